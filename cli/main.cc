@@ -1,0 +1,56 @@
+/// `rig`: the rig's command-line tool. Dispatches to one sub-command.
+
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* synopsis;
+  int (*run)(const std::vector<std::string>&);
+};
+
+const Command kCommands[] = {
+    {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
+     nimble::cli::run_model_command},
+};
+
+void print_usage(std::ostream& out) {
+  out << "usage: rig <command> [args]\n\ncommands:\n";
+  for (const auto& c : kCommands) out << "  " << c.synopsis << "\n";
+  out << "\n'rig <command> --help' describes one command.\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    print_usage(std::cerr);
+    return nimble::cli::kExitUsage;
+  }
+  const std::string name = argv[1];
+  if (name == "help" || name == "--help" || name == "-h") {
+    print_usage(std::cout);
+    return 0;
+  }
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  for (const auto& c : kCommands) {
+    if (name == c.name) {
+      try {
+        return c.run(args);
+      } catch (const std::exception& e) {
+        std::cerr << "rig " << name << ": error: " << e.what() << "\n";
+        return nimble::cli::kExitUsage;
+      }
+    }
+  }
+  std::cerr << "rig: unknown command '" << name << "'\n";
+  print_usage(std::cerr);
+  return nimble::cli::kExitUsage;
+}

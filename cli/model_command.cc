@@ -1,0 +1,260 @@
+/// `rig model`: the linear model of a parameter set, its modes and eigenvectors.
+
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "core/json_writer.h"
+#include "core/model.h"
+#include "core/modes.h"
+#include "core/vehicle.h"
+
+namespace nimble::cli {
+namespace {
+
+constexpr const char* kUsage =
+    "usage: rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]\n"
+    "  Builds A and B of the model's structure from its derivatives and vehicle,\n"
+    "  prints eigenvalues, the mode table and the non-dimensional eigenvectors.\n"
+    "  --vehicle FILE  use this vehicle instead of the one the model file names\n"
+    "  --json          one JSON object on stdout instead of the text report\n";
+
+struct Options {
+  std::string model_file;
+  std::string vehicle_file;
+  bool json = false;
+};
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+Options parse(const std::vector<std::string>& args) {
+  Options o;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--json") {
+      o.json = true;
+    } else if (a == "--vehicle") {
+      if (i + 1 >= args.size()) throw UsageError("--vehicle needs a file");
+      o.vehicle_file = args[++i];
+    } else if (!a.empty() && a[0] == '-') {
+      throw UsageError("unknown option '" + a + "'");
+    } else if (o.model_file.empty()) {
+      o.model_file = a;
+    } else {
+      throw UsageError("unexpected argument '" + a + "'");
+    }
+  }
+  if (o.model_file.empty()) throw UsageError("missing <model.yaml>");
+  return o;
+}
+
+/// For each published eigenvalue, the relative distance to the nearest computed one.
+std::vector<double> published_errors(const std::vector<std::complex<double>>& published,
+                                     const std::vector<std::complex<double>>& computed) {
+  std::vector<double> errors;
+  for (const auto& p : published) {
+    double best = INFINITY;
+    for (const auto& c : computed) best = std::min(best, std::abs(c - p));
+    errors.push_back(best / std::max(std::abs(p), 1e-12));
+  }
+  return errors;
+}
+
+std::string format_complex(const std::complex<double>& z) {
+  char buf[64];
+  if (std::fabs(z.imag()) < 1e-12) {
+    std::snprintf(buf, sizeof buf, "%.4f", z.real());
+  } else {
+    std::snprintf(buf, sizeof buf, "%.4f %c %.4fi", z.real(), z.imag() < 0 ? '-' : '+', std::fabs(z.imag()));
+  }
+  return buf;
+}
+
+double phase_deg(const std::complex<double>& z) { return std::arg(z) * 180.0 / M_PI; }
+
+void print_matrix(const char* name, const Eigen::MatrixXd& M, const std::vector<std::string>& rows,
+                  const std::vector<std::string>& cols) {
+  std::printf("%s\n%10s", name, "");
+  for (const auto& c : cols) std::printf(" %13s", c.c_str());
+  std::printf("\n");
+  for (Eigen::Index i = 0; i < M.rows(); ++i) {
+    std::printf("%10s", (rows[i] + "_dot").c_str());
+    for (Eigen::Index j = 0; j < M.cols(); ++j) std::printf(" %13.6g", M(i, j));
+    std::printf("\n");
+  }
+}
+
+void print_text(const DerivativeModel& model, const Vehicle& vehicle, const StateSpace& ss,
+                const std::vector<std::complex<double>>& eig, const std::vector<Mode>& modes) {
+  std::printf("model    %s (%s)\n", model.name.c_str(), to_string(model.structure).c_str());
+  std::printf("source   %s\n", model.source.c_str());
+  std::printf("vehicle  %s: m = %.2f g, Ixx %.3g, Iyy %.3g, Izz %.3g, Ixz %.3g kg m^2\n",
+              vehicle.name.c_str(), vehicle.mass_kg * 1e3, vehicle.Ixx_kgm2, vehicle.Iyy_kgm2,
+              vehicle.Izz_kgm2, vehicle.Ixz_kgm2);
+  std::printf("trim     u0 %.3g m/s, w0 %.3g m/s, theta0 %.3g rad, phi0 %.3g rad\n\n", model.trim.u0_mps,
+              model.trim.w0_mps, model.trim.theta0_rad, model.trim.phi0_rad);
+
+  std::vector<std::string> state_cols, input_cols;
+  for (std::size_t i = 0; i < ss.states.size(); ++i) state_cols.push_back(ss.states[i] + "[" + ss.state_units[i] + "]");
+  for (std::size_t i = 0; i < ss.inputs.size(); ++i) input_cols.push_back(ss.inputs[i] + "[" + ss.input_units[i] + "]");
+  print_matrix("A", ss.A, ss.states, state_cols);
+  std::printf("\n");
+  print_matrix("B", ss.B, ss.states, input_cols);
+
+  std::printf("\neigenvalues [1/s]\n");
+  for (const auto& z : eig) std::printf("  %s\n", format_complex(z).c_str());
+
+  std::printf("\nmodes\n  %-3s %-22s %-12s %-9s %10s %7s %9s %14s\n", "#", "eigenvalue", "type", "stability",
+              "wn[rad/s]", "zeta", "period[s]", "T2|T1/2[s]");
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    const Mode& m = modes[k];
+    char t2[32];
+    std::snprintf(t2, sizeof t2, "%s %.3f", m.stable ? "T1/2" : "T2", m.time_to_double_or_half_s);
+    char period[16] = "-";
+    if (m.oscillatory) std::snprintf(period, sizeof period, "%.3f", m.period_s);
+    std::printf("  %-3zu %-22s %-12s %-9s %10.3f %7.3f %9s %14s\n", k + 1,
+                (format_complex(m.eigenvalue) + (m.oscillatory ? " (pair)" : "")).c_str(),
+                m.oscillatory ? "oscillatory" : "aperiodic", m.stable ? "stable" : "UNSTABLE",
+                m.natural_frequency_radps, m.damping_ratio, period, t2);
+  }
+
+  std::printf("\nnon-dimensional eigenvectors (rates / f, velocities / (2 Phi f r2), angles / 2pi;"
+              " f = %.1f rad/s, Phi = %.3f rad, r2 = %.4g m), normalised on the attitude angle\n  %-8s",
+              vehicle.flap_frequency_radps(), vehicle.flap_amplitude_rad, vehicle.r2_m, "state");
+  for (std::size_t k = 0; k < modes.size(); ++k) std::printf(" %20s", ("mode " + std::to_string(k + 1)).c_str());
+  std::printf("\n");
+  for (std::size_t i = 0; i < ss.states.size(); ++i) {
+    std::printf("  %-8s", (ss.states[i] + "+").c_str());
+    for (const auto& m : modes) {
+      char cell[48];
+      std::snprintf(cell, sizeof cell, "%.3f (%.1f deg)", std::abs(m.eigenvector_nondim[i]),
+                    phase_deg(m.eigenvector_nondim[i]));
+      std::printf(" %20s", cell);
+    }
+    std::printf("\n");
+  }
+
+  if (!model.published_eigenvalues.empty()) {
+    const auto errors = published_errors(model.published_eigenvalues, eig);
+    std::printf("\npublished eigenvalues (%s)\n", model.source.c_str());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < errors.size(); ++i) {
+      std::printf("  %-22s nearest computed differs by %.2f %%\n",
+                  format_complex(model.published_eigenvalues[i]).c_str(), 100.0 * errors[i]);
+      worst = std::max(worst, errors[i]);
+    }
+    std::printf("  largest difference %.2f %%\n", 100.0 * worst);
+  }
+}
+
+void write_rows(JsonWriter& w, const Eigen::MatrixXd& M) {
+  w.begin_array();
+  for (Eigen::Index i = 0; i < M.rows(); ++i) {
+    w.begin_array();
+    for (Eigen::Index j = 0; j < M.cols(); ++j) w.value(M(i, j));
+    w.end_array();
+  }
+  w.end_array();
+}
+
+void write_complex(JsonWriter& w, const std::complex<double>& z) {
+  w.begin_array().value(z.real()).value(z.imag()).end_array();
+}
+
+std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const StateSpace& ss,
+                    const std::vector<std::complex<double>>& eig, const std::vector<Mode>& modes) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("model").value(model.name);
+  w.key("model_file").value(model.file);
+  w.key("source").value(model.source);
+  w.key("structure").value(to_string(model.structure));
+  w.key("vehicle").begin_object();
+  w.key("name").value(vehicle.name).key("file").value(vehicle.file).key("mass_kg").value(vehicle.mass_kg);
+  w.end_object();
+  w.key("trim").begin_object();
+  w.key("u0_mps").value(model.trim.u0_mps).key("w0_mps").value(model.trim.w0_mps);
+  w.key("theta0_rad").value(model.trim.theta0_rad).key("phi0_rad").value(model.trim.phi0_rad);
+  w.end_object();
+  w.key("states").array(ss.states);
+  w.key("state_units").array(ss.state_units);
+  w.key("inputs").array(ss.inputs);
+  w.key("input_units").array(ss.input_units);
+  w.key("A");
+  write_rows(w, ss.A);
+  w.key("B");
+  write_rows(w, ss.B);
+  w.key("eigenvalues").begin_array();
+  for (const auto& z : eig) write_complex(w, z);
+  w.end_array();
+  w.key("modes").begin_array();
+  for (const auto& m : modes) {
+    w.begin_object();
+    w.key("eigenvalue");
+    write_complex(w, m.eigenvalue);
+    w.key("oscillatory").value(m.oscillatory);
+    w.key("stable").value(m.stable);
+    w.key("natural_frequency_radps").value(m.natural_frequency_radps);
+    w.key("damping_ratio").value(m.damping_ratio);
+    w.key("period_s").value(m.period_s);
+    w.key(m.stable ? "time_to_half_s" : "time_to_double_s").value(m.time_to_double_or_half_s);
+    w.key("eigenvector_nondim").begin_object();
+    for (std::size_t i = 0; i < ss.states.size(); ++i) {
+      w.key(ss.states[i]).begin_object();
+      w.key("magnitude").value(std::abs(m.eigenvector_nondim[i]));
+      w.key("phase_deg").value(phase_deg(m.eigenvector_nondim[i]));
+      w.end_object();
+    }
+    w.end_object();
+    w.end_object();
+  }
+  w.end_array();
+  if (!model.published_eigenvalues.empty()) {
+    const auto errors = published_errors(model.published_eigenvalues, eig);
+    w.key("published").begin_object();
+    w.key("eigenvalues").begin_array();
+    for (const auto& z : model.published_eigenvalues) write_complex(w, z);
+    w.end_array();
+    w.key("relative_errors").array(errors);
+    w.end_object();
+  }
+  w.end_object();
+  return w.str();
+}
+
+}  // namespace
+
+int run_model_command(const std::vector<std::string>& args) {
+  for (const auto& a : args) {
+    if (a == "--help" || a == "-h") {
+      std::cout << kUsage;
+      return 0;
+    }
+  }
+  Options opt;
+  try {
+    opt = parse(args);
+  } catch (const UsageError& e) {
+    std::cerr << "rig model: " << e.what() << "\n" << kUsage;
+    return kExitUsage;
+  }
+  const DerivativeModel model = load_model(opt.model_file);
+  const Vehicle vehicle = load_vehicle(opt.vehicle_file.empty() ? model.vehicle_file : opt.vehicle_file);
+  const StateSpace ss = build_state_space(model, vehicle);
+  const auto eig = sorted_eigenvalues(ss.A);
+  const auto modes = analyse_modes(ss, vehicle);
+  if (opt.json) {
+    std::cout << to_json(model, vehicle, ss, eig, modes) << "\n";
+  } else {
+    print_text(model, vehicle, ss, eig, modes);
+  }
+  return 0;
+}
+
+}  // namespace nimble::cli

@@ -1,0 +1,311 @@
+#include "core/model.h"
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace nimble {
+namespace {
+
+struct InputInfo {
+  const char* name;
+  const char* suffix;  // derivative suffix: L_<suffix>
+  const char* unit;
+};
+
+constexpr InputInfo kInputs[] = {
+    {"delta_f", "df", "rad/s"},
+    {"delta_t", "dt", "%"},
+    {"delta_d", "dd", "rad"},
+    {"delta_w", "dw", "rad"},
+};
+
+const InputInfo& input_info(const std::string& input) {
+  for (const auto& info : kInputs) {
+    if (input == info.name) return info;
+  }
+  throw std::invalid_argument("unknown input '" + input + "'");
+}
+
+/// Letters of the force/moment equations of each structure, e.g. {L, Y}.
+std::vector<std::string> equation_letters(Structure s) {
+  switch (s) {
+    case Structure::kLateral3: return {"L", "Y"};
+    case Structure::kLateral4: return {"L", "N", "Y"};
+    case Structure::kLongitudinal: return {"M", "X", "Z"};
+  }
+  return {};
+}
+
+/// States that derivatives are taken with respect to (the rates and velocities).
+std::vector<std::string> derivative_states(Structure s) {
+  switch (s) {
+    case Structure::kLateral3: return {"p", "v"};
+    case Structure::kLateral4: return {"p", "r", "v"};
+    case Structure::kLongitudinal: return {"q", "u", "w"};
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string to_string(Structure s) {
+  switch (s) {
+    case Structure::kLateral3: return "lateral3";
+    case Structure::kLateral4: return "lateral4";
+    case Structure::kLongitudinal: return "longitudinal";
+  }
+  return "?";
+}
+
+Structure structure_from_string(const std::string& name) {
+  if (name == "lateral3") return Structure::kLateral3;
+  if (name == "lateral4") return Structure::kLateral4;
+  if (name == "longitudinal") return Structure::kLongitudinal;
+  throw std::invalid_argument("unknown structure '" + name + "'");
+}
+
+const std::vector<std::string>& state_names(Structure s) {
+  static const std::vector<std::string> lat3{"p", "v", "phi"};
+  static const std::vector<std::string> lat4{"p", "r", "v", "phi"};
+  static const std::vector<std::string> lon{"q", "u", "w", "theta"};
+  switch (s) {
+    case Structure::kLateral3: return lat3;
+    case Structure::kLateral4: return lat4;
+    case Structure::kLongitudinal: return lon;
+  }
+  return lat3;
+}
+
+const std::vector<std::string>& state_units(Structure s) {
+  static const std::vector<std::string> lat3{"rad/s", "m/s", "rad"};
+  static const std::vector<std::string> lat4{"rad/s", "rad/s", "m/s", "rad"};
+  static const std::vector<std::string> lon{"rad/s", "m/s", "m/s", "rad"};
+  switch (s) {
+    case Structure::kLateral3: return lat3;
+    case Structure::kLateral4: return lat4;
+    case Structure::kLongitudinal: return lon;
+  }
+  return lat3;
+}
+
+std::vector<std::string> stability_derivative_names(Structure s) {
+  std::vector<std::string> out;
+  for (const auto& eq : equation_letters(s)) {
+    for (const auto& x : derivative_states(s)) out.push_back(eq + x);
+  }
+  return out;
+}
+
+std::vector<std::string> control_derivative_names(Structure s, const std::string& input) {
+  const InputInfo& info = input_info(input);
+  std::vector<std::string> out;
+  for (const auto& eq : equation_letters(s)) out.push_back(eq + "_" + info.suffix);
+  return out;
+}
+
+const std::vector<std::string>& known_inputs() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const auto& info : kInputs) v.push_back(info.name);
+    return v;
+  }();
+  return names;
+}
+
+std::string input_unit(const std::string& input) { return input_info(input).unit; }
+
+double DerivativeModel::at(const std::string& key) const {
+  const auto it = derivatives.find(key);
+  if (it == derivatives.end()) {
+    throw std::out_of_range("model '" + name + "' has no derivative '" + key + "'");
+  }
+  return it->second;
+}
+
+DerivativeModel model_from_config(ConfigMap& map) {
+  DerivativeModel m;
+  m.file = map.file();
+  m.name = map.get_string("name");
+  m.source = map.get_string("source");
+  m.structure = structure_from_string(
+      map.get_enum("structure", {"lateral3", "lateral4", "longitudinal"}));
+
+  const std::string vehicle = map.get_string("vehicle");
+  const std::filesystem::path vehicle_path(vehicle);
+  m.vehicle_file = vehicle_path.is_absolute()
+                       ? vehicle
+                       : (std::filesystem::path(map.directory()) / vehicle_path).lexically_normal().string();
+
+  if (m.structure == Structure::kLateral4) {
+    m.coupling = map.get_enum("roll_yaw_coupling", {"full", "decoupled"}) == "full"
+                     ? RollYawCoupling::kFull
+                     : RollYawCoupling::kDecoupled;
+  }
+
+  m.inputs = map.get_string_list("inputs");
+  if (m.inputs.empty()) map.fail("inputs", "must name at least one input");
+  for (std::size_t i = 0; i < m.inputs.size(); ++i) {
+    bool known = false;
+    for (const auto& k : known_inputs()) known = known || (k == m.inputs[i]);
+    if (!known) {
+      map.fail("inputs", "unknown input '" + m.inputs[i] +
+                             "' (known: delta_f, delta_t, delta_d, delta_w)");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (m.inputs[j] == m.inputs[i]) map.fail("inputs", "input '" + m.inputs[i] + "' listed twice");
+    }
+  }
+
+  ConfigMap trim = map.get_map("trim");
+  m.trim.u0_mps = trim.get_double("u0_mps");
+  m.trim.w0_mps = trim.get_double("w0_mps");
+  m.trim.theta0_rad = trim.get_double("theta0_rad", Range::closed(-M_PI / 2 + 1e-6, M_PI / 2 - 1e-6));
+  m.trim.phi0_rad = trim.get_double("phi0_rad", Range::closed(-M_PI, M_PI));
+  trim.finish();
+
+  // Exactly the derivatives the structure and inputs need: no more, no fewer.
+  ConfigMap derivs = map.get_map("derivatives");
+  std::vector<std::string> required = stability_derivative_names(m.structure);
+  for (const auto& input : m.inputs) {
+    for (const auto& n : control_derivative_names(m.structure, input)) required.push_back(n);
+  }
+  for (const auto& n : required) m.derivatives[n] = derivs.get_double(n);
+  derivs.finish();
+
+  if (map.has("published")) {
+    ConfigMap pub = map.get_map("published");
+    if (pub.has("eigenvalues")) {
+      const YAML::Node list = pub.get_node("eigenvalues");
+      if (!list.IsSequence()) pub.fail("eigenvalues", "must be a list of [re, im] pairs");
+      for (const auto& pair : list) {
+        if (!pair.IsSequence() || pair.size() != 2) {
+          pub.fail("eigenvalues", "must be a list of [re, im] pairs");
+        }
+        try {
+          m.published_eigenvalues.emplace_back(pair[0].as<double>(), pair[1].as<double>());
+        } catch (const YAML::Exception&) {
+          pub.fail("eigenvalues", "must be a list of numeric [re, im] pairs");
+        }
+      }
+    }
+    if (pub.has("sigma")) {
+      ConfigMap sigma = pub.get_map("sigma");
+      for (const auto& key : sigma.keys()) {
+        if (m.derivatives.count(key) == 0) {
+          sigma.fail(key, "standard deviation given for a derivative the model does not have");
+        }
+        m.published_sigma[key] = sigma.get_double(key, Range::non_negative());
+      }
+      sigma.finish();
+    }
+    pub.finish();
+  }
+  map.finish();
+  return m;
+}
+
+DerivativeModel load_model(const std::string& file) {
+  ConfigMap map = ConfigMap::load_file(file);
+  return model_from_config(map);
+}
+
+StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicle) {
+  StateSpace ss;
+  ss.states = state_names(model.structure);
+  ss.state_units = state_units(model.structure);
+  ss.inputs = model.inputs;
+  for (const auto& in : model.inputs) ss.input_units.push_back(input_unit(in));
+
+  const std::size_t n = ss.states.size();
+  const std::size_t m = ss.inputs.size();
+  ss.A = Eigen::MatrixXd::Zero(n, n);
+  ss.B = Eigen::MatrixXd::Zero(n, m);
+
+  const double mass = vehicle.mass_kg;
+  const double g = vehicle.gravity_mps2;
+  const double Ic = vehicle.Ic();
+  const double Ixx = vehicle.Ixx_kgm2, Izz = vehicle.Izz_kgm2, Ixz = vehicle.Ixz_kgm2;
+  const Trim& t = model.trim;
+  const auto d = [&](const std::string& key) { return model.at(key); };
+
+  switch (model.structure) {
+    case Structure::kLateral3: {
+      // x = [p v phi]; pdot = Izz/Ic * L, vdot = Y/m + w0 p + g cos(theta0) cos(phi0) phi.
+      const double kL = Izz / Ic;
+      ss.A << kL * d("Lp"), kL * d("Lv"), 0.0,
+              d("Yp") / mass + t.w0_mps, d("Yv") / mass, g * std::cos(t.theta0_rad) * std::cos(t.phi0_rad),
+              1.0, 0.0, 0.0;
+      for (std::size_t j = 0; j < m; ++j) {
+        const auto names = control_derivative_names(model.structure, ss.inputs[j]);
+        ss.B(0, j) = kL * d(names[0]);
+        ss.B(1, j) = d(names[1]) / mass;
+      }
+      break;
+    }
+    case Structure::kLateral4: {
+      // x = [p r v phi] (Eq B.16). Rows of the moment equations mix L and N
+      // through the inertia; the decoupled form (Eq 8.7) drops the Ixz terms.
+      const bool full = model.coupling == RollYawCoupling::kFull;
+      const double pL = Izz / Ic, pN = full ? Ixz / Ic : 0.0;
+      const double rL = full ? Ixz / Ic : 0.0, rN = Ixx / Ic;
+      const char* xs[] = {"p", "r", "v"};
+      for (int k = 0; k < 3; ++k) {
+        const std::string s = xs[k];
+        ss.A(0, k) = pL * d("L" + s) + pN * d("N" + s);
+        ss.A(1, k) = rL * d("L" + s) + rN * d("N" + s);
+        ss.A(2, k) = d("Y" + s) / mass;
+      }
+      ss.A(2, 0) += t.w0_mps;
+      ss.A(2, 1) -= t.u0_mps;
+      ss.A(2, 3) = g * std::cos(t.theta0_rad) * std::cos(t.phi0_rad);
+      ss.A(3, 0) = 1.0;
+      ss.A(3, 1) = std::tan(t.theta0_rad) * std::cos(t.phi0_rad);
+      for (std::size_t j = 0; j < m; ++j) {
+        const auto names = control_derivative_names(model.structure, ss.inputs[j]);  // L, N, Y
+        ss.B(0, j) = pL * d(names[0]) + pN * d(names[1]);
+        ss.B(1, j) = rL * d(names[0]) + rN * d(names[1]);
+        ss.B(2, j) = d(names[2]) / mass;
+      }
+      break;
+    }
+    case Structure::kLongitudinal: {
+      // x = [q u w theta] (Eq B.15).
+      const double Iyy = vehicle.Iyy_kgm2;
+      ss.A << d("Mq") / Iyy, d("Mu") / Iyy, d("Mw") / Iyy, 0.0,
+              d("Xq") / mass - t.w0_mps, d("Xu") / mass, d("Xw") / mass, -g * std::cos(t.theta0_rad),
+              d("Zq") / mass + t.u0_mps, d("Zu") / mass, d("Zw") / mass,
+              -g * std::sin(t.theta0_rad) * std::cos(t.phi0_rad),
+              std::cos(t.phi0_rad), 0.0, 0.0, 0.0;
+      for (std::size_t j = 0; j < m; ++j) {
+        const auto names = control_derivative_names(model.structure, ss.inputs[j]);  // M, X, Z
+        ss.B(0, j) = d(names[0]) / Iyy;
+        ss.B(1, j) = d(names[1]) / mass;
+        ss.B(2, j) = d(names[2]) / mass;
+      }
+      break;
+    }
+  }
+  return ss;
+}
+
+DiscreteStateSpace discretize_zoh(const StateSpace& ss, double dt_s) {
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
+    throw std::invalid_argument("discretize_zoh: dt_s must be positive and finite");
+  }
+  const Eigen::Index n = ss.A.rows();
+  const Eigen::Index m = ss.B.cols();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + m, n + m);
+  M.topLeftCorner(n, n) = ss.A * dt_s;
+  M.topRightCorner(n, m) = ss.B * dt_s;
+  const Eigen::MatrixXd E = M.exp();
+  DiscreteStateSpace out;
+  out.Ad = E.topLeftCorner(n, n);
+  out.Bd = E.topRightCorner(n, m);
+  out.dt_s = dt_s;
+  return out;
+}
+
+}  // namespace nimble

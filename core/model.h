@@ -1,0 +1,114 @@
+#pragma once
+/// Linear body-dynamics models of the Delfly Nimble built from identified
+/// dimensional stability and control derivatives (thesis Appendix B).
+///
+/// Structures:
+///  - lateral3:     x = [p v phi]        (thesis Eq 8.4 / paper Eq B.1)
+///  - lateral4:     x = [p r v phi]      (thesis Eq B.16, or Eq 8.7 with decoupled L and N)
+///  - longitudinal: x = [q u w theta]    (thesis Eq B.15 / E.11)
+/// Inputs are any of delta_f [rad/s] (flapping-frequency difference),
+/// delta_t [%] (throttle, deviation from trim), delta_d [rad] (dihedral),
+/// delta_w [rad] (wing root), each in the order the model file lists them.
+
+#include <complex>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "core/config.h"
+#include "core/vehicle.h"
+
+namespace nimble {
+
+enum class Structure { kLateral3, kLateral4, kLongitudinal };
+
+/// How the roll and yaw moment equations are combined in the lateral4 structure.
+enum class RollYawCoupling {
+  kFull,       ///< pdot = (Izz L + Ixz N)/Ic, rdot = (Ixz L + Ixx N)/Ic   (Eq B.16)
+  kDecoupled,  ///< pdot = Izz/Ic L, rdot = Ixx/Ic N                       (Eq 8.7, C.8)
+};
+
+std::string to_string(Structure s);
+/// @throws std::invalid_argument for an unknown name.
+Structure structure_from_string(const std::string& name);
+
+/// State names of a structure, e.g. {"p", "v", "phi"}.
+const std::vector<std::string>& state_names(Structure s);
+/// Units of the states, same order.
+const std::vector<std::string>& state_units(Structure s);
+/// Names of the stability derivatives the structure needs, e.g. {"Lp","Lv","Yp","Yv"}.
+std::vector<std::string> stability_derivative_names(Structure s);
+/// Names of the control derivatives for `input`, e.g. delta_f -> {"L_df","Y_df"}.
+std::vector<std::string> control_derivative_names(Structure s, const std::string& input);
+/// Inputs a model may use.
+const std::vector<std::string>& known_inputs();
+/// Unit of an input ("rad/s", "%", "rad").
+std::string input_unit(const std::string& input);
+
+/// Trim (reference) condition the linear model is taken about.
+struct Trim {
+  double u0_mps = 0.0;
+  double w0_mps = 0.0;
+  double theta0_rad = 0.0;
+  double phi0_rad = 0.0;
+};
+
+/// A parameter set: structure, inputs, dimensional derivatives and trim.
+struct DerivativeModel {
+  std::string name;
+  std::string file;          ///< file it was loaded from
+  std::string source;        ///< table of the thesis/paper the numbers come from
+  std::string vehicle_file;  ///< resolved path of the vehicle it goes with
+  Structure structure = Structure::kLateral3;
+  RollYawCoupling coupling = RollYawCoupling::kFull;
+  std::vector<std::string> inputs;
+  /// Dimensional derivatives in SI units: L*, N*, M* in N m per unit of the
+  /// state/input; Y*, X*, Z* in N per unit of the state/input.
+  std::map<std::string, double> derivatives;
+  Trim trim;
+  /// Published eigenvalues to compare against (optional, from the source table).
+  std::vector<std::complex<double>> published_eigenvalues;
+  /// Published parameter standard deviations (optional).
+  std::map<std::string, double> published_sigma;
+
+  /// Value of a derivative; @throws std::out_of_range naming it if absent.
+  double at(const std::string& name) const;
+};
+
+/// Continuous-time linear state-space model xdot = A x + B u.
+struct StateSpace {
+  Eigen::MatrixXd A;
+  Eigen::MatrixXd B;
+  std::vector<std::string> states;
+  std::vector<std::string> state_units;
+  std::vector<std::string> inputs;
+  std::vector<std::string> input_units;
+};
+
+/// Reads a model from a mapping (the root of a model file). Relative vehicle
+/// paths are resolved against the file's directory.
+/// @throws ConfigError on a missing/unknown key or derivative, a non-numeric
+///         value, an unknown structure or input.
+DerivativeModel model_from_config(ConfigMap& map);
+
+/// Loads and validates a model file (rig_configs/models/*.yaml).
+DerivativeModel load_model(const std::string& file);
+
+/// Builds A and B from the derivatives, the trim and the vehicle (thesis Eqs B.15, B.16).
+StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicle);
+
+/// Exact zero-order-hold discretisation: x[k+1] = Ad x[k] + Bd u[k].
+struct DiscreteStateSpace {
+  Eigen::MatrixXd Ad;
+  Eigen::MatrixXd Bd;
+  double dt_s = 0.0;
+};
+
+/// Exact ZOH discretisation via the matrix exponential of [[A B];[0 0]] dt.
+/// @throws std::invalid_argument if dt_s is not positive and finite.
+DiscreteStateSpace discretize_zoh(const StateSpace& ss, double dt_s);
+
+}  // namespace nimble

@@ -1,0 +1,181 @@
+// Unit tests of config validation: every error names the file, the key and the value.
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "core/config.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+
+using namespace nimble;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// Writes `text` to a fresh file in a per-test temporary directory.
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rig_test_config_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+/// The shipped vehicle file with one line replaced (regex on the whole text).
+std::string vehicle_with(const std::string& pattern, const std::string& replacement) {
+  const std::string text = read_text(kConfigs + "vehicles/nimble_no_wifi.yaml");
+  const std::string edited = std::regex_replace(text, std::regex(pattern), replacement);
+  REQUIRE(edited != text);
+  return write_temp("vehicle.yaml", edited);
+}
+
+std::string model_with(const std::string& pattern, const std::string& replacement) {
+  std::string text = read_text(kConfigs + "models/nimble_lateral_set1.yaml");
+  // Point at the shipped vehicle by absolute path, since the copy lives elsewhere.
+  text = std::regex_replace(text, std::regex("vehicle: \\.\\./vehicles/"), "vehicle: " + kConfigs + "vehicles/");
+  const std::string edited = std::regex_replace(text, std::regex(pattern), replacement);
+  REQUIRE(edited != text);
+  return write_temp("model.yaml", edited);
+}
+
+/// Runs `load`, requires a ConfigError, checks it names file, key and value.
+template <typename Fn>
+void expect_error(Fn load, const std::string& file, const std::string& key, const std::string& value,
+                  const std::string& problem_part) {
+  try {
+    load();
+    FAIL("expected a ConfigError for key " << key);
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    INFO(what);
+    CHECK(e.file() == file);
+    CHECK(e.key() == key);
+    CHECK(e.value() == value);
+    CHECK(what.find(file) != std::string::npos);
+    if (!key.empty()) CHECK(what.find("'" + key + "'") != std::string::npos);
+    if (!value.empty()) CHECK(what.find("'" + value + "'") != std::string::npos);
+    CHECK(what.find(problem_part) != std::string::npos);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("shipped vehicle files load with the thesis values", "[config]") {
+  const Vehicle v = load_vehicle(kConfigs + "vehicles/nimble_no_wifi.yaml");
+  CHECK(v.mass_kg == Approx(28.76e-3));
+  CHECK(v.Ixz_kgm2 == Approx(-8.81e-6));
+  CHECK(v.flap_frequency_radps() == Approx(106.8).epsilon(0.001));
+  const Vehicle w = load_vehicle(kConfigs + "vehicles/nimble_wifi.yaml");
+  CHECK(w.mass_kg == Approx(29.47e-3));
+  CHECK(w.Ixx_kgm2 == Approx(9.76e-5));
+  CHECK(w.Izz_kgm2 == Approx(3.34e-5));
+}
+
+TEST_CASE("every shipped model file loads", "[config]") {
+  for (const auto& entry : std::filesystem::directory_iterator(kConfigs + "models")) {
+    INFO(entry.path());
+    const DerivativeModel m = load_model(entry.path().string());
+    CHECK(std::filesystem::exists(m.vehicle_file));
+    CHECK_NOTHROW(build_state_space(m, load_vehicle(m.vehicle_file)));
+  }
+}
+
+TEST_CASE("vehicle errors name file, key and value", "[config]") {
+  SECTION("missing key") {
+    const auto f = vehicle_with("mass_kg: 0.02876\n", "");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", "", "missing required key");
+  }
+  SECTION("unknown key") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: 0.02876\nmas_kg: 0.03");
+    expect_error([&] { load_vehicle(f); }, f, "mas_kg", "0.03", "unknown key");
+  }
+  SECTION("unknown nested key") {
+    const auto f = vehicle_with("  Ixz: -8.81e-6", "  Ixz: -8.81e-6\n  Ixy: 1e-6");
+    expect_error([&] { load_vehicle(f); }, f, "inertia_kgm2.Ixy", "1e-6", "unknown key");
+  }
+  SECTION("non-numeric value") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: heavy");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", "heavy", "must be a number");
+  }
+  SECTION("number followed by a unit") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: 28.76 g");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", "28.76 g", "must be a number");
+  }
+  SECTION("non-finite value") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: .nan");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", ".nan", "finite");
+  }
+  SECTION("non-positive mass") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: -0.029");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", "-0.029", "must be > 0");
+  }
+  SECTION("zero mass") {
+    const auto f = vehicle_with("mass_kg: 0.02876", "mass_kg: 0");
+    expect_error([&] { load_vehicle(f); }, f, "mass_kg", "0", "must be > 0");
+  }
+  SECTION("non-positive inertia") {
+    const auto f = vehicle_with("Izz: 3.32e-5", "Izz: -3.32e-5");
+    expect_error([&] { load_vehicle(f); }, f, "inertia_kgm2.Izz", "-3.32e-5", "must be > 0");
+  }
+  SECTION("Ixx*Izz - Ixz^2 <= 0") {
+    const auto f = vehicle_with("Ixz: -8.81e-6", "Ixz: -6.0e-5");
+    expect_error([&] { load_vehicle(f); }, f, "inertia_kgm2.Ixz", "-6.0e-5", "Ixx*Izz - Ixz^2");
+  }
+  SECTION("missing file") {
+    const std::string f = "/nonexistent/vehicle.yaml";
+    expect_error([&] { load_vehicle(f); }, f, "", "", "file not found");
+  }
+  SECTION("invalid YAML gives the line") {
+    const auto f = write_temp("broken.yaml", "name: x\nmass_kg: [1, 2\n");
+    try {
+      load_vehicle(f);
+      FAIL("expected a ConfigError");
+    } catch (const ConfigError& e) {
+      CHECK(std::string(e.what()).find("not valid YAML") != std::string::npos);
+      CHECK(e.line() > 0);
+    }
+  }
+}
+
+TEST_CASE("model errors name file, key and value", "[config]") {
+  SECTION("missing derivative") {
+    const auto f = model_with("  Lv: -3.74e-04 .*\n", "");
+    expect_error([&] { load_model(f); }, f, "derivatives.Lv", "", "missing required key");
+  }
+  SECTION("derivative the structure does not have") {
+    const auto f = model_with("  Lp: -2.43e-04", "  Lp: -2.43e-04\n  Nr: 1.0e-4");
+    expect_error([&] { load_model(f); }, f, "derivatives.Nr", "1.0e-4", "unknown key");
+  }
+  SECTION("non-numeric derivative") {
+    const auto f = model_with("Yv: -5.61e-02", "Yv: -5.61e-02x");
+    expect_error([&] { load_model(f); }, f, "derivatives.Yv", "-5.61e-02x", "must be a number");
+  }
+  SECTION("unknown structure") {
+    const auto f = model_with("structure: lateral3", "structure: lateral5");
+    expect_error([&] { load_model(f); }, f, "structure", "lateral5", "must be one of");
+  }
+  SECTION("unknown input") {
+    const auto f = model_with("inputs: \\[delta_f, delta_t\\]", "inputs: [delta_f, delta_x]");
+    expect_error([&] { load_model(f); }, f, "inputs", "[delta_f, delta_x]", "unknown input 'delta_x'");
+  }
+  SECTION("missing trim value") {
+    const auto f = model_with("  w0_mps: -0.30\n", "");
+    expect_error([&] { load_model(f); }, f, "trim.w0_mps", "", "missing required key");
+  }
+  SECTION("misspelt top-level key") {
+    const auto f = model_with("source:", "sauce:");
+    expect_error([&] { load_model(f); }, f, "source", "", "missing required key");
+  }
+}
