@@ -76,7 +76,11 @@ std::string format_complex(const std::complex<double>& z) {
   return buf;
 }
 
-double phase_deg(const std::complex<double>& z) { return std::arg(z) * 180.0 / M_PI; }
+/// Phase in degrees in (-180, 180], so that an opposite sign reads as 180 deg.
+double phase_deg(const std::complex<double>& z) {
+  const double deg = std::arg(z) * 180.0 / M_PI;
+  return deg <= -180.0 + 1e-6 ? deg + 360.0 : deg;
+}
 
 void print_matrix(const char* name, const Eigen::MatrixXd& M, const std::vector<std::string>& rows,
                   const std::vector<std::string>& cols) {
