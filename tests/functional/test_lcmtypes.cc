@@ -16,6 +16,7 @@
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/step_ack_t.hpp>
+#include <nimble/run_control_t.hpp>
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
@@ -310,14 +311,16 @@ void fill(nimble::rig_clock_t& m, Distinct& g) {
   m.utime = g.i64();
   m.seq = g.i64();
   m.step = g.i64();
-  m.dt_us = g.i32();
+  m.sim_time_ns = g.i64();
+  m.dt_ns = g.i64();
   m.run_id = g.str();
 }
 void require_equal(const nimble::rig_clock_t& a, const nimble::rig_clock_t& b) {
   REQUIRE(a.utime == b.utime);
   REQUIRE(a.seq == b.seq);
   REQUIRE(a.step == b.step);
-  REQUIRE(a.dt_us == b.dt_us);
+  REQUIRE(a.sim_time_ns == b.sim_time_ns);
+  REQUIRE(a.dt_ns == b.dt_ns);
   REQUIRE(a.run_id == b.run_id);
 }
 
@@ -326,13 +329,39 @@ void fill(nimble::step_ack_t& m, Distinct& g) {
   m.utime = g.i64();
   m.seq = g.i64();
   m.step = g.i64();
+  m.next_due_ns = g.i64();
   m.process = g.str();
 }
 void require_equal(const nimble::step_ack_t& a, const nimble::step_ack_t& b) {
   REQUIRE(a.utime == b.utime);
   REQUIRE(a.seq == b.seq);
   REQUIRE(a.step == b.step);
+  REQUIRE(a.next_due_ns == b.next_due_ns);
   REQUIRE(a.process == b.process);
+}
+
+// --- run_control_t -------------------------------------------------------------------------
+void fill(nimble::run_control_t& m, Distinct& g) {
+  m.utime = g.i64();
+  m.seq = g.i64();
+  m.command = nimble::run_control_t::COMMAND_STOP;
+  m.clock_mode = nimble::run_control_t::CLOCK_MODE_LOCKSTEP;
+  m.t0_monotonic_ns = g.i64();
+  m.duration_ns = g.i64();
+  m.run_id = g.str();
+  m.num_participants = 2;
+  m.participants = {g.str(), g.str()};
+}
+void require_equal(const nimble::run_control_t& a, const nimble::run_control_t& b) {
+  REQUIRE(a.utime == b.utime);
+  REQUIRE(a.seq == b.seq);
+  REQUIRE(a.command == b.command);
+  REQUIRE(a.clock_mode == b.clock_mode);
+  REQUIRE(a.t0_monotonic_ns == b.t0_monotonic_ns);
+  REQUIRE(a.duration_ns == b.duration_ns);
+  REQUIRE(a.run_id == b.run_id);
+  REQUIRE(a.num_participants == b.num_participants);
+  REQUIRE(a.participants == b.participants);
 }
 
 // --- heartbeat_t ---------------------------------------------------------------------------
@@ -437,6 +466,7 @@ const char* channel_of(const nimble::estimator_state_t*) { return "ESTIMATE"; }
 const char* channel_of(const nimble::controller_status_t*) { return "CONTROLLER_STATUS"; }
 const char* channel_of(const nimble::rig_clock_t*) { return "RIG_CLOCK"; }
 const char* channel_of(const nimble::step_ack_t*) { return "STEP_ACK"; }
+const char* channel_of(const nimble::run_control_t*) { return "RUN_CONTROL"; }
 const char* channel_of(const nimble::heartbeat_t*) { return "HEARTBEAT"; }
 const char* channel_of(const nimble::timing_health_t*) { return "TIMING_HEALTH"; }
 const char* channel_of(const nimble::fault_event_t*) { return "FAULT"; }
@@ -479,7 +509,8 @@ class Receiver {
   nimble::truth_state_t, nimble::imu_sample_t, nimble::mocap_pose_t,                        \
       nimble::actuator_command_t, nimble::actuator_feedback_t, nimble::attitude_setpoint_t, \
       nimble::estimator_state_t, nimble::controller_status_t, nimble::rig_clock_t,          \
-      nimble::step_ack_t, nimble::heartbeat_t, nimble::timing_health_t, nimble::fault_event_t
+      nimble::step_ack_t, nimble::run_control_t, nimble::heartbeat_t, nimble::timing_health_t, \
+      nimble::fault_event_t
 
 TEMPLATE_TEST_CASE("encode and decode preserve every field", "[lcmtypes]", RIG_LCM_TYPES) {
   const TestType in = make_sample<TestType>();
@@ -587,6 +618,7 @@ TEST_CASE("every type has its own fingerprint", "[lcmtypes]") {
       nimble::actuator_feedback_t::getHash(), nimble::attitude_setpoint_t::getHash(),
       nimble::estimator_state_t::getHash(),  nimble::controller_status_t::getHash(),
       nimble::rig_clock_t::getHash(),        nimble::step_ack_t::getHash(),
+      nimble::run_control_t::getHash(),
       nimble::heartbeat_t::getHash(),        nimble::timing_health_t::getHash(),
       nimble::fault_event_t::getHash()};
   const std::set<int64_t> unique(hashes.begin(), hashes.end());
