@@ -650,6 +650,7 @@ TEST_CASE("enumeration constants have their documented values", "[lcmtypes]") {
   CHECK(heartbeat_t::STATE_RUNNING == 2);
   CHECK(heartbeat_t::STATE_STOPPING == 3);
   CHECK(heartbeat_t::STATE_FAULT == 4);
+  CHECK(heartbeat_t::STATE_FINISHED == 5);
 
   CHECK(fault_event_t::SEVERITY_INFO == 0);
   CHECK(fault_event_t::SEVERITY_WARNING == 1);

@@ -1,0 +1,361 @@
+#include "plant/plant_model.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace nimble::plant {
+namespace {
+
+// State layout.
+enum : int {
+  kN = 0, kE, kD,            // position NED [m]
+  kU, kV, kW,                // body velocity [m/s]
+  kPhi, kTheta, kPsi,        // ZYX Euler angles [rad]
+  kP, kQ, kR,                // body rates [rad/s]
+  kFcoll,                    // actual collective flapping frequency [rad/s]
+  kDf,                       // actual flapping-frequency difference [rad/s]
+  kDd, kDdRate,              // dihedral servo position [rad] and rate [rad/s]
+  kDw, kDwRate,              // wing-root servo position [rad] and rate [rad/s]
+  kStates
+};
+
+double get_or_zero(const DerivativeModel& m, const std::string& key) {
+  const auto it = m.derivatives.find(key);
+  return it == m.derivatives.end() ? 0.0 : it->second;
+}
+
+std::vector<double> read_list(ConfigMap& map, const std::string& key) {
+  std::vector<double> out;
+  if (!map.has(key)) {
+    map.get_double_or(key, 0.0);  // mark as known
+    return out;
+  }
+  const YAML::Node node = map.get_node(key);
+  if (!node.IsSequence()) map.fail(key, "must be a list of numbers");
+  for (const auto& item : node) {
+    try {
+      out.push_back(item.as<double>());
+    } catch (const YAML::Exception&) {
+      map.fail(key, "must be a list of numbers");
+    }
+    if (!std::isfinite(out.back()) || std::fabs(out.back()) > 1.0) {
+      map.fail(key, "entries must be finite and at most 1 in magnitude (N or N m)");
+    }
+  }
+  return out;
+}
+
+Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
+  const double cr = std::cos(phi / 2), sr = std::sin(phi / 2);
+  const double cp = std::cos(theta / 2), sp = std::sin(theta / 2);
+  const double cy = std::cos(psi / 2), sy = std::sin(psi / 2);
+  return {cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr,
+          sy * cp * cr - cy * sp * sr};
+}
+
+}  // namespace
+
+PlantConfig plant_config_from(ConfigMap& map) {
+  PlantConfig c;
+  c.rate_hz = map.get_double_or("rate_hz", c.rate_hz, Range::closed(100.0, 20000.0));
+  c.truth_rate_hz = map.get_double_or("truth_rate_hz", c.truth_rate_hz, Range{0.0, 20000.0, true, false});
+  c.feedback_rate_hz = map.get_double_or("feedback_rate_hz", c.feedback_rate_hz, Range{0.0, 20000.0, true, false});
+  c.command_timeout_s = map.get_double_or("command_timeout_s", c.command_timeout_s, Range{0.0, 10.0, true, false});
+  for (const auto& [key, rate] : {std::pair<const char*, double>{"truth_rate_hz", c.truth_rate_hz},
+                                  {"feedback_rate_hz", c.feedback_rate_hz}}) {
+    const double ratio = c.rate_hz / rate;
+    if (std::fabs(ratio - std::round(ratio)) > 1e-9) {
+      map.fail(key, "must divide rate_hz (" + std::to_string(c.rate_hz) + " Hz) into whole steps");
+    }
+  }
+  const double period_ns = 1e9 / c.rate_hz;
+  if (std::fabs(period_ns - std::round(period_ns)) > 1e-6) {
+    map.fail("rate_hz", "must give a whole number of nanoseconds per step (e.g. 500, 1000, 2000)");
+  }
+  if (map.has("flap_actuator")) {
+    ConfigMap m = map.get_map("flap_actuator");
+    c.flap.delta_f_gain_radps = m.get_double_or("delta_f_gain_radps", c.flap.delta_f_gain_radps, Range::positive());
+    c.flap.pole_radps = m.get_double_or("pole_radps", c.flap.pole_radps, Range::positive());
+    m.finish();
+  }
+  if (map.has("servo")) {
+    ConfigMap m = map.get_map("servo");
+    c.servo.wn2_rad2ps2 = m.get_double_or("wn2_rad2ps2", c.servo.wn2_rad2ps2, Range::positive());
+    c.servo.c1_radps = m.get_double_or("c1_radps", c.servo.c1_radps, Range::positive());
+    m.finish();
+  }
+  if (map.has("thrust")) {
+    ConfigMap m = map.get_map("thrust");
+    c.thrust.slope_n_per_hz = m.get_double_or("slope_n_per_hz", c.thrust.slope_n_per_hz, Range::positive());
+    c.thrust.offset_n = m.get_double_or("offset_n", c.thrust.offset_n);
+    c.thrust.pairs = m.get_double_or("pairs", c.thrust.pairs, Range::positive());
+    m.finish();
+  }
+  c.collective_radps_per_pct = map.get_double_or("collective_radps_per_pct", c.collective_radps_per_pct, Range::positive());
+  c.vertical_damping_Zw_nspm = map.get_double_or("vertical_damping_Zw_nspm", c.vertical_damping_Zw_nspm, Range{-10.0, 0.0, false, false});
+  if (map.has("initial")) {
+    ConfigMap m = map.get_map("initial");
+    const Range rates = Range::closed(-20.0, 20.0);
+    c.initial.p_radps = m.get_double_or("p_radps", 0.0, rates);
+    c.initial.q_radps = m.get_double_or("q_radps", 0.0, rates);
+    c.initial.r_radps = m.get_double_or("r_radps", 0.0, rates);
+    c.initial.v_mps = m.get_double_or("v_mps", 0.0, Range::closed(-5.0, 5.0));
+    c.initial.phi_rad = m.get_double_or("phi_rad", 0.0, Range::closed(-1.2, 1.2));
+    c.initial.theta_rad = m.get_double_or("theta_rad", 0.0, Range::closed(-1.2, 1.2));
+    m.finish();
+  }
+  if (map.has("effects")) {
+    ConfigMap e = map.get_map("effects");
+    EffectsConfig& fx = c.effects;
+    if (e.has("flapping_forcing")) {
+      ConfigMap m = e.get_map("flapping_forcing");
+      fx.flapping_forcing.enabled = m.get_bool("enabled");
+      fx.flapping_forcing.roll_moment_amplitudes_nm = read_list(m, "roll_moment_amplitudes_nm");
+      fx.flapping_forcing.side_force_amplitudes_n = read_list(m, "side_force_amplitudes_n");
+      m.finish();
+    }
+    if (e.has("lateral_inflow")) {
+      ConfigMap m = e.get_map("lateral_inflow");
+      fx.lateral_inflow.enabled = m.get_bool("enabled");
+      fx.lateral_inflow.Y_vv_ns2pm2 = m.get_double_or("Y_vv_ns2pm2", 0.0, Range::closed(-1.0, 1.0));
+      fx.lateral_inflow.L_vv_ns2pm = m.get_double_or("L_vv_ns2pm", 0.0, Range::closed(-0.1, 0.1));
+      m.finish();
+    }
+    if (e.has("forward_speed_coupling")) {
+      ConfigMap m = e.get_map("forward_speed_coupling");
+      fx.forward_speed_coupling.enabled = m.get_bool("enabled");
+      fx.forward_speed_coupling.gain_per_mps = m.get_double_or("gain_per_mps", 0.0, Range::closed(-2.0, 2.0));
+      m.finish();
+    }
+    if (e.has("actuator_delay")) {
+      ConfigMap m = e.get_map("actuator_delay");
+      fx.actuator_delay.enabled = m.get_bool("enabled");
+      fx.actuator_delay.delay_s = m.get_double_or("delay_s", 0.0, Range::closed(0.0, 0.5));
+      m.finish();
+    }
+    if (e.has("lateral_gust")) {
+      ConfigMap m = e.get_map("lateral_gust");
+      fx.lateral_gust.enabled = m.get_bool("enabled");
+      fx.lateral_gust.sigma_mps = m.get_double_or("sigma_mps", 0.0, Range::closed(0.0, 5.0));
+      fx.lateral_gust.tau_s = m.get_double_or("tau_s", 1.0, Range{0.0, 100.0, true, false});
+      m.finish();
+    }
+    e.finish();
+  }
+  map.finish();
+  return c;
+}
+
+PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
+                       const Vehicle& vehicle, const PlantConfig& config)
+    : lat_(lateral), lon_(longitudinal), veh_(vehicle), cfg_(config), rng_(config.seed) {
+  if (lat_.structure == Structure::kLongitudinal) {
+    throw std::invalid_argument("plant: model '" + lat_.name + "' is longitudinal; the plant needs a lateral model");
+  }
+  if (lon_ && lon_->structure != Structure::kLongitudinal) {
+    throw std::invalid_argument("plant: longitudinal model '" + lon_->name + "' has structure " +
+                                to_string(lon_->structure));
+  }
+  dt_s_ = 1.0 / cfg_.rate_hz;
+  lateral4_ = lat_.structure == Structure::kLateral4;
+  active_r_ = lateral4_;
+  active_q_ = lon_.has_value();
+  active_u_ = lon_.has_value();
+
+  const auto& L = lat_;
+  Lp_ = get_or_zero(L, "Lp"); Lr_ = get_or_zero(L, "Lr"); Lv_ = get_or_zero(L, "Lv");
+  Np_ = get_or_zero(L, "Np"); Nr_ = get_or_zero(L, "Nr"); Nv_ = get_or_zero(L, "Nv");
+  Yp_ = get_or_zero(L, "Yp"); Yr_ = get_or_zero(L, "Yr"); Yv_ = get_or_zero(L, "Yv");
+  L_df_ = get_or_zero(L, "L_df"); L_dt_ = get_or_zero(L, "L_dt"); L_dd_ = get_or_zero(L, "L_dd"); L_dw_ = get_or_zero(L, "L_dw");
+  N_df_ = get_or_zero(L, "N_df"); N_dt_ = get_or_zero(L, "N_dt"); N_dd_ = get_or_zero(L, "N_dd"); N_dw_ = get_or_zero(L, "N_dw");
+  Y_df_ = get_or_zero(L, "Y_df"); Y_dt_ = get_or_zero(L, "Y_dt"); Y_dd_ = get_or_zero(L, "Y_dd"); Y_dw_ = get_or_zero(L, "Y_dw");
+  if (lon_) {
+    const auto& M = *lon_;
+    Mq_ = M.at("Mq"); Mu_ = M.at("Mu"); Mw_ = M.at("Mw"); M_dd_ = get_or_zero(M, "M_dd");
+    Xq_ = M.at("Xq"); Xu_ = M.at("Xu"); Xw_ = M.at("Xw"); X_dd_ = get_or_zero(M, "X_dd");
+    Zq_ = M.at("Zq"); Zu_ = M.at("Zu"); Zw_ = M.at("Zw"); Z_dd_ = get_or_zero(M, "Z_dd");
+  }
+
+  // Trim: thrust equals weight.
+  const Trim& trim = lat_.trim;
+  trim_thrust_n_ = veh_.mass_kg * veh_.gravity_mps2 * std::cos(trim.theta0_rad) * std::cos(trim.phi0_rad);
+  const double f_hz = (trim_thrust_n_ / cfg_.thrust.pairs + cfg_.thrust.offset_n) / cfg_.thrust.slope_n_per_hz;
+  f_trim_radps_ = 2.0 * M_PI * f_hz;
+
+  x_ = Eigen::VectorXd::Zero(kStates);
+  x_[kU] = trim.u0_mps;
+  x_[kW] = trim.w0_mps;
+  x_[kPhi] = trim.phi0_rad + cfg_.initial.phi_rad;
+  x_[kTheta] = trim.theta0_rad + (active_q_ ? cfg_.initial.theta_rad : 0.0);
+  x_[kP] = cfg_.initial.p_radps;
+  x_[kQ] = active_q_ ? cfg_.initial.q_radps : 0.0;
+  x_[kR] = active_r_ ? cfg_.initial.r_radps : 0.0;
+  x_[kV] = cfg_.initial.v_mps;
+  x_[kFcoll] = f_trim_radps_;
+
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.roll_moment_amplitudes_nm.size(); ++h) {
+    forcing_phase_roll_.push_back(phase(rng_));
+  }
+  for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.side_force_amplitudes_n.size(); ++h) {
+    forcing_phase_side_.push_back(phase(rng_));
+  }
+  update_truth(trim_command());
+}
+
+ActuatorInput PlantModel::trim_command() const {
+  return ActuatorInput{f_trim_radps_, f_trim_radps_, 0.0, 0.0};
+}
+
+ActuatorInput PlantModel::delayed(const ActuatorInput& cmd) {
+  const auto& d = cfg_.effects.actuator_delay;
+  if (!d.enabled || d.delay_s <= 0.0) return cmd;
+  // The plant applies the newest command issued at least delay_s ago (trim before that).
+  delay_line_.emplace_back(t_s_, cmd);
+  const double cutoff = t_s_ - d.delay_s + 1e-9;
+  while (delay_line_.size() >= 2 && delay_line_[1].first <= cutoff) delay_line_.pop_front();
+  return delay_line_.front().first <= cutoff ? delay_line_.front().second : trim_command();
+}
+
+Eigen::VectorXd PlantModel::derivative(const Eigen::VectorXd& x, const ActuatorInput& u, double t,
+                                       Eigen::Vector3d* specific_force, Eigen::Vector3d* omega_dot) const {
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(kStates);
+  const double m = veh_.mass_kg, g = veh_.gravity_mps2;
+  const double Ixx = veh_.Ixx_kgm2, Iyy = veh_.Iyy_kgm2, Izz = veh_.Izz_kgm2, Ixz = veh_.Ixz_kgm2;
+  const double Ic = veh_.Ic();
+  const Trim& trim = lat_.trim;
+
+  const double uu = x[kU], v = x[kV], w = x[kW];
+  const double phi = x[kPhi], theta = x[kTheta], psi = x[kPsi];
+  const double p = x[kP], q = x[kQ], r = x[kR];
+
+  // Actuators: collective with unity gain, delta_f per Eq 33, second-order servos.
+  const double pole = cfg_.flap.pole_radps;
+  const double f_cmd = 0.5 * (u.flap_freq_left_radps + u.flap_freq_right_radps);
+  const double df_cmd = u.flap_freq_left_radps - u.flap_freq_right_radps;
+  dx[kFcoll] = pole * (f_cmd - x[kFcoll]);
+  dx[kDf] = cfg_.flap.delta_f_gain_radps * df_cmd - pole * x[kDf];
+  dx[kDd] = x[kDdRate];
+  dx[kDdRate] = cfg_.servo.wn2_rad2ps2 * (u.dihedral_rad - x[kDd]) - cfg_.servo.c1_radps * x[kDdRate];
+  dx[kDw] = x[kDwRate];
+  dx[kDwRate] = cfg_.servo.wn2_rad2ps2 * (u.wing_root_rad - x[kDw]) - cfg_.servo.c1_radps * x[kDwRate];
+
+  const double df = x[kDf];
+  const double dt_pct = (x[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
+  const double dd = x[kDd], dw = x[kDw];
+  const double f_hz = x[kFcoll] / (2.0 * M_PI);
+  const double thrust = cfg_.thrust.pairs * (cfg_.thrust.slope_n_per_hz * f_hz - cfg_.thrust.offset_n);
+
+  // Aerodynamic perturbation forces and moments.
+  const EffectsConfig& fx = cfg_.effects;
+  const double v_rel = v - (fx.lateral_gust.enabled ? x_gust_ : 0.0);
+  const double du = uu - trim.u0_mps, dw_vel = w - trim.w0_mps;
+  const double k_speed = fx.forward_speed_coupling.enabled ? 1.0 + fx.forward_speed_coupling.gain_per_mps * du : 1.0;
+
+  double L = k_speed * (Lp_ * p + Lr_ * r + Lv_ * v_rel) + L_df_ * df + L_dt_ * dt_pct + L_dd_ * dd + L_dw_ * dw;
+  double N = k_speed * (Np_ * p + Nr_ * r + Nv_ * v_rel) + N_df_ * df + N_dt_ * dt_pct + N_dd_ * dd + N_dw_ * dw;
+  double Y = k_speed * (Yp_ * p + Yr_ * r + Yv_ * v_rel) + Y_df_ * df + Y_dt_ * dt_pct + Y_dd_ * dd + Y_dw_ * dw;
+  double X = 0.0, M = 0.0, Z = cfg_.vertical_damping_Zw_nspm * dw_vel;
+  if (lon_) {
+    M = Mq_ * q + Mu_ * du + Mw_ * dw_vel + M_dd_ * dd;
+    X = Xq_ * q + Xu_ * du + Xw_ * dw_vel + X_dd_ * dd;
+    Z = Zq_ * q + Zu_ * du + Zw_ * dw_vel + Z_dd_ * dd;
+  }
+  if (fx.lateral_inflow.enabled) {
+    Y += fx.lateral_inflow.Y_vv_ns2pm2 * v_rel * std::fabs(v_rel);
+    L += fx.lateral_inflow.L_vv_ns2pm * v_rel * std::fabs(v_rel);
+  }
+  if (fx.flapping_forcing.enabled) {
+    const double phase = flap_phase_rad_ + x_[kFcoll] * (t - t_s_);
+    const auto& ff = fx.flapping_forcing;
+    for (std::size_t h = 0; h < ff.roll_moment_amplitudes_nm.size(); ++h) {
+      L += ff.roll_moment_amplitudes_nm[h] * std::sin(static_cast<double>(h + 1) * phase + forcing_phase_roll_[h]);
+    }
+    for (std::size_t h = 0; h < ff.side_force_amplitudes_n.size(); ++h) {
+      Y += ff.side_force_amplitudes_n[h] * std::sin(static_cast<double>(h + 1) * phase + forcing_phase_side_[h]);
+    }
+  }
+  Z -= thrust;
+
+  // Translational dynamics (thesis Eq 3.1), body axes.
+  const double sphi = std::sin(phi), cphi = std::cos(phi), sth = std::sin(theta), cth = std::cos(theta);
+  dx[kU] = active_u_ ? -(q * w - r * v) + X / m - g * sth : 0.0;
+  dx[kV] = -(r * uu - p * w) + Y / m + g * cth * sphi;
+  dx[kW] = -(p * v - q * uu) + Z / m + g * cth * cphi;
+
+  // Rotational dynamics: [Ixx -Ixz; -Ixz Izz] [pdot; rdot] = [b1; b2].
+  const double b1 = L - (Izz - Iyy) * q * r + Ixz * p * q;
+  const double b2 = N - (Iyy - Ixx) * p * q - Ixz * q * r;
+  double pdot, rdot;
+  if (lateral4_ && lat_.coupling == RollYawCoupling::kDecoupled) {
+    pdot = Izz / Ic * b1;  // thesis Eq 8.7: the identified L and N act decoupled
+    rdot = Ixx / Ic * b2;
+  } else {
+    pdot = (Izz * b1 + Ixz * b2) / Ic;
+    rdot = (Ixz * b1 + Ixx * b2) / Ic;
+  }
+  const double qdot = (M - (Ixx - Izz) * p * r - Ixz * (p * p - r * r)) / Iyy;
+  dx[kP] = pdot;
+  dx[kQ] = active_q_ ? qdot : 0.0;
+  dx[kR] = active_r_ ? rdot : 0.0;
+
+  // Kinematics.
+  const double tth = std::tan(theta);
+  dx[kPhi] = p + (q * sphi + r * cphi) * tth;
+  dx[kTheta] = q * cphi - r * sphi;
+  dx[kPsi] = (q * sphi + r * cphi) / cth;
+  const double spsi = std::sin(psi), cpsi = std::cos(psi);
+  Eigen::Matrix3d R;  // body to NED, ZYX
+  R << cth * cpsi, sphi * sth * cpsi - cphi * spsi, cphi * sth * cpsi + sphi * spsi,
+       cth * spsi, sphi * sth * spsi + cphi * cpsi, cphi * sth * spsi - sphi * cpsi,
+       -sth, sphi * cth, cphi * cth;
+  dx.segment<3>(kN) = R * Eigen::Vector3d(uu, v, w);
+
+  if (specific_force) *specific_force = Eigen::Vector3d(X / m, Y / m, Z / m);
+  if (omega_dot) *omega_dot = Eigen::Vector3d(dx[kP], dx[kQ], dx[kR]);
+  return dx;
+}
+
+void PlantModel::step(const ActuatorInput& cmd_in) {
+  const ActuatorInput cmd = delayed(cmd_in);
+  const double h = dt_s_;
+  const Eigen::VectorXd k1 = derivative(x_, cmd, t_s_, nullptr, nullptr);
+  const Eigen::VectorXd k2 = derivative(x_ + 0.5 * h * k1, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
+  const Eigen::VectorXd k3 = derivative(x_ + 0.5 * h * k2, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
+  const Eigen::VectorXd k4 = derivative(x_ + h * k3, cmd, t_s_ + h, nullptr, nullptr);
+  const double f_before = x_[kFcoll];
+  x_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  flap_phase_rad_ = std::fmod(flap_phase_rad_ + 0.5 * (f_before + x_[kFcoll]) * h, 2.0 * M_PI);
+  t_s_ += h;
+
+  // Side gust: exact discretisation of the first-order Gauss-Markov process.
+  const auto& gust = cfg_.effects.lateral_gust;
+  if (gust.enabled) {
+    const double a = std::exp(-h / gust.tau_s);
+    x_gust_ = a * x_gust_ + gust.sigma_mps * std::sqrt(1.0 - a * a) * normal_(rng_);
+  }
+  update_truth(cmd);
+}
+
+void PlantModel::update_truth(const ActuatorInput& u) {
+  Eigen::Vector3d sf, wdot;
+  derivative(x_, u, t_s_, &sf, &wdot);
+  Truth& tr = truth_;
+  tr.time_s = t_s_;
+  tr.position_ned_m = x_.segment<3>(kN);
+  tr.velocity_body_mps = x_.segment<3>(kU);
+  tr.euler_rad = x_.segment<3>(kPhi);
+  tr.quaternion_wxyz = quaternion_from_euler(x_[kPhi], x_[kTheta], x_[kPsi]);
+  tr.omega_body_radps = x_.segment<3>(kP);
+  tr.specific_force_body_mps2 = sf;
+  tr.angular_accel_body_radps2 = wdot;
+  tr.flap_freq_left_radps = x_[kFcoll] + 0.5 * x_[kDf];
+  tr.flap_freq_right_radps = x_[kFcoll] - 0.5 * x_[kDf];
+  tr.delta_f_radps = x_[kDf];
+  tr.throttle_pct = (x_[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
+  tr.dihedral_rad = x_[kDd];
+  tr.wing_root_rad = x_[kDw];
+  tr.gust_v_mps = x_gust_;
+}
+
+}  // namespace nimble::plant

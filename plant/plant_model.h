@@ -1,0 +1,206 @@
+#pragma once
+/// PlantModel: nonlinear rigid-body dynamics of the Delfly Nimble near hover with the
+/// identified aerodynamic derivatives, the flap and servo actuators, and optional effects
+/// that the paper's linear model leaves out. Transport-free; the plant process wraps it.
+///
+/// Equations of motion: thesis Eq 3.1 (rigid body, body axes x forward, y right, z down).
+/// Forces and moments: trim thrust from the flapping frequency, T = 2 (0.0114 f - 0.0449) N
+/// with f in Hz, plus the derivative model's perturbation forces and moments
+/// (L, N, Y from the lateral model; M, X, Z from an optional longitudinal model).
+/// Degrees of freedom the configured models do not describe are held at trim, as the
+/// vehicle's own pitch and yaw loops would hold them (lateral3: q, r, u, theta, psi).
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "core/config.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+
+namespace nimble::plant {
+
+/// Flap mechanism: the collective follows its command through pole/(s + pole); the
+/// flapping-frequency difference through delta_f_gain/(s + pole).
+struct FlapActuatorConfig {
+  /// delta_f = gain / (s + pole) * delta_f_cmd (thesis Eq 33: 12.56/(s+12.56) scaled by 1/1.4).
+  double delta_f_gain_radps = 8.97;
+  double pole_radps = 12.56;
+};
+
+/// Second-order servo: y = wn^2 / (s^2 + 2 zeta wn s + wn^2) u (thesis: 554.2/(s^2+30.25 s+554.2)).
+struct ServoConfig {
+  double wn2_rad2ps2 = 554.2;  ///< wn^2 [1/s^2]
+  double c1_radps = 30.25;     ///< 2 zeta wn [1/s]
+};
+
+/// Thrust of the two wing pairs: T = pairs * (slope * f_hz - offset) [N] (paper-facts §3).
+struct ThrustConfig {
+  double slope_n_per_hz = 0.0114;
+  double offset_n = 0.0449;
+  double pairs = 2.0;
+};
+
+/// Periodic forcing at the flapping frequency and its harmonics (thesis §7: oscillations at
+/// hover not captured by the linear model). Amplitude h-1 of the list acts at h times the
+/// flapping frequency; phases are drawn from the seed.
+struct FlappingForcingConfig {
+  bool enabled = false;
+  std::vector<double> roll_moment_amplitudes_nm;  ///< per harmonic [N m]
+  std::vector<double> side_force_amplitudes_n;    ///< per harmonic [N]
+};
+
+/// Lateral-inflow nonlinearity: Y += Y_vv v|v|, L += L_vv v|v| (sideways flight, thesis §9.5).
+struct LateralInflowConfig {
+  bool enabled = false;
+  double Y_vv_ns2pm2 = 0.0;  ///< [N s^2/m^2]
+  double L_vv_ns2pm = 0.0;   ///< [N m s^2/m^2]
+};
+
+/// Forward-speed coupling: the lateral stability derivatives scale with (1 + k (u - u0)).
+struct ForwardSpeedCouplingConfig {
+  bool enabled = false;
+  double gain_per_mps = 0.0;  ///< k [1/(m/s)]
+};
+
+/// Pure delay on every actuator command.
+struct ActuatorDelayConfig {
+  bool enabled = false;
+  double delay_s = 0.0;
+};
+
+/// Lateral gust: first-order Gauss-Markov side wind v_g with standard deviation sigma and
+/// correlation time tau; aerodynamics see v - v_g.
+struct LateralGustConfig {
+  bool enabled = false;
+  double sigma_mps = 0.0;
+  double tau_s = 1.0;
+};
+
+struct EffectsConfig {
+  FlappingForcingConfig flapping_forcing;
+  LateralInflowConfig lateral_inflow;
+  ForwardSpeedCouplingConfig forward_speed_coupling;
+  ActuatorDelayConfig actuator_delay;
+  LateralGustConfig lateral_gust;
+};
+
+/// Initial perturbation from trim.
+struct InitialState {
+  double p_radps = 0.0, q_radps = 0.0, r_radps = 0.0;
+  double v_mps = 0.0;
+  double phi_rad = 0.0, theta_rad = 0.0;
+};
+
+/// Everything the plant model needs besides the derivative models and the vehicle.
+struct PlantConfig {
+  double rate_hz = 1000.0;           ///< integration rate [Hz]
+  double truth_rate_hz = 1000.0;     ///< TRUTH publication rate [Hz]
+  double feedback_rate_hz = 100.0;   ///< ACTUATOR_FB publication rate [Hz]
+  double command_timeout_s = 0.1;    ///< hold the safe state when commands stop this long [s]
+  FlapActuatorConfig flap;
+  ServoConfig servo;
+  ThrustConfig thrust;
+  /// Collective flapping frequency per % of throttle [rad/s per %]: converts the actual
+  /// collective back to the model's delta_t. Not published; assumption: 1 rad/s per %.
+  double collective_radps_per_pct = 1.0;
+  /// Vertical aerodynamic damping when no longitudinal model is given [N s/m]
+  /// (thesis Table E.4: Zw = -5.9e-3).
+  double vertical_damping_Zw_nspm = -5.9e-3;
+  InitialState initial;
+  EffectsConfig effects;
+  uint64_t seed = 1;
+};
+
+/// Reads the `plant:` section of a scenario.
+/// @throws ConfigError naming the key.
+PlantConfig plant_config_from(ConfigMap& map);
+
+/// Actuator command as the plant receives it.
+struct ActuatorInput {
+  double flap_freq_left_radps = 0.0;
+  double flap_freq_right_radps = 0.0;
+  double dihedral_rad = 0.0;
+  double wing_root_rad = 0.0;
+};
+
+/// Truth of the rigid body and actuators at one instant.
+struct Truth {
+  double time_s = 0.0;
+  Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();  ///< u v w
+  Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();          ///< phi theta psi
+  Eigen::Vector4d quaternion_wxyz = Eigen::Vector4d(1, 0, 0, 0);
+  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();   ///< p q r
+  Eigen::Vector3d specific_force_body_mps2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_accel_body_radps2 = Eigen::Vector3d::Zero();
+  double flap_freq_left_radps = 0.0;
+  double flap_freq_right_radps = 0.0;
+  double delta_f_radps = 0.0;
+  double throttle_pct = 0.0;  ///< actual delta_t (deviation from trim) [%]
+  double dihedral_rad = 0.0;
+  double wing_root_rad = 0.0;
+  double gust_v_mps = 0.0;
+};
+
+class PlantModel {
+ public:
+  /// @param lateral  the lateral derivative model (lateral3 or lateral4)
+  /// @param longitudinal optional longitudinal model (q u w theta, input delta_d)
+  /// @throws std::invalid_argument if the structures do not fit.
+  PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
+             const Vehicle& vehicle, const PlantConfig& config);
+
+  /// Advances by one integration step of 1/rate_hz with `cmd` held (RK4).
+  void step(const ActuatorInput& cmd);
+
+  const Truth& truth() const { return truth_; }
+  /// Actuator command that holds trimmed hover (both wings at the trim frequency).
+  ActuatorInput trim_command() const;
+  /// Hover flapping frequency for thrust = weight [rad/s].
+  double trim_flap_frequency_radps() const { return f_trim_radps_; }
+  double dt_s() const { return dt_s_; }
+
+  /// Full state vector (for tests).
+  const Eigen::VectorXd& state() const { return x_; }
+
+ private:
+  Eigen::VectorXd derivative(const Eigen::VectorXd& x, const ActuatorInput& u, double t,
+                             Eigen::Vector3d* specific_force, Eigen::Vector3d* omega_dot) const;
+  void update_truth(const ActuatorInput& u);
+  ActuatorInput delayed(const ActuatorInput& cmd);
+
+  DerivativeModel lat_;
+  std::optional<DerivativeModel> lon_;
+  Vehicle veh_;
+  PlantConfig cfg_;
+  double dt_s_;
+  double f_trim_radps_;
+  double trim_thrust_n_;
+  bool lateral4_;
+  // Cached derivatives (0 where the model has none).
+  double Lp_ = 0, Lr_ = 0, Lv_ = 0, Np_ = 0, Nr_ = 0, Nv_ = 0, Yp_ = 0, Yr_ = 0, Yv_ = 0;
+  double L_df_ = 0, L_dt_ = 0, L_dd_ = 0, L_dw_ = 0;
+  double N_df_ = 0, N_dt_ = 0, N_dd_ = 0, N_dw_ = 0;
+  double Y_df_ = 0, Y_dt_ = 0, Y_dd_ = 0, Y_dw_ = 0;
+  double Mq_ = 0, Mu_ = 0, Mw_ = 0, M_dd_ = 0, Xq_ = 0, Xu_ = 0, Xw_ = 0, X_dd_ = 0;
+  double Zq_ = 0, Zu_ = 0, Zw_ = 0, Z_dd_ = 0;
+  bool active_q_ = false, active_r_ = false, active_u_ = false;
+
+  Eigen::VectorXd x_;
+  double t_s_ = 0.0;
+  double flap_phase_rad_ = 0.0;
+  double x_gust_ = 0.0;  ///< side gust velocity [m/s]
+  std::vector<double> forcing_phase_roll_, forcing_phase_side_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  std::deque<std::pair<double, ActuatorInput>> delay_line_;
+  Truth truth_;
+};
+
+}  // namespace nimble::plant

@@ -1,0 +1,77 @@
+#include "transport/bus.h"
+
+#include <poll.h>
+
+#include "transport/clock.h"
+
+namespace nimble::transport {
+
+Bus::Bus(const std::string& url) : url_(url) {
+  lcm_ = std::make_unique<lcm::LCM>(url);
+  if (!lcm_->good()) {
+    throw TransportError("LCM could not start on '" + (url.empty() ? std::string("(default URL)") : url) +
+                         "'. For udpm:// the loopback needs multicast: run 'rig check' for the fix, "
+                         "or let 'rig run' create a private network namespace");
+  }
+}
+
+Bus::~Bus() = default;
+
+void Bus::track_seq(int64_t seq, ChannelStats& stats) {
+  if (stats.last_seq >= 0 && seq > stats.last_seq + 1) stats.drops += seq - stats.last_seq - 1;
+  stats.last_seq = seq;
+}
+
+void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+  if (raw) {
+    raw(ch, rbuf->data, static_cast<int>(rbuf->data_size), monotonic_us());
+    return;
+  }
+  std::string error;
+  if (decode_and_call(rbuf->data, static_cast<int>(rbuf->data_size), *stats, error)) {
+    ++stats->received;
+  } else {
+    ++stats->malformed;
+    if (bus->on_malformed_) bus->on_malformed_(ch, error);
+  }
+}
+
+void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
+  lcm::Subscription* handle = lcm_->subscribe(sub->channel, &Subscription::on_receive, sub.get());
+  if (handle != nullptr) handle->setQueueCapacity(queue_capacity);
+  subs_.push_back(std::move(sub));
+}
+
+void Bus::subscribe_raw(const std::string& regex,
+                        std::function<void(const std::string&, const void*, int, int64_t)> handler,
+                        int queue_capacity) {
+  auto sub = std::make_unique<Subscription>();
+  sub->channel = regex;
+  sub->bus = this;
+  sub->raw = std::move(handler);
+  attach(std::move(sub), queue_capacity);
+}
+
+int Bus::fileno() const { return lcm_->getFileno(); }
+
+int Bus::handle() { return lcm_->handle(); }
+
+int Bus::handle_timeout(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+
+int Bus::drain() {
+  int n = 0;
+  pollfd pfd{fileno(), POLLIN, 0};
+  while (::poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN)) {
+    if (lcm_->handle() != 0) break;
+    ++n;
+  }
+  return n;
+}
+
+int64_t Bus::malformed_total() const {
+  int64_t n = 0;
+  for (const auto& [name, s] : stats_) n += s.malformed;
+  return n;
+}
+
+}  // namespace nimble::transport

@@ -1,0 +1,131 @@
+#pragma once
+/// The rig's LCM transport: one Bus per process.
+///
+/// Bus wraps lcm::LCM with what a rig process needs and LCM 1.3.1 lacks:
+///  - typed subscriptions with std::function handlers;
+///  - malformed messages (wrong fingerprint, truncated) counted and reported, never thrown;
+///  - per-channel receive statistics: count, drops (gaps in `seq`), queue capacity set on purpose;
+///  - a clear error naming the URL when LCM cannot start (for example no multicast route).
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+namespace nimble::transport {
+
+/// LCM could not be started on the given URL.
+class TransportError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Receive statistics of one subscribed channel.
+struct ChannelStats {
+  int64_t received = 0;   ///< messages decoded and delivered
+  int64_t malformed = 0;  ///< messages that failed to decode (dropped)
+  int64_t drops = 0;      ///< messages missing according to gaps in the publisher's seq
+  int64_t last_seq = -1;  ///< seq of the newest message, -1 before the first
+};
+
+/// Called for a message that failed to decode: channel and a description.
+using MalformedHandler = std::function<void(const std::string& channel, const std::string& what)>;
+
+/// Default receive queue per subscription [messages]; LCM's own default of 30 drops silently.
+constexpr int kDefaultQueueCapacity = 1000;
+
+class Bus {
+ public:
+  /// Opens LCM on `url` (empty: LCM_DEFAULT_URL or LCM's default).
+  /// @throws TransportError naming the URL if LCM does not start.
+  explicit Bus(const std::string& url);
+  ~Bus();
+  Bus(const Bus&) = delete;
+  Bus& operator=(const Bus&) = delete;
+
+  const std::string& url() const { return url_; }
+
+  /// Publishes `msg` on `channel`. Never throws; a failure is counted in publish_failures().
+  template <typename T>
+  void publish(const std::string& channel, const T& msg) {
+    if (lcm_->publish(channel, &msg) != 0) ++publish_failures_;
+  }
+
+  /// Subscribes `handler` to `channel` (an exact name). The handler gets the decoded
+  /// message and its receive time [us, CLOCK_MONOTONIC]. Types whose first fields are
+  /// `utime, seq` get drop counting from gaps in seq.
+  template <typename T>
+  void subscribe(const std::string& channel, std::function<void(const T&)> handler,
+                 int queue_capacity = kDefaultQueueCapacity) {
+    auto sub = std::make_unique<Subscription>();
+    sub->channel = channel;
+    sub->stats = &stats_[channel];
+    sub->bus = this;
+    sub->decode_and_call = [handler](const void* data, int size, ChannelStats& stats,
+                                     std::string& error) -> bool {
+      T msg;
+      if (msg.decode(data, 0, size) != size) {
+        error = "cannot decode as " + std::string(T::getTypeName()) +
+                " (wrong type or truncated, " + std::to_string(size) + " bytes)";
+        return false;
+      }
+      track_seq(msg.seq, stats);
+      handler(msg);
+      return true;
+    };
+    attach(std::move(sub), queue_capacity);
+  }
+
+  /// Subscribes to every channel matching `regex` without decoding (for loggers).
+  /// The handler gets channel, data, size and the receive time [us, CLOCK_MONOTONIC].
+  void subscribe_raw(const std::string& regex,
+                     std::function<void(const std::string&, const void*, int, int64_t)> handler,
+                     int queue_capacity = 10000);
+
+  /// Called for every malformed message in addition to counting it.
+  void on_malformed(MalformedHandler handler) { on_malformed_ = std::move(handler); }
+
+  /// File descriptor that becomes readable when messages wait (for poll/ppoll).
+  int fileno() const;
+  /// Handles one message, blocking until one arrives. Returns 0 on success, -1 on error.
+  int handle();
+  /// Handles one message or returns after `timeout_ms`: > 0 handled, 0 timeout, < 0 error.
+  int handle_timeout(int timeout_ms);
+  /// Handles every message already waiting without blocking; returns how many.
+  int drain();
+
+  /// Receive statistics by channel (exact subscriptions only).
+  const std::map<std::string, ChannelStats>& stats() const { return stats_; }
+  int64_t publish_failures() const { return publish_failures_; }
+  int64_t malformed_total() const;
+
+  /// The underlying LCM instance (for tools that need its full API).
+  lcm::LCM& lcm() { return *lcm_; }
+
+ private:
+  struct Subscription {
+    std::string channel;
+    ChannelStats* stats = nullptr;
+    Bus* bus = nullptr;
+    std::function<bool(const void*, int, ChannelStats&, std::string&)> decode_and_call;
+    std::function<void(const std::string&, const void*, int, int64_t)> raw;
+    void on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  };
+
+  static void track_seq(int64_t seq, ChannelStats& stats);
+  void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
+
+  std::string url_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::map<std::string, ChannelStats> stats_;
+  std::vector<std::unique_ptr<Subscription>> subs_;
+  MalformedHandler on_malformed_;
+  int64_t publish_failures_ = 0;
+};
+
+}  // namespace nimble::transport

@@ -1,0 +1,343 @@
+#include "transport/node.h"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <nimble/rig_clock_t.hpp>
+#include <nimble/timing_health_t.hpp>
+
+namespace nimble::transport {
+
+volatile std::sig_atomic_t ProcessNode::stop_requested_ = 0;
+
+namespace {
+
+constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
+
+extern "C" void on_stop_signal(int) { ProcessNode::request_stop(); }
+
+}  // namespace
+
+NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name) {
+  NodeOptions o;
+  o.name = default_name;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--name") o.name = value();
+    else if (a == "--scenario") o.scenario_file = value();
+    else if (a == "--lcm-url") o.lcm_url = value();
+    else throw std::invalid_argument("unknown argument '" + a + "' (expected --name, --scenario, --lcm-url)");
+  }
+  if (o.scenario_file.empty()) throw std::invalid_argument("missing --scenario <resolved scenario.yaml>");
+  return o;
+}
+
+ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest)
+    : name_(std::move(name)), config_digest_(std::move(config_digest)), bus_(lcm_url) {
+  bus_.on_malformed([this](const std::string& channel, const std::string& what) {
+    fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
+          "dropped a malformed message on " + channel + ": " + what);
+  });
+}
+
+void ProcessNode::install_signal_handlers() {
+  struct sigaction sa{};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+}
+
+void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn) {
+  const double period = 1e9 / rate_hz;
+  if (!(rate_hz > 0.0) || std::fabs(period - std::round(period)) > 1e-6) {
+    throw std::invalid_argument("task '" + label + "': rate " + std::to_string(rate_hz) +
+                                " Hz does not give a whole number of nanoseconds per period");
+  }
+  tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), 0});
+}
+
+void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message) {
+  const int64_t second = monotonic_ns() / 1000000000LL;
+  auto& [sec, count] = fault_budget_[code];
+  if (sec != second) {
+    sec = second;
+    count = 0;
+  }
+  if (++count > 10) return;
+  fault_event_t f;
+  f.utime = wall_us();
+  f.seq = fault_seq_++;
+  f.rig_utime = sim_time_ns_ / 1000;
+  f.process = name_;
+  f.severity = severity;
+  f.code = code;
+  f.channel = channel;
+  f.message = message;
+  bus_.publish(channels::kFault, f);
+}
+
+void ProcessNode::publish_heartbeat(int8_t state) {
+  hb_state_ = state;
+  heartbeat_t hb;
+  hb.utime = wall_us();
+  hb.seq = hb_seq_++;
+  hb.process = name_;
+  hb.pid = static_cast<int32_t>(::getpid());
+  hb.state = state;
+  hb.config_digest = config_digest_;
+  bus_.publish(channels::kHeartbeat, hb);
+  next_heartbeat_us_ = hb.utime + (state == heartbeat_t::STATE_READY ? 100000 : 500000);
+}
+
+void ProcessNode::publish_timing_health() {
+  const int64_t now = wall_us();
+  timing_health_t h;
+  h.utime = now;
+  h.seq = health_seq_++;
+  h.process = name_;
+  h.window_us = started_wall_us_ > 0 ? now - started_wall_us_ : 0;
+  h.loop_rate_hz = tasks_.empty() ? 0.0 : 1e9 / static_cast<double>(tasks_.front().period_ns);
+  h.loop_count = loop_count_;
+  h.overruns = overruns_;
+  h.jitter_p50_us = jitter_.percentile_us(50);
+  h.jitter_p99_us = jitter_.percentile_us(99);
+  h.jitter_max_us = jitter_.max_us();
+  const double window_s = std::max(1e-9, static_cast<double>(h.window_us) / 1e6);
+  for (const auto& [channel, s] : bus_.stats()) {
+    h.channel.push_back(channel);
+    h.count.push_back(s.received);
+    h.rate_hz.push_back(static_cast<double>(s.received) / window_s);
+    const auto it = expected_hz_.find(channel);
+    h.expected_hz.push_back(it == expected_hz_.end() ? 0.0 : it->second);
+    h.drops.push_back(s.drops);
+    h.late.push_back(0);
+  }
+  h.num_channels = static_cast<int32_t>(h.channel.size());
+  bus_.publish(channels::kTimingHealth, h);
+  next_health_us_ = now + 1000000;
+}
+
+void ProcessNode::housekeeping() {
+  const int64_t now = wall_us();
+  if (now >= next_heartbeat_us_) publish_heartbeat(hb_state_);
+  if (started_ && now >= next_health_us_) publish_timing_health();
+  if (stop_requested_) stop_ = true;
+}
+
+void ProcessNode::on_run_control(const run_control_t& msg) {
+  if (msg.command == run_control_t::COMMAND_STOP) {
+    stop_ = true;
+    return;
+  }
+  if (msg.command == run_control_t::COMMAND_START && !started_) {
+    started_ = true;
+    clock_mode_ = msg.clock_mode;
+    t0_ns_ = msg.t0_monotonic_ns;
+    duration_ns_ = msg.duration_ns;
+    run_id_ = msg.run_id;
+    participants_ = msg.participants;
+  }
+}
+
+bool ProcessNode::wait_for_start() {
+  publish_heartbeat(heartbeat_t::STATE_READY);
+  while (!started_ && !stop_) {
+    bus_.handle_timeout(20);
+    housekeeping();
+  }
+  return started_ && !stop_;
+}
+
+int64_t ProcessNode::next_due_ns() const {
+  int64_t due = kNever;
+  for (const auto& t : tasks_) {
+    if (t.next_ns < duration_ns_) due = std::min(due, t.next_ns);
+  }
+  return due;
+}
+
+void ProcessNode::idle_until_stopped() {
+  publish_heartbeat(heartbeat_t::STATE_FINISHED);
+  publish_timing_health();
+  while (!stop_) {
+    bus_.handle_timeout(50);
+    housekeeping();
+  }
+}
+
+int ProcessNode::run() {
+  bus_.subscribe<run_control_t>(channels::kRunControl,
+                                [this](const run_control_t& m) { on_run_control(m); });
+  if (master_) {
+    bus_.subscribe<step_ack_t>(
+        channels::kStepAck,
+        [this](const step_ack_t& ack) {
+          if (next_due_.count(ack.process) == 0) return;  // not a participant of this run
+          last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
+          next_due_[ack.process] = ack.next_due_ns;
+        },
+        100000);
+  } else {
+    bus_.subscribe<rig_clock_t>(
+        channels::kRigClock,
+        [this](const rig_clock_t& tick) {
+          if (!started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
+          bool ran = false;
+          for (auto& t : tasks_) {
+            while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
+              sim_time_ns_ = t.next_ns;
+              t.fn(t.next_ns);
+              t.next_ns += t.period_ns;
+              ++loop_count_;
+              ran = true;
+            }
+          }
+          if (!ran) return;
+          step_ack_t ack;
+          ack.utime = tick.utime;
+          ack.seq = ack_seq_++;
+          ack.step = tick.step;
+          ack.next_due_ns = next_due_ns();
+          ack.process = name_;
+          bus_.publish(channels::kStepAck, ack);
+        },
+        100000);
+  }
+
+  if (!wait_for_start()) {
+    publish_heartbeat(heartbeat_t::STATE_STOPPING);
+    return kExitOk;
+  }
+  started_wall_us_ = wall_us();
+  publish_heartbeat(heartbeat_t::STATE_RUNNING);
+  int code = kExitOk;
+  if (clock_mode_ == run_control_t::CLOCK_MODE_REALTIME) {
+    code = run_realtime();
+  } else if (master_) {
+    code = run_lockstep_master();
+  } else {
+    code = run_lockstep_participant();
+  }
+  publish_timing_health();
+  publish_heartbeat(code == kExitOk ? heartbeat_t::STATE_STOPPING : heartbeat_t::STATE_FAULT);
+  return code;
+}
+
+int ProcessNode::run_realtime() {
+  use_fine_timer_slack();
+  if (tasks_.empty()) {
+    idle_until_stopped();
+    return kExitOk;
+  }
+  const int fd = bus_.fileno();
+  while (!stop_) {
+    Task* task = &tasks_.front();
+    for (auto& t : tasks_) {
+      if (t.next_ns < task->next_ns) task = &t;
+    }
+    if (task->next_ns >= duration_ns_) break;
+    const int64_t deadline = t0_ns_ + task->next_ns;
+    for (;;) {
+      const int64_t now = monotonic_ns();
+      if (now >= deadline || stop_) break;
+      const int64_t wait = deadline - now;
+      timespec ts{wait / 1000000000LL, wait % 1000000000LL};
+      pollfd pfd{fd, POLLIN, 0};
+      if (::ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN)) bus_.handle();
+      housekeeping();
+    }
+    if (stop_) break;
+    jitter_.add_ns(monotonic_ns() - deadline);
+    ++loop_count_;
+    sim_time_ns_ = task->next_ns;
+    task->fn(task->next_ns);
+    task->next_ns += task->period_ns;
+    if (monotonic_ns() > t0_ns_ + task->next_ns) ++overruns_;
+    housekeeping();
+  }
+  if (!stop_) idle_until_stopped();
+  return kExitOk;
+}
+
+int ProcessNode::run_lockstep_participant() {
+  // Tasks run inside the RIG_CLOCK handler; wall time here only paces housekeeping.
+  while (!stop_) {
+    const int64_t before = monotonic_ns();
+    bus_.handle_timeout(50);
+    jitter_.add_ns(monotonic_ns() - before);
+    housekeeping();
+    if (next_due_ns() == kNever && hb_state_ != heartbeat_t::STATE_FINISHED) {
+      publish_heartbeat(heartbeat_t::STATE_FINISHED);
+    }
+  }
+  return kExitOk;
+}
+
+int ProcessNode::run_lockstep_master() {
+  if (tasks_.size() != 1) throw std::logic_error("the lockstep master needs exactly one task");
+  Task& task = tasks_.front();
+  for (const auto& p : participants_) {
+    if (p != name_) {
+      next_due_[p] = 0;
+      last_ack_step_[p] = -1;
+    }
+  }
+  for (int64_t step = 0; !stop_; ++step) {
+    const int64_t t = step * task.period_ns;
+    if (t > duration_ns_) break;
+    const int64_t step_start = monotonic_ns();
+    sim_time_ns_ = t;
+    task.fn(t);
+    task.next_ns = t + task.period_ns;
+    ++loop_count_;
+
+    rig_clock_t tick;
+    tick.utime = t / 1000;
+    tick.seq = clock_seq_++;
+    tick.step = step;
+    tick.sim_time_ns = t;
+    tick.dt_ns = task.period_ns;
+    tick.run_id = run_id_;
+    bus_.publish(channels::kRigClock, tick);
+
+    // Wait for every participant due at this step.
+    const int64_t give_up = monotonic_ns() + static_cast<int64_t>(ack_timeout_ms_) * 1000000LL;
+    for (;;) {
+      std::string missing;
+      for (const auto& [p, due] : next_due_) {
+        if (due <= t && last_ack_step_[p] < step) {
+          missing = p;
+          break;
+        }
+      }
+      if (missing.empty()) break;
+      const int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
+      if (left_ms <= 0 || stop_) {
+        if (stop_) return kExitOk;
+        fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, channels::kStepAck,
+              "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
+                  std::to_string(static_cast<double>(t) / 1e9) + " s) within " +
+                  std::to_string(ack_timeout_ms_) + " ms");
+        return kExitAckTimeout;
+      }
+      bus_.handle_timeout(static_cast<int>(std::min<int64_t>(left_ms, 50)));
+      housekeeping();
+    }
+    jitter_.add_ns(monotonic_ns() - step_start);  // lockstep: wall time per step
+    housekeeping();
+  }
+  if (!stop_) idle_until_stopped();
+  return kExitOk;
+}
+
+}  // namespace nimble::transport

@@ -1,0 +1,170 @@
+#pragma once
+/// ProcessNode: the run-time frame every rig process shares.
+///
+/// A process registers periodic tasks (in simulated time) and message handlers, then
+/// calls run(). ProcessNode then
+///  - publishes HEARTBEAT (READY at 10 Hz until the run starts, then 2 Hz), FAULT events
+///    (rate-limited per code) and TIMING_HEALTH (1 Hz, cumulative loop statistics);
+///  - waits for RUN_CONTROL COMMAND_START from the launcher;
+///  - real time: runs each task against absolute deadlines of CLOCK_MONOTONIC from the
+///    run's t0, handling messages while it waits (ppoll on the LCM descriptor);
+///  - lockstep participant: runs the tasks due at each RIG_CLOCK tick, then answers STEP_ACK
+///    with the time it is next due;
+///  - lockstep master (the plant): runs its task once per step, publishes RIG_CLOCK, and
+///    starts the next step only when every due participant has acknowledged; a participant
+///    that does not answer within the ack timeout is named in a FAULT and run() returns
+///    kExitAckTimeout;
+///  - stops on RUN_CONTROL COMMAND_STOP, SIGTERM or SIGINT, after the duration it reports
+///    STATE_FINISHED and idles until stopped.
+///
+/// Channels: publishes HEARTBEAT, FAULT, TIMING_HEALTH, STEP_ACK (lockstep participants),
+/// RIG_CLOCK (lockstep master); subscribes RUN_CONTROL, RIG_CLOCK (participants),
+/// STEP_ACK (master).
+
+#include <csignal>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/run_control_t.hpp>
+#include <nimble/step_ack_t.hpp>
+
+#include "transport/bus.h"
+#include "transport/clock.h"
+
+namespace nimble::transport {
+
+/// Channel names of the rig (see lcmtypes/README.md).
+namespace channels {
+inline const std::string kTruth = "TRUTH";
+inline const std::string kImu = "IMU";
+inline const std::string kMocapPose = "MOCAP_POSE";
+inline const std::string kAttitudeSetpoint = "ATTITUDE_SP";
+inline const std::string kEstimate = "ESTIMATE";
+inline const std::string kActuatorCommand = "ACTUATOR_CMD";
+inline const std::string kActuatorFeedback = "ACTUATOR_FB";
+inline const std::string kControllerStatus = "CONTROLLER_STATUS";
+inline const std::string kRigClock = "RIG_CLOCK";
+inline const std::string kStepAck = "STEP_ACK";
+inline const std::string kRunControl = "RUN_CONTROL";
+inline const std::string kHeartbeat = "HEARTBEAT";
+inline const std::string kTimingHealth = "TIMING_HEALTH";
+inline const std::string kFault = "FAULT";
+}  // namespace channels
+
+/// Exit codes of rig processes.
+constexpr int kExitOk = 0;
+constexpr int kExitConfig = 2;      ///< bad configuration or command line
+constexpr int kExitAckTimeout = 3;  ///< lockstep participant did not acknowledge in time
+constexpr int kExitFault = 4;       ///< other fatal fault at run time
+
+/// Command-line options common to every rig process.
+struct NodeOptions {
+  std::string name;           ///< process name, used on HEARTBEAT, FAULT, STEP_ACK
+  std::string scenario_file;  ///< resolved scenario YAML written by the launcher
+  std::string lcm_url;        ///< LCM URL of the run
+};
+
+/// Parses `--name N --scenario FILE --lcm-url URL`.
+/// @throws std::invalid_argument naming the bad or missing flag.
+NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name);
+
+class ProcessNode {
+ public:
+  /// A task run every `period_ns` of simulated time, first at t = 0.
+  using TaskFn = std::function<void(int64_t sim_time_ns)>;
+
+  ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest = "");
+
+  Bus& bus() { return bus_; }
+  const std::string& name() const { return name_; }
+
+  /// Registers a periodic task. `rate_hz` must make an integer period in ns.
+  /// @throws std::invalid_argument otherwise.
+  void add_task(const std::string& label, double rate_hz, TaskFn fn);
+
+  /// Makes this node the lockstep master (the plant): its single task defines the step.
+  void set_lockstep_master(bool master) { master_ = master; }
+  /// Lockstep master: how long to wait for a participant's STEP_ACK [ms] (wall clock).
+  void set_ack_timeout_ms(int ms) { ack_timeout_ms_ = ms; }
+
+  /// Expected receive rate of a channel [Hz], reported on TIMING_HEALTH.
+  void set_expected_rate(const std::string& channel, double hz) { expected_hz_[channel] = hz; }
+
+  /// Publishes a fault event (rate-limited to 10 per second per code). Never throws.
+  void fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message);
+
+  /// Current simulated time [ns] (the time of the task being run).
+  int64_t sim_time_ns() const { return sim_time_ns_; }
+  /// Clock mode of the run (run_control_t::CLOCK_MODE_*); valid once started.
+  int8_t clock_mode() const { return clock_mode_; }
+  bool lockstep() const { return clock_mode_ == run_control_t::CLOCK_MODE_LOCKSTEP; }
+
+  /// Waits for the start, runs until stopped. Returns the process exit code.
+  int run();
+
+  /// Requests a clean stop from a signal handler or a callback.
+  static void request_stop() { stop_requested_ = 1; }
+  /// Installs SIGTERM/SIGINT handlers that call request_stop().
+  static void install_signal_handlers();
+
+ private:
+  struct Task {
+    std::string label;
+    int64_t period_ns;
+    TaskFn fn;
+    int64_t next_ns = 0;
+  };
+
+  void publish_heartbeat(int8_t state);
+  void publish_timing_health();
+  void housekeeping();
+  bool wait_for_start();
+  int run_realtime();
+  int run_lockstep_participant();
+  int run_lockstep_master();
+  void idle_until_stopped();
+  void on_run_control(const run_control_t& msg);
+  int64_t next_due_ns() const;
+
+  std::string name_;
+  std::string config_digest_;
+  Bus bus_;
+  std::vector<Task> tasks_;
+  bool master_ = false;
+  int ack_timeout_ms_ = 2000;
+  std::map<std::string, double> expected_hz_;
+
+  bool started_ = false;
+  bool stop_ = false;
+  int8_t clock_mode_ = run_control_t::CLOCK_MODE_REALTIME;
+  int64_t t0_ns_ = 0;
+  int64_t duration_ns_ = 0;
+  std::string run_id_;
+  std::vector<std::string> participants_;
+  int64_t sim_time_ns_ = 0;
+
+  int8_t hb_state_ = heartbeat_t::STATE_STARTING;
+  int64_t hb_seq_ = 0, fault_seq_ = 0, health_seq_ = 0, ack_seq_ = 0, clock_seq_ = 0;
+  int64_t next_heartbeat_us_ = 0;
+  int64_t next_health_us_ = 0;
+  int64_t started_wall_us_ = 0;
+  std::map<int32_t, std::pair<int64_t, int>> fault_budget_;  // code -> (second, count)
+
+  LatencyHistogram jitter_;
+  int64_t loop_count_ = 0;
+  int64_t overruns_ = 0;
+
+  // Lockstep master state: participant -> next due time [ns].
+  std::map<std::string, int64_t> next_due_;
+  int64_t acked_step_waiting_ = -1;
+  std::map<std::string, int64_t> last_ack_step_;
+
+  static volatile std::sig_atomic_t stop_requested_;
+};
+
+}  // namespace nimble::transport
