@@ -108,6 +108,11 @@ function(rig_add_lcm_types target)
   target_include_directories(${target} SYSTEM INTERFACE "$<BUILD_INTERFACE:${cpp_dir}>")
   target_link_libraries(${target} INTERFACE PkgConfig::LCM)
   target_compile_features(${target} INTERFACE cxx_std_11)
+  # LCM 1.3.1's generated decoders write doubles through int64_t pointers
+  # (__double_decode_array -> __int64_t_decode_array). With strict aliasing the optimiser
+  # may read a decoded array field before that write (seen at -O2: a value-initialised
+  # message decoded to zeros). Every consumer of the types compiles without it.
+  target_compile_options(${target} INTERFACE -fno-strict-aliasing)
 
   if(NOT ARG_JAR)
     return()

@@ -1,0 +1,113 @@
+#include "controller/controller_node.h"
+
+#include <cmath>
+
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/controller_status_t.hpp>
+
+namespace nimble {
+namespace {
+
+using transport::channels::kActuatorCommand;
+using transport::channels::kAttitudeSetpoint;
+using transport::channels::kControllerStatus;
+using transport::channels::kTruth;
+
+}  // namespace
+
+ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOptions& options) {
+  ConfigMap section = scenario.section("controller");
+  config_ = controller_config_from(section);
+  if (!scenario.root["manoeuvre"]) {
+    throw ConfigError(scenario.file, "manoeuvre", "", "missing required key: the controller plays a manoeuvre file");
+  }
+  const Manoeuvre manoeuvre = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>());
+  check_gain_sets(manoeuvre, config_);
+  controller_ = std::make_unique<AttitudeController>(config_);
+  player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
+
+  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
+  node_->set_expected_rate(kTruth, 1000.0);
+  node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
+    input_ = t;
+    have_input_ = true;
+  });
+  node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); });
+}
+
+int ControllerNode::run() { return node_->run(); }
+
+void ControllerNode::cycle(int64_t sim_time_ns) {
+  const double t_s = static_cast<double>(sim_time_ns) / 1e9;
+  const int64_t utime = sim_time_ns / 1000;
+  const Setpoint sp = player_->at(t_s);
+  if (!sp.gain_set.empty() && sp.gain_set != controller_->gain_set()) controller_->select_gain_set(sp.gain_set);
+
+  ControllerInput in;
+  in.phi_rad = input_.euler_rad[0];
+  in.theta_rad = input_.euler_rad[1];
+  in.p_radps = input_.omega_body_radps[0];
+  in.q_radps = input_.omega_body_radps[1];
+  in.roll_sp_rad = sp.roll_sp_rad;
+  in.pitch_sp_rad = sp.pitch_sp_rad;
+  in.throttle_pct = sp.throttle_pct;
+  in.throttle_factor = sp.throttle_factor;
+  const int64_t input_age_us = have_input_ ? utime - input_.utime : -1;
+  if (have_input_ && input_age_us > static_cast<int64_t>(input_stale_s_ * 1e6) && !stale_reported_) {
+    stale_reported_ = true;
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, kTruth,
+                 "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
+  }
+  const ControllerOutput out = controller_->step(in);
+
+  attitude_setpoint_t asp;
+  asp.utime = utime;
+  asp.seq = sp_seq_++;
+  asp.roll_sp_rad = sp.roll_sp_rad;
+  asp.pitch_sp_rad = sp.pitch_sp_rad;
+  asp.yaw_rate_sp_radps = 0.0;
+  asp.throttle_pct = sp.throttle_pct;
+  asp.throttle_factor = sp.throttle_factor;
+  asp.manoeuvre = sp.manoeuvre;
+  asp.segment_index = sp.segment_index;
+  asp.segment_name = sp.segment_name;
+  asp.gain_set = controller_->gain_set();
+  node_->bus().publish(kAttitudeSetpoint, asp);
+
+  actuator_command_t cmd;
+  cmd.utime = utime;
+  cmd.seq = cmd_seq_++;
+  cmd.mode = actuator_command_t::MODE_LEFT_RIGHT;
+  cmd.flap_freq_left_radps = out.flap_freq_left_radps;
+  cmd.flap_freq_right_radps = out.flap_freq_right_radps;
+  cmd.delta_f_radps = out.delta_f_cmd_radps;
+  cmd.flap_freq_collective_radps = out.collective_radps;
+  cmd.throttle_pct = out.throttle_cmd_pct;
+  cmd.dihedral_rad = out.dihedral_rad;
+  cmd.wing_root_rad = out.wing_root_rad;
+  cmd.rolling_counter = rolling_counter_;
+  rolling_counter_ = static_cast<int8_t>((rolling_counter_ + 1) % 16);
+  cmd.source = node_->name();
+  node_->bus().publish(kActuatorCommand, cmd);
+
+  controller_status_t st;
+  st.utime = utime;
+  st.seq = status_seq_++;
+  st.gain_set = controller_->gain_set();
+  st.kp = out.roll_kp_per_rad;
+  st.kd = out.roll_kd_per_radps;
+  st.roll_ref_rad = out.roll_ref_rad;
+  st.roll_rate_ref_radps = out.roll_rate_ref_radps;
+  st.roll_error_rad = out.roll_error_rad;
+  st.roll_cmd_norm = out.roll_cmd_norm;
+  st.pitch_cmd_norm = out.pitch_cmd_norm;
+  st.delta_f_cmd_radps = out.delta_f_cmd_radps;
+  st.throttle_pct = out.throttle_cmd_pct;
+  st.saturated = out.saturated;
+  st.input_source = controller_status_t::INPUT_TRUTH;
+  st.input_age_us = input_age_us;
+  node_->bus().publish(kControllerStatus, st);
+}
+
+}  // namespace nimble

@@ -1,0 +1,48 @@
+#pragma once
+/// The attitude controller process: ManoeuvrePlayer + AttitudeController on the rig's bus.
+///
+/// Subscribes:
+///   TRUTH          truth_state_t        plant rate   measured attitude and rates (ideal sensing)
+///   RUN_CONTROL, RIG_CLOCK                            (ProcessNode; lockstep participant)
+/// Publishes, each at controller.rate_hz (default 512 Hz):
+///   ATTITUDE_SP        attitude_setpoint_t   the manoeuvre player's set-point
+///   ACTUATOR_CMD       actuator_command_t    left/right flapping frequencies, servos (MODE_LEFT_RIGHT)
+///   CONTROLLER_STATUS  controller_status_t   references, errors, gains, saturation
+///   FAULT, HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode)
+///
+/// Each control cycle uses the newest TRUTH; an input older than input_stale_s is
+/// reported once as a FAULT and the controller keeps flying on it.
+
+#include <memory>
+
+#include <nimble/truth_state_t.hpp>
+
+#include "controller/attitude_controller.h"
+#include "controller/manoeuvre.h"
+#include "scenario/scenario.h"
+#include "transport/node.h"
+
+namespace nimble {
+
+class ControllerNode {
+ public:
+  /// @throws ConfigError on bad configuration.
+  ControllerNode(const Scenario& scenario, const transport::NodeOptions& options);
+  int run();
+
+ private:
+  void cycle(int64_t sim_time_ns);
+
+  ControllerConfig config_;
+  std::unique_ptr<AttitudeController> controller_;
+  std::unique_ptr<ManoeuvrePlayer> player_;
+  std::unique_ptr<transport::ProcessNode> node_;
+  truth_state_t input_{};
+  bool have_input_ = false;
+  bool stale_reported_ = false;
+  double input_stale_s_ = 0.05;
+  int64_t sp_seq_ = 0, cmd_seq_ = 0, status_seq_ = 0;
+  int8_t rolling_counter_ = 0;
+};
+
+}  // namespace nimble

@@ -1,0 +1,139 @@
+#include "launcher/run_monitor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <cstdio>
+
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/step_ack_t.hpp>
+#include <nimble/timing_health_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+namespace nimble::launcher {
+namespace {
+
+/// Reads a big-endian int64 at `offset` of an encoded LCM message.
+bool read_i64(const void* data, int size, int offset, int64_t& out) {
+  if (size < offset + 8) return false;
+  const auto* b = static_cast<const uint8_t*>(data) + offset;
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
+  out = static_cast<int64_t>(v);
+  return true;
+}
+
+template <typename T>
+bool decode(const void* data, int size, T& msg) {
+  return msg.decode(data, 0, size) == size;
+}
+
+}  // namespace
+
+void RunMonitor::count_seq(Counter& c, const std::string& publisher, int64_t seq) {
+  auto it = c.last_seq.find(publisher);
+  if (it != c.last_seq.end() && seq > it->second + 1) c.drops += seq - it->second - 1;
+  c.last_seq[publisher] = seq;
+}
+
+void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns) {
+  Counter& c = counters_[channel];
+  ++c.count;
+
+  if (channel == "HEARTBEAT") {
+    heartbeat_t hb{};
+    if (!decode(data, size, hb)) { ++c.malformed; return; }
+    heartbeat_[hb.process] = hb.state;
+    count_seq(c, hb.process, hb.seq);
+    return;
+  }
+  if (channel == "TIMING_HEALTH") {
+    timing_health_t h{};
+    if (!decode(data, size, h)) { ++c.malformed; return; }
+    TimingSummary& t = timing_[h.process];
+    t.loop_rate_hz = h.loop_rate_hz;
+    t.loop_count = h.loop_count;
+    t.overruns = h.overruns;
+    t.jitter_p50_us = h.jitter_p50_us;
+    t.jitter_p99_us = h.jitter_p99_us;
+    t.jitter_max_us = h.jitter_max_us;
+    count_seq(c, h.process, h.seq);
+    return;
+  }
+  if (channel == "FAULT") {
+    fault_event_t f{};
+    if (!decode(data, size, f)) { ++c.malformed; return; }
+    faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
+                                  static_cast<double>(f.rig_utime) / 1e6});
+    count_seq(c, f.process, f.seq);
+    return;
+  }
+  if (channel == "STEP_ACK") {
+    step_ack_t a{};
+    if (!decode(data, size, a)) { ++c.malformed; return; }
+    count_seq(c, a.process, a.seq);
+    return;
+  }
+
+  // Stream channels: one publisher, utime and seq at byte offsets 8 and 16.
+  int64_t utime = 0, seq = 0;
+  if (!read_i64(data, size, 8, utime) || !read_i64(data, size, 16, seq)) {
+    ++c.malformed;
+    return;
+  }
+  count_seq(c, "", seq);
+  if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != "RUN_CONTROL") {
+    const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - utime;
+    if (lag_us > cfg_.late_threshold_us) ++c.late;
+  }
+  if (channel == "TRUTH") {
+    truth_state_t t{};
+    if (!decode(data, size, t)) { ++c.malformed; return; }
+    const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
+    FlightSummary& f = flight_;
+    if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi)) f.finite = false;
+    if (f.samples == 0) {
+      f.min_p = f.max_p = p;
+      f.min_v = f.max_v = v;
+      f.min_phi = f.max_phi = phi;
+      f.min_df = f.max_df = t.delta_f_radps;
+    }
+    ++f.samples;
+    f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
+    f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
+    f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
+    f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
+    f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
+    f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);
+    f.min_df = std::min(f.min_df, t.delta_f_radps); f.max_df = std::max(f.max_df, t.delta_f_radps);
+    f.final_p = p;
+    f.final_v = v;
+    f.final_phi = phi;
+    f.last_sim_time_s = static_cast<double>(t.utime) / 1e6;
+  }
+}
+
+int RunMonitor::heartbeat_state(const std::string& process) const {
+  const auto it = heartbeat_.find(process);
+  return it == heartbeat_.end() ? -1 : it->second;
+}
+
+std::map<std::string, ChannelSummary> RunMonitor::channels(double sim_duration_s, double wall_duration_s) const {
+  std::map<std::string, ChannelSummary> out;
+  for (const auto& [name, hz] : cfg_.expected_hz) out[name].expected_hz = hz;
+  for (const auto& [name, c] : counters_) {
+    ChannelSummary& s = out[name];
+    s.count = c.count;
+    s.drops = c.drops;
+    s.late = c.late;
+    s.malformed = c.malformed;
+    s.wall_clock = std::find(cfg_.wall_clock_channels.begin(), cfg_.wall_clock_channels.end(), name) !=
+                   cfg_.wall_clock_channels.end();
+    const double basis = s.wall_clock ? wall_duration_s : sim_duration_s;
+    s.rate_hz = basis > 0 ? static_cast<double>(c.count) / basis : 0.0;
+  }
+  return out;
+}
+
+}  // namespace nimble::launcher

@@ -1,0 +1,100 @@
+#pragma once
+/// RunMonitor: watches every message of a run (as the launcher logs it) and builds the
+/// run summary: per-channel counts, rates, drops and lateness, loop timing reported by
+/// the processes, faults, and the flight itself (extremes, ranges, final state).
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace nimble::launcher {
+
+/// What the monitor needs to know about the run to judge it.
+struct MonitorConfig {
+  bool lockstep = false;
+  int64_t t0_monotonic_ns = 0;       ///< real time: CLOCK_MONOTONIC of simulated time 0
+  int64_t late_threshold_us = 2000;  ///< real time: a stream message later than this is late
+  std::map<std::string, double> expected_hz;  ///< per channel; wall-clock channels per process
+  std::vector<std::string> wall_clock_channels;  ///< rates of these are per wall second
+};
+
+struct ChannelSummary {
+  int64_t count = 0;
+  double rate_hz = 0.0;
+  double expected_hz = 0.0;
+  int64_t drops = 0;
+  int64_t late = 0;
+  int64_t malformed = 0;
+  bool wall_clock = false;
+};
+
+struct TimingSummary {
+  double loop_rate_hz = 0.0;
+  int64_t loop_count = 0;
+  int64_t overruns = 0;
+  double jitter_p50_us = 0.0, jitter_p99_us = 0.0, jitter_max_us = 0.0;
+};
+
+struct FaultRecord {
+  std::string process;
+  int severity = 0;
+  int code = 0;
+  std::string channel;
+  std::string message;
+  double rig_time_s = 0.0;
+};
+
+/// Flight statistics from TRUTH.
+struct FlightSummary {
+  int64_t samples = 0;
+  double max_abs_p = 0.0, max_abs_v = 0.0, max_abs_phi = 0.0;
+  double min_p = 0, max_p = 0, min_v = 0, max_v = 0, min_phi = 0, max_phi = 0;
+  double min_df = 0, max_df = 0;
+  double final_p = 0.0, final_v = 0.0, final_phi = 0.0;
+  double last_sim_time_s = 0.0;
+  bool finite = true;
+};
+
+class RunMonitor {
+ public:
+  explicit RunMonitor(MonitorConfig config) : cfg_(std::move(config)) {}
+
+  /// Feeds one raw message (channel, encoded bytes, receive time [ns, CLOCK_MONOTONIC]).
+  void on_message(const std::string& channel, const void* data, int size, int64_t recv_ns);
+
+  /// Heartbeat state of each process (heartbeat_t::STATE_*), -1 if never heard.
+  int heartbeat_state(const std::string& process) const;
+  /// Simulated time of the newest TRUTH [s].
+  double sim_time_s() const { return flight_.last_sim_time_s; }
+  int64_t truth_count() const { return flight_.samples; }
+  const std::vector<FaultRecord>& faults() const { return faults_; }
+  const FlightSummary& flight() const { return flight_; }
+  const std::map<std::string, TimingSummary>& timing() const { return timing_; }
+
+  /// Channel table at the end of the run; `sim_duration_s` and `wall_duration_s` give the
+  /// rate bases.
+  std::map<std::string, ChannelSummary> channels(double sim_duration_s, double wall_duration_s) const;
+
+  /// Sets the real-time origin once the run has started.
+  void set_t0(int64_t t0_monotonic_ns) { cfg_.t0_monotonic_ns = t0_monotonic_ns; }
+
+ private:
+  struct Counter {
+    int64_t count = 0;
+    int64_t late = 0;
+    int64_t malformed = 0;
+    std::map<std::string, int64_t> last_seq;  // publisher -> seq
+    int64_t drops = 0;
+  };
+  void count_seq(Counter& c, const std::string& publisher, int64_t seq);
+
+  MonitorConfig cfg_;
+  std::map<std::string, Counter> counters_;
+  std::map<std::string, int> heartbeat_;
+  std::map<std::string, TimingSummary> timing_;
+  std::vector<FaultRecord> faults_;
+  FlightSummary flight_;
+};
+
+}  // namespace nimble::launcher

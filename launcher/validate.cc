@@ -1,0 +1,70 @@
+#include "launcher/validate.h"
+
+#include <cmath>
+#include <optional>
+#include <sstream>
+
+#include "controller/attitude_controller.h"
+#include "controller/manoeuvre.h"
+#include "plant/plant_model.h"
+
+namespace nimble::launcher {
+namespace {
+
+bool has(const Scenario& s, const std::string& process) {
+  for (const auto& p : s.processes) {
+    if (p == process) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+void validate_process_sections(const Scenario& s) {
+  ConfigMap plant_section = s.section("plant");
+  const plant::PlantConfig plant = plant::plant_config_from(plant_section);
+  const DerivativeModel lateral = load_model(s.model_file);
+  std::optional<DerivativeModel> longitudinal;
+  if (!s.longitudinal_model_file.empty()) longitudinal = load_model(s.longitudinal_model_file);
+  const Vehicle vehicle = load_vehicle(s.vehicle_file.empty() ? lateral.vehicle_file : s.vehicle_file);
+  try {
+    plant::PlantModel model(lateral, longitudinal, vehicle, plant);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(s.file, "model", s.model_file, e.what());
+  }
+
+  if (has(s, "controller")) {
+    ConfigMap section = s.section("controller");
+    const ControllerConfig controller = controller_config_from(section);
+    if (!s.root["manoeuvre"]) {
+      throw ConfigError(s.file, "manoeuvre", "", "missing required key: the controller plays a manoeuvre file");
+    }
+    const Manoeuvre manoeuvre = load_manoeuvre(s.root["manoeuvre"].as<std::string>());
+    check_gain_sets(manoeuvre, controller);
+    // The plant reconstructs delta_t from the collective with the controller's map.
+    if (std::fabs(plant.collective_radps_per_pct - controller.throttle_to_freq_radps_per_pct) >
+        1e-6 * controller.throttle_to_freq_radps_per_pct) {
+      std::ostringstream why;
+      why << "must equal controller.throttle.throttle_to_freq_radps_per_pct ("
+          << controller.throttle_to_freq_radps_per_pct << ") so that the plant's delta_t is the controller's";
+      throw ConfigError(s.file, "plant.collective_radps_per_pct", std::to_string(plant.collective_radps_per_pct),
+                        why.str());
+    }
+  }
+}
+
+ProcessRates process_rates(const Scenario& s) {
+  ProcessRates r;
+  ConfigMap plant_section = s.section("plant");
+  const plant::PlantConfig plant = plant::plant_config_from(plant_section);
+  r.plant_hz = plant.rate_hz;
+  r.truth_hz = plant.truth_rate_hz;
+  r.feedback_hz = plant.feedback_rate_hz;
+  if (has(s, "controller")) {
+    ConfigMap section = s.section("controller");
+    r.controller_hz = controller_config_from(section).rate_hz;
+  }
+  return r;
+}
+
+}  // namespace nimble::launcher

@@ -1,0 +1,171 @@
+#include "plant/plant_node.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+namespace nimble::plant {
+namespace {
+
+using transport::channels::kActuatorCommand;
+using transport::channels::kActuatorFeedback;
+using transport::channels::kTruth;
+
+/// Physical range of a flapping-frequency command [rad/s]: 0 to 40 Hz.
+constexpr double kMaxFlapRadps = 2.0 * M_PI * 40.0;
+/// Physical range of a servo command [rad].
+constexpr double kMaxServoRad = 1.0;
+
+double clamp(double x, double lo, double hi, bool& clamped) {
+  if (x < lo) { clamped = true; return lo; }
+  if (x > hi) { clamped = true; return hi; }
+  return x;
+}
+
+std::string file_digest(const std::string& text) {
+  // FNV-1a 64-bit of the resolved scenario: equal digests mean equal configurations.
+  uint64_t h = 1469598103934665603ULL;
+  for (const unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+}  // namespace
+
+PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& options) {
+  ConfigMap section = scenario.section("plant");
+  config_ = plant_config_from(section);
+  config_.seed = scenario.seed;
+  const DerivativeModel lateral = load_model(scenario.model_file);
+  std::optional<DerivativeModel> longitudinal;
+  if (!scenario.longitudinal_model_file.empty()) longitudinal = load_model(scenario.longitudinal_model_file);
+  const Vehicle vehicle = load_vehicle(scenario.vehicle_file.empty() ? lateral.vehicle_file : scenario.vehicle_file);
+  model_ = std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config_);
+  command_ = model_->trim_command();
+  truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
+  feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
+
+  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
+  node_->set_lockstep_master(true);
+  if (scenario.has_section("lockstep")) {
+    ConfigMap ls = scenario.section("lockstep");
+    node_->set_ack_timeout_ms(static_cast<int>(ls.get_int("ack_timeout_ms", Range::closed(10, 600000))));
+    ls.finish();
+  }
+  node_->set_expected_rate(kActuatorCommand, 512.0);
+  node_->bus().subscribe<actuator_command_t>(kActuatorCommand,
+                                             [this](const actuator_command_t& c) { on_command(c); });
+  node_->add_task("plant", config_.rate_hz, [this](int64_t t) { step(t); });
+}
+
+int PlantNode::run() { return node_->run(); }
+
+void PlantNode::on_command(const actuator_command_t& cmd) {
+  double left = cmd.flap_freq_left_radps, right = cmd.flap_freq_right_radps;
+  if (cmd.mode == actuator_command_t::MODE_DELTA_F) {
+    left = cmd.flap_freq_collective_radps + 0.5 * cmd.delta_f_radps;
+    right = cmd.flap_freq_collective_radps - 0.5 * cmd.delta_f_radps;
+  } else if (cmd.mode != actuator_command_t::MODE_LEFT_RIGHT) {
+    ++commands_rejected_;
+    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, kActuatorCommand,
+                 "rejected actuator command seq " + std::to_string(cmd.seq) + ": unknown mode " +
+                     std::to_string(cmd.mode));
+    return;
+  }
+  for (const auto& [name, value] : {std::pair<const char*, double>{"flap_freq_left_radps", left},
+                                    {"flap_freq_right_radps", right},
+                                    {"dihedral_rad", cmd.dihedral_rad},
+                                    {"wing_root_rad", cmd.wing_root_rad}}) {
+    if (!std::isfinite(value)) {
+      ++commands_rejected_;
+      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, kActuatorCommand,
+                   "rejected actuator command seq " + std::to_string(cmd.seq) + ": " + name + " is not finite");
+      return;
+    }
+  }
+  bool clamped = false;
+  command_.flap_freq_left_radps = clamp(left, 0.0, kMaxFlapRadps, clamped);
+  command_.flap_freq_right_radps = clamp(right, 0.0, kMaxFlapRadps, clamped);
+  command_.dihedral_rad = clamp(cmd.dihedral_rad, -kMaxServoRad, kMaxServoRad, clamped);
+  command_.wing_root_rad = clamp(cmd.wing_root_rad, -kMaxServoRad, kMaxServoRad, clamped);
+  if (clamped) {
+    ++commands_clamped_;
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, kActuatorCommand,
+                 "clamped actuator command seq " + std::to_string(cmd.seq) + " to the actuator range");
+  }
+  have_command_ = true;
+  last_command_ns_ = node_->sim_time_ns();
+  last_command_seq_ = cmd.seq;
+  last_command_utime_ = cmd.utime;
+  if (safe_state_) {
+    safe_state_ = false;
+    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_COMMAND_TIMEOUT, kActuatorCommand,
+                 "actuator commands resumed; leaving the safe state");
+  }
+}
+
+void PlantNode::step(int64_t sim_time_ns) {
+  if (sim_time_ns > 0) {
+    const int64_t timeout_ns = std::llround(config_.command_timeout_s * 1e9);
+    if (!safe_state_ && sim_time_ns - last_command_ns_ > timeout_ns) {
+      safe_state_ = true;
+      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_COMMAND_TIMEOUT, kActuatorCommand,
+                   std::string("no actuator command for ") + std::to_string(config_.command_timeout_s) +
+                       " s" + (have_command_ ? "" : " since the start") +
+                       ": holding the safe state (trim flapping frequencies, servos neutral)");
+    }
+    model_->step(safe_state_ ? model_->trim_command() : command_);
+    ++step_index_;
+  }
+  if (step_index_ % truth_every_ == 0) publish_truth(sim_time_ns);
+  if (step_index_ % feedback_every_ == 0) publish_feedback(sim_time_ns);
+}
+
+void PlantNode::publish_truth(int64_t sim_time_ns) {
+  const Truth& t = model_->truth();
+  truth_state_t m;
+  m.utime = sim_time_ns / 1000;
+  m.seq = truth_seq_++;
+  m.step = node_->lockstep() ? step_index_ : -1;
+  for (int i = 0; i < 3; ++i) {
+    m.position_ned_m[i] = t.position_ned_m[i];
+    m.velocity_body_mps[i] = t.velocity_body_mps[i];
+    m.euler_rad[i] = t.euler_rad[i];
+    m.omega_body_radps[i] = t.omega_body_radps[i];
+    m.specific_force_body_mps2[i] = t.specific_force_body_mps2[i];
+    m.angular_accel_body_radps2[i] = t.angular_accel_body_radps2[i];
+  }
+  for (int i = 0; i < 4; ++i) m.quaternion_wxyz[i] = t.quaternion_wxyz[i];
+  m.flap_freq_left_radps = t.flap_freq_left_radps;
+  m.flap_freq_right_radps = t.flap_freq_right_radps;
+  m.delta_f_radps = t.delta_f_radps;
+  m.throttle_pct = t.throttle_pct;
+  m.dihedral_rad = t.dihedral_rad;
+  m.wing_root_rad = t.wing_root_rad;
+  node_->bus().publish(kTruth, m);
+}
+
+void PlantNode::publish_feedback(int64_t sim_time_ns) {
+  const Truth& t = model_->truth();
+  actuator_feedback_t m;
+  m.utime = sim_time_ns / 1000;
+  m.seq = feedback_seq_++;
+  m.flap_freq_left_radps = t.flap_freq_left_radps;
+  m.flap_freq_right_radps = t.flap_freq_right_radps;
+  m.delta_f_radps = t.delta_f_radps;
+  m.dihedral_rad = t.dihedral_rad;
+  m.wing_root_rad = t.wing_root_rad;
+  m.throttle_pct = t.throttle_pct;
+  m.cmd_seq = last_command_seq_;
+  m.cmd_age_us = have_command_ ? (sim_time_ns - last_command_ns_) / 1000 : -1;
+  m.safe_state = safe_state_;
+  node_->bus().publish(kActuatorFeedback, m);
+}
+
+}  // namespace nimble::plant

@@ -1,0 +1,62 @@
+#pragma once
+/// The plant process: PlantModel on the rig's LCM bus.
+///
+/// Subscribes:
+///   ACTUATOR_CMD  actuator_command_t   512 Hz   left/right flapping frequencies, servos
+///   RUN_CONTROL   run_control_t        events   start/stop (ProcessNode)
+///   STEP_ACK      step_ack_t           lockstep (ProcessNode, the plant is the lockstep master)
+/// Publishes:
+///   TRUTH         truth_state_t        plant.truth_rate_hz (default 1 kHz)
+///   ACTUATOR_FB   actuator_feedback_t  plant.feedback_rate_hz (default 100 Hz)
+///   RIG_CLOCK     rig_clock_t          lockstep only, once per plant step
+///   FAULT         fault_event_t        command timeout, malformed or out-of-range commands
+///   HEARTBEAT, TIMING_HEALTH           (ProcessNode)
+///
+/// Command timeout: when no ACTUATOR_CMD has arrived for plant.command_timeout_s of simulated
+/// time, the plant holds the safe state (both wings at the trim flapping frequency, servos
+/// neutral), reports it in ACTUATOR_FB.safe_state and publishes a FAULT; it leaves the safe
+/// state on the next valid command.
+
+#include <memory>
+#include <optional>
+
+#include <nimble/actuator_command_t.hpp>
+
+#include "plant/plant_model.h"
+#include "scenario/scenario.h"
+#include "transport/node.h"
+
+namespace nimble::plant {
+
+class PlantNode {
+ public:
+  /// Builds the model from the scenario; @throws ConfigError on bad configuration.
+  PlantNode(const Scenario& scenario, const transport::NodeOptions& options);
+  /// Runs until stopped; returns the exit code.
+  int run();
+
+ private:
+  void on_command(const actuator_command_t& cmd);
+  void step(int64_t sim_time_ns);
+  void publish_truth(int64_t sim_time_ns);
+  void publish_feedback(int64_t sim_time_ns);
+
+  PlantConfig config_;
+  std::unique_ptr<PlantModel> model_;
+  std::unique_ptr<transport::ProcessNode> node_;
+  ActuatorInput command_;
+  int64_t last_command_ns_ = 0;
+  int64_t last_command_seq_ = -1;
+  int64_t last_command_utime_ = -1;
+  bool have_command_ = false;
+  bool safe_state_ = false;
+  int64_t step_index_ = 0;
+  int64_t truth_every_ = 1;
+  int64_t feedback_every_ = 10;
+  int64_t truth_seq_ = 0;
+  int64_t feedback_seq_ = 0;
+  int64_t commands_rejected_ = 0;
+  int64_t commands_clamped_ = 0;
+};
+
+}  // namespace nimble::plant

@@ -1,0 +1,69 @@
+#pragma once
+/// Rig scenarios: the YAML files in rig_configs/ that say what a run is.
+///
+/// A scenario names the models, the processes to launch, the run's duration and clock,
+/// and one section per process. Loading resolves it into one self-contained tree:
+///  1. every mapping with a `base: <file.yaml>` key is merged over the content of that
+///     file (the mapping's own keys win; bases may nest);
+///  2. relative paths (keys model, longitudinal_model, vehicle, manoeuvre, base) become
+///     absolute, relative to the file they are written in;
+///  3. `--set a.b.c=value` overrides from the command line replace single values.
+/// The launcher writes the resolved tree next to the run's log and hands it to every
+/// process, so a run can always be repeated from its record.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "core/config.h"
+
+namespace nimble {
+
+/// One `key.path=value` override from the command line.
+struct Override {
+  std::string key_path;
+  std::string value;  ///< parsed as YAML (number, string, list or mapping)
+};
+
+/// Parses "a.b=1" into an Override. @throws ConfigError naming the text.
+Override parse_override(const std::string& text);
+
+/// Loads a scenario file, merges bases, absolutises paths and applies overrides.
+/// @throws ConfigError naming the file and key.
+YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides = {});
+
+/// The top-level facts of a resolved scenario; process sections stay in `root` and are
+/// validated by their owners (plant_config_from, controller config, ...).
+struct Scenario {
+  std::string file;         ///< the file it was loaded from (or the resolved copy)
+  std::string name;
+  std::string description;
+  double duration_s = 0.0;
+  std::string clock;        ///< "realtime" or "lockstep"
+  uint64_t seed = 1;
+  std::string model_file;               ///< lateral derivative model
+  std::string longitudinal_model_file;  ///< optional
+  std::string vehicle_file;             ///< optional override of the model's vehicle
+  std::vector<std::string> processes;   ///< process names to launch, e.g. plant, controller
+  YAML::Node root;
+
+  /// The section of one process (an empty mapping if absent) as a strict ConfigMap.
+  ConfigMap section(const std::string& name) const;
+  bool has_section(const std::string& name) const { return static_cast<bool>(root[name]); }
+};
+
+/// Known top-level keys that are sections owned by processes or by the launcher.
+const std::vector<std::string>& scenario_section_keys();
+
+/// Validates the top level of a resolved tree. @throws ConfigError naming the key.
+Scenario scenario_from_tree(const YAML::Node& root, const std::string& file);
+
+/// load_scenario_tree + scenario_from_tree.
+Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides = {});
+
+/// Writes a tree as YAML text.
+std::string to_yaml(const YAML::Node& node);
+
+}  // namespace nimble
