@@ -14,4 +14,15 @@ constexpr int kExitUsage = 2;
 /// `rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]`
 int run_model_command(const std::vector<std::string>& args);
 
+/// `rig run <scenario.yaml> [--clock realtime|lockstep] [--log F] [--json F] [--set k=v] [--seed N]`
+int run_run_command(const std::vector<std::string>& args);
+
+/// `rig check`: can this host run LCM multicast (directly or in a private namespace)?
+int run_check_command(const std::vector<std::string>& args);
+
+/// `rig spy [--pid PID] [--url URL]`: lcm-spy with the rig's types.
+int run_spy_command(const std::vector<std::string>& args);
+
+
+
 }  // namespace nimble::cli

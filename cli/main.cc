@@ -19,6 +19,12 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
+    {"run", "run <scenario.yaml> [--clock realtime|lockstep] [--log F] [--json F] [--set k=v] [--seed N]   fly a scenario",
+     nimble::cli::run_run_command},
+    {"check", "check                                              can this host run LCM multicast?",
+     nimble::cli::run_check_command},
+    {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",
+     nimble::cli::run_spy_command},
 };
 
 void print_usage(std::ostream& out) {
