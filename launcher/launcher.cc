@@ -430,6 +430,7 @@ int run_scenario(const RunOptions& options) {
   int64_t event_number = 0;
   int64_t last_flush_ns = monotonic_ns();
   bus->subscribe_raw(".*", [&](const std::string& channel, const void* data, int size, int64_t recv_us) {
+    if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
     lcm::LogEvent ev;
     ev.eventnum = event_number++;
     ev.timestamp = transport::wall_us();
@@ -446,6 +447,8 @@ int run_scenario(const RunOptions& options) {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
 
+  int64_t run_control_seq = 0;
+
   // Start every process.
   const std::string bin_dir = options.bin_dir.empty() ? self_dir() : options.bin_dir;
   std::vector<Child> children;
@@ -460,7 +463,7 @@ int run_scenario(const RunOptions& options) {
   const auto stop_all = [&](double grace_s) {
     run_control_t stop;
     stop.utime = transport::wall_us();
-    stop.seq = 1000;
+    stop.seq = run_control_seq++;
     stop.command = run_control_t::COMMAND_STOP;
     stop.clock_mode = lockstep ? run_control_t::CLOCK_MODE_LOCKSTEP : run_control_t::CLOCK_MODE_REALTIME;
     stop.run_id = scenario.name;
@@ -522,7 +525,7 @@ int run_scenario(const RunOptions& options) {
   // Start the run.
   run_control_t start;
   start.utime = transport::wall_us();
-  start.seq = 0;
+  start.seq = run_control_seq++;
   start.command = run_control_t::COMMAND_START;
   start.clock_mode = lockstep ? run_control_t::CLOCK_MODE_LOCKSTEP : run_control_t::CLOCK_MODE_REALTIME;
   const int64_t wall_start_ns = monotonic_ns();
@@ -573,7 +576,10 @@ int run_scenario(const RunOptions& options) {
     if (resends < 5 && now - wall_start_ns > (resends + 1) * 300000000LL) {
       bool someone_waiting = false;
       for (const auto& c : children) someone_waiting |= monitor.heartbeat_state(c.name) == heartbeat_t::STATE_READY;
-      if (someone_waiting) bus->publish("RUN_CONTROL", start);
+      if (someone_waiting) {
+        start.seq = run_control_seq++;
+        bus->publish("RUN_CONTROL", start);
+      }
       ++resends;
     }
     bool done = false;
