@@ -1,0 +1,314 @@
+// System tests: the real executables, launched by `rig run` in a private network
+// namespace (the launcher creates it), with short scenarios. They wait on the launcher's
+// exit and on what it records, never on fixed sleeps of the rig itself.
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/fault_event_t.hpp>
+#include <nimble/truth_state_t.hpp>
+#include <yaml-cpp/yaml.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+/// A fresh directory for one test's logs.
+std::string scratch_dir(const std::string& tag) {
+  const fs::path dir = fs::temp_directory_path() / ("rig_system_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;
+  YAML::Node summary;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// Runs `rig run <scenario> <args>` to completion.
+RunResult rig_run(const std::string& scenario, const std::string& dir, const std::string& args) {
+  const std::string out = dir + "/out.txt";
+  const std::string json = dir + "/summary.json";
+  const std::string cmd = std::string(RIG_BIN) + " run " + scenario + " --log " + dir + "/run.lcmlog --json " + json +
+                          " --no-progress " + args + " >" + out + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.output = slurp(out);
+  if (fs::exists(json)) r.summary = YAML::LoadFile(json);
+  return r;
+}
+
+/// Every TRUTH message of a log, as raw bytes.
+std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::vector<std::vector<uint8_t>> out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "TRUTH") {
+      const auto* b = static_cast<const uint8_t*>(ev->data);
+      out.emplace_back(b, b + ev->datalen);
+    }
+  }
+  return out;
+}
+
+/// Number of events per channel in a log.
+std::map<std::string, int> channel_counts(const std::string& log_path) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::map<std::string, int> counts;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) ++counts[ev->channel];
+  return counts;
+}
+
+/// Pid of the child of `parent` whose executable is `name`, or -1.
+pid_t child_named(pid_t parent, const std::string& name) {
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string pid = entry.path().filename().string();
+    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const auto close = line.rfind(')');
+    const auto open = line.find('(');
+    if (open == std::string::npos || close == std::string::npos) continue;
+    const std::string comm = line.substr(open + 1, close - open - 1);
+    int ppid = 0;
+    char state = 0;
+    std::sscanf(line.c_str() + close + 2, "%c %d", &state, &ppid);
+    if (ppid == parent && comm == name.substr(0, 15)) return static_cast<pid_t>(std::stoi(pid));
+  }
+  return -1;
+}
+
+/// Starts `rig run` in the background; returns its pid.
+pid_t rig_run_background(const std::string& scenario, const std::string& dir, const std::string& args) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string out = dir + "/out.txt";
+    std::freopen(out.c_str(), "w", stdout);
+    std::freopen(out.c_str(), "a", stderr);
+    const std::string log = dir + "/run.lcmlog", json = dir + "/summary.json";
+    std::vector<std::string> argv_s = {RIG_BIN, "run", scenario, "--log", log, "--json", json, "--no-progress"};
+    for (std::size_t start = 0; start < args.size();) {
+      const auto end = args.find(' ', start);
+      argv_s.push_back(args.substr(start, end - start));
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+    std::vector<char*> argv;
+    for (auto& s : argv_s) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    ::execv(RIG_BIN, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+/// Waits (bounded) until `rig run` with pid `rig` has started process `name` and the run
+/// has produced TRUTH in its log.
+pid_t wait_for_running(pid_t rig, const std::string& name, const std::string& log_path) {
+  for (int i = 0; i < 600; ++i) {
+    const pid_t child = child_named(rig, name);
+    if (child > 0 && fs::exists(log_path) && fs::file_size(log_path) > 20000) return child;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return -1;
+}
+
+int wait_exit_code(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST_CASE("identification doublet train in lockstep: controlled, back to hover, Table 9.4 ranges, all rates",
+          "[system]") {
+  const std::string dir = scratch_dir("idtrain");
+  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock lockstep");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node& s = r.summary;
+  CHECK(s["controlled"].as<bool>());
+  CHECK(s["returned_to_hover"].as<bool>());
+  CHECK(s["sim_time_s"].as<double>() == Approx(6.0).margin(0.002));
+  // Thesis Table 9.4, identification set 1: p 12.06 rad/s, v 1.17 m/s, phi 0.89 rad.
+  const double p = s["ranges"]["p"].as<double>(), v = s["ranges"]["v"].as<double>(),
+               phi = s["ranges"]["phi"].as<double>();
+  CHECK(p > 12.06 / 2);
+  CHECK(p < 12.06 * 2);
+  CHECK(v > 1.17 / 2);
+  CHECK(v < 1.17 * 2);
+  CHECK(phi > 0.89 / 2);
+  CHECK(phi < 0.89 * 2);
+  // Every stream channel at its rate in simulated time, nothing dropped.
+  for (const char* ch : {"TRUTH", "ACTUATOR_CMD", "ACTUATOR_FB", "ATTITUDE_SP", "CONTROLLER_STATUS", "RIG_CLOCK",
+                         "STEP_ACK"}) {
+    INFO(ch);
+    const YAML::Node c = s["channels"][ch];
+    REQUIRE(c);
+    CHECK(c["rate_hz"].as<double>() == Approx(c["expected_hz"].as<double>()).epsilon(0.01));
+    CHECK(c["drops"].as<int>() == 0);
+    CHECK(c["malformed"].as<int>() == 0);
+  }
+  // The log replays: TRUTH at 1 kHz for 6 s.
+  const auto counts = channel_counts(dir + "/run.lcmlog");
+  CHECK(counts.at("TRUTH") == 6001);
+  CHECK(counts.at("ACTUATOR_CMD") == 3072);
+  // The resolved scenario is kept next to the log.
+  CHECK(fs::exists(dir + "/run.lcmlog.scenario.yaml"));
+}
+
+TEST_CASE("two lockstep runs give bit-identical truth", "[system]") {
+  const std::string a = scratch_dir("det_a"), b = scratch_dir("det_b");
+  const std::string scenario = kConfigs + "ol_doublet_6hz_fast.yaml";
+  // The second run shares the machine with a busy loop: load must not change the truth.
+  std::atomic<bool> busy{true};
+  const RunResult ra = rig_run(scenario, a, "--clock lockstep --set duration_s=3");
+  std::thread hog([&] {
+    volatile double x = 0;
+    while (busy) x = x + 1.0;
+  });
+  const RunResult rb = rig_run(scenario, b, "--clock lockstep --set duration_s=3");
+  busy = false;
+  hog.join();
+  REQUIRE(ra.exit_code == 0);
+  REQUIRE(rb.exit_code == 0);
+  const auto ta = truth_payloads(a + "/run.lcmlog"), tb = truth_payloads(b + "/run.lcmlog");
+  REQUIRE(ta.size() == 3001);
+  REQUIRE(ta.size() == tb.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < ta.size(); ++i) differing += ta[i] != tb[i];
+  CHECK(differing == 0);
+  // The flight is not trivially identical: the vehicle moved.
+  CHECK(ra.summary["max_abs"]["phi"].as<double>() > 0.1);
+}
+
+TEST_CASE("a short real-time run holds its rates", "[system]") {
+  const std::string dir = scratch_dir("realtime");
+  const RunResult r = rig_run(kConfigs + "hover.yaml", dir, "--clock realtime --set duration_s=2");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const double wall = r.summary["wall_time_s"].as<double>();
+  CHECK(wall == Approx(2.0).margin(0.3));
+  for (const char* ch : {"TRUTH", "ACTUATOR_CMD", "ACTUATOR_FB"}) {
+    INFO(ch);
+    const YAML::Node c = r.summary["channels"][ch];
+    CHECK(c["rate_hz"].as<double>() == Approx(c["expected_hz"].as<double>()).epsilon(0.02));
+    CHECK(c["drops"].as<int>() == 0);
+  }
+  CHECK(r.summary["timing"]["plant"]["loop_count"].as<int>() >= 1990);
+}
+
+TEST_CASE("a process killed mid-run is named, the run fails, and the log stays readable", "[system]") {
+  const std::string dir = scratch_dir("kill");
+  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir, "--clock realtime --set duration_s=8");
+  const pid_t controller = wait_for_running(rig, "nimble_controller", dir + "/run.lcmlog");
+  REQUIRE(controller > 0);
+  ::kill(controller, SIGKILL);
+  const int code = wait_exit_code(rig);
+  const std::string out = slurp(dir + "/out.txt");
+  INFO(out);
+  CHECK(code == 3);
+  CHECK(out.find("process 'controller'") != std::string::npos);
+  CHECK(out.find("killed by signal 9") != std::string::npos);
+  // Everything recorded so far reads back.
+  const auto truth = truth_payloads(dir + "/run.lcmlog");
+  CHECK(truth.size() > 10);
+  CHECK(YAML::LoadFile(dir + "/summary.json")["exit_code"].as<int>() == 3);
+}
+
+TEST_CASE("a stalled lockstep participant is named with its channel; the run stops", "[system]") {
+  const std::string dir = scratch_dir("stall");
+  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
+                                       "--clock lockstep --set duration_s=600 --set lockstep.ack_timeout_ms=500");
+  const pid_t controller = wait_for_running(rig, "nimble_controller", dir + "/run.lcmlog");
+  REQUIRE(controller > 0);
+  ::kill(controller, SIGSTOP);
+  const int code = wait_exit_code(rig);
+  ::kill(controller, SIGCONT);
+  const std::string out = slurp(dir + "/out.txt");
+  INFO(out);
+  CHECK(code == 3);
+  CHECK(out.find("no STEP_ACK from 'controller'") != std::string::npos);
+  CHECK(out.find("process 'plant'") != std::string::npos);
+}
+
+TEST_CASE("command timeout: the plant holds the safe state and reports it", "[system]") {
+  const std::string dir = scratch_dir("timeout");
+  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir, "--clock realtime --set duration_s=3");
+  const pid_t controller = wait_for_running(rig, "nimble_controller", dir + "/run.lcmlog");
+  REQUIRE(controller > 0);
+  ::kill(controller, SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // > command_timeout_s = 0.1 s
+  ::kill(controller, SIGCONT);
+  const int code = wait_exit_code(rig);
+  const std::string out = slurp(dir + "/out.txt");
+  INFO(out);
+  CHECK(code == 0);
+  bool timeout_fault = false, resumed = false, safe_feedback = false;
+  lcm::LogFile log(dir + "/run.lcmlog", "r");
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "FAULT") {
+      nimble::fault_event_t f;
+      REQUIRE(f.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      if (f.code == nimble::fault_event_t::CODE_COMMAND_TIMEOUT && f.process == "plant") {
+        if (f.message.find("safe state") != std::string::npos && f.severity == nimble::fault_event_t::SEVERITY_ERROR) {
+          timeout_fault = true;
+        }
+        if (f.message.find("resumed") != std::string::npos) resumed = true;
+      }
+    }
+    if (ev->channel == "ACTUATOR_FB") {
+      nimble::actuator_feedback_t fb;
+      REQUIRE(fb.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      safe_feedback = safe_feedback || fb.safe_state;
+    }
+  }
+  CHECK(timeout_fault);
+  CHECK(resumed);
+  CHECK(safe_feedback);
+}
+
+TEST_CASE("bad scenario values stop the run before anything starts, naming the key", "[system]") {
+  const std::string dir = scratch_dir("bad");
+  RunResult r = rig_run(kConfigs + "hover.yaml", dir, "--set plant.rate_hz=abc");
+  CHECK(r.exit_code == 2);
+  CHECK(r.output.find("plant.rate_hz") != std::string::npos);
+  CHECK(r.output.find("'abc'") != std::string::npos);
+  r = rig_run(kConfigs + "hover.yaml", dir, "--set controller.mixing.roll_cmd_to_delta_f_radps=-5");
+  CHECK(r.exit_code == 2);
+  CHECK(r.output.find("roll_cmd_to_delta_f_radps") != std::string::npos);
+  r = rig_run(kConfigs + "hover.yaml", dir, "--clock sometimes");
+  CHECK(r.exit_code == 2);
+  CHECK(r.output.find("--clock") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir + "/run.lcmlog"));
+}
