@@ -5,3 +5,23 @@ target_link_libraries(test_lcmtypes PRIVATE rig_catch_main nimble_lcmtypes PkgCo
 catch_discover_tests(test_lcmtypes
   TEST_PREFIX "functional.lcmtypes."
   PROPERTIES LABELS functional)
+
+# Java and C++ fingerprints of the same types (lcm-spy decodes with the Java ones).
+set(_fp_classes ${CMAKE_CURRENT_BINARY_DIR}/fingerprint_classes)
+add_custom_command(
+  OUTPUT ${_fp_classes}/PrintFingerprints.class
+  COMMAND ${CMAKE_COMMAND} -E make_directory ${_fp_classes}
+  COMMAND ${Java_JAVAC_EXECUTABLE} -d ${_fp_classes} ${CMAKE_CURRENT_LIST_DIR}/PrintFingerprints.java
+  DEPENDS ${CMAKE_CURRENT_LIST_DIR}/PrintFingerprints.java
+  COMMENT "Compiling PrintFingerprints.java")
+add_custom_target(fingerprint_classes DEPENDS ${_fp_classes}/PrintFingerprints.class)
+add_executable(test_java_fingerprints ${CMAKE_CURRENT_LIST_DIR}/test_java_fingerprints.cc)
+target_link_libraries(test_java_fingerprints PRIVATE rig_catch_main nimble_lcmtypes)
+get_target_property(_types_jar nimble_lcmtypes_jar JAR_FILE)
+target_compile_definitions(test_java_fingerprints PRIVATE
+  JAVA_EXE="${Java_JAVA_EXECUTABLE}"
+  FINGERPRINT_CLASSES="${_fp_classes}"
+  TYPES_JAR="${_types_jar}"
+  LCM_JAR="${LCM_JAVA_JAR}")
+add_dependencies(test_java_fingerprints fingerprint_classes nimble_lcmtypes_jar)
+catch_discover_tests(test_java_fingerprints TEST_PREFIX "functional.lcmtypes." PROPERTIES LABELS functional)
