@@ -29,6 +29,8 @@ class ControllerNode {
   /// @throws ConfigError on bad configuration.
   ControllerNode(const Scenario& scenario, const transport::NodeOptions& options);
   int run();
+  /// The process frame (its bus, for in-process tests on memq://).
+  transport::ProcessNode& node() { return *node_; }
 
  private:
   void cycle(int64_t sim_time_ns);

@@ -34,6 +34,8 @@ class PlantNode {
   PlantNode(const Scenario& scenario, const transport::NodeOptions& options);
   /// Runs until stopped; returns the exit code.
   int run();
+  /// The process frame (its bus, for in-process tests on memq://).
+  transport::ProcessNode& node() { return *node_; }
 
  private:
   void on_command(const actuator_command_t& cmd);

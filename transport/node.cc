@@ -47,6 +47,41 @@ ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::stri
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
           "dropped a malformed message on " + channel + ": " + what);
   });
+  // Subscribed before anything is announced, so that no start, tick or ack is missed.
+  bus_.subscribe<run_control_t>(channels::kRunControl,
+                                [this](const run_control_t& m) { on_run_control(m); });
+  bus_.subscribe<step_ack_t>(
+    channels::kStepAck,
+    [this](const step_ack_t& ack) {
+      if (!master_ || next_due_.count(ack.process) == 0) return;  // not for us
+      last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
+      next_due_[ack.process] = ack.next_due_ns;
+    },
+    100000);
+  bus_.subscribe<rig_clock_t>(
+    channels::kRigClock,
+    [this](const rig_clock_t& tick) {
+      if (master_ || !started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
+      bool ran = false;
+      for (auto& t : tasks_) {
+        while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
+          sim_time_ns_ = t.next_ns;
+          t.fn(t.next_ns);
+          t.next_ns += t.period_ns;
+          ++loop_count_;
+          ran = true;
+        }
+      }
+      if (!ran) return;
+      step_ack_t ack;
+      ack.utime = tick.utime;
+      ack.seq = ack_seq_++;
+      ack.step = tick.step;
+      ack.next_due_ns = next_due_ns();
+      ack.process = name_;
+      bus_.publish(channels::kStepAck, ack);
+    },
+    100000);
 }
 
 void ProcessNode::install_signal_handlers() {
@@ -176,44 +211,6 @@ void ProcessNode::idle_until_stopped() {
 }
 
 int ProcessNode::run() {
-  bus_.subscribe<run_control_t>(channels::kRunControl,
-                                [this](const run_control_t& m) { on_run_control(m); });
-  if (master_) {
-    bus_.subscribe<step_ack_t>(
-        channels::kStepAck,
-        [this](const step_ack_t& ack) {
-          if (next_due_.count(ack.process) == 0) return;  // not a participant of this run
-          last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
-          next_due_[ack.process] = ack.next_due_ns;
-        },
-        100000);
-  } else {
-    bus_.subscribe<rig_clock_t>(
-        channels::kRigClock,
-        [this](const rig_clock_t& tick) {
-          if (!started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
-          bool ran = false;
-          for (auto& t : tasks_) {
-            while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
-              sim_time_ns_ = t.next_ns;
-              t.fn(t.next_ns);
-              t.next_ns += t.period_ns;
-              ++loop_count_;
-              ran = true;
-            }
-          }
-          if (!ran) return;
-          step_ack_t ack;
-          ack.utime = tick.utime;
-          ack.seq = ack_seq_++;
-          ack.step = tick.step;
-          ack.next_due_ns = next_due_ns();
-          ack.process = name_;
-          bus_.publish(channels::kStepAck, ack);
-        },
-        100000);
-  }
-
   if (!wait_for_start()) {
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
     return kExitOk;

@@ -1,0 +1,250 @@
+// Functional tests: the plant and controller processes' node classes on the in-process
+// memq:// provider, the test playing the other side of the lockstep protocol.
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/controller_status_t.hpp>
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/rig_clock_t.hpp>
+#include <nimble/run_control_t.hpp>
+#include <nimble/step_ack_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+#include "controller/controller_node.h"
+#include "plant/plant_node.h"
+
+using namespace nimble;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+run_control_t start_lockstep(double duration_s, const std::vector<std::string>& participants) {
+  run_control_t m;
+  m.utime = 0;
+  m.seq = 0;
+  m.command = run_control_t::COMMAND_START;
+  m.clock_mode = run_control_t::CLOCK_MODE_LOCKSTEP;
+  m.t0_monotonic_ns = 0;
+  m.duration_ns = static_cast<int64_t>(duration_s * 1e9);
+  m.run_id = "test";
+  m.participants = participants;
+  m.num_participants = static_cast<int32_t>(participants.size());
+  return m;
+}
+
+run_control_t stop_command() {
+  run_control_t m = start_lockstep(0, {});
+  m.seq = 1;
+  m.command = run_control_t::COMMAND_STOP;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("plant node: steps in lockstep on a participant's acks, applies commands, reports faults",
+          "[plant][process]") {
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  plant::PlantNode plant(scenario, {"plant", "", "memq://"});
+  transport::Bus& bus = plant.node().bus();
+
+  std::vector<truth_state_t> truth;
+  std::vector<actuator_feedback_t> feedback;
+  std::vector<fault_event_t> faults;
+  int ticks = 0;
+  bus.subscribe<truth_state_t>("TRUTH", [&](const truth_state_t& m) { truth.push_back(m); });
+  bus.subscribe<actuator_feedback_t>("ACTUATOR_FB", [&](const actuator_feedback_t& m) { feedback.push_back(m); });
+  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
+  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish("RUN_CONTROL", stop_command());
+  });
+  // The test is the participant "controller": it answers every tick with a command
+  // (delta_f = +20 rad/s) and an acknowledgement, and sends bad commands at step 10 and 11.
+  bus.subscribe<rig_clock_t>("RIG_CLOCK", [&](const rig_clock_t& tick) {
+    ++ticks;
+    actuator_command_t cmd{};
+    cmd.utime = tick.utime;
+    cmd.seq = tick.step;
+    cmd.mode = actuator_command_t::MODE_DELTA_F;
+    cmd.flap_freq_collective_radps = 102.497;
+    cmd.delta_f_radps = 20.0;
+    cmd.source = "test";
+    if (tick.step == 10) cmd.delta_f_radps = std::nan("");
+    bus.publish("ACTUATOR_CMD", cmd);
+    if (tick.step == 11) {
+      const char garbage[] = "not an actuator command";
+      bus.lcm().publish("ACTUATOR_CMD", garbage, sizeof garbage);
+    }
+    step_ack_t ack{};
+    ack.utime = tick.utime;
+    ack.seq = tick.step;
+    ack.step = tick.step;
+    ack.next_due_ns = tick.sim_time_ns + tick.dt_ns;
+    ack.process = "controller";
+    bus.publish("STEP_ACK", ack);
+  });
+  bus.publish("RUN_CONTROL", start_lockstep(0.2, {"controller"}));
+
+  REQUIRE(plant.run() == transport::kExitOk);
+  CHECK(ticks == 201);
+  REQUIRE(truth.size() == 201);
+  CHECK(feedback.size() == 21);
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    REQUIRE(truth[i].seq == static_cast<int64_t>(i));
+    REQUIRE(truth[i].utime == static_cast<int64_t>(i) * 1000);
+    REQUIRE(truth[i].step == static_cast<int64_t>(i));
+  }
+  // Positive delta_f rolls right wing down: p > 0 and phi > 0 after 0.2 s.
+  CHECK(truth.back().delta_f_radps > 5.0);
+  CHECK(truth.back().omega_body_radps[0] > 0.0);
+  CHECK(truth.back().euler_rad[0] > 0.0);
+  // The bad commands were reported, named, and did not stop the plant.
+  bool nan_reported = false, garbage_reported = false;
+  for (const auto& f : faults) {
+    if (f.code == fault_event_t::CODE_MESSAGE_MALFORMED && f.message.find("not finite") != std::string::npos) {
+      nan_reported = true;
+    }
+    if (f.code == fault_event_t::CODE_MESSAGE_MALFORMED && f.channel == "ACTUATOR_CMD" &&
+        f.message.find("cannot decode") != std::string::npos) {
+      garbage_reported = true;
+    }
+  }
+  CHECK(nan_reported);
+  CHECK(garbage_reported);
+  CHECK(bus.stats().at("ACTUATOR_CMD").malformed == 1);
+}
+
+TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][process]") {
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  plant::PlantNode plant(scenario, {"plant", "", "memq://"});
+  transport::Bus& bus = plant.node().bus();
+  std::vector<actuator_feedback_t> feedback;
+  std::vector<fault_event_t> faults;
+  std::vector<truth_state_t> truth;
+  bus.subscribe<truth_state_t>("TRUTH", [&](const truth_state_t& m) { truth.push_back(m); });
+  bus.subscribe<actuator_feedback_t>("ACTUATOR_FB", [&](const actuator_feedback_t& m) { feedback.push_back(m); });
+  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
+  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish("RUN_CONTROL", stop_command());
+  });
+  // Commands with delta_f = 30 rad/s for the first 50 ms only; acknowledgements always.
+  bus.subscribe<rig_clock_t>("RIG_CLOCK", [&](const rig_clock_t& tick) {
+    if (tick.sim_time_ns < 50000000) {
+      actuator_command_t cmd{};
+      cmd.utime = tick.utime;
+      cmd.seq = tick.step;
+      cmd.mode = actuator_command_t::MODE_LEFT_RIGHT;
+      cmd.flap_freq_left_radps = 102.497 + 15;
+      cmd.flap_freq_right_radps = 102.497 - 15;
+      bus.publish("ACTUATOR_CMD", cmd);
+    }
+    step_ack_t ack{};
+    ack.step = tick.step;
+    ack.next_due_ns = tick.sim_time_ns + tick.dt_ns;
+    ack.process = "controller";
+    bus.publish("STEP_ACK", ack);
+  });
+  bus.publish("RUN_CONTROL", start_lockstep(0.5, {"controller"}));
+  REQUIRE(plant.run() == transport::kExitOk);
+
+  // Timeout 0.1 s after the last command (t = 0.049 s): safe state from about t = 0.15 s.
+  int timeouts = 0;
+  for (const auto& f : faults) {
+    if (f.code == fault_event_t::CODE_COMMAND_TIMEOUT) {
+      ++timeouts;
+      CHECK(f.rig_utime == Approx(150000).margin(2000));
+    }
+  }
+  CHECK(timeouts == 1);
+  REQUIRE_FALSE(feedback.empty());
+  CHECK_FALSE(feedback[10].safe_state);  // t = 0.1 s
+  CHECK(feedback.back().safe_state);
+  CHECK(feedback.back().cmd_seq == 49);
+  // In the safe state delta_f decays back to zero (trim frequencies on both wings).
+  CHECK(std::fabs(truth.back().delta_f_radps) < 0.05 * 30 * 8.97 / 12.56);
+}
+
+TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-points, restores roll",
+          "[controller][process]") {
+  const Scenario scenario = load_scenario(kConfigs + "id_doublet_train_fast.yaml");
+  ControllerNode controller(scenario, {"controller", "", "memq://"});
+  transport::Bus& bus = controller.node().bus();
+  std::vector<actuator_command_t> commands;
+  std::vector<attitude_setpoint_t> setpoints;
+  std::vector<controller_status_t> status;
+  std::vector<int64_t> acked_steps;
+  bus.subscribe<actuator_command_t>("ACTUATOR_CMD", [&](const actuator_command_t& m) { commands.push_back(m); });
+  bus.subscribe<attitude_setpoint_t>("ATTITUDE_SP", [&](const attitude_setpoint_t& m) { setpoints.push_back(m); });
+  bus.subscribe<controller_status_t>("CONTROLLER_STATUS", [&](const controller_status_t& m) { status.push_back(m); });
+
+  // The test is the plant: a vehicle frozen at phi = +0.1 rad, ticking at 1 kHz up to
+  // the controller's next due time.
+  const int64_t dt_ns = 1000000;
+  const double duration_s = 1.5;
+  int64_t step = 0;
+  const auto tick = [&](int64_t k) {
+    truth_state_t t{};
+    t.utime = k * dt_ns / 1000;
+    t.seq = k;
+    t.step = k;
+    t.euler_rad[0] = 0.1;
+    t.quaternion_wxyz[0] = 1.0;
+    bus.publish("TRUTH", t);
+    rig_clock_t c{};
+    c.utime = t.utime;
+    c.seq = k;
+    c.step = k;
+    c.sim_time_ns = k * dt_ns;
+    c.dt_ns = dt_ns;
+    bus.publish("RIG_CLOCK", c);
+  };
+  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+    acked_steps.push_back(ack.step);
+    if (ack.next_due_ns > static_cast<int64_t>(duration_s * 1e9)) {
+      bus.publish("RUN_CONTROL", stop_command());
+      return;
+    }
+    step = (ack.next_due_ns + dt_ns - 1) / dt_ns;  // first plant step at or after the due time
+    tick(step);
+  });
+  bus.publish("RUN_CONTROL", start_lockstep(duration_s, {"controller"}));
+  tick(0);
+  REQUIRE(controller.run() == transport::kExitOk);
+
+  // 512 Hz over 1.5 s: cycles at n / 512 s for n = 0..767.
+  CHECK(commands.size() == 768);
+  CHECK(setpoints.size() == 768);
+  CHECK(status.size() == 768);
+  CHECK(acked_steps.size() == 768);
+  for (std::size_t n = 0; n < commands.size(); ++n) {
+    REQUIRE(commands[n].seq == static_cast<int64_t>(n));
+    REQUIRE(commands[n].utime == static_cast<int64_t>(n) * 1953125 / 1000);
+  }
+  // During the first hover second the set-point is level and the roll error restoring:
+  // phi = +0.1 rad (right wing down) needs negative delta_f (left slower than right).
+  const auto& c = commands[400];
+  CHECK(setpoints[400].roll_sp_rad == 0.0);
+  CHECK(c.delta_f_radps < 0.0);
+  CHECK(c.flap_freq_left_radps < c.flap_freq_right_radps);
+  CHECK(status[400].roll_error_rad < 0.0);
+  CHECK(status[400].gain_set == "fast");
+  // After 1 s the doublet starts: negative half first (thesis Fig 7.7).
+  bool doublet_seen = false;
+  for (const auto& sp : setpoints) {
+    if (sp.segment_name == "doublet_7hz") {
+      doublet_seen = true;
+      CHECK(sp.utime >= 1000000);
+      CHECK(sp.roll_sp_rad < 0.0);
+      break;
+    }
+  }
+  CHECK(doublet_seen);
+}
