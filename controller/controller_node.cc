@@ -29,11 +29,16 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
 
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
   node_->set_expected_rate(kTruth, 1000.0);
+  const ProcessRunOptions run = process_run_options(scenario);
+  node_->set_realtime_priority(run.realtime_priority);
   node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
     input_ = t;
     have_input_ = true;
+    node_->notify_input(t.utime * 1000);
   });
-  node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); });
+  node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
+                  run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
+                                                    : transport::ProcessNode::Trigger::kTimer);
 }
 
 int ControllerNode::run() { return node_->run(); }
@@ -86,6 +91,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   cmd.throttle_pct = out.throttle_cmd_pct;
   cmd.dihedral_rad = out.dihedral_rad;
   cmd.wing_root_rad = out.wing_root_rad;
+  cmd.input_utime = have_input_ ? input_.utime : -1;
   cmd.rolling_counter = rolling_counter_;
   rolling_counter_ = static_cast<int8_t>((rolling_counter_ + 1) % 16);
   cmd.source = node_->name();

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -70,6 +71,8 @@ LaunchConfig launch_config_from(const Scenario& s) {
   c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
                                                    : m.get_string_or("network_namespace", "auto");
   c.late_threshold_us = static_cast<int64_t>(m.get_double_or("late_threshold_us", 2000, Range::positive()));
+  if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
+  if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
   m.finish();
   return c;
 }
@@ -173,7 +176,8 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     hz["ATTITUDE_SP"] = rates.controller_hz;
   }
   if (lockstep) {
-    hz["RIG_CLOCK"] = rates.plant_hz;
+    // RIG_CLOCK goes out at the plant steps where a participant is due.
+    hz["RIG_CLOCK"] = rates.controller_hz > 0 ? std::min(rates.plant_hz, rates.controller_hz) : 0.0;
     hz["STEP_ACK"] = rates.controller_hz;
   }
   const double n = static_cast<double>(s.processes.size());
@@ -209,6 +213,15 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
     std::snprintf(line, sizeof line, "%-14s %9.1f %8lld %9lld %10.1f %10.1f %10.1f\n", name.c_str(), t.loop_rate_hz,
                   static_cast<long long>(t.loop_count), static_cast<long long>(t.overruns), t.jitter_p50_us,
                   t.jitter_p99_us, t.jitter_max_us);
+    out << line;
+  }
+  for (const auto& [name, t] : mon.timing()) {
+    if (t.latency_count == 0) continue;
+    std::snprintf(line, sizeof line,
+                  "%s control loop latency (TRUTH published -> ACTUATOR_CMD received): p50 %.1f us, p99 %.1f us, "
+                  "max %.1f us over %lld commands\n",
+                  name.c_str(), t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
+                  static_cast<long long>(t.latency_count));
     out << line;
   }
   out << "\nflight     max |p| " << std::to_string(f.max_abs_p).substr(0, 6) << " rad/s, max |v| "
@@ -284,6 +297,10 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
     w.key("jitter_p50_us").value(t.jitter_p50_us);
     w.key("jitter_p99_us").value(t.jitter_p99_us);
     w.key("jitter_max_us").value(t.jitter_max_us);
+    w.key("latency_count").value(static_cast<long long>(t.latency_count));
+    w.key("latency_p50_us").value(t.latency_p50_us);
+    w.key("latency_p99_us").value(t.latency_p99_us);
+    w.key("latency_max_us").value(t.latency_max_us);
     w.end_object();
   }
   w.end_object();

@@ -58,6 +58,10 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     t.jitter_p50_us = h.jitter_p50_us;
     t.jitter_p99_us = h.jitter_p99_us;
     t.jitter_max_us = h.jitter_max_us;
+    t.latency_count = h.latency_count;
+    t.latency_p50_us = h.latency_p50_us;
+    t.latency_p99_us = h.latency_p99_us;
+    t.latency_max_us = h.latency_max_us;
     count_seq(c, h.process, h.seq);
     return;
   }

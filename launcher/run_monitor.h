@@ -34,6 +34,8 @@ struct TimingSummary {
   int64_t loop_count = 0;
   int64_t overruns = 0;
   double jitter_p50_us = 0.0, jitter_p99_us = 0.0, jitter_max_us = 0.0;
+  int64_t latency_count = 0;
+  double latency_p50_us = 0.0, latency_p99_us = 0.0, latency_max_us = 0.0;
 };
 
 struct FaultRecord {

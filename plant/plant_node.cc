@@ -53,6 +53,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
 
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
   node_->set_lockstep_master(true);
+  node_->set_realtime_priority(process_run_options(scenario).realtime_priority);
   if (scenario.has_section("lockstep")) {
     ConfigMap ls = scenario.section("lockstep");
     node_->set_ack_timeout_ms(static_cast<int>(ls.get_int("ack_timeout_ms", Range::closed(10, 600000))));
@@ -98,6 +99,14 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
     ++commands_clamped_;
     node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, kActuatorCommand,
                  "clamped actuator command seq " + std::to_string(cmd.seq) + " to the actuator range");
+  }
+  if (cmd.input_utime >= 0) {
+    for (const auto& p : published_) {
+      if (p.utime == cmd.input_utime) {
+        node_->record_latency_ns(transport::monotonic_ns() - p.wall_ns);
+        break;
+      }
+    }
   }
   have_command_ = true;
   last_command_ns_ = node_->sim_time_ns();
@@ -149,6 +158,7 @@ void PlantNode::publish_truth(int64_t sim_time_ns) {
   m.dihedral_rad = t.dihedral_rad;
   m.wing_root_rad = t.wing_root_rad;
   node_->bus().publish(kTruth, m);
+  published_[static_cast<std::size_t>(m.seq) % published_.size()] = {m.utime, transport::monotonic_ns()};
 }
 
 void PlantNode::publish_feedback(int64_t sim_time_ns) {

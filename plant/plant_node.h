@@ -19,6 +19,7 @@
 
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <nimble/actuator_command_t.hpp>
 
@@ -58,6 +59,13 @@ class PlantNode {
   int64_t truth_seq_ = 0;
   int64_t feedback_seq_ = 0;
   int64_t commands_rejected_ = 0;
+  /// Wall-clock publish time of recent TRUTH messages, by seq modulo the ring size,
+  /// to measure the control loop's latency from actuator_command_t.input_utime.
+  struct Published {
+    int64_t utime = -1;
+    int64_t wall_ns = 0;
+  };
+  std::vector<Published> published_ = std::vector<Published>(256);
   int64_t commands_clamped_ = 0;
 };
 

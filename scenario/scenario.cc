@@ -163,6 +163,16 @@ Scenario load_scenario(const std::string& file, const std::vector<Override>& ove
   return scenario_from_tree(load_scenario_tree(file, overrides), file);
 }
 
+ProcessRunOptions process_run_options(const Scenario& scenario) {
+  ProcessRunOptions o;
+  ConfigMap run = scenario.section("run");
+  if (run.has("realtime_priority")) {
+    o.realtime_priority = static_cast<int>(run.get_int("realtime_priority", Range::closed(0, 99)));
+  }
+  if (run.has("controller_trigger")) o.controller_trigger = run.get_enum("controller_trigger", {"timer", "state"});
+  return o;
+}
+
 std::string to_yaml(const YAML::Node& node) {
   YAML::Emitter out;
   out << node;

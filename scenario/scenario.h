@@ -63,6 +63,19 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file);
 /// load_scenario_tree + scenario_from_tree.
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides = {});
 
+/// Options of the `run` section that the processes themselves apply (the launcher
+/// validates the whole section).
+struct ProcessRunOptions {
+  /// Real time: SCHED_FIFO priority of the rig processes, 1..99; 0 = default scheduler.
+  int realtime_priority = 0;
+  /// Real time: "timer" (the controller runs on its own 512 Hz deadlines) or "state"
+  /// (each cycle starts when the state it needs arrives, as the onboard loop does on its IMU).
+  std::string controller_trigger = "timer";
+};
+
+/// Reads the process-level options of `run`. @throws ConfigError naming the key.
+ProcessRunOptions process_run_options(const Scenario& scenario);
+
 /// Writes a tree as YAML text.
 std::string to_yaml(const YAML::Node& node);
 

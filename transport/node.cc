@@ -1,7 +1,12 @@
 #include "transport/node.h"
 
 #include <poll.h>
+#include <sched.h>
+#include <sys/mman.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <cmath>
@@ -92,13 +97,28 @@ void ProcessNode::install_signal_handlers() {
   sigaction(SIGINT, &sa, nullptr);
 }
 
-void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn) {
+void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger) {
   const double period = 1e9 / rate_hz;
   if (!(rate_hz > 0.0) || std::fabs(period - std::round(period)) > 1e-6) {
     throw std::invalid_argument("task '" + label + "': rate " + std::to_string(rate_hz) +
                                 " Hz does not give a whole number of nanoseconds per period");
   }
-  tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), 0});
+  tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), trigger, 0});
+}
+
+void ProcessNode::notify_input(int64_t input_sim_time_ns) {
+  if (!started_ || stop_ || clock_mode_ != run_control_t::CLOCK_MODE_REALTIME) return;
+  for (auto& t : tasks_) {
+    if (t.trigger != Trigger::kInput || t.next_ns > input_sim_time_ns || t.next_ns >= duration_ns_) continue;
+    jitter_.add_ns(monotonic_ns() - (t0_ns_ + t.next_ns));
+    ++loop_count_;
+    sim_time_ns_ = t.next_ns;
+    t.fn(t.next_ns);
+    // Next cycle: the first period boundary after this input (missed cycles are skipped).
+    const int64_t skipped = (input_sim_time_ns - t.next_ns) / t.period_ns;
+    overruns_ += skipped;
+    t.next_ns += (skipped + 1) * t.period_ns;
+  }
 }
 
 void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message) {
@@ -147,6 +167,10 @@ void ProcessNode::publish_timing_health() {
   h.jitter_p50_us = jitter_.percentile_us(50);
   h.jitter_p99_us = jitter_.percentile_us(99);
   h.jitter_max_us = jitter_.max_us();
+  h.latency_count = latency_.count();
+  h.latency_p50_us = latency_.percentile_us(50);
+  h.latency_p99_us = latency_.percentile_us(99);
+  h.latency_max_us = latency_.max_us();
   const double window_s = std::max(1e-9, static_cast<double>(h.window_us) / 1e6);
   for (const auto& [channel, s] : bus_.stats()) {
     h.channel.push_back(channel);
@@ -232,15 +256,29 @@ int ProcessNode::run() {
 
 int ProcessNode::run_realtime() {
   use_fine_timer_slack();
-  if (tasks_.empty()) {
-    idle_until_stopped();
-    return kExitOk;
+  if (rt_priority_ > 0) {
+    sched_param sp{};
+    sp.sched_priority = rt_priority_;
+    if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0 || ::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+      fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "",
+            std::string("cannot run under SCHED_FIFO priority ") + std::to_string(rt_priority_) + ": " +
+                std::strerror(errno) + " (needs root or CAP_SYS_NICE); running with the default scheduler");
+    }
   }
   const int fd = bus_.fileno();
   while (!stop_) {
-    Task* task = &tasks_.front();
+    Task* task = nullptr;
     for (auto& t : tasks_) {
-      if (t.next_ns < task->next_ns) task = &t;
+      if (t.trigger == Trigger::kTimer && (task == nullptr || t.next_ns < task->next_ns)) task = &t;
+    }
+    if (task == nullptr) {
+      // Only input-triggered tasks: they run from notify_input() while messages are handled.
+      bool due = false;
+      for (const auto& t : tasks_) due = due || t.next_ns < duration_ns_;
+      if (!due || (t0_ns_ + duration_ns_ <= monotonic_ns())) break;
+      bus_.handle_timeout(10);
+      housekeeping();
+      continue;
     }
     if (task->next_ns >= duration_ns_) break;
     const int64_t deadline = t0_ns_ + task->next_ns;
@@ -298,6 +336,12 @@ int ProcessNode::run_lockstep_master() {
     task.next_ns = t + task.period_ns;
     ++loop_count_;
 
+    bool anyone_due = false;
+    for (const auto& [p, due] : next_due_) anyone_due = anyone_due || due <= t;
+    if (!anyone_due) {
+      housekeeping();
+      continue;  // nobody needs this step: no tick, no wait
+    }
     rig_clock_t tick;
     tick.utime = t / 1000;
     tick.seq = clock_seq_++;

@@ -78,6 +78,13 @@ class ProcessNode {
   /// A task run every `period_ns` of simulated time, first at t = 0.
   using TaskFn = std::function<void(int64_t sim_time_ns)>;
 
+  /// What starts a task in real time. In lockstep every task runs on the RIG_CLOCK tick.
+  enum class Trigger {
+    kTimer,  ///< at its deadline on CLOCK_MONOTONIC
+    kInput,  ///< when an input arrives whose time has reached the task's next due time
+             ///< (notify_input); the onboard loop of the vehicle is triggered by its IMU
+  };
+
   ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest = "");
 
   Bus& bus() { return bus_; }
@@ -85,7 +92,18 @@ class ProcessNode {
 
   /// Registers a periodic task. `rate_hz` must make an integer period in ns.
   /// @throws std::invalid_argument otherwise.
-  void add_task(const std::string& label, double rate_hz, TaskFn fn);
+  void add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger = Trigger::kTimer);
+
+  /// Real time: an input stamped `input_sim_time_ns` arrived; runs the input-triggered
+  /// tasks that are due. No effect in lockstep or before the start.
+  void notify_input(int64_t input_sim_time_ns);
+
+  /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
+  void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
+
+  /// Real time: run the loop under SCHED_FIFO at this priority (1..99) with memory locked;
+  /// 0 leaves the scheduler alone. Failure is reported as a FAULT, not fatal.
+  void set_realtime_priority(int priority) { rt_priority_ = priority; }
 
   /// Makes this node the lockstep master (the plant): its single task defines the step.
   void set_lockstep_master(bool master) { master_ = master; }
@@ -117,6 +135,7 @@ class ProcessNode {
     std::string label;
     int64_t period_ns;
     TaskFn fn;
+    Trigger trigger = Trigger::kTimer;
     int64_t next_ns = 0;
   };
 
@@ -156,6 +175,8 @@ class ProcessNode {
   std::map<int32_t, std::pair<int64_t, int>> fault_budget_;  // code -> (second, count)
 
   LatencyHistogram jitter_;
+  LatencyHistogram latency_;
+  int rt_priority_ = 0;
   int64_t loop_count_ = 0;
   int64_t overruns_ = 0;
 

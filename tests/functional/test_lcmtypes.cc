@@ -164,6 +164,7 @@ void fill(nimble::actuator_command_t& m, Distinct& g) {
   m.throttle_pct = g.real();
   m.dihedral_rad = g.real();
   m.wing_root_rad = g.real();
+  m.input_utime = g.i64();
   m.rolling_counter = 13;
   m.source = g.str();
 }
@@ -178,6 +179,7 @@ void require_equal(const nimble::actuator_command_t& a, const nimble::actuator_c
   REQUIRE(a.throttle_pct == b.throttle_pct);
   REQUIRE(a.dihedral_rad == b.dihedral_rad);
   REQUIRE(a.wing_root_rad == b.wing_root_rad);
+  REQUIRE(a.input_utime == b.input_utime);
   REQUIRE(a.rolling_counter == b.rolling_counter);
   REQUIRE(a.source == b.source);
 }
@@ -394,6 +396,10 @@ void fill(nimble::timing_health_t& m, Distinct& g, int32_t num_channels) {
   m.jitter_p50_us = g.real();
   m.jitter_p99_us = g.real();
   m.jitter_max_us = g.real();
+  m.latency_count = g.i64();
+  m.latency_p50_us = g.real();
+  m.latency_p99_us = g.real();
+  m.latency_max_us = g.real();
   m.num_channels = num_channels;
   m.channel.clear();
   m.count.clear();
@@ -422,6 +428,10 @@ void require_equal(const nimble::timing_health_t& a, const nimble::timing_health
   REQUIRE(a.jitter_p50_us == b.jitter_p50_us);
   REQUIRE(a.jitter_p99_us == b.jitter_p99_us);
   REQUIRE(a.jitter_max_us == b.jitter_max_us);
+  REQUIRE(a.latency_count == b.latency_count);
+  REQUIRE(a.latency_p50_us == b.latency_p50_us);
+  REQUIRE(a.latency_p99_us == b.latency_p99_us);
+  REQUIRE(a.latency_max_us == b.latency_max_us);
   REQUIRE(a.num_channels == b.num_channels);
   REQUIRE(a.channel == b.channel);
   REQUIRE(a.count == b.count);

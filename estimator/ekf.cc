@@ -1,0 +1,396 @@
+#include "estimator/ekf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+#include "estimator/attitude.h"
+#include "estimator/chi_square.h"
+
+namespace nimble {
+namespace {
+
+[[noreturn]] void invalid(const std::string& field, double value, const std::string& allowed) {
+  std::ostringstream out;
+  out << "EkfConfig." << field << " = " << value << ": must be " << allowed;
+  throw std::invalid_argument(out.str());
+}
+
+void require_positive(const std::string& field, double v) {
+  if (!(v > 0.0) || !std::isfinite(v)) invalid(field, v, "> 0");
+}
+
+void require_non_negative(const std::string& field, const Eigen::Vector3d& v) {
+  for (int i = 0; i < 3; ++i) {
+    if (!(v[i] >= 0.0) || !std::isfinite(v[i])) invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
+  }
+}
+
+void require_positive(const std::string& field, const Eigen::Vector3d& v) {
+  for (int i = 0; i < 3; ++i) require_positive(field + "[" + std::to_string(i) + "]", v[i]);
+}
+
+EkfInput lerp(const EkfInput& a, const EkfInput& b, std::int64_t ta, std::int64_t tb, std::int64_t t) {
+  if (tb <= ta) return b;
+  const double s = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
+  return a + s * (b - a);
+}
+
+template <int M>
+bool update_fixed(EkfState* x, EkfCovariance* P, const Eigen::Matrix<double, M, 1>& z,
+                  const Eigen::Matrix<double, M, 1>& r_diag, double gate_threshold, bool gate,
+                  EkfUpdateRecord* record) {
+  Eigen::Matrix<double, M, 1> y = z - x->template head<M>();
+  for (int i = 0; i < 3; ++i) y[i] = wrap_angle_rad(y[i]);
+  Eigen::Matrix<double, M, M> S = P->template topLeftCorner<M, M>();
+  S.diagonal() += r_diag;
+  const Eigen::LLT<Eigen::Matrix<double, M, M>> llt(S);
+  record->dim = M;
+  if (llt.info() != Eigen::Success) {  // S not positive definite: reject, reported as infinite NIS
+    record->nis = std::numeric_limits<double>::infinity();
+    record->accepted = false;
+    return false;
+  }
+  const double nis = y.dot(llt.solve(y));
+  record->nis = nis;
+  record->innovation.setZero();
+  record->innovation.template head<M>() = y;
+  if (!std::isfinite(nis) || (gate && nis > gate_threshold)) {
+    record->accepted = false;
+    return false;
+  }
+  // K = P H^T S^-1 with H = [I 0]: P H^T = left M columns of P.
+  const Eigen::Matrix<double, kEkfStateDim, M> PHt = P->template leftCols<M>();
+  const Eigen::Matrix<double, kEkfStateDim, M> K = llt.solve(PHt.transpose()).transpose();
+  *x += K * y;
+  EkfCovariance IKH = EkfCovariance::Identity();
+  IKH.template leftCols<M>() -= K;
+  const EkfCovariance IKHP = IKH.lazyProduct(*P);
+  EkfCovariance Pn = IKHP.lazyProduct(IKH.transpose());
+  const Eigen::Matrix<double, kEkfStateDim, M> KR = K * r_diag.asDiagonal();
+  Pn += KR.lazyProduct(K.transpose());
+  *P = 0.5 * (Pn + Pn.transpose());
+  ekf_wrap_angles(x);
+  record->accepted = true;
+  return true;
+}
+
+bool finite(const PoseMeasurement& z) {
+  return z.euler_rad.allFinite() && (!z.has_velocity || z.velocity_body_mps.allFinite());
+}
+
+}  // namespace
+
+EkfCovariance EkfConfig::initial_covariance() const {
+  EkfState d;
+  d << Eigen::Vector3d::Constant(initial_attitude_sigma_rad), Eigen::Vector3d::Constant(initial_velocity_sigma_mps),
+      Eigen::Vector3d::Constant(initial_gyro_bias_sigma_radps), Eigen::Vector3d::Constant(initial_accel_bias_sigma_mps2);
+  return d.array().square().matrix().asDiagonal();
+}
+
+void validate(const EkfConfig& c) {
+  require_positive("gravity_mps2", c.gravity_mps2);
+  if (!(c.min_abs_cos_theta > 0.0 && c.min_abs_cos_theta < 1.0)) invalid("min_abs_cos_theta", c.min_abs_cos_theta, "in (0, 1)");
+  require_positive("process_noise_reference_rate_hz", c.process_noise_reference_rate_hz);
+  require_non_negative("gyro_noise_var_per_sample_rad2ps2", c.gyro_noise_var_per_sample_rad2ps2);
+  require_non_negative("accel_noise_var_per_sample_m2ps4", c.accel_noise_var_per_sample_m2ps4);
+  require_non_negative("gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts);
+  require_non_negative("accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts);
+  require_positive("attitude_var_rad2", c.attitude_var_rad2);
+  require_positive("velocity_var_m2ps2", c.velocity_var_m2ps2);
+  require_positive("initial_attitude_sigma_rad", c.initial_attitude_sigma_rad);
+  require_positive("initial_velocity_sigma_mps", c.initial_velocity_sigma_mps);
+  require_positive("initial_gyro_bias_sigma_radps", c.initial_gyro_bias_sigma_radps);
+  require_positive("initial_accel_bias_sigma_mps2", c.initial_accel_bias_sigma_mps2);
+  if (!(c.gate_probability > 0.0 && c.gate_probability < 1.0)) invalid("gate_probability", c.gate_probability, "in (0, 1)");
+  if (!(c.history_s >= 0.0 && c.history_s <= 10.0)) invalid("history_s", c.history_s, "in [0, 10]");
+  if (!(c.max_step_s > 0.0 && c.max_step_s <= 0.1)) invalid("max_step_s", c.max_step_s, "in (0, 0.1]");
+  require_positive("imu_gap_s", c.imu_gap_s);
+}
+
+AttitudeVelocityEkf::AttitudeVelocityEkf(const EkfConfig& config) : config_(config) {
+  validate(config_);
+  params_ = config_.model_params();
+  input_psd_ << config_.gyro_noise_var_per_sample_rad2ps2, config_.accel_noise_var_per_sample_m2ps4;
+  input_psd_ /= config_.process_noise_reference_rate_hz;
+  bias_rw_psd_ << config_.gyro_bias_rw_radps_per_sqrts.array().square().matrix(),
+      config_.accel_bias_rw_mps2_per_sqrts.array().square().matrix();
+  gate3_ = chi_square_quantile(config_.gate_probability, 3.0);
+  gate6_ = chi_square_quantile(config_.gate_probability, 6.0);
+  history_us_ = static_cast<std::int64_t>(std::llround(config_.history_s * 1e6));
+}
+
+void AttitudeVelocityEkf::initialize(std::int64_t utime, const EkfState& x0, const EkfCovariance& P0) {
+  history_.clear();
+  accepted_.clear();
+  pending_.clear();
+  Node node;
+  node.utime = utime;
+  node.x = x0;
+  ekf_wrap_angles(&node.x);
+  node.P = 0.5 * (P0 + P0.transpose());
+  history_.push_back(node);
+  last_nis_ = -1.0;
+}
+
+void AttitudeVelocityEkf::initialize_from_measurement(const PoseMeasurement& z) {
+  EkfState x0 = EkfState::Zero();
+  x0.head<3>() = z.euler_rad;
+  if (z.has_velocity) x0.segment<3>(kU) = z.velocity_body_mps;
+  initialize(z.utime, x0, config_.initial_covariance());
+}
+
+Eigen::Vector3d AttitudeVelocityEkf::corrected_rate_radps() const {
+  const Node& n = history_.back();
+  return n.u.head<3>() - n.x.segment<3>(kBiasP);
+}
+
+bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovariance* P) const {
+  for (auto it = history_.rbegin(); it != history_.rend(); ++it) {
+    if (it->utime <= utime) {
+      if (x) *x = it->x;
+      if (P) *P = it->P;
+      return true;
+    }
+  }
+  return false;
+}
+
+void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
+                                    double dt_s) const {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  const EkfState k0 = ekf_process_derivative(*x, u0, params_);
+  const EkfState x1 = *x + dt_s * k0;
+  const EkfState k1 = ekf_process_derivative(x1, u1, params_);
+  const EkfCovariance F0 = ekf_process_jacobian(*x, u0, params_);
+  const EkfCovariance F1 = ekf_process_jacobian(x1, u1, params_);
+
+  // The bias rows of F are zero: F = [A B; 0 0] (6x6 blocks), so
+  //   Phi = I + dt/2 (F0 + F1) + dt^2/2 F1 F0 = [Phi11 Phi12; 0 I],
+  //   Phi11 = I + dt/2 (A0 + A1) + dt^2/2 A1 A0,  Phi12 = dt/2 (B0 + B1) + dt^2/2 A1 B0,
+  // and G = df/du_m = -B (top rows). The products below are the 12x12 formula of the header
+  // written blockwise (a third of the operations). Small fixed-size products use lazyProduct
+  // (coefficient-based), which is faster than Eigen's blocked GEMM at this size.
+  const Mat6 A0 = F0.topLeftCorner<6, 6>(), B0 = F0.topRightCorner<6, 6>();
+  const Mat6 A1 = F1.topLeftCorner<6, 6>(), B1 = F1.topRightCorner<6, 6>();
+  const double h2 = 0.5 * dt_s, hh2 = 0.5 * dt_s * dt_s;
+  Mat6 Phi11 = hh2 * A1.lazyProduct(A0) + h2 * (A0 + A1);
+  Phi11.diagonal().array() += 1.0;
+  const Mat6 Phi12 = hh2 * A1.lazyProduct(B0) + h2 * (B0 + B1);
+  const Mat6 B0S = B0 * input_psd_.asDiagonal();
+  const Mat6 B1S = B1 * input_psd_.asDiagonal();
+
+  // M = P + dt/2 Qc0
+  EkfCovariance M = *P;
+  M.topLeftCorner<6, 6>() += h2 * B0S.lazyProduct(B0.transpose());
+  M.diagonal().tail<6>() += h2 * bias_rw_psd_;
+  const Mat6 M11 = M.topLeftCorner<6, 6>(), M12 = M.topRightCorner<6, 6>();
+  const Mat6 M21 = M.bottomLeftCorner<6, 6>(), M22 = M.bottomRightCorner<6, 6>();
+  // Phi M = [X11 X12; M21 M22]
+  const Mat6 X11 = Phi11.lazyProduct(M11) + Phi12.lazyProduct(M21);
+  const Mat6 X12 = Phi11.lazyProduct(M12) + Phi12.lazyProduct(M22);
+  // Phi M Phi^T = [X11 Phi11^T + X12 Phi12^T, X12; X12^T, M22]
+  EkfCovariance Pn;
+  Pn.topLeftCorner<6, 6>() = X11.lazyProduct(Phi11.transpose()) + X12.lazyProduct(Phi12.transpose());
+  Pn.topRightCorner<6, 6>() = X12;
+  Pn.bottomLeftCorner<6, 6>() = X12.transpose();
+  Pn.bottomRightCorner<6, 6>() = M22;
+  // + dt/2 Qc1
+  Pn.topLeftCorner<6, 6>() += h2 * B1S.lazyProduct(B1.transpose());
+  Pn.diagonal().tail<6>() += h2 * bias_rw_psd_;
+  *P = 0.5 * (Pn + Pn.transpose());
+  *x += 0.5 * dt_s * (k0 + k1);
+  ekf_wrap_angles(x);
+}
+
+void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0,
+                                             const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
+  if (t1 <= t0) return;
+  const double dt_s = 1e-6 * static_cast<double>(t1 - t0);
+  const int steps = std::max(1, static_cast<int>(std::ceil(dt_s / config_.max_step_s - 1e-9)));
+  const double h = dt_s / steps;
+  for (int i = 0; i < steps; ++i) {
+    const EkfInput ua = u0 + (static_cast<double>(i) / steps) * (u1 - u0);
+    const EkfInput ub = u0 + (static_cast<double>(i + 1) / steps) * (u1 - u0);
+    propagate(x, P, ua, ub, h);
+  }
+}
+
+bool AttitudeVelocityEkf::predict(const ImuSample& sample) {
+  EkfInput u;
+  u << sample.gyro_radps, sample.accel_mps2;
+  return predict(sample.utime, u);
+}
+
+bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input) {
+  if (!initialized() || !imu_input.allFinite()) {
+    ++counters_.imu_rejected;
+    return false;
+  }
+  Node& last = history_.back();
+  if (utime <= last.utime) {
+    if (!last.has_input && utime == last.utime) {
+      last.u = imu_input;
+      last.has_input = true;
+      ++counters_.imu_samples;
+      return true;
+    }
+    ++counters_.imu_rejected;
+    return false;
+  }
+  if (1e-6 * static_cast<double>(utime - last.utime) > config_.imu_gap_s) ++counters_.imu_gaps;
+  Node next;
+  next.utime = utime;
+  next.u = imu_input;
+  next.has_input = true;
+  next.x = last.x;
+  next.P = last.P;
+  const EkfInput u0 = last.has_input ? last.u : imu_input;
+  if (!last.has_input) {
+    last.u = imu_input;
+    last.has_input = true;
+  }
+  propagate_interval(&next.x, &next.P, u0, imu_input, last.utime, utime);
+  history_.push_back(next);
+  ++counters_.imu_samples;
+
+  // Measurements that were waiting for this sample.
+  while (!pending_.empty() && pending_.front().utime <= utime) {
+    const PoseMeasurement z = pending_.front();
+    pending_.erase(pending_.begin());
+    if (config_.latency_mode == EkfLatencyMode::kNaive) {
+      apply_now(z);
+    } else {
+      insert_in_past(z);
+    }
+  }
+  trim();
+  return true;
+}
+
+void AttitudeVelocityEkf::trim() {
+  const std::int64_t cutoff = history_.back().utime - history_us_;
+  while (history_.size() >= 2 && history_[1].utime <= cutoff) history_.pop_front();
+  while (!accepted_.empty() && accepted_.front().z.utime <= history_.front().utime) accepted_.pop_front();
+}
+
+void AttitudeVelocityEkf::report(const EkfUpdateRecord& record) {
+  last_nis_ = record.nis;
+  if (record.accepted) {
+    ++counters_.measurements_accepted;
+  } else {
+    ++counters_.measurements_rejected_gate;
+  }
+  if (observer_) observer_(record);
+}
+
+bool AttitudeVelocityEkf::update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate,
+                                 EkfUpdateRecord* record) const {
+  record->utime = z.utime;
+  record->frame_number = z.frame_number;
+  record->filter_utime = history_.back().utime;
+  const bool use_gate = gate && config_.gate_enabled;
+  if (z.has_velocity) {
+    Eigen::Matrix<double, 6, 1> zv, r;
+    zv << z.euler_rad, z.velocity_body_mps;
+    r << config_.attitude_var_rad2, config_.velocity_var_m2ps2;
+    return update_fixed<6>(x, P, zv, r, gate6_, use_gate, record);
+  }
+  return update_fixed<3>(x, P, z.euler_rad, config_.attitude_var_rad2, gate3_, use_gate, record);
+}
+
+EkfMeasurementStatus AttitudeVelocityEkf::apply_now(const PoseMeasurement& z) {
+  Node& now = history_.back();
+  EkfUpdateRecord record;
+  const bool ok = update(&now.x, &now.P, z, true, &record);
+  report(record);
+  return ok ? EkfMeasurementStatus::kAccepted : EkfMeasurementStatus::kRejectedGate;
+}
+
+EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& z) {
+  const std::int64_t now = history_.back().utime;
+  if (z.utime <= history_.front().utime || z.utime < now - history_us_) {
+    ++counters_.measurements_too_old;
+    return EkfMeasurementStatus::kTooOld;
+  }
+  // j: last node strictly before the measurement.
+  std::size_t j = history_.size() - 1;
+  while (j > 0 && history_[j].utime >= z.utime) --j;
+  if (z.utime < now) ++counters_.rollbacks;
+
+  // Insert into the stored measurements, after those with the same or an earlier time.
+  auto pos = std::upper_bound(accepted_.begin(), accepted_.end(), z.utime,
+                              [](std::int64_t t, const Stored& s) { return t < s.z.utime; });
+  accepted_.insert(pos, Stored{z, true});
+
+  EkfState x = history_[j].x;
+  EkfCovariance P = history_[j].P;
+  std::int64_t t = history_[j].utime;
+  std::size_t k = static_cast<std::size_t>(
+      std::upper_bound(accepted_.begin(), accepted_.end(), t,
+                       [](std::int64_t tt, const Stored& s) { return tt < s.z.utime; }) -
+      accepted_.begin());
+  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
+  for (std::size_t i = j; i + 1 < history_.size(); ++i) {
+    const Node& a = history_[i];
+    Node& b = history_[i + 1];
+    while (k < accepted_.size() && accepted_[k].z.utime <= b.utime) {
+      const std::int64_t tm = accepted_[k].z.utime;
+      if (tm > t) {
+        propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), lerp(a.u, b.u, a.utime, b.utime, tm), t, tm);
+        t = tm;
+      }
+      EkfUpdateRecord record;
+      if (accepted_[k].is_new) {
+        const bool ok = update(&x, &P, accepted_[k].z, true, &record);
+        report(record);
+        if (!ok) {
+          status = EkfMeasurementStatus::kRejectedGate;
+          accepted_.erase(accepted_.begin() + static_cast<std::ptrdiff_t>(k));
+          continue;
+        }
+        accepted_[k].is_new = false;
+      } else {
+        update(&x, &P, accepted_[k].z, false, &record);
+      }
+      ++k;
+    }
+    if (t < b.utime) {
+      propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), b.u, t, b.utime);
+      t = b.utime;
+    }
+    b.x = x;
+    b.P = P;
+  }
+  return status;
+}
+
+EkfMeasurementStatus AttitudeVelocityEkf::add_measurement(const PoseMeasurement& z) {
+  if (!initialized()) {
+    ++counters_.measurements_invalid;
+    return EkfMeasurementStatus::kNotInitialized;
+  }
+  if (!finite(z)) {
+    ++counters_.measurements_invalid;
+    return EkfMeasurementStatus::kInvalid;
+  }
+  const std::int64_t now = history_.back().utime;
+  if (config_.latency_mode == EkfLatencyMode::kNaive) return apply_now(z);
+  if (z.utime > now) {
+    if (z.utime > now + history_us_) {
+      ++counters_.measurements_too_new;
+      return EkfMeasurementStatus::kTooNew;
+    }
+    auto pos = std::upper_bound(pending_.begin(), pending_.end(), z.utime,
+                                [](std::int64_t t, const PoseMeasurement& m) { return t < m.utime; });
+    pending_.insert(pos, z);
+    return EkfMeasurementStatus::kPending;
+  }
+  return insert_in_past(z);
+}
+
+}  // namespace nimble

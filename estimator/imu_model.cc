@@ -1,0 +1,175 @@
+#include "estimator/imu_model.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace nimble {
+namespace {
+
+[[noreturn]] void invalid(const std::string& field, double value, const std::string& allowed) {
+  std::ostringstream out;
+  out << "ImuModelConfig." << field << " = " << value << ": must be " << allowed;
+  throw std::invalid_argument(out.str());
+}
+
+void require_non_negative(const std::string& field, const Eigen::Vector3d& v) {
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(v[i]) || v[i] < 0.0) invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
+  }
+}
+
+void require_finite(const std::string& field, const Eigen::Vector3d& v) {
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(v[i])) invalid(field + "[" + std::to_string(i) + "]", v[i], "finite");
+  }
+}
+
+double clamp_axis(double value, double range, bool* clamped) {
+  if (value > range) {
+    *clamped = true;
+    return range;
+  }
+  if (value < -range) {
+    *clamped = true;
+    return -range;
+  }
+  if (std::isnan(value)) {
+    *clamped = true;
+    return 0.0;
+  }
+  return value;
+}
+
+}  // namespace
+
+std::vector<VibrationHarmonic> default_flapping_harmonics() {
+  VibrationHarmonic first;
+  first.harmonic = 1;
+  first.gyro_amplitude_radps = Eigen::Vector3d(0.2, 0.2, 0.1);
+  first.accel_amplitude_mps2 = Eigen::Vector3d(0.5, 0.3, 1.0);
+  VibrationHarmonic second;
+  second.harmonic = 2;
+  second.gyro_amplitude_radps = Eigen::Vector3d(0.1, 0.1, 0.05);
+  second.accel_amplitude_mps2 = Eigen::Vector3d(1.0, 0.2, 0.5);
+  return {first, second};
+}
+
+void validate(const ImuModelConfig& c) {
+  if (!(c.sample_rate_hz > 0.0) || !std::isfinite(c.sample_rate_hz)) invalid("sample_rate_hz", c.sample_rate_hz, "> 0");
+  require_non_negative("gyro_noise_sigma_radps", c.gyro_noise_sigma_radps);
+  require_non_negative("accel_noise_sigma_mps2", c.accel_noise_sigma_mps2);
+  require_finite("gyro_bias_initial_radps", c.gyro_bias_initial_radps);
+  require_finite("accel_bias_initial_mps2", c.accel_bias_initial_mps2);
+  if (!(c.gyro_bias_turn_on_sigma_radps >= 0.0)) invalid("gyro_bias_turn_on_sigma_radps", c.gyro_bias_turn_on_sigma_radps, ">= 0");
+  if (!(c.accel_bias_turn_on_sigma_mps2 >= 0.0)) invalid("accel_bias_turn_on_sigma_mps2", c.accel_bias_turn_on_sigma_mps2, ">= 0");
+  require_non_negative("gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts);
+  require_non_negative("accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts);
+  if (!(c.gyro_range_radps > 0.0)) invalid("gyro_range_radps", c.gyro_range_radps, "> 0");
+  if (!(c.accel_range_mps2 > 0.0)) invalid("accel_range_mps2", c.accel_range_mps2, "> 0");
+  for (std::size_t i = 0; i < c.flapping_harmonics.size(); ++i) {
+    const auto& h = c.flapping_harmonics[i];
+    const std::string name = "flapping_harmonics[" + std::to_string(i) + "]";
+    if (h.harmonic < 1) invalid(name + ".harmonic", h.harmonic, ">= 1");
+    require_non_negative(name + ".gyro_amplitude_radps", h.gyro_amplitude_radps);
+    require_non_negative(name + ".accel_amplitude_mps2", h.accel_amplitude_mps2);
+  }
+  if (!(c.structural_mode_hz > 0.0) || !std::isfinite(c.structural_mode_hz)) invalid("structural_mode_hz", c.structural_mode_hz, "> 0");
+  require_non_negative("structural_gyro_amplitude_radps", c.structural_gyro_amplitude_radps);
+  require_non_negative("structural_accel_amplitude_mps2", c.structural_accel_amplitude_mps2);
+  if (!std::isfinite(c.temperature_degc)) invalid("temperature_degc", c.temperature_degc, "finite");
+}
+
+ImuModel::ImuModel(const ImuModelConfig& config, std::uint64_t seed) : config_(config), rng_(seed) {
+  validate(config_);
+  // Fixed draw order: turn-on biases, then vibration phases.
+  for (int i = 0; i < 3; ++i) {
+    gyro_bias_radps_[i] = config_.gyro_bias_initial_radps[i] + config_.gyro_bias_turn_on_sigma_radps * normal_(rng_);
+  }
+  for (int i = 0; i < 3; ++i) {
+    accel_bias_mps2_[i] = config_.accel_bias_initial_mps2[i] + config_.accel_bias_turn_on_sigma_mps2 * normal_(rng_);
+  }
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  for (std::size_t h = 0; h < config_.flapping_harmonics.size(); ++h) {
+    Eigen::Vector3d g, a;
+    for (int i = 0; i < 3; ++i) g[i] = phase(rng_);
+    for (int i = 0; i < 3; ++i) a[i] = phase(rng_);
+    harmonic_gyro_phase_rad_.push_back(g);
+    harmonic_accel_phase_rad_.push_back(a);
+  }
+  for (int i = 0; i < 3; ++i) structural_gyro_phase_rad_[i] = phase(rng_);
+  for (int i = 0; i < 3; ++i) structural_accel_phase_rad_[i] = phase(rng_);
+  flap_phase_left_rad_ = phase(rng_);
+  flap_phase_right_rad_ = phase(rng_);
+}
+
+ImuSample ImuModel::sample(const ImuTruthInput& truth) {
+  double dt_s = 0.0;
+  if (seq_ > 0) {
+    if (truth.utime > last_utime_) {
+      dt_s = 1e-6 * static_cast<double>(truth.utime - last_utime_);
+    } else {
+      ++non_increasing_time_;
+    }
+  }
+  last_utime_ = truth.utime;
+
+  // Bias random walk over the interval since the previous sample.
+  if (dt_s > 0.0) {
+    const double sq = std::sqrt(dt_s);
+    for (int i = 0; i < 3; ++i) gyro_bias_radps_[i] += config_.gyro_bias_rw_radps_per_sqrts[i] * sq * normal_(rng_);
+    for (int i = 0; i < 3; ++i) accel_bias_mps2_[i] += config_.accel_bias_rw_mps2_per_sqrts[i] * sq * normal_(rng_);
+  }
+
+  // Vibration phases advance with the current flapping frequencies.
+  flap_phase_left_rad_ = std::fmod(flap_phase_left_rad_ + truth.flap_freq_left_radps * dt_s, 2.0 * M_PI);
+  flap_phase_right_rad_ = std::fmod(flap_phase_right_rad_ + truth.flap_freq_right_radps * dt_s, 2.0 * M_PI);
+  structural_phase_rad_ = std::fmod(structural_phase_rad_ + 2.0 * M_PI * config_.structural_mode_hz * dt_s, 2.0 * M_PI);
+
+  Eigen::Vector3d vib_gyro = Eigen::Vector3d::Zero(), vib_accel = Eigen::Vector3d::Zero();
+  if (config_.vibration_enabled) {
+    for (std::size_t h = 0; h < config_.flapping_harmonics.size(); ++h) {
+      const VibrationHarmonic& harm = config_.flapping_harmonics[h];
+      const double k = harm.harmonic;
+      for (int i = 0; i < 3; ++i) {
+        vib_gyro[i] += 0.5 * harm.gyro_amplitude_radps[i] *
+                       (std::sin(k * flap_phase_left_rad_ + harmonic_gyro_phase_rad_[h][i]) +
+                        std::sin(k * flap_phase_right_rad_ + harmonic_gyro_phase_rad_[h][i]));
+        vib_accel[i] += 0.5 * harm.accel_amplitude_mps2[i] *
+                        (std::sin(k * flap_phase_left_rad_ + harmonic_accel_phase_rad_[h][i]) +
+                         std::sin(k * flap_phase_right_rad_ + harmonic_accel_phase_rad_[h][i]));
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      vib_gyro[i] += config_.structural_gyro_amplitude_radps[i] * std::sin(structural_phase_rad_ + structural_gyro_phase_rad_[i]);
+      vib_accel[i] += config_.structural_accel_amplitude_mps2[i] * std::sin(structural_phase_rad_ + structural_accel_phase_rad_[i]);
+    }
+  }
+  last_gyro_vibration_radps_ = vib_gyro;
+  last_accel_vibration_mps2_ = vib_accel;
+
+  ImuSample out;
+  out.utime = truth.utime;
+  out.seq = seq_++;
+  out.temperature_degc = config_.temperature_degc;
+  std::uint8_t flags = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double raw = truth.omega_body_radps[i] + gyro_bias_radps_[i] + vib_gyro[i] +
+                       config_.gyro_noise_sigma_radps[i] * normal_(rng_);
+    bool clamped = false;
+    out.gyro_radps[i] = clamp_axis(raw, config_.gyro_range_radps, &clamped);
+    if (clamped) flags |= static_cast<std::uint8_t>(kSatGyroX << i);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double raw = truth.specific_force_body_mps2[i] + accel_bias_mps2_[i] + vib_accel[i] +
+                       config_.accel_noise_sigma_mps2[i] * normal_(rng_);
+    bool clamped = false;
+    out.accel_mps2[i] = clamp_axis(raw, config_.accel_range_mps2, &clamped);
+    if (clamped) flags |= static_cast<std::uint8_t>(kSatAccelX << i);
+  }
+  out.saturation_flags = flags;
+  if (flags != 0) ++saturated_samples_;
+  return out;
+}
+
+}  // namespace nimble

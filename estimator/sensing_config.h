@@ -1,0 +1,67 @@
+#pragma once
+/// Loading of the sensing configuration (IMU model, mocap emulator, velocity differentiator, EKF)
+/// from YAML through the strict ConfigMap, and EKF noise matched to the emulated sensors.
+///
+/// Every key is optional and falls back to the struct default; unknown keys, non-numeric values
+/// and out-of-range values are ConfigError naming file, key and value. 3-vectors are mappings with
+/// keys x y z (sensor axes), phi theta psi (attitude) or u v w (body velocity).
+/// rig_configs/sensing/default_sensing.yaml documents every key.
+
+#include <cstdint>
+#include <string>
+
+#include "core/config.h"
+#include "estimator/ekf.h"
+#include "estimator/imu_model.h"
+#include "estimator/mocap_emulator.h"
+#include "estimator/mocap_measurement.h"
+
+namespace nimble {
+
+/// All sensing parameters of one scenario.
+struct SensingConfig {
+  ImuModelConfig imu;                                    ///< section `imu`
+  MocapConfig mocap;                                     ///< section `mocap`
+  VelocityDifferentiatorConfig velocity_differentiator;  ///< section `velocity_differentiator`
+  EkfConfig ekf;                                         ///< section `ekf`
+  /// Seed of the IMU and mocap noise generators [-].
+  std::uint64_t seed = 1;
+};
+
+/// Reads the `imu` section. @throws ConfigError.
+ImuModelConfig imu_model_config_from(ConfigMap& map);
+/// Reads the `mocap` section. @throws ConfigError.
+MocapConfig mocap_config_from(ConfigMap& map);
+/// Reads the `velocity_differentiator` section. @throws ConfigError.
+VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map);
+/// Reads the `ekf` section. @throws ConfigError.
+EkfConfig ekf_config_from(ConfigMap& map);
+/// Reads a sensing mapping with optional sections imu, mocap, velocity_differentiator, ekf and an
+/// optional seed. @throws ConfigError.
+SensingConfig sensing_config_from(ConfigMap& map);
+/// Loads a sensing file (e.g. rig_configs/sensing/default_sensing.yaml). @throws ConfigError.
+SensingConfig load_sensing_config(const std::string& file);
+
+/// Options of ekf_config_matched_to_sensors().
+struct MatchedNoiseOptions {
+  /// Add the mean square of the vibration (sum of amplitude^2 / 2 per axis) to the white input
+  /// noise. The vibration is not white, so this is an approximation (conservative for the
+  /// attitude and velocity, whose errors integrate the vibration over less than one period).
+  bool include_vibration = false;
+  /// Speed used to account for the attitude noise in the rotation of the differentiated velocity
+  /// into body axes [m/s]: adds speed^2 * mean(attitude variance) to each velocity variance.
+  double rotation_speed_mps = 0.5;
+};
+
+/// Returns `base` with process and measurement noise and initial bias sigmas set from the sensor
+/// models, so that the filter's noise model is the one that generates the data:
+///   Q: per-sample gyro/accelerometer variance = noise sigma^2 (+ vibration mean square), reference
+///      rate = IMU rate; bias random walks = the IMU model's;
+///   R: attitude variance = mocap attitude sigma^2 per axis; velocity variance =
+///      differentiated_velocity_sigma_mps(position sigma, span)^2 + rotation term;
+///   initial bias sigmas = the IMU model's turn-on sigmas.
+EkfConfig ekf_config_matched_to_sensors(const EkfConfig& base, const ImuModelConfig& imu, const MocapConfig& mocap,
+                                        const VelocityDifferentiatorConfig& differentiator,
+                                        const MatchedNoiseOptions& options = {});
+
+}  // namespace nimble

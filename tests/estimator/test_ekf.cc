@@ -1,0 +1,262 @@
+// Unit tests of AttitudeVelocityEkf (estimator/ekf.h): update mechanics, angle wrapping, measurement
+// timing (pending, too old, too new), latency rollback against a filter without latency and
+// against naive late updates, innovation gating of outliers, dropouts.
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <catch2/catch.hpp>
+
+#include "estimator/attitude.h"
+#include "estimator/ekf.h"
+#include "estimator_test_support.h"
+
+using namespace nimble;
+using nimble::test::estimation_error;
+using nimble::test::feed;
+using nimble::test::record_data;
+using nimble::test::RecordedData;
+
+namespace {
+
+EkfInput level_at_rest() {
+  EkfInput u;
+  u << 0, 0, 0, 0, 0, -9.81;
+  return u;
+}
+
+std::int64_t imu_time(int k) { return static_cast<std::int64_t>(std::llround(k * 1e6 / 512.0)); }
+
+PoseMeasurement attitude_measurement(std::int64_t utime, const Eigen::Vector3d& euler) {
+  PoseMeasurement z;
+  z.utime = utime;
+  z.euler_rad = euler;
+  return z;
+}
+
+/// The rig's default sensing with the EKF noise matched to the emulated sensors.
+SensingConfig matched_sensing() {
+  SensingConfig s;
+  s.mocap.dropout_burst_rate_hz = 0.0;
+  s.imu.vibration_enabled = false;
+  s.ekf = ekf_config_matched_to_sensors(s.ekf, s.imu, s.mocap, s.velocity_differentiator);
+  return s;
+}
+
+double rms(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s / static_cast<double>(v.size()));
+}
+
+}  // namespace
+
+TEST_CASE("EKF at rest with exact IMU stays at rest, updates shrink the covariance", "[ekf]") {
+  EkfConfig c;
+  AttitudeVelocityEkf ekf(c);
+  ekf.initialize(0, EkfState::Zero(), c.initial_covariance());
+  for (int k = 0; k <= 512; ++k) REQUIRE(ekf.predict(imu_time(k), level_at_rest()));
+  CHECK(ekf.state().norm() < 1e-12);
+  const EkfCovariance before = ekf.covariance();
+  CHECK(ekf.add_measurement(attitude_measurement(ekf.utime(), Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kAccepted);
+  const EkfCovariance after = ekf.covariance();
+  for (int i = 0; i < 3; ++i) CHECK(after(i, i) < before(i, i));
+  CHECK((after - after.transpose()).norm() == 0.0);
+  CHECK(Eigen::SelfAdjointEigenSolver<EkfCovariance>(after).eigenvalues().minCoeff() > 0.0);
+  CHECK(ekf.counters().measurements_accepted == 1);
+  CHECK(ekf.last_nis() == Approx(0.0).margin(1e-20));
+}
+
+TEST_CASE("EKF: yaw innovation is wrapped across +-180 deg", "[ekf]") {
+  EkfConfig c;
+  AttitudeVelocityEkf ekf(c);
+  EkfState x0 = EkfState::Zero();
+  x0[kPsi] = 179.0 * M_PI / 180.0;
+  ekf.initialize(0, x0, c.initial_covariance());
+  REQUIRE(ekf.predict(0, level_at_rest()));
+  REQUIRE(ekf.predict(imu_time(1), level_at_rest()));
+  EkfUpdateRecord last;
+  ekf.set_update_observer([&last](const EkfUpdateRecord& r) { last = r; });
+  const auto status = ekf.add_measurement(attitude_measurement(imu_time(1), Eigen::Vector3d(0, 0, -179.0 * M_PI / 180.0)));
+  CHECK(status == EkfMeasurementStatus::kAccepted);
+  CHECK(last.innovation[2] == Approx(2.0 * M_PI / 180.0));  // not -358 deg
+  const double psi = ekf.state()[kPsi];
+  CHECK(std::fabs(psi) > 179.0 * M_PI / 180.0);  // moved towards +-180, not through 0
+  CHECK(psi <= M_PI);
+}
+
+TEST_CASE("EKF measurement timing: pending, too old, too new, not initialised", "[ekf]") {
+  EkfConfig c;
+  AttitudeVelocityEkf ekf(c);
+  CHECK(ekf.add_measurement(attitude_measurement(0, Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kNotInitialized);
+  CHECK_FALSE(ekf.predict(0, level_at_rest()));
+  ekf.initialize(0, EkfState::Zero(), c.initial_covariance());
+  for (int k = 0; k <= 100; ++k) REQUIRE(ekf.predict(imu_time(k), level_at_rest()));
+  const std::int64_t now = ekf.utime();
+  SECTION("a measurement 1.5 ms ahead waits for the next IMU sample") {
+    CHECK(ekf.add_measurement(attitude_measurement(now + 1500, Eigen::Vector3d(0.01, 0, 0))) == EkfMeasurementStatus::kPending);
+    CHECK(ekf.counters().measurements_accepted == 0);
+    REQUIRE(ekf.predict(imu_time(101), level_at_rest()));
+    CHECK(ekf.counters().measurements_accepted == 1);
+    CHECK(ekf.state()[kPhi] > 0.0);
+  }
+  SECTION("older than the history: dropped and counted") {
+    CHECK(ekf.add_measurement(attitude_measurement(now - 150000, Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kTooOld);
+    CHECK(ekf.counters().measurements_too_old == 1);
+  }
+  SECTION("more than the history ahead: dropped and counted") {
+    CHECK(ekf.add_measurement(attitude_measurement(now + 150000, Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kTooNew);
+    CHECK(ekf.counters().measurements_too_new == 1);
+  }
+  SECTION("non-finite measurement or IMU sample: dropped and counted") {
+    CHECK(ekf.add_measurement(attitude_measurement(now, Eigen::Vector3d(NAN, 0, 0))) == EkfMeasurementStatus::kInvalid);
+    EkfInput bad = level_at_rest();
+    bad[3] = INFINITY;
+    CHECK_FALSE(ekf.predict(imu_time(101), bad));
+    CHECK_FALSE(ekf.predict(imu_time(100), level_at_rest()));  // time not increasing
+    CHECK(ekf.counters().imu_rejected == 3);  // including the one before initialisation
+  }
+  SECTION("the history holds about history_s of IMU samples") {
+    CHECK(ekf.history_size() >= 52);
+    CHECK(ekf.history_size() <= 53);
+  }
+}
+
+TEST_CASE("EKF latency: rollback equals the filter without latency, naive late updates are worse", "[ekf]") {
+  const SensingConfig s;  // the rig default: thesis Q and R, vibrating IMU, default differentiator
+  const TruthProfile profile = make_roll_doublet_profile(21, 12.0);
+  const RecordedData data = record_data(profile, s, 12.0);
+  const std::int64_t latency = 20000;
+  const std::int64_t lag = 60000;  // latency + half the differentiator span (30 ms) + margin
+
+  struct Run {
+    std::vector<EkfState> lagged;  // state at t - lag, once final
+    std::vector<double> phi_err, theta_err, psi_err, v_err;
+    std::vector<std::pair<std::int64_t, bool>> decisions;  // (measurement time, accepted)
+    EkfCounters counters;
+  };
+  auto run = [&](std::int64_t delay, EkfLatencyMode mode) {
+    EkfConfig c = s.ekf;
+    c.latency_mode = mode;
+    AttitudeVelocityEkf ekf(c);
+    Run r;
+    ekf.set_update_observer([&r](const EkfUpdateRecord& u) { r.decisions.emplace_back(u.utime, u.accepted); });
+    feed(ekf, data, delay, s.velocity_differentiator, nullptr, [&](std::size_t k) {
+      EkfState x;
+      if (data.imu[k].utime > 200000) {
+        REQUIRE(ekf.state_at(data.imu[k].utime - lag, &x, nullptr));
+        r.lagged.push_back(x);
+      }
+      if (data.imu[k].utime > 1000000) {
+        const EkfState e = estimation_error(ekf.state(), data.truth_at_imu[k]);
+        r.phi_err.push_back(e[kPhi]);
+        r.theta_err.push_back(e[kTheta]);
+        r.psi_err.push_back(e[kPsi]);
+        r.v_err.push_back(e[kV]);
+      }
+    });
+    r.counters = ekf.counters();
+    return r;
+  };
+  const Run immediate = run(0, EkfLatencyMode::kRollback);
+  const Run rollback = run(latency, EkfLatencyMode::kRollback);
+  const Run naive = run(latency, EkfLatencyMode::kNaive);
+
+  // Once all frames up to a time have arrived, the rollback filter's history equals the filter
+  // that got them without latency (same measurements, same order, same gating).
+  REQUIRE(rollback.lagged.size() == immediate.lagged.size());
+  double max_diff = 0.0;
+  for (std::size_t i = 0; i < rollback.lagged.size(); ++i) {
+    max_diff = std::max(max_diff, estimation_error(rollback.lagged[i], immediate.lagged[i]).cwiseAbs().maxCoeff());
+  }
+  INFO("largest state difference " << max_diff);
+  CHECK(max_diff < 1e-9);
+  // The same gating decisions for every measurement both filters received (the rollback filter
+  // misses the frames of the last 20 ms of the run).
+  auto sorted_until = [](std::vector<std::pair<std::int64_t, bool>> v, std::int64_t until) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::remove_if(v.begin(), v.end(), [until](const auto& d) { return d.first > until; }), v.end());
+    return v;
+  };
+  const std::int64_t until = data.imu.back().utime - lag;
+  CHECK(sorted_until(rollback.decisions, until) == sorted_until(immediate.decisions, until));
+  CHECK(sorted_until(rollback.decisions, until).size() > 2000);
+  CHECK(rollback.counters.rollbacks > 0);
+  CHECK(rollback.counters.measurements_too_old == 0);
+
+  const double d = 180.0 / M_PI;
+  INFO("phi RMS error [deg]: no latency " << rms(immediate.phi_err) * d << ", rollback " << rms(rollback.phi_err) * d
+                                          << ", naive " << rms(naive.phi_err) * d);
+  INFO("v RMS error [m/s]: no latency " << rms(immediate.v_err) << ", rollback " << rms(rollback.v_err) << ", naive "
+                                        << rms(naive.v_err));
+  INFO("naive: accepted " << naive.counters.measurements_accepted << ", rejected " << naive.counters.measurements_rejected_gate);
+  // At the current time the rollback filter lacks the last 20 ms of frames, which costs little.
+  CHECK(rms(rollback.phi_err) < 1.15 * rms(immediate.phi_err));
+  CHECK(rms(rollback.v_err) < 1.15 * rms(immediate.v_err));
+  // Applying 20 ms old poses as current is clearly worse.
+  CHECK(rms(naive.phi_err) > 2.0 * rms(rollback.phi_err));
+  CHECK(rms(naive.v_err) > 1.5 * rms(rollback.v_err));
+}
+
+TEST_CASE("EKF gating: injected outliers are rejected and counted, good measurements are not", "[ekf]") {
+  for (const bool thesis_noise : {false, true}) {
+    SensingConfig s = thesis_noise ? SensingConfig() : matched_sensing();
+    s.mocap.dropout_burst_rate_hz = 0.0;
+    const TruthProfile profile = make_roll_doublet_profile(31, 20.0);
+    const RecordedData data = record_data(profile, s, 20.0);
+    // Frame classes with span 12, stride 5: pair starts n = 0 mod 5, ends n = 2, middles n = 1.
+    std::set<std::int64_t> bad_measurement_frames;
+    auto hook = [&](MocapPose& p) {
+      const std::int64_t n = p.frame_number;
+      if (!p.tracking_valid || n < 40) return;
+      const std::int64_t r = n % 40;
+      if (r == 17 || r == 31 || r == 8) {  // attitude outlier: +10 deg about body x
+        p.q_body_to_ned = p.q_body_to_ned * quaternion_exp(Eigen::Vector3d(10.0 * M_PI / 180.0, 0, 0));
+        bad_measurement_frames.insert(n);
+      } else if (r == 25) {  // position jump of 5 cm on a pair start: the pair's velocity is wrong
+        p.position_ned_m += Eigen::Vector3d(0.0, 0.05, 0.0);
+        bad_measurement_frames.insert(n + 6);
+      }
+    };
+    AttitudeVelocityEkf ekf(s.ekf);
+    std::vector<EkfUpdateRecord> records;
+    ekf.set_update_observer([&records](const EkfUpdateRecord& r) { records.push_back(r); });
+    feed(ekf, data, 5000, s.velocity_differentiator, hook, nullptr);
+    int outliers_rejected = 0, outliers_accepted = 0, good_rejected = 0, good = 0;
+    for (const EkfUpdateRecord& r : records) {
+      if (bad_measurement_frames.count(r.frame_number) != 0) {
+        (r.accepted ? outliers_accepted : outliers_rejected)++;
+      } else {
+        ++good;
+        if (!r.accepted) ++good_rejected;
+      }
+    }
+    INFO((thesis_noise ? "thesis Q/R" : "matched Q/R") << ": outliers rejected " << outliers_rejected << " of "
+                                                      << bad_measurement_frames.size() << ", good rejected "
+                                                      << good_rejected << " of " << good);
+    CHECK(outliers_accepted == 0);
+    CHECK(outliers_rejected == static_cast<int>(bad_measurement_frames.size()));
+    CHECK(ekf.counters().measurements_rejected_gate == outliers_rejected + good_rejected);
+    // A consistent gate at 99.9 % rejects about 0.1 % of good measurements.
+    CHECK(good_rejected <= 0.005 * good);
+  }
+}
+
+TEST_CASE("EKF without measurements keeps predicting and its covariance grows", "[ekf]") {
+  EkfConfig c;
+  AttitudeVelocityEkf ekf(c);
+  ekf.initialize(0, EkfState::Zero(), c.initial_covariance() * 1e-4);
+  double previous_v = 0.0, previous_phi = 0.0;
+  for (int k = 0; k <= 256; ++k) {
+    REQUIRE(ekf.predict(imu_time(k), level_at_rest()));
+    const EkfCovariance& P = ekf.covariance();
+    REQUIRE(P(kV, kV) >= previous_v);
+    REQUIRE(P(kPhi, kPhi) >= previous_phi);
+    previous_v = P(kV, kV);
+    previous_phi = P(kPhi, kPhi);
+  }
+  CHECK(std::sqrt(previous_v) > 0.1);  // thesis Q: about 6 m/s^2 input noise for 0.5 s
+}
