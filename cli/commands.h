@@ -23,6 +23,12 @@ int run_check_command(const std::vector<std::string>& args);
 /// `rig spy [--pid PID] [--url URL]`: lcm-spy with the rig's types.
 int run_spy_command(const std::vector<std::string>& args);
 
+/// `rig identify <data.csv> [--structure lateral3|lateral4] [--method ols|wls] [--vehicle F] [--w0 M_PER_S]
+/// [--rate HZ] [--cutoff HZ] [--order N] [--json F] [--model-out F] [--plots DIR] ...`: identification
+/// of the lateral model from CSV flight data (cli/identify_command.cc).
+int run_identify_command(const std::vector<std::string>& args);
 
+/// `rig validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...`: open-loop validation.
+int run_validate_command(const std::vector<std::string>& args);
 
 }  // namespace nimble::cli

@@ -25,6 +25,10 @@ const Command kCommands[] = {
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",
      nimble::cli::run_spy_command},
+    {"identify", "identify <data.csv> [--structure lateral3|lateral4] [--method ols|wls] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
+     nimble::cli::run_identify_command},
+    {"validate", "validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
+     nimble::cli::run_validate_command},
 };
 
 void print_usage(std::ostream& out) {

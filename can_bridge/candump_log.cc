@@ -1,0 +1,153 @@
+#include "can_bridge/candump_log.h"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace nimble::can {
+
+namespace {
+
+constexpr char kHex[] = "0123456789ABCDEF";
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  return -1;
+}
+
+}  // namespace
+
+std::string format_candump_line(const can_frame& frame, int64_t time_ns, const std::string& interface) {
+  const int64_t us_total = time_ns / 1000;
+  char head[64];
+  std::snprintf(head, sizeof head, "(%010lld.%06lld) ", static_cast<long long>(us_total / 1000000),
+                static_cast<long long>(us_total % 1000000));
+  std::string line = head;
+  line += interface;
+  line += ' ';
+  char id[16];
+  if (frame.can_id & CAN_ERR_FLAG) {
+    std::snprintf(id, sizeof id, "%08X", frame.can_id & (CAN_ERR_MASK | CAN_ERR_FLAG));
+  } else if (frame.can_id & CAN_EFF_FLAG) {
+    std::snprintf(id, sizeof id, "%08X", frame.can_id & CAN_EFF_MASK);
+  } else {
+    std::snprintf(id, sizeof id, "%03X", frame.can_id & CAN_SFF_MASK);
+  }
+  line += id;
+  line += '#';
+  if ((frame.can_id & CAN_RTR_FLAG) && !(frame.can_id & CAN_ERR_FLAG)) {
+    line += 'R';
+    if (frame.len > 0 && frame.len <= CAN_MAX_DLEN) line += kHex[frame.len];
+    return line;
+  }
+  const unsigned len = frame.len <= CAN_MAX_DLEN ? frame.len : CAN_MAX_DLEN;
+  for (unsigned i = 0; i < len; ++i) {
+    line += kHex[frame.data[i] >> 4];
+    line += kHex[frame.data[i] & 0x0F];
+  }
+  return line;
+}
+
+std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
+  CandumpRecord rec;
+  std::memset(&rec.frame, 0, sizeof rec.frame);
+  // (SECONDS.MICROS)
+  if (line.size() < 4 || line[0] != '(') return std::nullopt;
+  const auto close = line.find(')');
+  const auto dot = line.find('.');
+  if (close == std::string::npos || dot == std::string::npos || dot > close) return std::nullopt;
+  long long sec = 0, usec = 0;
+  for (std::size_t i = 1; i < dot; ++i) {
+    if (line[i] < '0' || line[i] > '9') return std::nullopt;
+    sec = sec * 10 + (line[i] - '0');
+  }
+  if (close - dot - 1 != 6) return std::nullopt;
+  for (std::size_t i = dot + 1; i < close; ++i) {
+    if (line[i] < '0' || line[i] > '9') return std::nullopt;
+    usec = usec * 10 + (line[i] - '0');
+  }
+  rec.time_ns = (sec * 1000000 + usec) * 1000;
+  // INTERFACE
+  std::size_t pos = close + 1;
+  if (pos >= line.size() || line[pos] != ' ') return std::nullopt;
+  const auto space = line.find(' ', pos + 1);
+  if (space == std::string::npos || space == pos + 1) return std::nullopt;
+  rec.interface = line.substr(pos + 1, space - pos - 1);
+  // ID#DATA
+  std::string text = line.substr(space + 1);
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  const auto hash = text.find('#');
+  if (hash == std::string::npos || (hash != 3 && hash != 8)) return std::nullopt;
+  if (text.compare(hash, 2, "##") == 0) return std::nullopt;  // CAN FD
+  uint32_t id = 0;
+  for (std::size_t i = 0; i < hash; ++i) {
+    const int v = hex_value(text[i]);
+    if (v < 0) return std::nullopt;
+    id = (id << 4) | static_cast<uint32_t>(v);
+  }
+  if (hash == 3) {
+    if (id > CAN_SFF_MASK) return std::nullopt;
+  } else if (!(id & CAN_ERR_FLAG)) {
+    id = (id & CAN_EFF_MASK) | CAN_EFF_FLAG;
+  }
+  rec.frame.can_id = id;
+  std::string data = text.substr(hash + 1);
+  if (!data.empty() && (data[0] == 'R' || data[0] == 'r')) {
+    rec.frame.can_id |= CAN_RTR_FLAG;
+    if (data.size() == 2 && hex_value(data[1]) >= 0 && hex_value(data[1]) <= CAN_MAX_DLEN) {
+      rec.frame.len = static_cast<uint8_t>(hex_value(data[1]));
+    } else if (data.size() != 1) {
+      return std::nullopt;
+    }
+    return rec;
+  }
+  // Optional '.' separators between bytes (cansend syntax) are accepted.
+  unsigned len = 0;
+  for (std::size_t i = 0; i < data.size();) {
+    if (data[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= data.size() || len >= CAN_MAX_DLEN) return std::nullopt;
+    const int hi = hex_value(data[i]), lo = hex_value(data[i + 1]);
+    if (hi < 0 || lo < 0) return std::nullopt;
+    rec.frame.data[len++] = static_cast<uint8_t>((hi << 4) | lo);
+    i += 2;
+  }
+  rec.frame.len = static_cast<uint8_t>(len);
+  return rec;
+}
+
+CandumpWriter::CandumpWriter(const std::string& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "w");
+  if (file_ == nullptr) {
+    const int err = errno;
+    throw std::runtime_error("cannot open candump log '" + path + "' for writing: " + std::strerror(err));
+  }
+}
+
+CandumpWriter::~CandumpWriter() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+bool CandumpWriter::write(const can_frame& frame, int64_t time_ns, const std::string& interface) {
+  const std::string line = format_candump_line(frame, time_ns, interface) + '\n';
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size()) {
+    ++write_errors_;
+    return false;
+  }
+  ++lines_written_;
+  return true;
+}
+
+bool CandumpWriter::flush() {
+  if (std::fflush(file_) != 0) {
+    ++write_errors_;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace nimble::can

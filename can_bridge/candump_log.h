@@ -1,0 +1,61 @@
+#pragma once
+/// candump log format ("candump -L"): the input format of canplayer and log2asc.
+///
+/// One frame per line: `(SECONDS.MICROSECONDS) INTERFACE FRAME`, e.g.
+/// `(1700000000.123456) vcan0 101#10272823881330A7`. FRAME is a 3-digit hex identifier for
+/// standard frames, 8 digits for extended and error frames (the latter with CAN_ERR_FLAG, as
+/// candump prints them), `#`, then the data bytes as upper-case hex; remote frames are `ID#R`.
+
+#include <linux/can.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <optional>
+#include <string>
+
+namespace nimble::can {
+
+/// One line of a candump log, without the newline. `time_ns`: CLOCK_REALTIME [ns].
+std::string format_candump_line(const can_frame& frame, int64_t time_ns, const std::string& interface);
+
+/// One parsed candump log line.
+struct CandumpRecord {
+  int64_t time_ns = 0;    ///< timestamp [ns] (microsecond resolution)
+  std::string interface;  ///< interface name as written
+  can_frame frame{};      ///< the frame (classical CAN only)
+};
+
+/// Parses one candump log line (classical CAN frames). nullopt for anything else, including
+/// CAN FD lines (`ID##...`). Never throws.
+std::optional<CandumpRecord> parse_candump_line(const std::string& line);
+
+/// Appends frames to a candump log file that canplayer can replay.
+class CandumpWriter {
+ public:
+  /// Creates or truncates `path`.
+  /// @throws std::runtime_error naming the path and errno if it cannot be opened.
+  explicit CandumpWriter(const std::string& path);
+  ~CandumpWriter();
+  CandumpWriter(const CandumpWriter&) = delete;
+  CandumpWriter& operator=(const CandumpWriter&) = delete;
+
+  /// Writes one line; false (and counted) on an I/O error. Never throws.
+  bool write(const can_frame& frame, int64_t time_ns, const std::string& interface);
+  /// Flushes buffered lines to the file; false on an I/O error.
+  bool flush();
+
+  /// Lines written so far.
+  uint64_t lines_written() const { return lines_written_; }
+  /// Failed writes and flushes.
+  uint64_t write_errors() const { return write_errors_; }
+  /// The log file's path.
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  uint64_t lines_written_ = 0;
+  uint64_t write_errors_ = 0;
+};
+
+}  // namespace nimble::can

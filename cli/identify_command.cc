@@ -1,0 +1,294 @@
+/// `rig identify` and `rig validate`: identification of the lateral model from
+/// CSV flight data and open-loop validation of a model on CSV flight data.
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/flight_data.h"
+#include "ident/identify.h"
+#include "ident/model_writer.h"
+#include "ident/plots.h"
+#include "ident/report.h"
+#include "ident/validate.h"
+
+namespace nimble::cli {
+namespace {
+
+constexpr const char* kIdentifyUsage =
+    "usage: rig identify <data.csv> [options]\n"
+    "  Identifies the dimensional stability and control derivatives of the lateral\n"
+    "  model from CSV flight data (equation error, thesis Section IV), prints the\n"
+    "  parameters with their standard deviations, flagged correlations, accuracy\n"
+    "  metrics, residual whiteness, eigenvalues and modes, and state PSDs.\n"
+    "  --structure lateral3|lateral4  model structure (default lateral3)\n"
+    "  --method ols|wls               estimator (default wls)\n"
+    "  --vehicle FILE                 vehicle (default rig_configs/vehicles/nimble_no_wifi.yaml)\n"
+    "  --inputs LIST                  comma-separated inputs (default delta_f,delta_t plus\n"
+    "                                 delta_d, delta_w when the data has them)\n"
+    "  --w0 M_PER_S                   trim vertical velocity of Eq 21 (default 0)\n"
+    "  --u0 M_PER_S                   trim forward velocity, lateral4 (default 0)\n"
+    "  --rate HZ                      resampling rate (default 512)\n"
+    "  --cutoff HZ                    low-pass cut-off (default 9)\n"
+    "  --order N                      Butterworth order, 0 = no low-pass (default 10)\n"
+    "  --wls-window S                 WLS residual-covariance window (default 2 s)\n"
+    "  --lags N                       whiteness lags (default 50)\n"
+    "  --hover A:B, --manoeuvre A:B   PSD segments in s (repeatable; default from |phi_sp|)\n"
+    "  --json FILE                    write the JSON report to FILE ('-' for stdout)\n"
+    "  --model-out FILE               write the identified model as a model YAML file\n"
+    "  --plots DIR                    PNG plots via gnuplot (Debian package gnuplot-nox)\n";
+
+constexpr const char* kValidateUsage =
+    "usage: rig validate <model.yaml> <data.csv> [options]\n"
+    "  Open-loop validation: the state derivatives predicted by the model from the\n"
+    "  measured states and inputs against the measured ones (thesis Tables 7-8).\n"
+    "  --vehicle FILE   use this vehicle instead of the model's\n"
+    "  --rate HZ, --cutoff HZ, --order N   processing (defaults 512, 9, 10)\n"
+    "  --lags N         whiteness lags (default 50)\n"
+    "  --json FILE      write the JSON report to FILE ('-' for stdout)\n"
+    "  --plots DIR      PNG plots via gnuplot (Debian package gnuplot-nox)\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Number in an option value; @throws UsageError naming the option.
+double number(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double x = 0.0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(x)) {
+    throw UsageError(option + ": '" + text + "' is not a finite number");
+  }
+  return x;
+}
+
+int integer(const std::string& option, const std::string& text, int lo, int hi) {
+  const double x = number(option, text);
+  if (x != static_cast<double>(static_cast<long long>(x)) || x < lo || x > hi) {
+    throw UsageError(option + ": '" + text + "' must be an integer in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "]");
+  }
+  return static_cast<int>(x);
+}
+
+ident::TimeRange time_range(const std::string& option, const std::string& text) {
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos) throw UsageError(option + ": '" + text + "' is not START:END in seconds");
+  ident::TimeRange r{number(option, text.substr(0, colon)), number(option, text.substr(colon + 1))};
+  if (!(r.end_s > r.start_s)) throw UsageError(option + ": '" + text + "': END must be after START");
+  return r;
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (!item.empty()) out.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+/// Walks the arguments: options with a value, and positional arguments.
+class Args {
+ public:
+  explicit Args(const std::vector<std::string>& args) : args_(args) {}
+  bool next() { return ++i_ < args_.size(); }
+  const std::string& arg() const { return args_[i_]; }
+  const std::string& value() {
+    if (i_ + 1 >= args_.size()) throw UsageError(args_[i_] + " needs a value");
+    return args_[++i_];
+  }
+
+ private:
+  const std::vector<std::string>& args_;
+  std::size_t i_ = static_cast<std::size_t>(-1);
+};
+
+void write_json(const std::string& target, const std::string& json) {
+  if (target == "-") {
+    std::cout << json << "\n";
+    return;
+  }
+  std::ofstream out(target);
+  if (!out) throw std::runtime_error(target + ": cannot be written");
+  out << json << "\n";
+  if (!out) throw std::runtime_error(target + ": write failed");
+}
+
+bool wants_help(const std::vector<std::string>& args) {
+  for (const auto& a : args) {
+    if (a == "--help" || a == "-h") return true;
+  }
+  return false;
+}
+
+/// Processing options shared by both commands; returns false if `a` is not one.
+bool processing_option(Args& it, ident::ProcessingOptions& p) {
+  const std::string& a = it.arg();
+  if (a == "--rate") {
+    p.rate_hz = number(a, it.value());
+    if (!(p.rate_hz > 0.0)) throw UsageError("--rate must be > 0 Hz");
+  } else if (a == "--cutoff") {
+    p.cutoff_hz = number(a, it.value());
+  } else if (a == "--order") {
+    p.filter_order = integer(a, it.value(), 0, 40);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int run_identify_command(const std::vector<std::string>& args) {
+  if (wants_help(args)) {
+    std::cout << kIdentifyUsage;
+    return 0;
+  }
+  std::string csv, vehicle_file, json, model_out, plots;
+  ident::IdentOptions opt;
+  try {
+    Args it(args);
+    while (it.next()) {
+      const std::string& a = it.arg();
+      if (processing_option(it, opt.processing)) continue;
+      if (a == "--structure") {
+        const std::string s = it.value();
+        if (s != "lateral3" && s != "lateral4") throw UsageError("--structure: '" + s + "' is not lateral3 or lateral4");
+        opt.structure = structure_from_string(s);
+      } else if (a == "--method") {
+        const std::string m = it.value();
+        if (m != "ols" && m != "wls") throw UsageError("--method: '" + m + "' is not ols or wls");
+        opt.method = ident::method_from_string(m);
+      } else if (a == "--vehicle") {
+        vehicle_file = it.value();
+      } else if (a == "--inputs") {
+        opt.inputs = split_list(it.value());
+        if (opt.inputs.empty()) throw UsageError("--inputs: empty list");
+      } else if (a == "--w0") {
+        opt.trim.w0_mps = number(a, it.value());
+      } else if (a == "--u0") {
+        opt.trim.u0_mps = number(a, it.value());
+      } else if (a == "--wls-window") {
+        opt.wls_window_s = number(a, it.value());
+        if (!(opt.wls_window_s > 0.0)) throw UsageError("--wls-window must be > 0 s");
+      } else if (a == "--lags") {
+        opt.whiteness_lags = static_cast<std::size_t>(integer(a, it.value(), 1, 100000));
+      } else if (a == "--hover") {
+        opt.segments.hover.push_back(time_range(a, it.value()));
+      } else if (a == "--manoeuvre") {
+        opt.segments.manoeuvre.push_back(time_range(a, it.value()));
+      } else if (a == "--json") {
+        json = it.value();
+      } else if (a == "--model-out") {
+        model_out = it.value();
+      } else if (a == "--plots") {
+        plots = it.value();
+      } else if (!a.empty() && a[0] == '-') {
+        throw UsageError("unknown option '" + a + "'");
+      } else if (csv.empty()) {
+        csv = a;
+      } else {
+        throw UsageError("unexpected argument '" + a + "'");
+      }
+    }
+    if (csv.empty()) throw UsageError("missing <data.csv>");
+  } catch (const UsageError& e) {
+    std::cerr << "rig identify: " << e.what() << "\n" << kIdentifyUsage;
+    return kExitUsage;
+  }
+  if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
+
+  if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
+  const Vehicle vehicle = load_vehicle(vehicle_file);
+  const ident::FlightData data = ident::read_flight_csv(csv);
+  const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
+
+  if (!model_out.empty()) {
+    ident::write_model_yaml(result.model, model_out,
+                            {"Identified by rig identify from " + csv + ".",
+                             "Structure " + to_string(opt.structure) + ", " + ident::to_string(opt.method) +
+                                 "; published: holds the eigenvalues and the standard deviations of this identification",
+                             "(white-residual formula)."});
+  }
+  std::vector<std::string> pngs;
+  if (!plots.empty()) pngs = ident::plot_identification(result, plots);
+
+  if (json != "-") std::cout << ident::identification_text(result);
+  if (!model_out.empty() && json != "-") std::cout << "\nmodel written to " << model_out << "\n";
+  for (const auto& p : pngs) {
+    if (json != "-") std::cout << "plot " << p << "\n";
+  }
+  if (!json.empty()) write_json(json, ident::identification_json(result, model_out, pngs));
+  return 0;
+}
+
+int run_validate_command(const std::vector<std::string>& args) {
+  if (wants_help(args)) {
+    std::cout << kValidateUsage;
+    return 0;
+  }
+  std::string model_file, csv, vehicle_file, json, plots;
+  ident::ValidationOptions opt;
+  try {
+    Args it(args);
+    while (it.next()) {
+      const std::string& a = it.arg();
+      if (processing_option(it, opt.processing)) continue;
+      if (a == "--vehicle") {
+        vehicle_file = it.value();
+      } else if (a == "--lags") {
+        opt.whiteness_lags = static_cast<std::size_t>(integer(a, it.value(), 1, 100000));
+      } else if (a == "--json") {
+        json = it.value();
+      } else if (a == "--plots") {
+        plots = it.value();
+      } else if (!a.empty() && a[0] == '-') {
+        throw UsageError("unknown option '" + a + "'");
+      } else if (model_file.empty()) {
+        model_file = a;
+      } else if (csv.empty()) {
+        csv = a;
+      } else {
+        throw UsageError("unexpected argument '" + a + "'");
+      }
+    }
+    if (model_file.empty()) throw UsageError("missing <model.yaml>");
+    if (csv.empty()) throw UsageError("missing <data.csv>");
+  } catch (const UsageError& e) {
+    std::cerr << "rig validate: " << e.what() << "\n" << kValidateUsage;
+    return kExitUsage;
+  }
+  if (!plots.empty()) ident::require_gnuplot();
+
+  const DerivativeModel model = load_model(model_file);
+  const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
+  const ident::FlightData data = ident::read_flight_csv(csv);
+  const ident::ValidationResult result = ident::validate_open_loop(data, model, vehicle, opt);
+  std::vector<std::string> pngs;
+  if (!plots.empty()) pngs = ident::plot_validation(result, plots);
+  if (json != "-") {
+    std::cout << ident::validation_text(result);
+    for (const auto& p : pngs) std::cout << "plot " << p << "\n";
+  }
+  if (!json.empty()) write_json(json, ident::validation_json(result, pngs));
+  return 0;
+}
+
+}  // namespace nimble::cli

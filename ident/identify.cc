@@ -1,0 +1,331 @@
+#include "ident/identify.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+namespace nimble::ident {
+namespace {
+
+const std::vector<std::string> kInputOrder{"delta_f", "delta_t", "delta_d", "delta_w"};
+
+std::vector<std::string> equation_letters(Structure s) {
+  if (s == Structure::kLateral3) return {"L", "Y"};
+  if (s == Structure::kLateral4) return {"L", "N", "Y"};
+  throw std::invalid_argument("identification supports lateral3 and lateral4, not " + to_string(s));
+}
+
+std::string input_suffix(const std::string& input) {
+  // "delta_f" -> "df" (the suffix core/model.h uses in derivative names).
+  const auto names = control_derivative_names(Structure::kLateral3, input);
+  return names.front().substr(2);
+}
+
+bool is_input(const std::string& name) {
+  return std::find(kInputOrder.begin(), kInputOrder.end(), name) != kInputOrder.end();
+}
+
+void require_channels(const FlightData& data, const std::vector<std::string>& names, const std::string& why) {
+  std::vector<std::string> missing;
+  for (const auto& n : names) {
+    if (!data.has(n)) missing.push_back(n);
+  }
+  if (missing.empty()) return;
+  std::string list;
+  for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+  throw DataError(data.source, -1, -1, missing.front(), why + " needs column" + (missing.size() > 1 ? "s " : " ") + list);
+}
+
+std::vector<TimeRange> runs(const UniformData& data, const std::vector<bool>& mask, double min_length_s) {
+  std::vector<TimeRange> out;
+  const Eigen::Index n = data.size();
+  Eigen::Index k = 0;
+  while (k < n) {
+    if (!mask[static_cast<std::size_t>(k)]) {
+      ++k;
+      continue;
+    }
+    const Eigen::Index start = k;
+    while (k < n && mask[static_cast<std::size_t>(k)]) ++k;
+    const TimeRange r{data.t_s[start], data.t_s[k - 1]};
+    if (r.end_s - r.start_s >= min_length_s) out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace
+
+Segments find_segments(const UniformData& data, const SegmentOptions& options) {
+  for (const auto* list : {&options.hover, &options.manoeuvre}) {
+    for (const auto& r : *list) {
+      if (!(r.end_s > r.start_s)) {
+        throw std::invalid_argument("segment " + std::to_string(r.start_s) + ":" + std::to_string(r.end_s) +
+                                    " s: end must be after start");
+      }
+    }
+  }
+  Segments s;
+  if (!options.hover.empty() || !options.manoeuvre.empty()) {
+    s.hover = options.hover;
+    s.manoeuvre = options.manoeuvre;
+    s.how = "time ranges";
+    return s;
+  }
+  const Eigen::Index n = data.size();
+  if (!data.has("phi_sp") || n == 0) {
+    if (n > 0) s.manoeuvre.push_back({data.t_s[0], data.t_s[n - 1]});
+    s.how = "whole record";
+    return s;
+  }
+  const Eigen::VectorXd& sp = data.at("phi_sp");
+  const Eigen::Index margin = static_cast<Eigen::Index>(std::ceil(options.margin_s * data.rate_hz));
+  std::vector<bool> active(static_cast<std::size_t>(n), false);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (std::fabs(sp[k]) <= options.active_threshold_rad) continue;
+    const Eigen::Index lo = std::max<Eigen::Index>(0, k - margin);
+    const Eigen::Index hi = std::min<Eigen::Index>(n - 1, k + margin);
+    for (Eigen::Index j = lo; j <= hi; ++j) active[static_cast<std::size_t>(j)] = true;
+  }
+  std::vector<bool> quiet(active.size());
+  for (std::size_t k = 0; k < active.size(); ++k) quiet[k] = !active[k];
+  s.manoeuvre = runs(data, active, options.min_length_s);
+  s.hover = runs(data, quiet, options.min_length_s);
+  s.how = "|phi_sp| activity";
+  return s;
+}
+
+std::vector<std::pair<Eigen::Index, Eigen::Index>> sample_ranges(const UniformData& data,
+                                                                 const std::vector<TimeRange>& ranges) {
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> out;
+  const Eigen::Index n = data.size();
+  if (n == 0) return out;
+  const double t0 = data.t_s[0];
+  for (const auto& r : ranges) {
+    const Eigen::Index a = std::clamp<Eigen::Index>(
+        static_cast<Eigen::Index>(std::ceil((r.start_s - t0) * data.rate_hz - 1e-9)), 0, n);
+    const Eigen::Index b = std::clamp<Eigen::Index>(
+        static_cast<Eigen::Index>(std::floor((r.end_s - t0) * data.rate_hz + 1e-9)) + 1, a, n);
+    if (b > a) out.push_back({a, b});
+  }
+  return out;
+}
+
+PreparedData prepare(const FlightData& data, Structure structure, const Trim& trim, double gravity_mps2,
+                     const ProcessingOptions& options) {
+  const std::vector<std::string>& states = state_names(structure);
+  require_channels(data, states, "structure " + to_string(structure));
+  PreparedData out;
+  out.raw = resample_uniform(data, options.rate_hz);
+  out.filtered = out.raw;
+  if (options.filter_order > 0) {
+    const auto sos = butterworth_lowpass(options.filter_order, options.cutoff_hz, options.rate_hz);
+    const std::size_t pad = options.padding ? options.padding : default_padding(options.cutoff_hz, options.rate_hz);
+    for (auto& [name, y] : out.filtered.signals) y = filtfilt(sos, y, pad);
+  }
+  UniformData& f = out.filtered;
+  for (const auto& s : states) f.signals[s + "_dot"] = differentiate(f.at(s), f.rate_hz);
+  if (structure == Structure::kLateral3 || structure == Structure::kLateral4) {
+    Eigen::VectorXd star = f.at("v_dot") - trim.w0_mps * f.at("p") -
+                           gravity_mps2 * std::cos(trim.theta0_rad) * std::cos(trim.phi0_rad) * f.at("phi");
+    if (structure == Structure::kLateral4) star += trim.u0_mps * f.at("r");
+    f.signals["v_dot_star"] = std::move(star);
+  }
+  return out;
+}
+
+std::vector<std::string> default_inputs(const FlightData& data) {
+  std::vector<std::string> out{"delta_f", "delta_t"};
+  for (const char* extra : {"delta_d", "delta_w"}) {
+    if (data.has(extra)) out.push_back(extra);
+  }
+  return out;
+}
+
+std::string parameter_name(const std::string& letter, const std::string& regressor) {
+  if (regressor == "p" || regressor == "r" || regressor == "v" || regressor == "q" || regressor == "u" ||
+      regressor == "w") {
+    return letter + regressor;
+  }
+  if (is_input(regressor)) return letter + "_" + input_suffix(regressor);
+  return letter + "_" + regressor;
+}
+
+std::vector<Equation> lateral_equations(Structure structure, const std::vector<std::string>& inputs,
+                                        const Vehicle& vehicle) {
+  const std::vector<std::string> letters = equation_letters(structure);
+  for (const auto& in : inputs) {
+    if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
+  }
+  std::vector<std::string> regressors = structure == Structure::kLateral4 ? std::vector<std::string>{"p", "r", "v"}
+                                                                          : std::vector<std::string>{"p", "v"};
+  for (const auto& in : inputs) regressors.push_back(in);
+  std::vector<Equation> eqs;
+  for (const auto& letter : letters) {
+    Equation eq;
+    eq.name = letter;
+    eq.regressors = regressors;
+    if (letter == "L") {
+      eq.dependent = "p_dot";
+      eq.scale = vehicle.Ic() / vehicle.Izz_kgm2;
+    } else if (letter == "N") {
+      eq.dependent = "r_dot";
+      eq.scale = vehicle.Ic() / vehicle.Ixx_kgm2;
+    } else {
+      eq.dependent = "v_dot_star";
+      eq.scale = vehicle.mass_kg;
+    }
+    for (const auto& r : regressors) eq.parameters.push_back(parameter_name(letter, r));
+    eqs.push_back(std::move(eq));
+  }
+  return eqs;
+}
+
+std::string default_vehicle_file() { return NIMBLE_DEFAULT_VEHICLE; }
+
+std::size_t whiteness_lag_step(std::size_t requested, const ProcessingOptions& processing) {
+  if (requested > 0) return requested;
+  if (processing.filter_order <= 0) return 1;
+  return std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::lround(processing.rate_hz / (2.0 * processing.cutoff_hz))));
+}
+
+std::size_t coloured_lags(std::size_t requested, const ProcessingOptions& processing) {
+  return requested > 0 ? requested : 4 * whiteness_lag_step(0, processing);
+}
+
+std::vector<StatePsd> state_psds(const UniformData& raw, const std::vector<std::string>& states,
+                                 const Segments& segments, double segment_s) {
+  const std::size_t seg = std::max<std::size_t>(8, static_cast<std::size_t>(std::lround(segment_s * raw.rate_hz)));
+  const auto hover = sample_ranges(raw, segments.hover);
+  const auto man = sample_ranges(raw, segments.manoeuvre);
+  std::vector<StatePsd> out;
+  for (const auto& s : states) {
+    StatePsd p;
+    p.state = s;
+    p.unit = channel_spec(s).unit;
+    const Eigen::VectorXd& x = raw.at(s);
+    // A part too short for one segment of 8 samples has no PSD.
+    if (!hover.empty()) {
+      try {
+        p.hover = welch(x, raw.rate_hz, seg, hover);
+        p.has_hover = p.hover.segments > 0;
+      } catch (const std::invalid_argument&) {
+        p.has_hover = false;
+      }
+    }
+    if (!man.empty()) {
+      try {
+        p.manoeuvre = welch(x, raw.rate_hz, seg, man);
+        p.has_manoeuvre = p.manoeuvre.segments > 0;
+      } catch (const std::invalid_argument&) {
+        p.has_manoeuvre = false;
+      }
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
+                     const IdentOptions& options) {
+  if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
+  IdentResult res;
+  res.source = data.source;
+  res.options = options;
+  res.vehicle = vehicle;
+  res.inputs = options.inputs.empty() ? default_inputs(data) : options.inputs;
+  // Inputs in the canonical order, each once.
+  {
+    std::vector<std::string> ordered;
+    for (const auto& name : kInputOrder) {
+      if (std::find(res.inputs.begin(), res.inputs.end(), name) != res.inputs.end()) ordered.push_back(name);
+    }
+    for (const auto& in : res.inputs) {
+      if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
+    }
+    res.inputs = ordered;
+  }
+  if (res.inputs.empty()) throw std::invalid_argument("identification needs at least one input");
+  require_channels(data, res.inputs, "input list");
+
+  std::vector<Equation> equations = lateral_equations(options.structure, res.inputs, vehicle);
+  for (const auto& extra : options.extra_regressors) {
+    auto it = std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == extra.equation; });
+    if (it == equations.end()) {
+      throw std::invalid_argument("extra regressor '" + extra.signal + "': structure " + to_string(options.structure) +
+                                  " has no equation '" + extra.equation + "'");
+    }
+    it->regressors.push_back(extra.signal);
+    it->parameters.push_back(extra.equation + "_" + extra.signal);
+  }
+
+  std::size_t n_params = 0;
+  for (const auto& eq : equations) n_params += eq.regressors.size();
+  const std::size_t rows = data.min_samples();
+  if (rows < 10 * n_params) {
+    throw DataError(data.source, -1, -1, "",
+                    std::to_string(rows) + " samples are too few for " + to_string(options.structure) + " with " +
+                        std::to_string(n_params) + " parameters: need at least " + std::to_string(10 * n_params) +
+                        " (10 per parameter)");
+  }
+
+  res.data = prepare(data, options.structure, options.trim, vehicle.gravity_mps2, options.processing);
+  if (options.add_signals) options.add_signals(res.data.filtered);
+
+  WlsOptions wls;
+  wls.variance_window = static_cast<Eigen::Index>(std::lround(options.wls_window_s * options.processing.rate_hz));
+  wls.cross_equation = options.wls_cross_equation;
+  CovarianceOptions cov;
+  cov.correlation_lags = static_cast<Eigen::Index>(coloured_lags(options.coloured_lags, options.processing));
+  res.regression = estimate(res.data.filtered.signals, equations, options.method, wls, cov);
+  res.parameters = res.regression.parameters();
+  res.parameter_order = res.regression.parameter_names;
+  res.correlated = correlated_pairs(res.regression, options.correlation_threshold);
+
+  const std::size_t lag_step = whiteness_lag_step(options.whiteness_lag_step, options.processing);
+  for (const auto& eq : res.regression.equations) {
+    OutputFit fit;
+    fit.output = eq.equation.dependent;
+    fit.unit = (eq.equation.dependent == "v_dot_star") ? "m/s^2" : "rad/s^2";
+    fit.measured = eq.y / eq.equation.scale;
+    fit.estimated = eq.fitted / eq.equation.scale;
+    fit.metrics = fit_metrics(fit.measured, fit.estimated, static_cast<int>(eq.theta.size()));
+    fit.whiteness = residual_whiteness(fit.measured - fit.estimated, res.data.filtered.rate_hz,
+                                       options.whiteness_lags, lag_step);
+    res.fits.push_back(std::move(fit));
+  }
+
+  // The identified linear model.
+  DerivativeModel& m = res.model;
+  const std::string stem = std::filesystem::path(data.source).stem().string();
+  m.name = options.model_name.empty() ? (stem.empty() ? "identified" : stem) + "_" + to_string(options.structure) +
+                                            "_" + to_string(options.method)
+                                      : options.model_name;
+  m.source = "rig identify " + data.source + " (" + to_string(options.method) + ")";
+  m.vehicle_file = vehicle_file;
+  m.structure = options.structure;
+  m.coupling = RollYawCoupling::kDecoupled;
+  m.inputs = res.inputs;
+  m.trim = options.trim;
+  if (m.structure == Structure::kLateral3) m.trim.u0_mps = 0.0;  // not part of the lateral3 model
+  std::vector<std::string> model_names = stability_derivative_names(m.structure);
+  for (const auto& in : m.inputs) {
+    for (const auto& n : control_derivative_names(m.structure, in)) model_names.push_back(n);
+  }
+  for (const auto& n : model_names) {
+    const ParameterEstimate& e = res.parameters.at(n);
+    m.derivatives[n] = e.value;
+    m.published_sigma[n] = e.sigma;
+  }
+  res.state_space = build_state_space(m, vehicle);
+  res.eigenvalues = sorted_eigenvalues(res.state_space.A);
+  res.modes = analyse_modes(res.state_space, vehicle);
+  m.published_eigenvalues = res.eigenvalues;
+
+  res.segments = find_segments(res.data.raw, options.segments);
+  res.psd = state_psds(res.data.raw, state_names(options.structure), res.segments, options.psd_segment_s);
+  return res;
+}
+
+}  // namespace nimble::ident

@@ -1,0 +1,242 @@
+#include "ident/plots.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace nimble::ident {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Single-quoted gnuplot string ('' escapes a quote).
+std::string gp_quote(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+/// Single-quoted shell word.
+std::string sh_quote(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+/// Runs gnuplot on `script` (in `dir`); the log goes to <script>.log.
+void run_gnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
+  const fs::path gp = dir / (name + ".gp");
+  const fs::path log = dir / (name + ".log");
+  write_text(gp, script);
+  const std::string cmd = "gnuplot " + sh_quote(gp.string()) + " >" + sh_quote(log.string()) + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  if (status != 0) {
+    std::ifstream in(log);
+    std::ostringstream text;
+    text << in.rdbuf();
+    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
+  }
+}
+
+std::string terminal(int width, int height) {
+  return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
+         " font 'sans,10'\nset termoption noenhanced\n";
+}
+
+std::string g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
+
+/// Measured and estimated outputs over time: one panel per output.
+std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, const std::vector<OutputFit>& fits,
+                             const std::string& title) {
+  std::ostringstream data;
+  data << "# t_s";
+  for (const auto& f : fits) data << " " << f.output << "_measured " << f.output << "_estimated";
+  data << "\n";
+  for (Eigen::Index k = 0; k < t.size(); ++k) {
+    data << g(t[k]);
+    for (const auto& f : fits) data << " " << g(f.measured[k]) << " " << g(f.estimated[k]);
+    data << "\n";
+  }
+  const fs::path dat = dir / "derivatives.dat";
+  write_text(dat, data.str());
+  const fs::path png = dir / "derivatives.png";
+  const int n = static_cast<int>(fits.size());
+  std::ostringstream s;
+  s << terminal(1400, 320 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
+  s << "set grid\nset key top right\nset xlabel 'time [s]'\n";
+  for (int i = 0; i < n; ++i) {
+    const OutputFit& f = fits[static_cast<std::size_t>(i)];
+    char sub[160];
+    std::snprintf(sub, sizeof sub, "%s   r_xy %.3f  R^2 %.3f  RMSE %.3g %s (%.2f %% of range)", f.output.c_str(),
+                  f.metrics.rxy, f.metrics.r2, f.metrics.rmse, f.unit.c_str(), f.metrics.rmse_pct_range);
+    s << "set title " << gp_quote(sub) << " noenhanced\n";
+    s << "set ylabel " << gp_quote(f.output + " [" + f.unit + "]") << " noenhanced\n";
+    s << "plot " << gp_quote(dat.string()) << " using 1:" << 2 + 2 * i << " with lines lw 1.2 lc rgb '#1f77b4' title 'measured', \\\n"
+      << "     '' using 1:" << 3 + 2 * i << " with lines lw 1.2 lc rgb '#d62728' title 'estimated'\n";
+  }
+  s << "unset multiplot\n";
+  run_gnuplot(dir, "derivatives", s.str());
+  return png.string();
+}
+
+/// Residual autocorrelation per output with the 95 % bounds.
+std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFit>& fits, const std::string& title) {
+  const fs::path dat = dir / "autocorrelation.dat";
+  std::ostringstream data;
+  data << "# lag_s rho (one block per output, separated by two blank lines)\n";
+  for (const auto& f : fits) {
+    data << "# " << f.output << "\n";
+    for (Eigen::Index k = 0; k < f.whiteness.rho.size(); ++k) {
+      data << g(static_cast<double>(k) * f.whiteness.lag_step_s) << " " << g(f.whiteness.rho[k]) << "\n";
+    }
+    data << "\n\n";
+  }
+  write_text(dat, data.str());
+  const fs::path png = dir / "autocorrelation.png";
+  const int n = static_cast<int>(fits.size());
+  std::ostringstream s;
+  s << terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
+  double max_lag_s = 0.0;
+  for (const auto& f : fits) max_lag_s = std::max(max_lag_s, static_cast<double>(f.whiteness.lags) * f.whiteness.lag_step_s);
+  s << "set grid\nset yrange [-1.05:1.05]\nset xrange [0:" << g(max_lag_s) << "]\n";
+  s << "set xlabel 'lag [s]'\nset ylabel 'autocorrelation'\nset key top right\n";
+  for (int i = 0; i < n; ++i) {
+    const OutputFit& f = fits[static_cast<std::size_t>(i)];
+    char sub[200];
+    std::snprintf(sub, sizeof sub, "residual of %s: %zu of %zu lags outside +-%.3f (%.0f %%, allowed %.0f %%): %s",
+                  f.output.c_str(), f.whiteness.outside, f.whiteness.lags, f.whiteness.bound,
+                  100.0 * f.whiteness.fraction_outside, 100.0 * f.whiteness.allowed_fraction,
+                  f.whiteness.white ? "white" : "COLOURED");
+    s << "set title " << gp_quote(sub) << " noenhanced\n";
+    s << "plot " << gp_quote(dat.string()) << " index " << i
+      << " using 1:2 with impulses lw 3 lc rgb '#1f77b4' title 'autocorrelation', \\\n"
+      << "     " << g(f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' title '95 % bounds', \\\n"
+      << "     " << g(-f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' notitle\n";
+  }
+  s << "unset multiplot\n";
+  run_gnuplot(dir, "autocorrelation", s.str());
+  return png.string();
+}
+
+std::string plot_psd(const fs::path& dir, const IdentResult& r) {
+  const fs::path dat = dir / "psd.dat";
+  std::ostringstream data;
+  data << "# f_hz psd (blocks: for each state hover then manoeuvre, separated by two blank lines)\n";
+  for (const auto& p : r.psd) {
+    for (const Psd* psd : {&p.hover, &p.manoeuvre}) {
+      const bool have = (psd == &p.hover) ? p.has_hover : p.has_manoeuvre;
+      data << "# " << p.state << (psd == &p.hover ? " hover" : " manoeuvre") << "\n";
+      if (have) {
+        for (Eigen::Index k = 1; k < psd->psd.size(); ++k) data << g(psd->f_hz[k]) << " " << g(psd->psd[k]) << "\n";
+      } else {
+        data << "NaN NaN\n";
+      }
+      data << "\n\n";
+    }
+  }
+  write_text(dat, data.str());
+  const fs::path png = dir / "psd.png";
+  const int n = static_cast<int>(r.psd.size());
+  const double cutoff = r.options.processing.cutoff_hz;
+  const double fmax = std::max(20.0, 3.0 * cutoff);
+  std::ostringstream s;
+  s << terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << "set multiplot layout " << n << ",1 title "
+    << gp_quote("state PSDs (Welch, Hann, 50 % overlap; unfiltered), hover vs manoeuvre; segments by " +
+                r.segments.how)
+    << "\n";
+  s << "set grid\nset logscale y\nset format y '%.0e'\nset xrange [0:" << g(fmax) << "]\nset xlabel 'frequency [Hz]'\n";
+  if (r.options.processing.filter_order > 0) {
+    s << "set arrow 1 from " << g(cutoff) << ", graph 0 to " << g(cutoff)
+      << ", graph 1 nohead dt 2 lc rgb '#2ca02c'\n";
+    s << "set label 1 'cut-off " << g(cutoff) << " Hz' at " << g(cutoff) << ", graph 0.92 offset 0.5,0 tc rgb '#2ca02c'\n";
+  }
+  for (int i = 0; i < n; ++i) {
+    const StatePsd& p = r.psd[static_cast<std::size_t>(i)];
+    s << "set title " << gp_quote(p.state) << " noenhanced\n";
+    s << "set ylabel " << gp_quote("PSD [(" + p.unit + ")^2/Hz]") << " noenhanced\n";
+    s << "plot " << gp_quote(dat.string()) << " index " << 2 * i
+      << " using 1:2 with lines lw 1.5 lc rgb '#7f7f7f' title 'hover', \\\n"
+      << "     '' index " << 2 * i + 1 << " using 1:2 with lines lw 1.5 lc rgb '#d62728' title 'manoeuvre'\n";
+  }
+  s << "unset multiplot\n";
+  run_gnuplot(dir, "psd", s.str());
+  return png.string();
+}
+
+std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
+  const fs::path dat = dir / "eigenvalues.dat";
+  std::ostringstream data;
+  data << "# re im [1/s]\n";
+  double extent = 1.0;
+  for (const auto& z : r.eigenvalues) {
+    data << g(z.real()) << " " << g(z.imag()) << "\n";
+    extent = std::max({extent, std::fabs(z.real()), std::fabs(z.imag())});
+  }
+  write_text(dat, data.str());
+  const fs::path png = dir / "eigenvalues.png";
+  const double lim = 1.2 * extent;
+  std::ostringstream s;
+  s << terminal(700, 600) << "set output " << gp_quote(png.string()) << "\n";
+  s << "set title " << gp_quote("eigenvalues of the identified model (" + r.model.name + ")") << " noenhanced\n";
+  s << "set grid\nset xlabel 'real [1/s]'\nset ylabel 'imaginary [rad/s]'\n";
+  s << "set xrange [" << g(-lim) << ":" << g(lim) << "]\nset yrange [" << g(-lim) << ":" << g(lim) << "]\n";
+  s << "set size ratio -1\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n";
+  s << "plot " << gp_quote(dat.string()) << " using 1:2 with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'identified'\n";
+  run_gnuplot(dir, "eigenvalues", s.str());
+  return png.string();
+}
+
+fs::path make_dir(const std::string& dir) {
+  require_gnuplot();
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create the plot directory");
+  return fs::absolute(dir);
+}
+
+}  // namespace
+
+bool gnuplot_available() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+void require_gnuplot() {
+  if (!gnuplot_available()) {
+    throw std::runtime_error("--plots needs gnuplot, which is not on the PATH: install the Debian package gnuplot-nox");
+  }
+}
+
+std::vector<std::string> plot_identification(const IdentResult& result, const std::string& dir) {
+  const fs::path d = make_dir(dir);
+  const std::string what = result.source + ": " + to_string(result.options.structure) + ", " +
+                           to_string(result.options.method);
+  return {plot_derivatives(d, result.data.filtered.t_s, result.fits, "identification " + what),
+          plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what), plot_psd(d, result),
+          plot_eigenvalues(d, result)};
+}
+
+std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir) {
+  const fs::path d = make_dir(dir);
+  const std::string what = result.source + " with model " + result.model.name;
+  return {plot_derivatives(d, result.data.t_s, result.fits, "open-loop validation " + what),
+          plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what)};
+}
+
+}  // namespace nimble::ident

@@ -1,0 +1,32 @@
+#pragma once
+/// PNG plots of an identification or validation, drawn by gnuplot (Debian
+/// package gnuplot-nox): each plot is a data file plus a gnuplot script in the
+/// output directory, then `gnuplot <script>` renders the PNG next to them.
+
+#include <string>
+#include <vector>
+
+#include "ident/identify.h"
+#include "ident/validate.h"
+
+namespace nimble::ident {
+
+/// True if a `gnuplot` executable is on the PATH.
+bool gnuplot_available();
+
+/// @throws std::runtime_error naming the Debian package gnuplot-nox if gnuplot is not on the PATH.
+void require_gnuplot();
+
+/// Writes into `dir` (created if needed): derivatives.png (measured and
+/// estimated state derivatives), autocorrelation.png (residual
+/// autocorrelation with the 95 % bounds), psd.png (state PSDs in hover and
+/// manoeuvre, cut-off marked), eigenvalues.png (complex plane).
+/// Returns the paths of the PNG files.
+/// @throws std::runtime_error if gnuplot is missing or fails, or a file cannot be written.
+std::vector<std::string> plot_identification(const IdentResult& result, const std::string& dir);
+
+/// Writes derivatives.png and autocorrelation.png of an open-loop validation into `dir`.
+/// @throws std::runtime_error as plot_identification.
+std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir);
+
+}  // namespace nimble::ident

@@ -1,0 +1,334 @@
+#include "ident/report.h"
+
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+
+#include "core/json_writer.h"
+
+namespace nimble::ident {
+namespace {
+
+/// printf into a std::string.
+std::string fmt(const char* format, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char* format, ...) {
+  char buf[512];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(buf, sizeof buf, format, args);
+  va_end(args);
+  return buf;
+}
+
+std::string complex_text(const std::complex<double>& z) {
+  if (std::fabs(z.imag()) < 1e-12) return fmt("%.4f", z.real());
+  return fmt("%.4f %c %.4fi", z.real(), z.imag() < 0 ? '-' : '+', std::fabs(z.imag()));
+}
+
+double phase_deg(const std::complex<double>& z) {
+  const double deg = std::arg(z) * 180.0 / M_PI;
+  return deg <= -180.0 + 1e-6 ? deg + 360.0 : deg;
+}
+
+double pct(double sigma, double value) { return value != 0.0 ? 100.0 * sigma / std::fabs(value) : INFINITY; }
+
+std::string metrics_text(const std::vector<OutputFit>& fits) {
+  std::string out = fmt("  %-12s %8s %8s %12s %-8s %10s %10s\n", "output", "r_xy", "R2", "RMSE", "unit", "range",
+                        "RMSE[%rng]");
+  for (const auto& f : fits) {
+    out += fmt("  %-12s %8.4f %8.4f %12.4g %-8s %10.4g %10.2f\n", f.output.c_str(), f.metrics.rxy, f.metrics.r2,
+               f.metrics.rmse, f.unit.c_str(), f.metrics.range, f.metrics.rmse_pct_range);
+  }
+  return out;
+}
+
+std::string whiteness_text(const std::vector<OutputFit>& fits) {
+  std::string out;
+  if (!fits.empty()) {
+    const Whiteness& w = fits.front().whiteness;
+    out += fmt("  (residual decimated to lags of %zu samples = %.4f s; %zu lags; 95 %% bounds +-1.96/sqrt(N);"
+               " white if at most %.0f %% of the lags lie outside)\n",
+               w.lag_step, w.lag_step_s, w.lags, 100.0 * w.allowed_fraction);
+  }
+  out += fmt("  %-12s %8s %8s %10s  %s\n", "output", "bound", "outside", "fraction", "verdict");
+  for (const auto& f : fits) {
+    const Whiteness& w = f.whiteness;
+    out += fmt("  %-12s %8.4f %8zu %9.1f%%  %s\n", f.output.c_str(), w.bound, w.outside, 100.0 * w.fraction_outside,
+               w.white ? "white" : "COLOURED");
+  }
+  return out;
+}
+
+void fits_json(JsonWriter& w, const std::vector<OutputFit>& fits) {
+  w.key("metrics").begin_object();
+  for (const auto& f : fits) {
+    w.key(f.output).begin_object();
+    w.key("rxy").value(f.metrics.rxy);
+    w.key("r2").value(f.metrics.r2);
+    w.key("rmse").value(f.metrics.rmse);
+    w.key("range").value(f.metrics.range);
+    w.key("rmse_pct_range").value(f.metrics.rmse_pct_range);
+    w.key("unit").value(f.unit);
+    w.key("samples").value(static_cast<long long>(f.metrics.samples));
+    w.key("parameters").value(f.metrics.parameters);
+    w.end_object();
+  }
+  w.end_object();
+  w.key("whiteness").begin_object();
+  for (const auto& f : fits) w.key(f.output).value(f.whiteness.fraction_outside);
+  w.end_object();
+  w.key("whiteness_detail").begin_object();
+  for (const auto& f : fits) {
+    const Whiteness& x = f.whiteness;
+    w.key(f.output).begin_object();
+    w.key("white").value(x.white);
+    w.key("fraction_outside").value(x.fraction_outside);
+    w.key("allowed_fraction").value(x.allowed_fraction);
+    w.key("outside").value(static_cast<long long>(x.outside));
+    w.key("lags").value(static_cast<long long>(x.lags));
+    w.key("lag_step_samples").value(static_cast<long long>(x.lag_step));
+    w.key("lag_step_s").value(x.lag_step_s);
+    w.key("bound").value(x.bound);
+    w.key("autocorrelation").begin_array();
+    for (Eigen::Index k = 0; k < x.rho.size(); ++k) w.value(x.rho[k]);
+    w.end_array();
+    w.end_object();
+  }
+  w.end_object();
+}
+
+void ranges_json(JsonWriter& w, const std::vector<TimeRange>& ranges) {
+  w.begin_array();
+  for (const auto& r : ranges) w.begin_array().value(r.start_s).value(r.end_s).end_array();
+  w.end_array();
+}
+
+}  // namespace
+
+std::string identification_text(const IdentResult& r) {
+  const IdentOptions& o = r.options;
+  const UniformData& d = r.data.filtered;
+  std::string out;
+  out += fmt("identify   %s\n", r.source.c_str());
+  out += fmt("data       %ld samples at %.6g Hz (%.3f s)\n", static_cast<long>(d.size()), d.rate_hz,
+             d.size() > 0 ? d.t_s[d.size() - 1] - d.t_s[0] : 0.0);
+  if (o.processing.filter_order > 0) {
+    out += fmt("processing linear resampling; zero-phase Butterworth low-pass, order %d, cut-off %.4g Hz;"
+               " 4th-order central differences\n",
+               o.processing.filter_order, o.processing.cutoff_hz);
+  } else {
+    out += "processing linear resampling, no low-pass; 4th-order central differences\n";
+  }
+  std::string inputs;
+  for (const auto& in : r.inputs) inputs += (inputs.empty() ? "" : ", ") + in;
+  out += fmt("model      %s, inputs %s, %s\n", to_string(o.structure).c_str(), inputs.c_str(),
+             o.method == Method::kOls ? "ordinary least squares"
+                                      : fmt("weighted least squares (residual covariance over %.3g s%s)",
+                                            o.wls_window_s, o.wls_cross_equation ? ", across equations" : "")
+                                            .c_str());
+  out += fmt("vehicle    %s (%s): m = %.2f g, Ixx %.3g, Izz %.3g, Ixz %.3g kg m^2\n", r.vehicle.name.c_str(),
+             r.vehicle.file.c_str(), 1e3 * r.vehicle.mass_kg, r.vehicle.Ixx_kgm2, r.vehicle.Izz_kgm2,
+             r.vehicle.Ixz_kgm2);
+  out += fmt("trim       u0 %.4g m/s, w0 %.4g m/s, theta0 %.4g rad, phi0 %.4g rad\n\n", r.model.trim.u0_mps,
+             r.model.trim.w0_mps, r.model.trim.theta0_rad, r.model.trim.phi0_rad);
+
+  out += "parameters (dimensional: L, N in N m, Y in N per unit of the regressor)\n";
+  out += "  sigma: residuals taken as white (thesis formula); sigma_c: allowing coloured residuals (Newey-West)\n";
+  out += fmt("  %-12s %13s %12s %10s %12s %10s\n", "name", "value", "sigma", "100s/|v|", "sigma_c", "100s_c/|v|");
+  for (const auto& name : r.parameter_order) {
+    const ParameterEstimate& e = r.parameters.at(name);
+    out += fmt("  %-12s %13.4e %12.3e %10.3g %12.3e %10.3g\n", name.c_str(), e.value, e.sigma, pct(e.sigma, e.value),
+               e.sigma_coloured, pct(e.sigma_coloured, e.value));
+  }
+  out += fmt("\ncorrelated parameters (|rho| > %.2g, within an equation)\n", o.correlation_threshold);
+  if (r.correlated.empty()) out += "  none\n";
+  for (const auto& c : r.correlated) {
+    out += fmt("  %s: %s and %s, rho = %.3f\n", c.equation.c_str(), c.a.c_str(), c.b.c_str(), c.rho);
+  }
+  out += "\naccuracy (measured vs estimated state derivatives)\n" + metrics_text(r.fits);
+  out += "\nresidual whiteness\n" + whiteness_text(r.fits);
+
+  out += "\neigenvalues of the identified model [1/s]\n";
+  for (const auto& z : r.eigenvalues) out += "  " + complex_text(z) + "\n";
+  out += "\nmodes\n";
+  out += fmt("  %-3s %-22s %-12s %-9s %10s %7s\n", "#", "eigenvalue", "type", "stability", "wn[rad/s]", "zeta");
+  for (std::size_t k = 0; k < r.modes.size(); ++k) {
+    const Mode& m = r.modes[k];
+    out += fmt("  %-3zu %-22s %-12s %-9s %10.3f %7.3f\n", k + 1, complex_text(m.eigenvalue).c_str(),
+               m.oscillatory ? "oscillatory" : "aperiodic", m.stable ? "stable" : "UNSTABLE",
+               m.natural_frequency_radps, m.damping_ratio);
+  }
+  out += "non-dimensional eigenvectors (normalised on the roll angle)\n";
+  out += fmt("  %-8s", "state");
+  for (std::size_t k = 0; k < r.modes.size(); ++k) out += fmt(" %20s", ("mode " + std::to_string(k + 1)).c_str());
+  out += "\n";
+  for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
+    out += fmt("  %-8s", (r.state_space.states[i] + "+").c_str());
+    for (const auto& m : r.modes) {
+      const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
+      out += fmt(" %20s", fmt("%.3f (%.1f deg)", std::abs(c), phase_deg(c)).c_str());
+    }
+    out += "\n";
+  }
+
+  out += fmt("\nstate PSDs (Welch, unfiltered): hover vs manoeuvre, segments by %s\n", r.segments.how.c_str());
+  out += fmt("  hover %zu segment(s), manoeuvre %zu segment(s)\n", r.segments.hover.size(),
+             r.segments.manoeuvre.size());
+  const double fc = o.processing.cutoff_hz;
+  out += fmt("  %-8s %-10s %18s %18s %12s\n", "state", "unit", "hover var<=fc", "manoeuvre var<=fc", "ratio");
+  for (const auto& p : r.psd) {
+    const double h = p.has_hover ? p.hover.integral_up_to(fc) : NAN;
+    const double m = p.has_manoeuvre ? p.manoeuvre.integral_up_to(fc) : NAN;
+    out += fmt("  %-8s %-10s %18.4g %18.4g %12.3g\n", p.state.c_str(), ("(" + p.unit + ")^2").c_str(), h, m, m / h);
+  }
+  return out;
+}
+
+std::string identification_json(const IdentResult& r, const std::string& model_out,
+                                const std::vector<std::string>& plots) {
+  const IdentOptions& o = r.options;
+  JsonWriter w;
+  w.begin_object();
+  w.key("source").value(r.source);
+  w.key("structure").value(to_string(o.structure));
+  w.key("method").value(to_string(o.method));
+  w.key("inputs").array(r.inputs);
+  w.key("vehicle").begin_object();
+  w.key("name").value(r.vehicle.name).key("file").value(r.vehicle.file).key("mass_kg").value(r.vehicle.mass_kg);
+  w.end_object();
+  w.key("trim").begin_object();
+  w.key("u0_mps").value(r.model.trim.u0_mps).key("w0_mps").value(r.model.trim.w0_mps);
+  w.key("theta0_rad").value(r.model.trim.theta0_rad).key("phi0_rad").value(r.model.trim.phi0_rad);
+  w.end_object();
+  w.key("processing").begin_object();
+  w.key("rate_hz").value(o.processing.rate_hz);
+  w.key("filter_order").value(o.processing.filter_order);
+  w.key("cutoff_hz").value(o.processing.cutoff_hz);
+  w.key("samples").value(static_cast<long long>(r.data.filtered.size()));
+  w.end_object();
+  if (o.method == Method::kWls) {
+    w.key("wls").begin_object();
+    w.key("window_s").value(o.wls_window_s).key("cross_equation").value(o.wls_cross_equation);
+    w.key("scale_factor").value(r.regression.scale_factor);
+    w.end_object();
+  }
+
+  w.key("parameters").begin_object();
+  for (const auto& name : r.parameter_order) {
+    const ParameterEstimate& e = r.parameters.at(name);
+    w.key(name).begin_object();
+    w.key("value").value(e.value);
+    w.key("sigma").value(e.sigma);
+    w.key("sigma_pct").value(pct(e.sigma, e.value));
+    w.key("sigma_coloured").value(e.sigma_coloured);
+    w.key("sigma_coloured_pct").value(pct(e.sigma_coloured, e.value));
+    w.end_object();
+  }
+  w.end_object();
+  w.key("correlation").begin_object();
+  for (const auto& eq : r.regression.equations) {
+    w.key(eq.equation.name).begin_object();
+    w.key("parameters").array(eq.equation.parameters);
+    w.key("matrix").begin_array();
+    for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
+      w.begin_array();
+      for (Eigen::Index j = 0; j < eq.correlation.cols(); ++j) w.value(eq.correlation(i, j));
+      w.end_array();
+    }
+    w.end_array();
+    w.end_object();
+  }
+  w.end_object();
+  w.key("correlation_threshold").value(o.correlation_threshold);
+  w.key("correlated_pairs").begin_array();
+  for (const auto& c : r.correlated) {
+    w.begin_object().key("equation").value(c.equation).key("a").value(c.a).key("b").value(c.b);
+    w.key("rho").value(c.rho).end_object();
+  }
+  w.end_array();
+
+  fits_json(w, r.fits);
+
+  w.key("eigenvalues").begin_array();
+  for (const auto& z : r.eigenvalues) w.begin_array().value(z.real()).value(z.imag()).end_array();
+  w.end_array();
+  w.key("modes").begin_array();
+  for (const auto& m : r.modes) {
+    w.begin_object();
+    w.key("eigenvalue").begin_array().value(m.eigenvalue.real()).value(m.eigenvalue.imag()).end_array();
+    w.key("oscillatory").value(m.oscillatory).key("stable").value(m.stable);
+    w.key("natural_frequency_radps").value(m.natural_frequency_radps).key("damping_ratio").value(m.damping_ratio);
+    w.key("eigenvector_nondim").begin_object();
+    for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
+      const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
+      w.key(r.state_space.states[i]).begin_object();
+      w.key("magnitude").value(std::abs(c)).key("phase_deg").value(phase_deg(c));
+      w.end_object();
+    }
+    w.end_object();
+    w.end_object();
+  }
+  w.end_array();
+
+  w.key("segments").begin_object();
+  w.key("how").value(r.segments.how);
+  w.key("hover");
+  ranges_json(w, r.segments.hover);
+  w.key("manoeuvre");
+  ranges_json(w, r.segments.manoeuvre);
+  w.end_object();
+  w.key("psd").begin_object();
+  for (const auto& p : r.psd) {
+    w.key(p.state).begin_object();
+    w.key("unit").value("(" + p.unit + ")^2/Hz");
+    for (const auto* part : {&p.hover, &p.manoeuvre}) {
+      const bool have = part == &p.hover ? p.has_hover : p.has_manoeuvre;
+      w.key(part == &p.hover ? "hover" : "manoeuvre");
+      if (!have) {
+        w.null();
+        continue;
+      }
+      w.begin_object();
+      w.key("variance").value(part->integral());
+      w.key("variance_below_cutoff").value(part->integral_up_to(o.processing.cutoff_hz));
+      w.key("df_hz").value(part->df_hz);
+      w.key("segments").value(static_cast<long long>(part->segments));
+      w.end_object();
+    }
+    w.end_object();
+  }
+  w.end_object();
+  if (!model_out.empty()) w.key("model_out").value(model_out);
+  if (!plots.empty()) w.key("plots").array(plots);
+  w.end_object();
+  return w.str();
+}
+
+std::string validation_text(const ValidationResult& r) {
+  std::string out;
+  out += fmt("validate   %s (open loop: state derivatives from the measured states and inputs)\n", r.source.c_str());
+  out += fmt("model      %s (%s), %s\n", r.model.name.c_str(), r.model.file.c_str(), to_string(r.model.structure).c_str());
+  out += fmt("vehicle    %s\n", r.vehicle.name.c_str());
+  out += fmt("data       %ld samples at %.6g Hz\n\n", static_cast<long>(r.data.size()), r.data.rate_hz);
+  out += "accuracy (measured vs predicted state derivatives; R2 with P = 1)\n" + metrics_text(r.fits);
+  out += "\nresidual whiteness\n" + whiteness_text(r.fits);
+  return out;
+}
+
+std::string validation_json(const ValidationResult& r, const std::vector<std::string>& plots) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("source").value(r.source);
+  w.key("model").value(r.model.name);
+  w.key("model_file").value(r.model.file);
+  w.key("structure").value(to_string(r.model.structure));
+  w.key("vehicle").value(r.vehicle.name);
+  w.key("samples").value(static_cast<long long>(r.data.size()));
+  w.key("rate_hz").value(r.data.rate_hz);
+  fits_json(w, r.fits);
+  if (!plots.empty()) w.key("plots").array(plots);
+  w.end_object();
+  return w.str();
+}
+
+}  // namespace nimble::ident

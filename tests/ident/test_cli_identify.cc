@@ -1,0 +1,197 @@
+// Functional tests of `rig identify` and `rig validate`: the real executable
+// on a synthetic flight written as CSV, its JSON, model file, plots and errors.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/flight_data.h"
+#include "ident/synthetic.h"
+#include "synthetic_flight.h"
+
+namespace fs = std::filesystem;
+using namespace nimble;
+using namespace nimble::ident;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+fs::path work_dir() {
+  const fs::path dir = fs::temp_directory_path() / ("rig_test_cli_identify_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// Runs `[env] rig <args>` through the shell, capturing stdout and stderr.
+Result run_rig(const std::string& args, const std::string& env = "") {
+  const fs::path dir = work_dir();
+  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
+  const std::string cmd = env + (env.empty() ? "" : " ") + std::string(RIG_BIN) + " " + args + " >" + out + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+/// A synthetic set-1 identification flight as CSV (written once per process).
+std::string flight_csv() {
+  static const std::string path = [] {
+    const DerivativeModel truth = test::set1_model();
+    const Vehicle vehicle = load_vehicle(truth.vehicle_file);
+    const std::string file = (work_dir() / "flight.csv").string();
+    write_flight_csv(simulate_synthetic(truth, vehicle, test::identification_flight(7)), file);
+    return file;
+  }();
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("rig identify writes JSON with parameters, metrics, eigenvalues and whiteness", "[cli]") {
+  const fs::path dir = work_dir();
+  const std::string json = (dir / "ident.json").string(), model = (dir / "ident_model.yaml").string();
+  const Result r = run_rig("identify " + flight_csv() + " --w0 -0.30 --json " + json + " --model-out " + model);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.empty());
+  for (const char* part : {"parameters", "Lp", "L_df", "sigma_c", "accuracy", "p_dot", "v_dot_star",
+                           "residual whiteness", "eigenvalues", "UNSTABLE", "state PSDs", "model written to"}) {
+    INFO(part);
+    CHECK(r.out.find(part) != std::string::npos);
+  }
+  const YAML::Node j = YAML::LoadFile(json);
+  CHECK(j["structure"].as<std::string>() == "lateral3");
+  CHECK(j["method"].as<std::string>() == "wls");
+  const DerivativeModel truth = test::set1_model();
+  for (const char* name : {"Lp", "Lv", "L_df", "L_dt", "Yp", "Yv", "Y_df", "Y_dt"}) {
+    INFO(name);
+    REQUIRE(j["parameters"][name]);
+    CHECK(j["parameters"][name]["sigma"].as<double>() > 0.0);
+  }
+  CHECK(j["parameters"]["L_df"]["value"].as<double>() == Approx(truth.at("L_df")).epsilon(0.1));
+  CHECK(j["parameters"]["Yv"]["value"].as<double>() == Approx(truth.at("Yv")).epsilon(0.1));
+  for (const char* out : {"p_dot", "v_dot_star"}) {
+    INFO(out);
+    CHECK(j["metrics"][out]["rxy"].as<double>() > 0.99);
+    CHECK(j["metrics"][out]["r2"].as<double>() > 0.99);
+    CHECK(j["metrics"][out]["rmse"].as<double>() > 0.0);
+    CHECK(j["metrics"][out]["rmse_pct_range"].as<double>() < 5.0);
+    CHECK(j["whiteness"][out].as<double>() <= 0.1);
+  }
+  REQUIRE(j["eigenvalues"].size() == 3);
+  for (const auto& pair : j["eigenvalues"]) CHECK(pair.size() == 2);
+  // The model file flies: load_model reads it and its eigenvalues are those of the JSON.
+  const DerivativeModel back = load_model(model);
+  CHECK(back.at("L_df") == Approx(j["parameters"]["L_df"]["value"].as<double>()).epsilon(1e-8));
+  CHECK(back.trim.w0_mps == Approx(-0.30));
+  CHECK(j["model_out"].as<std::string>() == model);
+}
+
+TEST_CASE("rig identify --method ols --json - prints only JSON", "[cli]") {
+  const Result r = run_rig("identify " + flight_csv() + " --method ols --order 8 --cutoff 10 --json -");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node j = YAML::Load(r.out);
+  CHECK(j["method"].as<std::string>() == "ols");
+  CHECK(j["processing"]["filter_order"].as<int>() == 8);
+  CHECK(j["processing"]["cutoff_hz"].as<double>() == 10.0);
+}
+
+TEST_CASE("rig validate reports open-loop metrics of every state derivative", "[cli]") {
+  const std::string model = test::kConfigs + "models/nimble_lateral_set1.yaml";
+  const Result r = run_rig("validate " + model + " " + flight_csv() + " --json -");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node j = YAML::Load(r.out);
+  for (const char* out : {"p_dot", "v_dot", "phi_dot"}) {
+    INFO(out);
+    CHECK(j["metrics"][out]["r2"].as<double>() > 0.99);
+    CHECK(j["whiteness"][out]);
+  }
+  const Result text = run_rig("validate " + model + " " + flight_csv());
+  REQUIRE(text.exit_code == 0);
+  CHECK(text.out.find("phi_dot") != std::string::npos);
+}
+
+TEST_CASE("rig identify --plots draws PNGs with gnuplot, or names the package when it is missing", "[cli]") {
+  const fs::path plots = work_dir() / "plots";
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    const Result r = run_rig("identify " + flight_csv() + " --plots " + plots.string());
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    for (const char* png : {"derivatives.png", "autocorrelation.png", "psd.png", "eigenvalues.png"}) {
+      INFO(png);
+      const std::string bytes = slurp((plots / png).string());
+      REQUIRE(bytes.size() > 1000);
+      CHECK(bytes.substr(1, 3) == "PNG");
+    }
+    const Result v = run_rig("validate " + test::kConfigs + "models/nimble_lateral_set1.yaml " + flight_csv() +
+                             " --plots " + (plots / "validate").string());
+    REQUIRE(v.exit_code == 0);
+    CHECK(fs::exists(plots / "validate" / "derivatives.png"));
+  }
+  const Result missing = run_rig("identify " + flight_csv() + " --plots " + plots.string(), "PATH=/nonexistent");
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err.find("gnuplot-nox") != std::string::npos);
+}
+
+TEST_CASE("rig identify errors name the file, row and column, with exit code 2", "[cli]") {
+  const fs::path dir = work_dir();
+  SECTION("bad cell") {
+    const fs::path bad = dir / "bad.csv";
+    std::ofstream(bad) << "# a comment\nt,p,v,phi,delta_f,delta_t\n0,0,0,0,0,0\n0.1,0,zero,0,0,0\n";
+    const Result r = run_rig("identify " + bad.string());
+    CHECK(r.exit_code == 2);
+    CHECK(r.out.empty());
+    CHECK(r.err.find("bad.csv:4: row 2, column 'v': value 'zero' is not a number") != std::string::npos);
+  }
+  SECTION("unknown column") {
+    const fs::path bad = dir / "unknown.csv";
+    std::ofstream(bad) << "t,p,v,phi,delta_f,delta_t,gyro_x\n0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n";
+    const Result r = run_rig("identify " + bad.string());
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("unknown column gyro_x") != std::string::npos);
+  }
+  SECTION("too few samples") {
+    const fs::path few = dir / "few.csv";
+    std::ofstream(few) << "t,p,v,phi,delta_f,delta_t\n0,0,0,0,0,0\n0.1,1,0,0,0,0\n0.2,0,1,0,0,0\n";
+    const Result r = run_rig("identify " + few.string());
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("too few") != std::string::npos);
+  }
+  SECTION("usage") {
+    CHECK(run_rig("identify").exit_code == 2);
+    CHECK(run_rig("identify " + flight_csv() + " --bogus").exit_code == 2);
+    CHECK(run_rig("identify " + flight_csv() + " --structure longitudinal").exit_code == 2);
+    CHECK(run_rig("identify " + flight_csv() + " --method mle").exit_code == 2);
+    CHECK(run_rig("identify " + flight_csv() + " --order ten").exit_code == 2);
+    const Result nyquist = run_rig("identify " + flight_csv() + " --rate 16");
+    CHECK(nyquist.exit_code == 2);
+    CHECK(nyquist.err.find("cut-off") != std::string::npos);
+    CHECK(run_rig("identify /nonexistent/flight.csv").exit_code == 2);
+    CHECK(run_rig("validate " + flight_csv()).exit_code == 2);
+    CHECK(run_rig("identify --help").exit_code == 0);
+  }
+}
