@@ -27,10 +27,11 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   controller_ = std::make_unique<AttitudeController>(config_);
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
-  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
-  node_->set_expected_rate(kTruth, 1000.0);
   const ProcessRunOptions run = process_run_options(scenario);
-  node_->set_realtime_priority(run.realtime_priority);
+  const std::string rt_problem = transport::apply_realtime_priority(run.realtime_priority);
+  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
+  if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
+  node_->set_expected_rate(kTruth, 1000.0);
   node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
     input_ = t;
     have_input_ = true;
@@ -65,20 +66,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
                  "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
   }
   const ControllerOutput out = controller_->step(in);
-
-  attitude_setpoint_t asp;
-  asp.utime = utime;
-  asp.seq = sp_seq_++;
-  asp.roll_sp_rad = sp.roll_sp_rad;
-  asp.pitch_sp_rad = sp.pitch_sp_rad;
-  asp.yaw_rate_sp_radps = 0.0;
-  asp.throttle_pct = sp.throttle_pct;
-  asp.throttle_factor = sp.throttle_factor;
-  asp.manoeuvre = sp.manoeuvre;
-  asp.segment_index = sp.segment_index;
-  asp.segment_name = sp.segment_name;
-  asp.gain_set = controller_->gain_set();
-  node_->bus().publish(kAttitudeSetpoint, asp);
+  // The command goes out first: it is what the plant waits for.
 
   actuator_command_t cmd;
   cmd.utime = utime;
@@ -96,6 +84,20 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   rolling_counter_ = static_cast<int8_t>((rolling_counter_ + 1) % 16);
   cmd.source = node_->name();
   node_->bus().publish(kActuatorCommand, cmd);
+
+  attitude_setpoint_t asp;
+  asp.utime = utime;
+  asp.seq = sp_seq_++;
+  asp.roll_sp_rad = sp.roll_sp_rad;
+  asp.pitch_sp_rad = sp.pitch_sp_rad;
+  asp.yaw_rate_sp_radps = 0.0;
+  asp.throttle_pct = sp.throttle_pct;
+  asp.throttle_factor = sp.throttle_factor;
+  asp.manoeuvre = sp.manoeuvre;
+  asp.segment_index = sp.segment_index;
+  asp.segment_name = sp.segment_name;
+  asp.gain_set = controller_->gain_set();
+  node_->bus().publish(kAttitudeSetpoint, asp);
 
   controller_status_t st;
   st.utime = utime;

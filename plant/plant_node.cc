@@ -51,9 +51,10 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
+  const std::string rt_problem = transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
+  if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
   node_->set_lockstep_master(true);
-  node_->set_realtime_priority(process_run_options(scenario).realtime_priority);
   if (scenario.has_section("lockstep")) {
     ConfigMap ls = scenario.section("lockstep");
     node_->set_ack_timeout_ms(static_cast<int>(ls.get_int("ack_timeout_ms", Range::closed(10, 600000))));

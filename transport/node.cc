@@ -28,6 +28,20 @@ extern "C" void on_stop_signal(int) { ProcessNode::request_stop(); }
 
 }  // namespace
 
+std::string apply_realtime_priority(int priority) {
+  if (priority <= 0) return "";
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+    return std::string("cannot run under SCHED_FIFO priority ") + std::to_string(priority) + ": " +
+           std::strerror(errno) + " (needs root or CAP_SYS_NICE); running with the default scheduler";
+  }
+  if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    return std::string("SCHED_FIFO set, but mlockall failed: ") + std::strerror(errno);
+  }
+  return "";
+}
+
 NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name) {
   NodeOptions o;
   o.name = default_name;
@@ -110,7 +124,8 @@ void ProcessNode::notify_input(int64_t input_sim_time_ns) {
   if (!started_ || stop_ || clock_mode_ != run_control_t::CLOCK_MODE_REALTIME) return;
   for (auto& t : tasks_) {
     if (t.trigger != Trigger::kInput || t.next_ns > input_sim_time_ns || t.next_ns >= duration_ns_) continue;
-    jitter_.add_ns(monotonic_ns() - (t0_ns_ + t.next_ns));
+    // Lateness of the cycle behind the triggering input's own time.
+    jitter_.add_ns(monotonic_ns() - (t0_ns_ + input_sim_time_ns));
     ++loop_count_;
     sim_time_ns_ = t.next_ns;
     t.fn(t.next_ns);
@@ -256,15 +271,6 @@ int ProcessNode::run() {
 
 int ProcessNode::run_realtime() {
   use_fine_timer_slack();
-  if (rt_priority_ > 0) {
-    sched_param sp{};
-    sp.sched_priority = rt_priority_;
-    if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0 || ::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-      fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "",
-            std::string("cannot run under SCHED_FIFO priority ") + std::to_string(rt_priority_) + ": " +
-                std::strerror(errno) + " (needs root or CAP_SYS_NICE); running with the default scheduler");
-    }
-  }
   const int fd = bus_.fileno();
   while (!stop_) {
     Task* task = nullptr;

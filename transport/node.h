@@ -69,6 +69,11 @@ struct NodeOptions {
   std::string lcm_url;        ///< LCM URL of the run
 };
 
+/// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,
+/// before it starts any thread (LCM's receive thread inherits the policy). 0 does nothing.
+/// Returns an empty string on success, otherwise why it failed (the caller reports it).
+std::string apply_realtime_priority(int priority);
+
 /// Parses `--name N --scenario FILE --lcm-url URL`.
 /// @throws std::invalid_argument naming the bad or missing flag.
 NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name);
@@ -101,9 +106,6 @@ class ProcessNode {
   /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
   void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
 
-  /// Real time: run the loop under SCHED_FIFO at this priority (1..99) with memory locked;
-  /// 0 leaves the scheduler alone. Failure is reported as a FAULT, not fatal.
-  void set_realtime_priority(int priority) { rt_priority_ = priority; }
 
   /// Makes this node the lockstep master (the plant): its single task defines the step.
   void set_lockstep_master(bool master) { master_ = master; }
@@ -176,7 +178,6 @@ class ProcessNode {
 
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
-  int rt_priority_ = 0;
   int64_t loop_count_ = 0;
   int64_t overruns_ = 0;
 
