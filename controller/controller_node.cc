@@ -31,6 +31,7 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   const std::string rt_problem = transport::apply_realtime_priority(run.realtime_priority);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
   if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
+  node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_expected_rate(kTruth, 1000.0);
   node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
     input_ = t;
@@ -85,37 +86,40 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   cmd.source = node_->name();
   node_->bus().publish(kActuatorCommand, cmd);
 
-  attitude_setpoint_t asp;
-  asp.utime = utime;
-  asp.seq = sp_seq_++;
-  asp.roll_sp_rad = sp.roll_sp_rad;
-  asp.pitch_sp_rad = sp.pitch_sp_rad;
-  asp.yaw_rate_sp_radps = 0.0;
-  asp.throttle_pct = sp.throttle_pct;
-  asp.throttle_factor = sp.throttle_factor;
-  asp.manoeuvre = sp.manoeuvre;
-  asp.segment_index = sp.segment_index;
-  asp.segment_name = sp.segment_name;
-  asp.gain_set = controller_->gain_set();
-  node_->bus().publish(kAttitudeSetpoint, asp);
+  // Set-point and status records go out after the command and the step's acknowledgement.
+  node_->defer([this, sp, out, utime, input_age_us] {
+    attitude_setpoint_t asp;
+    asp.utime = utime;
+    asp.seq = sp_seq_++;
+    asp.roll_sp_rad = sp.roll_sp_rad;
+    asp.pitch_sp_rad = sp.pitch_sp_rad;
+    asp.yaw_rate_sp_radps = 0.0;
+    asp.throttle_pct = sp.throttle_pct;
+    asp.throttle_factor = sp.throttle_factor;
+    asp.manoeuvre = sp.manoeuvre;
+    asp.segment_index = sp.segment_index;
+    asp.segment_name = sp.segment_name;
+    asp.gain_set = controller_->gain_set();
+    node_->bus().publish(kAttitudeSetpoint, asp);
 
-  controller_status_t st;
-  st.utime = utime;
-  st.seq = status_seq_++;
-  st.gain_set = controller_->gain_set();
-  st.kp = out.roll_kp_per_rad;
-  st.kd = out.roll_kd_per_radps;
-  st.roll_ref_rad = out.roll_ref_rad;
-  st.roll_rate_ref_radps = out.roll_rate_ref_radps;
-  st.roll_error_rad = out.roll_error_rad;
-  st.roll_cmd_norm = out.roll_cmd_norm;
-  st.pitch_cmd_norm = out.pitch_cmd_norm;
-  st.delta_f_cmd_radps = out.delta_f_cmd_radps;
-  st.throttle_pct = out.throttle_cmd_pct;
-  st.saturated = out.saturated;
-  st.input_source = controller_status_t::INPUT_TRUTH;
-  st.input_age_us = input_age_us;
-  node_->bus().publish(kControllerStatus, st);
+    controller_status_t st;
+    st.utime = utime;
+    st.seq = status_seq_++;
+    st.gain_set = controller_->gain_set();
+    st.kp = out.roll_kp_per_rad;
+    st.kd = out.roll_kd_per_radps;
+    st.roll_ref_rad = out.roll_ref_rad;
+    st.roll_rate_ref_radps = out.roll_rate_ref_radps;
+    st.roll_error_rad = out.roll_error_rad;
+    st.roll_cmd_norm = out.roll_cmd_norm;
+    st.pitch_cmd_norm = out.pitch_cmd_norm;
+    st.delta_f_cmd_radps = out.delta_f_cmd_radps;
+    st.throttle_pct = out.throttle_cmd_pct;
+    st.saturated = out.saturated;
+    st.input_source = controller_status_t::INPUT_TRUTH;
+    st.input_age_us = input_age_us;
+    node_->bus().publish(kControllerStatus, st);
+  });
 }
 
 }  // namespace nimble

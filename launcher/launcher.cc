@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sched.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -51,7 +52,45 @@ struct LaunchConfig {
   std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run
   std::string network_namespace = "auto";  ///< auto | always | never
   int64_t late_threshold_us = 2000;
+  std::vector<int> rig_cpus;       ///< CPUs for the rig's processes (empty: no pinning)
+  std::vector<int> launcher_cpus;  ///< CPUs for the launcher itself (empty: no pinning)
 };
+
+std::vector<int> read_cpu_list(ConfigMap& m, const std::string& key) {
+  std::vector<int> cpus;
+  if (!m.has(key)) return cpus;
+  const YAML::Node list = m.get_node(key);
+  if (!list.IsSequence()) m.fail(key, "must be a list of CPU numbers, e.g. [0]");
+  for (const auto& item : list) {
+    int cpu = -1;
+    try {
+      cpu = item.as<int>();
+    } catch (const YAML::Exception&) {
+      m.fail(key, "must be a list of CPU numbers, e.g. [0]");
+    }
+    if (cpu < 0 || cpu >= CPU_SETSIZE) m.fail(key, "CPU numbers must be in [0, " + std::to_string(CPU_SETSIZE) + ")");
+    cpus.push_back(cpu);
+  }
+  return cpus;
+}
+
+/// Pins the calling process to `cpus` that exist; returns a note when some do not.
+std::string pin_to(const std::vector<int>& cpus) {
+  if (cpus.empty()) return "";
+  const int online = static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN));
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  int used = 0;
+  for (const int c : cpus) {
+    if (c < online) {
+      CPU_SET(c, &set);
+      ++used;
+    }
+  }
+  if (used == 0) return "none of the CPUs asked for exist on this machine (" + std::to_string(online) + " online)";
+  if (::sched_setaffinity(0, sizeof set, &set) != 0) return std::string("sched_setaffinity: ") + std::strerror(errno);
+  return used < static_cast<int>(cpus.size()) ? "some CPUs asked for do not exist; pinned to the others" : "";
+}
 
 /// Judgement of the flight (scenario section `summary`).
 struct JudgeConfig {
@@ -74,6 +113,9 @@ LaunchConfig launch_config_from(const Scenario& s) {
   c.late_threshold_us = static_cast<int64_t>(m.get_double_or("late_threshold_us", 2000, Range::positive()));
   if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
   if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
+  if (m.has("spin_us")) m.get_int("spin_us", Range::closed(0, 1000));
+  c.rig_cpus = read_cpu_list(m, "rig_cpus");
+  c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
   m.finish();
   return c;
 }
@@ -111,9 +153,11 @@ struct Child {
   int signal = 0;
 };
 
-pid_t spawn(const std::string& exe, const std::vector<std::string>& args, const std::string& output_file) {
+pid_t spawn(const std::string& exe, const std::vector<std::string>& args, const std::string& output_file,
+            const std::vector<int>& cpus) {
   const pid_t pid = ::fork();
   if (pid != 0) return pid;
+  pin_to(cpus);
   // Child: die with the launcher, write output to its own file.
   ::prctl(PR_SET_PDEATHSIG, SIGTERM);
   ::signal(SIGINT, SIG_IGN);  // the launcher handles Ctrl-C and stops the run in order
@@ -475,8 +519,12 @@ int run_scenario(const RunOptions& options) {
     c.name = name;
     c.output_file = log_file + "." + name + ".out";
     const std::string exe = bin_dir + "/nimble_" + name;
-    c.pid = spawn(exe, {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, c.output_file);
+    c.pid = spawn(exe, {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, c.output_file, lc.rig_cpus);
     children.push_back(c);
+  }
+  if (const std::string note = pin_to(lc.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
+  if (const std::string note = pin_to(lc.launcher_cpus); !note.empty()) {
+    std::cerr << "rig run: run.launcher_cpus: " << note << "\n";
   }
   // The launcher only records and watches: it yields the CPU to the rig's processes.
   ::setpriority(PRIO_PROCESS, 0, 10);

@@ -54,6 +54,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   const std::string rt_problem = transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
   if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
+  node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_lockstep_master(true);
   if (scenario.has_section("lockstep")) {
     ConfigMap ls = scenario.section("lockstep");

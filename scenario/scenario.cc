@@ -170,6 +170,7 @@ ProcessRunOptions process_run_options(const Scenario& scenario) {
     o.realtime_priority = static_cast<int>(run.get_int("realtime_priority", Range::closed(0, 99)));
   }
   if (run.has("controller_trigger")) o.controller_trigger = run.get_enum("controller_trigger", {"timer", "state"});
+  if (run.has("spin_us")) o.spin_us = static_cast<int>(run.get_int("spin_us", Range::closed(0, 1000)));
   return o;
 }
 

@@ -66,41 +66,9 @@ ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::stri
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
           "dropped a malformed message on " + channel + ": " + what);
   });
-  // Subscribed before anything is announced, so that no start, tick or ack is missed.
+  // Subscribed before anything is announced, so that no start command is missed.
   bus_.subscribe<run_control_t>(channels::kRunControl,
                                 [this](const run_control_t& m) { on_run_control(m); });
-  bus_.subscribe<step_ack_t>(
-    channels::kStepAck,
-    [this](const step_ack_t& ack) {
-      if (!master_ || next_due_.count(ack.process) == 0) return;  // not for us
-      last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
-      next_due_[ack.process] = ack.next_due_ns;
-    },
-    100000);
-  bus_.subscribe<rig_clock_t>(
-    channels::kRigClock,
-    [this](const rig_clock_t& tick) {
-      if (master_ || !started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
-      bool ran = false;
-      for (auto& t : tasks_) {
-        while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
-          sim_time_ns_ = t.next_ns;
-          t.fn(t.next_ns);
-          t.next_ns += t.period_ns;
-          ++loop_count_;
-          ran = true;
-        }
-      }
-      if (!ran) return;
-      step_ack_t ack;
-      ack.utime = tick.utime;
-      ack.seq = ack_seq_++;
-      ack.step = tick.step;
-      ack.next_due_ns = next_due_ns();
-      ack.process = name_;
-      bus_.publish(channels::kStepAck, ack);
-    },
-    100000);
 }
 
 void ProcessNode::install_signal_handlers() {
@@ -120,6 +88,11 @@ void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, 
   tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), trigger, 0});
 }
 
+void ProcessNode::run_deferred() {
+  for (auto& fn : deferred_) fn();
+  deferred_.clear();
+}
+
 void ProcessNode::notify_input(int64_t input_sim_time_ns) {
   if (!started_ || stop_ || clock_mode_ != run_control_t::CLOCK_MODE_REALTIME) return;
   for (auto& t : tasks_) {
@@ -133,6 +106,7 @@ void ProcessNode::notify_input(int64_t input_sim_time_ns) {
     const int64_t skipped = (input_sim_time_ns - t.next_ns) / t.period_ns;
     overruns_ += skipped;
     t.next_ns += (skipped + 1) * t.period_ns;
+    run_deferred();
   }
 }
 
@@ -250,6 +224,44 @@ void ProcessNode::idle_until_stopped() {
 }
 
 int ProcessNode::run() {
+  // The master listens for acknowledgements, participants for the clock; each subscribes
+  // only to its own side, so that nobody wakes up for its own messages.
+  if (master_) {
+    bus_.subscribe<step_ack_t>(
+      channels::kStepAck,
+      [this](const step_ack_t& ack) {
+        if (next_due_.count(ack.process) == 0) return;  // not a participant of this run
+        last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
+        next_due_[ack.process] = ack.next_due_ns;
+      },
+      100000);
+  } else {
+    bus_.subscribe<rig_clock_t>(
+      channels::kRigClock,
+      [this](const rig_clock_t& tick) {
+        if (!started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
+        bool ran = false;
+        for (auto& t : tasks_) {
+          while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
+            sim_time_ns_ = t.next_ns;
+            t.fn(t.next_ns);
+            t.next_ns += t.period_ns;
+            ++loop_count_;
+            ran = true;
+          }
+        }
+        if (!ran) return;
+        step_ack_t ack;
+        ack.utime = tick.utime;
+        ack.seq = ack_seq_++;
+        ack.step = tick.step;
+        ack.next_due_ns = next_due_ns();
+        ack.process = name_;
+        bus_.publish(channels::kStepAck, ack);
+        run_deferred();
+      },
+      100000);
+  }
   if (!wait_for_start()) {
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
     return kExitOk;
@@ -291,7 +303,11 @@ int ProcessNode::run_realtime() {
     for (;;) {
       const int64_t now = monotonic_ns();
       if (now >= deadline || stop_) break;
-      const int64_t wait = deadline - now;
+      if (deadline - now <= spin_ns_) {
+        bus_.drain();  // spin to the deadline, still handling messages
+        continue;
+      }
+      const int64_t wait = deadline - now - spin_ns_;
       timespec ts{wait / 1000000000LL, wait % 1000000000LL};
       pollfd pfd{fd, POLLIN, 0};
       if (::ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN)) bus_.handle();
@@ -302,6 +318,7 @@ int ProcessNode::run_realtime() {
     ++loop_count_;
     sim_time_ns_ = task->next_ns;
     task->fn(task->next_ns);
+    run_deferred();
     task->next_ns += task->period_ns;
     if (monotonic_ns() > t0_ns_ + task->next_ns) ++overruns_;
     housekeeping();

@@ -103,6 +103,10 @@ class ProcessNode {
   /// tasks that are due. No effect in lockstep or before the start.
   void notify_input(int64_t input_sim_time_ns);
 
+  /// Runs `fn` once the current task has finished and, in lockstep, after its STEP_ACK has
+  /// gone out: for outputs nobody in the loop waits for (status, set-point records).
+  void defer(std::function<void()> fn) { deferred_.push_back(std::move(fn)); }
+
   /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
   void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
 
@@ -111,6 +115,10 @@ class ProcessNode {
   void set_lockstep_master(bool master) { master_ = master; }
   /// Lockstep master: how long to wait for a participant's STEP_ACK [ms] (wall clock).
   void set_ack_timeout_ms(int ms) { ack_timeout_ms_ = ms; }
+
+  /// Real time: wake this long before each deadline and spin to it [ns] (0: sleep only).
+  /// Trades CPU for wake-up jitter.
+  void set_spin_ns(int64_t ns) { spin_ns_ = ns; }
 
   /// Expected receive rate of a channel [Hz], reported on TIMING_HEALTH.
   void set_expected_rate(const std::string& channel, double hz) { expected_hz_[channel] = hz; }
@@ -178,6 +186,9 @@ class ProcessNode {
 
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
+  std::vector<std::function<void()>> deferred_;
+  void run_deferred();
+  int64_t spin_ns_ = 0;
   int64_t loop_count_ = 0;
   int64_t overruns_ = 0;
 

@@ -215,8 +215,11 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
     step = (ack.next_due_ns + dt_ns - 1) / dt_ns;  // first plant step at or after the due time
     tick(step);
   });
+  // The first tick goes out once the controller runs (it listens for the clock from then on).
+  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_RUNNING && step == 0) tick(0);
+  });
   bus.publish("RUN_CONTROL", start_lockstep(duration_s, {"controller"}));
-  tick(0);
   REQUIRE(controller.run() == transport::kExitOk);
 
   // 512 Hz over 1.5 s: cycles at n / 512 s for n = 0..767.
