@@ -25,7 +25,9 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <nimble/heartbeat_t.hpp>
+#include <nimble/rig_clock_t.hpp>
 #include <nimble/run_control_t.hpp>
+#include <nimble/step_ack_t.hpp>
 
 #include "core/json_writer.h"
 #include "launcher/netns.h"
@@ -221,9 +223,13 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     hz["ATTITUDE_SP"] = rates.controller_hz;
   }
   if (lockstep) {
-    // RIG_CLOCK goes out at the plant steps where a participant is due.
-    hz["RIG_CLOCK"] = rates.controller_hz > 0 ? std::min(rates.plant_hz, rates.controller_hz) : 0.0;
-    hz["STEP_ACK"] = rates.controller_hz;
+    // RIG_CLOCK goes out at the plant steps where a participant is due: the controller's
+    // steps and the logger's, which fall on a controller step with probability
+    // controller_hz / plant_hz. Every due participant acknowledges.
+    const double logger_hz = 1000.0 / lockstep_options(s).logger_period_ms;
+    const double controller_hz = std::min(rates.plant_hz, rates.controller_hz);
+    hz["RIG_CLOCK"] = controller_hz + logger_hz * (1.0 - controller_hz / rates.plant_hz);
+    hz["STEP_ACK"] = rates.controller_hz + logger_hz;
   }
   const double n = static_cast<double>(s.processes.size());
   hz["HEARTBEAT"] = 2.0 * n;
@@ -383,6 +389,7 @@ Scenario prepare_scenario(const RunOptions& options) {
   if (options.seed) overrides.push_back({"seed", std::to_string(*options.seed)});
   Scenario s = load_scenario(options.scenario_file, overrides);
   validate_process_sections(s);
+  lockstep_options(s);
   launch_config_from(s);
   judge_config_from(s);
   return s;
@@ -491,6 +498,12 @@ int run_scenario(const RunOptions& options) {
   RunMonitor monitor(mc);
   int64_t event_number = 0;
   int64_t last_flush_ns = monotonic_ns();
+  // Lockstep: the launcher's logger is a participant. It acknowledges a tick once it has
+  // logged everything before it, every logger_period_ms of simulated time, so the run can
+  // never outpace the log (no message lost, whatever the load).
+  const std::string kLogger = "logger";
+  const int64_t logger_period_ns = static_cast<int64_t>(lockstep_options(scenario).logger_period_ms * 1e6);
+  int64_t logger_next_due_ns = 0, logger_ack_seq = 0;
   bus->subscribe_raw(".*", [&](const std::string& channel, const void* data, int size, int64_t recv_us) {
     if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
     lcm::LogEvent ev;
@@ -501,6 +514,19 @@ int run_scenario(const RunOptions& options) {
     ev.data = const_cast<void*>(data);
     log.writeEvent(&ev);
     monitor.on_message(channel, data, size, recv_us * 1000);
+    if (lockstep && channel == "RIG_CLOCK") {
+      rig_clock_t tick{};
+      if (tick.decode(data, 0, size) == size && tick.sim_time_ns >= logger_next_due_ns) {
+        logger_next_due_ns = tick.sim_time_ns + logger_period_ns;
+        step_ack_t ack{};
+        ack.utime = tick.utime;
+        ack.seq = logger_ack_seq++;
+        ack.step = tick.step;
+        ack.next_due_ns = logger_next_due_ns;
+        ack.process = kLogger;
+        bus->publish("STEP_ACK", ack);
+      }
+    }
   });
 
   struct sigaction sa{};
@@ -526,8 +552,9 @@ int run_scenario(const RunOptions& options) {
   if (const std::string note = pin_to(lc.launcher_cpus); !note.empty()) {
     std::cerr << "rig run: run.launcher_cpus: " << note << "\n";
   }
-  // The launcher only records and watches: it yields the CPU to the rig's processes.
-  ::setpriority(PRIO_PROCESS, 0, 10);
+  // Real time: the launcher only records and watches, so it yields the CPU to the rig's
+  // processes. (In lockstep it paces the run through its acknowledgements instead.)
+  if (!lockstep) ::setpriority(PRIO_PROCESS, 0, 10);
 
   const auto stop_all = [&](double grace_s) {
     run_control_t stop;
@@ -604,6 +631,7 @@ int run_scenario(const RunOptions& options) {
   for (const auto& p : scenario.processes) {
     if (p != "plant") start.participants.push_back(p);
   }
+  if (lockstep) start.participants.push_back(kLogger);
   start.num_participants = static_cast<int32_t>(start.participants.size());
   bus->publish("RUN_CONTROL", start);
   monitor.set_t0(start.t0_monotonic_ns);

@@ -56,11 +56,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
   node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_lockstep_master(true);
-  if (scenario.has_section("lockstep")) {
-    ConfigMap ls = scenario.section("lockstep");
-    node_->set_ack_timeout_ms(static_cast<int>(ls.get_int("ack_timeout_ms", Range::closed(10, 600000))));
-    ls.finish();
-  }
+  node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   node_->set_expected_rate(kActuatorCommand, 512.0);
   node_->bus().subscribe<actuator_command_t>(kActuatorCommand,
                                              [this](const actuator_command_t& c) { on_command(c); });

@@ -163,6 +163,17 @@ Scenario load_scenario(const std::string& file, const std::vector<Override>& ove
   return scenario_from_tree(load_scenario_tree(file, overrides), file);
 }
 
+LockstepOptions lockstep_options(const Scenario& scenario) {
+  LockstepOptions o;
+  ConfigMap m = scenario.section("lockstep");
+  if (m.has("ack_timeout_ms")) {
+    o.ack_timeout_ms = static_cast<int>(m.get_int("ack_timeout_ms", Range::closed(10, 600000)));
+  }
+  o.logger_period_ms = m.get_double_or("logger_period_ms", o.logger_period_ms, Range::closed(1.0, 1000.0));
+  m.finish();
+  return o;
+}
+
 ProcessRunOptions process_run_options(const Scenario& scenario) {
   ProcessRunOptions o;
   ConfigMap run = scenario.section("run");

@@ -75,6 +75,18 @@ struct ProcessRunOptions {
   int spin_us = 0;
 };
 
+/// The `lockstep` section.
+struct LockstepOptions {
+  /// How long the plant waits for a due participant's STEP_ACK [ms] (wall clock).
+  int ack_timeout_ms = 2000;
+  /// The launcher's logger acknowledges every this much simulated time [ms], so that the
+  /// run never gets further ahead of the log than this (no message is lost under load).
+  double logger_period_ms = 10.0;
+};
+
+/// Reads the `lockstep` section (strict). @throws ConfigError naming the key.
+LockstepOptions lockstep_options(const Scenario& scenario);
+
 /// Reads the process-level options of `run`. @throws ConfigError naming the key.
 ProcessRunOptions process_run_options(const Scenario& scenario);
 
