@@ -18,6 +18,7 @@
 #include "ident/flight_data.h"
 #include "ident/synthetic.h"
 #include "synthetic_flight.h"
+#include "../support/run_rig.h"
 
 namespace fs = std::filesystem;
 using namespace nimble;
@@ -25,16 +26,6 @@ using namespace nimble::ident;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 fs::path work_dir() {
   const fs::path dir = fs::temp_directory_path() / ("rig_test_cli_identify_" + std::to_string(::getpid()));
@@ -42,26 +33,17 @@ fs::path work_dir() {
   return dir;
 }
 
-/// Runs `[env] rig <args>` through the shell, capturing stdout and stderr.
-Result run_rig(const std::string& args, const std::string& env = "") {
-  const fs::path dir = work_dir();
-  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
-  const std::string cmd = env + (env.empty() ? "" : " ") + std::string(RIG_BIN) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+using nimble::test::run_rig;
+using nimble::test::slurp;
+using Result = nimble::test::RigResult;
 
 /// A synthetic set-1 identification flight as CSV (written once per process).
 std::string flight_csv() {
   static const std::string path = [] {
-    const DerivativeModel truth = test::set1_model();
+    const DerivativeModel truth = ident::test::set1_model();
     const Vehicle vehicle = load_vehicle(truth.vehicle_file);
     const std::string file = (work_dir() / "flight.csv").string();
-    write_flight_csv(simulate_synthetic(truth, vehicle, test::identification_flight(7)), file);
+    write_flight_csv(simulate_synthetic(truth, vehicle, ident::test::identification_flight(7)), file);
     return file;
   }();
   return path;
@@ -84,7 +66,7 @@ TEST_CASE("rig identify writes JSON with parameters, metrics, eigenvalues and wh
   const YAML::Node j = YAML::LoadFile(json);
   CHECK(j["structure"].as<std::string>() == "lateral3");
   CHECK(j["method"].as<std::string>() == "wls");
-  const DerivativeModel truth = test::set1_model();
+  const DerivativeModel truth = ident::test::set1_model();
   for (const char* name : {"Lp", "Lv", "L_df", "L_dt", "Yp", "Yv", "Y_df", "Y_dt"}) {
     INFO(name);
     REQUIRE(j["parameters"][name]);
@@ -120,7 +102,7 @@ TEST_CASE("rig identify --method ols --json - prints only JSON", "[cli]") {
 }
 
 TEST_CASE("rig validate reports open-loop metrics of every state derivative", "[cli]") {
-  const std::string model = test::kConfigs + "models/nimble_lateral_set1.yaml";
+  const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1.yaml";
   const Result r = run_rig("validate " + model + " " + flight_csv() + " --json -");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
@@ -147,7 +129,7 @@ TEST_CASE("rig identify --plots draws PNGs with gnuplot, or names the package wh
       REQUIRE(bytes.size() > 1000);
       CHECK(bytes.substr(1, 3) == "PNG");
     }
-    const Result v = run_rig("validate " + test::kConfigs + "models/nimble_lateral_set1.yaml " + flight_csv() +
+    const Result v = run_rig("validate " + ident::test::kConfigs + "models/nimble_lateral_set1.yaml " + flight_csv() +
                              " --plots " + (plots / "validate").string());
     REQUIRE(v.exit_code == 0);
     CHECK(fs::exists(plots / "validate" / "derivatives.png"));

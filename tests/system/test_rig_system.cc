@@ -25,6 +25,8 @@
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "../support/run_rig.h"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -45,10 +47,7 @@ struct RunResult {
   YAML::Node summary;
 };
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using nimble::test::slurp;
 
 /// Runs `rig run <scenario> <args>` to completion.
 RunResult rig_run(const std::string& scenario, const std::string& dir, const std::string& args) {
