@@ -10,12 +10,13 @@ BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
 BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 
 # Debian bookworm packages: toolchain, LCM (library, tools, Java for lcm-spy),
-# glib headers (lcm.pc requires them), Eigen, yaml-cpp, Catch2, a JDK for the type jar,
+# jchart2d (lcm-spy's detail plots), glib headers (lcm.pc requires them), Eigen, yaml-cpp,
+# Catch2, a JDK for the type jar,
 # gnuplot for identification plots, and for real SocketCAN tests: can-utils, iproute2,
 # and qemu with xz (can_bridge/vm/canvm boots Debian's kernel when the host has no vcan).
 PACKAGES=(
   g++ make cmake pkg-config
-  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
   libeigen3-dev libyaml-cpp-dev catch2
   default-jdk-headless
   gnuplot-nox
