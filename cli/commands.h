@@ -31,4 +31,7 @@ int run_identify_command(const std::vector<std::string>& args);
 /// `rig validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...`: open-loop validation.
 int run_validate_command(const std::vector<std::string>& args);
 
+/// `rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]`
+int run_export_command(const std::vector<std::string>& args);
+
 }  // namespace nimble::cli

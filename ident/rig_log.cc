@@ -1,0 +1,124 @@
+#include "ident/rig_log.h"
+
+#include <cstdint>
+#include <fstream>
+
+#include <lcm/lcm-cpp.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/estimator_state_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+namespace nimble::ident {
+namespace {
+
+/// Appends a sample unless its time does not increase (a repeated stamp is skipped).
+void append(Channel& c, double t_s, double value) {
+  if (!c.t_s.empty() && t_s <= c.t_s.back()) return;
+  c.t_s.push_back(t_s);
+  c.values.push_back(value);
+}
+
+template <typename T>
+T decode_or_throw(const lcm::LogEvent& ev, const std::string& file) {
+  T msg{};
+  if (msg.decode(ev.data, 0, ev.datalen) != ev.datalen) {
+    throw DataError(file, -1, static_cast<int>(ev.eventnum), ev.channel,
+                    "event does not decode as " + std::string(T::getTypeName()));
+  }
+  return msg;
+}
+
+}  // namespace
+
+bool is_lcm_log(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char magic[4] = {0, 0, 0, 0};
+  in.read(reinterpret_cast<char*>(magic), 4);
+  return in.gcount() == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
+}
+
+RigLogData read_rig_log(const std::string& file, StateSource source) {
+  lcm::LogFile log(file, "r");
+  if (!log.good()) throw DataError(file, -1, -1, "", "cannot open as an LCM log");
+  FlightData estimate, truth, inputs;
+  for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
+    if (ev->channel == "TRUTH") {
+      const auto m = decode_or_throw<truth_state_t>(*ev, file);
+      const double t = static_cast<double>(m.utime) * 1e-6;
+      append(truth.channels["p"], t, m.omega_body_radps[0]);
+      append(truth.channels["q"], t, m.omega_body_radps[1]);
+      append(truth.channels["r"], t, m.omega_body_radps[2]);
+      append(truth.channels["u"], t, m.velocity_body_mps[0]);
+      append(truth.channels["v"], t, m.velocity_body_mps[1]);
+      append(truth.channels["w"], t, m.velocity_body_mps[2]);
+      append(truth.channels["phi"], t, m.euler_rad[0]);
+      append(truth.channels["theta"], t, m.euler_rad[1]);
+      append(truth.channels["psi"], t, m.euler_rad[2]);
+    } else if (ev->channel == "ESTIMATE") {
+      const auto m = decode_or_throw<estimator_state_t>(*ev, file);
+      const double t = static_cast<double>(m.utime) * 1e-6;
+      append(estimate.channels["p"], t, m.omega_body_radps[0]);
+      append(estimate.channels["q"], t, m.omega_body_radps[1]);
+      append(estimate.channels["r"], t, m.omega_body_radps[2]);
+      append(estimate.channels["u"], t, m.velocity_body_mps[0]);
+      append(estimate.channels["v"], t, m.velocity_body_mps[1]);
+      append(estimate.channels["w"], t, m.velocity_body_mps[2]);
+      append(estimate.channels["phi"], t, m.euler_rad[0]);
+      append(estimate.channels["theta"], t, m.euler_rad[1]);
+      append(estimate.channels["psi"], t, m.euler_rad[2]);
+    } else if (ev->channel == "ACTUATOR_FB") {
+      const auto m = decode_or_throw<actuator_feedback_t>(*ev, file);
+      const double t = static_cast<double>(m.utime) * 1e-6;
+      append(inputs.channels["delta_f"], t, m.delta_f_radps);
+      append(inputs.channels["delta_t"], t, m.throttle_pct);
+      append(inputs.channels["delta_d"], t, m.dihedral_rad);
+      append(inputs.channels["delta_w"], t, m.wing_root_rad);
+    } else if (ev->channel == "ATTITUDE_SP") {
+      const auto m = decode_or_throw<attitude_setpoint_t>(*ev, file);
+      append(inputs.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
+    } else if (ev->channel == "IMU") {
+      const auto m = decode_or_throw<imu_sample_t>(*ev, file);
+      const double t = static_cast<double>(m.utime) * 1e-6;
+      append(inputs.channels["ax"], t, m.accel_mps2[0]);
+      append(inputs.channels["ay"], t, m.accel_mps2[1]);
+      append(inputs.channels["az"], t, m.accel_mps2[2]);
+    }
+  }
+  if (!inputs.has("delta_f")) {
+    throw DataError(file, -1, -1, "ACTUATOR_FB", "the log has no actuator feedback (delta_f, delta_t)");
+  }
+  // Servo inputs that never moved carry no information; leave them out so that the
+  // identification does not try to estimate derivatives they cannot excite.
+  for (const char* servo : {"delta_d", "delta_w"}) {
+    bool moved = false;
+    for (const double x : inputs.channels[servo].values) moved = moved || x != 0.0;
+    if (!moved) inputs.channels.erase(servo);
+  }
+  RigLogData out;
+  bool use_estimate = false;
+  if (source == StateSource::kEstimate) {
+    if (!estimate.has("p")) throw DataError(file, -1, -1, "ESTIMATE", "the log has no estimator output");
+    use_estimate = true;
+  } else if (source == StateSource::kAuto) {
+    use_estimate = estimate.has("p");
+  }
+  if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, "TRUTH", "the log has neither ESTIMATE nor TRUTH");
+  out.state_source = use_estimate ? "estimate" : "truth";
+  out.measured = use_estimate ? estimate : truth;
+  out.measured.source = file;
+  for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;
+  if (truth.has("p")) {
+    out.truth = truth;
+    out.truth.source = file + " (truth)";
+    for (const auto& [name, c] : inputs.channels) out.truth.channels[name] = c;
+  }
+  return out;
+}
+
+FlightData read_flight_data(const std::string& file) {
+  return is_lcm_log(file) ? read_rig_log(file).measured : read_flight_csv(file);
+}
+
+}  // namespace nimble::ident

@@ -1,0 +1,41 @@
+#pragma once
+/// Reading rig LCM logs as flight data for identification.
+///
+/// The measured data of a rig flight are what the lab would have: the states from the
+/// estimator (ESTIMATE) when the log has it, else from the plant's truth (TRUTH); the
+/// inputs from the actuator feedback (ACTUATOR_FB, 100 Hz: delta_f, delta_t, delta_d,
+/// delta_w); the roll set-point from ATTITUDE_SP; specific force from IMU when present.
+/// The truth is kept separately for checking.
+
+#include <string>
+
+#include "ident/flight_data.h"
+
+namespace nimble::ident {
+
+/// Where the states of a rig log are taken from.
+enum class StateSource {
+  kAuto,      ///< ESTIMATE if the log has it, else TRUTH
+  kEstimate,  ///< ESTIMATE (error if absent)
+  kTruth,     ///< TRUTH
+};
+
+/// A rig log as flight data.
+struct RigLogData {
+  FlightData measured;       ///< states (per StateSource), inputs, set-points, at their own rates
+  FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
+  std::string state_source;  ///< "estimate" or "truth"
+};
+
+/// True if `file` starts with the LCM log event sync word.
+bool is_lcm_log(const std::string& file);
+
+/// Reads a rig log (lcm::LogFile format).
+/// @throws DataError naming the log, the event number (as the row) and the channel for
+///         an unreadable file, a message that does not decode, or a missing channel.
+RigLogData read_rig_log(const std::string& file, StateSource source = StateSource::kAuto);
+
+/// Reads flight data from a rig log (its measured data) or a CSV file, by content.
+FlightData read_flight_data(const std::string& file);
+
+}  // namespace nimble::ident
