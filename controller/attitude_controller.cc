@@ -11,7 +11,7 @@ namespace nimble {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-/// T = 2 (0.0114 f_hz - 0.0449) N (paper-facts §3).
+/// T = 2 (0.0114 f_hz - 0.0449) N (thesis Eq 4.18).
 constexpr double kThrustSlopeNPerHz = 0.0114;
 constexpr double kThrustOffsetN = 0.0449;
 constexpr int kThrustWingPairs = 2;

@@ -32,7 +32,7 @@
 namespace nimble {
 
 /// Thrust of both flapping wing pairs [N] at flapping frequency `f_radps` [rad/s]:
-/// T = 2 (0.0114 f_hz - 0.0449) (paper-facts §3).
+/// T = 2 (0.0114 f_hz - 0.0449) (thesis Eq 4.18).
 double flap_thrust_n(double f_radps);
 
 /// Flapping frequency [rad/s] at which the thrust T = 2 (0.0114 f_hz - 0.0449) N

@@ -1,6 +1,6 @@
 #pragma once
 /// Discrete second-order Butterworth low-pass filter for the attitude commands
-/// (15 Hz on roll and pitch, paper-facts §3).
+/// (15 Hz on roll and pitch, as the onboard stabilisation).
 ///
 /// Bilinear (Tustin) transform of H(s) = wc^2 / (s^2 + sqrt(2) wc s + wc^2)
 /// with the cut-off pre-warped, K = tan(pi fc / fs), so that the discrete

@@ -1,7 +1,7 @@
 #pragma once
 /// Second-order attitude reference generator with rate and acceleration limits,
 /// after the Paparazzi 'int_euler' stabilisation reference that runs on the
-/// Delfly Nimble (paper-facts §3).
+/// Delfly Nimble (the vehicle's onboard Paparazzi 'int_euler' stabilisation).
 ///
 /// Per axis, every control cycle of length dt:
 ///   angle_ref += rate_ref * dt

@@ -1,6 +1,6 @@
 #pragma once
 /// Attitude and body-velocity EKF fusing the IMU (input) with motion capture (measurement),
-/// thesis Section 8.1, Eqs 8.1 and 8.2 (paper-facts §5). Transport-free core: predict(imu) at the
+/// thesis Section 8.1, Eqs 8.1 and 8.2. Transport-free core: predict(imu) at the
 /// IMU rate, add_measurement(pose) when a mocap measurement arrives.
 ///
 /// Model: see ekf_model.h. State [phi theta psi u v w b_p b_q b_r b_ax b_ay b_az].

@@ -1,5 +1,5 @@
 #pragma once
-/// Process and measurement model of the attitude/velocity EKF (thesis Eq 8.1, paper-facts §5).
+/// Process and measurement model of the attitude/velocity EKF (thesis Section 8.1, Eq 8.1).
 ///
 /// State x (12): [phi theta psi | u v w | b_p b_q b_r | b_ax b_ay b_az]
 ///   ZYX Euler angles of the body relative to NED [rad]; velocity relative to the world in body

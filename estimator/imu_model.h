@@ -7,7 +7,7 @@
 ///   accel = sat( f_body     + b_accel + vibration_accel + n_accel )
 /// with
 ///  - n: white Gaussian noise, independent per sample and axis, standard deviation per sample
-///    (paper-facts §5: gyro 0.05 deg/s, accelerometer 0.05 g in x and y and 0.08 g in z; the
+///    (thesis Section 8.1: gyro 0.05 deg/s, accelerometer 0.05 g in x and y and 0.08 g in z; the
 ///    published "accuracy" figures are read as 1-sigma per sample at the 512 Hz output rate);
 ///  - b: bias = initial bias (fixed part + seeded random turn-on part) + random walk
 ///    b(t_k) = b(t_{k-1}) + sigma_rw * sqrt(t_k - t_{k-1}) * N(0, 1), per axis;
@@ -58,14 +58,14 @@ struct VibrationHarmonic {
 /// The default flapping harmonics (see ImuModelConfig::flapping_harmonics).
 std::vector<VibrationHarmonic> default_flapping_harmonics();
 
-/// Parameters of ImuModel. Defaults: paper-facts §5 where published, otherwise stated assumptions.
+/// Parameters of ImuModel. Defaults: thesis Section 8.1 where published, otherwise stated assumptions.
 struct ImuModelConfig {
-  /// Output rate [Hz]; paper-facts §5 (512 Hz). The model uses the actual sample times; this is
+  /// Output rate [Hz]; thesis Section 8.1 (512 Hz). The model uses the actual sample times; this is
   /// the nominal rate for the process that calls it and for matched EKF noise.
   double sample_rate_hz = 512.0;
-  /// White gyro noise, 1-sigma per sample, axes x y z [rad/s]; paper-facts §5: 0.05 deg/s.
+  /// White gyro noise, 1-sigma per sample, axes x y z [rad/s]; thesis Section 8.1: 0.05 deg/s.
   Eigen::Vector3d gyro_noise_sigma_radps = Eigen::Vector3d::Constant(0.05 * kDegToRad);
-  /// White accelerometer noise, 1-sigma per sample [m/s^2]; paper-facts §5: 0.05 g (x, y), 0.08 g (z).
+  /// White accelerometer noise, 1-sigma per sample [m/s^2]; thesis Section 8.1: 0.05 g (x, y), 0.08 g (z).
   Eigen::Vector3d accel_noise_sigma_mps2 =
       Eigen::Vector3d(0.05, 0.05, 0.08) * kStandardGravityMps2;
   /// Fixed part of the initial gyro bias [rad/s] (scenario value, e.g. an injected bias).

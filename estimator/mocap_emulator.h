@@ -1,5 +1,5 @@
 #pragma once
-/// Emulated motion-capture system (OptiTrack-like rigid-body tracking, paper-facts §5).
+/// Emulated motion-capture system (OptiTrack-like rigid-body tracking, thesis Section 8.1).
 ///
 /// Frames are strictly periodic: frame n (n = 0, 1, ...) is exposed from
 ///   start_n = first_frame_start_utime + n * frame_period_us
@@ -39,7 +39,7 @@ namespace nimble {
 
 /// Parameters of MocapEmulator.
 struct MocapConfig {
-  /// Frame rate [Hz]; paper-facts §5: 200 Hz. 1e6 / rate must be a whole number of microseconds.
+  /// Frame rate [Hz]; thesis Section 8.1: 200 Hz. 1e6 / rate must be a whole number of microseconds.
   double frame_rate_hz = 200.0;
   /// Start of the exposure of frame 0 [us] (rig time).
   std::int64_t first_frame_start_utime = 0;
@@ -49,7 +49,7 @@ struct MocapConfig {
   std::int64_t latency_us = 5000;
   /// 1-sigma Gaussian jitter of the latency [us]; 0 for constant latency.
   double latency_jitter_sigma_us = 0.0;
-  /// Mean 3-D position error [m]; paper-facts §5 / thesis Section II.B: 0.85 mm.
+  /// Mean 3-D position error [m]; paper Section II.B: 0.85 mm.
   double mean_position_error_m = 0.85e-3;
   /// Attitude noise, 1-sigma of the small rotation about body x y z [rad]. Default: the square roots
   /// of thesis Eq 8.2 R for phi, theta, psi (0.64, 0.43, 0.35 deg), read as the noise of the mocap

@@ -55,7 +55,7 @@ struct TruthProfile {
   double drag_v_per_s = 1.95;                ///< linear drag on v [1/s]: -Yv/m of set 1 (5.61e-2 / 0.02876 kg)
   double vertical_damping_per_s = 2.0;       ///< damping of the NED down velocity by the thrust [1/s]
   double gravity_mps2 = 9.81;                ///< [m/s^2]
-  double flap_frequency_radps = 2.0 * M_PI * 17.0;  ///< both wing pairs [rad/s]; paper-facts §1: 17 Hz
+  double flap_frequency_radps = 2.0 * M_PI * 17.0;  ///< both wing pairs [rad/s]; thesis Table A.1: 17 Hz
   Eigen::Vector3d initial_position_ned_m = Eigen::Vector3d(0.0, 0.0, -1.5);  ///< [m]
   Eigen::Vector3d initial_euler_rad = Eigen::Vector3d::Zero();                ///< ZYX [rad]
   Eigen::Vector3d initial_velocity_body_mps = Eigen::Vector3d::Zero();        ///< [m/s]

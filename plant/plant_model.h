@@ -39,7 +39,7 @@ struct ServoConfig {
   double c1_radps = 30.25;     ///< 2 zeta wn [1/s]
 };
 
-/// Thrust of the two wing pairs: T = pairs * (slope * f_hz - offset) [N] (paper-facts §3).
+/// Thrust of the two wing pairs: T = pairs * (slope * f_hz - offset) [N] (thesis Eq 4.18).
 struct ThrustConfig {
   double slope_n_per_hz = 0.0114;
   double offset_n = 0.0449;

@@ -211,7 +211,7 @@ TEST_CASE("shipped controller config: loads, hover trim from the thrust curve, m
   CHECK(flap_thrust_n(f_hover) == Approx(vehicle.mass_kg * vehicle.gravity_mps2).epsilon(1e-12));
   CHECK(cfg.f_trim_radps == Approx(f_hover).margin(1e-3));
   CHECK(cfg.throttle_to_freq_radps_per_pct == Approx(cfg.f_trim_radps / cfg.trim_throttle_pct).margin(1e-3));
-  // paper-facts §3: with either gain set the linear loop is stable for 10..160 rad/s per unit.
+  // Linear closed loop on set 1: with either gain set the linear loop is stable for 10..160 rad/s per unit.
   CHECK(cfg.roll_cmd_to_delta_f_radps >= 10.0);
   CHECK(cfg.roll_cmd_to_delta_f_radps <= 160.0);
   CHECK(cfg.roll_gain_sets.at("fast").kp_per_rad == 1.406);

@@ -98,7 +98,7 @@ TEST_CASE("both gain sets are stable over the published map interval 10..160 rad
 }
 
 TEST_CASE("slow gains with a too small map (5 rad/s) do not return to hover", "[closed_loop]") {
-  // paper-facts §3: slow gains need more than about 8 rad/s per unit.
+  // Linear closed loop on set 1: slow gains need more than about 8 rad/s per unit.
   const Rig rig;
   ControllerConfig cfg = rig.config;
   cfg.roll_cmd_to_delta_f_radps = 5.0;

@@ -68,7 +68,7 @@ TEST_CASE("IMU white noise: sample sigma per axis within 3 % of the config", "[i
     CHECK(sigma_g[i] == Approx(c.gyro_noise_sigma_radps[i]).epsilon(0.03));
     CHECK(sigma_a[i] == Approx(c.accel_noise_sigma_mps2[i]).epsilon(0.03));
   }
-  // Paper-facts §5 values: 0.05 deg/s, 0.05 g, 0.05 g, 0.08 g.
+  // Thesis Section 8.1 / paper Section II.B values: 0.05 deg/s, 0.05 g, 0.05 g, 0.08 g.
   CHECK(c.gyro_noise_sigma_radps[2] == Approx(0.05 * M_PI / 180.0));
   CHECK(c.accel_noise_sigma_mps2[2] == Approx(0.08 * 9.80665));
 }

@@ -67,7 +67,7 @@ TEST_CASE("eigenvalues of the five identification sets match thesis Table 9.5", 
 }
 
 TEST_CASE("set 1 A and B entries follow the thesis equations (Eqs 10-17)", "[model]") {
-  // Independent computation from paper-facts §1-2: vehicle without wifi module.
+  // Independent computation from thesis Table A.1, Table 9.2 and Eqs 10-17: vehicle without wifi module.
   const double m = 28.76e-3, Ixx = 9.60e-5, Izz = 3.32e-5, Ixz = -8.81e-6, g = 9.81;
   const double Ic = Ixx * Izz - Ixz * Ixz;
   const double Lp = -2.43e-4, Lv = -3.74e-4, Yp = 2.75e-3, Yv = -5.61e-2;
