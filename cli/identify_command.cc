@@ -14,6 +14,8 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
+#include "ident/closed_loop.h"
+#include "core/json_writer.h"
 #include "ident/signal.h"
 #include "ident/identify.h"
 #include "ident/model_writer.h"
@@ -55,7 +57,13 @@ constexpr const char* kValidateUsage =
     "  --rate HZ, --cutoff HZ, --order N   processing (defaults 512, 9, 10)\n"
     "  --lags N         whiteness lags (default 50)\n"
     "  --json FILE      write the JSON report to FILE ('-' for stdout)\n"
-    "  --plots DIR      PNG plots via gnuplot (Debian package gnuplot-nox)\n";
+    "  --plots DIR      PNG plots via gnuplot (Debian package gnuplot-nox)\n"
+    "  --closed-loop    closed-loop validation instead (thesis Tables 9-11): the model flown by a copy\n"
+    "                   of the attitude controller and the flap actuator on the data's phi_sp and\n"
+    "                   delta_t, from the measured initial state; simulated p, v, phi, delta_f\n"
+    "                   against the measured ones\n"
+    "  --gains NAME     roll gain set of the controller copy (default fast)\n"
+    "  --controller FILE  controller configuration (default rig_configs/controller/nimble_attitude.yaml)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -247,13 +255,21 @@ int run_validate_command(const std::vector<std::string>& args) {
     return 0;
   }
   std::string model_file, csv, vehicle_file, json, plots;
+  std::string gains = "fast", controller_file = NIMBLE_DEFAULT_CONTROLLER;
+  bool closed_loop = false;
   ident::ValidationOptions opt;
   try {
     Args it(args);
     while (it.next()) {
       const std::string& a = it.arg();
       if (processing_option(it, opt.processing)) continue;
-      if (a == "--vehicle") {
+      if (a == "--closed-loop") {
+        closed_loop = true;
+      } else if (a == "--gains") {
+        gains = it.value();
+      } else if (a == "--controller") {
+        controller_file = it.value();
+      } else if (a == "--vehicle") {
         vehicle_file = it.value();
       } else if (a == "--lags") {
         opt.whiteness_lags = static_cast<std::size_t>(integer(a, it.value(), 1, 100000));
@@ -282,6 +298,36 @@ int run_validate_command(const std::vector<std::string>& args) {
   const DerivativeModel model = load_model(model_file);
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
   const ident::FlightData data = ident::read_flight_data(csv);
+  if (closed_loop) {
+    ident::ClosedLoopOptions cl;
+    cl.controller = load_controller_config(controller_file);
+    cl.gain_set = gains;
+    const ident::ClosedLoopResult r = ident::validate_closed_loop(data, model, vehicle, cl);
+    JsonWriter w;
+    w.begin_object();
+    w.key("source").value(r.source).key("model").value(model.name).key("gain_set").value(r.gain_set);
+    w.key("rate_hz").value(r.rate_hz).key("samples").value(static_cast<long long>(r.t_s.size()));
+    w.key("closed_loop").begin_object();
+    if (json != "-") {
+      std::printf("closed-loop validation of %s on %s (gains %s, %lld samples at %.0f Hz)\n", model.name.c_str(),
+                  r.source.c_str(), r.gain_set.c_str(), static_cast<long long>(r.t_s.size()), r.rate_hz);
+      std::printf("  %-8s %8s %8s %12s %12s %10s\n", "output", "r_xy", "R2", "RMSE", "range", "RMSE[%rng]");
+    }
+    for (const char* name : {"p", "v", "phi", "delta_f"}) {
+      const ident::FitMetrics& f = r.fits.at(name);
+      if (json != "-") {
+        std::printf("  %-8s %8.3f %8.3f %12.4g %12.4g %10.2f\n", name, f.rxy, f.r2, f.rmse, f.range, f.rmse_pct_range);
+      }
+      w.key(name).begin_object();
+      w.key("rxy").value(f.rxy).key("r2").value(f.r2).key("rmse").value(f.rmse);
+      w.key("range").value(f.range).key("rmse_pct_range").value(f.rmse_pct_range);
+      w.end_object();
+    }
+    w.end_object();
+    w.end_object();
+    if (!json.empty()) write_json(json, w.str());
+    return 0;
+  }
   const ident::ValidationResult result = ident::validate_open_loop(data, model, vehicle, opt);
   std::vector<std::string> pngs;
   if (!plots.empty()) pngs = ident::plot_validation(result, plots);

@@ -4,12 +4,8 @@
 /// measured (processed) states and inputs, against the differentiated
 /// measured states.
 ///
-/// Closed-loop validation (thesis Tables 9-11) simulates the model from the
-/// measured initial state with the attitude controller in the loop and
-/// compares the simulated states with the measured ones. It needs the
-/// controller, so it is not part of this library: it takes the model, the
-/// processed data and a controller step function, and reuses fit_metrics()
-/// and residual_whiteness() on the states.
+/// Closed-loop validation (thesis Tables 9-11) needs the attitude controller;
+/// it is in ident/closed_loop.h (library nimble_ident_closed_loop).
 
 #include <cstddef>
 #include <string>

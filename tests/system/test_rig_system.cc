@@ -336,4 +336,21 @@ TEST_CASE("a rig log flows into the identification: export to CSV, identify the 
       CHECK(p[name]["value"].as<double>() == Approx(truth).epsilon(0.10));
     }
   }
+  // Closed-loop validation: the set-1 model with the controller copy follows the flight;
+  // a model with half the roll control derivative does not.
+  const auto closed = nimble::test::run_rig("validate " + kConfigs + "models/nimble_lateral_set1.yaml " + log +
+                                            " --closed-loop --json " + json);
+  INFO(closed.err);
+  REQUIRE(closed.exit_code == 0);
+  const YAML::Node good = YAML::LoadFile(json)["closed_loop"];
+  CHECK(good["phi"]["r2"].as<double>() > 0.95);
+  CHECK(good["p"]["r2"].as<double>() > 0.95);
+  CHECK(good["delta_f"]["r2"].as<double>() > 0.95);
+  std::string half = nimble::test::slurp(kConfigs + "models/nimble_lateral_set1.yaml");
+  half.replace(half.find("L_df: 1.06e-04"), 14, "L_df: 0.53e-04");
+  half.replace(half.find("../vehicles/"), 12, kConfigs + "vehicles/");
+  std::ofstream(dir + "/half.yaml") << half;
+  const auto wrong = nimble::test::run_rig("validate " + dir + "/half.yaml " + log + " --closed-loop --json " + json);
+  REQUIRE(wrong.exit_code == 0);
+  CHECK(YAML::LoadFile(json)["closed_loop"]["phi"]["r2"].as<double>() < 0.7);
 }

@@ -1,0 +1,46 @@
+#pragma once
+/// Closed-loop validation (thesis Section 9.3, Tables 9-11): the model flown by a copy of
+/// the attitude controller and the flap actuator, driven by the logged roll set-point and
+/// throttle, from the measured initial state; the simulated states and delta_f are compared
+/// with the measured ones. An unstable model that is only held by the controller is judged
+/// the way it is used.
+
+#include <map>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "controller/attitude_controller.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/flight_data.h"
+#include "ident/metrics.h"
+
+namespace nimble::ident {
+
+struct ClosedLoopOptions {
+  ControllerConfig controller;    ///< the controller copy (rate = data grid rate)
+  std::string gain_set = "fast";  ///< roll gain set flown
+  double flap_gain_per_s = 8.97;  ///< flap actuator numerator (thesis Eq 33) [1/s]
+  double flap_pole_radps = 12.56; ///< flap actuator pole (thesis Eq 33) [rad/s]
+};
+
+struct ClosedLoopResult {
+  std::string source;
+  std::string gain_set;
+  double rate_hz = 0.0;
+  Eigen::VectorXd t_s;
+  /// Measured and simulated p [rad/s], v [m/s], phi [rad], delta_f [rad/s].
+  std::map<std::string, Eigen::VectorXd> measured, simulated;
+  /// Fit of each simulated signal against the measured one (P = 1: nothing fitted).
+  std::map<std::string, FitMetrics> fits;
+};
+
+/// Simulates `model` (lateral3 with delta_f, optionally delta_t) in closed loop on the
+/// data's phi_sp and delta_t, at the controller's rate.
+/// @throws DataError if the data lacks p, v, phi, delta_f or phi_sp;
+///         std::invalid_argument if the model does not fit or the gain set is unknown.
+ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
+                                      const ClosedLoopOptions& options);
+
+}  // namespace nimble::ident
