@@ -354,3 +354,15 @@ TEST_CASE("a rig log flows into the identification: export to CSV, identify the 
   REQUIRE(wrong.exit_code == 0);
   CHECK(YAML::LoadFile(json)["closed_loop"]["phi"]["r2"].as<double>() < 0.7);
 }
+
+TEST_CASE("rig check says whether LCM multicast can run, and how", "[system]") {
+  const auto r = nimble::test::run_rig("check");
+  INFO(r.out << r.err);
+  // This machine runs the rig (the tests above prove it), so check must agree.
+  CHECK(r.exit_code == 0);
+  CHECK(r.out.find("LCM multicast on this host's loopback") != std::string::npos);
+  const bool host = r.out.find("): works") != std::string::npos;
+  const bool ns = r.out.find("private network namespace with multicast loopback: works") != std::string::npos;
+  CHECK((host || ns));
+  if (!host) CHECK(r.out.find("ip route add 224.0.0.0/4 dev lo") != std::string::npos);
+}
