@@ -217,6 +217,7 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
   std::map<std::string, double> hz;
   hz["TRUTH"] = rates.truth_hz;
   hz["ACTUATOR_FB"] = rates.feedback_hz;
+  hz["IMU"] = rates.imu_hz;
   if (rates.controller_hz > 0) {
     hz["ACTUATOR_CMD"] = rates.controller_hz;
     hz["CONTROLLER_STATUS"] = rates.controller_hz;

@@ -6,6 +6,7 @@
 
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
+#include "estimator/sensing_config.h"
 #include "plant/plant_model.h"
 
 namespace nimble::launcher {
@@ -21,6 +22,8 @@ bool has(const Scenario& s, const std::string& process) {
 }  // namespace
 
 void validate_process_sections(const Scenario& s) {
+  ConfigMap sensing = s.section("sensing");
+  sensing_config_from(sensing);
   ConfigMap plant_section = s.section("plant");
   const plant::PlantConfig plant = plant::plant_config_from(plant_section);
   const DerivativeModel lateral = load_model(s.model_file);
@@ -60,6 +63,8 @@ ProcessRates process_rates(const Scenario& s) {
   r.plant_hz = plant.rate_hz;
   r.truth_hz = plant.truth_rate_hz;
   r.feedback_hz = plant.feedback_rate_hz;
+  ConfigMap sensing = s.section("sensing");
+  r.imu_hz = sensing_config_from(sensing).imu.sample_rate_hz;
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     r.controller_hz = controller_config_from(section).rate_hz;

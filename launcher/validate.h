@@ -12,6 +12,7 @@ struct ProcessRates {
   double plant_hz = 0.0;
   double truth_hz = 0.0;
   double feedback_hz = 0.0;
+  double imu_hz = 0.0;
   double controller_hz = 0.0;  ///< 0 if the scenario has no controller
 };
 

@@ -4,6 +4,9 @@
 #include <cstdio>
 
 #include <nimble/actuator_feedback_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+
+#include "estimator/sensing_config.h"
 #include <nimble/truth_state_t.hpp>
 
 namespace nimble::plant {
@@ -48,6 +51,10 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   const Vehicle vehicle = load_vehicle(scenario.vehicle_file.empty() ? lateral.vehicle_file : scenario.vehicle_file);
   model_ = std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config_);
   command_ = model_->trim_command();
+  ConfigMap sensing_section = scenario.section("sensing");
+  const SensingConfig sensing = sensing_config_from(sensing_section);
+  imu_ = std::make_unique<ImuModel>(sensing.imu, scenario.seed);
+  imu_period_ns_ = std::llround(1e9 / sensing.imu.sample_rate_hz);
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
@@ -130,6 +137,7 @@ void PlantNode::step(int64_t sim_time_ns) {
     model_->step(safe_state_ ? model_->trim_command() : command_);
     ++step_index_;
   }
+  if (sim_time_ns >= imu_next_ns_) publish_imu(sim_time_ns);
   if (step_index_ % truth_every_ == 0) publish_truth(sim_time_ns);
   if (step_index_ % feedback_every_ == 0) publish_feedback(sim_time_ns);
 }
@@ -157,6 +165,29 @@ void PlantNode::publish_truth(int64_t sim_time_ns) {
   m.wing_root_rad = t.wing_root_rad;
   node_->bus().publish(kTruth, m);
   published_[static_cast<std::size_t>(m.seq) % published_.size()] = {m.utime, transport::monotonic_ns()};
+}
+
+void PlantNode::publish_imu(int64_t sim_time_ns) {
+  const Truth& t = model_->truth();
+  ImuTruthInput in;
+  in.utime = sim_time_ns / 1000;
+  in.omega_body_radps = t.omega_body_radps;
+  in.specific_force_body_mps2 = t.specific_force_body_mps2;
+  in.flap_freq_left_radps = t.flap_freq_left_radps;
+  in.flap_freq_right_radps = t.flap_freq_right_radps;
+  const ImuSample sample = imu_->sample(in);
+  imu_sample_t m;
+  m.utime = sample.utime;
+  m.seq = imu_seq_++;
+  for (int i = 0; i < 3; ++i) {
+    m.gyro_radps[i] = sample.gyro_radps[i];
+    m.accel_mps2[i] = sample.accel_mps2[i];
+  }
+  m.temperature_degc = sample.temperature_degc;
+  m.saturation_flags = static_cast<int8_t>(sample.saturation_flags);
+  node_->bus().publish(transport::channels::kImu, m);
+  // Next sample: the first period boundary after this step.
+  imu_next_ns_ = (sim_time_ns / imu_period_ns_ + 1) * imu_period_ns_;
 }
 
 void PlantNode::publish_feedback(int64_t sim_time_ns) {

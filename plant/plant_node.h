@@ -7,6 +7,9 @@
 ///   STEP_ACK      step_ack_t           lockstep (ProcessNode, the plant is the lockstep master)
 /// Publishes:
 ///   TRUTH         truth_state_t        plant.truth_rate_hz (default 1 kHz)
+///   IMU           imu_sample_t         sensing.imu.sample_rate_hz (default 512 Hz): the onboard
+///                                      IMU emulated from the truth (estimator/imu_model.h), each
+///                                      sample taken at the first plant step at or after its time
 ///   ACTUATOR_FB   actuator_feedback_t  plant.feedback_rate_hz (default 100 Hz)
 ///   RIG_CLOCK     rig_clock_t          lockstep only, once per plant step
 ///   FAULT         fault_event_t        command timeout, malformed or out-of-range commands
@@ -23,6 +26,7 @@
 
 #include <nimble/actuator_command_t.hpp>
 
+#include "estimator/imu_model.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "transport/node.h"
@@ -43,9 +47,14 @@ class PlantNode {
   void step(int64_t sim_time_ns);
   void publish_truth(int64_t sim_time_ns);
   void publish_feedback(int64_t sim_time_ns);
+  void publish_imu(int64_t sim_time_ns);
 
   PlantConfig config_;
   std::unique_ptr<PlantModel> model_;
+  std::unique_ptr<ImuModel> imu_;
+  int64_t imu_period_ns_ = 0;
+  int64_t imu_next_ns_ = 0;
+  int64_t imu_seq_ = 0;
   std::unique_ptr<transport::ProcessNode> node_;
   ActuatorInput command_;
   int64_t last_command_ns_ = 0;

@@ -30,6 +30,6 @@ catch_discover_tests(test_java_fingerprints TEST_PREFIX "functional.lcmtypes." P
 add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.cc
   ${PROJECT_SOURCE_DIR}/plant/plant_node.cc ${PROJECT_SOURCE_DIR}/controller/controller_node.cc)
 target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_core nimble_controller_core
-  nimble_scenario nimble_transport)
+  nimble_estimation nimble_scenario nimble_transport)
 target_compile_definitions(test_process_nodes PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 catch_discover_tests(test_process_nodes TEST_PREFIX "functional.process." PROPERTIES LABELS functional)

@@ -22,6 +22,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/fault_event_t.hpp>
+#include <nimble/imu_sample_t.hpp>
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -365,4 +366,43 @@ TEST_CASE("rig check says whether LCM multicast can run, and how", "[system]") {
   const bool ns = r.out.find("private network namespace with multicast loopback: works") != std::string::npos;
   CHECK((host || ns));
   if (!host) CHECK(r.out.find("ip route add 224.0.0.0/4 dev lo") != std::string::npos);
+}
+
+TEST_CASE("the plant's IMU stream: 512 Hz, seeded, noisy around the truth", "[system]") {
+  const std::string dir = scratch_dir("imu");
+  const RunResult r = rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4");
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.summary["channels"]["IMU"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
+  CHECK(r.summary["channels"]["IMU"]["drops"].as<int>() == 0);
+  // Each IMU sample is taken from the truth of the plant step at its time stamp.
+  std::map<int64_t, nimble::truth_state_t> truth;
+  std::vector<nimble::imu_sample_t> imu;
+  lcm::LogFile log(dir + "/run.lcmlog", "r");
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "TRUTH") {
+      nimble::truth_state_t t;
+      REQUIRE(t.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      truth[t.utime] = t;
+    } else if (ev->channel == "IMU") {
+      nimble::imu_sample_t s;
+      REQUIRE(s.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      imu.push_back(s);
+    }
+  }
+  REQUIRE(imu.size() == 4 * 512 + 1);
+  double sum_err = 0, sum_err2 = 0, sum_az = 0;
+  for (const auto& s : imu) {
+    REQUIRE(truth.count(s.utime) == 1);
+    const double e = s.gyro_radps[0] - truth.at(s.utime).omega_body_radps[0];
+    sum_err += e;
+    sum_err2 += e * e;
+    sum_az += s.accel_mps2[2];
+  }
+  const double n = static_cast<double>(imu.size());
+  const double err_sd = std::sqrt(sum_err2 / n - (sum_err / n) * (sum_err / n));
+  INFO("gyro x error sd " << err_sd << " rad/s, mean az " << sum_az / n);
+  // White noise alone is 0.05 deg/s = 8.7e-4 rad/s; flapping vibration adds to it.
+  CHECK(err_sd > 8.7e-4 * 0.9);
+  CHECK(err_sd < 0.5);
+  CHECK(sum_az / n == Approx(-9.81).margin(0.2));
 }
