@@ -223,14 +223,35 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     hz["CONTROLLER_STATUS"] = rates.controller_hz;
     hz["ATTITUDE_SP"] = rates.controller_hz;
   }
+  if (rates.mocap_hz > 0) hz["MOCAP_POSE"] = rates.mocap_hz;
   if (lockstep) {
-    // RIG_CLOCK goes out at the plant steps where a participant is due: the controller's
-    // steps and the logger's, which fall on a controller step with probability
-    // controller_hz / plant_hz. Every due participant acknowledges.
-    const double logger_hz = 1000.0 / lockstep_options(s).logger_period_ms;
-    const double controller_hz = std::min(rates.plant_hz, rates.controller_hz);
-    hz["RIG_CLOCK"] = controller_hz + logger_hz * (1.0 - controller_hz / rates.plant_hz);
-    hz["STEP_ACK"] = rates.controller_hz + logger_hz;
+    // RIG_CLOCK goes out at the plant steps where a participant is due, and every due
+    // participant acknowledges: replay the plant's rule over one simulated second.
+    const int64_t dt = std::llround(1e9 / rates.plant_hz);
+    const int64_t logger_period = std::llround(lockstep_options(s).logger_period_ms * 1e6);
+    std::vector<int64_t> periods;
+    if (rates.controller_hz > 0) periods.push_back(std::llround(1e9 / rates.controller_hz));
+    if (rates.mocap_hz > 0) periods.push_back(std::llround(1e9 / rates.mocap_hz));
+    std::vector<int64_t> next(periods.size(), 0);
+    int64_t logger_next = 0, ticks = 0, acks = 0;
+    for (int64_t t = 0; t < 1000000000LL; t += dt) {
+      bool due = logger_next <= t;
+      for (const int64_t n : next) due = due || n <= t;
+      if (!due) continue;
+      ++ticks;
+      for (std::size_t i = 0; i < periods.size(); ++i) {
+        if (next[i] <= t) {
+          ++acks;
+          next[i] = (t / periods[i] + 1) * periods[i];
+        }
+      }
+      if (logger_next <= t) {
+        ++acks;
+        logger_next = t + logger_period;
+      }
+    }
+    hz["RIG_CLOCK"] = static_cast<double>(ticks);
+    hz["STEP_ACK"] = static_cast<double>(acks);
   }
   const double n = static_cast<double>(s.processes.size());
   hz["HEARTBEAT"] = 2.0 * n;

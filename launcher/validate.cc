@@ -64,7 +64,9 @@ ProcessRates process_rates(const Scenario& s) {
   r.truth_hz = plant.truth_rate_hz;
   r.feedback_hz = plant.feedback_rate_hz;
   ConfigMap sensing = s.section("sensing");
-  r.imu_hz = sensing_config_from(sensing).imu.sample_rate_hz;
+  const SensingConfig sc = sensing_config_from(sensing);
+  r.imu_hz = sc.imu.sample_rate_hz;
+  if (has(s, "mocap")) r.mocap_hz = sc.mocap.frame_rate_hz;
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     r.controller_hz = controller_config_from(section).rate_hz;

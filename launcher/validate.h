@@ -14,6 +14,7 @@ struct ProcessRates {
   double feedback_hz = 0.0;
   double imu_hz = 0.0;
   double controller_hz = 0.0;  ///< 0 if the scenario has no controller
+  double mocap_hz = 0.0;       ///< 0 if the scenario has no motion-capture emulator
 };
 
 /// Loads every section, model and manoeuvre the scenario's processes will load, and checks

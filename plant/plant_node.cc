@@ -137,7 +137,8 @@ void PlantNode::step(int64_t sim_time_ns) {
     model_->step(safe_state_ ? model_->trim_command() : command_);
     ++step_index_;
   }
-  if (sim_time_ns >= imu_next_ns_) publish_imu(sim_time_ns);
+  // The IMU sample goes out after the step's tick: consumers take it at their next tick.
+  if (sim_time_ns >= imu_next_ns_) node_->defer([this, sim_time_ns] { publish_imu(sim_time_ns); });
   if (step_index_ % truth_every_ == 0) publish_truth(sim_time_ns);
   if (step_index_ % feedback_every_ == 0) publish_feedback(sim_time_ns);
 }

@@ -141,10 +141,10 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   s.longitudinal_model_file = map.get_string_or("longitudinal_model", "");
   s.vehicle_file = map.get_string_or("vehicle", "");
   s.processes = map.get_string_list("processes");
-  const std::set<std::string> known = {"plant", "controller"};
+  const std::set<std::string> known = {"plant", "controller", "mocap"};
   std::set<std::string> seen;
   for (const auto& p : s.processes) {
-    if (!known.count(p)) map.fail("processes", "unknown process '" + p + "' (known: plant, controller)");
+    if (!known.count(p)) map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap)");
     if (!seen.insert(p).second) map.fail("processes", "process '" + p + "' listed twice");
   }
   if (!seen.count("plant")) map.fail("processes", "a run needs the plant");

@@ -362,6 +362,7 @@ int ProcessNode::run_lockstep_master() {
     bool anyone_due = false;
     for (const auto& [p, due] : next_due_) anyone_due = anyone_due || due <= t;
     if (!anyone_due) {
+      run_deferred();
       housekeeping();
       continue;  // nobody needs this step: no tick, no wait
     }
@@ -373,6 +374,7 @@ int ProcessNode::run_lockstep_master() {
     tick.dt_ns = task.period_ns;
     tick.run_id = run_id_;
     bus_.publish(channels::kRigClock, tick);
+    run_deferred();  // outputs nobody waits for this step go out after the tick
 
     // Wait for every participant due at this step.
     const int64_t give_up = monotonic_ns() + static_cast<int64_t>(ack_timeout_ms_) * 1000000LL;

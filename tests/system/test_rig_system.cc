@@ -23,6 +23,7 @@
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/imu_sample_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -405,4 +406,57 @@ TEST_CASE("the plant's IMU stream: 512 Hz, seeded, noisy around the truth", "[sy
   CHECK(err_sd > 8.7e-4 * 0.9);
   CHECK(err_sd < 0.5);
   CHECK(sum_az / n == Approx(-9.81).margin(0.2));
+}
+
+TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm marker error, latency",
+          "[system]") {
+  const std::string dir = scratch_dir("mocap");
+  const RunResult r =
+      rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4 --set processes=[plant,controller,mocap]");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node c = r.summary["channels"]["MOCAP_POSE"];
+  CHECK(c["rate_hz"].as<double>() == Approx(200.0).epsilon(0.02));
+  CHECK(c["drops"].as<int>() == 0);
+  CHECK(r.summary["channels"]["RIG_CLOCK"]["rate_hz"].as<double>() ==
+        Approx(r.summary["channels"]["RIG_CLOCK"]["expected_hz"].as<double>()).epsilon(0.01));
+  std::map<int64_t, nimble::truth_state_t> truth;
+  std::vector<nimble::mocap_pose_t> poses;
+  lcm::LogFile log(dir + "/run.lcmlog", "r");
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "TRUTH") {
+      nimble::truth_state_t t;
+      REQUIRE(t.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      truth[t.utime] = t;
+    } else if (ev->channel == "MOCAP_POSE") {
+      nimble::mocap_pose_t p;
+      REQUIRE(p.decode(ev->data, 0, ev->datalen) == ev->datalen);
+      poses.push_back(p);
+    }
+  }
+  REQUIRE(poses.size() > 700);
+  double error_sum = 0;
+  int valid = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const auto& p = poses[i];
+    if (i > 0) REQUIRE(p.frame_number == poses[i - 1].frame_number + 1);
+    CHECK(p.latency_us == 5000);
+    if (!p.tracking_valid) continue;
+    // Truth at mid-exposure, interpolated between the plant steps around it.
+    const auto hi = truth.lower_bound(p.utime);
+    REQUIRE(hi != truth.end());
+    REQUIRE(hi != truth.begin());
+    const auto lo = std::prev(hi);
+    const double a = static_cast<double>(p.utime - lo->first) / static_cast<double>(hi->first - lo->first);
+    double e2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double x = (1 - a) * lo->second.position_ned_m[k] + a * hi->second.position_ned_m[k];
+      e2 += std::pow(p.position_m[k] - x, 2);
+    }
+    error_sum += std::sqrt(e2);
+    ++valid;
+  }
+  const double mean_error_mm = 1000.0 * error_sum / valid;
+  INFO("mean 3-D position error " << mean_error_mm << " mm over " << valid << " frames");
+  CHECK(mean_error_mm == Approx(0.85).epsilon(0.1));
 }
