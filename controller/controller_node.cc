@@ -33,11 +33,27 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
   node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_expected_rate(kTruth, 1000.0);
-  node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
-    input_ = t;
-    have_input_ = true;
-    node_->notify_input(t.utime * 1000);
-  });
+  use_estimate_ = run.controller_input == "estimate";
+  if (use_estimate_) {
+    node_->set_expected_rate(transport::channels::kEstimate, 512.0);
+    node_->bus().subscribe<estimator_state_t>(transport::channels::kEstimate, [this](const estimator_state_t& e) {
+      const Input in{e.utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
+      if (node_->lockstep()) {
+        pending_.push_back(in);  // used from the next tick on (see cycle)
+        if (pending_.size() > 8) pending_.pop_front();
+      } else {
+        input_ = in;
+        have_input_ = true;
+        node_->notify_input(e.imu_utime * 1000);
+      }
+    });
+  } else {
+    node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
+      input_ = Input{t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
+      have_input_ = true;
+      node_->notify_input(t.utime * 1000);
+    });
+  }
   node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
                   run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
                                                     : transport::ProcessNode::Trigger::kTimer);
@@ -51,11 +67,22 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   const Setpoint sp = player_->at(t_s);
   if (!sp.gain_set.empty() && sp.gain_set != controller_->gain_set()) controller_->select_gain_set(sp.gain_set);
 
+  // Lockstep on estimates: an estimate published at an earlier tick (its utime is the tick
+  // time) is used; one published at this very tick waits for the next cycle.
+  if (use_estimate_ && node_->lockstep()) {
+    for (auto it = pending_.rbegin(); it != pending_.rend(); ++it) {
+      if (it->utime < utime) {
+        input_ = *it;
+        have_input_ = true;
+        break;
+      }
+    }
+  }
   ControllerInput in;
-  in.phi_rad = input_.euler_rad[0];
-  in.theta_rad = input_.euler_rad[1];
-  in.p_radps = input_.omega_body_radps[0];
-  in.q_radps = input_.omega_body_radps[1];
+  in.phi_rad = input_.phi_rad;
+  in.theta_rad = input_.theta_rad;
+  in.p_radps = input_.p_radps;
+  in.q_radps = input_.q_radps;
   in.roll_sp_rad = sp.roll_sp_rad;
   in.pitch_sp_rad = sp.pitch_sp_rad;
   in.throttle_pct = sp.throttle_pct;
@@ -63,7 +90,8 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   const int64_t input_age_us = have_input_ ? utime - input_.utime : -1;
   if (have_input_ && input_age_us > static_cast<int64_t>(input_stale_s_ * 1e6) && !stale_reported_) {
     stale_reported_ = true;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, kTruth,
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER,
+                 use_estimate_ ? transport::channels::kEstimate : kTruth,
                  "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
   }
   const ControllerOutput out = controller_->step(in);
@@ -116,7 +144,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
     st.delta_f_cmd_radps = out.delta_f_cmd_radps;
     st.throttle_pct = out.throttle_cmd_pct;
     st.saturated = out.saturated;
-    st.input_source = controller_status_t::INPUT_TRUTH;
+    st.input_source = use_estimate_ ? controller_status_t::INPUT_ESTIMATE : controller_status_t::INPUT_TRUTH;
     st.input_age_us = input_age_us;
     node_->bus().publish(kControllerStatus, st);
   });

@@ -2,7 +2,8 @@
 /// The attitude controller process: ManoeuvrePlayer + AttitudeController on the rig's bus.
 ///
 /// Subscribes:
-///   TRUTH          truth_state_t        plant rate   measured attitude and rates (ideal sensing)
+///   TRUTH          truth_state_t        plant rate   attitude and rates (run.controller_input: truth)
+///   ESTIMATE       estimator_state_t    512 Hz       attitude and corrected rates (run.controller_input: estimate)
 ///   RUN_CONTROL, RIG_CLOCK                            (ProcessNode; lockstep participant)
 /// Publishes, each at controller.rate_hz (default 512 Hz):
 ///   ATTITUDE_SP        attitude_setpoint_t   the manoeuvre player's set-point
@@ -13,8 +14,10 @@
 /// Each control cycle uses the newest TRUTH; an input older than input_stale_s is
 /// reported once as a FAULT and the controller keeps flying on it.
 
+#include <deque>
 #include <memory>
 
+#include <nimble/estimator_state_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
 #include "controller/attitude_controller.h"
@@ -39,7 +42,16 @@ class ControllerNode {
   std::unique_ptr<AttitudeController> controller_;
   std::unique_ptr<ManoeuvrePlayer> player_;
   std::unique_ptr<transport::ProcessNode> node_;
-  truth_state_t input_{};
+  /// The state the next cycle uses (from TRUTH or ESTIMATE).
+  struct Input {
+    int64_t utime = -1;
+    double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0;
+  };
+  Input input_{};
+  /// Lockstep with estimates: the newest few estimates; a cycle uses the newest one published
+  /// at an earlier tick, whatever arrived meanwhile.
+  std::deque<Input> pending_;
+  bool use_estimate_ = false;
   bool have_input_ = false;
   bool stale_reported_ = false;
   double input_stale_s_ = 0.05;

@@ -116,6 +116,7 @@ LaunchConfig launch_config_from(const Scenario& s) {
   if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
   if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
   if (m.has("spin_us")) m.get_int("spin_us", Range::closed(0, 1000));
+  if (m.has("controller_input")) m.get_enum("controller_input", {"truth", "estimate"});
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
   m.finish();
@@ -224,6 +225,7 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     hz["ATTITUDE_SP"] = rates.controller_hz;
   }
   if (rates.mocap_hz > 0) hz["MOCAP_POSE"] = rates.mocap_hz;
+  if (rates.estimator_hz > 0) hz["ESTIMATE"] = rates.estimator_hz;
   if (lockstep) {
     // RIG_CLOCK goes out at the plant steps where a participant is due, and every due
     // participant acknowledges: replay the plant's rule over one simulated second.
@@ -232,6 +234,7 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     std::vector<int64_t> periods;
     if (rates.controller_hz > 0) periods.push_back(std::llround(1e9 / rates.controller_hz));
     if (rates.mocap_hz > 0) periods.push_back(std::llround(1e9 / rates.mocap_hz));
+    if (rates.estimator_hz > 0) periods.push_back(std::llround(1e9 / rates.estimator_hz));
     std::vector<int64_t> next(periods.size(), 0);
     int64_t logger_next = 0, ticks = 0, acks = 0;
     for (int64_t t = 0; t < 1000000000LL; t += dt) {
@@ -306,6 +309,16 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
   std::snprintf(line, sizeof line, "final      p %.3f rad/s, v %.3f m/s, phi %.2f deg\n", f.final_p, f.final_v,
                 f.final_phi * 180 / M_PI);
   out << line;
+  const EstimatorSummary est = mon.estimator();
+  if (est.samples > 0) {
+    std::snprintf(line, sizeof line,
+                  "estimator  phi error rms %.3f deg (max %.3f), p error rms %.4f rad/s, v error rms %.4f m/s over %lld "
+                  "estimates; poses accepted %lld, rejected %lld, missing %lld\n",
+                  est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, static_cast<long long>(est.samples),
+                  static_cast<long long>(est.poses_accepted), static_cast<long long>(est.poses_rejected),
+                  static_cast<long long>(est.poses_missing));
+    out << line;
+  }
   out << "faults     " << mon.faults().size() << "\n";
   std::size_t shown = 0;
   for (const auto& fr : mon.faults()) {
@@ -348,6 +361,17 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
   w.key("delta_f").value(f.max_df - f.min_df);
   w.end_object();
   w.key("final").begin_object().key("p").value(f.final_p).key("v").value(f.final_v).key("phi").value(f.final_phi).end_object();
+  const EstimatorSummary est = mon.estimator();
+  if (est.samples > 0) {
+    w.key("estimator").begin_object();
+    w.key("samples").value(static_cast<long long>(est.samples));
+    w.key("phi_rms_deg").value(est.phi_rms_deg).key("phi_max_deg").value(est.phi_max_deg);
+    w.key("p_rms_radps").value(est.p_rms_radps).key("v_rms_mps").value(est.v_rms_mps);
+    w.key("poses_accepted").value(static_cast<long long>(est.poses_accepted));
+    w.key("poses_rejected").value(static_cast<long long>(est.poses_rejected));
+    w.key("poses_missing").value(static_cast<long long>(est.poses_missing));
+    w.end_object();
+  }
   w.key("channels").begin_object();
   for (const auto& [name, c] : channels) {
     w.key(name).begin_object();

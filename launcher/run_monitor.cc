@@ -5,6 +5,7 @@
 #include <cstring>
 #include <cstdio>
 
+#include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/step_ack_t.hpp>
@@ -115,7 +116,37 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     f.final_v = v;
     f.final_phi = phi;
     f.last_sim_time_s = static_cast<double>(t.utime) / 1e6;
+    recent_truth_[t.utime] = TruthPoint{phi, p, v};
+    while (!recent_truth_.empty() && recent_truth_.begin()->first < t.utime - 1000000) {
+      recent_truth_.erase(recent_truth_.begin());
+    }
   }
+  if (channel == "ESTIMATE") {
+    estimator_state_t e{};
+    if (!decode(data, size, e)) { ++c.malformed; return; }
+    est_.poses_accepted = e.poses_accepted;
+    est_.poses_rejected = e.poses_rejected;
+    est_.poses_missing = e.poses_missing;
+    const auto it = recent_truth_.find(e.imu_utime);
+    if (it == recent_truth_.end()) return;
+    const double dphi = (e.euler_rad[0] - it->second.phi) * 180.0 / M_PI;
+    est_phi2_ += dphi * dphi;
+    est_p2_ += std::pow(e.omega_body_radps[0] - it->second.p, 2);
+    est_v2_ += std::pow(e.velocity_body_mps[1] - it->second.v, 2);
+    est_.phi_max_deg = std::max(est_.phi_max_deg, std::fabs(dphi));
+    ++est_.samples;
+  }
+}
+
+EstimatorSummary RunMonitor::estimator() const {
+  EstimatorSummary s = est_;
+  if (s.samples > 0) {
+    const double n = static_cast<double>(s.samples);
+    s.phi_rms_deg = std::sqrt(est_phi2_ / n);
+    s.p_rms_radps = std::sqrt(est_p2_ / n);
+    s.v_rms_mps = std::sqrt(est_v2_ / n);
+  }
+  return s;
 }
 
 int RunMonitor::heartbeat_state(const std::string& process) const {

@@ -58,6 +58,14 @@ struct FlightSummary {
   bool finite = true;
 };
 
+/// Estimation error of ESTIMATE against TRUTH at the estimate's IMU time.
+struct EstimatorSummary {
+  int64_t samples = 0;
+  double phi_rms_deg = 0.0, phi_max_deg = 0.0;
+  double p_rms_radps = 0.0, v_rms_mps = 0.0;
+  int64_t poses_accepted = 0, poses_rejected = 0, poses_missing = 0;
+};
+
 class RunMonitor {
  public:
   explicit RunMonitor(MonitorConfig config) : cfg_(std::move(config)) {}
@@ -72,6 +80,8 @@ class RunMonitor {
   int64_t truth_count() const { return flight_.samples; }
   const std::vector<FaultRecord>& faults() const { return faults_; }
   const FlightSummary& flight() const { return flight_; }
+  /// Estimation errors (samples == 0 if the run had no estimator).
+  EstimatorSummary estimator() const;
   const std::map<std::string, TimingSummary>& timing() const { return timing_; }
 
   /// Channel table at the end of the run; `sim_duration_s` and `wall_duration_s` give the
@@ -97,6 +107,12 @@ class RunMonitor {
   std::map<std::string, TimingSummary> timing_;
   std::vector<FaultRecord> faults_;
   FlightSummary flight_;
+  struct TruthPoint {
+    double phi, p, v;
+  };
+  std::map<int64_t, TruthPoint> recent_truth_;  // utime -> truth, the last second
+  double est_phi2_ = 0, est_p2_ = 0, est_v2_ = 0;
+  EstimatorSummary est_;
 };
 
 }  // namespace nimble::launcher

@@ -36,6 +36,10 @@ void validate_process_sections(const Scenario& s) {
     throw ConfigError(s.file, "model", s.model_file, e.what());
   }
 
+  if (process_run_options(s).controller_input == "estimate" && !(has(s, "estimator") && has(s, "mocap"))) {
+    throw ConfigError(s.file, "run.controller_input", "estimate",
+                      "flying on the estimate needs the processes estimator and mocap");
+  }
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     const ControllerConfig controller = controller_config_from(section);
@@ -67,6 +71,11 @@ ProcessRates process_rates(const Scenario& s) {
   const SensingConfig sc = sensing_config_from(sensing);
   r.imu_hz = sc.imu.sample_rate_hz;
   if (has(s, "mocap")) r.mocap_hz = sc.mocap.frame_rate_hz;
+  if (has(s, "estimator")) r.estimator_hz = sc.imu.sample_rate_hz;
+  if (process_run_options(s).controller_input == "estimate" && !(has(s, "estimator") && has(s, "mocap"))) {
+    throw ConfigError(s.file, "run.controller_input", "estimate",
+                      "flying on the estimate needs the processes estimator and mocap");
+  }
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     r.controller_hz = controller_config_from(section).rate_hz;

@@ -15,6 +15,7 @@ struct ProcessRates {
   double imu_hz = 0.0;
   double controller_hz = 0.0;  ///< 0 if the scenario has no controller
   double mocap_hz = 0.0;       ///< 0 if the scenario has no motion-capture emulator
+  double estimator_hz = 0.0;   ///< 0 if the scenario has no estimator
 };
 
 /// Loads every section, model and manoeuvre the scenario's processes will load, and checks

@@ -141,10 +141,10 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   s.longitudinal_model_file = map.get_string_or("longitudinal_model", "");
   s.vehicle_file = map.get_string_or("vehicle", "");
   s.processes = map.get_string_list("processes");
-  const std::set<std::string> known = {"plant", "controller", "mocap"};
+  const std::set<std::string> known = {"plant", "controller", "mocap", "estimator"};
   std::set<std::string> seen;
   for (const auto& p : s.processes) {
-    if (!known.count(p)) map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap)");
+    if (!known.count(p)) map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap, estimator)");
     if (!seen.insert(p).second) map.fail("processes", "process '" + p + "' listed twice");
   }
   if (!seen.count("plant")) map.fail("processes", "a run needs the plant");
@@ -181,6 +181,7 @@ ProcessRunOptions process_run_options(const Scenario& scenario) {
     o.realtime_priority = static_cast<int>(run.get_int("realtime_priority", Range::closed(0, 99)));
   }
   if (run.has("controller_trigger")) o.controller_trigger = run.get_enum("controller_trigger", {"timer", "state"});
+  if (run.has("controller_input")) o.controller_input = run.get_enum("controller_input", {"truth", "estimate"});
   if (run.has("spin_us")) o.spin_us = static_cast<int>(run.get_int("spin_us", Range::closed(0, 1000)));
   return o;
 }

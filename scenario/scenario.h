@@ -71,6 +71,8 @@ struct ProcessRunOptions {
   /// Real time: "timer" (the controller runs on its own 512 Hz deadlines) or "state"
   /// (each cycle starts when the state it needs arrives, as the onboard loop does on its IMU).
   std::string controller_trigger = "timer";
+  /// What the controller flies on: "truth" (ideal sensing, TRUTH) or "estimate" (ESTIMATE).
+  std::string controller_input = "truth";
   /// Real time: spin this long before each deadline instead of sleeping [us] (0 = sleep).
   int spin_us = 0;
 };

@@ -1,0 +1,117 @@
+#include "estimator/estimator_node.h"
+
+#include <nimble/estimator_state_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
+
+#include "estimator/sensing_config.h"
+
+namespace nimble {
+
+EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOptions& options) {
+  ConfigMap section = scenario.section("sensing");
+  const SensingConfig sensing = sensing_config_from(section);
+  ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
+  builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
+  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
+  node_->set_expected_rate(transport::channels::kImu, sensing.imu.sample_rate_hz);
+  node_->set_expected_rate(transport::channels::kMocapPose, sensing.mocap.frame_rate_hz);
+  node_->bus().subscribe<imu_sample_t>(transport::channels::kImu, [this](const imu_sample_t& m) {
+    ImuSample s;
+    s.utime = m.utime;
+    s.seq = m.seq;
+    s.gyro_radps = Eigen::Vector3d(m.gyro_radps[0], m.gyro_radps[1], m.gyro_radps[2]);
+    s.accel_mps2 = Eigen::Vector3d(m.accel_mps2[0], m.accel_mps2[1], m.accel_mps2[2]);
+    s.temperature_degc = m.temperature_degc;
+    s.saturation_flags = static_cast<std::uint8_t>(m.saturation_flags);
+    if (node_->lockstep()) {
+      imu_inbox_.push_back(s);
+    } else {
+      apply_imu(s);
+      publish(s.utime);
+    }
+  });
+  node_->bus().subscribe<mocap_pose_t>(transport::channels::kMocapPose, [this](const mocap_pose_t& m) {
+    MocapPose p;
+    p.utime = m.utime;
+    p.seq = m.seq;
+    p.frame_number = m.frame_number;
+    p.latency_us = m.latency_us;
+    p.rigid_body_id = m.rigid_body_id;
+    p.position_ned_m = Eigen::Vector3d(m.position_m[0], m.position_m[1], m.position_m[2]);
+    p.q_body_to_ned = Eigen::Quaterniond(m.quaternion_wxyz[0], m.quaternion_wxyz[1], m.quaternion_wxyz[2],
+                                         m.quaternion_wxyz[3]);
+    p.tracking_valid = m.tracking_valid;
+    p.mean_marker_error_m = m.mean_marker_error_m;
+    p.num_markers = m.num_markers;
+    p.publish_utime = m.utime + m.latency_us;
+    if (node_->lockstep()) pose_inbox_.push_back(p);
+    else apply_pose(p);
+  });
+  node_->add_task("estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); });
+}
+
+int EstimatorNode::run() { return node_->run(); }
+
+void EstimatorNode::apply_imu(const ImuSample& sample) {
+  if (ekf_->initialized()) ekf_->predict(sample);
+}
+
+void EstimatorNode::apply_pose(const MocapPose& pose) {
+  if (last_frame_ >= 0 && pose.frame_number > last_frame_ + 1) poses_missing_ += pose.frame_number - last_frame_ - 1;
+  last_frame_ = pose.frame_number;
+  if (!pose.tracking_valid) ++poses_missing_;
+  for (const PoseMeasurement& z : builder_->push(pose)) {
+    if (!ekf_->initialized()) {
+      ekf_->initialize_from_measurement(z);
+    } else {
+      ekf_->add_measurement(z);
+    }
+  }
+}
+
+void EstimatorNode::tick(int64_t sim_time_ns) {
+  if (!node_->lockstep()) return;  // real time works on arrival
+  const int64_t now_us = sim_time_ns / 1000;
+  // Inputs available before this tick, in the order they became available.
+  for (;;) {
+    const bool imu_ready = !imu_inbox_.empty() && imu_inbox_.front().utime < now_us;
+    const bool pose_ready = !pose_inbox_.empty() && pose_inbox_.front().publish_utime < now_us;
+    if (!imu_ready && !pose_ready) break;
+    if (imu_ready && (!pose_ready || imu_inbox_.front().utime <= pose_inbox_.front().publish_utime)) {
+      apply_imu(imu_inbox_.front());
+      imu_inbox_.pop_front();
+    } else {
+      apply_pose(pose_inbox_.front());
+      pose_inbox_.pop_front();
+    }
+  }
+  publish(now_us);
+}
+
+void EstimatorNode::publish(int64_t utime) {
+  if (!ekf_->initialized()) return;
+  const EkfState& x = ekf_->state();
+  const EkfCovariance& P = ekf_->covariance();
+  const Eigen::Vector3d w = ekf_->corrected_rate_radps();
+  estimator_state_t m;
+  m.utime = utime;
+  m.seq = seq_++;
+  m.imu_utime = ekf_->utime();
+  for (int i = 0; i < 3; ++i) {
+    m.euler_rad[i] = x[kPhi + i];
+    m.velocity_body_mps[i] = x[kU + i];
+    m.gyro_bias_radps[i] = x[kBiasP + i];
+    m.accel_bias_mps2[i] = x[kBiasAx + i];
+    m.omega_body_radps[i] = w[i];
+  }
+  for (int i = 0; i < 12; ++i) m.cov_diag[i] = P(i, i);
+  const EkfCounters& c = ekf_->counters();
+  m.poses_accepted = c.measurements_accepted;
+  m.poses_rejected = c.measurements_rejected_gate;
+  m.poses_missing = poses_missing_;
+  m.last_nis = ekf_->last_nis();
+  node_->bus().publish(transport::channels::kEstimate, m);
+}
+
+}  // namespace nimble
