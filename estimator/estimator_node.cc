@@ -48,7 +48,9 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     if (node_->lockstep()) pose_inbox_.push_back(p);
     else apply_pose(p);
   });
-  node_->add_task("estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); });
+  // Lockstep ticks only: in real time the work happens as the inputs arrive.
+  node_->add_task("estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); },
+                  transport::ProcessNode::Trigger::kInput);
 }
 
 int EstimatorNode::run() { return node_->run(); }

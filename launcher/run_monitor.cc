@@ -89,7 +89,13 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
   }
   count_seq(c, "", seq);
   if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != "RUN_CONTROL") {
-    const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - utime;
+    // A pose is stamped at mid-exposure and due latency_us later (int32 at byte offset 32).
+    int64_t due_us = utime;
+    if (channel == "MOCAP_POSE" && size >= 36) {
+      const auto* b = static_cast<const uint8_t*>(data) + 32;
+      due_us += static_cast<int32_t>((uint32_t{b[0]} << 24) | (uint32_t{b[1]} << 16) | (uint32_t{b[2]} << 8) | b[3]);
+    }
+    const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }
   if (channel == "TRUTH") {

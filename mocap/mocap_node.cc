@@ -25,7 +25,9 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
       else publish(pose);
     }
   });
-  node_->add_task("mocap", sensing.mocap.frame_rate_hz, [this](int64_t t) { flush(t); });
+  // Lockstep ticks only: in real time frames go out as the truth shows they are due.
+  node_->add_task("mocap", sensing.mocap.frame_rate_hz, [this](int64_t t) { flush(t); },
+                  transport::ProcessNode::Trigger::kInput);
 }
 
 int MocapNode::run() { return node_->run(); }
