@@ -1,0 +1,36 @@
+#pragma once
+/// The `main()` every rig process shares: parse the common flags, load the resolved
+/// scenario, install the stop signals, build the node and run it. Errors before the run
+/// (bad flags or configuration) go to stderr with exit code kExitConfig.
+
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include "core/config.h"
+#include "scenario/scenario.h"
+#include "transport/node.h"
+
+namespace nimble::transport {
+
+/// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with
+/// `int run()`). `program` names the executable in messages; `default_name` is the
+/// process name used when --name is not given.
+template <typename Node>
+int process_main(int argc, char** argv, const char* program, const char* default_name) {
+  try {
+    const NodeOptions options = parse_node_options(argc, argv, default_name);
+    const Scenario scenario = load_scenario(options.scenario_file);
+    ProcessNode::install_signal_handlers();
+    Node node(scenario, options);
+    return node.run();
+  } catch (const ConfigError& e) {
+    std::cerr << program << ": config error: " << e.what() << "\n";
+    return kExitConfig;
+  } catch (const std::exception& e) {
+    std::cerr << program << ": error: " << e.what() << "\n";
+    return kExitConfig;
+  }
+}
+
+}  // namespace nimble::transport
