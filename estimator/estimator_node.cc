@@ -29,6 +29,8 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     } else {
       apply_imu(s);
       publish(s.utime);
+      // End-to-end latency: from the IMU sample's time to its estimate going out.
+      node_->record_latency_ns(transport::monotonic_ns() - (node_->t0_monotonic_ns() + s.utime * 1000));
     }
   });
   node_->bus().subscribe<mocap_pose_t>(transport::channels::kMocapPose, [this](const mocap_pose_t& m) {

@@ -7,6 +7,8 @@
 ///    loops, and the control-loop latency TRUTH published -> ACTUATOR_CMD received at the
 ///    plant, p50/p99/max, with the scenario's run settings (rig_configs/run/realtime_lab.yaml)
 ///    and with plain defaults (timer-driven controller, no spinning, no CPU placement);
+///  - real time on the estimator: the estimator's latency from an IMU sample's time to its
+///    estimate going out, and the loop figures of that run;
 ///  - lockstep: speed in multiples of real time over N runs.
 /// Targets: jitter p99 <= 50 us, latency p99 <= 150 us, lockstep >= 20x.
 
@@ -85,6 +87,16 @@ int main(int argc, char** argv) {
   print_realtime("real time, plain defaults (timer-driven controller, sleeping waits, no CPU placement)"
                  "\n  latency includes the wait for the controller's next 512 Hz deadline",
                  plain);
+
+  const YAML::Node est = run(rig, scenario,
+                             "--clock realtime --set processes=[plant,controller,mocap,estimator] "
+                             "--set run.controller_input=estimate",
+                             dir);
+  const YAML::Node e = est["timing"]["estimator"];
+  std::printf("\nreal time, flying on the estimator: IMU sample time -> ESTIMATE published\n");
+  std::printf("  %-12s %10.1f %10.1f %10.1f   (%lld estimates)\n", "estimator", e["latency_p50_us"].as<double>(),
+              e["latency_p99_us"].as<double>(), e["latency_max_us"].as<double>(), e["latency_count"].as<long long>());
+  print_realtime("  (same run) plant and controller:", est);
 
   std::vector<double> speeds;
   for (int i = 0; i < runs; ++i) speeds.push_back(run(rig, scenario, "--clock lockstep", dir)["speed_x_realtime"].as<double>());

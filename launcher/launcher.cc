@@ -293,10 +293,11 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
   }
   for (const auto& [name, t] : mon.timing()) {
     if (t.latency_count == 0) continue;
-    std::snprintf(line, sizeof line,
-                  "%s control loop latency (TRUTH published -> ACTUATOR_CMD received): p50 %.1f us, p99 %.1f us, "
-                  "max %.1f us over %lld commands\n",
-                  name.c_str(), t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
+    const char* what = name == "plant" ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
+                       : name == "estimator" ? "latency (IMU sample time -> ESTIMATE published)"
+                                             : "latency";
+    std::snprintf(line, sizeof line, "%s %s: p50 %.1f us, p99 %.1f us, max %.1f us over %lld messages\n",
+                  name.c_str(), what, t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
                   static_cast<long long>(t.latency_count));
     out << line;
   }

@@ -126,6 +126,9 @@ class ProcessNode {
   /// Publishes a fault event (rate-limited to 10 per second per code). Never throws.
   void fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message);
 
+  /// Real time: CLOCK_MONOTONIC time of simulated time 0 [ns] (valid once started).
+  int64_t t0_monotonic_ns() const { return t0_ns_; }
+
   /// Current simulated time [ns] (the time of the task being run).
   int64_t sim_time_ns() const { return sim_time_ns_; }
   /// Clock mode of the run (run_control_t::CLOCK_MODE_*); valid once started.
