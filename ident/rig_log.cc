@@ -20,6 +20,18 @@ void append(Channel& c, double t_s, double value) {
   c.values.push_back(value);
 }
 
+/// Appends one sample of the nine states (rates, body velocity, attitude) at time t.
+void append_states(FlightData& d, double t, const double omega[3], const double velocity[3], const double euler[3]) {
+  static const char* const kRates[] = {"p", "q", "r"};
+  static const char* const kVelocities[] = {"u", "v", "w"};
+  static const char* const kAngles[] = {"phi", "theta", "psi"};
+  for (int i = 0; i < 3; ++i) {
+    append(d.channels[kRates[i]], t, omega[i]);
+    append(d.channels[kVelocities[i]], t, velocity[i]);
+    append(d.channels[kAngles[i]], t, euler[i]);
+  }
+}
+
 template <typename T>
 T decode_or_throw(const lcm::LogEvent& ev, const std::string& file) {
   T msg{};
@@ -46,28 +58,11 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
     if (ev->channel == "TRUTH") {
       const auto m = decode_or_throw<truth_state_t>(*ev, file);
-      const double t = static_cast<double>(m.utime) * 1e-6;
-      append(truth.channels["p"], t, m.omega_body_radps[0]);
-      append(truth.channels["q"], t, m.omega_body_radps[1]);
-      append(truth.channels["r"], t, m.omega_body_radps[2]);
-      append(truth.channels["u"], t, m.velocity_body_mps[0]);
-      append(truth.channels["v"], t, m.velocity_body_mps[1]);
-      append(truth.channels["w"], t, m.velocity_body_mps[2]);
-      append(truth.channels["phi"], t, m.euler_rad[0]);
-      append(truth.channels["theta"], t, m.euler_rad[1]);
-      append(truth.channels["psi"], t, m.euler_rad[2]);
+      append_states(truth, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
     } else if (ev->channel == "ESTIMATE") {
       const auto m = decode_or_throw<estimator_state_t>(*ev, file);
-      const double t = static_cast<double>(m.utime) * 1e-6;
-      append(estimate.channels["p"], t, m.omega_body_radps[0]);
-      append(estimate.channels["q"], t, m.omega_body_radps[1]);
-      append(estimate.channels["r"], t, m.omega_body_radps[2]);
-      append(estimate.channels["u"], t, m.velocity_body_mps[0]);
-      append(estimate.channels["v"], t, m.velocity_body_mps[1]);
-      append(estimate.channels["w"], t, m.velocity_body_mps[2]);
-      append(estimate.channels["phi"], t, m.euler_rad[0]);
-      append(estimate.channels["theta"], t, m.euler_rad[1]);
-      append(estimate.channels["psi"], t, m.euler_rad[2]);
+      append_states(estimate, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps,
+                    m.euler_rad);
     } else if (ev->channel == "ACTUATOR_FB") {
       const auto m = decode_or_throw<actuator_feedback_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;
