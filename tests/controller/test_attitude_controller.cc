@@ -8,6 +8,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "../support/config_error.h"
+
 #include "controller/attitude_controller.h"
 #include "core/config.h"
 #include "core/vehicle.h"
@@ -30,19 +32,9 @@ ControllerConfig from_text(const std::string& text) {
   return controller_config_from(map);
 }
 
-/// Requires a ConfigError naming `key` (and `value` if given).
+/// Requires a ConfigError naming `key` (and `value` if given) from from_text().
 void expect_key_error(const std::string& text, const std::string& key, const std::string& value = "") {
-  INFO("yaml: " << text);
-  try {
-    from_text(text);
-    FAIL("expected a ConfigError for " << key);
-  } catch (const ConfigError& e) {
-    INFO("message: " << e.what());
-    CHECK(e.key() == key);
-    CHECK(e.file() == "inline.yaml");
-    if (!value.empty()) CHECK(e.value() == value);
-    CHECK(std::string(e.what()).find(key) != std::string::npos);
-  }
+  nimble::test::expect_inline_key_error([](const std::string& t) { return from_text(t); }, text, key, value);
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "../support/config_error.h"
+
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "core/config.h"
@@ -57,18 +59,9 @@ std::vector<Piece> roll_pieces(const ManoeuvrePlayer& player, double t0, double 
   return out;
 }
 
+/// Requires a ConfigError naming `key` (and `value` if given) from from_text().
 void expect_key_error(const std::string& text, const std::string& key, const std::string& value = "") {
-  INFO("yaml:\n" << text);
-  try {
-    from_text(text);
-    FAIL("expected a ConfigError for " << key);
-  } catch (const ConfigError& e) {
-    INFO("message: " << e.what());
-    CHECK(e.key() == key);
-    CHECK(e.file() == "inline.yaml");
-    if (!value.empty()) CHECK(e.value() == value);
-    CHECK(std::string(e.what()).find(key) != std::string::npos);
-  }
+  nimble::test::expect_inline_key_error([](const std::string& t) { return from_text(t); }, text, key, value);
 }
 
 }  // namespace
