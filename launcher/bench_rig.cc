@@ -76,33 +76,41 @@ int main(int argc, char** argv) {
   std::printf("bench_rig: %s\n", scenario.c_str());
   std::printf("machine: %ld CPUs online\n", ::sysconf(_SC_NPROCESSORS_ONLN));
 
+  // The scenario as shipped: the controller flies on the estimator's output.
   const YAML::Node lab = run(rig, scenario, "--clock realtime", dir);
-  print_realtime("real time, scenario run settings (state-triggered controller, spin 100 us, CPU placement)"
+  const YAML::Node e = lab["timing"]["estimator"];
+  std::printf("\nreal time, scenario as shipped (flying on the estimator)\n");
+  if (e) {
+    std::printf("  estimator: IMU sample time -> ESTIMATE published [us]\n");
+    std::printf("  %-12s %10.1f %10.1f %10.1f   (%lld estimates)\n", "estimator", e["latency_p50_us"].as<double>(),
+                e["latency_p99_us"].as<double>(), e["latency_max_us"].as<double>(),
+                e["latency_count"].as<long long>());
+  }
+  print_realtime("  plant and controller (state-triggered controller, spin 100 us, CPU placement)"
                  "\n  controller row: lateness of each cycle behind the state that triggered it",
                  lab);
-  const YAML::Node plain = run(rig, scenario,
-                               "--clock realtime --set run.controller_trigger=timer --set run.spin_us=0 "
-                               "--set run.rig_cpus=[] --set run.launcher_cpus=[]",
-                               dir);
-  print_realtime("real time, plain defaults (timer-driven controller, sleeping waits, no CPU placement)"
+
+  // Ideal sensing, plant and controller alone: the rig's own control-loop latency.
+  const std::string ideal = "--set run.controller_input=truth --set processes=[plant,controller]";
+  print_realtime("real time, ideal sensing (plant and controller only), scenario run settings",
+                 run(rig, scenario, "--clock realtime " + ideal, dir));
+  print_realtime("real time, ideal sensing, plain defaults (timer-driven controller, sleeping waits, no CPU placement)"
                  "\n  latency includes the wait for the controller's next 512 Hz deadline",
-                 plain);
+                 run(rig, scenario,
+                     "--clock realtime " + ideal +
+                         " --set run.controller_trigger=timer --set run.spin_us=0 "
+                         "--set run.rig_cpus=[] --set run.launcher_cpus=[]",
+                     dir));
 
-  const YAML::Node est = run(rig, scenario,
-                             "--clock realtime --set processes=[plant,controller,mocap,estimator] "
-                             "--set run.controller_input=estimate",
-                             dir);
-  const YAML::Node e = est["timing"]["estimator"];
-  std::printf("\nreal time, flying on the estimator: IMU sample time -> ESTIMATE published\n");
-  std::printf("  %-12s %10.1f %10.1f %10.1f   (%lld estimates)\n", "estimator", e["latency_p50_us"].as<double>(),
-              e["latency_p99_us"].as<double>(), e["latency_max_us"].as<double>(), e["latency_count"].as<long long>());
-  print_realtime("  (same run) plant and controller:", est);
-
-  std::vector<double> speeds;
-  for (int i = 0; i < runs; ++i) speeds.push_back(run(rig, scenario, "--clock lockstep", dir)["speed_x_realtime"].as<double>());
-  std::sort(speeds.begin(), speeds.end());
-  std::printf("\nlockstep speed over %d runs [x real time]: min %.1f, median %.1f, max %.1f\n", runs, speeds.front(),
-              speeds[speeds.size() / 2], speeds.back());
+  const auto lockstep_speed = [&](const std::string& label, const std::string& args) {
+    std::vector<double> speeds;
+    for (int i = 0; i < runs; ++i) speeds.push_back(run(rig, scenario, "--clock lockstep " + args, dir)["speed_x_realtime"].as<double>());
+    std::sort(speeds.begin(), speeds.end());
+    std::printf("\nlockstep speed, %s, over %d runs [x real time]: min %.1f, median %.1f, max %.1f\n", label.c_str(),
+                runs, speeds.front(), speeds[speeds.size() / 2], speeds.back());
+  };
+  lockstep_speed("scenario as shipped", "");
+  lockstep_speed("ideal sensing (plant and controller only)", ideal);
   std::printf("\ntargets: jitter p99 <= 50 us, latency p99 <= 150 us, lockstep >= 20x\n");
   fs::remove_all(dir);
   return 0;

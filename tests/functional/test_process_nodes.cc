@@ -174,7 +174,8 @@ TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][pr
 
 TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-points, restores roll",
           "[controller][process]") {
-  const Scenario scenario = load_scenario(kConfigs + "id_doublet_train_fast.yaml");
+  // The test is the plant and feeds TRUTH: ideal sensing.
+  const Scenario scenario = load_scenario(kConfigs + "id_doublet_train_fast.yaml", {{"run.controller_input", "truth"}});
   ControllerNode controller(scenario, {"controller", "", "memq://"});
   transport::Bus& bus = controller.node().bus();
   std::vector<actuator_command_t> commands;

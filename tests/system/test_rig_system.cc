@@ -173,7 +173,7 @@ TEST_CASE("identification doublet train in lockstep: controlled, back to hover, 
   CHECK(phi < 0.89 * 2);
   // Every stream channel at its rate in simulated time, nothing dropped.
   for (const char* ch : {"TRUTH", "ACTUATOR_CMD", "ACTUATOR_FB", "ATTITUDE_SP", "CONTROLLER_STATUS", "RIG_CLOCK",
-                         "STEP_ACK"}) {
+                         "STEP_ACK", "IMU", "MOCAP_POSE", "ESTIMATE"}) {
     INFO(ch);
     const YAML::Node c = s["channels"][ch];
     REQUIRE(c);
@@ -317,7 +317,9 @@ TEST_CASE("bad scenario values stop the run before anything starts, naming the k
 
 TEST_CASE("a rig log flows into the identification: export to CSV, identify the set-1 derivatives", "[system]") {
   const std::string dir = scratch_dir("ident");
-  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock lockstep");
+  // Ideal sensing: the log has no ESTIMATE, so the truth is the measured data.
+  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+                              "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller]");
   REQUIRE(r.exit_code == 0);
   const std::string log = dir + "/run.lcmlog", csv = dir + "/flight.csv", json = dir + "/ident.json";
   const auto exported = nimble::test::run_rig("export " + log + " --csv " + csv);
@@ -413,7 +415,8 @@ TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm ma
           "[system]") {
   const std::string dir = scratch_dir("mocap");
   const RunResult r =
-      rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4 --set processes=[plant,controller,mocap]");
+      rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4 --set processes=[plant,controller,mocap] "
+             "--set run.controller_input=truth");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   const YAML::Node c = r.summary["channels"]["MOCAP_POSE"];
@@ -465,8 +468,8 @@ TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm ma
 TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, deterministic in lockstep",
           "[system]") {
   const std::string a = scratch_dir("est_a"), b = scratch_dir("est_b");
-  const std::string args =
-      "--clock lockstep --set processes=[plant,controller,mocap,estimator] --set run.controller_input=estimate";
+  // The shipped scenario as it is: it flies on the estimator.
+  const std::string args = "--clock lockstep";
   const RunResult ra = rig_run(kConfigs + "id_doublet_train_fast.yaml", a, args);
   INFO(ra.output);
   REQUIRE(ra.exit_code == 0);
