@@ -29,6 +29,7 @@
 #include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 
+#include "can_bridge/bridge_config.h"
 #include "core/json_writer.h"
 #include "launcher/netns.h"
 #include "launcher/run_monitor.h"
@@ -211,8 +212,16 @@ Child* reap(std::vector<Child>& children) {
   return first;
 }
 
+/// The executable of a rig process: nimble_<name>; both sides of the CAN bridge run
+/// nimble_can_bridge (their name selects the side).
+std::string executable_of(const std::string& process) {
+  if (process == can::kFlightProcess || process == can::kRigProcess) return "nimble_can_bridge";
+  return "nimble_" + process;
+}
+
 /// Channels whose publishers pace themselves by the wall clock.
-const std::vector<std::string> kWallClockChannels = {"HEARTBEAT", "TIMING_HEALTH", "RUN_CONTROL", "FAULT"};
+const std::vector<std::string> kWallClockChannels = {"HEARTBEAT", "TIMING_HEALTH", "RUN_CONTROL", "FAULT",
+                                                     "CAN_HEALTH"};
 
 std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRates& rates, bool lockstep) {
   std::map<std::string, double> hz;
@@ -226,6 +235,11 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
   }
   if (rates.mocap_hz > 0) hz["MOCAP_POSE"] = rates.mocap_hz;
   if (rates.estimator_hz > 0) hz["ESTIMATE"] = rates.estimator_hz;
+  if (rates.can_link) {
+    hz["ACTUATOR_CMD_CAN"] = rates.controller_hz;
+    hz["ACTUATOR_FB_CAN"] = rates.feedback_hz;
+    hz["CAN_HEALTH"] = 2.0 * rates.can_health_hz;
+  }
   if (lockstep) {
     // RIG_CLOCK goes out at the plant steps where a participant is due, and every due
     // participant acknowledges: replay the plant's rule over one simulated second.
@@ -233,6 +247,10 @@ std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRat
     const int64_t logger_period = std::llround(lockstep_options(s).logger_period_ms * 1e6);
     std::vector<int64_t> periods;
     if (rates.controller_hz > 0) periods.push_back(std::llround(1e9 / rates.controller_hz));
+    if (rates.can_link) {  // both sides of the bridge are due at every control cycle
+      periods.push_back(std::llround(1e9 / rates.controller_hz));
+      periods.push_back(std::llround(1e9 / rates.controller_hz));
+    }
     if (rates.mocap_hz > 0) periods.push_back(std::llround(1e9 / rates.mocap_hz));
     if (rates.estimator_hz > 0) periods.push_back(std::llround(1e9 / rates.estimator_hz));
     std::vector<int64_t> next(periods.size(), 0);
@@ -320,6 +338,21 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
                   static_cast<long long>(est.poses_missing));
     out << line;
   }
+  for (const auto& [name, h] : mon.can_health()) {
+    std::snprintf(line, sizeof line,
+                  "%-10s %s: %lld messages to CAN, %lld to LCM; frames sent %lld, received %lld; rejected: unknown id "
+                  "%lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; error frames "
+                  "%lld; ENOBUFS %lld, dropped %lld\n",
+                  name.c_str(), h.interface_name.c_str(), static_cast<long long>(h.messages_to_can),
+                  static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
+                  static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
+                  static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
+                  static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
+                  static_cast<long long>(h.error_frames), static_cast<long long>(h.send_enobufs),
+                  static_cast<long long>(h.send_dropped + h.receive_dropped));
+    out << line;
+    if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
+  }
   out << "faults     " << mon.faults().size() << "\n";
   std::size_t shown = 0;
   for (const auto& fr : mon.faults()) {
@@ -371,6 +404,29 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
     w.key("poses_accepted").value(static_cast<long long>(est.poses_accepted));
     w.key("poses_rejected").value(static_cast<long long>(est.poses_rejected));
     w.key("poses_missing").value(static_cast<long long>(est.poses_missing));
+    w.end_object();
+  }
+  if (!mon.can_health().empty()) {
+    w.key("can").begin_object();
+    for (const auto& [name, h] : mon.can_health()) {
+      const auto n = [](int64_t v) { return static_cast<long long>(v); };
+      w.key(name).begin_object();
+      w.key("interface").value(h.interface_name);
+      w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
+      w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
+      w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
+      w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
+      w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));
+      w.key("rejected_stale_counter").value(n(h.rejected_stale_counter));
+      w.key("rejected_out_of_range").value(n(h.rejected_out_of_range));
+      w.key("counter_gaps").value(n(h.counter_gaps)).key("saturated_values").value(n(h.saturated_values));
+      w.key("error_frames").value(n(h.error_frames)).key("bus_state").value(static_cast<int>(h.bus_state));
+      w.key("last_error").value(h.last_error);
+      w.key("send_enobufs").value(n(h.send_enobufs)).key("send_retries").value(n(h.send_retries));
+      w.key("send_dropped").value(n(h.send_dropped)).key("receive_dropped").value(n(h.receive_dropped));
+      w.key("candump_file").value(h.candump_file).key("candump_lines").value(n(h.candump_lines));
+      w.end_object();
+    }
     w.end_object();
   }
   w.key("channels").begin_object();
@@ -514,6 +570,19 @@ int run_scenario(const RunOptions& options) {
   std::error_code ec;
   if (fs::path(log_file).has_parent_path()) fs::create_directories(fs::path(log_file).parent_path(), ec);
   const std::string resolved_file = log_file + ".scenario.yaml";
+  if (scenario.actuator_link == "can") {
+    ConfigMap section = scenario.section("can_bridge");
+    const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
+    if (cc.candump_log && cc.candump_file.empty()) {
+      scenario.root["can_bridge"]["candump_file"] = fs::absolute(log_file + ".candump").string();
+    }
+    // The interface lives in the run's network namespace: a virtual one is made there.
+    const std::string problem = ensure_can_interface(cc.interface, cc.create_virtual);
+    if (!problem.empty()) {
+      std::cerr << "rig run: actuator_link can: " << problem << "\n";
+      return kRunBadInput;
+    }
+  }
   {
     std::ofstream out(resolved_file);
     out << "# Resolved scenario of this run (bases merged, overrides applied): " << scenario.file << "\n";
@@ -591,7 +660,7 @@ int run_scenario(const RunOptions& options) {
     Child c;
     c.name = name;
     c.output_file = log_file + "." + name + ".out";
-    const std::string exe = bin_dir + "/nimble_" + name;
+    const std::string exe = bin_dir + "/" + executable_of(name);
     c.pid = spawn(exe, {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, c.output_file, lc.rig_cpus);
     children.push_back(c);
   }

@@ -7,11 +7,17 @@
 #include <sched.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <linux/can.h>
+#include <linux/can/raw.h>
 
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -96,6 +102,82 @@ std::string multicast_fix_commands() {
   return "  sudo ip link set lo multicast on\n"
          "  sudo ip route add 224.0.0.0/4 dev lo\n"
          "(or let 'rig run' create a private network namespace: it needs root or unprivileged user namespaces)";
+}
+
+namespace {
+
+/// Runs `argv` (no shell), returning its exit status and what it printed.
+int run_quiet(const std::vector<std::string>& argv, std::string* output) {
+  int pipe_fd[2];
+  if (::pipe(pipe_fd) != 0) return -1;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::dup2(pipe_fd[1], 1);
+    ::dup2(pipe_fd[1], 2);
+    ::close(pipe_fd[0]);
+    ::close(pipe_fd[1]);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execvp(args[0], args.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", args[0], std::strerror(errno));
+    ::_exit(127);
+  }
+  ::close(pipe_fd[1]);
+  char buf[512];
+  ssize_t n;
+  while ((n = ::read(pipe_fd[0], buf, sizeof buf)) > 0) output->append(buf, static_cast<std::size_t>(n));
+  ::close(pipe_fd[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  while (!output->empty() && output->back() == '\n') output->pop_back();
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// Sets IFF_UP on `name`; "" on success.
+std::string bring_up(const std::string& name) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return std::string("socket: ") + std::strerror(errno);
+  ifreq ifr{};
+  std::strncpy(ifr.ifr_name, name.c_str(), IFNAMSIZ - 1);
+  std::string problem;
+  if (::ioctl(fd, SIOCGIFFLAGS, &ifr) < 0) {
+    problem = "SIOCGIFFLAGS " + name + ": " + std::strerror(errno);
+  } else if (!(ifr.ifr_flags & IFF_UP)) {
+    ifr.ifr_flags = static_cast<short>(ifr.ifr_flags | IFF_UP);
+    if (::ioctl(fd, SIOCSIFFLAGS, &ifr) < 0) problem = "cannot bring " + name + " up: " + std::strerror(errno);
+  }
+  ::close(fd);
+  return problem;
+}
+
+}  // namespace
+
+std::string ensure_can_interface(const std::string& name, bool create_virtual) {
+  const std::string no_can_hint =
+      "on a machine whose kernel has no CAN support, run the rig inside the CAN VM: "
+      "can_bridge/vm/canvm run -- build/bin/rig run <scenario>";
+  const int probe = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (probe < 0) {
+    const int e = errno;
+    if (e == EAFNOSUPPORT) return "this kernel has no CAN support (AF_CAN: " + std::string(std::strerror(e)) + "); " + no_can_hint;
+    return std::string("cannot open a CAN socket: ") + std::strerror(e);
+  }
+  ::close(probe);
+  if (::if_nametoindex(name.c_str()) == 0) {
+    if (!create_virtual) {
+      return "CAN interface '" + name + "' does not exist in the run's network namespace (create it, set "
+             "can_bridge.create_virtual: true, or run.network_namespace: never to use the host's interfaces)";
+    }
+    std::string out;
+    const int code = run_quiet({"ip", "link", "add", "dev", name, "type", "vcan"}, &out);
+    if (code != 0) {
+      return "cannot create the virtual CAN interface '" + name + "' (ip link add dev " + name +
+             " type vcan: " + (out.empty() ? "exit " + std::to_string(code) : out) +
+             "); the kernel needs the vcan module (modprobe vcan); " + no_can_hint;
+    }
+  }
+  return bring_up(name);
 }
 
 }  // namespace nimble::launcher

@@ -27,6 +27,12 @@ NamespaceResult configure_loopback_multicast();
 /// True if LCM can open `url` in the current namespace (creates and destroys an instance).
 bool lcm_url_works(const std::string& url);
 
+/// Makes sure the CAN interface `name` exists and is up in the current network namespace;
+/// a missing one is created as a virtual CAN interface (`ip link add dev NAME type vcan`)
+/// when `create_virtual`. Returns "" on success, else what is wrong and how to fix it
+/// (a kernel without CAN support is named as such).
+std::string ensure_can_interface(const std::string& name, bool create_virtual);
+
 /// The exact commands that make the host's loopback carry LCM multicast.
 std::string multicast_fix_commands();
 

@@ -66,6 +66,13 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     count_seq(c, h.process, h.seq);
     return;
   }
+  if (channel == "CAN_HEALTH") {
+    can_health_t h{};
+    if (!decode(data, size, h)) { ++c.malformed; return; }
+    can_health_[h.process] = h;
+    count_seq(c, h.process, h.seq);
+    return;
+  }
   if (channel == "FAULT") {
     fault_event_t f{};
     if (!decode(data, size, f)) { ++c.malformed; return; }

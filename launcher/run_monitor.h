@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nimble/can_health_t.hpp>
+
 namespace nimble::launcher {
 
 /// What the monitor needs to know about the run to judge it.
@@ -83,6 +85,8 @@ class RunMonitor {
   /// Estimation errors (samples == 0 if the run had no estimator).
   EstimatorSummary estimator() const;
   const std::map<std::string, TimingSummary>& timing() const { return timing_; }
+  /// The newest CAN_HEALTH of each side of the CAN bridge (empty over the LCM link).
+  const std::map<std::string, nimble::can_health_t>& can_health() const { return can_health_; }
 
   /// Channel table at the end of the run; `sim_duration_s` and `wall_duration_s` give the
   /// rate bases.
@@ -105,6 +109,7 @@ class RunMonitor {
   std::map<std::string, Counter> counters_;
   std::map<std::string, int> heartbeat_;
   std::map<std::string, TimingSummary> timing_;
+  std::map<std::string, nimble::can_health_t> can_health_;
   std::vector<FaultRecord> faults_;
   FlightSummary flight_;
   struct TruthPoint {

@@ -4,6 +4,7 @@
 #include <optional>
 #include <sstream>
 
+#include "can_bridge/bridge_config.h"
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "estimator/sensing_config.h"
@@ -39,6 +40,14 @@ void validate_process_sections(const Scenario& s) {
   if (process_run_options(s).controller_input == "estimate" && !(has(s, "estimator") && has(s, "mocap"))) {
     throw ConfigError(s.file, "run.controller_input", "estimate",
                       "flying on the estimate needs the processes estimator and mocap");
+  }
+  if (s.actuator_link == "can" || s.has_section("can_bridge")) {
+    ConfigMap section = s.section("can_bridge");
+    can::can_bridge_config_from(section);
+  }
+  if (s.actuator_link == "can" && !has(s, "controller")) {
+    throw ConfigError(s.file, "actuator_link", "can",
+                      "the CAN link carries the controller's commands: it needs the process controller");
   }
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
@@ -79,6 +88,11 @@ ProcessRates process_rates(const Scenario& s) {
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     r.controller_hz = controller_config_from(section).rate_hz;
+  }
+  if (s.actuator_link == "can") {
+    ConfigMap section = s.section("can_bridge");
+    r.can_link = true;
+    r.can_health_hz = can::can_bridge_config_from(section).health_rate_hz;
   }
   return r;
 }

@@ -16,6 +16,8 @@ struct ProcessRates {
   double controller_hz = 0.0;  ///< 0 if the scenario has no controller
   double mocap_hz = 0.0;       ///< 0 if the scenario has no motion-capture emulator
   double estimator_hz = 0.0;   ///< 0 if the scenario has no estimator
+  bool can_link = false;       ///< actuator_link: can (the two sides of the CAN bridge run)
+  double can_health_hz = 0.0;  ///< CAN_HEALTH rate of each side (wall clock)
 };
 
 /// Loads every section, model and manoeuvre the scenario's processes will load, and checks

@@ -61,6 +61,13 @@ PlantConfig plant_config_from(ConfigMap& map) {
   c.truth_rate_hz = map.get_double_or("truth_rate_hz", c.truth_rate_hz, Range{0.0, 20000.0, true, false});
   c.feedback_rate_hz = map.get_double_or("feedback_rate_hz", c.feedback_rate_hz, Range{0.0, 20000.0, true, false});
   c.command_timeout_s = map.get_double_or("command_timeout_s", c.command_timeout_s, Range{0.0, 10.0, true, false});
+  if (map.has("command_resolution")) {
+    ConfigMap r = map.get_map("command_resolution");
+    c.flap_command_resolution_radps =
+        r.get_double_or("flap_freq_radps", c.flap_command_resolution_radps, Range::closed(0.0, 10.0));
+    c.servo_command_resolution_rad = r.get_double_or("servo_rad", c.servo_command_resolution_rad, Range::closed(0.0, 0.1));
+    r.finish();
+  }
   for (const auto& [key, rate] : {std::pair<const char*, double>{"truth_rate_hz", c.truth_rate_hz},
                                   {"feedback_rate_hz", c.feedback_rate_hz}}) {
     const double ratio = c.rate_hz / rate;

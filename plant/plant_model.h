@@ -103,6 +103,11 @@ struct PlantConfig {
   double truth_rate_hz = 1000.0;     ///< TRUTH publication rate [Hz]
   double feedback_rate_hz = 100.0;   ///< ACTUATOR_FB publication rate [Hz]
   double command_timeout_s = 0.1;    ///< hold the safe state when commands stop this long [s]
+  /// Resolution of the actuator interface: commands are rounded to a multiple of it
+  /// (0 = no rounding). Defaults: the CAN frames' resolution (can_bridge/nimble_rig.dbc), so
+  /// that the plant flies the same commands over the LCM and the CAN link.
+  double flap_command_resolution_radps = 0.01;
+  double servo_command_resolution_rad = 1e-4;
   FlapActuatorConfig flap;
   ServoConfig servo;
   ThrustConfig thrust;

@@ -12,7 +12,6 @@
 namespace nimble::plant {
 namespace {
 
-using transport::channels::kActuatorCommand;
 using transport::channels::kActuatorFeedback;
 using transport::channels::kTruth;
 
@@ -20,6 +19,14 @@ using transport::channels::kTruth;
 constexpr double kMaxFlapRadps = 2.0 * M_PI * 40.0;
 /// Physical range of a servo command [rad].
 constexpr double kMaxServoRad = 1.0;
+
+/// `x` rounded to a multiple of `resolution` (unchanged for 0). Computed as the CAN decoder
+/// computes a physical value, raw * factor, so that a value that crossed the CAN link is
+/// left exactly as it is.
+double quantize(double x, double resolution) {
+  if (!(resolution > 0.0)) return x;
+  return static_cast<double>(std::llround(x / resolution)) * resolution;
+}
 
 double clamp(double x, double lo, double hi, bool& clamped) {
   if (x < lo) { clamped = true; return lo; }
@@ -64,8 +71,9 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
-  node_->set_expected_rate(kActuatorCommand, 512.0);
-  node_->bus().subscribe<actuator_command_t>(kActuatorCommand,
+  command_channel_ = plant_command_channel(scenario);
+  node_->set_expected_rate(command_channel_, 512.0);
+  node_->bus().subscribe<actuator_command_t>(command_channel_,
                                              [this](const actuator_command_t& c) { on_command(c); });
   node_->add_task("plant", config_.rate_hz, [this](int64_t t) { step(t); });
 }
@@ -79,7 +87,7 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
     right = cmd.flap_freq_collective_radps - 0.5 * cmd.delta_f_radps;
   } else if (cmd.mode != actuator_command_t::MODE_LEFT_RIGHT) {
     ++commands_rejected_;
-    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, kActuatorCommand,
+    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, command_channel_,
                  "rejected actuator command seq " + std::to_string(cmd.seq) + ": unknown mode " +
                      std::to_string(cmd.mode));
     return;
@@ -90,19 +98,20 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
                                     {"wing_root_rad", cmd.wing_root_rad}}) {
     if (!std::isfinite(value)) {
       ++commands_rejected_;
-      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, kActuatorCommand,
+      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, command_channel_,
                    "rejected actuator command seq " + std::to_string(cmd.seq) + ": " + name + " is not finite");
       return;
     }
   }
   bool clamped = false;
-  command_.flap_freq_left_radps = clamp(left, 0.0, kMaxFlapRadps, clamped);
-  command_.flap_freq_right_radps = clamp(right, 0.0, kMaxFlapRadps, clamped);
-  command_.dihedral_rad = clamp(cmd.dihedral_rad, -kMaxServoRad, kMaxServoRad, clamped);
-  command_.wing_root_rad = clamp(cmd.wing_root_rad, -kMaxServoRad, kMaxServoRad, clamped);
+  const double rf = config_.flap_command_resolution_radps, rs = config_.servo_command_resolution_rad;
+  command_.flap_freq_left_radps = quantize(clamp(left, 0.0, kMaxFlapRadps, clamped), rf);
+  command_.flap_freq_right_radps = quantize(clamp(right, 0.0, kMaxFlapRadps, clamped), rf);
+  command_.dihedral_rad = quantize(clamp(cmd.dihedral_rad, -kMaxServoRad, kMaxServoRad, clamped), rs);
+  command_.wing_root_rad = quantize(clamp(cmd.wing_root_rad, -kMaxServoRad, kMaxServoRad, clamped), rs);
   if (clamped) {
     ++commands_clamped_;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, kActuatorCommand,
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, command_channel_,
                  "clamped actuator command seq " + std::to_string(cmd.seq) + " to the actuator range");
   }
   if (cmd.input_utime >= 0) {
@@ -119,7 +128,7 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
   last_command_utime_ = cmd.utime;
   if (safe_state_) {
     safe_state_ = false;
-    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_COMMAND_TIMEOUT, kActuatorCommand,
+    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_COMMAND_TIMEOUT, command_channel_,
                  "actuator commands resumed; leaving the safe state");
   }
 }
@@ -129,7 +138,7 @@ void PlantNode::step(int64_t sim_time_ns) {
     const int64_t timeout_ns = std::llround(config_.command_timeout_s * 1e9);
     if (!safe_state_ && sim_time_ns - last_command_ns_ > timeout_ns) {
       safe_state_ = true;
-      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_COMMAND_TIMEOUT, kActuatorCommand,
+      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_COMMAND_TIMEOUT, command_channel_,
                    std::string("no actuator command for ") + std::to_string(config_.command_timeout_s) +
                        " s" + (have_command_ ? "" : " since the start") +
                        ": holding the safe state (trim flapping frequencies, servos neutral)");

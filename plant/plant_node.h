@@ -2,7 +2,9 @@
 /// The plant process: PlantModel on the rig's LCM bus.
 ///
 /// Subscribes:
-///   ACTUATOR_CMD  actuator_command_t   512 Hz   left/right flapping frequencies, servos
+///   ACTUATOR_CMD  actuator_command_t   512 Hz   left/right flapping frequencies, servos; over
+///                                      the CAN link (actuator_link: can) ACTUATOR_CMD_CAN instead,
+///                                      as the rig side of nimble_can_bridge decoded it
 ///   RUN_CONTROL   run_control_t        events   start/stop (ProcessNode)
 ///   STEP_ACK      step_ack_t           lockstep (ProcessNode, the plant is the lockstep master)
 /// Publishes:
@@ -18,7 +20,8 @@
 /// Command timeout: when no ACTUATOR_CMD has arrived for plant.command_timeout_s of simulated
 /// time, the plant holds the safe state (both wings at the trim flapping frequency, servos
 /// neutral), reports it in ACTUATOR_FB.safe_state and publishes a FAULT; it leaves the safe
-/// state on the next valid command.
+/// state on the next valid command. Commands are rounded to plant.command_resolution, the
+/// resolution of the actuator interface.
 
 #include <memory>
 #include <optional>
@@ -59,6 +62,7 @@ class PlantNode {
   ActuatorInput command_;
   int64_t last_command_ns_ = 0;
   int64_t last_command_seq_ = -1;
+  std::string command_channel_;  ///< ACTUATOR_CMD, or ACTUATOR_CMD_CAN over the CAN link
   int64_t last_command_utime_ = -1;
   bool have_command_ = false;
   bool safe_state_ = false;

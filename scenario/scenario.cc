@@ -141,13 +141,24 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   s.longitudinal_model_file = map.get_string_or("longitudinal_model", "");
   s.vehicle_file = map.get_string_or("vehicle", "");
   s.processes = map.get_string_list("processes");
-  const std::set<std::string> known = {"plant", "controller", "mocap", "estimator"};
+  if (map.has("actuator_link")) s.actuator_link = map.get_enum("actuator_link", {"lcm", "can"});
+  const std::set<std::string> known = {"plant", "controller", "mocap", "estimator", "can_flight", "can_rig"};
   std::set<std::string> seen;
   for (const auto& p : s.processes) {
-    if (!known.count(p)) map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap, estimator)");
+    if (!known.count(p)) {
+      map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap, estimator, can_flight, can_rig)");
+    }
     if (!seen.insert(p).second) map.fail("processes", "process '" + p + "' listed twice");
+    if ((p == "can_flight" || p == "can_rig") && s.actuator_link != "can") {
+      map.fail("processes", "process '" + p + "' is a side of the CAN bridge: it needs actuator_link: can");
+    }
   }
   if (!seen.count("plant")) map.fail("processes", "a run needs the plant");
+  if (s.actuator_link == "can") {
+    for (const char* side : {"can_flight", "can_rig"}) {
+      if (!seen.count(side)) s.processes.push_back(side);
+    }
+  }
   for (const auto& key : scenario_section_keys()) {
     if (map.has(key)) map.get_node(key);  // mark as known; owners validate the content
   }
@@ -157,6 +168,10 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
     if (!f.empty() && !fs::exists(f)) throw ConfigError(file, "model", f, "file not found");
   }
   return s;
+}
+
+std::string plant_command_channel(const Scenario& scenario) {
+  return scenario.actuator_link == "can" ? "ACTUATOR_CMD_CAN" : "ACTUATOR_CMD";
 }
 
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides) {

@@ -46,13 +46,22 @@ struct Scenario {
   std::string model_file;               ///< lateral derivative model
   std::string longitudinal_model_file;  ///< optional
   std::string vehicle_file;             ///< optional override of the model's vehicle
-  std::vector<std::string> processes;   ///< process names to launch, e.g. plant, controller
+  /// Process names to launch, e.g. plant, controller. With actuator_link "can" the two
+  /// sides of the CAN bridge (can_flight, can_rig) are added if not listed.
+  std::vector<std::string> processes;
+  /// How actuator commands and feedback travel between controller and plant: "lcm"
+  /// (directly) or "can" (through nimble_can_bridge and SocketCAN; section can_bridge).
+  std::string actuator_link = "lcm";
   YAML::Node root;
 
   /// The section of one process (an empty mapping if absent) as a strict ConfigMap.
   ConfigMap section(const std::string& name) const;
   bool has_section(const std::string& name) const { return static_cast<bool>(root[name]); }
 };
+
+/// The channel on which the plant takes its actuator commands: ACTUATOR_CMD over the LCM
+/// link, ACTUATOR_CMD_CAN (published by the rig side of the bridge) over the CAN link.
+std::string plant_command_channel(const Scenario& scenario);
 
 /// Known top-level keys that are sections owned by processes or by the launcher.
 const std::vector<std::string>& scenario_section_keys();

@@ -110,6 +110,44 @@ void ProcessNode::notify_input(int64_t input_sim_time_ns) {
   }
 }
 
+void ProcessNode::watch_fd(int fd, std::function<void()> on_readable) {
+  watched_.push_back(Watched{fd, std::move(on_readable)});
+}
+
+void ProcessNode::publish_ack(int64_t step, int64_t utime) {
+  step_ack_t ack;
+  ack.utime = utime;
+  ack.seq = ack_seq_++;
+  ack.step = step;
+  ack.next_due_ns = next_due_ns();
+  ack.process = name_;
+  bus_.publish(channels::kStepAck, ack);
+}
+
+void ProcessNode::release_ack() {
+  ack_hold_requested_ = false;  // released within the task itself: nothing to hold
+  if (!ack_held_) return;
+  ack_held_ = false;
+  publish_ack(held_step_, held_utime_);
+  run_deferred();
+}
+
+int ProcessNode::wait_io(int64_t timeout_ns) {
+  std::vector<pollfd> fds;
+  fds.reserve(1 + watched_.size());
+  fds.push_back(pollfd{bus_.fileno(), POLLIN, 0});
+  for (const auto& w : watched_) fds.push_back(pollfd{w.fd, POLLIN, 0});
+  const int64_t t = std::max<int64_t>(0, timeout_ns);
+  timespec ts{t / 1000000000LL, t % 1000000000LL};
+  const int n = ::ppoll(fds.data(), fds.size(), &ts, nullptr);
+  if (n <= 0) return 0;
+  if (fds[0].revents & POLLIN) bus_.handle();
+  for (std::size_t i = 1; i < fds.size(); ++i) {
+    if (fds[i].revents & (POLLIN | POLLERR)) watched_[i - 1].on_readable();
+  }
+  return n;
+}
+
 void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message) {
   const int64_t second = monotonic_ns() / 1000000000LL;
   auto& [sec, count] = fault_budget_[code];
@@ -179,6 +217,7 @@ void ProcessNode::housekeeping() {
   const int64_t now = wall_us();
   if (now >= next_heartbeat_us_) publish_heartbeat(hb_state_);
   if (started_ && now >= next_health_us_) publish_timing_health();
+  for (const auto& fn : housekeeping_hooks_) fn();
   if (stop_requested_) stop_ = true;
 }
 
@@ -200,7 +239,7 @@ void ProcessNode::on_run_control(const run_control_t& msg) {
 bool ProcessNode::wait_for_start() {
   publish_heartbeat(heartbeat_t::STATE_READY);
   while (!started_ && !stop_) {
-    bus_.handle_timeout(20);
+    wait_io(20000000);
     housekeeping();
   }
   return started_ && !stop_;
@@ -218,7 +257,7 @@ void ProcessNode::idle_until_stopped() {
   publish_heartbeat(heartbeat_t::STATE_FINISHED);
   publish_timing_health();
   while (!stop_) {
-    bus_.handle_timeout(50);
+    wait_io(50000000);
     housekeeping();
   }
 }
@@ -251,13 +290,14 @@ int ProcessNode::run() {
           }
         }
         if (!ran) return;
-        step_ack_t ack;
-        ack.utime = tick.utime;
-        ack.seq = ack_seq_++;
-        ack.step = tick.step;
-        ack.next_due_ns = next_due_ns();
-        ack.process = name_;
-        bus_.publish(channels::kStepAck, ack);
+        if (ack_hold_requested_) {
+          ack_hold_requested_ = false;
+          ack_held_ = true;
+          held_step_ = tick.step;
+          held_utime_ = tick.utime;
+          return;
+        }
+        publish_ack(tick.step, tick.utime);
         run_deferred();
       },
       100000);
@@ -283,7 +323,6 @@ int ProcessNode::run() {
 
 int ProcessNode::run_realtime() {
   use_fine_timer_slack();
-  const int fd = bus_.fileno();
   while (!stop_) {
     Task* task = nullptr;
     for (auto& t : tasks_) {
@@ -294,7 +333,7 @@ int ProcessNode::run_realtime() {
       bool due = false;
       for (const auto& t : tasks_) due = due || t.next_ns < duration_ns_;
       if (!due || (t0_ns_ + duration_ns_ <= monotonic_ns())) break;
-      bus_.handle_timeout(10);
+      wait_io(10000000);
       housekeeping();
       continue;
     }
@@ -305,12 +344,10 @@ int ProcessNode::run_realtime() {
       if (now >= deadline || stop_) break;
       if (deadline - now <= spin_ns_) {
         bus_.drain();  // spin to the deadline, still handling messages
+        if (!watched_.empty()) wait_io(0);
         continue;
       }
-      const int64_t wait = deadline - now - spin_ns_;
-      timespec ts{wait / 1000000000LL, wait % 1000000000LL};
-      pollfd pfd{fd, POLLIN, 0};
-      if (::ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN)) bus_.handle();
+      wait_io(deadline - now - spin_ns_);
       housekeeping();
     }
     if (stop_) break;
@@ -331,7 +368,7 @@ int ProcessNode::run_lockstep_participant() {
   // Tasks run inside the RIG_CLOCK handler; wall time here only paces housekeeping.
   while (!stop_) {
     const int64_t before = monotonic_ns();
-    bus_.handle_timeout(50);
+    wait_io(50000000);
     jitter_.add_ns(monotonic_ns() - before);
     housekeeping();
     if (next_due_ns() == kNever && hb_state_ != heartbeat_t::STATE_FINISHED) {
@@ -396,7 +433,7 @@ int ProcessNode::run_lockstep_master() {
                   std::to_string(ack_timeout_ms_) + " ms");
         return kExitAckTimeout;
       }
-      bus_.handle_timeout(static_cast<int>(std::min<int64_t>(left_ms, 50)));
+      wait_io(std::min<int64_t>(left_ms, 50) * 1000000LL);
       housekeeping();
     }
     jitter_.add_ns(monotonic_ns() - step_start);  // lockstep: wall time per step

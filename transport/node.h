@@ -47,6 +47,11 @@ inline const std::string kAttitudeSetpoint = "ATTITUDE_SP";
 inline const std::string kEstimate = "ESTIMATE";
 inline const std::string kActuatorCommand = "ACTUATOR_CMD";
 inline const std::string kActuatorFeedback = "ACTUATOR_FB";
+/// Commands as the rig side of the CAN link decoded them (actuator_link: can): the plant's input.
+inline const std::string kActuatorCommandCan = "ACTUATOR_CMD_CAN";
+/// Feedback as the flight-board side of the CAN link decoded it (actuator_link: can).
+inline const std::string kActuatorFeedbackCan = "ACTUATOR_FB_CAN";
+inline const std::string kCanHealth = "CAN_HEALTH";
 inline const std::string kControllerStatus = "CONTROLLER_STATUS";
 inline const std::string kRigClock = "RIG_CLOCK";
 inline const std::string kStepAck = "STEP_ACK";
@@ -107,6 +112,25 @@ class ProcessNode {
   /// gone out: for outputs nobody in the loop waits for (status, set-point records).
   void defer(std::function<void()> fn) { deferred_.push_back(std::move(fn)); }
 
+  /// Also waits on descriptor `fd` wherever the node waits for messages (before the start,
+  /// in real time, in lockstep, after the run): `on_readable` runs when it is readable. For
+  /// a second input next to LCM, such as a CAN socket.
+  void watch_fd(int fd, std::function<void()> on_readable);
+
+  /// Runs `fn` at every housekeeping pass (several times per second of wall time, whatever
+  /// the clock): for periodic reports such as link health.
+  void on_housekeeping(std::function<void()> fn) { housekeeping_hooks_.push_back(std::move(fn)); }
+
+  /// Lockstep participant, from a task: this tick's STEP_ACK waits until release_ack(). For
+  /// a process whose output for the tick depends on an input still in flight (the CAN bridge
+  /// acknowledges a control cycle once that cycle's command has crossed the bus). The master
+  /// names the process if the release does not come within its ack timeout.
+  void hold_ack() { ack_hold_requested_ = true; }
+  /// Sends the held STEP_ACK, then the deferred outputs. No effect if nothing is held.
+  void release_ack();
+  /// True while a STEP_ACK is held.
+  bool ack_held() const { return ack_held_ || ack_hold_requested_; }
+
   /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
   void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
 
@@ -160,6 +184,10 @@ class ProcessNode {
   int run_lockstep_participant();
   int run_lockstep_master();
   void idle_until_stopped();
+  /// Waits up to `timeout_ns` for LCM or a watched descriptor and handles what is ready
+  /// (0: poll). Returns the number of descriptors that were ready.
+  int wait_io(int64_t timeout_ns);
+  void publish_ack(int64_t step, int64_t utime);
   void on_run_control(const run_control_t& msg);
   int64_t next_due_ns() const;
 
@@ -190,6 +218,15 @@ class ProcessNode {
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
   std::vector<std::function<void()>> deferred_;
+  struct Watched {
+    int fd;
+    std::function<void()> on_readable;
+  };
+  std::vector<Watched> watched_;
+  std::vector<std::function<void()>> housekeeping_hooks_;
+  bool ack_hold_requested_ = false;
+  bool ack_held_ = false;
+  int64_t held_step_ = 0, held_utime_ = 0;
   void run_deferred();
   int64_t spin_ns_ = 0;
   int64_t loop_count_ = 0;

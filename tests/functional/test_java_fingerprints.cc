@@ -13,6 +13,7 @@
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/can_health_t.hpp>
 #include <nimble/controller_status_t.hpp>
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
@@ -39,6 +40,7 @@ TEST_CASE("Java and C++ fingerprints agree for every type", "[lcmtypes][java]") 
   add<nimble::actuator_command_t>(cpp);
   add<nimble::actuator_feedback_t>(cpp);
   add<nimble::attitude_setpoint_t>(cpp);
+  add<nimble::can_health_t>(cpp);
   add<nimble::controller_status_t>(cpp);
   add<nimble::estimator_state_t>(cpp);
   add<nimble::fault_event_t>(cpp);

@@ -8,6 +8,7 @@
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/can_health_t.hpp>
 #include <nimble/controller_status_t.hpp>
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
@@ -210,6 +211,63 @@ void require_equal(const nimble::actuator_feedback_t& a, const nimble::actuator_
   REQUIRE(a.cmd_seq == b.cmd_seq);
   REQUIRE(a.cmd_age_us == b.cmd_age_us);
   REQUIRE(a.safe_state == b.safe_state);
+}
+
+
+// --- can_health_t ---------------------------------------------------------------------------
+void fill(nimble::can_health_t& m, Distinct& g) {
+  m.utime = g.i64();
+  m.seq = g.i64();
+  m.process = "can_rig";
+  m.role = nimble::can_health_t::ROLE_RIG;
+  m.interface_name = "vcan0";
+  m.messages_to_can = g.i64();
+  m.messages_to_lcm = g.i64();
+  m.frames_sent = g.i64();
+  m.frames_received = g.i64();
+  m.send_enobufs = g.i64();
+  m.send_retries = g.i64();
+  m.send_dropped = g.i64();
+  m.receive_dropped = g.i64();
+  m.rejected_unknown_id = g.i64();
+  m.rejected_wrong_length = g.i64();
+  m.rejected_bad_checksum = g.i64();
+  m.rejected_stale_counter = g.i64();
+  m.rejected_out_of_range = g.i64();
+  m.counter_gaps = g.i64();
+  m.saturated_values = g.i64();
+  m.error_frames = g.i64();
+  m.candump_lines = g.i64();
+  m.bus_state = nimble::can_health_t::BUS_PASSIVE;
+  m.last_error = "controller: TX error-passive";
+  m.candump_file = "/tmp/run.candump";
+}
+void require_equal(const nimble::can_health_t& a, const nimble::can_health_t& b) {
+  REQUIRE(a.utime == b.utime);
+  REQUIRE(a.seq == b.seq);
+  REQUIRE(a.process == b.process);
+  REQUIRE(a.role == b.role);
+  REQUIRE(a.interface_name == b.interface_name);
+  REQUIRE(a.messages_to_can == b.messages_to_can);
+  REQUIRE(a.messages_to_lcm == b.messages_to_lcm);
+  REQUIRE(a.frames_sent == b.frames_sent);
+  REQUIRE(a.frames_received == b.frames_received);
+  REQUIRE(a.send_enobufs == b.send_enobufs);
+  REQUIRE(a.send_retries == b.send_retries);
+  REQUIRE(a.send_dropped == b.send_dropped);
+  REQUIRE(a.receive_dropped == b.receive_dropped);
+  REQUIRE(a.rejected_unknown_id == b.rejected_unknown_id);
+  REQUIRE(a.rejected_wrong_length == b.rejected_wrong_length);
+  REQUIRE(a.rejected_bad_checksum == b.rejected_bad_checksum);
+  REQUIRE(a.rejected_stale_counter == b.rejected_stale_counter);
+  REQUIRE(a.rejected_out_of_range == b.rejected_out_of_range);
+  REQUIRE(a.counter_gaps == b.counter_gaps);
+  REQUIRE(a.saturated_values == b.saturated_values);
+  REQUIRE(a.error_frames == b.error_frames);
+  REQUIRE(a.candump_lines == b.candump_lines);
+  REQUIRE(a.bus_state == b.bus_state);
+  REQUIRE(a.last_error == b.last_error);
+  REQUIRE(a.candump_file == b.candump_file);
 }
 
 // --- attitude_setpoint_t -------------------------------------------------------------------
@@ -480,6 +538,7 @@ const char* channel_of(const nimble::run_control_t*) { return "RUN_CONTROL"; }
 const char* channel_of(const nimble::heartbeat_t*) { return "HEARTBEAT"; }
 const char* channel_of(const nimble::timing_health_t*) { return "TIMING_HEALTH"; }
 const char* channel_of(const nimble::fault_event_t*) { return "FAULT"; }
+const char* channel_of(const nimble::can_health_t*) { return "CAN_HEALTH"; }
 
 template <typename T>
 T make_sample() {
@@ -520,7 +579,7 @@ class Receiver {
       nimble::actuator_command_t, nimble::actuator_feedback_t, nimble::attitude_setpoint_t, \
       nimble::estimator_state_t, nimble::controller_status_t, nimble::rig_clock_t,          \
       nimble::step_ack_t, nimble::run_control_t, nimble::heartbeat_t, nimble::timing_health_t, \
-      nimble::fault_event_t
+      nimble::fault_event_t, nimble::can_health_t
 
 TEMPLATE_TEST_CASE("encode and decode preserve every field", "[lcmtypes]", RIG_LCM_TYPES) {
   const TestType in = make_sample<TestType>();
@@ -630,7 +689,7 @@ TEST_CASE("every type has its own fingerprint", "[lcmtypes]") {
       nimble::rig_clock_t::getHash(),        nimble::step_ack_t::getHash(),
       nimble::run_control_t::getHash(),
       nimble::heartbeat_t::getHash(),        nimble::timing_health_t::getHash(),
-      nimble::fault_event_t::getHash()};
+      nimble::fault_event_t::getHash(),      nimble::can_health_t::getHash()};
   const std::set<int64_t> unique(hashes.begin(), hashes.end());
   REQUIRE(unique.size() == hashes.size());
 }

@@ -1,0 +1,41 @@
+#pragma once
+/// The scenario's actuator link: `actuator_link: lcm | can` and the `can_bridge` section.
+///
+///   actuator_link: can            # lcm (default): the plant takes ACTUATOR_CMD directly
+///   can_bridge:
+///     interface: vcan0            # SocketCAN interface, e.g. vcan0 (virtual) or can0
+///     create_virtual: true        # rig run creates it as a vcan in the run's network namespace
+///     candump_log: true           # the rig side writes <log>.candump (canplayer replays it)
+///     health_rate_hz: 2           # CAN_HEALTH rate of each side [Hz]
+///     receive_buffer_bytes: 0     # SO_RCVBUF of the bridge sockets; 0 = kernel default
+///
+/// With `actuator_link: can` the launcher adds the two sides of the bridge to the run's
+/// processes: `can_flight` (flight board: ACTUATOR_CMD -> frames, feedback frames ->
+/// ACTUATOR_FB_CAN) and `can_rig` (HIL bench: command frames -> ACTUATOR_CMD_CAN for the plant,
+/// ACTUATOR_FB -> frames). Both run the executable nimble_can_bridge.
+
+#include <string>
+
+#include "core/config.h"
+
+namespace nimble::can {
+
+/// Process names of the two sides of the bridge.
+inline const std::string kFlightProcess = "can_flight";
+inline const std::string kRigProcess = "can_rig";
+
+struct CanBridgeConfig {
+  std::string interface = "vcan0";
+  bool create_virtual = true;
+  bool candump_log = true;
+  /// Set by the launcher in the resolved scenario (next to the run's log); empty: no log.
+  std::string candump_file;
+  double health_rate_hz = 2.0;
+  int receive_buffer_bytes = 0;
+};
+
+/// Reads and validates the `can_bridge` section (every key optional).
+/// @throws ConfigError naming the key, e.g. an interface name longer than 15 characters.
+CanBridgeConfig can_bridge_config_from(ConfigMap& section);
+
+}  // namespace nimble::can

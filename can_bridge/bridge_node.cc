@@ -1,0 +1,233 @@
+#include "can_bridge/bridge_node.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+
+#include <nimble/can_health_t.hpp>
+#include <nimble/fault_event_t.hpp>
+
+#include "transport/clock.h"
+
+namespace nimble::can {
+
+namespace {
+
+using transport::ProcessNode;
+namespace ch = transport::channels;
+
+int64_t realtime_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+std::string hex_id(const can_frame& f) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%03X", f.can_id & CAN_EFF_MASK);
+  return buf;
+}
+
+/// The controller's rate: one command per control cycle (controller section, default 512 Hz).
+double controller_rate_hz(const Scenario& scenario) {
+  const YAML::Node rate = scenario.root["controller"]["rate_hz"];
+  return rate ? rate.as<double>() : 512.0;
+}
+
+}  // namespace
+
+CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options) {
+  if (options.name == kFlightProcess) {
+    role_ = Role::kFlight;
+  } else if (options.name == kRigProcess) {
+    role_ = Role::kRig;
+  } else {
+    throw ConfigError(options.scenario_file, "--name", options.name,
+                      "the CAN bridge runs as '" + kFlightProcess + "' (flight-board side) or '" + kRigProcess +
+                          "' (rig side)");
+  }
+  ConfigMap section = scenario.section("can_bridge");
+  config_ = can_bridge_config_from(section);
+
+  CanSocketOptions so;
+  so.receive_all = true;  // unknown identifiers are counted, not filtered away unseen
+  so.error_frames = true;
+  so.timestamps = true;
+  so.receive_buffer_bytes = config_.receive_buffer_bytes;
+  socket_.emplace(CanSocket::open(config_.interface, so));
+  if (role_ == Role::kRig && config_.candump_log && !config_.candump_file.empty()) {
+    candump_ = std::make_unique<CandumpWriter>(config_.candump_file);
+  }
+
+  node_ = std::make_unique<ProcessNode>(options.name, options.lcm_url);
+  node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
+  health_period_ns_ = static_cast<int64_t>(1e9 / config_.health_rate_hz);
+  node_->on_housekeeping([this] {
+    if (transport::monotonic_ns() >= next_health_wall_ns_) publish_health();
+  });
+
+  const double cycle_hz = controller_rate_hz(scenario);
+  cycle_period_ns_ = static_cast<int64_t>(std::llround(1e9 / cycle_hz));
+  // Lockstep only: in real time an input-triggered task never runs unless notified.
+  node_->add_task("control_cycle", cycle_hz, [this](int64_t t) { on_cycle(t); },
+                  ProcessNode::Trigger::kInput);
+
+  if (role_ == Role::kFlight) {
+    node_->set_expected_rate(ch::kActuatorCommand, cycle_hz);
+    node_->bus().subscribe<actuator_command_t>(ch::kActuatorCommand,
+                                               [this](const actuator_command_t& c) { on_command(c); });
+  } else {
+    node_->bus().subscribe<actuator_feedback_t>(ch::kActuatorFeedback,
+                                                [this](const actuator_feedback_t& f) { on_feedback(f); });
+  }
+}
+
+CanBridgeNode::~CanBridgeNode() {
+  if (candump_) candump_->flush();
+}
+
+int CanBridgeNode::run() {
+  const int code = node_->run();
+  drain_socket();
+  if (candump_) candump_->flush();
+  publish_health();
+  return code;
+}
+
+int64_t CanBridgeNode::rig_time_us() const {
+  if (node_->lockstep()) return node_->sim_time_ns() / 1000;
+  const int64_t t0 = node_->t0_monotonic_ns();
+  return t0 > 0 ? (transport::monotonic_ns() - t0) / 1000 : 0;
+}
+
+void CanBridgeNode::on_cycle(int64_t /*sim_time_ns*/) {
+  ++cycles_due_;
+  if (commands_crossed_ < cycles_due_) node_->hold_ack();
+}
+
+void CanBridgeNode::log_frame(const can_frame& frame, int64_t realtime) {
+  if (candump_) candump_->write(frame, realtime, config_.interface);
+}
+
+void CanBridgeNode::send(const can_frame& frame) {
+  const SendResult r = socket_->send(frame);
+  log_frame(frame, realtime_ns());
+  if (r == SendResult::kSent) return;
+  node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_QUEUE_DROP, "CAN " + config_.interface,
+               "frame " + hex_id(frame) + " not sent on " + config_.interface + ": " +
+                   (r == SendResult::kDropped ? "transmit queue full after every retry (ENOBUFS)"
+                                              : std::string(std::strerror(socket_->stats().last_errno))));
+}
+
+void CanBridgeNode::on_command(const actuator_command_t& cmd) {
+  for (const can_frame& f : command_encoder_.encode(cmd)) send(f);
+  ++messages_to_can_;
+  ++commands_crossed_;
+  if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
+}
+
+void CanBridgeNode::on_feedback(const actuator_feedback_t& fb) {
+  for (const can_frame& f : feedback_encoder_.encode(fb)) send(f);
+  ++messages_to_can_;
+}
+
+void CanBridgeNode::drain_socket() {
+  ReceivedFrame rx;
+  // Bounded, so that a flooded bus cannot starve LCM; the wait loop comes back at once.
+  for (int i = 0; i < 256 && socket_->receive(&rx, 0) == ReceiveResult::kFrame; ++i) {
+    if (rx.is_error_frame) on_error_frame(rx);
+    else on_frame(rx);
+  }
+}
+
+void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
+  log_frame(rx.frame, rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns());
+  if (role_ == Role::kRig) {
+    actuator_command_t cmd;
+    const DecodeResult r = command_decoder_.decode(rx.frame, &cmd);
+    if (r == DecodeResult::kMessageComplete) {
+      // Lockstep: the command of the next control cycle still owed an acknowledgement.
+      cmd.utime = node_->lockstep() ? commands_crossed_ * cycle_period_ns_ / 1000 : rig_time_us();
+      cmd.source = node_->name();
+      cmd.input_utime = -1;
+      node_->bus().publish(ch::kActuatorCommandCan, cmd);
+      ++messages_to_lcm_;
+      ++commands_crossed_;
+      if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
+    } else if (r != DecodeResult::kAccepted) {
+      reject(rx.frame, r);
+    }
+  } else {
+    actuator_feedback_t fb;
+    const DecodeResult r = feedback_decoder_.decode(rx.frame, &fb);
+    if (r == DecodeResult::kMessageComplete) {
+      fb.utime = rig_time_us();
+      fb.seq = feedback_seq_++;
+      node_->bus().publish(ch::kActuatorFeedbackCan, fb);
+      ++messages_to_lcm_;
+    } else if (r != DecodeResult::kAccepted) {
+      reject(rx.frame, r);
+    }
+  }
+}
+
+void CanBridgeNode::reject(const can_frame& frame, DecodeResult result) {
+  char data[3 * CAN_MAX_DLEN + 1] = {0};
+  for (int i = 0; i < frame.can_dlc && i < CAN_MAX_DLEN; ++i) {
+    std::snprintf(data + 3 * i, 4, "%02X ", frame.data[i]);
+  }
+  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, "CAN " + config_.interface,
+               "dropped frame " + hex_id(frame) + " [" + std::to_string(frame.can_dlc) + "] " + data + "on " +
+                   config_.interface + ": " + to_string(result));
+}
+
+void CanBridgeNode::on_error_frame(const ReceivedFrame& rx) {
+  log_frame(rx.frame, rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns());
+  const ErrorFrameInfo& e = rx.error;
+  if (e.bus_off) bus_state_ = can_health_t::BUS_OFF;
+  else if (e.error_passive) bus_state_ = can_health_t::BUS_PASSIVE;
+  else if (e.error_warning) bus_state_ = can_health_t::BUS_WARNING;
+  else if (e.back_to_error_active || e.restarted) bus_state_ = can_health_t::BUS_ACTIVE;
+  last_error_ = e.description;
+  node_->fault(e.bus_off ? fault_event_t::SEVERITY_ERROR : fault_event_t::SEVERITY_WARNING,
+               fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
+               "error frame on " + config_.interface + ": " + e.description);
+}
+
+void CanBridgeNode::publish_health() {
+  const CanSocketStats& s = socket_->stats();
+  const DecodeStats& d = role_ == Role::kRig ? command_decoder_.stats() : feedback_decoder_.stats();
+  const EncodeStats& enc = role_ == Role::kFlight ? command_encoder_.stats() : feedback_encoder_.stats();
+  can_health_t h;
+  h.utime = transport::wall_us();
+  h.seq = health_seq_++;
+  h.process = node_->name();
+  h.role = role_ == Role::kFlight ? can_health_t::ROLE_FLIGHT : can_health_t::ROLE_RIG;
+  h.interface_name = config_.interface;
+  h.messages_to_can = messages_to_can_;
+  h.messages_to_lcm = messages_to_lcm_;
+  h.frames_sent = static_cast<int64_t>(s.frames_sent);
+  h.frames_received = static_cast<int64_t>(s.frames_received);
+  h.send_enobufs = static_cast<int64_t>(s.send_enobufs);
+  h.send_retries = static_cast<int64_t>(s.send_retries);
+  h.send_dropped = static_cast<int64_t>(s.send_dropped + s.send_errors);
+  h.receive_dropped = static_cast<int64_t>(s.receive_dropped);
+  h.rejected_unknown_id = static_cast<int64_t>(d.unknown_id);
+  h.rejected_wrong_length = static_cast<int64_t>(d.wrong_length);
+  h.rejected_bad_checksum = static_cast<int64_t>(d.bad_checksum);
+  h.rejected_stale_counter = static_cast<int64_t>(d.stale_counter);
+  h.rejected_out_of_range = static_cast<int64_t>(d.out_of_range);
+  h.counter_gaps = static_cast<int64_t>(d.counter_gaps);
+  h.saturated_values = static_cast<int64_t>(enc.saturated_values + enc.non_finite_values);
+  h.error_frames = static_cast<int64_t>(s.error_frames);
+  h.bus_state = bus_state_;
+  h.last_error = last_error_;
+  h.candump_file = candump_ ? candump_->path() : "";
+  h.candump_lines = candump_ ? static_cast<int64_t>(candump_->lines_written()) : 0;
+  node_->bus().publish(ch::kCanHealth, h);
+  next_health_wall_ns_ = transport::monotonic_ns() + health_period_ns_;
+  if (candump_) candump_->flush();
+}
+
+}  // namespace nimble::can

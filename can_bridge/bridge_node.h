@@ -1,0 +1,101 @@
+#pragma once
+/// nimble_can_bridge: one side of the CAN actuator link, as a rig process.
+///
+/// The side is the process name: `can_flight` or `can_rig` (bridge_config.h).
+///
+/// can_flight (the flight board's CAN interface):
+///   Subscribes  ACTUATOR_CMD      actuator_command_t   512 Hz   -> NIMBLE_CMD_FLAP + NIMBLE_CMD_SERVO
+///   Publishes   ACTUATOR_FB_CAN   actuator_feedback_t  100 Hz   <- NIMBLE_FB_MOTOR/SERVO/STATUS
+/// can_rig (the HIL bench's actuator side):
+///   Publishes   ACTUATOR_CMD_CAN  actuator_command_t   512 Hz   <- command frames; the plant's input
+///   Subscribes  ACTUATOR_FB       actuator_feedback_t  100 Hz   -> feedback frames
+/// Both:
+///   Publishes   CAN_HEALTH        can_health_t         health_rate_hz (wall clock) and at exit
+///               FAULT             error frames (CODE_CAN_ERROR_FRAME), dropped frames
+///                                 (CODE_MESSAGE_MALFORMED), failed sends (CODE_QUEUE_DROP)
+///   and HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode).
+///
+/// Frames: can_bridge/nimble_rig.dbc. Every received frame goes through the decoder, which
+/// counts and drops unknown identifiers, wrong lengths, bad checksums, stale counters and
+/// out-of-range values; nothing a frame contains can stop the bridge.
+///
+/// Lockstep: each side is a participant due at the controller's rate. At each control cycle
+/// it acknowledges only once that cycle's command has crossed its part of the link
+/// (can_flight: sent as frames; can_rig: decoded and published), so the plant steps on the
+/// command exactly as it would over LCM and the truth is the same over either link.
+///
+/// Decoded commands carry `utime` = the control cycle's rig time, `source` = the process
+/// name and `input_utime` = -1 (the frames do not carry it).
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+
+#include "can_bridge/bridge_config.h"
+#include "can_bridge/can_socket.h"
+#include "can_bridge/candump_log.h"
+#include "can_bridge/codec.h"
+#include "scenario/scenario.h"
+#include "transport/node.h"
+
+namespace nimble::can {
+
+class CanBridgeNode {
+ public:
+  enum class Role { kFlight, kRig };
+
+  /// @throws ConfigError on bad configuration or an unknown process name; CanError if the
+  ///         interface cannot be opened (the message names it and says how to create it).
+  CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options);
+  ~CanBridgeNode();
+
+  int run();
+  transport::ProcessNode& node() { return *node_; }
+  Role role() const { return role_; }
+
+  /// Reads every frame waiting on the socket (also called by the node's wait loop).
+  void drain_socket();
+  /// Publishes CAN_HEALTH now.
+  void publish_health();
+
+ private:
+  void on_command(const actuator_command_t& cmd);
+  void on_feedback(const actuator_feedback_t& fb);
+  void on_frame(const ReceivedFrame& rx);
+  void on_error_frame(const ReceivedFrame& rx);
+  void reject(const can_frame& frame, DecodeResult result);
+  void send(const can_frame& frame);
+  void log_frame(const can_frame& frame, int64_t realtime_ns);
+  void on_cycle(int64_t sim_time_ns);
+  int64_t rig_time_us() const;
+
+  Role role_;
+  CanBridgeConfig config_;
+  std::unique_ptr<transport::ProcessNode> node_;
+  std::optional<CanSocket> socket_;
+  std::unique_ptr<CandumpWriter> candump_;
+  int64_t cycle_period_ns_ = 0;
+
+  CommandEncoder command_encoder_;
+  FeedbackEncoder feedback_encoder_;
+  CommandDecoder command_decoder_;
+  FeedbackDecoder feedback_decoder_;
+
+  // Lockstep: control cycles acknowledged, and commands that crossed the link.
+  int64_t cycles_due_ = 0;
+  int64_t commands_crossed_ = 0;
+
+  int64_t messages_to_can_ = 0, messages_to_lcm_ = 0;
+  int64_t feedback_seq_ = 0;
+  int8_t bus_state_ = 0;
+  std::string last_error_;
+  int64_t health_seq_ = 0;
+  int64_t next_health_wall_ns_ = 0;
+  int64_t health_period_ns_ = 0;
+};
+
+}  // namespace nimble::can
