@@ -40,6 +40,7 @@ constexpr const char* kIdentifyUsage =
     "  --w0 M_PER_S                   trim vertical velocity of Eq 21 (default 0)\n"
     "  --u0 M_PER_S                   trim forward velocity, lateral4 (default 0)\n"
     "  --rate HZ                      resampling rate (default 512)\n"
+    "  --interpolation cubic|linear   resampling of every channel (default cubic)\n"
     "  --cutoff HZ                    low-pass cut-off (default 9)\n"
     "  --order N                      Butterworth order, 0 = no low-pass (default 10)\n"
     "  --wls-window S                 WLS residual-covariance window (default 2 s)\n"
@@ -55,13 +56,14 @@ constexpr const char* kValidateUsage =
     "  measured states and inputs against the measured ones (thesis Tables 7-8).\n"
     "  --vehicle FILE   use this vehicle instead of the model's\n"
     "  --rate HZ, --cutoff HZ, --order N   processing (defaults 512, 9, 10)\n"
+    "  --interpolation cubic|linear        resampling (default cubic)\n"
     "  --lags N         whiteness lags (default 50)\n"
     "  --json FILE      write the JSON report to FILE ('-' for stdout)\n"
     "  --plots DIR      PNG plots via gnuplot (Debian package gnuplot-nox)\n"
     "  --closed-loop    closed-loop validation instead (thesis Tables 9-11): the model flown by a copy\n"
     "                   of the attitude controller and the flap actuator on the data's phi_sp and\n"
     "                   delta_t, from the measured initial state; simulated p, v, phi, delta_f\n"
-    "                   against the measured ones\n"
+    "                   against the measured ones; --plots draws their time histories (closed_loop.png)\n"
     "  --gains NAME     roll gain set of the controller copy (default fast)\n"
     "  --controller FILE  controller configuration (default rig_configs/controller/nimble_attitude.yaml)\n";
 
@@ -158,6 +160,10 @@ bool processing_option(Args& it, ident::ProcessingOptions& p) {
     p.cutoff_hz = number(a, it.value());
   } else if (a == "--order") {
     p.filter_order = integer(a, it.value(), 0, 40);
+  } else if (a == "--interpolation") {
+    const std::string m = it.value();
+    if (m != "linear" && m != "cubic") throw UsageError("--interpolation: '" + m + "' is not cubic or linear");
+    p.interpolation = ident::interpolation_from_string(m);
   } else {
     return false;
   }
@@ -302,7 +308,10 @@ int run_validate_command(const std::vector<std::string>& args) {
     ident::ClosedLoopOptions cl;
     cl.controller = load_controller_config(controller_file);
     cl.gain_set = gains;
+    cl.interpolation = opt.processing.interpolation;
     const ident::ClosedLoopResult r = ident::validate_closed_loop(data, model, vehicle, cl);
+    std::vector<std::string> pngs;
+    if (!plots.empty()) pngs = ident::plot_closed_loop(r, plots);
     JsonWriter w;
     w.begin_object();
     w.key("source").value(r.source).key("model").value(model.name).key("gain_set").value(r.gain_set);
@@ -324,7 +333,11 @@ int run_validate_command(const std::vector<std::string>& args) {
       w.end_object();
     }
     w.end_object();
+    if (!pngs.empty()) w.key("plots").array(pngs);
     w.end_object();
+    if (json != "-") {
+      for (const auto& p : pngs) std::cout << "plot " << p << "\n";
+    }
     if (!json.empty()) write_json(json, w.str());
     return 0;
   }
@@ -344,7 +357,7 @@ namespace {
 constexpr const char* kExportUsage =
     "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]\n"
     "  Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
-    "  linearly resampled onto one grid (default 512 Hz). States come from the estimator\n"
+    "  resampled onto one grid (default 512 Hz, cubic interpolation). States come from the estimator\n"
     "  (ESTIMATE) when the log has it, else from the plant's truth; inputs from ACTUATOR_FB;\n"
     "  phi_sp from ATTITUDE_SP.\n";
 

@@ -1,8 +1,10 @@
 #include "ident/closed_loop.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
+#include "ident/plots.h"
 #include "ident/signal.h"
 
 namespace nimble::ident {
@@ -29,7 +31,7 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   }
 
   const double rate_hz = options.controller.rate_hz;
-  const UniformData grid = resample_uniform(data, rate_hz);
+  const UniformData grid = resample_uniform(data, rate_hz, options.interpolation);
   const Eigen::Index n = grid.size();
 
   // Plant x = [p v phi delta_f], inputs [delta_f_cmd, delta_t]: the model with the flap
@@ -64,6 +66,8 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
 
   ClosedLoopResult r;
   r.source = data.source;
+  r.model = model.name;
+  r.phi_sp = phi_sp;
   r.gain_set = options.gain_set;
   r.rate_hz = rate_hz;
   r.t_s = grid.t_s;
@@ -86,6 +90,32 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   }
   for (const auto& [name, m] : r.measured) r.fits[name] = fit_metrics(m, r.simulated[name], 1);
   return r;
+}
+
+std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::string& dir) {
+  struct Signal {
+    const char* name;
+    const char* unit;
+  };
+  const Signal signals[] = {{"p", "rad/s"}, {"phi", "rad"}, {"v", "m/s"}, {"delta_f", "rad/s"}};
+  std::vector<TimePanel> panels;
+  for (const Signal& s : signals) {
+    const FitMetrics& f = r.fits.at(s.name);
+    char title[200];
+    std::snprintf(title, sizeof title, "%s   r_xy %.3f  R^2 %.3f  RMSE %.3g %s (%.1f %% of range)", s.name, f.rxy, f.r2,
+                  f.rmse, s.unit, f.rmse_pct_range);
+    TimePanel panel;
+    panel.name = s.name;
+    panel.title = title;
+    panel.ylabel = std::string(s.name) + " [" + s.unit + "]";
+    panel.series.push_back({"measured", r.measured.at(s.name), "#1f77b4", false});
+    panel.series.push_back({"simulated", r.simulated.at(s.name), "#d62728", false});
+    if (std::string(s.name) == "phi") panel.series.push_back({"phi_sp", r.phi_sp, "#2ca02c", true});
+    panels.push_back(std::move(panel));
+  }
+  const std::string title = "closed-loop validation: " + r.model + " flown by the controller copy (gains " + r.gain_set +
+                            ") on phi_sp of " + r.source;
+  return {plot_time_histories(dir, "closed_loop", title, r.t_s, panels)};
 }
 
 }  // namespace nimble::ident

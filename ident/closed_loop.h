@@ -7,6 +7,7 @@
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -15,6 +16,7 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 #include "ident/metrics.h"
+#include "ident/signal.h"
 
 namespace nimble::ident {
 
@@ -23,15 +25,18 @@ struct ClosedLoopOptions {
   std::string gain_set = "fast";  ///< roll gain set flown
   double flap_gain_per_s = 8.97;  ///< flap actuator numerator (thesis Eq 33) [1/s]
   double flap_pole_radps = 12.56; ///< flap actuator pole (thesis Eq 33) [rad/s]
+  Interpolation interpolation = Interpolation::kCubic;  ///< resampling onto the controller's rate
 };
 
 struct ClosedLoopResult {
   std::string source;
+  std::string model;  ///< name of the model flown
   std::string gain_set;
   double rate_hz = 0.0;
   Eigen::VectorXd t_s;
   /// Measured and simulated p [rad/s], v [m/s], phi [rad], delta_f [rad/s].
   std::map<std::string, Eigen::VectorXd> measured, simulated;
+  Eigen::VectorXd phi_sp;  ///< roll set-point flown [rad]
   /// Fit of each simulated signal against the measured one (P = 1: nothing fitted).
   std::map<std::string, FitMetrics> fits;
 };
@@ -42,5 +47,11 @@ struct ClosedLoopResult {
 ///         std::invalid_argument if the model does not fit or the gain set is unknown.
 ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                       const ClosedLoopOptions& options);
+
+/// Writes closed_loop.png into `dir` (with its .dat data and .gp script): the time
+/// histories of p, phi (with phi_sp), v and delta_f, measured against simulated, each
+/// panel titled with its r_xy, R^2 and RMSE. Returns the PNG paths.
+/// @throws std::runtime_error if gnuplot (Debian package gnuplot-nox) is missing or fails.
+std::vector<std::string> plot_closed_loop(const ClosedLoopResult& result, const std::string& dir);
 
 }  // namespace nimble::ident

@@ -116,7 +116,7 @@ PreparedData prepare(const FlightData& data, Structure structure, const Trim& tr
   const std::vector<std::string>& states = state_names(structure);
   require_channels(data, states, "structure " + to_string(structure));
   PreparedData out;
-  out.raw = resample_uniform(data, options.rate_hz);
+  out.raw = resample_uniform(data, options.rate_hz, options.interpolation);
   out.filtered = out.raw;
   if (options.filter_order > 0) {
     const auto sos = butterworth_lowpass(options.filter_order, options.cutoff_hz, options.rate_hz);

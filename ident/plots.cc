@@ -232,6 +232,61 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
           plot_eigenvalues(d, result)};
 }
 
+std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
+                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels) {
+  if (panels.empty()) throw std::invalid_argument("plot " + name + ": no panel");
+  for (const auto& panel : panels) {
+    if (panel.series.empty()) throw std::invalid_argument("plot " + name + ": panel '" + panel.title + "' has no series");
+    for (const auto& c : panel.series) {
+      if (c.y.size() != t_s.size()) {
+        throw std::invalid_argument("plot " + name + ": series '" + c.label + "' has " + std::to_string(c.y.size()) +
+                                    " samples, the time vector " + std::to_string(t_s.size()));
+      }
+    }
+  }
+  const fs::path d = make_dir(dir);
+  const fs::path dat = d / (name + ".dat");
+  std::ostringstream data;
+  data << "# t_s";
+  for (const auto& panel : panels) {
+    for (const auto& c : panel.series) {
+      std::string column = panel.name + ":" + c.label;
+      for (char& ch : column) ch = (ch == ' ') ? '_' : ch;
+      data << " " << column;
+    }
+  }
+  data << "\n";
+  for (Eigen::Index k = 0; k < t_s.size(); ++k) {
+    data << g(t_s[k]);
+    for (const auto& panel : panels) {
+      for (const auto& c : panel.series) data << " " << g(c.y[k]);
+    }
+    data << "\n";
+  }
+  write_text(dat, data.str());
+  const fs::path png = d / (name + ".png");
+  const int n = static_cast<int>(panels.size());
+  std::ostringstream s;
+  s << terminal(1400, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
+  s << "set grid\nset key top right\nset xlabel 'time [s]'\n";
+  int column = 2;
+  for (const auto& panel : panels) {
+    s << "set title " << gp_quote(panel.title) << " noenhanced\n";
+    s << "set ylabel " << gp_quote(panel.ylabel) << " noenhanced\n";
+    s << "plot ";
+    for (std::size_t i = 0; i < panel.series.size(); ++i) {
+      const PlotSeries& c = panel.series[i];
+      s << (i == 0 ? gp_quote(dat.string()) : std::string("''")) << " using 1:" << column++
+        << " with lines lw 1.2" << (c.dashed ? " dt 2" : "") << " lc rgb " << gp_quote(c.colour) << " title "
+        << gp_quote(c.label) << (i + 1 < panel.series.size() ? ", \\\n     " : "\n");
+    }
+  }
+  s << "unset multiplot\n";
+  run_gnuplot(d, name, s.str());
+  return png.string();
+}
+
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir) {
   const fs::path d = make_dir(dir);
   const std::string what = result.source + " with model " + result.model.name;

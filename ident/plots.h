@@ -11,6 +11,22 @@
 
 namespace nimble::ident {
 
+/// One curve of a time-history panel.
+struct PlotSeries {
+  std::string label;
+  Eigen::VectorXd y;                ///< one value per time sample
+  std::string colour = "#1f77b4";   ///< gnuplot rgb colour
+  bool dashed = false;
+};
+
+/// One panel of a time-history plot.
+struct TimePanel {
+  std::string name;   ///< short name: the data columns are <name>:<label> (spaces as _)
+  std::string title;
+  std::string ylabel;
+  std::vector<PlotSeries> series;
+};
+
 /// True if a `gnuplot` executable is on the PATH.
 bool gnuplot_available();
 
@@ -28,5 +44,13 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
 /// Writes derivatives.png and autocorrelation.png of an open-loop validation into `dir`.
 /// @throws std::runtime_error as plot_identification.
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir);
+
+/// Time histories over `t_s`, one panel per entry stacked under `title`: writes
+/// <name>.dat (t and every series, one column each), <name>.gp and <name>.png into `dir`
+/// (created if needed). Returns the path of the PNG.
+/// @throws std::invalid_argument if there is no panel, a panel has no series or a series
+///         is not as long as t_s; std::runtime_error as plot_identification.
+std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
+                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels);
 
 }  // namespace nimble::ident

@@ -112,12 +112,13 @@ std::string identification_text(const IdentResult& r) {
   out += fmt("identify   %s\n", r.source.c_str());
   out += fmt("data       %ld samples at %.6g Hz (%.3f s)\n", static_cast<long>(d.size()), d.rate_hz,
              d.size() > 0 ? d.t_s[d.size() - 1] - d.t_s[0] : 0.0);
+  const std::string interpolation = to_string(o.processing.interpolation);
   if (o.processing.filter_order > 0) {
-    out += fmt("processing linear resampling; zero-phase Butterworth low-pass, order %d, cut-off %.4g Hz;"
+    out += fmt("processing %s resampling; zero-phase Butterworth low-pass, order %d, cut-off %.4g Hz;"
                " 4th-order central differences\n",
-               o.processing.filter_order, o.processing.cutoff_hz);
+               interpolation.c_str(), o.processing.filter_order, o.processing.cutoff_hz);
   } else {
-    out += "processing linear resampling, no low-pass; 4th-order central differences\n";
+    out += fmt("processing %s resampling, no low-pass; 4th-order central differences\n", interpolation.c_str());
   }
   std::string inputs;
   for (const auto& in : r.inputs) inputs += (inputs.empty() ? "" : ", ") + in;
@@ -202,6 +203,7 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
   w.end_object();
   w.key("processing").begin_object();
   w.key("rate_hz").value(o.processing.rate_hz);
+  w.key("interpolation").value(to_string(o.processing.interpolation));
   w.key("filter_order").value(o.processing.filter_order);
   w.key("cutoff_hz").value(o.processing.cutoff_hz);
   w.key("samples").value(static_cast<long long>(r.data.filtered.size()));

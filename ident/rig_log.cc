@@ -13,22 +13,32 @@
 namespace nimble::ident {
 namespace {
 
-/// Appends a sample unless its time does not increase (a repeated stamp is skipped).
-void append(Channel& c, double t_s, double value) {
-  if (!c.t_s.empty() && t_s <= c.t_s.back()) return;
+/// What append() does with a sample whose time is not after the last one.
+enum class Repeat {
+  kSkip,     ///< keep the first sample of that time
+  kReplace,  ///< a repeated time replaces the last sample (newer information about the same instant)
+};
+
+/// Appends a sample; a time before the last one is skipped, a repeated time per `repeat`.
+void append(Channel& c, double t_s, double value, Repeat repeat = Repeat::kSkip) {
+  if (!c.t_s.empty() && t_s <= c.t_s.back()) {
+    if (repeat == Repeat::kReplace && t_s == c.t_s.back()) c.values.back() = value;
+    return;
+  }
   c.t_s.push_back(t_s);
   c.values.push_back(value);
 }
 
 /// Appends one sample of the nine states (rates, body velocity, attitude) at time t.
-void append_states(FlightData& d, double t, const double omega[3], const double velocity[3], const double euler[3]) {
+void append_states(FlightData& d, double t, const double omega[3], const double velocity[3], const double euler[3],
+                   Repeat repeat = Repeat::kSkip) {
   static const char* const kRates[] = {"p", "q", "r"};
   static const char* const kVelocities[] = {"u", "v", "w"};
   static const char* const kAngles[] = {"phi", "theta", "psi"};
   for (int i = 0; i < 3; ++i) {
-    append(d.channels[kRates[i]], t, omega[i]);
-    append(d.channels[kVelocities[i]], t, velocity[i]);
-    append(d.channels[kAngles[i]], t, euler[i]);
+    append(d.channels[kRates[i]], t, omega[i], repeat);
+    append(d.channels[kVelocities[i]], t, velocity[i], repeat);
+    append(d.channels[kAngles[i]], t, euler[i], repeat);
   }
 }
 
@@ -43,6 +53,12 @@ T decode_or_throw(const lcm::LogEvent& ev, const std::string& file) {
 }
 
 }  // namespace
+
+double estimate_time_s(std::int64_t utime, std::int64_t imu_utime) {
+  // A time of the IMU sample after the publication cannot be right: keep the publication time.
+  const std::int64_t t = (imu_utime >= 0 && imu_utime <= utime) ? imu_utime : utime;
+  return static_cast<double>(t) * 1e-6;
+}
 
 bool is_lcm_log(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
@@ -60,9 +76,13 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
       const auto m = decode_or_throw<truth_state_t>(*ev, file);
       append_states(truth, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
     } else if (ev->channel == "ESTIMATE") {
+      // The estimate describes the instant of the newest IMU sample it has integrated
+      // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
+      // propagated to it. utime is when it was published, which in lockstep is the next
+      // estimator tick, 1-2 ms later (see estimate_time_s()).
       const auto m = decode_or_throw<estimator_state_t>(*ev, file);
-      append_states(estimate, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps,
-                    m.euler_rad);
+      append_states(estimate, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps, m.velocity_body_mps,
+                    m.euler_rad, Repeat::kReplace);
     } else if (ev->channel == "ACTUATOR_FB") {
       const auto m = decode_or_throw<actuator_feedback_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;

@@ -6,7 +6,15 @@
 /// inputs from the actuator feedback (ACTUATOR_FB, 100 Hz: delta_f, delta_t, delta_d,
 /// delta_w); the roll set-point from ATTITUDE_SP; specific force from IMU when present.
 /// The truth is kept separately for checking.
+///
+/// Time stamps: every sample is placed at the instant it describes. For ESTIMATE that is
+/// imu_utime, the newest IMU sample the estimate has integrated, not utime, the time it was
+/// published: in lockstep the estimator publishes at its next 512 Hz tick, 0.97-1.95 ms
+/// (mean 1.46 ms) after that sample, and stamping the states at utime delays p, v, phi
+/// against delta_f (ACTUATOR_FB, stamped at the actuator state it reports) by that much,
+/// which biases Lp by -15 % (ident/README.md, "Flying on the estimator").
 
+#include <cstdint>
 #include <string>
 
 #include "ident/flight_data.h"
@@ -26,6 +34,10 @@ struct RigLogData {
   FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
   std::string state_source;  ///< "estimate" or "truth"
 };
+
+/// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is
+/// negative or after utime.
+double estimate_time_s(std::int64_t utime, std::int64_t imu_utime);
 
 /// True if `file` starts with the LCM log event sync word.
 bool is_lcm_log(const std::string& file);

@@ -12,7 +12,50 @@ const Eigen::VectorXd& UniformData::at(const std::string& name) const {
   return it->second;
 }
 
-UniformData resample_uniform(const FlightData& data, double rate_hz) {
+namespace {
+
+/// Slopes of the cubic Hermite interpolant of (t, y) at every sample (see Interpolation::kCubic).
+std::vector<double> hermite_slopes(const std::vector<double>& t, const std::vector<double>& y) {
+  const std::size_t n = t.size();
+  std::vector<double> m(n, 0.0);
+  if (n < 2) return m;
+  if (n == 2) {
+    m[0] = m[1] = (y[1] - y[0]) / (t[1] - t[0]);
+    return m;
+  }
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double h0 = t[i] - t[i - 1], h1 = t[i + 1] - t[i];
+    const double d0 = (y[i] - y[i - 1]) / h0, d1 = (y[i + 1] - y[i]) / h1;
+    m[i] = (h1 * d0 + h0 * d1) / (h0 + h1);
+  }
+  {
+    const double h0 = t[1] - t[0], h1 = t[2] - t[1];
+    const double d0 = (y[1] - y[0]) / h0, d1 = (y[2] - y[1]) / h1;
+    m[0] = ((2.0 * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
+  }
+  {
+    const double h0 = t[n - 2] - t[n - 3], h1 = t[n - 1] - t[n - 2];
+    const double d0 = (y[n - 2] - y[n - 3]) / h0, d1 = (y[n - 1] - y[n - 2]) / h1;
+    m[n - 1] = ((2.0 * h1 + h0) * d1 - h1 * d0) / (h0 + h1);
+  }
+  return m;
+}
+
+}  // namespace
+
+bool is_set_point(const std::string& channel) { return channel == "phi_sp"; }
+
+std::string to_string(Interpolation interpolation) {
+  return interpolation == Interpolation::kLinear ? "linear" : "cubic";
+}
+
+Interpolation interpolation_from_string(const std::string& name) {
+  if (name == "linear") return Interpolation::kLinear;
+  if (name == "cubic") return Interpolation::kCubic;
+  throw std::invalid_argument("interpolation must be linear or cubic, got '" + name + "'");
+}
+
+UniformData resample_uniform(const FlightData& data, double rate_hz, Interpolation interpolation) {
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) {
     throw std::invalid_argument("resample rate must be positive and finite, got " + std::to_string(rate_hz));
   }
@@ -40,6 +83,9 @@ UniformData resample_uniform(const FlightData& data, double rate_hz) {
   for (Eigen::Index k = 0; k < n; ++k) out.t_s[k] = t0 + static_cast<double>(k) * dt;
   for (const auto& [name, c] : data.channels) {
     Eigen::VectorXd y(n);
+    // Set-points are steps, not band-limited signals: linear, which never overshoots.
+    const bool cubic = interpolation == Interpolation::kCubic && c.t_s.size() >= 3 && !is_set_point(name);
+    const std::vector<double> slope = cubic ? hermite_slopes(c.t_s, c.values) : std::vector<double>{};
     std::size_t j = 0;  // c.t_s[j] <= t < c.t_s[j + 1]
     for (Eigen::Index k = 0; k < n; ++k) {
       const double t = std::min(out.t_s[k], c.t_s.back());
@@ -50,7 +96,13 @@ UniformData resample_uniform(const FlightData& data, double rate_hz) {
       }
       const double ta = c.t_s[j], tb = c.t_s[j + 1];
       const double a = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
-      y[k] = (1.0 - a) * c.values[j] + a * c.values[j + 1];
+      if (!cubic) {
+        y[k] = (1.0 - a) * c.values[j] + a * c.values[j + 1];
+        continue;
+      }
+      const double h = tb - ta, a2 = a * a, a3 = a2 * a;
+      y[k] = (2.0 * a3 - 3.0 * a2 + 1.0) * c.values[j] + (a3 - 2.0 * a2 + a) * h * slope[j] +
+             (3.0 * a2 - 2.0 * a3) * c.values[j + 1] + (a3 - a2) * h * slope[j + 1];
     }
     out.signals.emplace(name, std::move(y));
   }
@@ -186,7 +238,7 @@ Eigen::VectorXd differentiate(const Eigen::VectorXd& x, double rate_hz) {
 }
 
 UniformData process(const FlightData& data, const ProcessingOptions& options) {
-  UniformData out = resample_uniform(data, options.rate_hz);
+  UniformData out = resample_uniform(data, options.rate_hz, options.interpolation);
   if (options.filter_order == 0) return out;
   const auto sos = butterworth_lowpass(options.filter_order, options.cutoff_hz, options.rate_hz);
   const std::size_t pad = options.padding ? options.padding : default_padding(options.cutoff_hz, options.rate_hz);

@@ -68,7 +68,7 @@ class Bus {
     sub->bus = this;
     sub->decode_and_call = [handler](const void* data, int size, ChannelStats& stats,
                                      std::string& error) -> bool {
-      T msg;
+      T msg{};  // value-initialised: decode() fills it, the compiler cannot see that
       if (msg.decode(data, 0, size) != size) {
         error = "cannot decode as " + std::string(T::getTypeName()) +
                 " (wrong type or truncated, " + std::to_string(size) + " bytes)";

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,12 @@ TEST_CASE("rig identify --method ols --json - prints only JSON", "[cli]") {
   CHECK(j["method"].as<std::string>() == "ols");
   CHECK(j["processing"]["filter_order"].as<int>() == 8);
   CHECK(j["processing"]["cutoff_hz"].as<double>() == 10.0);
+  CHECK(j["processing"]["interpolation"].as<std::string>() == "cubic");
+  const Result linear = run_rig("identify " + flight_csv() + " --interpolation linear --json -");
+  REQUIRE(linear.exit_code == 0);
+  CHECK(YAML::Load(linear.out)["processing"]["interpolation"].as<std::string>() == "linear");
+  const Result text = run_rig("identify " + flight_csv() + " --interpolation linear");
+  CHECK(text.out.find("processing linear resampling") != std::string::npos);
 }
 
 TEST_CASE("rig validate reports open-loop metrics of every state derivative", "[cli]") {
@@ -139,6 +146,66 @@ TEST_CASE("rig identify --plots draws PNGs with gnuplot, or names the package wh
   CHECK(missing.err.find("gnuplot-nox") != std::string::npos);
 }
 
+TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histories", "[cli]") {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    FAIL("gnuplot is not on the PATH: install the Debian package gnuplot-nox (the plots need it)");
+  }
+  const fs::path plots = work_dir() / "closed_loop_plots";
+  fs::remove_all(plots);
+  const std::string json = (work_dir() / "closed_loop.json").string();
+  const Result r = run_rig("validate " + ident::test::kConfigs + "models/nimble_lateral_set1.yaml " + flight_csv() +
+                           " --closed-loop --plots " + plots.string() + " --json " + json);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  const fs::path png = plots / "closed_loop.png";
+  CHECK(r.out.find("plot " + png.string()) != std::string::npos);
+  const YAML::Node j = YAML::LoadFile(json);
+  REQUIRE(j["plots"].size() == 1);
+  CHECK(j["plots"][0].as<std::string>() == png.string());
+  // A real PNG of a 1400 x 1200 four-panel figure, not an empty or error image.
+  const std::string bytes = slurp(png.string());
+  REQUIRE(bytes.size() > 30000);
+  CHECK(bytes.substr(0, 8) == std::string("\x89PNG\r\n\x1a\n", 8));
+  // IHDR: width and height, big-endian, at bytes 16 and 20.
+  const auto be32 = [&](std::size_t at) {
+    return (static_cast<unsigned>(static_cast<unsigned char>(bytes[at])) << 24) |
+           (static_cast<unsigned>(static_cast<unsigned char>(bytes[at + 1])) << 16) |
+           (static_cast<unsigned>(static_cast<unsigned char>(bytes[at + 2])) << 8) |
+           static_cast<unsigned>(static_cast<unsigned char>(bytes[at + 3]));
+  };
+  CHECK(bytes.substr(12, 4) == "IHDR");
+  CHECK(be32(16) == 1400u);
+  CHECK(be32(20) == 1200u);
+  // The data behind it: time plus measured and simulated p, phi, phi_sp, v, delta_f, one row per sample.
+  std::ifstream dat(plots / "closed_loop.dat");
+  std::string header, line;
+  std::getline(dat, header);
+  for (const char* column : {" t_s ", " p:measured ", " p:simulated ", " phi:measured ", " phi:simulated ",
+                             " phi:phi_sp ", " v:measured ", " v:simulated ", " delta_f:measured ", " delta_f:simulated "}) {
+    INFO(column);
+    CHECK((header + " ").find(column) != std::string::npos);
+  }
+  long rows = 0;
+  std::size_t columns = 0;
+  while (std::getline(dat, line)) {
+    if (rows++ == 0) {
+      std::istringstream in(line);
+      double x = 0.0;
+      while (in >> x) ++columns;
+    }
+  }
+  CHECK(rows == j["samples"].as<long>());
+  CHECK(columns == 10);
+  const std::string script = slurp((plots / "closed_loop.gp").string());
+  for (const char* panel : {"p ", "phi ", "v ", "delta_f "}) CHECK(script.find(std::string("set title '") + panel) != std::string::npos);
+
+  const Result missing = run_rig("validate " + ident::test::kConfigs + "models/nimble_lateral_set1.yaml " +
+                                     flight_csv() + " --closed-loop --plots " + plots.string(),
+                                 "PATH=/nonexistent");
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err.find("gnuplot-nox") != std::string::npos);
+}
+
 TEST_CASE("rig identify errors name the file, row and column, with exit code 2", "[cli]") {
   const fs::path dir = work_dir();
   SECTION("bad cell") {
@@ -169,6 +236,9 @@ TEST_CASE("rig identify errors name the file, row and column, with exit code 2",
     CHECK(run_rig("identify " + flight_csv() + " --structure longitudinal").exit_code == 2);
     CHECK(run_rig("identify " + flight_csv() + " --method mle").exit_code == 2);
     CHECK(run_rig("identify " + flight_csv() + " --order ten").exit_code == 2);
+    const Result spline = run_rig("identify " + flight_csv() + " --interpolation spline");
+    CHECK(spline.exit_code == 2);
+    CHECK(spline.err.find("--interpolation: 'spline'") != std::string::npos);
     const Result nyquist = run_rig("identify " + flight_csv() + " --rate 16");
     CHECK(nyquist.exit_code == 2);
     CHECK(nyquist.err.find("cut-off") != std::string::npos);

@@ -45,7 +45,7 @@ TEST_CASE("resampling interpolates linearly onto the common grid of all channels
   for (double t : tv) vv.push_back(2.0 * lin(t));
   d.channels["p"] = Channel{tp, vp};
   d.channels["v"] = Channel{tv, vv};
-  const UniformData u = resample_uniform(d, 100.0);
+  const UniformData u = resample_uniform(d, 100.0, Interpolation::kLinear);
   CHECK(u.t_s[0] == Approx(0.1));                       // latest first stamp
   CHECK(u.t_s[u.size() - 1] <= 1.5 + 1e-12);             // earliest last stamp
   CHECK(u.t_s[u.size() - 1] == Approx(1.5));
@@ -56,6 +56,97 @@ TEST_CASE("resampling interpolates linearly onto the common grid of all channels
   }
   CHECK_THROWS_AS(resample_uniform(d, 0.0), std::invalid_argument);
   CHECK_THROWS_AS(resample_uniform(d, -5.0), std::invalid_argument);
+  // The cubic default is exact for straight lines too.
+  const UniformData c = resample_uniform(d, 100.0);
+  for (Eigen::Index k = 0; k < c.size(); ++k) CHECK(c.at("p")[k] == Approx(lin(c.t_s[k])).margin(1e-12));
+}
+
+TEST_CASE("cubic resampling: exact for quadratics on uneven stamps, keeps samples, upsamples 100 Hz data",
+          "[signal]") {
+  SECTION("quadratics on uneven stamps and samples on the grid") {
+    FlightData d;
+    d.source = "quadratic";
+    std::vector<double> tp{0.0, 0.013, 0.02, 0.045, 0.05, 0.1, 0.17, 0.2, 0.31, 0.33, 0.4};
+    const auto quad = [](double t) { return 5.0 * t * t - 2.0 * t + 0.3; };
+    std::vector<double> vp;
+    for (double t : tp) vp.push_back(quad(t));
+    d.channels["p"] = Channel{tp, vp};
+    // v: arbitrary values on a 200 Hz grid that the output grid hits exactly.
+    std::vector<double> tv, vv;
+    for (int k = 0; k <= 80; ++k) {
+      tv.push_back(k / 200.0);
+      vv.push_back(std::cos(7.3 * k) + 0.1 * k);
+    }
+    d.channels["v"] = Channel{tv, vv};
+    const UniformData cubic = resample_uniform(d, 200.0, Interpolation::kCubic);
+    const UniformData linear = resample_uniform(d, 200.0, Interpolation::kLinear);
+    REQUIRE(cubic.size() == 81);
+    double linear_worst = 0.0;
+    for (Eigen::Index k = 0; k < cubic.size(); ++k) {
+      const double t = cubic.t_s[k];
+      CHECK(cubic.at("p")[k] == Approx(quad(t)).margin(1e-12));
+      linear_worst = std::max(linear_worst, std::fabs(linear.at("p")[k] - quad(t)));
+      CHECK(cubic.at("v")[k] == Approx(vv[static_cast<std::size_t>(k)]).margin(1e-12));
+      CHECK(linear.at("v")[k] == Approx(vv[static_cast<std::size_t>(k)]).margin(1e-12));
+    }
+    CHECK(linear_worst > 1e-3);  // the straight lines cut the parabola's corners
+  }
+  SECTION("a 5 Hz sine sampled at 100 Hz: linear attenuates it by sinc^2, cubic by (w h)^4 / 80") {
+    FlightData d;
+    d.source = "100 Hz";
+    std::vector<double> t, y;
+    for (int k = 0; k <= 1000; ++k) {
+      t.push_back(k / 100.0);
+      y.push_back(std::sin(2.0 * M_PI * 5.0 * t.back() + 0.3));
+    }
+    d.channels["delta_f"] = Channel{t, y};
+    const double wh = 2.0 * M_PI * 5.0 / 100.0;
+    const double sinc2 = std::pow(std::sin(wh / 2.0) / (wh / 2.0), 2);  // 0.99180
+    for (Interpolation how : {Interpolation::kLinear, Interpolation::kCubic}) {
+      INFO(to_string(how));
+      const UniformData u = resample_uniform(d, 512.0, how);
+      // In-phase gain: projection on the true sine over the middle 8 s.
+      double num = 0.0, den = 0.0;
+      for (Eigen::Index k = 512; k < 9 * 512; ++k) {
+        const double truth = std::sin(2.0 * M_PI * 5.0 * u.t_s[k] + 0.3);
+        num += u.at("delta_f")[k] * truth;
+        den += truth * truth;
+      }
+      const double gain = num / den;
+      if (how == Interpolation::kLinear) {
+        CHECK(gain == Approx(sinc2).margin(3e-4));
+      } else {
+        CHECK(std::fabs(1.0 - gain) < 3e-4);
+        CHECK(std::fabs(1.0 - gain) == Approx(std::pow(wh, 4) / 80.0).epsilon(0.25));
+      }
+    }
+  }
+  SECTION("a step overshoots by at most 7.4 % next to it, except a set-point") {
+    FlightData d;
+    d.source = "step";
+    std::vector<double> t, y;
+    for (int k = 0; k <= 20; ++k) {
+      t.push_back(k / 100.0);
+      y.push_back(k < 10 ? 0.0 : 1.0);
+    }
+    d.channels["delta_t"] = Channel{t, y};
+    d.channels["phi_sp"] = Channel{t, y};
+    const UniformData u = resample_uniform(d, 12800.0);
+    CHECK(u.at("delta_t").minCoeff() == Approx(-2.0 / 27.0).margin(1e-4));
+    CHECK(u.at("delta_t").maxCoeff() == Approx(1.0 + 2.0 / 27.0).margin(1e-4));
+    for (Eigen::Index k = 0; k < u.size(); ++k) {
+      if (u.t_s[k] < 0.08 - 1e-9 || u.t_s[k] > 0.11 + 1e-9) CHECK(u.at("delta_t")[k] == Approx(y[u.t_s[k] < 0.1 ? 0 : 20]));
+    }
+    // The set-point, a step by nature, is interpolated linearly: no overshoot.
+    CHECK(is_set_point("phi_sp"));
+    CHECK_FALSE(is_set_point("delta_t"));
+    CHECK(u.at("phi_sp").minCoeff() == 0.0);
+    CHECK(u.at("phi_sp").maxCoeff() == 1.0);
+    CHECK(u.at("phi_sp")[1216] == Approx(0.5));  // t = 0.095 s, half-way up the step
+  }
+  CHECK(interpolation_from_string("cubic") == Interpolation::kCubic);
+  CHECK(interpolation_from_string("linear") == Interpolation::kLinear);
+  CHECK_THROWS_WITH(interpolation_from_string("spline"), Catch::Contains("'spline'"));
 }
 
 TEST_CASE("Butterworth sections reproduce the analytic magnitude of the bilinear design", "[signal]") {

@@ -1,0 +1,137 @@
+// System test of the identification on what the lab measures: the identification doublet
+// train flown in lockstep on the estimator (IMU and motion capture fused by the EKF, the
+// controller flying on the estimate), the LCM log identified by `rig identify`, which takes
+// the states from ESTIMATE. Checks the criteria against set 1 (thesis Table 9.2):
+// the well-determined derivatives within 10 % and 3 sigma, Lv and L_dt less well
+// determined, metrics of the order of the paper's Table 4.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "../support/run_rig.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+/// A fresh directory for this test's files.
+std::string scratch(const std::string& tag) {
+  const fs::path dir = fs::temp_directory_path() / ("rig_ident_est_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+/// Relative standard deviation (coloured-residual sigma) of one parameter of a report.
+double rel_sigma_c(const YAML::Node& p, const std::string& name) {
+  return p[name]["sigma_coloured"].as<double>() / std::fabs(p[name]["value"].as<double>());
+}
+
+}  // namespace
+
+TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE, Table 3/4 criteria",
+          "[system]") {
+  const std::string dir = scratch("fly");
+  const std::string log = dir + "/run.lcmlog", summary = dir + "/summary.json";
+  // Explicit processes, controller input and seed: the test does not depend on the shipped defaults.
+  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
+                          " --seed 1 --set processes=[plant,controller,mocap,estimator]" +
+                          " --set run.controller_input=estimate --log " + log + " --json " + summary +
+                          " --no-progress >" + dir + "/run.txt 2>&1";
+  const int status = std::system(fly.c_str());
+  INFO(nimble::test::slurp(dir + "/run.txt"));
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  const YAML::Node s = YAML::LoadFile(summary);
+  REQUIRE(s["controlled"].as<bool>());
+  REQUIRE(s["estimator"]);  // the EKF ran and its estimate is in the log
+
+  // The log's measured states are the estimates.
+  const auto exported = nimble::test::run_rig("export " + log + " --csv " + dir + "/flight.csv");
+  INFO(exported.err);
+  REQUIRE(exported.exit_code == 0);
+  CHECK(exported.out.find("(states from estimate)") != std::string::npos);
+
+  const std::string json = dir + "/ident.json";
+  const auto ident = nimble::test::run_rig("identify " + log + " --w0 -0.30 --json " + json);
+  INFO(ident.err);
+  REQUIRE(ident.exit_code == 0);
+  const YAML::Node report = YAML::LoadFile(json);
+  const YAML::Node p = report["parameters"];
+
+  // Set 1 as the plant flies it (rig_configs/models/nimble_lateral_set1.yaml), which must be
+  // thesis Table 9.2 data set 1.
+  const YAML::Node model = YAML::LoadFile(kConfigs + "models/nimble_lateral_set1.yaml")["derivatives"];
+  const std::map<std::string, double> table_9_2 = {{"Lp", -2.43e-4}, {"Lv", -3.74e-4}, {"L_df", 1.06e-4},
+                                                   {"L_dt", 4.19e-5}, {"Yv", -5.61e-2}, {"Y_df", -8.63e-4}};
+  std::map<std::string, double> set1;
+  for (const auto& [name, value] : table_9_2) {
+    set1[name] = model[name].as<double>();
+    CHECK(set1[name] == Approx(value).epsilon(1e-9));
+  }
+
+  // Well-determined derivatives: within 10 % and within 3 sigma_c of set 1. sigma_c is the
+  // report's Newey-West sigma, which allows for the coloured residuals of 9 Hz low-passed
+  // data at 512 Hz (ident/README.md); the thesis's white-residual sigma is about 3-4x
+  // smaller there, and the unit tests show that sigma_c, not sigma, matches the spread of
+  // the estimates over repeated flights.
+  for (const char* name : {"Lp", "L_df", "Yv", "Y_df"}) {
+    const double value = p[name]["value"].as<double>(), sigma_c = p[name]["sigma_coloured"].as<double>();
+    const double truth = set1.at(name);
+    INFO(name << " = " << value << " (sigma " << p[name]["sigma"].as<double>() << ", sigma_c " << sigma_c
+              << "), set 1 " << truth << ": " << 100.0 * (value - truth) / std::fabs(truth) << " %, "
+              << std::fabs(value - truth) / sigma_c << " sigma_c");
+    REQUIRE(sigma_c > 0.0);
+    CHECK(std::fabs(value - truth) < 0.10 * std::fabs(truth));
+    CHECK(std::fabs(value - truth) < 3.0 * sigma_c);
+  }
+
+  // Lv and L_dt: less well determined (thesis Table 3: 407 % and 131 % against Lp 70 % and
+  // L_df 8 %); here, in the same roll equation, their relative sigma is larger than those of
+  // Lp and L_df.
+  for (const char* weak : {"Lv", "L_dt"}) {
+    for (const char* strong : {"Lp", "L_df"}) {
+      INFO(weak << " relative sigma_c " << rel_sigma_c(p, weak) << ", " << strong << " " << rel_sigma_c(p, strong));
+      CHECK(rel_sigma_c(p, weak) > rel_sigma_c(p, strong));
+    }
+    CHECK(p[weak]["sigma"].as<double>() > 0.0);
+  }
+
+  // Metrics of the order of Table 4 (p_dot: r_xy 0.945, R^2 0.907, RMSE 5.74 % of range;
+  // v_dot: 0.982, 0.967, 2.84 %).
+  for (const char* out : {"p_dot", "v_dot_star"}) {
+    const YAML::Node m = report["metrics"][out];
+    INFO(out << ": r_xy " << m["rxy"].as<double>() << ", R2 " << m["r2"].as<double>() << ", RMSE "
+             << m["rmse_pct_range"].as<double>() << " % of range");
+    CHECK(m["rxy"].as<double>() > 0.9);
+    CHECK(m["r2"].as<double>() > 0.8);
+    CHECK(m["rmse_pct_range"].as<double>() < 10.0);
+  }
+
+  // The estimate and the truth of the same flight give the same roll derivatives: the states
+  // of ESTIMATE are placed at the IMU sample they describe (stamped at the estimator's
+  // publication they lag delta_f by 1.5 ms and Lp comes out 15 % small).
+  const auto truth_csv = nimble::test::run_rig("export " + log + " --states truth --csv " + dir + "/truth.csv");
+  REQUIRE(truth_csv.exit_code == 0);
+  const std::string truth_json = dir + "/ident_truth.json";
+  const auto from_truth = nimble::test::run_rig("identify " + dir + "/truth.csv --w0 -0.30 --json " + truth_json);
+  INFO(from_truth.err);
+  REQUIRE(from_truth.exit_code == 0);
+  const YAML::Node pt = YAML::LoadFile(truth_json)["parameters"];
+  for (const char* name : {"Lp", "L_df"}) {
+    const double est = p[name]["value"].as<double>(), tru = pt[name]["value"].as<double>();
+    INFO(name << ": from the estimate " << est << ", from the truth " << tru);
+    CHECK(std::fabs(est - tru) < 0.02 * std::fabs(tru));
+  }
+}
