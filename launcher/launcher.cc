@@ -98,6 +98,7 @@ std::string pin_to(const std::vector<int>& cpus) {
 /// Judgement of the flight (scenario section `summary`).
 struct JudgeConfig {
   double max_phi_deg = 80.0;        ///< beyond this roll the vehicle is not controlled
+  double max_theta_deg = 60.0;      ///< beyond this pitch (the pitch set-point limit) neither
   double hover_phi_deg = 5.0;       ///< final |phi| for "returned to hover"
   double hover_p_radps = 0.5;       ///< final |p| for "returned to hover"
   double hover_v_mps = 0.3;         ///< final |v| for "returned to hover"
@@ -128,6 +129,7 @@ JudgeConfig judge_config_from(const Scenario& s) {
   JudgeConfig c;
   ConfigMap m = s.section("summary");
   c.max_phi_deg = m.get_double_or("max_phi_deg", c.max_phi_deg, Range{0.0, 180.0, true, false});
+  c.max_theta_deg = m.get_double_or("max_theta_deg", c.max_theta_deg, Range{0.0, 90.0, true, false});
   c.hover_phi_deg = m.get_double_or("hover_phi_deg", c.hover_phi_deg, Range::positive());
   c.hover_p_radps = m.get_double_or("hover_p_radps", c.hover_p_radps, Range::positive());
   c.hover_v_mps = m.get_double_or("hover_v_mps", c.hover_v_mps, Range::positive());
@@ -321,7 +323,9 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
   }
   out << "\nflight     max |p| " << std::to_string(f.max_abs_p).substr(0, 6) << " rad/s, max |v| "
       << std::to_string(f.max_abs_v).substr(0, 6) << " m/s, max |phi| "
-      << std::to_string(f.max_abs_phi * 180 / M_PI).substr(0, 6) << " deg\n";
+      << std::to_string(f.max_abs_phi * 180 / M_PI).substr(0, 6) << " deg";
+  if (f.max_abs_theta > 0.0) out << ", max |theta| " << std::to_string(f.max_abs_theta * 180 / M_PI).substr(0, 6) << " deg";
+  out << "\n";
   std::snprintf(line, sizeof line, "ranges     p %.2f rad/s, v %.2f m/s, phi %.2f rad, delta_f %.1f rad/s\n",
                 f.max_p - f.min_p, f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
   out << line;
@@ -389,7 +393,7 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
   w.key("sim_time_s").value(sim_s);
   w.key("wall_time_s").value(wall_s);
   w.key("speed_x_realtime").value(wall_s > 0 ? sim_s / wall_s : 0.0);
-  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).end_object();
+  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).end_object();
   w.key("ranges").begin_object();
   w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
   w.key("delta_f").value(f.max_df - f.min_df);
@@ -831,7 +835,8 @@ int run_scenario(const RunOptions& options) {
   // Judge and report.
   const FlightSummary& f = monitor.flight();
   const double sim_s = monitor.sim_time_s();
-  const bool controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * M_PI / 180.0;
+  const bool controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * M_PI / 180.0 &&
+                          f.max_abs_theta <= jc.max_theta_deg * M_PI / 180.0;
   const bool hover = controlled && std::fabs(f.final_phi) <= jc.hover_phi_deg * M_PI / 180.0 &&
                      std::fabs(f.final_p) <= jc.hover_p_radps && std::fabs(f.final_v) <= jc.hover_v_mps;
   int code = kRunOk;

@@ -110,7 +110,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     if (!decode(data, size, t)) { ++c.malformed; return; }
     const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
     FlightSummary& f = flight_;
-    if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi)) f.finite = false;
+    if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi) || !std::isfinite(t.euler_rad[1])) f.finite = false;
     if (f.samples == 0) {
       f.min_p = f.max_p = p;
       f.min_v = f.max_v = v;
@@ -121,6 +121,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
     f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
     f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
+    f.max_abs_theta = std::max(f.max_abs_theta, std::fabs(t.euler_rad[1]));
     f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
     f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
     f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);
