@@ -10,6 +10,7 @@
 //    health, and the run's candump log replays with canplayer.
 
 #include <linux/can/error.h>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -35,12 +36,18 @@
 #include "can_bridge/codec.h"
 #include "can_bridge/frame_layout.h"
 
+#include "../support/rig_runs.h"
+
 using namespace nimble::can;
 using nimble::actuator_command_t;
 using nimble::actuator_feedback_t;
 using nimble::can_health_t;
 using nimble::fault_event_t;
 namespace fs = std::filesystem;
+using nimble::test::differing;
+using nimble::test::rig_run;
+using nimble::test::RunResult;
+using nimble::test::truth_payloads;
 
 namespace {
 
@@ -82,10 +89,23 @@ bool same_frame(const can_frame& a, const can_frame& b) {
   return a.can_id == b.can_id && a.len == b.len && std::memcmp(a.data, b.data, a.len) == 0;
 }
 
+/// Keeps this test and everything it starts (cansend, rig run) on CPU 0. vcan hands a frame
+/// to the receive path of the CPU that sent it; frames sent one after the other from two
+/// CPUs (two cansend processes, or a process that migrates) can then arrive out of order,
+/// and the bridge would rightly drop the older one as stale. A CAN controller keeps the
+/// order of the wire; on vcan one CPU does.
+void pin_to_cpu0() {
+  cpu_set_t cpu0;
+  CPU_ZERO(&cpu0);
+  CPU_SET(0, &cpu0);
+  REQUIRE(::sched_setaffinity(0, sizeof cpu0, &cpu0) == 0);
+}
+
 /// A bridge node of one side on memq://, with the messages it publishes collected.
 struct Bridge {
   explicit Bridge(const std::string& side)
-      : scenario(nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml",
+      : pinned((pin_to_cpu0(), true)),
+        scenario(nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml",
                                        {{"actuator_link", "can"}, {"can_bridge.interface", kIf}})),
         node(scenario, {side, scenario.file, "memq://"}) {
     auto& bus = node.node().bus();
@@ -107,6 +127,7 @@ struct Bridge {
     }
     return false;
   }
+  bool pinned;
   nimble::Scenario scenario;
   CanBridgeNode node;
   std::vector<actuator_command_t> commands;
@@ -291,53 +312,20 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
   CHECK(rig.commands.back().seq == 8);
 }
 
-namespace {
-
-struct RigRun {
-  int exit_code = -1;
-  std::string output;
-  YAML::Node summary;
-};
-
-RigRun rig_run(const std::string& dir, const std::string& args) {
-  fs::create_directories(dir);
-  const std::string json = dir + "/summary.json";
-  const std::string cmd = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --no-progress --log " +
-                          dir + "/run.lcmlog --json " + json + " " + args + " >" + dir + "/out.txt 2>&1";
-  const int status = std::system(cmd.c_str());
-  RigRun r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(dir + "/out.txt");
-  r.output.assign(std::istreambuf_iterator<char>(in), {});
-  if (fs::exists(json)) r.summary = YAML::LoadFile(json);
-  return r;
-}
-
-std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
-  lcm::LogFile log(log_path, "r");
-  REQUIRE(log.good());
-  std::vector<std::vector<uint8_t>> out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
-      const auto* b = static_cast<const uint8_t*>(ev->data);
-      out.emplace_back(b, b + ev->datalen);
-    }
-  }
-  return out;
-}
-
-}  // namespace
-
 TEST_CASE("the identification doublet train in lockstep: the same truth over the CAN link as over LCM; "
           "the run's candump log replays with canplayer",
           "[system][rig]") {
-  const std::string dir = (fs::temp_directory_path() / ("can_rig_" + std::to_string(::getpid()))).string();
+  pin_to_cpu0();
+  const std::string dir = nimble::test::scratch_dir("can_link");
+  fs::create_directories(dir + "/lcm");
+  fs::create_directories(dir + "/can");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
   // Ideal sensing keeps the run short under emulation; the link is what differs.
   const std::string common = "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller]";
-  const RigRun over_lcm = rig_run(dir + "/lcm", common);
+  const RunResult over_lcm = rig_run(scenario, dir + "/lcm", common);
   INFO(over_lcm.output);
   REQUIRE(over_lcm.exit_code == 0);
-  const RigRun over_can = rig_run(dir + "/can", common + " --set actuator_link=can");
+  const RunResult over_can = rig_run(scenario, dir + "/can", common + " --set actuator_link=can");
   INFO(over_can.output);
   REQUIRE(over_can.exit_code == 0);
   CHECK(over_can.summary["controlled"].as<bool>());
@@ -346,10 +334,7 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   // Bit for bit the same truth.
   const auto a = truth_payloads(dir + "/lcm/run.lcmlog"), b = truth_payloads(dir + "/can/run.lcmlog");
   REQUIRE(a.size() == 6001);
-  REQUIRE(b.size() == a.size());
-  std::size_t differing = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) differing += a[i] != b[i];
-  CHECK(differing == 0);
+  CHECK(differing(a, b) == 0);
 
   // Every command crossed the bus; both sides report clean health.
   const YAML::Node ch = over_can.summary["channels"];

@@ -17,7 +17,7 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include "../support/run_rig.h"
+#include "../support/rig_runs.h"
 
 namespace fs = std::filesystem;
 
@@ -25,13 +25,6 @@ namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
-/// A fresh directory for this test's files.
-std::string scratch(const std::string& tag) {
-  const fs::path dir = fs::temp_directory_path() / ("rig_ident_est_" + tag + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
 
 /// Relative standard deviation (coloured-residual sigma) of one parameter of a report.
 double rel_sigma_c(const YAML::Node& p, const std::string& name) {
@@ -42,7 +35,7 @@ double rel_sigma_c(const YAML::Node& p, const std::string& name) {
 
 TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE, Table 3/4 criteria",
           "[system]") {
-  const std::string dir = scratch("fly");
+  const std::string dir = nimble::test::scratch_dir("ident_est");
   const std::string log = dir + "/run.lcmlog", summary = dir + "/summary.json";
   // Explicit processes, controller input and seed: the test does not depend on the shipped defaults.
   const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +

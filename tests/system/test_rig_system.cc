@@ -28,7 +28,7 @@
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include "../support/run_rig.h"
+#include "../support/rig_runs.h"
 
 namespace fs = std::filesystem;
 
@@ -36,49 +36,14 @@ namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
-/// A fresh directory for one test's logs.
-std::string scratch_dir(const std::string& tag) {
-  const fs::path dir = fs::temp_directory_path() / ("rig_system_" + tag + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
-
-struct RunResult {
-  int exit_code = -1;
-  std::string output;
-  YAML::Node summary;
-};
-
+using nimble::test::RunResult;
 using nimble::test::slurp;
+using nimble::test::differing;
+using nimble::test::rig_run;
+using nimble::test::truth_payloads;
 
-/// Runs `rig run <scenario> <args>` to completion.
-RunResult rig_run(const std::string& scenario, const std::string& dir, const std::string& args) {
-  const std::string out = dir + "/out.txt";
-  const std::string json = dir + "/summary.json";
-  const std::string cmd = std::string(RIG_BIN) + " run " + scenario + " --log " + dir + "/run.lcmlog --json " + json +
-                          " --no-progress " + args + " >" + out + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.output = slurp(out);
-  if (fs::exists(json)) r.summary = YAML::LoadFile(json);
-  return r;
-}
-
-/// Every TRUTH message of a log, as raw bytes.
-std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
-  lcm::LogFile log(log_path, "r");
-  REQUIRE(log.good());
-  std::vector<std::vector<uint8_t>> out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
-      const auto* b = static_cast<const uint8_t*>(ev->data);
-      out.emplace_back(b, b + ev->datalen);
-    }
-  }
-  return out;
-}
+/// A fresh directory for one test's logs.
+std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("system_" + tag); }
 
 /// Number of events per channel in a log.
 std::map<std::string, int> channel_counts(const std::string& log_path) {
@@ -206,10 +171,7 @@ TEST_CASE("two lockstep runs give bit-identical truth", "[system]") {
   REQUIRE(rb.exit_code == 0);
   const auto ta = truth_payloads(a + "/run.lcmlog"), tb = truth_payloads(b + "/run.lcmlog");
   REQUIRE(ta.size() == 3001);
-  REQUIRE(ta.size() == tb.size());
-  std::size_t differing = 0;
-  for (std::size_t i = 0; i < ta.size(); ++i) differing += ta[i] != tb[i];
-  CHECK(differing == 0);
+  CHECK(differing(ta, tb) == 0);
   // The flight is not trivially identical: the vehicle moved.
   CHECK(ra.summary["max_abs"]["phi"].as<double>() > 0.1);
 }
@@ -500,8 +462,5 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   const RunResult rb = rig_run(kConfigs + "id_doublet_train_fast.yaml", b, args);
   REQUIRE(rb.exit_code == 0);
   const auto ta = truth_payloads(a + "/run.lcmlog"), tb = truth_payloads(b + "/run.lcmlog");
-  REQUIRE(ta.size() == tb.size());
-  std::size_t differing = 0;
-  for (std::size_t i = 0; i < ta.size(); ++i) differing += ta[i] != tb[i];
-  CHECK(differing == 0);
+  CHECK(differing(ta, tb) == 0);
 }

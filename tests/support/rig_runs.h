@@ -1,0 +1,75 @@
+#pragma once
+/// Test support for system tests: `rig run` of a scenario into a scratch directory, and
+/// what tests read back from its log. Needs RIG_BIN (compile definition), LCM and yaml-cpp.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "run_rig.h"
+
+namespace nimble::test {
+
+/// A fresh, empty directory for one test's files: <tmp>/rig_<tag>_<pid>.
+inline std::string scratch_dir(const std::string& tag) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rig_" + tag + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+/// Outcome of one `rig run`.
+struct RunResult {
+  int exit_code = -1;
+  std::string output;   ///< stdout and stderr together
+  YAML::Node summary;   ///< the --json summary (null if none was written)
+};
+
+/// Runs `rig run <scenario> <args>` to completion, logging to <dir>/run.lcmlog with the
+/// summary in <dir>/summary.json and the output in <dir>/out.txt.
+inline RunResult rig_run(const std::string& scenario, const std::string& dir, const std::string& args) {
+  const std::string out = dir + "/out.txt";
+  const std::string json = dir + "/summary.json";
+  const std::string cmd = std::string(RIG_BIN) + " run " + scenario + " --log " + dir + "/run.lcmlog --json " + json +
+                          " --no-progress " + args + " >" + out + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.output = slurp(out);
+  if (std::filesystem::exists(json)) r.summary = YAML::LoadFile(json);
+  return r;
+}
+
+/// Every TRUTH message of a log, as raw bytes (for bit-for-bit comparisons).
+inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::vector<std::vector<uint8_t>> out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "TRUTH") {
+      const auto* b = static_cast<const uint8_t*>(ev->data);
+      out.emplace_back(b, b + ev->datalen);
+    }
+  }
+  return out;
+}
+
+/// Number of positions at which two payload sequences differ (sizes must match).
+inline std::size_t differing(const std::vector<std::vector<uint8_t>>& a, const std::vector<std::vector<uint8_t>>& b) {
+  REQUIRE(a.size() == b.size());
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) n += a[i] != b[i];
+  return n;
+}
+
+}  // namespace nimble::test
