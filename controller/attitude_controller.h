@@ -66,8 +66,10 @@ struct ControllerConfig {
   std::map<std::string, GainSet> roll_gain_sets{{"fast", {1.406, 0.200}}, {"slow", {0.625, 0.156}}};
   /// Gain set active after construction and reset.
   std::string default_gain_set = "fast";
-  /// Pitch PD gains (not published; assumption: the slow roll gains).
-  GainSet pitch_gains{0.625, 0.156};
+  /// Pitch PD gains (not published; calibrated on the linear pitch loop of the thesis
+  /// Table E.4 model with pitch_cmd_to_dihedral_rad 0.35: calibrate_pitch_gains, see
+  /// rig_configs/controller/nimble_attitude.yaml).
+  GainSet pitch_gains{0.115, 0.011};
   /// delta_f command per unit normalised roll command [rad/s] (not published; calibrated
   /// on the linear closed loop, see rig_configs/controller/nimble_attitude.yaml).
   double roll_cmd_to_delta_f_radps = 125.0;

@@ -10,6 +10,12 @@
 
 namespace nimble {
 
+/// Coefficients of the difference equation
+/// y[k] = b0 x[k] + b1 x[k-1] + b2 x[k-2] - a1 y[k-1] - a2 y[k-2].
+struct LowPassCoefficients {
+  double b0, b1, b2, a1, a2;
+};
+
 /// Second-order Butterworth low-pass, direct form II transposed.
 class SecondOrderLowPass {
  public:
@@ -31,6 +37,8 @@ class SecondOrderLowPass {
   double sample_rate_hz() const { return sample_rate_hz_; }
   /// Gain |H(e^{j 2 pi f / fs})| of the discrete filter at `f_hz` [-].
   double gain_at(double f_hz) const;
+  /// Coefficients of the difference equation (for linear analyses of the loops).
+  LowPassCoefficients coefficients() const { return {b0_, b1_, b2_, a1_, a2_}; }
 
  private:
   double cutoff_hz_, sample_rate_hz_;
