@@ -464,3 +464,18 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   const auto ta = truth_payloads(a + "/run.lcmlog"), tb = truth_payloads(b + "/run.lcmlog");
   CHECK(differing(ta, tb) == 0);
 }
+
+TEST_CASE("the coupled doublet: pitch to 20 deg and a 6 Hz roll doublet with the longitudinal model, held",
+          "[system]") {
+  const std::string dir = scratch_dir("coupled");
+  const RunResult r = rig_run(kConfigs + "coupled_doublet_6hz.yaml", dir, "--clock lockstep");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.summary["controlled"].as<bool>());
+  CHECK(r.summary["returned_to_hover"].as<bool>());
+  // The pitch loop really flew the 20 deg set-point, and stayed within the verdict's 60 deg.
+  const double theta_deg = r.summary["max_abs"]["theta"].as<double>() * 180.0 / M_PI;
+  CHECK(theta_deg > 15.0);
+  CHECK(theta_deg < 60.0);
+  CHECK(r.summary["max_abs"]["phi"].as<double>() > 0.15);
+}
