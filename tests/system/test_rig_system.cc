@@ -479,3 +479,25 @@ TEST_CASE("the coupled doublet: pitch to 20 deg and a 6 Hz roll doublet with the
   CHECK(theta_deg < 60.0);
   CHECK(r.summary["max_abs"]["phi"].as<double>() > 0.15);
 }
+
+TEST_CASE("the CAN link without a usable interface stops the run before anything starts, naming why", "[system]") {
+  const std::string dir = scratch_dir("can_missing");
+  // No interface may be created: on a kernel without CAN the kernel is named, on one with CAN
+  // the missing interface is.
+  const RunResult r = rig_run(kConfigs + "hover.yaml", dir,
+                              "--clock lockstep --set actuator_link=can --set can_bridge.interface=nimblenone0 "
+                              "--set can_bridge.create_virtual=false");
+  INFO(r.output);
+  CHECK(r.exit_code == 2);
+  CHECK(r.output.find("actuator_link can: ") != std::string::npos);
+  const bool no_can = r.output.find("this kernel has no CAN support") != std::string::npos;
+  const bool missing = r.output.find("CAN interface 'nimblenone0' does not exist") != std::string::npos;
+  CHECK((no_can || missing));
+  if (no_can) CHECK(r.output.find("can_bridge/vm/canvm run") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir + "/run.lcmlog.scenario.yaml"));  // nothing was started
+
+  // A bad section value is named as well.
+  const RunResult bad = rig_run(kConfigs + "hover.yaml", dir, "--set actuator_link=can --set can_bridge.health_rate_hz=0");
+  CHECK(bad.exit_code == 2);
+  CHECK(bad.output.find("can_bridge.health_rate_hz") != std::string::npos);
+}
