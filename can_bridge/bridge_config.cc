@@ -22,6 +22,7 @@ CanBridgeConfig can_bridge_config_from(ConfigMap& m) {
   if (m.has("receive_buffer_bytes")) {
     c.receive_buffer_bytes = static_cast<int>(m.get_int("receive_buffer_bytes", Range::closed(0, 64 * 1024 * 1024)));
   }
+  if (m.has("fd")) c.fd = m.get_bool("fd");
   m.finish();
   return c;
 }

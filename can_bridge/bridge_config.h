@@ -8,6 +8,8 @@
 ///     candump_log: true           # the rig side writes <log>.candump (canplayer replays it)
 ///     health_rate_hz: 2           # CAN_HEALTH rate of each side [Hz]
 ///     receive_buffer_bytes: 0     # SO_RCVBUF of the bridge sockets; 0 = kernel default
+///     fd: false                   # true: CAN FD frames (same 8-byte layout, bit rate switch);
+///                                 #   the interface needs MTU 72 (a vcan rig run creates gets it)
 ///
 /// With `actuator_link: can` the launcher adds the two sides of the bridge to the run's
 /// processes: `can_flight` (flight board: ACTUATOR_CMD -> frames, feedback frames ->
@@ -32,6 +34,9 @@ struct CanBridgeConfig {
   std::string candump_file;
   double health_rate_hz = 2.0;
   int receive_buffer_bytes = 0;
+  /// CAN FD: both sides send every frame as an FD frame of 8 bytes with CANFD_BRS and accept
+  /// classical and FD frames of 8 bytes. The interface needs the CAN FD MTU (72).
+  bool fd = false;
 };
 
 /// Reads and validates the `can_bridge` section (every key optional).

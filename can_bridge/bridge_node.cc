@@ -1,5 +1,6 @@
 #include "can_bridge/bridge_node.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -55,6 +56,7 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
   so.error_frames = true;
   so.timestamps = true;
   so.receive_buffer_bytes = config_.receive_buffer_bytes;
+  so.fd = config_.fd;
   socket_.emplace(CanSocket::open(config_.interface, so));
   if (role_ == Role::kRig && config_.candump_log && !config_.candump_file.empty()) {
     candump_ = std::make_unique<CandumpWriter>(config_.candump_file);
@@ -106,13 +108,23 @@ void CanBridgeNode::on_cycle(int64_t /*sim_time_ns*/) {
   if (commands_crossed_ < cycles_due_) node_->hold_ack();
 }
 
-void CanBridgeNode::log_frame(const can_frame& frame, int64_t realtime) {
-  if (candump_) candump_->write(frame, realtime, config_.interface);
+void CanBridgeNode::log_frame(const ReceivedFrame& rx) {
+  if (!candump_) return;
+  const int64_t t = rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns();
+  if (rx.is_fd) candump_->write(rx.fd_frame, t, config_.interface);
+  else candump_->write(rx.frame, t, config_.interface);
 }
 
 void CanBridgeNode::send(const can_frame& frame) {
-  const SendResult r = socket_->send(frame);
-  log_frame(frame, realtime_ns());
+  SendResult r;
+  if (config_.fd) {
+    const canfd_frame fd_frame = to_fd_frame(frame, CANFD_BRS);
+    r = socket_->send(fd_frame);
+    if (candump_) candump_->write(fd_frame, realtime_ns(), config_.interface);
+  } else {
+    r = socket_->send(frame);
+    if (candump_) candump_->write(frame, realtime_ns(), config_.interface);
+  }
   if (r == SendResult::kSent) return;
   node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_QUEUE_DROP, "CAN " + config_.interface,
                "frame " + hex_id(frame) + " not sent on " + config_.interface + ": " +
@@ -142,7 +154,9 @@ void CanBridgeNode::drain_socket() {
 }
 
 void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
-  log_frame(rx.frame, rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns());
+  log_frame(rx);
+  // An FD frame of up to 8 bytes is in rx.frame as a classical one; a longer one has length 0
+  // there, which the decoders report as a wrong length (or an unknown identifier).
   if (role_ == Role::kRig) {
     actuator_command_t cmd;
     const DecodeResult r = command_decoder_.decode(rx.frame, &cmd);
@@ -156,7 +170,7 @@ void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
       ++commands_crossed_;
       if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
     } else if (r != DecodeResult::kAccepted) {
-      reject(rx.frame, r);
+      reject(rx, r);
     }
   } else {
     actuator_feedback_t fb;
@@ -167,23 +181,28 @@ void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
       node_->bus().publish(ch::kActuatorFeedbackCan, fb);
       ++messages_to_lcm_;
     } else if (r != DecodeResult::kAccepted) {
-      reject(rx.frame, r);
+      reject(rx, r);
     }
   }
 }
 
-void CanBridgeNode::reject(const can_frame& frame, DecodeResult result) {
-  char data[3 * CAN_MAX_DLEN + 1] = {0};
-  for (int i = 0; i < frame.can_dlc && i < CAN_MAX_DLEN; ++i) {
-    std::snprintf(data + 3 * i, 4, "%02X ", frame.data[i]);
+void CanBridgeNode::reject(const ReceivedFrame& rx, DecodeResult result) {
+  const unsigned len = rx.is_fd ? std::min<unsigned>(rx.fd_frame.len, CANFD_MAX_DLEN)
+                                : std::min<unsigned>(rx.frame.len, CAN_MAX_DLEN);
+  const uint8_t* bytes = rx.is_fd ? rx.fd_frame.data : rx.frame.data;
+  std::string data;
+  char byte[4];
+  for (unsigned i = 0; i < len; ++i) {
+    std::snprintf(byte, sizeof byte, "%02X ", bytes[i]);
+    data += byte;
   }
   node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, "CAN " + config_.interface,
-               "dropped frame " + hex_id(frame) + " [" + std::to_string(frame.can_dlc) + "] " + data + "on " +
-                   config_.interface + ": " + to_string(result));
+               std::string("dropped ") + (rx.is_fd ? "FD frame " : "frame ") + hex_id(rx.frame) + " [" +
+                   std::to_string(len) + "] " + data + "on " + config_.interface + ": " + to_string(result));
 }
 
 void CanBridgeNode::on_error_frame(const ReceivedFrame& rx) {
-  log_frame(rx.frame, rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns());
+  log_frame(rx);
   const ErrorFrameInfo& e = rx.error;
   if (e.bus_off) bus_state_ = can_health_t::BUS_OFF;
   else if (e.error_passive) bus_state_ = can_health_t::BUS_PASSIVE;

@@ -15,7 +15,9 @@
 ///                                 (CODE_MESSAGE_MALFORMED), failed sends (CODE_QUEUE_DROP)
 ///   and HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode).
 ///
-/// Frames: can_bridge/nimble_rig.dbc. Every received frame goes through the decoder, which
+/// Frames: can_bridge/nimble_rig.dbc. With `can_bridge.fd: true` the same 8-byte frames travel as
+/// CAN FD frames (CANFD_BRS set); either side then accepts classical and FD frames of 8 bytes (an
+/// FD frame of another length is a wrong length). Every received frame goes through the decoder, which
 /// counts and drops unknown identifiers, wrong lengths, bad checksums, stale counters and
 /// out-of-range values; nothing a frame contains can stop the bridge.
 ///
@@ -67,9 +69,9 @@ class CanBridgeNode {
   void on_feedback(const actuator_feedback_t& fb);
   void on_frame(const ReceivedFrame& rx);
   void on_error_frame(const ReceivedFrame& rx);
-  void reject(const can_frame& frame, DecodeResult result);
+  void reject(const ReceivedFrame& rx, DecodeResult result);
   void send(const can_frame& frame);
-  void log_frame(const can_frame& frame, int64_t realtime_ns);
+  void log_frame(const ReceivedFrame& rx);
   void on_cycle(int64_t sim_time_ns);
   int64_t rig_time_us() const;
 

@@ -61,6 +61,25 @@ std::vector<can_filter> rig_filters() {
   return filters;
 }
 
+can_frame classical_view(const canfd_frame& frame) {
+  can_frame f{};
+  f.can_id = frame.can_id;
+  if (frame.len <= CAN_MAX_DLEN) {
+    f.len = frame.len;
+    std::memcpy(f.data, frame.data, frame.len);
+  }
+  return f;
+}
+
+canfd_frame to_fd_frame(const can_frame& frame, uint8_t flags) {
+  canfd_frame f{};
+  f.can_id = frame.can_id;
+  f.len = frame.len <= CAN_MAX_DLEN ? frame.len : CAN_MAX_DLEN;
+  f.flags = flags;
+  std::memcpy(f.data, frame.data, f.len);
+  return f;
+}
+
 SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy,
                            CanSocketStats& stats, const SleepFunction& sleep) {
   std::chrono::microseconds backoff = policy.first_backoff;
@@ -124,6 +143,26 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
          "CAN interface '" + interface + "' is down: ip link set " + interface + " up");
   }
 
+  if (options.fd) {
+    ifreq mtu_req{};
+    std::memcpy(mtu_req.ifr_name, interface.c_str(), interface.size() + 1);
+    if (::ioctl(fd, SIOCGIFMTU, &mtu_req) != 0) {
+      const int err = errno;
+      fail(fd, interface, err, "cannot read the MTU of CAN interface '" + interface + "': " + errno_text(err));
+    }
+    if (mtu_req.ifr_mtu != static_cast<int>(CANFD_MTU)) {
+      fail(fd, interface, EINVAL,
+           "CAN interface '" + interface + "' has MTU " + std::to_string(mtu_req.ifr_mtu) +
+               (mtu_req.ifr_mtu == static_cast<int>(CAN_MTU) ? " (classical CAN only)" : "") +
+               "; CAN FD needs MTU " + std::to_string(CANFD_MTU) + ": ip link set " + interface +
+               " down && ip link set " + interface + " mtu " + std::to_string(CANFD_MTU) + " && ip link set " +
+               interface + " up (a vcan accepts 16 or 72; a real controller also needs its data bitrate, "
+               "e.g. ip link set " + interface + " type can bitrate 1000000 dbitrate 4000000 fd on)");
+    }
+    const int on = 1;
+    set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on, "CAN_RAW_FD_FRAMES");
+  }
+
   if (!options.receive_all) {
     set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_FILTER,
                options.filters.empty() ? nullptr : options.filters.data(),
@@ -160,6 +199,7 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
   }
   CanSocket socket(fd, interface, options.retry);
   socket.timestamps_ = options.timestamps;
+  socket.fd_enabled_ = options.fd;
   return socket;
 }
 
@@ -171,7 +211,8 @@ CanSocket::CanSocket(CanSocket&& other) noexcept
       interface_(std::move(other.interface_)),
       retry_(other.retry_),
       stats_(other.stats_),
-      timestamps_(other.timestamps_) {}
+      timestamps_(other.timestamps_),
+      fd_enabled_(other.fd_enabled_) {}
 
 CanSocket& CanSocket::operator=(CanSocket&& other) noexcept {
   if (this != &other) {
@@ -181,6 +222,7 @@ CanSocket& CanSocket::operator=(CanSocket&& other) noexcept {
     retry_ = other.retry_;
     stats_ = other.stats_;
     timestamps_ = other.timestamps_;
+    fd_enabled_ = other.fd_enabled_;
   }
   return *this;
 }
@@ -200,6 +242,19 @@ SendResult CanSocket::send(const can_frame& frame) {
                          [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
 }
 
+SendResult CanSocket::send(const canfd_frame& frame) {
+  const int fd = fd_;
+  const SendAttempt attempt = [fd, &frame]() -> int {
+    const ssize_t n = ::send(fd, &frame, sizeof frame, MSG_DONTWAIT);
+    if (n == static_cast<ssize_t>(sizeof frame)) return 0;
+    return n < 0 ? errno : EIO;
+  };
+  const SendResult r = send_with_retry(attempt, retry_, stats_,
+                                       [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
+  if (r == SendResult::kSent) ++stats_.fd_frames_sent;
+  return r;
+}
+
 ReceiveResult CanSocket::receive(ReceivedFrame* out, int timeout_ms) {
   pollfd pfd{fd_, POLLIN, 0};
   const int ready = ::poll(&pfd, 1, timeout_ms);
@@ -211,7 +266,8 @@ ReceiveResult CanSocket::receive(ReceivedFrame* out, int timeout_ms) {
   }
 
   ReceivedFrame rx;
-  iovec iov{&rx.frame, sizeof rx.frame};
+  canfd_frame buffer{};
+  iovec iov{&buffer, sizeof buffer};
   alignas(cmsghdr) char control[CMSG_SPACE(sizeof(scm_timestamping)) + CMSG_SPACE(sizeof(uint32_t)) + 64];
   msghdr msg{};
   msg.msg_iov = &iov;
@@ -225,10 +281,19 @@ ReceiveResult CanSocket::receive(ReceivedFrame* out, int timeout_ms) {
     ++stats_.receive_errors;
     return ReceiveResult::kError;
   }
-  if (n != static_cast<ssize_t>(sizeof(can_frame)) || (msg.msg_flags & MSG_TRUNC)) {
+  if ((n != static_cast<ssize_t>(CAN_MTU) && n != static_cast<ssize_t>(CANFD_MTU)) || (msg.msg_flags & MSG_TRUNC)) {
     stats_.last_errno = EMSGSIZE;
     ++stats_.receive_errors;
     return ReceiveResult::kError;
+  }
+  if (n == static_cast<ssize_t>(CANFD_MTU)) {
+    if (buffer.len > CANFD_MAX_DLEN) buffer.len = CANFD_MAX_DLEN;
+    rx.is_fd = true;
+    rx.fd_frame = buffer;
+    rx.fd_flags = buffer.flags;
+    rx.frame = classical_view(buffer);
+  } else {
+    std::memcpy(&rx.frame, &buffer, sizeof rx.frame);
   }
   for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
     if (c->cmsg_level != SOL_SOCKET) continue;
@@ -253,6 +318,7 @@ ReceiveResult CanSocket::receive(ReceivedFrame* out, int timeout_ms) {
     ++stats_.error_frames;
   } else {
     ++stats_.frames_received;
+    if (rx.is_fd) ++stats_.fd_frames_received;
   }
   if (out != nullptr) *out = std::move(rx);
   return ReceiveResult::kFrame;

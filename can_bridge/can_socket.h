@@ -1,5 +1,6 @@
 #pragma once
-/// SocketCAN raw socket (PF_CAN / CAN_RAW) for the rig's frames.
+/// SocketCAN raw socket (PF_CAN / CAN_RAW) for the rig's frames, classical CAN and optionally
+/// CAN FD (CAN_RAW_FD_FRAMES).
 ///
 /// Opening throws (with the interface name, the errno and a hint); after that nothing throws:
 /// sending retries a full queue (ENOBUFS / EAGAIN) with a bounded back-off and then drops the
@@ -42,8 +43,10 @@ struct SendRetryPolicy {
 
 /// Everything a CanSocket counts.
 struct CanSocketStats {
-  uint64_t frames_sent = 0;          ///< frames the kernel accepted
-  uint64_t frames_received = 0;      ///< data frames received
+  uint64_t frames_sent = 0;          ///< frames the kernel accepted (classical and FD)
+  uint64_t frames_received = 0;      ///< data frames received (classical and FD)
+  uint64_t fd_frames_sent = 0;       ///< of frames_sent: CAN FD frames
+  uint64_t fd_frames_received = 0;   ///< of frames_received: CAN FD frames
   uint64_t error_frames = 0;         ///< error frames received (CAN_RAW_ERR_FILTER)
   uint64_t send_enobufs = 0;         ///< send attempts that returned ENOBUFS (queue full)
   uint64_t send_eagain = 0;          ///< send attempts that returned EAGAIN (socket buffer full)
@@ -73,6 +76,9 @@ struct CanSocketOptions {
   bool receive_own = false;      ///< CAN_RAW_RECV_OWN_MSGS
   int send_buffer_bytes = 0;     ///< SO_SNDBUF; 0: kernel default
   int receive_buffer_bytes = 0;  ///< SO_RCVBUF; 0: kernel default
+  /// CAN FD (CAN_RAW_FD_FRAMES): send(const canfd_frame&) works and receive() returns FD frames
+  /// too. The interface must have the CAN FD MTU (CANFD_MTU, 72); open() throws otherwise.
+  bool fd = false;
   SendRetryPolicy retry;         ///< back-off on a full queue
 };
 
@@ -91,8 +97,16 @@ enum class ReceiveResult : uint8_t {
 };
 
 /// A received frame with its kernel timestamps.
+///
+/// Classical frames are in `frame`. CAN FD frames (sockets opened with CanSocketOptions::fd) are
+/// in `fd_frame`; those of at most 8 bytes are also copied into `frame` (identifier, length and
+/// data), so code that takes a can_frame handles them unchanged. For longer FD frames `frame`
+/// holds only the identifier, with length 0.
 struct ReceivedFrame {
-  can_frame frame{};                ///< the frame as received
+  can_frame frame{};                ///< the frame as received (classical), or see above (FD)
+  bool is_fd = false;               ///< a CAN FD frame (CANFD_MTU bytes from the kernel)
+  canfd_frame fd_frame{};           ///< the FD frame (is_fd only), up to 64 data bytes
+  uint8_t fd_flags = 0;             ///< its flags: CANFD_BRS, CANFD_ESI, CANFD_FDF (is_fd only)
   bool is_error_frame = false;      ///< CAN_ERR_FLAG set; see `error`
   ErrorFrameInfo error;             ///< decoded error frame (is_error_frame only)
   bool has_kernel_time = false;     ///< software receive timestamp present
@@ -105,6 +119,14 @@ using SendAttempt = std::function<int()>;
 /// Waits for the given time (injectable for tests).
 using SleepFunction = std::function<void(std::chrono::microseconds)>;
 
+/// The first 8 bytes of an FD frame as a classical frame: identifier, length (if at most
+/// CAN_MAX_DLEN; else 0) and data. See ReceivedFrame.
+can_frame classical_view(const canfd_frame& frame);
+
+/// A classical frame as an FD frame with the same identifier, length and data, and `flags`
+/// (e.g. CANFD_BRS).
+canfd_frame to_fd_frame(const can_frame& frame, uint8_t flags);
+
 /// Calls `attempt` until it succeeds, retrying ENOBUFS / EAGAIN / EWOULDBLOCK per `policy` with
 /// `sleep` between tries; counts every outcome in `stats`. Never throws.
 SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy,
@@ -115,7 +137,9 @@ class CanSocket {
  public:
   /// Opens a raw CAN socket on `interface` (e.g. "vcan0", "can0") and applies `options`.
   /// @throws CanError naming the interface and errno; on EAFNOSUPPORT the message says that the
-  ///         kernel has no CAN support and that tests get it through can_bridge/vm/canvm.
+  ///         kernel has no CAN support and that tests get it through can_bridge/vm/canvm. With
+  ///         options.fd on an interface whose MTU is not CANFD_MTU, the message gives the
+  ///         `ip link set <if> mtu 72` fix.
   static CanSocket open(const std::string& interface, const CanSocketOptions& options = {});
 
   CanSocket(CanSocket&& other) noexcept;
@@ -126,9 +150,12 @@ class CanSocket {
 
   /// Sends one classical CAN frame without blocking; a full queue is retried with back-off.
   SendResult send(const can_frame& frame);
+  /// Sends one CAN FD frame (socket opened with CanSocketOptions::fd), same retry policy.
+  /// Without fd the kernel refuses it: kError with EINVAL.
+  SendResult send(const canfd_frame& frame);
 
-  /// Waits up to `timeout_ms` (0: poll, < 0: forever) for one frame. Error frames are returned
-  /// too (is_error_frame) and counted separately.
+  /// Waits up to `timeout_ms` (0: poll, < 0: forever) for one frame, classical or (with fd) CAN
+  /// FD. Error frames are returned too (is_error_frame) and counted separately.
   ReceiveResult receive(ReceivedFrame* out, int timeout_ms);
 
   /// Counters since the socket was opened.
@@ -137,6 +164,8 @@ class CanSocket {
   const std::string& interface() const { return interface_; }
   /// The socket's file descriptor (for poll loops).
   int fd() const { return fd_; }
+  /// True if opened with CanSocketOptions::fd (CAN FD frames enabled).
+  bool fd_enabled() const { return fd_enabled_; }
 
  private:
   CanSocket(int fd, std::string interface, SendRetryPolicy retry);
@@ -146,6 +175,7 @@ class CanSocket {
   SendRetryPolicy retry_;
   CanSocketStats stats_;
   bool timestamps_ = true;
+  bool fd_enabled_ = false;
 };
 
 }  // namespace nimble::can

@@ -17,9 +17,26 @@ int hex_value(char c) {
   return -1;
 }
 
-}  // namespace
+/// Hex data bytes into `out` (at most `max_len`); optional '.' separators between bytes (cansend
+/// syntax) are accepted. The number of bytes, or nullopt.
+std::optional<unsigned> parse_data(const std::string& data, uint8_t* out, unsigned max_len) {
+  unsigned len = 0;
+  for (std::size_t i = 0; i < data.size();) {
+    if (data[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= data.size() || len >= max_len) return std::nullopt;
+    const int hi = hex_value(data[i]), lo = hex_value(data[i + 1]);
+    if (hi < 0 || lo < 0) return std::nullopt;
+    out[len++] = static_cast<uint8_t>((hi << 4) | lo);
+    i += 2;
+  }
+  return len;
+}
 
-std::string format_candump_line(const can_frame& frame, int64_t time_ns, const std::string& interface) {
+/// "(SECONDS.MICROS) INTERFACE ID" of a line.
+std::string line_head(canid_t can_id, int64_t time_ns, const std::string& interface) {
   const int64_t us_total = time_ns / 1000;
   char head[64];
   std::snprintf(head, sizeof head, "(%010lld.%06lld) ", static_cast<long long>(us_total / 1000000),
@@ -28,25 +45,43 @@ std::string format_candump_line(const can_frame& frame, int64_t time_ns, const s
   line += interface;
   line += ' ';
   char id[16];
-  if (frame.can_id & CAN_ERR_FLAG) {
-    std::snprintf(id, sizeof id, "%08X", frame.can_id & (CAN_ERR_MASK | CAN_ERR_FLAG));
-  } else if (frame.can_id & CAN_EFF_FLAG) {
-    std::snprintf(id, sizeof id, "%08X", frame.can_id & CAN_EFF_MASK);
+  if (can_id & CAN_ERR_FLAG) {
+    std::snprintf(id, sizeof id, "%08X", can_id & (CAN_ERR_MASK | CAN_ERR_FLAG));
+  } else if (can_id & CAN_EFF_FLAG) {
+    std::snprintf(id, sizeof id, "%08X", can_id & CAN_EFF_MASK);
   } else {
-    std::snprintf(id, sizeof id, "%03X", frame.can_id & CAN_SFF_MASK);
+    std::snprintf(id, sizeof id, "%03X", can_id & CAN_SFF_MASK);
   }
   line += id;
+  return line;
+}
+
+void append_hex(std::string& line, const uint8_t* data, unsigned len) {
+  for (unsigned i = 0; i < len; ++i) {
+    line += kHex[data[i] >> 4];
+    line += kHex[data[i] & 0x0F];
+  }
+}
+
+}  // namespace
+
+std::string format_candump_line(const can_frame& frame, int64_t time_ns, const std::string& interface) {
+  std::string line = line_head(frame.can_id, time_ns, interface);
   line += '#';
   if ((frame.can_id & CAN_RTR_FLAG) && !(frame.can_id & CAN_ERR_FLAG)) {
     line += 'R';
     if (frame.len > 0 && frame.len <= CAN_MAX_DLEN) line += kHex[frame.len];
     return line;
   }
-  const unsigned len = frame.len <= CAN_MAX_DLEN ? frame.len : CAN_MAX_DLEN;
-  for (unsigned i = 0; i < len; ++i) {
-    line += kHex[frame.data[i] >> 4];
-    line += kHex[frame.data[i] & 0x0F];
-  }
+  append_hex(line, frame.data, frame.len <= CAN_MAX_DLEN ? frame.len : CAN_MAX_DLEN);
+  return line;
+}
+
+std::string format_candump_line(const canfd_frame& frame, int64_t time_ns, const std::string& interface) {
+  std::string line = line_head(frame.can_id, time_ns, interface);
+  line += "##";
+  line += kHex[frame.flags & 0x0F];
+  append_hex(line, frame.data, frame.len <= CANFD_MAX_DLEN ? frame.len : CANFD_MAX_DLEN);
   return line;
 }
 
@@ -80,7 +115,7 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
   const auto hash = text.find('#');
   if (hash == std::string::npos || (hash != 3 && hash != 8)) return std::nullopt;
-  if (text.compare(hash, 2, "##") == 0) return std::nullopt;  // CAN FD
+  const bool fd = text.compare(hash, 2, "##") == 0;
   uint32_t id = 0;
   for (std::size_t i = 0; i < hash; ++i) {
     const int v = hex_value(text[i]);
@@ -93,6 +128,25 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
     id = (id & CAN_EFF_MASK) | CAN_EFF_FLAG;
   }
   rec.frame.can_id = id;
+  if (fd) {
+    // ID##F DATA: F = flags (one hex digit), then up to 64 data bytes.
+    if (id & CAN_ERR_FLAG) return std::nullopt;
+    if (hash + 2 >= text.size()) return std::nullopt;
+    const int flags = hex_value(text[hash + 2]);
+    if (flags < 0) return std::nullopt;
+    std::memset(&rec.fd_frame, 0, sizeof rec.fd_frame);
+    rec.is_fd = true;
+    rec.fd_frame.can_id = id;
+    rec.fd_frame.flags = static_cast<uint8_t>(flags);
+    const auto len = parse_data(text.substr(hash + 3), rec.fd_frame.data, CANFD_MAX_DLEN);
+    if (!len) return std::nullopt;
+    rec.fd_frame.len = static_cast<uint8_t>(*len);
+    if (*len <= CAN_MAX_DLEN) {
+      rec.frame.len = static_cast<uint8_t>(*len);
+      std::memcpy(rec.frame.data, rec.fd_frame.data, *len);
+    }
+    return rec;
+  }
   std::string data = text.substr(hash + 1);
   if (!data.empty() && (data[0] == 'R' || data[0] == 'r')) {
     rec.frame.can_id |= CAN_RTR_FLAG;
@@ -103,20 +157,9 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
     }
     return rec;
   }
-  // Optional '.' separators between bytes (cansend syntax) are accepted.
-  unsigned len = 0;
-  for (std::size_t i = 0; i < data.size();) {
-    if (data[i] == '.') {
-      ++i;
-      continue;
-    }
-    if (i + 1 >= data.size() || len >= CAN_MAX_DLEN) return std::nullopt;
-    const int hi = hex_value(data[i]), lo = hex_value(data[i + 1]);
-    if (hi < 0 || lo < 0) return std::nullopt;
-    rec.frame.data[len++] = static_cast<uint8_t>((hi << 4) | lo);
-    i += 2;
-  }
-  rec.frame.len = static_cast<uint8_t>(len);
+  const auto len = parse_data(data, rec.frame.data, CAN_MAX_DLEN);
+  if (!len) return std::nullopt;
+  rec.frame.len = static_cast<uint8_t>(*len);
   return rec;
 }
 
@@ -133,7 +176,15 @@ CandumpWriter::~CandumpWriter() {
 }
 
 bool CandumpWriter::write(const can_frame& frame, int64_t time_ns, const std::string& interface) {
-  const std::string line = format_candump_line(frame, time_ns, interface) + '\n';
+  return write_line(format_candump_line(frame, time_ns, interface));
+}
+
+bool CandumpWriter::write(const canfd_frame& frame, int64_t time_ns, const std::string& interface) {
+  return write_line(format_candump_line(frame, time_ns, interface));
+}
+
+bool CandumpWriter::write_line(std::string line) {
+  line += '\n';
   if (std::fwrite(line.data(), 1, line.size(), file_) != line.size()) {
     ++write_errors_;
     return false;

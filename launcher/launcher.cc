@@ -581,7 +581,7 @@ int run_scenario(const RunOptions& options) {
       scenario.root["can_bridge"]["candump_file"] = fs::absolute(log_file + ".candump").string();
     }
     // The interface lives in the run's network namespace: a virtual one is made there.
-    const std::string problem = ensure_can_interface(cc.interface, cc.create_virtual);
+    const std::string problem = ensure_can_interface(cc.interface, cc.create_virtual, cc.fd);
     if (!problem.empty()) {
       std::cerr << "rig run: actuator_link can: " << problem << "\n";
       return kRunBadInput;

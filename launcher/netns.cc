@@ -151,9 +151,28 @@ std::string bring_up(const std::string& name) {
   return problem;
 }
 
+/// The MTU of `name`, or -1 (with `problem` set).
+int interface_mtu(const std::string& name, std::string* problem) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) {
+    *problem = std::string("socket: ") + std::strerror(errno);
+    return -1;
+  }
+  ifreq ifr{};
+  std::strncpy(ifr.ifr_name, name.c_str(), IFNAMSIZ - 1);
+  int mtu = -1;
+  if (::ioctl(fd, SIOCGIFMTU, &ifr) < 0) {
+    *problem = "SIOCGIFMTU " + name + ": " + std::strerror(errno);
+  } else {
+    mtu = ifr.ifr_mtu;
+  }
+  ::close(fd);
+  return mtu;
+}
+
 }  // namespace
 
-std::string ensure_can_interface(const std::string& name, bool create_virtual) {
+std::string ensure_can_interface(const std::string& name, bool create_virtual, bool fd) {
   const std::string no_can_hint =
       "on a machine whose kernel has no CAN support, run the rig inside the CAN VM: "
       "can_bridge/vm/canvm run -- build/bin/rig run <scenario>";
@@ -175,6 +194,29 @@ std::string ensure_can_interface(const std::string& name, bool create_virtual) {
       return "cannot create the virtual CAN interface '" + name + "' (ip link add dev " + name +
              " type vcan: " + (out.empty() ? "exit " + std::to_string(code) : out) +
              "); the kernel needs the vcan module (modprobe vcan); " + no_can_hint;
+    }
+    if (fd) {
+      // A vcan takes MTU 16 (classical) or 72 (CAN FD), only while it is down (as it is now).
+      out.clear();
+      const int mtu_code = run_quiet({"ip", "link", "set", "dev", name, "mtu", std::to_string(CANFD_MTU)}, &out);
+      if (mtu_code != 0) {
+        return "cannot give the virtual CAN interface '" + name + "' the CAN FD MTU (ip link set dev " + name +
+               " mtu " + std::to_string(CANFD_MTU) + ": " + (out.empty() ? "exit " + std::to_string(mtu_code) : out) +
+               ")";
+      }
+    }
+  }
+  if (fd) {
+    std::string problem;
+    const int mtu = interface_mtu(name, &problem);
+    if (mtu < 0) return problem;
+    if (mtu != static_cast<int>(CANFD_MTU)) {
+      return "CAN interface '" + name + "' has MTU " + std::to_string(mtu) +
+             (mtu == static_cast<int>(CAN_MTU) ? " (classical CAN only)" : "") +
+             " but can_bridge.fd is true, which needs CAN FD (MTU " + std::to_string(CANFD_MTU) + "): ip link set " +
+             name + " down && ip link set " + name + " mtu " + std::to_string(CANFD_MTU) + " && ip link set " + name +
+             " up (a real controller: ip link set " + name + " type can bitrate ... dbitrate ... fd on), "
+             "or set can_bridge.fd: false";
     }
   }
   return bring_up(name);

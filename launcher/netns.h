@@ -29,9 +29,11 @@ bool lcm_url_works(const std::string& url);
 
 /// Makes sure the CAN interface `name` exists and is up in the current network namespace;
 /// a missing one is created as a virtual CAN interface (`ip link add dev NAME type vcan`)
-/// when `create_virtual`. Returns "" on success, else what is wrong and how to fix it
-/// (a kernel without CAN support is named as such).
-std::string ensure_can_interface(const std::string& name, bool create_virtual);
+/// when `create_virtual`. With `fd` (CAN FD) a vcan created here gets the CAN FD MTU (72), and an
+/// existing interface with the classical MTU (16) is an error naming the `ip link set` fix.
+/// Returns "" on success, else what is wrong and how to fix it (a kernel without CAN support is
+/// named as such).
+std::string ensure_can_interface(const std::string& name, bool create_virtual, bool fd = false);
 
 /// The exact commands that make the host's loopback carry LCM multicast.
 std::string multicast_fix_commands();

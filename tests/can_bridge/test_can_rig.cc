@@ -8,8 +8,14 @@
 //  - the real processes through `rig run`: the identification doublet train in lockstep
 //    gives the same truth over the CAN link as over LCM, the summary reports both sides'
 //    health, and the run's candump log replays with canplayer.
+//  - CAN FD (can_bridge.fd: true) on vcan1, which the FD cases create with MTU 72: the bridge
+//    node's frames are FD frames with bit rate switch, FD frames from cansend are decoded, and a
+//    short lockstep `rig run` carries every command across in FD frames.
 
 #include <linux/can/error.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -35,6 +41,7 @@
 #include "can_bridge/candump_log.h"
 #include "can_bridge/codec.h"
 #include "can_bridge/frame_layout.h"
+#include "launcher/netns.h"
 
 #include "../support/rig_runs.h"
 
@@ -78,6 +85,23 @@ std::string cansend(const can_frame& f, int len = -1) {
   return "cansend " + kIf + " " + id + "#" + hex(f, len);
 }
 
+/// The CAN FD interface (MTU 72) of the FD cases; vcan0 keeps the classical MTU.
+const std::string kFdIf = "vcan1";
+
+void ensure_fd_interface() {
+  if (::if_nametoindex(kFdIf.c_str()) != 0) return;
+  // A vcan's MTU can only be changed while it is down, as it is after `ip link add`.
+  REQUIRE(run("ip link add dev " + kFdIf + " type vcan && ip link set " + kFdIf + " mtu 72 && ip link set " + kFdIf +
+              " up") == 0);
+}
+
+/// `cansend vcan1 ID##1DATA` for a frame: an FD frame with bit rate switch.
+std::string cansend_fd(const can_frame& f, const std::string& data) {
+  char id[8];
+  std::snprintf(id, sizeof id, "%03X", f.can_id & CAN_SFF_MASK);
+  return "cansend " + kFdIf + " " + id + "##1" + data;
+}
+
 CanSocketOptions receive_all() {
   CanSocketOptions o;
   o.receive_all = true;
@@ -103,10 +127,12 @@ void pin_to_cpu0() {
 
 /// A bridge node of one side on memq://, with the messages it publishes collected.
 struct Bridge {
-  explicit Bridge(const std::string& side)
+  explicit Bridge(const std::string& side, bool fd = false)
       : pinned((pin_to_cpu0(), true)),
         scenario(nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml",
-                                       {{"actuator_link", "can"}, {"can_bridge.interface", kIf}})),
+                                       {{"actuator_link", "can"},
+                                        {"can_bridge.interface", fd ? kFdIf : kIf},
+                                        {"can_bridge.fd", fd ? "true" : "false"}})),
         node(scenario, {side, scenario.file, "memq://"}) {
     auto& bus = node.node().bus();
     bus.subscribe<actuator_command_t>("ACTUATOR_CMD_CAN", [this](const actuator_command_t& m) { commands.push_back(m); });
@@ -405,5 +431,219 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   std::size_t mismatched = 0;
   for (std::size_t i = 0; i < replayed.size(); ++i) mismatched += !same_frame(replayed[i], records[i].frame);
   CHECK(mismatched == 0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch; FD and classical feedback frames "
+          "become ACTUATOR_FB_CAN; FD frames of another length are wrong_length",
+          "[bridge][fd]") {
+  ensure_fd_interface();
+  Bridge flight(kFlightProcess, true);
+  CanSocketOptions listen = receive_all();
+  listen.fd = true;
+  CanSocket listener = CanSocket::open(kFdIf, listen);
+
+  const actuator_command_t cmd = sample_command(41);
+  flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
+  REQUIRE(flight.node.node().bus().handle_timeout(1000) > 0);
+  CommandEncoder reference;
+  for (const can_frame& want : reference.encode(cmd)) {
+    ReceivedFrame rx;
+    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
+    INFO("frame 0x" << std::hex << rx.frame.can_id);
+    REQUIRE(rx.is_fd);
+    CHECK(rx.fd_frame.len == 8);
+    CHECK((rx.fd_flags & CANFD_BRS) != 0);
+    CHECK((rx.fd_flags & CANFD_ESI) == 0);
+    CHECK(same_frame(rx.frame, want));  // the documented 8-byte frame, bit for bit
+  }
+
+  // Feedback as FD frames from cansend (`ID##1DATA`), then as classical frames.
+  actuator_feedback_t fb{};
+  fb.flap_freq_left_radps = 110.37;
+  fb.flap_freq_right_radps = 95.02;
+  fb.dihedral_rad = 0.0421;
+  fb.throttle_pct = -2.5;
+  fb.cmd_seq = 41;
+  fb.cmd_age_us = 1500;
+  FeedbackEncoder fenc;
+  std::string sends;
+  for (const can_frame& f : fenc.encode(fb)) sends += (sends.empty() ? "" : " && ") + cansend_fd(f, hex(f));
+  REQUIRE(run(sends) == 0);
+  flight.pump();
+  REQUIRE(flight.feedback.size() == 1);
+  CHECK(flight.feedback.front().flap_freq_left_radps == Approx(110.37).margin(0.005));
+  CHECK(flight.feedback.front().dihedral_rad == Approx(0.0421).margin(5e-5));
+  CHECK(flight.feedback.front().throttle_pct == Approx(-2.5).margin(0.005));
+  CHECK(flight.feedback.front().cmd_seq == 41);
+  CHECK(flight.feedback.front().cmd_age_us == 1500);
+
+  fb.cmd_seq = 42;
+  sends.clear();
+  for (const can_frame& f : fenc.encode(fb)) {
+    char id[8];
+    std::snprintf(id, sizeof id, "%03X", f.can_id & CAN_SFF_MASK);
+    sends += (sends.empty() ? "" : " && ") + ("cansend " + kFdIf + " " + id + "#" + hex(f));
+  }
+  REQUIRE(run(sends) == 0);
+  flight.pump();
+  REQUIRE(flight.feedback.size() == 2);
+  CHECK(flight.feedback.back().cmd_seq == 42);
+
+  // FD frames of 12 and 5 bytes under a feedback identifier: wrong length, reported, dropped.
+  const auto next = fenc.encode(fb);
+  REQUIRE(run(cansend_fd(next[0], hex(next[0]) + "00112233") + " && " + cansend_fd(next[0], hex(next[0], 5))) == 0);
+  flight.pump();
+  CHECK(flight.feedback.size() == 2);
+  const can_health_t& h = flight.health.back();
+  CHECK(h.interface_name == kFdIf);
+  CHECK(h.messages_to_can == 1);
+  CHECK(h.messages_to_lcm == 2);
+  CHECK(h.frames_sent == 2);
+  CHECK(h.frames_received == 8);
+  CHECK(h.rejected_wrong_length == 2);
+  CHECK(h.rejected_stale_counter == 0);
+  CHECK(h.send_dropped == 0);
+  CHECK(flight.fault_mentions("dropped FD frame 0x181 [12]"));
+  CHECK(flight.fault_mentions("wrong_length"));
+}
+
+TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN; feedback goes out as FD frames",
+          "[bridge][fd]") {
+  ensure_fd_interface();
+  Bridge rig(kRigProcess, true);
+  CommandEncoder enc;
+  std::string sends;
+  for (const can_frame& f : enc.encode(sample_command(1000))) sends += (sends.empty() ? "" : " && ") + cansend_fd(f, hex(f));
+  REQUIRE(run(sends) == 0);
+  rig.pump();
+  REQUIRE(rig.commands.size() == 1);
+  const actuator_command_t& c = rig.commands.back();
+  CHECK(c.seq == 1000);
+  CHECK(c.flap_freq_left_radps == Approx(131.25).margin(0.005));
+  CHECK(c.dihedral_rad == Approx(-0.1234).margin(5e-5));
+  CHECK(c.source == kRigProcess);
+
+  CanSocketOptions listen = receive_all();
+  listen.fd = true;
+  CanSocket listener = CanSocket::open(kFdIf, listen);
+  actuator_feedback_t fb{};
+  fb.flap_freq_left_radps = 101.0;
+  fb.flap_freq_right_radps = 103.5;
+  fb.cmd_seq = 1000;
+  fb.cmd_age_us = 900;
+  rig.node.node().bus().publish("ACTUATOR_FB", fb);
+  REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
+  FeedbackEncoder reference;
+  for (const can_frame& want : reference.encode(fb)) {
+    ReceivedFrame rx;
+    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
+    REQUIRE(rx.is_fd);
+    CHECK(rx.fd_frame.len == 8);
+    CHECK((rx.fd_flags & CANFD_BRS) != 0);
+    CHECK(same_frame(rx.frame, want));
+  }
+  rig.pump();
+  CHECK(rig.health.back().frames_sent == 3);
+  CHECK(rig.health.back().frames_received == 2);
+  CHECK(rig.health.back().messages_to_lcm == 1);
+}
+
+TEST_CASE("can_bridge.fd on an interface with the classical MTU names the fix", "[bridge][fd]") {
+  pin_to_cpu0();
+  const std::string classical_if = "vcan_cc";
+  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if + " mtu 16 && ip link set " +
+              classical_if + " up") == 0);
+  const nimble::Scenario scenario = nimble::load_scenario(
+      kConfigs + "id_doublet_train_fast.yaml",
+      {{"actuator_link", "can"}, {"can_bridge.interface", classical_if}, {"can_bridge.fd", "true"}});
+  try {
+    CanBridgeNode node(scenario, {kRigProcess, scenario.file, "memq://"});
+    FAIL("no exception");
+  } catch (const CanError& e) {
+    CHECK_THAT(std::string(e.what()), Catch::Matchers::Contains("'" + classical_if + "' has MTU 16") &&
+                                          Catch::Matchers::Contains("ip link set " + classical_if + " mtu 72"));
+  }
+  CHECK(run("ip link del dev " + classical_if) == 0);
+}
+
+TEST_CASE("rig run's interface set-up with can_bridge.fd: a vcan it creates gets MTU 72; MTU 16 names the fix",
+          "[launcher][fd]") {
+  using nimble::launcher::ensure_can_interface;
+  const auto mtu = [](const std::string& name) {
+    const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    REQUIRE(fd >= 0);
+    ifreq ifr{};
+    std::strncpy(ifr.ifr_name, name.c_str(), IFNAMSIZ - 1);
+    const int rc = ::ioctl(fd, SIOCGIFMTU, &ifr);
+    ::close(fd);
+    REQUIRE(rc == 0);
+    return ifr.ifr_mtu;
+  };
+  CHECK(ensure_can_interface("vcan_fdnew", true, true) == "");
+  CHECK(mtu("vcan_fdnew") == 72);
+  CHECK(ensure_can_interface("vcan_fdnew", true, true) == "");  // existing, MTU 72, up
+
+  REQUIRE(run("ip link add dev vcan_cc type vcan && ip link set vcan_cc mtu 16") == 0);
+  CHECK(ensure_can_interface("vcan_cc", true, false) == "");  // classical: fine (and raised)
+  const std::string problem = ensure_can_interface("vcan_cc", true, true);
+  CHECK_THAT(problem, Catch::Matchers::Contains("'vcan_cc' has MTU 16") &&
+                          Catch::Matchers::Contains("ip link set vcan_cc mtu 72") &&
+                          Catch::Matchers::Contains("can_bridge.fd"));
+  CHECK(mtu("vcan_cc") == 16);  // an existing interface is never changed
+  CHECK(run("ip link del dev vcan_cc && ip link del dev vcan_fdnew") == 0);
+}
+
+TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses in FD frames", "[system][rig][fd]") {
+  pin_to_cpu0();
+  const std::string dir = nimble::test::scratch_dir("can_fd_link");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  const RunResult r = rig_run(scenario, dir,
+                              "--clock lockstep --set duration_s=1 --set actuator_link=can --set can_bridge.fd=true "
+                              "--set run.controller_input=truth --set processes=[plant,controller]");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node ch = r.summary["channels"];
+  CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == 512);
+  CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == 512);
+  CHECK(ch["ACTUATOR_CMD_CAN"]["drops"].as<int>() == 0);
+  CHECK(ch["ACTUATOR_FB_CAN"]["count"].as<int>() == ch["ACTUATOR_FB"]["count"].as<int>());
+  const YAML::Node flight = r.summary["can"]["can_flight"], rig = r.summary["can"]["can_rig"];
+  REQUIRE(flight);
+  REQUIRE(rig);
+  CHECK(flight["frames_sent"].as<int>() == 2 * 512);
+  CHECK(rig["frames_received"].as<int>() == 2 * 512);
+  CHECK(rig["messages_to_lcm"].as<int>() == 512);
+  for (const YAML::Node& side : {flight, rig}) {
+    for (const char* key : {"rejected_unknown_id", "rejected_wrong_length", "rejected_bad_checksum",
+                            "rejected_stale_counter", "rejected_out_of_range", "error_frames", "send_dropped"}) {
+      INFO(key);
+      CHECK(side[key].as<int>() == 0);
+    }
+  }
+  // The rig side's candump log holds FD lines (ID##1...) that decode as the run's commands.
+  const std::string candump = rig["candump_file"].as<std::string>();
+  std::ifstream in(candump);
+  REQUIRE(in.good());
+  std::string line;
+  std::size_t lines = 0, fd_with_brs = 0;
+  CommandDecoder decoder;
+  while (std::getline(in, line)) {
+    INFO(line);
+    const auto rec = parse_candump_line(line);
+    REQUIRE(rec);
+    ++lines;
+    if (rec->is_fd && rec->fd_frame.len == 8 && (rec->fd_frame.flags & CANFD_BRS)) ++fd_with_brs;
+    actuator_command_t cmd;
+    decoder.decode(rec->frame, &cmd);
+  }
+  CHECK(static_cast<int>(lines) == rig["candump_lines"].as<int>());
+  CHECK(lines == 2 * 512 + 3 * ch["ACTUATOR_FB"]["count"].as<std::size_t>());
+  CHECK(fd_with_brs == lines);
+  CHECK(decoder.stats().messages == 512);
+  CHECK(decoder.stats().unknown_id == 3 * ch["ACTUATOR_FB"]["count"].as<std::size_t>());  // the feedback frames
+  CHECK(decoder.stats().wrong_length == 0);
+  CHECK(decoder.stats().bad_checksum == 0);
+  CHECK(decoder.stats().stale_counter == 0);
   fs::remove_all(dir);
 }

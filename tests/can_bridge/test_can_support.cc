@@ -5,6 +5,7 @@
 #include <linux/can/error.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -42,6 +43,19 @@ can_frame data_frame(uint32_t id, std::vector<uint8_t> data) {
 
 bool same_frame(const can_frame& a, const can_frame& b) {
   return a.can_id == b.can_id && a.len == b.len && std::equal(a.data, a.data + a.len, b.data);
+}
+
+canfd_frame fd_frame(uint32_t id, uint8_t flags, std::vector<uint8_t> data) {
+  canfd_frame f{};
+  f.can_id = id;
+  f.flags = flags;
+  f.len = static_cast<uint8_t>(data.size());
+  for (std::size_t i = 0; i < data.size(); ++i) f.data[i] = data[i];
+  return f;
+}
+
+bool same_fd_frame(const canfd_frame& a, const canfd_frame& b) {
+  return a.can_id == b.can_id && a.len == b.len && a.flags == b.flags && std::equal(a.data, a.data + a.len, b.data);
 }
 
 }  // namespace
@@ -119,7 +133,6 @@ TEST_CASE("candump log lines have canplayer's format and parse back", "[candump]
     CHECK(same_frame(rec->frame, f));
   }
   CHECK(parse_candump_line("(1.000001) vcan0 101#11.22.33")->frame.len == 3);  // cansend style
-  CHECK_FALSE(parse_candump_line("(1.000001) vcan0 101##0112233"));           // CAN FD
   CHECK_FALSE(parse_candump_line("garbage"));
   CHECK_FALSE(parse_candump_line("(1.0) vcan0 101#00"));
   CHECK_FALSE(parse_candump_line("(1.000001) vcan0 1011#00"));
@@ -128,22 +141,91 @@ TEST_CASE("candump log lines have canplayer's format and parse back", "[candump]
   CHECK_FALSE(parse_candump_line("(1.000001) vcan0 FFF#00"));
 }
 
+TEST_CASE("CAN FD frames have candump's ID##F format and parse back", "[candump][fd]") {
+  const int64_t t_ns = 1700000000123456789;
+  const canfd_frame cmd = fd_frame(0x101, CANFD_BRS, {0x10, 0x27, 0x28, 0x23, 0x88, 0x13, 0x30, 0x71});
+  CHECK(format_candump_line(cmd, t_ns, "vcan1") == "(1700000000.123456) vcan1 101##11027282388133071");
+  CHECK(format_candump_line(fd_frame(0x7, 0, {}), 5000, "can0") == "(0000000000.000005) can0 007##0");
+  CHECK(format_candump_line(fd_frame(0x12345 | CAN_EFF_FLAG, CANFD_BRS | CANFD_ESI, {0xAB}), 0, "vcan1") ==
+        "(0000000000.000000) vcan1 00012345##3AB");
+  CHECK(format_candump_line(fd_frame(0x181, CANFD_BRS | CANFD_FDF, {1, 2}), 0, "vcan1") ==
+        "(0000000000.000000) vcan1 181##50102");
+  std::vector<uint8_t> long_payload(64);
+  for (std::size_t i = 0; i < long_payload.size(); ++i) long_payload[i] = static_cast<uint8_t>(i * 7);
+  const canfd_frame longest = fd_frame(0x102, CANFD_BRS, long_payload);
+  CHECK(format_candump_line(longest, 0, "vcan1").size() == std::string("(0000000000.000000) vcan1 102##1").size() + 128);
+
+  for (const canfd_frame& f : {cmd, fd_frame(0x5, 0, {}), fd_frame(0x1ABCDEF0 | CAN_EFF_FLAG, CANFD_BRS, {1, 2, 3}),
+                               fd_frame(0x183, CANFD_ESI, {9, 8, 7, 6, 5, 4, 3, 2, 1, 0, 0xFF, 0xEE}), longest}) {
+    const std::string line = format_candump_line(f, t_ns, "vcan1");
+    INFO(line);
+    const auto rec = parse_candump_line(line);
+    REQUIRE(rec);
+    CHECK(rec->is_fd);
+    CHECK(rec->interface == "vcan1");
+    CHECK(rec->time_ns == t_ns / 1000 * 1000);
+    CHECK(same_fd_frame(rec->fd_frame, f));
+    // FD frames of up to 8 bytes are also in `frame`, as the decoders take them.
+    if (f.len <= CAN_MAX_DLEN) {
+      can_frame classical{};
+      classical.can_id = f.can_id;
+      classical.len = f.len;
+      std::copy(f.data, f.data + f.len, classical.data);
+      CHECK(same_frame(rec->frame, classical));
+    } else {
+      CHECK(rec->frame.can_id == f.can_id);
+      CHECK(rec->frame.len == 0);
+    }
+  }
+  // a classical line is not FD
+  const auto classical = parse_candump_line("(1.000001) vcan0 101#0011");
+  REQUIRE(classical);
+  CHECK_FALSE(classical->is_fd);
+  // cansend's FD syntax with '.' separators and lower-case hex
+  const auto dotted = parse_candump_line("(1.000001) vcan1 181##1de.ad.be.ef");
+  REQUIRE(dotted);
+  CHECK(same_fd_frame(dotted->fd_frame, fd_frame(0x181, CANFD_BRS, {0xDE, 0xAD, 0xBE, 0xEF})));
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##"));                 // no flags digit
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##G00"));              // flags not hex
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##100112"));           // odd number of digits
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 20000040##100"));         // no FD error frames
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##1" + std::string(130, '0')));  // 65 bytes
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 FFF##100"));
+}
+
+TEST_CASE("FD frames convert to and from classical frames of up to 8 bytes", "[fd]") {
+  const can_frame c = data_frame(0x102, {1, 2, 3, 4, 5, 6, 7, 8});
+  const canfd_frame f = to_fd_frame(c, CANFD_BRS);
+  CHECK(f.can_id == 0x102);
+  CHECK(f.len == 8);
+  CHECK(f.flags == CANFD_BRS);
+  CHECK(std::equal(c.data, c.data + 8, f.data));
+  CHECK(std::all_of(f.data + 8, f.data + CANFD_MAX_DLEN, [](uint8_t b) { return b == 0; }));
+  CHECK(same_frame(classical_view(f), c));
+  const can_frame long_view = classical_view(fd_frame(0x101, CANFD_BRS, std::vector<uint8_t>(12, 0xAA)));
+  CHECK(long_view.can_id == 0x101);
+  CHECK(long_view.len == 0);
+}
+
 TEST_CASE("CandumpWriter writes one parseable line per frame", "[candump]") {
   const auto path = std::filesystem::temp_directory_path() / ("rig_candump_" + std::to_string(::getpid()) + ".log");
   {
     CandumpWriter w(path.string());
     CHECK(w.write(data_frame(0x181, {1, 2, 3, 4, 5, 6, 7, 8}), 1000000000, "vcan0"));
     CHECK(w.write(data_frame(0x182, {9}), 1000001000, "vcan0"));
+    CHECK(w.write(fd_frame(0x183, CANFD_BRS, {1, 2, 3, 4, 5, 6, 7, 8}), 1000002000, "vcan1"));
     CHECK(w.flush());
-    CHECK(w.lines_written() == 2);
+    CHECK(w.lines_written() == 3);
     CHECK(w.write_errors() == 0);
   }
   std::ifstream in(path);
-  std::string l1, l2;
+  std::string l1, l2, l3;
   std::getline(in, l1);
   std::getline(in, l2);
+  std::getline(in, l3);
   CHECK(l1 == "(0000000001.000000) vcan0 181#0102030405060708");
   CHECK(l2 == "(0000000001.000001) vcan0 182#09");
+  CHECK(l3 == "(0000000001.000002) vcan1 183##10102030405060708");
   std::filesystem::remove(path);
   CHECK_THROWS_WITH(CandumpWriter("/nonexistent-dir/x.log"), Contains("/nonexistent-dir/x.log"));
 }

@@ -1,8 +1,11 @@
 // Tests on a real SocketCAN interface, vcan0, created by can_bridge/vm/canvm ctest-wrap (in a qemu
 // VM on kernels without CAN, else in a private network namespace). One executable = one VM boot.
 // Uses can-utils (cansend, candump, canplayer) and iproute2's tc from PATH.
+// The CAN FD cases use vcan1, which they create with the CAN FD MTU (72; a vcan's default on
+// current kernels, set explicitly all the same), and vcan_cc with the classical MTU (16).
 
 #include <fcntl.h>
+#include <net/if.h>
 #include <linux/can/error.h>
 #include <poll.h>
 #include <signal.h>
@@ -10,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -184,6 +188,60 @@ std::vector<can_frame> traffic(int commands) {
   return frames;
 }
 
+/// vcan1 with the CAN FD MTU, created (once) by the FD cases.
+const std::string kFdIf = "vcan1";
+
+void ensure_fd_interface() {
+  if (::if_nametoindex(kFdIf.c_str()) != 0) return;
+  // A vcan's MTU can only be changed while it is down, as it is after `ip link add`.
+  REQUIRE(run("ip link add dev " + kFdIf + " type vcan && ip link set " + kFdIf + " mtu 72 && ip link set " + kFdIf +
+              " up") == 0);
+}
+
+/// Sends a marker frame until `rx` receives one with a kernel timestamp. The first socket that asks
+/// for receive timestamps switches them on for the whole kernel through a deferred work item; frames
+/// queued before it ran carry none.
+void wait_for_timestamps(CanSocket& tx, CanSocket& rx) {
+  can_frame marker{};
+  marker.can_id = 0x7F1;
+  marker.len = 1;
+  for (int i = 0; i < 200; ++i) {
+    REQUIRE(tx.send(marker) == SendResult::kSent);
+    ReceivedFrame got;
+    bool stamped = false;
+    while (rx.receive(&got, 10) == ReceiveResult::kFrame) stamped = got.has_kernel_time;
+    if (stamped) return;
+  }
+  FAIL("no kernel receive timestamps after 200 frames");
+}
+
+CanSocketOptions fd_options(CanSocketOptions o) {
+  o.fd = true;
+  return o;
+}
+
+/// The flags the kernel may add on its own: CANFD_FDF (kernels with CAN XL mark every FD frame).
+bool same_fd_frame(const canfd_frame& got, const canfd_frame& sent) {
+  return got.can_id == sent.can_id && got.len == sent.len && (got.flags & ~CANFD_FDF) == (sent.flags & ~CANFD_FDF) &&
+         std::memcmp(got.data, sent.data, sent.len) == 0;
+}
+
+/// The rig's traffic as FD frames of 8 bytes with bit rate switch, as the bridge sends it with fd.
+std::vector<canfd_frame> fd_traffic(int commands) {
+  std::vector<canfd_frame> out;
+  for (const can_frame& f : traffic(commands)) out.push_back(to_fd_frame(f, CANFD_BRS));
+  return out;
+}
+
+canfd_frame fd_frame(uint32_t id, uint8_t flags, unsigned len, uint8_t seed) {
+  canfd_frame f{};
+  f.can_id = id;
+  f.flags = flags;
+  f.len = static_cast<uint8_t>(len);
+  for (unsigned i = 0; i < len; ++i) f.data[i] = static_cast<uint8_t>(seed + 13 * i);
+  return f;
+}
+
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))).string();
 }
@@ -193,6 +251,12 @@ std::string temp_path(const std::string& name) {
 TEST_CASE("frames sent with CanSocket arrive bit-exact with monotonic kernel timestamps", "[vcan]") {
   CanSocket tx = CanSocket::open(kIf, send_only());
   CanSocket rx = CanSocket::open(kIf);  // rig filters, error frames, timestamps
+  {
+    // rx keeps the kernel's timestamping on; a second socket sees the markers rx filters out.
+    CanSocket warm_tx = CanSocket::open(kIf, send_only());
+    CanSocket warm = CanSocket::open(kIf, receive_all());
+    wait_for_timestamps(warm_tx, warm);
+  }
   const std::vector<can_frame> frames = traffic(60);
   const int64_t t_start = realtime_ns();
   for (const can_frame& f : frames) REQUIRE(tx.send(f) == SendResult::kSent);
@@ -483,4 +547,190 @@ TEST_CASE("opening a missing or down interface names it and says what to do", "[
   } catch (const CanError& e) {
     CHECK_THAT(std::string(e.what()), Contains("'lo'"));
   }
+}
+
+TEST_CASE("CAN FD frames sent with CanSocket arrive bit-exact on a vcan with MTU 72", "[vcan][fd]") {
+  ensure_fd_interface();
+  CanSocket tx = CanSocket::open(kFdIf, fd_options(send_only()));
+  CanSocket rx = CanSocket::open(kFdIf, fd_options(receive_all()));
+  CanSocket classical_only = CanSocket::open(kFdIf, receive_all());  // no CAN_RAW_FD_FRAMES
+  CHECK(tx.fd_enabled());
+  CHECK_FALSE(classical_only.fd_enabled());
+  wait_for_timestamps(tx, rx);
+  while (classical_only.receive(nullptr, 0) == ReceiveResult::kFrame) {
+  }
+  const uint64_t received_before = rx.stats().frames_received, sent_before = tx.stats().frames_sent;
+  const uint64_t classical_before = classical_only.stats().frames_received;
+
+  // The rig's frames as FD frames, then other FD lengths, flags and a classical frame.
+  std::vector<canfd_frame> frames = fd_traffic(20);
+  const canfd_frame longest = fd_frame(0x101, CANFD_BRS, 64, 3);
+  const canfd_frame twelve = fd_frame(0x182, 0, 12, 7);
+  const canfd_frame empty = fd_frame(0x123, CANFD_BRS | CANFD_ESI, 0, 0);
+  const canfd_frame extended = fd_frame(0x1ABCDEF | CAN_EFF_FLAG, CANFD_BRS, 8, 9);
+  frames.insert(frames.end(), {longest, twelve, empty, extended});
+  const can_frame classical = traffic(1)[0];
+  const int64_t t_start = realtime_ns();
+  for (const canfd_frame& f : frames) REQUIRE(tx.send(f) == SendResult::kSent);
+  REQUIRE(tx.send(classical) == SendResult::kSent);
+
+  CommandDecoder cdec;
+  FeedbackDecoder fdec;
+  for (const canfd_frame& sent : frames) {
+    const ReceivedFrame got = next_data(rx);
+    INFO("frame " << std::hex << sent.can_id << std::dec << " len " << int(sent.len));
+    REQUIRE(got.is_fd);
+    CHECK(same_fd_frame(got.fd_frame, sent));
+    CHECK(got.fd_flags == got.fd_frame.flags);
+    CHECK((got.fd_flags & CANFD_BRS) == (sent.flags & CANFD_BRS));
+    REQUIRE(got.has_kernel_time);
+    CHECK(got.kernel_time_ns >= t_start - 1000000);
+    if (sent.len <= CAN_MAX_DLEN) {
+      CHECK(same_frame(got.frame, classical_view(sent)));
+    } else {
+      CHECK(got.frame.can_id == sent.can_id);
+      CHECK(got.frame.len == 0);
+    }
+    const uint32_t id = got.frame.can_id;
+    if (id == kCmdFlap.id || id == kCmdServo.id) {
+      actuator_command_t c;
+      const DecodeResult r = cdec.decode(got.frame, &c);
+      if (sent.len == 8) CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
+      else CHECK(r == DecodeResult::kWrongLength);
+    } else if (id == kFbMotor.id || id == kFbServo.id || id == kFbStatus.id) {
+      actuator_feedback_t fb;
+      const DecodeResult r = fdec.decode(got.frame, &fb);
+      if (sent.len == 8) CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
+      else CHECK(r == DecodeResult::kWrongLength);
+    }
+  }
+  const ReceivedFrame got_classical = next_data(rx);
+  CHECK_FALSE(got_classical.is_fd);
+  CHECK(same_frame(got_classical.frame, classical));
+  CHECK(nothing_pending(rx, 50));
+  CHECK(cdec.stats().messages == 20);
+  CHECK(fdec.stats().messages == 4);
+  CHECK(cdec.stats().wrong_length == 1);
+  CHECK(fdec.stats().wrong_length == 1);
+
+  // A socket without CAN_RAW_FD_FRAMES sees only the classical frame.
+  CHECK(same_frame(next_data(classical_only).frame, classical));
+  CHECK(nothing_pending(classical_only, 50));
+
+  CHECK(tx.stats().frames_sent - sent_before == frames.size() + 1);
+  CHECK(tx.stats().fd_frames_sent == frames.size());
+  CHECK(rx.stats().frames_received - received_before == frames.size() + 1);
+  CHECK(rx.stats().fd_frames_received == frames.size());
+  CHECK(classical_only.stats().frames_received - classical_before == 1);
+  CHECK(classical_only.stats().fd_frames_received == 0);
+  CHECK(rx.stats().receive_errors == 0);
+}
+
+TEST_CASE("CAN FD on an interface with the classical MTU is refused with the fix", "[vcan][fd]") {
+  const std::string classical_if = "vcan_cc";
+  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if + " mtu 16 && ip link set " +
+              classical_if + " up") == 0);
+  try {
+    CanSocket::open(classical_if, fd_options(send_only()));
+    FAIL("no exception");
+  } catch (const CanError& e) {
+    CHECK(e.interface() == classical_if);
+    CHECK_THAT(std::string(e.what()), Contains("'" + classical_if + "' has MTU 16") &&
+                                          Contains("ip link set " + classical_if + " mtu 72"));
+  }
+  CanSocket::open(classical_if, send_only());  // classical CAN is fine there
+  CHECK(run("ip link del dev " + classical_if) == 0);
+  // Without fd the kernel refuses an FD frame: an error, not a crash, and no retries.
+  ensure_fd_interface();
+  CanSocket classical = CanSocket::open(kFdIf, send_only());
+  CHECK(classical.send(fd_frame(0x101, CANFD_BRS, 8, 1)) == SendResult::kError);
+  CHECK(classical.stats().send_errors == 1);
+  CHECK(classical.stats().send_retries == 0);
+  CHECK(classical.stats().fd_frames_sent == 0);
+}
+
+TEST_CASE("cansend FD frames arrive; candump -L prints FD frames exactly as our writer", "[vcan][fd][can-utils]") {
+  ensure_fd_interface();
+  CanSocket rx = CanSocket::open(kFdIf, fd_options(receive_all()));
+  REQUIRE(run("cansend " + kFdIf + " 181##1DEADBEEF01020304 && cansend " + kFdIf + " 1FFFFFFF##0" +
+              std::string(24, 'A')) == 0);
+  ReceivedFrame got = next_data(rx);
+  CHECK(got.is_fd);
+  CHECK(same_fd_frame(got.fd_frame, to_fd_frame(got.frame, CANFD_BRS)));
+  CHECK(hex(got.frame) == "DEADBEEF01020304");
+  got = next_data(rx);
+  CHECK(got.is_fd);
+  CHECK(got.fd_frame.can_id == (0x1FFFFFFF | CAN_EFF_FLAG));
+  CHECK(got.fd_frame.len == 12);
+  CHECK((got.fd_flags & CANFD_BRS) == 0);
+
+  Child candump({"stdbuf", "-oL", "candump", "-L", kFdIf});
+  CanSocket tx = CanSocket::open(kFdIf, fd_options(send_only()));
+  const canfd_frame marker = fd_frame(0x7F0, 0, 1, 0);
+  std::string line;
+  bool listening = false;
+  for (int i = 0; i < 100 && !listening; ++i) {
+    tx.send(marker);
+    while (candump.read_line(&line, 50)) {
+      if (line.find(" " + kFdIf + " 7F0#") != std::string::npos) listening = true;
+    }
+  }
+  REQUIRE(listening);
+  std::vector<canfd_frame> frames = fd_traffic(10);
+  frames.push_back(fd_frame(0x101, CANFD_BRS, 64, 5));
+  frames.push_back(fd_frame(0x1ABCDEF | CAN_EFF_FLAG, CANFD_BRS | CANFD_ESI, 20, 6));
+  for (const canfd_frame& f : frames) REQUIRE(tx.send(f) == SendResult::kSent);
+  std::size_t matched = 0;
+  while (matched < frames.size() && candump.read_line(&line, kTimeoutMs)) {
+    if (line.find(" " + kFdIf + " 7F0#") != std::string::npos) continue;  // late marker copies
+    INFO(line);
+    const auto rec = parse_candump_line(line);
+    REQUIRE(rec);
+    REQUIRE(rec->is_fd);
+    CHECK(rec->interface == kFdIf);
+    CHECK(same_fd_frame(rec->fd_frame, frames[matched]));
+    // our writer gives the same text for the frame as received (with any flag the kernel added)
+    canfd_frame expected = frames[matched];
+    expected.flags = static_cast<uint8_t>(expected.flags | (rec->fd_frame.flags & CANFD_FDF));
+    CHECK(line == format_candump_line(expected, rec->time_ns, kFdIf));
+    ++matched;
+  }
+  CHECK(matched == frames.size());
+}
+
+TEST_CASE("a CAN FD candump log written by CandumpWriter is replayed by canplayer identically", "[vcan][fd][can-utils]") {
+  ensure_fd_interface();
+  const std::string path = temp_path("rig_canplayer_fd") + ".log";
+  std::vector<canfd_frame> frames = fd_traffic(8);
+  frames.push_back(fd_frame(0x102, CANFD_BRS, 48, 11));
+  const can_frame classical = traffic(1)[0];
+  {
+    CandumpWriter writer(path);
+    int64_t t = realtime_ns();
+    for (const canfd_frame& f : frames) {
+      REQUIRE(writer.write(f, t, kFdIf));
+      t += 1000000;  // 1 ms apart
+    }
+    REQUIRE(writer.write(classical, t, kFdIf));  // a mixed log
+    REQUIRE(writer.flush());
+  }
+  CanSocket rx = CanSocket::open(kFdIf, fd_options(receive_all()));
+  REQUIRE(run("canplayer -I " + path + " " + kFdIf + "=" + kFdIf) == 0);
+  CommandDecoder cdec;
+  for (const canfd_frame& f : frames) {
+    const ReceivedFrame got = next_data(rx);
+    REQUIRE(got.is_fd);
+    CHECK(same_fd_frame(got.fd_frame, f));
+    if (got.frame.can_id == kCmdFlap.id || got.frame.can_id == kCmdServo.id) {
+      actuator_command_t c;
+      cdec.decode(got.frame, &c);
+    }
+  }
+  const ReceivedFrame got = next_data(rx);
+  CHECK_FALSE(got.is_fd);
+  CHECK(same_frame(got.frame, classical));
+  CHECK(nothing_pending(rx, 100));
+  CHECK(cdec.stats().messages == 8);
+  CHECK(cdec.stats().wrong_length == 1);  // the 48-byte frame
+  std::filesystem::remove(path);
 }
