@@ -52,7 +52,9 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
   config_ = can_bridge_config_from(section);
 
   CanSocketOptions so;
-  so.receive_all = true;  // unknown identifiers are counted, not filtered away unseen
+  // The rig's identifier block, not only its five identifiers: an unexpected identifier in
+  // the block is counted and reported; other nodes' traffic on a shared bus stays in the kernel.
+  so.filters = {rig_block_filter()};
   so.error_frames = true;
   so.timestamps = true;
   so.receive_buffer_bytes = config_.receive_buffer_bytes;

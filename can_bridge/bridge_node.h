@@ -15,7 +15,8 @@
 ///                                 (CODE_MESSAGE_MALFORMED), failed sends (CODE_QUEUE_DROP)
 ///   and HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode).
 ///
-/// Frames: can_bridge/nimble_rig.dbc. With `can_bridge.fd: true` the same 8-byte frames travel as
+/// Frames: can_bridge/nimble_rig.dbc. The socket receives the rig's identifier block
+/// 0x100..0x1FF (one kernel filter) and error frames. With `can_bridge.fd: true` the same 8-byte frames travel as
 /// CAN FD frames (CANFD_BRS set); either side then accepts classical and FD frames of 8 bytes (an
 /// FD frame of another length is a wrong length). Every received frame goes through the decoder, which
 /// counts and drops unknown identifiers, wrong lengths, bad checksums, stale counters and

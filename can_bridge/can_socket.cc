@@ -61,6 +61,8 @@ std::vector<can_filter> rig_filters() {
   return filters;
 }
 
+can_filter rig_block_filter() { return can_filter{0x100, 0x700 | CAN_EFF_FLAG | CAN_RTR_FLAG}; }
+
 can_frame classical_view(const canfd_frame& frame) {
   can_frame f{};
   f.can_id = frame.can_id;

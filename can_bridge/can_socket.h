@@ -64,6 +64,12 @@ struct CanSocketStats {
 /// Exact-match filters for the rig's identifiers (frame_layout.h).
 std::vector<can_filter> rig_filters();
 
+/// One filter for the rig's whole identifier block: every standard data frame with an
+/// identifier 0x100..0x1FF (no extended or remote frames). Frames of other nodes on a shared
+/// bus stay in the kernel; unexpected identifiers within the rig's block reach the decoders,
+/// which count them.
+can_filter rig_block_filter();
+
 /// Options of CanSocket::open. The defaults receive the rig's five identifiers and all error
 /// frames, with kernel receive timestamps.
 struct CanSocketOptions {

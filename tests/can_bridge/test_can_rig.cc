@@ -293,7 +293,9 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
   can_frame corrupt = good[0];
   corrupt.data[0] ^= 0x01;  // payload changed, checksum kept
   std::vector<std::string> sends = {
-      "cansend " + kIf + " 1FF#0011223344556677",  // unknown identifier
+      "cansend " + kIf + " 1FF#0011223344556677",  // unknown identifier in the rig's block
+      "cansend " + kIf + " 2A0#0011223344556677",  // another node's frame: filtered by the kernel
+      "cansend " + kIf + " 00000101#0011",         // extended identifier: filtered as well
       cansend(good[0], 5),                         // short frame (DLC 5)
       cansend(corrupt),                            // bad checksum
       cansend(good[0]), cansend(good[1]),          // a valid command
@@ -318,6 +320,7 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
   CHECK(rig.commands.front().seq == 7);
   const can_health_t& h = rig.health.back();
   CHECK(h.rejected_unknown_id == 1);
+  CHECK(h.frames_received == 6);  // the block's frames only
   CHECK(h.rejected_wrong_length == 1);
   CHECK(h.rejected_bad_checksum == 1);
   CHECK(h.rejected_stale_counter == 1);
