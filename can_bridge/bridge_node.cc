@@ -110,6 +110,11 @@ void CanBridgeNode::on_cycle(int64_t /*sim_time_ns*/) {
   if (commands_crossed_ < cycles_due_) node_->hold_ack();
 }
 
+void CanBridgeNode::on_command_crossed() {
+  ++commands_crossed_;
+  if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
+}
+
 void CanBridgeNode::log_frame(const ReceivedFrame& rx) {
   if (!candump_) return;
   const int64_t t = rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns();
@@ -137,8 +142,7 @@ void CanBridgeNode::send(const can_frame& frame) {
 void CanBridgeNode::on_command(const actuator_command_t& cmd) {
   for (const can_frame& f : command_encoder_.encode(cmd)) send(f);
   ++messages_to_can_;
-  ++commands_crossed_;
-  if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
+  on_command_crossed();
 }
 
 void CanBridgeNode::on_feedback(const actuator_feedback_t& fb) {
@@ -169,8 +173,7 @@ void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
       cmd.input_utime = -1;
       node_->bus().publish(ch::kActuatorCommandCan, cmd);
       ++messages_to_lcm_;
-      ++commands_crossed_;
-      if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
+      on_command_crossed();
     } else if (r != DecodeResult::kAccepted) {
       reject(rx, r);
     }

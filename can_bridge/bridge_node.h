@@ -74,6 +74,9 @@ class CanBridgeNode {
   void send(const can_frame& frame);
   void log_frame(const ReceivedFrame& rx);
   void on_cycle(int64_t sim_time_ns);
+  /// A command crossed this side's part of the link; releases a held STEP_ACK once every
+  /// due control cycle has its command.
+  void on_command_crossed();
   int64_t rig_time_us() const;
 
   Role role_;
