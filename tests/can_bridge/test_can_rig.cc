@@ -341,6 +341,33 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
   CHECK(rig.commands.back().seq == 8);
 }
 
+namespace {
+
+/// A run's summary shows that all `commands` crossed the CAN link (two frames each), the
+/// feedback came back, and neither side rejected, dropped or saw an error frame.
+void check_link_carried(const YAML::Node& summary, int commands) {
+  const YAML::Node ch = summary["channels"];
+  CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == commands);
+  CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == commands);
+  CHECK(ch["ACTUATOR_CMD_CAN"]["drops"].as<int>() == 0);
+  CHECK(ch["ACTUATOR_FB_CAN"]["count"].as<int>() == ch["ACTUATOR_FB"]["count"].as<int>());
+  const YAML::Node flight = summary["can"]["can_flight"], rig = summary["can"]["can_rig"];
+  REQUIRE(flight);
+  REQUIRE(rig);
+  CHECK(flight["frames_sent"].as<int>() == 2 * commands);
+  CHECK(rig["frames_received"].as<int>() == 2 * commands);
+  CHECK(rig["messages_to_lcm"].as<int>() == commands);
+  for (const YAML::Node& side : {flight, rig}) {
+    for (const char* key : {"rejected_unknown_id", "rejected_wrong_length", "rejected_bad_checksum",
+                            "rejected_stale_counter", "rejected_out_of_range", "error_frames", "send_dropped"}) {
+      INFO(key);
+      CHECK(side[key].as<int>() == 0);
+    }
+  }
+}
+
+}  // namespace
+
 TEST_CASE("the identification doublet train in lockstep: the same truth over the CAN link as over LCM; "
           "the run's candump log replays with canplayer",
           "[system][rig]") {
@@ -366,24 +393,9 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   CHECK(differing(a, b) == 0);
 
   // Every command crossed the bus; both sides report clean health.
+  check_link_carried(over_can.summary, 3072);
   const YAML::Node ch = over_can.summary["channels"];
-  CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == 3072);
-  CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == 3072);
-  CHECK(ch["ACTUATOR_FB_CAN"]["count"].as<int>() == ch["ACTUATOR_FB"]["count"].as<int>());
-  CHECK(ch["ACTUATOR_CMD_CAN"]["drops"].as<int>() == 0);
-  const YAML::Node flight = over_can.summary["can"]["can_flight"], rig = over_can.summary["can"]["can_rig"];
-  REQUIRE(flight);
-  REQUIRE(rig);
-  CHECK(flight["frames_sent"].as<int>() == 2 * 3072);
-  CHECK(rig["frames_received"].as<int>() == 2 * 3072);
-  CHECK(rig["messages_to_lcm"].as<int>() == 3072);
-  for (const YAML::Node& side : {flight, rig}) {
-    for (const char* key : {"rejected_unknown_id", "rejected_wrong_length", "rejected_bad_checksum",
-                            "rejected_stale_counter", "rejected_out_of_range", "error_frames", "send_dropped"}) {
-      INFO(key);
-      CHECK(side[key].as<int>() == 0);
-    }
-  }
+  const YAML::Node rig = over_can.summary["can"]["can_rig"];
 
   // The rig side's candump log: every frame of the run, replayable.
   const std::string candump = rig["candump_file"].as<std::string>();
@@ -606,24 +618,9 @@ TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses i
                               "--set run.controller_input=truth --set processes=[plant,controller]");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
+  check_link_carried(r.summary, 512);
   const YAML::Node ch = r.summary["channels"];
-  CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == 512);
-  CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == 512);
-  CHECK(ch["ACTUATOR_CMD_CAN"]["drops"].as<int>() == 0);
-  CHECK(ch["ACTUATOR_FB_CAN"]["count"].as<int>() == ch["ACTUATOR_FB"]["count"].as<int>());
-  const YAML::Node flight = r.summary["can"]["can_flight"], rig = r.summary["can"]["can_rig"];
-  REQUIRE(flight);
-  REQUIRE(rig);
-  CHECK(flight["frames_sent"].as<int>() == 2 * 512);
-  CHECK(rig["frames_received"].as<int>() == 2 * 512);
-  CHECK(rig["messages_to_lcm"].as<int>() == 512);
-  for (const YAML::Node& side : {flight, rig}) {
-    for (const char* key : {"rejected_unknown_id", "rejected_wrong_length", "rejected_bad_checksum",
-                            "rejected_stale_counter", "rejected_out_of_range", "error_frames", "send_dropped"}) {
-      INFO(key);
-      CHECK(side[key].as<int>() == 0);
-    }
-  }
+  const YAML::Node rig = r.summary["can"]["can_rig"];
   // The rig side's candump log holds FD lines (ID##1...) that decode as the run's commands.
   const std::string candump = rig["candump_file"].as<std::string>();
   std::ifstream in(candump);

@@ -64,6 +64,22 @@ inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_p
   return out;
 }
 
+/// Every message of `channel` in a log, decoded as T (a message that does not decode fails
+/// the test).
+template <typename T>
+std::vector<T> decode_channel(const std::string& log_path, const std::string& channel) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::vector<T> out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel != channel) continue;
+    T m{};
+    REQUIRE(m.decode(ev->data, 0, ev->datalen) == ev->datalen);
+    out.push_back(m);
+  }
+  return out;
+}
+
 /// Number of positions at which two payload sequences differ (sizes must match).
 inline std::size_t differing(const std::vector<std::vector<uint8_t>>& a, const std::vector<std::vector<uint8_t>>& b) {
   REQUIRE(a.size() == b.size());

@@ -36,6 +36,7 @@ namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
+using nimble::test::decode_channel;
 using nimble::test::RunResult;
 using nimble::test::slurp;
 using nimble::test::differing;
@@ -44,6 +45,13 @@ using nimble::test::truth_payloads;
 
 /// A fresh directory for one test's logs.
 std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("system_" + tag); }
+
+/// TRUTH of a log by its time stamp [us].
+std::map<int64_t, nimble::truth_state_t> truth_by_utime(const std::string& log_path) {
+  std::map<int64_t, nimble::truth_state_t> truth;
+  for (const auto& t : decode_channel<nimble::truth_state_t>(log_path, "TRUTH")) truth[t.utime] = t;
+  return truth;
+}
 
 /// Number of events per channel in a log.
 std::map<std::string, int> channel_counts(const std::string& log_path) {
@@ -239,23 +247,17 @@ TEST_CASE("command timeout: the plant holds the safe state and reports it", "[sy
   INFO(out);
   CHECK(code == 0);
   bool timeout_fault = false, resumed = false, safe_feedback = false;
-  lcm::LogFile log(dir + "/run.lcmlog", "r");
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "FAULT") {
-      nimble::fault_event_t f;
-      REQUIRE(f.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      if (f.code == nimble::fault_event_t::CODE_COMMAND_TIMEOUT && f.process == "plant") {
-        if (f.message.find("safe state") != std::string::npos && f.severity == nimble::fault_event_t::SEVERITY_ERROR) {
-          timeout_fault = true;
-        }
-        if (f.message.find("resumed") != std::string::npos) resumed = true;
+  const std::string log = dir + "/run.lcmlog";
+  for (const auto& f : decode_channel<nimble::fault_event_t>(log, "FAULT")) {
+    if (f.code == nimble::fault_event_t::CODE_COMMAND_TIMEOUT && f.process == "plant") {
+      if (f.message.find("safe state") != std::string::npos && f.severity == nimble::fault_event_t::SEVERITY_ERROR) {
+        timeout_fault = true;
       }
+      if (f.message.find("resumed") != std::string::npos) resumed = true;
     }
-    if (ev->channel == "ACTUATOR_FB") {
-      nimble::actuator_feedback_t fb;
-      REQUIRE(fb.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      safe_feedback = safe_feedback || fb.safe_state;
-    }
+  }
+  for (const auto& fb : decode_channel<nimble::actuator_feedback_t>(log, "ACTUATOR_FB")) {
+    safe_feedback = safe_feedback || fb.safe_state;
   }
   CHECK(timeout_fault);
   CHECK(resumed);
@@ -341,20 +343,8 @@ TEST_CASE("the plant's IMU stream: 512 Hz, seeded, noisy around the truth", "[sy
   CHECK(r.summary["channels"]["IMU"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
   CHECK(r.summary["channels"]["IMU"]["drops"].as<int>() == 0);
   // Each IMU sample is taken from the truth of the plant step at its time stamp.
-  std::map<int64_t, nimble::truth_state_t> truth;
-  std::vector<nimble::imu_sample_t> imu;
-  lcm::LogFile log(dir + "/run.lcmlog", "r");
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
-      nimble::truth_state_t t;
-      REQUIRE(t.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      truth[t.utime] = t;
-    } else if (ev->channel == "IMU") {
-      nimble::imu_sample_t s;
-      REQUIRE(s.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      imu.push_back(s);
-    }
-  }
+  const std::map<int64_t, nimble::truth_state_t> truth = truth_by_utime(dir + "/run.lcmlog");
+  const auto imu = decode_channel<nimble::imu_sample_t>(dir + "/run.lcmlog", "IMU");
   REQUIRE(imu.size() == 4 * 512 + 1);
   double sum_err = 0, sum_err2 = 0, sum_az = 0;
   for (const auto& s : imu) {
@@ -386,20 +376,8 @@ TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm ma
   CHECK(c["drops"].as<int>() == 0);
   CHECK(r.summary["channels"]["RIG_CLOCK"]["rate_hz"].as<double>() ==
         Approx(r.summary["channels"]["RIG_CLOCK"]["expected_hz"].as<double>()).epsilon(0.01));
-  std::map<int64_t, nimble::truth_state_t> truth;
-  std::vector<nimble::mocap_pose_t> poses;
-  lcm::LogFile log(dir + "/run.lcmlog", "r");
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
-      nimble::truth_state_t t;
-      REQUIRE(t.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      truth[t.utime] = t;
-    } else if (ev->channel == "MOCAP_POSE") {
-      nimble::mocap_pose_t p;
-      REQUIRE(p.decode(ev->data, 0, ev->datalen) == ev->datalen);
-      poses.push_back(p);
-    }
-  }
+  const std::map<int64_t, nimble::truth_state_t> truth = truth_by_utime(dir + "/run.lcmlog");
+  const auto poses = decode_channel<nimble::mocap_pose_t>(dir + "/run.lcmlog", "MOCAP_POSE");
   REQUIRE(poses.size() > 700);
   double error_sum = 0;
   int valid = 0;
@@ -448,12 +426,8 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   CHECK(ra.summary["channels"]["ESTIMATE"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
   // The controller flew on estimates.
   {
-    lcm::LogFile log(a + "/run.lcmlog", "r");
     int estimate_inputs = 0;
-    while (const lcm::LogEvent* ev = log.readNextEvent()) {
-      if (ev->channel != "CONTROLLER_STATUS") continue;
-      nimble::controller_status_t st;
-      REQUIRE(st.decode(ev->data, 0, ev->datalen) == ev->datalen);
+    for (const auto& st : decode_channel<nimble::controller_status_t>(a + "/run.lcmlog", "CONTROLLER_STATUS")) {
       estimate_inputs += st.input_source == nimble::controller_status_t::INPUT_ESTIMATE;
     }
     CHECK(estimate_inputs == 3072);
