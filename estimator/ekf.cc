@@ -34,6 +34,11 @@ void require_positive(const std::string& field, const Eigen::Vector3d& v) {
   for (int i = 0; i < 3; ++i) require_positive(field + "[" + std::to_string(i) + "]", v[i]);
 }
 
+/// Velocity relative to the world in NED axes [m/s] of a filter state.
+Eigen::Vector3d world_velocity(const EkfState& x) {
+  return rotation_from_euler_zyx(x.head<3>()) * x.segment<3>(3);
+}
+
 EkfInput lerp(const EkfInput& a, const EkfInput& b, std::int64_t ta, std::int64_t tb, std::int64_t t) {
   if (tb <= ta) return b;
   const double s = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
@@ -259,8 +264,8 @@ bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input)
   ++counters_.imu_samples;
 
   // Measurements that were waiting for this sample.
-  while (!pending_.empty() && pending_.front().utime <= utime) {
-    const PoseMeasurement z = pending_.front();
+  while (!pending_.empty() && ready_utime(pending_.front()) <= utime) {
+    const PoseMeasurement z = prepared(pending_.front());
     pending_.erase(pending_.begin());
     if (config_.latency_mode == EkfLatencyMode::kNaive) {
       apply_now(z);
@@ -369,6 +374,61 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
   return status;
 }
 
+std::int64_t AttitudeVelocityEkf::ready_utime(const PoseMeasurement& z) const {
+  const bool window = z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
+  return window ? std::max(z.utime, z.velocity_window_end_utime) : z.utime;
+}
+
+bool AttitudeVelocityEkf::velocity_window_offset(const PoseMeasurement& z, Eigen::Vector3d* offset) const {
+  const std::int64_t ts = z.velocity_window_start_utime, te = z.velocity_window_end_utime;
+  if (!(ts <= z.utime && z.utime <= te && ts < te)) return false;
+  if (history_.front().utime > ts || history_.back().utime < te) return false;
+  // World velocity along the history, linear between nodes; its integral over [ts, te] by the
+  // trapezoidal rule, ends interpolated.
+  const auto at = [&](std::size_t i, std::int64_t t) {  // between node i and i + 1
+    const Node& a = history_[i];
+    if (i + 1 >= history_.size() || t <= a.utime) return world_velocity(a.x);
+    const Node& b = history_[i + 1];
+    const double s = static_cast<double>(t - a.utime) / static_cast<double>(b.utime - a.utime);
+    return Eigen::Vector3d((1.0 - s) * world_velocity(a.x) + s * world_velocity(b.x));
+  };
+  std::size_t i = 0;
+  while (i + 1 < history_.size() && history_[i + 1].utime <= ts) ++i;
+  Eigen::Vector3d integral = Eigen::Vector3d::Zero(), v_mid = at(i, ts), v_prev = v_mid;
+  std::int64_t t_prev = ts;
+  std::size_t mid_node = i;
+  bool mid_found = false;
+  for (std::size_t k = i; t_prev < te; ++k) {
+    const std::int64_t t_next = (k + 1 < history_.size()) ? std::min(history_[k + 1].utime, te) : te;
+    const Eigen::Vector3d v_next = at(k, t_next);
+    if (!mid_found && z.utime <= t_next) {
+      v_mid = at(k, z.utime);
+      mid_node = (z.utime - history_[k].utime <= t_next - z.utime || k + 1 >= history_.size()) ? k : k + 1;
+      mid_found = true;
+    }
+    integral += 0.5 * static_cast<double>(t_next - t_prev) * (v_prev + v_next);
+    t_prev = t_next;
+    v_prev = v_next;
+  }
+  const Eigen::Vector3d mean = integral / static_cast<double>(te - ts);
+  *offset = rotation_from_euler_zyx(history_[mid_node].x.head<3>()).transpose() * (mean - v_mid);
+  return true;
+}
+
+PoseMeasurement AttitudeVelocityEkf::prepared(const PoseMeasurement& z) {
+  if (!z.has_velocity || config_.velocity_measurement != EkfVelocityMeasurement::kWindowMean) return z;
+  // Without a window (start not before end) the velocity is taken as instantaneous.
+  if (z.velocity_window_start_utime >= z.velocity_window_end_utime) return z;
+  PoseMeasurement out = z;
+  Eigen::Vector3d offset;
+  if (velocity_window_offset(z, &offset)) {
+    out.velocity_body_mps -= offset;
+  } else {
+    ++counters_.velocity_window_uncovered;
+  }
+  return out;
+}
+
 EkfMeasurementStatus AttitudeVelocityEkf::add_measurement(const PoseMeasurement& z) {
   if (!initialized()) {
     ++counters_.measurements_invalid;
@@ -379,18 +439,19 @@ EkfMeasurementStatus AttitudeVelocityEkf::add_measurement(const PoseMeasurement&
     return EkfMeasurementStatus::kInvalid;
   }
   const std::int64_t now = history_.back().utime;
-  if (config_.latency_mode == EkfLatencyMode::kNaive) return apply_now(z);
-  if (z.utime > now) {
-    if (z.utime > now + history_us_) {
-      ++counters_.measurements_too_new;
-      return EkfMeasurementStatus::kTooNew;
-    }
-    auto pos = std::upper_bound(pending_.begin(), pending_.end(), z.utime,
-                                [](std::int64_t t, const PoseMeasurement& m) { return t < m.utime; });
+  if (config_.latency_mode == EkfLatencyMode::kNaive) return apply_now(prepared(z));
+  if (z.utime > now + history_us_) {
+    ++counters_.measurements_too_new;
+    return EkfMeasurementStatus::kTooNew;
+  }
+  const std::int64_t ready = ready_utime(z);
+  if (ready > now) {
+    auto pos = std::upper_bound(pending_.begin(), pending_.end(), ready,
+                                [this](std::int64_t t, const PoseMeasurement& m) { return t < ready_utime(m); });
     pending_.insert(pos, z);
     return EkfMeasurementStatus::kPending;
   }
-  return insert_in_past(z);
+  return insert_in_past(prepared(z));
 }
 
 }  // namespace nimble

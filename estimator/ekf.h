@@ -26,6 +26,17 @@
 /// measurement (sigma 0.64, 0.43, 0.35 deg and 0.011 to 0.015 m/s, the size of the residuals the
 /// thesis reports). R is not rescaled with the rate: each frame is used once at its own time.
 ///
+/// Differentiated velocity (velocity_measurement = kWindowMean): the mocap velocity
+///   z_v = R(q_c)^T (r(t_e) - r(t_s)) / (t_e - t_s) = R(q_c)^T mean over [t_s, t_e] of v_ned,
+/// the mean of the world velocity over the difference's window, seen in the body axes of the
+/// middle frame. The filter applies it at t_c as a measurement of v_body(t_c) plus a known offset
+///   c = R(x_c)^T mean_[t_s, t_e](R(x) v_body) - v_body(x_c),
+/// computed once, when the measurement arrives, from the filter's own trajectory over the window
+/// (the history nodes, trapezoidal rule, ends interpolated): its short-term shape comes from the
+/// integrated accelerometer, which resolves what the 60 ms difference averages away. The
+/// measurement waits until the IMU has reached t_e; if the history does not cover the window the
+/// offset is taken as zero and counted (velocity_window_uncovered).
+///
 /// Gating: a measurement whose NIS = y^T S^-1 y exceeds the chi-square quantile of
 /// gate_probability for its dimension (3 or 6) is rejected and counted. Angle innovations are
 /// wrapped into (-pi, pi].
@@ -55,6 +66,12 @@
 #include "estimator/mocap_measurement.h"
 
 namespace nimble {
+
+/// What the EKF takes a differentiated mocap velocity to measure.
+enum class EkfVelocityMeasurement {
+  kWindowMean,  ///< the mean velocity over the difference's window (what it is; default)
+  kInstant,     ///< the velocity at the middle frame (the thesis's reading)
+};
 
 /// How the EKF treats measurements stamped in the past.
 enum class EkfLatencyMode {
@@ -102,6 +119,12 @@ struct EkfConfig {
   /// Probability of the chi-square gate [-] (0.999: a consistent measurement is rejected 1 in 1000).
   double gate_probability = 0.999;
 
+  /// What a differentiated velocity measures. The central difference over the span D is the
+  /// mean velocity over the window, not the velocity at its middle: a manoeuvre at f Hz comes
+  /// out scaled by sinc(f D) (0.86 at 5 Hz for D = 60 ms), which the instant reading passes on
+  /// to the estimate. kWindowMean removes it (see the top of this header).
+  EkfVelocityMeasurement velocity_measurement = EkfVelocityMeasurement::kWindowMean;
+
   /// Treatment of late measurements.
   EkfLatencyMode latency_mode = EkfLatencyMode::kRollback;
   /// Length of the rollback history [s]; measurements older than this are dropped and counted.
@@ -125,7 +148,7 @@ void validate(const EkfConfig& config);
 enum class EkfMeasurementStatus {
   kAccepted,        ///< applied (now or in the past)
   kRejectedGate,    ///< NIS above the gate
-  kPending,         ///< stamped after the newest IMU sample; applied when the IMU catches up
+  kPending,         ///< stamped (or its velocity window ends) after the newest IMU sample; applied when the IMU catches up
   kTooOld,          ///< older than the history; dropped
   kTooNew,          ///< more than history_s ahead of the newest IMU sample; dropped
   kNotInitialized,  ///< the filter is not initialised; dropped
@@ -161,6 +184,7 @@ struct EkfCounters {
   std::int64_t measurements_too_new = 0;       ///< measurements too far ahead of the IMU
   std::int64_t measurements_invalid = 0;       ///< non-finite or before initialisation
   std::int64_t rollbacks = 0;                  ///< measurements inserted in the past
+  std::int64_t velocity_window_uncovered = 0;  ///< velocity windows the history did not cover (no offset applied)
 };
 
 /// The EKF. See the top of this header.
@@ -231,6 +255,12 @@ class AttitudeVelocityEkf {
                           std::int64_t t0, std::int64_t t1) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);
+  /// Filter time from which z can be applied: its own time, or the end of its velocity window.
+  std::int64_t ready_utime(const PoseMeasurement& z) const;
+  /// Offset c of the header for z's velocity window; false if the history does not cover it.
+  bool velocity_window_offset(const PoseMeasurement& z, Eigen::Vector3d* offset) const;
+  /// z with the window offset removed from its velocity (kWindowMean), as the filter applies it.
+  PoseMeasurement prepared(const PoseMeasurement& z);
   EkfMeasurementStatus apply_now(const PoseMeasurement& z);
   void report(const EkfUpdateRecord& record);
   void trim();

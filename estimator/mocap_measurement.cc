@@ -111,6 +111,8 @@ std::vector<PoseMeasurement> MocapMeasurementBuilder::push(const MocapPose& pose
       m.euler_rad = euler_zyx_from_quaternion(middle.q_body_to_ned);
       m.has_velocity = true;
       m.velocity_body_mps = middle.q_body_to_ned.normalized().toRotationMatrix().transpose() * v_ned;
+      m.velocity_window_start_utime = start->utime;
+      m.velocity_window_end_utime = frame.utime;
       ++velocity_measurements_;
       out.push_back(m);
     } else {

@@ -43,6 +43,11 @@ struct PoseMeasurement {
   bool has_velocity = false;
   /// Measured velocity relative to the world in body axes [m/s], order u v w.
   Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();
+  /// Mid-exposure times of the start and end frames of the difference [us]. The measured velocity
+  /// is the mean of the velocity over this window (see EkfConfig); start >= end (both 0 by
+  /// default) means an instantaneous velocity.
+  std::int64_t velocity_window_start_utime = 0;
+  std::int64_t velocity_window_end_utime = 0;
   /// Frame number of the mocap frame it comes from [-]; -1 if not from a frame.
   std::int64_t frame_number = -1;
 };

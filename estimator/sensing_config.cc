@@ -157,6 +157,11 @@ EkfConfig ekf_config_from(ConfigMap& map) {
     c.gate_probability = g.get_double_or("probability", c.gate_probability, Range{0.0, 1.0, true, true});
     g.finish();
   }
+  if (map.has("velocity_measurement")) {
+    c.velocity_measurement = map.get_enum("velocity_measurement", {"window_mean", "instant"}) == "instant"
+                                 ? EkfVelocityMeasurement::kInstant
+                                 : EkfVelocityMeasurement::kWindowMean;
+  }
   if (map.has("latency")) {
     ConfigMap l = map.get_map("latency");
     if (l.has("mode")) {

@@ -75,12 +75,14 @@ TEST_CASE("default_sensing.yaml loads and equals the struct defaults", "[sensing
 TEST_CASE("sensing config: every key optional, overrides applied", "[sensing_config]") {
   const SensingConfig empty = load_text("{}");
   CHECK(empty.ekf.gate_probability == 0.999);
+  CHECK(empty.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean);
   const SensingConfig c = load_text(R"(
 seed: 42
 imu: {vibration_enabled: false, gyro_noise_sigma_radps: {y: 0.01}}
 mocap: {latency_us: 20000, dropout_burst_rate_hz: 0}
 velocity_differentiator: {span_frames: 4, stride_frames: 3}
 ekf:
+  velocity_measurement: instant
   latency: {mode: naive, history_s: 0.2}
   gate: {enabled: false}
   measurement_noise: {velocity_var_m2ps2: {v: 1.0e-3}}
@@ -92,6 +94,7 @@ ekf:
   CHECK(c.mocap.latency_us == 20000);
   CHECK(c.velocity_differentiator.span_frames == 4);
   CHECK(c.ekf.latency_mode == EkfLatencyMode::kNaive);
+  CHECK(c.ekf.velocity_measurement == EkfVelocityMeasurement::kInstant);
   CHECK(c.ekf.history_s == 0.2);
   CHECK_FALSE(c.ekf.gate_enabled);
   CHECK(c.ekf.velocity_var_m2ps2 == Eigen::Vector3d(0.113e-3, 1.0e-3, 0.135e-3));
@@ -108,6 +111,7 @@ TEST_CASE("sensing config: strict errors name file, key and problem", "[sensing_
   expect_config_error("velocity_differentiator: {span_frames: 10, stride_frames: 5}",
                       "velocity_differentiator.stride_frames", "not white");
   expect_config_error("ekf: {latency: {mode: late}}", "ekf.latency.mode", "rollback, naive");
+  expect_config_error("ekf: {velocity_measurement: mean}", "ekf.velocity_measurement", "window_mean, instant");
   expect_config_error("ekf: {gate: {probability: 1.0}}", "ekf.gate.probability", "in (0, 1)");
   expect_config_error("ekf: {measurement_noise: {attitude_var_rad2: {phi: 0}}}",
                       "ekf.measurement_noise.attitude_var_rad2.phi", "> 0");
