@@ -439,7 +439,8 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   CHECK(differing(ta, tb) == 0);
 }
 
-TEST_CASE("the coupled doublet: pitch to 20 deg and a 6 Hz roll doublet with the longitudinal model, held",
+TEST_CASE("the coupled doublet: pitch 20 deg nose down (forward flight) and a 6 Hz roll doublet with the "
+          "longitudinal model, held",
           "[system]") {
   const std::string dir = scratch_dir("coupled");
   const RunResult r = rig_run(kConfigs + "coupled_doublet_6hz.yaml", dir, "--clock lockstep");
@@ -452,6 +453,21 @@ TEST_CASE("the coupled doublet: pitch to 20 deg and a 6 Hz roll doublet with the
   CHECK(theta_deg > 15.0);
   CHECK(theta_deg < 60.0);
   CHECK(r.summary["max_abs"]["phi"].as<double>() > 0.15);
+  // Nose down and forward through the forward-flight hold (1.2 to 2.0 s of the manoeuvre).
+  double theta_sum = 0.0, u_end = 0.0;
+  int n = 0;
+  for (const auto& t : decode_channel<nimble::truth_state_t>(dir + "/run.lcmlog", "TRUTH")) {
+    const double time_s = 1e-6 * static_cast<double>(t.utime);
+    if (time_s < 1.2 || time_s > 2.0) continue;
+    theta_sum += t.euler_rad[1];
+    u_end = t.velocity_body_mps[0];
+    ++n;
+  }
+  REQUIRE(n > 700);
+  const double theta_mean_deg = theta_sum / n * 180.0 / M_PI;
+  INFO("forward-flight hold: mean theta " << theta_mean_deg << " deg, u at its end " << u_end << " m/s");
+  CHECK(theta_mean_deg < -3.0);
+  CHECK(u_end > 0.1);
 }
 
 TEST_CASE("the CAN link without a usable interface stops the run before anything starts, naming why", "[system]") {
