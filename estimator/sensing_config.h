@@ -37,8 +37,16 @@ VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map)
 /// Reads the `ekf` section. @throws ConfigError.
 EkfConfig ekf_config_from(ConfigMap& map);
 /// Reads a sensing mapping with optional sections imu, mocap, velocity_differentiator, ekf and an
-/// optional seed. @throws ConfigError.
+/// optional seed. Also checks that the EKF's rollback history holds what a motion-capture
+/// measurement needs when it arrives (ekf_history_needed_s). @throws ConfigError.
 SensingConfig sensing_config_from(ConfigMap& map);
+
+/// Shortest ekf.latency.history_s [s] with which no motion-capture measurement arrives too old:
+/// the mocap latency + 3 sigma of its jitter + the part of the differentiator's window before the
+/// measurement's own time (the whole span with velocity_measurement window_mean, which needs the
+/// filter's trajectory from the window's start; half of it with instant) + two IMU periods (the
+/// measurement is applied at the next IMU sample; the node before the window's start must be kept).
+double ekf_history_needed_s(const SensingConfig& config);
 /// Loads a sensing file (e.g. rig_configs/sensing/default_sensing.yaml). @throws ConfigError.
 SensingConfig load_sensing_config(const std::string& file);
 

@@ -75,6 +75,9 @@ TEST_CASE("default_sensing.yaml loads and equals the struct defaults", "[sensing
 TEST_CASE("sensing config: every key optional, overrides applied", "[sensing_config]") {
   const SensingConfig empty = load_text("{}");
   CHECK(empty.ekf.gate_probability == 0.999);
+  CHECK(ekf_history_needed_s(empty) == Approx(0.005 + 0.060 + 2.0 / 512.0));
+  CHECK(load_text("ekf: {velocity_measurement: instant, latency: {history_s: 0.04}}").ekf.history_s == 0.04);  // 5 + 30 + 3.9 ms
+  CHECK(load_text("ekf: {latency: {mode: naive, history_s: 0.01}}").ekf.history_s == 0.01);  // naive: no rollback
   CHECK(empty.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean);
   const SensingConfig c = load_text(R"(
 seed: 42
@@ -112,6 +115,11 @@ TEST_CASE("sensing config: strict errors name file, key and problem", "[sensing_
                       "velocity_differentiator.stride_frames", "not white");
   expect_config_error("ekf: {latency: {mode: late}}", "ekf.latency.mode", "rollback, naive");
   expect_config_error("ekf: {velocity_measurement: mean}", "ekf.velocity_measurement", "window_mean, instant");
+  // The rollback history must hold a velocity measurement's window when it arrives: 5 ms latency
+  // + 60 ms span + 2 IMU periods = 68.9 ms by default.
+  expect_config_error("ekf: {latency: {history_s: 0.05}}", "ekf.latency.history_s",
+                      "= 68.9 ms; set ekf.latency.history_s >= 0.069");
+  expect_config_error("mocap: {latency_us: 40000}", "ekf.latency.history_s", "latency 40 ms");
   expect_config_error("ekf: {gate: {probability: 1.0}}", "ekf.gate.probability", "in (0, 1)");
   expect_config_error("ekf: {measurement_noise: {attitude_var_rad2: {phi: 0}}}",
                       "ekf.measurement_noise.attitude_var_rad2.phi", "> 0");
