@@ -139,6 +139,7 @@ void AttitudeVelocityEkf::initialize(std::int64_t utime, const EkfState& x0, con
   ekf_wrap_angles(&node.x);
   node.P = 0.5 * (P0 + P0.transpose());
   history_.push_back(node);
+  initialized_utime_ = utime;
   last_nis_ = -1.0;
 }
 
@@ -419,11 +420,14 @@ PoseMeasurement AttitudeVelocityEkf::prepared(const PoseMeasurement& z) {
   if (!z.has_velocity || config_.velocity_measurement != EkfVelocityMeasurement::kWindowMean) return z;
   // Without a window (start not before end) the velocity is taken as instantaneous.
   if (z.velocity_window_start_utime >= z.velocity_window_end_utime) return z;
+  // Too old for the history: dropped by insert_in_past, nothing to offset or count.
+  if (z.utime <= history_.front().utime || z.utime < history_.back().utime - history_us_) return z;
   PoseMeasurement out = z;
   Eigen::Vector3d offset;
   if (velocity_window_offset(z, &offset)) {
     out.velocity_body_mps -= offset;
-  } else {
+  } else if (z.velocity_window_start_utime >= initialized_utime_) {
+    // A window that starts before the filter did cannot be covered; only later ones count.
     ++counters_.velocity_window_uncovered;
   }
   return out;

@@ -35,7 +35,8 @@
 /// (the history nodes, trapezoidal rule, ends interpolated): its short-term shape comes from the
 /// integrated accelerometer, which resolves what the 60 ms difference averages away. The
 /// measurement waits until the IMU has reached t_e; if the history does not cover the window the
-/// offset is taken as zero and counted (velocity_window_uncovered).
+/// offset is taken as zero and counted (velocity_window_uncovered; windows that start before the
+/// filter was initialised are not counted).
 ///
 /// Gating: a measurement whose NIS = y^T S^-1 y exceeds the chi-square quantile of
 /// gate_probability for its dimension (3 or 6) is rejected and counted. Angle innovations are
@@ -272,6 +273,7 @@ class AttitudeVelocityEkf {
   double gate3_ = 0.0, gate6_ = 0.0;
   std::int64_t history_us_ = 0;
   std::deque<Node> history_;
+  std::int64_t initialized_utime_ = 0;  // time of the last initialize()
   std::deque<Stored> accepted_;
   std::vector<PoseMeasurement> pending_;
   EkfCounters counters_;

@@ -1,6 +1,11 @@
 #include "estimator/estimator_node.h"
 
+#include <climits>
+#include <iomanip>
+#include <sstream>
+
 #include <nimble/estimator_state_t.hpp>
+#include <nimble/fault_event_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 
@@ -12,6 +17,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   ConfigMap section = scenario.section("sensing");
   const SensingConfig sensing = sensing_config_from(section);
   ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
+  history_s_ = sensing.ekf.history_s;
   builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
   node_->set_expected_rate(transport::channels::kImu, sensing.imu.sample_rate_hz);
@@ -69,9 +75,29 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
     if (!ekf_->initialized()) {
       ekf_->initialize_from_measurement(z);
     } else {
-      ekf_->add_measurement(z);
+      const EkfMeasurementStatus status = ekf_->add_measurement(z);
+      if (status == EkfMeasurementStatus::kTooOld || status == EkfMeasurementStatus::kTooNew) report_dropped(z, status);
     }
   }
+}
+
+void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status) {
+  const int64_t now = ekf_->utime();
+  if (last_drop_fault_utime_ != INT64_MIN && now - last_drop_fault_utime_ < 1000000) return;
+  last_drop_fault_utime_ = now;
+  const EkfCounters& c = ekf_->counters();
+  std::ostringstream msg;
+  msg << std::fixed << std::setprecision(1) << "mocap frame " << z.frame_number << " dropped by the EKF: ";
+  if (status == EkfMeasurementStatus::kTooOld) {
+    msg << "it refers to " << 1e-3 * static_cast<double>(now - z.utime) << " ms before the newest IMU sample, older than "
+        << "the rollback history of " << 1e3 * history_s_ << " ms (" << c.measurements_too_old
+        << " so far); the motion-capture stream is late: raise sensing.ekf.latency.history_s or find the delay";
+  } else {
+    msg << "it refers to " << 1e-3 * static_cast<double>(z.utime - now) << " ms after the newest IMU sample, more than "
+        << "the history of " << 1e3 * history_s_ << " ms ahead (" << c.measurements_too_new
+        << " so far); the IMU stream is late or the two clocks differ";
+  }
+  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, transport::channels::kMocapPose, msg.str());
 }
 
 void EstimatorNode::tick(int64_t sim_time_ns) {
@@ -115,6 +141,11 @@ void EstimatorNode::publish(int64_t utime) {
   m.poses_rejected = c.measurements_rejected_gate;
   m.poses_missing = poses_missing_;
   m.last_nis = ekf_->last_nis();
+  m.poses_too_old = c.measurements_too_old;
+  m.poses_too_new = c.measurements_too_new;
+  m.velocity_windows_uncovered = c.velocity_window_uncovered;
+  m.imu_rejected = c.imu_rejected;
+  m.imu_gaps = c.imu_gaps;
   node_->bus().publish(transport::channels::kEstimate, m);
 }
 

@@ -41,6 +41,8 @@ class EstimatorNode {
   void apply_pose(const MocapPose& pose);
   void tick(int64_t sim_time_ns);
   void publish(int64_t utime);
+  /// FAULT for a measurement the EKF dropped for its time (at most one a second of rig time).
+  void report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status);
 
   std::unique_ptr<AttitudeVelocityEkf> ekf_;
   std::unique_ptr<MocapMeasurementBuilder> builder_;
@@ -50,6 +52,8 @@ class EstimatorNode {
   int64_t seq_ = 0;
   int64_t poses_missing_ = 0;
   int64_t last_frame_ = -1;
+  double history_s_ = 0.0;
+  int64_t last_drop_fault_utime_ = INT64_MIN;
 };
 
 }  // namespace nimble

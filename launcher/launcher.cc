@@ -341,6 +341,15 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
                   static_cast<long long>(est.poses_accepted), static_cast<long long>(est.poses_rejected),
                   static_cast<long long>(est.poses_missing));
     out << line;
+    if (est.poses_too_old + est.poses_too_new + est.velocity_windows_uncovered + est.imu_rejected + est.imu_gaps > 0) {
+      std::snprintf(line, sizeof line,
+                    "estimator  poses dropped %lld too old, %lld too new; velocity windows uncovered %lld; IMU samples "
+                    "rejected %lld, gaps %lld\n",
+                    static_cast<long long>(est.poses_too_old), static_cast<long long>(est.poses_too_new),
+                    static_cast<long long>(est.velocity_windows_uncovered), static_cast<long long>(est.imu_rejected),
+                    static_cast<long long>(est.imu_gaps));
+      out << line;
+    }
   }
   for (const auto& [name, h] : mon.can_health()) {
     std::snprintf(line, sizeof line,
@@ -408,6 +417,11 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
     w.key("poses_accepted").value(static_cast<long long>(est.poses_accepted));
     w.key("poses_rejected").value(static_cast<long long>(est.poses_rejected));
     w.key("poses_missing").value(static_cast<long long>(est.poses_missing));
+    w.key("poses_too_old").value(static_cast<long long>(est.poses_too_old));
+    w.key("poses_too_new").value(static_cast<long long>(est.poses_too_new));
+    w.key("velocity_windows_uncovered").value(static_cast<long long>(est.velocity_windows_uncovered));
+    w.key("imu_rejected").value(static_cast<long long>(est.imu_rejected));
+    w.key("imu_gaps").value(static_cast<long long>(est.imu_gaps));
     w.end_object();
   }
   if (!mon.can_health().empty()) {

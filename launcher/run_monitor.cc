@@ -141,6 +141,11 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     est_.poses_accepted = e.poses_accepted;
     est_.poses_rejected = e.poses_rejected;
     est_.poses_missing = e.poses_missing;
+    est_.poses_too_old = e.poses_too_old;
+    est_.poses_too_new = e.poses_too_new;
+    est_.velocity_windows_uncovered = e.velocity_windows_uncovered;
+    est_.imu_rejected = e.imu_rejected;
+    est_.imu_gaps = e.imu_gaps;
     const auto it = recent_truth_.find(e.imu_utime);
     if (it == recent_truth_.end()) return;
     const double dphi = (e.euler_rad[0] - it->second.phi) * 180.0 / M_PI;

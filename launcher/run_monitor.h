@@ -67,6 +67,8 @@ struct EstimatorSummary {
   double phi_rms_deg = 0.0, phi_max_deg = 0.0;
   double p_rms_radps = 0.0, v_rms_mps = 0.0;
   int64_t poses_accepted = 0, poses_rejected = 0, poses_missing = 0;
+  int64_t poses_too_old = 0, poses_too_new = 0, velocity_windows_uncovered = 0;
+  int64_t imu_rejected = 0, imu_gaps = 0;
 };
 
 class RunMonitor {

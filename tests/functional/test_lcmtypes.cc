@@ -313,6 +313,11 @@ void fill(nimble::estimator_state_t& m, Distinct& g) {
   m.poses_rejected = g.i64();
   m.poses_missing = g.i64();
   m.last_nis = g.real();
+  m.poses_too_old = g.i64();
+  m.poses_too_new = g.i64();
+  m.velocity_windows_uncovered = g.i64();
+  m.imu_rejected = g.i64();
+  m.imu_gaps = g.i64();
 }
 void require_equal(const nimble::estimator_state_t& a, const nimble::estimator_state_t& b) {
   REQUIRE(a.utime == b.utime);
@@ -328,6 +333,11 @@ void require_equal(const nimble::estimator_state_t& a, const nimble::estimator_s
   REQUIRE(a.poses_rejected == b.poses_rejected);
   REQUIRE(a.poses_missing == b.poses_missing);
   REQUIRE(a.last_nis == b.last_nis);
+  REQUIRE(a.poses_too_old == b.poses_too_old);
+  REQUIRE(a.poses_too_new == b.poses_too_new);
+  REQUIRE(a.velocity_windows_uncovered == b.velocity_windows_uncovered);
+  REQUIRE(a.imu_rejected == b.imu_rejected);
+  REQUIRE(a.imu_gaps == b.imu_gaps);
 }
 
 // --- controller_status_t -------------------------------------------------------------------

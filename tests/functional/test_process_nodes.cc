@@ -1,4 +1,4 @@
-// Functional tests: the plant and controller processes' node classes on the in-process
+// Functional tests: the plant, controller and estimator processes' node classes on the in-process
 // memq:// provider, the test playing the other side of the lockstep protocol.
 
 #include <cmath>
@@ -11,14 +11,18 @@
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
 #include <nimble/controller_status_t.hpp>
+#include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
 #include "controller/controller_node.h"
+#include "estimator/estimator_node.h"
 #include "plant/plant_node.h"
 
 using namespace nimble;
@@ -251,4 +255,96 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
     }
   }
   CHECK(doublet_seen);
+}
+
+TEST_CASE("estimator node: ESTIMATE carries the EKF's counters; when the motion capture falls behind by more "
+          "than the history, its poses are dropped, counted and raised as a FAULT naming the key",
+          "[estimator][process]") {
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  EstimatorNode estimator(scenario, {"estimator", "", "memq://"});
+  transport::Bus& bus = estimator.node().bus();
+  std::vector<estimator_state_t> estimates;
+  std::vector<fault_event_t> faults;
+  bus.subscribe<estimator_state_t>("ESTIMATE", [&](const estimator_state_t& m) { estimates.push_back(m); });
+  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
+
+  // The test is the plant and the motion capture: a vehicle at rest, IMU at 512 Hz, poses at
+  // 200 Hz with 5 ms latency; from frame 100 (0.5 s) on the motion capture lags 200 ms.
+  const double duration_s = 1.0;
+  int64_t imu_k = 0, frame = 0, clock_seq = 0;
+  const auto pose_times = [](int64_t f) {  // (utime, latency) of frame f
+    return std::make_pair<int64_t, int32_t>(f * 5000, f < 100 ? 5000 : 200000);
+  };
+  const auto publish_until = [&](int64_t t_ns) {  // inputs published up to t_ns, then the clock
+    const int64_t t_us = t_ns / 1000;
+    for (; imu_k * 1000000 / 512 <= t_us; ++imu_k) {
+      imu_sample_t s{};
+      s.utime = imu_k * 1000000 / 512;
+      s.seq = imu_k;
+      s.accel_mps2[2] = -9.81;
+      s.temperature_degc = 25.0;
+      bus.publish("IMU", s);
+    }
+    for (;; ++frame) {
+      const auto [utime, latency] = pose_times(frame);
+      if (utime + latency > t_us) break;
+      mocap_pose_t p{};
+      p.utime = utime;
+      p.seq = frame;
+      p.frame_number = frame;
+      p.latency_us = latency;
+      p.rigid_body_id = 1;
+      p.position_m[2] = -1.5;
+      p.quaternion_wxyz[0] = 1.0;
+      p.tracking_valid = true;
+      p.num_markers = 4;
+      bus.publish("MOCAP_POSE", p);
+    }
+    rig_clock_t c{};
+    c.utime = t_us;
+    c.seq = clock_seq;
+    c.step = clock_seq++;
+    c.sim_time_ns = t_ns;
+    c.dt_ns = 1953125;
+    bus.publish("RIG_CLOCK", c);
+  };
+  bool started = false;
+  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+    if (ack.next_due_ns > static_cast<int64_t>(duration_s * 1e9)) {
+      bus.publish("RUN_CONTROL", stop_command());
+      return;
+    }
+    publish_until(ack.next_due_ns);
+  });
+  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_RUNNING && !started) {
+      started = true;
+      publish_until(0);
+    }
+  });
+  bus.publish("RUN_CONTROL", start_lockstep(duration_s, {"estimator"}));
+  REQUIRE(estimator.run() == transport::kExitOk);
+
+  REQUIRE(estimates.size() > 400);
+  const estimator_state_t& last = estimates.back();
+  // Measurements from the middle frames 94 on (emitted once their end frame, 100 or later,
+  // arrives 200 ms late) up to the last frame delivered before 1 s.
+  CHECK(last.poses_too_old >= 55);  // 60 measured
+  CHECK(last.poses_too_new == 0);
+  CHECK(last.velocity_windows_uncovered == 0);
+  CHECK(last.imu_rejected == 0);
+  CHECK(last.imu_gaps == 0);
+  CHECK(last.poses_accepted > 90);
+  CHECK(std::fabs(last.velocity_body_mps[1]) < 0.01);  // still at rest
+  int dropped = 0;
+  for (const auto& f : faults) {
+    if (f.message.find("dropped by the EKF") == std::string::npos) continue;
+    ++dropped;
+    INFO(f.message);
+    CHECK(f.severity == fault_event_t::SEVERITY_WARNING);
+    CHECK(f.channel == "MOCAP_POSE");
+    CHECK(f.message.find("older than the rollback history of 100.0 ms") != std::string::npos);
+    CHECK(f.message.find("sensing.ekf.latency.history_s") != std::string::npos);
+  }
+  CHECK(dropped == 1);  // at most one a second of rig time
 }

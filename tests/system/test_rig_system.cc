@@ -423,6 +423,11 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   CHECK(e["samples"].as<int>() > 3000);
   CHECK(e["poses_rejected"].as<int>() >= 0);
   CHECK(e["poses_missing"].as<int>() >= 0);
+  // Nothing dropped for its time, every velocity window covered, every IMU sample used.
+  for (const char* key : {"poses_too_old", "poses_too_new", "velocity_windows_uncovered", "imu_rejected", "imu_gaps"}) {
+    INFO(key);
+    CHECK(e[key].as<int>() == 0);
+  }
   CHECK(ra.summary["channels"]["ESTIMATE"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
   // The controller flew on estimates.
   {
