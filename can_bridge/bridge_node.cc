@@ -233,6 +233,9 @@ void CanBridgeNode::publish_health() {
   h.messages_to_lcm = messages_to_lcm_;
   h.frames_sent = static_cast<int64_t>(s.frames_sent);
   h.frames_received = static_cast<int64_t>(s.frames_received);
+  h.fd = config_.fd;
+  h.fd_frames_sent = static_cast<int64_t>(s.fd_frames_sent);
+  h.fd_frames_received = static_cast<int64_t>(s.fd_frames_received);
   h.send_enobufs = static_cast<int64_t>(s.send_enobufs);
   h.send_retries = static_cast<int64_t>(s.send_retries);
   h.send_dropped = static_cast<int64_t>(s.send_dropped + s.send_errors);

@@ -364,6 +364,10 @@ void print_summary(std::ostream& out, const Scenario& s, const std::string& url,
                   static_cast<long long>(h.error_frames), static_cast<long long>(h.send_enobufs),
                   static_cast<long long>(h.send_dropped + h.receive_dropped));
     out << line;
+    if (h.fd) {
+      out << "           CAN FD: " << h.fd_frames_sent << " of the frames sent and " << h.fd_frames_received
+          << " of those received were FD frames\n";
+    }
     if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
   }
   out << "faults     " << mon.faults().size() << "\n";
@@ -432,6 +436,8 @@ std::string summary_json(const Scenario& s, const std::string& url, const std::s
       w.key("interface").value(h.interface_name);
       w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
       w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
+      w.key("fd").value(h.fd != 0);
+      w.key("fd_frames_sent").value(n(h.fd_frames_sent)).key("fd_frames_received").value(n(h.fd_frames_received));
       w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
       w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
       w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));

@@ -344,8 +344,9 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
 namespace {
 
 /// A run's summary shows that all `commands` crossed the CAN link (two frames each), the
-/// feedback came back, and neither side rejected, dropped or saw an error frame.
-void check_link_carried(const YAML::Node& summary, int commands) {
+/// feedback came back, neither side rejected, dropped or saw an error frame, and every frame
+/// was a CAN FD frame (`fd`) or none was.
+void check_link_carried(const YAML::Node& summary, int commands, bool fd) {
   const YAML::Node ch = summary["channels"];
   CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == commands);
   CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == commands);
@@ -358,6 +359,9 @@ void check_link_carried(const YAML::Node& summary, int commands) {
   CHECK(rig["frames_received"].as<int>() == 2 * commands);
   CHECK(rig["messages_to_lcm"].as<int>() == commands);
   for (const YAML::Node& side : {flight, rig}) {
+    CHECK(side["fd"].as<bool>() == fd);
+    CHECK(side["fd_frames_sent"].as<int>() == (fd ? side["frames_sent"].as<int>() : 0));
+    CHECK(side["fd_frames_received"].as<int>() == (fd ? side["frames_received"].as<int>() : 0));
     for (const char* key : {"rejected_unknown_id", "rejected_wrong_length", "rejected_bad_checksum",
                             "rejected_stale_counter", "rejected_out_of_range", "error_frames", "send_dropped"}) {
       INFO(key);
@@ -393,7 +397,7 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   CHECK(differing(a, b) == 0);
 
   // Every command crossed the bus; both sides report clean health.
-  check_link_carried(over_can.summary, 3072);
+  check_link_carried(over_can.summary, 3072, false);
   const YAML::Node ch = over_can.summary["channels"];
   const YAML::Node rig = over_can.summary["can"]["can_rig"];
 
@@ -618,7 +622,7 @@ TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses i
                               "--set run.controller_input=truth --set processes=[plant,controller]");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
-  check_link_carried(r.summary, 512);
+  check_link_carried(r.summary, 512, true);
   const YAML::Node ch = r.summary["channels"];
   const YAML::Node rig = r.summary["can"]["can_rig"];
   // The rig side's candump log holds FD lines (ID##1...) that decode as the run's commands.

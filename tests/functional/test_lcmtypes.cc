@@ -238,6 +238,9 @@ void fill(nimble::can_health_t& m, Distinct& g) {
   m.saturated_values = g.i64();
   m.error_frames = g.i64();
   m.candump_lines = g.i64();
+  m.fd = true;
+  m.fd_frames_sent = g.i64();
+  m.fd_frames_received = g.i64();
   m.bus_state = nimble::can_health_t::BUS_PASSIVE;
   m.last_error = "controller: TX error-passive";
   m.candump_file = "/tmp/run.candump";
@@ -265,6 +268,9 @@ void require_equal(const nimble::can_health_t& a, const nimble::can_health_t& b)
   REQUIRE(a.saturated_values == b.saturated_values);
   REQUIRE(a.error_frames == b.error_frames);
   REQUIRE(a.candump_lines == b.candump_lines);
+  REQUIRE(a.fd == b.fd);
+  REQUIRE(a.fd_frames_sent == b.fd_frames_sent);
+  REQUIRE(a.fd_frames_received == b.fd_frames_received);
   REQUIRE(a.bus_state == b.bus_state);
   REQUIRE(a.last_error == b.last_error);
   REQUIRE(a.candump_file == b.candump_file);
