@@ -78,11 +78,11 @@ std::string hex(const can_frame& f, int len = -1) {
   return s;
 }
 
-/// `cansend vcan0 ID#DATA` for a frame.
-std::string cansend(const can_frame& f, int len = -1) {
+/// `cansend IF ID#DATA` for a frame (first `len` data bytes; all if negative).
+std::string cansend(const can_frame& f, int len = -1, const std::string& interface = kIf) {
   char id[8];
   std::snprintf(id, sizeof id, "%03X", f.can_id & CAN_SFF_MASK);
-  return "cansend " + kIf + " " + id + "#" + hex(f, len);
+  return "cansend " + interface + " " + id + "#" + hex(f, len);
 }
 
 /// The CAN FD interface (MTU 72) of the FD cases; vcan0 keeps the classical MTU.
@@ -179,6 +179,85 @@ actuator_command_t sample_command(int64_t seq) {
   return c;
 }
 
+/// sample_command(seq) as the rig side publishes it after the frames (frame resolution).
+void check_sample_command(const actuator_command_t& c, int64_t seq) {
+  CHECK(c.seq == seq);
+  CHECK(c.flap_freq_left_radps == Approx(131.25).margin(0.005));
+  CHECK(c.flap_freq_right_radps == Approx(88.5).margin(0.005));
+  CHECK(c.delta_f_radps == Approx(131.25 - 88.5).margin(0.01));
+  CHECK(c.dihedral_rad == Approx(-0.1234).margin(5e-5));
+  CHECK(c.wing_root_rad == Approx(0.0567).margin(5e-5));
+  CHECK(c.throttle_pct == Approx(62.5).margin(0.005));
+  CHECK(c.source == kRigProcess);
+  CHECK(c.input_utime == -1);  // the frames do not carry it
+}
+
+/// Feedback as a motor controller reports it (sent with cansend to the flight side).
+actuator_feedback_t motor_feedback(int64_t cmd_seq) {
+  actuator_feedback_t fb{};
+  fb.flap_freq_left_radps = 110.37;
+  fb.flap_freq_right_radps = 95.02;
+  fb.dihedral_rad = 0.0421;
+  fb.wing_root_rad = -0.0033;
+  fb.throttle_pct = -2.5;
+  fb.cmd_seq = cmd_seq;
+  fb.cmd_age_us = 1500;
+  fb.safe_state = false;
+  return fb;
+}
+
+/// motor_feedback(cmd_seq) as the flight side publishes it after the frames.
+void check_motor_feedback(const actuator_feedback_t& got, int64_t cmd_seq) {
+  CHECK(got.flap_freq_left_radps == Approx(110.37).margin(0.005));
+  CHECK(got.flap_freq_right_radps == Approx(95.02).margin(0.005));
+  CHECK(got.delta_f_radps == Approx(110.37 - 95.02).margin(0.01));
+  CHECK(got.dihedral_rad == Approx(0.0421).margin(5e-5));
+  CHECK(got.wing_root_rad == Approx(-0.0033).margin(5e-5));
+  CHECK(got.throttle_pct == Approx(-2.5).margin(0.005));
+  CHECK(got.cmd_seq == cmd_seq);
+  CHECK(got.cmd_age_us == 1500);
+  CHECK_FALSE(got.safe_state);
+}
+
+/// Feedback as the plant publishes it (sent as frames by the rig side).
+actuator_feedback_t plant_feedback(int64_t cmd_seq) {
+  actuator_feedback_t fb{};
+  fb.utime = 123456;
+  fb.flap_freq_left_radps = 101.0;
+  fb.flap_freq_right_radps = 103.5;
+  fb.throttle_pct = 1.25;
+  fb.cmd_seq = cmd_seq;
+  fb.cmd_age_us = 900;
+  fb.safe_state = true;
+  return fb;
+}
+
+/// One shell command that sends `frames` one after the other, each made by `send`.
+template <typename Frames, typename Send>
+std::string send_all(const Frames& frames, Send send) {
+  std::string cmd;
+  for (const can_frame& f : frames) cmd += (cmd.empty() ? "" : " && ") + send(f);
+  return cmd;
+}
+
+/// The next frames on `listener` are `expected`, bit for bit; with `fd`, as FD frames of 8
+/// bytes with bit rate switch.
+template <typename Frames>
+void expect_frames(CanSocket& listener, const Frames& expected, bool fd) {
+  for (const can_frame& want : expected) {
+    ReceivedFrame rx;
+    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
+    INFO("frame 0x" << std::hex << rx.frame.can_id);
+    if (fd) {
+      REQUIRE(rx.is_fd);
+      CHECK(rx.fd_frame.len == 8);
+      CHECK((rx.fd_flags & CANFD_BRS) != 0);
+      CHECK((rx.fd_flags & CANFD_ESI) == 0);
+    }
+    CHECK(same_frame(rx.frame, want));  // the documented 8-byte frame
+  }
+}
+
 }  // namespace
 
 TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames; feedback frames become ACTUATOR_FB_CAN",
@@ -190,40 +269,14 @@ TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames; feedback 
   flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
   REQUIRE(flight.node.node().bus().handle_timeout(1000) > 0);
   CommandEncoder reference;
-  const auto expected = reference.encode(cmd);
-  for (const can_frame& want : expected) {
-    ReceivedFrame rx;
-    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
-    INFO("frame 0x" << std::hex << rx.frame.can_id);
-    CHECK(same_frame(rx.frame, want));
-  }
+  expect_frames(listener, reference.encode(cmd), false);
 
   // Feedback frames as a motor controller would send them, with cansend.
-  actuator_feedback_t fb{};
-  fb.flap_freq_left_radps = 110.37;
-  fb.flap_freq_right_radps = 95.02;
-  fb.dihedral_rad = 0.0421;
-  fb.wing_root_rad = -0.0033;
-  fb.throttle_pct = -2.5;
-  fb.cmd_seq = 41;
-  fb.cmd_age_us = 1500;
-  fb.safe_state = false;
   FeedbackEncoder fenc;
-  std::string sends;
-  for (const can_frame& f : fenc.encode(fb)) sends += (sends.empty() ? "" : " && ") + cansend(f);
-  REQUIRE(run(sends) == 0);
+  REQUIRE(run(send_all(fenc.encode(motor_feedback(41)), [](const can_frame& f) { return cansend(f); })) == 0);
   flight.pump();
   REQUIRE(flight.feedback.size() == 1);
-  const actuator_feedback_t& got = flight.feedback.front();
-  CHECK(got.flap_freq_left_radps == Approx(110.37).margin(0.005));
-  CHECK(got.flap_freq_right_radps == Approx(95.02).margin(0.005));
-  CHECK(got.delta_f_radps == Approx(110.37 - 95.02).margin(0.01));
-  CHECK(got.dihedral_rad == Approx(0.0421).margin(5e-5));
-  CHECK(got.wing_root_rad == Approx(-0.0033).margin(5e-5));
-  CHECK(got.throttle_pct == Approx(-2.5).margin(0.005));
-  CHECK(got.cmd_seq == 41);
-  CHECK(got.cmd_age_us == 1500);
-  CHECK_FALSE(got.safe_state);
+  check_motor_feedback(flight.feedback.front(), 41);
 
   REQUIRE_FALSE(flight.health.empty());
   const can_health_t& h = flight.health.back();
@@ -241,42 +294,18 @@ TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN; ACTUATO
   Bridge rig(kRigProcess);
   CommandEncoder enc;
   for (int64_t seq : {1000, 1001}) {
-    const actuator_command_t cmd = sample_command(seq);
-    std::string sends;
-    for (const can_frame& f : enc.encode(cmd)) sends += (sends.empty() ? "" : " && ") + cansend(f);
-    REQUIRE(run(sends) == 0);
+    REQUIRE(run(send_all(enc.encode(sample_command(seq)), [](const can_frame& f) { return cansend(f); })) == 0);
   }
   rig.pump();
   REQUIRE(rig.commands.size() == 2);
-  const actuator_command_t& c = rig.commands.back();
-  CHECK(c.seq == 1001);
-  CHECK(c.flap_freq_left_radps == Approx(131.25).margin(0.005));
-  CHECK(c.flap_freq_right_radps == Approx(88.5).margin(0.005));
-  CHECK(c.delta_f_radps == Approx(131.25 - 88.5).margin(0.01));
-  CHECK(c.dihedral_rad == Approx(-0.1234).margin(5e-5));
-  CHECK(c.wing_root_rad == Approx(0.0567).margin(5e-5));
-  CHECK(c.throttle_pct == Approx(62.5).margin(0.005));
-  CHECK(c.source == kRigProcess);
-  CHECK(c.input_utime == -1);  // the frames do not carry it
+  check_sample_command(rig.commands.back(), 1001);
 
   CanSocket listener = CanSocket::open(kIf, receive_all());  // from here on: the bridge's frames only
-  actuator_feedback_t fb{};
-  fb.utime = 123456;
-  fb.flap_freq_left_radps = 101.0;
-  fb.flap_freq_right_radps = 103.5;
-  fb.throttle_pct = 1.25;
-  fb.cmd_seq = 1001;
-  fb.cmd_age_us = 900;
-  fb.safe_state = true;
+  const actuator_feedback_t fb = plant_feedback(1001);
   rig.node.node().bus().publish("ACTUATOR_FB", fb);
   REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
   FeedbackEncoder reference;
-  for (const can_frame& want : reference.encode(fb)) {
-    ReceivedFrame rx;
-    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
-    INFO("frame 0x" << std::hex << rx.frame.can_id);
-    CHECK(same_frame(rx.frame, want));
-  }
+  expect_frames(listener, reference.encode(fb), false);
   rig.pump();
   const can_health_t& h = rig.health.back();
   CHECK(h.role == can_health_t::ROLE_RIG);
@@ -466,48 +495,21 @@ TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch; FD 
   flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
   REQUIRE(flight.node.node().bus().handle_timeout(1000) > 0);
   CommandEncoder reference;
-  for (const can_frame& want : reference.encode(cmd)) {
-    ReceivedFrame rx;
-    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
-    INFO("frame 0x" << std::hex << rx.frame.can_id);
-    REQUIRE(rx.is_fd);
-    CHECK(rx.fd_frame.len == 8);
-    CHECK((rx.fd_flags & CANFD_BRS) != 0);
-    CHECK((rx.fd_flags & CANFD_ESI) == 0);
-    CHECK(same_frame(rx.frame, want));  // the documented 8-byte frame, bit for bit
-  }
+  expect_frames(listener, reference.encode(cmd), true);
 
   // Feedback as FD frames from cansend (`ID##1DATA`), then as classical frames.
-  actuator_feedback_t fb{};
-  fb.flap_freq_left_radps = 110.37;
-  fb.flap_freq_right_radps = 95.02;
-  fb.dihedral_rad = 0.0421;
-  fb.throttle_pct = -2.5;
-  fb.cmd_seq = 41;
-  fb.cmd_age_us = 1500;
+  actuator_feedback_t fb = motor_feedback(41);
   FeedbackEncoder fenc;
-  std::string sends;
-  for (const can_frame& f : fenc.encode(fb)) sends += (sends.empty() ? "" : " && ") + cansend_fd(f, hex(f));
-  REQUIRE(run(sends) == 0);
+  REQUIRE(run(send_all(fenc.encode(fb), [](const can_frame& f) { return cansend_fd(f, hex(f)); })) == 0);
   flight.pump();
   REQUIRE(flight.feedback.size() == 1);
-  CHECK(flight.feedback.front().flap_freq_left_radps == Approx(110.37).margin(0.005));
-  CHECK(flight.feedback.front().dihedral_rad == Approx(0.0421).margin(5e-5));
-  CHECK(flight.feedback.front().throttle_pct == Approx(-2.5).margin(0.005));
-  CHECK(flight.feedback.front().cmd_seq == 41);
-  CHECK(flight.feedback.front().cmd_age_us == 1500);
+  check_motor_feedback(flight.feedback.front(), 41);
 
   fb.cmd_seq = 42;
-  sends.clear();
-  for (const can_frame& f : fenc.encode(fb)) {
-    char id[8];
-    std::snprintf(id, sizeof id, "%03X", f.can_id & CAN_SFF_MASK);
-    sends += (sends.empty() ? "" : " && ") + ("cansend " + kFdIf + " " + id + "#" + hex(f));
-  }
-  REQUIRE(run(sends) == 0);
+  REQUIRE(run(send_all(fenc.encode(fb), [](const can_frame& f) { return cansend(f, -1, kFdIf); })) == 0);
   flight.pump();
   REQUIRE(flight.feedback.size() == 2);
-  CHECK(flight.feedback.back().cmd_seq == 42);
+  check_motor_feedback(flight.feedback.back(), 42);
 
   // FD frames of 12 and 5 bytes under a feedback identifier: wrong length, reported, dropped.
   const auto next = fenc.encode(fb);
@@ -532,36 +534,19 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
   ensure_fd_interface();
   Bridge rig(kRigProcess, true);
   CommandEncoder enc;
-  std::string sends;
-  for (const can_frame& f : enc.encode(sample_command(1000))) sends += (sends.empty() ? "" : " && ") + cansend_fd(f, hex(f));
-  REQUIRE(run(sends) == 0);
+  REQUIRE(run(send_all(enc.encode(sample_command(1000)), [](const can_frame& f) { return cansend_fd(f, hex(f)); })) == 0);
   rig.pump();
   REQUIRE(rig.commands.size() == 1);
-  const actuator_command_t& c = rig.commands.back();
-  CHECK(c.seq == 1000);
-  CHECK(c.flap_freq_left_radps == Approx(131.25).margin(0.005));
-  CHECK(c.dihedral_rad == Approx(-0.1234).margin(5e-5));
-  CHECK(c.source == kRigProcess);
+  check_sample_command(rig.commands.back(), 1000);
 
   CanSocketOptions listen = receive_all();
   listen.fd = true;
   CanSocket listener = CanSocket::open(kFdIf, listen);
-  actuator_feedback_t fb{};
-  fb.flap_freq_left_radps = 101.0;
-  fb.flap_freq_right_radps = 103.5;
-  fb.cmd_seq = 1000;
-  fb.cmd_age_us = 900;
+  const actuator_feedback_t fb = plant_feedback(1000);
   rig.node.node().bus().publish("ACTUATOR_FB", fb);
   REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
   FeedbackEncoder reference;
-  for (const can_frame& want : reference.encode(fb)) {
-    ReceivedFrame rx;
-    REQUIRE(listener.receive(&rx, 2000) == ReceiveResult::kFrame);
-    REQUIRE(rx.is_fd);
-    CHECK(rx.fd_frame.len == 8);
-    CHECK((rx.fd_flags & CANFD_BRS) != 0);
-    CHECK(same_frame(rx.frame, want));
-  }
+  expect_frames(listener, reference.encode(fb), true);
   rig.pump();
   CHECK(rig.health.back().frames_sent == 3);
   CHECK(rig.health.back().frames_received == 2);
