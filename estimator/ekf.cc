@@ -319,7 +319,7 @@ EkfMeasurementStatus AttitudeVelocityEkf::apply_now(const PoseMeasurement& z) {
 
 EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& z) {
   const std::int64_t now = history_.back().utime;
-  if (z.utime <= history_.front().utime || z.utime < now - history_us_) {
+  if (too_old(z)) {
     ++counters_.measurements_too_old;
     return EkfMeasurementStatus::kTooOld;
   }
@@ -375,6 +375,10 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
   return status;
 }
 
+bool AttitudeVelocityEkf::too_old(const PoseMeasurement& z) const {
+  return z.utime <= history_.front().utime || z.utime < history_.back().utime - history_us_;
+}
+
 std::int64_t AttitudeVelocityEkf::ready_utime(const PoseMeasurement& z) const {
   const bool window = z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
   return window ? std::max(z.utime, z.velocity_window_end_utime) : z.utime;
@@ -421,7 +425,7 @@ PoseMeasurement AttitudeVelocityEkf::prepared(const PoseMeasurement& z) {
   // Without a window (start not before end) the velocity is taken as instantaneous.
   if (z.velocity_window_start_utime >= z.velocity_window_end_utime) return z;
   // Too old for the history: dropped by insert_in_past, nothing to offset or count.
-  if (z.utime <= history_.front().utime || z.utime < history_.back().utime - history_us_) return z;
+  if (too_old(z)) return z;
   PoseMeasurement out = z;
   Eigen::Vector3d offset;
   if (velocity_window_offset(z, &offset)) {

@@ -256,6 +256,8 @@ class AttitudeVelocityEkf {
                           std::int64_t t0, std::int64_t t1) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);
+  /// True if z is older than the history (insert_in_past drops it).
+  bool too_old(const PoseMeasurement& z) const;
   /// Filter time from which z can be applied: its own time, or the end of its velocity window.
   std::int64_t ready_utime(const PoseMeasurement& z) const;
   /// Offset c of the header for z's velocity window; false if the history does not cover it.

@@ -17,7 +17,6 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   ConfigMap section = scenario.section("sensing");
   const SensingConfig sensing = sensing_config_from(section);
   ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
-  history_s_ = sensing.ekf.history_s;
   builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
   node_->set_expected_rate(transport::channels::kImu, sensing.imu.sample_rate_hz);
@@ -90,11 +89,11 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
   msg << std::fixed << std::setprecision(1) << "mocap frame " << z.frame_number << " dropped by the EKF: ";
   if (status == EkfMeasurementStatus::kTooOld) {
     msg << "it refers to " << 1e-3 * static_cast<double>(now - z.utime) << " ms before the newest IMU sample, older than "
-        << "the rollback history of " << 1e3 * history_s_ << " ms (" << c.measurements_too_old
+        << "the rollback history of " << 1e3 * ekf_->config().history_s << " ms (" << c.measurements_too_old
         << " so far); the motion-capture stream is late: raise sensing.ekf.latency.history_s or find the delay";
   } else {
     msg << "it refers to " << 1e-3 * static_cast<double>(z.utime - now) << " ms after the newest IMU sample, more than "
-        << "the history of " << 1e3 * history_s_ << " ms ahead (" << c.measurements_too_new
+        << "the history of " << 1e3 * ekf_->config().history_s << " ms ahead (" << c.measurements_too_new
         << " so far); the IMU stream is late or the two clocks differ";
   }
   node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, transport::channels::kMocapPose, msg.str());

@@ -52,7 +52,6 @@ class EstimatorNode {
   int64_t seq_ = 0;
   int64_t poses_missing_ = 0;
   int64_t last_frame_ = -1;
-  double history_s_ = 0.0;
   int64_t last_drop_fault_utime_ = INT64_MIN;
 };
 

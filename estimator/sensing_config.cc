@@ -204,16 +204,17 @@ SensingConfig sensing_config_from(ConfigMap& map) {
     c.ekf = ekf_config_from(m);
   }
   map.finish();
-  const double needed_s = ekf_history_needed_s(c);
+  const EkfHistoryNeed need = ekf_history_need(c);
+  const double needed_s = need.total_s();
   if (c.ekf.latency_mode == EkfLatencyMode::kRollback && c.ekf.history_s < needed_s) {
-    const VelocityDifferentiatorConfig& d = c.velocity_differentiator;
     const bool window = c.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
     std::ostringstream why;
     why << std::setprecision(3) << "is too short for the motion-capture measurements, which would arrive older than the "
-        << "history and be dropped: latency " << 1e-3 * static_cast<double>(c.mocap.latency_us) << " ms + 3 x jitter "
-        << 3e-3 * c.mocap.latency_jitter_sigma_us << " ms + " << (window ? "" : "half ") << "the differentiator span ("
-        << d.span_frames << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "")
-        << ") + 2 IMU periods = " << 1e3 * needed_s << " ms; set ekf.latency.history_s >= " << std::ceil(needed_s * 1e3) / 1e3;
+        << "history and be dropped: latency " << 1e3 * need.latency_s << " ms + 3 x jitter " << 1e3 * need.jitter_s
+        << " ms + " << (window ? "" : "half ") << "the differentiator span (" << c.velocity_differentiator.span_frames
+        << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "")
+        << ") " << 1e3 * need.window_s << " ms + 2 IMU periods " << 1e3 * need.imu_s << " ms = " << 1e3 * needed_s
+        << " ms; set ekf.latency.history_s >= " << std::ceil(needed_s * 1e3) / 1e3;
     std::ostringstream value;
     value << c.ekf.history_s;
     throw ConfigError(map.file(), map.key_path("ekf.latency.history_s"), value.str(), why.str());
@@ -221,13 +222,17 @@ SensingConfig sensing_config_from(ConfigMap& map) {
   return c;
 }
 
-double ekf_history_needed_s(const SensingConfig& config) {
+EkfHistoryNeed ekf_history_need(const SensingConfig& config) {
   const double span_s = config.velocity_differentiator.span_frames / config.mocap.frame_rate_hz;
-  const double window_s =
-      config.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean ? span_s : 0.5 * span_s;
-  return 1e-6 * (static_cast<double>(config.mocap.latency_us) + 3.0 * config.mocap.latency_jitter_sigma_us) + window_s +
-         2.0 / config.imu.sample_rate_hz;
+  EkfHistoryNeed need;
+  need.latency_s = 1e-6 * static_cast<double>(config.mocap.latency_us);
+  need.jitter_s = 3e-6 * config.mocap.latency_jitter_sigma_us;
+  need.window_s = config.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean ? span_s : 0.5 * span_s;
+  need.imu_s = 2.0 / config.imu.sample_rate_hz;
+  return need;
 }
+
+double ekf_history_needed_s(const SensingConfig& config) { return ekf_history_need(config).total_s(); }
 
 SensingConfig load_sensing_config(const std::string& file) {
   ConfigMap root = ConfigMap::load_file(file);

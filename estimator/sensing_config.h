@@ -41,11 +41,21 @@ EkfConfig ekf_config_from(ConfigMap& map);
 /// measurement needs when it arrives (ekf_history_needed_s). @throws ConfigError.
 SensingConfig sensing_config_from(ConfigMap& map);
 
+/// What the EKF's rollback history must hold when a motion-capture measurement arrives [s].
+struct EkfHistoryNeed {
+  double latency_s = 0.0;  ///< the mocap latency
+  double jitter_s = 0.0;   ///< 3 sigma of its jitter
+  double window_s = 0.0;   ///< the differentiator's window before the measurement's own time: the
+                           ///< whole span with velocity_measurement window_mean (the offset needs
+                           ///< the filter's trajectory from the window's start), half with instant
+  double imu_s = 0.0;      ///< two IMU periods (applied at the next IMU sample; the node before
+                           ///< the window's start must be kept)
+  double total_s() const { return latency_s + jitter_s + window_s + imu_s; }
+};
+EkfHistoryNeed ekf_history_need(const SensingConfig& config);
+
 /// Shortest ekf.latency.history_s [s] with which no motion-capture measurement arrives too old:
-/// the mocap latency + 3 sigma of its jitter + the part of the differentiator's window before the
-/// measurement's own time (the whole span with velocity_measurement window_mean, which needs the
-/// filter's trajectory from the window's start; half of it with instant) + two IMU periods (the
-/// measurement is applied at the next IMU sample; the node before the window's start must be kept).
+/// ekf_history_need(config).total_s().
 double ekf_history_needed_s(const SensingConfig& config);
 /// Loads a sensing file (e.g. rig_configs/sensing/default_sensing.yaml). @throws ConfigError.
 SensingConfig load_sensing_config(const std::string& file);
