@@ -30,6 +30,17 @@ std::pair<double, double> amplitude_phase(const Eigen::VectorXd& x, double f_hz,
   return {std::hypot(c[0], c[1]), std::atan2(c[1], c[0])};
 }
 
+/// A channel sampled at `rate_hz`: stamps t_k = k / rate_hz and values f(t_k), k = 0..last.
+template <typename F>
+Channel sampled(double rate_hz, int last, F f) {
+  Channel c;
+  for (int k = 0; k <= last; ++k) {
+    c.t_s.push_back(k / rate_hz);
+    c.values.push_back(f(c.t_s.back()));
+  }
+  return c;
+}
+
 }  // namespace
 
 TEST_CASE("resampling interpolates linearly onto the common grid of all channels", "[signal]") {
@@ -94,12 +105,7 @@ TEST_CASE("cubic resampling: exact for quadratics on uneven stamps, keeps sample
   SECTION("a 5 Hz sine sampled at 100 Hz: linear attenuates it by sinc^2, cubic by (w h)^4 / 80") {
     FlightData d;
     d.source = "100 Hz";
-    std::vector<double> t, y;
-    for (int k = 0; k <= 1000; ++k) {
-      t.push_back(k / 100.0);
-      y.push_back(std::sin(2.0 * M_PI * 5.0 * t.back() + 0.3));
-    }
-    d.channels["delta_f"] = Channel{t, y};
+    d.channels["delta_f"] = sampled(100.0, 1000, [](double t) { return std::sin(2.0 * M_PI * 5.0 * t + 0.3); });
     const double wh = 2.0 * M_PI * 5.0 / 100.0;
     const double sinc2 = std::pow(std::sin(wh / 2.0) / (wh / 2.0), 2);  // 0.99180
     for (Interpolation how : {Interpolation::kLinear, Interpolation::kCubic}) {
@@ -235,12 +241,8 @@ TEST_CASE("the differentiator recovers the derivative of a sine and is exact for
 TEST_CASE("process() resamples then filters every channel", "[signal]") {
   FlightData d;
   d.source = "two tones";
-  std::vector<double> t, v;
-  for (int k = 0; k < 4000; ++k) {
-    t.push_back(k / 1000.0);
-    v.push_back(std::sin(2.0 * M_PI * 2.0 * t.back()) + std::sin(2.0 * M_PI * 40.0 * t.back()));
-  }
-  d.channels["p"] = Channel{t, v};
+  d.channels["p"] =
+      sampled(1000.0, 3999, [](double t) { return std::sin(2.0 * M_PI * 2.0 * t) + std::sin(2.0 * M_PI * 40.0 * t); });
   ProcessingOptions o;  // 512 Hz, order 10, 9 Hz
   const UniformData u = process(d, o);
   CHECK(u.rate_hz == 512.0);
