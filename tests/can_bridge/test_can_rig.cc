@@ -109,6 +109,13 @@ CanSocketOptions receive_all() {
   return o;
 }
 
+/// A socket on the FD interface that receives every frame, classical and FD.
+CanSocket fd_listener() {
+  CanSocketOptions o = receive_all();
+  o.fd = true;
+  return CanSocket::open(kFdIf, o);
+}
+
 bool same_frame(const can_frame& a, const can_frame& b) {
   return a.can_id == b.can_id && a.len == b.len && std::memcmp(a.data, b.data, a.len) == 0;
 }
@@ -487,9 +494,7 @@ TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch; FD 
           "[bridge][fd]") {
   ensure_fd_interface();
   Bridge flight(kFlightProcess, true);
-  CanSocketOptions listen = receive_all();
-  listen.fd = true;
-  CanSocket listener = CanSocket::open(kFdIf, listen);
+  CanSocket listener = fd_listener();
 
   const actuator_command_t cmd = sample_command(41);
   flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
@@ -539,9 +544,7 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
   REQUIRE(rig.commands.size() == 1);
   check_sample_command(rig.commands.back(), 1000);
 
-  CanSocketOptions listen = receive_all();
-  listen.fd = true;
-  CanSocket listener = CanSocket::open(kFdIf, listen);
+  CanSocket listener = fd_listener();
   const actuator_feedback_t fb = plant_feedback(1000);
   rig.node.node().bus().publish("ACTUATOR_FB", fb);
   REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
