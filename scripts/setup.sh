@@ -13,7 +13,9 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # jchart2d (lcm-spy's detail plots), glib headers (lcm.pc requires them), Eigen, yaml-cpp,
 # Catch2, a JDK for the type jar,
 # gnuplot for identification plots, and for real SocketCAN tests: can-utils, iproute2,
-# and qemu with xz (can_bridge/vm/canvm boots Debian's kernel when the host has no vcan).
+# and qemu with xz (can_bridge/vm/canvm boots Debian's kernel when the host has no vcan);
+# python3 for the check that every CTest entry runs one test case (tests/meta).
+# python3 for the check that every CTest entry runs one test case (tests/meta).
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
@@ -21,6 +23,7 @@ PACKAGES=(
   default-jdk-headless
   gnuplot-nox
   can-utils iproute2 qemu-system-x86 xz-utils
+  python3
 )
 
 missing=()

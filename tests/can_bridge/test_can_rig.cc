@@ -267,7 +267,7 @@ void expect_frames(CanSocket& listener, const Frames& expected, bool fd) {
 
 }  // namespace
 
-TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames; feedback frames become ACTUATOR_FB_CAN",
+TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames, feedback frames become ACTUATOR_FB_CAN",
           "[bridge]") {
   Bridge flight(kFlightProcess);
   CanSocket listener = CanSocket::open(kIf, receive_all());
@@ -296,7 +296,7 @@ TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames; feedback 
   CHECK(h.frames_received == 3);
 }
 
-TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN; ACTUATOR_FB goes out as frames",
+TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN, ACTUATOR_FB goes out as frames",
           "[bridge]") {
   Bridge rig(kRigProcess);
   CommandEncoder enc;
@@ -408,7 +408,7 @@ void check_link_carried(const YAML::Node& summary, int commands, bool fd) {
 
 }  // namespace
 
-TEST_CASE("the identification doublet train in lockstep: the same truth over the CAN link as over LCM; "
+TEST_CASE("the identification doublet train in lockstep: the same truth over the CAN link as over LCM, "
           "the run's candump log replays with canplayer",
           "[system][rig]") {
   pin_to_cpu0();
@@ -489,8 +489,8 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   fs::remove_all(dir);
 }
 
-TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch; FD and classical feedback frames "
-          "become ACTUATOR_FB_CAN; FD frames of another length are wrong_length",
+TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch, FD and classical feedback frames "
+          "become ACTUATOR_FB_CAN, FD frames of another length are wrong_length",
           "[bridge][fd]") {
   ensure_fd_interface();
   Bridge flight(kFlightProcess, true);
@@ -534,7 +534,7 @@ TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch; FD 
   CHECK(flight.fault_mentions("wrong_length"));
 }
 
-TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN; feedback goes out as FD frames",
+TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN, feedback goes out as FD frames",
           "[bridge][fd]") {
   ensure_fd_interface();
   Bridge rig(kRigProcess, true);
@@ -574,7 +574,7 @@ TEST_CASE("can_bridge.fd on an interface with the classical MTU names the fix", 
   CHECK(run("ip link del dev " + classical_if) == 0);
 }
 
-TEST_CASE("rig run's interface set-up with can_bridge.fd: a vcan it creates gets MTU 72; MTU 16 names the fix",
+TEST_CASE("rig run's interface set-up with can_bridge.fd: a vcan it creates gets MTU 72, MTU 16 names the fix",
           "[launcher][fd]") {
   using nimble::launcher::ensure_can_interface;
   const auto mtu = [](const std::string& name) {

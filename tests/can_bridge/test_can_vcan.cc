@@ -309,7 +309,7 @@ TEST_CASE("receive filters pass only the rig's identifiers", "[vcan]") {
   CHECK(same_frame(next_data(all).frame, rig_frame));
 }
 
-TEST_CASE("frames sent with cansend arrive and decode; bad ones are counted", "[vcan][can-utils]") {
+TEST_CASE("frames sent with cansend arrive and decode, bad ones are counted", "[vcan][can-utils]") {
   CanSocket rx = CanSocket::open(kIf, receive_all());
   // A command written by hand from the documented layout: left 100.00 rad/s (0x2710), right
   // 90.00 rad/s (0x2328), throttle 50.00 % (0x1388), mode 0, counter 3; dihedral -0.1234 rad
@@ -649,7 +649,7 @@ TEST_CASE("CAN FD on an interface with the classical MTU is refused with the fix
   CHECK(classical.stats().fd_frames_sent == 0);
 }
 
-TEST_CASE("cansend FD frames arrive; candump -L prints FD frames exactly as our writer", "[vcan][fd][can-utils]") {
+TEST_CASE("cansend FD frames arrive, candump -L prints FD frames exactly as our writer", "[vcan][fd][can-utils]") {
   ensure_fd_interface();
   CanSocket rx = CanSocket::open(kFdIf, fd_options(receive_all()));
   REQUIRE(run("cansend " + kFdIf + " 181##1DEADBEEF01020304 && cansend " + kFdIf + " 1FFFFFFF##0" +

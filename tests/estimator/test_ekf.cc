@@ -320,7 +320,7 @@ TEST_CASE("EKF velocity measurement: a central difference is the window mean, wh
   CHECK(instant == Approx(mean - A).margin(1e-3));  // -0.070 m/s: the sinc scaling, read as an error
 }
 
-TEST_CASE("EKF velocity window: a window the history does not cover is counted and applied as instantaneous; "
+TEST_CASE("EKF velocity window: a window the history does not cover is counted and applied as instantaneous, "
           "one without bounds is instantaneous",
           "[ekf]") {
   EkfConfig c;

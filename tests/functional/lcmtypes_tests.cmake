@@ -1,10 +1,8 @@
 # Functional tests of the LCM message contract (lcmtypes/). Included from tests/CMakeLists.txt,
-# which provides the rig_catch_main library and include(Catch) for catch_discover_tests.
+# which provides the rig_catch_main library and rig_discover_tests (cmake/RigTests.cmake).
 add_executable(test_lcmtypes ${CMAKE_CURRENT_LIST_DIR}/test_lcmtypes.cc)
 target_link_libraries(test_lcmtypes PRIVATE rig_catch_main nimble_lcmtypes PkgConfig::LCM)
-catch_discover_tests(test_lcmtypes
-  TEST_PREFIX "functional.lcmtypes."
-  PROPERTIES LABELS functional)
+rig_discover_tests(test_lcmtypes PREFIX "functional.lcmtypes." LABELS functional)
 
 # Java and C++ fingerprints of the same types (lcm-spy decodes with the Java ones).
 set(_fp_classes ${CMAKE_CURRENT_BINARY_DIR}/fingerprint_classes)
@@ -24,7 +22,7 @@ target_compile_definitions(test_java_fingerprints PRIVATE
   TYPES_JAR="${_types_jar}"
   LCM_JAR="${LCM_JAVA_JAR}")
 add_dependencies(test_java_fingerprints fingerprint_classes nimble_lcmtypes_jar)
-catch_discover_tests(test_java_fingerprints TEST_PREFIX "functional.lcmtypes." PROPERTIES LABELS functional)
+rig_discover_tests(test_java_fingerprints PREFIX "functional.lcmtypes." LABELS functional)
 
 # The plant, controller and estimator processes' nodes on memq:// (one process, no network).
 add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.cc
@@ -33,4 +31,4 @@ add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.c
 target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_core nimble_controller_core
   nimble_estimation nimble_scenario nimble_transport)
 target_compile_definitions(test_process_nodes PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-catch_discover_tests(test_process_nodes TEST_PREFIX "functional.process." PROPERTIES LABELS functional)
+rig_discover_tests(test_process_nodes PREFIX "functional.process." LABELS functional)

@@ -257,7 +257,7 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
   CHECK(doublet_seen);
 }
 
-TEST_CASE("estimator node: ESTIMATE carries the EKF's counters; when the motion capture falls behind by more "
+TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion capture falls behind by more "
           "than the history, its poses are dropped, counted and raised as a FAULT naming the key",
           "[estimator][process]") {
   const Scenario scenario = load_scenario(kConfigs + "hover.yaml");

@@ -218,7 +218,7 @@ TEST_CASE("a process killed mid-run is named, the run fails, and the log stays r
   CHECK(YAML::LoadFile(dir + "/summary.json")["exit_code"].as<int>() == 3);
 }
 
-TEST_CASE("a stalled lockstep participant is named with its channel; the run stops", "[system]") {
+TEST_CASE("a stalled lockstep participant is named with its channel, the run stops", "[system]") {
   const std::string dir = scratch_dir("stall");
   const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
                                        "--clock lockstep --set duration_s=600 --set lockstep.ack_timeout_ms=500");

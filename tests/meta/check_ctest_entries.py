@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Checks that every CTest entry discovered from a Catch2 executable runs exactly one test case.
+
+CTest splits a test name at ';', and catch_discover_tests then registers entries whose test spec
+matches no test case: Catch2 prints "No test cases matched" and the entry passes without running
+anything. This check lists the build's entries (ctest --show-only=json-v1) and, for each one that
+runs a Catch2 executable with a test spec, asks the executable which test cases the spec selects
+(--list-test-names-only). It fails, naming the entry, when a spec selects no case or several, when
+an entry lacks `--warn NoTests`, or when a test case of an executable is selected by no entry.
+
+Usage: check_ctest_entries.py BUILD_DIR
+"""
+import json
+import subprocess
+import sys
+from collections import defaultdict
+
+# Entries that run a whole Catch2 executable (one VM boot each) and this check itself.
+WHOLE_EXECUTABLE_ENTRIES = {"can.vcan", "can.rig"}
+SELF = "meta.ctest_entries"
+
+
+def catch_list(exe, spec=None):
+    cmd = [exe] + ([spec] if spec is not None else []) + ["--list-test-names-only"]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=False).stdout
+    return [line for line in out.splitlines() if line.strip()]
+
+
+def main():
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    shown = subprocess.run(["ctest", "--test-dir", sys.argv[1], "--show-only=json-v1"],
+                           capture_output=True, text=True, check=True).stdout
+    tests = json.loads(shown)["tests"]
+    problems = []
+    selected = defaultdict(set)   # executable -> test case names some entry selects
+    checked = 0
+    for test in tests:
+        name, command = test["name"], test.get("command", [])
+        if name == SELF:
+            continue
+        if name in WHOLE_EXECUTABLE_ENTRIES:
+            if "NoTests" not in command:
+                problems.append(f"{name}: runs a whole Catch2 executable without --warn NoTests")
+            continue
+        if len(command) < 2 or command[1].startswith("-"):
+            problems.append(f"{name}: not a discovered Catch2 entry (command {command}); "
+                            "register it with rig_discover_tests or list it in this check")
+            continue
+        exe, spec = command[0], command[1]
+        if "--warn" not in command or "NoTests" not in command:
+            problems.append(f"{name}: discovered without --warn NoTests (use rig_discover_tests)")
+        cases = catch_list(exe, spec)
+        checked += 1
+        if len(cases) != 1:
+            problems.append(f"{name}: its test spec {spec!r} selects {len(cases)} test cases "
+                            f"of {exe} ({cases[:3]}); a ';' in a test name splits the entry")
+        selected[exe].update(cases)
+    for exe, cases in selected.items():
+        missed = sorted(set(catch_list(exe)) - cases)
+        for case in missed:
+            problems.append(f"{exe}: test case {case!r} is run by no CTest entry")
+    for problem in problems:
+        print("FAIL", problem)
+    print(f"{checked} discovered entries in {len(selected)} executables checked; "
+          f"{len(problems)} problems")
+    return 1 if problems or checked == 0 else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
