@@ -9,7 +9,7 @@
 #include <Eigen/Cholesky>
 
 #include "estimator/attitude.h"
-#include "estimator/chi_square.h"
+#include "core/chi_square.h"
 
 namespace nimble {
 namespace {

@@ -6,7 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include "estimator/attitude.h"
-#include "estimator/chi_square.h"
+#include "core/chi_square.h"
 
 using namespace nimble;
 

@@ -10,7 +10,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "estimator/chi_square.h"
+#include "core/chi_square.h"
 #include "estimator/sensing_simulation.h"
 
 using namespace nimble;

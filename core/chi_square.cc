@@ -1,4 +1,4 @@
-#include "estimator/chi_square.h"
+#include "core/chi_square.h"
 
 #include <algorithm>
 #include <cmath>
@@ -58,6 +58,16 @@ double chi_square_cdf(double x, double dof) {
   }
   if (x <= 0.0) return 0.0;
   return regularized_gamma_p(0.5 * dof, 0.5 * x);
+}
+
+double chi_square_survival(double x, double dof) {
+  if (!(dof > 0.0) || !std::isfinite(x)) {
+    throw std::invalid_argument("chi_square_survival: need dof > 0 and finite x");
+  }
+  if (x <= 0.0) return 1.0;
+  const double a = 0.5 * dof, h = 0.5 * x;
+  if (h < a + 1.0) return 1.0 - gamma_p_series(a, h);
+  return gamma_q_continued_fraction(a, h);
 }
 
 double chi_square_quantile(double p, double dof) {
