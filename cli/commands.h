@@ -28,6 +28,9 @@ int run_spy_command(const std::vector<std::string>& args);
 /// of the lateral model from CSV flight data (cli/identify_command.cc).
 int run_identify_command(const std::vector<std::string>& args);
 
+/// `rig discrepancy <data> --model <model.yaml> [--json F] [--model-out F] [--candidates LIST] ...`: the
+/// discrepancy workflow (ident/discrepancy.h).
+int run_discrepancy_command(const std::vector<std::string>& args);
 /// `rig validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...`: open-loop validation.
 int run_validate_command(const std::vector<std::string>& args);
 

@@ -15,6 +15,7 @@
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
 #include "ident/closed_loop.h"
+#include "ident/discrepancy.h"
 #include "core/json_writer.h"
 #include "ident/signal.h"
 #include "ident/identify.h"
@@ -66,6 +67,24 @@ constexpr const char* kValidateUsage =
     "                   against the measured ones; --plots draws their time histories (closed_loop.png)\n"
     "  --gains NAME     roll gain set of the controller copy (default fast)\n"
     "  --controller FILE  controller configuration (default rig_configs/controller/nimble_attitude.yaml)\n";
+
+constexpr const char* kDiscrepancyUsage =
+    "usage: rig discrepancy <data.csv|log.lcmlog> --model <model.yaml> [options]\n"
+    "  Where the model and the measured data disagree, which physical effect the model is\n"
+    "  missing (by name), the model refit with it, and the gap before and after on data the\n"
+    "  fit did not see (ident/README.md, \"Discrepancy workflow\"). Exit 0 whatever the verdict.\n"
+    "  --model FILE        the model (lateral3) to check\n"
+    "  --vehicle FILE      use this vehicle instead of the model's\n"
+    "  --candidates LIST   comma-separated candidate effects to try (default: all the data supports):\n"
+    "                      kinematic_coupling, gravity_nonlinearity, lateral_inflow,\n"
+    "                      forward_speed_coupling, actuator_delay, sensor_bias, dihedral_coupling,\n"
+    "                      yaw_coupling\n"
+    "  --folds K           held-out cross-validation folds (default 10)\n"
+    "  --partial-f F       significance rule (default 20, SIDPAC)\n"
+    "  --delay-max S       actuator_delay scan limit (default 0.06 s)\n"
+    "  --rate HZ, --cutoff HZ, --order N, --interpolation cubic|linear   processing (512, 9, 10, cubic)\n"
+    "  --json FILE         write the JSON report to FILE ('-' for stdout)\n"
+    "  --model-out FILE    write the model refit with the named effects (section effects:)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -252,6 +271,68 @@ int run_identify_command(const std::vector<std::string>& args) {
     if (json != "-") std::cout << "plot " << p << "\n";
   }
   if (!json.empty()) write_json(json, ident::identification_json(result, model_out, pngs));
+  return 0;
+}
+
+int run_discrepancy_command(const std::vector<std::string>& args) {
+  if (wants_help(args)) {
+    std::cout << kDiscrepancyUsage;
+    return 0;
+  }
+  std::string data_file, model_file, vehicle_file, json, model_out;
+  ident::DiscrepancyOptions opt;
+  try {
+    Args it(args);
+    while (it.next()) {
+      const std::string& a = it.arg();
+      if (processing_option(it, opt.processing)) continue;
+      if (a == "--model") {
+        model_file = it.value();
+      } else if (a == "--vehicle") {
+        vehicle_file = it.value();
+      } else if (a == "--candidates") {
+        opt.candidates = split_list(it.value());
+        if (opt.candidates.empty()) throw UsageError("--candidates: empty list");
+      } else if (a == "--folds") {
+        opt.folds = static_cast<std::size_t>(integer(a, it.value(), 4, 100));
+      } else if (a == "--partial-f") {
+        opt.partial_f = number(a, it.value());
+        if (!(opt.partial_f > 0.0)) throw UsageError("--partial-f must be > 0");
+      } else if (a == "--delay-max") {
+        opt.delay_max_s = number(a, it.value());
+        if (!(opt.delay_max_s > 0.0 && opt.delay_max_s <= 1.0)) throw UsageError("--delay-max must be in (0, 1] s");
+      } else if (a == "--json") {
+        json = it.value();
+      } else if (a == "--model-out") {
+        model_out = it.value();
+      } else if (!a.empty() && a[0] == '-') {
+        throw UsageError("unknown option '" + a + "'");
+      } else if (data_file.empty()) {
+        data_file = a;
+      } else {
+        throw UsageError("unexpected argument '" + a + "'");
+      }
+    }
+    if (data_file.empty()) throw UsageError("missing <data.csv|log.lcmlog>");
+    if (model_file.empty()) throw UsageError("missing --model <model.yaml>");
+  } catch (const UsageError& e) {
+    std::cerr << "rig discrepancy: " << e.what() << "\n" << kDiscrepancyUsage;
+    return kExitUsage;
+  }
+  const DerivativeModel model = load_model(model_file);
+  const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
+  const Vehicle vehicle = load_vehicle(vfile);
+  const ident::FlightData data = ident::read_flight_data(data_file);
+  const ident::DiscrepancyResult result = ident::find_discrepancy(data, model, vehicle, opt);
+  if (!model_out.empty()) {
+    ident::write_model_yaml(result.augmented_model, model_out,
+                            {"Refit by rig discrepancy from " + data_file + " on " + model_file + ".",
+                             "Verdict: " + result.verdict + ". " + result.summary,
+                             "published.sigma: coloured-residual standard deviations of this refit."});
+  }
+  if (json != "-") std::cout << ident::discrepancy_text(result);
+  if (!model_out.empty() && json != "-") std::cout << "\nmodel written to " << model_out << "\n";
+  if (!json.empty()) write_json(json, ident::discrepancy_json(result));
   return 0;
 }
 

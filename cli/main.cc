@@ -29,6 +29,8 @@ const Command kCommands[] = {
      nimble::cli::run_identify_command},
     {"validate", "validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
      nimble::cli::run_validate_command},
+    {"discrepancy", "discrepancy <data> --model <model.yaml> [--json F] [--model-out F] ...   name the effect the model misses",
+     nimble::cli::run_discrepancy_command},
     {"export", "export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]   a rig log as identification CSV",
      nimble::cli::run_export_command},
 };

@@ -1,5 +1,6 @@
 #include "core/model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
@@ -203,8 +204,31 @@ DerivativeModel model_from_config(ConfigMap& map) {
     }
     pub.finish();
   }
+  if (map.has("effects")) {
+    ConfigMap effects = map.get_map("effects");
+    const auto& known = model_effect_names();
+    for (const auto& name : effects.keys()) {
+      if (std::find(known.begin(), known.end(), name) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        effects.fail(name, "unknown effect (known: " + list + ")");
+      }
+      ConfigMap params = effects.get_map(name);
+      for (const auto& key : params.keys()) m.effects[name][key] = params.get_double(key);
+      params.finish();
+    }
+    effects.finish();
+  }
   map.finish();
   return m;
+}
+
+const std::vector<std::string>& model_effect_names() {
+  static const std::vector<std::string> names{
+      "kinematic_coupling", "gravity_nonlinearity", "lateral_inflow", "forward_speed_coupling",
+      "actuator_delay",     "sensor_bias",          "dihedral_coupling", "yaw_coupling",
+      "flapping_forcing",   "lateral_gust"};
+  return names;
 }
 
 DerivativeModel load_model(const std::string& file) {

@@ -73,10 +73,19 @@ struct DerivativeModel {
   std::vector<std::complex<double>> published_eigenvalues;
   /// Published parameter standard deviations (optional).
   std::map<std::string, double> published_sigma;
+  /// Effects beyond the linear derivatives that a discrepancy analysis named (optional
+  /// section `effects:` of a model file, written by rig discrepancy --model-out): effect name
+  /// (one of model_effect_names()) -> parameter name -> value, in SI units.
+  std::map<std::string, std::map<std::string, double>> effects;
 
   /// Value of a derivative; @throws std::out_of_range naming it if absent.
   double at(const std::string& name) const;
 };
+
+/// Names an `effects:` section of a model file may use: the candidate effects of the
+/// discrepancy workflow (ident/discrepancy.h), named as the plant's effects where the plant
+/// has them.
+const std::vector<std::string>& model_effect_names();
 
 /// Continuous-time linear state-space model xdot = A x + B u.
 struct StateSpace {

@@ -61,6 +61,14 @@ std::string format_model_yaml(const DerivativeModel& model, const std::string& v
   out << "derivatives:\n";
   for (const auto& n : names) out << "  " << n << ": " << num(model.at(n)) << "   # " << derivative_unit(n) << "\n";
 
+  if (!model.effects.empty()) {
+    out << "# effects beyond the linear derivatives (rig discrepancy), parameters in SI units\n";
+    out << "effects:\n";
+    for (const auto& [name, params] : model.effects) {
+      out << "  " << name << ":\n";
+      for (const auto& [key, value] : params) out << "    " << key << ": " << num(value) << "\n";
+    }
+  }
   if (!model.published_eigenvalues.empty() || !model.published_sigma.empty()) {
     out << "published:\n";
     if (!model.published_eigenvalues.empty()) {

@@ -1,0 +1,967 @@
+#include "ident/discrepancy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/chi_square.h"
+#include "ident/metrics.h"
+#include "ident/spectrum.h"
+
+namespace nimble::ident {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using Folds = std::vector<std::pair<Index, Index>>;
+
+// ---------------------------------------------------------------------------------------
+// The candidate library.
+
+const std::vector<CandidateSpec> kLibrary{
+    {"kinematic_coupling",
+     "p (w - w0): the vertical-velocity part of the kinematic term p w of v_dot that Eq 21 "
+     "linearises at w0 (coefficient the mass)",
+     {"w"},
+     {{"Y", "Y_pw", "p (w - w0)"}},
+     false},
+    {"gravity_nonlinearity",
+     "g (sin phi - phi) cos theta0: the part of the gravity component that Eq 21 linearises "
+     "(coefficient the mass)",
+     {},
+     {{"Y", "Y_gphi", "g (sin phi - phi) cos theta0"}},
+     false},
+    {"lateral_inflow",
+     "v|v| in side force and roll moment: lateral inflow on the leading-edge vortex in sideways "
+     "flight (plant effect lateral_inflow)",
+     {},
+     {{"L", "L_vv", "v|v|"}, {"Y", "Y_vv", "v|v|"}},
+     false},
+    {"forward_speed_coupling",
+     "(u - u0) p and (u - u0) v: the lateral stability derivatives change with forward speed "
+     "(plant effect forward_speed_coupling)",
+     {"u"},
+     {{"L", "L_up", "(u - u0) p"}, {"L", "L_uv", "(u - u0) v"}, {"Y", "Y_up", "(u - u0) p"},
+      {"Y", "Y_uv", "(u - u0) v"}},
+     false},
+    {"actuator_delay",
+     "delta_f(t - tau) - delta_f(t): the flap input acts tau later than recorded, tau scanned "
+     "over 1 sample .. delay_max_s (plant effect actuator_delay)",
+     {},
+     {{"L", "L_df_delayed", "delta_f(t - tau) - delta_f(t)"}, {"Y", "Y_df_delayed", "delta_f(t - tau) - delta_f(t)"}},
+     true},
+    {"sensor_bias",
+     "constant in both equations: a constant offset of a measured rate or velocity (or a "
+     "constant moment and force)",
+     {},
+     {{"L", "L_0", "1"}, {"Y", "Y_0", "1"}},
+     false},
+    {"dihedral_coupling",
+     "delta_d in roll moment and side force: the dihedral input the 3-state model leaves out",
+     {"delta_d"},
+     {{"L", "L_dd", "delta_d"}, {"Y", "Y_dd", "delta_d"}},
+     false},
+    {"yaw_coupling",
+     "r in roll moment and side force: the yaw rate the 3-state model leaves out",
+     {"r"},
+     {{"L", "Lr", "r"}, {"Y", "Yr", "r"}},
+     false},
+};
+
+/// A regressor column is excited when its standard deviation reaches this fraction of its
+/// root mean square plus an absolute floor: a column that is (nearly) constant cannot be
+/// told from the other regressors (except the intercept of sensor_bias, which is constant
+/// by design). The floors are 10 resolution steps of the rig's actuator interface for the
+/// inputs (delta_d: 1e-4 rad, plant.command_resolution) and 1e-9 otherwise.
+double excitation_floor(const std::string& channel) {
+  if (channel == "delta_d" || channel == "delta_w") return 1e-3;
+  if (channel == "delta_t") return 0.1;
+  if (channel == "delta_f") return 0.1;
+  return 1e-9;
+}
+
+// ---------------------------------------------------------------------------------------
+// Least squares from per-fold sufficient statistics.
+
+struct Eq {
+  std::string name;    // "L" or "Y"
+  std::string output;  // "p_dot", "v_dot_star"
+  std::string unit;
+  double scale = 1.0;
+  VectorXd y;          // scale * dependent
+  std::vector<std::string> names;
+  std::vector<VectorXd> cols;
+};
+
+/// A set of columns added to equation `eq`.
+struct Addition {
+  std::size_t eq = 0;
+  std::vector<std::string> names;
+  std::vector<VectorXd> cols;
+};
+
+MatrixXd design(const std::vector<VectorXd>& cols) {
+  MatrixXd X(cols.front().size(), static_cast<Index>(cols.size()));
+  for (std::size_t j = 0; j < cols.size(); ++j) X.col(static_cast<Index>(j)) = cols[j];
+  return X;
+}
+
+struct FoldStats {
+  std::vector<MatrixXd> G;  // C_k' C_k
+  std::vector<VectorXd> b;  // C_k' y_k
+  std::vector<double> s;    // y_k' y_k
+  MatrixXd Gt;
+  VectorXd bt;
+  double st = 0.0;
+};
+
+FoldStats fold_stats(const MatrixXd& C, const VectorXd& y, const Folds& folds) {
+  FoldStats f;
+  f.Gt = MatrixXd::Zero(C.cols(), C.cols());
+  f.bt = VectorXd::Zero(C.cols());
+  for (const auto& [a, e] : folds) {
+    const auto Ck = C.middleRows(a, e - a);
+    const auto yk = y.segment(a, e - a);
+    MatrixXd G = MatrixXd::Zero(C.cols(), C.cols());
+    G.selfadjointView<Eigen::Lower>().rankUpdate(Ck.transpose());
+    G = G.selfadjointView<Eigen::Lower>();
+    f.G.push_back(G);
+    f.b.push_back(Ck.transpose() * yk);
+    f.s.push_back(yk.squaredNorm());
+    f.Gt += f.G.back();
+    f.bt += f.b.back();
+    f.st += f.s.back();
+  }
+  return f;
+}
+
+/// Solves G theta = b with column scaling; false if G is (numerically) singular.
+bool solve(const MatrixXd& G, const VectorXd& b, VectorXd& theta) {
+  const VectorXd d = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const MatrixXd Gs = d.asDiagonal() * G * d.asDiagonal();
+  Eigen::LDLT<MatrixXd> ldlt(Gs);
+  if (ldlt.info() != Eigen::Success) return false;
+  const VectorXd D = ldlt.vectorD();
+  if (D.minCoeff() <= 1e-10 * D.maxCoeff()) return false;
+  theta = d.asDiagonal() * ldlt.solve(d.asDiagonal() * b);
+  return theta.allFinite();
+}
+
+/// RSS of the fit on all folds.
+double full_rss(const FoldStats& f) {
+  VectorXd theta;
+  if (!solve(f.Gt, f.bt, theta)) return std::numeric_limits<double>::quiet_NaN();
+  return f.st - theta.dot(f.bt);
+}
+
+/// Covariance of the OLS estimate allowing coloured residuals: batch means of the scores
+/// x_i e_i over blocks of `block` samples, Cov = G^-1 S G^-1 n / (n - q).
+MatrixXd coloured_covariance(const MatrixXd& C, const VectorXd& e, Index block) {
+  const Index n = C.rows(), q = C.cols();
+  MatrixXd S = MatrixXd::Zero(q, q);
+  for (Index a = 0; a < n; a += block) {
+    const Index len = std::min(block, n - a);
+    const VectorXd g = C.middleRows(a, len).transpose() * e.segment(a, len);
+    S += g * g.transpose();
+  }
+  const MatrixXd G = C.transpose() * C;
+  const VectorXd d = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const MatrixXd Ginv = d.asDiagonal() * (d.asDiagonal() * G * d.asDiagonal()).ldlt().solve(
+                                             MatrixXd::Identity(q, q)) * d.asDiagonal();
+  return Ginv * S * Ginv * (static_cast<double>(n) / static_cast<double>(std::max<Index>(1, n - q)));
+}
+
+/// Block length of the coloured covariance: twice the lag at which the residual's
+/// autocorrelation first falls below 0.1, at least `minimum`, and at most n / 30 so that
+/// there are at least 30 blocks.
+Index block_length(const VectorXd& e, Index minimum) {
+  const Index n = e.size();
+  const Index cap = std::max<Index>(1, n / 30);
+  const VectorXd d = e.array() - e.mean();
+  const double c0 = d.squaredNorm();
+  Index lag = 1;
+  if (c0 > 0.0) {
+    for (; lag < cap; ++lag) {
+      if (std::fabs(d.head(n - lag).dot(d.tail(n - lag)) / c0) < 0.1) break;
+    }
+  }
+  return std::clamp<Index>(std::max<Index>(2 * lag, minimum), 1, cap);
+}
+
+// ---------------------------------------------------------------------------------------
+// Building the equations and candidate columns.
+
+Folds make_folds(Index n, std::size_t k) {
+  Folds folds;
+  for (std::size_t i = 0; i < k; ++i) {
+    const Index a = static_cast<Index>(static_cast<double>(n) * static_cast<double>(i) / static_cast<double>(k));
+    const Index b = static_cast<Index>(static_cast<double>(n) * static_cast<double>(i + 1) / static_cast<double>(k));
+    folds.push_back({a, b});
+  }
+  return folds;
+}
+
+VectorXd delayed(const VectorXd& x, Index k) {
+  VectorXd out(x.size());
+  for (Index i = 0; i < x.size(); ++i) out[i] = x[std::max<Index>(0, i - k)];
+  return out;
+}
+
+bool excited(const VectorXd& x, const std::string& channel) {
+  const double mean = x.mean();
+  const double sd = std::sqrt((x.array() - mean).square().mean());
+  return sd >= excitation_floor(channel) && sd >= 1e-6 * std::sqrt(x.squaredNorm() / static_cast<double>(x.size()));
+}
+
+/// The columns of candidate `spec` on the prepared data (delay in samples for actuator_delay).
+std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
+                                        double g, Index delay_samples) {
+  const Index n = d.size();
+  VectorXd col;
+  std::vector<Addition> out;
+  auto add = [&](std::size_t eq, const std::string& name, VectorXd c) {
+    for (auto& a : out) {
+      if (a.eq == eq) {
+        a.names.push_back(name);
+        a.cols.push_back(std::move(c));
+        return;
+      }
+    }
+    out.push_back({eq, {name}, {std::move(c)}});
+  };
+  const std::size_t L = 0, Y = 1;
+  const auto& p = d.at("p");
+  const auto& v = d.at("v");
+  if (spec.name == "kinematic_coupling") {
+    add(Y, "Y_pw", p.cwiseProduct((d.at("w").array() - trim.w0_mps).matrix()));
+  } else if (spec.name == "gravity_nonlinearity") {
+    const auto& phi = d.at("phi");
+    add(Y, "Y_gphi", (g * std::cos(trim.theta0_rad) * (phi.array().sin() - phi.array())).matrix());
+  } else if (spec.name == "lateral_inflow") {
+    const VectorXd vv = v.cwiseProduct(v.cwiseAbs());
+    add(L, "L_vv", vv);
+    add(Y, "Y_vv", vv);
+  } else if (spec.name == "forward_speed_coupling") {
+    const VectorXd du = d.at("u").array() - trim.u0_mps;
+    add(L, "L_up", du.cwiseProduct(p));
+    add(L, "L_uv", du.cwiseProduct(v));
+    add(Y, "Y_up", du.cwiseProduct(p));
+    add(Y, "Y_uv", du.cwiseProduct(v));
+  } else if (spec.name == "actuator_delay") {
+    const auto& df = d.at("delta_f");
+    const VectorXd c = delayed(df, delay_samples) - df;
+    add(L, "L_df_delayed", c);
+    add(Y, "Y_df_delayed", c);
+  } else if (spec.name == "sensor_bias") {
+    add(L, "L_0", VectorXd::Ones(n));
+    add(Y, "Y_0", VectorXd::Ones(n));
+  } else if (spec.name == "dihedral_coupling") {
+    add(L, "L_dd", d.at("delta_d"));
+    add(Y, "Y_dd", d.at("delta_d"));
+  } else if (spec.name == "yaw_coupling") {
+    add(L, "Lr", d.at("r"));
+    add(Y, "Yr", d.at("r"));
+  } else {
+    throw std::logic_error("no columns for candidate " + spec.name);
+  }
+  return out;
+}
+
+/// The columns of `eq` with `adds` (for this equation) appended.
+MatrixXd augmented_design(const Eq& eq, const std::vector<Addition>& adds) {
+  std::vector<VectorXd> cols = eq.cols;
+  for (const auto& a : adds) {
+    for (const auto& c : a.cols) cols.push_back(c);
+  }
+  return design(cols);
+}
+
+// ---------------------------------------------------------------------------------------
+// The state of the stepwise search: the baseline equations plus what has entered.
+
+struct Model {
+  std::vector<Eq> eqs;
+  std::vector<std::vector<Addition>> added;  // per equation, the additions that entered
+  std::vector<std::string> effect_names;
+
+  MatrixXd X(std::size_t e) const { return augmented_design(eqs[e], added[e]); }
+  std::vector<std::string> names(std::size_t e) const {
+    std::vector<std::string> out = eqs[e].names;
+    for (const auto& a : added[e]) out.insert(out.end(), a.names.begin(), a.names.end());
+    return out;
+  }
+};
+
+struct Evaluation {
+  bool ok = true;
+  std::vector<double> rss_before, rss_after;                  // per equation
+  std::vector<double> heldout_before_total;                   // per equation
+  std::vector<std::vector<double>> heldout_before, heldout_after;  // [eq][fold]
+};
+
+/// Per-fold stats of every equation of the current model.
+std::vector<FoldStats> model_stats(const Model& m, const Folds& folds) {
+  std::vector<FoldStats> out;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) out.push_back(fold_stats(m.X(e), m.eqs[e].y, folds));
+  return out;
+}
+
+/// RSS of the fit on every fold but k (on those folds).
+double training_rss(const FoldStats& f, std::size_t k) {
+  VectorXd th;
+  if (!solve(f.Gt - f.G[k], f.bt - f.b[k], th)) return std::numeric_limits<double>::infinity();
+  return (f.st - f.s[k]) - th.dot(f.bt - f.b[k]);
+}
+
+/// Relative drop of the held-out squared error and its standard error (a Diebold-Mariano
+/// comparison of two predictors). Per sample, d_i = sum over equations of
+/// (before_i^2 - after_i^2) / sum_j before_j^2; drop = sum_i d_i. Its standard error comes
+/// from batch means of d over blocks longer than d's correlation time (block_length), so it
+/// holds for coloured residuals; an effect that lives in a few manoeuvres is judged on all the
+/// samples, not on the scatter of a few folds.
+void heldout_drop(const std::vector<VectorXd>& before, const std::vector<VectorXd>& after, Index min_block,
+                  double& drop, double& se) {
+  const Index n = before.front().size();
+  VectorXd d = VectorXd::Zero(n);
+  for (std::size_t e = 0; e < before.size(); ++e) {
+    const double total = before[e].squaredNorm();
+    if (!(total > 0.0)) continue;
+    d += ((before[e].array().square() - after[e].array().square()) / total).matrix();
+  }
+  drop = d.sum();
+  const double mean = drop / static_cast<double>(n);
+  const Index block = block_length(d, min_block);
+  double var = 0.0;
+  for (Index a = 0; a < n; a += block) {
+    const Index len = std::min(block, n - a);
+    const double dev = d.segment(a, len).sum() - mean * static_cast<double>(len);
+    var += dev * dev;
+  }
+  se = std::sqrt(var);
+}
+
+/// Correlation of two columns after projecting out the columns of X.
+double residual_correlation(const MatrixXd& X, const VectorXd& a, const VectorXd& b) {
+  const MatrixXd G = X.transpose() * X;
+  VectorXd ta, tb;
+  if (!solve(G, X.transpose() * a, ta) || !solve(G, X.transpose() * b, tb)) return 1.0;
+  const VectorXd ra = a - X * ta, rb = b - X * tb;
+  const double na = ra.norm(), nb = rb.norm();
+  if (!(na > 0.0) || !(nb > 0.0)) return 1.0;
+  return ra.dot(rb) / (na * nb);
+}
+
+std::string fmt(double x, int digits = 3) {
+  std::ostringstream o;
+  o.precision(digits);
+  o << x;
+  return o.str();
+}
+
+}  // namespace
+
+const std::vector<CandidateSpec>& candidate_library() { return kLibrary; }
+
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+struct Workflow {
+  const DiscrepancyOptions& opt;
+  const Vehicle& vehicle;
+  const DerivativeModel& model;
+  UniformData data;
+  Folds folds;
+  Index min_block = 1;
+  double p_critical = 0.0;
+
+  /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
+  /// the additions it would make.
+  CandidateTrial trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
+                       const std::vector<VectorXd>& base_cv, std::size_t round,
+                       std::vector<Addition>& best_adds) const {
+    CandidateTrial t;
+    t.name = spec.name;
+    t.round = round;
+    t.p_critical = p_critical;
+    for (const auto& need : spec.needs) {
+      if (!data.has(need)) {
+        t.available = false;
+        t.reason = "the data has no " + need;
+        return t;
+      }
+      if (!excited(data.at(need), need)) {
+        t.available = false;
+        t.reason = need + " is not excited (standard deviation below " + fmt(excitation_floor(need)) + ")";
+        return t;
+      }
+    }
+    const std::size_t neq = m.eqs.size();
+    const double g = vehicle.gravity_mps2;
+    std::vector<Index> delays{0};
+    if (spec.scanned) {
+      delays.clear();
+      const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
+      for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
+    }
+    t.scan_points = delays.size();
+
+    // Statistics of every scan point: per equation fold stats of [X, Z].
+    struct Point {
+      std::vector<Addition> adds;
+      std::vector<FoldStats> stats;  // per equation touched (index by equation)
+      std::vector<bool> touched;
+      double rss_rel = 0.0;          // sum over equations of RSS_after / RSS_before
+    };
+    std::vector<Point> points;
+    std::vector<double> rss_before(neq);
+    for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+    for (Index k : delays) {
+      Point pt;
+      pt.adds = candidate_columns(spec, data, model.trim, g, k);
+      pt.touched.assign(neq, false);
+      pt.stats.resize(neq);
+      bool ok = true;
+      for (const auto& a : pt.adds) {
+        for (const auto& c : a.cols) {
+          const bool constant = spec.name == "sensor_bias";
+          if (!constant && !excited(c, "")) ok = false;
+        }
+        std::vector<Addition> all = m.added[a.eq];
+        all.push_back(a);
+        pt.stats[a.eq] = fold_stats(augmented_design(m.eqs[a.eq], all), m.eqs[a.eq].y, folds);
+        pt.touched[a.eq] = true;
+      }
+      for (std::size_t e = 0; e < neq && ok; ++e) {
+        const double r = pt.touched[e] ? full_rss(pt.stats[e]) : rss_before[e];
+        if (!std::isfinite(r)) ok = false;
+        pt.rss_rel += r / rss_before[e];
+      }
+      if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
+      points.push_back(std::move(pt));
+    }
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      if (points[i].rss_rel < points[best].rss_rel) best = i;
+    }
+    if (!std::isfinite(points[best].rss_rel)) {
+      t.available = false;
+      t.reason = "its regressors are not excited or cannot be separated from the model's";
+      return t;
+    }
+    const Point& P = points[best];
+    if (spec.scanned) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+
+    // Significance: Wald with the coloured covariance, per equation.
+    double p_min = 1.0;
+    std::string p_eq;
+    for (const auto& a : P.adds) {
+      std::vector<Addition> all = m.added[a.eq];
+      all.push_back(a);
+      const MatrixXd C = augmented_design(m.eqs[a.eq], all);
+      VectorXd theta;
+      if (!solve(P.stats[a.eq].Gt, P.stats[a.eq].bt, theta)) continue;
+      const VectorXd resid = m.eqs[a.eq].y - C * theta;
+      const Index block = block_length(resid, min_block);
+      const MatrixXd cov = coloured_covariance(C, resid, block);
+      const Index kc = static_cast<Index>(a.cols.size());
+      const Index off = C.cols() - kc;
+      const VectorXd th = theta.tail(kc);
+      const MatrixXd S = cov.block(off, off, kc, kc);
+      const double wald = th.dot(S.ldlt().solve(th));
+      const double F = wald / static_cast<double>(kc);
+      const std::string& eqname = m.eqs[a.eq].name;
+      t.partial_f[eqname] = F;
+      for (Index j = 0; j < kc; ++j) {
+        t.parameters[a.names[static_cast<std::size_t>(j)]] = th[j];
+        t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, S(j, j)));
+      }
+      const double p = chi_square_survival(wald, static_cast<double>(kc));
+      if (p < p_min) {
+        p_min = p;
+        p_eq = eqname;
+      }
+      // PSE of this equation.
+      const double N = static_cast<double>(C.rows());
+      const VectorXd& y = m.eqs[a.eq].y;
+      const double s2max = (y.array() - y.mean()).square().mean();
+      const double rss_after = full_rss(P.stats[a.eq]);
+      t.pse_before[eqname] = rss_before[a.eq] / N + s2max * static_cast<double>(C.cols() - kc) / N;
+      t.pse_after[eqname] = rss_after / N + s2max * static_cast<double>(C.cols()) / N;
+    }
+    if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
+    t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+
+    // Held-out: K-fold; a scanned candidate picks its delay on the training folds. Every
+    // sample is predicted by a fit that did not see its block; the drop of the squared
+    // held-out error is judged against its own spread (next function).
+    const std::size_t K = folds.size();
+    std::vector<VectorXd> after = base_cv;
+    bool cv_ok = true;
+    for (std::size_t k = 0; k < K && cv_ok; ++k) {
+      std::size_t pick = best;
+      if (spec.scanned) {
+        double best_rel = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          if (!std::isfinite(points[i].rss_rel)) continue;
+          double rel = 0.0;
+          for (std::size_t e = 0; e < neq && std::isfinite(rel); ++e) {
+            if (!points[i].touched[e]) {
+              rel += 1.0;
+              continue;
+            }
+            rel += training_rss(points[i].stats[e], k) / training_rss(base[e], k);
+          }
+          if (rel < best_rel) {
+            best_rel = rel;
+            pick = i;
+          }
+        }
+      }
+      const auto [a, b] = folds[k];
+      for (const auto& add : points[pick].adds) {
+        std::vector<Addition> all = m.added[add.eq];
+        all.push_back(add);
+        const MatrixXd C = augmented_design(m.eqs[add.eq], all);
+        const FoldStats& fs = points[pick].stats[add.eq];
+        VectorXd th;
+        if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) {
+          cv_ok = false;
+          break;
+        }
+        after[add.eq].segment(a, b - a) = m.eqs[add.eq].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+      }
+    }
+    if (!cv_ok) {
+      t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
+      return t;
+    }
+    heldout_drop(base_cv, after, min_block, t.heldout_drop, t.heldout_se);
+
+    const bool significant = t.p_value <= p_critical;
+    const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
+    const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
+    t.passed = significant && pse_falls && heldout;
+    std::ostringstream why;
+    if (t.passed) {
+      why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq])
+          << " in " << p_eq << "), PSE falls, held-out error falls " << fmt(100.0 * t.heldout_drop) << " % (+- "
+          << fmt(100.0 * t.heldout_se) << ")";
+    } else {
+      why << "fails:";
+      if (!significant) {
+        why << " not significant (p " << fmt(t.p_value) << " > " << fmt(p_critical);
+        if (!p_eq.empty()) why << ", F " << fmt(t.partial_f[p_eq]) << " in " << p_eq;
+        why << ")";
+      }
+      if (!pse_falls) why << " PSE does not fall;";
+      if (!heldout) {
+        why << " held-out error change " << fmt(-100.0 * t.heldout_drop) << " % is not a drop beyond "
+            << fmt(opt.heldout_sigmas) << " standard errors (" << fmt(100.0 * t.heldout_se) << " %)";
+      }
+    }
+    t.reason = why.str();
+    if (t.passed) best_adds = P.adds;
+    return t;
+  }
+};
+
+/// Held-out residual of each equation (every fold predicted by the fit on the others).
+std::vector<VectorXd> heldout_residuals(const Model& m, const Folds& folds) {
+  std::vector<VectorXd> out;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    const MatrixXd C = m.X(e);
+    const FoldStats fs = fold_stats(C, m.eqs[e].y, folds);
+    VectorXd r(C.rows());
+    for (std::size_t k = 0; k < folds.size(); ++k) {
+      VectorXd th;
+      const auto [a, b] = folds[k];
+      if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) th = VectorXd::Zero(C.cols());
+      r.segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+/// Full-data fit of the model: parameters with coloured sigma, and residuals.
+std::map<std::string, ParameterEstimate> full_fit(const Model& m, Index min_block, std::vector<VectorXd>* residuals) {
+  std::map<std::string, ParameterEstimate> out;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    const MatrixXd C = m.X(e);
+    VectorXd th;
+    if (!solve(C.transpose() * C, C.transpose() * m.eqs[e].y, th)) {
+      throw std::invalid_argument("equation " + m.eqs[e].name + ": the regressors cannot be separated");
+    }
+    const VectorXd r = m.eqs[e].y - C * th;
+    const MatrixXd cov = coloured_covariance(C, r, block_length(r, min_block));
+    const double s2 = r.squaredNorm() / static_cast<double>(std::max<Index>(1, C.rows() - C.cols()));
+    const MatrixXd white = s2 * (C.transpose() * C).inverse();
+    const auto names = m.names(e);
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      const Index i = static_cast<Index>(j);
+      out[names[j]] = {th[i], std::sqrt(std::max(0.0, white(i, i))), std::sqrt(std::max(0.0, cov(i, i)))};
+    }
+    if (residuals) residuals->push_back(r);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Location.
+
+/// Periodogram peaks of `r` against the median of their neighbourhood (+-20 bins, the
+/// centre +-2 bins left out). For a Gaussian process a periodogram ordinate over its
+/// spectrum is Exp(1) (chi2_2 / 2) and the local median estimates ln 2 times the
+/// spectrum, so P(ratio > x) = exp(-x); the p-value is multiplied by the number of bins
+/// scanned (Bonferroni).
+void frequency_peaks(const std::string& output, const VectorXd& r, double rate, double f_lo, double f_hi,
+                     double alpha, std::vector<FrequencyFinding>& out) {
+  const Psd P = periodogram(r, rate);
+  const Index nb = P.psd.size();
+  const Index half = 20, gap = 2;
+  std::vector<Index> bins;
+  for (Index k = half; k + half < nb; ++k) {
+    if (P.f_hz[k] >= f_lo && P.f_hz[k] <= f_hi) bins.push_back(k);
+  }
+  if (bins.empty()) return;
+  const double M = static_cast<double>(bins.size());
+  std::vector<double> nbh;
+  FrequencyFinding best;
+  bool found = false;
+  for (Index k : bins) {
+    nbh.clear();
+    for (Index j = k - half; j <= k + half; ++j) {
+      if (std::abs(j - k) > gap) nbh.push_back(P.psd[j]);
+    }
+    std::nth_element(nbh.begin(), nbh.begin() + static_cast<long>(nbh.size() / 2), nbh.end());
+    const double background = nbh[nbh.size() / 2] / std::log(2.0);
+    if (!(background > 0.0)) continue;
+    const double ratio = P.psd[k] / background;
+    const double p = std::min(1.0, std::exp(-ratio) * M);
+    if (p <= alpha && (!found || ratio > best.ratio)) {
+      best = {output, P.f_hz[k], ratio, p};
+      found = true;
+    }
+  }
+  if (found) out.push_back(best);
+}
+
+/// Residual against a nonlinear function of each state and input (x^2 and x^3, which the
+/// linear model cannot produce), with the model's regressors: Wald test with the coloured
+/// covariance, significant at alpha / (number of signals tested), per equation.
+void state_findings(const Model& m, std::size_t e, const UniformData& d, Index min_block, double alpha,
+                    std::vector<StateFinding>& out) {
+  std::vector<std::string> signals;
+  for (const char* s : {"p", "v", "phi", "delta_f", "u", "w", "r", "delta_t"}) {
+    if (d.has(s) && excited(d.at(s), s)) signals.push_back(s);
+  }
+  const double M = static_cast<double>(signals.size());
+  const MatrixXd X = m.X(e);
+  VectorXd th0;
+  if (!solve(X.transpose() * X, X.transpose() * m.eqs[e].y, th0)) return;
+  const double rss0 = (m.eqs[e].y - X * th0).squaredNorm();
+  for (const auto& s : signals) {
+    const VectorXd& x = d.at(s);
+    const double sd = std::sqrt((x.array() - x.mean()).square().mean());
+    const VectorXd z = (x.array() - x.mean()) / sd;
+    MatrixXd C(X.rows(), X.cols() + 2);
+    C << X, z.array().square().matrix(), z.array().cube().matrix();
+    VectorXd th;
+    if (!solve(C.transpose() * C, C.transpose() * m.eqs[e].y, th)) continue;
+    const VectorXd r = m.eqs[e].y - C * th;
+    const MatrixXd cov = coloured_covariance(C, r, block_length(r, min_block));
+    const VectorXd t2 = th.tail(2);
+    const double wald = t2.dot(cov.bottomRightCorner(2, 2).ldlt().solve(t2));
+    const double p = std::min(1.0, chi_square_survival(wald, 2.0) * M);
+    if (p <= alpha) {
+      StateFinding f;
+      f.output = m.eqs[e].output;
+      f.signal = s;
+      f.partial_r = std::sqrt(std::max(0.0, 1.0 - r.squaredNorm() / rss0));
+      f.p_value = p;
+      out.push_back(f);
+    }
+  }
+}
+
+void time_findings(const std::string& output, const VectorXd& r, const UniformData& d, const Segments& seg,
+                   double window_s, std::vector<TimeFinding>& out) {
+  const double total = r.squaredNorm();
+  const Index n = r.size();
+  if (!(total > 0.0) || n == 0) return;
+  auto share = [&](Index a, Index b) { return r.segment(a, b - a).squaredNorm() / total; };
+  for (const auto& [what, list] : {std::pair<std::string, const std::vector<TimeRange>*>{"manoeuvre", &seg.manoeuvre},
+                                   {"hover", &seg.hover}}) {
+    for (const auto& [a, b] : sample_ranges(d, *list)) {
+      out.push_back({output, what, d.t_s[a], d.t_s[b - 1], share(a, b),
+                     static_cast<double>(b - a) / static_cast<double>(n)});
+    }
+  }
+  // The three 1 s windows with the most residual energy.
+  const Index w = std::max<Index>(1, static_cast<Index>(std::lround(window_s * d.rate_hz)));
+  std::vector<std::pair<double, Index>> windows;
+  for (Index a = 0; a + w <= n; a += w) windows.push_back({share(a, a + w), a});
+  std::sort(windows.begin(), windows.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  for (std::size_t i = 0; i < std::min<std::size_t>(3, windows.size()); ++i) {
+    const Index a = windows[i].second;
+    out.push_back({output, "window", d.t_s[a], d.t_s[a + w - 1], windows[i].first,
+                   static_cast<double>(w) / static_cast<double>(n)});
+  }
+}
+
+}  // namespace
+
+DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
+                                   const DiscrepancyOptions& options) {
+  if (model.structure != Structure::kLateral3) {
+    throw std::invalid_argument("rig discrepancy works on lateral3 models; '" + model.name + "' is " +
+                                to_string(model.structure));
+  }
+  if (options.folds < 4) throw std::invalid_argument("discrepancy: folds must be >= 4");
+  if (!(options.partial_f > 0.0)) throw std::invalid_argument("discrepancy: partial F must be > 0");
+  if (!(options.delay_max_s > 0.0)) throw std::invalid_argument("discrepancy: delay_max_s must be > 0");
+  for (const auto& name : options.candidates) {
+    const auto it = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    if (it == kLibrary.end()) {
+      std::string list;
+      for (const auto& c : kLibrary) list += (list.empty() ? "" : ", ") + c.name;
+      throw std::invalid_argument("unknown candidate '" + name + "' (known: " + list + ")");
+    }
+  }
+
+  DiscrepancyResult res;
+  res.source = data.source;
+  res.model_name = model.name;
+  const std::vector<std::string> inputs = options.inputs.empty() ? model.inputs : options.inputs;
+  for (const auto& in : inputs) {
+    if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
+  }
+  const PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
+  const UniformData& d = prep.filtered;
+  const Index n = d.size();
+  if (n < static_cast<Index>(50 * options.folds)) {
+    throw DataError(data.source, -1, -1, "", std::to_string(n) + " samples are too few for " +
+                                                 std::to_string(options.folds) + "-fold cross-validation");
+  }
+  res.rate_hz = d.rate_hz;
+  res.samples = static_cast<std::size_t>(n);
+  res.folds = options.folds;
+
+  // Baseline equations (the model's structure), and the model as given.
+  Model m;
+  const auto equations = lateral_equations(Structure::kLateral3, inputs, vehicle);
+  for (const auto& eq : equations) {
+    Eq e;
+    e.name = eq.name;
+    e.output = eq.dependent;
+    e.unit = eq.dependent == "v_dot_star" ? "m/s^2" : "rad/s^2";
+    e.scale = eq.scale;
+    e.y = eq.scale * d.at(eq.dependent);
+    for (std::size_t j = 0; j < eq.regressors.size(); ++j) {
+      e.names.push_back(eq.parameters[j]);
+      e.cols.push_back(d.at(eq.regressors[j]));
+    }
+    m.eqs.push_back(std::move(e));
+  }
+  m.added.resize(m.eqs.size());
+
+  Workflow wf{options, vehicle, model, d, make_folds(n, options.folds), 1, 0.0};
+  wf.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
+  wf.p_critical = chi_square_survival(options.partial_f, 1.0);
+
+  std::vector<const CandidateSpec*> pool;
+  for (const auto& c : kLibrary) {
+    if (options.candidates.empty() ||
+        std::find(options.candidates.begin(), options.candidates.end(), c.name) != options.candidates.end()) {
+      pool.push_back(&c);
+    }
+  }
+
+  // Baseline fit and its held-out residuals.
+  std::vector<VectorXd> base_resid;
+  res.baseline = full_fit(m, wf.min_block, &base_resid);
+  const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
+
+  // Stepwise search.
+  std::vector<std::string> entered;
+  for (std::size_t round = 1; round <= options.max_effects; ++round) {
+    const std::vector<FoldStats> base = model_stats(m, wf.folds);
+    const std::vector<VectorXd> base_cv = heldout_residuals(m, wf.folds);
+    struct Pass {
+      std::size_t trial;
+      std::vector<Addition> adds;
+    };
+    std::vector<Pass> passing;
+    for (const CandidateSpec* spec : pool) {
+      if (std::find(entered.begin(), entered.end(), spec->name) != entered.end()) continue;
+      std::vector<Addition> adds;
+      res.candidates.push_back(wf.trial(*spec, m, base, base_cv, round, adds));
+      if (res.candidates.back().passed) passing.push_back({res.candidates.size() - 1, std::move(adds)});
+    }
+    if (passing.empty()) break;
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < passing.size(); ++i) {
+      if (res.candidates[passing[i].trial].heldout_drop > res.candidates[passing[best].trial].heldout_drop) best = i;
+    }
+    // Another passing candidate that explains the same thing: ambiguous.
+    for (std::size_t i = 0; i < passing.size(); ++i) {
+      if (i == best) continue;
+      double rho_max = 0.0;
+      for (const auto& a : passing[best].adds) {
+        for (const auto& b : passing[i].adds) {
+          if (a.eq != b.eq) continue;
+          const MatrixXd X = m.X(a.eq);
+          for (const auto& ca : a.cols) {
+            for (const auto& cb : b.cols) rho_max = std::max(rho_max, std::fabs(residual_correlation(X, ca, cb)));
+          }
+        }
+      }
+      if (rho_max > options.collinearity) {
+        res.ambiguous.push_back({res.candidates[passing[best].trial].name, res.candidates[passing[i].trial].name});
+        res.candidates[passing[i].trial].reason +=
+            "; explains the same as " + res.candidates[passing[best].trial].name + " (|rho| " + fmt(rho_max) + ")";
+      }
+    }
+    CandidateTrial& win = res.candidates[passing[best].trial];
+    win.entered = true;
+    win.reason = "entered: " + win.reason;
+    entered.push_back(win.name);
+    for (auto& a : passing[best].adds) m.added[a.eq].push_back(std::move(a));
+    m.effect_names.push_back(win.name);
+    // Candidates that passed with this one but explain the same thing are not tried again.
+    for (const auto& pair : res.ambiguous) {
+      if (pair[0] == win.name) entered.push_back(pair[1]);
+    }
+  }
+
+  // The augmented fit and the gap after.
+  std::vector<VectorXd> aug_resid;
+  res.augmented = full_fit(m, wf.min_block, &aug_resid);
+  const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
+  for (const auto& name : m.effect_names) {
+    NamedEffect eff;
+    eff.name = name;
+    const CandidateSpec& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    for (const auto& term : spec.terms) {
+      const auto it = res.augmented.find(term.parameter);
+      if (it == res.augmented.end()) continue;
+      eff.parameters[term.parameter] = it->second.value;
+      eff.sigma[term.parameter] = it->second.sigma_coloured;
+    }
+    for (const auto& t : res.candidates) {
+      if (t.name == name && t.entered && spec.scanned) eff.parameters["delay_s"] = t.delay_s;
+    }
+    res.effects.push_back(std::move(eff));
+  }
+
+  // Location, on the baseline structure's residual.
+  const Segments seg = find_segments(d, options.segments);
+  const double f_hi = options.processing.filter_order > 0 ? 0.8 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    const VectorXd r = base_resid[e] / m.eqs[e].scale;
+    time_findings(m.eqs[e].output, r, d, seg, options.window_s, res.located.time);
+    frequency_peaks(m.eqs[e].output, r, d.rate_hz, 0.5, f_hi, options.location_alpha / 2.0, res.located.frequency);
+  }
+  {
+    Model base_model = m;
+    for (auto& a : base_model.added) a.clear();
+    for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+      state_findings(base_model, e, d, wf.min_block, options.location_alpha / 2.0, res.located.state);
+    }
+  }
+
+  // Gap table.
+  const std::size_t lag_step = whiteness_lag_step(0, options.processing);
+  double gb = 0.0, ga = 0.0;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    const Eq& eq = m.eqs[e];
+    OutputGap g;
+    g.output = eq.output;
+    g.unit = eq.unit;
+    VectorXd model_fit = VectorXd::Zero(n);
+    for (std::size_t j = 0; j < eq.names.size(); ++j) {
+      const auto it = model.derivatives.find(eq.names[j]);
+      if (it != model.derivatives.end()) model_fit += it->second * eq.cols[j];
+    }
+    const VectorXd y = eq.y / eq.scale;
+    const double sst = (y.array() - y.mean()).square().sum();
+    const VectorXd rb = cv_before[e] / eq.scale, ra = cv_after[e] / eq.scale;
+    g.rmse_model = std::sqrt((eq.y - model_fit).squaredNorm() / static_cast<double>(n)) / eq.scale;
+    g.rmse_before = std::sqrt(rb.squaredNorm() / static_cast<double>(n));
+    g.rmse_after = std::sqrt(ra.squaredNorm() / static_cast<double>(n));
+    g.fit_before_pct = 100.0 * (1.0 - rb.norm() / std::sqrt(sst));
+    g.fit_after_pct = 100.0 * (1.0 - ra.norm() / std::sqrt(sst));
+    g.white_before = residual_whiteness(rb, d.rate_hz, options.whiteness_lags, lag_step).white;
+    g.white_after = residual_whiteness(ra, d.rate_hz, options.whiteness_lags, lag_step).white;
+    for (const auto& f : res.located.frequency) {
+      if (f.output != eq.output) continue;
+      const Psd pb = periodogram(rb, d.rate_hz), pa = periodogram(ra, d.rate_hz);
+      const Index k = static_cast<Index>(std::lround(f.f_hz / pb.df_hz));
+      g.peak_psd_before = pb.psd[k];
+      g.peak_psd_after = pa.psd[k];
+    }
+    gb += rb.squaredNorm() / sst;
+    ga += ra.squaredNorm() / sst;
+    res.gap.push_back(g);
+  }
+  res.gap_before = gb / static_cast<double>(m.eqs.size());
+  res.gap_after = ga / static_cast<double>(m.eqs.size());
+  res.gap_metric =
+      "mean over the L and Y equations of the held-out squared equation error divided by the sum of squares of the "
+      "dependent about its mean (1 - R^2 on data the fit did not see, " + std::to_string(options.folds) +
+      "-fold cross-validation over contiguous blocks)";
+
+  // Verdict.
+  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty();
+  if (!res.ambiguous.empty()) {
+    res.verdict = "ambiguous";
+  } else if (!res.effects.empty()) {
+    res.verdict = "effects";
+  } else if (structure_found) {
+    res.verdict = "unexplained";
+  } else {
+    res.verdict = "none";
+  }
+  std::ostringstream s;
+  if (res.verdict == "effects" || res.verdict == "ambiguous") {
+    s << "named:";
+    for (const auto& e : res.effects) s << " " << e.name;
+    for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
+    s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after);
+  } else if (res.verdict == "unexplained") {
+    s << "no candidate passes, but the residual has structure:";
+    for (const auto& f : res.located.frequency) s << " " << f.output << " peak at " << fmt(f.f_hz) << " Hz;";
+    for (const auto& f : res.located.state) s << " " << f.output << " depends nonlinearly on " << f.signal << ";";
+  } else {
+    s << "nothing significant: no candidate passes and the residual shows no structure";
+  }
+  res.summary = s.str();
+
+  // The augmented model.
+  DerivativeModel& am = res.augmented_model;
+  am = model;
+  am.name = model.name + "_augmented";
+  am.source = "rig discrepancy " + data.source + " on " + model.name;
+  am.inputs = inputs;
+  am.derivatives.clear();
+  am.published_sigma.clear();
+  am.published_eigenvalues.clear();
+  std::vector<std::string> names = stability_derivative_names(Structure::kLateral3);
+  for (const auto& in : inputs) {
+    for (const auto& nm : control_derivative_names(Structure::kLateral3, in)) names.push_back(nm);
+  }
+  for (const auto& nm : names) {
+    am.derivatives[nm] = res.augmented.at(nm).value;
+    am.published_sigma[nm] = res.augmented.at(nm).sigma_coloured;
+  }
+  am.effects.clear();
+  for (const auto& e : res.effects) am.effects[e.name] = e.parameters;
+  return res;
+}
+
+}  // namespace nimble::ident

@@ -1,0 +1,206 @@
+#pragma once
+/// The discrepancy workflow: given measured flight data and a lateral model, find where
+/// they disagree, name the physical effect the model is missing, add it, and show the gap
+/// shrink on data the fit did not see (rig discrepancy, ident/README.md "Discrepancy").
+///
+/// 1. Gap. The model's regression equations (thesis Eq 21, as rig identify):
+///        L:  Ic/Izz p_dot  = Lp p + Lv v + sum_u L_u u
+///        Y:  m v_dot_star  = Yp p + Yv v + sum_u Y_u u
+///    with the model's own derivatives (the model as given) and with its derivatives refit
+///    (the baseline structure), on the measured states and inputs, low-passed as for
+///    identification. Per output: RMSE, fit % (100 (1 - |e| / |y - mean y|)) and residual
+///    whiteness, every figure on held-out data (below).
+/// 2. Locate. Where the residual of the baseline structure lives: in time (residual energy
+///    of each manoeuvre / hover segment and of 1 s windows against their share of the
+///    record), in frequency (periodogram peaks against the local median of their
+///    neighbourhood, so valid on a coloured background, Bonferroni-corrected over the
+///    frequencies scanned), and against the states and inputs (the residual regressed on
+///    x^2 and x^3 of every state and input, which no linear model produces; Wald test
+///    with the coloured covariance, Bonferroni-corrected over the signals).
+/// 3. Name. A library of physically named candidate effects, each a set of regressor
+///    columns in the L and Y equations (candidate_library()). Stepwise: in each round every
+///    candidate not yet in the model is tried on the current model; it passes only if all of
+///      - significance: its Wald statistic with a covariance that allows coloured
+///        residuals (batch means over blocks longer than the residual's correlation time)
+///        reaches the partial-F rule F >= 20 (SIDPAC). The rule is applied as its
+///        chi-square tail probability, P(chi2_1 >= 20) = 7.7e-6, so that it holds alike for
+///        a group of k parameters, for the two equations (Bonferroni) and for a candidate
+///        scanned over M delays (Bonferroni over the M scan points);
+///      - the predicted squared error PSE = RSS / N + sigma_max^2 P / N falls in an
+///        equation where it is significant (sigma_max^2 the variance of the dependent);
+///      - held-out: in K-fold cross-validation over contiguous blocks (the fit never sees
+///        the block it predicts; a scanned candidate chooses its delay on the training
+///        blocks only), the relative drop of the held-out squared error is larger than
+///        twice its standard error over the folds.
+///    The passing candidate with the largest held-out drop enters; the search repeats on
+///    the new residual. Two passing candidates whose regressors, with the model's
+///    regressors projected out, correlate by more than 0.9 explain the same thing: the
+///    verdict is `ambiguous` and names both.
+/// 4. Add. The baseline derivatives are refit together with the named effects.
+/// 5. Gap after: the held-out table again, with the effects.
+///
+/// Verdicts: `effects` (one or more named), `ambiguous`, `unexplained` (nothing passed, but
+/// a location test found structure: a frequency peak, or a residual-input or residual-state
+/// correlation), `none`.
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/flight_data.h"
+#include "ident/identify.h"
+#include "ident/signal.h"
+
+namespace nimble::ident {
+
+/// One regressor column of a candidate effect in one equation.
+struct CandidateTerm {
+  std::string equation;   ///< "L" or "Y"
+  std::string parameter;  ///< e.g. "Y_vv"
+  std::string regressor;  ///< documented form, e.g. "v|v|"
+};
+
+/// A physically named candidate effect of the library.
+struct CandidateSpec {
+  std::string name;         ///< the plant's effect name where the plant has it, e.g. "lateral_inflow"
+  std::string effect;       ///< the physics, one line
+  std::vector<std::string> needs;  ///< data channels it needs besides p, v, phi, delta_f
+  std::vector<CandidateTerm> terms;
+  bool scanned = false;     ///< has a scanned parameter (the delay of actuator_delay)
+};
+
+/// Every candidate effect, in a fixed order.
+const std::vector<CandidateSpec>& candidate_library();
+
+/// Options of the workflow. Every threshold is documented where it is defined.
+struct DiscrepancyOptions {
+  ProcessingOptions processing;  ///< resampling and low-pass (defaults as rig identify: 512 Hz, 9 Hz)
+  /// Candidates to try (names of candidate_library()); empty: every candidate the data supports.
+  std::vector<std::string> candidates;
+  /// Inputs of the baseline equations; empty: the model's inputs.
+  std::vector<std::string> inputs;
+  std::size_t folds = 10;             ///< K of the held-out cross-validation, >= 4
+  double partial_f = 20.0;            ///< the partial-F rule (SIDPAC), applied as its chi2_1 tail
+  double heldout_sigmas = 2.0;        ///< held-out drop must exceed this many standard errors
+  double collinearity = 0.9;          ///< |rho| above which two passing candidates are ambiguous
+  std::size_t max_effects = 4;        ///< rounds of the stepwise search
+  double delay_max_s = 0.060;         ///< actuator_delay scan: 1 sample .. this delay
+  double location_alpha = 0.01;       ///< family-wise level of each location test
+  double window_s = 1.0;              ///< time location windows [s]
+  std::size_t whiteness_lags = 50;
+  SegmentOptions segments;            ///< manoeuvre / hover segments of the time location
+};
+
+/// Statistics of one candidate tried in one round.
+struct CandidateTrial {
+  std::string name;
+  std::size_t round = 0;
+  bool available = true;        ///< false: the data lacks a channel it needs, or a regressor is not excited
+  bool passed = false;          ///< met every criterion in this round
+  bool entered = false;         ///< entered the model in this round
+  std::string reason;           ///< why it entered or not
+  std::map<std::string, double> partial_f;  ///< per equation: Wald / k (coloured covariance)
+  double p_value = 1.0;         ///< adjusted tail probability (equations and scan), compared with p_critical
+  double p_critical = 0.0;      ///< P(chi2_1 >= partial_f option)
+  std::size_t scan_points = 1;
+  double delay_s = 0.0;         ///< chosen delay (actuator_delay)
+  std::map<std::string, double> pse_before, pse_after;  ///< per equation
+  double heldout_drop = 0.0;    ///< mean over folds of the relative drop of the held-out squared error
+  double heldout_se = 0.0;      ///< its standard error over the folds
+  std::map<std::string, double> parameters, sigma;  ///< the candidate's parameters (coloured sigma)
+};
+
+/// A named effect with its parameters.
+struct NamedEffect {
+  std::string name;
+  std::map<std::string, double> parameters;  ///< regression parameters, plus delay_s when scanned
+  std::map<std::string, double> sigma;       ///< coloured-residual standard deviations
+};
+
+/// Held-out fit of one equation output.
+struct OutputGap {
+  std::string output;  ///< "p_dot" or "v_dot_star"
+  std::string unit;
+  double rmse_model = 0.0;   ///< the model as given (its own derivatives), whole record
+  double rmse_before = 0.0;  ///< baseline structure refit, held-out
+  double rmse_after = 0.0;   ///< with the named effects, held-out
+  double fit_before_pct = 0.0, fit_after_pct = 0.0;
+  bool white_before = false, white_after = false;
+  double peak_psd_before = 0.0, peak_psd_after = 0.0;  ///< residual PSD at the located frequency (if any)
+};
+
+/// A frequency where a residual has a significant peak.
+struct FrequencyFinding {
+  std::string output;
+  double f_hz = 0.0;
+  double ratio = 0.0;      ///< periodogram / local background
+  double p_value = 1.0;    ///< Bonferroni-corrected over the bins scanned
+};
+
+/// A state or input whose nonlinear function (x^2, x^3 of its standardised value) the
+/// residual depends on, with the model's regressors in the fit.
+struct StateFinding {
+  std::string output;
+  std::string signal;
+  double partial_r = 0.0;  ///< sqrt of the share of the residual sum of squares it explains
+  double p_value = 1.0;    ///< Wald test, coloured covariance, Bonferroni over the signals tested
+};
+
+/// A time segment and its share of the residual energy.
+struct TimeFinding {
+  std::string output;
+  std::string what;        ///< "manoeuvre", "hover" or "window"
+  double start_s = 0.0, end_s = 0.0;
+  double energy_share = 0.0;  ///< of the residual sum of squares
+  double time_share = 0.0;    ///< of the record
+};
+
+struct Located {
+  std::vector<TimeFinding> time;
+  std::vector<FrequencyFinding> frequency;
+  std::vector<StateFinding> state;
+};
+
+/// Everything rig discrepancy reports.
+struct DiscrepancyResult {
+  std::string source;
+  std::string model_name;
+  std::string verdict;  ///< "effects", "none", "ambiguous" or "unexplained"
+  std::string summary;  ///< one sentence saying what was found and where
+  std::vector<NamedEffect> effects;
+  std::vector<std::vector<std::string>> ambiguous;  ///< pairs of candidates that explain the same thing
+  std::vector<CandidateTrial> candidates;           ///< every candidate tried, every round
+  Located located;
+  std::vector<OutputGap> gap;
+  /// The documented scalar of the gap: mean over the equations of the held-out squared
+  /// error divided by the variance of the dependent (1 - R^2 on unseen data).
+  double gap_before = 0.0, gap_after = 0.0;
+  std::string gap_metric;
+  std::size_t folds = 0;
+  double rate_hz = 0.0;
+  std::size_t samples = 0;
+  /// Baseline refit and the refit with the named effects (all data), by parameter name.
+  std::map<std::string, ParameterEstimate> baseline, augmented;
+  /// The model with the refit derivatives and the named effects (DerivativeModel::effects).
+  DerivativeModel augmented_model;
+};
+
+/// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally
+/// delta_t, delta_d).
+/// @throws DataError if the data lacks p, v, phi or an input of the model; std::invalid_argument
+///         for an unknown candidate name, a non-lateral3 model or invalid options.
+DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
+                                   const DiscrepancyOptions& options);
+
+/// JSON report (keys verdict, effects, candidates, located, gap; see rig discrepancy --help).
+std::string discrepancy_json(const DiscrepancyResult& result);
+
+/// Plain-text report for the terminal.
+std::string discrepancy_text(const DiscrepancyResult& result);
+
+}  // namespace nimble::ident

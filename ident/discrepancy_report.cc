@@ -1,0 +1,210 @@
+/// JSON and text reports of the discrepancy workflow (ident/discrepancy.h).
+
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "core/json_writer.h"
+#include "ident/discrepancy.h"
+
+namespace nimble::ident {
+namespace {
+
+void number_map(JsonWriter& j, const std::map<std::string, double>& m) {
+  j.begin_object();
+  for (const auto& [k, v] : m) j.key(k).value(v);
+  j.end_object();
+}
+
+std::string g(double x, const char* f = "%.4g") {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+}  // namespace
+
+std::string discrepancy_json(const DiscrepancyResult& r) {
+  JsonWriter j;
+  j.begin_object();
+  j.key("source").value(r.source);
+  j.key("model").value(r.model_name);
+  j.key("verdict").value(r.verdict);
+  j.key("summary").value(r.summary);
+  j.key("samples").value(static_cast<long long>(r.samples));
+  j.key("rate_hz").value(r.rate_hz);
+  j.key("effects").begin_array();
+  for (const auto& e : r.effects) {
+    j.begin_object();
+    j.key("name").value(e.name);
+    j.key("parameters");
+    number_map(j, e.parameters);
+    j.key("sigma");
+    number_map(j, e.sigma);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("ambiguous").begin_array();
+  for (const auto& pair : r.ambiguous) j.array(pair);
+  j.end_array();
+  j.key("candidates").begin_array();
+  for (const auto& t : r.candidates) {
+    j.begin_object();
+    j.key("name").value(t.name);
+    j.key("round").value(static_cast<long long>(t.round));
+    j.key("available").value(t.available);
+    j.key("passed").value(t.passed);
+    j.key("entered").value(t.entered);
+    j.key("reason").value(t.reason);
+    if (t.available) {
+      j.key("partial_f");
+      number_map(j, t.partial_f);
+      j.key("p_value").value(t.p_value);
+      j.key("p_critical").value(t.p_critical);
+      j.key("scan_points").value(static_cast<long long>(t.scan_points));
+      j.key("pse_before");
+      number_map(j, t.pse_before);
+      j.key("pse_after");
+      number_map(j, t.pse_after);
+      j.key("heldout_drop").value(t.heldout_drop);
+      j.key("heldout_se").value(t.heldout_se);
+      j.key("parameters");
+      number_map(j, t.parameters);
+      j.key("sigma");
+      number_map(j, t.sigma);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  j.key("located").begin_object();
+  j.key("time").begin_array();
+  for (const auto& f : r.located.time) {
+    j.begin_object();
+    j.key("output").value(f.output);
+    j.key("what").value(f.what);
+    j.key("start_s").value(f.start_s);
+    j.key("end_s").value(f.end_s);
+    j.key("energy_share").value(f.energy_share);
+    j.key("time_share").value(f.time_share);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("frequency").begin_array();
+  for (const auto& f : r.located.frequency) {
+    j.begin_object();
+    j.key("output").value(f.output);
+    j.key("f_hz").value(f.f_hz);
+    j.key("ratio").value(f.ratio);
+    j.key("p_value").value(f.p_value);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("state").begin_array();
+  for (const auto& f : r.located.state) {
+    j.begin_object();
+    j.key("output").value(f.output);
+    j.key("signal").value(f.signal);
+    j.key("partial_r").value(f.partial_r);
+    j.key("p_value").value(f.p_value);
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+  j.key("gap").begin_object();
+  j.key("metric").value(r.gap_metric);
+  j.key("before").value(r.gap_before);
+  j.key("after").value(r.gap_after);
+  j.key("folds").value(static_cast<long long>(r.folds));
+  j.key("outputs").begin_array();
+  for (const auto& o : r.gap) {
+    j.begin_object();
+    j.key("output").value(o.output);
+    j.key("unit").value(o.unit);
+    j.key("rmse_model").value(o.rmse_model);
+    j.key("rmse_before").value(o.rmse_before);
+    j.key("rmse_after").value(o.rmse_after);
+    j.key("fit_before_pct").value(o.fit_before_pct);
+    j.key("fit_after_pct").value(o.fit_after_pct);
+    j.key("white_before").value(o.white_before);
+    j.key("white_after").value(o.white_after);
+    j.key("peak_psd_before").value(o.peak_psd_before);
+    j.key("peak_psd_after").value(o.peak_psd_after);
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+  auto params = [&](const char* key, const std::map<std::string, ParameterEstimate>& m) {
+    j.key(key).begin_object();
+    for (const auto& [name, e] : m) {
+      j.key(name).begin_object();
+      j.key("value").value(e.value);
+      j.key("sigma").value(e.sigma);
+      j.key("sigma_coloured").value(e.sigma_coloured);
+      j.end_object();
+    }
+    j.end_object();
+  };
+  params("baseline", r.baseline);
+  params("augmented", r.augmented);
+  j.end_object();
+  return j.str();
+}
+
+std::string discrepancy_text(const DiscrepancyResult& r) {
+  std::ostringstream o;
+  o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
+    << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";
+  o << "verdict: " << r.verdict << ": " << r.summary << "\n\n";
+  if (!r.effects.empty()) {
+    o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
+    for (const auto& e : r.effects) {
+      o << "  " << e.name << "\n";
+      for (const auto& [k, v] : e.parameters) {
+        const auto s = e.sigma.find(k);
+        o << "    " << k << " = " << g(v);
+        if (s != e.sigma.end()) o << "  (sigma " << g(s->second) << ")";
+        o << "\n";
+      }
+    }
+    o << "\n";
+  }
+  o << "gap on held-out data: " << g(r.gap_before) << " -> " << g(r.gap_after)
+    << "  (1 - R^2 of the equation error, mean of L and Y)\n";
+  o << "  output        unit      RMSE model  RMSE before  RMSE after  fit% before  fit% after  white before/after\n";
+  for (const auto& x : r.gap) {
+    char line[200];
+    std::snprintf(line, sizeof line, "  %-12s  %-8s  %10.4g  %11.4g  %10.4g  %11.1f  %10.1f  %s/%s\n", x.output.c_str(),
+                  x.unit.c_str(), x.rmse_model, x.rmse_before, x.rmse_after, x.fit_before_pct, x.fit_after_pct,
+                  x.white_before ? "yes" : "no", x.white_after ? "yes" : "no");
+    o << line;
+  }
+  o << "\ncandidates (p_critical = P(chi2_1 >= F) of the partial-F rule)\n";
+  for (const auto& t : r.candidates) {
+    o << "  round " << t.round << "  " << t.name << ": ";
+    if (!t.available) {
+      o << "not tried: " << t.reason << "\n";
+      continue;
+    }
+    o << t.reason;
+    if (t.scan_points > 1) o << "  [delay " << g(1e3 * t.delay_s) << " ms of " << t.scan_points << " scanned]";
+    o << "\n";
+  }
+  o << "\nlocated (baseline structure's residual)\n";
+  for (const auto& f : r.located.frequency) {
+    o << "  frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio)
+      << " x local background (p " << g(f.p_value) << ")\n";
+  }
+  for (const auto& f : r.located.state) {
+    o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
+      << ", p " << g(f.p_value) << ")\n";
+  }
+  if (r.located.frequency.empty() && r.located.state.empty()) o << "  no significant frequency peak or state dependence\n";
+  for (const auto& f : r.located.time) {
+    o << "  time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
+      << " s carries " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
+      << g(100.0 * f.time_share, "%.1f") << " % of the time\n";
+  }
+  return o.str();
+}
+
+}  // namespace nimble::ident
