@@ -485,6 +485,20 @@ struct Workflow {
         p_min = p;
         p_eq = eqname;
       }
+      if (spec.scanned) {
+        // A delayed input acts only delayed: with the columns delta_f and
+        // delta_f(t - tau) - delta_f the instantaneous part is theta_df - c. In closed loop a
+        // feedback-driven correlation of delta_f with the filtered equation error also
+        // favours the delayed column, but keeps most of the input instantaneous.
+        const auto it = std::find(m.eqs[a.eq].names.begin(), m.eqs[a.eq].names.end(), eqname + "_df");
+        if (it != m.eqs[a.eq].names.end()) {
+          const Index i = static_cast<Index>(it - m.eqs[a.eq].names.begin());
+          const double inst = theta[i] - th[0];
+          const double var = cov(i, i) + cov(off, off) - 2.0 * cov(i, off);
+          t.instantaneous_f[eqname] = var > 0.0 ? inst * inst / var : std::numeric_limits<double>::infinity();
+          t.parameters[eqname + "_df_fraction_delayed"] = theta[i] != 0.0 ? th[0] / theta[i] : 0.0;
+        }
+      }
       // PSE of this equation.
       const double N = static_cast<double>(C.rows());
       const VectorXd& y = m.eqs[a.eq].y;
@@ -544,8 +558,10 @@ struct Workflow {
 
     const bool significant = t.p_value <= p_critical;
     const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
+    const auto inst = t.instantaneous_f.find(p_eq);
+    const bool consistent = inst == t.instantaneous_f.end() || inst->second < opt.partial_f;
     const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
-    t.passed = significant && pse_falls && heldout;
+    t.passed = significant && pse_falls && heldout && consistent;
     std::ostringstream why;
     if (t.passed) {
       why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq])
@@ -559,6 +575,10 @@ struct Workflow {
         why << ")";
       }
       if (!pse_falls) why << " PSE does not fall;";
+      if (!consistent) {
+        why << " the input keeps an instantaneous part (F " << fmt(inst->second) << " >= " << fmt(opt.partial_f)
+            << " in " << p_eq << "): not a delay;";
+      }
       if (!heldout) {
         why << " held-out error change " << fmt(-100.0 * t.heldout_drop) << " % is not a drop beyond "
             << fmt(opt.heldout_sigmas) << " standard errors (" << fmt(100.0 * t.heldout_se) << " %)";
@@ -594,9 +614,10 @@ std::map<std::string, ParameterEstimate> full_fit(const Model& m, Index min_bloc
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
     const MatrixXd C = m.X(e);
     VectorXd th;
-    if (!solve(C.transpose() * C, C.transpose() * m.eqs[e].y, th)) {
-      throw std::invalid_argument("equation " + m.eqs[e].name + ": the regressors cannot be separated");
-    }
+    const FoldStats fs = fold_stats(C, m.eqs[e].y, {{0, C.rows()}});
+    // A candidate enters only with its cross-validation fits solvable; a fit that is only
+    // nearly singular on all the data is solved by complete orthogonal decomposition.
+    if (!solve(fs.Gt, fs.bt, th)) th = C.completeOrthogonalDecomposition().solve(m.eqs[e].y);
     const VectorXd r = m.eqs[e].y - C * th;
     const MatrixXd cov = coloured_covariance(C, r, block_length(r, min_block));
     const double s2 = r.squaredNorm() / static_cast<double>(std::max<Index>(1, C.rows() - C.cols()));

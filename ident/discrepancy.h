@@ -28,10 +28,13 @@
 ///        scanned over M delays (Bonferroni over the M scan points);
 ///      - the predicted squared error PSE = RSS / N + sigma_max^2 P / N falls in an
 ///        equation where it is significant (sigma_max^2 the variance of the dependent);
+///      - for actuator_delay, the input acts only delayed: the part of delta_f that still
+///        acts instantaneously fails the same partial-F rule in that equation;
 ///      - held-out: in K-fold cross-validation over contiguous blocks (the fit never sees
 ///        the block it predicts; a scanned candidate chooses its delay on the training
 ///        blocks only), the relative drop of the held-out squared error is larger than
-///        twice its standard error over the folds.
+///        twice its standard error (a Diebold-Mariano comparison: batch means of the
+///        per-sample loss difference over blocks longer than its correlation time).
 ///    The passing candidate with the largest held-out drop enters; the search repeats on
 ///    the new residual. Two passing candidates whose regressors, with the model's
 ///    regressors projected out, correlate by more than 0.9 explain the same thing: the
@@ -113,6 +116,9 @@ struct CandidateTrial {
   double heldout_drop = 0.0;    ///< mean over folds of the relative drop of the held-out squared error
   double heldout_se = 0.0;      ///< its standard error over the folds
   std::map<std::string, double> parameters, sigma;  ///< the candidate's parameters (coloured sigma)
+  /// actuator_delay, per equation: partial F of the part of delta_f that still acts
+  /// instantaneously; a delay passes only where it is below the partial-F rule.
+  std::map<std::string, double> instantaneous_f;
 };
 
 /// A named effect with its parameters.

@@ -72,6 +72,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
       number_map(j, t.parameters);
       j.key("sigma");
       number_map(j, t.sigma);
+      if (!t.instantaneous_f.empty()) {
+        j.key("instantaneous_f");
+        number_map(j, t.instantaneous_f);
+      }
     }
     j.end_object();
   }

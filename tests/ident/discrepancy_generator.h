@@ -1,0 +1,178 @@
+#pragma once
+/// Flight records with a hidden effect, for the discrepancy workflow's tests and benchmark.
+/// Independent of the plant code: the linear lateral3 model (thesis Eqs 10-17) written out
+/// here, flown by a roll PD law through the Eq 33 flap actuator on a doublet train, with
+/// throttle doublets, a vertical and a forward velocity that the record carries (w, u), and
+/// at most a few effects added to the model's forces and moments. RK4 at 2048 Hz, recorded
+/// at 512 Hz with measurement noise; process noise enters as white force and moment.
+///
+/// Effects and the physical ranges their magnitudes are drawn from (by the seed):
+///   lateral_inflow        Y += Y_vv v|v|, L += L_vv v|v|; Y_vv in [-0.03, -0.01] N s^2/m^2,
+///                         L_vv = Y_vv * 0.01 m (the plant file's ratio)
+///   kinematic_coupling    m v_dot += m p (w - w0) (the exact kinematics instead of Eq 21's w0 p)
+///   forward_speed_coupling  Lp, Lv, Yp, Yv scale with (1 + k (u - u0)), k in [0.3, 0.7] per m/s
+///   actuator_delay        the flap input acts tau later than recorded, tau in [12, 40] ms
+///   sensor_bias           the recorded p carries a constant bias b in [0.02, 0.06] rad/s
+///   lateral_gust          the aerodynamics see v - v_g, v_g first-order Gauss-Markov,
+///                         sigma 0.1 m/s, tau 0.5 s (stochastic: no deterministic name)
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <random>
+#include <set>
+#include <string>
+
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/flight_data.h"
+
+namespace nimble::ident::testing {
+
+struct HiddenEffects {
+  std::set<std::string> on;   ///< effect names (see the file comment)
+  double scale = 1.0;         ///< multiplies every drawn magnitude (small effects: << 1)
+  double Y_vv = 0.0, L_vv = 0.0, k_speed = 0.0, delay_s = 0.0, bias_p = 0.0;
+};
+
+struct GeneratorOptions {
+  double duration_s = 40.0;
+  double rate_hz = 512.0;
+  double doublet_amplitude_rad = 0.45;
+  double k_phi = 175.0, k_p = 25.0;           ///< PD on the roll error [rad/s per rad, per rad/s]
+  double throttle_amplitude_pct = 2.0;
+  double moment_noise_Nm = 1e-3, force_noise_N = 0.04;  ///< per 2048 Hz step, white
+  double noise_p = 0.01, noise_v = 0.005, noise_phi = 0.002, noise_df = 0.2, noise_w = 0.005;
+  std::uint64_t seed = 1;
+};
+
+/// Draws the magnitudes of `h.on` from their ranges (see the file comment) with `seed`.
+inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
+  std::mt19937_64 rng(seed * 7919 + 17);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  h.Y_vv = -(0.01 + 0.02 * u01(rng)) * h.scale;
+  h.L_vv = h.Y_vv * 0.01;
+  h.k_speed = (0.3 + 0.4 * u01(rng)) * h.scale;
+  h.delay_s = (0.012 + 0.028 * u01(rng)) * h.scale;
+  h.bias_p = (0.02 + 0.04 * u01(rng)) * h.scale;
+}
+
+/// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
+inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& veh, const HiddenEffects& h,
+                                  const GeneratorOptions& o) {
+  const double m = veh.mass_kg, g = veh.gravity_mps2, Ic = veh.Ic(), Izz = veh.Izz_kgm2;
+  const double Lp = model.at("Lp"), Lv = model.at("Lv"), Yp = model.at("Yp"), Yv = model.at("Yv");
+  const double L_df = model.at("L_df"), Y_df = model.at("Y_df");
+  const double L_dt = model.derivatives.count("L_dt") ? model.at("L_dt") : 0.0;
+  const double Y_dt = model.derivatives.count("Y_dt") ? model.at("Y_dt") : 0.0;
+  const double w0 = model.trim.w0_mps;
+  const bool inflow = h.on.count("lateral_inflow") > 0, kin = h.on.count("kinematic_coupling") > 0;
+  const bool speed = h.on.count("forward_speed_coupling") > 0, delay = h.on.count("actuator_delay") > 0;
+  const bool bias = h.on.count("sensor_bias") > 0, gust = h.on.count("lateral_gust") > 0;
+
+  const int sub = 4;
+  const double dt = 1.0 / (o.rate_hz * sub);
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+
+  // Manoeuvres: roll doublets of 7, 4 and 2 Hz every 2.5 s; throttle doublets at 1.5 Hz
+  // every 3.7 s; w and u follow slow smooth profiles (climb/descent, forward flight).
+  auto phi_sp = [&](double t) {
+    const double period = 2.5, start = 1.0;
+    if (t < start || t > o.duration_s - 2.0) return 0.0;
+    const double k = std::floor((t - start) / period);
+    const double f = (static_cast<int>(k) % 3 == 0) ? 7.0 : (static_cast<int>(k) % 3 == 1 ? 4.0 : 2.0);
+    const double tau = t - start - k * period;
+    const double a = o.doublet_amplitude_rad * ((static_cast<int>(k) % 2) ? -1.0 : 1.0);
+    if (tau < 0.5 / f) return a;
+    if (tau < 1.0 / f) return -a;
+    return 0.0;
+  };
+  auto throttle = [&](double t) {
+    const double tau = std::fmod(t + 0.8, 3.7);
+    if (tau < 1.0 / 3.0) return o.throttle_amplitude_pct;
+    if (tau < 2.0 / 3.0) return -o.throttle_amplitude_pct;
+    return 0.0;
+  };
+  const double ph_w = 2.0 * M_PI * std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  auto w_of = [&](double t) { return w0 - 0.6 * std::sin(2.0 * M_PI * t / 13.0 + ph_w) - 0.3 * std::sin(2.0 * M_PI * t / 5.3); };
+  auto u_of = [&](double t) { return 0.6 + 0.6 * std::sin(2.0 * M_PI * t / 11.0 + ph_w); };
+
+  // State: p, v, phi, delta_f, v_gust.
+  double p = 0, v = 0, phi = 0, df = 0, vg = 0;
+  std::deque<std::pair<double, double>> df_hist;  // (t, df) for the delayed input
+  auto df_at = [&](double t) {
+    if (!delay) return df;
+    const double td = t - h.delay_s;
+    double val = 0.0;
+    for (const auto& [ti, di] : df_hist) {
+      if (ti <= td) val = di; else break;
+    }
+    return val;
+  };
+  auto deriv = [&](double t, const double* x, double dfin, double Lw, double Yw, double* dx) {
+    const double P = x[0], V = x[1], PHI = x[2], DF = x[3];
+    const double cmd = o.k_phi * (phi_sp(t) - PHI) - o.k_p * P;
+    const double dtp = throttle(t);
+    const double vrel = V - (gust ? vg : 0.0);
+    const double ks = speed ? 1.0 + h.k_speed * (u_of(t) - 0.0) : 1.0;
+    double L = ks * (Lp * P + Lv * vrel) + L_df * dfin + L_dt * dtp + Lw;
+    double Y = ks * (Yp * P + Yv * vrel) + Y_df * dfin + Y_dt * dtp + Yw;
+    if (inflow) {
+      L += h.L_vv * vrel * std::fabs(vrel);
+      Y += h.Y_vv * vrel * std::fabs(vrel);
+    }
+    dx[0] = Izz / Ic * L;
+    dx[1] = Y / m + w0 * P + g * PHI + (kin ? (w_of(t) - w0) * P : 0.0);
+    dx[2] = P;
+    dx[3] = 8.97 * cmd - 12.56 * DF;
+    (void)DF;
+  };
+
+  FlightData d;
+  d.source = "generated";
+  for (const char* c : {"p", "v", "phi", "u", "w", "delta_f", "delta_t", "phi_sp"}) d.channels[c];
+  const long steps = static_cast<long>(std::lround(o.duration_s * o.rate_hz)) * sub;
+  const double a_g = std::exp(-dt / 0.5);
+  for (long i = 0; i <= steps; ++i) {
+    const double t = static_cast<double>(i) * dt;
+    if (i % sub == 0) {
+      auto rec = [&](const char* c, double val) {
+        d.channels[c].t_s.push_back(t);
+        d.channels[c].values.push_back(val);
+      };
+      rec("p", p + (bias ? h.bias_p : 0.0) + o.noise_p * n01(rng));
+      rec("v", v + o.noise_v * n01(rng));
+      rec("phi", phi + o.noise_phi * n01(rng));
+      rec("u", u_of(t) + o.noise_w * n01(rng));
+      rec("w", w_of(t) + o.noise_w * n01(rng));
+      rec("delta_f", df + o.noise_df * n01(rng));
+      rec("delta_t", throttle(t));
+      rec("phi_sp", phi_sp(t));
+    }
+    if (i == steps) break;
+    if (delay) {
+      df_hist.emplace_back(t, df);
+      while (df_hist.size() > 2 && df_hist[1].first <= t - h.delay_s - 1e-12) df_hist.pop_front();
+    }
+    const double Lw = o.moment_noise_Nm * n01(rng), Yw = o.force_noise_N * n01(rng);
+    const double dfin = df_at(t);
+    double x[4] = {p, v, phi, df}, k1[4], k2[4], k3[4], k4[4], tmp[4];
+    deriv(t, x, dfin, Lw, Yw, k1);
+    for (int j = 0; j < 4; ++j) tmp[j] = x[j] + 0.5 * dt * k1[j];
+    deriv(t + 0.5 * dt, tmp, dfin, Lw, Yw, k2);
+    for (int j = 0; j < 4; ++j) tmp[j] = x[j] + 0.5 * dt * k2[j];
+    deriv(t + 0.5 * dt, tmp, dfin, Lw, Yw, k3);
+    for (int j = 0; j < 4; ++j) tmp[j] = x[j] + dt * k3[j];
+    deriv(t + dt, tmp, dfin, Lw, Yw, k4);
+    p += dt / 6.0 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]);
+    v += dt / 6.0 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]);
+    phi += dt / 6.0 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2]);
+    df += dt / 6.0 * (k1[3] + 2 * k2[3] + 2 * k3[3] + k4[3]);
+    if (gust) vg = a_g * vg + 0.1 * std::sqrt(1.0 - a_g * a_g) * n01(rng);
+  }
+  return d;
+}
+
+}  // namespace nimble::ident::testing
