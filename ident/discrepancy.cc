@@ -192,6 +192,13 @@ Index block_length(const VectorXd& e, Index minimum) {
   return std::clamp<Index>(std::max<Index>(2 * lag, minimum), 1, cap);
 }
 
+/// The part of x above f_hz: x minus its zero-phase Butterworth low-pass (order 4, applied
+/// forward and backward), so that the two parts add up to x exactly.
+VectorXd high_pass(const VectorXd& x, double f_hz, double rate_hz) {
+  const auto sos = butterworth_lowpass(4, f_hz, rate_hz);
+  return x - filtfilt(sos, x, default_padding(f_hz, rate_hz));
+}
+
 // ---------------------------------------------------------------------------------------
 // Building the equations and candidate columns.
 
@@ -458,6 +465,11 @@ struct Workflow {
 
     // Significance: Wald with the coloured covariance, per equation.
     double p_min = 1.0;
+    // The candidate enters only the equations where its terms are significant on their own
+    // (with the same Bonferroni factors): a term that explains nothing in an equation would
+    // only add variance there.
+    const double bonferroni = static_cast<double>(P.adds.size()) * static_cast<double>(delays.size());
+    std::vector<bool> use_eq(neq, false);
     std::string p_eq;
     for (const auto& a : P.adds) {
       std::vector<Addition> all = m.added[a.eq];
@@ -481,6 +493,7 @@ struct Workflow {
         t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, S(j, j)));
       }
       const double p = chi_square_survival(wald, static_cast<double>(kc));
+      use_eq[a.eq] = p * bonferroni <= p_critical;
       if (p < p_min) {
         p_min = p;
         p_eq = eqname;
@@ -508,6 +521,35 @@ struct Workflow {
       t.pse_after[eqname] = rss_after / N + s2max * static_cast<double>(C.cols()) / N;
     }
     if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
+
+    // Confirmation above the gust band: an unmeasured side wind acts through v - v_g and
+    // drives v itself, so in closed loop it correlates the equation error with functions of
+    // v (v|v| above all). Its power lies at low frequency; an effect that is a function of the
+    // states holds at every frequency. The candidate must stay significant, at
+    // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
+    // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
+    // there and is exempt.
+    if (!p_eq.empty() && spec.name != "sensor_bias") {
+      double p_hp = 1.0;
+      for (const auto& a : P.adds) {
+        std::vector<Addition> all = m.added[a.eq];
+        all.push_back(a);
+        const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
+        MatrixXd C(C0.rows(), C0.cols());
+        for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
+        const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+        VectorXd theta;
+        const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
+        if (!solve(fs.Gt, fs.bt, theta)) continue;
+        const VectorXd resid = y - C * theta;
+        const MatrixXd cov = coloured_covariance(C, resid, block_length(resid, min_block));
+        const Index kc = static_cast<Index>(a.cols.size());
+        const VectorXd th = theta.tail(kc);
+        const double wald = th.dot(cov.bottomRightCorner(kc, kc).ldlt().solve(th));
+        p_hp = std::min(p_hp, chi_square_survival(wald, static_cast<double>(kc)));
+      }
+      t.highpass_p = std::min(1.0, p_hp * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+    }
     t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
 
     // Held-out: K-fold; a scanned candidate picks its delay on the training folds. Every
@@ -538,6 +580,7 @@ struct Workflow {
       }
       const auto [a, b] = folds[k];
       for (const auto& add : points[pick].adds) {
+        if (!use_eq[add.eq] && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) continue;
         std::vector<Addition> all = m.added[add.eq];
         all.push_back(add);
         const MatrixXd C = augmented_design(m.eqs[add.eq], all);
@@ -560,8 +603,9 @@ struct Workflow {
     const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
     const auto inst = t.instantaneous_f.find(p_eq);
     const bool consistent = inst == t.instantaneous_f.end() || inst->second < opt.partial_f;
+    const bool above_gusts = t.highpass_p <= opt.gust_band_alpha;
     const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
-    t.passed = significant && pse_falls && heldout && consistent;
+    t.passed = significant && pse_falls && heldout && consistent && above_gusts;
     std::ostringstream why;
     if (t.passed) {
       why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq])
@@ -575,6 +619,10 @@ struct Workflow {
         why << ")";
       }
       if (!pse_falls) why << " PSE does not fall;";
+      if (!above_gusts) {
+        why << " not significant above the gust band (p " << fmt(t.highpass_p) << " > " << fmt(opt.gust_band_alpha)
+            << " on the equations high-passed at " << fmt(opt.gust_band_hz) << " Hz);";
+      }
       if (!consistent) {
         why << " the input keeps an instantaneous part (F " << fmt(inst->second) << " >= " << fmt(opt.partial_f)
             << " in " << p_eq << "): not a delay;";
@@ -585,7 +633,11 @@ struct Workflow {
       }
     }
     t.reason = why.str();
-    if (t.passed) best_adds = P.adds;
+    if (t.passed) {
+      for (const auto& a : P.adds) {
+        if (use_eq[a.eq]) best_adds.push_back(a);
+      }
+    }
     return t;
   }
 };
@@ -678,7 +730,7 @@ void frequency_peaks(const std::string& output, const VectorXd& r, double rate, 
 void state_findings(const Model& m, std::size_t e, const UniformData& d, Index min_block, double alpha,
                     std::vector<StateFinding>& out) {
   std::vector<std::string> signals;
-  for (const char* s : {"p", "v", "phi", "delta_f", "u", "w", "r", "delta_t"}) {
+  for (const char* s : {"p", "v", "phi", "delta_f", "u", "w", "delta_t"}) {
     if (d.has(s) && excited(d.at(s), s)) signals.push_back(s);
   }
   const double M = static_cast<double>(signals.size());
@@ -791,6 +843,31 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   }
   m.added.resize(m.eqs.size());
 
+  // Effects the model file already carries (an earlier analysis named them) are part of the
+  // baseline structure: their columns are refit with the derivatives, and they are not
+  // candidates again.
+  std::vector<std::string> known;
+  std::map<std::string, double> known_values;
+  for (const auto& [name, params] : model.effects) {
+    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    if (spec == kLibrary.end()) continue;  // an effect the library has no regressor form for
+    for (const auto& need : spec->needs) {
+      if (!d.has(need)) {
+        throw DataError(data.source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
+      }
+    }
+    const auto delay = params.find("delay_s");
+    const Index k = delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
+    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, k)) {
+      for (std::size_t j = 0; j < add.names.size(); ++j) {
+        m.eqs[add.eq].names.push_back(add.names[j]);
+        m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
+      }
+    }
+    for (const auto& [key, value] : params) known_values[key] = value;
+    known.push_back(name);
+  }
+
   Workflow wf{options, vehicle, model, d, make_folds(n, options.folds), 1, 0.0};
   wf.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
   wf.p_critical = chi_square_survival(options.partial_f, 1.0);
@@ -809,7 +886,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
 
   // Stepwise search.
-  std::vector<std::string> entered;
+  std::vector<std::string> entered = known;
   for (std::size_t round = 1; round <= options.max_effects; ++round) {
     const std::vector<FoldStats> base = model_stats(m, wf.folds);
     const std::vector<VectorXd> base_cv = heldout_residuals(m, wf.folds);
@@ -907,7 +984,12 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     VectorXd model_fit = VectorXd::Zero(n);
     for (std::size_t j = 0; j < eq.names.size(); ++j) {
       const auto it = model.derivatives.find(eq.names[j]);
-      if (it != model.derivatives.end()) model_fit += it->second * eq.cols[j];
+      const auto fx = known_values.find(eq.names[j]);
+      if (it != model.derivatives.end()) {
+        model_fit += it->second * eq.cols[j];
+      } else if (fx != known_values.end()) {
+        model_fit += fx->second * eq.cols[j];
+      }
     }
     const VectorXd y = eq.y / eq.scale;
     const double sst = (y.array() - y.mean()).square().sum();
@@ -981,6 +1063,15 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     am.published_sigma[nm] = res.augmented.at(nm).sigma_coloured;
   }
   am.effects.clear();
+  for (const auto& name : known) {
+    const auto& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    for (const auto& term : spec.terms) {
+      const auto it = res.augmented.find(term.parameter);
+      if (it != res.augmented.end()) am.effects[name][term.parameter] = it->second.value;
+    }
+    const auto& given = model.effects.at(name);
+    if (given.count("delay_s")) am.effects[name]["delay_s"] = given.at("delay_s");
+  }
   for (const auto& e : res.effects) am.effects[e.name] = e.parameters;
   return res;
 }

@@ -30,10 +30,14 @@
 ///        equation where it is significant (sigma_max^2 the variance of the dependent);
 ///      - for actuator_delay, the input acts only delayed: the part of delta_f that still
 ///        acts instantaneously fails the same partial-F rule in that equation;
+///      - above the gust band: the same test on the equations high-passed at gust_band_hz
+///        (y and every column) is significant at gust_band_alpha: an unmeasured side wind
+///        drives v and correlates the error with v|v| in closed loop, but only at low
+///        frequency;
 ///      - held-out: in K-fold cross-validation over contiguous blocks (the fit never sees
 ///        the block it predicts; a scanned candidate chooses its delay on the training
 ///        blocks only), the relative drop of the held-out squared error is larger than
-///        twice its standard error (a Diebold-Mariano comparison: batch means of the
+///        its spread, one standard error (a Diebold-Mariano comparison: batch means of the
 ///        per-sample loss difference over blocks longer than its correlation time).
 ///    The passing candidate with the largest held-out drop enters; the search repeats on
 ///    the new residual. Two passing candidates whose regressors, with the model's
@@ -41,6 +45,9 @@
 ///    verdict is `ambiguous` and names both.
 /// 4. Add. The baseline derivatives are refit together with the named effects.
 /// 5. Gap after: the held-out table again, with the effects.
+///
+/// Effects the model file already carries (section `effects:`, e.g. from an earlier run's
+/// --model-out) belong to the baseline structure: refit with the derivatives, not tried again.
 ///
 /// Verdicts: `effects` (one or more named), `ambiguous`, `unexplained` (nothing passed, but
 /// a location test found structure: a frequency peak, or a residual-input or residual-state
@@ -89,10 +96,15 @@ struct DiscrepancyOptions {
   std::vector<std::string> inputs;
   std::size_t folds = 10;             ///< K of the held-out cross-validation, >= 4
   double partial_f = 20.0;            ///< the partial-F rule (SIDPAC), applied as its chi2_1 tail
-  double heldout_sigmas = 2.0;        ///< held-out drop must exceed this many standard errors
+  double heldout_sigmas = 1.0;        ///< held-out drop must exceed this many standard errors (its spread)
   double collinearity = 0.9;          ///< |rho| above which two passing candidates are ambiguous
   std::size_t max_effects = 4;        ///< rounds of the stepwise search
   double delay_max_s = 0.060;         ///< actuator_delay scan: 1 sample .. this delay
+  /// Confirmation band above side gusts [Hz]: a first-order Gauss-Markov wind with a
+  /// correlation time of 0.5 s or longer (the plant's lateral_gust.tau_s) has 90 % of its
+  /// variance below 2 Hz ((2/pi) atan(2 pi f tau)).
+  double gust_band_hz = 2.0;
+  double gust_band_alpha = 0.01;      ///< level of the confirmation above the gust band
   double location_alpha = 0.01;       ///< family-wise level of each location test
   double window_s = 1.0;              ///< time location windows [s]
   std::size_t whiteness_lags = 50;
@@ -119,6 +131,9 @@ struct CandidateTrial {
   /// actuator_delay, per equation: partial F of the part of delta_f that still acts
   /// instantaneously; a delay passes only where it is below the partial-F rule.
   std::map<std::string, double> instantaneous_f;
+  /// Adjusted p-value of the same test on the equations high-passed above the gust band
+  /// (1 for sensor_bias, which is exempt).
+  double highpass_p = 0.0;
 };
 
 /// A named effect with its parameters.

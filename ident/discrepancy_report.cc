@@ -61,6 +61,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
       number_map(j, t.partial_f);
       j.key("p_value").value(t.p_value);
       j.key("p_critical").value(t.p_critical);
+      j.key("highpass_p").value(t.highpass_p);
       j.key("scan_points").value(static_cast<long long>(t.scan_points));
       j.key("pse_before");
       number_map(j, t.pse_before);
