@@ -95,6 +95,36 @@ TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is
   }
 }
 
+TEST_CASE("discrepancy: a lateral gust alone never gets a deterministic name (24 seeds)", "[discrepancy][null]") {
+  int named_any = 0;
+  for (int s = 1; s <= 24; ++s) {
+    const DiscrepancyResult r = run({"lateral_gust"}, static_cast<std::uint64_t>(s));
+    INFO("seed " << s << ": " << r.summary);
+    CHECK(r.effects.empty());
+    if (!r.effects.empty()) ++named_any;
+  }
+  std::printf("discrepancy gust-only records: %d of 24 named a deterministic effect\n", named_any);
+}
+
+TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign in most records, nothing else is named",
+          "[discrepancy]") {
+  int hits = 0;
+  const int seeds = 8;
+  for (int s = 1; s <= seeds; ++s) {
+    const DiscrepancyResult r = run({"lateral_inflow"}, static_cast<std::uint64_t>(s));
+    INFO("seed " << s << ": " << r.summary);
+    for (const auto& n : names(r)) CHECK(n == "lateral_inflow");
+    if (!named(r, "lateral_inflow")) continue;
+    ++hits;
+    const NamedEffect& e = r.effects.front();
+    REQUIRE(e.parameters.count("Y_vv") == 1);
+    CHECK(e.parameters.at("Y_vv") < 0.0);
+    CHECK(r.gap_after < r.gap_before);
+  }
+  std::printf("discrepancy lateral inflow: named in %d of %d records\n", hits, seeds);
+  CHECK(hits >= 6);
+}
+
 TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign of its gain", "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
     const DiscrepancyResult r = run({"forward_speed_coupling"}, s);
