@@ -84,7 +84,8 @@ constexpr const char* kDiscrepancyUsage =
     "  --delay-max S       actuator_delay scan limit (default 0.06 s)\n"
     "  --rate HZ, --cutoff HZ, --order N, --interpolation cubic|linear   processing (512, 9, 10, cubic)\n"
     "  --json FILE         write the JSON report to FILE ('-' for stdout)\n"
-    "  --model-out FILE    write the model refit with the named effects (section effects:)\n";
+    "  --model-out FILE    write the model refit with the named effects (section effects:)\n"
+    "  --report DIR        report.md with PNG plots (gnuplot, Debian package gnuplot-nox)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -279,7 +280,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
     std::cout << kDiscrepancyUsage;
     return 0;
   }
-  std::string data_file, model_file, vehicle_file, json, model_out;
+  std::string data_file, model_file, vehicle_file, json, model_out, report;
   ident::DiscrepancyOptions opt;
   try {
     Args it(args);
@@ -305,6 +306,8 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
         json = it.value();
       } else if (a == "--model-out") {
         model_out = it.value();
+      } else if (a == "--report") {
+        report = it.value();
       } else if (!a.empty() && a[0] == '-') {
         throw UsageError("unknown option '" + a + "'");
       } else if (data_file.empty()) {
@@ -319,6 +322,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
     std::cerr << "rig discrepancy: " << e.what() << "\n" << kDiscrepancyUsage;
     return kExitUsage;
   }
+  if (!report.empty()) ident::require_gnuplot();  // fail before the work, not after
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);
@@ -330,8 +334,11 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                              "Verdict: " + result.verdict + ". " + result.summary,
                              "published.sigma: coloured-residual standard deviations of this refit."});
   }
+  std::vector<std::string> report_files;
+  if (!report.empty()) report_files = ident::write_discrepancy_report(result, report);
   if (json != "-") std::cout << ident::discrepancy_text(result);
   if (!model_out.empty() && json != "-") std::cout << "\nmodel written to " << model_out << "\n";
+  if (!report_files.empty() && json != "-") std::cout << "report written to " << report_files.front() << "\n";
   if (!json.empty()) write_json(json, ident::discrepancy_json(result));
   return 0;
 }

@@ -822,6 +822,8 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
                                                  std::to_string(options.folds) + "-fold cross-validation");
   }
   res.rate_hz = d.rate_hz;
+  res.cutoff_hz = options.processing.filter_order > 0 ? options.processing.cutoff_hz : 0.0;
+  res.t_s = d.t_s;
   res.samples = static_cast<std::size_t>(n);
   res.folds = options.folds;
 
@@ -1008,6 +1010,9 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
       g.peak_psd_before = pb.psd[k];
       g.peak_psd_after = pa.psd[k];
     }
+    g.measured = y;
+    g.predicted_before = y - rb;
+    g.predicted_after = y - ra;
     gb += rb.squaredNorm() / sst;
     ga += ra.squaredNorm() / sst;
     res.gap.push_back(g);

@@ -153,6 +153,8 @@ struct OutputGap {
   double fit_before_pct = 0.0, fit_after_pct = 0.0;
   bool white_before = false, white_after = false;
   double peak_psd_before = 0.0, peak_psd_after = 0.0;  ///< residual PSD at the located frequency (if any)
+  /// The output [unit] and its held-out predictions before and after, on the grid t_s.
+  Eigen::VectorXd measured, predicted_before, predicted_after;
 };
 
 /// A frequency where a residual has a significant peak.
@@ -204,7 +206,9 @@ struct DiscrepancyResult {
   std::string gap_metric;
   std::size_t folds = 0;
   double rate_hz = 0.0;
+  double cutoff_hz = 0.0;  ///< identification low-pass of the data (0: none)
   std::size_t samples = 0;
+  Eigen::VectorXd t_s;     ///< time grid of the gap table's series [s]
   /// Baseline refit and the refit with the named effects (all data), by parameter name.
   std::map<std::string, ParameterEstimate> baseline, augmented;
   /// The model with the refit derivatives and the named effects (DerivativeModel::effects).
@@ -223,5 +227,13 @@ std::string discrepancy_json(const DiscrepancyResult& result);
 
 /// Plain-text report for the terminal.
 std::string discrepancy_text(const DiscrepancyResult& result);
+
+/// Writes a report an engineer can attach to a flight-test note into `dir` (created if
+/// needed): report.md (verdict, named effects, gap table, every candidate, located findings)
+/// and the PNGs it shows, drawn by gnuplot: outputs.png (each output with its held-out
+/// predictions before and after), residuals.png and residual_psd.png (Welch PSDs of the
+/// held-out residuals before and after, located frequencies marked in the text). Returns the
+/// paths written. @throws std::runtime_error if gnuplot (gnuplot-nox) is missing or fails.
+std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& result, const std::string& dir);
 
 }  // namespace nimble::ident

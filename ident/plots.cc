@@ -234,6 +234,11 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
 
 std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
                                  const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels) {
+  return plot_panels(dir, name, title, t_s, panels, PlotAxes{});
+}
+
+std::string plot_panels(const std::string& dir, const std::string& name, const std::string& title,
+                        const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels, const PlotAxes& axes) {
   if (panels.empty()) throw std::invalid_argument("plot " + name + ": no panel");
   for (const auto& panel : panels) {
     if (panel.series.empty()) throw std::invalid_argument("plot " + name + ": panel '" + panel.title + "' has no series");
@@ -269,7 +274,9 @@ std::string plot_time_histories(const std::string& dir, const std::string& name,
   std::ostringstream s;
   s << terminal(1400, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
-  s << "set grid\nset key top right\nset xlabel 'time [s]'\n";
+  s << "set grid\nset key top right\nset xlabel " << gp_quote(axes.xlabel) << "\n";
+  if (axes.log_y) s << "set logscale y\nset format y '%.0e'\n";
+  if (axes.x_max > 0.0) s << "set xrange [0:" << g(axes.x_max) << "]\n";
   int column = 2;
   for (const auto& panel : panels) {
     s << "set title " << gp_quote(panel.title) << " noenhanced\n";

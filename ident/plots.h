@@ -45,6 +45,17 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
 /// @throws std::runtime_error as plot_identification.
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir);
 
+/// Axes of plot_panels().
+struct PlotAxes {
+  std::string xlabel = "time [s]";
+  bool log_y = false;
+  double x_max = 0.0;  ///< > 0: the x axis ends there
+};
+
+/// Panels over any x (e.g. frequency, with a logarithmic y): as plot_time_histories.
+std::string plot_panels(const std::string& dir, const std::string& name, const std::string& title,
+                        const Eigen::VectorXd& x, const std::vector<TimePanel>& panels, const PlotAxes& axes);
+
 /// Time histories over `t_s`, one panel per entry stacked under `title`: writes
 /// <name>.dat (t and every series, one column each), <name>.gp and <name>.png into `dir`
 /// (created if needed). Returns the path of the PNG.

@@ -18,6 +18,7 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 #include "ident/synthetic.h"
+#include "discrepancy_generator.h"
 #include "synthetic_flight.h"
 #include "../support/run_rig.h"
 
@@ -246,4 +247,62 @@ TEST_CASE("rig identify errors name the file, row and column, with exit code 2",
     CHECK(run_rig("validate " + flight_csv()).exit_code == 2);
     CHECK(run_rig("identify --help").exit_code == 0);
   }
+}
+
+TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and report with plots", "[cli]") {
+  const fs::path dir = work_dir() / "discrepancy";
+  fs::create_directories(dir);
+  const DerivativeModel set1 = ident::test::set1_model();
+  const Vehicle vehicle = load_vehicle(set1.vehicle_file);
+  testing::HiddenEffects hidden;
+  hidden.on = {"kinematic_coupling"};
+  testing::draw_magnitudes(hidden, 3);
+  testing::GeneratorOptions o;
+  o.seed = 3;
+  const std::string csv = (dir / "flight.csv").string();
+  write_flight_csv(testing::generate_flight(set1, vehicle, hidden, o), csv);
+  const std::string json = (dir / "d.json").string(), model = (dir / "augmented.yaml").string();
+  const std::string report = (dir / "report").string();
+  const Result r = run_rig("discrepancy " + csv + " --model " + std::string(RIG_SOURCE_DIR) +
+                           "/rig_configs/models/nimble_lateral_set1.yaml --json " + json + " --model-out " + model +
+                           " --report " + report);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  for (const char* part : {"verdict: effects", "kinematic_coupling", "gap on held-out data", "candidates", "located",
+                           "model written to", "report written to"}) {
+    INFO(part);
+    CHECK(r.out.find(part) != std::string::npos);
+  }
+  const YAML::Node j = YAML::LoadFile(json);
+  CHECK(j["verdict"].as<std::string>() == "effects");
+  REQUIRE(j["effects"].size() == 1);
+  CHECK(j["effects"][0]["name"].as<std::string>() == "kinematic_coupling");
+  CHECK(j["effects"][0]["parameters"]["Y_pw"].as<double>() > 0.0);
+  CHECK(j["effects"][0]["sigma"]["Y_pw"].as<double>() > 0.0);
+  CHECK(j["candidates"].size() >= 6);
+  for (const auto& c : j["candidates"]) CHECK_FALSE(c["reason"].as<std::string>().empty());
+  CHECK(j["located"]["time"].IsSequence());
+  CHECK(j["located"]["frequency"].IsSequence());
+  CHECK(j["located"]["state"].IsSequence());
+  CHECK_FALSE(j["gap"]["metric"].as<std::string>().empty());
+  CHECK(j["gap"]["after"].as<double>() < j["gap"]["before"].as<double>());
+  CHECK(j["gap"]["outputs"].size() == 2);
+  CHECK(load_model(model).effects.count("kinematic_coupling") == 1);
+  for (const char* file : {"report.md", "outputs.png", "residuals.png", "residual_psd.png"}) {
+    INFO(file);
+    CHECK(fs::file_size(fs::path(report) / file) > 1000);
+  }
+  CHECK(slurp(report + "/report.md").find("kinematic_coupling") != std::string::npos);
+
+  // Bad usage: exit 2, naming what is wrong.
+  const Result no_model = run_rig("discrepancy " + csv);
+  CHECK(no_model.exit_code == 2);
+  CHECK(no_model.err.find("missing --model") != std::string::npos);
+  const Result bad = run_rig("discrepancy " + csv + " --model " + std::string(RIG_SOURCE_DIR) +
+                             "/rig_configs/models/nimble_lateral_set1.yaml --candidates warp_drive");
+  CHECK(bad.exit_code != 0);
+  CHECK(bad.err.find("unknown candidate 'warp_drive'") != std::string::npos);
+  const Result folds = run_rig("discrepancy " + csv + " --model x.yaml --folds 2");
+  CHECK(folds.exit_code == 2);
+  CHECK(folds.err.find("--folds") != std::string::npos);
 }
