@@ -499,10 +499,12 @@ struct Workflow {
         p_eq = eqname;
       }
       if (spec.scanned) {
-        // A delayed input acts only delayed: with the columns delta_f and
-        // delta_f(t - tau) - delta_f the instantaneous part is theta_df - c. In closed loop a
+        // A delayed input acts (mostly) delayed: with the columns delta_f and
+        // delta_f(t - tau) - delta_f the delayed fraction is c / theta_df. In closed loop a
         // feedback-driven correlation of delta_f with the filtered equation error also
-        // favours the delayed column, but keeps most of the input instantaneous.
+        // favours the delayed column, but keeps most of the input instantaneous. (The scan's
+        // delay is biased low by the same correlation, which leaves a small instantaneous part
+        // with a real delay: the criterion is the fraction, not its significance.)
         const auto it = std::find(m.eqs[a.eq].names.begin(), m.eqs[a.eq].names.end(), eqname + "_df");
         if (it != m.eqs[a.eq].names.end()) {
           const Index i = static_cast<Index>(it - m.eqs[a.eq].names.begin());
@@ -601,8 +603,8 @@ struct Workflow {
 
     const bool significant = t.p_value <= p_critical;
     const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
-    const auto inst = t.instantaneous_f.find(p_eq);
-    const bool consistent = inst == t.instantaneous_f.end() || inst->second < opt.partial_f;
+    const auto frac = t.parameters.find(p_eq + "_df_fraction_delayed");
+    const bool consistent = frac == t.parameters.end() || frac->second >= 0.5;
     const bool above_gusts = t.highpass_p <= opt.gust_band_alpha;
     const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
     t.passed = significant && pse_falls && heldout && consistent && above_gusts;
@@ -624,8 +626,8 @@ struct Workflow {
             << " on the equations high-passed at " << fmt(opt.gust_band_hz) << " Hz);";
       }
       if (!consistent) {
-        why << " the input keeps an instantaneous part (F " << fmt(inst->second) << " >= " << fmt(opt.partial_f)
-            << " in " << p_eq << "): not a delay;";
+        why << " most of the input still acts at once (delayed fraction " << fmt(frac->second) << " < 0.5 in " << p_eq
+            << "): not a delay;";
       }
       if (!heldout) {
         why << " held-out error change " << fmt(-100.0 * t.heldout_drop) << " % is not a drop beyond "

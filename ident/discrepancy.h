@@ -28,8 +28,8 @@
 ///        scanned over M delays (Bonferroni over the M scan points);
 ///      - the predicted squared error PSE = RSS / N + sigma_max^2 P / N falls in an
 ///        equation where it is significant (sigma_max^2 the variance of the dependent);
-///      - for actuator_delay, the input acts only delayed: the part of delta_f that still
-///        acts instantaneously fails the same partial-F rule in that equation;
+///      - for actuator_delay, the input acts mostly delayed: the delayed column's coefficient
+///        is at least half of delta_f's total coefficient in that equation;
 ///      - above the gust band: the same test on the equations high-passed at gust_band_hz
 ///        (y and every column) is significant at gust_band_alpha: an unmeasured side wind
 ///        drives v and correlates the error with v|v| in closed loop, but only at low
@@ -129,7 +129,8 @@ struct CandidateTrial {
   double heldout_se = 0.0;      ///< its standard error over the folds
   std::map<std::string, double> parameters, sigma;  ///< the candidate's parameters (coloured sigma)
   /// actuator_delay, per equation: partial F of the part of delta_f that still acts
-  /// instantaneously; a delay passes only where it is below the partial-F rule.
+  /// instantaneously (reported; the criterion is the delayed fraction, parameter
+  /// <eq>_df_fraction_delayed >= 0.5).
   std::map<std::string, double> instantaneous_f;
   /// Adjusted p-value of the same test on the equations high-passed above the gust band
   /// (1 for sensor_bias, which is exempt).

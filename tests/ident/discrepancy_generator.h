@@ -39,8 +39,11 @@ struct HiddenEffects {
 struct GeneratorOptions {
   double duration_s = 40.0;
   double rate_hz = 512.0;
-  double doublet_amplitude_rad = 0.45;
-  double k_phi = 175.0, k_p = 25.0;           ///< PD on the roll error [rad/s per rad, per rad/s]
+  double doublet_amplitude_rad = 0.6;         ///< 34 deg, the rig's identification doublet (35 deg)
+  /// PD on the roll error [rad/s per rad, per rad/s]: half the rig's fast gains through the
+  /// roll map (1.406 and 0.2 per unit times 125 rad/s), so that the loop stays stable with the
+  /// 40 ms delays the generator hides.
+  double k_phi = 80.0, k_p = 15.0;
   double throttle_amplitude_pct = 2.0;
   double moment_noise_Nm = 1e-3, force_noise_N = 0.04;  ///< per 2048 Hz step, white
   double noise_p = 0.01, noise_v = 0.005, noise_phi = 0.002, noise_df = 0.2, noise_w = 0.005;
