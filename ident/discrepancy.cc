@@ -70,6 +70,15 @@ const std::vector<CandidateSpec> kLibrary{
      {"r"},
      {{"L", "Lr", "r"}, {"Y", "Yr", "r"}},
      false},
+    {"flapping_forcing",
+     "sin and cos of h 2 pi f t (h = 1, 2) in roll moment and side force: periodic forcing at the flapping "
+     "frequency f, scanned over 10-25 Hz on data low-passed above the band (plant effect flapping_forcing)",
+     {},
+     {{"L", "L_sin1", "sin(2 pi f t)"}, {"L", "L_cos1", "cos(2 pi f t)"}, {"L", "L_sin2", "sin(4 pi f t)"},
+      {"L", "L_cos2", "cos(4 pi f t)"}, {"Y", "Y_sin1", "sin(2 pi f t)"}, {"Y", "Y_cos1", "cos(2 pi f t)"},
+      {"Y", "Y_sin2", "sin(4 pi f t)"}, {"Y", "Y_cos2", "cos(4 pi f t)"}},
+     true,
+     true},
 };
 
 /// A regressor column is excited when its standard deviation reaches this fraction of its
@@ -791,6 +800,213 @@ void time_findings(const std::string& output, const VectorXd& r, const UniformDa
 
 }  // namespace
 
+/// sin and cos of h 2 pi f t, h = 1 .. harmonics, in every equation.
+std::vector<Addition> harmonic_columns(const VectorXd& t_s, double f_hz, int harmonics, const Model& m) {
+  std::vector<Addition> out;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    Addition a;
+    a.eq = e;
+    for (int h = 1; h <= harmonics; ++h) {
+      const VectorXd arg = (2.0 * M_PI * h * f_hz) * t_s;
+      a.names.push_back(m.eqs[e].name + "_sin" + std::to_string(h));
+      a.cols.push_back(arg.array().sin().matrix());
+      a.names.push_back(m.eqs[e].name + "_cos" + std::to_string(h));
+      a.cols.push_back(arg.array().cos().matrix());
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+/// Frequency in [lo, hi] where the residuals (each normalised by its variance) have the most
+/// power at the frequency and its harmonics; samples where `mask` is false count as zero.
+double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo, double hi, int harmonics,
+                      const std::vector<bool>& mask) {
+  std::vector<Psd> psd;
+  for (const auto& r0 : resid) {
+    VectorXd r = r0;
+    for (Index i = 0; i < r.size(); ++i) {
+      if (!mask[static_cast<std::size_t>(i)]) r[i] = 0.0;
+    }
+    const double var = r.squaredNorm() / static_cast<double>(r.size());
+    psd.push_back(periodogram(var > 0.0 ? VectorXd(r / std::sqrt(var)) : r, rate));
+  }
+  const Psd& p0 = psd.front();
+  double best_f = lo, best = -1.0;
+  for (Index k = 0; k < p0.f_hz.size(); ++k) {
+    const double f = p0.f_hz[k];
+    if (f < lo || f > hi) continue;
+    double score = 0.0;
+    for (const auto& p : psd) {
+      for (int h = 1; h <= harmonics; ++h) {
+        const Index j = static_cast<Index>(std::lround(h * f / p.df_hz));
+        if (j < p.psd.size()) score += p.psd[j];
+      }
+    }
+    if (score > best) {
+      best = score;
+      best_f = f;
+    }
+  }
+  return best_f;
+}
+
+/// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
+CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
+                              double p_critical, Index min_block) {
+  CandidateTrial t;
+  t.name = "flapping_forcing";
+  t.round = m.effect_names.size() + 1;
+  t.p_critical = p_critical;
+  const int H = 2;
+  const Index n = d.size();
+  const double T = d.t_s[n - 1] - d.t_s[0];
+  const double lo = opt.flapping_band_hz[0], hi = opt.flapping_band_hz[1];
+  // Independent frequencies of the band: one per 1 / T (the periodogram's resolution).
+  t.scan_points = static_cast<std::size_t>(std::max(1.0, std::ceil((hi - lo) * T)));
+  const std::size_t neq = m.eqs.size();
+  std::vector<VectorXd> resid;
+  std::vector<FoldStats> base;
+  for (std::size_t e = 0; e < neq; ++e) {
+    const MatrixXd X = m.X(e);
+    base.push_back(fold_stats(X, m.eqs[e].y, folds));
+    VectorXd th;
+    if (!solve(base.back().Gt, base.back().bt, th)) {
+      t.available = false;
+      t.reason = "the model cannot be refit on the wideband data";
+      return t;
+    }
+    resid.push_back(m.eqs[e].y - X * th);
+  }
+  const VectorXd t0 = d.t_s.array() - d.t_s[0];
+  const double f = scan_frequency(resid, d.rate_hz, lo, hi, H, std::vector<bool>(static_cast<std::size_t>(n), true));
+  t.parameters["flapping_hz"] = f;
+  const std::vector<Addition> adds = harmonic_columns(t0, f, H, m);
+  double p_min = 1.0;
+  std::string p_eq;
+  std::vector<FoldStats> with(neq);
+  for (const auto& a : adds) {
+    std::vector<Addition> all = m.added[a.eq];
+    all.push_back(a);
+    const MatrixXd C = augmented_design(m.eqs[a.eq], all);
+    with[a.eq] = fold_stats(C, m.eqs[a.eq].y, folds);
+    VectorXd theta;
+    if (!solve(with[a.eq].Gt, with[a.eq].bt, theta)) continue;
+    const VectorXd r = m.eqs[a.eq].y - C * theta;
+    const MatrixXd cov = coloured_covariance(C, r, block_length(r, min_block));
+    const Index kc = static_cast<Index>(a.cols.size()), off = C.cols() - kc;
+    const VectorXd th = theta.tail(kc);
+    const double wald = th.dot(cov.block(off, off, kc, kc).ldlt().solve(th));
+    const std::string& eqname = m.eqs[a.eq].name;
+    t.partial_f[eqname] = wald / static_cast<double>(kc);
+    for (Index j = 0; j < kc; ++j) {
+      t.parameters[a.names[static_cast<std::size_t>(j)]] = th[j];
+      t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, cov(off + j, off + j)));
+    }
+    for (int h = 1; h <= H; ++h) {
+      const double s1 = th[2 * (h - 1)], c1 = th[2 * (h - 1) + 1];
+      t.parameters[eqname + "_amp" + std::to_string(h)] = std::hypot(s1, c1);
+    }
+    const double p = chi_square_survival(wald, static_cast<double>(kc));
+    if (p < p_min) {
+      p_min = p;
+      p_eq = eqname;
+    }
+    const double N = static_cast<double>(n);
+    const VectorXd& y = m.eqs[a.eq].y;
+    const double s2max = (y.array() - y.mean()).square().mean();
+    t.pse_before[eqname] = full_rss(base[a.eq]) / N + s2max * static_cast<double>(C.cols() - kc) / N;
+    t.pse_after[eqname] = full_rss(with[a.eq]) / N + s2max * static_cast<double>(C.cols()) / N;
+  }
+  t.p_value = std::min(1.0, p_min * static_cast<double>(neq) * static_cast<double>(t.scan_points));
+  // Held-out: each block predicted with the frequency found without it.
+  std::vector<VectorXd> before, after;
+  for (std::size_t e = 0; e < neq; ++e) {
+    before.push_back(VectorXd(n));
+    after.push_back(VectorXd(n));
+  }
+  for (std::size_t k = 0; k < folds.size(); ++k) {
+    const auto [a, b] = folds[k];
+    std::vector<bool> mask(static_cast<std::size_t>(n), true);
+    for (Index i = a; i < b; ++i) mask[static_cast<std::size_t>(i)] = false;
+    const double fk = scan_frequency(resid, d.rate_hz, lo, hi, H, mask);
+    const std::vector<Addition> ak = harmonic_columns(t0, fk, H, m);
+    for (std::size_t e = 0; e < neq; ++e) {
+      const MatrixXd X = m.X(e);
+      VectorXd th0;
+      if (!solve(base[e].Gt - base[e].G[k], base[e].bt - base[e].b[k], th0)) th0 = VectorXd::Zero(X.cols());
+      before[e].segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - X.middleRows(a, b - a) * th0;
+      std::vector<Addition> all = m.added[e];
+      all.push_back(ak[e]);
+      const MatrixXd C = augmented_design(m.eqs[e], all);
+      const FoldStats fs = fold_stats(C, m.eqs[e].y, folds);
+      VectorXd th;
+      if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) th = VectorXd::Zero(C.cols());
+      after[e].segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+    }
+  }
+  heldout_drop(before, after, min_block, t.heldout_drop, t.heldout_se);
+  const bool significant = t.p_value <= p_critical;
+  const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
+  const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
+  t.passed = significant && pse_falls && heldout;
+  std::ostringstream why;
+  why << (t.passed ? "passes:" : "fails:") << " at " << fmt(f) << " Hz (band " << fmt(lo) << "-" << fmt(hi) << " Hz, "
+      << t.scan_points << " independent frequencies, data low-passed at " << fmt(opt.flapping_cutoff_hz) << " Hz): p "
+      << fmt(t.p_value) << (significant ? " <= " : " > ") << fmt(p_critical);
+  if (!p_eq.empty()) why << " (F " << fmt(t.partial_f[p_eq]) << " in " << p_eq << ")";
+  why << (pse_falls ? ", PSE falls" : ", PSE does not fall") << ", held-out error change " << fmt(-100.0 * t.heldout_drop)
+      << " % (spread " << fmt(100.0 * t.heldout_se) << " %)";
+  t.reason = why.str();
+  return t;
+}
+
+/// The model's regression equations on `d`, with the columns of the effects the model file
+/// carries (an earlier analysis named them): refit with the derivatives, not tried again.
+/// Effects without a column on `d` (flapping forcing on low-passed data) are only listed.
+Model build_baseline(const UniformData& d, const std::vector<Equation>& equations, const DerivativeModel& model,
+                     const Vehicle& vehicle, const std::string& source, std::vector<std::string>* known,
+                     std::map<std::string, double>* known_values) {
+  Model m;
+  for (const auto& eq : equations) {
+    Eq e;
+    e.name = eq.name;
+    e.output = eq.dependent;
+    e.unit = eq.dependent == "v_dot_star" ? "m/s^2" : "rad/s^2";
+    e.scale = eq.scale;
+    e.y = eq.scale * d.at(eq.dependent);
+    for (std::size_t j = 0; j < eq.regressors.size(); ++j) {
+      e.names.push_back(eq.parameters[j]);
+      e.cols.push_back(d.at(eq.regressors[j]));
+    }
+    m.eqs.push_back(std::move(e));
+  }
+  m.added.resize(m.eqs.size());
+  for (const auto& [name, params] : model.effects) {
+    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    if (spec == kLibrary.end()) continue;  // an effect the library has no regressor form for
+    if (known) known->push_back(name);
+    if (known_values) {
+      for (const auto& [key, value] : params) (*known_values)[key] = value;
+    }
+    if (spec->wideband) continue;
+    for (const auto& need : spec->needs) {
+      if (!d.has(need)) {
+        throw DataError(source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
+      }
+    }
+    const auto delay = params.find("delay_s");
+    const Index k = delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
+    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, k)) {
+      for (std::size_t j = 0; j < add.names.size(); ++j) {
+        m.eqs[add.eq].names.push_back(add.names[j]);
+        m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
+      }
+    }
+  }
+  return m;
+}
+
 DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                    const DiscrepancyOptions& options) {
   if (model.structure != Structure::kLateral3) {
@@ -829,48 +1045,11 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   res.samples = static_cast<std::size_t>(n);
   res.folds = options.folds;
 
-  // Baseline equations (the model's structure), and the model as given.
-  Model m;
+  // Baseline equations (the model's structure with the effects the model file carries).
   const auto equations = lateral_equations(Structure::kLateral3, inputs, vehicle);
-  for (const auto& eq : equations) {
-    Eq e;
-    e.name = eq.name;
-    e.output = eq.dependent;
-    e.unit = eq.dependent == "v_dot_star" ? "m/s^2" : "rad/s^2";
-    e.scale = eq.scale;
-    e.y = eq.scale * d.at(eq.dependent);
-    for (std::size_t j = 0; j < eq.regressors.size(); ++j) {
-      e.names.push_back(eq.parameters[j]);
-      e.cols.push_back(d.at(eq.regressors[j]));
-    }
-    m.eqs.push_back(std::move(e));
-  }
-  m.added.resize(m.eqs.size());
-
-  // Effects the model file already carries (an earlier analysis named them) are part of the
-  // baseline structure: their columns are refit with the derivatives, and they are not
-  // candidates again.
   std::vector<std::string> known;
   std::map<std::string, double> known_values;
-  for (const auto& [name, params] : model.effects) {
-    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
-    if (spec == kLibrary.end()) continue;  // an effect the library has no regressor form for
-    for (const auto& need : spec->needs) {
-      if (!d.has(need)) {
-        throw DataError(data.source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
-      }
-    }
-    const auto delay = params.find("delay_s");
-    const Index k = delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
-    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, k)) {
-      for (std::size_t j = 0; j < add.names.size(); ++j) {
-        m.eqs[add.eq].names.push_back(add.names[j]);
-        m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
-      }
-    }
-    for (const auto& [key, value] : params) known_values[key] = value;
-    known.push_back(name);
-  }
+  Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
 
   Workflow wf{options, vehicle, model, d, make_folds(n, options.folds), 1, 0.0};
   wf.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
@@ -900,6 +1079,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     };
     std::vector<Pass> passing;
     for (const CandidateSpec* spec : pool) {
+      if (spec->wideband) continue;  // the wideband stage below
       if (std::find(entered.begin(), entered.end(), spec->name) != entered.end()) continue;
       std::vector<Addition> adds;
       res.candidates.push_back(wf.trial(*spec, m, base, base_cv, round, adds));
@@ -941,11 +1121,46 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     }
   }
 
+  // Wideband stage: flapping forcing lies above the identification low-pass. The model as
+  // it now stands (baseline, known and named effects) is refit on the same data low-passed at
+  // flapping_cutoff_hz, and harmonics at a frequency scanned over the flapping band are tried
+  // with the same entry rule (Bonferroni over the independent frequencies of the band).
+  const auto flapping = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->wideband; });
+  if (flapping != pool.end() && std::find(known.begin(), known.end(), (*flapping)->name) == known.end()) {
+    ProcessingOptions wide_proc = options.processing;
+    wide_proc.filter_order = 10;
+    wide_proc.cutoff_hz = std::min(options.flapping_cutoff_hz, 0.4 * options.processing.rate_hz);
+    const PreparedData wide = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, wide_proc);
+    Model wm = build_baseline(wide.filtered, equations, model, vehicle, data.source, nullptr, nullptr);
+    for (const auto& name : m.effect_names) {
+      const CandidateSpec& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+      Index k = 0;
+      for (const auto& t : res.candidates) {
+        if (t.name == name && t.entered && spec.scanned) k = std::lround(t.delay_s * wide.filtered.rate_hz);
+      }
+      for (auto& a : candidate_columns(spec, wide.filtered, model.trim, vehicle.gravity_mps2, k)) wm.added[a.eq].push_back(a);
+    }
+    const Index wide_block = static_cast<Index>(4 * whiteness_lag_step(0, wide_proc));
+    CandidateTrial t = flapping_trial(wm, wide.filtered, wf.folds, options, wf.p_critical, wide_block);
+    if (t.passed) {
+      t.entered = true;
+      t.reason = "entered: " + t.reason;
+      NamedEffect eff;
+      eff.name = t.name;
+      eff.parameters = t.parameters;
+      eff.sigma = t.sigma;
+      res.effects.push_back(eff);
+      m.effect_names.push_back(t.name);
+    }
+    res.candidates.push_back(std::move(t));
+  }
+
   // The augmented fit and the gap after.
   std::vector<VectorXd> aug_resid;
   res.augmented = full_fit(m, wf.min_block, &aug_resid);
   const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
   for (const auto& name : m.effect_names) {
+    if (name == "flapping_forcing") continue;  // named with its parameters by the wideband stage
     NamedEffect eff;
     eff.name = name;
     const CandidateSpec& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });

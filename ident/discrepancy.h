@@ -43,6 +43,11 @@
 ///    the new residual. Two passing candidates whose regressors, with the model's
 ///    regressors projected out, correlate by more than 0.9 explain the same thing: the
 ///    verdict is `ambiguous` and names both.
+///    flapping_forcing lies above the identification low-pass: after the stepwise search the
+///    model as it stands is refit on the same data low-passed at flapping_cutoff_hz, and
+///    sin/cos of the first two harmonics of a frequency scanned over flapping_band_hz are tried
+///    with the same significance (Bonferroni over the band's independent frequencies, one per
+///    1 / record length), PSE and held-out rules (each block's frequency found without it).
 /// 4. Add. The baseline derivatives are refit together with the named effects.
 /// 5. Gap after: the held-out table again, with the effects.
 ///
@@ -81,7 +86,8 @@ struct CandidateSpec {
   std::string effect;       ///< the physics, one line
   std::vector<std::string> needs;  ///< data channels it needs besides p, v, phi, delta_f
   std::vector<CandidateTerm> terms;
-  bool scanned = false;     ///< has a scanned parameter (the delay of actuator_delay)
+  bool scanned = false;     ///< has a scanned parameter (a delay, a frequency)
+  bool wideband = false;    ///< tested on data low-passed above the flapping band (flapping_forcing)
 };
 
 /// Every candidate effect, in a fixed order.
@@ -105,6 +111,11 @@ struct DiscrepancyOptions {
   /// variance below 2 Hz ((2/pi) atan(2 pi f tau)).
   double gust_band_hz = 2.0;
   double gust_band_alpha = 0.01;      ///< level of the confirmation above the gust band
+  /// flapping_forcing: the band scanned [Hz] (the Nimble flaps at about 17 Hz; 10-25 Hz covers
+  /// the throttle range) and the low-pass of the data it is tested on [Hz], above the second
+  /// harmonic of the band's upper half (clamped to 0.4 x the rate).
+  double flapping_band_hz[2] = {10.0, 25.0};
+  double flapping_cutoff_hz = 60.0;
   double location_alpha = 0.01;       ///< family-wise level of each location test
   double window_s = 1.0;              ///< time location windows [s]
   std::size_t whiteness_lags = 50;

@@ -191,7 +191,9 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
       continue;
     }
     o << t.reason;
-    if (t.scan_points > 1) o << "  [delay " << g(1e3 * t.delay_s) << " ms of " << t.scan_points << " scanned]";
+    if (t.scan_points > 1 && t.parameters.count("flapping_hz") == 0) {
+      o << "  [delay " << g(1e3 * t.delay_s) << " ms of " << t.scan_points << " scanned]";
+    }
     o << "\n";
   }
   o << "\nlocated (baseline structure's residual)\n";

@@ -13,6 +13,9 @@
 ///   forward_speed_coupling  Lp, Lv, Yp, Yv scale with (1 + k (u - u0)), k in [0.3, 0.7] per m/s
 ///   actuator_delay        the flap input acts tau later than recorded, tau in [12, 40] ms
 ///   sensor_bias           the recorded p carries a constant bias b in [0.02, 0.06] rad/s
+///   flapping_forcing      L += A_L (sin(2 pi f t + a) + 0.5 sin(4 pi f t + b)), Y likewise with A_Y;
+///                         f in [14, 20] Hz, A_L in [1, 3] mN m, A_Y = 5 m^-1 A_L (the plant
+///                         file's 2 mN m and 10 mN)
 ///   lateral_gust          the aerodynamics see v - v_g, v_g first-order Gauss-Markov,
 ///                         sigma 0.1 m/s, tau 0.5 s (stochastic: no deterministic name)
 
@@ -34,6 +37,7 @@ struct HiddenEffects {
   std::set<std::string> on;   ///< effect names (see the file comment)
   double scale = 1.0;         ///< multiplies every drawn magnitude (small effects: << 1)
   double Y_vv = 0.0, L_vv = 0.0, k_speed = 0.0, delay_s = 0.0, bias_p = 0.0;
+  double flap_hz = 17.0, flap_L = 0.0, flap_Y = 0.0, flap_phase1 = 0.0, flap_phase2 = 0.0;
 };
 
 struct GeneratorOptions {
@@ -59,6 +63,11 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   h.k_speed = (0.3 + 0.4 * u01(rng)) * h.scale;
   h.delay_s = (0.012 + 0.028 * u01(rng)) * h.scale;
   h.bias_p = (0.02 + 0.04 * u01(rng)) * h.scale;
+  h.flap_hz = 14.0 + 6.0 * u01(rng);
+  h.flap_L = (1e-3 + 2e-3 * u01(rng)) * h.scale;
+  h.flap_Y = 5.0 * h.flap_L;
+  h.flap_phase1 = 2.0 * M_PI * u01(rng);
+  h.flap_phase2 = 2.0 * M_PI * u01(rng);
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -73,6 +82,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool inflow = h.on.count("lateral_inflow") > 0, kin = h.on.count("kinematic_coupling") > 0;
   const bool speed = h.on.count("forward_speed_coupling") > 0, delay = h.on.count("actuator_delay") > 0;
   const bool bias = h.on.count("sensor_bias") > 0, gust = h.on.count("lateral_gust") > 0;
+  const bool flap = h.on.count("flapping_forcing") > 0;
 
   const int sub = 4;
   const double dt = 1.0 / (o.rate_hz * sub);
@@ -122,6 +132,11 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     const double ks = speed ? 1.0 + h.k_speed * (u_of(t) - 0.0) : 1.0;
     double L = ks * (Lp * P + Lv * vrel) + L_df * dfin + L_dt * dtp + Lw;
     double Y = ks * (Yp * P + Yv * vrel) + Y_df * dfin + Y_dt * dtp + Yw;
+    if (flap) {
+      const double a1 = 2.0 * M_PI * h.flap_hz * t + h.flap_phase1, a2 = 4.0 * M_PI * h.flap_hz * t + h.flap_phase2;
+      L += h.flap_L * (std::sin(a1) + 0.5 * std::sin(a2));
+      Y += h.flap_Y * (std::sin(a1) + 0.5 * std::sin(a2));
+    }
     if (inflow) {
       L += h.L_vv * vrel * std::fabs(vrel);
       Y += h.Y_vv * vrel * std::fabs(vrel);

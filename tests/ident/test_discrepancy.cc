@@ -163,6 +163,21 @@ TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign o
   }
 }
 
+TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its frequency", "[discrepancy]") {
+  for (std::uint64_t s = 1; s <= 4; ++s) {
+    testing::HiddenEffects h;
+    h.on = {"flapping_forcing"};
+    testing::draw_magnitudes(h, s);
+    const DiscrepancyResult r = run({"flapping_forcing"}, s);
+    INFO("seed " << s << " f " << h.flap_hz << ": " << r.summary);
+    REQUIRE(names(r) == std::vector<std::string>{"flapping_forcing"});
+    const auto& p = r.effects.front().parameters;
+    CHECK(std::fabs(p.at("flapping_hz") - h.flap_hz) < 0.05);
+    // The roll moment of the first harmonic comes back (generator: A_L sin(2 pi f t + a)).
+    CHECK(p.at("L_amp1") == Approx(h.flap_L).epsilon(0.15));
+  }
+}
+
 TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 2; ++s) {
     const DiscrepancyResult r = run({"kinematic_coupling", "forward_speed_coupling"}, s);
