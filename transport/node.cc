@@ -115,6 +115,7 @@ void ProcessNode::watch_fd(int fd, std::function<void()> on_readable) {
 }
 
 void ProcessNode::publish_ack(int64_t step, int64_t utime) {
+  last_acked_step_ = step;
   step_ack_t ack;
   ack.utime = utime;
   ack.seq = ack_seq_++;
@@ -276,31 +277,7 @@ int ProcessNode::run() {
       100000);
   } else {
     bus_.subscribe<rig_clock_t>(
-      channels::kRigClock,
-      [this](const rig_clock_t& tick) {
-        if (!started_ || clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP) return;
-        bool ran = false;
-        for (auto& t : tasks_) {
-          while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
-            sim_time_ns_ = t.next_ns;
-            t.fn(t.next_ns);
-            t.next_ns += t.period_ns;
-            ++loop_count_;
-            ran = true;
-          }
-        }
-        if (!ran) return;
-        if (ack_hold_requested_) {
-          ack_hold_requested_ = false;
-          ack_held_ = true;
-          held_step_ = tick.step;
-          held_utime_ = tick.utime;
-          return;
-        }
-        publish_ack(tick.step, tick.utime);
-        run_deferred();
-      },
-      100000);
+      channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
   }
   if (!wait_for_start()) {
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
@@ -308,6 +285,11 @@ int ProcessNode::run() {
   }
   started_wall_us_ = wall_us();
   publish_heartbeat(heartbeat_t::STATE_RUNNING);
+  if (has_pending_tick_) {
+    // The master's first tick overtook RUN_CONTROL start (they come from different senders).
+    has_pending_tick_ = false;
+    if (pending_tick_.run_id == run_id_) on_rig_clock(pending_tick_);
+  }
   int code = kExitOk;
   if (clock_mode_ == run_control_t::CLOCK_MODE_REALTIME) {
     code = run_realtime();
@@ -364,6 +346,39 @@ int ProcessNode::run_realtime() {
   return kExitOk;
 }
 
+void ProcessNode::on_rig_clock(const rig_clock_t& tick) {
+  if (!started_) {
+    has_pending_tick_ = true;
+    pending_tick_ = tick;
+    return;
+  }
+  if (clock_mode_ != run_control_t::CLOCK_MODE_LOCKSTEP || master_) return;
+  bool ran = false;
+  for (auto& t : tasks_) {
+    while (t.next_ns <= tick.sim_time_ns && t.next_ns < duration_ns_) {
+      sim_time_ns_ = t.next_ns;
+      t.fn(t.next_ns);
+      t.next_ns += t.period_ns;
+      ++loop_count_;
+      ran = true;
+    }
+  }
+  if (!ran) {
+    // The master sent this tick again: our acknowledgement did not reach it.
+    if (tick.step == last_acked_step_ && !ack_held_) publish_ack(tick.step, tick.utime);
+    return;
+  }
+  if (ack_hold_requested_) {
+    ack_hold_requested_ = false;
+    ack_held_ = true;
+    held_step_ = tick.step;
+    held_utime_ = tick.utime;
+    return;
+  }
+  publish_ack(tick.step, tick.utime);
+  run_deferred();
+}
+
 int ProcessNode::run_lockstep_participant() {
   // Tasks run inside the RIG_CLOCK handler; wall time here only paces housekeeping.
   while (!stop_) {
@@ -413,8 +428,13 @@ int ProcessNode::run_lockstep_master() {
     bus_.publish(channels::kRigClock, tick);
     run_deferred();  // outputs nobody waits for this step go out after the tick
 
-    // Wait for every participant due at this step.
+    // Wait for every participant due at this step. The tick goes out again every
+    // kTickResendMs while an acknowledgement is missing: a participant that had not yet seen
+    // RUN_CONTROL start, or whose acknowledgement was lost, answers the repeat (it runs nothing
+    // twice); a stalled participant still times out.
+    constexpr int64_t kTickResendMs = 250;
     const int64_t give_up = monotonic_ns() + static_cast<int64_t>(ack_timeout_ms_) * 1000000LL;
+    int64_t resend_at = monotonic_ns() + kTickResendMs * 1000000LL;
     for (;;) {
       std::string missing;
       for (const auto& [p, due] : next_due_) {
@@ -435,6 +455,10 @@ int ProcessNode::run_lockstep_master() {
       }
       wait_io(std::min<int64_t>(left_ms, 50) * 1000000LL);
       housekeeping();
+      if (monotonic_ns() >= resend_at) {
+        bus_.publish(channels::kRigClock, tick);
+        resend_at = monotonic_ns() + kTickResendMs * 1000000LL;
+      }
     }
     jitter_.add_ns(monotonic_ns() - step_start);  // lockstep: wall time per step
     housekeeping();

@@ -30,6 +30,7 @@
 
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
+#include <nimble/rig_clock_t.hpp>
 #include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 
@@ -227,6 +228,14 @@ class ProcessNode {
   bool ack_hold_requested_ = false;
   bool ack_held_ = false;
   int64_t held_step_ = 0, held_utime_ = 0;
+  /// Lockstep participant: runs the tasks due at `tick` and acknowledges it. A tick that comes
+  /// before RUN_CONTROL start is kept (pending_tick_) and handled once the run starts; a tick
+  /// already acknowledged (the master sends it again when no acknowledgement came) is
+  /// acknowledged again without running anything.
+  void on_rig_clock(const rig_clock_t& tick);
+  bool has_pending_tick_ = false;
+  rig_clock_t pending_tick_{};
+  int64_t last_acked_step_ = -1;
   void run_deferred();
   int64_t spin_ns_ = 0;
   int64_t loop_count_ = 0;

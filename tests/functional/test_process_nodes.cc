@@ -348,3 +348,43 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
   }
   CHECK(dropped == 1);  // at most one a second of rig time
 }
+
+TEST_CASE("lockstep participant: a tick that overtakes RUN_CONTROL start is handled once the run starts, a repeated "
+          "tick is acknowledged again without running twice",
+          "[controller][process][lockstep]") {
+  // RUN_CONTROL start (from the launcher) and the master's first RIG_CLOCK come from different
+  // senders; the tick may arrive first. The master repeats a tick whose acknowledgement is
+  // missing; the participant must answer without running its tasks again.
+  const Scenario scenario = load_scenario(kConfigs + "id_doublet_train_fast.yaml", {{"run.controller_input", "truth"}});
+  ControllerNode controller(scenario, {"controller", "", "memq://"});
+  transport::Bus& bus = controller.node().bus();
+  std::vector<actuator_command_t> commands;
+  std::vector<int64_t> acked_steps;
+  bus.subscribe<actuator_command_t>("ACTUATOR_CMD", [&](const actuator_command_t& m) { commands.push_back(m); });
+  truth_state_t t{};
+  t.quaternion_wxyz[0] = 1.0;
+  rig_clock_t c{};
+  c.dt_ns = 1000000;
+  c.run_id = "test";
+  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+    acked_steps.push_back(ack.step);
+    if (acked_steps.size() == 1) {
+      bus.publish("RIG_CLOCK", c);  // the same tick again, as the master sends it
+    } else {
+      bus.publish("RUN_CONTROL", stop_command());
+    }
+  });
+  // When the participant says READY it listens for the clock but has not seen the start:
+  // the tick goes out first, then the start.
+  bool started = false;
+  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+    if (m.state != heartbeat_t::STATE_READY || started) return;
+    started = true;
+    bus.publish("TRUTH", t);
+    bus.publish("RIG_CLOCK", c);
+    bus.publish("RUN_CONTROL", start_lockstep(1.0, {"controller"}));
+  });
+  REQUIRE(controller.run() == transport::kExitOk);
+  CHECK(acked_steps == std::vector<int64_t>{0, 0});
+  CHECK(commands.size() == 1);
+}
