@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -134,10 +135,31 @@ PreparedData prepare(const FlightData& data, Structure structure, const Trim& tr
   return out;
 }
 
-std::vector<std::string> default_inputs(const FlightData& data) {
+bool input_excited(const FlightData& data, const std::string& name, double* std_out) {
+  const Channel& c = data.at(name);
+  double mean = 0.0, ss = 0.0;
+  for (double x : c.values) mean += x;
+  mean /= std::max<std::size_t>(1, c.values.size());
+  for (double x : c.values) ss += (x - mean) * (x - mean);
+  const double sd = std::sqrt(ss / std::max<std::size_t>(1, c.values.size()));
+  if (std_out) *std_out = sd;
+  const double floor = (name == "delta_d" || name == "delta_w") ? kServoExcitationFloorRad : 0.0;
+  return sd > floor;
+}
+
+std::vector<std::string> default_inputs(const FlightData& data, std::vector<std::string>* left_out) {
   std::vector<std::string> out{"delta_f", "delta_t"};
   for (const char* extra : {"delta_d", "delta_w"}) {
-    if (data.has(extra)) out.push_back(extra);
+    if (!data.has(extra)) continue;
+    double sd = 0.0;
+    if (input_excited(data, extra, &sd)) {
+      out.push_back(extra);
+    } else if (left_out) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "%s left out: standard deviation %.3g rad, below the excitation floor %.3g rad",
+                    extra, sd, kServoExcitationFloorRad);
+      left_out->push_back(buf);
+    }
   }
   return out;
 }
@@ -234,7 +256,7 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
   res.source = data.source;
   res.options = options;
   res.vehicle = vehicle;
-  res.inputs = options.inputs.empty() ? default_inputs(data) : options.inputs;
+  res.inputs = options.inputs.empty() ? default_inputs(data, &res.inputs_left_out) : options.inputs;
   // Inputs in the canonical order, each once.
   {
     std::vector<std::string> ordered;

@@ -114,8 +114,21 @@ struct PreparedData {
 PreparedData prepare(const FlightData& data, Structure structure, const Trim& trim, double gravity_mps2,
                      const ProcessingOptions& options);
 
-/// Inputs used when IdentOptions::inputs is empty.
-std::vector<std::string> default_inputs(const FlightData& data);
+/// Inputs used when IdentOptions::inputs is empty: delta_f and delta_t, and delta_d, delta_w
+/// when the data has them and they are excited (input_excited()). Each input left out is
+/// described in `left_out` (if given).
+std::vector<std::string> default_inputs(const FlightData& data, std::vector<std::string>* left_out = nullptr);
+
+/// Excitation floor of the optional servo inputs [rad]: 10 steps of the actuator interface's
+/// resolution (1e-4 rad, plant.command_resolution.servo_rad and the CAN frames). An input that
+/// moves less than this (standard deviation over the record) is at the size of its own
+/// quantisation, and its derivatives cannot be estimated: a rig flight whose dihedral moved
+/// 2.6e-4 rad gave L_dd with sigma_c 146 %.
+constexpr double kServoExcitationFloorRad = 1e-3;
+
+/// True if channel `name` of `data` varies by at least its excitation floor (standard deviation
+/// over the record; kServoExcitationFloorRad for delta_d and delta_w; any variation otherwise).
+bool input_excited(const FlightData& data, const std::string& name, double* std_out = nullptr);
 
 /// Name of the parameter of `regressor` in the equation `letter`: "Lp",
 /// "Yv", "L_df" (inputs use their derivative suffix), otherwise
@@ -152,6 +165,7 @@ struct IdentResult {
   std::string source;
   IdentOptions options;
   std::vector<std::string> inputs;
+  std::vector<std::string> inputs_left_out;  ///< optional inputs not excited enough, with why
   Vehicle vehicle;
   PreparedData data;
   RegressionResult regression;

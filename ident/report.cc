@@ -122,6 +122,7 @@ std::string identification_text(const IdentResult& r) {
   }
   std::string inputs;
   for (const auto& in : r.inputs) inputs += (inputs.empty() ? "" : ", ") + in;
+  for (const auto& note : r.inputs_left_out) out += "note       " + note + "\n";
   out += fmt("model      %s, inputs %s, %s\n", to_string(o.structure).c_str(), inputs.c_str(),
              o.method == Method::kOls ? "ordinary least squares"
                                       : fmt("weighted least squares (residual covariance over %.3g s%s)",
@@ -194,6 +195,7 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
   w.key("structure").value(to_string(o.structure));
   w.key("method").value(to_string(o.method));
   w.key("inputs").array(r.inputs);
+  w.key("inputs_left_out").array(r.inputs_left_out);
   w.key("vehicle").begin_object();
   w.key("name").value(r.vehicle.name).key("file").value(r.vehicle.file).key("mass_kg").value(r.vehicle.mass_kg);
   w.end_object();

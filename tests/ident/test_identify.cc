@@ -446,3 +446,35 @@ TEST_CASE("states stamped 1.5 ms late against the inputs make the roll damping L
   // L_df hardly moves: the error goes into the small damping term.
   CHECK(std::fabs(relative_error(late, truth, "L_df")) < 0.02);
 }
+
+TEST_CASE("a servo input enters only when it is excited beyond its floor, otherwise it is left out with a note",
+          "[identify]") {
+  const DerivativeModel truth = test::set1_model();
+  const Vehicle vehicle = load_vehicle(truth.vehicle_file);
+  FlightData data = simulate_synthetic(truth, vehicle, test::identification_flight(3));
+  const Channel& df = data.at("delta_f");
+  // A dihedral that only jitters at the servo resolution (as on a roll-only rig flight)...
+  Channel dd{df.t_s, std::vector<double>(df.t_s.size())};
+  for (std::size_t k = 0; k < dd.values.size(); ++k) dd.values[k] = (k % 7 < 3) ? 2e-4 : -1e-4;
+  data.channels["delta_d"] = dd;
+  IdentOptions opt;
+  opt.trim = truth.trim;
+  IdentResult r = identify(data, vehicle, truth.vehicle_file, opt);
+  CHECK(r.inputs == std::vector<std::string>{"delta_f", "delta_t"});
+  REQUIRE(r.inputs_left_out.size() == 1);
+  CHECK(r.inputs_left_out.front().find("delta_d left out") != std::string::npos);
+  CHECK(r.parameters.count("L_dd") == 0);
+  // ... and one that moves: it enters.
+  for (std::size_t k = 0; k < dd.values.size(); ++k) dd.values[k] = 0.05 * std::sin(0.01 * static_cast<double>(k));
+  data.channels["delta_d"] = dd;
+  r = identify(data, vehicle, truth.vehicle_file, opt);
+  CHECK(r.inputs == std::vector<std::string>{"delta_f", "delta_t", "delta_d"});
+  CHECK(r.inputs_left_out.empty());
+  // Asked for explicitly, an input is used whatever its excitation.
+  for (std::size_t k = 0; k < dd.values.size(); ++k) dd.values[k] = (k % 7 < 3) ? 2e-4 : -1e-4;
+  data.channels["delta_d"] = dd;
+  opt.inputs = {"delta_f", "delta_t", "delta_d"};
+  r = identify(data, vehicle, truth.vehicle_file, opt);
+  CHECK(r.inputs == std::vector<std::string>{"delta_f", "delta_t", "delta_d"});
+  CHECK(r.inputs_left_out.empty());
+}
