@@ -16,6 +16,11 @@
 ///   flapping_forcing      L += A_L (sin(2 pi f t + a) + 0.5 sin(4 pi f t + b)), Y likewise with A_Y;
 ///                         f in [14, 20] Hz, A_L in [1, 3] mN m, A_Y = 5 m^-1 A_L (the plant
 ///                         file's 2 mN m and 10 mN)
+///   dihedral_coupling     a dihedral input delta_d (a smooth random signal, 0.05 rad) acts with
+///                         L_dd, Y_dd of thesis Table B.2; recorded as channel delta_d
+///   yaw_alias             (with dihedral_coupling) the record also carries a yaw rate r that
+///                         follows delta_d (r = 2 delta_d + 1 % noise): two candidates that
+///                         explain the same thing
 ///   lateral_gust          the aerodynamics see v - v_g, v_g first-order Gauss-Markov,
 ///                         sigma 0.1 m/s, tau 0.5 s (stochastic: no deterministic name)
 
@@ -83,11 +88,18 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool speed = h.on.count("forward_speed_coupling") > 0, delay = h.on.count("actuator_delay") > 0;
   const bool bias = h.on.count("sensor_bias") > 0, gust = h.on.count("lateral_gust") > 0;
   const bool flap = h.on.count("flapping_forcing") > 0;
+  const bool dihedral = h.on.count("dihedral_coupling") > 0, yaw_alias = h.on.count("yaw_alias") > 0;
+  const double L_dd = 1.20e-3, Y_dd = -5.41e-2;  // thesis Table B.2
+  double ph_d = 0.0;  // drawn below (only when the dihedral acts, so other records keep their noise)
+  auto dd_of = [&](double t) {
+    return 0.05 * (0.6 * std::sin(2.0 * M_PI * 0.7 * t + ph_d) + 0.4 * std::sin(2.0 * M_PI * 2.3 * t + 2.0 * ph_d));
+  };
 
   const int sub = 4;
   const double dt = 1.0 / (o.rate_hz * sub);
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01(0.0, 1.0);
+  if (dihedral) ph_d = 2.0 * M_PI * std::uniform_real_distribution<double>(0.0, 1.0)(rng);
 
   // Manoeuvres: roll doublets of 7, 4 and 2 Hz every 2.5 s; throttle doublets at 1.5 Hz
   // every 3.7 s; w and u follow slow smooth profiles (climb/descent, forward flight).
@@ -132,6 +144,10 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     const double ks = speed ? 1.0 + h.k_speed * (u_of(t) - 0.0) : 1.0;
     double L = ks * (Lp * P + Lv * vrel) + L_df * dfin + L_dt * dtp + Lw;
     double Y = ks * (Yp * P + Yv * vrel) + Y_df * dfin + Y_dt * dtp + Yw;
+    if (dihedral) {
+      L += L_dd * dd_of(t);
+      Y += Y_dd * dd_of(t);
+    }
     if (flap) {
       const double a1 = 2.0 * M_PI * h.flap_hz * t + h.flap_phase1, a2 = 4.0 * M_PI * h.flap_hz * t + h.flap_phase2;
       L += h.flap_L * (std::sin(a1) + 0.5 * std::sin(a2));
@@ -151,6 +167,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   FlightData d;
   d.source = "generated";
   for (const char* c : {"p", "v", "phi", "u", "w", "delta_f", "delta_t", "phi_sp"}) d.channels[c];
+  if (dihedral) d.channels["delta_d"];
+  if (yaw_alias) d.channels["r"];
   const long steps = static_cast<long>(std::lround(o.duration_s * o.rate_hz)) * sub;
   const double a_g = std::exp(-dt / 0.5);
   for (long i = 0; i <= steps; ++i) {
@@ -168,6 +186,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
       rec("delta_f", df + o.noise_df * n01(rng));
       rec("delta_t", throttle(t));
       rec("phi_sp", phi_sp(t));
+      if (dihedral) rec("delta_d", dd_of(t));
+      if (yaw_alias) rec("r", 2.0 * dd_of(t) * (1.0 + 0.01 * n01(rng)));
     }
     if (i == steps) break;
     if (delay) {

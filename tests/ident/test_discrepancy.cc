@@ -178,6 +178,25 @@ TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its fre
   }
 }
 
+TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguous, naming both", "[discrepancy]") {
+  // The dihedral acts (thesis Table B.2 derivatives); the record's yaw rate follows the dihedral,
+  // so yaw_coupling explains the same residual as dihedral_coupling.
+  for (std::uint64_t s = 1; s <= 2; ++s) {
+    const DiscrepancyResult r = run({"dihedral_coupling", "yaw_alias"}, s);
+    INFO("seed " << s << ": " << r.summary);
+    CHECK(r.verdict == "ambiguous");
+    REQUIRE(r.ambiguous.size() == 1);
+    std::vector<std::string> pair = r.ambiguous.front();
+    std::sort(pair.begin(), pair.end());
+    CHECK(pair == std::vector<std::string>{"dihedral_coupling", "yaw_coupling"});
+  }
+  // Without the alias it is named.
+  const DiscrepancyResult r = run({"dihedral_coupling"}, 1);
+  INFO(r.summary);
+  CHECK(r.verdict == "effects");
+  CHECK(names(r) == std::vector<std::string>{"dihedral_coupling"});
+}
+
 TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 2; ++s) {
     const DiscrepancyResult r = run({"kinematic_coupling", "forward_speed_coupling"}, s);
