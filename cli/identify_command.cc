@@ -327,7 +327,24 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);
   const ident::FlightData data = ident::read_flight_data(data_file);
-  const ident::DiscrepancyResult result = ident::find_discrepancy(data, model, vehicle, opt);
+  ident::DiscrepancyResult result = ident::find_discrepancy(data, model, vehicle, opt);
+  // Closed loop before and after, as rig validate --closed-loop.
+  if (!data.has("phi_sp")) {
+    result.closed_loop_note = "the data has no phi_sp";
+  } else {
+    try {
+      ident::ClosedLoopOptions cl;
+      cl.controller = load_controller_config(NIMBLE_DEFAULT_CONTROLLER);
+      const ident::ClosedLoopResult before = ident::validate_closed_loop(data, model, vehicle, cl);
+      const ident::ClosedLoopResult after = ident::validate_closed_loop(data, result.augmented_model, vehicle, cl);
+      for (const char* s : {"p", "v", "phi", "delta_f"}) {
+        result.closed_loop.push_back({s, before.fits.at(s).r2, after.fits.at(s).r2, before.fits.at(s).rmse,
+                                      after.fits.at(s).rmse});
+      }
+    } catch (const std::exception& e) {
+      result.closed_loop_note = std::string("not flown: ") + e.what();
+    }
+  }
   if (!model_out.empty()) {
     ident::write_model_yaml(result.augmented_model, model_out,
                             {"Refit by rig discrepancy from " + data_file + " on " + model_file + ".",

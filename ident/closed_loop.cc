@@ -8,6 +8,83 @@
 #include "ident/signal.h"
 
 namespace nimble::ident {
+namespace {
+
+/// The effects of `model` (section effects:, as rig discrepancy writes them) as extra roll
+/// moment and side force at one step of the closed-loop simulation, from the simulated p, v,
+/// phi, delta_f (and delta_f's history for a delay) and the measured exogenous channels the
+/// model does not simulate (u, w, delta_d, r), at time t.
+class EffectForces {
+ public:
+  EffectForces(const DerivativeModel& model, const Vehicle& vehicle, const UniformData& grid)
+      : model_(model), g_(vehicle.gravity_mps2), grid_(grid) {
+    for (const auto& [name, params] : model.effects) {
+      for (const auto& [key, value] : params) {
+        if (key == "delay_s") delay_samples_ = std::max<Eigen::Index>(1, std::lround(value * grid.rate_hz));
+        if (key == "flapping_hz") flapping_hz_ = value;
+      }
+    }
+    for (const auto& [name, params] : model.effects) {
+      for (const char* need : {"u", "w", "delta_d", "r"}) {
+        bool used = false;
+        for (const auto& [key, value] : params) used = used || uses(key, need);
+        if (used && !grid.has(need)) {
+          throw DataError(grid.source, -1, -1, need, "the model's effect " + name + " needs this channel");
+        }
+      }
+    }
+  }
+
+  /// Extra L [N m] and Y [N] at sample k.
+  std::pair<double, double> at(Eigen::Index k, double p, double v, double phi, const std::vector<double>& df_hist) const {
+    double L = 0.0, Y = 0.0;
+    const Trim& trim = model_.trim;
+    const double t = grid_.t_s[k] - grid_.t_s[0];
+    for (const auto& [name, params] : model_.effects) {
+      for (const auto& [key, c] : params) {
+        if (key == "delay_s" || key == "flapping_hz" || key.find("_amp") != std::string::npos ||
+            key.find("fraction") != std::string::npos) {
+          continue;
+        }
+        double x = 0.0;
+        const std::string form = key.substr(key.find('_') == 1 ? 2 : 1);  // "L_vv" -> "vv", "Lr" -> "r"
+        if (form == "pw") x = p * (grid_.at("w")[k] - trim.w0_mps);
+        else if (form == "gphi") x = g_ * std::cos(trim.theta0_rad) * (std::sin(phi) - phi);
+        else if (form == "vv") x = v * std::fabs(v);
+        else if (form == "up") x = (grid_.at("u")[k] - trim.u0_mps) * p;
+        else if (form == "uv") x = (grid_.at("u")[k] - trim.u0_mps) * v;
+        else if (form == "df_delayed") {
+          const std::size_t n = df_hist.size();
+          const std::size_t back = static_cast<std::size_t>(delay_samples_);
+          x = df_hist[n > back ? n - 1 - back : 0] - df_hist.back();
+        } else if (form == "0") x = 1.0;
+        else if (form == "dd") x = grid_.at("delta_d")[k];
+        else if (form == "r") x = grid_.at("r")[k];
+        else if (form.rfind("sin", 0) == 0) x = std::sin(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
+        else if (form.rfind("cos", 0) == 0) x = std::cos(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
+        else throw std::invalid_argument("closed loop: effect parameter '" + key + "' of " + name + " has no form");
+        (key[0] == 'L' ? L : Y) += c * x;
+      }
+    }
+    return {L, Y};
+  }
+
+ private:
+  static bool uses(const std::string& key, const char* channel) {
+    const std::string c = channel;
+    if (c == "u") return key.size() > 3 && (key.substr(key.size() - 2) == "up" || key.substr(key.size() - 2) == "uv");
+    if (c == "w") return key.size() >= 4 && key.substr(key.size() - 2) == "pw";
+    if (c == "delta_d") return key.size() >= 4 && key.substr(key.size() - 2) == "dd";
+    return key == "Lr" || key == "Yr";
+  }
+  const DerivativeModel& model_;
+  double g_;
+  const UniformData& grid_;
+  Eigen::Index delay_samples_ = 1;
+  double flapping_hz_ = 0.0;
+};
+
+}  // namespace
 
 ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                       const ClosedLoopOptions& options) {
@@ -74,6 +151,11 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   r.measured = {{"p", p}, {"v", v}, {"phi", phi}, {"delta_f", df}};
   for (const auto& [name, m] : r.measured) r.simulated[name] = Eigen::VectorXd::Zero(n);
 
+  // Effects beyond the linear model enter as extra moment and force, held over each step
+  // (forward Euler on their contribution; the linear part stays exact).
+  const EffectForces effects(model, vehicle, grid);
+  const double Izz_over_Ic = vehicle.Izz_kgm2 / vehicle.Ic();
+  std::vector<double> df_hist;
   Eigen::Vector4d x(p[0], v[0], phi[0], df[0]);
   for (Eigen::Index k = 0; k < n; ++k) {
     r.simulated["p"][k] = x[0];
@@ -86,7 +168,12 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
     in.roll_sp_rad = phi_sp[k];
     const ControllerOutput out = controller.step(in);
     const Eigen::Vector2d u(out.delta_f_cmd_radps, dt[k]);
+    df_hist.push_back(x[3]);
+    const auto [dL, dY] = model.effects.empty() ? std::pair<double, double>{0.0, 0.0}
+                                                : effects.at(k, x[0], x[1], x[2], df_hist);
     x = d.Ad * x + d.Bd * u;
+    x[0] += Izz_over_Ic * dL / rate_hz;
+    x[1] += dY / vehicle.mass_kg / rate_hz;
   }
   for (const auto& [name, m] : r.measured) r.fits[name] = fit_metrics(m, r.simulated[name], 1);
   return r;

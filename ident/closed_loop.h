@@ -42,8 +42,10 @@ struct ClosedLoopResult {
 };
 
 /// Simulates `model` (lateral3 with delta_f, optionally delta_t) in closed loop on the
-/// data's phi_sp and delta_t, at the controller's rate.
-/// @throws DataError if the data lacks p, v, phi, delta_f or phi_sp;
+/// data's phi_sp and delta_t, at the controller's rate. The model's effects (section
+/// effects:, as rig discrepancy writes them) fly too: extra moment and force from the simulated
+/// p, v, phi, delta_f and the measured u, w, delta_d, r they need.
+/// @throws DataError if the data lacks p, v, phi, delta_f or phi_sp, or a channel an effect needs;
 ///         std::invalid_argument if the model does not fit or the gain set is unknown.
 ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                       const ClosedLoopOptions& options);

@@ -201,6 +201,14 @@ struct Located {
   std::vector<StateFinding> state;
 };
 
+/// Closed-loop comparison of one signal (rig validate --closed-loop): the model as given and
+/// the augmented model, each flown by the controller copy on the data's phi_sp.
+struct ClosedLoopGap {
+  std::string output;  ///< "p", "v", "phi", "delta_f"
+  double r2_before = 0.0, r2_after = 0.0;
+  double rmse_before = 0.0, rmse_after = 0.0;
+};
+
 /// Everything rig discrepancy reports.
 struct DiscrepancyResult {
   std::string source;
@@ -225,6 +233,11 @@ struct DiscrepancyResult {
   std::map<std::string, ParameterEstimate> baseline, augmented;
   /// The model with the refit derivatives and the named effects (DerivativeModel::effects).
   DerivativeModel augmented_model;
+  /// Closed loop before (the model as given) and after (the augmented model), filled by the
+  /// caller that has the controller (rig discrepancy) when the data has phi_sp; empty otherwise,
+  /// with the reason in closed_loop_note.
+  std::vector<ClosedLoopGap> closed_loop;
+  std::string closed_loop_note;
 };
 
 /// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally

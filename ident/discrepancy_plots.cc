@@ -77,6 +77,14 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
        << g(o.rmse_after) << " | " << g(o.fit_before_pct, "%.1f") << " | " << g(o.fit_after_pct, "%.1f") << " | "
        << (o.white_before ? "yes" : "no") << " | " << (o.white_after ? "yes" : "no") << " |\n";
   }
+  if (!r.closed_loop.empty()) {
+    md << "\nClosed loop (the model flown by the controller copy on the data's phi_sp), the model as given -> "
+          "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after |\n|---|---|---|---|---|\n";
+    for (const auto& c : r.closed_loop) {
+      md << "| " << c.output << " | " << g(c.r2_before, "%.3f") << " | " << g(c.r2_after, "%.3f") << " | "
+         << g(c.rmse_before) << " | " << g(c.rmse_after) << " |\n";
+    }
+  }
   md << "\n![outputs](outputs.png)\n\n![residuals](residuals.png)\n\n![residual PSDs](residual_psd.png)\n\n";
   md << "## Candidates\n\n| round | candidate | partial F | p (adjusted) | held-out drop | result |\n|---|---|---|---|---|---|\n";
   for (const auto& t : r.candidates) {

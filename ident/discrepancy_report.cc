@@ -138,6 +138,20 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   }
   j.end_array();
   j.end_object();
+  j.key("closed_loop").begin_object();
+  j.key("note").value(r.closed_loop_note);
+  j.key("outputs").begin_array();
+  for (const auto& c : r.closed_loop) {
+    j.begin_object();
+    j.key("output").value(c.output);
+    j.key("r2_before").value(c.r2_before);
+    j.key("r2_after").value(c.r2_after);
+    j.key("rmse_before").value(c.rmse_before);
+    j.key("rmse_after").value(c.rmse_after);
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
   auto params = [&](const char* key, const std::map<std::string, ParameterEstimate>& m) {
     j.key(key).begin_object();
     for (const auto& [name, e] : m) {
@@ -182,6 +196,17 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
                   x.unit.c_str(), x.rmse_model, x.rmse_before, x.rmse_after, x.fit_before_pct, x.fit_after_pct,
                   x.white_before ? "yes" : "no", x.white_after ? "yes" : "no");
     o << line;
+  }
+  if (!r.closed_loop.empty()) {
+    o << "\nclosed loop (model flown by the controller copy on phi_sp): the model as given -> the augmented model\n";
+    for (const auto& c : r.closed_loop) {
+      char line[160];
+      std::snprintf(line, sizeof line, "  %-8s R^2 %7.3f -> %7.3f   RMSE %10.4g -> %10.4g\n", c.output.c_str(), c.r2_before,
+                    c.r2_after, c.rmse_before, c.rmse_after);
+      o << line;
+    }
+  } else if (!r.closed_loop_note.empty()) {
+    o << "\nclosed loop: " << r.closed_loop_note << "\n";
   }
   o << "\ncandidates (p_critical = P(chi2_1 >= F) of the partial-F rule)\n";
   for (const auto& t : r.candidates) {

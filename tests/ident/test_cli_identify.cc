@@ -288,6 +288,11 @@ TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and 
   CHECK(j["gap"]["after"].as<double>() < j["gap"]["before"].as<double>());
   CHECK(j["gap"]["outputs"].size() == 2);
   CHECK(load_model(model).effects.count("kinematic_coupling") == 1);
+  // Closed loop: the data has phi_sp, so both models are flown by the rig's controller copy
+  // (the generator's own PD loop is another controller: the figures are only present here;
+  // system.discrepancy on the effect-free identification train checks them on a rig flight).
+  REQUIRE(j["closed_loop"]["outputs"].size() == 4);
+  CHECK(r.out.find("closed loop (model flown by the controller copy") != std::string::npos);
   for (const char* file : {"report.md", "outputs.png", "residuals.png", "residual_psd.png"}) {
     INFO(file);
     CHECK(fs::file_size(fs::path(report) / file) > 1000);

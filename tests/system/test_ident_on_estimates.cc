@@ -166,5 +166,10 @@ TEST_CASE("discrepancy on the effect-free identification train: the kinematic te
     CHECK(std::fabs(after["value"].as<double>() - yp_plant) < 3.0 * after["sigma_coloured"].as<double>());
     CHECK(d["gap"]["after"].as<double>() < 0.5 * d["gap"]["before"].as<double>());
     CHECK(nimble::load_model(model_out).effects.count("kinematic_coupling") == 1);
+    // Flown in closed loop by the controller copy, the augmented model tracks v much better.
+    for (const auto& c : d["closed_loop"]["outputs"]) {
+      if (c["output"].as<std::string>() == "v") CHECK(c["r2_after"].as<double>() > c["r2_before"].as<double>() + 0.2);
+    }
+    CHECK(d["closed_loop"]["outputs"].size() == 4);
   }
 }
