@@ -164,6 +164,16 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
                                 to_string(lon_->structure));
   }
   dt_s_ = 1.0 / cfg_.rate_hz;
+  // A model that carries lateral_inflow (rig discrepancy --model-out names it with the plant's
+  // regressor form) flies it with the model's coefficients, whatever the plant file says; a
+  // coefficient the model does not carry is 0.
+  const auto inflow = lat_.effects.find("lateral_inflow");
+  if (inflow != lat_.effects.end()) {
+    auto& li = cfg_.effects.lateral_inflow;
+    li.enabled = true;
+    li.Y_vv_ns2pm2 = inflow->second.count("Y_vv") ? inflow->second.at("Y_vv") : 0.0;
+    li.L_vv_ns2pm = inflow->second.count("L_vv") ? inflow->second.at("L_vv") : 0.0;
+  }
   lateral4_ = lat_.structure == Structure::kLateral4;
   active_r_ = lateral4_;
   active_q_ = lon_.has_value();

@@ -56,6 +56,7 @@ struct FlappingForcingConfig {
 };
 
 /// Lateral-inflow nonlinearity: Y += Y_vv v|v|, L += L_vv v|v| (sideways flight, thesis §9.5).
+/// A lateral model whose effects: section carries lateral_inflow (Y_vv, L_vv) overrides this.
 struct LateralInflowConfig {
   bool enabled = false;
   double Y_vv_ns2pm2 = 0.0;  ///< [N s^2/m^2]

@@ -195,3 +195,23 @@ TEST_CASE("plant config: errors name the key", "[plant]") {
                     Catch::Contains("effects.lateral_gust.sigma_mps"));
   CHECK_THROWS_WITH(load("effects:\n  gusty: {enabled: true}\n"), Catch::Contains("effects.gusty"));
 }
+
+TEST_CASE("a model that carries lateral_inflow flies it with the model's coefficients", "[plant]") {
+  Fixture f;
+  PlantConfig by_config;
+  by_config.initial.v_mps = 1.2;
+  by_config.effects.lateral_inflow = {true, -0.025, -2.5e-4};
+  Fixture g;
+  g.model.effects["lateral_inflow"] = {{"Y_vv", -0.025}, {"L_vv", -2.5e-4}};
+  PlantConfig plain;
+  plain.initial.v_mps = 1.2;
+  PlantModel a = make_plant(f, by_config), b = make_plant(g, plain), c = make_plant(f, plain);
+  for (int i = 0; i < 300; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+    c.step(c.trim_command());
+  }
+  CHECK(b.truth().velocity_body_mps[1] == Approx(a.truth().velocity_body_mps[1]).epsilon(1e-12));
+  CHECK(b.truth().omega_body_radps[0] == Approx(a.truth().omega_body_radps[0]).epsilon(1e-12));
+  CHECK(std::fabs(c.truth().velocity_body_mps[1] - a.truth().velocity_body_mps[1]) > 1e-3);
+}

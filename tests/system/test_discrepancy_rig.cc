@@ -171,3 +171,30 @@ TEST_CASE("rig-flown: the plant's actuator delay, which the equation error does 
   INFO(d["summary"].as<std::string>());
   CHECK(named(d).empty());
 }
+
+TEST_CASE("rig-flown: the augmented model flies what was found: a scenario with it as model has the named lateral "
+          "inflow, and the workflow names it again",
+          "[system][discrepancy]") {
+  const std::string dir = nimble::test::scratch_dir("discrepancy_fly_found");
+  const auto found = nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir,
+                                           "--clock lockstep --seed 1 --set plant.effects.lateral_inflow.enabled=true" +
+                                               kNoVibration);
+  REQUIRE(found.exit_code == 0);
+  const std::string augmented = dir + "/augmented.yaml";
+  const auto r = nimble::test::run_rig("discrepancy " + dir + "/run.lcmlog --model " + kModel + " --model-out " +
+                                       augmented);
+  REQUIRE(r.exit_code == 0);
+  // Fly the augmented model as the plant's model (plant effects off, as in the plant file).
+  const std::string dir2 = nimble::test::scratch_dir("discrepancy_fly_found_2");
+  const auto flown = nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir2,
+                                           "--clock lockstep --seed 2 --set model=" + augmented + kNoVibration);
+  INFO(flown.output);
+  REQUIRE(flown.exit_code == 0);
+  const std::string json = dir2 + "/discrepancy.json";
+  const auto again = nimble::test::run_rig("discrepancy " + dir2 + "/run.lcmlog --model " + kModel + " --json " + json);
+  REQUIRE(again.exit_code == 0);
+  const YAML::Node d = YAML::LoadFile(json);
+  INFO(d["summary"].as<std::string>());
+  REQUIRE(named(d) == std::vector<std::string>{"lateral_inflow"});
+  CHECK(std::fabs(d["effects"][0]["parameters"]["Y_vv"].as<double>() + 0.02) < 0.005);  // plant file: -0.02
+}
