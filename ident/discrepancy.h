@@ -39,8 +39,9 @@
 ///        blocks only), the relative drop of the held-out squared error is larger than
 ///        its spread, one standard error (a Diebold-Mariano comparison: batch means of the
 ///        per-sample loss difference over blocks longer than its correlation time).
-///    The passing candidate with the largest held-out drop enters; the search repeats on
-///    the new residual. Two passing candidates whose regressors, with the model's
+///    The passing candidate with the largest held-out drop enters, its terms only in the
+///    equations where they are significant on their own; the search repeats on the new
+///    residual. Two passing candidates whose regressors, with the model's
 ///    regressors projected out, correlate by more than 0.9 explain the same thing: the
 ///    verdict is `ambiguous` and names both.
 ///    flapping_forcing lies above the identification low-pass: after the stepwise search the
@@ -49,14 +50,16 @@
 ///    with the same significance (Bonferroni over the band's independent frequencies, one per
 ///    1 / record length), PSE and held-out rules (each block's frequency found without it).
 /// 4. Add. The baseline derivatives are refit together with the named effects.
-/// 5. Gap after: the held-out table again, with the effects.
+/// 5. Gap after: the held-out table again, with the effects. rig discrepancy also flies the
+///    model as given and the augmented model in closed loop on the data's phi_sp
+///    (validate_closed_loop, ident/closed_loop.h) and reports both (closed_loop).
 ///
 /// Effects the model file already carries (section `effects:`, e.g. from an earlier run's
 /// --model-out) belong to the baseline structure: refit with the derivatives, not tried again.
 ///
 /// Verdicts: `effects` (one or more named), `ambiguous`, `unexplained` (nothing passed, but
-/// a location test found structure: a frequency peak, or a residual-input or residual-state
-/// correlation), `none`.
+/// a location test found structure: a frequency peak or a nonlinear dependence on a state or
+/// input), `none`.
 
 #include <cstddef>
 #include <map>
