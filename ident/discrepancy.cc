@@ -312,18 +312,57 @@ struct Model {
   }
 };
 
-struct Evaluation {
-  bool ok = true;
-  std::vector<double> rss_before, rss_after;                  // per equation
-  std::vector<double> heldout_before_total;                   // per equation
-  std::vector<std::vector<double>> heldout_before, heldout_after;  // [eq][fold]
-};
-
 /// Per-fold stats of every equation of the current model.
 std::vector<FoldStats> model_stats(const Model& m, const Folds& folds) {
   std::vector<FoldStats> out;
   for (std::size_t e = 0; e < m.eqs.size(); ++e) out.push_back(fold_stats(m.X(e), m.eqs[e].y, folds));
   return out;
+}
+
+/// The fit of one equation with addition `a` appended (`with`: the fold stats of that
+/// design): all its parameters and their coloured covariance, the addition's Wald statistic
+/// and chi-square tail, and the equation's PSE before (`rss_before`) and after.
+struct AdditionFit {
+  VectorXd theta;
+  MatrixXd cov;
+  Index off = 0, k = 0;  ///< the addition's parameters: theta.segment(off, k)
+  double wald = 0.0, p = 1.0;
+  double pse_before = 0.0, pse_after = 0.0;
+};
+
+/// Fits `a` (see AdditionFit); false if the design is singular.
+bool fit_addition(const Model& m, const Addition& a, const FoldStats& with, double rss_before, Index min_block,
+                  AdditionFit& f) {
+  std::vector<Addition> all = m.added[a.eq];
+  all.push_back(a);
+  const MatrixXd C = augmented_design(m.eqs[a.eq], all);
+  if (!solve(with.Gt, with.bt, f.theta)) return false;
+  const VectorXd resid = m.eqs[a.eq].y - C * f.theta;
+  f.cov = coloured_covariance(C, resid, block_length(resid, min_block));
+  f.k = static_cast<Index>(a.cols.size());
+  f.off = C.cols() - f.k;
+  const VectorXd th = f.theta.tail(f.k);
+  f.wald = th.dot(f.cov.block(f.off, f.off, f.k, f.k).ldlt().solve(th));
+  f.p = chi_square_survival(f.wald, static_cast<double>(f.k));
+  // PSE = RSS / N + sigma_max^2 P / N, sigma_max^2 the variance of the dependent (SIDPAC).
+  const double N = static_cast<double>(C.rows());
+  const VectorXd& y = m.eqs[a.eq].y;
+  const double s2max = (y.array() - y.mean()).square().mean();
+  f.pse_before = rss_before / N + s2max * static_cast<double>(f.off) / N;
+  f.pse_after = full_rss(with) / N + s2max * static_cast<double>(C.cols()) / N;
+  return true;
+}
+
+/// Records the fit of `a` in the trial: partial F, parameters, sigma, PSE of its equation.
+void record(const Model& m, const Addition& a, const AdditionFit& f, CandidateTrial& t) {
+  const std::string& eqname = m.eqs[a.eq].name;
+  t.partial_f[eqname] = f.wald / static_cast<double>(f.k);
+  for (Index j = 0; j < f.k; ++j) {
+    t.parameters[a.names[static_cast<std::size_t>(j)]] = f.theta[f.off + j];
+    t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, f.cov(f.off + j, f.off + j)));
+  }
+  t.pse_before[eqname] = f.pse_before;
+  t.pse_after[eqname] = f.pse_after;
 }
 
 /// RSS of the fit on every fold but k (on those folds).
@@ -481,30 +520,13 @@ struct Workflow {
     std::vector<bool> use_eq(neq, false);
     std::string p_eq;
     for (const auto& a : P.adds) {
-      std::vector<Addition> all = m.added[a.eq];
-      all.push_back(a);
-      const MatrixXd C = augmented_design(m.eqs[a.eq], all);
-      VectorXd theta;
-      if (!solve(P.stats[a.eq].Gt, P.stats[a.eq].bt, theta)) continue;
-      const VectorXd resid = m.eqs[a.eq].y - C * theta;
-      const Index block = block_length(resid, min_block);
-      const MatrixXd cov = coloured_covariance(C, resid, block);
-      const Index kc = static_cast<Index>(a.cols.size());
-      const Index off = C.cols() - kc;
-      const VectorXd th = theta.tail(kc);
-      const MatrixXd S = cov.block(off, off, kc, kc);
-      const double wald = th.dot(S.ldlt().solve(th));
-      const double F = wald / static_cast<double>(kc);
+      AdditionFit f;
+      if (!fit_addition(m, a, P.stats[a.eq], rss_before[a.eq], min_block, f)) continue;
+      record(m, a, f, t);
       const std::string& eqname = m.eqs[a.eq].name;
-      t.partial_f[eqname] = F;
-      for (Index j = 0; j < kc; ++j) {
-        t.parameters[a.names[static_cast<std::size_t>(j)]] = th[j];
-        t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, S(j, j)));
-      }
-      const double p = chi_square_survival(wald, static_cast<double>(kc));
-      use_eq[a.eq] = p * bonferroni <= p_critical;
-      if (p < p_min) {
-        p_min = p;
+      use_eq[a.eq] = f.p * bonferroni <= p_critical;
+      if (f.p < p_min) {
+        p_min = f.p;
         p_eq = eqname;
       }
       if (spec.scanned) {
@@ -517,19 +539,13 @@ struct Workflow {
         const auto it = std::find(m.eqs[a.eq].names.begin(), m.eqs[a.eq].names.end(), eqname + "_df");
         if (it != m.eqs[a.eq].names.end()) {
           const Index i = static_cast<Index>(it - m.eqs[a.eq].names.begin());
-          const double inst = theta[i] - th[0];
-          const double var = cov(i, i) + cov(off, off) - 2.0 * cov(i, off);
+          const double c = f.theta[f.off];
+          const double inst = f.theta[i] - c;
+          const double var = f.cov(i, i) + f.cov(f.off, f.off) - 2.0 * f.cov(i, f.off);
           t.instantaneous_f[eqname] = var > 0.0 ? inst * inst / var : std::numeric_limits<double>::infinity();
-          t.parameters[eqname + "_df_fraction_delayed"] = theta[i] != 0.0 ? th[0] / theta[i] : 0.0;
+          t.parameters[eqname + "_df_fraction_delayed"] = f.theta[i] != 0.0 ? c / f.theta[i] : 0.0;
         }
       }
-      // PSE of this equation.
-      const double N = static_cast<double>(C.rows());
-      const VectorXd& y = m.eqs[a.eq].y;
-      const double s2max = (y.array() - y.mean()).square().mean();
-      const double rss_after = full_rss(P.stats[a.eq]);
-      t.pse_before[eqname] = rss_before[a.eq] / N + s2max * static_cast<double>(C.cols() - kc) / N;
-      t.pse_after[eqname] = rss_after / N + s2max * static_cast<double>(C.cols()) / N;
     }
     if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
 
@@ -888,35 +904,19 @@ CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds&
   for (const auto& a : adds) {
     std::vector<Addition> all = m.added[a.eq];
     all.push_back(a);
-    const MatrixXd C = augmented_design(m.eqs[a.eq], all);
-    with[a.eq] = fold_stats(C, m.eqs[a.eq].y, folds);
-    VectorXd theta;
-    if (!solve(with[a.eq].Gt, with[a.eq].bt, theta)) continue;
-    const VectorXd r = m.eqs[a.eq].y - C * theta;
-    const MatrixXd cov = coloured_covariance(C, r, block_length(r, min_block));
-    const Index kc = static_cast<Index>(a.cols.size()), off = C.cols() - kc;
-    const VectorXd th = theta.tail(kc);
-    const double wald = th.dot(cov.block(off, off, kc, kc).ldlt().solve(th));
+    with[a.eq] = fold_stats(augmented_design(m.eqs[a.eq], all), m.eqs[a.eq].y, folds);
+    AdditionFit fit;
+    if (!fit_addition(m, a, with[a.eq], full_rss(base[a.eq]), min_block, fit)) continue;
+    record(m, a, fit, t);
     const std::string& eqname = m.eqs[a.eq].name;
-    t.partial_f[eqname] = wald / static_cast<double>(kc);
-    for (Index j = 0; j < kc; ++j) {
-      t.parameters[a.names[static_cast<std::size_t>(j)]] = th[j];
-      t.sigma[a.names[static_cast<std::size_t>(j)]] = std::sqrt(std::max(0.0, cov(off + j, off + j)));
-    }
     for (int h = 1; h <= H; ++h) {
-      const double s1 = th[2 * (h - 1)], c1 = th[2 * (h - 1) + 1];
+      const double s1 = fit.theta[fit.off + 2 * (h - 1)], c1 = fit.theta[fit.off + 2 * (h - 1) + 1];
       t.parameters[eqname + "_amp" + std::to_string(h)] = std::hypot(s1, c1);
     }
-    const double p = chi_square_survival(wald, static_cast<double>(kc));
-    if (p < p_min) {
-      p_min = p;
+    if (fit.p < p_min) {
+      p_min = fit.p;
       p_eq = eqname;
     }
-    const double N = static_cast<double>(n);
-    const VectorXd& y = m.eqs[a.eq].y;
-    const double s2max = (y.array() - y.mean()).square().mean();
-    t.pse_before[eqname] = full_rss(base[a.eq]) / N + s2max * static_cast<double>(C.cols() - kc) / N;
-    t.pse_after[eqname] = full_rss(with[a.eq]) / N + s2max * static_cast<double>(C.cols()) / N;
   }
   t.p_value = std::min(1.0, p_min * static_cast<double>(neq) * static_cast<double>(t.scan_points));
   // Held-out: each block predicted with the frequency found without it.
