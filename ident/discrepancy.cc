@@ -85,9 +85,9 @@ const std::vector<CandidateSpec> kLibrary{
 /// root mean square plus an absolute floor: a column that is (nearly) constant cannot be
 /// told from the other regressors (except the intercept of sensor_bias, which is constant
 /// by design). The floors are 10 resolution steps of the rig's actuator interface for the
-/// inputs (delta_d: 1e-4 rad, plant.command_resolution) and 1e-9 otherwise.
+/// inputs (the servos: kServoExcitationFloorRad, as rig identify uses) and 1e-9 otherwise.
 double excitation_floor(const std::string& channel) {
-  if (channel == "delta_d" || channel == "delta_w") return 1e-3;
+  if (channel == "delta_d" || channel == "delta_w") return kServoExcitationFloorRad;
   if (channel == "delta_t") return 0.1;
   if (channel == "delta_f") return 0.1;
   return 1e-9;

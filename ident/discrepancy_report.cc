@@ -1,11 +1,17 @@
-/// JSON and text reports of the discrepancy workflow (ident/discrepancy.h).
+/// JSON, text and Markdown reports of the discrepancy workflow (ident/discrepancy.h); the
+/// Markdown report draws its figures with gnuplot (ident/plots.h).
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "core/json_writer.h"
 #include "ident/discrepancy.h"
+#include "ident/plots.h"
+#include "ident/spectrum.h"
 
 namespace nimble::ident {
 namespace {
@@ -238,5 +244,102 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   }
   return o.str();
 }
+
+std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, const std::string& dir) {
+  require_gnuplot();
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> files;
+
+  std::vector<TimePanel> outputs, residuals, psds;
+  Eigen::VectorXd f_hz;
+  const std::size_t segment = std::max<std::size_t>(64, static_cast<std::size_t>(2.0 * r.rate_hz));
+  for (const auto& o : r.gap) {
+    outputs.push_back({o.output, o.output + " [" + o.unit + "]", o.unit,
+                       {{"measured", o.measured, "#000000", false},
+                        {"model structure refit (held-out)", o.predicted_before, "#d62728", true},
+                        {"with the named effects (held-out)", o.predicted_after, "#1f77b4", false}}});
+    const Eigen::VectorXd rb = o.measured - o.predicted_before, ra = o.measured - o.predicted_after;
+    residuals.push_back({o.output + "_residual", o.output + " residual [" + o.unit + "]", o.unit,
+                         {{"before", rb, "#d62728", false}, {"after", ra, "#1f77b4", false}}});
+    const Psd pb = welch(rb, r.rate_hz, segment), pa = welch(ra, r.rate_hz, segment);
+    f_hz = pb.f_hz;
+    psds.push_back({o.output + "_psd", o.output + " residual PSD [(" + o.unit + ")^2/Hz]", "PSD",
+                    {{"before", pb.psd.cwiseMax(1e-30), "#d62728", false},
+                     {"after", pa.psd.cwiseMax(1e-30), "#1f77b4", false}}});
+  }
+  const std::string what = r.model_name + " on " + r.source;
+  files.push_back(plot_time_histories(dir, "outputs", "discrepancy: " + what, r.t_s, outputs));
+  files.push_back(plot_time_histories(dir, "residuals", "held-out residuals before and after: " + what, r.t_s, residuals));
+  PlotAxes axes;
+  axes.xlabel = "frequency [Hz]";
+  axes.log_y = true;
+  axes.x_max = r.cutoff_hz > 0.0 ? 2.0 * r.cutoff_hz : 0.5 * r.rate_hz;
+  files.push_back(plot_panels(dir, "residual_psd", "residual PSDs (Welch, 2 s): " + what, f_hz, psds, axes));
+
+  std::ostringstream md;
+  md << "# Discrepancy: " << r.model_name << "\n\n";
+  md << "Data: `" << r.source << "`, " << r.samples << " samples at " << g(r.rate_hz) << " Hz; held-out figures from "
+     << r.folds << "-fold cross-validation over contiguous blocks.\n\n";
+  md << "**Verdict: " << r.verdict << "**: " << r.summary << "\n\n";
+  if (!r.effects.empty()) {
+    md << "## Named effects\n\n| effect | parameter | value | sigma (coloured) |\n|---|---|---|---|\n";
+    for (const auto& e : r.effects) {
+      for (const auto& [k, v] : e.parameters) {
+        const auto s = e.sigma.find(k);
+        md << "| " << e.name << " | " << k << " | " << g(v) << " | " << (s == e.sigma.end() ? "" : g(s->second))
+           << " |\n";
+      }
+    }
+    md << "\n";
+  }
+  md << "## Gap on held-out data\n\n" << r.gap_metric << ": **" << g(r.gap_before) << " -> " << g(r.gap_after)
+     << "**\n\n";
+  md << "| output | unit | RMSE model | RMSE before | RMSE after | fit % before | fit % after | white before | white after "
+        "|\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& o : r.gap) {
+    md << "| " << o.output << " | " << o.unit << " | " << g(o.rmse_model) << " | " << g(o.rmse_before) << " | "
+       << g(o.rmse_after) << " | " << g(o.fit_before_pct, "%.1f") << " | " << g(o.fit_after_pct, "%.1f") << " | "
+       << (o.white_before ? "yes" : "no") << " | " << (o.white_after ? "yes" : "no") << " |\n";
+  }
+  if (!r.closed_loop.empty()) {
+    md << "\nClosed loop (the model flown by the controller copy on the data's phi_sp), the model as given -> "
+          "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after |\n|---|---|---|---|---|\n";
+    for (const auto& c : r.closed_loop) {
+      md << "| " << c.output << " | " << g(c.r2_before, "%.3f") << " | " << g(c.r2_after, "%.3f") << " | "
+         << g(c.rmse_before) << " | " << g(c.rmse_after) << " |\n";
+    }
+  }
+  md << "\n![outputs](outputs.png)\n\n![residuals](residuals.png)\n\n![residual PSDs](residual_psd.png)\n\n";
+  md << "## Candidates\n\n| round | candidate | partial F | p (adjusted) | held-out drop | result |\n|---|---|---|---|---|---|\n";
+  for (const auto& t : r.candidates) {
+    std::string f;
+    for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + g(v);
+    md << "| " << t.round << " | " << t.name << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
+       << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
+       << " | " << t.reason << " |\n";
+  }
+  md << "\n## Located\n\n";
+  for (const auto& f : r.located.frequency) {
+    md << "- frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio)
+       << " x the local background (p " << g(f.p_value) << ")\n";
+  }
+  for (const auto& f : r.located.state) {
+    md << "- state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r) << ", p "
+       << g(f.p_value) << ")\n";
+  }
+  for (const auto& f : r.located.time) {
+    md << "- time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f") << " s: "
+       << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in " << g(100.0 * f.time_share, "%.1f")
+       << " % of the time\n";
+  }
+  const std::string report = (std::filesystem::path(dir) / "report.md").string();
+  std::ofstream out(report);
+  if (!out) throw std::runtime_error(report + ": cannot be written");
+  out << md.str();
+  if (!out) throw std::runtime_error(report + ": write failed");
+  files.insert(files.begin(), report);
+  return files;
+}
+
 
 }  // namespace nimble::ident
