@@ -1,5 +1,7 @@
 #include "plant/plant_model.h"
 
+#include "plant/model_effects.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -106,6 +108,7 @@ PlantConfig plant_config_from(ConfigMap& map) {
     c.initial.p_radps = m.get_double_or("p_radps", 0.0, rates);
     c.initial.q_radps = m.get_double_or("q_radps", 0.0, rates);
     c.initial.r_radps = m.get_double_or("r_radps", 0.0, rates);
+    c.initial.u_mps = m.get_double_or("u_mps", 0.0, Range::closed(-5.0, 5.0));
     c.initial.v_mps = m.get_double_or("v_mps", 0.0, Range::closed(-5.0, 5.0));
     c.initial.phi_rad = m.get_double_or("phi_rad", 0.0, Range::closed(-1.2, 1.2));
     c.initial.theta_rad = m.get_double_or("theta_rad", 0.0, Range::closed(-1.2, 1.2));
@@ -130,8 +133,23 @@ PlantConfig plant_config_from(ConfigMap& map) {
     }
     if (e.has("forward_speed_coupling")) {
       ConfigMap m = e.get_map("forward_speed_coupling");
-      fx.forward_speed_coupling.enabled = m.get_bool("enabled");
-      fx.forward_speed_coupling.gain_per_mps = m.get_double_or("gain_per_mps", 0.0, Range::closed(-2.0, 2.0));
+      auto& fsc = fx.forward_speed_coupling;
+      fsc.enabled = m.get_bool("enabled");
+      // One form or the other: a gain on the stability derivatives, or the four coefficients.
+      const bool gain = m.has("gain_per_mps");
+      std::string coefficient;
+      for (const char* key : {"L_up_ns2", "L_uv_ns2pm", "Y_up_ns2pm", "Y_uv_ns2pm2"}) {
+        if (m.has(key) && coefficient.empty()) coefficient = key;
+      }
+      if (gain && !coefficient.empty()) {
+        m.fail("gain_per_mps", "give either gain_per_mps or the coefficients L_up_ns2, L_uv_ns2pm, Y_up_ns2pm, "
+                               "Y_uv_ns2pm2, not both (" + coefficient + " is given too)");
+      }
+      fsc.gain_per_mps = m.get_double_or("gain_per_mps", 0.0, Range::closed(-2.0, 2.0));
+      fsc.L_up_ns2 = m.get_double_or("L_up_ns2", 0.0, Range::closed(-0.1, 0.1));
+      fsc.L_uv_ns2pm = m.get_double_or("L_uv_ns2pm", 0.0, Range::closed(-0.1, 0.1));
+      fsc.Y_up_ns2pm = m.get_double_or("Y_up_ns2pm", 0.0, Range::closed(-1.0, 1.0));
+      fsc.Y_uv_ns2pm2 = m.get_double_or("Y_uv_ns2pm2", 0.0, Range::closed(-1.0, 1.0));
       m.finish();
     }
     if (e.has("actuator_delay")) {
@@ -145,6 +163,13 @@ PlantConfig plant_config_from(ConfigMap& map) {
       fx.lateral_gust.enabled = m.get_bool("enabled");
       fx.lateral_gust.sigma_mps = m.get_double_or("sigma_mps", 0.0, Range::closed(0.0, 5.0));
       fx.lateral_gust.tau_s = m.get_double_or("tau_s", 1.0, Range{0.0, 100.0, true, false});
+      m.finish();
+    }
+    if (e.has("constant_load")) {
+      ConfigMap m = e.get_map("constant_load");
+      fx.constant_load.enabled = m.get_bool("enabled");
+      fx.constant_load.roll_moment_nm = m.get_double_or("roll_moment_nm", 0.0, Range::closed(-0.1, 0.1));
+      fx.constant_load.side_force_n = m.get_double_or("side_force_n", 0.0, Range::closed(-1.0, 1.0));
       m.finish();
     }
     e.finish();
@@ -164,15 +189,16 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
                                 to_string(lon_->structure));
   }
   dt_s_ = 1.0 / cfg_.rate_hz;
-  // A model that carries lateral_inflow (rig discrepancy --model-out names it with the plant's
-  // regressor form) flies it with the model's coefficients, whatever the plant file says; a
-  // coefficient the model does not carry is 0.
-  const auto inflow = lat_.effects.find("lateral_inflow");
-  if (inflow != lat_.effects.end()) {
-    auto& li = cfg_.effects.lateral_inflow;
-    li.enabled = true;
-    li.Y_vv_ns2pm2 = inflow->second.count("Y_vv") ? inflow->second.at("Y_vv") : 0.0;
-    li.L_vv_ns2pm = inflow->second.count("L_vv") ? inflow->second.at("L_vv") : 0.0;
+  // Every effect the lateral model's effects: section carries (rig discrepancy --model-out)
+  // flies with the model's coefficients, overriding the plant file's effect of the same name;
+  // dihedral_coupling and yaw_coupling set derivatives (read into the cache below);
+  // kinematic_coupling and gravity_nonlinearity are in the equations of motion already; an
+  // effect the plant does not know is refused. The mapping: plant/model_effects.h.
+  apply_model_effects(lateral, cfg_.effects, lat_.derivatives);
+  const auto& fsc = cfg_.effects.forward_speed_coupling;
+  if (fsc.enabled && fsc.gain_per_mps != 0.0 && fsc.has_coefficients()) {
+    throw std::invalid_argument(
+        "plant: forward_speed_coupling has both gain_per_mps and the coefficients L_up, L_uv, Y_up, Y_uv; give one form");
   }
   lateral4_ = lat_.structure == Structure::kLateral4;
   active_r_ = lateral4_;
@@ -200,7 +226,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   f_trim_radps_ = 2.0 * M_PI * f_hz;
 
   x_ = Eigen::VectorXd::Zero(kStates);
-  x_[kU] = trim.u0_mps;
+  x_[kU] = trim.u0_mps + (active_u_ ? cfg_.initial.u_mps : 0.0);
   x_[kW] = trim.w0_mps;
   x_[kPhi] = trim.phi0_rad + cfg_.initial.phi_rad;
   x_[kTheta] = trim.theta0_rad + (active_q_ ? cfg_.initial.theta_rad : 0.0);
@@ -267,7 +293,8 @@ Eigen::VectorXd PlantModel::derivative(const Eigen::VectorXd& x, const ActuatorI
   const EffectsConfig& fx = cfg_.effects;
   const double v_rel = v - (fx.lateral_gust.enabled ? x_gust_ : 0.0);
   const double du = uu - trim.u0_mps, dw_vel = w - trim.w0_mps;
-  const double k_speed = fx.forward_speed_coupling.enabled ? 1.0 + fx.forward_speed_coupling.gain_per_mps * du : 1.0;
+  const auto& fsc = fx.forward_speed_coupling;
+  const double k_speed = fsc.enabled ? 1.0 + fsc.gain_per_mps * du : 1.0;
 
   double L = k_speed * (Lp_ * p + Lr_ * r + Lv_ * v_rel) + L_df_ * df + L_dt_ * dt_pct + L_dd_ * dd + L_dw_ * dw;
   double N = k_speed * (Np_ * p + Nr_ * r + Nv_ * v_rel) + N_df_ * df + N_dt_ * dt_pct + N_dd_ * dd + N_dw_ * dw;
@@ -277,6 +304,14 @@ Eigen::VectorXd PlantModel::derivative(const Eigen::VectorXd& x, const ActuatorI
     M = Mq_ * q + Mu_ * du + Mw_ * dw_vel + M_dd_ * dd;
     X = Xq_ * q + Xu_ * du + Xw_ * dw_vel + X_dd_ * dd;
     Z = Zq_ * q + Zu_ * du + Zw_ * dw_vel + Z_dd_ * dd;
+  }
+  if (fsc.enabled) {
+    L += fsc.L_up_ns2 * du * p + fsc.L_uv_ns2pm * du * v_rel;
+    Y += fsc.Y_up_ns2pm * du * p + fsc.Y_uv_ns2pm2 * du * v_rel;
+  }
+  if (fx.constant_load.enabled) {
+    L += fx.constant_load.roll_moment_nm;
+    Y += fx.constant_load.side_force_n;
   }
   if (fx.lateral_inflow.enabled) {
     Y += fx.lateral_inflow.Y_vv_ns2pm2 * v_rel * std::fabs(v_rel);

@@ -48,7 +48,8 @@ struct ThrustConfig {
 
 /// Periodic forcing at the flapping frequency and its harmonics (thesis §7: oscillations at
 /// hover not captured by the linear model). Amplitude h-1 of the list acts at h times the
-/// flapping frequency; phases are drawn from the seed.
+/// flapping frequency of the actual collective (about 16-17 Hz at trim), phase-locked to the
+/// plant's flapping phase; the phases relative to it are drawn from the seed.
 struct FlappingForcingConfig {
   bool enabled = false;
   std::vector<double> roll_moment_amplitudes_nm;  ///< per harmonic [N m]
@@ -56,20 +57,43 @@ struct FlappingForcingConfig {
 };
 
 /// Lateral-inflow nonlinearity: Y += Y_vv v|v|, L += L_vv v|v| (sideways flight, thesis §9.5).
-/// A lateral model whose effects: section carries lateral_inflow (Y_vv, L_vv) overrides this.
+///
+/// Each effect below can also come from the lateral model: an effect its `effects:` section
+/// carries (rig discrepancy --model-out) overrides the plant file's effect of the same name
+/// with the model's coefficients; plant/model_effects.h apply_model_effects() has the mapping
+/// for every effect name (lateral_inflow: Y_vv, L_vv; forward_speed_coupling; actuator_delay;
+/// flapping_forcing; sensor_bias as constant_load; lateral_gust; dihedral_coupling and
+/// yaw_coupling as derivatives; kinematic_coupling and gravity_nonlinearity are in the
+/// equations of motion already).
 struct LateralInflowConfig {
   bool enabled = false;
   double Y_vv_ns2pm2 = 0.0;  ///< [N s^2/m^2]
   double L_vv_ns2pm = 0.0;   ///< [N m s^2/m^2]
 };
 
-/// Forward-speed coupling: the lateral stability derivatives scale with (1 + k (u - u0)).
+/// Forward-speed coupling, in one of two forms (not both: the config reader and the
+/// PlantModel constructor refuse a gain together with a coefficient):
+///  - one gain k: the lateral stability derivatives (L, N and Y rows) scale with (1 + k (u - u0));
+///  - four coefficients (the discrepancy workflow's regressors): L += L_up (u - u0) p +
+///    L_uv (u - u0) v, Y += Y_up (u - u0) p + Y_uv (u - u0) v.
+/// For a lateral3 model (r = 0, no N row) the gain k is the same as L_up = k Lp, L_uv = k Lv,
+/// Y_up = k Yp, Y_uv = k Yv. u0 is the lateral model's trim; v is relative to the lateral gust,
+/// as in the rest of the aerodynamics. u moves only with a longitudinal model (otherwise it is
+/// held at trim and the effect is inert).
 struct ForwardSpeedCouplingConfig {
   bool enabled = false;
   double gain_per_mps = 0.0;  ///< k [1/(m/s)]
+  double L_up_ns2 = 0.0;      ///< [N m per (m/s) (rad/s)] = [N s^2]
+  double L_uv_ns2pm = 0.0;    ///< [N m per (m/s)^2] = [N s^2/m]
+  double Y_up_ns2pm = 0.0;    ///< [N per (m/s) (rad/s)] = [N s^2/m]
+  double Y_uv_ns2pm2 = 0.0;   ///< [N per (m/s)^2] = [N s^2/m^2]
+  /// True when any of the four coefficients is non-zero.
+  bool has_coefficients() const {
+    return L_up_ns2 != 0.0 || L_uv_ns2pm != 0.0 || Y_up_ns2pm != 0.0 || Y_uv_ns2pm2 != 0.0;
+  }
 };
 
-/// Pure delay on every actuator command.
+/// Pure delay on every actuator command (flap frequencies and servos).
 struct ActuatorDelayConfig {
   bool enabled = false;
   double delay_s = 0.0;
@@ -83,18 +107,29 @@ struct LateralGustConfig {
   double tau_s = 1.0;
 };
 
+/// Constant roll moment and side force (L += roll_moment_nm, Y += side_force_n). Flies a model's
+/// sensor_bias (L_0, Y_0): the equation-error regression cannot tell a rate-sensor bias from a
+/// constant moment, and the plant flies the moment/force form.
+struct ConstantLoadConfig {
+  bool enabled = false;
+  double roll_moment_nm = 0.0;  ///< [N m]
+  double side_force_n = 0.0;    ///< [N]
+};
+
 struct EffectsConfig {
   FlappingForcingConfig flapping_forcing;
   LateralInflowConfig lateral_inflow;
   ForwardSpeedCouplingConfig forward_speed_coupling;
   ActuatorDelayConfig actuator_delay;
   LateralGustConfig lateral_gust;
+  ConstantLoadConfig constant_load;
 };
 
-/// Initial perturbation from trim.
+/// Initial perturbation from trim. q, r, u and theta apply only where they are states
+/// (q, u, theta with a longitudinal model; r with a lateral4 model).
 struct InitialState {
   double p_radps = 0.0, q_radps = 0.0, r_radps = 0.0;
-  double v_mps = 0.0;
+  double u_mps = 0.0, v_mps = 0.0;
   double phi_rad = 0.0, theta_rad = 0.0;
 };
 
@@ -156,9 +191,12 @@ struct Truth {
 
 class PlantModel {
  public:
-  /// @param lateral  the lateral derivative model (lateral3 or lateral4)
+  /// @param lateral  the lateral derivative model (lateral3 or lateral4); the effects of its
+  ///                 `effects:` section are flown with its coefficients (apply_model_effects())
   /// @param longitudinal optional longitudinal model (q u w theta, input delta_d)
-  /// @throws std::invalid_argument if the structures do not fit.
+  /// @throws std::invalid_argument if the structures do not fit, if the lateral model's
+  ///         effects cannot be flown (naming the model and the effect), or if
+  ///         forward_speed_coupling has both a gain and coefficients.
   PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
              const Vehicle& vehicle, const PlantConfig& config);
 

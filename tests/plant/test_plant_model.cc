@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <complex>
+#include <map>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -9,12 +12,14 @@
 
 #include "core/model.h"
 #include "core/modes.h"
+#include "plant/model_effects.h"
 #include "plant/plant_model.h"
 
 using namespace nimble;
 using nimble::plant::ActuatorInput;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
+using nimble::model_effect_names;
 
 namespace {
 
@@ -27,6 +32,13 @@ struct Fixture {
 
 PlantModel make_plant(const Fixture& f, PlantConfig cfg = {}) {
   return PlantModel(f.model, std::nullopt, f.vehicle, cfg);
+}
+
+/// Set 1 with one effect in its effects: section.
+Fixture with_effect(const std::string& effect, const std::map<std::string, double>& params) {
+  Fixture f;
+  f.model.effects[effect] = params;
+  return f;
 }
 
 /// Lateral state [p v phi] of a plant.
@@ -194,6 +206,24 @@ TEST_CASE("plant config: errors name the key", "[plant]") {
   CHECK_THROWS_WITH(load("effects:\n  lateral_gust: {enabled: true, sigma_mps: 9}\n"),
                     Catch::Contains("effects.lateral_gust.sigma_mps"));
   CHECK_THROWS_WITH(load("effects:\n  gusty: {enabled: true}\n"), Catch::Contains("effects.gusty"));
+  CHECK(load("initial: {u_mps: 0.4}\n").initial.u_mps == 0.4);
+  const PlantConfig c = load(
+      "effects:\n  forward_speed_coupling: {enabled: true, L_up_ns2: 1.0e-4, L_uv_ns2pm: 2.0e-4, Y_up_ns2pm: 3.0e-3, "
+      "Y_uv_ns2pm2: -4.0e-2}\n  constant_load: {enabled: true, roll_moment_nm: 1.0e-4, side_force_n: -2.0e-3}\n");
+  CHECK(c.effects.forward_speed_coupling.enabled);
+  CHECK(c.effects.forward_speed_coupling.gain_per_mps == 0.0);
+  CHECK(c.effects.forward_speed_coupling.L_up_ns2 == 1.0e-4);
+  CHECK(c.effects.forward_speed_coupling.L_uv_ns2pm == 2.0e-4);
+  CHECK(c.effects.forward_speed_coupling.Y_up_ns2pm == 3.0e-3);
+  CHECK(c.effects.forward_speed_coupling.Y_uv_ns2pm2 == -4.0e-2);
+  CHECK(c.effects.constant_load.enabled);
+  CHECK(c.effects.constant_load.roll_moment_nm == 1.0e-4);
+  CHECK(c.effects.constant_load.side_force_n == -2.0e-3);
+  // The two forms of forward-speed coupling do not mix.
+  CHECK_THROWS_WITH(load("effects:\n  forward_speed_coupling: {enabled: true, gain_per_mps: 0.5, Y_uv_ns2pm2: 0.01}\n"),
+                    Catch::Contains("effects.forward_speed_coupling.gain_per_mps") && Catch::Contains("Y_uv_ns2pm2"));
+  CHECK_THROWS_WITH(load("effects:\n  constant_load: {enabled: true, roll_moment_nm: 0.5}\n"),
+                    Catch::Contains("effects.constant_load.roll_moment_nm"));
 }
 
 TEST_CASE("a model that carries lateral_inflow flies it with the model's coefficients", "[plant]") {
@@ -214,4 +244,268 @@ TEST_CASE("a model that carries lateral_inflow flies it with the model's coeffic
   CHECK(b.truth().velocity_body_mps[1] == Approx(a.truth().velocity_body_mps[1]).epsilon(1e-12));
   CHECK(b.truth().omega_body_radps[0] == Approx(a.truth().omega_body_radps[0]).epsilon(1e-12));
   CHECK(std::fabs(c.truth().velocity_body_mps[1] - a.truth().velocity_body_mps[1]) > 1e-3);
+}
+
+// ---------------------------------------------------------------------------------------
+// Every effect a model file's effects: section can carry flies with the model's coefficients.
+
+TEST_CASE("every effect name a model may carry is one the plant flies", "[plant][model_effects]") {
+  // A valid section per name; the table must cover core's list of names.
+  const std::map<std::string, std::map<std::string, double>> sections{
+      {"kinematic_coupling", {{"Y_pw", 0.02876}}},
+      {"gravity_nonlinearity", {{"Y_gphi", 0.02876}}},
+      {"lateral_inflow", {{"L_vv", -2e-4}, {"Y_vv", -0.02}}},
+      {"forward_speed_coupling", {{"L_up", -1e-4}, {"L_uv", -2e-4}, {"Y_up", 1e-3}, {"Y_uv", -0.03}}},
+      {"actuator_delay", {{"delay_s", 0.02}, {"L_df_delayed", 1e-4}, {"Y_df_delayed", -8e-4},
+                          {"L_df_fraction_delayed", 0.9}, {"Y_df_fraction_delayed", 0.9}, {"F_cmd_delayed", 0.5}}},
+      {"sensor_bias", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
+      {"dihedral_coupling", {{"L_dd", 1.4e-3}, {"Y_dd", -0.06}}},
+      {"yaw_coupling", {{"Lr", -2.8e-4}, {"Yr", 8.4e-3}}},
+      {"flapping_forcing", {{"flapping_hz", 16.5}, {"L_sin1", 1e-3}, {"L_cos1", 1e-3}, {"L_amp1", std::sqrt(2e-6)}}},
+      {"lateral_gust", {{"sigma_mps", 0.1}, {"tau_s", 0.5}}},
+  };
+  for (const auto& name : model_effect_names()) {
+    INFO("effect " << name);
+    REQUIRE(sections.count(name) == 1);
+    const Fixture f = with_effect(name, sections.at(name));
+    CHECK_NOTHROW(make_plant(f));
+  }
+  const auto& eom = nimble::plant::effects_in_equations_of_motion();
+  CHECK(eom == std::vector<std::string>{"kinematic_coupling", "gravity_nonlinearity"});
+}
+
+TEST_CASE("a model effect the plant does not know is refused with its name", "[plant][model_effects]") {
+  const Fixture unknown = with_effect("wind_shear", {{"k", 1.0}});
+  CHECK_THROWS_AS(make_plant(unknown), std::invalid_argument);
+  CHECK_THROWS_WITH(make_plant(unknown), Catch::Contains("wind_shear") && Catch::Contains("nimble_lateral_set1.yaml"));
+  // A parameter the effect does not have, a missing required one, an out-of-range value.
+  CHECK_THROWS_WITH(make_plant(with_effect("lateral_inflow", {{"L_vvv", 1e-4}})),
+                    Catch::Contains("effects.lateral_inflow.L_vvv"));
+  CHECK_THROWS_WITH(make_plant(with_effect("flapping_forcing", {{"L_sin0", 1e-3}})),
+                    Catch::Contains("effects.flapping_forcing.L_sin0"));
+  CHECK_THROWS_WITH(make_plant(with_effect("actuator_delay", {{"L_df_delayed", 1e-4}})),
+                    Catch::Contains("effects.actuator_delay") && Catch::Contains("delay_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("lateral_gust", {{"sigma_mps", 0.1}})),
+                    Catch::Contains("effects.lateral_gust") && Catch::Contains("tau_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("actuator_delay", {{"delay_s", 2.0}})),
+                    Catch::Contains("effects.actuator_delay.delay_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("sensor_bias", {{"L_0", NAN}})), Catch::Contains("effects.sensor_bias.L_0"));
+}
+
+TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0) v terms", "[plant][model_effects]") {
+  // u moves only with a longitudinal model: fly set 1 with it, perturbed in u, v and p.
+  const DerivativeModel lon = load_model(kModels + "nimble_longitudinal.yaml");
+  const double L_up = -1.5e-4, L_uv = 3.0e-4, Y_up = 2.0e-3, Y_uv = -0.03;
+  Fixture f;
+  const Fixture g = with_effect("forward_speed_coupling", {{"L_up", L_up}, {"L_uv", L_uv}, {"Y_up", Y_up}, {"Y_uv", Y_uv}});
+  PlantConfig cfg;
+  cfg.initial.u_mps = 0.6;
+  cfg.initial.v_mps = 0.4;
+  cfg.initial.p_radps = 0.3;
+  const PlantModel plain(f.model, lon, f.vehicle, cfg), coupled(g.model, lon, f.vehicle, cfg);
+  const double du = 0.6 - f.model.trim.u0_mps, v = 0.4, p = 0.3;
+  REQUIRE(plain.truth().velocity_body_mps.x() == Approx(f.model.trim.u0_mps + 0.6));
+  // Truth at t = 0: p_dot = Izz/Ic L (lateral3, no N), side specific force Y/m.
+  const double dL = L_up * du * p + L_uv * du * v, dY = Y_up * du * p + Y_uv * du * v;
+  const double Izz_over_Ic = f.vehicle.Izz_kgm2 / f.vehicle.Ic();
+  CHECK(coupled.truth().angular_accel_body_radps2.x() - plain.truth().angular_accel_body_radps2.x() ==
+        Approx(Izz_over_Ic * dL).epsilon(1e-9));
+  CHECK(coupled.truth().specific_force_body_mps2.y() - plain.truth().specific_force_body_mps2.y() ==
+        Approx(dY / f.vehicle.mass_kg).epsilon(1e-9));
+  CHECK(std::fabs(Izz_over_Ic * dL) > 1e-3);  // a change the check can see
+
+  // The model's section replaces the plant file's one-gain form; with coefficients k Lp, k Lv,
+  // k Yp, k Yv it flies as the gain k does (lateral3).
+  const double k = 0.5;
+  PlantConfig by_gain = cfg;
+  by_gain.effects.forward_speed_coupling.enabled = true;
+  by_gain.effects.forward_speed_coupling.gain_per_mps = k;
+  const Fixture h = with_effect("forward_speed_coupling", {{"L_up", k * f.model.at("Lp")},
+                                                           {"L_uv", k * f.model.at("Lv")},
+                                                           {"Y_up", k * f.model.at("Yp")},
+                                                           {"Y_uv", k * f.model.at("Yv")}});
+  PlantModel a(f.model, lon, f.vehicle, by_gain), b(h.model, lon, f.vehicle, by_gain);
+  for (int i = 0; i < 300; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == Approx(a.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(b.truth().velocity_body_mps.y() == Approx(a.truth().velocity_body_mps.y()).epsilon(1e-9));
+
+  // A plant file with both forms is refused.
+  PlantConfig both = by_gain;
+  both.effects.forward_speed_coupling.Y_uv_ns2pm2 = 0.01;
+  CHECK_THROWS_WITH(PlantModel(f.model, lon, f.vehicle, both), Catch::Contains("forward_speed_coupling"));
+}
+
+TEST_CASE("actuator delay from the model postpones the delta_f response by delay_s", "[plant][model_effects]") {
+  // The plant file's delay (50 ms) is replaced by the model's (20 ms).
+  const Fixture g = with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
+  PlantConfig cfg;
+  cfg.effects.actuator_delay.enabled = true;
+  cfg.effects.actuator_delay.delay_s = 0.050;
+  PlantModel plant = make_plant(g, cfg), undelayed = make_plant(Fixture{});
+  ActuatorInput cmd = plant.trim_command();
+  cmd.flap_freq_left_radps += 10;
+  for (int i = 0; i < 20; ++i) {
+    plant.step(cmd);
+    undelayed.step(cmd);
+    REQUIRE(std::fabs(plant.truth().delta_f_radps) < 1e-12);
+  }
+  CHECK(undelayed.truth().delta_f_radps > 0.1);
+  std::vector<double> reference;  // the undelayed response from its start
+  PlantModel ref = make_plant(Fixture{});
+  for (int i = 0; i < 30; ++i) {
+    ref.step(cmd);
+    reference.push_back(ref.truth().delta_f_radps);
+  }
+  for (int i = 0; i < 30; ++i) {
+    plant.step(cmd);
+    REQUIRE(plant.truth().delta_f_radps == Approx(reference[static_cast<std::size_t>(i)]).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("flapping forcing from the model oscillates at the plant's flapping frequency", "[plant][model_effects]") {
+  // Amplitude hypot(L_sin1, L_cos1) = 2e-3 N m at the plant's flapping frequency (about 16.3 Hz
+  // at trim), not at the model's flapping_hz (given 12 Hz here).
+  const Fixture g = with_effect("flapping_forcing", {{"flapping_hz", 12.0}, {"L_sin1", 1.2e-3}, {"L_cos1", -1.6e-3}});
+  PlantModel plant = make_plant(g);
+  const double w = plant.trim_flap_frequency_radps();
+  std::complex<double> at_f = 0, at_model_f = 0;
+  for (int i = 0; i < 1000; ++i) {
+    plant.step(plant.trim_command());
+    const double t = plant.truth().time_s, p = plant.truth().omega_body_radps.x();
+    at_f += p * std::exp(std::complex<double>(0, -w * t));
+    at_model_f += p * std::exp(std::complex<double>(0, -2 * M_PI * 12.0 * t));
+  }
+  const double amp = 2.0 * std::abs(at_f) / 1000.0;
+  CHECK(amp == Approx(2e-3 * g.vehicle.Izz_kgm2 / g.vehicle.Ic() / w).epsilon(0.15));
+  CHECK(std::abs(at_model_f) < 0.2 * std::abs(at_f));
+
+  // Both equations and two harmonics: the same as the plant file's forcing with the
+  // amplitudes hypot(sin_h, cos_h), with the plant's seeded phases.
+  const Fixture h = with_effect("flapping_forcing", {{"flapping_hz", 16.0}, {"L_sin1", 1.2e-3}, {"L_cos1", -1.6e-3},
+                                                     {"L_sin2", 0.6e-3}, {"L_cos2", 0.8e-3}, {"Y_cos1", 1.0e-2},
+                                                     {"Y_sin2", -3.0e-3}, {"Y_cos2", 4.0e-3}});
+  PlantConfig by_config;
+  by_config.effects.flapping_forcing.enabled = true;
+  by_config.effects.flapping_forcing.roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
+  by_config.effects.flapping_forcing.side_force_amplitudes_n = {1.0e-2, 5.0e-3};
+  PlantConfig other;  // the plant file's own forcing, replaced by the model's
+  other.effects.flapping_forcing = by_config.effects.flapping_forcing;
+  other.effects.flapping_forcing.roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
+  PlantModel a = make_plant(Fixture{}, by_config), b = make_plant(h, other);
+  for (int i = 0; i < 500; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == Approx(a.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(b.truth().velocity_body_mps.y() == Approx(a.truth().velocity_body_mps.y()).epsilon(1e-9));
+  CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-4);
+}
+
+TEST_CASE("sensor_bias from the model is a constant roll moment and side force", "[plant][model_effects]") {
+  const double L0 = 1.0e-4, Y0 = -2.0e-3;
+  const Fixture g = with_effect("sensor_bias", {{"L_0", L0}, {"Y_0", Y0}});
+  const PlantModel plain = make_plant(Fixture{});
+  PlantModel biased = make_plant(g);
+  REQUIRE(plain.truth().angular_accel_body_radps2.x() == 0.0);
+  CHECK(biased.truth().angular_accel_body_radps2.x() == Approx(g.vehicle.Izz_kgm2 / g.vehicle.Ic() * L0).epsilon(1e-12));
+  CHECK(biased.truth().specific_force_body_mps2.y() == Approx(Y0 / g.vehicle.mass_kg).epsilon(1e-12));
+  // The same as the plant file's constant load.
+  PlantConfig by_config;
+  by_config.effects.constant_load = {true, L0, Y0};
+  PlantModel a = make_plant(Fixture{}, by_config);
+  for (int i = 0; i < 200; ++i) {
+    a.step(a.trim_command());
+    biased.step(biased.trim_command());
+  }
+  CHECK(biased.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(biased.truth().omega_body_radps.x() > 1e-3);
+}
+
+TEST_CASE("dihedral_coupling from the model sets the dihedral derivatives", "[plant][model_effects]") {
+  const double L_dd = 1.41e-3, Y_dd = -6.06e-2;
+  const Fixture g = with_effect("dihedral_coupling", {{"L_dd", L_dd}, {"Y_dd", Y_dd}});
+  Fixture d;  // the same derivatives in the model's derivatives
+  d.model.derivatives["L_dd"] = L_dd;
+  d.model.derivatives["Y_dd"] = Y_dd;
+  PlantModel a = make_plant(d), b = make_plant(g), plain = make_plant(Fixture{});
+  ActuatorInput cmd = a.trim_command();
+  cmd.dihedral_rad = 0.1;
+  for (int i = 0; i < 300; ++i) {
+    a.step(cmd);
+    b.step(cmd);
+    plain.step(cmd);
+  }
+  CHECK(b.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(b.truth().velocity_body_mps.y() == a.truth().velocity_body_mps.y());
+  CHECK(std::fabs(b.truth().omega_body_radps.x()) > 1e-3);
+  CHECK(std::fabs(plain.truth().omega_body_radps.x()) < 1e-12);
+  // Given both as a derivative and in effects: refused, naming it.
+  Fixture both = d;
+  both.model.effects["dihedral_coupling"] = {{"L_dd", L_dd}};
+  CHECK_THROWS_WITH(make_plant(both), Catch::Contains("effects.dihedral_coupling.L_dd"));
+}
+
+TEST_CASE("yaw_coupling from the model sets Lr and Yr (acting where r is a state)", "[plant][model_effects]") {
+  // Lateral4: the model without Lr, Yr among its derivatives but in effects flies as the original.
+  const DerivativeModel full = load_model(kModels + "nimble_lateral4_yaw.yaml");
+  const Vehicle vehicle = load_vehicle(full.vehicle_file);
+  DerivativeModel moved = full, without = full;
+  moved.derivatives.erase("Lr");
+  moved.derivatives.erase("Yr");
+  without.derivatives.erase("Lr");
+  without.derivatives.erase("Yr");
+  moved.effects["yaw_coupling"] = {{"Lr", full.at("Lr")}, {"Yr", full.at("Yr")}};
+  PlantConfig cfg;
+  cfg.initial.r_radps = 0.5;
+  PlantModel a(full, std::nullopt, vehicle, cfg), b(moved, std::nullopt, vehicle, cfg), c(without, std::nullopt, vehicle, cfg);
+  for (int i = 0; i < 300; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+    c.step(c.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(b.truth().velocity_body_mps.y() == a.truth().velocity_body_mps.y());
+  CHECK(std::fabs(c.truth().omega_body_radps.x() - a.truth().omega_body_radps.x()) > 1e-3);
+}
+
+TEST_CASE("lateral_gust from the model has the model's sigma and tau", "[plant][model_effects]") {
+  const Fixture g = with_effect("lateral_gust", {{"sigma_mps", 0.2}, {"tau_s", 0.05}});
+  PlantConfig file_gust;  // the plant file's gust, replaced by the model's
+  file_gust.effects.lateral_gust = {true, 1.0, 0.5};
+  file_gust.seed = 7;
+  PlantConfig by_config;
+  by_config.effects.lateral_gust = {true, 0.2, 0.05};
+  by_config.seed = 7;
+  PlantModel a = make_plant(g, file_gust), b = make_plant(Fixture{}, by_config);
+  double sum2 = 0;
+  const int n = 60000;
+  for (int i = 0; i < n; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+    REQUIRE(a.truth().gust_v_mps == b.truth().gust_v_mps);
+    sum2 += a.truth().gust_v_mps * a.truth().gust_v_mps;
+  }
+  CHECK(std::sqrt(sum2 / n) == Approx(0.2).epsilon(0.1));
+}
+
+TEST_CASE("kinematic and gravity terms from the model are the plant's equations of motion", "[plant][model_effects]") {
+  // Set 1 with kinematic_coupling and gravity_nonlinearity flies exactly as set 1: the plant's
+  // equations of motion carry p w and g sin(phi) already.
+  const Fixture f;
+  Fixture k;
+  k.model = load_model(kModels + "nimble_lateral_set1_kinematic.yaml");
+  REQUIRE(k.model.effects.count("kinematic_coupling") == 1);
+  REQUIRE(k.model.effects.count("gravity_nonlinearity") == 1);
+  PlantConfig cfg;
+  cfg.initial.phi_rad = 0.3;
+  cfg.initial.p_radps = 0.5;
+  PlantModel a = make_plant(f, cfg), b = make_plant(k, cfg);
+  for (int i = 0; i < 500; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.state() == a.state());
 }
