@@ -37,4 +37,8 @@ int run_validate_command(const std::vector<std::string>& args);
 /// `rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]`
 int run_export_command(const std::vector<std::string>& args);
 
+/// `rig turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]`: the
+/// Ce500 practical, aircraft responses to atmospheric turbulence (cli/turbulence_command.cc).
+int run_turbulence_command(const std::vector<std::string>& args);
+
 }  // namespace nimble::cli

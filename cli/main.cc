@@ -33,6 +33,8 @@ const Command kCommands[] = {
      nimble::cli::run_discrepancy_command},
     {"export", "export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]   a rig log as identification CSV",
      nimble::cli::run_export_command},
+    {"turbulence", "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence practical",
+     nimble::cli::run_turbulence_command},
 };
 
 void print_usage(std::ostream& out) {

@@ -162,8 +162,8 @@ SystemAnalysis analyse_system(const std::string& key, const LinearSystem& sys, c
 
 std::string percent(double predicted, double published) {
   std::ostringstream out;
-  out.precision(2);
-  out << std::fixed << 100.0 * (published / predicted - 1.0) << " %";
+  out.precision(1);
+  out << std::showpos << std::fixed << 100.0 * (published / predicted - 1.0) << " %";
   return out.str();
 }
 
@@ -208,8 +208,8 @@ std::vector<Table51Cell> explain_table_5_1(const Ce500Analysis& a) {
         }
         cell.explained = best <= std::log(kExplainedRatio);
         cell.reason = (cell.explained ? "" : "not reproduced by the causes tested; nearest: ") + cell.explanation_name +
-                      unit_note + " predicts " + number(cell.explanation_value) + " (published " +
-                      percent(cell.explanation_value, cell.published) + ")";
+                      unit_note + " predicts " + number(cell.explanation_value) + "; published " +
+                      percent(cell.explanation_value, cell.published) + " from it";
       };
       const auto make = [&](const std::string& method, double published, double ours) {
         Table51Cell c;
@@ -249,10 +249,9 @@ std::vector<Table51Cell> explain_table_5_1(const Ce500Analysis& a) {
         c.explanation_value = L;
         c.explained = std::abs(z) <= kExplainedSigmas;
         std::ostringstream r;
-        r.precision(2);
-        r << std::fixed << (c.explained ? "within " : "outside ") << kExplainedSigmas << " sigma of the exact variance"
-          << unit_note << " for a " << cfg.published.record_length_s << " s record (assumed): " << number(L) << " +- "
-          << number(sigma) << ", z = " << z;
+        r << (c.explained ? "within " : "outside ") << kExplainedSigmas << " sigma of the exact variance" << unit_note
+          << " for a " << cfg.published.record_length_s << " s record (assumed): " << number(L) << " +- "
+          << number(sigma) << ", z = " << number(z);
         c.reason = r.str();
         cells.push_back(c);
       }

@@ -215,15 +215,10 @@ std::vector<NamedEigenvalue> ce500_named_eigenvalues(const LinearSystem& sys) {
     if (z.imag() > 0.0) pairs.push_back(i);
     if (z.imag() == 0.0) reals.push_back(i);
   }
+  // Of two oscillatory pairs the Dutch roll is the faster oscillation (larger imaginary part).
   int dutch = -1;
-  double best = -1.0;
   for (const int i : pairs) {
-    const auto v = es.eigenvectors().col(i);
-    const double ratio = std::abs(v[kBeta]) / std::max(std::abs(v[kPhi]), 1e-300);
-    if (ratio > best) {
-      best = ratio;
-      dutch = i;
-    }
+    if (dutch < 0 || es.eigenvalues()[i].imag() > es.eigenvalues()[dutch].imag()) dutch = i;
   }
   for (int i = 0; i < 4; ++i) {
     const auto z = es.eigenvalues()[i];

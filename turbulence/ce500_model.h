@@ -94,8 +94,8 @@ struct NamedEigenvalue {
 /// upper triangular (the gust filters are not driven by the aircraft), so the aircraft
 /// eigenvalues are those of the 4 x 4 aircraft block and the gust poles those of each filter.
 /// Aircraft names: a single complex pair is the Dutch roll; of two pairs, the Dutch roll is the
-/// one whose eigenvector has the larger |beta| / |phi|, the other the roll pair (aperiodic roll
-/// and bank angle joined by the roll damper); of two real eigenvalues the faster is the
+/// faster oscillation (larger imaginary part), the other the roll pair (aperiodic roll and bank
+/// angle joined by the roll damper); of two real eigenvalues the faster is the
 /// aperiodic roll and the slower the spiral; a zero eigenvalue is the neutral bank angle.
 /// Sorted by real part descending, then imaginary part descending.
 std::vector<NamedEigenvalue> ce500_named_eigenvalues(const LinearSystem& sys);
