@@ -78,10 +78,14 @@ constexpr const char* kDiscrepancyUsage =
     "  --candidates LIST   comma-separated candidate effects to try (default: all the data supports):\n"
     "                      kinematic_coupling, gravity_nonlinearity, lateral_inflow,\n"
     "                      forward_speed_coupling, actuator_delay, sensor_bias, dihedral_coupling,\n"
-    "                      yaw_coupling\n"
+    "                      yaw_coupling, flapping_forcing, lateral_gust\n"
     "  --folds K           held-out cross-validation folds (default 10)\n"
     "  --partial-f F       significance rule (default 20, SIDPAC)\n"
     "  --delay-max S       actuator_delay scan limit (default 0.06 s)\n"
+    "  --command-latency S known latency of the flap command path, not named as a delay\n"
+    "                      (default 1/512 s: one controller tick of the rig)\n"
+    "  --gains NAME        roll gain set of the closed-loop controller copy (default: the log's\n"
+    "                      CONTROLLER_STATUS gain set; fast for CSV data)\n"
     "  --rate HZ, --cutoff HZ, --order N, --interpolation cubic|linear   processing (512, 9, 10, cubic)\n"
     "  --json FILE         write the JSON report to FILE ('-' for stdout)\n"
     "  --model-out FILE    write the model refit with the named effects (section effects:)\n"
@@ -280,7 +284,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
     std::cout << kDiscrepancyUsage;
     return 0;
   }
-  std::string data_file, model_file, vehicle_file, json, model_out, report;
+  std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   try {
     Args it(args);
@@ -302,6 +306,13 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
       } else if (a == "--delay-max") {
         opt.delay_max_s = number(a, it.value());
         if (!(opt.delay_max_s > 0.0 && opt.delay_max_s <= 1.0)) throw UsageError("--delay-max must be in (0, 1] s");
+      } else if (a == "--command-latency") {
+        opt.command_latency_s = number(a, it.value());
+        if (!(opt.command_latency_s >= 0.0 && opt.command_latency_s <= 0.1)) {
+          throw UsageError("--command-latency must be in [0, 0.1] s");
+        }
+      } else if (a == "--gains") {
+        gains = it.value();
       } else if (a == "--json") {
         json = it.value();
       } else if (a == "--model-out") {
@@ -326,7 +337,15 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);
-  const ident::FlightData data = ident::read_flight_data(data_file);
+  ident::FlightData data;
+  if (ident::is_lcm_log(data_file)) {
+    ident::RigLogData log = ident::read_rig_log(data_file);
+    data = std::move(log.measured);
+    if (gains.empty()) gains = log.gain_set;  // the gains the run flew
+  } else {
+    data = ident::read_flight_csv(data_file);
+  }
+  if (gains.empty()) gains = "fast";
   ident::DiscrepancyResult result = ident::find_discrepancy(data, model, vehicle, opt);
   // Closed loop before and after, as rig validate --closed-loop.
   if (!data.has("phi_sp")) {
@@ -335,12 +354,14 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
     try {
       ident::ClosedLoopOptions cl;
       cl.controller = load_controller_config(NIMBLE_DEFAULT_CONTROLLER);
+      cl.gain_set = gains;
       const ident::ClosedLoopResult before = ident::validate_closed_loop(data, model, vehicle, cl);
       const ident::ClosedLoopResult after = ident::validate_closed_loop(data, result.augmented_model, vehicle, cl);
       for (const char* s : {"p", "v", "phi", "delta_f"}) {
         result.closed_loop.push_back({s, before.fits.at(s).r2, after.fits.at(s).r2, before.fits.at(s).rmse,
                                       after.fits.at(s).rmse});
       }
+      result.closed_loop_note = "gains " + gains;
     } catch (const std::exception& e) {
       result.closed_loop_note = std::string("not flown: ") + e.what();
     }

@@ -35,6 +35,15 @@ class EffectForces {
     }
   }
 
+  /// Samples by which the flap command reaches the actuator late: an actuator_delay named in
+  /// the actuator equation (F_cmd_delayed), 0 otherwise.
+  Eigen::Index command_delay_samples() const {
+    for (const auto& [name, params] : model_.effects) {
+      if (params.count("F_cmd_delayed")) return delay_samples_;
+    }
+    return 0;
+  }
+
   /// Extra L [N m] and Y [N] at sample k.
   std::pair<double, double> at(Eigen::Index k, double p, double v, double phi, const std::vector<double>& df_hist) const {
     double L = 0.0, Y = 0.0;
@@ -43,8 +52,8 @@ class EffectForces {
     for (const auto& [name, params] : model_.effects) {
       for (const auto& [key, c] : params) {
         if (key == "delay_s" || key == "flapping_hz" || key.find("_amp") != std::string::npos ||
-            key.find("fraction") != std::string::npos) {
-          continue;
+            key.find("fraction") != std::string::npos || key.rfind("F_", 0) == 0) {
+          continue;  // not a force (F_: the actuator's command delay, command_delay_samples())
         }
         double x = 0.0;
         const std::string form = key.substr(key.find('_') == 1 ? 2 : 1);  // "L_vv" -> "vv", "Lr" -> "r"
@@ -155,7 +164,8 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   // (forward Euler on their contribution; the linear part stays exact).
   const EffectForces effects(model, vehicle, grid);
   const double Izz_over_Ic = vehicle.Izz_kgm2 / vehicle.Ic();
-  std::vector<double> df_hist;
+  std::vector<double> df_hist, cmd_hist;
+  const Eigen::Index cmd_delay = effects.command_delay_samples();
   Eigen::Vector4d x(p[0], v[0], phi[0], df[0]);
   for (Eigen::Index k = 0; k < n; ++k) {
     r.simulated["p"][k] = x[0];
@@ -167,7 +177,9 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
     in.p_radps = x[0];
     in.roll_sp_rad = phi_sp[k];
     const ControllerOutput out = controller.step(in);
-    const Eigen::Vector2d u(out.delta_f_cmd_radps, dt[k]);
+    cmd_hist.push_back(out.delta_f_cmd_radps);
+    const Eigen::Index back = static_cast<Eigen::Index>(cmd_hist.size()) - 1 - cmd_delay;
+    const Eigen::Vector2d u(back >= 0 ? cmd_hist[static_cast<std::size_t>(back)] : 0.0, dt[k]);
     df_hist.push_back(x[3]);
     const auto [dL, dY] = model.effects.empty() ? std::pair<double, double>{0.0, 0.0}
                                                 : effects.at(k, x[0], x[1], x[2], df_hist);

@@ -6,6 +6,9 @@
 /// 1. Gap. The model's regression equations (thesis Eq 21, as rig identify):
 ///        L:  Ic/Izz p_dot  = Lp p + Lv v + sum_u L_u u
 ///        Y:  m v_dot_star  = Yp p + Yv v + sum_u Y_u u
+///    and, when the data carries the flight board's command delta_f_cmd (a rig log does), the
+///    flap actuator (thesis Eq 33):
+///        F:  delta_f_dot   = F_f delta_f + F_cmd delta_f_cmd   (as given: -12.56, 8.97)
 ///    with the model's own derivatives (the model as given) and with its derivatives refit
 ///    (the baseline structure), on the measured states and inputs, low-passed as for
 ///    identification. Per output: RMSE, fit % (100 (1 - |e| / |y - mean y|)) and residual
@@ -18,18 +21,23 @@
 ///    x^2 and x^3 of every state and input, which no linear model produces; Wald test
 ///    with the coloured covariance, Bonferroni-corrected over the signals).
 /// 3. Name. A library of physically named candidate effects, each a set of regressor
-///    columns in the L and Y equations (candidate_library()). Stepwise: in each round every
-///    candidate not yet in the model is tried on the current model; it passes only if all of
+///    columns in the L, Y (and F) equations (candidate_library()). Stepwise: in each round
+///    every candidate not yet in the model is tried on the current model; it passes only if
+///    all of
 ///      - significance: its Wald statistic with a covariance that allows coloured
 ///        residuals (batch means over blocks longer than the residual's correlation time)
 ///        reaches the partial-F rule F >= 20 (SIDPAC). The rule is applied as its
 ///        chi-square tail probability, P(chi2_1 >= 20) = 7.7e-6, so that it holds alike for
-///        a group of k parameters, for the two equations (Bonferroni) and for a candidate
-///        scanned over M delays (Bonferroni over the M scan points);
+///        a group of k parameters, for the equations (Bonferroni) and for a candidate
+///        scanned over M delays (Bonferroni over the M scan points). The Wald statistic's
+///        tail is taken with the batch-means covariance's own scatter: from B blocks it is
+///        Hotelling's T^2, W (B - k) / (k (B - 1)) ~ F(k, B - k), not chi2_k;
 ///      - the predicted squared error PSE = RSS / N + sigma_max^2 P / N falls in an
 ///        equation where it is significant (sigma_max^2 the variance of the dependent);
 ///      - for actuator_delay, the input acts mostly delayed: the delayed column's coefficient
-///        is at least half of delta_f's total coefficient in that equation;
+///        is at least half of the input's total coefficient in that equation (delta_f in L
+///        and Y, where the aerodynamics respond late to the measured flap output; the command
+///        in F, where the actuator responds late to the command: the plant's actuator_delay);
 ///      - above the gust band: the same test on the equations high-passed at gust_band_hz
 ///        (y and every column) is significant at gust_band_alpha: an unmeasured side wind
 ///        drives v and correlates the error with v|v| in closed loop, but only at low
@@ -53,6 +61,13 @@
 /// 5. Gap after: the held-out table again, with the effects. rig discrepancy also flies the
 ///    model as given and the augmented model in closed loop on the data's phi_sp
 ///    (validate_closed_loop, ident/closed_loop.h) and reports both (closed_loop).
+///
+/// lateral_gust has no regressor: a side wind v_g enters the side-force equation as -Yv v_g, a
+/// random force with the wind's low-pass spectrum. After the search it is named from that
+/// signature alone: the final Y residual's mean periodogram below gust_band_hz against its
+/// level in a reference band above (an F test of the two bands' chi-square sums, with their
+/// Satterthwaite degrees of freedom), at the partial-F rule's p_critical as every other
+/// candidate. It leaves the held-out gap as it is.
 ///
 /// Effects the model file already carries (section `effects:`, e.g. from an earlier run's
 /// --model-out) belong to the baseline structure: refit with the derivatives, not tried again.
@@ -91,6 +106,7 @@ struct CandidateSpec {
   std::vector<CandidateTerm> terms;
   bool scanned = false;     ///< has a scanned parameter (a delay, a frequency)
   bool wideband = false;    ///< tested on data low-passed above the flapping band (flapping_forcing)
+  bool stochastic = false;  ///< no regressor: named from its signature in the residual (lateral_gust)
 };
 
 /// Every candidate effect, in a fixed order.
@@ -109,6 +125,17 @@ struct DiscrepancyOptions {
   double collinearity = 0.9;          ///< |rho| above which two passing candidates are ambiguous
   std::size_t max_effects = 4;        ///< rounds of the stepwise search
   double delay_max_s = 0.060;         ///< actuator_delay scan: 1 sample .. this delay
+  /// The flap actuator of the model as given, delta_f = gain / (s + pole) delta_f_cmd (thesis
+  /// Eq 33; the plant's plant.flap): the actuator equation F of data that carries delta_f_cmd.
+  double actuator_gain = 8.97;
+  double actuator_pole_radps = 12.56;
+  /// Known latency of the command path [s]: the actuator equation takes delta_f_cmd this much
+  /// later (rounded to samples), and a named actuator_delay is the delay beyond it. The rig
+  /// applies a command from an earlier controller tick: in lockstep one to two plant steps
+  /// after the 512 Hz controller published it, in real time as much plus the LCM hop, so the
+  /// default is one controller period (1/512 s, controller.rate_hz). Data from a flight board
+  /// that logs its command when it is sent should set its own link's latency.
+  double command_latency_s = 1.0 / 512.0;
   /// Confirmation band above side gusts [Hz]: a first-order Gauss-Markov wind with a
   /// correlation time of 0.5 s or longer (the plant's lateral_gust.tau_s) has 90 % of its
   /// variance below 2 Hz ((2/pi) atan(2 pi f tau)).
@@ -238,7 +265,7 @@ struct DiscrepancyResult {
   DerivativeModel augmented_model;
   /// Closed loop before (the model as given) and after (the augmented model), filled by the
   /// caller that has the controller (rig discrepancy) when the data has phi_sp; empty otherwise,
-  /// with the reason in closed_loop_note.
+  /// with the reason in closed_loop_note (when flown, the note names the gain set).
   std::vector<ClosedLoopGap> closed_loop;
   std::string closed_loop_note;
 };

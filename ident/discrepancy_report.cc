@@ -204,7 +204,9 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << line;
   }
   if (!r.closed_loop.empty()) {
-    o << "\nclosed loop (model flown by the controller copy on phi_sp): the model as given -> the augmented model\n";
+    o << "\nclosed loop (model flown by the controller copy on phi_sp";
+    if (!r.closed_loop_note.empty()) o << ", " << r.closed_loop_note;
+    o << "): the model as given -> the augmented model\n";
     for (const auto& c : r.closed_loop) {
       char line[160];
       std::snprintf(line, sizeof line, "  %-8s R^2 %7.3f -> %7.3f   RMSE %10.4g -> %10.4g\n", c.output.c_str(), c.r2_before,

@@ -76,6 +76,7 @@ const std::vector<ChannelSpec>& channel_specs() {
       {"ay", "m/s^2", false, "specific force (body y)"},
       {"az", "m/s^2", false, "specific force (body z)"},
       {"phi_sp", "rad", false, "roll-angle set-point"},
+      {"delta_f_cmd", "rad/s", false, "flapping-frequency difference commanded by the flight board (flap actuator input)"},
   };
   return specs;
 }

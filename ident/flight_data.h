@@ -8,7 +8,7 @@
 ///  - one data row per sample, every cell a finite decimal number;
 ///  - column `t` [s] strictly increasing; the other columns share it.
 /// Required columns: t, p, v, phi, delta_f, delta_t. Optional: r, q, u, w,
-/// theta, psi, delta_d, delta_w, ax, ay, az, phi_sp (see channel_specs()).
+/// theta, psi, delta_d, delta_w, ax, ay, az, phi_sp, delta_f_cmd (see channel_specs()).
 /// A column outside these is an error. Blank lines are skipped.
 ///
 /// A flight-log reader fills FlightData directly, each channel at its own

@@ -4,8 +4,10 @@
 #include <fstream>
 
 #include <lcm/lcm-cpp.hpp>
+#include <nimble/actuator_command_t.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/controller_status_t.hpp>
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/truth_state_t.hpp>
@@ -71,6 +73,7 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   lcm::LogFile log(file, "r");
   if (!log.good()) throw DataError(file, -1, -1, "", "cannot open as an LCM log");
   FlightData estimate, truth, inputs;
+  std::string gain_set;
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
     if (ev->channel == "TRUTH") {
       const auto m = decode_or_throw<truth_state_t>(*ev, file);
@@ -90,6 +93,15 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
       append(inputs.channels["delta_t"], t, m.throttle_pct);
       append(inputs.channels["delta_d"], t, m.dihedral_rad);
       append(inputs.channels["delta_w"], t, m.wing_root_rad);
+    } else if (ev->channel == "ACTUATOR_CMD") {
+      // The flight board's command, the flap actuator's input (what the plant receives, over
+      // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
+      const auto m = decode_or_throw<actuator_command_t>(*ev, file);
+      const double df = m.mode == actuator_command_t::MODE_DELTA_F ? m.delta_f_radps
+                                                                   : m.flap_freq_left_radps - m.flap_freq_right_radps;
+      append(inputs.channels["delta_f_cmd"], static_cast<double>(m.utime) * 1e-6, df);
+    } else if (ev->channel == "CONTROLLER_STATUS") {
+      if (gain_set.empty()) gain_set = decode_or_throw<controller_status_t>(*ev, file).gain_set;
     } else if (ev->channel == "ATTITUDE_SP") {
       const auto m = decode_or_throw<attitude_setpoint_t>(*ev, file);
       append(inputs.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
@@ -121,6 +133,7 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   }
   if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, "TRUTH", "the log has neither ESTIMATE nor TRUTH");
   out.state_source = use_estimate ? "estimate" : "truth";
+  out.gain_set = gain_set;
   out.measured = use_estimate ? estimate : truth;
   out.measured.source = file;
   for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;

@@ -33,6 +33,7 @@ struct RigLogData {
   FlightData measured;       ///< states (per StateSource), inputs, set-points, at their own rates
   FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
   std::string state_source;  ///< "estimate" or "truth"
+  std::string gain_set;      ///< the roll gain set the controller flew (CONTROLLER_STATUS; empty if none)
 };
 
 /// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is

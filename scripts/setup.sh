@@ -14,12 +14,12 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # Catch2, a JDK for the type jar,
 # gnuplot for identification plots, and for real SocketCAN tests: can-utils, iproute2,
 # and qemu with xz (can_bridge/vm/canvm boots Debian's kernel when the host has no vcan);
-# python3 for the check that every CTest entry runs one test case (tests/meta).
-# python3 for the check that every CTest entry runs one test case (tests/meta).
+# python3 for the check that every CTest entry runs one test case (tests/meta);
+# Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests.
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
-  libeigen3-dev libyaml-cpp-dev catch2
+  libeigen3-dev libyaml-cpp-dev catch2 libboost-dev
   default-jdk-headless
   gnuplot-nox
   can-utils iproute2 qemu-system-x86 xz-utils
