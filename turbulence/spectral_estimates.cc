@@ -1,5 +1,6 @@
 #include "turbulence/spectral_estimates.h"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <stdexcept>
@@ -94,6 +95,37 @@ SpectralEstimate welch(const Eigen::VectorXd& x, double dt_s, std::size_t M) {
   e.segments = K;
   e.dof = welch_dof(K, M);
   return e;
+}
+
+Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M,
+                                  std::size_t bins) {
+  check_dt(dt_s);
+  if (!is_power_of_two(M) || M < 8 || bins > M / 2 + 1 || autocovariance.size() == 0) {
+    throw std::invalid_argument("welch_expectation: need M a power of two >= 8, at most M/2 + 1 bins and an "
+                                "autocovariance");
+  }
+  const Eigen::VectorXd w = hann_window(M);
+  const Eigen::Index lags = std::min<Eigen::Index>(autocovariance.size(), static_cast<Eigen::Index>(M));
+  // a_m R_m for m = 0 .. lags - 1.
+  Eigen::VectorXd aR(lags);
+  for (Eigen::Index m = 0; m < lags; ++m) {
+    const Eigen::Index len = static_cast<Eigen::Index>(M) - m;
+    aR[m] = w.head(len).dot(w.segment(m, len)) * autocovariance[m];
+  }
+  // The lags -m wrap to M - m: one DFT of length M gives every bin.
+  std::vector<double> y(M, 0.0);
+  y[0] = aR[0];
+  for (Eigen::Index m = 1; m < lags; ++m) {
+    y[static_cast<std::size_t>(m)] += aR[m];
+    y[M - static_cast<std::size_t>(m)] += aR[m];
+  }
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> Y;
+  fft.fwd(Y, y);
+  Eigen::VectorXd out(static_cast<Eigen::Index>(bins));
+  const double scale = dt_s / w.squaredNorm();
+  for (Eigen::Index k = 0; k < out.size(); ++k) out[k] = scale * Y[static_cast<std::size_t>(k)].real();
+  return out;
 }
 
 std::size_t default_welch_segment(std::size_t n) {

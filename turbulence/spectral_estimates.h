@@ -47,6 +47,18 @@ SpectralEstimate welch(const Eigen::VectorXd& x, double dt_s, std::size_t segmen
 /// The default Welch segment length for n samples (see the header comment).
 std::size_t default_welch_segment(std::size_t n);
 
+/// Expected value of welch() with Hann segments of M samples for a zero-mean stationary
+/// process with autocovariance R_k = R(k dt) (k = 0 .. ; lags beyond its end taken as 0), at
+/// the Welch bins k = 0 .. bins - 1 (omega_k = 2 pi k / (M dt)):
+///   E[S_k] = (dt / sum w^2) sum_{|m| < M} a_|m| R_|m| cos(omega_k m dt),  a_m = sum_n w_n w_{n+m}.
+/// It holds the window's leakage and the aliasing of the sampled process exactly (it neglects
+/// the removal of the record mean, which only touches the lowest bin or two). Use it as the
+/// centre of the confidence band where the analytical PSD curves on the scale of a bin.
+/// @throws std::invalid_argument unless M is a power of two >= 8, bins <= M/2 + 1, dt > 0 and
+///         the autocovariance is not empty.
+Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M,
+                                  std::size_t bins);
+
 /// The periodic Hann window of length M.
 Eigen::VectorXd hann_window(std::size_t M);
 

@@ -114,4 +114,23 @@ ConfidenceBand psd_confidence_band(double dof, double level) {
   return b;
 }
 
+std::size_t binomial_upper_quantile(std::size_t n, double p, double level) {
+  if (!(p >= 0.0 && p <= 1.0) || !(level > 0.0 && level < 1.0)) {
+    throw std::invalid_argument("binomial_upper_quantile: need 0 <= p <= 1 and 0 < level < 1");
+  }
+  if (p == 0.0) return 0;
+  if (p == 1.0) return n;
+  // P(X = k) by the recursion P(k+1) = P(k) (n - k) / (k + 1) p / (1 - p), in logs from P(0).
+  const double log_ratio = std::log(p) - std::log1p(-p);
+  double log_pk = static_cast<double>(n) * std::log1p(-p);
+  double cumulative = std::exp(log_pk);
+  std::size_t c = 0;
+  while (cumulative < level && c < n) {
+    log_pk += std::log(static_cast<double>(n - c)) - std::log(static_cast<double>(c + 1)) + log_ratio;
+    ++c;
+    cumulative += std::exp(log_pk);
+  }
+  return c;
+}
+
 }  // namespace nimble::turbulence

@@ -76,4 +76,11 @@ struct ConfidenceBand {
 };
 ConfidenceBand psd_confidence_band(double dof, double level);
 
+/// Smallest c with P(X <= c) >= level for X ~ Binomial(n, p): the most bins of n independent
+/// ones that may fall outside a band of coverage 1 - p before the agreement is rejected at
+/// the false-alarm rate 1 - level. (Adjacent Welch bins of a Hann window are correlated,
+/// rho = 4/9 for the power; bins two apart nearly not, rho = 1/36: count every other bin.)
+/// @throws std::invalid_argument unless 0 <= p <= 1 and 0 < level < 1.
+std::size_t binomial_upper_quantile(std::size_t n, double p, double level);
+
 }  // namespace nimble::turbulence
