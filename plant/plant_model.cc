@@ -5,6 +5,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "turbulence/discretisation.h"
+#include "turbulence/dryden.h"
+#include "turbulence/lyapunov.h"
+
 namespace nimble::plant {
 namespace {
 
@@ -56,6 +60,8 @@ Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
 }
 
 }  // namespace
+
+std::string to_string(GustModel model) { return model == GustModel::kDryden ? "dryden" : "gauss_markov"; }
 
 PlantConfig plant_config_from(ConfigMap& map) {
   PlantConfig c;
@@ -163,6 +169,9 @@ PlantConfig plant_config_from(ConfigMap& map) {
       fx.lateral_gust.enabled = m.get_bool("enabled");
       fx.lateral_gust.sigma_mps = m.get_double_or("sigma_mps", 0.0, Range::closed(0.0, 5.0));
       fx.lateral_gust.tau_s = m.get_double_or("tau_s", 1.0, Range{0.0, 100.0, true, false});
+      const std::string model = m.has("model") ? m.get_enum("model", {"gauss_markov", "dryden"}) : "gauss_markov";
+      fx.lateral_gust.model = model == "dryden" ? GustModel::kDryden : GustModel::kGaussMarkov;
+      fx.lateral_gust.time_scale_s = m.get_double_or("time_scale_s", 1.0, Range{0.0, 100.0, true, false});
       m.finish();
     }
     if (e.has("constant_load")) {
@@ -242,6 +251,25 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   }
   for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.side_force_amplitudes_n.size(); ++h) {
     forcing_phase_side_.push_back(phase(rng_));
+  }
+  const auto& gust = cfg_.effects.lateral_gust;
+  if (gust.enabled && gust.model == GustModel::kDryden) {
+    if (!(gust.sigma_mps >= 0.0) || !(gust.time_scale_s > 0.0) || !std::isfinite(gust.time_scale_s)) {
+      throw std::invalid_argument("plant: effects.lateral_gust (dryden) needs sigma_mps >= 0 and time_scale_s > 0");
+    }
+    // The unit-sigma filter, scaled by sigma on the output (sigma = 0 is a silent gust with
+    // the same random stream).
+    const turbulence::ShapingFilter f = turbulence::time_based_second_order(1.0, gust.time_scale_s);
+    const Eigen::VectorXd unit = Eigen::VectorXd::Ones(1);
+    const turbulence::DiscreteModel d = turbulence::discretise(f.system, unit, dt_s_);
+    gust_Phi_ = d.Phi;
+    gust_L_ = d.noise_factor;
+    gust_C_ = gust.sigma_mps * f.system.C;
+    const Eigen::Matrix2d P = turbulence::stationary_covariance(f.system, unit);
+    const Eigen::Matrix2d P_factor = turbulence::psd_factor(P);
+    const double n0 = normal_(rng_), n1 = normal_(rng_);
+    gust_z_ = P_factor * Eigen::Vector2d(n0, n1);
+    x_gust_ = (gust_C_ * gust_z_)(0);
   }
   update_truth(trim_command());
 }
@@ -380,9 +408,14 @@ void PlantModel::step(const ActuatorInput& cmd_in) {
   flap_phase_rad_ = std::fmod(flap_phase_rad_ + 0.5 * (f_before + x_[kFcoll]) * h, 2.0 * M_PI);
   t_s_ += h;
 
-  // Side gust: exact discretisation of the first-order Gauss-Markov process.
+  // Side gust, exactly discretised: the first-order Gauss-Markov process, or the Dryden
+  // filter with the exact process noise of one plant step (drawn in a fixed order).
   const auto& gust = cfg_.effects.lateral_gust;
-  if (gust.enabled) {
+  if (gust.enabled && gust.model == GustModel::kDryden) {
+    const double n0 = normal_(rng_), n1 = normal_(rng_);
+    gust_z_ = gust_Phi_ * gust_z_ + gust_L_ * Eigen::Vector2d(n0, n1);
+    x_gust_ = (gust_C_ * gust_z_)(0);
+  } else if (gust.enabled) {
     const double a = std::exp(-h / gust.tau_s);
     x_gust_ = a * x_gust_ + gust.sigma_mps * std::sqrt(1.0 - a * a) * normal_(rng_);
   }

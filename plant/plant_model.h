@@ -99,12 +99,33 @@ struct ActuatorDelayConfig {
   double delay_s = 0.0;
 };
 
-/// Lateral gust: first-order Gauss-Markov side wind v_g with standard deviation sigma and
-/// correlation time tau; aerodynamics see v - v_g.
+/// Form of the lateral gust's spectrum.
+enum class GustModel {
+  kGaussMarkov,  ///< first order: S(omega) = 2 sigma^2 tau / (1 + (omega tau)^2)
+  kDryden,       ///< time-based second-order Dryden lateral form (turbulence/dryden.h)
+};
+
+/// "gauss_markov" or "dryden".
+std::string to_string(GustModel model);
+
+/// Lateral gust: side wind v_g with standard deviation sigma; aerodynamics see v - v_g (the
+/// Lv, Yv (and Nv) terms and every effect of v act on the relative velocity).
+///  - gauss_markov (default): first-order Gauss-Markov with correlation time tau_s, starting
+///    at v_g = 0, one normal draw per plant step;
+///  - dryden: the time-based second-order Dryden lateral form of turbulence/dryden.h,
+///    S(omega) = sigma^2 T (1 + 3 (omega T)^2) / (1 + (omega T)^2)^2 with T = time_scale_s
+///    (the frozen-field form's T = L_v / V: a hovering vehicle has no airspeed to fly through
+///    the turbulence, so the time scale is the parameter), discretised exactly at the plant
+///    rate (ZOH and Van Loan, turbulence/discretisation.h): its sampled variance is sigma^2
+///    at any rate. Starts stationary (filter state drawn from its covariance, two normal draws
+///    in the constructor), then two normal draws per plant step.
+/// The plant file's defaults and where they come from: rig_configs/plant/nimble_plant.yaml.
 struct LateralGustConfig {
   bool enabled = false;
   double sigma_mps = 0.0;
-  double tau_s = 1.0;
+  double tau_s = 1.0;                          ///< Gauss-Markov correlation time [s]
+  GustModel model = GustModel::kGaussMarkov;
+  double time_scale_s = 1.0;                   ///< Dryden time scale T [s]
 };
 
 /// Constant roll moment and side force (L += roll_moment_nm, Y += side_force_n). Flies a model's
@@ -240,6 +261,10 @@ class PlantModel {
   double t_s_ = 0.0;
   double flap_phase_rad_ = 0.0;
   double x_gust_ = 0.0;  ///< side gust velocity [m/s]
+  // Dryden gust filter, exact discrete form: z_{k+1} = Phi z_k + L n_k, v_g = C z.
+  Eigen::Matrix2d gust_Phi_ = Eigen::Matrix2d::Zero(), gust_L_ = Eigen::Matrix2d::Zero();
+  Eigen::RowVector2d gust_C_ = Eigen::RowVector2d::Zero();
+  Eigen::Vector2d gust_z_ = Eigen::Vector2d::Zero();
   std::vector<double> forcing_phase_roll_, forcing_phase_side_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
