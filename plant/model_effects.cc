@@ -232,7 +232,7 @@ void apply_model_effects(const DerivativeModel& model, EffectsConfig& fx, std::m
       s.check_keys({"sigma_mps", "tau_s"});
       auto& g = fx.lateral_gust;
       g.enabled = true;
-      g.model = GustModel::kGaussMarkov;
+      g.form = GustForm::kGaussMarkov;
       g.sigma_mps = s.required("sigma_mps", 0.0, 5.0);
       g.tau_s = s.required("tau_s", 1e-6, 100.0);
 

@@ -61,7 +61,7 @@ Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
 
 }  // namespace
 
-std::string to_string(GustModel model) { return model == GustModel::kDryden ? "dryden" : "gauss_markov"; }
+std::string to_string(GustForm form) { return form == GustForm::kDryden ? "dryden" : "gauss_markov"; }
 
 PlantConfig plant_config_from(ConfigMap& map) {
   PlantConfig c;
@@ -169,8 +169,8 @@ PlantConfig plant_config_from(ConfigMap& map) {
       fx.lateral_gust.enabled = m.get_bool("enabled");
       fx.lateral_gust.sigma_mps = m.get_double_or("sigma_mps", 0.0, Range::closed(0.0, 5.0));
       fx.lateral_gust.tau_s = m.get_double_or("tau_s", 1.0, Range{0.0, 100.0, true, false});
-      const std::string model = m.has("model") ? m.get_enum("model", {"gauss_markov", "dryden"}) : "gauss_markov";
-      fx.lateral_gust.model = model == "dryden" ? GustModel::kDryden : GustModel::kGaussMarkov;
+      const std::string form = m.has("form") ? m.get_enum("form", {"gauss_markov", "dryden"}) : "gauss_markov";
+      fx.lateral_gust.form = form == "dryden" ? GustForm::kDryden : GustForm::kGaussMarkov;
       fx.lateral_gust.time_scale_s = m.get_double_or("time_scale_s", 1.0, Range{0.0, 100.0, true, false});
       m.finish();
     }
@@ -253,7 +253,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
     forcing_phase_side_.push_back(phase(rng_));
   }
   const auto& gust = cfg_.effects.lateral_gust;
-  if (gust.enabled && gust.model == GustModel::kDryden) {
+  if (gust.enabled && gust.form == GustForm::kDryden) {
     if (!(gust.sigma_mps >= 0.0) || !(gust.time_scale_s > 0.0) || !std::isfinite(gust.time_scale_s)) {
       throw std::invalid_argument("plant: effects.lateral_gust (dryden) needs sigma_mps >= 0 and time_scale_s > 0");
     }
@@ -411,7 +411,7 @@ void PlantModel::step(const ActuatorInput& cmd_in) {
   // Side gust, exactly discretised: the first-order Gauss-Markov process, or the Dryden
   // filter with the exact process noise of one plant step (drawn in a fixed order).
   const auto& gust = cfg_.effects.lateral_gust;
-  if (gust.enabled && gust.model == GustModel::kDryden) {
+  if (gust.enabled && gust.form == GustForm::kDryden) {
     const double n0 = normal_(rng_), n1 = normal_(rng_);
     gust_z_ = gust_Phi_ * gust_z_ + gust_L_ * Eigen::Vector2d(n0, n1);
     x_gust_ = (gust_C_ * gust_z_)(0);

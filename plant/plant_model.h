@@ -99,14 +99,15 @@ struct ActuatorDelayConfig {
   double delay_s = 0.0;
 };
 
-/// Form of the lateral gust's spectrum.
-enum class GustModel {
+/// Form of the lateral gust's spectrum (key `form`; not `model`, which scenario loading
+/// treats as a file path at any depth).
+enum class GustForm {
   kGaussMarkov,  ///< first order: S(omega) = 2 sigma^2 tau / (1 + (omega tau)^2)
   kDryden,       ///< time-based second-order Dryden lateral form (turbulence/dryden.h)
 };
 
 /// "gauss_markov" or "dryden".
-std::string to_string(GustModel model);
+std::string to_string(GustForm form);
 
 /// Lateral gust: side wind v_g with standard deviation sigma; aerodynamics see v - v_g (the
 /// Lv, Yv (and Nv) terms and every effect of v act on the relative velocity).
@@ -124,7 +125,7 @@ struct LateralGustConfig {
   bool enabled = false;
   double sigma_mps = 0.0;
   double tau_s = 1.0;                          ///< Gauss-Markov correlation time [s]
-  GustModel model = GustModel::kGaussMarkov;
+  GustForm form = GustForm::kGaussMarkov;       ///< key `form`: gauss_markov | dryden
   double time_scale_s = 1.0;                   ///< Dryden time scale T [s]
 };
 

@@ -16,7 +16,7 @@
 #include "turbulence/uncertainty.h"
 
 using namespace nimble;
-using nimble::plant::GustModel;
+using nimble::plant::GustForm;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
 namespace tb = nimble::turbulence;
@@ -36,7 +36,7 @@ PlantConfig dryden_config(double sigma, double T, double rate_hz, std::uint64_t 
   cfg.truth_rate_hz = rate_hz;
   cfg.feedback_rate_hz = rate_hz;
   cfg.effects.lateral_gust.enabled = true;
-  cfg.effects.lateral_gust.model = GustModel::kDryden;
+  cfg.effects.lateral_gust.form = GustForm::kDryden;
   cfg.effects.lateral_gust.sigma_mps = sigma;
   cfg.effects.lateral_gust.time_scale_s = T;
   cfg.seed = seed;
@@ -70,7 +70,7 @@ TEST_CASE("lateral gust: the Gauss-Markov default flies the same seeded values a
   cfg.effects.lateral_gust.sigma_mps = 0.2;
   cfg.effects.lateral_gust.tau_s = 0.05;
   cfg.seed = 7;
-  REQUIRE(cfg.effects.lateral_gust.model == GustModel::kGaussMarkov);
+  REQUIRE(cfg.effects.lateral_gust.form == GustForm::kGaussMarkov);
   struct Golden {
     int step;
     double gust, v;
@@ -95,28 +95,28 @@ TEST_CASE("lateral gust: the Gauss-Markov default flies the same seeded values a
   CHECK(next == golden.size());
 }
 
-TEST_CASE("plant config: lateral_gust model dryden with its time scale, bad values name the key", "[plant][gust]") {
+TEST_CASE("plant config: lateral_gust form dryden with its time scale, bad values name the key", "[plant][gust]") {
   const auto load = [](const std::string& body) {
     ConfigMap m = gust_yaml(body);
     return nimble::plant::plant_config_from(m);
   };
-  const PlantConfig d = load("enabled: true, model: dryden, sigma_mps: 0.3, time_scale_s: 2.5");
-  CHECK(d.effects.lateral_gust.model == GustModel::kDryden);
+  const PlantConfig d = load("enabled: true, form: dryden, sigma_mps: 0.3, time_scale_s: 2.5");
+  CHECK(d.effects.lateral_gust.form == GustForm::kDryden);
   CHECK(d.effects.lateral_gust.sigma_mps == 0.3);
   CHECK(d.effects.lateral_gust.time_scale_s == 2.5);
-  CHECK(load("enabled: true, sigma_mps: 0.3").effects.lateral_gust.model == GustModel::kGaussMarkov);
-  CHECK(load("enabled: true, model: gauss_markov").effects.lateral_gust.model == GustModel::kGaussMarkov);
+  CHECK(load("enabled: true, sigma_mps: 0.3").effects.lateral_gust.form == GustForm::kGaussMarkov);
+  CHECK(load("enabled: true, form: gauss_markov").effects.lateral_gust.form == GustForm::kGaussMarkov);
   CHECK(PlantConfig{}.effects.lateral_gust.time_scale_s == 1.0);
-  CHECK(nimble::plant::to_string(GustModel::kDryden) == "dryden");
+  CHECK(nimble::plant::to_string(GustForm::kDryden) == "dryden");
 
-  CHECK_THROWS_WITH(load("enabled: true, model: dryden, sigma_mps: -0.1"),
+  CHECK_THROWS_WITH(load("enabled: true, form: dryden, sigma_mps: -0.1"),
                     Catch::Contains("effects.lateral_gust.sigma_mps"));
-  CHECK_THROWS_WITH(load("enabled: true, model: dryden, time_scale_s: 0"),
+  CHECK_THROWS_WITH(load("enabled: true, form: dryden, time_scale_s: 0"),
                     Catch::Contains("effects.lateral_gust.time_scale_s"));
-  CHECK_THROWS_WITH(load("enabled: true, model: dryden, time_scale_s: -1"),
+  CHECK_THROWS_WITH(load("enabled: true, form: dryden, time_scale_s: -1"),
                     Catch::Contains("effects.lateral_gust.time_scale_s"));
-  CHECK_THROWS_WITH(load("enabled: true, model: von_karman"), Catch::Contains("effects.lateral_gust.model"));
-  CHECK_THROWS_WITH(load("enabled: true, model: dryden, length_scale_m: 3"),
+  CHECK_THROWS_WITH(load("enabled: true, form: von_karman"), Catch::Contains("effects.lateral_gust.form"));
+  CHECK_THROWS_WITH(load("enabled: true, form: dryden, length_scale_m: 3"),
                     Catch::Contains("effects.lateral_gust.length_scale_m"));
 }
 
@@ -124,7 +124,7 @@ TEST_CASE("plant file: the lateral_gust keys and their defaults", "[plant][gust]
   ConfigMap m = ConfigMap::load_file(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
   const PlantConfig c = nimble::plant::plant_config_from(m);
   const PlantConfig defaults;
-  CHECK(c.effects.lateral_gust.model == defaults.effects.lateral_gust.model);
+  CHECK(c.effects.lateral_gust.form == defaults.effects.lateral_gust.form);
   CHECK(c.effects.lateral_gust.time_scale_s == defaults.effects.lateral_gust.time_scale_s);
   // The defaults: the Dryden form's integral time scale T/2 equals the Gauss-Markov tau, so
   // both forms have the same S(0) = 2 sigma^2 tau = sigma^2 T.
