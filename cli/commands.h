@@ -41,4 +41,9 @@ int run_export_command(const std::vector<std::string>& args);
 /// Ce500 practical, aircraft responses to atmospheric turbulence (cli/turbulence_command.cc).
 int run_turbulence_command(const std::vector<std::string>& args);
 
+/// `rig turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--skip S] [--f-max HZ] [--json F|-]
+/// [--plots DIR]`: a rig flight in Dryden side gusts against the closed-loop linear model's PSDs and
+/// variances (cli/turbulence_response_command.cc, turbulence/hover_gust_response.h).
+int run_turbulence_response_command(const std::vector<std::string>& args);
+
 }  // namespace nimble::cli

@@ -35,6 +35,8 @@ const Command kCommands[] = {
      nimble::cli::run_export_command},
     {"turbulence", "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence practical",
      nimble::cli::run_turbulence_command},
+    {"turbulence-response", "turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--f-max HZ] [--json F|-] [--plots DIR]   a flight in Dryden gusts against the closed-loop model",
+     nimble::cli::run_turbulence_response_command},
 };
 
 void print_usage(std::ostream& out) {

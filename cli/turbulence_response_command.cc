@@ -1,0 +1,436 @@
+/// `rig turbulence-response`: a rig flight in Dryden side gusts (rig_configs/hover_turbulence.yaml)
+/// against the closed-loop linear model driven by the same gust spectrum
+/// (turbulence/hover_gust_response.h): Welch PSDs of the true p, v, phi inside the confidence
+/// band of the model's expected Welch estimate below f_max, and the variances within their
+/// uncertainty. The scenario (with the --set overrides the flight used) gives the model, the
+/// vehicle, the controller's gains and the plant's gust.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "controller/attitude_controller.h"
+#include "controller/manoeuvre.h"
+#include "core/json_writer.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/plots.h"
+#include "ident/rig_log.h"
+#include "plant/plant_model.h"
+#include "scenario/scenario.h"
+#include "turbulence/hover_gust_response.h"
+
+namespace nimble::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace nimble::turbulence;
+
+constexpr const char* kUsage =
+    "usage: rig turbulence-response <scenario.yaml> <log.lcmlog> [options]\n"
+    "  A rig flight in Dryden side gusts (e.g. rig_configs/hover_turbulence.yaml flown with\n"
+    "  rig run ... --log F) against the closed-loop linear model (lateral3 model, flap actuator,\n"
+    "  PD roll controller with its low-pass, the plant's Dryden gust filter): Welch PSDs of the\n"
+    "  true p, v, phi inside the confidence band of the model's expected Welch estimate up to\n"
+    "  --f-max, and their variances within the uncertainty of the model's. The scenario (with\n"
+    "  the same --set overrides as the flight) gives model, vehicle, gains and gust.\n"
+    "  Exit 0 if every check agrees, 1 if one does not, 2 on bad usage or input.\n"
+    "  --set KEY=VALUE     scenario override, as for rig run (repeatable)\n"
+    "  --skip S            drop the first S seconds of the flight (start-up; default 5)\n"
+    "  --f-max HZ          compare up to this frequency (default 10 Hz: above the closed-loop roll\n"
+    "                      mode (2.4 Hz) and the flap actuator (2 Hz), below the 15 Hz low-pass and\n"
+    "                      the flapping frequency; on the truth the model holds to 20 Hz and beyond)\n"
+    "  --welch-segment M   Welch segment [samples], a power of two (default 8192: 8.2 s at 1 kHz)\n"
+    "  --json FILE         write the JSON report to FILE ('-' for stdout, text report suppressed)\n"
+    "  --plots DIR         PNG plots via gnuplot (Debian package gnuplot-nox): response_psd.png\n"
+    "                      (flight Welch, model expectation and band, analytical PSD) and\n"
+    "                      response_ratio.png (flight / model with the band)\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+double number(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double x = 0.0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(x)) {
+    throw UsageError(option + ": '" + text + "' is not a finite number");
+  }
+  return x;
+}
+
+std::string fmt(const char* format, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
+  return buf;
+}
+
+/// What the analysis needs from the scenario.
+struct Setup {
+  DerivativeModel model;
+  Vehicle vehicle;
+  HoverLoopParameters params;
+  std::string gain_set;
+  std::string controller_input;
+  std::vector<std::string> other_effects;  ///< plant effects on besides the gust
+};
+
+Setup setup_from(const std::string& file, const std::vector<Override>& overrides) {
+  const Scenario scenario = load_scenario(file, overrides);
+  Setup s;
+  ConfigMap plant_section = scenario.section("plant");
+  const plant::PlantConfig plant = plant::plant_config_from(plant_section);
+  const auto& gust = plant.effects.lateral_gust;
+  if (!gust.enabled || gust.form != plant::GustForm::kDryden || !(gust.sigma_mps > 0.0)) {
+    throw std::invalid_argument(file + ": plant.effects.lateral_gust must be enabled with form dryden and "
+                                "sigma_mps > 0 (it is " + std::string(gust.enabled ? "enabled" : "disabled") + ", " +
+                                plant::to_string(gust.form) + ", sigma " + fmt("%g", gust.sigma_mps) + " m/s)");
+  }
+  const auto& fx = plant.effects;
+  if (fx.flapping_forcing.enabled) s.other_effects.push_back("flapping_forcing");
+  if (fx.lateral_inflow.enabled) s.other_effects.push_back("lateral_inflow");
+  if (fx.forward_speed_coupling.enabled) s.other_effects.push_back("forward_speed_coupling");
+  if (fx.actuator_delay.enabled) s.other_effects.push_back("actuator_delay");
+  if (fx.constant_load.enabled) s.other_effects.push_back("constant_load");
+
+  s.model = load_model(scenario.model_file);
+  s.vehicle = load_vehicle(scenario.vehicle_file.empty() ? s.model.vehicle_file : scenario.vehicle_file);
+  if (!s.model.effects.empty()) s.other_effects.push_back("the model's effects: section");
+  ConfigMap controller_section = scenario.section("controller");
+  const ControllerConfig controller = controller_config_from(controller_section);
+  s.gain_set = controller.default_gain_set;
+  if (scenario.root["manoeuvre"]) {
+    const Manoeuvre m = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>());
+    std::vector<std::string> sets = {m.gain_set};
+    for (const auto& seg : m.segments) sets.push_back(seg.gain_set.empty() ? m.gain_set : seg.gain_set);
+    for (const auto& g : sets) {
+      if (g != s.gain_set) {
+        throw std::invalid_argument(file + ": the manoeuvre flies gain set '" + g + "' and the controller's default is '" +
+                                    s.gain_set + "': the comparison needs one gain set throughout");
+      }
+    }
+  }
+  const GainSet& gains = roll_gain_set(controller, s.gain_set);
+  s.params.kp_per_rad = gains.kp_per_rad;
+  s.params.kd_per_radps = gains.kd_per_radps;
+  s.params.lowpass_cutoff_hz = controller.roll_lowpass_cutoff_hz;
+  s.params.roll_cmd_to_delta_f_radps = controller.roll_cmd_to_delta_f_radps;
+  s.params.flap_gain_per_s = plant.flap.delta_f_gain_radps;
+  s.params.flap_pole_radps = plant.flap.pole_radps;
+  s.params.gust_sigma_mps = gust.sigma_mps;
+  s.params.gust_time_scale_s = gust.time_scale_s;
+  s.controller_input = process_run_options(scenario).controller_input;
+  return s;
+}
+
+/// The true p, v, phi of the log from `skip_s` on, on the TRUTH grid.
+std::map<std::string, Eigen::VectorXd> truth_records(const std::string& log, double skip_s, double& dt_s) {
+  const ident::RigLogData data = ident::read_rig_log(log, ident::StateSource::kTruth);
+  const ident::FlightData& truth = data.truth.channels.empty() ? data.measured : data.truth;
+  std::map<std::string, Eigen::VectorXd> out;
+  const ident::Channel& ref = truth.at("p");
+  if (ref.t_s.size() < 3) throw std::invalid_argument(log + ": too few TRUTH samples");
+  std::vector<double> steps(ref.t_s.size() - 1);
+  for (std::size_t i = 0; i + 1 < ref.t_s.size(); ++i) steps[i] = ref.t_s[i + 1] - ref.t_s[i];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  dt_s = steps[steps.size() / 2];
+  for (std::size_t i = 0; i + 1 < ref.t_s.size(); ++i) {
+    const double step = ref.t_s[i + 1] - ref.t_s[i];
+    if (std::fabs(step - dt_s) > 1e-3 * dt_s) {
+      throw std::invalid_argument(log + ": TRUTH is not evenly sampled (step " + fmt("%.6g", step) + " s at t = " +
+                                  fmt("%.6g", ref.t_s[i]) + " s against " + fmt("%.6g", dt_s) +
+                                  " s); fly with --clock lockstep");
+    }
+  }
+  const double t0 = ref.t_s.front() + skip_s;
+  std::size_t first = 0;
+  while (first < ref.t_s.size() && ref.t_s[first] < t0) ++first;
+  for (const char* name : {"p", "v", "phi"}) {
+    const ident::Channel& c = truth.at(name);
+    if (c.values.size() != ref.values.size()) throw std::invalid_argument(log + ": TRUTH channels differ in length");
+    const std::size_t n = c.values.size() - std::min(first, c.values.size());
+    out[name] = Eigen::Map<const Eigen::VectorXd>(c.values.data() + first, static_cast<Eigen::Index>(n));
+  }
+  return out;
+}
+
+std::string report_text(const std::string& scenario, const std::string& log, const Setup& s,
+                        const ResponseComparison& c, double skip_s) {
+  std::ostringstream out;
+  out << "rig turbulence-response: " << log << " (scenario " << scenario << ")\n";
+  out << "Closed loop: " << s.model.name << ", gain set " << s.gain_set << " (Kp " << s.params.kp_per_rad << " /rad, Kd "
+      << s.params.kd_per_radps << " s/rad), low-pass " << s.params.lowpass_cutoff_hz << " Hz, map "
+      << s.params.roll_cmd_to_delta_f_radps << " rad/s, flap " << s.params.flap_gain_per_s << "/(s+"
+      << s.params.flap_pole_radps << "); Dryden gust sigma " << s.params.gust_sigma_mps << " m/s, T "
+      << s.params.gust_time_scale_s << " s\n";
+  if (s.controller_input != "truth") {
+    out << "note: the controller flew on the " << s.controller_input
+        << "; the model's controller reads the true state (the estimator's noise and lag are not in it)\n";
+  }
+  for (const auto& e : s.other_effects) out << "note: plant effect " << e << " is on; the linear model leaves it out\n";
+  out << "Flight: " << c.samples << " TRUTH samples at " << fmt("%.4g", 1.0 / c.dt_s) << " Hz after the first " << skip_s
+      << " s; Welch " << c.segments << " Hann segments of " << c.segment_length << " (" << fmt("%.3g", c.segment_length * c.dt_s)
+      << " s), " << fmt("%.1f", c.dof) << " degrees of freedom, " << fmt("%.0f", 100 * c.level) << " % band x["
+      << fmt("%.3f", c.band_lower) << ", " << fmt("%.3f", c.band_upper) << "]\n";
+  out << "PSD: S(omega) two-sided in unit^2/(rad/s), sigma^2 = (1/pi) int_0^inf S d omega (turbulence/spectral_density.h)\n\n";
+  out << "Spectra up to " << fmt("%g", c.f_max_hz) << " Hz, flight Welch against the model's expected Welch estimate:\n";
+  out << "  output  bins  counted  outside  allowed  mean ratio        max |E/analytical - 1|  verdict\n";
+  for (const auto& o : c.outputs) {
+    out << "  " << o.name << std::string(8 - o.name.size(), ' ') << fmt("%4.0f", double(o.bins))
+        << fmt("%9.0f", double(o.counted)) << fmt("%9.0f", double(o.outside)) << fmt("%9.0f", double(o.allowed)) << "  "
+        << fmt("%.3f", o.mean_ratio) << " +- " << fmt("%.3f", o.mean_ratio_sigma) << "   "
+        << fmt("%-24.3f", o.max_analytical_deviation)
+        << (o.bins_agree && o.mean_agrees ? "agrees" : "DISAGREES") << "\n";
+  }
+  out << "\nVariances, flight (sample variance) against the model (Lyapunov) with the model's sampling spread:\n";
+  for (const auto& o : c.outputs) {
+    const double z = (o.flight_variance - o.model_variance) / o.flight_variance_sigma;
+    out << "  " << o.name << std::string(5 - std::min<std::size_t>(5, o.name.size()), ' ') << " flight "
+        << fmt("%.4e", o.flight_variance) << "  model " << fmt("%.4e", o.model_variance) << " +- "
+        << fmt("%.2e", o.flight_variance_sigma) << " (" << o.unit << ")^2  (" << fmt("%+.2f", z) << " sigma)  "
+        << (o.variance_agrees ? "agrees" : "DISAGREES") << "\n";
+  }
+  out << "\n" << (c.agrees() ? "AGREES" : "DISAGREES") << ": "
+      << "bins outside the band within the binomial bound (every other bin, false alarm 1e-3), mean ratio within 3 sigma "
+         "of 1, variances within 3 sigma\n";
+  return out.str();
+}
+
+std::vector<double> vec(const Eigen::VectorXd& x) { return std::vector<double>(x.data(), x.data() + x.size()); }
+
+std::string report_json(const std::string& scenario, const std::string& log, const Setup& s, const ResponseComparison& c) {
+  JsonWriter j;
+  j.begin_object();
+  j.key("scenario").value(scenario);
+  j.key("log").value(log);
+  j.key("model").value(s.model.name);
+  j.key("gain_set").value(s.gain_set);
+  j.key("controller_input").value(s.controller_input);
+  j.key("gust").begin_object();
+  j.key("form").value("dryden");
+  j.key("sigma_mps").value(s.params.gust_sigma_mps);
+  j.key("time_scale_s").value(s.params.gust_time_scale_s);
+  j.end_object();
+  j.key("dt_s").value(c.dt_s);
+  j.key("samples").value(static_cast<long long>(c.samples));
+  j.key("segment_length").value(static_cast<long long>(c.segment_length));
+  j.key("segments").value(static_cast<long long>(c.segments));
+  j.key("dof").value(c.dof);
+  j.key("level").value(c.level);
+  j.key("f_max_hz").value(c.f_max_hz);
+  j.key("agrees").value(c.agrees());
+  j.key("outputs").begin_object();
+  for (const auto& o : c.outputs) {
+    j.key(o.name).begin_object();
+    j.key("unit").value(o.unit);
+    j.key("bins").value(static_cast<long long>(o.bins));
+    j.key("counted").value(static_cast<long long>(o.counted));
+    j.key("outside").value(static_cast<long long>(o.outside));
+    j.key("allowed").value(static_cast<long long>(o.allowed));
+    j.key("mean_ratio").value(o.mean_ratio);
+    j.key("mean_ratio_sigma").value(o.mean_ratio_sigma);
+    j.key("max_analytical_deviation").value(o.max_analytical_deviation);
+    j.key("flight_variance").value(o.flight_variance);
+    j.key("model_variance").value(o.model_variance);
+    j.key("flight_variance_sigma").value(o.flight_variance_sigma);
+    j.key("bins_agree").value(o.bins_agree);
+    j.key("mean_agrees").value(o.mean_agrees);
+    j.key("variance_agrees").value(o.variance_agrees);
+    j.key("omega_radps").array(vec(o.omega_radps));
+    j.key("welch").array(vec(o.welch));
+    j.key("expected").array(vec(o.expected));
+    j.key("analytical").array(vec(o.analytical));
+    j.end_object();
+  }
+  j.end_object();
+  j.end_object();
+  return j.str();
+}
+
+void write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+std::string gp_quote(const std::string& s) {
+  std::string out = "'";
+  for (const char ch : s) out += (ch == '\'') ? std::string("''") : std::string(1, ch);
+  return out + "'";
+}
+
+void gnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
+  const fs::path gp = dir / (name + ".gp");
+  const fs::path log = dir / (name + ".log");
+  write_file(gp, script);
+  const std::string cmd = "gnuplot " + gp_quote(gp.string()) + " >" + gp_quote(log.string()) + " 2>&1";
+  if (std::system(cmd.c_str()) != 0) {
+    std::ifstream in(log);
+    std::ostringstream text;
+    text << in.rdbuf();
+    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
+  }
+}
+
+/// response_psd.png and response_ratio.png: three panels each (p, v, phi), log frequency axis.
+std::vector<std::string> plot_response(const fs::path& dir, const ResponseComparison& c) {
+  std::ostringstream data;
+  data << "# omega_radps, then per output p, v, phi: welch expected lower upper analytical\n";
+  const Eigen::Index n = c.outputs.front().omega_radps.size();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    data << fmt("%.9g", c.outputs.front().omega_radps[k]);
+    for (const auto& o : c.outputs) {
+      for (const double x : {o.welch[k], o.expected[k], o.lower[k], o.upper[k], o.analytical[k]}) data << " " << fmt("%.9g", x);
+    }
+    data << "\n";
+  }
+  const fs::path dat = dir / "response_psd.dat";
+  write_file(dat, data.str());
+  const double w_max = 2.0 * M_PI * c.f_max_hz;
+  const double x_hi = std::min(c.outputs.front().omega_radps[n - 1], 2.0 * M_PI * 20.0);
+  std::vector<std::string> pngs;
+  for (const bool ratio : {false, true}) {
+    const std::string name = ratio ? "response_ratio" : "response_psd";
+    const fs::path png = dir / (name + ".png");
+    std::ostringstream s;
+    s << "set terminal pngcairo size 1100,1300 font 'sans,10'\nset termoption noenhanced\n";
+    s << "set output " << gp_quote(png.string()) << "\n";
+    s << "set multiplot layout 3,1 title "
+      << gp_quote(std::string(ratio ? "Flight Welch PSD / model expectation" : "Hover in Dryden gusts: flight against the closed-loop model") +
+                  " (" + fmt("%.0f", 100 * c.level) + " % band, " + fmt("%.1f", c.dof) + " dof; compared up to " +
+                  fmt("%g", c.f_max_hz) + " Hz)")
+      << "\n";
+    s << "set logscale x\nset grid\nset key top right\nset xrange [" << fmt("%.6g", c.outputs.front().omega_radps[0]) << ":"
+      << fmt("%.6g", x_hi) << "]\n";
+    s << "set arrow 1 from " << fmt("%.6g", w_max) << ", graph 0 to " << fmt("%.6g", w_max)
+      << ", graph 1 nohead dt 3 lc rgb '#555555'\n";
+    if (ratio) {
+      s << "set logscale y\nset yrange [0.1:10]\n";
+    } else {
+      s << "set logscale y\nset format y '%.0e'\n";
+    }
+    for (std::size_t i = 0; i < c.outputs.size(); ++i) {
+      const auto& o = c.outputs[i];
+      const int base = 2 + static_cast<int>(i) * 5;  // welch column
+      s << "set title " << gp_quote(o.name) << "\nset xlabel 'omega [rad/s]'\n";
+      if (ratio) {
+        s << "set ylabel 'flight / expected [-]'\n";
+        s << "plot " << gp_quote(dat.string()) << " using 1:(" << c.band_lower << "):(" << c.band_upper
+          << ") with filledcurves lc rgb '#cce0f5' title 'band', '' using 1:($" << base << "/$" << base + 1
+          << ") with linespoints pt 7 ps 0.5 lc rgb '#d62728' title 'flight / model', 1 with lines lc rgb '#1f77b4' notitle\n";
+      } else {
+        s << "set ylabel " << gp_quote("(" + o.unit + ")^2/(rad/s)") << "\n";
+        s << "plot " << gp_quote(dat.string()) << " using 1:" << base + 2 << ":" << base + 3
+          << " with filledcurves lc rgb '#cce0f5' title 'band', '' using 1:" << base + 1
+          << " with lines lw 2 lc rgb '#1f77b4' title 'model (expected Welch)', '' using 1:" << base + 4
+          << " with lines dt 2 lc rgb '#2ca02c' title 'model (analytical)', '' using 1:" << base
+          << " with linespoints pt 7 ps 0.5 lc rgb '#d62728' title 'flight (Welch)'\n";
+      }
+    }
+    s << "unset multiplot\n";
+    gnuplot(dir, name, s.str());
+    pngs.push_back(png.string());
+  }
+  return pngs;
+}
+
+}  // namespace
+
+int run_turbulence_response_command(const std::vector<std::string>& args) {
+  for (const auto& arg : args) {
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage;
+      return 0;
+    }
+  }
+  std::string scenario, log, json, plots;
+  std::vector<Override> overrides;
+  double skip_s = 5.0;
+  ResponseComparisonOptions options;
+  options.welch_segment = 8192;
+  options.f_max_hz = 10.0;
+  try {
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      const auto value = [&]() -> const std::string& {
+        if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
+        return args[++i];
+      };
+      if (a == "--json") {
+        json = value();
+      } else if (a == "--plots") {
+        plots = value();
+      } else if (a == "--set") {
+        overrides.push_back(parse_override(value()));
+      } else if (a == "--skip") {
+        skip_s = number(a, value());
+        if (!(skip_s >= 0.0)) throw UsageError("--skip must be >= 0 s");
+      } else if (a == "--f-max") {
+        options.f_max_hz = number(a, value());
+        if (!(options.f_max_hz > 0.0)) throw UsageError("--f-max must be > 0 Hz");
+      } else if (a == "--welch-segment") {
+        const double x = number(a, value());
+        const auto m = static_cast<std::size_t>(x);
+        if (x != std::floor(x) || x < 8 || x > 1e9 || (m & (m - 1)) != 0) {
+          throw UsageError("--welch-segment must be a power of two >= 8");
+        }
+        options.welch_segment = m;
+      } else if (!a.empty() && a[0] == '-') {
+        throw UsageError("unknown option " + a);
+      } else if (scenario.empty()) {
+        scenario = a;
+      } else if (log.empty()) {
+        log = a;
+      } else {
+        throw UsageError("unexpected argument " + a);
+      }
+    }
+    if (log.empty()) throw UsageError("need a scenario and a log");
+  } catch (const UsageError& e) {
+    std::cerr << "rig turbulence-response: " << e.what() << "\n" << kUsage;
+    return kExitUsage;
+  }
+  if (!plots.empty()) ident::require_gnuplot();
+
+  const Setup s = setup_from(scenario, overrides);
+  double dt_s = 0.0;
+  const auto records = truth_records(log, skip_s, dt_s);
+  const LinearSystem loop = hover_gust_loop(s.model, s.vehicle, s.params);
+  const ResponseComparison c = compare_hover_response(loop, records, dt_s, options);
+
+  if (json != "-") std::cout << report_text(scenario, log, s, c, skip_s);
+  if (!json.empty()) {
+    const std::string text = report_json(scenario, log, s, c);
+    if (json == "-") {
+      std::cout << text << "\n";
+    } else {
+      write_file(json, text + "\n");
+    }
+  }
+  if (!plots.empty()) {
+    const fs::path dir(plots);
+    fs::create_directories(dir);
+    for (const auto& p : plot_response(dir, c)) {
+      if (json != "-") std::cout << "plot " << p << "\n";
+    }
+  }
+  return c.agrees() ? 0 : 1;
+}
+
+}  // namespace nimble::cli
