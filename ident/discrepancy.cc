@@ -775,14 +775,14 @@ std::vector<VectorXd> heldout_residuals(const Model& m, const Folds& folds) {
 ///      stationary (manoeuvres come and go), its periodogram ordinates scatter more than
 ///      chi-square, and at location_alpha (0.01) 2 of 24 generator nulls measured p < 0.01.
 ///   2. parameters: tau_s and A from a Whittle fit of A / (1 + (2 pi f tau)^2) + N0 to the
-///      periodogram below f_ref_hi (N0 the reference band's level; tau on a log grid
-///      0.02-20 s); the force variance is A / (4 tau) (one-sided PSD), and
-///      sigma_mps = sqrt(A / (4 tau)) / |Yv|. Estimates from the residual: the refit
-///      derivatives absorb part of the wind and the fit's floor adds some (generator records
-///      with sigma 0.1 m/s and tau 0.5 s give 0.10-0.14 m/s and 0.3-0.4 s).
+///      periodogram, below f_ref_hi, of the Y residual of the model as given (N0 the
+///      reference band's level; tau on a log grid 0.02-20 s); the force variance is
+///      A / (4 tau) (one-sided PSD), and sigma_mps = sqrt(A / (4 tau)) / |Yv| with the model's
+///      Yv. Rough: the model's own errors at low frequency add to it.
 CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
                           const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
-                          const std::vector<VectorXd>& extra, const DiscrepancyOptions& opt, double p_critical) {
+                          const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
+                          const DiscrepancyOptions& opt, double p_critical) {
   CandidateTrial t;
   t.name = "lateral_gust";
   t.round = m.effect_names.size() + 1;
@@ -850,18 +850,30 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
                " times its level above (p " + fmt(t.p_value) + " > " + fmt(p_critical) + ")";
     return t;
   }
-  // Whittle fit of A / (1 + (2 pi f tau)^2) + N0 below f_ref_hi.
+  // Size: from the residual of the model as given (its own derivatives), which carries the
+  // whole wind force -Yv v_g; the refit's residual does not, since the refit derivatives absorb
+  // the part of the wind the vehicle's motion follows (on a rig hover in gusts the refit Yv goes
+  // to nearly 0). Whittle fit of A / (1 + (2 pi f tau)^2) + N0 below f_ref_hi, N0 the
+  // reference band's level.
+  const bool given = given_resid.size() == r.size() && yv_given != 0.0;
+  const Psd Pg = given ? periodogram(given_resid, rate_hz) : P;
+  double lo_g = 0.0, ref_g = 0.0;
+  for (Index k = 1; k < Pg.psd.size(); ++k) {
+    if (Pg.f_hz[k] <= opt.gust_band_hz) lo_g += Pg.psd[k];
+    else if (Pg.f_hz[k] >= 1.5 * opt.gust_band_hz && Pg.f_hz[k] <= f_ref_hi) ref_g += Pg.psd[k];
+  }
+  const double N0g = ref_g / static_cast<double>(k_ref);
   double best = std::numeric_limits<double>::infinity(), tau_best = 0.0, a_best = 0.0;
-  const double excess = std::max(0.0, lo / static_cast<double>(k_lo) - N0);
+  const double excess = std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g);
   for (int i = 0; i <= 60; ++i) {
     const double tau = 0.02 * std::pow(1000.0, i / 60.0);
     for (int j = 0; j <= 60; ++j) {
       const double A = excess * std::pow(10.0, -1.0 + 3.0 * j / 60.0);
       double nll = 0.0;
-      for (Index k = 1; k < P.psd.size() && P.f_hz[k] <= f_ref_hi; ++k) {
-        const double w = 2.0 * M_PI * P.f_hz[k] * tau;
-        const double S = A / (1.0 + w * w) + N0;
-        nll += P.psd[k] / S + std::log(S);
+      for (Index k = 1; k < Pg.psd.size() && Pg.f_hz[k] <= f_ref_hi; ++k) {
+        const double w = 2.0 * M_PI * Pg.f_hz[k] * tau;
+        const double S = A / (1.0 + w * w) + N0g;
+        nll += Pg.psd[k] / S + std::log(S);
       }
       if (nll < best) {
         best = nll;
@@ -871,7 +883,7 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
     }
   }
   const double sigma_force = std::sqrt(a_best / (4.0 * tau_best));
-  t.parameters["sigma_mps"] = sigma_force / std::fabs(yv->second.value);
+  t.parameters["sigma_mps"] = sigma_force / std::fabs(given ? yv_given : yv->second.value);
   t.parameters["tau_s"] = tau_best;
   // The low band's mean has a relative standard error 1 / sqrt(d_lo / 2); sigma is its square root.
   t.sigma["sigma_mps"] = t.parameters["sigma_mps"] / std::sqrt(2.0 * d_lo);
@@ -881,6 +893,27 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
              " times its level above (p " + fmt(t.p_value) + " <= " + fmt(p_critical) +
              "), a side wind of about " + fmt(t.parameters["sigma_mps"]) + " m/s with tau " + fmt(tau_best) + " s";
   return t;
+}
+
+/// Prediction of equation `eq` (scaled as eq.y) by the model as given: its own derivatives,
+/// the values of the effects its file carries, and the actuator of the options.
+VectorXd given_prediction(const Eq& eq, const DerivativeModel& model, const std::map<std::string, double>& known_values,
+                          const DiscrepancyOptions& options) {
+  VectorXd out = VectorXd::Zero(eq.y.size());
+  for (std::size_t j = 0; j < eq.names.size(); ++j) {
+    const auto it = model.derivatives.find(eq.names[j]);
+    const auto fx = known_values.find(eq.names[j]);
+    if (eq.names[j] == "F_f") {
+      out -= options.actuator_pole_radps * eq.cols[j];
+    } else if (eq.names[j] == "F_cmd") {
+      out += options.actuator_gain * eq.cols[j];
+    } else if (it != model.derivatives.end()) {
+      out += it->second * eq.cols[j];
+    } else if (fx != known_values.end()) {
+      out += fx->second * eq.cols[j];
+    }
+  }
+  return out;
 }
 
 /// Full-data fit of the model: parameters with coloured sigma, and residuals.
@@ -1396,7 +1429,15 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
         for (auto& col : a.cols) extra.push_back(std::move(col));
       }
     }
-    gust_result = gust_trial(m, aug_resid, res.augmented, d.rate_hz, f_ref_hi, extra, options, wf.p_critical);
+    VectorXd given_resid;
+    double yv_given = 0.0;
+    for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+      if (m.eqs[e].name != "Y" || !model.derivatives.count("Yv")) continue;
+      given_resid = m.eqs[e].y - given_prediction(m.eqs[e], model, known_values, options);
+      yv_given = model.derivatives.at("Yv");
+    }
+    gust_result = gust_trial(m, aug_resid, res.augmented, d.rate_hz, f_ref_hi, extra, given_resid, yv_given, options,
+                             wf.p_critical);
     res.candidates.push_back(gust_result);
   }
   for (const auto& name : m.effect_names) {
@@ -1442,20 +1483,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     OutputGap g;
     g.output = eq.output;
     g.unit = eq.unit;
-    VectorXd model_fit = VectorXd::Zero(n);
-    for (std::size_t j = 0; j < eq.names.size(); ++j) {
-      const auto it = model.derivatives.find(eq.names[j]);
-      const auto fx = known_values.find(eq.names[j]);
-      if (eq.names[j] == "F_f") {
-        model_fit -= options.actuator_pole_radps * eq.cols[j];
-      } else if (eq.names[j] == "F_cmd") {
-        model_fit += options.actuator_gain * eq.cols[j];
-      } else if (it != model.derivatives.end()) {
-        model_fit += it->second * eq.cols[j];
-      } else if (fx != known_values.end()) {
-        model_fit += fx->second * eq.cols[j];
-      }
-    }
+    const VectorXd model_fit = given_prediction(eq, model, known_values, options);
     const VectorXd y = eq.y / eq.scale;
     const double sst = (y.array() - y.mean()).square().sum();
     const VectorXd rb = cv_before[e] / eq.scale, ra = cv_after[e] / eq.scale;

@@ -194,7 +194,7 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "\n";
   }
   o << "gap on held-out data: " << g(r.gap_before) << " -> " << g(r.gap_after)
-    << "  (1 - R^2 of the equation error, mean of L and Y)\n";
+    << "  (1 - R^2 of the equation error, mean over the equations)\n";
   o << "  output        unit      RMSE model  RMSE before  RMSE after  fit% before  fit% after  white before/after\n";
   for (const auto& x : r.gap) {
     char line[200];

@@ -1,7 +1,8 @@
 // bench_discrepancy: the whole discrepancy workflow (gap, location, every candidate with the
 // actuator_delay scan, stepwise rounds, refit, held-out gap) on 60 s at 512 Hz of a generated
-// record with two hidden effects. Prints figures; not a test. The machine's floor in the same
-// run: one OLS regression of the two baseline equations on the same prepared data
+// record with two hidden effects and the recorded command (three equations: L, Y and the flap
+// actuator's F). Prints figures; not a test. The machine's floor in the same run: one OLS
+// regression of the two baseline L and Y equations on the same prepared data
 // (ident::estimate_ols), and the ratio of the two.
 //   build/bin/bench_discrepancy [repetitions]
 #include <algorithm>
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   testing::draw_magnitudes(h, 1);
   testing::GeneratorOptions o;
   o.duration_s = 60.0;
+  o.record_command = true;  // with the actuator equation, as on a rig log
   const FlightData data = testing::generate_flight(model, vehicle, h, o);
 
   std::vector<double> workflow_ms, floor_ms;

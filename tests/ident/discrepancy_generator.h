@@ -23,6 +23,13 @@
 ///                         explain the same thing
 ///   lateral_gust          the aerodynamics see v - v_g, v_g first-order Gauss-Markov,
 ///                         sigma 0.1 m/s, tau 0.5 s (stochastic: no deterministic name)
+///   command_delay         the flap actuator receives the controller's command tau late (a link
+///                         or motor-driver delay: the plant's actuator_delay), tau in [12, 40] ms;
+///                         the recorded delta_f is the actuator's output, so only the recorded
+///                         command (GeneratorOptions::record_command) shows it
+///
+/// With GeneratorOptions::record_command the record carries the controller's command as
+/// channel delta_f_cmd, sampled when it is issued (no measurement noise: it is digital).
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +64,7 @@ struct GeneratorOptions {
   double moment_noise_Nm = 1e-3, force_noise_N = 0.04;  ///< per 2048 Hz step, white
   double noise_p = 0.01, noise_v = 0.005, noise_phi = 0.002, noise_df = 0.2, noise_w = 0.005;
   std::uint64_t seed = 1;
+  bool record_command = false;  ///< record delta_f_cmd (the actuator's input as commanded)
 };
 
 /// Draws the magnitudes of `h.on` from their ranges (see the file comment) with `seed`.
@@ -89,6 +97,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool bias = h.on.count("sensor_bias") > 0, gust = h.on.count("lateral_gust") > 0;
   const bool flap = h.on.count("flapping_forcing") > 0;
   const bool dihedral = h.on.count("dihedral_coupling") > 0, yaw_alias = h.on.count("yaw_alias") > 0;
+  const bool cmd_delay = h.on.count("command_delay") > 0;
   const double L_dd = 1.20e-3, Y_dd = -5.41e-2;  // thesis Table B.2
   double ph_d = 0.0;  // drawn below (only when the dihedral acts, so other records keep their noise)
   auto dd_of = [&](double t) {
@@ -136,9 +145,14 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     }
     return val;
   };
+  auto command = [&](double t, double P, double PHI) { return o.k_phi * (phi_sp(t) - PHI) - o.k_p * P; };
+  // With a command delay the actuator gets the command issued at the start of each step, held
+  // over it (2048 Hz) and tau late; otherwise the command acts continuously.
+  std::deque<std::pair<double, double>> cmd_hist;
+  double cmd_held = 0.0;
   auto deriv = [&](double t, const double* x, double dfin, double Lw, double Yw, double* dx) {
     const double P = x[0], V = x[1], PHI = x[2], DF = x[3];
-    const double cmd = o.k_phi * (phi_sp(t) - PHI) - o.k_p * P;
+    const double cmd = cmd_delay ? cmd_held : command(t, P, PHI);
     const double dtp = throttle(t);
     const double vrel = V - (gust ? vg : 0.0);
     const double ks = speed ? 1.0 + h.k_speed * (u_of(t) - 0.0) : 1.0;
@@ -169,6 +183,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   for (const char* c : {"p", "v", "phi", "u", "w", "delta_f", "delta_t", "phi_sp"}) d.channels[c];
   if (dihedral) d.channels["delta_d"];
   if (yaw_alias) d.channels["r"];
+  if (o.record_command) d.channels["delta_f_cmd"];
   const long steps = static_cast<long>(std::lround(o.duration_s * o.rate_hz)) * sub;
   const double a_g = std::exp(-dt / 0.5);
   for (long i = 0; i <= steps; ++i) {
@@ -188,11 +203,17 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
       rec("phi_sp", phi_sp(t));
       if (dihedral) rec("delta_d", dd_of(t));
       if (yaw_alias) rec("r", 2.0 * dd_of(t) * (1.0 + 0.01 * n01(rng)));
+      if (o.record_command) rec("delta_f_cmd", command(t, p, phi));
     }
     if (i == steps) break;
     if (delay) {
       df_hist.emplace_back(t, df);
       while (df_hist.size() > 2 && df_hist[1].first <= t - h.delay_s - 1e-12) df_hist.pop_front();
+    }
+    if (cmd_delay) {
+      cmd_hist.emplace_back(t, command(t, p, phi));
+      while (cmd_hist.size() > 2 && cmd_hist[1].first <= t - h.delay_s + 1e-12) cmd_hist.pop_front();
+      cmd_held = cmd_hist.front().first <= t - h.delay_s + 1e-12 ? cmd_hist.front().second : 0.0;
     }
     const double Lw = o.moment_noise_Nm * n01(rng), Yw = o.force_noise_N * n01(rng);
     const double dfin = df_at(t);

@@ -76,6 +76,42 @@ TEST_CASE("discrepancy: with no hidden effect, 24 seeds name an effect in at mos
   CHECK(static_cast<double>(named_any) / seeds <= 0.05);
 }
 
+TEST_CASE("discrepancy: null records under other noise, gains and lengths name nothing", "[discrepancy][null]") {
+  // The thresholds are not tuned to the default generator settings: nulls with five times the
+  // process noise, four times the measurement noise, other PD gains on a 15 s record, and a
+  // 8 s record (the rig's manoeuvres are 5-9 s) must name nothing either.
+  struct Variant {
+    const char* what;
+    double process = 1.0, measurement = 1.0, k_phi = 80.0, k_p = 15.0, duration_s = 40.0;
+  };
+  const Variant variants[] = {{"process noise x5", 5.0},
+                              {"measurement noise x4", 1.0, 4.0},
+                              {"gains 60/10, 15 s", 1.0, 1.0, 60.0, 10.0, 15.0},
+                              {"8 s record", 1.0, 1.0, 80.0, 15.0, 8.0}};
+  int named_any = 0, records = 0;
+  for (const Variant& v : variants) {
+    for (int s = 1; s <= 8; ++s) {
+      testing::GeneratorOptions o;
+      o.seed = static_cast<std::uint64_t>(100 + s);
+      o.moment_noise_Nm *= v.process;
+      o.force_noise_N *= v.process;
+      o.noise_p *= v.measurement;
+      o.noise_v *= v.measurement;
+      o.noise_phi *= v.measurement;
+      o.k_phi = v.k_phi;
+      o.k_p = v.k_p;
+      o.duration_s = v.duration_s;
+      const DiscrepancyResult r = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, {}, o),
+                                                   set1().model, set1().vehicle, {});
+      INFO(v.what << " seed " << o.seed << ": " << r.summary);
+      CHECK(r.effects.empty());
+      named_any += !r.effects.empty();
+      ++records;
+    }
+  }
+  std::printf("discrepancy null records under other settings: %d of %d named an effect\n", named_any, records);
+}
+
 TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is the mass, the held-out gap shrinks",
           "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
@@ -147,6 +183,46 @@ TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its del
   }
   std::printf("discrepancy actuator delay: named in %d of %d records\n", hits, seeds);
   CHECK(hits >= 7);
+}
+
+TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named from the recorded command, and with "
+          "no delay the recorded command names nothing",
+          "[discrepancy]") {
+  // The recorded delta_f is the actuator's output, so the L and Y equations cannot see a delay
+  // before the actuator; the actuator equation (delta_f against the recorded command) does.
+  // The generator's command path has no latency of its own: command_latency_s 0.
+  DiscrepancyOptions opt;
+  opt.command_latency_s = 0.0;
+  int hits = 0, null_named = 0;
+  for (int s = 1; s <= 6; ++s) {
+    testing::HiddenEffects h;
+    h.on = {"command_delay"};
+    testing::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    testing::GeneratorOptions o;
+    o.seed = static_cast<std::uint64_t>(s);
+    o.record_command = true;
+    const DiscrepancyResult r = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, h, o),
+                                                 set1().model, set1().vehicle, opt);
+    INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
+    for (const auto& n : names(r)) CHECK(n == "actuator_delay");
+    if (named(r, "actuator_delay")) {
+      ++hits;
+      const NamedEffect& e = r.effects.front();
+      CHECK(std::fabs(e.parameters.at("delay_s") - h.delay_s) < 0.003);
+      CHECK(e.parameters.count("F_cmd_delayed") == 1);
+      CHECK(r.gap_after < r.gap_before);
+    }
+    testing::HiddenEffects none;
+    const DiscrepancyResult n0 = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, none, o),
+                                                  set1().model, set1().vehicle, opt);
+    INFO("null seed " << s << ": " << n0.summary);
+    null_named += !n0.effects.empty();
+    // The actuator equation is part of the model when the command is recorded.
+    CHECK(std::any_of(n0.gap.begin(), n0.gap.end(), [](const OutputGap& g) { return g.output == "delta_f_dot"; }));
+  }
+  std::printf("discrepancy command delay: named in %d of 6 records, %d of 6 nulls named anything\n", hits, null_named);
+  CHECK(hits == 6);
+  CHECK(null_named == 0);
 }
 
 TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign in two thirds of 24 records and in all "
