@@ -1,14 +1,13 @@
 /// `rig identify` and `rig validate`: identification of the lateral model from
 /// CSV flight data and open-loop validation of a model on CSV flight data.
 
-#include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -91,34 +90,6 @@ constexpr const char* kDiscrepancyUsage =
     "  --model-out FILE    write the model refit with the named effects (section effects:)\n"
     "  --report DIR        report.md with PNG plots (gnuplot, Debian package gnuplot-nox)\n";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-/// Number in an option value; @throws UsageError naming the option.
-double number(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double x = 0.0;
-  try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(x)) {
-    throw UsageError(option + ": '" + text + "' is not a finite number");
-  }
-  return x;
-}
-
-int integer(const std::string& option, const std::string& text, int lo, int hi) {
-  const double x = number(option, text);
-  if (x != static_cast<double>(static_cast<long long>(x)) || x < lo || x > hi) {
-    throw UsageError(option + ": '" + text + "' must be an integer in [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "]");
-  }
-  return static_cast<int>(x);
-}
-
 ident::TimeRange time_range(const std::string& option, const std::string& text) {
   const std::size_t colon = text.find(':');
   if (colon == std::string::npos) throw UsageError(option + ": '" + text + "' is not START:END in seconds");
@@ -138,40 +109,6 @@ std::vector<std::string> split_list(const std::string& text) {
     start = comma + 1;
   }
   return out;
-}
-
-/// Walks the arguments: options with a value, and positional arguments.
-class Args {
- public:
-  explicit Args(const std::vector<std::string>& args) : args_(args) {}
-  bool next() { return ++i_ < args_.size(); }
-  const std::string& arg() const { return args_[i_]; }
-  const std::string& value() {
-    if (i_ + 1 >= args_.size()) throw UsageError(args_[i_] + " needs a value");
-    return args_[++i_];
-  }
-
- private:
-  const std::vector<std::string>& args_;
-  std::size_t i_ = static_cast<std::size_t>(-1);
-};
-
-void write_json(const std::string& target, const std::string& json) {
-  if (target == "-") {
-    std::cout << json << "\n";
-    return;
-  }
-  std::ofstream out(target);
-  if (!out) throw std::runtime_error(target + ": cannot be written");
-  out << json << "\n";
-  if (!out) throw std::runtime_error(target + ": write failed");
-}
-
-bool wants_help(const std::vector<std::string>& args) {
-  for (const auto& a : args) {
-    if (a == "--help" || a == "-h") return true;
-  }
-  return false;
 }
 
 /// Processing options shared by both commands; returns false if `a` is not one.

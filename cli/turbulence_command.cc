@@ -4,17 +4,15 @@
 /// Table 5.1 beside ours with a reason for each disagreement (turbulence/ce500_analysis.h).
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <sstream>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
+#include "cli/report_files.h"
 #include "core/json_writer.h"
 #include "ident/plots.h"
 #include "turbulence/ce500_analysis.h"
@@ -43,30 +41,6 @@ constexpr const char* kUsage =
     "  --json FILE         write the JSON report to FILE ('-' for stdout, text report suppressed)\n"
     "  --plots DIR         PNG plots via gnuplot (Debian package gnuplot-nox): psd_matrix.png,\n"
     "                      time_histories.png, pole_map.png\n";
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-double number(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double x = 0.0;
-  try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(x)) {
-    throw UsageError(option + ": '" + text + "' is not a finite number");
-  }
-  return x;
-}
-
-std::string fmt(const char* format, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, x);
-  return buf;
-}
 
 std::string complex_text(const std::complex<double>& z) {
   if (z.imag() == 0.0) return fmt("%+.4f", z.real());
@@ -332,44 +306,7 @@ std::string report_json(const Ce500Analysis& a) {
   return j.str();
 }
 
-void write_json(const std::string& target, const std::string& json) {
-  if (target == "-") {
-    std::cout << json << "\n";
-    return;
-  }
-  std::ofstream out(target);
-  if (!out) throw std::runtime_error(target + ": cannot be written");
-  out << json << "\n";
-  if (!out) throw std::runtime_error(target + ": write failed");
-}
-
 // --- plots -------------------------------------------------------------------------------
-
-std::string gp_quote(const std::string& s) {
-  std::string out = "'";
-  for (const char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
-void gnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
-  const fs::path gp = dir / (name + ".gp");
-  const fs::path log = dir / (name + ".log");
-  write_file(gp, script);
-  const std::string cmd = "gnuplot " + gp_quote(gp.string()) + " >" + gp_quote(log.string()) + " 2>&1";
-  if (std::system(cmd.c_str()) != 0) {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
-  }
-}
 
 /// The 5 x 3 PSD matrix: rows outputs, columns analytical / periodogram / Welch, both systems per panel.
 std::string plot_psd_matrix(const fs::path& dir, const Ce500Analysis& a) {
@@ -409,7 +346,7 @@ std::string plot_psd_matrix(const fs::path& dir, const Ce500Analysis& a) {
     }
   }
   s << "unset multiplot\n";
-  gnuplot(dir, "psd_matrix", s.str());
+  run_gnuplot(dir, "psd_matrix", s.str());
   return png.string();
 }
 
@@ -435,7 +372,7 @@ std::string plot_pole_map(const fs::path& dir, const Ce500Analysis& a) {
     << " index 0 using 1:2 with points pt 2 ps 2 lc rgb '#2ca02c' title 'uncontrolled', "
        "'' index 1 using 1:2 with points pt 1 ps 2 lc rgb '#1f77b4' title 'controlled', "
        "'' index 2 using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'reduced'\n";
-  gnuplot(dir, "pole_map", s.str());
+  run_gnuplot(dir, "pole_map", s.str());
   return png.string();
 }
 
@@ -462,34 +399,29 @@ std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
 }  // namespace
 
 int run_turbulence_command(const std::vector<std::string>& args) {
-  for (const auto& arg : args) {
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
-      return 0;
-    }
+  if (wants_help(args)) {
+    std::cout << kUsage;
+    return 0;
   }
   std::string file, json, plots;
   double duration = NAN, dt = NAN;
   long long seed = -1, segment = -1;
   try {
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      const auto value = [&]() -> const std::string& {
-        if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
-        return args[++i];
-      };
+    Args it(args);
+    while (it.next()) {
+      const std::string& a = it.arg();
       if (a == "--json") {
-        json = value();
+        json = it.value();
       } else if (a == "--plots") {
-        plots = value();
+        plots = it.value();
       } else if (a == "--duration") {
-        duration = number(a, value());
+        duration = number(a, it.value());
         if (!(duration > 0.0)) throw UsageError("--duration must be > 0 s");
       } else if (a == "--dt") {
-        dt = number(a, value());
+        dt = number(a, it.value());
         if (!(dt > 0.0) || dt > 1.0) throw UsageError("--dt must be in (0, 1] s");
       } else if (a == "--seed" || a == "--welch-segment") {
-        const double x = number(a, value());
+        const double x = number(a, it.value());
         if (x < 0.0 || x != std::floor(x) || x > 9.0e15) throw UsageError(a + " must be a whole number >= 0");
         (a == "--seed" ? seed : segment) = static_cast<long long>(x);
       } else if (!a.empty() && a[0] == '-') {

@@ -7,10 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -18,7 +15,9 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
+#include "cli/report_files.h"
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "core/json_writer.h"
@@ -55,30 +54,6 @@ constexpr const char* kUsage =
     "  --plots DIR         PNG plots via gnuplot (Debian package gnuplot-nox): response_psd.png\n"
     "                      (flight Welch, model expectation and band, analytical PSD) and\n"
     "                      response_ratio.png (flight / model with the band)\n";
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-double number(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double x = 0.0;
-  try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(x)) {
-    throw UsageError(option + ": '" + text + "' is not a finite number");
-  }
-  return x;
-}
-
-std::string fmt(const char* format, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, x);
-  return buf;
-}
 
 /// What the analysis needs from the scenario.
 struct Setup {
@@ -262,32 +237,6 @@ std::string report_json(const std::string& scenario, const std::string& log, con
   return j.str();
 }
 
-void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
-std::string gp_quote(const std::string& s) {
-  std::string out = "'";
-  for (const char ch : s) out += (ch == '\'') ? std::string("''") : std::string(1, ch);
-  return out + "'";
-}
-
-void gnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
-  const fs::path gp = dir / (name + ".gp");
-  const fs::path log = dir / (name + ".log");
-  write_file(gp, script);
-  const std::string cmd = "gnuplot " + gp_quote(gp.string()) + " >" + gp_quote(log.string()) + " 2>&1";
-  if (std::system(cmd.c_str()) != 0) {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
-  }
-}
-
 /// response_psd.png and response_ratio.png: three panels each (p, v, phi), log frequency axis.
 std::vector<std::string> plot_response(const fs::path& dir, const ResponseComparison& c) {
   std::ostringstream data;
@@ -344,7 +293,7 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
       }
     }
     s << "unset multiplot\n";
-    gnuplot(dir, name, s.str());
+    run_gnuplot(dir, name, s.str());
     pngs.push_back(png.string());
   }
   return pngs;
@@ -353,11 +302,9 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
 }  // namespace
 
 int run_turbulence_response_command(const std::vector<std::string>& args) {
-  for (const auto& arg : args) {
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
-      return 0;
-    }
+  if (wants_help(args)) {
+    std::cout << kUsage;
+    return 0;
   }
   std::string scenario, log, json, plots;
   std::vector<Override> overrides;
@@ -366,26 +313,23 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   options.welch_segment = 8192;
   options.f_max_hz = 10.0;
   try {
-    for (std::size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      const auto value = [&]() -> const std::string& {
-        if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
-        return args[++i];
-      };
+    Args it(args);
+    while (it.next()) {
+      const std::string& a = it.arg();
       if (a == "--json") {
-        json = value();
+        json = it.value();
       } else if (a == "--plots") {
-        plots = value();
+        plots = it.value();
       } else if (a == "--set") {
-        overrides.push_back(parse_override(value()));
+        overrides.push_back(parse_override(it.value()));
       } else if (a == "--skip") {
-        skip_s = number(a, value());
+        skip_s = number(a, it.value());
         if (!(skip_s >= 0.0)) throw UsageError("--skip must be >= 0 s");
       } else if (a == "--f-max") {
-        options.f_max_hz = number(a, value());
+        options.f_max_hz = number(a, it.value());
         if (!(options.f_max_hz > 0.0)) throw UsageError("--f-max must be > 0 Hz");
       } else if (a == "--welch-segment") {
-        const double x = number(a, value());
+        const double x = number(a, it.value());
         const auto m = static_cast<std::size_t>(x);
         if (x != std::floor(x) || x < 8 || x > 1e9 || (m & (m - 1)) != 0) {
           throw UsageError("--welch-segment must be a power of two >= 8");
@@ -415,14 +359,7 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   const ResponseComparison c = compare_hover_response(loop, records, dt_s, options);
 
   if (json != "-") std::cout << report_text(scenario, log, s, c, skip_s);
-  if (!json.empty()) {
-    const std::string text = report_json(scenario, log, s, c);
-    if (json == "-") {
-      std::cout << text << "\n";
-    } else {
-      write_file(json, text + "\n");
-    }
-  }
+  if (!json.empty()) write_json(json, report_json(scenario, log, s, c));
   if (!plots.empty()) {
     const fs::path dir(plots);
     fs::create_directories(dir);

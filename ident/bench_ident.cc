@@ -3,8 +3,6 @@
 /// repetitions; also the whole identify() pipeline for reference.
 ///   bench_ident [repetitions]      (default 21)
 
-#include <time.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/bench_timing.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "ident/identify.h"
@@ -20,18 +19,6 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-/// CPU time of this thread [ms]: unlike wall time, not inflated by other processes.
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-
-double median(std::vector<double> xs) {
-  std::sort(xs.begin(), xs.end());
-  return xs[xs.size() / 2];
-}
 
 }  // namespace
 
@@ -73,22 +60,22 @@ int main(int argc, char** argv) {
     const auto t2 = Clock::now();
     cpu_ms.push_back(thread_cpu_ms() - c0);
     sink += ols.equations[0].theta[0] + w.equations[0].theta[0];
-    ols_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    wls_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
-    regression_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t0).count());
+    ols_ms.push_back(elapsed_ms(t0, t1));
+    wls_ms.push_back(elapsed_ms(t1, t2));
+    regression_ms.push_back(elapsed_ms(t0, t2));
   }
   for (int i = 0; i < std::min(reps, 5); ++i) {
     const auto t0 = Clock::now();
     const IdentResult r = identify(data, vehicle, model.vehicle_file, opt);
     const auto t1 = Clock::now();
     sink += r.eigenvalues.front().real();
-    pipeline_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    pipeline_ms.push_back(elapsed_ms(t0, t1));
   }
   std::printf("bench_ident: lateral3, %ld samples (%.0f s at %.0f Hz), %d repetitions\n",
               static_cast<long>(prepared.filtered.size()), so.duration_s, so.rate_hz, reps);
-  std::printf("  OLS + WLS regression: median %.2f ms (min %.2f, max %.2f); target <= 50 ms\n", median(regression_ms),
-              *std::min_element(regression_ms.begin(), regression_ms.end()),
-              *std::max_element(regression_ms.begin(), regression_ms.end()));
+  const TimingSpread regression = timing_spread(regression_ms);
+  std::printf("  OLS + WLS regression: median %.2f ms (min %.2f, max %.2f); target <= 50 ms\n", regression.median,
+              regression.min, regression.max);
   std::printf("    CPU time of the same: median %.2f ms\n", median(cpu_ms));
   std::printf("    OLS median %.2f ms, WLS (its own OLS pass, weights, GLS) median %.2f ms\n", median(ols_ms),
               median(wls_ms));

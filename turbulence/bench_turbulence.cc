@@ -5,8 +5,6 @@
 /// matrix-vector products as the record has samples per system (2 x 60000), and the ratio.
 ///   bench_turbulence [repetitions]      (default 5)
 
-#include <time.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -15,26 +13,12 @@
 
 #include <Eigen/Dense>
 
+#include "core/bench_timing.h"
 #include "turbulence/ce500_analysis.h"
 #include "turbulence/ce500_config.h"
 
-namespace {
-
-/// CPU time of this thread [ms]: unlike wall time, not inflated by other processes.
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-
-double median(std::vector<double> xs) {
-  std::sort(xs.begin(), xs.end());
-  return xs[xs.size() / 2];
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
+  using namespace nimble;
   using namespace nimble::turbulence;
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   const Ce500Config config = load_ce500_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/turbulence/ce500_practical.yaml");

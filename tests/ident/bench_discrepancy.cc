@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <vector>
 
+#include "core/bench_timing.h"
 #include "discrepancy_generator.h"
 #include "ident/discrepancy.h"
 #include "ident/identify.h"
@@ -18,13 +19,6 @@
 using namespace nimble;
 using namespace nimble::ident;
 using Clock = std::chrono::steady_clock;
-
-namespace {
-double median(std::vector<double> x) {
-  std::sort(x.begin(), x.end());
-  return x[x.size() / 2];
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
@@ -44,21 +38,21 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     last = find_discrepancy(data, model, vehicle, {});
     const auto t1 = Clock::now();
-    workflow_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    workflow_ms.push_back(elapsed_ms(t0, t1));
     const PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, {});
     const auto eqs = lateral_equations(Structure::kLateral3, model.inputs, vehicle);
     const auto t2 = Clock::now();
     const RegressionResult r = estimate_ols(prep.filtered.signals, eqs);
     const auto t3 = Clock::now();
-    floor_ms.push_back(std::chrono::duration<double, std::milli>(t3 - t2).count());
+    floor_ms.push_back(elapsed_ms(t2, t3));
     if (r.equations.empty()) return 1;
   }
   std::printf("bench_discrepancy: %zu samples (60 s at 512 Hz), %d repetitions, verdict %s:", last.samples, reps,
               last.verdict.c_str());
   for (const auto& e : last.effects) std::printf(" %s", e.name.c_str());
-  std::printf("\n  whole workflow: median %.0f ms (min %.0f, max %.0f); target <= 5000 ms\n", median(workflow_ms),
-              *std::min_element(workflow_ms.begin(), workflow_ms.end()),
-              *std::max_element(workflow_ms.begin(), workflow_ms.end()));
+  const TimingSpread workflow = timing_spread(workflow_ms);
+  std::printf("\n  whole workflow: median %.0f ms (min %.0f, max %.0f); target <= 5000 ms\n", workflow.median,
+              workflow.min, workflow.max);
   std::printf("  machine floor, one OLS of the baseline L and Y equations: median %.2f ms; workflow / floor = %.0f\n",
               median(floor_ms), median(workflow_ms) / median(floor_ms));
   return 0;
