@@ -8,7 +8,7 @@
 
 #include <Eigen/Cholesky>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "core/chi_square.h"
 
 namespace nimble {

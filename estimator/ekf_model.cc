@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 
 namespace nimble {
 namespace {

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 
 namespace nimble {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <Eigen/Cholesky>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "estimator/mocap_measurement.h"
 
 namespace nimble {

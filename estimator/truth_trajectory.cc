@@ -5,7 +5,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 
 namespace nimble {
 namespace {

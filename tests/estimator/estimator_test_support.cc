@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "estimator/mocap_measurement.h"
 
 namespace nimble::test {

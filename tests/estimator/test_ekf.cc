@@ -11,7 +11,7 @@
 #include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "estimator/ekf.h"
 #include "estimator_test_support.h"
 

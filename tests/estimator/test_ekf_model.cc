@@ -8,7 +8,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "estimator/ekf.h"
 #include "estimator/ekf_model.h"
 

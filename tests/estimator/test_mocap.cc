@@ -6,7 +6,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "estimator/mocap_emulator.h"
 #include "estimator/mocap_measurement.h"
 

@@ -1,11 +1,11 @@
-// Unit tests of the attitude conversions (estimator/attitude.h) and the chi-square functions.
+// Unit tests of the attitude conversions (core/attitude.h) and the chi-square functions.
 
 #include <cmath>
 #include <random>
 
 #include <catch2/catch.hpp>
 
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 #include "core/chi_square.h"
 
 using namespace nimble;

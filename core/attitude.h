@@ -1,5 +1,5 @@
 #pragma once
-/// Attitude representations and conversions used by the sensing chain.
+/// Attitude representations and conversions used by the sensors, the estimator and their tests.
 ///
 /// Conventions (those of lcmtypes/README.md):
 ///  - Body axes x forward, y right wing, z down; world frame NED.

@@ -1,4 +1,4 @@
-#include "estimator/attitude.h"
+#include "core/attitude.h"
 
 #include <cmath>
 
