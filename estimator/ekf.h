@@ -63,8 +63,8 @@
 #include <Eigen/Core>
 
 #include "estimator/ekf_model.h"
-#include "estimator/imu_model.h"
 #include "estimator/mocap_measurement.h"
+#include "sensors/sensor_types.h"
 
 namespace nimble {
 

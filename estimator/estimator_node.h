@@ -22,9 +22,9 @@
 #include <memory>
 
 #include "estimator/ekf.h"
-#include "estimator/mocap_emulator.h"
 #include "estimator/mocap_measurement.h"
 #include "scenario/scenario.h"
+#include "sensors/sensor_types.h"
 #include "transport/node.h"
 
 namespace nimble {

@@ -29,7 +29,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "estimator/mocap_emulator.h"
+#include "sensors/sensor_types.h"
 
 namespace nimble {
 

@@ -1,6 +1,7 @@
 #pragma once
-/// Loading of the sensing configuration (IMU model, mocap emulator, velocity differentiator, EKF)
-/// from YAML through the strict ConfigMap, and EKF noise matched to the emulated sensors.
+/// Loading of a scenario's whole `sensing` section (the sensor models of sensors/sensor_config.h,
+/// the velocity differentiator, the EKF) from YAML through the strict ConfigMap, and EKF noise
+/// matched to the emulated sensors.
 ///
 /// Every key is optional and falls back to the struct default; unknown keys, non-numeric values
 /// and out-of-range values are ConfigError naming file, key and value. 3-vectors are mappings with
@@ -12,32 +13,24 @@
 
 #include "core/config.h"
 #include "estimator/ekf.h"
-#include "estimator/imu_model.h"
-#include "estimator/mocap_emulator.h"
 #include "estimator/mocap_measurement.h"
+#include "sensors/sensor_config.h"
 
 namespace nimble {
 
-/// All sensing parameters of one scenario.
-struct SensingConfig {
-  ImuModelConfig imu;                                    ///< section `imu`
-  MocapConfig mocap;                                     ///< section `mocap`
+/// All sensing parameters of one scenario: the sensor models (imu, mocap, seed of SensorConfig)
+/// and the estimator's sections.
+struct SensingConfig : SensorConfig {
   VelocityDifferentiatorConfig velocity_differentiator;  ///< section `velocity_differentiator`
   EkfConfig ekf;                                         ///< section `ekf`
-  /// Seed of the IMU and mocap noise generators [-].
-  std::uint64_t seed = 1;
 };
 
-/// Reads the `imu` section. @throws ConfigError.
-ImuModelConfig imu_model_config_from(ConfigMap& map);
-/// Reads the `mocap` section. @throws ConfigError.
-MocapConfig mocap_config_from(ConfigMap& map);
 /// Reads the `velocity_differentiator` section. @throws ConfigError.
 VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map);
 /// Reads the `ekf` section. @throws ConfigError.
 EkfConfig ekf_config_from(ConfigMap& map);
-/// Reads a sensing mapping with optional sections imu, mocap, velocity_differentiator, ekf and an
-/// optional seed. Also checks that the EKF's rollback history holds what a motion-capture
+/// Reads a sensing mapping with optional sections imu, mocap (sensor_config_from()),
+/// velocity_differentiator, ekf and an optional seed; any other key is an error. Also checks that the EKF's rollback history holds what a motion-capture
 /// measurement needs when it arrives (ekf_history_needed_s). @throws ConfigError.
 SensingConfig sensing_config_from(ConfigMap& map);
 

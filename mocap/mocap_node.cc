@@ -3,13 +3,13 @@
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
-#include "estimator/sensing_config.h"
+#include "sensors/sensor_config.h"
 
 namespace nimble {
 
 MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& options) {
   ConfigMap section = scenario.section("sensing");
-  const SensingConfig sensing = sensing_config_from(section);
+  const SensorConfig sensing = sensor_config_from(section);
   // An offset keeps the mocap noise independent of the IMU noise of the same seed.
   emulator_ = std::make_unique<MocapEmulator>(sensing.mocap, scenario.seed + 0x6d6f636170ULL);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);

@@ -1,6 +1,6 @@
 #pragma once
 /// The motion-capture emulator process: an OptiTrack-like rigid-body stream from the
-/// plant's truth (estimator/mocap_emulator.h): 200 Hz frames stamped at mid-exposure,
+/// plant's truth (sensors/mocap_emulator.h): 200 Hz frames stamped at mid-exposure,
 /// marker noise (mean 3-D error 0.85 mm), attitude noise, a configurable latency, and
 /// seeded occlusion bursts. Configured by the scenario's `sensing.mocap` section.
 ///
@@ -18,7 +18,7 @@
 #include <memory>
 #include <vector>
 
-#include "estimator/mocap_emulator.h"
+#include "sensors/mocap_emulator.h"
 #include "scenario/scenario.h"
 #include "transport/node.h"
 

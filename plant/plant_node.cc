@@ -6,7 +6,7 @@
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 
-#include "estimator/sensing_config.h"
+#include "sensors/sensor_config.h"
 #include <nimble/truth_state_t.hpp>
 
 namespace nimble::plant {
@@ -59,7 +59,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   model_ = std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config_);
   command_ = model_->trim_command();
   ConfigMap sensing_section = scenario.section("sensing");
-  const SensingConfig sensing = sensing_config_from(sensing_section);
+  const SensorConfig sensing = sensor_config_from(sensing_section);
   imu_ = std::make_unique<ImuModel>(sensing.imu, scenario.seed);
   imu_period_ns_ = std::llround(1e9 / sensing.imu.sample_rate_hz);
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);

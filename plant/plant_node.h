@@ -10,7 +10,7 @@
 /// Publishes:
 ///   TRUTH         truth_state_t        plant.truth_rate_hz (default 1 kHz)
 ///   IMU           imu_sample_t         sensing.imu.sample_rate_hz (default 512 Hz): the onboard
-///                                      IMU emulated from the truth (estimator/imu_model.h), each
+///                                      IMU emulated from the truth (sensors/imu_model.h), each
 ///                                      sample taken at the first plant step at or after its time
 ///   ACTUATOR_FB   actuator_feedback_t  plant.feedback_rate_hz (default 100 Hz)
 ///   RIG_CLOCK     rig_clock_t          lockstep only, once per plant step
@@ -29,7 +29,7 @@
 
 #include <nimble/actuator_command_t.hpp>
 
-#include "estimator/imu_model.h"
+#include "sensors/imu_model.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "transport/node.h"

@@ -8,7 +8,7 @@
 
 #include "estimator/ekf.h"
 #include "estimator/sensing_config.h"
-#include "estimator/truth_trajectory.h"
+#include "truth_trajectory.h"
 
 namespace nimble::test {
 

@@ -11,7 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/chi_square.h"
-#include "estimator/sensing_simulation.h"
+#include "sensing_simulation.h"
 
 using namespace nimble;
 

@@ -29,6 +29,6 @@ add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.c
   ${PROJECT_SOURCE_DIR}/plant/plant_node.cc ${PROJECT_SOURCE_DIR}/controller/controller_node.cc
   ${PROJECT_SOURCE_DIR}/estimator/estimator_node.cc)
 target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_core nimble_controller_core
-  nimble_estimation nimble_scenario nimble_transport)
+  nimble_sensors nimble_estimation nimble_sensing_config nimble_scenario nimble_transport)
 target_compile_definitions(test_process_nodes PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 rig_discover_tests(test_process_nodes PREFIX "functional.process." LABELS functional)

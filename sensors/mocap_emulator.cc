@@ -1,4 +1,4 @@
-#include "estimator/mocap_emulator.h"
+#include "sensors/mocap_emulator.h"
 
 #include <algorithm>
 #include <cmath>

@@ -22,7 +22,7 @@
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
 #include "estimator/sensing_config.h"
-#include "estimator/truth_trajectory.h"
+#include "truth_trajectory.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "estimator/imu_model.h"
+#include "sensors/imu_model.h"
 
 #include <cmath>
 #include <sstream>

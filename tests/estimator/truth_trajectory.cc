@@ -1,4 +1,4 @@
-#include "estimator/truth_trajectory.h"
+#include "truth_trajectory.h"
 
 #include <algorithm>
 #include <cmath>

@@ -21,8 +21,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "estimator/imu_model.h"
-#include "estimator/mocap_emulator.h"
+#include "sensors/imu_model.h"
+#include "sensors/mocap_emulator.h"
 
 namespace nimble {
 

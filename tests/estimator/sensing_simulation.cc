@@ -1,4 +1,4 @@
-#include "estimator/sensing_simulation.h"
+#include "sensing_simulation.h"
 
 #include <cmath>
 #include <deque>

@@ -35,6 +35,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "sensors/sensor_types.h"
+
 namespace nimble {
 
 /// Parameters of MocapEmulator.
@@ -85,32 +87,6 @@ struct MocapTruthInput {
   Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();
   /// Attitude, rotates body vectors into NED.
   Eigen::Quaterniond q_body_to_ned = Eigen::Quaterniond::Identity();
-};
-
-/// One motion-capture frame; mirrors mocap_pose_t plus its publication time.
-struct MocapPose {
-  /// Middle of the camera exposure, rig time [us].
-  std::int64_t utime = 0;
-  /// Message counter of this emulator [-]: 0 for the first frame, +1 per frame.
-  std::int64_t seq = 0;
-  /// Frame counter [-], consecutive.
-  std::int64_t frame_number = 0;
-  /// Latency from mid-exposure to publication [us].
-  std::int32_t latency_us = 0;
-  /// Rigid-body identifier [-].
-  std::int32_t rigid_body_id = 1;
-  /// Measured position in NED [m]; zero when tracking_valid is false.
-  Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();
-  /// Measured attitude q_body_to_ned (w >= 0); identity when tracking_valid is false.
-  Eigen::Quaterniond q_body_to_ned = Eigen::Quaterniond::Identity();
-  /// False during an occlusion.
-  bool tracking_valid = false;
-  /// Size of this frame's 3-D position error [m] (the emulator's stand-in for the fit residual).
-  double mean_marker_error_m = 0.0;
-  /// Markers seen [-]: config num_markers when tracked, 0 when occluded.
-  std::int16_t num_markers = 0;
-  /// Rig time at which the frame is published [us] = utime + latency_us.
-  std::int64_t publish_utime = 0;
 };
 
 /// Transport-free motion-capture emulator. See the top of this header.

@@ -28,22 +28,14 @@
 
 #include <Eigen/Core>
 
+#include "sensors/sensor_types.h"
+
 namespace nimble {
 
 /// Standard gravity, the unit "g" of the sensor specifications [m/s^2].
 constexpr double kStandardGravityMps2 = 9.80665;
 /// One degree [rad].
 constexpr double kDegToRad = 0.017453292519943295;
-
-/// Bits of ImuSample::saturation_flags (identical to imu_sample_t::SAT_*).
-enum ImuSaturationBit : std::uint8_t {
-  kSatGyroX = 1,
-  kSatGyroY = 2,
-  kSatGyroZ = 4,
-  kSatAccelX = 8,
-  kSatAccelY = 16,
-  kSatAccelZ = 32,
-};
 
 /// One harmonic of the flapping-induced vibration.
 struct VibrationHarmonic {
@@ -90,7 +82,7 @@ struct ImuModelConfig {
   /// Switches all vibration (flapping harmonics and structural mode) on or off.
   bool vibration_enabled = true;
   /// Vibration at multiples of the flapping frequency. The thesis publishes no amplitudes; the
-  /// defaults are assumptions (see default_flapping_harmonics() and estimator/README.md): 1st
+  /// defaults are assumptions (see default_flapping_harmonics() and sensors/README.md): 1st
   /// harmonic gyro (0.2, 0.2, 0.1) rad/s, accel (0.5, 0.3, 1.0) m/s^2; 2nd harmonic gyro
   /// (0.1, 0.1, 0.05) rad/s, accel (1.0, 0.2, 0.5) m/s^2. They stay well below the effective
   /// input noise that the thesis's EKF tuning implies (Eq 8.2 Q: 1.6-3.5 rad/s, 5-7.5 m/s^2).
@@ -120,22 +112,6 @@ struct ImuTruthInput {
   double flap_freq_left_radps = 0.0;
   /// Flapping frequency of the right wing pair [rad/s].
   double flap_freq_right_radps = 0.0;
-};
-
-/// One emulated IMU sample; mirrors imu_sample_t.
-struct ImuSample {
-  /// Sampling instant, rig time [us].
-  std::int64_t utime = 0;
-  /// Sample counter of this model [-]: 0 for the first sample.
-  std::int64_t seq = 0;
-  /// Measured angular rate, body axes [rad/s], order p q r.
-  Eigen::Vector3d gyro_radps = Eigen::Vector3d::Zero();
-  /// Measured specific force, body axes [m/s^2].
-  Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();
-  /// Die temperature [degC].
-  double temperature_degc = 0.0;
-  /// Bitmask of ImuSaturationBit [-]; 0 when no axis is clamped.
-  std::uint8_t saturation_flags = 0;
 };
 
 /// Checks an ImuModelConfig.

@@ -1,4 +1,4 @@
-// Unit tests of the emulated IMU (estimator/imu_model.h).
+// Unit tests of the emulated IMU (sensors/imu_model.h).
 
 #include <cmath>
 #include <complex>
@@ -6,7 +6,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "estimator/imu_model.h"
+#include "sensors/imu_model.h"
 
 using namespace nimble;
 
