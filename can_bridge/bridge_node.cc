@@ -16,7 +16,7 @@ namespace nimble::can {
 namespace {
 
 using transport::ProcessNode;
-namespace ch = transport::channels;
+namespace ch = contract::channels;
 
 int64_t realtime_ns() {
   timespec ts{};

@@ -9,10 +9,10 @@
 namespace nimble {
 namespace {
 
-using transport::channels::kActuatorCommand;
-using transport::channels::kAttitudeSetpoint;
-using transport::channels::kControllerStatus;
-using transport::channels::kTruth;
+using contract::channels::kActuatorCommand;
+using contract::channels::kAttitudeSetpoint;
+using contract::channels::kControllerStatus;
+using contract::channels::kTruth;
 
 }  // namespace
 
@@ -35,8 +35,8 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {
-    node_->set_expected_rate(transport::channels::kEstimate, 512.0);
-    node_->bus().subscribe<estimator_state_t>(transport::channels::kEstimate, [this](const estimator_state_t& e) {
+    node_->set_expected_rate(contract::channels::kEstimate, 512.0);
+    node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& e) {
       const Input in{e.utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
       if (node_->lockstep()) {
         pending_.push_back(in);  // used from the next tick on (see cycle)
@@ -91,7 +91,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   if (have_input_ && input_age_us > static_cast<int64_t>(input_stale_s_ * 1e6) && !stale_reported_) {
     stale_reported_ = true;
     node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER,
-                 use_estimate_ ? transport::channels::kEstimate : kTruth,
+                 use_estimate_ ? contract::channels::kEstimate : kTruth,
                  "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
   }
   const ControllerOutput out = controller_->step(in);

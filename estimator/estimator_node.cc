@@ -19,9 +19,9 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
   builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
-  node_->set_expected_rate(transport::channels::kImu, sensing.imu.sample_rate_hz);
-  node_->set_expected_rate(transport::channels::kMocapPose, sensing.mocap.frame_rate_hz);
-  node_->bus().subscribe<imu_sample_t>(transport::channels::kImu, [this](const imu_sample_t& m) {
+  node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
+  node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
+  node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
     ImuSample s;
     s.utime = m.utime;
     s.seq = m.seq;
@@ -38,7 +38,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
       node_->record_latency_ns(transport::monotonic_ns() - (node_->t0_monotonic_ns() + s.utime * 1000));
     }
   });
-  node_->bus().subscribe<mocap_pose_t>(transport::channels::kMocapPose, [this](const mocap_pose_t& m) {
+  node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
     MocapPose p;
     p.utime = m.utime;
     p.seq = m.seq;
@@ -96,7 +96,7 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
         << "the history of " << 1e3 * ekf_->config().history_s << " ms ahead (" << c.measurements_too_new
         << " so far); the IMU stream is late or the two clocks differ";
   }
-  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, transport::channels::kMocapPose, msg.str());
+  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, contract::channels::kMocapPose, msg.str());
 }
 
 void EstimatorNode::tick(int64_t sim_time_ns) {
@@ -145,7 +145,7 @@ void EstimatorNode::publish(int64_t utime) {
   m.velocity_windows_uncovered = c.velocity_window_uncovered;
   m.imu_rejected = c.imu_rejected;
   m.imu_gaps = c.imu_gaps;
-  node_->bus().publish(transport::channels::kEstimate, m);
+  node_->bus().publish(contract::channels::kEstimate, m);
 }
 
 }  // namespace nimble

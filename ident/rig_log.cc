@@ -12,8 +12,12 @@
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
+#include "contract/channels.h"
+
 namespace nimble::ident {
 namespace {
+
+using namespace contract::channels;
 
 /// What append() does with a sample whose time is not after the last one.
 enum class Repeat {
@@ -75,10 +79,10 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   FlightData estimate, truth, inputs;
   std::string gain_set;
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
+    if (ev->channel == kTruth) {
       const auto m = decode_or_throw<truth_state_t>(*ev, file);
       append_states(truth, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
-    } else if (ev->channel == "ESTIMATE") {
+    } else if (ev->channel == kEstimate) {
       // The estimate describes the instant of the newest IMU sample it has integrated
       // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
       // propagated to it. utime is when it was published, which in lockstep is the next
@@ -86,26 +90,26 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
       const auto m = decode_or_throw<estimator_state_t>(*ev, file);
       append_states(estimate, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps, m.velocity_body_mps,
                     m.euler_rad, Repeat::kReplace);
-    } else if (ev->channel == "ACTUATOR_FB") {
+    } else if (ev->channel == kActuatorFeedback) {
       const auto m = decode_or_throw<actuator_feedback_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;
       append(inputs.channels["delta_f"], t, m.delta_f_radps);
       append(inputs.channels["delta_t"], t, m.throttle_pct);
       append(inputs.channels["delta_d"], t, m.dihedral_rad);
       append(inputs.channels["delta_w"], t, m.wing_root_rad);
-    } else if (ev->channel == "ACTUATOR_CMD") {
+    } else if (ev->channel == kActuatorCommand) {
       // The flight board's command, the flap actuator's input (what the plant receives, over
       // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
       const auto m = decode_or_throw<actuator_command_t>(*ev, file);
       const double df = m.mode == actuator_command_t::MODE_DELTA_F ? m.delta_f_radps
                                                                    : m.flap_freq_left_radps - m.flap_freq_right_radps;
       append(inputs.channels["delta_f_cmd"], static_cast<double>(m.utime) * 1e-6, df);
-    } else if (ev->channel == "CONTROLLER_STATUS") {
+    } else if (ev->channel == kControllerStatus) {
       if (gain_set.empty()) gain_set = decode_or_throw<controller_status_t>(*ev, file).gain_set;
-    } else if (ev->channel == "ATTITUDE_SP") {
+    } else if (ev->channel == kAttitudeSetpoint) {
       const auto m = decode_or_throw<attitude_setpoint_t>(*ev, file);
       append(inputs.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
-    } else if (ev->channel == "IMU") {
+    } else if (ev->channel == kImu) {
       const auto m = decode_or_throw<imu_sample_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;
       append(inputs.channels["ax"], t, m.accel_mps2[0]);
@@ -114,7 +118,7 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
     }
   }
   if (!inputs.has("delta_f")) {
-    throw DataError(file, -1, -1, "ACTUATOR_FB", "the log has no actuator feedback (delta_f, delta_t)");
+    throw DataError(file, -1, -1, kActuatorFeedback, "the log has no actuator feedback (delta_f, delta_t)");
   }
   // Servo inputs that never moved carry no information; leave them out so that the
   // identification does not try to estimate derivatives they cannot excite.
@@ -126,12 +130,12 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   RigLogData out;
   bool use_estimate = false;
   if (source == StateSource::kEstimate) {
-    if (!estimate.has("p")) throw DataError(file, -1, -1, "ESTIMATE", "the log has no estimator output");
+    if (!estimate.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
     use_estimate = true;
   } else if (source == StateSource::kAuto) {
     use_estimate = estimate.has("p");
   }
-  if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, "TRUTH", "the log has neither ESTIMATE nor TRUTH");
+  if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
   out.state_source = use_estimate ? "estimate" : "truth";
   out.gain_set = gain_set;
   out.measured = use_estimate ? estimate : truth;

@@ -30,6 +30,8 @@
 #include <nimble/step_ack_t.hpp>
 
 #include "can_bridge/bridge_config.h"
+#include "contract/channels.h"
+#include "contract/rates.h"
 #include "core/json_writer.h"
 #include "launcher/netns.h"
 #include "launcher/run_monitor.h"
@@ -219,67 +221,6 @@ Child* reap(std::vector<Child>& children) {
 std::string executable_of(const std::string& process) {
   if (process == can::kFlightProcess || process == can::kRigProcess) return "nimble_can_bridge";
   return "nimble_" + process;
-}
-
-/// Channels whose publishers pace themselves by the wall clock.
-const std::vector<std::string> kWallClockChannels = {"HEARTBEAT", "TIMING_HEALTH", "RUN_CONTROL", "FAULT",
-                                                     "CAN_HEALTH"};
-
-std::map<std::string, double> expected_rates(const Scenario& s, const ProcessRates& rates, bool lockstep) {
-  std::map<std::string, double> hz;
-  hz["TRUTH"] = rates.truth_hz;
-  hz["ACTUATOR_FB"] = rates.feedback_hz;
-  hz["IMU"] = rates.imu_hz;
-  if (rates.controller_hz > 0) {
-    hz["ACTUATOR_CMD"] = rates.controller_hz;
-    hz["CONTROLLER_STATUS"] = rates.controller_hz;
-    hz["ATTITUDE_SP"] = rates.controller_hz;
-  }
-  if (rates.mocap_hz > 0) hz["MOCAP_POSE"] = rates.mocap_hz;
-  if (rates.estimator_hz > 0) hz["ESTIMATE"] = rates.estimator_hz;
-  if (rates.can_link) {
-    hz["ACTUATOR_CMD_CAN"] = rates.controller_hz;
-    hz["ACTUATOR_FB_CAN"] = rates.feedback_hz;
-    hz["CAN_HEALTH"] = 2.0 * rates.can_health_hz;
-  }
-  if (lockstep) {
-    // RIG_CLOCK goes out at the plant steps where a participant is due, and every due
-    // participant acknowledges: replay the plant's rule over one simulated second.
-    const int64_t dt = std::llround(1e9 / rates.plant_hz);
-    const int64_t logger_period = std::llround(lockstep_options(s).logger_period_ms * 1e6);
-    std::vector<int64_t> periods;
-    if (rates.controller_hz > 0) periods.push_back(std::llround(1e9 / rates.controller_hz));
-    if (rates.can_link) {  // both sides of the bridge are due at every control cycle
-      periods.push_back(std::llround(1e9 / rates.controller_hz));
-      periods.push_back(std::llround(1e9 / rates.controller_hz));
-    }
-    if (rates.mocap_hz > 0) periods.push_back(std::llround(1e9 / rates.mocap_hz));
-    if (rates.estimator_hz > 0) periods.push_back(std::llround(1e9 / rates.estimator_hz));
-    std::vector<int64_t> next(periods.size(), 0);
-    int64_t logger_next = 0, ticks = 0, acks = 0;
-    for (int64_t t = 0; t < 1000000000LL; t += dt) {
-      bool due = logger_next <= t;
-      for (const int64_t n : next) due = due || n <= t;
-      if (!due) continue;
-      ++ticks;
-      for (std::size_t i = 0; i < periods.size(); ++i) {
-        if (next[i] <= t) {
-          ++acks;
-          next[i] = (t / periods[i] + 1) * periods[i];
-        }
-      }
-      if (logger_next <= t) {
-        ++acks;
-        logger_next = t + logger_period;
-      }
-    }
-    hz["RIG_CLOCK"] = static_cast<double>(ticks);
-    hz["STEP_ACK"] = static_cast<double>(acks);
-  }
-  const double n = static_cast<double>(s.processes.size());
-  hz["HEARTBEAT"] = 2.0 * n;
-  hz["TIMING_HEALTH"] = 1.0 * n;
-  return hz;
 }
 
 void print_summary(std::ostream& out, const Scenario& s, const std::string& url, const std::string& ns_detail,
@@ -633,8 +574,9 @@ int run_scenario(const RunOptions& options) {
   MonitorConfig mc;
   mc.lockstep = lockstep;
   mc.late_threshold_us = lc.late_threshold_us;
-  mc.expected_hz = expected_rates(scenario, rates, lockstep);
-  mc.wall_clock_channels = kWallClockChannels;
+  mc.expected_hz = contract::expected_rates(
+      rates, contract::RunShape{lockstep, lockstep_options(scenario).logger_period_ms, scenario.processes.size()});
+  mc.wall_clock_channels = contract::wall_clock_channels();
   RunMonitor monitor(mc);
   int64_t event_number = 0;
   int64_t last_flush_ns = monotonic_ns();
@@ -654,7 +596,7 @@ int run_scenario(const RunOptions& options) {
     ev.data = const_cast<void*>(data);
     log.writeEvent(&ev);
     monitor.on_message(channel, data, size, recv_us * 1000);
-    if (lockstep && channel == "RIG_CLOCK") {
+    if (lockstep && channel == contract::channels::kRigClock) {
       rig_clock_t tick{};
       if (tick.decode(data, 0, size) == size && tick.sim_time_ns >= logger_next_due_ns) {
         logger_next_due_ns = tick.sim_time_ns + logger_period_ns;
@@ -664,7 +606,7 @@ int run_scenario(const RunOptions& options) {
         ack.step = tick.step;
         ack.next_due_ns = logger_next_due_ns;
         ack.process = kLogger;
-        bus->publish("STEP_ACK", ack);
+        bus->publish(contract::channels::kStepAck, ack);
       }
     }
   });
@@ -704,7 +646,7 @@ int run_scenario(const RunOptions& options) {
     stop.clock_mode = lockstep ? run_control_t::CLOCK_MODE_LOCKSTEP : run_control_t::CLOCK_MODE_REALTIME;
     stop.run_id = scenario.name;
     stop.num_participants = 0;
-    bus->publish("RUN_CONTROL", stop);
+    bus->publish(contract::channels::kRunControl, stop);
     const auto wait_exit = [&](double seconds) {
       const int64_t until = monotonic_ns() + static_cast<int64_t>(seconds * 1e9);
       while (monotonic_ns() < until) {
@@ -773,7 +715,7 @@ int run_scenario(const RunOptions& options) {
   }
   if (lockstep) start.participants.push_back(kLogger);
   start.num_participants = static_cast<int32_t>(start.participants.size());
-  bus->publish("RUN_CONTROL", start);
+  bus->publish(contract::channels::kRunControl, start);
   monitor.set_t0(start.t0_monotonic_ns);
   const int64_t t0 = lockstep ? wall_start_ns : start.t0_monotonic_ns;
 
@@ -815,7 +757,7 @@ int run_scenario(const RunOptions& options) {
       for (const auto& c : children) someone_waiting |= monitor.heartbeat_state(c.name) == heartbeat_t::STATE_READY;
       if (someone_waiting) {
         start.seq = run_control_seq++;
-        bus->publish("RUN_CONTROL", start);
+        bus->publish(contract::channels::kRunControl, start);
       }
       ++resends;
     }

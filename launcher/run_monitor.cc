@@ -12,8 +12,12 @@
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
+#include "contract/channels.h"
+
 namespace nimble::launcher {
 namespace {
+
+using namespace contract::channels;
 
 /// Reads a big-endian int64 at `offset` of an encoded LCM message.
 bool read_i64(const void* data, int size, int offset, int64_t& out) {
@@ -42,14 +46,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
   Counter& c = counters_[channel];
   ++c.count;
 
-  if (channel == "HEARTBEAT") {
+  if (channel == kHeartbeat) {
     heartbeat_t hb{};
     if (!decode(data, size, hb)) { ++c.malformed; return; }
     heartbeat_[hb.process] = hb.state;
     count_seq(c, hb.process, hb.seq);
     return;
   }
-  if (channel == "TIMING_HEALTH") {
+  if (channel == kTimingHealth) {
     timing_health_t h{};
     if (!decode(data, size, h)) { ++c.malformed; return; }
     TimingSummary& t = timing_[h.process];
@@ -66,14 +70,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     count_seq(c, h.process, h.seq);
     return;
   }
-  if (channel == "CAN_HEALTH") {
+  if (channel == kCanHealth) {
     can_health_t h{};
     if (!decode(data, size, h)) { ++c.malformed; return; }
     can_health_[h.process] = h;
     count_seq(c, h.process, h.seq);
     return;
   }
-  if (channel == "FAULT") {
+  if (channel == kFault) {
     fault_event_t f{};
     if (!decode(data, size, f)) { ++c.malformed; return; }
     faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
@@ -81,7 +85,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     count_seq(c, f.process, f.seq);
     return;
   }
-  if (channel == "STEP_ACK") {
+  if (channel == kStepAck) {
     step_ack_t a{};
     if (!decode(data, size, a)) { ++c.malformed; return; }
     count_seq(c, a.process, a.seq);
@@ -95,17 +99,17 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     return;
   }
   count_seq(c, "", seq);
-  if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != "RUN_CONTROL") {
+  if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != kRunControl) {
     // A pose is stamped at mid-exposure and due latency_us later (int32 at byte offset 32).
     int64_t due_us = utime;
-    if (channel == "MOCAP_POSE" && size >= 36) {
+    if (channel == kMocapPose && size >= 36) {
       const auto* b = static_cast<const uint8_t*>(data) + 32;
       due_us += static_cast<int32_t>((uint32_t{b[0]} << 24) | (uint32_t{b[1]} << 16) | (uint32_t{b[2]} << 8) | b[3]);
     }
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }
-  if (channel == "TRUTH") {
+  if (channel == kTruth) {
     truth_state_t t{};
     if (!decode(data, size, t)) { ++c.malformed; return; }
     const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
@@ -135,7 +139,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
       recent_truth_.erase(recent_truth_.begin());
     }
   }
-  if (channel == "ESTIMATE") {
+  if (channel == kEstimate) {
     estimator_state_t e{};
     if (!decode(data, size, e)) { ++c.malformed; return; }
     est_.poses_accepted = e.poses_accepted;

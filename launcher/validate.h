@@ -3,22 +3,13 @@
 /// same loaders the processes use, so that a bad value is reported once, up front,
 /// naming its file and key.
 
+#include "contract/rates.h"
 #include "scenario/scenario.h"
 
 namespace nimble::launcher {
 
 /// Rates the processes of a scenario will run at.
-struct ProcessRates {
-  double plant_hz = 0.0;
-  double truth_hz = 0.0;
-  double feedback_hz = 0.0;
-  double imu_hz = 0.0;
-  double controller_hz = 0.0;  ///< 0 if the scenario has no controller
-  double mocap_hz = 0.0;       ///< 0 if the scenario has no motion-capture emulator
-  double estimator_hz = 0.0;   ///< 0 if the scenario has no estimator
-  bool can_link = false;       ///< actuator_link: can (the two sides of the CAN bridge run)
-  double can_health_hz = 0.0;  ///< CAN_HEALTH rate of each side (wall clock)
-};
+using ProcessRates = contract::ProcessRates;
 
 /// Loads every section, model and manoeuvre the scenario's processes will load, and checks
 /// that the plant and controller agree on shared assumptions.

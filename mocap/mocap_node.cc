@@ -13,8 +13,8 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
   // An offset keeps the mocap noise independent of the IMU noise of the same seed.
   emulator_ = std::make_unique<MocapEmulator>(sensing.mocap, scenario.seed + 0x6d6f636170ULL);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
-  node_->set_expected_rate(transport::channels::kTruth, 1000.0);
-  node_->bus().subscribe<truth_state_t>(transport::channels::kTruth, [this](const truth_state_t& t) {
+  node_->set_expected_rate(contract::channels::kTruth, 1000.0);
+  node_->bus().subscribe<truth_state_t>(contract::channels::kTruth, [this](const truth_state_t& t) {
     MocapTruthInput in;
     in.utime = t.utime;
     in.position_ned_m = Eigen::Vector3d(t.position_ned_m[0], t.position_ned_m[1], t.position_ned_m[2]);
@@ -53,7 +53,7 @@ void MocapNode::publish(const MocapPose& pose) {
   m.tracking_valid = pose.tracking_valid;
   m.mean_marker_error_m = pose.mean_marker_error_m;
   m.num_markers = pose.num_markers;
-  node_->bus().publish(transport::channels::kMocapPose, m);
+  node_->bus().publish(contract::channels::kMocapPose, m);
 }
 
 }  // namespace nimble

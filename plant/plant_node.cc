@@ -12,8 +12,8 @@
 namespace nimble::plant {
 namespace {
 
-using transport::channels::kActuatorFeedback;
-using transport::channels::kTruth;
+using contract::channels::kActuatorFeedback;
+using contract::channels::kTruth;
 
 /// Physical range of a flapping-frequency command [rad/s]: 0 to 40 Hz.
 constexpr double kMaxFlapRadps = 2.0 * M_PI * 40.0;
@@ -195,7 +195,7 @@ void PlantNode::publish_imu(int64_t sim_time_ns) {
   }
   m.temperature_degc = sample.temperature_degc;
   m.saturation_flags = static_cast<int8_t>(sample.saturation_flags);
-  node_->bus().publish(transport::channels::kImu, m);
+  node_->bus().publish(contract::channels::kImu, m);
   // Next sample: the first period boundary after this step.
   imu_next_ns_ = (sim_time_ns / imu_period_ns_ + 1) * imu_period_ns_;
 }

@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <set>
 
+#include "contract/channels.h"
+
 namespace nimble {
 namespace {
 
@@ -171,7 +173,7 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
 }
 
 std::string plant_command_channel(const Scenario& scenario) {
-  return scenario.actuator_link == "can" ? "ACTUATOR_CMD_CAN" : "ACTUATOR_CMD";
+  return contract::plant_command_channel(scenario.actuator_link == "can");
 }
 
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides) {

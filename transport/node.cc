@@ -67,7 +67,7 @@ ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::stri
           "dropped a malformed message on " + channel + ": " + what);
   });
   // Subscribed before anything is announced, so that no start command is missed.
-  bus_.subscribe<run_control_t>(channels::kRunControl,
+  bus_.subscribe<run_control_t>(contract::channels::kRunControl,
                                 [this](const run_control_t& m) { on_run_control(m); });
 }
 
@@ -122,7 +122,7 @@ void ProcessNode::publish_ack(int64_t step, int64_t utime) {
   ack.step = step;
   ack.next_due_ns = next_due_ns();
   ack.process = name_;
-  bus_.publish(channels::kStepAck, ack);
+  bus_.publish(contract::channels::kStepAck, ack);
 }
 
 void ProcessNode::release_ack() {
@@ -166,7 +166,7 @@ void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channe
   f.code = code;
   f.channel = channel;
   f.message = message;
-  bus_.publish(channels::kFault, f);
+  bus_.publish(contract::channels::kFault, f);
 }
 
 void ProcessNode::publish_heartbeat(int8_t state) {
@@ -178,7 +178,7 @@ void ProcessNode::publish_heartbeat(int8_t state) {
   hb.pid = static_cast<int32_t>(::getpid());
   hb.state = state;
   hb.config_digest = config_digest_;
-  bus_.publish(channels::kHeartbeat, hb);
+  bus_.publish(contract::channels::kHeartbeat, hb);
   next_heartbeat_us_ = hb.utime + (state == heartbeat_t::STATE_READY ? 100000 : 500000);
 }
 
@@ -210,7 +210,7 @@ void ProcessNode::publish_timing_health() {
     h.late.push_back(0);
   }
   h.num_channels = static_cast<int32_t>(h.channel.size());
-  bus_.publish(channels::kTimingHealth, h);
+  bus_.publish(contract::channels::kTimingHealth, h);
   next_health_us_ = now + 1000000;
 }
 
@@ -268,7 +268,7 @@ int ProcessNode::run() {
   // only to its own side, so that nobody wakes up for its own messages.
   if (master_) {
     bus_.subscribe<step_ack_t>(
-      channels::kStepAck,
+      contract::channels::kStepAck,
       [this](const step_ack_t& ack) {
         if (next_due_.count(ack.process) == 0) return;  // not a participant of this run
         last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
@@ -277,7 +277,7 @@ int ProcessNode::run() {
       100000);
   } else {
     bus_.subscribe<rig_clock_t>(
-      channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
+      contract::channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
   }
   if (!wait_for_start()) {
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
@@ -425,7 +425,7 @@ int ProcessNode::run_lockstep_master() {
     tick.sim_time_ns = t;
     tick.dt_ns = task.period_ns;
     tick.run_id = run_id_;
-    bus_.publish(channels::kRigClock, tick);
+    bus_.publish(contract::channels::kRigClock, tick);
     run_deferred();  // outputs nobody waits for this step go out after the tick
 
     // Wait for every participant due at this step. The tick goes out again every
@@ -447,7 +447,7 @@ int ProcessNode::run_lockstep_master() {
       const int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
       if (left_ms <= 0 || stop_) {
         if (stop_) return kExitOk;
-        fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, channels::kStepAck,
+        fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
               "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
                   std::to_string(static_cast<double>(t) / 1e9) + " s) within " +
                   std::to_string(ack_timeout_ms_) + " ms");
@@ -456,7 +456,7 @@ int ProcessNode::run_lockstep_master() {
       wait_io(std::min<int64_t>(left_ms, 50) * 1000000LL);
       housekeeping();
       if (monotonic_ns() >= resend_at) {
-        bus_.publish(channels::kRigClock, tick);
+        bus_.publish(contract::channels::kRigClock, tick);
         resend_at = monotonic_ns() + kTickResendMs * 1000000LL;
       }
     }

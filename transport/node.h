@@ -34,33 +34,11 @@
 #include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 
+#include "contract/channels.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
 
 namespace nimble::transport {
-
-/// Channel names of the rig (see lcmtypes/README.md).
-namespace channels {
-inline const std::string kTruth = "TRUTH";
-inline const std::string kImu = "IMU";
-inline const std::string kMocapPose = "MOCAP_POSE";
-inline const std::string kAttitudeSetpoint = "ATTITUDE_SP";
-inline const std::string kEstimate = "ESTIMATE";
-inline const std::string kActuatorCommand = "ACTUATOR_CMD";
-inline const std::string kActuatorFeedback = "ACTUATOR_FB";
-/// Commands as the rig side of the CAN link decoded them (actuator_link: can): the plant's input.
-inline const std::string kActuatorCommandCan = "ACTUATOR_CMD_CAN";
-/// Feedback as the flight-board side of the CAN link decoded it (actuator_link: can).
-inline const std::string kActuatorFeedbackCan = "ACTUATOR_FB_CAN";
-inline const std::string kCanHealth = "CAN_HEALTH";
-inline const std::string kControllerStatus = "CONTROLLER_STATUS";
-inline const std::string kRigClock = "RIG_CLOCK";
-inline const std::string kStepAck = "STEP_ACK";
-inline const std::string kRunControl = "RUN_CONTROL";
-inline const std::string kHeartbeat = "HEARTBEAT";
-inline const std::string kTimingHealth = "TIMING_HEALTH";
-inline const std::string kFault = "FAULT";
-}  // namespace channels
 
 /// Exit codes of rig processes.
 constexpr int kExitOk = 0;

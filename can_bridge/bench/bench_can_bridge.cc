@@ -66,6 +66,7 @@
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/run_control_t.hpp>
 
+#include "contract/channels.h"
 #include "launcher/netns.h"
 #include "scenario/scenario.h"
 
@@ -80,8 +81,8 @@ using nimble::fault_event_t;
 using nimble::heartbeat_t;
 using nimble::run_control_t;
 
-const char* const kCmd = "ACTUATOR_CMD";
-const char* const kCmdCan = "ACTUATOR_CMD_CAN";
+const std::string& kCmd = nimble::contract::channels::kActuatorCommand;
+const std::string& kCmdCan = nimble::contract::channels::kActuatorCommandCan;
 const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
 const char* const kInterface = "vcan0";
 
@@ -177,9 +178,9 @@ class Receiver {
   void subscribe(lcm::LCM& lcm) {
     lcm.subscribe(kCmd, &Receiver::on_direct, this)->setQueueCapacity(100000);
     lcm.subscribe(kCmdCan, &Receiver::on_can, this)->setQueueCapacity(100000);
-    lcm.subscribe("HEARTBEAT", &Receiver::on_heartbeat, this)->setQueueCapacity(1000);
-    lcm.subscribe("CAN_HEALTH", &Receiver::on_health, this)->setQueueCapacity(1000);
-    lcm.subscribe("FAULT", &Receiver::on_fault, this)->setQueueCapacity(1000);
+    lcm.subscribe(nimble::contract::channels::kHeartbeat, &Receiver::on_heartbeat, this)->setQueueCapacity(1000);
+    lcm.subscribe(nimble::contract::channels::kCanHealth, &Receiver::on_health, this)->setQueueCapacity(1000);
+    lcm.subscribe(nimble::contract::channels::kFault, &Receiver::on_fault, this)->setQueueCapacity(1000);
   }
 
   std::vector<int64_t> direct_rx_, can_rx_;  // receive time by seq [ns, CLOCK_MONOTONIC]; -1 = none
@@ -311,7 +312,7 @@ void publish_run_control(lcm::LCM& lcm, int64_t* seq, int8_t command, int64_t du
   rc.duration_ns = duration_ns;
   rc.run_id = "bench_can_bridge-" + std::to_string(getpid());
   rc.num_participants = 0;  // real time: no lockstep participants
-  lcm.publish("RUN_CONTROL", &rc);
+  lcm.publish(nimble::contract::channels::kRunControl, &rc);
 }
 
 /// Waits until every child has announced `state` on HEARTBEAT (under its own pid). Returns ""

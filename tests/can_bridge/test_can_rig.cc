@@ -40,6 +40,7 @@
 #include "can_bridge/bridge_node.h"
 #include "can_bridge/candump_log.h"
 #include "can_bridge/codec.h"
+#include "contract/channels.h"
 #include "can_bridge/frame_layout.h"
 #include "launcher/netns.h"
 
@@ -50,6 +51,7 @@ using nimble::actuator_command_t;
 using nimble::actuator_feedback_t;
 using nimble::can_health_t;
 using nimble::fault_event_t;
+using namespace nimble::contract::channels;
 namespace fs = std::filesystem;
 using nimble::test::differing;
 using nimble::test::rig_run;
@@ -142,10 +144,10 @@ struct Bridge {
                                         {"can_bridge.fd", fd ? "true" : "false"}})),
         node(scenario, {side, scenario.file, "memq://"}) {
     auto& bus = node.node().bus();
-    bus.subscribe<actuator_command_t>("ACTUATOR_CMD_CAN", [this](const actuator_command_t& m) { commands.push_back(m); });
-    bus.subscribe<actuator_feedback_t>("ACTUATOR_FB_CAN", [this](const actuator_feedback_t& m) { feedback.push_back(m); });
-    bus.subscribe<can_health_t>("CAN_HEALTH", [this](const can_health_t& m) { health.push_back(m); });
-    bus.subscribe<fault_event_t>("FAULT", [this](const fault_event_t& m) { faults.push_back(m); });
+    bus.subscribe<actuator_command_t>(kActuatorCommandCan, [this](const actuator_command_t& m) { commands.push_back(m); });
+    bus.subscribe<actuator_feedback_t>(kActuatorFeedbackCan, [this](const actuator_feedback_t& m) { feedback.push_back(m); });
+    bus.subscribe<can_health_t>(kCanHealth, [this](const can_health_t& m) { health.push_back(m); });
+    bus.subscribe<fault_event_t>(kFault, [this](const fault_event_t& m) { faults.push_back(m); });
   }
   /// Hands the node every frame waiting on vcan0, then delivers what it published.
   void pump() {
@@ -273,7 +275,7 @@ TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames, feedback 
   CanSocket listener = CanSocket::open(kIf, receive_all());
 
   const actuator_command_t cmd = sample_command(41);
-  flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
+  flight.node.node().bus().publish(kActuatorCommand, cmd);
   REQUIRE(flight.node.node().bus().handle_timeout(1000) > 0);
   CommandEncoder reference;
   expect_frames(listener, reference.encode(cmd), false);
@@ -309,7 +311,7 @@ TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN, ACTUATO
 
   CanSocket listener = CanSocket::open(kIf, receive_all());  // from here on: the bridge's frames only
   const actuator_feedback_t fb = plant_feedback(1001);
-  rig.node.node().bus().publish("ACTUATOR_FB", fb);
+  rig.node.node().bus().publish(kActuatorFeedback, fb);
   REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
   FeedbackEncoder reference;
   expect_frames(listener, reference.encode(fb), false);
@@ -384,10 +386,10 @@ namespace {
 /// was a CAN FD frame (`fd`) or none was.
 void check_link_carried(const YAML::Node& summary, int commands, bool fd) {
   const YAML::Node ch = summary["channels"];
-  CHECK(ch["ACTUATOR_CMD"]["count"].as<int>() == commands);
-  CHECK(ch["ACTUATOR_CMD_CAN"]["count"].as<int>() == commands);
-  CHECK(ch["ACTUATOR_CMD_CAN"]["drops"].as<int>() == 0);
-  CHECK(ch["ACTUATOR_FB_CAN"]["count"].as<int>() == ch["ACTUATOR_FB"]["count"].as<int>());
+  CHECK(ch[kActuatorCommand]["count"].as<int>() == commands);
+  CHECK(ch[kActuatorCommandCan]["count"].as<int>() == commands);
+  CHECK(ch[kActuatorCommandCan]["drops"].as<int>() == 0);
+  CHECK(ch[kActuatorFeedbackCan]["count"].as<int>() == ch[kActuatorFeedback]["count"].as<int>());
   const YAML::Node flight = summary["can"]["can_flight"], rig = summary["can"]["can_rig"];
   REQUIRE(flight);
   REQUIRE(rig);
@@ -452,7 +454,7 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
     }
   }
   CHECK(static_cast<int>(records.size()) == rig["candump_lines"].as<int>());
-  CHECK(records.size() == 2 * 3072 + 3 * ch["ACTUATOR_FB"]["count"].as<std::size_t>());
+  CHECK(records.size() == 2 * 3072 + 3 * ch[kActuatorFeedback]["count"].as<std::size_t>());
   // Its commands decode as the run's commands did.
   CommandDecoder decoder;
   for (const auto& rec : records) {
@@ -497,7 +499,7 @@ TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch, FD 
   CanSocket listener = fd_listener();
 
   const actuator_command_t cmd = sample_command(41);
-  flight.node.node().bus().publish("ACTUATOR_CMD", cmd);
+  flight.node.node().bus().publish(kActuatorCommand, cmd);
   REQUIRE(flight.node.node().bus().handle_timeout(1000) > 0);
   CommandEncoder reference;
   expect_frames(listener, reference.encode(cmd), true);
@@ -546,7 +548,7 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
 
   CanSocket listener = fd_listener();
   const actuator_feedback_t fb = plant_feedback(1000);
-  rig.node.node().bus().publish("ACTUATOR_FB", fb);
+  rig.node.node().bus().publish(kActuatorFeedback, fb);
   REQUIRE(rig.node.node().bus().handle_timeout(1000) > 0);
   FeedbackEncoder reference;
   expect_frames(listener, reference.encode(fb), true);
@@ -630,10 +632,10 @@ TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses i
     decoder.decode(rec->frame, &cmd);
   }
   CHECK(static_cast<int>(lines) == rig["candump_lines"].as<int>());
-  CHECK(lines == 2 * 512 + 3 * ch["ACTUATOR_FB"]["count"].as<std::size_t>());
+  CHECK(lines == 2 * 512 + 3 * ch[kActuatorFeedback]["count"].as<std::size_t>());
   CHECK(fd_with_brs == lines);
   CHECK(decoder.stats().messages == 512);
-  CHECK(decoder.stats().unknown_id == 3 * ch["ACTUATOR_FB"]["count"].as<std::size_t>());  // the feedback frames
+  CHECK(decoder.stats().unknown_id == 3 * ch[kActuatorFeedback]["count"].as<std::size_t>());  // the feedback frames
   CHECK(decoder.stats().wrong_length == 0);
   CHECK(decoder.stats().bad_checksum == 0);
   CHECK(decoder.stats().stale_counter == 0);

@@ -1,7 +1,7 @@
 # Functional tests of the LCM message contract (lcmtypes/). Included from tests/CMakeLists.txt,
 # which provides the rig_catch_main library and rig_discover_tests (cmake/RigTests.cmake).
 add_executable(test_lcmtypes ${CMAKE_CURRENT_LIST_DIR}/test_lcmtypes.cc)
-target_link_libraries(test_lcmtypes PRIVATE rig_catch_main nimble_lcmtypes PkgConfig::LCM)
+target_link_libraries(test_lcmtypes PRIVATE rig_catch_main nimble_contract nimble_lcmtypes PkgConfig::LCM)
 rig_discover_tests(test_lcmtypes PREFIX "functional.lcmtypes." LABELS functional)
 
 # Java and C++ fingerprints of the same types (lcm-spy decodes with the Java ones).
@@ -32,3 +32,9 @@ target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_cor
   nimble_sensors nimble_estimation nimble_sensing_config nimble_scenario nimble_transport)
 target_compile_definitions(test_process_nodes PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 rig_discover_tests(test_process_nodes PREFIX "functional.process." LABELS functional)
+
+# The owner of the message contract (contract/): channel table and nominal rates.
+add_executable(test_contract ${CMAKE_CURRENT_LIST_DIR}/test_contract.cc)
+target_link_libraries(test_contract PRIVATE rig_catch_main nimble_contract nimble_lcmtypes)
+target_compile_definitions(test_contract PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+rig_discover_tests(test_contract PREFIX "functional.contract." LABELS functional)

@@ -28,6 +28,10 @@
 #include <type_traits>
 #include <vector>
 
+#include "contract/channels.h"
+
+using namespace nimble::contract::channels;
+
 namespace {
 
 // Produces a different non-zero value on every call, so that a decoded field that was left
@@ -540,21 +544,21 @@ void require_equal(const nimble::fault_event_t& a, const nimble::fault_event_t& 
 #undef REQUIRE_ARRAY
 
 // Rig channel of each type (lcmtypes/README.md).
-const char* channel_of(const nimble::truth_state_t*) { return "TRUTH"; }
-const char* channel_of(const nimble::imu_sample_t*) { return "IMU"; }
-const char* channel_of(const nimble::mocap_pose_t*) { return "MOCAP_POSE"; }
-const char* channel_of(const nimble::actuator_command_t*) { return "ACTUATOR_CMD"; }
-const char* channel_of(const nimble::actuator_feedback_t*) { return "ACTUATOR_FB"; }
-const char* channel_of(const nimble::attitude_setpoint_t*) { return "ATTITUDE_SP"; }
-const char* channel_of(const nimble::estimator_state_t*) { return "ESTIMATE"; }
-const char* channel_of(const nimble::controller_status_t*) { return "CONTROLLER_STATUS"; }
-const char* channel_of(const nimble::rig_clock_t*) { return "RIG_CLOCK"; }
-const char* channel_of(const nimble::step_ack_t*) { return "STEP_ACK"; }
-const char* channel_of(const nimble::run_control_t*) { return "RUN_CONTROL"; }
-const char* channel_of(const nimble::heartbeat_t*) { return "HEARTBEAT"; }
-const char* channel_of(const nimble::timing_health_t*) { return "TIMING_HEALTH"; }
-const char* channel_of(const nimble::fault_event_t*) { return "FAULT"; }
-const char* channel_of(const nimble::can_health_t*) { return "CAN_HEALTH"; }
+const std::string& channel_of(const nimble::truth_state_t*) { return kTruth; }
+const std::string& channel_of(const nimble::imu_sample_t*) { return kImu; }
+const std::string& channel_of(const nimble::mocap_pose_t*) { return kMocapPose; }
+const std::string& channel_of(const nimble::actuator_command_t*) { return kActuatorCommand; }
+const std::string& channel_of(const nimble::actuator_feedback_t*) { return kActuatorFeedback; }
+const std::string& channel_of(const nimble::attitude_setpoint_t*) { return kAttitudeSetpoint; }
+const std::string& channel_of(const nimble::estimator_state_t*) { return kEstimate; }
+const std::string& channel_of(const nimble::controller_status_t*) { return kControllerStatus; }
+const std::string& channel_of(const nimble::rig_clock_t*) { return kRigClock; }
+const std::string& channel_of(const nimble::step_ack_t*) { return kStepAck; }
+const std::string& channel_of(const nimble::run_control_t*) { return kRunControl; }
+const std::string& channel_of(const nimble::heartbeat_t*) { return kHeartbeat; }
+const std::string& channel_of(const nimble::timing_health_t*) { return kTimingHealth; }
+const std::string& channel_of(const nimble::fault_event_t*) { return kFault; }
+const std::string& channel_of(const nimble::can_health_t*) { return kCanHealth; }
 
 template <typename T>
 T make_sample() {

@@ -21,11 +21,13 @@
 #include <nimble/step_ack_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
+#include "contract/channels.h"
 #include "controller/controller_node.h"
 #include "estimator/estimator_node.h"
 #include "plant/plant_node.h"
 
 using namespace nimble;
+using namespace nimble::contract::channels;
 
 namespace {
 
@@ -64,15 +66,15 @@ TEST_CASE("plant node: steps in lockstep on a participant's acks, applies comman
   std::vector<actuator_feedback_t> feedback;
   std::vector<fault_event_t> faults;
   int ticks = 0;
-  bus.subscribe<truth_state_t>("TRUTH", [&](const truth_state_t& m) { truth.push_back(m); });
-  bus.subscribe<actuator_feedback_t>("ACTUATOR_FB", [&](const actuator_feedback_t& m) { feedback.push_back(m); });
-  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
-  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish("RUN_CONTROL", stop_command());
+  bus.subscribe<truth_state_t>(kTruth, [&](const truth_state_t& m) { truth.push_back(m); });
+  bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [&](const actuator_feedback_t& m) { feedback.push_back(m); });
+  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& m) { faults.push_back(m); });
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
   });
   // The test is the participant "controller": it answers every tick with a command
   // (delta_f = +20 rad/s) and an acknowledgement, and sends bad commands at step 10 and 11.
-  bus.subscribe<rig_clock_t>("RIG_CLOCK", [&](const rig_clock_t& tick) {
+  bus.subscribe<rig_clock_t>(kRigClock, [&](const rig_clock_t& tick) {
     ++ticks;
     actuator_command_t cmd{};
     cmd.utime = tick.utime;
@@ -82,10 +84,10 @@ TEST_CASE("plant node: steps in lockstep on a participant's acks, applies comman
     cmd.delta_f_radps = 20.0;
     cmd.source = "test";
     if (tick.step == 10) cmd.delta_f_radps = std::nan("");
-    bus.publish("ACTUATOR_CMD", cmd);
+    bus.publish(kActuatorCommand, cmd);
     if (tick.step == 11) {
       const char garbage[] = "not an actuator command";
-      bus.lcm().publish("ACTUATOR_CMD", garbage, sizeof garbage);
+      bus.lcm().publish(kActuatorCommand, garbage, sizeof garbage);
     }
     step_ack_t ack{};
     ack.utime = tick.utime;
@@ -93,9 +95,9 @@ TEST_CASE("plant node: steps in lockstep on a participant's acks, applies comman
     ack.step = tick.step;
     ack.next_due_ns = tick.sim_time_ns + tick.dt_ns;
     ack.process = "controller";
-    bus.publish("STEP_ACK", ack);
+    bus.publish(kStepAck, ack);
   });
-  bus.publish("RUN_CONTROL", start_lockstep(0.2, {"controller"}));
+  bus.publish(kRunControl, start_lockstep(0.2, {"controller"}));
 
   REQUIRE(plant.run() == transport::kExitOk);
   CHECK(ticks == 201);
@@ -116,14 +118,14 @@ TEST_CASE("plant node: steps in lockstep on a participant's acks, applies comman
     if (f.code == fault_event_t::CODE_MESSAGE_MALFORMED && f.message.find("not finite") != std::string::npos) {
       nan_reported = true;
     }
-    if (f.code == fault_event_t::CODE_MESSAGE_MALFORMED && f.channel == "ACTUATOR_CMD" &&
+    if (f.code == fault_event_t::CODE_MESSAGE_MALFORMED && f.channel == kActuatorCommand &&
         f.message.find("cannot decode") != std::string::npos) {
       garbage_reported = true;
     }
   }
   CHECK(nan_reported);
   CHECK(garbage_reported);
-  CHECK(bus.stats().at("ACTUATOR_CMD").malformed == 1);
+  CHECK(bus.stats().at(kActuatorCommand).malformed == 1);
 }
 
 TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][process]") {
@@ -133,14 +135,14 @@ TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][pr
   std::vector<actuator_feedback_t> feedback;
   std::vector<fault_event_t> faults;
   std::vector<truth_state_t> truth;
-  bus.subscribe<truth_state_t>("TRUTH", [&](const truth_state_t& m) { truth.push_back(m); });
-  bus.subscribe<actuator_feedback_t>("ACTUATOR_FB", [&](const actuator_feedback_t& m) { feedback.push_back(m); });
-  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
-  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish("RUN_CONTROL", stop_command());
+  bus.subscribe<truth_state_t>(kTruth, [&](const truth_state_t& m) { truth.push_back(m); });
+  bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [&](const actuator_feedback_t& m) { feedback.push_back(m); });
+  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& m) { faults.push_back(m); });
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
   });
   // Commands with delta_f = 30 rad/s for the first 50 ms only; acknowledgements always.
-  bus.subscribe<rig_clock_t>("RIG_CLOCK", [&](const rig_clock_t& tick) {
+  bus.subscribe<rig_clock_t>(kRigClock, [&](const rig_clock_t& tick) {
     if (tick.sim_time_ns < 50000000) {
       actuator_command_t cmd{};
       cmd.utime = tick.utime;
@@ -148,15 +150,15 @@ TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][pr
       cmd.mode = actuator_command_t::MODE_LEFT_RIGHT;
       cmd.flap_freq_left_radps = 102.497 + 15;
       cmd.flap_freq_right_radps = 102.497 - 15;
-      bus.publish("ACTUATOR_CMD", cmd);
+      bus.publish(kActuatorCommand, cmd);
     }
     step_ack_t ack{};
     ack.step = tick.step;
     ack.next_due_ns = tick.sim_time_ns + tick.dt_ns;
     ack.process = "controller";
-    bus.publish("STEP_ACK", ack);
+    bus.publish(kStepAck, ack);
   });
-  bus.publish("RUN_CONTROL", start_lockstep(0.5, {"controller"}));
+  bus.publish(kRunControl, start_lockstep(0.5, {"controller"}));
   REQUIRE(plant.run() == transport::kExitOk);
 
   // Timeout 0.1 s after the last command (t = 0.049 s): safe state from about t = 0.15 s.
@@ -186,9 +188,9 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
   std::vector<attitude_setpoint_t> setpoints;
   std::vector<controller_status_t> status;
   std::vector<int64_t> acked_steps;
-  bus.subscribe<actuator_command_t>("ACTUATOR_CMD", [&](const actuator_command_t& m) { commands.push_back(m); });
-  bus.subscribe<attitude_setpoint_t>("ATTITUDE_SP", [&](const attitude_setpoint_t& m) { setpoints.push_back(m); });
-  bus.subscribe<controller_status_t>("CONTROLLER_STATUS", [&](const controller_status_t& m) { status.push_back(m); });
+  bus.subscribe<actuator_command_t>(kActuatorCommand, [&](const actuator_command_t& m) { commands.push_back(m); });
+  bus.subscribe<attitude_setpoint_t>(kAttitudeSetpoint, [&](const attitude_setpoint_t& m) { setpoints.push_back(m); });
+  bus.subscribe<controller_status_t>(kControllerStatus, [&](const controller_status_t& m) { status.push_back(m); });
 
   // The test is the plant: a vehicle frozen at phi = +0.1 rad, ticking at 1 kHz up to
   // the controller's next due time.
@@ -202,29 +204,29 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
     t.step = k;
     t.euler_rad[0] = 0.1;
     t.quaternion_wxyz[0] = 1.0;
-    bus.publish("TRUTH", t);
+    bus.publish(kTruth, t);
     rig_clock_t c{};
     c.utime = t.utime;
     c.seq = k;
     c.step = k;
     c.sim_time_ns = k * dt_ns;
     c.dt_ns = dt_ns;
-    bus.publish("RIG_CLOCK", c);
+    bus.publish(kRigClock, c);
   };
-  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
     acked_steps.push_back(ack.step);
     if (ack.next_due_ns > static_cast<int64_t>(duration_s * 1e9)) {
-      bus.publish("RUN_CONTROL", stop_command());
+      bus.publish(kRunControl, stop_command());
       return;
     }
     step = (ack.next_due_ns + dt_ns - 1) / dt_ns;  // first plant step at or after the due time
     tick(step);
   });
   // The first tick goes out once the controller runs (it listens for the clock from then on).
-  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
     if (m.state == heartbeat_t::STATE_RUNNING && step == 0) tick(0);
   });
-  bus.publish("RUN_CONTROL", start_lockstep(duration_s, {"controller"}));
+  bus.publish(kRunControl, start_lockstep(duration_s, {"controller"}));
   REQUIRE(controller.run() == transport::kExitOk);
 
   // 512 Hz over 1.5 s: cycles at n / 512 s for n = 0..767.
@@ -265,8 +267,8 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
   transport::Bus& bus = estimator.node().bus();
   std::vector<estimator_state_t> estimates;
   std::vector<fault_event_t> faults;
-  bus.subscribe<estimator_state_t>("ESTIMATE", [&](const estimator_state_t& m) { estimates.push_back(m); });
-  bus.subscribe<fault_event_t>("FAULT", [&](const fault_event_t& m) { faults.push_back(m); });
+  bus.subscribe<estimator_state_t>(kEstimate, [&](const estimator_state_t& m) { estimates.push_back(m); });
+  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& m) { faults.push_back(m); });
 
   // The test is the plant and the motion capture: a vehicle at rest, IMU at 512 Hz, poses at
   // 200 Hz with 5 ms latency; from frame 100 (0.5 s) on the motion capture lags 200 ms.
@@ -283,7 +285,7 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
       s.seq = imu_k;
       s.accel_mps2[2] = -9.81;
       s.temperature_degc = 25.0;
-      bus.publish("IMU", s);
+      bus.publish(kImu, s);
     }
     for (;; ++frame) {
       const auto [utime, latency] = pose_times(frame);
@@ -298,7 +300,7 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
       p.quaternion_wxyz[0] = 1.0;
       p.tracking_valid = true;
       p.num_markers = 4;
-      bus.publish("MOCAP_POSE", p);
+      bus.publish(kMocapPose, p);
     }
     rig_clock_t c{};
     c.utime = t_us;
@@ -306,23 +308,23 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
     c.step = clock_seq++;
     c.sim_time_ns = t_ns;
     c.dt_ns = 1953125;
-    bus.publish("RIG_CLOCK", c);
+    bus.publish(kRigClock, c);
   };
   bool started = false;
-  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
     if (ack.next_due_ns > static_cast<int64_t>(duration_s * 1e9)) {
-      bus.publish("RUN_CONTROL", stop_command());
+      bus.publish(kRunControl, stop_command());
       return;
     }
     publish_until(ack.next_due_ns);
   });
-  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
     if (m.state == heartbeat_t::STATE_RUNNING && !started) {
       started = true;
       publish_until(0);
     }
   });
-  bus.publish("RUN_CONTROL", start_lockstep(duration_s, {"estimator"}));
+  bus.publish(kRunControl, start_lockstep(duration_s, {"estimator"}));
   REQUIRE(estimator.run() == transport::kExitOk);
 
   REQUIRE(estimates.size() > 400);
@@ -342,7 +344,7 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
     ++dropped;
     INFO(f.message);
     CHECK(f.severity == fault_event_t::SEVERITY_WARNING);
-    CHECK(f.channel == "MOCAP_POSE");
+    CHECK(f.channel == kMocapPose);
     CHECK(f.message.find("older than the rollback history of 100.0 ms") != std::string::npos);
     CHECK(f.message.find("sensing.ekf.latency.history_s") != std::string::npos);
   }
@@ -360,29 +362,29 @@ TEST_CASE("lockstep participant: a tick that overtakes RUN_CONTROL start is hand
   transport::Bus& bus = controller.node().bus();
   std::vector<actuator_command_t> commands;
   std::vector<int64_t> acked_steps;
-  bus.subscribe<actuator_command_t>("ACTUATOR_CMD", [&](const actuator_command_t& m) { commands.push_back(m); });
+  bus.subscribe<actuator_command_t>(kActuatorCommand, [&](const actuator_command_t& m) { commands.push_back(m); });
   truth_state_t t{};
   t.quaternion_wxyz[0] = 1.0;
   rig_clock_t c{};
   c.dt_ns = 1000000;
   c.run_id = "test";
-  bus.subscribe<step_ack_t>("STEP_ACK", [&](const step_ack_t& ack) {
+  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
     acked_steps.push_back(ack.step);
     if (acked_steps.size() == 1) {
-      bus.publish("RIG_CLOCK", c);  // the same tick again, as the master sends it
+      bus.publish(kRigClock, c);  // the same tick again, as the master sends it
     } else {
-      bus.publish("RUN_CONTROL", stop_command());
+      bus.publish(kRunControl, stop_command());
     }
   });
   // When the participant says READY it listens for the clock but has not seen the start:
   // the tick goes out first, then the start.
   bool started = false;
-  bus.subscribe<heartbeat_t>("HEARTBEAT", [&](const heartbeat_t& m) {
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
     if (m.state != heartbeat_t::STATE_READY || started) return;
     started = true;
-    bus.publish("TRUTH", t);
-    bus.publish("RIG_CLOCK", c);
-    bus.publish("RUN_CONTROL", start_lockstep(1.0, {"controller"}));
+    bus.publish(kTruth, t);
+    bus.publish(kRigClock, c);
+    bus.publish(kRunControl, start_lockstep(1.0, {"controller"}));
   });
   REQUIRE(controller.run() == transport::kExitOk);
   CHECK(acked_steps == std::vector<int64_t>{0, 0});

@@ -15,11 +15,13 @@
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
+#include "contract/channels.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"
 
 using namespace nimble;
 using namespace nimble::ident;
+using namespace nimble::contract::channels;
 
 namespace {
 
@@ -65,7 +67,7 @@ LockstepLog write_lockstep_log(const std::string& file, double duration_s) {
     tr.omega_body_radps[0] = p_of(t);
     tr.velocity_body_mps[1] = v_of(t);
     tr.euler_rad[0] = phi_of(t);
-    write(log, "TRUTH", tr, us);
+    write(log, kTruth, tr, us);
   }
   // IMU samples at the first plant step at or after each 512 Hz instant.
   std::vector<int64_t> imu;
@@ -88,7 +90,7 @@ LockstepLog write_lockstep_log(const std::string& file, double duration_s) {
     e.omega_body_radps[0] = p_of(ti);
     e.velocity_body_mps[1] = v_of(ti);
     e.euler_rad[0] = phi_of(ti);
-    write(log, "ESTIMATE", e, tick);
+    write(log, kEstimate, e, tick);
     out.utimes.push_back(tick);
     out.imu_utimes.push_back(newest);
   }
@@ -96,7 +98,7 @@ LockstepLog write_lockstep_log(const std::string& file, double duration_s) {
     actuator_feedback_t fb{};
     fb.utime = us;
     fb.delta_f_radps = 40.0 * p_of(static_cast<double>(us) * 1e-6);
-    write(log, "ACTUATOR_FB", fb, us);
+    write(log, kActuatorFeedback, fb, us);
   }
   return out;
 }
@@ -159,15 +161,15 @@ TEST_CASE("a repeated estimate time keeps the newest estimate of that instant", 
       e.utime = 2000 * k + 1500;
       e.imu_utime = 2000 * k;
       e.omega_body_radps[0] = k;
-      write(log, "ESTIMATE", e, e.utime);
+      write(log, kEstimate, e, e.utime);
       if (k == 1) {  // a pose update of the same instant, published again
         e.utime += 300;
         e.omega_body_radps[0] = 10.0;
-        write(log, "ESTIMATE", e, e.utime);
+        write(log, kEstimate, e, e.utime);
       }
       actuator_feedback_t fb{};
       fb.utime = 2000 * k;
-      write(log, "ACTUATOR_FB", fb, fb.utime);
+      write(log, kActuatorFeedback, fb, fb.utime);
     }
   }
   const RigLogData d = read_rig_log(file, StateSource::kEstimate);

@@ -15,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "contract/channels.h"
 #include "run_rig.h"
 
 namespace nimble::test {
@@ -56,7 +57,7 @@ inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_p
   REQUIRE(log.good());
   std::vector<std::vector<uint8_t>> out;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == "TRUTH") {
+    if (ev->channel == contract::channels::kTruth) {
       const auto* b = static_cast<const uint8_t*>(ev->data);
       out.emplace_back(b, b + ev->datalen);
     }

@@ -28,9 +28,12 @@
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "contract/channels.h"
+
 #include "../support/rig_runs.h"
 
 namespace fs = std::filesystem;
+using namespace nimble::contract::channels;
 
 namespace {
 
@@ -49,7 +52,7 @@ std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_d
 /// TRUTH of a log by its time stamp [us].
 std::map<int64_t, nimble::truth_state_t> truth_by_utime(const std::string& log_path) {
   std::map<int64_t, nimble::truth_state_t> truth;
-  for (const auto& t : decode_channel<nimble::truth_state_t>(log_path, "TRUTH")) truth[t.utime] = t;
+  for (const auto& t : decode_channel<nimble::truth_state_t>(log_path, kTruth)) truth[t.utime] = t;
   return truth;
 }
 
@@ -145,8 +148,8 @@ TEST_CASE("identification doublet train in lockstep: controlled, back to hover, 
   CHECK(phi > 0.89 / 2);
   CHECK(phi < 0.89 * 2);
   // Every stream channel at its rate in simulated time, nothing dropped.
-  for (const char* ch : {"TRUTH", "ACTUATOR_CMD", "ACTUATOR_FB", "ATTITUDE_SP", "CONTROLLER_STATUS", "RIG_CLOCK",
-                         "STEP_ACK", "IMU", "MOCAP_POSE", "ESTIMATE"}) {
+  for (const std::string& ch : {kTruth, kActuatorCommand, kActuatorFeedback, kAttitudeSetpoint, kControllerStatus,
+                                kRigClock, kStepAck, kImu, kMocapPose, kEstimate}) {
     INFO(ch);
     const YAML::Node c = s["channels"][ch];
     REQUIRE(c);
@@ -156,8 +159,8 @@ TEST_CASE("identification doublet train in lockstep: controlled, back to hover, 
   }
   // The log replays: TRUTH at 1 kHz for 6 s.
   const auto counts = channel_counts(dir + "/run.lcmlog");
-  CHECK(counts.at("TRUTH") == 6001);
-  CHECK(counts.at("ACTUATOR_CMD") == 3072);
+  CHECK(counts.at(kTruth) == 6001);
+  CHECK(counts.at(kActuatorCommand) == 3072);
   // The resolved scenario is kept next to the log.
   CHECK(fs::exists(dir + "/run.lcmlog.scenario.yaml"));
 }
@@ -191,7 +194,7 @@ TEST_CASE("a short real-time run holds its rates", "[system]") {
   REQUIRE(r.exit_code == 0);
   const double wall = r.summary["wall_time_s"].as<double>();
   CHECK(wall == Approx(2.0).margin(0.3));
-  for (const char* ch : {"TRUTH", "ACTUATOR_CMD", "ACTUATOR_FB"}) {
+  for (const std::string& ch : {kTruth, kActuatorCommand, kActuatorFeedback}) {
     INFO(ch);
     const YAML::Node c = r.summary["channels"][ch];
     CHECK(c["rate_hz"].as<double>() == Approx(c["expected_hz"].as<double>()).epsilon(0.02));
@@ -248,7 +251,7 @@ TEST_CASE("command timeout: the plant holds the safe state and reports it", "[sy
   CHECK(code == 0);
   bool timeout_fault = false, resumed = false, safe_feedback = false;
   const std::string log = dir + "/run.lcmlog";
-  for (const auto& f : decode_channel<nimble::fault_event_t>(log, "FAULT")) {
+  for (const auto& f : decode_channel<nimble::fault_event_t>(log, kFault)) {
     if (f.code == nimble::fault_event_t::CODE_COMMAND_TIMEOUT && f.process == "plant") {
       if (f.message.find("safe state") != std::string::npos && f.severity == nimble::fault_event_t::SEVERITY_ERROR) {
         timeout_fault = true;
@@ -256,7 +259,7 @@ TEST_CASE("command timeout: the plant holds the safe state and reports it", "[sy
       if (f.message.find("resumed") != std::string::npos) resumed = true;
     }
   }
-  for (const auto& fb : decode_channel<nimble::actuator_feedback_t>(log, "ACTUATOR_FB")) {
+  for (const auto& fb : decode_channel<nimble::actuator_feedback_t>(log, kActuatorFeedback)) {
     safe_feedback = safe_feedback || fb.safe_state;
   }
   CHECK(timeout_fault);
@@ -340,11 +343,11 @@ TEST_CASE("the plant's IMU stream: 512 Hz, seeded, noisy around the truth", "[sy
   const std::string dir = scratch_dir("imu");
   const RunResult r = rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4");
   REQUIRE(r.exit_code == 0);
-  CHECK(r.summary["channels"]["IMU"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
-  CHECK(r.summary["channels"]["IMU"]["drops"].as<int>() == 0);
+  CHECK(r.summary["channels"][kImu]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
+  CHECK(r.summary["channels"][kImu]["drops"].as<int>() == 0);
   // Each IMU sample is taken from the truth of the plant step at its time stamp.
   const std::map<int64_t, nimble::truth_state_t> truth = truth_by_utime(dir + "/run.lcmlog");
-  const auto imu = decode_channel<nimble::imu_sample_t>(dir + "/run.lcmlog", "IMU");
+  const auto imu = decode_channel<nimble::imu_sample_t>(dir + "/run.lcmlog", kImu);
   REQUIRE(imu.size() == 4 * 512 + 1);
   double sum_err = 0, sum_err2 = 0, sum_az = 0;
   for (const auto& s : imu) {
@@ -371,13 +374,13 @@ TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm ma
              "--set run.controller_input=truth");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
-  const YAML::Node c = r.summary["channels"]["MOCAP_POSE"];
+  const YAML::Node c = r.summary["channels"][kMocapPose];
   CHECK(c["rate_hz"].as<double>() == Approx(200.0).epsilon(0.02));
   CHECK(c["drops"].as<int>() == 0);
-  CHECK(r.summary["channels"]["RIG_CLOCK"]["rate_hz"].as<double>() ==
-        Approx(r.summary["channels"]["RIG_CLOCK"]["expected_hz"].as<double>()).epsilon(0.01));
+  CHECK(r.summary["channels"][kRigClock]["rate_hz"].as<double>() ==
+        Approx(r.summary["channels"][kRigClock]["expected_hz"].as<double>()).epsilon(0.01));
   const std::map<int64_t, nimble::truth_state_t> truth = truth_by_utime(dir + "/run.lcmlog");
-  const auto poses = decode_channel<nimble::mocap_pose_t>(dir + "/run.lcmlog", "MOCAP_POSE");
+  const auto poses = decode_channel<nimble::mocap_pose_t>(dir + "/run.lcmlog", kMocapPose);
   REQUIRE(poses.size() > 700);
   double error_sum = 0;
   int valid = 0;
@@ -428,11 +431,11 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
     INFO(key);
     CHECK(e[key].as<int>() == 0);
   }
-  CHECK(ra.summary["channels"]["ESTIMATE"]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
+  CHECK(ra.summary["channels"][kEstimate]["rate_hz"].as<double>() == Approx(512.0).epsilon(0.01));
   // The controller flew on estimates.
   {
     int estimate_inputs = 0;
-    for (const auto& st : decode_channel<nimble::controller_status_t>(a + "/run.lcmlog", "CONTROLLER_STATUS")) {
+    for (const auto& st : decode_channel<nimble::controller_status_t>(a + "/run.lcmlog", kControllerStatus)) {
       estimate_inputs += st.input_source == nimble::controller_status_t::INPUT_ESTIMATE;
     }
     CHECK(estimate_inputs == 3072);
@@ -461,7 +464,7 @@ TEST_CASE("the coupled doublet: pitch 20 deg nose down (forward flight) and a 6 
   // Nose down and forward through the forward-flight hold (1.2 to 2.0 s of the manoeuvre).
   double theta_sum = 0.0, u_end = 0.0;
   int n = 0;
-  for (const auto& t : decode_channel<nimble::truth_state_t>(dir + "/run.lcmlog", "TRUTH")) {
+  for (const auto& t : decode_channel<nimble::truth_state_t>(dir + "/run.lcmlog", kTruth)) {
     const double time_s = 1e-6 * static_cast<double>(t.utime);
     if (time_s < 1.2 || time_s > 2.0) continue;
     theta_sum += t.euler_rad[1];

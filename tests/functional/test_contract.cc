@@ -1,0 +1,114 @@
+// Functional test of the message contract's owner (contract/): the channel table names every
+// channel once with its real LCM type, and the nominal rates follow the configured ones.
+#include <set>
+#include <string>
+
+#include <catch2/catch.hpp>
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/can_health_t.hpp>
+#include <nimble/controller_status_t.hpp>
+#include <nimble/estimator_state_t.hpp>
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
+#include <nimble/rig_clock_t.hpp>
+#include <nimble/run_control_t.hpp>
+#include <nimble/step_ack_t.hpp>
+#include <nimble/timing_health_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+#include "contract/channels.h"
+#include "contract/rates.h"
+
+using namespace nimble;
+using namespace nimble::contract;
+using namespace nimble::contract::channels;
+
+namespace {
+
+template <typename... T>
+std::set<std::string> type_names() {
+  return {T::getTypeName()...};
+}
+
+}  // namespace
+
+TEST_CASE("the channel table names every channel once, with a generated LCM type", "[contract]") {
+  const std::set<std::string> types =
+      type_names<truth_state_t, imu_sample_t, mocap_pose_t, attitude_setpoint_t, estimator_state_t, actuator_command_t,
+                 actuator_feedback_t, can_health_t, controller_status_t, rig_clock_t, step_ack_t, run_control_t,
+                 heartbeat_t, timing_health_t, fault_event_t>();
+  const std::set<std::string> constants = {kTruth,       kImu,           kMocapPose,          kAttitudeSetpoint,
+                                           kEstimate,    kActuatorCommand, kActuatorFeedback, kActuatorCommandCan,
+                                           kActuatorFeedbackCan, kCanHealth, kControllerStatus, kRigClock,
+                                           kStepAck,     kRunControl,    kHeartbeat,          kTimingHealth,
+                                           kFault};
+  std::set<std::string> names;
+  for (const ChannelSpec& c : channel_table()) {
+    INFO(c.name);
+    CHECK(names.insert(c.name).second);
+    CHECK(constants.count(c.name) == 1);
+    CHECK(types.count(c.type) == 1);
+    CHECK_FALSE(c.publishers.empty());
+    CHECK_FALSE(c.rate.empty());
+    REQUIRE(find_channel(c.name) == &c);
+  }
+  CHECK(names == constants);
+  CHECK(find_channel("NO_SUCH_CHANNEL") == nullptr);
+  CHECK(find_channel(kTruth)->type == truth_state_t::getTypeName());
+  CHECK(find_channel(kFault)->type == fault_event_t::getTypeName());
+}
+
+TEST_CASE("channel names on the wire", "[contract]") {
+  // Logs and lcm-spy sessions name channels by these strings: they must not change.
+  CHECK(kTruth == "TRUTH");
+  CHECK(kActuatorCommand == "ACTUATOR_CMD");
+  CHECK(kActuatorCommandCan == "ACTUATOR_CMD_CAN");
+  CHECK(kAttitudeSetpoint == "ATTITUDE_SP");
+  CHECK(plant_command_channel(false) == "ACTUATOR_CMD");
+  CHECK(plant_command_channel(true) == "ACTUATOR_CMD_CAN");
+  CHECK(wall_clock_channels() ==
+        std::vector<std::string>{"CAN_HEALTH", "RUN_CONTROL", "HEARTBEAT", "TIMING_HEALTH", "FAULT"});
+}
+
+TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
+  ProcessRates r;
+  r.plant_hz = 1000.0;
+  r.truth_hz = 500.0;
+  r.feedback_hz = 100.0;
+  r.imu_hz = 512.0;
+  r.controller_hz = 512.0;
+  r.estimator_hz = 512.0;
+  SECTION("real time, no motion capture, LCM link") {
+    const auto hz = expected_rates(r, RunShape{false, 10.0, 3});
+    CHECK(hz.at(kTruth) == 500.0);
+    CHECK(hz.at(kImu) == 512.0);
+    CHECK(hz.at(kActuatorCommand) == 512.0);
+    CHECK(hz.at(kAttitudeSetpoint) == 512.0);
+    CHECK(hz.at(kControllerStatus) == 512.0);
+    CHECK(hz.at(kEstimate) == 512.0);
+    CHECK(hz.at(kActuatorFeedback) == 100.0);
+    CHECK(hz.at(kHeartbeat) == 6.0);
+    CHECK(hz.at(kTimingHealth) == 3.0);
+    CHECK(hz.count(kMocapPose) == 0);
+    CHECK(hz.count(kActuatorCommandCan) == 0);
+    CHECK(hz.count(kRigClock) == 0);
+    CHECK(hz.count(kFault) == 0);
+  }
+  SECTION("lockstep over the CAN link") {
+    r.estimator_hz = 0.0;
+    r.can_link = true;
+    r.can_health_hz = 2.0;
+    const auto hz = expected_rates(r, RunShape{true, 10.0, 4});
+    CHECK(hz.at(kActuatorCommandCan) == 512.0);
+    CHECK(hz.at(kActuatorFeedbackCan) == 100.0);
+    CHECK(hz.at(kCanHealth) == 4.0);
+    // Controller and both bridge sides are due 512 times each, the logger 100 times.
+    CHECK(hz.at(kStepAck) == 3 * 512 + 100);
+    CHECK(hz.at(kRigClock) >= 512);
+    CHECK(hz.at(kRigClock) <= 612);
+  }
+}
