@@ -8,6 +8,7 @@
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
 #include <nimble/step_ack_t.hpp>
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
@@ -99,13 +100,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     return;
   }
   count_seq(c, "", seq);
+  // A message is due at its utime; a pose is stamped at mid-exposure and due latency_us later.
+  int64_t due_us = utime;
+  if (channel == kMocapPose) {
+    mocap_pose_t pose{};
+    if (!decode(data, size, pose)) { ++c.malformed; return; }
+    due_us += pose.latency_us;
+  }
   if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != kRunControl) {
-    // A pose is stamped at mid-exposure and due latency_us later (int32 at byte offset 32).
-    int64_t due_us = utime;
-    if (channel == kMocapPose && size >= 36) {
-      const auto* b = static_cast<const uint8_t*>(data) + 32;
-      due_us += static_cast<int32_t>((uint32_t{b[0]} << 24) | (uint32_t{b[1]} << 16) | (uint32_t{b[2]} << 8) | b[3]);
-    }
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }

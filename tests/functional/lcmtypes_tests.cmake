@@ -38,3 +38,8 @@ add_executable(test_contract ${CMAKE_CURRENT_LIST_DIR}/test_contract.cc)
 target_link_libraries(test_contract PRIVATE rig_catch_main nimble_contract nimble_lcmtypes)
 target_compile_definitions(test_contract PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 rig_discover_tests(test_contract PREFIX "functional.contract." LABELS functional)
+
+# The launcher's run monitor reading the contract's messages (lateness of poses, drops, malformed).
+add_executable(test_run_monitor ${CMAKE_CURRENT_LIST_DIR}/test_run_monitor.cc)
+target_link_libraries(test_run_monitor PRIVATE rig_catch_main nimble_launcher)
+rig_discover_tests(test_run_monitor PREFIX "functional.monitor." LABELS functional)
