@@ -30,7 +30,9 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   const ProcessRunOptions run = process_run_options(scenario);
   const std::string rt_problem = transport::apply_realtime_priority(run.realtime_priority);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
-  if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
+  if (!rt_problem.empty()) {
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
+  }
   node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
@@ -90,7 +92,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   const int64_t input_age_us = have_input_ ? utime - input_.utime : -1;
   if (have_input_ && input_age_us > static_cast<int64_t>(input_stale_s_ * 1e6) && !stale_reported_) {
     stale_reported_ = true;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER,
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_INPUT_STALE,
                  use_estimate_ ? contract::channels::kEstimate : kTruth,
                  "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
   }

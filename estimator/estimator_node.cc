@@ -96,7 +96,8 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
         << "the history of " << 1e3 * ekf_->config().history_s << " ms ahead (" << c.measurements_too_new
         << " so far); the IMU stream is late or the two clocks differ";
   }
-  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, contract::channels::kMocapPose, msg.str());
+  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW,
+               contract::channels::kMocapPose, msg.str());
 }
 
 void EstimatorNode::tick(int64_t sim_time_ns) {

@@ -67,7 +67,9 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
 
   const std::string rt_problem = transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
   node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
-  if (!rt_problem.empty()) node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, "", rt_problem);
+  if (!rt_problem.empty()) {
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
+  }
   node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
@@ -111,7 +113,7 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
   command_.wing_root_rad = quantize(clamp(cmd.wing_root_rad, -kMaxServoRad, kMaxServoRad, clamped), rs);
   if (clamped) {
     ++commands_clamped_;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_OTHER, command_channel_,
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_COMMAND_CLAMPED, command_channel_,
                  "clamped actuator command seq " + std::to_string(cmd.seq) + " to the actuator range");
   }
   if (cmd.input_utime >= 0) {

@@ -758,4 +758,8 @@ TEST_CASE("enumeration constants have their documented values", "[lcmtypes]") {
   CHECK(fault_event_t::CODE_HEARTBEAT_LOST == 9);
   CHECK(fault_event_t::CODE_STEP_ACK_TIMEOUT == 10);
   CHECK(fault_event_t::CODE_TRACKING_LOST == 11);
+  CHECK(fault_event_t::CODE_REALTIME_UNAVAILABLE == 12);
+  CHECK(fault_event_t::CODE_COMMAND_CLAMPED == 13);
+  CHECK(fault_event_t::CODE_INPUT_STALE == 14);
+  CHECK(fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW == 15);
 }

@@ -344,6 +344,7 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
     ++dropped;
     INFO(f.message);
     CHECK(f.severity == fault_event_t::SEVERITY_WARNING);
+    CHECK(f.code == fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW);
     CHECK(f.channel == kMocapPose);
     CHECK(f.message.find("older than the rollback history of 100.0 ms") != std::string::npos);
     CHECK(f.message.find("sensing.ekf.latency.history_s") != std::string::npos);
