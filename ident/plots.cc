@@ -12,15 +12,6 @@
 namespace nimble::ident {
 namespace {
 
-namespace fs = std::filesystem;
-
-/// Single-quoted gnuplot string ('' escapes a quote).
-std::string gp_quote(const std::string& s) {
-  std::string out = "'";
-  for (const char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
 /// Single-quoted shell word.
 std::string sh_quote(const std::string& s) {
   std::string out = "'";
@@ -28,27 +19,7 @@ std::string sh_quote(const std::string& s) {
   return out + "'";
 }
 
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
-/// Runs gnuplot on `script` (in `dir`); the log goes to <script>.log.
-void run_gnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
-  const fs::path gp = dir / (name + ".gp");
-  const fs::path log = dir / (name + ".log");
-  write_text(gp, script);
-  const std::string cmd = "gnuplot " + sh_quote(gp.string()) + " >" + sh_quote(log.string()) + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  if (status != 0) {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
-  }
-}
+namespace fs = std::filesystem;
 
 std::string terminal(int width, int height) {
   return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
@@ -214,6 +185,34 @@ fs::path make_dir(const std::string& dir) {
 }
 
 }  // namespace
+
+std::string gp_quote(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+void run_gnuplot(const std::filesystem::path& dir, const std::string& name, const std::string& script) {
+  const fs::path gp = dir / (name + ".gp");
+  const fs::path log = dir / (name + ".log");
+  write_text(gp, script);
+  const std::string cmd = "gnuplot " + sh_quote(gp.string()) + " >" + sh_quote(log.string()) + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  if (status != 0) {
+    std::ifstream in(log);
+    std::ostringstream text;
+    text << in.rdbuf();
+    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
+  }
+}
+
 
 bool gnuplot_available() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
 

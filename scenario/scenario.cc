@@ -10,21 +10,26 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::set<std::string> kPathKeys = {"model", "longitudinal_model", "vehicle", "manoeuvre", "base"};
+/// Keys whose values are file paths, relative to the file that sets them: the scenario's own
+/// top-level files, and `base:` at any depth. A section key that happens to share one of the
+/// top-level names (a plant option called `model`, say) is a value, not a path.
+const std::set<std::string> kTopLevelPathKeys = {"model", "longitudinal_model", "vehicle", "manoeuvre", "base"};
 
-void absolutise_paths(YAML::Node node, const fs::path& dir) {
+/// Makes the path values of `node` absolute against `dir`; `top_level`: node is a scenario root.
+void absolutise_paths(YAML::Node node, const fs::path& dir, bool top_level) {
   if (node.IsMap()) {
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string key = it->first.as<std::string>();
-      if (kPathKeys.count(key) && it->second.IsScalar()) {
+      const bool path_key = key == "base" || (top_level && kTopLevelPathKeys.count(key));
+      if (path_key && it->second.IsScalar()) {
         const fs::path p(it->second.Scalar());
         if (!p.empty() && p.is_relative()) it->second = (dir / p).lexically_normal().string();
       } else {
-        absolutise_paths(it->second, dir);
+        absolutise_paths(it->second, dir, false);
       }
     }
   } else if (node.IsSequence()) {
-    for (auto item : node) absolutise_paths(item, dir);
+    for (auto item : node) absolutise_paths(item, dir, false);
   }
 }
 
@@ -49,21 +54,22 @@ YAML::Node merge(const YAML::Node& under, const YAML::Node& over) {
 }
 
 /// Replaces every mapping that has `base:` by base merged with the mapping.
-YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path, int depth) {
+/// Resolves `base:` files in `node` (at `path` of `file`); `at_root`: node is the scenario root.
+YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path, int depth, bool at_root) {
   if (depth > 16) throw ConfigError(file, path, "", "base files nest too deeply (a cycle?)");
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
     if (out["base"]) {
       const std::string base_file = out["base"].as<std::string>();
       YAML::Node base = load_yaml(base_file, path.empty() ? "base" : path + ".base");
-      absolutise_paths(base, fs::absolute(base_file).parent_path());
-      base = resolve_bases(base, base_file, "", depth + 1);
+      absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);
+      base = resolve_bases(base, base_file, "", depth + 1, at_root);
       out.remove("base");
       out = merge(base, out);
     }
     for (auto it = out.begin(); it != out.end(); ++it) {
       const std::string key = it->first.as<std::string>();
-      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, depth);
+      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, depth, false);
     }
     return out;
   }
@@ -83,8 +89,8 @@ Override parse_override(const std::string& text) {
 YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides) {
   YAML::Node root = load_yaml(file, "");
   if (!root.IsMap()) throw ConfigError(file, "", "", "a scenario must be a YAML mapping");
-  absolutise_paths(root, fs::absolute(file).parent_path());
-  root = resolve_bases(root, file, "", 0);
+  absolutise_paths(root, fs::absolute(file).parent_path(), true);
+  root = resolve_bases(root, file, "", 0, true);
   for (const auto& o : overrides) {
     YAML::Node value;
     try {
@@ -118,8 +124,10 @@ YAML::Node load_scenario_tree(const std::string& file, const std::vector<Overrid
 }
 
 const std::vector<std::string>& scenario_section_keys() {
-  static const std::vector<std::string> keys = {"plant", "controller", "sensing", "imu", "mocap",
-                                                "estimator", "can_bridge", "lockstep", "run", "summary"};
+  // The IMU, motion-capture and EKF settings live under sensing (sensing.imu, sensing.mocap,
+  // sensing.ekf): a top-level imu, mocap or estimator section would be read by nobody.
+  static const std::vector<std::string> keys = {"plant",    "controller", "sensing", "can_bridge",
+                                                "lockstep", "run",        "summary"};
   return keys;
 }
 
