@@ -14,7 +14,7 @@ const std::string kIdent = "`rig ident` (from the run log)";
 const std::vector<ChannelSpec>& channel_table() {
   static const std::vector<ChannelSpec> table = {
       {kTruth, "truth_state_t", "`plant.truth_rate_hz` (default 1 kHz)", {"plant"},
-       {"mocap", "controller (`controller_input: truth`)", "launcher", kIdent}},
+       {"mocap", "controller (`run.controller_input: truth`)", "launcher", kIdent}},
       {kImu, "imu_sample_t", "`sensing.imu.sample_rate_hz` (default 512 Hz)", {"plant (emulated onboard IMU)"},
        {"estimator", kIdent}},
       {kMocapPose, "mocap_pose_t", "`sensing.mocap.frame_rate_hz` (default 200 Hz)", {"mocap"},
@@ -22,7 +22,7 @@ const std::vector<ChannelSpec>& channel_table() {
       {kAttitudeSetpoint, "attitude_setpoint_t", "`controller.rate_hz` (default 512 Hz)",
        {"controller (manoeuvre player)"}, {kIdent}},
       {kEstimate, "estimator_state_t", "one per IMU sample", {"estimator"},
-       {"controller (`controller_input: estimate`)", "launcher", kIdent}},
+       {"controller (`run.controller_input: estimate`)", "launcher", kIdent}},
       {kActuatorCommand, "actuator_command_t", "`controller.rate_hz` (one per control cycle)", {"controller"},
        {"plant (`actuator_link: lcm`)", "can_flight (`actuator_link: can`)", kIdent}},
       {kActuatorCommandCan, "actuator_command_t", "`controller.rate_hz`",

@@ -1,7 +1,13 @@
 // Functional test of the message contract's owner (contract/): the channel table names every
-// channel once with its real LCM type, and the nominal rates follow the configured ones.
+// channel once with its real LCM type, lcmtypes/README.md shows the same table, and the nominal
+// rates follow the configured ones.
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <set>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 #include <nimble/actuator_command_t.hpp>
@@ -34,6 +40,28 @@ std::set<std::string> type_names() {
   return {T::getTypeName()...};
 }
 
+/// The rows of the table under `## Channels` in lcmtypes/README.md (without header and rule).
+std::vector<std::string> readme_channel_rows() {
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/lcmtypes/README.md");
+  REQUIRE(in.good());
+  std::vector<std::string> rows;
+  bool in_section = false;
+  int table_lines = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("## ", 0) == 0) {
+      in_section = line == "## Channels";
+      continue;
+    }
+    if (!in_section) continue;
+    if (line.rfind("|", 0) != 0) {
+      if (table_lines > 0) break;  // the end of the table
+      continue;
+    }
+    if (++table_lines > 2) rows.push_back(line);  // past the header row and the |---| rule
+  }
+  return rows;
+}
+
 }  // namespace
 
 TEST_CASE("the channel table names every channel once, with a generated LCM type", "[contract]") {
@@ -62,6 +90,46 @@ TEST_CASE("the channel table names every channel once, with a generated LCM type
   CHECK(find_channel(kFault)->type == fault_event_t::getTypeName());
 }
 
+TEST_CASE("lcmtypes/README.md shows the contract's channel table", "[contract]") {
+  // On a difference, the expected table is printed: paste it into the README.
+  std::ostringstream expected;
+  for (const ChannelSpec& c : channel_table()) expected << markdown_row(c) << "\n";
+  INFO("expected rows of the channel table in lcmtypes/README.md:\n" << expected.str());
+  const std::vector<std::string> rows = readme_channel_rows();
+  REQUIRE(rows.size() == channel_table().size());
+  for (std::size_t i = 0; i < rows.size(); ++i) CHECK(rows[i] == markdown_row(channel_table()[i]));
+}
+
+TEST_CASE("C++ code spells channel names only in contract/channels.h", "[contract]") {
+  // Anything else names a channel through contract::channels. This file, which pins the names
+  // on the wire, is the one exception.
+  namespace fs = std::filesystem;
+  const fs::path root(RIG_SOURCE_DIR);
+  std::vector<std::string> literals;
+  for (const ChannelSpec& c : channel_table()) literals.push_back('"' + c.name + '"');
+  std::vector<std::string> found;
+  for (auto it = fs::recursive_directory_iterator(root); it != fs::recursive_directory_iterator(); ++it) {
+    const fs::path rel = fs::relative(it->path(), root);
+    const std::string top = rel.begin()->string();
+    if (it->is_directory() && it.depth() == 0 && (top == "contract" || top.rfind("build", 0) == 0 || top[0] == '.')) {
+      it.disable_recursion_pending();
+      continue;
+    }
+    const std::string ext = it->path().extension().string();
+    if (!it->is_regular_file() || (ext != ".cc" && ext != ".h") || rel == "tests/functional/test_contract.cc") continue;
+    std::ifstream in(it->path());
+    int number = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++number;
+      for (const auto& l : literals) {
+        if (line.find(l) != std::string::npos) found.push_back(rel.string() + ":" + std::to_string(number) + ": " + l);
+      }
+    }
+  }
+  for (const auto& f : found) UNSCOPED_INFO(f);
+  CHECK(found.empty());
+}
+
 TEST_CASE("channel names on the wire", "[contract]") {
   // Logs and lcm-spy sessions name channels by these strings: they must not change.
   CHECK(kTruth == "TRUTH");
@@ -83,20 +151,11 @@ TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
   r.controller_hz = 512.0;
   r.estimator_hz = 512.0;
   SECTION("real time, no motion capture, LCM link") {
-    const auto hz = expected_rates(r, RunShape{false, 10.0, 3});
-    CHECK(hz.at(kTruth) == 500.0);
-    CHECK(hz.at(kImu) == 512.0);
-    CHECK(hz.at(kActuatorCommand) == 512.0);
-    CHECK(hz.at(kAttitudeSetpoint) == 512.0);
-    CHECK(hz.at(kControllerStatus) == 512.0);
-    CHECK(hz.at(kEstimate) == 512.0);
-    CHECK(hz.at(kActuatorFeedback) == 100.0);
-    CHECK(hz.at(kHeartbeat) == 6.0);
-    CHECK(hz.at(kTimingHealth) == 3.0);
-    CHECK(hz.count(kMocapPose) == 0);
-    CHECK(hz.count(kActuatorCommandCan) == 0);
-    CHECK(hz.count(kRigClock) == 0);
-    CHECK(hz.count(kFault) == 0);
+    const std::map<std::string, double> expected = {
+        {kTruth, 500.0},           {kImu, 512.0},         {kActuatorCommand, 512.0}, {kAttitudeSetpoint, 512.0},
+        {kControllerStatus, 512.0}, {kEstimate, 512.0},   {kActuatorFeedback, 100.0}, {kHeartbeat, 6.0},
+        {kTimingHealth, 3.0}};
+    CHECK(expected_rates(r, RunShape{false, 10.0, 3}) == expected);
   }
   SECTION("lockstep over the CAN link") {
     r.estimator_hz = 0.0;
