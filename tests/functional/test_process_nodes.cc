@@ -54,6 +54,24 @@ run_control_t stop_command() {
   return m;
 }
 
+/// What the plant node publishes, collected from `bus`; its FINISHED heartbeat stops the run.
+struct PlantOutputs {
+  explicit PlantOutputs(transport::Bus& bus) {
+    bus.subscribe<truth_state_t>(kTruth, [this](const truth_state_t& m) { truth.push_back(m); });
+    bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [this](const actuator_feedback_t& m) { feedback.push_back(m); });
+    bus.subscribe<fault_event_t>(kFault, [this](const fault_event_t& m) { faults.push_back(m); });
+    bus.subscribe<heartbeat_t>(kHeartbeat, [&bus](const heartbeat_t& m) {
+      if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
+    });
+  }
+  PlantOutputs(const PlantOutputs&) = delete;
+  PlantOutputs& operator=(const PlantOutputs&) = delete;
+
+  std::vector<truth_state_t> truth;
+  std::vector<actuator_feedback_t> feedback;
+  std::vector<fault_event_t> faults;
+};
+
 }  // namespace
 
 TEST_CASE("plant node: steps in lockstep on a participant's acks, applies commands, reports faults",
@@ -62,16 +80,11 @@ TEST_CASE("plant node: steps in lockstep on a participant's acks, applies comman
   plant::PlantNode plant(scenario, {"plant", "", "memq://"});
   transport::Bus& bus = plant.node().bus();
 
-  std::vector<truth_state_t> truth;
-  std::vector<actuator_feedback_t> feedback;
-  std::vector<fault_event_t> faults;
+  PlantOutputs out(bus);
+  std::vector<truth_state_t>& truth = out.truth;
+  std::vector<actuator_feedback_t>& feedback = out.feedback;
+  std::vector<fault_event_t>& faults = out.faults;
   int ticks = 0;
-  bus.subscribe<truth_state_t>(kTruth, [&](const truth_state_t& m) { truth.push_back(m); });
-  bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [&](const actuator_feedback_t& m) { feedback.push_back(m); });
-  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& m) { faults.push_back(m); });
-  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
-  });
   // The test is the participant "controller": it answers every tick with a command
   // (delta_f = +20 rad/s) and an acknowledgement, and sends bad commands at step 10 and 11.
   bus.subscribe<rig_clock_t>(kRigClock, [&](const rig_clock_t& tick) {
@@ -132,15 +145,10 @@ TEST_CASE("plant node: commands stop, safe state held and reported", "[plant][pr
   const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
   plant::PlantNode plant(scenario, {"plant", "", "memq://"});
   transport::Bus& bus = plant.node().bus();
-  std::vector<actuator_feedback_t> feedback;
-  std::vector<fault_event_t> faults;
-  std::vector<truth_state_t> truth;
-  bus.subscribe<truth_state_t>(kTruth, [&](const truth_state_t& m) { truth.push_back(m); });
-  bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [&](const actuator_feedback_t& m) { feedback.push_back(m); });
-  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& m) { faults.push_back(m); });
-  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
-  });
+  PlantOutputs out(bus);
+  std::vector<truth_state_t>& truth = out.truth;
+  std::vector<actuator_feedback_t>& feedback = out.feedback;
+  std::vector<fault_event_t>& faults = out.faults;
   // Commands with delta_f = 30 rad/s for the first 50 ms only; acknowledgements always.
   bus.subscribe<rig_clock_t>(kRigClock, [&](const rig_clock_t& tick) {
     if (tick.sim_time_ns < 50000000) {
