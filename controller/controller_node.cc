@@ -41,8 +41,7 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
     node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& e) {
       const Input in{e.utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
       if (node_->lockstep()) {
-        pending_.push_back(in);  // used from the next tick on (see cycle)
-        if (pending_.size() > 8) pending_.pop_front();
+        estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
       } else {
         input_ = in;
         have_input_ = true;
@@ -72,12 +71,9 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   // Lockstep on estimates: an estimate published at an earlier tick (its utime is the tick
   // time) is used; one published at this very tick waits for the next cycle.
   if (use_estimate_ && node_->lockstep()) {
-    for (auto it = pending_.rbegin(); it != pending_.rend(); ++it) {
-      if (it->utime < utime) {
-        input_ = *it;
-        have_input_ = true;
-        break;
-      }
+    if (const Input* latched = estimates_.newest(utime)) {
+      input_ = *latched;
+      have_input_ = true;
     }
   }
   ControllerInput in;

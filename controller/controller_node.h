@@ -14,7 +14,6 @@
 /// Each control cycle uses the newest TRUTH; an input older than input_stale_s is
 /// reported once as a FAULT and the controller keeps flying on it.
 
-#include <deque>
 #include <memory>
 
 #include <nimble/estimator_state_t.hpp>
@@ -23,6 +22,7 @@
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "scenario/scenario.h"
+#include "transport/latched_input.h"
 #include "transport/node.h"
 
 namespace nimble {
@@ -48,9 +48,9 @@ class ControllerNode {
     double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0;
   };
   Input input_{};
-  /// Lockstep with estimates: the newest few estimates; a cycle uses the newest one published
-  /// at an earlier tick, whatever arrived meanwhile.
-  std::deque<Input> pending_;
+  /// Estimates received (stamped with their tick): a lockstep cycle uses the newest one
+  /// published at an earlier tick, whatever arrived meanwhile.
+  transport::LatchedInput<Input> estimates_{transport::LatchedInput<Input>::Release::kAfterStamp, 8};
   bool use_estimate_ = false;
   bool have_input_ = false;
   bool stale_reported_ = false;

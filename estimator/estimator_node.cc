@@ -30,7 +30,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     s.temperature_degc = m.temperature_degc;
     s.saturation_flags = static_cast<std::uint8_t>(m.saturation_flags);
     if (node_->lockstep()) {
-      imu_inbox_.push_back(s);
+      imu_inbox_.push(s.utime, s);
     } else {
       apply_imu(s);
       publish(s.utime);
@@ -52,7 +52,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     p.mean_marker_error_m = m.mean_marker_error_m;
     p.num_markers = m.num_markers;
     p.publish_utime = m.utime + m.latency_us;
-    if (node_->lockstep()) pose_inbox_.push_back(p);
+    if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
     else apply_pose(p);
   });
   // Lockstep ticks only: in real time the work happens as the inputs arrive.
@@ -105,15 +105,15 @@ void EstimatorNode::tick(int64_t sim_time_ns) {
   const int64_t now_us = sim_time_ns / 1000;
   // Inputs available before this tick, in the order they became available.
   for (;;) {
-    const bool imu_ready = !imu_inbox_.empty() && imu_inbox_.front().utime < now_us;
-    const bool pose_ready = !pose_inbox_.empty() && pose_inbox_.front().publish_utime < now_us;
+    const bool imu_ready = imu_inbox_.ready(now_us);
+    const bool pose_ready = pose_inbox_.ready(now_us);
     if (!imu_ready && !pose_ready) break;
-    if (imu_ready && (!pose_ready || imu_inbox_.front().utime <= pose_inbox_.front().publish_utime)) {
+    if (imu_ready && (!pose_ready || imu_inbox_.front_stamp_utime() <= pose_inbox_.front_stamp_utime())) {
       apply_imu(imu_inbox_.front());
-      imu_inbox_.pop_front();
+      imu_inbox_.pop();
     } else {
       apply_pose(pose_inbox_.front());
-      pose_inbox_.pop_front();
+      pose_inbox_.pop();
     }
   }
   publish(now_us);

@@ -18,13 +18,13 @@
 /// applied in time order and one estimate goes out, stamped with the tick time, so that
 /// what the controller sees at a tick does not depend on process timing.
 
-#include <deque>
 #include <memory>
 
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
 #include "scenario/scenario.h"
 #include "sensors/sensor_types.h"
+#include "transport/latched_input.h"
 #include "transport/node.h"
 
 namespace nimble {
@@ -47,8 +47,10 @@ class EstimatorNode {
   std::unique_ptr<AttitudeVelocityEkf> ekf_;
   std::unique_ptr<MocapMeasurementBuilder> builder_;
   std::unique_ptr<transport::ProcessNode> node_;
-  std::deque<ImuSample> imu_inbox_;
-  std::deque<MocapPose> pose_inbox_;
+  /// Lockstep: IMU samples (by their time) and poses (by their publication time) received,
+  /// applied from the first tick after that time.
+  transport::LatchedInput<ImuSample> imu_inbox_;
+  transport::LatchedInput<MocapPose> pose_inbox_;
   int64_t seq_ = 0;
   int64_t poses_missing_ = 0;
   int64_t last_frame_ = -1;

@@ -21,7 +21,7 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
     in.q_body_to_ned =
         Eigen::Quaterniond(t.quaternion_wxyz[0], t.quaternion_wxyz[1], t.quaternion_wxyz[2], t.quaternion_wxyz[3]);
     for (const MocapPose& pose : emulator_->step(in)) {
-      if (node_->lockstep()) outbox_.push_back(pose);
+      if (node_->lockstep()) outbox_.push(pose.publish_utime, pose);
       else publish(pose);
     }
   });
@@ -33,9 +33,7 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
 int MocapNode::run() { return node_->run(); }
 
 void MocapNode::flush(int64_t sim_time_ns) {
-  std::size_t sent = 0;
-  for (; sent < outbox_.size() && outbox_[sent].publish_utime * 1000 <= sim_time_ns; ++sent) publish(outbox_[sent]);
-  outbox_.erase(outbox_.begin(), outbox_.begin() + static_cast<std::ptrdiff_t>(sent));
+  outbox_.drain(sim_time_ns / 1000, [this](const MocapPose& pose) { publish(pose); });
 }
 
 void MocapNode::publish(const MocapPose& pose) {

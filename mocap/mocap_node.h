@@ -16,10 +16,10 @@
 /// tick does not depend on process timing.
 
 #include <memory>
-#include <vector>
 
 #include "sensors/mocap_emulator.h"
 #include "scenario/scenario.h"
+#include "transport/latched_input.h"
 #include "transport/node.h"
 
 namespace nimble {
@@ -37,7 +37,8 @@ class MocapNode {
 
   std::unique_ptr<MocapEmulator> emulator_;
   std::unique_ptr<transport::ProcessNode> node_;
-  std::vector<MocapPose> outbox_;
+  /// Lockstep: frames computed, each going out at the first tick at or after its publication time.
+  transport::LatchedInput<MocapPose> outbox_{transport::LatchedInput<MocapPose>::Release::kAtStamp};
 };
 
 }  // namespace nimble
