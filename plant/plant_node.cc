@@ -15,25 +15,6 @@ namespace {
 using contract::channels::kActuatorFeedback;
 using contract::channels::kTruth;
 
-/// Physical range of a flapping-frequency command [rad/s]: 0 to 40 Hz.
-constexpr double kMaxFlapRadps = 2.0 * M_PI * 40.0;
-/// Physical range of a servo command [rad].
-constexpr double kMaxServoRad = 1.0;
-
-/// `x` rounded to a multiple of `resolution` (unchanged for 0). Computed as the CAN decoder
-/// computes a physical value, raw * factor, so that a value that crossed the CAN link is
-/// left exactly as it is.
-double quantize(double x, double resolution) {
-  if (!(resolution > 0.0)) return x;
-  return static_cast<double>(std::llround(x / resolution)) * resolution;
-}
-
-double clamp(double x, double lo, double hi, bool& clamped) {
-  if (x < lo) { clamped = true; return lo; }
-  if (x > hi) { clamped = true; return hi; }
-  return x;
-}
-
 std::string file_digest(const std::string& text) {
   // FNV-1a 64-bit of the resolved scenario: equal digests mean equal configurations.
   uint64_t h = 1469598103934665603ULL;
@@ -57,7 +38,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   if (!scenario.longitudinal_model_file.empty()) longitudinal = load_model(scenario.longitudinal_model_file);
   const Vehicle vehicle = load_vehicle(scenario.vehicle_file.empty() ? lateral.vehicle_file : scenario.vehicle_file);
   model_ = std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config_);
-  command_ = model_->trim_command();
+  actuators_ = std::make_unique<ActuatorInterface>(config_, model_->trim_command());
   ConfigMap sensing_section = scenario.section("sensing");
   const SensorConfig sensing = sensor_config_from(sensing_section);
   imu_ = std::make_unique<ImuModel>(sensing.imu, scenario.seed);
@@ -83,40 +64,17 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
 int PlantNode::run() { return node_->run(); }
 
 void PlantNode::on_command(const actuator_command_t& cmd) {
-  double left = cmd.flap_freq_left_radps, right = cmd.flap_freq_right_radps;
-  if (cmd.mode == actuator_command_t::MODE_DELTA_F) {
-    left = cmd.flap_freq_collective_radps + 0.5 * cmd.delta_f_radps;
-    right = cmd.flap_freq_collective_radps - 0.5 * cmd.delta_f_radps;
-  } else if (cmd.mode != actuator_command_t::MODE_LEFT_RIGHT) {
-    ++commands_rejected_;
-    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, command_channel_,
-                 "rejected actuator command seq " + std::to_string(cmd.seq) + ": unknown mode " +
-                     std::to_string(cmd.mode));
-    return;
-  }
-  for (const auto& [name, value] : {std::pair<const char*, double>{"flap_freq_left_radps", left},
-                                    {"flap_freq_right_radps", right},
-                                    {"dihedral_rad", cmd.dihedral_rad},
-                                    {"wing_root_rad", cmd.wing_root_rad}}) {
-    if (!std::isfinite(value)) {
-      ++commands_rejected_;
-      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_MESSAGE_MALFORMED, command_channel_,
-                   "rejected actuator command seq " + std::to_string(cmd.seq) + ": " + name + " is not finite");
-      return;
-    }
-  }
-  bool clamped = false;
-  const double rf = config_.flap_command_resolution_radps, rs = config_.servo_command_resolution_rad;
-  command_.flap_freq_left_radps = quantize(clamp(left, 0.0, kMaxFlapRadps, clamped), rf);
-  command_.flap_freq_right_radps = quantize(clamp(right, 0.0, kMaxFlapRadps, clamped), rf);
-  command_.dihedral_rad = quantize(clamp(cmd.dihedral_rad, -kMaxServoRad, kMaxServoRad, clamped), rs);
-  command_.wing_root_rad = quantize(clamp(cmd.wing_root_rad, -kMaxServoRad, kMaxServoRad, clamped), rs);
-  if (clamped) {
-    ++commands_clamped_;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_COMMAND_CLAMPED, command_channel_,
-                 "clamped actuator command seq " + std::to_string(cmd.seq) + " to the actuator range");
-  }
-  if (cmd.input_utime >= 0) {
+  ActuatorCommand in;
+  in.seq = cmd.seq;
+  in.mode = cmd.mode;
+  in.flap_freq_left_radps = cmd.flap_freq_left_radps;
+  in.flap_freq_right_radps = cmd.flap_freq_right_radps;
+  in.flap_freq_collective_radps = cmd.flap_freq_collective_radps;
+  in.delta_f_radps = cmd.delta_f_radps;
+  in.dihedral_rad = cmd.dihedral_rad;
+  in.wing_root_rad = cmd.wing_root_rad;
+  const ActuatorInterface::Result result = actuators_->command(in, node_->sim_time_ns());
+  if (result.accepted && cmd.input_utime >= 0) {
     for (const auto& p : published_) {
       if (p.utime == cmd.input_utime) {
         node_->record_latency_ns(transport::monotonic_ns() - p.wall_ns);
@@ -124,28 +82,34 @@ void PlantNode::on_command(const actuator_command_t& cmd) {
       }
     }
   }
-  have_command_ = true;
-  last_command_ns_ = node_->sim_time_ns();
-  last_command_seq_ = cmd.seq;
-  last_command_utime_ = cmd.utime;
-  if (safe_state_) {
-    safe_state_ = false;
-    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_COMMAND_TIMEOUT, command_channel_,
-                 "actuator commands resumed; leaving the safe state");
+  for (const ActuatorEvent& e : result.events) report(e);
+}
+
+void PlantNode::report(const ActuatorEvent& event) {
+  int8_t severity = fault_event_t::SEVERITY_ERROR;
+  int32_t code = fault_event_t::CODE_MESSAGE_MALFORMED;
+  switch (event.kind) {
+    case ActuatorEvent::Kind::kRejected:
+      break;
+    case ActuatorEvent::Kind::kClamped:
+      severity = fault_event_t::SEVERITY_WARNING;
+      code = fault_event_t::CODE_COMMAND_CLAMPED;
+      break;
+    case ActuatorEvent::Kind::kTimeout:
+      code = fault_event_t::CODE_COMMAND_TIMEOUT;
+      break;
+    case ActuatorEvent::Kind::kResumed:
+      severity = fault_event_t::SEVERITY_INFO;
+      code = fault_event_t::CODE_COMMAND_TIMEOUT;
+      break;
   }
+  node_->fault(severity, code, command_channel_, event.message);
 }
 
 void PlantNode::step(int64_t sim_time_ns) {
   if (sim_time_ns > 0) {
-    const int64_t timeout_ns = std::llround(config_.command_timeout_s * 1e9);
-    if (!safe_state_ && sim_time_ns - last_command_ns_ > timeout_ns) {
-      safe_state_ = true;
-      node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_COMMAND_TIMEOUT, command_channel_,
-                   std::string("no actuator command for ") + std::to_string(config_.command_timeout_s) +
-                       " s" + (have_command_ ? "" : " since the start") +
-                       ": holding the safe state (trim flapping frequencies, servos neutral)");
-    }
-    model_->step(safe_state_ ? model_->trim_command() : command_);
+    if (const auto event = actuators_->update(sim_time_ns)) report(*event);
+    model_->step(actuators_->input());
     ++step_index_;
   }
   // The IMU sample goes out after the step's tick: consumers take it at their next tick.
@@ -213,9 +177,9 @@ void PlantNode::publish_feedback(int64_t sim_time_ns) {
   m.dihedral_rad = t.dihedral_rad;
   m.wing_root_rad = t.wing_root_rad;
   m.throttle_pct = t.throttle_pct;
-  m.cmd_seq = last_command_seq_;
-  m.cmd_age_us = have_command_ ? (sim_time_ns - last_command_ns_) / 1000 : -1;
-  m.safe_state = safe_state_;
+  m.cmd_seq = actuators_->last_command_seq();
+  m.cmd_age_us = actuators_->command_age_us(sim_time_ns);
+  m.safe_state = actuators_->safe_state();
   node_->bus().publish(kActuatorFeedback, m);
 }
 

@@ -21,7 +21,8 @@
 /// time, the plant holds the safe state (both wings at the trim flapping frequency, servos
 /// neutral), reports it in ACTUATOR_FB.safe_state and publishes a FAULT; it leaves the safe
 /// state on the next valid command. Commands are rounded to plant.command_resolution, the
-/// resolution of the actuator interface.
+/// resolution of the actuator interface. The decoding, clamps, rounding and timeout are
+/// ActuatorInterface's (plant/actuator_interface.h); this node publishes what it raises.
 
 #include <memory>
 #include <optional>
@@ -30,6 +31,7 @@
 #include <nimble/actuator_command_t.hpp>
 
 #include "sensors/imu_model.h"
+#include "plant/actuator_interface.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "transport/node.h"
@@ -47,6 +49,8 @@ class PlantNode {
 
  private:
   void on_command(const actuator_command_t& cmd);
+  /// Publishes an event of the actuator interface as a FAULT on the command channel.
+  void report(const ActuatorEvent& event);
   void step(int64_t sim_time_ns);
   void publish_truth(int64_t sim_time_ns);
   void publish_feedback(int64_t sim_time_ns);
@@ -59,19 +63,13 @@ class PlantNode {
   int64_t imu_next_ns_ = 0;
   int64_t imu_seq_ = 0;
   std::unique_ptr<transport::ProcessNode> node_;
-  ActuatorInput command_;
-  int64_t last_command_ns_ = 0;
-  int64_t last_command_seq_ = -1;
+  std::unique_ptr<ActuatorInterface> actuators_;
   std::string command_channel_;  ///< ACTUATOR_CMD, or ACTUATOR_CMD_CAN over the CAN link
-  int64_t last_command_utime_ = -1;
-  bool have_command_ = false;
-  bool safe_state_ = false;
   int64_t step_index_ = 0;
   int64_t truth_every_ = 1;
   int64_t feedback_every_ = 10;
   int64_t truth_seq_ = 0;
   int64_t feedback_seq_ = 0;
-  int64_t commands_rejected_ = 0;
   /// Wall-clock publish time of recent TRUTH messages, by seq modulo the ring size,
   /// to measure the control loop's latency from actuator_command_t.input_utime.
   struct Published {
@@ -79,7 +77,6 @@ class PlantNode {
     int64_t wall_ns = 0;
   };
   std::vector<Published> published_ = std::vector<Published>(256);
-  int64_t commands_clamped_ = 0;
 };
 
 }  // namespace nimble::plant
