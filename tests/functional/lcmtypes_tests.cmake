@@ -24,12 +24,11 @@ target_compile_definitions(test_java_fingerprints PRIVATE
 add_dependencies(test_java_fingerprints fingerprint_classes nimble_lcmtypes_jar)
 rig_discover_tests(test_java_fingerprints PREFIX "functional.lcmtypes." LABELS functional)
 
-# The plant, controller and estimator processes' nodes on memq:// (one process, no network).
-add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.cc
-  ${PROJECT_SOURCE_DIR}/plant/plant_node.cc ${PROJECT_SOURCE_DIR}/controller/controller_node.cc
-  ${PROJECT_SOURCE_DIR}/estimator/estimator_node.cc)
-target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_core nimble_controller_core
-  nimble_sensors nimble_estimation nimble_sensing_config nimble_scenario nimble_transport)
+# The plant, controller, estimator and motion-capture processes' nodes on memq:// (one process,
+# no network).
+add_executable(test_process_nodes ${CMAKE_CURRENT_LIST_DIR}/test_process_nodes.cc)
+target_link_libraries(test_process_nodes PRIVATE rig_catch_main nimble_plant_node nimble_controller_node
+  nimble_estimator_node nimble_mocap_node)
 target_compile_definitions(test_process_nodes PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 rig_discover_tests(test_process_nodes PREFIX "functional.process." LABELS functional)
 

@@ -1,5 +1,5 @@
-// Functional tests: the plant, controller and estimator processes' node classes on the in-process
-// memq:// provider, the test playing the other side of the lockstep protocol.
+// Functional tests: the plant, controller, estimator and motion-capture processes' node classes on
+// the in-process memq:// provider, the test playing the other side of the lockstep protocol.
 
 #include <cmath>
 #include <cstring>
@@ -24,6 +24,7 @@
 #include "contract/channels.h"
 #include "controller/controller_node.h"
 #include "estimator/estimator_node.h"
+#include "mocap/mocap_node.h"
 #include "plant/plant_node.h"
 
 using namespace nimble;
@@ -398,4 +399,115 @@ TEST_CASE("lockstep participant: a tick that overtakes RUN_CONTROL start is hand
   REQUIRE(controller.run() == transport::kExitOk);
   CHECK(acked_steps == std::vector<int64_t>{0, 0});
   CHECK(commands.size() == 1);
+}
+
+namespace {
+
+/// A pose the motion-capture node published and the tick [us] it went out at.
+struct ReceivedPose {
+  mocap_pose_t pose;
+  int64_t tick_utime;
+};
+
+/// Runs the motion-capture node of `scenario` in lockstep for `duration_s`, the test being the
+/// plant: TRUTH at 1 kHz of a vehicle moving north at 0.5 m/s, 1.5 m up, level; a tick at the
+/// first plant step at or after each time the node is due. Returns the poses it published.
+std::vector<ReceivedPose> run_mocap(const Scenario& scenario, double duration_s) {
+  MocapNode mocap(scenario, {"mocap", "", "memq://"});
+  transport::Bus& bus = mocap.node().bus();
+  std::vector<ReceivedPose> poses;
+  const int64_t dt_ns = 1000000;
+  int64_t published = -1;  // last plant step whose TRUTH went out
+  int64_t tick_utime = -1;
+  const auto tick = [&](int64_t k) {
+    for (++published; published <= k; ++published) {
+      truth_state_t t{};
+      t.utime = published * dt_ns / 1000;
+      t.seq = published;
+      t.step = published;
+      t.position_ned_m[0] = 0.5 * static_cast<double>(t.utime) / 1e6;
+      t.position_ned_m[2] = -1.5;
+      t.quaternion_wxyz[0] = 1.0;
+      bus.publish(kTruth, t);
+    }
+    published = k;
+    rig_clock_t c{};
+    c.utime = k * dt_ns / 1000;
+    c.seq = k;
+    c.step = k;
+    c.sim_time_ns = k * dt_ns;
+    c.dt_ns = dt_ns;
+    c.run_id = "test";
+    tick_utime = c.utime;
+    bus.publish(kRigClock, c);
+  };
+  bus.subscribe<mocap_pose_t>(kMocapPose, [&](const mocap_pose_t& m) { poses.push_back({m, tick_utime}); });
+  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
+    if (ack.next_due_ns >= static_cast<int64_t>(duration_s * 1e9)) {
+      bus.publish(kRunControl, stop_command());
+      return;
+    }
+    tick((ack.next_due_ns + dt_ns - 1) / dt_ns);
+  });
+  bool started = false;
+  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
+    if (m.state == heartbeat_t::STATE_RUNNING && !started) {
+      started = true;
+      tick(0);
+    }
+  });
+  bus.publish(kRunControl, start_lockstep(duration_s, {"mocap"}));
+  REQUIRE(mocap.run() == transport::kExitOk);
+  return poses;
+}
+
+}  // namespace
+
+TEST_CASE("mocap node: 200 Hz poses from the plant-rate truth, each out at the tick after its latency, "
+          "seeded marker noise",
+          "[mocap][process]") {
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  const std::vector<ReceivedPose> poses = run_mocap(scenario, 1.0);
+
+  // Frames every 5 ms at mid-exposure (500 us exposure from t = 0), out 5 ms later: those out
+  // before the last tick at 995 ms.
+  REQUIRE(poses.size() == 198);
+  double error_sum = 0;
+  int valid = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const mocap_pose_t& p = poses[i].pose;
+    INFO("frame " << p.frame_number);
+    REQUIRE(p.frame_number == static_cast<int64_t>(i));
+    REQUIRE(p.utime == static_cast<int64_t>(i) * 5000 + 250);
+    CHECK(p.latency_us == 5000);
+    // Released at the first frame tick at or after its publication time.
+    CHECK(poses[i].tick_utime >= p.utime + p.latency_us);
+    CHECK(poses[i].tick_utime < p.utime + p.latency_us + 5000);
+    if (!p.tracking_valid) continue;
+    const double north_m = 0.5 * static_cast<double>(p.utime) / 1e6;
+    error_sum += std::sqrt(std::pow(p.position_m[0] - north_m, 2) + std::pow(p.position_m[1], 2) +
+                           std::pow(p.position_m[2] + 1.5, 2));
+    ++valid;
+  }
+  REQUIRE(valid > 150);
+  const double rate_hz = 1e6 * static_cast<double>(poses.size() - 1) /
+                         static_cast<double>(poses.back().pose.utime - poses.front().pose.utime);
+  CHECK(rate_hz == Approx(200.0));
+  // Marker noise: a mean 3-D error of 0.85 mm (about 170 frames: within 15 %).
+  const double mean_error_mm = 1000.0 * error_sum / valid;
+  INFO("mean 3-D position error " << mean_error_mm << " mm over " << valid << " frames");
+  CHECK(mean_error_mm == Approx(0.85).epsilon(0.15));
+
+  // Seeded: the same seed gives the same poses, another seed other noise.
+  const std::vector<ReceivedPose> again = run_mocap(scenario, 1.0);
+  const std::vector<ReceivedPose> other = run_mocap(load_scenario(kConfigs + "hover.yaml", {{"seed", "2"}}), 1.0);
+  REQUIRE(again.size() == poses.size());
+  REQUIRE_FALSE(other.empty());
+  bool same = true;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    for (int k = 0; k < 3; ++k) same = same && again[i].pose.position_m[k] == poses[i].pose.position_m[k];
+    same = same && again[i].pose.tracking_valid == poses[i].pose.tracking_valid;
+  }
+  CHECK(same);
+  CHECK(other[0].pose.position_m[0] != poses[0].pose.position_m[0]);
 }
