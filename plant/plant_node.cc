@@ -64,15 +64,9 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
 int PlantNode::run() { return node_->run(); }
 
 void PlantNode::on_command(const actuator_command_t& cmd) {
-  ActuatorCommand in;
-  in.seq = cmd.seq;
-  in.mode = cmd.mode;
-  in.flap_freq_left_radps = cmd.flap_freq_left_radps;
-  in.flap_freq_right_radps = cmd.flap_freq_right_radps;
-  in.flap_freq_collective_radps = cmd.flap_freq_collective_radps;
-  in.delta_f_radps = cmd.delta_f_radps;
-  in.dihedral_rad = cmd.dihedral_rad;
-  in.wing_root_rad = cmd.wing_root_rad;
+  // The message's fields the plant reads, in ActuatorCommand's order.
+  const ActuatorCommand in{cmd.seq, cmd.mode, cmd.flap_freq_left_radps, cmd.flap_freq_right_radps,
+                           cmd.flap_freq_collective_radps, cmd.delta_f_radps, cmd.dihedral_rad, cmd.wing_root_rad};
   const ActuatorInterface::Result result = actuators_->command(in, node_->sim_time_ns());
   if (result.accepted && cmd.input_utime >= 0) {
     for (const auto& p : published_) {

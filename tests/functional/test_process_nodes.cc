@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,27 @@ struct PlantOutputs {
   std::vector<actuator_feedback_t> feedback;
   std::vector<fault_event_t> faults;
 };
+
+/// Plays the lockstep master for `participant` on `bus` and starts the run: once the participant
+/// runs, advance(0), then advance(next_due_ns) on each of its STEP_ACKs (publish the inputs up to
+/// that time and the tick), until it is due no more within `duration_s`; then stops the run.
+void play_lockstep_master(transport::Bus& bus, const std::string& participant, double duration_s,
+                          const std::function<void(int64_t)>& advance) {
+  bus.subscribe<step_ack_t>(kStepAck, [&bus, duration_s, advance](const step_ack_t& ack) {
+    if (ack.next_due_ns >= static_cast<int64_t>(duration_s * 1e9)) {
+      bus.publish(kRunControl, stop_command());
+      return;
+    }
+    advance(ack.next_due_ns);
+  });
+  bus.subscribe<heartbeat_t>(kHeartbeat, [advance, started = false](const heartbeat_t& m) mutable {
+    if (m.state == heartbeat_t::STATE_RUNNING && !started) {
+      started = true;
+      advance(0);
+    }
+  });
+  bus.publish(kRunControl, start_lockstep(duration_s, {participant}));
+}
 
 }  // namespace
 
@@ -319,21 +341,7 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
     c.dt_ns = 1953125;
     bus.publish(kRigClock, c);
   };
-  bool started = false;
-  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
-    if (ack.next_due_ns > static_cast<int64_t>(duration_s * 1e9)) {
-      bus.publish(kRunControl, stop_command());
-      return;
-    }
-    publish_until(ack.next_due_ns);
-  });
-  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_RUNNING && !started) {
-      started = true;
-      publish_until(0);
-    }
-  });
-  bus.publish(kRunControl, start_lockstep(duration_s, {"estimator"}));
+  play_lockstep_master(bus, "estimator", duration_s, publish_until);
   REQUIRE(estimator.run() == transport::kExitOk);
 
   REQUIRE(estimates.size() > 400);
@@ -442,21 +450,8 @@ std::vector<ReceivedPose> run_mocap(const Scenario& scenario, double duration_s)
     bus.publish(kRigClock, c);
   };
   bus.subscribe<mocap_pose_t>(kMocapPose, [&](const mocap_pose_t& m) { poses.push_back({m, tick_utime}); });
-  bus.subscribe<step_ack_t>(kStepAck, [&](const step_ack_t& ack) {
-    if (ack.next_due_ns >= static_cast<int64_t>(duration_s * 1e9)) {
-      bus.publish(kRunControl, stop_command());
-      return;
-    }
-    tick((ack.next_due_ns + dt_ns - 1) / dt_ns);
-  });
-  bool started = false;
-  bus.subscribe<heartbeat_t>(kHeartbeat, [&](const heartbeat_t& m) {
-    if (m.state == heartbeat_t::STATE_RUNNING && !started) {
-      started = true;
-      tick(0);
-    }
-  });
-  bus.publish(kRunControl, start_lockstep(duration_s, {"mocap"}));
+  // At the first plant step at or after each due time.
+  play_lockstep_master(bus, "mocap", duration_s, [&](int64_t t_ns) { tick((t_ns + dt_ns - 1) / dt_ns); });
   REQUIRE(mocap.run() == transport::kExitOk);
   return poses;
 }
