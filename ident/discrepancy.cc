@@ -236,7 +236,7 @@ double wald_tail(double wald, Index k, double blocks) {
   if (std::isnan(wald)) return 1.0;
   if (std::isinf(wald)) return 0.0;
   const double K = static_cast<double>(k), nu = blocks - 1.0;
-  if (nu - K + 1.0 < 1.0) return 1.0;  // too few effective blocks to test k parameters
+  if (nu - K + 1.0 < 1.0) return 1.0;  // too few blocks to test k parameters
   const double F = std::max(0.0, wald) * (nu - K + 1.0) / (K * nu);
   return boost::math::cdf(boost::math::complement(boost::math::fisher_f(K, nu - K + 1.0), F));
 }
@@ -261,20 +261,6 @@ Folds make_folds(Index n, std::size_t k) {
   return folds;
 }
 
-/// The flap actuator's equation (thesis Eq 33, delta_f_dot = -pole delta_f + gain
-/// delta_f_cmd) joins the model as a third equation "F" when the data carries the flight
-/// board's command delta_f_cmd and it moves: a delay before the actuator (the plant's
-/// actuator_delay, a late link) shows there, where the L and Y equations, which see the
-/// actuator's output, cannot see it. Always equation 2.
-constexpr std::size_t kActuatorEq = 2;
-
-bool has_actuator_equation(const UniformData& d) {
-  if (!d.has("delta_f_cmd_applied") || !d.has("delta_f")) return false;
-  const VectorXd& c = d.at("delta_f_cmd_applied");
-  const double mean = c.mean();
-  return std::sqrt((c.array() - mean).square().mean()) >= excitation_floor("delta_f");
-}
-
 VectorXd delayed(const VectorXd& x, Index k) {
   VectorXd out(x.size());
   for (Index i = 0; i < x.size(); ++i) out[i] = x[std::max<Index>(0, i - k)];
@@ -294,6 +280,17 @@ bool excited(const VectorXd& x, const std::string& channel) {
   const double mean = x.mean();
   const double sd = std::sqrt((x.array() - mean).square().mean());
   return sd >= excitation_floor(channel) && sd >= 1e-6 * std::sqrt(x.squaredNorm() / static_cast<double>(x.size()));
+}
+
+/// The flap actuator's equation (thesis Eq 33, delta_f_dot = -pole delta_f + gain
+/// delta_f_cmd) joins the model as a third equation "F" when the data carries the flight
+/// board's command delta_f_cmd and it moves: a delay before the actuator (the plant's
+/// actuator_delay, a late link) shows there, where the L and Y equations, which see the
+/// actuator's output, cannot see it. Always equation 2.
+constexpr std::size_t kActuatorEq = 2;
+
+bool has_actuator_equation(const UniformData& d) {
+  return d.has("delta_f_cmd_applied") && d.has("delta_f") && excited(d.at("delta_f_cmd_applied"), "delta_f");
 }
 
 /// The columns of candidate `spec` on the prepared data (delay in samples for actuator_delay).
@@ -779,6 +776,30 @@ std::vector<VectorXd> heldout_residuals(const Model& m, const Folds& folds) {
 ///      reference band's level; tau on a log grid 0.02-20 s); the force variance is
 ///      A / (4 tau) (one-sided PSD), and sigma_mps = sqrt(A / (4 tau)) / |Yv| with the model's
 ///      Yv. Rough: the model's own errors at low frequency add to it.
+/// Sums of a periodogram's ordinates (and of their squares) in the gust band, (0, band_hz],
+/// and in the reference band above it, [1.5 band_hz, ref_hi_hz]; bin counts of each.
+struct GustBands {
+  double lo = 0.0, ref = 0.0, lo2 = 0.0, ref2 = 0.0;
+  Index k_lo = 0, k_ref = 0;
+};
+
+GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz) {
+  GustBands b;
+  for (Index k = 1; k < P.psd.size(); ++k) {
+    const double x = P.psd[k];
+    if (P.f_hz[k] <= band_hz) {
+      b.lo += x;
+      b.lo2 += x * x;
+      ++b.k_lo;
+    } else if (P.f_hz[k] >= 1.5 * band_hz && P.f_hz[k] <= ref_hi_hz) {
+      b.ref += x;
+      b.ref2 += x * x;
+      ++b.k_ref;
+    }
+  }
+  return b;
+}
+
 CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
                           const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
                           const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
@@ -811,19 +832,9 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   }
   const Psd P = periodogram(r, rate_hz);
   const double per_bin = static_cast<double>(r.size()) * P.df_hz / rate_hz;  // independent bins per padded bin
-  double lo = 0.0, ref = 0.0, lo2 = 0.0, ref2 = 0.0;
-  Index k_lo = 0, k_ref = 0;
-  for (Index k = 1; k < P.psd.size(); ++k) {
-    if (P.f_hz[k] <= opt.gust_band_hz) {
-      lo += P.psd[k];
-      lo2 += P.psd[k] * P.psd[k];
-      ++k_lo;
-    } else if (P.f_hz[k] >= 1.5 * opt.gust_band_hz && P.f_hz[k] <= f_ref_hi) {
-      ref += P.psd[k];
-      ref2 += P.psd[k] * P.psd[k];
-      ++k_ref;
-    }
-  }
+  const GustBands b = gust_bands(P, opt.gust_band_hz, f_ref_hi);
+  const double lo = b.lo, ref = b.ref, lo2 = b.lo2, ref2 = b.ref2;
+  const Index k_lo = b.k_lo, k_ref = b.k_ref;
   if (k_lo == 0 || k_ref == 0 || !(ref2 > 0.0) || !(lo2 > 0.0)) {
     t.available = false;
     t.reason = "the record is too short or the low-pass too low for the band test";
@@ -857,12 +868,8 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   // reference band's level.
   const bool given = given_resid.size() == r.size() && yv_given != 0.0;
   const Psd Pg = given ? periodogram(given_resid, rate_hz) : P;
-  double lo_g = 0.0, ref_g = 0.0;
-  for (Index k = 1; k < Pg.psd.size(); ++k) {
-    if (Pg.f_hz[k] <= opt.gust_band_hz) lo_g += Pg.psd[k];
-    else if (Pg.f_hz[k] >= 1.5 * opt.gust_band_hz && Pg.f_hz[k] <= f_ref_hi) ref_g += Pg.psd[k];
-  }
-  const double N0g = ref_g / static_cast<double>(k_ref);
+  const GustBands bg = gust_bands(Pg, opt.gust_band_hz, f_ref_hi);
+  const double lo_g = bg.lo, N0g = bg.ref / static_cast<double>(k_ref);
   double best = std::numeric_limits<double>::infinity(), tau_best = 0.0, a_best = 0.0;
   const double excess = std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g);
   for (int i = 0; i <= 60; ++i) {
