@@ -34,6 +34,19 @@ PlantModel make_plant(const Fixture& f, PlantConfig cfg = {}) {
   return PlantModel(f.model, std::nullopt, f.vehicle, cfg);
 }
 
+/// Steps `a` and `b` at trim for n steps, requiring the same side gust at every step; the gust's
+/// RMS.
+double same_gust_rms(PlantModel& a, PlantModel& b, int n) {
+  double sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+    REQUIRE(a.truth().gust_v_mps == b.truth().gust_v_mps);
+    sum2 += a.truth().gust_v_mps * a.truth().gust_v_mps;
+  }
+  return std::sqrt(sum2 / n);
+}
+
 /// Set 1 with one effect in its effects: section.
 Fixture with_effect(const std::string& effect, const std::map<std::string, double>& params) {
   Fixture f;
@@ -162,15 +175,7 @@ TEST_CASE("lateral gust: seeded, with the configured standard deviation", "[plan
   cfg.effects.lateral_gust.tau_s = 0.05;
   cfg.seed = 7;
   PlantModel a = make_plant(f, cfg), b = make_plant(f, cfg);
-  double sum2 = 0;
-  const int n = 60000;
-  for (int i = 0; i < n; ++i) {
-    a.step(a.trim_command());
-    b.step(b.trim_command());
-    REQUIRE(a.truth().gust_v_mps == b.truth().gust_v_mps);
-    sum2 += a.truth().gust_v_mps * a.truth().gust_v_mps;
-  }
-  CHECK(std::sqrt(sum2 / n) == Approx(0.2).epsilon(0.1));
+  CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
 }
 
 TEST_CASE("flapping forcing puts a roll-rate oscillation at the flapping frequency", "[plant]") {
@@ -480,15 +485,7 @@ TEST_CASE("lateral_gust from the model has the model's sigma and tau", "[plant][
   by_config.effects.lateral_gust = {true, 0.2, 0.05};
   by_config.seed = 7;
   PlantModel a = make_plant(g, file_gust), b = make_plant(Fixture{}, by_config);
-  double sum2 = 0;
-  const int n = 60000;
-  for (int i = 0; i < n; ++i) {
-    a.step(a.trim_command());
-    b.step(b.trim_command());
-    REQUIRE(a.truth().gust_v_mps == b.truth().gust_v_mps);
-    sum2 += a.truth().gust_v_mps * a.truth().gust_v_mps;
-  }
-  CHECK(std::sqrt(sum2 / n) == Approx(0.2).epsilon(0.1));
+  CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
 }
 
 TEST_CASE("kinematic and gravity terms from the model are the plant's equations of motion", "[plant][model_effects]") {
