@@ -38,7 +38,8 @@ double controller_rate_hz(const Scenario& scenario) {
 
 }  // namespace
 
-CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options) {
+CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options,
+                             InprocessCanBus* inprocess_bus) {
   if (options.name == kFlightProcess) {
     role_ = Role::kFlight;
   } else if (options.name == kRigProcess) {
@@ -59,13 +60,18 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
   so.timestamps = true;
   so.receive_buffer_bytes = config_.receive_buffer_bytes;
   so.fd = config_.fd;
-  socket_.emplace(CanSocket::open(config_.interface, so));
+  if (inprocess_bus != nullptr && options.hub != nullptr) {
+    socket_ = inprocess_bus->attach(config_.interface, config_.fd);
+  } else {
+    socket_ = std::make_unique<CanSocket>(CanSocket::open(config_.interface, so));
+  }
   if (role_ == Role::kRig && config_.candump_log && !config_.candump_file.empty()) {
     candump_ = std::make_unique<CandumpWriter>(config_.candump_file);
   }
 
-  node_ = std::make_unique<ProcessNode>(options.name, options.lcm_url);
-  node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
+  node_ = std::make_unique<ProcessNode>(options);
+  if (socket_->fd() >= 0) node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
+  else options.hub->add_poller([this] { return drain_socket() > 0; });
   health_period_ns_ = static_cast<int64_t>(1e9 / config_.health_rate_hz);
   node_->on_housekeeping([this] {
     if (transport::monotonic_ns() >= next_health_wall_ns_) publish_health();
@@ -150,13 +156,15 @@ void CanBridgeNode::on_feedback(const actuator_feedback_t& fb) {
   ++messages_to_can_;
 }
 
-void CanBridgeNode::drain_socket() {
+int CanBridgeNode::drain_socket() {
   ReceivedFrame rx;
   // Bounded, so that a flooded bus cannot starve LCM; the wait loop comes back at once.
-  for (int i = 0; i < 256 && socket_->receive(&rx, 0) == ReceiveResult::kFrame; ++i) {
+  int n = 0;
+  for (; n < 256 && socket_->receive(&rx, 0) == ReceiveResult::kFrame; ++n) {
     if (rx.is_error_frame) on_error_frame(rx);
     else on_frame(rx);
   }
+  return n;
 }
 
 void CanBridgeNode::on_frame(const ReceivedFrame& rx) {

@@ -42,6 +42,7 @@
 #include "can_bridge/can_socket.h"
 #include "can_bridge/candump_log.h"
 #include "can_bridge/codec.h"
+#include "can_bridge/inprocess_can_bus.h"
 #include "scenario/scenario.h"
 #include "transport/node.h"
 
@@ -53,15 +54,19 @@ class CanBridgeNode {
 
   /// @throws ConfigError on bad configuration or an unknown process name; CanError if the
   ///         interface cannot be opened (the message names it and says how to create it).
-  CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options);
+  ///         With `inprocess_bus` (an in-process run, options.hub set) the side sends and
+  ///         receives its frames there instead of on the interface.
+  CanBridgeNode(const Scenario& scenario, const transport::NodeOptions& options,
+                InprocessCanBus* inprocess_bus = nullptr);
   ~CanBridgeNode();
 
   int run();
   transport::ProcessNode& node() { return *node_; }
   Role role() const { return role_; }
 
-  /// Reads every frame waiting on the socket (also called by the node's wait loop).
-  void drain_socket();
+  /// Reads the frames waiting on the socket (also called by the node's wait loop); returns
+  /// how many it read.
+  int drain_socket();
   /// Publishes CAN_HEALTH now.
   void publish_health();
 
@@ -82,7 +87,7 @@ class CanBridgeNode {
   Role role_;
   CanBridgeConfig config_;
   std::unique_ptr<transport::ProcessNode> node_;
-  std::optional<CanSocket> socket_;
+  std::unique_ptr<FramePort> socket_;  // the interface, or an in-process bus endpoint
   std::unique_ptr<CandumpWriter> candump_;
   int64_t cycle_period_ns_ = 0;
 

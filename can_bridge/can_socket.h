@@ -138,8 +138,25 @@ canfd_frame to_fd_frame(const can_frame& frame, uint8_t flags);
 SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy,
                            CanSocketStats& stats, const SleepFunction& sleep);
 
+/// Where a side of the CAN bridge sends and receives its frames: a SocketCAN socket
+/// (CanSocket) or, in a run flown in one process, an endpoint of an InprocessCanBus.
+class FramePort {
+ public:
+  virtual ~FramePort() = default;
+  /// Sends one classical frame; never throws.
+  virtual SendResult send(const can_frame& frame) = 0;
+  /// Sends one CAN FD frame; never throws.
+  virtual SendResult send(const canfd_frame& frame) = 0;
+  /// Waits up to `timeout_ms` (0: poll) for one frame.
+  virtual ReceiveResult receive(ReceivedFrame* out, int timeout_ms) = 0;
+  /// Counters since the port was opened.
+  virtual const CanSocketStats& stats() const = 0;
+  /// Descriptor that becomes readable when frames wait; -1 if there is none (in process).
+  virtual int fd() const = 0;
+};
+
 /// A PF_CAN / CAN_RAW socket bound to one interface; non-blocking.
-class CanSocket {
+class CanSocket : public FramePort {
  public:
   /// Opens a raw CAN socket on `interface` (e.g. "vcan0", "can0") and applies `options`.
   /// @throws CanError naming the interface and errno; on EAFNOSUPPORT the message says that the
@@ -152,24 +169,24 @@ class CanSocket {
   CanSocket& operator=(CanSocket&& other) noexcept;
   CanSocket(const CanSocket&) = delete;
   CanSocket& operator=(const CanSocket&) = delete;
-  ~CanSocket();
+  ~CanSocket() override;
 
   /// Sends one classical CAN frame without blocking; a full queue is retried with back-off.
-  SendResult send(const can_frame& frame);
+  SendResult send(const can_frame& frame) override;
   /// Sends one CAN FD frame (socket opened with CanSocketOptions::fd), same retry policy.
   /// Without fd the kernel refuses it: kError with EINVAL.
-  SendResult send(const canfd_frame& frame);
+  SendResult send(const canfd_frame& frame) override;
 
   /// Waits up to `timeout_ms` (0: poll, < 0: forever) for one frame, classical or (with fd) CAN
   /// FD. Error frames are returned too (is_error_frame) and counted separately.
-  ReceiveResult receive(ReceivedFrame* out, int timeout_ms);
+  ReceiveResult receive(ReceivedFrame* out, int timeout_ms) override;
 
   /// Counters since the socket was opened.
-  const CanSocketStats& stats() const { return stats_; }
+  const CanSocketStats& stats() const override { return stats_; }
   /// Interface name the socket is bound to.
   const std::string& interface() const { return interface_; }
   /// The socket's file descriptor (for poll loops).
-  int fd() const { return fd_; }
+  int fd() const override { return fd_; }
   /// True if opened with CanSocketOptions::fd (CAN FD frames enabled).
   bool fd_enabled() const { return fd_enabled_; }
 

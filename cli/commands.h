@@ -14,8 +14,12 @@ constexpr int kExitUsage = 2;
 /// `rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]`
 int run_model_command(const std::vector<std::string>& args);
 
-/// `rig run <scenario.yaml> [--clock realtime|lockstep] [--log F] [--json F] [--set k=v] [--seed N]`
+/// `rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]`
 int run_run_command(const std::vector<std::string>& args);
+
+/// `rig sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]`: a
+/// Monte Carlo campaign (launcher/sweep.h).
+int run_sweep_command(const std::vector<std::string>& args);
 
 /// `rig check`: can this host run LCM multicast (directly or in a private namespace)?
 int run_check_command(const std::vector<std::string>& args);

@@ -19,8 +19,10 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
-    {"run", "run <scenario.yaml> [--clock realtime|lockstep] [--log F] [--json F] [--set k=v] [--seed N]   fly a scenario",
+    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]   fly a scenario",
      nimble::cli::run_run_command},
+    {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]   Monte Carlo campaign",
+     nimble::cli::run_sweep_command},
     {"check", "check                                              can this host run LCM multicast?",
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",

@@ -18,12 +18,14 @@ namespace nimble::cli {
 namespace {
 
 constexpr const char* kRunUsage =
-    "usage: rig run <scenario.yaml> [--clock realtime|lockstep] [--log FILE] [--json FILE]\n"
+    "usage: rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log FILE] [--json FILE]\n"
     "               [--set key.path=value]... [--seed N] [--no-progress]\n"
     "  Starts every process of the scenario, records all channels to an LCM log\n"
     "  (default rig_logs/<name>-<time>.lcmlog, replay with lcm-logplayer), and prints a\n"
-    "  summary. Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed\n"
-    "  or the run stalled, 130 interrupted.\n";
+    "  summary. realtime and lockstep run each process as its own OS process over LCM;\n"
+    "  inprocess flies the same processes' code in this process, lockstep semantics, no\n"
+    "  transport (same log, same truth as lockstep). Exit code: 0 controlled, 1 not\n"
+    "  controlled, 2 bad input, 3 a process failed or the run stalled, 130 interrupted.\n";
 
 constexpr const char* kSpyUsage =
     "usage: rig spy [--pid PID] [--url URL]\n"
@@ -85,7 +87,9 @@ int run_run_command(const std::vector<std::string>& args) {
     std::cerr << "rig run: missing <scenario.yaml>\n" << kRunUsage;
     return kExitUsage;
   }
-  std::cerr << "rig run: pid " << ::getpid() << " (watch live: rig spy --pid " << ::getpid() << ")\n";
+  if (!o.clock || *o.clock != launcher::kClockInprocess) {
+    std::cerr << "rig run: pid " << ::getpid() << " (watch live: rig spy --pid " << ::getpid() << ")\n";
+  }
   return launcher::run_scenario(o);
 }
 

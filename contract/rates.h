@@ -25,7 +25,8 @@ struct ProcessRates {
 /// How the run is clocked, for the rates that depend on it.
 struct RunShape {
   bool lockstep = false;
-  double logger_period_ms = 10.0;  ///< lockstep.logger_period_ms: the launcher's logger acknowledges this often
+  double logger_period_ms = 10.0;  ///< lockstep.logger_period_ms: the launcher's logger acknowledges this
+                                   ///< often; 0: the logger is no participant (in process)
   std::size_t processes = 0;       ///< rig processes in the run (each sends HEARTBEAT and TIMING_HEALTH)
 };
 

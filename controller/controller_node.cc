@@ -28,8 +28,10 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
   const ProcessRunOptions run = process_run_options(scenario);
-  const std::string rt_problem = transport::apply_realtime_priority(run.realtime_priority);
-  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url);
+  // In process the executor's thread runs every node: no scheduling policy of its own.
+  const std::string rt_problem =
+      options.hub != nullptr ? "" : transport::apply_realtime_priority(run.realtime_priority);
+  node_ = std::make_unique<transport::ProcessNode>(options);
   if (!rt_problem.empty()) {
     node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
   }

@@ -32,10 +32,13 @@
 #include "can_bridge/bridge_config.h"
 #include "contract/channels.h"
 #include "contract/rates.h"
-#include "core/json_writer.h"
+#include "launcher/inprocess.h"
 #include "launcher/netns.h"
+#include "launcher/recorder.h"
 #include "launcher/run_monitor.h"
+#include "launcher/run_report.h"
 #include "launcher/validate.h"
+#include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
 
@@ -47,37 +50,6 @@ using transport::monotonic_ns;
 
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void on_interrupt(int) { g_interrupted = 1; }
-
-/// Settings of the launcher itself (scenario section `run`).
-struct LaunchConfig {
-  double ready_timeout_s = 15.0;   ///< every process must report READY within this [s]
-  double stop_grace_s = 2.0;       ///< after RUN_CONTROL stop, before SIGTERM [s]
-  double stall_timeout_s = 10.0;   ///< lockstep: no simulated progress for this long is a failure [s]
-  double start_delay_s = 0.05;     ///< real time: t0 lies this far after the start command [s]
-  std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run
-  std::string network_namespace = "auto";  ///< auto | always | never
-  int64_t late_threshold_us = 2000;
-  std::vector<int> rig_cpus;       ///< CPUs for the rig's processes (empty: no pinning)
-  std::vector<int> launcher_cpus;  ///< CPUs for the launcher itself (empty: no pinning)
-};
-
-std::vector<int> read_cpu_list(ConfigMap& m, const std::string& key) {
-  std::vector<int> cpus;
-  if (!m.has(key)) return cpus;
-  const YAML::Node list = m.get_node(key);
-  if (!list.IsSequence()) m.fail(key, "must be a list of CPU numbers, e.g. [0]");
-  for (const auto& item : list) {
-    int cpu = -1;
-    try {
-      cpu = item.as<int>();
-    } catch (const YAML::Exception&) {
-      m.fail(key, "must be a list of CPU numbers, e.g. [0]");
-    }
-    if (cpu < 0 || cpu >= CPU_SETSIZE) m.fail(key, "CPU numbers must be in [0, " + std::to_string(CPU_SETSIZE) + ")");
-    cpus.push_back(cpu);
-  }
-  return cpus;
-}
 
 /// Pins the calling process to `cpus` that exist; returns a note when some do not.
 std::string pin_to(const std::vector<int>& cpus) {
@@ -95,55 +67,6 @@ std::string pin_to(const std::vector<int>& cpus) {
   if (used == 0) return "none of the CPUs asked for exist on this machine (" + std::to_string(online) + " online)";
   if (::sched_setaffinity(0, sizeof set, &set) != 0) return std::string("sched_setaffinity: ") + std::strerror(errno);
   return used < static_cast<int>(cpus.size()) ? "some CPUs asked for do not exist; pinned to the others" : "";
-}
-
-/// Judgement of the flight (scenario section `summary`).
-struct JudgeConfig {
-  double max_phi_deg = 80.0;        ///< beyond this roll the vehicle is not controlled
-  double max_theta_deg = 60.0;      ///< beyond this pitch (the pitch set-point limit) neither
-  double hover_phi_deg = 5.0;       ///< final |phi| for "returned to hover"
-  double hover_p_radps = 0.5;       ///< final |p| for "returned to hover"
-  double hover_v_mps = 0.3;         ///< final |v| for "returned to hover"
-};
-
-LaunchConfig launch_config_from(const Scenario& s) {
-  LaunchConfig c;
-  ConfigMap m = s.section("run");
-  c.ready_timeout_s = m.get_double_or("ready_timeout_s", c.ready_timeout_s, Range{0.0, 600.0, true, false});
-  c.stop_grace_s = m.get_double_or("stop_grace_s", c.stop_grace_s, Range::closed(0.0, 60.0));
-  c.stall_timeout_s = m.get_double_or("stall_timeout_s", c.stall_timeout_s, Range{0.0, 3600.0, true, false});
-  c.start_delay_s = m.get_double_or("start_delay_s", c.start_delay_s, Range::closed(0.0, 10.0));
-  c.lcm_url = m.get_string_or("lcm_url", c.lcm_url);
-  c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
-                                                   : m.get_string_or("network_namespace", "auto");
-  c.late_threshold_us = static_cast<int64_t>(m.get_double_or("late_threshold_us", 2000, Range::positive()));
-  if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
-  if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
-  if (m.has("spin_us")) m.get_int("spin_us", Range::closed(0, 1000));
-  if (m.has("controller_input")) m.get_enum("controller_input", {"truth", "estimate"});
-  c.rig_cpus = read_cpu_list(m, "rig_cpus");
-  c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
-  m.finish();
-  return c;
-}
-
-JudgeConfig judge_config_from(const Scenario& s) {
-  JudgeConfig c;
-  ConfigMap m = s.section("summary");
-  c.max_phi_deg = m.get_double_or("max_phi_deg", c.max_phi_deg, Range{0.0, 180.0, true, false});
-  c.max_theta_deg = m.get_double_or("max_theta_deg", c.max_theta_deg, Range{0.0, 90.0, true, false});
-  c.hover_phi_deg = m.get_double_or("hover_phi_deg", c.hover_phi_deg, Range::positive());
-  c.hover_p_radps = m.get_double_or("hover_p_radps", c.hover_p_radps, Range::positive());
-  c.hover_v_mps = m.get_double_or("hover_v_mps", c.hover_v_mps, Range::positive());
-  m.finish();
-  return c;
-}
-
-std::string timestamp() {
-  const std::time_t now = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&now));
-  return buf;
 }
 
 std::string self_dir() {
@@ -223,245 +146,10 @@ std::string executable_of(const std::string& process) {
   return "nimble_" + process;
 }
 
-void print_summary(std::ostream& out, const Scenario& s, const std::string& url, const std::string& ns_detail,
-                   const std::string& log_file, double sim_s, double wall_s,
-                   const std::map<std::string, ChannelSummary>& channels, const RunMonitor& mon,
-                   const std::vector<Child>& children, bool controlled, bool hover, const std::string& verdict) {
-  const FlightSummary& f = mon.flight();
-  char line[256];
-  out << "\n== run summary: " << s.name << " ==\n";
-  out << "clock      " << s.clock << ", seed " << s.seed << "\n";
-  out << "transport  " << url << (ns_detail.empty() ? "" : "  (" + ns_detail + ")") << "\n";
-  out << "log        " << log_file << "\n";
-  std::snprintf(line, sizeof line, "time       simulated %.3f s, wall %.3f s (%.2fx real time)\n", sim_s, wall_s,
-                wall_s > 0 ? sim_s / wall_s : 0.0);
-  out << line;
-  out << "\nchannel              count    rate [Hz]  expected   drops   late  malformed\n";
-  for (const auto& [name, c] : channels) {
-    std::snprintf(line, sizeof line, "%-18s %8lld %10.1f %9.1f %7lld %6lld %9lld%s\n", name.c_str(),
-                  static_cast<long long>(c.count), c.rate_hz, c.expected_hz, static_cast<long long>(c.drops),
-                  static_cast<long long>(c.late), static_cast<long long>(c.malformed),
-                  c.wall_clock ? "  (per wall second)" : "");
-    out << line;
-  }
-  out << "\nloop timing " << (s.clock == "lockstep" ? "(lockstep: wall time per step / per wait)" : "(wake-up jitter)")
-      << "\nprocess        rate [Hz]    loops  overruns   p50 [us]   p99 [us]   max [us]\n";
-  for (const auto& [name, t] : mon.timing()) {
-    std::snprintf(line, sizeof line, "%-14s %9.1f %8lld %9lld %10.1f %10.1f %10.1f\n", name.c_str(), t.loop_rate_hz,
-                  static_cast<long long>(t.loop_count), static_cast<long long>(t.overruns), t.jitter_p50_us,
-                  t.jitter_p99_us, t.jitter_max_us);
-    out << line;
-  }
-  for (const auto& [name, t] : mon.timing()) {
-    if (t.latency_count == 0) continue;
-    const char* what = name == "plant" ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
-                       : name == "estimator" ? "latency (IMU sample time -> ESTIMATE published)"
-                                             : "latency";
-    std::snprintf(line, sizeof line, "%s %s: p50 %.1f us, p99 %.1f us, max %.1f us over %lld messages\n",
-                  name.c_str(), what, t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
-                  static_cast<long long>(t.latency_count));
-    out << line;
-  }
-  out << "\nflight     max |p| " << std::to_string(f.max_abs_p).substr(0, 6) << " rad/s, max |v| "
-      << std::to_string(f.max_abs_v).substr(0, 6) << " m/s, max |phi| "
-      << std::to_string(f.max_abs_phi * 180 / M_PI).substr(0, 6) << " deg";
-  if (f.max_abs_theta > 0.0) out << ", max |theta| " << std::to_string(f.max_abs_theta * 180 / M_PI).substr(0, 6) << " deg";
-  out << "\n";
-  std::snprintf(line, sizeof line, "ranges     p %.2f rad/s, v %.2f m/s, phi %.2f rad, delta_f %.1f rad/s\n",
-                f.max_p - f.min_p, f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
-  out << line;
-  std::snprintf(line, sizeof line, "final      p %.3f rad/s, v %.3f m/s, phi %.2f deg\n", f.final_p, f.final_v,
-                f.final_phi * 180 / M_PI);
-  out << line;
-  const EstimatorSummary est = mon.estimator();
-  if (est.samples > 0) {
-    std::snprintf(line, sizeof line,
-                  "estimator  phi error rms %.3f deg (max %.3f), p error rms %.4f rad/s, v error rms %.4f m/s over %lld "
-                  "estimates; poses accepted %lld, rejected %lld, missing %lld\n",
-                  est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, static_cast<long long>(est.samples),
-                  static_cast<long long>(est.poses_accepted), static_cast<long long>(est.poses_rejected),
-                  static_cast<long long>(est.poses_missing));
-    out << line;
-    if (est.poses_too_old + est.poses_too_new + est.velocity_windows_uncovered + est.imu_rejected + est.imu_gaps > 0) {
-      std::snprintf(line, sizeof line,
-                    "estimator  poses dropped %lld too old, %lld too new; velocity windows uncovered %lld; IMU samples "
-                    "rejected %lld, gaps %lld\n",
-                    static_cast<long long>(est.poses_too_old), static_cast<long long>(est.poses_too_new),
-                    static_cast<long long>(est.velocity_windows_uncovered), static_cast<long long>(est.imu_rejected),
-                    static_cast<long long>(est.imu_gaps));
-      out << line;
-    }
-  }
-  for (const auto& [name, h] : mon.can_health()) {
-    std::snprintf(line, sizeof line,
-                  "%-10s %s: %lld messages to CAN, %lld to LCM; frames sent %lld, received %lld; rejected: unknown id "
-                  "%lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; error frames "
-                  "%lld; ENOBUFS %lld, dropped %lld\n",
-                  name.c_str(), h.interface_name.c_str(), static_cast<long long>(h.messages_to_can),
-                  static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
-                  static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
-                  static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
-                  static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
-                  static_cast<long long>(h.error_frames), static_cast<long long>(h.send_enobufs),
-                  static_cast<long long>(h.send_dropped + h.receive_dropped));
-    out << line;
-    if (h.fd) {
-      out << "           CAN FD: " << h.fd_frames_sent << " of the frames sent and " << h.fd_frames_received
-          << " of those received were FD frames\n";
-    }
-    if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
-  }
-  out << "faults     " << mon.faults().size() << "\n";
-  std::size_t shown = 0;
-  for (const auto& fr : mon.faults()) {
-    if (++shown > 8) {
-      out << "           ...\n";
-      break;
-    }
-    std::snprintf(line, sizeof line, "           [%s t=%.3f s] ", fr.process.c_str(), fr.rig_time_s);
-    out << line << fr.message << "\n";
-  }
-  out << "processes ";
-  for (const auto& c : children) out << " " << c.name << "(" << (c.exited ? describe_exit(c) : "running") << ")";
-  out << "\n";
-  out << "controlled " << (controlled ? "yes" : "NO") << ", returned to hover " << (hover ? "yes" : "no") << "\n";
-  out << "result     " << verdict << "\n";
-}
-
-std::string summary_json(const Scenario& s, const std::string& url, const std::string& log_file, double sim_s,
-                         double wall_s, const std::map<std::string, ChannelSummary>& channels, const RunMonitor& mon,
-                         const std::vector<Child>& children, bool controlled, bool hover, int exit_code,
-                         const std::string& verdict) {
-  const FlightSummary& f = mon.flight();
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(s.name);
-  w.key("clock").value(s.clock);
-  w.key("seed").value(static_cast<long long>(s.seed));
-  w.key("lcm_url").value(url);
-  w.key("log").value(log_file);
-  w.key("controlled").value(controlled);
-  w.key("returned_to_hover").value(hover);
-  w.key("exit_code").value(exit_code);
-  w.key("result").value(verdict);
-  w.key("sim_time_s").value(sim_s);
-  w.key("wall_time_s").value(wall_s);
-  w.key("speed_x_realtime").value(wall_s > 0 ? sim_s / wall_s : 0.0);
-  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).end_object();
-  w.key("ranges").begin_object();
-  w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
-  w.key("delta_f").value(f.max_df - f.min_df);
-  w.end_object();
-  w.key("final").begin_object().key("p").value(f.final_p).key("v").value(f.final_v).key("phi").value(f.final_phi).end_object();
-  const EstimatorSummary est = mon.estimator();
-  if (est.samples > 0) {
-    w.key("estimator").begin_object();
-    w.key("samples").value(static_cast<long long>(est.samples));
-    w.key("phi_rms_deg").value(est.phi_rms_deg).key("phi_max_deg").value(est.phi_max_deg);
-    w.key("p_rms_radps").value(est.p_rms_radps).key("v_rms_mps").value(est.v_rms_mps);
-    w.key("poses_accepted").value(static_cast<long long>(est.poses_accepted));
-    w.key("poses_rejected").value(static_cast<long long>(est.poses_rejected));
-    w.key("poses_missing").value(static_cast<long long>(est.poses_missing));
-    w.key("poses_too_old").value(static_cast<long long>(est.poses_too_old));
-    w.key("poses_too_new").value(static_cast<long long>(est.poses_too_new));
-    w.key("velocity_windows_uncovered").value(static_cast<long long>(est.velocity_windows_uncovered));
-    w.key("imu_rejected").value(static_cast<long long>(est.imu_rejected));
-    w.key("imu_gaps").value(static_cast<long long>(est.imu_gaps));
-    w.end_object();
-  }
-  if (!mon.can_health().empty()) {
-    w.key("can").begin_object();
-    for (const auto& [name, h] : mon.can_health()) {
-      const auto n = [](int64_t v) { return static_cast<long long>(v); };
-      w.key(name).begin_object();
-      w.key("interface").value(h.interface_name);
-      w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
-      w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
-      w.key("fd").value(h.fd != 0);
-      w.key("fd_frames_sent").value(n(h.fd_frames_sent)).key("fd_frames_received").value(n(h.fd_frames_received));
-      w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
-      w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
-      w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));
-      w.key("rejected_stale_counter").value(n(h.rejected_stale_counter));
-      w.key("rejected_out_of_range").value(n(h.rejected_out_of_range));
-      w.key("counter_gaps").value(n(h.counter_gaps)).key("saturated_values").value(n(h.saturated_values));
-      w.key("error_frames").value(n(h.error_frames)).key("bus_state").value(static_cast<int>(h.bus_state));
-      w.key("last_error").value(h.last_error);
-      w.key("send_enobufs").value(n(h.send_enobufs)).key("send_retries").value(n(h.send_retries));
-      w.key("send_dropped").value(n(h.send_dropped)).key("receive_dropped").value(n(h.receive_dropped));
-      w.key("candump_file").value(h.candump_file).key("candump_lines").value(n(h.candump_lines));
-      w.end_object();
-    }
-    w.end_object();
-  }
-  w.key("channels").begin_object();
-  for (const auto& [name, c] : channels) {
-    w.key(name).begin_object();
-    w.key("count").value(static_cast<long long>(c.count));
-    w.key("rate_hz").value(c.rate_hz);
-    w.key("expected_hz").value(c.expected_hz);
-    w.key("drops").value(static_cast<long long>(c.drops));
-    w.key("late").value(static_cast<long long>(c.late));
-    w.key("malformed").value(static_cast<long long>(c.malformed));
-    w.key("rate_basis").value(c.wall_clock ? "wall" : "sim");
-    w.end_object();
-  }
-  w.end_object();
-  w.key("timing").begin_object();
-  for (const auto& [name, t] : mon.timing()) {
-    w.key(name).begin_object();
-    w.key("loop_rate_hz").value(t.loop_rate_hz);
-    w.key("loop_count").value(static_cast<long long>(t.loop_count));
-    w.key("overruns").value(static_cast<long long>(t.overruns));
-    w.key("jitter_p50_us").value(t.jitter_p50_us);
-    w.key("jitter_p99_us").value(t.jitter_p99_us);
-    w.key("jitter_max_us").value(t.jitter_max_us);
-    w.key("latency_count").value(static_cast<long long>(t.latency_count));
-    w.key("latency_p50_us").value(t.latency_p50_us);
-    w.key("latency_p99_us").value(t.latency_p99_us);
-    w.key("latency_max_us").value(t.latency_max_us);
-    w.end_object();
-  }
-  w.end_object();
-  w.key("faults").begin_array();
-  for (const auto& fr : mon.faults()) {
-    w.begin_object();
-    w.key("process").value(fr.process).key("severity").value(fr.severity).key("code").value(fr.code);
-    w.key("channel").value(fr.channel).key("message").value(fr.message).key("rig_time_s").value(fr.rig_time_s);
-    w.end_object();
-  }
-  w.end_array();
-  w.key("processes").begin_object();
-  for (const auto& c : children) {
-    w.key(c.name).begin_object();
-    w.key("pid").value(static_cast<long long>(c.pid));
-    w.key("exit_code").value(c.exit_code);
-    w.key("signal").value(c.signal);
-    w.end_object();
-  }
-  w.end_object();
-  w.end_object();
-  return w.str();
-}
+/// Flies `plan` with each rig process its own OS process over LCM (clock realtime or lockstep).
+int run_processes(RunPlan& plan, const RunOptions& options);
 
 }  // namespace
-
-Scenario prepare_scenario(const RunOptions& options) {
-  std::vector<Override> overrides = options.overrides;
-  if (options.clock) {
-    if (*options.clock != "realtime" && *options.clock != "lockstep") {
-      throw ConfigError("--clock", "clock", *options.clock, "must be realtime or lockstep");
-    }
-    overrides.push_back({"clock", *options.clock});
-  }
-  if (options.seed) overrides.push_back({"seed", std::to_string(*options.seed)});
-  Scenario s = load_scenario(options.scenario_file, overrides);
-  validate_process_sections(s);
-  lockstep_options(s);
-  launch_config_from(s);
-  judge_config_from(s);
-  return s;
-}
 
 int check_host() {
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
@@ -492,20 +180,23 @@ int check_host() {
 }
 
 int run_scenario(const RunOptions& options) {
-  Scenario scenario;
-  LaunchConfig lc;
-  JudgeConfig jc;
-  ProcessRates rates;
+  RunPlan plan;
   try {
-    scenario = prepare_scenario(options);
-    lc = launch_config_from(scenario);
-    jc = judge_config_from(scenario);
-    rates = process_rates(scenario);
+    plan = load_run_plan(options);
   } catch (const ConfigError& e) {
     std::cerr << "rig run: config error: " << e.what() << "\n";
     return kRunBadInput;
   }
-  const bool lockstep = scenario.clock == "lockstep";
+  if (plan.inprocess()) return run_inprocess(plan, options);
+  return run_processes(plan, options);
+}
+
+namespace {
+
+int run_processes(RunPlan& plan, const RunOptions& options) {
+  Scenario& scenario = plan.scenario;
+  const LaunchConfig& lc = plan.launch;
+  const bool lockstep = scenario.clock == kClockLockstep;
 
   // Transport: a private network namespace unless told otherwise (before any thread).
   std::string url = lc.lcm_url;
@@ -530,11 +221,9 @@ int run_scenario(const RunOptions& options) {
   }
 
   // Record of the run: log, resolved scenario, process outputs.
-  std::string log_file = options.log_file;
-  if (log_file.empty()) log_file = "rig_logs/" + scenario.name + "-" + timestamp() + ".lcmlog";
+  const std::string log_file = log_file_for(plan, options);
   std::error_code ec;
   if (fs::path(log_file).has_parent_path()) fs::create_directories(fs::path(log_file).parent_path(), ec);
-  const std::string resolved_file = log_file + ".scenario.yaml";
   if (scenario.actuator_link == "can") {
     ConfigMap section = scenario.section("can_bridge");
     const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
@@ -548,14 +237,12 @@ int run_scenario(const RunOptions& options) {
       return kRunBadInput;
     }
   }
-  {
-    std::ofstream out(resolved_file);
-    out << "# Resolved scenario of this run (bases merged, overrides applied): " << scenario.file << "\n";
-    out << to_yaml(scenario.root);
-    if (!out) {
-      std::cerr << "rig run: cannot write " << resolved_file << "\n";
-      return kRunBadInput;
-    }
+  std::string resolved_file;
+  try {
+    resolved_file = write_resolved_scenario(plan, log_file);
+  } catch (const std::exception& e) {
+    std::cerr << "rig run: " << e.what() << "\n";
+    return kRunBadInput;
   }
 
   std::unique_ptr<transport::Bus> bus;
@@ -565,37 +252,23 @@ int run_scenario(const RunOptions& options) {
     std::cerr << "rig run: " << e.what() << "\nFix:\n" << multicast_fix_commands() << "\n";
     return kRunBadInput;
   }
-  lcm::LogFile log(log_file, "w");
-  if (!log.good()) {
-    std::cerr << "rig run: cannot open log " << log_file << " for writing\n";
+  RunMonitor monitor(monitor_config(plan));
+  std::unique_ptr<Recorder> recorder;
+  try {
+    recorder = std::make_unique<Recorder>(log_file, monitor);
+  } catch (const std::exception& e) {
+    std::cerr << "rig run: " << e.what() << "\n";
     return kRunBadInput;
   }
-
-  MonitorConfig mc;
-  mc.lockstep = lockstep;
-  mc.late_threshold_us = lc.late_threshold_us;
-  mc.expected_hz = contract::expected_rates(
-      rates, contract::RunShape{lockstep, lockstep_options(scenario).logger_period_ms, scenario.processes.size()});
-  mc.wall_clock_channels = contract::wall_clock_channels();
-  RunMonitor monitor(mc);
-  int64_t event_number = 0;
-  int64_t last_flush_ns = monotonic_ns();
   // Lockstep: the launcher's logger is a participant. It acknowledges a tick once it has
   // logged everything before it, every logger_period_ms of simulated time, so the run can
   // never outpace the log (no message lost, whatever the load).
   const std::string kLogger = "logger";
-  const int64_t logger_period_ns = static_cast<int64_t>(lockstep_options(scenario).logger_period_ms * 1e6);
+  const int64_t logger_period_ns = static_cast<int64_t>(plan.logger_period_ms * 1e6);
   int64_t logger_next_due_ns = 0, logger_ack_seq = 0;
   bus->subscribe_raw(".*", [&](const std::string& channel, const void* data, int size, int64_t recv_us) {
     if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
-    lcm::LogEvent ev;
-    ev.eventnum = event_number++;
-    ev.timestamp = transport::wall_us();
-    ev.channel = channel;
-    ev.datalen = size;
-    ev.data = const_cast<void*>(data);
-    log.writeEvent(&ev);
-    monitor.on_message(channel, data, size, recv_us * 1000);
+    recorder->record(channel, data, size, recv_us * 1000);
     if (lockstep && channel == contract::channels::kRigClock) {
       rig_clock_t tick{};
       if (tick.decode(data, 0, size) == size && tick.sim_time_ns >= logger_next_due_ns) {
@@ -672,7 +345,7 @@ int run_scenario(const RunOptions& options) {
     std::cerr << "rig run: " << message << "\n";
     stop_all(0.5);
     bus->drain();
-    std::fflush(log.getFilePtr());
+    recorder->flush();
     return kRunFailed;
   };
 
@@ -729,10 +402,7 @@ int run_scenario(const RunOptions& options) {
   for (;;) {
     bus->handle_timeout(5);
     const int64_t now = monotonic_ns();
-    if (now - last_flush_ns > 100000000LL) {
-      std::fflush(log.getFilePtr());
-      last_flush_ns = now;
-    }
+    recorder->flush_if_due(now);
     if (Child* dead = reap(children)) {
       bus->drain();
       std::string why;
@@ -792,39 +462,25 @@ int run_scenario(const RunOptions& options) {
   if (options.progress && tty) std::fprintf(stderr, "\n");
   stop_all(failure.empty() ? lc.stop_grace_s : 0.5);
   bus->drain();
-  std::fflush(log.getFilePtr());
+  recorder->flush();
 
   // Judge and report.
-  const FlightSummary& f = monitor.flight();
-  const double sim_s = monitor.sim_time_s();
-  const bool controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * M_PI / 180.0 &&
-                          f.max_abs_theta <= jc.max_theta_deg * M_PI / 180.0;
-  const bool hover = controlled && std::fabs(f.final_phi) <= jc.hover_phi_deg * M_PI / 180.0 &&
-                     std::fabs(f.final_p) <= jc.hover_p_radps && std::fabs(f.final_v) <= jc.hover_v_mps;
-  int code = kRunOk;
-  std::string verdict = "ok";
-  if (interrupted) {
-    code = kRunInterrupted;
-    verdict = "interrupted";
-  } else if (!failure.empty()) {
-    code = kRunFailed;
-    verdict = "failed: " + failure.substr(0, failure.find('\n'));
-    std::cerr << "rig run: " << failure << "\n";
-  } else if (!controlled) {
-    code = kRunNotControlled;
-    verdict = "completed, vehicle NOT controlled";
+  RunReport report;
+  report.scenario = scenario.name;
+  report.clock = scenario.clock;
+  report.seed = scenario.seed;
+  report.transport = url;
+  report.transport_detail = ns_detail;
+  report.log_file = log_file;
+  fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
+  for (const auto& c : children) {
+    report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal,
+                                              c.exited ? describe_exit(c) : "running"});
   }
-  const auto channels = monitor.channels(sim_s, wall_s);
-  print_summary(std::cout, scenario, url, ns_detail, log_file, sim_s, wall_s, channels, monitor, children, controlled,
-                hover, verdict);
-  if (!options.json_file.empty()) {
-    std::ofstream out(options.json_file);
-    out << summary_json(scenario, url, log_file, sim_s, wall_s, channels, monitor, children, controlled, hover, code,
-                        verdict)
-        << "\n";
-    if (!out) std::cerr << "rig run: cannot write " << options.json_file << "\n";
-  }
-  return code;
+  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure);
+  if (!failure.empty()) std::cerr << "rig run: " << failure << "\n";
+  return finish_report(report, options);
 }
 
+}  // namespace
 }  // namespace nimble::launcher

@@ -24,6 +24,7 @@ enum : int {
   kDw, kDwRate,              // wing-root servo position [rad] and rate [rad/s]
   kStates
 };
+static_assert(kStates == PlantModel::kStateDim, "PlantModel::kStateDim is the state layout's size");
 
 double get_or_zero(const DerivativeModel& m, const std::string& key) {
   const auto it = m.derivatives.find(key);
@@ -234,7 +235,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   const double f_hz = (trim_thrust_n_ / cfg_.thrust.pairs + cfg_.thrust.offset_n) / cfg_.thrust.slope_n_per_hz;
   f_trim_radps_ = 2.0 * M_PI * f_hz;
 
-  x_ = Eigen::VectorXd::Zero(kStates);
+  x_ = State::Zero();
   x_[kU] = trim.u0_mps + (active_u_ ? cfg_.initial.u_mps : 0.0);
   x_[kW] = trim.w0_mps;
   x_[kPhi] = trim.phi0_rad + cfg_.initial.phi_rad;
@@ -288,9 +289,9 @@ ActuatorInput PlantModel::delayed(const ActuatorInput& cmd) {
   return delay_line_.front().first <= cutoff ? delay_line_.front().second : trim_command();
 }
 
-Eigen::VectorXd PlantModel::derivative(const Eigen::VectorXd& x, const ActuatorInput& u, double t,
-                                       Eigen::Vector3d* specific_force, Eigen::Vector3d* omega_dot) const {
-  Eigen::VectorXd dx = Eigen::VectorXd::Zero(kStates);
+PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u, double t,
+                                         Eigen::Vector3d* specific_force, Eigen::Vector3d* omega_dot) const {
+  State dx = State::Zero();
   const double m = veh_.mass_kg, g = veh_.gravity_mps2;
   const double Ixx = veh_.Ixx_kgm2, Iyy = veh_.Iyy_kgm2, Izz = veh_.Izz_kgm2, Ixz = veh_.Ixz_kgm2;
   const double Ic = veh_.Ic();
@@ -399,10 +400,10 @@ Eigen::VectorXd PlantModel::derivative(const Eigen::VectorXd& x, const ActuatorI
 void PlantModel::step(const ActuatorInput& cmd_in) {
   const ActuatorInput cmd = delayed(cmd_in);
   const double h = dt_s_;
-  const Eigen::VectorXd k1 = derivative(x_, cmd, t_s_, nullptr, nullptr);
-  const Eigen::VectorXd k2 = derivative(x_ + 0.5 * h * k1, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
-  const Eigen::VectorXd k3 = derivative(x_ + 0.5 * h * k2, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
-  const Eigen::VectorXd k4 = derivative(x_ + h * k3, cmd, t_s_ + h, nullptr, nullptr);
+  const State k1 = derivative(x_, cmd, t_s_, nullptr, nullptr);
+  const State k2 = derivative(x_ + 0.5 * h * k1, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
+  const State k3 = derivative(x_ + 0.5 * h * k2, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
+  const State k4 = derivative(x_ + h * k3, cmd, t_s_ + h, nullptr, nullptr);
   const double f_before = x_[kFcoll];
   x_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
   flap_phase_rad_ = std::fmod(flap_phase_rad_ + 0.5 * (f_before + x_[kFcoll]) * h, 2.0 * M_PI);

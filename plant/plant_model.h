@@ -232,12 +232,18 @@ class PlantModel {
   double trim_flap_frequency_radps() const { return f_trim_radps_; }
   double dt_s() const { return dt_s_; }
 
+  /// Size of the state vector: position, velocity, Euler angles, rates, the two flapping
+  /// frequencies, two servos with their rates (plant_model.cc lists them).
+  static constexpr int kStateDim = 18;
+  /// Fixed size: a plant step allocates nothing.
+  using State = Eigen::Matrix<double, kStateDim, 1>;
+
   /// Full state vector (for tests).
-  const Eigen::VectorXd& state() const { return x_; }
+  const State& state() const { return x_; }
 
  private:
-  Eigen::VectorXd derivative(const Eigen::VectorXd& x, const ActuatorInput& u, double t,
-                             Eigen::Vector3d* specific_force, Eigen::Vector3d* omega_dot) const;
+  State derivative(const State& x, const ActuatorInput& u, double t, Eigen::Vector3d* specific_force,
+                   Eigen::Vector3d* omega_dot) const;
   void update_truth(const ActuatorInput& u);
   ActuatorInput delayed(const ActuatorInput& cmd);
 
@@ -258,7 +264,7 @@ class PlantModel {
   double Zq_ = 0, Zu_ = 0, Zw_ = 0, Z_dd_ = 0;
   bool active_q_ = false, active_r_ = false, active_u_ = false;
 
-  Eigen::VectorXd x_;
+  State x_;
   double t_s_ = 0.0;
   double flap_phase_rad_ = 0.0;
   double x_gust_ = 0.0;  ///< side gust velocity [m/s]

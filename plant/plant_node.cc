@@ -46,8 +46,10 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
-  const std::string rt_problem = transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
-  node_ = std::make_unique<transport::ProcessNode>(options.name, options.lcm_url, file_digest(to_yaml(scenario.root)));
+  // In process the executor's thread runs every node: no scheduling policy of its own.
+  const std::string rt_problem =
+      options.hub != nullptr ? "" : transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
+  node_ = std::make_unique<transport::ProcessNode>(options, file_digest(to_yaml(scenario.root)));
   if (!rt_problem.empty()) {
     node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
   }

@@ -145,7 +145,7 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   s.name = map.get_string("name");
   s.description = map.get_string_or("description", "");
   s.duration_s = map.get_double("duration_s", Range{0.0, 24 * 3600.0, true, false});
-  s.clock = map.get_enum("clock", {"realtime", "lockstep"});
+  s.clock = map.get_enum("clock", {"realtime", "lockstep", "inprocess"});
   s.seed = static_cast<uint64_t>(map.get_int("seed", Range::closed(0, 9.0e15)));
   s.model_file = map.get_string("model");
   s.longitudinal_model_file = map.get_string_or("longitudinal_model", "");

@@ -41,7 +41,7 @@ struct Scenario {
   std::string name;
   std::string description;
   double duration_s = 0.0;
-  std::string clock;        ///< "realtime" or "lockstep"
+  std::string clock;        ///< "realtime", "lockstep" or "inprocess" (launcher/run_plan.h)
   uint64_t seed = 1;
   std::string model_file;               ///< lateral derivative model
   std::string longitudinal_model_file;  ///< optional

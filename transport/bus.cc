@@ -15,6 +15,8 @@ Bus::Bus(const std::string& url) : url_(url) {
   }
 }
 
+Bus::Bus(InprocessHub& hub) : url_("inprocess"), hub_(&hub) {}
+
 Bus::~Bus() = default;
 
 void Bus::track_seq(int64_t seq, ChannelStats& stats) {
@@ -23,12 +25,16 @@ void Bus::track_seq(int64_t seq, ChannelStats& stats) {
 }
 
 void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+  deliver(ch, rbuf->data, static_cast<int>(rbuf->data_size));
+}
+
+void Bus::Subscription::deliver(const std::string& ch, const void* data, int size) {
   if (raw) {
-    raw(ch, rbuf->data, static_cast<int>(rbuf->data_size), monotonic_us());
+    raw(ch, data, size, monotonic_us());
     return;
   }
   std::string error;
-  if (decode_and_call(rbuf->data, static_cast<int>(rbuf->data_size), *stats, error)) {
+  if (decode_and_call(data, size, *stats, error)) {
     ++stats->received;
   } else {
     ++stats->malformed;
@@ -37,6 +43,12 @@ void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::st
 }
 
 void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
+  if (hub_ != nullptr) {
+    Subscription* s = sub.get();
+    hub_->subscribe(s->channel, [s](const std::string& ch, const void* data, int size) { s->deliver(ch, data, size); });
+    subs_.push_back(std::move(sub));
+    return;
+  }
   lcm::Subscription* handle = lcm_->subscribe(sub->channel, &Subscription::on_receive, sub.get());
   if (handle != nullptr) handle->setQueueCapacity(queue_capacity);
   subs_.push_back(std::move(sub));
@@ -52,13 +64,23 @@ void Bus::subscribe_raw(const std::string& regex,
   attach(std::move(sub), queue_capacity);
 }
 
-int Bus::fileno() const { return lcm_->getFileno(); }
+int Bus::fileno() const { return hub_ != nullptr ? -1 : lcm_->getFileno(); }
 
-int Bus::handle() { return lcm_->handle(); }
+int Bus::handle() {
+  if (hub_ != nullptr) {
+    hub_->drain();
+    return 0;
+  }
+  return lcm_->handle();
+}
 
-int Bus::handle_timeout(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+int Bus::handle_timeout(int timeout_ms) {
+  if (hub_ != nullptr) return hub_->drain() > 0 ? 1 : 0;
+  return lcm_->handleTimeout(timeout_ms);
+}
 
 int Bus::drain() {
+  if (hub_ != nullptr) return static_cast<int>(hub_->drain());
   int n = 0;
   pollfd pfd{fileno(), POLLIN, 0};
   while (::poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN)) {

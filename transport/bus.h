@@ -5,7 +5,9 @@
 ///  - typed subscriptions with std::function handlers;
 ///  - malformed messages (wrong fingerprint, truncated) counted and reported, never thrown;
 ///  - per-channel receive statistics: count, drops (gaps in `seq`), queue capacity set on purpose;
-///  - a clear error naming the URL when LCM cannot start (for example no multicast route).
+///  - a clear error naming the URL when LCM cannot start (for example no multicast route);
+///  - a second carrier for runs flown in one process: the same messages, encoded the same
+///    way, through an InprocessHub instead of LCM.
 
 #include <cstdint>
 #include <functional>
@@ -16,6 +18,8 @@
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
+
+#include "transport/inprocess_hub.h"
 
 namespace nimble::transport {
 
@@ -44,15 +48,29 @@ class Bus {
   /// Opens LCM on `url` (empty: LCM_DEFAULT_URL or LCM's default).
   /// @throws TransportError naming the URL if LCM does not start.
   explicit Bus(const std::string& url);
+  /// Carries messages through `hub` (an in-process run); `hub` must outlive the Bus.
+  explicit Bus(InprocessHub& hub);
   ~Bus();
   Bus(const Bus&) = delete;
   Bus& operator=(const Bus&) = delete;
 
   const std::string& url() const { return url_; }
+  /// The hub of an in-process run, nullptr over LCM.
+  InprocessHub* hub() const { return hub_; }
 
   /// Publishes `msg` on `channel`. Never throws; a failure is counted in publish_failures().
   template <typename T>
   void publish(const std::string& channel, const T& msg) {
+    if (hub_ != nullptr) {
+      const int size = msg.getEncodedSize();
+      if (scratch_.size() < static_cast<std::size_t>(size)) scratch_.resize(static_cast<std::size_t>(size));
+      if (msg.encode(scratch_.data(), 0, size) != size) {
+        ++publish_failures_;
+        return;
+      }
+      hub_->publish(channel, scratch_.data(), size);
+      return;
+    }
     if (lcm_->publish(channel, &msg) != 0) ++publish_failures_;
   }
 
@@ -90,11 +108,13 @@ class Bus {
   /// Called for every malformed message in addition to counting it.
   void on_malformed(MalformedHandler handler) { on_malformed_ = std::move(handler); }
 
-  /// File descriptor that becomes readable when messages wait (for poll/ppoll).
+  /// File descriptor that becomes readable when messages wait (for poll/ppoll); -1 in process.
   int fileno() const;
   /// Handles one message, blocking until one arrives. Returns 0 on success, -1 on error.
+  /// In process: delivers everything waiting (never blocks).
   int handle();
   /// Handles one message or returns after `timeout_ms`: > 0 handled, 0 timeout, < 0 error.
+  /// In process: delivers everything waiting (never waits).
   int handle_timeout(int timeout_ms);
   /// Handles every message already waiting without blocking; returns how many.
   int drain();
@@ -104,7 +124,7 @@ class Bus {
   int64_t publish_failures() const { return publish_failures_; }
   int64_t malformed_total() const;
 
-  /// The underlying LCM instance (for tools that need its full API).
+  /// The underlying LCM instance (for tools that need its full API); only over LCM.
   lcm::LCM& lcm() { return *lcm_; }
 
  private:
@@ -115,6 +135,7 @@ class Bus {
     std::function<bool(const void*, int, ChannelStats&, std::string&)> decode_and_call;
     std::function<void(const std::string&, const void*, int, int64_t)> raw;
     void on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+    void deliver(const std::string& channel, const void* data, int size);
   };
 
   static void track_seq(int64_t seq, ChannelStats& stats);
@@ -122,6 +143,8 @@ class Bus {
 
   std::string url_;
   std::unique_ptr<lcm::LCM> lcm_;
+  InprocessHub* hub_ = nullptr;
+  std::vector<unsigned char> scratch_;  // in process: the encoded message
   std::map<std::string, ChannelStats> stats_;
   std::vector<std::unique_ptr<Subscription>> subs_;
   MalformedHandler on_malformed_;

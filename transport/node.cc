@@ -61,7 +61,12 @@ NodeOptions parse_node_options(int argc, char** argv, const std::string& default
 }
 
 ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest)
-    : name_(std::move(name)), config_digest_(std::move(config_digest)), bus_(lcm_url) {
+    : ProcessNode(NodeOptions{std::move(name), "", lcm_url, nullptr}, std::move(config_digest)) {}
+
+ProcessNode::ProcessNode(const NodeOptions& options, std::string config_digest)
+    : name_(options.name),
+      config_digest_(std::move(config_digest)),
+      bus_(options.hub != nullptr ? Bus(*options.hub) : Bus(options.lcm_url)) {
   bus_.on_malformed([this](const std::string& channel, const std::string& what) {
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
           "dropped a malformed message on " + channel + ": " + what);
@@ -134,6 +139,7 @@ void ProcessNode::release_ack() {
 }
 
 int ProcessNode::wait_io(int64_t timeout_ns) {
+  if (inprocess()) return bus_.drain();  // everything published so far, and what it causes
   std::vector<pollfd> fds;
   fds.reserve(1 + watched_.size());
   fds.push_back(pollfd{bus_.fileno(), POLLIN, 0});
@@ -234,7 +240,22 @@ void ProcessNode::on_run_control(const run_control_t& msg) {
     duration_ns_ = msg.duration_ns;
     run_id_ = msg.run_id;
     participants_ = msg.participants;
+    if (inprocess() && !master_) {
+      started_wall_us_ = wall_us();
+      publish_heartbeat(heartbeat_t::STATE_RUNNING);
+    }
   }
+}
+
+void ProcessNode::join_inprocess() {
+  subscribe_lockstep_side();
+  publish_heartbeat(heartbeat_t::STATE_READY);
+}
+
+void ProcessNode::finish_inprocess() {
+  publish_heartbeat(heartbeat_t::STATE_FINISHED);
+  publish_timing_health();
+  publish_heartbeat(heartbeat_t::STATE_STOPPING);
 }
 
 bool ProcessNode::wait_for_start() {
@@ -257,15 +278,18 @@ int64_t ProcessNode::next_due_ns() const {
 void ProcessNode::idle_until_stopped() {
   publish_heartbeat(heartbeat_t::STATE_FINISHED);
   publish_timing_health();
+  if (inprocess()) return;  // nobody else runs until this returns
   while (!stop_) {
     wait_io(50000000);
     housekeeping();
   }
 }
 
-int ProcessNode::run() {
+void ProcessNode::subscribe_lockstep_side() {
   // The master listens for acknowledgements, participants for the clock; each subscribes
   // only to its own side, so that nobody wakes up for its own messages.
+  if (lockstep_side_subscribed_) return;
+  lockstep_side_subscribed_ = true;
   if (master_) {
     bus_.subscribe<step_ack_t>(
       contract::channels::kStepAck,
@@ -279,6 +303,11 @@ int ProcessNode::run() {
     bus_.subscribe<rig_clock_t>(
       contract::channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
   }
+}
+
+int ProcessNode::run() {
+  if (inprocess() && !master_) throw std::logic_error("in process only the lockstep master runs; see join_inprocess()");
+  subscribe_lockstep_side();
   if (!wait_for_start()) {
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
     return kExitOk;
@@ -444,13 +473,18 @@ int ProcessNode::run_lockstep_master() {
         }
       }
       if (missing.empty()) break;
-      const int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
+      int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
+      if (inprocess() && bus_.drain() == 0) {
+        // Everything published has been delivered: the acknowledgement will never come.
+        left_ms = 0;
+      }
       if (left_ms <= 0 || stop_) {
         if (stop_) return kExitOk;
         fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
               "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
-                  std::to_string(static_cast<double>(t) / 1e9) + " s) within " +
-                  std::to_string(ack_timeout_ms_) + " ms");
+                  std::to_string(static_cast<double>(t) / 1e9) + " s) " +
+                  (inprocess() ? std::string("in process, with nothing left to deliver")
+                               : "within " + std::to_string(ack_timeout_ms_) + " ms"));
         return kExitAckTimeout;
       }
       wait_io(std::min<int64_t>(left_ms, 50) * 1000000LL);

@@ -37,6 +37,7 @@
 #include "contract/channels.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
+#include "transport/inprocess_hub.h"
 
 namespace nimble::transport {
 
@@ -51,6 +52,7 @@ struct NodeOptions {
   std::string name;           ///< process name, used on HEARTBEAT, FAULT, STEP_ACK
   std::string scenario_file;  ///< resolved scenario YAML written by the launcher
   std::string lcm_url;        ///< LCM URL of the run
+  InprocessHub* hub = nullptr;  ///< set: the node is one of a run flown in one process (no LCM)
 };
 
 /// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,
@@ -75,6 +77,11 @@ class ProcessNode {
   };
 
   ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest = "");
+  /// Over LCM at `options.lcm_url`, or through `options.hub` in an in-process run.
+  explicit ProcessNode(const NodeOptions& options, std::string config_digest = "");
+
+  /// True in an in-process run (see "In process" below).
+  bool inprocess() const { return bus_.hub() != nullptr; }
 
   Bus& bus() { return bus_; }
   const std::string& name() const { return name_; }
@@ -139,7 +146,18 @@ class ProcessNode {
   bool lockstep() const { return clock_mode_ == run_control_t::CLOCK_MODE_LOCKSTEP; }
 
   /// Waits for the start, runs until stopped. Returns the process exit code.
+  ///
+  /// In process (the node's Bus is on an InprocessHub, one thread runs every node): only the
+  /// lockstep master calls run(). Its waits deliver what the hub holds instead of blocking, a
+  /// participant whose acknowledgement is still missing once nothing is left to deliver is a
+  /// fatal fault at once, and it returns when the duration is flown. The participants call
+  /// join_inprocess() before the start and finish_inprocess() after the master returns;
+  /// their tasks run from the RIG_CLOCK ticks the hub delivers.
   int run();
+  /// In process, a participant: subscribes to RIG_CLOCK and announces READY.
+  void join_inprocess();
+  /// In process, a participant: the last TIMING_HEALTH and HEARTBEAT STOPPING.
+  void finish_inprocess();
 
   /// Requests a clean stop from a signal handler or a callback.
   static void request_stop() { stop_requested_ = 1; }
@@ -155,6 +173,7 @@ class ProcessNode {
     int64_t next_ns = 0;
   };
 
+  void subscribe_lockstep_side();
   void publish_heartbeat(int8_t state);
   void publish_timing_health();
   void housekeeping();
@@ -175,6 +194,7 @@ class ProcessNode {
   Bus bus_;
   std::vector<Task> tasks_;
   bool master_ = false;
+  bool lockstep_side_subscribed_ = false;
   int ack_timeout_ms_ = 2000;
   std::map<std::string, double> expected_hz_;
 

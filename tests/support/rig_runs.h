@@ -51,18 +51,23 @@ inline RunResult rig_run(const std::string& scenario, const std::string& dir, co
   return r;
 }
 
-/// Every TRUTH message of a log, as raw bytes (for bit-for-bit comparisons).
-inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
+/// Every message of `channel` in a log, as raw bytes (for bit-for-bit comparisons).
+inline std::vector<std::vector<uint8_t>> channel_payloads(const std::string& log_path, const std::string& channel) {
   lcm::LogFile log(log_path, "r");
   REQUIRE(log.good());
   std::vector<std::vector<uint8_t>> out;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == contract::channels::kTruth) {
+    if (ev->channel == channel) {
       const auto* b = static_cast<const uint8_t*>(ev->data);
       out.emplace_back(b, b + ev->datalen);
     }
   }
   return out;
+}
+
+/// Every TRUTH message of a log, as raw bytes.
+inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
+  return channel_payloads(log_path, contract::channels::kTruth);
 }
 
 /// Every message of `channel` in a log, decoded as T (a message that does not decode fails

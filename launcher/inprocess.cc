@@ -1,0 +1,236 @@
+#include "launcher/inprocess.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <exception>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <vector>
+
+#include <nimble/run_control_t.hpp>
+
+#include "can_bridge/bridge_config.h"
+#include "can_bridge/bridge_node.h"
+#include "can_bridge/inprocess_can_bus.h"
+#include "contract/channels.h"
+#include "controller/controller_node.h"
+#include "estimator/estimator_node.h"
+#include "launcher/message_pipe.h"
+#include "launcher/recorder.h"
+#include "mocap/mocap_node.h"
+#include "plant/plant_node.h"
+#include "transport/bus.h"
+#include "transport/clock.h"
+#include "transport/inprocess_hub.h"
+#include "transport/node.h"
+
+namespace nimble::launcher {
+namespace {
+
+using transport::monotonic_ns;
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_inprocess_interrupt(int) {
+  g_interrupted = 1;
+  transport::ProcessNode::request_stop();
+}
+
+/// One process of the run, built in this process.
+struct Process {
+  std::string name;
+  transport::ProcessNode* node = nullptr;
+  std::function<int()> run;        ///< the lockstep master only: flies the run
+  std::function<void()> finish;    ///< participants: after the run, before their last health report
+  std::shared_ptr<void> owner;
+};
+
+template <typename Node>
+Process make(const std::string& name, std::shared_ptr<Node> n) {
+  Process p;
+  p.name = name;
+  p.node = &n->node();
+  p.run = [n] { return n->run(); };
+  p.owner = n;
+  return p;
+}
+
+Process make_process(const std::string& name, const Scenario& scenario, transport::InprocessHub& hub,
+                     can::InprocessCanBus& can_bus) {
+  const transport::NodeOptions o{name, scenario.file, "inprocess", &hub};
+  if (name == "plant") return make(name, std::make_shared<plant::PlantNode>(scenario, o));
+  if (name == "controller") return make(name, std::make_shared<ControllerNode>(scenario, o));
+  if (name == "mocap") return make(name, std::make_shared<MocapNode>(scenario, o));
+  if (name == "estimator") return make(name, std::make_shared<EstimatorNode>(scenario, o));
+  if (name == can::kFlightProcess || name == can::kRigProcess) {
+    auto n = std::make_shared<can::CanBridgeNode>(scenario, o, &can_bus);
+    Process p = make(name, n);
+    p.finish = [n] {
+      n->drain_socket();
+      n->publish_health();
+    };
+    return p;
+  }
+  throw ConfigError(scenario.file, "processes", name,
+                    "unknown process (known: plant, controller, mocap, estimator, can_flight, can_rig)");
+}
+
+std::string last_fatal_fault(const RunMonitor& monitor) {
+  for (auto it = monitor.faults().rbegin(); it != monitor.faults().rend(); ++it) {
+    if (it->severity >= 3) return "'" + it->process + "': " + it->message;
+  }
+  return "";
+}
+
+}  // namespace
+
+RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
+  const Scenario& s = plan.scenario;
+  transport::InprocessHub hub;
+  RunMonitor monitor(monitor_config(plan));
+  std::unique_ptr<Recorder> recorder;
+  if (!options.log_file.empty()) recorder = std::make_unique<Recorder>(options.log_file, monitor);
+
+  // Every message goes, in order, to a second thread that records and monitors it (the
+  // launcher's logger, in the other executors); the flight never waits for the disk.
+  const bool tty = ::isatty(STDERR_FILENO);
+  std::atomic<int64_t> wall_start_ns{monotonic_ns()};
+  int64_t next_progress_ns = 0;  // the recording thread's own
+  MessagePipe pipe([&](const std::string& channel, const void* data, int size, int64_t /*sent*/) {
+    // Stamped on arrival here, as the launcher's logger stamps what it receives.
+    const int64_t recv_ns = monotonic_ns();
+    if (recorder) {
+      recorder->record(channel, data, size, recv_ns);
+      recorder->flush_if_due(recv_ns);
+    } else {
+      monitor.on_message(channel, data, size, recv_ns);
+    }
+    if (options.progress && recv_ns >= next_progress_ns && channel == contract::channels::kTruth) {
+      const double wall = static_cast<double>(recv_ns - wall_start_ns) / 1e9;
+      char line[160];
+      std::snprintf(line, sizeof line, "[inprocess] sim %7.2f / %.2f s   wall %7.2f s   %7.1fx   TRUTH %lld",
+                    monitor.sim_time_s(), s.duration_s, wall, wall > 0 ? monitor.sim_time_s() / wall : 0.0,
+                    static_cast<long long>(monitor.truth_count()));
+      std::fprintf(stderr, tty ? "\r%s" : "%s\n", line);
+      next_progress_ns = recv_ns + (tty ? 200000000LL : 2000000000LL);
+    }
+  });
+  hub.subscribe(".*", [&pipe](const std::string& channel, const void* data, int size) {
+    pipe.send(&channel, data, size, 0);
+  });
+
+  can::InprocessCanBus can_bus;
+  std::vector<Process> processes;
+  Process* master = nullptr;
+  for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus));
+  for (auto& p : processes) {
+    if (p.name == "plant") master = &p;
+    else p.node->join_inprocess();
+  }
+  if (master == nullptr) throw ConfigError(s.file, "processes", "", "a run needs the process plant");
+
+  transport::Bus control(hub);
+  run_control_t start;
+  start.utime = transport::wall_us();
+  start.seq = 0;
+  start.command = run_control_t::COMMAND_START;
+  start.clock_mode = run_control_t::CLOCK_MODE_LOCKSTEP;
+  start.t0_monotonic_ns = 0;
+  start.duration_ns = static_cast<int64_t>(std::llround(s.duration_s * 1e9));
+  start.run_id = s.name + "-" + std::to_string(::getpid());
+  for (const auto& p : processes) {
+    if (&p != master) start.participants.push_back(p.name);
+  }
+  start.num_participants = static_cast<int32_t>(start.participants.size());
+  wall_start_ns = monotonic_ns();  // the run starts here; building it is not timed
+  control.publish(contract::channels::kRunControl, start);
+  hub.drain();
+
+  g_interrupted = 0;
+  struct sigaction sa{}, old_int{}, old_term{};
+  sa.sa_handler = on_inprocess_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &old_int);
+  sigaction(SIGTERM, &sa, &old_term);
+
+  std::string failure;
+  int master_code = transport::kExitOk;
+  try {
+    master_code = master->run();
+    for (auto& p : processes) {
+      if (&p == master) continue;
+      if (p.finish) p.finish();
+      p.node->finish_inprocess();
+    }
+  } catch (const std::exception& e) {
+    failure = "a process threw during the run at simulated t = " +
+              std::to_string(static_cast<double>(master->node->sim_time_ns()) / 1e9) + " s: " + e.what();
+  }
+  run_control_t stop = start;
+  stop.seq = 1;
+  stop.utime = transport::wall_us();
+  stop.command = run_control_t::COMMAND_STOP;
+  control.publish(contract::channels::kRunControl, stop);
+  hub.drain();
+  pipe.close();  // every message recorded and monitored
+  if (recorder) recorder->flush();
+  const double wall_s = static_cast<double>(monotonic_ns() - wall_start_ns) / 1e9;
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+  const bool interrupted = g_interrupted != 0;
+  if (options.progress && tty) std::fprintf(stderr, "\n");
+  if (failure.empty() && master_code != transport::kExitOk) {
+    const std::string why = last_fatal_fault(monitor);
+    failure = "the lockstep master (plant) ended with code " + std::to_string(master_code) + " at simulated t = " +
+              std::to_string(monitor.sim_time_s()) + " s" + (why.empty() ? "" : ": " + why);
+  }
+
+  RunReport report;
+  report.scenario = s.name;
+  report.clock = kClockInprocess;
+  report.seed = s.seed;
+  report.transport = "in process";
+  report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages";
+  report.log_file = options.log_file;
+  fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
+  for (const auto& p : processes) {
+    const int code = &p == master ? master_code : transport::kExitOk;
+    report.processes.push_back(ProcessOutcome{p.name, static_cast<long long>(::getpid()), true, code, 0,
+                                              "in process, returned " + std::to_string(code)});
+  }
+  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure);
+  return report;
+}
+
+int run_inprocess(const RunPlan& plan_in, const RunOptions& options) {
+  RunPlan plan = plan_in;
+  const std::string log_file = log_file_for(plan, options);
+  RunReport report;
+  try {
+    if (plan.scenario.actuator_link == "can") {
+      ConfigMap section = plan.scenario.section("can_bridge");
+      const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
+      if (cc.candump_log && cc.candump_file.empty()) {
+        plan.scenario.root["can_bridge"]["candump_file"] = log_file + ".candump";
+      }
+    }
+    write_resolved_scenario(plan, log_file);
+    InprocessOptions o;
+    o.log_file = log_file;
+    o.progress = options.progress;
+    report = fly_inprocess(plan, o);
+  } catch (const ConfigError& e) {
+    std::cerr << "rig run: config error: " << e.what() << "\n";
+    return kRunBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "rig run: " << e.what() << "\n";
+    return kRunBadInput;
+  }
+  if (report.verdict.exit_code == kRunFailed) std::cerr << "rig run: " << report.verdict.text << "\n";
+  return finish_report(report, options);
+}
+
+}  // namespace nimble::launcher

@@ -1,0 +1,37 @@
+#pragma once
+/// The in-process executor: `rig run <scenario> --clock inprocess`.
+///
+/// Flies a run plan with every process of the scenario (plant, controller, mocap, estimator,
+/// both sides of the CAN bridge) built from the same node classes the rig's executables run,
+/// in this process and on one thread, without transport: their Buses share an InprocessHub,
+/// the plant is the lockstep master, the others are participants fed its RIG_CLOCK ticks, so
+/// each consumer uses what was published at earlier ticks, as in `--clock lockstep`. The TRUTH
+/// messages are byte for byte those of a lockstep run of the same scenario and seed. The CAN
+/// link, when the scenario has one, carries real frames through the rig's codec over an
+/// InprocessCanBus. Every message goes to the same recorder and monitor as in the other
+/// executors: the log has every channel, the report and verdict are the same.
+
+#include <string>
+
+#include "launcher/run_plan.h"
+#include "launcher/run_report.h"
+
+namespace nimble::launcher {
+
+struct InprocessOptions {
+  std::string log_file;   ///< the LCM log; empty: none (the monitor still sees every message)
+  bool progress = false;  ///< progress line on stderr
+};
+
+/// Flies `plan` (any clock: it is flown in process) and returns its report; prints nothing
+/// but the progress line. A failure during the run (a process that throws, a participant
+/// that does not acknowledge) ends the run and is in the verdict.
+/// @throws ConfigError for a bad configuration found while the processes are built;
+///         std::runtime_error if the log cannot be written.
+RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options);
+
+/// `rig run --clock inprocess`: writes the resolved scenario next to the log, flies the plan,
+/// prints the summary, writes the JSON; returns the verdict's exit code.
+int run_inprocess(const RunPlan& plan, const RunOptions& options);
+
+}  // namespace nimble::launcher

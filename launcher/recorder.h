@@ -1,0 +1,54 @@
+#pragma once
+/// Recorder: writes every message of a run to an LCM log (lcm-logplayer, lcm::LogFile and
+/// `rig identify` read it) and feeds the run monitor. Used by both executors; nothing here
+/// knows where the messages come from.
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "launcher/run_monitor.h"
+#include "launcher/run_plan.h"
+
+namespace nimble::launcher {
+
+/// What the monitor of a run of `plan` expects: the channel rates of its processes, the
+/// clock's own channels (RIG_CLOCK, STEP_ACK with the recorder as a lockstep participant,
+/// but not in process), lateness in real time.
+MonitorConfig monitor_config(const RunPlan& plan);
+
+class Recorder {
+ public:
+  /// Opens `log_file` for writing (a 1 MiB write buffer).
+  /// @throws std::runtime_error naming the file if it cannot be opened.
+  Recorder(const std::string& log_file, RunMonitor& monitor);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  /// Logs one message, stamped with the wall clock, and hands it to the monitor.
+  /// `recv_ns`: its receive time [ns, CLOCK_MONOTONIC].
+  void record(const std::string& channel, const void* data, int size, int64_t recv_ns);
+
+  /// Flushes the log if `flush_period_ns` has passed since the last flush (what is recorded
+  /// survives a crash of the recorder up to that age).
+  void flush_if_due(int64_t now_ns, int64_t flush_period_ns = 100000000LL);
+  /// Flushes the log.
+  void flush();
+
+  int64_t events() const { return event_number_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  RunMonitor& monitor_;
+  std::unique_ptr<lcm::LogFile> log_;
+  std::unique_ptr<char[]> buffer_;
+  int64_t event_number_ = 0;
+  int64_t last_flush_ns_ = 0;
+};
+
+}  // namespace nimble::launcher

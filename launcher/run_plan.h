@@ -1,0 +1,86 @@
+#pragma once
+/// The run plan: everything `rig run` needs to know before it starts anything, loaded and
+/// validated once from the scenario and the command line. Both executors (separate processes
+/// over LCM, and in process) fly a RunPlan.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "contract/rates.h"
+#include "scenario/scenario.h"
+
+namespace nimble::launcher {
+
+/// Exit codes of `rig run`.
+constexpr int kRunOk = 0;
+constexpr int kRunNotControlled = 1;  ///< the run completed but the vehicle was not controlled
+constexpr int kRunBadInput = 2;       ///< bad scenario, flag or environment
+constexpr int kRunFailed = 3;         ///< a process failed, did not start, or the run stalled
+constexpr int kRunInterrupted = 130;  ///< stopped by SIGINT/SIGTERM
+
+/// The clocks a scenario can be flown on (`clock:` or `--clock`).
+/// realtime and lockstep run each process as its own OS process over LCM; inprocess flies
+/// the same processes' code in one process and one thread, with lockstep semantics.
+constexpr const char* kClockRealtime = "realtime";
+constexpr const char* kClockLockstep = "lockstep";
+constexpr const char* kClockInprocess = "inprocess";
+
+struct RunOptions {
+  std::string scenario_file;
+  std::vector<Override> overrides;   ///< --set key=value
+  std::optional<std::string> clock;  ///< --clock realtime|lockstep|inprocess
+  std::optional<uint64_t> seed;      ///< --seed N
+  std::string log_file;              ///< --log FILE (default: rig_logs/<name>-<time>.lcmlog)
+  std::string json_file;             ///< --json FILE
+  std::string bin_dir;               ///< where nimble_plant etc. live (default: next to rig)
+  bool progress = true;              ///< progress line on stderr
+  bool print_summary = true;         ///< the run summary on stdout
+};
+
+/// Settings of the launcher itself (scenario section `run`).
+struct LaunchConfig {
+  double ready_timeout_s = 15.0;   ///< every process must report READY within this [s]
+  double stop_grace_s = 2.0;       ///< after RUN_CONTROL stop, before SIGTERM [s]
+  double stall_timeout_s = 10.0;   ///< lockstep: no simulated progress for this long is a failure [s]
+  double start_delay_s = 0.05;     ///< real time: t0 lies this far after the start command [s]
+  std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run
+  std::string network_namespace = "auto";  ///< auto | always | never
+  int64_t late_threshold_us = 2000;
+  std::vector<int> rig_cpus;       ///< CPUs for the rig's processes (empty: no pinning)
+  std::vector<int> launcher_cpus;  ///< CPUs for the launcher itself (empty: no pinning)
+};
+
+/// Judgement of the flight (scenario section `summary`).
+struct JudgeConfig {
+  double max_phi_deg = 80.0;        ///< beyond this roll the vehicle is not controlled
+  double max_theta_deg = 60.0;      ///< beyond this pitch (the pitch set-point limit) neither
+  double hover_phi_deg = 5.0;       ///< final |phi| for "returned to hover"
+  double hover_p_radps = 0.5;       ///< final |p| for "returned to hover"
+  double hover_v_mps = 0.3;         ///< final |v| for "returned to hover"
+};
+
+struct RunPlan {
+  Scenario scenario;            ///< resolved: bases merged, --clock/--seed/--set applied, validated
+  LaunchConfig launch;
+  JudgeConfig judge;
+  contract::ProcessRates rates;
+  double logger_period_ms = 10.0;  ///< lockstep.logger_period_ms
+  bool inprocess() const { return scenario.clock == kClockInprocess; }
+  bool lockstep() const { return scenario.clock != kClockRealtime; }  ///< lockstep semantics
+};
+
+/// Loads and validates a scenario with the run options applied (every process section,
+/// the models and the manoeuvre) without starting anything.
+/// @throws ConfigError naming the file, key and value.
+RunPlan load_run_plan(const RunOptions& options);
+
+/// The log file of a run: `options.log_file`, or rig_logs/<name>-<time>.lcmlog.
+std::string log_file_for(const RunPlan& plan, const RunOptions& options);
+
+/// Writes the resolved scenario next to the log (`<log>.scenario.yaml`); returns its path.
+/// @throws std::runtime_error if it cannot be written.
+std::string write_resolved_scenario(const RunPlan& plan, const std::string& log_file);
+
+}  // namespace nimble::launcher

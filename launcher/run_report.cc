@@ -1,0 +1,254 @@
+#include "launcher/run_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <ostream>
+
+#include "core/json_writer.h"
+
+namespace nimble::launcher {
+
+void fill_from_monitor(RunReport& r, const RunMonitor& monitor, double sim_s, double wall_s) {
+  r.sim_time_s = sim_s;
+  r.wall_time_s = wall_s;
+  r.channels = monitor.channels(sim_s, wall_s);
+  r.timing = monitor.timing();
+  r.flight = monitor.flight();
+  r.estimator = monitor.estimator();
+  r.can_health = monitor.can_health();
+  r.faults = monitor.faults();
+}
+
+void write_report_text(std::ostream& out, const RunReport& r) {
+  const FlightSummary& f = r.flight;
+  const double sim_s = r.sim_time_s, wall_s = r.wall_time_s;
+  char line[256];
+  out << "\n== run summary: " << r.scenario << " ==\n";
+  out << "clock      " << r.clock << ", seed " << r.seed << "\n";
+  out << "transport  " << r.transport << (r.transport_detail.empty() ? "" : "  (" + r.transport_detail + ")") << "\n";
+  out << "log        " << r.log_file << "\n";
+  std::snprintf(line, sizeof line, "time       simulated %.3f s, wall %.3f s (%.2fx real time)\n", sim_s, wall_s,
+                wall_s > 0 ? sim_s / wall_s : 0.0);
+  out << line;
+  out << "\nchannel              count    rate [Hz]  expected   drops   late  malformed\n";
+  for (const auto& [name, c] : r.channels) {
+    std::snprintf(line, sizeof line, "%-18s %8lld %10.1f %9.1f %7lld %6lld %9lld%s\n", name.c_str(),
+                  static_cast<long long>(c.count), c.rate_hz, c.expected_hz, static_cast<long long>(c.drops),
+                  static_cast<long long>(c.late), static_cast<long long>(c.malformed),
+                  c.wall_clock ? "  (per wall second)" : "");
+    out << line;
+  }
+  out << "\nloop timing "
+      << (r.clock == kClockRealtime ? "(wake-up jitter)"
+          : r.clock == kClockInprocess ? "(in process: wall time per step, all processes)"
+                                       : "(lockstep: wall time per step / per wait)")
+      << "\nprocess        rate [Hz]    loops  overruns   p50 [us]   p99 [us]   max [us]\n";
+  for (const auto& [name, t] : r.timing) {
+    std::snprintf(line, sizeof line, "%-14s %9.1f %8lld %9lld %10.1f %10.1f %10.1f\n", name.c_str(), t.loop_rate_hz,
+                  static_cast<long long>(t.loop_count), static_cast<long long>(t.overruns), t.jitter_p50_us,
+                  t.jitter_p99_us, t.jitter_max_us);
+    out << line;
+  }
+  for (const auto& [name, t] : r.timing) {
+    if (t.latency_count == 0) continue;
+    const char* what = name == "plant" ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
+                       : name == "estimator" ? "latency (IMU sample time -> ESTIMATE published)"
+                                             : "latency";
+    std::snprintf(line, sizeof line, "%s %s: p50 %.1f us, p99 %.1f us, max %.1f us over %lld messages\n",
+                  name.c_str(), what, t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
+                  static_cast<long long>(t.latency_count));
+    out << line;
+  }
+  out << "\nflight     max |p| " << std::to_string(f.max_abs_p).substr(0, 6) << " rad/s, max |v| "
+      << std::to_string(f.max_abs_v).substr(0, 6) << " m/s, max |phi| "
+      << std::to_string(f.max_abs_phi * 180 / M_PI).substr(0, 6) << " deg";
+  if (f.max_abs_theta > 0.0) out << ", max |theta| " << std::to_string(f.max_abs_theta * 180 / M_PI).substr(0, 6) << " deg";
+  out << "\n";
+  std::snprintf(line, sizeof line, "ranges     p %.2f rad/s, v %.2f m/s, phi %.2f rad, delta_f %.1f rad/s\n",
+                f.max_p - f.min_p, f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
+  out << line;
+  std::snprintf(line, sizeof line, "final      p %.3f rad/s, v %.3f m/s, phi %.2f deg\n", f.final_p, f.final_v,
+                f.final_phi * 180 / M_PI);
+  out << line;
+  const EstimatorSummary& est = r.estimator;
+  if (est.samples > 0) {
+    std::snprintf(line, sizeof line,
+                  "estimator  phi error rms %.3f deg (max %.3f), p error rms %.4f rad/s, v error rms %.4f m/s over %lld "
+                  "estimates; poses accepted %lld, rejected %lld, missing %lld\n",
+                  est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, static_cast<long long>(est.samples),
+                  static_cast<long long>(est.poses_accepted), static_cast<long long>(est.poses_rejected),
+                  static_cast<long long>(est.poses_missing));
+    out << line;
+    if (est.poses_too_old + est.poses_too_new + est.velocity_windows_uncovered + est.imu_rejected + est.imu_gaps > 0) {
+      std::snprintf(line, sizeof line,
+                    "estimator  poses dropped %lld too old, %lld too new; velocity windows uncovered %lld; IMU samples "
+                    "rejected %lld, gaps %lld\n",
+                    static_cast<long long>(est.poses_too_old), static_cast<long long>(est.poses_too_new),
+                    static_cast<long long>(est.velocity_windows_uncovered), static_cast<long long>(est.imu_rejected),
+                    static_cast<long long>(est.imu_gaps));
+      out << line;
+    }
+  }
+  for (const auto& [name, h] : r.can_health) {
+    std::snprintf(line, sizeof line,
+                  "%-10s %s: %lld messages to CAN, %lld to LCM; frames sent %lld, received %lld; rejected: unknown id "
+                  "%lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; error frames "
+                  "%lld; ENOBUFS %lld, dropped %lld\n",
+                  name.c_str(), h.interface_name.c_str(), static_cast<long long>(h.messages_to_can),
+                  static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
+                  static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
+                  static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
+                  static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
+                  static_cast<long long>(h.error_frames), static_cast<long long>(h.send_enobufs),
+                  static_cast<long long>(h.send_dropped + h.receive_dropped));
+    out << line;
+    if (h.fd) {
+      out << "           CAN FD: " << h.fd_frames_sent << " of the frames sent and " << h.fd_frames_received
+          << " of those received were FD frames\n";
+    }
+    if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
+  }
+  out << "faults     " << r.faults.size() << "\n";
+  std::size_t shown = 0;
+  for (const auto& fr : r.faults) {
+    if (++shown > 8) {
+      out << "           ...\n";
+      break;
+    }
+    std::snprintf(line, sizeof line, "           [%s t=%.3f s] ", fr.process.c_str(), fr.rig_time_s);
+    out << line << fr.message << "\n";
+  }
+  out << "processes ";
+  for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";
+  out << "\n";
+  out << "controlled " << (r.verdict.controlled ? "yes" : "NO") << ", returned to hover "
+      << (r.verdict.hover ? "yes" : "no") << "\n";
+  out << "result     " << r.verdict.text << "\n";
+}
+
+std::string report_json(const RunReport& r) {
+  const FlightSummary& f = r.flight;
+  JsonWriter w;
+  w.begin_object();
+  w.key("scenario").value(r.scenario);
+  w.key("clock").value(r.clock);
+  w.key("seed").value(static_cast<long long>(r.seed));
+  w.key("lcm_url").value(r.transport);
+  w.key("log").value(r.log_file);
+  w.key("controlled").value(r.verdict.controlled);
+  w.key("returned_to_hover").value(r.verdict.hover);
+  w.key("exit_code").value(r.verdict.exit_code);
+  w.key("result").value(r.verdict.text);
+  w.key("sim_time_s").value(r.sim_time_s);
+  w.key("wall_time_s").value(r.wall_time_s);
+  w.key("speed_x_realtime").value(r.speed_x_realtime());
+  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).end_object();
+  w.key("ranges").begin_object();
+  w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
+  w.key("delta_f").value(f.max_df - f.min_df);
+  w.end_object();
+  w.key("final").begin_object().key("p").value(f.final_p).key("v").value(f.final_v).key("phi").value(f.final_phi).end_object();
+  const EstimatorSummary& est = r.estimator;
+  if (est.samples > 0) {
+    w.key("estimator").begin_object();
+    w.key("samples").value(static_cast<long long>(est.samples));
+    w.key("phi_rms_deg").value(est.phi_rms_deg).key("phi_max_deg").value(est.phi_max_deg);
+    w.key("p_rms_radps").value(est.p_rms_radps).key("v_rms_mps").value(est.v_rms_mps);
+    w.key("poses_accepted").value(static_cast<long long>(est.poses_accepted));
+    w.key("poses_rejected").value(static_cast<long long>(est.poses_rejected));
+    w.key("poses_missing").value(static_cast<long long>(est.poses_missing));
+    w.key("poses_too_old").value(static_cast<long long>(est.poses_too_old));
+    w.key("poses_too_new").value(static_cast<long long>(est.poses_too_new));
+    w.key("velocity_windows_uncovered").value(static_cast<long long>(est.velocity_windows_uncovered));
+    w.key("imu_rejected").value(static_cast<long long>(est.imu_rejected));
+    w.key("imu_gaps").value(static_cast<long long>(est.imu_gaps));
+    w.end_object();
+  }
+  if (!r.can_health.empty()) {
+    w.key("can").begin_object();
+    for (const auto& [name, h] : r.can_health) {
+      const auto n = [](int64_t v) { return static_cast<long long>(v); };
+      w.key(name).begin_object();
+      w.key("interface").value(h.interface_name);
+      w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
+      w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
+      w.key("fd").value(h.fd != 0);
+      w.key("fd_frames_sent").value(n(h.fd_frames_sent)).key("fd_frames_received").value(n(h.fd_frames_received));
+      w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
+      w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
+      w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));
+      w.key("rejected_stale_counter").value(n(h.rejected_stale_counter));
+      w.key("rejected_out_of_range").value(n(h.rejected_out_of_range));
+      w.key("counter_gaps").value(n(h.counter_gaps)).key("saturated_values").value(n(h.saturated_values));
+      w.key("error_frames").value(n(h.error_frames)).key("bus_state").value(static_cast<int>(h.bus_state));
+      w.key("last_error").value(h.last_error);
+      w.key("send_enobufs").value(n(h.send_enobufs)).key("send_retries").value(n(h.send_retries));
+      w.key("send_dropped").value(n(h.send_dropped)).key("receive_dropped").value(n(h.receive_dropped));
+      w.key("candump_file").value(h.candump_file).key("candump_lines").value(n(h.candump_lines));
+      w.end_object();
+    }
+    w.end_object();
+  }
+  w.key("channels").begin_object();
+  for (const auto& [name, c] : r.channels) {
+    w.key(name).begin_object();
+    w.key("count").value(static_cast<long long>(c.count));
+    w.key("rate_hz").value(c.rate_hz);
+    w.key("expected_hz").value(c.expected_hz);
+    w.key("drops").value(static_cast<long long>(c.drops));
+    w.key("late").value(static_cast<long long>(c.late));
+    w.key("malformed").value(static_cast<long long>(c.malformed));
+    w.key("rate_basis").value(c.wall_clock ? "wall" : "sim");
+    w.end_object();
+  }
+  w.end_object();
+  w.key("timing").begin_object();
+  for (const auto& [name, t] : r.timing) {
+    w.key(name).begin_object();
+    w.key("loop_rate_hz").value(t.loop_rate_hz);
+    w.key("loop_count").value(static_cast<long long>(t.loop_count));
+    w.key("overruns").value(static_cast<long long>(t.overruns));
+    w.key("jitter_p50_us").value(t.jitter_p50_us);
+    w.key("jitter_p99_us").value(t.jitter_p99_us);
+    w.key("jitter_max_us").value(t.jitter_max_us);
+    w.key("latency_count").value(static_cast<long long>(t.latency_count));
+    w.key("latency_p50_us").value(t.latency_p50_us);
+    w.key("latency_p99_us").value(t.latency_p99_us);
+    w.key("latency_max_us").value(t.latency_max_us);
+    w.end_object();
+  }
+  w.end_object();
+  w.key("faults").begin_array();
+  for (const auto& fr : r.faults) {
+    w.begin_object();
+    w.key("process").value(fr.process).key("severity").value(fr.severity).key("code").value(fr.code);
+    w.key("channel").value(fr.channel).key("message").value(fr.message).key("rig_time_s").value(fr.rig_time_s);
+    w.end_object();
+  }
+  w.end_array();
+  w.key("processes").begin_object();
+  for (const auto& p : r.processes) {
+    w.key(p.name).begin_object();
+    w.key("pid").value(p.pid);
+    w.key("exit_code").value(p.exit_code);
+    w.key("signal").value(p.signal);
+    w.end_object();
+  }
+  w.end_object();
+  w.end_object();
+  return w.str();
+}
+
+int finish_report(const RunReport& report, const RunOptions& options) {
+  if (options.print_summary) write_report_text(std::cout, report);
+  if (!options.json_file.empty()) {
+    std::ofstream out(options.json_file);
+    out << report_json(report) << "\n";
+    if (!out) std::cerr << "rig run: cannot write " << options.json_file << "\n";
+  }
+  return report.verdict.exit_code;
+}
+
+}  // namespace nimble::launcher

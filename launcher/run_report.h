@@ -1,0 +1,62 @@
+#pragma once
+/// The run report: what `rig run` prints and writes as JSON, as plain data, built once at the
+/// end of a run by either executor and written by two writers that know nothing of processes
+/// or transport.
+
+#include <iosfwd>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nimble/can_health_t.hpp>
+
+#include "launcher/run_monitor.h"
+#include "launcher/verdict.h"
+
+namespace nimble::launcher {
+
+/// How one process of the run ended.
+struct ProcessOutcome {
+  std::string name;
+  long long pid = -1;
+  bool exited = false;
+  int exit_code = -1;
+  int signal = 0;
+  std::string ended;  ///< "exited with code 0", "was killed by signal 9 (Killed)", "running"
+};
+
+struct RunReport {
+  std::string scenario;
+  std::string clock;
+  unsigned long long seed = 0;
+  std::string transport;         ///< the LCM URL, or "in process"
+  std::string transport_detail;  ///< network namespace etc. (may be empty)
+  std::string log_file;
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  std::map<std::string, ChannelSummary> channels;
+  std::map<std::string, TimingSummary> timing;
+  FlightSummary flight;
+  EstimatorSummary estimator;    ///< samples == 0: no estimator in the run
+  std::map<std::string, nimble::can_health_t> can_health;
+  std::vector<FaultRecord> faults;
+  std::vector<ProcessOutcome> processes;
+  Verdict verdict;
+
+  double speed_x_realtime() const { return wall_time_s > 0 ? sim_time_s / wall_time_s : 0.0; }
+};
+
+/// Fills the parts of a report that come from the monitor (channels, timing, flight,
+/// estimator, CAN health, faults) for a run of `sim_s` simulated and `wall_s` wall seconds.
+void fill_from_monitor(RunReport& report, const RunMonitor& monitor, double sim_s, double wall_s);
+
+/// The human-readable summary.
+void write_report_text(std::ostream& out, const RunReport& report);
+/// The summary as one JSON object (`rig run --json`).
+std::string report_json(const RunReport& report);
+
+/// Prints the summary (options.print_summary) and writes the JSON (options.json_file);
+/// returns the verdict's exit code.
+int finish_report(const RunReport& report, const RunOptions& options);
+
+}  // namespace nimble::launcher

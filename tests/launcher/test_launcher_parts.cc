@@ -1,0 +1,200 @@
+// Unit tests of the launcher's parts that know nothing of processes: the verdict, the report
+// writers, the message pipe to the recording thread, and the in-process CAN bus.
+
+#include <linux/can.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "can_bridge/inprocess_can_bus.h"
+#include "contract/channels.h"
+#include "launcher/message_pipe.h"
+#include "launcher/run_report.h"
+#include "launcher/verdict.h"
+
+using namespace nimble::launcher;
+
+namespace {
+
+FlightSummary calm_flight() {
+  FlightSummary f;
+  f.samples = 100;
+  f.max_abs_phi = 20.0 * M_PI / 180.0;
+  f.final_phi = 1.0 * M_PI / 180.0;
+  f.final_p = 0.1;
+  f.final_v = 0.05;
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("verdict: controlled and back at hover is ok", "[launcher]") {
+  const Verdict v = judge_run(calm_flight(), JudgeConfig{}, false, "");
+  CHECK(v.exit_code == kRunOk);
+  CHECK(v.text == "ok");
+  CHECK(v.controlled);
+  CHECK(v.hover);
+}
+
+TEST_CASE("verdict: roll beyond the limit, non-finite truth or no truth is not controlled", "[launcher]") {
+  FlightSummary f = calm_flight();
+  f.max_abs_phi = 81.0 * M_PI / 180.0;
+  Verdict v = judge_run(f, JudgeConfig{}, false, "");
+  CHECK(v.exit_code == kRunNotControlled);
+  CHECK_FALSE(v.controlled);
+  CHECK_FALSE(v.hover);
+  CHECK(v.text == "completed, vehicle NOT controlled");
+  JudgeConfig wide;
+  wide.max_phi_deg = 90.0;
+  CHECK(judge_run(f, wide, false, "").exit_code == kRunOk);  // the limit is the judge's
+
+  f = calm_flight();
+  f.finite = false;
+  CHECK(judge_run(f, JudgeConfig{}, false, "").exit_code == kRunNotControlled);
+  f = calm_flight();
+  f.max_abs_theta = 61.0 * M_PI / 180.0;
+  CHECK(judge_run(f, JudgeConfig{}, false, "").exit_code == kRunNotControlled);
+  CHECK(judge_run(FlightSummary{}, JudgeConfig{}, false, "").exit_code == kRunNotControlled);
+}
+
+TEST_CASE("verdict: controlled but not back at hover is still ok", "[launcher]") {
+  FlightSummary f = calm_flight();
+  f.final_v = 0.31;
+  const Verdict v = judge_run(f, JudgeConfig{}, false, "");
+  CHECK(v.exit_code == kRunOk);
+  CHECK(v.controlled);
+  CHECK_FALSE(v.hover);
+}
+
+TEST_CASE("verdict: a failure outranks the flight, an interruption outranks both", "[launcher]") {
+  const Verdict failed = judge_run(calm_flight(), JudgeConfig{}, false, "process 'plant' died\n  details");
+  CHECK(failed.exit_code == kRunFailed);
+  CHECK(failed.text == "failed: process 'plant' died");  // the first line only
+  const Verdict stopped = judge_run(calm_flight(), JudgeConfig{}, true, "process 'plant' died");
+  CHECK(stopped.exit_code == kRunInterrupted);
+  CHECK(stopped.text == "interrupted");
+}
+
+TEST_CASE("report: the text and the JSON carry the same run", "[launcher]") {
+  RunReport r;
+  r.scenario = "unit";
+  r.clock = kClockInprocess;
+  r.seed = 42;
+  r.transport = "in process";
+  r.log_file = "x.lcmlog";
+  r.sim_time_s = 6.0;
+  r.wall_time_s = 0.03;
+  r.channels[nimble::contract::channels::kTruth] = ChannelSummary{6001, 1000.2, 1000.0, 0, 0, 0, false};
+  r.flight = calm_flight();
+  r.faults.push_back(FaultRecord{"plant", 2, 13, nimble::contract::channels::kActuatorCommand, "clamped", 1.5});
+  r.processes.push_back(ProcessOutcome{"plant", 1, true, 0, 0, "in process, returned 0"});
+  r.verdict = judge_run(r.flight, JudgeConfig{}, false, "");
+  std::ostringstream text;
+  write_report_text(text, r);
+  CHECK(text.str().find("== run summary: unit ==") != std::string::npos);
+  CHECK(text.str().find("inprocess, seed 42") != std::string::npos);
+  CHECK(text.str().find("200.00x real time") != std::string::npos);
+  CHECK(text.str().find("[plant t=1.500 s] clamped") != std::string::npos);
+  CHECK(text.str().find("result     ok") != std::string::npos);
+  const YAML::Node j = YAML::Load(report_json(r));
+  CHECK(j["scenario"].as<std::string>() == "unit");
+  CHECK(j["clock"].as<std::string>() == "inprocess");
+  CHECK(j["seed"].as<int>() == 42);
+  CHECK(j["speed_x_realtime"].as<double>() == Approx(200.0));
+  CHECK(j["channels"][nimble::contract::channels::kTruth]["count"].as<int>() == 6001);
+  CHECK(j["faults"][0]["code"].as<int>() == 13);
+  CHECK(j["processes"]["plant"]["exit_code"].as<int>() == 0);
+  CHECK(j["exit_code"].as<int>() == kRunOk);
+  CHECK(j["result"].as<std::string>() == "ok");
+}
+
+TEST_CASE("message pipe: every message arrives on the other thread, in order, with its bytes", "[launcher]") {
+  const std::string a = "A", b = "BB";
+  std::vector<std::string> got;
+  std::thread::id sink_thread;
+  {
+    MessagePipe pipe(
+        [&](const std::string& channel, const void* data, int size, int64_t stamp) {
+          sink_thread = std::this_thread::get_id();
+          got.push_back(channel + ":" + std::string(static_cast<const char*>(data), size) + ":" +
+                        std::to_string(stamp));
+        },
+        64, 2);  // small batches and two in flight: the sender waits, nothing is dropped
+    for (int i = 0; i < 5000; ++i) {
+      const std::string payload = std::to_string(i);
+      pipe.send(i % 3 == 0 ? &a : &b, payload.data(), static_cast<int>(payload.size()), i);
+    }
+    pipe.close();
+    pipe.close();  // idempotent
+  }
+  REQUIRE(got.size() == 5000);
+  for (int i = 0; i < 5000; ++i) {
+    const std::string want = (i % 3 == 0 ? a : b) + ":" + std::to_string(i) + ":" + std::to_string(i);
+    if (got[i] != want) FAIL("message " << i << " is '" << got[i] << "', expected '" << want << "'");
+  }
+  CHECK(sink_thread != std::this_thread::get_id());
+}
+
+TEST_CASE("message pipe: an exception in the sink reaches close()", "[launcher]") {
+  const std::string c = "C";
+  MessagePipe pipe([](const std::string&, const void*, int, int64_t) { throw std::runtime_error("disk full"); });
+  pipe.send(&c, "x", 1, 0);
+  CHECK_THROWS_WITH(pipe.close(), "disk full");
+}
+
+TEST_CASE("in-process CAN bus: frames reach every other endpoint, FD only where FD is on", "[launcher][can]") {
+  using nimble::can::FramePort;
+  using nimble::can::InprocessCanBus;
+  using nimble::can::ReceivedFrame;
+  using nimble::can::ReceiveResult;
+  using nimble::can::SendResult;
+  InprocessCanBus bus;
+  auto flight = bus.attach("vcan0", true);
+  auto rig = bus.attach("vcan0", true);
+  auto classical = bus.attach("vcan0", false);
+  CHECK(flight->fd() == -1);
+
+  can_frame f{};
+  f.can_id = 0x110;
+  f.len = 8;
+  for (int i = 0; i < 8; ++i) f.data[i] = static_cast<uint8_t>(i);
+  CHECK(flight->send(f) == SendResult::kSent);
+  ReceivedFrame rx;
+  CHECK(flight->receive(&rx, 0) == ReceiveResult::kTimeout);  // not its own frame
+  REQUIRE(rig->receive(&rx, 0) == ReceiveResult::kFrame);
+  CHECK_FALSE(rx.is_fd);
+  CHECK(rx.frame.can_id == 0x110);
+  CHECK(std::memcmp(rx.frame.data, f.data, 8) == 0);
+  CHECK(rx.has_kernel_time);
+  REQUIRE(classical->receive(&rx, 0) == ReceiveResult::kFrame);
+
+  canfd_frame fd{};
+  fd.can_id = 0x120;
+  fd.len = 8;
+  fd.flags = CANFD_BRS;
+  fd.data[7] = 0xAB;
+  CHECK(flight->send(fd) == SendResult::kSent);
+  REQUIRE(rig->receive(&rx, 0) == ReceiveResult::kFrame);
+  CHECK(rx.is_fd);
+  CHECK(rx.fd_flags == CANFD_BRS);
+  CHECK(rx.frame.can_id == 0x120);  // the first 8 bytes as a classical view
+  CHECK(rx.frame.data[7] == 0xAB);
+  CHECK(classical->receive(&rx, 0) == ReceiveResult::kTimeout);  // a classical socket never sees FD
+  CHECK(classical->send(fd) == SendResult::kError);                // nor may it send one
+  CHECK(classical->stats().last_errno == EINVAL);
+
+  CHECK(flight->stats().frames_sent == 2);
+  CHECK(flight->stats().fd_frames_sent == 1);
+  CHECK(rig->stats().frames_received == 2);
+  CHECK(rig->stats().fd_frames_received == 1);
+  CHECK(bus.frames() == 2);
+}

@@ -1,0 +1,131 @@
+// System tests of the in-process executor (`rig run --clock inprocess`) against the processes
+// over LCM (`--clock lockstep`, in a private network namespace the launcher creates): the same
+// scenario and seed give the same bytes on every data channel, the log reads the same, the CAN
+// link through its codec changes nothing, and bad input is refused the same way.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <nimble/truth_state_t.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "contract/channels.h"
+
+#include "../support/rig_runs.h"
+
+namespace ch = nimble::contract::channels;
+using nimble::test::channel_payloads;
+using nimble::test::differing;
+using nimble::test::rig_run;
+using nimble::test::RunResult;
+using nimble::test::slurp;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("inprocess_" + tag); }
+
+/// The channels every processes' code publishes from simulated time only.
+const std::vector<std::string> kDataChannels = {ch::kTruth,         ch::kImu,        ch::kMocapPose,
+                                                ch::kEstimate,      ch::kActuatorCommand, ch::kActuatorFeedback,
+                                                ch::kAttitudeSetpoint, ch::kControllerStatus};
+
+int run_command(const std::string& cmd) {
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST_CASE("in process and lockstep fly the same bytes on every data channel, with the estimator in the loop",
+          "[system]") {
+  const std::string a = scratch_dir("ls"), b = scratch_dir("ip");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  const std::string common = "--seed 5 --set duration_s=3";
+  const RunResult lockstep = rig_run(scenario, a, "--clock lockstep " + common);
+  const RunResult inprocess = rig_run(scenario, b, "--clock inprocess " + common);
+  INFO(lockstep.output);
+  INFO(inprocess.output);
+  REQUIRE(lockstep.exit_code == 0);
+  REQUIRE(inprocess.exit_code == 0);
+  CHECK(inprocess.summary["clock"].as<std::string>() == "inprocess");
+  CHECK(inprocess.summary["result"].as<std::string>() == "ok");
+  for (const auto& channel : kDataChannels) {
+    INFO(channel);
+    const auto pa = channel_payloads(a + "/run.lcmlog", channel), pb = channel_payloads(b + "/run.lcmlog", channel);
+    CHECK(pa.size() > 100);
+    CHECK(differing(pa, pb) == 0);
+  }
+  CHECK(channel_payloads(b + "/run.lcmlog", ch::kTruth).size() == 3001);
+  // The same report from either executor.
+  for (const char* key : {"p", "v", "phi"}) {
+    CHECK(inprocess.summary["max_abs"][key].as<double>() == lockstep.summary["max_abs"][key].as<double>());
+  }
+  CHECK(inprocess.summary["estimator"]["phi_rms_deg"].as<double>() ==
+        lockstep.summary["estimator"]["phi_rms_deg"].as<double>());
+  CHECK(inprocess.summary["channels"][ch::kRigClock]["count"].as<int>() > 0);
+  CHECK(inprocess.summary["channels"][ch::kStepAck]["drops"].as<int>() == 0);
+  // Not trivially equal: the vehicle flew the doublets, and another seed flies other noise.
+  CHECK(inprocess.summary["max_abs"]["phi"].as<double>() > 0.3);
+  const std::string c = scratch_dir("ip_seed6");
+  REQUIRE(rig_run(scenario, c, "--clock inprocess --seed 6 --set duration_s=3").exit_code == 0);
+  CHECK(differing(channel_payloads(b + "/run.lcmlog", ch::kImu), channel_payloads(c + "/run.lcmlog", ch::kImu)) > 0);
+
+  // The log is the same format: `rig export` reads both into the same identification CSV.
+  const std::string export_a = std::string(RIG_BIN) + " export " + a + "/run.lcmlog --csv " + a + "/run.csv";
+  const std::string export_b = std::string(RIG_BIN) + " export " + b + "/run.lcmlog --csv " + b + "/run.csv";
+  REQUIRE(run_command(export_a + " > /dev/null 2>&1") == 0);
+  REQUIRE(run_command(export_b + " > /dev/null 2>&1") == 0);
+  const std::string csv = slurp(b + "/run.csv");
+  CHECK(csv.size() > 10000);
+  CHECK(csv == slurp(a + "/run.csv"));
+  // And the resolved scenario lies next to it, as for every run.
+  CHECK(std::filesystem::exists(b + "/run.lcmlog.scenario.yaml"));
+}
+
+TEST_CASE("in process over the CAN link: frames through the codec, the truth of lockstep over LCM", "[system]") {
+  const std::string a = scratch_dir("lcm"), b = scratch_dir("can"), c = scratch_dir("canfd");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  const std::string common = "--seed 3 --set duration_s=2";
+  const RunResult over_lcm = rig_run(scenario, a, "--clock lockstep " + common);
+  const RunResult over_can = rig_run(scenario, b, "--clock inprocess --set actuator_link=can " + common);
+  const RunResult over_fd =
+      rig_run(scenario, c, "--clock inprocess --set actuator_link=can --set can_bridge.fd=true " + common);
+  INFO(over_can.output);
+  REQUIRE(over_lcm.exit_code == 0);
+  REQUIRE(over_can.exit_code == 0);
+  REQUIRE(over_fd.exit_code == 0);
+  const auto truth = channel_payloads(a + "/run.lcmlog", ch::kTruth);
+  CHECK(differing(truth, channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
+  CHECK(differing(truth, channel_payloads(c + "/run.lcmlog", ch::kTruth)) == 0);
+  // Every command crossed as frames and came back as the plant's input.
+  const YAML::Node flight = over_can.summary["can"]["can_flight"], rig = over_can.summary["can"]["can_rig"];
+  const int commands = over_can.summary["channels"][ch::kActuatorCommand]["count"].as<int>();
+  CHECK(commands == 1024);
+  CHECK(flight["messages_to_can"].as<int>() == commands);
+  CHECK(rig["messages_to_lcm"].as<int>() == commands);
+  CHECK(over_can.summary["channels"][ch::kActuatorCommandCan]["count"].as<int>() == commands);
+  CHECK(flight["frames_sent"].as<int>() == rig["frames_received"].as<int>());
+  CHECK(rig["rejected_bad_checksum"].as<int>() == 0);
+  CHECK(rig["rejected_stale_counter"].as<int>() == 0);
+  CHECK(over_fd.summary["can"]["can_rig"]["fd_frames_received"].as<int>() ==
+        over_fd.summary["can"]["can_rig"]["frames_received"].as<int>());
+}
+
+TEST_CASE("in process: bad input is refused before the run, naming the key, and a wrong clock names the choices",
+          "[system]") {
+  const std::string d = scratch_dir("bad");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  const RunResult bad_rate = rig_run(scenario, d, "--clock inprocess --set plant.rate_hz=-5");
+  CHECK(bad_rate.exit_code == 2);
+  CHECK(bad_rate.output.find("plant.rate_hz") != std::string::npos);
+  const RunResult bad_clock = rig_run(scenario, d, "--clock warp");
+  CHECK(bad_clock.exit_code == 2);
+  CHECK(bad_clock.output.find("realtime, lockstep or inprocess") != std::string::npos);
+  const RunResult bad_process = rig_run(scenario, d, "--clock inprocess --set processes=[plant,autopilot]");
+  CHECK(bad_process.exit_code == 2);
+  CHECK(bad_process.output.find("autopilot") != std::string::npos);
+}

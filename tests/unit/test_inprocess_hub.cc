@@ -1,0 +1,185 @@
+// Unit tests of the in-process carrier: InprocessHub (order, patterns, nesting, pollers), a
+// Bus on a hub (typed messages, malformed ones counted), and ProcessNode's in-process
+// lockstep (a participant's ticks and acknowledgements through the hub; a missing
+// acknowledgement is a fault at once, not after a timeout).
+
+#include <chrono>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/run_control_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+#include "contract/channels.h"
+#include "transport/bus.h"
+#include "transport/inprocess_hub.h"
+#include "transport/node.h"
+
+using nimble::transport::Bus;
+using nimble::transport::InprocessHub;
+using nimble::transport::NodeOptions;
+using nimble::transport::ProcessNode;
+namespace ch = nimble::contract::channels;
+
+namespace {
+
+void publish_text(InprocessHub& hub, const std::string& channel, const std::string& text) {
+  hub.publish(channel, text.data(), static_cast<int>(text.size()));
+}
+
+}  // namespace
+
+TEST_CASE("hub: every message reaches every matching pattern, in publication order", "[transport]") {
+  InprocessHub hub;
+  std::vector<std::string> all, truth_only;
+  hub.subscribe(".*", [&](const std::string& c, const void* d, int n) {
+    all.push_back(c + ":" + std::string(static_cast<const char*>(d), n));
+  });
+  hub.subscribe("ALPHA", [&](const std::string&, const void* d, int n) {
+    truth_only.push_back(std::string(static_cast<const char*>(d), n));
+  });
+  publish_text(hub, "ALPHA", "a");
+  publish_text(hub, "BETA", "b");
+  publish_text(hub, "ALPHA_X", "c");  // a pattern matches the whole name, not a prefix
+  publish_text(hub, "ALPHA", "d");
+  CHECK(all.empty());  // nothing is delivered before drain()
+  CHECK(hub.waiting() == 4);
+  CHECK(hub.drain() == 4);
+  CHECK(all == std::vector<std::string>{"ALPHA:a", "BETA:b", "ALPHA_X:c", "ALPHA:d"});
+  CHECK(truth_only == std::vector<std::string>{"a", "d"});
+  CHECK(hub.published() == 4);
+  CHECK(hub.waiting() == 0);
+  CHECK(hub.drain() == 0);
+}
+
+TEST_CASE("hub: what a handler publishes comes after what was already waiting", "[transport]") {
+  InprocessHub hub;
+  std::vector<std::string> seen;
+  hub.subscribe("A", [&](const std::string&, const void* d, int n) {
+    seen.push_back("A" + std::string(static_cast<const char*>(d), n));
+    CHECK(hub.drain() == 0);  // a nested drain does nothing
+    publish_text(hub, "B", std::string(static_cast<const char*>(d), n));
+  });
+  hub.subscribe("B", [&](const std::string&, const void* d, int n) {
+    seen.push_back("B" + std::string(static_cast<const char*>(d), n));
+  });
+  publish_text(hub, "A", "1");
+  publish_text(hub, "A", "2");
+  CHECK(hub.drain() == 4);
+  CHECK(seen == std::vector<std::string>{"A1", "A2", "B1", "B2"});
+}
+
+TEST_CASE("hub: pollers run when the queue is empty, until nobody has anything", "[transport]") {
+  InprocessHub hub;
+  int frames = 3;  // a poller's own input, e.g. CAN frames
+  std::vector<std::string> seen;
+  hub.subscribe(".*", [&](const std::string& c, const void*, int) { seen.push_back(c); });
+  hub.add_poller([&] {
+    if (frames == 0) return false;
+    --frames;
+    publish_text(hub, "FROM_POLLER", "x");
+    return true;
+  });
+  publish_text(hub, "FIRST", "x");
+  CHECK(hub.drain() == 4);
+  CHECK(seen == std::vector<std::string>{"FIRST", "FROM_POLLER", "FROM_POLLER", "FROM_POLLER"});
+  CHECK(frames == 0);
+}
+
+TEST_CASE("hub: a malformed pattern is refused when subscribing", "[transport]") {
+  InprocessHub hub;
+  CHECK_THROWS(hub.subscribe("TRUTH(", [](const std::string&, const void*, int) {}));
+}
+
+TEST_CASE("bus on a hub: typed messages round-trip, malformed ones are counted and reported", "[transport]") {
+  InprocessHub hub;
+  Bus sender(hub), receiver(hub);
+  CHECK(sender.hub() == &hub);
+  CHECK(sender.fileno() == -1);
+  std::vector<nimble::truth_state_t> got;
+  std::vector<std::string> malformed;
+  receiver.subscribe<nimble::truth_state_t>(ch::kTruth, [&](const nimble::truth_state_t& t) { got.push_back(t); });
+  receiver.on_malformed([&](const std::string& c, const std::string& what) { malformed.push_back(c + ": " + what); });
+  nimble::truth_state_t t{};
+  t.utime = 1234;
+  t.seq = 7;
+  t.euler_rad[0] = 0.25;
+  sender.publish(ch::kTruth, t);
+  const char garbage[5] = {1, 2, 3, 4, 5};
+  hub.publish(ch::kTruth, garbage, sizeof garbage);
+  t.seq = 9;  // a gap of one in seq: one drop
+  sender.publish(ch::kTruth, t);
+  CHECK(receiver.drain() == 3);
+  REQUIRE(got.size() == 2);
+  CHECK(got[0].utime == 1234);
+  CHECK(got[0].euler_rad[0] == 0.25);
+  CHECK(receiver.stats().at(ch::kTruth).received == 2);
+  CHECK(receiver.stats().at(ch::kTruth).malformed == 1);
+  CHECK(receiver.stats().at(ch::kTruth).drops == 1);
+  REQUIRE(malformed.size() == 1);
+  CHECK(malformed[0].find("truth_state_t") != std::string::npos);
+}
+
+namespace {
+
+/// A master with one task at 1 kHz and a participant at 500 Hz on one hub.
+struct TwoNodes {
+  InprocessHub hub;
+  ProcessNode master{NodeOptions{"plant", "", "inprocess", &hub}};
+  ProcessNode participant{NodeOptions{"controller", "", "inprocess", &hub}};
+  Bus control{hub};
+  std::vector<int64_t> master_steps, participant_ticks;
+  std::vector<nimble::fault_event_t> faults;
+
+  TwoNodes() {
+    master.set_lockstep_master(true);
+    master.add_task("plant", 1000.0, [this](int64_t t) { master_steps.push_back(t); });
+    participant.add_task("cycle", 500.0, [this](int64_t t) { participant_ticks.push_back(t); });
+    control.subscribe<nimble::fault_event_t>(ch::kFault, [this](const nimble::fault_event_t& f) { faults.push_back(f); });
+    participant.join_inprocess();
+    nimble::run_control_t start{};
+    start.command = nimble::run_control_t::COMMAND_START;
+    start.clock_mode = nimble::run_control_t::CLOCK_MODE_LOCKSTEP;
+    start.duration_ns = 10000000;  // 10 ms
+    start.run_id = "test";
+    start.participants = {"controller"};
+    start.num_participants = 1;
+    control.publish(ch::kRunControl, start);
+    hub.drain();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("in-process lockstep: the master steps, the participant runs at its ticks, no waiting", "[transport]") {
+  TwoNodes n;
+  CHECK(n.master.inprocess());
+  const auto before = std::chrono::steady_clock::now();
+  CHECK(n.master.run() == nimble::transport::kExitOk);
+  n.participant.finish_inprocess();
+  n.hub.drain();
+  CHECK(std::chrono::steady_clock::now() - before < std::chrono::seconds(1));
+  CHECK(n.master_steps.size() == 11);  // t = 0, 1, ..., 10 ms
+  CHECK(n.participant_ticks == std::vector<int64_t>{0, 2000000, 4000000, 6000000, 8000000});
+  CHECK(n.faults.empty());
+  CHECK_THROWS_AS(n.participant.run(), std::logic_error);  // only the master runs in process
+}
+
+TEST_CASE("in-process lockstep: a participant that never acknowledges is a fatal fault at once", "[transport]") {
+  TwoNodes n;
+  // The participant holds its first acknowledgement and never releases it.
+  n.participant.add_task("hold", 500.0, [&](int64_t) { n.participant.hold_ack(); });
+  const auto before = std::chrono::steady_clock::now();
+  CHECK(n.master.run() == nimble::transport::kExitAckTimeout);
+  // Immediately, not after the 2 s acknowledgement timeout of a run over LCM.
+  CHECK(std::chrono::steady_clock::now() - before < std::chrono::milliseconds(500));
+  n.hub.drain();
+  REQUIRE(n.faults.size() == 1);
+  CHECK(n.faults[0].code == nimble::fault_event_t::CODE_STEP_ACK_TIMEOUT);
+  CHECK(n.faults[0].message.find("'controller'") != std::string::npos);
+  CHECK(n.faults[0].message.find("in process") != std::string::npos);
+}
