@@ -181,6 +181,8 @@ class ProcessNode {
   int run_realtime();
   int run_lockstep_participant();
   int run_lockstep_master();
+  /// Lockstep master: a participant due at step `step` (time `t`) that has not acknowledged it.
+  std::string first_missing_ack(int64_t step, int64_t t);
   void idle_until_stopped();
   /// Waits up to `timeout_ns` for LCM or a watched descriptor and handles what is ready
   /// (0: poll). Returns the number of descriptors that were ready.

@@ -3,6 +3,7 @@
 
 #include <linux/can.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -19,6 +20,7 @@
 #include "contract/channels.h"
 #include "launcher/message_pipe.h"
 #include "launcher/run_report.h"
+#include "launcher/sweep.h"
 #include "launcher/verdict.h"
 
 using namespace nimble::launcher;
@@ -197,4 +199,89 @@ TEST_CASE("in-process CAN bus: frames reach every other endpoint, FD only where 
   CHECK(rig->stats().frames_received == 2);
   CHECK(rig->stats().fd_frames_received == 1);
   CHECK(bus.frames() == 2);
+}
+
+// --- rig sweep's parts ------------------------------------------------------------------
+
+
+TEST_CASE("sweep: --vary splits values at top-level commas only", "[launcher][sweep]") {
+  const Vary v = parse_vary("model=a.yaml, b.yaml");
+  CHECK(v.key == "model");
+  CHECK(v.values == std::vector<std::string>{"a.yaml", "b.yaml"});
+  const Vary p = parse_vary("processes=[plant,controller],[plant,controller,mocap,estimator]");
+  CHECK(p.values == std::vector<std::string>{"[plant,controller]", "[plant,controller,mocap,estimator]"});
+  CHECK_THROWS_WITH(parse_vary("model"), Catch::Contains("key=value1,value2"));
+  CHECK_THROWS_WITH(parse_vary("=1,2"), Catch::Contains("key=value1,value2"));
+  CHECK_THROWS_WITH(parse_vary("a=1,,2"), Catch::Contains("empty value"));
+  CHECK_THROWS_WITH(parse_vary("a=[1,2"), Catch::Contains("unbalanced"));
+}
+
+TEST_CASE("sweep: seed ranges", "[launcher][sweep]") {
+  CHECK(parse_seed_range("1-20") == std::pair<uint64_t, uint64_t>{1, 20});
+  CHECK(parse_seed_range("7") == std::pair<uint64_t, uint64_t>{7, 7});
+  for (const char* bad : {"20-1", "a-b", "1-", "-3", "1.5", "", "1-2-3", "99999999999999999999999"}) {
+    INFO(bad);
+    CHECK_THROWS_WITH(parse_seed_range(bad), Catch::Contains("--seeds"));
+  }
+}
+
+TEST_CASE("sweep: parameter sets are every combination, the first --vary slowest", "[launcher][sweep]") {
+  const auto sets = parameter_sets({parse_vary("a=1,2"), parse_vary("b=x,y,z")});
+  REQUIRE(sets.size() == 6);
+  CHECK(sets[0].label == "a=1 b=x");
+  CHECK(sets[2].label == "a=1 b=z");
+  CHECK(sets[3].label == "a=2 b=x");
+  REQUIRE(sets[5].overrides.size() == 2);
+  CHECK(sets[5].overrides[0].key_path == "a");
+  CHECK(sets[5].overrides[1].value == "z");
+  const auto one = parameter_sets({});
+  REQUIRE(one.size() == 1);
+  CHECK(one[0].overrides.empty());
+  CHECK(one[0].label == "scenario as given");
+}
+
+TEST_CASE("sweep: percentiles interpolate between order statistics", "[launcher][sweep]") {
+  const std::vector<double> v = {5, 1, 4, 2, 3};
+  CHECK(percentile(v, 0) == 1);
+  CHECK(percentile(v, 50) == 3);
+  CHECK(percentile(v, 100) == 5);
+  CHECK(percentile(v, 25) == 2);
+  CHECK(percentile(v, 90) == Approx(4.6));  // numpy.percentile([1..5], 90)
+  CHECK(percentile({7.0}, 95) == 7.0);
+  CHECK(std::isnan(percentile({}, 50)));
+}
+
+TEST_CASE("sweep: the summary, the JSON runs list and the CSV agree", "[launcher][sweep]") {
+  SweepResult r;
+  r.scenario = "unit";
+  r.clock = kClockInprocess;
+  r.sets = parameter_sets({parse_vary("model=a,b")});
+  for (std::size_t s = 0; s < 2; ++s) {
+    for (uint64_t seed = 1; seed <= 3; ++seed) {
+      SweepRun run;
+      run.set = s;
+      run.seed = seed;
+      run.controlled = !(s == 1 && seed == 2);
+      run.exit_code = run.controlled ? kRunOk : kRunNotControlled;
+      run.verdict = run.controlled ? "ok" : "completed, vehicle NOT controlled";
+      run.figures["max_abs_phi_deg"] = 10.0 * static_cast<double>(s + 1) + static_cast<double>(seed);
+      r.runs.push_back(run);
+    }
+  }
+  std::ostringstream text;
+  write_sweep_text(text, r);
+  CHECK(text.str().find("6 runs: 2 parameter sets x 3 seeds (1-3)") != std::string::npos);
+  CHECK(text.str().find("controlled 3/3 (100 %)") != std::string::npos);
+  CHECK(text.str().find("controlled 2/3 (67 %)") != std::string::npos);
+  CHECK(text.str().find("seed 2: completed, vehicle NOT controlled") != std::string::npos);
+  const YAML::Node j = YAML::Load(sweep_json(r));
+  REQUIRE(j["runs"].size() == 6);
+  CHECK(j["runs"][4]["seed"].as<int>() == 2);
+  CHECK(j["runs"][4]["exit_code"].as<int>() == kRunNotControlled);
+  CHECK(j["sets"][1]["controlled_rate"].as<double>() == Approx(2.0 / 3.0));
+  CHECK(j["sets"][1]["percentiles"]["max_abs_phi_deg"]["p50"].as<double>() == 22.0);
+  CHECK(j["sets"][0]["overrides"]["model"].as<std::string>() == "a");
+  const std::string csv = sweep_csv(r);
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == 7);
+  CHECK(csv.find("2,\"model=b\",2,1,\"completed, vehicle NOT controlled\",0,0") != std::string::npos);
 }

@@ -1,0 +1,157 @@
+/// bench_inprocess: speed of the in-process executor and of `rig sweep`.
+///
+///   bench_inprocess [scenario.yaml] [--runs N] [--duration S]
+///
+/// Prints, for the scenario (default rig_configs/id_doublet_train_fast.yaml, every process:
+/// plant, controller, mocap, estimator), flown for S simulated seconds (default 30):
+///  - the in-process speed in multiples of real time, median and best of N runs (default 5),
+///    with the LCM log written (the target: >= 300x), without a log, and without the estimator
+///    and motion capture (flying on truth);
+///  - the machine's floor in the same run: the plant model stepped alone at its rate, nothing
+///    else (no sensors, no controller, no messages), as a speed and as the ratio rig / floor;
+///  - the time of `rig sweep` over the five published parameter sets x 20 seeds.
+/// Not a test: figures depend on the machine; the ratio to the floor is what travels.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <thread>
+#include <string>
+#include <vector>
+
+#include "launcher/inprocess.h"
+#include "launcher/run_plan.h"
+#include "plant/plant_model.h"
+
+namespace fs = std::filesystem;
+using namespace nimble;
+
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+struct Speeds {
+  double median_x = 0.0, best_x = 0.0;
+  std::string verdict;
+};
+
+Speeds fly(const launcher::RunOptions& base, const std::vector<Override>& extra, const std::string& log, int runs) {
+  launcher::RunOptions o = base;
+  o.overrides.insert(o.overrides.end(), extra.begin(), extra.end());
+  const launcher::RunPlan plan = launcher::load_run_plan(o);
+  std::vector<double> x;
+  Speeds s;
+  for (int i = 0; i < runs; ++i) {
+    launcher::InprocessOptions io;
+    io.log_file = log;
+    const launcher::RunReport r = launcher::fly_inprocess(plan, io);
+    x.push_back(r.speed_x_realtime());
+    s.verdict = r.verdict.text;
+  }
+  s.median_x = median(x);
+  s.best_x = *std::max_element(x.begin(), x.end());
+  return s;
+}
+
+/// The plant model alone, stepped at its rate for `duration_s` with the trim command.
+double plant_floor_x(const launcher::RunPlan& plan, double duration_s, int runs) {
+  const Scenario& s = plan.scenario;
+  ConfigMap section = s.section("plant");
+  plant::PlantConfig config = plant::plant_config_from(section);
+  const DerivativeModel lateral = load_model(s.model_file);
+  std::optional<DerivativeModel> longitudinal;
+  if (!s.longitudinal_model_file.empty()) longitudinal = load_model(s.longitudinal_model_file);
+  const Vehicle vehicle = load_vehicle(s.vehicle_file.empty() ? lateral.vehicle_file : s.vehicle_file);
+  std::vector<double> x;
+  for (int i = 0; i < runs; ++i) {
+    plant::PlantModel model(lateral, longitudinal, vehicle, config);
+    const plant::ActuatorInput trim = model.trim_command();
+    const long steps = static_cast<long>(duration_s * config.rate_hz);
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long k = 0; k < steps; ++k) {
+      plant::ActuatorInput u = trim;  // a +-2.5 rad/s square wave of delta_f, so the state moves
+      const double half_df = (k / 100) % 2 ? 1.25 : -1.25;
+      u.flap_freq_left_radps += half_df;
+      u.flap_freq_right_radps -= half_df;
+      model.step(u);
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    x.push_back(duration_s / wall);
+  }
+  return median(x);
+}
+
+double sweep_seconds(const std::string& rig, const std::string& scenario) {
+  std::string vary = "model=";
+  for (int k = 1; k <= 5; ++k) {
+    vary += std::string(k > 1 ? "," : "") + RIG_SOURCE_DIR + "/rig_configs/models/nimble_lateral_set" +
+            std::to_string(k) + ".yaml";
+  }
+  const std::string cmd = rig + " sweep " + scenario + " --seeds 1-20 --vary " + vary + " --no-progress > /dev/null";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? s : -s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
+  int runs = 5;
+  double duration_s = 30.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--duration" && i + 1 < argc) duration_s = std::atof(argv[++i]);
+    else if (!a.empty() && a[0] != '-') scenario = a;
+    else {
+      std::fprintf(stderr, "usage: bench_inprocess [scenario.yaml] [--runs N] [--duration S]\n");
+      return 2;
+    }
+  }
+  const std::string dir = (fs::temp_directory_path() / ("bench_inprocess_" + std::to_string(::getpid()))).string();
+  fs::create_directories(dir);
+  try {
+    launcher::RunOptions base;
+    base.scenario_file = scenario;
+    base.clock = launcher::kClockInprocess;
+    base.overrides.push_back({"duration_s", std::to_string(duration_s)});
+    const launcher::RunPlan plan = launcher::load_run_plan(base);
+    std::printf("bench_inprocess: %s, %.0f s simulated, %d runs each, %u CPUs\n", plan.scenario.name.c_str(),
+                duration_s, runs, std::max(1u, std::thread::hardware_concurrency()));
+    const Speeds full = fly(base, {}, dir + "/bench.lcmlog", runs);
+    const double log_mb = static_cast<double>(fs::file_size(dir + "/bench.lcmlog")) / 1e6;
+    const Speeds no_log = fly(base, {}, "", runs);
+    const Speeds truth = fly(base, {{"run.controller_input", "truth"}, {"processes", "[plant,controller]"}}, "", runs);
+    const double floor_x = plant_floor_x(plan, duration_s, runs);
+    std::printf("  %-58s median %7.1fx  best %7.1fx   (%s; log %.1f MB)\n",
+                "in process, every process, log written (target >= 300x)", full.median_x, full.best_x,
+                full.verdict.c_str(), log_mb);
+    std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, every process, no log", no_log.median_x,
+                no_log.best_x);
+    std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, plant and controller on truth, no log",
+                truth.median_x, truth.best_x);
+    std::printf("  %-58s median %7.1fx\n", "floor: the plant model alone at its rate", floor_x);
+    std::printf("  ratio rig (every process, log) / floor: %.3f\n", full.median_x / floor_x);
+    const std::string rig = (fs::path(argv[0]).parent_path() / "rig").string();
+    const double sweep_s = sweep_seconds(rig, scenario);
+    std::printf("  %-58s %7.2f s%s\n", "rig sweep, 5 published sets x 20 seeds, 6 s each", std::abs(sweep_s),
+                sweep_s < 0 ? "  (some run not ok)" : "");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_inprocess: %s\n", e.what());
+    fs::remove_all(dir);
+    return 2;
+  }
+  fs::remove_all(dir);
+  return 0;
+}
