@@ -1,6 +1,6 @@
 #pragma once
 /// Nominal rates of the rig's channels as a function of the configured process rates. The
-/// numbers come from the scenario's sections (launcher/validate.cc loads them with the same
+/// numbers come from the scenario's sections (launcher/scenario_check.cc loads them with the same
 /// loaders the processes use); this library only derives the channel rates from them.
 
 #include <cstddef>

@@ -37,7 +37,7 @@
 #include "launcher/recorder.h"
 #include "launcher/run_monitor.h"
 #include "launcher/run_report.h"
-#include "launcher/validate.h"
+#include "launcher/scenario_check.h"
 #include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"

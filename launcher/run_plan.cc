@@ -7,7 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "launcher/validate.h"
+#include "launcher/scenario_check.h"
 
 namespace nimble::launcher {
 namespace {

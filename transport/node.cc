@@ -294,9 +294,7 @@ void ProcessNode::subscribe_lockstep_side() {
     bus_.subscribe<step_ack_t>(
       contract::channels::kStepAck,
       [this](const step_ack_t& ack) {
-        if (next_due_.count(ack.process) == 0) return;  // not a participant of this run
-        last_ack_step_[ack.process] = std::max(last_ack_step_[ack.process], ack.step);
-        next_due_[ack.process] = ack.next_due_ns;
+        schedule_.acknowledge(ack.process, ack.step, ack.next_due_ns);  // others are not of this run
       },
       100000);
   } else {
@@ -422,20 +420,12 @@ int ProcessNode::run_lockstep_participant() {
   return kExitOk;
 }
 
-std::string ProcessNode::first_missing_ack(int64_t step, int64_t t) {
-  for (const auto& [p, due] : next_due_) {
-    if (due <= t && last_ack_step_[p] < step) return p;
-  }
-  return "";
-}
-
 int ProcessNode::run_lockstep_master() {
   if (tasks_.size() != 1) throw std::logic_error("the lockstep master needs exactly one task");
   Task& task = tasks_.front();
   for (const auto& p : participants_) {
     if (p != name_) {
-      next_due_[p] = 0;
-      last_ack_step_[p] = -1;
+      schedule_.add(p);
     }
   }
   for (int64_t step = 0; !stop_; ++step) {
@@ -447,9 +437,7 @@ int ProcessNode::run_lockstep_master() {
     task.next_ns = t + task.period_ns;
     ++loop_count_;
 
-    bool anyone_due = false;
-    for (const auto& [p, due] : next_due_) anyone_due = anyone_due || due <= t;
-    if (!anyone_due) {
+    if (!schedule_.tick_at(t)) {
       run_deferred();
       housekeeping();
       continue;  // nobody needs this step: no tick, no wait
@@ -468,7 +456,7 @@ int ProcessNode::run_lockstep_master() {
       // Delivering what the hub holds runs every due participant's tick to its
       // acknowledgement: nothing to wait for, and a missing one will never come.
       bus_.drain();
-      const std::string missing = first_missing_ack(step, t);
+      const std::string missing = schedule_.missing(step, t);
       if (!missing.empty()) {
         fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
               "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
@@ -487,7 +475,7 @@ int ProcessNode::run_lockstep_master() {
     const int64_t give_up = monotonic_ns() + static_cast<int64_t>(ack_timeout_ms_) * 1000000LL;
     int64_t resend_at = monotonic_ns() + kTickResendMs * 1000000LL;
     for (;;) {
-      const std::string missing = first_missing_ack(step, t);
+      const std::string missing = schedule_.missing(step, t);
       if (missing.empty()) break;
       const int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
       if (left_ms <= 0 || stop_) {

@@ -35,6 +35,7 @@
 #include <nimble/step_ack_t.hpp>
 
 #include "contract/channels.h"
+#include "contract/lockstep_schedule.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
 #include "transport/inprocess_hub.h"
@@ -181,8 +182,7 @@ class ProcessNode {
   int run_realtime();
   int run_lockstep_participant();
   int run_lockstep_master();
-  /// Lockstep master: a participant due at step `step` (time `t`) that has not acknowledged it.
-  std::string first_missing_ack(int64_t step, int64_t t);
+
   void idle_until_stopped();
   /// Waits up to `timeout_ns` for LCM or a watched descriptor and handles what is ready
   /// (0: poll). Returns the number of descriptors that were ready.
@@ -242,9 +242,8 @@ class ProcessNode {
   int64_t overruns_ = 0;
 
   // Lockstep master state: participant -> next due time [ns].
-  std::map<std::string, int64_t> next_due_;
+  contract::LockstepSchedule schedule_;
   int64_t acked_step_waiting_ = -1;
-  std::map<std::string, int64_t> last_ack_step_;
 
   static volatile std::sig_atomic_t stop_requested_;
 };

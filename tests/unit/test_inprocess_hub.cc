@@ -4,6 +4,8 @@
 // acknowledgement is a fault at once, not after a timeout).
 
 #include <chrono>
+#include <cmath>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +17,8 @@
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
+#include "contract/lockstep_schedule.h"
+#include "contract/rates.h"
 #include "transport/bus.h"
 #include "transport/inprocess_hub.h"
 #include "transport/node.h"
@@ -182,4 +186,52 @@ TEST_CASE("in-process lockstep: a participant that never acknowledges is a fatal
   CHECK(n.faults[0].code == nimble::fault_event_t::CODE_STEP_ACK_TIMEOUT);
   CHECK(n.faults[0].message.find("'controller'") != std::string::npos);
   CHECK(n.faults[0].message.find("in process") != std::string::npos);
+}
+
+TEST_CASE("lockstep schedule: the master's ticks and acknowledgements are the ones the rate model replays",
+          "[transport]") {
+  InprocessHub hub;
+  ProcessNode master{NodeOptions{"plant", "", "inprocess", &hub}};
+  master.set_lockstep_master(true);
+  master.add_task("plant", 1000.0, [](int64_t) {});
+  const std::vector<std::pair<std::string, double>> rates = {{"controller", 512.0}, {"mocap", 200.0}, {"estimator", 512.0}};
+  std::vector<std::unique_ptr<ProcessNode>> participants;
+  for (const auto& [name, hz] : rates) {
+    participants.push_back(std::make_unique<ProcessNode>(NodeOptions{name, "", "inprocess", &hub}));
+    participants.back()->add_task("task", hz, [](int64_t) {});
+    participants.back()->join_inprocess();
+  }
+  Bus control(hub);
+  int64_t ticks = 0, acks = 0;
+  hub.subscribe(ch::kRigClock, [&](const std::string&, const void*, int) { ++ticks; });
+  hub.subscribe(ch::kStepAck, [&](const std::string&, const void*, int) { ++acks; });
+  nimble::run_control_t start{};
+  start.command = nimble::run_control_t::COMMAND_START;
+  start.clock_mode = nimble::run_control_t::CLOCK_MODE_LOCKSTEP;
+  start.duration_ns = 1000000000;
+  start.run_id = "schedule";
+  for (const auto& [name, hz] : rates) start.participants.push_back(name);
+  start.num_participants = static_cast<int32_t>(start.participants.size());
+  control.publish(ch::kRunControl, start);
+  hub.drain();
+  REQUIRE(master.run() == nimble::transport::kExitOk);
+  hub.drain();
+
+  std::vector<nimble::contract::ScheduledParticipant> model;
+  for (const auto& [name, hz] : rates) model.push_back({std::llround(1e9 / hz), true});
+  const auto replayed = nimble::contract::replay_lockstep(1000000, model, 1000000000);
+  CHECK(ticks == replayed.ticks);
+  CHECK(acks == replayed.acks);
+  CHECK(acks == 512 + 200 + 512);  // every due time of every participant, once
+  CHECK(ticks < 1000);             // steps where nobody is due send no tick
+
+  // And the expected-rate table of a run with these processes is the same replay.
+  nimble::contract::ProcessRates pr;
+  pr.plant_hz = 1000.0;
+  pr.controller_hz = 512.0;
+  pr.mocap_hz = 200.0;
+  pr.estimator_hz = 512.0;
+  const auto hz = nimble::contract::expected_rates(pr, nimble::contract::RunShape{true, 0.0, 4});
+  CHECK(hz.at(ch::kRigClock) == static_cast<double>(ticks));
+  CHECK(hz.at(ch::kStepAck) == static_cast<double>(acks));
 }

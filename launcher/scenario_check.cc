@@ -1,4 +1,4 @@
-#include "launcher/validate.h"
+#include "launcher/scenario_check.h"
 
 #include <cmath>
 #include <optional>
