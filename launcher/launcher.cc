@@ -38,6 +38,7 @@
 #include "launcher/run_monitor.h"
 #include "launcher/run_report.h"
 #include "launcher/scenario_check.h"
+#include "launcher/supervisor.h"
 #include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
@@ -51,92 +52,10 @@ using transport::monotonic_ns;
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void on_interrupt(int) { g_interrupted = 1; }
 
-/// Pins the calling process to `cpus` that exist; returns a note when some do not.
-std::string pin_to(const std::vector<int>& cpus) {
-  if (cpus.empty()) return "";
-  const int online = static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN));
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  int used = 0;
-  for (const int c : cpus) {
-    if (c < online) {
-      CPU_SET(c, &set);
-      ++used;
-    }
-  }
-  if (used == 0) return "none of the CPUs asked for exist on this machine (" + std::to_string(online) + " online)";
-  if (::sched_setaffinity(0, sizeof set, &set) != 0) return std::string("sched_setaffinity: ") + std::strerror(errno);
-  return used < static_cast<int>(cpus.size()) ? "some CPUs asked for do not exist; pinned to the others" : "";
-}
-
 std::string self_dir() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   return ec ? std::string(".") : exe.parent_path().string();
-}
-
-struct Child {
-  std::string name;
-  pid_t pid = -1;
-  std::string output_file;
-  bool exited = false;
-  int exit_code = -1;
-  int signal = 0;
-};
-
-pid_t spawn(const std::string& exe, const std::vector<std::string>& args, const std::string& output_file,
-            const std::vector<int>& cpus) {
-  const pid_t pid = ::fork();
-  if (pid != 0) return pid;
-  pin_to(cpus);
-  // Child: die with the launcher, write output to its own file.
-  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-  ::signal(SIGINT, SIG_IGN);  // the launcher handles Ctrl-C and stops the run in order
-  const int fd = ::open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd >= 0) {
-    ::dup2(fd, STDOUT_FILENO);
-    ::dup2(fd, STDERR_FILENO);
-    ::close(fd);
-  }
-  std::vector<char*> argv;
-  argv.push_back(const_cast<char*>(exe.c_str()));
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  ::execv(exe.c_str(), argv.data());
-  std::fprintf(stderr, "cannot execute %s: %s\n", exe.c_str(), std::strerror(errno));
-  ::_exit(127);
-}
-
-std::string tail_of(const std::string& file, int lines) {
-  std::ifstream in(file);
-  std::vector<std::string> all;
-  for (std::string line; std::getline(in, line);) all.push_back(line);
-  std::string out;
-  for (std::size_t i = all.size() > static_cast<std::size_t>(lines) ? all.size() - lines : 0; i < all.size(); ++i) {
-    out += "    | " + all[i] + "\n";
-  }
-  return out;
-}
-
-std::string describe_exit(const Child& c) {
-  if (c.signal != 0) return "was killed by signal " + std::to_string(c.signal) + " (" + strsignal(c.signal) + ")";
-  return "exited with code " + std::to_string(c.exit_code);
-}
-
-/// Reaps children that have exited; returns the first one newly found dead (or nullptr).
-Child* reap(std::vector<Child>& children) {
-  Child* first = nullptr;
-  for (auto& c : children) {
-    if (c.exited || c.pid <= 0) continue;
-    int status = 0;
-    if (::waitpid(c.pid, &status, WNOHANG) == c.pid) {
-      c.exited = true;
-      if (WIFEXITED(status)) c.exit_code = WEXITSTATUS(status);
-      if (WIFSIGNALED(status)) c.signal = WTERMSIG(status);
-      if (!first) first = &c;
-    }
-  }
-  return first;
 }
 
 /// The executable of a rig process: nimble_<name>; both sides of the CAN bridge run
@@ -294,15 +213,13 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
 
   // Start every process.
   const std::string bin_dir = options.bin_dir.empty() ? self_dir() : options.bin_dir;
-  std::vector<Child> children;
+  ProcessSupervisor supervisor;
   for (const auto& name : scenario.processes) {
-    Child c;
-    c.name = name;
-    c.output_file = log_file + "." + name + ".out";
-    const std::string exe = bin_dir + "/" + executable_of(name);
-    c.pid = spawn(exe, {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, c.output_file, lc.rig_cpus);
-    children.push_back(c);
+    supervisor.start(name, bin_dir + "/" + executable_of(name),
+                     {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, log_file + "." + name + ".out",
+                     lc.rig_cpus);
   }
+  const std::vector<ChildProcess>& children = supervisor.children();
   if (const std::string note = pin_to(lc.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
   if (const std::string note = pin_to(lc.launcher_cpus); !note.empty()) {
     std::cerr << "rig run: run.launcher_cpus: " << note << "\n";
@@ -312,34 +229,17 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   if (!lockstep) ::setpriority(PRIO_PROCESS, 0, 10);
 
   const auto stop_all = [&](double grace_s) {
-    run_control_t stop;
-    stop.utime = transport::wall_us();
-    stop.seq = run_control_seq++;
-    stop.command = run_control_t::COMMAND_STOP;
-    stop.clock_mode = lockstep ? run_control_t::CLOCK_MODE_LOCKSTEP : run_control_t::CLOCK_MODE_REALTIME;
-    stop.run_id = scenario.name;
-    stop.num_participants = 0;
-    bus->publish(contract::channels::kRunControl, stop);
-    const auto wait_exit = [&](double seconds) {
-      const int64_t until = monotonic_ns() + static_cast<int64_t>(seconds * 1e9);
-      while (monotonic_ns() < until) {
-        reap(children);
-        bool all = true;
-        for (const auto& c : children) all = all && c.exited;
-        if (all) return true;
-        bus->handle_timeout(10);
-      }
-      return false;
+    const auto ask = [&] {
+      run_control_t stop;
+      stop.utime = transport::wall_us();
+      stop.seq = run_control_seq++;
+      stop.command = run_control_t::COMMAND_STOP;
+      stop.clock_mode = lockstep ? run_control_t::CLOCK_MODE_LOCKSTEP : run_control_t::CLOCK_MODE_REALTIME;
+      stop.run_id = scenario.name;
+      stop.num_participants = 0;
+      bus->publish(contract::channels::kRunControl, stop);
     };
-    if (wait_exit(grace_s)) return;
-    for (const auto& c : children) {
-      if (!c.exited) ::kill(c.pid, SIGTERM);
-    }
-    if (wait_exit(1.0)) return;
-    for (const auto& c : children) {
-      if (!c.exited) ::kill(c.pid, SIGKILL);
-    }
-    wait_exit(1.0);
+    supervisor.stop(grace_s, ask, [&] { bus->handle_timeout(10); });
   };
   const auto fail = [&](const std::string& message) {
     std::cerr << "rig run: " << message << "\n";
@@ -353,8 +253,8 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   const int64_t ready_deadline = monotonic_ns() + static_cast<int64_t>(lc.ready_timeout_s * 1e9);
   for (;;) {
     bus->handle_timeout(10);
-    if (Child* dead = reap(children)) {
-      return fail("process '" + dead->name + "' " + describe_exit(*dead) + " before it was ready:\n" +
+    if (const ChildProcess* dead = supervisor.reap()) {
+      return fail("process '" + dead->name + "' " + dead->describe() + " before it was ready:\n" +
                   tail_of(dead->output_file, 12));
     }
     bool all_ready = true;
@@ -403,7 +303,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     bus->handle_timeout(5);
     const int64_t now = monotonic_ns();
     recorder->flush_if_due(now);
-    if (Child* dead = reap(children)) {
+    if (const ChildProcess* dead = supervisor.reap()) {
       bus->drain();
       std::string why;
       for (auto it = monitor.faults().rbegin(); it != monitor.faults().rend(); ++it) {
@@ -412,7 +312,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
           break;
         }
       }
-      failure = "process '" + dead->name + "' (pid " + std::to_string(dead->pid) + ") " + describe_exit(*dead) +
+      failure = "process '" + dead->name + "' (pid " + std::to_string(dead->pid) + ") " + dead->describe() +
                 " during the run at simulated t = " + std::to_string(monitor.sim_time_s()) + " s" + why +
                 "\n  last output (" + dead->output_file + "):\n" + tail_of(dead->output_file, 8);
       break;
@@ -474,8 +374,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   report.log_file = log_file;
   fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
   for (const auto& c : children) {
-    report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal,
-                                              c.exited ? describe_exit(c) : "running"});
+    report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});
   }
   report.verdict = judge_run(report.flight, plan.judge, interrupted, failure);
   if (!failure.empty()) std::cerr << "rig run: " << failure << "\n";

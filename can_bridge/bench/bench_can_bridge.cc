@@ -36,7 +36,6 @@
 
 #include <sched.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -68,9 +67,9 @@
 
 #include "contract/channels.h"
 #include "launcher/netns.h"
+#include "launcher/supervisor.h"
 #include "scenario/scenario.h"
 
-extern char** environ;
 
 namespace {
 
@@ -258,49 +257,8 @@ class Receiver {
 
 // ---- the bridge processes ---------------------------------------------------------------------
 
-struct Child {
-  std::string name;
-  pid_t pid = -1;
-  bool reaped = false;
-  int status = 0;
-};
-
-pid_t spawn(const std::vector<std::string>& argv) {
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ);
-  if (rc != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(rc));
-  return pid;
-}
-
-/// Reaps `c` if it has exited; true if it is gone.
-bool poll_exit(Child& c) {
-  if (c.reaped) return true;
-  const pid_t r = waitpid(c.pid, &c.status, WNOHANG);
-  if (r == c.pid) c.reaped = true;
-  return c.reaped;
-}
-
-std::string describe_exit(const Child& c) {
-  if (!c.reaped) return "still running";
-  if (WIFEXITED(c.status)) return "exit status " + std::to_string(WEXITSTATUS(c.status));
-  if (WIFSIGNALED(c.status)) return std::string("killed by signal ") + strsignal(WTERMSIG(c.status));
-  return "status " + std::to_string(c.status);
-}
-
-/// Waits up to `ms` for every child to exit.
-bool wait_all(std::vector<Child>& children, int ms) {
-  const int64_t until = monotonic_ns() + static_cast<int64_t>(ms) * 1000000;
-  for (;;) {
-    bool all = true;
-    for (auto& c : children) all = poll_exit(c) && all;
-    if (all) return true;
-    if (monotonic_ns() >= until) return false;
-    sleep_ms(10);
-  }
-}
+using nimble::launcher::ChildProcess;
+using nimble::launcher::ProcessSupervisor;
 
 void publish_run_control(lcm::LCM& lcm, int64_t* seq, int8_t command, int64_t duration_ns) {
   run_control_t rc{};
@@ -317,8 +275,9 @@ void publish_run_control(lcm::LCM& lcm, int64_t* seq, int8_t command, int64_t du
 
 /// Waits until every child has announced `state` on HEARTBEAT (under its own pid). Returns ""
 /// or what went wrong.
-std::string wait_for_state(Receiver& rx, std::vector<Child>& children, int8_t state, int timeout_ms,
+std::string wait_for_state(Receiver& rx, ProcessSupervisor& supervisor, int8_t state, int timeout_ms,
                            const std::function<void()>& every_second = {}) {
+  const std::vector<ChildProcess>& children = supervisor.children();
   const int64_t start = monotonic_ns();
   int64_t next_second = start + 1000000000;
   for (;;) {
@@ -331,8 +290,8 @@ std::string wait_for_state(Receiver& rx, std::vector<Child>& children, int8_t st
       }
     }
     if (all) return "";
-    for (auto& c : children) {
-      if (poll_exit(c)) return c.name + " ended before the run started (" + describe_exit(c) + ")";
+    if (const ChildProcess* dead = supervisor.reap()) {
+      return dead->name + " ended before the run started (" + dead->describe() + ")";
     }
     const int64_t now = monotonic_ns();
     if (now - start > static_cast<int64_t>(timeout_ms) * 1000000) {
@@ -471,26 +430,20 @@ int run(const Options& opt) {
   CPU_ZERO(&cpu0);
   CPU_SET(0, &cpu0);
   if (pinned) sched_setaffinity(0, sizeof cpu0, &cpu0);
-  std::vector<Child> children{{"can_flight"}, {"can_rig"}};
-  for (auto& c : children) {
-    c.pid = spawn({bridge, "--name", c.name, "--scenario", scenario_file, "--lcm-url", kUrl});
+  ProcessSupervisor supervisor;
+  for (const std::string name : {"can_flight", "can_rig"}) {
+    supervisor.start(name, bridge, {"--name", name, "--scenario", scenario_file, "--lcm-url", kUrl});
   }
   if (pinned) sched_setaffinity(0, sizeof all_cpus, &all_cpus);
-  auto kill_all = [&](int sig) {
-    for (auto& c : children) {
-      if (!poll_exit(c)) kill(c.pid, sig);
-    }
-  };
+  const std::vector<ChildProcess>& children = supervisor.children();
   auto abort_run = [&](const std::string& why) {
     std::fprintf(stderr, "bench_can_bridge: %s\n", why.c_str());
-    kill_all(SIGTERM);
-    if (!wait_all(children, 3000)) kill_all(SIGKILL);
-    wait_all(children, 3000);
-    for (const auto& c : children) std::fprintf(stderr, "  %s: %s\n", c.name.c_str(), describe_exit(c).c_str());
+    supervisor.stop(0.0);
+    for (const auto& c : children) std::fprintf(stderr, "  %s: %s\n", c.name.c_str(), c.describe().c_str());
     return 1;
   };
 
-  std::string problem = wait_for_state(rx, children, heartbeat_t::STATE_READY, 60000);
+  std::string problem = wait_for_state(rx, supervisor, heartbeat_t::STATE_READY, 60000);
   if (!problem.empty()) return abort_run(problem);
   const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / opt.rate_hz));
   // Long enough that the bridges are still in their run when the last command goes out (they
@@ -498,7 +451,7 @@ int run(const Options& opt) {
   const int64_t duration_ns = total * period_ns * 4 + 120LL * 1000000000;
   int64_t rc_seq = 0;
   publish_run_control(pub, &rc_seq, run_control_t::COMMAND_START, duration_ns);
-  problem = wait_for_state(rx, children, heartbeat_t::STATE_RUNNING, 10000, [&] {
+  problem = wait_for_state(rx, supervisor, heartbeat_t::STATE_RUNNING, 10000, [&] {
     publish_run_control(pub, &rc_seq, run_control_t::COMMAND_START, duration_ns);  // in case it was lost
   });
   if (!problem.empty()) return abort_run(problem);
@@ -543,20 +496,15 @@ int run(const Options& opt) {
 
   // 5. Stop the bridges, reap them; their last CAN_HEALTH goes out as they exit.
   publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
-  bool exited = wait_all(children, 2000);
+  bool exited = supervisor.wait_all(2.0);
   if (!exited) {
     publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
-    exited = wait_all(children, 3000);
+    exited = supervisor.wait_all(3.0);
   }
   std::string stop_how = "RUN_CONTROL COMMAND_STOP";
   if (!exited) {
-    stop_how += ", then SIGTERM";
-    kill_all(SIGTERM);
-    if (!wait_all(children, 5000)) {
-      stop_how += ", then SIGKILL";
-      kill_all(SIGKILL);
-      wait_all(children, 5000);
-    }
+    stop_how += ", then SIGTERM (then SIGKILL if needed)";
+    supervisor.stop(0.0);
   }
   sleep_ms(300);  // the final CAN_HEALTH through the receiving thread
   stop_rx = true;
@@ -602,7 +550,7 @@ int run(const Options& opt) {
               static_cast<long long>(late));
   std::printf("  bridges stopped by %s: ", stop_how.c_str());
   for (std::size_t i = 0; i < children.size(); ++i) {
-    std::printf("%s%s %s", i ? ", " : "", children[i].name.c_str(), describe_exit(children[i]).c_str());
+    std::printf("%s%s %s", i ? ", " : "", children[i].name.c_str(), children[i].describe().c_str());
   }
   std::printf("\n");
   {

@@ -1,0 +1,88 @@
+// Functional tests of ProcessSupervisor: real child processes started, reaped, named when they
+// die, and stopped in order (ask, SIGTERM, SIGKILL).
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "launcher/supervisor.h"
+
+using nimble::launcher::ChildProcess;
+using nimble::launcher::ProcessSupervisor;
+
+namespace {
+
+std::string scratch(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rig_supervisor_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+std::string slurp(const std::string& file) {
+  std::ifstream in(file);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("supervisor: a child's exit code, its output file and its death are seen", "[launcher]") {
+  ProcessSupervisor s;
+  const std::string out = scratch("exit3.out");
+  s.start("exits", "/bin/sh", {"-c", "echo said this; exit 3"}, out);
+  REQUIRE(s.wait_all(10.0));
+  const ChildProcess& c = s.children().front();
+  CHECK(c.exited);
+  CHECK(c.exit_code == 3);
+  CHECK(c.describe() == "exited with code 3");
+  CHECK(slurp(out) == "said this\n");
+  CHECK(nimble::launcher::tail_of(out, 5) == "    | said this\n");
+  CHECK(s.reap() == nullptr);  // reported once
+}
+
+TEST_CASE("supervisor: a missing executable is a child that exits 127 and says why", "[launcher]") {
+  ProcessSupervisor s;
+  const std::string out = scratch("missing.out");
+  s.start("ghost", "/nonexistent/nimble_ghost", {}, out);
+  REQUIRE(s.wait_all(10.0));
+  CHECK(s.children().front().exit_code == 127);
+  CHECK(slurp(out).find("cannot execute /nonexistent/nimble_ghost") != std::string::npos);
+}
+
+TEST_CASE("supervisor: stop asks first, then SIGTERM, then SIGKILL", "[launcher]") {
+  ProcessSupervisor s;
+  // One that leaves when asked (a flag file appears), one that needs SIGTERM,
+  // one that ignores SIGTERM.
+  const std::string flag = scratch("leave.flag");
+  std::filesystem::remove(flag);
+  s.start("polite", "/bin/sh", {"-c", "while [ ! -e " + flag + " ]; do sleep 0.01; done"});
+  s.start("plain", "/bin/sleep", {"30"});
+  s.start("stubborn", "/bin/sh", {"-c", "trap '' TERM; while true; do sleep 0.01; done"});
+  bool asked = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  s.stop(0.5, [&] {
+    asked = true;
+    std::ofstream(flag) << "go";
+  });
+  CHECK(asked);
+  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5));
+  REQUIRE(s.all_exited());
+  CHECK(s.children()[0].exit_code == 0);
+  CHECK(s.children()[0].signal == 0);
+  CHECK(s.children()[1].signal == SIGTERM);
+  CHECK(s.children()[2].signal == SIGKILL);
+  CHECK(s.children()[2].describe().find("was killed by signal 9") == 0);
+}
+
+TEST_CASE("supervisor: pinning to CPUs that do not exist is said, not fatal", "[launcher]") {
+  CHECK(nimble::launcher::pin_to({}).empty());
+  CHECK(nimble::launcher::pin_to({100000}).find("none of the CPUs") != std::string::npos);
+}
