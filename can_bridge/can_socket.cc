@@ -123,7 +123,7 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
     if (err == EAFNOSUPPORT) {
       msg += ". The running kernel has no CAN support (CONFIG_CAN not set or the can module not "
              "loadable). On a kernel with CAN: modprobe can can_raw vcan. Tests get real SocketCAN "
-             "without it through can_bridge/vm/canvm (ctest runs the tests labelled 'can' that way).";
+             "without it through tools/canvm/canvm (ctest runs the tests labelled 'can' that way).";
     } else if (err == EPROTONOSUPPORT) {
       msg += ". The kernel has CAN but no raw CAN sockets: modprobe can_raw.";
     }

@@ -160,7 +160,7 @@ class CanSocket : public FramePort {
  public:
   /// Opens a raw CAN socket on `interface` (e.g. "vcan0", "can0") and applies `options`.
   /// @throws CanError naming the interface and errno; on EAFNOSUPPORT the message says that the
-  ///         kernel has no CAN support and that tests get it through can_bridge/vm/canvm. With
+  ///         kernel has no CAN support and that tests get it through tools/canvm/canvm. With
   ///         options.fd on an interface whose MTU is not CANFD_MTU, the message gives the
   ///         `ip link set <if> mtu 72` fix.
   static CanSocket open(const std::string& interface, const CanSocketOptions& options = {});

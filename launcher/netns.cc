@@ -175,7 +175,7 @@ int interface_mtu(const std::string& name, std::string* problem) {
 std::string ensure_can_interface(const std::string& name, bool create_virtual, bool fd) {
   const std::string no_can_hint =
       "on a machine whose kernel has no CAN support, run the rig inside the CAN VM: "
-      "can_bridge/vm/canvm run -- build/bin/rig run <scenario>";
+      "tools/canvm/canvm run -- build/bin/rig run <scenario>";
   const int probe = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
   if (probe < 0) {
     const int e = errno;

@@ -13,7 +13,7 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # jchart2d (lcm-spy's detail plots), glib headers (lcm.pc requires them), Eigen, yaml-cpp,
 # Catch2, a JDK for the type jar,
 # gnuplot for identification plots, and for real SocketCAN tests: can-utils, iproute2,
-# and qemu with xz (can_bridge/vm/canvm boots Debian's kernel when the host has no vcan);
+# and qemu with xz (tools/canvm/canvm boots Debian's kernel when the host has no vcan);
 # python3 for the check that every CTest entry runs one test case (tests/meta);
 # Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests.
 PACKAGES=(

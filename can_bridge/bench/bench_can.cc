@@ -8,7 +8,7 @@
 //    actuator_command_t on a second socket;
 //  - round trip: a frame sent, echoed back by a thread with its own socket, received.
 // Needs a CAN interface: on a kernel without CAN run it as
-//   can_bridge/vm/canvm run -- build/bin/bench_can
+//   tools/canvm/canvm run -- build/bin/bench_can
 
 #include <time.h>
 

@@ -4,7 +4,7 @@
 //                    [--candump FILE]
 //
 // Needs SocketCAN: on a kernel without CAN run it as
-//   can_bridge/vm/canvm run -- build/bin/bench_can_bridge
+//   tools/canvm/canvm run -- build/bin/bench_can_bridge
 //
 // Set-up, as `rig run` does it for `actuator_link: can`:
 //  - the bench moves itself into a private network namespace (loopback with multicast) before it
@@ -345,7 +345,7 @@ int run(const Options& opt) {
     std::fprintf(stderr,
                  "bench_can_bridge: cannot create a private network namespace: %s\n"
                  "  (needs root or unprivileged user namespaces; on a kernel without CAN run it as\n"
-                 "   can_bridge/vm/canvm run -- build/bin/bench_can_bridge)\n",
+                 "   tools/canvm/canvm run -- build/bin/bench_can_bridge)\n",
                  ns.detail.c_str());
     return 1;
   }
@@ -353,7 +353,7 @@ int run(const Options& opt) {
   if (!can_problem.empty()) {
     std::fprintf(stderr,
                  "bench_can_bridge: no CAN interface %s: %s\n"
-                 "  run the bench through the CAN VM instead: can_bridge/vm/canvm run -- build/bin/bench_can_bridge\n",
+                 "  run the bench through the CAN VM instead: tools/canvm/canvm run -- build/bin/bench_can_bridge\n",
                  kInterface, can_problem.c_str());
     return 1;
   }
@@ -619,7 +619,7 @@ int main(int argc, char** argv) {
           "  --scenario FILE  base scenario (default rig_configs/hover.yaml)\n"
           "  --candump FILE   can_rig writes every frame it receives there (candump -L format;\n"
           "                   the logging adds to can_rig's work)\n"
-          "Needs SocketCAN; on a kernel without CAN: can_bridge/vm/canvm run -- build/bin/bench_can_bridge\n");
+          "Needs SocketCAN; on a kernel without CAN: tools/canvm/canvm run -- build/bin/bench_can_bridge\n");
       return 0;
     } else {
       std::fprintf(stderr, "bench_can_bridge: unknown argument '%s'\n", a.c_str());

@@ -1,5 +1,5 @@
 // The CAN actuator link of the rig on a real SocketCAN interface (vcan0), run by
-// can_bridge/vm/canvm ctest-wrap (in a qemu VM on kernels without CAN, else in a private
+// tools/canvm/canvm ctest-wrap (in a qemu VM on kernels without CAN, else in a private
 // network namespace). One executable = one VM boot.
 //
 //  - the bridge node itself, in this process on LCM's memq://: LCM messages become the

@@ -1,4 +1,4 @@
-// Tests on a real SocketCAN interface, vcan0, created by can_bridge/vm/canvm ctest-wrap (in a qemu
+// Tests on a real SocketCAN interface, vcan0, created by tools/canvm/canvm ctest-wrap (in a qemu
 // VM on kernels without CAN, else in a private network namespace). One executable = one VM boot.
 // Uses can-utils (cansend, candump, canplayer) and iproute2's tc from PATH.
 // The CAN FD cases use vcan1, which they create with the CAN FD MTU (72; a vcan's default on
