@@ -12,9 +12,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 /// T = 2 (0.0114 f_hz - 0.0449) N (thesis Eq 4.18).
-constexpr double kThrustSlopeNPerHz = 0.0114;
-constexpr double kThrustOffsetN = 0.0449;
-constexpr int kThrustWingPairs = 2;
 
 std::string num(double x) {
   std::ostringstream out;
@@ -107,9 +104,7 @@ GainSet gains_from(ConfigMap& map, const GainSet& base) {
 
 }  // namespace
 
-double flap_thrust_n(double f_radps) {
-  return kThrustWingPairs * (kThrustSlopeNPerHz * f_radps / (2.0 * kPi) - kThrustOffsetN);
-}
+double flap_thrust_n(double f_radps) { return ThrustCurve{}.thrust_n(f_radps); }
 
 double hover_flap_frequency_radps(double mass_kg, double gravity_mps2) {
   if (!(std::isfinite(mass_kg) && mass_kg > 0.0)) {
@@ -118,8 +113,7 @@ double hover_flap_frequency_radps(double mass_kg, double gravity_mps2) {
   if (!(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0)) {
     throw std::invalid_argument("hover_flap_frequency_radps: gravity_mps2 must be > 0, got " + num(gravity_mps2));
   }
-  const double f_hz = (mass_kg * gravity_mps2 / kThrustWingPairs + kThrustOffsetN) / kThrustSlopeNPerHz;
-  return 2.0 * kPi * f_hz;
+  return ThrustCurve{}.frequency_radps(mass_kg * gravity_mps2);
 }
 
 void validate(const ControllerConfig& c) {

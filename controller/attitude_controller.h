@@ -28,14 +28,15 @@
 #include "controller/low_pass.h"
 #include "controller/reference_generator.h"
 #include "core/config.h"
+#include "core/thrust_curve.h"
 
 namespace nimble {
 
-/// Thrust of both flapping wing pairs [N] at flapping frequency `f_radps` [rad/s]:
-/// T = 2 (0.0114 f_hz - 0.0449) (thesis Eq 4.18).
+/// Thrust of both flapping wing pairs [N] at flapping frequency `f_radps` [rad/s]: the
+/// published curve of core/thrust_curve.h, T = 2 (0.0114 f_hz - 0.0449) (thesis Eq 4.18).
 double flap_thrust_n(double f_radps);
 
-/// Flapping frequency [rad/s] at which the thrust T = 2 (0.0114 f_hz - 0.0449) N
+/// Flapping frequency [rad/s] at which the published thrust curve (core/thrust_curve.h)
 /// equals the weight mass_kg * gravity_mps2.
 /// @throws std::invalid_argument if mass_kg or gravity_mps2 is not positive and finite.
 double hover_flap_frequency_radps(double mass_kg, double gravity_mps2);

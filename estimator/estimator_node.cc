@@ -9,6 +9,8 @@
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 
+#include "contract/messages.h"
+
 #include "estimator/sensing_config.h"
 
 namespace nimble {
@@ -22,13 +24,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
   node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
-    ImuSample s;
-    s.utime = m.utime;
-    s.seq = m.seq;
-    s.gyro_radps = Eigen::Vector3d(m.gyro_radps[0], m.gyro_radps[1], m.gyro_radps[2]);
-    s.accel_mps2 = Eigen::Vector3d(m.accel_mps2[0], m.accel_mps2[1], m.accel_mps2[2]);
-    s.temperature_degc = m.temperature_degc;
-    s.saturation_flags = static_cast<std::uint8_t>(m.saturation_flags);
+    const ImuSample s = contract::from_message(m);
     if (node_->lockstep()) {
       imu_inbox_.push(s.utime, s);
     } else {
@@ -39,19 +35,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
-    MocapPose p;
-    p.utime = m.utime;
-    p.seq = m.seq;
-    p.frame_number = m.frame_number;
-    p.latency_us = m.latency_us;
-    p.rigid_body_id = m.rigid_body_id;
-    p.position_ned_m = Eigen::Vector3d(m.position_m[0], m.position_m[1], m.position_m[2]);
-    p.q_body_to_ned = Eigen::Quaterniond(m.quaternion_wxyz[0], m.quaternion_wxyz[1], m.quaternion_wxyz[2],
-                                         m.quaternion_wxyz[3]);
-    p.tracking_valid = m.tracking_valid;
-    p.mean_marker_error_m = m.mean_marker_error_m;
-    p.num_markers = m.num_markers;
-    p.publish_utime = m.utime + m.latency_us;
+    const MocapPose p = contract::from_message(m);
     if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
     else apply_pose(p);
   });

@@ -1,6 +1,8 @@
 #include "mocap/mocap_node.h"
 
 #include <nimble/mocap_pose_t.hpp>
+
+#include "contract/messages.h"
 #include <nimble/truth_state_t.hpp>
 
 #include "sensors/sensor_config.h"
@@ -15,11 +17,12 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_ = std::make_unique<transport::ProcessNode>(options);
   node_->set_expected_rate(contract::channels::kTruth, 1000.0);
   node_->bus().subscribe<truth_state_t>(contract::channels::kTruth, [this](const truth_state_t& t) {
+    const plant::Truth truth = contract::from_message(t);
     MocapTruthInput in;
     in.utime = t.utime;
-    in.position_ned_m = Eigen::Vector3d(t.position_ned_m[0], t.position_ned_m[1], t.position_ned_m[2]);
-    in.q_body_to_ned =
-        Eigen::Quaterniond(t.quaternion_wxyz[0], t.quaternion_wxyz[1], t.quaternion_wxyz[2], t.quaternion_wxyz[3]);
+    in.position_ned_m = truth.position_ned_m;
+    const Eigen::Vector4d& q = truth.quaternion_wxyz;
+    in.q_body_to_ned = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
     for (const MocapPose& pose : emulator_->step(in)) {
       if (node_->lockstep()) outbox_.push(pose.publish_utime, pose);
       else publish(pose);
@@ -37,21 +40,7 @@ void MocapNode::flush(int64_t sim_time_ns) {
 }
 
 void MocapNode::publish(const MocapPose& pose) {
-  mocap_pose_t m;
-  m.utime = pose.utime;
-  m.seq = pose.seq;
-  m.frame_number = pose.frame_number;
-  m.latency_us = pose.latency_us;
-  m.rigid_body_id = pose.rigid_body_id;
-  for (int i = 0; i < 3; ++i) m.position_m[i] = pose.position_ned_m[i];
-  m.quaternion_wxyz[0] = pose.q_body_to_ned.w();
-  m.quaternion_wxyz[1] = pose.q_body_to_ned.x();
-  m.quaternion_wxyz[2] = pose.q_body_to_ned.y();
-  m.quaternion_wxyz[3] = pose.q_body_to_ned.z();
-  m.tracking_valid = pose.tracking_valid;
-  m.mean_marker_error_m = pose.mean_marker_error_m;
-  m.num_markers = pose.num_markers;
-  node_->bus().publish(contract::channels::kMocapPose, m);
+  node_->bus().publish(contract::channels::kMocapPose, contract::to_message(pose));
 }
 
 }  // namespace nimble

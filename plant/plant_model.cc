@@ -232,8 +232,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   // Trim: thrust equals weight.
   const Trim& trim = lat_.trim;
   trim_thrust_n_ = veh_.mass_kg * veh_.gravity_mps2 * std::cos(trim.theta0_rad) * std::cos(trim.phi0_rad);
-  const double f_hz = (trim_thrust_n_ / cfg_.thrust.pairs + cfg_.thrust.offset_n) / cfg_.thrust.slope_n_per_hz;
-  f_trim_radps_ = 2.0 * M_PI * f_hz;
+  f_trim_radps_ = cfg_.thrust.frequency_radps(trim_thrust_n_);
 
   x_ = State::Zero();
   x_[kU] = trim.u0_mps + (active_u_ ? cfg_.initial.u_mps : 0.0);
@@ -315,8 +314,7 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   const double df = x[kDf];
   const double dt_pct = (x[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
   const double dd = x[kDd], dw = x[kDw];
-  const double f_hz = x[kFcoll] / (2.0 * M_PI);
-  const double thrust = cfg_.thrust.pairs * (cfg_.thrust.slope_n_per_hz * f_hz - cfg_.thrust.offset_n);
+  const double thrust = cfg_.thrust.thrust_n(x[kFcoll]);
 
   // Aerodynamic perturbation forces and moments.
   const EffectsConfig& fx = cfg_.effects;

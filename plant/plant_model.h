@@ -21,6 +21,7 @@
 
 #include "core/config.h"
 #include "core/model.h"
+#include "core/thrust_curve.h"
 #include "core/vehicle.h"
 
 namespace nimble::plant {
@@ -39,12 +40,9 @@ struct ServoConfig {
   double c1_radps = 30.25;     ///< 2 zeta wn [1/s]
 };
 
-/// Thrust of the two wing pairs: T = pairs * (slope * f_hz - offset) [N] (thesis Eq 4.18).
-struct ThrustConfig {
-  double slope_n_per_hz = 0.0114;
-  double offset_n = 0.0449;
-  double pairs = 2.0;
-};
+/// Thrust of the two wing pairs (thesis Eq 4.18), the curve of core/thrust_curve.h; the
+/// plant section's `thrust` may change its coefficients.
+using ThrustConfig = ThrustCurve;
 
 /// Periodic forcing at the flapping frequency and its harmonics (thesis §7: oscillations at
 /// hover not captured by the linear model). Amplitude h-1 of the list acts at h times the

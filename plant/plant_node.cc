@@ -6,6 +6,7 @@
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 
+#include "contract/messages.h"
 #include "sensors/sensor_config.h"
 #include <nimble/truth_state_t.hpp>
 
@@ -66,10 +67,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
 int PlantNode::run() { return node_->run(); }
 
 void PlantNode::on_command(const actuator_command_t& cmd) {
-  // The message's fields the plant reads, in ActuatorCommand's order.
-  const ActuatorCommand in{cmd.seq, cmd.mode, cmd.flap_freq_left_radps, cmd.flap_freq_right_radps,
-                           cmd.flap_freq_collective_radps, cmd.delta_f_radps, cmd.dihedral_rad, cmd.wing_root_rad};
-  const ActuatorInterface::Result result = actuators_->command(in, node_->sim_time_ns());
+  const ActuatorInterface::Result result = actuators_->command(contract::from_message(cmd), node_->sim_time_ns());
   if (result.accepted && cmd.input_utime >= 0) {
     for (const auto& p : published_) {
       if (p.utime == cmd.input_utime) {
@@ -115,26 +113,8 @@ void PlantNode::step(int64_t sim_time_ns) {
 }
 
 void PlantNode::publish_truth(int64_t sim_time_ns) {
-  const Truth& t = model_->truth();
-  truth_state_t m;
-  m.utime = sim_time_ns / 1000;
-  m.seq = truth_seq_++;
-  m.step = node_->lockstep() ? step_index_ : -1;
-  for (int i = 0; i < 3; ++i) {
-    m.position_ned_m[i] = t.position_ned_m[i];
-    m.velocity_body_mps[i] = t.velocity_body_mps[i];
-    m.euler_rad[i] = t.euler_rad[i];
-    m.omega_body_radps[i] = t.omega_body_radps[i];
-    m.specific_force_body_mps2[i] = t.specific_force_body_mps2[i];
-    m.angular_accel_body_radps2[i] = t.angular_accel_body_radps2[i];
-  }
-  for (int i = 0; i < 4; ++i) m.quaternion_wxyz[i] = t.quaternion_wxyz[i];
-  m.flap_freq_left_radps = t.flap_freq_left_radps;
-  m.flap_freq_right_radps = t.flap_freq_right_radps;
-  m.delta_f_radps = t.delta_f_radps;
-  m.throttle_pct = t.throttle_pct;
-  m.dihedral_rad = t.dihedral_rad;
-  m.wing_root_rad = t.wing_root_rad;
+  const truth_state_t m =
+      contract::to_message(model_->truth(), sim_time_ns / 1000, truth_seq_++, node_->lockstep() ? step_index_ : -1);
   node_->bus().publish(kTruth, m);
   published_[static_cast<std::size_t>(m.seq) % published_.size()] = {m.utime, transport::monotonic_ns()};
 }
@@ -147,16 +127,8 @@ void PlantNode::publish_imu(int64_t sim_time_ns) {
   in.specific_force_body_mps2 = t.specific_force_body_mps2;
   in.flap_freq_left_radps = t.flap_freq_left_radps;
   in.flap_freq_right_radps = t.flap_freq_right_radps;
-  const ImuSample sample = imu_->sample(in);
-  imu_sample_t m;
-  m.utime = sample.utime;
+  imu_sample_t m = contract::to_message(imu_->sample(in));
   m.seq = imu_seq_++;
-  for (int i = 0; i < 3; ++i) {
-    m.gyro_radps[i] = sample.gyro_radps[i];
-    m.accel_mps2[i] = sample.accel_mps2[i];
-  }
-  m.temperature_degc = sample.temperature_degc;
-  m.saturation_flags = static_cast<int8_t>(sample.saturation_flags);
   node_->bus().publish(contract::channels::kImu, m);
   // Next sample: the first period boundary after this step.
   imu_next_ns_ = (sim_time_ns / imu_period_ns_ + 1) * imu_period_ns_;

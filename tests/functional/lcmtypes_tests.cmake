@@ -42,3 +42,7 @@ rig_discover_tests(test_contract PREFIX "functional.contract." LABELS functional
 add_executable(test_run_monitor ${CMAKE_CURRENT_LIST_DIR}/test_run_monitor.cc)
 target_link_libraries(test_run_monitor PRIVATE rig_catch_main nimble_launcher)
 rig_discover_tests(test_run_monitor PREFIX "functional.monitor." LABELS functional)
+
+add_executable(test_messages ${CMAKE_CURRENT_LIST_DIR}/test_messages.cc)
+target_link_libraries(test_messages PRIVATE rig_catch_main nimble_messages)
+rig_discover_tests(test_messages PREFIX "functional.messages." LABELS functional)
