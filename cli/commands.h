@@ -21,6 +21,9 @@ int run_run_command(const std::vector<std::string>& args);
 /// Monte Carlo campaign (launcher/sweep.h).
 int run_sweep_command(const std::vector<std::string>& args);
 
+/// `rig params [SECTION]`: parameter tables (key, default, range, unit, meaning).
+int run_params_command(const std::vector<std::string>& args);
+
 /// `rig check`: can this host run LCM multicast (directly or in a private namespace)?
 int run_check_command(const std::vector<std::string>& args);
 

@@ -23,6 +23,8 @@ const Command kCommands[] = {
      nimble::cli::run_run_command},
     {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]   Monte Carlo campaign",
      nimble::cli::run_sweep_command},
+    {"params", "params [SECTION]                                   parameters: default, range, unit, meaning",
+     nimble::cli::run_params_command},
     {"check", "check                                              can this host run LCM multicast?",
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",

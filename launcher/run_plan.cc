@@ -35,14 +35,10 @@ std::vector<int> read_cpu_list(ConfigMap& m, const std::string& key) {
 LaunchConfig launch_config_from(const Scenario& s) {
   LaunchConfig c;
   ConfigMap m = s.section("run");
-  c.ready_timeout_s = m.get_double_or("ready_timeout_s", c.ready_timeout_s, Range{0.0, 600.0, true, false});
-  c.stop_grace_s = m.get_double_or("stop_grace_s", c.stop_grace_s, Range::closed(0.0, 60.0));
-  c.stall_timeout_s = m.get_double_or("stall_timeout_s", c.stall_timeout_s, Range{0.0, 3600.0, true, false});
-  c.start_delay_s = m.get_double_or("start_delay_s", c.start_delay_s, Range::closed(0.0, 10.0));
+  read_params(m, launch_params(), c);
   c.lcm_url = m.get_string_or("lcm_url", c.lcm_url);
   c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
                                                    : m.get_string_or("network_namespace", "auto");
-  c.late_threshold_us = static_cast<int64_t>(m.get_double_or("late_threshold_us", 2000, Range::positive()));
   if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
   if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
   if (m.has("spin_us")) m.get_int("spin_us", Range::closed(0, 1000));
@@ -56,11 +52,7 @@ LaunchConfig launch_config_from(const Scenario& s) {
 JudgeConfig judge_config_from(const Scenario& s) {
   JudgeConfig c;
   ConfigMap m = s.section("summary");
-  c.max_phi_deg = m.get_double_or("max_phi_deg", c.max_phi_deg, Range{0.0, 180.0, true, false});
-  c.max_theta_deg = m.get_double_or("max_theta_deg", c.max_theta_deg, Range{0.0, 90.0, true, false});
-  c.hover_phi_deg = m.get_double_or("hover_phi_deg", c.hover_phi_deg, Range::positive());
-  c.hover_p_radps = m.get_double_or("hover_p_radps", c.hover_p_radps, Range::positive());
-  c.hover_v_mps = m.get_double_or("hover_v_mps", c.hover_v_mps, Range::positive());
+  read_params(m, judge_params(), c);
   m.finish();
   return c;
 }
@@ -73,6 +65,30 @@ std::string timestamp() {
 }
 
 }  // namespace
+
+const ParamTable<LaunchConfig>& launch_params() {
+  using C = LaunchConfig;
+  static const ParamTable<C> table = {
+      {"ready_timeout_s", &C::ready_timeout_s, Range{0.0, 600.0, true, false}, "s", "every process must report READY within this"},
+      {"stop_grace_s", &C::stop_grace_s, Range::closed(0.0, 60.0), "s", "after RUN_CONTROL stop, before SIGTERM"},
+      {"stall_timeout_s", &C::stall_timeout_s, Range{0.0, 3600.0, true, false}, "s", "lockstep: no new TRUTH for this long (wall clock) is a failure"},
+      {"start_delay_s", &C::start_delay_s, Range::closed(0.0, 10.0), "s", "real time: simulated time 0 lies this far after the start command"},
+      {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us", "real time: a stream message later than this after its due time is late"},
+  };
+  return table;
+}
+
+const ParamTable<JudgeConfig>& judge_params() {
+  using C = JudgeConfig;
+  static const ParamTable<C> table = {
+      {"max_phi_deg", &C::max_phi_deg, Range{0.0, 180.0, true, false}, "deg", "beyond this roll the vehicle is not controlled"},
+      {"max_theta_deg", &C::max_theta_deg, Range{0.0, 90.0, true, false}, "deg", "beyond this pitch (the pitch set-point limit) neither"},
+      {"hover_phi_deg", &C::hover_phi_deg, Range::positive(), "deg", "final |phi| within this: returned to hover"},
+      {"hover_p_radps", &C::hover_p_radps, Range::positive(), "rad/s", "final |p| within this: returned to hover"},
+      {"hover_v_mps", &C::hover_v_mps, Range::positive(), "m/s", "final |v| within this: returned to hover"},
+  };
+  return table;
+}
 
 RunPlan load_run_plan(const RunOptions& options) {
   std::vector<Override> overrides = options.overrides;

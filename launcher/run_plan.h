@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "contract/rates.h"
+#include "core/param_table.h"
 #include "scenario/scenario.h"
 
 namespace nimble::launcher {
@@ -60,6 +61,12 @@ struct JudgeConfig {
   double hover_p_radps = 0.5;       ///< final |p| for "returned to hover"
   double hover_v_mps = 0.3;         ///< final |v| for "returned to hover"
 };
+
+/// The `run` section's numeric parameters (defaults: LaunchConfig's); lcm_url,
+/// network_namespace, the CPU lists and the processes' own keys are read on their own.
+const ParamTable<LaunchConfig>& launch_params();
+/// The `summary` section's parameters (defaults: JudgeConfig's).
+const ParamTable<JudgeConfig>& judge_params();
 
 struct RunPlan {
   Scenario scenario;            ///< resolved: bases merged, --clock/--seed/--set applied, validated

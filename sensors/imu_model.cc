@@ -1,5 +1,7 @@
 #include "sensors/imu_model.h"
 
+#include "sensors/sensor_config.h"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -16,12 +18,6 @@ namespace {
 void require_non_negative(const std::string& field, const Eigen::Vector3d& v) {
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(v[i]) || v[i] < 0.0) invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
-  }
-}
-
-void require_finite(const std::string& field, const Eigen::Vector3d& v) {
-  for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(v[i])) invalid(field + "[" + std::to_string(i) + "]", v[i], "finite");
   }
 }
 
@@ -56,17 +52,12 @@ std::vector<VibrationHarmonic> default_flapping_harmonics() {
 }
 
 void validate(const ImuModelConfig& c) {
-  if (!(c.sample_rate_hz > 0.0) || !std::isfinite(c.sample_rate_hz)) invalid("sample_rate_hz", c.sample_rate_hz, "> 0");
-  require_non_negative("gyro_noise_sigma_radps", c.gyro_noise_sigma_radps);
-  require_non_negative("accel_noise_sigma_mps2", c.accel_noise_sigma_mps2);
-  require_finite("gyro_bias_initial_radps", c.gyro_bias_initial_radps);
-  require_finite("accel_bias_initial_mps2", c.accel_bias_initial_mps2);
-  if (!(c.gyro_bias_turn_on_sigma_radps >= 0.0)) invalid("gyro_bias_turn_on_sigma_radps", c.gyro_bias_turn_on_sigma_radps, ">= 0");
-  if (!(c.accel_bias_turn_on_sigma_mps2 >= 0.0)) invalid("accel_bias_turn_on_sigma_mps2", c.accel_bias_turn_on_sigma_mps2, ">= 0");
-  require_non_negative("gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts);
-  require_non_negative("accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts);
-  if (!(c.gyro_range_radps > 0.0)) invalid("gyro_range_radps", c.gyro_range_radps, "> 0");
-  if (!(c.accel_range_mps2 > 0.0)) invalid("accel_range_mps2", c.accel_range_mps2, "> 0");
+  // The scalar and vector parameters: the ranges of the loader's table (sensors/sensor_config.h).
+  try {
+    check_params(imu_params(), c);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("ImuModelConfig.") + e.what());
+  }
   for (std::size_t i = 0; i < c.flapping_harmonics.size(); ++i) {
     const auto& h = c.flapping_harmonics[i];
     const std::string name = "flapping_harmonics[" + std::to_string(i) + "]";
@@ -74,10 +65,6 @@ void validate(const ImuModelConfig& c) {
     require_non_negative(name + ".gyro_amplitude_radps", h.gyro_amplitude_radps);
     require_non_negative(name + ".accel_amplitude_mps2", h.accel_amplitude_mps2);
   }
-  if (!(c.structural_mode_hz > 0.0) || !std::isfinite(c.structural_mode_hz)) invalid("structural_mode_hz", c.structural_mode_hz, "> 0");
-  require_non_negative("structural_gyro_amplitude_radps", c.structural_gyro_amplitude_radps);
-  require_non_negative("structural_accel_amplitude_mps2", c.structural_accel_amplitude_mps2);
-  if (!std::isfinite(c.temperature_degc)) invalid("temperature_degc", c.temperature_degc, "finite");
 }
 
 ImuModel::ImuModel(const ImuModelConfig& config, std::uint64_t seed) : config_(config), rng_(seed) {

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/attitude.h"
+#include "sensors/sensor_config.h"
 
 namespace nimble {
 namespace {
@@ -34,32 +35,20 @@ double MocapConfig::expected_dropout_fraction() const {
 }
 
 void validate(const MocapConfig& c) {
-  if (!(c.frame_rate_hz > 0.0 && c.frame_rate_hz <= 1e5)) invalid("frame_rate_hz", c.frame_rate_hz, "in (0, 1e5]");
+  // Each parameter's range: the loader's table (sensors/sensor_config.h).
+  try {
+    check_params(mocap_params(), c);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("MocapConfig.") + e.what());
+  }
+  // And what relates two of them.
   const double period = 1e6 / c.frame_rate_hz;
   if (std::fabs(period - std::round(period)) > 1e-6) {
     invalid("frame_rate_hz", c.frame_rate_hz, "such that 1e6 / frame_rate_hz is a whole number of microseconds");
   }
-  if (c.exposure_us < 0 || c.exposure_us > c.frame_period_us()) {
+  if (c.exposure_us > c.frame_period_us()) {
     invalid("exposure_us", static_cast<double>(c.exposure_us), "in [0, frame period]");
   }
-  if (c.latency_us < 0 || c.latency_us > 1000000) invalid("latency_us", static_cast<double>(c.latency_us), "in [0, 1e6]");
-  if (!(c.latency_jitter_sigma_us >= 0.0) || !std::isfinite(c.latency_jitter_sigma_us)) {
-    invalid("latency_jitter_sigma_us", c.latency_jitter_sigma_us, ">= 0");
-  }
-  if (!(c.mean_position_error_m >= 0.0) || !std::isfinite(c.mean_position_error_m)) {
-    invalid("mean_position_error_m", c.mean_position_error_m, ">= 0");
-  }
-  for (int i = 0; i < 3; ++i) {
-    const double s = c.attitude_noise_sigma_rad[i];
-    if (!(s >= 0.0 && s < 0.5)) invalid("attitude_noise_sigma_rad[" + std::to_string(i) + "]", s, "in [0, 0.5)");
-  }
-  if (!(c.dropout_burst_rate_hz >= 0.0) || !std::isfinite(c.dropout_burst_rate_hz)) {
-    invalid("dropout_burst_rate_hz", c.dropout_burst_rate_hz, ">= 0");
-  }
-  if (!(c.dropout_mean_duration_s >= 0.0) || !std::isfinite(c.dropout_mean_duration_s)) {
-    invalid("dropout_mean_duration_s", c.dropout_mean_duration_s, ">= 0");
-  }
-  if (c.num_markers < 0 || c.num_markers > 32767) invalid("num_markers", c.num_markers, "in [0, 32767]");
 }
 
 MocapEmulator::MocapEmulator(const MocapConfig& config, std::uint64_t seed)

@@ -7,21 +7,53 @@
 
 namespace nimble {
 
+const ParamTable<ImuModelConfig>& imu_params() {
+  using C = ImuModelConfig;
+  const Range nn = Range::non_negative();
+  static const ParamTable<C> table = {
+      {"sample_rate_hz", &C::sample_rate_hz, Range{0.0, 1e5, true, false}, "Hz", "output rate; thesis Section 8.1: 512 Hz"},
+      {"gyro_noise_sigma_radps", &C::gyro_noise_sigma_radps, nn, "rad/s", "white gyro noise, 1-sigma per sample; thesis Section 8.1: 0.05 deg/s"},
+      {"accel_noise_sigma_mps2", &C::accel_noise_sigma_mps2, nn, "m/s^2", "white accelerometer noise, 1-sigma per sample; thesis Section 8.1: 0.05 g (x, y), 0.08 g (z)"},
+      {"gyro_bias_initial_radps", &C::gyro_bias_initial_radps, Range::closed(-10.0, 10.0), "rad/s", "fixed part of the initial gyro bias (an injected bias)"},
+      {"accel_bias_initial_mps2", &C::accel_bias_initial_mps2, Range::closed(-50.0, 50.0), "m/s^2", "fixed part of the initial accelerometer bias"},
+      {"gyro_bias_turn_on_sigma_radps", &C::gyro_bias_turn_on_sigma_radps, nn, "rad/s", "1-sigma of the seeded turn-on gyro bias per axis; assumption: residual after start-up calibration, about 1 deg/s"},
+      {"accel_bias_turn_on_sigma_mps2", &C::accel_bias_turn_on_sigma_mps2, nn, "m/s^2", "1-sigma of the seeded turn-on accelerometer bias per axis; assumption: about 0.02 g"},
+      {"gyro_bias_rw_radps_per_sqrts", &C::gyro_bias_rw_radps_per_sqrts, nn, "rad/s/sqrt(s)", "gyro bias random walk; assumption (not published): 2e-4, about 0.1 deg/s per minute"},
+      {"accel_bias_rw_mps2_per_sqrts", &C::accel_bias_rw_mps2_per_sqrts, nn, "m/s^2/sqrt(s)", "accelerometer bias random walk; assumption (not published): 2e-3"},
+      {"gyro_range_radps", &C::gyro_range_radps, Range::positive(), "rad/s", "gyro full scale; MPU-6000 largest setting, 2000 deg/s"},
+      {"accel_range_mps2", &C::accel_range_mps2, Range::positive(), "m/s^2", "accelerometer full scale; MPU-6000 largest setting, 16 g"},
+      {"vibration_enabled", &C::vibration_enabled, Range::any(), "-", "switches all vibration (flapping harmonics, structural mode) on or off"},
+      {"structural_mode_hz", &C::structural_mode_hz, Range{0.0, 1e4, true, false}, "Hz", "structural (fuselage) mode; thesis Section 8.3, Fig D.2: about 11 Hz"},
+      {"structural_gyro_amplitude_radps", &C::structural_gyro_amplitude_radps, nn, "rad/s", "structural mode on the gyro axes; assumption: 0.3 rad/s on z only"},
+      {"structural_accel_amplitude_mps2", &C::structural_accel_amplitude_mps2, nn, "m/s^2", "structural mode on the accelerometer axes; assumption: zero"},
+      {"temperature_degc", &C::temperature_degc, Range::closed(-60.0, 150.0), "degC", "reported die temperature; assumption: constant 35 degC"},
+  };
+  return table;
+}
+
+const ParamTable<MocapConfig>& mocap_params() {
+  using C = MocapConfig;
+  const Range nn = Range::non_negative();
+  static const ParamTable<C> table = {
+      {"frame_rate_hz", &C::frame_rate_hz, Range{0.0, 1e5, true, false}, "Hz", "frame rate (1e6 / rate a whole number of us); thesis Section 8.1: 200 Hz"},
+      {"first_frame_start_utime", &C::first_frame_start_utime, Range::closed(-9e15, 9e15), "us", "start of the exposure of frame 0, rig time"},
+      {"exposure_us", &C::exposure_us, Range::closed(0.0, 1e5), "us", "exposure time, at most one frame period; assumption: 500 us"},
+      {"latency_us", &C::latency_us, Range::closed(0.0, 1e6), "us", "latency from mid-exposure to publication; assumption: 5 ms"},
+      {"latency_jitter_sigma_us", &C::latency_jitter_sigma_us, nn, "us", "1-sigma Gaussian jitter of the latency; 0: constant"},
+      {"mean_position_error_m", &C::mean_position_error_m, Range::closed(0.0, 1.0), "m", "mean 3-D position error; paper Section II.B: 0.85 mm"},
+      {"attitude_noise_sigma_rad", &C::attitude_noise_sigma_rad, Range{0.0, 0.5, false, true}, "rad", "attitude noise, 1-sigma about body x y z; square roots of thesis Eq 8.2 R"},
+      {"dropout_burst_rate_hz", &C::dropout_burst_rate_hz, nn, "1/s", "occlusion bursts per second of tracked time; assumption: 0.2"},
+      {"dropout_mean_duration_s", &C::dropout_mean_duration_s, nn, "s", "mean duration of an occlusion burst; assumption: 0.05 s"},
+      {"rigid_body_id", &C::rigid_body_id, Range::closed(-2147483648.0, 2147483647.0), "-", "rigid-body identifier in every frame"},
+      {"num_markers", &C::num_markers, Range::closed(0, 32767), "-", "markers of the rigid body; thesis Fig 3: four"},
+  };
+  return table;
+}
+
 ImuModelConfig imu_model_config_from(ConfigMap& map) {
   ImuModelConfig c;
   const Range nn = Range::non_negative();
-  c.sample_rate_hz = map.get_double_or("sample_rate_hz", c.sample_rate_hz, Range{0.0, 1e5, true, false});
-  c.gyro_noise_sigma_radps = get_vec3_or(map, "gyro_noise_sigma_radps", c.gyro_noise_sigma_radps, nn);
-  c.accel_noise_sigma_mps2 = get_vec3_or(map, "accel_noise_sigma_mps2", c.accel_noise_sigma_mps2, nn);
-  c.gyro_bias_initial_radps = get_vec3_or(map, "gyro_bias_initial_radps", c.gyro_bias_initial_radps, Range::closed(-10.0, 10.0));
-  c.accel_bias_initial_mps2 = get_vec3_or(map, "accel_bias_initial_mps2", c.accel_bias_initial_mps2, Range::closed(-50.0, 50.0));
-  c.gyro_bias_turn_on_sigma_radps = map.get_double_or("gyro_bias_turn_on_sigma_radps", c.gyro_bias_turn_on_sigma_radps, nn);
-  c.accel_bias_turn_on_sigma_mps2 = map.get_double_or("accel_bias_turn_on_sigma_mps2", c.accel_bias_turn_on_sigma_mps2, nn);
-  c.gyro_bias_rw_radps_per_sqrts = get_vec3_or(map, "gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts, nn);
-  c.accel_bias_rw_mps2_per_sqrts = get_vec3_or(map, "accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts, nn);
-  c.gyro_range_radps = map.get_double_or("gyro_range_radps", c.gyro_range_radps, Range::positive());
-  c.accel_range_mps2 = map.get_double_or("accel_range_mps2", c.accel_range_mps2, Range::positive());
-  c.vibration_enabled = get_bool_or(map, "vibration_enabled", c.vibration_enabled);
+  read_params(map, imu_params(), c);
   if (map.has("flapping_harmonics")) {
     const YAML::Node list = map.get_node("flapping_harmonics");
     if (!list.IsSequence()) map.fail("flapping_harmonics", "must be a list of mappings (harmonic, gyro_amplitude_radps, accel_amplitude_mps2)");
@@ -36,10 +68,6 @@ ImuModelConfig imu_model_config_from(ConfigMap& map) {
       c.flapping_harmonics.push_back(h);
     }
   }
-  c.structural_mode_hz = map.get_double_or("structural_mode_hz", c.structural_mode_hz, Range{0.0, 1e4, true, false});
-  c.structural_gyro_amplitude_radps = get_vec3_or(map, "structural_gyro_amplitude_radps", c.structural_gyro_amplitude_radps, nn);
-  c.structural_accel_amplitude_mps2 = get_vec3_or(map, "structural_accel_amplitude_mps2", c.structural_accel_amplitude_mps2, nn);
-  c.temperature_degc = map.get_double_or("temperature_degc", c.temperature_degc, Range::closed(-60.0, 150.0));
   map.finish();
   validate_section(map, c);
   return c;
@@ -47,22 +75,14 @@ ImuModelConfig imu_model_config_from(ConfigMap& map) {
 
 MocapConfig mocap_config_from(ConfigMap& map) {
   MocapConfig c;
-  const Range nn = Range::non_negative();
-  c.frame_rate_hz = map.get_double_or("frame_rate_hz", c.frame_rate_hz, Range{0.0, 1e5, true, false});
+  read_params(map, mocap_params(), c);
   const double period = 1e6 / c.frame_rate_hz;
   if (std::fabs(period - std::round(period)) > 1e-6) {
     map.fail("frame_rate_hz", "must give a whole number of microseconds per frame (1e6 / frame_rate_hz)");
   }
-  c.first_frame_start_utime = get_int_or(map, "first_frame_start_utime", c.first_frame_start_utime, Range::closed(-9e15, 9e15));
-  c.exposure_us = get_int_or(map, "exposure_us", c.exposure_us, Range::closed(0.0, std::round(period)));
-  c.latency_us = get_int_or(map, "latency_us", c.latency_us, Range::closed(0.0, 1e6));
-  c.latency_jitter_sigma_us = map.get_double_or("latency_jitter_sigma_us", c.latency_jitter_sigma_us, nn);
-  c.mean_position_error_m = map.get_double_or("mean_position_error_m", c.mean_position_error_m, Range::closed(0.0, 1.0));
-  c.attitude_noise_sigma_rad = get_vec3_or(map, "attitude_noise_sigma_rad", c.attitude_noise_sigma_rad, Range{0.0, 0.5, false, true});
-  c.dropout_burst_rate_hz = map.get_double_or("dropout_burst_rate_hz", c.dropout_burst_rate_hz, nn);
-  c.dropout_mean_duration_s = map.get_double_or("dropout_mean_duration_s", c.dropout_mean_duration_s, nn);
-  c.rigid_body_id = static_cast<int>(get_int_or(map, "rigid_body_id", c.rigid_body_id, Range::closed(-2147483648.0, 2147483647.0)));
-  c.num_markers = static_cast<int>(get_int_or(map, "num_markers", c.num_markers, Range::closed(0, 32767)));
+  if (static_cast<double>(c.exposure_us) > std::round(period)) {
+    map.fail("exposure_us", "must be at most one frame period (" + std::to_string(std::llround(period)) + " us)");
+  }
   map.finish();
   validate_section(map, c);
   return c;

@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "core/config.h"
+#include "core/param_table.h"
 #include "sensors/imu_model.h"
 #include "sensors/mocap_emulator.h"
 
@@ -24,6 +25,14 @@ struct SensorConfig {
   /// from the scenario's seed).
   std::uint64_t seed = 1;
 };
+
+/// The `imu` section's scalar and vector parameters: key, range, unit, meaning (the defaults are
+/// ImuModelConfig's). The loader, validate(ImuModelConfig) and `rig params` use this table; the
+/// list `flapping_harmonics` is read and checked on its own.
+const ParamTable<ImuModelConfig>& imu_params();
+/// The `mocap` section's parameters (the defaults are MocapConfig's); the frame rate's whole
+/// number of microseconds and the exposure within the frame are checked on their own.
+const ParamTable<MocapConfig>& mocap_params();
 
 /// Reads the `imu` section. @throws ConfigError.
 ImuModelConfig imu_model_config_from(ConfigMap& map);

@@ -1,0 +1,56 @@
+/// `rig params [SECTION]`: the parameters of the sections that declare them in a parameter table
+/// (core/param_table.h), with default, allowed range, unit and meaning: the same table the
+/// loader and the validation use.
+
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "launcher/run_plan.h"
+#include "sensors/sensor_config.h"
+
+namespace nimble::cli {
+namespace {
+
+struct Section {
+  const char* name;
+  std::string (*markdown)();
+};
+
+const std::vector<Section>& sections() {
+  static const std::vector<Section> list = {
+      {"run", [] { return params_markdown(launcher::launch_params(), launcher::LaunchConfig{}, "run."); }},
+      {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},
+      {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},
+      {"sensing.mocap", [] { return params_markdown(mocap_params(), MocapConfig{}, "sensing.mocap."); }},
+  };
+  return list;
+}
+
+}  // namespace
+
+int run_params_command(const std::vector<std::string>& args) {
+  if (args.size() > 1 || (args.size() == 1 && (args[0] == "--help" || args[0] == "-h"))) {
+    std::cout << "usage: rig params [SECTION]\n  The parameters of a scenario section (default: every section that has a\n"
+                 "  table): key, default, allowed range, unit, meaning, as Markdown.\n  Sections:";
+    for (const auto& s : sections()) std::cout << " " << s.name;
+    std::cout << "\n";
+    return args.size() == 1 && (args[0] == "--help" || args[0] == "-h") ? 0 : kExitUsage;
+  }
+  bool found = false;
+  for (const auto& s : sections()) {
+    if (!args.empty() && args[0] != s.name) continue;
+    found = true;
+    std::cout << "### " << s.name << "\n\n" << s.markdown() << "\n";
+  }
+  if (!found) {
+    std::cerr << "rig params: no parameter table for section '" << args[0] << "'; sections:";
+    for (const auto& s : sections()) std::cerr << " " << s.name;
+    std::cerr << "\n";
+    return kExitUsage;
+  }
+  return 0;
+}
+
+}  // namespace nimble::cli

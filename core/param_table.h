@@ -1,0 +1,137 @@
+#pragma once
+/// Parameter tables: each configuration parameter's key, range, unit and meaning declared once,
+/// next to its struct, and used by
+///  - the loader (read_params: a ConfigMap key within its range, or the struct's default),
+///  - validation of a struct built in code (check_params: the same ranges),
+///  - the documentation (params_markdown: key, default, range, unit, meaning; `rig params`).
+/// The default is the struct's own initialiser, so it too is written once.
+///
+/// A parameter is a double, an integer, a boolean or a 3-vector (written as a mapping x, y, z,
+/// each component within the range).
+
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/config.h"
+#include "core/config_fields.h"
+
+namespace nimble {
+
+template <typename Config>
+struct Param {
+  using Member = std::variant<double Config::*, Eigen::Vector3d Config::*, bool Config::*, int Config::*,
+                              std::int64_t Config::*>;
+  std::string key;
+  Member member;
+  Range range;          ///< of the value (of each component of a vector); unused for booleans
+  std::string unit;     ///< e.g. "rad/s", "-" for none
+  std::string meaning;  ///< one line, with its source where it has one
+};
+
+template <typename Config>
+using ParamTable = std::vector<Param<Config>>;
+
+namespace param_detail {
+
+inline std::string number(double x) {
+  std::ostringstream s;
+  s.precision(10);
+  s << x;
+  return s.str();
+}
+
+[[noreturn]] inline void out_of_range(const std::string& key, const std::string& value, const Range& range) {
+  throw std::invalid_argument(key + " = " + value + ": must be " + range.describe());
+}
+
+}  // namespace param_detail
+
+/// Reads every parameter of `table` that `map` has into `config`, each within its range; an
+/// absent key leaves the struct's default. Does not call map.finish(): the caller may read more.
+/// @throws ConfigError naming the file, key and value.
+template <typename Config>
+void read_params(ConfigMap& map, const ParamTable<Config>& table, Config& config) {
+  for (const Param<Config>& p : table) {
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(config.*member)>;
+          T& field = config.*member;
+          if constexpr (std::is_same_v<T, double>) {
+            field = map.get_double_or(p.key, field, p.range);
+          } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+            field = get_vec3_or(map, p.key, field, p.range);
+          } else if constexpr (std::is_same_v<T, bool>) {
+            field = get_bool_or(map, p.key, field);
+          } else {
+            field = static_cast<T>(get_int_or(map, p.key, static_cast<long long>(field), p.range));
+          }
+        },
+        p.member);
+  }
+}
+
+/// Checks every parameter of `config` against its range (and for finiteness); a vector's
+/// component is named key[i].
+/// @throws std::invalid_argument naming the key, the value and the range.
+template <typename Config>
+void check_params(const ParamTable<Config>& table, const Config& config) {
+  using param_detail::number;
+  for (const Param<Config>& p : table) {
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(config.*member)>;
+          const T& field = config.*member;
+          if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+            for (int i = 0; i < 3; ++i) {
+              if (!std::isfinite(field[i]) || !p.range.contains(field[i])) {
+                // Index notation: the struct's component, as code built it.
+                param_detail::out_of_range(p.key + "[" + std::to_string(i) + "]", number(field[i]), p.range);
+              }
+            }
+          } else if constexpr (!std::is_same_v<T, bool>) {
+            const double x = static_cast<double>(field);
+            if (!std::isfinite(x) || !p.range.contains(x)) param_detail::out_of_range(p.key, number(x), p.range);
+          }
+        },
+        p.member);
+  }
+}
+
+/// The table as Markdown: key, default (from `defaults`), allowed range, unit, meaning.
+template <typename Config>
+std::string params_markdown(const ParamTable<Config>& table, const Config& defaults, const std::string& prefix = "") {
+  using param_detail::number;
+  std::ostringstream out;
+  out << "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
+  for (const Param<Config>& p : table) {
+    std::string value;
+    bool is_bool = false;
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(defaults.*member)>;
+          const T& field = defaults.*member;
+          if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+            value = "{x: " + number(field[0]) + ", y: " + number(field[1]) + ", z: " + number(field[2]) + "}";
+          } else if constexpr (std::is_same_v<T, bool>) {
+            value = field ? "true" : "false";
+            is_bool = true;
+          } else {
+            value = number(static_cast<double>(field));
+          }
+        },
+        p.member);
+    out << "| `" << prefix << p.key << "` | " << value << " | " << (is_bool ? "true, false" : p.range.describe())
+        << " | " << p.unit << " | " << p.meaning << " |\n";
+  }
+  return out.str();
+}
+
+}  // namespace nimble

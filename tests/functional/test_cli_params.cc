@@ -1,0 +1,89 @@
+// Functional tests of `rig params` and of the parameter tables against the shipped sensing
+// base: the tables the loader and the validation use are the documentation, and every key of
+// them is written, at its default, in rig_configs/sensing/default_sensing.yaml.
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "sensors/sensor_config.h"
+
+namespace {
+
+struct Out {
+  int code = -1;
+  std::string text;
+};
+
+Out rig(const std::string& args) {
+  const std::string cmd = std::string(RIG_BIN) + " " + args + " 2>&1";
+  Out o;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  REQUIRE(p != nullptr);
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) o.text.append(buf, n);
+  const int status = ::pclose(p);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+template <typename Config>
+void check_documented(const nimble::ParamTable<Config>& table, const Config& defaults, const YAML::Node& section,
+                      const std::string& name) {
+  for (const auto& p : table) {
+    INFO(name << "." << p.key);
+    REQUIRE(section[p.key]);
+    // The shipped base writes each default (to its printed precision).
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(defaults.*member)>;
+          if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+            for (int i = 0; i < 3; ++i) {
+              const char* axis = nimble::kXyzAxes[static_cast<std::size_t>(i)];
+              CHECK(section[p.key][axis].template as<double>() ==
+                    Approx((defaults.*member)[i]).epsilon(1e-4).margin(1e-12));
+            }
+          } else if constexpr (std::is_same_v<T, bool>) {
+            CHECK(section[p.key].template as<bool>() == defaults.*member);
+          } else {
+            CHECK(section[p.key].template as<double>() ==
+                  Approx(static_cast<double>(defaults.*member)).epsilon(1e-4).margin(1e-12));
+          }
+        },
+        p.member);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("rig params prints each section's table, and an unknown section is named", "[cli]") {
+  const Out all = rig("params");
+  REQUIRE(all.code == 0);
+  for (const char* key : {"`run.stop_grace_s`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
+                          "`sensing.mocap.latency_us`"}) {
+    CHECK(all.text.find(key) != std::string::npos);
+  }
+  const Out mocap = rig("params sensing.mocap");
+  REQUIRE(mocap.code == 0);
+  CHECK(mocap.text.find("| `sensing.mocap.latency_us` | 5000 | in [0, 1e+06] | us |") != std::string::npos);
+  CHECK(mocap.text.find("sensing.imu") == std::string::npos);
+  const Out bad = rig("params sensing.lidar");
+  CHECK(bad.code == 2);
+  CHECK(bad.text.find("sensing.lidar") != std::string::npos);
+  CHECK(bad.text.find("sensing.imu") != std::string::npos);  // the sections there are
+}
+
+TEST_CASE("every tabled sensing parameter is written at its default in the shipped sensing base", "[cli]") {
+  const YAML::Node base = YAML::LoadFile(std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/default_sensing.yaml");
+  check_documented(nimble::imu_params(), nimble::ImuModelConfig{}, base["imu"], "imu");
+  check_documented(nimble::mocap_params(), nimble::MocapConfig{}, base["mocap"], "mocap");
+}
