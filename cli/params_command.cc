@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
+#include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
 
 namespace nimble::cli {
@@ -24,6 +25,7 @@ const std::vector<Section>& sections() {
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},
       {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},
       {"sensing.mocap", [] { return params_markdown(mocap_params(), MocapConfig{}, "sensing.mocap."); }},
+      {"sensing.ekf", [] { return params_markdown(ekf_params(), EkfConfig{}, "sensing.ekf."); }},
   };
   return list;
 }

@@ -6,8 +6,10 @@
 ///  - the documentation (params_markdown: key, default, range, unit, meaning; `rig params`).
 /// The default is the struct's own initialiser, so it too is written once.
 ///
-/// A parameter is a double, an integer, a boolean or a 3-vector (written as a mapping x, y, z,
-/// each component within the range).
+/// A parameter is a double, an integer, a boolean or a 3-vector (written as a mapping of its
+/// axis names, x y z unless the parameter names others, each component within the range). A key
+/// "group.name" lives in the section's sub-mapping `group`: the loader reads a group with
+/// read_params(sub_map, table, config, "group").
 
 #include <cmath>
 #include <cstdint>
@@ -34,6 +36,7 @@ struct Param {
   Range range;          ///< of the value (of each component of a vector); unused for booleans
   std::string unit;     ///< e.g. "rad/s", "-" for none
   std::string meaning;  ///< one line, with its source where it has one
+  AxisNames axes = kXyzAxes;  ///< a vector's component keys
 };
 
 template <typename Config>
@@ -54,24 +57,39 @@ inline std::string number(double x) {
 
 }  // namespace param_detail
 
-/// Reads every parameter of `table` that `map` has into `config`, each within its range; an
-/// absent key leaves the struct's default. Does not call map.finish(): the caller may read more.
+namespace param_detail {
+
+/// The key of `p` within `group` ("" for the section itself), or "" if it is not in the group.
+inline std::string key_in_group(const std::string& key, const std::string& group) {
+  if (group.empty()) return key.find('.') == std::string::npos ? key : "";
+  if (key.size() <= group.size() + 1 || key.compare(0, group.size(), group) != 0 || key[group.size()] != '.') return "";
+  const std::string rest = key.substr(group.size() + 1);
+  return rest.find('.') == std::string::npos ? rest : "";
+}
+
+}  // namespace param_detail
+
+/// Reads every parameter of `table` in `group` ("": the keys without a dot) that `map` has into
+/// `config`, each within its range; an absent key leaves the struct's default. Does not call
+/// map.finish(): the caller may read more.
 /// @throws ConfigError naming the file, key and value.
 template <typename Config>
-void read_params(ConfigMap& map, const ParamTable<Config>& table, Config& config) {
+void read_params(ConfigMap& map, const ParamTable<Config>& table, Config& config, const std::string& group = "") {
   for (const Param<Config>& p : table) {
+    const std::string key = param_detail::key_in_group(p.key, group);
+    if (key.empty()) continue;
     std::visit(
         [&](auto member) {
           using T = std::decay_t<decltype(config.*member)>;
           T& field = config.*member;
           if constexpr (std::is_same_v<T, double>) {
-            field = map.get_double_or(p.key, field, p.range);
+            field = map.get_double_or(key, field, p.range);
           } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-            field = get_vec3_or(map, p.key, field, p.range);
+            field = get_vec3_or(map, key, field, p.range, p.axes);
           } else if constexpr (std::is_same_v<T, bool>) {
-            field = get_bool_or(map, p.key, field);
+            field = get_bool_or(map, key, field);
           } else {
-            field = static_cast<T>(get_int_or(map, p.key, static_cast<long long>(field), p.range));
+            field = static_cast<T>(get_int_or(map, key, static_cast<long long>(field), p.range));
           }
         },
         p.member);
@@ -119,7 +137,8 @@ std::string params_markdown(const ParamTable<Config>& table, const Config& defau
           using T = std::decay_t<decltype(defaults.*member)>;
           const T& field = defaults.*member;
           if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-            value = "{x: " + number(field[0]) + ", y: " + number(field[1]) + ", z: " + number(field[2]) + "}";
+            value = std::string("{") + p.axes[0] + ": " + number(field[0]) + ", " + p.axes[1] + ": " + number(field[1]) +
+                    ", " + p.axes[2] + ": " + number(field[2]) + "}";
           } else if constexpr (std::is_same_v<T, bool>) {
             value = field ? "true" : "false";
             is_bool = true;

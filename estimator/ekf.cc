@@ -14,26 +14,6 @@
 namespace nimble {
 namespace {
 
-[[noreturn]] void invalid(const std::string& field, double value, const std::string& allowed) {
-  std::ostringstream out;
-  out << "EkfConfig." << field << " = " << value << ": must be " << allowed;
-  throw std::invalid_argument(out.str());
-}
-
-void require_positive(const std::string& field, double v) {
-  if (!(v > 0.0) || !std::isfinite(v)) invalid(field, v, "> 0");
-}
-
-void require_non_negative(const std::string& field, const Eigen::Vector3d& v) {
-  for (int i = 0; i < 3; ++i) {
-    if (!(v[i] >= 0.0) || !std::isfinite(v[i])) invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
-  }
-}
-
-void require_positive(const std::string& field, const Eigen::Vector3d& v) {
-  for (int i = 0; i < 3; ++i) require_positive(field + "[" + std::to_string(i) + "]", v[i]);
-}
-
 /// Velocity relative to the world in NED axes [m/s] of a filter state.
 Eigen::Vector3d world_velocity(const EkfState& x) {
   return rotation_from_euler_zyx(x.head<3>()) * x.segment<3>(3);
@@ -97,24 +77,42 @@ EkfCovariance EkfConfig::initial_covariance() const {
   return d.array().square().matrix().asDiagonal();
 }
 
+const ParamTable<EkfConfig>& ekf_params() {
+  using C = EkfConfig;
+  const Range nn = Range::non_negative();
+  const Range pos = Range::positive();
+  static const AxisNames euler = {"phi", "theta", "psi"};
+  static const AxisNames uvw = {"u", "v", "w"};
+  static const ParamTable<C> table = {
+      {"gravity_mps2", &C::gravity_mps2, Range::closed(9.0, 10.5), "m/s^2", "gravity; the value of the thesis's models (9.81)"},
+      {"min_abs_cos_theta", &C::min_abs_cos_theta, Range{0.0, 0.5, true, false}, "-", "smallest |cos(theta)| in the Euler kinematics (pitch singularity guard)"},
+      {"process_noise.reference_rate_hz", &C::process_noise_reference_rate_hz, pos, "Hz", "rate at which the *_var_per_sample values are per-sample variances; thesis: 512 Hz"},
+      {"process_noise.gyro_var_per_sample_rad2ps2", &C::gyro_noise_var_per_sample_rad2ps2, nn, "(rad/s)^2", "gyro input noise per sample at the reference rate; thesis Eq 8.2 Q(1:3)"},
+      {"process_noise.accel_var_per_sample_m2ps4", &C::accel_noise_var_per_sample_m2ps4, nn, "(m/s^2)^2", "accelerometer input noise per sample at the reference rate; thesis Eq 8.2 Q(4:6)"},
+      {"process_noise.gyro_bias_rw_radps_per_sqrts", &C::gyro_bias_rw_radps_per_sqrts, nn, "rad/s/sqrt(s)", "gyro bias random walk; not in the thesis, the emulated IMU's"},
+      {"process_noise.accel_bias_rw_mps2_per_sqrts", &C::accel_bias_rw_mps2_per_sqrts, nn, "m/s^2/sqrt(s)", "accelerometer bias random walk; the emulated IMU's"},
+      {"measurement_noise.attitude_var_rad2", &C::attitude_var_rad2, pos, "rad^2", "variance of the measured phi, theta, psi; thesis Eq 8.2 R(1:3)", euler},
+      {"measurement_noise.velocity_var_m2ps2", &C::velocity_var_m2ps2, pos, "(m/s)^2", "variance of the measured u, v, w; thesis Eq 8.2 R(4:6)", uvw},
+      {"initial_sigma.attitude_rad", &C::initial_attitude_sigma_rad, pos, "rad", "initial 1-sigma of the attitude; assumption: 0.02"},
+      {"initial_sigma.velocity_mps", &C::initial_velocity_sigma_mps, pos, "m/s", "initial 1-sigma of the body velocity; assumption: 0.1 (near hover)"},
+      {"initial_sigma.gyro_bias_radps", &C::initial_gyro_bias_sigma_radps, pos, "rad/s", "initial 1-sigma of the gyro bias; the emulated IMU's turn-on sigma"},
+      {"initial_sigma.accel_bias_mps2", &C::initial_accel_bias_sigma_mps2, pos, "m/s^2", "initial 1-sigma of the accelerometer bias; the emulated IMU's turn-on sigma"},
+      {"gate.enabled", &C::gate_enabled, Range::any(), "-", "innovation gating on or off"},
+      {"gate.probability", &C::gate_probability, Range{0.0, 1.0, true, true}, "-", "probability of the chi-square gate (0.999: a consistent measurement is rejected 1 in 1000)"},
+      {"latency.history_s", &C::history_s, Range::closed(0.0, 10.0), "s", "length of the rollback history; older measurements are dropped and counted"},
+      {"integration.max_step_s", &C::max_step_s, Range{0.0, 0.1, true, false}, "s", "longest single integration step; longer IMU intervals are split"},
+      {"integration.imu_gap_s", &C::imu_gap_s, pos, "s", "IMU interval above which a gap is counted"},
+  };
+  return table;
+}
+
 void validate(const EkfConfig& c) {
-  require_positive("gravity_mps2", c.gravity_mps2);
-  if (!(c.min_abs_cos_theta > 0.0 && c.min_abs_cos_theta < 1.0)) invalid("min_abs_cos_theta", c.min_abs_cos_theta, "in (0, 1)");
-  require_positive("process_noise_reference_rate_hz", c.process_noise_reference_rate_hz);
-  require_non_negative("gyro_noise_var_per_sample_rad2ps2", c.gyro_noise_var_per_sample_rad2ps2);
-  require_non_negative("accel_noise_var_per_sample_m2ps4", c.accel_noise_var_per_sample_m2ps4);
-  require_non_negative("gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts);
-  require_non_negative("accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts);
-  require_positive("attitude_var_rad2", c.attitude_var_rad2);
-  require_positive("velocity_var_m2ps2", c.velocity_var_m2ps2);
-  require_positive("initial_attitude_sigma_rad", c.initial_attitude_sigma_rad);
-  require_positive("initial_velocity_sigma_mps", c.initial_velocity_sigma_mps);
-  require_positive("initial_gyro_bias_sigma_radps", c.initial_gyro_bias_sigma_radps);
-  require_positive("initial_accel_bias_sigma_mps2", c.initial_accel_bias_sigma_mps2);
-  if (!(c.gate_probability > 0.0 && c.gate_probability < 1.0)) invalid("gate_probability", c.gate_probability, "in (0, 1)");
-  if (!(c.history_s >= 0.0 && c.history_s <= 10.0)) invalid("history_s", c.history_s, "in [0, 10]");
-  if (!(c.max_step_s > 0.0 && c.max_step_s <= 0.1)) invalid("max_step_s", c.max_step_s, "in (0, 0.1]");
-  require_positive("imu_gap_s", c.imu_gap_s);
+  // Each parameter's range: the loader's table.
+  try {
+    check_params(ekf_params(), c);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("EkfConfig.") + e.what());
+  }
 }
 
 AttitudeVelocityEkf::AttitudeVelocityEkf(const EkfConfig& config) : config_(config) {

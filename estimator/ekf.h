@@ -62,6 +62,8 @@
 
 #include <Eigen/Core>
 
+#include "core/param_table.h"
+
 #include "estimator/ekf_model.h"
 #include "estimator/mocap_measurement.h"
 #include "sensors/sensor_types.h"
@@ -144,6 +146,11 @@ struct EkfConfig {
 /// Checks an EkfConfig.
 /// @throws std::invalid_argument naming the field, its value and the allowed range.
 void validate(const EkfConfig& config);
+
+/// The `ekf` section's parameters: key (group.key within its sub-mapping), range, unit,
+/// meaning; the defaults are EkfConfig's. The loader (estimator/sensing_config.h), validate()
+/// and `rig params` use this table; velocity_measurement and latency.mode are read on their own.
+const ParamTable<EkfConfig>& ekf_params();
 
 /// Outcome of add_measurement().
 enum class EkfMeasurementStatus {

@@ -7,12 +7,6 @@
 #include "core/config_fields.h"
 
 namespace nimble {
-namespace {
-
-constexpr AxisNames kEuler = {"phi", "theta", "psi"};
-constexpr AxisNames kUvw = {"u", "v", "w"};
-
-}  // namespace
 
 VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map) {
   VelocityDifferentiatorConfig c;
@@ -31,38 +25,12 @@ VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map)
 
 EkfConfig ekf_config_from(ConfigMap& map) {
   EkfConfig c;
-  const Range nn = Range::non_negative();
-  const Range pos = Range::positive();
-  c.gravity_mps2 = map.get_double_or("gravity_mps2", c.gravity_mps2, Range::closed(9.0, 10.5));
-  c.min_abs_cos_theta = map.get_double_or("min_abs_cos_theta", c.min_abs_cos_theta, Range{0.0, 0.5, true, false});
-  if (map.has("process_noise")) {
-    ConfigMap q = map.get_map("process_noise");
-    c.process_noise_reference_rate_hz = q.get_double_or("reference_rate_hz", c.process_noise_reference_rate_hz, pos);
-    c.gyro_noise_var_per_sample_rad2ps2 = get_vec3_or(q, "gyro_var_per_sample_rad2ps2", c.gyro_noise_var_per_sample_rad2ps2, nn);
-    c.accel_noise_var_per_sample_m2ps4 = get_vec3_or(q, "accel_var_per_sample_m2ps4", c.accel_noise_var_per_sample_m2ps4, nn);
-    c.gyro_bias_rw_radps_per_sqrts = get_vec3_or(q, "gyro_bias_rw_radps_per_sqrts", c.gyro_bias_rw_radps_per_sqrts, nn);
-    c.accel_bias_rw_mps2_per_sqrts = get_vec3_or(q, "accel_bias_rw_mps2_per_sqrts", c.accel_bias_rw_mps2_per_sqrts, nn);
-    q.finish();
-  }
-  if (map.has("measurement_noise")) {
-    ConfigMap r = map.get_map("measurement_noise");
-    c.attitude_var_rad2 = get_vec3_or(r, "attitude_var_rad2", c.attitude_var_rad2, pos, kEuler);
-    c.velocity_var_m2ps2 = get_vec3_or(r, "velocity_var_m2ps2", c.velocity_var_m2ps2, pos, kUvw);
-    r.finish();
-  }
-  if (map.has("initial_sigma")) {
-    ConfigMap s = map.get_map("initial_sigma");
-    c.initial_attitude_sigma_rad = s.get_double_or("attitude_rad", c.initial_attitude_sigma_rad, pos);
-    c.initial_velocity_sigma_mps = s.get_double_or("velocity_mps", c.initial_velocity_sigma_mps, pos);
-    c.initial_gyro_bias_sigma_radps = s.get_double_or("gyro_bias_radps", c.initial_gyro_bias_sigma_radps, pos);
-    c.initial_accel_bias_sigma_mps2 = s.get_double_or("accel_bias_mps2", c.initial_accel_bias_sigma_mps2, pos);
-    s.finish();
-  }
-  if (map.has("gate")) {
-    ConfigMap g = map.get_map("gate");
-    c.gate_enabled = get_bool_or(g, "enabled", c.gate_enabled);
-    c.gate_probability = g.get_double_or("probability", c.gate_probability, Range{0.0, 1.0, true, true});
-    g.finish();
+  read_params(map, ekf_params(), c);
+  for (const char* group : {"process_noise", "measurement_noise", "initial_sigma", "gate", "integration"}) {
+    if (!map.has(group)) continue;
+    ConfigMap m = map.get_map(group);
+    read_params(m, ekf_params(), c, group);
+    m.finish();
   }
   if (map.has("velocity_measurement")) {
     c.velocity_measurement = map.get_enum("velocity_measurement", {"window_mean", "instant"}) == "instant"
@@ -75,14 +43,8 @@ EkfConfig ekf_config_from(ConfigMap& map) {
       c.latency_mode = l.get_enum("mode", {"rollback", "naive"}) == "naive" ? EkfLatencyMode::kNaive
                                                                              : EkfLatencyMode::kRollback;
     }
-    c.history_s = l.get_double_or("history_s", c.history_s, Range::closed(0.0, 10.0));
+    read_params(l, ekf_params(), c, "latency");
     l.finish();
-  }
-  if (map.has("integration")) {
-    ConfigMap i = map.get_map("integration");
-    c.max_step_s = i.get_double_or("max_step_s", c.max_step_s, Range{0.0, 0.1, true, false});
-    c.imu_gap_s = i.get_double_or("imu_gap_s", c.imu_gap_s, pos);
-    i.finish();
   }
   map.finish();
   validate_section(map, c);

@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
 
 namespace {
@@ -69,7 +70,7 @@ TEST_CASE("rig params prints each section's table, and an unknown section is nam
   const Out all = rig("params");
   REQUIRE(all.code == 0);
   for (const char* key : {"`run.stop_grace_s`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
-                          "`sensing.mocap.latency_us`"}) {
+                          "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`"}) {
     CHECK(all.text.find(key) != std::string::npos);
   }
   const Out mocap = rig("params sensing.mocap");
@@ -86,4 +87,17 @@ TEST_CASE("every tabled sensing parameter is written at its default in the shipp
   const YAML::Node base = YAML::LoadFile(std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/default_sensing.yaml");
   check_documented(nimble::imu_params(), nimble::ImuModelConfig{}, base["imu"], "imu");
   check_documented(nimble::mocap_params(), nimble::MocapConfig{}, base["mocap"], "mocap");
+  // The EKF's keys live in sub-mappings (process_noise.gyro_var_per_sample_rad2ps2 ...).
+  const YAML::Node ekf = base["ekf"];
+  for (const auto& p : nimble::ekf_params()) {
+    INFO("ekf." << p.key);
+    YAML::Node node = YAML::Clone(ekf);
+    std::string rest = p.key;
+    for (auto dot = rest.find('.'); dot != std::string::npos; dot = rest.find('.')) {
+      node = YAML::Node(node[rest.substr(0, dot)]);
+      REQUIRE(node);
+      rest = rest.substr(dot + 1);
+    }
+    CHECK(node[rest]);
+  }
 }
