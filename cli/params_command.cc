@@ -8,11 +8,14 @@
 
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
+#include "scenario/scenario.h"
 #include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
 
 namespace nimble::cli {
 namespace {
+
+constexpr const char* kHeader = "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
 
 struct Section {
   const char* name;
@@ -21,7 +24,11 @@ struct Section {
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> list = {
-      {"run", [] { return params_markdown(launcher::launch_params(), launcher::LaunchConfig{}, "run."); }},
+      {"run", [] {
+         return params_markdown(launcher::launch_params(), launcher::LaunchConfig{}, "run.") +
+                params_markdown(process_run_params(), ProcessRunOptions{}, "run.").substr(std::string(kHeader).size());
+       }},
+      {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},
       {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},
       {"sensing.mocap", [] { return params_markdown(mocap_params(), MocapConfig{}, "sensing.mocap."); }},

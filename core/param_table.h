@@ -147,8 +147,10 @@ std::string params_markdown(const ParamTable<Config>& table, const Config& defau
           }
         },
         p.member);
+    std::string meaning;  // a '|' would end the cell
+    for (const char c : p.meaning) meaning += c == '|' ? std::string("\\|") : std::string(1, c);
     out << "| `" << prefix << p.key << "` | " << value << " | " << (is_bool ? "true, false" : p.range.describe())
-        << " | " << p.unit << " | " << p.meaning << " |\n";
+        << " | " << p.unit << " | " << meaning << " |\n";
   }
   return out.str();
 }

@@ -39,10 +39,7 @@ LaunchConfig launch_config_from(const Scenario& s) {
   c.lcm_url = m.get_string_or("lcm_url", c.lcm_url);
   c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
                                                    : m.get_string_or("network_namespace", "auto");
-  if (m.has("realtime_priority")) m.get_int("realtime_priority", Range::closed(0, 99));
-  if (m.has("controller_trigger")) m.get_enum("controller_trigger", {"timer", "state"});
-  if (m.has("spin_us")) m.get_int("spin_us", Range::closed(0, 1000));
-  if (m.has("controller_input")) m.get_enum("controller_input", {"truth", "estimate"});
+  process_run_options_from(m);  // the processes' own keys of the section, checked where they are defined
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
   m.finish();

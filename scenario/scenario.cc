@@ -188,27 +188,43 @@ Scenario load_scenario(const std::string& file, const std::vector<Override>& ove
   return scenario_from_tree(load_scenario_tree(file, overrides), file);
 }
 
+const ParamTable<LockstepOptions>& lockstep_params() {
+  using C = LockstepOptions;
+  static const ParamTable<C> table = {
+      {"ack_timeout_ms", &C::ack_timeout_ms, Range::closed(10, 600000), "ms", "how long the plant waits for a due participant's STEP_ACK (wall clock)"},
+      {"logger_period_ms", &C::logger_period_ms, Range::closed(1.0, 1000.0), "ms", "the launcher's recorder acknowledges every this much simulated time, so the run never outpaces the log"},
+  };
+  return table;
+}
+
+const ParamTable<ProcessRunOptions>& process_run_params() {
+  using C = ProcessRunOptions;
+  static const ParamTable<C> table = {
+      {"realtime_priority", &C::realtime_priority, Range::closed(0, 99), "-", "real time: SCHED_FIFO priority of the rig's processes, 0 = default scheduler"},
+      {"spin_us", &C::spin_us, Range::closed(0, 1000), "us", "real time: spin this long before each deadline instead of sleeping (0 = sleep)"},
+  };
+  return table;
+}
+
 LockstepOptions lockstep_options(const Scenario& scenario) {
   LockstepOptions o;
   ConfigMap m = scenario.section("lockstep");
-  if (m.has("ack_timeout_ms")) {
-    o.ack_timeout_ms = static_cast<int>(m.get_int("ack_timeout_ms", Range::closed(10, 600000)));
-  }
-  o.logger_period_ms = m.get_double_or("logger_period_ms", o.logger_period_ms, Range::closed(1.0, 1000.0));
+  read_params(m, lockstep_params(), o);
   m.finish();
   return o;
 }
 
-ProcessRunOptions process_run_options(const Scenario& scenario) {
+ProcessRunOptions process_run_options_from(ConfigMap& run) {
   ProcessRunOptions o;
-  ConfigMap run = scenario.section("run");
-  if (run.has("realtime_priority")) {
-    o.realtime_priority = static_cast<int>(run.get_int("realtime_priority", Range::closed(0, 99)));
-  }
+  read_params(run, process_run_params(), o);
   if (run.has("controller_trigger")) o.controller_trigger = run.get_enum("controller_trigger", {"timer", "state"});
   if (run.has("controller_input")) o.controller_input = run.get_enum("controller_input", {"truth", "estimate"});
-  if (run.has("spin_us")) o.spin_us = static_cast<int>(run.get_int("spin_us", Range::closed(0, 1000)));
   return o;
+}
+
+ProcessRunOptions process_run_options(const Scenario& scenario) {
+  ConfigMap run = scenario.section("run");
+  return process_run_options_from(run);
 }
 
 std::string to_yaml(const YAML::Node& node) {

@@ -18,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
+#include "core/param_table.h"
 
 namespace nimble {
 
@@ -95,11 +96,20 @@ struct LockstepOptions {
   double logger_period_ms = 10.0;
 };
 
+/// The `lockstep` section's parameters (defaults: LockstepOptions's).
+const ParamTable<LockstepOptions>& lockstep_params();
+/// The numeric process-level parameters of `run` (defaults: ProcessRunOptions's); the two
+/// choices controller_trigger and controller_input are read by process_run_options_from().
+const ParamTable<ProcessRunOptions>& process_run_params();
+
 /// Reads the `lockstep` section (strict). @throws ConfigError naming the key.
 LockstepOptions lockstep_options(const Scenario& scenario);
 
 /// Reads the process-level options of `run`. @throws ConfigError naming the key.
 ProcessRunOptions process_run_options(const Scenario& scenario);
+/// The same from the `run` mapping itself, without finish(): the launcher reads its own keys
+/// of the section from the same map.
+ProcessRunOptions process_run_options_from(ConfigMap& run);
 
 /// Writes a tree as YAML text.
 std::string to_yaml(const YAML::Node& node);

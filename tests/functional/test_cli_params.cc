@@ -69,7 +69,7 @@ void check_documented(const nimble::ParamTable<Config>& table, const Config& def
 TEST_CASE("rig params prints each section's table, and an unknown section is named", "[cli]") {
   const Out all = rig("params");
   REQUIRE(all.code == 0);
-  for (const char* key : {"`run.stop_grace_s`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
+  for (const char* key : {"`run.stop_grace_s`", "`run.spin_us`", "`lockstep.ack_timeout_ms`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
                           "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`"}) {
     CHECK(all.text.find(key) != std::string::npos);
   }
