@@ -9,6 +9,7 @@
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
 #include "scenario/scenario.h"
+#include "controller/attitude_controller.h"
 #include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
 
@@ -27,6 +28,13 @@ const std::vector<Section>& sections() {
       {"run", [] {
          return params_markdown(launcher::launch_params(), launcher::LaunchConfig{}, "run.") +
                 params_markdown(process_run_params(), ProcessRunOptions{}, "run.").substr(std::string(kHeader).size());
+       }},
+      {"controller", [] {
+         return params_markdown(controller_params(), ControllerConfig{}, "controller.") +
+                params_markdown(reference_params(), ReferenceGeneratorConfig{}, "controller.reference.{roll,pitch}.")
+                    .substr(std::string(kHeader).size()) +
+                params_markdown(gain_params(), GainSet{}, "controller.{roll_gain_sets.NAME,pitch_gains}.")
+                    .substr(std::string(kHeader).size());
        }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},

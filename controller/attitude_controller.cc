@@ -69,40 +69,70 @@ const Range kTrimThrottle{0.0, 100.0, true, true};
 const Range kFreq = Range::closed(0.0, 1000.0);
 const Range kThrottleMap = Range::closed(0.0, 50.0);
 
-void check_reference(const std::string& axis, const ReferenceGeneratorConfig& r) {
-  check(r.omega_radps > 0.0, axis + ".omega_radps", r.omega_radps, "> 0");
-  check(kZeta.contains(r.zeta), axis + ".zeta", r.zeta, kZeta.describe());
-  check(r.rate_max_radps > 0.0, axis + ".rate_max_radps", r.rate_max_radps, "> 0");
-  check(r.accel_max_radps2 > 0.0, axis + ".accel_max_radps2", r.accel_max_radps2, "> 0");
-  check(kSetpointMaxRad.contains(r.setpoint_max_rad), axis + ".setpoint_max_rad", r.setpoint_max_rad,
-        kSetpointMaxRad.describe());
+/// A table's first violation as the controller's InvalidParameter, its key under `prefix`.
+template <typename C>
+void check_table(const ParamTable<C>& table, const C& config, const std::string& prefix) {
+  if (const auto v = first_violation(table, config)) throw InvalidParameter(prefix + v->key, v->value, "must be " + v->allowed);
 }
 
-void check_gains(const std::string& name, const GainSet& g) {
-  check(kGain.contains(g.kp_per_rad), name + ".kp_per_rad", g.kp_per_rad, kGain.describe());
-  check(kGain.contains(g.kd_per_radps), name + ".kd_per_radps", g.kd_per_radps, kGain.describe());
+void check_reference(const std::string& axis, const ReferenceGeneratorConfig& r) {
+  check_table(reference_params(), r, axis + ".");
 }
+
+void check_gains(const std::string& name, const GainSet& g) { check_table(gain_params(), g, name + "."); }
 
 ReferenceGeneratorConfig reference_from(ConfigMap& map, const ReferenceGeneratorConfig& base) {
   ReferenceGeneratorConfig r = base;
-  r.omega_radps = map.get_double_or("omega_radps", base.omega_radps, Range::positive());
-  r.zeta = map.get_double_or("zeta", base.zeta, kZeta);
-  r.rate_max_radps = map.get_double_or("rate_max_radps", base.rate_max_radps, Range::positive());
-  r.accel_max_radps2 = map.get_double_or("accel_max_radps2", base.accel_max_radps2, Range::positive());
-  r.setpoint_max_rad = map.get_double_or("setpoint_max_rad", base.setpoint_max_rad, kSetpointMaxRad);
+  read_params(map, reference_params(), r);
   map.finish();
   return r;
 }
 
 GainSet gains_from(ConfigMap& map, const GainSet& base) {
-  GainSet g;
-  g.kp_per_rad = map.get_double_or("kp_per_rad", base.kp_per_rad, kGain);
-  g.kd_per_radps = map.get_double_or("kd_per_radps", base.kd_per_radps, kGain);
+  GainSet g = base;
+  read_params(map, gain_params(), g);
   map.finish();
   return g;
 }
 
 }  // namespace
+
+const ParamTable<ControllerConfig>& controller_params() {
+  using C = ControllerConfig;
+  static const ParamTable<C> table = {
+      {"rate_hz", &C::rate_hz, kRateHz, "Hz", "control rate; thesis: 512 Hz onboard loop"},
+      {"mixing.roll_cmd_to_delta_f_radps", &C::roll_cmd_to_delta_f_radps, kRollMap, "rad/s", "flapping-frequency difference per unit roll command (calibrated, see the controller file)"},
+      {"mixing.mix_abs_roll_gain", &C::mix_abs_roll_gain, kMixAbs, "-", "collective added per |roll command|, onboard mixing 0.1 |roll|"},
+      {"mixing.pitch_cmd_to_dihedral_rad", &C::pitch_cmd_to_dihedral_rad, kPitchMap, "rad", "dihedral per unit pitch command"},
+      {"throttle.trim_throttle_pct", &C::trim_throttle_pct, kTrimThrottle, "%", "throttle at trim"},
+      {"throttle.f_trim_radps", &C::f_trim_radps, Range{0.0, 1000.0, true, false}, "rad/s", "collective flapping frequency at trim, within the limits"},
+      {"throttle.throttle_to_freq_radps_per_pct", &C::throttle_to_freq_radps_per_pct, kThrottleMap, "rad/s/%", "collective per % throttle; the plant's collective_radps_per_pct"},
+      {"limits.flap_freq_min_radps", &C::flap_freq_min_radps, kFreq, "rad/s", "lowest flapping-frequency command"},
+      {"limits.flap_freq_max_radps", &C::flap_freq_max_radps, Range{0.0, 1000.0, true, false}, "rad/s", "highest flapping-frequency command, above the lowest"},
+  };
+  return table;
+}
+
+const ParamTable<ReferenceGeneratorConfig>& reference_params() {
+  using C = ReferenceGeneratorConfig;
+  static const ParamTable<C> table = {
+      {"omega_radps", &C::omega_radps, Range::positive(), "rad/s", "natural frequency; 800 deg/s in the onboard code"},
+      {"zeta", &C::zeta, kZeta, "-", "damping ratio"},
+      {"rate_max_radps", &C::rate_max_radps, Range::positive(), "rad/s", "limit on |rate_ref|; 400 deg/s"},
+      {"accel_max_radps2", &C::accel_max_radps2, Range::positive(), "rad/s^2", "limit on |accel_ref|; 8000 deg/s^2"},
+      {"setpoint_max_rad", &C::setpoint_max_rad, kSetpointMaxRad, "rad", "limit on |angle set-point|; 60 deg"},
+  };
+  return table;
+}
+
+const ParamTable<GainSet>& gain_params() {
+  using C = GainSet;
+  static const ParamTable<C> table = {
+      {"kp_per_rad", &C::kp_per_rad, kGain, "1/rad", "proportional gain: normalised command per rad of angle error"},
+      {"kd_per_radps", &C::kd_per_radps, kGain, "s/rad", "derivative gain: normalised command per rad/s of rate error"},
+  };
+  return table;
+}
 
 double flap_thrust_n(double f_radps) { return ThrustCurve{}.thrust_n(f_radps); }
 
@@ -117,7 +147,7 @@ double hover_flap_frequency_radps(double mass_kg, double gravity_mps2) {
 }
 
 void validate(const ControllerConfig& c) {
-  check(kRateHz.contains(c.rate_hz), "rate_hz", c.rate_hz, kRateHz.describe());
+  check_table(controller_params(), c, "");
   check_reference("reference.roll", c.roll_reference);
   check_reference("reference.pitch", c.pitch_reference);
   const Range cutoff{0.0, 0.5 * c.rate_hz, true, true};
@@ -137,20 +167,7 @@ void validate(const ControllerConfig& c) {
                            "unknown gain set '" + c.default_gain_set + "' (known: " + known_sets(c) + ")");
   }
   check_gains("pitch_gains", c.pitch_gains);
-  check(kRollMap.contains(c.roll_cmd_to_delta_f_radps), "mixing.roll_cmd_to_delta_f_radps",
-        c.roll_cmd_to_delta_f_radps, kRollMap.describe());
-  check(kMixAbs.contains(c.mix_abs_roll_gain), "mixing.mix_abs_roll_gain", c.mix_abs_roll_gain, kMixAbs.describe());
-  check(kPitchMap.contains(c.pitch_cmd_to_dihedral_rad), "mixing.pitch_cmd_to_dihedral_rad",
-        c.pitch_cmd_to_dihedral_rad, kPitchMap.describe());
-  check(kTrimThrottle.contains(c.trim_throttle_pct), "throttle.trim_throttle_pct", c.trim_throttle_pct,
-        kTrimThrottle.describe());
-  check(kFreq.contains(c.f_trim_radps) && c.f_trim_radps > 0.0, "throttle.f_trim_radps", c.f_trim_radps,
-        "in (0, 1000]");
-  check(kThrottleMap.contains(c.throttle_to_freq_radps_per_pct), "throttle.throttle_to_freq_radps_per_pct",
-        c.throttle_to_freq_radps_per_pct, kThrottleMap.describe());
-  check(kFreq.contains(c.flap_freq_min_radps), "limits.flap_freq_min_radps", c.flap_freq_min_radps,
-        kFreq.describe());
-  check(kFreq.contains(c.flap_freq_max_radps) && c.flap_freq_max_radps > c.flap_freq_min_radps,
+  check(c.flap_freq_max_radps > c.flap_freq_min_radps,
         "limits.flap_freq_max_radps", c.flap_freq_max_radps,
         "in (flap_freq_min_radps = " + num(c.flap_freq_min_radps) + ", 1000]");
   check(c.f_trim_radps >= c.flap_freq_min_radps && c.f_trim_radps <= c.flap_freq_max_radps,
@@ -167,7 +184,7 @@ const GainSet& roll_gain_set(const ControllerConfig& config, const std::string& 
 
 ControllerConfig controller_config_from(ConfigMap& map, const ControllerConfig& base) {
   ControllerConfig c = base;
-  c.rate_hz = map.get_double_or("rate_hz", base.rate_hz, kRateHz);
+  read_params(map, controller_params(), c);
 
   if (map.has("reference")) {
     ConfigMap ref = map.get_map("reference");
@@ -224,26 +241,19 @@ ControllerConfig controller_config_from(ConfigMap& map, const ControllerConfig& 
 
   if (map.has("mixing")) {
     ConfigMap mix = map.get_map("mixing");
-    c.roll_cmd_to_delta_f_radps = mix.get_double_or("roll_cmd_to_delta_f_radps", base.roll_cmd_to_delta_f_radps, kRollMap);
-    c.mix_abs_roll_gain = mix.get_double_or("mix_abs_roll_gain", base.mix_abs_roll_gain, kMixAbs);
-    c.pitch_cmd_to_dihedral_rad = mix.get_double_or("pitch_cmd_to_dihedral_rad", base.pitch_cmd_to_dihedral_rad, kPitchMap);
+    read_params(mix, controller_params(), c, "mixing");
     mix.finish();
   }
 
   if (map.has("throttle")) {
     ConfigMap thr = map.get_map("throttle");
-    c.trim_throttle_pct = thr.get_double_or("trim_throttle_pct", base.trim_throttle_pct, kTrimThrottle);
-    c.f_trim_radps = thr.get_double_or("f_trim_radps", base.f_trim_radps, Range{0.0, 1000.0, true, false});
-    c.throttle_to_freq_radps_per_pct =
-        thr.get_double_or("throttle_to_freq_radps_per_pct", base.throttle_to_freq_radps_per_pct, kThrottleMap);
+    read_params(thr, controller_params(), c, "throttle");
     thr.finish();
   }
 
   if (map.has("limits")) {
     ConfigMap lim = map.get_map("limits");
-    c.flap_freq_min_radps = lim.get_double_or("flap_freq_min_radps", base.flap_freq_min_radps, kFreq);
-    c.flap_freq_max_radps = lim.get_double_or("flap_freq_max_radps", base.flap_freq_max_radps,
-                                              Range{c.flap_freq_min_radps, 1000.0, true, false});
+    read_params(lim, controller_params(), c, "limits");
     lim.finish();
   }
   map.finish();

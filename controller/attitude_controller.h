@@ -28,6 +28,7 @@
 #include "controller/low_pass.h"
 #include "controller/reference_generator.h"
 #include "core/config.h"
+#include "core/param_table.h"
 #include "core/thrust_curve.h"
 
 namespace nimble {
@@ -41,7 +42,7 @@ double flap_thrust_n(double f_radps);
 /// @throws std::invalid_argument if mass_kg or gravity_mps2 is not positive and finite.
 double hover_flap_frequency_radps(double mass_kg, double gravity_mps2);
 
-/// PD gains of one attitude loop.
+/// PD gains of one attitude loop (parameters: gain_params()).
 struct GainSet {
   /// Proportional gain [1/rad]: normalised command per rad of angle error.
   double kp_per_rad = 0.0;
@@ -98,6 +99,16 @@ struct ControllerConfig {
 /// Checks a controller configuration.
 /// @throws std::invalid_argument naming the first bad parameter, its value and the allowed range.
 void validate(const ControllerConfig& config);
+
+/// The controller section's single-valued parameters (key group.name within its sub-mapping,
+/// range, unit, meaning; defaults: ControllerConfig's or the base file's). The loader,
+/// validate() and `rig params` use the tables; the low-pass cut-offs (below Nyquist of rate_hz),
+/// the gain-set map and default_gain_set are read and checked on their own.
+const ParamTable<ControllerConfig>& controller_params();
+/// Each axis of `reference` (roll, pitch).
+const ParamTable<ReferenceGeneratorConfig>& reference_params();
+/// Each gain set (roll_gain_sets.<name>, pitch_gains).
+const ParamTable<GainSet>& gain_params();
 
 /// Gains of the roll gain set `name`.
 /// @throws std::invalid_argument naming `name` and the known sets if there is none of that name.

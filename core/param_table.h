@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -49,10 +50,6 @@ inline std::string number(double x) {
   s.precision(10);
   s << x;
   return s.str();
-}
-
-[[noreturn]] inline void out_of_range(const std::string& key, const std::string& value, const Range& range) {
-  throw std::invalid_argument(key + " = " + value + ": must be " + range.describe());
 }
 
 }  // namespace param_detail
@@ -96,30 +93,47 @@ void read_params(ConfigMap& map, const ParamTable<Config>& table, Config& config
   }
 }
 
-/// Checks every parameter of `config` against its range (and for finiteness); a vector's
-/// component is named key[i].
-/// @throws std::invalid_argument naming the key, the value and the range.
+/// A parameter outside its range: its key (a vector's component as key[i]), value and range.
+struct ParamViolation {
+  std::string key;
+  std::string value;
+  std::string allowed;  ///< e.g. "> 0", "in [0, 1]"
+};
+
+/// The first parameter of `config` outside its range (or not finite), if any.
 template <typename Config>
-void check_params(const ParamTable<Config>& table, const Config& config) {
+std::optional<ParamViolation> first_violation(const ParamTable<Config>& table, const Config& config) {
   using param_detail::number;
+  std::optional<ParamViolation> found;
   for (const Param<Config>& p : table) {
     std::visit(
         [&](auto member) {
           using T = std::decay_t<decltype(config.*member)>;
           const T& field = config.*member;
           if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-            for (int i = 0; i < 3; ++i) {
+            for (int i = 0; i < 3 && !found; ++i) {
               if (!std::isfinite(field[i]) || !p.range.contains(field[i])) {
                 // Index notation: the struct's component, as code built it.
-                param_detail::out_of_range(p.key + "[" + std::to_string(i) + "]", number(field[i]), p.range);
+                found = ParamViolation{p.key + "[" + std::to_string(i) + "]", number(field[i]), p.range.describe()};
               }
             }
           } else if constexpr (!std::is_same_v<T, bool>) {
             const double x = static_cast<double>(field);
-            if (!std::isfinite(x) || !p.range.contains(x)) param_detail::out_of_range(p.key, number(x), p.range);
+            if (!std::isfinite(x) || !p.range.contains(x)) found = ParamViolation{p.key, number(x), p.range.describe()};
           }
         },
         p.member);
+    if (found) break;
+  }
+  return found;
+}
+
+/// Checks every parameter of `config` against its range (and for finiteness).
+/// @throws std::invalid_argument "key = value: must be <range>".
+template <typename Config>
+void check_params(const ParamTable<Config>& table, const Config& config) {
+  if (const auto v = first_violation(table, config)) {
+    throw std::invalid_argument(v->key + " = " + v->value + ": must be " + v->allowed);
   }
 }
 
