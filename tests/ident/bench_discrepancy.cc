@@ -24,13 +24,13 @@ int main(int argc, char** argv) {
   const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   const DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
-  testing::HiddenEffects h;
+  test::HiddenEffects h;
   h.on = {"kinematic_coupling", "forward_speed_coupling"};
-  testing::draw_magnitudes(h, 1);
-  testing::GeneratorOptions o;
+  test::draw_magnitudes(h, 1);
+  test::GeneratorOptions o;
   o.duration_s = 60.0;
   o.record_command = true;  // with the actuator equation, as on a rig log
-  const FlightData data = testing::generate_flight(model, vehicle, h, o);
+  const FlightData data = test::generate_flight(model, vehicle, h, o);
 
   std::vector<double> workflow_ms, floor_ms;
   DiscrepancyResult last;

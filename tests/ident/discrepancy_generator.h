@@ -43,7 +43,7 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 
-namespace nimble::ident::testing {
+namespace nimble::ident::test {
 
 struct HiddenEffects {
   std::set<std::string> on;   ///< effect names (see the file comment)
@@ -234,4 +234,4 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   return d;
 }
 
-}  // namespace nimble::ident::testing
+}  // namespace nimble::ident::test

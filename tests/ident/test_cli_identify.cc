@@ -254,13 +254,13 @@ TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and 
   fs::create_directories(dir);
   const DerivativeModel set1 = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(set1.vehicle_file);
-  testing::HiddenEffects hidden;
+  ident::test::HiddenEffects hidden;
   hidden.on = {"kinematic_coupling"};
-  testing::draw_magnitudes(hidden, 3);
-  testing::GeneratorOptions o;
+  ident::test::draw_magnitudes(hidden, 3);
+  ident::test::GeneratorOptions o;
   o.seed = 3;
   const std::string csv = (dir / "flight.csv").string();
-  write_flight_csv(testing::generate_flight(set1, vehicle, hidden, o), csv);
+  write_flight_csv(ident::test::generate_flight(set1, vehicle, hidden, o), csv);
   const std::string json = (dir / "d.json").string(), model = (dir / "augmented.yaml").string();
   const std::string report = (dir / "report").string();
   const Result r = run_rig("discrepancy " + csv + " --model " + std::string(RIG_SOURCE_DIR) +

@@ -35,13 +35,13 @@ const Set1& set1() {
 }
 
 DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed, double scale = 1.0) {
-  testing::HiddenEffects h;
+  test::HiddenEffects h;
   h.on = effects;
   h.scale = scale;
-  testing::draw_magnitudes(h, seed);
-  testing::GeneratorOptions o;
+  test::draw_magnitudes(h, seed);
+  test::GeneratorOptions o;
   o.seed = seed;
-  const FlightData d = testing::generate_flight(set1().model, set1().vehicle, h, o);
+  const FlightData d = test::generate_flight(set1().model, set1().vehicle, h, o);
   return find_discrepancy(d, set1().model, set1().vehicle, {});
 }
 
@@ -91,7 +91,7 @@ TEST_CASE("discrepancy: null records under other noise, gains and lengths name n
   int named_any = 0, records = 0;
   for (const Variant& v : variants) {
     for (int s = 1; s <= 8; ++s) {
-      testing::GeneratorOptions o;
+      test::GeneratorOptions o;
       o.seed = static_cast<std::uint64_t>(100 + s);
       o.moment_noise_Nm *= v.process;
       o.force_noise_N *= v.process;
@@ -101,7 +101,7 @@ TEST_CASE("discrepancy: null records under other noise, gains and lengths name n
       o.k_phi = v.k_phi;
       o.k_p = v.k_p;
       o.duration_s = v.duration_s;
-      const DiscrepancyResult r = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, {}, o),
+      const DiscrepancyResult r = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, {}, o),
                                                    set1().model, set1().vehicle, {});
       INFO(v.what << " seed " << o.seed << ": " << r.summary);
       CHECK(r.effects.empty());
@@ -170,9 +170,9 @@ TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its del
   int hits = 0;
   const int seeds = 8;
   for (int s = 1; s <= seeds; ++s) {
-    testing::HiddenEffects h;
+    test::HiddenEffects h;
     h.on = {"actuator_delay"};
-    testing::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
     const DiscrepancyResult r = run({"actuator_delay"}, static_cast<std::uint64_t>(s));
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
@@ -195,13 +195,13 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
   opt.command_latency_s = 0.0;
   int hits = 0, null_named = 0;
   for (int s = 1; s <= 6; ++s) {
-    testing::HiddenEffects h;
+    test::HiddenEffects h;
     h.on = {"command_delay"};
-    testing::draw_magnitudes(h, static_cast<std::uint64_t>(s));
-    testing::GeneratorOptions o;
+    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    test::GeneratorOptions o;
     o.seed = static_cast<std::uint64_t>(s);
     o.record_command = true;
-    const DiscrepancyResult r = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, h, o),
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o),
                                                  set1().model, set1().vehicle, opt);
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
@@ -212,8 +212,8 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
       CHECK(e.parameters.count("F_cmd_delayed") == 1);
       CHECK(r.gap_after < r.gap_before);
     }
-    testing::HiddenEffects none;
-    const DiscrepancyResult n0 = find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, none, o),
+    test::HiddenEffects none;
+    const DiscrepancyResult n0 = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, none, o),
                                                   set1().model, set1().vehicle, opt);
     INFO("null seed " << s << ": " << n0.summary);
     null_named += !n0.effects.empty();
@@ -234,8 +234,8 @@ TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign i
   const int seeds = 24;
   for (int s = 1; s <= seeds; ++s) {
     const DiscrepancyResult r = run({"lateral_inflow"}, static_cast<std::uint64_t>(s));
-    testing::HiddenEffects h;
-    testing::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    test::HiddenEffects h;
+    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
     const bool is_large = h.Y_vv <= -0.02;
     large += is_large;
     INFO("seed " << s << " Y_vv " << h.Y_vv << ": " << r.summary);
@@ -270,9 +270,9 @@ TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign o
 
 TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its frequency", "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 4; ++s) {
-    testing::HiddenEffects h;
+    test::HiddenEffects h;
     h.on = {"flapping_forcing"};
-    testing::draw_magnitudes(h, s);
+    test::draw_magnitudes(h, s);
     const DiscrepancyResult r = run({"flapping_forcing"}, s);
     INFO("seed " << s << " f " << h.flap_hz << ": " << r.summary);
     REQUIRE(names(r) == std::vector<std::string>{"flapping_forcing"});
@@ -344,7 +344,7 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
   }
   DiscrepancyOptions bad;
   bad.candidates = {"lateral_inflow", "warp_drive"};
-  CHECK_THROWS_WITH(find_discrepancy(testing::generate_flight(set1().model, set1().vehicle, {}, {}), set1().model,
+  CHECK_THROWS_WITH(find_discrepancy(test::generate_flight(set1().model, set1().vehicle, {}, {}), set1().model,
                                      set1().vehicle, bad),
                     Catch::Contains("unknown candidate 'warp_drive'"));
 }
