@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
+#include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "controller/attitude_controller.h"
 #include "estimator/ekf.h"
@@ -35,6 +36,14 @@ const std::vector<Section>& sections() {
                     .substr(std::string(kHeader).size()) +
                 params_markdown(gain_params(), GainSet{}, "controller.{roll_gain_sets.NAME,pitch_gains}.")
                     .substr(std::string(kHeader).size());
+       }},
+      {"plant", [] {
+         const auto rows = [](const std::string& md) { return md.substr(std::string(kHeader).size()); };
+         return params_markdown(plant::plant_params(), plant::PlantConfig{}, "plant.") +
+                rows(params_markdown(plant::flap_actuator_params(), plant::FlapActuatorConfig{}, "plant.flap_actuator.")) +
+                rows(params_markdown(plant::servo_params(), plant::ServoConfig{}, "plant.servo.")) +
+                rows(params_markdown(plant::thrust_params(), ThrustCurve{}, "plant.thrust.")) +
+                rows(params_markdown(plant::initial_params(), plant::InitialState{}, "plant.initial."));
        }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},

@@ -64,17 +64,70 @@ Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
 
 std::string to_string(GustForm form) { return form == GustForm::kDryden ? "dryden" : "gauss_markov"; }
 
+const ParamTable<PlantConfig>& plant_params() {
+  using C = PlantConfig;
+  static const ParamTable<C> table = {
+      {"rate_hz", &C::rate_hz, Range::closed(100.0, 20000.0), "Hz", "integration rate, the lockstep step; whole ns per step"},
+      {"truth_rate_hz", &C::truth_rate_hz, Range{0.0, 20000.0, true, false}, "Hz", "TRUTH publication rate; divides rate_hz"},
+      {"feedback_rate_hz", &C::feedback_rate_hz, Range{0.0, 20000.0, true, false}, "Hz", "ACTUATOR_FB publication rate; divides rate_hz"},
+      {"command_timeout_s", &C::command_timeout_s, Range{0.0, 10.0, true, false}, "s", "hold the safe state when commands stop this long"},
+      {"command_resolution.flap_freq_radps", &C::flap_command_resolution_radps, Range::closed(0.0, 10.0), "rad/s", "flapping-frequency commands are rounded to this (the CAN frames' resolution)"},
+      {"command_resolution.servo_rad", &C::servo_command_resolution_rad, Range::closed(0.0, 0.1), "rad", "servo commands are rounded to this"},
+      {"collective_radps_per_pct", &C::collective_radps_per_pct, Range::positive(), "rad/s/%", "collective per % throttle; equals the controller's throttle_to_freq_radps_per_pct"},
+      {"vertical_damping_Zw_nspm", &C::vertical_damping_Zw_nspm, Range::closed(-10.0, 0.0), "N s/m", "vertical damping without a longitudinal model"},
+  };
+  return table;
+}
+
+const ParamTable<FlapActuatorConfig>& flap_actuator_params() {
+  using C = FlapActuatorConfig;
+  static const ParamTable<C> table = {
+      {"delta_f_gain_radps", &C::delta_f_gain_radps, Range::positive(), "rad/s", "delta_f = gain / (s + pole) delta_f_cmd; thesis Eq 33 scaled by 1/1.4"},
+      {"pole_radps", &C::pole_radps, Range::positive(), "rad/s", "flap mechanism pole; thesis Eq 33: 12.56"},
+  };
+  return table;
+}
+
+const ParamTable<ServoConfig>& servo_params() {
+  using C = ServoConfig;
+  static const ParamTable<C> table = {
+      {"wn2_rad2ps2", &C::wn2_rad2ps2, Range::positive(), "1/s^2", "servo wn^2; thesis: 554.2"},
+      {"c1_radps", &C::c1_radps, Range::positive(), "1/s", "servo 2 zeta wn; thesis: 30.25"},
+  };
+  return table;
+}
+
+const ParamTable<ThrustCurve>& thrust_params() {
+  using C = ThrustCurve;
+  static const ParamTable<C> table = {
+      {"slope_n_per_hz", &C::slope_n_per_hz, Range::positive(), "N/Hz", "thrust slope per wing pair; thesis Eq 4.18: 0.0114"},
+      {"offset_n", &C::offset_n, Range::any(), "N", "thrust offset per wing pair; thesis Eq 4.18: 0.0449"},
+      {"pairs", &C::pairs, Range::positive(), "-", "wing pairs: 2"},
+  };
+  return table;
+}
+
+const ParamTable<InitialState>& initial_params() {
+  using C = InitialState;
+  const Range rates = Range::closed(-20.0, 20.0);
+  static const ParamTable<C> table = {
+      {"p_radps", &C::p_radps, rates, "rad/s", "initial roll rate"},
+      {"q_radps", &C::q_radps, rates, "rad/s", "initial pitch rate"},
+      {"r_radps", &C::r_radps, rates, "rad/s", "initial yaw rate"},
+      {"u_mps", &C::u_mps, Range::closed(-5.0, 5.0), "m/s", "initial forward speed perturbation"},
+      {"v_mps", &C::v_mps, Range::closed(-5.0, 5.0), "m/s", "initial side speed"},
+      {"phi_rad", &C::phi_rad, Range::closed(-1.2, 1.2), "rad", "initial roll"},
+      {"theta_rad", &C::theta_rad, Range::closed(-1.2, 1.2), "rad", "initial pitch perturbation"},
+  };
+  return table;
+}
+
 PlantConfig plant_config_from(ConfigMap& map) {
   PlantConfig c;
-  c.rate_hz = map.get_double_or("rate_hz", c.rate_hz, Range::closed(100.0, 20000.0));
-  c.truth_rate_hz = map.get_double_or("truth_rate_hz", c.truth_rate_hz, Range{0.0, 20000.0, true, false});
-  c.feedback_rate_hz = map.get_double_or("feedback_rate_hz", c.feedback_rate_hz, Range{0.0, 20000.0, true, false});
-  c.command_timeout_s = map.get_double_or("command_timeout_s", c.command_timeout_s, Range{0.0, 10.0, true, false});
+  read_params(map, plant_params(), c);
   if (map.has("command_resolution")) {
     ConfigMap r = map.get_map("command_resolution");
-    c.flap_command_resolution_radps =
-        r.get_double_or("flap_freq_radps", c.flap_command_resolution_radps, Range::closed(0.0, 10.0));
-    c.servo_command_resolution_rad = r.get_double_or("servo_rad", c.servo_command_resolution_rad, Range::closed(0.0, 0.1));
+    read_params(r, plant_params(), c, "command_resolution");
     r.finish();
   }
   for (const auto& [key, rate] : {std::pair<const char*, double>{"truth_rate_hz", c.truth_rate_hz},
@@ -88,39 +141,16 @@ PlantConfig plant_config_from(ConfigMap& map) {
   if (std::fabs(period_ns - std::round(period_ns)) > 1e-6) {
     map.fail("rate_hz", "must give a whole number of nanoseconds per step (e.g. 500, 1000, 2000)");
   }
-  if (map.has("flap_actuator")) {
-    ConfigMap m = map.get_map("flap_actuator");
-    c.flap.delta_f_gain_radps = m.get_double_or("delta_f_gain_radps", c.flap.delta_f_gain_radps, Range::positive());
-    c.flap.pole_radps = m.get_double_or("pole_radps", c.flap.pole_radps, Range::positive());
+  const auto sub = [&map](const char* key, const auto& table, auto& part) {
+    if (!map.has(key)) return;
+    ConfigMap m = map.get_map(key);
+    read_params(m, table, part);
     m.finish();
-  }
-  if (map.has("servo")) {
-    ConfigMap m = map.get_map("servo");
-    c.servo.wn2_rad2ps2 = m.get_double_or("wn2_rad2ps2", c.servo.wn2_rad2ps2, Range::positive());
-    c.servo.c1_radps = m.get_double_or("c1_radps", c.servo.c1_radps, Range::positive());
-    m.finish();
-  }
-  if (map.has("thrust")) {
-    ConfigMap m = map.get_map("thrust");
-    c.thrust.slope_n_per_hz = m.get_double_or("slope_n_per_hz", c.thrust.slope_n_per_hz, Range::positive());
-    c.thrust.offset_n = m.get_double_or("offset_n", c.thrust.offset_n);
-    c.thrust.pairs = m.get_double_or("pairs", c.thrust.pairs, Range::positive());
-    m.finish();
-  }
-  c.collective_radps_per_pct = map.get_double_or("collective_radps_per_pct", c.collective_radps_per_pct, Range::positive());
-  c.vertical_damping_Zw_nspm = map.get_double_or("vertical_damping_Zw_nspm", c.vertical_damping_Zw_nspm, Range{-10.0, 0.0, false, false});
-  if (map.has("initial")) {
-    ConfigMap m = map.get_map("initial");
-    const Range rates = Range::closed(-20.0, 20.0);
-    c.initial.p_radps = m.get_double_or("p_radps", 0.0, rates);
-    c.initial.q_radps = m.get_double_or("q_radps", 0.0, rates);
-    c.initial.r_radps = m.get_double_or("r_radps", 0.0, rates);
-    c.initial.u_mps = m.get_double_or("u_mps", 0.0, Range::closed(-5.0, 5.0));
-    c.initial.v_mps = m.get_double_or("v_mps", 0.0, Range::closed(-5.0, 5.0));
-    c.initial.phi_rad = m.get_double_or("phi_rad", 0.0, Range::closed(-1.2, 1.2));
-    c.initial.theta_rad = m.get_double_or("theta_rad", 0.0, Range::closed(-1.2, 1.2));
-    m.finish();
-  }
+  };
+  sub("flap_actuator", flap_actuator_params(), c.flap);
+  sub("servo", servo_params(), c.servo);
+  sub("thrust", thrust_params(), c.thrust);
+  sub("initial", initial_params(), c.initial);
   if (map.has("effects")) {
     ConfigMap e = map.get_map("effects");
     EffectsConfig& fx = c.effects;

@@ -21,6 +21,7 @@
 
 #include "core/config.h"
 #include "core/model.h"
+#include "core/param_table.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
 
@@ -168,8 +169,10 @@ struct PlantConfig {
   ServoConfig servo;
   ThrustConfig thrust;
   /// Collective flapping frequency per % of throttle [rad/s per %]: converts the actual
-  /// collective back to the model's delta_t. Not published; assumption: 1 rad/s per %.
-  double collective_radps_per_pct = 1.0;
+  /// collective back to the model's delta_t. Not published; the controller's map
+  /// (ControllerConfig::throttle_to_freq_radps_per_pct, trim frequency over trim throttle),
+  /// which the scenario check requires, and the value rig_configs/plant/nimble_plant.yaml writes.
+  double collective_radps_per_pct = 102.49738145337824 / 60.0;
   /// Vertical aerodynamic damping when no longitudinal model is given [N s/m]
   /// (thesis Table E.4: Zw = -5.9e-3).
   double vertical_damping_Zw_nspm = -5.9e-3;
@@ -181,6 +184,15 @@ struct PlantConfig {
 /// Reads the `plant:` section of a scenario.
 /// @throws ConfigError naming the key.
 PlantConfig plant_config_from(ConfigMap& map);
+
+/// The plant section's parameter tables (key, range, unit, meaning; the defaults are the
+/// structs'): the loader and `rig params` use them. The effects and the rates' divisibility
+/// are read and checked on their own (rig_configs/plant/nimble_plant.yaml documents them).
+const ParamTable<PlantConfig>& plant_params();
+const ParamTable<FlapActuatorConfig>& flap_actuator_params();  ///< `flap_actuator`
+const ParamTable<ServoConfig>& servo_params();                 ///< `servo`
+const ParamTable<ThrustCurve>& thrust_params();                ///< `thrust`
+const ParamTable<InitialState>& initial_params();              ///< `initial`
 
 /// Actuator command as the plant receives it.
 struct ActuatorInput {

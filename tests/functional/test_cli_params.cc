@@ -15,6 +15,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "estimator/ekf.h"
+#include "plant/plant_model.h"
 #include "sensors/sensor_config.h"
 
 namespace {
@@ -70,7 +71,9 @@ TEST_CASE("rig params prints each section's table, and an unknown section is nam
   const Out all = rig("params");
   REQUIRE(all.code == 0);
   for (const char* key : {"`run.stop_grace_s`", "`run.spin_us`", "`lockstep.ack_timeout_ms`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
-                          "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`"}) {
+                          "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`",
+                          "`plant.thrust.slope_n_per_hz`", "`plant.command_resolution.flap_freq_radps`",
+                          "`controller.mixing.roll_cmd_to_delta_f_radps`"}) {
     CHECK(all.text.find(key) != std::string::npos);
   }
   const Out mocap = rig("params sensing.mocap");
@@ -100,4 +103,20 @@ TEST_CASE("every tabled sensing parameter is written at its default in the shipp
     }
     CHECK(node[rest]);
   }
+}
+
+TEST_CASE("every tabled plant parameter is written at its default in the shipped plant base", "[cli]") {
+  const YAML::Node root = YAML::LoadFile(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
+  const YAML::Node plant = root["plant"] ? root["plant"] : root;
+  // The top-level keys, then each sub-mapping's (command_resolution.* is in plant_params()).
+  for (const auto& p : nimble::plant::plant_params()) {
+    INFO(p.key);
+    const auto dot = p.key.find('.');
+    const YAML::Node node = dot == std::string::npos ? plant[p.key] : plant[p.key.substr(0, dot)][p.key.substr(dot + 1)];
+    REQUIRE(node);
+    CHECK(node.as<double>() == Approx(static_cast<double>(nimble::plant::PlantConfig{}.*std::get<double nimble::plant::PlantConfig::*>(p.member))).epsilon(1e-4));
+  }
+  check_documented(nimble::plant::flap_actuator_params(), nimble::plant::FlapActuatorConfig{}, plant["flap_actuator"], "flap_actuator");
+  check_documented(nimble::plant::servo_params(), nimble::plant::ServoConfig{}, plant["servo"], "servo");
+  check_documented(nimble::plant::thrust_params(), nimble::ThrustCurve{}, plant["thrust"], "thrust");
 }
