@@ -89,11 +89,9 @@ const ParamTable<FlapActuatorConfig>& flap_actuator_params() {
 }
 
 const ParamTable<ServoConfig>& servo_params() {
-  using C = ServoConfig;
-  static const ParamTable<C> table = {
-      {"wn2_rad2ps2", &C::wn2_rad2ps2, Range::positive(), "1/s^2", "servo wn^2; thesis: 554.2"},
-      {"c1_radps", &C::c1_radps, Range::positive(), "1/s", "servo 2 zeta wn; thesis: 30.25"},
-  };
+  // y = wn^2 / (s^2 + c1 s + wn^2) u; thesis: 554.2 / (s^2 + 30.25 s + 554.2).
+  static const ParamTable<ServoConfig> table = {{"wn2_rad2ps2", &ServoConfig::wn2_rad2ps2, Range::positive(), "1/s^2", "servo wn^2; thesis: 554.2"},
+                                                {"c1_radps", &ServoConfig::c1_radps, Range::positive(), "1/s", "servo 2 zeta wn; thesis: 30.25"}};
   return table;
 }
 
