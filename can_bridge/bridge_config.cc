@@ -4,6 +4,18 @@
 
 namespace nimble::can {
 
+const ParamTable<CanBridgeConfig>& can_bridge_params() {
+  using C = CanBridgeConfig;
+  static const ParamTable<C> table = {
+      {"create_virtual", &C::create_virtual, Range::any(), "-", "rig run creates the interface as a vcan in the run's network namespace"},
+      {"candump_log", &C::candump_log, Range::any(), "-", "can_rig writes every frame it receives to <log>.candump (candump -L format)"},
+      {"health_rate_hz", &C::health_rate_hz, Range::closed(0.1, 50.0), "Hz", "CAN_HEALTH of each side, per wall second"},
+      {"receive_buffer_bytes", &C::receive_buffer_bytes, Range::closed(0, 64 * 1024 * 1024), "bytes", "SO_RCVBUF of the sockets; 0: the kernel's default"},
+      {"fd", &C::fd, Range::any(), "-", "every frame as an 8-byte CAN FD frame with CANFD_BRS; the interface needs MTU 72"},
+  };
+  return table;
+}
+
 CanBridgeConfig can_bridge_config_from(ConfigMap& m) {
   CanBridgeConfig c;
   c.interface = m.get_string_or("interface", c.interface);
@@ -15,14 +27,8 @@ CanBridgeConfig can_bridge_config_from(ConfigMap& m) {
       m.fail("interface", "an interface name may not contain '/', ':' or white space");
     }
   }
-  if (m.has("create_virtual")) c.create_virtual = m.get_bool("create_virtual");
-  if (m.has("candump_log")) c.candump_log = m.get_bool("candump_log");
   c.candump_file = m.get_string_or("candump_file", "");
-  c.health_rate_hz = m.get_double_or("health_rate_hz", c.health_rate_hz, Range::closed(0.1, 50.0));
-  if (m.has("receive_buffer_bytes")) {
-    c.receive_buffer_bytes = static_cast<int>(m.get_int("receive_buffer_bytes", Range::closed(0, 64 * 1024 * 1024)));
-  }
-  if (m.has("fd")) c.fd = m.get_bool("fd");
+  read_params(m, can_bridge_params(), c);
   m.finish();
   return c;
 }

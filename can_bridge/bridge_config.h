@@ -19,6 +19,7 @@
 #include <string>
 
 #include "core/config.h"
+#include "core/param_table.h"
 
 namespace nimble::can {
 
@@ -38,6 +39,10 @@ struct CanBridgeConfig {
   /// classical and FD frames of 8 bytes. The interface needs the CAN FD MTU (72).
   bool fd = false;
 };
+
+/// The section's numeric and boolean parameters (defaults: CanBridgeConfig's); interface and
+/// candump_file are read on their own. The loader and `rig params` use the table.
+const ParamTable<CanBridgeConfig>& can_bridge_params();
 
 /// Reads and validates the `can_bridge` section (every key optional).
 /// @throws ConfigError naming the key, e.g. an interface name longer than 15 characters.

@@ -10,6 +10,7 @@
 #include "launcher/run_plan.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
+#include "can_bridge/bridge_config.h"
 #include "controller/attitude_controller.h"
 #include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
@@ -45,6 +46,7 @@ const std::vector<Section>& sections() {
                 rows(params_markdown(plant::thrust_params(), ThrustCurve{}, "plant.thrust.")) +
                 rows(params_markdown(plant::initial_params(), plant::InitialState{}, "plant.initial."));
        }},
+      {"can_bridge", [] { return params_markdown(can::can_bridge_params(), can::CanBridgeConfig{}, "can_bridge."); }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},
       {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},

@@ -73,7 +73,7 @@ TEST_CASE("rig params prints each section's table, and an unknown section is nam
   for (const char* key : {"`run.stop_grace_s`", "`run.spin_us`", "`lockstep.ack_timeout_ms`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
                           "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`",
                           "`plant.thrust.slope_n_per_hz`", "`plant.command_resolution.flap_freq_radps`",
-                          "`controller.mixing.roll_cmd_to_delta_f_radps`"}) {
+                          "`controller.mixing.roll_cmd_to_delta_f_radps`", "`can_bridge.health_rate_hz`"}) {
     CHECK(all.text.find(key) != std::string::npos);
   }
   const Out mocap = rig("params sensing.mocap");
