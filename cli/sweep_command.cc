@@ -7,6 +7,7 @@
 #include <tuple>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
 #include "launcher/sweep.h"
 
@@ -34,53 +35,46 @@ int run_sweep_command(const std::vector<std::string>& args) {
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string json_file, csv_file;
   bool have_seeds = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
-      return args[++i];
-    };
-    try {
-      if (a == "--help" || a == "-h") {
-        std::cout << kSweepUsage;
-        return 0;
-      } else if (a == "--seeds") {
-        std::tie(o.first_seed, o.last_seed) = launcher::parse_seed_range(value());
+  if (wants_help(args)) {
+    std::cout << kSweepUsage;
+    return 0;
+  }
+  try {
+    for (Args arg(args); arg.next();) {
+      const std::string& a = arg.arg();
+      if (a == "--seeds") {
+        std::tie(o.first_seed, o.last_seed) = launcher::parse_seed_range(arg.value());
         have_seeds = true;
       } else if (a == "--vary") {
-        o.vary.push_back(launcher::parse_vary(value()));
+        o.vary.push_back(launcher::parse_vary(arg.value()));
       } else if (a == "--jobs") {
-        const std::string v = value();
-        std::size_t used = 0;
-        const int jobs = std::stoi(v, &used);
-        if (used != v.size() || jobs < 1 || jobs > 256) throw std::invalid_argument("--jobs needs 1..256, got '" + v + "'");
-        o.jobs = jobs;
+        o.jobs = integer("--jobs", arg.value(), 1, 256);
       } else if (a == "--json") {
-        json_file = value();
+        json_file = arg.value();
       } else if (a == "--csv") {
-        csv_file = value();
+        csv_file = arg.value();
       } else if (a == "--clock") {
-        o.base.clock = value();
+        o.base.clock = arg.value();
       } else if (a == "--set") {
-        o.base.overrides.push_back(parse_override(value()));
+        o.base.overrides.push_back(parse_override(arg.value()));
       } else if (a == "--logs") {
-        o.logs_dir = value();
+        o.logs_dir = arg.value();
       } else if (a == "--no-progress") {
         o.progress = false;
       } else if (!a.empty() && a[0] == '-') {
-        throw std::invalid_argument("unknown option '" + a + "'");
+        throw UsageError("unknown option '" + a + "'");
       } else if (o.base.scenario_file.empty()) {
         o.base.scenario_file = a;
       } else {
-        throw std::invalid_argument("unexpected argument '" + a + "'");
+        throw UsageError("unexpected argument '" + a + "'");
       }
-    } catch (const std::invalid_argument& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n" << kSweepUsage;
-      return kExitUsage;
-    } catch (const std::out_of_range&) {
-      std::cerr << "rig sweep: " << a << " value out of range\n";
-      return kExitUsage;
     }
+  } catch (const UsageError& e) {
+    std::cerr << "rig sweep: " << e.what() << "\n" << kSweepUsage;
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {  // a malformed --seeds or --vary
+    std::cerr << "rig sweep: " << e.what() << "\n" << kSweepUsage;
+    return kExitUsage;
   }
   if (o.base.scenario_file.empty() || !have_seeds) {
     std::cerr << "rig sweep: " << (o.base.scenario_file.empty() ? "missing <scenario.yaml>" : "missing --seeds A-B")

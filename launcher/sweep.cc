@@ -141,6 +141,29 @@ std::string last_line(const std::string& file) {
   return last;
 }
 
+/// The percentiles the summary and the JSON give, and their JSON names.
+constexpr double kPercentiles[] = {0.0, 5.0, 50.0, 95.0, 100.0};
+
+/// One parameter set's runs and what both the summary and the JSON say of them.
+struct SetStatistics {
+  std::vector<const SweepRun*> runs;
+  long long controlled = 0, hover = 0, ok = 0;
+  std::map<std::string, std::vector<double>> by_figure;  ///< figure key -> its value in each run that has it
+};
+
+SetStatistics set_statistics(const SweepResult& r, std::size_t set) {
+  SetStatistics st;
+  for (const auto& run : r.runs) {
+    if (run.set != set) continue;
+    st.runs.push_back(&run);
+    st.controlled += run.controlled;
+    st.hover += run.hover;
+    st.ok += run.exit_code == kRunOk;
+    for (const auto& [k, v] : run.figures) st.by_figure[k].push_back(v);
+  }
+  return st;
+}
+
 void progress_bar(std::size_t done, std::size_t total, std::size_t failed, double wall_s, bool tty) {
   // Not a terminal: a line at every tenth of the campaign, not one per run.
   if (!tty && done != total && (done * 10 / std::max<std::size_t>(total, 1)) ==
@@ -350,35 +373,27 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
                 r.jobs == 1 ? "" : "s", r.wall_time_s);
   out << line;
   for (std::size_t s = 0; s < r.sets.size(); ++s) {
-    std::vector<const SweepRun*> runs;
-    for (const auto& run : r.runs) {
-      if (run.set == s) runs.push_back(&run);
-    }
-    std::size_t controlled = 0, hover = 0, ok = 0;
-    for (const auto* run : runs) {
-      controlled += run->controlled;
-      hover += run->hover;
-      ok += run->exit_code == kRunOk;
-    }
-    std::snprintf(line, sizeof line, "\n[%zu] %s\n    controlled %zu/%zu (%.0f %%), back to hover %zu/%zu, result ok %zu/%zu\n",
-                  s + 1, r.sets[s].label.c_str(), controlled, runs.size(),
-                  runs.empty() ? 0.0 : 100.0 * static_cast<double>(controlled) / static_cast<double>(runs.size()),
-                  hover, runs.size(), ok, runs.size());
+    const SetStatistics st = set_statistics(r, s);
+    const long long n = static_cast<long long>(st.runs.size());
+    std::snprintf(line, sizeof line, "\n[%zu] %s\n    controlled %lld/%lld (%.0f %%), back to hover %lld/%lld, result ok %lld/%lld\n",
+                  s + 1, r.sets[s].label.c_str(), st.controlled, n,
+                  n == 0 ? 0.0 : 100.0 * static_cast<double>(st.controlled) / static_cast<double>(n), st.hover, n, st.ok,
+                  n);
     out << line;
     std::snprintf(line, sizeof line, "    %-32s %10s %10s %10s %10s %10s\n", "across runs", "min", "p5", "p50", "p95", "max");
     out << line;
     for (const auto& fig : sweep_figures()) {
-      std::vector<double> v;
-      for (const auto* run : runs) {
-        const auto it = run->figures.find(fig.key);
-        if (it != run->figures.end()) v.push_back(it->second);
-      }
-      if (v.empty()) continue;
-      std::snprintf(line, sizeof line, "    %-32s %10.4g %10.4g %10.4g %10.4g %10.4g\n", fig.label, percentile(v, 0),
-                    percentile(v, 5), percentile(v, 50), percentile(v, 95), percentile(v, 100));
+      const auto it = st.by_figure.find(fig.key);
+      if (it == st.by_figure.end()) continue;
+      std::snprintf(line, sizeof line, "    %-32s", fig.label);
       out << line;
+      for (const double p : kPercentiles) {
+        std::snprintf(line, sizeof line, " %10.4g", percentile(it->second, p));
+        out << line;
+      }
+      out << "\n";
     }
-    for (const auto* run : runs) {
+    for (const auto* run : st.runs) {
       if (run->exit_code == kRunOk) continue;
       out << "    seed " << run->seed << ": " << run->verdict << "\n";
     }
@@ -399,25 +414,17 @@ std::string sweep_json(const SweepResult& r) {
     w.key("overrides").begin_object();
     for (const auto& ov : r.sets[s].overrides) w.key(ov.key_path).value(ov.value);
     w.end_object();
-    long long n = 0, controlled = 0, hover = 0, ok = 0;
-    std::map<std::string, std::vector<double>> by_figure;
-    for (const auto& run : r.runs) {
-      if (run.set != s) continue;
-      ++n;
-      controlled += run.controlled;
-      hover += run.hover;
-      ok += run.exit_code == kRunOk;
-      for (const auto& [k, v] : run.figures) by_figure[k].push_back(v);
-    }
-    w.key("runs").value(n).key("controlled").value(controlled).key("returned_to_hover").value(hover);
-    w.key("ok").value(ok);
-    w.key("controlled_rate").value(n > 0 ? static_cast<double>(controlled) / static_cast<double>(n) : 0.0);
+    const SetStatistics st = set_statistics(r, s);
+    const long long n = static_cast<long long>(st.runs.size());
+    w.key("runs").value(n).key("controlled").value(st.controlled).key("returned_to_hover").value(st.hover);
+    w.key("ok").value(st.ok);
+    w.key("controlled_rate").value(n > 0 ? static_cast<double>(st.controlled) / static_cast<double>(n) : 0.0);
     w.key("percentiles").begin_object();
     for (const auto& fig : sweep_figures()) {
-      const auto it = by_figure.find(fig.key);
-      if (it == by_figure.end()) continue;
+      const auto it = st.by_figure.find(fig.key);
+      if (it == st.by_figure.end()) continue;
       w.key(fig.key).begin_object();
-      for (const double p : {0.0, 5.0, 50.0, 95.0, 100.0}) {
+      for (const double p : kPercentiles) {
         w.key("p" + std::to_string(static_cast<int>(p))).value(percentile(it->second, p));
       }
       w.end_object();
