@@ -210,13 +210,7 @@ int run_inprocess(const RunPlan& plan_in, const RunOptions& options) {
   const std::string log_file = log_file_for(plan, options);
   RunReport report;
   try {
-    if (plan.scenario.actuator_link == "can") {
-      ConfigMap section = plan.scenario.section("can_bridge");
-      const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
-      if (cc.candump_log && cc.candump_file.empty()) {
-        plan.scenario.root["can_bridge"]["candump_file"] = log_file + ".candump";
-      }
-    }
+    place_candump_log(plan, log_file);
     write_resolved_scenario(plan, log_file);
     InprocessOptions o;
     o.log_file = log_file;

@@ -143,12 +143,10 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   const std::string log_file = log_file_for(plan, options);
   std::error_code ec;
   if (fs::path(log_file).has_parent_path()) fs::create_directories(fs::path(log_file).parent_path(), ec);
+  place_candump_log(plan, log_file);
   if (scenario.actuator_link == "can") {
     ConfigMap section = scenario.section("can_bridge");
     const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
-    if (cc.candump_log && cc.candump_file.empty()) {
-      scenario.root["can_bridge"]["candump_file"] = fs::absolute(log_file + ".candump").string();
-    }
     // The interface lives in the run's network namespace: a virtual one is made there.
     const std::string problem = ensure_can_interface(cc.interface, cc.create_virtual, cc.fd);
     if (!problem.empty()) {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "can_bridge/bridge_config.h"
 #include "launcher/scenario_check.h"
 
 namespace nimble::launcher {
@@ -109,6 +110,15 @@ RunPlan load_run_plan(const RunOptions& options) {
 std::string log_file_for(const RunPlan& plan, const RunOptions& options) {
   if (!options.log_file.empty()) return options.log_file;
   return "rig_logs/" + plan.scenario.name + "-" + timestamp() + ".lcmlog";
+}
+
+void place_candump_log(RunPlan& plan, const std::string& log_file) {
+  if (plan.scenario.actuator_link != "can") return;
+  ConfigMap section = plan.scenario.section("can_bridge");
+  const can::CanBridgeConfig cc = can::can_bridge_config_from(section);
+  if (cc.candump_log && cc.candump_file.empty()) {
+    plan.scenario.root["can_bridge"]["candump_file"] = fs::absolute(log_file + ".candump").string();
+  }
 }
 
 std::string write_resolved_scenario(const RunPlan& plan, const std::string& log_file) {

@@ -86,6 +86,10 @@ RunPlan load_run_plan(const RunOptions& options);
 /// The log file of a run: `options.log_file`, or rig_logs/<name>-<time>.lcmlog.
 std::string log_file_for(const RunPlan& plan, const RunOptions& options);
 
+/// Over the CAN link with a candump log and no file named: names <log>.candump (absolute) in
+/// the plan's scenario, so that the frames are recorded next to the run's LCM log.
+void place_candump_log(RunPlan& plan, const std::string& log_file);
+
 /// Writes the resolved scenario next to the log (`<log>.scenario.yaml`); returns its path.
 /// @throws std::runtime_error if it cannot be written.
 std::string write_resolved_scenario(const RunPlan& plan, const std::string& log_file);
