@@ -420,6 +420,13 @@ int ProcessNode::run_lockstep_participant() {
   return kExitOk;
 }
 
+int ProcessNode::ack_missing(const std::string& participant, int64_t step, int64_t t, const std::string& when) {
+  fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
+        "lockstep: no STEP_ACK from '" + participant + "' for step " + std::to_string(step) + " (t = " +
+            std::to_string(static_cast<double>(t) / 1e9) + " s) " + when);
+  return kExitAckTimeout;
+}
+
 int ProcessNode::run_lockstep_master() {
   if (tasks_.size() != 1) throw std::logic_error("the lockstep master needs exactly one task");
   Task& task = tasks_.front();
@@ -457,12 +464,7 @@ int ProcessNode::run_lockstep_master() {
       // acknowledgement: nothing to wait for, and a missing one will never come.
       bus_.drain();
       const std::string missing = schedule_.missing(step, t);
-      if (!missing.empty()) {
-        fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
-              "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
-                  std::to_string(static_cast<double>(t) / 1e9) + " s) in process, with nothing left to deliver");
-        return kExitAckTimeout;
-      }
+      if (!missing.empty()) return ack_missing(missing, step, t, "in process, with nothing left to deliver");
       jitter_.add_ns(monotonic_ns() - step_start);
       housekeeping();
       continue;
@@ -480,11 +482,7 @@ int ProcessNode::run_lockstep_master() {
       const int64_t left_ms = (give_up - monotonic_ns()) / 1000000LL;
       if (left_ms <= 0 || stop_) {
         if (stop_) return kExitOk;
-        fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
-              "lockstep: no STEP_ACK from '" + missing + "' for step " + std::to_string(step) + " (t = " +
-                  std::to_string(static_cast<double>(t) / 1e9) + " s) within " +
-                  std::to_string(ack_timeout_ms_) + " ms");
-        return kExitAckTimeout;
+        return ack_missing(missing, step, t, "within " + std::to_string(ack_timeout_ms_) + " ms");
       }
       wait_io(std::min<int64_t>(left_ms, 50) * 1000000LL);
       housekeeping();

@@ -182,6 +182,9 @@ class ProcessNode {
   int run_realtime();
   int run_lockstep_participant();
   int run_lockstep_master();
+  /// Lockstep master: the fatal fault naming `participant`, which did not acknowledge `step`
+  /// (time `t`) `when`; returns kExitAckTimeout.
+  int ack_missing(const std::string& participant, int64_t step, int64_t t, const std::string& when);
 
   void idle_until_stopped();
   /// Waits up to `timeout_ns` for LCM or a watched descriptor and handles what is ready
