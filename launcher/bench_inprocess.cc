@@ -22,12 +22,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
-#include "plant/plant_model.h"
+#include "plant/plant_node.h"
 
 namespace fs = std::filesystem;
 using namespace nimble;
@@ -66,15 +67,11 @@ Speeds fly(const launcher::RunOptions& base, const std::vector<Override>& extra,
 double plant_floor_x(const launcher::RunPlan& plan, double duration_s, int runs) {
   const Scenario& s = plan.scenario;
   ConfigMap section = s.section("plant");
-  plant::PlantConfig config = plant::plant_config_from(section);
-  const DerivativeModel lateral = load_model(s.model_file);
-  std::optional<DerivativeModel> longitudinal;
-  if (!s.longitudinal_model_file.empty()) longitudinal = load_model(s.longitudinal_model_file);
-  const Vehicle vehicle = load_vehicle(s.vehicle_file.empty() ? lateral.vehicle_file : s.vehicle_file);
+  const plant::PlantConfig config = plant::plant_config_from(section);
   std::vector<double> x;
   for (int i = 0; i < runs; ++i) {
-    plant::PlantModel model(lateral, longitudinal, vehicle, config);
-    const plant::ActuatorInput trim = model.trim_command();
+    const std::unique_ptr<plant::PlantModel> model = plant::plant_model_for(s, config);
+    const plant::ActuatorInput trim = model->trim_command();
     const long steps = static_cast<long>(duration_s * config.rate_hz);
     const auto t0 = std::chrono::steady_clock::now();
     for (long k = 0; k < steps; ++k) {
@@ -82,7 +79,7 @@ double plant_floor_x(const launcher::RunPlan& plan, double duration_s, int runs)
       const double half_df = (k / 100) % 2 ? 1.25 : -1.25;
       u.flap_freq_left_radps += half_df;
       u.flap_freq_right_radps -= half_df;
-      model.step(u);
+      model->step(u);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     x.push_back(duration_s / wall);

@@ -8,7 +8,7 @@
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "estimator/sensing_config.h"
-#include "plant/plant_model.h"
+#include "plant/plant_node.h"
 
 namespace nimble::launcher {
 namespace {
@@ -27,12 +27,8 @@ void validate_process_sections(const Scenario& s) {
   sensing_config_from(sensing);
   ConfigMap plant_section = s.section("plant");
   const plant::PlantConfig plant = plant::plant_config_from(plant_section);
-  const DerivativeModel lateral = load_model(s.model_file);
-  std::optional<DerivativeModel> longitudinal;
-  if (!s.longitudinal_model_file.empty()) longitudinal = load_model(s.longitudinal_model_file);
-  const Vehicle vehicle = load_vehicle(s.vehicle_file.empty() ? lateral.vehicle_file : s.vehicle_file);
   try {
-    plant::PlantModel model(lateral, longitudinal, vehicle, plant);
+    plant::plant_model_for(s, plant);
   } catch (const std::invalid_argument& e) {
     throw ConfigError(s.file, "model", s.model_file, e.what());
   }

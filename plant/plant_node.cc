@@ -30,15 +30,19 @@ std::string file_digest(const std::string& text) {
 
 }  // namespace
 
-PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& options) {
-  ConfigMap section = scenario.section("plant");
-  config_ = plant_config_from(section);
-  config_.seed = scenario.seed;
+std::unique_ptr<PlantModel> plant_model_for(const Scenario& scenario, const PlantConfig& config) {
   const DerivativeModel lateral = load_model(scenario.model_file);
   std::optional<DerivativeModel> longitudinal;
   if (!scenario.longitudinal_model_file.empty()) longitudinal = load_model(scenario.longitudinal_model_file);
   const Vehicle vehicle = load_vehicle(scenario.vehicle_file.empty() ? lateral.vehicle_file : scenario.vehicle_file);
-  model_ = std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config_);
+  return std::make_unique<PlantModel>(lateral, longitudinal, vehicle, config);
+}
+
+PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& options) {
+  ConfigMap section = scenario.section("plant");
+  config_ = plant_config_from(section);
+  config_.seed = scenario.seed;
+  model_ = plant_model_for(scenario, config_);
   actuators_ = std::make_unique<ActuatorInterface>(config_, model_->trim_command());
   ConfigMap sensing_section = scenario.section("sensing");
   const SensorConfig sensing = sensor_config_from(sensing_section);

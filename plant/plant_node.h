@@ -38,6 +38,12 @@
 
 namespace nimble::plant {
 
+/// The plant model of a scenario: its lateral model, optional longitudinal model and vehicle
+/// (the scenario's, else the lateral model's) with `config`.
+/// @throws ConfigError for a file that does not load; std::invalid_argument if the models do
+///         not fit together (PlantModel).
+std::unique_ptr<PlantModel> plant_model_for(const Scenario& scenario, const PlantConfig& config);
+
 class PlantNode {
  public:
   /// Builds the model from the scenario; @throws ConfigError on bad configuration.
