@@ -166,12 +166,13 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
                                     double dt_s) const {
-  using Mat6 = Eigen::Matrix<double, 6, 6>;
-  const EkfState k0 = ekf_process_derivative(*x, u0, params_);
+  using Mat6 = EkfLinearisation::Block;
+  // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
+  const EkfLinearisation lin0 = ekf_linearise(*x, u0, params_);
+  const EkfState& k0 = lin0.x_dot;
   const EkfState x1 = *x + dt_s * k0;
-  const EkfState k1 = ekf_process_derivative(x1, u1, params_);
-  const EkfCovariance F0 = ekf_process_jacobian(*x, u0, params_);
-  const EkfCovariance F1 = ekf_process_jacobian(x1, u1, params_);
+  const EkfLinearisation lin1 = ekf_linearise(x1, u1, params_);
+  const EkfState& k1 = lin1.x_dot;
 
   // The bias rows of F are zero: F = [A B; 0 0] (6x6 blocks), so
   //   Phi = I + dt/2 (F0 + F1) + dt^2/2 F1 F0 = [Phi11 Phi12; 0 I],
@@ -179,8 +180,10 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   // and G = df/du_m = -B (top rows). The products below are the 12x12 formula of the header
   // written blockwise (a third of the operations). Small fixed-size products use lazyProduct
   // (coefficient-based), which is faster than Eigen's blocked GEMM at this size.
-  const Mat6 A0 = F0.topLeftCorner<6, 6>(), B0 = F0.topRightCorner<6, 6>();
-  const Mat6 A1 = F1.topLeftCorner<6, 6>(), B1 = F1.topRightCorner<6, 6>();
+  const Mat6& A0 = lin0.A;
+  const Mat6& B0 = lin0.B;
+  const Mat6& A1 = lin1.A;
+  const Mat6& B1 = lin1.B;
   const double h2 = 0.5 * dt_s, hh2 = 0.5 * dt_s * dt_s;
   Mat6 Phi11 = hh2 * A1.lazyProduct(A0) + h2 * (A0 + A1);
   Phi11.diagonal().array() += 1.0;

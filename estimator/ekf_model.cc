@@ -36,8 +36,9 @@ Terms terms(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params
 
 }  // namespace
 
-EkfState ekf_process_derivative(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params) {
-  const Terms t = terms(x, u_m, params);
+namespace {
+
+EkfState derivative_from(const Terms& t, const EkfModelParams& params) {
   const double g = params.gravity_mps2;
   const double qs_rc = t.q * t.sf + t.r * t.cf;
   EkfState xd = EkfState::Zero();
@@ -50,51 +51,78 @@ EkfState ekf_process_derivative(const EkfState& x, const EkfInput& u_m, const Ek
   return xd;
 }
 
-EkfCovariance ekf_process_jacobian(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params) {
-  const Terms t = terms(x, u_m, params);
+/// The non-zero rows of F: A = F(0:6, 0:6), B = F(0:6, 6:12). Column indices of B are offset by 6.
+void jacobian_from(const Terms& t, const EkfModelParams& params, EkfLinearisation::Block* A_out,
+                   EkfLinearisation::Block* B_out) {
+  EkfLinearisation::Block& A = *A_out;
+  EkfLinearisation::Block& B = *B_out;
+  constexpr int b = 6;  // column offset of the biases
   const double g = params.gravity_mps2;
   const double qs_rc = t.q * t.sf + t.r * t.cf;  // q sin(phi) + r cos(phi)
   const double qc_rs = t.q * t.cf - t.r * t.sf;  // d/dphi of the above
   const double ct2 = t.ct * t.ct;
-  EkfCovariance F = EkfCovariance::Zero();
+  A.setZero();
+  B.setZero();
   // phi_dot
-  F(kPhi, kPhi) = qc_rs * t.tt;
-  F(kPhi, kTheta) = qs_rc / ct2;
-  F(kPhi, kBiasP) = -1.0;
-  F(kPhi, kBiasQ) = -t.sf * t.tt;
-  F(kPhi, kBiasR) = -t.cf * t.tt;
+  A(kPhi, kPhi) = qc_rs * t.tt;
+  A(kPhi, kTheta) = qs_rc / ct2;
+  B(kPhi, kBiasP - b) = -1.0;
+  B(kPhi, kBiasQ - b) = -t.sf * t.tt;
+  B(kPhi, kBiasR - b) = -t.cf * t.tt;
   // theta_dot
-  F(kTheta, kPhi) = -qs_rc;
-  F(kTheta, kBiasQ) = -t.cf;
-  F(kTheta, kBiasR) = t.sf;
+  A(kTheta, kPhi) = -qs_rc;
+  B(kTheta, kBiasQ - b) = -t.cf;
+  B(kTheta, kBiasR - b) = t.sf;
   // psi_dot
-  F(kPsi, kPhi) = qc_rs / t.ct;
-  F(kPsi, kTheta) = qs_rc * t.st / ct2;
-  F(kPsi, kBiasQ) = -t.sf / t.ct;
-  F(kPsi, kBiasR) = -t.cf / t.ct;
+  A(kPsi, kPhi) = qc_rs / t.ct;
+  A(kPsi, kTheta) = qs_rc * t.st / ct2;
+  B(kPsi, kBiasQ - b) = -t.sf / t.ct;
+  B(kPsi, kBiasR - b) = -t.cf / t.ct;
   // u_dot = ax - g st - q w + r v
-  F(kU, kTheta) = -g * t.ct;
-  F(kU, kV) = t.r;
-  F(kU, kW) = -t.q;
-  F(kU, kBiasQ) = t.w;
-  F(kU, kBiasR) = -t.v;
-  F(kU, kBiasAx) = -1.0;
+  A(kU, kTheta) = -g * t.ct;
+  A(kU, kV) = t.r;
+  A(kU, kW) = -t.q;
+  B(kU, kBiasQ - b) = t.w;
+  B(kU, kBiasR - b) = -t.v;
+  B(kU, kBiasAx - b) = -1.0;
   // v_dot = ay + g ct sf - r u + p w
-  F(kV, kPhi) = g * t.ct * t.cf;
-  F(kV, kTheta) = -g * t.st * t.sf;
-  F(kV, kU) = -t.r;
-  F(kV, kW) = t.p;
-  F(kV, kBiasP) = -t.w;
-  F(kV, kBiasR) = t.u;
-  F(kV, kBiasAy) = -1.0;
+  A(kV, kPhi) = g * t.ct * t.cf;
+  A(kV, kTheta) = -g * t.st * t.sf;
+  A(kV, kU) = -t.r;
+  A(kV, kW) = t.p;
+  B(kV, kBiasP - b) = -t.w;
+  B(kV, kBiasR - b) = t.u;
+  B(kV, kBiasAy - b) = -1.0;
   // w_dot = az + g ct cf - p v + q u
-  F(kW, kPhi) = -g * t.ct * t.sf;
-  F(kW, kTheta) = -g * t.st * t.cf;
-  F(kW, kU) = t.q;
-  F(kW, kV) = -t.p;
-  F(kW, kBiasP) = t.v;
-  F(kW, kBiasQ) = -t.u;
-  F(kW, kBiasAz) = -1.0;
+  A(kW, kPhi) = -g * t.ct * t.sf;
+  A(kW, kTheta) = -g * t.st * t.cf;
+  A(kW, kU) = t.q;
+  A(kW, kV) = -t.p;
+  B(kW, kBiasP - b) = t.v;
+  B(kW, kBiasQ - b) = -t.u;
+  B(kW, kBiasAz - b) = -1.0;
+}
+
+}  // namespace
+
+EkfLinearisation ekf_linearise(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params) {
+  const Terms t = terms(x, u_m, params);
+  EkfLinearisation lin;
+  lin.x_dot = derivative_from(t, params);
+  jacobian_from(t, params, &lin.A, &lin.B);
+  return lin;
+}
+
+EkfState ekf_process_derivative(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params) {
+  return derivative_from(terms(x, u_m, params), params);
+}
+
+EkfCovariance ekf_process_jacobian(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params) {
+  EkfLinearisation::Block A, B;
+  jacobian_from(terms(x, u_m, params), params, &A, &B);
+  EkfCovariance F = EkfCovariance::Zero();
+  F.topLeftCorner<6, 6>() = A;
+  F.topRightCorner<6, 6>() = B;
   return F;
 }
 

@@ -56,6 +56,19 @@ struct EkfModelParams {
   double min_abs_cos_theta = 1e-3;
 };
 
+/// f and its Jacobian at one point (x, u_m), sharing one evaluation of the trigonometry.
+/// The bias rows of F are zero, so F = [A B; 0 0] in 6x6 blocks: A = d(attitude, velocity)_dot /
+/// d(attitude, velocity), B = the same derivative by the biases (and G = df/du_m = [-B; 0]).
+struct EkfLinearisation {
+  using Block = Eigen::Matrix<double, 6, 6>;
+  EkfState x_dot;
+  Block A, B;
+};
+
+/// f(x, u_m) and its Jacobian blocks (above). Exactly the values of ekf_process_derivative() and
+/// ekf_process_jacobian(), computed once.
+EkfLinearisation ekf_linearise(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params);
+
 /// x_dot = f(x, u_m) (header). Units of x_dot: rad/s, m/s^2, and 0 for the biases.
 EkfState ekf_process_derivative(const EkfState& x, const EkfInput& u_m, const EkfModelParams& params);
 
