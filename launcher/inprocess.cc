@@ -92,7 +92,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   transport::InprocessHub hub;
   RunMonitor monitor(monitor_config(plan));
   std::unique_ptr<Recorder> recorder;
-  if (!options.log_file.empty()) recorder = std::make_unique<Recorder>(options.log_file, monitor);
+  if (!options.log_file.empty()) recorder = std::make_unique<Recorder>(options.log_file, monitor, LogStamps::kSimulated);
 
   // Every message goes, in order, to a second thread that records and monitors it (the
   // launcher's logger, in the other executors); the flight never waits for the disk.

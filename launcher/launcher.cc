@@ -172,7 +172,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   RunMonitor monitor(monitor_config(plan));
   std::unique_ptr<Recorder> recorder;
   try {
-    recorder = std::make_unique<Recorder>(log_file, monitor);
+    recorder = std::make_unique<Recorder>(log_file, monitor, lockstep ? LogStamps::kSimulated : LogStamps::kWallClock);
   } catch (const std::exception& e) {
     std::cerr << "rig run: " << e.what() << "\n";
     return kRunBadInput;

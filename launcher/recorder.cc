@@ -1,6 +1,9 @@
 #include "launcher/recorder.h"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include <nimble/rig_clock_t.hpp>
 
 #include "contract/channels.h"
 #include "contract/rates.h"
@@ -24,8 +27,8 @@ MonitorConfig monitor_config(const RunPlan& plan) {
   return mc;
 }
 
-Recorder::Recorder(const std::string& log_file, RunMonitor& monitor)
-    : file_(log_file), monitor_(monitor), log_(std::make_unique<lcm::LogFile>(log_file, "w")) {
+Recorder::Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps)
+    : file_(log_file), monitor_(monitor), log_(std::make_unique<lcm::LogFile>(log_file, "w")), stamps_(stamps) {
   if (!log_->good()) throw std::runtime_error("cannot open log " + log_file + " for writing");
   buffer_ = std::make_unique<char[]>(kWriteBuffer);
   std::setvbuf(log_->getFilePtr(), buffer_.get(), _IOFBF, kWriteBuffer);
@@ -37,10 +40,24 @@ Recorder::~Recorder() {
   log_.reset();  // closes the file before the buffer goes
 }
 
+int64_t Recorder::stamp_us(const std::string& channel, const void* data, int size) {
+  if (stamps_ == LogStamps::kWallClock) return transport::wall_us();
+  if (channel == contract::channels::kRigClock) {
+    rig_clock_t tick{};
+    if (tick.decode(data, 0, size) == size) {
+      if (sim_base_us_ < 0) sim_base_us_ = transport::wall_us() - tick.sim_time_ns / 1000;
+      last_stamp_us_ = std::max(last_stamp_us_, sim_base_us_ + tick.sim_time_ns / 1000);
+      return last_stamp_us_;
+    }
+  }
+  if (sim_base_us_ < 0) last_stamp_us_ = std::max(last_stamp_us_, transport::wall_us());
+  return last_stamp_us_;
+}
+
 void Recorder::record(const std::string& channel, const void* data, int size, int64_t recv_ns) {
   lcm::LogEvent ev;
   ev.eventnum = event_number_++;
-  ev.timestamp = transport::wall_us();
+  ev.timestamp = stamp_us(channel, data, size);
   ev.channel = channel;
   ev.datalen = size;
   ev.data = const_cast<void*>(data);

@@ -20,16 +20,27 @@ namespace nimble::launcher {
 /// but not in process), lateness in real time.
 MonitorConfig monitor_config(const RunPlan& plan);
 
+/// What the log's event timestamps follow (lcm-logplayer replays at their pace).
+enum class LogStamps {
+  kWallClock,  ///< the wall clock at recording (real time: the log replays as it happened)
+  kSimulated,  ///< simulated time, from RIG_CLOCK (lockstep, in process: the log replays at
+               ///< real speed, however fast the run was flown)
+};
+
 class Recorder {
  public:
   /// Opens `log_file` for writing (a 1 MiB write buffer).
+  /// With LogStamps::kSimulated, events before the first RIG_CLOCK tick carry the wall clock;
+  /// from the first tick on, an event carries the wall clock of that tick plus the simulated
+  /// time of the newest tick recorded, never less than the event before it. So the events of a
+  /// run are spaced as in flight, and the log stays ordered.
   /// @throws std::runtime_error naming the file if it cannot be opened.
-  Recorder(const std::string& log_file, RunMonitor& monitor);
+  Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps = LogStamps::kWallClock);
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  /// Logs one message, stamped with the wall clock, and hands it to the monitor.
+  /// Logs one message, stamped as the constructor says, and hands it to the monitor.
   /// `recv_ns`: its receive time [ns, CLOCK_MONOTONIC].
   void record(const std::string& channel, const void* data, int size, int64_t recv_ns);
 
@@ -49,6 +60,11 @@ class Recorder {
   std::unique_ptr<char[]> buffer_;
   int64_t event_number_ = 0;
   int64_t last_flush_ns_ = 0;
+  /// The timestamp of `channel`'s event now [us].
+  int64_t stamp_us(const std::string& channel, const void* data, int size);
+  LogStamps stamps_;
+  int64_t sim_base_us_ = -1;  ///< simulated: the wall clock of sim time 0 (-1: no tick yet)
+  int64_t last_stamp_us_ = 0;
 };
 
 }  // namespace nimble::launcher

@@ -1,11 +1,14 @@
 // Unit tests of the launcher's parts that know nothing of processes: the verdict, the report
-// writers, the message pipe to the recording thread, and the in-process CAN bus.
+// writers, the message pipe to the recording thread, the recorder's timestamps, the in-process
+// CAN bus and the sweep's arithmetic.
 
 #include <linux/can.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
@@ -16,9 +19,12 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <nimble/rig_clock_t.hpp>
+
 #include "can_bridge/inprocess_can_bus.h"
 #include "contract/channels.h"
 #include "launcher/message_pipe.h"
+#include "launcher/recorder.h"
 #include "launcher/run_report.h"
 #include "launcher/sweep.h"
 #include "launcher/verdict.h"
@@ -284,4 +290,51 @@ TEST_CASE("sweep: the summary, the JSON runs list and the CSV agree", "[launcher
   const std::string csv = sweep_csv(r);
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 7);
   CHECK(csv.find("2,\"model=b\",2,1,\"completed, vehicle NOT controlled\",0,0") != std::string::npos);
+}
+
+namespace {
+
+/// Writes `ticks` RIG_CLOCK events 1 ms of simulated time apart (with a HEARTBEAT before the
+/// first and a TRUTH-like event after each) as fast as it can, returns the log's event times.
+std::vector<int64_t> record_ticks(const std::string& file, LogStamps stamps, int ticks) {
+  RunMonitor monitor(MonitorConfig{});
+  {
+    Recorder recorder(file, monitor, stamps);
+    const std::vector<unsigned char> other(16, 0);
+    recorder.record(nimble::contract::channels::kHeartbeat, other.data(), static_cast<int>(other.size()), 0);
+    for (int k = 0; k < ticks; ++k) {
+      nimble::rig_clock_t tick{};
+      tick.step = k;
+      tick.sim_time_ns = 1000000LL * k;
+      tick.utime = tick.sim_time_ns / 1000;
+      std::vector<unsigned char> bytes(static_cast<std::size_t>(tick.getEncodedSize()));
+      tick.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      recorder.record(nimble::contract::channels::kRigClock, bytes.data(), static_cast<int>(bytes.size()), 0);
+      recorder.record(nimble::contract::channels::kTruth, other.data(), static_cast<int>(other.size()), 0);
+    }
+  }
+  lcm::LogFile log(file, "r");
+  std::vector<int64_t> t;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) t.push_back(ev->timestamp);
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("recorder: lockstep logs carry simulated time, real-time logs the wall clock", "[launcher]") {
+  const std::string file = "/tmp/test_recorder_" + std::to_string(::getpid()) + ".lcmlog";
+  const int ticks = 3001;  // 3 s of simulated time, written in a few milliseconds
+  const std::vector<int64_t> sim = record_ticks(file, LogStamps::kSimulated, ticks);
+  REQUIRE(sim.size() == static_cast<std::size_t>(1 + 2 * ticks));
+  CHECK(std::is_sorted(sim.begin(), sim.end()));
+  // From the first tick to the last: exactly the simulated 3 s; each event after a tick
+  // carries that tick's time.
+  CHECK(sim.back() - sim[1] == 3000000);
+  CHECK(sim[2] == sim[1]);
+  CHECK(sim[4] - sim[2] == 1000);
+  const std::vector<int64_t> wall = record_ticks(file, LogStamps::kWallClock, ticks);
+  REQUIRE(wall.size() == sim.size());
+  CHECK(std::is_sorted(wall.begin(), wall.end()));
+  CHECK(wall.back() - wall[1] < 1000000);  // the wall clock: far less than the simulated 3 s
+  std::remove(file.c_str());
 }

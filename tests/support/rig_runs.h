@@ -65,6 +65,17 @@ inline std::vector<std::vector<uint8_t>> channel_payloads(const std::string& log
   return out;
 }
 
+/// The event timestamps [us] of every message of `channel` in a log.
+inline std::vector<int64_t> event_times_us(const std::string& log_path, const std::string& channel) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::vector<int64_t> out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == channel) out.push_back(ev->timestamp);
+  }
+  return out;
+}
+
 /// Every TRUTH message of a log, as raw bytes.
 inline std::vector<std::vector<uint8_t>> truth_payloads(const std::string& log_path) {
   return channel_payloads(log_path, contract::channels::kTruth);

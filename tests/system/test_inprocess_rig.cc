@@ -3,6 +3,7 @@
 // scenario and seed give the same bytes on every data channel, the log reads the same, the CAN
 // link through its codec changes nothing, and bad input is refused the same way.
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -82,6 +83,16 @@ TEST_CASE("in process and lockstep fly the same bytes on every data channel, wit
   const std::string csv = slurp(b + "/run.csv");
   CHECK(csv.size() > 10000);
   CHECK(csv == slurp(a + "/run.csv"));
+  // Both logs carry simulated time: the 3 s flight spans 3 s of event time, so lcm-logplayer
+  // replays it at real speed, though it was flown in far less wall time.
+  for (const std::string& log : {a + "/run.lcmlog", b + "/run.lcmlog"}) {
+    INFO(log);
+    const std::vector<int64_t> t = nimble::test::event_times_us(log, ch::kTruth);
+    REQUIRE(t.size() == 3001);
+    CHECK(std::is_sorted(t.begin(), t.end()));
+    CHECK(t.back() - t.front() == Approx(3e6).margin(2000));
+  }
+  CHECK(inprocess.summary["wall_time_s"].as<double>() < 1.0);
   // And the resolved scenario lies next to it, as for every run.
   CHECK(std::filesystem::exists(b + "/run.lcmlog.scenario.yaml"));
 }

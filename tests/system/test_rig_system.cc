@@ -201,6 +201,10 @@ TEST_CASE("a short real-time run holds its rates", "[system]") {
     CHECK(c["drops"].as<int>() == 0);
   }
   CHECK(r.summary["timing"]["plant"]["loop_count"].as<int>() >= 1990);
+  // A real-time log carries the wall clock: its TRUTH spans the run as it happened.
+  const std::vector<int64_t> t = nimble::test::event_times_us(dir + "/run.lcmlog", kTruth);
+  REQUIRE(t.size() > 1900);
+  CHECK(static_cast<double>(t.back() - t.front()) == Approx(2e6).margin(0.2e6));
 }
 
 TEST_CASE("a process killed mid-run is named, the run fails, and the log stays readable", "[system]") {
