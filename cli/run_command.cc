@@ -19,13 +19,16 @@ namespace {
 
 constexpr const char* kRunUsage =
     "usage: rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log FILE] [--json FILE]\n"
-    "               [--set key.path=value]... [--seed N] [--no-progress]\n"
+    "               [--set key.path=value]... [--seed N] [--no-progress] [--strict-timing]\n"
     "  Starts every process of the scenario, records all channels to an LCM log\n"
     "  (default rig_logs/<name>-<time>.lcmlog, replay with lcm-logplayer), and prints a\n"
     "  summary. realtime and lockstep run each process as its own OS process over LCM;\n"
     "  inprocess flies the same processes' code in this process, lockstep semantics, no\n"
-    "  transport (same log, same truth as lockstep). Exit code: 0 controlled, 1 not\n"
-    "  controlled, 2 bad input, 3 a process failed or the run stalled, 130 interrupted.\n";
+    "  transport (same log, same truth as lockstep). Real time is judged from what each\n"
+    "  process reports: more than summary.max_late_fraction of a channel late or\n"
+    "  summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.\n"
+    "  Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed or the run\n"
+    "  stalled, 4 real-time degraded (only with --strict-timing), 130 interrupted.\n";
 
 constexpr const char* kSpyUsage =
     "usage: rig spy [--pid PID] [--url URL]\n"
@@ -68,6 +71,8 @@ int run_run_command(const std::vector<std::string>& args) {
         o.seed = seed;
       } else if (a == "--no-progress") {
         o.progress = false;
+      } else if (a == "--strict-timing") {
+        o.strict_timing = true;
       } else if (!a.empty() && a[0] == '-') {
         throw std::invalid_argument("unknown option '" + a + "'");
       } else if (o.scenario_file.empty()) {

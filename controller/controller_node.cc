@@ -1,4 +1,5 @@
 #include "controller/controller_node.h"
+#include "transport/process_main.h"
 
 #include <cmath>
 
@@ -28,14 +29,7 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
   const ProcessRunOptions run = process_run_options(scenario);
-  // In process the executor's thread runs every node: no scheduling policy of its own.
-  const std::string rt_problem =
-      options.hub != nullptr ? "" : transport::apply_realtime_priority(run.realtime_priority);
-  node_ = std::make_unique<transport::ProcessNode>(options);
-  if (!rt_problem.empty()) {
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
-  }
-  node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
+  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario));
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {

@@ -374,7 +374,8 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   for (const auto& c : children) {
     report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});
   }
-  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure);
+  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure,
+                             judge_timing(report.timing, plan.judge, !lockstep), options.strict_timing);
   if (!failure.empty()) std::cerr << "rig run: " << failure << "\n";
   return finish_report(report, options);
 }

@@ -18,7 +18,7 @@ constexpr std::size_t kWriteBuffer = 1 << 20;
 MonitorConfig monitor_config(const RunPlan& plan) {
   MonitorConfig mc;
   mc.lockstep = plan.lockstep();
-  mc.late_threshold_us = plan.launch.late_threshold_us;
+  mc.late_threshold_us = process_run_options(plan.scenario).late_threshold_us;
   // In process the recorder is no lockstep participant: nothing it does can fall behind.
   const double logger_period_ms = plan.inprocess() ? 0.0 : plan.logger_period_ms;
   mc.expected_hz = contract::expected_rates(

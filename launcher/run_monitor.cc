@@ -68,6 +68,10 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     t.latency_p50_us = h.latency_p50_us;
     t.latency_p99_us = h.latency_p99_us;
     t.latency_max_us = h.latency_max_us;
+    for (int i = 0; i < h.num_channels; ++i) {
+      t.received[h.channel[static_cast<std::size_t>(i)]] =
+          TimingSummary::Received{h.count[static_cast<std::size_t>(i)], h.late[static_cast<std::size_t>(i)]};
+    }
     count_seq(c, h.process, h.seq);
     return;
   }

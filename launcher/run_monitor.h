@@ -38,6 +38,13 @@ struct TimingSummary {
   double jitter_p50_us = 0.0, jitter_p99_us = 0.0, jitter_max_us = 0.0;
   int64_t latency_count = 0;
   double latency_p50_us = 0.0, latency_p99_us = 0.0, latency_max_us = 0.0;
+  /// What the process received, per channel: messages, and how many arrived late (real time:
+  /// more than run.late_threshold_us after they were due, as the process itself saw them).
+  struct Received {
+    int64_t count = 0;
+    int64_t late = 0;
+  };
+  std::map<std::string, Received> received;
 };
 
 struct FaultRecord {

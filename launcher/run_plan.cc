@@ -71,7 +71,6 @@ const ParamTable<LaunchConfig>& launch_params() {
       {"stop_grace_s", &C::stop_grace_s, Range::closed(0.0, 60.0), "s", "after RUN_CONTROL stop, before SIGTERM"},
       {"stall_timeout_s", &C::stall_timeout_s, Range{0.0, 3600.0, true, false}, "s", "lockstep: no new TRUTH for this long (wall clock) is a failure"},
       {"start_delay_s", &C::start_delay_s, Range::closed(0.0, 10.0), "s", "real time: simulated time 0 lies this far after the start command"},
-      {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us", "real time: a stream message later than this after its due time is late"},
   };
   return table;
 }
@@ -84,6 +83,8 @@ const ParamTable<JudgeConfig>& judge_params() {
       {"hover_phi_deg", &C::hover_phi_deg, Range::positive(), "deg", "final |phi| within this: returned to hover"},
       {"hover_p_radps", &C::hover_p_radps, Range::positive(), "rad/s", "final |p| within this: returned to hover"},
       {"hover_v_mps", &C::hover_v_mps, Range::positive(), "m/s", "final |v| within this: returned to hover"},
+      {"max_late_fraction", &C::max_late_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a channel's messages late at a receiving process than this is real-time degraded"},
+      {"max_overrun_fraction", &C::max_overrun_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a process's cycles overrun than this is real-time degraded"},
   };
   return table;
 }

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <ostream>
 
+#include <nimble/fault_event_t.hpp>
+
 #include "core/json_writer.h"
 
 namespace nimble::launcher {
@@ -123,6 +125,19 @@ void write_report_text(std::ostream& out, const RunReport& r) {
   out << "processes ";
   for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";
   out << "\n";
+  if (r.verdict.timing.judged) out << "timing     " << r.verdict.timing.text << "\n";
+  // Real-time priority that could not be applied: one line, with what to do.
+  std::string no_priority, why;
+  for (const auto& fr : r.faults) {
+    if (fr.code != fault_event_t::CODE_REALTIME_UNAVAILABLE) continue;
+    if (no_priority.find(fr.process) == std::string::npos) no_priority += (no_priority.empty() ? "" : ", ") + fr.process;
+    why = fr.message;
+  }
+  if (!no_priority.empty()) {
+    out << "priority   run.realtime_priority NOT applied in " << no_priority << " (" << why
+        << "). Run rig as root, or give the rig's executables CAP_SYS_NICE and CAP_IPC_LOCK "
+           "(setcap cap_sys_nice,cap_ipc_lock+ep build/bin/nimble_*), or set run.realtime_priority: 0\n";
+  }
   out << "controlled " << (r.verdict.controlled ? "yes" : "NO") << ", returned to hover "
       << (r.verdict.hover ? "yes" : "no") << "\n";
   out << "result     " << r.verdict.text << "\n";
@@ -141,6 +156,13 @@ std::string report_json(const RunReport& r) {
   w.key("returned_to_hover").value(r.verdict.hover);
   w.key("exit_code").value(r.verdict.exit_code);
   w.key("result").value(r.verdict.text);
+  if (r.verdict.timing.judged) {
+    const TimingVerdict& tv = r.verdict.timing;
+    w.key("realtime_health").begin_object();
+    w.key("degraded").value(tv.degraded).key("worst_process").value(tv.worst);
+    w.key("worst_fraction").value(tv.worst_fraction).key("text").value(tv.text);
+    w.end_object();
+  }
   w.key("sim_time_s").value(r.sim_time_s);
   w.key("wall_time_s").value(r.wall_time_s);
   w.key("speed_x_realtime").value(r.speed_x_realtime());
@@ -217,6 +239,13 @@ std::string report_json(const RunReport& r) {
     w.key("latency_p50_us").value(t.latency_p50_us);
     w.key("latency_p99_us").value(t.latency_p99_us);
     w.key("latency_max_us").value(t.latency_max_us);
+    w.key("received").begin_object();
+    for (const auto& [channel, rc] : t.received) {
+      w.key(channel).begin_object();
+      w.key("count").value(static_cast<long long>(rc.count)).key("late").value(static_cast<long long>(rc.late));
+      w.end_object();
+    }
+    w.end_object();
     w.end_object();
   }
   w.end_object();

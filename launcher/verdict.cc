@@ -1,10 +1,74 @@
 #include "launcher/verdict.h"
 
 #include <cmath>
+#include <cstdio>
+
+#include "contract/channels.h"
 
 namespace nimble::launcher {
 
-Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupted, const std::string& failure) {
+namespace {
+
+std::string percent(double fraction) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f %%", 100.0 * fraction);
+  return buf;
+}
+
+std::string publishers_of(const std::string& channel) {
+  const contract::ChannelSpec* spec = contract::find_channel(channel);
+  if (spec == nullptr || spec->publishers.empty()) return "";
+  std::string out;
+  for (const auto& p : spec->publishers) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
+}  // namespace
+
+TimingVerdict judge_timing(const std::map<std::string, TimingSummary>& timing, const JudgeConfig& jc, bool realtime) {
+  TimingVerdict v;
+  if (!realtime) return v;
+  v.judged = true;
+  // The worst finding relative to its threshold (a threshold of 0 makes any count degrading).
+  double worst_ratio = -1.0;
+  std::string worst_text;
+  const auto consider = [&](double fraction, double threshold, const std::string& process, const std::string& text) {
+    const double ratio = threshold > 0.0 ? fraction / threshold : (fraction > 0.0 ? 1e300 : 0.0);
+    if (ratio > worst_ratio) {
+      worst_ratio = ratio;
+      v.worst = process;
+      v.worst_fraction = fraction;
+      worst_text = text;
+    }
+    if (fraction > threshold) v.degraded = true;
+  };
+  for (const auto& [process, t] : timing) {
+    if (t.loop_count > 0) {
+      const double f = static_cast<double>(t.overruns) / static_cast<double>(t.loop_count);
+      consider(f, jc.max_overrun_fraction, process,
+               process + " overran " + percent(f) + " of its " + std::to_string(t.loop_count) + " cycles (limit " +
+                   percent(jc.max_overrun_fraction) + ")");
+    }
+    for (const auto& [channel, r] : t.received) {
+      if (r.count <= 0) continue;
+      const double f = static_cast<double>(r.late) / static_cast<double>(r.count);
+      const std::string from = publishers_of(channel);
+      consider(f, jc.max_late_fraction, process,
+               percent(f) + " of " + channel + " arrived late at " + process +
+                   (from.empty() ? "" : " (published by " + from + ")") + " (limit " +
+                   percent(jc.max_late_fraction) + ")");
+    }
+  }
+  if (worst_ratio < 0.0) {
+    v.text = "real-time health not reported (no TIMING_HEALTH)";
+  } else {
+    v.text = std::string(v.degraded ? "real-time degraded: " : "real-time ok; worst: ") + worst_text;
+  }
+  return v;
+}
+
+Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupted, const std::string& failure,
+                  const TimingVerdict& timing, bool strict_timing) {
   constexpr double kRad = M_PI / 180.0;
   Verdict v;
   v.controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * kRad &&
@@ -20,10 +84,14 @@ Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupte
   } else if (!v.controlled) {
     v.exit_code = kRunNotControlled;
     v.text = "completed, vehicle NOT controlled";
+  } else if (timing.degraded) {
+    v.exit_code = strict_timing ? kRunTimingDegraded : kRunOk;
+    v.text = timing.text;
   } else {
     v.exit_code = kRunOk;
     v.text = "ok";
   }
+  v.timing = timing;
   return v;
 }
 

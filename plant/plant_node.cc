@@ -8,6 +8,7 @@
 
 #include "contract/messages.h"
 #include "sensors/sensor_config.h"
+#include "transport/process_main.h"
 #include <nimble/truth_state_t.hpp>
 
 namespace nimble::plant {
@@ -51,14 +52,8 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
-  // In process the executor's thread runs every node: no scheduling policy of its own.
-  const std::string rt_problem =
-      options.hub != nullptr ? "" : transport::apply_realtime_priority(process_run_options(scenario).realtime_priority);
-  node_ = std::make_unique<transport::ProcessNode>(options, file_digest(to_yaml(scenario.root)));
-  if (!rt_problem.empty()) {
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", rt_problem);
-  }
-  node_->set_spin_ns(static_cast<int64_t>(process_run_options(scenario).spin_us) * 1000);
+  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
+                                                   file_digest(to_yaml(scenario.root)));
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   command_channel_ = plant_command_channel(scenario);

@@ -85,6 +85,9 @@ struct ProcessRunOptions {
   std::string controller_input = "truth";
   /// Real time: spin this long before each deadline instead of sleeping [us] (0 = sleep).
   int spin_us = 0;
+  /// Real time: a stream message received more than this after its due time is late [us];
+  /// counted by each receiving process and by the launcher.
+  int64_t late_threshold_us = 2000;
 };
 
 /// The `lockstep` section.

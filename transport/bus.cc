@@ -2,6 +2,7 @@
 
 #include <poll.h>
 
+#include "contract/channels.h"
 #include "transport/clock.h"
 
 namespace nimble::transport {
@@ -22,6 +23,16 @@ Bus::~Bus() = default;
 void Bus::track_seq(int64_t seq, ChannelStats& stats) {
   if (stats.last_seq >= 0 && seq > stats.last_seq + 1) stats.drops += seq - stats.last_seq - 1;
   stats.last_seq = seq;
+}
+
+bool Bus::due_in_sim_time(const std::string& channel) {
+  const contract::ChannelSpec* spec = contract::find_channel(channel);
+  return spec != nullptr && !spec->wall_clock && channel != contract::channels::kRigClock &&
+         channel != contract::channels::kStepAck;
+}
+
+void Bus::count_late(int64_t due_us, ChannelStats& stats) const {
+  if (monotonic_ns() - (t0_ns_ + due_us * 1000) > late_threshold_ns_) ++stats.late;
 }
 
 void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {

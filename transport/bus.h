@@ -15,6 +15,8 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
@@ -35,7 +37,18 @@ struct ChannelStats {
   int64_t malformed = 0;  ///< messages that failed to decode (dropped)
   int64_t drops = 0;      ///< messages missing according to gaps in the publisher's seq
   int64_t last_seq = -1;  ///< seq of the newest message, -1 before the first
+  /// Real time, once Bus::set_deadlines() was called: messages handled more than the late
+  /// threshold after their due time (channels stamped in simulated time only).
+  int64_t late = 0;
+  bool due_in_sim_time = false;  ///< the channel's utime is simulated time (the contract says)
 };
+
+namespace detail {
+template <typename T, typename = void>
+struct has_latency_us : std::false_type {};
+template <typename T>
+struct has_latency_us<T, std::void_t<decltype(std::declval<T>().latency_us)>> : std::true_type {};
+}  // namespace detail
 
 /// Called for a message that failed to decode: channel and a description.
 using MalformedHandler = std::function<void(const std::string& channel, const std::string& what)>;
@@ -84,7 +97,8 @@ class Bus {
     sub->channel = channel;
     sub->stats = &stats_[channel];
     sub->bus = this;
-    sub->decode_and_call = [handler](const void* data, int size, ChannelStats& stats,
+    sub->stats->due_in_sim_time = due_in_sim_time(channel);
+    sub->decode_and_call = [this, handler](const void* data, int size, ChannelStats& stats,
                                      std::string& error) -> bool {
       T msg{};  // value-initialised: decode() fills it, the compiler cannot see that
       if (msg.decode(data, 0, size) != size) {
@@ -93,6 +107,13 @@ class Bus {
         return false;
       }
       track_seq(msg.seq, stats);
+      if (late_threshold_ns_ > 0 && stats.due_in_sim_time) {
+        // Due at its simulated time; a motion-capture pose (stamped at mid-exposure) once
+        // its latency has passed.
+        int64_t due_us = msg.utime;
+        if constexpr (detail::has_latency_us<T>::value) due_us += msg.latency_us;
+        count_late(due_us, stats);
+      }
       handler(msg);
       return true;
     };
@@ -104,6 +125,15 @@ class Bus {
   void subscribe_raw(const std::string& regex,
                      std::function<void(const std::string&, const void*, int, int64_t)> handler,
                      int queue_capacity = 10000);
+
+  /// Real time: from now on, a message of a channel stamped in simulated time counts as late
+  /// (ChannelStats::late) when it is handled more than `threshold_ns` after it was due:
+  /// at t0 + utime, a motion-capture pose at t0 + utime + latency_us. Rig processes call it
+  /// at the start of a real-time run. 0 turns it off.
+  void set_deadlines(int64_t t0_monotonic_ns, int64_t threshold_ns) {
+    t0_ns_ = t0_monotonic_ns;
+    late_threshold_ns_ = threshold_ns;
+  }
 
   /// Called for every malformed message in addition to counting it.
   void on_malformed(MalformedHandler handler) { on_malformed_ = std::move(handler); }
@@ -139,6 +169,8 @@ class Bus {
   };
 
   static void track_seq(int64_t seq, ChannelStats& stats);
+  static bool due_in_sim_time(const std::string& channel);
+  void count_late(int64_t due_us, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
 
   std::string url_;
@@ -149,6 +181,8 @@ class Bus {
   std::vector<std::unique_ptr<Subscription>> subs_;
   MalformedHandler on_malformed_;
   int64_t publish_failures_ = 0;
+  int64_t t0_ns_ = 0;
+  int64_t late_threshold_ns_ = 0;
 };
 
 }  // namespace nimble::transport

@@ -64,9 +64,16 @@ ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::stri
     : ProcessNode(NodeOptions{std::move(name), "", lcm_url, nullptr}, std::move(config_digest)) {}
 
 ProcessNode::ProcessNode(const NodeOptions& options, std::string config_digest)
+    : ProcessNode(options, RealtimeSettings{}, std::move(config_digest)) {}
+
+ProcessNode::ProcessNode(const NodeOptions& options, const RealtimeSettings& realtime, std::string config_digest)
     : name_(options.name),
       config_digest_(std::move(config_digest)),
-      bus_(options.hub != nullptr ? Bus(*options.hub) : Bus(options.lcm_url)) {
+      // In process the executor's thread runs every node: no scheduling policy of its own.
+      realtime_problem_(options.hub != nullptr ? "" : apply_realtime_priority(realtime.priority)),
+      bus_(options.hub != nullptr ? Bus(*options.hub) : Bus(options.lcm_url)),
+      late_threshold_ns_(realtime.late_threshold_ns) {
+  spin_ns_ = realtime.spin_ns;
   bus_.on_malformed([this](const std::string& channel, const std::string& what) {
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
           "dropped a malformed message on " + channel + ": " + what);
@@ -74,6 +81,9 @@ ProcessNode::ProcessNode(const NodeOptions& options, std::string config_digest)
   // Subscribed before anything is announced, so that no start command is missed.
   bus_.subscribe<run_control_t>(contract::channels::kRunControl,
                                 [this](const run_control_t& m) { on_run_control(m); });
+  if (!realtime_problem_.empty()) {
+    fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", realtime_problem_);
+  }
 }
 
 void ProcessNode::install_signal_handlers() {
@@ -213,7 +223,7 @@ void ProcessNode::publish_timing_health() {
     const auto it = expected_hz_.find(channel);
     h.expected_hz.push_back(it == expected_hz_.end() ? 0.0 : it->second);
     h.drops.push_back(s.drops);
-    h.late.push_back(0);
+    h.late.push_back(s.late);
   }
   h.num_channels = static_cast<int32_t>(h.channel.size());
   bus_.publish(contract::channels::kTimingHealth, h);
@@ -240,6 +250,7 @@ void ProcessNode::on_run_control(const run_control_t& msg) {
     duration_ns_ = msg.duration_ns;
     run_id_ = msg.run_id;
     participants_ = msg.participants;
+    if (clock_mode_ == run_control_t::CLOCK_MODE_REALTIME) bus_.set_deadlines(t0_ns_, late_threshold_ns_);
     if (inprocess() && !master_) {
       started_wall_us_ = wall_us();
       publish_heartbeat(heartbeat_t::STATE_RUNNING);

@@ -56,6 +56,13 @@ struct NodeOptions {
   InprocessHub* hub = nullptr;  ///< set: the node is one of a run flown in one process (no LCM)
 };
 
+/// How a process runs in real time (scenario section `run`). Ignored in lockstep and in process.
+struct RealtimeSettings {
+  int priority = 0;               ///< SCHED_FIFO priority 1..99, 0: the default scheduler
+  int64_t spin_ns = 0;            ///< wake this long before each deadline and spin to it
+  int64_t late_threshold_ns = 0;  ///< a received stream message later than this is late (0: not counted)
+};
+
 /// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,
 /// before it starts any thread (LCM's receive thread inherits the policy). 0 does nothing.
 /// Returns an empty string on success, otherwise why it failed (the caller reports it).
@@ -80,6 +87,9 @@ class ProcessNode {
   ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest = "");
   /// Over LCM at `options.lcm_url`, or through `options.hub` in an in-process run.
   explicit ProcessNode(const NodeOptions& options, std::string config_digest = "");
+  /// The same, run with `realtime`: the priority is applied before LCM starts its receive
+  /// thread (which inherits it); if it cannot be, a CODE_REALTIME_UNAVAILABLE warning says why.
+  ProcessNode(const NodeOptions& options, const RealtimeSettings& realtime, std::string config_digest = "");
 
   /// True in an in-process run (see "In process" below).
   bool inprocess() const { return bus_.hub() != nullptr; }
@@ -196,7 +206,9 @@ class ProcessNode {
 
   std::string name_;
   std::string config_digest_;
+  std::string realtime_problem_;  ///< why the real-time priority could not be applied (before bus_)
   Bus bus_;
+  int64_t late_threshold_ns_ = 0;
   std::vector<Task> tasks_;
   bool master_ = false;
   bool lockstep_side_subscribed_ = false;

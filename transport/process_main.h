@@ -13,6 +13,16 @@
 
 namespace nimble::transport {
 
+/// The real-time settings of the scenario's `run` section, as every rig process applies them.
+inline RealtimeSettings realtime_settings(const Scenario& scenario) {
+  const ProcessRunOptions run = process_run_options(scenario);
+  RealtimeSettings r;
+  r.priority = run.realtime_priority;
+  r.spin_ns = static_cast<int64_t>(run.spin_us) * 1000;
+  r.late_threshold_ns = run.late_threshold_us * 1000;
+  return r;
+}
+
 /// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with
 /// `int run()`). `program` names the executable in messages; `default_name` is the
 /// process name used when --name is not given.

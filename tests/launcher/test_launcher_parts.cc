@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -337,4 +338,68 @@ TEST_CASE("recorder: lockstep logs carry simulated time, real-time logs the wall
   CHECK(std::is_sorted(wall.begin(), wall.end()));
   CHECK(wall.back() - wall[1] < 1000000);  // the wall clock: far less than the simulated 3 s
   std::remove(file.c_str());
+}
+
+namespace {
+
+TimingSummary loops(int64_t count, int64_t overruns) {
+  TimingSummary t;
+  t.loop_count = count;
+  t.overruns = overruns;
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("timing verdict: fractions against the thresholds, the worst named", "[launcher]") {
+  JudgeConfig jc;  // 1 % late, 1 % overruns
+  std::map<std::string, TimingSummary> timing;
+  timing["plant"] = loops(6000, 30);  // 0.5 %
+  timing["plant"].received[nimble::contract::channels::kActuatorCommand] = {3000, 15};  // 0.5 %
+  timing["controller"] = loops(3000, 0);
+  timing["controller"].received[nimble::contract::channels::kEstimate] = {3000, 3};  // 0.1 %
+
+  SECTION("below both limits: ok, and the worst still named") {
+    const TimingVerdict v = judge_timing(timing, jc, true);
+    CHECK(v.judged);
+    CHECK_FALSE(v.degraded);
+    CHECK(v.worst == "plant");
+    CHECK(v.text.find("real-time ok") == 0);
+  }
+  SECTION("late commands above the limit: degraded, naming the receiver and the publisher") {
+    timing["plant"].received[nimble::contract::channels::kActuatorCommand] = {3000, 1170};  // 39 %
+    const TimingVerdict v = judge_timing(timing, jc, true);
+    CHECK(v.degraded);
+    CHECK(v.worst == "plant");
+    CHECK(v.worst_fraction == Approx(0.39));
+    CHECK(v.text.find("real-time degraded: 39.0 % of ACTUATOR_CMD arrived late at plant") == 0);
+    CHECK(v.text.find("published by controller") != std::string::npos);
+    // The run's result says so; --strict-timing makes it an exit code.
+    FlightSummary f = calm_flight();
+    const Verdict lenient = judge_run(f, jc, false, "", v, false);
+    CHECK(lenient.exit_code == kRunOk);
+    CHECK(lenient.text.find("real-time degraded") == 0);
+    const Verdict strict = judge_run(f, jc, false, "", v, true);
+    CHECK(strict.exit_code == kRunTimingDegraded);
+    // A worse outcome keeps its own code and text.
+    CHECK(judge_run(f, jc, false, "plant died", v, true).exit_code == kRunFailed);
+  }
+  SECTION("overruns above the limit: degraded, naming the process") {
+    timing["controller"] = loops(3000, 300);
+    const TimingVerdict v = judge_timing(timing, jc, true);
+    CHECK(v.degraded);
+    CHECK(v.worst == "controller");
+    CHECK(v.text.find("controller overran 10.0 %") != std::string::npos);
+  }
+  SECTION("a stricter threshold turns the same run degraded") {
+    jc.max_overrun_fraction = 0.001;
+    CHECK(judge_timing(timing, jc, true).degraded);
+  }
+  SECTION("lockstep and in process are not judged") {
+    timing["plant"] = loops(6000, 6000);
+    const TimingVerdict v = judge_timing(timing, jc, false);
+    CHECK_FALSE(v.judged);
+    CHECK_FALSE(v.degraded);
+    CHECK(judge_run(calm_flight(), jc, false, "", v, true).exit_code == kRunOk);
+  }
 }

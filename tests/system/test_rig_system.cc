@@ -207,6 +207,34 @@ TEST_CASE("a short real-time run holds its rates", "[system]") {
   CHECK(static_cast<double>(t.back() - t.front()) == Approx(2e6).margin(0.2e6));
 }
 
+TEST_CASE("real-time health: a run whose messages come late says so, and --strict-timing makes it an exit code",
+          "[system]") {
+  // A late threshold of 1 us makes every stream message late at every receiving process: a
+  // degraded run made on purpose, the same on any machine.
+  const std::string dir = scratch_dir("strict_timing");
+  const RunResult r = rig_run(kConfigs + "hover.yaml", dir,
+                              "--clock realtime --set duration_s=1 --set run.late_threshold_us=1 --strict-timing");
+  INFO(r.output);
+  CHECK(r.exit_code == 4);
+  const YAML::Node h = r.summary["realtime_health"];
+  REQUIRE(h);
+  CHECK(h["degraded"].as<bool>());
+  CHECK(h["worst_fraction"].as<double>() > 0.5);
+  CHECK(r.summary["result"].as<std::string>().find("real-time degraded") == 0);
+  CHECK(r.output.find("timing     real-time degraded") != std::string::npos);
+  // Each process's own count of what reached it late is in the report.
+  CHECK(r.summary["timing"]["plant"]["received"][kActuatorCommand]["late"].as<int>() > 100);
+  // The run itself is whole: controlled, and the log has every TRUTH.
+  CHECK(r.summary["controlled"].as<bool>());
+  CHECK(channel_counts(dir + "/run.lcmlog").at(kTruth) >= 990);
+
+  // The same run at the default threshold on this machine is judged, whatever the verdict.
+  const std::string dir2 = scratch_dir("timing_default");
+  const RunResult ok = rig_run(kConfigs + "hover.yaml", dir2, "--clock realtime --set duration_s=1");
+  REQUIRE(ok.exit_code == 0);
+  CHECK(ok.summary["realtime_health"]["text"].as<std::string>().find("real-time") == 0);
+}
+
 TEST_CASE("a process killed mid-run is named, the run fails, and the log stays readable", "[system]") {
   const std::string dir = scratch_dir("kill");
   const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir, "--clock realtime --set duration_s=8");
