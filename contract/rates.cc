@@ -11,6 +11,21 @@ namespace nimble::contract {
 
 using namespace channels;
 
+std::vector<ScheduledParticipant> lockstep_participants(const ProcessRates& rates, const RunShape& run) {
+  std::vector<ScheduledParticipant> participants;
+  const auto every = [](double hz) { return ScheduledParticipant{std::llround(1e9 / hz), true}; };
+  if (rates.controller_hz > 0) participants.push_back(every(rates.controller_hz));
+  if (rates.can_link) {  // both sides of the bridge are due at every control cycle
+    participants.push_back(every(rates.controller_hz));
+    participants.push_back(every(rates.controller_hz));
+  }
+  if (rates.mocap_hz > 0) participants.push_back(every(rates.mocap_hz));
+  if (rates.estimator_hz > 0) participants.push_back(every(rates.estimator_hz));
+  // The launcher's recorder, when it takes part, is next due one period after each tick.
+  if (run.logger_period_ms > 0) participants.push_back({std::llround(run.logger_period_ms * 1e6), false});
+  return participants;
+}
+
 std::map<std::string, double> expected_rates(const ProcessRates& rates, const RunShape& run) {
   std::map<std::string, double> hz;
   hz[kTruth] = rates.truth_hz;
@@ -31,18 +46,8 @@ std::map<std::string, double> expected_rates(const ProcessRates& rates, const Ru
   if (run.lockstep) {
     // RIG_CLOCK goes out at the plant steps where a participant is due, and every due
     // participant acknowledges: the master's own schedule, replayed over one simulated second.
-    std::vector<ScheduledParticipant> participants;
-    const auto every = [](double hz) { return ScheduledParticipant{std::llround(1e9 / hz), true}; };
-    if (rates.controller_hz > 0) participants.push_back(every(rates.controller_hz));
-    if (rates.can_link) {  // both sides of the bridge are due at every control cycle
-      participants.push_back(every(rates.controller_hz));
-      participants.push_back(every(rates.controller_hz));
-    }
-    if (rates.mocap_hz > 0) participants.push_back(every(rates.mocap_hz));
-    if (rates.estimator_hz > 0) participants.push_back(every(rates.estimator_hz));
-    // The launcher's recorder, when it takes part, is next due one period after each tick.
-    if (run.logger_period_ms > 0) participants.push_back({std::llround(run.logger_period_ms * 1e6), false});
-    const LockstepCounts c = replay_lockstep(std::llround(1e9 / rates.plant_hz), participants, 1000000000LL);
+    const LockstepCounts c =
+        replay_lockstep(std::llround(1e9 / rates.plant_hz), lockstep_participants(rates, run), 1000000000LL);
     hz[kRigClock] = static_cast<double>(c.ticks);
     hz[kStepAck] = static_cast<double>(c.acks);
   }

@@ -6,6 +6,9 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <vector>
+
+#include "contract/lockstep_schedule.h"
 
 namespace nimble::contract {
 
@@ -29,6 +32,10 @@ struct RunShape {
                                    ///< often; 0: the logger is no participant (in process)
   std::size_t processes = 0;       ///< rig processes in the run (each sends HEARTBEAT and TIMING_HEALTH)
 };
+
+/// The lockstep participants of a run and their schedule (rig processes with a task, both
+/// CAN bridge sides over the CAN link, the launcher's recorder when it takes part).
+std::vector<ScheduledParticipant> lockstep_participants(const ProcessRates& rates, const RunShape& run);
 
 /// Expected rate of each channel [Hz]: simulated-time rates for stream channels, wall-clock
 /// rates summed over the publishers for the wall-clock channels. In lockstep RIG_CLOCK and

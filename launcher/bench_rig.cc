@@ -1,16 +1,27 @@
-/// bench_rig: the rig's timing figures, measured on the real executables through `rig run`.
+/// bench_rig: the rig's timing figures beside the machine's floors, measured in the same run.
 ///
-///   bench_rig [scenario.yaml] [--runs N]
+///   bench_rig [scenario.yaml] [--runs N] [--json FILE] [--set key=value]...
 ///
-/// Prints, for the scenario (default rig_configs/id_doublet_train_fast.yaml):
-///  - real time: wake-up jitter p50/p99/max of the plant (1 kHz) and controller (512 Hz)
-///    loops, and the control-loop latency TRUTH published -> ACTUATOR_CMD received at the
-///    plant, p50/p99/max, with the scenario's run settings (rig_configs/run/realtime_lab.yaml)
-///    and with plain defaults (timer-driven controller, no spinning, no CPU placement);
-///  - real time on the estimator: the estimator's latency from an IMU sample's time to its
-///    estimate going out, and the loop figures of that run;
-///  - lockstep: speed in multiples of real time over N runs.
-/// Targets: jitter p99 <= 50 us, latency p99 <= 150 us, lockstep >= 20x.
+/// For the scenario (default rig_configs/id_doublet_train_fast.yaml, flown on the estimator
+/// with its run settings), in a private network namespace:
+///  1. the floors, quiet: a bare SCHED_FIFO 1 kHz wake-up; a bare LCM chain with the hops of the
+///     rig's control path (plant -> [estimator ->] controller -> plant), each hop its own
+///     process on the rig's URL, CPUs and priority;
+///  2. the rig in real time as shipped (`rig run --clock realtime`): control-loop latency
+///     TRUTH published -> ACTUATOR_CMD received at the plant, the plant's 1 kHz wake-up jitter,
+///     the estimator's latency;
+///  3. the chain floor and the rig again with a busy loop on every CPU (a bounded background
+///     load this bench starts and stops);
+///  4. lockstep: a bare lockstep master with the rig's participants and schedule (the speed the
+///     transport allows), then the rig in lockstep, median of N runs (default 3), with the
+///     messages it exchanges per simulated second.
+/// Prints a table and, with --json, the figures under fixed keys:
+///   realtime.{latency_p99_us, floor_latency_p99_us, jitter_p99_us, floor_jitter_p99_us}
+///   realtime.loaded.{latency_p99_us, floor_latency_p99_us}
+///   lockstep.{speed_x, limit_speed_x, messages_per_sim_s}
+/// (and more beside them). Targets (README, "Timing"): latency p99 <= 2.5x the chain floor
+/// quiet and <= 4x loaded, plant jitter p99 <= 2x the wake-up floor, lockstep >= 50 % of the
+/// limit. Not a test: the figures depend on the machine; the ratios to the floors travel.
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -19,12 +30,21 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 
+#include "core/json_writer.h"
+#include "launcher/bench_floor.h"
+#include "launcher/netns.h"
+#include "launcher/run_plan.h"
+
 namespace fs = std::filesystem;
+using namespace nimble;
+using namespace nimble::launcher;
 
 namespace {
 
@@ -34,84 +54,217 @@ std::string self_dir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
-YAML::Node run(const std::string& rig, const std::string& scenario, const std::string& args, const std::string& dir) {
+/// Flies the scenario with `rig run` and returns its JSON summary.
+YAML::Node fly(const std::string& scenario, const std::string& args, const std::string& dir) {
   const std::string json = dir + "/summary.json";
   fs::remove(json);
-  const std::string cmd = rig + " run " + scenario + " --no-progress --log " + dir + "/bench.lcmlog --json " + json +
-                          " " + args + " > " + dir + "/out.txt 2>&1";
+  const std::string cmd = self_dir() + "/rig run " + scenario + " --no-progress --log " + dir + "/bench.lcmlog --json " +
+                          json + " " + args + " > " + dir + "/out.txt 2>&1";
   const int status = std::system(cmd.c_str());
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !fs::exists(json)) {
-    std::fprintf(stderr, "bench_rig: '%s' failed; see %s/out.txt\n", cmd.c_str(), dir.c_str());
-    std::exit(1);
+    throw std::runtime_error("'" + cmd + "' failed; see " + dir + "/out.txt");
   }
   return YAML::LoadFile(json);
 }
 
-void print_realtime(const char* label, const YAML::Node& s) {
-  std::printf("\n%s\n", label);
-  std::printf("  %-12s %10s %10s %10s\n", "loop", "p50 [us]", "p99 [us]", "max [us]");
-  for (const char* p : {"plant", "controller"}) {
-    const YAML::Node t = s["timing"][p];
-    std::printf("  %-12s %10.1f %10.1f %10.1f\n", p, t["jitter_p50_us"].as<double>(), t["jitter_p99_us"].as<double>(),
-                t["jitter_max_us"].as<double>());
+/// The rig's real-time figures from a run summary.
+struct RigRealtime {
+  double latency_p50_us = 0, latency_p99_us = 0, latency_max_us = 0;
+  double jitter_p50_us = 0, jitter_p99_us = 0, jitter_max_us = 0;
+  double estimator_p50_us = 0, estimator_p99_us = 0;
+  std::string health;
+};
+
+RigRealtime realtime_figures(const YAML::Node& s) {
+  RigRealtime r;
+  const YAML::Node p = s["timing"]["plant"];
+  r.latency_p50_us = p["latency_p50_us"].as<double>();
+  r.latency_p99_us = p["latency_p99_us"].as<double>();
+  r.latency_max_us = p["latency_max_us"].as<double>();
+  r.jitter_p50_us = p["jitter_p50_us"].as<double>();
+  r.jitter_p99_us = p["jitter_p99_us"].as<double>();
+  r.jitter_max_us = p["jitter_max_us"].as<double>();
+  if (const YAML::Node e = s["timing"]["estimator"]; e && e["latency_count"].as<long long>() > 0) {
+    r.estimator_p50_us = e["latency_p50_us"].as<double>();
+    r.estimator_p99_us = e["latency_p99_us"].as<double>();
   }
-  const YAML::Node t = s["timing"]["plant"];
-  std::printf("  %-12s %10.1f %10.1f %10.1f   (%lld commands)\n", "latency", t["latency_p50_us"].as<double>(),
-              t["latency_p99_us"].as<double>(), t["latency_max_us"].as<double>(), t["latency_count"].as<long long>());
+  if (s["realtime_health"]) r.health = s["realtime_health"]["text"].as<std::string>();
+  return r;
+}
+
+/// Messages of every channel per simulated second in a run summary.
+double messages_per_sim_s(const YAML::Node& s) {
+  double n = 0.0;
+  for (const auto& c : s["channels"]) n += c.second["count"].as<double>();
+  return n / s["sim_time_s"].as<double>();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+void row(const char* label, const bench::Percentiles& p, const char* note = "") {
+  std::printf("  %-50s %8.1f %8.1f %9.1f  %s\n", label, p.p50_us, p.p99_us, p.max_us, note);
+}
+
+std::string cpus_text(const std::vector<int>& cpus) {
+  std::string s;
+  for (int c : cpus) s += (s.empty() ? "" : ",") + std::to_string(c);
+  return "[" + s + "]";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
-  int runs = 5;
+  std::string json_file;
+  std::vector<Override> extra;  // --set key=value, applied to every rig run
+  std::string set_args;
+  int runs = 3;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
-    else scenario = a;
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: bench_rig [scenario.yaml] [--runs N] [--json FILE] [--set key=value]...\n");
+      return 0;
+    } else if (a == "--runs" && i + 1 < argc) {
+      runs = std::max(1, std::atoi(argv[++i]));
+    } else if (a == "--json" && i + 1 < argc) {
+      json_file = argv[++i];
+    } else if (a == "--set" && i + 1 < argc) {
+      extra.push_back(parse_override(argv[++i]));
+      set_args += std::string(" --set ") + argv[i];
+    } else if (!a.empty() && a[0] != '-') {
+      scenario = a;
+    } else {
+      std::fprintf(stderr, "bench_rig: unknown argument '%s'\nusage: bench_rig [scenario.yaml] [--runs N] [--json FILE] [--set key=value]...\n",
+                   a.c_str());
+      return 2;
+    }
   }
-  const std::string rig = self_dir() + "/rig";
-  const std::string dir = (fs::temp_directory_path() / ("bench_rig_" + std::to_string(::getpid()))).string();
-  fs::create_directories(dir);
-  std::printf("bench_rig: %s\n", scenario.c_str());
-  std::printf("machine: %ld CPUs online\n", ::sysconf(_SC_NPROCESSORS_ONLN));
+  try {
+    RunOptions ro;
+    ro.scenario_file = scenario;
+    ro.clock = kClockRealtime;
+    ro.overrides = extra;
+    const RunPlan plan = load_run_plan(ro);
+    const ProcessRunOptions run = process_run_options(plan.scenario);
+    const bool on_estimate = run.controller_input == "estimate";
+    const int hops = on_estimate ? 3 : 2;
 
-  // The scenario as shipped: the controller flies on the estimator's output.
-  const YAML::Node lab = run(rig, scenario, "--clock realtime", dir);
-  const YAML::Node e = lab["timing"]["estimator"];
-  std::printf("\nreal time, scenario as shipped (flying on the estimator)\n");
-  if (e) {
-    std::printf("  estimator: IMU sample time -> ESTIMATE published [us]\n");
-    std::printf("  %-12s %10.1f %10.1f %10.1f   (%lld estimates)\n", "estimator", e["latency_p50_us"].as<double>(),
-                e["latency_p99_us"].as<double>(), e["latency_max_us"].as<double>(),
-                e["latency_count"].as<long long>());
-  }
-  print_realtime("  plant and controller (state-triggered controller, spin 100 us, CPU placement)"
-                 "\n  controller row: lateness of each cycle behind the state that triggered it",
-                 lab);
+    // Every floor process lives in this private namespace; the rig makes its own inside it.
+    const NamespaceResult ns = enter_private_network_namespace();
+    if (!ns.ok) throw std::runtime_error("cannot create a private network namespace: " + ns.detail);
+    const std::string url = kNamespaceLcmUrl;
+    // The floors run where the rig runs (its CPUs), under SCHED_FIFO (the rig's priority, or 80
+    // as cyclictest -p 80 if the rig has none): the best this machine allows there.
+    bench::FloorSettings rig_like;
+    rig_like.priority = run.realtime_priority > 0 ? run.realtime_priority : 80;
+    rig_like.cpus = plan.launch.rig_cpus;
+    const std::string dir = (fs::temp_directory_path() / ("bench_rig_" + std::to_string(::getpid()))).string();
+    fs::create_directories(dir);
 
-  // Ideal sensing, plant and controller alone: the rig's own control-loop latency.
-  const std::string ideal = "--set run.controller_input=truth --set processes=[plant,controller]";
-  print_realtime("real time, ideal sensing (plant and controller only), scenario run settings",
-                 run(rig, scenario, "--clock realtime " + ideal, dir));
-  print_realtime("real time, ideal sensing, plain defaults (timer-driven controller, sleeping waits, no CPU placement)"
-                 "\n  latency includes the wait for the controller's next 512 Hz deadline",
-                 run(rig, scenario,
-                     "--clock realtime " + ideal +
-                         " --set run.controller_trigger=timer --set run.spin_us=0 "
-                         "--set run.rig_cpus=[] --set run.launcher_cpus=[]",
-                     dir));
+    std::printf("bench_rig: %s\n", plan.scenario.name.c_str());
+    std::printf("machine: %ld CPUs online; rig settings: CPUs %s, SCHED_FIFO priority %d%s, spin %d us, controller "
+                "on the %s\n",
+                ::sysconf(_SC_NPROCESSORS_ONLN), cpus_text(rig_like.cpus).c_str(), run.realtime_priority,
+                run.realtime_priority == 0 ? " (off)" : "", run.spin_us, run.controller_input.c_str());
+    std::printf("\nreal time, quiet machine%*s p50 [us] p99 [us]  max [us]\n", 28, "");
+    const bench::Percentiles wake = bench::wake_up_floor(1000.0, 5.0, rig_like);
+    const std::string wake_label = "floor: bare 1 kHz wake-up, SCHED_FIFO " + std::to_string(rig_like.priority);
+    row(wake_label.c_str(), wake);
+    const bench::Percentiles chain = bench::lcm_chain_floor(url, hops, 1000.0, 5.0, 256, rig_like);
+    const std::string chain_label =
+        "floor: bare LCM chain, " + std::to_string(hops) + " hops, 1 kHz, SCHED_FIFO " + std::to_string(rig_like.priority);
+    row(chain_label.c_str(), chain);
+    const RigRealtime quiet = realtime_figures(fly(scenario, "--clock realtime" + set_args, dir));
+    row("rig: plant 1 kHz wake-up jitter", {quiet.jitter_p50_us, quiet.jitter_p99_us, quiet.jitter_max_us, 0});
+    row("rig: control loop TRUTH -> ACTUATOR_CMD at the plant",
+        {quiet.latency_p50_us, quiet.latency_p99_us, quiet.latency_max_us, 0});
+    if (on_estimate) row("rig: estimator, IMU sample -> ESTIMATE", {quiet.estimator_p50_us, quiet.estimator_p99_us, 0, 0});
+    std::printf("  %s\n", quiet.health.c_str());
 
-  const auto lockstep_speed = [&](const std::string& label, const std::string& args) {
+    std::printf("\nreal time, a busy loop on every CPU%*s p50 [us] p99 [us]  max [us]\n", 17, "");
+    bench::Percentiles chain_loaded;
+    RigRealtime loaded;
+    {
+      bench::CpuHog hog(120.0);
+      chain_loaded = bench::lcm_chain_floor(url, hops, 1000.0, 5.0, 256, rig_like);
+      loaded = realtime_figures(fly(scenario, "--clock realtime" + set_args, dir));
+    }
+    row(chain_label.c_str(), chain_loaded);
+    row("rig: plant 1 kHz wake-up jitter", {loaded.jitter_p50_us, loaded.jitter_p99_us, loaded.jitter_max_us, 0});
+    row("rig: control loop TRUTH -> ACTUATOR_CMD at the plant",
+        {loaded.latency_p50_us, loaded.latency_p99_us, loaded.latency_max_us, 0});
+    std::printf("  %s\n", loaded.health.c_str());
+
+    // Lockstep: the rig's participants and schedule, bare; then the rig.
+    RunOptions lo = ro;
+    lo.clock = kClockLockstep;
+    const RunPlan lplan = load_run_plan(lo);
+    const auto participants = contract::lockstep_participants(
+        lplan.rates, contract::RunShape{true, lplan.logger_period_ms, lplan.scenario.processes.size()});
+    const int64_t step_ns = std::llround(1e9 / lplan.rates.plant_hz);
+    const bench::LockstepFloor limit = bench::lockstep_floor(url, step_ns, participants, 3.0, rig_like);
     std::vector<double> speeds;
-    for (int i = 0; i < runs; ++i) speeds.push_back(run(rig, scenario, "--clock lockstep " + args, dir)["speed_x_realtime"].as<double>());
-    std::sort(speeds.begin(), speeds.end());
-    std::printf("\nlockstep speed, %s, over %d runs [x real time]: min %.1f, median %.1f, max %.1f\n", label.c_str(),
-                runs, speeds.front(), speeds[speeds.size() / 2], speeds.back());
-  };
-  lockstep_speed("scenario as shipped", "");
-  lockstep_speed("ideal sensing (plant and controller only)", ideal);
-  std::printf("\ntargets: jitter p99 <= 50 us, latency p99 <= 150 us, lockstep >= 20x\n");
-  fs::remove_all(dir);
+    double rig_messages = 0.0;
+    for (int i = 0; i < runs; ++i) {
+      const YAML::Node s = fly(scenario, "--clock lockstep" + set_args, dir);
+      speeds.push_back(s["speed_x_realtime"].as<double>());
+      rig_messages = messages_per_sim_s(s);
+    }
+    const double speed = median(speeds);
+    std::printf("\nlockstep%*s speed [x real time]  messages per simulated s\n", 44, "");
+    std::printf("  %-50s %10.1f %16.0f\n",
+                ("floor: bare master + " + std::to_string(participants.size()) + " participants, rig schedule").c_str(),
+                limit.speed_x, limit.messages_per_sim_s);
+    std::printf("  %-50s %10.1f %16.0f   (median of %d; %.0f %% of the floor)\n", "rig", speed, rig_messages, runs,
+                100.0 * speed / limit.speed_x);
+
+    const double r_quiet = quiet.latency_p99_us / chain.p99_us, r_loaded = loaded.latency_p99_us / chain_loaded.p99_us;
+    const double r_jitter = quiet.jitter_p99_us / wake.p99_us;
+    std::printf("\nratios to the floors (targets): latency p99 quiet %.2f (<= 2.5), loaded %.2f (<= 4); plant jitter "
+                "p99 %.2f (<= 2); lockstep %.0f %% of the limit (>= 50 %%)\n",
+                r_quiet, r_loaded, r_jitter, 100.0 * speed / limit.speed_x);
+
+    if (!json_file.empty()) {
+      JsonWriter w;
+      w.begin_object();
+      w.key("scenario").value(plan.scenario.name);
+      w.key("cpus").value(static_cast<long long>(::sysconf(_SC_NPROCESSORS_ONLN)));
+      w.key("realtime").begin_object();
+      w.key("latency_p99_us").value(quiet.latency_p99_us);
+      w.key("floor_latency_p99_us").value(chain.p99_us);
+      w.key("jitter_p99_us").value(quiet.jitter_p99_us);
+      w.key("floor_jitter_p99_us").value(wake.p99_us);
+      w.key("latency_p50_us").value(quiet.latency_p50_us);
+      w.key("floor_latency_p50_us").value(chain.p50_us);
+      w.key("estimator_latency_p99_us").value(quiet.estimator_p99_us);
+      w.key("chain_hops").value(hops);
+      w.key("health").value(quiet.health);
+      w.key("loaded").begin_object();
+      w.key("latency_p99_us").value(loaded.latency_p99_us);
+      w.key("floor_latency_p99_us").value(chain_loaded.p99_us);
+      w.key("jitter_p99_us").value(loaded.jitter_p99_us);
+      w.key("health").value(loaded.health);
+      w.end_object();
+      w.end_object();
+      w.key("lockstep").begin_object();
+      w.key("speed_x").value(speed);
+      w.key("limit_speed_x").value(limit.speed_x);
+      w.key("messages_per_sim_s").value(rig_messages);
+      w.key("limit_messages_per_sim_s").value(limit.messages_per_sim_s);
+      w.key("participants").value(static_cast<long long>(participants.size()));
+      w.end_object();
+      w.end_object();
+      std::ofstream out(json_file);
+      out << w.str() << "\n";
+      if (!out) throw std::runtime_error("cannot write " + json_file);
+    }
+    fs::remove_all(dir);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_rig: %s\n", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -121,7 +121,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   std::string url = lc.lcm_url;
   std::string ns_detail;
   if (url == "auto") {
-    url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+    url = kNamespaceLcmUrl;
     bool in_ns = false;
     if (lc.network_namespace != "never") {
       const NamespaceResult r = enter_private_network_namespace();

@@ -29,6 +29,10 @@ constexpr const char* kClockRealtime = "realtime";
 constexpr const char* kClockLockstep = "lockstep";
 constexpr const char* kClockInprocess = "inprocess";
 
+/// The LCM URL of a run in its private network namespace (run.lcm_url: auto). The receive
+/// buffer holds a burst of several hundred milliseconds of the rig's traffic.
+constexpr const char* kNamespaceLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+
 struct RunOptions {
   std::string scenario_file;
   std::vector<Override> overrides;   ///< --set key=value

@@ -57,6 +57,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   command_channel_ = plant_command_channel(scenario);
+  controller_on_estimate_ = process_run_options(scenario).controller_input == "estimate";
   node_->set_expected_rate(command_channel_, 512.0);
   node_->bus().subscribe<actuator_command_t>(command_channel_,
                                              [this](const actuator_command_t& c) { on_command(c); });
@@ -105,9 +106,18 @@ void PlantNode::step(int64_t sim_time_ns) {
     model_->step(actuators_->input());
     ++step_index_;
   }
-  // The IMU sample goes out after the step's tick: consumers take it at their next tick.
-  if (sim_time_ns >= imu_next_ns_) node_->defer([this, sim_time_ns] { publish_imu(sim_time_ns); });
+  // The control loop's latency counts from here: the step's state starts going out.
+  step_out_ns_ = transport::monotonic_ns();
+  const bool imu_due = sim_time_ns >= imu_next_ns_;
+  if (imu_due && node_->lockstep()) {
+    // The IMU sample goes out after the step's tick: consumers take it at their next tick.
+    node_->defer([this, sim_time_ns] { publish_imu(sim_time_ns); });
+  } else if (imu_due && controller_on_estimate_) {
+    // Real time, the controller on the estimate: the control loop starts with the IMU sample.
+    publish_imu(sim_time_ns);
+  }
   if (step_index_ % truth_every_ == 0) publish_truth(sim_time_ns);
+  if (imu_due && !node_->lockstep() && !controller_on_estimate_) publish_imu(sim_time_ns);
   if (step_index_ % feedback_every_ == 0) publish_feedback(sim_time_ns);
 }
 
@@ -115,7 +125,7 @@ void PlantNode::publish_truth(int64_t sim_time_ns) {
   const truth_state_t m =
       contract::to_message(model_->truth(), sim_time_ns / 1000, truth_seq_++, node_->lockstep() ? step_index_ : -1);
   node_->bus().publish(kTruth, m);
-  published_[static_cast<std::size_t>(m.seq) % published_.size()] = {m.utime, transport::monotonic_ns()};
+  published_[static_cast<std::size_t>(m.seq) % published_.size()] = {m.utime, step_out_ns_};
 }
 
 void PlantNode::publish_imu(int64_t sim_time_ns) {

@@ -71,13 +71,17 @@ class PlantNode {
   std::unique_ptr<transport::ProcessNode> node_;
   std::unique_ptr<ActuatorInterface> actuators_;
   std::string command_channel_;  ///< ACTUATOR_CMD, or ACTUATOR_CMD_CAN over the CAN link
+  bool controller_on_estimate_ = false;  ///< run.controller_input: estimate (the IMU goes out first)
   int64_t step_index_ = 0;
   int64_t truth_every_ = 1;
   int64_t feedback_every_ = 10;
   int64_t truth_seq_ = 0;
   int64_t feedback_seq_ = 0;
-  /// Wall-clock publish time of recent TRUTH messages, by seq modulo the ring size,
-  /// to measure the control loop's latency from actuator_command_t.input_utime.
+  /// CLOCK_MONOTONIC time at which the current step's outputs (IMU, TRUTH) started going out.
+  int64_t step_out_ns_ = 0;
+  /// For recent TRUTH messages, by seq modulo the ring size: the time their step's outputs
+  /// started going out, to measure the control loop's latency from
+  /// actuator_command_t.input_utime (the state's time the command was computed from).
   struct Published {
     int64_t utime = -1;
     int64_t wall_ns = 0;
