@@ -203,6 +203,7 @@ const ParamTable<ProcessRunOptions>& process_run_params() {
       {"realtime_priority", &C::realtime_priority, Range::closed(0, 99), "-", "real time: SCHED_FIFO priority of the rig's processes, 0 = default scheduler"},
       {"spin_us", &C::spin_us, Range::closed(0, 1000), "us", "real time: spin this long before each deadline instead of sleeping (0 = sleep)"},
       {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us", "real time: a stream message received later than this after its due time is late"},
+      {"channel_filter", &C::channel_filter, Range::closed(0, 1), "-", "1: each process's LCM socket drops, in the kernel, the channels the process does not take; 0: every message wakes every process"},
   };
   return table;
 }

@@ -77,7 +77,9 @@ Scenario load_scenario(const std::string& file, const std::vector<Override>& ove
 /// validates the whole section).
 struct ProcessRunOptions {
   /// Real time: SCHED_FIFO priority of the rig processes, 1..99; 0 = default scheduler.
-  int realtime_priority = 0;
+  /// 50, the middle of SCHED_FIFO's 1..99: above every ordinary process. Where it cannot be
+  /// applied (no root, no CAP_SYS_NICE) the process runs on with a warning the summary shows.
+  int realtime_priority = 50;
   /// Real time: "timer" (the controller runs on its own 512 Hz deadlines) or "state"
   /// (each cycle starts when the state it needs arrives, as the onboard loop does on its IMU).
   std::string controller_trigger = "timer";
@@ -88,6 +90,10 @@ struct ProcessRunOptions {
   /// Real time: a stream message received more than this after its due time is late [us];
   /// counted by each receiving process and by the launcher.
   int64_t late_threshold_us = 2000;
+  /// 1: each process's LCM receive socket keeps only the channels the process subscribes, in
+  /// the kernel, so a message wakes only the processes that take it (README, "Timing");
+  /// 0: LCM's own behaviour, every message wakes every process of the run.
+  int channel_filter = 1;
 };
 
 /// The `lockstep` section.

@@ -1,13 +1,17 @@
 #include "transport/bus.h"
 
 #include <poll.h>
+#include <sys/socket.h>
 
 #include "contract/channels.h"
+#include "transport/channel_filter.h"
 #include "transport/clock.h"
 
 namespace nimble::transport {
 
 Bus::Bus(const std::string& url) : url_(url) {
+  port_ = udpm_port(url);
+  if (port_ > 0) sockets_before_ = udp_sockets_bound_to(port_);
   lcm_ = std::make_unique<lcm::LCM>(url);
   if (!lcm_->good()) {
     throw TransportError("LCM could not start on '" + (url.empty() ? std::string("(default URL)") : url) +
@@ -62,7 +66,38 @@ void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
   }
   lcm::Subscription* handle = lcm_->subscribe(sub->channel, &Subscription::on_receive, sub.get());
   if (handle != nullptr) handle->setQueueCapacity(queue_capacity);
+  if (sub->raw) {
+    subscribed_by_pattern_ = true;
+  } else {
+    channels_.insert(sub->channel);
+  }
   subs_.push_back(std::move(sub));
+  refresh_channel_filter();
+}
+
+void Bus::refresh_channel_filter() {
+  if (hub_ != nullptr || port_ <= 0 || channels_.empty()) return;
+  if (receive_fd_ < 0) {
+    // LCM made its receive socket at the first subscription: the one socket on the port that
+    // was not there before.
+    std::set<int> fresh;
+    for (int fd : udp_sockets_bound_to(port_)) {
+      if (!sockets_before_.count(fd)) fresh.insert(fd);
+    }
+    if (fresh.size() != 1) {
+      filter_problem_ = "cannot tell LCM's receive socket on port " + std::to_string(port_) + " (" +
+                        std::to_string(fresh.size()) + " candidates)";
+      return;
+    }
+    receive_fd_ = *fresh.begin();
+  }
+  if (!filter_enabled_ || subscribed_by_pattern_) {
+    if (filter_active_) ::setsockopt(receive_fd_, SOL_SOCKET, SO_DETACH_FILTER, nullptr, 0);
+    filter_active_ = false;
+    return;
+  }
+  filter_problem_ = attach_channel_filter(receive_fd_, channels_);
+  filter_active_ = filter_problem_.empty();
 }
 
 void Bus::subscribe_raw(const std::string& regex,

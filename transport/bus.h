@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -135,6 +136,18 @@ class Bus {
     late_threshold_ns_ = threshold_ns;
   }
 
+  /// Over udpm://: keep only the subscribed channels on this process's LCM receive socket, in
+  /// the kernel (transport/channel_filter.h), from the next subscription on. A subscription
+  /// by pattern (subscribe_raw) turns the filter off. No effect in process or on other providers.
+  void enable_channel_filter(bool on) {
+    filter_enabled_ = on;
+    refresh_channel_filter();
+  }
+  /// "" while the filter works as asked, else why it does not (it is then simply off).
+  const std::string& channel_filter_problem() const { return filter_problem_; }
+  /// True if the kernel filter is in place on the receive socket.
+  bool channel_filter_active() const { return filter_active_; }
+
   /// Called for every malformed message in addition to counting it.
   void on_malformed(MalformedHandler handler) { on_malformed_ = std::move(handler); }
 
@@ -172,6 +185,7 @@ class Bus {
   static bool due_in_sim_time(const std::string& channel);
   void count_late(int64_t due_us, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
+  void refresh_channel_filter();
 
   std::string url_;
   std::unique_ptr<lcm::LCM> lcm_;
@@ -183,6 +197,15 @@ class Bus {
   int64_t publish_failures_ = 0;
   int64_t t0_ns_ = 0;
   int64_t late_threshold_ns_ = 0;
+  // Kernel channel filter (udpm only).
+  bool filter_enabled_ = false;
+  bool filter_active_ = false;
+  bool subscribed_by_pattern_ = false;
+  int port_ = -1;                  ///< the udpm URL's port, -1 for other providers
+  std::set<int> sockets_before_;   ///< UDP sockets on port_ before LCM made its receive socket
+  int receive_fd_ = -1;            ///< LCM's receive socket, once found
+  std::set<std::string> channels_; ///< exact subscriptions
+  std::string filter_problem_;
 };
 
 }  // namespace nimble::transport

@@ -42,6 +42,16 @@ std::string apply_realtime_priority(int priority) {
   return "";
 }
 
+namespace {
+std::string& realtime_problem_storage() {
+  static std::string why;
+  return why;
+}
+}  // namespace
+
+void set_realtime_problem(const std::string& why) { realtime_problem_storage() = why; }
+const std::string& realtime_problem() { return realtime_problem_storage(); }
+
 NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name) {
   NodeOptions o;
   o.name = default_name;
@@ -69,11 +79,10 @@ ProcessNode::ProcessNode(const NodeOptions& options, std::string config_digest)
 ProcessNode::ProcessNode(const NodeOptions& options, const RealtimeSettings& realtime, std::string config_digest)
     : name_(options.name),
       config_digest_(std::move(config_digest)),
-      // In process the executor's thread runs every node: no scheduling policy of its own.
-      realtime_problem_(options.hub != nullptr ? "" : apply_realtime_priority(realtime.priority)),
       bus_(options.hub != nullptr ? Bus(*options.hub) : Bus(options.lcm_url)),
       late_threshold_ns_(realtime.late_threshold_ns) {
   spin_ns_ = realtime.spin_ns;
+  bus_.enable_channel_filter(realtime.channel_filter);
   bus_.on_malformed([this](const std::string& channel, const std::string& what) {
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
           "dropped a malformed message on " + channel + ": " + what);
@@ -81,8 +90,8 @@ ProcessNode::ProcessNode(const NodeOptions& options, const RealtimeSettings& rea
   // Subscribed before anything is announced, so that no start command is missed.
   bus_.subscribe<run_control_t>(contract::channels::kRunControl,
                                 [this](const run_control_t& m) { on_run_control(m); });
-  if (!realtime_problem_.empty()) {
-    fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", realtime_problem_);
+  if (options.hub == nullptr && !realtime_problem().empty()) {
+    fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", realtime_problem());
   }
 }
 
@@ -270,6 +279,11 @@ void ProcessNode::finish_inprocess() {
 }
 
 bool ProcessNode::wait_for_start() {
+  if (!bus_.channel_filter_problem().empty()) {
+    fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "",
+          "kernel channel filter not applied: " + bus_.channel_filter_problem() +
+              "; every message of the run wakes this process");
+  }
   publish_heartbeat(heartbeat_t::STATE_READY);
   while (!started_ && !stop_) {
     wait_io(20000000);

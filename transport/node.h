@@ -56,17 +56,24 @@ struct NodeOptions {
   InprocessHub* hub = nullptr;  ///< set: the node is one of a run flown in one process (no LCM)
 };
 
-/// How a process runs in real time (scenario section `run`). Ignored in lockstep and in process.
+/// How a process's node runs in real time (scenario section `run`). Ignored in lockstep and in
+/// process. The process's SCHED_FIFO priority is the executable's business (process_main()).
 struct RealtimeSettings {
-  int priority = 0;               ///< SCHED_FIFO priority 1..99, 0: the default scheduler
   int64_t spin_ns = 0;            ///< wake this long before each deadline and spin to it
   int64_t late_threshold_ns = 0;  ///< a received stream message later than this is late (0: not counted)
+  bool channel_filter = false;    ///< drop unsubscribed channels in the kernel (Bus::enable_channel_filter)
 };
 
 /// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,
 /// before it starts any thread (LCM's receive thread inherits the policy). 0 does nothing.
 /// Returns an empty string on success, otherwise why it failed (the caller reports it).
 std::string apply_realtime_priority(int priority);
+
+/// Records why this process could not take run.realtime_priority (process_main() sets it; the
+/// scheduling policy belongs to the process, not to a node). Every ProcessNode over LCM reports
+/// it as a CODE_REALTIME_UNAVAILABLE warning.
+void set_realtime_problem(const std::string& why);
+const std::string& realtime_problem();
 
 /// Parses `--name N --scenario FILE --lcm-url URL`.
 /// @throws std::invalid_argument naming the bad or missing flag.
@@ -87,8 +94,7 @@ class ProcessNode {
   ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest = "");
   /// Over LCM at `options.lcm_url`, or through `options.hub` in an in-process run.
   explicit ProcessNode(const NodeOptions& options, std::string config_digest = "");
-  /// The same, run with `realtime`: the priority is applied before LCM starts its receive
-  /// thread (which inherits it); if it cannot be, a CODE_REALTIME_UNAVAILABLE warning says why.
+  /// The same, run with `realtime`.
   ProcessNode(const NodeOptions& options, const RealtimeSettings& realtime, std::string config_digest = "");
 
   /// True in an in-process run (see "In process" below).
@@ -206,7 +212,6 @@ class ProcessNode {
 
   std::string name_;
   std::string config_digest_;
-  std::string realtime_problem_;  ///< why the real-time priority could not be applied (before bus_)
   Bus bus_;
   int64_t late_threshold_ns_ = 0;
   std::vector<Task> tasks_;

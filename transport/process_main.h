@@ -13,13 +13,13 @@
 
 namespace nimble::transport {
 
-/// The real-time settings of the scenario's `run` section, as every rig process applies them.
+/// The real-time settings of the scenario's `run` section, as every rig process's node applies them.
 inline RealtimeSettings realtime_settings(const Scenario& scenario) {
   const ProcessRunOptions run = process_run_options(scenario);
   RealtimeSettings r;
-  r.priority = run.realtime_priority;
   r.spin_ns = static_cast<int64_t>(run.spin_us) * 1000;
   r.late_threshold_ns = run.late_threshold_us * 1000;
+  r.channel_filter = run.channel_filter != 0;
   return r;
 }
 
@@ -31,6 +31,12 @@ int process_main(int argc, char** argv, const char* program, const char* default
   try {
     const NodeOptions options = parse_node_options(argc, argv, default_name);
     const Scenario scenario = load_scenario(options.scenario_file);
+    // SCHED_FIFO before the node starts LCM's receive thread, which inherits it; in real time
+    // only: a lockstep run has no deadlines and runs as fast as it can, and under SCHED_FIFO it
+    // would take its CPU from everything else on the machine.
+    if (scenario.clock == "realtime") {
+      set_realtime_problem(apply_realtime_priority(process_run_options(scenario).realtime_priority));
+    }
     ProcessNode::install_signal_handlers();
     Node node(scenario, options);
     return node.run();
