@@ -201,6 +201,10 @@ TEST_CASE("a short real-time run holds its rates", "[system]") {
     CHECK(c["drops"].as<int>() == 0);
   }
   CHECK(r.summary["timing"]["plant"]["loop_count"].as<int>() >= 1990);
+  // Each process's kernel channel filter is in place (it needs no privilege).
+  for (const auto& f : r.summary["faults"]) {
+    CHECK(f["message"].as<std::string>().find("channel filter") == std::string::npos);
+  }
   // A real-time log carries the wall clock: its TRUTH spans the run as it happened.
   const std::vector<int64_t> t = nimble::test::event_times_us(dir + "/run.lcmlog", kTruth);
   REQUIRE(t.size() > 1900);
