@@ -110,6 +110,29 @@ ChildResult collect(pid_t pid, int read_fd, const std::string& what) {
   return r;
 }
 
+/// Collects the lead process's result, then its helpers' (killed at once if the lead failed,
+/// since they would wait for a stop that never comes). Throws the first error.
+ChildResult collect_group(pid_t lead, int lead_fd, const std::string& lead_what,
+                          const std::vector<std::pair<pid_t, int>>& helpers, const std::string& helper_what) {
+  ChildResult r;
+  std::string error;
+  try {
+    r = collect(lead, lead_fd, lead_what);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  for (const auto& [pid, fd] : helpers) {
+    if (!error.empty()) ::kill(pid, SIGKILL);
+    try {
+      collect(pid, fd, helper_what);
+    } catch (const std::exception& e) {
+      if (error.empty()) error = e.what();
+    }
+  }
+  if (!error.empty()) throw std::runtime_error(error);
+  return r;
+}
+
 ChildResult fail(const std::string& message) {
   ChildResult r;
   std::snprintf(r.error, sizeof r.error, "%s", message.c_str());
@@ -144,6 +167,16 @@ void serve_until_stop(lcm_t* lcm, double guard_s) {
       lcm, kStop, [](const lcm_recv_buf_t*, const char*, void* u) { *static_cast<bool*>(u) = true; }, &stop);
   const int64_t end = monotonic_ns() + static_cast<int64_t>(guard_s * 1e9);
   while (!stop && monotonic_ns() < end) lcm_handle_timeout(lcm, 100);
+}
+
+/// A helper process's life after it subscribed `sub`: handle messages until FLOOR_STOP.
+ChildResult serve(lcm_t* lcm, lcm_subscription_t* sub, double guard_s) {
+  lcm_subscription_set_queue_capacity(sub, 1000);
+  serve_until_stop(lcm, guard_s);
+  lcm_destroy(lcm);
+  ChildResult r;
+  r.ok = 1;
+  return r;
 }
 
 }  // namespace
@@ -207,12 +240,7 @@ Percentiles lcm_chain_floor(const std::string& url, int hops, double rate_hz, do
                 lcm_publish(h->lcm, h->out.c_str(), rb->data, rb->data_size);
               },
               &hop);
-          lcm_subscription_set_queue_capacity(sub, 1000);
-          serve_until_stop(lcm, guard_s);
-          lcm_destroy(lcm);
-          ChildResult r;
-          r.ok = 1;
-          return r;
+          return serve(lcm, sub, guard_s);
         },
         &fd);
     relays.emplace_back(pid, fd);
@@ -273,22 +301,7 @@ Percentiles lcm_chain_floor(const std::string& url, int hops, double rate_hz, do
         return r;
       },
       &fd);
-  ChildResult r;
-  std::string error;
-  try {
-    r = collect(source, fd, "LCM chain source");
-  } catch (const std::exception& e) {
-    error = e.what();
-  }
-  for (auto& [pid, rfd] : relays) {
-    if (!error.empty()) ::kill(pid, SIGKILL);
-    try {
-      collect(pid, rfd, "LCM chain relay");
-    } catch (const std::exception& e) {
-      if (error.empty()) error = e.what();
-    }
-  }
-  if (!error.empty()) throw std::runtime_error(error);
+  const ChildResult r = collect_group(source, fd, "LCM chain source", relays, "LCM chain relay");
   Percentiles p = to_percentiles(r);
   if (p.count < static_cast<int64_t>(0.99 * r.values[4])) {
     throw std::runtime_error("LCM chain: only " + std::to_string(p.count) + " of " +
@@ -331,12 +344,7 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
                 lcm_publish(s->lcm, kAck, ack, sizeof ack);
               },
               &st);
-          lcm_subscription_set_queue_capacity(sub, 1000);
-          serve_until_stop(lcm, guard_s);
-          lcm_destroy(lcm);
-          ChildResult r;
-          r.ok = 1;
-          return r;
+          return serve(lcm, sub, guard_s);
         },
         &fd);
     children.emplace_back(pid, fd);
@@ -403,22 +411,7 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
         return r;
       },
       &fd);
-  ChildResult r;
-  std::string error;
-  try {
-    r = collect(master, fd, "lockstep master");
-  } catch (const std::exception& e) {
-    error = e.what();
-  }
-  for (auto& [pid, rfd] : children) {
-    if (!error.empty()) ::kill(pid, SIGKILL);
-    try {
-      collect(pid, rfd, "lockstep participant");
-    } catch (const std::exception& e) {
-      if (error.empty()) error = e.what();
-    }
-  }
-  if (!error.empty()) throw std::runtime_error(error);
+  const ChildResult r = collect_group(master, fd, "lockstep master", children, "lockstep participant");
   LockstepFloor f;
   f.speed_x = r.values[0];
   f.ticks = static_cast<int64_t>(r.values[1]);
