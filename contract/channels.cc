@@ -55,6 +55,11 @@ const ChannelSpec* find_channel(const std::string& name) {
   return nullptr;
 }
 
+bool single_publisher(const std::string& name) {
+  const ChannelSpec* spec = find_channel(name);
+  return spec != nullptr && spec->publishers.size() == 1 && spec->publishers[0].find("every") == std::string::npos;
+}
+
 std::vector<std::string> wall_clock_channels() {
   std::vector<std::string> out;
   for (const auto& c : channel_table()) {

@@ -51,6 +51,9 @@ const std::vector<ChannelSpec>& channel_table();
 /// The channel called `name`, or nullptr.
 const ChannelSpec* find_channel(const std::string& name);
 
+/// True if `name` has exactly one publishing process (its seq is one sequence).
+bool single_publisher(const std::string& name);
+
 /// Names of the channels whose publishers pace themselves by the wall clock.
 std::vector<std::string> wall_clock_channels();
 

@@ -13,6 +13,7 @@
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
+#include "contract/decode.h"
 
 namespace nimble::ident {
 namespace {
@@ -51,9 +52,9 @@ void append_states(FlightData& d, double t, const double omega[3], const double 
 template <typename T>
 T decode_or_throw(const lcm::LogEvent& ev, const std::string& file) {
   T msg{};
-  if (msg.decode(ev.data, 0, ev.datalen) != ev.datalen) {
-    throw DataError(file, -1, static_cast<int>(ev.eventnum), ev.channel,
-                    "event does not decode as " + std::string(T::getTypeName()));
+  std::string why;
+  if (!contract::decode_exact(ev.data, ev.datalen, msg, &why)) {
+    throw DataError(file, -1, static_cast<int>(ev.eventnum), ev.channel, "event " + why);
   }
   return msg;
 }

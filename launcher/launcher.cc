@@ -31,6 +31,7 @@
 
 #include "can_bridge/bridge_config.h"
 #include "contract/channels.h"
+#include "contract/decode.h"
 #include "contract/rates.h"
 #include "launcher/inprocess.h"
 #include "launcher/netns.h"
@@ -188,7 +189,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     recorder->record(channel, data, size, recv_us * 1000);
     if (lockstep && channel == contract::channels::kRigClock) {
       rig_clock_t tick{};
-      if (tick.decode(data, 0, size) == size && tick.sim_time_ns >= logger_next_due_ns) {
+      if (contract::decode_exact(data, size, tick) && tick.sim_time_ns >= logger_next_due_ns) {
         logger_next_due_ns = tick.sim_time_ns + logger_period_ns;
         step_ack_t ack{};
         ack.utime = tick.utime;

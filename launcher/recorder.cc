@@ -6,6 +6,7 @@
 #include <nimble/rig_clock_t.hpp>
 
 #include "contract/channels.h"
+#include "contract/decode.h"
 #include "contract/rates.h"
 #include "transport/clock.h"
 
@@ -24,6 +25,7 @@ MonitorConfig monitor_config(const RunPlan& plan) {
   mc.expected_hz = contract::expected_rates(
       plan.rates, contract::RunShape{plan.lockstep(), logger_period_ms, plan.scenario.processes.size()});
   mc.wall_clock_channels = contract::wall_clock_channels();
+  mc.processes = plan.scenario.processes;
   return mc;
 }
 
@@ -44,7 +46,7 @@ int64_t Recorder::stamp_us(const std::string& channel, const void* data, int siz
   if (stamps_ == LogStamps::kWallClock) return transport::wall_us();
   if (channel == contract::channels::kRigClock) {
     rig_clock_t tick{};
-    if (tick.decode(data, 0, size) == size) {
+    if (contract::decode_exact(data, size, tick)) {
       if (sim_base_us_ < 0) sim_base_us_ = transport::wall_us() - tick.sim_time_ns / 1000;
       last_stamp_us_ = std::max(last_stamp_us_, sim_base_us_ + tick.sim_time_ns / 1000);
       return last_stamp_us_;

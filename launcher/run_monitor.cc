@@ -5,20 +5,50 @@
 #include <cstring>
 #include <cstdio>
 
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/controller_status_t.hpp>
 #include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
+#include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
+#include <nimble/rig_clock_t.hpp>
+#include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
+#include "contract/decode.h"
 
 namespace nimble::launcher {
 namespace {
 
 using namespace contract::channels;
+using contract::decode_exact;
+
+/// Publisher names a run's messages may carry besides its processes.
+bool known_publisher(const MonitorConfig& cfg, const std::string& name) {
+  if (name == "launcher" || name == "logger") return true;
+  return cfg.processes.empty() ||
+         std::find(cfg.processes.begin(), cfg.processes.end(), name) != cfg.processes.end();
+}
+
+/// True if the bytes decode exactly as the LCM type of a stream channel of the contract (or the
+/// channel is not one of the contract's stream channels).
+bool decodes_as_stream(const std::string& channel, const void* data, int size) {
+  const auto as = [&](auto msg) { return decode_exact(data, size, msg); };
+  if (channel == kImu) return as(imu_sample_t{});
+  if (channel == kActuatorCommand || channel == kActuatorCommandCan) return as(actuator_command_t{});
+  if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return as(actuator_feedback_t{});
+  if (channel == kAttitudeSetpoint) return as(attitude_setpoint_t{});
+  if (channel == kControllerStatus) return as(controller_status_t{});
+  if (channel == kRigClock) return as(rig_clock_t{});
+  if (channel == kRunControl) return as(run_control_t{});
+  return true;  // TRUTH, MOCAP_POSE, ESTIMATE are decoded where they are used
+}
 
 /// Reads a big-endian int64 at `offset` of an encoded LCM message.
 bool read_i64(const void* data, int size, int offset, int64_t& out) {
@@ -30,33 +60,41 @@ bool read_i64(const void* data, int size, int offset, int64_t& out) {
   return true;
 }
 
-template <typename T>
-bool decode(const void* data, int size, T& msg) {
-  return msg.decode(data, 0, size) == size;
-}
-
 }  // namespace
 
-void RunMonitor::count_seq(Counter& c, const std::string& publisher, int64_t seq) {
-  auto it = c.last_seq.find(publisher);
-  if (it != c.last_seq.end() && seq > it->second + 1) c.drops += seq - it->second - 1;
+bool RunMonitor::accept_seq(Counter& c, const std::string& publisher, int64_t seq) {
+  const auto it = c.last_seq.find(publisher);
+  const int64_t last = it == c.last_seq.end() ? -1 : it->second;
+  if (!contract::seq_continues(last, seq)) return false;
+  if (last >= 0 && seq > last + 1) c.drops += seq - last - 1;
   c.last_seq[publisher] = seq;
+  return true;
 }
 
 void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns) {
-  Counter& c = counters_[channel];
-  ++c.count;
+  // Channels nobody in a run publishes are counted under one name, so that a flood of made-up
+  // names cannot grow the table without bound.
+  Counter& c = counters_[contract::find_channel(channel) != nullptr || channel == "LCM_SELF_TEST" ? channel : "(other)"];
+  // A message is counted and used only once it decodes exactly as its channel's type and
+  // continues its publisher's seq; anything else is malformed and left out of every figure.
+  const auto take = [&](auto& msg, const std::string& publisher) {
+    if (!decode_exact(data, size, msg) || !known_publisher(cfg_, publisher_of(msg, publisher)) ||
+        !accept_seq(c, publisher_of(msg, publisher), msg.seq)) {
+      ++c.malformed;
+      return false;
+    }
+    ++c.count;
+    return true;
+  };
 
   if (channel == kHeartbeat) {
     heartbeat_t hb{};
-    if (!decode(data, size, hb)) { ++c.malformed; return; }
-    heartbeat_[hb.process] = hb.state;
-    count_seq(c, hb.process, hb.seq);
+    if (take(hb, "")) heartbeat_[hb.process] = hb.state;
     return;
   }
   if (channel == kTimingHealth) {
     timing_health_t h{};
-    if (!decode(data, size, h)) { ++c.malformed; return; }
+    if (!take(h, "")) return;
     TimingSummary& t = timing_[h.process];
     t.loop_rate_hz = h.loop_rate_hz;
     t.loop_count = h.loop_count;
@@ -72,52 +110,56 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
       t.received[h.channel[static_cast<std::size_t>(i)]] =
           TimingSummary::Received{h.count[static_cast<std::size_t>(i)], h.late[static_cast<std::size_t>(i)]};
     }
-    count_seq(c, h.process, h.seq);
     return;
   }
   if (channel == kCanHealth) {
     can_health_t h{};
-    if (!decode(data, size, h)) { ++c.malformed; return; }
-    can_health_[h.process] = h;
-    count_seq(c, h.process, h.seq);
+    if (take(h, "")) can_health_[h.process] = h;
     return;
   }
   if (channel == kFault) {
     fault_event_t f{};
-    if (!decode(data, size, f)) { ++c.malformed; return; }
-    faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
-                                  static_cast<double>(f.rig_utime) / 1e6});
-    count_seq(c, f.process, f.seq);
+    if (take(f, "")) {
+      faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
+                                    static_cast<double>(f.rig_utime) / 1e6});
+    }
     return;
   }
   if (channel == kStepAck) {
     step_ack_t a{};
-    if (!decode(data, size, a)) { ++c.malformed; return; }
-    count_seq(c, a.process, a.seq);
+    take(a, "");
+    return;
+  }
+  if (contract::find_channel(channel) == nullptr) {  // not the rig's: counted, not judged
+    ++c.count;
     return;
   }
 
-  // Stream channels: one publisher, utime and seq at byte offsets 8 and 16.
+  // Stream channels: one publisher; utime and seq at byte offsets 8 and 16 of every type.
   int64_t utime = 0, seq = 0;
-  if (!read_i64(data, size, 8, utime) || !read_i64(data, size, 16, seq)) {
+  if (!decodes_as_stream(channel, data, size) || !read_i64(data, size, 8, utime) || !read_i64(data, size, 16, seq)) {
     ++c.malformed;
     return;
   }
-  count_seq(c, "", seq);
+  // TRUTH, MOCAP_POSE and ESTIMATE are decoded first: a message that does not decode is not
+  // counted at all.
+  truth_state_t t{};
+  mocap_pose_t pose{};
+  estimator_state_t e{};
+  if ((channel == kTruth && !decode_exact(data, size, t)) || (channel == kMocapPose && !decode_exact(data, size, pose)) ||
+      (channel == kEstimate && !decode_exact(data, size, e)) || !accept_seq(c, "", seq)) {
+    ++c.malformed;
+    return;
+  }
+  ++c.count;
   // A message is due at its utime; a pose is stamped at mid-exposure and due latency_us later.
   int64_t due_us = utime;
-  if (channel == kMocapPose) {
-    mocap_pose_t pose{};
-    if (!decode(data, size, pose)) { ++c.malformed; return; }
-    due_us += pose.latency_us;
-  }
+  if (channel == kMocapPose) due_us += pose.latency_us;
   if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != kRunControl) {
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }
   if (channel == kTruth) {
-    truth_state_t t{};
-    if (!decode(data, size, t)) { ++c.malformed; return; }
     const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
     FlightSummary& f = flight_;
     if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi) || !std::isfinite(t.euler_rad[1])) f.finite = false;
@@ -146,8 +188,6 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     }
   }
   if (channel == kEstimate) {
-    estimator_state_t e{};
-    if (!decode(data, size, e)) { ++c.malformed; return; }
     est_.poses_accepted = e.poses_accepted;
     est_.poses_rejected = e.poses_rejected;
     est_.poses_missing = e.poses_missing;

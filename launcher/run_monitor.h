@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <nimble/can_health_t.hpp>
@@ -19,6 +21,9 @@ struct MonitorConfig {
   int64_t late_threshold_us = 2000;  ///< real time: a stream message later than this is late
   std::map<std::string, double> expected_hz;  ///< per channel; wall-clock channels per process
   std::vector<std::string> wall_clock_channels;  ///< rates of these are per wall second
+  /// The run's processes: a HEARTBEAT, TIMING_HEALTH, FAULT, STEP_ACK or CAN_HEALTH naming
+  /// another publisher (the launcher and its logger aside) is not trusted. Empty: any.
+  std::vector<std::string> processes;
 };
 
 struct ChannelSummary {
@@ -113,7 +118,21 @@ class RunMonitor {
     std::map<std::string, int64_t> last_seq;  // publisher -> seq
     int64_t drops = 0;
   };
-  void count_seq(Counter& c, const std::string& publisher, int64_t seq);
+  /// Counts gaps in `publisher`'s seq as drops; false (nothing counted) if `seq` does not
+  /// continue its sequence (contract::seq_continues).
+  bool accept_seq(Counter& c, const std::string& publisher, int64_t seq);
+  template <typename T>
+  static const std::string& publisher_of(const T& msg, const std::string& fallback) {
+    if constexpr (has_process<T>::value) {
+      return msg.process;
+    } else {
+      return fallback;
+    }
+  }
+  template <typename T, typename = void>
+  struct has_process : std::false_type {};
+  template <typename T>
+  struct has_process<T, std::void_t<decltype(std::declval<T>().process)>> : std::true_type {};
 
   MonitorConfig cfg_;
   std::map<std::string, Counter> counters_;

@@ -24,9 +24,11 @@ Bus::Bus(InprocessHub& hub) : url_("inprocess"), hub_(&hub) {}
 
 Bus::~Bus() = default;
 
-void Bus::track_seq(int64_t seq, ChannelStats& stats) {
+bool Bus::track_seq(int64_t seq, ChannelStats& stats) {
+  if (stats.one_publisher && !contract::seq_continues(stats.last_seq, seq)) return false;
   if (stats.last_seq >= 0 && seq > stats.last_seq + 1) stats.drops += seq - stats.last_seq - 1;
   stats.last_seq = seq;
+  return true;
 }
 
 bool Bus::due_in_sim_time(const std::string& channel) {

@@ -22,6 +22,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "contract/channels.h"
+#include "contract/decode.h"
 #include "transport/inprocess_hub.h"
 
 namespace nimble::transport {
@@ -42,6 +44,7 @@ struct ChannelStats {
   /// threshold after their due time (channels stamped in simulated time only).
   int64_t late = 0;
   bool due_in_sim_time = false;  ///< the channel's utime is simulated time (the contract says)
+  bool one_publisher = false;    ///< the channel has one publisher: its seq must continue
 };
 
 namespace detail {
@@ -89,8 +92,9 @@ class Bus {
   }
 
   /// Subscribes `handler` to `channel` (an exact name). The handler gets the decoded
-  /// message and its receive time [us, CLOCK_MONOTONIC]. Types whose first fields are
-  /// `utime, seq` get drop counting from gaps in seq.
+  /// message. Types whose first fields are `utime, seq` get drop counting from gaps in seq.
+  /// A message that does not decode exactly, or (on a channel with one publisher) whose seq
+  /// does not continue the sequence, is malformed: counted, reported, never delivered.
   template <typename T>
   void subscribe(const std::string& channel, std::function<void(const T&)> handler,
                  int queue_capacity = kDefaultQueueCapacity) {
@@ -99,15 +103,16 @@ class Bus {
     sub->stats = &stats_[channel];
     sub->bus = this;
     sub->stats->due_in_sim_time = due_in_sim_time(channel);
+    sub->stats->one_publisher = contract::single_publisher(channel);
     sub->decode_and_call = [this, handler](const void* data, int size, ChannelStats& stats,
                                      std::string& error) -> bool {
       T msg{};  // value-initialised: decode() fills it, the compiler cannot see that
-      if (msg.decode(data, 0, size) != size) {
-        error = "cannot decode as " + std::string(T::getTypeName()) +
-                " (wrong type or truncated, " + std::to_string(size) + " bytes)";
+      if (!contract::decode_exact(data, size, msg, &error)) return false;
+      if (!track_seq(msg.seq, stats)) {
+        error = "seq " + std::to_string(msg.seq) + " does not continue the publisher's " +
+                std::to_string(stats.last_seq) + " (a stray publisher, or bytes that happened to decode)";
         return false;
       }
-      track_seq(msg.seq, stats);
       if (late_threshold_ns_ > 0 && stats.due_in_sim_time) {
         // Due at its simulated time; a motion-capture pose (stamped at mid-exposure) once
         // its latency has passed.
@@ -181,7 +186,9 @@ class Bus {
     void deliver(const std::string& channel, const void* data, int size);
   };
 
-  static void track_seq(int64_t seq, ChannelStats& stats);
+  /// Counts gaps in `seq` as drops. On a channel with one publisher, a seq that does not
+  /// continue the sequence (contract::seq_continues) is refused: false, nothing counted.
+  static bool track_seq(int64_t seq, ChannelStats& stats);
   static bool due_in_sim_time(const std::string& channel);
   void count_late(int64_t due_us, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);

@@ -1,17 +1,24 @@
 // Functional test: the launcher's run monitor judges stream messages by their decoded fields;
-// a motion-capture pose is due latency_us after its mid-exposure stamp.
+// a motion-capture pose is due latency_us after its mid-exposure stamp; what it cannot trust
+// (bytes that do not decode, a decoder that throws, a seq that does not continue its publisher's,
+// a publisher that is not in the run) is counted as malformed and left out of every figure.
+#include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <nimble/heartbeat_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
 #include "launcher/run_monitor.h"
 
+using nimble::heartbeat_t;
 using nimble::mocap_pose_t;
 using nimble::truth_state_t;
+using nimble::contract::channels::kHeartbeat;
 using nimble::contract::channels::kMocapPose;
 using nimble::contract::channels::kTruth;
 using nimble::launcher::MonitorConfig;
@@ -75,7 +82,7 @@ TEST_CASE("a pose that does not decode is malformed, not judged", "[launcher][mo
   buf.resize(buf.size() - 1);  // truncated: the header is intact, the pose is not
   mon.on_message(kMocapPose, buf.data(), static_cast<int>(buf.size()), received_at(10000, 60000));
   const auto c = mon.channels(1.0, 1.0).at(kMocapPose);
-  CHECK(c.count == 1);
+  CHECK(c.count == 0);  // the count is of messages the monitor could read
   CHECK(c.malformed == 1);
   CHECK(c.late == 0);
 }
@@ -95,4 +102,73 @@ TEST_CASE("other stream messages are due at their utime", "[launcher][monitor]")
   CHECK(c.count == 2);
   CHECK(c.late == 1);
   CHECK(c.drops == 1);
+}
+
+TEST_CASE("garbage on the rig's channels is malformed and stays out of the flight figures", "[launcher][monitor]") {
+  MonitorConfig cfg;
+  cfg.lockstep = true;
+  cfg.processes = {"plant", "controller"};
+  RunMonitor mon(cfg);
+  // The real flight: 100 TRUTH messages, |phi| <= 0.1 rad.
+  truth_state_t t{};
+  t.quaternion_wxyz[0] = 1.0;
+  for (int k = 0; k < 100; ++k) {
+    t.utime = 1000 * k;
+    t.seq = k;
+    t.euler_rad[0] = 0.1 * std::sin(0.1 * k);
+    const auto b = encode(t);
+    mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
+  }
+  std::mt19937_64 rng(7);
+  int garbage = 0;
+  // TRUTH that decodes (the right fingerprint, random fields, random seq): a stray publisher.
+  for (int k = 0; k < 200; ++k, ++garbage) {
+    truth_state_t g = t;
+    g.seq = static_cast<int64_t>(rng());
+    g.euler_rad[0] = 1e4 * static_cast<double>(static_cast<int64_t>(rng() % 2000) - 1000);
+    const auto b = encode(g);
+    mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
+  }
+  // Random bytes, half of them behind TRUTH's real fingerprint.
+  const auto real = encode(t);
+  for (int k = 0; k < 200; ++k, ++garbage) {
+    std::vector<uint8_t> b(static_cast<std::size_t>(rng() % 600));
+    for (auto& x : b) x = static_cast<uint8_t>(rng());
+    if (k % 2 == 0 && b.size() >= 8) std::copy(real.begin(), real.begin() + 8, b.begin());
+    mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
+  }
+  const auto c = mon.channels(0.1, 0.1).at(kTruth);
+  CHECK(c.count == 100);
+  CHECK(c.malformed == garbage);
+  CHECK(c.drops == 0);
+  CHECK(mon.flight().samples == 100);
+  CHECK(mon.flight().max_abs_phi <= 0.1);
+  CHECK(mon.flight().finite);
+}
+
+TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed", "[launcher][monitor]") {
+  MonitorConfig cfg;
+  cfg.processes = {"plant"};
+  RunMonitor mon(cfg);
+  heartbeat_t hb{};
+  hb.process = "plant";
+  hb.state = heartbeat_t::STATE_READY;
+  auto b = encode(hb);
+  mon.on_message(kHeartbeat, b.data(), static_cast<int>(b.size()), 0);
+  CHECK(mon.heartbeat_state("plant") == heartbeat_t::STATE_READY);
+  // A string whose encoded length is 0 makes LCM 1.3.1's decoder throw: bytes 24-27 hold the
+  // length of `process` (after fingerprint, utime and seq).
+  auto zero_length = b;
+  zero_length[24] = zero_length[25] = zero_length[26] = zero_length[27] = 0;
+  CHECK_NOTHROW(mon.on_message(kHeartbeat, zero_length.data(), static_cast<int>(zero_length.size()), 0));
+  // A heartbeat from a process the run does not have.
+  heartbeat_t stray = hb;
+  stray.process = "intruder";
+  stray.seq = 1;
+  auto s = encode(stray);
+  mon.on_message(kHeartbeat, s.data(), static_cast<int>(s.size()), 0);
+  CHECK(mon.heartbeat_state("intruder") == -1);
+  const auto c = mon.channels(1.0, 1.0).at(kHeartbeat);
+  CHECK(c.count == 1);
+  CHECK(c.malformed == 2);
 }

@@ -128,6 +128,42 @@ TEST_CASE("bus on a hub: typed messages round-trip, malformed ones are counted a
   CHECK(malformed[0].find("truth_state_t") != std::string::npos);
 }
 
+TEST_CASE("bus: a decoder that throws and a seq that does not continue are malformed, never delivered",
+          "[transport]") {
+  InprocessHub hub;
+  Bus sender(hub), receiver(hub);
+  std::vector<nimble::truth_state_t> truth;
+  std::vector<nimble::heartbeat_t> heartbeats;
+  std::vector<std::string> malformed;
+  receiver.subscribe<nimble::truth_state_t>(ch::kTruth, [&](const nimble::truth_state_t& t) { truth.push_back(t); });
+  receiver.subscribe<nimble::heartbeat_t>(ch::kHeartbeat, [&](const nimble::heartbeat_t& h) { heartbeats.push_back(h); });
+  receiver.on_malformed([&](const std::string& c, const std::string& what) { malformed.push_back(c + ": " + what); });
+  // A heartbeat whose `process` string has an encoded length of 0 (bytes 24-27): LCM 1.3.1's
+  // generated decoder throws std::length_error from std::string::assign.
+  nimble::heartbeat_t hb{};
+  hb.process = "plant";
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(hb.getEncodedSize()));
+  hb.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  bytes[24] = bytes[25] = bytes[26] = bytes[27] = 0;
+  hub.publish(ch::kHeartbeat, bytes.data(), static_cast<int>(bytes.size()));
+  // TRUTH (one publisher): 0, 1, then a stray 2^40, a step back to 0... and the real 2 again.
+  nimble::truth_state_t t{};
+  for (const int64_t seq : {int64_t{0}, int64_t{1}, int64_t{1} << 40, int64_t{2}}) {
+    t.seq = seq;
+    sender.publish(ch::kTruth, t);
+  }
+  CHECK_NOTHROW(receiver.drain());
+  CHECK(heartbeats.empty());
+  REQUIRE(truth.size() == 3);
+  CHECK(truth.back().seq == 2);
+  CHECK(receiver.stats().at(ch::kTruth).drops == 0);
+  CHECK(receiver.stats().at(ch::kTruth).malformed == 1);
+  CHECK(receiver.stats().at(ch::kHeartbeat).malformed == 1);
+  REQUIRE(malformed.size() == 2);
+  CHECK(malformed[0].find("failed") != std::string::npos);
+  CHECK(malformed[1].find("does not continue") != std::string::npos);
+}
+
 namespace {
 
 /// A master with one task at 1 kHz and a participant at 500 Hz on one hub.
