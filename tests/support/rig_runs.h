@@ -5,7 +5,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <thread>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -103,6 +108,76 @@ inline std::size_t differing(const std::vector<std::vector<uint8_t>>& a, const s
   std::size_t n = 0;
   for (std::size_t i = 0; i < a.size(); ++i) n += a[i] != b[i];
   return n;
+}
+
+/// Number of events per channel in a log.
+inline std::map<std::string, int> channel_counts(const std::string& log_path) {
+  lcm::LogFile log(log_path, "r");
+  REQUIRE(log.good());
+  std::map<std::string, int> counts;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) ++counts[ev->channel];
+  return counts;
+}
+
+/// Pid of the child of `parent` whose executable is `name`, or -1.
+inline pid_t child_named(pid_t parent, const std::string& name) {
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    const std::string pid = entry.path().filename().string();
+    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const auto close = line.rfind(')');
+    const auto open = line.find('(');
+    if (open == std::string::npos || close == std::string::npos) continue;
+    const std::string comm = line.substr(open + 1, close - open - 1);
+    int ppid = 0;
+    char state = 0;
+    std::sscanf(line.c_str() + close + 2, "%c %d", &state, &ppid);
+    if (ppid == parent && comm == name.substr(0, 15)) return static_cast<pid_t>(std::stoi(pid));
+  }
+  return -1;
+}
+
+/// Starts `rig run` in the background; returns its pid.
+inline pid_t rig_run_background(const std::string& scenario, const std::string& dir, const std::string& args) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string out = dir + "/out.txt";
+    std::freopen(out.c_str(), "w", stdout);
+    std::freopen(out.c_str(), "a", stderr);
+    const std::string log = dir + "/run.lcmlog", json = dir + "/summary.json";
+    std::vector<std::string> argv_s = {RIG_BIN, "run", scenario, "--log", log, "--json", json, "--no-progress"};
+    for (std::size_t start = 0; start < args.size();) {
+      const auto end = args.find(' ', start);
+      argv_s.push_back(args.substr(start, end - start));
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+    std::vector<char*> argv;
+    for (auto& s : argv_s) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    ::execv(RIG_BIN, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+/// Waits (bounded) until `rig run` with pid `rig` has started process `name` and the run
+/// has produced TRUTH in its log.
+inline pid_t wait_for_running(pid_t rig, const std::string& name, const std::string& log_path) {
+  for (int i = 0; i < 600; ++i) {
+    const pid_t child = child_named(rig, name);
+    if (child > 0 && std::filesystem::exists(log_path) && std::filesystem::file_size(log_path) > 20000) return child;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return -1;
+}
+
+inline int wait_exit_code(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace nimble::test

@@ -45,6 +45,11 @@ using nimble::test::slurp;
 using nimble::test::differing;
 using nimble::test::rig_run;
 using nimble::test::truth_payloads;
+using nimble::test::channel_counts;
+using nimble::test::child_named;
+using nimble::test::rig_run_background;
+using nimble::test::wait_for_running;
+using nimble::test::wait_exit_code;
 
 /// A fresh directory for one test's logs.
 std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("system_" + tag); }
@@ -54,76 +59,6 @@ std::map<int64_t, nimble::truth_state_t> truth_by_utime(const std::string& log_p
   std::map<int64_t, nimble::truth_state_t> truth;
   for (const auto& t : decode_channel<nimble::truth_state_t>(log_path, kTruth)) truth[t.utime] = t;
   return truth;
-}
-
-/// Number of events per channel in a log.
-std::map<std::string, int> channel_counts(const std::string& log_path) {
-  lcm::LogFile log(log_path, "r");
-  REQUIRE(log.good());
-  std::map<std::string, int> counts;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) ++counts[ev->channel];
-  return counts;
-}
-
-/// Pid of the child of `parent` whose executable is `name`, or -1.
-pid_t child_named(pid_t parent, const std::string& name) {
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string pid = entry.path().filename().string();
-    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream stat(entry.path() / "stat");
-    std::string line;
-    if (!std::getline(stat, line)) continue;
-    const auto close = line.rfind(')');
-    const auto open = line.find('(');
-    if (open == std::string::npos || close == std::string::npos) continue;
-    const std::string comm = line.substr(open + 1, close - open - 1);
-    int ppid = 0;
-    char state = 0;
-    std::sscanf(line.c_str() + close + 2, "%c %d", &state, &ppid);
-    if (ppid == parent && comm == name.substr(0, 15)) return static_cast<pid_t>(std::stoi(pid));
-  }
-  return -1;
-}
-
-/// Starts `rig run` in the background; returns its pid.
-pid_t rig_run_background(const std::string& scenario, const std::string& dir, const std::string& args) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string out = dir + "/out.txt";
-    std::freopen(out.c_str(), "w", stdout);
-    std::freopen(out.c_str(), "a", stderr);
-    const std::string log = dir + "/run.lcmlog", json = dir + "/summary.json";
-    std::vector<std::string> argv_s = {RIG_BIN, "run", scenario, "--log", log, "--json", json, "--no-progress"};
-    for (std::size_t start = 0; start < args.size();) {
-      const auto end = args.find(' ', start);
-      argv_s.push_back(args.substr(start, end - start));
-      if (end == std::string::npos) break;
-      start = end + 1;
-    }
-    std::vector<char*> argv;
-    for (auto& s : argv_s) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    ::execv(RIG_BIN, argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-/// Waits (bounded) until `rig run` with pid `rig` has started process `name` and the run
-/// has produced TRUTH in its log.
-pid_t wait_for_running(pid_t rig, const std::string& name, const std::string& log_path) {
-  for (int i = 0; i < 600; ++i) {
-    const pid_t child = child_named(rig, name);
-    if (child > 0 && fs::exists(log_path) && fs::file_size(log_path) > 20000) return child;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return -1;
-}
-
-int wait_exit_code(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace

@@ -1,0 +1,147 @@
+/// bus_flood: publishes garbage on the rig's channels, to test that a run survives it.
+///
+///   bus_flood [--url URL] [--rate HZ] [--seconds S] [--burst N] [--seed N] [--max-bytes N]
+///
+/// Publishes through liblcm, like any process that joined the run's network, at `rate`
+/// messages per second for `seconds` (default 2000/s for 2 s), or, with --burst N, N messages
+/// as fast as it can once per second. Each message goes to one of the rig's channels drawn at
+/// random, with a payload of 0 to --max-bytes (default 600) random bytes (LCM fragments those
+/// over about 64 KB); half of the payloads start with the channel's
+/// real 8-byte LCM fingerprint, so that they reach the decoder's field parsing; some of those
+/// carry a string length of 0 where the type has its first string (the input that makes
+/// LCM 1.3.1's decoders throw). Prints how many it sent. Used by the `fault` system tests with
+/// `nsenter -t <rig pid> -n`.
+
+#include <time.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm.h>
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/controller_status_t.hpp>
+#include <nimble/estimator_state_t.hpp>
+#include <nimble/fault_event_t.hpp>
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/imu_sample_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
+#include <nimble/run_control_t.hpp>
+#include <nimble/timing_health_t.hpp>
+#include <nimble/truth_state_t.hpp>
+
+#include "contract/channels.h"
+
+namespace {
+
+int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+/// The 8-byte fingerprint of each channel's type, from an encoded default message.
+template <typename T>
+std::vector<unsigned char> fingerprint() {
+  T msg{};
+  std::vector<unsigned char> b(static_cast<std::size_t>(msg.getEncodedSize()));
+  msg.encode(b.data(), 0, static_cast<int>(b.size()));
+  return std::vector<unsigned char>(b.begin(), b.begin() + 8);
+}
+
+}  // namespace
+
+
+int main(int argc, char** argv) {
+  std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  double rate = 2000.0, seconds = 2.0;
+  long burst = 0;
+  std::size_t max_bytes = 600;
+  unsigned long seed = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto next = [&]() -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bus_flood: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--url") url = next();
+    else if (a == "--rate") rate = std::atof(next());
+    else if (a == "--seconds") seconds = std::atof(next());
+    else if (a == "--burst") burst = std::atol(next());
+    else if (a == "--seed") seed = std::strtoul(next(), nullptr, 10);
+    else if (a == "--max-bytes") max_bytes = std::strtoul(next(), nullptr, 10);
+    else if (a == "--help" || a == "-h") {
+      std::printf("usage: bus_flood [--url URL] [--rate HZ] [--seconds S] [--burst N] [--seed N] [--max-bytes N]\n");
+      return 0;
+    } else {
+      std::fprintf(stderr, "bus_flood: unknown argument '%s'\n", a.c_str());
+      return 2;
+    }
+  }
+  namespace ch = nimble::contract::channels;
+  struct Target {
+    std::string channel;
+    std::vector<unsigned char> fingerprint;
+    int first_string_offset;  ///< byte offset of the first string's length, -1 if none
+  };
+  const std::vector<Target> targets = {
+      {ch::kTruth, fingerprint<nimble::truth_state_t>(), -1},
+      {ch::kImu, fingerprint<nimble::imu_sample_t>(), -1},
+      {ch::kMocapPose, fingerprint<nimble::mocap_pose_t>(), -1},
+      {ch::kEstimate, fingerprint<nimble::estimator_state_t>(), -1},
+      {ch::kActuatorCommand, fingerprint<nimble::actuator_command_t>(), -1},
+      {ch::kActuatorFeedback, fingerprint<nimble::actuator_feedback_t>(), -1},
+      {ch::kAttitudeSetpoint, fingerprint<nimble::attitude_setpoint_t>(), -1},
+      {ch::kControllerStatus, fingerprint<nimble::controller_status_t>(), -1},
+      {ch::kHeartbeat, fingerprint<nimble::heartbeat_t>(), 24},
+      {ch::kTimingHealth, fingerprint<nimble::timing_health_t>(), 24},
+      {ch::kFault, fingerprint<nimble::fault_event_t>(), 24},
+      {ch::kRunControl, fingerprint<nimble::run_control_t>(), -1},
+  };
+  lcm_t* lcm = lcm_create(url.c_str());
+  if (lcm == nullptr) {
+    std::fprintf(stderr, "bus_flood: LCM does not start on %s\n", url.c_str());
+    return 1;
+  }
+  std::mt19937_64 rng(seed);
+  const auto send_one = [&] {
+    const Target& t = targets[rng() % targets.size()];
+    std::vector<unsigned char> payload(rng() % (max_bytes + 1));
+    for (auto& b : payload) b = static_cast<unsigned char>(rng());
+    if (rng() % 2 == 0 && payload.size() >= 8) {
+      std::copy(t.fingerprint.begin(), t.fingerprint.end(), payload.begin());
+      if (t.first_string_offset > 0 && payload.size() >= static_cast<std::size_t>(t.first_string_offset + 4) &&
+          rng() % 4 == 0) {
+        std::memset(payload.data() + t.first_string_offset, 0, 4);
+      }
+    }
+    lcm_publish(lcm, t.channel.c_str(), payload.data(), static_cast<unsigned>(payload.size()));
+  };
+  long sent = 0;
+  const int64_t start = now_ns(), end = start + static_cast<int64_t>(seconds * 1e9);
+  if (burst > 0) {
+    for (int64_t second = start; second < end; second += 1000000000LL) {
+      while (now_ns() < second) {
+      }
+      for (long k = 0; k < burst; ++k, ++sent) send_one();
+    }
+  } else {
+    const int64_t period = static_cast<int64_t>(1e9 / rate);
+    for (int64_t next = start; next < end; next += period, ++sent) {
+      timespec ts{static_cast<time_t>(next / 1000000000LL), static_cast<long>(next % 1000000000LL)};
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+      send_one();
+    }
+  }
+  lcm_destroy(lcm);
+  std::printf("bus_flood: sent %ld messages on %zu channels\n", sent, targets.size());
+  return 0;
+}
