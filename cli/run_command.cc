@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -66,8 +67,12 @@ int run_run_command(const std::vector<std::string>& args) {
       } else if (a == "--seed") {
         const std::string v = value();
         std::size_t used = 0;
+        // std::stoull takes "-1" as 2^64 - 1: a seed must be written as a whole number >= 0.
+        if (v.empty() || !std::isdigit(static_cast<unsigned char>(v[0]))) {
+          throw std::invalid_argument("--seed needs a whole number >= 0, got '" + v + "'");
+        }
         const unsigned long long seed = std::stoull(v, &used);
-        if (used != v.size()) throw std::invalid_argument("--seed needs a whole number, got '" + v + "'");
+        if (used != v.size()) throw std::invalid_argument("--seed needs a whole number >= 0, got '" + v + "'");
         o.seed = seed;
       } else if (a == "--no-progress") {
         o.progress = false;

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 namespace nimble {
@@ -81,10 +82,47 @@ ConfigMap::ConfigMap(YAML::Node node, std::string file, std::string path)
   }
 }
 
-ConfigMap ConfigMap::load_file(const std::string& file) {
-  if (!std::filesystem::exists(file)) {
-    throw ConfigError(file, "", "", "file not found");
+namespace {
+
+void check_unique_keys_at(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsMap()) {
+    std::map<std::string, int> seen;  // key -> line
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      if (!it->first.IsScalar()) continue;
+      const std::string key = it->first.Scalar();
+      const std::string key_path = path.empty() ? key : path + "." + key;
+      const int line = it->first.Mark().line + 1;
+      const auto [where, fresh] = seen.emplace(key, line);
+      if (!fresh) {
+        throw ConfigError(file, key_path, "",
+                          "key given twice (lines " + std::to_string(where->second) + " and " + std::to_string(line) +
+                              "); give it once",
+                          line);
+      }
+      check_unique_keys_at(it->second, file, key_path);
+    }
+  } else if (node.IsSequence()) {
+    std::size_t i = 0;
+    for (auto it = node.begin(); it != node.end(); ++it, ++i) {
+      check_unique_keys_at(*it, file, path + "[" + std::to_string(i) + "]");
+    }
   }
+}
+
+}  // namespace
+
+void check_unique_keys(const YAML::Node& root, const std::string& file) { check_unique_keys_at(root, file, ""); }
+
+void check_readable_file(const std::string& file, const std::string& referrer_key) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) throw ConfigError(file, referrer_key, "", "file not found");
+  if (std::filesystem::is_directory(file, ec)) {
+    throw ConfigError(file, referrer_key, "", "is a directory, not a file");
+  }
+}
+
+ConfigMap ConfigMap::load_file(const std::string& file) {
+  check_readable_file(file);
   YAML::Node root;
   try {
     root = YAML::LoadFile(file);
@@ -93,6 +131,7 @@ ConfigMap ConfigMap::load_file(const std::string& file) {
   } catch (const YAML::BadFile&) {
     throw ConfigError(file, "", "", "cannot be read");
   }
+  check_unique_keys(root, file);
   return ConfigMap(root, file, "");
 }
 
@@ -103,6 +142,7 @@ ConfigMap ConfigMap::load_string(const std::string& text, const std::string& ori
   } catch (const YAML::ParserException& e) {
     throw ConfigError(origin, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
   }
+  check_unique_keys(root, origin);
   return ConfigMap(root, origin, "");
 }
 

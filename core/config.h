@@ -41,6 +41,15 @@ class ConfigError : public std::runtime_error {
   int line_;
 };
 
+/// Refuses a YAML mapping (anywhere in `root`) that gives one key twice: yaml-cpp keeps both and
+/// answers with one of them, so that a value written later in the file could silently lose.
+/// @throws ConfigError naming `file`, the key path and both lines.
+void check_unique_keys(const YAML::Node& root, const std::string& file);
+
+/// Refuses a path that is a directory or does not exist, as the YAML loaders' callers expect.
+/// @throws ConfigError naming `file` ("file not found", "is a directory, not a file").
+void check_readable_file(const std::string& file, const std::string& referrer_key = "");
+
 /// Closed or open interval used to validate numeric config values.
 struct Range {
   double lo = -std::numeric_limits<double>::infinity();

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <cstdio>
 #include <ctime>
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -45,6 +46,23 @@
 #include "transport/clock.h"
 
 namespace nimble::launcher {
+namespace {
+
+/// "" if `file` can be written (opened for appending; a file made by the check is removed
+/// again), else why not.
+std::string writable_problem(const std::string& file) {
+  const bool existed = std::filesystem::exists(file);
+  errno = 0;
+  {
+    std::ofstream out(file, std::ios::app);
+    if (!out) return std::string("cannot be written (") + (errno ? std::strerror(errno) : "open failed") + ")";
+  }
+  if (!existed) std::filesystem::remove(file);
+  return "";
+}
+
+}  // namespace
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -106,6 +124,13 @@ int run_scenario(const RunOptions& options) {
   } catch (const ConfigError& e) {
     std::cerr << "rig run: config error: " << e.what() << "\n";
     return kRunBadInput;
+  }
+  // An output that cannot be written is found now, not after the flight.
+  if (!options.json_file.empty()) {
+    if (const std::string problem = writable_problem(options.json_file); !problem.empty()) {
+      std::cerr << "rig run: --json " << options.json_file << ": " << problem << "\n";
+      return kRunBadInput;
+    }
   }
   if (plan.inprocess()) return run_inprocess(plan, options);
   return run_processes(plan, options);

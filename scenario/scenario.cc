@@ -34,12 +34,17 @@ void absolutise_paths(YAML::Node node, const fs::path& dir, bool top_level) {
 }
 
 YAML::Node load_yaml(const std::string& file, const std::string& referrer_key) {
-  if (!fs::exists(file)) throw ConfigError(file, referrer_key, "", "file not found");
+  check_readable_file(file, referrer_key);
+  YAML::Node root;
   try {
-    return YAML::LoadFile(file);
+    root = YAML::LoadFile(file);
   } catch (const YAML::ParserException& e) {
     throw ConfigError(file, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(file, referrer_key, "", "cannot be read");
   }
+  check_unique_keys(root, file);
+  return root;
 }
 
 /// Merges `over` onto a copy of `under` (mappings recursively; everything else replaced).

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -139,4 +140,41 @@ TEST_CASE("in process: bad input is refused before the run, naming the key, and 
   const RunResult bad_process = rig_run(scenario, d, "--clock inprocess --set processes=[plant,autopilot]");
   CHECK(bad_process.exit_code == 2);
   CHECK(bad_process.output.find("autopilot") != std::string::npos);
+}
+
+TEST_CASE("bad input a new user gives is refused before the run, with a message that names it", "[system]") {
+  const std::string d = scratch_dir("bad_input");
+  const std::string scenario = kConfigs + "hover.yaml";
+  // A key given twice: both lines named.
+  const std::string dup = d + "/dup.yaml";
+  {
+    std::ifstream in(scenario);
+    std::ofstream out(dup);
+    std::string line;
+    while (std::getline(in, line)) {
+      out << line << "\n";
+      if (line.rfind("seed:", 0) == 0) out << "duration_s: 3.0\n";
+    }
+  }
+  // (the copy's relative paths resolve against its own folder: the same files are linked there)
+  for (const char* sub : {"models", "manoeuvres", "plant", "controller", "sensing", "run", "vehicles", "turbulence"}) {
+    std::filesystem::create_directory_symlink(kConfigs + sub, d + "/" + sub);
+  }
+  const RunResult twice = rig_run(dup, d, "--clock inprocess");
+  CHECK(twice.exit_code == 2);
+  CHECK(twice.output.find("key 'duration_s': key given twice (lines 4 and 7)") != std::string::npos);
+  // A directory where the scenario should be.
+  const RunResult directory = rig_run(kConfigs, d, "--clock inprocess");
+  CHECK(directory.exit_code == 2);
+  CHECK(directory.output.find("is a directory, not a file") != std::string::npos);
+  // A negative seed is not read as 2^64 - 1.
+  const RunResult negative = rig_run(scenario, d, "--clock inprocess --seed -1");
+  CHECK(negative.exit_code == 2);
+  CHECK(negative.output.find("--seed needs a whole number >= 0, got '-1'") != std::string::npos);
+  CHECK(negative.output.find("18446744073709551615") == std::string::npos);
+  // A summary that could not be written is found before the flight, not after it.
+  const RunResult unwritable = rig_run(scenario, d, "--clock inprocess --json /nonexistent-dir/summary.json");
+  CHECK(unwritable.exit_code == 2);
+  CHECK(unwritable.output.find("--json /nonexistent-dir/summary.json: cannot be written") != std::string::npos);
+  CHECK(unwritable.output.find("run summary") == std::string::npos);  // nothing flew
 }
