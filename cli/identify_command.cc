@@ -33,6 +33,7 @@ constexpr const char* kIdentifyUsage =
     "  parameters with their standard deviations, flagged correlations, accuracy\n"
     "  metrics, residual whiteness, eigenvalues and modes, and state PSDs.\n"
     "  --structure lateral3|lateral4  model structure (default lateral3)\n"
+    "  --salvage                      a damaged rig log: read the events before the damage\n"
     "  --method ols|wls               estimator (default wls)\n"
     "  --vehicle FILE                 vehicle (default rig_configs/vehicles/nimble_no_wifi.yaml)\n"
     "  --inputs LIST                  comma-separated inputs (default delta_f,delta_t plus\n"
@@ -55,6 +56,7 @@ constexpr const char* kValidateUsage =
     "  Open-loop validation: the state derivatives predicted by the model from the\n"
     "  measured states and inputs against the measured ones (thesis Tables 7-8).\n"
     "  --vehicle FILE   use this vehicle instead of the model's\n"
+    "  --salvage        a damaged rig log: read the events before the damage\n"
     "  --rate HZ, --cutoff HZ, --order N   processing (defaults 512, 9, 10)\n"
     "  --interpolation cubic|linear        resampling (default cubic)\n"
     "  --lags N         whiteness lags (default 50)\n"
@@ -73,6 +75,7 @@ constexpr const char* kDiscrepancyUsage =
     "  missing (by name), the model refit with it, and the gap before and after on data the\n"
     "  fit did not see (ident/README.md, \"Discrepancy workflow\"). Exit 0 whatever the verdict.\n"
     "  --model FILE        the model (lateral3) to check\n"
+    "  --salvage           a damaged rig log: read the events before the damage\n"
     "  --vehicle FILE      use this vehicle instead of the model's\n"
     "  --candidates LIST   comma-separated candidate effects to try (default: all the data supports):\n"
     "                      kinematic_coupling, gravity_nonlinearity, lateral_inflow,\n"
@@ -131,6 +134,18 @@ bool processing_option(Args& it, ident::ProcessingOptions& p) {
   return true;
 }
 
+/// `--salvage`: read a damaged log up to the damage; returns false if `it` is not that option.
+bool log_option(Args& it, ident::LogReadOptions& o) {
+  if (it.arg() != "--salvage") return false;
+  o.salvage = true;
+  return true;
+}
+
+/// Says on stderr what a salvaged read left out.
+void warn_damage(const char* command, const std::string& file, const std::string& damage) {
+  if (!damage.empty()) std::cerr << command << ": warning: " << file << ": " << damage << "\n";
+}
+
 }  // namespace
 
 int run_identify_command(const std::vector<std::string>& args) {
@@ -140,11 +155,12 @@ int run_identify_command(const std::vector<std::string>& args) {
   }
   std::string csv, vehicle_file, json, model_out, plots;
   ident::IdentOptions opt;
+  ident::LogReadOptions log_options;
   try {
     Args it(args);
     while (it.next()) {
       const std::string& a = it.arg();
-      if (processing_option(it, opt.processing)) continue;
+      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
       if (a == "--structure") {
         const std::string s = it.value();
         if (s != "lateral3" && s != "lateral4") throw UsageError("--structure: '" + s + "' is not lateral3 or lateral4");
@@ -194,7 +210,9 @@ int run_identify_command(const std::vector<std::string>& args) {
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
-  const ident::FlightData data = ident::read_flight_data(csv);
+  std::string damage;
+  const ident::FlightData data = ident::read_flight_data(csv, log_options, &damage);
+  warn_damage("rig identify", csv, damage);
   const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
 
   if (!model_out.empty()) {
@@ -223,11 +241,12 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   }
   std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
+  ident::LogReadOptions log_options;
   try {
     Args it(args);
     while (it.next()) {
       const std::string& a = it.arg();
-      if (processing_option(it, opt.processing)) continue;
+      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
       if (a == "--model") {
         model_file = it.value();
       } else if (a == "--vehicle") {
@@ -276,7 +295,8 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   const Vehicle vehicle = load_vehicle(vfile);
   ident::FlightData data;
   if (ident::is_lcm_log(data_file)) {
-    ident::RigLogData log = ident::read_rig_log(data_file);
+    ident::RigLogData log = ident::read_rig_log(data_file, ident::StateSource::kAuto, log_options);
+    warn_damage("rig discrepancy", data_file, log.damage);
     data = std::move(log.measured);
     if (gains.empty()) gains = log.gain_set;  // the gains the run flew
   } else {
@@ -327,11 +347,12 @@ int run_validate_command(const std::vector<std::string>& args) {
   std::string gains = "fast", controller_file = NIMBLE_DEFAULT_CONTROLLER;
   bool closed_loop = false;
   ident::ValidationOptions opt;
+  ident::LogReadOptions log_options;
   try {
     Args it(args);
     while (it.next()) {
       const std::string& a = it.arg();
-      if (processing_option(it, opt.processing)) continue;
+      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
       if (a == "--closed-loop") {
         closed_loop = true;
       } else if (a == "--gains") {
@@ -366,7 +387,9 @@ int run_validate_command(const std::vector<std::string>& args) {
 
   const DerivativeModel model = load_model(model_file);
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
-  const ident::FlightData data = ident::read_flight_data(csv);
+  std::string damage;
+  const ident::FlightData data = ident::read_flight_data(csv, log_options, &damage);
+  warn_damage("rig validate", csv, damage);
   if (closed_loop) {
     ident::ClosedLoopOptions cl;
     cl.controller = load_controller_config(controller_file);
@@ -418,11 +441,12 @@ int run_validate_command(const std::vector<std::string>& args) {
 namespace {
 
 constexpr const char* kExportUsage =
-    "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]\n"
+    "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth] [--salvage]\n"
     "  Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
     "  resampled onto one grid (default 512 Hz, cubic interpolation). States come from the estimator\n"
     "  (ESTIMATE) when the log has it, else from the plant's truth; inputs from ACTUATOR_FB;\n"
-    "  phi_sp from ATTITUDE_SP.\n";
+    "  phi_sp from ATTITUDE_SP. A damaged log is an error naming the byte offset and the event;\n"
+    "  --salvage reads the events before the damage and says how much was left.\n";
 
 }  // namespace
 
@@ -430,6 +454,7 @@ int run_export_command(const std::vector<std::string>& args) {
   std::string log, csv;
   double rate_hz = 512.0;
   ident::StateSource source = ident::StateSource::kAuto;
+  ident::LogReadOptions log_options;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
@@ -455,6 +480,8 @@ int run_export_command(const std::vector<std::string>& args) {
         std::cerr << "rig export: --states must be auto, estimate or truth, got '" << v << "'\n";
         return kExitUsage;
       }
+    } else if (a == "--salvage") {
+      log_options.salvage = true;
     } else if (!a.empty() && a[0] != '-' && log.empty()) {
       log = a;
     } else {
@@ -466,7 +493,8 @@ int run_export_command(const std::vector<std::string>& args) {
     std::cerr << "rig export: needs <log.lcmlog> and --csv <out.csv>\n" << kExportUsage;
     return kExitUsage;
   }
-  const ident::RigLogData data = ident::read_rig_log(log, source);
+  const ident::RigLogData data = ident::read_rig_log(log, source, log_options);
+  warn_damage("rig export", log, data.damage);
   const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz);
   ident::FlightData out;
   out.source = log;

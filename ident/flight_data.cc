@@ -120,7 +120,9 @@ DataError::DataError(std::string source, int line, int row, std::string column, 
       problem_(std::move(problem)) {}
 
 FlightData parse_flight_csv(const std::string& text, const std::string& source) {
-  std::istringstream in(text);
+  // A UTF-8 byte order mark (spreadsheet programs write one) is not part of the first name.
+  const bool bom = text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0;
+  std::istringstream in(bom ? text.substr(3) : text);
   std::string line;
   int line_no = 0;
 
@@ -132,6 +134,10 @@ FlightData parse_flight_csv(const std::string& text, const std::string& source) 
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
     header = split_cells(t);
+    // Names in double quotes (as spreadsheet programs export them) are the names without them.
+    for (auto& name : header) {
+      if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = trim(name.substr(1, name.size() - 2));
+    }
     header_line = line_no;
     break;
   }

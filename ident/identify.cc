@@ -67,6 +67,21 @@ Segments find_segments(const UniformData& data, const SegmentOptions& options) {
     }
   }
   Segments s;
+  const Eigen::Index samples = data.size();
+  if (samples > 0) {
+    // A range must overlap the data: one beyond it would give statistics of nothing (NaN).
+    const double first = data.t_s[0], last = data.t_s[samples - 1];
+    for (const auto* list : {&options.hover, &options.manoeuvre}) {
+      for (const auto& r : *list) {
+        if (r.end_s < first || r.start_s > last) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "segment %g:%g s lies outside the data (%.3f to %.3f s)", r.start_s, r.end_s,
+                        first, last);
+          throw std::invalid_argument(buf);
+        }
+      }
+    }
+  }
   if (!options.hover.empty() || !options.manoeuvre.empty()) {
     s.hover = options.hover;
     s.manoeuvre = options.manoeuvre;

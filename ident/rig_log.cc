@@ -2,8 +2,8 @@
 
 #include <cstdint>
 #include <fstream>
+#include <utility>
 
-#include <lcm/lcm-cpp.hpp>
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
@@ -14,6 +14,7 @@
 
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "ident/lcm_log.h"
 
 namespace nimble::ident {
 namespace {
@@ -50,11 +51,12 @@ void append_states(FlightData& d, double t, const double omega[3], const double 
 }
 
 template <typename T>
-T decode_or_throw(const lcm::LogEvent& ev, const std::string& file) {
+T decode_or_throw(const LogEventRecord& ev, const std::string& file) {
   T msg{};
   std::string why;
-  if (!contract::decode_exact(ev.data, ev.datalen, msg, &why)) {
-    throw DataError(file, -1, static_cast<int>(ev.eventnum), ev.channel, "event " + why);
+  if (!contract::decode_exact(ev.data.data(), static_cast<int>(ev.data.size()), msg, &why)) {
+    throw DataError(file, -1, static_cast<int>(ev.event_number), ev.channel,
+                    "event at byte " + std::to_string(ev.offset) + ": " + why);
   }
   return msg;
 }
@@ -74,12 +76,12 @@ bool is_lcm_log(const std::string& file) {
   return in.gcount() == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
 }
 
-RigLogData read_rig_log(const std::string& file, StateSource source) {
-  lcm::LogFile log(file, "r");
-  if (!log.good()) throw DataError(file, -1, -1, "", "cannot open as an LCM log");
+RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
+  LcmLogReader log(file, options.salvage);
   FlightData estimate, truth, inputs;
   std::string gain_set;
-  for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
+  LogEventRecord record;
+  for (const LogEventRecord* ev = &record; log.next(&record);) {
     if (ev->channel == kTruth) {
       const auto m = decode_or_throw<truth_state_t>(*ev, file);
       append_states(truth, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
@@ -138,6 +140,7 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   }
   if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
   out.state_source = use_estimate ? "estimate" : "truth";
+  out.damage = log.damage();
   out.gain_set = gain_set;
   out.measured = use_estimate ? estimate : truth;
   out.measured.source = file;
@@ -150,8 +153,11 @@ RigLogData read_rig_log(const std::string& file, StateSource source) {
   return out;
 }
 
-FlightData read_flight_data(const std::string& file) {
-  return is_lcm_log(file) ? read_rig_log(file).measured : read_flight_csv(file);
+FlightData read_flight_data(const std::string& file, const LogReadOptions& options, std::string* damage) {
+  if (!is_lcm_log(file)) return read_flight_csv(file);
+  RigLogData log = read_rig_log(file, StateSource::kAuto, options);
+  if (damage) *damage = log.damage;
+  return std::move(log.measured);
 }
 
 }  // namespace nimble::ident

@@ -34,6 +34,14 @@ struct RigLogData {
   FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
   std::string state_source;  ///< "estimate" or "truth"
   std::string gain_set;      ///< the roll gain set the controller flew (CONTROLLER_STATUS; empty if none)
+  std::string damage;        ///< read with salvage from a damaged log: where and how much was left ("" if whole)
+};
+
+/// How to read a log.
+struct LogReadOptions {
+  /// A damaged log (truncated, corrupted) is an error naming the byte offset and the event;
+  /// with salvage the events before the damage are read and RigLogData::damage says what was left.
+  bool salvage = false;
 };
 
 /// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is
@@ -43,12 +51,14 @@ double estimate_time_s(std::int64_t utime, std::int64_t imu_utime);
 /// True if `file` starts with the LCM log event sync word.
 bool is_lcm_log(const std::string& file);
 
-/// Reads a rig log (lcm::LogFile format).
-/// @throws DataError naming the log, the event number (as the row) and the channel for
-///         an unreadable file, a message that does not decode, or a missing channel.
-RigLogData read_rig_log(const std::string& file, StateSource source = StateSource::kAuto);
+/// Reads a rig log (the LCM log format, through LcmLogReader: damage is never read past).
+/// @throws DataError naming the log, the byte offset and event of damage, or the event number
+///         (as the row) and channel of a message that does not decode, or a missing channel.
+RigLogData read_rig_log(const std::string& file, StateSource source = StateSource::kAuto,
+                        const LogReadOptions& options = {});
 
-/// Reads flight data from a rig log (its measured data) or a CSV file, by content.
-FlightData read_flight_data(const std::string& file);
+/// Reads flight data from a rig log (its measured data) or a CSV file, by content. `damage`
+/// (if given) receives RigLogData::damage of a log read with salvage.
+FlightData read_flight_data(const std::string& file, const LogReadOptions& options = {}, std::string* damage = nullptr);
 
 }  // namespace nimble::ident

@@ -109,6 +109,13 @@ TEST_CASE("rig identify --method ols --json - prints only JSON", "[cli]") {
   CHECK(text.out.find("processing linear resampling") != std::string::npos);
 }
 
+TEST_CASE("rig identify refuses a segment beyond the data instead of giving NaN", "[cli]") {
+  const Result r = run_rig("identify " + flight_csv() + " --hover 500:600");
+  CHECK(r.exit_code != 0);
+  CHECK(r.err.find("segment 500:600 s lies outside the data") != std::string::npos);
+  CHECK(r.out.find("nan") == std::string::npos);
+}
+
 TEST_CASE("rig validate reports open-loop metrics of every state derivative", "[cli]") {
   const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1.yaml";
   const Result r = run_rig("validate " + model + " " + flight_csv() + " --json -");

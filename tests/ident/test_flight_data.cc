@@ -56,6 +56,19 @@ TEST_CASE("a CSV with comments, optional columns in any order and blank lines is
   CHECK(d.min_samples() == 2);
 }
 
+TEST_CASE("a CSV from a spreadsheet program: byte order mark and quoted header names", "[flight_data]") {
+  const std::string body = "0,0.1,0.01,0.001,1,0\n0.5,0.2,0.02,0.002,2,0.5\n";
+  const FlightData plain = parse_flight_csv("t,p,v,phi,delta_f,delta_t\n" + body, "plain.csv");
+  const FlightData bom = parse_flight_csv("\xEF\xBB\xBFt,p,v,phi,delta_f,delta_t\n" + body, "bom.csv");
+  const FlightData quoted =
+      parse_flight_csv("\xEF\xBB\xBF\"t\",\"p\",\"v\",\"phi\",\"delta_f\",\"delta_t\"\n" + body, "quoted.csv");
+  for (const FlightData* d : {&bom, &quoted}) {
+    REQUIRE(d->has("p"));
+    CHECK(d->at("p").values == plain.at("p").values);
+    CHECK(d->at("delta_t").t_s == plain.at("delta_t").t_s);
+  }
+}
+
 TEST_CASE("CSV written by format_flight_csv reads back bit for bit", "[flight_data]") {
   FlightData d;
   d.source = "memory";

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -16,6 +19,7 @@
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
+#include "ident/lcm_log.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"
 
@@ -177,4 +181,91 @@ TEST_CASE("a repeated estimate time keeps the newest estimate of that instant", 
   CHECK(p.t_s == std::vector<double>{0.0, 2000e-6, 4000e-6, 6000e-6});
   CHECK(p.values == std::vector<double>{0.0, 10.0, 2.0, 3.0});
   CHECK_FALSE(d.truth.has("p"));
+}
+
+namespace {
+
+std::vector<char> file_bytes(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+}
+
+void put_bytes(const std::string& file, const std::vector<char>& bytes) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// The byte offset of each event of a whole log, by reading it.
+std::vector<int64_t> event_offsets(const std::string& file) {
+  LcmLogReader reader(file);
+  std::vector<int64_t> offsets;
+  LogEventRecord ev;
+  while (reader.next(&ev)) offsets.push_back(ev.offset);
+  return offsets;
+}
+
+std::string what_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const DataError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("a damaged log is refused naming the byte offset and the event, --salvage reads what precedes it",
+          "[ident]") {
+  const std::string whole = temp_log("whole.lcmlog");
+  write_lockstep_log(whole, 1.0);
+  const std::vector<char> bytes = file_bytes(whole);
+  const std::vector<int64_t> offsets = event_offsets(whole);
+  REQUIRE(offsets.size() > 1000);
+  const RigLogData full = read_rig_log(whole);
+  CHECK(full.damage.empty());
+
+  // Cut in the middle of an event (half the file): an error, not half a flight.
+  const std::size_t k = offsets.size() / 2;
+  const std::string cut = temp_log("cut.lcmlog");
+  put_bytes(cut, std::vector<char>(bytes.begin(), bytes.begin() + offsets[k] + 30));
+  const std::string message = what_of([&] { read_rig_log(cut); });
+  INFO(message);
+  CHECK(message.find(cut) != std::string::npos);
+  CHECK(message.find("damaged at byte " + std::to_string(offsets[k])) != std::string::npos);
+  CHECK(message.find("event " + std::to_string(k + 1) + " (after " + std::to_string(k) + " whole events)") !=
+        std::string::npos);
+  CHECK(message.find("truncated") != std::string::npos);
+  // Salvaged: exactly the whole events before the cut, and how much was left.
+  LogReadOptions salvage;
+  salvage.salvage = true;
+  LcmLogReader reader(cut, true);
+  LogEventRecord ev;
+  std::size_t read = 0;
+  while (reader.next(&ev)) ++read;
+  CHECK(read == k);
+  CHECK(reader.damage().find("read the " + std::to_string(k) + " events before it, left 30 bytes") !=
+        std::string::npos);
+  // (this test log writes its channels one after the other: the half before the cut has no
+  // actuator feedback, which read_rig_log names rather than returning states without inputs)
+  CHECK(what_of([&] { read_rig_log(cut, StateSource::kAuto, salvage); }).find("no actuator feedback") !=
+        std::string::npos);
+
+  // Corrupted in the middle (the sync word of event k overwritten): refused at that event.
+  std::vector<char> corrupt = bytes;
+  corrupt[static_cast<std::size_t>(offsets[k])] ^= 0x5a;
+  const std::string corrupted = temp_log("corrupt.lcmlog");
+  put_bytes(corrupted, corrupt);
+  const std::string bad_sync = what_of([&] { read_rig_log(corrupted); });
+  CHECK(bad_sync.find("damaged at byte " + std::to_string(offsets[k])) != std::string::npos);
+  CHECK(bad_sync.find("no event sync word") != std::string::npos);
+  // An impossible data length (the event would run past the end).
+  std::vector<char> long_event = bytes;
+  long_event[static_cast<std::size_t>(offsets[k]) + 24] = 0x7f;
+  put_bytes(corrupted, long_event);
+  CHECK(what_of([&] { read_rig_log(corrupted); }).find("damaged at byte " + std::to_string(offsets[k])) !=
+        std::string::npos);
+  // Not a log at all.
+  put_bytes(corrupted, std::vector<char>{'t', ',', 'p', '\n'});
+  CHECK(what_of([&] { LcmLogReader r(corrupted); }).find("is not an LCM log") != std::string::npos);
 }

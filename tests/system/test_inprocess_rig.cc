@@ -178,3 +178,45 @@ TEST_CASE("bad input a new user gives is refused before the run, with a message 
   CHECK(unwritable.output.find("--json /nonexistent-dir/summary.json: cannot be written") != std::string::npos);
   CHECK(unwritable.output.find("run summary") == std::string::npos);  // nothing flew
 }
+
+TEST_CASE("every log reader refuses a damaged rig log naming the offset and the event, --salvage reads the rest",
+          "[system]") {
+  const std::string d = scratch_dir("damaged_log");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  REQUIRE(rig_run(scenario, d, "--clock inprocess --set duration_s=3").exit_code == 0);
+  // The log cut a little after its middle, inside an event.
+  const std::string whole = d + "/run.lcmlog", cut = d + "/cut.lcmlog";
+  const auto size = std::filesystem::file_size(whole);
+  std::filesystem::copy_file(whole, cut);
+  std::filesystem::resize_file(cut, size / 2 + 7);
+  const std::string model = kConfigs + "models/nimble_lateral_set1.yaml";
+  const std::vector<std::string> readers = {
+      "export " + cut + " --csv " + d + "/out.csv",
+      "identify " + cut,
+      "validate " + model + " " + cut,
+      "discrepancy " + cut + " --model " + model,
+  };
+  for (const std::string& args : readers) {
+    INFO(args);
+    const std::string out = d + "/reader.txt";
+    CHECK(run_command(std::string(RIG_BIN) + " " + args + " > " + out + " 2>&1") != 0);
+    const std::string text = slurp(out);
+    INFO(text);
+    CHECK(text.find(cut) != std::string::npos);
+    CHECK(text.find("damaged at byte ") != std::string::npos);
+    CHECK(text.find("whole events") != std::string::npos);
+  }
+  // --salvage: the events before the damage, and a warning that says how much was left.
+  const std::string out = d + "/salvage.txt";
+  CHECK(run_command(std::string(RIG_BIN) + " export " + cut + " --csv " + d + "/part.csv --salvage > " + out +
+                    " 2>&1") == 0);
+  const std::string text = slurp(out);
+  CHECK(text.find("warning: " + cut) != std::string::npos);
+  CHECK(text.find("% of the file)") != std::string::npos);
+  REQUIRE(run_command(std::string(RIG_BIN) + " export " + whole + " --csv " + d + "/full.csv > /dev/null 2>&1") == 0);
+  const std::string part = slurp(d + "/part.csv"), full = slurp(d + "/full.csv");
+  const auto part_rows = std::count(part.begin(), part.end(), '\n');
+  const auto full_rows = std::count(full.begin(), full.end(), '\n');
+  CHECK(part_rows < full_rows);
+  CHECK(part_rows > full_rows / 3);
+}
