@@ -100,11 +100,16 @@ RunPlan load_run_plan(const RunOptions& options) {
   if (options.seed) overrides.push_back({"seed", std::to_string(*options.seed)});
   RunPlan plan;
   plan.scenario = load_scenario(options.scenario_file, overrides);
-  validate_process_sections(plan.scenario);
-  plan.logger_period_ms = lockstep_options(plan.scenario).logger_period_ms;
-  plan.launch = launch_config_from(plan.scenario);
-  plan.judge = judge_config_from(plan.scenario);
-  plan.rates = process_rates(plan.scenario);
+  try {
+    validate_process_sections(plan.scenario);
+    plan.logger_period_ms = lockstep_options(plan.scenario).logger_period_ms;
+    plan.launch = launch_config_from(plan.scenario);
+    plan.judge = judge_config_from(plan.scenario);
+    plan.rates = process_rates(plan.scenario);
+  } catch (const ConfigError& e) {
+    // Name the file and line the key was written on (a base file), or --set.
+    throw locate_error(e, plan.scenario.file, plan.scenario.origins);
+  }
   return plan;
 }
 

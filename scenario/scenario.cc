@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <set>
+#include <utility>
 
 #include "contract/channels.h"
 
@@ -58,23 +59,49 @@ YAML::Node merge(const YAML::Node& under, const YAML::Node& over) {
   return out;
 }
 
+std::string join_path(const std::string& a, const std::string& b) { return a.empty() ? b : b.empty() ? a : a + "." + b; }
+
+/// Records where each key of `node` (freshly parsed from `file`, so with line marks) is
+/// written, as key paths under `mount`. `replace`: the new origins win over ones already
+/// recorded (a later layer); otherwise the first recorded wins (an earlier, overriding layer).
+void record_origins(const YAML::Node& node, const std::string& file, const std::string& mount, bool replace,
+                    KeyOrigins* origins) {
+  if (origins == nullptr || !node.IsMap()) return;
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    if (!it->first.IsScalar()) continue;
+    const std::string path = join_path(mount, it->first.Scalar());
+    const KeyOrigin origin{file, it->first.Mark().is_null() ? -1 : it->first.Mark().line + 1};
+    if (replace) {
+      (*origins)[path] = origin;
+    } else {
+      origins->emplace(path, origin);
+    }
+    record_origins(it->second, file, path, replace, origins);
+  }
+}
+
 /// Replaces every mapping that has `base:` by base merged with the mapping.
-/// Resolves `base:` files in `node` (at `path` of `file`); `at_root`: node is the scenario root.
-YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path, int depth, bool at_root) {
+/// Resolves `base:` files in `node` (at `path` of `file`, which is mounted at `mount` of the
+/// scenario); `at_root`: node is the scenario root. Each base file's keys are recorded in
+/// `origins` where the files above it did not give them.
+YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path, int depth, bool at_root,
+                         const std::string& mount, KeyOrigins* origins) {
   if (depth > 16) throw ConfigError(file, path, "", "base files nest too deeply (a cycle?)");
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
     if (out["base"]) {
       const std::string base_file = out["base"].as<std::string>();
       YAML::Node base = load_yaml(base_file, path.empty() ? "base" : path + ".base");
+      const std::string base_mount = join_path(mount, path);
+      record_origins(base, base_file, base_mount, false, origins);
       absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);
-      base = resolve_bases(base, base_file, "", depth + 1, at_root);
+      base = resolve_bases(base, base_file, "", depth + 1, at_root, base_mount, origins);
       out.remove("base");
       out = merge(base, out);
     }
     for (auto it = out.begin(); it != out.end(); ++it) {
       const std::string key = it->first.as<std::string>();
-      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, depth, false);
+      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, depth, false, mount, origins);
     }
     return out;
   }
@@ -91,11 +118,12 @@ Override parse_override(const std::string& text) {
   return Override{text.substr(0, eq), text.substr(eq + 1)};
 }
 
-YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides) {
+YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides, KeyOrigins* origins) {
   YAML::Node root = load_yaml(file, "");
   if (!root.IsMap()) throw ConfigError(file, "", "", "a scenario must be a YAML mapping");
+  record_origins(root, file, "", false, origins);
   absolutise_paths(root, fs::absolute(file).parent_path(), true);
-  root = resolve_bases(root, file, "", 0, true);
+  root = resolve_bases(root, file, "", 0, true, "", origins);
   for (const auto& o : overrides) {
     YAML::Node value;
     try {
@@ -124,8 +152,30 @@ YAML::Node load_scenario_tree(const std::string& file, const std::vector<Overrid
       chain.push_back(next);
     }
     chain.back()[parts.back()] = value;
+    if (origins != nullptr) {
+      (*origins)[o.key_path] = KeyOrigin{"--set", -1};
+      // Keys inside a mapping given on the command line come from there too.
+      KeyOrigins inner;
+      record_origins(value, "--set", o.key_path, true, &inner);
+      for (auto& [path, origin] : inner) (*origins)[path] = KeyOrigin{"--set", -1};
+    }
   }
   return root;
+}
+
+ConfigError locate_error(const ConfigError& error, const std::string& scenario_file, const KeyOrigins& origins) {
+  if (error.file() != scenario_file || error.key().empty()) return error;
+  // The key itself, or the nearest enclosing key with a recorded origin.
+  std::string path = error.key();
+  for (;;) {
+    const auto it = origins.find(path);
+    if (it != origins.end()) {
+      return ConfigError(it->second.file, error.key(), error.value(), error.problem(), it->second.line);
+    }
+    const auto dot = path.rfind('.');
+    if (dot == std::string::npos) return error;
+    path.erase(dot);
+  }
 }
 
 const std::vector<std::string>& scenario_section_keys() {
@@ -190,7 +240,15 @@ std::string plant_command_channel(const Scenario& scenario) {
 }
 
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides) {
-  return scenario_from_tree(load_scenario_tree(file, overrides), file);
+  KeyOrigins origins;
+  const YAML::Node root = load_scenario_tree(file, overrides, &origins);
+  try {
+    Scenario s = scenario_from_tree(root, file);
+    s.origins = std::move(origins);
+    return s;
+  } catch (const ConfigError& e) {
+    throw locate_error(e, file, origins);
+  }
 }
 
 const ParamTable<LockstepOptions>& lockstep_params() {

@@ -12,6 +12,7 @@
 /// process, so a run can always be repeated from its record.
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,9 +32,25 @@ struct Override {
 /// Parses "a.b=1" into an Override. @throws ConfigError naming the text.
 Override parse_override(const std::string& text);
 
-/// Loads a scenario file, merges bases, absolutises paths and applies overrides.
+/// Where a key of a resolved scenario was written: the file (the scenario or one of its base
+/// files) and line, or "--set" (line -1) for a command-line override.
+struct KeyOrigin {
+  std::string file;
+  int line = -1;
+};
+/// Origin of every key path of a resolved scenario ("plant.rate_hz" -> file and line).
+using KeyOrigins = std::map<std::string, KeyOrigin>;
+
+/// Loads a scenario file, merges bases, absolutises paths and applies overrides. `origins`
+/// (if given) receives where each key came from (merging loses yaml-cpp's line marks).
 /// @throws ConfigError naming the file and key.
-YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides = {});
+YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides = {},
+                              KeyOrigins* origins = nullptr);
+
+/// `error` (about a key of the scenario `scenario_file`) pointed at where its key was written:
+/// the base file and line, or --set for a command-line value. Errors about other files, or
+/// keys without a recorded origin, come back unchanged.
+ConfigError locate_error(const ConfigError& error, const std::string& scenario_file, const KeyOrigins& origins);
 
 /// The top-level facts of a resolved scenario; process sections stay in `root` and are
 /// validated by their owners (plant_config_from, controller config, ...).
@@ -54,6 +71,7 @@ struct Scenario {
   /// (directly) or "can" (through nimble_can_bridge and SocketCAN; section can_bridge).
   std::string actuator_link = "lcm";
   YAML::Node root;
+  KeyOrigins origins;  ///< where each key was written (locate_error)
 
   /// The section of one process (an empty mapping if absent) as a strict ConfigMap.
   ConfigMap section(const std::string& name) const;

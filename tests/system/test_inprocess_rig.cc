@@ -163,6 +163,20 @@ TEST_CASE("bad input a new user gives is refused before the run, with a message 
   const RunResult twice = rig_run(dup, d, "--clock inprocess");
   CHECK(twice.exit_code == 2);
   CHECK(twice.output.find("key 'duration_s': key given twice (lines 4 and 7)") != std::string::npos);
+  // A bad value is named on the line it is written on, and a --set value on --set.
+  const std::string bad_line = d + "/bad_line.yaml";
+  {
+    std::ifstream in(scenario);
+    std::ofstream out(bad_line);
+    std::string line;
+    while (std::getline(in, line)) out << (line.rfind("duration_s:", 0) == 0 ? "duration_s: -3.0" : line) << "\n";
+  }
+  const RunResult on_line = rig_run(bad_line, d, "--clock inprocess");
+  CHECK(on_line.exit_code == 2);
+  CHECK(on_line.output.find("bad_line.yaml:4: key 'duration_s'") != std::string::npos);
+  const RunResult on_set = rig_run(scenario, d, "--clock inprocess --set plant.rate_hz=-5");
+  CHECK(on_set.exit_code == 2);
+  CHECK(on_set.output.find("--set: key 'plant.rate_hz'") != std::string::npos);
   // A directory where the scenario should be.
   const RunResult directory = rig_run(kConfigs, d, "--clock inprocess");
   CHECK(directory.exit_code == 2);

@@ -63,3 +63,40 @@ TEST_CASE("scenario: a top-level section that no process reads is refused, namin
     CHECK(std::string(e.what()).find("unknown key") != std::string::npos);
   }
 }
+
+TEST_CASE("scenario tree: every key's origin is recorded (file and line, base files, --set), and an error is "
+          "moved there",
+          "[scenario]") {
+  const fs::path dir = write_tree();
+  nimble::KeyOrigins origins;
+  nimble::load_scenario_tree((dir / "scenario.yaml").string(), {{"plant.rate_hz", "2000"}, {"run", "{spin_us: 5}"}},
+                             &origins);
+  const std::string scenario = (dir / "scenario.yaml").string();
+  const std::string base = (dir / "sub" / "plant_base.yaml").lexically_normal().string();
+  // Keys of the scenario at their lines; keys of the base file at theirs, under the section.
+  CHECK(origins.at("manoeuvre").file == scenario);
+  CHECK(origins.at("manoeuvre").line == 2);
+  CHECK(origins.at("plant.vehicle").line == 5);
+  CHECK(origins.at("plant.effects.lateral_gust.model").line == 4);
+  CHECK(fs::path(origins.at("plant.effects.lateral_gust.model").file).lexically_normal().string() == base);
+  // What came from the command line, including the keys of a mapping given there.
+  CHECK(origins.at("plant.rate_hz").file == "--set");
+  CHECK(origins.at("run.spin_us").file == "--set");
+
+  // An error about a key of the scenario is named where that key was written.
+  const nimble::ConfigError in_base(scenario, "plant.effects.lateral_gust.model", "gauss_markov", "unknown model", 1);
+  const nimble::ConfigError moved = nimble::locate_error(in_base, scenario, origins);
+  CHECK(fs::path(moved.file()).lexically_normal().string() == base);
+  CHECK(moved.line() == 4);
+  CHECK(std::string(moved.what()).find("plant_base.yaml:4: key 'plant.effects.lateral_gust.model'") !=
+        std::string::npos);
+  const nimble::ConfigError from_set =
+      nimble::locate_error(nimble::ConfigError(scenario, "plant.rate_hz", "2000", "too fast", 1), scenario, origins);
+  CHECK(from_set.file() == "--set");
+  CHECK(from_set.line() == -1);
+  // A key below a recorded one takes the nearest recorded origin; another file's error stays.
+  CHECK(nimble::locate_error(nimble::ConfigError(scenario, "plant.vehicle.x", "", "bad"), scenario, origins).line() ==
+        5);
+  CHECK(nimble::locate_error(nimble::ConfigError("model.yaml", "Lp", "", "bad", 7), scenario, origins).file() ==
+        "model.yaml");
+}
