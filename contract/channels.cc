@@ -55,6 +55,11 @@ const ChannelSpec* find_channel(const std::string& name) {
   return nullptr;
 }
 
+bool due_in_sim_time(const std::string& name) {
+  const ChannelSpec* spec = find_channel(name);
+  return spec != nullptr && !spec->wall_clock && name != channels::kRigClock && name != channels::kStepAck;
+}
+
 bool single_publisher(const std::string& name) {
   const ChannelSpec* spec = find_channel(name);
   return spec != nullptr && spec->publishers.size() == 1 && spec->publishers[0].find("every") == std::string::npos;

@@ -51,6 +51,11 @@ const std::vector<ChannelSpec>& channel_table();
 /// The channel called `name`, or nullptr.
 const ChannelSpec* find_channel(const std::string& name);
 
+/// True if `name` is a stream the rig publishes at its simulated time (utime): in real time each
+/// message is due at t0 + utime (a motion-capture pose latency_us later), and can be late. Not
+/// the wall-clock channels, nor the lockstep clock's RIG_CLOCK and STEP_ACK.
+bool due_in_sim_time(const std::string& name);
+
 /// True if `name` has exactly one publishing process (its seq is one sequence).
 bool single_publisher(const std::string& name);
 

@@ -155,7 +155,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
   // A message is due at its utime; a pose is stamped at mid-exposure and due latency_us later.
   int64_t due_us = utime;
   if (channel == kMocapPose) due_us += pose.latency_us;
-  if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && channel != kRunControl) {
+  if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && contract::due_in_sim_time(channel)) {
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }

@@ -31,12 +31,6 @@ bool Bus::track_seq(int64_t seq, ChannelStats& stats) {
   return true;
 }
 
-bool Bus::due_in_sim_time(const std::string& channel) {
-  const contract::ChannelSpec* spec = contract::find_channel(channel);
-  return spec != nullptr && !spec->wall_clock && channel != contract::channels::kRigClock &&
-         channel != contract::channels::kStepAck;
-}
-
 void Bus::count_late(int64_t due_us, ChannelStats& stats) const {
   if (monotonic_ns() - (t0_ns_ + due_us * 1000) > late_threshold_ns_) ++stats.late;
 }

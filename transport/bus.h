@@ -102,7 +102,7 @@ class Bus {
     sub->channel = channel;
     sub->stats = &stats_[channel];
     sub->bus = this;
-    sub->stats->due_in_sim_time = due_in_sim_time(channel);
+    sub->stats->due_in_sim_time = contract::due_in_sim_time(channel);
     sub->stats->one_publisher = contract::single_publisher(channel);
     sub->decode_and_call = [this, handler](const void* data, int size, ChannelStats& stats,
                                      std::string& error) -> bool {
@@ -189,7 +189,6 @@ class Bus {
   /// Counts gaps in `seq` as drops. On a channel with one publisher, a seq that does not
   /// continue the sequence (contract::seq_continues) is refused: false, nothing counted.
   static bool track_seq(int64_t seq, ChannelStats& stats);
-  static bool due_in_sim_time(const std::string& channel);
   void count_late(int64_t due_us, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
   void refresh_channel_filter();
