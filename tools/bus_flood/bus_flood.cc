@@ -45,6 +45,11 @@ int64_t now_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
 }
 
+void sleep_until(int64_t t_ns) {
+  const timespec ts{static_cast<time_t>(t_ns / 1000000000LL), static_cast<long>(t_ns % 1000000000LL)};
+  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+}
+
 /// The 8-byte fingerprint of each channel's type, from an encoded default message.
 template <typename T>
 std::vector<unsigned char> fingerprint() {
@@ -129,15 +134,13 @@ int main(int argc, char** argv) {
   const int64_t start = now_ns(), end = start + static_cast<int64_t>(seconds * 1e9);
   if (burst > 0) {
     for (int64_t second = start; second < end; second += 1000000000LL) {
-      while (now_ns() < second) {
-      }
+      sleep_until(second);  // between bursts the flood sleeps: the load is the messages only
       for (long k = 0; k < burst; ++k, ++sent) send_one();
     }
   } else {
     const int64_t period = static_cast<int64_t>(1e9 / rate);
     for (int64_t next = start; next < end; next += period, ++sent) {
-      timespec ts{static_cast<time_t>(next / 1000000000LL), static_cast<long>(next % 1000000000LL)};
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+      sleep_until(next);
       send_one();
     }
   }
