@@ -89,7 +89,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
 
   if (channel == kHeartbeat) {
     heartbeat_t hb{};
-    if (take(hb, "")) heartbeat_[hb.process] = hb.state;
+    if (take(hb, "")) heartbeat_[hb.process] = Heartbeat{hb.state, hb.pid, hb.config_digest, recv_ns};
     return;
   }
   if (channel == kTimingHealth) {
@@ -220,7 +220,12 @@ EstimatorSummary RunMonitor::estimator() const {
 
 int RunMonitor::heartbeat_state(const std::string& process) const {
   const auto it = heartbeat_.find(process);
-  return it == heartbeat_.end() ? -1 : it->second;
+  return it == heartbeat_.end() ? -1 : it->second.state;
+}
+
+const RunMonitor::Heartbeat* RunMonitor::heartbeat(const std::string& process) const {
+  const auto it = heartbeat_.find(process);
+  return it == heartbeat_.end() ? nullptr : &it->second;
 }
 
 std::map<std::string, ChannelSummary> RunMonitor::channels(double sim_duration_s, double wall_duration_s) const {

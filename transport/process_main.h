@@ -5,6 +5,7 @@
 
 #include <exception>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include "core/config.h"
@@ -21,6 +22,14 @@ inline RealtimeSettings realtime_settings(const Scenario& scenario) {
   r.late_threshold_ns = run.late_threshold_us * 1000;
   r.channel_filter = run.channel_filter != 0;
   return r;
+}
+
+/// The node of a rig process: the scenario's real-time settings, its digest on every heartbeat,
+/// and its faults applied to what the process publishes.
+inline std::unique_ptr<ProcessNode> make_process_node(const Scenario& scenario, const NodeOptions& options) {
+  auto node = std::make_unique<ProcessNode>(options, realtime_settings(scenario), scenario_digest(scenario));
+  node->inject_faults(scenario.faults, scenario.seed);
+  return node;
 }
 
 /// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with
