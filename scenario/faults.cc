@@ -80,6 +80,7 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
     if (can) {
       if (!can_link) m.fail("target", "the CAN link is faulted only in a run with actuator_link: can");
     } else {
+
       const std::string publisher = publisher_of(f.target);
       if (std::find(processes.begin(), processes.end(), publisher) == processes.end()) {
         m.fail("target", f.target + " is published by the " + publisher + ", which this run does not start (processes: " +
@@ -112,6 +113,15 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
         f.probability = p.get_double("probability", Range{0.0, 1.0, true, false});
         break;
       default: break;
+    }
+    // Over the CAN link the bridge forwards one command per control cycle, and in lockstep its
+    // rig side waits for each: a command that is never published (or never decodes) would stall
+    // the run. Commands lost on the way are the link's fault.
+    const bool withholds = f.kind == FaultKind::kOff || f.kind == FaultKind::kSlow || f.kind == FaultKind::kDelayed ||
+                           f.kind == FaultKind::kIntermittent || (f.kind == FaultKind::kGarbage && !f.garbage_nan);
+    if (can_link && f.target == contract::channels::kActuatorCommand && withholds) {
+      m.fail("kind", "over actuator_link: can, commands that do not reach the bridge are a fault of the link: use "
+                     "target CAN (loss, corrupt, bus_off)");
     }
     if (!f.field.empty()) {
       const std::vector<std::string> names = contract::value_field_names(f.target);

@@ -241,6 +241,11 @@ TEST_CASE("faults section: a bad entry is refused before anything starts, named 
       {"[{target: IMU, kind: wrong, start_s: 1, params: {field: gps, bias: 1}}]", "no value field 'gps'"},
       {"[{target: CAN, kind: loss, start_s: 1, params: {probability: 0.1}}]", "actuator_link: can"},
   };
+  {
+    const RunResult r = fly("bad", "[{target: ACTUATOR_CMD, kind: off, start_s: 1}]", 3.0, "--set actuator_link=can");
+    CHECK(r.exit_code == kExitBadInput);
+    CHECK(r.output.find("use target CAN") != std::string::npos);
+  }
   for (const auto& c : cases) {
     INFO(c.faults);
     const RunResult r = fly("bad", c.faults);
@@ -312,4 +317,108 @@ TEST_CASE("external process: one started by hand with the run's scenario joins t
     CHECK(out.find("process 'controller'") != std::string::npos);
     CHECK(out.find("started with another scenario") != std::string::npos);
   }
+}
+
+TEST_CASE("watchdogs stay quiet in nominal flights: no divergence, stuck IMU or failsafe over 16 seeded runs",
+          "[fault]") {
+  // The false-alarm side of the watchdogs: flights without faults, in process (fast), two
+  // manoeuvres on the estimator times 8 seeds; the gate decisions are counted to show the
+  // filter's nominal rejection rate against the 0.001 the divergence threshold assumes.
+  int64_t accepted = 0, rejected = 0;
+  for (const std::string scenario : {"id_doublet_train_fast", "cl_doublet_train_slow"}) {
+    for (int seed = 1; seed <= 8; ++seed) {
+      const std::string dir = nimble::test::scratch_dir("faults_quiet");
+      const RunResult r = rig_run(kConfigs + scenario + ".yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
+      INFO(scenario << " seed " << seed << "\n" << r.output);
+      REQUIRE(r.summary);
+      CHECK(r.exit_code == kExitOk);
+      const std::vector<int> watchdog_codes = {fault_event_t::CODE_ESTIMATOR_DIVERGED, fault_event_t::CODE_SENSOR_STUCK,
+                                               fault_event_t::CODE_FAILSAFE, fault_event_t::CODE_INPUT_STALE};
+      for (const int code : watchdog_codes) {
+        CHECK(faults_with(r.summary, code).empty());
+      }
+      accepted += r.summary["estimator"]["poses_accepted"].as<int64_t>();
+      rejected += r.summary["estimator"]["poses_rejected"].as<int64_t>();
+    }
+  }
+  const double rate = static_cast<double>(rejected) / static_cast<double>(accepted + rejected);
+  std::printf("nominal gate rejections: %lld of %lld (%.2e; the divergence threshold assumes 1e-3)\n",
+              static_cast<long long>(rejected), static_cast<long long>(accepted + rejected), rate);
+  CHECK(accepted > 20000);  // 8 x (6 s + 9 s) at 200 Hz, less the frames the emulated tracking loses
+  CHECK(rate < 1e-3);
+}
+
+namespace {
+
+/// Flies hover over the CAN link in process (the bridge's code on an in-process frame bus) with
+/// `faults`.
+RunResult fly_can(const std::string& tag, const std::string& faults) {
+  const std::string dir = nimble::test::scratch_dir("faults_" + tag);
+  return rig_run(kConfigs + "hover.yaml", dir,
+                 "--clock inprocess --set duration_s=3 --set actuator_link=can --set 'faults=" + faults + "'");
+}
+
+}  // namespace
+
+TEST_CASE("fault CAN loss: frames lost with p = 0.2 lose whole commands as drops, the same in every run", "[fault]") {
+  const std::string faults = "[{target: CAN, kind: loss, start_s: 1.0, duration_s: 1.0, params: {probability: 0.2}}]";
+  const RunResult a = fly_can("can_loss_a", faults);
+  INFO(a.output);
+  REQUIRE(a.summary);
+  CHECK(a.exit_code == kExitOk);
+  check_announced(a.summary, "can_flight", "CAN");
+  // A command is two frames: 1 - 0.8^2 = 36 % of 512 commands lost, Binomial sd 11.
+  const int drops = a.summary["channels"][ch::kActuatorCommandCan]["drops"].as<int>();
+  CHECK(drops > 184 - 55);
+  CHECK(drops < 184 + 55);
+  CHECK(a.summary["channels"][ch::kActuatorCommand]["drops"].as<int>() == 0);  // the loss is the link's
+  CHECK(a.summary["controlled"].as<bool>());
+  const RunResult b = fly_can("can_loss_b", faults);
+  REQUIRE(b.summary);
+  CHECK(b.summary["channels"][ch::kActuatorCommandCan]["drops"].as<int>() == drops);
+  CHECK(nimble::test::differing(nimble::test::truth_payloads(dir_of("can_loss_a") + "/run.lcmlog"),
+                                nimble::test::truth_payloads(dir_of("can_loss_b") + "/run.lcmlog")) == 0);
+}
+
+TEST_CASE("fault CAN corrupt: a flipped bit fails the frame's CRC, both sides name it MESSAGE_MALFORMED", "[fault]") {
+  const RunResult r =
+      fly_can("can_corrupt", "[{target: CAN, kind: corrupt, start_s: 1.0, duration_s: 1.0, params: {probability: 0.1}}]");
+  INFO(r.output);
+  REQUIRE(r.summary);
+  CHECK(r.exit_code == kExitOk);
+  for (const std::string side : {"can_rig", "can_flight"}) {
+    const YAML::Node m = first_fault(r.summary, fault_event_t::CODE_MESSAGE_MALFORMED, side);
+    REQUIRE(m);
+    CHECK(m["message"].as<std::string>().find("bad_checksum") != std::string::npos);
+  }
+  // 1 - 0.9^2 = 19 % of 512 commands, sd 9.
+  const int drops = r.summary["channels"][ch::kActuatorCommandCan]["drops"].as<int>();
+  CHECK(drops > 97 - 45);
+  CHECK(drops < 97 + 45);
+  CHECK(r.summary["controlled"].as<bool>());
+}
+
+TEST_CASE("fault CAN bus_off: both controllers report bus-off, the plant holds its safe state and resumes after",
+          "[fault]") {
+  const RunResult r = fly_can("can_bus_off", "[{target: CAN, kind: bus_off, start_s: 1.0, duration_s: 0.3}]");
+  INFO(r.output);
+  REQUIRE(r.summary);
+  CHECK(r.exit_code == kExitOk);
+  for (const std::string side : {"can_rig", "can_flight"}) {
+    const YAML::Node e = first_fault(r.summary, fault_event_t::CODE_CAN_ERROR_FRAME, side);
+    REQUIRE(e);
+    CHECK(e["severity"].as<int>() == fault_event_t::SEVERITY_ERROR);
+    CHECK(e["message"].as<std::string>().find("bus-off") != std::string::npos);
+  }
+  // No command for command_timeout_s (0.1 s): the safe state at 1.1 s, left once commands resume.
+  std::vector<double> times;
+  for (const auto& f : faults_with(r.summary, fault_event_t::CODE_COMMAND_TIMEOUT)) times.push_back(f["rig_time_s"].as<double>());
+  REQUIRE(times.size() == 2);
+  CHECK(times[0] == Approx(1.1).margin(0.005));
+  CHECK(times[1] > 1.3);
+  CHECK(times[1] < 1.35);
+  // 0.3 s of commands, and the few after it whose counters look stale to the receiver.
+  const int drops = r.summary["channels"][ch::kActuatorCommandCan]["drops"].as<int>();
+  CHECK(drops >= 154);
+  CHECK(drops <= 154 + 8);
 }
