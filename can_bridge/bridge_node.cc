@@ -115,15 +115,21 @@ int64_t CanBridgeNode::rig_time_us() const {
 
 void CanBridgeNode::on_cycle(int64_t /*sim_time_ns*/) {
   ++cycles_due_;
-  if (role_ == Role::kRig && !link_faults_->empty()) {
-    // A command the link's faults destroy never comes: its cycle is acknowledged without it.
-    while (commands_crossed_ < cycles_due_ && shadow_next_ == commands_crossed_ &&
-           !command_will_arrive(commands_crossed_)) {
-      ++commands_crossed_;
-      ++commands_never_came_;
-    }
-  }
+  skip_lost_commands();
   if (commands_crossed_ < cycles_due_) node_->hold_ack();
+}
+
+void CanBridgeNode::skip_lost_commands() {
+  if (role_ != Role::kRig || link_faults_->empty()) return;
+  // A command the link's faults destroy never comes: its cycle is acknowledged without it. Asked
+  // for the next command owed, whether it is owed at this cycle or became the next at an arrival.
+  while (commands_crossed_ < cycles_due_) {
+    // The shadow decoder sees every command in order, also those that arrived before their cycle.
+    while (shadow_next_ <= commands_crossed_) shadow_arrives_ = command_will_arrive(shadow_next_);
+    if (shadow_arrives_) break;
+    ++commands_crossed_;
+    ++commands_never_came_;
+  }
 }
 
 bool CanBridgeNode::command_will_arrive(int64_t m) {
@@ -201,6 +207,7 @@ void CanBridgeNode::send_message(const std::array<can_frame, N>& frames, CanLink
 
 void CanBridgeNode::on_command_crossed() {
   ++commands_crossed_;
+  skip_lost_commands();
   if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
 }
 

@@ -116,11 +116,14 @@ class CanBridgeNode {
   int64_t command_messages_ = 0, feedback_messages_ = 0;
   int64_t frames_withheld_ = 0;      ///< frames a link fault lost or a bus-off kept back
   int64_t commands_never_came_ = 0;  ///< rig side, lockstep: cycles acknowledged without their command
-  /// Rig side, lockstep, with link faults: whether command message `m` (asked in order, once each)
+  /// Rig side, lockstep, with link faults: whether command message `m` (m = shadow_next_; asked in order, once each)
   /// will be decoded whole: the flight side's frame fates, then the decoder's counter rule on a
   /// shadow assembler (a long gap makes the next few counters look stale, and they are dropped).
   /// The controller numbers its commands' rolling counters m mod 16.
   bool command_will_arrive(int64_t m);
+  /// Rig side, lockstep, with link faults: counts as crossed the owed commands that will never arrive.
+  void skip_lost_commands();
+  bool shadow_arrives_ = true;  ///< command_will_arrive() of the command shadow_next_ - 1
   FrameAssembler shadow_assembler_{kCommandFrames.size()};
   DecodeStats shadow_stats_;
   int64_t shadow_next_ = 0;

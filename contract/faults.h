@@ -66,6 +66,9 @@ struct FaultSpec {
   std::string describe() const;
 };
 
+/// The name of a fault_event_t code without its prefix ("MESSAGE_MALFORMED"); "code N" if unknown.
+std::string fault_code_name(int32_t code);
+
 /// The value fields of a message that faults may change (wrong, garbage nan): physical
 /// quantities only, never utime, seq, counters or flags. Name and address of each element.
 using ValueFields = std::vector<std::pair<std::string, double*>>;

@@ -473,6 +473,8 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   const std::string head = dir + "/head.candump";
   REQUIRE(run("head -n 600 " + candump + " > " + head) == 0);
   CanSocketOptions opts = receive_all();
+  // Room for all 600 frames: a reader thread starved by a loaded host must not lose any.
+  opts.receive_buffer_bytes = 1 << 20;
   CanSocket listener = CanSocket::open(kIf, opts);
   std::vector<can_frame> replayed;
   std::atomic<bool> done{false};
@@ -662,10 +664,16 @@ TEST_CASE("faults of the CAN link over vcan0 in lockstep: the frames lost and th
       "params: {probability: 0.2}}, {target: CAN, kind: bus_off, start_s: 1.2, duration_s: 0.2}]'";
   const RunResult over_vcan = rig_run(scenario, dir + "/vcan", "--clock lockstep " + common);
   INFO(over_vcan.output);
-  REQUIRE(over_vcan.exit_code == 0);
+  // 0.2 s of safe-state hold in the middle of the doublets: the vehicle may well be lost (exit 1);
+  // what matters is that both runs agree.
+  REQUIRE(over_vcan.summary);
+  CHECK((over_vcan.exit_code == 0 || over_vcan.exit_code == 1));
   const RunResult in_process = rig_run(scenario, dir + "/inprocess", "--clock inprocess " + common);
   INFO(in_process.output);
-  REQUIRE(in_process.exit_code == 0);
+  REQUIRE(in_process.summary);
+  CHECK(in_process.exit_code == over_vcan.exit_code);
+  CHECK(in_process.summary["sim_time_s"].as<double>() == Approx(2.0).margin(0.002));
+  CHECK(over_vcan.summary["sim_time_s"].as<double>() == Approx(2.0).margin(0.002));
   const int drops = over_vcan.summary["channels"][kActuatorCommandCan]["drops"].as<int>();
   CHECK(drops > 0.2 * 1024 * 0.36 + 100);  // the loss window and the 0.2 s bus-off (102 commands)
   CHECK(drops == in_process.summary["channels"][kActuatorCommandCan]["drops"].as<int>());

@@ -2,6 +2,8 @@
 // (scenario/faults.h) and the estimator's divergence monitor (estimator/divergence_monitor.h).
 
 #include <cmath>
+#include <fstream>
+#include <regex>
 #include <limits>
 #include <random>
 #include <string>
@@ -236,4 +238,20 @@ TEST_CASE("divergence monitor: no alarm on a consistent filter over many seeds a
   int n = 0;
   while (!m.add(true)) ++n;
   CHECK(n + 1 == 5);
+}
+
+TEST_CASE("fault code names: every CODE_ constant of fault_event_t.lcm has its name", "[fault_injector]") {
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/lcmtypes/fault_event_t.lcm");
+  REQUIRE(in.good());
+  const std::regex constant(R"(const\s+int32_t\s+CODE_(\w+)\s*=\s*(\d+)\s*;)");
+  std::string line;
+  int checked = 0;
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (!std::regex_search(line, m, constant)) continue;
+    CHECK(nimble::contract::fault_code_name(std::stoi(m[2])) == m[1].str());
+    ++checked;
+  }
+  CHECK(checked >= 19);
+  CHECK(nimble::contract::fault_code_name(999) == "code 999");
 }
