@@ -90,7 +90,7 @@ std::string dir_of(const std::string& tag) { return nimble::test::scratch_path("
 
 }  // namespace
 
-TEST_CASE("fault off: ESTIMATE stops at 1 s, the controller takes its failsafe 50 ms later", "[fault]") {
+TEST_CASE("off: ESTIMATE stops at 1 s, the controller takes its failsafe 50 ms later", "[fault]") {
   const RunResult r = fly("off_estimate", "[{target: ESTIMATE, kind: off, start_s: 1.0}]");
   INFO(r.output);
   REQUIRE(r.summary);
@@ -107,7 +107,7 @@ TEST_CASE("fault off: ESTIMATE stops at 1 s, the controller takes its failsafe 5
   CHECK(failsafe_time_s(dir_of("off_estimate") + "/run.lcmlog") == Approx(1.05).margin(0.01));
 }
 
-TEST_CASE("fault off: ACTUATOR_CMD stops for 0.3 s, the plant holds its safe state on COMMAND_TIMEOUT", "[fault]") {
+TEST_CASE("off: ACTUATOR_CMD stops for 0.3 s, the plant holds its safe state on COMMAND_TIMEOUT", "[fault]") {
   const RunResult r =
       fly("off_cmd", "[{target: ACTUATOR_CMD, kind: off, start_s: 1.0, duration_s: 0.3}]");
   INFO(r.output);
@@ -121,7 +121,7 @@ TEST_CASE("fault off: ACTUATOR_CMD stops for 0.3 s, the plant holds its safe sta
   CHECK(faults_with(r.summary, fault_event_t::CODE_FAILSAFE).empty());
 }
 
-TEST_CASE("fault stuck: a frozen IMU is named SENSOR_STUCK by the estimator, and the controller takes its failsafe",
+TEST_CASE("stuck: a frozen IMU is named SENSOR_STUCK by the estimator, and the controller takes its failsafe",
           "[fault]") {
   const RunResult r = fly("stuck_imu", "[{target: IMU, kind: stuck, start_s: 1.0}]");
   INFO(r.output);
@@ -138,7 +138,7 @@ TEST_CASE("fault stuck: a frozen IMU is named SENSOR_STUCK by the estimator, and
   CHECK(failsafe["rig_time_s"].as<double>() > stuck["rig_time_s"].as<double>());
 }
 
-TEST_CASE("fault garbage: malformed MOCAP_POSE bytes are counted and left out, the run flies on", "[fault]") {
+TEST_CASE("garbage: malformed MOCAP_POSE bytes are counted and left out, the run flies on", "[fault]") {
   const RunResult r = fly("garbage_bytes", "[{target: MOCAP_POSE, kind: garbage, start_s: 1.0, duration_s: 0.5}]");
   INFO(r.output);
   REQUIRE(r.summary);
@@ -152,7 +152,7 @@ TEST_CASE("fault garbage: malformed MOCAP_POSE bytes are counted and left out, t
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("fault garbage nan: non-finite poses are refused by the estimator as malformed, the run flies on",
+TEST_CASE("garbage nan: non-finite poses are refused by the estimator as malformed, the run flies on",
           "[fault]") {
   const RunResult r = fly("garbage_nan",
                           "[{target: MOCAP_POSE, kind: garbage, start_s: 1.0, duration_s: 0.5, params: {mode: nan}}]");
@@ -166,7 +166,7 @@ TEST_CASE("fault garbage nan: non-finite poses are refused by the estimator as m
   CHECK(std::isfinite(r.summary["estimator"]["phi_rms_deg"].as<double>()));
 }
 
-TEST_CASE("fault wrong: a 23 deg roll bias on the motion capture makes the estimator declare ESTIMATOR_DIVERGED",
+TEST_CASE("wrong: a 23 deg roll bias on the motion capture makes the estimator declare ESTIMATOR_DIVERGED",
           "[fault]") {
   // quaternion x + 0.2: about 23 deg of roll; every attitude innovation fails the gate.
   const RunResult r = fly("wrong_pose", "[{target: MOCAP_POSE, kind: wrong, start_s: 1.0, params: "
@@ -182,7 +182,7 @@ TEST_CASE("fault wrong: a 23 deg roll bias on the motion capture makes the estim
   CHECK(first_fault(r.summary, fault_event_t::CODE_FAILSAFE, "controller"));
 }
 
-TEST_CASE("fault slow: MOCAP_POSE at a quarter of its rate arrives without gaps and the run flies on", "[fault]") {
+TEST_CASE("slow: MOCAP_POSE at a quarter of its rate arrives without gaps and the run flies on", "[fault]") {
   const RunResult r = fly("slow_pose", "[{target: MOCAP_POSE, kind: slow, start_s: 1.0, params: {divisor: 4}}]");
   INFO(r.output);
   REQUIRE(r.summary);
@@ -194,7 +194,7 @@ TEST_CASE("fault slow: MOCAP_POSE at a quarter of its rate arrives without gaps 
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("fault delayed: MOCAP_POSE 150 ms late is outside the EKF's window: MEASUREMENT_OUT_OF_WINDOW", "[fault]") {
+TEST_CASE("delayed: MOCAP_POSE 150 ms late is outside the EKF's window: MEASUREMENT_OUT_OF_WINDOW", "[fault]") {
   const RunResult r = fly("delayed_pose",
                           "[{target: MOCAP_POSE, kind: delayed, start_s: 1.0, duration_s: 1.0, params: {delay_ms: 150}}]");
   INFO(r.output);
@@ -208,7 +208,7 @@ TEST_CASE("fault delayed: MOCAP_POSE 150 ms late is outside the EKF's window: ME
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("fault intermittent: ACTUATOR_CMD lost 30 % of the time shows as drops, the same in every run", "[fault]") {
+TEST_CASE("intermittent: ACTUATOR_CMD lost 30 % of the time shows as drops, the same in every run", "[fault]") {
   const std::string faults =
       "[{target: ACTUATOR_CMD, kind: intermittent, start_s: 1.0, duration_s: 1.0, params: {probability: 0.3}}]";
   const RunResult a = fly("intermittent_a", faults);
@@ -360,7 +360,7 @@ RunResult fly_can(const std::string& tag, const std::string& faults) {
 
 }  // namespace
 
-TEST_CASE("fault CAN loss: frames lost with p = 0.2 lose whole commands as drops, the same in every run", "[fault]") {
+TEST_CASE("CAN loss: frames lost with p = 0.2 lose whole commands as drops, the same in every run", "[fault]") {
   const std::string faults = "[{target: CAN, kind: loss, start_s: 1.0, duration_s: 1.0, params: {probability: 0.2}}]";
   const RunResult a = fly_can("can_loss_a", faults);
   INFO(a.output);
@@ -380,7 +380,7 @@ TEST_CASE("fault CAN loss: frames lost with p = 0.2 lose whole commands as drops
                                 nimble::test::truth_payloads(dir_of("can_loss_b") + "/run.lcmlog")) == 0);
 }
 
-TEST_CASE("fault CAN corrupt: a flipped bit fails the frame's CRC, both sides name it MESSAGE_MALFORMED", "[fault]") {
+TEST_CASE("CAN corrupt: a flipped bit fails the frame's CRC, both sides name it MESSAGE_MALFORMED", "[fault]") {
   const RunResult r =
       fly_can("can_corrupt", "[{target: CAN, kind: corrupt, start_s: 1.0, duration_s: 1.0, params: {probability: 0.1}}]");
   INFO(r.output);
@@ -398,7 +398,7 @@ TEST_CASE("fault CAN corrupt: a flipped bit fails the frame's CRC, both sides na
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("fault CAN bus_off: both controllers report bus-off, the plant holds its safe state and resumes after",
+TEST_CASE("CAN bus_off: both controllers report bus-off, the plant holds its safe state and resumes after",
           "[fault]") {
   const RunResult r = fly_can("can_bus_off", "[{target: CAN, kind: bus_off, start_s: 1.0, duration_s: 0.3}]");
   INFO(r.output);
