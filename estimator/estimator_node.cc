@@ -45,7 +45,8 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     const MocapPose p = contract::from_message(m);
     if (!p.position_ned_m.allFinite() || !p.q_body_to_ned.coeffs().allFinite()) {
       node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
-                   "motion-capture frame " + std::to_string(p.frame_number) + " has non-finite values: not used");
+                   "motion-capture frame " + std::to_string(p.frame_number) + " has non-finite values: not used",
+                   p.publish_utime);
       return;
     }
     if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
@@ -61,7 +62,7 @@ int EstimatorNode::run() { return node_->run(); }
 bool EstimatorNode::imu_usable(const ImuSample& sample) {
   if (!sample.gyro_radps.allFinite() || !sample.accel_mps2.allFinite()) {
     node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kImu,
-                 "IMU sample at " + std::to_string(sample.utime) + " us has non-finite values: not used");
+                 "IMU sample at " + std::to_string(sample.utime) + " us has non-finite values: not used", sample.utime);
     return false;
   }
   if (!stuck_check_) return true;
@@ -71,13 +72,14 @@ bool EstimatorNode::imu_usable(const ImuSample& sample) {
   if (!same && imu_stuck_) {
     imu_stuck_ = false;
     node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_SENSOR_STUCK, contract::channels::kImu,
-                 "IMU values change again at " + std::to_string(sample.utime) + " us: samples used again");
+                 "IMU values change again at " + std::to_string(sample.utime) + " us: samples used again", sample.utime);
   }
   if (imu_repeats_ + 1 >= kImuStuckSamples && !imu_stuck_) {
     imu_stuck_ = true;
     node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_SENSOR_STUCK, contract::channels::kImu,
                  "IMU stuck: " + std::to_string(kImuStuckSamples) + " bit-identical samples up to " +
-                     std::to_string(sample.utime) + " us, impossible with its configured noise; samples not used");
+                     std::to_string(sample.utime) + " us, impossible with its configured noise; samples not used",
+                 sample.utime);
   }
   return !imu_stuck_;
 }
@@ -117,7 +119,7 @@ void EstimatorNode::watch_divergence() {
       << kDivergenceFalseAlarm << "; last NIS " << std::setprecision(1) << ekf_->last_nis()
       << "); no more estimates are published";
   node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_ESTIMATOR_DIVERGED, contract::channels::kEstimate,
-               msg.str());
+               msg.str(), ekf_->utime());
 }
 
 void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status) {
@@ -137,7 +139,7 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
         << " so far); the IMU stream is late or the two clocks differ";
   }
   node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW,
-               contract::channels::kMocapPose, msg.str());
+               contract::channels::kMocapPose, msg.str(), now);
 }
 
 void EstimatorNode::tick(int64_t sim_time_ns) {

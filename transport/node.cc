@@ -177,7 +177,8 @@ int ProcessNode::wait_io(int64_t timeout_ns) {
   return n;
 }
 
-void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message) {
+void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message,
+                        int64_t rig_utime_us) {
   const int64_t second = monotonic_ns() / 1000000000LL;
   auto& [sec, count] = fault_budget_[code];
   if (sec != second) {
@@ -188,7 +189,7 @@ void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channe
   fault_event_t f;
   f.utime = wall_us();
   f.seq = fault_seq_++;
-  f.rig_utime = sim_time_ns_ / 1000;
+  f.rig_utime = rig_utime_us >= 0 ? rig_utime_us : sim_time_ns_ / 1000;
   f.process = name_;
   f.severity = severity;
   f.code = code;
@@ -206,7 +207,7 @@ void ProcessNode::inject_faults(const std::vector<contract::FaultSpec>& faults, 
         char when[48];
         std::snprintf(when, sizeof when, " at t = %.3f s", 1e-6 * static_cast<double>(utime));
         fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_FAULT_INJECTED, f.target,
-              "injected " + f.describe() + (began ? " began" : " ended") + when);
+              "injected " + f.describe() + (began ? " began" : " ended") + when, utime);
       }));
 }
 

@@ -160,7 +160,9 @@ class ProcessNode {
   void inject_faults(const std::vector<contract::FaultSpec>& faults, uint64_t seed);
 
   /// Publishes a fault event (rate-limited to 10 per second per code). Never throws.
-  void fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message);
+  /// `rig_utime_us` (>= 0) stamps it at that rig time instead of the current task's.
+  void fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message,
+             int64_t rig_utime_us = -1);
 
   /// Real time: CLOCK_MONOTONIC time of simulated time 0 [ns] (valid once started).
   int64_t t0_monotonic_ns() const { return t0_ns_; }
