@@ -3,7 +3,8 @@
 #   rig_add_lcm_types(<target>
 #                     PACKAGE <pkg>
 #                     FILES <file.lcm>...
-#                     [JAR <jar_target> [JAR_NAME <name>]])
+#                     [JAR <jar_target> [JAR_NAME <name>]]
+#                     [PYTHON <python_target>])
 #
 # Each .lcm file must hold exactly one struct, named like the file (foo_t.lcm -> struct foo_t),
 # declared in `package <pkg>;`. This is checked at configure time.
@@ -18,7 +19,12 @@
 #   is built by ALL; its JAR_FILE property holds the jar path. Requires a JDK (javac, jar) and
 #   LCM's lcm.jar (cache variable LCM_JAVA_JAR).
 #
-# Both steps delete their output directory before generating, so removed or renamed types never
+# Python (only with PYTHON): `lcm-gen --python` runs at build time into
+#   ${PROJECT_BINARY_DIR}/python/<pkg>/ (one module per type and an __init__.py importing them;
+#   the generated modules need only the standard library). <python_target> is built by ALL; its
+#   PYTHON_DIR property holds ${PROJECT_BINARY_DIR}/python.
+#
+# Every step deletes its output directory before generating, so removed or renamed types never
 # leave stale files behind, and re-running gives the same result.
 #
 # Requires PkgConfig::LCM (pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)) to exist.
@@ -32,7 +38,7 @@ if(NOT LCM_GEN_EXECUTABLE)
 endif()
 
 function(rig_add_lcm_types target)
-  cmake_parse_arguments(PARSE_ARGV 1 ARG "" "PACKAGE;JAR;JAR_NAME" "FILES")
+  cmake_parse_arguments(PARSE_ARGV 1 ARG "" "PACKAGE;JAR;JAR_NAME;PYTHON" "FILES")
   if(ARG_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "rig_add_lcm_types(${target}): unknown arguments: ${ARG_UNPARSED_ARGUMENTS}")
   endif()
@@ -113,6 +119,25 @@ function(rig_add_lcm_types target)
   # may read a decoded array field before that write (seen at -O2: a value-initialised
   # message decoded to zeros). Every consumer of the types compiles without it.
   target_compile_options(${target} INTERFACE -fno-strict-aliasing)
+
+  # --- Python --------------------------------------------------------------------------------
+  if(ARG_PYTHON)
+    set(py_root "${PROJECT_BINARY_DIR}/python")
+    set(py_files "${py_root}/${pkg_dir}/__init__.py")
+    foreach(type IN LISTS types)
+      list(APPEND py_files "${py_root}/${pkg_dir}/${type}.py")
+    endforeach()
+    add_custom_command(
+      OUTPUT ${py_files}
+      COMMAND "${CMAKE_COMMAND}" -E rm -rf "${py_root}/${pkg_dir}"
+      COMMAND "${CMAKE_COMMAND}" -E make_directory "${py_root}"
+      COMMAND "${LCM_GEN_EXECUTABLE}" --python --ppath "${py_root}" ${lcm_files}
+      DEPENDS ${lcm_files} "${LCM_GEN_EXECUTABLE}"
+      COMMENT "lcm-gen (Python): ${ARG_PACKAGE} types in ${py_root}"
+      VERBATIM)
+    add_custom_target(${ARG_PYTHON} ALL DEPENDS ${py_files})
+    set_target_properties(${ARG_PYTHON} PROPERTIES PYTHON_DIR "${py_root}")
+  endif()
 
   if(NOT ARG_JAR)
     return()

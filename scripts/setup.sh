@@ -14,7 +14,8 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # Catch2, a JDK for the type jar,
 # gnuplot for identification plots, and for real SocketCAN tests: can-utils, iproute2,
 # and qemu with xz (tools/canvm/canvm boots Debian's kernel when the host has no vcan);
-# python3 for the check that every CTest entry runs one test case (tests/meta);
+# python3 for the check that every CTest entry runs one test case (tests/meta), python3-numpy for
+# the Python log reader (python/nimble_rig);
 # Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests.
 PACKAGES=(
   g++ make cmake pkg-config
@@ -23,7 +24,7 @@ PACKAGES=(
   default-jdk-headless
   gnuplot-nox
   can-utils iproute2 qemu-system-x86 xz-utils
-  python3
+  python3 python3-numpy
 )
 
 missing=()

@@ -1,0 +1,143 @@
+"""Reader of LCM log files (lcm-logger's format) into numpy arrays per channel.
+
+An LCM log is a sequence of events, each
+    sync word 0xEDA1DA01 (uint32, big-endian), event number (int64), timestamp [us] (int64),
+    channel length (int32), data length (int32), channel (UTF-8), data.
+Each message's first 8 bytes are its type's fingerprint, which names the nimble type that
+decodes it. A damaged log (a wrong sync word, a truncated event) is an error that names the
+file, the byte offset and the event number; salvage=True keeps what precedes the damage.
+"""
+
+import struct
+
+import numpy as np
+
+import nimble
+
+_SYNC = 0xEDA1DA01
+_HEADER = struct.Struct(">IqqII")
+_MAX_CHANNEL = 256
+
+
+class LogError(Exception):
+    """A log that cannot be read to its end (damaged or truncated), or not an LCM log at all."""
+
+
+def _types_by_fingerprint():
+    found = {}
+    for name in dir(nimble):
+        cls = getattr(nimble, name)
+        if isinstance(cls, type) and hasattr(cls, "_get_packed_fingerprint"):
+            found[cls._get_packed_fingerprint()] = cls
+    return found
+
+
+def _columns(messages):
+    """Field name -> numpy array over the messages (fixed-size numeric fields as 2-D arrays)."""
+    out = {}
+    for field in messages[0].__slots__:
+        values = [getattr(m, field) for m in messages]
+        first = values[0]
+        if isinstance(first, (bool, int, float)):
+            out[field] = np.asarray(values)
+        elif isinstance(first, (list, tuple)) and all(isinstance(v, (list, tuple)) and len(v) == len(first)
+                                                      for v in values) and \
+                all(isinstance(x, (bool, int, float)) for x in first):
+            out[field] = np.asarray(values)
+        else:
+            out[field] = np.asarray(values, dtype=object)
+    return out
+
+
+class RigLog:
+    """The messages of one log, decoded and grouped by channel.
+
+    log[channel] is a dict of numpy arrays: every field of the channel's type, plus
+    "log_utime", the event's timestamp in the log [us] (wall clock of the recording for a
+    real-time run, simulated time for a lockstep or in-process run).
+    """
+
+    def __init__(self, path, channels, undecoded, events, damage):
+        self.path = path
+        self._channels = channels
+        #: channel -> number of messages of no nimble type (or that did not decode)
+        self.undecoded = undecoded
+        #: number of events read
+        self.events = events
+        #: None, or what was wrong where (with salvage=True)
+        self.damage = damage
+
+    def channels(self):
+        return sorted(self._channels)
+
+    def __contains__(self, channel):
+        return channel in self._channels
+
+    def __getitem__(self, channel):
+        if channel not in self._channels:
+            raise KeyError("no decodable message on channel %r in %s (channels: %s)"
+                           % (channel, self.path, ", ".join(self.channels())))
+        return self._channels[channel]
+
+    def __repr__(self):
+        counts = ", ".join("%s: %d" % (c, len(v["log_utime"])) for c, v in sorted(self._channels.items()))
+        return "RigLog(%r, %d events; %s)" % (self.path, self.events, counts)
+
+
+def read_log(path, channels=None, salvage=False):
+    """Reads the LCM log at `path`; `channels` (a collection of names) keeps only those.
+
+    Raises LogError naming the byte offset and event number of any damage, unless `salvage`,
+    which keeps the events before it and records what was wrong in RigLog.damage.
+    """
+    types = _types_by_fingerprint()
+    with open(path, "rb") as f:
+        data = f.read()
+    offset, events, damage = 0, 0, None
+    messages, stamps, undecoded = {}, {}, {}
+    while offset < len(data):
+        problem = None
+        if len(data) - offset < _HEADER.size:
+            problem = "a truncated event header (%d bytes left)" % (len(data) - offset)
+        else:
+            sync, _number, utime, channel_len, data_len = _HEADER.unpack_from(data, offset)
+            if sync != _SYNC:
+                problem = "no sync word (0x%08X instead of 0xEDA1DA01)" % sync
+            elif channel_len == 0 or channel_len > _MAX_CHANNEL:
+                problem = "a channel name of %d bytes" % channel_len
+            elif offset + _HEADER.size + channel_len + data_len > len(data):
+                problem = "a truncated event (%d bytes announced, %d left)" % (
+                    channel_len + data_len, len(data) - offset - _HEADER.size)
+        if problem is not None:
+            message = "%s: damaged at byte %d (event %d): %s" % (path, offset, events, problem)
+            if not salvage:
+                raise LogError(message + "; read_log(..., salvage=True) keeps the events before it")
+            damage = message
+            break
+        start = offset + _HEADER.size
+        channel = data[start:start + channel_len].decode("utf-8", "replace")
+        payload = data[start + channel_len:start + channel_len + data_len]
+        offset = start + channel_len + data_len
+        events += 1
+        if channels is not None and channel not in channels:
+            continue
+        cls = types.get(payload[:8])
+        msg = None
+        if cls is not None:
+            try:
+                msg = cls.decode(payload)
+            except Exception:  # a malformed payload is counted, like the rig's own readers do
+                msg = None
+        if msg is None:
+            undecoded[channel] = undecoded.get(channel, 0) + 1
+            continue
+        messages.setdefault(channel, []).append(msg)
+        stamps.setdefault(channel, []).append(utime)
+    if events == 0 and damage is None and len(data) > 0:
+        raise LogError("%s: not an LCM log" % path)
+    decoded = {}
+    for channel, msgs in messages.items():
+        columns = _columns(msgs)
+        columns["log_utime"] = np.asarray(stamps[channel], dtype=np.int64)
+        decoded[channel] = columns
+    return RigLog(path, decoded, undecoded, events, damage)
