@@ -27,9 +27,10 @@ namespace nimble::cli {
 namespace {
 
 constexpr const char* kIdentifyUsage =
-    "usage: rig identify <data.csv> [options]\n"
+    "usage: rig identify <data.csv|log.lcmlog> [options]\n"
     "  Identifies the dimensional stability and control derivatives of the lateral\n"
-    "  model from CSV flight data (equation error, thesis Section IV), prints the\n"
+    "  model from flight data, a CSV file or a rig log (read by its content; equation\n"
+    "  error, thesis Section IV), prints the\n"
     "  parameters with their standard deviations, flagged correlations, accuracy\n"
     "  metrics, residual whiteness, eigenvalues and modes, and state PSDs.\n"
     "  --structure lateral3|lateral4  model structure (default lateral3)\n"
@@ -52,7 +53,7 @@ constexpr const char* kIdentifyUsage =
     "  --plots DIR                    PNG plots via gnuplot (Debian package gnuplot-nox)\n";
 
 constexpr const char* kValidateUsage =
-    "usage: rig validate <model.yaml> <data.csv> [options]\n"
+    "usage: rig validate <model.yaml> <data.csv|log.lcmlog> [options]\n"
     "  Open-loop validation: the state derivatives predicted by the model from the\n"
     "  measured states and inputs against the measured ones (thesis Tables 7-8).\n"
     "  --vehicle FILE   use this vehicle instead of the model's\n"
@@ -441,12 +442,15 @@ int run_validate_command(const std::vector<std::string>& args) {
 namespace {
 
 constexpr const char* kExportUsage =
-    "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth] [--salvage]\n"
+    "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--interpolation cubic|linear]\n"
+    "                  [--states auto|estimate|truth] [--salvage] [--json FILE|-]\n"
     "  Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
     "  resampled onto one grid (default 512 Hz, cubic interpolation). States come from the estimator\n"
     "  (ESTIMATE) when the log has it, else from the plant's truth; inputs from ACTUATOR_FB;\n"
     "  phi_sp from ATTITUDE_SP. A damaged log is an error naming the byte offset and the event;\n"
-    "  --salvage reads the events before the damage and says how much was left.\n";
+    "  --salvage reads the events before the damage and says how much was left.\n"
+    "  --json writes what was exported (samples, rate, columns, state source, damage) as JSON;\n"
+    "  '-' writes it to stdout.\n";
 
 }  // namespace
 
@@ -455,12 +459,23 @@ int run_export_command(const std::vector<std::string>& args) {
   double rate_hz = 512.0;
   ident::StateSource source = ident::StateSource::kAuto;
   ident::LogReadOptions log_options;
+  ident::Interpolation interpolation = ident::Interpolation::kCubic;
+  std::string json;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--help" || a == "-h") {
       std::cout << kExportUsage;
       return 0;
+    } else if (a == "--json" && has_value) {
+      json = args[++i];
+    } else if (a == "--interpolation" && has_value) {
+      const std::string v = args[++i];
+      if (v != "cubic" && v != "linear") {
+        std::cerr << "rig export: --interpolation must be cubic or linear, got '" << v << "'\n";
+        return kExitUsage;
+      }
+      interpolation = ident::interpolation_from_string(v);
     } else if (a == "--csv" && has_value) {
       csv = args[++i];
     } else if (a == "--rate" && has_value) {
@@ -495,7 +510,7 @@ int run_export_command(const std::vector<std::string>& args) {
   }
   const ident::RigLogData data = ident::read_rig_log(log, source, log_options);
   warn_damage("rig export", log, data.damage);
-  const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz);
+  const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz, interpolation);
   ident::FlightData out;
   out.source = log;
   const std::vector<double> t(grid.t_s.data(), grid.t_s.data() + grid.t_s.size());
@@ -504,8 +519,20 @@ int run_export_command(const std::vector<std::string>& args) {
     out.channels[name] = ident::Channel{t, std::vector<double>(values.data(), values.data() + values.size())};
   }
   ident::write_flight_csv(out, csv);
-  std::cout << "rig export: " << grid.size() << " samples at " << rate_hz << " Hz (states from " << data.state_source
-            << ") -> " << csv << "\n";
+  (json == "-" ? std::cerr : std::cout) << "rig export: " << grid.size() << " samples at " << rate_hz
+                                        << " Hz (states from " << data.state_source << ") -> " << csv << "\n";
+  if (!json.empty()) {
+    JsonWriter w;
+    w.begin_object();
+    w.key("log").value(log).key("csv").value(csv).key("samples").value(static_cast<long long>(grid.size()));
+    w.key("rate_hz").value(rate_hz).key("interpolation").value(ident::to_string(interpolation));
+    w.key("state_source").value(data.state_source).key("damage").value(data.damage);
+    w.key("columns").begin_array();
+    for (const auto& [name, channel] : out.channels) w.value(name);
+    w.end_array();
+    w.end_object();
+    write_json(json, w.str());
+  }
   return 0;
 }
 

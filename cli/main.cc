@@ -19,23 +19,23 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
-    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]   fly a scenario",
+    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F|-] [--set k=v] [--seed N]   fly a scenario",
      nimble::cli::run_run_command},
-    {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]   Monte Carlo campaign",
+    {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F|-] [--csv F]   Monte Carlo campaign",
      nimble::cli::run_sweep_command},
     {"params", "params [SECTION]                                   parameters: default, range, unit, meaning",
      nimble::cli::run_params_command},
-    {"check", "check                                              can this host run LCM multicast?",
+    {"check", "check [--json F|-]                                 can this host run LCM multicast?",
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",
      nimble::cli::run_spy_command},
-    {"identify", "identify <data.csv> [--structure lateral3|lateral4] [--method ols|wls] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
+    {"identify", "identify <data.csv|log.lcmlog> [--structure lateral3|lateral4] [--method ols|wls] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
      nimble::cli::run_identify_command},
-    {"validate", "validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
+    {"validate", "validate <model.yaml> <data.csv|log.lcmlog> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
      nimble::cli::run_validate_command},
     {"discrepancy", "discrepancy <data> --model <model.yaml> [--json F] [--model-out F] ...   name the effect the model misses",
      nimble::cli::run_discrepancy_command},
-    {"export", "export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]   a rig log as identification CSV",
+    {"export", "export <log.lcmlog> --csv <out.csv> [--rate HZ] [--interpolation cubic|linear] [--states auto|estimate|truth] [--json F|-]   a rig log as identification CSV",
      nimble::cli::run_export_command},
     {"turbulence", "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence practical",
      nimble::cli::run_turbulence_command},
@@ -44,7 +44,7 @@ const Command kCommands[] = {
 };
 
 void print_usage(std::ostream& out) {
-  out << "usage: rig <command> [args]\n\ncommands:\n";
+  out << "usage: rig <command> [args]   (rig --version: the version)\n\ncommands:\n";
   for (const auto& c : kCommands) out << "  " << c.synopsis << "\n";
   out << "\n'rig <command> --help' describes one command.\n";
 }
@@ -59,6 +59,10 @@ int main(int argc, char** argv) {
   const std::string name = argv[1];
   if (name == "help" || name == "--help" || name == "-h") {
     print_usage(std::cout);
+    return 0;
+  }
+  if (name == "--version" || name == "version") {
+    std::cout << "rig " << NIMBLE_RIG_VERSION << " (Delfly Nimble lateral-dynamics rig)\n";
     return 0;
   }
   const std::vector<std::string> args(argv + 2, argv + argc);

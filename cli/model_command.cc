@@ -17,7 +17,7 @@ namespace nimble::cli {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]\n"
+    "usage: rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json [-]]\n"
     "  Builds A and B of the model's structure from its derivatives and vehicle,\n"
     "  prints eigenvalues, the mode table and the non-dimensional eigenvectors.\n"
     "  --vehicle FILE  use this vehicle instead of the one the model file names\n"
@@ -39,6 +39,8 @@ Options parse(const std::vector<std::string>& args) {
     const std::string& a = args[i];
     if (a == "--json") {
       o.json = true;
+      // As every command: --json - is stdout (where this command writes its JSON anyway).
+      if (i + 1 < args.size() && args[i + 1] == "-") ++i;
     } else if (a == "--vehicle") {
       if (i + 1 >= args.size()) throw UsageError("--vehicle needs a file");
       o.vehicle_file = args[++i];

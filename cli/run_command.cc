@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <sched.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cctype>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -28,13 +30,48 @@ constexpr const char* kRunUsage =
     "  transport (same log, same truth as lockstep). Real time is judged from what each\n"
     "  process reports: more than summary.max_late_fraction of a channel late or\n"
     "  summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.\n"
-    "  Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed or the run\n"
-    "  stalled, 4 real-time degraded (only with --strict-timing), 130 interrupted.\n";
+    "  --clock C          realtime (default of most scenarios), lockstep or inprocess\n"
+    "  --log FILE         the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved\n"
+    "                     scenario and each process's output are written next to it\n"
+    "  --json FILE        the summary as JSON; '-' writes it to stdout (the text summary then\n"
+    "                     goes to stderr)\n"
+    "  --set key.path=v   override one scenario value, parsed as YAML: --set duration_s=3,\n"
+    "                     --set processes=[plant,controller], --set 'faults=[{target: IMU,\n"
+    "                     kind: off, start_s: 1}]' (quote values with spaces for the shell)\n"
+    "  --seed N           the run's seed (a whole number >= 0)\n"
+    "  --no-progress      no progress line on stderr (for logs and scripts)\n"
+    "  --strict-timing    a real-time degraded run exits 4\n"
+    "  Network: run.network_namespace auto (default) flies realtime and lockstep runs in a\n"
+    "  private network namespace whose loopback carries multicast; 'rig spy --pid PID' joins\n"
+    "  it. always: fail if one cannot be made; never: the host's network (rig check).\n"
+    "  Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
+    "  (HEARTBEAT_LOST) or the run stalled, 4 real-time degraded (only with --strict-timing),\n"
+    "  5 completed in the controller's failsafe, 130 interrupted.\n";
 
 constexpr const char* kSpyUsage =
     "usage: rig spy [--pid PID] [--url URL]\n"
     "  Starts lcm-spy with the rig's type jar on its classpath. --pid joins the network\n"
-    "  namespace of a running 'rig run' (its pid is printed at start) to watch it live.\n";
+    "  namespace of a running 'rig run' (its pid is printed at start) to watch it live; the\n"
+    "  user who started the run may (a run started without root lives in a user namespace\n"
+    "  that is joined first). A run on the host's network prints its --url instead.\n"
+    "  lcm-spy is a window: it needs a display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).\n";
+
+/// The inode of a namespace link (/proc/<pid>/ns/<kind>), 0 if it cannot be read.
+ino_t namespace_inode(const std::string& pid, const std::string& kind) {
+  struct stat st{};
+  return ::stat(("/proc/" + pid + "/ns/" + kind).c_str(), &st) == 0 ? st.st_ino : 0;
+}
+
+/// Joins the namespace `kind` (CLONE_NEWUSER or CLONE_NEWNET) of `pid`; "" or why not.
+std::string join_namespace(const std::string& pid, const std::string& kind, int type) {
+  const std::string path = "/proc/" + pid + "/ns/" + kind;
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return "cannot open " + path + ": " + std::strerror(errno);
+  const int r = ::setns(fd, type);
+  const int err = errno;
+  ::close(fd);
+  return r == 0 ? "" : "cannot join " + path + ": " + std::strerror(err);
+}
 
 std::string self_dir() {
   std::error_code ec;
@@ -97,18 +134,28 @@ int run_run_command(const std::vector<std::string>& args) {
     std::cerr << "rig run: missing <scenario.yaml>\n" << kRunUsage;
     return kExitUsage;
   }
-  if (!o.clock || *o.clock != launcher::kClockInprocess) {
-    std::cerr << "rig run: pid " << ::getpid() << " (watch live: rig spy --pid " << ::getpid() << ")\n";
-  }
   return launcher::run_scenario(o);
 }
 
 int run_check_command(const std::vector<std::string>& args) {
-  if (!args.empty()) {
-    std::cerr << "usage: rig check\n";
-    return kExitUsage;
+  constexpr const char* kCheckUsage =
+      "usage: rig check [--json FILE|-]\n"
+      "  Can this host run the rig's LCM multicast, directly or in a private network namespace?\n"
+      "  Prints what works and the commands that fix what does not. Exit code 0 if a run can\n"
+      "  start, 1 if not. --json writes the findings as JSON ('-': stdout, the text to stderr).\n";
+  std::string json;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--help" || args[i] == "-h") {
+      std::cout << kCheckUsage;
+      return 0;
+    } else if (args[i] == "--json" && i + 1 < args.size()) {
+      json = args[++i];
+    } else {
+      std::cerr << "rig check: unexpected argument '" << args[i] << "'\n" << kCheckUsage;
+      return kExitUsage;
+    }
   }
-  return launcher::check_host();
+  return launcher::check_host(json);
 }
 
 int run_spy_command(const std::vector<std::string>& args) {
@@ -133,15 +180,35 @@ int run_spy_command(const std::vector<std::string>& args) {
     return kExitUsage;
   }
   if (!pid.empty()) {
-    const std::string ns = "/proc/" + pid + "/ns/net";
-    const int fd = ::open(ns.c_str(), O_RDONLY);
-    if (fd < 0 || ::setns(fd, CLONE_NEWNET) != 0) {
-      std::cerr << "rig spy: cannot join the network namespace of pid " << pid << " (" << ns
-                << "): is 'rig run' still running, and are you root?\n";
+    if (pid.find_first_not_of("0123456789") != std::string::npos || !std::filesystem::exists("/proc/" + pid)) {
+      std::cerr << "rig spy: no process " << pid << " (is 'rig run' still running? it prints its pid at start)\n";
       return kExitUsage;
     }
-    ::close(fd);
+    if (namespace_inode(pid, "net") == namespace_inode("self", "net")) {
+      std::cerr << "rig spy: pid " << pid << " runs on this host's network, not in a namespace of its own: "
+                   "watch it with the URL it printed at start (rig spy --url '...')\n";
+      return kExitUsage;
+    }
+    // A run started without root made its network namespace inside a user namespace it owns:
+    // join that first (its owner holds every capability there), then the network namespace.
+    std::string problem;
+    if (::geteuid() != 0 && namespace_inode(pid, "user") != namespace_inode("self", "user")) {
+      problem = join_namespace(pid, "user", CLONE_NEWUSER);
+    }
+    if (problem.empty()) problem = join_namespace(pid, "net", CLONE_NEWNET);
+    if (!problem.empty()) {
+      std::cerr << "rig spy: cannot watch the run of pid " << pid << ": " << problem
+                << " (only its own user, or root, may join it)\n";
+      return kExitUsage;
+    }
     if (url.empty()) url = "udpm://239.255.76.67:7667?ttl=0";
+  }
+  const char* display = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0')) {
+    std::cerr << "rig spy: no display (DISPLAY is not set): lcm-spy is a window. Run it on a desktop, over "
+                 "ssh -X, or headless with xvfb-run rig spy ...\n";
+    return kExitUsage;
   }
   std::string classpath = jar + ":/usr/share/java/lcm.jar";
   if (std::filesystem::exists("/usr/share/java/jchart2d.jar")) classpath += ":/usr/share/java/jchart2d.jar";

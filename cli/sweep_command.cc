@@ -15,7 +15,7 @@ namespace nimble::cli {
 namespace {
 
 constexpr const char* kSweepUsage =
-    "usage: rig sweep <scenario.yaml> --seeds A-B [--vary key=v1,v2,...]... [--jobs N] [--json FILE]\n"
+    "usage: rig sweep <scenario.yaml> --seeds A-B [--vary key=v1,v2,...]... [--jobs N] [--json FILE|-]\n"
     "                 [--csv FILE] [--clock inprocess|lockstep|realtime] [--set key.path=value]...\n"
     "                 [--logs DIR] [--no-progress]\n"
     "  Flies the scenario once per seed A..B and per combination of the --vary values (each\n"
@@ -23,7 +23,8 @@ constexpr const char* kSweepUsage =
     "  its own child process, in process unless --clock says otherwise. Prints per parameter\n"
     "  set the controlled rate and percentiles across runs of the extremes, state ranges and\n"
     "  estimator errors, and each run that was not ok. --json writes the sets and a 'runs' list\n"
-    "  (seed, verdict, figures), --csv one row per run, --logs DIR keeps each run's LCM log.\n"
+    "  (seed, verdict, figures; '-': to stdout, the text then to stderr), --csv one row per run,\n"
+    "  --logs DIR keeps each run's LCM log.\n"
     "  Exit code: 0 every run ok, 1 some run not ok, 2 bad input.\n"
     "  Example: rig sweep rig_configs/id_doublet_train_fast.yaml --seeds 1-20 \\\n"
     "             --vary model=rig_configs/models/nimble_lateral_set1.yaml,rig_configs/models/nimble_lateral_set2.yaml\n";
@@ -91,9 +92,14 @@ int run_sweep_command(const std::vector<std::string>& args) {
     std::cerr << "rig sweep: " << e.what() << "\n";
     return kExitUsage;
   }
-  launcher::write_sweep_text(std::cout, result);
+  // --json -: stdout carries the JSON alone, the text goes to stderr.
+  launcher::write_sweep_text(json_file == "-" ? std::cerr : std::cout, result);
   const auto write = [](const std::string& file, const std::string& text) {
     if (file.empty()) return true;
+    if (file == "-") {
+      std::cout << text;
+      return true;
+    }
     std::ofstream out(file);
     out << text;
     if (!out) std::cerr << "rig sweep: cannot write " << file << "\n";

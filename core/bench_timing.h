@@ -6,9 +6,31 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 namespace nimble {
+
+/// The command line of a benchmark that takes one optional argument, its repetitions:
+/// `--help` prints `usage` on stdout and the benchmark exits 0; anything but a whole number >= 1
+/// prints it on stderr and exits 2. Returns the repetitions, or -(exit code + 1) to exit.
+inline int bench_repetitions(int argc, char** argv, const char* usage, int fallback) {
+  if (argc < 2) return fallback;
+  const std::string a = argv[1];
+  if (a == "--help" || a == "-h") {
+    std::fputs(usage, stdout);
+    return -1;
+  }
+  char* end = nullptr;
+  const long n = std::strtol(a.c_str(), &end, 10);
+  if (argc > 2 || end == a.c_str() || *end != '\0' || n < 1 || n > 1000000) {
+    std::fprintf(stderr, "%s: '%s' is not a number of repetitions\n%s", argv[0], a.c_str(), usage);
+    return -3;
+  }
+  return static_cast<int>(n);
+}
 
 /// CPU time of this thread [ms]: unlike wall time, not inflated by other processes.
 inline double thread_cpu_ms() {

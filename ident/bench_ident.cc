@@ -25,7 +25,13 @@ using Clock = std::chrono::steady_clock;
 int main(int argc, char** argv) {
   using namespace nimble;
   using namespace nimble::ident;
-  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 21;
+  const int reps = bench_repetitions(argc, argv,
+                                     "usage: bench_ident [REPETITIONS (default 21)]\n"
+                                     "  Times the identification of a 60 s, 512 Hz synthetic flight: OLS + WLS\n"
+                                     "  regression (target <= 50 ms) and the whole identify(), against this\n"
+                                     "  machine's floor measured in the same run.\n",
+                                     21);
+  if (reps < 0) return -reps - 1;
   const std::string configs = std::string(NIMBLE_SOURCE_DIR) + "/rig_configs/";
   const DerivativeModel model = load_model(configs + "models/nimble_lateral_set1.yaml");
   const Vehicle vehicle = load_vehicle(model.vehicle_file);

@@ -108,6 +108,12 @@ int main(int argc, char** argv) {
   double duration_s = 30.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: bench_inprocess [scenario.yaml] [--runs N] [--duration S]\n"
+                  "  Times the in-process executor on a flight (default 30 s) against the machine's floor\n"
+                  "  (the plant model alone) measured in the same run, and rig sweep.\n");
+      return 0;
+    }
     if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--duration" && i + 1 < argc) duration_s = std::atof(argv[++i]);
     else if (!a.empty() && a[0] != '-') scenario = a;

@@ -35,6 +35,7 @@
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "contract/rates.h"
+#include "core/json_writer.h"
 #include "launcher/inprocess.h"
 #include "launcher/netns.h"
 #include "launcher/recorder.h"
@@ -90,32 +91,56 @@ int run_processes(RunPlan& plan, const RunOptions& options);
 
 }  // namespace
 
-int check_host() {
+int check_host(const std::string& json_target) {
+  // With --json -, stdout carries the JSON and the text goes to stderr.
+  std::ostream& out = json_target == "-" ? std::cerr : std::cout;
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  std::cout << "LCM multicast on this host's loopback (" << url << "): ";
-  if (lcm_url_works(url)) {
-    std::cout << "works\n";
-    return 0;
+  out << "LCM multicast on this host's loopback (" << url << "): ";
+  const bool host_ok = lcm_url_works(url);
+  bool ns_ok = false;
+  if (host_ok) {
+    out << "works\n";
+  } else {
+    out << "does NOT work (no multicast route or loopback multicast off)\n";
+    // Probe a private namespace in a child, so this process stays where it is.
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      const NamespaceResult r = enter_private_network_namespace();
+      ::_exit(r.ok && lcm_url_works(url) ? 0 : 1);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ns_ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    out << "private network namespace with multicast loopback: " << (ns_ok ? "works" : "does NOT work") << "\n";
+    if (ns_ok) {
+      out << "'rig run' will run each rig in its own private namespace. To run LCM tools on the host\n"
+             "itself (lcm-spy on a host-level URL), fix the host's loopback with:\n"
+          << multicast_fix_commands() << "\n";
+    } else {
+      out << "Neither works. Fix the host's loopback with:\n" << multicast_fix_commands() << "\n";
+    }
   }
-  std::cout << "does NOT work (no multicast route or loopback multicast off)\n";
-  // Probe a private namespace in a child, so this process stays where it is.
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const NamespaceResult r = enter_private_network_namespace();
-    ::_exit(r.ok && lcm_url_works(url) ? 0 : 1);
+  const bool ok = host_ok || ns_ok;
+  if (!json_target.empty()) {
+    JsonWriter w;
+    w.begin_object();
+    w.key("url").value(url).key("host_multicast").value(host_ok);
+    w.key("private_namespace").value(host_ok ? "not needed" : (ns_ok ? "works" : "does not work"));
+    w.key("runs_can_start").value(ok);
+    if (!host_ok) w.key("fix").value(multicast_fix_commands());
+    w.end_object();
+    if (json_target == "-") {
+      std::cout << w.str() << "\n";
+    } else {
+      std::ofstream f(json_target);
+      f << w.str() << "\n";
+      if (!f) {
+        std::cerr << "rig check: cannot write " << json_target << "\n";
+        return kRunBadInput;
+      }
+    }
   }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  const bool ns_ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  std::cout << "private network namespace with multicast loopback: " << (ns_ok ? "works" : "does NOT work") << "\n";
-  if (ns_ok) {
-    std::cout << "'rig run' will run each rig in its own private namespace. To run LCM tools on the host\n"
-                 "itself (lcm-spy on a host-level URL), fix the host's loopback with:\n"
-              << multicast_fix_commands() << "\n";
-    return 0;
-  }
-  std::cout << "Neither works. Fix the host's loopback with:\n" << multicast_fix_commands() << "\n";
-  return 1;
+  return ok ? 0 : 1;
 }
 
 int run_scenario(const RunOptions& options) {
@@ -127,7 +152,7 @@ int run_scenario(const RunOptions& options) {
     return kRunBadInput;
   }
   // An output that cannot be written is found now, not after the flight.
-  if (!options.json_file.empty()) {
+  if (!options.json_file.empty() && options.json_file != "-") {
     if (const std::string problem = writable_problem(options.json_file); !problem.empty()) {
       std::cerr << "rig run: --json " << options.json_file << ": " << problem << "\n";
       return kRunBadInput;
@@ -164,6 +189,10 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
       url = "udpm://239.255.76.67:" + std::to_string(20000 + ::getpid() % 20000) + "?ttl=0&recv_buf_size=8388608";
       ns_detail = "host network, port chosen per run";
     }
+    std::cerr << "rig run: pid " << ::getpid() << " (watch live: "
+              << (in_ns ? "rig spy --pid " + std::to_string(::getpid()) : "rig spy --url '" + url + "'") << ")\n";
+  } else {
+    std::cerr << "rig run: pid " << ::getpid() << " (watch live: rig spy --url '" << url << "')\n";
   }
 
   // Record of the run: log, resolved scenario, process outputs.

@@ -21,7 +21,8 @@ namespace nimble::launcher {
 int run_scenario(const RunOptions& options);
 
 /// `rig check`: whether this host can run LCM multicast, with the fix if not. Returns 0 if
-/// runs can proceed (directly or in a private namespace), 1 otherwise.
-int check_host();
+/// runs can proceed (directly or in a private namespace), 1 otherwise. `json_target` (a file,
+/// or "-" for stdout with the text on stderr) also gets the findings as JSON.
+int check_host(const std::string& json_target = "");
 
 }  // namespace nimble::launcher

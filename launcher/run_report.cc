@@ -287,8 +287,12 @@ std::string report_json(const RunReport& r) {
 }
 
 int finish_report(const RunReport& report, const RunOptions& options) {
-  if (options.print_summary) write_report_text(std::cout, report);
-  if (!options.json_file.empty()) {
+  // --json -: stdout carries the JSON alone, the text summary goes to stderr.
+  const bool json_stdout = options.json_file == "-";
+  if (options.print_summary) write_report_text(json_stdout ? std::cerr : std::cout, report);
+  if (json_stdout) {
+    std::cout << report_json(report) << "\n";
+  } else if (!options.json_file.empty()) {
     std::ofstream out(options.json_file);
     out << report_json(report) << "\n";
     if (!out) std::cerr << "rig run: cannot write " << options.json_file << "\n";

@@ -20,7 +20,12 @@
 int main(int argc, char** argv) {
   using namespace nimble;
   using namespace nimble::turbulence;
-  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
+  const int reps = bench_repetitions(argc, argv,
+                                     "usage: bench_turbulence [REPETITIONS (default 5)]\n"
+                                     "  Times rig turbulence's work on a 10-minute record at 100 Hz against the\n"
+                                     "  machine's floor measured in the same run.\n",
+                                     5);
+  if (reps < 0) return -reps - 1;
   const Ce500Config config = load_ce500_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/turbulence/ce500_practical.yaml");
   Ce500Options options = ce500_default_options(config);
   options.dt_s = 0.01;         // 100 Hz

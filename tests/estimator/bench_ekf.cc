@@ -82,6 +82,11 @@ Data make_data(const nimble::SensingConfig& s, double seconds) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf("usage: bench_ekf [seconds_of_flight >= 2 (default 60)]\n"
+                "  Times the EKF's predict and update on emulated flight data.\n");
+    return 0;
+  }
   const double seconds = argc > 1 ? std::atof(argv[1]) : 60.0;
   if (!(seconds >= 2.0)) {
     std::fprintf(stderr, "usage: bench_ekf [seconds_of_flight >= 2]\n");

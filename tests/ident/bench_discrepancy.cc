@@ -21,7 +21,12 @@ using namespace nimble::ident;
 using Clock = std::chrono::steady_clock;
 
 int main(int argc, char** argv) {
-  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
+  const int reps = bench_repetitions(argc, argv,
+                                     "usage: bench_discrepancy [REPETITIONS (default 5)]\n"
+                                     "  Times the discrepancy workflow on a 60 s flight with two hidden effects,\n"
+                                     "  against the machine's floor (one identification) in the same run.\n",
+                                     5);
+  if (reps < 0) return -reps - 1;
   const DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   test::HiddenEffects h;

@@ -25,13 +25,13 @@ inline std::string slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-/// Runs `[env] rig <args>` through the shell, capturing stdout and stderr separately.
-inline RigResult run_rig(const std::string& args, const std::string& env = "") {
+/// Runs `[env] <program> <args>` through the shell, capturing stdout and stderr separately.
+inline RigResult run_program(const std::string& program, const std::string& args, const std::string& env = "") {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string tag = std::to_string(::getpid());
   const std::string out = (dir / ("rig_out_" + tag)).string();
   const std::string err = (dir / ("rig_err_" + tag)).string();
-  const std::string cmd = env + (env.empty() ? "" : " ") + std::string(RIG_BIN) + " " + args + " >" + out + " 2>" + err;
+  const std::string cmd = env + (env.empty() ? "" : " ") + program + " " + args + " >" + out + " 2>" + err;
   const int status = std::system(cmd.c_str());
   RigResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -40,6 +40,11 @@ inline RigResult run_rig(const std::string& args, const std::string& env = "") {
   std::filesystem::remove(out);
   std::filesystem::remove(err);
   return r;
+}
+
+/// Runs `[env] rig <args>` through the shell, capturing stdout and stderr separately.
+inline RigResult run_rig(const std::string& args, const std::string& env = "") {
+  return run_program(RIG_BIN, args, env);
 }
 
 }  // namespace nimble::test

@@ -1,0 +1,111 @@
+// One convention for every command of the `rig` tool and every benchmark: --help on stdout with
+// exit 0, --version, and --json - writing JSON (alone) to stdout.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "../support/run_rig.h"
+
+using nimble::test::run_rig;
+using nimble::test::RigResult;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+const std::string kBin = std::filesystem::path(RIG_BIN).parent_path().string();
+
+/// Runs a benchmark (they sit next to rig) with `args`.
+RigResult run_bench(const std::string& bench, const std::string& args) {
+  return nimble::test::run_program(kBin + "/" + bench, args);
+}
+
+/// The JSON written on stdout, parsed (YAML is a superset); fails the test if it does not parse.
+YAML::Node json_of(const RigResult& r) {
+  INFO(r.out << r.err);
+  YAML::Node n;
+  REQUIRE_NOTHROW(n = YAML::Load(r.out));
+  REQUIRE(n.IsMap());
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("cli: every command answers --help on stdout with exit 0, and --version names the version", "[cli]") {
+  for (const std::string command : {"model", "run", "sweep", "params", "check", "spy", "identify", "validate",
+                                    "discrepancy", "export", "turbulence", "turbulence-response"}) {
+    INFO(command);
+    const RigResult r = run_rig(command + " --help");
+    CHECK(r.exit_code == 0);
+    CHECK(r.out.find("usage: rig " + command) != std::string::npos);
+    CHECK(r.err.empty());
+  }
+  const RigResult v = run_rig("--version");
+  CHECK(v.exit_code == 0);
+  CHECK(v.out.find("rig " + std::string(NIMBLE_RIG_VERSION)) == 0);
+  const RigResult unknown = run_rig("--frobnicate");
+  CHECK(unknown.exit_code == 2);
+  CHECK(unknown.err.find("unknown command") != std::string::npos);
+}
+
+TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
+  for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
+                                  "bench_turbulence", "bench_can", "bench_can_bridge"}) {
+    INFO(bench);
+    const RigResult r = run_bench(bench, "--help");
+    CHECK(r.exit_code == 0);
+    CHECK(r.out.find("usage: " + bench) != std::string::npos);
+  }
+  const RigResult bad = run_bench("bench_ident", "many");
+  CHECK(bad.exit_code == 2);
+  CHECK(bad.err.find("not a number of repetitions") != std::string::npos);
+}
+
+TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, export, model)", "[cli]") {
+  const std::string dir = (std::filesystem::temp_directory_path() / ("rig_cli_json_" + std::to_string(::getpid()))).string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string log = dir + "/hover.lcmlog";
+
+  const RigResult run = run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " +
+                                log + " --json -");
+  CHECK(run.exit_code == 0);
+  const YAML::Node summary = json_of(run);
+  CHECK(summary["result"].as<std::string>() == "ok");
+  CHECK(run.err.find("== run summary: hover ==") != std::string::npos);  // the text went to stderr
+  CHECK_FALSE(std::filesystem::exists("-"));
+
+  const RigResult exported = run_rig("export " + log + " --csv " + dir + "/hover.csv --interpolation linear --json -");
+  CHECK(exported.exit_code == 0);
+  const YAML::Node e = json_of(exported);
+  CHECK(e["samples"].as<int>() > 400);
+  CHECK(e["interpolation"].as<std::string>() == "linear");
+
+  const RigResult sweep =
+      run_rig("sweep " + kConfigs + "hover.yaml --seeds 1-2 --set duration_s=0.5 --json - --jobs 1 --no-progress");
+  INFO(sweep.err);
+  CHECK(sweep.exit_code == 0);
+  CHECK(json_of(sweep)["runs"].size() == 2);
+
+  const RigResult check = run_rig("check --json -");
+  CHECK(json_of(check)["runs_can_start"].IsDefined());
+
+  const RigResult model = run_rig("model " + kConfigs + "models/nimble_lateral_set1.yaml --json -");
+  CHECK(model.exit_code == 0);
+  CHECK(json_of(model)["eigenvalues"].IsSequence());
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("cli: rig spy without a display says so in one line instead of a Java trace", "[cli]") {
+  const RigResult r = run_rig("spy", "env -u DISPLAY -u WAYLAND_DISPLAY");
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("no display") != std::string::npos);
+  CHECK(r.err.find("xvfb-run") != std::string::npos);
+  CHECK(r.err.find("Exception") == std::string::npos);
+  const RigResult host = run_rig("spy --pid " + std::to_string(::getpid()));
+  CHECK(host.exit_code == 2);
+  CHECK(host.err.find("runs on this host's network") != std::string::npos);
+}
