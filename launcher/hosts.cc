@@ -34,6 +34,16 @@ std::string join(const std::vector<std::string>& items) {
 
 unsigned subnet_of(unsigned address, int prefix) { return prefix == 0 ? 0u : address & (~0u << (32 - prefix)); }
 
+/// The ttl of an LCM udpm URL (LCM's default, 0, when the URL gives none); -1 if it is not a number.
+int lcm_url_ttl(const std::string& url) {
+  const auto at = url.find("ttl=");
+  if (at == std::string::npos || (at > 0 && url[at - 1] != '?' && url[at - 1] != '&')) return 0;
+  const std::string digits = url.substr(at + 4, url.find('&', at) == std::string::npos ? std::string::npos
+                                                                                         : url.find('&', at) - at - 4);
+  if (digits.empty() || digits.size() > 3 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) return -1;
+  return std::atoi(digits.c_str());
+}
+
 }  // namespace
 
 std::size_t HostPlacement::host_index(const std::string& process) const {
@@ -92,6 +102,14 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
       ConfigMap host_map = section.get_map(name);
       listed = host_map.get_string_list("processes");
       list_key = host_map.key_path("processes");
+      if (host_map.has("start")) host.by_hand = host_map.get_enum("start", {"launcher", "by_hand"}) == "by_hand";
+      if (host.by_hand && i == 0) {
+        host_map.fail("start", "the first host is the launcher's: its processes are started by the launcher");
+      }
+      if (host.by_hand && host_map.has("address")) {
+        host_map.fail("address", "is the address of the emulated link's end; a host started by hand is a machine of "
+                                 "the lab network with its own address");
+      }
       if (host_map.has("address")) {
         host.address = host_map.get_string("address");
         unsigned a = 0;
@@ -103,7 +121,7 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
       host_map.finish();
     } else {
       section.fail(name, "must be a list of processes, e.g. [controller, estimator], or a mapping with "
-                         "processes: (and address:)");
+                         "processes: (and address: or start:)");
     }
     for (const auto& p : listed) {
       if (std::find(scenario.processes.begin(), scenario.processes.end(), p) == scenario.processes.end()) {
@@ -136,14 +154,16 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
 
   const HostConfig& first = placement.hosts[0];
   const HostConfig& second = placement.hosts[1];
-  unsigned a0 = 0, a1 = 0;
-  int p0 = 0, p1 = 0;
-  parse_ipv4_prefix(first.address, &a0, &p0);
-  parse_ipv4_prefix(second.address, &a1, &p1);
-  if (p0 != p1 || subnet_of(a0, p0) != subnet_of(a1, p1) || a0 == a1) {
-    throw ConfigError(scenario.file, "hosts." + second.name + ".address", second.address,
-                      "the two ends of the link need distinct addresses in one subnet (host '" + first.name +
-                          "' has " + first.address + ")");
+  if (!second.by_hand) {
+    unsigned a0 = 0, a1 = 0;
+    int p0 = 0, p1 = 0;
+    parse_ipv4_prefix(first.address, &a0, &p0);
+    parse_ipv4_prefix(second.address, &a1, &p1);
+    if (p0 != p1 || subnet_of(a0, p0) != subnet_of(a1, p1) || a0 == a1) {
+      throw ConfigError(scenario.file, "hosts." + second.name + ".address", second.address,
+                        "the two ends of the link need distinct addresses in one subnet (host '" + first.name +
+                            "' has " + first.address + ")");
+    }
   }
   for (const std::string& side : {can::kFlightProcess, can::kRigProcess}) {
     const auto it = placed.find(side);
@@ -154,22 +174,41 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
                             "that host's network namespace, and a vcan cannot span two hosts");
     }
   }
+  if (second.by_hand) {
+    // A real second machine: the launcher flies on the lab network, in lockstep.
+    const std::string where = "host '" + second.name + "' is started by hand (a machine of the lab network)";
+    if (launch.network_namespace != "never") {
+      throw ConfigError(scenario.file, "run.network_namespace", launch.network_namespace,
+                        where + ": the launcher must be on the lab network too, run.network_namespace: never");
+    }
+    if (launch.lcm_url == "auto" || lcm_url_ttl(launch.lcm_url) < 1) {
+      throw ConfigError(scenario.file, "run.lcm_url", launch.lcm_url,
+                        where + ": give the lab network's URL, with ttl >= 1 so that the datagrams leave this "
+                                "machine, e.g. udpm://239.255.76.67:7667?ttl=1");
+    }
+    if (scenario.clock == kClockRealtime) {
+      throw ConfigError(scenario.file, "clock", scenario.clock,
+                        where + ": fly it in lockstep; in real time every process keeps the start time, the "
+                                "launcher's CLOCK_MONOTONIC, which another machine does not share");
+    }
+    return placement;
+  }
   if (launch.network_namespace == "never") {
     throw ConfigError(scenario.file, "run.network_namespace", "never",
                       "a run over two hosts emulates them as two network namespaces joined by a veth pair: it "
-                      "needs run.network_namespace auto or always");
+                      "needs run.network_namespace auto or always (or start: by_hand on two real machines)");
   }
   if (launch.lcm_url != "auto") {
     throw ConfigError(scenario.file, "run.lcm_url", launch.lcm_url,
-                      std::string("a run over two hosts flies on its own URL across the emulated link (") +
-                          kTwoHostLcmUrl + "): leave run.lcm_url at auto");
+                      std::string("a run over two emulated hosts flies on its own URL across the emulated link (") +
+                          kTwoHostLcmUrl + "): leave run.lcm_url at auto (or start: by_hand on two real machines)");
   }
   return placement;
 }
 
 std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_private_namespace, std::string* problem) {
-  if (!placement.split()) {
-    *problem = "the run has one host";
+  if (!placement.emulated()) {
+    *problem = "the run has no emulated second host";
     return nullptr;
   }
   if (!in_private_namespace) {
@@ -180,6 +219,12 @@ std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_pri
   return HostLink::create(placement.hosts[0].address, placement.hosts[1].address, problem);
 }
 
+std::string by_hand_command(const std::string& process, const std::string& executable, const std::string& bin_dir,
+                            const std::string& resolved_scenario, const std::string& lcm_url) {
+  return bin_dir + "/" + executable + " --name " + process + " --scenario " + resolved_scenario + " --lcm-url '" +
+         lcm_url + "'";
+}
+
 std::vector<HostSummary> host_summaries(const HostPlacement& placement, const HostLink* link) {
   std::vector<HostSummary> out;
   for (std::size_t i = 0; i < placement.hosts.size(); ++i) {
@@ -188,7 +233,7 @@ std::vector<HostSummary> host_summaries(const HostPlacement& placement, const Ho
     s.name = h.name;
     s.launcher = i == 0;
     s.processes = h.processes;
-    if (placement.split()) s.address = h.address;
+    if (placement.emulated()) s.address = h.address;
     if (i == 0) {
       char id[64] = {0};
       const ssize_t n = ::readlink("/proc/self/ns/net", id, sizeof id - 1);
@@ -203,6 +248,18 @@ std::vector<HostSummary> host_summaries(const HostPlacement& placement, const Ho
 
 std::string hosts_hint(const HostPlacement& placement, const std::string& waiting) {
   if (!placement.split() || waiting.empty()) return "";
+  if (placement.hosts[1].by_hand) {
+    for (std::size_t start = 0; start < waiting.size();) {
+      const auto end = waiting.find(", ", start);
+      if (placement.started_by_hand(waiting.substr(start, end - start))) {
+        return " (host '" + placement.hosts[1].name + "' is started by hand: were its processes started there, "
+               "with the resolved scenario and this run's URL, and does multicast cross the lab network both ways?)";
+      }
+      if (end == std::string::npos) break;
+      start = end + 2;
+    }
+    return "";
+  }
   for (std::size_t start = 0; start < waiting.size();) {
     const auto end = waiting.find(", ", start);
     if (placement.host_index(waiting.substr(start, end - start)) == 0) return "";

@@ -15,6 +15,13 @@
 /// namespaces joined by a veth pair (netns.h, HostLink) on an LCM URL with ttl=1, as over a lab
 /// network. Both sides of the CAN bridge must run on the first host: the run's virtual CAN
 /// interface lives in that host's network namespace, and a vcan cannot span two.
+///
+/// On two real machines the second host says `start: by_hand`: `rig run` does not start its
+/// processes but prints the command of each, to be run on that machine (by hand or over ssh)
+/// with the resolved scenario and the run's LCM URL, waits for their READY and flies them as any
+/// other process. That needs the lab network's URL (run.lcm_url with ttl >= 1,
+/// run.network_namespace: never) and the lockstep clock: a real-time start time is the
+/// launcher's CLOCK_MONOTONIC, which another machine does not share.
 
 #include <memory>
 #include <string>
@@ -46,6 +53,8 @@ struct HostConfig {
   std::string name;                    ///< as written in the scenario, e.g. "sim"
   std::vector<std::string> processes;  ///< in the order of the scenario's `processes`
   std::string address;                 ///< its end of the emulated link, IPv4 with prefix, e.g. 10.76.67.1/30
+  /// The host's processes are started on it by hand (a real machine), not by the launcher.
+  bool by_hand = false;
 };
 
 /// The placement of a run's processes.
@@ -55,6 +64,11 @@ struct HostPlacement {
 
   /// True if the run spans more than one host.
   bool split() const { return hosts.size() > 1; }
+  /// True if the second host is emulated: a network namespace the launcher makes, and starts
+  /// that host's processes in.
+  bool emulated() const { return split() && !hosts[1].by_hand; }
+  /// True if `process` runs on a host whose processes are started by hand.
+  bool started_by_hand(const std::string& process) const { return split() && hosts[host_index(process)].by_hand; }
   /// Index into `hosts` of the host that runs `process` (0 without a hosts section).
   std::size_t host_index(const std::string& process) const;
 };
@@ -69,6 +83,11 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
 /// namespace, the ends of the link at the hosts' addresses. Returns nullptr with `problem` set
 /// if the launcher is not in a private namespace (`in_private_namespace` false) or a step fails.
 std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_private_namespace, std::string* problem);
+
+/// The command that starts `process` on a host started by hand, with the run's resolved scenario
+/// and URL (executables from `bin_dir`, as installed on that host).
+std::string by_hand_command(const std::string& process, const std::string& executable, const std::string& bin_dir,
+                            const std::string& resolved_scenario, const std::string& lcm_url);
 
 /// What the run report says of the hosts: each with its processes, the launcher's host with
 /// the launcher's namespace, the second with `link`'s (may be null). Empty without a hosts

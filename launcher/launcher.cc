@@ -165,9 +165,9 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
       ns_detail = "host network, port chosen per run";
     }
   }
-  // Two hosts: the second is a network namespace of its own behind a veth pair (hosts.h).
+  // Two emulated hosts: the second is a network namespace of its own behind a veth pair (hosts.h).
   std::unique_ptr<HostLink> host_link;
-  if (plan.hosts.split()) {
+  if (plan.hosts.emulated()) {
     std::string problem;
     host_link = link_hosts(plan.hosts, in_ns, &problem);
     if (!host_link) {
@@ -251,11 +251,20 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   // Start every process.
   const std::string bin_dir = options.bin_dir.empty() ? self_dir() : options.bin_dir;
   ProcessSupervisor supervisor;
+  std::string by_hand;
   for (const auto& name : scenario.processes) {
+    if (plan.hosts.started_by_hand(name)) {
+      by_hand += "  " + by_hand_command(name, executable_of(name), bin_dir, resolved_file, url) + "\n";
+      continue;
+    }
     const int host_ns = host_link && plan.hosts.host_index(name) > 0 ? host_link->remote_namespace_fd() : -1;
     supervisor.start(name, bin_dir + "/" + executable_of(name),
                      {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, log_file + "." + name + ".out",
                      lc.rig_cpus, host_ns);
+  }
+  if (!by_hand.empty()) {
+    std::cerr << "rig run: start on host '" << plan.hosts.hosts[1].name
+              << "' (by hand or ssh, with this resolved scenario copied to the same path):\n" << by_hand;
   }
   const std::vector<ChildProcess>& children = supervisor.children();
   if (const std::string note = pin_to(lc.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
@@ -297,10 +306,10 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     }
     bool all_ready = true;
     std::string waiting;
-    for (const auto& c : children) {
-      if (monitor.heartbeat_state(c.name) != heartbeat_t::STATE_READY) {
+    for (const auto& name : scenario.processes) {
+      if (monitor.heartbeat_state(name) != heartbeat_t::STATE_READY) {
         all_ready = false;
-        waiting += (waiting.empty() ? "" : ", ") + c.name;
+        waiting += (waiting.empty() ? "" : ", ") + name;
       }
     }
     if (all_ready) break;
@@ -362,7 +371,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     // Processes that missed the start command get it again.
     if (resends < 5 && now - wall_start_ns > (resends + 1) * 300000000LL) {
       bool someone_waiting = false;
-      for (const auto& c : children) someone_waiting |= monitor.heartbeat_state(c.name) == heartbeat_t::STATE_READY;
+      for (const auto& p : scenario.processes) someone_waiting |= monitor.heartbeat_state(p) == heartbeat_t::STATE_READY;
       if (someone_waiting) {
         start.seq = run_control_seq++;
         bus->publish(contract::channels::kRunControl, start);
@@ -413,6 +422,9 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
   for (const auto& c : children) {
     report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});
+  }
+  for (const auto& name : scenario.processes) {
+    if (plan.hosts.started_by_hand(name)) report.processes.push_back(ProcessOutcome{name, -1, false, -1, 0, "started by hand"});
   }
   report.hosts = host_summaries(plan.hosts, host_link.get());
   report.verdict = judge_run(report.flight, plan.judge, interrupted, failure,

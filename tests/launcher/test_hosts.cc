@@ -18,25 +18,28 @@ namespace {
 
 const std::vector<std::string> kFour = {"plant", "controller", "mocap", "estimator"};
 
-Scenario scenario_with(const std::string& hosts_yaml, const std::vector<std::string>& processes = kFour) {
+Scenario scenario_with(const std::string& hosts_yaml, const std::vector<std::string>& processes = kFour,
+                       const std::string& clock = kClockLockstep) {
   Scenario s;
   s.file = "inline.yaml";
   s.processes = processes;
+  s.clock = clock;
   s.root = YAML::Load(hosts_yaml);
   return s;
 }
 
 HostPlacement place(const std::string& hosts_yaml, const std::vector<std::string>& processes = kFour,
-                    const LaunchConfig& launch = LaunchConfig{}) {
-  return host_placement_from(scenario_with(hosts_yaml, processes), launch);
+                    const LaunchConfig& launch = LaunchConfig{}, const std::string& clock = kClockLockstep) {
+  return host_placement_from(scenario_with(hosts_yaml, processes, clock), launch);
 }
 
 /// Requires that placing `hosts_yaml` fails naming `key` with `problem` in its message.
 void expect_error(const std::string& hosts_yaml, const std::string& key, const std::string& problem,
-                  const std::vector<std::string>& processes = kFour, const LaunchConfig& launch = LaunchConfig{}) {
+                  const std::vector<std::string>& processes = kFour, const LaunchConfig& launch = LaunchConfig{},
+                  const std::string& clock = kClockLockstep) {
   INFO("yaml: " << hosts_yaml);
   try {
-    place(hosts_yaml, processes, launch);
+    place(hosts_yaml, processes, launch, clock);
     FAIL("expected a ConfigError for " << key);
   } catch (const ConfigError& e) {
     INFO("message: " << e.what());
@@ -139,4 +142,48 @@ TEST_CASE("hosts: addresses with prefix, and the hint when only the far host is 
   CHECK(hosts_hint(p, "controller, estimator").find("all on host 'flight'") != std::string::npos);
   CHECK(hosts_hint(p, "controller, mocap").empty());
   CHECK(hosts_hint(HostPlacement{}, "controller").empty());
+}
+
+TEST_CASE("hosts: a second host started by hand flies on the lab network's URL, in lockstep", "[unit]") {
+  const std::string by_hand = "hosts: {sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}";
+  LaunchConfig lab;
+  lab.network_namespace = "never";
+  lab.lcm_url = "udpm://239.255.76.67:7667?ttl=1";
+  const HostPlacement p = place(by_hand, kFour, lab);
+  REQUIRE(p.split());
+  CHECK_FALSE(p.emulated());
+  CHECK(p.started_by_hand("controller"));
+  CHECK(p.started_by_hand("estimator"));
+  CHECK_FALSE(p.started_by_hand("plant"));
+  CHECK(p.hosts[1].by_hand);
+  CHECK(by_hand_command("controller", "nimble_controller", "/opt/rig/bin", "/data/run.lcmlog.scenario.yaml",
+                        lab.lcm_url) ==
+        "/opt/rig/bin/nimble_controller --name controller --scenario /data/run.lcmlog.scenario.yaml --lcm-url "
+        "'udpm://239.255.76.67:7667?ttl=1'");
+  CHECK(hosts_hint(p, "controller").find("started by hand") != std::string::npos);
+  CHECK(hosts_hint(p, "mocap").empty());
+  // An emulated host is not started by hand.
+  CHECK(place("hosts: {sim: [plant], flight: [controller]}").emulated());
+  CHECK_FALSE(place("hosts: {sim: [plant], flight: [controller]}").started_by_hand("controller"));
+
+  expect_error("hosts: {sim: {processes: [plant], start: by_hand}, flight: [controller]}", "hosts.sim.start",
+               "the first host is the launcher's", kFour, lab);
+  expect_error("hosts: {sim: [plant], flight: {processes: [controller], start: ssh}}", "hosts.flight.start",
+               "launcher", kFour, lab);
+  expect_error("hosts: {sim: [plant], flight: {processes: [controller], start: by_hand, address: 10.76.67.2/30}}",
+               "hosts.flight.address", "a host started by hand is a machine of the lab network", kFour, lab);
+  LaunchConfig in_namespace = lab;
+  in_namespace.network_namespace = "auto";
+  expect_error(by_hand, "run.network_namespace", "run.network_namespace: never", kFour, in_namespace);
+  for (const char* url : {"auto", "udpm://239.255.76.67:7667", "udpm://239.255.76.67:7667?ttl=0",
+                          "udpm://239.255.76.67:7667?recv_buf_size=8388608&ttl=0", "udpm://239.255.76.67:7667?ttl=x"}) {
+    INFO(url);
+    LaunchConfig bad = lab;
+    bad.lcm_url = url;
+    expect_error(by_hand, "run.lcm_url", "with ttl >= 1", kFour, bad);
+  }
+  LaunchConfig later_ttl = lab;
+  later_ttl.lcm_url = "udpm://239.255.76.67:7667?recv_buf_size=8388608&ttl=2";
+  CHECK(place(by_hand, kFour, later_ttl).started_by_hand("controller"));
+  expect_error(by_hand, "clock", "fly it in lockstep", kFour, lab, kClockRealtime);
 }

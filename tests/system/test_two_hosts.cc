@@ -5,8 +5,10 @@
 // namespaces and veth: on a machine without them the runs fail (exit 2, naming why), and so
 // do the tests.
 
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -188,6 +190,57 @@ TEST_CASE("real time over two hosts: controlled as on one host, each process in 
     CHECK(c["drops"].as<int>() == 0);
   }
   CHECK(two["timing"]["plant"]["latency_count"].as<int>() > 500);
+}
+
+TEST_CASE("a host started by hand: rig run prints its commands, they fly with it, the truth of one host",
+          "[system]") {
+  // The lab network is a private namespace's loopback with a multicast route; the commands rig
+  // run prints for host 'flight' are run in it as printed, as on the flight computer.
+  const std::string a = scratch_dir("hand_one"), b = scratch_dir("hand_two");
+  const std::string common = "--clock lockstep --seed 4 --set duration_s=2";
+  const RunResult one = rig_run(kOneHost, a, common);
+  INFO(one.output);
+  REQUIRE(one.exit_code == 0);
+  const std::string script = b + "/lab.sh";
+  std::ofstream(script)
+      << "set -u\n"
+      << "ip link set lo up && ip route add 224.0.0.0/4 dev lo || exit 90\n"
+      << RIG_BIN << " run " << kOneHost << " " << common
+      << " --set run.network_namespace=never --set 'run.lcm_url=udpm://239.255.76.67:7667?ttl=1'"
+      << " --set 'hosts={sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}'"
+      << " --log " << b << "/run.lcmlog --json " << b << "/summary.json --no-progress > " << b << "/out.txt 2>&1 &\n"
+      << "rig=$!\n"
+      << "for i in $(seq 800); do [ \"$(grep -c -- '--lcm-url' " << b << "/out.txt)\" = 2 ] && break; sleep 0.025; done\n"
+      << "grep -- '--lcm-url' " << b << "/out.txt > " << b << "/commands.txt\n"
+      << "while read -r command; do eval \"$command\" >> " << b << "/by_hand.out 2>&1 & done < " << b << "/commands.txt\n"
+      << "wait $rig\n"
+      << "code=$?\n"
+      // The processes started by hand end on the run's stop command; whatever has not after a
+      // moment is stopped here, so that a failed run leaves nothing behind.
+      << "for i in $(seq 40); do [ -z \"$(jobs -pr)\" ] && break; sleep 0.05; done\n"
+      << "kill $(jobs -pr) 2>/dev/null\n"
+      << "exit $code\n";
+  const int status = std::system(("unshare -n bash " + script).c_str());
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const std::string out = slurp(b + "/out.txt");
+  INFO(out);
+  INFO("by hand: " << slurp(b + "/by_hand.out"));
+  if (code == 90) FAIL("this machine cannot give a private network namespace a multicast loopback (unshare -n, ip route)");
+  REQUIRE(code == 0);
+  const std::string commands = slurp(b + "/commands.txt");
+  CHECK(commands.find("nimble_controller --name controller --scenario " + b + "/run.lcmlog.scenario.yaml") !=
+        std::string::npos);
+  CHECK(commands.find("nimble_estimator --name estimator") != std::string::npos);
+  const YAML::Node two = YAML::LoadFile(b + "/summary.json");
+  CHECK(two["result"].as<std::string>() == one.summary["result"].as<std::string>());
+  CHECK(two["processes"]["controller"]["host"].as<std::string>() == "flight");
+  CHECK(two["processes"]["controller"]["pid"].as<long long>() == -1);  // not the launcher's child
+  CHECK(two["processes"]["plant"]["host"].as<std::string>() == "sim");
+  CHECK(out.find("controller(started by hand)") != std::string::npos);
+  const auto truth_one = channel_payloads(a + "/run.lcmlog", ch::kTruth);
+  REQUIRE(truth_one.size() == 2001);
+  CHECK(differing(truth_one, channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
+  CHECK(two["channels"][ch::kActuatorCommand]["count"].as<int>() == 1024);
 }
 
 TEST_CASE("a bad hosts section stops the run before anything starts, naming the file, the line and why",
