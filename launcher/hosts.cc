@@ -38,8 +38,8 @@ unsigned subnet_of(unsigned address, int prefix) { return prefix == 0 ? 0u : add
 int lcm_url_ttl(const std::string& url) {
   const auto at = url.find("ttl=");
   if (at == std::string::npos || (at > 0 && url[at - 1] != '?' && url[at - 1] != '&')) return 0;
-  const std::string digits = url.substr(at + 4, url.find('&', at) == std::string::npos ? std::string::npos
-                                                                                         : url.find('&', at) - at - 4);
+  const auto end = url.find('&', at);
+  const std::string digits = url.substr(at + 4, end == std::string::npos ? std::string::npos : end - at - 4);
   if (digits.empty() || digits.size() > 3 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) return -1;
   return std::atoi(digits.c_str());
 }
