@@ -70,7 +70,8 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
     candump_ = std::make_unique<CandumpWriter>(config_.candump_file);
   }
 
-  node_ = std::make_unique<ProcessNode>(options, transport::realtime_settings(scenario));
+  node_ = std::make_unique<ProcessNode>(options, transport::realtime_settings(scenario),
+                                        transport::config_digest(scenario));
   if (socket_->fd() >= 0) node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
   else options.hub->add_poller([this] { return drain_socket() > 0; });
   health_period_ns_ = static_cast<int64_t>(1e9 / config_.health_rate_hz);

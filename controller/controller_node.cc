@@ -29,7 +29,8 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
   const ProcessRunOptions run = process_run_options(scenario);
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario));
+  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
+                                                   transport::config_digest(scenario));
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {

@@ -21,7 +21,8 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   const SensingConfig sensing = sensing_config_from(section);
   ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
   builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario));
+  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
+                                                   transport::config_digest(scenario));
   node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
   node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {

@@ -45,6 +45,7 @@
 #include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
+#include "transport/process_main.h"
 
 namespace nimble::launcher {
 namespace {
@@ -201,6 +202,15 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     return kRunBadInput;
   }
 
+  // What every process must report as its configuration: the digest of the resolved scenario.
+  std::string run_digest;
+  try {
+    run_digest = transport::config_digest(load_scenario(resolved_file));
+  } catch (const ConfigError& e) {
+    std::cerr << "rig run: the resolved scenario does not load back: " << e.what() << "\n";
+    return kRunBadInput;
+  }
+
   std::unique_ptr<transport::Bus> bus;
   try {
     bus = std::make_unique<transport::Bus>(url);
@@ -312,7 +322,13 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
         waiting += (waiting.empty() ? "" : ", ") + name;
       }
     }
-    if (all_ready) break;
+    if (all_ready) {
+      if (const std::string wrong = monitor.config_mismatch(run_digest, scenario.processes); !wrong.empty()) {
+        return fail(wrong + ": it was not started with this run's resolved scenario " + resolved_file +
+                    " (on another machine: the same file, with the same model and manoeuvre files at the same paths)");
+      }
+      break;
+    }
     if (g_interrupted) return fail("interrupted while waiting for processes to be ready");
     if (monotonic_ns() > ready_deadline) {
       return fail("timed out after " + std::to_string(lc.ready_timeout_s) +

@@ -17,18 +17,6 @@ namespace {
 using contract::channels::kActuatorFeedback;
 using contract::channels::kTruth;
 
-std::string file_digest(const std::string& text) {
-  // FNV-1a 64-bit of the resolved scenario: equal digests mean equal configurations.
-  uint64_t h = 1469598103934665603ULL;
-  for (const unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
 }  // namespace
 
 std::unique_ptr<PlantModel> plant_model_for(const Scenario& scenario, const PlantConfig& config) {
@@ -53,7 +41,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
   node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
-                                                   file_digest(to_yaml(scenario.root)));
+                                                   transport::config_digest(scenario));
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   command_channel_ = plant_command_channel(scenario);

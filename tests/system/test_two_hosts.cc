@@ -192,27 +192,31 @@ TEST_CASE("real time over two hosts: controlled as on one host, each process in 
   CHECK(two["timing"]["plant"]["latency_count"].as<int>() > 500);
 }
 
-TEST_CASE("a host started by hand: rig run prints its commands, they fly with it, the truth of one host",
-          "[system]") {
-  // The lab network is a private namespace's loopback with a multicast route; the commands rig
-  // run prints for host 'flight' are run in it as printed, as on the flight computer.
-  const std::string a = scratch_dir("hand_one"), b = scratch_dir("hand_two");
-  const std::string common = "--clock lockstep --seed 4 --set duration_s=2";
-  const RunResult one = rig_run(kOneHost, a, common);
-  INFO(one.output);
-  REQUIRE(one.exit_code == 0);
-  const std::string script = b + "/lab.sh";
+/// Flies the 6 Hz doublet with host 'flight' (controller, estimator) started by hand, in a
+/// private network namespace whose loopback carries multicast: the lab network of the test. The
+/// commands `rig run` prints for that host are run as printed, as on the flight computer; with
+/// `other_seed` the controller's command is given a copy of the resolved scenario with another
+/// seed. Writes into `dir` (out.txt, summary.json, commands.txt); returns the script's exit code.
+int fly_by_hand(const std::string& dir, const std::string& args, bool other_seed) {
+  const std::string script = dir + "/lab.sh";
+  const std::string resolved = dir + "/run.lcmlog.scenario.yaml";
   std::ofstream(script)
       << "set -u\n"
       << "ip link set lo up && ip route add 224.0.0.0/4 dev lo || exit 90\n"
-      << RIG_BIN << " run " << kOneHost << " " << common
+      << RIG_BIN << " run " << kOneHost << " " << args
       << " --set run.network_namespace=never --set 'run.lcm_url=udpm://239.255.76.67:7667?ttl=1'"
       << " --set 'hosts={sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}'"
-      << " --log " << b << "/run.lcmlog --json " << b << "/summary.json --no-progress > " << b << "/out.txt 2>&1 &\n"
+      << " --log " << dir << "/run.lcmlog --json " << dir << "/summary.json --no-progress > " << dir
+      << "/out.txt 2>&1 &\n"
       << "rig=$!\n"
-      << "for i in $(seq 800); do [ \"$(grep -c -- '--lcm-url' " << b << "/out.txt)\" = 2 ] && break; sleep 0.025; done\n"
-      << "grep -- '--lcm-url' " << b << "/out.txt > " << b << "/commands.txt\n"
-      << "while read -r command; do eval \"$command\" >> " << b << "/by_hand.out 2>&1 & done < " << b << "/commands.txt\n"
+      << "for i in $(seq 800); do [ \"$(grep -c -- '--lcm-url' " << dir << "/out.txt)\" = 2 ] && break; sleep 0.025; done\n"
+      << "grep -- '--lcm-url' " << dir << "/out.txt > " << dir << "/commands.txt\n"
+      << (other_seed ? "sed 's/^seed: .*/seed: 99/' " + resolved + " > " + dir + "/other.yaml\n" +
+                           "sed -i '/--name controller/s#--scenario [^ ]*#--scenario " + dir + "/other.yaml#' " + dir +
+                           "/commands.txt\n"
+                     : std::string())
+      << "while read -r command; do eval \"$command\" >> " << dir << "/by_hand.out 2>&1 & done < " << dir
+      << "/commands.txt\n"
       << "wait $rig\n"
       << "code=$?\n"
       // The processes started by hand end on the run's stop command; whatever has not after a
@@ -222,10 +226,21 @@ TEST_CASE("a host started by hand: rig run prints its commands, they fly with it
       << "exit $code\n";
   const int status = std::system(("unshare -n bash " + script).c_str());
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code == 90) FAIL("this machine cannot give a private network namespace a multicast loopback (unshare -n, ip route)");
+  return code;
+}
+
+TEST_CASE("a host started by hand: rig run prints its commands, they fly with it, the truth of one host",
+          "[system]") {
+  const std::string a = scratch_dir("hand_one"), b = scratch_dir("hand_two");
+  const std::string common = "--clock lockstep --seed 4 --set duration_s=2";
+  const RunResult one = rig_run(kOneHost, a, common);
+  INFO(one.output);
+  REQUIRE(one.exit_code == 0);
+  const int code = fly_by_hand(b, common, false);
   const std::string out = slurp(b + "/out.txt");
   INFO(out);
   INFO("by hand: " << slurp(b + "/by_hand.out"));
-  if (code == 90) FAIL("this machine cannot give a private network namespace a multicast loopback (unshare -n, ip route)");
   REQUIRE(code == 0);
   const std::string commands = slurp(b + "/commands.txt");
   CHECK(commands.find("nimble_controller --name controller --scenario " + b + "/run.lcmlog.scenario.yaml") !=
@@ -241,6 +256,20 @@ TEST_CASE("a host started by hand: rig run prints its commands, they fly with it
   REQUIRE(truth_one.size() == 2001);
   CHECK(differing(truth_one, channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
   CHECK(two["channels"][ch::kActuatorCommand]["count"].as<int>() == 1024);
+}
+
+TEST_CASE("a process started by hand with another scenario is named before the run starts", "[system]") {
+  const std::string d = scratch_dir("hand_other");
+  const int code = fly_by_hand(d, "--clock lockstep --set duration_s=2", true);
+  const std::string out = slurp(d + "/out.txt");
+  INFO(out);
+  CHECK(slurp(d + "/commands.txt").find("--scenario " + d + "/other.yaml") != std::string::npos);
+  CHECK(code == 3);
+  CHECK(out.find("process 'controller' flies another configuration: its digest ") != std::string::npos);
+  CHECK(out.find("it was not started with this run's resolved scenario " + d + "/run.lcmlog.scenario.yaml") !=
+        std::string::npos);
+  CHECK(out.find("estimator' flies") == std::string::npos);  // the one given the run's scenario is not named
+  CHECK(nimble::test::channel_counts(d + "/run.lcmlog").count(ch::kTruth) == 0);  // nothing flew
 }
 
 TEST_CASE("a bad hosts section stops the run before anything starts, naming the file, the line and why",
