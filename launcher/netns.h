@@ -41,6 +41,9 @@ std::string ensure_can_interface(const std::string& name, bool create_virtual, b
 /// 224.0.0.0/4 route (on the veth, not on lo: a datagram sent with ttl >= 1 goes out on the
 /// link, and IP_MULTICAST_LOOP, on in LCM, still delivers it to the sender's own host).
 ///
+/// The veth keeps the kernel's default MTU, 1500 bytes, as on an Ethernet lab network: a large
+/// LCM message is fragmented on the link as it would be there.
+///
 /// Nothing outside holds the namespace but this object's descriptor and the processes started
 /// in it: once both are gone the kernel frees the namespace, and with it the veth pair (both
 /// ends: deleting one end of a veth deletes its peer), so a run leaves nothing behind.
