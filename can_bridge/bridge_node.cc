@@ -70,8 +70,8 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
     candump_ = std::make_unique<CandumpWriter>(config_.candump_file);
   }
 
-  node_ = std::make_unique<ProcessNode>(options, transport::realtime_settings(scenario),
-                                        transport::config_digest(scenario));
+  node_ = transport::make_process_node(scenario, options);
+  link_faults_ = std::make_unique<CanLinkFaults>(scenario.faults, scenario.seed);
   if (socket_->fd() >= 0) node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
   else options.hub->add_poller([this] { return drain_socket() > 0; });
   health_period_ns_ = static_cast<int64_t>(1e9 / config_.health_rate_hz);
@@ -115,11 +115,99 @@ int64_t CanBridgeNode::rig_time_us() const {
 
 void CanBridgeNode::on_cycle(int64_t /*sim_time_ns*/) {
   ++cycles_due_;
+  skip_lost_commands();
   if (commands_crossed_ < cycles_due_) node_->hold_ack();
+}
+
+void CanBridgeNode::skip_lost_commands() {
+  if (role_ != Role::kRig || link_faults_->empty()) return;
+  // A command the link's faults destroy never comes: its cycle is acknowledged without it. Asked
+  // for the next command owed, whether it is owed at this cycle or became the next at an arrival.
+  while (commands_crossed_ < cycles_due_) {
+    // The shadow decoder sees every command in order, also those that arrived before their cycle.
+    while (shadow_next_ <= commands_crossed_) shadow_arrives_ = command_will_arrive(shadow_next_);
+    if (shadow_arrives_) break;
+    ++commands_crossed_;
+    ++commands_never_came_;
+  }
+}
+
+bool CanBridgeNode::command_will_arrive(int64_t m) {
+  ++shadow_next_;
+  const int64_t utime = m * cycle_period_ns_ / 1000;  // the controller's cycle time
+  const auto counter = static_cast<uint8_t>(m % kCounterModulo);
+  bool complete = false;
+  for (std::size_t j = 0; j < kCommandFrames.size(); ++j) {
+    if (link_faults_->fate(CanLinkFaults::Direction::kCommand, m, static_cast<int>(j), utime, CAN_MAX_DLEN, nullptr) !=
+        CanLinkFaults::Fate::kSent) {
+      continue;
+    }
+    if (!shadow_assembler_.accept_counter(j, counter, shadow_stats_)) continue;
+    complete = shadow_assembler_.store(j, counter, shadow_stats_);
+  }
+  return complete;
+}
+
+void CanBridgeNode::update_bus_off(int64_t utime) {
+  const contract::FaultSpec* active = link_faults_->active_at(utime);
+  if (active != active_link_fault_ && role_ == Role::kFlight) {
+    // The flight side announces the link's faults (its commands pace them, 512 a second).
+    char when[40];
+    std::snprintf(when, sizeof when, " at t = %.3f s", 1e-6 * static_cast<double>(utime));
+    if (active_link_fault_ != nullptr) {
+      node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_FAULT_INJECTED, contract::kFaultTargetCan,
+                   "injected " + active_link_fault_->describe() + " ended" + when);
+    }
+    if (active != nullptr) {
+      node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_FAULT_INJECTED, contract::kFaultTargetCan,
+                   "injected " + active->describe() + " began" + when);
+    }
+  }
+  active_link_fault_ = active;
+  const contract::FaultSpec* off = link_faults_->bus_off_at(utime);
+  if ((off != nullptr) == injected_bus_off_) return;
+  injected_bus_off_ = off != nullptr;
+  char when[40];
+  std::snprintf(when, sizeof when, "t = %.3f s", 1e-6 * static_cast<double>(utime));
+  if (injected_bus_off_) {
+    bus_state_ = can_health_t::BUS_OFF;
+    last_error_ = "bus-off (injected " + off->describe() + ")";
+    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
+                 "bus-off on " + config_.interface + " at " + when + ": this controller sends nothing (injected " +
+                     off->describe() + ")");
+  } else {
+    bus_state_ = can_health_t::BUS_ACTIVE;
+    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
+                 "back to error-active on " + config_.interface + " at " + when + ": sending again");
+  }
+}
+
+template <std::size_t N>
+void CanBridgeNode::send_message(const std::array<can_frame, N>& frames, CanLinkFaults::Direction direction,
+                                 int64_t message, int64_t utime) {
+  if (link_faults_->empty()) {
+    for (const can_frame& f : frames) send(f);
+    return;
+  }
+  update_bus_off(utime);
+  for (std::size_t j = 0; j < N; ++j) {
+    can_frame f = frames[j];
+    int bit = 0;
+    switch (link_faults_->fate(direction, message, static_cast<int>(j), utime, f.len, &bit)) {
+      case CanLinkFaults::Fate::kSent: send(f); break;
+      case CanLinkFaults::Fate::kCorrupted:
+        f.data[bit / 8] ^= static_cast<uint8_t>(1u << (bit % 8));
+        send(f);
+        break;
+      case CanLinkFaults::Fate::kLost:
+      case CanLinkFaults::Fate::kBusOff: ++frames_withheld_; break;
+    }
+  }
 }
 
 void CanBridgeNode::on_command_crossed() {
   ++commands_crossed_;
+  skip_lost_commands();
   if (node_->ack_held() && commands_crossed_ >= cycles_due_) node_->release_ack();
 }
 
@@ -148,13 +236,13 @@ void CanBridgeNode::send(const can_frame& frame) {
 }
 
 void CanBridgeNode::on_command(const actuator_command_t& cmd) {
-  for (const can_frame& f : command_encoder_.encode(cmd)) send(f);
+  send_message(command_encoder_.encode(cmd), CanLinkFaults::Direction::kCommand, command_messages_++, cmd.utime);
   ++messages_to_can_;
   on_command_crossed();
 }
 
 void CanBridgeNode::on_feedback(const actuator_feedback_t& fb) {
-  for (const can_frame& f : feedback_encoder_.encode(fb)) send(f);
+  send_message(feedback_encoder_.encode(fb), CanLinkFaults::Direction::kFeedback, feedback_messages_++, fb.utime);
   ++messages_to_can_;
 }
 

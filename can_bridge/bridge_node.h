@@ -38,8 +38,11 @@
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 
+#include <array>
+
 #include "can_bridge/bridge_config.h"
 #include "can_bridge/can_socket.h"
+#include "can_bridge/can_faults.h"
 #include "can_bridge/candump_log.h"
 #include "can_bridge/codec.h"
 #include "can_bridge/inprocess_can_bus.h"
@@ -77,6 +80,13 @@ class CanBridgeNode {
   void on_error_frame(const ReceivedFrame& rx);
   void reject(const ReceivedFrame& rx, DecodeResult result);
   void send(const can_frame& frame);
+  /// Sends the frames of message `message` in `direction` (time `utime`) through the link's
+  /// faults (CanLinkFaults): lost and bus-off frames are not sent, corrupted ones have a bit flipped.
+  template <std::size_t N>
+  void send_message(const std::array<can_frame, N>& frames, CanLinkFaults::Direction direction, int64_t message,
+                    int64_t utime);
+  /// Enters or leaves an injected bus-off at `utime` (FAULT CAN_ERROR_FRAME, CAN_HEALTH state).
+  void update_bus_off(int64_t utime);
   void log_frame(const ReceivedFrame& rx);
   void on_cycle(int64_t sim_time_ns);
   /// A command crossed this side's part of the link; releases a held STEP_ACK once every
@@ -101,6 +111,24 @@ class CanBridgeNode {
   int64_t commands_crossed_ = 0;
 
   int64_t messages_to_can_ = 0, messages_to_lcm_ = 0;
+  /// Faults of the link (scenario faults with target CAN), and the messages numbered for them.
+  std::unique_ptr<CanLinkFaults> link_faults_;
+  int64_t command_messages_ = 0, feedback_messages_ = 0;
+  int64_t frames_withheld_ = 0;      ///< frames a link fault lost or a bus-off kept back
+  int64_t commands_never_came_ = 0;  ///< rig side, lockstep: cycles acknowledged without their command
+  /// Rig side, lockstep, with link faults: whether command message `m` (m = shadow_next_; asked in order, once each)
+  /// will be decoded whole: the flight side's frame fates, then the decoder's counter rule on a
+  /// shadow assembler (a long gap makes the next few counters look stale, and they are dropped).
+  /// The controller numbers its commands' rolling counters m mod 16.
+  bool command_will_arrive(int64_t m);
+  /// Rig side, lockstep, with link faults: counts as crossed the owed commands that will never arrive.
+  void skip_lost_commands();
+  bool shadow_arrives_ = true;  ///< command_will_arrive() of the command shadow_next_ - 1
+  FrameAssembler shadow_assembler_{kCommandFrames.size()};
+  DecodeStats shadow_stats_;
+  int64_t shadow_next_ = 0;
+  const contract::FaultSpec* active_link_fault_ = nullptr;  ///< the link fault active at the last message
+  bool injected_bus_off_ = false;
   int64_t feedback_seq_ = 0;
   int8_t bus_state_ = 0;
   std::string last_error_;

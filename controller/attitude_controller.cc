@@ -109,6 +109,9 @@ const ParamTable<ControllerConfig>& controller_params() {
       {"throttle.throttle_to_freq_radps_per_pct", &C::throttle_to_freq_radps_per_pct, kThrottleMap, "rad/s/%", "collective per % throttle; the plant's collective_radps_per_pct"},
       {"limits.flap_freq_min_radps", &C::flap_freq_min_radps, kFreq, "rad/s", "lowest flapping-frequency command"},
       {"limits.flap_freq_max_radps", &C::flap_freq_max_radps, Range{0.0, 1000.0, true, false}, "rad/s", "highest flapping-frequency command, above the lowest"},
+      {"failsafe.input_stale_s", &C::input_stale_s, Range{0.0, 10.0, true, false}, "s", "an input older than this engages the failsafe"},
+      {"failsafe.first_input_timeout_s", &C::first_input_timeout_s, Range{0.0, 60.0, true, false}, "s", "no input at all by this time engages the failsafe"},
+      {"failsafe.throttle_pct", &C::failsafe_throttle_pct, Range::closed(0.0, 100.0), "%", "throttle of the failsafe (neutral roll and pitch)"},
   };
   return table;
 }
@@ -256,6 +259,12 @@ ControllerConfig controller_config_from(ConfigMap& map, const ControllerConfig& 
     read_params(lim, controller_params(), c, "limits");
     lim.finish();
   }
+
+  if (map.has("failsafe")) {
+    ConfigMap fs = map.get_map("failsafe");
+    read_params(fs, controller_params(), c, "failsafe");
+    fs.finish();
+  }
   map.finish();
 
   try {
@@ -394,6 +403,22 @@ ControllerOutput AttitudeController::step(const ControllerInput& in) {
 
   out.saturated = saturated;
   if (saturated) ++counters_.saturated_steps;
+  return out;
+}
+
+ControllerOutput AttitudeController::failsafe_output(double throttle_pct) {
+  reset();
+  ControllerOutput out;
+  out.throttle_cmd_pct = std::clamp(throttle_pct, 0.0, 100.0);
+  out.delta_throttle_pct = out.throttle_cmd_pct - config_.trim_throttle_pct;
+  const double f = std::clamp(config_.f_trim_radps + config_.throttle_to_freq_radps_per_pct * out.delta_throttle_pct,
+                              config_.flap_freq_min_radps, config_.flap_freq_max_radps);
+  out.flap_freq_left_radps = f;
+  out.flap_freq_right_radps = f;
+  out.collective_radps = f;
+  out.delta_f_cmd_radps = 0.0;
+  out.dihedral_rad = 0.0;
+  out.wing_root_rad = 0.0;
   return out;
 }
 

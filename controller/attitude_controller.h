@@ -92,6 +92,17 @@ struct ControllerConfig {
   /// Upper limit of each wing's flapping-frequency command [rad/s] (software safety limit).
   double flap_freq_max_radps = 200.0;
 
+  /// Failsafe: the input (TRUTH or ESTIMATE; for an estimate, the time of the IMU sample it
+  /// rests on) is stale when older than this [s]. 50 ms: about 25 control cycles at 512 Hz, ten
+  /// times the motion-capture latency the EKF is built for (assumption: no published figure).
+  double input_stale_s = 0.05;
+  /// Failsafe: no input at all by this simulated time [s] engages it too. 0.5 s: the estimator's
+  /// first estimate follows its first motion-capture pose within milliseconds (assumption).
+  double first_input_timeout_s = 0.5;
+  /// Failsafe throttle [%]: with neutral roll and pitch commands, a slow descent. 57 %: about
+  /// 0.65 m/s^2 of thrust below the weight (thesis Eq 4.18 with the collective map above).
+  double failsafe_throttle_pct = 57.0;
+
   /// Control period 1 / rate_hz [s].
   double dt_s() const { return 1.0 / rate_hz; }
 };
@@ -184,6 +195,11 @@ class AttitudeController {
   /// One control step. Never throws: non-finite inputs are replaced by their
   /// last finite value (counted), commands are clipped at their limits (counted).
   ControllerOutput step(const ControllerInput& in);
+
+  /// The failsafe's command, without state feedback: zero roll and pitch commands (the wings
+  /// neutral, no differential flapping) at `throttle_pct`. Resets the command filters, so that
+  /// a step() after it starts from rest.
+  ControllerOutput failsafe_output(double throttle_pct);
 
   /// Selects the roll gain set `name`. Never throws: an unknown name keeps the
   /// active set, is counted and returns false.

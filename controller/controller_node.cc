@@ -2,6 +2,8 @@
 #include "transport/process_main.h"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
@@ -29,14 +31,13 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
   const ProcessRunOptions run = process_run_options(scenario);
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
-                                                   transport::config_digest(scenario));
+  node_ = transport::make_process_node(scenario, options);
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {
     node_->set_expected_rate(contract::channels::kEstimate, 512.0);
     node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& e) {
-      const Input in{e.utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
+      const Input in{e.utime, e.imu_utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
       if (node_->lockstep()) {
         estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
       } else {
@@ -47,17 +48,33 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
     });
   } else {
     node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
-      input_ = Input{t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
+      input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
       have_input_ = true;
       node_->notify_input(t.utime * 1000);
     });
   }
   node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
                   run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
-                                                    : transport::ProcessNode::Trigger::kTimer);
+                                                    : transport::ProcessNode::Trigger::kTimer,
+                  // Triggered by its input, it still runs once that input is stale, to take the failsafe.
+                  static_cast<int64_t>(config_.input_stale_s * 1e9));
 }
 
 int ControllerNode::run() { return node_->run(); }
+
+void ControllerNode::engage_failsafe(int64_t utime, const std::string& why) {
+  failsafe_ = true;
+  const std::string& channel = use_estimate_ ? contract::channels::kEstimate : kTruth;
+  char when[40];
+  std::snprintf(when, sizeof when, "at t = %.3f s", 1e-6 * static_cast<double>(utime));
+  node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_INPUT_STALE, channel,
+               std::string("controller input ") + channel + " " + when + ": " + why);
+  char action[120];
+  std::snprintf(action, sizeof action, "zero roll and pitch commands at %.1f %% throttle until the run ends",
+                config_.failsafe_throttle_pct);
+  node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_FAILSAFE, channel,
+               std::string("failsafe engaged ") + when + " (" + channel + ": " + why + "): " + action);
+}
 
 void ControllerNode::cycle(int64_t sim_time_ns) {
   const double t_s = static_cast<double>(sim_time_ns) / 1e9;
@@ -82,14 +99,21 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   in.pitch_sp_rad = sp.pitch_sp_rad;
   in.throttle_pct = sp.throttle_pct;
   in.throttle_factor = sp.throttle_factor;
-  const int64_t input_age_us = have_input_ ? utime - input_.utime : -1;
-  if (have_input_ && input_age_us > static_cast<int64_t>(input_stale_s_ * 1e6) && !stale_reported_) {
-    stale_reported_ = true;
-    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_INPUT_STALE,
-                 use_estimate_ ? contract::channels::kEstimate : kTruth,
-                 "controller input is " + std::to_string(input_age_us / 1000) + " ms old");
+  const int64_t input_age_us = have_input_ ? utime - input_.measured_utime : -1;
+  if (!failsafe_) {
+    // Not finite is as good as none: the controller never flies on NaN.
+    const bool finite = std::isfinite(in.phi_rad) && std::isfinite(in.theta_rad) && std::isfinite(in.p_radps) &&
+                        std::isfinite(in.q_radps);
+    if (have_input_ && input_age_us > static_cast<int64_t>(config_.input_stale_s * 1e6)) {
+      engage_failsafe(utime, "its input is " + std::to_string(input_age_us / 1000) + " ms old (limit " +
+                                 std::to_string(static_cast<int>(config_.input_stale_s * 1e3)) + " ms)");
+    } else if (!have_input_ && utime > static_cast<int64_t>(config_.first_input_timeout_s * 1e6)) {
+      engage_failsafe(utime, "no input at all after " + std::to_string(config_.first_input_timeout_s) + " s");
+    } else if (have_input_ && !finite) {
+      engage_failsafe(utime, "its input is not finite");
+    }
   }
-  const ControllerOutput out = controller_->step(in);
+  const ControllerOutput out = failsafe_ ? controller_->failsafe_output(config_.failsafe_throttle_pct) : controller_->step(in);
   // The command goes out first: it is what the plant waits for.
 
   actuator_command_t cmd;
@@ -141,6 +165,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
     st.saturated = out.saturated;
     st.input_source = use_estimate_ ? controller_status_t::INPUT_ESTIMATE : controller_status_t::INPUT_TRUTH;
     st.input_age_us = input_age_us;
+    st.failsafe = failsafe_;
     node_->bus().publish(kControllerStatus, st);
   });
 }

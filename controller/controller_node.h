@@ -11,8 +11,12 @@
 ///   CONTROLLER_STATUS  controller_status_t   references, errors, gains, saturation
 ///   FAULT, HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode)
 ///
-/// Each control cycle uses the newest TRUTH; an input older than input_stale_s is
-/// reported once as a FAULT and the controller keeps flying on it.
+/// Each control cycle uses the newest input. Failsafe (controller.failsafe): when the input is
+/// older than input_stale_s (an estimate by the time of the IMU sample it rests on, so a
+/// repeated or frozen estimate ages too), or none has come by first_input_timeout_s, the
+/// controller raises CODE_INPUT_STALE and CODE_FAILSAFE and from then on, until the run ends,
+/// commands zero roll and pitch (wings neutral, no differential flapping) at
+/// failsafe.throttle_pct, a slow descent. CONTROLLER_STATUS carries `failsafe`.
 
 #include <memory>
 
@@ -44,7 +48,8 @@ class ControllerNode {
   std::unique_ptr<transport::ProcessNode> node_;
   /// The state the next cycle uses (from TRUTH or ESTIMATE).
   struct Input {
-    int64_t utime = -1;
+    int64_t utime = -1;     ///< the message's stamp (a lockstep estimate's tick)
+    int64_t measured_utime = -1;  ///< the time the state refers to (an estimate: its IMU sample)
     double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0;
   };
   Input input_{};
@@ -53,8 +58,9 @@ class ControllerNode {
   transport::LatchedInput<Input> estimates_{transport::LatchedInput<Input>::Release::kAfterStamp, 8};
   bool use_estimate_ = false;
   bool have_input_ = false;
-  bool stale_reported_ = false;
-  double input_stale_s_ = 0.05;
+  bool failsafe_ = false;
+  /// Engages the failsafe at `utime` for `why` (CODE_INPUT_STALE and CODE_FAILSAFE).
+  void engage_failsafe(int64_t utime, const std::string& why);
   int64_t sp_seq_ = 0, cmd_seq_ = 0, status_seq_ = 0;
   int8_t rolling_counter_ = 0;
 };

@@ -21,12 +21,17 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   const SensingConfig sensing = sensing_config_from(section);
   ekf_ = std::make_unique<AttitudeVelocityEkf>(sensing.ekf);
   builder_ = std::make_unique<MocapMeasurementBuilder>(sensing.velocity_differentiator);
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
-                                                   transport::config_digest(scenario));
+  if (sensing.ekf.gate_enabled) {
+    divergence_ = std::make_unique<DivergenceMonitor>(kDivergenceWindow, 1.0 - sensing.ekf.gate_probability,
+                                                      kDivergenceFalseAlarm);
+  }
+  node_ = transport::make_process_node(scenario, options);
   node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
   node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
+  stuck_check_ = sensing.imu.gyro_noise_sigma_radps.norm() > 0.0 || sensing.imu.accel_noise_sigma_mps2.norm() > 0.0;
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
     const ImuSample s = contract::from_message(m);
+    if (!imu_usable(s)) return;
     if (node_->lockstep()) {
       imu_inbox_.push(s.utime, s);
     } else {
@@ -38,6 +43,11 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
     const MocapPose p = contract::from_message(m);
+    if (!p.position_ned_m.allFinite() || !p.q_body_to_ned.coeffs().allFinite()) {
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
+                   "motion-capture frame " + std::to_string(p.frame_number) + " has non-finite values: not used");
+      return;
+    }
     if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
     else apply_pose(p);
   });
@@ -47,6 +57,30 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
 }
 
 int EstimatorNode::run() { return node_->run(); }
+
+bool EstimatorNode::imu_usable(const ImuSample& sample) {
+  if (!sample.gyro_radps.allFinite() || !sample.accel_mps2.allFinite()) {
+    node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kImu,
+                 "IMU sample at " + std::to_string(sample.utime) + " us has non-finite values: not used");
+    return false;
+  }
+  if (!stuck_check_) return true;
+  const bool same = sample.gyro_radps == last_imu_.gyro_radps && sample.accel_mps2 == last_imu_.accel_mps2;
+  last_imu_ = sample;
+  imu_repeats_ = same ? imu_repeats_ + 1 : 0;
+  if (!same && imu_stuck_) {
+    imu_stuck_ = false;
+    node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_SENSOR_STUCK, contract::channels::kImu,
+                 "IMU values change again at " + std::to_string(sample.utime) + " us: samples used again");
+  }
+  if (imu_repeats_ + 1 >= kImuStuckSamples && !imu_stuck_) {
+    imu_stuck_ = true;
+    node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_SENSOR_STUCK, contract::channels::kImu,
+                 "IMU stuck: " + std::to_string(kImuStuckSamples) + " bit-identical samples up to " +
+                     std::to_string(sample.utime) + " us, impossible with its configured noise; samples not used");
+  }
+  return !imu_stuck_;
+}
 
 void EstimatorNode::apply_imu(const ImuSample& sample) {
   if (ekf_->initialized()) ekf_->predict(sample);
@@ -64,6 +98,26 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
       if (status == EkfMeasurementStatus::kTooOld || status == EkfMeasurementStatus::kTooNew) report_dropped(z, status);
     }
   }
+  watch_divergence();
+}
+
+void EstimatorNode::watch_divergence() {
+  if (!divergence_ || diverged_) return;
+  // Decisions taken since the last look (a measurement held for the IMU is decided later).
+  const EkfCounters& c = ekf_->counters();
+  bool now_diverged = false;
+  for (; seen_accepted_ < c.measurements_accepted; ++seen_accepted_) now_diverged |= divergence_->add(false);
+  for (; seen_rejected_ < c.measurements_rejected_gate; ++seen_rejected_) now_diverged |= divergence_->add(true);
+  if (!now_diverged) return;
+  diverged_ = true;
+  std::ostringstream msg;
+  msg << std::fixed << std::setprecision(3) << "EKF diverged at t = " << 1e-6 * static_cast<double>(ekf_->utime())
+      << " s: " << divergence_->threshold() << " or more of the last " << divergence_->window()
+      << " motion-capture measurements failed the innovation gate (a consistent filter does so with probability "
+      << kDivergenceFalseAlarm << "; last NIS " << std::setprecision(1) << ekf_->last_nis()
+      << "); no more estimates are published";
+  node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_ESTIMATOR_DIVERGED, contract::channels::kEstimate,
+               msg.str());
 }
 
 void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status) {
@@ -106,7 +160,8 @@ void EstimatorNode::tick(int64_t sim_time_ns) {
 }
 
 void EstimatorNode::publish(int64_t utime) {
-  if (!ekf_->initialized()) return;
+  watch_divergence();  // decisions taken when an IMU sample released a held measurement
+  if (!ekf_->initialized() || diverged_) return;
   const EkfState& x = ekf_->state();
   const EkfCovariance& P = ekf_->covariance();
   const Eigen::Vector3d w = ekf_->corrected_rate_radps();

@@ -17,9 +17,16 @@
 /// rollback). Lockstep: at each tick the inputs that became available before the tick are
 /// applied in time order and one estimate goes out, stamped with the tick time, so that
 /// what the controller sees at a tick does not depend on process timing.
+///
+/// Bad inputs: a sample or pose with non-finite values is malformed (CODE_MESSAGE_MALFORMED)
+/// and not used. An IMU whose six channels repeat bit for bit for kImuStuckSamples samples
+/// is stuck (CODE_SENSOR_STUCK, only when the configured IMU noise is not zero: a noisy sensor
+/// cannot repeat itself); its samples are not used until they change, so the estimate's
+/// imu_utime stops and the controller, which ages an estimate by it, takes its failsafe.
 
 #include <memory>
 
+#include "estimator/divergence_monitor.h"
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
 #include "scenario/scenario.h"
@@ -36,6 +43,17 @@ class EstimatorNode {
   int run();
   transport::ProcessNode& node() { return *node_; }
 
+  /// Identical IMU samples in a row that make the IMU stuck: 0.1 s at 512 Hz. With the IMU
+  /// model's white noise (0.05 deg/s, 0.05 g per sample) one exact repeat of all six channels
+  /// already has a probability below 1e-30.
+  static constexpr int kImuStuckSamples = 50;
+  /// Divergence (DivergenceMonitor): gating decisions per window, 0.2 s of motion capture at
+  /// 200 Hz, and the false-alarm probability per window: 1e-9, about one false alarm in 5,000
+  /// hours of flight with overlapping windows at 200 Hz. Once diverged the estimator raises
+  /// CODE_ESTIMATOR_DIVERGED and publishes no more estimates: the controller's failsafe follows.
+  static constexpr int kDivergenceWindow = 40;
+  static constexpr double kDivergenceFalseAlarm = 1e-9;
+
  private:
   void apply_imu(const ImuSample& sample);
   void apply_pose(const MocapPose& pose);
@@ -44,6 +62,17 @@ class EstimatorNode {
   /// FAULT for a measurement the EKF dropped for its time (at most one a second of rig time).
   void report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status);
 
+  /// The IMU sample to use, or false (non-finite: malformed; stuck: repeated).
+  bool imu_usable(const ImuSample& sample);
+  /// Feeds the gate decisions made since the last call to the divergence monitor.
+  void watch_divergence();
+  std::unique_ptr<DivergenceMonitor> divergence_;
+  int64_t seen_accepted_ = 0, seen_rejected_ = 0;
+  bool diverged_ = false;
+  bool stuck_check_ = false;  ///< the configured IMU noise is not zero
+  ImuSample last_imu_{};
+  int imu_repeats_ = 0;
+  bool imu_stuck_ = false;
   std::unique_ptr<AttitudeVelocityEkf> ekf_;
   std::unique_ptr<MocapMeasurementBuilder> builder_;
   std::unique_ptr<transport::ProcessNode> node_;

@@ -193,6 +193,13 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
     }
     return placement;
   }
+  for (const auto& p : launch.external_processes) {
+    if (placement.host_index(p) > 0) {
+      throw ConfigError(scenario.file, "run.external_processes", p,
+                        "process '" + p + "' runs on the emulated host '" + second.name + "', whose processes the "
+                        "launcher starts in that host's network namespace (on two real machines: start: by_hand)");
+    }
+  }
   if (launch.network_namespace == "never") {
     throw ConfigError(scenario.file, "run.network_namespace", "never",
                       "a run over two hosts emulates them as two network namespaces joined by a veth pair: it "
@@ -219,10 +226,11 @@ std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_pri
   return HostLink::create(placement.hosts[0].address, placement.hosts[1].address, problem);
 }
 
-std::string by_hand_command(const std::string& process, const std::string& executable, const std::string& bin_dir,
-                            const std::string& resolved_scenario, const std::string& lcm_url) {
-  return bin_dir + "/" + executable + " --name " + process + " --scenario " + resolved_scenario + " --lcm-url '" +
-         lcm_url + "'";
+void add_by_hand_processes(const HostPlacement& placement, std::vector<std::string>& external) {
+  if (!placement.split() || !placement.hosts[1].by_hand) return;
+  for (const auto& p : placement.hosts[1].processes) {
+    if (std::find(external.begin(), external.end(), p) == external.end()) external.push_back(p);
+  }
 }
 
 std::vector<HostSummary> host_summaries(const HostPlacement& placement, const HostLink* link) {

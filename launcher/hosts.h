@@ -16,10 +16,10 @@
 /// network. Both sides of the CAN bridge must run on the first host: the run's virtual CAN
 /// interface lives in that host's network namespace, and a vcan cannot span two.
 ///
-/// On two real machines the second host says `start: by_hand`: `rig run` does not start its
-/// processes but prints the command of each, to be run on that machine (by hand or over ssh)
-/// with the resolved scenario and the run's LCM URL, waits for their READY and flies them as any
-/// other process. That needs the lab network's URL (run.lcm_url with ttl >= 1,
+/// On two real machines the second host says `start: by_hand`: its processes are external
+/// (run.external_processes): `rig run` does not start them but prints the command of each, to be
+/// run on that machine (by hand or over ssh) with the resolved scenario and the run's LCM URL,
+/// waits for their READY and flies them as any other process. That needs the lab network's URL (run.lcm_url with ttl >= 1,
 /// run.network_namespace: never) and the lockstep clock: a real-time start time is the
 /// launcher's CLOCK_MONOTONIC, which another machine does not share.
 
@@ -84,10 +84,9 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
 /// if the launcher is not in a private namespace (`in_private_namespace` false) or a step fails.
 std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_private_namespace, std::string* problem);
 
-/// The command that starts `process` on a host started by hand, with the run's resolved scenario
-/// and URL (executables from `bin_dir`, as installed on that host).
-std::string by_hand_command(const std::string& process, const std::string& executable, const std::string& bin_dir,
-                            const std::string& resolved_scenario, const std::string& lcm_url);
+/// Adds the processes of a host started by hand to `external` (run.external_processes: the
+/// launcher does not start them, prints the command of each and waits for their READY), each once.
+void add_by_hand_processes(const HostPlacement& placement, std::vector<std::string>& external);
 
 /// What the run report says of the hosts: each with its processes, the launcher's host with
 /// the launcher's namespace, the second with `link`'s (may be null). Empty without a hosts

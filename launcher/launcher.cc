@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
+#include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/run_control_t.hpp>
@@ -45,7 +46,6 @@
 #include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
-#include "transport/process_main.h"
 
 namespace nimble::launcher {
 namespace {
@@ -202,15 +202,6 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     return kRunBadInput;
   }
 
-  // What every process must report as its configuration: the digest of the resolved scenario.
-  std::string run_digest;
-  try {
-    run_digest = transport::config_digest(load_scenario(resolved_file));
-  } catch (const ConfigError& e) {
-    std::cerr << "rig run: the resolved scenario does not load back: " << e.what() << "\n";
-    return kRunBadInput;
-  }
-
   std::unique_ptr<transport::Bus> bus;
   try {
     bus = std::make_unique<transport::Bus>(url);
@@ -257,24 +248,26 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   sigaction(SIGTERM, &sa, nullptr);
 
   int64_t run_control_seq = 0;
+  int64_t launcher_fault_seq = 0;
 
   // Start every process.
   const std::string bin_dir = options.bin_dir.empty() ? self_dir() : options.bin_dir;
   ProcessSupervisor supervisor;
-  std::string by_hand;
+  const auto external = [&](const std::string& name) {
+    return std::find(lc.external_processes.begin(), lc.external_processes.end(), name) != lc.external_processes.end();
+  };
   for (const auto& name : scenario.processes) {
-    if (plan.hosts.started_by_hand(name)) {
-      by_hand += "  " + by_hand_command(name, executable_of(name), bin_dir, resolved_file, url) + "\n";
+    if (external(name)) {
+      std::cerr << "rig run: " << name << " is external: start it in this run's network"
+                << (ns_detail.empty() || url != kNamespaceLcmUrl ? "" : " (nsenter -t " + std::to_string(::getpid()) + " -n)")
+                << " with\n  " << bin_dir << "/" << executable_of(name) << " --name " << name << " --scenario "
+                << resolved_file << " --lcm-url '" << url << "'\n";
       continue;
     }
     const int host_ns = host_link && plan.hosts.host_index(name) > 0 ? host_link->remote_namespace_fd() : -1;
     supervisor.start(name, bin_dir + "/" + executable_of(name),
                      {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, log_file + "." + name + ".out",
                      lc.rig_cpus, host_ns);
-  }
-  if (!by_hand.empty()) {
-    std::cerr << "rig run: start on host '" << plan.hosts.hosts[1].name
-              << "' (by hand or ssh, with this resolved scenario copied to the same path):\n" << by_hand;
   }
   const std::vector<ChildProcess>& children = supervisor.children();
   if (const std::string note = pin_to(lc.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
@@ -298,12 +291,52 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     };
     supervisor.stop(grace_s, ask, [&] { bus->handle_timeout(10); });
   };
-  const auto fail = [&](const std::string& message) {
+  const auto fail = [&](const std::string& message, int code = kRunFailed) {
     std::cerr << "rig run: " << message << "\n";
     stop_all(0.5);
     bus->drain();
     recorder->flush();
-    return kRunFailed;
+    return code;
+  };
+  // Every process must fly the plant's configuration: a heartbeat with another digest is a
+  // process started with another scenario. Returns what is wrong, or "".
+  const auto digest_problem = [&]() -> std::string {
+    const RunMonitor::Heartbeat* plant = monitor.heartbeat("plant");
+    if (plant == nullptr || plant->digest.empty()) return "";
+    for (const auto& name : scenario.processes) {
+      const RunMonitor::Heartbeat* hb = monitor.heartbeat(name);
+      if (hb == nullptr || hb->digest == plant->digest) continue;
+      return "process '" + name + "' (pid " + std::to_string(hb->pid) + ") was started with another scenario: " +
+             "configuration digest " + (hb->digest.empty() ? std::string("(none)") : hb->digest) + ", the plant's " +
+             plant->digest + "; refused. Start it with --scenario " + resolved_file;
+    }
+    return "";
+  };
+  // A running process that has gone silent without exiting (stopped, hung). Returns what, or "".
+  const auto heartbeat_lost = [&](int64_t now) -> std::string {
+    const int64_t limit = static_cast<int64_t>(lc.heartbeat_timeout_s * 1e9);
+    for (const auto& name : scenario.processes) {
+      const RunMonitor::Heartbeat* hb = monitor.heartbeat(name);
+      if (hb == nullptr || now - hb->recv_ns <= limit) continue;
+      if (hb->state == heartbeat_t::STATE_STOPPING || hb->state == heartbeat_t::STATE_FAULT) continue;
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.1f s", 1e-9 * static_cast<double>(now - hb->recv_ns));
+      const std::string what = "process '" + name + "' (pid " + std::to_string(hb->pid) + ") sent no heartbeat for " +
+                               buf + " (run.heartbeat_timeout_s " + std::to_string(lc.heartbeat_timeout_s) +
+                               ") and has not exited: stopped or hung";
+      fault_event_t f;
+      f.utime = transport::wall_us();
+      f.seq = launcher_fault_seq++;
+      f.rig_utime = static_cast<int64_t>(monitor.sim_time_s() * 1e6);
+      f.process = "launcher";
+      f.severity = fault_event_t::SEVERITY_FATAL;
+      f.code = fault_event_t::CODE_HEARTBEAT_LOST;
+      f.channel = contract::channels::kHeartbeat;
+      f.message = what;
+      bus->publish(contract::channels::kFault, f);
+      return "HEARTBEAT_LOST: " + what;
+    }
+    return "";
   };
 
   // Wait for READY from every process.
@@ -314,6 +347,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
       return fail("process '" + dead->name + "' " + dead->describe() + " before it was ready:\n" +
                   tail_of(dead->output_file, 12));
     }
+    if (const std::string problem = digest_problem(); !problem.empty()) return fail(problem, kRunBadInput);
     bool all_ready = true;
     std::string waiting;
     for (const auto& name : scenario.processes) {
@@ -322,11 +356,9 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
         waiting += (waiting.empty() ? "" : ", ") + name;
       }
     }
-    if (all_ready) {
-      if (const std::string wrong = monitor.config_mismatch(run_digest, scenario.processes); !wrong.empty()) {
-        return fail(wrong + ": it was not started with this run's resolved scenario " + resolved_file +
-                    " (on another machine: the same file, with the same model and manoeuvre files at the same paths)");
-      }
+    if (all_ready && monitor.heartbeat("plant") != nullptr) {
+      // The digests of every READY heartbeat are in: the last check before the start.
+      if (const std::string problem = digest_problem(); !problem.empty()) return fail(problem, kRunBadInput);
       break;
     }
     if (g_interrupted) return fail("interrupted while waiting for processes to be ready");
@@ -384,10 +416,12 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
       interrupted = true;
       break;
     }
+    if (failure = digest_problem(); !failure.empty()) break;
+    if (failure = heartbeat_lost(now); !failure.empty()) break;
     // Processes that missed the start command get it again.
     if (resends < 5 && now - wall_start_ns > (resends + 1) * 300000000LL) {
       bool someone_waiting = false;
-      for (const auto& p : scenario.processes) someone_waiting |= monitor.heartbeat_state(p) == heartbeat_t::STATE_READY;
+      for (const auto& name : scenario.processes) someone_waiting |= monitor.heartbeat_state(name) == heartbeat_t::STATE_READY;
       if (someone_waiting) {
         start.seq = run_control_seq++;
         bus->publish(contract::channels::kRunControl, start);
@@ -439,12 +473,17 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   for (const auto& c : children) {
     report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});
   }
-  for (const auto& name : scenario.processes) {
-    if (plan.hosts.started_by_hand(name)) report.processes.push_back(ProcessOutcome{name, -1, false, -1, 0, "started by hand"});
+  for (const auto& name : lc.external_processes) {
+    const RunMonitor::Heartbeat* hb = monitor.heartbeat(name);
+    const bool stopped = hb != nullptr && hb->state == heartbeat_t::STATE_STOPPING;
+    report.processes.push_back(ProcessOutcome{name, hb != nullptr ? hb->pid : -1, stopped, stopped ? 0 : -1, 0,
+                                              hb == nullptr ? "external, never heard"
+                                                            : stopped ? "external, stopped" : "external, still running"});
   }
   report.hosts = host_summaries(plan.hosts, host_link.get());
   report.verdict = judge_run(report.flight, plan.judge, interrupted, failure,
-                             judge_timing(report.timing, plan.judge, !lockstep), options.strict_timing);
+                             judge_timing(report.timing, plan.judge, !lockstep), options.strict_timing,
+                             failsafe_of(monitor));
   if (!failure.empty()) std::cerr << "rig run: " << failure << "\n";
   return finish_report(report, options);
 }

@@ -89,10 +89,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
 
   if (channel == kHeartbeat) {
     heartbeat_t hb{};
-    if (take(hb, "")) {
-      heartbeat_[hb.process] = hb.state;
-      config_digest_[hb.process] = hb.config_digest;
-    }
+    if (take(hb, "")) heartbeat_[hb.process] = Heartbeat{hb.state, hb.pid, hb.config_digest, recv_ns};
     return;
   }
   if (channel == kTimingHealth) {
@@ -223,17 +220,12 @@ EstimatorSummary RunMonitor::estimator() const {
 
 int RunMonitor::heartbeat_state(const std::string& process) const {
   const auto it = heartbeat_.find(process);
-  return it == heartbeat_.end() ? -1 : it->second;
+  return it == heartbeat_.end() ? -1 : it->second.state;
 }
 
-std::string RunMonitor::config_mismatch(const std::string& expected, const std::vector<std::string>& processes) const {
-  for (const auto& p : processes) {
-    const auto it = config_digest_.find(p);
-    if (it == config_digest_.end() || it->second == expected) continue;
-    if (it->second.empty()) return "process '" + p + "' reports no configuration digest (a build of another version?)";
-    return "process '" + p + "' flies another configuration: its digest " + it->second + ", this run's " + expected;
-  }
-  return "";
+const RunMonitor::Heartbeat* RunMonitor::heartbeat(const std::string& process) const {
+  const auto it = heartbeat_.find(process);
+  return it == heartbeat_.end() ? nullptr : &it->second;
 }
 
 std::map<std::string, ChannelSummary> RunMonitor::channels(double sim_duration_s, double wall_duration_s) const {

@@ -92,10 +92,15 @@ class RunMonitor {
 
   /// Heartbeat state of each process (heartbeat_t::STATE_*), -1 if never heard.
   int heartbeat_state(const std::string& process) const;
-  /// What is wrong with the configuration digests (heartbeat_t.config_digest) that `processes`
-  /// reported against the run's `expected` one: "" if every one that was heard matches, else a
-  /// message naming the first that does not (another scenario, or none reported).
-  std::string config_mismatch(const std::string& expected, const std::vector<std::string>& processes) const;
+  /// The newest heartbeat of a process: state, pid, configuration digest and when it came.
+  struct Heartbeat {
+    int state = -1;
+    int pid = 0;
+    std::string digest;
+    int64_t recv_ns = 0;  ///< CLOCK_MONOTONIC
+  };
+  /// nullptr if the process was never heard.
+  const Heartbeat* heartbeat(const std::string& process) const;
   /// Simulated time of the newest TRUTH [s].
   double sim_time_s() const { return flight_.last_sim_time_s; }
   int64_t truth_count() const { return flight_.samples; }
@@ -140,8 +145,7 @@ class RunMonitor {
 
   MonitorConfig cfg_;
   std::map<std::string, Counter> counters_;
-  std::map<std::string, int> heartbeat_;
-  std::map<std::string, std::string> config_digest_;
+  std::map<std::string, Heartbeat> heartbeat_;
   std::map<std::string, TimingSummary> timing_;
   std::map<std::string, nimble::can_health_t> can_health_;
   std::vector<FaultRecord> faults_;

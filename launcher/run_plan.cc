@@ -1,5 +1,7 @@
 #include "launcher/run_plan.h"
 
+#include <algorithm>
+
 #include <sched.h>
 
 #include <ctime>
@@ -43,6 +45,14 @@ LaunchConfig launch_config_from(const Scenario& s) {
   process_run_options_from(m);  // the processes' own keys of the section, checked where they are defined
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
+  if (m.has("external_processes")) {
+    c.external_processes = m.get_string_list("external_processes");
+    for (const auto& p : c.external_processes) {
+      if (std::find(s.processes.begin(), s.processes.end(), p) == s.processes.end()) {
+        m.fail("external_processes", "'" + p + "' is not one of the run's processes");
+      }
+    }
+  }
   m.finish();
   return c;
 }
@@ -71,6 +81,7 @@ const ParamTable<LaunchConfig>& launch_params() {
       {"stop_grace_s", &C::stop_grace_s, Range::closed(0.0, 60.0), "s", "after RUN_CONTROL stop, before SIGTERM"},
       {"stall_timeout_s", &C::stall_timeout_s, Range{0.0, 3600.0, true, false}, "s", "lockstep: no new TRUTH for this long (wall clock) is a failure"},
       {"start_delay_s", &C::start_delay_s, Range::closed(0.0, 10.0), "s", "real time: simulated time 0 lies this far after the start command"},
+      {"heartbeat_timeout_s", &C::heartbeat_timeout_s, Range{0.0, 600.0, true, false}, "s", "a running process silent for this long (wall clock) is lost: HEARTBEAT_LOST, the run fails"},
   };
   return table;
 }
@@ -107,6 +118,7 @@ RunPlan load_run_plan(const RunOptions& options) {
     plan.judge = judge_config_from(plan.scenario);
     plan.rates = process_rates(plan.scenario);
     plan.hosts = host_placement_from(plan.scenario, plan.launch);
+    add_by_hand_processes(plan.hosts, plan.launch.external_processes);
   } catch (const ConfigError& e) {
     // Name the file and line the key was written on (a base file), or --set.
     throw locate_error(e, plan.scenario.file, plan.scenario.origins);

@@ -21,6 +21,7 @@ constexpr int kRunNotControlled = 1;  ///< the run completed but the vehicle was
 constexpr int kRunBadInput = 2;       ///< bad scenario, flag or environment
 constexpr int kRunFailed = 3;         ///< a process failed, did not start, or the run stalled
 constexpr int kRunTimingDegraded = 4; ///< with --strict-timing: controlled, but real time was degraded
+constexpr int kRunFailsafe = 5;       ///< the run completed with the controller in its failsafe
 constexpr int kRunInterrupted = 130;  ///< stopped by SIGINT/SIGTERM
 
 /// The clocks a scenario can be flown on (`clock:` or `--clock`).
@@ -53,6 +54,14 @@ struct LaunchConfig {
   double stop_grace_s = 2.0;       ///< after RUN_CONTROL stop, before SIGTERM [s]
   double stall_timeout_s = 10.0;   ///< lockstep: no simulated progress for this long is a failure [s]
   double start_delay_s = 0.05;     ///< real time: t0 lies this far after the start command [s]
+  /// A running process that sends no heartbeat for this long (wall clock) is lost
+  /// (CODE_HEARTBEAT_LOST) and the run fails [s]. Heartbeats come at 2 Hz while running, so
+  /// 2 s is four missed in a row.
+  double heartbeat_timeout_s = 2.0;
+  /// Processes of `processes` that the launcher does not start: they are started by hand (on
+  /// another machine of the lab, README "Running across machines") with the run's resolved
+  /// scenario and LCM URL, which the launcher prints; it waits for their READY as for the others.
+  std::vector<std::string> external_processes;
   std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run
   std::string network_namespace = "auto";  ///< auto | always | never
   std::vector<int> rig_cpus;       ///< CPUs for the rig's processes (empty: no pinning)

@@ -5,10 +5,12 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <ostream>
 
 #include <nimble/fault_event_t.hpp>
 
+#include "contract/faults.h"
 #include "core/json_writer.h"
 
 namespace nimble::launcher {
@@ -113,15 +115,29 @@ void write_report_text(std::ostream& out, const RunReport& r) {
     }
     if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
   }
+  // Faults by process and code, in order of first appearance: the first message of each and
+  // how many followed (the JSON summary lists them all).
   out << "faults     " << r.faults.size() << "\n";
-  std::size_t shown = 0;
+  std::vector<std::pair<std::string, int>> order;
+  std::map<std::pair<std::string, int>, int> count;
   for (const auto& fr : r.faults) {
-    if (++shown > 8) {
-      out << "           ...\n";
+    if (count[{fr.process, fr.code}]++ == 0) order.emplace_back(fr.process, fr.code);
+  }
+  std::size_t shown = 0;
+  for (const auto& key : order) {
+    if (++shown > 12) {
+      out << "           ... (" << order.size() - 12 << " more kinds; every fault is in the JSON summary)\n";
       break;
     }
-    std::snprintf(line, sizeof line, "           [%s t=%.3f s] ", fr.process.c_str(), fr.rig_time_s);
-    out << line << fr.message << "\n";
+    for (const auto& fr : r.faults) {
+      if (fr.process != key.first || fr.code != key.second) continue;
+      std::snprintf(line, sizeof line, "           [%s %s t=%.3f s] ", fr.process.c_str(),
+                    contract::fault_code_name(fr.code).c_str(), fr.rig_time_s);
+      out << line << fr.message;
+      if (count[key] > 1) out << " (" << count[key] << " in all)";
+      out << "\n";
+      break;
+    }
   }
   out << "processes ";
   for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <nimble/fault_event_t.hpp>
+
 #include "contract/channels.h"
 
 namespace nimble::launcher {
@@ -67,8 +69,17 @@ TimingVerdict judge_timing(const std::map<std::string, TimingSummary>& timing, c
   return v;
 }
 
+std::string failsafe_of(const RunMonitor& monitor) {
+  for (const auto& f : monitor.faults()) {
+    if (f.code == fault_event_t::CODE_FAILSAFE && f.severity >= fault_event_t::SEVERITY_ERROR) {
+      return f.process + ": " + f.message;
+    }
+  }
+  return "";
+}
+
 Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupted, const std::string& failure,
-                  const TimingVerdict& timing, bool strict_timing) {
+                  const TimingVerdict& timing, bool strict_timing, const std::string& failsafe) {
   constexpr double kRad = M_PI / 180.0;
   Verdict v;
   v.controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * kRad &&
@@ -81,6 +92,11 @@ Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupte
   } else if (!failure.empty()) {
     v.exit_code = kRunFailed;
     v.text = "failed: " + failure.substr(0, failure.find('\n'));
+  } else if (!failsafe.empty()) {
+    // The manoeuvre was not flown to its end: whatever the vehicle did, the failsafe decided it.
+    v.exit_code = kRunFailsafe;
+    v.text = std::string("completed in failsafe (vehicle ") + (v.controlled ? "within" : "beyond") +
+             " the control limits): " + failsafe;
   } else if (!v.controlled) {
     v.exit_code = kRunNotControlled;
     v.text = "completed, vehicle NOT controlled";

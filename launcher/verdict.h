@@ -38,7 +38,13 @@ TimingVerdict judge_timing(const std::map<std::string, TimingSummary>& timing, c
 /// goes into the text); `interrupted`: stopped by the user.
 /// With `timing` degraded, an otherwise "ok" run says "real-time degraded: ..." and, if
 /// `strict_timing`, exits kRunTimingDegraded.
+/// `failsafe` (from failsafe_of()): the controller took its failsafe; a run that was not
+/// stopped otherwise then exits kRunFailsafe and says so.
 Verdict judge_run(const FlightSummary& flight, const JudgeConfig& judge, bool interrupted,
-                  const std::string& failure, const TimingVerdict& timing = {}, bool strict_timing = false);
+                  const std::string& failure, const TimingVerdict& timing = {}, bool strict_timing = false,
+                  const std::string& failsafe = "");
+
+/// The first CODE_FAILSAFE fault of the run ("process: message"), or "".
+std::string failsafe_of(const RunMonitor& monitor);
 
 }  // namespace nimble::launcher

@@ -15,8 +15,7 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
   const SensorConfig sensing = sensor_config_from(section);
   // An offset keeps the mocap noise independent of the IMU noise of the same seed.
   emulator_ = std::make_unique<MocapEmulator>(sensing.mocap, scenario.seed + 0x6d6f636170ULL);
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
-                                                   transport::config_digest(scenario));
+  node_ = transport::make_process_node(scenario, options);
   node_->set_expected_rate(contract::channels::kTruth, 1000.0);
   node_->bus().subscribe<truth_state_t>(contract::channels::kTruth, [this](const truth_state_t& t) {
     const plant::Truth truth = contract::from_message(t);

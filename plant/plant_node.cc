@@ -40,8 +40,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   truth_every_ = std::llround(config_.rate_hz / config_.truth_rate_hz);
   feedback_every_ = std::llround(config_.rate_hz / config_.feedback_rate_hz);
 
-  node_ = std::make_unique<transport::ProcessNode>(options, transport::realtime_settings(scenario),
-                                                   transport::config_digest(scenario));
+  node_ = transport::make_process_node(scenario, options);
   node_->set_lockstep_master(true);
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   command_channel_ = plant_command_channel(scenario);

@@ -1,10 +1,12 @@
 #include "scenario/scenario.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <utility>
 
 #include "contract/channels.h"
+#include "scenario/faults.h"
 
 namespace nimble {
 namespace {
@@ -228,6 +230,9 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
     if (map.has(key)) map.get_node(key);  // mark as known; owners validate the content
   }
   if (map.has("manoeuvre")) map.get_string("manoeuvre");
+  if (map.has("faults")) {
+    s.faults = faults_from(map.get_node("faults"), file, s.processes, s.actuator_link == "can", s.duration_s);
+  }
   map.finish();
   for (const auto& f : {s.model_file, s.longitudinal_model_file, s.vehicle_file}) {
     if (!f.empty() && !fs::exists(f)) throw ConfigError(file, "model", f, "file not found");
@@ -290,6 +295,17 @@ ProcessRunOptions process_run_options_from(ConfigMap& run) {
 ProcessRunOptions process_run_options(const Scenario& scenario) {
   ConfigMap run = scenario.section("run");
   return process_run_options_from(run);
+}
+
+std::string scenario_digest(const Scenario& scenario) {
+  uint64_t h = 1469598103934665603ULL;
+  for (const unsigned char c : to_yaml(scenario.root)) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
 }
 
 std::string to_yaml(const YAML::Node& node) {

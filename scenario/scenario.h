@@ -19,6 +19,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
+#include "contract/faults.h"
 #include "core/param_table.h"
 
 namespace nimble {
@@ -70,6 +71,8 @@ struct Scenario {
   /// How actuator commands and feedback travel between controller and plant: "lcm"
   /// (directly) or "can" (through nimble_can_bridge and SocketCAN; section can_bridge).
   std::string actuator_link = "lcm";
+  /// Faults injected into the run (section `faults`, scenario/faults.h); empty: none.
+  std::vector<contract::FaultSpec> faults;
   YAML::Node root;
   KeyOrigins origins;  ///< where each key was written (locate_error)
 
@@ -137,6 +140,10 @@ ProcessRunOptions process_run_options(const Scenario& scenario);
 /// The same from the `run` mapping itself, without finish(): the launcher reads its own keys
 /// of the section from the same map.
 ProcessRunOptions process_run_options_from(ConfigMap& run);
+
+/// Digest of a resolved scenario (FNV-1a 64-bit of its YAML text, 16 hex digits): every process
+/// of a run puts it on its heartbeat; equal digests mean equal configurations.
+std::string scenario_digest(const Scenario& scenario);
 
 /// Writes a tree as YAML text.
 std::string to_yaml(const YAML::Node& node);

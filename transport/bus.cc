@@ -24,6 +24,14 @@ Bus::Bus(InprocessHub& hub) : url_("inprocess"), hub_(&hub) {}
 
 Bus::~Bus() = default;
 
+void Bus::publish_bytes(const std::string& channel, const void* data, int size) {
+  if (hub_ != nullptr) {
+    hub_->publish(channel, data, size);
+    return;
+  }
+  if (lcm_->publish(channel, data, static_cast<unsigned int>(size)) != 0) ++publish_failures_;
+}
+
 bool Bus::track_seq(int64_t seq, ChannelStats& stats) {
   if (stats.one_publisher && !contract::seq_continues(stats.last_seq, seq)) return false;
   if (stats.last_seq >= 0 && seq > stats.last_seq + 1) stats.drops += seq - stats.last_seq - 1;

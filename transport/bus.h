@@ -24,6 +24,8 @@
 
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "contract/faults.h"
+#include "transport/fault_injector.h"
 #include "transport/inprocess_hub.h"
 
 namespace nimble::transport {
@@ -48,6 +50,10 @@ struct ChannelStats {
 };
 
 namespace detail {
+template <typename T, typename = void>
+struct has_value_fields : std::false_type {};
+template <typename T>
+struct has_value_fields<T, std::void_t<decltype(contract::value_fields(std::declval<T&>()))>> : std::true_type {};
 template <typename T, typename = void>
 struct has_latency_us : std::false_type {};
 template <typename T>
@@ -76,8 +82,44 @@ class Bus {
   InprocessHub* hub() const { return hub_; }
 
   /// Publishes `msg` on `channel`. Never throws; a failure is counted in publish_failures().
+  /// On a channel the scenario faults, the message goes through the fault injector.
   template <typename T>
   void publish(const std::string& channel, const T& msg) {
+    if constexpr (detail::has_value_fields<T>::value) {
+      if (injector_ != nullptr && injector_->targets(channel)) {
+        publish_faulted(channel, msg);
+        return;
+      }
+    }
+    publish_now(channel, msg);
+  }
+
+  /// Publishes already encoded bytes (the fault injector, tools). Never throws.
+  void publish_bytes(const std::string& channel, const void* data, int size);
+
+  /// From now on, the messages of the channels `injector` targets go through it.
+  void set_fault_injector(std::unique_ptr<FaultInjector> injector) { injector_ = std::move(injector); }
+  const FaultInjector* fault_injector() const { return injector_.get(); }
+
+ private:
+  template <typename T>
+  void publish_faulted(const std::string& channel, const T& original) {
+    T msg = original;
+    FaultableMessage m;
+    m.utime = &msg.utime;
+    m.seq = &msg.seq;
+    m.values = contract::value_fields(msg);
+    m.encode = [&msg] {
+      std::vector<uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
+      msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      return bytes;
+    };
+    m.restore = [&msg](const std::vector<uint8_t>& bytes) { msg.decode(bytes.data(), 0, static_cast<int>(bytes.size())); };
+    injector_->publish(*this, channel, m);
+  }
+
+  template <typename T>
+  void publish_now(const std::string& channel, const T& msg) {
     if (hub_ != nullptr) {
       const int size = msg.getEncodedSize();
       if (scratch_.size() < static_cast<std::size_t>(size)) scratch_.resize(static_cast<std::size_t>(size));
@@ -90,6 +132,8 @@ class Bus {
     }
     if (lcm_->publish(channel, &msg) != 0) ++publish_failures_;
   }
+
+ public:
 
   /// Subscribes `handler` to `channel` (an exact name). The handler gets the decoded
   /// message. Types whose first fields are `utime, seq` get drop counting from gaps in seq.
@@ -197,6 +241,7 @@ class Bus {
   std::unique_ptr<lcm::LCM> lcm_;
   InprocessHub* hub_ = nullptr;
   std::vector<unsigned char> scratch_;  // in process: the encoded message
+  std::unique_ptr<FaultInjector> injector_;
   std::map<std::string, ChannelStats> stats_;
   std::vector<std::unique_ptr<Subscription>> subs_;
   MalformedHandler on_malformed_;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 #include <algorithm>
@@ -103,13 +104,15 @@ void ProcessNode::install_signal_handlers() {
   sigaction(SIGINT, &sa, nullptr);
 }
 
-void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger) {
+void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger,
+                           int64_t backstop_ns) {
   const double period = 1e9 / rate_hz;
   if (!(rate_hz > 0.0) || std::fabs(period - std::round(period)) > 1e-6) {
     throw std::invalid_argument("task '" + label + "': rate " + std::to_string(rate_hz) +
                                 " Hz does not give a whole number of nanoseconds per period");
   }
-  tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), trigger, 0});
+  tasks_.push_back(Task{label, static_cast<int64_t>(std::llround(period)), std::move(fn), trigger, 0,
+                        trigger == Trigger::kInput ? std::max<int64_t>(0, backstop_ns) : 0});
 }
 
 void ProcessNode::run_deferred() {
@@ -192,6 +195,19 @@ void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channe
   f.channel = channel;
   f.message = message;
   bus_.publish(contract::channels::kFault, f);
+}
+
+void ProcessNode::inject_faults(const std::vector<contract::FaultSpec>& faults, uint64_t seed) {
+  bool any = false;
+  for (const auto& f : faults) any |= f.target != contract::kFaultTargetCan;
+  if (!any) return;
+  bus_.set_fault_injector(std::make_unique<FaultInjector>(
+      faults, seed, [this](const contract::FaultSpec& f, bool began, int64_t utime) {
+        char when[48];
+        std::snprintf(when, sizeof when, " at t = %.3f s", 1e-6 * static_cast<double>(utime));
+        fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_FAULT_INJECTED, f.target,
+              "injected " + f.describe() + (began ? " began" : " ended") + when);
+      }));
 }
 
 void ProcessNode::publish_heartbeat(int8_t state) {
@@ -360,10 +376,11 @@ int ProcessNode::run_realtime() {
   while (!stop_) {
     Task* task = nullptr;
     for (auto& t : tasks_) {
-      if (t.trigger == Trigger::kTimer && (task == nullptr || t.next_ns < task->next_ns)) task = &t;
+      if (t.timed() && t.next_ns < duration_ns_ && (task == nullptr || t.deadline_ns() < task->deadline_ns())) task = &t;
     }
     if (task == nullptr) {
-      // Only input-triggered tasks: they run from notify_input() while messages are handled.
+      // Only input-triggered tasks (or timed ones done): they run from notify_input() while
+      // messages are handled.
       bool due = false;
       for (const auto& t : tasks_) due = due || t.next_ns < duration_ns_;
       if (!due || (t0_ns_ + duration_ns_ <= monotonic_ns())) break;
@@ -371,11 +388,11 @@ int ProcessNode::run_realtime() {
       housekeeping();
       continue;
     }
-    if (task->next_ns >= duration_ns_) break;
-    const int64_t deadline = t0_ns_ + task->next_ns;
+    const int64_t deadline = t0_ns_ + task->deadline_ns();
     for (;;) {
       const int64_t now = monotonic_ns();
       if (now >= deadline || stop_) break;
+      if (t0_ns_ + task->deadline_ns() != deadline) break;  // its input came: it ran (notify_input)
       if (deadline - now <= spin_ns_) {
         bus_.drain();  // spin to the deadline, still handling messages
         if (!watched_.empty()) wait_io(0);
@@ -385,6 +402,10 @@ int ProcessNode::run_realtime() {
       housekeeping();
     }
     if (stop_) break;
+    // An input-triggered task on its backstop: first what has arrived (this process may itself
+    // have been held up), which runs it through notify_input if its input is there after all.
+    if (task->trigger == Trigger::kInput) bus_.drain();
+    if (monotonic_ns() < t0_ns_ + task->deadline_ns()) continue;
     jitter_.add_ns(monotonic_ns() - deadline);
     ++loop_count_;
     sim_time_ns_ = task->next_ns;

@@ -104,8 +104,12 @@ class ProcessNode {
   const std::string& name() const { return name_; }
 
   /// Registers a periodic task. `rate_hz` must make an integer period in ns.
+  /// An input-triggered task with `backstop_ns` > 0 also runs, in real time, when its input is
+  /// that late: at t0 + its due time + backstop_ns (so a lost input stream cannot stop the loop
+  /// that must notice it).
   /// @throws std::invalid_argument otherwise.
-  void add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger = Trigger::kTimer);
+  void add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger = Trigger::kTimer,
+                int64_t backstop_ns = 0);
 
   /// Real time: an input stamped `input_sim_time_ns` arrived; runs the input-triggered
   /// tasks that are due. No effect in lockstep or before the start.
@@ -150,6 +154,11 @@ class ProcessNode {
   /// Expected receive rate of a channel [Hz], reported on TIMING_HEALTH.
   void set_expected_rate(const std::string& channel, double hz) { expected_hz_[channel] = hz; }
 
+  /// Applies the scenario's `faults` to what this process publishes (transport/fault_injector.h):
+  /// each fault's beginning and end is announced as a CODE_FAULT_INJECTED event. `seed` is the
+  /// run's (the random choices of a fault are drawn from it).
+  void inject_faults(const std::vector<contract::FaultSpec>& faults, uint64_t seed);
+
   /// Publishes a fault event (rate-limited to 10 per second per code). Never throws.
   void fault(int8_t severity, int32_t code, const std::string& channel, const std::string& message);
 
@@ -188,6 +197,10 @@ class ProcessNode {
     TaskFn fn;
     Trigger trigger = Trigger::kTimer;
     int64_t next_ns = 0;
+    int64_t backstop_ns = 0;  ///< input-triggered: also runs this late on the timer (0: never)
+    /// Real time: when it runs on the timer [ns after t0].
+    int64_t deadline_ns() const { return next_ns + (trigger == Trigger::kInput ? backstop_ns : 0); }
+    bool timed() const { return trigger == Trigger::kTimer || backstop_ns > 0; }
   };
 
   void subscribe_lockstep_side();

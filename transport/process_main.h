@@ -3,10 +3,9 @@
 /// scenario, install the stop signals, build the node and run it. Errors before the run
 /// (bad flags or configuration) go to stderr with exit code kExitConfig.
 
-#include <cstdint>
-#include <cstdio>
 #include <exception>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include "core/config.h"
@@ -25,19 +24,12 @@ inline RealtimeSettings realtime_settings(const Scenario& scenario) {
   return r;
 }
 
-/// The configuration digest every rig process reports in its HEARTBEAT (config_digest): FNV-1a
-/// 64-bit of the resolved scenario as loaded, 16 hex digits. Equal digests mean equal
-/// configurations; the launcher refuses to fly processes whose digest is not the run's (a
-/// process on another machine given another scenario, README "Running across machines").
-inline std::string config_digest(const Scenario& scenario) {
-  uint64_t h = 1469598103934665603ULL;
-  for (const unsigned char c : to_yaml(scenario.root)) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
+/// The node of a rig process: the scenario's real-time settings, its digest on every heartbeat,
+/// and its faults applied to what the process publishes.
+inline std::unique_ptr<ProcessNode> make_process_node(const Scenario& scenario, const NodeOptions& options) {
+  auto node = std::make_unique<ProcessNode>(options, realtime_settings(scenario), scenario_digest(scenario));
+  node->inject_faults(scenario.faults, scenario.seed);
+  return node;
 }
 
 /// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with

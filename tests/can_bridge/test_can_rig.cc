@@ -473,6 +473,8 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   const std::string head = dir + "/head.candump";
   REQUIRE(run("head -n 600 " + candump + " > " + head) == 0);
   CanSocketOptions opts = receive_all();
+  // Room for all 600 frames: a reader thread starved by a loaded host must not lose any.
+  opts.receive_buffer_bytes = 1 << 20;
   CanSocket listener = CanSocket::open(kIf, opts);
   std::vector<can_frame> replayed;
   std::atomic<bool> done{false};
@@ -644,5 +646,43 @@ TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses i
   CHECK(decoder.stats().wrong_length == 0);
   CHECK(decoder.stats().bad_checksum == 0);
   CHECK(decoder.stats().stale_counter == 0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("faults of the CAN link over vcan0 in lockstep: the frames lost and the truth are those of the in-process run",
+          "[system][rig][faults]") {
+  pin_to_cpu0();
+  const std::string dir = nimble::test::scratch_dir("can_link_faults");
+  fs::create_directories(dir + "/vcan");
+  fs::create_directories(dir + "/inprocess");
+  const std::string scenario = kConfigs + "id_doublet_train_fast.yaml";
+  // Loss, then a bus-off, on the real SocketCAN link: every decision comes from the seed at the
+  // sending side, so the real bus and the in-process frame bus lose the same frames.
+  const std::string common =
+      "--set duration_s=2 --set actuator_link=can --set run.controller_input=truth --set processes=[plant,controller] "
+      "--set lockstep.ack_timeout_ms=30000 --set 'faults=[{target: CAN, kind: loss, start_s: 0.5, duration_s: 0.5, "
+      "params: {probability: 0.2}}, {target: CAN, kind: bus_off, start_s: 1.2, duration_s: 0.2}]'";
+  const RunResult over_vcan = rig_run(scenario, dir + "/vcan", "--clock lockstep " + common);
+  INFO(over_vcan.output);
+  // 0.2 s of safe-state hold in the middle of the doublets: the vehicle may well be lost (exit 1);
+  // what matters is that both runs agree.
+  REQUIRE(over_vcan.summary);
+  CHECK((over_vcan.exit_code == 0 || over_vcan.exit_code == 1));
+  const RunResult in_process = rig_run(scenario, dir + "/inprocess", "--clock inprocess " + common);
+  INFO(in_process.output);
+  REQUIRE(in_process.summary);
+  CHECK(in_process.exit_code == over_vcan.exit_code);
+  CHECK(in_process.summary["sim_time_s"].as<double>() == Approx(2.0).margin(0.002));
+  CHECK(over_vcan.summary["sim_time_s"].as<double>() == Approx(2.0).margin(0.002));
+  const int drops = over_vcan.summary["channels"][kActuatorCommandCan]["drops"].as<int>();
+  CHECK(drops > 0.2 * 1024 * 0.36 + 100);  // the loss window and the 0.2 s bus-off (102 commands)
+  CHECK(drops == in_process.summary["channels"][kActuatorCommandCan]["drops"].as<int>());
+  bool bus_off = false;
+  for (const auto& f : over_vcan.summary["faults"]) {
+    bus_off |= f["code"].as<int>() == fault_event_t::CODE_CAN_ERROR_FRAME &&
+               f["message"].as<std::string>().find("bus-off") != std::string::npos;
+  }
+  CHECK(bus_off);
+  CHECK(differing(truth_payloads(dir + "/vcan/run.lcmlog"), truth_payloads(dir + "/inprocess/run.lcmlog")) == 0);
   fs::remove_all(dir);
 }

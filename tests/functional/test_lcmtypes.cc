@@ -367,6 +367,7 @@ void fill(nimble::controller_status_t& m, Distinct& g) {
   m.saturated = true;
   m.input_source = nimble::controller_status_t::INPUT_ESTIMATE;
   m.input_age_us = g.i64();
+  m.failsafe = true;
 }
 void require_equal(const nimble::controller_status_t& a, const nimble::controller_status_t& b) {
   REQUIRE(a.utime == b.utime);
@@ -384,6 +385,7 @@ void require_equal(const nimble::controller_status_t& a, const nimble::controlle
   REQUIRE(a.saturated == b.saturated);
   REQUIRE(a.input_source == b.input_source);
   REQUIRE(a.input_age_us == b.input_age_us);
+  REQUIRE(a.failsafe == b.failsafe);
 }
 
 // --- rig_clock_t ---------------------------------------------------------------------------

@@ -314,7 +314,9 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
       imu_sample_t s{};
       s.utime = imu_k * 1000000 / 512;
       s.seq = imu_k;
-      s.accel_mps2[2] = -9.81;
+      // A real IMU at rest: gravity and a little noise (a sample that repeats bit for bit for
+      // 50 samples is a stuck sensor to the estimator).
+      s.accel_mps2[2] = -9.81 + 1e-4 * static_cast<double>((imu_k * 7919) % 11 - 5);
       s.temperature_degc = 25.0;
       bus.publish(kImu, s);
     }

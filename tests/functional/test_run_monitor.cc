@@ -172,29 +172,3 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   CHECK(c.count == 1);
   CHECK(c.malformed == 2);
 }
-
-TEST_CASE("a process whose configuration digest is not the run's is named", "[launcher][monitor]") {
-  MonitorConfig cfg;
-  cfg.processes = {"plant", "controller", "estimator"};
-  RunMonitor mon(cfg);
-  const auto beat = [&](const std::string& process, const std::string& digest, int64_t seq) {
-    heartbeat_t hb{};
-    hb.process = process;
-    hb.seq = seq;
-    hb.state = heartbeat_t::STATE_READY;
-    hb.config_digest = digest;
-    auto b = encode(hb);
-    mon.on_message(kHeartbeat, b.data(), static_cast<int>(b.size()), 0);
-  };
-  const std::vector<std::string> all = {"plant", "controller", "estimator"};
-  beat("plant", "b3b4108ed10971c2", 0);
-  beat("controller", "b3b4108ed10971c2", 0);
-  CHECK(mon.config_mismatch("b3b4108ed10971c2", all).empty());  // the estimator is not heard yet
-  beat("estimator", "c769abba864ebce3", 0);
-  CHECK(mon.config_mismatch("b3b4108ed10971c2", all) ==
-        "process 'estimator' flies another configuration: its digest c769abba864ebce3, this run's b3b4108ed10971c2");
-  beat("estimator", "", 1);
-  CHECK(mon.config_mismatch("b3b4108ed10971c2", all).find("process 'estimator' reports no configuration digest") == 0);
-  beat("estimator", "b3b4108ed10971c2", 2);
-  CHECK(mon.config_mismatch("b3b4108ed10971c2", all).empty());
-}

@@ -124,6 +124,11 @@ TEST_CASE("hosts: bad sections are refused naming the key and the problem", "[un
   LaunchConfig url;
   url.lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   expect_error("hosts: {sim: [plant], flight: [controller]}", "run.lcm_url", "leave run.lcm_url at auto", kFour, url);
+  // An emulated host's processes are started by the launcher, in its namespace: none is external.
+  LaunchConfig external;
+  external.external_processes = {"mocap", "controller"};
+  expect_error("hosts: {sim: [plant, mocap], flight: [controller]}", "run.external_processes",
+               "process 'controller' runs on the emulated host 'flight'", kFour, external);
   // ... which one host does not need.
   CHECK(place("hosts: {sim: [plant]}", kFour, never).hosts.size() == 1);
 }
@@ -156,10 +161,13 @@ TEST_CASE("hosts: a second host started by hand flies on the lab network's URL, 
   CHECK(p.started_by_hand("estimator"));
   CHECK_FALSE(p.started_by_hand("plant"));
   CHECK(p.hosts[1].by_hand);
-  CHECK(by_hand_command("controller", "nimble_controller", "/opt/rig/bin", "/data/run.lcmlog.scenario.yaml",
-                        lab.lcm_url) ==
-        "/opt/rig/bin/nimble_controller --name controller --scenario /data/run.lcmlog.scenario.yaml --lcm-url "
-        "'udpm://239.255.76.67:7667?ttl=1'");
+  // Its processes are the run's external processes, each once.
+  std::vector<std::string> external = {"estimator"};
+  add_by_hand_processes(p, external);
+  CHECK(external == std::vector<std::string>{"estimator", "controller"});
+  std::vector<std::string> none;
+  add_by_hand_processes(place("hosts: {sim: [plant], flight: [controller]}"), none);
+  CHECK(none.empty());
   CHECK(hosts_hint(p, "controller").find("started by hand") != std::string::npos);
   CHECK(hosts_hint(p, "mocap").empty());
   // An emulated host is not started by hand.

@@ -105,6 +105,7 @@ TEST_CASE("report: the text and the JSON carry the same run", "[launcher]") {
   r.channels[nimble::contract::channels::kTruth] = ChannelSummary{6001, 1000.2, 1000.0, 0, 0, 0, false};
   r.flight = calm_flight();
   r.faults.push_back(FaultRecord{"plant", 2, 13, nimble::contract::channels::kActuatorCommand, "clamped", 1.5});
+  r.faults.push_back(FaultRecord{"plant", 2, 13, nimble::contract::channels::kActuatorCommand, "clamped again", 1.6});
   r.processes.push_back(ProcessOutcome{"plant", 1, true, 0, 0, "in process, returned 0"});
   r.verdict = judge_run(r.flight, JudgeConfig{}, false, "");
   std::ostringstream text;
@@ -112,7 +113,9 @@ TEST_CASE("report: the text and the JSON carry the same run", "[launcher]") {
   CHECK(text.str().find("== run summary: unit ==") != std::string::npos);
   CHECK(text.str().find("inprocess, seed 42") != std::string::npos);
   CHECK(text.str().find("200.00x real time") != std::string::npos);
-  CHECK(text.str().find("[plant t=1.500 s] clamped") != std::string::npos);
+  CHECK(text.str().find("[plant COMMAND_CLAMPED t=1.500 s] clamped") != std::string::npos);
+  CHECK(text.str().find("(2 in all)") != std::string::npos);  // one line per process and code
+  CHECK(text.str().find("clamped again") == std::string::npos);
   CHECK(text.str().find("result     ok") != std::string::npos);
   const YAML::Node j = YAML::Load(report_json(r));
   CHECK(j["scenario"].as<std::string>() == "unit");

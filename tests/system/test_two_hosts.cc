@@ -251,9 +251,10 @@ TEST_CASE("a host started by hand: rig run prints its commands, they fly with it
   const YAML::Node two = YAML::LoadFile(b + "/summary.json");
   CHECK(two["result"].as<std::string>() == one.summary["result"].as<std::string>());
   CHECK(two["processes"]["controller"]["host"].as<std::string>() == "flight");
-  CHECK(two["processes"]["controller"]["pid"].as<long long>() == -1);  // not the launcher's child
   CHECK(two["processes"]["plant"]["host"].as<std::string>() == "sim");
-  CHECK(out.find("controller(started by hand)") != std::string::npos);
+  // Not the launcher's children: run.external_processes, known by their heartbeats.
+  CHECK(out.find("controller(external, stopped)") != std::string::npos);
+  CHECK(out.find("estimator(external, stopped)") != std::string::npos);
   const auto truth_one = channel_payloads(a + "/run.lcmlog", ch::kTruth);
   REQUIRE(truth_one.size() == 2001);
   CHECK(differing(truth_one, channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
@@ -266,11 +267,11 @@ TEST_CASE("a process started by hand with another scenario is named before the r
   const std::string out = slurp(d + "/out.txt");
   INFO(out);
   CHECK(slurp(d + "/commands.txt").find("--scenario " + d + "/other.yaml") != std::string::npos);
-  CHECK(code == 3);
-  CHECK(out.find("process 'controller' flies another configuration: its digest ") != std::string::npos);
-  CHECK(out.find("it was not started with this run's resolved scenario " + d + "/run.lcmlog.scenario.yaml") !=
-        std::string::npos);
-  CHECK(out.find("estimator' flies") == std::string::npos);  // the one given the run's scenario is not named
+  CHECK(code == 2);
+  CHECK(out.find("process 'controller' (pid ") != std::string::npos);
+  CHECK(out.find(") was started with another scenario: configuration digest ") != std::string::npos);
+  CHECK(out.find("Start it with --scenario " + d + "/run.lcmlog.scenario.yaml") != std::string::npos);
+  CHECK(out.find("process 'estimator'") == std::string::npos);  // the one given the run's scenario is not named
   CHECK(nimble::test::channel_counts(d + "/run.lcmlog").count(ch::kTruth) == 0);  // nothing flew
 }
 
