@@ -51,14 +51,14 @@ void expect_error(const std::string& hosts_yaml, const std::string& key, const s
 
 }  // namespace
 
-TEST_CASE("hosts: without the section every process runs on the launcher's host", "[unit]") {
+TEST_CASE("without the section every process runs on the launcher's host", "[unit]") {
   const HostPlacement p = place("name: x");
   CHECK(p.hosts.empty());
   CHECK_FALSE(p.split());
   CHECK(p.host_index("controller") == 0);
 }
 
-TEST_CASE("hosts: processes placed as listed, the unplaced ones on the first host, in the run's order", "[unit]") {
+TEST_CASE("processes placed as listed, the unplaced ones on the first host, in the run's order", "[unit]") {
   const HostPlacement p = place("hosts: {sim: [mocap], flight: [estimator, controller]}");
   REQUIRE(p.hosts.size() == 2);
   CHECK(p.split());
@@ -83,7 +83,7 @@ TEST_CASE("hosts: processes placed as listed, the unplaced ones on the first hos
   CHECK(one.hosts[0].processes == kFour);
 }
 
-TEST_CASE("hosts: bad sections are refused naming the key and the problem", "[unit]") {
+TEST_CASE("bad sections are refused naming the key and the problem", "[unit]") {
   expect_error("hosts: [plant]", "hosts", "must be a mapping of host names");
   expect_error("hosts: {}", "hosts", "must be a mapping of host names");
   expect_error("hosts: {a: [plant], b: [controller], c: [mocap]}", "hosts", "at most 2 hosts");
@@ -133,7 +133,7 @@ TEST_CASE("hosts: bad sections are refused naming the key and the problem", "[un
   CHECK(place("hosts: {sim: [plant]}", kFour, never).hosts.size() == 1);
 }
 
-TEST_CASE("hosts: addresses with prefix, and the hint when only the far host is silent", "[unit]") {
+TEST_CASE("addresses with prefix, and the hint when only the far host is silent", "[unit]") {
   unsigned a = 0;
   int prefix = 0;
   CHECK(parse_ipv4_prefix("10.76.67.2/30", &a, &prefix));
@@ -149,7 +149,7 @@ TEST_CASE("hosts: addresses with prefix, and the hint when only the far host is 
   CHECK(hosts_hint(HostPlacement{}, "controller").empty());
 }
 
-TEST_CASE("hosts: a second host started by hand flies on the lab network's URL, in lockstep", "[unit]") {
+TEST_CASE("a second host started by hand flies on the lab network's URL, in lockstep", "[unit]") {
   const std::string by_hand = "hosts: {sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}";
   LaunchConfig lab;
   lab.network_namespace = "never";
