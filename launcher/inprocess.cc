@@ -193,7 +193,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   report.clock = kClockInprocess;
   report.seed = s.seed;
   report.transport = "in process";
-  report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages";
+  report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages" +
+                            (plan.hosts.split() ? "; the hosts section does not apply in process" : "");
   report.log_file = options.log_file;
   fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
   for (const auto& p : processes) {

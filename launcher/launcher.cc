@@ -36,6 +36,7 @@
 #include "contract/decode.h"
 #include "contract/rates.h"
 #include "core/json_writer.h"
+#include "launcher/hosts.h"
 #include "launcher/inprocess.h"
 #include "launcher/netns.h"
 #include "launcher/recorder.h"
@@ -172,9 +173,9 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   // Transport: a private network namespace unless told otherwise (before any thread).
   std::string url = lc.lcm_url;
   std::string ns_detail;
+  bool in_ns = false;
   if (url == "auto") {
     url = kNamespaceLcmUrl;
-    bool in_ns = false;
     if (lc.network_namespace != "never") {
       const NamespaceResult r = enter_private_network_namespace();
       in_ns = r.ok;
@@ -189,11 +190,21 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
       url = "udpm://239.255.76.67:" + std::to_string(20000 + ::getpid() % 20000) + "?ttl=0&recv_buf_size=8388608";
       ns_detail = "host network, port chosen per run";
     }
-    std::cerr << "rig run: pid " << ::getpid() << " (watch live: "
-              << (in_ns ? "rig spy --pid " + std::to_string(::getpid()) : "rig spy --url '" + url + "'") << ")\n";
-  } else {
-    std::cerr << "rig run: pid " << ::getpid() << " (watch live: rig spy --url '" << url << "')\n";
   }
+  // Two emulated hosts: the second is a network namespace of its own behind a veth pair (hosts.h).
+  std::unique_ptr<HostLink> host_link;
+  if (plan.hosts.emulated()) {
+    std::string problem;
+    host_link = link_hosts(plan.hosts, in_ns, &problem);
+    if (!host_link) {
+      std::cerr << "rig run: hosts: " << problem << "\n";
+      return kRunBadInput;
+    }
+    url = kTwoHostLcmUrl;
+    ns_detail += "; to host '" + plan.hosts.hosts[1].name + "': " + host_link->detail();
+  }
+  std::cerr << "rig run: pid " << ::getpid() << " (watch live: "
+            << (in_ns ? "rig spy --pid " + std::to_string(::getpid()) : "rig spy --url '" + url + "'") << ")\n";
 
   // Record of the run: log, resolved scenario, process outputs.
   const std::string log_file = log_file_for(plan, options);
@@ -280,9 +291,10 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
                 << resolved_file << " --lcm-url '" << url << "'\n";
       continue;
     }
+    const int host_ns = host_link && plan.hosts.host_index(name) > 0 ? host_link->remote_namespace_fd() : -1;
     supervisor.start(name, bin_dir + "/" + executable_of(name),
                      {"--name", name, "--scenario", resolved_file, "--lcm-url", url}, log_file + "." + name + ".out",
-                     lc.rig_cpus);
+                     lc.rig_cpus, host_ns);
   }
   const std::vector<ChildProcess>& children = supervisor.children();
   if (const std::string note = pin_to(lc.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
@@ -379,7 +391,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     if (g_interrupted) return fail("interrupted while waiting for processes to be ready");
     if (monotonic_ns() > ready_deadline) {
       return fail("timed out after " + std::to_string(lc.ready_timeout_s) +
-                  " s waiting for HEARTBEAT READY from: " + waiting);
+                  " s waiting for HEARTBEAT READY from: " + waiting + hosts_hint(plan.hosts, waiting));
     }
   }
 
@@ -495,6 +507,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
                                               hb == nullptr ? "external, never heard"
                                                             : stopped ? "external, stopped" : "external, still running"});
   }
+  report.hosts = host_summaries(plan.hosts, host_link.get());
   report.verdict = judge_run(report.flight, plan.judge, interrupted, failure,
                              judge_timing(report.timing, plan.judge, !lockstep), options.strict_timing,
                              failsafe_of(monitor));

@@ -14,6 +14,8 @@
 #include <linux/can/raw.h>
 
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -106,12 +108,17 @@ std::string multicast_fix_commands() {
 
 namespace {
 
-/// Runs `argv` (no shell), returning its exit status and what it printed.
-int run_quiet(const std::vector<std::string>& argv, std::string* output) {
+/// Runs `argv` (no shell), returning its exit status and what it printed; in the network
+/// namespace of `netns_fd` if it is not -1.
+int run_quiet(const std::vector<std::string>& argv, std::string* output, int netns_fd = -1) {
   int pipe_fd[2];
   if (::pipe(pipe_fd) != 0) return -1;
   const pid_t pid = ::fork();
   if (pid == 0) {
+    if (netns_fd >= 0 && ::setns(netns_fd, CLONE_NEWNET) != 0) {
+      std::fprintf(stderr, "setns(CLONE_NEWNET): %s\n", std::strerror(errno));
+      ::_exit(126);
+    }
     ::dup2(pipe_fd[1], 1);
     ::dup2(pipe_fd[1], 2);
     ::close(pipe_fd[0]);
@@ -220,6 +227,81 @@ std::string ensure_can_interface(const std::string& name, bool create_virtual, b
     }
   }
   return bring_up(name);
+}
+
+HostLink::~HostLink() {
+  if (remote_fd_ >= 0) ::close(remote_fd_);
+}
+
+std::unique_ptr<HostLink> HostLink::create(const std::string& local_address, const std::string& remote_address,
+                                           std::string* problem) {
+  std::unique_ptr<HostLink> link(new HostLink());
+  const int here = ::open("/proc/self/ns/net", O_RDONLY | O_CLOEXEC);
+  if (here < 0) {
+    *problem = "cannot open this process's network namespace (/proc/self/ns/net): " + errno_text();
+    return nullptr;
+  }
+  // The new namespace: entered for a moment to hold it by a descriptor and bring up its lo.
+  if (::unshare(CLONE_NEWNET) != 0) {
+    *problem = "cannot create the second host's network namespace (unshare(CLONE_NEWNET)): " + errno_text();
+    ::close(here);
+    return nullptr;
+  }
+  link->remote_fd_ = ::open("/proc/self/ns/net", O_RDONLY | O_CLOEXEC);
+  const int open_errno = errno;
+  const NamespaceResult lo = configure_loopback_multicast();
+  if (::setns(here, CLONE_NEWNET) != 0) {
+    // This process is left in the wrong namespace: nothing it would do from here is right.
+    std::fprintf(stderr, "rig run: cannot return to the launcher's network namespace: %s\n", std::strerror(errno));
+    std::abort();
+  }
+  ::close(here);
+  if (link->remote_fd_ < 0) {
+    *problem = std::string("cannot open the second host's network namespace: ") + std::strerror(open_errno);
+    return nullptr;
+  }
+  if (!lo.ok) {
+    *problem = "second host's loopback: " + lo.detail;
+    return nullptr;
+  }
+  char id[64] = {0};
+  const std::string fd_path = "/proc/self/fd/" + std::to_string(link->remote_fd_);
+  const ssize_t n = ::readlink(fd_path.c_str(), id, sizeof id - 1);
+  link->remote_id_ = n > 0 ? std::string(id, static_cast<std::size_t>(n)) : "";
+
+  // The veth pair, its second end moved into the new namespace (iproute2 takes a path to a
+  // namespace where it would take a name), each end with its address, up, and the multicast
+  // route on it in place of the one on lo.
+  const std::string remote_ns = "/proc/" + std::to_string(::getpid()) + "/fd/" + std::to_string(link->remote_fd_);
+  const std::string local_if = kLocalInterface, remote_if = kRemoteInterface;
+  struct Step {
+    std::vector<std::string> argv;
+    bool in_remote;
+  };
+  const std::vector<Step> steps = {
+      {{"ip", "link", "add", local_if, "type", "veth", "peer", "name", remote_if}, false},
+      {{"ip", "link", "set", remote_if, "netns", remote_ns}, false},
+      {{"ip", "addr", "add", local_address, "dev", local_if}, false},
+      {{"ip", "link", "set", local_if, "multicast", "on", "up"}, false},
+      {{"ip", "route", "replace", "224.0.0.0/4", "dev", local_if}, false},
+      {{"ip", "addr", "add", remote_address, "dev", remote_if}, true},
+      {{"ip", "link", "set", remote_if, "multicast", "on", "up"}, true},
+      {{"ip", "route", "replace", "224.0.0.0/4", "dev", remote_if}, true},
+  };
+  for (const Step& step : steps) {
+    std::string out;
+    const int code = run_quiet(step.argv, &out, step.in_remote ? link->remote_fd_ : -1);
+    if (code != 0) {
+      std::string cmd;
+      for (const auto& a : step.argv) cmd += (cmd.empty() ? "" : " ") + a;
+      *problem = "cannot set up the link to the second host (" + cmd + (step.in_remote ? " in its namespace" : "") +
+                 ": " + (out.empty() ? "exit " + std::to_string(code) : out) + ")";
+      return nullptr;
+    }
+  }
+  link->detail_ = "veth " + local_if + " " + local_address + " <-> " + remote_if + " " + remote_address +
+                  ", route 224.0.0.0/4 on each end";
+  return link;
 }
 
 }  // namespace nimble::launcher

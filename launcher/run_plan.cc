@@ -117,6 +117,8 @@ RunPlan load_run_plan(const RunOptions& options) {
     plan.launch = launch_config_from(plan.scenario);
     plan.judge = judge_config_from(plan.scenario);
     plan.rates = process_rates(plan.scenario);
+    plan.hosts = host_placement_from(plan.scenario, plan.launch);
+    add_by_hand_processes(plan.hosts, plan.launch.external_processes);
   } catch (const ConfigError& e) {
     // Name the file and line the key was written on (a base file), or --set.
     throw locate_error(e, plan.scenario.file, plan.scenario.origins);

@@ -10,6 +10,7 @@
 
 #include "contract/rates.h"
 #include "core/param_table.h"
+#include "launcher/hosts.h"
 #include "scenario/scenario.h"
 
 namespace nimble::launcher {
@@ -94,6 +95,7 @@ struct RunPlan {
   JudgeConfig judge;
   contract::ProcessRates rates;
   double logger_period_ms = 10.0;  ///< lockstep.logger_period_ms
+  HostPlacement hosts;             ///< the `hosts` section: where each process runs (hosts.h)
   bool inprocess() const { return scenario.clock == kClockInprocess; }
   bool lockstep() const { return scenario.clock != kClockRealtime; }  ///< lockstep semantics
 };

@@ -1,5 +1,6 @@
 #include "launcher/run_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -141,6 +142,18 @@ void write_report_text(std::ostream& out, const RunReport& r) {
   out << "processes ";
   for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";
   out << "\n";
+  if (!r.hosts.empty()) {
+    out << "hosts     ";
+    for (std::size_t i = 0; i < r.hosts.size(); ++i) {
+      const HostSummary& h = r.hosts[i];
+      std::string about = h.launcher ? "launcher" : "";
+      if (!h.address.empty()) about += (about.empty() ? "" : ", ") + h.address;
+      if (!h.network_namespace.empty()) about += (about.empty() ? "" : ", ") + h.network_namespace;
+      out << (i ? "; " : " ") << h.name << (about.empty() ? "" : " (" + about + ")") << ":";
+      for (std::size_t k = 0; k < h.processes.size(); ++k) out << (k ? ", " : " ") << h.processes[k];
+    }
+    out << "\n";
+  }
   if (r.verdict.timing.judged) out << "timing     " << r.verdict.timing.text << "\n";
   // Real-time priority that could not be applied: one line, with what to do.
   std::string no_priority, why;
@@ -279,9 +292,26 @@ std::string report_json(const RunReport& r) {
     w.key("pid").value(p.pid);
     w.key("exit_code").value(p.exit_code);
     w.key("signal").value(p.signal);
+    for (const HostSummary& h : r.hosts) {
+      if (std::find(h.processes.begin(), h.processes.end(), p.name) != h.processes.end()) w.key("host").value(h.name);
+    }
     w.end_object();
   }
   w.end_object();
+  if (!r.hosts.empty()) {
+    w.key("hosts").begin_object();
+    for (const HostSummary& h : r.hosts) {
+      w.key(h.name).begin_object();
+      w.key("launcher").value(h.launcher);
+      w.key("address").value(h.address);
+      w.key("network_namespace").value(h.network_namespace);
+      w.key("processes").begin_array();
+      for (const auto& p : h.processes) w.value(p);
+      w.end_array();
+      w.end_object();
+    }
+    w.end_object();
+  }
   w.end_object();
   return w.str();
 }

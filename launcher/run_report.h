@@ -25,6 +25,15 @@ struct ProcessOutcome {
   std::string ended;  ///< "exited with code 0", "was killed by signal 9 (Killed)", "running"
 };
 
+/// One host of the run and what ran on it.
+struct HostSummary {
+  std::string name;                    ///< as in the scenario's hosts section
+  bool launcher = false;               ///< the host that recorded and watched the run
+  std::vector<std::string> processes;
+  std::string address;                 ///< its end of the emulated link ("" on one host)
+  std::string network_namespace;       ///< the kernel's name of its namespace, e.g. "net:[4026532417]" ("" if unknown)
+};
+
 struct RunReport {
   std::string scenario;
   std::string clock;
@@ -41,6 +50,7 @@ struct RunReport {
   std::map<std::string, nimble::can_health_t> can_health;
   std::vector<FaultRecord> faults;
   std::vector<ProcessOutcome> processes;
+  std::vector<HostSummary> hosts;  ///< where the processes ran (empty: no hosts section)
   Verdict verdict;
 
   double speed_x_realtime() const { return wall_time_s > 0 ? sim_time_s / wall_time_s : 0.0; }

@@ -62,7 +62,7 @@ ProcessSupervisor::~ProcessSupervisor() {
 
 const ChildProcess& ProcessSupervisor::start(const std::string& name, const std::string& exe,
                                              const std::vector<std::string>& args, const std::string& output_file,
-                                             const std::vector<int>& cpus) {
+                                             const std::vector<int>& cpus, int network_namespace_fd) {
   // Everything the child needs is prepared before fork: it only calls async-signal-safe
   // functions until exec.
   std::vector<char*> argv;
@@ -84,6 +84,10 @@ const ChildProcess& ProcessSupervisor::start(const std::string& name, const std:
         ::dup2(fd, STDERR_FILENO);
         ::close(fd);
       }
+    }
+    if (network_namespace_fd >= 0 && ::setns(network_namespace_fd, CLONE_NEWNET) != 0) {
+      std::fprintf(stderr, "cannot enter the network namespace of its host (setns): %s\n", std::strerror(errno));
+      ::_exit(127);
     }
     ::execv(exe.c_str(), argv.data());
     std::fprintf(stderr, "cannot execute %s: %s\n", exe.c_str(), std::strerror(errno));

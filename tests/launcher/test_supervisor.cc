@@ -1,11 +1,13 @@
 // Functional tests of ProcessSupervisor: real child processes started, reaped, named when they
 // die, and stopped in order (ask, SIGTERM, SIGKILL).
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
+#include <thread>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -85,4 +87,38 @@ TEST_CASE("supervisor: stop asks first, then SIGTERM, then SIGKILL", "[launcher]
 TEST_CASE("supervisor: pinning to CPUs that do not exist is said, not fatal", "[launcher]") {
   CHECK(nimble::launcher::pin_to({}).empty());
   CHECK(nimble::launcher::pin_to({100000}).find("none of the CPUs") != std::string::npos);
+}
+
+TEST_CASE("supervisor: a child given a network namespace runs in it, a bad one is named", "[launcher]") {
+  // A namespace held by a child of its own (unshare -n needs root, as rig run's second host does).
+  ProcessSupervisor s;
+  const ChildProcess& holder = s.start("holder", "/usr/bin/unshare", {"-n", "sleep", "30"}, scratch("holder.out"));
+  const std::string self_ns = std::filesystem::read_symlink("/proc/self/ns/net").string();
+  const std::string holder_path = "/proc/" + std::to_string(holder.pid) + "/ns/net";
+  std::string holder_ns;
+  for (int i = 0; i < 500 && (holder_ns.empty() || holder_ns == self_ns); ++i) {
+    std::error_code ec;
+    holder_ns = std::filesystem::read_symlink(holder_path, ec).string();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  INFO(slurp(scratch("holder.out")));
+  REQUIRE(holder_ns != self_ns);  // unshare -n works here (else this machine cannot run two hosts)
+  const int fd = ::open(holder_path.c_str(), O_RDONLY | O_CLOEXEC);
+  REQUIRE(fd >= 0);
+  const std::string out = scratch("in_ns.out");
+  s.start("in_ns", "/usr/bin/readlink", {"/proc/self/ns/net"}, out, {}, fd);
+  const int not_a_namespace = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  const std::string bad = scratch("bad_ns.out");
+  s.start("bad_ns", "/usr/bin/readlink", {"/proc/self/ns/net"}, bad, {}, not_a_namespace);
+  ::close(fd);
+  ::close(not_a_namespace);
+  for (int i = 0; i < 1000 && !(s.children()[1].exited && s.children()[2].exited); ++i) {
+    s.reap();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  CHECK(s.children()[1].exit_code == 0);
+  CHECK(slurp(out) == holder_ns + "\n");
+  CHECK(s.children()[2].exit_code == 127);
+  CHECK(slurp(bad).find("cannot enter the network namespace of its host (setns)") != std::string::npos);
+  s.stop(0.0);
 }
