@@ -368,6 +368,8 @@ std::string plot_pole_map(const fs::path& dir, const Ce500Analysis& a) {
   s << "set output " << gp_quote(png.string()) << "\n";
   s << "set title 'Ce500 poles: uncontrolled, roll-damped, reduced (gust poles on the real axis)'\n";
   s << "set xlabel 'real [1/s]'\nset ylabel 'imaginary [rad/s]'\nset grid\nset xzeroaxis\nset yzeroaxis\n";
+  // The legend below the axes: its markers inside them would read as poles.
+  s << "set key outside below center horizontal\n";
   s << "plot " << gp_quote(dat.string())
     << " index 0 using 1:2 with points pt 2 ps 2 lc rgb '#2ca02c' title 'uncontrolled', "
        "'' index 1 using 1:2 with points pt 1 ps 2 lc rgb '#1f77b4' title 'controlled', "

@@ -32,12 +32,13 @@ std::string g(double x) {
   return buf;
 }
 
-/// Measured and estimated outputs over time: one panel per output.
+/// Measured outputs over time against the model's: `model_label` says what the model's are
+/// ("estimated" by the regression, "predicted" by a model under validation). One panel per output.
 std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, const std::vector<OutputFit>& fits,
-                             const std::string& title) {
+                             const std::string& title, const std::string& model_label) {
   std::ostringstream data;
   data << "# t_s";
-  for (const auto& f : fits) data << " " << f.output << "_measured " << f.output << "_estimated";
+  for (const auto& f : fits) data << " " << f.output << "_measured " << f.output << "_" << model_label;
   data << "\n";
   for (Eigen::Index k = 0; k < t.size(); ++k) {
     data << g(t[k]);
@@ -60,7 +61,7 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
     s << "set title " << gp_quote(sub) << " noenhanced\n";
     s << "set ylabel " << gp_quote(f.output + " [" + f.unit + "]") << " noenhanced\n";
     s << "plot " << gp_quote(dat.string()) << " using 1:" << 2 + 2 * i << " with lines lw 1.2 lc rgb '#1f77b4' title 'measured', \\\n"
-      << "     '' using 1:" << 3 + 2 * i << " with lines lw 1.2 lc rgb '#d62728' title 'estimated'\n";
+      << "     '' using 1:" << 3 + 2 * i << " with lines lw 1.2 lc rgb '#d62728' title " << gp_quote(model_label) << "\n";
   }
   s << "unset multiplot\n";
   run_gnuplot(dir, "derivatives", s.str());
@@ -171,7 +172,9 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
   s << "set grid\nset xlabel 'real [1/s]'\nset ylabel 'imaginary [rad/s]'\n";
   s << "set xrange [" << g(-lim) << ":" << g(lim) << "]\nset yrange [" << g(-lim) << ":" << g(lim) << "]\n";
   s << "set size ratio -1\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n";
-  s << "plot " << gp_quote(dat.string()) << " using 1:2 with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'identified'\n";
+  // The legend below the axes: a cross inside them would read as one more pole.
+  s << "set key outside below center\n";
+  s << "plot " << gp_quote(dat.string()) << " using 1:2 with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'identified eigenvalue'\n";
   run_gnuplot(dir, "eigenvalues", s.str());
   return png.string();
 }
@@ -211,6 +214,9 @@ void run_gnuplot(const std::filesystem::path& dir, const std::string& name, cons
     text << in.rdbuf();
     throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
   }
+  // gnuplot's output is kept only when it said something (a warning worth reading).
+  std::error_code ec;
+  if (fs::exists(log, ec) && fs::file_size(log, ec) == 0) fs::remove(log, ec);
 }
 
 
@@ -226,7 +232,7 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
   const fs::path d = make_dir(dir);
   const std::string what = result.source + ": " + to_string(result.options.structure) + ", " +
                            to_string(result.options.method);
-  return {plot_derivatives(d, result.data.filtered.t_s, result.fits, "identification " + what),
+  return {plot_derivatives(d, result.data.filtered.t_s, result.fits, "identification " + what, "estimated"),
           plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what), plot_psd(d, result),
           plot_eigenvalues(d, result)};
 }
@@ -296,7 +302,7 @@ std::string plot_panels(const std::string& dir, const std::string& name, const s
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir) {
   const fs::path d = make_dir(dir);
   const std::string what = result.source + " with model " + result.model.name;
-  return {plot_derivatives(d, result.data.t_s, result.fits, "open-loop validation " + what),
+  return {plot_derivatives(d, result.data.t_s, result.fits, "open-loop validation " + what, "predicted"),
           plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what)};
 }
 

@@ -134,7 +134,9 @@ TEST_CASE("rig validate reports open-loop metrics of every state derivative", "[
 
 TEST_CASE("rig identify --plots draws PNGs with gnuplot, or names the package when it is missing", "[cli]") {
   const fs::path plots = work_dir() / "plots";
-  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+  INFO("gnuplot is not on the PATH: install the Debian package gnuplot-nox (scripts/setup.sh does)");
+  REQUIRE(std::system("command -v gnuplot >/dev/null 2>&1") == 0);
+  {
     const Result r = run_rig("identify " + flight_csv() + " --plots " + plots.string());
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
@@ -144,10 +146,22 @@ TEST_CASE("rig identify --plots draws PNGs with gnuplot, or names the package wh
       REQUIRE(bytes.size() > 1000);
       CHECK(bytes.substr(1, 3) == "PNG");
     }
+    // The eigenvalue legend sits below the axes (its cross would read as a pole inside them).
+    CHECK(slurp((plots / "eigenvalues.gp").string()).find("set key outside below") != std::string::npos);
+    CHECK(slurp((plots / "derivatives.gp").string()).find("'estimated'") != std::string::npos);
     const Result v = run_rig("validate " + ident::test::kConfigs + "models/nimble_lateral_set1.yaml " + flight_csv() +
                              " --plots " + (plots / "validate").string());
     REQUIRE(v.exit_code == 0);
     CHECK(fs::exists(plots / "validate" / "derivatives.png"));
+    // A model under validation predicts, as the text says; it estimates nothing.
+    const std::string gp = slurp((plots / "validate" / "derivatives.gp").string());
+    CHECK(gp.find("'predicted'") != std::string::npos);
+    CHECK(gp.find("estimated") == std::string::npos);
+    // No empty files are left beside the plots (gnuplot's output is kept only when it said something).
+    for (const auto& e : fs::recursive_directory_iterator(plots)) {
+      INFO(e.path().string());
+      if (e.is_regular_file()) CHECK(fs::file_size(e.path()) > 0);
+    }
   }
   const Result missing = run_rig("identify " + flight_csv() + " --plots " + plots.string(), "PATH=/nonexistent");
   CHECK(missing.exit_code == 2);
