@@ -19,7 +19,7 @@ from collections import defaultdict
 WHOLE_EXECUTABLE_ENTRIES = {"can.vcan", "can.rig"}
 SELF = "meta.ctest_entries"
 # Entries that run a script, not a Catch2 executable.
-SCRIPT_ENTRIES = {"meta.truth_side", "install.prefix"}
+SCRIPT_ENTRIES = {"meta.truth_side", "install.prefix", "can.canvm_out"}
 
 
 def catch_list(exe, spec=None):
