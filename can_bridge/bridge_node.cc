@@ -101,6 +101,9 @@ CanBridgeNode::~CanBridgeNode() {
 
 int CanBridgeNode::run() {
   const int code = node_->run();
+  // What arrived before the stop still crosses: messages waiting on LCM go out as frames, frames
+  // waiting on the socket go out on LCM.
+  node_->bus().drain();
   drain_socket();
   if (candump_) candump_->flush();
   publish_health();

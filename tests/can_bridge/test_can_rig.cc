@@ -389,7 +389,11 @@ void check_link_carried(const YAML::Node& summary, int commands, bool fd) {
   CHECK(ch[kActuatorCommand]["count"].as<int>() == commands);
   CHECK(ch[kActuatorCommandCan]["count"].as<int>() == commands);
   CHECK(ch[kActuatorCommandCan]["drops"].as<int>() == 0);
-  CHECK(ch[kActuatorFeedbackCan]["count"].as<int>() == ch[kActuatorFeedback]["count"].as<int>());
+  // Every feedback message crosses; nobody waits for feedback in lockstep, so the one of the very
+  // last step may still be on its way when the run stops (seen under a loaded host).
+  const int feedback = ch[kActuatorFeedback]["count"].as<int>();
+  CHECK(ch[kActuatorFeedbackCan]["count"].as<int>() >= feedback - 1);
+  CHECK(ch[kActuatorFeedbackCan]["count"].as<int>() <= feedback);
   const YAML::Node flight = summary["can"]["can_flight"], rig = summary["can"]["can_rig"];
   REQUIRE(flight);
   REQUIRE(rig);
