@@ -1,109 +1,91 @@
 #include "core/json_writer.h"
 
 #include <cmath>
-#include <cstdio>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
 
 namespace nimble {
 
-std::string json_quote(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
+using Json = nlohmann::ordered_json;
 
-void JsonWriter::before_value() {
-  if (after_key_) {
-    after_key_ = false;
-    return;
+struct JsonWriter::Impl {
+  Json root;
+  std::vector<Json*> open;  ///< the containers begun and not ended, outermost first
+  std::string key;
+  bool has_key = false;
+
+  /// Places `v` where the document is: the root, the next element of the open array, or the
+  /// value of the pending key. Returns where it went (a new container is opened there).
+  Json* put(Json v) {
+    if (open.empty()) {
+      root = std::move(v);
+      return &root;
+    }
+    Json& top = *open.back();
+    if (top.is_object()) {
+      if (!has_key) throw std::logic_error("JsonWriter: a value inside an object needs a key first");
+      has_key = false;
+      Json& slot = top[key];
+      slot = std::move(v);
+      return &slot;
+    }
+    top.push_back(std::move(v));
+    return &top.back();
   }
-  if (!first_.empty()) {
-    if (!first_.back()) out_ += ",";
-    first_.back() = false;
-  }
-}
+};
+
+JsonWriter::JsonWriter() : impl_(std::make_unique<Impl>()) {}
+JsonWriter::~JsonWriter() = default;
 
 JsonWriter& JsonWriter::begin_object() {
-  before_value();
-  out_ += "{";
-  first_.push_back(true);
+  impl_->open.push_back(impl_->put(Json::object()));
   return *this;
 }
 
 JsonWriter& JsonWriter::end_object() {
-  first_.pop_back();
-  out_ += "}";
+  impl_->open.pop_back();
   return *this;
 }
 
 JsonWriter& JsonWriter::begin_array() {
-  before_value();
-  out_ += "[";
-  first_.push_back(true);
+  impl_->open.push_back(impl_->put(Json::array()));
   return *this;
 }
 
 JsonWriter& JsonWriter::end_array() {
-  first_.pop_back();
-  out_ += "]";
+  impl_->open.pop_back();
   return *this;
 }
 
 JsonWriter& JsonWriter::key(const std::string& k) {
-  before_value();
-  out_ += json_quote(k) + ":";
-  after_key_ = true;
+  impl_->key = k;
+  impl_->has_key = true;
   return *this;
 }
 
 JsonWriter& JsonWriter::value(double x) {
-  before_value();
-  if (!std::isfinite(x)) {
-    out_ += "null";
-  } else {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.17g", x);
-    out_ += buf;
-  }
+  impl_->put(std::isfinite(x) ? Json(x) : Json(nullptr));
   return *this;
 }
 
 JsonWriter& JsonWriter::value(long long x) {
-  before_value();
-  out_ += std::to_string(x);
+  impl_->put(Json(x));
   return *this;
 }
 
 JsonWriter& JsonWriter::value(bool b) {
-  before_value();
-  out_ += b ? "true" : "false";
+  impl_->put(Json(b));
   return *this;
 }
 
 JsonWriter& JsonWriter::value(const std::string& s) {
-  before_value();
-  out_ += json_quote(s);
+  impl_->put(Json(s));
   return *this;
 }
 
 JsonWriter& JsonWriter::null() {
-  before_value();
-  out_ += "null";
+  impl_->put(Json(nullptr));
   return *this;
 }
 
@@ -118,5 +100,11 @@ JsonWriter& JsonWriter::array(const std::vector<std::string>& xs) {
   for (const auto& x : xs) value(x);
   return end_array();
 }
+
+std::string JsonWriter::str() const {
+  return impl_->root.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+std::string json_quote(const std::string& s) { return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace); }
 
 }  // namespace nimble

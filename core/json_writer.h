@@ -1,8 +1,11 @@
 #pragma once
-/// Minimal streaming JSON writer for machine-readable command output.
-/// Numbers are written with 17 significant digits (round-trip exact);
-/// non-finite numbers become null.
+/// Streaming JSON writer for machine-readable command output, over nlohmann::json (Debian's
+/// nlohmann-json3-dev): the callers build objects and arrays in order, the library does the
+/// escaping and the number formatting (shortest text that reads back to the same double).
+/// Keys keep the order they were written in; non-finite numbers become null; bytes that are not
+/// UTF-8 are replaced by U+FFFD instead of failing.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +13,11 @@ namespace nimble {
 
 class JsonWriter {
  public:
+  JsonWriter();
+  ~JsonWriter();
+  JsonWriter(const JsonWriter&) = delete;
+  JsonWriter& operator=(const JsonWriter&) = delete;
+
   JsonWriter& begin_object();
   JsonWriter& end_object();
   JsonWriter& begin_array();
@@ -26,13 +34,12 @@ class JsonWriter {
   JsonWriter& array(const std::vector<double>& xs);
   JsonWriter& array(const std::vector<std::string>& xs);
 
-  const std::string& str() const { return out_; }
+  /// The document written so far, compact (one line).
+  std::string str() const;
 
  private:
-  void before_value();
-  std::string out_;
-  std::vector<bool> first_;  // per open container: no element written yet
-  bool after_key_ = false;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// JSON string literal of `s` with quotes and escapes.

@@ -8,6 +8,8 @@
 #include <map>
 #include <ostream>
 
+#include <fmt/format.h>
+#include <fmt/ostream.h>
 #include <nimble/fault_event_t.hpp>
 
 #include "contract/faults.h"
@@ -29,21 +31,16 @@ void fill_from_monitor(RunReport& r, const RunMonitor& monitor, double sim_s, do
 void write_report_text(std::ostream& out, const RunReport& r) {
   const FlightSummary& f = r.flight;
   const double sim_s = r.sim_time_s, wall_s = r.wall_time_s;
-  char line[256];
   out << "\n== run summary: " << r.scenario << " ==\n";
   out << "clock      " << r.clock << ", seed " << r.seed << "\n";
   out << "transport  " << r.transport << (r.transport_detail.empty() ? "" : "  (" + r.transport_detail + ")") << "\n";
   out << "log        " << r.log_file << "\n";
-  std::snprintf(line, sizeof line, "time       simulated %.3f s, wall %.3f s (%.2fx real time)\n", sim_s, wall_s,
-                wall_s > 0 ? sim_s / wall_s : 0.0);
-  out << line;
+  fmt::print(out, "time       simulated {:.3f} s, wall {:.3f} s ({:.2f}x real time)\n", sim_s, wall_s,
+             wall_s > 0 ? sim_s / wall_s : 0.0);
   out << "\nchannel              count    rate [Hz]  expected   drops   late  malformed\n";
   for (const auto& [name, c] : r.channels) {
-    std::snprintf(line, sizeof line, "%-18s %8lld %10.1f %9.1f %7lld %6lld %9lld%s\n", name.c_str(),
-                  static_cast<long long>(c.count), c.rate_hz, c.expected_hz, static_cast<long long>(c.drops),
-                  static_cast<long long>(c.late), static_cast<long long>(c.malformed),
-                  c.wall_clock ? "  (per wall second)" : "");
-    out << line;
+    fmt::print(out, "{:<18} {:>8} {:>10.1f} {:>9.1f} {:>7} {:>6} {:>9}{}\n", name, c.count, c.rate_hz, c.expected_hz,
+               c.drops, c.late, c.malformed, c.wall_clock ? "  (per wall second)" : "");
   }
   out << "\nloop timing "
       << (r.clock == kClockRealtime ? "(wake-up jitter)"
@@ -51,64 +48,46 @@ void write_report_text(std::ostream& out, const RunReport& r) {
                                        : "(lockstep: wall time per step / per wait)")
       << "\nprocess        rate [Hz]    loops  overruns   p50 [us]   p99 [us]   max [us]\n";
   for (const auto& [name, t] : r.timing) {
-    std::snprintf(line, sizeof line, "%-14s %9.1f %8lld %9lld %10.1f %10.1f %10.1f\n", name.c_str(), t.loop_rate_hz,
-                  static_cast<long long>(t.loop_count), static_cast<long long>(t.overruns), t.jitter_p50_us,
-                  t.jitter_p99_us, t.jitter_max_us);
-    out << line;
+    fmt::print(out, "{:<14} {:>9.1f} {:>8} {:>9} {:>10.1f} {:>10.1f} {:>10.1f}\n", name, t.loop_rate_hz, t.loop_count,
+               t.overruns, t.jitter_p50_us, t.jitter_p99_us, t.jitter_max_us);
   }
   for (const auto& [name, t] : r.timing) {
     if (t.latency_count == 0) continue;
     const char* what = name == "plant" ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
                        : name == "estimator" ? "latency (IMU sample time -> ESTIMATE published)"
                                              : "latency";
-    std::snprintf(line, sizeof line, "%s %s: p50 %.1f us, p99 %.1f us, max %.1f us over %lld messages\n",
-                  name.c_str(), what, t.latency_p50_us, t.latency_p99_us, t.latency_max_us,
-                  static_cast<long long>(t.latency_count));
-    out << line;
+    fmt::print(out, "{} {}: p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us over {} messages\n", name, what,
+               t.latency_p50_us, t.latency_p99_us, t.latency_max_us, t.latency_count);
   }
-  out << "\nflight     max |p| " << std::to_string(f.max_abs_p).substr(0, 6) << " rad/s, max |v| "
-      << std::to_string(f.max_abs_v).substr(0, 6) << " m/s, max |phi| "
-      << std::to_string(f.max_abs_phi * 180 / M_PI).substr(0, 6) << " deg";
-  if (f.max_abs_theta > 0.0) out << ", max |theta| " << std::to_string(f.max_abs_theta * 180 / M_PI).substr(0, 6) << " deg";
+  fmt::print(out, "\nflight     max |p| {:.4g} rad/s, max |v| {:.4g} m/s, max |phi| {:.4g} deg", f.max_abs_p, f.max_abs_v,
+             f.max_abs_phi * 180 / M_PI);
+  if (f.max_abs_theta > 0.0) fmt::print(out, ", max |theta| {:.4g} deg", f.max_abs_theta * 180 / M_PI);
   out << "\n";
-  std::snprintf(line, sizeof line, "ranges     p %.2f rad/s, v %.2f m/s, phi %.2f rad, delta_f %.1f rad/s\n",
-                f.max_p - f.min_p, f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
-  out << line;
-  std::snprintf(line, sizeof line, "final      p %.3f rad/s, v %.3f m/s, phi %.2f deg\n", f.final_p, f.final_v,
-                f.final_phi * 180 / M_PI);
-  out << line;
+  fmt::print(out, "ranges     p {:.2f} rad/s, v {:.2f} m/s, phi {:.2f} rad, delta_f {:.1f} rad/s\n", f.max_p - f.min_p,
+             f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
+  fmt::print(out, "final      p {:.3f} rad/s, v {:.3f} m/s, phi {:.2f} deg\n", f.final_p, f.final_v,
+             f.final_phi * 180 / M_PI);
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
-    std::snprintf(line, sizeof line,
-                  "estimator  phi error rms %.3f deg (max %.3f), p error rms %.4f rad/s, v error rms %.4f m/s over %lld "
-                  "estimates; poses accepted %lld, rejected %lld, missing %lld\n",
-                  est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, static_cast<long long>(est.samples),
-                  static_cast<long long>(est.poses_accepted), static_cast<long long>(est.poses_rejected),
-                  static_cast<long long>(est.poses_missing));
-    out << line;
+    fmt::print(out,
+               "estimator  phi error rms {:.3f} deg (max {:.3f}), p error rms {:.4f} rad/s, v error rms {:.4f} m/s over {} "
+               "estimates; poses accepted {}, rejected {}, missing {}\n",
+               est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, est.samples, est.poses_accepted,
+               est.poses_rejected, est.poses_missing);
     if (est.poses_too_old + est.poses_too_new + est.velocity_windows_uncovered + est.imu_rejected + est.imu_gaps > 0) {
-      std::snprintf(line, sizeof line,
-                    "estimator  poses dropped %lld too old, %lld too new; velocity windows uncovered %lld; IMU samples "
-                    "rejected %lld, gaps %lld\n",
-                    static_cast<long long>(est.poses_too_old), static_cast<long long>(est.poses_too_new),
-                    static_cast<long long>(est.velocity_windows_uncovered), static_cast<long long>(est.imu_rejected),
-                    static_cast<long long>(est.imu_gaps));
-      out << line;
+      fmt::print(out,
+                 "estimator  poses dropped {} too old, {} too new; velocity windows uncovered {}; IMU samples "
+                 "rejected {}, gaps {}\n",
+                 est.poses_too_old, est.poses_too_new, est.velocity_windows_uncovered, est.imu_rejected, est.imu_gaps);
     }
   }
   for (const auto& [name, h] : r.can_health) {
-    std::snprintf(line, sizeof line,
-                  "%-10s %s: %lld messages to CAN, %lld to LCM; frames sent %lld, received %lld; rejected: unknown id "
-                  "%lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; error frames "
-                  "%lld; ENOBUFS %lld, dropped %lld\n",
-                  name.c_str(), h.interface_name.c_str(), static_cast<long long>(h.messages_to_can),
-                  static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
-                  static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
-                  static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
-                  static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
-                  static_cast<long long>(h.error_frames), static_cast<long long>(h.send_enobufs),
-                  static_cast<long long>(h.send_dropped + h.receive_dropped));
-    out << line;
+    fmt::print(out,
+               "{:<10} {}: {} messages to CAN, {} to LCM; frames sent {}, received {}; rejected: unknown id {}, wrong "
+               "length {}, bad checksum {}, stale counter {}, out of range {}; error frames {}; ENOBUFS {}, dropped {}\n",
+               name, h.interface_name, h.messages_to_can, h.messages_to_lcm, h.frames_sent, h.frames_received,
+               h.rejected_unknown_id, h.rejected_wrong_length, h.rejected_bad_checksum, h.rejected_stale_counter,
+               h.rejected_out_of_range, h.error_frames, h.send_enobufs, h.send_dropped + h.receive_dropped);
     if (h.fd) {
       out << "           CAN FD: " << h.fd_frames_sent << " of the frames sent and " << h.fd_frames_received
           << " of those received were FD frames\n";
@@ -131,9 +110,8 @@ void write_report_text(std::ostream& out, const RunReport& r) {
     }
     for (const auto& fr : r.faults) {
       if (fr.process != key.first || fr.code != key.second) continue;
-      std::snprintf(line, sizeof line, "           [%s %s t=%.3f s] ", fr.process.c_str(),
-                    contract::fault_code_name(fr.code).c_str(), fr.rig_time_s);
-      out << line << fr.message;
+      fmt::print(out, "           [{} {} t={:.3f} s] {}", fr.process, contract::fault_code_name(fr.code), fr.rig_time_s,
+                 fr.message);
       if (count[key] > 1) out << " (" << count[key] << " in all)";
       out << "\n";
       break;

@@ -2,14 +2,18 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
+#include "core/json_writer.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 
@@ -178,4 +182,35 @@ TEST_CASE("model errors name file, key and value", "[config]") {
     const auto f = model_with("source:", "sauce:");
     expect_error([&] { load_model(f); }, f, "source", "", "missing required key");
   }
+}
+
+TEST_CASE("json writer: keys in written order, escapes, non-finite numbers as null, doubles that read back exactly",
+          "[json]") {
+  nimble::JsonWriter w;
+  const double third = 1.0 / 3.0;
+  w.begin_object();
+  w.key("zeta").value(third).key("alpha").value(static_cast<long long>(-7));
+  w.key("text").value(std::string("quote \" backslash \\ newline \n tab \t bell \a"));
+  w.key("nan").value(std::nan("")).key("inf").value(HUGE_VAL).key("flag").value(true);
+  w.key("list").array(std::vector<double>{1.5, -0.0, 1e-300});
+  w.key("nested").begin_object().key("empty").begin_array().end_array().key("none").null().end_object();
+  w.key("bad_utf8").value(std::string("ok \xff\xfe end"));
+  w.end_object();
+  const std::string s = w.str();
+  INFO(s);
+  CHECK(s.find("\"zeta\"") < s.find("\"alpha\""));  // written order, not sorted
+  CHECK(s.find("\\\"") != std::string::npos);
+  CHECK(s.find("\\n") != std::string::npos);
+  CHECK(s.find("\\u0007") != std::string::npos);
+  CHECK(s.find("\"nan\":null") != std::string::npos);
+  CHECK(s.find("\"inf\":null") != std::string::npos);
+  CHECK(s.find('\n') == std::string::npos);  // one line
+  // It parses, and the double reads back to the same bits.
+  const YAML::Node n = YAML::Load(s);
+  CHECK(n["zeta"].as<double>() == third);
+  CHECK(n["list"][2].as<double>() == 1e-300);
+  CHECK(n["nested"]["empty"].size() == 0);
+  CHECK(n["text"].as<std::string>() == "quote \" backslash \\ newline \n tab \t bell \a");
+  CHECK(n["bad_utf8"].as<std::string>().find("\xef\xbf\xbd") != std::string::npos);  // U+FFFD
+  CHECK(nimble::json_quote("a\"b") == "\"a\\\"b\"");
 }
