@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 namespace nimble::can {
@@ -93,10 +94,13 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   const auto close = line.find(')');
   const auto dot = line.find('.');
   if (close == std::string::npos || dot == std::string::npos || dot > close) return std::nullopt;
+  // The time must fit time_ns: a larger number of seconds (year 2262 on) is not a candump line.
+  constexpr long long kMaxSeconds = (std::numeric_limits<int64_t>::max() / 1000 - 999999) / 1000000;
   long long sec = 0, usec = 0;
   for (std::size_t i = 1; i < dot; ++i) {
     if (line[i] < '0' || line[i] > '9') return std::nullopt;
     sec = sec * 10 + (line[i] - '0');
+    if (sec > kMaxSeconds) return std::nullopt;
   }
   if (close - dot - 1 != 6) return std::nullopt;
   for (std::size_t i = dot + 1; i < close; ++i) {
