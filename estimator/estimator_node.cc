@@ -32,7 +32,8 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
       apply_imu(s);
       publish(s.utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
-      node_->record_latency_ns(transport::monotonic_ns() - (node_->t0_monotonic_ns() + s.utime * 1000));
+      node_->record_latency_ns(transport::monotonic_ns() -
+                                (node_->t0_monotonic_ns() + transport::message_us_to_ns(s.utime)));
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {

@@ -31,8 +31,8 @@ bool Bus::track_seq(int64_t seq, ChannelStats& stats) {
   return true;
 }
 
-void Bus::count_late(int64_t due_us, ChannelStats& stats) const {
-  if (monotonic_ns() - (t0_ns_ + due_us * 1000) > late_threshold_ns_) ++stats.late;
+void Bus::count_late(int64_t due_ns, ChannelStats& stats) const {
+  if (monotonic_ns() - (t0_ns_ + due_ns) > late_threshold_ns_) ++stats.late;
 }
 
 void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
