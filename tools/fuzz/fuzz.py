@@ -37,10 +37,14 @@ def run_target(build, name, seconds, runs):
     if runs:
         cmd.append(f"-runs={runs}")
     cmd.append(corpus)
+    env = dict(os.environ)
+    # Shorter allocation stacks in ASan reports (the crash's own stack stays whole): the
+    # allocation-heavy targets (YAML, logs) run about twice as fast.
+    env.setdefault("ASAN_OPTIONS", "malloc_context_size=5")
     log_path = os.path.join(work, "log.txt")
     start = time.monotonic()
     with open(log_path, "w") as log:
-        status = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
+        status = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, check=False).returncode
     elapsed = time.monotonic() - start
     with open(log_path, errors="replace") as log:
         text = log.read()
