@@ -751,9 +751,9 @@ TEST_CASE("an array count larger than the message is refused without allocating 
 
     nimble::timing_health_t th{};
     fill(th, g, n);
-    for (auto& c : th.channel) c = "TRUTH";
+    for (auto& c : th.channel) c = kTruth;
     buf = encode(th);
-    const std::size_t th_count_pos = buf.size() - static_cast<std::size_t>(n) * (4 + 6 + 5 * 8) - 4;
+    const std::size_t th_count_pos = buf.size() - static_cast<std::size_t>(n) * (4 + kTruth.size() + 1 + 5 * 8) - 4;
     for (uint32_t bad : {0x7FFFFFFFu, 1000u, 0xFFFFFFFFu}) {
       std::vector<uint8_t> patched = buf;
       put_count(patched, th_count_pos, bad);
