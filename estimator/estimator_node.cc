@@ -25,6 +25,11 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
   node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
+    if (!transport::plausible_sim_utime(m.utime)) {
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kImu,
+                   "IMU sample at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
+      return;
+    }
     const ImuSample s = contract::from_message(m);
     if (node_->lockstep()) {
       imu_inbox_.push(s.utime, s);
@@ -37,6 +42,11 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
+    if (!transport::plausible_sim_utime(m.utime)) {
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
+                   "pose at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
+      return;
+    }
     const MocapPose p = contract::from_message(m);
     if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
     else apply_pose(p);

@@ -537,3 +537,37 @@ TEST_CASE("controller node: a message time at the end of int64 is taken without 
   CHECK(transport::message_us_to_ns(std::numeric_limits<int64_t>::min()) == -transport::kMaxMessageTimeNs);
   CHECK(transport::message_us_to_ns(-1234) == -1234000);
 }
+
+TEST_CASE("estimator and mocap nodes: an input time outside any run is refused with a FAULT",
+          "[estimator][mocap][process]") {
+  // Found by fuzz_node_estimator and fuzz_node_mocap: an IMU sample or TRUTH stamped days ahead
+  // made the EKF integrate step by step, and the emulator capture every frame, up to it.
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  EstimatorNode estimator(scenario, {"estimator", "", "memq://"});
+  MocapNode mocap(scenario, {"mocap", "", "memq://"});
+  for (transport::Bus* bus : {&estimator.node().bus(), &mocap.node().bus()}) {
+    std::vector<fault_event_t> faults;
+    bus->subscribe<fault_event_t>(kFault, [&](const fault_event_t& f) { faults.push_back(f); });
+    const bool is_estimator = bus == &estimator.node().bus();
+    if (is_estimator) {
+      imu_sample_t imu{};
+      imu.utime = transport::kMaxSimUtime + 1;
+      bus->publish(kImu, imu);
+    } else {
+      truth_state_t t{};
+      t.utime = -5;
+      t.quaternion_wxyz[0] = 1.0;
+      bus->publish(kTruth, t);
+    }
+    bus->drain();
+    bus->drain();  // the FAULT the handler published
+    INFO((is_estimator ? "estimator" : "mocap"));
+    REQUIRE(faults.size() == 1);
+    CHECK(faults[0].code == fault_event_t::CODE_MESSAGE_MALFORMED);
+    CHECK(faults[0].channel == (is_estimator ? kImu : kTruth));
+    CHECK(faults[0].message.find("outside any run") != std::string::npos);
+  }
+  CHECK(transport::plausible_sim_utime(0));
+  CHECK(transport::plausible_sim_utime(transport::kMaxSimUtime));
+  CHECK_FALSE(transport::plausible_sim_utime(-1));
+}

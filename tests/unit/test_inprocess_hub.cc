@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -271,4 +272,24 @@ TEST_CASE("lockstep schedule: the master's ticks and acknowledgements are the on
   const auto hz = nimble::contract::expected_rates(pr, nimble::contract::RunShape{true, 0.0, 4});
   CHECK(hz.at(ch::kRigClock) == static_cast<double>(ticks));
   CHECK(hz.at(ch::kStepAck) == static_cast<double>(acks));
+}
+
+TEST_CASE("bus: drops counted from seq gaps saturate instead of overflowing", "[transport]") {
+  // Found by fuzz_node_plant: on a channel with several publishers (HEARTBEAT) a stray seq can
+  // be anything; seq gaps near 2^62, one after another, overflowed the drop count.
+  InprocessHub hub;
+  Bus sender(hub), receiver(hub);
+  int received = 0;
+  receiver.subscribe<nimble::heartbeat_t>(ch::kHeartbeat, [&](const nimble::heartbeat_t&) { ++received; });
+  nimble::heartbeat_t hb{};
+  hb.process = "plant";
+  for (int i = 0; i < 3; ++i) {
+    for (const int64_t seq : {int64_t{0}, int64_t{1} << 62}) {
+      hb.seq = seq;
+      sender.publish(ch::kHeartbeat, hb);
+    }
+  }
+  receiver.drain();
+  CHECK(received == 6);
+  CHECK(receiver.stats().at(ch::kHeartbeat).drops == std::numeric_limits<int64_t>::max());
 }
