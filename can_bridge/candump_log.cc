@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 namespace nimble::can {
@@ -93,10 +94,13 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   const auto close = line.find(')');
   const auto dot = line.find('.');
   if (close == std::string::npos || dot == std::string::npos || dot > close) return std::nullopt;
+  // The time must fit time_ns: a larger number of seconds (year 2262 on) is not a candump line.
+  constexpr long long kMaxSeconds = (std::numeric_limits<int64_t>::max() / 1000 - 999999) / 1000000;
   long long sec = 0, usec = 0;
   for (std::size_t i = 1; i < dot; ++i) {
     if (line[i] < '0' || line[i] > '9') return std::nullopt;
     sec = sec * 10 + (line[i] - '0');
+    if (sec > kMaxSeconds) return std::nullopt;
   }
   if (close - dot - 1 != 6) return std::nullopt;
   for (std::size_t i = dot + 1; i < close; ++i) {
@@ -124,8 +128,13 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   }
   if (hash == 3) {
     if (id > CAN_SFF_MASK) return std::nullopt;
-  } else if (!(id & CAN_ERR_FLAG)) {
-    id = (id & CAN_EFF_MASK) | CAN_EFF_FLAG;
+  } else if (id & CAN_ERR_FLAG) {
+    // An error frame: its class bits and nothing else (candump writes no other flag with it).
+    if (id & ~(CAN_ERR_FLAG | CAN_ERR_MASK)) return std::nullopt;
+  } else {
+    // An extended identifier: 29 bits (no flag bits, which candump never writes).
+    if (id > CAN_EFF_MASK) return std::nullopt;
+    id |= CAN_EFF_FLAG;
   }
   rec.frame.can_id = id;
   if (fd) {
@@ -149,6 +158,7 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   }
   std::string data = text.substr(hash + 1);
   if (!data.empty() && (data[0] == 'R' || data[0] == 'r')) {
+    if (id & CAN_ERR_FLAG) return std::nullopt;  // an error frame is not a remote frame
     rec.frame.can_id |= CAN_RTR_FLAG;
     if (data.size() == 2 && hex_value(data[1]) >= 0 && hex_value(data[1]) <= CAN_MAX_DLEN) {
       rec.frame.len = static_cast<uint8_t>(hex_value(data[1]));

@@ -10,7 +10,8 @@
 # declared in `package <pkg>;`. This is checked at configure time.
 #
 # C++: `lcm-gen --cpp` runs at build time into <binary dir>/<target>_cpp and produces
-#   <pkg>/<type>.hpp for every file. <target> is an INTERFACE library that exposes that include
+#   <pkg>/<type>.hpp for every file, to whose decoders LcmDecodeChecks.cmake adds the length and
+#   count checks lcm-gen 1.3.1 leaves out. <target> is an INTERFACE library that exposes that include
 #   directory, links PkgConfig::LCM and makes its consumers wait for the generation step.
 #   Use as: #include <nimble/truth_state_t.hpp>
 #
@@ -101,7 +102,8 @@ function(rig_add_lcm_types target)
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${cpp_dir}"
     COMMAND "${CMAKE_COMMAND}" -E make_directory "${cpp_dir}"
     COMMAND "${LCM_GEN_EXECUTABLE}" --cpp --cpp-std=c++11 --cpp-hpath "${cpp_dir}" ${lcm_files}
-    DEPENDS ${lcm_files} "${LCM_GEN_EXECUTABLE}"
+    COMMAND "${CMAKE_COMMAND}" "-DDIR=${cpp_dir}/${pkg_dir}" -P "${CMAKE_CURRENT_FUNCTION_LIST_DIR}/LcmDecodeChecks.cmake"
+    DEPENDS ${lcm_files} "${LCM_GEN_EXECUTABLE}" "${CMAKE_CURRENT_FUNCTION_LIST_DIR}/LcmDecodeChecks.cmake"
     COMMENT "lcm-gen (C++): ${ARG_PACKAGE} types for ${target}"
     VERBATIM)
   add_custom_target(${target}_gen ALL DEPENDS ${headers})

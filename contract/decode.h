@@ -1,27 +1,51 @@
 #pragma once
 /// Decoding a received LCM message without trusting it.
 ///
-/// LCM 1.3.1's generated decoders check sizes but not everything: a string field whose encoded
-/// length is 0 makes them call std::string::assign(p, -1), which throws. Every reader of
-/// messages from the bus or a log decodes through decode_exact(), so that such bytes are one
-/// more malformed message, never an exception that ends a process.
+/// LCM 1.3.1's generated decoders check sizes but not everything. The rig's build adds the
+/// string-length and array-count checks they lack (cmake/LcmDecodeChecks.cmake: a zero or
+/// negative string length, an array count larger than the message). One thing is left to this
+/// header: a string is taken with whatever its terminating byte holds and with NUL bytes
+/// inside, which the encoder (strlen) cannot write back; the message decodes, but a node that
+/// copies such a string into a message of its own (the run id into RIG_CLOCK) can no longer
+/// publish it. Every reader of messages from the bus or a log decodes through decode_exact(),
+/// so that such bytes are one more malformed message, never an exception that ends a process,
+/// an allocation out of proportion to the message, or a message that cannot be sent on.
 
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <string>
+#include <vector>
 
 namespace nimble::contract {
 
+namespace detail {
+
+/// True if `msg` encodes back to exactly `size` bytes equal to `data`.
+template <typename T>
+bool encodes_back(const T& msg, const void* data, int size) {
+  thread_local std::vector<uint8_t> buffer;
+  if (msg.getEncodedSize() != size) return false;
+  buffer.resize(static_cast<std::size_t>(size));
+  return msg.encode(buffer.data(), 0, size) == size && std::memcmp(buffer.data(), data, buffer.size()) == 0;
+}
+
+}  // namespace detail
+
 /// Decodes `size` bytes as one T. True only if the bytes are exactly one T (right fingerprint,
-/// nothing short, nothing left over). On false, `error` (if given) says why.
+/// nothing short, nothing left over, and bytes the encoder writes back unchanged). On false, `error` (if given) says why.
 template <typename T>
 bool decode_exact(const void* data, int size, T& msg, std::string* error = nullptr) {
   try {
-    if (msg.decode(data, 0, size) == size) return true;
-    if (error) {
-      *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " +
-               std::to_string(size) + " bytes)";
+    if (msg.decode(data, 0, size) == size) {
+      if (detail::encodes_back(msg, data, size)) return true;
+      if (error) {
+        *error = "cannot decode as " + std::string(T::getTypeName()) + " (a string with a NUL inside or without its terminating NUL, " +
+                 std::to_string(size) + " bytes)";
+      }
+      return false;
     }
+    if (error) *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " + std::to_string(size) + " bytes)";
   } catch (const std::exception& e) {
     if (error) *error = "decoding as " + std::string(T::getTypeName()) + " failed: " + e.what();
   }

@@ -43,14 +43,14 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       } else {
         input_ = in;
         have_input_ = true;
-        node_->notify_input(e.imu_utime * 1000);
+        node_->notify_input(transport::message_us_to_ns(e.imu_utime));
       }
     });
   } else {
     node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
       input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
       have_input_ = true;
-      node_->notify_input(t.utime * 1000);
+      node_->notify_input(transport::message_us_to_ns(t.utime));
     });
   }
   node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },

@@ -88,7 +88,12 @@ void check_unique_keys_at(const YAML::Node& node, const std::string& file, const
   if (node.IsMap()) {
     std::map<std::string, int> seen;  // key -> line
     for (auto it = node.begin(); it != node.end(); ++it) {
-      if (!it->first.IsScalar()) continue;
+      if (!it->first.IsScalar()) {
+        // Every reader takes keys as names (ConfigMap, scenario merging): `[a, b]: 1` or
+        // `? {a: 1}` would end it with yaml-cpp's conversion error instead of this one.
+        throw ConfigError(file, path, "", "a key must be a plain name, not a list, mapping or null",
+                          it->first.Mark().line + 1);
+      }
       const std::string key = it->first.Scalar();
       const std::string key_path = path.empty() ? key : path + "." + key;
       const int line = it->first.Mark().line + 1;

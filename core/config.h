@@ -43,7 +43,8 @@ class ConfigError : public std::runtime_error {
 
 /// Refuses a YAML mapping (anywhere in `root`) that gives one key twice: yaml-cpp keeps both and
 /// answers with one of them, so that a value written later in the file could silently lose.
-/// @throws ConfigError naming `file`, the key path and both lines.
+/// Refuses as well a key that is not a plain name (a list, a mapping or null).
+/// @throws ConfigError naming `file`, the key path and both lines (or the key's line).
 void check_unique_keys(const YAML::Node& root, const std::string& file);
 
 /// Refuses a path that is a directory or does not exist, as the YAML loaders' callers expect.

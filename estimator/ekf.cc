@@ -217,8 +217,11 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
 void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0,
                                              const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
   if (t1 <= t0) return;
-  const double dt_s = 1e-6 * static_cast<double>(t1 - t0);
-  const int steps = std::max(1, static_cast<int>(std::ceil(dt_s / config_.max_step_s - 1e-9)));
+  const double dt_s = 1e-6 * (static_cast<double>(t1) - static_cast<double>(t0));
+  // At most kMaxSubsteps: an IMU time far ahead (a stray message, found by fuzz_node_estimator)
+  // took one step per max_step_s, without end; such an interval is integrated coarsely instead.
+  constexpr double kMaxSubsteps = 400;  // 1 s at the default max_step_s
+  const int steps = static_cast<int>(std::clamp(std::ceil(dt_s / config_.max_step_s - 1e-9), 1.0, kMaxSubsteps));
   const double h = dt_s / steps;
   for (int i = 0; i < steps; ++i) {
     const EkfInput ua = u0 + (static_cast<double>(i) / steps) * (u1 - u0);
@@ -249,7 +252,7 @@ bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input)
     ++counters_.imu_rejected;
     return false;
   }
-  if (1e-6 * static_cast<double>(utime - last.utime) > config_.imu_gap_s) ++counters_.imu_gaps;
+  if (1e-6 * (static_cast<double>(utime) - static_cast<double>(last.utime)) > config_.imu_gap_s) ++counters_.imu_gaps;
   Node next;
   next.utime = utime;
   next.u = imu_input;

@@ -30,6 +30,11 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
   stuck_check_ = sensing.imu.gyro_noise_sigma_radps.norm() > 0.0 || sensing.imu.accel_noise_sigma_mps2.norm() > 0.0;
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
+    if (!transport::plausible_sim_utime(m.utime)) {
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kImu,
+                   "IMU sample at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
+      return;
+    }
     const ImuSample s = contract::from_message(m);
     if (!imu_usable(s)) return;
     if (node_->lockstep()) {
@@ -38,10 +43,16 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
       apply_imu(s);
       publish(s.utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
-      node_->record_latency_ns(transport::monotonic_ns() - (node_->t0_monotonic_ns() + s.utime * 1000));
+      node_->record_latency_ns(transport::monotonic_ns() -
+                                (node_->t0_monotonic_ns() + transport::message_us_to_ns(s.utime)));
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
+    if (!transport::plausible_sim_utime(m.utime)) {
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
+                   "pose at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
+      return;
+    }
     const MocapPose p = contract::from_message(m);
     if (!p.position_ned_m.allFinite() || !p.q_body_to_ned.coeffs().allFinite()) {
       node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,

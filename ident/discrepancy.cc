@@ -1238,7 +1238,8 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
   }
   m.added.resize(m.eqs.size());
   for (const auto& [name, params] : model.effects) {
-    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    const std::string& effect = name;  // a lambda cannot capture a structured binding in C++17
+    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == effect; });
     if (spec == kLibrary.end()) continue;  // an effect the library has no regressor form for
     if (known) known->push_back(name);
     if (known_values) {

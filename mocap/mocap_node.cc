@@ -18,6 +18,12 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_ = transport::make_process_node(scenario, options);
   node_->set_expected_rate(contract::channels::kTruth, 1000.0);
   node_->bus().subscribe<truth_state_t>(contract::channels::kTruth, [this](const truth_state_t& t) {
+    if (!transport::plausible_sim_utime(t.utime)) {
+      // Found by fuzz_node_mocap: the emulator captured every frame up to a stray time.
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kTruth,
+                   "TRUTH at utime " + std::to_string(t.utime) + " us lies outside any run; ignored");
+      return;
+    }
     const plant::Truth truth = contract::from_message(t);
     MocapTruthInput in;
     in.utime = t.utime;

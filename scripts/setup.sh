@@ -3,6 +3,9 @@
 # Used by scripts/main.sh and scripts/test.sh; safe to run again.
 #   BUILD_DIR  build directory (default: build)
 #   BUILD_TYPE CMake build type (default: RelWithDebInfo)
+#   SANITIZE   1: the clang build with AddressSanitizer, UndefinedBehaviorSanitizer and the
+#              libFuzzer targets of fuzz/ (cmake/Sanitizers.cmake); use its own BUILD_DIR
+#   TARGETS    build only these targets (space separated; default: all)
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -27,6 +30,12 @@ PACKAGES=(
   can-utils iproute2 qemu-system-x86 xz-utils
   python3 python3-numpy
 )
+CMAKE_ARGS=()
+if [[ "${SANITIZE:-0}" == 1 ]]; then
+  # clang, its sanitizer and libFuzzer runtimes, and llvm-symbolizer for readable reports.
+  PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14)
+  CMAKE_ARGS+=(-DCMAKE_CXX_COMPILER=clang++-14 -DRIG_SANITIZE=ON -DRIG_FUZZ=ON)
+fi
 
 missing=()
 for pkg in "${PACKAGES[@]}"; do
@@ -45,5 +54,10 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" >/dev/null
-cmake --build "$BUILD_DIR" -j "$(nproc)"
+cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" "${CMAKE_ARGS[@]}" >/dev/null
+if [[ -n "${TARGETS:-}" ]]; then
+  # shellcheck disable=SC2086  # a list of target names
+  cmake --build "$BUILD_DIR" -j "$(nproc)" --target ${TARGETS}
+else
+  cmake --build "$BUILD_DIR" -j "$(nproc)"
+fi

@@ -1,9 +1,31 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test through CTest.
-# Exits non-zero on any failure. Extra arguments go to ctest (e.g. -L unit).
+# Installs what is missing, builds, and runs every test through CTest; then the sanitizer pass:
+# builds the clang build with AddressSanitizer, UndefinedBehaviorSanitizer and the libFuzzer
+# targets (build-san/, cmake/Sanitizers.cmake) and runs the unit, functional and fuzz tests there.
+# Exits non-zero on any failure in either pass. Extra arguments go to the first pass's ctest
+# (e.g. -L unit); with arguments the sanitizer pass is left out unless SANITIZE_PASS=1.
+#   BUILD_DIR      build directory of the first pass (default: build)
+#   SAN_BUILD_DIR  build directory of the sanitizer pass (default: build-san)
+#   SANITIZE_PASS  1: always run the sanitizer pass, 0: never (default: only without arguments)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
+SAN_BUILD_DIR="${SAN_BUILD_DIR:-$ROOT/build-san}"
+SANITIZE_PASS="${SANITIZE_PASS:-$([[ $# -eq 0 ]] && echo 1 || echo 0)}"
 export BUILD_DIR
 "$ROOT/scripts/setup.sh"
-ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "$@"
+status=0
+ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "$@" || status=$?
+
+if [[ "$SANITIZE_PASS" == 1 ]]; then
+  start=$(date +%s)
+  echo "== sanitizer pass: ASan + UBSan build in $SAN_BUILD_DIR, ctest -L 'unit|functional|fuzz'"
+  BUILD_DIR="$SAN_BUILD_DIR" SANITIZE=1 "$ROOT/scripts/setup.sh"
+  # Leaks and undefined behaviour fail the test that shows them; reports name file and line.
+  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
+  export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+  export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}"
+  ctest --test-dir "$SAN_BUILD_DIR" --output-on-failure -j "$(nproc)" -L 'unit|functional|fuzz' || status=$?
+  echo "== sanitizer pass took $(( $(date +%s) - start )) s"
+fi
+exit "$status"

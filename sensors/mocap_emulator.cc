@@ -141,6 +141,18 @@ std::vector<MocapPose> MocapEmulator::step(const MocapTruthInput& truth_now) {
   if (truth_now.utime < previous_truth_.utime) {
     previous_truth_ = truth_now;  // time went backwards: restart interpolation, capture nothing
   }
+  // A truth more than kMaxCatchUpFrames frames ahead of the schedule (a stray time, not a
+  // sample of the run: found by fuzz_node_mocap) is not caught up frame by frame: the schedule
+  // skips to it, and the frames skipped count as dropped.
+  constexpr std::int64_t kMaxCatchUpFrames = 1000;
+  if (truth_now.utime > next_frame_utime() &&
+      (static_cast<double>(truth_now.utime) - static_cast<double>(next_frame_utime())) / static_cast<double>(period_us_) >
+          static_cast<double>(kMaxCatchUpFrames)) {
+    const std::int64_t skip = (truth_now.utime - next_frame_utime()) / period_us_;
+    next_frame_ += skip;
+    dropped_ += skip;
+    previous_truth_ = truth_now;
+  }
   while (next_frame_utime() <= truth_now.utime) {
     const std::int64_t t = next_frame_utime();
     MocapTruthInput at;

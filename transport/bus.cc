@@ -1,5 +1,7 @@
 #include "transport/bus.h"
 
+#include <limits>
+
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -34,13 +36,19 @@ void Bus::publish_bytes(const std::string& channel, const void* data, int size) 
 
 bool Bus::track_seq(int64_t seq, ChannelStats& stats) {
   if (stats.one_publisher && !contract::seq_continues(stats.last_seq, seq)) return false;
-  if (stats.last_seq >= 0 && seq > stats.last_seq + 1) stats.drops += seq - stats.last_seq - 1;
+  if (stats.last_seq >= 0 && seq > stats.last_seq && seq - stats.last_seq > 1) {
+    // Saturating: on a channel with several publishers a stray seq can be anything (found by
+    // fuzz_node_plant: the sum overflowed).
+    const int64_t gap = seq - stats.last_seq - 1;
+    stats.drops = gap > std::numeric_limits<int64_t>::max() - stats.drops ? std::numeric_limits<int64_t>::max()
+                                                                          : stats.drops + gap;
+  }
   stats.last_seq = seq;
   return true;
 }
 
-void Bus::count_late(int64_t due_us, ChannelStats& stats) const {
-  if (monotonic_ns() - (t0_ns_ + due_us * 1000) > late_threshold_ns_) ++stats.late;
+void Bus::count_late(int64_t due_ns, ChannelStats& stats) const {
+  if (monotonic_ns() - (t0_ns_ + due_ns) > late_threshold_ns_) ++stats.late;
 }
 
 void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {

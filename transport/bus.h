@@ -25,6 +25,7 @@
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "contract/faults.h"
+#include "transport/clock.h"
 #include "transport/fault_injector.h"
 #include "transport/inprocess_hub.h"
 
@@ -160,9 +161,9 @@ class Bus {
       if (late_threshold_ns_ > 0 && stats.due_in_sim_time) {
         // Due at its simulated time; a motion-capture pose (stamped at mid-exposure) once
         // its latency has passed.
-        int64_t due_us = msg.utime;
-        if constexpr (detail::has_latency_us<T>::value) due_us += msg.latency_us;
-        count_late(due_us, stats);
+        int64_t due_ns = message_us_to_ns(msg.utime);
+        if constexpr (detail::has_latency_us<T>::value) due_ns += message_us_to_ns(msg.latency_us);
+        count_late(due_ns, stats);
       }
       handler(msg);
       return true;
@@ -233,7 +234,7 @@ class Bus {
   /// Counts gaps in `seq` as drops. On a channel with one publisher, a seq that does not
   /// continue the sequence (contract::seq_continues) is refused: false, nothing counted.
   static bool track_seq(int64_t seq, ChannelStats& stats);
-  void count_late(int64_t due_us, ChannelStats& stats) const;
+  void count_late(int64_t due_ns, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
   void refresh_channel_filter();
 

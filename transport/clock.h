@@ -9,6 +9,23 @@ namespace nimble::transport {
 
 /// CLOCK_MONOTONIC now [ns].
 int64_t monotonic_ns();
+
+/// Largest time a message's microseconds convert to [ns], about 73 years: a time from the bus
+/// (any int64) can be converted and added to a clock reading without overflowing.
+constexpr int64_t kMaxMessageTimeNs = INT64_MAX / 4;
+
+/// Latest simulated time a rig message can carry [us], about 11.6 days: no run is longer.
+constexpr int64_t kMaxSimUtime = 1000000000000;
+/// True if `utime` [us] can be the simulated time of a message of a run (0..kMaxSimUtime). A
+/// node refuses other times before its cores see them: arithmetic on times stays far from
+/// overflow, and no core catches up (frame by frame, step by step) over an absurd interval.
+constexpr bool plausible_sim_utime(int64_t utime) { return utime >= 0 && utime <= kMaxSimUtime; }
+
+/// A message's time [us] in ns, clamped to +-kMaxMessageTimeNs (a received utime is not trusted).
+constexpr int64_t message_us_to_ns(int64_t us) {
+  constexpr int64_t kMaxUs = kMaxMessageTimeNs / 1000;
+  return us > kMaxUs ? kMaxMessageTimeNs : us < -kMaxUs ? -kMaxMessageTimeNs : us * 1000;
+}
 /// CLOCK_MONOTONIC now [us].
 inline int64_t monotonic_us() { return monotonic_ns() / 1000; }
 /// CLOCK_REALTIME now [us since the Unix epoch] (for heartbeats and faults).

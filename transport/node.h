@@ -278,7 +278,6 @@ class ProcessNode {
 
   // Lockstep master state: participant -> next due time [ns].
   contract::LockstepSchedule schedule_;
-  int64_t acked_step_waiting_ = -1;
 
   static volatile std::sig_atomic_t stop_requested_;
 };

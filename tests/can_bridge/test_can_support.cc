@@ -141,6 +141,31 @@ TEST_CASE("candump log lines have canplayer's format and parse back", "[candump]
   CHECK_FALSE(parse_candump_line("(1.000001) vcan0 FFF#00"));
 }
 
+TEST_CASE("a candump time that does not fit in nanoseconds is not a candump line", "[candump]") {
+  // Found by fuzz_candump: (sec * 1000000 + usec) * 1000 overflowed int64 (undefined behaviour).
+  const auto latest = parse_candump_line("(9223372035.999999) vcan0 101#00");
+  REQUIRE(latest);
+  CHECK(latest->time_ns == 9223372035999999000);
+  CHECK_FALSE(parse_candump_line("(9223372037.000000) vcan0 101#00"));
+  CHECK_FALSE(parse_candump_line("(17000000000.130412) vcan0 102#E8030CFE65002046"));
+  CHECK_FALSE(parse_candump_line("(99999999999999999999999.000000) vcan0 101#00"));
+}
+
+TEST_CASE("an 8-digit candump identifier carries no flag bits but the error flag", "[candump]") {
+  // Found by fuzz_candump: 68717632 (error flag and RTR flag) was taken as an error frame with
+  // the RTR bit, which format_candump_line writes as 28717632: the line did not read back.
+  CHECK_FALSE(parse_candump_line("(1700000000.300000) vcan0 68717632#DEADBEEF"));
+  CHECK_FALSE(parse_candump_line("(1700000000.300000) vcan0 C0000001#00"));
+  CHECK_FALSE(parse_candump_line("(1700000000.300000) vcan0 20000000##100"));
+  CHECK_FALSE(parse_candump_line("(1700000000.139456) vcan0 20000244#R"));  // an error frame is not remote
+  const auto err = parse_candump_line("(1700000000.300000) vcan0 20000040#0000000000000000");
+  REQUIRE(err);
+  CHECK(err->frame.can_id == (CAN_ERR_FLAG | CAN_ERR_BUSOFF));
+  const auto ext = parse_candump_line("(1700000000.300000) vcan0 1FFFFFFF#01");
+  REQUIRE(ext);
+  CHECK(ext->frame.can_id == (0x1FFFFFFFu | CAN_EFF_FLAG));
+}
+
 TEST_CASE("CAN FD frames have candump's ID##F format and parse back", "[candump][fd]") {
   const int64_t t_ns = 1700000000123456789;
   const canfd_frame cmd = fd_frame(0x101, CANFD_BRS, {0x10, 0x27, 0x28, 0x23, 0x88, 0x13, 0x30, 0x71});

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "contract/channels.h"
+#include "contract/decode.h"
 
 using namespace nimble::contract::channels;
 
@@ -700,6 +701,106 @@ TEST_CASE("timing_health_t with zero channels round-trips", "[lcmtypes]") {
           static_cast<int>(buf.size()));
   require_equal(in, out);
   REQUIRE(out.channel.empty());
+}
+
+TEMPLATE_TEST_CASE("decode_exact takes every message the encoder writes", "[lcmtypes][decode]", RIG_LCM_TYPES) {
+  const TestType in = make_sample<TestType>();
+  const std::vector<uint8_t> buf = encode(in);
+  TestType out{};
+  std::string error;
+  CHECK(nimble::contract::decode_exact(buf.data(), static_cast<int>(buf.size()), out, &error));
+  CHECK(error.empty());
+  require_equal(in, out);
+}
+
+namespace {
+
+/// Puts `count` as the big-endian int32 at `pos` of `buf`.
+void put_count(std::vector<uint8_t>& buf, std::size_t pos, uint32_t count) {
+  for (int i = 0; i < 4; ++i) buf[pos + static_cast<std::size_t>(i)] = static_cast<uint8_t>(count >> (24 - 8 * i));
+}
+
+/// Neither LCM's decoder (with the rig's checks) nor decode_exact() takes `buf` as a T.
+template <typename T>
+void require_count_refused(const std::vector<uint8_t>& buf) {
+  T raw{};
+  CHECK(raw.decode(buf.data(), 0, static_cast<int>(buf.size())) < 0);
+  T out{};
+  CHECK_FALSE(nimble::contract::decode_exact(buf.data(), static_cast<int>(buf.size()), out));
+}
+
+}  // namespace
+
+TEST_CASE("an array count larger than the message is refused without allocating it", "[lcmtypes][decode]") {
+  // Found by the node fuzz targets: LCM's decoders resized an array to the count in the bytes
+  // before reading it, and a 200-byte TIMING_HEALTH with num_channels near 2^31 allocated
+  // tens of gigabytes (cmake/LcmDecodeChecks.cmake adds the check). The count sits just before
+  // the elements, which end the encoding.
+  for (int n : {0, 1, 3}) {
+    INFO(n << " elements");
+    nimble::run_control_t rc{};
+    Distinct g;
+    fill(rc, g);
+    rc.participants.assign(static_cast<std::size_t>(n), "plant");
+    rc.num_participants = n;
+    std::vector<uint8_t> buf = encode(rc);
+    const std::size_t rc_count_pos = buf.size() - static_cast<std::size_t>(n) * (4 + 6) - 4;
+    for (uint32_t bad : {0x7FFFFFFFu, 1000u, 0xFFFFFFFFu}) {
+      std::vector<uint8_t> patched = buf;
+      put_count(patched, rc_count_pos, bad);
+      require_count_refused<nimble::run_control_t>(patched);
+    }
+
+    nimble::timing_health_t th{};
+    fill(th, g, n);
+    for (auto& c : th.channel) c = kTruth;
+    buf = encode(th);
+    const std::size_t th_count_pos = buf.size() - static_cast<std::size_t>(n) * (4 + kTruth.size() + 1 + 5 * 8) - 4;
+    for (uint32_t bad : {0x7FFFFFFFu, 1000u, 0xFFFFFFFFu}) {
+      std::vector<uint8_t> patched = buf;
+      put_count(patched, th_count_pos, bad);
+      require_count_refused<nimble::timing_health_t>(patched);
+    }
+  }
+}
+
+TEST_CASE("a string length below 1 is refused", "[lcmtypes][decode]") {
+  // Found by the node fuzz targets: a length of INT32_MIN made `length - 1` in LCM's decoder
+  // overflow (undefined behaviour, in practice a 2 GB read); 0 made it throw.
+  nimble::heartbeat_t hb{};
+  hb.process = "plant";
+  hb.config_digest = "d";
+  const std::vector<uint8_t> buf = encode(hb);
+  for (uint32_t length : {0x80000000u, 0u, 0xFFFFFFFFu}) {
+    INFO("length " << length);
+    std::vector<uint8_t> bad = buf;
+    put_count(bad, 24, length);  // process: after fingerprint, utime and seq
+    nimble::heartbeat_t raw{};
+    CHECK(raw.decode(bad.data(), 0, static_cast<int>(bad.size())) < 0);
+  }
+}
+
+TEST_CASE("decode_exact refuses a string the encoder cannot write back", "[lcmtypes][decode]") {
+  // Found by fuzz_lcm_decode: LCM's decoder takes a string with a NUL inside, or with another
+  // byte where its NUL belongs; the encoder (strlen) cannot write such a message again.
+  nimble::fault_event_t fault{};
+  fault.process = "plant";
+  fault.channel = "C";
+  fault.message = "abcdef";
+  const std::vector<uint8_t> buf = encode(fault);
+  const std::size_t message_end = buf.size() - 1;  // the message is the last field: its NUL ends the bytes
+  REQUIRE(buf[message_end] == 0);
+  for (const auto& [pos, byte] : std::vector<std::pair<std::size_t, uint8_t>>{{message_end - 3, 0}, {message_end, 'x'}}) {
+    INFO("byte " << pos << " set to " << int{byte});
+    std::vector<uint8_t> bad = buf;
+    bad[pos] = byte;
+    nimble::fault_event_t raw{};
+    REQUIRE(raw.decode(bad.data(), 0, static_cast<int>(bad.size())) == static_cast<int>(bad.size()));  // LCM takes it
+    nimble::fault_event_t out{};
+    std::string error;
+    CHECK_FALSE(nimble::contract::decode_exact(bad.data(), static_cast<int>(bad.size()), out, &error));
+    CHECK(error.find("NUL") != std::string::npos);
+  }
 }
 
 TEST_CASE("every type has its own fingerprint", "[lcmtypes]") {

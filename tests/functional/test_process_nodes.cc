@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -507,4 +508,68 @@ TEST_CASE("mocap node: 200 Hz poses from the plant-rate truth, each out at the t
   }
   CHECK(same);
   CHECK(other[0].pose.position_m[0] != poses[0].pose.position_m[0]);
+}
+
+TEST_CASE("controller node: a message time at the end of int64 is taken without overflow", "[controller][process]") {
+  // Found by fuzz_node_controller: the input's time [us] was multiplied by 1000 for the
+  // input-triggered task, and a TRUTH (or ESTIMATE) stamped near INT64_MAX overflowed (undefined
+  // behaviour; the sanitizer build fails this test without transport::message_us_to_ns).
+  for (const char* input : {"truth", "estimate"}) {
+    INFO("run.controller_input=" << input);
+    const Scenario scenario = load_scenario(kConfigs + "hover.yaml", {{"run.controller_input", input}});
+    ControllerNode controller(scenario, {"controller", "", "memq://"});
+    transport::Bus& bus = controller.node().bus();
+    if (std::string(input) == "truth") {
+      truth_state_t t{};
+      t.utime = std::numeric_limits<int64_t>::max();
+      t.quaternion_wxyz[0] = 1.0;
+      bus.publish(kTruth, t);
+    } else {
+      estimator_state_t e{};
+      e.utime = std::numeric_limits<int64_t>::max();
+      e.imu_utime = std::numeric_limits<int64_t>::max();
+      bus.publish(kEstimate, e);
+    }
+    bus.drain();
+    const std::string channel = std::string(input) == "truth" ? kTruth : kEstimate;
+    CHECK(bus.stats().at(channel).received == 1);
+    CHECK(bus.stats().at(channel).malformed == 0);
+  }
+  CHECK(transport::message_us_to_ns(std::numeric_limits<int64_t>::max()) == transport::kMaxMessageTimeNs);
+  CHECK(transport::message_us_to_ns(std::numeric_limits<int64_t>::min()) == -transport::kMaxMessageTimeNs);
+  CHECK(transport::message_us_to_ns(-1234) == -1234000);
+}
+
+TEST_CASE("estimator and mocap nodes: an input time outside any run is refused with a FAULT",
+          "[estimator][mocap][process]") {
+  // Found by fuzz_node_estimator and fuzz_node_mocap: an IMU sample or TRUTH stamped days ahead
+  // made the EKF integrate step by step, and the emulator capture every frame, up to it.
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
+  EstimatorNode estimator(scenario, {"estimator", "", "memq://"});
+  MocapNode mocap(scenario, {"mocap", "", "memq://"});
+  for (transport::Bus* bus : {&estimator.node().bus(), &mocap.node().bus()}) {
+    std::vector<fault_event_t> faults;
+    bus->subscribe<fault_event_t>(kFault, [&](const fault_event_t& f) { faults.push_back(f); });
+    const bool is_estimator = bus == &estimator.node().bus();
+    if (is_estimator) {
+      imu_sample_t imu{};
+      imu.utime = transport::kMaxSimUtime + 1;
+      bus->publish(kImu, imu);
+    } else {
+      truth_state_t t{};
+      t.utime = -5;
+      t.quaternion_wxyz[0] = 1.0;
+      bus->publish(kTruth, t);
+    }
+    bus->drain();
+    bus->drain();  // the FAULT the handler published
+    INFO((is_estimator ? "estimator" : "mocap"));
+    REQUIRE(faults.size() == 1);
+    CHECK(faults[0].code == fault_event_t::CODE_MESSAGE_MALFORMED);
+    CHECK(faults[0].channel == (is_estimator ? kImu : kTruth));
+    CHECK(faults[0].message.find("outside any run") != std::string::npos);
+  }
+  CHECK(transport::plausible_sim_utime(0));
+  CHECK(transport::plausible_sim_utime(transport::kMaxSimUtime));
+  CHECK_FALSE(transport::plausible_sim_utime(-1));
 }

@@ -156,8 +156,9 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   auto b = encode(hb);
   mon.on_message(kHeartbeat, b.data(), static_cast<int>(b.size()), 0);
   CHECK(mon.heartbeat_state("plant") == heartbeat_t::STATE_READY);
-  // A string whose encoded length is 0 makes LCM 1.3.1's decoder throw: bytes 24-27 hold the
-  // length of `process` (after fingerprint, utime and seq).
+  // A string whose encoded length is 0 (LCM 1.3.1's decoder threw; the rig's build refuses it,
+  // cmake/LcmDecodeChecks.cmake): bytes 24-27 hold the length of `process` (after fingerprint,
+  // utime and seq).
   auto zero_length = b;
   zero_length[24] = zero_length[25] = zero_length[26] = zero_length[27] = 0;
   CHECK_NOTHROW(mon.on_message(kHeartbeat, zero_length.data(), static_cast<int>(zero_length.size()), 0));

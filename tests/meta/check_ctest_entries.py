@@ -20,6 +20,8 @@ WHOLE_EXECUTABLE_ENTRIES = {"can.vcan", "can.rig"}
 SELF = "meta.ctest_entries"
 # Entries that run a script, not a Catch2 executable.
 SCRIPT_ENTRIES = {"meta.truth_side", "install.prefix", "can.canvm_out"}
+# Entries of the sanitizer build that run a libFuzzer target (fuzz/CMakeLists.txt), not Catch2.
+FUZZ_PREFIX = "fuzz."
 
 
 def catch_list(exe, spec=None):
@@ -40,7 +42,7 @@ def main():
     checked = 0
     for test in tests:
         name, command = test["name"], test.get("command", [])
-        if name == SELF or name in SCRIPT_ENTRIES:
+        if name == SELF or name in SCRIPT_ENTRIES or name.startswith(FUZZ_PREFIX):
             continue
         if name in WHOLE_EXECUTABLE_ENTRIES:
             if "NoTests" not in command:

@@ -214,3 +214,20 @@ TEST_CASE("json writer: keys in written order, escapes, non-finite numbers as nu
   CHECK(n["bad_utf8"].as<std::string>().find("\xef\xbf\xbd") != std::string::npos);  // U+FFFD
   CHECK(nimble::json_quote("a\"b") == "\"a\\\"b\"");
 }
+
+TEST_CASE("a key that is not a plain name is a ConfigError naming its line", "[config]") {
+  // Found by fuzz_model_yaml: `[a, b]: 1` in a model file ended `rig model` with yaml-cpp's
+  // bad conversion (ConfigMap::keys), not with the loader's error.
+  for (const char* text : {"name: x\n[a, b]: 1\n", "name: x\neffects:\n  ? {a: 1}\n  : 2\n", "name: x\n? \n: 3\n"}) {
+    INFO(text);
+    try {
+      (void)ConfigMap::load_string(text, "model.yaml");
+      FAIL("no ConfigError");
+    } catch (const ConfigError& e) {
+      CHECK(std::string(e.what()).find("a key must be a plain name") != std::string::npos);
+      CHECK(std::string(e.what()).find("model.yaml") != std::string::npos);
+    }
+  }
+  ConfigMap plain = ConfigMap::load_string("name: x\n1: 2\n", "model.yaml");
+  CHECK(plain.keys().size() == 2);
+}

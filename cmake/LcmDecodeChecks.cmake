@@ -1,0 +1,41 @@
+# cmake -DDIR=<generated package dir> -P LcmDecodeChecks.cmake
+#
+# Adds to the C++ decoders lcm-gen 1.3.1 writes the two checks they lack, so that no sequence of
+# bytes makes a decoder misbehave (decoding is the first thing a rig process does with bytes from
+# the network or a log; contract/decode.h):
+#  - a string's encoded length must be at least 1 (its NUL): a length of 0 made the decoder call
+#    std::string::assign(p, -1), which throws, and INT32_MIN made `length - 1` overflow (undefined
+#    behaviour; in practice a 2 GB read past the message);
+#  - a variable-length array's count must be between 0 and the bytes left (every element takes at
+#    least one): the decoder resized the array to the count before reading any element, so a
+#    count near 2^31 in a 200-byte message allocated tens of gigabytes.
+# Each check replaces a line lcm-gen writes; a header with a string or an array whose line is not
+# found fails the build (another lcm-gen version), rather than going out unchecked.
+file(GLOB headers "${DIR}/*.hpp")
+if(NOT headers)
+  message(FATAL_ERROR "LcmDecodeChecks: no headers in ${DIR}")
+endif()
+foreach(header IN LISTS headers)
+  file(READ "${header}" text)
+  # Strings: `if(__x_len__ > maxlen - pos) return -1;` and `if(__elem_len > maxlen - pos) return -1;`
+  string(REGEX MATCHALL "\\.assign\\(" assigns "${text}")
+  string(REGEX REPLACE "if\\((__[A-Za-z0-9_]+_len__|__elem_len) > maxlen - pos\\) return -1;"
+                       "if(\\1 < 1 || \\1 > maxlen - pos) return -1;" text "${text}")
+  string(REGEX MATCHALL "< 1 \\|\\| __[A-Za-z0-9_]+ > maxlen - pos" strings "${text}")
+  list(LENGTH assigns n_assigns)
+  list(LENGTH strings n_strings)
+  if(NOT n_assigns EQUAL n_strings)
+    message(FATAL_ERROR "LcmDecodeChecks: ${header}: ${n_assigns} string decodes, ${n_strings} length checks added")
+  endif()
+  # Arrays: `this->x.resize(this->n);`
+  string(REGEX MATCHALL "\\.resize\\(" resizes "${text}")
+  string(REGEX REPLACE "(this->[A-Za-z0-9_]+)\\.resize\\((this->[A-Za-z0-9_]+)\\);"
+                       "if(\\2 < 0 || \\2 > maxlen - pos) return -1;\n        \\1.resize(\\2);" text "${text}")
+  string(REGEX MATCHALL "< 0 \\|\\| this->[A-Za-z0-9_]+ > maxlen - pos" counts "${text}")
+  list(LENGTH resizes n_resizes)
+  list(LENGTH counts n_counts)
+  if(NOT n_resizes EQUAL n_counts)
+    message(FATAL_ERROR "LcmDecodeChecks: ${header}: ${n_resizes} array resizes, ${n_counts} count checks added")
+  endif()
+  file(WRITE "${header}" "${text}")
+endforeach()
