@@ -37,6 +37,13 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   if (use_estimate_) {
     node_->set_expected_rate(contract::channels::kEstimate, 512.0);
     node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& e) {
+      // Times outside any run are not an estimate to fly on (and would overflow its age).
+      if (!transport::plausible_sim_utime(e.utime) || !transport::plausible_sim_utime(e.imu_utime)) {
+        node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kEstimate,
+                     "estimate stamped outside any run (utime " + std::to_string(e.utime) + " us, imu_utime " +
+                         std::to_string(e.imu_utime) + " us): not used");
+        return;
+      }
       const Input in{e.utime, e.imu_utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
       if (node_->lockstep()) {
         estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
@@ -48,6 +55,11 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
     });
   } else {
     node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
+      if (!transport::plausible_sim_utime(t.utime)) {
+        node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, kTruth,
+                     "TRUTH stamped outside any run (utime " + std::to_string(t.utime) + " us): not used");
+        return;
+      }
       input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
       have_input_ = true;
       node_->notify_input(transport::message_us_to_ns(t.utime));
