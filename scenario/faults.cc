@@ -23,13 +23,13 @@ constexpr KindName kChannelKinds[] = {
 constexpr KindName kCanKinds[] = {
     {"loss", FaultKind::kCanLoss}, {"corrupt", FaultKind::kCanCorrupt}, {"bus_off", FaultKind::kCanBusOff}};
 
-/// The process that publishes `channel` in a run (the contract's single publisher).
+/// The process that publishes `channel` in a run: the contract's single publisher (its first
+/// word: "plant (emulated onboard IMU)" is the plant).
 std::string publisher_of(const std::string& channel) {
-  if (channel == contract::channels::kImu || channel == contract::channels::kActuatorFeedback) return "plant";
-  if (channel == contract::channels::kMocapPose) return "mocap";
-  if (channel == contract::channels::kEstimate) return "estimator";
-  if (channel == contract::channels::kActuatorCommand) return "controller";
-  return "";
+  const contract::ChannelSpec* spec = contract::find_channel(channel);
+  if (spec == nullptr || spec->publishers.empty()) return "";
+  const std::string& p = spec->publishers.front();
+  return p.substr(0, p.find(' '));
 }
 
 std::string join(const std::vector<std::string>& v) {
