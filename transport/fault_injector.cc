@@ -53,14 +53,17 @@ void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessa
     if (f != nullptr && announce_) announce_(*f, true, t);
     cs.active = now_active;
   }
-  // Sent now, unless delayed messages still wait (then behind them).
-  const auto send_now = [&](std::vector<uint8_t> bytes) {
-    if (cs.delayed.empty()) {
+  // Sent at `release` (now if due and nothing waits), always behind the messages still waiting:
+  // order and seq are kept.
+  const auto send_at = [&](int64_t release, std::vector<uint8_t> bytes) {
+    if (cs.delayed.empty() && release <= t) {
       bus.publish_bytes(channel, bytes.data(), static_cast<int>(bytes.size()));
     } else {
-      cs.delayed.push_back({std::max(t, cs.delayed.back().release_utime), std::move(bytes)});
+      const int64_t after = cs.delayed.empty() ? release : std::max(release, cs.delayed.back().release_utime);
+      cs.delayed.push_back({after, std::move(bytes)});
     }
   };
+  const auto send_now = [&](std::vector<uint8_t> bytes) { send_at(t, std::move(bytes)); };
 
   if (f == nullptr) {
     *msg.seq = cs.next_seq++;
@@ -123,9 +126,7 @@ void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessa
       return;
     case FaultKind::kDelayed: {
       *msg.seq = cs.next_seq++;
-      const int64_t release = cs.delayed.empty() ? t + f->delay_us
-                                                 : std::max(t + f->delay_us, cs.delayed.back().release_utime);
-      cs.delayed.push_back({release, msg.encode()});
+      send_at(t + f->delay_us, msg.encode());
       return;
     }
     case FaultKind::kIntermittent: {
