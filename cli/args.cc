@@ -3,42 +3,140 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "cli/commands.h"
 
 namespace nimble::cli {
 
-const std::string& Args::value() {
-  if (i_ + 1 >= args_.size()) throw UsageError(args_[i_] + " needs a value");
-  return args_[++i_];
+const CLI::Validator kFinite(
+    [](std::string& text) -> std::string {
+      std::size_t used = 0;
+      double x = NAN;
+      try {
+        x = std::stod(text, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != text.size() || !std::isfinite(x)) return "'" + text + "' is not a finite number";
+      return {};
+    },
+    "", "FINITE");
+
+const CLI::Validator kPowerOfTwo(
+    [](std::string& text) -> std::string {
+      unsigned long long m = 0;
+      if (!CLI::detail::lexical_cast(text, m) || m < 8 || m > (1ULL << 40) || (m & (m - 1)) != 0) {
+        return "'" + text + "' is not a power of two >= 8";
+      }
+      return {};
+    },
+    "", "POWER_OF_TWO");
+
+const CLI::Validator kWholeNumber(
+    [](std::string& text) -> std::string {
+      if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos) {
+        return "'" + text + "' is not a whole number >= 0";
+      }
+      return {};
+    },
+    "", "WHOLE_NUMBER");
+
+namespace {
+
+/// Words of `text` in lines of at most `width` characters (a word longer than that stays whole).
+std::string wrap(const std::string& text, std::size_t width) {
+  std::string out, line, word;
+  const auto flush_word = [&] {
+    if (word.empty()) return;
+    if (!line.empty() && line.size() + 1 + word.size() > width) {
+      out += line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    word.clear();
+  };
+  for (const char c : text) {
+    if (c == ' ' || c == '\n') {
+      flush_word();
+      if (c == '\n') {
+        out += line + "\n";
+        line.clear();
+      }
+    } else {
+      word += c;
+    }
+  }
+  flush_word();
+  return out + line;
 }
 
-double number(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double x = 0.0;
+/// CLI11's help with the option descriptions wrapped to a terminal's width.
+class Formatter : public CLI::Formatter {
+ public:
+  std::string make_option_desc(const CLI::Option* option) const override {
+    return wrap(CLI::Formatter::make_option_desc(option), 100 - get_column_width());
+  }
+};
+
+}  // namespace
+
+CommandLine::CommandLine(const std::string& command, const std::string& description)
+    : command_(command), app_(description, "rig " + command) {
+  formatter_ = std::make_shared<Formatter>();
+  formatter_->label("Usage", "usage");
+  formatter_->label("OPTIONS", "options");
+  formatter_->label("REQUIRED", "required");
+  formatter_->column_width(34);
+  app_.formatter(formatter_);
+}
+
+CLI::Option* CommandLine::add_json(std::string& target, const std::string& what) {
+  return app_.add_option("--json", target, what + " as JSON to FILE; '-' writes it alone to stdout (the text then "
+                                            "goes to stderr or is left out)")
+      ->type_name("FILE|-");
+}
+
+std::optional<int> CommandLine::parse(const std::vector<std::string>& args) {
+  // CLI11 takes a vector in reverse order (it pops arguments off its back).
+  std::vector<std::string> reversed(args.rbegin(), args.rend());
   try {
-    x = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
+    app_.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    const std::string help = app_.help();
+    std::cout << help << (help.empty() || help.back() != '\n' ? "\n" : "");
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return fail(e.what());
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what());
   }
-  if (used == 0 || used != text.size() || !std::isfinite(x)) {
-    throw UsageError(option + ": '" + text + "' is not a finite number");
-  }
-  return x;
+  return std::nullopt;
 }
 
-int integer(const std::string& option, const std::string& text, int lo, int hi) {
-  const double x = number(option, text);
-  if (x != static_cast<double>(static_cast<long long>(x)) || x < lo || x > hi) {
-    throw UsageError(option + ": '" + text + "' must be an integer in [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "]");
-  }
-  return static_cast<int>(x);
+int CommandLine::fail(const std::string& what) const {
+  std::cerr << "rig " << command_ << ": " << what << "\n"
+            << formatter_->make_usage(&app_, "rig " + command_) << "'rig " << command_
+            << " --help' describes the options.\n";
+  return kExitUsage;
 }
 
-bool wants_help(const std::vector<std::string>& args) {
-  for (const auto& a : args) {
-    if (a == "--help" || a == "-h") return true;
-  }
-  return false;
+CLI::Option* each_value(CLI::Option* option, std::function<void(const std::string&)> use) {
+  const std::string option_name = option->get_name();
+  return option->each([use, option_name](const std::string& value) {
+    try {
+      use(value);
+    } catch (const CLI::Error&) {
+      throw;
+    } catch (const std::exception& e) {  // the rig's own parsers: std::invalid_argument, ConfigError
+      // CLI11 names the option; a ConfigError from an override names it too ("--set: ...").
+      std::string what = e.what();
+      const std::string named = option_name + ": ";
+      if (what.compare(0, named.size(), named) == 0) what.erase(0, named.size());
+      throw CLI::ValidationError(what);
+    }
+  });
 }
 
 void write_json(const std::string& target, const std::string& json) {

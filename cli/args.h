@@ -1,45 +1,63 @@
 #pragma once
-/// Argument parsing shared by the `rig` sub-commands: the usage error, a walker over
-/// options and positional arguments, number and integer option values, --help, and the
-/// --json target (a file or '-' for stdout).
+/// The command line of a `rig` sub-command, parsed by CLI11 (Debian libcli11-dev) with one
+/// convention for every command:
+/// - `-h`/`--help` prints the help on stdout and exits 0; the help is made from the options
+///   themselves, so it cannot drift from what the command accepts;
+/// - a usage error (unknown option, missing value or argument, a value out of range) prints
+///   "rig <command>: <what>" and a pointer to --help on stderr and exits kExitUsage (2);
+/// - options take `--opt value` or `--opt=value`; numbers are checked (finite, in range) before
+///   the command runs;
+/// - `--json FILE|-` writes the command's JSON to FILE, or alone to stdout with '-'.
 
-#include <cstddef>
-#include <stdexcept>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 namespace nimble::cli {
 
-/// Bad usage: the command prints "rig <command>: <what>" and its usage, and exits kExitUsage.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-/// Walks the arguments: options with a value, and positional arguments.
-class Args {
+/// One sub-command's command line.
+class CommandLine {
  public:
-  explicit Args(const std::vector<std::string>& args) : args_(args) {}
-  /// Moves to the next argument; false after the last.
-  bool next() { return ++i_ < args_.size(); }
-  /// The current argument.
-  const std::string& arg() const { return args_[i_]; }
-  /// The value of the current option (the next argument, consumed).
-  /// @throws UsageError "<option> needs a value" if there is none.
-  const std::string& value();
+  /// `command`: the sub-command's name (the help says "rig <command>"); `description`: what it
+  /// does, the first paragraph of its help.
+  CommandLine(const std::string& command, const std::string& description);
+
+  /// The CLI11 application to add options to.
+  CLI::App* operator->() { return &app_; }
+  CLI::App& app() { return app_; }
+
+  /// Adds `--json FILE|-` writing to `target`.
+  CLI::Option* add_json(std::string& target, const std::string& what);
+
+  /// Parses `args` (those after the sub-command's name). Returns the exit code if the command
+  /// ends here (0 after --help, kExitUsage after a usage error), else std::nullopt.
+  std::optional<int> parse(const std::vector<std::string>& args);
+
+  /// Reports a usage error found after parsing (between options); returns kExitUsage.
+  int fail(const std::string& what) const;
 
  private:
-  const std::vector<std::string>& args_;
-  std::size_t i_ = static_cast<std::size_t>(-1);
+  std::string command_;
+  CLI::App app_;
+  std::shared_ptr<CLI::Formatter> formatter_;
 };
 
-/// Number in an option value; @throws UsageError naming the option.
-double number(const std::string& option, const std::string& text);
+/// Validator: a finite number (CLI11's own number checks let "nan" and "inf" through).
+extern const CLI::Validator kFinite;
 
-/// Integer in [lo, hi] in an option value; @throws UsageError naming the option.
-int integer(const std::string& option, const std::string& text, int lo, int hi);
+/// Validator: a whole number >= 0 written in digits (CLI11's unsigned conversion takes "-1").
+extern const CLI::Validator kWholeNumber;
 
-/// True if any argument is --help or -h.
-bool wants_help(const std::vector<std::string>& args);
+/// Validator: a whole number >= 8 that is a power of two (a Welch segment length).
+extern const CLI::Validator kPowerOfTwo;
+
+/// Adds a use of each value that may throw (a parser of the rig's own value syntax, such as
+/// parse_override): its message becomes the option's usage error.
+CLI::Option* each_value(CLI::Option* option, std::function<void(const std::string&)> use);
 
 /// Writes `json` and a newline to the file `target`, or to stdout if `target` is "-".
 /// @throws std::runtime_error if the file cannot be written.

@@ -1,6 +1,7 @@
 /// `rig identify` and `rig validate`: identification of the lateral model from
 /// CSV flight data and open-loop validation of a model on CSV flight data.
 
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <stdexcept>
@@ -26,80 +27,15 @@
 namespace nimble::cli {
 namespace {
 
-constexpr const char* kIdentifyUsage =
-    "usage: rig identify <data.csv|log.lcmlog> [options]\n"
-    "  Identifies the dimensional stability and control derivatives of the lateral\n"
-    "  model from flight data, a CSV file or a rig log (read by its content; equation\n"
-    "  error, thesis Section IV), prints the\n"
-    "  parameters with their standard deviations, flagged correlations, accuracy\n"
-    "  metrics, residual whiteness, eigenvalues and modes, and state PSDs.\n"
-    "  --structure lateral3|lateral4  model structure (default lateral3)\n"
-    "  --salvage                      a damaged rig log: read the events before the damage\n"
-    "  --method ols|wls               estimator (default wls)\n"
-    "  --vehicle FILE                 vehicle (default rig_configs/vehicles/nimble_no_wifi.yaml)\n"
-    "  --inputs LIST                  comma-separated inputs (default delta_f,delta_t plus\n"
-    "                                 delta_d, delta_w when the data has them)\n"
-    "  --w0 M_PER_S                   trim vertical velocity of Eq 21 (default 0)\n"
-    "  --u0 M_PER_S                   trim forward velocity, lateral4 (default 0)\n"
-    "  --rate HZ                      resampling rate (default 512)\n"
-    "  --interpolation cubic|linear   resampling of every channel (default cubic)\n"
-    "  --cutoff HZ                    low-pass cut-off (default 9)\n"
-    "  --order N                      Butterworth order, 0 = no low-pass (default 10)\n"
-    "  --wls-window S                 WLS residual-covariance window (default 2 s)\n"
-    "  --lags N                       whiteness lags (default 50)\n"
-    "  --hover A:B, --manoeuvre A:B   PSD segments in s (repeatable; default from |phi_sp|)\n"
-    "  --json FILE                    write the JSON report to FILE ('-' for stdout)\n"
-    "  --model-out FILE               write the identified model as a model YAML file\n"
-    "  --plots DIR                    PNG plots via gnuplot (Debian package gnuplot-nox)\n";
-
-constexpr const char* kValidateUsage =
-    "usage: rig validate <model.yaml> <data.csv|log.lcmlog> [options]\n"
-    "  Open-loop validation: the state derivatives predicted by the model from the\n"
-    "  measured states and inputs against the measured ones (thesis Tables 7-8).\n"
-    "  --vehicle FILE   use this vehicle instead of the model's\n"
-    "  --salvage        a damaged rig log: read the events before the damage\n"
-    "  --rate HZ, --cutoff HZ, --order N   processing (defaults 512, 9, 10)\n"
-    "  --interpolation cubic|linear        resampling (default cubic)\n"
-    "  --lags N         whiteness lags (default 50)\n"
-    "  --json FILE      write the JSON report to FILE ('-' for stdout)\n"
-    "  --plots DIR      PNG plots via gnuplot (Debian package gnuplot-nox)\n"
-    "  --closed-loop    closed-loop validation instead (thesis Tables 9-11): the model flown by a copy\n"
-    "                   of the attitude controller and the flap actuator on the data's phi_sp and\n"
-    "                   delta_t, from the measured initial state; simulated p, v, phi, delta_f\n"
-    "                   against the measured ones; --plots draws their time histories (closed_loop.png)\n"
-    "  --gains NAME     roll gain set of the controller copy (default fast)\n"
-    "  --controller FILE  controller configuration (default rig_configs/controller/nimble_attitude.yaml)\n";
-
-constexpr const char* kDiscrepancyUsage =
-    "usage: rig discrepancy <data.csv|log.lcmlog> --model <model.yaml> [options]\n"
-    "  Where the model and the measured data disagree, which physical effect the model is\n"
-    "  missing (by name), the model refit with it, and the gap before and after on data the\n"
-    "  fit did not see (ident/README.md, \"Discrepancy workflow\"). Exit 0 whatever the verdict.\n"
-    "  --model FILE        the model (lateral3) to check\n"
-    "  --salvage           a damaged rig log: read the events before the damage\n"
-    "  --vehicle FILE      use this vehicle instead of the model's\n"
-    "  --candidates LIST   comma-separated candidate effects to try (default: all the data supports):\n"
-    "                      kinematic_coupling, gravity_nonlinearity, lateral_inflow,\n"
-    "                      forward_speed_coupling, actuator_delay, sensor_bias, dihedral_coupling,\n"
-    "                      yaw_coupling, flapping_forcing, lateral_gust\n"
-    "  --folds K           held-out cross-validation folds (default 10)\n"
-    "  --partial-f F       significance rule (default 20, SIDPAC)\n"
-    "  --delay-max S       actuator_delay scan limit (default 0.06 s)\n"
-    "  --command-latency S known latency of the flap command path, not named as a delay\n"
-    "                      (default 1/512 s: one controller tick of the rig)\n"
-    "  --gains NAME        roll gain set of the closed-loop controller copy (default: the log's\n"
-    "                      CONTROLLER_STATUS gain set; fast for CSV data)\n"
-    "  --rate HZ, --cutoff HZ, --order N, --interpolation cubic|linear   processing (512, 9, 10, cubic)\n"
-    "  --json FILE         write the JSON report to FILE ('-' for stdout)\n"
-    "  --model-out FILE    write the model refit with the named effects (section effects:)\n"
-    "  --report DIR        report.md with PNG plots (gnuplot, Debian package gnuplot-nox)\n";
-
-ident::TimeRange time_range(const std::string& option, const std::string& text) {
+ident::TimeRange time_range(const std::string& text) {
   const std::size_t colon = text.find(':');
-  if (colon == std::string::npos) throw UsageError(option + ": '" + text + "' is not START:END in seconds");
-  ident::TimeRange r{number(option, text.substr(0, colon)), number(option, text.substr(colon + 1))};
-  if (!(r.end_s > r.start_s)) throw UsageError(option + ": '" + text + "': END must be after START");
-  return r;
+  double start = NAN, end = NAN;
+  if (colon == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, colon), start) ||
+      !CLI::detail::lexical_cast(text.substr(colon + 1), end) || !std::isfinite(start) || !std::isfinite(end)) {
+    throw std::invalid_argument("'" + text + "' is not START:END in seconds");
+  }
+  if (!(end > start)) throw std::invalid_argument("'" + text + "': END must be after START");
+  return {start, end};
 }
 
 std::vector<std::string> split_list(const std::string& text) {
@@ -112,34 +48,38 @@ std::vector<std::string> split_list(const std::string& text) {
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
+  if (out.empty()) throw std::invalid_argument("empty list");
   return out;
 }
 
-/// Processing options shared by both commands; returns false if `a` is not one.
-bool processing_option(Args& it, ident::ProcessingOptions& p) {
-  const std::string& a = it.arg();
-  if (a == "--rate") {
-    p.rate_hz = number(a, it.value());
-    if (!(p.rate_hz > 0.0)) throw UsageError("--rate must be > 0 Hz");
-  } else if (a == "--cutoff") {
-    p.cutoff_hz = number(a, it.value());
-  } else if (a == "--order") {
-    p.filter_order = integer(a, it.value(), 0, 40);
-  } else if (a == "--interpolation") {
-    const std::string m = it.value();
-    if (m != "linear" && m != "cubic") throw UsageError("--interpolation: '" + m + "' is not cubic or linear");
-    p.interpolation = ident::interpolation_from_string(m);
-  } else {
-    return false;
-  }
-  return true;
+/// --rate, --cutoff, --order, --interpolation: the processing every analysis command shares.
+void add_processing(CommandLine& cl, ident::ProcessingOptions& p) {
+  cl->add_option("--rate", p.rate_hz, "resampling rate [Hz]")
+      ->check(kFinite & CLI::Range(1e-3, 1e6))
+      ->capture_default_str()
+      ->type_name("HZ");
+  cl->add_option("--cutoff", p.cutoff_hz, "low-pass cut-off [Hz]")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str()
+      ->type_name("HZ");
+  cl->add_option("--order", p.filter_order, "Butterworth order, 0 = no low-pass")
+      ->check(CLI::Range(0, 40))
+      ->capture_default_str()
+      ->type_name("N");
+  each_value(cl->add_option("--interpolation", "resampling of every channel: cubic (default) or linear")
+                 ->type_name("MODE")
+                 ->check(CLI::IsMember({"cubic", "linear"})),
+             [&p](const std::string& v) { p.interpolation = ident::interpolation_from_string(v); });
 }
 
-/// `--salvage`: read a damaged log up to the damage; returns false if `it` is not that option.
-bool log_option(Args& it, ident::LogReadOptions& o) {
-  if (it.arg() != "--salvage") return false;
-  o.salvage = true;
-  return true;
+/// --salvage: read a damaged log up to the damage.
+void add_salvage(CommandLine& cl, ident::LogReadOptions& o) {
+  cl->add_flag("--salvage", o.salvage, "a damaged rig log: read the events before the damage and say what was left");
+}
+
+/// --vehicle FILE.
+void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text) {
+  cl->add_option("--vehicle", file, "the vehicle (default " + default_text + ")")->type_name("FILE");
 }
 
 /// Says on stderr what a salvaged read left out.
@@ -150,64 +90,61 @@ void warn_damage(const char* command, const std::string& file, const std::string
 }  // namespace
 
 int run_identify_command(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kIdentifyUsage;
-    return 0;
-  }
   std::string csv, vehicle_file, json, model_out, plots;
   ident::IdentOptions opt;
   ident::LogReadOptions log_options;
-  try {
-    Args it(args);
-    while (it.next()) {
-      const std::string& a = it.arg();
-      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
-      if (a == "--structure") {
-        const std::string s = it.value();
-        if (s != "lateral3" && s != "lateral4") throw UsageError("--structure: '" + s + "' is not lateral3 or lateral4");
-        opt.structure = structure_from_string(s);
-      } else if (a == "--method") {
-        const std::string m = it.value();
-        if (m != "ols" && m != "wls") throw UsageError("--method: '" + m + "' is not ols or wls");
-        opt.method = ident::method_from_string(m);
-      } else if (a == "--vehicle") {
-        vehicle_file = it.value();
-      } else if (a == "--inputs") {
-        opt.inputs = split_list(it.value());
-        if (opt.inputs.empty()) throw UsageError("--inputs: empty list");
-      } else if (a == "--w0") {
-        opt.trim.w0_mps = number(a, it.value());
-      } else if (a == "--u0") {
-        opt.trim.u0_mps = number(a, it.value());
-      } else if (a == "--wls-window") {
-        opt.wls_window_s = number(a, it.value());
-        if (!(opt.wls_window_s > 0.0)) throw UsageError("--wls-window must be > 0 s");
-      } else if (a == "--lags") {
-        opt.whiteness_lags = static_cast<std::size_t>(integer(a, it.value(), 1, 100000));
-      } else if (a == "--hover") {
-        opt.segments.hover.push_back(time_range(a, it.value()));
-      } else if (a == "--manoeuvre") {
-        opt.segments.manoeuvre.push_back(time_range(a, it.value()));
-      } else if (a == "--json") {
-        json = it.value();
-      } else if (a == "--model-out") {
-        model_out = it.value();
-      } else if (a == "--plots") {
-        plots = it.value();
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option '" + a + "'");
-      } else if (csv.empty()) {
-        csv = a;
-      } else {
-        throw UsageError("unexpected argument '" + a + "'");
-      }
-    }
-    if (csv.empty()) throw UsageError("missing <data.csv>");
-  } catch (const UsageError& e) {
-    std::cerr << "rig identify: " << e.what() << "\n" << kIdentifyUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("identify",
+                 "Identifies the dimensional stability and control derivatives of the lateral model from\n"
+                 "flight data, a CSV file or a rig log (read by its content; equation error, thesis\n"
+                 "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
+                 "accuracy metrics, residual whiteness, eigenvalues and modes, and state PSDs.");
+  cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
+  each_value(cl->add_option("--structure", "model structure: lateral3 (default) or lateral4")
+                 ->type_name("NAME")
+                 ->check(CLI::IsMember({"lateral3", "lateral4"})),
+             [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
+  each_value(cl->add_option("--method", "estimator: wls (default) or ols")->type_name("NAME")->check(CLI::IsMember({"ols", "wls"})),
+             [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
+  add_vehicle(cl, vehicle_file, "rig_configs/vehicles/nimble_no_wifi.yaml");
+  add_salvage(cl, log_options);
+  each_value(cl->add_option("--inputs", "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
+                                        "when the data has them)")
+                 ->type_name("LIST"),
+             [&opt](const std::string& v) { opt.inputs = split_list(v); });
+  cl->add_option("--w0", opt.trim.w0_mps, "trim vertical velocity of Eq 21 [m/s]")
+      ->check(kFinite)
+      ->capture_default_str()
+      ->type_name("M_PER_S");
+  cl->add_option("--u0", opt.trim.u0_mps, "trim forward velocity, lateral4 [m/s]")
+      ->check(kFinite)
+      ->capture_default_str()
+      ->type_name("M_PER_S");
+  add_processing(cl, opt.processing);
+  cl->add_option("--wls-window", opt.wls_window_s, "WLS residual-covariance window [s]")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str()
+      ->type_name("S");
+  cl->add_option("--lags", opt.whiteness_lags, "whiteness lags")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->type_name("N");
+  each_value(cl->add_option("--hover", "a hover PSD segment [s] (repeatable; default from |phi_sp|)")
+                 ->type_name("A:B")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&opt](const std::string& v) { opt.segments.hover.push_back(time_range(v)); });
+  each_value(cl->add_option("--manoeuvre", "a manoeuvre PSD segment [s] (repeatable; default from |phi_sp|)")
+                 ->type_name("A:B")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&opt](const std::string& v) { opt.segments.manoeuvre.push_back(time_range(v)); });
+  cl.add_json(json, "the report");
+  cl->add_option("--model-out", model_out, "write the identified model as a model YAML file")->type_name("FILE");
+  cl->add_option("--plots", plots, "PNG plots via gnuplot (Debian package gnuplot-nox)")->type_name("DIR");
+  if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
+
+  if (vehicle_file.empty())  if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
@@ -236,60 +173,53 @@ int run_identify_command(const std::vector<std::string>& args) {
 }
 
 int run_discrepancy_command(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kDiscrepancyUsage;
-    return 0;
-  }
   std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
-  try {
-    Args it(args);
-    while (it.next()) {
-      const std::string& a = it.arg();
-      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
-      if (a == "--model") {
-        model_file = it.value();
-      } else if (a == "--vehicle") {
-        vehicle_file = it.value();
-      } else if (a == "--candidates") {
-        opt.candidates = split_list(it.value());
-        if (opt.candidates.empty()) throw UsageError("--candidates: empty list");
-      } else if (a == "--folds") {
-        opt.folds = static_cast<std::size_t>(integer(a, it.value(), 4, 100));
-      } else if (a == "--partial-f") {
-        opt.partial_f = number(a, it.value());
-        if (!(opt.partial_f > 0.0)) throw UsageError("--partial-f must be > 0");
-      } else if (a == "--delay-max") {
-        opt.delay_max_s = number(a, it.value());
-        if (!(opt.delay_max_s > 0.0 && opt.delay_max_s <= 1.0)) throw UsageError("--delay-max must be in (0, 1] s");
-      } else if (a == "--command-latency") {
-        opt.command_latency_s = number(a, it.value());
-        if (!(opt.command_latency_s >= 0.0 && opt.command_latency_s <= 0.1)) {
-          throw UsageError("--command-latency must be in [0, 0.1] s");
-        }
-      } else if (a == "--gains") {
-        gains = it.value();
-      } else if (a == "--json") {
-        json = it.value();
-      } else if (a == "--model-out") {
-        model_out = it.value();
-      } else if (a == "--report") {
-        report = it.value();
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option '" + a + "'");
-      } else if (data_file.empty()) {
-        data_file = a;
-      } else {
-        throw UsageError("unexpected argument '" + a + "'");
-      }
-    }
-    if (data_file.empty()) throw UsageError("missing <data.csv|log.lcmlog>");
-    if (model_file.empty()) throw UsageError("missing --model <model.yaml>");
-  } catch (const UsageError& e) {
-    std::cerr << "rig discrepancy: " << e.what() << "\n" << kDiscrepancyUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("discrepancy",
+                 "Where the model and the measured data disagree, which physical effect the model is\n"
+                 "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
+                 "did not see (ident/README.md, \"Discrepancy workflow\").");
+  cl->footer("Exit code: 0 whatever the verdict; 2 bad usage or input.");
+  cl->add_option("data", data_file, "flight data: identification CSV or a rig log (.lcmlog)")->required();
+  cl->add_option("--model", model_file, "the model (lateral3) to check")->type_name("FILE")->required();
+  add_salvage(cl, log_options);
+  add_vehicle(cl, vehicle_file, "the model's");
+  each_value(cl->add_option("--candidates",
+                            "comma-separated candidate effects to try (default: all the data supports): "
+                            "kinematic_coupling, gravity_nonlinearity, lateral_inflow, forward_speed_coupling, "
+                            "actuator_delay, sensor_bias, dihedral_coupling, yaw_coupling, flapping_forcing, "
+                            "lateral_gust")
+                 ->type_name("LIST"),
+             [&opt](const std::string& v) { opt.candidates = split_list(v); });
+  cl->add_option("--folds", opt.folds, "held-out cross-validation folds")
+      ->check(CLI::Range(4, 100))
+      ->capture_default_str()
+      ->type_name("K");
+  cl->add_option("--partial-f", opt.partial_f, "significance rule (SIDPAC)")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str()
+      ->type_name("F");
+  cl->add_option("--delay-max", opt.delay_max_s, "actuator_delay scan limit [s], in (0, 1]")
+      ->check(kFinite & CLI::Range(1e-9, 1.0))
+      ->capture_default_str()
+      ->type_name("S");
+  cl->add_option("--command-latency", opt.command_latency_s,
+                 "known latency of the flap command path [s], in [0, 0.1], not named as a delay (default: one "
+                 "controller tick of the rig)")
+      ->check(kFinite & CLI::Range(0.0, 0.1))
+      ->type_name("S");
+  cl->add_option("--gains", gains,
+                 "roll gain set of the closed-loop controller copy (default: the log's CONTROLLER_STATUS gain "
+                 "set; fast for CSV data)")
+      ->type_name("NAME");
+  add_processing(cl, opt.processing);
+  cl.add_json(json, "the report");
+  cl->add_option("--model-out", model_out, "write the model refit with the named effects (section effects:)")
+      ->type_name("FILE");
+  cl->add_option("--report", report, "report.md with PNG plots (gnuplot, Debian package gnuplot-nox)")
+      ->type_name("DIR");
+  if (const auto done = cl.parse(args)) return *done;
   if (!report.empty()) ident::require_gnuplot();  // fail before the work, not after
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
@@ -340,50 +270,35 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
 }
 
 int run_validate_command(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kValidateUsage;
-    return 0;
-  }
   std::string model_file, csv, vehicle_file, json, plots;
   std::string gains = "fast", controller_file = NIMBLE_DEFAULT_CONTROLLER;
   bool closed_loop = false;
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
-  try {
-    Args it(args);
-    while (it.next()) {
-      const std::string& a = it.arg();
-      if (processing_option(it, opt.processing) || log_option(it, log_options)) continue;
-      if (a == "--closed-loop") {
-        closed_loop = true;
-      } else if (a == "--gains") {
-        gains = it.value();
-      } else if (a == "--controller") {
-        controller_file = it.value();
-      } else if (a == "--vehicle") {
-        vehicle_file = it.value();
-      } else if (a == "--lags") {
-        opt.whiteness_lags = static_cast<std::size_t>(integer(a, it.value(), 1, 100000));
-      } else if (a == "--json") {
-        json = it.value();
-      } else if (a == "--plots") {
-        plots = it.value();
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option '" + a + "'");
-      } else if (model_file.empty()) {
-        model_file = a;
-      } else if (csv.empty()) {
-        csv = a;
-      } else {
-        throw UsageError("unexpected argument '" + a + "'");
-      }
-    }
-    if (model_file.empty()) throw UsageError("missing <model.yaml>");
-    if (csv.empty()) throw UsageError("missing <data.csv>");
-  } catch (const UsageError& e) {
-    std::cerr << "rig validate: " << e.what() << "\n" << kValidateUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("validate",
+                 "Open-loop validation: the state derivatives predicted by the model from the measured\n"
+                 "states and inputs against the measured ones (thesis Tables 7-8).");
+  cl->add_option("model", model_file, "the model file")->required();
+  cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
+  add_vehicle(cl, vehicle_file, "the model's");
+  add_salvage(cl, log_options);
+  add_processing(cl, opt.processing);
+  cl->add_option("--lags", opt.whiteness_lags, "whiteness lags")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->type_name("N");
+  cl.add_json(json, "the report");
+  cl->add_option("--plots", plots, "PNG plots via gnuplot (Debian package gnuplot-nox)")->type_name("DIR");
+  cl->add_flag("--closed-loop", closed_loop,
+               "closed-loop validation instead (thesis Tables 9-11): the model flown by a copy of the attitude "
+               "controller and the flap actuator on the data's phi_sp and delta_t, from the measured initial "
+               "state; simulated p, v, phi, delta_f against the measured ones; --plots draws their time "
+               "histories (closed_loop.png)");
+  cl->add_option("--gains", gains, "roll gain set of the controller copy")->capture_default_str()->type_name("NAME");
+  cl->add_option("--controller", controller_file, "controller configuration")
+      ->capture_default_str()
+      ->type_name("FILE");
+  if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();
 
   const DerivativeModel model = load_model(model_file);
@@ -439,75 +354,37 @@ int run_validate_command(const std::vector<std::string>& args) {
   return 0;
 }
 
-namespace {
-
-constexpr const char* kExportUsage =
-    "usage: rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--interpolation cubic|linear]\n"
-    "                  [--states auto|estimate|truth] [--salvage] [--json FILE|-]\n"
-    "  Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
-    "  resampled onto one grid (default 512 Hz, cubic interpolation). States come from the estimator\n"
-    "  (ESTIMATE) when the log has it, else from the plant's truth; inputs from ACTUATOR_FB;\n"
-    "  phi_sp from ATTITUDE_SP. A damaged log is an error naming the byte offset and the event;\n"
-    "  --salvage reads the events before the damage and says how much was left.\n"
-    "  --json writes what was exported (samples, rate, columns, state source, damage) as JSON;\n"
-    "  '-' writes it to stdout.\n";
-
-}  // namespace
-
 int run_export_command(const std::vector<std::string>& args) {
-  std::string log, csv;
+  std::string log, csv, json;
   double rate_hz = 512.0;
   ident::StateSource source = ident::StateSource::kAuto;
   ident::LogReadOptions log_options;
   ident::Interpolation interpolation = ident::Interpolation::kCubic;
-  std::string json;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const bool has_value = i + 1 < args.size();
-    if (a == "--help" || a == "-h") {
-      std::cout << kExportUsage;
-      return 0;
-    } else if (a == "--json" && has_value) {
-      json = args[++i];
-    } else if (a == "--interpolation" && has_value) {
-      const std::string v = args[++i];
-      if (v != "cubic" && v != "linear") {
-        std::cerr << "rig export: --interpolation must be cubic or linear, got '" << v << "'\n";
-        return kExitUsage;
-      }
-      interpolation = ident::interpolation_from_string(v);
-    } else if (a == "--csv" && has_value) {
-      csv = args[++i];
-    } else if (a == "--rate" && has_value) {
-      const std::string v = args[++i];
-      char* end = nullptr;
-      rate_hz = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !(rate_hz > 0.0) || rate_hz > 100000.0) {
-        std::cerr << "rig export: --rate needs a positive number of Hz, got '" << v << "'\n";
-        return kExitUsage;
-      }
-    } else if (a == "--states" && has_value) {
-      const std::string v = args[++i];
-      if (v == "auto") source = ident::StateSource::kAuto;
-      else if (v == "estimate") source = ident::StateSource::kEstimate;
-      else if (v == "truth") source = ident::StateSource::kTruth;
-      else {
-        std::cerr << "rig export: --states must be auto, estimate or truth, got '" << v << "'\n";
-        return kExitUsage;
-      }
-    } else if (a == "--salvage") {
-      log_options.salvage = true;
-    } else if (!a.empty() && a[0] != '-' && log.empty()) {
-      log = a;
-    } else {
-      std::cerr << "rig export: unexpected argument '" << a << "'\n" << kExportUsage;
-      return kExitUsage;
-    }
-  }
-  if (log.empty() || csv.empty()) {
-    std::cerr << "rig export: needs <log.lcmlog> and --csv <out.csv>\n" << kExportUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("export",
+                 "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
+                 "resampled onto one grid. States come from the estimator (ESTIMATE) when the log has it,\n"
+                 "else from the plant's truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. A damaged\n"
+                 "log is an error naming the byte offset and the event.");
+  cl->add_option("log", log, "the rig log (.lcmlog)")->required();
+  cl->add_option("--csv", csv, "the CSV file to write")->type_name("FILE")->required();
+  cl->add_option("--rate", rate_hz, "the grid's rate [Hz]")
+      ->check(kFinite & CLI::Range(1e-3, 100000.0))
+      ->capture_default_str()
+      ->type_name("HZ");
+  each_value(cl->add_option("--interpolation", "cubic (default) or linear")->type_name("MODE")
+                 ->check(CLI::IsMember({"cubic", "linear"})),
+             [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
+  each_value(cl->add_option("--states", "where the states come from: auto (default), estimate or truth")
+                 ->type_name("SOURCE")
+                 ->check(CLI::IsMember({"auto", "estimate", "truth"})),
+             [&source](const std::string& v) {
+               source = v == "estimate" ? ident::StateSource::kEstimate
+                        : v == "truth"  ? ident::StateSource::kTruth
+                                        : ident::StateSource::kAuto;
+             });
+  add_salvage(cl, log_options);
+  cl.add_json(json, "what was exported (samples, rate, columns, state source, damage)");
+  if (const auto done = cl.parse(args)) return *done;
   const ident::RigLogData data = ident::read_rig_log(log, source, log_options);
   warn_damage("rig export", log, data.damage);
   const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz, interpolation);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
 #include "core/json_writer.h"
 #include "core/model.h"
@@ -15,46 +16,6 @@
 
 namespace nimble::cli {
 namespace {
-
-constexpr const char* kUsage =
-    "usage: rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json [-]]\n"
-    "  Builds A and B of the model's structure from its derivatives and vehicle,\n"
-    "  prints eigenvalues, the mode table and the non-dimensional eigenvectors.\n"
-    "  --vehicle FILE  use this vehicle instead of the one the model file names\n"
-    "  --json          one JSON object on stdout instead of the text report\n";
-
-struct Options {
-  std::string model_file;
-  std::string vehicle_file;
-  bool json = false;
-};
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-Options parse(const std::vector<std::string>& args) {
-  Options o;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--json") {
-      o.json = true;
-      // As every command: --json - is stdout (where this command writes its JSON anyway).
-      if (i + 1 < args.size() && args[i + 1] == "-") ++i;
-    } else if (a == "--vehicle") {
-      if (i + 1 >= args.size()) throw UsageError("--vehicle needs a file");
-      o.vehicle_file = args[++i];
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError("unknown option '" + a + "'");
-    } else if (o.model_file.empty()) {
-      o.model_file = a;
-    } else {
-      throw UsageError("unexpected argument '" + a + "'");
-    }
-  }
-  if (o.model_file.empty()) throw UsageError("missing <model.yaml>");
-  return o;
-}
 
 /// For each published eigenvalue, the relative distance to the nearest computed one.
 std::vector<double> published_errors(const std::vector<std::complex<double>>& published,
@@ -237,28 +198,26 @@ std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const 
 }  // namespace
 
 int run_model_command(const std::vector<std::string>& args) {
-  for (const auto& a : args) {
-    if (a == "--help" || a == "-h") {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  Options opt;
-  try {
-    opt = parse(args);
-  } catch (const UsageError& e) {
-    std::cerr << "rig model: " << e.what() << "\n" << kUsage;
-    return kExitUsage;
-  }
-  const DerivativeModel model = load_model(opt.model_file);
-  const Vehicle vehicle = load_vehicle(opt.vehicle_file.empty() ? model.vehicle_file : opt.vehicle_file);
+  std::string model_file, vehicle_file, json;
+  CommandLine cl("model",
+                 "Builds A and B of the model's structure from its derivatives and vehicle, prints the\n"
+                 "eigenvalues, the mode table and the non-dimensional eigenvectors.");
+  cl->add_option("model", model_file, "the model file (rig_configs/models/*.yaml)")->required();
+  cl->add_option("--vehicle", vehicle_file, "use this vehicle instead of the one the model file names")
+      ->type_name("FILE");
+  // This command's JSON goes to stdout when no file is named (`--json` alone, as it always has).
+  cl.add_json(json, "the model (A, B, eigenvalues, modes)")->expected(0, 1);
+  if (const auto done = cl.parse(args)) return *done;
+  if (cl->count("--json") > 0 && json.empty()) json = "-";
+  const DerivativeModel model = load_model(model_file);
+  const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
   const StateSpace ss = build_state_space(model, vehicle);
   const auto eig = sorted_eigenvalues(ss.A);
   const auto modes = analyse_modes(ss, vehicle);
-  if (opt.json) {
-    std::cout << to_json(model, vehicle, ss, eig, modes) << "\n";
-  } else {
+  if (json.empty()) {
     print_text(model, vehicle, ss, eig, modes);
+  } else {
+    write_json(json, to_json(model, vehicle, ss, eig, modes));
   }
   return 0;
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
 #include "plant/plant_model.h"
@@ -59,24 +60,17 @@ const std::vector<Section>& sections() {
 }  // namespace
 
 int run_params_command(const std::vector<std::string>& args) {
-  if (args.size() > 1 || (args.size() == 1 && (args[0] == "--help" || args[0] == "-h"))) {
-    std::cout << "usage: rig params [SECTION]\n  The parameters of a scenario section (default: every section that has a\n"
-                 "  table): key, default, allowed range, unit, meaning, as Markdown.\n  Sections:";
-    for (const auto& s : sections()) std::cout << " " << s.name;
-    std::cout << "\n";
-    return args.size() == 1 && (args[0] == "--help" || args[0] == "-h") ? 0 : kExitUsage;
-  }
-  bool found = false;
+  std::string section;
+  std::vector<std::string> names;
+  for (const auto& s : sections()) names.push_back(s.name);
+  CommandLine cl("params",
+                 "The parameters of a scenario section (default: every section that has a table): key,\n"
+                 "default, allowed range, unit and meaning, as Markdown. The same table the loader and\n"
+                 "the validation use.");
+  cl->add_option("section", section, "one section")->check(CLI::IsMember(names));
+  if (const auto done = cl.parse(args)) return *done;
   for (const auto& s : sections()) {
-    if (!args.empty() && args[0] != s.name) continue;
-    found = true;
-    std::cout << "### " << s.name << "\n\n" << s.markdown() << "\n";
-  }
-  if (!found) {
-    std::cerr << "rig params: no parameter table for section '" << args[0] << "'; sections:";
-    for (const auto& s : sections()) std::cerr << " " << s.name;
-    std::cerr << "\n";
-    return kExitUsage;
+    if (section.empty() || section == s.name) std::cout << "### " << s.name << "\n\n" << s.markdown() << "\n";
   }
   return 0;
 }

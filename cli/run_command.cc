@@ -14,47 +14,28 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "cli/commands.h"
 #include "launcher/launcher.h"
 
 namespace nimble::cli {
 namespace {
 
-constexpr const char* kRunUsage =
-    "usage: rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log FILE] [--json FILE]\n"
-    "               [--set key.path=value]... [--seed N] [--no-progress] [--strict-timing]\n"
-    "  Starts every process of the scenario, records all channels to an LCM log\n"
-    "  (default rig_logs/<name>-<time>.lcmlog, replay with lcm-logplayer), and prints a\n"
-    "  summary. realtime and lockstep run each process as its own OS process over LCM;\n"
-    "  inprocess flies the same processes' code in this process, lockstep semantics, no\n"
-    "  transport (same log, same truth as lockstep). Real time is judged from what each\n"
-    "  process reports: more than summary.max_late_fraction of a channel late or\n"
-    "  summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.\n"
-    "  --clock C          realtime (default of most scenarios), lockstep or inprocess\n"
-    "  --log FILE         the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved\n"
-    "                     scenario and each process's output are written next to it\n"
-    "  --json FILE        the summary as JSON; '-' writes it to stdout (the text summary then\n"
-    "                     goes to stderr)\n"
-    "  --set key.path=v   override one scenario value, parsed as YAML: --set duration_s=3,\n"
-    "                     --set processes=[plant,controller], --set 'faults=[{target: IMU,\n"
-    "                     kind: off, start_s: 1}]' (quote values with spaces for the shell)\n"
-    "  --seed N           the run's seed (a whole number >= 0)\n"
-    "  --no-progress      no progress line on stderr (for logs and scripts)\n"
-    "  --strict-timing    a real-time degraded run exits 4\n"
-    "  Network: run.network_namespace auto (default) flies realtime and lockstep runs in a\n"
-    "  private network namespace whose loopback carries multicast; 'rig spy --pid PID' joins\n"
-    "  it. always: fail if one cannot be made; never: the host's network (rig check).\n"
-    "  Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
-    "  (HEARTBEAT_LOST) or the run stalled, 4 real-time degraded (only with --strict-timing),\n"
-    "  5 completed in the controller's failsafe, 130 interrupted.\n";
+constexpr const char* kRunDescription =
+    "Starts every process of the scenario, records all channels to an LCM log (replay it with\n"
+    "lcm-logplayer) and prints a summary. realtime and lockstep run each process as its own OS\n"
+    "process over LCM; inprocess flies the same processes' code in this process, lockstep\n"
+    "semantics, no transport (same log, same truth as lockstep). Real time is judged from what\n"
+    "each process reports: more than summary.max_late_fraction of a channel late or\n"
+    "summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.";
 
-constexpr const char* kSpyUsage =
-    "usage: rig spy [--pid PID] [--url URL]\n"
-    "  Starts lcm-spy with the rig's type jar on its classpath. --pid joins the network\n"
-    "  namespace of a running 'rig run' (its pid is printed at start) to watch it live; the\n"
-    "  user who started the run may (a run started without root lives in a user namespace\n"
-    "  that is joined first). A run on the host's network prints its --url instead.\n"
-    "  lcm-spy is a window: it needs a display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).\n";
+constexpr const char* kRunFooter =
+    "Network: run.network_namespace auto (default) flies realtime and lockstep runs in a private\n"
+    "network namespace whose loopback carries multicast; 'rig spy --pid PID' joins it. always:\n"
+    "fail if one cannot be made; never: the host's network (see rig check).\n"
+    "Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
+    "(HEARTBEAT_LOST) or the run stalled, 4 real-time degraded (only with --strict-timing),\n"
+    "5 completed in the controller's failsafe, 130 interrupted.";
 
 /// The inode of a namespace link (/proc/<pid>/ns/<kind>), 0 if it cannot be read.
 ino_t namespace_inode(const std::string& pid, const std::string& kind) {
@@ -83,97 +64,58 @@ std::string self_dir() {
 
 int run_run_command(const std::vector<std::string>& args) {
   launcher::RunOptions o;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
-      return args[++i];
-    };
-    try {
-      if (a == "--help" || a == "-h") {
-        std::cout << kRunUsage;
-        return 0;
-      } else if (a == "--clock") {
-        o.clock = value();
-      } else if (a == "--log") {
-        o.log_file = value();
-      } else if (a == "--json") {
-        o.json_file = value();
-      } else if (a == "--set") {
-        o.overrides.push_back(parse_override(value()));
-      } else if (a == "--seed") {
-        const std::string v = value();
-        std::size_t used = 0;
-        // std::stoull takes "-1" as 2^64 - 1: a seed must be written as a whole number >= 0.
-        if (v.empty() || !std::isdigit(static_cast<unsigned char>(v[0]))) {
-          throw std::invalid_argument("--seed needs a whole number >= 0, got '" + v + "'");
-        }
-        const unsigned long long seed = std::stoull(v, &used);
-        if (used != v.size()) throw std::invalid_argument("--seed needs a whole number >= 0, got '" + v + "'");
-        o.seed = seed;
-      } else if (a == "--no-progress") {
-        o.progress = false;
-      } else if (a == "--strict-timing") {
-        o.strict_timing = true;
-      } else if (!a.empty() && a[0] == '-') {
-        throw std::invalid_argument("unknown option '" + a + "'");
-      } else if (o.scenario_file.empty()) {
-        o.scenario_file = a;
-      } else {
-        throw std::invalid_argument("unexpected argument '" + a + "'");
-      }
-    } catch (const std::invalid_argument& e) {
-      std::cerr << "rig run: " << e.what() << "\n" << kRunUsage;
-      return kExitUsage;
-    } catch (const std::out_of_range&) {
-      std::cerr << "rig run: " << a << " value out of range\n";
-      return kExitUsage;
-    }
-  }
-  if (o.scenario_file.empty()) {
-    std::cerr << "rig run: missing <scenario.yaml>\n" << kRunUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("run", kRunDescription);
+  cl->footer(kRunFooter);
+  cl->add_option("scenario", o.scenario_file, "the scenario file (rig_configs/*.yaml)")->required();
+  cl->add_option("--clock", o.clock, "realtime, lockstep or inprocess (default: the scenario's clock)")
+      ->check(CLI::IsMember({std::string(launcher::kClockRealtime), std::string(launcher::kClockLockstep),
+                                std::string(launcher::kClockInprocess)}));
+  cl->add_option("--log", o.log_file,
+                 "the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved scenario and each "
+                 "process's output are written next to it")
+      ->type_name("FILE");
+  cl.add_json(o.json_file, "the run summary");
+  each_value(cl->add_option("--set", "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
+                                     "--set processes=[plant,controller], --set 'faults=[{target: IMU, kind: off, "
+                                     "start_s: 1}]' (quote values with spaces for the shell)")
+                 ->type_name("KEY.PATH=VALUE")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
+  cl->add_option("--seed", o.seed, "the run's seed (a whole number >= 0; default: the scenario's seed)")
+      ->check(kWholeNumber)
+      ->type_name("N");
+  cl->add_flag("--no-progress", "no progress line on stderr (for logs and scripts)")
+      ->each([&o](const std::string&) { o.progress = false; });
+  cl->add_flag("--strict-timing", o.strict_timing, "a real-time degraded run exits 4");
+  if (const auto done = cl.parse(args)) return *done;
   return launcher::run_scenario(o);
 }
 
 int run_check_command(const std::vector<std::string>& args) {
-  constexpr const char* kCheckUsage =
-      "usage: rig check [--json FILE|-]\n"
-      "  Can this host run the rig's LCM multicast, directly or in a private network namespace?\n"
-      "  Prints what works and the commands that fix what does not. Exit code 0 if a run can\n"
-      "  start, 1 if not. --json writes the findings as JSON ('-': stdout, the text to stderr).\n";
   std::string json;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--help" || args[i] == "-h") {
-      std::cout << kCheckUsage;
-      return 0;
-    } else if (args[i] == "--json" && i + 1 < args.size()) {
-      json = args[++i];
-    } else {
-      std::cerr << "rig check: unexpected argument '" << args[i] << "'\n" << kCheckUsage;
-      return kExitUsage;
-    }
-  }
+  CommandLine cl("check",
+                 "Can this host run the rig's LCM multicast, directly or in a private network namespace?\n"
+                 "Prints what works and the commands that fix what does not.");
+  cl->footer("Exit code: 0 if a run can start, 1 if not, 2 bad usage.");
+  cl.add_json(json, "the findings");
+  if (const auto done = cl.parse(args)) return *done;
   return launcher::check_host(json);
 }
 
 int run_spy_command(const std::vector<std::string>& args) {
   std::string url;
   std::string pid;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--help" || args[i] == "-h") {
-      std::cout << kSpyUsage;
-      return 0;
-    } else if (args[i] == "--url" && i + 1 < args.size()) {
-      url = args[++i];
-    } else if (args[i] == "--pid" && i + 1 < args.size()) {
-      pid = args[++i];
-    } else {
-      std::cerr << "rig spy: unexpected argument '" << args[i] << "'\n" << kSpyUsage;
-      return kExitUsage;
-    }
-  }
+  CommandLine cl("spy",
+                 "Starts lcm-spy with the rig's type jar on its classpath. lcm-spy is a window: it needs a\n"
+                 "display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).");
+  cl->add_option("--pid", pid,
+                 "join the network namespace of a running 'rig run' (it prints its pid at start) to watch it "
+                 "live; the user who started the run may (a run started without root lives in a user namespace "
+                 "that is joined first)")
+      ->check(CLI::PositiveNumber);
+  cl->add_option("--url", url, "the LCM URL to watch (a run on the host's network prints it at start)");
+  if (const auto done = cl.parse(args)) return *done;
   const std::string jar = std::filesystem::path(self_dir()).parent_path().string() + "/share/java/nimble_lcmtypes.jar";
   if (!std::filesystem::exists(jar)) {
     std::cerr << "rig spy: type jar not found at " << jar << " (build the project first)\n";

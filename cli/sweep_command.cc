@@ -14,20 +14,16 @@
 namespace nimble::cli {
 namespace {
 
-constexpr const char* kSweepUsage =
-    "usage: rig sweep <scenario.yaml> --seeds A-B [--vary key=v1,v2,...]... [--jobs N] [--json FILE|-]\n"
-    "                 [--csv FILE] [--clock inprocess|lockstep|realtime] [--set key.path=value]...\n"
-    "                 [--logs DIR] [--no-progress]\n"
-    "  Flies the scenario once per seed A..B and per combination of the --vary values (each\n"
-    "  --vary multiplies the parameter sets), N runs at a time (default: one per CPU), each in\n"
-    "  its own child process, in process unless --clock says otherwise. Prints per parameter\n"
-    "  set the controlled rate and percentiles across runs of the extremes, state ranges and\n"
-    "  estimator errors, and each run that was not ok. --json writes the sets and a 'runs' list\n"
-    "  (seed, verdict, figures; '-': to stdout, the text then to stderr), --csv one row per run,\n"
-    "  --logs DIR keeps each run's LCM log.\n"
-    "  Exit code: 0 every run ok, 1 some run not ok, 2 bad input.\n"
-    "  Example: rig sweep rig_configs/id_doublet_train_fast.yaml --seeds 1-20 \\\n"
-    "             --vary model=rig_configs/models/nimble_lateral_set1.yaml,rig_configs/models/nimble_lateral_set2.yaml\n";
+constexpr const char* kSweepDescription =
+    "Flies the scenario once per seed A..B and per combination of the --vary values (each --vary\n"
+    "multiplies the parameter sets), N runs at a time, each in its own child process, in process\n"
+    "unless --clock says otherwise. Prints per parameter set the controlled rate and percentiles\n"
+    "across runs of the extremes, state ranges and estimator errors, and each run that was not ok.";
+
+constexpr const char* kSweepFooter =
+    "Exit code: 0 every run ok, 1 some run not ok, 2 bad input.\n"
+    "Example: rig sweep rig_configs/id_doublet_train_fast.yaml --seeds 1-20 \\\n"
+    "           --vary model=rig_configs/models/nimble_lateral_set1.yaml,rig_configs/models/nimble_lateral_set2.yaml";
 
 }  // namespace
 
@@ -35,53 +31,30 @@ int run_sweep_command(const std::vector<std::string>& args) {
   launcher::SweepOptions o;
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string json_file, csv_file;
-  bool have_seeds = false;
-  if (wants_help(args)) {
-    std::cout << kSweepUsage;
-    return 0;
-  }
-  try {
-    for (Args arg(args); arg.next();) {
-      const std::string& a = arg.arg();
-      if (a == "--seeds") {
-        std::tie(o.first_seed, o.last_seed) = launcher::parse_seed_range(arg.value());
-        have_seeds = true;
-      } else if (a == "--vary") {
-        o.vary.push_back(launcher::parse_vary(arg.value()));
-      } else if (a == "--jobs") {
-        o.jobs = integer("--jobs", arg.value(), 1, 256);
-      } else if (a == "--json") {
-        json_file = arg.value();
-      } else if (a == "--csv") {
-        csv_file = arg.value();
-      } else if (a == "--clock") {
-        o.base.clock = arg.value();
-      } else if (a == "--set") {
-        o.base.overrides.push_back(parse_override(arg.value()));
-      } else if (a == "--logs") {
-        o.logs_dir = arg.value();
-      } else if (a == "--no-progress") {
-        o.progress = false;
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option '" + a + "'");
-      } else if (o.base.scenario_file.empty()) {
-        o.base.scenario_file = a;
-      } else {
-        throw UsageError("unexpected argument '" + a + "'");
-      }
-    }
-  } catch (const UsageError& e) {
-    std::cerr << "rig sweep: " << e.what() << "\n" << kSweepUsage;
-    return kExitUsage;
-  } catch (const std::invalid_argument& e) {  // a malformed --seeds or --vary
-    std::cerr << "rig sweep: " << e.what() << "\n" << kSweepUsage;
-    return kExitUsage;
-  }
-  if (o.base.scenario_file.empty() || !have_seeds) {
-    std::cerr << "rig sweep: " << (o.base.scenario_file.empty() ? "missing <scenario.yaml>" : "missing --seeds A-B")
-              << "\n" << kSweepUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("sweep", kSweepDescription);
+  cl->footer(kSweepFooter);
+  cl->add_option("scenario", o.base.scenario_file, "the scenario file")->required();
+  each_value(cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B")->required(),
+             [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = launcher::parse_seed_range(v); });
+  each_value(cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
+                 ->type_name("KEY=V1,V2,...")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&o](const std::string& v) { o.vary.push_back(launcher::parse_vary(v)); });
+  cl->add_option("--jobs", o.jobs, "runs at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
+  cl.add_json(json_file, "the sets and a 'runs' list (seed, verdict, figures)");
+  cl->add_option("--csv", csv_file, "one row per run")->type_name("FILE");
+  cl->add_option("--clock", o.base.clock, "inprocess (default), lockstep or realtime")
+      ->check(CLI::IsMember({std::string(launcher::kClockInprocess), std::string(launcher::kClockLockstep),
+                              std::string(launcher::kClockRealtime)}));
+  each_value(cl->add_option("--set", "override one scenario value in every run, parsed as YAML (repeatable)")
+                 ->type_name("KEY.PATH=VALUE")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&o](const std::string& v) { o.base.overrides.push_back(parse_override(v)); });
+  cl->add_option("--logs", o.logs_dir, "keep each run's LCM log in DIR")->type_name("DIR");
+  cl->add_flag("--no-progress", "no progress line on stderr")->each([&o](const std::string&) { o.progress = false; });
+  if (const auto done = cl.parse(args)) return *done;
   launcher::SweepResult result;
   try {
     result = launcher::run_sweep(o);

@@ -4,8 +4,10 @@
 /// Table 5.1 beside ours with a reason for each disagreement (turbulence/ce500_analysis.h).
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -25,22 +27,13 @@ namespace {
 namespace fs = std::filesystem;
 using namespace nimble::turbulence;
 
-constexpr const char* kUsage =
-    "usage: rig turbulence <practical.yaml> [options]\n"
-    "  The Ce500 lateral model in Dryden turbulence (AE4304 practical), built from the\n"
-    "  derivatives in the file: eigenvalues of the uncontrolled, roll-damped and reduced\n"
-    "  systems beside the practical's Table 2.1; a seeded simulation with white-noise gust\n"
-    "  inputs, exactly discretised; output PSDs (analytical, periodogram, Welch); variances\n"
-    "  (Lyapunov, analytical PSD integral, periodogram, Welch, sample) with uncertainties; the\n"
-    "  practical's Table 5.1 beside ours with the reason for each difference.\n"
-    "  Exit 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance.\n"
-    "  --duration S        record length [s] (default: the file's simulation.duration_s)\n"
-    "  --dt S              time step [s] (default: the file's simulation.dt_s, 0.05 as the practical)\n"
-    "  --seed N            noise seed (default: the file's simulation.seed)\n"
-    "  --welch-segment M   Welch segment length [samples], a power of two (default N/8 rounded down)\n"
-    "  --json FILE         write the JSON report to FILE ('-' for stdout, text report suppressed)\n"
-    "  --plots DIR         PNG plots via gnuplot (Debian package gnuplot-nox): psd_matrix.png,\n"
-    "                      time_histories.png, pole_map.png\n";
+constexpr const char* kDescription =
+    "The Ce500 lateral model in Dryden turbulence (AE4304 practical), built from the derivatives\n"
+    "in the file: eigenvalues of the uncontrolled, roll-damped and reduced systems beside the\n"
+    "practical's Table 2.1; a seeded simulation with white-noise gust inputs, exactly\n"
+    "discretised; output PSDs (analytical, periodogram, Welch); variances (Lyapunov, analytical\n"
+    "PSD integral, periodogram, Welch, sample) with uncertainties; the practical's Table 5.1\n"
+    "beside ours with the reason for each difference.";
 
 std::string complex_text(const std::complex<double>& z) {
   if (z.imag() == 0.0) return fmt("%+.4f", z.real());
@@ -401,55 +394,41 @@ std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
 }  // namespace
 
 int run_turbulence_command(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kUsage;
-    return 0;
-  }
   std::string file, json, plots;
-  double duration = NAN, dt = NAN;
-  long long seed = -1, segment = -1;
-  try {
-    Args it(args);
-    while (it.next()) {
-      const std::string& a = it.arg();
-      if (a == "--json") {
-        json = it.value();
-      } else if (a == "--plots") {
-        plots = it.value();
-      } else if (a == "--duration") {
-        duration = number(a, it.value());
-        if (!(duration > 0.0)) throw UsageError("--duration must be > 0 s");
-      } else if (a == "--dt") {
-        dt = number(a, it.value());
-        if (!(dt > 0.0) || dt > 1.0) throw UsageError("--dt must be in (0, 1] s");
-      } else if (a == "--seed" || a == "--welch-segment") {
-        const double x = number(a, it.value());
-        if (x < 0.0 || x != std::floor(x) || x > 9.0e15) throw UsageError(a + " must be a whole number >= 0");
-        (a == "--seed" ? seed : segment) = static_cast<long long>(x);
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option " + a);
-      } else if (file.empty()) {
-        file = a;
-      } else {
-        throw UsageError("more than one practical file: " + file + ", " + a);
-      }
-    }
-    if (file.empty()) throw UsageError("no practical file given");
-    if (segment > 0 && (segment < 8 || (segment & (segment - 1)) != 0)) {
-      throw UsageError("--welch-segment must be a power of two >= 8");
-    }
-  } catch (const UsageError& e) {
-    std::cerr << "rig turbulence: " << e.what() << "\n" << kUsage;
-    return kExitUsage;
-  }
+  std::optional<double> duration, dt;
+  std::optional<std::uint64_t> seed;
+  std::optional<std::size_t> segment;
+  CommandLine cl("turbulence", kDescription);
+  cl->footer("Exit code: 0, or 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance;\n"
+             "2 bad usage or input.");
+  cl->add_option("practical", file, "the practical's file (rig_configs/turbulence/ce500_practical.yaml)")->required();
+  cl->add_option("--duration", duration, "record length [s] (default: the file's simulation.duration_s)")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->type_name("S");
+  cl->add_option("--dt", dt, "time step [s] (default: the file's simulation.dt_s, 0.05 as the practical)")
+      ->check(kFinite & CLI::Range(1e-9, 1.0))
+      ->type_name("S");
+  cl->add_option("--seed", seed, "noise seed (default: the file's simulation.seed)")
+      ->check(kWholeNumber)
+      ->type_name("N");
+  cl->add_option("--welch-segment", segment,
+                 "Welch segment length [samples], a power of two >= 8 (default N/8 rounded down)")
+      ->check(kPowerOfTwo)
+      ->type_name("M");
+  cl.add_json(json, "the report");
+  cl->add_option("--plots", plots,
+                 "PNG plots via gnuplot (Debian package gnuplot-nox): psd_matrix.png, time_histories.png, "
+                 "pole_map.png")
+      ->type_name("DIR");
+  if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();
 
   const Ce500Config config = load_ce500_config(file);
   Ce500Options options = ce500_default_options(config);
-  if (!std::isnan(duration)) options.duration_s = duration;
-  if (!std::isnan(dt)) options.dt_s = dt;
-  if (seed >= 0) options.seed = static_cast<std::uint64_t>(seed);
-  if (segment >= 0) options.welch_segment = static_cast<std::size_t>(segment);
+  if (duration) options.duration_s = *duration;
+  if (dt) options.dt_s = *dt;
+  if (seed) options.seed = *seed;
+  if (segment) options.welch_segment = *segment;
   const Ce500Analysis a = analyse_ce500(config, options);
 
   if (json != "-") std::cout << report_text(a);

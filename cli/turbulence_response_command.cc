@@ -35,25 +35,13 @@ namespace {
 namespace fs = std::filesystem;
 using namespace nimble::turbulence;
 
-constexpr const char* kUsage =
-    "usage: rig turbulence-response <scenario.yaml> <log.lcmlog> [options]\n"
-    "  A rig flight in Dryden side gusts (e.g. rig_configs/hover_turbulence.yaml flown with\n"
-    "  rig run ... --log F) against the closed-loop linear model (lateral3 model, flap actuator,\n"
-    "  PD roll controller with its low-pass, the plant's Dryden gust filter): Welch PSDs of the\n"
-    "  true p, v, phi inside the confidence band of the model's expected Welch estimate up to\n"
-    "  --f-max, and their variances within the uncertainty of the model's. The scenario (with\n"
-    "  the same --set overrides as the flight) gives model, vehicle, gains and gust.\n"
-    "  Exit 0 if every check agrees, 1 if one does not, 2 on bad usage or input.\n"
-    "  --set KEY=VALUE     scenario override, as for rig run (repeatable)\n"
-    "  --skip S            drop the first S seconds of the flight (start-up; default 5)\n"
-    "  --f-max HZ          compare up to this frequency (default 10 Hz: above the closed-loop roll\n"
-    "                      mode (2.4 Hz) and the flap actuator (2 Hz), below the 15 Hz low-pass and\n"
-    "                      the flapping frequency; on the truth the model holds to 20 Hz and beyond)\n"
-    "  --welch-segment M   Welch segment [samples], a power of two (default 8192: 8.2 s at 1 kHz)\n"
-    "  --json FILE         write the JSON report to FILE ('-' for stdout, text report suppressed)\n"
-    "  --plots DIR         PNG plots via gnuplot (Debian package gnuplot-nox): response_psd.png\n"
-    "                      (flight Welch, model expectation and band, analytical PSD) and\n"
-    "                      response_ratio.png (flight / model with the band)\n";
+constexpr const char* kDescription =
+    "A rig flight in Dryden side gusts (e.g. rig_configs/hover_turbulence.yaml flown with rig run\n"
+    "... --log F) against the closed-loop linear model (lateral3 model, flap actuator, PD roll\n"
+    "controller with its low-pass, the plant's Dryden gust filter): Welch PSDs of the true p, v,\n"
+    "phi inside the confidence band of the model's expected Welch estimate up to --f-max, and\n"
+    "their variances within the uncertainty of the model's. The scenario (with the same --set\n"
+    "overrides as the flight) gives model, vehicle, gains and gust.";
 
 /// What the analysis needs from the scenario.
 struct Setup {
@@ -302,54 +290,43 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
 }  // namespace
 
 int run_turbulence_response_command(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kUsage;
-    return 0;
-  }
   std::string scenario, log, json, plots;
   std::vector<Override> overrides;
   double skip_s = 5.0;
   ResponseComparisonOptions options;
   options.welch_segment = 8192;
   options.f_max_hz = 10.0;
-  try {
-    Args it(args);
-    while (it.next()) {
-      const std::string& a = it.arg();
-      if (a == "--json") {
-        json = it.value();
-      } else if (a == "--plots") {
-        plots = it.value();
-      } else if (a == "--set") {
-        overrides.push_back(parse_override(it.value()));
-      } else if (a == "--skip") {
-        skip_s = number(a, it.value());
-        if (!(skip_s >= 0.0)) throw UsageError("--skip must be >= 0 s");
-      } else if (a == "--f-max") {
-        options.f_max_hz = number(a, it.value());
-        if (!(options.f_max_hz > 0.0)) throw UsageError("--f-max must be > 0 Hz");
-      } else if (a == "--welch-segment") {
-        const double x = number(a, it.value());
-        const auto m = static_cast<std::size_t>(x);
-        if (x != std::floor(x) || x < 8 || x > 1e9 || (m & (m - 1)) != 0) {
-          throw UsageError("--welch-segment must be a power of two >= 8");
-        }
-        options.welch_segment = m;
-      } else if (!a.empty() && a[0] == '-') {
-        throw UsageError("unknown option " + a);
-      } else if (scenario.empty()) {
-        scenario = a;
-      } else if (log.empty()) {
-        log = a;
-      } else {
-        throw UsageError("unexpected argument " + a);
-      }
-    }
-    if (log.empty()) throw UsageError("need a scenario and a log");
-  } catch (const UsageError& e) {
-    std::cerr << "rig turbulence-response: " << e.what() << "\n" << kUsage;
-    return kExitUsage;
-  }
+  CommandLine cl("turbulence-response", kDescription);
+  cl->footer("Exit code: 0 if every check agrees, 1 if one does not, 2 bad usage or input.");
+  cl->add_option("scenario", scenario, "the scenario the flight was flown with")->required();
+  cl->add_option("log", log, "the flight's LCM log")->required();
+  each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
+                 ->type_name("KEY.PATH=VALUE")
+                 ->allow_extra_args(false)
+                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+             [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
+  cl->add_option("--skip", skip_s, "drop the first S seconds of the flight (start-up)")
+      ->capture_default_str()
+      ->check(kFinite & CLI::NonNegativeNumber)
+      ->type_name("S");
+  cl->add_option("--f-max", options.f_max_hz,
+                 "compare up to this frequency [Hz]: above the closed-loop roll mode (2.4 Hz) and the flap "
+                 "actuator (2 Hz), below the 15 Hz low-pass and the flapping frequency; on the truth the model "
+                 "holds to 20 Hz and beyond")
+      ->capture_default_str()
+      ->check(kFinite & CLI::PositiveNumber)
+      ->type_name("HZ");
+  cl->add_option("--welch-segment", options.welch_segment,
+                 "Welch segment [samples], a power of two >= 8 (8192: 8.2 s at 1 kHz)")
+      ->capture_default_str()
+      ->check(kPowerOfTwo)
+      ->type_name("M");
+  cl.add_json(json, "the report");
+  cl->add_option("--plots", plots,
+                 "PNG plots via gnuplot (Debian package gnuplot-nox): response_psd.png (flight Welch, model "
+                 "expectation and band, analytical PSD) and response_ratio.png (flight / model with the band)")
+      ->type_name("DIR");
+  if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();
 
   const Setup s = setup_from(scenario, overrides);

@@ -20,11 +20,12 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # python3 for the check that every CTest entry runs one test case (tests/meta), python3-numpy for
 # the Python log reader (python/nimble_rig);
 # Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests;
-# nlohmann-json (JSON output and reading run reports) and fmt (the run summary's formatting).
+# nlohmann-json (JSON output and reading run reports), fmt (the run summary's formatting) and
+# CLI11 (the rig tool's command lines).
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
-  libeigen3-dev libyaml-cpp-dev catch2 libboost-dev nlohmann-json3-dev libfmt-dev
+  libeigen3-dev libyaml-cpp-dev catch2 libboost-dev nlohmann-json3-dev libfmt-dev libcli11-dev
   default-jdk-headless
   gnuplot-nox
   can-utils iproute2 qemu-system-x86 xz-utils

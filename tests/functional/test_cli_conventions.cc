@@ -51,6 +51,40 @@ TEST_CASE("cli: every command answers --help on stdout with exit 0, and --versio
   CHECK(unknown.err.find("unknown command") != std::string::npos);
 }
 
+TEST_CASE("cli: usage errors name the option and exit 2, and values are checked before the command runs", "[cli]") {
+  struct Case {
+    std::string args;
+    std::string names;  // in the message on stderr
+  };
+  const std::string scenario = kConfigs + "hover.yaml";
+  for (const Case& c : std::vector<Case>{
+           {"run " + scenario + " --bogus", "--bogus"},
+           {"run", "scenario is required"},
+           {"run " + scenario + " --seed -1", "--seed: '-1' is not a whole number >= 0"},
+           {"run " + scenario + " --seed", "--seed"},
+           {"run " + scenario + " --clock fast", "--clock: fast not in {realtime,lockstep,inprocess}"},
+           {"run " + scenario + " --set duration_s", "--set: key 'duration_s'"},
+           {"sweep " + scenario, "--seeds is required"},
+           {"sweep " + scenario + " --seeds 1-2 --jobs 0", "--jobs"},
+           {"export x.lcmlog --csv y.csv --rate nan", "--rate: 'nan' is not a finite number"},
+           {"turbulence x.yaml --welch-segment 1000", "--welch-segment: '1000' is not a power of two >= 8"},
+           {"params nosuchsection", "section: nosuchsection not in"},
+           {"model", "model is required"},
+       }) {
+    INFO(c.args);
+    const RigResult r = run_rig(c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find(c.names) != std::string::npos);
+    CHECK(r.err.find("--help' describes the options") != std::string::npos);
+    CHECK(r.out.empty());
+  }
+  // --opt=value is the same as --opt value.
+  const RigResult eq = run_rig("run " + scenario + " --clock=inprocess --set=duration_s=0.3 --no-progress --log " +
+                               (std::filesystem::temp_directory_path() / "rig_cli_eq.lcmlog").string());
+  CHECK(eq.exit_code == 0);
+  CHECK(eq.out.find("clock      inprocess") != std::string::npos);
+}
+
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
   for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
                                   "bench_turbulence", "bench_can", "bench_can_bridge"}) {
