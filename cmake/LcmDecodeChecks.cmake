@@ -15,27 +15,33 @@ file(GLOB headers "${DIR}/*.hpp")
 if(NOT headers)
   message(FATAL_ERROR "LcmDecodeChecks: no headers in ${DIR}")
 endif()
+
+# In the header text `text_var`, replaces `line` by `checked`, then fails unless the checks found
+# by `check` are as many as the `sites` (the decodes the check guards) found before.
+function(add_checks text_var what sites line checked check)
+  set(text "${${text_var}}")
+  string(REGEX MATCHALL "${sites}" found_sites "${text}")
+  string(REGEX REPLACE "${line}" "${checked}" text "${text}")
+  string(REGEX MATCHALL "${check}" found_checks "${text}")
+  list(LENGTH found_sites n_sites)
+  list(LENGTH found_checks n_checks)
+  if(NOT n_sites EQUAL n_checks)
+    message(FATAL_ERROR "LcmDecodeChecks: ${header}: ${n_sites} ${what} decodes, ${n_checks} checks added")
+  endif()
+  set(${text_var} "${text}" PARENT_SCOPE)
+endfunction()
+
 foreach(header IN LISTS headers)
   file(READ "${header}" text)
   # Strings: `if(__x_len__ > maxlen - pos) return -1;` and `if(__elem_len > maxlen - pos) return -1;`
-  string(REGEX MATCHALL "\\.assign\\(" assigns "${text}")
-  string(REGEX REPLACE "if\\((__[A-Za-z0-9_]+_len__|__elem_len) > maxlen - pos\\) return -1;"
-                       "if(\\1 < 1 || \\1 > maxlen - pos) return -1;" text "${text}")
-  string(REGEX MATCHALL "< 1 \\|\\| __[A-Za-z0-9_]+ > maxlen - pos" strings "${text}")
-  list(LENGTH assigns n_assigns)
-  list(LENGTH strings n_strings)
-  if(NOT n_assigns EQUAL n_strings)
-    message(FATAL_ERROR "LcmDecodeChecks: ${header}: ${n_assigns} string decodes, ${n_strings} length checks added")
-  endif()
+  add_checks(text "string" "\\.assign\\("
+             "if\\((__[A-Za-z0-9_]+_len__|__elem_len) > maxlen - pos\\) return -1;"
+             "if(\\1 < 1 || \\1 > maxlen - pos) return -1;"
+             "< 1 \\|\\| __[A-Za-z0-9_]+ > maxlen - pos")
   # Arrays: `this->x.resize(this->n);`
-  string(REGEX MATCHALL "\\.resize\\(" resizes "${text}")
-  string(REGEX REPLACE "(this->[A-Za-z0-9_]+)\\.resize\\((this->[A-Za-z0-9_]+)\\);"
-                       "if(\\2 < 0 || \\2 > maxlen - pos) return -1;\n        \\1.resize(\\2);" text "${text}")
-  string(REGEX MATCHALL "< 0 \\|\\| this->[A-Za-z0-9_]+ > maxlen - pos" counts "${text}")
-  list(LENGTH resizes n_resizes)
-  list(LENGTH counts n_counts)
-  if(NOT n_resizes EQUAL n_counts)
-    message(FATAL_ERROR "LcmDecodeChecks: ${header}: ${n_resizes} array resizes, ${n_counts} count checks added")
-  endif()
+  add_checks(text "array" "\\.resize\\("
+             "(this->[A-Za-z0-9_]+)\\.resize\\((this->[A-Za-z0-9_]+)\\);"
+             "if(\\2 < 0 || \\2 > maxlen - pos) return -1;\n        \\1.resize(\\2);"
+             "< 0 \\|\\| this->[A-Za-z0-9_]+ > maxlen - pos")
   file(WRITE "${header}" "${text}")
 endforeach()
