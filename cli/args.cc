@@ -82,8 +82,8 @@ class Formatter : public CLI::Formatter {
 
 }  // namespace
 
-CommandLine::CommandLine(const std::string& command, const std::string& description)
-    : command_(command), app_(description, "rig " + command) {
+CommandLine::CommandLine(const std::string& program, const std::string& description)
+    : program_(program), app_(description, program) {
   formatter_ = std::make_shared<Formatter>();
   formatter_->label("Usage", "usage");
   formatter_->label("OPTIONS", "options");
@@ -115,10 +115,13 @@ std::optional<int> CommandLine::parse(const std::vector<std::string>& args) {
   return std::nullopt;
 }
 
+std::optional<int> CommandLine::parse(int argc, char** argv) {
+  return parse(argc > 1 ? std::vector<std::string>(argv + 1, argv + argc) : std::vector<std::string>{});
+}
+
 int CommandLine::fail(const std::string& what) const {
-  std::cerr << "rig " << command_ << ": " << what << "\n"
-            << formatter_->make_usage(&app_, "rig " + command_) << "'rig " << command_
-            << " --help' describes the options.\n";
+  std::cerr << program_ << ": " << what << "\n"
+            << formatter_->make_usage(&app_, program_) << "'" << program_ << " --help' describes the options.\n";
   return kExitUsage;
 }
 

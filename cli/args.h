@@ -1,10 +1,11 @@
 #pragma once
-/// The command line of a `rig` sub-command, parsed by CLI11 (Debian libcli11-dev) with one
-/// convention for every command:
+/// The command line of a program of the rig, parsed by CLI11 (Debian libcli11-dev) with one
+/// convention for every `rig` sub-command, rig process, benchmark and tool:
 /// - `-h`/`--help` prints the help on stdout and exits 0; the help is made from the options
-///   themselves, so it cannot drift from what the command accepts;
+///   themselves, so it cannot drift from what the program accepts;
 /// - a usage error (unknown option, missing value or argument, a value out of range) prints
-///   "rig <command>: <what>" and a pointer to --help on stderr and exits kExitUsage (2);
+///   "<program>: <what>", the usage line and a pointer to --help on stderr and exits
+///   kExitUsage (2);
 /// - options take `--opt value` or `--opt=value`; numbers are checked (finite, in range) before
 ///   the command runs;
 /// - `--json FILE|-` writes the command's JSON to FILE, or alone to stdout with '-'.
@@ -19,12 +20,12 @@
 
 namespace nimble::cli {
 
-/// One sub-command's command line.
+/// One program's command line.
 class CommandLine {
  public:
-  /// `command`: the sub-command's name (the help says "rig <command>"); `description`: what it
-  /// does, the first paragraph of its help.
-  CommandLine(const std::string& command, const std::string& description);
+  /// `program`: the program as it is typed ("rig run", "nimble_plant", "bench_can"), which the
+  /// help and the messages name; `description`: what it does, the first paragraph of its help.
+  CommandLine(const std::string& program, const std::string& description);
 
   /// The CLI11 application to add options to.
   CLI::App* operator->() { return &app_; }
@@ -33,15 +34,17 @@ class CommandLine {
   /// Adds `--json FILE|-` writing to `target`.
   CLI::Option* add_json(std::string& target, const std::string& what);
 
-  /// Parses `args` (those after the sub-command's name). Returns the exit code if the command
+  /// Parses `args` (those after the program's name). Returns the exit code if the program
   /// ends here (0 after --help, kExitUsage after a usage error), else std::nullopt.
   std::optional<int> parse(const std::vector<std::string>& args);
+  /// The same for main()'s arguments (argv[0] is skipped).
+  std::optional<int> parse(int argc, char** argv);
 
   /// Reports a usage error found after parsing (between options); returns kExitUsage.
   int fail(const std::string& what) const;
 
  private:
-  std::string command_;
+  std::string program_;
   CLI::App app_;
   std::shared_ptr<CLI::Formatter> formatter_;
 };

@@ -93,7 +93,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   std::string csv, vehicle_file, json, model_out, plots;
   ident::IdentOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("identify",
+  CommandLine cl("rig identify",
                  "Identifies the dimensional stability and control derivatives of the lateral model from\n"
                  "flight data, a CSV file or a rig log (read by its content; equation error, thesis\n"
                  "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
@@ -176,7 +176,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("discrepancy",
+  CommandLine cl("rig discrepancy",
                  "Where the model and the measured data disagree, which physical effect the model is\n"
                  "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
@@ -275,7 +275,7 @@ int run_validate_command(const std::vector<std::string>& args) {
   bool closed_loop = false;
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("validate",
+  CommandLine cl("rig validate",
                  "Open-loop validation: the state derivatives predicted by the model from the measured\n"
                  "states and inputs against the measured ones (thesis Tables 7-8).");
   cl->add_option("model", model_file, "the model file")->required();
@@ -360,7 +360,7 @@ int run_export_command(const std::vector<std::string>& args) {
   ident::StateSource source = ident::StateSource::kAuto;
   ident::LogReadOptions log_options;
   ident::Interpolation interpolation = ident::Interpolation::kCubic;
-  CommandLine cl("export",
+  CommandLine cl("rig export",
                  "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
                  "resampled onto one grid. States come from the estimator (ESTIMATE) when the log has it,\n"
                  "else from the plant's truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. A damaged\n"

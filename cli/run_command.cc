@@ -64,7 +64,7 @@ std::string self_dir() {
 
 int run_run_command(const std::vector<std::string>& args) {
   launcher::RunOptions o;
-  CommandLine cl("run", kRunDescription);
+  CommandLine cl("rig run", kRunDescription);
   cl->footer(kRunFooter);
   cl->add_option("scenario", o.scenario_file, "the scenario file (rig_configs/*.yaml)")->required();
   cl->add_option("--clock", o.clock, "realtime, lockstep or inprocess (default: the scenario's clock)")
@@ -94,7 +94,7 @@ int run_run_command(const std::vector<std::string>& args) {
 
 int run_check_command(const std::vector<std::string>& args) {
   std::string json;
-  CommandLine cl("check",
+  CommandLine cl("rig check",
                  "Can this host run the rig's LCM multicast, directly or in a private network namespace?\n"
                  "Prints what works and the commands that fix what does not.");
   cl->footer("Exit code: 0 if a run can start, 1 if not, 2 bad usage.");
@@ -106,7 +106,7 @@ int run_check_command(const std::vector<std::string>& args) {
 int run_spy_command(const std::vector<std::string>& args) {
   std::string url;
   std::string pid;
-  CommandLine cl("spy",
+  CommandLine cl("rig spy",
                  "Starts lcm-spy with the rig's type jar on its classpath. lcm-spy is a window: it needs a\n"
                  "display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).");
   cl->add_option("--pid", pid,

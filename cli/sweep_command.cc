@@ -31,7 +31,7 @@ int run_sweep_command(const std::vector<std::string>& args) {
   launcher::SweepOptions o;
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string json_file, csv_file;
-  CommandLine cl("sweep", kSweepDescription);
+  CommandLine cl("rig sweep", kSweepDescription);
   cl->footer(kSweepFooter);
   cl->add_option("scenario", o.base.scenario_file, "the scenario file")->required();
   each_value(cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B")->required(),

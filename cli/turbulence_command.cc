@@ -398,7 +398,7 @@ int run_turbulence_command(const std::vector<std::string>& args) {
   std::optional<double> duration, dt;
   std::optional<std::uint64_t> seed;
   std::optional<std::size_t> segment;
-  CommandLine cl("turbulence", kDescription);
+  CommandLine cl("rig turbulence", kDescription);
   cl->footer("Exit code: 0, or 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance;\n"
              "2 bad usage or input.");
   cl->add_option("practical", file, "the practical's file (rig_configs/turbulence/ce500_practical.yaml)")->required();

@@ -296,7 +296,7 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   ResponseComparisonOptions options;
   options.welch_segment = 8192;
   options.f_max_hz = 10.0;
-  CommandLine cl("turbulence-response", kDescription);
+  CommandLine cl("rig turbulence-response", kDescription);
   cl->footer("Exit code: 0 if every check agrees, 1 if one does not, 2 bad usage or input.");
   cl->add_option("scenario", scenario, "the scenario the flight was flown with")->required();
   cl->add_option("log", log, "the flight's LCM log")->required();

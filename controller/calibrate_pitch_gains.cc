@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "controller/attitude_controller.h"
 #include "controller/pitch_loop.h"
 #include "core/config.h"
@@ -38,8 +39,13 @@ namespace {
 
 double parse_number(const std::string& item) {
   std::size_t used = 0;
-  const double x = std::stod(item, &used);
-  if (used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
+  double x = NAN;
+  try {
+    x = std::stod(item, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
   return x;
 }
 
@@ -106,43 +112,55 @@ int main(int argc, char** argv) {
   int delay_steps = 0;
   double u0 = NAN, w0 = NAN, theta0 = NAN;
 
-  try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--model") model_file = value();
-      else if (arg == "--controller") controller_file = value();
-      else if (arg == "--plant") plant_file = value();
-      else if (arg == "--map") map = parse_number(value());
-      else if (arg == "--kp") kp_values = parse_grid(value());
-      else if (arg == "--kd") kd_values = parse_grid(value());
-      else if (arg == "--continuous") continuous = true;
-      else if (arg == "--full") full = true;
-      else if (arg == "--u0") u0 = parse_number(value());
-      else if (arg == "--w0") w0 = parse_number(value());
-      else if (arg == "--theta0") theta0 = parse_number(value());
-      else if (arg == "--delay-steps") {
-        const double d = parse_number(value());
-        if (d < 0.0 || d != std::floor(d) || d > 100.0) throw std::invalid_argument("--delay-steps must be 0..100");
-        delay_steps = static_cast<int>(d);
-      } else if (arg == "--check") {
-        const std::vector<double> g = split(value(), ',');
-        if (g.size() != 2) throw std::invalid_argument("--check needs KP,KD");
-        checks.push_back({g[0], g[1]});
-      } else if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: calibrate_pitch_gains [--model FILE] [--controller FILE] [--plant FILE]\n"
-                     "       [--map RAD] [--kp LIST] [--kd LIST] [--continuous] [--delay-steps N]\n"
-                     "       [--check KP,KD]... [--full] [--u0 MPS] [--w0 MPS] [--theta0 RAD]\n"
-                     "       LIST: A,B,C or FROM:TO:STEP\n";
-        return 0;
-      } else {
-        throw std::invalid_argument("unknown argument '" + arg + "'");
-      }
-    }
+  cli::CommandLine cl(
+      "calibrate_pitch_gains",
+      "Scans the pitch PD gains kp, kd (fixed dihedral map) on the linear closed loop of the longitudinal\n"
+      "model and picks the pair whose closed loop is stable and whose least-damped complex poles are best\n"
+      "damped. Prints, per kp, the best kd, then the chosen gains and their poles.");
+  cl->footer("LIST: A,B,C or FROM:TO:STEP. The controller file's pitch gains are always checked.\n"
+             "Exit code: 0 a stable pair found, 1 no grid point is stable, 2 a usage or config error.");
+  cl->add_option("--model", model_file,
+                 "the longitudinal model (default rig_configs/models/nimble_longitudinal.yaml, thesis Table E.4)")
+      ->type_name("FILE");
+  cl->add_option("--controller", controller_file,
+                 "the controller: its rate, pitch cut-off and pitch_cmd_to_dihedral_rad (default "
+                 "rig_configs/controller/nimble_attitude.yaml)")
+      ->type_name("FILE");
+  cl->add_option("--plant", plant_file,
+                 "the plant, of which only the servo is read (default rig_configs/plant/nimble_plant.yaml)")
+      ->type_name("FILE");
+  cl->add_option("--map", map, "pitch_cmd_to_dihedral_rad (default: the controller file's)")
+      ->check(cli::kFinite)
+      ->type_name("RAD");
+  cli::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0.005:0.300:0.005)")->type_name("LIST"),
+                  [&kp_values](const std::string& v) { kp_values = parse_grid(v); });
+  cli::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0.0005:0.0400:0.0005)")->type_name("LIST"),
+                  [&kd_values](const std::string& v) { kd_values = parse_grid(v); });
+  cl->add_flag("--continuous", continuous, "the continuous loop instead of the discrete one at the controller rate");
+  cl->add_option("--delay-steps", delay_steps, "extra command delay of the discrete loop [control periods]")
+      ->check(CLI::Range(0, 100))
+      ->type_name("N")
+      ->capture_default_str();
+  cli::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
+                      ->type_name("KP,KD")
+                      ->allow_extra_args(false)
+                      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                  [&checks](const std::string& v) {
+                    const std::vector<double> g = split(v, ',');
+                    if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
+                    checks.push_back({g[0], g[1]});
+                  });
+  cl->add_flag("--full", full, "print every grid point, not only the best kd per kp");
+  cl->add_option("--u0", u0, "replaces the model's trim u0 (the linearisation point, Eq B.15)")
+      ->check(cli::kFinite)
+      ->type_name("MPS");
+  cl->add_option("--w0", w0, "replaces the model's trim w0 (enters A as the -w0 q term of udot, e.g. a climb)")
+      ->check(cli::kFinite)
+      ->type_name("MPS");
+  cl->add_option("--theta0", theta0, "replaces the model's trim theta0")->check(cli::kFinite)->type_name("RAD");
+  if (const auto done = cl.parse(argc, argv)) return *done;
 
+  try {
     DerivativeModel model = load_model(model_file);
     if (std::isfinite(u0)) model.trim.u0_mps = u0;
     if (std::isfinite(w0)) model.trim.w0_mps = w0;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "controller/attitude_controller.h"
 #include "controller/linear_closed_loop.h"
 #include "controller/manoeuvre.h"
@@ -38,8 +39,13 @@ std::vector<double> parse_list(const std::string& text) {
   std::string item;
   while (std::getline(in, item, ',')) {
     std::size_t used = 0;
-    const double x = std::stod(item, &used);
-    if (used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
+    double x = NAN;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
     out.push_back(x);
   }
   if (out.empty()) throw std::invalid_argument("empty list");
@@ -83,34 +89,51 @@ int main(int argc, char** argv) {
   LinearLoopOptions options;
   TargetRanges target;
 
-  try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--model") model_file = value();
-      else if (arg == "--controller") controller_file = value();
-      else if (arg == "--manoeuvre") manoeuvre_file = value();
-      else if (arg == "--gain-set") gain_set = value();
-      else if (arg == "--maps") maps = parse_list(value());
-      else if (arg == "--amplitudes-deg") amplitudes_deg = parse_list(value());
-      else if (arg == "--tail-s") options.tail_s = parse_list(value()).at(0);
-      else if (arg == "--target-p") target.p_radps = parse_list(value()).at(0);
-      else if (arg == "--target-v") target.v_mps = parse_list(value()).at(0);
-      else if (arg == "--target-phi") target.phi_rad = parse_list(value()).at(0);
-      else if (arg == "--target-df") target.delta_f_radps = parse_list(value()).at(0);
-      else if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: calibrate_roll_map [--model FILE] [--controller FILE] [--manoeuvre FILE]\n"
-                     "       [--gain-set NAME] [--maps A,B,..] [--amplitudes-deg A,B,..] [--tail-s S]\n"
-                     "       [--target-p R] [--target-v R] [--target-phi R] [--target-df R]\n";
-        return 0;
-      } else {
-        throw std::invalid_argument("unknown argument '" + arg + "'");
-      }
-    }
+  cli::CommandLine cl(
+      "calibrate_roll_map",
+      "Sweeps roll_cmd_to_delta_f_radps (and the doublet amplitude of a manoeuvre) on the linear closed\n"
+      "loop and prints the state and delta_f ranges next to the published ones (thesis Table 9.4 set 1,\n"
+      "Table 9.10).");
+  cl->footer("'stable': |phi| < 0.01 rad, |p| < 0.1 rad/s, |v| < 0.05 m/s in the last 0.5 s simulated.\n"
+             "Exit code: 0 a stable combination found, 1 none, 2 a usage or config error.");
+  cl->add_option("--model", model_file, "the lateral model (default rig_configs/models/nimble_lateral_set1.yaml)")
+      ->type_name("FILE");
+  cl->add_option("--controller", controller_file, "the controller (default rig_configs/controller/nimble_attitude.yaml)")
+      ->type_name("FILE");
+  cl->add_option("--manoeuvre", manoeuvre_file,
+                 "the manoeuvre (default rig_configs/manoeuvres/id_doublet_train_7_4hz.yaml, the identification "
+                 "doublet train)")
+      ->type_name("FILE");
+  cl->add_option("--gain-set", gain_set, "the roll gain set of the controller")->type_name("NAME")->capture_default_str();
+  cli::each_value(cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")
+                      ->type_name("A,B,.."),
+                  [&maps](const std::string& v) { maps = parse_list(v); });
+  cli::each_value(cl->add_option("--amplitudes-deg", "the roll doublet amplitudes (default: the manoeuvre's own)")
+                      ->type_name("A,B,.."),
+                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = parse_list(v); });
+  cl->add_option("--tail-s", options.tail_s, "hover simulated after the manoeuvre")
+      ->check(cli::kFinite & CLI::NonNegativeNumber)
+      ->type_name("S")
+      ->capture_default_str();
+  cl->add_option("--target-p", target.p_radps, "published range of p [rad/s]")
+      ->check(cli::kFinite)
+      ->type_name("R")
+      ->capture_default_str();
+  cl->add_option("--target-v", target.v_mps, "published range of v [m/s]")
+      ->check(cli::kFinite)
+      ->type_name("R")
+      ->capture_default_str();
+  cl->add_option("--target-phi", target.phi_rad, "published range of phi [rad]")
+      ->check(cli::kFinite)
+      ->type_name("R")
+      ->capture_default_str();
+  cl->add_option("--target-df", target.delta_f_radps, "published range of delta_f [rad/s]")
+      ->check(cli::kFinite)
+      ->type_name("R")
+      ->capture_default_str();
+  if (const auto done = cl.parse(argc, argv)) return *done;
 
+  try {
     const DerivativeModel model = load_model(model_file);
     const Vehicle vehicle = load_vehicle(model.vehicle_file);
     const ControllerConfig base = load_controller_config(controller_file);

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include "plant/plant_node.h"
@@ -106,22 +107,21 @@ int main(int argc, char** argv) {
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
   int runs = 5;
   double duration_s = 30.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::printf("usage: bench_inprocess [scenario.yaml] [--runs N] [--duration S]\n"
-                  "  Times the in-process executor on a flight (default 30 s) against the machine's floor\n"
-                  "  (the plant model alone) measured in the same run, and rig sweep.\n");
-      return 0;
-    }
-    if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--duration" && i + 1 < argc) duration_s = std::atof(argv[++i]);
-    else if (!a.empty() && a[0] != '-') scenario = a;
-    else {
-      std::fprintf(stderr, "usage: bench_inprocess [scenario.yaml] [--runs N] [--duration S]\n");
-      return 2;
-    }
-  }
+  cli::CommandLine cl("bench_inprocess",
+                      "Times the in-process executor on a flight against the machine's floor (the plant model\n"
+                      "alone) measured in the same run, and rig sweep.");
+  cl->footer("Not a test: the figures depend on the machine; the ratio to the floor travels.");
+  cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)")
+      ->type_name("SCENARIO.YAML");
+  cl->add_option("--runs", runs, "runs of each figure (median and best are reported)")
+      ->check(CLI::Range(1, 1000))
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--duration", duration_s, "simulated seconds of each flight")
+      ->check(cli::kFinite & CLI::Range(0.001, 1e6))
+      ->type_name("S")
+      ->capture_default_str();
+  if (const auto done = cl.parse(argc, argv)) return *done;
   const std::string dir = (fs::temp_directory_path() / ("bench_inprocess_" + std::to_string(::getpid()))).string();
   fs::create_directories(dir);
   try {

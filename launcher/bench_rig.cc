@@ -37,6 +37,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "cli/args.h"
 #include "core/json_writer.h"
 #include "launcher/bench_floor.h"
 #include "launcher/netns.h"
@@ -122,26 +123,29 @@ int main(int argc, char** argv) {
   std::vector<Override> extra;  // --set key=value, applied to every rig run
   std::string set_args;
   int runs = 3;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::printf("usage: bench_rig [scenario.yaml] [--runs N] [--json FILE] [--set key=value]...\n");
-      return 0;
-    } else if (a == "--runs" && i + 1 < argc) {
-      runs = std::max(1, std::atoi(argv[++i]));
-    } else if (a == "--json" && i + 1 < argc) {
-      json_file = argv[++i];
-    } else if (a == "--set" && i + 1 < argc) {
-      extra.push_back(parse_override(argv[++i]));
-      set_args += std::string(" --set ") + argv[i];
-    } else if (!a.empty() && a[0] != '-') {
-      scenario = a;
-    } else {
-      std::fprintf(stderr, "bench_rig: unknown argument '%s'\nusage: bench_rig [scenario.yaml] [--runs N] [--json FILE] [--set key=value]...\n",
-                   a.c_str());
-      return 2;
-    }
-  }
+  cli::CommandLine cl(
+      "bench_rig",
+      "The rig's timing figures beside the machine's floors, measured in the same run, in a private\n"
+      "network namespace: real time quiet and loaded (control-loop latency, plant wake-up jitter)\n"
+      "against a bare SCHED_FIFO wake-up and a bare LCM chain, and lockstep against a bare lockstep\n"
+      "master.");
+  cl->footer("Not a test: the figures depend on the machine; the ratios to the floors travel.");
+  cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)")
+      ->type_name("SCENARIO.YAML");
+  cl->add_option("--runs", runs, "lockstep runs (the median is reported)")
+      ->check(CLI::Range(1, 1000))
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--json", json_file, "the figures as JSON to FILE, under fixed keys")->type_name("FILE");
+  cli::each_value(cl->add_option("--set", "override one scenario value in every rig run; repeatable")
+                      ->type_name("KEY.PATH=VALUE")
+                      ->allow_extra_args(false)
+                      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                  [&](const std::string& v) {
+                    extra.push_back(parse_override(v));
+                    set_args += " --set " + v;
+                  });
+  if (const auto done = cl.parse(argc, argv)) return *done;
   try {
     RunOptions ro;
     ro.scenario_file = scenario;

@@ -13,9 +13,12 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/timing_health_t.hpp>
+
+#include "cli/args.h"
 
 namespace nimble::transport {
 
@@ -53,22 +56,28 @@ std::string& realtime_problem_storage() {
 void set_realtime_problem(const std::string& why) { realtime_problem_storage() = why; }
 const std::string& realtime_problem() { return realtime_problem_storage(); }
 
-NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name) {
+std::optional<int> parse_node_options(int argc, char** argv, const std::string& program,
+                                      const std::string& default_name, NodeOptions& options) {
   NodeOptions o;
   o.name = default_name;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--name") o.name = value();
-    else if (a == "--scenario") o.scenario_file = value();
-    else if (a == "--lcm-url") o.lcm_url = value();
-    else throw std::invalid_argument("unknown argument '" + a + "' (expected --name, --scenario, --lcm-url)");
-  }
-  if (o.scenario_file.empty()) throw std::invalid_argument("missing --scenario <resolved scenario.yaml>");
-  return o;
+  cli::CommandLine cl(program, "The rig's " + default_name +
+                                   " process. 'rig run' starts it with the resolved scenario it writes next to\n"
+                                   "the log and the run's LCM URL; it announces HEARTBEAT READY, waits for RUN_CONTROL\n"
+                                   "start and runs until stopped.");
+  cl->footer("Exit code: 0 stopped cleanly, 2 bad command line or configuration, 3 a lockstep participant\n"
+             "did not acknowledge in time, 4 another fatal fault.");
+  cl->add_option("--scenario", o.scenario_file, "the resolved scenario YAML (rig run writes it next to the log)")
+      ->type_name("FILE")
+      ->required();
+  cl->add_option("--name", o.name, "the process name on HEARTBEAT, FAULT and STEP_ACK")
+      ->type_name("NAME")
+      ->capture_default_str();
+  cl->add_option("--lcm-url", o.lcm_url,
+                 "the run's LCM URL (default: LCM's, that is LCM_DEFAULT_URL or udpm://239.255.76.67:7667)")
+      ->type_name("URL");
+  if (const auto done = cl.parse(argc, argv)) return *done == 0 ? kExitOk : kExitConfig;
+  options = std::move(o);
+  return std::nullopt;
 }
 
 ProcessNode::ProcessNode(std::string name, const std::string& lcm_url, std::string config_digest)

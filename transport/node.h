@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -75,9 +76,13 @@ std::string apply_realtime_priority(int priority);
 void set_realtime_problem(const std::string& why);
 const std::string& realtime_problem();
 
-/// Parses `--name N --scenario FILE --lcm-url URL`.
-/// @throws std::invalid_argument naming the bad or missing flag.
-NodeOptions parse_node_options(int argc, char** argv, const std::string& default_name);
+/// Parses the command line of rig process `program` (the executable's name, used in its help and
+/// messages): `--scenario FILE [--name N] [--lcm-url URL]`, `default_name` being --name's default.
+/// Returns the exit code if the process ends here: 0 after --help (printed on stdout), kExitConfig
+/// after a usage error (on stderr: "<program>: <what>", the usage line and a pointer to --help).
+/// Otherwise fills `options` and returns std::nullopt.
+std::optional<int> parse_node_options(int argc, char** argv, const std::string& program,
+                                      const std::string& default_name, NodeOptions& options);
 
 class ProcessNode {
  public:

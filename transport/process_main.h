@@ -1,7 +1,8 @@
 #pragma once
 /// The `main()` every rig process shares: parse the common flags, load the resolved
-/// scenario, install the stop signals, build the node and run it. Errors before the run
-/// (bad flags or configuration) go to stderr with exit code kExitConfig.
+/// scenario, install the stop signals, build the node and run it. --help prints the help on
+/// stdout (exit 0); errors before the run (bad flags or configuration) go to stderr with exit
+/// code kExitConfig.
 
 #include <exception>
 #include <iostream>
@@ -38,7 +39,8 @@ inline std::unique_ptr<ProcessNode> make_process_node(const Scenario& scenario, 
 template <typename Node>
 int process_main(int argc, char** argv, const char* program, const char* default_name) {
   try {
-    const NodeOptions options = parse_node_options(argc, argv, default_name);
+    NodeOptions options;
+    if (const auto done = parse_node_options(argc, argv, program, default_name, options)) return *done;
     const Scenario scenario = load_scenario(options.scenario_file);
     // SCHED_FIFO before the node starts LCM's receive thread, which inherits it; in real time
     // only: a lockstep run has no deadlines and runs as fast as it can, and under SCHED_FIFO it

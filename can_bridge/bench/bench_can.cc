@@ -25,6 +25,7 @@
 #include "can_bridge/can_socket.h"
 #include "can_bridge/codec.h"
 #include "can_bridge/frame_layout.h"
+#include "cli/args.h"
 
 namespace {
 
@@ -171,33 +172,22 @@ int main(int argc, char** argv) {
   std::string iface = "vcan0";
   int count = 2000;
   int warmup = 200;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "bench_can: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--interface") {
-      iface = value();
-    } else if (a == "--count") {
-      count = std::atoi(value().c_str());
-    } else if (a == "--warmup") {
-      warmup = std::atoi(value().c_str());
-    } else if (a == "--help" || a == "-h") {
-      std::printf("usage: bench_can [--interface vcan0] [--count N] [--warmup N]\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "bench_can: unknown argument '%s'\n", a.c_str());
-      return 2;
-    }
-  }
-  if (count < 1 || warmup < 0) {
-    std::fprintf(stderr, "bench_can: --count must be >= 1 and --warmup >= 0\n");
-    return 2;
-  }
+  nimble::cli::CommandLine cl(
+      "bench_can",
+      "Latency of the CAN path on a (virtual) CAN interface, printed as p50 / p99 / max: one frame send ->\n"
+      "receive on a second socket; actuator_command_t -> 2 frames -> decoded command; a round trip through\n"
+      "an echo thread.");
+  cl->footer("Needs a CAN interface; on a kernel without CAN: tools/canvm/canvm run -- build/bin/bench_can");
+  cl->add_option("--interface", iface, "the CAN interface")->type_name("IFACE")->capture_default_str();
+  cl->add_option("--count", count, "samples of each figure")
+      ->check(CLI::Range(1, 10000000))
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--warmup", warmup, "samples sent first and not counted")
+      ->check(CLI::Range(0, 10000000))
+      ->type_name("N")
+      ->capture_default_str();
+  if (const auto done = cl.parse(argc, argv)) return *done;
   try {
     return run(iface, count, warmup);
   } catch (const std::exception& e) {

@@ -65,6 +65,7 @@
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/run_control_t.hpp>
 
+#include "cli/args.h"
 #include "contract/channels.h"
 #include "launcher/netns.h"
 #include "launcher/supervisor.h"
@@ -587,51 +588,32 @@ int run(const Options& opt) {
 
 int main(int argc, char** argv) {
   Options opt;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "bench_can_bridge: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--count") {
-      opt.count = std::atoi(value().c_str());
-    } else if (a == "--warmup") {
-      opt.warmup = std::atoi(value().c_str());
-    } else if (a == "--rate") {
-      opt.rate_hz = std::atof(value().c_str());
-    } else if (a == "--bridge") {
-      opt.bridge = value();
-    } else if (a == "--scenario") {
-      opt.scenario = value();
-    } else if (a == "--candump") {
-      opt.candump = value();
-    } else if (a == "--help" || a == "-h") {
-      std::printf(
-          "usage: bench_can_bridge [--count N] [--rate HZ] [--warmup N] [--bridge PATH] [--scenario FILE]\n"
-          "                        [--candump FILE]\n"
-          "  --count N        commands measured (default 5000)\n"
-          "  --rate HZ        publish rate (default 512, the controller's)\n"
-          "  --warmup N       commands sent first and not counted (default 200)\n"
-          "  --bridge PATH    nimble_can_bridge (default: next to this executable)\n"
-          "  --scenario FILE  base scenario (default rig_configs/hover.yaml)\n"
-          "  --candump FILE   can_rig writes every frame it receives there (candump -L format;\n"
-          "                   the logging adds to can_rig's work)\n"
-          "Needs SocketCAN; on a kernel without CAN: tools/canvm/canvm run -- build/bin/bench_can_bridge\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "bench_can_bridge: unknown argument '%s'\n", a.c_str());
-      return 2;
-    }
-  }
-  if (opt.count < 1 || opt.warmup < 0 || !(opt.rate_hz > 0.0 && opt.rate_hz <= 100000.0) ||
-      static_cast<int64_t>(opt.count) + opt.warmup > 10000000) {
-    std::fprintf(stderr, "bench_can_bridge: need 1 <= --count, 0 <= --warmup, count + warmup <= 10000000, "
-                         "0 < --rate <= 100000\n");
-    return 2;
-  }
+  nimble::cli::CommandLine cl(
+      "bench_can_bridge",
+      "The latency the CAN actuator link adds, through the real bridge processes: commands published on\n"
+      "ACTUATOR_CMD at a fixed rate, received directly and after can_flight -> vcan0 -> can_rig, in a\n"
+      "private network namespace of its own.");
+  cl->footer("Needs SocketCAN; on a kernel without CAN: tools/canvm/canvm run -- build/bin/bench_can_bridge");
+  cl->add_option("--count", opt.count, "commands measured")
+      ->check(CLI::Range(1, 10000000))
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--rate", opt.rate_hz, "publish rate (the controller's)")
+      ->check(nimble::cli::kFinite & CLI::Range(1e-3, 1e5))
+      ->type_name("HZ")
+      ->capture_default_str();
+  cl->add_option("--warmup", opt.warmup, "commands sent first and not counted")
+      ->check(CLI::Range(0, 10000000))
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--bridge", opt.bridge, "nimble_can_bridge (default: next to this executable)")->type_name("PATH");
+  cl->add_option("--scenario", opt.scenario, "base scenario (default rig_configs/hover.yaml)")->type_name("FILE");
+  cl->add_option("--candump", opt.candump,
+                 "can_rig writes every frame it receives there (candump -L format; the logging adds to "
+                 "can_rig's work)")
+      ->type_name("FILE");
+  if (const auto done = cl.parse(argc, argv)) return *done;
+  if (static_cast<int64_t>(opt.count) + opt.warmup > 10000000) return cl.fail("--count + --warmup must be <= 10000000");
   try {
     return run(opt);
   } catch (const std::exception& e) {

@@ -1,5 +1,6 @@
-// One convention for every command of the `rig` tool and every benchmark: --help on stdout with
-// exit 0, --version, and --json - writing JSON (alone) to stdout.
+// One convention for every command of the `rig` tool, every rig process, benchmark and tool:
+// --help on stdout with exit 0, usage errors naming the option with exit 2, --version, and
+// --json - writing JSON (alone) to stdout.
 
 #include <filesystem>
 #include <string>
@@ -18,7 +19,7 @@ namespace {
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 const std::string kBin = std::filesystem::path(RIG_BIN).parent_path().string();
 
-/// Runs a benchmark (they sit next to rig) with `args`.
+/// Runs a benchmark, rig process or tool (they sit next to rig) with `args`.
 RigResult run_bench(const std::string& bench, const std::string& args) {
   return nimble::test::run_program(kBin + "/" + bench, args);
 }
@@ -96,6 +97,64 @@ TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of 
   const RigResult bad = run_bench("bench_ident", "many");
   CHECK(bad.exit_code == 2);
   CHECK(bad.err.find("not a number of repetitions") != std::string::npos);
+}
+
+TEST_CASE("cli: every rig process answers --help on stdout with exit 0 and names a bad option", "[cli]") {
+  for (const std::string process :
+       {"nimble_plant", "nimble_controller", "nimble_estimator", "nimble_mocap", "nimble_can_bridge"}) {
+    INFO(process);
+    const RigResult help = run_bench(process, "--help");
+    CHECK(help.exit_code == 0);
+    CHECK(help.out.find("usage: " + process) != std::string::npos);
+    for (const std::string option : {"--scenario", "--name", "--lcm-url"}) {
+      CHECK(help.out.find(option) != std::string::npos);
+    }
+    CHECK(help.err.empty());
+
+    const RigResult bogus = run_bench(process, "--scenario " + kConfigs + "hover.yaml --bogus");
+    CHECK(bogus.exit_code == 2);
+    CHECK(bogus.err.find(process + ": ") == 0);
+    CHECK(bogus.err.find("--bogus") != std::string::npos);
+    CHECK(bogus.err.find("'" + process + " --help' describes the options") != std::string::npos);
+    CHECK(bogus.out.empty());
+  }
+  const RigResult missing = run_bench("nimble_plant", "--name plant");
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err.find("--scenario is required") != std::string::npos);
+  const RigResult no_value = run_bench("nimble_plant", "--scenario");
+  CHECK(no_value.exit_code == 2);
+  CHECK(no_value.err.find("--scenario") != std::string::npos);
+}
+
+TEST_CASE("cli: the calibration tools and bus_flood answer --help and check their values before running", "[cli]") {
+  for (const std::string tool : {"calibrate_pitch_gains", "calibrate_roll_map", "bus_flood"}) {
+    INFO(tool);
+    const RigResult r = run_bench(tool, "--help");
+    CHECK(r.exit_code == 0);
+    CHECK(r.out.find("usage: " + tool) != std::string::npos);
+    CHECK(r.err.empty());
+  }
+  struct Case {
+    std::string tool, args, names;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"calibrate_pitch_gains", "--kp 0.3:0.1:0.01", "--kp: range must be FROM:TO:STEP"},
+           {"calibrate_pitch_gains", "--check 0.1", "--check: '0.1' is not KP,KD"},
+           {"calibrate_pitch_gains", "--delay-steps 101", "--delay-steps"},
+           {"calibrate_pitch_gains", "--map nan", "--map: 'nan' is not a finite number"},
+           {"calibrate_roll_map", "--maps 10,x", "--maps: not a number: 'x'"},
+           {"calibrate_roll_map", "--bogus", "--bogus"},
+           {"calibrate_roll_map", "--gain-set", "--gain-set"},
+           {"bus_flood", "--rate 0", "--rate"},
+           {"bus_flood", "--seed -1", "--seed: '-1' is not a whole number >= 0"},
+       }) {
+    INFO(c.tool << " " << c.args);
+    const RigResult r = run_bench(c.tool, c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find(c.tool + ": ") == 0);
+    CHECK(r.err.find(c.names) != std::string::npos);
+    CHECK(r.out.empty());
+  }
 }
 
 TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, export, model)", "[cli]") {

@@ -35,6 +35,7 @@
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
+#include "cli/args.h"
 #include "contract/channels.h"
 
 namespace {
@@ -68,29 +69,33 @@ int main(int argc, char** argv) {
   long burst = 0;
   std::size_t max_bytes = 600;
   unsigned long seed = 1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto next = [&]() -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "bus_flood: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--url") url = next();
-    else if (a == "--rate") rate = std::atof(next());
-    else if (a == "--seconds") seconds = std::atof(next());
-    else if (a == "--burst") burst = std::atol(next());
-    else if (a == "--seed") seed = std::strtoul(next(), nullptr, 10);
-    else if (a == "--max-bytes") max_bytes = std::strtoul(next(), nullptr, 10);
-    else if (a == "--help" || a == "-h") {
-      std::printf("usage: bus_flood [--url URL] [--rate HZ] [--seconds S] [--burst N] [--seed N] [--max-bytes N]\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "bus_flood: unknown argument '%s'\n", a.c_str());
-      return 2;
-    }
-  }
+  nimble::cli::CommandLine cl(
+      "bus_flood",
+      "Publishes garbage on the rig's channels through liblcm, to test that a run survives it: each\n"
+      "message goes to one of the rig's channels drawn at random, with 0 to --max-bytes random bytes,\n"
+      "half of them behind the channel type's real fingerprint. Prints how many it sent.");
+  cl->add_option("--url", url, "the LCM URL to publish on")->type_name("URL")->capture_default_str();
+  cl->add_option("--rate", rate, "messages per second (without --burst)")
+      ->check(nimble::cli::kFinite & CLI::Range(1e-3, 1e9))
+      ->type_name("HZ")
+      ->capture_default_str();
+  cl->add_option("--seconds", seconds, "how long it floods")
+      ->check(nimble::cli::kFinite & CLI::Range(0.0, 1e6))
+      ->type_name("S")
+      ->capture_default_str();
+  cl->add_option("--burst", burst, "N messages as fast as it can once per second instead of --rate (0: off)")
+      ->check(nimble::cli::kWholeNumber)
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--seed", seed, "the seed of the random choices")
+      ->check(nimble::cli::kWholeNumber)
+      ->type_name("N")
+      ->capture_default_str();
+  cl->add_option("--max-bytes", max_bytes, "the longest payload (LCM fragments those over about 64 KB)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 26))
+      ->type_name("N")
+      ->capture_default_str();
+  if (const auto done = cl.parse(argc, argv)) return *done;
   namespace ch = nimble::contract::channels;
   struct Target {
     std::string channel;
