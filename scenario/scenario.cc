@@ -92,8 +92,10 @@ YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::st
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
     if (out["base"]) {
+      const std::string base_key = path.empty() ? "base" : path + ".base";
+      if (!out["base"].IsScalar()) throw ConfigError(file, base_key, "", "must be the name of a base file");
       const std::string base_file = out["base"].as<std::string>();
-      YAML::Node base = load_yaml(base_file, path.empty() ? "base" : path + ".base");
+      YAML::Node base = load_yaml(base_file, base_key);
       const std::string base_mount = join_path(mount, path);
       record_origins(base, base_file, base_mount, false, origins);
       absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);

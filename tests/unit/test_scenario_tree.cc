@@ -100,3 +100,23 @@ TEST_CASE("scenario tree: every key's origin is recorded (file and line, base fi
   CHECK(nimble::locate_error(nimble::ConfigError("model.yaml", "Lp", "", "bad", 7), scenario, origins).file() ==
         "model.yaml");
 }
+
+TEST_CASE("scenario tree: a base that is not a file name (a mapping, a list) is a ConfigError naming its key",
+          "[scenario]") {
+  // Found by fuzz_scenario_yaml: a mapping under plant.base escaped the loader as a yaml-cpp
+  // conversion error instead of a ConfigError.
+  const fs::path dir = fs::temp_directory_path() / ("rig_scenario_base_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  for (const std::string& base : {std::string("\n    enabled: true\n"), std::string(" [a.yaml, b.yaml]\n")}) {
+    INFO(base);
+    std::ofstream(dir / "scenario.yaml") << "name: t\nplant:\n  base:" << base << "  rate_hz: 1000\n";
+    try {
+      nimble::load_scenario_tree((dir / "scenario.yaml").string());
+      FAIL("a base that is not a file name was accepted");
+    } catch (const nimble::ConfigError& e) {
+      CHECK(std::string(e.what()).find("plant.base") != std::string::npos);
+      CHECK(std::string(e.what()).find("must be the name of a base file") != std::string::npos);
+    }
+  }
+  fs::remove_all(dir);
+}
