@@ -90,6 +90,9 @@ CommandLine::CommandLine(const std::string& program, const std::string& descript
   formatter_->label("REQUIRED", "required");
   formatter_->column_width(34);
   app_.formatter(formatter_);
+  // An option given twice takes its last value, as the shell convention goes (a script may append
+  // `--json F` to a command line that has one); list options (--set) say TakeAll themselves.
+  app_.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
 }
 
 CLI::Option* CommandLine::add_json(std::string& target, const std::string& what) {

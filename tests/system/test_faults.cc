@@ -88,6 +88,17 @@ double failsafe_time_s(const std::string& log_path) {
 
 std::string dir_of(const std::string& tag) { return nimble::test::scratch_path("faults_" + tag); }
 
+/// The second run `b` (tag `tag_b`) of the faulted run tagged `tag_a`, same seed: the fault's
+/// random choices are drawn from the seed at the publisher, so it lost the same `drops` messages
+/// on `channel` and flew byte-identical TRUTH.
+void check_same_again(const std::string& tag_a, const RunResult& b, const std::string& tag_b, const std::string& channel,
+                      int drops) {
+  REQUIRE(b.summary);
+  CHECK(b.summary["channels"][channel]["drops"].as<int>() == drops);
+  CHECK(nimble::test::differing(nimble::test::truth_payloads(dir_of(tag_a) + "/run.lcmlog"),
+                                nimble::test::truth_payloads(dir_of(tag_b) + "/run.lcmlog")) == 0);
+}
+
 }  // namespace
 
 TEST_CASE("off: ESTIMATE stops at 1 s, the controller takes its failsafe 50 ms later", "[fault]") {
@@ -220,12 +231,7 @@ TEST_CASE("intermittent: ACTUATOR_CMD lost 30 % of the time shows as drops, the 
   CHECK(drops > 154 - 50);
   CHECK(drops < 154 + 50);
   CHECK(a.summary["controlled"].as<bool>());
-  // Drawn from the run's seed at the publisher: a second run loses the same commands.
-  const RunResult b = fly("intermittent_b", faults);
-  REQUIRE(b.summary);
-  CHECK(b.summary["channels"][ch::kActuatorCommand]["drops"].as<int>() == drops);
-  CHECK(nimble::test::differing(nimble::test::truth_payloads(dir_of("intermittent_a") + "/run.lcmlog"),
-                                nimble::test::truth_payloads(dir_of("intermittent_b") + "/run.lcmlog")) == 0);
+  check_same_again("intermittent_a", fly("intermittent_b", faults), "intermittent_b", ch::kActuatorCommand, drops);
 }
 
 TEST_CASE("faults section: a bad entry is refused before anything starts, named with its key", "[fault]") {
@@ -373,11 +379,7 @@ TEST_CASE("CAN loss: frames lost with p = 0.2 lose whole commands as drops, the 
   CHECK(drops < 184 + 55);
   CHECK(a.summary["channels"][ch::kActuatorCommand]["drops"].as<int>() == 0);  // the loss is the link's
   CHECK(a.summary["controlled"].as<bool>());
-  const RunResult b = fly_can("can_loss_b", faults);
-  REQUIRE(b.summary);
-  CHECK(b.summary["channels"][ch::kActuatorCommandCan]["drops"].as<int>() == drops);
-  CHECK(nimble::test::differing(nimble::test::truth_payloads(dir_of("can_loss_a") + "/run.lcmlog"),
-                                nimble::test::truth_payloads(dir_of("can_loss_b") + "/run.lcmlog")) == 0);
+  check_same_again("can_loss_a", fly_can("can_loss_b", faults), "can_loss_b", ch::kActuatorCommandCan, drops);
 }
 
 TEST_CASE("CAN corrupt: a flipped bit fails the frame's CRC, both sides name it MESSAGE_MALFORMED", "[fault]") {

@@ -93,7 +93,7 @@ TEST_CASE("rig sweep: bad input stops it before any run, naming the problem", "[
   CHECK(s.output.find("--seeds needs A-B") != std::string::npos);
   s = rig_sweep(d, kScenario);
   CHECK(s.exit_code == 2);
-  CHECK(s.output.find("missing --seeds") != std::string::npos);
+  CHECK(s.output.find("--seeds is required") != std::string::npos);
   s = rig_sweep(d, kScenario + " --seeds 1-3 --vary plant.rate_hz=1000,-3");
   CHECK(s.exit_code == 2);
   CHECK(s.output.find("plant.rate_hz") != std::string::npos);
