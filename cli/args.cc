@@ -10,16 +10,38 @@
 
 namespace nimble::cli {
 
+double finite_number(const std::string& text) {
+  std::size_t used = 0;
+  double x = NAN;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(x)) {
+    throw std::invalid_argument("'" + text + "' is not a finite number");
+  }
+  return x;
+}
+
+std::vector<double> number_list(const std::string& text, char separator) {
+  std::vector<double> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find(separator, start);
+    out.push_back(finite_number(text.substr(start, end == std::string::npos ? std::string::npos : end - start)));
+    if (end == std::string::npos) return out;
+    start = end + 1;
+  }
+}
+
 const CLI::Validator kFinite(
     [](std::string& text) -> std::string {
-      std::size_t used = 0;
-      double x = NAN;
       try {
-        x = std::stod(text, &used);
-      } catch (const std::exception&) {
-        used = 0;
+        finite_number(text);
+      } catch (const std::invalid_argument& e) {
+        return e.what();
       }
-      if (used == 0 || used != text.size() || !std::isfinite(x)) return "'" + text + "' is not a finite number";
       return {};
     },
     "", "FINITE");
@@ -99,6 +121,12 @@ CLI::Option* CommandLine::add_json(std::string& target, const std::string& what)
   return app_.add_option("--json", target, what + " as JSON to FILE; '-' writes it alone to stdout (the text then "
                                             "goes to stderr or is left out)")
       ->type_name("FILE|-");
+}
+
+CLI::Option* CommandLine::add_plots(std::string& dir, const std::string& files) {
+  return app_.add_option("--plots", dir, "PNG plots via gnuplot (Debian package gnuplot-nox)" +
+                                             (files.empty() ? std::string() : ": " + files))
+      ->type_name("DIR");
 }
 
 std::optional<int> CommandLine::parse(const std::vector<std::string>& args) {

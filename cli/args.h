@@ -34,6 +34,9 @@ class CommandLine {
   /// Adds `--json FILE|-` writing to `target`.
   CLI::Option* add_json(std::string& target, const std::string& what);
 
+  /// Adds `--plots DIR`, PNG plots drawn by gnuplot into `dir`; `files` names them.
+  CLI::Option* add_plots(std::string& dir, const std::string& files);
+
   /// Parses `args` (those after the program's name). Returns the exit code if the program
   /// ends here (0 after --help, kExitUsage after a usage error), else std::nullopt.
   std::optional<int> parse(const std::vector<std::string>& args);
@@ -48,6 +51,14 @@ class CommandLine {
   CLI::App app_;
   std::shared_ptr<CLI::Formatter> formatter_;
 };
+
+/// The finite number written in `text` (all of it).
+/// @throws std::invalid_argument "'<text>' is not a finite number".
+double finite_number(const std::string& text);
+
+/// The finite numbers of a list such as "1,2.5,3" (`separator` between items).
+/// @throws std::invalid_argument naming the first item that is not a finite number.
+std::vector<double> number_list(const std::string& text, char separator = ',');
 
 /// Validator: a finite number (CLI11's own number checks let "nan" and "inf" through).
 extern const CLI::Validator kFinite;

@@ -140,11 +140,9 @@ int run_identify_command(const std::vector<std::string>& args) {
              [&opt](const std::string& v) { opt.segments.manoeuvre.push_back(time_range(v)); });
   cl.add_json(json, "the report");
   cl->add_option("--model-out", model_out, "write the identified model as a model YAML file")->type_name("FILE");
-  cl->add_option("--plots", plots, "PNG plots via gnuplot (Debian package gnuplot-nox)")->type_name("DIR");
+  cl.add_plots(plots, "");
   if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
-
-  if (vehicle_file.empty())  if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
@@ -288,7 +286,7 @@ int run_validate_command(const std::vector<std::string>& args) {
       ->capture_default_str()
       ->type_name("N");
   cl.add_json(json, "the report");
-  cl->add_option("--plots", plots, "PNG plots via gnuplot (Debian package gnuplot-nox)")->type_name("DIR");
+  cl.add_plots(plots, "");
   cl->add_flag("--closed-loop", closed_loop,
                "closed-loop validation instead (thesis Tables 9-11): the model flown by a copy of the attitude "
                "controller and the flap actuator on the data's phi_sp and delta_t, from the measured initial "

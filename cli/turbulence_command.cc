@@ -416,10 +416,7 @@ int run_turbulence_command(const std::vector<std::string>& args) {
       ->check(kPowerOfTwo)
       ->type_name("M");
   cl.add_json(json, "the report");
-  cl->add_option("--plots", plots,
-                 "PNG plots via gnuplot (Debian package gnuplot-nox): psd_matrix.png, time_histories.png, "
-                 "pole_map.png")
-      ->type_name("DIR");
+  cl.add_plots(plots, "psd_matrix.png, time_histories.png, pole_map.png");
   if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();
 

@@ -322,10 +322,9 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
       ->check(kPowerOfTwo)
       ->type_name("M");
   cl.add_json(json, "the report");
-  cl->add_option("--plots", plots,
-                 "PNG plots via gnuplot (Debian package gnuplot-nox): response_psd.png (flight Welch, model "
-                 "expectation and band, analytical PSD) and response_ratio.png (flight / model with the band)")
-      ->type_name("DIR");
+  cl.add_plots(plots,
+               "response_psd.png (flight Welch, model expectation and band, analytical PSD) and "
+               "response_ratio.png (flight / model with the band)");
   if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();
 

@@ -37,30 +37,10 @@ using namespace nimble;
 
 namespace {
 
-double parse_number(const std::string& item) {
-  std::size_t used = 0;
-  double x = NAN;
-  try {
-    x = std::stod(item, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
-  return x;
-}
-
-std::vector<double> split(const std::string& text, char sep) {
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, sep)) out.push_back(parse_number(item));
-  return out;
-}
-
 /// "A,B,C" or "FROM:TO:STEP".
 std::vector<double> parse_grid(const std::string& text) {
   if (text.find(':') != std::string::npos) {
-    const std::vector<double> r = split(text, ':');
+    const std::vector<double> r = cli::number_list(text, ':');
     if (r.size() != 3 || !(r[2] > 0.0) || r[1] < r[0]) {
       throw std::invalid_argument("range must be FROM:TO:STEP with STEP > 0 and TO >= FROM: '" + text + "'");
     }
@@ -69,7 +49,7 @@ std::vector<double> parse_grid(const std::string& text) {
     for (long i = 0; i <= n; ++i) out.push_back(r[0] + static_cast<double>(i) * r[2]);
     return out;
   }
-  std::vector<double> out = split(text, ',');
+  std::vector<double> out = cli::number_list(text, ',');
   if (out.empty()) throw std::invalid_argument("empty list");
   return out;
 }
@@ -146,7 +126,7 @@ int main(int argc, char** argv) {
                       ->allow_extra_args(false)
                       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
                   [&checks](const std::string& v) {
-                    const std::vector<double> g = split(v, ',');
+                    const std::vector<double> g = cli::number_list(v, ',');
                     if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
                     checks.push_back({g[0], g[1]});
                   });

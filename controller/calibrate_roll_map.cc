@@ -33,25 +33,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::vector<double> parse_list(const std::string& text) {
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double x = NAN;
-    try {
-      x = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(x)) throw std::invalid_argument("not a number: '" + item + "'");
-    out.push_back(x);
-  }
-  if (out.empty()) throw std::invalid_argument("empty list");
-  return out;
-}
-
 /// Sets every doublet/112 amplitude on the roll axis to `amplitude_rad` and
 /// recomputes an automatic throttle factor.
 Manoeuvre with_amplitude(Manoeuvre m, double amplitude_rad) {
@@ -107,10 +88,10 @@ int main(int argc, char** argv) {
   cl->add_option("--gain-set", gain_set, "the roll gain set of the controller")->type_name("NAME")->capture_default_str();
   cli::each_value(cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")
                       ->type_name("A,B,.."),
-                  [&maps](const std::string& v) { maps = parse_list(v); });
+                  [&maps](const std::string& v) { maps = cli::number_list(v); });
   cli::each_value(cl->add_option("--amplitudes-deg", "the roll doublet amplitudes (default: the manoeuvre's own)")
                       ->type_name("A,B,.."),
-                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = parse_list(v); });
+                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = cli::number_list(v); });
   cl->add_option("--tail-s", options.tail_s, "hover simulated after the manoeuvre")
       ->check(cli::kFinite & CLI::NonNegativeNumber)
       ->type_name("S")

@@ -142,7 +142,7 @@ TEST_CASE("cli: the calibration tools and bus_flood answer --help and check thei
            {"calibrate_pitch_gains", "--check 0.1", "--check: '0.1' is not KP,KD"},
            {"calibrate_pitch_gains", "--delay-steps 101", "--delay-steps"},
            {"calibrate_pitch_gains", "--map nan", "--map: 'nan' is not a finite number"},
-           {"calibrate_roll_map", "--maps 10,x", "--maps: not a number: 'x'"},
+           {"calibrate_roll_map", "--maps 10,x", "--maps: 'x' is not a finite number"},
            {"calibrate_roll_map", "--bogus", "--bogus"},
            {"calibrate_roll_map", "--gain-set", "--gain-set"},
            {"bus_flood", "--rate 0", "--rate"},
