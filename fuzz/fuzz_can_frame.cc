@@ -12,6 +12,7 @@
 // completed command re-encodes (CommandEncoder) to frames that a fresh decoder takes back to the
 // same values; to_raw() of any value lies inside the signal's raw range.
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -41,12 +42,20 @@ bool in_signal_range(const SignalSpec& s, double value) {
   return std::isfinite(value) && value >= s.min - slack && value <= s.max + slack;
 }
 
+/// The five actuator values of a decoded command or feedback (`what`) inside their signals'
+/// ranges: left and right flapping frequency, throttle, dihedral, wing root.
+template <typename Message>
+void check_in_range(const Message& m, const std::array<const SignalSpec*, 5>& signals, const std::string& what) {
+  const double values[] = {m.flap_freq_left_radps, m.flap_freq_right_radps, m.throttle_pct, m.dihedral_rad,
+                           m.wing_root_rad};
+  const char* names[] = {"left flapping frequency", "right flapping frequency", "throttle", "dihedral", "wing root"};
+  for (std::size_t i = 0; i < signals.size(); ++i) {
+    require(in_signal_range(*signals[i], values[i]), "decoded " + what + " " + names[i] + " out of range");
+  }
+}
+
 void check_command(const nimble::actuator_command_t& c) {
-  require(in_signal_range(kCmdFlapFreqLeft, c.flap_freq_left_radps), "decoded left flapping frequency out of range");
-  require(in_signal_range(kCmdFlapFreqRight, c.flap_freq_right_radps), "decoded right flapping frequency out of range");
-  require(in_signal_range(kCmdThrottle, c.throttle_pct), "decoded throttle out of range");
-  require(in_signal_range(kCmdDihedral, c.dihedral_rad), "decoded dihedral out of range");
-  require(in_signal_range(kCmdWingRoot, c.wing_root_rad), "decoded wing root out of range");
+  check_in_range(c, {&kCmdFlapFreqLeft, &kCmdFlapFreqRight, &kCmdThrottle, &kCmdDihedral, &kCmdWingRoot}, "command");
   require(c.mode == nimble::actuator_command_t::MODE_LEFT_RIGHT || c.mode == nimble::actuator_command_t::MODE_DELTA_F,
           "decoded mode " + std::to_string(c.mode) + " is not a MODE_*");
   require(c.seq >= 0, "decoded seq is negative");
@@ -72,11 +81,7 @@ void check_command(const nimble::actuator_command_t& c) {
 }
 
 void check_feedback(const nimble::actuator_feedback_t& fb) {
-  require(in_signal_range(kFbFlapFreqLeft, fb.flap_freq_left_radps), "decoded feedback left frequency out of range");
-  require(in_signal_range(kFbFlapFreqRight, fb.flap_freq_right_radps), "decoded feedback right frequency out of range");
-  require(in_signal_range(kFbThrottle, fb.throttle_pct), "decoded feedback throttle out of range");
-  require(in_signal_range(kFbDihedral, fb.dihedral_rad), "decoded feedback dihedral out of range");
-  require(in_signal_range(kFbWingRoot, fb.wing_root_rad), "decoded feedback wing root out of range");
+  check_in_range(fb, {&kFbFlapFreqLeft, &kFbFlapFreqRight, &kFbThrottle, &kFbDihedral, &kFbWingRoot}, "feedback");
   require((fb.cmd_seq == -1) == (fb.cmd_age_us == -1), "feedback: cmd_seq and cmd_age_us disagree on 'no command'");
   require(fb.cmd_age_us >= -1 && fb.cmd_age_us <= kCmdAgeMax_us, "decoded command age out of range");
 }
