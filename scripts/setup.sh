@@ -21,7 +21,7 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # the Python log reader (python/nimble_rig);
 # Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests;
 # nlohmann-json (JSON output and reading run reports), fmt (the run summary's formatting) and
-# CLI11 (the rig tool's command lines).
+# CLI11 (the command lines of the rig tool, its processes, benchmarks and tools).
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
