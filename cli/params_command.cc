@@ -13,6 +13,7 @@
 #include "scenario/scenario.h"
 #include "can_bridge/bridge_config.h"
 #include "controller/attitude_controller.h"
+#include "controller/pilot.h"
 #include "estimator/ekf.h"
 #include "sensors/sensor_config.h"
 
@@ -47,6 +48,7 @@ const std::vector<Section>& sections() {
                 rows(params_markdown(plant::thrust_params(), ThrustCurve{}, "plant.thrust.")) +
                 rows(params_markdown(plant::initial_params(), plant::InitialState{}, "plant.initial."));
        }},
+      {"pilot", [] { return params_markdown(pilot_params(), PilotConfig{}, "pilot."); }},
       {"can_bridge", [] { return params_markdown(can::can_bridge_params(), can::CanBridgeConfig{}, "can_bridge."); }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},
       {"summary", [] { return params_markdown(launcher::judge_params(), launcher::JudgeConfig{}, "summary."); }},

@@ -18,7 +18,7 @@ const std::vector<ChannelSpec>& channel_table() {
       {kImu, "imu_sample_t", "`sensing.imu.sample_rate_hz` (default 512 Hz)", {"plant (emulated onboard IMU)"},
        {"estimator", kIdent}},
       {kMocapPose, "mocap_pose_t", "`sensing.mocap.frame_rate_hz` (default 200 Hz)", {"mocap"},
-       {"estimator", "launcher (lateness from `latency_us`)"}},
+       {"estimator", "controller (`pilot.enabled`: the pilot's height)", "launcher (lateness from `latency_us`)"}},
       {kAttitudeSetpoint, "attitude_setpoint_t", "`controller.rate_hz` (default 512 Hz)",
        {"controller (manoeuvre player)"}, {kIdent}},
       {kEstimate, "estimator_state_t", "one per IMU sample", {"estimator"},

@@ -8,6 +8,7 @@
 #include <nimble/actuator_command_t.hpp>
 #include <nimble/attitude_setpoint_t.hpp>
 #include <nimble/controller_status_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
 
 namespace nimble {
 namespace {
@@ -30,8 +31,23 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
   controller_ = std::make_unique<AttitudeController>(config_);
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);
 
+  ConfigMap pilot_section = scenario.section("pilot");
+  const PilotConfig pilot = pilot_config_from(pilot_section);
+  if (pilot.enabled) {
+    pilot_ = std::make_unique<AltitudePilot>(
+        pilot, throttle_accel_per_pct(config_.f_trim_radps, config_.throttle_to_freq_radps_per_pct));
+  }
+
   const ProcessRunOptions run = process_run_options(scenario);
   node_ = transport::make_process_node(scenario, options);
+  if (pilot_) {
+    // The pilot watches the vehicle's height (up = -down) as motion capture measures it; heights
+    // are used reaction_delay_s after their exposure, long after they were published.
+    node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& pose) {
+      if (!pose.tracking_valid || !transport::plausible_sim_utime(pose.utime)) return;
+      pilot_->observe(static_cast<double>(pose.utime) * 1e-6, -pose.position_m[2]);
+    });
+  }
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {
@@ -109,7 +125,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   in.q_radps = input_.q_radps;
   in.roll_sp_rad = sp.roll_sp_rad;
   in.pitch_sp_rad = sp.pitch_sp_rad;
-  in.throttle_pct = sp.throttle_pct;
+  in.throttle_pct = sp.throttle_pct + (pilot_ ? pilot_->correction_pct(t_s) : 0.0);
   in.throttle_factor = sp.throttle_factor;
   const int64_t input_age_us = have_input_ ? utime - input_.measured_utime : -1;
   if (!failsafe_) {
@@ -146,14 +162,15 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   node_->bus().publish(kActuatorCommand, cmd);
 
   // Set-point and status records go out after the command and the step's acknowledgement.
-  node_->defer([this, sp, out, utime, input_age_us] {
+  const double throttle_sp_pct = in.throttle_pct;
+  node_->defer([this, sp, out, utime, input_age_us, throttle_sp_pct] {
     attitude_setpoint_t asp;
     asp.utime = utime;
     asp.seq = sp_seq_++;
     asp.roll_sp_rad = sp.roll_sp_rad;
     asp.pitch_sp_rad = sp.pitch_sp_rad;
     asp.yaw_rate_sp_radps = 0.0;
-    asp.throttle_pct = sp.throttle_pct;
+    asp.throttle_pct = throttle_sp_pct;
     asp.throttle_factor = sp.throttle_factor;
     asp.manoeuvre = sp.manoeuvre;
     asp.segment_index = sp.segment_index;

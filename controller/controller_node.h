@@ -4,6 +4,7 @@
 /// Subscribes:
 ///   TRUTH          truth_state_t        plant rate   attitude and rates (run.controller_input: truth)
 ///   ESTIMATE       estimator_state_t    512 Hz       attitude and corrected rates (run.controller_input: estimate)
+///   MOCAP_POSE     mocap_pose_t         200 Hz       the pilot's height (pilot.enabled; controller/pilot.h)
 ///   RUN_CONTROL, RIG_CLOCK                            (ProcessNode; lockstep participant)
 /// Publishes, each at controller.rate_hz (default 512 Hz):
 ///   ATTITUDE_SP        attitude_setpoint_t   the manoeuvre player's set-point
@@ -17,6 +18,9 @@
 /// controller raises CODE_INPUT_STALE and CODE_FAILSAFE and from then on, until the run ends,
 /// commands zero roll and pitch (wings neutral, no differential flapping) at
 /// failsafe.throttle_pct, a slow descent. CONTROLLER_STATUS carries `failsafe`.
+///
+/// With the `pilot` section enabled, the pilot's throttle correction (controller/pilot.h) is added
+/// to the manoeuvre's throttle set-point before THRF; ATTITUDE_SP carries the sum.
 
 #include <memory>
 
@@ -25,6 +29,7 @@
 
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
+#include "controller/pilot.h"
 #include "scenario/scenario.h"
 #include "transport/latched_input.h"
 #include "transport/node.h"
@@ -45,6 +50,8 @@ class ControllerNode {
   ControllerConfig config_;
   std::unique_ptr<AttitudeController> controller_;
   std::unique_ptr<ManoeuvrePlayer> player_;
+  /// The pilot on the throttle (pilot.enabled), fed the motion-capture height.
+  std::unique_ptr<AltitudePilot> pilot_;
   std::unique_ptr<transport::ProcessNode> node_;
   /// The state the next cycle uses (from TRUTH or ESTIMATE).
   struct Input {

@@ -195,7 +195,9 @@ Manoeuvre manoeuvre_from_config(ConfigMap& map) {
   double factor = 1.0;
   if (map.has("throttle_factor")) {
     const YAML::Node node = map.get_node("throttle_factor");
-    if (!(node.IsScalar() && node.Scalar() == "auto")) {
+    if (node.IsScalar() && node.Scalar() == "setpoint") {
+      m.throttle_factor_from_setpoint = true;
+    } else if (!(node.IsScalar() && node.Scalar() == "auto")) {
       factor = map.get_double("throttle_factor", kThrottleFactor);
       factor_auto = false;
     }
@@ -273,7 +275,9 @@ Setpoint ManoeuvrePlayer::at(double t_s) const {
   const Segment& s = manoeuvre_.segments[index];
   s.attitude_at(t_s - starts_[index], sp.roll_sp_rad, sp.pitch_sp_rad);
   sp.throttle_pct = std::clamp(trim_throttle_pct_ + s.delta_throttle_pct, 0.0, 100.0);
-  sp.throttle_factor = s.apply_throttle_factor ? manoeuvre_.throttle_factor : 1.0;
+  sp.throttle_factor = !s.apply_throttle_factor ? 1.0
+                       : manoeuvre_.throttle_factor_from_setpoint ? throttle_factor_for(std::fabs(sp.roll_sp_rad))
+                                                                   : manoeuvre_.throttle_factor;
   sp.delta_throttle_pct = sp.throttle_pct * sp.throttle_factor - trim_throttle_pct_;
   sp.segment_index = static_cast<int>(index);
   sp.segment_name = s.name;

@@ -69,7 +69,10 @@ struct Manoeuvre {
   std::string file;               ///< file it was loaded from (empty if built in code)
   std::string gain_set = "fast";  ///< default roll gain set of the segments
   bool throttle_factor_auto = true;  ///< THRF = 1/cos(max |roll set-point|)
-  double throttle_factor = 1.0;   ///< THRF applied in segments that apply it [-], >= 1
+  /// `throttle_factor: setpoint`: THRF follows the roll set-point, 1/cos(phi_sp(t)), in the
+  /// segments that apply it (thesis Eq 7.1 read with the set-point of the moment, Figs 7.1-7.4).
+  bool throttle_factor_from_setpoint = false;
+  double throttle_factor = 1.0;   ///< THRF applied in segments that apply it [-], >= 1 (the largest, with setpoint)
   std::vector<Segment> segments;  ///< flown in order, from t = 0
 
   /// Sum of the segment durations [s].

@@ -168,7 +168,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
       f.min_v = f.max_v = v;
       f.min_phi = f.max_phi = phi;
       f.min_df = f.max_df = t.delta_f_radps;
+      start_down_m_ = t.position_ned_m[2];
+      f.min_w = f.max_w = f.initial_w = t.velocity_body_mps[2];
     }
+    const double height = start_down_m_ - t.position_ned_m[2], w = t.velocity_body_mps[2];
+    if (!std::isfinite(height) || !std::isfinite(w)) f.finite = false;
+    f.min_height_m = std::min(f.min_height_m, height); f.max_height_m = std::max(f.max_height_m, height);
+    f.final_height_m = height;
+    f.min_w = std::min(f.min_w, w); f.max_w = std::max(f.max_w, w);
     ++f.samples;
     f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
     f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));

@@ -3,6 +3,8 @@
 /// run summary: per-channel counts, rates, drops and lateness, loop timing reported by
 /// the processes, faults, and the flight itself (extremes, ranges, final state).
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -69,7 +71,12 @@ struct FlightSummary {
   double min_p = 0, max_p = 0, min_v = 0, max_v = 0, min_phi = 0, max_phi = 0;
   double min_df = 0, max_df = 0;
   double final_p = 0.0, final_v = 0.0, final_phi = 0.0;
+  /// Vertical channel: height relative to the first TRUTH (up positive) [m], body w [m/s].
+  double min_height_m = 0, max_height_m = 0, final_height_m = 0;
+  double min_w = 0, max_w = 0, initial_w = 0;
   double last_sim_time_s = 0.0;
+  /// Largest |height change| from the start [m].
+  double max_abs_height_change_m() const { return std::max(std::fabs(min_height_m), std::fabs(max_height_m)); }
   bool finite = true;
 };
 
@@ -154,6 +161,7 @@ class RunMonitor {
     double phi, p, v;
   };
   std::map<int64_t, TruthPoint> recent_truth_;  // utime -> truth, the last second
+  double start_down_m_ = 0.0;  ///< the first TRUTH's down position [m]
   double est_phi2_ = 0, est_p2_ = 0, est_v2_ = 0;
   EstimatorSummary est_;
 };

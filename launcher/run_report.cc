@@ -67,6 +67,8 @@ void write_report_text(std::ostream& out, const RunReport& r) {
              f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
   fmt::print(out, "final      p {:.3f} rad/s, v {:.3f} m/s, phi {:.2f} deg\n", f.final_p, f.final_v,
              f.final_phi * 180 / M_PI);
+  fmt::print(out, "vertical   height {:+.2f} .. {:+.2f} m from the start (final {:+.2f} m), w {:.2f} .. {:.2f} m/s (initial {:.2f})\n",
+             f.min_height_m, f.max_height_m, f.final_height_m, f.min_w, f.max_w, f.initial_w);
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
     fmt::print(out,
@@ -179,6 +181,11 @@ std::string report_json(const RunReport& r) {
   w.key("delta_f").value(f.max_df - f.min_df);
   w.end_object();
   w.key("final").begin_object().key("p").value(f.final_p).key("v").value(f.final_v).key("phi").value(f.final_phi).end_object();
+  w.key("vertical").begin_object();
+  w.key("height_min_m").value(f.min_height_m).key("height_max_m").value(f.max_height_m);
+  w.key("height_final_m").value(f.final_height_m).key("max_abs_height_change_m").value(f.max_abs_height_change_m());
+  w.key("w_min_mps").value(f.min_w).key("w_max_mps").value(f.max_w).key("w_initial_mps").value(f.initial_w);
+  w.end_object();
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
     w.key("estimator").begin_object();

@@ -7,6 +7,7 @@
 #include "can_bridge/bridge_config.h"
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
+#include "controller/pilot.h"
 #include "estimator/sensing_config.h"
 #include "plant/plant_node.h"
 
@@ -44,6 +45,12 @@ void validate_process_sections(const Scenario& s) {
   if (s.actuator_link == "can" && !has(s, "controller")) {
     throw ConfigError(s.file, "actuator_link", "can",
                       "the CAN link carries the controller's commands: it needs the process controller");
+  }
+  ConfigMap pilot_section = s.section("pilot");
+  if (pilot_config_from(pilot_section).enabled && !(has(s, "controller") && has(s, "mocap"))) {
+    throw ConfigError(s.file, "pilot.enabled", "true",
+                      "the pilot flies the controller's throttle on the motion-capture height: it needs the "
+                      "processes controller and mocap");
   }
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");

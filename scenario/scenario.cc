@@ -186,7 +186,8 @@ const std::vector<std::string>& scenario_section_keys() {
   // The IMU, motion-capture and EKF settings live under sensing (sensing.imu, sensing.mocap,
   // sensing.ekf): a top-level imu, mocap or estimator section would be read by nobody.
   static const std::vector<std::string> keys = {"plant",    "controller", "sensing", "can_bridge",
-                                                "lockstep", "run",        "summary", "hosts"};
+                                                "lockstep", "run",        "summary", "hosts",
+                                                "pilot"};
   return keys;
 }
 

@@ -1,0 +1,65 @@
+// System tests of the paper's flights as the rig flies them (in process, the same truth as
+// lockstep): the vertical channel held by the pilot as the real vehicle's was, and the
+// identification train's state ranges against thesis Table 9.4, set 1.
+
+#include <cmath>
+#include <string>
+
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "../support/rig_runs.h"
+
+using nimble::test::rig_run;
+using nimble::test::RunResult;
+
+namespace {
+
+const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+
+double range(const YAML::Node& summary, const char* state) { return summary["ranges"][state].as<double>(); }
+double vertical(const YAML::Node& summary, const char* key) { return summary["vertical"][key].as<double>(); }
+
+}  // namespace
+
+TEST_CASE("paper flights: the identification train holds its height with the pilot and flies Table 9.4's ranges",
+          "[system]") {
+  // Thesis Table 9.4, set 1: ranges of p [rad/s], v [m/s], phi [rad]; the paper: max |v| 1.00 m/s.
+  const double p_range = 12.06, v_range = 1.17, phi_range = 0.89, v_max = 1.00;
+  for (int seed = 1; seed <= 5; ++seed) {
+    const std::string dir = nimble::test::scratch_dir("paper_id_" + std::to_string(seed));
+    const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+                                "--clock inprocess --seed " + std::to_string(seed));
+    INFO("seed " << seed << "\n" << r.output);
+    REQUIRE(r.exit_code == 0);
+    const YAML::Node& s = r.summary;
+    CHECK(vertical(s, "w_initial_mps") == Approx(-0.30).margin(1e-6));  // Table 9.3: the flight starts at w0
+    CHECK(vertical(s, "max_abs_height_change_m") < 0.8);
+    CHECK(std::fabs(vertical(s, "height_final_m")) < 0.5);
+    CHECK(vertical(s, "w_min_mps") > -0.30 - 0.45);
+    CHECK(vertical(s, "w_max_mps") < -0.30 + 0.50);
+    CHECK(range(s, "p") == Approx(p_range).epsilon(0.20));
+    CHECK(range(s, "v") == Approx(v_range).epsilon(0.20));
+    CHECK(range(s, "phi") == Approx(phi_range).epsilon(0.20));
+    CHECK(s["max_abs"]["v"].as<double>() == Approx(v_max).epsilon(0.20));
+  }
+}
+
+TEST_CASE("paper flights: without the pilot the same train climbs by metres", "[system]") {
+  const std::string dir = nimble::test::scratch_dir("paper_id_no_pilot");
+  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+                              "--clock inprocess --seed 1 --set pilot.enabled=false");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  // Trim thrust holds the trim climb rate w0 = -0.30 m/s of Table 9.3 and THRF adds to it.
+  CHECK(vertical(r.summary, "height_final_m") > 2.0);
+}
+
+TEST_CASE("paper flights: a pilot without the motion capture to watch is refused before the run", "[system]") {
+  const std::string dir = nimble::test::scratch_dir("paper_pilot_no_mocap");
+  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+                              "--clock inprocess --set 'processes=[plant, controller]' --set run.controller_input=truth");
+  INFO(r.output);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains("pilot.enabled") && Catch::Contains("mocap"));
+}
