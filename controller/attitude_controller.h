@@ -84,10 +84,9 @@ struct ControllerConfig {
   /// Flapping frequency at hover trim [rad/s]: thrust = weight for the vehicle
   /// without wifi module (28.76 g, g = 9.81 m/s^2).
   double f_trim_radps = 102.49738145337824;
-  /// Collective flapping frequency per % of throttle deviation [rad/s/%] (assumption: thrust
-  /// proportional to throttle about trim, so that THRF raises the thrust by THRF:
-  /// weight / (trim_throttle_pct * dT/df); rig_configs/controller/nimble_attitude.yaml).
-  double throttle_to_freq_radps_per_pct = 1.295841;
+  /// Collective flapping frequency per % of throttle deviation [rad/s/%]
+  /// (assumption: frequency proportional to throttle, f_trim / trim_throttle_pct).
+  double throttle_to_freq_radps_per_pct = 102.49738145337824 / 60.0;
   /// Lower limit of each wing's flapping-frequency command [rad/s].
   double flap_freq_min_radps = 0.0;
   /// Upper limit of each wing's flapping-frequency command [rad/s] (software safety limit).
@@ -100,9 +99,9 @@ struct ControllerConfig {
   /// Failsafe: no input at all by this simulated time [s] engages it too. 0.5 s: the estimator's
   /// first estimate follows its first motion-capture pose within milliseconds (assumption).
   double first_input_timeout_s = 0.5;
-  /// Failsafe throttle [%]: with neutral roll and pitch commands, a slow descent. 56 %: about
-  /// 0.65 m/s^2 of thrust below the weight (a % of throttle is a sixtieth of the weight).
-  double failsafe_throttle_pct = 56.0;
+  /// Failsafe throttle [%]: with neutral roll and pitch commands, a slow descent. 57 %: about
+  /// 0.65 m/s^2 of thrust below the weight (thesis Eq 4.18 with the collective map above).
+  double failsafe_throttle_pct = 57.0;
 
   /// Control period 1 / rate_hz [s].
   double dt_s() const { return 1.0 / rate_hz; }

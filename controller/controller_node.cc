@@ -40,9 +40,13 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
 
   const ProcessRunOptions run = process_run_options(scenario);
   node_ = transport::make_process_node(scenario, options);
-  if (pilot_) {
+  bool mocap = false;
+  for (const auto& p : scenario.processes) mocap = mocap || p == "mocap";
+  pilot_on_truth_ = pilot_ && !mocap;
+  if (pilot_ && mocap) {
     // The pilot watches the vehicle's height (up = -down) as motion capture measures it; heights
-    // are used reaction_delay_s after their exposure, long after they were published.
+    // are used reaction_delay_s after their exposure, long after they were published. Without
+    // the motion capture (ideal sensing) he watches the TRUTH height (the TRUTH handler below).
     node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& pose) {
       if (!pose.tracking_valid || !transport::plausible_sim_utime(pose.utime)) return;
       pilot_->observe(static_cast<double>(pose.utime) * 1e-6, -pose.position_m[2]);
@@ -77,6 +81,7 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
         return;
       }
       input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
+      if (pilot_on_truth_) pilot_->observe(static_cast<double>(t.utime) * 1e-6, -t.position_ned_m[2]);
       have_input_ = true;
       node_->notify_input(transport::message_us_to_ns(t.utime));
     });

@@ -4,7 +4,8 @@
 /// Subscribes:
 ///   TRUTH          truth_state_t        plant rate   attitude and rates (run.controller_input: truth)
 ///   ESTIMATE       estimator_state_t    512 Hz       attitude and corrected rates (run.controller_input: estimate)
-///   MOCAP_POSE     mocap_pose_t         200 Hz       the pilot's height (pilot.enabled; controller/pilot.h)
+///   MOCAP_POSE     mocap_pose_t         200 Hz       the pilot's height (pilot.enabled; controller/pilot.h;
+///                                                    without the process mocap, the TRUTH height)
 ///   RUN_CONTROL, RIG_CLOCK                            (ProcessNode; lockstep participant)
 /// Publishes, each at controller.rate_hz (default 512 Hz):
 ///   ATTITUDE_SP        attitude_setpoint_t   the manoeuvre player's set-point
@@ -52,6 +53,8 @@ class ControllerNode {
   std::unique_ptr<ManoeuvrePlayer> player_;
   /// The pilot on the throttle (pilot.enabled), fed the motion-capture height.
   std::unique_ptr<AltitudePilot> pilot_;
+  /// No motion capture in the run (ideal sensing, flying on TRUTH): the pilot watches TRUTH.
+  bool pilot_on_truth_ = false;
   std::unique_ptr<transport::ProcessNode> node_;
   /// The state the next cycle uses (from TRUTH or ESTIMATE).
   struct Input {

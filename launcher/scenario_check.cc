@@ -47,11 +47,11 @@ void validate_process_sections(const Scenario& s) {
                       "the CAN link carries the controller's commands: it needs the process controller");
   }
   ConfigMap pilot_section = s.section("pilot");
-  if (pilot_config_from(pilot_section).enabled && !(has(s, "controller") && has(s, "mocap"))) {
-    throw ConfigError(s.file, "pilot.enabled", "true",
-                      "the pilot flies the controller's throttle on the motion-capture height: it needs the "
-                      "processes controller and mocap");
+  if (pilot_config_from(pilot_section).enabled && !has(s, "controller")) {
+    throw ConfigError(s.file, "pilot.enabled", "true", "the pilot flies the controller's throttle: it needs the process controller");
   }
+  // Without the process mocap (ideal sensing) the pilot watches the TRUTH height; flying on the
+  // estimate needs mocap anyway (checked above).
   if (has(s, "controller")) {
     ConfigMap section = s.section("controller");
     const ControllerConfig controller = controller_config_from(section);

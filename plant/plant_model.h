@@ -172,7 +172,7 @@ struct PlantConfig {
   /// collective back to the model's delta_t. Not published; the controller's map
   /// (ControllerConfig::throttle_to_freq_radps_per_pct, trim frequency over trim throttle),
   /// which the scenario check requires, and the value rig_configs/plant/nimble_plant.yaml writes.
-  double collective_radps_per_pct = 1.295841;
+  double collective_radps_per_pct = 102.49738145337824 / 60.0;
   /// Vertical aerodynamic damping when no longitudinal model is given [N s/m]
   /// (thesis Table E.4: Zw = -5.9e-3).
   double vertical_damping_Zw_nspm = -5.9e-3;

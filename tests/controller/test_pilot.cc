@@ -17,7 +17,7 @@ using nimble::PilotConfig;
 
 namespace {
 
-constexpr double kAccelPerPct = 0.1635;  // m/s^2 per %: the shipped map, g / 60
+constexpr double kAccelPerPct = 0.215;  // m/s^2 per %: the shipped map (1.708 rad/s per %)
 
 PilotConfig enabled() {
   PilotConfig c;
@@ -86,11 +86,13 @@ TEST_CASE("pilot: the correction stops at max_correction_pct, samples out of ord
   CHECK(pilot.correction_pct(1.9) == 4.0);
 }
 
-TEST_CASE("pilot: the shipped throttle map makes a % of throttle a sixtieth of the weight", "[pilot]") {
+TEST_CASE("pilot: a % of throttle accelerates by the thrust curve's slope times the map over the mass", "[pilot]") {
   const nimble::ControllerConfig c;
   const double a = nimble::throttle_accel_per_pct(c.f_trim_radps, c.throttle_to_freq_radps_per_pct, 9.81);
-  // Thrust proportional to throttle about trim (60 %): THRF then multiplies the thrust by THRF.
-  CHECK(a == Approx(9.81 / c.trim_throttle_pct).epsilon(1e-5));
+  // Eq 4.18: dT/df = 2 * 0.0114 / (2 pi) N per rad/s; the mass from weight = thrust at trim.
+  const double mass = nimble::flap_thrust_n(c.f_trim_radps) / 9.81;
+  CHECK(a == Approx(2.0 * 0.0114 / (2.0 * M_PI) * c.throttle_to_freq_radps_per_pct / mass).epsilon(1e-9));
+  CHECK(a == Approx(0.215).epsilon(0.01));  // the shipped map: 1.708 rad/s per %, 28.76 g
   CHECK_THROWS_AS(AltitudePilot(enabled(), 0.0), std::invalid_argument);
   CHECK_THROWS_AS(AltitudePilot(enabled(), std::nan("")), std::invalid_argument);
 }

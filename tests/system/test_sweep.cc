@@ -41,7 +41,7 @@ TEST_CASE("rig sweep: two model sets x three seeds, each run as a single run wou
   const std::string set1 = kSource + "rig_configs/models/nimble_lateral_set1.yaml";
   const std::string set4 = kSource + "rig_configs/models/nimble_lateral_set4.yaml";
   const SweepOutcome s = rig_sweep(d, kScenario + " --seeds 4-6 --vary model=" + set1 + "," + set4 +
-                                          " --jobs 2 --json " + d + "/sweep.json --csv " + d + "/sweep.csv --logs " +
+                                          " --set pilot.enabled=false --jobs 2 --json " + d + "/sweep.json --csv " + d + "/sweep.csv --logs " +
                                           d + "/logs");
   INFO(s.output);
   REQUIRE(s.exit_code == 0);
@@ -64,7 +64,7 @@ TEST_CASE("rig sweep: two model sets x three seeds, each run as a single run wou
 
   // Run 5 of set 2 is the single run with that model and seed.
   const std::string r = nimble::test::scratch_dir("sweep_single");
-  const auto single = rig_run(kScenario, r, "--clock inprocess --seed 5 --set model=" + set4);
+  const auto single = rig_run(kScenario, r, "--clock inprocess --seed 5 --set pilot.enabled=false --set model=" + set4);
   REQUIRE(single.exit_code == 0);
   const YAML::Node run5 = j["runs"][4];
   REQUIRE(run5["seed"].as<int>() == 5);

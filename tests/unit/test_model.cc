@@ -154,10 +154,22 @@ TEST_CASE("four-state model: decoupled and full roll-yaw inertia coupling", "[mo
   REQUIRE(dec.states == std::vector<std::string>{"p", "r", "v", "phi"});
   CHECK(dec.A(0, 1) == Approx(v.Izz_kgm2 / Ic * -2.81e-4));
   CHECK(dec.A(1, 0) == Approx(v.Ixx_kgm2 / Ic * 5.55e-5));
-  CHECK(dec.A(2, 1) == Approx(8.37e-3 / v.mass_kg));
-  CHECK(dec.A(2, 3) == Approx(v.gravity_mps2));
+  // The trim read from thesis Eq D.1 (A_grey): its v and phi rows to the printed precision.
+  CHECK(dec.A(2, 0) == Approx(-0.156).margin(5e-4));  // Yp/m + w0
+  CHECK(dec.A(2, 1) == Approx(-0.090).margin(5e-4));  // Yr/m - u0
+  CHECK(dec.A(2, 1) == Approx(8.37e-3 / v.mass_kg - model.trim.u0_mps));
+  CHECK(dec.A(2, 3) == Approx(9.743).margin(5e-4));   // g cos(theta0) cos(phi0)
   CHECK(dec.A(3, 0) == 1.0);
-  CHECK(dec.A(3, 1) == 0.0);  // tan(theta0) = 0 at hover
+  CHECK(dec.A(3, 1) == Approx(-0.079).margin(5e-4));  // tan(theta0) cos(phi0)
+  // With it, thesis Table 8.8: -8.44, 1.99 +- 5.54i, 2.70, each within 1 %.
+  const Eigen::VectorXcd eig = dec.A.eigenvalues();
+  for (const std::complex<double> published : {std::complex<double>(-8.44, 0), std::complex<double>(1.99, 5.54),
+                                               std::complex<double>(1.99, -5.54), std::complex<double>(2.70, 0)}) {
+    double nearest = 1e9;
+    for (int i = 0; i < eig.size(); ++i) nearest = std::min(nearest, std::abs(eig(i) - published));
+    INFO("Table 8.8 eigenvalue " << published);
+    CHECK(nearest / std::abs(published) < 0.01);
+  }
 
   model.coupling = RollYawCoupling::kFull;
   const StateSpace full = build_state_space(model, v);
