@@ -40,10 +40,8 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
 
   const ProcessRunOptions run = process_run_options(scenario);
   node_ = transport::make_process_node(scenario, options);
-  bool mocap = false;
-  for (const auto& p : scenario.processes) mocap = mocap || p == "mocap";
-  pilot_on_truth_ = pilot_ && !mocap;
-  if (pilot_ && mocap) {
+  pilot_on_truth_ = pilot_ && !scenario.runs("mocap");
+  if (pilot_ && !pilot_on_truth_) {
     // The pilot watches the vehicle's height (up = -down) as motion capture measures it; heights
     // are used reaction_delay_s after their exposure, long after they were published. Without
     // the motion capture (ideal sensing) he watches the TRUTH height (the TRUTH handler below).

@@ -124,7 +124,7 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
                          "processes: (and address: or start:)");
     }
     for (const auto& p : listed) {
-      if (std::find(scenario.processes.begin(), scenario.processes.end(), p) == scenario.processes.end()) {
+      if (!scenario.runs(p)) {
         throw ConfigError(scenario.file, list_key, p,
                           "process '" + p + "' is not one of the run's processes (" + join(scenario.processes) + ")");
       }

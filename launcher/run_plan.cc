@@ -48,7 +48,7 @@ LaunchConfig launch_config_from(const Scenario& s) {
   if (m.has("external_processes")) {
     c.external_processes = m.get_string_list("external_processes");
     for (const auto& p : c.external_processes) {
-      if (std::find(s.processes.begin(), s.processes.end(), p) == s.processes.end()) {
+      if (!s.runs(p)) {
         m.fail("external_processes", "'" + p + "' is not one of the run's processes");
       }
     }

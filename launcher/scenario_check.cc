@@ -12,17 +12,6 @@
 #include "plant/plant_node.h"
 
 namespace nimble::launcher {
-namespace {
-
-bool has(const Scenario& s, const std::string& process) {
-  for (const auto& p : s.processes) {
-    if (p == process) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
 void validate_process_sections(const Scenario& s) {
   ConfigMap sensing = s.section("sensing");
   sensing_config_from(sensing);
@@ -34,7 +23,7 @@ void validate_process_sections(const Scenario& s) {
     throw ConfigError(s.file, "model", s.model_file, e.what());
   }
 
-  if (process_run_options(s).controller_input == "estimate" && !(has(s, "estimator") && has(s, "mocap"))) {
+  if (process_run_options(s).controller_input == "estimate" && !(s.runs("estimator") && s.runs("mocap"))) {
     throw ConfigError(s.file, "run.controller_input", "estimate",
                       "flying on the estimate needs the processes estimator and mocap");
   }
@@ -42,17 +31,17 @@ void validate_process_sections(const Scenario& s) {
     ConfigMap section = s.section("can_bridge");
     can::can_bridge_config_from(section);
   }
-  if (s.actuator_link == "can" && !has(s, "controller")) {
+  if (s.actuator_link == "can" && !s.runs("controller")) {
     throw ConfigError(s.file, "actuator_link", "can",
                       "the CAN link carries the controller's commands: it needs the process controller");
   }
   ConfigMap pilot_section = s.section("pilot");
-  if (pilot_config_from(pilot_section).enabled && !has(s, "controller")) {
+  if (pilot_config_from(pilot_section).enabled && !s.runs("controller")) {
     throw ConfigError(s.file, "pilot.enabled", "true", "the pilot flies the controller's throttle: it needs the process controller");
   }
   // Without the process mocap (ideal sensing) the pilot watches the TRUTH height; flying on the
   // estimate needs mocap anyway (checked above).
-  if (has(s, "controller")) {
+  if (s.runs("controller")) {
     ConfigMap section = s.section("controller");
     const ControllerConfig controller = controller_config_from(section);
     if (!s.root["manoeuvre"]) {
@@ -82,13 +71,13 @@ ProcessRates process_rates(const Scenario& s) {
   ConfigMap sensing = s.section("sensing");
   const SensingConfig sc = sensing_config_from(sensing);
   r.imu_hz = sc.imu.sample_rate_hz;
-  if (has(s, "mocap")) r.mocap_hz = sc.mocap.frame_rate_hz;
-  if (has(s, "estimator")) r.estimator_hz = sc.imu.sample_rate_hz;
-  if (process_run_options(s).controller_input == "estimate" && !(has(s, "estimator") && has(s, "mocap"))) {
+  if (s.runs("mocap")) r.mocap_hz = sc.mocap.frame_rate_hz;
+  if (s.runs("estimator")) r.estimator_hz = sc.imu.sample_rate_hz;
+  if (process_run_options(s).controller_input == "estimate" && !(s.runs("estimator") && s.runs("mocap"))) {
     throw ConfigError(s.file, "run.controller_input", "estimate",
                       "flying on the estimate needs the processes estimator and mocap");
   }
-  if (has(s, "controller")) {
+  if (s.runs("controller")) {
     ConfigMap section = s.section("controller");
     r.controller_hz = controller_config_from(section).rate_hz;
   }

@@ -1,5 +1,6 @@
 #include "scenario/scenario.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <set>
@@ -189,6 +190,10 @@ const std::vector<std::string>& scenario_section_keys() {
                                                 "lockstep", "run",        "summary", "hosts",
                                                 "pilot"};
   return keys;
+}
+
+bool Scenario::runs(const std::string& process) const {
+  return std::find(processes.begin(), processes.end(), process) != processes.end();
 }
 
 ConfigMap Scenario::section(const std::string& name) const {

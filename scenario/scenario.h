@@ -79,6 +79,8 @@ struct Scenario {
   /// The section of one process (an empty mapping if absent) as a strict ConfigMap.
   ConfigMap section(const std::string& name) const;
   bool has_section(const std::string& name) const { return static_cast<bool>(root[name]); }
+  /// True if `process` is one of the run's processes.
+  bool runs(const std::string& process) const;
 };
 
 /// The channel on which the plant takes its actuator commands: ACTUATOR_CMD over the LCM
