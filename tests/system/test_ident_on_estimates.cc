@@ -42,7 +42,8 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   const std::string dir = nimble::test::scratch_dir("ident_est_" + std::to_string(seed));
   const std::string log = dir + "/run.lcmlog", summary = dir + "/summary.json";
   // Explicit processes, controller input and seed: the test does not depend on the shipped defaults.
-  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep --set pilot.enabled=false" +  // identification checked on the flight the linear model describes (README, "Flights like the paper's")
+  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
+                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (README, "Flights like the paper's")
                           " --seed " + std::to_string(seed) + " --set processes=[plant,controller,mocap,estimator]" +
                           " --set run.controller_input=estimate --log " + log + " --json " + summary +
                           " --no-progress >" + dir + "/run.txt 2>&1";
@@ -140,7 +141,8 @@ TEST_CASE("discrepancy on the effect-free identification train: the kinematic te
   // g sin(phi) in v_dot, Eq 21 linearises them at w0 while w drifts during the manoeuvre.
   const std::string dir = nimble::test::scratch_dir("discrepancy_id_train");
   const std::string log = dir + "/run.lcmlog";
-  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep --set pilot.enabled=false" +  // identification checked on the flight the linear model describes (README, "Flights like the paper's")
+  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
+                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (README, "Flights like the paper's")
                           " --seed 1 --log " + log + " --no-progress >" + dir + "/run.txt 2>&1";
   const int status = std::system(fly.c_str());
   INFO(nimble::test::slurp(dir + "/run.txt"));
