@@ -35,6 +35,22 @@ std::vector<double> number_list(const std::string& text, char separator) {
   }
 }
 
+std::vector<double> number_grid(const std::string& text) {
+  if (text.find(':') != std::string::npos) {
+    const std::vector<double> r = number_list(text, ':');
+    if (r.size() != 3 || !(r[2] > 0.0) || r[1] < r[0]) {
+      throw std::invalid_argument("range must be FROM:TO:STEP with STEP > 0 and TO >= FROM: '" + text + "'");
+    }
+    std::vector<double> out;
+    const long n = std::lround(std::floor((r[1] - r[0]) / r[2] + 1e-9));
+    for (long i = 0; i <= n; ++i) out.push_back(r[0] + static_cast<double>(i) * r[2]);
+    return out;
+  }
+  std::vector<double> out = number_list(text, ',');
+  if (out.empty()) throw std::invalid_argument("empty list");
+  return out;
+}
+
 const CLI::Validator kFinite(
     [](std::string& text) -> std::string {
       try {

@@ -60,6 +60,10 @@ double finite_number(const std::string& text);
 /// @throws std::invalid_argument naming the first item that is not a finite number.
 std::vector<double> number_list(const std::string& text, char separator = ',');
 
+/// A grid of values: "A,B,C" (a list) or "FROM:TO:STEP" (STEP > 0, TO >= FROM, both ends in).
+/// @throws std::invalid_argument naming the text.
+std::vector<double> number_grid(const std::string& text);
+
 /// Validator: a finite number (CLI11's own number checks let "nan" and "inf" through).
 extern const CLI::Validator kFinite;
 

@@ -37,7 +37,7 @@ const std::vector<Section>& sections() {
          return params_markdown(controller_params(), ControllerConfig{}, "controller.") +
                 params_markdown(reference_params(), ReferenceGeneratorConfig{}, "controller.reference.{roll,pitch}.")
                     .substr(std::string(kHeader).size()) +
-                params_markdown(gain_params(), GainSet{}, "controller.{roll_gain_sets.NAME,pitch_gains}.")
+                params_markdown(gain_params(), GainSet{}, "controller.{roll_gain_sets.NAME,pitch_gains,yaw}.")
                     .substr(std::string(kHeader).size());
        }},
       {"plant", [] {

@@ -104,6 +104,8 @@ const ParamTable<ControllerConfig>& controller_params() {
       {"mixing.roll_cmd_to_delta_f_radps", &C::roll_cmd_to_delta_f_radps, kRollMap, "rad/s", "flapping-frequency difference per unit roll command (calibrated, see the controller file)"},
       {"mixing.mix_abs_roll_gain", &C::mix_abs_roll_gain, kMixAbs, "-", "collective added per |roll command|, onboard mixing 0.1 |roll|"},
       {"mixing.pitch_cmd_to_dihedral_rad", &C::pitch_cmd_to_dihedral_rad, kPitchMap, "rad", "dihedral per unit pitch command"},
+      {"yaw.enabled", &C::yaw_enabled, Range{}, "-", "the yaw loop flies the wing-root servo (four-state models)"},
+      {"yaw.cmd_to_wing_root_rad", &C::yaw_cmd_to_wing_root_rad, Range::closed(-1.0, 1.0), "rad", "wing-root angle per unit yaw command; negative: N_dw < 0 (Table 8.3)"},
       {"throttle.trim_throttle_pct", &C::trim_throttle_pct, kTrimThrottle, "%", "throttle at trim"},
       {"throttle.f_trim_radps", &C::f_trim_radps, Range{0.0, 1000.0, true, false}, "rad/s", "collective flapping frequency at trim, within the limits"},
       {"throttle.throttle_to_freq_radps_per_pct", &C::throttle_to_freq_radps_per_pct, kThrottleMap, "rad/s/%", "collective per % throttle; the plant's collective_radps_per_pct"},
@@ -170,6 +172,7 @@ void validate(const ControllerConfig& c) {
                            "unknown gain set '" + c.default_gain_set + "' (known: " + known_sets(c) + ")");
   }
   check_gains("pitch_gains", c.pitch_gains);
+  check_gains("yaw", c.yaw_gains);
   check(c.flap_freq_max_radps > c.flap_freq_min_radps,
         "limits.flap_freq_max_radps", c.flap_freq_max_radps,
         "in (flap_freq_min_radps = " + num(c.flap_freq_min_radps) + ", 1000]");
@@ -242,6 +245,13 @@ ControllerConfig controller_config_from(ConfigMap& map, const ControllerConfig& 
     c.pitch_gains = gains_from(pg, base.pitch_gains);
   }
 
+  if (map.has("yaw")) {
+    ConfigMap yaw = map.get_map("yaw");
+    read_params(yaw, controller_params(), c, "yaw");
+    read_params(yaw, gain_params(), c.yaw_gains);  // yaw.kp_per_rad, yaw.kd_per_radps
+    yaw.finish();
+  }
+
   if (map.has("mixing")) {
     ConfigMap mix = map.get_map("mixing");
     read_params(mix, controller_params(), c, "mixing");
@@ -286,7 +296,8 @@ AttitudeController::AttitudeController(const ControllerConfig& config)
       roll_ref_(config.roll_reference, config.dt_s()),
       pitch_ref_(config.pitch_reference, config.dt_s()),
       roll_lp_(config.roll_lowpass_cutoff_hz, config.rate_hz),
-      pitch_lp_(config.pitch_lowpass_cutoff_hz, config.rate_hz) {
+      pitch_lp_(config.pitch_lowpass_cutoff_hz, config.rate_hz),
+      yaw_lp_(config.roll_lowpass_cutoff_hz, config.rate_hz) {
   reset();
 }
 
@@ -295,6 +306,7 @@ void AttitudeController::reset(double phi_rad, double theta_rad) {
   pitch_ref_.reset(theta_rad);
   roll_lp_.reset(0.0);
   pitch_lp_.reset(0.0);
+  yaw_lp_.reset(0.0);
   gain_set_name_ = config_.default_gain_set;
   gains_ = config_.roll_gain_sets.at(gain_set_name_);
   last_phi_ = std::isfinite(phi_rad) ? phi_rad : 0.0;
@@ -335,6 +347,8 @@ ControllerOutput AttitudeController::step(const ControllerInput& in) {
   const double roll_sp = sanitize(in.roll_sp_rad, last_roll_sp_, invalid);
   const double pitch_sp = sanitize(in.pitch_sp_rad, last_pitch_sp_, invalid);
   const double factor_in = sanitize(in.throttle_factor, last_factor_, invalid);
+  const double psi = sanitize(in.psi_rad, last_psi_, invalid);
+  const double r = sanitize(in.r_radps, last_r_, invalid);
   ++counters_.steps;
   if (invalid) ++counters_.invalid_inputs;
 
@@ -399,7 +413,17 @@ ControllerOutput AttitudeController::step(const ControllerInput& in) {
   out.delta_f_cmd_radps = out.flap_freq_left_radps - out.flap_freq_right_radps;
   out.collective_radps = 0.5 * (out.flap_freq_left_radps + out.flap_freq_right_radps);
   out.dihedral_rad = config_.pitch_cmd_to_dihedral_rad * out.pitch_cmd_norm;
-  out.wing_root_rad = 0.0;
+  // Yaw: hold the heading the run starts from (psi = 0), error wrapped to [-pi, pi].
+  if (config_.yaw_enabled) {
+    const double yaw_error = std::remainder(-psi, 2.0 * M_PI);
+    const double yaw_f = yaw_lp_.step(config_.yaw_gains.kp_per_rad * yaw_error - config_.yaw_gains.kd_per_radps * r);
+    out.yaw_cmd_norm = std::clamp(yaw_f, -1.0, 1.0);
+    if (out.yaw_cmd_norm != yaw_f) {
+      ++counters_.yaw_saturations;
+      saturated = true;
+    }
+  }
+  out.wing_root_rad = config_.yaw_cmd_to_wing_root_rad * out.yaw_cmd_norm;
 
   out.saturated = saturated;
   if (saturated) ++counters_.saturated_steps;

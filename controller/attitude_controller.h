@@ -16,6 +16,8 @@
 ///   delta_f    = roll_cmd_to_delta_f_radps * roll_cmd                             [rad/s]
 ///   left/right = f_c +- delta_f / 2 + roll_cmd_to_delta_f_radps * mix_abs_roll_gain * |roll_cmd|
 ///   dihedral   = pitch_cmd_to_dihedral_rad * pitch_cmd                           [rad]
+///   yaw_cmd    = sat1( LP15( Kp_psi (0 - psi) + Kd_psi (0 - r) ) )   (yaw.enabled)     [-]
+///   wing_root  = yaw_cmd_to_wing_root_rad * yaw_cmd                               [rad]
 /// which is the onboard mixing left/right = thrust +- 0.5 roll + 0.1 |roll| with one
 /// normalised motor unit worth roll_cmd_to_delta_f_radps of flapping frequency.
 
@@ -79,6 +81,16 @@ struct ControllerConfig {
   double mix_abs_roll_gain = 0.1;
   /// Dihedral deflection per unit normalised pitch command [rad] (assumption).
   double pitch_cmd_to_dihedral_rad = 0.35;
+  /// Yaw loop (thesis Fig 2.9 C: the yaw angle through the wing-root servo). Off by default:
+  /// the three-state models have no yaw; on for the four-state model (rig_configs/yaw/).
+  bool yaw_enabled = false;
+  /// Yaw PD gains (not published, "found by trial and error"; calibrated on the linear roll-yaw
+  /// loop of the Table 8.3 model: calibrate_yaw_gains, rig_configs/controller/nimble_attitude.yaml).
+  GainSet yaw_gains{0.16, 0.82};
+  /// Wing-root deflection per unit normalised yaw command [rad] (assumption: 0.35 rad full scale,
+  /// as the dihedral). Negative: N_dw of Table 8.3 is negative, so a positive wing-root angle
+  /// yaws the nose left, and a positive yaw command asks for nose right.
+  double yaw_cmd_to_wing_root_rad = -0.35;
   /// Throttle at hover trim [% of full scale] (assumption).
   double trim_throttle_pct = 60.0;
   /// Flapping frequency at hover trim [rad/s]: thrust = weight for the vehicle
@@ -148,6 +160,8 @@ struct ControllerInput {
   double throttle_pct = std::numeric_limits<double>::quiet_NaN();
   /// Tilt compensation factor THRF [-], >= 1 (attitude_setpoint_t.throttle_factor).
   double throttle_factor = 1.0;
+  double psi_rad = 0.0;        ///< measured yaw angle [rad] (yaw loop)
+  double r_radps = 0.0;        ///< measured yaw rate, body z [rad/s] (yaw loop)
 };
 
 /// Outputs of one control step.
@@ -159,7 +173,8 @@ struct ControllerOutput {
   double throttle_cmd_pct = 0.0;       ///< throttle after tilt compensation [%, 0..100]
   double delta_throttle_pct = 0.0;     ///< throttle_cmd_pct - trim_throttle_pct: the model's delta_t [%]
   double dihedral_rad = 0.0;           ///< dihedral servo command [rad], positive nose-up moment
-  double wing_root_rad = 0.0;          ///< wing-root servo command [rad]; no yaw loop: always 0
+  double wing_root_rad = 0.0;          ///< wing-root servo command [rad]; 0 without the yaw loop
+  double yaw_cmd_norm = 0.0;           ///< yaw command after low-pass and saturation [-], -1..1
   double roll_cmd_norm = 0.0;          ///< roll command after low-pass and saturation [-], -1..1
   double pitch_cmd_norm = 0.0;         ///< pitch command after low-pass and saturation [-], -1..1
   double roll_ref_rad = 0.0;           ///< roll reference [rad]
@@ -179,6 +194,7 @@ struct ControllerCounters {
   std::int64_t saturated_steps = 0;            ///< steps with any clipped command
   std::int64_t roll_saturations = 0;           ///< steps with |roll_cmd| clipped to 1
   std::int64_t pitch_saturations = 0;          ///< steps with |pitch_cmd| clipped to 1
+  std::int64_t yaw_saturations = 0;            ///< steps with |yaw_cmd| clipped to 1
   std::int64_t throttle_saturations = 0;       ///< steps with throttle or throttle factor clipped
   std::int64_t flap_freq_saturations = 0;      ///< steps with a wing frequency clipped
   std::int64_t invalid_inputs = 0;             ///< steps with a non-finite measured value or set-point
@@ -227,12 +243,12 @@ class AttitudeController {
 
   ControllerConfig config_;
   ReferenceGenerator roll_ref_, pitch_ref_;
-  SecondOrderLowPass roll_lp_, pitch_lp_;
+  SecondOrderLowPass roll_lp_, pitch_lp_, yaw_lp_;
   std::string gain_set_name_;
   GainSet gains_;
   ControllerCounters counters_;
   // last finite values of the inputs
-  double last_phi_ = 0.0, last_theta_ = 0.0, last_p_ = 0.0, last_q_ = 0.0;
+  double last_phi_ = 0.0, last_theta_ = 0.0, last_p_ = 0.0, last_q_ = 0.0, last_psi_ = 0.0, last_r_ = 0.0;
   double last_roll_sp_ = 0.0, last_pitch_sp_ = 0.0, last_factor_ = 1.0;
 };
 

@@ -37,23 +37,6 @@ using namespace nimble;
 
 namespace {
 
-/// "A,B,C" or "FROM:TO:STEP".
-std::vector<double> parse_grid(const std::string& text) {
-  if (text.find(':') != std::string::npos) {
-    const std::vector<double> r = cli::number_list(text, ':');
-    if (r.size() != 3 || !(r[2] > 0.0) || r[1] < r[0]) {
-      throw std::invalid_argument("range must be FROM:TO:STEP with STEP > 0 and TO >= FROM: '" + text + "'");
-    }
-    std::vector<double> out;
-    const long n = std::lround(std::floor((r[1] - r[0]) / r[2] + 1e-9));
-    for (long i = 0; i <= n; ++i) out.push_back(r[0] + static_cast<double>(i) * r[2]);
-    return out;
-  }
-  std::vector<double> out = cli::number_list(text, ',');
-  if (out.empty()) throw std::invalid_argument("empty list");
-  return out;
-}
-
 std::string format_pole(const std::complex<double>& s) {
   char buf[64];
   if (!std::isfinite(s.real())) return "-inf";
@@ -113,9 +96,9 @@ int main(int argc, char** argv) {
       ->check(cli::kFinite)
       ->type_name("RAD");
   cli::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0.005:0.300:0.005)")->type_name("LIST"),
-                  [&kp_values](const std::string& v) { kp_values = parse_grid(v); });
+                  [&kp_values](const std::string& v) { kp_values = cli::number_grid(v); });
   cli::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0.0005:0.0400:0.0005)")->type_name("LIST"),
-                  [&kd_values](const std::string& v) { kd_values = parse_grid(v); });
+                  [&kd_values](const std::string& v) { kd_values = cli::number_grid(v); });
   cl->add_flag("--continuous", continuous, "the continuous loop instead of the discrete one at the controller rate");
   cl->add_option("--delay-steps", delay_steps, "extra command delay of the discrete loop [control periods]")
       ->check(CLI::Range(0, 100))

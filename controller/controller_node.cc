@@ -62,7 +62,8 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
                          std::to_string(e.imu_utime) + " us): not used");
         return;
       }
-      const Input in{e.utime, e.imu_utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1]};
+      const Input in{e.utime, e.imu_utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1],
+                     e.euler_rad[2], e.omega_body_radps[2]};
       if (node_->lockstep()) {
         estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
       } else {
@@ -78,7 +79,8 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
                      "TRUTH stamped outside any run (utime " + std::to_string(t.utime) + " us): not used");
         return;
       }
-      input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1]};
+      input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1],
+                     t.euler_rad[2], t.omega_body_radps[2]};
       if (pilot_on_truth_) pilot_->observe(static_cast<double>(t.utime) * 1e-6, -t.position_ned_m[2]);
       have_input_ = true;
       node_->notify_input(transport::message_us_to_ns(t.utime));
@@ -126,6 +128,8 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   in.theta_rad = input_.theta_rad;
   in.p_radps = input_.p_radps;
   in.q_radps = input_.q_radps;
+  in.psi_rad = input_.psi_rad;
+  in.r_radps = input_.r_radps;
   in.roll_sp_rad = sp.roll_sp_rad;
   in.pitch_sp_rad = sp.pitch_sp_rad;
   in.throttle_pct = sp.throttle_pct + (pilot_ ? pilot_->correction_pct(t_s) : 0.0);

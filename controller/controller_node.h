@@ -60,7 +60,7 @@ class ControllerNode {
   struct Input {
     int64_t utime = -1;     ///< the message's stamp (a lockstep estimate's tick)
     int64_t measured_utime = -1;  ///< the time the state refers to (an estimate: its IMU sample)
-    double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0;
+    double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0, psi_rad = 0, r_radps = 0;
   };
   Input input_{};
   /// Estimates received (stamped with their tick): a lockstep cycle uses the newest one

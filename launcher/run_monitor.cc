@@ -181,6 +181,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
     f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
     f.max_abs_theta = std::max(f.max_abs_theta, std::fabs(t.euler_rad[1]));
+    f.max_abs_psi = std::max(f.max_abs_psi, std::fabs(t.euler_rad[2]));
     f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
     f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
     f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);

@@ -67,7 +67,8 @@ struct FaultRecord {
 struct FlightSummary {
   int64_t samples = 0;
   double max_abs_p = 0.0, max_abs_v = 0.0, max_abs_phi = 0.0;
-  double max_abs_theta = 0.0;  ///< pitch: stays 0 without a longitudinal model
+  double max_abs_theta = 0.0;  ///< pitch: stays at trim without a longitudinal model
+  double max_abs_psi = 0.0;    ///< yaw: stays 0 without a four-state model
   double min_p = 0, max_p = 0, min_v = 0, max_v = 0, min_phi = 0, max_phi = 0;
   double min_df = 0, max_df = 0;
   double final_p = 0.0, final_v = 0.0, final_phi = 0.0;

@@ -62,6 +62,7 @@ void write_report_text(std::ostream& out, const RunReport& r) {
   fmt::print(out, "\nflight     max |p| {:.4g} rad/s, max |v| {:.4g} m/s, max |phi| {:.4g} deg", f.max_abs_p, f.max_abs_v,
              f.max_abs_phi * 180 / M_PI);
   if (f.max_abs_theta > 0.0) fmt::print(out, ", max |theta| {:.4g} deg", f.max_abs_theta * 180 / M_PI);
+  if (f.max_abs_psi > 0.0) fmt::print(out, ", max |psi| {:.4g} deg", f.max_abs_psi * 180 / M_PI);
   out << "\n";
   fmt::print(out, "ranges     p {:.2f} rad/s, v {:.2f} m/s, phi {:.2f} rad, delta_f {:.1f} rad/s\n", f.max_p - f.min_p,
              f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
@@ -175,7 +176,7 @@ std::string report_json(const RunReport& r) {
   w.key("sim_time_s").value(r.sim_time_s);
   w.key("wall_time_s").value(r.wall_time_s);
   w.key("speed_x_realtime").value(r.speed_x_realtime());
-  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).end_object();
+  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).key("psi").value(f.max_abs_psi).end_object();
   w.key("ranges").begin_object();
   w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
   w.key("delta_f").value(f.max_df - f.min_df);

@@ -409,7 +409,9 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   // Kinematics.
   const double tth = std::tan(theta);
   dx[kPhi] = p + (q * sphi + r * cphi) * tth;
-  dx[kTheta] = q * cphi - r * sphi;
+  // Without a longitudinal model the vehicle's own pitch loop holds theta at trim (q is not a
+  // state here; theta_dot = q cos(phi) - r sin(phi) with q = 0 would let the yaw rate tilt it).
+  dx[kTheta] = active_q_ ? q * cphi - r * sphi : 0.0;
   dx[kPsi] = (q * sphi + r * cphi) / cth;
   const double spsi = std::sin(psi), cpsi = std::cos(psi);
   Eigen::Matrix3d R;  // body to NED, ZYX
