@@ -53,4 +53,8 @@ int run_turbulence_command(const std::vector<std::string>& args);
 /// variances (cli/turbulence_response_command.cc, turbulence/hover_gust_response.h).
 int run_turbulence_response_command(const std::vector<std::string>& args);
 
+/// `rig reproduce thesis [--clock C] [--seed N] [--json F|-] [--report DIR]`: the thesis's campaign and
+/// its tables (reproduce/campaign.h).
+int run_reproduce_command(const std::vector<std::string>& args);
+
 }  // namespace nimble::cli

@@ -269,7 +269,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
 
 int run_validate_command(const std::vector<std::string>& args) {
   std::string model_file, csv, vehicle_file, json, plots;
-  std::string gains = "fast", controller_file = NIMBLE_DEFAULT_CONTROLLER;
+  std::string gains, controller_file = NIMBLE_DEFAULT_CONTROLLER;
   bool closed_loop = false;
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
@@ -292,7 +292,10 @@ int run_validate_command(const std::vector<std::string>& args) {
                "controller and the flap actuator on the data's phi_sp and delta_t, from the measured initial "
                "state; simulated p, v, phi, delta_f against the measured ones; --plots draws their time "
                "histories (closed_loop.png)");
-  cl->add_option("--gains", gains, "roll gain set of the controller copy")->capture_default_str()->type_name("NAME");
+  cl->add_option("--gains", gains,
+                 "roll gain set of the controller copy (default: the set a rig log's controller flew, "
+                 "fast for CSV data)")
+      ->type_name("NAME");
   cl->add_option("--controller", controller_file, "controller configuration")
       ->capture_default_str()
       ->type_name("FILE");
@@ -302,7 +305,16 @@ int run_validate_command(const std::vector<std::string>& args) {
   const DerivativeModel model = load_model(model_file);
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
   std::string damage;
-  const ident::FlightData data = ident::read_flight_data(csv, log_options, &damage);
+  ident::FlightData data;
+  if (ident::is_lcm_log(csv)) {
+    ident::RigLogData log = ident::read_rig_log(csv, ident::StateSource::kAuto, log_options);
+    damage = log.damage;
+    data = std::move(log.measured);
+    if (gains.empty()) gains = log.gain_set;  // the gains the run flew
+  } else {
+    data = ident::read_flight_data(csv, log_options, &damage);
+  }
+  if (gains.empty()) gains = "fast";
   warn_damage("rig validate", csv, damage);
   if (closed_loop) {
     ident::ClosedLoopOptions cl;

@@ -41,6 +41,8 @@ const Command kCommands[] = {
      nimble::cli::run_turbulence_command},
     {"turbulence-response", "turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--f-max HZ] [--json F|-] [--plots DIR]   a flight in Dryden gusts against the closed-loop model",
      nimble::cli::run_turbulence_response_command},
+    {"reproduce", "reproduce thesis [--clock C] [--seed N] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
+     nimble::cli::run_reproduce_command},
 };
 
 void print_usage(std::ostream& out) {

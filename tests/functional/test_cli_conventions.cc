@@ -37,7 +37,7 @@ YAML::Node json_of(const RigResult& r) {
 
 TEST_CASE("cli: every command answers --help on stdout with exit 0, and --version names the version", "[cli]") {
   for (const std::string command : {"model", "run", "sweep", "params", "check", "spy", "identify", "validate",
-                                    "discrepancy", "export", "turbulence", "turbulence-response"}) {
+                                    "discrepancy", "export", "turbulence", "turbulence-response", "reproduce"}) {
     INFO(command);
     const RigResult r = run_rig(command + " --help");
     CHECK(r.exit_code == 0);
@@ -71,6 +71,9 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"turbulence x.yaml --welch-segment 1000", "--welch-segment: '1000' is not a power of two >= 8"},
            {"params nosuchsection", "section: nosuchsection not in"},
            {"model", "model is required"},
+           {"reproduce", "what is required"},
+           {"reproduce paper", "what: paper not in {thesis}"},
+           {"reproduce thesis --states guess", "--states: guess not in {estimate,truth}"},
        }) {
     INFO(c.args);
     const RigResult r = run_rig(c.args);

@@ -3,6 +3,7 @@
 // identification train's state ranges against thesis Table 9.4, set 1.
 
 #include <cmath>
+#include <fstream>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -113,4 +114,84 @@ TEST_CASE("paper flights: the yaw loop holds the four-state model of Table 8.3 t
   INFO(off.output);
   CHECK(off.exit_code != 0);
   CHECK_FALSE(off.summary["controlled"].as<bool>());
+}
+
+namespace {
+
+/// The cells of table `id` in a `rig reproduce` JSON.
+YAML::Node table(const YAML::Node& json, const std::string& id) {
+  for (const auto& t : json["tables"]) {
+    if (t["id"].as<std::string>() == id) return t;
+  }
+  return YAML::Node();
+}
+
+}  // namespace
+
+TEST_CASE("rig reproduce thesis: the campaign flies, and its tables carry the published values and verdicts",
+          "[system]") {
+  const std::string dir = nimble::test::scratch_dir("paper_reproduce");
+  const std::string json = dir + "/tables.json";
+  const auto r = nimble::test::run_rig("reproduce thesis --no-progress --logs " + dir + "/logs --json " + json);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);  // no cell differs
+  const YAML::Node j = YAML::LoadFile(json);
+  CHECK(j["flights"].size() == 12);
+  for (const auto& f : j["flights"]) CHECK(f["controlled"].as<bool>());
+  CHECK(j["counts"]["differs"].as<int>() == 0);
+  CHECK(j["counts"]["match"].as<int>() >= 40);
+  // Every cell of 9.4 set 1, 9.6 and 8.8 matches; the published values are the thesis's.
+  for (const char* id : {"9.4", "9.6", "8.8"}) {
+    const YAML::Node t = table(j, id);
+    REQUIRE(t);
+    for (const auto& c : t["cells"]) {
+      if (std::string(id) == "9.4" && c["row"].as<std::string>() != "set 1") continue;
+      INFO(id << " " << c["row"].as<std::string>() << " / " << c["column"].as<std::string>());
+      CHECK(c["verdict"].as<std::string>() == "match");
+      CHECK(std::fabs(c["rig"].as<double>() - c["published"].as<double>()) <= 0.25 * std::fabs(c["published"].as<double>()));
+    }
+  }
+  const YAML::Node t94 = table(j, "9.4");
+  CHECK(t94["cells"][0]["published"].as<double>() == 12.06);
+  // A cell outside its tolerance carries its reason.
+  for (const auto& t : j["tables"]) {
+    for (const auto& c : t["cells"]) {
+      if (c["verdict"].as<std::string>() == "explained") CHECK(c["reason"].as<std::string>().size() > 40);
+    }
+  }
+  // From the plant's truth, Table 9.5 matches in every cell of every set.
+  const std::string json_truth = dir + "/tables_truth.json";
+  const auto rt = nimble::test::run_rig("reproduce thesis --no-progress --states truth --logs " + dir + "/logs_truth --json " + json_truth);
+  INFO(rt.out << rt.err);
+  REQUIRE(rt.exit_code == 0);
+  for (const auto& c : table(YAML::LoadFile(json_truth), "9.5")["cells"]) {
+    INFO("9.5 " << c["row"].as<std::string>() << " / " << c["column"].as<std::string>());
+    CHECK(c["verdict"].as<std::string>() == "match");
+  }
+}
+
+TEST_CASE("rig reproduce: a campaign file with a table left out is refused, naming the key", "[system]") {
+  const std::string dir = nimble::test::scratch_dir("paper_reproduce_bad");
+  YAML::Node c = YAML::LoadFile(kConfigs + "reproduce/thesis.yaml");
+  c["tables"].remove("9.5");
+  for (auto item : c["flights"]) item.second = kConfigs + "reproduce/" + item.second.as<std::string>();
+  for (auto item : c["sets"]) item.second = kConfigs + "reproduce/" + item.second.as<std::string>();
+  c["lateral4_model"] = kConfigs + "reproduce/" + c["lateral4_model"].as<std::string>();
+  std::ofstream(dir + "/bad.yaml") << c;
+  const auto r = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/bad.yaml --logs " + dir);
+  INFO(r.out << r.err);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("tables.9.5"));
+}
+
+TEST_CASE("rig validate --closed-loop flies the gain set the log's controller flew", "[system]") {
+  const std::string dir = nimble::test::scratch_dir("paper_validate_gains");
+  const RunResult r = rig_run(kConfigs + "cl_doublet_train_slow.yaml", dir, "--clock inprocess --set duration_s=3");
+  REQUIRE(r.exit_code == 0);
+  const std::string json = dir + "/validate.json";
+  const auto v = nimble::test::run_rig("validate " + kConfigs + "models/nimble_lateral_set1.yaml " + dir +
+                                       "/run.lcmlog --closed-loop --json " + json);
+  INFO(v.out << v.err);
+  REQUIRE(v.exit_code == 0);
+  CHECK(YAML::LoadFile(json)["gain_set"].as<std::string>() == "slow");
 }
