@@ -474,10 +474,21 @@ std::string campaign_text(const CampaignResult& r) {
   for (const auto& t : r.tables) {
     out << fmt::format("\nTable {}: {}\n  match: {}\n", t.id, t.title, t.tolerance);
     out << fmt::format("  {:<10} {:<20} {:>11} {:>11}  {}\n", "row", "column", "published", "rig", "verdict");
+    // A table's reasons once each, as notes below it.
+    std::vector<std::string> notes;
     for (const auto& c : t.cells) {
+      std::string note;
+      if (c.verdict == "explained") {
+        auto it = std::find(notes.begin(), notes.end(), c.reason);
+        if (it == notes.end()) it = notes.insert(notes.end(), c.reason);
+        note = fmt::format(" [{}]", it - notes.begin() + 1);
+      } else if (!c.reason.empty()) {
+        note = " (" + c.reason + ")";
+      }
       out << fmt::format("  {:<10} {:<20} {:>11.4g} {:>11.4g}  {}{}\n", c.row, c.column, c.published, c.rig, c.verdict,
-                         c.reason.empty() ? "" : " (" + c.reason + ")");
+                         note);
     }
+    for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
   }
   const auto counts = r.counts();
   const int total = counts.at("match") + counts.at("explained") + counts.at("differs");
