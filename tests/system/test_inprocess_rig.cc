@@ -157,7 +157,7 @@ TEST_CASE("bad input a new user gives is refused before the run, with a message 
     }
   }
   // (the copy's relative paths resolve against its own folder: the same files are linked there)
-  for (const char* sub : {"models", "manoeuvres", "plant", "controller", "sensing", "run", "vehicles", "turbulence"}) {
+  for (const char* sub : {"models", "manoeuvres", "plant", "controller", "sensing", "run", "vehicles", "turbulence", "pilot"}) {
     std::filesystem::create_directory_symlink(kConfigs + sub, d + "/" + sub);
   }
   const RunResult twice = rig_run(dup, d, "--clock inprocess");
