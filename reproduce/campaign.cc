@@ -134,7 +134,6 @@ CampaignSpec load_campaign(const std::string& file) {
 struct Flown {
   FlightRecord record;
   double range_p = 0, range_v = 0, range_phi = 0;
-  std::string gain_set;
 };
 
 Flown fly(const CampaignOptions& o, const std::string& name, const std::string& scenario,
@@ -177,7 +176,6 @@ Flown fly(const CampaignOptions& o, const std::string& name, const std::string& 
     f.range_phi = j["ranges"]["phi"].as<double>();
   }
   f.record.wall_s = seconds_since(t0);
-  f.gain_set = ident::read_rig_log(f.record.log).gain_set;
   if (o.progress) {
     std::cerr << fmt::format("rig reproduce: flew {} ({}) in {:.2f} s: {}\n", name, fs::path(scenario).filename().string(),
                              f.record.wall_s, f.record.result);
@@ -285,6 +283,13 @@ const ident::OutputFit& fit_of(const std::vector<ident::OutputFit>& fits, const 
     if (f.output == output) return f;
   }
   throw std::runtime_error("no fit of " + output);
+}
+
+/// An open-loop validation table: the state-derivative fits of p, v and phi.
+Table open_loop_table(const std::string& id, const TableSpec& spec, const ident::ValidationResult& v) {
+  Judge j(id, spec);
+  for (const char* out : {"p_dot", "v_dot", "phi_dot"}) fit_cells(j, out, fit_of(v.fits, out).metrics);
+  return j.take();
 }
 
 /// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
@@ -396,9 +401,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     const ident::ValidationResult v =
         ident::validate_open_loop(ident::read_rig_log(f.record.log, states).measured, model, vehicle,
                                   ident::ValidationOptions{});
-    Judge j(id, spec.tables.at(id));
-    for (const char* out : {"p_dot", "v_dot", "phi_dot"}) fit_cells(j, out, fit_of(v.fits, out).metrics);
-    result.tables.push_back(j.take());
+    result.tables.push_back(open_loop_table(id, spec.tables.at(id), v));
     if (!o.report_dir.empty()) {
       const fs::path dir = fs::path(o.report_dir) / ("table_" + id + "_" + flight);
       fs::create_directories(dir);
@@ -441,9 +444,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
       const DerivativeModel m = file.empty() ? model : load_model(file);
       const ident::ValidationResult v =
           ident::validate_open_loop(data, m, file.empty() ? vehicle : load_vehicle(m.vehicle_file), ident::ValidationOptions{});
-      Judge j(id, spec.tables.at(id));
-      for (const char* out : {"p_dot", "v_dot", "phi_dot"}) fit_cells(j, out, fit_of(v.fits, out).metrics);
-      result.tables.push_back(j.take());
+      result.tables.push_back(open_loop_table(id, spec.tables.at(id), v));
     }
   }
 
