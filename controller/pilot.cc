@@ -74,6 +74,8 @@ double AltitudePilot::correction_pct(double t_s) {
   const double hdot = (now->second - before->second) / (now->first - before->first);
   const double w = cfg_.bandwidth_radps;
   const double accel = w * w * (h_ref_ - h) - 2.0 * cfg_.damping * w * hdot;
+  // Heights so far apart that the arithmetic overflows are no height a pilot acts on.
+  if (!std::isfinite(accel)) return 0.0;
   return std::clamp(accel / accel_per_pct_, -cfg_.max_correction_pct, cfg_.max_correction_pct);
 }
 

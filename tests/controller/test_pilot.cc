@@ -84,6 +84,10 @@ TEST_CASE("pilot: the correction stops at max_correction_pct, samples out of ord
   CHECK_FALSE(pilot.observe(2.5, std::nan("")));
   CHECK_FALSE(pilot.observe(std::nan(""), 0.0));
   CHECK(pilot.correction_pct(1.9) == 4.0);
+  // Heights whose differences overflow (a malformed pose that still decodes) give no correction.
+  AltitudePilot far(c, kAccelPerPct);
+  feed(far, 0.0, 1.0, [](double t) { return t < 0.5 ? 1e308 : -1e308; });
+  CHECK(far.correction_pct(0.95) == 0.0);
 }
 
 TEST_CASE("pilot: a % of throttle accelerates by the thrust curve's slope times the map over the mass", "[pilot]") {
