@@ -154,6 +154,7 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   r.source = data.source;
   r.model = model.name;
   r.phi_sp = phi_sp;
+  r.phi_ref = Eigen::VectorXd::Zero(n);
   r.gain_set = options.gain_set;
   r.rate_hz = rate_hz;
   r.t_s = grid.t_s;
@@ -177,6 +178,7 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
     in.p_radps = x[0];
     in.roll_sp_rad = phi_sp[k];
     const ControllerOutput out = controller.step(in);
+    r.phi_ref[k] = out.roll_ref_rad;
     cmd_hist.push_back(out.delta_f_cmd_radps);
     const Eigen::Index back = static_cast<Eigen::Index>(cmd_hist.size()) - 1 - cmd_delay;
     const Eigen::Vector2d u(back >= 0 ? cmd_hist[static_cast<std::size_t>(back)] : 0.0, dt[k]);
@@ -209,7 +211,10 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
     panel.ylabel = std::string(s.name) + " [" + s.unit + "]";
     panel.series.push_back({"measured", r.measured.at(s.name), "#1f77b4", false});
     panel.series.push_back({"simulated", r.simulated.at(s.name), "#d62728", false});
-    if (std::string(s.name) == "phi") panel.series.push_back({"phi_sp", r.phi_sp, "#2ca02c", true});
+    if (std::string(s.name) == "phi") {
+      panel.series.push_back({"phi_sp", r.phi_sp, "#2ca02c", true});
+      panel.series.push_back({"phi_ref (simulated)", r.phi_ref, "#9467bd", true});
+    }
     panels.push_back(std::move(panel));
   }
   const std::string title = "closed-loop validation: " + r.model + " flown by the controller copy (gains " + r.gain_set +

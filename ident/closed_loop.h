@@ -37,6 +37,7 @@ struct ClosedLoopResult {
   /// Measured and simulated p [rad/s], v [m/s], phi [rad], delta_f [rad/s].
   std::map<std::string, Eigen::VectorXd> measured, simulated;
   Eigen::VectorXd phi_sp;  ///< roll set-point flown [rad]
+  Eigen::VectorXd phi_ref; ///< the controller copy's roll reference (reference generator output) [rad]
   /// Fit of each simulated signal against the measured one (P = 1: nothing fitted).
   std::map<std::string, FitMetrics> fits;
 };
@@ -51,7 +52,7 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
                                       const ClosedLoopOptions& options);
 
 /// Writes closed_loop.png into `dir` (with its .dat data and .gp script): the time
-/// histories of p, phi (with phi_sp), v and delta_f, measured against simulated, each
+/// histories of p, phi (with phi_sp and the simulated phi_ref), v and delta_f, measured against simulated, each
 /// panel titled with its r_xy, R^2 and RMSE. Returns the PNG paths.
 /// @throws std::runtime_error if gnuplot (Debian package gnuplot-nox) is missing or fails.
 std::vector<std::string> plot_closed_loop(const ClosedLoopResult& result, const std::string& dir);
