@@ -213,7 +213,7 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
     panel.series.push_back({"simulated", r.simulated.at(s.name), "#d62728", false});
     if (std::string(s.name) == "phi") {
       panel.series.push_back({"phi_sp", r.phi_sp, "#2ca02c", true});
-      panel.series.push_back({"phi_ref (simulated)", r.phi_ref, "#9467bd", true});
+      panel.series.push_back({"phi_ref", r.phi_ref, "#9467bd", true});  // the controller copy's
     }
     panels.push_back(std::move(panel));
   }

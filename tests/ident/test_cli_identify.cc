@@ -203,7 +203,7 @@ TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histori
   std::string header, line;
   std::getline(dat, header);
   for (const char* column : {" t_s ", " p:measured ", " p:simulated ", " phi:measured ", " phi:simulated ",
-                             " phi:phi_sp ", " v:measured ", " v:simulated ", " delta_f:measured ", " delta_f:simulated "}) {
+                             " phi:phi_sp ", " phi:phi_ref ", " v:measured ", " v:simulated ", " delta_f:measured ", " delta_f:simulated "}) {
     INFO(column);
     CHECK((header + " ").find(column) != std::string::npos);
   }
@@ -217,7 +217,7 @@ TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histori
     }
   }
   CHECK(rows == j["samples"].as<long>());
-  CHECK(columns == 10);
+  CHECK(columns == 11);
   const std::string script = slurp((plots / "closed_loop.gp").string());
   for (const char* panel : {"p ", "phi ", "v ", "delta_f "}) CHECK(script.find(std::string("set title '") + panel) != std::string::npos);
 
