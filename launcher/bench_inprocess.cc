@@ -9,7 +9,9 @@
 ///    and motion capture (flying on truth);
 ///  - the machine's floor in the same run: the plant model stepped alone at its rate, nothing
 ///    else (no sensors, no controller, no messages), as a speed and as the ratio rig / floor;
-///  - the time of `rig sweep` over the five published parameter sets x 20 seeds.
+///  - the time of `rig sweep` over the five published parameter sets x 20 seeds;
+///  - the time of `rig reproduce thesis` (12 flights, identification, validation, every table;
+///    the target: <= 60 s), and its simulated seconds per wall second against the floor.
 /// Not a test: figures depend on the machine; the ratio to the floor is what travels.
 
 #include <sys/wait.h>
@@ -25,6 +27,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <yaml-cpp/yaml.h>
 
 #include "cli/args.h"
 #include "launcher/inprocess.h"
@@ -88,17 +92,21 @@ double plant_floor_x(const launcher::RunPlan& plan, double duration_s, int runs)
   return median(x);
 }
 
+/// Wall seconds of `cmd` through the shell; negative if it failed.
+double command_seconds(const std::string& cmd) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? s : -s;
+}
+
 double sweep_seconds(const std::string& rig, const std::string& scenario) {
   std::string vary = "model=";
   for (int k = 1; k <= 5; ++k) {
     vary += std::string(k > 1 ? "," : "") + RIG_SOURCE_DIR + "/rig_configs/models/nimble_lateral_set" +
             std::to_string(k) + ".yaml";
   }
-  const std::string cmd = rig + " sweep " + scenario + " --seeds 1-20 --vary " + vary + " --no-progress > /dev/null";
-  const auto t0 = std::chrono::steady_clock::now();
-  const int status = std::system(cmd.c_str());
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? s : -s;
+  return command_seconds(rig + " sweep " + scenario + " --seeds 1-20 --vary " + vary + " --no-progress > /dev/null");
 }
 
 }  // namespace
@@ -150,6 +158,13 @@ int main(int argc, char** argv) {
     const double sweep_s = sweep_seconds(rig, scenario);
     std::printf("  %-58s %7.2f s%s\n", "rig sweep, 5 published sets x 20 seeds, 6 s each", std::abs(sweep_s),
                 sweep_s < 0 ? "  (some run not ok)" : "");
+    const double reproduce_s = command_seconds(rig + " reproduce thesis --no-progress --logs " + dir +
+                                               "/reproduce --json " + dir + "/reproduce.json > /dev/null");
+    double campaign_sim_s = 0.0;  // simulated seconds of every flight of the campaign
+    for (const auto& f : YAML::LoadFile(dir + "/reproduce.json")["flights"]) campaign_sim_s += f["sim_s"].as<double>();
+    std::printf("  %-58s %7.2f s%s (target <= 60 s; %.0fx real time, %.3f of the floor)\n",
+                "rig reproduce thesis, in process", std::abs(reproduce_s), reproduce_s < 0 ? "  (a cell differs)" : "",
+                campaign_sim_s / std::abs(reproduce_s), campaign_sim_s / std::abs(reproduce_s) / floor_x);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_inprocess: %s\n", e.what());
     fs::remove_all(dir);

@@ -157,6 +157,7 @@ Flown fly(const CampaignOptions& o, const std::string& name, const std::string& 
     const launcher::RunReport report = launcher::fly_inprocess(plan, io);
     f.record.result = report.verdict.text;
     f.record.controlled = report.verdict.controlled;
+    f.record.sim_s = report.sim_time_s;
     f.range_p = report.flight.max_p - report.flight.min_p;
     f.range_v = report.flight.max_v - report.flight.min_v;
     f.range_phi = report.flight.max_phi - report.flight.min_phi;
@@ -171,6 +172,7 @@ Flown fly(const CampaignOptions& o, const std::string& name, const std::string& 
     const YAML::Node j = YAML::LoadFile(json);
     f.record.result = j["result"].as<std::string>();
     f.record.controlled = j["controlled"].as<bool>();
+    f.record.sim_s = j["sim_time_s"].as<double>();
     f.range_p = j["ranges"]["p"].as<double>();
     f.range_v = j["ranges"]["v"].as<double>();
     f.range_phi = j["ranges"]["phi"].as<double>();
@@ -526,7 +528,8 @@ std::string campaign_json(const CampaignResult& r) {
   w.key("flights").begin_array();
   for (const auto& f : r.flights) {
     w.begin_object().key("name").value(f.name).key("scenario").value(f.scenario).key("log").value(f.log);
-    w.key("result").value(f.result).key("controlled").value(f.controlled).key("wall_s").value(f.wall_s).end_object();
+    w.key("result").value(f.result).key("controlled").value(f.controlled).key("sim_s").value(f.sim_s);
+    w.key("wall_s").value(f.wall_s).end_object();
   }
   w.end_array();
   w.key("tables").begin_array();

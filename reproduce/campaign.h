@@ -54,6 +54,7 @@ struct FlightRecord {
   std::string log;       ///< its log
   std::string result;    ///< the run's verdict text
   bool controlled = false;
+  double sim_s = 0.0;    ///< simulated time flown
   double wall_s = 0.0;
 };
 
