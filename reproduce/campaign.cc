@@ -40,6 +40,9 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 struct Tolerance {
   double relative = 0.0;
   double relative_to_modulus = 0.0;
+  /// Also a match within this many standard deviations of the rig's estimate (its Newey-West
+  /// sigma, coloured residuals), where that is wider: for identified parameters.
+  double sigmas = 0.0;
   std::map<std::string, double> absolute;  ///< by column
 };
 
@@ -97,6 +100,7 @@ CampaignSpec load_campaign(const std::string& file) {
     s.title = t.get_string("title");
     s.tolerance.relative = t.get_double_or("relative", 0.0, Range::closed(0.0, 10.0));
     s.tolerance.relative_to_modulus = t.get_double_or("relative_to_modulus", 0.0, Range::closed(0.0, 10.0));
+    s.tolerance.sigmas = t.get_double_or("sigmas", 0.0, Range::closed(0.0, 10.0));
     if (t.has("absolute")) {
       ConfigMap a = t.get_map("absolute");
       for (const auto& item : t.get_node("absolute")) {
@@ -227,10 +231,14 @@ class Judge {
       t << "within " << 100 * spec.tolerance.relative_to_modulus << " % of the published eigenvalue's modulus";
     }
     for (const auto& [col, a] : spec.tolerance.absolute) t << (t.tellp() > 0 ? "; " : "") << col << " within " << a;
+    if (spec.tolerance.sigmas > 0) {
+      t << ", or within " << spec.tolerance.sigmas << " standard deviations of the rig's estimate where that is wider";
+    }
     table_.tolerance = t.str();
   }
-  /// Adds the cell (row, column) with the rig's value; `modulus` for eigenvalue tables.
-  void cell(const std::string& row, const std::string& column, double rig, double modulus = NAN) {
+  /// Adds the cell (row, column) with the rig's value; `modulus` for eigenvalue tables, `sigma`
+  /// (the standard deviation of the rig's value) for identified parameters.
+  void cell(const std::string& row, const std::string& column, double rig, double modulus = NAN, double sigma = NAN) {
     const auto r = spec_.published.find(row);
     if (r == spec_.published.end() || r->second.count(column) == 0) return;  // not published
     Cell c;
@@ -247,6 +255,7 @@ class Judge {
     } else {
       allowed = spec_.tolerance.relative * std::fabs(c.published);
     }
+    if (spec_.tolerance.sigmas > 0 && std::isfinite(sigma)) allowed = std::max(allowed, spec_.tolerance.sigmas * sigma);
     const bool match = std::isfinite(rig) && std::fabs(rig - c.published) <= allowed;
     if (match) {
       c.verdict = "match";
@@ -382,11 +391,14 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     const double f = v.flap_frequency_hz, rho = v.air_density_kgpm3, A = v.wing_area_m2, c = v.mean_chord_m;
     const double U = 2.0 * v.flap_amplitude_rad * f * v.r2_m;
     const auto d = [&](const char* name) { return set1->parameters.at(name).value; };
+    const auto sd = [&](const char* name) { return set1->parameters.at(name).sigma_coloured; };
     const std::string row = spec.sets.front().first;
-    t96.cell(row, "Lp+", d("Lp") * f / (rho * U * U * A * c));
-    t96.cell(row, "Lv+", d("Lv") / (rho * U * A * c));
-    t96.cell(row, "Yp+", d("Yp") * f / (rho * U * U * A));
-    t96.cell(row, "Yv+", d("Yv") / (rho * U * A));
+    const double kLp = f / (rho * U * U * A * c), kLv = 1.0 / (rho * U * A * c);
+    const double kYp = f / (rho * U * U * A), kYv = 1.0 / (rho * U * A);
+    t96.cell(row, "Lp+", d("Lp") * kLp, NAN, sd("Lp") * kLp);
+    t96.cell(row, "Lv+", d("Lv") * kLv, NAN, sd("Lv") * kLv);
+    t96.cell(row, "Yp+", d("Yp") * kYp, NAN, sd("Yp") * kYp);
+    t96.cell(row, "Yv+", d("Yv") * kYv, NAN, sd("Yv") * kYv);
     result.tables.push_back(t96.take());
   }
   fit_cells(t4, "p_dot", fit_of(set1->fits, "p_dot").metrics);
