@@ -219,7 +219,24 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
   }
   const std::string title = "closed-loop validation: " + r.model + " flown by the controller copy (gains " + r.gain_set +
                             ") on phi_sp of " + r.source;
-  return {plot_time_histories(dir, "closed_loop", title, r.t_s, panels)};
+  // Residual autocorrelation of each simulated signal (thesis Figs C.4-C.9), lags as for the
+  // identification's 9 Hz data.
+  std::vector<OutputFit> fits;
+  ProcessingOptions processing;
+  processing.rate_hz = r.rate_hz;
+  const std::size_t lag_step = whiteness_lag_step(0, processing);
+  for (const Signal& s : signals) {
+    OutputFit f;
+    f.output = s.name;
+    f.unit = s.unit;
+    f.measured = r.measured.at(s.name);
+    f.estimated = r.simulated.at(s.name);
+    f.metrics = r.fits.at(s.name);
+    f.whiteness = residual_whiteness(f.measured - f.estimated, r.rate_hz, 50, lag_step);
+    fits.push_back(std::move(f));
+  }
+  return {plot_time_histories(dir, "closed_loop", title, r.t_s, panels),
+          plot_autocorrelation(dir, fits, "residual autocorrelation, closed loop: " + r.model + " on " + r.source)};
 }
 
 }  // namespace nimble::ident

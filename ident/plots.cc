@@ -68,7 +68,8 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
   return png.string();
 }
 
-/// Residual autocorrelation per output with the 95 % bounds.
+}  // namespace
+
 std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFit>& fits, const std::string& title) {
   const fs::path dat = dir / "autocorrelation.dat";
   std::ostringstream data;
@@ -107,6 +108,8 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   run_gnuplot(dir, "autocorrelation", s.str());
   return png.string();
 }
+
+namespace {
 
 std::string plot_psd(const fs::path& dir, const IdentResult& r) {
   const fs::path dat = dir / "psd.dat";

@@ -56,6 +56,11 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
 /// @throws std::runtime_error as plot_identification.
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir);
 
+/// autocorrelation.png in `dir` (with its .dat and .gp): the residual autocorrelation of each fit
+/// (OutputFit::whiteness) with the 95 % bounds, one panel per output, titled with its verdict.
+std::string plot_autocorrelation(const std::filesystem::path& dir, const std::vector<OutputFit>& fits,
+                                 const std::string& title);
+
 /// Axes of plot_panels().
 struct PlotAxes {
   std::string xlabel = "time [s]";

@@ -182,8 +182,14 @@ TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histori
   const fs::path png = plots / "closed_loop.png";
   CHECK(r.out.find("plot " + png.string()) != std::string::npos);
   const YAML::Node j = YAML::LoadFile(json);
-  REQUIRE(j["plots"].size() == 1);
+  REQUIRE(j["plots"].size() == 2);
   CHECK(j["plots"][0].as<std::string>() == png.string());
+  // The residual autocorrelation of the four simulated signals (thesis Figs C.4-C.9).
+  CHECK(j["plots"][1].as<std::string>() == (plots / "autocorrelation.png").string());
+  const std::string autocorrelation = slurp((plots / "autocorrelation.gp").string());
+  for (const char* signal : {"residual of p:", "residual of phi:", "residual of v:", "residual of delta_f:"}) {
+    CHECK(autocorrelation.find(signal) != std::string::npos);
+  }
   // A real PNG of a 1400 x 1200 four-panel figure, not an empty or error image.
   const std::string bytes = slurp(png.string());
   REQUIRE(bytes.size() > 30000);
