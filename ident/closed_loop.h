@@ -51,10 +51,10 @@ struct ClosedLoopResult {
 ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                       const ClosedLoopOptions& options);
 
-/// Writes closed_loop.png into `dir` (with its .dat data and .gp script), and autocorrelation.png
-/// (the residual autocorrelation of each signal, thesis Figs C.4-C.9): the time
-/// histories of p, phi (with phi_sp and the simulated phi_ref), v and delta_f, measured against simulated, each
-/// panel titled with its r_xy, R^2 and RMSE. Returns the PNG paths.
+/// Writes closed_loop.png into `dir` (with its .dat data and .gp script): the time histories of
+/// p, phi (with phi_sp and the simulated phi_ref), v and delta_f, measured against simulated, each
+/// panel titled with its r_xy, R^2 and RMSE; and autocorrelation.png: the residual
+/// autocorrelation of each of them with the 95 % bounds (thesis Figs C.4-C.9). Returns the PNG paths.
 /// @throws std::runtime_error if gnuplot (Debian package gnuplot-nox) is missing or fails.
 std::vector<std::string> plot_closed_loop(const ClosedLoopResult& result, const std::string& dir);
 
