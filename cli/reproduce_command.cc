@@ -10,6 +10,7 @@
 #include "cli/args.h"
 #include "cli/commands.h"
 #include "core/config.h"
+#include "launcher/launcher.h"
 #include "launcher/run_plan.h"
 #include "reproduce/campaign.h"
 
@@ -57,9 +58,8 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   cl->add_flag("--no-progress", "no line per flight on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
   if (!json_file.empty() && json_file != "-") {
-    std::ofstream probe(json_file, std::ios::app);
-    if (!probe) {
-      std::cerr << "rig reproduce: cannot write " << json_file << "\n";
+    if (const std::string problem = launcher::writable_problem(json_file); !problem.empty()) {
+      std::cerr << "rig reproduce: --json " << json_file << ": " << problem << "\n";
       return kExitUsage;
     }
   }

@@ -49,10 +49,7 @@
 #include "transport/clock.h"
 
 namespace nimble::launcher {
-namespace {
 
-/// "" if `file` can be written (opened for appending; a file made by the check is removed
-/// again), else why not.
 std::string writable_problem(const std::string& file) {
   const bool existed = std::filesystem::exists(file);
   errno = 0;
@@ -63,8 +60,6 @@ std::string writable_problem(const std::string& file) {
   if (!existed) std::filesystem::remove(file);
   return "";
 }
-
-}  // namespace
 
 namespace {
 

@@ -20,6 +20,10 @@ namespace nimble::launcher {
 /// errors on stderr. Must be called before the process has started any thread.
 int run_scenario(const RunOptions& options);
 
+/// "" if `file` can be written (opened for appending; a file made by the check is removed
+/// again), else why not: outputs are checked before anything flies.
+std::string writable_problem(const std::string& file);
+
 /// `rig check`: whether this host can run LCM multicast, with the fix if not. Returns 0 if
 /// runs can proceed (directly or in a private namespace), 1 otherwise. `json_target` (a file,
 /// or "-" for stdout with the text on stderr) also gets the findings as JSON.

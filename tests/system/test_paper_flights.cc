@@ -3,6 +3,7 @@
 // identification train's state ranges against thesis Table 9.4, set 1.
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -186,6 +187,13 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
   INFO(r.out << r.err);
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("tables.9.5"));
+  // An output that cannot be written is named before anything flies.
+  const auto out = nimble::test::run_rig("reproduce thesis --no-progress --logs " + dir + "/never --json " + dir +
+                                         "/no/such/dir/tables.json");
+  INFO(out.out << out.err);
+  CHECK(out.exit_code == 2);
+  CHECK_THAT(out.err, Catch::Contains("--json") && Catch::Contains("cannot be written"));
+  CHECK_FALSE(std::filesystem::exists(dir + "/never"));
 }
 
 TEST_CASE("rig validate --closed-loop flies the gain set the log's controller flew", "[system]") {
