@@ -1,6 +1,7 @@
 #include "reproduce/campaign.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <complex>
@@ -57,7 +58,12 @@ struct TableSpec {
 struct CampaignSpec {
   std::string file;
   std::map<std::string, std::string> flights;  ///< name -> scenario
-  std::vector<std::pair<std::string, std::string>> sets;  ///< row name -> model file
+  struct Set {
+    std::string row;        ///< "set N"
+    std::string model;      ///< the set's model file
+    std::string manoeuvre;  ///< the set's identification train (empty: the scenario's)
+  };
+  std::vector<Set> sets;
   std::string lateral4_model;
   std::map<std::string, std::string> coupled_models;  ///< table id -> model file
   std::map<std::string, TableSpec> tables;
@@ -82,9 +88,13 @@ CampaignSpec load_campaign(const std::string& file) {
   }
   {
     const YAML::Node sets = root.get_node("sets");
-    if (!sets.IsMap() || sets.size() == 0) root.fail("sets", "must map each set's row name to its model file");
+    if (!sets.IsMap() || sets.size() == 0) root.fail("sets", "must map each set's row name to its model and manoeuvre");
     for (const auto& item : sets) {
-      c.sets.emplace_back(item.first.as<std::string>(), resolve(file, item.second.as<std::string>()));
+      const std::string row = item.first.as<std::string>();
+      ConfigMap set(item.second, file, root.key_path("sets") + "." + row);
+      c.sets.push_back({row, resolve(file, set.get_string("model")),
+                        set.has("manoeuvre") ? resolve(file, set.get_string("manoeuvre")) : ""});
+      set.finish();
     }
   }
   c.lateral4_model = resolve(file, root.get_string("lateral4_model"));
@@ -218,6 +228,24 @@ std::pair<double, std::complex<double>> split_eigenvalues(const std::vector<std:
     }
   }
   return {real, osc};
+}
+
+/// Standard deviations of the aperiodic eigenvalue and of the oscillatory pair's real and imaginary
+/// parts of an identified three-state model: each stability derivative of A moved by its
+/// estimate's standard deviation (Newey-West), the changes added in quadrature.
+std::array<double, 3> eigenvalue_sigmas(const ident::IdentResult& id) {
+  const auto [a0, o0] = split_eigenvalues(id.eigenvalues);
+  double va = 0.0, vr = 0.0, vi = 0.0;
+  for (const char* name : {"Lp", "Lv", "Yp", "Yv"}) {
+    DerivativeModel moved = id.model;
+    moved.derivatives[name] += id.parameters.at(name).sigma_coloured;
+    const Eigen::VectorXcd eig = build_state_space(moved, id.vehicle).A.eigenvalues();
+    const auto [a, o] = split_eigenvalues(std::vector<std::complex<double>>(eig.data(), eig.data() + eig.size()));
+    va += (a - a0) * (a - a0);
+    vr += (o.real() - o0.real()) * (o.real() - o0.real());
+    vi += (o.imag() - o0.imag()) * (o.imag() - o0.imag());
+  }
+  return {std::sqrt(va), std::sqrt(vr), std::sqrt(vi)};
 }
 
 class Judge {
@@ -359,10 +387,12 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   std::optional<ident::IdentResult> set1;
   std::string set1_log;
   std::vector<std::pair<std::string, std::vector<std::complex<double>>>> all_eigenvalues;
-  for (const auto& [row, model_file] : spec.sets) {
+  for (const auto& [row, model_file, manoeuvre] : spec.sets) {
     const std::string flight_name = "identification_" + row.substr(row.rfind(' ') + 1);
-    const Flown f = fly(o, row == spec.sets.front().first ? "identification" : flight_name,
-                        spec.flights.at("identification"), {Override{"model", model_file}});
+    std::vector<Override> overrides{{"model", model_file}};
+    if (!manoeuvre.empty()) overrides.push_back({"manoeuvre", manoeuvre});
+    const Flown f = fly(o, row == spec.sets.front().row ? "identification" : flight_name,
+                        spec.flights.at("identification"), overrides);
     result.flights.push_back(f.record);
     t94.cell(row, "p", f.range_p);
     t94.cell(row, "v", f.range_v);
@@ -371,11 +401,12 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     const Vehicle vehicle = load_vehicle(truth.vehicle_file);
     ident::IdentResult id = identify_flight(f.record.log, states, vehicle, truth.vehicle_file, "rig_" + row);
     const auto [aperiodic, osc] = split_eigenvalues(id.eigenvalues);
-    t95.cell(row, "aperiodic", aperiodic, std::fabs(spec.tables.at("9.5").published.at(row).at("aperiodic")));
+    const std::array<double, 3> sd = eigenvalue_sigmas(id);
+    t95.cell(row, "aperiodic", aperiodic, std::fabs(spec.tables.at("9.5").published.at(row).at("aperiodic")), sd[0]);
     const auto& pub = spec.tables.at("9.5").published.at(row);
     const double modulus = std::abs(std::complex<double>(pub.at("oscillatory re"), pub.at("oscillatory im")));
-    t95.cell(row, "oscillatory re", osc.real(), modulus);
-    t95.cell(row, "oscillatory im", osc.imag(), modulus);
+    t95.cell(row, "oscillatory re", osc.real(), modulus, sd[1]);
+    t95.cell(row, "oscillatory im", osc.imag(), modulus, sd[2]);
     all_eigenvalues.emplace_back(row, id.eigenvalues);
     if (!set1) {
       set1 = std::move(id);
@@ -392,7 +423,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     const double U = 2.0 * v.flap_amplitude_rad * f * v.r2_m;
     const auto d = [&](const char* name) { return set1->parameters.at(name).value; };
     const auto sd = [&](const char* name) { return set1->parameters.at(name).sigma_coloured; };
-    const std::string row = spec.sets.front().first;
+    const std::string row = spec.sets.front().row;
     const double kLp = f / (rho * U * U * A * c), kLv = 1.0 / (rho * U * A * c);
     const double kYp = f / (rho * U * U * A), kYv = 1.0 / (rho * U * A);
     t96.cell(row, "Lp+", d("Lp") * kLp, NAN, sd("Lp") * kLp);

@@ -6,7 +6,8 @@
 /// model sets whose identification flights Table 9.4 and 9.5 need, and per table the published
 /// values, the tolerance of a `match` and the reasons of cells that are `explained`. This module
 /// flies, identifies, validates and judges:
-///  - 9.4  state ranges of each set's identification flight (the train flown on that set's model);
+///  - 9.4  state ranges of each set's identification flight (the train flown on that set's model,
+///         with that set's excitation: the campaign file may name a manoeuvre per set);
 ///  - 9.5  eigenvalues of the model identified from each of those flights;
 ///  - 9.6  non-dimensional derivatives (thesis Eq 9.2) of the model identified from set 1's flight;
 ///  - 4    the identification's equation-error fit (set 1);
