@@ -150,16 +150,20 @@ TEST_CASE("throttle factor 1/cos(max roll) applies only during manoeuvre segment
   CHECK(in_doublets > 100);
 
   // Offset manoeuvre: the factor uses offset + amplitude and holds at the offset apply it.
-  const Manoeuvre nl = load_manoeuvre(kManoeuvres + "nonlinear_doublet_30deg.yaml");
+  // The shipped file flies `throttle_factor: setpoint`; the same manoeuvre with the factor of
+  // Eq 7.1 held over every non-level segment first.
+  const Manoeuvre shipped = load_manoeuvre(kManoeuvres + "nonlinear_doublet_30deg.yaml");
+  CHECK(shipped.throttle_factor_from_setpoint);
+  Manoeuvre nl = shipped;
+  nl.throttle_factor_from_setpoint = false;
   CHECK(nl.throttle_factor == Approx(1.0 / std::cos(45.0 * kDeg)));
   const ManoeuvrePlayer nlp(nl, kTrim);
   CHECK(nlp.at(0.5).throttle_factor == 1.0);  // hover before
   CHECK(nlp.at(1.5).throttle_factor == Approx(std::sqrt(2.0)));  // sideways hold
 
-  // The same manoeuvre with `throttle_factor: setpoint`: the factor follows the set-point of the
+  // With `throttle_factor: setpoint` (the shipped file): the factor follows the set-point of the
   // moment (its largest, offset + amplitude, is the manoeuvre's).
-  Manoeuvre nls = nl;
-  nls.throttle_factor_from_setpoint = true;
+  const Manoeuvre& nls = shipped;
   const ManoeuvrePlayer nlsp(nls, kTrim);
   CHECK(nlsp.at(0.5).throttle_factor == 1.0);  // hover before
   CHECK(nlsp.at(1.1).throttle_factor == Approx(1.0 / std::cos(15.0 * kDeg)));  // half-way up the ramp
@@ -167,6 +171,7 @@ TEST_CASE("throttle factor 1/cos(max roll) applies only during manoeuvre segment
   CHECK(nlsp.at(1.75).throttle_factor == Approx(1.0 / std::cos(15.0 * kDeg)));  // doublet, lower pulse
   CHECK(nlsp.at(1.9).throttle_factor == Approx(std::sqrt(2.0)));  // doublet, far pulse at 45 deg
   CHECK(nlsp.at(1.9).delta_throttle_pct == Approx(kTrim * (std::sqrt(2.0) - 1.0)));
+  CHECK(nlsp.at(nlsp.duration_s() - 0.1).throttle_factor == 1.0);  // hover after
   CHECK(nlp.at(nlp.duration_s() - 0.1).throttle_factor == 1.0);  // hover after
 }
 
