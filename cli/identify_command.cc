@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/vehicle.h"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/json_writer.h"
 #include "core/model.h"

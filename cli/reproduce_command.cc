@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/config.h"
 #include "launcher/launcher.h"

@@ -7,7 +7,7 @@
 #include <tuple>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "launcher/sweep.h"
 

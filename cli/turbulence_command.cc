@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "cli/report_files.h"
 #include "core/json_writer.h"

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "cli/commands.h"
 #include "cli/report_files.h"
 #include "controller/attitude_controller.h"

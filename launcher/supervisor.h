@@ -1,7 +1,7 @@
 #pragma once
 /// ProcessSupervisor: starts child processes, notices when they die, and stops them in order.
 /// Used by the launcher for the rig's processes and by the benches and system tests that start
-/// processes of their own (can_bridge/bench/bench_can_bridge.cc).
+/// processes of their own (bench/bench_can_bridge.cc).
 ///
 /// A child dies with its supervisor (PR_SET_PDEATHSIG), ignores SIGINT (the supervisor handles
 /// Ctrl-C and stops everything in order), may be pinned to CPUs, and writes its output to a

@@ -18,7 +18,7 @@
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/timing_health_t.hpp>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 
 namespace nimble::transport {
 

@@ -35,7 +35,7 @@
 #include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "contract/channels.h"
 
 namespace {

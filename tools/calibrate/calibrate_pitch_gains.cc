@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "controller/attitude_controller.h"
 #include "controller/pitch_loop.h"
 #include "core/config.h"

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "controller/attitude_controller.h"
 #include "controller/linear_closed_loop.h"
 #include "controller/manoeuvre.h"

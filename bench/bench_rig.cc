@@ -37,9 +37,9 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "core/json_writer.h"
-#include "launcher/bench_floor.h"
+#include "bench/bench_floor.h"
 #include "launcher/netns.h"
 #include "launcher/run_plan.h"
 

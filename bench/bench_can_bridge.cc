@@ -65,7 +65,7 @@
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/run_control_t.hpp>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "contract/channels.h"
 #include "launcher/netns.h"
 #include "launcher/supervisor.h"

@@ -30,7 +30,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "cli/args.h"
+#include "cmdline/args.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include "plant/plant_node.h"

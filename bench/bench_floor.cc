@@ -1,4 +1,4 @@
-#include "launcher/bench_floor.h"
+#include "bench/bench_floor.h"
 
 #include <poll.h>
 #include <sched.h>

@@ -1,4 +1,4 @@
-#include "cli/args.h"
+#include "cmdline/args.h"
 
 #include <cmath>
 #include <fstream>

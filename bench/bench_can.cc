@@ -25,7 +25,7 @@
 #include "can_bridge/can_socket.h"
 #include "can_bridge/codec.h"
 #include "can_bridge/frame_layout.h"
-#include "cli/args.h"
+#include "cmdline/args.h"
 
 namespace {
 
