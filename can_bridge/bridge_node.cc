@@ -6,7 +6,7 @@
 #include <cstring>
 #include <ctime>
 
-#include <nimble/can_health_t.hpp>
+#include "contract/messages.h"
 #include <nimble/fault_event_t.hpp>
 
 #include "transport/clock.h"
@@ -173,13 +173,13 @@ void CanBridgeNode::update_bus_off(int64_t utime) {
   char when[40];
   std::snprintf(when, sizeof when, "t = %.3f s", 1e-6 * static_cast<double>(utime));
   if (injected_bus_off_) {
-    bus_state_ = can_health_t::BUS_OFF;
+    bus_state_ = CanHealth::kBusOff;
     last_error_ = "bus-off (injected " + off->describe() + ")";
     node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
                  "bus-off on " + config_.interface + " at " + when + ": this controller sends nothing (injected " +
                      off->describe() + ")");
   } else {
-    bus_state_ = can_health_t::BUS_ACTIVE;
+    bus_state_ = CanHealth::kBusActive;
     node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
                  "back to error-active on " + config_.interface + " at " + when + ": sending again");
   }
@@ -310,10 +310,10 @@ void CanBridgeNode::reject(const ReceivedFrame& rx, DecodeResult result) {
 void CanBridgeNode::on_error_frame(const ReceivedFrame& rx) {
   log_frame(rx);
   const ErrorFrameInfo& e = rx.error;
-  if (e.bus_off) bus_state_ = can_health_t::BUS_OFF;
-  else if (e.error_passive) bus_state_ = can_health_t::BUS_PASSIVE;
-  else if (e.error_warning) bus_state_ = can_health_t::BUS_WARNING;
-  else if (e.back_to_error_active || e.restarted) bus_state_ = can_health_t::BUS_ACTIVE;
+  if (e.bus_off) bus_state_ = CanHealth::kBusOff;
+  else if (e.error_passive) bus_state_ = CanHealth::kBusPassive;
+  else if (e.error_warning) bus_state_ = CanHealth::kBusWarning;
+  else if (e.back_to_error_active || e.restarted) bus_state_ = CanHealth::kBusActive;
   last_error_ = e.description;
   node_->fault(e.bus_off ? fault_event_t::SEVERITY_ERROR : fault_event_t::SEVERITY_WARNING,
                fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,
@@ -324,11 +324,11 @@ void CanBridgeNode::publish_health() {
   const CanSocketStats& s = socket_->stats();
   const DecodeStats& d = role_ == Role::kRig ? command_decoder_.stats() : feedback_decoder_.stats();
   const EncodeStats& enc = role_ == Role::kFlight ? command_encoder_.stats() : feedback_encoder_.stats();
-  can_health_t h;
+  CanHealth h;
   h.utime = transport::wall_us();
   h.seq = health_seq_++;
   h.process = node_->name();
-  h.role = role_ == Role::kFlight ? can_health_t::ROLE_FLIGHT : can_health_t::ROLE_RIG;
+  h.role = role_ == Role::kFlight ? CanHealth::kRoleFlight : CanHealth::kRoleRig;
   h.interface_name = config_.interface;
   h.messages_to_can = messages_to_can_;
   h.messages_to_lcm = messages_to_lcm_;
@@ -353,7 +353,7 @@ void CanBridgeNode::publish_health() {
   h.last_error = last_error_;
   h.candump_file = candump_ ? candump_->path() : "";
   h.candump_lines = candump_ ? static_cast<int64_t>(candump_->lines_written()) : 0;
-  node_->bus().publish(ch::kCanHealth, h);
+  node_->bus().publish(ch::kCanHealth, contract::to_message(h));
   next_health_wall_ns_ = transport::monotonic_ns() + health_period_ns_;
   if (candump_) candump_->flush();
 }

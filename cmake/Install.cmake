@@ -2,11 +2,11 @@
 #
 #   bin/                          rig and the rig's processes (rig finds them next to itself)
 #   lib/                          the libraries for reuse (static): nimble_core, nimble_contract,
-#                                 nimble_ident, nimble_ident_lcm
+#                                 nimble_messages, nimble_ident, nimble_ident_lcm
 #   include/nimble_rig/           their headers (core/, contract/, ident/) and the generated
 #                                 LCM types (nimble/<type>.hpp)
 #   lib/cmake/nimble_rig/         find_package(nimble_rig): nimble_rig::lcmtypes, ::core,
-#                                 ::contract, ::ident, ::ident_lcm
+#                                 ::contract, ::messages, ::ident, ::ident_lcm
 #   lib/pkgconfig/nimble_rig.pc   the same for pkg-config
 #   lib/python3/dist-packages/    nimble (the LCM types, generated) and nimble_rig (log reader)
 #   share/java/                   nimble_lcmtypes.jar (lcm-spy, lcm-logplayer-gui)
@@ -22,10 +22,11 @@ set(NIMBLE_INSTALL_PYTHONDIR "lib/python3/dist-packages")
 install(TARGETS rig nimble_plant nimble_controller nimble_estimator nimble_mocap nimble_can_bridge
         RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
 
-set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_ident nimble_ident_lcm)
+set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_messages nimble_ident nimble_ident_lcm)
 set_target_properties(nimble_lcmtypes PROPERTIES EXPORT_NAME lcmtypes)
 set_target_properties(nimble_core PROPERTIES EXPORT_NAME core)
 set_target_properties(nimble_contract PROPERTIES EXPORT_NAME contract)
+set_target_properties(nimble_messages PROPERTIES EXPORT_NAME messages)
 set_target_properties(nimble_ident PROPERTIES EXPORT_NAME ident)
 set_target_properties(nimble_ident_lcm PROPERTIES EXPORT_NAME ident_lcm)
 foreach(t IN LISTS nimble_exported)

@@ -5,10 +5,7 @@
 #include <cstdio>
 #include <string>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
+#include "contract/messages.h"
 
 namespace nimble {
 namespace {
@@ -45,16 +42,18 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
     // The pilot watches the vehicle's height (up = -down) as motion capture measures it; heights
     // are used reaction_delay_s after their exposure, long after they were published. Without
     // the motion capture (ideal sensing) he watches the TRUTH height (the TRUTH handler below).
-    node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& pose) {
+    node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& message) {
+      const MocapPose pose = contract::from_message(message);
       if (!pose.tracking_valid || !transport::plausible_sim_utime(pose.utime)) return;
-      pilot_->observe(static_cast<double>(pose.utime) * 1e-6, -pose.position_m[2]);
+      pilot_->observe(static_cast<double>(pose.utime) * 1e-6, -pose.position_ned_m[2]);
     });
   }
   node_->set_expected_rate(kTruth, 1000.0);
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {
     node_->set_expected_rate(contract::channels::kEstimate, 512.0);
-    node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& e) {
+    node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& message) {
+      const Estimate e = contract::from_message(message);
       // Times outside any run are not an estimate to fly on (and would overflow its age).
       if (!transport::plausible_sim_utime(e.utime) || !transport::plausible_sim_utime(e.imu_utime)) {
         node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kEstimate,
@@ -73,17 +72,19 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       }
     });
   } else {
-    node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& t) {
-      if (!transport::plausible_sim_utime(t.utime)) {
+    node_->bus().subscribe<truth_state_t>(kTruth, [this](const truth_state_t& message) {
+      const int64_t utime = message.utime;  // exact: the truth's time_s is utime / 1e6
+      if (!transport::plausible_sim_utime(utime)) {
         node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, kTruth,
-                     "TRUTH stamped outside any run (utime " + std::to_string(t.utime) + " us): not used");
+                     "TRUTH stamped outside any run (utime " + std::to_string(utime) + " us): not used");
         return;
       }
-      input_ = Input{t.utime, t.utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1],
+      const Truth t = contract::from_message(message);
+      input_ = Input{utime, utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1],
                      t.euler_rad[2], t.omega_body_radps[2]};
-      if (pilot_on_truth_) pilot_->observe(static_cast<double>(t.utime) * 1e-6, -t.position_ned_m[2]);
+      if (pilot_on_truth_) pilot_->observe(static_cast<double>(utime) * 1e-6, -t.position_ned_m[2]);
       have_input_ = true;
-      node_->notify_input(transport::message_us_to_ns(t.utime));
+      node_->notify_input(transport::message_us_to_ns(utime));
     });
   }
   node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
@@ -151,10 +152,10 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   const ControllerOutput out = failsafe_ ? controller_->failsafe_output(config_.failsafe_throttle_pct) : controller_->step(in);
   // The command goes out first: it is what the plant waits for.
 
-  actuator_command_t cmd;
+  ActuatorCommand cmd;
   cmd.utime = utime;
   cmd.seq = cmd_seq_++;
-  cmd.mode = actuator_command_t::MODE_LEFT_RIGHT;
+  cmd.mode = ActuatorCommand::kModeLeftRight;
   cmd.flap_freq_left_radps = out.flap_freq_left_radps;
   cmd.flap_freq_right_radps = out.flap_freq_right_radps;
   cmd.delta_f_radps = out.delta_f_cmd_radps;
@@ -166,12 +167,12 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   cmd.rolling_counter = rolling_counter_;
   rolling_counter_ = static_cast<int8_t>((rolling_counter_ + 1) % 16);
   cmd.source = node_->name();
-  node_->bus().publish(kActuatorCommand, cmd);
+  node_->bus().publish(kActuatorCommand, contract::to_message(cmd));
 
   // Set-point and status records go out after the command and the step's acknowledgement.
   const double throttle_sp_pct = in.throttle_pct;
   node_->defer([this, sp, out, utime, input_age_us, throttle_sp_pct] {
-    attitude_setpoint_t asp;
+    AttitudeSetpoint asp;
     asp.utime = utime;
     asp.seq = sp_seq_++;
     asp.roll_sp_rad = sp.roll_sp_rad;
@@ -183,9 +184,9 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
     asp.segment_index = sp.segment_index;
     asp.segment_name = sp.segment_name;
     asp.gain_set = controller_->gain_set();
-    node_->bus().publish(kAttitudeSetpoint, asp);
+    node_->bus().publish(kAttitudeSetpoint, contract::to_message(asp));
 
-    controller_status_t st;
+    ControllerStatus st;
     st.utime = utime;
     st.seq = status_seq_++;
     st.gain_set = controller_->gain_set();
@@ -199,10 +200,10 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
     st.delta_f_cmd_radps = out.delta_f_cmd_radps;
     st.throttle_pct = out.throttle_cmd_pct;
     st.saturated = out.saturated;
-    st.input_source = use_estimate_ ? controller_status_t::INPUT_ESTIMATE : controller_status_t::INPUT_TRUTH;
+    st.input_source = use_estimate_ ? ControllerStatus::kInputEstimate : ControllerStatus::kInputTruth;
     st.input_age_us = input_age_us;
     st.failsafe = failsafe_;
-    node_->bus().publish(kControllerStatus, st);
+    node_->bus().publish(kControllerStatus, contract::to_message(st));
   });
 }
 

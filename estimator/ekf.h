@@ -66,7 +66,7 @@
 
 #include "estimator/ekf_model.h"
 #include "estimator/mocap_measurement.h"
-#include "sensors/sensor_types.h"
+#include "core/rig_values.h"
 
 namespace nimble {
 

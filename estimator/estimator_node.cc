@@ -4,10 +4,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include <nimble/estimator_state_t.hpp>
 #include <nimble/fault_event_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
 
 #include "contract/messages.h"
 
@@ -178,18 +175,16 @@ void EstimatorNode::publish(int64_t utime) {
   const EkfState& x = ekf_->state();
   const EkfCovariance& P = ekf_->covariance();
   const Eigen::Vector3d w = ekf_->corrected_rate_radps();
-  estimator_state_t m;
+  Estimate m;
   m.utime = utime;
   m.seq = seq_++;
   m.imu_utime = ekf_->utime();
-  for (int i = 0; i < 3; ++i) {
-    m.euler_rad[i] = x[kPhi + i];
-    m.velocity_body_mps[i] = x[kU + i];
-    m.gyro_bias_radps[i] = x[kBiasP + i];
-    m.accel_bias_mps2[i] = x[kBiasAx + i];
-    m.omega_body_radps[i] = w[i];
-  }
-  for (int i = 0; i < 12; ++i) m.cov_diag[i] = P(i, i);
+  m.euler_rad = x.segment<3>(kPhi);
+  m.velocity_body_mps = x.segment<3>(kU);
+  m.gyro_bias_radps = x.segment<3>(kBiasP);
+  m.accel_bias_mps2 = x.segment<3>(kBiasAx);
+  m.omega_body_radps = w;
+  m.cov_diag = P.diagonal();
   const EkfCounters& c = ekf_->counters();
   m.poses_accepted = c.measurements_accepted;
   m.poses_rejected = c.measurements_rejected_gate;
@@ -200,7 +195,7 @@ void EstimatorNode::publish(int64_t utime) {
   m.velocity_windows_uncovered = c.velocity_window_uncovered;
   m.imu_rejected = c.imu_rejected;
   m.imu_gaps = c.imu_gaps;
-  node_->bus().publish(contract::channels::kEstimate, m);
+  node_->bus().publish(contract::channels::kEstimate, contract::to_message(m));
 }
 
 }  // namespace nimble

@@ -30,7 +30,7 @@
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
 #include "scenario/scenario.h"
-#include "sensors/sensor_types.h"
+#include "core/rig_values.h"
 #include "transport/latched_input.h"
 #include "transport/node.h"
 

@@ -29,7 +29,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "sensors/sensor_types.h"
+#include "core/rig_values.h"
 
 namespace nimble {
 

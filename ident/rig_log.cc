@@ -4,16 +4,9 @@
 #include <fstream>
 #include <utility>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/truth_state_t.hpp>
-
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "contract/messages.h"
 #include "ident/lcm_log.h"
 
 namespace nimble::ident {
@@ -38,8 +31,8 @@ void append(Channel& c, double t_s, double value, Repeat repeat = Repeat::kSkip)
 }
 
 /// Appends one sample of the nine states (rates, body velocity, attitude) at time t.
-void append_states(FlightData& d, double t, const double omega[3], const double velocity[3], const double euler[3],
-                   Repeat repeat = Repeat::kSkip) {
+void append_states(FlightData& d, double t, const Eigen::Vector3d& omega, const Eigen::Vector3d& velocity,
+                   const Eigen::Vector3d& euler, Repeat repeat = Repeat::kSkip) {
   static const char* const kRates[] = {"p", "q", "r"};
   static const char* const kVelocities[] = {"u", "v", "w"};
   static const char* const kAngles[] = {"phi", "theta", "psi"};
@@ -59,6 +52,13 @@ T decode_or_throw(const LogEventRecord& ev, const std::string& file) {
                     "event at byte " + std::to_string(ev.offset) + ": " + why);
   }
   return msg;
+}
+
+/// The event's message as its value (contract/messages.h); a message that does not decode
+/// exactly is an error naming the event.
+template <typename T>
+auto read_value(const LogEventRecord& ev, const std::string& file) {
+  return contract::from_message(decode_or_throw<T>(ev, file));
 }
 
 }  // namespace
@@ -83,18 +83,20 @@ RigLogData read_rig_log(const std::string& file, StateSource source, const LogRe
   LogEventRecord record;
   for (const LogEventRecord* ev = &record; log.next(&record);) {
     if (ev->channel == kTruth) {
-      const auto m = decode_or_throw<truth_state_t>(*ev, file);
-      append_states(truth, static_cast<double>(m.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
+      const auto message = decode_or_throw<truth_state_t>(*ev, file);
+      const Truth m = contract::from_message(message);
+      append_states(truth, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps,
+                    m.euler_rad);
     } else if (ev->channel == kEstimate) {
       // The estimate describes the instant of the newest IMU sample it has integrated
       // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
       // propagated to it. utime is when it was published, which in lockstep is the next
       // estimator tick, 1-2 ms later (see estimate_time_s()).
-      const auto m = decode_or_throw<estimator_state_t>(*ev, file);
+      const Estimate m = read_value<estimator_state_t>(*ev, file);
       append_states(estimate, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps, m.velocity_body_mps,
                     m.euler_rad, Repeat::kReplace);
     } else if (ev->channel == kActuatorFeedback) {
-      const auto m = decode_or_throw<actuator_feedback_t>(*ev, file);
+      const ActuatorFeedback m = read_value<actuator_feedback_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;
       append(inputs.channels["delta_f"], t, m.delta_f_radps);
       append(inputs.channels["delta_t"], t, m.throttle_pct);
@@ -103,17 +105,17 @@ RigLogData read_rig_log(const std::string& file, StateSource source, const LogRe
     } else if (ev->channel == kActuatorCommand) {
       // The flight board's command, the flap actuator's input (what the plant receives, over
       // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
-      const auto m = decode_or_throw<actuator_command_t>(*ev, file);
-      const double df = m.mode == actuator_command_t::MODE_DELTA_F ? m.delta_f_radps
-                                                                   : m.flap_freq_left_radps - m.flap_freq_right_radps;
+      const ActuatorCommand m = read_value<actuator_command_t>(*ev, file);
+      const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
+                                                               : m.flap_freq_left_radps - m.flap_freq_right_radps;
       append(inputs.channels["delta_f_cmd"], static_cast<double>(m.utime) * 1e-6, df);
     } else if (ev->channel == kControllerStatus) {
-      if (gain_set.empty()) gain_set = decode_or_throw<controller_status_t>(*ev, file).gain_set;
+      if (gain_set.empty()) gain_set = read_value<controller_status_t>(*ev, file).gain_set;
     } else if (ev->channel == kAttitudeSetpoint) {
-      const auto m = decode_or_throw<attitude_setpoint_t>(*ev, file);
+      const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
       append(inputs.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
     } else if (ev->channel == kImu) {
-      const auto m = decode_or_throw<imu_sample_t>(*ev, file);
+      const ImuSample m = read_value<imu_sample_t>(*ev, file);
       const double t = static_cast<double>(m.utime) * 1e-6;
       append(inputs.channels["ax"], t, m.accel_mps2[0]);
       append(inputs.channels["ay"], t, m.accel_mps2[1]);

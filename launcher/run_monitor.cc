@@ -5,23 +5,18 @@
 #include <cstring>
 #include <cstdio>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
+#include <optional>
+
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
 #include <nimble/rig_clock_t.hpp>
 #include <nimble/run_control_t.hpp>
 #include <nimble/step_ack_t.hpp>
 #include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "contract/messages.h"
 
 namespace nimble::launcher {
 namespace {
@@ -36,28 +31,63 @@ bool known_publisher(const MonitorConfig& cfg, const std::string& name) {
          std::find(cfg.processes.begin(), cfg.processes.end(), name) != cfg.processes.end();
 }
 
-/// True if the bytes decode exactly as the LCM type of a stream channel of the contract (or the
-/// channel is not one of the contract's stream channels).
-bool decodes_as_stream(const std::string& channel, const void* data, int size) {
-  const auto as = [&](auto msg) { return decode_exact(data, size, msg); };
-  if (channel == kImu) return as(imu_sample_t{});
-  if (channel == kActuatorCommand || channel == kActuatorCommandCan) return as(actuator_command_t{});
-  if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return as(actuator_feedback_t{});
-  if (channel == kAttitudeSetpoint) return as(attitude_setpoint_t{});
-  if (channel == kControllerStatus) return as(controller_status_t{});
-  if (channel == kRigClock) return as(rig_clock_t{});
-  if (channel == kRunControl) return as(run_control_t{});
-  return true;  // TRUTH, MOCAP_POSE, ESTIMATE are decoded where they are used
+/// A stream message of the contract as the monitor uses it: decoded exactly as its channel's
+/// type, its header (utime, seq) and, for the channels the summary reads, its value
+/// (contract/messages.h).
+struct StreamMessage {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  int64_t latency_us = 0;  ///< a pose's exposure-to-publication latency: it is due this much after utime
+  std::optional<Truth> truth;
+  std::optional<Estimate> estimate;
+};
+
+template <class Message>
+std::optional<Message> decoded(const void* data, int size) {
+  Message m{};
+  if (!decode_exact(data, size, m)) return std::nullopt;
+  return m;
 }
 
-/// Reads a big-endian int64 at `offset` of an encoded LCM message.
-bool read_i64(const void* data, int size, int offset, int64_t& out) {
-  if (size < offset + 8) return false;
-  const auto* b = static_cast<const uint8_t*>(data) + offset;
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
-  out = static_cast<int64_t>(v);
-  return true;
+/// The stream message on `channel`, or nothing if the bytes are not exactly its type.
+std::optional<StreamMessage> decode_stream(const std::string& channel, const void* data, int size) {
+  StreamMessage s;
+  const auto header = [&s](const auto& m) {
+    s.utime = m.utime;
+    s.seq = m.seq;
+    return std::optional<StreamMessage>(s);
+  };
+  const auto plain = [&](auto type) -> std::optional<StreamMessage> {
+    const auto m = decoded<decltype(type)>(data, size);
+    if (!m) return std::nullopt;
+    return header(*m);
+  };
+  if (channel == kTruth) {
+    const auto m = decoded<truth_state_t>(data, size);
+    if (!m) return std::nullopt;
+    s.truth = contract::from_message(*m);
+    return header(*m);
+  }
+  if (channel == kEstimate) {
+    const auto m = decoded<estimator_state_t>(data, size);
+    if (!m) return std::nullopt;
+    s.estimate = contract::from_message(*m);
+    return header(*m);
+  }
+  if (channel == kMocapPose) {
+    const auto m = decoded<mocap_pose_t>(data, size);
+    if (!m) return std::nullopt;
+    s.latency_us = contract::from_message(*m).latency_us;
+    return header(*m);
+  }
+  if (channel == kImu) return plain(imu_sample_t{});
+  if (channel == kActuatorCommand || channel == kActuatorCommandCan) return plain(actuator_command_t{});
+  if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return plain(actuator_feedback_t{});
+  if (channel == kAttitudeSetpoint) return plain(attitude_setpoint_t{});
+  if (channel == kControllerStatus) return plain(controller_status_t{});
+  if (channel == kRigClock) return plain(rig_clock_t{});
+  if (channel == kRunControl) return plain(run_control_t{});
+  return std::nullopt;  // not a stream channel of the contract
 }
 
 }  // namespace
@@ -114,7 +144,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
   }
   if (channel == kCanHealth) {
     can_health_t h{};
-    if (take(h, "")) can_health_[h.process] = h;
+    if (take(h, "")) can_health_[h.process] = contract::from_message(h);
     return;
   }
   if (channel == kFault) {
@@ -135,31 +165,23 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     return;
   }
 
-  // Stream channels: one publisher; utime and seq at byte offsets 8 and 16 of every type.
-  int64_t utime = 0, seq = 0;
-  if (!decodes_as_stream(channel, data, size) || !read_i64(data, size, 8, utime) || !read_i64(data, size, 16, seq)) {
-    ++c.malformed;
-    return;
-  }
-  // TRUTH, MOCAP_POSE and ESTIMATE are decoded first: a message that does not decode is not
-  // counted at all.
-  truth_state_t t{};
-  mocap_pose_t pose{};
-  estimator_state_t e{};
-  if ((channel == kTruth && !decode_exact(data, size, t)) || (channel == kMocapPose && !decode_exact(data, size, pose)) ||
-      (channel == kEstimate && !decode_exact(data, size, e)) || !accept_seq(c, "", seq)) {
+  // Stream channels: one publisher; a message that does not decode exactly as its channel's
+  // type, or does not continue its seq, is not counted at all.
+  const std::optional<StreamMessage> m = decode_stream(channel, data, size);
+  if (!m || !accept_seq(c, "", m->seq)) {
     ++c.malformed;
     return;
   }
   ++c.count;
   // A message is due at its utime; a pose is stamped at mid-exposure and due latency_us later.
-  int64_t due_us = utime;
-  if (channel == kMocapPose) due_us += pose.latency_us;
+  const int64_t utime = m->utime;
+  const int64_t due_us = utime + m->latency_us;
   if (!cfg_.lockstep && cfg_.t0_monotonic_ns > 0 && contract::due_in_sim_time(channel)) {
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }
-  if (channel == kTruth) {
+  if (m->truth) {
+    const Truth& t = *m->truth;
     const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
     FlightSummary& f = flight_;
     if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi) || !std::isfinite(t.euler_rad[1])) f.finite = false;
@@ -189,13 +211,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     f.final_p = p;
     f.final_v = v;
     f.final_phi = phi;
-    f.last_sim_time_s = static_cast<double>(t.utime) / 1e6;
-    recent_truth_[t.utime] = TruthPoint{phi, p, v};
-    while (!recent_truth_.empty() && recent_truth_.begin()->first < t.utime - 1000000) {
+    f.last_sim_time_s = t.time_s;
+    recent_truth_[utime] = TruthPoint{phi, p, v};
+    while (!recent_truth_.empty() && recent_truth_.begin()->first < utime - 1000000) {
       recent_truth_.erase(recent_truth_.begin());
     }
   }
-  if (channel == kEstimate) {
+  if (m->estimate) {
+    const Estimate& e = *m->estimate;
     est_.poses_accepted = e.poses_accepted;
     est_.poses_rejected = e.poses_rejected;
     est_.poses_missing = e.poses_missing;

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include <nimble/can_health_t.hpp>
+#include "core/rig_values.h"
 
 namespace nimble::launcher {
 
@@ -118,7 +118,7 @@ class RunMonitor {
   EstimatorSummary estimator() const;
   const std::map<std::string, TimingSummary>& timing() const { return timing_; }
   /// The newest CAN_HEALTH of each side of the CAN bridge (empty over the LCM link).
-  const std::map<std::string, nimble::can_health_t>& can_health() const { return can_health_; }
+  const std::map<std::string, nimble::CanHealth>& can_health() const { return can_health_; }
 
   /// Channel table at the end of the run; `sim_duration_s` and `wall_duration_s` give the
   /// rate bases.
@@ -155,7 +155,7 @@ class RunMonitor {
   std::map<std::string, Counter> counters_;
   std::map<std::string, Heartbeat> heartbeat_;
   std::map<std::string, TimingSummary> timing_;
-  std::map<std::string, nimble::can_health_t> can_health_;
+  std::map<std::string, nimble::CanHealth> can_health_;
   std::vector<FaultRecord> faults_;
   FlightSummary flight_;
   struct TruthPoint {

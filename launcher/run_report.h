@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <nimble/can_health_t.hpp>
+#include "core/rig_values.h"
 
 #include "launcher/run_monitor.h"
 #include "launcher/verdict.h"
@@ -47,7 +47,7 @@ struct RunReport {
   std::map<std::string, TimingSummary> timing;
   FlightSummary flight;
   EstimatorSummary estimator;    ///< samples == 0: no estimator in the run
-  std::map<std::string, nimble::can_health_t> can_health;
+  std::map<std::string, nimble::CanHealth> can_health;
   std::vector<FaultRecord> faults;
   std::vector<ProcessOutcome> processes;
   std::vector<HostSummary> hosts;  ///< where the processes ran (empty: no hosts section)

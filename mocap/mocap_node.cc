@@ -1,9 +1,6 @@
 #include "mocap/mocap_node.h"
 
-#include <nimble/mocap_pose_t.hpp>
-
 #include "contract/messages.h"
-#include <nimble/truth_state_t.hpp>
 
 #include "sensors/sensor_config.h"
 #include "transport/process_main.h"
@@ -24,7 +21,7 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
                    "TRUTH at utime " + std::to_string(t.utime) + " us lies outside any run; ignored");
       return;
     }
-    const plant::Truth truth = contract::from_message(t);
+    const Truth truth = contract::from_message(t);
     MocapTruthInput in;
     in.utime = t.utime;
     in.position_ned_m = truth.position_ned_m;

@@ -25,17 +25,12 @@ enum class CommandMode : int8_t {
   kDeltaF = 1,     ///< flap_freq_collective_radps and delta_f_radps (left - right)
 };
 
-/// The fields of a received actuator command the plant reads.
-struct ActuatorCommand {
-  int64_t seq = 0;   ///< sender's sequence number
-  int8_t mode = 0;   ///< a CommandMode value; any other is rejected
-  double flap_freq_left_radps = 0.0;        ///< kLeftRight [rad/s]
-  double flap_freq_right_radps = 0.0;       ///< kLeftRight [rad/s]
-  double flap_freq_collective_radps = 0.0;  ///< kDeltaF [rad/s]
-  double delta_f_radps = 0.0;               ///< kDeltaF, left minus right [rad/s]
-  double dihedral_rad = 0.0;                ///< dihedral servo [rad]
-  double wing_root_rad = 0.0;               ///< wing-root servo [rad]
-};
+/// A received actuator command (core/rig_values.h): the interface reads its seq, mode, flapping
+/// frequencies and servo angles.
+using nimble::ActuatorCommand;
+static_assert(static_cast<int8_t>(CommandMode::kLeftRight) == ActuatorCommand::kModeLeftRight &&
+                  static_cast<int8_t>(CommandMode::kDeltaF) == ActuatorCommand::kModeDeltaF,
+              "CommandMode is the command's mode");
 
 /// Something the interface reports.
 struct ActuatorEvent {

@@ -22,6 +22,7 @@
 #include "core/config.h"
 #include "core/model.h"
 #include "core/param_table.h"
+#include "core/rig_values.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
 
@@ -202,24 +203,9 @@ struct ActuatorInput {
   double wing_root_rad = 0.0;
 };
 
-/// Truth of the rigid body and actuators at one instant.
-struct Truth {
-  double time_s = 0.0;
-  Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();  ///< u v w
-  Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();          ///< phi theta psi
-  Eigen::Vector4d quaternion_wxyz = Eigen::Vector4d(1, 0, 0, 0);
-  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();   ///< p q r
-  Eigen::Vector3d specific_force_body_mps2 = Eigen::Vector3d::Zero();
-  Eigen::Vector3d angular_accel_body_radps2 = Eigen::Vector3d::Zero();
-  double flap_freq_left_radps = 0.0;
-  double flap_freq_right_radps = 0.0;
-  double delta_f_radps = 0.0;
-  double throttle_pct = 0.0;  ///< actual delta_t (deviation from trim) [%]
-  double dihedral_rad = 0.0;
-  double wing_root_rad = 0.0;
-  double gust_v_mps = 0.0;
-};
+/// Truth of the rigid body and actuators at one instant: the value TRUTH carries
+/// (core/rig_values.h).
+using nimble::Truth;
 
 class PlantModel {
  public:

@@ -3,13 +3,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/imu_sample_t.hpp>
 
 #include "contract/messages.h"
 #include "sensors/sensor_config.h"
 #include "transport/process_main.h"
-#include <nimble/truth_state_t.hpp>
 
 namespace nimble::plant {
 namespace {
@@ -132,7 +129,7 @@ void PlantNode::publish_imu(int64_t sim_time_ns) {
 
 void PlantNode::publish_feedback(int64_t sim_time_ns) {
   const Truth& t = model_->truth();
-  actuator_feedback_t m;
+  ActuatorFeedback m;
   m.utime = sim_time_ns / 1000;
   m.seq = feedback_seq_++;
   m.flap_freq_left_radps = t.flap_freq_left_radps;
@@ -144,7 +141,7 @@ void PlantNode::publish_feedback(int64_t sim_time_ns) {
   m.cmd_seq = actuators_->last_command_seq();
   m.cmd_age_us = actuators_->command_age_us(sim_time_ns);
   m.safe_state = actuators_->safe_state();
-  node_->bus().publish(kActuatorFeedback, m);
+  node_->bus().publish(kActuatorFeedback, contract::to_message(m));
 }
 
 }  // namespace nimble::plant

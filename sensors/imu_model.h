@@ -28,7 +28,7 @@
 
 #include <Eigen/Core>
 
-#include "sensors/sensor_types.h"
+#include "core/rig_values.h"
 
 namespace nimble {
 

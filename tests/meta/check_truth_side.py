@@ -3,7 +3,7 @@
 
 The truth side is plant/, mocap/ and sensors/: their sources must not include an estimator/
 header and their CMakeLists.txt must not link an estimator library (nimble_estimation,
-nimble_sensing_config). The data types both sides exchange live in sensors/sensor_types.h.
+nimble_sensing_config). The data types both sides exchange live in core/rig_values.h.
 Fails naming each file and line that does.
 
 Usage: check_truth_side.py SOURCE_DIR
