@@ -86,10 +86,11 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
                   ProcessNode::Trigger::kInput);
 
   if (role_ == Role::kFlight) {
-    node_->set_expected_rate(ch::kActuatorCommand, cycle_hz);
+    node_->set_expected_rate(ch::kActuatorCommand, scenario.expected_rate(ch::kActuatorCommand));
     node_->bus().subscribe<actuator_command_t>(ch::kActuatorCommand,
                                                [this](const actuator_command_t& c) { on_command(c); });
   } else {
+    node_->set_expected_rate(ch::kActuatorFeedback, scenario.expected_rate(ch::kActuatorFeedback));
     node_->bus().subscribe<actuator_feedback_t>(ch::kActuatorFeedback,
                                                 [this](const actuator_feedback_t& f) { on_feedback(f); });
   }

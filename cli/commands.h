@@ -6,10 +6,9 @@
 #include <string>
 #include <vector>
 
-namespace nimble::cli {
+#include "cmdline/args.h"  // kExitUsage
 
-/// Exit code for bad usage or bad input.
-constexpr int kExitUsage = 2;
+namespace nimble::cli {
 
 /// `rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]`
 int run_model_command(const std::vector<std::string>& args);

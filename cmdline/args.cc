@@ -6,8 +6,6 @@
 #include <memory>
 #include <stdexcept>
 
-#include "cli/commands.h"
-
 namespace nimble::cli {
 
 double finite_number(const std::string& text) {

@@ -20,6 +20,9 @@
 
 namespace nimble::cli {
 
+/// Exit code for bad usage or bad input (every command line of the rig).
+constexpr int kExitUsage = 2;
+
 /// One program's command line.
 class CommandLine {
  public:

@@ -48,10 +48,10 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       pilot_->observe(static_cast<double>(pose.utime) * 1e-6, -pose.position_ned_m[2]);
     });
   }
-  node_->set_expected_rate(kTruth, 1000.0);
+  node_->set_expected_rate(kTruth, scenario.expected_rate(kTruth));
   use_estimate_ = run.controller_input == "estimate";
   if (use_estimate_) {
-    node_->set_expected_rate(contract::channels::kEstimate, 512.0);
+    node_->set_expected_rate(contract::channels::kEstimate, scenario.expected_rate(contract::channels::kEstimate));
     node_->bus().subscribe<estimator_state_t>(contract::channels::kEstimate, [this](const estimator_state_t& message) {
       const Estimate e = contract::from_message(message);
       // Times outside any run are not an estimate to fly on (and would overflow its age).

@@ -23,8 +23,8 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
                                                       kDivergenceFalseAlarm);
   }
   node_ = transport::make_process_node(scenario, options);
-  node_->set_expected_rate(contract::channels::kImu, sensing.imu.sample_rate_hz);
-  node_->set_expected_rate(contract::channels::kMocapPose, sensing.mocap.frame_rate_hz);
+  node_->set_expected_rate(contract::channels::kImu, scenario.expected_rate(contract::channels::kImu));
+  node_->set_expected_rate(contract::channels::kMocapPose, scenario.expected_rate(contract::channels::kMocapPose));
   stuck_check_ = sensing.imu.gyro_noise_sigma_radps.norm() > 0.0 || sensing.imu.accel_noise_sigma_mps2.norm() > 0.0;
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
     if (!transport::plausible_sim_utime(m.utime)) {

@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include "can_bridge/bridge_config.h"
+#include "contract/channels.h"
+#include "contract/rates.h"
 #include "launcher/scenario_check.h"
 
 namespace nimble::launcher {
@@ -117,6 +119,12 @@ RunPlan load_run_plan(const RunOptions& options) {
     plan.launch = launch_config_from(plan.scenario);
     plan.judge = judge_config_from(plan.scenario);
     plan.rates = process_rates(plan.scenario);
+    // What every process expects of its inputs: the stream channels' rates of this run.
+    std::map<std::string, double> stream_hz;
+    for (const auto& [channel, hz] : contract::expected_rates(plan.rates, contract::RunShape{})) {
+      if (hz > 0 && contract::due_in_sim_time(channel)) stream_hz[channel] = hz;
+    }
+    set_expected_rates(plan.scenario, stream_hz);
     plan.hosts = host_placement_from(plan.scenario, plan.launch);
     add_by_hand_processes(plan.hosts, plan.launch.external_processes);
   } catch (const ConfigError& e) {

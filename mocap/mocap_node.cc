@@ -13,7 +13,7 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
   // An offset keeps the mocap noise independent of the IMU noise of the same seed.
   emulator_ = std::make_unique<MocapEmulator>(sensing.mocap, scenario.seed + 0x6d6f636170ULL);
   node_ = transport::make_process_node(scenario, options);
-  node_->set_expected_rate(contract::channels::kTruth, 1000.0);
+  node_->set_expected_rate(contract::channels::kTruth, scenario.expected_rate(contract::channels::kTruth));
   node_->bus().subscribe<truth_state_t>(contract::channels::kTruth, [this](const truth_state_t& t) {
     if (!transport::plausible_sim_utime(t.utime)) {
       // Found by fuzz_node_mocap: the emulator captured every frame up to a stray time.

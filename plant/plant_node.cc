@@ -42,7 +42,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_->set_ack_timeout_ms(lockstep_options(scenario).ack_timeout_ms);
   command_channel_ = plant_command_channel(scenario);
   controller_on_estimate_ = process_run_options(scenario).controller_input == "estimate";
-  node_->set_expected_rate(command_channel_, 512.0);
+  node_->set_expected_rate(command_channel_, scenario.expected_rate(command_channel_));
   node_->bus().subscribe<actuator_command_t>(command_channel_,
                                              [this](const actuator_command_t& c) { on_command(c); });
   node_->add_task("plant", config_.rate_hz, [this](int64_t t) { step(t); });

@@ -17,6 +17,9 @@ namespace fs = std::filesystem;
 /// Keys whose values are file paths, relative to the file that sets them: the scenario's own
 /// top-level files, and `base:` at any depth. A section key that happens to share one of the
 /// top-level names (a plant option called `model`, say) is a value, not a path.
+/// The key of the run's expected channel rates in a resolved scenario (Scenario::expected_rates_hz).
+const std::string kExpectedRatesKey = "expected_rates_hz";
+
 const std::set<std::string> kTopLevelPathKeys = {"model", "longitudinal_model", "vehicle", "manoeuvre", "base"};
 
 /// Makes the path values of `node` absolute against `dir`; `top_level`: node is a scenario root.
@@ -192,6 +195,18 @@ const std::vector<std::string>& scenario_section_keys() {
   return keys;
 }
 
+double Scenario::expected_rate(const std::string& channel) const {
+  const auto it = expected_rates_hz.find(channel);
+  return it == expected_rates_hz.end() ? 0.0 : it->second;
+}
+
+void set_expected_rates(Scenario& scenario, const std::map<std::string, double>& rates_hz) {
+  scenario.expected_rates_hz = rates_hz;
+  YAML::Node node(YAML::NodeType::Map);
+  for (const auto& [channel, hz] : rates_hz) node[channel] = hz;
+  scenario.root[kExpectedRatesKey] = node;
+}
+
 bool Scenario::runs(const std::string& process) const {
   return std::find(processes.begin(), processes.end(), process) != processes.end();
 }
@@ -238,6 +253,19 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
     if (map.has(key)) map.get_node(key);  // mark as known; owners validate the content
   }
   if (map.has("manoeuvre")) map.get_string("manoeuvre");
+  if (map.has(kExpectedRatesKey)) {
+    const YAML::Node node = map.get_node(kExpectedRatesKey);
+    if (!node.IsMap()) map.fail(kExpectedRatesKey, "must be a mapping of channel name to rate [Hz]");
+    ConfigMap rates(node, file, kExpectedRatesKey);
+    for (const auto& entry : node) {
+      const std::string channel = entry.first.as<std::string>();
+      if (contract::find_channel(channel) == nullptr) {
+        rates.fail(channel, "not a channel of the rig's contract (contract/channels.h)");
+      }
+      s.expected_rates_hz[channel] = rates.get_double(channel, Range::positive());
+    }
+    rates.finish();
+  }
   if (map.has("faults")) {
     s.faults = faults_from(map.get_node("faults"), file, s.processes, s.actuator_link == "can", s.duration_s);
   }

@@ -73,6 +73,12 @@ struct Scenario {
   std::string actuator_link = "lcm";
   /// Faults injected into the run (section `faults`, scenario/faults.h); empty: none.
   std::vector<contract::FaultSpec> faults;
+  /// The rate each stream channel of the run is expected at [Hz] (contract::expected_rates() of
+  /// the configured process rates). The launcher derives it when it plans the run and writes it
+  /// into the resolved scenario (key `expected_rates_hz`) that the processes load, so that each
+  /// process judges its inputs by the run's rates; a value in a scenario file is replaced there.
+  /// Empty for a scenario no launcher resolved: nothing is expected.
+  std::map<std::string, double> expected_rates_hz;
   YAML::Node root;
   KeyOrigins origins;  ///< where each key was written (locate_error)
 
@@ -81,7 +87,13 @@ struct Scenario {
   bool has_section(const std::string& name) const { return static_cast<bool>(root[name]); }
   /// True if `process` is one of the run's processes.
   bool runs(const std::string& process) const;
+  /// expected_rates_hz of `channel`; 0 (nothing expected) if the run does not carry it.
+  double expected_rate(const std::string& channel) const;
 };
+
+/// Sets the run's expected stream rates (Scenario::expected_rates_hz) and writes them into the
+/// scenario's tree, so that the resolved scenario the processes load carries them.
+void set_expected_rates(Scenario& scenario, const std::map<std::string, double>& rates_hz);
 
 /// The channel on which the plant takes its actuator commands: ACTUATOR_CMD over the LCM
 /// link, ACTUATOR_CMD_CAN (published by the rig side of the bridge) over the CAN link.

@@ -156,7 +156,8 @@ class ProcessNode {
   /// Trades CPU for wake-up jitter.
   void set_spin_ns(int64_t ns) { spin_ns_ = ns; }
 
-  /// Expected receive rate of a channel [Hz], reported on TIMING_HEALTH.
+  /// Expected receive rate of a channel [Hz], reported on TIMING_HEALTH: the run's own
+  /// (Scenario::expected_rate(), from contract::expected_rates()); 0 if the run gives none.
   void set_expected_rate(const std::string& channel, double hz) { expected_hz_[channel] = hz; }
 
   /// Applies the scenario's `faults` to what this process publishes (transport/fault_injector.h):

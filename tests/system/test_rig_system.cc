@@ -25,6 +25,7 @@
 #include <nimble/fault_event_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
+#include <nimble/timing_health_t.hpp>
 #include <nimble/truth_state_t.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -470,4 +471,30 @@ TEST_CASE("the CAN link without a usable interface stops the run before anything
   const RunResult bad = rig_run(kConfigs + "hover.yaml", dir, "--set actuator_link=can --set can_bridge.health_rate_hz=0");
   CHECK(bad.exit_code == 2);
   CHECK(bad.output.find("can_bridge.health_rate_hz") != std::string::npos);
+}
+
+TEST_CASE("expected rates: every process expects its inputs at the run's configured rates, not at fixed ones",
+          "[system]") {
+  // TRUTH at 500 Hz instead of 1000, the control cycle at 256 Hz instead of 512: the processes'
+  // TIMING_HEALTH names the rates of this run for what they receive.
+  const std::string dir = scratch_dir("expected_rates");
+  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+                              "--clock inprocess --set duration_s=1 --set plant.truth_rate_hz=500 "
+                              "--set controller.rate_hz=256");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  std::map<std::string, std::map<std::string, double>> expected;  // process -> channel -> Hz
+  for (const auto& h : decode_channel<nimble::timing_health_t>(dir + "/run.lcmlog", kTimingHealth)) {
+    for (int i = 0; i < h.num_channels; ++i) {
+      expected[h.process][h.channel[static_cast<std::size_t>(i)]] = h.expected_hz[static_cast<std::size_t>(i)];
+    }
+  }
+  CHECK(expected["mocap"][kTruth] == 500.0);
+  CHECK(expected["plant"][kActuatorCommand] == 256.0);
+  CHECK(expected["estimator"][kImu] == 512.0);
+  CHECK(expected["estimator"][kMocapPose] == 200.0);
+  // The resolved scenario the processes load carries them.
+  const YAML::Node resolved = YAML::LoadFile(dir + "/run.lcmlog.scenario.yaml");
+  CHECK(resolved["expected_rates_hz"][kTruth].as<double>() == 500.0);
+  CHECK(resolved["expected_rates_hz"][kActuatorCommand].as<double>() == 256.0);
 }
