@@ -217,8 +217,12 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     }
   }
   std::string resolved_file;
+  // The run's configuration as the processes will load it: the resolved scenario and the files it
+  // names, read now. A process that reads another (a file changed since) is refused.
+  std::string run_digest;
   try {
     resolved_file = write_resolved_scenario(plan, log_file);
+    run_digest = scenario_digest(load_scenario(resolved_file));
   } catch (const std::exception& e) {
     std::cerr << "rig run: " << e.what() << "\n";
     return kRunBadInput;
@@ -320,17 +324,18 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
     recorder->flush();
     return code;
   };
-  // Every process must fly the plant's configuration: a heartbeat with another digest is a
-  // process started with another scenario. Returns what is wrong, or "".
+  // Every process must fly the run's configuration: a heartbeat with another digest is a process
+  // started with another scenario, or after a file the scenario names (model, manoeuvre,
+  // vehicle) changed. Returns what is wrong, or "".
   const auto digest_problem = [&]() -> std::string {
-    const RunMonitor::Heartbeat* plant = monitor.heartbeat("plant");
-    if (plant == nullptr || plant->digest.empty()) return "";
     for (const auto& name : scenario.processes) {
       const RunMonitor::Heartbeat* hb = monitor.heartbeat(name);
-      if (hb == nullptr || hb->digest == plant->digest) continue;
+      if (hb == nullptr || hb->digest == run_digest) continue;
       return "process '" + name + "' (pid " + std::to_string(hb->pid) + ") was started with another scenario: " +
-             "configuration digest " + (hb->digest.empty() ? std::string("(none)") : hb->digest) + ", the plant's " +
-             plant->digest + "; refused. Start it with --scenario " + resolved_file;
+             "configuration digest " + (hb->digest.empty() ? std::string("(none)") : hb->digest) + ", the run's " +
+             run_digest + " (the scenario " + resolved_file +
+             " and the files it names, as they were when the run started); refused. Start it with --scenario " +
+             resolved_file + ", and change no model, manoeuvre or vehicle file during a run";
     }
     return "";
   };
@@ -488,6 +493,7 @@ int run_processes(RunPlan& plan, const RunOptions& options) {
   report.scenario = scenario.name;
   report.clock = scenario.clock;
   report.seed = scenario.seed;
+  report.config_digest = run_digest;
   report.transport = url;
   report.transport_detail = ns_detail;
   report.log_file = log_file;

@@ -160,6 +160,7 @@ std::string report_json(const RunReport& r) {
   w.key("scenario").value(r.scenario);
   w.key("clock").value(r.clock);
   w.key("seed").value(static_cast<long long>(r.seed));
+  w.key("config_digest").value(r.config_digest);
   w.key("lcm_url").value(r.transport);
   w.key("log").value(r.log_file);
   w.key("controlled").value(r.verdict.controlled);

@@ -41,6 +41,9 @@ struct RunReport {
   std::string transport;         ///< the LCM URL, or "in process"
   std::string transport_detail;  ///< network namespace etc. (may be empty)
   std::string log_file;
+  /// The run's configuration digest (scenario_digest(): the resolved scenario and the content of
+  /// every file it names); every process flew with it.
+  std::string config_digest;
   double sim_time_s = 0.0;
   double wall_time_s = 0.0;
   std::map<std::string, ChannelSummary> channels;

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
 #include <utility>
 
 #include "contract/channels.h"
@@ -333,11 +335,56 @@ ProcessRunOptions process_run_options(const Scenario& scenario) {
   return process_run_options_from(run);
 }
 
+std::vector<std::pair<std::string, std::string>> named_files(const Scenario& scenario) {
+  std::vector<std::pair<std::string, std::string>> files;
+  const auto add = [&files](const std::string& what, const std::string& path) {
+    if (path.empty()) return;
+    const std::string absolute = fs::absolute(path).lexically_normal().string();
+    for (const auto& f : files) {
+      if (f.second == absolute) return;
+    }
+    files.emplace_back(what, absolute);
+  };
+  // The vehicle a model file names, relative to the model (core/model.h); none if unreadable.
+  const auto model_vehicle = [](const std::string& model) -> std::string {
+    try {
+      const YAML::Node root = YAML::LoadFile(model);
+      if (root.IsMap() && root["vehicle"] && root["vehicle"].IsScalar()) {
+        const fs::path v(root["vehicle"].Scalar());
+        return v.is_relative() ? (fs::path(model).parent_path() / v).string() : v.string();
+      }
+    } catch (const YAML::Exception&) {
+    }
+    return "";
+  };
+  add("model", scenario.model_file);
+  if (!scenario.model_file.empty()) add("model.vehicle", model_vehicle(scenario.model_file));
+  add("longitudinal_model", scenario.longitudinal_model_file);
+  if (!scenario.longitudinal_model_file.empty()) {
+    add("longitudinal_model.vehicle", model_vehicle(scenario.longitudinal_model_file));
+  }
+  add("vehicle", scenario.vehicle_file);
+  if (scenario.root["manoeuvre"] && scenario.root["manoeuvre"].IsScalar()) {
+    add("manoeuvre", scenario.root["manoeuvre"].Scalar());
+  }
+  return files;
+}
+
 std::string scenario_digest(const Scenario& scenario) {
   uint64_t h = 1469598103934665603ULL;
-  for (const unsigned char c : to_yaml(scenario.root)) {
-    h ^= c;
-    h *= 1099511628211ULL;
+  const auto feed = [&h](const std::string& bytes) {
+    for (const unsigned char c : bytes) {
+      h ^= c;
+      h *= 1099511628211ULL;
+    }
+  };
+  feed(to_yaml(scenario.root));
+  for (const auto& [what, path] : named_files(scenario)) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream content;
+    content << in.rdbuf();
+    // A file that cannot be read digests as such (its loader names the problem).
+    feed(what + '\0' + path + '\0' + (in ? content.str() : std::string("(unreadable)")) + '\0');
   }
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));

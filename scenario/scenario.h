@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -155,8 +156,16 @@ ProcessRunOptions process_run_options(const Scenario& scenario);
 /// of the section from the same map.
 ProcessRunOptions process_run_options_from(ConfigMap& run);
 
-/// Digest of a resolved scenario (FNV-1a 64-bit of its YAML text, 16 hex digits): every process
-/// of a run puts it on its heartbeat; equal digests mean equal configurations.
+/// The files a scenario names besides its bases (which are merged into its tree): the lateral
+/// and longitudinal models, the vehicle (the scenario's, and the one a model names), the
+/// manoeuvre. Each as (what names it, absolute path), in a fixed order; a file named twice
+/// comes once.
+std::vector<std::pair<std::string, std::string>> named_files(const Scenario& scenario);
+
+/// Digest of a resolved scenario (FNV-1a 64-bit, 16 hex digits) over its YAML text and the
+/// content of every file it names (named_files()): a model or manoeuvre changed under the same
+/// path changes it. Every process of a run puts it on its heartbeat and the launcher refuses a
+/// process whose digest is not the run's; the run summary carries it (`config_digest`).
 std::string scenario_digest(const Scenario& scenario);
 
 /// Writes a tree as YAML text.

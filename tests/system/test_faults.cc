@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -323,6 +324,48 @@ TEST_CASE("external process: one started by hand with the run's scenario joins t
     CHECK(out.find("process 'controller'") != std::string::npos);
     CHECK(out.find("started with another scenario") != std::string::npos);
   }
+}
+
+TEST_CASE("external process: one started after the run's model file changed under the same path is refused",
+          "[fault]") {
+  // The run flies a copy of set 1's model; after the launcher has read it (and written the
+  // resolved scenario), the copy changes. A process started now with the run's own resolved
+  // scenario reads the changed model: its digest is not the run's, and the launcher refuses it.
+  const std::string bin_dir = std::filesystem::path(RIG_BIN).parent_path().string();
+  const std::string dir = nimble::test::scratch_dir("faults_external_model_changed");
+  const std::string model = dir + "/model.yaml";
+  std::filesystem::copy_file(kConfigs + "models/nimble_lateral_set1.yaml", model);
+  {
+    // The copy's vehicle is named relative to the model file: name the shipped one absolutely.
+    std::ifstream in(model);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string s = text.str();
+    const std::string from = "vehicle: ../vehicles/", to = "vehicle: " + kConfigs + "vehicles/";
+    s.replace(s.find(from), from.size(), to);
+    std::ofstream(model) << s;
+  }
+  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
+                                       "--clock lockstep --set duration_s=2 --set model=" + model +
+                                           " --set run.external_processes=[controller]");
+  const std::string resolved = dir + "/run.lcmlog.scenario.yaml";
+  for (int i = 0; i < 200 && !std::filesystem::exists(resolved); ++i) ::usleep(50000);
+  REQUIRE(std::filesystem::exists(resolved));
+  ::usleep(300000);
+  std::ofstream(model, std::ios::app) << "# changed during the run\n";
+  const std::string cmd = "nsenter -t " + std::to_string(rig) + " -n " + bin_dir +
+                          "/nimble_controller --name controller --scenario " + resolved +
+                          " --lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608' > " + dir +
+                          "/controller.out 2>&1 &";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const int code = wait_exit_code(rig);
+  std::system(("pkill -f 'nimble_controller --name controller --scenario " + resolved + "'").c_str());
+  const std::string out = slurp(dir + "/out.txt");
+  INFO(out);
+  CHECK(code == kExitBadInput);
+  CHECK(out.find("process 'controller'") != std::string::npos);
+  CHECK(out.find("started with another scenario") != std::string::npos);
+  CHECK(out.find("change no model, manoeuvre or vehicle file during a run") != std::string::npos);
 }
 
 TEST_CASE("watchdogs stay quiet in nominal flights: no divergence, stuck IMU or failsafe over 16 seeded runs",

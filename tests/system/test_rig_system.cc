@@ -497,4 +497,8 @@ TEST_CASE("expected rates: every process expects its inputs at the run's configu
   const YAML::Node resolved = YAML::LoadFile(dir + "/run.lcmlog.scenario.yaml");
   CHECK(resolved["expected_rates_hz"][kTruth].as<double>() == 500.0);
   CHECK(resolved["expected_rates_hz"][kActuatorCommand].as<double>() == 256.0);
+  // The summary names the configuration the run flew (scenario and the content of its files).
+  const std::string digest = r.summary["config_digest"].as<std::string>();
+  CHECK(digest.size() == 16);
+  CHECK(digest.find_first_not_of("0123456789abcdef") == std::string::npos);
 }

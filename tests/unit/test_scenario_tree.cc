@@ -120,3 +120,41 @@ TEST_CASE("scenario tree: a base that is not a file name (a mapping, a list) is 
   }
   fs::remove_all(dir);
 }
+
+TEST_CASE("scenario digest: it covers the content of every file the scenario names, not only their paths",
+          "[scenario]") {
+  // A scenario in a scratch folder with its own copies of the model, the model's vehicle and the
+  // manoeuvre, so that each can be changed under the same path.
+  const fs::path dir = fs::temp_directory_path() / ("rig_scenario_digest_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "models");
+  fs::create_directories(dir / "vehicles");
+  const fs::path configs = fs::path(RIG_SOURCE_DIR) / "rig_configs";
+  fs::copy_file(configs / "models" / "nimble_lateral_set1.yaml", dir / "models" / "m.yaml");
+  fs::copy_file(configs / "vehicles" / "nimble_no_wifi.yaml", dir / "vehicles" / "nimble_no_wifi.yaml");
+  fs::copy_file(configs / "manoeuvres" / "hover.yaml", dir / "hover.yaml");
+  std::ofstream(dir / "scenario.yaml") << "name: d\nduration_s: 1\nclock: inprocess\nseed: 1\n"
+                                          "processes: [plant, controller]\nmodel: models/m.yaml\n"
+                                          "manoeuvre: hover.yaml\n";
+  const auto digest = [&] { return nimble::scenario_digest(nimble::load_scenario((dir / "scenario.yaml").string())); };
+
+  const auto files = nimble::named_files(nimble::load_scenario((dir / "scenario.yaml").string()));
+  REQUIRE(files.size() == 3);
+  CHECK(files[0].first == "model");
+  CHECK(files[1].first == "model.vehicle");
+  CHECK(files[1].second == (dir / "vehicles" / "nimble_no_wifi.yaml").string());
+  CHECK(files[2].first == "manoeuvre");
+
+  const std::string original = digest();
+  CHECK(original.size() == 16);
+  CHECK(digest() == original);  // nothing changed: the same digest
+  // Each named file changed under its own path changes the digest.
+  for (const fs::path& file : {dir / "models" / "m.yaml", dir / "vehicles" / "nimble_no_wifi.yaml", dir / "hover.yaml"}) {
+    INFO(file);
+    std::ofstream(file, std::ios::app) << "# changed\n";
+    const std::string changed = digest();
+    CHECK(changed != original);
+    CHECK(changed.size() == 16);
+  }
+  fs::remove_all(dir);
+}
