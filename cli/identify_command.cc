@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cmdline/args.h"
+#include "core/effects.h"
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -183,11 +184,9 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   cl->add_option("--model", model_file, "the model (lateral3) to check")->type_name("FILE")->required();
   add_salvage(cl, log_options);
   add_vehicle(cl, vehicle_file, "the model's");
-  each_value(cl->add_option("--candidates",
-                            "comma-separated candidate effects to try (default: all the data supports): "
-                            "kinematic_coupling, gravity_nonlinearity, lateral_inflow, forward_speed_coupling, "
-                            "actuator_delay, sensor_bias, dihedral_coupling, yaw_coupling, flapping_forcing, "
-                            "lateral_gust")
+  each_value(cl->add_option("--candidates")
+                 ->description("comma-separated candidate effects to try (default: all the data supports): " +
+                               effect_name_list())
                  ->type_name("LIST"),
              [&opt](const std::string& v) { opt.candidates = split_list(v); });
   cl->add_option("--folds", opt.folds, "held-out cross-validation folds")

@@ -1,5 +1,7 @@
 #include "core/model.h"
 
+#include "core/effects.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -206,13 +208,8 @@ DerivativeModel model_from_config(ConfigMap& map) {
   }
   if (map.has("effects")) {
     ConfigMap effects = map.get_map("effects");
-    const auto& known = model_effect_names();
     for (const auto& name : effects.keys()) {
-      if (std::find(known.begin(), known.end(), name) == known.end()) {
-        std::string list;
-        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-        effects.fail(name, "unknown effect (known: " + list + ")");
-      }
+      if (find_effect(name) == nullptr) effects.fail(name, "unknown effect (known: " + effect_name_list() + ")");
       ConfigMap params = effects.get_map(name);
       for (const auto& key : params.keys()) m.effects[name][key] = params.get_double(key);
       params.finish();
@@ -224,10 +221,11 @@ DerivativeModel model_from_config(ConfigMap& map) {
 }
 
 const std::vector<std::string>& model_effect_names() {
-  static const std::vector<std::string> names{
-      "kinematic_coupling", "gravity_nonlinearity", "lateral_inflow", "forward_speed_coupling",
-      "actuator_delay",     "sensor_bias",          "dihedral_coupling", "yaw_coupling",
-      "flapping_forcing",   "lateral_gust"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const auto& e : effect_registry()) out.push_back(e.name);
+    return out;
+  }();
   return names;
 }
 

@@ -24,75 +24,8 @@ using Folds = std::vector<std::pair<Index, Index>>;
 // ---------------------------------------------------------------------------------------
 // The candidate library.
 
-const std::vector<CandidateSpec> kLibrary{
-    {"kinematic_coupling",
-     "p (w - w0): the vertical-velocity part of the kinematic term p w of v_dot that Eq 21 "
-     "linearises at w0 (coefficient the mass)",
-     {"w"},
-     {{"Y", "Y_pw", "p (w - w0)"}},
-     false},
-    {"gravity_nonlinearity",
-     "g (sin phi - phi) cos theta0: the part of the gravity component that Eq 21 linearises "
-     "(coefficient the mass)",
-     {},
-     {{"Y", "Y_gphi", "g (sin phi - phi) cos theta0"}},
-     false},
-    {"lateral_inflow",
-     "v|v| in side force and roll moment: lateral inflow on the leading-edge vortex in sideways "
-     "flight (plant effect lateral_inflow)",
-     {},
-     {{"L", "L_vv", "v|v|"}, {"Y", "Y_vv", "v|v|"}},
-     false},
-    {"forward_speed_coupling",
-     "(u - u0) p and (u - u0) v: the lateral stability derivatives change with forward speed "
-     "(plant effect forward_speed_coupling)",
-     {"u"},
-     {{"L", "L_up", "(u - u0) p"}, {"L", "L_uv", "(u - u0) v"}, {"Y", "Y_up", "(u - u0) p"},
-      {"Y", "Y_uv", "(u - u0) v"}},
-     false},
-    {"actuator_delay",
-     "delta_f(t - tau) - delta_f(t): the flap input acts tau later than recorded, tau scanned "
-     "over 1 sample .. delay_max_s (plant effect actuator_delay)",
-     {},
-     {{"L", "L_df_delayed", "delta_f(t - tau) - delta_f(t)"},
-      {"Y", "Y_df_delayed", "delta_f(t - tau) - delta_f(t)"},
-      {"F", "F_cmd_delayed", "delta_f_cmd(t - t0 - tau) - delta_f_cmd(t - t0), t0 the command latency"}},
-     true},
-    {"sensor_bias",
-     "constant in both equations: a constant offset of a measured rate or velocity (or a "
-     "constant moment and force)",
-     {},
-     {{"L", "L_0", "1"}, {"Y", "Y_0", "1"}},
-     false},
-    {"dihedral_coupling",
-     "delta_d in roll moment and side force: the dihedral input the 3-state model leaves out",
-     {"delta_d"},
-     {{"L", "L_dd", "delta_d"}, {"Y", "Y_dd", "delta_d"}},
-     false},
-    {"yaw_coupling",
-     "r in roll moment and side force: the yaw rate the 3-state model leaves out",
-     {"r"},
-     {{"L", "Lr", "r"}, {"Y", "Yr", "r"}},
-     false},
-    {"flapping_forcing",
-     "sin and cos of h 2 pi f t (h = 1, 2) in roll moment and side force: periodic forcing at the flapping "
-     "frequency f, scanned over 10-25 Hz on data low-passed above the band (plant effect flapping_forcing)",
-     {},
-     {{"L", "L_sin1", "sin(2 pi f t)"}, {"L", "L_cos1", "cos(2 pi f t)"}, {"L", "L_sin2", "sin(4 pi f t)"},
-      {"L", "L_cos2", "cos(4 pi f t)"}, {"Y", "Y_sin1", "sin(2 pi f t)"}, {"Y", "Y_cos1", "cos(2 pi f t)"},
-      {"Y", "Y_sin2", "sin(4 pi f t)"}, {"Y", "Y_cos2", "cos(4 pi f t)"}},
-     true,
-     true},
-    {"lateral_gust",
-     "an unmeasured side wind v_g: the aerodynamics see v - v_g, so the side-force equation carries "
-     "-Yv v_g, a low-frequency random force. Stochastic, no regressor: named from its signature in the "
-     "residual spectrum (plant effect lateral_gust; parameters sigma_mps, tau_s)",
-     {},
-     {},
-     false,
-     false,
-     true},
-};
+// The library is the registry's effects (core/effects.h); the regressor columns of each are
+// computed in candidate_columns().
 
 /// A regressor column is excited when its standard deviation reaches this fraction of its
 /// root mean square plus an absolute floor: a column that is (nearly) constant cannot be
@@ -488,7 +421,7 @@ std::string fmt(double x, int digits = 3) {
 
 }  // namespace
 
-const std::vector<CandidateSpec>& candidate_library() { return kLibrary; }
+const std::vector<CandidateSpec>& candidate_library() { return effect_registry(); }
 
 // ---------------------------------------------------------------------------------------
 
@@ -1238,9 +1171,8 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
   }
   m.added.resize(m.eqs.size());
   for (const auto& [name, params] : model.effects) {
-    const std::string& effect = name;  // a lambda cannot capture a structured binding in C++17
-    const auto spec = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == effect; });
-    if (spec == kLibrary.end()) continue;  // an effect the library has no regressor form for
+    const EffectSpec* spec = find_effect(name);
+    if (spec == nullptr) continue;  // an effect the library has no regressor form for
     if (known) known->push_back(name);
     if (known_values) {
       for (const auto& [key, value] : params) (*known_values)[key] = value;
@@ -1273,11 +1205,8 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   if (!(options.partial_f > 0.0)) throw std::invalid_argument("discrepancy: partial F must be > 0");
   if (!(options.delay_max_s > 0.0)) throw std::invalid_argument("discrepancy: delay_max_s must be > 0");
   for (const auto& name : options.candidates) {
-    const auto it = std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
-    if (it == kLibrary.end()) {
-      std::string list;
-      for (const auto& c : kLibrary) list += (list.empty() ? "" : ", ") + c.name;
-      throw std::invalid_argument("unknown candidate '" + name + "' (known: " + list + ")");
+    if (find_effect(name) == nullptr) {
+      throw std::invalid_argument("unknown candidate '" + name + "' (known: " + effect_name_list() + ")");
     }
   }
 
@@ -1313,7 +1242,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   wf.p_critical = chi_square_survival(options.partial_f, 1.0);
 
   std::vector<const CandidateSpec*> pool;
-  for (const auto& c : kLibrary) {
+  for (const auto& c : candidate_library()) {
     if (options.candidates.empty() ||
         std::find(options.candidates.begin(), options.candidates.end(), c.name) != options.candidates.end()) {
       pool.push_back(&c);
@@ -1391,7 +1320,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     add_applied_command(wide.filtered, options.command_latency_s);
     Model wm = build_baseline(wide.filtered, equations, model, vehicle, data.source, nullptr, nullptr);
     for (const auto& name : m.effect_names) {
-      const CandidateSpec& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+      const CandidateSpec& spec = *find_effect(name);
       Index k = 0;
       for (const auto& t : res.candidates) {
         if (t.name == name && t.entered && spec.scanned) k = std::lround(t.delay_s * wide.filtered.rate_hz);
@@ -1425,7 +1354,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
       options.processing.filter_order > 0 ? 0.6 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   if (gust != pool.end() && std::find(known.begin(), known.end(), (*gust)->name) == known.end()) {
     std::vector<VectorXd> extra;  // Y columns of every deterministic candidate the data supports
-    for (const auto& c : kLibrary) {
+    for (const auto& c : candidate_library()) {
       if (c.scanned || c.wideband || c.stochastic) continue;
       if (std::find(m.effect_names.begin(), m.effect_names.end(), c.name) != m.effect_names.end()) continue;
       if (std::find(known.begin(), known.end(), c.name) != known.end()) continue;
@@ -1452,7 +1381,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     if (name == "flapping_forcing") continue;  // named with its parameters by the wideband stage
     NamedEffect eff;
     eff.name = name;
-    const CandidateSpec& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    const CandidateSpec& spec = *find_effect(name);
     for (const auto& term : spec.terms) {
       const auto it = res.augmented.find(term.parameter);
       if (it == res.augmented.end()) continue;
@@ -1572,7 +1501,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   }
   am.effects.clear();
   for (const auto& name : known) {
-    const auto& spec = *std::find_if(kLibrary.begin(), kLibrary.end(), [&](const auto& c) { return c.name == name; });
+    const auto& spec = *find_effect(name);
     for (const auto& term : spec.terms) {
       const auto it = res.augmented.find(term.parameter);
       if (it != res.augmented.end()) am.effects[name][term.parameter] = it->second.value;

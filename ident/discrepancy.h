@@ -87,29 +87,18 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 #include "ident/identify.h"
+#include "core/effects.h"
 #include "ident/signal.h"
 
 namespace nimble::ident {
 
-/// One regressor column of a candidate effect in one equation.
-struct CandidateTerm {
-  std::string equation;   ///< "L" or "Y"
-  std::string parameter;  ///< e.g. "Y_vv"
-  std::string regressor;  ///< documented form, e.g. "v|v|"
-};
+/// One regressor column of a candidate effect in one equation (core/effects.h).
+using CandidateTerm = EffectTerm;
 
-/// A physically named candidate effect of the library.
-struct CandidateSpec {
-  std::string name;         ///< the plant's effect name where the plant has it, e.g. "lateral_inflow"
-  std::string effect;       ///< the physics, one line
-  std::vector<std::string> needs;  ///< data channels it needs besides p, v, phi, delta_f
-  std::vector<CandidateTerm> terms;
-  bool scanned = false;     ///< has a scanned parameter (a delay, a frequency)
-  bool wideband = false;    ///< tested on data low-passed above the flapping band (flapping_forcing)
-  bool stochastic = false;  ///< no regressor: named from its signature in the residual (lateral_gust)
-};
+/// A physically named candidate effect: an effect of the rig's registry (core/effects.h).
+using CandidateSpec = EffectSpec;
 
-/// Every candidate effect, in a fixed order.
+/// Every candidate effect, in a fixed order: the registry's effects.
 const std::vector<CandidateSpec>& candidate_library();
 
 /// Options of the workflow. Every threshold is documented where it is defined.
