@@ -9,6 +9,7 @@
 #include "cmdline/args.h"
 #include "cli/commands.h"
 #include "launcher/run_plan.h"
+#include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "can_bridge/bridge_config.h"
@@ -48,6 +49,7 @@ const std::vector<Section>& sections() {
                 rows(params_markdown(plant::thrust_params(), ThrustCurve{}, "plant.thrust.")) +
                 rows(params_markdown(plant::initial_params(), plant::InitialState{}, "plant.initial."));
        }},
+      {"plant.effects", [] { return plant::effects_markdown(); }},
       {"pilot", [] { return params_markdown(pilot_params(), PilotConfig{}, "pilot."); }},
       {"can_bridge", [] { return params_markdown(can::can_bridge_params(), can::CanBridgeConfig{}, "can_bridge."); }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},

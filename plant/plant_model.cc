@@ -1,13 +1,10 @@
 #include "plant/plant_model.h"
 
-#include "plant/model_effects.h"
+#include "plant/effects/registry.h"
 
 #include <cmath>
 #include <stdexcept>
 
-#include "turbulence/discretisation.h"
-#include "turbulence/dryden.h"
-#include "turbulence/lyapunov.h"
 
 namespace nimble::plant {
 namespace {
@@ -31,27 +28,6 @@ double get_or_zero(const DerivativeModel& m, const std::string& key) {
   return it == m.derivatives.end() ? 0.0 : it->second;
 }
 
-std::vector<double> read_list(ConfigMap& map, const std::string& key) {
-  std::vector<double> out;
-  if (!map.has(key)) {
-    map.get_double_or(key, 0.0);  // mark as known
-    return out;
-  }
-  const YAML::Node node = map.get_node(key);
-  if (!node.IsSequence()) map.fail(key, "must be a list of numbers");
-  for (const auto& item : node) {
-    try {
-      out.push_back(item.as<double>());
-    } catch (const YAML::Exception&) {
-      map.fail(key, "must be a list of numbers");
-    }
-    if (!std::isfinite(out.back()) || std::fabs(out.back()) > 1.0) {
-      map.fail(key, "entries must be finite and at most 1 in magnitude (N or N m)");
-    }
-  }
-  return out;
-}
-
 Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
   const double cr = std::cos(phi / 2), sr = std::sin(phi / 2);
   const double cp = std::cos(theta / 2), sp = std::sin(theta / 2);
@@ -61,8 +37,6 @@ Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
 }
 
 }  // namespace
-
-std::string to_string(GustForm form) { return form == GustForm::kDryden ? "dryden" : "gauss_markov"; }
 
 const ParamTable<PlantConfig>& plant_params() {
   using C = PlantConfig;
@@ -151,66 +125,7 @@ PlantConfig plant_config_from(ConfigMap& map) {
   sub("initial", initial_params(), c.initial);
   if (map.has("effects")) {
     ConfigMap e = map.get_map("effects");
-    EffectsConfig& fx = c.effects;
-    if (e.has("flapping_forcing")) {
-      ConfigMap m = e.get_map("flapping_forcing");
-      fx.flapping_forcing.enabled = m.get_bool("enabled");
-      fx.flapping_forcing.roll_moment_amplitudes_nm = read_list(m, "roll_moment_amplitudes_nm");
-      fx.flapping_forcing.side_force_amplitudes_n = read_list(m, "side_force_amplitudes_n");
-      m.finish();
-    }
-    if (e.has("lateral_inflow")) {
-      ConfigMap m = e.get_map("lateral_inflow");
-      fx.lateral_inflow.enabled = m.get_bool("enabled");
-      fx.lateral_inflow.Y_vv_ns2pm2 = m.get_double_or("Y_vv_ns2pm2", 0.0, Range::closed(-1.0, 1.0));
-      fx.lateral_inflow.L_vv_ns2pm = m.get_double_or("L_vv_ns2pm", 0.0, Range::closed(-0.1, 0.1));
-      m.finish();
-    }
-    if (e.has("forward_speed_coupling")) {
-      ConfigMap m = e.get_map("forward_speed_coupling");
-      auto& fsc = fx.forward_speed_coupling;
-      fsc.enabled = m.get_bool("enabled");
-      // One form or the other: a gain on the stability derivatives, or the four coefficients.
-      const bool gain = m.has("gain_per_mps");
-      std::string coefficient;
-      for (const char* key : {"L_up_ns2", "L_uv_ns2pm", "Y_up_ns2pm", "Y_uv_ns2pm2"}) {
-        if (m.has(key) && coefficient.empty()) coefficient = key;
-      }
-      if (gain && !coefficient.empty()) {
-        m.fail("gain_per_mps", "give either gain_per_mps or the coefficients L_up_ns2, L_uv_ns2pm, Y_up_ns2pm, "
-                               "Y_uv_ns2pm2, not both (" + coefficient + " is given too)");
-      }
-      fsc.gain_per_mps = m.get_double_or("gain_per_mps", 0.0, Range::closed(-2.0, 2.0));
-      fsc.L_up_ns2 = m.get_double_or("L_up_ns2", 0.0, Range::closed(-0.1, 0.1));
-      fsc.L_uv_ns2pm = m.get_double_or("L_uv_ns2pm", 0.0, Range::closed(-0.1, 0.1));
-      fsc.Y_up_ns2pm = m.get_double_or("Y_up_ns2pm", 0.0, Range::closed(-1.0, 1.0));
-      fsc.Y_uv_ns2pm2 = m.get_double_or("Y_uv_ns2pm2", 0.0, Range::closed(-1.0, 1.0));
-      m.finish();
-    }
-    if (e.has("actuator_delay")) {
-      ConfigMap m = e.get_map("actuator_delay");
-      fx.actuator_delay.enabled = m.get_bool("enabled");
-      fx.actuator_delay.delay_s = m.get_double_or("delay_s", 0.0, Range::closed(0.0, 0.5));
-      m.finish();
-    }
-    if (e.has("lateral_gust")) {
-      ConfigMap m = e.get_map("lateral_gust");
-      fx.lateral_gust.enabled = m.get_bool("enabled");
-      fx.lateral_gust.sigma_mps = m.get_double_or("sigma_mps", 0.0, Range::closed(0.0, 5.0));
-      fx.lateral_gust.tau_s = m.get_double_or("tau_s", 1.0, Range{0.0, 100.0, true, false});
-      const std::string form = m.has("form") ? m.get_enum("form", {"gauss_markov", "dryden"}) : "gauss_markov";
-      fx.lateral_gust.form = form == "dryden" ? GustForm::kDryden : GustForm::kGaussMarkov;
-      fx.lateral_gust.time_scale_s = m.get_double_or("time_scale_s", 1.0, Range{0.0, 100.0, true, false});
-      m.finish();
-    }
-    if (e.has("constant_load")) {
-      ConfigMap m = e.get_map("constant_load");
-      fx.constant_load.enabled = m.get_bool("enabled");
-      fx.constant_load.roll_moment_nm = m.get_double_or("roll_moment_nm", 0.0, Range::closed(-0.1, 0.1));
-      fx.constant_load.side_force_n = m.get_double_or("side_force_n", 0.0, Range::closed(-1.0, 1.0));
-      m.finish();
-    }
-    e.finish();
+    effects_from(e, c.effects);  // plant/effects/registry.h
   }
   map.finish();
   return c;
@@ -231,7 +146,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   // flies with the model's coefficients, overriding the plant file's effect of the same name;
   // dihedral_coupling and yaw_coupling set derivatives (read into the cache below);
   // kinematic_coupling and gravity_nonlinearity are in the equations of motion already; an
-  // effect the plant does not know is refused. The mapping: plant/model_effects.h.
+  // effect the plant does not know is refused. The mapping: plant/effects/registry.h.
   apply_model_effects(lateral, cfg_.effects, lat_.derivatives);
   const auto& fsc = cfg_.effects.forward_speed_coupling;
   if (fsc.enabled && fsc.gain_per_mps != 0.0 && fsc.has_coefficients()) {
@@ -280,25 +195,8 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.side_force_amplitudes_n.size(); ++h) {
     forcing_phase_side_.push_back(phase(rng_));
   }
-  const auto& gust = cfg_.effects.lateral_gust;
-  if (gust.enabled && gust.form == GustForm::kDryden) {
-    if (!(gust.sigma_mps >= 0.0) || !(gust.time_scale_s > 0.0) || !std::isfinite(gust.time_scale_s)) {
-      throw std::invalid_argument("plant: effects.lateral_gust (dryden) needs sigma_mps >= 0 and time_scale_s > 0");
-    }
-    // The unit-sigma filter, scaled by sigma on the output (sigma = 0 is a silent gust with
-    // the same random stream).
-    const turbulence::ShapingFilter f = turbulence::time_based_second_order(1.0, gust.time_scale_s);
-    const Eigen::VectorXd unit = Eigen::VectorXd::Ones(1);
-    const turbulence::DiscreteModel d = turbulence::discretise(f.system, unit, dt_s_);
-    gust_Phi_ = d.Phi;
-    gust_L_ = d.noise_factor;
-    gust_C_ = gust.sigma_mps * f.system.C;
-    const Eigen::Matrix2d P = turbulence::stationary_covariance(f.system, unit);
-    const Eigen::Matrix2d P_factor = turbulence::psd_factor(P);
-    const double n0 = normal_(rng_), n1 = normal_(rng_);
-    gust_z_ = P_factor * Eigen::Vector2d(n0, n1);
-    x_gust_ = (gust_C_ * gust_z_)(0);
-  }
+  // The Dryden gust draws its stationary start here, after the forcing's phases.
+  gust_ = GustProcess(cfg_.effects.lateral_gust, dt_s_, rng_, normal_);
   update_truth(trim_command());
 }
 
@@ -307,13 +205,7 @@ ActuatorInput PlantModel::trim_command() const {
 }
 
 ActuatorInput PlantModel::delayed(const ActuatorInput& cmd) {
-  const auto& d = cfg_.effects.actuator_delay;
-  if (!d.enabled || d.delay_s <= 0.0) return cmd;
-  // The plant applies the newest command issued at least delay_s ago (trim before that).
-  delay_line_.emplace_back(t_s_, cmd);
-  const double cutoff = t_s_ - d.delay_s + 1e-9;
-  while (delay_line_.size() >= 2 && delay_line_[1].first <= cutoff) delay_line_.pop_front();
-  return delay_line_.front().first <= cutoff ? delay_line_.front().second : trim_command();
+  return delay_.apply(cfg_.effects.actuator_delay, t_s_, cmd, trim_command());
 }
 
 PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u, double t,
@@ -346,10 +238,9 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
 
   // Aerodynamic perturbation forces and moments.
   const EffectsConfig& fx = cfg_.effects;
-  const double v_rel = v - (fx.lateral_gust.enabled ? x_gust_ : 0.0);
+  const double v_rel = v - (fx.lateral_gust.enabled ? gust_.velocity_mps() : 0.0);
   const double du = uu - trim.u0_mps, dw_vel = w - trim.w0_mps;
-  const auto& fsc = fx.forward_speed_coupling;
-  const double k_speed = fsc.enabled ? 1.0 + fsc.gain_per_mps * du : 1.0;
+  const double k_speed = forward_speed_factor(fx.forward_speed_coupling, du);
 
   double L = k_speed * (Lp_ * p + Lr_ * r + Lv_ * v_rel) + L_df_ * df + L_dt_ * dt_pct + L_dd_ * dd + L_dw_ * dw;
   double N = k_speed * (Np_ * p + Nr_ * r + Nv_ * v_rel) + N_df_ * df + N_dt_ * dt_pct + N_dd_ * dd + N_dw_ * dw;
@@ -360,28 +251,12 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
     X = Xq_ * q + Xu_ * du + Xw_ * dw_vel + X_dd_ * dd;
     Z = Zq_ * q + Zu_ * du + Zw_ * dw_vel + Z_dd_ * dd;
   }
-  if (fsc.enabled) {
-    L += fsc.L_up_ns2 * du * p + fsc.L_uv_ns2pm * du * v_rel;
-    Y += fsc.Y_up_ns2pm * du * p + fsc.Y_uv_ns2pm2 * du * v_rel;
-  }
-  if (fx.constant_load.enabled) {
-    L += fx.constant_load.roll_moment_nm;
-    Y += fx.constant_load.side_force_n;
-  }
-  if (fx.lateral_inflow.enabled) {
-    Y += fx.lateral_inflow.Y_vv_ns2pm2 * v_rel * std::fabs(v_rel);
-    L += fx.lateral_inflow.L_vv_ns2pm * v_rel * std::fabs(v_rel);
-  }
-  if (fx.flapping_forcing.enabled) {
-    const double phase = flap_phase_rad_ + x_[kFcoll] * (t - t_s_);
-    const auto& ff = fx.flapping_forcing;
-    for (std::size_t h = 0; h < ff.roll_moment_amplitudes_nm.size(); ++h) {
-      L += ff.roll_moment_amplitudes_nm[h] * std::sin(static_cast<double>(h + 1) * phase + forcing_phase_roll_[h]);
-    }
-    for (std::size_t h = 0; h < ff.side_force_amplitudes_n.size(); ++h) {
-      Y += ff.side_force_amplitudes_n[h] * std::sin(static_cast<double>(h + 1) * phase + forcing_phase_side_[h]);
-    }
-  }
+  // The plant's effects (plant/effects/), each adding its loads, in a fixed order.
+  add_forward_speed_coupling(fx.forward_speed_coupling, du, p, v_rel, L, Y);
+  add_constant_load(fx.constant_load, L, Y);
+  add_lateral_inflow(fx.lateral_inflow, v_rel, L, Y);
+  add_flapping_forcing(fx.flapping_forcing, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), forcing_phase_roll_,
+                       forcing_phase_side_, L, Y);
   Z -= thrust;
 
   // Translational dynamics (thesis Eq 3.1), body axes.
@@ -437,17 +312,7 @@ void PlantModel::step(const ActuatorInput& cmd_in) {
   flap_phase_rad_ = std::fmod(flap_phase_rad_ + 0.5 * (f_before + x_[kFcoll]) * h, 2.0 * M_PI);
   t_s_ += h;
 
-  // Side gust, exactly discretised: the first-order Gauss-Markov process, or the Dryden
-  // filter with the exact process noise of one plant step (drawn in a fixed order).
-  const auto& gust = cfg_.effects.lateral_gust;
-  if (gust.enabled && gust.form == GustForm::kDryden) {
-    const double n0 = normal_(rng_), n1 = normal_(rng_);
-    gust_z_ = gust_Phi_ * gust_z_ + gust_L_ * Eigen::Vector2d(n0, n1);
-    x_gust_ = (gust_C_ * gust_z_)(0);
-  } else if (gust.enabled) {
-    const double a = std::exp(-h / gust.tau_s);
-    x_gust_ = a * x_gust_ + gust.sigma_mps * std::sqrt(1.0 - a * a) * normal_(rng_);
-  }
+  gust_.step(h, rng_, normal_);  // the side gust's step (effects.lateral_gust)
   update_truth(cmd);
 }
 
@@ -469,7 +334,7 @@ void PlantModel::update_truth(const ActuatorInput& u) {
   tr.throttle_pct = (x_[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
   tr.dihedral_rad = x_[kDd];
   tr.wing_root_rad = x_[kDw];
-  tr.gust_v_mps = x_gust_;
+  tr.gust_v_mps = gust_.velocity_mps();
 }
 
 }  // namespace nimble::plant

@@ -25,6 +25,7 @@
 #include "core/rig_values.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
+#include "plant/effects/effects.h"
 
 namespace nimble::plant {
 
@@ -46,106 +47,11 @@ struct ServoConfig {
 /// plant section's `thrust` may change its coefficients.
 using ThrustConfig = ThrustCurve;
 
-/// Periodic forcing at the flapping frequency and its harmonics (thesis §7: oscillations at
-/// hover not captured by the linear model). Amplitude h-1 of the list acts at h times the
-/// flapping frequency of the actual collective (about 16-17 Hz at trim), phase-locked to the
-/// plant's flapping phase; the phases relative to it are drawn from the seed.
-struct FlappingForcingConfig {
-  bool enabled = false;
-  std::vector<double> roll_moment_amplitudes_nm;  ///< per harmonic [N m]
-  std::vector<double> side_force_amplitudes_n;    ///< per harmonic [N]
-};
-
-/// Lateral-inflow nonlinearity: Y += Y_vv v|v|, L += L_vv v|v| (sideways flight, thesis §9.5).
-///
-/// Each effect below can also come from the lateral model: an effect its `effects:` section
-/// carries (rig discrepancy --model-out) overrides the plant file's effect of the same name
-/// with the model's coefficients; plant/model_effects.h apply_model_effects() has the mapping
-/// for every effect name (lateral_inflow: Y_vv, L_vv; forward_speed_coupling; actuator_delay;
-/// flapping_forcing; sensor_bias as constant_load; lateral_gust; dihedral_coupling and
-/// yaw_coupling as derivatives; kinematic_coupling and gravity_nonlinearity are in the
-/// equations of motion already).
-struct LateralInflowConfig {
-  bool enabled = false;
-  double Y_vv_ns2pm2 = 0.0;  ///< [N s^2/m^2]
-  double L_vv_ns2pm = 0.0;   ///< [N m s^2/m^2]
-};
-
-/// Forward-speed coupling, in one of two forms (not both: the config reader and the
-/// PlantModel constructor refuse a gain together with a coefficient):
-///  - one gain k: the lateral stability derivatives (L, N and Y rows) scale with (1 + k (u - u0));
-///  - four coefficients (the discrepancy workflow's regressors): L += L_up (u - u0) p +
-///    L_uv (u - u0) v, Y += Y_up (u - u0) p + Y_uv (u - u0) v.
-/// For a lateral3 model (r = 0, no N row) the gain k is the same as L_up = k Lp, L_uv = k Lv,
-/// Y_up = k Yp, Y_uv = k Yv. u0 is the lateral model's trim; v is relative to the lateral gust,
-/// as in the rest of the aerodynamics. u moves only with a longitudinal model (otherwise it is
-/// held at trim and the effect is inert).
-struct ForwardSpeedCouplingConfig {
-  bool enabled = false;
-  double gain_per_mps = 0.0;  ///< k [1/(m/s)]
-  double L_up_ns2 = 0.0;      ///< [N m per (m/s) (rad/s)] = [N s^2]
-  double L_uv_ns2pm = 0.0;    ///< [N m per (m/s)^2] = [N s^2/m]
-  double Y_up_ns2pm = 0.0;    ///< [N per (m/s) (rad/s)] = [N s^2/m]
-  double Y_uv_ns2pm2 = 0.0;   ///< [N per (m/s)^2] = [N s^2/m^2]
-  /// True when any of the four coefficients is non-zero.
-  bool has_coefficients() const {
-    return L_up_ns2 != 0.0 || L_uv_ns2pm != 0.0 || Y_up_ns2pm != 0.0 || Y_uv_ns2pm2 != 0.0;
-  }
-};
-
-/// Pure delay on every actuator command (flap frequencies and servos).
-struct ActuatorDelayConfig {
-  bool enabled = false;
-  double delay_s = 0.0;
-};
-
-/// Form of the lateral gust's spectrum (key `form`; not `model`, which scenario loading
-/// treats as a file path at any depth).
-enum class GustForm {
-  kGaussMarkov,  ///< first order: S(omega) = 2 sigma^2 tau / (1 + (omega tau)^2)
-  kDryden,       ///< time-based second-order Dryden lateral form (turbulence/dryden.h)
-};
-
-/// "gauss_markov" or "dryden".
-std::string to_string(GustForm form);
-
-/// Lateral gust: side wind v_g with standard deviation sigma; aerodynamics see v - v_g (the
-/// Lv, Yv (and Nv) terms and every effect of v act on the relative velocity).
-///  - gauss_markov (default): first-order Gauss-Markov with correlation time tau_s, starting
-///    at v_g = 0, one normal draw per plant step;
-///  - dryden: the time-based second-order Dryden lateral form of turbulence/dryden.h,
-///    S(omega) = sigma^2 T (1 + 3 (omega T)^2) / (1 + (omega T)^2)^2 with T = time_scale_s
-///    (the frozen-field form's T = L_v / V: a hovering vehicle has no airspeed to fly through
-///    the turbulence, so the time scale is the parameter), discretised exactly at the plant
-///    rate (ZOH and Van Loan, turbulence/discretisation.h): its sampled variance is sigma^2
-///    at any rate. Starts stationary (filter state drawn from its covariance, two normal draws
-///    in the constructor), then two normal draws per plant step.
-/// The plant file's defaults and where they come from: rig_configs/plant/nimble_plant.yaml.
-struct LateralGustConfig {
-  bool enabled = false;
-  double sigma_mps = 0.0;
-  double tau_s = 1.0;                          ///< Gauss-Markov correlation time [s]
-  GustForm form = GustForm::kGaussMarkov;       ///< key `form`: gauss_markov | dryden
-  double time_scale_s = 1.0;                   ///< Dryden time scale T [s]
-};
-
-/// Constant roll moment and side force (L += roll_moment_nm, Y += side_force_n). Flies a model's
-/// sensor_bias (L_0, Y_0): the equation-error regression cannot tell a rate-sensor bias from a
-/// constant moment, and the plant flies the moment/force form.
-struct ConstantLoadConfig {
-  bool enabled = false;
-  double roll_moment_nm = 0.0;  ///< [N m]
-  double side_force_n = 0.0;    ///< [N]
-};
-
-struct EffectsConfig {
-  FlappingForcingConfig flapping_forcing;
-  LateralInflowConfig lateral_inflow;
-  ForwardSpeedCouplingConfig forward_speed_coupling;
-  ActuatorDelayConfig actuator_delay;
-  LateralGustConfig lateral_gust;
-  ConstantLoadConfig constant_load;
-};
+/// The plant's effects (FlappingForcingConfig, LateralInflowConfig, ForwardSpeedCouplingConfig,
+/// ActuatorDelayConfig, LateralGustConfig, ConstantLoadConfig and EffectsConfig): one file each
+/// in plant/effects/. Each can also come from the lateral model: an effect its `effects:`
+/// section carries (rig discrepancy --model-out) overrides the plant file's effect of the same
+/// name with the model's coefficients (plant/effects/registry.h apply_model_effects()).
 
 /// Initial perturbation from trim. q, r, u and theta apply only where they are states
 /// (q, u, theta with a longitudinal model; r with a lateral4 model).
@@ -263,15 +169,11 @@ class PlantModel {
   State x_;
   double t_s_ = 0.0;
   double flap_phase_rad_ = 0.0;
-  double x_gust_ = 0.0;  ///< side gust velocity [m/s]
-  // Dryden gust filter, exact discrete form: z_{k+1} = Phi z_k + L n_k, v_g = C z.
-  Eigen::Matrix2d gust_Phi_ = Eigen::Matrix2d::Zero(), gust_L_ = Eigen::Matrix2d::Zero();
-  Eigen::RowVector2d gust_C_ = Eigen::RowVector2d::Zero();
-  Eigen::Vector2d gust_z_ = Eigen::Vector2d::Zero();
+  GustProcess gust_;  ///< the side gust (effects.lateral_gust)
   std::vector<double> forcing_phase_roll_, forcing_phase_side_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
-  std::deque<std::pair<double, ActuatorInput>> delay_line_;
+  CommandDelay<ActuatorInput> delay_;  ///< effects.actuator_delay
   Truth truth_;
 };
 

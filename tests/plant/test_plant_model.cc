@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <complex>
+#include <fstream>
+#include <sstream>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -10,9 +12,10 @@
 #include <catch2/catch.hpp>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "core/effects.h"
 #include "core/model.h"
 #include "core/modes.h"
-#include "plant/model_effects.h"
+#include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 
 using namespace nimble;
@@ -277,6 +280,31 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
   }
   const auto& eom = nimble::plant::effects_in_equations_of_motion();
   CHECK(eom == std::vector<std::string>{"kinematic_coupling", "gravity_nonlinearity"});
+}
+
+TEST_CASE("the effect registry and the plant agree: every regressor parameter of every effect flies, every plant "
+          "effect flies a registry effect and is written in the plant file",
+          "[plant][model_effects]") {
+  // Built from the registry (core/effects.h) alone: an effect added there without its plant
+  // side (plant/effects/registry.cc) fails here.
+  for (const auto& spec : nimble::effect_registry()) {
+    std::map<std::string, double> section;
+    for (const auto& term : spec.terms) section[term.parameter] = 1e-4;
+    if (spec.name == "actuator_delay") section["delay_s"] = 0.02;  // the scanned delay
+    if (spec.name == "flapping_forcing") section["flapping_hz"] = 16.5;  // the scanned frequency
+    if (spec.name == "lateral_gust") section = {{"sigma_mps", 0.1}, {"tau_s", 0.5}};  // stochastic: no terms
+    INFO("effect " << spec.name);
+    CHECK_NOTHROW(make_plant(with_effect(spec.name, section)));
+  }
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
+  std::stringstream plant_file;
+  plant_file << in.rdbuf();
+  for (const auto& effect : nimble::plant::plant_effects()) {
+    INFO("plant effect " << effect.name);
+    CHECK(nimble::find_effect(effect.model_effect) != nullptr);
+    CHECK(plant_file.str().find("\n  " + effect.name + ":") != std::string::npos);
+    CHECK(effect.markdown_rows("x.").find("`x.enabled`") != std::string::npos);
+  }
 }
 
 TEST_CASE("a model effect the plant does not know is refused with its name", "[plant][model_effects]") {

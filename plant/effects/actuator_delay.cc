@@ -1,0 +1,46 @@
+#include "plant/effects/actuator_delay.h"
+
+#include <string>
+
+namespace nimble::plant {
+namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+const ParamTable<ActuatorDelayConfig>& actuator_delay_params() {
+  using C = ActuatorDelayConfig;
+  static const ParamTable<C> table = {
+      {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
+      {"delay_s", &C::delay_s, Range::closed(0.0, 0.5), "s", "pure delay of every actuator command"},
+  };
+  return table;
+}
+
+ActuatorDelayConfig actuator_delay_from(ConfigMap& map) {
+  ActuatorDelayConfig c;
+  c.enabled = map.get_bool("enabled");
+  read_params(map, actuator_delay_params(), c);
+  return c;
+}
+
+void actuator_delay_from_model(const ModelSection& s, ActuatorDelayConfig& c) {
+  // The workflow finds that delta_f acts delay_s later than recorded (regressor
+  // delta_f(t - tau) - delta_f(t)). The plant delays every command (the servos too) and all of
+  // the input (the workflow names the effect only when most of it acts delayed); the
+  // regression's coefficients of the delayed column, the delayed fractions and an
+  // actuator-equation coefficient are accepted but not needed.
+  s.check_keys(
+      [](const std::string& k) {
+        return k == "delay_s" || ends_with(k, "_df_delayed") || ends_with(k, "_df_fraction_delayed") ||
+               ends_with(k, "_cmd_delayed");
+      },
+      "delay_s, <eq>_df_delayed, <eq>_df_fraction_delayed, <eq>_cmd_delayed");
+  c.enabled = true;
+  c.delay_s = s.required("delay_s", range_of(actuator_delay_params(), "delay_s"));
+}
+
+}  // namespace nimble::plant

@@ -1,0 +1,30 @@
+#include "plant/effects/constant_load.h"
+
+namespace nimble::plant {
+
+const ParamTable<ConstantLoadConfig>& constant_load_params() {
+  using C = ConstantLoadConfig;
+  static const ParamTable<C> table = {
+      {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
+      {"roll_moment_nm", &C::roll_moment_nm, Range::closed(-0.1, 0.1), "N m", "constant roll moment"},
+      {"side_force_n", &C::side_force_n, Range::closed(-1.0, 1.0), "N", "constant side force"},
+  };
+  return table;
+}
+
+ConstantLoadConfig constant_load_from(ConfigMap& map) {
+  ConstantLoadConfig c;
+  c.enabled = map.get_bool("enabled");
+  read_params(map, constant_load_params(), c);
+  return c;
+}
+
+void constant_load_from_model(const ModelSection& s, ConstantLoadConfig& c) {
+  // Regressor 1 in L and Y: a constant roll moment L_0 and side force Y_0.
+  s.check_keys({"L_0", "Y_0"});
+  c.enabled = true;
+  c.roll_moment_nm = s.or_zero("L_0", range_of(constant_load_params(), "roll_moment_nm"));
+  c.side_force_n = s.or_zero("Y_0", range_of(constant_load_params(), "side_force_n"));
+}
+
+}  // namespace nimble::plant

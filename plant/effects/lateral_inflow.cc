@@ -1,0 +1,30 @@
+#include "plant/effects/lateral_inflow.h"
+
+namespace nimble::plant {
+
+const ParamTable<LateralInflowConfig>& lateral_inflow_params() {
+  using C = LateralInflowConfig;
+  static const ParamTable<C> table = {
+      {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
+      {"Y_vv_ns2pm2", &C::Y_vv_ns2pm2, Range::closed(-1.0, 1.0), "N s^2/m^2", "side force Y_vv v|v|"},
+      {"L_vv_ns2pm", &C::L_vv_ns2pm, Range::closed(-0.1, 0.1), "N m s^2/m^2", "roll moment L_vv v|v|"},
+  };
+  return table;
+}
+
+LateralInflowConfig lateral_inflow_from(ConfigMap& map) {
+  LateralInflowConfig c;
+  c.enabled = map.get_bool("enabled");
+  read_params(map, lateral_inflow_params(), c);
+  return c;
+}
+
+void lateral_inflow_from_model(const ModelSection& s, LateralInflowConfig& c) {
+  // L += L_vv v|v|, Y += Y_vv v|v| (v relative to the gust).
+  s.check_keys({"L_vv", "Y_vv"});
+  c.enabled = true;
+  c.L_vv_ns2pm = s.or_zero("L_vv", range_of(lateral_inflow_params(), "L_vv_ns2pm"));
+  c.Y_vv_ns2pm2 = s.or_zero("Y_vv", range_of(lateral_inflow_params(), "Y_vv_ns2pm2"));
+}
+
+}  // namespace nimble::plant

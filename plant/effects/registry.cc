@@ -1,0 +1,133 @@
+#include "plant/effects/registry.h"
+
+#include <algorithm>
+
+#include "core/effects.h"
+#include "core/param_table.h"
+
+namespace nimble::plant {
+namespace {
+
+/// The rows of a parameter table's Markdown (without its header).
+template <typename Config>
+std::string rows(const ParamTable<Config>& table, const std::string& prefix) {
+  const std::string md = params_markdown(table, Config{}, prefix);
+  return md.substr(md.find("|\n|---") + std::string("|\n|---|---|---|---|---|\n").size());
+}
+
+/// Bounds of the derivatives a model's effects: section may set (wide sanity bounds: |L| terms
+/// up to 0.1 N m per unit, |Y| terms up to 1 N per unit).
+const Range kRollDerivative = Range::closed(-0.1, 0.1);
+const Range kSideDerivative = Range::closed(-1.0, 1.0);
+
+/// Sets derivative `name` from the section (a coefficient the section does not carry is left
+/// as the model has it). Refuses one the model also carries among its derivatives: the two
+/// would be two values of one term.
+void set_derivative(const ModelSection& s, const std::string& name, std::map<std::string, double>& derivatives,
+                    const Range& range) {
+  const auto it = s.params.find(name);
+  if (it == s.params.end()) return;
+  if (s.model.derivatives.count(name)) {
+    s.fail(name, "the model also carries " + name + " among its derivatives; give it in one place only");
+  }
+  s.in_range(name, it->second, range);
+  derivatives[name] = it->second;
+}
+
+}  // namespace
+
+const std::vector<PlantEffect>& plant_effects() {
+  static const std::vector<PlantEffect> effects = {
+      {"flapping_forcing",
+       [](ConfigMap& m, EffectsConfig& e) { e.flapping_forcing = flapping_forcing_from(m); },
+       flapping_forcing_markdown_rows, "flapping_forcing",
+       [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.flapping_forcing); }},
+      {"lateral_inflow",
+       [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
+       [](const std::string& prefix) { return rows(lateral_inflow_params(), prefix); }, "lateral_inflow",
+       [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); }},
+      {"forward_speed_coupling",
+       [](ConfigMap& m, EffectsConfig& e) { e.forward_speed_coupling = forward_speed_coupling_from(m); },
+       [](const std::string& prefix) { return rows(forward_speed_coupling_params(), prefix); },
+       "forward_speed_coupling",
+       [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); }},
+      {"actuator_delay",
+       [](ConfigMap& m, EffectsConfig& e) { e.actuator_delay = actuator_delay_from(m); },
+       [](const std::string& prefix) { return rows(actuator_delay_params(), prefix); }, "actuator_delay",
+       [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); }},
+      {"lateral_gust",
+       [](ConfigMap& m, EffectsConfig& e) { e.lateral_gust = lateral_gust_from(m); },
+       [](const std::string& prefix) {
+         return rows(lateral_gust_params(), prefix) + "| `" + prefix +
+                "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
+       },
+       "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); }},
+      {"constant_load",
+       [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
+       [](const std::string& prefix) { return rows(constant_load_params(), prefix); }, "sensor_bias",
+       [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); }},
+  };
+  return effects;
+}
+
+void effects_from(ConfigMap& section, EffectsConfig& effects) {
+  for (const std::string& key : section.keys()) {
+    const auto& all = plant_effects();
+    const auto it = std::find_if(all.begin(), all.end(), [&](const PlantEffect& e) { return e.name == key; });
+    if (it == all.end()) {
+      std::string known;
+      for (const auto& e : all) known += (known.empty() ? "" : ", ") + e.name;
+      section.fail(key, "not an effect of the plant (known: " + known + ")");
+    }
+    ConfigMap m = section.get_map(key);
+    it->load(m, effects);
+    m.finish();
+  }
+  section.finish();
+}
+
+std::string effects_markdown() {
+  std::string out = "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
+  for (const auto& e : plant_effects()) out += e.markdown_rows("plant.effects." + e.name + ".");
+  return out;
+}
+
+const std::vector<std::string>& effects_in_equations_of_motion() {
+  static const std::vector<std::string> names{"kinematic_coupling", "gravity_nonlinearity"};
+  return names;
+}
+
+void apply_model_effects(const DerivativeModel& model, EffectsConfig& fx, std::map<std::string, double>& derivatives) {
+  const auto& eom = effects_in_equations_of_motion();
+  for (const auto& [name, params] : model.effects) {
+    const ModelSection s{model, name, params};
+    const auto& all = plant_effects();
+    const auto plant_effect =
+        std::find_if(all.begin(), all.end(), [&](const PlantEffect& e) { return e.model_effect == name; });
+    if (plant_effect != all.end()) {
+      plant_effect->from_model(s, fx);
+    } else if (name == "dihedral_coupling") {
+      // Regressor delta_d in L and Y: the dihedral derivatives.
+      s.check_keys({"L_dd", "Y_dd"});
+      set_derivative(s, "L_dd", derivatives, kRollDerivative);
+      set_derivative(s, "Y_dd", derivatives, kSideDerivative);
+    } else if (name == "yaw_coupling") {
+      // Regressor r in L and Y: the yaw-rate derivatives. They act only where r is a state (a
+      // lateral4 model); with a lateral3 model the plant holds r at trim (0), as the vehicle's
+      // yaw loop would, and they are inert.
+      s.check_keys({"Lr", "Yr"});
+      set_derivative(s, "Lr", derivatives, kRollDerivative);
+      set_derivative(s, "Yr", derivatives, kSideDerivative);
+    } else if (std::find(eom.begin(), eom.end(), name) != eom.end()) {
+      // Nothing to add: Y_pw is the coefficient of p (w - w0), the part of the kinematic term
+      // p w of v_dot that Eq 21 linearises at w0, and Y_gphi that of g (sin phi - phi)
+      // cos theta0; the plant's equations of motion (Eq 3.1) carry p w and
+      // g cos(theta) sin(phi) exactly, with the vehicle's mass.
+      s.check_keys({name == "kinematic_coupling" ? "Y_pw" : "Y_gphi"});
+    } else {
+      s.fail("effect '" + name + "' is not one the plant can fly (known: " + effect_name_list() + ")");
+    }
+  }
+}
+
+}  // namespace nimble::plant

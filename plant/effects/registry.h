@@ -1,0 +1,61 @@
+#pragma once
+/// The plant's effect registry: each plant effect (one file in this folder) with its section
+/// reader, its parameter table and the registry effects (core/effects.h) it flies from a
+/// model's `effects:` section; and the effects a model may carry that the plant flies as
+/// derivatives or already has in its equations of motion. The scenario loader, the PlantModel
+/// constructor and `rig params plant.effects` read it. Adding an effect: README.md here.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/model.h"
+#include "plant/effects/effects.h"
+
+namespace nimble::plant {
+
+/// One plant effect: `plant.effects.<name>`.
+struct PlantEffect {
+  std::string name;
+  /// Reads its section into `effects`. @throws ConfigError naming the key.
+  void (*load)(ConfigMap& section, EffectsConfig& effects);
+  /// Its parameters as Markdown rows (key, default, allowed, unit, meaning), keys after `prefix`.
+  std::string (*markdown_rows)(const std::string& prefix);
+  /// The registry effect (core/effects.h) a model's effects: section names for it, or "".
+  std::string model_effect;
+  /// Sets `effects` from that section of a model. @throws std::invalid_argument naming the
+  /// model, the effect and the parameter.
+  void (*from_model)(const ModelSection& section, EffectsConfig& effects);
+};
+
+/// Every plant effect, in the order of the plant file.
+const std::vector<PlantEffect>& plant_effects();
+
+/// Reads the `effects` section of the plant: every key one of plant_effects().
+/// @throws ConfigError naming the key (an unknown effect names the known ones).
+void effects_from(ConfigMap& section, EffectsConfig& effects);
+
+/// `rig params plant.effects`: every plant effect's parameters as one Markdown table.
+std::string effects_markdown();
+
+/// Effects whose regressor is the part of the exact rigid-body equations that the linear model
+/// (Eq 21) linearises: the plant's equations of motion (thesis Eq 3.1) already contain them
+/// (kinematic_coupling: the p w term of v_dot; gravity_nonlinearity: g cos(theta) sin(phi)),
+/// so a model carrying them needs nothing added. Their coefficient (the mass) is not used.
+const std::vector<std::string>& effects_in_equations_of_motion();
+
+/// Makes `effects` (the plant file's effects) and `derivatives` (the model's derivatives, as
+/// the plant will fly them) fly every effect of `model.effects`: a plant effect through its
+/// from_model (overriding the plant file's effect of the same name; a coefficient the section
+/// does not carry is 0), dihedral_coupling (L_dd, Y_dd) and yaw_coupling (Lr, Yr) as
+/// derivatives, the effects of effects_in_equations_of_motion() by nothing.
+/// @throws std::invalid_argument naming the model (name and file), the effect and, where it
+///         applies, the parameter: for an effect name the plant does not know, a parameter the
+///         effect does not have, a non-finite or out-of-range value, a missing required
+///         parameter, or a derivative that the model carries both among its derivatives and in
+///         its effects.
+void apply_model_effects(const DerivativeModel& model, EffectsConfig& effects,
+                         std::map<std::string, double>& derivatives);
+
+}  // namespace nimble::plant
