@@ -1,0 +1,252 @@
+// The discrepancy workflow (ident/discrepancy.h), part: the equations of the baseline model and the regressor columns of each candidate
+// effect on the prepared data.
+
+#include "ident/discrepancy_parts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/chi_square.h"
+#include "ident/metrics.h"
+#include "ident/spectrum.h"
+
+namespace nimble::ident::discrepancy_parts {
+
+// ---------------------------------------------------------------------------------------
+// The candidate library.
+
+// The library is the registry's effects (core/effects.h); the regressor columns of each are
+// computed in candidate_columns().
+
+/// A regressor column is excited when its standard deviation reaches this fraction of its
+/// root mean square plus an absolute floor: a column that is (nearly) constant cannot be
+/// told from the other regressors (except the intercept of sensor_bias, which is constant
+/// by design). The floors are 10 resolution steps of the rig's actuator interface for the
+/// inputs (the servos: kServoExcitationFloorRad, as rig identify uses) and 1e-9 otherwise.
+double excitation_floor(const std::string& channel) {
+  if (channel == "delta_d" || channel == "delta_w") return kServoExcitationFloorRad;
+  if (channel == "delta_t") return 0.1;
+  if (channel == "delta_f") return 0.1;
+  return 1e-9;
+}
+
+// ---------------------------------------------------------------------------------------
+// Building the equations and candidate columns.
+
+Folds make_folds(Index n, std::size_t k) {
+  Folds folds;
+  for (std::size_t i = 0; i < k; ++i) {
+    const Index a = static_cast<Index>(static_cast<double>(n) * static_cast<double>(i) / static_cast<double>(k));
+    const Index b = static_cast<Index>(static_cast<double>(n) * static_cast<double>(i + 1) / static_cast<double>(k));
+    folds.push_back({a, b});
+  }
+  return folds;
+}
+
+VectorXd delayed(const VectorXd& x, Index k) {
+  VectorXd out(x.size());
+  for (Index i = 0; i < x.size(); ++i) out[i] = x[std::max<Index>(0, i - k)];
+  return out;
+}
+
+/// The command as the actuator receives it: delta_f_cmd late by the command path's known
+/// latency (DiscrepancyOptions::command_latency_s, rounded to samples), as signal
+/// "delta_f_cmd_applied". The actuator equation and its delay candidate use it, so that a
+/// named actuator_delay is the delay beyond that latency.
+void add_applied_command(UniformData& d, double latency_s) {
+  if (!d.has("delta_f_cmd")) return;
+  d.signals["delta_f_cmd_applied"] = delayed(d.at("delta_f_cmd"), std::lround(latency_s * d.rate_hz));
+}
+
+bool excited(const VectorXd& x, const std::string& channel) {
+  const double mean = x.mean();
+  const double sd = std::sqrt((x.array() - mean).square().mean());
+  return sd >= excitation_floor(channel) && sd >= 1e-6 * std::sqrt(x.squaredNorm() / static_cast<double>(x.size()));
+}
+
+bool has_actuator_equation(const UniformData& d) {
+  return d.has("delta_f_cmd_applied") && d.has("delta_f") && excited(d.at("delta_f_cmd_applied"), "delta_f");
+}
+
+/// The columns of candidate `spec` on the prepared data (delay in samples for actuator_delay).
+std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
+                                        double g, Index delay_samples) {
+  const Index n = d.size();
+  VectorXd col;
+  std::vector<Addition> out;
+  auto add = [&](std::size_t eq, const std::string& name, VectorXd c) {
+    for (auto& a : out) {
+      if (a.eq == eq) {
+        a.names.push_back(name);
+        a.cols.push_back(std::move(c));
+        return;
+      }
+    }
+    out.push_back({eq, {name}, {std::move(c)}});
+  };
+  const std::size_t L = 0, Y = 1;
+  const auto& p = d.at("p");
+  const auto& v = d.at("v");
+  if (spec.name == "kinematic_coupling") {
+    add(Y, "Y_pw", p.cwiseProduct((d.at("w").array() - trim.w0_mps).matrix()));
+  } else if (spec.name == "gravity_nonlinearity") {
+    const auto& phi = d.at("phi");
+    add(Y, "Y_gphi", (g * std::cos(trim.theta0_rad) * (phi.array().sin() - phi.array())).matrix());
+  } else if (spec.name == "lateral_inflow") {
+    const VectorXd vv = v.cwiseProduct(v.cwiseAbs());
+    add(L, "L_vv", vv);
+    add(Y, "Y_vv", vv);
+  } else if (spec.name == "forward_speed_coupling") {
+    const VectorXd du = d.at("u").array() - trim.u0_mps;
+    add(L, "L_up", du.cwiseProduct(p));
+    add(L, "L_uv", du.cwiseProduct(v));
+    add(Y, "Y_up", du.cwiseProduct(p));
+    add(Y, "Y_uv", du.cwiseProduct(v));
+  } else if (spec.name == "actuator_delay") {
+    const auto& df = d.at("delta_f");
+    const VectorXd c = delayed(df, delay_samples) - df;
+    add(L, "L_df_delayed", c);
+    add(Y, "Y_df_delayed", c);
+    if (has_actuator_equation(d)) {
+      const auto& cmd = d.at("delta_f_cmd_applied");
+      add(kActuatorEq, "F_cmd_delayed", delayed(cmd, delay_samples) - cmd);
+    }
+  } else if (spec.name == "sensor_bias") {
+    add(L, "L_0", VectorXd::Ones(n));
+    add(Y, "Y_0", VectorXd::Ones(n));
+  } else if (spec.name == "dihedral_coupling") {
+    add(L, "L_dd", d.at("delta_d"));
+    add(Y, "Y_dd", d.at("delta_d"));
+  } else if (spec.name == "yaw_coupling") {
+    add(L, "Lr", d.at("r"));
+    add(Y, "Yr", d.at("r"));
+  } else {
+    throw std::logic_error("no columns for candidate " + spec.name);
+  }
+  return out;
+}
+
+/// The columns of `eq` with `adds` (for this equation) appended.
+MatrixXd augmented_design(const Eq& eq, const std::vector<Addition>& adds) {
+  std::vector<VectorXd> cols = eq.cols;
+  for (const auto& a : adds) {
+    for (const auto& c : a.cols) cols.push_back(c);
+  }
+  return design(cols);
+}
+
+/// sin and cos of h 2 pi f t, h = 1 .. harmonics, in every equation.
+std::vector<Addition> harmonic_columns(const VectorXd& t_s, double f_hz, int harmonics, const Model& m) {
+  std::vector<Addition> out;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    if (m.eqs[e].name == "F") continue;  // a force or moment, not an actuator input
+    Addition a;
+    a.eq = e;
+    for (int h = 1; h <= harmonics; ++h) {
+      const VectorXd arg = (2.0 * M_PI * h * f_hz) * t_s;
+      a.names.push_back(m.eqs[e].name + "_sin" + std::to_string(h));
+      a.cols.push_back(arg.array().sin().matrix());
+      a.names.push_back(m.eqs[e].name + "_cos" + std::to_string(h));
+      a.cols.push_back(arg.array().cos().matrix());
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+/// Prediction of equation `eq` (scaled as eq.y) by the model as given: its own derivatives,
+/// the values of the effects its file carries, and the actuator of the options.
+VectorXd given_prediction(const Eq& eq, const DerivativeModel& model, const std::map<std::string, double>& known_values,
+                          const DiscrepancyOptions& options) {
+  VectorXd out = VectorXd::Zero(eq.y.size());
+  for (std::size_t j = 0; j < eq.names.size(); ++j) {
+    const auto it = model.derivatives.find(eq.names[j]);
+    const auto fx = known_values.find(eq.names[j]);
+    if (eq.names[j] == "F_f") {
+      out -= options.actuator_pole_radps * eq.cols[j];
+    } else if (eq.names[j] == "F_cmd") {
+      out += options.actuator_gain * eq.cols[j];
+    } else if (it != model.derivatives.end()) {
+      out += it->second * eq.cols[j];
+    } else if (fx != known_values.end()) {
+      out += fx->second * eq.cols[j];
+    }
+  }
+  return out;
+}
+
+/// The model's regression equations on `d`, with the columns of the effects the model file
+/// carries (an earlier analysis named them): refit with the derivatives, not tried again.
+/// Effects without a column on `d` (flapping forcing on low-passed data) are only listed.
+Model build_baseline(const UniformData& d, const std::vector<Equation>& equations, const DerivativeModel& model,
+                     const Vehicle& vehicle, const std::string& source, std::vector<std::string>* known,
+                     std::map<std::string, double>* known_values) {
+  Model m;
+  for (const auto& eq : equations) {
+    Eq e;
+    e.name = eq.name;
+    e.output = eq.dependent;
+    e.unit = eq.dependent == "v_dot_star" ? "m/s^2" : "rad/s^2";
+    e.scale = eq.scale;
+    e.y = eq.scale * d.at(eq.dependent);
+    for (std::size_t j = 0; j < eq.regressors.size(); ++j) {
+      e.names.push_back(eq.parameters[j]);
+      e.cols.push_back(d.at(eq.regressors[j]));
+    }
+    m.eqs.push_back(std::move(e));
+  }
+  if (has_actuator_equation(d)) {
+    // Eq 33 refit: delta_f_dot = F_f delta_f + F_cmd delta_f_cmd (the model as given has
+    // F_f = -actuator_pole_radps, F_cmd = actuator_gain: DiscrepancyOptions).
+    Eq e;
+    e.name = "F";
+    e.output = "delta_f_dot";
+    e.unit = "rad/s^2";
+    e.y = differentiate(d.at("delta_f"), d.rate_hz);
+    e.names = {"F_f", "F_cmd"};
+    e.cols = {d.at("delta_f"), d.at("delta_f_cmd_applied")};
+    m.eqs.push_back(std::move(e));
+  }
+  m.added.resize(m.eqs.size());
+  for (const auto& [name, params] : model.effects) {
+    const EffectSpec* spec = find_effect(name);
+    if (spec == nullptr) continue;  // an effect the library has no regressor form for
+    if (known) known->push_back(name);
+    if (known_values) {
+      for (const auto& [key, value] : params) (*known_values)[key] = value;
+    }
+    if (spec->wideband) continue;
+    for (const auto& need : spec->needs) {
+      if (!d.has(need)) {
+        throw DataError(source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
+      }
+    }
+    const auto delay = params.find("delay_s");
+    const Index k = delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
+    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, k)) {
+      for (std::size_t j = 0; j < add.names.size(); ++j) {
+        m.eqs[add.eq].names.push_back(add.names[j]);
+        m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
+      }
+    }
+  }
+  return m;
+}
+
+/// The parameter of the input whose delay actuator_delay tests in equation `eq`: delta_f's
+/// derivative in L and Y (L_df, Y_df), the command's gain in the actuator equation (F_cmd).
+
+std::string delayed_input(const std::string& eq) { return eq == "F" ? "F_cmd" : eq + "_df"; }
+
+std::string fmt(double x, int digits) {
+  std::ostringstream o;
+  o.precision(digits);
+  o << x;
+  return o.str();
+}
+
+}  // namespace nimble::ident::discrepancy_parts

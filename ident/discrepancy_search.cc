@@ -1,0 +1,507 @@
+// The discrepancy workflow (ident/discrepancy.h), part: the trials of the stepwise search: a candidate with regressors on the current model, the
+// flapping forcing scanned over its band, the lateral gust from its signature in the residual.
+
+#include "ident/discrepancy_parts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include <boost/math/distributions/fisher_f.hpp>
+
+#include "core/chi_square.h"
+#include "ident/metrics.h"
+#include "ident/spectrum.h"
+
+namespace nimble::ident::discrepancy_parts {
+
+  /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
+  /// the additions it would make.
+CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
+                     const std::vector<VectorXd>& base_cv, std::size_t round,
+                     std::vector<Addition>& best_adds) const {
+  CandidateTrial t;
+  t.name = spec.name;
+  t.round = round;
+  t.p_critical = p_critical;
+  for (const auto& need : spec.needs) {
+    if (!data.has(need)) {
+      t.available = false;
+      t.reason = "the data has no " + need;
+      return t;
+    }
+    if (!excited(data.at(need), need)) {
+      t.available = false;
+      t.reason = need + " is not excited (standard deviation below " + fmt(excitation_floor(need)) + ")";
+      return t;
+    }
+  }
+  const std::size_t neq = m.eqs.size();
+  const double g = vehicle.gravity_mps2;
+  std::vector<Index> delays{0};
+  if (spec.scanned) {
+    delays.clear();
+    const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
+    for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
+  }
+  t.scan_points = delays.size();
+
+  // Statistics of every scan point: per equation fold stats of [X, Z].
+  struct Point {
+    std::vector<Addition> adds;
+    std::vector<FoldStats> stats;  // per equation touched (index by equation)
+    std::vector<bool> touched;
+    double rss_rel = 0.0;          // sum over equations of RSS_after / RSS_before
+  };
+  std::vector<Point> points;
+  std::vector<double> rss_before(neq);
+  for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+  for (Index k : delays) {
+    Point pt;
+    pt.adds = candidate_columns(spec, data, model.trim, g, k);
+    pt.touched.assign(neq, false);
+    pt.stats.resize(neq);
+    bool ok = true;
+    for (const auto& a : pt.adds) {
+      for (const auto& c : a.cols) {
+        const bool constant = spec.name == "sensor_bias";
+        if (!constant && !excited(c, "")) ok = false;
+      }
+      std::vector<Addition> all = m.added[a.eq];
+      all.push_back(a);
+      pt.stats[a.eq] = fold_stats(augmented_design(m.eqs[a.eq], all), m.eqs[a.eq].y, folds);
+      pt.touched[a.eq] = true;
+    }
+    for (std::size_t e = 0; e < neq && ok; ++e) {
+      const double r = pt.touched[e] ? full_rss(pt.stats[e]) : rss_before[e];
+      if (!std::isfinite(r)) ok = false;
+      pt.rss_rel += r / rss_before[e];
+    }
+    if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
+    points.push_back(std::move(pt));
+  }
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].rss_rel < points[best].rss_rel) best = i;
+  }
+  if (!std::isfinite(points[best].rss_rel)) {
+    t.available = false;
+    t.reason = "its regressors are not excited or cannot be separated from the model's";
+    return t;
+  }
+  const Point& P = points[best];
+  if (spec.scanned) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+
+  // Significance: Wald with the coloured covariance, per equation.
+  double p_min = 1.0;
+  // The candidate enters only the equations where its terms are significant on their own
+  // (with the same Bonferroni factors): a term that explains nothing in an equation would
+  // only add variance there.
+  const double bonferroni = static_cast<double>(P.adds.size()) * static_cast<double>(delays.size());
+  std::vector<bool> use_eq(neq, false);
+  std::string p_eq;
+  for (const auto& a : P.adds) {
+    AdditionFit f;
+    if (!fit_addition(m, a, P.stats[a.eq], rss_before[a.eq], batch, f)) continue;
+    record(m, a, f, t);
+    const std::string& eqname = m.eqs[a.eq].name;
+    use_eq[a.eq] = f.p * bonferroni <= p_critical;
+    if (f.p < p_min) {
+      p_min = f.p;
+      p_eq = eqname;
+    }
+    if (spec.scanned) {
+      // A delayed input acts (mostly) delayed: with the columns delta_f and
+      // delta_f(t - tau) - delta_f the delayed fraction is c / theta_df. In closed loop a
+      // feedback-driven correlation of delta_f with the filtered equation error also
+      // favours the delayed column, but keeps most of the input instantaneous. (The scan's
+      // delay is biased low by the same correlation, which leaves a small instantaneous part
+      // with a real delay: the criterion is the fraction, not its significance.)
+      const auto it = std::find(m.eqs[a.eq].names.begin(), m.eqs[a.eq].names.end(), delayed_input(eqname));
+      if (it != m.eqs[a.eq].names.end()) {
+        const Index i = static_cast<Index>(it - m.eqs[a.eq].names.begin());
+        const double c = f.theta[f.off];
+        const double inst = f.theta[i] - c;
+        const double var = f.cov(i, i) + f.cov(f.off, f.off) - 2.0 * f.cov(i, f.off);
+        t.instantaneous_f[eqname] = var > 0.0 ? inst * inst / var : std::numeric_limits<double>::infinity();
+        t.parameters[delayed_input(eqname) + "_fraction_delayed"] = f.theta[i] != 0.0 ? c / f.theta[i] : 0.0;
+      }
+    }
+  }
+  if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
+
+  // Confirmation above the gust band: an unmeasured side wind acts through v - v_g and
+  // drives v itself, so in closed loop it correlates the equation error with functions of
+  // v (v|v| above all). Its power lies at low frequency; an effect that is a function of the
+  // states holds at every frequency. The candidate must stay significant, at
+  // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
+  // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
+  // there and is exempt.
+  if (!p_eq.empty() && spec.name != "sensor_bias") {
+    double p_hp = 1.0;
+    for (const auto& a : P.adds) {
+      std::vector<Addition> all = m.added[a.eq];
+      all.push_back(a);
+      const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
+      MatrixXd C(C0.rows(), C0.cols());
+      for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
+      const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+      VectorXd theta;
+      const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
+      if (!solve(fs.Gt, fs.bt, theta)) continue;
+      const VectorXd resid = y - C * theta;
+      const Index block = batch.block(resid);
+      const MatrixXd cov = coloured_covariance(C, resid, block);
+      const Index kc = static_cast<Index>(a.cols.size());
+      const VectorXd th = theta.tail(kc);
+      const double wald = th.dot(cov.bottomRightCorner(kc, kc).ldlt().solve(th));
+      p_hp = std::min(p_hp, wald_tail(wald, kc, block_count(C.rows(), block)));
+    }
+    t.highpass_p = std::min(1.0, p_hp * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+  }
+  t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+
+  // Held-out: K-fold; a scanned candidate picks its delay on the training folds. Every
+  // sample is predicted by a fit that did not see its block; the drop of the squared
+  // held-out error is judged against its own spread (next function).
+  const std::size_t K = folds.size();
+  std::vector<VectorXd> after = base_cv;
+  bool cv_ok = true;
+  for (std::size_t k = 0; k < K && cv_ok; ++k) {
+    std::size_t pick = best;
+    if (spec.scanned) {
+      double best_rel = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        if (!std::isfinite(points[i].rss_rel)) continue;
+        double rel = 0.0;
+        for (std::size_t e = 0; e < neq && std::isfinite(rel); ++e) {
+          if (!points[i].touched[e]) {
+            rel += 1.0;
+            continue;
+          }
+          rel += training_rss(points[i].stats[e], k) / training_rss(base[e], k);
+        }
+        if (rel < best_rel) {
+          best_rel = rel;
+          pick = i;
+        }
+      }
+    }
+    const auto [a, b] = folds[k];
+    for (const auto& add : points[pick].adds) {
+      if (!use_eq[add.eq] && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) continue;
+      std::vector<Addition> all = m.added[add.eq];
+      all.push_back(add);
+      const MatrixXd C = augmented_design(m.eqs[add.eq], all);
+      const FoldStats& fs = points[pick].stats[add.eq];
+      VectorXd th;
+      if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) {
+        cv_ok = false;
+        break;
+      }
+      after[add.eq].segment(a, b - a) = m.eqs[add.eq].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+    }
+  }
+  if (!cv_ok) {
+    t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
+    return t;
+  }
+  heldout_drop(base_cv, after, batch, t.heldout_drop, t.heldout_se);
+
+  const bool significant = t.p_value <= p_critical;
+  const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
+  const auto frac = t.parameters.find(delayed_input(p_eq) + "_fraction_delayed");
+  const bool consistent = frac == t.parameters.end() || frac->second >= 0.5;
+  const bool above_gusts = t.highpass_p <= opt.gust_band_alpha;
+  const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
+  t.passed = significant && pse_falls && heldout && consistent && above_gusts;
+  std::ostringstream why;
+  if (t.passed) {
+    why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq])
+        << " in " << p_eq << "), PSE falls, held-out error falls " << fmt(100.0 * t.heldout_drop) << " % (+- "
+        << fmt(100.0 * t.heldout_se) << ")";
+  } else {
+    why << "fails:";
+    if (!significant) {
+      why << " not significant (p " << fmt(t.p_value) << " > " << fmt(p_critical);
+      if (!p_eq.empty()) why << ", F " << fmt(t.partial_f[p_eq]) << " in " << p_eq;
+      why << ")";
+    }
+    if (!pse_falls) why << " PSE does not fall;";
+    if (!above_gusts) {
+      why << " not significant above the gust band (p " << fmt(t.highpass_p) << " > " << fmt(opt.gust_band_alpha)
+          << " on the equations high-passed at " << fmt(opt.gust_band_hz) << " Hz);";
+    }
+    if (!consistent) {
+      why << " most of the input still acts at once (delayed fraction " << fmt(frac->second) << " < 0.5 in " << p_eq
+          << "): not a delay;";
+    }
+    if (!heldout) {
+      why << " held-out error change " << fmt(-100.0 * t.heldout_drop) << " % is not a drop beyond "
+          << fmt(opt.heldout_sigmas) << " standard errors (" << fmt(100.0 * t.heldout_se) << " %)";
+    }
+  }
+  t.reason = why.str();
+  if (t.passed) {
+    for (const auto& a : P.adds) {
+      if (use_eq[a.eq]) best_adds.push_back(a);
+    }
+  }
+  return t;
+}
+
+GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz) {
+  GustBands b;
+  for (Index k = 1; k < P.psd.size(); ++k) {
+    const double x = P.psd[k];
+    if (P.f_hz[k] <= band_hz) {
+      b.lo += x;
+      b.lo2 += x * x;
+      ++b.k_lo;
+    } else if (P.f_hz[k] >= 1.5 * band_hz && P.f_hz[k] <= ref_hi_hz) {
+      b.ref += x;
+      b.ref2 += x * x;
+      ++b.k_ref;
+    }
+  }
+  return b;
+}
+
+CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
+                          const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
+                          const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
+                          const DiscrepancyOptions& opt, double p_critical) {
+  CandidateTrial t;
+  t.name = "lateral_gust";
+  t.round = m.effect_names.size() + 1;
+  t.p_critical = p_critical;
+  std::size_t ey = m.eqs.size();
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    if (m.eqs[e].name == "Y") ey = e;
+  }
+  const auto yv = fit.find("Yv");
+  if (ey == m.eqs.size() || yv == fit.end() || !(std::fabs(yv->second.value) > 0.0)) {
+    t.available = false;
+    t.reason = "the model has no side-force equation with Yv to see a side wind through";
+    return t;
+  }
+  // A deterministic effect too weak to enter on its own also leaves low-frequency structure
+  // in the residual (a slow (u - u0) v term, say). The signature is taken on the Y residual
+  // with every deterministic candidate's Y columns in the fit (`extra`), so that only what no
+  // function of the measured states and inputs explains is left: a random force.
+  VectorXd r = resid[ey];
+  if (!extra.empty()) {
+    std::vector<VectorXd> cols = m.eqs[ey].cols;
+    for (const auto& a : m.added[ey]) cols.insert(cols.end(), a.cols.begin(), a.cols.end());
+    cols.insert(cols.end(), extra.begin(), extra.end());
+    const MatrixXd C = design(cols);
+    r = m.eqs[ey].y - C * C.completeOrthogonalDecomposition().solve(m.eqs[ey].y);
+  }
+  const Psd P = periodogram(r, rate_hz);
+  const double per_bin = static_cast<double>(r.size()) * P.df_hz / rate_hz;  // independent bins per padded bin
+  const GustBands b = gust_bands(P, opt.gust_band_hz, f_ref_hi);
+  const double lo = b.lo, ref = b.ref, lo2 = b.lo2, ref2 = b.ref2;
+  const Index k_lo = b.k_lo, k_ref = b.k_ref;
+  if (k_lo == 0 || k_ref == 0 || !(ref2 > 0.0) || !(lo2 > 0.0)) {
+    t.available = false;
+    t.reason = "the record is too short or the low-pass too low for the band test";
+    return t;
+  }
+  // Degrees of freedom of each band's sum: 2 per independent bin for chi2_2 ordinates of
+  // equal mean; ordinates more scattered than that (a spectrum that varies across the band, a
+  // residual that is not Gaussian) have fewer, 4 (sum P)^2 / sum P^2 per padded bin set
+  // (Satterthwaite), never more than 2 per independent bin.
+  const double d_lo = std::min(2.0 * static_cast<double>(k_lo), 4.0 * lo * lo / lo2) * per_bin;
+  const double d_ref = std::min(2.0 * static_cast<double>(k_ref), 4.0 * ref * ref / ref2) * per_bin;
+  if (d_lo < 6.0 || d_ref < 6.0) {
+    t.available = false;
+    t.reason = "the record is too short or the low-pass too low for the band test";
+    return t;
+  }
+  const double N0 = ref / static_cast<double>(k_ref);
+  const double ratio = (lo / static_cast<double>(k_lo)) / N0;
+  t.partial_f["Y"] = ratio;
+  t.p_value = boost::math::cdf(boost::math::complement(boost::math::fisher_f(d_lo, d_ref), ratio));
+  t.highpass_p = 1.0;
+  if (t.p_value > p_critical) {
+    t.reason = "no signature: the Y residual below " + fmt(opt.gust_band_hz) + " Hz is " + fmt(ratio) +
+               " times its level above (p " + fmt(t.p_value) + " > " + fmt(p_critical) + ")";
+    return t;
+  }
+  // Size: from the residual of the model as given (its own derivatives), which carries the
+  // whole wind force -Yv v_g; the refit's residual does not, since the refit derivatives absorb
+  // the part of the wind the vehicle's motion follows (on a rig hover in gusts the refit Yv goes
+  // to nearly 0). Whittle fit of A / (1 + (2 pi f tau)^2) + N0 below f_ref_hi, N0 the
+  // reference band's level.
+  const bool given = given_resid.size() == r.size() && yv_given != 0.0;
+  const Psd Pg = given ? periodogram(given_resid, rate_hz) : P;
+  const GustBands bg = gust_bands(Pg, opt.gust_band_hz, f_ref_hi);
+  const double lo_g = bg.lo, N0g = bg.ref / static_cast<double>(k_ref);
+  double best = std::numeric_limits<double>::infinity(), tau_best = 0.0, a_best = 0.0;
+  const double excess = std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g);
+  for (int i = 0; i <= 60; ++i) {
+    const double tau = 0.02 * std::pow(1000.0, i / 60.0);
+    for (int j = 0; j <= 60; ++j) {
+      const double A = excess * std::pow(10.0, -1.0 + 3.0 * j / 60.0);
+      double nll = 0.0;
+      for (Index k = 1; k < Pg.psd.size() && Pg.f_hz[k] <= f_ref_hi; ++k) {
+        const double w = 2.0 * M_PI * Pg.f_hz[k] * tau;
+        const double S = A / (1.0 + w * w) + N0g;
+        nll += Pg.psd[k] / S + std::log(S);
+      }
+      if (nll < best) {
+        best = nll;
+        tau_best = tau;
+        a_best = A;
+      }
+    }
+  }
+  const double sigma_force = std::sqrt(a_best / (4.0 * tau_best));
+  t.parameters["sigma_mps"] = sigma_force / std::fabs(given ? yv_given : yv->second.value);
+  t.parameters["tau_s"] = tau_best;
+  // The low band's mean has a relative standard error 1 / sqrt(d_lo / 2); sigma is its square root.
+  t.sigma["sigma_mps"] = t.parameters["sigma_mps"] / std::sqrt(2.0 * d_lo);
+  t.passed = true;
+  t.entered = true;
+  t.reason = "entered: the Y residual below " + fmt(opt.gust_band_hz) + " Hz is " + fmt(ratio) +
+             " times its level above (p " + fmt(t.p_value) + " <= " + fmt(p_critical) +
+             "), a side wind of about " + fmt(t.parameters["sigma_mps"]) + " m/s with tau " + fmt(tau_best) + " s";
+  return t;
+}
+
+/// Frequency in [lo, hi] where the residuals (each normalised by its variance) have the most
+/// power at the frequency and its harmonics; samples where `mask` is false count as zero.
+double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo, double hi, int harmonics,
+                      const std::vector<bool>& mask) {
+  std::vector<Psd> psd;
+  for (const auto& r0 : resid) {
+    VectorXd r = r0;
+    for (Index i = 0; i < r.size(); ++i) {
+      if (!mask[static_cast<std::size_t>(i)]) r[i] = 0.0;
+    }
+    const double var = r.squaredNorm() / static_cast<double>(r.size());
+    psd.push_back(periodogram(var > 0.0 ? VectorXd(r / std::sqrt(var)) : r, rate));
+  }
+  const Psd& p0 = psd.front();
+  double best_f = lo, best = -1.0;
+  for (Index k = 0; k < p0.f_hz.size(); ++k) {
+    const double f = p0.f_hz[k];
+    if (f < lo || f > hi) continue;
+    double score = 0.0;
+    for (const auto& p : psd) {
+      for (int h = 1; h <= harmonics; ++h) {
+        const Index j = static_cast<Index>(std::lround(h * f / p.df_hz));
+        if (j < p.psd.size()) score += p.psd[j];
+      }
+    }
+    if (score > best) {
+      best = score;
+      best_f = f;
+    }
+  }
+  return best_f;
+}
+
+/// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
+CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
+                              double p_critical, const BatchRule& batch) {
+  CandidateTrial t;
+  t.name = "flapping_forcing";
+  t.round = m.effect_names.size() + 1;
+  t.p_critical = p_critical;
+  const int H = 2;
+  const Index n = d.size();
+  const double T = d.t_s[n - 1] - d.t_s[0];
+  const double lo = opt.flapping_band_hz[0], hi = opt.flapping_band_hz[1];
+  // Independent frequencies of the band: one per 1 / T (the periodogram's resolution).
+  t.scan_points = static_cast<std::size_t>(std::max(1.0, std::ceil((hi - lo) * T)));
+  const std::size_t neq = m.eqs.size();
+  std::vector<VectorXd> resid;
+  std::vector<FoldStats> base;
+  for (std::size_t e = 0; e < neq; ++e) {
+    const MatrixXd X = m.X(e);
+    base.push_back(fold_stats(X, m.eqs[e].y, folds));
+    VectorXd th;
+    if (!solve(base.back().Gt, base.back().bt, th)) {
+      t.available = false;
+      t.reason = "the model cannot be refit on the wideband data";
+      return t;
+    }
+    resid.push_back(m.eqs[e].y - X * th);
+  }
+  const VectorXd t0 = d.t_s.array() - d.t_s[0];
+  const double f = scan_frequency(resid, d.rate_hz, lo, hi, H, std::vector<bool>(static_cast<std::size_t>(n), true));
+  t.parameters["flapping_hz"] = f;
+  const std::vector<Addition> adds = harmonic_columns(t0, f, H, m);
+  double p_min = 1.0;
+  std::string p_eq;
+  std::vector<FoldStats> with(neq);
+  for (const auto& a : adds) {
+    std::vector<Addition> all = m.added[a.eq];
+    all.push_back(a);
+    with[a.eq] = fold_stats(augmented_design(m.eqs[a.eq], all), m.eqs[a.eq].y, folds);
+    AdditionFit fit;
+    if (!fit_addition(m, a, with[a.eq], full_rss(base[a.eq]), batch, fit)) continue;
+    record(m, a, fit, t);
+    const std::string& eqname = m.eqs[a.eq].name;
+    for (int h = 1; h <= H; ++h) {
+      const double s1 = fit.theta[fit.off + 2 * (h - 1)], c1 = fit.theta[fit.off + 2 * (h - 1) + 1];
+      t.parameters[eqname + "_amp" + std::to_string(h)] = std::hypot(s1, c1);
+    }
+    if (fit.p < p_min) {
+      p_min = fit.p;
+      p_eq = eqname;
+    }
+  }
+  t.p_value = std::min(1.0, p_min * static_cast<double>(adds.size()) * static_cast<double>(t.scan_points));
+  // Held-out: each block predicted with the frequency found without it.
+  std::vector<VectorXd> before, after;
+  for (std::size_t e = 0; e < neq; ++e) {
+    before.push_back(VectorXd(n));
+    after.push_back(VectorXd(n));
+  }
+  for (std::size_t k = 0; k < folds.size(); ++k) {
+    const auto [a, b] = folds[k];
+    std::vector<bool> mask(static_cast<std::size_t>(n), true);
+    for (Index i = a; i < b; ++i) mask[static_cast<std::size_t>(i)] = false;
+    const double fk = scan_frequency(resid, d.rate_hz, lo, hi, H, mask);
+    const std::vector<Addition> ak = harmonic_columns(t0, fk, H, m);
+    for (std::size_t e = 0; e < neq; ++e) {
+      const MatrixXd X = m.X(e);
+      VectorXd th0;
+      if (!solve(base[e].Gt - base[e].G[k], base[e].bt - base[e].b[k], th0)) th0 = VectorXd::Zero(X.cols());
+      before[e].segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - X.middleRows(a, b - a) * th0;
+      const auto add = std::find_if(ak.begin(), ak.end(), [&](const Addition& x) { return x.eq == e; });
+      if (add == ak.end()) {  // an equation without harmonics (the actuator's)
+        after[e].segment(a, b - a) = before[e].segment(a, b - a);
+        continue;
+      }
+      std::vector<Addition> all = m.added[e];
+      all.push_back(*add);
+      const MatrixXd C = augmented_design(m.eqs[e], all);
+      const FoldStats fs = fold_stats(C, m.eqs[e].y, folds);
+      VectorXd th;
+      if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) th = VectorXd::Zero(C.cols());
+      after[e].segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+    }
+  }
+  heldout_drop(before, after, batch, t.heldout_drop, t.heldout_se);
+  const bool significant = t.p_value <= p_critical;
+  const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
+  const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
+  t.passed = significant && pse_falls && heldout;
+  std::ostringstream why;
+  why << (t.passed ? "passes:" : "fails:") << " at " << fmt(f) << " Hz (band " << fmt(lo) << "-" << fmt(hi) << " Hz, "
+      << t.scan_points << " independent frequencies, data low-passed at " << fmt(opt.flapping_cutoff_hz) << " Hz): p "
+      << fmt(t.p_value) << (significant ? " <= " : " > ") << fmt(p_critical);
+  if (!p_eq.empty()) why << " (F " << fmt(t.partial_f[p_eq]) << " in " << p_eq << ")";
+  why << (pse_falls ? ", PSE falls" : ", PSE does not fall") << ", held-out error change " << fmt(-100.0 * t.heldout_drop)
+      << " % (spread " << fmt(100.0 * t.heldout_se) << " %)";
+  t.reason = why.str();
+  return t;
+}
+
+}  // namespace nimble::ident::discrepancy_parts
