@@ -143,6 +143,16 @@ inline constexpr std::size_t kActuatorEq = 2;
 // ---------------------------------------------------------------------------------------
 
 
+/// One scan point of a candidate (one, or one per delay of a scanned candidate): its columns,
+/// the fold statistics of each equation it touches (indexed by equation) and the sum over the
+/// equations of RSS after over RSS before.
+struct ScanPoint {
+  std::vector<Addition> adds;
+  std::vector<FoldStats> stats;
+  std::vector<bool> touched;
+  double rss_rel = 0.0;
+};
+
 struct Workflow {
   const DiscrepancyOptions& opt;
   const Vehicle& vehicle;
@@ -157,6 +167,18 @@ struct Workflow {
   CandidateTrial trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
                        const std::vector<VectorXd>& base_cv, std::size_t round,
                        std::vector<Addition>& best_adds) const;
+
+  // The steps of trial() (discrepancy_search.cc).
+  std::vector<ScanPoint> scan(const CandidateSpec& spec, const Model& m, const std::vector<Index>& delays,
+                              const std::vector<double>& rss_before) const;
+  double significance(const CandidateSpec& spec, const Model& m, const ScanPoint& P,
+                      const std::vector<double>& rss_before, std::size_t scan_points, CandidateTrial& t,
+                      std::vector<bool>& use_eq, std::string& p_eq) const;
+  double above_gust_band(const Model& m, const ScanPoint& P, std::size_t scan_points) const;
+  bool heldout(const CandidateSpec& spec, const Model& m, const std::vector<ScanPoint>& points, std::size_t best,
+               const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
+               const std::vector<bool>& use_eq, CandidateTrial& t) const;
+  void judge(CandidateTrial& t, const std::string& p_eq) const;
 };
 
 // --- discrepancy_stats.cc ---

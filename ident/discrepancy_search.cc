@@ -18,49 +18,15 @@
 
 namespace nimble::ident::discrepancy_parts {
 
-  /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
-  /// the additions it would make.
-CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
-                     const std::vector<VectorXd>& base_cv, std::size_t round,
-                     std::vector<Addition>& best_adds) const {
-  CandidateTrial t;
-  t.name = spec.name;
-  t.round = round;
-  t.p_critical = p_critical;
-  for (const auto& need : spec.needs) {
-    if (!data.has(need)) {
-      t.available = false;
-      t.reason = "the data has no " + need;
-      return t;
-    }
-    if (!excited(data.at(need), need)) {
-      t.available = false;
-      t.reason = need + " is not excited (standard deviation below " + fmt(excitation_floor(need)) + ")";
-      return t;
-    }
-  }
+/// Every scan point of `spec` (one, or one per delay): its columns and the fold statistics
+/// of each equation it touches, with its total relative RSS (infinite if it cannot be fitted).
+std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m, const std::vector<Index>& delays,
+                                      const std::vector<double>& rss_before) const {
   const std::size_t neq = m.eqs.size();
   const double g = vehicle.gravity_mps2;
-  std::vector<Index> delays{0};
-  if (spec.scanned) {
-    delays.clear();
-    const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
-    for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
-  }
-  t.scan_points = delays.size();
-
-  // Statistics of every scan point: per equation fold stats of [X, Z].
-  struct Point {
-    std::vector<Addition> adds;
-    std::vector<FoldStats> stats;  // per equation touched (index by equation)
-    std::vector<bool> touched;
-    double rss_rel = 0.0;          // sum over equations of RSS_after / RSS_before
-  };
-  std::vector<Point> points;
-  std::vector<double> rss_before(neq);
-  for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+  std::vector<ScanPoint> points;
   for (Index k : delays) {
-    Point pt;
+    ScanPoint pt;
     pt.adds = candidate_columns(spec, data, model.trim, g, k);
     pt.touched.assign(neq, false);
     pt.stats.resize(neq);
@@ -83,26 +49,21 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
     points.push_back(std::move(pt));
   }
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < points.size(); ++i) {
-    if (points[i].rss_rel < points[best].rss_rel) best = i;
-  }
-  if (!std::isfinite(points[best].rss_rel)) {
-    t.available = false;
-    t.reason = "its regressors are not excited or cannot be separated from the model's";
-    return t;
-  }
-  const Point& P = points[best];
-  if (spec.scanned) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+  return points;
+}
 
-  // Significance: Wald with the coloured covariance, per equation.
+/// Significance of the chosen scan point: the Wald test of its terms in each equation with
+/// the coloured covariance (Bonferroni over terms and scan points); fills the trial's
+/// statistics, the equations it enters (`use_eq`) and the equation of its smallest p
+/// (`p_eq`). Returns that p before the Bonferroni factor.
+double Workflow::significance(const CandidateSpec& spec, const Model& m, const ScanPoint& P,
+                              const std::vector<double>& rss_before, std::size_t scan_points, CandidateTrial& t,
+                              std::vector<bool>& use_eq, std::string& p_eq) const {
   double p_min = 1.0;
   // The candidate enters only the equations where its terms are significant on their own
   // (with the same Bonferroni factors): a term that explains nothing in an equation would
   // only add variance there.
-  const double bonferroni = static_cast<double>(P.adds.size()) * static_cast<double>(delays.size());
-  std::vector<bool> use_eq(neq, false);
-  std::string p_eq;
+  const double bonferroni = static_cast<double>(P.adds.size()) * static_cast<double>(scan_points);
   for (const auto& a : P.adds) {
     AdditionFit f;
     if (!fit_addition(m, a, P.stats[a.eq], rss_before[a.eq], batch, f)) continue;
@@ -131,42 +92,42 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
       }
     }
   }
-  if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
 
-  // Confirmation above the gust band: an unmeasured side wind acts through v - v_g and
-  // drives v itself, so in closed loop it correlates the equation error with functions of
-  // v (v|v| above all). Its power lies at low frequency; an effect that is a function of the
-  // states holds at every frequency. The candidate must stay significant, at
-  // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
-  // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
-  // there and is exempt.
-  if (!p_eq.empty() && spec.name != "sensor_bias") {
-    double p_hp = 1.0;
-    for (const auto& a : P.adds) {
-      std::vector<Addition> all = m.added[a.eq];
-      all.push_back(a);
-      const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
-      MatrixXd C(C0.rows(), C0.cols());
-      for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
-      const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
-      VectorXd theta;
-      const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
-      if (!solve(fs.Gt, fs.bt, theta)) continue;
-      const VectorXd resid = y - C * theta;
-      const Index block = batch.block(resid);
-      const MatrixXd cov = coloured_covariance(C, resid, block);
-      const Index kc = static_cast<Index>(a.cols.size());
-      const VectorXd th = theta.tail(kc);
-      const double wald = th.dot(cov.bottomRightCorner(kc, kc).ldlt().solve(th));
-      p_hp = std::min(p_hp, wald_tail(wald, kc, block_count(C.rows(), block)));
-    }
-    t.highpass_p = std::min(1.0, p_hp * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+  return p_min;
+}
+
+/// The chosen scan point's smallest Wald p on the equations high-passed above the gust band
+/// (y and every column alike), Bonferroni over terms and scan points.
+double Workflow::above_gust_band(const Model& m, const ScanPoint& P, std::size_t scan_points) const {
+  double p_hp = 1.0;
+  for (const auto& a : P.adds) {
+    std::vector<Addition> all = m.added[a.eq];
+    all.push_back(a);
+    const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
+    MatrixXd C(C0.rows(), C0.cols());
+    for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
+    const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+    VectorXd theta;
+    const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
+    if (!solve(fs.Gt, fs.bt, theta)) continue;
+    const VectorXd resid = y - C * theta;
+    const Index block = batch.block(resid);
+    const MatrixXd cov = coloured_covariance(C, resid, block);
+    const Index kc = static_cast<Index>(a.cols.size());
+    const VectorXd th = theta.tail(kc);
+    const double wald = th.dot(cov.bottomRightCorner(kc, kc).ldlt().solve(th));
+    p_hp = std::min(p_hp, wald_tail(wald, kc, block_count(C.rows(), block)));
   }
-  t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+  return std::min(1.0, p_hp * static_cast<double>(P.adds.size()) * static_cast<double>(scan_points));
+}
 
-  // Held-out: K-fold; a scanned candidate picks its delay on the training folds. Every
-  // sample is predicted by a fit that did not see its block; the drop of the squared
-  // held-out error is judged against its own spread (next function).
+/// The held-out drop of the squared error with the candidate (K-fold; a scanned candidate picks
+/// its delay on the training folds): every sample predicted by a fit that did not see its
+/// block. False if a cross-validation fit is singular.
+bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vector<ScanPoint>& points,
+                       std::size_t best, const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
+                       const std::vector<bool>& use_eq, CandidateTrial& t) const {
+  const std::size_t neq = m.eqs.size();
   const std::size_t K = folds.size();
   std::vector<VectorXd> after = base_cv;
   bool cv_ok = true;
@@ -205,12 +166,14 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
       after[add.eq].segment(a, b - a) = m.eqs[add.eq].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
     }
   }
-  if (!cv_ok) {
-    t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
-    return t;
-  }
+  if (!cv_ok) return false;
   heldout_drop(base_cv, after, batch, t.heldout_drop, t.heldout_se);
+  return true;
 
+}
+
+/// Whether the trial passes every entry rule, and its reason in words.
+void Workflow::judge(CandidateTrial& t, const std::string& p_eq) const {
   const bool significant = t.p_value <= p_critical;
   const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
   const auto frac = t.parameters.find(delayed_input(p_eq) + "_fraction_delayed");
@@ -245,6 +208,72 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     }
   }
   t.reason = why.str();
+}
+
+/// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes, the
+/// additions it would make.
+CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
+                               const std::vector<VectorXd>& base_cv, std::size_t round,
+                               std::vector<Addition>& best_adds) const {
+  CandidateTrial t;
+  t.name = spec.name;
+  t.round = round;
+  t.p_critical = p_critical;
+  for (const auto& need : spec.needs) {
+    if (!data.has(need)) {
+      t.available = false;
+      t.reason = "the data has no " + need;
+      return t;
+    }
+    if (!excited(data.at(need), need)) {
+      t.available = false;
+      t.reason = need + " is not excited (standard deviation below " + fmt(excitation_floor(need)) + ")";
+      return t;
+    }
+  }
+  const std::size_t neq = m.eqs.size();
+  std::vector<Index> delays{0};
+  if (spec.scanned) {
+    delays.clear();
+    const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
+    for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
+  }
+  t.scan_points = delays.size();
+
+  std::vector<double> rss_before(neq);
+  for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+  const std::vector<ScanPoint> points = scan(spec, m, delays, rss_before);
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].rss_rel < points[best].rss_rel) best = i;
+  }
+  if (!std::isfinite(points[best].rss_rel)) {
+    t.available = false;
+    t.reason = "its regressors are not excited or cannot be separated from the model's";
+    return t;
+  }
+  const ScanPoint& P = points[best];
+  if (spec.scanned) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+
+  std::vector<bool> use_eq(neq, false);
+  std::string p_eq;
+  const double p_min = significance(spec, m, P, rss_before, delays.size(), t, use_eq, p_eq);
+  if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
+
+  // Confirmation above the gust band: an unmeasured side wind acts through v - v_g and
+  // drives v itself, so in closed loop it correlates the equation error with functions of
+  // v (v|v| above all). Its power lies at low frequency; an effect that is a function of the
+  // states holds at every frequency. The candidate must stay significant, at
+  // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
+  // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
+  // there and is exempt.
+  if (!p_eq.empty() && spec.name != "sensor_bias") t.highpass_p = above_gust_band(m, P, delays.size());
+  t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
+  if (!heldout(spec, m, points, best, base, base_cv, use_eq, t)) {
+    t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
+    return t;
+  }
+  judge(t, p_eq);
   if (t.passed) {
     for (const auto& a : P.adds) {
       if (use_eq[a.eq]) best_adds.push_back(a);
