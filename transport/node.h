@@ -24,6 +24,7 @@
 #include <csignal>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -40,49 +41,9 @@
 #include "transport/bus.h"
 #include "transport/clock.h"
 #include "transport/inprocess_hub.h"
+#include "transport/process_options.h"
 
 namespace nimble::transport {
-
-/// Exit codes of rig processes.
-constexpr int kExitOk = 0;
-constexpr int kExitConfig = 2;      ///< bad configuration or command line
-constexpr int kExitAckTimeout = 3;  ///< lockstep participant did not acknowledge in time
-constexpr int kExitFault = 4;       ///< other fatal fault at run time
-
-/// Command-line options common to every rig process.
-struct NodeOptions {
-  std::string name;           ///< process name, used on HEARTBEAT, FAULT, STEP_ACK
-  std::string scenario_file;  ///< resolved scenario YAML written by the launcher
-  std::string lcm_url;        ///< LCM URL of the run
-  InprocessHub* hub = nullptr;  ///< set: the node is one of a run flown in one process (no LCM)
-};
-
-/// How a process's node runs in real time (scenario section `run`). Ignored in lockstep and in
-/// process. The process's SCHED_FIFO priority is the executable's business (process_main()).
-struct RealtimeSettings {
-  int64_t spin_ns = 0;            ///< wake this long before each deadline and spin to it
-  int64_t late_threshold_ns = 0;  ///< a received stream message later than this is late (0: not counted)
-  bool channel_filter = false;    ///< drop unsubscribed channels in the kernel (Bus::enable_channel_filter)
-};
-
-/// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,
-/// before it starts any thread (LCM's receive thread inherits the policy). 0 does nothing.
-/// Returns an empty string on success, otherwise why it failed (the caller reports it).
-std::string apply_realtime_priority(int priority);
-
-/// Records why this process could not take run.realtime_priority (process_main() sets it; the
-/// scheduling policy belongs to the process, not to a node). Every ProcessNode over LCM reports
-/// it as a CODE_REALTIME_UNAVAILABLE warning.
-void set_realtime_problem(const std::string& why);
-const std::string& realtime_problem();
-
-/// Parses the command line of rig process `program` (the executable's name, used in its help and
-/// messages): `--scenario FILE [--name N] [--lcm-url URL]`, `default_name` being --name's default.
-/// Returns the exit code if the process ends here: 0 after --help (printed on stdout), kExitConfig
-/// after a usage error (on stderr: "<program>: <what>", the usage line and a pointer to --help).
-/// Otherwise fills `options` and returns std::nullopt.
-std::optional<int> parse_node_options(int argc, char** argv, const std::string& program,
-                                      const std::string& default_name, NodeOptions& options);
 
 class ProcessNode {
  public:
@@ -229,7 +190,9 @@ class ProcessNode {
   int wait_io(int64_t timeout_ns);
   void publish_ack(int64_t step, int64_t utime);
   void on_run_control(const run_control_t& msg);
+  /// The simulated time at which the next task is due [ns]; kNever if none is.
   int64_t next_due_ns() const;
+  static constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
 
   std::string name_;
   std::string config_digest_;
