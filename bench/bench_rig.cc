@@ -117,6 +117,53 @@ std::string cpus_text(const std::vector<int>& cpus) {
 
 }  // namespace
 
+/// The figures one bench_rig run reports.
+struct Figures {
+  std::string scenario;
+  int hops = 0;
+  bench::Percentiles wake, chain, chain_loaded;
+  RigRealtime quiet, loaded;
+  bench::LockstepFloor limit;
+  std::size_t participants = 0;
+  double speed = 0.0, rig_messages = 0.0;
+};
+
+/// The figures as JSON to `file`, under fixed keys. @throws std::runtime_error if it cannot be written.
+void write_figures_json(const std::string& file, const Figures& f) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("scenario").value(f.scenario);
+  w.key("cpus").value(static_cast<long long>(::sysconf(_SC_NPROCESSORS_ONLN)));
+  w.key("realtime").begin_object();
+  w.key("latency_p99_us").value(f.quiet.latency_p99_us);
+  w.key("floor_latency_p99_us").value(f.chain.p99_us);
+  w.key("jitter_p99_us").value(f.quiet.jitter_p99_us);
+  w.key("floor_jitter_p99_us").value(f.wake.p99_us);
+  w.key("latency_p50_us").value(f.quiet.latency_p50_us);
+  w.key("floor_latency_p50_us").value(f.chain.p50_us);
+  w.key("estimator_latency_p99_us").value(f.quiet.estimator_p99_us);
+  w.key("chain_hops").value(f.hops);
+  w.key("health").value(f.quiet.health);
+  w.key("loaded").begin_object();
+  w.key("latency_p99_us").value(f.loaded.latency_p99_us);
+  w.key("floor_latency_p99_us").value(f.chain_loaded.p99_us);
+  w.key("jitter_p99_us").value(f.loaded.jitter_p99_us);
+  w.key("health").value(f.loaded.health);
+  w.end_object();
+  w.end_object();
+  w.key("lockstep").begin_object();
+  w.key("speed_x").value(f.speed);
+  w.key("limit_speed_x").value(f.limit.speed_x);
+  w.key("messages_per_sim_s").value(f.rig_messages);
+  w.key("limit_messages_per_sim_s").value(f.limit.messages_per_sim_s);
+  w.key("participants").value(static_cast<long long>(f.participants));
+  w.end_object();
+  w.end_object();
+  std::ofstream out(file);
+  out << w.str() << "\n";
+  if (!out) throw std::runtime_error("cannot write " + file);
+}
+
 int main(int argc, char** argv) {
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
   std::string json_file;
@@ -232,38 +279,8 @@ int main(int argc, char** argv) {
                 r_quiet, r_loaded, r_jitter, 100.0 * speed / limit.speed_x);
 
     if (!json_file.empty()) {
-      JsonWriter w;
-      w.begin_object();
-      w.key("scenario").value(plan.scenario.name);
-      w.key("cpus").value(static_cast<long long>(::sysconf(_SC_NPROCESSORS_ONLN)));
-      w.key("realtime").begin_object();
-      w.key("latency_p99_us").value(quiet.latency_p99_us);
-      w.key("floor_latency_p99_us").value(chain.p99_us);
-      w.key("jitter_p99_us").value(quiet.jitter_p99_us);
-      w.key("floor_jitter_p99_us").value(wake.p99_us);
-      w.key("latency_p50_us").value(quiet.latency_p50_us);
-      w.key("floor_latency_p50_us").value(chain.p50_us);
-      w.key("estimator_latency_p99_us").value(quiet.estimator_p99_us);
-      w.key("chain_hops").value(hops);
-      w.key("health").value(quiet.health);
-      w.key("loaded").begin_object();
-      w.key("latency_p99_us").value(loaded.latency_p99_us);
-      w.key("floor_latency_p99_us").value(chain_loaded.p99_us);
-      w.key("jitter_p99_us").value(loaded.jitter_p99_us);
-      w.key("health").value(loaded.health);
-      w.end_object();
-      w.end_object();
-      w.key("lockstep").begin_object();
-      w.key("speed_x").value(speed);
-      w.key("limit_speed_x").value(limit.speed_x);
-      w.key("messages_per_sim_s").value(rig_messages);
-      w.key("limit_messages_per_sim_s").value(limit.messages_per_sim_s);
-      w.key("participants").value(static_cast<long long>(participants.size()));
-      w.end_object();
-      w.end_object();
-      std::ofstream out(json_file);
-      out << w.str() << "\n";
-      if (!out) throw std::runtime_error("cannot write " + json_file);
+      write_figures_json(json_file, Figures{plan.scenario.name, hops, wake, chain, chain_loaded, quiet, loaded, limit,
+                                            participants.size(), speed, rig_messages});
     }
     fs::remove_all(dir);
   } catch (const std::exception& e) {

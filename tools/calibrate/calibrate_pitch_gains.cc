@@ -62,6 +62,33 @@ void print_point(const PitchGainPoint& p, double map, const char* note = "") {
 
 }  // namespace
 
+/// The scan, per kp the best kd (a stable one with the largest damping, else the least
+/// unstable), or with `full` every grid point.
+void print_scan(const PitchGainScan& scan, std::size_t n_kp, std::size_t n_kd, bool full, double map) {
+  print_point_header();
+  for (std::size_t i = 0; i < n_kp; ++i) {
+    if (full) {
+      for (std::size_t j = 0; j < n_kd; ++j) {
+        print_point(scan.points[i * n_kd + j], map);
+      }
+      continue;
+    }
+    // Best kd for this kp: a stable one with the largest damping, else the least unstable.
+    std::size_t best = i * n_kd;
+    for (std::size_t j = 0; j < n_kd; ++j) {
+      const PitchGainPoint& p = scan.points[i * n_kd + j];
+      const PitchGainPoint& b = scan.points[best];
+      const double pz = p.poles.has_oscillatory ? p.poles.min_damping : -INFINITY;
+      const double bz = b.poles.has_oscillatory ? b.poles.min_damping : -INFINITY;
+      const bool better = p.poles.stable != b.poles.stable ? p.poles.stable
+                          : p.poles.stable                ? pz > bz
+                                                          : p.poles.max_real_per_s < b.poles.max_real_per_s;
+      if (better) best = i * n_kd + j;
+    }
+    print_point(scan.points[best], map);
+  }
+}
+
 int main(int argc, char** argv) {
   const std::string src = RIG_SOURCE_DIR;
   std::string model_file = src + "/rig_configs/models/nimble_longitudinal.yaml";
@@ -165,28 +192,7 @@ int main(int argc, char** argv) {
                 "wn: natural frequency of that pole; Kp_eff, Kd_eff = gain * map (dihedral rad per rad, per rad/s)\n\n");
 
     const PitchGainScan scan = scan_pitch_gains(lon, options, kp_values, kd_values);
-    print_point_header();
-    for (std::size_t i = 0; i < kp_values.size(); ++i) {
-      if (full) {
-        for (std::size_t j = 0; j < kd_values.size(); ++j) {
-          print_point(scan.points[i * kd_values.size() + j], options.pitch_cmd_to_dihedral_rad);
-        }
-        continue;
-      }
-      // Best kd for this kp: a stable one with the largest damping, else the least unstable.
-      std::size_t best = i * kd_values.size();
-      for (std::size_t j = 0; j < kd_values.size(); ++j) {
-        const PitchGainPoint& p = scan.points[i * kd_values.size() + j];
-        const PitchGainPoint& b = scan.points[best];
-        const double pz = p.poles.has_oscillatory ? p.poles.min_damping : -INFINITY;
-        const double bz = b.poles.has_oscillatory ? b.poles.min_damping : -INFINITY;
-        const bool better = p.poles.stable != b.poles.stable ? p.poles.stable
-                            : p.poles.stable                ? pz > bz
-                                                            : p.poles.max_real_per_s < b.poles.max_real_per_s;
-        if (better) best = i * kd_values.size() + j;
-      }
-      print_point(scan.points[best], options.pitch_cmd_to_dihedral_rad);
-    }
+    print_scan(scan, kp_values.size(), kd_values.size(), full, options.pitch_cmd_to_dihedral_rad);
 
     std::printf("\ngain pairs checked:\n");
     print_point_header();
