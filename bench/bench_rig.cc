@@ -19,7 +19,7 @@
 ///   realtime.{latency_p99_us, floor_latency_p99_us, jitter_p99_us, floor_jitter_p99_us}
 ///   realtime.loaded.{latency_p99_us, floor_latency_p99_us}
 ///   lockstep.{speed_x, limit_speed_x, messages_per_sim_s}
-/// (and more beside them). Targets (README, "Timing"): latency p99 <= 2.5x the chain floor
+/// (and more beside them). Targets (docs/timing.md "Timing"): latency p99 <= 2.5x the chain floor
 /// quiet and <= 4x loaded, plant jitter p99 <= 2x the wake-up floor, lockstep >= 50 % of the
 /// limit. Not a test: the figures depend on the machine; the ratios to the floors travel.
 

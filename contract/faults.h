@@ -42,7 +42,7 @@ const char* fault_kind_name(FaultKind kind);
 /// The target that stands for the CAN link (the frames between the two sides of the bridge).
 inline const std::string kFaultTargetCan = "CAN";
 
-/// The channels a fault may target, in the order the README lists them.
+/// The channels a fault may target, in the order docs/faults.md lists them.
 const std::vector<std::string>& fault_channel_targets();
 
 /// One entry of the scenario's `faults` list.

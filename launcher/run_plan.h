@@ -59,7 +59,7 @@ struct LaunchConfig {
   /// 2 s is four missed in a row.
   double heartbeat_timeout_s = 2.0;
   /// Processes of `processes` that the launcher does not start: they are started by hand (on
-  /// another machine of the lab, README "Running across machines") with the run's resolved
+  /// another machine of the lab, docs/machines.md "Running across machines") with the run's resolved
   /// scenario and LCM URL, which the launcher prints; it waits for their READY as for the others.
   std::vector<std::string> external_processes;
   std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run

@@ -127,7 +127,7 @@ struct ProcessRunOptions {
   /// counted by each receiving process and by the launcher.
   int64_t late_threshold_us = 2000;
   /// 1: each process's LCM receive socket keeps only the channels the process subscribes, in
-  /// the kernel, so a message wakes only the processes that take it (README, "Timing");
+  /// the kernel, so a message wakes only the processes that take it (docs/timing.md "Timing");
   /// 0: LCM's own behaviour, every message wakes every process of the run.
   int channel_filter = 1;
 };

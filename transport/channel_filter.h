@@ -5,7 +5,7 @@
 /// receives every message of the run, and its receive thread wakes for each one only to drop
 /// the channels nobody in the process subscribed. With the rig's ~6,000 messages per second
 /// and five receivers, most wake-ups carry nothing for the process, and they delay the ones
-/// that do (README, "Timing").
+/// that do (docs/timing.md "Timing").
 ///
 /// A classic BPF socket filter (SO_ATTACH_FILTER) on the provider's receive socket drops those
 /// datagrams in the kernel instead. It reads the LCM short-message header

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -119,4 +121,19 @@ TEST_CASE("every tabled plant parameter is written at its default in the shipped
   check_documented(nimble::plant::flap_actuator_params(), nimble::plant::FlapActuatorConfig{}, plant["flap_actuator"], "flap_actuator");
   check_documented(nimble::plant::servo_params(), nimble::plant::ServoConfig{}, plant["servo"], "servo");
   check_documented(nimble::plant::thrust_params(), nimble::ThrustCurve{}, plant["thrust"], "thrust");
+}
+
+TEST_CASE("docs/configuration.md is the configuration reference the parameter tables give now", "[cli]") {
+  // Generated from the tables, never edited by hand: a parameter added, renamed or given another
+  // default or range without regenerating the page fails here.
+  const Out page = rig("params --doc-page");
+  REQUIRE(page.code == 0);
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/docs/configuration.md");
+  REQUIRE(in);
+  std::stringstream text;
+  text << in.rdbuf();
+  INFO("docs/configuration.md is out of date: regenerate it with build/bin/rig params --doc-page > "
+       "docs/configuration.md");
+  CHECK(text.str() == page.text);
+  CHECK(page.text.find("`plant.effects.lateral_inflow.Y_vv_ns2pm2`") != std::string::npos);
 }

@@ -91,7 +91,7 @@ TEST_CASE("the channel table names every channel once, with a generated LCM type
 }
 
 TEST_CASE("lcmtypes/README.md shows the contract's channel table", "[contract]") {
-  // On a difference, the expected table is printed: paste it into the README.
+  // On a difference, the expected table is printed: paste it into lcmtypes/README.md.
   std::ostringstream expected;
   for (const ChannelSpec& c : channel_table()) expected << markdown_row(c) << "\n";
   INFO("expected rows of the channel table in lcmtypes/README.md:\n" << expected.str());

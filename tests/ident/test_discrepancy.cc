@@ -61,7 +61,7 @@ bool named(const DiscrepancyResult& r, const std::string& name) {
 TEST_CASE("discrepancy: with no hidden effect, 24 seeds name an effect in at most 5 % of the records",
           "[discrepancy][null]") {
   // The false-naming rate on null records: the thresholds come from the partial-F rule and the
-  // held-out test, not from these records; the rate measured here is what the README reports.
+  // held-out test, not from these records; the rate measured here is what docs/discrepancy.md reports.
   int named_any = 0;
   const int seeds = 24;
   for (int s = 1; s <= seeds; ++s) {

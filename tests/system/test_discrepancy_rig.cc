@@ -42,7 +42,7 @@ double drawn(int seed, double lo, double hi) {
 YAML::Node fly_and_check(const std::string& tag, const std::string& scenario, int seed, const std::string& sets) {
   const std::string dir = nimble::test::scratch_dir("discrepancy_" + tag + "_" + std::to_string(seed));
   // The pilot off: the workflow's naming rates were measured on flights without the pilot's
-  // throttle; with it, the kinematic term that Eq 21 drops is larger (README, "Flights like the
+  // throttle; with it, the kinematic term that Eq 21 drops is larger (docs/paper-flights.md "Flights like the
   // paper's"; system.paper.*).
   const auto run = nimble::test::rig_run(kConfigs + scenario, dir,
                                          "--clock lockstep --set pilot.enabled=false --seed " + std::to_string(seed) + kLinearOnly + " " + sets);

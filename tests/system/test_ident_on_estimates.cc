@@ -43,7 +43,7 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   const std::string log = dir + "/run.lcmlog", summary = dir + "/summary.json";
   // Explicit processes, controller input and seed: the test does not depend on the shipped defaults.
   const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
-                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (README, "Flights like the paper's")
+                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
                           " --seed " + std::to_string(seed) + " --set processes=[plant,controller,mocap,estimator]" +
                           " --set run.controller_input=estimate --log " + log + " --json " + summary +
                           " --no-progress >" + dir + "/run.txt 2>&1";
@@ -142,7 +142,7 @@ TEST_CASE("discrepancy on the effect-free identification train: the kinematic te
   const std::string dir = nimble::test::scratch_dir("discrepancy_id_train");
   const std::string log = dir + "/run.lcmlog";
   const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
-                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (README, "Flights like the paper's")
+                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
                           " --seed 1 --log " + log + " --no-progress >" + dir + "/run.txt 2>&1";
   const int status = std::system(fly.c_str());
   INFO(nimble::test::slurp(dir + "/run.txt"));

@@ -259,7 +259,7 @@ TEST_CASE("a rig log flows into the identification: export to CSV, identify the 
   // Ideal sensing: the log has no ESTIMATE, so the truth is the measured data.
   const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
                               "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller] "
-                              "--set pilot.enabled=false");  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (README, "Flights like the paper's")
+                              "--set pilot.enabled=false");  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
   REQUIRE(r.exit_code == 0);
   const std::string log = dir + "/run.lcmlog", csv = dir + "/flight.csv", json = dir + "/ident.json";
   const auto exported = nimble::test::run_rig("export " + log + " --csv " + csv);
