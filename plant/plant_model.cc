@@ -251,12 +251,12 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
     X = Xq_ * q + Xu_ * du + Xw_ * dw_vel + X_dd_ * dd;
     Z = Zq_ * q + Zu_ * du + Zw_ * dw_vel + Z_dd_ * dd;
   }
-  // The plant's effects (plant/effects/), each adding its loads, in a fixed order.
-  add_forward_speed_coupling(fx.forward_speed_coupling, du, p, v_rel, L, Y);
-  add_constant_load(fx.constant_load, L, Y);
-  add_lateral_inflow(fx.lateral_inflow, v_rel, L, Y);
-  add_flapping_forcing(fx.flapping_forcing, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), forcing_phase_roll_,
-                       forcing_phase_side_, L, Y);
+  // The plant's effects (plant/effects/registry.h), each adding its loads, in the registry's order.
+  const LoadInputs effect_inputs{du, p, v_rel, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), &forcing_phase_roll_,
+                                 &forcing_phase_side_};
+  for (const PlantEffect& effect : plant_effects()) {
+    if (effect.add_loads != nullptr) effect.add_loads(fx, effect_inputs, L, Y);
+  }
   Z -= thrust;
 
   // Translational dynamics (thesis Eq 3.1), body axes.

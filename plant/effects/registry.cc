@@ -38,34 +38,46 @@ void set_derivative(const ModelSection& s, const std::string& name, std::map<std
 
 const std::vector<PlantEffect>& plant_effects() {
   static const std::vector<PlantEffect> effects = {
-      {"flapping_forcing",
-       [](ConfigMap& m, EffectsConfig& e) { e.flapping_forcing = flapping_forcing_from(m); },
-       flapping_forcing_markdown_rows, "flapping_forcing",
-       [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.flapping_forcing); }},
-      {"lateral_inflow",
-       [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
-       [](const std::string& prefix) { return rows(lateral_inflow_params(), prefix); }, "lateral_inflow",
-       [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); }},
       {"forward_speed_coupling",
        [](ConfigMap& m, EffectsConfig& e) { e.forward_speed_coupling = forward_speed_coupling_from(m); },
        [](const std::string& prefix) { return rows(forward_speed_coupling_params(), prefix); },
        "forward_speed_coupling",
-       [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); }},
+       [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); },
+       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
+         add_forward_speed_coupling(e.forward_speed_coupling, in.du, in.p, in.v_rel, L, Y);
+       }},
+      {"constant_load",
+       [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
+       [](const std::string& prefix) { return rows(constant_load_params(), prefix); }, "sensor_bias",
+       [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); },
+       [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); }},
+      {"lateral_inflow",
+       [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
+       [](const std::string& prefix) { return rows(lateral_inflow_params(), prefix); }, "lateral_inflow",
+       [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); },
+       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
+         add_lateral_inflow(e.lateral_inflow, in.v_rel, L, Y);
+       }},
+      {"flapping_forcing",
+       [](ConfigMap& m, EffectsConfig& e) { e.flapping_forcing = flapping_forcing_from(m); },
+       flapping_forcing_markdown_rows, "flapping_forcing",
+       [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.flapping_forcing); },
+       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
+         add_flapping_forcing(e.flapping_forcing, in.flap_phase_rad, *in.phases_roll, *in.phases_side, L, Y);
+       }},
       {"actuator_delay",
        [](ConfigMap& m, EffectsConfig& e) { e.actuator_delay = actuator_delay_from(m); },
        [](const std::string& prefix) { return rows(actuator_delay_params(), prefix); }, "actuator_delay",
-       [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); }},
+       [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); },
+       nullptr},  // on the commands: PlantModel::delayed()
       {"lateral_gust",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_gust = lateral_gust_from(m); },
        [](const std::string& prefix) {
          return rows(lateral_gust_params(), prefix) + "| `" + prefix +
                 "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
        },
-       "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); }},
-      {"constant_load",
-       [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
-       [](const std::string& prefix) { return rows(constant_load_params(), prefix); }, "sensor_bias",
-       [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); }},
+       "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); },
+       nullptr},  // on the velocity the aerodynamics see: LoadInputs::v_rel
   };
   return effects;
 }
@@ -99,8 +111,9 @@ const std::vector<std::string>& effects_in_equations_of_motion() {
 
 void apply_model_effects(const DerivativeModel& model, EffectsConfig& fx, std::map<std::string, double>& derivatives) {
   const auto& eom = effects_in_equations_of_motion();
-  for (const auto& [name, params] : model.effects) {
-    const ModelSection s{model, name, params};
+  for (const auto& entry : model.effects) {
+    const std::string& name = entry.first;  // a lambda cannot capture a structured binding in C++17
+    const ModelSection s{model, name, entry.second};
     const auto& all = plant_effects();
     const auto plant_effect =
         std::find_if(all.begin(), all.end(), [&](const PlantEffect& e) { return e.model_effect == name; });

@@ -27,9 +27,12 @@ struct PlantEffect {
   /// Sets `effects` from that section of a model. @throws std::invalid_argument naming the
   /// model, the effect and the parameter.
   void (*from_model)(const ModelSection& section, EffectsConfig& effects);
+  /// Adds its roll moment L and side force Y (nullptr: an effect that acts otherwise, on the
+  /// commands or on the velocity the aerodynamics see).
+  void (*add_loads)(const EffectsConfig& effects, const LoadInputs& in, double& L, double& Y);
 };
 
-/// Every plant effect, in the order of the plant file.
+/// Every plant effect, in the order the plant adds their loads (PlantModel::derivative()).
 const std::vector<PlantEffect>& plant_effects();
 
 /// Reads the `effects` section of the plant: every key one of plant_effects().
