@@ -339,16 +339,17 @@ struct Options {
   std::string candump;  ///< can_rig's candump log of every frame it received; empty: none
 };
 
-int run(const Options& opt) {
-  // 1. Private network namespace with multicast loopback, and vcan0 in it (before any thread).
-  const nimble::launcher::NamespaceResult ns = nimble::launcher::enter_private_network_namespace();
+/// A private network namespace with multicast loopback, and vcan0 in it (before any thread);
+/// false, with the reason on stderr, where this machine cannot.
+bool open_network(nimble::launcher::NamespaceResult& ns) {
+  ns = nimble::launcher::enter_private_network_namespace();
   if (!ns.ok) {
     std::fprintf(stderr,
                  "bench_can_bridge: cannot create a private network namespace: %s\n"
                  "  (needs root or unprivileged user namespaces; on a kernel without CAN run it as\n"
                  "   tools/canvm/canvm run -- build/bin/bench_can_bridge)\n",
                  ns.detail.c_str());
-    return 1;
+    return false;
   }
   const std::string can_problem = nimble::launcher::ensure_can_interface(kInterface, true);
   if (!can_problem.empty()) {
@@ -356,8 +357,118 @@ int run(const Options& opt) {
                  "bench_can_bridge: no CAN interface %s: %s\n"
                  "  run the bench through the CAN VM instead: tools/canvm/canvm run -- build/bin/bench_can_bridge\n",
                  kInterface, can_problem.c_str());
-    return 1;
+    return false;
   }
+  return true;
+}
+
+/// The scenario the bridges read: the bench's, over the CAN link on vcan0, with or without a
+/// candump log. False, with the reason on stderr, if it cannot be written.
+bool write_scenario(const Options& opt, const std::string& scenario_file) {
+  std::vector<nimble::Override> overrides{{"actuator_link", "can"}, {"can_bridge.interface", kInterface}};
+  if (opt.candump.empty()) {
+    overrides.push_back({"can_bridge.candump_log", "false"});
+  } else {
+    overrides.push_back({"can_bridge.candump_log", "true"});
+    std::string quoted = "'";  // a YAML single-quoted string
+    for (const char c : fs::absolute(opt.candump).string()) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+    overrides.push_back({"can_bridge.candump_file", quoted + "'"});
+  }
+  const nimble::Scenario s = nimble::load_scenario(opt.scenario, overrides);
+  std::ofstream out(scenario_file);
+  out << "# Resolved scenario for bench_can_bridge (from " << opt.scenario << ")\n" << nimble::to_yaml(s.root);
+  if (!out) {
+    std::fprintf(stderr, "bench_can_bridge: cannot write %s\n", scenario_file.c_str());
+    return false;
+  }
+  return true;
+}
+
+/// Each bridge's last CAN_HEALTH, and the FAULT events the run saw.
+void print_health(Receiver& rx, const std::vector<ChildProcess>& children) {
+  std::lock_guard<std::mutex> lock(rx.mu);
+  for (const auto& c : children) {
+    auto it = rx.health.find(c.name);
+    if (it == rx.health.end()) {
+      std::printf("  CAN_HEALTH %-10s none received\n", c.name.c_str());
+      continue;
+    }
+    const can_health_t& h = it->second;
+    std::printf("  CAN_HEALTH %-10s (seq %lld) to CAN %lld, to LCM %lld, frames sent %lld, received %lld; rejected: "
+                "unknown id %lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; "
+                "counter gaps %lld, ENOBUFS %lld, send retries %lld, send dropped %lld, receive dropped %lld, error frames %lld\n",
+                c.name.c_str(), static_cast<long long>(h.seq), static_cast<long long>(h.messages_to_can),
+                static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
+                static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
+                static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
+                static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
+                static_cast<long long>(h.counter_gaps), static_cast<long long>(h.send_enobufs),
+                static_cast<long long>(h.send_retries),
+                static_cast<long long>(h.send_dropped), static_cast<long long>(h.receive_dropped),
+                static_cast<long long>(h.error_frames));
+  }
+  if (rx.fault_count > 0) {
+    std::printf("  FAULT events: %lld, e.g.\n", static_cast<long long>(rx.fault_count));
+    for (const auto& f : rx.faults) std::printf("    %s\n", f.c_str());
+  }
+}
+
+/// The latencies of the direct hop and of the CAN path per command, what was lost, and the
+/// bridges' health. Returns 0 if any command crossed the CAN path, else 1.
+int report(const Options& opt, Receiver& rx, const std::vector<int64_t>& sent, int64_t late,
+           const std::string& ns_detail, const std::string& bridge, const std::string& stop_how,
+           const std::vector<ChildProcess>& children) {
+  std::vector<int64_t> direct_ns, can_ns, added_ns;
+  int64_t direct_lost = 0, can_lost = 0, warm_direct = 0, warm_can = 0;
+  const int64_t total = static_cast<int64_t>(sent.size());
+  for (int64_t seq = 0; seq < total; ++seq) {
+    const int64_t d = rx.direct_rx_[seq], k = rx.can_rx_[seq];
+    if (seq < opt.warmup) {
+      warm_direct += d >= 0;
+      warm_can += k >= 0;
+      continue;
+    }
+    if (d >= 0) direct_ns.push_back(d - sent[seq]);
+    else ++direct_lost;
+    if (k >= 0) can_ns.push_back(k - sent[seq]);
+    else ++can_lost;
+    if (d >= 0 && k >= 0) added_ns.push_back(k - d);
+  }
+  const Summary direct = summarise(direct_ns), can = summarise(can_ns), added = summarise(added_ns);
+
+  std::printf("bench_can_bridge: %d commands at %g Hz after %d warm-up, %s on %s\n", opt.count, opt.rate_hz,
+              opt.warmup, kUrl, kInterface);
+  std::printf("  measured %s\n", where_measured().c_str());
+  std::printf("  network: %s\n", ns_detail.c_str());
+  std::printf("  bridge: %s (scenario %s)\n", bridge.c_str(), opt.scenario.c_str());
+  print("direct LCM hop (ACTUATOR_CMD)", direct);
+  print("LCM -> can_flight -> vcan0 -> can_rig -> LCM", can);
+  if (direct.n > 0 && can.n > 0) {
+    std::printf("  %-46s %8.1f us (difference of the medians)\n", "added by the CAN path", can.p50_us - direct.p50_us);
+  }
+  print("  per command, CAN path minus direct hop", added);
+  std::printf("  lost (published, not received): direct %lld of %d, CAN path %lld of %d; warm-up received: direct "
+              "%lld, CAN %lld of %d\n",
+              static_cast<long long>(direct_lost), opt.count, static_cast<long long>(can_lost), opt.count,
+              static_cast<long long>(warm_direct), static_cast<long long>(warm_can), opt.warmup);
+  std::printf("  CAN path: values differing from those sent %lld, duplicates %lld, unknown seq %lld, source '%s'; "
+              "undecodable messages %lld; publisher late by > 1 period %lld times\n",
+              static_cast<long long>(rx.can_mismatches), static_cast<long long>(rx.can_duplicates),
+              static_cast<long long>(rx.can_other), rx.can_sources.c_str(), static_cast<long long>(rx.malformed),
+              static_cast<long long>(late));
+  std::printf("  bridges stopped by %s: ", stop_how.c_str());
+  for (std::size_t i = 0; i < children.size(); ++i) {
+    std::printf("%s%s %s", i ? ", " : "", children[i].name.c_str(), children[i].describe().c_str());
+  }
+  std::printf("\n");
+  print_health(rx, children);
+  return can.n > 0 ? 0 : 1;
+}
+
+int run(const Options& opt) {
+  // 1. Private network namespace with multicast loopback, and vcan0 in it (before any thread).
+  nimble::launcher::NamespaceResult ns;
+  if (!open_network(ns)) return 1;
 
   // 2. The resolved scenario the bridges read.
   const std::string bridge = opt.bridge.empty() ? self_dir() + "/nimble_can_bridge" : opt.bridge;
@@ -380,24 +491,8 @@ int run(const Options& opt) {
     }
   } remove_dir{dir};
   const std::string scenario_file = dir + "/scenario.yaml";
-  {
-    std::vector<nimble::Override> overrides{{"actuator_link", "can"}, {"can_bridge.interface", kInterface}};
-    if (opt.candump.empty()) {
-      overrides.push_back({"can_bridge.candump_log", "false"});
-    } else {
-      overrides.push_back({"can_bridge.candump_log", "true"});
-      std::string quoted = "'";  // a YAML single-quoted string
-      for (const char c : fs::absolute(opt.candump).string()) quoted += c == '\'' ? std::string("''") : std::string(1, c);
-      overrides.push_back({"can_bridge.candump_file", quoted + "'"});
-    }
-    const nimble::Scenario s = nimble::load_scenario(opt.scenario, overrides);
-    std::ofstream out(scenario_file);
-    out << "# Resolved scenario for bench_can_bridge (from " << opt.scenario << ")\n" << nimble::to_yaml(s.root);
-    if (!out) {
-      std::fprintf(stderr, "bench_can_bridge: cannot write %s\n", scenario_file.c_str());
-      return 1;
-    }
-  }
+  if (!write_scenario(opt, scenario_file)) return 1;
+
   nimble::load_scenario(scenario_file);  // what the bridges will load: fail here if it does not
 
   // 3. LCM: one instance to publish (never subscribed), one for the receiving thread.
@@ -512,76 +607,7 @@ int run(const Options& opt) {
   rx_thread.join();
 
   // 6. Report.
-  std::vector<int64_t> direct_ns, can_ns, added_ns;
-  int64_t direct_lost = 0, can_lost = 0, warm_direct = 0, warm_can = 0;
-  for (int64_t seq = 0; seq < total; ++seq) {
-    const int64_t d = rx.direct_rx_[seq], k = rx.can_rx_[seq];
-    if (seq < opt.warmup) {
-      warm_direct += d >= 0;
-      warm_can += k >= 0;
-      continue;
-    }
-    if (d >= 0) direct_ns.push_back(d - sent[seq]);
-    else ++direct_lost;
-    if (k >= 0) can_ns.push_back(k - sent[seq]);
-    else ++can_lost;
-    if (d >= 0 && k >= 0) added_ns.push_back(k - d);
-  }
-  const Summary direct = summarise(direct_ns), can = summarise(can_ns), added = summarise(added_ns);
-
-  std::printf("bench_can_bridge: %d commands at %g Hz after %d warm-up, %s on %s\n", opt.count, opt.rate_hz,
-              opt.warmup, kUrl, kInterface);
-  std::printf("  measured %s\n", where_measured().c_str());
-  std::printf("  network: %s\n", ns.detail.c_str());
-  std::printf("  bridge: %s (scenario %s)\n", bridge.c_str(), opt.scenario.c_str());
-  print("direct LCM hop (ACTUATOR_CMD)", direct);
-  print("LCM -> can_flight -> vcan0 -> can_rig -> LCM", can);
-  if (direct.n > 0 && can.n > 0) {
-    std::printf("  %-46s %8.1f us (difference of the medians)\n", "added by the CAN path", can.p50_us - direct.p50_us);
-  }
-  print("  per command, CAN path minus direct hop", added);
-  std::printf("  lost (published, not received): direct %lld of %d, CAN path %lld of %d; warm-up received: direct "
-              "%lld, CAN %lld of %d\n",
-              static_cast<long long>(direct_lost), opt.count, static_cast<long long>(can_lost), opt.count,
-              static_cast<long long>(warm_direct), static_cast<long long>(warm_can), opt.warmup);
-  std::printf("  CAN path: values differing from those sent %lld, duplicates %lld, unknown seq %lld, source '%s'; "
-              "undecodable messages %lld; publisher late by > 1 period %lld times\n",
-              static_cast<long long>(rx.can_mismatches), static_cast<long long>(rx.can_duplicates),
-              static_cast<long long>(rx.can_other), rx.can_sources.c_str(), static_cast<long long>(rx.malformed),
-              static_cast<long long>(late));
-  std::printf("  bridges stopped by %s: ", stop_how.c_str());
-  for (std::size_t i = 0; i < children.size(); ++i) {
-    std::printf("%s%s %s", i ? ", " : "", children[i].name.c_str(), children[i].describe().c_str());
-  }
-  std::printf("\n");
-  {
-    std::lock_guard<std::mutex> lock(rx.mu);
-    for (const auto& c : children) {
-      auto it = rx.health.find(c.name);
-      if (it == rx.health.end()) {
-        std::printf("  CAN_HEALTH %-10s none received\n", c.name.c_str());
-        continue;
-      }
-      const can_health_t& h = it->second;
-      std::printf("  CAN_HEALTH %-10s (seq %lld) to CAN %lld, to LCM %lld, frames sent %lld, received %lld; rejected: "
-                  "unknown id %lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; "
-                  "counter gaps %lld, ENOBUFS %lld, send retries %lld, send dropped %lld, receive dropped %lld, error frames %lld\n",
-                  c.name.c_str(), static_cast<long long>(h.seq), static_cast<long long>(h.messages_to_can),
-                  static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
-                  static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
-                  static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
-                  static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
-                  static_cast<long long>(h.counter_gaps), static_cast<long long>(h.send_enobufs),
-                  static_cast<long long>(h.send_retries),
-                  static_cast<long long>(h.send_dropped), static_cast<long long>(h.receive_dropped),
-                  static_cast<long long>(h.error_frames));
-    }
-    if (rx.fault_count > 0) {
-      std::printf("  FAULT events: %lld, e.g.\n", static_cast<long long>(rx.fault_count));
-      for (const auto& f : rx.faults) std::printf("    %s\n", f.c_str());
-    }
-  }
-  return can.n > 0 ? 0 : 1;
+  return report(opt, rx, sent, late, ns.detail, bridge, stop_how, children);
 }
 
 }  // namespace
