@@ -162,6 +162,18 @@ void bind_can_health(V& v, M& m, Copy copy) {
   copy(v.fd_frames_received, m.fd_frames_received);
 }
 
+template <class V, class M, class Copy>
+void bind_fault(V& v, M& m, Copy copy) {
+  copy(v.utime, m.utime);
+  copy(v.seq, m.seq);
+  copy(v.rig_utime, m.rig_utime);
+  copy(v.process, m.process);
+  copy(v.severity, m.severity);
+  copy(v.code, m.code);
+  copy(v.channel, m.channel);
+  copy(v.message, m.message);
+}
+
 }  // namespace
 
 imu_sample_t to_message(const ImuSample& s) {
@@ -331,6 +343,18 @@ can_health_t to_message(const CanHealth& v) {
 CanHealth from_message(const can_health_t& m) {
   CanHealth v;
   bind_can_health(v, m, FromMessage{});
+  return v;
+}
+
+fault_event_t to_message(const FaultEvent& v) {
+  fault_event_t m{};
+  bind_fault(v, m, ToMessage{});
+  return m;
+}
+
+FaultEvent from_message(const fault_event_t& m) {
+  FaultEvent v;
+  bind_fault(v, m, FromMessage{});
   return v;
 }
 

@@ -13,6 +13,7 @@
 ///   estimator_state_t   <-> Estimate          estimator -> controller, tools
 ///   controller_status_t <-> ControllerStatus  controller -> launcher, tools
 ///   can_health_t        <-> CanHealth         can_flight, can_rig -> launcher
+///   fault_event_t       <-> FaultEvent        every process, launcher -> launcher
 ///
 /// What a message carries beyond the value (utime, seq, step of a truth message) is an argument
 /// of to_message(); what a value holds beyond the message (the truth's side gust, not on the
@@ -26,6 +27,7 @@
 #include <nimble/can_health_t.hpp>
 #include <nimble/controller_status_t.hpp>
 #include <nimble/estimator_state_t.hpp>
+#include <nimble/fault_event_t.hpp>
 #include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
@@ -63,5 +65,8 @@ ControllerStatus from_message(const controller_status_t& message);
 
 can_health_t to_message(const CanHealth& health);
 CanHealth from_message(const can_health_t& message);
+
+fault_event_t to_message(const FaultEvent& fault);
+FaultEvent from_message(const fault_event_t& message);
 
 }  // namespace nimble::contract

@@ -13,12 +13,13 @@
 ///   Estimate          estimator_state_t      ESTIMATE            estimator
 ///   ControllerStatus  controller_status_t    CONTROLLER_STATUS   controller
 ///   CanHealth         can_health_t           CAN_HEALTH          can_flight, can_rig
+///   FaultEvent        fault_event_t          FAULT               every process, the launcher
 ///
 /// Units are in the names (SI; angles in rad, flapping frequencies in rad/s, throttle in % of
 /// full scale). utime is the rig's time of the value [us]; seq the publisher's sequence number.
 /// The lockstep clock's and the processes' own messages (RIG_CLOCK, STEP_ACK, RUN_CONTROL,
-/// HEARTBEAT, TIMING_HEALTH, FAULT) belong to the transport (transport/node.h) and have no value
-/// type here.
+/// HEARTBEAT, TIMING_HEALTH) belong to the transport (transport/node.h) and have no value type
+/// here.
 ///
 /// The IMU sample and the motion-capture pose are what the emulated sensors (sensors/, on the
 /// truth side) produce and the estimator (estimator/, under test) consumes: neither side's model
@@ -235,6 +236,19 @@ struct CanHealth {
   bool fd = false;
   int64_t fd_frames_sent = 0;
   int64_t fd_frames_received = 0;
+};
+
+/// Something a process reports (FAULT): severity and code are fault_event_t's SEVERITY_* and
+/// CODE_* values (contract/faults.h names them).
+struct FaultEvent {
+  int64_t utime = 0;       ///< wall clock when it was reported [us]
+  int64_t seq = 0;
+  int64_t rig_utime = 0;   ///< the rig's time it refers to [us]
+  std::string process;     ///< who reports it
+  int8_t severity = 0;
+  int32_t code = 0;
+  std::string channel;     ///< the channel it concerns ("" if none)
+  std::string message;     ///< what happened, in words
 };
 
 }  // namespace nimble

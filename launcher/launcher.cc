@@ -34,6 +34,7 @@
 #include "can_bridge/bridge_config.h"
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "contract/messages.h"
 #include "contract/rates.h"
 #include "core/json_writer.h"
 #include "launcher/hosts.h"
@@ -375,7 +376,7 @@ class ProcessRun {
       const std::string what = "process '" + name + "' (pid " + std::to_string(hb->pid) + ") sent no heartbeat for " +
                                buf + " (run.heartbeat_timeout_s " + std::to_string(lc_.heartbeat_timeout_s) +
                                ") and has not exited: stopped or hung";
-      fault_event_t f;
+      FaultEvent f;
       f.utime = transport::wall_us();
       f.seq = launcher_fault_seq_++;
       f.rig_utime = static_cast<int64_t>(monitor_.sim_time_s() * 1e6);
@@ -384,7 +385,7 @@ class ProcessRun {
       f.code = fault_event_t::CODE_HEARTBEAT_LOST;
       f.channel = contract::channels::kHeartbeat;
       f.message = what;
-      bus_->publish(contract::channels::kFault, f);
+      bus_->publish(contract::channels::kFault, contract::to_message(f));
       return "HEARTBEAT_LOST: " + what;
     }
     return "";

@@ -148,8 +148,9 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     return;
   }
   if (channel == kFault) {
-    fault_event_t f{};
-    if (take(f, "")) {
+    fault_event_t message{};
+    if (take(message, "")) {
+      const FaultEvent f = contract::from_message(message);
       faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
                                     static_cast<double>(f.rig_utime) / 1e6});
     }

@@ -3,6 +3,8 @@
 
 #include "transport/node.h"
 
+#include "contract/messages.h"
+
 #include <poll.h>
 #include <sched.h>
 #include <sys/mman.h>
@@ -32,7 +34,7 @@ void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channe
     count = 0;
   }
   if (++count > 10) return;
-  fault_event_t f;
+  FaultEvent f;
   f.utime = wall_us();
   f.seq = fault_seq_++;
   f.rig_utime = rig_utime_us >= 0 ? rig_utime_us : sim_time_ns_ / 1000;
@@ -41,7 +43,7 @@ void ProcessNode::fault(int8_t severity, int32_t code, const std::string& channe
   f.code = code;
   f.channel = channel;
   f.message = message;
-  bus_.publish(contract::channels::kFault, f);
+  bus_.publish(contract::channels::kFault, contract::to_message(f));
 }
 
 void ProcessNode::inject_faults(const std::vector<contract::FaultSpec>& faults, uint64_t seed) {

@@ -160,6 +160,7 @@ TEST_CASE("messages: every stream message goes to its value and back with every 
   back_and_forth(estimator_state_t{});
   back_and_forth(controller_status_t{});
   back_and_forth(can_health_t{});
+  back_and_forth(fault_event_t{});
   truth_state_t t{};
   rig_test::fill(t, g);
   rig_test::require_equal(t, contract::to_message(contract::from_message(t), t.utime, t.seq, t.step));
