@@ -137,12 +137,16 @@ void check_params(const ParamTable<Config>& table, const Config& config) {
   }
 }
 
-/// The table as Markdown: key, default (from `defaults`), allowed range, unit, meaning.
+/// The header of a parameter table in Markdown (params_markdown()).
+inline constexpr const char* kParamsMarkdownHeader =
+    "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
+
+/// The rows of the table in Markdown, one per parameter (key after `prefix`, default from
+/// `defaults`, allowed range, unit, meaning), without the header: tables of one section join up.
 template <typename Config>
-std::string params_markdown(const ParamTable<Config>& table, const Config& defaults, const std::string& prefix = "") {
+std::string params_markdown_rows(const ParamTable<Config>& table, const Config& defaults, const std::string& prefix = "") {
   using param_detail::number;
   std::ostringstream out;
-  out << "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
   for (const Param<Config>& p : table) {
     std::string value;
     bool is_bool = false;
@@ -167,6 +171,12 @@ std::string params_markdown(const ParamTable<Config>& table, const Config& defau
         << " | " << p.unit << " | " << meaning << " |\n";
   }
   return out.str();
+}
+
+/// The table as Markdown: the header and the rows of params_markdown_rows().
+template <typename Config>
+std::string params_markdown(const ParamTable<Config>& table, const Config& defaults, const std::string& prefix = "") {
+  return kParamsMarkdownHeader + params_markdown_rows(table, defaults, prefix);
 }
 
 }  // namespace nimble

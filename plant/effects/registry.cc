@@ -8,13 +8,6 @@
 namespace nimble::plant {
 namespace {
 
-/// The rows of a parameter table's Markdown (without its header).
-template <typename Config>
-std::string rows(const ParamTable<Config>& table, const std::string& prefix) {
-  const std::string md = params_markdown(table, Config{}, prefix);
-  return md.substr(md.find("|\n|---") + std::string("|\n|---|---|---|---|---|\n").size());
-}
-
 /// Bounds of the derivatives a model's effects: section may set (wide sanity bounds: |L| terms
 /// up to 0.1 N m per unit, |Y| terms up to 1 N per unit).
 const Range kRollDerivative = Range::closed(-0.1, 0.1);
@@ -40,7 +33,7 @@ const std::vector<PlantEffect>& plant_effects() {
   static const std::vector<PlantEffect> effects = {
       {"forward_speed_coupling",
        [](ConfigMap& m, EffectsConfig& e) { e.forward_speed_coupling = forward_speed_coupling_from(m); },
-       [](const std::string& prefix) { return rows(forward_speed_coupling_params(), prefix); },
+       [](const std::string& prefix) { return params_markdown_rows(forward_speed_coupling_params(), ForwardSpeedCouplingConfig{}, prefix); },
        "forward_speed_coupling",
        [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
@@ -48,12 +41,12 @@ const std::vector<PlantEffect>& plant_effects() {
        }},
       {"constant_load",
        [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
-       [](const std::string& prefix) { return rows(constant_load_params(), prefix); }, "sensor_bias",
+       [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "sensor_bias",
        [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); },
        [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); }},
       {"lateral_inflow",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
-       [](const std::string& prefix) { return rows(lateral_inflow_params(), prefix); }, "lateral_inflow",
+       [](const std::string& prefix) { return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix); }, "lateral_inflow",
        [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_lateral_inflow(e.lateral_inflow, in.v_rel, L, Y);
@@ -67,13 +60,13 @@ const std::vector<PlantEffect>& plant_effects() {
        }},
       {"actuator_delay",
        [](ConfigMap& m, EffectsConfig& e) { e.actuator_delay = actuator_delay_from(m); },
-       [](const std::string& prefix) { return rows(actuator_delay_params(), prefix); }, "actuator_delay",
+       [](const std::string& prefix) { return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix); }, "actuator_delay",
        [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); },
        nullptr},  // on the commands: PlantModel::delayed()
       {"lateral_gust",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_gust = lateral_gust_from(m); },
        [](const std::string& prefix) {
-         return rows(lateral_gust_params(), prefix) + "| `" + prefix +
+         return params_markdown_rows(lateral_gust_params(), LateralGustConfig{}, prefix) + "| `" + prefix +
                 "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
        },
        "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); },
@@ -99,7 +92,7 @@ void effects_from(ConfigMap& section, EffectsConfig& effects) {
 }
 
 std::string effects_markdown() {
-  std::string out = "| key | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
+  std::string out = kParamsMarkdownHeader;
   for (const auto& e : plant_effects()) out += e.markdown_rows("plant.effects." + e.name + ".");
   return out;
 }
