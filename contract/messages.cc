@@ -25,8 +25,8 @@ void assign(double (&to)[N], const Eigen::Matrix<double, N, 1>& from) {
   for (int i = 0; i < N; ++i) to[i] = from[i];
 }
 
-// Each pair's fields, listed once for both directions: bind(value, message, copy) calls
-// copy(value.f, message.f) for every field f. to_message() copies message <- value,
+// Each pair's fields, listed once for both directions: a Bind functor's bind(value, message,
+// copy) calls copy(value.f, message.f) for every field f. to_message() copies message <- value,
 // from_message() value <- message.
 struct ToMessage {
   template <class V, class M>
@@ -41,138 +41,166 @@ struct FromMessage {
   }
 };
 
-template <class V, class M, class Copy>
-void bind_command(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.mode, m.mode);
-  copy(v.flap_freq_left_radps, m.flap_freq_left_radps);
-  copy(v.flap_freq_right_radps, m.flap_freq_right_radps);
-  copy(v.delta_f_radps, m.delta_f_radps);
-  copy(v.flap_freq_collective_radps, m.flap_freq_collective_radps);
-  copy(v.throttle_pct, m.throttle_pct);
-  copy(v.dihedral_rad, m.dihedral_rad);
-  copy(v.wing_root_rad, m.wing_root_rad);
-  copy(v.input_utime, m.input_utime);
-  copy(v.rolling_counter, m.rolling_counter);
-  copy(v.source, m.source);
+template <class Message, class Value, class Bind>
+Message message_of(const Value& v, Bind bind) {
+  Message m{};
+  bind(v, m, ToMessage{});
+  return m;
 }
 
-template <class V, class M, class Copy>
-void bind_feedback(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.flap_freq_left_radps, m.flap_freq_left_radps);
-  copy(v.flap_freq_right_radps, m.flap_freq_right_radps);
-  copy(v.delta_f_radps, m.delta_f_radps);
-  copy(v.dihedral_rad, m.dihedral_rad);
-  copy(v.wing_root_rad, m.wing_root_rad);
-  copy(v.throttle_pct, m.throttle_pct);
-  copy(v.cmd_seq, m.cmd_seq);
-  copy(v.cmd_age_us, m.cmd_age_us);
-  copy(v.safe_state, m.safe_state);
+template <class Value, class Message, class Bind>
+Value value_of(const Message& m, Bind bind) {
+  Value v;
+  bind(v, m, FromMessage{});
+  return v;
 }
 
-template <class V, class M, class Copy>
-void bind_setpoint(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.roll_sp_rad, m.roll_sp_rad);
-  copy(v.pitch_sp_rad, m.pitch_sp_rad);
-  copy(v.yaw_rate_sp_radps, m.yaw_rate_sp_radps);
-  copy(v.throttle_pct, m.throttle_pct);
-  copy(v.throttle_factor, m.throttle_factor);
-  copy(v.manoeuvre, m.manoeuvre);
-  copy(v.segment_index, m.segment_index);
-  copy(v.segment_name, m.segment_name);
-  copy(v.gain_set, m.gain_set);
-}
+struct BindCommand {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.mode, m.mode);
+    copy(v.flap_freq_left_radps, m.flap_freq_left_radps);
+    copy(v.flap_freq_right_radps, m.flap_freq_right_radps);
+    copy(v.delta_f_radps, m.delta_f_radps);
+    copy(v.flap_freq_collective_radps, m.flap_freq_collective_radps);
+    copy(v.throttle_pct, m.throttle_pct);
+    copy(v.dihedral_rad, m.dihedral_rad);
+    copy(v.wing_root_rad, m.wing_root_rad);
+    copy(v.input_utime, m.input_utime);
+    copy(v.rolling_counter, m.rolling_counter);
+    copy(v.source, m.source);
+  }
+};
 
-template <class V, class M, class Copy>
-void bind_estimate(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.imu_utime, m.imu_utime);
-  copy(v.euler_rad, m.euler_rad);
-  copy(v.velocity_body_mps, m.velocity_body_mps);
-  copy(v.gyro_bias_radps, m.gyro_bias_radps);
-  copy(v.accel_bias_mps2, m.accel_bias_mps2);
-  copy(v.omega_body_radps, m.omega_body_radps);
-  copy(v.cov_diag, m.cov_diag);
-  copy(v.poses_accepted, m.poses_accepted);
-  copy(v.poses_rejected, m.poses_rejected);
-  copy(v.poses_missing, m.poses_missing);
-  copy(v.last_nis, m.last_nis);
-  copy(v.poses_too_old, m.poses_too_old);
-  copy(v.poses_too_new, m.poses_too_new);
-  copy(v.velocity_windows_uncovered, m.velocity_windows_uncovered);
-  copy(v.imu_rejected, m.imu_rejected);
-  copy(v.imu_gaps, m.imu_gaps);
-}
+struct BindFeedback {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.flap_freq_left_radps, m.flap_freq_left_radps);
+    copy(v.flap_freq_right_radps, m.flap_freq_right_radps);
+    copy(v.delta_f_radps, m.delta_f_radps);
+    copy(v.dihedral_rad, m.dihedral_rad);
+    copy(v.wing_root_rad, m.wing_root_rad);
+    copy(v.throttle_pct, m.throttle_pct);
+    copy(v.cmd_seq, m.cmd_seq);
+    copy(v.cmd_age_us, m.cmd_age_us);
+    copy(v.safe_state, m.safe_state);
+  }
+};
 
-template <class V, class M, class Copy>
-void bind_status(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.gain_set, m.gain_set);
-  copy(v.kp, m.kp);
-  copy(v.kd, m.kd);
-  copy(v.roll_ref_rad, m.roll_ref_rad);
-  copy(v.roll_rate_ref_radps, m.roll_rate_ref_radps);
-  copy(v.roll_error_rad, m.roll_error_rad);
-  copy(v.roll_cmd_norm, m.roll_cmd_norm);
-  copy(v.pitch_cmd_norm, m.pitch_cmd_norm);
-  copy(v.delta_f_cmd_radps, m.delta_f_cmd_radps);
-  copy(v.throttle_pct, m.throttle_pct);
-  copy(v.saturated, m.saturated);
-  copy(v.input_source, m.input_source);
-  copy(v.input_age_us, m.input_age_us);
-  copy(v.failsafe, m.failsafe);
-}
+struct BindSetpoint {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.roll_sp_rad, m.roll_sp_rad);
+    copy(v.pitch_sp_rad, m.pitch_sp_rad);
+    copy(v.yaw_rate_sp_radps, m.yaw_rate_sp_radps);
+    copy(v.throttle_pct, m.throttle_pct);
+    copy(v.throttle_factor, m.throttle_factor);
+    copy(v.manoeuvre, m.manoeuvre);
+    copy(v.segment_index, m.segment_index);
+    copy(v.segment_name, m.segment_name);
+    copy(v.gain_set, m.gain_set);
+  }
+};
 
-template <class V, class M, class Copy>
-void bind_can_health(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.process, m.process);
-  copy(v.role, m.role);
-  copy(v.interface_name, m.interface_name);
-  copy(v.messages_to_can, m.messages_to_can);
-  copy(v.messages_to_lcm, m.messages_to_lcm);
-  copy(v.frames_sent, m.frames_sent);
-  copy(v.frames_received, m.frames_received);
-  copy(v.send_enobufs, m.send_enobufs);
-  copy(v.send_retries, m.send_retries);
-  copy(v.send_dropped, m.send_dropped);
-  copy(v.receive_dropped, m.receive_dropped);
-  copy(v.rejected_unknown_id, m.rejected_unknown_id);
-  copy(v.rejected_wrong_length, m.rejected_wrong_length);
-  copy(v.rejected_bad_checksum, m.rejected_bad_checksum);
-  copy(v.rejected_stale_counter, m.rejected_stale_counter);
-  copy(v.rejected_out_of_range, m.rejected_out_of_range);
-  copy(v.counter_gaps, m.counter_gaps);
-  copy(v.saturated_values, m.saturated_values);
-  copy(v.error_frames, m.error_frames);
-  copy(v.bus_state, m.bus_state);
-  copy(v.last_error, m.last_error);
-  copy(v.candump_file, m.candump_file);
-  copy(v.candump_lines, m.candump_lines);
-  copy(v.fd, m.fd);
-  copy(v.fd_frames_sent, m.fd_frames_sent);
-  copy(v.fd_frames_received, m.fd_frames_received);
-}
+struct BindEstimate {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.imu_utime, m.imu_utime);
+    copy(v.euler_rad, m.euler_rad);
+    copy(v.velocity_body_mps, m.velocity_body_mps);
+    copy(v.gyro_bias_radps, m.gyro_bias_radps);
+    copy(v.accel_bias_mps2, m.accel_bias_mps2);
+    copy(v.omega_body_radps, m.omega_body_radps);
+    copy(v.cov_diag, m.cov_diag);
+    copy(v.poses_accepted, m.poses_accepted);
+    copy(v.poses_rejected, m.poses_rejected);
+    copy(v.poses_missing, m.poses_missing);
+    copy(v.last_nis, m.last_nis);
+    copy(v.poses_too_old, m.poses_too_old);
+    copy(v.poses_too_new, m.poses_too_new);
+    copy(v.velocity_windows_uncovered, m.velocity_windows_uncovered);
+    copy(v.imu_rejected, m.imu_rejected);
+    copy(v.imu_gaps, m.imu_gaps);
+  }
+};
 
-template <class V, class M, class Copy>
-void bind_fault(V& v, M& m, Copy copy) {
-  copy(v.utime, m.utime);
-  copy(v.seq, m.seq);
-  copy(v.rig_utime, m.rig_utime);
-  copy(v.process, m.process);
-  copy(v.severity, m.severity);
-  copy(v.code, m.code);
-  copy(v.channel, m.channel);
-  copy(v.message, m.message);
-}
+struct BindStatus {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.gain_set, m.gain_set);
+    copy(v.kp, m.kp);
+    copy(v.kd, m.kd);
+    copy(v.roll_ref_rad, m.roll_ref_rad);
+    copy(v.roll_rate_ref_radps, m.roll_rate_ref_radps);
+    copy(v.roll_error_rad, m.roll_error_rad);
+    copy(v.roll_cmd_norm, m.roll_cmd_norm);
+    copy(v.pitch_cmd_norm, m.pitch_cmd_norm);
+    copy(v.delta_f_cmd_radps, m.delta_f_cmd_radps);
+    copy(v.throttle_pct, m.throttle_pct);
+    copy(v.saturated, m.saturated);
+    copy(v.input_source, m.input_source);
+    copy(v.input_age_us, m.input_age_us);
+    copy(v.failsafe, m.failsafe);
+  }
+};
+
+struct BindCanHealth {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.process, m.process);
+    copy(v.role, m.role);
+    copy(v.interface_name, m.interface_name);
+    copy(v.messages_to_can, m.messages_to_can);
+    copy(v.messages_to_lcm, m.messages_to_lcm);
+    copy(v.frames_sent, m.frames_sent);
+    copy(v.frames_received, m.frames_received);
+    copy(v.send_enobufs, m.send_enobufs);
+    copy(v.send_retries, m.send_retries);
+    copy(v.send_dropped, m.send_dropped);
+    copy(v.receive_dropped, m.receive_dropped);
+    copy(v.rejected_unknown_id, m.rejected_unknown_id);
+    copy(v.rejected_wrong_length, m.rejected_wrong_length);
+    copy(v.rejected_bad_checksum, m.rejected_bad_checksum);
+    copy(v.rejected_stale_counter, m.rejected_stale_counter);
+    copy(v.rejected_out_of_range, m.rejected_out_of_range);
+    copy(v.counter_gaps, m.counter_gaps);
+    copy(v.saturated_values, m.saturated_values);
+    copy(v.error_frames, m.error_frames);
+    copy(v.bus_state, m.bus_state);
+    copy(v.last_error, m.last_error);
+    copy(v.candump_file, m.candump_file);
+    copy(v.candump_lines, m.candump_lines);
+    copy(v.fd, m.fd);
+    copy(v.fd_frames_sent, m.fd_frames_sent);
+    copy(v.fd_frames_received, m.fd_frames_received);
+  }
+};
+
+struct BindFault {
+  template <class V, class M, class Copy>
+  void operator()(V& v, M& m, Copy copy) const {
+    copy(v.utime, m.utime);
+    copy(v.seq, m.seq);
+    copy(v.rig_utime, m.rig_utime);
+    copy(v.process, m.process);
+    copy(v.severity, m.severity);
+    copy(v.code, m.code);
+    copy(v.channel, m.channel);
+    copy(v.message, m.message);
+  }
+};
 
 }  // namespace
 
@@ -274,88 +302,25 @@ Truth from_message(const truth_state_t& m) {
   return t;
 }
 
-actuator_command_t to_message(const ActuatorCommand& v) {
-  actuator_command_t m{};
-  bind_command(v, m, ToMessage{});
-  return m;
-}
+actuator_command_t to_message(const ActuatorCommand& v) { return message_of<actuator_command_t>(v, BindCommand{}); }
+ActuatorCommand from_message(const actuator_command_t& m) { return value_of<ActuatorCommand>(m, BindCommand{}); }
 
-ActuatorCommand from_message(const actuator_command_t& m) {
-  ActuatorCommand v;
-  bind_command(v, m, FromMessage{});
-  return v;
-}
+actuator_feedback_t to_message(const ActuatorFeedback& v) { return message_of<actuator_feedback_t>(v, BindFeedback{}); }
+ActuatorFeedback from_message(const actuator_feedback_t& m) { return value_of<ActuatorFeedback>(m, BindFeedback{}); }
 
-actuator_feedback_t to_message(const ActuatorFeedback& v) {
-  actuator_feedback_t m{};
-  bind_feedback(v, m, ToMessage{});
-  return m;
-}
+attitude_setpoint_t to_message(const AttitudeSetpoint& v) { return message_of<attitude_setpoint_t>(v, BindSetpoint{}); }
+AttitudeSetpoint from_message(const attitude_setpoint_t& m) { return value_of<AttitudeSetpoint>(m, BindSetpoint{}); }
 
-ActuatorFeedback from_message(const actuator_feedback_t& m) {
-  ActuatorFeedback v;
-  bind_feedback(v, m, FromMessage{});
-  return v;
-}
+estimator_state_t to_message(const Estimate& v) { return message_of<estimator_state_t>(v, BindEstimate{}); }
+Estimate from_message(const estimator_state_t& m) { return value_of<Estimate>(m, BindEstimate{}); }
 
-attitude_setpoint_t to_message(const AttitudeSetpoint& v) {
-  attitude_setpoint_t m{};
-  bind_setpoint(v, m, ToMessage{});
-  return m;
-}
+controller_status_t to_message(const ControllerStatus& v) { return message_of<controller_status_t>(v, BindStatus{}); }
+ControllerStatus from_message(const controller_status_t& m) { return value_of<ControllerStatus>(m, BindStatus{}); }
 
-AttitudeSetpoint from_message(const attitude_setpoint_t& m) {
-  AttitudeSetpoint v;
-  bind_setpoint(v, m, FromMessage{});
-  return v;
-}
+can_health_t to_message(const CanHealth& v) { return message_of<can_health_t>(v, BindCanHealth{}); }
+CanHealth from_message(const can_health_t& m) { return value_of<CanHealth>(m, BindCanHealth{}); }
 
-estimator_state_t to_message(const Estimate& v) {
-  estimator_state_t m{};
-  bind_estimate(v, m, ToMessage{});
-  return m;
-}
-
-Estimate from_message(const estimator_state_t& m) {
-  Estimate v;
-  bind_estimate(v, m, FromMessage{});
-  return v;
-}
-
-controller_status_t to_message(const ControllerStatus& v) {
-  controller_status_t m{};
-  bind_status(v, m, ToMessage{});
-  return m;
-}
-
-ControllerStatus from_message(const controller_status_t& m) {
-  ControllerStatus v;
-  bind_status(v, m, FromMessage{});
-  return v;
-}
-
-can_health_t to_message(const CanHealth& v) {
-  can_health_t m{};
-  bind_can_health(v, m, ToMessage{});
-  return m;
-}
-
-CanHealth from_message(const can_health_t& m) {
-  CanHealth v;
-  bind_can_health(v, m, FromMessage{});
-  return v;
-}
-
-fault_event_t to_message(const FaultEvent& v) {
-  fault_event_t m{};
-  bind_fault(v, m, ToMessage{});
-  return m;
-}
-
-FaultEvent from_message(const fault_event_t& m) {
-  FaultEvent v;
-  bind_fault(v, m, FromMessage{});
-  return v;
-}
+fault_event_t to_message(const FaultEvent& v) { return message_of<fault_event_t>(v, BindFault{}); }
+FaultEvent from_message(const fault_event_t& m) { return value_of<FaultEvent>(m, BindFault{}); }
 
 }  // namespace nimble::contract
