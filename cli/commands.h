@@ -56,4 +56,9 @@ int run_turbulence_response_command(const std::vector<std::string>& args);
 /// its tables (reproduce/campaign.h).
 int run_reproduce_command(const std::vector<std::string>& args);
 
+/// `rig loop <scenario.yaml> [--model F] [--gains NAME|KP,KD] [--all-sets] [--break actuator|sensor]
+/// [--design phase_margin_deg=P,crossover_hz=F] [--gains-out F] [--fly] [--json F|-] [--plots DIR]`: the roll
+/// loop's margins, poles and bandwidth, and a PD design (cli/loop_command.cc).
+int run_loop_command(const std::vector<std::string>& args);
+
 }  // namespace nimble::cli

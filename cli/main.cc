@@ -41,6 +41,8 @@ const Command kCommands[] = {
      nimble::cli::run_turbulence_command},
     {"turbulence-response", "turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--f-max HZ] [--json F|-] [--plots DIR]   a flight in Dryden gusts against the closed-loop model",
      nimble::cli::run_turbulence_response_command},
+    {"loop", "loop <scenario.yaml> [--all-sets] [--gains NAME|KP,KD] [--break actuator|sensor] [--design ...] [--json F|-] [--plots DIR]   the roll loop's margins, poles, bandwidth; PD design",
+     nimble::cli::run_loop_command},
     {"reproduce", "reproduce thesis [--clock C] [--seed N] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
      nimble::cli::run_reproduce_command},
 };

@@ -1,0 +1,129 @@
+#include "cli/loop_setup.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "controller/manoeuvre.h"
+#include "plant/plant_model.h"
+
+namespace nimble::cli {
+
+RollLoopConfig LoopSetup::loop_config(const GainSet& gains) const {
+  RollLoopConfig c = roll_loop_config(controller, gains);
+  c.flap_gain_per_s = flap_gain_per_s;
+  c.flap_pole_radps = flap_pole_radps;
+  c.latency_s = latency_s();
+  return c;
+}
+
+double pipeline_latency_s(const std::string& input, double control_rate_hz) {
+  return input == "estimate" ? 2.0 / control_rate_hz : 0.0;
+}
+
+LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overrides, const std::string& model_file,
+                     const std::string& input) {
+  const Scenario scenario = load_scenario(file, overrides);
+  LoopSetup s;
+  s.scenario_file = file;
+  ConfigMap plant_section = scenario.section("plant");
+  const plant::PlantConfig plant = plant::plant_config_from(plant_section);
+  s.flap_gain_per_s = plant.flap.delta_f_gain_radps;
+  s.flap_pole_radps = plant.flap.pole_radps;
+  s.plant_rate_hz = plant.rate_hz;
+  const auto& fx = plant.effects;
+  if (fx.actuator_delay.enabled && fx.actuator_delay.delay_s > 0.0) {
+    // The plant applies the newest command issued at least delay_s before each of its steps.
+    s.actuator_delay_s = std::ceil(fx.actuator_delay.delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
+  }
+  if (fx.flapping_forcing.enabled) s.nonlinear_effects.push_back("flapping_forcing");
+  if (fx.lateral_inflow.enabled) s.nonlinear_effects.push_back("lateral_inflow");
+  if (fx.forward_speed_coupling.enabled) s.nonlinear_effects.push_back("forward_speed_coupling");
+  if (fx.lateral_gust.enabled) s.nonlinear_effects.push_back("lateral_gust");
+  if (fx.constant_load.enabled) s.nonlinear_effects.push_back("constant_load");
+
+  s.model = load_model(model_file.empty() ? scenario.model_file : model_file);
+  s.vehicle = load_vehicle(scenario.vehicle_file.empty() || !model_file.empty() ? s.model.vehicle_file
+                                                                                 : scenario.vehicle_file);
+  if (!s.model.effects.empty()) s.nonlinear_effects.push_back("the model's effects: section");
+  ConfigMap controller_section = scenario.section("controller");
+  s.controller = controller_config_from(controller_section);
+  s.gain_set = s.controller.default_gain_set;
+  if (scenario.root["manoeuvre"]) {
+    s.gain_set = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>()).gain_set;
+  }
+  s.input = input.empty() ? process_run_options(scenario).controller_input : input;
+  if (s.input != "truth" && s.input != "estimate") {
+    throw std::invalid_argument("the controller's input must be truth or estimate, got '" + s.input + "'");
+  }
+  s.pipeline_latency_s = pipeline_latency_s(s.input, s.controller.rate_hz);
+  return s;
+}
+
+const std::vector<std::string>& loop_derivatives() {
+  static const std::vector<std::string> names{"Lp", "Lv", "L_df", "Yp", "Yv", "Y_df"};
+  return names;
+}
+
+DerivativeBox derivative_box(const std::string& file) {
+  DerivativeBox box;
+  box.source = file;
+  const bool json = file.size() > 5 && file.substr(file.size() - 5) == ".json";
+  if (!json) {
+    const DerivativeModel m = load_model(file);
+    DerivativeBox b = derivative_box(m);
+    b.source = file;
+    return b;
+  }
+  std::ifstream in(file);
+  if (!in) throw std::invalid_argument("derivative box: cannot read " + file);
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const std::exception& e) {
+    throw std::invalid_argument("derivative box: " + file + " is not JSON: " + e.what());
+  }
+  if (!j.contains("parameters") || !j["parameters"].is_object()) {
+    throw std::invalid_argument("derivative box: " + file + " has no 'parameters' (a rig identify --json report)");
+  }
+  for (const std::string& name : loop_derivatives()) {
+    const auto& p = j["parameters"];
+    if (!p.contains(name) || !p[name].contains("value") || !p[name].contains("sigma") || !p[name]["value"].is_number() ||
+        !p[name]["sigma"].is_number()) {
+      throw std::invalid_argument("derivative box: " + file + " has no value and sigma of " + name);
+    }
+    box.value[name] = p[name]["value"].get<double>();
+    box.sigma[name] = p[name]["sigma"].get<double>();
+  }
+  return box;
+}
+
+DerivativeBox derivative_box(const DerivativeModel& model) {
+  DerivativeBox box;
+  box.source = model.file;
+  for (const std::string& name : loop_derivatives()) {
+    const auto s = model.published_sigma.find(name);
+    if (s == model.published_sigma.end()) {
+      throw std::invalid_argument("derivative box: model " + model.name + " has no published sigma of " + name);
+    }
+    box.value[name] = model.at(name);
+    box.sigma[name] = s->second;
+  }
+  return box;
+}
+
+DerivativeModel box_point(const DerivativeModel& model, const DerivativeBox& box, const std::vector<int>& signs,
+                          double k) {
+  DerivativeModel m = model;
+  const auto& names = loop_derivatives();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const int sign = i < signs.size() ? signs[i] : 0;
+    m.derivatives[names[i]] = box.value.at(names[i]) + sign * k * box.sigma.at(names[i]);
+  }
+  return m;
+}
+
+}  // namespace nimble::cli
