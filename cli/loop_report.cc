@@ -185,8 +185,9 @@ std::string design_yaml(const DesignOutcome& d, const std::string& command) {
       << or_none("%.2f dB", m.gain_margin_db(), "inf") << ", PM " << or_none("%.2f deg", m.phase_margin_deg)
       << or_none(" at %.3f Hz", m.crossover_hz, "") << ", DM " << or_none("%.2f ms", 1e3 * m.delay_margin_s, "inf")
       << fmt(", Ms %.3f", m.sensitivity_peak) << "\n";
-  out << "# A controller section's fragment (rig_configs/controller/nimble_attitude.yaml format): use it as\n"
-      << "# the controller's base, or copy the set into roll_gain_sets.\n";
+  out << "# Keys of a controller file (rig_configs/controller/nimble_attitude.yaml): copy them into one, or\n"
+      << "# fly them with --set controller.roll_gain_sets." << d.name << ".kp_per_rad=... (and kd_per_radps,\n"
+      << "# lowpass.roll_cutoff_hz) and a manoeuvre that names the set.\n";
   out << "lowpass:\n" << fmt("  roll_cutoff_hz: %.6g\n", d.design.lowpass_cutoff_hz);
   out << "roll_gain_sets:\n  " << d.name << ":\n";
   out << fmt("    kp_per_rad: %.6g\n", d.design.gains.kp_per_rad);

@@ -305,6 +305,51 @@ RollLoopResponse roll_loop_response(const StateSpace& lateral, const RollLoopCon
   return r;
 }
 
+namespace {
+
+/// PD gains for `request` on the loop `config` (its cut-off as it is), or why there are none.
+RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, const DesignRequest& request) {
+  RollDesign d;
+  d.lowpass_cutoff_hz = config.lowpass_cutoff_hz;
+  const std::string with = "with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass ";
+  const double w = 2.0 * kPi * request.crossover_hz;
+  const std::complex<double> target = std::polar(1.0, (-180.0 + request.phase_margin_deg) * kPi / 180.0);
+  // L is linear in (kp, kd): L = kp L(1, 0) + kd L(0, 1).
+  RollLoopConfig c = config;
+  c.gains = {1.0, 0.0};
+  const std::complex<double> a = LoopResponse(roll_broken_loop(lateral, c, LoopBreak::kActuator)).ratio(w);
+  c.gains = {0.0, 1.0};
+  const std::complex<double> b = LoopResponse(roll_broken_loop(lateral, c, LoopBreak::kActuator)).ratio(w);
+  const double det = a.real() * b.imag() - b.real() * a.imag();
+  if (std::abs(det) < 1e-300) {
+    d.note = "the gains cannot shape the loop at " + num(request.crossover_hz) + " Hz";
+    return d;
+  }
+  const double kp = (target.real() * b.imag() - b.real() * target.imag()) / det;
+  const double kd = (a.real() * target.imag() - target.real() * a.imag()) / det;
+  d.gains = {kp, kd};
+  if (kp < 0.0 || kd < 0.0) {
+    d.note = with + "it needs kp " + num(kp) + ", kd " + num(kd) + ": a negative gain";
+    return d;
+  }
+  c.gains = d.gains;
+  d.analysis = analyse_roll_loop(lateral, c);
+  if (!d.analysis.margins.closed_loop_stable) {
+    d.note = with + "kp " + num(kp) + ", kd " + num(kd) + " leave the closed loop unstable";
+  } else if (std::abs(d.analysis.margins.phase_margin_deg - request.phase_margin_deg) > 1.0) {
+    d.note = with + "another crossover (" + num(d.analysis.margins.crossover_hz) + " Hz) has the smaller phase margin, " +
+             num(d.analysis.margins.phase_margin_deg) + " deg";
+  } else if (d.analysis.dc_gain < request.min_dc_gain) {
+    d.note = with + "kp " + num(kp) + ", kd " + num(kd) + " track phi_ref at 0 Hz only by " + num(d.analysis.dc_gain) +
+             " (at least " + num(request.min_dc_gain) + " asked)";
+  } else {
+    d.feasible = true;
+  }
+  return d;
+}
+
+}  // namespace
+
 RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& config, const DesignRequest& request) {
   if (!(request.phase_margin_deg > 0.0 && request.phase_margin_deg < 90.0)) {
     throw std::invalid_argument("design: phase_margin_deg must be in (0, 90), got " + num(request.phase_margin_deg));
@@ -313,58 +358,42 @@ RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& co
     throw std::invalid_argument("design: crossover_hz must be in (0, " + num(config.rate_hz / 4.0) + "), got " +
                                 num(request.crossover_hz));
   }
-  const double w = 2.0 * kPi * request.crossover_hz;
-  const std::complex<double> target = std::polar(1.0, (-180.0 + request.phase_margin_deg) * kPi / 180.0);
-  RollDesign best;
-  std::string why;
   std::vector<double> cutoffs{config.lowpass_cutoff_hz};
   for (const double f : {20.0, 25.0, 30.0, 40.0, 50.0, 64.0}) {
     if (f > config.lowpass_cutoff_hz && f <= config.rate_hz / 8.0) cutoffs.push_back(f);
   }
+  std::string first_why;
   for (const double cutoff : cutoffs) {
     RollLoopConfig c = config;
     c.lowpass_cutoff_hz = cutoff;
-    // L is linear in (kp, kd): L = kp L(1, 0) + kd L(0, 1).
-    c.gains = {1.0, 0.0};
-    const std::complex<double> a = LoopResponse(roll_broken_loop(lateral, c, LoopBreak::kActuator)).ratio(w);
-    c.gains = {0.0, 1.0};
-    const std::complex<double> b = LoopResponse(roll_broken_loop(lateral, c, LoopBreak::kActuator)).ratio(w);
-    const double det = a.real() * b.imag() - b.real() * a.imag();
-    if (std::abs(det) < 1e-300) {
-      why = "the gains cannot shape the loop at " + num(request.crossover_hz) + " Hz";
-      continue;
+    RollDesign d = try_design(lateral, c, request);
+    if (d.feasible) {
+      d.note = cutoff == config.lowpass_cutoff_hz ? "on the configured " + num(cutoff) + " Hz low-pass"
+                                                  : "the low-pass cut-off raised from " + num(config.lowpass_cutoff_hz) +
+                                                        " to " + num(cutoff) + " Hz: " + first_why;
+      return d;
     }
-    const double kp = (target.real() * b.imag() - b.real() * target.imag()) / det;
-    const double kd = (a.real() * target.imag() - target.real() * a.imag()) / det;
-    if (kp < 0.0 || kd < 0.0) {
-      why = "with the " + num(cutoff) + " Hz low-pass it needs kp " + num(kp) + ", kd " + num(kd) +
-            " (a negative gain): the phase the low-pass and the timing take at the crossover is too large";
-      continue;
-    }
-    c.gains = {kp, kd};
-    const RollLoopAnalysis an = analyse_roll_loop(lateral, c);
-    if (!an.margins.closed_loop_stable) {
-      why = "with the " + num(cutoff) + " Hz low-pass the gains kp " + num(kp) + ", kd " + num(kd) +
-            " leave the closed loop unstable";
-      continue;
-    }
-    if (std::abs(an.margins.phase_margin_deg - request.phase_margin_deg) > 1.0) {
-      why = "with the " + num(cutoff) + " Hz low-pass another crossover (" + num(an.margins.crossover_hz) +
-            " Hz) has the smaller phase margin, " + num(an.margins.phase_margin_deg) + " deg";
-      continue;
-    }
-    best.feasible = true;
-    best.gains = c.gains;
-    best.lowpass_cutoff_hz = cutoff;
-    best.analysis = an;
-    best.note = cutoff == config.lowpass_cutoff_hz
-                    ? "gains on the configured " + num(cutoff) + " Hz low-pass"
-                    : "the low-pass cut-off raised from " + num(config.lowpass_cutoff_hz) + " to " + num(cutoff) +
-                          " Hz: " + why;
-    return best;
+    if (first_why.empty()) first_why = d.note;
   }
-  best.note = "no PD gains reach the request up to a " + num(cutoffs.back()) + " Hz low-pass: " + why;
-  return best;
+  // Where the request can be met: the crossovers at which it is feasible on the configured loop.
+  RollDesign none;
+  none.note = "no PD gains reach it up to a " + num(cutoffs.back()) + " Hz low-pass (" + first_why + ")";
+  DesignRequest probe = request;
+  double lo = 0.0, hi = 0.0;
+  for (int i = 0; i <= 80; ++i) {
+    probe.crossover_hz = 0.1 * std::pow(100.0, i / 80.0);  // 0.1 .. 10 Hz
+    if (probe.crossover_hz >= config.rate_hz / 4.0) break;
+    if (try_design(lateral, config, probe).feasible) {
+      if (lo == 0.0) lo = probe.crossover_hz;
+      hi = probe.crossover_hz;
+    }
+  }
+  none.note += lo > 0.0 ? "; with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass a " +
+                              num(request.phase_margin_deg) + " deg margin is reached at crossovers " + num(lo) + " to " +
+                              num(hi) + " Hz"
+                        : "; with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass no crossover from 0.1 to 10 Hz "
+                              "reaches a " + num(request.phase_margin_deg) + " deg margin";
+  return none;
 }
 
 }  // namespace nimble
