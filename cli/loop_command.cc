@@ -84,6 +84,10 @@ LoopRow analyse(const LoopSetup& s, const DerivativeModel& model, const std::str
   return r;
 }
 
+/// The box's corners need the margins only: a grid of 300 points (the crossovers are refined by
+/// bisection all the same; the table's loops use 600).
+const MarginOptions kBoxGrid{0.01, 300};
+
 /// Per gain set: the worst over the given rows and over the +-2 sigma box (every corner).
 std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopRow>& rows,
                                      const std::vector<std::pair<std::string, GainSet>>& sets, const DerivativeBox& box) {
@@ -111,7 +115,7 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
         label += names[i] + (signs[i] > 0 ? "+" : "-") + (i + 1 < names.size() ? " " : "");
       }
       const DerivativeModel m = box_point(s.model, box, signs);
-      const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, {}, false);
+      const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, kBoxGrid, false);
       over_box.add(label, a);
       if (!a.margins.closed_loop_stable) {
         for (std::size_t i = 0; i < names.size(); ++i) by_sign[names[i] + (signs[i] > 0 ? "+" : "-")] += 1;
@@ -122,7 +126,7 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
         std::vector<int> signs(names.size(), 0);
         signs[static_cast<std::size_t>(&name - names.data())] = sign;
         const DerivativeModel m = box_point(s.model, box, signs);
-        const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, {}, false);
+        const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, kBoxGrid, false);
         if (!a.margins.closed_loop_stable) over_box.unstable_alone.push_back(name + (sign > 0 ? "+" : "-"));
       }
     }

@@ -80,7 +80,7 @@ std::string loop_text(const LoopRow& r) {
   out << fmt("  an angle error of %.1f deg alone saturates the command\n", a.saturation_error_rad * 180.0 / kPi);
   if (!m.closed_loop_stable) out << "  CLOSED LOOP UNSTABLE: no margins\n";
   out << "  gain margin        " << or_none("%+.2f dB", m.gain_margin_db()) << or_none(" at %.3f Hz", m.gain_margin_hz, "")
-      << ";  gain reduction margin " << or_none("%.2f dB", m.gain_reduction_margin_db())
+      << ";  gain reduction margin " << or_none("%.2f dB", m.gain_reduction_margin_db(), "none (any lower gain is stable)")
       << or_none(" at %.3f Hz", m.gain_reduction_margin_hz, "") << "\n";
   out << "  phase margin       " << or_none("%.2f deg", m.phase_margin_deg) << or_none(" at %.3f Hz", m.crossover_hz, "")
       << "\n";

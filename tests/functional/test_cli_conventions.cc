@@ -37,7 +37,7 @@ YAML::Node json_of(const RigResult& r) {
 
 TEST_CASE("cli: every command answers --help on stdout with exit 0, and --version names the version", "[cli]") {
   for (const std::string command : {"model", "run", "sweep", "params", "check", "spy", "identify", "validate",
-                                    "discrepancy", "export", "turbulence", "turbulence-response", "reproduce"}) {
+                                    "discrepancy", "export", "turbulence", "turbulence-response", "reproduce", "loop"}) {
     INFO(command);
     const RigResult r = run_rig(command + " --help");
     CHECK(r.exit_code == 0);
@@ -91,7 +91,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
 
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
   for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
-                                  "bench_turbulence", "bench_can", "bench_can_bridge"}) {
+                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop"}) {
     INFO(bench);
     const RigResult r = run_bench(bench, "--help");
     CHECK(r.exit_code == 0);
