@@ -132,27 +132,25 @@ std::string worst_text(const WorstMargins& w) {
   out << "robustness " << w.gains << " over " << w.over << " (" << w.loops << " loops): ";
   if (w.unstable > 0) {
     out << w.unstable << " UNSTABLE (first: " << w.unstable_at << ")";
-    const int half = w.loops / 2;
     std::string always;
     for (const auto& [key, count] : w.unstable_by_sign) {
-      if (count == w.unstable && count <= half) always += " " + key;
+      if (count == w.unstable && count <= w.loops / 2) always += " " + key;
     }
     if (!always.empty()) out << "; every unstable corner has" << always;
     out << "\n";
+  } else {
+    out << "all stable; worst GM " << or_none("%.2f dB", w.gain_margin_db, "inf") << " (" << w.gain_margin_at << "), "
+        << "GRM " << or_none("%.2f dB", w.gain_reduction_margin_db, "-inf") << " (" << w.gain_reduction_margin_at
+        << "), PM " << or_none("%.2f deg", w.phase_margin_deg) << " (" << w.phase_margin_at << "), "
+        << "DM " << or_none("%.2f ms", w.delay_margin_ms, "inf") << " (" << w.delay_margin_at << "), "
+        << fmt("Ms %.3f", w.sensitivity_peak) << " (" << w.sensitivity_peak_at << ")\n";
   }
   if (w.loops > 5) {
     out << "  one derivative at +-2 sigma, the others at the centre: ";
-    if (w.unstable_alone.empty()) out << "all stable\n";
-    for (std::size_t i = 0; i < w.unstable_alone.size(); ++i) {
-      out << (i ? ", " : "") << w.unstable_alone[i] << (i + 1 == w.unstable_alone.size() ? " unstable\n" : "");
-    }
+    if (w.unstable_alone.empty()) out << "all stable";
+    for (std::size_t i = 0; i < w.unstable_alone.size(); ++i) out << (i ? ", " : "") << w.unstable_alone[i];
+    out << (w.unstable_alone.empty() ? "\n" : " unstable\n");
   }
-  if (w.unstable > 0) return out.str();
-  out << "all stable; worst GM " << or_none("%.2f dB", w.gain_margin_db, "inf") << " (" << w.gain_margin_at << "), "
-      << "GRM " << or_none("%.2f dB", w.gain_reduction_margin_db, "-inf") << " (" << w.gain_reduction_margin_at << "), "
-      << "PM " << or_none("%.2f deg", w.phase_margin_deg) << " (" << w.phase_margin_at << "), "
-      << "DM " << or_none("%.2f ms", w.delay_margin_ms, "inf") << " (" << w.delay_margin_at << "), "
-      << fmt("Ms %.3f", w.sensitivity_peak) << " (" << w.sensitivity_peak_at << ")\n";
   return out.str();
 }
 
