@@ -31,8 +31,8 @@ constexpr const char* kDescription =
     "The roll loop of a scenario as the rig flies it, linear and exactly sampled: the lateral3 model,\n"
     "the flap actuator (thesis Eq 33), the PD with its 15 Hz Butterworth, the command map, the\n"
     "reference generator, 512 Hz zero-order hold and the latency from the controller's input to the\n"
-    "command's action (none on the truth, two control periods on the estimate, plus the plant's\n"
-    "actuator_delay). Prints per model and gain set the gain margin (and the gain reduction margin of\n"
+    "command's action (in lockstep and in process none on the truth, two control periods on the\n"
+    "estimate; in real time none; plus the plant's actuator_delay). Prints per model and gain set the gain margin (and the gain reduction margin of\n"
     "the unstable open loop), phase margin and crossover, delay margin, peak sensitivity Ms, the -3 dB\n"
     "bandwidth of phi/phi_ref and the closed-loop poles. --all-sets: model sets 1-5 (the files\n"
     "nimble_lateral_set1..5.yaml beside the scenario's model) with every gain set, and per gain set\n"
@@ -186,7 +186,7 @@ void fly_design(DesignOutcome& d, const LoopSetup& s, const std::string& scenari
 }  // namespace
 
 int run_loop_command(const std::vector<std::string>& args) {
-  std::string scenario, model_file, gains_text, input, break_text = "actuator", box_file, json, plots;
+  std::string scenario, model_file, gains_text, input, clock, break_text = "actuator", box_file, json, plots;
   std::string design_text_arg, gains_out, design_name = "designed", fly_log;
   bool all_sets = false, fly = false;
   std::vector<Override> overrides;
@@ -205,6 +205,9 @@ int run_loop_command(const std::vector<std::string>& args) {
   cl->add_option("--on", input, "what the controller flies on (default: the scenario's run.controller_input)")
       ->check(CLI::IsMember({"truth", "estimate"}))
       ->type_name("truth|estimate");
+  cl->add_option("--clock", clock, "whose timing the loop has (default: the scenario's clock)")
+      ->check(CLI::IsMember({"realtime", "lockstep", "inprocess"}))
+      ->type_name("realtime|lockstep|inprocess");
   cl->add_option("--break", break_text, "where the loop is broken: actuator, or sensor (phi and p, one at a time)")
       ->check(CLI::IsMember({"actuator", "sensor"}))
       ->capture_default_str();
@@ -215,7 +218,8 @@ int run_loop_command(const std::vector<std::string>& args) {
       ->type_name("KEY=VALUE,...");
   cl->add_option("--gains-out", gains_out, "write the designed gain set (controller config format)")->type_name("FILE");
   cl->add_option("--design-name", design_name, "the designed gain set's name")->capture_default_str();
-  cl->add_flag("--fly", fly, "fly the scenario in process with the designed gains and print its summary");
+  cl->add_flag("--fly", fly, "fly the scenario in process with the designed gains and print its summary (the design "
+                             "then has the in-process timing unless --clock says otherwise)");
   cl->add_option("--log", fly_log, "the log of the --fly flight (default rig_logs/<name>-<time>.lcmlog)")->type_name("F");
   cl.add_json(json, "the report");
   cl.add_plots(plots, "loop_bode.png, loop_nyquist.png, loop_step.png and loop_poles.png");
@@ -223,7 +227,9 @@ int run_loop_command(const std::vector<std::string>& args) {
   if ((!gains_out.empty() || fly) && design_text_arg.empty()) return cl.fail("--gains-out and --fly need --design");
   if (!plots.empty()) ident::require_gnuplot();
 
-  const LoopSetup s = loop_setup(scenario, overrides, model_file, input);
+  // --fly flies in process: the design is for that loop unless another clock is asked for.
+  if (fly && clock.empty()) clock = "inprocess";
+  const LoopSetup s = loop_setup(scenario, overrides, model_file, input, clock);
   const auto sets = gain_sets_of(s, gains_text, all_sets);
   std::vector<LoopBreak> breaks{LoopBreak::kActuator};
   if (break_text == "sensor") breaks = {LoopBreak::kPhi, LoopBreak::kP};

@@ -53,8 +53,11 @@ std::string loop_header_text(const LoopSetup& s, const std::string& scenario) {
   out << "rig loop  " << scenario << "\n";
   out << "  model   " << s.model.name << " (" << s.model.source << ")\n";
   out << fmt("  loop    roll at %g Hz with zero-order hold; ", s.controller.rate_hz)
-      << fmt("latency %.3f ms", 1e3 * s.latency_s()) << " (controller on the " << s.input
-      << (s.input == "estimate" ? ": IMU -> estimator -> controller, 2 control periods" : ": none in the rig's clocks")
+      << fmt("latency %.3f ms", 1e3 * s.latency_s()) << " (" << s.clock << ", controller on the " << s.input
+      << (s.clock == "realtime"
+              ? (s.trigger == "state" ? ": each cycle started by its state, within the plant step"
+                                      : ": on its own timer, up to one control period")
+              : (s.input == "estimate" ? ": IMU -> estimator -> controller, one tick each" : ": none"))
       << (s.actuator_delay_s > 0.0 ? fmt("; plant actuator_delay %.3f ms", 1e3 * s.actuator_delay_s) : "") << ")\n";
   out << fmt("          PD -> %g Hz Butterworth -> ", s.controller.roll_lowpass_cutoff_hz)
       << fmt("delta_f_cmd = %g rad/s x cmd -> ", s.controller.roll_cmd_to_delta_f_radps)
@@ -242,7 +245,7 @@ std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, cons
                       const DesignOutcome* design) {
   JsonWriter w;
   w.begin_object();
-  w.key("scenario").value(s.scenario_file).key("input").value(s.input);
+  w.key("scenario").value(s.scenario_file).key("input").value(s.input).key("clock").value(s.clock);
   w.key("latency_s").value(s.latency_s()).key("actuator_delay_s").value(s.actuator_delay_s);
   w.key("rate_hz").value(s.controller.rate_hz).key("lowpass_cutoff_hz").value(s.controller.roll_lowpass_cutoff_hz);
   w.key("loops").begin_array();

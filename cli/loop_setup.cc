@@ -20,12 +20,14 @@ RollLoopConfig LoopSetup::loop_config(const GainSet& gains) const {
   return c;
 }
 
-double pipeline_latency_s(const std::string& input, double control_rate_hz) {
+double pipeline_latency_s(const std::string& input, const std::string& clock, const std::string& trigger,
+                          double control_rate_hz) {
+  if (clock == "realtime") return trigger == "state" ? 0.0 : 1.0 / control_rate_hz;
   return input == "estimate" ? 2.0 / control_rate_hz : 0.0;
 }
 
 LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overrides, const std::string& model_file,
-                     const std::string& input) {
+                     const std::string& input, const std::string& clock) {
   const Scenario scenario = load_scenario(file, overrides);
   LoopSetup s;
   s.scenario_file = file;
@@ -55,11 +57,17 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
   if (scenario.root["manoeuvre"]) {
     s.gain_set = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>()).gain_set;
   }
-  s.input = input.empty() ? process_run_options(scenario).controller_input : input;
+  const ProcessRunOptions run = process_run_options(scenario);
+  s.input = input.empty() ? run.controller_input : input;
   if (s.input != "truth" && s.input != "estimate") {
     throw std::invalid_argument("the controller's input must be truth or estimate, got '" + s.input + "'");
   }
-  s.pipeline_latency_s = pipeline_latency_s(s.input, s.controller.rate_hz);
+  s.clock = clock.empty() ? scenario.clock : clock;
+  if (s.clock != "realtime" && s.clock != "lockstep" && s.clock != "inprocess") {
+    throw std::invalid_argument("the clock must be realtime, lockstep or inprocess, got '" + s.clock + "'");
+  }
+  s.trigger = run.controller_trigger;
+  s.pipeline_latency_s = pipeline_latency_s(s.input, s.clock, s.trigger, s.controller.rate_hz);
   return s;
 }
 

@@ -26,6 +26,8 @@ struct LoopSetup {
   double flap_pole_radps = 12.56;
   double plant_rate_hz = 1000.0;
   std::string input;                    ///< truth | estimate: what the controller flies on
+  std::string clock;                    ///< realtime | lockstep | inprocess: whose timing the loop has
+  std::string trigger;                  ///< state | timer: what starts a real-time controller cycle
   double pipeline_latency_s = 0.0;      ///< from the input's sample to the command's action
   double actuator_delay_s = 0.0;        ///< the plant's actuator_delay effect, whole plant steps
   std::vector<std::string> nonlinear_effects;  ///< plant effects on that the linear loop leaves out
@@ -36,15 +38,24 @@ struct LoopSetup {
 };
 
 /// Reads `file` with `overrides`. `model_file` (if not empty) replaces the scenario's model;
-/// `input` ("" or truth | estimate) replaces what the controller flies on.
+/// `input` ("" or truth | estimate) replaces what the controller flies on, `clock` ("" or a
+/// clock) the scenario's clock.
 /// @throws ConfigError or std::invalid_argument naming the problem.
 LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overrides, const std::string& model_file,
-                     const std::string& input);
+                     const std::string& input, const std::string& clock = "");
 
-/// The latency from the controller's input sample to its command's action in the rig's
-/// lockstep and in-process clocks (controller/roll_loop.h): 0 on the truth, two control
-/// periods on the estimate.
-double pipeline_latency_s(const std::string& input, double control_rate_hz);
+/// The latency from the controller's input sample to its command's action (docs/loop.md):
+///  - lockstep and in process: each consumer takes what was published at earlier ticks. On the
+///    truth none (the controller ticks on the plant step whose TRUTH it reads, and the plant's
+///    next step integrates from there with the new command); on the estimate two control
+///    periods (the IMU sample reaches the estimator one period later, its estimate the
+///    controller one more; 3.907 ms measured on a hover log, mean).
+///  - real time, each cycle started by its state (run.controller_trigger state): none; the
+///    chain IMU -> estimator -> controller -> plant takes a few hundred us (bench_rig), within the
+///    plant step that integrates with the new command.
+///  - real time on the controller's own timer: up to one control period; one period is assumed.
+double pipeline_latency_s(const std::string& input, const std::string& clock, const std::string& trigger,
+                          double control_rate_hz);
 
 /// A derivative box: centre values and standard deviations of the loop's derivatives.
 struct DerivativeBox {

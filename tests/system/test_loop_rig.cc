@@ -128,7 +128,7 @@ void require_oscillating(const Flight& f) {
 
 void check_margins_on(const std::string& scenario, const Gains& g) {
   const std::string dir = nimble::test::scratch_dir(std::string("loop_pred_") + g.name);
-  const YAML::Node loop = rig_loop(scenario, dir, std::string("--gains ") + g.name)["loops"][0];
+  const YAML::Node loop = rig_loop(scenario, dir, std::string("--clock inprocess --gains ") + g.name)["loops"][0];
   const double gm = std::pow(10.0, loop["gain_margin_db"].as<double>() / 20.0);
   const double dm_s = loop["delay_margin_ms"].as<double>() * 1e-3;
   INFO(scenario << " gains " << g.name << ": gain margin x" << gm << ", delay margin " << dm_s * 1e3 << " ms");
@@ -180,7 +180,8 @@ TEST_CASE("rig loop: the rig's step response has the dominant pair rig loop list
       const std::string dir = nimble::test::scratch_dir(std::string("loop_step_") + g.name + input);
       const std::string scenario = kConfigs + "roll_step_fast.yaml";
       const std::string on = std::string(" --set run.controller_input=") + input;
-      const YAML::Node pair = rig_loop(scenario, dir, std::string("--gains ") + g.name + on)["loops"][0]["dominant_pair"];
+      const YAML::Node pair =
+          rig_loop(scenario, dir, std::string("--clock inprocess --gains ") + g.name + on)["loops"][0]["dominant_pair"];
       const double zeta = pair["damping"].as<double>(), fn = pair["natural_hz"].as<double>();
       const RunResult r = rig_run(scenario, dir, "--clock inprocess" + on + gains_set(g, 1.0));
       INFO(r.output);
@@ -267,7 +268,7 @@ TEST_CASE("rig loop: robustness over an identified model's +-2 sigma box from ri
   REQUIRE(r.exit_code == 0);
   const std::string id = dir + "/identify.json";
   REQUIRE(std::system((std::string(RIG_BIN) + " identify " + dir + "/run.lcmlog --json " + id + " > /dev/null").c_str()) == 0);
-  const YAML::Node identified = rig_loop(kConfigs + "hover.yaml", dir, "--all-sets --box " + id);
+  const YAML::Node identified = rig_loop(kConfigs + "hover.yaml", dir, "--clock inprocess --all-sets --box " + id);
   REQUIRE(identified["loops"].size() == 10);
   REQUIRE(identified["robustness"].size() == 4);
   const YAML::Node sets = identified["robustness"][0], box = identified["robustness"][1];
@@ -279,7 +280,7 @@ TEST_CASE("rig loop: robustness over an identified model's +-2 sigma box from ri
   CHECK(box["gain_margin_db"].as<double>() == Approx(sets["gain_margin_db"].as<double>()).margin(0.5));
   CHECK(box["gain_margin_db"].as<double>() > 2.0);
 
-  const YAML::Node published = rig_loop(kConfigs + "hover.yaml", dir, "--all-sets");
+  const YAML::Node published = rig_loop(kConfigs + "hover.yaml", dir, "--clock inprocess --all-sets");
   const YAML::Node pbox = published["robustness"][1];
   CHECK(pbox["unstable"].as<int>() > 0);
   bool lv = false;
