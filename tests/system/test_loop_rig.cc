@@ -81,7 +81,7 @@ struct Trace {
 
 Trace truth_of(const std::string& log) {
   Trace tr;
-  for (const auto& m : nimble::test::decode_channel<nimble::truth_state_t>(log, "TRUTH")) {
+  for (const auto& m : nimble::test::decode_channel<nimble::truth_state_t>(log, nimble::contract::channels::kTruth)) {
     tr.t.push_back(static_cast<double>(m.utime) * 1e-6);
     tr.phi.push_back(m.euler_rad[0]);
   }
@@ -228,7 +228,7 @@ TEST_CASE("rig loop: a designed gain set is written, loads as controller keys, a
         Approx(j["kd_per_radps"].as<double>()).epsilon(1e-5));
   CHECK(out.find("result     ok") != std::string::npos);
   // The flight flew the designed gains: its controller status carries them.
-  const auto status_msgs = nimble::test::decode_channel<nimble::controller_status_t>(dir + "/fly.lcmlog", "CONTROLLER_STATUS");
+  const auto status_msgs = nimble::test::decode_channel<nimble::controller_status_t>(dir + "/fly.lcmlog", nimble::contract::channels::kControllerStatus);
   REQUIRE(status_msgs.size() > 3000);
   CHECK(status_msgs.back().kp == Approx(j["kp_per_rad"].as<double>()).epsilon(1e-12));
   CHECK(status_msgs.back().kd == Approx(j["kd_per_radps"].as<double>()).epsilon(1e-12));
