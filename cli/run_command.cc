@@ -35,7 +35,9 @@ constexpr const char* kRunFooter =
     "fail if one cannot be made; never: the host's network (see rig check).\n"
     "Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
     "(HEARTBEAT_LOST) or the run stalled, 4 real-time degraded (only with --strict-timing),\n"
-    "5 completed in the controller's failsafe, 130 interrupted.";
+    "5 completed in the controller's failsafe, 6 controlled but not tracking (the roll tracking error\n"
+    "beyond summary.max_tracking_rms_deg or max_tracking_error_deg, or a sustained or growing roll\n"
+    "oscillation), 130 interrupted.";
 
 /// The inode of a namespace link (/proc/<pid>/ns/<kind>), 0 if it cannot be read.
 ino_t namespace_inode(const std::string& pid, const std::string& kind) {

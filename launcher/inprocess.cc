@@ -203,7 +203,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     report.processes.push_back(ProcessOutcome{p.name, static_cast<long long>(::getpid()), true, code, 0,
                                               "in process, returned " + std::to_string(code)});
   }
-  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure, {}, false, failsafe_of(monitor));
+  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure, {}, false, failsafe_of(monitor),
+                             judge_tracking(report.tracking, plan.judge));
   return report;
 }
 

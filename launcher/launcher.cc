@@ -546,7 +546,7 @@ class ProcessRun {
     report.hosts = host_summaries(plan_.hosts, host_link_.get());
     report.verdict = judge_run(report.flight, plan_.judge, interrupted, failure,
                                judge_timing(report.timing, plan_.judge, !lockstep_), options_.strict_timing,
-                               failsafe_of(monitor_));
+                               failsafe_of(monitor_), judge_tracking(report.tracking, plan_.judge));
     if (!failure.empty()) std::cerr << "rig run: " << failure << "\n";
     return finish_report(report, options_);
   }

@@ -40,6 +40,7 @@ struct StreamMessage {
   int64_t latency_us = 0;  ///< a pose's exposure-to-publication latency: it is due this much after utime
   std::optional<Truth> truth;
   std::optional<Estimate> estimate;
+  std::optional<ControllerStatus> status;
 };
 
 template <class Message>
@@ -84,13 +85,55 @@ std::optional<StreamMessage> decode_stream(const std::string& channel, const voi
   if (channel == kActuatorCommand || channel == kActuatorCommandCan) return plain(actuator_command_t{});
   if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return plain(actuator_feedback_t{});
   if (channel == kAttitudeSetpoint) return plain(attitude_setpoint_t{});
-  if (channel == kControllerStatus) return plain(controller_status_t{});
+  if (channel == kControllerStatus) {
+    const auto m = decoded<controller_status_t>(data, size);
+    if (!m) return std::nullopt;
+    s.status = contract::from_message(*m);
+    return header(*m);
+  }
   if (channel == kRigClock) return plain(rig_clock_t{});
   if (channel == kRunControl) return plain(run_control_t{});
   return std::nullopt;  // not a stream channel of the contract
 }
 
 }  // namespace
+
+void TrackingRecorder::add(double t_s, double e, double reference_deg) {
+  if (!std::isfinite(e) || !std::isfinite(reference_deg)) return;
+  ++s_.samples;
+  sum2_ += e * e;
+  if (std::fabs(e) > s_.max_deg) {
+    s_.max_deg = std::fabs(e);
+    s_.max_at_s = t_s;
+  }
+  if (s_.samples == 1) {
+    crossing_s_ = t_s;
+  } else if ((e > 0.0) != (last_e_ > 0.0)) {
+    crossing_s_ = last_t_ + (t_s - last_t_) * last_e_ / (last_e_ - e);  // interpolated
+  }
+  last_t_ = t_s;
+  last_e_ = e;
+  const int side = e > kDeadBandDeg ? 1 : e < -kDeadBandDeg ? -1 : 0;
+  if (side != 0 && side != side_) {
+    if (!s_.half_cycles.empty()) s_.half_cycles.back().end_s = crossing_s_;
+    s_.half_cycles.push_back(TrackingHalfCycle{crossing_s_, t_s, e, 0.0});
+    reference_min_ = reference_max_ = reference_deg;
+    side_ = side;
+  }
+  if (side_ == 0) return;
+  TrackingHalfCycle& h = s_.half_cycles.back();
+  h.end_s = t_s;
+  if (side_ * e > side_ * h.peak_deg) h.peak_deg = e;
+  reference_min_ = std::min(reference_min_, reference_deg);
+  reference_max_ = std::max(reference_max_, reference_deg);
+  h.reference_range_deg = reference_max_ - reference_min_;
+}
+
+TrackingSummary TrackingRecorder::summary() const {
+  TrackingSummary s = s_;
+  if (s.samples > 0) s.rms_deg = std::sqrt(sum2_ / static_cast<double>(s.samples));
+  return s;
+}
 
 bool RunMonitor::accept_seq(Counter& c, const std::string& publisher, int64_t seq) {
   const auto it = c.last_seq.find(publisher);
@@ -236,6 +279,14 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     est_v2_ += std::pow(e.velocity_body_mps[1] - it->second.v, 2);
     est_.phi_max_deg = std::max(est_.phi_max_deg, std::fabs(dphi));
     ++est_.samples;
+  }
+  if (m->status) {
+    // The true roll the cycle saw: the newest TRUTH at or before its time.
+    auto it = recent_truth_.upper_bound(utime);
+    if (it == recent_truth_.begin()) return;
+    --it;
+    const double error = std::remainder(m->status->roll_ref_rad - it->second.phi, 2.0 * M_PI);
+    tracking_.add(static_cast<double>(utime) / 1e6, error * 180.0 / M_PI, m->status->roll_ref_rad * 180.0 / M_PI);
   }
 }
 

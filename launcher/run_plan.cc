@@ -98,6 +98,13 @@ const ParamTable<JudgeConfig>& judge_params() {
       {"hover_v_mps", &C::hover_v_mps, Range::positive(), "m/s", "final |v| within this: returned to hover"},
       {"max_late_fraction", &C::max_late_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a channel's messages late at a receiving process than this is real-time degraded"},
       {"max_overrun_fraction", &C::max_overrun_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a process's cycles overrun than this is real-time degraded"},
+      {"max_tracking_rms_deg", &C::max_tracking_rms_deg, Range{0.0, 180.0, true, false}, "deg", "RMS over the run of the roll tracking error (the controller's roll reference - the true roll) beyond this: not tracking (nominal flights 10.7 at most, within the loop's margins 14.7)"},
+      {"max_tracking_error_deg", &C::max_tracking_error_deg, Range{0.0, 180.0, true, false}, "deg", "largest |roll tracking error| beyond this: not tracking (nominal flights 56.1 at most, within the loop's margins 76)"},
+      {"oscillation_amplitude_deg", &C::oscillation_amplitude_deg, Range::positive(), "deg", "roll oscillation: every half-cycle's peak of the tracking error at least this (within the loop's margins 2.6 at most; beyond them 7 and more)"},
+      {"oscillation_cycles", &C::oscillation_cycles, Range::closed(2.0, 100.0), "-", "roll oscillation: this many cycles in a row"},
+      {"oscillation_period_tolerance", &C::oscillation_period_tolerance, Range{0.0, 1.0, true, true}, "-", "roll oscillation: every full period within this fraction of their mean"},
+      {"oscillation_max_damping", &C::oscillation_max_damping, Range{-1.0, 1.0, true, true}, "-", "roll oscillation: its amplitude decays with a damping ratio below this (within the loop's margins 0.0057 and more; beyond them 0.0010 and less)"},
+      {"oscillation_reference_still_deg", &C::oscillation_reference_still_deg, Range{0.0, 180.0, true, false}, "deg", "roll oscillation: counts only half-cycles in which the roll reference moved less than this (the loop's own motion, not the manoeuvre's)"},
   };
   return table;
 }

@@ -24,6 +24,7 @@ void fill_from_monitor(RunReport& r, const RunMonitor& monitor, double sim_s, do
   r.timing = monitor.timing();
   r.flight = monitor.flight();
   r.estimator = monitor.estimator();
+  r.tracking = monitor.tracking();
   r.can_health = monitor.can_health();
   r.faults = monitor.faults();
 }
@@ -83,6 +84,13 @@ void write_report_text(std::ostream& out, const RunReport& r) {
                  "rejected {}, gaps {}\n",
                  est.poses_too_old, est.poses_too_new, est.velocity_windows_uncovered, est.imu_rejected, est.imu_gaps);
     }
+  }
+  if (r.tracking.samples > 0) {
+    const Oscillation& o = r.verdict.tracking.oscillation;
+    fmt::print(out, "tracking   roll error rms {:.2f} deg, max {:.2f} deg at t = {:.2f} s over {} control cycles; {}\n",
+               r.tracking.rms_deg, r.tracking.max_deg, r.tracking.max_at_s, r.tracking.samples,
+               o.detected ? fmt::format("{} (damping ratio {:.3f}, {} cycles)", o.text, o.damping_ratio, o.cycles)
+                          : std::string("no roll oscillation"));
   }
   for (const auto& [name, h] : r.can_health) {
     fmt::print(out,
@@ -153,6 +161,55 @@ void write_report_text(std::ostream& out, const RunReport& r) {
   out << "result     " << r.verdict.text << "\n";
 }
 
+namespace {
+
+/// The run's roll tracking and its oscillation, if it had a controller.
+void write_tracking_json(JsonWriter& w, const RunReport& r) {
+  if (r.tracking.samples == 0) return;
+  const TrackingSummary& t = r.tracking;
+  const Oscillation& o = r.verdict.tracking.oscillation;
+  w.key("tracking").begin_object();
+  w.key("samples").value(static_cast<long long>(t.samples));
+  w.key("rms_deg").value(t.rms_deg).key("max_deg").value(t.max_deg).key("max_at_s").value(t.max_at_s);
+  w.key("lost").value(r.verdict.tracking.lost);
+  w.key("oscillation").begin_object();
+  w.key("detected").value(o.detected);
+  w.key("kind").value(!o.detected ? "" : o.growing ? "growing" : "sustained");
+  w.key("frequency_hz").value(o.frequency_hz).key("amplitude_deg").value(o.amplitude_deg);
+  w.key("damping_ratio").value(o.damping_ratio).key("start_s").value(o.start_s).key("cycles").value(o.cycles);
+  w.end_object();
+  w.end_object();
+}
+
+/// Each side of the CAN bridge: what it carried and what it rejected.
+void write_can_json(JsonWriter& w, const std::map<std::string, nimble::CanHealth>& can_health) {
+  w.key("can").begin_object();
+  for (const auto& [name, h] : can_health) {
+    const auto n = [](int64_t v) { return static_cast<long long>(v); };
+    w.key(name).begin_object();
+    w.key("interface").value(h.interface_name);
+    w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
+    w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
+    w.key("fd").value(h.fd != 0);
+    w.key("fd_frames_sent").value(n(h.fd_frames_sent)).key("fd_frames_received").value(n(h.fd_frames_received));
+    w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
+    w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
+    w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));
+    w.key("rejected_stale_counter").value(n(h.rejected_stale_counter));
+    w.key("rejected_out_of_range").value(n(h.rejected_out_of_range));
+    w.key("counter_gaps").value(n(h.counter_gaps)).key("saturated_values").value(n(h.saturated_values));
+    w.key("error_frames").value(n(h.error_frames)).key("bus_state").value(static_cast<int>(h.bus_state));
+    w.key("last_error").value(h.last_error);
+    w.key("send_enobufs").value(n(h.send_enobufs)).key("send_retries").value(n(h.send_retries));
+    w.key("send_dropped").value(n(h.send_dropped)).key("receive_dropped").value(n(h.receive_dropped));
+    w.key("candump_file").value(h.candump_file).key("candump_lines").value(n(h.candump_lines));
+    w.end_object();
+  }
+  w.end_object();
+}
+
+}  // namespace
+
 std::string report_json(const RunReport& r) {
   const FlightSummary& f = r.flight;
   JsonWriter w;
@@ -204,31 +261,8 @@ std::string report_json(const RunReport& r) {
     w.key("imu_gaps").value(static_cast<long long>(est.imu_gaps));
     w.end_object();
   }
-  if (!r.can_health.empty()) {
-    w.key("can").begin_object();
-    for (const auto& [name, h] : r.can_health) {
-      const auto n = [](int64_t v) { return static_cast<long long>(v); };
-      w.key(name).begin_object();
-      w.key("interface").value(h.interface_name);
-      w.key("messages_to_can").value(n(h.messages_to_can)).key("messages_to_lcm").value(n(h.messages_to_lcm));
-      w.key("frames_sent").value(n(h.frames_sent)).key("frames_received").value(n(h.frames_received));
-      w.key("fd").value(h.fd != 0);
-      w.key("fd_frames_sent").value(n(h.fd_frames_sent)).key("fd_frames_received").value(n(h.fd_frames_received));
-      w.key("rejected_unknown_id").value(n(h.rejected_unknown_id));
-      w.key("rejected_wrong_length").value(n(h.rejected_wrong_length));
-      w.key("rejected_bad_checksum").value(n(h.rejected_bad_checksum));
-      w.key("rejected_stale_counter").value(n(h.rejected_stale_counter));
-      w.key("rejected_out_of_range").value(n(h.rejected_out_of_range));
-      w.key("counter_gaps").value(n(h.counter_gaps)).key("saturated_values").value(n(h.saturated_values));
-      w.key("error_frames").value(n(h.error_frames)).key("bus_state").value(static_cast<int>(h.bus_state));
-      w.key("last_error").value(h.last_error);
-      w.key("send_enobufs").value(n(h.send_enobufs)).key("send_retries").value(n(h.send_retries));
-      w.key("send_dropped").value(n(h.send_dropped)).key("receive_dropped").value(n(h.receive_dropped));
-      w.key("candump_file").value(h.candump_file).key("candump_lines").value(n(h.candump_lines));
-      w.end_object();
-    }
-    w.end_object();
-  }
+  write_tracking_json(w, r);
+  if (!r.can_health.empty()) write_can_json(w, r.can_health);
   w.key("channels").begin_object();
   for (const auto& [name, c] : r.channels) {
     w.key(name).begin_object();

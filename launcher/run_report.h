@@ -50,6 +50,7 @@ struct RunReport {
   std::map<std::string, TimingSummary> timing;
   FlightSummary flight;
   EstimatorSummary estimator;    ///< samples == 0: no estimator in the run
+  TrackingSummary tracking;      ///< samples == 0: no controller in the run
   std::map<std::string, nimble::CanHealth> can_health;
   std::vector<FaultRecord> faults;
   std::vector<ProcessOutcome> processes;
@@ -60,7 +61,8 @@ struct RunReport {
 };
 
 /// Fills the parts of a report that come from the monitor (channels, timing, flight,
-/// estimator, CAN health, faults) for a run of `sim_s` simulated and `wall_s` wall seconds.
+/// estimator, roll tracking, CAN health, faults) for a run of `sim_s` simulated and `wall_s`
+/// wall seconds.
 void fill_from_monitor(RunReport& report, const RunMonitor& monitor, double sim_s, double wall_s);
 
 /// The human-readable summary.

@@ -1,13 +1,15 @@
 // Functional test: the launcher's run monitor judges stream messages by their decoded fields;
 // a motion-capture pose is due latency_us after its mid-exposure stamp; what it cannot trust
 // (bytes that do not decode, a decoder that throws, a seq that does not continue its publisher's,
-// a publisher that is not in the run) is counted as malformed and left out of every figure.
+// a publisher that is not in the run) is counted as malformed and left out of every figure. The
+// roll tracking error is the controller's reference against the true roll.
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <nimble/controller_status_t.hpp>
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
@@ -15,9 +17,11 @@
 #include "contract/channels.h"
 #include "launcher/run_monitor.h"
 
+using nimble::controller_status_t;
 using nimble::heartbeat_t;
 using nimble::mocap_pose_t;
 using nimble::truth_state_t;
+using nimble::contract::channels::kControllerStatus;
 using nimble::contract::channels::kHeartbeat;
 using nimble::contract::channels::kMocapPose;
 using nimble::contract::channels::kTruth;
@@ -172,4 +176,45 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   const auto c = mon.channels(1.0, 1.0).at(kHeartbeat);
   CHECK(c.count == 1);
   CHECK(c.malformed == 2);
+}
+
+TEST_CASE("roll tracking: the controller's reference against the newest TRUTH at or before its cycle", "[launcher][monitor]") {
+  MonitorConfig cfg;
+  cfg.lockstep = true;
+  RunMonitor mon(cfg);
+  CHECK(mon.tracking().samples == 0);  // no controller, nothing to judge
+  constexpr double kDeg = M_PI / 180.0;
+  truth_state_t t{};
+  t.quaternion_wxyz[0] = 1.0;
+  controller_status_t st{};
+  st.gain_set = "fast";
+  // TRUTH every 1 ms with phi = 10 deg up to 5 ms, then 20 deg; a control cycle every 2 ms
+  // (utime 0, 2, 4, 6 ms, one of them between two truths) with the reference at 15 deg. Its own
+  // roll error is against the roll it measured (an estimate 3 deg off): not what is judged.
+  int64_t status_seq = 0;
+  for (int k = 0; k <= 8; ++k) {
+    t.utime = 1000 * k;
+    t.seq = k;
+    t.euler_rad[0] = (k <= 5 ? 10.0 : 20.0) * kDeg;
+    const auto tb = encode(t);
+    mon.on_message(kTruth, tb.data(), static_cast<int>(tb.size()), 0);
+    if (k % 2 == 0 || k == 5) {
+      st.utime = k == 5 ? 5500 : 1000 * k;  // 5.5 ms: the newest truth before it is 5 ms's
+      st.seq = status_seq++;
+      st.roll_ref_rad = 15.0 * kDeg;
+      st.roll_error_rad = st.roll_ref_rad - (t.euler_rad[0] + 3.0 * kDeg);
+      const auto sb = encode(st);
+      mon.on_message(kControllerStatus, sb.data(), static_cast<int>(sb.size()), 0);
+    }
+  }
+  const auto tr = mon.tracking();
+  // Cycles at 0, 2, 4, 5.5 ms: +5 deg; at 6 and 8 ms: -5 deg.
+  REQUIRE(tr.samples == 6);
+  CHECK(tr.rms_deg == Approx(5.0));
+  CHECK(tr.max_deg == Approx(5.0));
+  REQUIRE(tr.half_cycles.size() == 2);
+  CHECK(tr.half_cycles[0].peak_deg == Approx(5.0));
+  CHECK(tr.half_cycles[1].peak_deg == Approx(-5.0));
+  CHECK(tr.half_cycles[1].start_s == Approx(0.0055 + 0.0005 * 0.5));  // the interpolated zero crossing
+  CHECK(tr.half_cycles[0].reference_range_deg == Approx(0.0));
 }

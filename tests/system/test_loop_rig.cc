@@ -124,6 +124,10 @@ void require_oscillating(const Flight& f) {
   CAPTURE(late, before);
   CHECK(late > 5.0);
   CHECK(late > 0.8 * before);
+  // The verdict sees it: not ok, and the oscillation named (kRunNotTracking 6, or 1 if the roll
+  // also left the control limits).
+  CHECK((f.run.exit_code == 6 || f.run.exit_code == 1));
+  CHECK(f.run.output.find("roll oscillation") != std::string::npos);
 }
 
 void check_margins_on(const std::string& scenario, const Gains& g) {
