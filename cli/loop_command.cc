@@ -106,6 +106,11 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
     over_box.gains = gname;
     over_box.over = fs::path(box.source).filename().string() + " +-2 sigma, every corner";
     const RollLoopConfig config = s.loop_config(gains);
+    // The margins of the model at one point of the box.
+    auto margins_at = [&](const std::vector<int>& signs) {
+      return analyse_roll_loop(build_state_space(box_point(s.model, box, signs), s.vehicle), config,
+                               LoopBreak::kActuator, kBoxGrid, false);
+    };
     std::map<std::string, int> by_sign;
     for (int c = 0; c < corners; ++c) {
       std::vector<int> signs(names.size());
@@ -114,8 +119,7 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
         signs[i] = (c >> i) & 1 ? 1 : -1;
         label += names[i] + (signs[i] > 0 ? "+" : "-") + (i + 1 < names.size() ? " " : "");
       }
-      const DerivativeModel m = box_point(s.model, box, signs);
-      const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, kBoxGrid, false);
+      const RollLoopAnalysis a = margins_at(signs);
       over_box.add(label, a);
       if (!a.margins.closed_loop_stable) {
         for (std::size_t i = 0; i < names.size(); ++i) by_sign[names[i] + (signs[i] > 0 ? "+" : "-")] += 1;
@@ -125,9 +129,7 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
       for (const int sign : {-1, 1}) {
         std::vector<int> signs(names.size(), 0);
         signs[static_cast<std::size_t>(&name - names.data())] = sign;
-        const DerivativeModel m = box_point(s.model, box, signs);
-        const RollLoopAnalysis a = analyse_roll_loop(build_state_space(m, s.vehicle), config, LoopBreak::kActuator, kBoxGrid, false);
-        if (!a.margins.closed_loop_stable) over_box.unstable_alone.push_back(name + (sign > 0 ? "+" : "-"));
+        if (!margins_at(signs).margins.closed_loop_stable) over_box.unstable_alone.push_back(name + (sign > 0 ? "+" : "-"));
       }
     }
     for (const auto& [key, count] : by_sign) over_box.unstable_by_sign.emplace_back(key, count);

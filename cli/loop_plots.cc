@@ -44,10 +44,9 @@ std::vector<std::complex<double>> loop_zeros(const BrokenLoop& b) {
   return zeros;
 }
 
-std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, const std::vector<double>& w) {
+std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, const std::vector<RollLoopResponse>& resp) {
   std::ostringstream data, script;
-  std::vector<RollLoopResponse> resp;
-  for (const LoopRow& r : rows) resp.push_back(roll_loop_response(r.lateral, r.config, r.where, w));
+  const std::vector<double>& w = resp.front().omega_radps;
   for (std::size_t i = 0; i < w.size(); ++i) {
     data << w[i] / (2 * kPi);
     for (const auto& x : resp) {
@@ -95,10 +94,10 @@ std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, con
   return (dir / "loop_bode.png").string();
 }
 
-std::string plot_nyquist(const fs::path& dir, const std::vector<LoopRow>& rows, const std::vector<double>& w) {
+std::string plot_nyquist(const fs::path& dir, const std::vector<LoopRow>& rows,
+                         const std::vector<RollLoopResponse>& resp) {
   std::ostringstream data, script;
-  for (const LoopRow& r : rows) {
-    const RollLoopResponse x = roll_loop_response(r.lateral, r.config, r.where, w);
+  for (const RollLoopResponse& x : resp) {
     for (const auto& l : x.ratio) data << l.real() << " " << l.imag() << "\n";
     for (auto it = x.ratio.rbegin(); it != x.ratio.rend(); ++it) data << it->real() << " " << -it->imag() << "\n";
     data << "\n\n";
@@ -184,7 +183,10 @@ std::vector<std::string> plot_loops(const std::string& dir_name, const std::vect
   std::vector<double> w;
   const double nyquist = kPi * rows.front().config.rate_hz;
   for (int i = 0; i < 800; ++i) w.push_back(2 * kPi * 0.01 * std::pow(nyquist / (2 * kPi * 0.01), i / 799.0));
-  return {plot_bode(dir, rows, w), plot_nyquist(dir, rows, w), plot_step(dir, rows), plot_poles(dir, rows)};
+  // One frequency response per loop, for the Bode and the Nyquist plot.
+  std::vector<RollLoopResponse> resp;
+  for (const LoopRow& r : rows) resp.push_back(roll_loop_response(r.lateral, r.config, r.where, w));
+  return {plot_bode(dir, rows, resp), plot_nyquist(dir, rows, resp), plot_step(dir, rows), plot_poles(dir, rows)};
 }
 
 }  // namespace nimble::cli

@@ -16,22 +16,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// Bisection of a sign change of f on [a, b] (f(a) and f(b) of opposite signs), to 1e-9 relative.
-double bisect(const std::function<double(double)>& f, double a, double b) {
-  double fa = f(a);
-  for (int i = 0; i < 80 && (b - a) > 1e-9 * b; ++i) {
-    const double m = 0.5 * (a + b);
-    const double fm = f(m);
-    if ((fm < 0.0) == (fa < 0.0)) {
-      a = m;
-      fa = fm;
-    } else {
-      b = m;
-    }
-  }
-  return 0.5 * (a + b);
-}
-
 /// Phase in (-180, 180] [deg].
 double wrap_deg(double deg) {
   double x = std::fmod(deg, 360.0);
@@ -110,6 +94,21 @@ std::complex<double> LoopResponse::open(double omega_radps) const {
   return (CQ_.cast<C>() * b)(0) + D_;
 }
 
+double bisect_sign_change(const std::function<double(double)>& f, double a, double b) {
+  double fa = f(a);
+  for (int i = 0; i < 80 && (b - a) > 1e-9 * b; ++i) {
+    const double m = 0.5 * (a + b);
+    const double fm = f(m);
+    if ((fm < 0.0) == (fa < 0.0)) {
+      a = m;
+      fa = fm;
+    } else {
+      b = m;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
 double LoopMargins::gain_margin_db() const { return 20.0 * std::log10(gain_margin); }
 
 double LoopMargins::gain_reduction_margin_db() const {
@@ -163,13 +162,13 @@ LoopMargins loop_margins(const BrokenLoop& loop, const MarginOptions& options) {
     if (!(std::isfinite(std::abs(a)) && std::isfinite(std::abs(b)))) continue;
     // Phase crossover: L crosses the real axis on its negative side.
     if ((a.imag() < 0.0) != (b.imag() < 0.0)) {
-      const double x = bisect(imag, w[i], w[i + 1]);
+      const double x = bisect_sign_change(imag, w[i], w[i + 1]);
       const std::complex<double> l = response.ratio(x);
       if (l.real() < 0.0 && std::abs(l.imag()) < 1e-6 * std::abs(l) + 1e-12) candidates.push_back({-1.0 / l.real(), x});
     }
     // Gain crossover.
     if ((std::abs(a) < 1.0) != (std::abs(b) < 1.0)) {
-      const double x = bisect(log_gain, w[i], w[i + 1]);
+      const double x = bisect_sign_change(log_gain, w[i], w[i + 1]);
       const double pm = wrap_deg(180.0 + std::arg(response.ratio(x)) * 180.0 / kPi);
       m.crossovers_hz.push_back(x / (2.0 * kPi));
       if (std::abs(pm) < best_abs_pm) {

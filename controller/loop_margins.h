@@ -25,6 +25,7 @@
 /// Crossovers are found on a logarithmic grid and refined by bisection to 1e-9 relative.
 
 #include <complex>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -90,6 +91,10 @@ struct LoopMargins {
   /// 20 log10 of gain_reduction_margin [dB] (negative; -infinity if it is 0).
   double gain_reduction_margin_db() const;
 };
+
+/// A root of `f` in [a, b], where f(a) and f(b) have opposite signs, by bisection to 1e-9
+/// relative: the crossings of the margins and the bandwidth.
+double bisect_sign_change(const std::function<double(double)>& f, double a, double b);
 
 /// Closed-loop state matrix of `loop` closed with the loop gain scaled by `k` (w = k y).
 /// @throws std::invalid_argument if k D = 1 (an algebraic loop without solution).

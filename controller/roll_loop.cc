@@ -154,14 +154,7 @@ double bandwidth_hz(const F& h, double nyquist) {
   if (excess(prev) < 0.0) return prev / (2.0 * kPi);
   for (int i = 1; i < n; ++i) {
     const double x = w_min * std::pow(nyquist / w_min, static_cast<double>(i) / (n - 1));
-    if (excess(x) < 0.0) {
-      double lo = prev, hi = x;
-      for (int it = 0; it < 60 && hi - lo > 1e-9 * hi; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        (excess(mid) < 0.0 ? hi : lo) = mid;
-      }
-      return 0.5 * (lo + hi) / (2.0 * kPi);
-    }
+    if (excess(x) < 0.0) return bisect_sign_change(excess, prev, x) / (2.0 * kPi);
     prev = x;
   }
   return nyquist / (2.0 * kPi);
