@@ -103,7 +103,7 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
 void wideband_stage(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                     const DiscrepancyOptions& options, const std::vector<Equation>& equations,
                     const std::vector<const CandidateSpec*>& pool, const std::vector<std::string>& known,
-                    const Workflow& wf, Model& m, DiscrepancyResult& res) {
+                    const Workflow& wf, Model& m, DiscrepancyResult& res, std::vector<BandGap>& bands) {
   // Wideband stage: flapping forcing lies above the identification low-pass. The model as
   // it now stands (baseline, known and named effects) is refit on the same data low-passed at
   // flapping_cutoff_hz, and harmonics at a frequency scanned over the flapping band are tried
@@ -126,8 +126,27 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
     }
     BatchRule wide_batch = wf.batch;
     wide_batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, wide_proc));
-    CandidateTrial t = flapping_trial(wm, wide.filtered, wf.folds, options, wf.p_critical, wide_batch);
+    std::vector<VectorXd> cv_before, cv_after;
+    CandidateTrial t =
+        flapping_trial(wm, wide.filtered, wf.folds, options, wf.p_critical, wide_batch, &cv_before, &cv_after);
     if (t.passed) {
+      // The gap where the forcing lives: a band at each harmonic, of the record's resolution or
+      // kFlappingBandHz wide, in the equations the harmonics enter (not the actuator's).
+      const double rate = wide.filtered.rate_hz, T = static_cast<double>(wide.filtered.size()) / rate;
+      const double half = std::max(kFlappingBandHz, 1.5 / T);
+      std::vector<std::size_t> eqs;
+      for (std::size_t e = 0; e < wm.eqs.size(); ++e) {
+        if (e != kActuatorEq) eqs.push_back(e);
+      }
+      std::vector<VectorXd> contribution;
+      for (std::size_t e = 0; e < wm.eqs.size(); ++e) contribution.push_back(cv_before[e] - cv_after[e]);
+      const double f = t.parameters.at("flapping_hz");
+      for (int h = 1; h <= 2; ++h) {
+        BandGap g = band_gap(t.name + " harmonic " + std::to_string(h), wm, eqs, cv_before, cv_after, rate, h * f - half,
+                             h * f + half, &contribution);
+        g.wideband = true;
+        bands.push_back(std::move(g));
+      }
       t.entered = true;
       t.reason = "entered: " + t.reason;
       NamedEffect eff;
@@ -201,76 +220,52 @@ void name_effects(const Model& m, DiscrepancyResult& res) {
   }
 }
 
-/// Where the baseline structure's residual lives (frequency, time, nonlinear state dependence).
-void locate(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
-            const std::vector<VectorXd>& base_resid, const BatchRule& batch, DiscrepancyResult& res) {
-  // Location, on the baseline structure's residual.
+/// Where the baseline structure's residual lives (frequency, state dependence, excess energy in
+/// time), each test at the workflow's p_critical; and the descriptive energy shares of the
+/// manoeuvres, hovers and heaviest windows. Returns the number of alarm tests run.
+std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
+                   const std::vector<VectorXd>& base_resid, const BatchRule& batch, double p_critical,
+                   DiscrepancyResult& res) {
   const Segments seg = find_segments(d, options.segments);
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    time_findings(m.eqs[e].output, base_resid[e] / m.eqs[e].scale, d, seg, options.window_s, res.located.time);
+  }
+  const Excitation ex = excitation_bank(d, options.excitation);
+  res.located.excitation = ex.signals;
+  if (ex.signals.empty()) {
+    std::string names;
+    for (const auto& n : options.excitation) names += (names.empty() ? "" : ", ") + n;
+    res.located.note = "no location test: the data has no moving exogenous signal (" + names +
+                       ") to tell the linear response to the manoeuvre from structure the model misses";
+    return 0;
+  }
   const double f_hi = options.processing.filter_order > 0 ? 0.8 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
+  std::size_t tests = 0;
+  const LocationRule rule{p_critical, batch.min_block, options.gust_band_hz, options.gust_band_alpha,
+                          make_folds(d.size(), options.folds), options.heldout_sigmas};
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
-    const VectorXd r = base_resid[e] / m.eqs[e].scale;
-    time_findings(m.eqs[e].output, r, d, seg, options.window_s, res.located.time);
-    frequency_peaks(m.eqs[e].output, r, d.rate_hz, 0.5, f_hi, options.location_alpha / 2.0, res.located.frequency);
+    // The baseline structure without the effects that entered (it is what the gap starts from).
+    const MatrixXd X = augmented_design(m.eqs[e], {});
+    const LocationFrame frame(X, m.eqs[e].y, ex.Z);
+    const VectorXd r = frame.residual / m.eqs[e].scale;
+    // Above the gust band, as every candidate: below it a periodic force cannot be told from a
+    // side wind's random low-frequency force.
+    frequency_peaks(frame, m.eqs[e].output, m.eqs[e].scale, d.rate_hz, options.gust_band_hz, f_hi, rule,
+                    res.located.frequency);
+    state_findings(frame, X, m.eqs[e].output, d, rule, res.located.state);
+    energy_windows(m.eqs[e].output, r, d, options.window_s, location_edge(options.processing, d.rate_hz), p_critical,
+                   res.located.time);
+    tests += 3;
   }
-  {
-    Model base_model = m;
-    for (auto& a : base_model.added) a.clear();
-    for (std::size_t e = 0; e < m.eqs.size(); ++e) {
-      state_findings(base_model, e, d, batch, options.location_alpha / 2.0, res.located.state);
-    }
-  }
-}
-
-/// The gap table: each equation's held-out error before and after, and the mean gap.
-void gap_table(const UniformData& d, const DerivativeModel& model, const DiscrepancyOptions& options,
-               const std::map<std::string, double>& known_values, const Model& m,
-               const std::vector<VectorXd>& cv_before, const std::vector<VectorXd>& cv_after, DiscrepancyResult& res) {
-  // Gap table.
-  const Index n = d.size();
-  const std::size_t lag_step = whiteness_lag_step(0, options.processing);
-  double gb = 0.0, ga = 0.0;
-  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
-    const Eq& eq = m.eqs[e];
-    OutputGap g;
-    g.output = eq.output;
-    g.unit = eq.unit;
-    const VectorXd model_fit = given_prediction(eq, model, known_values, options);
-    const VectorXd y = eq.y / eq.scale;
-    const double sst = (y.array() - y.mean()).square().sum();
-    const VectorXd rb = cv_before[e] / eq.scale, ra = cv_after[e] / eq.scale;
-    g.rmse_model = std::sqrt((eq.y - model_fit).squaredNorm() / static_cast<double>(n)) / eq.scale;
-    g.rmse_before = std::sqrt(rb.squaredNorm() / static_cast<double>(n));
-    g.rmse_after = std::sqrt(ra.squaredNorm() / static_cast<double>(n));
-    g.fit_before_pct = 100.0 * (1.0 - rb.norm() / std::sqrt(sst));
-    g.fit_after_pct = 100.0 * (1.0 - ra.norm() / std::sqrt(sst));
-    g.white_before = residual_whiteness(rb, d.rate_hz, options.whiteness_lags, lag_step).white;
-    g.white_after = residual_whiteness(ra, d.rate_hz, options.whiteness_lags, lag_step).white;
-    for (const auto& f : res.located.frequency) {
-      if (f.output != eq.output) continue;
-      const Psd pb = periodogram(rb, d.rate_hz), pa = periodogram(ra, d.rate_hz);
-      const Index k = static_cast<Index>(std::lround(f.f_hz / pb.df_hz));
-      g.peak_psd_before = pb.psd[k];
-      g.peak_psd_after = pa.psd[k];
-    }
-    g.measured = y;
-    g.predicted_before = y - rb;
-    g.predicted_after = y - ra;
-    gb += rb.squaredNorm() / sst;
-    ga += ra.squaredNorm() / sst;
-    res.gap.push_back(g);
-  }
-  res.gap_before = gb / static_cast<double>(m.eqs.size());
-  res.gap_after = ga / static_cast<double>(m.eqs.size());
-  res.gap_metric =
-      "mean over the equations (L, Y, and F when the data has the actuator command) of the held-out squared equation error divided by the sum of squares of the "
-      "dependent about its mean (1 - R^2 on data the fit did not see, " + std::to_string(options.folds) +
-      "-fold cross-validation over contiguous blocks)";
+  return tests;
 }
 
 /// The verdict and its one-line summary.
 void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
   // Verdict.
-  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty();
+  const bool excess = std::any_of(res.located.time.begin(), res.located.time.end(),
+                                  [](const TimeFinding& f) { return f.what == "excess"; });
+  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty() || excess;
   if (!res.ambiguous.empty()) {
     res.verdict = "ambiguous";
   } else if (!res.effects.empty()) {
@@ -285,7 +280,14 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "named:";
     for (const auto& e : res.effects) s << " " << e.name;
     for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
-    s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after);
+    s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after) << " in the identification band";
+    for (std::size_t i = 1; i < res.gap_bands.size(); ++i) {
+      const BandGap& b = res.gap_bands[i];
+      std::string eqs;
+      for (const auto& e : b.equations) eqs += (eqs.empty() ? "" : ", ") + e;
+      s << ", " << fmt(b.before) << " -> " << fmt(b.after) << " in " << b.name << "'s band " << fmt(b.lo_hz) << "-"
+        << fmt(b.hi_hz) << " Hz (" << eqs << (b.wideband ? ", wideband data" : "") << ")";
+    }
     if (gust_result.entered) {
       s << " (lateral_gust is random: it has no regressor and leaves the gap as it is; its evidence is the "
            "residual spectrum)";
@@ -294,6 +296,9 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "no candidate passes, but the residual has structure:";
     for (const auto& f : res.located.frequency) s << " " << f.output << " peak at " << fmt(f.f_hz) << " Hz;";
     for (const auto& f : res.located.state) s << " " << f.output << " depends nonlinearly on " << f.signal << ";";
+    for (const auto& f : res.located.time) {
+      if (f.what == "excess") s << " " << f.output << " error grows " << fmt(f.start_s) << "-" << fmt(f.end_s) << " s;";
+    }
   } else {
     s << "nothing significant: no candidate passes and the residual shows no structure";
   }
@@ -386,7 +391,8 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
 
   stepwise_search(wf, pool, known, m, res);
-  wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res);
+  std::vector<BandGap> wide_bands;
+  wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
 
   // The augmented fit and the gap after.
   std::vector<VectorXd> aug_resid;
@@ -395,8 +401,12 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   const CandidateTrial gust_result = gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
   name_effects(m, res);
   if (gust_result.entered) res.effects.push_back({gust_result.name, gust_result.parameters, gust_result.sigma});
-  locate(d, options, m, base_resid, wf.batch, res);
+  const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.p_critical, res);
+  res.alarm_rule.p_critical = wf.p_critical;
+  res.alarm_rule.tests = res.candidates.size() + location_tests;
+  res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;
   gap_table(d, model, options, known_values, m, cv_before, cv_after, res);
+  gap_bands(d, options, m, cv_before, cv_after, std::move(wide_bands), res);
   judge(gust_result, res);
   res.augmented_model = augmented_model(data, model, inputs, known, res);
   return res;

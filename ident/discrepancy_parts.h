@@ -316,30 +316,140 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
 double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo, double hi, int harmonics,
                       const std::vector<bool>& mask);
 
-/// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
+/// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy);
+/// its held-out residuals without and with the harmonics, when asked for.
 CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
-                              double p_critical, const BatchRule& batch);
+                              double p_critical, const BatchRule& batch,
+                              std::vector<VectorXd>* heldout_before = nullptr,
+                              std::vector<VectorXd>* heldout_after = nullptr);
 
 // --- discrepancy_locate.cc ---
 
 // ---------------------------------------------------------------------------------------
 // Location.
 
-/// Periodogram peaks of `r` against the median of their neighbourhood (+-20 bins, the
-/// centre +-2 bins left out). For a Gaussian process a periodogram ordinate over its
-/// spectrum is Exp(1) (chi2_2 / 2) and the local median estimates ln 2 times the
-/// spectrum, so P(ratio > x) = exp(-x); the p-value is multiplied by the number of bins
-/// scanned (Bonferroni).
-void frequency_peaks(const std::string& output, const VectorXd& r, double rate, double f_lo, double f_hi,
-                     double alpha, std::vector<FrequencyFinding>& out);
+/// The excitation of the record: its exogenous signals (DiscrepancyOptions::excitation, those the
+/// data has and that move) through orthonormal discrete Laguerre filter banks of
+/// kExcitationOrder filters at each of kExcitationTimeConstants, plus a constant. The closed
+/// loop's linear response to the excitation lies (nearly) in their span, whatever the
+/// manoeuvre's shape; the measurement noise and the process noise are independent of it.
+inline constexpr double kExcitationTimeConstants[] = {0.05, 0.5};  ///< [s]: the roll loop's and the side drift's
+inline constexpr int kExcitationOrder = 8;
+struct Excitation {
+  std::vector<std::string> signals;  ///< the exogenous signals used (empty: none, no location test)
+  MatrixXd Z;                        ///< the bank's columns
+};
+Excitation excitation_bank(const UniformData& d, const std::vector<std::string>& names);
 
-/// Residual against a nonlinear function of each state and input (x^2 and x^3, which the
-/// linear model cannot produce), with the model's regressors: Wald test with the coloured
-/// covariance, significant at alpha / (number of signals tested), per equation.
-void state_findings(const Model& m, std::size_t e, const UniformData& d, const BatchRule& batch, double alpha,
-                    std::vector<StateFinding>& out);
+/// The column span of a matrix, by an orthonormal basis Q: from the eigen-decomposition of its
+/// column-scaled Gram matrix, directions below kSpanTolerance of the largest dropped (the
+/// Laguerre banks of neighbouring time constants, and a model's intercept against the bank's
+/// constant, are nearly collinear; a projection needs only the span).
+inline constexpr double kSpanTolerance = 1e-10;
+/// The location tests' batch means have at least this many blocks (score_block()).
+inline constexpr Index kMinScoreBlocks = 10;
+struct Span {
+  explicit Span(const MatrixXd& A);
+  MatrixXd Q;
+  VectorXd project(const VectorXd& c) const { return Q * (Q.transpose() * c); }
+  VectorXd residualise(const VectorXd& c) const { return c - project(c); }
+  Index rank() const { return Q.cols(); }
+};
+
+/// One equation as the location tests see it: y against the span of [X, Z], the baseline
+/// design and the excitation's bank. The residual keeps what is neither the model's linear
+/// structure nor a linear response to the excitation: under a linear plant that is process and
+/// measurement noise, independent of the excitation however biased the baseline fit is by noisy
+/// regressors (errors in variables) or by the feedback.
+struct LocationFrame {
+  LocationFrame(const MatrixXd& X, const VectorXd& y, const MatrixXd& Z);
+  VectorXd y;
+  MatrixXd excitation_columns;  ///< Z
+  Span excitation;            ///< span of Z
+  Span model_and_excitation;  ///< span of [X, Z]
+  VectorXd residual;          ///< y minus its projection on [X, Z]
+};
+
+/// Dependence of the frame's residual on a nonlinear function (z^2 and z^3, z standardised) of
+/// each state and input's excitation part (its projection on the bank). Under a linear plant
+/// the residual is independent of any function of the excitation, so the test holds its level
+/// on closed-loop, non-Gaussian manoeuvres with noisy regressors; a measured signal's own
+/// z^2, z^3 would not (noise in a regressor makes its conditional mean nonlinear in the
+/// measurement when the manoeuvre is not Gaussian). Wald test with the coloured covariance,
+/// Bonferroni over the signals tested, significant at alpha.
+/// The thresholds of a location test: its level (the workflow's p_critical), the batch means'
+/// shortest block, and the confirmation above the gust band that every candidate passes too.
+struct LocationRule {
+  double alpha = 0.0;
+  Index min_block = 1;
+  double gust_band_hz = 2.0, gust_band_alpha = 0.01;
+  Folds folds;                 ///< the held-out rule's folds (the workflow's)
+  double heldout_sigmas = 1.0;  ///< DiscrepancyOptions::heldout_sigmas
+};
+
+void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::string& output, const UniformData& d,
+                    const LocationRule& rule, std::vector<StateFinding>& out);
+
+/// A periodic component of the frame's residual: the frequency in [f_lo, f_hi] where its
+/// periodogram is largest, and the Wald test of sin and cos at it (frame_wald), Bonferroni over
+/// the band's independent frequencies ((f_hi - f_lo) T). Against a residual whose spectrum
+/// is not flat (a lightly damped loop driven by process noise has a resonance) the score's
+/// batch means carry the residual's own power at that frequency, so a resonance is not a line;
+/// a periodic force is. Reported (ratio: periodogram / local median, for the reader) at alpha.
+void frequency_peaks(const LocationFrame& frame, const std::string& output, double scale, double rate, double f_lo,
+                     double f_hi, const LocationRule& rule, std::vector<FrequencyFinding>& out);
+
+/// The window_s window of the residual r with the most energy above the others': each window's
+/// sum of squares against the median window's, as chi2_nu / nu with nu = w / sum_k rho(k)^2 its
+/// effective degrees of freedom (Gaussian series, autocorrelation rho), Bonferroni over the
+/// windows; reported (what "excess") when significant at alpha. The `edge` samples at each end
+/// are left out: there the zero-phase low-pass and the derivative see the padding, not the
+/// flight (location_edge()).
+void energy_windows(const std::string& output, const VectorXd& r, const UniformData& d, double window_s, Index edge,
+                    double alpha, std::vector<TimeFinding>& out);
+
+/// Samples at each end of the record that the location tests leave out: three periods of the
+/// identification low-pass's cut-off (its step response settles in about two), none unfiltered.
+Index location_edge(const ProcessingOptions& processing, double rate_hz);
 
 void time_findings(const std::string& output, const VectorXd& r, const UniformData& d, const Segments& seg,
                    double window_s, std::vector<TimeFinding>& out);
+
+// --- discrepancy_bands.cc ---
+
+/// A named effect's band gap is expected to shrink to at most this share of itself (by 20 %);
+/// when it does not, the band's note says how much of the error there the effect can explain.
+inline constexpr double kBandShrink = 0.8;
+/// An effect's band holds this central share of its fitted contribution's energy.
+inline constexpr double kEffectBandShare = 0.9;
+/// Half width of a flapping harmonic's band [Hz] (at least 1.5 / T, the record's resolution).
+inline constexpr double kFlappingBandHz = 0.25;
+
+/// Sum of squares of x in [lo_hz, hi_hz] (its mean counts at 0 Hz), from its periodogram.
+double band_energy(const VectorXd& x, double rate_hz, double lo_hz, double hi_hz);
+
+/// The band holding the central `share` of x's energy over frequency (from the (1 - share) / 2
+/// to the (1 + share) / 2 point of the cumulative), at least one resolution 1 / T wide.
+std::pair<double, double> energy_band(const VectorXd& x, double rate_hz, double share);
+
+/// The held-out gap of equations `eqs` of `m` in [lo_hz, hi_hz], before and after (held-out
+/// residuals); given what the effect adds beyond the baseline's regressors per equation, a note
+/// when the gap shrinks by less than 1 - kBandShrink saying what share of the error that is.
+BandGap band_gap(const std::string& name, const Model& m, const std::vector<std::size_t>& eqs,
+                 const std::vector<VectorXd>& before, const std::vector<VectorXd>& after, double rate_hz, double lo_hz,
+                 double hi_hz, const std::vector<VectorXd>* contribution);
+
+/// The gap table: each equation's held-out error before and after (cv_before, cv_after), the
+/// model as given, whiteness, and the scalar gap with its metric.
+void gap_table(const UniformData& d, const DerivativeModel& model, const DiscrepancyOptions& options,
+               const std::map<std::string, double>& known_values, const Model& m,
+               const std::vector<VectorXd>& cv_before, const std::vector<VectorXd>& cv_after, DiscrepancyResult& res);
+
+/// The gap in the identification band, in the band of each named effect's fitted contribution
+/// (kEffectBandShare of its energy, in the equations it entered), the side wind's band, and the
+/// wideband stage's bands (`wide`).
+void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
+               const std::vector<VectorXd>& cv_before, const std::vector<VectorXd>& cv_after, std::vector<BandGap> wide,
+               DiscrepancyResult& res);
 
 }  // namespace nimble::ident::discrepancy_parts

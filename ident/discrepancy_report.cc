@@ -1,6 +1,7 @@
 /// JSON, text and Markdown reports of the discrepancy workflow (ident/discrepancy.h); the
 /// Markdown report draws its figures with gnuplot (ident/plots.h).
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -87,7 +88,16 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
+  j.key("alarm_rule").begin_object();
+  j.key("p_critical").value(r.alarm_rule.p_critical);
+  j.key("tests").value(static_cast<long long>(r.alarm_rule.tests));
+  j.key("family_wise").value(r.alarm_rule.family_wise);
+  j.end_object();
   j.key("located").begin_object();
+  j.key("excitation").begin_array();
+  for (const auto& x : r.located.excitation) j.value(x);
+  j.end_array();
+  j.key("note").value(r.located.note);
   j.key("time").begin_array();
   for (const auto& f : r.located.time) {
     j.begin_object();
@@ -97,6 +107,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.key("end_s").value(f.end_s);
     j.key("energy_share").value(f.energy_share);
     j.key("time_share").value(f.time_share);
+    j.key("p_value").value(f.p_value);
     j.end_object();
   }
   j.end_array();
@@ -140,6 +151,22 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.key("white_after").value(o.white_after);
     j.key("peak_psd_before").value(o.peak_psd_before);
     j.key("peak_psd_after").value(o.peak_psd_after);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("bands").begin_array();
+  for (const auto& b : r.gap_bands) {
+    j.begin_object();
+    j.key("name").value(b.name);
+    j.key("equations").begin_array();
+    for (const auto& e : b.equations) j.value(e);
+    j.end_array();
+    j.key("lo_hz").value(b.lo_hz);
+    j.key("hi_hz").value(b.hi_hz);
+    j.key("before").value(b.before);
+    j.key("after").value(b.after);
+    j.key("wideband").value(b.wideband);
+    j.key("note").value(b.note);
     j.end_object();
   }
   j.end_array();
@@ -203,6 +230,17 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
                   x.white_before ? "yes" : "no", x.white_after ? "yes" : "no");
     o << line;
   }
+  o << "gap by band (where the evidence lives; each band's share of the gap, mean over its equations)\n";
+  for (const auto& b : r.gap_bands) {
+    std::string eqs;
+    for (const auto& e : b.equations) eqs += (eqs.empty() ? "" : ",") + e;
+    char line[240];
+    std::snprintf(line, sizeof line, "  %-32s %-7s %7.3g-%-7.3g Hz  %10.4g -> %10.4g  (%+.0f %%)%s\n", b.name.c_str(),
+                  eqs.c_str(), b.lo_hz, b.hi_hz, b.before, b.after,
+                  b.before > 0.0 ? 100.0 * (b.after / b.before - 1.0) : 0.0, b.wideband ? "  wideband data" : "");
+    o << line;
+    if (!b.note.empty()) o << "    " << b.note << "\n";
+  }
   if (!r.closed_loop.empty()) {
     o << "\nclosed loop (model flown by the controller copy on phi_sp";
     if (!r.closed_loop_note.empty()) o << ", " << r.closed_loop_note;
@@ -229,7 +267,11 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     }
     o << "\n";
   }
-  o << "\nlocated (baseline structure's residual)\n";
+  o << "\nlocated (baseline structure's residual, beside the linear response to the excitation";
+  for (const auto& x : r.located.excitation) o << " " << x;
+  o << "; each test at p_critical " << g(r.alarm_rule.p_critical) << ", " << r.alarm_rule.tests
+    << " alarm tests in all: any alarm on a record with nothing missing <= " << g(r.alarm_rule.family_wise) << ")\n";
+  if (!r.located.note.empty()) o << "  " << r.located.note << "\n";
   for (const auto& f : r.located.frequency) {
     o << "  frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio)
       << " x local background (p " << g(f.p_value) << ")\n";
@@ -238,8 +280,19 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
       << ", p " << g(f.p_value) << ")\n";
   }
-  if (r.located.frequency.empty() && r.located.state.empty()) o << "  no significant frequency peak or state dependence\n";
   for (const auto& f : r.located.time) {
+    if (f.what != "excess") continue;
+    o << "  time: " << f.output << " error larger " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
+      << " s than in the rest of the record (p " << g(f.p_value) << ")\n";
+  }
+  const bool excess = std::any_of(r.located.time.begin(), r.located.time.end(),
+                                  [](const TimeFinding& f) { return f.what == "excess"; });
+  if (r.located.frequency.empty() && r.located.state.empty() && !excess) {
+    o << "  no periodic component, state dependence or change in time\n";
+  }
+  o << "  where the residual's energy is (descriptive, not tests):\n";
+  for (const auto& f : r.located.time) {
+    if (f.what == "excess") continue;
     o << "  time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
       << " s carries " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
       << g(100.0 * f.time_share, "%.1f") << " % of the time\n";
@@ -319,6 +372,16 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
     md << "| " << t.round << " | " << t.name << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
        << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
        << " | " << t.reason << " |\n";
+  }
+  md << "\n## Gap by band\n\n| band | equations | Hz | before | after |\n|---|---|---|---|---|\n";
+  for (const auto& b : r.gap_bands) {
+    std::string eqs;
+    for (const auto& e : b.equations) eqs += (eqs.empty() ? "" : ", ") + e;
+    md << "| " << b.name << (b.wideband ? " (wideband data)" : "") << " | " << eqs << " | " << g(b.lo_hz) << "-"
+       << g(b.hi_hz) << " | " << g(b.before) << " | " << g(b.after) << " |\n";
+  }
+  for (const auto& b : r.gap_bands) {
+    if (!b.note.empty()) md << "\n" << b.name << ": " << b.note << "\n";
   }
   md << "\n## Located\n\n";
   for (const auto& f : r.located.frequency) {

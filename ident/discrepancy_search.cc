@@ -436,7 +436,8 @@ double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo
 
 /// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
 CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
-                              double p_critical, const BatchRule& batch) {
+                              double p_critical, const BatchRule& batch,
+                              std::vector<VectorXd>* heldout_before, std::vector<VectorXd>* heldout_after) {
   CandidateTrial t;
   t.name = "flapping_forcing";
   t.round = m.effect_names.size() + 1;
@@ -518,6 +519,8 @@ CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds&
     }
   }
   heldout_drop(before, after, batch, t.heldout_drop, t.heldout_se);
+  if (heldout_before) *heldout_before = before;
+  if (heldout_after) *heldout_after = after;
   const bool significant = t.p_value <= p_critical;
   const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
   const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
