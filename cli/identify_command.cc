@@ -172,7 +172,8 @@ int run_identify_command(const std::vector<std::string>& args) {
 }
 
 int run_discrepancy_command(const std::vector<std::string>& args) {
-  std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
+  std::vector<std::string> data_files;
+  std::string model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
   CommandLine cl("rig discrepancy",
@@ -180,7 +181,11 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                  "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
   cl->footer("Exit code: 0 whatever the verdict; 2 bad usage or input.");
-  cl->add_option("data", data_file, "flight data: identification CSV or a rig log (.lcmlog)")->required();
+  cl->add_option("data", data_files,
+                 "flight data: identification CSV or a rig log (.lcmlog); several flights of the same vehicle are "
+                 "pooled (each its own folds and noise level; an effect named only on the pooled evidence, each "
+                 "flight's estimate listed with a test that they agree)")
+      ->required();
   cl->add_option("--model", model_file, "the model (lateral3) to check")->type_name("FILE")->required();
   add_salvage(cl, log_options);
   add_vehicle(cl, vehicle_file, "the model's");
@@ -221,19 +226,24 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);
-  ident::FlightData data;
-  if (ident::is_lcm_log(data_file)) {
-    ident::RigLogData log = ident::read_rig_log(data_file, ident::StateSource::kAuto, log_options);
-    warn_damage("rig discrepancy", data_file, log.damage);
-    data = std::move(log.measured);
-    if (gains.empty()) gains = log.gain_set;  // the gains the run flew
-  } else {
-    data = ident::read_flight_csv(data_file);
+  std::vector<ident::FlightData> flights;
+  for (const auto& data_file : data_files) {
+    if (ident::is_lcm_log(data_file)) {
+      ident::RigLogData log = ident::read_rig_log(data_file, ident::StateSource::kAuto, log_options);
+      warn_damage("rig discrepancy", data_file, log.damage);
+      flights.push_back(std::move(log.measured));
+      if (gains.empty()) gains = log.gain_set;  // the gains the (first) run flew
+    } else {
+      flights.push_back(ident::read_flight_csv(data_file));
+    }
   }
   if (gains.empty()) gains = "fast";
-  ident::DiscrepancyResult result = ident::find_discrepancy(data, model, vehicle, opt);
+  ident::DiscrepancyResult result = ident::find_discrepancy(flights, model, vehicle, opt);
+  const ident::FlightData& data = flights.front();
   // Closed loop before and after, as rig validate --closed-loop.
-  if (!data.has("phi_sp")) {
+  if (flights.size() > 1) {
+    result.closed_loop_note = "not flown for pooled flights: run rig discrepancy on one flight for it";
+  } else if (!data.has("phi_sp")) {
     result.closed_loop_note = "the data has no phi_sp";
   } else {
     try {
@@ -251,6 +261,8 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
       result.closed_loop_note = std::string("not flown: ") + e.what();
     }
   }
+  std::string data_file;
+  for (const auto& f : data_files) data_file += (data_file.empty() ? "" : ", ") + f;
   if (!model_out.empty()) {
     ident::write_model_yaml(result.augmented_model, model_out,
                             {"Refit by rig discrepancy from " + data_file + " on " + model_file + ".",

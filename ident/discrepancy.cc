@@ -76,7 +76,11 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
           if (a.eq != b.eq) continue;
           const MatrixXd X = m.X(a.eq);
           for (const auto& ca : a.cols) {
-            for (const auto& cb : b.cols) rho_max = std::max(rho_max, std::fabs(residual_correlation(X, ca, cb)));
+            for (const auto& cb : b.cols) {
+              const VectorXd& w = m.eqs[a.eq].w;
+              rho_max = std::max(rho_max, std::fabs(w.size() ? residual_correlation(X, ca.cwiseProduct(w), cb.cwiseProduct(w))
+                                                              : residual_correlation(X, ca, cb)));
+            }
           }
         }
       }
@@ -224,8 +228,8 @@ void name_effects(const Model& m, DiscrepancyResult& res) {
 /// time), each test at the workflow's p_critical; and the descriptive energy shares of the
 /// manoeuvres, hovers and heaviest windows. Returns the number of alarm tests run.
 std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
-                   const std::vector<VectorXd>& base_resid, const BatchRule& batch, double p_critical,
-                   DiscrepancyResult& res) {
+                   const std::vector<VectorXd>& base_resid, const BatchRule& batch, const Folds& folds,
+                   double p_critical, DiscrepancyResult& res) {
   const Segments seg = find_segments(d, options.segments);
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
     time_findings(m.eqs[e].output, base_resid[e] / m.eqs[e].scale, d, seg, options.window_s, res.located.time);
@@ -242,7 +246,7 @@ std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, cons
   const double f_hi = options.processing.filter_order > 0 ? 0.8 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   std::size_t tests = 0;
   const LocationRule rule{p_critical, batch.min_block, options.gust_band_hz, options.gust_band_alpha,
-                          make_folds(d.size(), options.folds), options.heldout_sigmas};
+                          folds, options.heldout_sigmas};
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
     // The baseline structure without the effects that entered (it is what the gap starts from).
     const MatrixXd X = augmented_design(m.eqs[e], {});
@@ -288,6 +292,10 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
       s << ", " << fmt(b.before) << " -> " << fmt(b.after) << " in " << b.name << "'s band " << fmt(b.lo_hz) << "-"
         << fmt(b.hi_hz) << " Hz (" << eqs << (b.wideband ? ", wideband data" : "") << ")";
     }
+    for (const auto& c : res.consistency) {
+      s << "; " << c.effect << (c.same ? " the same in all " : " not the same in all ") << res.flights.size()
+        << " flights (p " << fmt(c.p_value) << (c.same ? ")" : ", " + c.differs + " differs most)");
+    }
     if (gust_result.entered) {
       s << " (lateral_gust is random: it has no regressor and leaves the gap as it is; its evidence is the "
            "residual spectrum)";
@@ -306,13 +314,13 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
 }
 
 /// The model refit with the named effects (its effects: section), as --model-out writes it.
-DerivativeModel augmented_model(const FlightData& data, const DerivativeModel& model,
+DerivativeModel augmented_model(const std::string& source, const DerivativeModel& model,
                                 const std::vector<std::string>& inputs, const std::vector<std::string>& known,
                                 const DiscrepancyResult& res) {
   // The augmented model.
   DerivativeModel am = model;
   am.name = model.name + "_augmented";
-  am.source = "rig discrepancy " + data.source + " on " + model.name;
+  am.source = "rig discrepancy " + source + " on " + model.name;
   am.inputs = inputs;
   am.derivatives.clear();
   am.published_sigma.clear();
@@ -344,23 +352,38 @@ DerivativeModel augmented_model(const FlightData& data, const DerivativeModel& m
 
 DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                    const DiscrepancyOptions& options) {
+  return find_discrepancy(std::vector<FlightData>{data}, model, vehicle, options);
+}
+
+DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const DerivativeModel& model,
+                                   const Vehicle& vehicle, const DiscrepancyOptions& options) {
   check_request(model, options);
+  if (flights.empty()) throw std::invalid_argument("discrepancy: no flight data");
+  const bool pooled = flights.size() > 1;
 
   DiscrepancyResult res;
-  res.source = data.source;
   res.model_name = model.name;
   const std::vector<std::string> inputs = options.inputs.empty() ? model.inputs : options.inputs;
-  for (const auto& in : inputs) {
-    if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
+  // Each flight prepared on its own (filter, derivatives, the applied command), then joined.
+  std::vector<UniformData> prepared;
+  for (const FlightData& data : flights) {
+    for (const auto& in : inputs) {
+      if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
+    }
+    PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
+    add_applied_command(prep.filtered, options.command_latency_s);
+    if (prep.filtered.size() < static_cast<Index>(50 * options.folds)) {
+      throw DataError(data.source, -1, -1, "", std::to_string(prep.filtered.size()) + " samples are too few for " +
+                                                   std::to_string(options.folds) + "-fold cross-validation");
+    }
+    prepared.push_back(std::move(prep.filtered));
   }
-  PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
-  add_applied_command(prep.filtered, options.command_latency_s);
-  const UniformData& d = prep.filtered;
+  std::vector<std::pair<Index, Index>> rows;
+  const UniformData d = join_flights(prepared, rows);
+  prepared.clear();
+  const FlightData& data = flights.front();
+  res.source = d.source;
   const Index n = d.size();
-  if (n < static_cast<Index>(50 * options.folds)) {
-    throw DataError(data.source, -1, -1, "", std::to_string(n) + " samples are too few for " +
-                                                 std::to_string(options.folds) + "-fold cross-validation");
-  }
   res.rate_hz = d.rate_hz;
   res.cutoff_hz = options.processing.filter_order > 0 ? options.processing.cutoff_hz : 0.0;
   res.t_s = d.t_s;
@@ -373,7 +396,7 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   std::map<std::string, double> known_values;
   Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
 
-  Workflow wf{options, vehicle, model, d, make_folds(n, options.folds), {}, 0.0};
+  Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0};
   wf.batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
   wf.p_critical = chi_square_survival(options.partial_f, 1.0);
 
@@ -385,14 +408,28 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
     }
   }
 
-  // Baseline fit and its held-out residuals.
+  // Baseline fit and its held-out residuals; pooled flights weighted by their own noise levels.
   std::vector<VectorXd> base_resid;
   res.baseline = full_fit(m, wf.batch, &base_resid);
+  if (pooled) {
+    const auto level = weight_flights(m, base_resid, rows);
+    for (std::size_t f = 0; f < flights.size(); ++f) {
+      FlightEstimate fe;
+      fe.source = flights[f].source;
+      fe.samples = static_cast<std::size_t>(rows[f].second - rows[f].first);
+      fe.start_s = d.t_s[rows[f].first];
+      fe.end_s = d.t_s[rows[f].second - 1];
+      for (std::size_t e = 0; e < m.eqs.size(); ++e) fe.noise[m.eqs[e].name] = level[f][e] / m.eqs[e].scale;
+      res.flights.push_back(std::move(fe));
+    }
+    base_resid.clear();
+    res.baseline = full_fit(m, wf.batch, &base_resid);
+  }
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
 
   stepwise_search(wf, pool, known, m, res);
   std::vector<BandGap> wide_bands;
-  wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
+  if (!pooled) wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
 
   // The augmented fit and the gap after.
   std::vector<VectorXd> aug_resid;
@@ -401,14 +438,15 @@ DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel
   const CandidateTrial gust_result = gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
   name_effects(m, res);
   if (gust_result.entered) res.effects.push_back({gust_result.name, gust_result.parameters, gust_result.sigma});
-  const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.p_critical, res);
+  const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
   res.alarm_rule.p_critical = wf.p_critical;
   res.alarm_rule.tests = res.candidates.size() + location_tests;
   res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;
   gap_table(d, model, options, known_values, m, cv_before, cv_after, res);
   gap_bands(d, options, m, cv_before, cv_after, std::move(wide_bands), res);
+  if (pooled) flight_consistency(m, wf.batch, rows, options.consistency_alpha, res);
   judge(gust_result, res);
-  res.augmented_model = augmented_model(data, model, inputs, known, res);
+  res.augmented_model = augmented_model(res.source, model, inputs, known, res);
   return res;
 }
 

@@ -162,6 +162,7 @@ struct DiscrepancyOptions {
   /// throttle the manoeuvre commands. Data from an open-loop flight should name its commanded
   /// input here (e.g. delta_f_cmd); with none of them in the data the location tests are not run.
   std::vector<std::string> excitation{"phi_sp", "delta_t"};
+  double consistency_alpha = 0.01;    ///< level of the test that pooled flights agree on an effect
   double window_s = 1.0;              ///< time location windows [s]
   std::size_t whiteness_lags = 50;
   SegmentOptions segments;            ///< manoeuvre / hover segments of the time location
@@ -276,6 +277,26 @@ struct AlarmRule {
   double family_wise = 0.0;   ///< the bound tests * p_critical
 };
 
+/// One flight of a pooled analysis: its rows, noise level and its own estimate of each named
+/// effect's parameters (the final model refit on its rows alone).
+struct FlightEstimate {
+  std::string source;
+  std::size_t samples = 0;
+  double start_s = 0.0, end_s = 0.0;        ///< its rows on the pool's time line
+  std::map<std::string, double> noise;      ///< per equation: RMS of the baseline residual [scaled]
+  std::map<std::string, double> parameters, sigma;  ///< the named effects' parameters
+};
+
+/// Whether a named effect is the same in all flights: Cochran's Q of the flights' estimates of
+/// its parameters against their inverse-covariance weighted mean, chi2 with (flights - 1) k
+/// degrees of freedom.
+struct FlightConsistency {
+  std::string effect;
+  double q = 0.0, dof = 0.0, p_value = 1.0;
+  bool same = true;        ///< p_value > consistency_alpha
+  std::string differs;     ///< the flight whose estimate contributes most to Q, when not the same
+};
+
 /// Closed-loop comparison of one signal (rig validate --closed-loop): the model as given and
 /// the augmented model, each flown by the controller copy on the data's phi_sp.
 struct ClosedLoopGap {
@@ -316,6 +337,10 @@ struct DiscrepancyResult {
   /// with the reason in closed_loop_note (when flown, the note names the gain set).
   std::vector<ClosedLoopGap> closed_loop;
   std::string closed_loop_note;
+  /// Pooled flights (find_discrepancy of several): each flight, and each named effect's
+  /// consistency over them. Empty for one flight.
+  std::vector<FlightEstimate> flights;
+  std::vector<FlightConsistency> consistency;
 };
 
 /// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally
@@ -324,6 +349,15 @@ struct DiscrepancyResult {
 ///         for an unknown candidate name, a non-lateral3 model or invalid options.
 DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                    const DiscrepancyOptions& options);
+
+/// The workflow on several flights of the same vehicle at once: each flight prepared on its own
+/// and given its own held-out folds and its own noise level (its rows weighted by the pool's
+/// residual level over its own), the evidence pooled, so an effect is named only when the pooled
+/// test passes; then each flight's estimate of each named effect and whether they agree
+/// (DiscrepancyResult::flights, consistency). The flapping forcing is not tried on a pool (its
+/// phase is each flight's own): run it on each flight. With one flight, as find_discrepancy.
+DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const DerivativeModel& model,
+                                   const Vehicle& vehicle, const DiscrepancyOptions& options);
 
 /// JSON report (keys verdict, effects, candidates, located, gap; see rig discrepancy --help).
 std::string discrepancy_json(const DiscrepancyResult& result);

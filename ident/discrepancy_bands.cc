@@ -174,7 +174,9 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
         if (!mine) continue;
         for (std::size_t j = 0; j < add.cols.size(); ++j) {
           const auto it = res.augmented.find(add.names[j]);
-          if (it != res.augmented.end()) contribution[e] += add.cols[j] * it->second.value;
+          if (it == res.augmented.end()) continue;
+          contribution[e] += (m.eqs[e].w.size() ? VectorXd(add.cols[j].cwiseProduct(m.eqs[e].w)) : add.cols[j]) *
+                             it->second.value;
         }
         if (std::find(eqs.begin(), eqs.end(), e) == eqs.end()) eqs.push_back(e);
       }

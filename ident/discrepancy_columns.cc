@@ -134,7 +134,7 @@ std::vector<Addition> candidate_columns(const CandidateSpec& spec, const Uniform
 MatrixXd augmented_design(const Eq& eq, const std::vector<Addition>& adds) {
   std::vector<VectorXd> cols = eq.cols;
   for (const auto& a : adds) {
-    for (const auto& c : a.cols) cols.push_back(c);
+    for (const auto& c : a.cols) cols.push_back(eq.w.size() ? VectorXd(c.cwiseProduct(eq.w)) : c);
   }
   return design(cols);
 }

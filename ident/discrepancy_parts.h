@@ -32,9 +32,13 @@ struct Eq {
   std::string output;  // "p_dot", "v_dot_star", "delta_f_dot"
   std::string unit;
   double scale = 1.0;
-  VectorXd y;          // scale * dependent
+  VectorXd y;          // scale * dependent (times w)
   std::vector<std::string> names;
-  std::vector<VectorXd> cols;
+  std::vector<VectorXd> cols;  // times w
+  /// Row weights when flights are pooled (each flight's rows 1 / its noise level, relative to
+  /// the pool's); empty: none. y and cols carry them; augmented_design() applies them to added
+  /// columns.
+  VectorXd w;
 };
 
 /// A set of columns added to equation `eq`.
@@ -46,7 +50,7 @@ struct Addition {
 
 MatrixXd design(const std::vector<VectorXd>& cols);
 
-/// The columns of `eq` with `adds` (for this equation) appended.
+/// The columns of `eq` with `adds` (for this equation, weighted by eq.w) appended.
 MatrixXd augmented_design(const Eq& eq, const std::vector<Addition>& adds);
 
 struct FoldStats {
@@ -451,5 +455,29 @@ void gap_table(const UniformData& d, const DerivativeModel& model, const Discrep
 void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
                const std::vector<VectorXd>& cv_before, const std::vector<VectorXd>& cv_after, std::vector<BandGap> wide,
                DiscrepancyResult& res);
+
+// --- discrepancy_pool.cc ---
+
+/// Flights prepared one by one (their own filter and derivatives) and joined end to end: the
+/// signals every flight has, time running on (each flight after the last, one sample apart).
+/// `rows` gets each flight's [first, last) rows. (A delayed column's first samples of a flight
+/// see the end of the one before: at most delay_max_s of each.)
+UniformData join_flights(const std::vector<UniformData>& flights, std::vector<std::pair<Index, Index>>& rows);
+
+/// K contiguous folds in each flight: every fold of the pool is one block of one flight, so each
+/// flight has its own held-out folds.
+Folds flight_folds(const std::vector<std::pair<Index, Index>>& rows, std::size_t k);
+
+/// Weights each flight's rows of every equation by the pool's residual level over the flight's
+/// own (the baseline fit's residuals `resid`), so that a noisy flight does not outweigh a quiet one
+/// (weighted least squares with each flight's own noise level); returns the levels per flight
+/// and equation.
+std::vector<std::vector<double>> weight_flights(Model& m, const std::vector<VectorXd>& resid,
+                                                const std::vector<std::pair<Index, Index>>& rows);
+
+/// Each flight's estimate of each named effect's parameters (the final model refit on its rows
+/// alone) and the test that they are the same in all flights (Cochran's Q).
+void flight_consistency(const Model& m, const BatchRule& batch, const std::vector<std::pair<Index, Index>>& rows,
+                        double alpha, DiscrepancyResult& res);
 
 }  // namespace nimble::ident::discrepancy_parts

@@ -185,6 +185,34 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   }
   j.end_array();
   j.end_object();
+  j.key("flights").begin_array();
+  for (const auto& f : r.flights) {
+    j.begin_object();
+    j.key("source").value(f.source);
+    j.key("samples").value(static_cast<long long>(f.samples));
+    j.key("start_s").value(f.start_s);
+    j.key("end_s").value(f.end_s);
+    j.key("noise");
+    number_map(j, f.noise);
+    j.key("parameters");
+    number_map(j, f.parameters);
+    j.key("sigma");
+    number_map(j, f.sigma);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("consistency").begin_array();
+  for (const auto& c : r.consistency) {
+    j.begin_object();
+    j.key("effect").value(c.effect);
+    j.key("q").value(c.q);
+    j.key("dof").value(c.dof);
+    j.key("p_value").value(c.p_value);
+    j.key("same").value(c.same);
+    j.key("differs").value(c.differs);
+    j.end_object();
+  }
+  j.end_array();
   auto params = [&](const char* key, const std::map<std::string, ParameterEstimate>& m) {
     j.key(key).begin_object();
     for (const auto& [name, e] : m) {
@@ -217,6 +245,25 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
         if (s != e.sigma.end()) o << "  (sigma " << g(s->second) << ")";
         o << "\n";
       }
+    }
+    o << "\n";
+  }
+  if (!r.flights.empty()) {
+    o << "pooled flights (each its own folds and noise level; each flight's own estimate of the named effects)\n";
+    for (const auto& f : r.flights) {
+      o << "  " << f.source << ": " << f.samples << " samples, noise";
+      for (const auto& [eq, v] : f.noise) o << " " << eq << " " << g(v);
+      o << "\n";
+      for (const auto& [k, v] : f.parameters) {
+        const auto sg = f.sigma.find(k);
+        o << "    " << k << " = " << g(v);
+        if (sg != f.sigma.end()) o << "  (sigma " << g(sg->second) << ")";
+        o << "\n";
+      }
+    }
+    for (const auto& c : r.consistency) {
+      o << "  " << c.effect << " in all flights: Q " << g(c.q) << " on " << g(c.dof) << " dof, p " << g(c.p_value)
+        << (c.same ? ": the same in all flights" : ": not the same; " + c.differs + " differs most") << "\n";
     }
     o << "\n";
   }

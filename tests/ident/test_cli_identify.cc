@@ -314,6 +314,15 @@ TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and 
   CHECK_FALSE(j["gap"]["metric"].as<std::string>().empty());
   CHECK(j["gap"]["after"].as<double>() < j["gap"]["before"].as<double>());
   CHECK(j["gap"]["outputs"].size() == 2);
+  // The gap where the effect lives, beside the identification band; the alarm rule.
+  REQUIRE(j["gap"]["bands"].size() >= 2);
+  CHECK(j["gap"]["bands"][0]["name"].as<std::string>() == "identification band");
+  CHECK(j["gap"]["bands"][1]["name"].as<std::string>() == "kinematic_coupling");
+  CHECK(j["gap"]["bands"][1]["after"].as<double>() < 0.8 * j["gap"]["bands"][1]["before"].as<double>());
+  CHECK(j["alarm_rule"]["family_wise"].as<double>() < 0.01);
+  CHECK(j["located"]["excitation"].size() == 2);
+  CHECK(j["flights"].size() == 0);
+  CHECK(r.out.find("gap by band") != std::string::npos);
   CHECK(load_model(model).effects.count("kinematic_coupling") == 1);
   // Closed loop: the data has phi_sp, so both models are flown by the rig's controller copy
   // (the generator's own PD loop is another controller: the figures are only present here;
@@ -325,6 +334,23 @@ TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and 
     CHECK(fs::file_size(fs::path(report) / file) > 1000);
   }
   CHECK(slurp(report + "/report.md").find("kinematic_coupling") != std::string::npos);
+
+  // Several flights pooled: each listed with its own estimate, and whether they agree.
+  o.seed = 4;
+  const std::string csv2 = (dir / "flight2.csv").string(), pooled_json = (dir / "pooled.json").string();
+  write_flight_csv(ident::test::generate_flight(set1, vehicle, hidden, o), csv2);
+  const Result pooled = run_rig("discrepancy " + csv + " " + csv2 + " --model " + std::string(RIG_SOURCE_DIR) +
+                                "/rig_configs/models/nimble_lateral_set1.yaml --json " + pooled_json);
+  INFO(pooled.out << pooled.err);
+  REQUIRE(pooled.exit_code == 0);
+  CHECK(pooled.out.find("pooled flights") != std::string::npos);
+  const YAML::Node pj = YAML::LoadFile(pooled_json);
+  REQUIRE(pj["flights"].size() == 2);
+  CHECK(pj["flights"][1]["source"].as<std::string>().find("flight2.csv") != std::string::npos);
+  CHECK(pj["flights"][0]["parameters"]["Y_pw"].as<double>() > 0.0);
+  REQUIRE(pj["consistency"].size() == 1);
+  CHECK(pj["consistency"][0]["effect"].as<std::string>() == "kinematic_coupling");
+  CHECK(pj["closed_loop"]["outputs"].size() == 0);
 
   // Bad usage: exit 2, naming what is wrong.
   const Result no_model = run_rig("discrepancy " + csv);
