@@ -186,6 +186,12 @@ struct ChangeProfile {
   double min_blocks() const;
 };
 
+/// An equation's model columns and dependent high-passed above the gust band.
+struct HighPassed {
+  MatrixXd X;
+  VectorXd y;
+};
+
 struct Workflow {
   const DiscrepancyOptions& opt;
   const Vehicle& vehicle;
@@ -194,6 +200,10 @@ struct Workflow {
   Folds folds;
   BatchRule batch;
   double p_critical = 0.0;
+  /// Per equation, the stepwise model's columns high-passed (above_gust_band): the same for every
+  /// candidate of a round, computed again when the model has gained columns. The model of the
+  /// search only grows, so its number of columns names it.
+  mutable std::map<std::size_t, HighPassed> high_passed;
 
   /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
   /// the additions it would make.

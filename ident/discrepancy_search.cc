@@ -111,12 +111,21 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
 double Workflow::above_gust_band(const Model& m, const ScanPoint& P, std::size_t scan_points) const {
   double p_hp = 1.0;
   for (const auto& a : P.adds) {
-    std::vector<Addition> all = m.added[a.eq];
-    all.push_back(a);
-    const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
-    MatrixXd C(C0.rows(), C0.cols());
-    for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
-    const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+    // The model's columns and y high-passed once per round (every candidate of a round has
+    // them), the candidate's columns here.
+    HighPassed& model_hp = high_passed[a.eq];
+    const MatrixXd X = m.X(a.eq);
+    if (model_hp.X.cols() != X.cols() || model_hp.X.rows() != X.rows()) {
+      model_hp.X.resize(X.rows(), X.cols());
+      for (Index j = 0; j < X.cols(); ++j) model_hp.X.col(j) = high_pass(X.col(j), opt.gust_band_hz, data.rate_hz);
+      model_hp.y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+    }
+    MatrixXd C(X.rows(), X.cols() + static_cast<Index>(a.cols.size()));
+    C.leftCols(X.cols()) = model_hp.X;
+    for (std::size_t j = 0; j < a.cols.size(); ++j) {
+      C.col(X.cols() + static_cast<Index>(j)) = high_pass(a.cols[j], opt.gust_band_hz, data.rate_hz);
+    }
+    const VectorXd& y = model_hp.y;
     VectorXd theta;
     const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
     if (!solve(fs.Gt, fs.bt, theta)) continue;
