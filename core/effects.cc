@@ -61,6 +61,22 @@ const std::vector<EffectSpec>& effect_registry() {
        {{"L", "Lr", "r"}, {"Y", "Yr", "r"}},
        false, false, false,
        "the yaw-rate derivatives Lr, Yr (inert on a lateral3 model: r held at trim)"},
+      {"effectiveness_drift",
+       "(t - t_mid) delta_f in roll moment and side force: the flap input's effectiveness drifts over the "
+       "flight (battery sag), named with its rate as a fraction of L_df per minute (plant effect "
+       "effectiveness_drift)",
+       {},
+       {{"L", "L_df_rate", "(t - t_mid) delta_f"}, {"Y", "Y_df_rate", "(t - t_mid) delta_f"}},
+       false, false, false,
+       "effects.effectiveness_drift: L_df, Y_df x (1 + rate_per_min (t - t_ref) / 60)"},
+      {"effectiveness_step",
+       "H(t - t*) delta_f in roll moment and side force: the flap input's effectiveness changes at an "
+       "unknown time t* (a damaged wing), t* scanned over the record away from its ends, named with "
+       "t_change_s and the fractional change (plant effect effectiveness_step)",
+       {},
+       {{"L", "L_df_step", "H(t - t*) delta_f"}, {"Y", "Y_df_step", "H(t - t*) delta_f"}},
+       true, false, false,
+       "effects.effectiveness_step: L_df x (1 + roll_fraction), Y_df x (1 + side_fraction) from t_change_s on"},
       {"flapping_forcing",
        "sin and cos of h 2 pi f t (h = 1, 2) in roll moment and side force: periodic forcing at the flapping "
        "frequency f, scanned over 10-25 Hz on data low-passed above the band (plant effect flapping_forcing)",

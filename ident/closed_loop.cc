@@ -22,6 +22,8 @@ class EffectForces {
       for (const auto& [key, value] : params) {
         if (key == "delay_s") delay_samples_ = std::max<Eigen::Index>(1, std::lround(value * grid.rate_hz));
         if (key == "flapping_hz") flapping_hz_ = value;
+        if (key == "t_mid_s") t_mid_s_ = value;
+        if (key == "t_change_s") t_change_s_ = value;
       }
     }
     for (const auto& [name, params] : model.effects) {
@@ -52,7 +54,8 @@ class EffectForces {
     for (const auto& [name, params] : model_.effects) {
       for (const auto& [key, c] : params) {
         if (key == "delay_s" || key == "flapping_hz" || key.find("_amp") != std::string::npos ||
-            key.find("fraction") != std::string::npos || key.rfind("F_", 0) == 0) {
+            key.find("fraction") != std::string::npos || key.rfind("F_", 0) == 0 || key.rfind("rate_per_min", 0) == 0 ||
+            key.rfind("t_", 0) == 0) {
           continue;  // not a force (F_: the actuator's command delay, command_delay_samples())
         }
         double x = 0.0;
@@ -66,7 +69,9 @@ class EffectForces {
           const std::size_t n = df_hist.size();
           const std::size_t back = static_cast<std::size_t>(delay_samples_);
           x = df_hist[n > back ? n - 1 - back : 0] - df_hist.back();
-        } else if (form == "0") x = 1.0;
+        } else if (form == "df_rate") x = (grid_.t_s[k] - t_mid_s_) * df_hist.back();
+        else if (form == "df_step") x = grid_.t_s[k] >= t_change_s_ ? df_hist.back() : 0.0;
+        else if (form == "0") x = 1.0;
         else if (form == "dd") x = grid_.at("delta_d")[k];
         else if (form == "r") x = grid_.at("r")[k];
         else if (form.rfind("sin", 0) == 0) x = std::sin(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
@@ -91,6 +96,8 @@ class EffectForces {
   const UniformData& grid_;
   Eigen::Index delay_samples_ = 1;
   double flapping_hz_ = 0.0;
+  double t_mid_s_ = 0.0;     ///< effectiveness_drift: the time its L_df, Y_df hold [s]
+  double t_change_s_ = 0.0;  ///< effectiveness_step: the change [s]
 };
 
 }  // namespace

@@ -124,7 +124,7 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
       const CandidateSpec& spec = *find_effect(name);
       Index k = 0;
       for (const auto& t : res.candidates) {
-        if (t.name == name && t.entered && spec.scanned) k = std::lround(t.delay_s * wide.filtered.rate_hz);
+        if (t.name == name && t.entered) k = scan_index(name, t.parameters, wide.filtered);
       }
       for (auto& a : candidate_columns(spec, wide.filtered, model.trim, vehicle.gravity_mps2, k)) wm.added[a.eq].push_back(a);
     }
@@ -205,7 +205,7 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
 
 /// The named effects with their parameters from the augmented fit (flapping forcing is named by
 /// the wideband stage).
-void name_effects(const Model& m, DiscrepancyResult& res) {
+void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
   for (const auto& name : m.effect_names) {
     if (name == "flapping_forcing") continue;  // named with its parameters by the wideband stage
     NamedEffect eff;
@@ -218,7 +218,9 @@ void name_effects(const Model& m, DiscrepancyResult& res) {
       eff.sigma[term.parameter] = it->second.sigma_coloured;
     }
     for (const auto& t : res.candidates) {
-      if (t.name == name && t.entered && spec.scanned) eff.parameters["delay_s"] = t.delay_s;
+      if (t.name != name || !t.entered) continue;
+      if (name == "actuator_delay") eff.parameters["delay_s"] = t.delay_s;
+      time_varying_parameters(m, wf.batch, wf.data, t, eff);  // rate or change time, for effects that change
     }
     res.effects.push_back(std::move(eff));
   }
@@ -341,7 +343,9 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
       if (it != res.augmented.end()) am.effects[name][term.parameter] = it->second.value;
     }
     const auto& given = model.effects.at(name);
-    if (given.count("delay_s")) am.effects[name]["delay_s"] = given.at("delay_s");
+    for (const char* scanned : {"delay_s", "t_change_s"}) {
+      if (given.count(scanned)) am.effects[name][scanned] = given.at(scanned);
+    }
     if (spec.stochastic) am.effects[name] = given;
   }
   for (const auto& e : res.effects) am.effects[e.name] = e.parameters;
@@ -396,7 +400,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::map<std::string, double> known_values;
   Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
 
-  Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0};
+  Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0, {}};
   wf.batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
   wf.p_critical = chi_square_survival(options.partial_f, 1.0);
 
@@ -436,7 +440,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   res.augmented = full_fit(m, wf.batch, &aug_resid);
   const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
   const CandidateTrial gust_result = gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
-  name_effects(m, res);
+  name_effects(m, wf, res);
   if (gust_result.entered) res.effects.push_back({gust_result.name, gust_result.parameters, gust_result.sigma});
   const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
   res.alarm_rule.p_critical = wf.p_critical;

@@ -78,6 +78,15 @@
 ///    model as given and the augmented model in closed loop on the data's phi_sp
 ///    (validate_closed_loop, ident/closed_loop.h) and reports both (closed_loop).
 ///
+/// effectiveness_drift ((t - t_mid) delta_f) and effectiveness_step (H(t - t*) delta_f, t*
+/// scanned every 0.25 s from the end of the first cross-validation block to the start of the
+/// last) change during the record: the step's significance counts Kish's effective blocks of
+/// its coefficient's batch-means variance, its held-out prediction averages over t* by the
+/// training blocks' profile likelihood, and it is named with t_change_s and an interval from
+/// the profile of the residual sum of squares; the drift with its rate per minute of L_df and
+/// a delta-method interval; both enter every equation they have a term in once significant in
+/// one (ident/README.md "Effects that change during a flight").
+///
 /// lateral_gust has no regressor: a side wind v_g enters the side-force equation as -Yv v_g, a
 /// random force with the wind's low-pass spectrum. After the search it is named from that
 /// signature alone: the final Y residual's mean periodogram below gust_band_hz against its
@@ -197,7 +206,10 @@ struct CandidateTrial {
 /// A named effect with its parameters.
 struct NamedEffect {
   std::string name;
-  std::map<std::string, double> parameters;  ///< regression parameters, plus delay_s when scanned
+  /// Regression parameters, plus delay_s when scanned; effectiveness_drift: rate_per_min with
+  /// rate_per_min_lo, _hi (95 %) and t_mid_s; effectiveness_step: t_change_s with
+  /// t_change_lo_s, _hi_s (95 %) and fraction with fraction_lo, _hi.
+  std::map<std::string, double> parameters;
   std::map<std::string, double> sigma;       ///< coloured-residual standard deviations
 };
 

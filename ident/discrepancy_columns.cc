@@ -72,9 +72,10 @@ bool has_actuator_equation(const UniformData& d) {
   return d.has("delta_f_cmd_applied") && d.has("delta_f") && excited(d.at("delta_f_cmd_applied"), "delta_f");
 }
 
-/// The columns of candidate `spec` on the prepared data (delay in samples for actuator_delay).
+/// The columns of candidate `spec` on the prepared data (`scan`: delay in samples for
+/// actuator_delay, sample of the change for effectiveness_step).
 std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
-                                        double g, Index delay_samples) {
+                                        double g, Index scan) {
   const Index n = d.size();
   VectorXd col;
   std::vector<Addition> out;
@@ -108,13 +109,22 @@ std::vector<Addition> candidate_columns(const CandidateSpec& spec, const Uniform
     add(Y, "Y_uv", du.cwiseProduct(v));
   } else if (spec.name == "actuator_delay") {
     const auto& df = d.at("delta_f");
-    const VectorXd c = delayed(df, delay_samples) - df;
+    const VectorXd c = delayed(df, scan) - df;
     add(L, "L_df_delayed", c);
     add(Y, "Y_df_delayed", c);
     if (has_actuator_equation(d)) {
       const auto& cmd = d.at("delta_f_cmd_applied");
-      add(kActuatorEq, "F_cmd_delayed", delayed(cmd, delay_samples) - cmd);
+      add(kActuatorEq, "F_cmd_delayed", delayed(cmd, scan) - cmd);
     }
+  } else if (spec.name == "effectiveness_drift") {
+    const VectorXd c = drift_time(d).cwiseProduct(d.at("delta_f"));
+    add(L, "L_df_rate", c);
+    add(Y, "Y_df_rate", c);
+  } else if (spec.name == "effectiveness_step") {
+    VectorXd c = d.at("delta_f");
+    c.head(std::clamp<Index>(scan, 0, n)).setZero();
+    add(L, "L_df_step", c);
+    add(Y, "Y_df_step", c);
   } else if (spec.name == "sensor_bias") {
     add(L, "L_0", VectorXd::Ones(n));
     add(Y, "Y_0", VectorXd::Ones(n));
@@ -225,9 +235,7 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
         throw DataError(source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
       }
     }
-    const auto delay = params.find("delay_s");
-    const Index k = delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
-    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, k)) {
+    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, scan_index(name, params, d))) {
       for (std::size_t j = 0; j < add.names.size(); ++j) {
         m.eqs[add.eq].names.push_back(add.names[j]);
         m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
@@ -235,6 +243,29 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
     }
   }
   return m;
+}
+
+/// The scan index of effect `name` with parameters `params` on `d`: the delay in samples of
+/// actuator_delay (delay_s, at least one sample), the first sample at or after t_change_s of
+/// effectiveness_step, 0 otherwise.
+Index scan_index(const std::string& name, const std::map<std::string, double>& params, const UniformData& d) {
+  if (name == "actuator_delay") {
+    const auto delay = params.find("delay_s");
+    return delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
+  }
+  if (name == "effectiveness_step") {
+    const auto t = params.find("t_change_s");
+    if (t == params.end()) return 0;
+    const auto first = std::lower_bound(d.t_s.data(), d.t_s.data() + d.size(), t->second);
+    return static_cast<Index>(first - d.t_s.data());
+  }
+  return 0;
+}
+
+/// t - t_mid of the drift's column: the time from the middle of the record [s].
+VectorXd drift_time(const UniformData& d) {
+  const Index n = d.size();
+  return (d.t_s.array() - 0.5 * (d.t_s[0] + d.t_s[n - 1])).matrix();
 }
 
 /// The parameter of the input whose delay actuator_delay tests in equation `eq`: delta_f's

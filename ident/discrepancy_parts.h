@@ -147,14 +147,53 @@ inline constexpr std::size_t kActuatorEq = 2;
 // ---------------------------------------------------------------------------------------
 
 
+/// effectiveness_step's grid of change times t* [s]: one every kChangeGridS, a quarter of a
+/// second, the period of the slowest roll doublet of the identification trains (4 Hz): the
+/// change shows only where delta_f moves, and a doublet is where it does.
+inline constexpr double kChangeGridS = 0.25;
+
 /// One scan point of a candidate (one, or one per delay of a scanned candidate): its columns,
 /// the fold statistics of each equation it touches (indexed by equation) and the sum over the
 /// equations of RSS after over RSS before.
 struct ScanPoint {
-  std::vector<Addition> adds;
+  Index k = 0;  ///< the scan index (candidate_columns' `scan`)
+  /// Per equation, the blocks the coloured covariance of the addition's coefficient rests on
+  /// (effectiveness_step, ChangeProfile::kish); empty: every block of the record counts.
+  std::vector<double> effective_blocks;
+  std::vector<Addition> adds;  ///< columns empty for effectiveness_step: Workflow::columns_of()
   std::vector<FoldStats> stats;
   std::vector<bool> touched;
   double rss_rel = 0.0;
+};
+
+/// effectiveness_step at its best t*, per equation (Workflow::change_profile): the scale of the
+/// profile statistic over t*, 1 / (s2 kappa) (0 where the change does not enter), the effective
+/// number of blocks of its coefficient's coloured variance, and the record's blocks.
+///
+/// The effective number is Kish's, (sum W_b)^2 / sum W_b^2 over the blocks (BatchRule) with W_b
+/// the energy of the coefficient's influence (the row of (C'C)^-1 C') in block b: the
+/// Satterthwaite degrees of freedom of the batch-means variance, a sum of the blocks' squared
+/// scores whose variances go with W_b. The significance of the change takes its Hotelling tail
+/// with it (wald_tail) instead of the record's blocks. The change column is zero before t*, so
+/// at a t* near an end its coefficient rests on the few blocks of manoeuvres after (or before)
+/// it, and the scan's maximum over t* goes where the variance estimate happens to be small:
+/// counting every block took that estimate for far better known than it was (measured: null
+/// records gave p 1.7e-10 at a t* 6 s before the end of a 52 s record, with 239 blocks counted
+/// and 3.2 effective). wald_tail explains why the other candidates, whose columns span the
+/// record, count every block.
+struct ChangeProfile {
+  std::vector<double> scale, kish, blocks;
+
+  /// Leaves the scale only in the equations the change enters (all if it enters none).
+  void restrict_to(const std::vector<bool>& use_eq);
+  /// The fewest blocks of the equations with a scale (0 if none).
+  double min_blocks() const;
+};
+
+/// An equation's model columns and dependent high-passed above the gust band.
+struct HighPassed {
+  MatrixXd X;
+  VectorXd y;
 };
 
 struct Workflow {
@@ -165,6 +204,10 @@ struct Workflow {
   Folds folds;
   BatchRule batch;
   double p_critical = 0.0;
+  /// Per equation, the stepwise model's columns high-passed (above_gust_band): the same for every
+  /// candidate of a round, computed again when the model has gained columns. The model of the
+  /// search only grows, so its number of columns names it.
+  mutable std::map<std::size_t, HighPassed> high_passed;
 
   /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
   /// the additions it would make.
@@ -181,9 +224,54 @@ struct Workflow {
   double above_gust_band(const Model& m, const ScanPoint& P, std::size_t scan_points) const;
   bool heldout(const CandidateSpec& spec, const Model& m, const std::vector<ScanPoint>& points, std::size_t best,
                const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
-               const std::vector<bool>& use_eq, CandidateTrial& t) const;
+               const std::vector<bool>& use_eq, const ChangeProfile& profile, CandidateTrial& t) const;
   void judge(CandidateTrial& t, const std::string& p_eq) const;
+
+  // effectiveness_step (discrepancy_timevarying.cc).
+  /// Every scan point of the change candidate `spec` on the grid (sample indices of t*): the fold
+  /// statistics from those of the model (`base`) and prefix sums, without columns.
+  std::vector<ScanPoint> scan_change(const CandidateSpec& spec, const Model& m, const std::vector<Index>& grid,
+                                     const std::vector<FoldStats>& base, const std::vector<double>& rss_before) const;
+  /// The columns of scan point `pt` (computed again when the scan kept none).
+  std::vector<Addition> columns_of(const CandidateSpec& spec, const ScanPoint& pt) const;
+  /// The profile at the best scan point `P` (ChangeProfile), in every equation it touches.
+  ChangeProfile change_profile(const Model& m, const ScanPoint& P) const;
+  /// The interval of the change time from the profile of the residual sum of squares over the
+  /// scan: t_change_lo_s and t_change_hi_s in the trial's parameters.
+  void change_interval(const Model& m, const std::vector<ScanPoint>& points, std::size_t best,
+                       const ChangeProfile& profile, CandidateTrial& t) const;
+  /// effectiveness_step's held-out predictions (`after`, per equation, each block predicted by the
+  /// fit on the others): averaged over the change times, weighted by their profile likelihood on
+  /// the training blocks. False if a cross-validation fit is singular.
+  bool heldout_change(const CandidateSpec& spec, const Model& m, const std::vector<ScanPoint>& points,
+                      const std::vector<bool>& use_eq, const ChangeProfile& profile,
+                      std::vector<VectorXd>& after) const;
 };
+
+// --- discrepancy_timevarying.cc ---
+
+/// True for the effects that change the flap input's effectiveness during the record
+/// (effectiveness_drift, effectiveness_step).
+inline bool changes_input_effectiveness(const std::string& name) {
+  return name == "effectiveness_drift" || name == "effectiveness_step";
+}
+
+/// effectiveness_step's scan grid: sample indices of t* every kChangeGridS from the end of the
+/// first cross-validation block to the start of the last. The margin at each end is one block
+/// (a tenth of the record with the default 10 folds): both sides of every t* then hold at least
+/// a whole block, so that every training set of the held-out test sees the input before and after
+/// the change, and a change within a block at the record's end, which only that block could
+/// show, is not scanned.
+std::vector<Index> change_grid(const UniformData& d, const Folds& folds);
+
+/// The parameters a named time-varying effect reports beyond its coefficients, from the final fit
+/// of `m` (delta method with the coloured covariance, 95 % intervals with Student t on the batch
+/// means' blocks): effectiveness_drift, rate_per_min = 60 L_df_rate / L_df (the fraction of L_df
+/// at t_mid per minute; from Y when only Y has the term) with rate_per_min_lo, _hi, and t_mid_s;
+/// effectiveness_step, fraction = L_df_step / L_df (the change as a fraction of the value before
+/// it) with fraction_lo, _hi, and t_change_s with its interval from the trial `t` that entered.
+void time_varying_parameters(const Model& m, const BatchRule& batch, const UniformData& d, const CandidateTrial& t,
+                             NamedEffect& eff);
 
 // --- discrepancy_stats.cc ---
 
@@ -281,9 +369,18 @@ bool excited(const VectorXd& x, const std::string& channel);
 
 bool has_actuator_equation(const UniformData& d);
 
-/// The columns of candidate `spec` on the prepared data (delay in samples for actuator_delay).
+/// The columns of candidate `spec` on the prepared data (`scan`: delay in samples for
+/// actuator_delay, sample of the change for effectiveness_step: H(t - t*) is 1 from it on).
 std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
-                                        double g, Index delay_samples);
+                                        double g, Index scan);
+
+/// The scan index of effect `name` with parameters `params` (a model's effects: section or a
+/// trial's parameters) on `d`: the delay in samples of actuator_delay (delay_s, at least one
+/// sample), the first sample at or after t_change_s of effectiveness_step, 0 otherwise.
+Index scan_index(const std::string& name, const std::map<std::string, double>& params, const UniformData& d);
+
+/// t - t_mid of effectiveness_drift's column (t_mid the middle of the record) [s].
+VectorXd drift_time(const UniformData& d);
 
 /// sin and cos of h 2 pi f t, h = 1 .. harmonics, in every equation.
 std::vector<Addition> harmonic_columns(const VectorXd& t_s, double f_hz, int harmonics, const Model& m);

@@ -239,6 +239,21 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
     for (const auto& e : r.effects) {
       o << "  " << e.name << "\n";
+      const auto& q = e.parameters;
+      if (q.count("rate_per_min")) {
+        o << "    drift of the flap input's effectiveness: " << g(100.0 * q.at("rate_per_min")) << " %/min (95 % interval "
+          << g(100.0 * q.at("rate_per_min_lo")) << " .. " << g(100.0 * q.at("rate_per_min_hi")) << ") of its value at t = "
+          << g(q.at("t_mid_s")) << " s\n";
+      }
+      if (q.count("t_change_s")) {
+        o << "    change at t = " << g(q.at("t_change_s")) << " s (95 % interval " << g(q.at("t_change_lo_s")) << " .. "
+          << g(q.at("t_change_hi_s")) << " s)";
+        if (q.count("fraction")) {
+          o << ", the flap input's effectiveness by " << g(100.0 * q.at("fraction")) << " % (" << g(100.0 * q.at("fraction_lo"))
+            << " .. " << g(100.0 * q.at("fraction_hi")) << ")";
+        }
+        o << "\n";
+      }
       for (const auto& [k, v] : e.parameters) {
         const auto s = e.sigma.find(k);
         o << "    " << k << " = " << g(v);
@@ -309,7 +324,9 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
       continue;
     }
     o << t.reason;
-    if (t.scan_points > 1 && t.parameters.count("flapping_hz") == 0) {
+    if (t.parameters.count("t_change_s")) {
+      o << "  [change at " << g(t.parameters.at("t_change_s")) << " s of " << t.scan_points << " scanned]";
+    } else if (t.scan_points > 1 && t.parameters.count("flapping_hz") == 0) {
       o << "  [delay " << g(1e3 * t.delay_s) << " ms of " << t.scan_points << " scanned]";
     }
     o << "\n";

@@ -27,6 +27,7 @@ std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m,
   std::vector<ScanPoint> points;
   for (Index k : delays) {
     ScanPoint pt;
+    pt.k = k;
     pt.adds = candidate_columns(spec, data, model.trim, g, k);
     pt.touched.assign(neq, false);
     pt.stats.resize(neq);
@@ -67,6 +68,7 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
   for (const auto& a : P.adds) {
     AdditionFit f;
     if (!fit_addition(m, a, P.stats[a.eq], rss_before[a.eq], batch, f)) continue;
+    if (!P.effective_blocks.empty()) f.p = wald_tail(f.wald, f.k, P.effective_blocks[a.eq]);
     record(m, a, f, t);
     const std::string& eqname = m.eqs[a.eq].name;
     use_eq[a.eq] = f.p * bonferroni <= p_critical;
@@ -74,7 +76,7 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
       p_min = f.p;
       p_eq = eqname;
     }
-    if (spec.scanned) {
+    if (spec.name == "actuator_delay") {
       // A delayed input acts (mostly) delayed: with the columns delta_f and
       // delta_f(t - tau) - delta_f the delayed fraction is c / theta_df. In closed loop a
       // feedback-driven correlation of delta_f with the filtered equation error also
@@ -93,6 +95,14 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
     }
   }
 
+  // A time-varying effectiveness (effectiveness_drift, effectiveness_step) is one physical change
+  // of the flap input, which acts in roll moment and side force alike: it enters every equation
+  // it has a term in once it is significant in one. Left out of the equation where it is weaker,
+  // the change there would be named again in the next round as another effect (a drift for what
+  // is a step).
+  if (changes_input_effectiveness(spec.name) && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) {
+    for (const auto& a : P.adds) use_eq[a.eq] = true;
+  }
   return p_min;
 }
 
@@ -101,12 +111,21 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
 double Workflow::above_gust_band(const Model& m, const ScanPoint& P, std::size_t scan_points) const {
   double p_hp = 1.0;
   for (const auto& a : P.adds) {
-    std::vector<Addition> all = m.added[a.eq];
-    all.push_back(a);
-    const MatrixXd C0 = augmented_design(m.eqs[a.eq], all);
-    MatrixXd C(C0.rows(), C0.cols());
-    for (Index j = 0; j < C0.cols(); ++j) C.col(j) = high_pass(C0.col(j), opt.gust_band_hz, data.rate_hz);
-    const VectorXd y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+    // The model's columns and y high-passed once per round (every candidate of a round has
+    // them), the candidate's columns here.
+    HighPassed& model_hp = high_passed[a.eq];
+    const MatrixXd X = m.X(a.eq);
+    if (model_hp.X.cols() != X.cols() || model_hp.X.rows() != X.rows()) {
+      model_hp.X.resize(X.rows(), X.cols());
+      for (Index j = 0; j < X.cols(); ++j) model_hp.X.col(j) = high_pass(X.col(j), opt.gust_band_hz, data.rate_hz);
+      model_hp.y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
+    }
+    MatrixXd C(X.rows(), X.cols() + static_cast<Index>(a.cols.size()));
+    C.leftCols(X.cols()) = model_hp.X;
+    for (std::size_t j = 0; j < a.cols.size(); ++j) {
+      C.col(X.cols() + static_cast<Index>(j)) = high_pass(a.cols[j], opt.gust_band_hz, data.rate_hz);
+    }
+    const VectorXd& y = model_hp.y;
     VectorXd theta;
     const FoldStats fs = fold_stats(C, y, {{0, C.rows()}});
     if (!solve(fs.Gt, fs.bt, theta)) continue;
@@ -122,14 +141,20 @@ double Workflow::above_gust_band(const Model& m, const ScanPoint& P, std::size_t
 }
 
 /// The held-out drop of the squared error with the candidate (K-fold; a scanned candidate picks
-/// its delay on the training folds): every sample predicted by a fit that did not see its
-/// block. False if a cross-validation fit is singular.
+/// its delay on the training folds, effectiveness_step averages over its change times:
+/// heldout_change): every sample predicted by a fit that did not see its block. False if a
+/// cross-validation fit is singular.
 bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vector<ScanPoint>& points,
                        std::size_t best, const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
-                       const std::vector<bool>& use_eq, CandidateTrial& t) const {
+                       const std::vector<bool>& use_eq, const ChangeProfile& profile, CandidateTrial& t) const {
   const std::size_t neq = m.eqs.size();
   const std::size_t K = folds.size();
   std::vector<VectorXd> after = base_cv;
+  if (spec.name == "effectiveness_step") {
+    if (!heldout_change(spec, m, points, use_eq, profile, after)) return false;
+    heldout_drop(base_cv, after, batch, t.heldout_drop, t.heldout_se);
+    return true;
+  }
   bool cv_ok = true;
   for (std::size_t k = 0; k < K && cv_ok; ++k) {
     std::size_t pick = best;
@@ -152,7 +177,7 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
       }
     }
     const auto [a, b] = folds[k];
-    for (const auto& add : points[pick].adds) {
+    for (const auto& add : columns_of(spec, points[pick])) {
       if (!use_eq[add.eq] && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) continue;
       std::vector<Addition> all = m.added[add.eq];
       all.push_back(add);
@@ -232,17 +257,21 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     }
   }
   const std::size_t neq = m.eqs.size();
-  std::vector<Index> delays{0};
-  if (spec.scanned) {
+  std::vector<Index> delays{0};  // the scan: delays [samples] of actuator_delay, change samples of effectiveness_step
+  const bool change = spec.name == "effectiveness_step";
+  if (spec.name == "actuator_delay") {
     delays.clear();
     const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
     for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
+  } else if (change) {
+    delays = change_grid(data, folds);
   }
   t.scan_points = delays.size();
 
   std::vector<double> rss_before(neq);
   for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
-  const std::vector<ScanPoint> points = scan(spec, m, delays, rss_before);
+  const std::vector<ScanPoint> points =
+      change ? scan_change(spec, m, delays, base, rss_before) : scan(spec, m, delays, rss_before);
   std::size_t best = 0;
   for (std::size_t i = 1; i < points.size(); ++i) {
     if (points[i].rss_rel < points[best].rss_rel) best = i;
@@ -252,13 +281,24 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     t.reason = "its regressors are not excited or cannot be separated from the model's";
     return t;
   }
-  const ScanPoint& P = points[best];
-  if (spec.scanned) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+  ScanPoint P = points[best];
+  P.adds = columns_of(spec, P);
+  ChangeProfile profile;
+  if (change) {
+    profile = change_profile(m, P);
+    P.effective_blocks = profile.kish;
+  }
+  if (spec.name == "actuator_delay") t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
 
   std::vector<bool> use_eq(neq, false);
   std::string p_eq;
   const double p_min = significance(spec, m, P, rss_before, delays.size(), t, use_eq, p_eq);
-  if (spec.scanned) t.parameters["delay_s"] = t.delay_s;
+  if (spec.name == "actuator_delay") t.parameters["delay_s"] = t.delay_s;
+  if (change) {
+    profile.restrict_to(use_eq);
+    t.parameters["t_change_s"] = data.t_s[P.k];
+    change_interval(m, points, best, profile, t);
+  }
 
   // Confirmation above the gust band: an unmeasured side wind acts through v - v_g and
   // drives v itself, so in closed loop it correlates the equation error with functions of
@@ -269,7 +309,7 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
   // there and is exempt.
   if (!p_eq.empty() && spec.name != "sensor_bias") t.highpass_p = above_gust_band(m, P, delays.size());
   t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
-  if (!heldout(spec, m, points, best, base, base_cv, use_eq, t)) {
+  if (!heldout(spec, m, points, best, base, base_cv, use_eq, profile, t)) {
     t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
     return t;
   }

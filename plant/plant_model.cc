@@ -253,7 +253,7 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   }
   // The plant's effects (plant/effects/registry.h), each adding its loads, in the registry's order.
   const LoadInputs effect_inputs{du, p, v_rel, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), &forcing_phase_roll_,
-                                 &forcing_phase_side_};
+                                 &forcing_phase_side_, t, L_df_ * df, Y_df_ * df};
   for (const PlantEffect& effect : plant_effects()) {
     if (effect.add_loads != nullptr) effect.add_loads(fx, effect_inputs, L, Y);
   }

@@ -7,6 +7,8 @@
 
 #include "plant/effects/actuator_delay.h"
 #include "plant/effects/constant_load.h"
+#include "plant/effects/effectiveness_drift.h"
+#include "plant/effects/effectiveness_step.h"
 #include "plant/effects/flapping_forcing.h"
 #include "plant/effects/forward_speed_coupling.h"
 #include "plant/effects/lateral_gust.h"
@@ -22,6 +24,9 @@ struct LoadInputs {
   double flap_phase_rad = 0.0;  ///< the plant's flapping phase at this instant [rad]
   const std::vector<double>* phases_roll = nullptr;  ///< flapping forcing's seeded phases, roll moment
   const std::vector<double>* phases_side = nullptr;  ///< and side force
+  double t_s = 0.0;             ///< time [s]
+  double roll_input_nm = 0.0;   ///< the roll input's moment of the derivative model, L_df delta_f [N m]
+  double roll_input_n = 0.0;    ///< and its side force, Y_df delta_f [N]
 };
 
 /// Every plant effect's configuration (all off by default).
@@ -32,6 +37,8 @@ struct EffectsConfig {
   ActuatorDelayConfig actuator_delay;
   LateralGustConfig lateral_gust;
   ConstantLoadConfig constant_load;
+  EffectivenessDriftConfig effectiveness_drift;
+  EffectivenessStepConfig effectiveness_step;
 };
 
 }  // namespace nimble::plant

@@ -71,6 +71,26 @@ const std::vector<PlantEffect>& plant_effects() {
        },
        "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); },
        nullptr},  // on the velocity the aerodynamics see: LoadInputs::v_rel
+      {"effectiveness_drift",
+       [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_drift = effectiveness_drift_from(m); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(effectiveness_drift_params(), EffectivenessDriftConfig{}, prefix);
+       },
+       "effectiveness_drift",
+       [](const ModelSection& s, EffectsConfig& e) { effectiveness_drift_from_model(s, e.effectiveness_drift); },
+       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
+         add_effectiveness_drift(e.effectiveness_drift, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+       }},
+      {"effectiveness_step",
+       [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_step = effectiveness_step_from(m); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(effectiveness_step_params(), EffectivenessStepConfig{}, prefix);
+       },
+       "effectiveness_step",
+       [](const ModelSection& s, EffectsConfig& e) { effectiveness_step_from_model(s, e.effectiveness_step); },
+       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
+         add_effectiveness_step(e.effectiveness_step, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+       }},
   };
   return effects;
 }

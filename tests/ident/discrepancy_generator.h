@@ -27,6 +27,11 @@
 ///                         or motor-driver delay: the plant's actuator_delay), tau in [12, 40] ms;
 ///                         the recorded delta_f is the actuator's output, so only the recorded
 ///                         command (GeneratorOptions::record_command) shows it
+///   effectiveness_drift   L_df and Y_df scale with 1 + r t / 60 (t from the record's start):
+///                         battery sag, r in [-0.08, -0.02] per minute (a one-cell LiPo sags
+///                         about 17 % over a flight of a few minutes)
+///   effectiveness_step    L_df and Y_df change by the fraction f from t* on: a damaged wing,
+///                         f in [-0.40, -0.15], t* in the middle 60 % of the record
 ///
 /// With GeneratorOptions::record_command the record carries the controller's command as
 /// channel delta_f_cmd, sampled when it is issued (no measurement noise: it is digital).
@@ -50,6 +55,9 @@ struct HiddenEffects {
   double scale = 1.0;         ///< multiplies every drawn magnitude (small effects: << 1)
   double Y_vv = 0.0, L_vv = 0.0, k_speed = 0.0, delay_s = 0.0, bias_p = 0.0;
   double flap_hz = 17.0, flap_L = 0.0, flap_Y = 0.0, flap_phase1 = 0.0, flap_phase2 = 0.0;
+  double drift_per_min = 0.0;   ///< effectiveness_drift: r [1/min]
+  double step_fraction = 0.0;   ///< effectiveness_step: f
+  double step_at = 0.5;         ///< effectiveness_step: t* as a fraction of the record's length
 };
 
 struct GeneratorOptions {
@@ -81,6 +89,9 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   h.flap_Y = 5.0 * h.flap_L;
   h.flap_phase1 = 2.0 * M_PI * u01(rng);
   h.flap_phase2 = 2.0 * M_PI * u01(rng);
+  h.drift_per_min = -(0.02 + 0.06 * u01(rng)) * h.scale;
+  h.step_fraction = -(0.15 + 0.25 * u01(rng)) * h.scale;
+  h.step_at = 0.2 + 0.6 * u01(rng);
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -98,6 +109,14 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool flap = h.on.count("flapping_forcing") > 0;
   const bool dihedral = h.on.count("dihedral_coupling") > 0, yaw_alias = h.on.count("yaw_alias") > 0;
   const bool cmd_delay = h.on.count("command_delay") > 0;
+  const bool drift = h.on.count("effectiveness_drift") > 0, step = h.on.count("effectiveness_step") > 0;
+  // The flap input's effectiveness at time t (effectiveness_drift, effectiveness_step).
+  auto effectiveness = [&](double t) {
+    double k = 1.0;
+    if (drift) k *= 1.0 + h.drift_per_min * t / 60.0;
+    if (step && t >= h.step_at * o.duration_s) k *= 1.0 + h.step_fraction;
+    return k;
+  };
   const double L_dd = 1.20e-3, Y_dd = -5.41e-2;  // thesis Table B.2
   double ph_d = 0.0;  // drawn below (only when the dihedral acts, so other records keep their noise)
   auto dd_of = [&](double t) {
@@ -156,8 +175,9 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     const double dtp = throttle(t);
     const double vrel = V - (gust ? vg : 0.0);
     const double ks = speed ? 1.0 + h.k_speed * (u_of(t) - 0.0) : 1.0;
-    double L = ks * (Lp * P + Lv * vrel) + L_df * dfin + L_dt * dtp + Lw;
-    double Y = ks * (Yp * P + Yv * vrel) + Y_df * dfin + Y_dt * dtp + Yw;
+    const double ke = effectiveness(t);
+    double L = ks * (Lp * P + Lv * vrel) + ke * L_df * dfin + L_dt * dtp + Lw;
+    double Y = ks * (Yp * P + Yv * vrel) + ke * Y_df * dfin + Y_dt * dtp + Yw;
     if (dihedral) {
       L += L_dd * dd_of(t);
       Y += Y_dd * dd_of(t);

@@ -271,6 +271,8 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
       {"yaw_coupling", {{"Lr", -2.8e-4}, {"Yr", 8.4e-3}}},
       {"flapping_forcing", {{"flapping_hz", 16.5}, {"L_sin1", 1e-3}, {"L_cos1", 1e-3}, {"L_amp1", std::sqrt(2e-6)}}},
       {"lateral_gust", {{"sigma_mps", 0.1}, {"tau_s", 0.5}}},
+      {"effectiveness_drift", {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}, {"rate_per_min", -0.05}, {"t_mid_s", 20.0}}},
+      {"effectiveness_step", {{"L_df_step", -2.6e-5}, {"Y_df_step", 2.2e-4}, {"t_change_s", 12.0}, {"fraction", -0.25}}},
   };
   for (const auto& name : model_effect_names()) {
     INFO("effect " << name);
@@ -293,6 +295,10 @@ TEST_CASE("the effect registry and the plant agree: every regressor parameter of
     if (spec.name == "actuator_delay") section["delay_s"] = 0.02;  // the scanned delay
     if (spec.name == "flapping_forcing") section["flapping_hz"] = 16.5;  // the scanned frequency
     if (spec.name == "lateral_gust") section = {{"sigma_mps", 0.1}, {"tau_s", 0.5}};  // stochastic: no terms
+    if (spec.name == "effectiveness_step") section["t_change_s"] = 12.0;  // the scanned change time
+    // The drift's coefficients are per second of the model's L_df (1.06e-4) and Y_df (-8.63e-4):
+    // 1e-4 would be a rate of 57 per minute; -5 %/min is the plant file's.
+    if (spec.name == "effectiveness_drift") section = {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}};
     INFO("effect " << spec.name);
     CHECK_NOTHROW(make_plant(with_effect(spec.name, section)));
   }
@@ -533,4 +539,87 @@ TEST_CASE("kinematic and gravity terms from the model are the plant's equations 
     b.step(b.trim_command());
   }
   CHECK(b.state() == a.state());
+}
+
+TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df changed by their fractions",
+          "[plant][model_effects]") {
+  const double fL = -0.3, fY = -0.2;
+  ActuatorInput cmd;
+  auto flown = [&](PlantModel plant, int steps) {
+    cmd = plant.trim_command();
+    cmd.flap_freq_left_radps += 10;
+    for (int i = 0; i < steps; ++i) plant.step(cmd);
+    return plant;
+  };
+  // Changed from the start: the same as a model with the changed derivatives.
+  PlantConfig from_start;
+  from_start.effects.effectiveness_step = {true, 0.0, fL, fY};
+  Fixture scaled;
+  scaled.model.derivatives["L_df"] *= 1.0 + fL;
+  scaled.model.derivatives["Y_df"] *= 1.0 + fY;
+  const PlantModel a = flown(make_plant(Fixture{}, from_start), 300), b = flown(make_plant(scaled), 300);
+  CHECK(a.truth().omega_body_radps.x() == Approx(b.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(a.truth().velocity_body_mps.y() == Approx(b.truth().velocity_body_mps.y()).epsilon(1e-9));
+  CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-2);
+  // Changed at 0.3 s: the plain plant's flight until then, another after.
+  PlantConfig later;
+  later.effects.effectiveness_step = {true, 0.3, fL, fY};
+  const int before = static_cast<int>(0.3 / make_plant(Fixture{}).dt_s()) - 1;
+  CHECK(flown(make_plant(Fixture{}, later), before).truth().omega_body_radps.x() ==
+        flown(make_plant(Fixture{}), before).truth().omega_body_radps.x());
+  CHECK(std::fabs(flown(make_plant(Fixture{}, later), 600).truth().omega_body_radps.x() -
+                  flown(make_plant(Fixture{}), 600).truth().omega_body_radps.x()) > 1e-3);
+
+  // From a model: the fractions are the coefficients over the model's L_df and Y_df.
+  const Fixture g = with_effect("effectiveness_step", {{"L_df_step", fL * 1.06e-4}, {"Y_df_step", fY * -8.63e-4},
+                                                       {"t_change_s", 0.3}, {"t_change_lo_s", 0.2}});
+  const PlantModel c = flown(make_plant(g), 600), d = flown(make_plant(Fixture{}, later), 600);
+  CHECK(c.truth().omega_body_radps.x() == Approx(d.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_step", {{"L_df_step", -1e-5}})),
+                    Catch::Contains("effects.effectiveness_step") && Catch::Contains("t_change_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_step", {{"L_df_step", -5e-4}, {"t_change_s", 1.0}})),
+                    Catch::Contains("effects.effectiveness_step.L_df_step / L_df"));
+}
+
+TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 60, clamped at 0, and a model's "
+          "coefficients give the rate",
+          "[plant][model_effects]") {
+  plant::EffectivenessDriftConfig c{true, -0.05, 10.0};
+  double L = 0.0, Y = 0.0;
+  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);  // 30 s after t_ref: -2.5 %
+  CHECK(L == Approx(-0.025 * 2e-3));
+  CHECK(Y == Approx(-0.025 * -1e-2));
+  L = Y = 0.0;
+  plant::add_effectiveness_drift(c, 10.0 + 3600.0, 2e-3, -1e-2, L, Y);  // an hour later: no input left, not reversed
+  CHECK(L == Approx(-2e-3));
+  c.enabled = false;
+  L = 0.0;
+  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);
+  CHECK(L == 0.0);
+
+  // Flown: differs from the plain plant, and not at all with rate 0.
+  auto flown = [](PlantModel plant) {
+    ActuatorInput cmd = plant.trim_command();
+    cmd.flap_freq_left_radps += 10;
+    for (int i = 0; i < 600; ++i) plant.step(cmd);
+    return plant.truth().omega_body_radps.x();
+  };
+  PlantConfig drift, none;
+  drift.effects.effectiveness_drift = {true, -0.5, 0.0};
+  none.effects.effectiveness_drift = {true, 0.0, 0.0};
+  CHECK(flown(make_plant(Fixture{}, none)) == flown(make_plant(Fixture{})));
+  CHECK(std::fabs(flown(make_plant(Fixture{}, drift)) - flown(make_plant(Fixture{}))) > 1e-5);
+
+  // From a model: rate = 60 L_df_rate / L_df (per minute), t_ref = t_mid_s.
+  const Fixture f;
+  const std::map<std::string, double> params{{"L_df_rate", -0.05 / 60.0 * 1.06e-4}, {"Y_df_rate", 1e-6}, {"t_mid_s", 30.0}};
+  plant::EffectivenessDriftConfig m;
+  plant::effectiveness_drift_from_model({f.model, "effectiveness_drift", params}, m);
+  CHECK(m.enabled);
+  CHECK(m.rate_per_min == Approx(-0.05));
+  CHECK(m.t_ref_s == 30.0);
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_drift", {{"L_df_rate", 1e-4}})),
+                    Catch::Contains("effects.effectiveness_drift.L_df_rate / L_df per minute"));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_drift", {{"t_mid_s", 3.0}})),
+                    Catch::Contains("effects.effectiveness_drift") && Catch::Contains("rate_per_min"));
 }
