@@ -1,6 +1,7 @@
 /// `rig identify` and `rig validate`: identification of the lateral model from
 /// CSV flight data and open-loop validation of a model on CSV flight data.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -172,6 +173,7 @@ int run_identify_command(const std::vector<std::string>& args) {
 }
 
 int run_discrepancy_command(const std::vector<std::string>& args) {
+  if (std::find(args.begin(), args.end(), "--power") != args.end()) return run_discrepancy_power_command(args);
   std::string data_file, model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
@@ -179,7 +181,9 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                  "Where the model and the measured data disagree, which physical effect the model is\n"
                  "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
-  cl->footer("Exit code: 0 whatever the verdict; 2 bad usage or input.");
+  cl->footer("With --power, no data: how long to fly to name an effect, by simulated flights of a scenario\n"
+             "(rig discrepancy --power --scenario S --model M --effect NAME=SIZE; 'rig discrepancy --power --help').\n"
+             "Exit code: 0 whatever the verdict; 2 bad usage or input.");
   cl->add_option("data", data_file, "flight data: identification CSV or a rig log (.lcmlog)")->required();
   cl->add_option("--model", model_file, "the model (lateral3) to check")->type_name("FILE")->required();
   add_salvage(cl, log_options);

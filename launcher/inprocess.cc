@@ -108,6 +108,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     } else {
       monitor.on_message(channel, data, size, recv_ns);
     }
+    if (options.on_message) options.on_message(channel, data, size);
     if (options.progress && recv_ns >= next_progress_ns && channel == contract::channels::kTruth) {
       const double wall = static_cast<double>(recv_ns - wall_start_ns) / 1e9;
       char line[160];
