@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,7 +18,6 @@ namespace nimble::power {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Offset of the verification's campaign seed: its flights share no seed with the curve's.
 constexpr std::uint64_t kVerifySeedOffset = 1000003;
 
@@ -170,84 +168,94 @@ void tally(PowerCell& c, const std::string& named_as) {
   c.alarm = wilson(alarm, n);
 }
 
+/// A length rounded to 0.01 s (refined lengths: a record is flown at whole plant steps anyway).
+double rounded_length(double length_s) { return std::max(0.01, std::round(length_s * 100.0) / 100.0); }
+
+/// The campaign as it goes: what every round of cells needs.
+class Campaign {
+ public:
+  Campaign(const PowerOptions& o, PowerResult& r, const launcher::RunPlan& base, const FlightCheck& check,
+           std::string dir)
+      : o_(o), r_(r), base_(base), check_(check), dir_(std::move(dir)) {}
+
+  /// Flies one round: the cells (size, length), with `flights` seeds of `seed`; returns them.
+  std::vector<PowerCell> fly(const std::vector<std::pair<double, double>>& which, const std::string& kind, int flights,
+                             std::uint64_t seed) {
+    std::vector<CellPlan> plans;
+    std::vector<PowerCell> cells;
+    for (const auto& [size, length] : which) {
+      plans.push_back(plan_cell(o_, base_.scenario.root, base_.scenario, size, length, dir_));
+      PowerCell c;
+      c.size = size;
+      c.length_s = length;
+      c.repetitions = plans.back().length.repetitions;
+      c.kind = kind;
+      cells.push_back(c);
+    }
+    if (cells.empty()) return cells;
+    fly_cells(plans, cells, flights, seed, check_, r_.jobs, o_.progress, kind.c_str());
+    for (PowerCell& c : cells) tally(c, r_.named_as);
+    return cells;
+  }
+
+  /// The curve of size `s` against the length, from every cell of that size so far.
+  void update_curve(std::size_t s) {
+    SizeCurve& curve = r_.curves[s];
+    curve.cells.clear();
+    for (std::size_t i = 0; i < r_.cells.size(); ++i) {
+      if (r_.cells[i].size == curve.size) curve.cells.push_back(i);
+    }
+    std::sort(curve.cells.begin(), curve.cells.end(),
+              [&](std::size_t a, std::size_t b) { return r_.cells[a].length_s < r_.cells[b].length_s; });
+    std::vector<double> x;
+    std::vector<Proportion> p;
+    for (const std::size_t i : curve.cells) {
+      x.push_back(r_.cells[i].length_s);
+      p.push_back(r_.cells[i].named);
+    }
+    curve.length = crossing(x, p, o_.target, true);
+  }
+
+  bool has_length(std::size_t s, double length_s) const {
+    for (const std::size_t i : r_.curves[s].cells) {
+      if (std::fabs(r_.cells[i].length_s - length_s) < 0.005) return true;
+    }
+    return false;
+  }
+
+  /// The next length to fly for size `s`, or 0 if its crossing needs none.
+  double refinement(std::size_t s) const {
+    const Crossing& c = r_.curves[s].length;
+    if (!c.bracketed) return 0.0;
+    double next = rounded_length(c.value);
+    if (next <= c.lo_x + 0.005 || next >= c.hi_x - 0.005 || has_length(s, next)) {
+      const double mid = 0.5 * (std::sqrt(c.lo_x) + std::sqrt(c.hi_x));
+      next = rounded_length(mid * mid);
+    }
+    return has_length(s, next) || next <= c.lo_x || next >= c.hi_x ? 0.0 : next;
+  }
+
+ private:
+  const PowerOptions& o_;
+  PowerResult& r_;
+  const launcher::RunPlan& base_;
+  const FlightCheck& check_;
+  std::string dir_;
+};
+
+/// The grid's lengths: the user's, or the scenario's block times 1, 2, 4.
+std::vector<double> grid_lengths(const PowerOptions& o, double block_s) {
+  std::vector<double> lengths = o.lengths_s;
+  if (lengths.empty()) lengths = {block_s, 2 * block_s, 4 * block_s};
+  for (const double l : lengths) {
+    if (!(std::isfinite(l) && l > 0.0)) throw std::invalid_argument("record length " + fmt_number(l) + " s: must be > 0");
+  }
+  std::sort(lengths.begin(), lengths.end());
+  lengths.erase(std::unique(lengths.begin(), lengths.end()), lengths.end());
+  return lengths;
+}
+
 }  // namespace
-
-Proportion wilson(int count, int n, double z) {
-  Proportion p;
-  p.count = count;
-  p.n = n;
-  if (n <= 0) return p;
-  const double nn = n, ph = count / nn, z2 = z * z;
-  const double centre = (ph + z2 / (2 * nn)) / (1 + z2 / nn);
-  const double half = z / (1 + z2 / nn) * std::sqrt(ph * (1 - ph) / nn + z2 / (4 * nn * nn));
-  p.p = ph;
-  p.lo = std::max(0.0, centre - half);
-  p.hi = std::min(1.0, centre + half);
-  return p;
-}
-
-Recommendation crossing(const std::vector<double>& x, const std::vector<Proportion>& props, double target,
-                        bool sqrt_x) {
-  Recommendation r;
-  r.value = kNaN;
-  const std::size_t m = x.size();
-  if (m == 0) {
-    r.note = "nothing flown";
-    return r;
-  }
-  // Pool adjacent violators: the non-decreasing fit of the estimates, weighted by flights.
-  std::vector<double> level, weight;
-  std::vector<std::size_t> width;
-  for (std::size_t i = 0; i < m; ++i) {
-    level.push_back(props[i].p);
-    weight.push_back(std::max(1, props[i].n));
-    width.push_back(1);
-    while (level.size() > 1 && level[level.size() - 2] > level.back()) {
-      const std::size_t k = level.size() - 1;
-      level[k - 1] = (level[k - 1] * weight[k - 1] + level[k] * weight[k]) / (weight[k - 1] + weight[k]);
-      weight[k - 1] += weight[k];
-      width[k - 1] += width[k];
-      level.pop_back();
-      weight.pop_back();
-      width.pop_back();
-    }
-  }
-  std::vector<double> p;
-  for (std::size_t b = 0; b < level.size(); ++b) p.insert(p.end(), width[b], level[b]);
-  const auto axis = [sqrt_x](double v) { return sqrt_x ? std::sqrt(std::fabs(v)) : std::fabs(v); };
-  const auto probit = [](double q, int n) {
-    const double e = 0.5 / std::max(1, n);
-    q = std::clamp(q, e, 1.0 - e);
-    // Phi^-1 by Newton on erfc, from a logistic start: ample for a probability of 0.5/n .. 1 - 0.5/n.
-    double z = std::log(q / (1 - q)) / 1.7;
-    for (int it = 0; it < 50; ++it) {
-      const double f = 0.5 * std::erfc(-z / std::sqrt(2.0)) - q;
-      const double d = std::exp(-0.5 * z * z) / 2.5066282746310002;
-      z -= f / d;
-    }
-    return z;
-  };
-  if (p[0] >= target) {
-    r.reached = true;
-    r.value = x[0];
-    r.note = "at or below " + fmt_number(x[0]) + ", the first value flown";
-    return r;
-  }
-  for (std::size_t i = 1; i < m; ++i) {
-    if (p[i] < target) continue;
-    const int n = std::max(props[i - 1].n, props[i].n);
-    const double z0 = probit(p[i - 1], n), z1 = probit(p[i], n), zt = probit(target, 1 << 30);
-    const double a0 = axis(x[i - 1]), a1 = axis(x[i]);
-    const double f = z1 > z0 ? std::clamp((zt - z0) / (z1 - z0), 0.0, 1.0) : 1.0;
-    const double a = a0 + f * (a1 - a0);
-    r.reached = true;
-    r.value = (sqrt_x ? a * a : a) * (x[i] < 0 ? -1.0 : 1.0);
-    r.note = "interpolated between " + fmt_number(x[i - 1]) + " and " + fmt_number(x[i]);
-    return r;
-  }
-  r.note = "not reached by " + fmt_number(x[m - 1]) + " (there " + fmt_number(100 * p[m - 1]) + " %)";
-  return r;
-}
 
 PowerResult run_power(const PowerOptions& o) {
   if (o.flights < 1) throw std::invalid_argument("flights must be >= 1");
@@ -264,23 +272,21 @@ PowerResult run_power(const PowerOptions& o) {
   r.seed = o.seed;
   r.jobs = std::max(1, o.jobs);
   r.sizes = o.sizes;
+  for (const double size : r.sizes) {
+    if (!effect.range.contains(size)) {
+      throw std::invalid_argument("effect " + effect.effect + ": SIZE " + fmt_number(size) + " is not " +
+                                  effect.range.describe());
+    }
+  }
 
-  launcher::RunOptions base;
-  base.scenario_file = o.scenario_file;
-  base.overrides = o.overrides;
-  base.clock = launcher::kClockInprocess;
-  const launcher::RunPlan base_plan = launcher::load_run_plan(base);
-  r.scenario = base_plan.scenario.name;
-  r.block_s = block_length_s(base_plan.scenario);
-  r.lengths_s = o.lengths_s;
-  if (r.lengths_s.empty()) {
-    for (const double k : {1.0, 2.0, 4.0, 8.0}) r.lengths_s.push_back(k * r.block_s);
-  }
-  for (const double l : r.lengths_s) {
-    if (!(std::isfinite(l) && l > 0.0)) throw std::invalid_argument("record length " + fmt_number(l) + " s: must be > 0");
-  }
-  std::sort(r.lengths_s.begin(), r.lengths_s.end());
-  r.lengths_s.erase(std::unique(r.lengths_s.begin(), r.lengths_s.end()), r.lengths_s.end());
+  launcher::RunOptions base_options;
+  base_options.scenario_file = o.scenario_file;
+  base_options.overrides = o.overrides;
+  base_options.clock = launcher::kClockInprocess;
+  const launcher::RunPlan base = launcher::load_run_plan(base_options);
+  r.scenario = base.scenario.name;
+  r.block_s = block_length_s(base.scenario);
+  r.lengths_s = grid_lengths(o, r.block_s);
 
   FlightCheck check;
   check.model = load_model(o.model_file);
@@ -297,34 +303,48 @@ PowerResult run_power(const PowerOptions& o) {
       fs::remove_all(dir, ec);
     }
   } cleanup{dir};
-
-  std::vector<CellPlan> plans;
+  Campaign campaign(o, r, base, check, dir.string());
+  // Every plan of the grid loads before anything flies: a size the plant refuses stops it here.
+  std::vector<std::pair<double, double>> grid;
   for (const double size : r.sizes) {
     for (const double length : r.lengths_s) {
-      plans.push_back(plan_cell(o, base_plan.scenario.root, base_plan.scenario, size, length, dir.string()));
-      PowerCell c;
-      c.size = size;
-      c.length_s = length;
-      c.repetitions = plans.back().length.repetitions;
-      r.cells.push_back(c);
+      grid.emplace_back(size, length);
+      plan_cell(o, base.scenario.root, base.scenario, size, length, dir.string());
     }
   }
   r.setup_s = static_cast<double>(transport::monotonic_ns() - setup_start) / 1e9;
 
   const std::int64_t start = transport::monotonic_ns();
-  fly_cells(plans, r.cells, o.flights, o.seed, check, r.jobs, o.progress, "curve");
-  for (PowerCell& c : r.cells) tally(c, r.named_as);
+  r.cells = campaign.fly(grid, "grid", o.flights, o.seed);
+  for (const double size : r.sizes) r.curves.push_back(SizeCurve{size, {}, {}});
+  for (std::size_t s = 0; s < r.sizes.size(); ++s) campaign.update_curve(s);
 
-  for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-    std::vector<Proportion> along;
-    for (std::size_t l = 0; l < r.lengths_s.size(); ++l) along.push_back(r.cell(s, l).named);
-    r.length_for_size.push_back(crossing(r.lengths_s, along, o.target, true));
+  // Longer records for the sizes that have not reached the target (default lengths only).
+  const double longest = 16 * r.block_s;
+  for (double length = 2 * r.lengths_s.back(); o.lengths_s.empty() && length <= longest + 1e-9; length *= 2) {
+    std::vector<std::pair<double, double>> more;
+    for (std::size_t s = 0; s < r.sizes.size(); ++s) {
+      if (r.sizes[s] != 0.0 && !r.curves[s].length.reached) more.emplace_back(r.sizes[s], length);
+    }
+    if (more.empty()) break;
+    for (PowerCell& c : campaign.fly(more, "longer", o.flights, o.seed)) r.cells.push_back(std::move(c));
+    for (std::size_t s = 0; s < r.sizes.size(); ++s) campaign.update_curve(s);
   }
+  for (int round = 0; round < o.refine; ++round) {
+    std::vector<std::pair<double, double>> more;
+    for (std::size_t s = 0; s < r.sizes.size(); ++s) {
+      const double next = campaign.refinement(s);
+      if (next > 0.0) more.emplace_back(r.sizes[s], next);
+    }
+    if (more.empty()) break;
+    for (PowerCell& c : campaign.fly(more, "refined", o.flights, o.seed)) r.cells.push_back(std::move(c));
+    for (std::size_t s = 0; s < r.sizes.size(); ++s) campaign.update_curve(s);
+  }
+
   std::vector<std::size_t> order(r.sizes.size());
   for (std::size_t s = 0; s < order.size(); ++s) order[s] = s;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return std::fabs(r.sizes[a]) < std::fabs(r.sizes[b]);
-  });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return std::fabs(r.sizes[a]) < std::fabs(r.sizes[b]); });
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
     std::vector<double> x;
     std::vector<Proportion> along;
@@ -336,21 +356,11 @@ PowerResult run_power(const PowerOptions& o) {
   }
 
   if (o.verify > 0) {
-    std::vector<CellPlan> vplans;
-    std::vector<PowerCell> vcells;
-    for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-      const Recommendation& rec = r.length_for_size[s];
-      if (!rec.reached || r.sizes[s] == 0.0) continue;
-      vplans.push_back(plan_cell(o, base_plan.scenario.root, base_plan.scenario, r.sizes[s], rec.value, dir.string()));
-      PowerCell c;
-      c.size = r.sizes[s];
-      c.length_s = rec.value;
-      c.repetitions = vplans.back().length.repetitions;
-      vcells.push_back(c);
+    std::vector<std::pair<double, double>> at;
+    for (const SizeCurve& c : r.curves) {
+      if (c.length.reached && c.size != 0.0) at.emplace_back(c.size, rounded_length(c.length.value));
     }
-    fly_cells(vplans, vcells, o.verify, o.seed + kVerifySeedOffset, check, r.jobs, o.progress, "verification");
-    for (PowerCell& c : vcells) tally(c, r.named_as);
-    r.verification = vcells;
+    r.verification = campaign.fly(at, "verification", o.verify, o.seed + kVerifySeedOffset);
   }
   r.wall_s = static_cast<double>(transport::monotonic_ns() - start) / 1e9;
   return r;

@@ -20,16 +20,16 @@
 /// is named (a wrong name, or an effect the scenario itself flies), and by name; how often any
 /// alarm is raised (a verdict other than none); runs that were not ok; flights that failed.
 ///
-/// Recommended length per size (recommend()): the smallest length whose naming probability
-/// reaches the target on the curve. The cell estimates along the lengths are first made
-/// non-decreasing (pool-adjacent-violators, weighted by flights); then between the two lengths
-/// that bracket the target, the probit of the probability, Phi^-1(P), is interpolated linearly
-/// in sqrt(length). The Wald statistic of an effect grows with the record's information, in
-/// proportion to its length, so its normal approximation gives P = Phi(c sqrt(L) - z), a straight
-/// line in those coordinates. Estimates of 0 or 1 are taken as 0.5 / n from the end. Below the
-/// shortest length flown or beyond the longest the answer says so instead of extrapolating. The
-/// smallest size named with the target probability at each length is interpolated the same way,
-/// linearly in |size| (the statistic's non-centrality grows with the size).
+/// Recommended length per size: where the curve of the size's cells against the length reaches
+/// the target (power_curve.h: monotone fit, probit against sqrt(length) between the two lengths
+/// that bracket it). The grid's lengths find the bracket; with the default lengths (the
+/// scenario's block times 1, 2, 4) a size that does not reach the target by the longest gets
+/// a cell at twice that, up to 16 blocks. Then `refine` rounds fly one more cell per size at the
+/// interpolated length (the bisection's midpoint in sqrt(length) when the interpolation lands
+/// on an end of the bracket, rounded to 0.01 s) and interpolate again on all its cells: near
+/// the target the curve is steep (tens of percent per second of record), and the grid alone
+/// would leave the recommendation seconds off. The smallest size named with the target
+/// probability at each grid length is interpolated the same way, linearly in |size|.
 ///
 /// Verification (`verify` > 0): the recommended length of every size that has one is flown with
 /// `verify` fresh seeds (flight_seed(campaign seed + 1000003, i), none of the curve's) and the
@@ -43,6 +43,7 @@
 
 #include "ident/discrepancy.h"
 #include "launcher/run_plan.h"
+#include "power/power_curve.h"
 #include "power/power_flight.h"
 
 namespace nimble::power {
@@ -55,28 +56,24 @@ struct PowerOptions {
   ident::DiscrepancyOptions discrepancy;
   std::string effect;                ///< plant effect (effect_size.h)
   std::vector<double> sizes;
-  std::vector<double> lengths_s;     ///< empty: the scenario's block times 1, 2, 4, 8
+  /// Record lengths of the grid [s]; empty: the scenario's block times 1, 2, 4, doubled on to 16
+  /// blocks for a size that has not reached the target.
+  std::vector<double> lengths_s;
   int flights = 100;                 ///< per cell
   std::uint64_t seed = 1;            ///< the campaign's seed
   int jobs = 1;
   double target = 0.9;               ///< the probability a recommended length reaches
-  int verify = 0;                    ///< fresh flights at the recommended length
+  int refine = 2;                    ///< rounds of refinement of each recommended length
+  int verify = 0;                    ///< fresh flights at each recommended length
   bool progress = true;              ///< progress line on stderr
 };
 
-/// A proportion with its 95 % Wilson score interval.
-struct Proportion {
-  int count = 0, n = 0;
-  double p = 0.0, lo = 0.0, hi = 1.0;
-};
-/// count of n with its Wilson score interval at z (1.96: 95 %).
-Proportion wilson(int count, int n, double z = 1.959963984540054);
-
-/// One cell of the grid.
+/// One cell: a size flown for a length.
 struct PowerCell {
   double size = 0.0;
   double length_s = 0.0;
   int repetitions = 1;
+  std::string kind;                       ///< grid, longer, refined or verification
   std::vector<FlightOutcome> flights;
   Proportion named;                       ///< the effect named
   Proportion other;                       ///< some other effect named
@@ -88,11 +85,11 @@ struct PowerCell {
   double flight_s = 0.0, build_s = 0.0, workflow_s = 0.0, flight_cpu_s = 0.0, workflow_cpu_s = 0.0;
 };
 
-/// The answer for one size, or one length.
-struct Recommendation {
-  bool reached = false;     ///< the target lies within the grid flown
-  double value = 0.0;       ///< the length [s] (or the size) that reaches it; NaN if not reached
-  std::string note;         ///< how: "interpolated between 12 and 24 s", "at or below 6 s", "not reached by 48 s"
+/// One size's curve against the record length.
+struct SizeCurve {
+  double size = 0.0;
+  std::vector<std::size_t> cells;  ///< into PowerResult::cells, by length
+  Crossing length;                 ///< the recommended length [s]
 };
 
 struct PowerResult {
@@ -104,26 +101,21 @@ struct PowerResult {
   int flights = 0;
   std::uint64_t seed = 1;
   int jobs = 1;
-  std::vector<double> sizes, lengths_s;
-  std::vector<PowerCell> cells;            ///< by size, then by length
-  std::vector<Recommendation> length_for_size;  ///< per size
-  std::vector<Recommendation> size_for_length;  ///< per length
+  std::vector<double> sizes, lengths_s;    ///< the grid
+  std::vector<PowerCell> cells;            ///< the grid's (by size, then length), then the longer and refined ones
+  std::vector<SizeCurve> curves;           ///< per size
+  std::vector<Crossing> size_for_length;   ///< per grid length: the smallest size named with the target
   /// Per size with a recommended length (size 0 excepted): its fresh seeds flown there.
   std::vector<PowerCell> verification;
   double wall_s = 0.0;                     ///< flying and analysing, plans loaded before
-  double setup_s = 0.0;                    ///< loading every cell's plan
+  double setup_s = 0.0;                    ///< loading the grid's plans
 
-  const PowerCell& cell(std::size_t size_index, std::size_t length_index) const {
-    return cells.at(size_index * lengths_s.size() + length_index);
-  }
+  /// The grid's cell of size `s` and length `l` (indices into sizes and lengths_s).
+  const PowerCell& cell(std::size_t s, std::size_t l) const { return cells.at(s * lengths_s.size() + l); }
 };
 
 /// Runs the campaign. @throws ConfigError naming the file, key and value (a bad scenario, or a
 /// size the plant refuses); std::invalid_argument for a bad effect, size or length.
 PowerResult run_power(const PowerOptions& options);
-
-/// The target crossing along `x` (increasing) of the proportions `p` (counts of n), as
-/// described above: probit against sqrt(x) (sqrt_x) or x.
-Recommendation crossing(const std::vector<double>& x, const std::vector<Proportion>& p, double target, bool sqrt_x);
 
 }  // namespace nimble::power

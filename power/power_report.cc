@@ -28,26 +28,27 @@ std::string cell_text(const Proportion& p) {
   return num(100 * p.p, "%.0f") + " [" + num(100 * p.lo, "%.0f") + "," + num(100 * p.hi, "%.0f") + "]";
 }
 
-/// One table: a row per size, a column per length, `of` picks the proportion.
-template <typename Of>
-void table(std::ostringstream& out, const PowerResult& r, const std::string& title, Of of) {
-  char line[64];
-  out << "\n" << title << ", % [95 % interval]\n";
-  std::snprintf(line, sizeof line, "  %-14s", (r.parameter.size() < 14 ? r.parameter : std::string("size")).c_str());
+/// One size's cells by length: the naming probability, another name, any alarm, runs not ok.
+void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& curve) {
+  char line[200];
+  out << "\n" << r.parameter << " = " << num(curve.size) << " " << r.unit
+      << (curve.size == 0.0 ? " (the effect off: naming it is a false name)" : "") << "\n";
+  std::snprintf(line, sizeof line, "  %10s %7s %9s  %-18s %-18s %-18s %s\n", "length [s]", "blocks", "", "named, %",
+                "another name, %", "any alarm, %", "not ok");
   out << line;
-  for (const double l : r.lengths_s) {
-    std::snprintf(line, sizeof line, " %15s", (num(l) + " s").c_str());
+  for (const std::size_t i : curve.cells) {
+    const PowerCell& c = r.cells[i];
+    std::snprintf(line, sizeof line, "  %10s %7.2f %9s  %-18s %-18s %-18s %d\n", num(c.length_s).c_str(),
+                  c.length_s / r.block_s, c.kind == "grid" ? "" : c.kind.c_str(), cell_text(c.named).c_str(),
+                  cell_text(c.other).c_str(), cell_text(c.alarm).c_str(), c.not_ok + c.failed);
     out << line;
   }
-  out << "\n";
-  for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-    std::snprintf(line, sizeof line, "  %-14s", num(r.sizes[s]).c_str());
-    out << line;
-    for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-      std::snprintf(line, sizeof line, " %15s", cell_text(of(r.cell(s, l))).c_str());
-      out << line;
-    }
-    out << "\n";
+  const Crossing& rec = curve.length;
+  if (curve.size != 0.0) {
+    out << "  -> " << num(100 * r.target, "%.0f") << " %: "
+        << (rec.reached ? num(rec.value, "%.2f") + " s, " + num(rec.value / r.block_s, "%.2f") + " blocks (" + rec.note + ")"
+                        : rec.note)
+        << "\n";
   }
 }
 
@@ -60,6 +61,7 @@ void proportion_json(JsonWriter& w, const std::string& key, const Proportion& p)
 void cell_json(JsonWriter& w, const PowerCell& c) {
   w.begin_object();
   w.key("size").value(c.size).key("length_s").value(c.length_s).key("repetitions").value(c.repetitions);
+  w.key("kind").value(c.kind);
   w.key("flights").value(static_cast<long long>(c.flights.size()));
   proportion_json(w, "named", c.named);
   proportion_json(w, "other", c.other);
@@ -74,7 +76,7 @@ void cell_json(JsonWriter& w, const PowerCell& c) {
   w.end_object();
 }
 
-void recommendation_json(JsonWriter& w, const char* what, double at, const char* value_key, const Recommendation& rec) {
+void crossing_json(JsonWriter& w, const char* what, double at, const char* value_key, const Crossing& rec) {
   w.begin_object();
   w.key(what).value(at).key("reached").value(rec.reached).key(value_key);
   if (std::isfinite(rec.value)) {
@@ -117,38 +119,23 @@ std::string power_text(const PowerResult& r) {
       << "cut at the length\n";
   out << r.flights << " flights per cell (campaign seed " << r.seed << ", the same seeds in every cell), " << r.jobs
       << " job" << (r.jobs == 1 ? "" : "s") << "\n";
-  table(out, r, "P(" + r.named_as + " named)", [](const PowerCell& c) { return c.named; });
-  table(out, r, "P(another effect named)", [](const PowerCell& c) { return c.other; });
-  table(out, r, "P(any alarm: verdict not none)", [](const PowerCell& c) { return c.alarm; });
+  out << "per cell: % of flights [95 % Wilson interval]; the target crossing by probit against sqrt(length) between\n"
+      << "the lengths that bracket it\n";
+  for (const SizeCurve& curve : r.curves) size_block(out, r, curve);
   std::map<std::string, int> others;
-  int not_ok = 0, failed = 0;
   std::size_t flights = 0;
   for (const PowerCell& c : r.cells) {
     for (const auto& [name, count] : c.other_names) others[name] += count;
-    not_ok += c.not_ok;
-    failed += c.failed;
     flights += c.flights.size();
   }
   if (!others.empty()) {
-    out << "other names over all " << flights << " flights:";
+    out << "\nother names over all " << flights << " flights:";
     for (const auto& [name, count] : others) out << " " << name << " " << count;
     out << "\n";
   }
-  if (not_ok + failed > 0) {
-    out << "runs not ok " << not_ok << " (analysed all the same), flights without a workflow result " << failed << "\n";
-  }
-  out << "\nrecord length for " << num(100 * r.target, "%.0f") << " % (probit against sqrt(length), between the "
-      << "lengths that bracket it):\n";
-  for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-    const Recommendation& rec = r.length_for_size[s];
-    out << "  size " << num(r.sizes[s]) << ": "
-        << (rec.reached ? num(rec.value) + " s, " + num(rec.value / r.block_s, "%.2f") + " blocks (" + rec.note + ")"
-                        : rec.note)
-        << "\n";
-  }
-  out << "smallest size named with " << num(100 * r.target, "%.0f") << " % (probit against |size|):\n";
+  out << "\nsmallest size named with " << num(100 * r.target, "%.0f") << " % (probit against |size|):\n";
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-    const Recommendation& rec = r.size_for_length[l];
+    const Crossing& rec = r.size_for_length[l];
     out << "  length " << num(r.lengths_s[l]) << " s: " << (rec.reached ? num(rec.value) + " (" + rec.note + ")" : rec.note)
         << "\n";
   }
@@ -180,13 +167,11 @@ std::string power_json(const PowerResult& r, const std::vector<std::string>& plo
   for (const PowerCell& c : r.cells) cell_json(w, c);
   w.end_array();
   w.key("recommended_length").begin_array();
-  for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-    recommendation_json(w, "size", r.sizes[s], "length_s", r.length_for_size[s]);
-  }
+  for (const SizeCurve& c : r.curves) crossing_json(w, "size", c.size, "length_s", c.length);
   w.end_array();
   w.key("smallest_size").begin_array();
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-    recommendation_json(w, "length_s", r.lengths_s[l], "size", r.size_for_length[l]);
+    crossing_json(w, "length_s", r.lengths_s[l], "size", r.size_for_length[l]);
   }
   w.end_array();
   w.key("verification").begin_array();
@@ -215,11 +200,11 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
   // Against the length: one block of rows per size (x, p, lo, hi), gnuplot's index selects it.
   {
     std::ostringstream data, script;
-    for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-      data << "# size " << r.sizes[s] << "\n";
-      for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-        const Proportion& p = r.cell(s, l).named;
-        data << r.lengths_s[l] << " " << p.p << " " << p.lo << " " << p.hi << "\n";
+    for (const SizeCurve& curve : r.curves) {
+      data << "# size " << curve.size << "\n";
+      for (const std::size_t i : curve.cells) {
+        const Proportion& p = r.cells[i].named;
+        data << r.cells[i].length_s << " " << p.p << " " << p.lo << " " << p.hi << "\n";
       }
       data << "\n\n";
     }
@@ -230,9 +215,9 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
                                               std::to_string(r.flights) + " flights per point, 95 % Wilson intervals")
            << "\nset xlabel 'record length [s]'\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\n"
            << "set key bottom right\n" << target;
-    for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-      const Recommendation& rec = r.length_for_size[s];
-      if (!rec.reached) continue;
+    for (std::size_t s = 0; s < r.curves.size(); ++s) {
+      const Crossing& rec = r.curves[s].length;
+      if (!rec.reached || r.curves[s].size == 0.0) continue;
       script << "set arrow from " << rec.value << ", graph 0 to " << rec.value << ", first " << r.target
              << " nohead dt 3 lc rgb '" << colour(s) << "'\n";
     }
