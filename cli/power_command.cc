@@ -85,6 +85,11 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
       ->check(kFinite & CLI::Range(0.01, 0.999))
       ->capture_default_str()
       ->type_name("P");
+  cl->add_option("--refine", o.refine, "rounds of refinement of each recommended length (a cell at the interpolated "
+                                      "length)")
+      ->check(CLI::Range(0, 20))
+      ->capture_default_str()
+      ->type_name("N");
   cl->add_option("--verify", o.verify, "fly N fresh seeds at each recommended length and report the rate there")
       ->check(CLI::Range(0, 100000))
       ->type_name("N");

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "cmdline/args.h"
@@ -28,9 +29,13 @@ std::string model_effect_of(const std::string& effect) {
   throw std::logic_error("power: no plant effect " + effect);
 }
 
+/// The shortest text that reads back as `x`.
 std::string number(double x) {
   char text[40];
-  std::snprintf(text, sizeof text, "%.17g", x);
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, x);
+    if (std::strtod(text, nullptr) == x) break;
+  }
   return text;
 }
 

@@ -223,15 +223,15 @@ class Campaign {
     return false;
   }
 
-  /// The next length to fly for size `s`, or 0 if its crossing needs none.
+  /// The next length to fly for size `s`, or 0 if its crossing needs none: the interpolated
+  /// length, kept within the middle half of the bracket (in sqrt(length)) so that both ends
+  /// move in turn (a secant from an end far below the target creeps toward it from one side).
   double refinement(std::size_t s) const {
     const Crossing& c = r_.curves[s].length;
     if (!c.bracketed) return 0.0;
-    double next = rounded_length(c.value);
-    if (next <= c.lo_x + 0.005 || next >= c.hi_x - 0.005 || has_length(s, next)) {
-      const double mid = 0.5 * (std::sqrt(c.lo_x) + std::sqrt(c.hi_x));
-      next = rounded_length(mid * mid);
-    }
+    const double a0 = std::sqrt(c.lo_x), a1 = std::sqrt(c.hi_x), w = a1 - a0;
+    const double a = std::clamp(std::sqrt(c.value), a0 + 0.25 * w, a1 - 0.25 * w);
+    const double next = rounded_length(a * a);
     return has_length(s, next) || next <= c.lo_x || next >= c.hi_x ? 0.0 : next;
   }
 

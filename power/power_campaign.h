@@ -25,10 +25,11 @@
 /// that bracket it). The grid's lengths find the bracket; with the default lengths (the
 /// scenario's block times 1, 2, 4) a size that does not reach the target by the longest gets
 /// a cell at twice that, up to 16 blocks. Then `refine` rounds fly one more cell per size at the
-/// interpolated length (the bisection's midpoint in sqrt(length) when the interpolation lands
-/// on an end of the bracket, rounded to 0.01 s) and interpolate again on all its cells: near
-/// the target the curve is steep (tens of percent per second of record), and the grid alone
-/// would leave the recommendation seconds off. The smallest size named with the target
+/// interpolated length, kept within the middle half of the bracket in sqrt(length) (a safeguarded
+/// secant: from an end far below the target the plain secant creeps up from one side) and
+/// rounded to 0.01 s, and interpolate again on all its cells: near the target the curve is
+/// steep (50 points of probability within a second of record on the 30 deg nonlinear doublet),
+/// and the grid alone would leave the recommendation seconds off. The smallest size named with the target
 /// probability at each grid length is interpolated the same way, linearly in |size|.
 ///
 /// Verification (`verify` > 0): the recommended length of every size that has one is flown with
@@ -63,7 +64,7 @@ struct PowerOptions {
   std::uint64_t seed = 1;            ///< the campaign's seed
   int jobs = 1;
   double target = 0.9;               ///< the probability a recommended length reaches
-  int refine = 2;                    ///< rounds of refinement of each recommended length
+  int refine = 3;                    ///< rounds of refinement of each recommended length
   int verify = 0;                    ///< fresh flights at each recommended length
   bool progress = true;              ///< progress line on stderr
 };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -14,9 +15,13 @@
 namespace nimble::power {
 namespace {
 
+/// The shortest text that reads back as `x`.
 std::string number(double x) {
   char text[40];
-  std::snprintf(text, sizeof text, "%.17g", x);
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, x);
+    if (std::strtod(text, nullptr) == x) break;
+  }
   return text;
 }
 
