@@ -1,5 +1,6 @@
 #include "ident/rig_log.h"
 
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <utility>
@@ -30,16 +31,21 @@ void append(Channel& c, double t_s, double value, Repeat repeat = Repeat::kSkip)
   c.values.push_back(value);
 }
 
+/// The nine state channels (rates, body velocity, attitude) of `d`, made on first use.
+void state_channels(FlightData& d, std::array<Channel*, 9>& c) {
+  if (c[0] != nullptr) return;
+  static const char* const kStates[] = {"p", "q", "r", "u", "v", "w", "phi", "theta", "psi"};
+  for (int i = 0; i < 9; ++i) c[i] = &d.channels[kStates[i]];  // a std::map's elements stay put
+}
+
 /// Appends one sample of the nine states (rates, body velocity, attitude) at time t.
-void append_states(FlightData& d, double t, const Eigen::Vector3d& omega, const Eigen::Vector3d& velocity,
-                   const Eigen::Vector3d& euler, Repeat repeat = Repeat::kSkip) {
-  static const char* const kRates[] = {"p", "q", "r"};
-  static const char* const kVelocities[] = {"u", "v", "w"};
-  static const char* const kAngles[] = {"phi", "theta", "psi"};
+void append_states(FlightData& d, std::array<Channel*, 9>& c, double t, const Eigen::Vector3d& omega,
+                   const Eigen::Vector3d& velocity, const Eigen::Vector3d& euler, Repeat repeat = Repeat::kSkip) {
+  state_channels(d, c);
   for (int i = 0; i < 3; ++i) {
-    append(d.channels[kRates[i]], t, omega[i], repeat);
-    append(d.channels[kVelocities[i]], t, velocity[i], repeat);
-    append(d.channels[kAngles[i]], t, euler[i], repeat);
+    append(*c[i], t, omega[i], repeat);
+    append(*c[3 + i], t, velocity[i], repeat);
+    append(*c[6 + i], t, euler[i], repeat);
   }
 }
 
@@ -88,47 +94,53 @@ void RigLogAssembler::add(const std::string& channel, const void* data, int size
   add(event_);
 }
 
+Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
+  Channel*& c = input_channels_[slot];
+  if (c == nullptr) c = &inputs_.channels[name];  // a std::map's elements stay put
+  return *c;
+}
+
 void RigLogAssembler::add(const LogEventRecord& event) {
   const LogEventRecord* ev = &event;
   const std::string& file = source_;
   if (ev->channel == kTruth) {
     const auto message = decode_or_throw<truth_state_t>(*ev, file);
     const Truth m = contract::from_message(message);
-    append_states(truth_, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps,
-                  m.euler_rad);
+    append_states(truth_, truth_states_, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps,
+                  m.velocity_body_mps, m.euler_rad);
   } else if (ev->channel == kEstimate) {
     // The estimate describes the instant of the newest IMU sample it has integrated
     // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
     // propagated to it. utime is when it was published, which in lockstep is the next
     // estimator tick, 1-2 ms later (see estimate_time_s()).
     const Estimate m = read_value<estimator_state_t>(*ev, file);
-    append_states(estimate_, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps, m.velocity_body_mps,
-                  m.euler_rad, Repeat::kReplace);
+    append_states(estimate_, estimate_states_, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps,
+                  m.velocity_body_mps, m.euler_rad, Repeat::kReplace);
   } else if (ev->channel == kActuatorFeedback) {
     const ActuatorFeedback m = read_value<actuator_feedback_t>(*ev, file);
     const double t = static_cast<double>(m.utime) * 1e-6;
-    append(inputs_.channels["delta_f"], t, m.delta_f_radps);
-    append(inputs_.channels["delta_t"], t, m.throttle_pct);
-    append(inputs_.channels["delta_d"], t, m.dihedral_rad);
-    append(inputs_.channels["delta_w"], t, m.wing_root_rad);
+    append(input(kDeltaF, "delta_f"), t, m.delta_f_radps);
+    append(input(kDeltaT, "delta_t"), t, m.throttle_pct);
+    append(input(kDeltaD, "delta_d"), t, m.dihedral_rad);
+    append(input(kDeltaW, "delta_w"), t, m.wing_root_rad);
   } else if (ev->channel == kActuatorCommand) {
     // The flight board's command, the flap actuator's input (what the plant receives, over
     // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
     const ActuatorCommand m = read_value<actuator_command_t>(*ev, file);
     const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
                                                              : m.flap_freq_left_radps - m.flap_freq_right_radps;
-    append(inputs_.channels["delta_f_cmd"], static_cast<double>(m.utime) * 1e-6, df);
+    append(input(kDeltaFCmd, "delta_f_cmd"), static_cast<double>(m.utime) * 1e-6, df);
   } else if (ev->channel == kControllerStatus) {
     if (gain_set_.empty()) gain_set_ = read_value<controller_status_t>(*ev, file).gain_set;
   } else if (ev->channel == kAttitudeSetpoint) {
     const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
-    append(inputs_.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
+    append(input(kPhiSp, "phi_sp"), static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
   } else if (ev->channel == kImu) {
     const ImuSample m = read_value<imu_sample_t>(*ev, file);
     const double t = static_cast<double>(m.utime) * 1e-6;
-    append(inputs_.channels["ax"], t, m.accel_mps2[0]);
-    append(inputs_.channels["ay"], t, m.accel_mps2[1]);
-    append(inputs_.channels["az"], t, m.accel_mps2[2]);
+    append(input(kAx, "ax"), t, m.accel_mps2[0]);
+    append(input(kAy, "ay"), t, m.accel_mps2[1]);
+    append(input(kAz, "az"), t, m.accel_mps2[2]);
   }
 }
 

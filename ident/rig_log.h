@@ -14,6 +14,7 @@
 /// against delta_f (ACTUATOR_FB, stamped at the actuator state it reports) by that much,
 /// which biases Lp by -15 % (ident/README.md, "Flying on the estimator").
 
+#include <array>
 #include <cstdint>
 #include <string>
 
@@ -60,6 +61,8 @@ class RigLogAssembler {
  public:
   /// `source` names the data in errors and in FlightData::source.
   explicit RigLogAssembler(std::string source);
+  RigLogAssembler(const RigLogAssembler&) = delete;  // it holds pointers into its own channels
+  RigLogAssembler& operator=(const RigLogAssembler&) = delete;
   /// One message: its channel and encoded bytes. `event_number` and `offset` name it in errors
   /// (the log's event number and byte offset; -1 for a message that was never in a file).
   /// @throws DataError naming the event and channel of a message that does not decode.
@@ -72,8 +75,14 @@ class RigLogAssembler {
   RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "");
 
  private:
+  enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
+  /// The input channel `name`, made on first use; looked up by slot after that.
+  Channel& input(InputSlot slot, const char* name);
+
   std::string source_;
   FlightData estimate_, truth_, inputs_;
+  std::array<Channel*, 9> estimate_states_{}, truth_states_{};  ///< p q r u v w phi theta psi, once made
+  std::array<Channel*, kInputSlots> input_channels_{};
   std::string gain_set_;
   LogEventRecord event_;  ///< reused by add(channel, data, ...)
 };

@@ -193,7 +193,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   report.scenario = s.name;
   report.clock = kClockInprocess;
   report.seed = s.seed;
-  report.config_digest = scenario_digest(s);
+  if (options.config_digest) report.config_digest = scenario_digest(s);
   report.transport = "in process";
   report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages" +
                             (plan.hosts.split() ? "; the hosts section does not apply in process" : "");

@@ -22,6 +22,10 @@ namespace nimble::launcher {
 struct InprocessOptions {
   std::string log_file;   ///< the LCM log; empty: none (the monitor still sees every message)
   bool progress = false;  ///< progress line on stderr
+  /// Compute the report's configuration digest (scenario_digest(): the tree and every file it
+  /// names, read again); false leaves it empty, for a caller that keeps only the verdict of
+  /// many flights of one plan.
+  bool config_digest = true;
   /// Every message of the run, in the order the log has them (on the recording thread, after
   /// the recorder and the monitor); empty: none. Something it throws ends the run: it is
   /// rethrown by fly_inprocess().
