@@ -158,6 +158,7 @@ void tally(PowerCell& c, const std::string& named_as) {
         ++c.other_names[name];
       }
     }
+    ++c.verdicts[f.verdict];
     named += hit;
     other += wrong;
     alarm += f.verdict != "none";

@@ -80,6 +80,7 @@ struct PowerCell {
   Proportion other;                       ///< some other effect named
   Proportion alarm;                       ///< any verdict but none
   std::map<std::string, int> other_names; ///< how often each other effect was named
+  std::map<std::string, int> verdicts;    ///< how often each verdict was given (effects, none, ...)
   int not_ok = 0;                         ///< runs whose verdict was not ok (the workflow still ran)
   int failed = 0;                         ///< flights with no workflow result (FlightOutcome::error)
   /// FlightOutcome's times summed over the cell's flights [s].

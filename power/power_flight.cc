@@ -56,6 +56,7 @@ AssembledFlight fly_assembled(const launcher::RunPlan& plan, const std::string& 
 }  // namespace
 
 void set_seed(launcher::RunPlan& plan, std::uint64_t seed) {
+  plan.scenario.root = YAML::Clone(plan.scenario.root);  // copies of a plan share their tree
   plan.scenario.seed = seed;
   plan.scenario.root["seed"] = seed;
 }

@@ -41,7 +41,8 @@ struct FlightOutcome {
 };
 
 /// `plan` with seed `seed`: what load_run_plan() gives with --seed (the scenario's seed and the
-/// `seed` key of its tree, which the configuration digest covers).
+/// `seed` key of its tree, which the configuration digest covers). The tree is cloned first: the
+/// copies of a plan share one tree (YAML nodes are references), and the others keep their seed.
 void set_seed(launcher::RunPlan& plan, std::uint64_t seed);
 
 /// Flies `plan` with `seed` in process and runs the workflow on it. `log_file` (optional) also

@@ -69,6 +69,9 @@ void cell_json(JsonWriter& w, const PowerCell& c) {
   w.key("other_names").begin_object();
   for (const auto& [name, count] : c.other_names) w.key(name).value(count);
   w.end_object();
+  w.key("verdicts").begin_object();
+  for (const auto& [verdict, count] : c.verdicts) w.key(verdict).value(count);
+  w.end_object();
   w.key("not_ok").value(c.not_ok).key("failed").value(c.failed);
   const double n = std::max<double>(1.0, static_cast<double>(c.flights.size()));
   w.key("flight_s_mean").value(c.flight_s / n).key("workflow_s_mean").value(c.workflow_s / n);
@@ -122,17 +125,18 @@ std::string power_text(const PowerResult& r) {
   out << "per cell: % of flights [95 % Wilson interval]; the target crossing by probit against sqrt(length) between\n"
       << "the lengths that bracket it\n";
   for (const SizeCurve& curve : r.curves) size_block(out, r, curve);
-  std::map<std::string, int> others;
+  std::map<std::string, int> others, verdicts;
   std::size_t flights = 0;
   for (const PowerCell& c : r.cells) {
     for (const auto& [name, count] : c.other_names) others[name] += count;
+    for (const auto& [verdict, count] : c.verdicts) verdicts[verdict] += count;
     flights += c.flights.size();
   }
-  if (!others.empty()) {
-    out << "\nother names over all " << flights << " flights:";
-    for (const auto& [name, count] : others) out << " " << name << " " << count;
-    out << "\n";
-  }
+  out << "\nover all " << flights << " flights: verdicts";
+  for (const auto& [verdict, count] : verdicts) out << " " << verdict << " " << count;
+  out << "; other names";
+  for (const auto& [name, count] : others) out << " " << name << " " << count;
+  out << (others.empty() ? " none\n" : "\n");
   out << "\nsmallest size named with " << num(100 * r.target, "%.0f") << " % (probit against |size|):\n";
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
     const Crossing& rec = r.size_for_length[l];

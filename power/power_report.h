@@ -15,7 +15,8 @@ std::string power_text(const PowerResult& result);
 
 /// JSON: scenario, model, effect, parameter, unit, named_as, block_s, target, flights_per_cell,
 /// seed, jobs, sizes, lengths_s, cells (size, length_s, repetitions, flights, named, other, alarm
-/// as {count, n, p, lo, hi}, other_names, not_ok, failed, flight_s_mean, workflow_s_mean),
+/// as {count, n, p, lo, hi}, other_names, verdicts, not_ok, failed, kind, flight_s_mean,
+/// workflow_s_mean, flight_cpu_s_mean, workflow_cpu_s_mean),
 /// recommended_length (per size: size, reached, length_s, note), smallest_size (per length),
 /// verification (cells), timing (wall_s, setup_s, flights, flight_s_mean, workflow_s_mean), plots.
 std::string power_json(const PowerResult& result, const std::vector<std::string>& plots = {});
