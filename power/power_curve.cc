@@ -91,17 +91,37 @@ Crossing crossing(const std::vector<double>& x, const std::vector<Proportion>& p
     const double e = 0.5 / std::max(1, n);
     return normal_quantile(std::clamp(q, e, 1.0 - e));
   };
+  const double zt = normal_quantile(target);
   for (std::size_t i = 1; i < m; ++i) {
     if (p[i] < target) continue;
-    const double z0 = probit(p[i - 1], props[i - 1].n), z1 = probit(p[i], props[i].n), zt = normal_quantile(target);
+    const double z0 = probit(p[i - 1], props[i - 1].n), z1 = probit(p[i], props[i].n);
     const double a0 = axis(x[i - 1]), a1 = axis(x[i]);
     const double f = z1 > z0 ? std::clamp((zt - z0) / (z1 - z0), 0.0, 1.0) : 1.0;
-    const double a = a0 + f * (a1 - a0);
+    double a = a0 + f * (a1 - a0);
+    // With three or more cells inside the transition (0 < P < 1), the line fitted to all of them
+    // instead: the end above the target was chosen for its estimate reaching it, which biases a
+    // two-point interpolation toward the short side; the fit pools that end with its neighbours.
+    double sw = 0, sa = 0, sz = 0, saa = 0, saz = 0;
+    int inside = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+      if (!(p[j] > 0.0 && p[j] < 1.0)) continue;
+      const double z = normal_quantile(p[j]);
+      const double density = std::exp(-0.5 * z * z) / 2.5066282746310002;
+      const double w = props[j].n * density * density / (p[j] * (1 - p[j]));  // 1 / var of the probit
+      const double aj = axis(x[j]);
+      sw += w, sa += w * aj, sz += w * z, saa += w * aj * aj, saz += w * aj * z;
+      ++inside;
+    }
+    const double slope = inside >= 3 ? (sw * saz - sa * sz) / (sw * saa - sa * sa) : 0.0;
+    const bool fitted = slope > 0.0 && std::isfinite(slope);
+    if (fitted) a = std::clamp(((zt - (sz - slope * sa) / sw) / slope), a0, a1);
     r.reached = r.bracketed = true;
     r.value = (sqrt_x ? a * a : a) * (x[i] < 0 ? -1.0 : 1.0);
     r.lo_x = x[i - 1];
     r.hi_x = x[i];
-    r.note = "interpolated between " + num(x[i - 1]) + " and " + num(x[i]);
+    r.note = fitted ? "fitted to the " + std::to_string(inside) + " values inside the transition, between " +
+                          num(x[i - 1]) + " and " + num(x[i])
+                    : "interpolated between " + num(x[i - 1]) + " and " + num(x[i]);
     return r;
   }
   r.note = "not reached by " + num(x[m - 1]) + " (there " + num(100 * p[m - 1]) + " %)";

@@ -9,8 +9,13 @@
 /// and in |x| for a size. The reason: the workflow's Wald statistic grows with the information
 /// in the record, in proportion to its length, and its root with the effect's size, so its
 /// normal approximation gives P = Phi(c sqrt(L) - z) and P = Phi(c' |size| - z), straight lines
-/// in those coordinates. An estimate of 0 or 1 is taken as 0.5 / n from its end. Below the
-/// first x or beyond the last the answer says so instead of extrapolating.
+/// in those coordinates. An estimate of 0 or 1 is taken as 0.5 / n from its end. With three or
+/// more estimates strictly between 0 and 1 (the refined cells of a steep transition), the line
+/// is instead the weighted least-squares fit of their probits (weights the inverse of each
+/// probit's binomial variance, n phi(z)^2 / (p (1 - p)); Berkson's minimum chi-square), its
+/// crossing kept within the bracket: the end of a bracket above the target is the cell whose
+/// estimate reached it, biased upward by that choice, and the fit pools it with its neighbours.
+/// Below the first x or beyond the last the answer says so instead of extrapolating.
 
 #include <string>
 #include <vector>
