@@ -37,6 +37,10 @@ int run_identify_command(const std::vector<std::string>& args);
 /// `rig discrepancy <data> --model <model.yaml> [--json F] [--model-out F] [--candidates LIST] ...`: the
 /// discrepancy workflow (ident/discrepancy.h).
 int run_discrepancy_command(const std::vector<std::string>& args);
+/// `rig discrepancy --power --scenario S --model M --effect NAME=SIZE[,...] [--lengths S,...] [--flights N]
+/// [--verify N] [--json F|-] [--plots DIR] ...`: how long to fly to name an effect (cli/power_command.cc,
+/// power/power_campaign.h). run_discrepancy_command hands every command line with --power to it.
+int run_discrepancy_power_command(const std::vector<std::string>& args);
 /// `rig validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...`: open-loop validation.
 int run_validate_command(const std::vector<std::string>& args);
 

@@ -1,6 +1,7 @@
 /// `rig identify` and `rig validate`: identification of the lateral model from
 /// CSV flight data and open-loop validation of a model on CSV flight data.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -172,6 +173,7 @@ int run_identify_command(const std::vector<std::string>& args) {
 }
 
 int run_discrepancy_command(const std::vector<std::string>& args) {
+  if (std::find(args.begin(), args.end(), "--power") != args.end()) return run_discrepancy_power_command(args);
   std::vector<std::string> data_files;
   std::string model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
@@ -180,7 +182,9 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                  "Where the model and the measured data disagree, which physical effect the model is\n"
                  "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
-  cl->footer("Exit code: 0 whatever the verdict; 2 bad usage or input.");
+  cl->footer("With --power, no data: how long to fly to name an effect, by simulated flights of a scenario\n"
+             "(rig discrepancy --power --scenario S --model M --effect NAME=SIZE; 'rig discrepancy --power --help').\n"
+             "Exit code: 0 whatever the verdict; 2 bad usage or input.");
   cl->add_option("data", data_files,
                  "flight data: identification CSV or a rig log (.lcmlog); several flights of the same vehicle are "
                  "pooled (each its own folds and noise level; an effect named only on the pooled evidence, each "

@@ -1,5 +1,6 @@
 #include "ident/rig_log.h"
 
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <utility>
@@ -30,16 +31,21 @@ void append(Channel& c, double t_s, double value, Repeat repeat = Repeat::kSkip)
   c.values.push_back(value);
 }
 
+/// The nine state channels (rates, body velocity, attitude) of `d`, made on first use.
+void state_channels(FlightData& d, std::array<Channel*, 9>& c) {
+  if (c[0] != nullptr) return;
+  static const char* const kStates[] = {"p", "q", "r", "u", "v", "w", "phi", "theta", "psi"};
+  for (int i = 0; i < 9; ++i) c[i] = &d.channels[kStates[i]];  // a std::map's elements stay put
+}
+
 /// Appends one sample of the nine states (rates, body velocity, attitude) at time t.
-void append_states(FlightData& d, double t, const Eigen::Vector3d& omega, const Eigen::Vector3d& velocity,
-                   const Eigen::Vector3d& euler, Repeat repeat = Repeat::kSkip) {
-  static const char* const kRates[] = {"p", "q", "r"};
-  static const char* const kVelocities[] = {"u", "v", "w"};
-  static const char* const kAngles[] = {"phi", "theta", "psi"};
+void append_states(FlightData& d, std::array<Channel*, 9>& c, double t, const Eigen::Vector3d& omega,
+                   const Eigen::Vector3d& velocity, const Eigen::Vector3d& euler, Repeat repeat = Repeat::kSkip) {
+  state_channels(d, c);
   for (int i = 0; i < 3; ++i) {
-    append(d.channels[kRates[i]], t, omega[i], repeat);
-    append(d.channels[kVelocities[i]], t, velocity[i], repeat);
-    append(d.channels[kAngles[i]], t, euler[i], repeat);
+    append(*c[i], t, omega[i], repeat);
+    append(*c[3 + i], t, velocity[i], repeat);
+    append(*c[6 + i], t, euler[i], repeat);
   }
 }
 
@@ -76,52 +82,71 @@ bool is_lcm_log(const std::string& file) {
   return in.gcount() == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
 }
 
-RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
-  LcmLogReader log(file, options.salvage);
-  FlightData estimate, truth, inputs;
-  std::string gain_set;
-  LogEventRecord record;
-  for (const LogEventRecord* ev = &record; log.next(&record);) {
-    if (ev->channel == kTruth) {
-      const auto message = decode_or_throw<truth_state_t>(*ev, file);
-      const Truth m = contract::from_message(message);
-      append_states(truth, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps, m.velocity_body_mps,
-                    m.euler_rad);
-    } else if (ev->channel == kEstimate) {
-      // The estimate describes the instant of the newest IMU sample it has integrated
-      // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
-      // propagated to it. utime is when it was published, which in lockstep is the next
-      // estimator tick, 1-2 ms later (see estimate_time_s()).
-      const Estimate m = read_value<estimator_state_t>(*ev, file);
-      append_states(estimate, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps, m.velocity_body_mps,
-                    m.euler_rad, Repeat::kReplace);
-    } else if (ev->channel == kActuatorFeedback) {
-      const ActuatorFeedback m = read_value<actuator_feedback_t>(*ev, file);
-      const double t = static_cast<double>(m.utime) * 1e-6;
-      append(inputs.channels["delta_f"], t, m.delta_f_radps);
-      append(inputs.channels["delta_t"], t, m.throttle_pct);
-      append(inputs.channels["delta_d"], t, m.dihedral_rad);
-      append(inputs.channels["delta_w"], t, m.wing_root_rad);
-    } else if (ev->channel == kActuatorCommand) {
-      // The flight board's command, the flap actuator's input (what the plant receives, over
-      // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
-      const ActuatorCommand m = read_value<actuator_command_t>(*ev, file);
-      const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
-                                                               : m.flap_freq_left_radps - m.flap_freq_right_radps;
-      append(inputs.channels["delta_f_cmd"], static_cast<double>(m.utime) * 1e-6, df);
-    } else if (ev->channel == kControllerStatus) {
-      if (gain_set.empty()) gain_set = read_value<controller_status_t>(*ev, file).gain_set;
-    } else if (ev->channel == kAttitudeSetpoint) {
-      const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
-      append(inputs.channels["phi_sp"], static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
-    } else if (ev->channel == kImu) {
-      const ImuSample m = read_value<imu_sample_t>(*ev, file);
-      const double t = static_cast<double>(m.utime) * 1e-6;
-      append(inputs.channels["ax"], t, m.accel_mps2[0]);
-      append(inputs.channels["ay"], t, m.accel_mps2[1]);
-      append(inputs.channels["az"], t, m.accel_mps2[2]);
-    }
+RigLogAssembler::RigLogAssembler(std::string source) : source_(std::move(source)) {}
+
+void RigLogAssembler::add(const std::string& channel, const void* data, int size, int64_t event_number,
+                          int64_t offset) {
+  event_.channel = channel;
+  event_.event_number = event_number;
+  event_.offset = offset;
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  event_.data.assign(bytes, bytes + size);
+  add(event_);
+}
+
+Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
+  Channel*& c = input_channels_[slot];
+  if (c == nullptr) c = &inputs_.channels[name];  // a std::map's elements stay put
+  return *c;
+}
+
+void RigLogAssembler::add(const LogEventRecord& event) {
+  const LogEventRecord* ev = &event;
+  const std::string& file = source_;
+  if (ev->channel == kTruth) {
+    const auto message = decode_or_throw<truth_state_t>(*ev, file);
+    const Truth m = contract::from_message(message);
+    append_states(truth_, truth_states_, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps,
+                  m.velocity_body_mps, m.euler_rad);
+  } else if (ev->channel == kEstimate) {
+    // The estimate describes the instant of the newest IMU sample it has integrated
+    // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
+    // propagated to it. utime is when it was published, which in lockstep is the next
+    // estimator tick, 1-2 ms later (see estimate_time_s()).
+    const Estimate m = read_value<estimator_state_t>(*ev, file);
+    append_states(estimate_, estimate_states_, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps,
+                  m.velocity_body_mps, m.euler_rad, Repeat::kReplace);
+  } else if (ev->channel == kActuatorFeedback) {
+    const ActuatorFeedback m = read_value<actuator_feedback_t>(*ev, file);
+    const double t = static_cast<double>(m.utime) * 1e-6;
+    append(input(kDeltaF, "delta_f"), t, m.delta_f_radps);
+    append(input(kDeltaT, "delta_t"), t, m.throttle_pct);
+    append(input(kDeltaD, "delta_d"), t, m.dihedral_rad);
+    append(input(kDeltaW, "delta_w"), t, m.wing_root_rad);
+  } else if (ev->channel == kActuatorCommand) {
+    // The flight board's command, the flap actuator's input (what the plant receives, over
+    // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
+    const ActuatorCommand m = read_value<actuator_command_t>(*ev, file);
+    const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
+                                                             : m.flap_freq_left_radps - m.flap_freq_right_radps;
+    append(input(kDeltaFCmd, "delta_f_cmd"), static_cast<double>(m.utime) * 1e-6, df);
+  } else if (ev->channel == kControllerStatus) {
+    if (gain_set_.empty()) gain_set_ = read_value<controller_status_t>(*ev, file).gain_set;
+  } else if (ev->channel == kAttitudeSetpoint) {
+    const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
+    append(input(kPhiSp, "phi_sp"), static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
+  } else if (ev->channel == kImu) {
+    const ImuSample m = read_value<imu_sample_t>(*ev, file);
+    const double t = static_cast<double>(m.utime) * 1e-6;
+    append(input(kAx, "ax"), t, m.accel_mps2[0]);
+    append(input(kAy, "ay"), t, m.accel_mps2[1]);
+    append(input(kAz, "az"), t, m.accel_mps2[2]);
   }
+}
+
+RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage) {
+  const std::string& file = source_;
+  FlightData& inputs = inputs_;
   if (!inputs.has("delta_f")) {
     throw DataError(file, -1, -1, kActuatorFeedback, "the log has no actuator feedback (delta_f, delta_t)");
   }
@@ -135,24 +160,32 @@ RigLogData read_rig_log(const std::string& file, StateSource source, const LogRe
   RigLogData out;
   bool use_estimate = false;
   if (source == StateSource::kEstimate) {
-    if (!estimate.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
+    if (!estimate_.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
     use_estimate = true;
   } else if (source == StateSource::kAuto) {
-    use_estimate = estimate.has("p");
+    use_estimate = estimate_.has("p");
   }
-  if (!use_estimate && !truth.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
+  if (!use_estimate && !truth_.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
   out.state_source = use_estimate ? "estimate" : "truth";
-  out.damage = log.damage();
-  out.gain_set = gain_set;
-  out.measured = use_estimate ? estimate : truth;
+  out.damage = damage;
+  out.gain_set = gain_set_;
+  out.measured = use_estimate ? std::move(estimate_) : truth_;
   out.measured.source = file;
   for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;
-  if (truth.has("p")) {
-    out.truth = truth;
+  if (truth_.has("p")) {
+    out.truth = std::move(truth_);
     out.truth.source = file + " (truth)";
     for (const auto& [name, c] : inputs.channels) out.truth.channels[name] = c;
   }
   return out;
+}
+
+RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
+  LcmLogReader log(file, options.salvage);
+  RigLogAssembler assembler(file);
+  LogEventRecord record;
+  while (log.next(&record)) assembler.add(record);
+  return assembler.finish(source, log.damage());
 }
 
 FlightData read_flight_data(const std::string& file, const LogReadOptions& options, std::string* damage) {

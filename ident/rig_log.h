@@ -14,10 +14,12 @@
 /// against delta_f (ACTUATOR_FB, stamped at the actuator state it reports) by that much,
 /// which biases Lp by -15 % (ident/README.md, "Flying on the estimator").
 
+#include <array>
 #include <cstdint>
 #include <string>
 
 #include "ident/flight_data.h"
+#include "ident/lcm_log.h"
 
 namespace nimble::ident {
 
@@ -50,6 +52,40 @@ double estimate_time_s(std::int64_t utime, std::int64_t imu_utime);
 
 /// True if `file` starts with the LCM log event sync word.
 bool is_lcm_log(const std::string& file);
+
+/// What read_rig_log() does with a log, one message at a time: the rig's messages, in the order
+/// they were published (the order a recorder writes them), become RigLogData. read_rig_log()
+/// feeds it every event of the file; an in-process flight can feed it every message it
+/// publishes, and the workflow then sees what it would see from the flight's log.
+class RigLogAssembler {
+ public:
+  /// `source` names the data in errors and in FlightData::source.
+  explicit RigLogAssembler(std::string source);
+  RigLogAssembler(const RigLogAssembler&) = delete;  // it holds pointers into its own channels
+  RigLogAssembler& operator=(const RigLogAssembler&) = delete;
+  /// One message: its channel and encoded bytes. `event_number` and `offset` name it in errors
+  /// (the log's event number and byte offset; -1 for a message that was never in a file).
+  /// @throws DataError naming the event and channel of a message that does not decode.
+  void add(const std::string& channel, const void* data, int size, std::int64_t event_number = -1,
+           std::int64_t offset = -1);
+  /// One event of a log. @throws DataError as above.
+  void add(const LogEventRecord& event);
+  /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
+  /// @throws DataError for a missing channel, as read_rig_log().
+  RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "");
+
+ private:
+  enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
+  /// The input channel `name`, made on first use; looked up by slot after that.
+  Channel& input(InputSlot slot, const char* name);
+
+  std::string source_;
+  FlightData estimate_, truth_, inputs_;
+  std::array<Channel*, 9> estimate_states_{}, truth_states_{};  ///< p q r u v w phi theta psi, once made
+  std::array<Channel*, kInputSlots> input_channels_{};
+  std::string gain_set_;
+  LogEventRecord event_;  ///< reused by add(channel, data, ...)
+};
 
 /// Reads a rig log (the LCM log format, through LcmLogReader: damage is never read past).
 /// @throws DataError naming the log, the byte offset and event of damage, or the event number

@@ -108,6 +108,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     } else {
       monitor.on_message(channel, data, size, recv_ns);
     }
+    if (options.on_message) options.on_message(channel, data, size);
     if (options.progress && recv_ns >= next_progress_ns && channel == contract::channels::kTruth) {
       const double wall = static_cast<double>(recv_ns - wall_start_ns) / 1e9;
       char line[160];
@@ -192,7 +193,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   report.scenario = s.name;
   report.clock = kClockInprocess;
   report.seed = s.seed;
-  report.config_digest = scenario_digest(s);
+  if (options.config_digest) report.config_digest = scenario_digest(s);
   report.transport = "in process";
   report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages" +
                             (plan.hosts.split() ? "; the hosts section does not apply in process" : "");

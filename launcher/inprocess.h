@@ -11,6 +11,7 @@
 /// InprocessCanBus. Every message goes to the same recorder and monitor as in the other
 /// executors: the log has every channel, the report and verdict are the same.
 
+#include <functional>
 #include <string>
 
 #include "launcher/run_plan.h"
@@ -21,6 +22,14 @@ namespace nimble::launcher {
 struct InprocessOptions {
   std::string log_file;   ///< the LCM log; empty: none (the monitor still sees every message)
   bool progress = false;  ///< progress line on stderr
+  /// Compute the report's configuration digest (scenario_digest(): the tree and every file it
+  /// names, read again); false leaves it empty, for a caller that keeps only the verdict of
+  /// many flights of one plan.
+  bool config_digest = true;
+  /// Every message of the run, in the order the log has them (on the recording thread, after
+  /// the recorder and the monitor); empty: none. Something it throws ends the run: it is
+  /// rethrown by fly_inprocess().
+  std::function<void(const std::string& channel, const void* data, int size)> on_message;
 };
 
 /// Flies `plan` (any clock: it is flown in process) and returns its report; prints nothing

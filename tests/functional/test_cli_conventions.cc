@@ -37,7 +37,8 @@ YAML::Node json_of(const RigResult& r) {
 
 TEST_CASE("cli: every command answers --help on stdout with exit 0, and --version names the version", "[cli]") {
   for (const std::string command : {"model", "run", "sweep", "params", "check", "spy", "identify", "validate",
-                                    "discrepancy", "export", "turbulence", "turbulence-response", "reproduce", "loop"}) {
+                                    "discrepancy", "discrepancy --power", "export", "turbulence",
+                                    "turbulence-response", "reproduce", "loop"}) {
     INFO(command);
     const RigResult r = run_rig(command + " --help");
     CHECK(r.exit_code == 0);
@@ -67,6 +68,9 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"run " + scenario + " --set duration_s", "--set: key 'duration_s'"},
            {"sweep " + scenario, "--seeds is required"},
            {"sweep " + scenario + " --seeds 1-2 --jobs 0", "--jobs"},
+           {"discrepancy --power --model m.yaml --effect actuator_delay=0.01", "--scenario is required"},
+           {"discrepancy --power --scenario " + scenario + " --model m.yaml --effect actuator_delay=0.01 --flights 0",
+            "--flights"},
            {"export x.lcmlog --csv y.csv --rate nan", "--rate: 'nan' is not a finite number"},
            {"turbulence x.yaml --welch-segment 1000", "--welch-segment: '1000' is not a power of two >= 8"},
            {"params nosuchsection", "section: nosuchsection not in"},
@@ -91,7 +95,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
 
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
   for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
-                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop"}) {
+                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop", "bench_power"}) {
     INFO(bench);
     const RigResult r = run_bench(bench, "--help");
     CHECK(r.exit_code == 0);

@@ -6,7 +6,7 @@
 2. No rate literal in a process: every set_expected_rate() takes its rate from the run
    (Scenario::expected_rate()), never a number written in the call.
 3. No include runs up to the programs: cli/ is included only from cli/; launcher/ only from
-   launcher/ and the folders above it (cli/, reproduce/, bench/, tools/, fuzz/).
+   launcher/ and the folders above it (cli/, reproduce/, power/, bench/, tools/, fuzz/).
 
 Usage: check_house_rules.py <source dir>. Prints every breach as file:line and exits 1 if
 there is one.
@@ -16,7 +16,7 @@ import re
 import sys
 
 SKIP_DIRS = {"tests", "lcmtypes", ".git", "corpus"}
-ABOVE_LAUNCHER = {"launcher", "cli", "reproduce", "bench", "tools", "fuzz"}
+ABOVE_LAUNCHER = {"launcher", "cli", "reproduce", "power", "bench", "tools", "fuzz"}
 
 
 def sources(root):
