@@ -226,9 +226,9 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
   }
 }
 
-/// Where the baseline structure's residual lives (frequency, state dependence, excess energy in
-/// time), each test at the workflow's p_critical; and the descriptive energy shares of the
-/// manoeuvres, hovers and heaviest windows. Returns the number of alarm tests run.
+/// Where the baseline structure's residual lives (a periodic component, a state dependence), each
+/// test at the workflow's p_critical; and the descriptive energy shares of the manoeuvres, hovers
+/// and heaviest windows. Returns the number of alarm tests run.
 std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, const Model& m,
                    const std::vector<VectorXd>& base_resid, const BatchRule& batch, const Folds& folds,
                    double p_critical, DiscrepancyResult& res) {
@@ -253,15 +253,12 @@ std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, cons
     // The baseline structure without the effects that entered (it is what the gap starts from).
     const MatrixXd X = augmented_design(m.eqs[e], {});
     const LocationFrame frame(X, m.eqs[e].y, ex.Z);
-    const VectorXd r = frame.residual / m.eqs[e].scale;
     // Above the gust band, as every candidate: below it a periodic force cannot be told from a
     // side wind's random low-frequency force.
     frequency_peaks(frame, m.eqs[e].output, m.eqs[e].scale, d.rate_hz, options.gust_band_hz, f_hi, rule,
                     res.located.frequency);
     state_findings(frame, X, m.eqs[e].output, d, rule, res.located.state);
-    energy_windows(m.eqs[e].output, r, d, options.window_s, location_edge(options.processing, d.rate_hz), p_critical,
-                   res.located.time);
-    tests += 3;
+    tests += 2;
   }
   return tests;
 }
@@ -269,9 +266,7 @@ std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, cons
 /// The verdict and its one-line summary.
 void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
   // Verdict.
-  const bool excess = std::any_of(res.located.time.begin(), res.located.time.end(),
-                                  [](const TimeFinding& f) { return f.what == "excess"; });
-  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty() || excess;
+  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty();
   if (!res.ambiguous.empty()) {
     res.verdict = "ambiguous";
   } else if (!res.effects.empty()) {
@@ -306,9 +301,6 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "no candidate passes, but the residual has structure:";
     for (const auto& f : res.located.frequency) s << " " << f.output << " peak at " << fmt(f.f_hz) << " Hz;";
     for (const auto& f : res.located.state) s << " " << f.output << " depends nonlinearly on " << f.signal << ";";
-    for (const auto& f : res.located.time) {
-      if (f.what == "excess") s << " " << f.output << " error grows " << fmt(f.start_s) << "-" << fmt(f.end_s) << " s;";
-    }
   } else {
     s << "nothing significant: no candidate passes and the residual shows no structure";
   }

@@ -19,19 +19,19 @@
 ///    so that the linear model's own error where the manoeuvre drives it (from noisy regressors,
 ///    the feedback, the zero-phase filter) is not taken for missing structure; what is left is
 ///    process and measurement noise, independent of the excitation, under a linear plant.
-///    Three alarm tests per equation, each a test the candidates would pass too:
+///    Two alarm tests per equation, each a test the candidates would pass too:
 ///      - frequency: the largest periodogram ordinate above the gust band, tested as sin and cos
 ///        at that frequency (Wald, batch means of the scores, Bonferroni over the band's
 ///        independent frequencies), which a resonance of the noise does not pass and a periodic
 ///        force does;
 ///      - state: z^2 and z^3 of each state and input's excitation part (its projection on the
 ///        bank), Bonferroni over the signals, confirmed above the gust band;
-///      - time: the 1 s window whose residual energy most exceeds the median window's (chi2 with
-///        the residual's effective degrees of freedom, Bonferroni over the windows), the
-///        filter's settling at the record's ends left out.
 ///    Frequency and state findings must also lower the held-out error (the candidates' held-out
 ///    rule). The energy shares of the manoeuvres, hovers and heaviest windows are reported as a
-///    description, not a test.
+///    description, not a test: a closed-loop residual is larger where the manoeuvre is (on rig
+///    flights the actuator equation's error follows the command's activity), so a window of more
+///    energy is no evidence of a change; a change during the flight is tested by the candidates
+///    effectiveness_step and effectiveness_drift, which hold the alarm rule.
 /// 3. Name. A library of physically named candidate effects, each a set of regressor
 ///    columns in the L, Y (and F) equations (candidate_library()). Stepwise: in each round
 ///    every candidate not yet in the model is tried on the current model; it passes only if
@@ -98,8 +98,8 @@
 /// --model-out) belong to the baseline structure: refit with the derivatives, not tried again.
 ///
 /// Verdicts: `effects` (one or more named), `ambiguous`, `unexplained` (nothing passed, but
-/// a location test found structure: a periodic component, a nonlinear dependence on a state or
-/// input, or a window of excess error), `none`.
+/// a location test found structure: a periodic component or a nonlinear dependence on a state
+/// or input), `none`.
 ///
 /// One error rate for every alarm: a name, `ambiguous` and `unexplained` all come from tests at
 /// the same p_critical (the partial-F rule's tail), each with its own Bonferroni factor, so the
@@ -266,9 +266,6 @@ struct TimeFinding {
   double start_s = 0.0, end_s = 0.0;
   double energy_share = 0.0;  ///< of the residual sum of squares
   double time_share = 0.0;    ///< of the record
-  /// "excess" windows: the test's p (Bonferroni over the windows); the descriptive shares
-  /// ("manoeuvre", "hover", "window") are not tests: 1.
-  double p_value = 1.0;
 };
 
 struct Located {

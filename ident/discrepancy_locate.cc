@@ -1,6 +1,6 @@
 // The discrepancy workflow (ident/discrepancy.h), part: where the residual of the baseline
-// structure lives: frequency peaks, nonlinear dependence on a state or input, windows of excess
-// residual energy, and the manoeuvres and windows that carry its energy (descriptive). Every
+// structure lives: a periodic component, a nonlinear dependence on a state or input, and the
+// manoeuvres and windows that carry its energy (descriptive). Every
 // test here is an alarm test, held to the one rule of the workflow (ident/README.md "One error
 // rate for every alarm").
 
@@ -13,8 +13,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <memory>
-
-#include <boost/math/distributions/chi_squared.hpp>
 
 #include "core/chi_square.h"
 #include "ident/metrics.h"
@@ -255,62 +253,6 @@ void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::st
         std::min(1.0, frame_wald(*high, high_pass_columns(C, rule.gust_band_hz, d.rate_hz), min_block, nullptr) * M);
     if (p_high <= rule.gust_band_alpha && heldout_confirms(frame, C, rule)) out.push_back({output, s, partial_r, p});
   }
-}
-
-/// Windows whose residual energy exceeds the rest's (see the declaration).
-void energy_windows(const std::string& output, const VectorXd& r_all, const UniformData& d, double window_s,
-                    Index edge, double alpha, std::vector<TimeFinding>& out) {
-  if (r_all.size() <= 2 * edge) return;
-  const VectorXd r = r_all.segment(edge, r_all.size() - 2 * edge);
-  const Index n = r.size();
-  const Index w = std::max<Index>(1, static_cast<Index>(std::lround(window_s * d.rate_hz)));
-  const Index nw = n / w;
-  if (nw < 8) return;
-  // Effective degrees of freedom of a window's sum of squares: w / sum_k rho(k)^2 for a
-  // Gaussian series, the autocorrelation summed until it stays below 0.05.
-  const VectorXd c = r.array() - r.mean();
-  const double c0 = c.squaredNorm();
-  if (!(c0 > 0.0)) return;
-  double s2 = 1.0;
-  for (Index k = 1; k < n / 4; ++k) {
-    const double rho = c.head(n - k).dot(c.tail(n - k)) / c0;
-    if (std::fabs(rho) < 0.05) break;
-    s2 += 2.0 * rho * rho;
-  }
-  const double nu = std::max(1.0, static_cast<double>(w) / s2);
-  std::vector<double> energy(static_cast<std::size_t>(nw));
-  for (Index k = 0; k < nw; ++k) energy[static_cast<std::size_t>(k)] = c.segment(k * w, w).squaredNorm();
-  std::vector<double> sorted = energy;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(nw / 2), sorted.end());
-  const boost::math::chi_squared chi(nu);
-  const double median_scale = boost::math::quantile(chi, 0.5) / nu;  // median of chi2_nu / nu
-  const double level = sorted[static_cast<std::size_t>(nw / 2)] / median_scale;  // estimate of E[window energy]
-  if (!(level > 0.0)) return;
-  Index best = -1;
-  double best_p = 1.0;
-  for (Index k = 0; k < nw; ++k) {
-    const double x = nu * energy[static_cast<std::size_t>(k)] / level;
-    const double p = std::min(1.0, boost::math::cdf(boost::math::complement(chi, x)) * static_cast<double>(nw));
-    if (p <= alpha && p < best_p) {
-      best_p = p;
-      best = k;
-    }
-  }
-  if (best < 0) return;
-  TimeFinding f;
-  f.output = output;
-  f.what = "excess";
-  f.start_s = d.t_s[edge + best * w];
-  f.end_s = d.t_s[edge + best * w + w - 1];
-  f.energy_share = energy[static_cast<std::size_t>(best)] / c0;
-  f.time_share = static_cast<double>(w) / static_cast<double>(n);
-  f.p_value = best_p;
-  out.push_back(f);
-}
-
-Index location_edge(const ProcessingOptions& processing, double rate_hz) {
-  if (processing.filter_order <= 0) return 0;
-  return static_cast<Index>(std::ceil(3.0 * rate_hz / processing.cutoff_hz));
 }
 
 void time_findings(const std::string& output, const VectorXd& r, const UniformData& d, const Segments& seg,

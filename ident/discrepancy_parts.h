@@ -500,19 +500,6 @@ void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::st
 void frequency_peaks(const LocationFrame& frame, const std::string& output, double scale, double rate, double f_lo,
                      double f_hi, const LocationRule& rule, std::vector<FrequencyFinding>& out);
 
-/// The window_s window of the residual r with the most energy above the others': each window's
-/// sum of squares against the median window's, as chi2_nu / nu with nu = w / sum_k rho(k)^2 its
-/// effective degrees of freedom (Gaussian series, autocorrelation rho), Bonferroni over the
-/// windows; reported (what "excess") when significant at alpha. The `edge` samples at each end
-/// are left out: there the zero-phase low-pass and the derivative see the padding, not the
-/// flight (location_edge()).
-void energy_windows(const std::string& output, const VectorXd& r, const UniformData& d, double window_s, Index edge,
-                    double alpha, std::vector<TimeFinding>& out);
-
-/// Samples at each end of the record that the location tests leave out: three periods of the
-/// identification low-pass's cut-off (its step response settles in about two), none unfiltered.
-Index location_edge(const ProcessingOptions& processing, double rate_hz);
-
 void time_findings(const std::string& output, const VectorXd& r, const UniformData& d, const Segments& seg,
                    double window_s, std::vector<TimeFinding>& out);
 

@@ -107,7 +107,6 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.key("end_s").value(f.end_s);
     j.key("energy_share").value(f.energy_share);
     j.key("time_share").value(f.time_share);
-    j.key("p_value").value(f.p_value);
     j.end_object();
   }
   j.end_array();
@@ -344,19 +343,11 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
       << ", p " << g(f.p_value) << ")\n";
   }
-  for (const auto& f : r.located.time) {
-    if (f.what != "excess") continue;
-    o << "  time: " << f.output << " error larger " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
-      << " s than in the rest of the record (p " << g(f.p_value) << ")\n";
-  }
-  const bool excess = std::any_of(r.located.time.begin(), r.located.time.end(),
-                                  [](const TimeFinding& f) { return f.what == "excess"; });
-  if (r.located.frequency.empty() && r.located.state.empty() && !excess) {
-    o << "  no periodic component, state dependence or change in time\n";
+  if (r.located.frequency.empty() && r.located.state.empty()) {
+    o << "  no periodic component or state dependence\n";
   }
   o << "  where the residual's energy is (descriptive, not tests):\n";
   for (const auto& f : r.located.time) {
-    if (f.what == "excess") continue;
     o << "  time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
       << " s carries " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
       << g(100.0 * f.time_share, "%.1f") << " % of the time\n";

@@ -105,9 +105,6 @@ TEST_CASE("discrepancy: over 240 null records of varied length, noise, gains and
     for (const auto& e : r.effects) ++kinds["name " + e.name];
     for (const auto& f : r.located.frequency) ++kinds["frequency " + f.output];
     for (const auto& f : r.located.state) ++kinds["state " + f.output + " on " + f.signal];
-    for (const auto& f : r.located.time) {
-      if (f.what == "excess") ++kinds["time " + f.output];
-    }
     std::printf("  null record %d (set %d, %.1f s): %s: %s\n", i, rec.set, rec.options.duration_s, r.verdict.c_str(),
                 r.summary.c_str());
   }
