@@ -29,8 +29,11 @@ UniformData join_flights(const std::vector<UniformData>& flights, std::vector<st
   for (std::size_t i = 1; i < flights.size(); ++i) out.source += " + " + flights[i].source;
   out.t_s.resize(n);
   std::vector<std::string> names;
-  for (const auto& [name, x] : flights.front().signals) {
-    if (std::all_of(flights.begin(), flights.end(), [&](const UniformData& f) { return f.has(name); })) names.push_back(name);
+  for (const auto& entry : flights.front().signals) {
+    const std::string& name = entry.first;
+    if (std::all_of(flights.begin(), flights.end(), [&name](const UniformData& f) { return f.has(name); })) {
+      names.push_back(name);
+    }
   }
   for (const auto& name : names) out.signals[name].resize(n);
   rows.clear();
