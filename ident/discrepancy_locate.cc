@@ -22,21 +22,6 @@ namespace nimble::ident::discrepancy_parts {
 
 namespace {
 
-/// Solves G x = B with the column scaling of solve(), for several right-hand sides.
-struct ScaledSolver {
-  VectorXd scale;
-  Eigen::LDLT<MatrixXd> ldlt;
-  bool ok = false;
-
-  explicit ScaledSolver(const MatrixXd& G) {
-    scale = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-    ldlt.compute(scale.asDiagonal() * G * scale.asDiagonal());
-    const VectorXd D = ldlt.vectorD();
-    ok = ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff();
-  }
-  MatrixXd solve(const MatrixXd& B) const { return scale.asDiagonal() * ldlt.solve(scale.asDiagonal() * B); }
-};
-
 /// One orthonormal discrete Laguerre bank of `order` filters with pole a, applied to u.
 void laguerre(const VectorXd& u, double a, int order, std::vector<VectorXd>& out) {
   const Index n = u.size();
@@ -137,15 +122,10 @@ double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block
   const VectorXd th = sr.solve(R.transpose() * frame.residual);
   const VectorXd e = frame.residual - R * th;
   const Index block = score_block(R, e, min_block);
-  MatrixXd S = MatrixXd::Zero(k, k);
-  for (Index a = 0; a < n; a += block) {
-    const Index len = std::min(block, n - a);
-    const VectorXd g = R.middleRows(a, len).transpose() * e.segment(a, len);
-    S += g * g.transpose();
-  }
-  const MatrixXd Ginv = sr.solve(MatrixXd::Identity(k, k));
+  // The partialled regression's sandwich, its degrees of freedom those of the full one (the
+  // frame's span and C).
   const double q = static_cast<double>(frame.model_and_excitation.rank() + k);
-  const MatrixXd cov = Ginv * S * Ginv * (static_cast<double>(n) / std::max(1.0, static_cast<double>(n) - q));
+  const MatrixXd cov = coloured_covariance(R, e, block) * (static_cast<double>(n - k) / std::max(1.0, static_cast<double>(n) - q));
   const double wald = th.dot(cov.ldlt().solve(th));
   if (partial_r) {
     const double rss0 = frame.residual.squaredNorm();
@@ -213,12 +193,6 @@ void frequency_peaks(const LocationFrame& frame, const std::string& output, doub
 
 /// Residual against a nonlinear function of each state and input, seen through the excitation
 /// (see the declaration), Bonferroni over the signals tested.
-MatrixXd high_pass_columns(const MatrixXd& A, double f_hz, double rate_hz) {
-  MatrixXd H(A.rows(), A.cols());
-  for (Index j = 0; j < A.cols(); ++j) H.col(j) = high_pass(A.col(j), f_hz, rate_hz);
-  return H;
-}
-
 void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::string& output, const UniformData& d,
                     const LocationRule& rule, std::vector<StateFinding>& out) {
   const Index min_block = rule.min_block;

@@ -196,6 +196,10 @@ struct HighPassed {
   VectorXd y;
 };
 
+/// The scan point's total relative RSS over the equations (those it does not touch count 1);
+/// infinite when !ok or a fit is singular.
+void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool ok);
+
 struct Workflow {
   const DiscrepancyOptions& opt;
   const Vehicle& vehicle;
@@ -277,6 +281,16 @@ void time_varying_parameters(const Model& m, const BatchRule& batch, const Unifo
 
 FoldStats fold_stats(const MatrixXd& C, const VectorXd& y, const Folds& folds);
 
+/// G x = B solved with column scaling (G scaled to unit diagonal, LDLT), for any number of
+/// right-hand sides; `ok` false if G is (numerically) singular.
+struct ScaledSolver {
+  explicit ScaledSolver(const MatrixXd& G);
+  MatrixXd solve(const MatrixXd& B) const { return scale.asDiagonal() * ldlt.solve(scale.asDiagonal() * B); }
+  VectorXd scale;
+  Eigen::LDLT<MatrixXd> ldlt;
+  bool ok = false;
+};
+
 /// Solves G theta = b with column scaling; false if G is (numerically) singular.
 bool solve(const MatrixXd& G, const VectorXd& b, VectorXd& theta);
 
@@ -305,6 +319,9 @@ double wald_tail(double wald, Index k, double blocks);
 /// The part of x above f_hz: x minus its zero-phase Butterworth low-pass (order 4, applied
 /// forward and backward), so that the two parts add up to x exactly.
 VectorXd high_pass(const VectorXd& x, double f_hz, double rate_hz);
+
+/// high_pass() of every column of A.
+MatrixXd high_pass_columns(const MatrixXd& A, double f_hz, double rate_hz);
 
 /// Per-fold stats of every equation of the current model.
 std::vector<FoldStats> model_stats(const Model& m, const Folds& folds);

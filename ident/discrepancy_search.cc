@@ -18,6 +18,15 @@
 
 namespace nimble::ident::discrepancy_parts {
 
+void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool ok) {
+  for (std::size_t e = 0; e < rss_before.size() && ok; ++e) {
+    const double r = pt.touched[e] ? full_rss(pt.stats[e]) : rss_before[e];
+    if (!std::isfinite(r)) ok = false;
+    pt.rss_rel += r / rss_before[e];
+  }
+  if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
+}
+
 /// Every scan point of `spec` (one, or one per delay): its columns and the fold statistics
 /// of each equation it touches, with its total relative RSS (infinite if it cannot be fitted).
 std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m, const std::vector<Index>& delays,
@@ -42,12 +51,7 @@ std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m,
       pt.stats[a.eq] = fold_stats(augmented_design(m.eqs[a.eq], all), m.eqs[a.eq].y, folds);
       pt.touched[a.eq] = true;
     }
-    for (std::size_t e = 0; e < neq && ok; ++e) {
-      const double r = pt.touched[e] ? full_rss(pt.stats[e]) : rss_before[e];
-      if (!std::isfinite(r)) ok = false;
-      pt.rss_rel += r / rss_before[e];
-    }
-    if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
+    close_scan_point(pt, rss_before, ok);
     points.push_back(std::move(pt));
   }
   return points;
@@ -116,8 +120,7 @@ double Workflow::above_gust_band(const Model& m, const ScanPoint& P, std::size_t
     HighPassed& model_hp = high_passed[a.eq];
     const MatrixXd X = m.X(a.eq);
     if (model_hp.X.cols() != X.cols() || model_hp.X.rows() != X.rows()) {
-      model_hp.X.resize(X.rows(), X.cols());
-      for (Index j = 0; j < X.cols(); ++j) model_hp.X.col(j) = high_pass(X.col(j), opt.gust_band_hz, data.rate_hz);
+      model_hp.X = high_pass_columns(X, opt.gust_band_hz, data.rate_hz);
       model_hp.y = high_pass(m.eqs[a.eq].y, opt.gust_band_hz, data.rate_hz);
     }
     MatrixXd C(X.rows(), X.cols() + static_cast<Index>(a.cols.size()));

@@ -44,14 +44,16 @@ FoldStats fold_stats(const MatrixXd& C, const VectorXd& y, const Folds& folds) {
 }
 
 /// Solves G theta = b with column scaling; false if G is (numerically) singular.
+ScaledSolver::ScaledSolver(const MatrixXd& G)
+    : scale(G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse()),
+      ldlt(scale.asDiagonal() * G * scale.asDiagonal()) {
+  ok = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-10 * ldlt.vectorD().maxCoeff();
+}
+
 bool solve(const MatrixXd& G, const VectorXd& b, VectorXd& theta) {
-  const VectorXd d = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const MatrixXd Gs = d.asDiagonal() * G * d.asDiagonal();
-  Eigen::LDLT<MatrixXd> ldlt(Gs);
-  if (ldlt.info() != Eigen::Success) return false;
-  const VectorXd D = ldlt.vectorD();
-  if (D.minCoeff() <= 1e-10 * D.maxCoeff()) return false;
-  theta = d.asDiagonal() * ldlt.solve(d.asDiagonal() * b);
+  const ScaledSolver s(G);
+  if (!s.ok) return false;
+  theta = s.solve(b);
   return theta.allFinite();
 }
 
@@ -107,6 +109,12 @@ double wald_tail(double wald, Index k, double blocks) {
 VectorXd high_pass(const VectorXd& x, double f_hz, double rate_hz) {
   const auto sos = butterworth_lowpass(4, f_hz, rate_hz);
   return x - filtfilt(sos, x, default_padding(f_hz, rate_hz));
+}
+
+MatrixXd high_pass_columns(const MatrixXd& A, double f_hz, double rate_hz) {
+  MatrixXd H(A.rows(), A.cols());
+  for (Index j = 0; j < A.cols(); ++j) H.col(j) = high_pass(A.col(j), f_hz, rate_hz);
+  return H;
 }
 
 /// Per-fold stats of every equation of the current model.

@@ -138,12 +138,7 @@ std::vector<ScanPoint> Workflow::scan_change(const CandidateSpec& spec, const Mo
       const double z2 = pt.stats[a.eq].Gt.bottomRightCorner(1, 1)(0, 0);
       if (!(z2 > 0.0)) ok = false;
     }
-    for (std::size_t e = 0; e < neq && ok; ++e) {
-      const double r = pt.touched[e] ? full_rss(pt.stats[e]) : rss_before[e];
-      if (!std::isfinite(r)) ok = false;
-      pt.rss_rel += r / rss_before[e];
-    }
-    if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
+    close_scan_point(pt, rss_before, ok);
     points.push_back(std::move(pt));
   }
   return points;

@@ -20,16 +20,12 @@
 #include <string>
 #include <vector>
 
+#include "core/proportion.h"
+
 namespace nimble::power {
 
-/// A proportion with its 95 % Wilson score interval.
-struct Proportion {
-  int count = 0, n = 0;
-  double p = 0.0, lo = 0.0, hi = 1.0;
-};
-
-/// count of n with its Wilson score interval at z (1.96: 95 %).
-Proportion wilson(int count, int n, double z = 1.959963984540054);
+using nimble::Proportion;  // a count with its Wilson score interval (core/proportion.h)
+using nimble::wilson;
 
 /// The standard normal quantile Phi^-1(q), q in (0, 1).
 double normal_quantile(double q);

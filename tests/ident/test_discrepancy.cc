@@ -25,16 +25,6 @@ using namespace nimble::ident;
 
 namespace {
 
-struct Set1 {
-  DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
-  Vehicle vehicle = load_vehicle(model.vehicle_file);
-};
-
-const Set1& set1() {
-  static const Set1 s;
-  return s;
-}
-
 DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed, double scale = 1.0) {
   test::HiddenEffects h;
   h.on = effects;
@@ -42,8 +32,8 @@ DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed, 
   test::draw_magnitudes(h, seed);
   test::GeneratorOptions o;
   o.seed = seed;
-  const FlightData d = test::generate_flight(set1().model, set1().vehicle, h, o);
-  DiscrepancyResult r = find_discrepancy(d, set1().model, set1().vehicle, {});
+  const FlightData d = test::generate_flight(test::set1().model, test::set1().vehicle, h, o);
+  DiscrepancyResult r = find_discrepancy(d, test::set1().model, test::set1().vehicle, {});
   // Where an effect is named, some band shows the gap shrinking by at least 20 %, or each
   // effect band says why it cannot.
   if (!r.effects.empty()) {
@@ -85,13 +75,13 @@ TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is
     REQUIRE(named(r, "kinematic_coupling"));
     CHECK(r.effects.size() == 1);
     const NamedEffect& e = r.effects.front();
-    const double m = set1().vehicle.mass_kg;
+    const double m = test::set1().vehicle.mass_kg;
     CHECK(std::fabs(e.parameters.at("Y_pw") - m) < 5.0 * e.sigma.at("Y_pw"));
     CHECK(r.gap_after < 0.5 * r.gap_before);
     // The refit Yp comes back to the model's value once the effect is in (Eq 21's bias gone).
     const auto& yp = r.augmented.at("Yp");
-    CHECK(std::fabs(yp.value - set1().model.at("Yp")) < 4.0 * yp.sigma_coloured + 1e-9);
-    CHECK(std::fabs(r.baseline.at("Yp").value - set1().model.at("Yp")) > std::fabs(yp.value - set1().model.at("Yp")));
+    CHECK(std::fabs(yp.value - test::set1().model.at("Yp")) < 4.0 * yp.sigma_coloured + 1e-9);
+    CHECK(std::fabs(r.baseline.at("Yp").value - test::set1().model.at("Yp")) > std::fabs(yp.value - test::set1().model.at("Yp")));
   }
 }
 
@@ -165,8 +155,8 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
     test::GeneratorOptions o;
     o.seed = static_cast<std::uint64_t>(s);
     o.record_command = true;
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o),
-                                                 set1().model, set1().vehicle, opt);
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
+                                                 test::set1().model, test::set1().vehicle, opt);
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
     if (named(r, "actuator_delay")) {
@@ -177,8 +167,8 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
       CHECK(r.gap_after < r.gap_before);
     }
     test::HiddenEffects none;
-    const DiscrepancyResult n0 = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, none, o),
-                                                  set1().model, set1().vehicle, opt);
+    const DiscrepancyResult n0 = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, none, o),
+                                                  test::set1().model, test::set1().vehicle, opt);
     INFO("null seed " << s << ": " << n0.summary);
     null_named += !n0.effects.empty();
     // The actuator equation is part of the model when the command is recorded.
@@ -269,8 +259,8 @@ TEST_CASE("discrepancy: a sensor bias's gap shrinks where it lives, at 0 Hz", "[
     test::draw_magnitudes(h, s);
     test::GeneratorOptions o;
     o.seed = s;
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o),
-                                                 set1().model, set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
+                                                 test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     if (!named(r, "sensor_bias")) continue;
     ++named_bias;
@@ -301,8 +291,8 @@ TEST_CASE("discrepancy: a nonlinearity outside the candidates is located: unexpl
     o.seed = s;
     DiscrepancyOptions opt;
     opt.candidates = {"sensor_bias", "actuator_delay"};
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o),
-                                                 set1().model, set1().vehicle, opt);
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
+                                                 test::set1().model, test::set1().vehicle, opt);
     INFO("seed " << s << ": " << r.summary);
     CHECK(r.effects.empty());
     const bool side_force = std::any_of(r.located.state.begin(), r.located.state.end(),
@@ -375,8 +365,8 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
   }
   DiscrepancyOptions bad;
   bad.candidates = {"lateral_inflow", "warp_drive"};
-  CHECK_THROWS_WITH(find_discrepancy(test::generate_flight(set1().model, set1().vehicle, {}, {}), set1().model,
-                                     set1().vehicle, bad),
+  CHECK_THROWS_WITH(find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, {}, {}), test::set1().model,
+                                     test::set1().vehicle, bad),
                     Catch::Contains("unknown candidate 'warp_drive'"));
 }
 

@@ -18,16 +18,6 @@ using namespace nimble::ident;
 
 namespace {
 
-struct Set1 {
-  DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
-  Vehicle vehicle = load_vehicle(model.vehicle_file);
-};
-
-const Set1& set1() {
-  static const Set1 s;
-  return s;
-}
-
 /// A flight with `effects` at `scale` of the magnitudes drawn by `magnitude_seed`, its noise by `seed`.
 FlightData flight(const std::set<std::string>& effects, std::uint64_t magnitude_seed, std::uint64_t seed,
                   double duration_s, double scale = 1.0) {
@@ -38,7 +28,7 @@ FlightData flight(const std::set<std::string>& effects, std::uint64_t magnitude_
   test::GeneratorOptions o;
   o.seed = seed;
   o.duration_s = duration_s;
-  FlightData d = test::generate_flight(set1().model, set1().vehicle, h, o);
+  FlightData d = test::generate_flight(test::set1().model, test::set1().vehicle, h, o);
   d.source = "flight" + std::to_string(seed);
   return d;
 }
@@ -57,9 +47,9 @@ TEST_CASE("discrepancy pool: a lateral inflow too weak to name on one 12 s recor
     std::vector<FlightData> flights;
     for (std::uint64_t k = 0; k < 3; ++k) {
       flights.push_back(flight({"lateral_inflow"}, s, 100 * s + k, 12.0));
-      single += named(find_discrepancy(flights.back(), set1().model, set1().vehicle, {}), "lateral_inflow");
+      single += named(find_discrepancy(flights.back(), test::set1().model, test::set1().vehicle, {}), "lateral_inflow");
     }
-    const DiscrepancyResult r = find_discrepancy(flights, set1().model, set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(flights, test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     // Each flight listed with its rows and noise; its own estimate of what was named.
     REQUIRE(r.flights.size() == 3);
@@ -89,7 +79,7 @@ TEST_CASE("discrepancy pool: flights with the same effect agree, a flight with t
   for (std::uint64_t s = 1; s <= static_cast<std::uint64_t>(seeds); ++s) {
     std::vector<FlightData> flights;
     for (std::uint64_t k = 0; k < 3; ++k) flights.push_back(flight({"forward_speed_coupling"}, s, 10 * s + k, 30.0));
-    const DiscrepancyResult r = find_discrepancy(flights, set1().model, set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(flights, test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     REQUIRE(named(r, "forward_speed_coupling"));
     const auto c = std::find_if(r.consistency.begin(), r.consistency.end(),
@@ -98,7 +88,7 @@ TEST_CASE("discrepancy pool: flights with the same effect agree, a flight with t
     same += c->same;
 
     flights.back() = flight({"forward_speed_coupling"}, s, 10 * s + 2, 30.0, 3.0);
-    const DiscrepancyResult d = find_discrepancy(flights, set1().model, set1().vehicle, {});
+    const DiscrepancyResult d = find_discrepancy(flights, test::set1().model, test::set1().vehicle, {});
     INFO("with the third at 3x: " << d.summary);
     const auto cd = std::find_if(d.consistency.begin(), d.consistency.end(),
                                  [](const FlightConsistency& x) { return x.effect == "forward_speed_coupling"; });
@@ -116,7 +106,7 @@ TEST_CASE("discrepancy pool: three null flights raise no alarm", "[discrepancy][
   for (std::uint64_t s = 1; s <= 4; ++s) {
     std::vector<FlightData> flights;
     for (std::uint64_t k = 0; k < 3; ++k) flights.push_back(flight({}, s, 1000 * s + k, 10.0 + 8.0 * static_cast<double>(k)));
-    const DiscrepancyResult r = find_discrepancy(flights, set1().model, set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(flights, test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     CHECK(r.verdict == "none");
     CHECK(r.flights.size() == 3);
