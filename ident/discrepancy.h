@@ -19,7 +19,8 @@
 ///    so that the linear model's own error where the manoeuvre drives it (from noisy regressors,
 ///    the feedback, the zero-phase filter) is not taken for missing structure; what is left is
 ///    process and measurement noise, independent of the excitation, under a linear plant.
-///    Two alarm tests per equation, each a test the candidates would pass too:
+///    Two alarm tests per equation (L and Y; not the actuator's F, whose error on sampled data
+///    follows the command's sampling and latency), each a test the candidates would pass too:
 ///      - frequency: the largest periodogram ordinate above the gust band, tested as sin and cos
 ///        at that frequency (Wald, batch means of the scores, Bonferroni over the band's
 ///        independent frequencies), which a resonance of the noise does not pass and a periodic

@@ -16,6 +16,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/config.h"
+#include "core/proportion.h"
 #include "discrepancy_generator.h"
 #include "ident/discrepancy.h"
 
@@ -24,21 +25,14 @@ using namespace nimble::ident;
 
 namespace {
 
-/// 95 % Wilson score interval of k successes in n trials.
-std::pair<double, double> wilson95(int k, int n) {
-  const double z = 1.959964, p = static_cast<double>(k) / n, N = static_cast<double>(n);
-  const double centre = (p + z * z / (2 * N)) / (1 + z * z / N);
-  const double half = z / (1 + z * z / N) * std::sqrt(p * (1 - p) / N + z * z / (4 * N * N));
-  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
-}
-
 struct NullRecord {
   int set = 1;
   test::GeneratorOptions options;
 };
 
 /// Record `i`'s settings: length 8-60 s (log-uniform), process noise x0.3-5 and measurement
-/// noise x0.3-4 (log-uniform; p, v, phi and delta_f alike), each PD gain x0.7-1.3, model set 1-5.
+/// noise x0.3-4 (log-uniform; p, v, phi and delta_f alike), each PD gain x0.7-1.3, model set 1-5,
+/// the controller's command recorded in every other record (the actuator equation F joins).
 NullRecord draw_null(int i) {
   std::mt19937_64 rng(static_cast<std::uint64_t>(i) * 2654435761u + 99u);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -57,24 +51,8 @@ NullRecord draw_null(int i) {
   o.noise_df *= measurement;
   o.k_phi *= 0.7 + 0.6 * u(rng);
   o.k_p *= 0.7 + 0.6 * u(rng);
+  o.record_command = i % 2 == 1;
   return r;
-}
-
-struct ModelSet {
-  DerivativeModel model;
-  Vehicle vehicle;
-};
-
-const ModelSet& model_set(int set) {
-  static std::map<int, ModelSet> sets;
-  auto it = sets.find(set);
-  if (it == sets.end()) {
-    DerivativeModel m = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set" +
-                                   std::to_string(set) + ".yaml");
-    Vehicle v = load_vehicle(m.vehicle_file);
-    it = sets.emplace(set, ModelSet{std::move(m), std::move(v)}).first;
-  }
-  return it->second;
 }
 
 }  // namespace
@@ -88,7 +66,7 @@ TEST_CASE("discrepancy: over 240 null records of varied length, noise, gains and
   double bound_max = 0.0;
   for (int i = 0; i < records; ++i) {
     const NullRecord rec = draw_null(i);
-    const ModelSet& ms = model_set(rec.set);
+    const test::ModelSet& ms = test::model_set(rec.set);
     const FlightData data = test::generate_flight(ms.model, ms.vehicle, {}, rec.options);
     const DiscrepancyResult r = find_discrepancy(data, ms.model, ms.vehicle, {});
     bound_max = std::max(bound_max, r.alarm_rule.family_wise);
@@ -108,7 +86,8 @@ TEST_CASE("discrepancy: over 240 null records of varied length, noise, gains and
     std::printf("  null record %d (set %d, %.1f s): %s: %s\n", i, rec.set, rec.options.duration_s, r.verdict.c_str(),
                 r.summary.c_str());
   }
-  const auto [lo, hi] = wilson95(alarms, records);
+  const Proportion rate = wilson(alarms, records);
+  const double lo = rate.lo, hi = rate.hi;
   std::printf("discrepancy null records: %d of %d raised an alarm (%.2f %%, 95 %% interval %.2f-%.2f %%); stated bound "
               "per record <= %.2g (tests x p_critical)\n",
               alarms, records, 100.0 * alarms / records, 100.0 * lo, 100.0 * hi, bound_max);

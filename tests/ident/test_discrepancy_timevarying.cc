@@ -21,23 +21,13 @@ using namespace nimble::ident;
 
 namespace {
 
-struct Set1 {
-  DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
-  Vehicle vehicle = load_vehicle(model.vehicle_file);
-};
-
-const Set1& set1() {
-  static const Set1 s;
-  return s;
-}
-
 DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed) {
   test::HiddenEffects h;
   h.on = effects;
   test::draw_magnitudes(h, seed);
   test::GeneratorOptions o;
   o.seed = seed;
-  return find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o), set1().model, set1().vehicle, {});
+  return find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o), test::set1().model, test::set1().vehicle, {});
 }
 
 std::vector<std::string> names(const DiscrepancyResult& r) {
@@ -112,7 +102,7 @@ TEST_CASE("discrepancy: a hidden drift of the flap input's effectiveness (-2..-8
     o.seed = static_cast<std::uint64_t>(s);
     o.duration_s = 120.0;
     const DiscrepancyResult r =
-        find_discrepancy(test::generate_flight(set1().model, set1().vehicle, h, o), set1().model, set1().vehicle, {});
+        find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o), test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << " rate " << h.drift_per_min << " /min: " << r.summary);
     CHECK(r.verdict != "ambiguous");
     for (const auto& n : names(r)) CHECK(n == "effectiveness_drift");
@@ -140,7 +130,7 @@ TEST_CASE("discrepancy: null records of 8-60 s under other noise and gains name 
   // too), three PD gain pairs, half the records with the recorded command: settings the entry
   // rules were not derived on. effectiveness_step is scanned over many t*; no t* may name it.
   const int records = 24;
-  int named_tv = 0, named_any = 0;
+  int named_tv = 0, named_any = 0, alarms = 0;
   for (int s = 1; s <= records; ++s) {
     std::mt19937_64 rng(static_cast<std::uint64_t>(1000 + s));
     test::GeneratorOptions o;
@@ -160,13 +150,16 @@ TEST_CASE("discrepancy: null records of 8-60 s under other noise and gains name 
     DiscrepancyOptions opt;
     opt.command_latency_s = 0.0;  // the generator's command path has no latency of its own
     const DiscrepancyResult r =
-        find_discrepancy(test::generate_flight(set1().model, set1().vehicle, {}, o), set1().model, set1().vehicle, opt);
+        find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, {}, o), test::set1().model, test::set1().vehicle, opt);
     INFO("seed " << s << ", " << o.duration_s << " s: " << r.summary);
     CHECK(effect(r, "effectiveness_drift") == nullptr);
     CHECK(effect(r, "effectiveness_step") == nullptr);
     named_tv += effect(r, "effectiveness_drift") != nullptr || effect(r, "effectiveness_step") != nullptr;
     named_any += !r.effects.empty();
+    alarms += r.verdict != "none";  // a name, ambiguous or unexplained
+    if (r.verdict != "none") std::printf("  alarm: seed %d: %s\n", s, r.summary.c_str());
   }
-  std::printf("discrepancy null records of 8-60 s: %d of %d named a time-varying effect, %d named any effect\n", named_tv,
-              records, named_any);
+  std::printf("discrepancy null records of 8-60 s: %d of %d named a time-varying effect, %d named any effect, %d raised "
+              "any alarm\n",
+              named_tv, records, named_any, alarms);
 }
