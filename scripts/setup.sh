@@ -21,7 +21,9 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # the Python log reader (python/nimble_rig);
 # Boost (header-only Boost.Math) for the F and chi-square distributions of the significance tests;
 # nlohmann-json (JSON output and reading run reports), fmt (the run summary's formatting) and
-# CLI11 (the command lines of the rig tool, its processes, benchmarks and tools).
+# CLI11 (the command lines of the rig tool, its processes, benchmarks and tools);
+# zstd and zlib (MCAP export: chunk compression and CRC-32), Debian's headless Chromium (the
+# dashboard's browser test); Node.js and npm (below) for the viewers' assets and their readers.
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
@@ -30,7 +32,10 @@ PACKAGES=(
   gnuplot-nox
   can-utils iproute2 qemu-system-x86 xz-utils
   python3 python3-numpy
+  libzstd-dev zlib1g-dev chromium-headless-shell
 )
+# Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
+command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
 CMAKE_ARGS=()
 if [[ "${SANITIZE:-0}" == 1 ]]; then
   # clang, its sanitizer and libFuzzer runtimes, and llvm-symbolizer for readable reports.
@@ -53,6 +58,19 @@ if ((${#missing[@]})); then
   fi
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The npm packages of tools/npm/package-lock.json in $BUILD_DIR/npm: the dashboard's plotting
+# library (copied into the build's web assets) and, for the tests, the MCAP reader, the Foxglove
+# WebSocket client and puppeteer-core. Installed again only when the lock file changed.
+if [[ "${SANITIZE:-0}" != 1 ]]; then
+  NPM_DIR="$BUILD_DIR/npm"
+  if ! cmp -s "$ROOT/tools/npm/package-lock.json" "$NPM_DIR/package-lock.json" || [[ ! -d "$NPM_DIR/node_modules" ]]; then
+    mkdir -p "$NPM_DIR"
+    cp "$ROOT/tools/npm/package.json" "$ROOT/tools/npm/package-lock.json" "$NPM_DIR/"
+    echo "setup: npm ci in $NPM_DIR"
+    (cd "$NPM_DIR" && npm ci --no-audit --no-fund --loglevel=error) || { echo "setup: npm ci failed in $NPM_DIR (the npm registry must be reachable)" >&2; exit 1; }
+  fi
 fi
 
 cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" "${CMAKE_ARGS[@]}" >/dev/null
