@@ -51,6 +51,10 @@ struct LcmStruct {
   /// Index in `fields` of the int64 field holding the message's rig (simulated) time [us]:
   /// `utime` unless its comment says it is the wall clock, else `rig_utime`; -1 if none.
   int rig_time_field = -1;
+  /// The text of the .lcm file that declares it (the schema of its raw LCM bytes).
+  std::string source;
+  /// The .lcm file's name, e.g. "truth_state_t.lcm".
+  std::string file;
 
   std::string full_name() const { return package.empty() ? name : package + "." + name; }
 };
