@@ -1,0 +1,617 @@
+#include "foxglove/foxglove_server.h"
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+
+namespace nimble::foxglove {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+
+namespace {
+
+/// A frame waiting in a client's queue.
+struct Frame {
+  std::string data;
+  bool text = false;
+  bool message = false;  ///< a messageData frame (counted as a message when sent)
+};
+
+std::string endpoint_text(const tcp::endpoint& e) {
+  const auto a = e.address();
+  return (a.is_v6() ? "[" + a.to_string() + "]" : a.to_string()) + ":" + std::to_string(e.port());
+}
+
+const char* content_type(const std::string& ext) {
+  if (ext == ".html" || ext == ".htm") return "text/html; charset=utf-8";
+  if (ext == ".js" || ext == ".mjs") return "text/javascript; charset=utf-8";
+  if (ext == ".css") return "text/css; charset=utf-8";
+  if (ext == ".png") return "image/png";
+  if (ext == ".json") return "application/json";
+  if (ext == ".svg") return "image/svg+xml";
+  return "application/octet-stream";
+}
+
+}  // namespace
+
+class WsSession;
+
+struct FoxgloveServer::Impl {
+  ServerOptions options;
+  net::io_context ioc{1};
+  tcp::acceptor acceptor{ioc};
+  std::thread thread;
+  std::atomic<bool> running{false};
+  std::string session_id;
+  uint16_t port = 0;
+
+  mutable std::mutex channels_mu;
+  std::vector<Channel> channels;  // id i + 1 at index i
+  std::array<std::atomic<int>, kMaxChannels + 1> subscribers{};
+
+  mutable std::mutex sessions_mu;
+  std::vector<std::shared_ptr<WsSession>> sessions;
+  uint64_t next_client_id = 1;
+
+  std::atomic<int64_t> clients_now{0}, clients_total{0}, handshakes_refused{0}, messages_sent{0}, bytes_sent{0},
+      dropped{0}, refused{0}, protocol_errors{0}, oversized_closes{0}, http_requests{0};
+
+  bool channel_exists(uint32_t id) const {
+    std::lock_guard<std::mutex> lock(channels_mu);
+    return id >= 1 && id <= channels.size();
+  }
+  std::vector<Channel> channel_list() const {
+    std::lock_guard<std::mutex> lock(channels_mu);
+    return channels;
+  }
+
+  void do_accept();
+  void on_connection(tcp::socket socket);
+  void add_session(const std::shared_ptr<WsSession>& s);
+  void remove_session(const WsSession* s);
+};
+
+/// One WebSocket client.
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(FoxgloveServer::Impl* server, beast::tcp_stream stream, std::string subprotocol,
+            uint64_t id)
+      : server_(server),
+        ws_(std::move(stream)),
+        subprotocol_(std::move(subprotocol)),
+        id_(id),
+        session_([server](uint32_t channel) { return server->channel_exists(channel); }) {
+    address_ = endpoint_text(beast::get_lowest_layer(ws_).socket().remote_endpoint(ignored_));
+  }
+
+  /// Completes the handshake of `request` (whose subprotocol was checked).
+  void accept(http::request<http::string_body> request) {
+    websocket::stream_base::timeout timeouts{};
+    timeouts.handshake_timeout = std::chrono::seconds(30);
+    timeouts.idle_timeout = websocket::stream_base::none();
+    timeouts.keep_alive_pings = false;
+    beast::get_lowest_layer(ws_).expires_never();
+    ws_.set_option(timeouts);
+    ws_.read_message_max(server_->options.max_frame_bytes);
+    ws_.auto_fragment(false);
+    const std::string sub = subprotocol_;
+    ws_.set_option(websocket::stream_base::decorator([sub](websocket::response_type& res) {
+      res.set(http::field::sec_websocket_protocol, sub);
+      res.set(http::field::server, "nimble_rig foxglove");
+    }));
+    ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) { self->on_accept(ec); });
+  }
+
+  /// Queues a messageData frame if this client subscribes to `channel`; drops it when the
+  /// queue is full. Any thread.
+  void offer(uint32_t channel, uint64_t timestamp_ns, std::string_view payload) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (closed_) return;
+    const auto it = subs_by_channel_.find(channel);
+    if (it == subs_by_channel_.end()) return;
+    const std::size_t size = kMessageDataHeader + payload.size();
+    const ServerOptions& o = server_->options;
+    if (data_bytes_ + size > o.max_queue_bytes || data_count_ + 1 > o.max_queue_messages) {
+      ++dropped_;
+      server_->dropped.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    Frame f;
+    f.data = message_data(it->second, timestamp_ns, payload);
+    f.message = true;
+    data_bytes_ += size;
+    ++data_count_;
+    queue_.push_back(std::move(f));
+    kick_locked();
+  }
+
+  /// Queues a text frame (serverInfo, advertise, status): never dropped, but a client that lets
+  /// them pile up beyond twice the queue's bound is closed. Any thread.
+  void send_text(std::string text) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (closed_) return;
+    control_bytes_ += text.size();
+    if (control_bytes_ > 2 * server_->options.max_queue_bytes) {
+      closed_ = true;
+      net::post(ws_.get_executor(), [self = shared_from_this()] { self->hard_close(); });
+      return;
+    }
+    Frame f;
+    f.data = std::move(text);
+    f.text = true;
+    queue_.push_back(std::move(f));
+    kick_locked();
+  }
+
+  /// Asks for a clean close once the queue is written. Any thread.
+  void close() {
+    net::post(ws_.get_executor(), [self = shared_from_this()] {
+      std::lock_guard<std::mutex> lock(self->mu_);
+      self->close_requested_ = true;
+      self->kick_locked();
+    });
+  }
+
+  /// Closes the socket at once. Any thread.
+  void abort() {
+    net::post(ws_.get_executor(), [self = shared_from_this()] { self->hard_close(); });
+  }
+
+  ClientStats stats() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return ClientStats{id_, address_, subprotocol_, subs_by_channel_.size(), sent_, dropped_};
+  }
+
+ private:
+  void on_accept(beast::error_code ec) {
+    if (ec) return;  // the client went away during its handshake
+    server_->add_session(shared_from_this());
+    accepted_ = true;
+    send_text(server_info_json(server_->options.name, server_->session_id, server_->options.metadata));
+    const std::vector<Channel> channels = server_->channel_list();
+    if (!channels.empty()) send_text(advertise_json(channels));
+    do_read();
+  }
+
+  void do_read() {
+    ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
+  }
+
+  void on_read(beast::error_code ec) {
+    if (ec) {
+      if (ec == websocket::error::message_too_big) {
+        server_->oversized_closes.fetch_add(1);
+        server_->protocol_errors.fetch_add(1);
+      }
+      finish();
+      return;
+    }
+    const std::string_view frame(static_cast<const char*>(buffer_.data().data()), buffer_.size());
+    std::vector<std::string> replies;
+    const SessionCounters before = session_.counters();
+    if (ws_.got_text()) {
+      const std::vector<uint32_t> changed = session_.on_text(frame, &replies);
+      if (!changed.empty()) update_subscriptions(changed);
+    } else {
+      session_.on_binary(frame, &replies);
+    }
+    buffer_.consume(buffer_.size());
+    server_->refused.fetch_add(session_.counters().refused - before.refused);
+    server_->protocol_errors.fetch_add(session_.counters().protocol_errors - before.protocol_errors);
+    for (auto& r : replies) send_text(std::move(r));
+    do_read();
+  }
+
+  /// Mirrors the session's subscriptions for offer() and the server's per-channel counts.
+  void update_subscriptions(const std::vector<uint32_t>& changed) {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (uint32_t channel : changed) {
+      uint32_t sub = 0;
+      const bool now = session_.subscription_of(channel, &sub);
+      const bool was = subs_by_channel_.count(channel) != 0;
+      if (now) subs_by_channel_[channel] = sub;
+      else subs_by_channel_.erase(channel);
+      if (now && !was) server_->subscribers[channel].fetch_add(1);
+      if (!now && was) server_->subscribers[channel].fetch_sub(1);
+    }
+  }
+
+  /// Starts writing the queue's front if nothing is being written. Under mu_.
+  void kick_locked() {
+    if (writing_) return;
+    writing_ = true;
+    net::post(ws_.get_executor(), [self = shared_from_this()] { self->do_write(); });
+  }
+
+  void do_write() {
+    Frame* front = nullptr;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (queue_.empty() || write_failed_) {
+        writing_ = false;
+        if (close_requested_ && !closing_ && !write_failed_) {
+          closing_ = true;
+          writing_ = true;
+          ws_.async_close(websocket::close_code::normal,
+                          [self = shared_from_this()](beast::error_code) { self->hard_close(); });
+        }
+        return;
+      }
+      front = &queue_.front();  // a deque keeps its elements in place while others are added
+    }
+    ws_.text(front->text);
+    ws_.async_write(net::buffer(front->data),
+                    [self = shared_from_this()](beast::error_code ec, std::size_t n) { self->on_write(ec, n); });
+  }
+
+  void on_write(beast::error_code ec, std::size_t bytes) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      Frame& f = queue_.front();
+      if (f.message) {
+        data_bytes_ -= f.data.size();
+        --data_count_;
+        if (!ec) {
+          ++sent_;
+          server_->messages_sent.fetch_add(1, std::memory_order_relaxed);
+        }
+      } else {
+        control_bytes_ -= f.data.size();
+      }
+      queue_.pop_front();
+      if (ec) write_failed_ = true;
+    }
+    if (!ec) server_->bytes_sent.fetch_add(static_cast<int64_t>(bytes), std::memory_order_relaxed);
+    if (ec) {
+      hard_close();
+      return;
+    }
+    do_write();
+  }
+
+  void hard_close() {
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+
+  /// The connection ended (read failed): unregisters the client.
+  void finish() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      closed_ = true;
+      for (const auto& kv : subs_by_channel_) server_->subscribers[kv.first].fetch_sub(1);
+      subs_by_channel_.clear();
+      queue_.erase(queue_.begin() + (writing_ && !queue_.empty() ? 1 : 0), queue_.end());
+    }
+    if (accepted_) {
+      accepted_ = false;
+      server_->remove_session(this);
+    }
+    hard_close();
+  }
+
+  FoxgloveServer::Impl* server_;  // outlives every connection: its io_context owns them
+  websocket::stream<beast::tcp_stream> ws_;
+  std::string subprotocol_, address_;
+  uint64_t id_;
+  beast::error_code ignored_;
+  beast::flat_buffer buffer_;
+  ClientSession session_;  // I/O thread only
+  bool accepted_ = false;  // I/O thread only
+
+  mutable std::mutex mu_;  // everything below
+  std::map<uint32_t, uint32_t> subs_by_channel_;
+  std::deque<Frame> queue_;
+  std::size_t data_bytes_ = 0, data_count_ = 0, control_bytes_ = 0;
+  bool writing_ = false, closed_ = false, close_requested_ = false, closing_ = false, write_failed_ = false;
+  int64_t sent_ = 0, dropped_ = 0;
+};
+
+/// A connection before it is a WebSocket: reads one HTTP request; an upgrade becomes a
+/// WsSession, anything else is answered (a static file, or why not) and closed.
+class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
+ public:
+  HttpConnection(FoxgloveServer::Impl* server, tcp::socket socket)
+      : server_(server), stream_(std::move(socket)) {}
+
+  void start() {
+    parser_.emplace();
+    parser_->header_limit(16 * 1024);
+    parser_->body_limit(16 * 1024);
+    stream_.expires_after(std::chrono::seconds(30));
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
+  }
+
+ private:
+  void on_read(beast::error_code ec) {
+    if (ec) return;  // closed, timed out or not HTTP: nothing to answer
+    http::request<http::string_body> req = parser_->release();
+    if (websocket::is_upgrade(req)) {
+      const std::string sub = choose_subprotocol(std::string(req[http::field::sec_websocket_protocol]));
+      if (sub.empty()) {
+        server_->handshakes_refused.fetch_add(1);
+        respond(req, http::status::bad_request, "text/plain; charset=utf-8",
+                std::string("This Foxglove WebSocket server speaks the subprotocol ") + kSubprotocolV1 + " (or " +
+                    kSubprotocolSdk + "); the handshake offered neither ('" +
+                    std::string(req[http::field::sec_websocket_protocol]) + "').\n");
+        return;
+      }
+      uint64_t id = 0;
+      {
+        std::lock_guard<std::mutex> lock(server_->sessions_mu);
+        id = server_->next_client_id++;
+      }
+      std::make_shared<WsSession>(server_, std::move(stream_), sub, id)->accept(std::move(req));
+      return;
+    }
+    server_->http_requests.fetch_add(1);
+    serve_file(req);
+  }
+
+  void serve_file(const http::request<http::string_body>& req) {
+    const std::string help = "This is a Foxglove WebSocket server: in Foxglove or Lichtblick, Open connection -> "
+                             "Foxglove WebSocket -> ws://" +
+                             endpoint_text(stream_.socket().local_endpoint(ignored_)) + "\n";
+    if (req.method() != http::verb::get && req.method() != http::verb::head) {
+      respond(req, http::status::method_not_allowed, "text/plain; charset=utf-8", "only GET and HEAD\n");
+      return;
+    }
+    if (server_->options.web_root.empty()) {
+      respond(req, http::status::not_found, "text/plain; charset=utf-8", help);
+      return;
+    }
+    std::string target(req.target());
+    target = target.substr(0, target.find_first_of("?#"));
+    if (target.empty() || target[0] != '/' || target.find("..") != std::string::npos ||
+        target.find('\\') != std::string::npos || target.find('%') != std::string::npos ||
+        target.find('\0') != std::string::npos) {
+      respond(req, http::status::bad_request, "text/plain; charset=utf-8", "bad path\n");
+      return;
+    }
+    if (target.back() == '/') target += "index.html";
+    const std::filesystem::path file = std::filesystem::path(server_->options.web_root) / target.substr(1);
+    std::error_code fec;
+    if (!std::filesystem::is_regular_file(file, fec)) {
+      respond(req, http::status::not_found, "text/plain; charset=utf-8", "not found: " + target + "\n" + help);
+      return;
+    }
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream body;
+    body << in.rdbuf();
+    if (!in) {
+      respond(req, http::status::internal_server_error, "text/plain; charset=utf-8", "cannot read " + target + "\n");
+      return;
+    }
+    respond(req, http::status::ok, content_type(file.extension().string()), body.str());
+  }
+
+  void respond(const http::request<http::string_body>& req, http::status status, const char* type,
+               std::string body) {
+    auto res = std::make_shared<http::response<http::string_body>>(status, req.version());
+    res->set(http::field::server, "nimble_rig foxglove");
+    res->set(http::field::content_type, type);
+    res->set(http::field::cache_control, "no-store");
+    res->keep_alive(false);
+    const bool head = req.method() == http::verb::head;
+    res->body() = std::move(body);
+    res->prepare_payload();
+    if (head) res->body().clear();
+    http::async_write(stream_, *res, [self = shared_from_this(), res](beast::error_code, std::size_t) {
+      beast::error_code ignored;
+      self->stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    });
+  }
+
+  FoxgloveServer::Impl* server_;
+  beast::tcp_stream stream_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  beast::error_code ignored_;
+};
+
+void FoxgloveServer::Impl::do_accept() {
+  acceptor.async_accept(net::make_strand(ioc), [self = this](beast::error_code ec, tcp::socket s) {
+    if (ec) {
+      if (ec == net::error::operation_aborted || !self->acceptor.is_open()) return;
+    } else {
+      self->on_connection(std::move(s));
+    }
+    self->do_accept();
+  });
+}
+
+void FoxgloveServer::Impl::on_connection(tcp::socket socket) {
+  beast::error_code ignored;
+  socket.set_option(tcp::no_delay(true), ignored);
+  std::make_shared<HttpConnection>(this, std::move(socket))->start();
+}
+
+void FoxgloveServer::Impl::add_session(const std::shared_ptr<WsSession>& s) {
+  std::lock_guard<std::mutex> lock(sessions_mu);
+  sessions.push_back(s);
+  clients_now.fetch_add(1);
+  clients_total.fetch_add(1);
+}
+
+void FoxgloveServer::Impl::remove_session(const WsSession* s) {
+  std::lock_guard<std::mutex> lock(sessions_mu);
+  for (auto it = sessions.begin(); it != sessions.end(); ++it) {
+    if (it->get() == s) {
+      sessions.erase(it);
+      clients_now.fetch_sub(1);
+      return;
+    }
+  }
+}
+
+FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = std::move(options);
+  const ServerOptions& o = impl_->options;
+  if (!o.web_root.empty() && !std::filesystem::is_directory(o.web_root)) {
+    throw std::invalid_argument("web root " + o.web_root + " is not a directory");
+  }
+  if (o.max_queue_bytes == 0 || o.max_queue_messages == 0 || o.max_frame_bytes == 0) {
+    throw std::invalid_argument("the queue and frame bounds must be positive");
+  }
+  beast::error_code ec;
+  net::ip::address address = net::ip::make_address(o.host == "localhost" ? "127.0.0.1" : o.host, ec);
+  if (ec) throw std::invalid_argument("'" + o.host + "' is not an IP address (e.g. 127.0.0.1, 0.0.0.0, ::1)");
+  const tcp::endpoint endpoint(address, o.port);
+  const std::string where = endpoint_text(endpoint);
+  auto& acc = impl_->acceptor;
+  acc.open(endpoint.protocol(), ec);
+  if (!ec) acc.set_option(net::socket_base::reuse_address(true), ec);
+  if (!ec) acc.bind(endpoint, ec);
+  if (!ec) acc.listen(net::socket_base::max_listen_connections, ec);
+  if (ec) throw std::runtime_error("cannot listen on " + where + ": " + ec.message());
+  impl_->port = acc.local_endpoint().port();
+  impl_->session_id = std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                         std::chrono::system_clock::now().time_since_epoch())
+                                         .count()) +
+                      "-" + std::to_string(impl_->port);
+}
+
+FoxgloveServer::~FoxgloveServer() { stop(); }
+
+uint16_t FoxgloveServer::port() const { return impl_->port; }
+const std::string& FoxgloveServer::host() const { return impl_->options.host; }
+std::string FoxgloveServer::url() const {
+  const std::string& h = impl_->options.host;
+  return "ws://" + (h.find(':') != std::string::npos ? "[" + h + "]" : h) + ":" + std::to_string(impl_->port);
+}
+
+void FoxgloveServer::start() {
+  if (impl_->running.exchange(true)) return;
+  impl_->do_accept();
+  impl_->thread = std::thread([impl = impl_.get()] { impl->ioc.run(); });
+}
+
+void FoxgloveServer::stop() {
+  if (!impl_->running.exchange(false)) return;
+  // Every client gets a WebSocket close after what is queued for it; then the thread ends.
+  net::post(impl_->ioc, [impl = impl_.get()] {
+    beast::error_code ignored;
+    impl->acceptor.close(ignored);
+    std::lock_guard<std::mutex> lock(impl->sessions_mu);
+    for (auto& s : impl->sessions) s->close();
+  });
+  const auto wait = [this](int ms) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+    while (impl_->clients_now.load() > 0 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  };
+  wait(500);
+  // A client that did not answer the close (not reading) has its connection closed under it.
+  net::post(impl_->ioc, [impl = impl_.get()] {
+    std::lock_guard<std::mutex> lock(impl->sessions_mu);
+    for (auto& s : impl->sessions) s->abort();
+  });
+  wait(100);
+  impl_->ioc.stop();
+  impl_->thread.join();
+  std::lock_guard<std::mutex> lock(impl_->sessions_mu);
+  impl_->sessions.clear();
+}
+
+uint32_t FoxgloveServer::add_channel(const std::string& topic, const std::string& schema_name,
+                                     const std::string& schema) {
+  Channel c;
+  {
+    std::lock_guard<std::mutex> lock(impl_->channels_mu);
+    if (impl_->channels.size() >= kMaxChannels) {
+      throw std::length_error("at most " + std::to_string(kMaxChannels) + " channels");
+    }
+    c = Channel{static_cast<uint32_t>(impl_->channels.size() + 1), topic, schema_name, schema};
+    impl_->channels.push_back(c);
+  }
+  const std::string advertise = advertise_json({c});
+  std::lock_guard<std::mutex> lock(impl_->sessions_mu);
+  for (auto& s : impl_->sessions) s->send_text(advertise);
+  return c.id;
+}
+
+bool FoxgloveServer::has_subscribers(uint32_t channel_id) const {
+  return channel_id <= kMaxChannels && impl_->subscribers[channel_id].load(std::memory_order_relaxed) > 0;
+}
+
+void FoxgloveServer::publish(uint32_t channel_id, uint64_t timestamp_ns, std::string_view payload) {
+  if (!has_subscribers(channel_id)) return;
+  std::lock_guard<std::mutex> lock(impl_->sessions_mu);
+  for (auto& s : impl_->sessions) s->offer(channel_id, timestamp_ns, payload);
+}
+
+void FoxgloveServer::broadcast_status(StatusLevel level, const std::string& message) {
+  const std::string text = status_json(level, message);
+  std::lock_guard<std::mutex> lock(impl_->sessions_mu);
+  for (auto& s : impl_->sessions) s->send_text(text);
+}
+
+ServerStats FoxgloveServer::stats() const {
+  const Impl& i = *impl_;
+  ServerStats s;
+  s.clients_now = i.clients_now.load();
+  s.clients_total = i.clients_total.load();
+  s.handshakes_refused = i.handshakes_refused.load();
+  s.messages_sent = i.messages_sent.load();
+  s.bytes_sent = i.bytes_sent.load();
+  s.dropped = i.dropped.load();
+  s.refused = i.refused.load();
+  s.protocol_errors = i.protocol_errors.load();
+  s.oversized_closes = i.oversized_closes.load();
+  s.http_requests = i.http_requests.load();
+  return s;
+}
+
+std::vector<ClientStats> FoxgloveServer::clients() const {
+  std::vector<ClientStats> out;
+  std::lock_guard<std::mutex> lock(impl_->sessions_mu);
+  for (const auto& s : impl_->sessions) out.push_back(s->stats());
+  return out;
+}
+
+void parse_host_port(const std::string& text, const std::string& default_host, std::string* host, uint16_t* port) {
+  std::string h = default_host, p = text;
+  if (!text.empty() && text[0] == '[') {
+    const std::size_t close = text.find(']');
+    if (close == std::string::npos || close + 1 >= text.size() || text[close + 1] != ':') {
+      throw std::invalid_argument("'" + text + "' is not [HOST]:PORT");
+    }
+    h = text.substr(1, close - 1);
+    p = text.substr(close + 2);
+  } else if (const std::size_t colon = text.rfind(':'); colon != std::string::npos) {
+    if (text.find(':') != colon) throw std::invalid_argument("'" + text + "': write an IPv6 host in brackets, [::1]:8765");
+    h = text.substr(0, colon);
+    p = text.substr(colon + 1);
+  }
+  if (h.empty()) throw std::invalid_argument("'" + text + "' has an empty host");
+  if (p.empty() || p.size() > 5 || p.find_first_not_of("0123456789") != std::string::npos || std::stoul(p) > 65535) {
+    throw std::invalid_argument("'" + text + "': the port must be a number from 0 to 65535 ([HOST:]PORT)");
+  }
+  *host = h;
+  *port = static_cast<uint16_t>(std::stoul(p));
+}
+
+}  // namespace nimble::foxglove
