@@ -13,7 +13,7 @@ const SUBPROTOCOL = "foxglove.websocket.v1";
 const REDRAW_MS = 100;        // at most 10 redraws a second
 const MAX_SAMPLES = 20000;    // per source, whatever the window holds
 const MAX_FAULTS = 200;       // list items kept; older ones are dropped from the list
-const RECONNECT_MS = 1000;
+const RECONNECT_MS = [1000, 4000];  // first retry, longest wait between retries
 const RESTART_S = 1.0;        // rig time running back more than this starts a new picture
 const RAD2DEG = 180 / Math.PI;
 const PLOT_HEIGHT = 190;      // px, each plot with its axes
@@ -97,11 +97,14 @@ function addSample(trace, t, msg) {
   dirty = true;
 }
 
+// A new run: the plots, the fault list and the verdict start afresh.
 function restart() {
   truth.clear();
   estimate.clear();
   tNewest = -Infinity;
   tFirst = Infinity;
+  clearFaults();
+  showVerdict(null);
 }
 
 // ---- plots -------------------------------------------------------------------------------
@@ -234,6 +237,19 @@ function faultItem(msg) {
   return li;
 }
 
+function clearFaults() {
+  pendingFaults.length = 0;
+  faultTotal = 0;
+  faultsEl.replaceChildren();
+  showFaultCount();
+}
+
+function showFaultCount() {
+  const fc = document.getElementById("fault-count");
+  fc.textContent = String(faultTotal);
+  fc.dataset.count = String(faultTotal);
+}
+
 function flushFaults() {
   if (pendingFaults.length === 0) return;
   const frag = document.createDocumentFragment();
@@ -241,13 +257,17 @@ function flushFaults() {
   pendingFaults.length = 0;
   faultsEl.insertBefore(frag, faultsEl.firstChild);
   while (faultsEl.childElementCount > MAX_FAULTS) faultsEl.lastElementChild.remove();
-  const fc = document.getElementById("fault-count");
-  fc.textContent = String(faultTotal);
-  fc.dataset.count = String(faultTotal);
+  showFaultCount();
 }
 
 function showVerdict(msg) {
   const el = document.getElementById("verdict");
+  if (msg === null) {
+    el.dataset.state = "none";
+    el.dataset.verdict = "";
+    el.textContent = "no verdict yet";
+    return;
+  }
   const state = typeof msg.state === "string" ? msg.state : "unknown";
   const verdict = typeof msg.verdict === "string" ? msg.verdict : "";
   const t = typeof msg.t_s === "number" && Number.isFinite(msg.t_s) ? msg.t_s.toFixed(1) + " s" : "";
@@ -278,6 +298,7 @@ const decoder = new TextDecoder();
 let subscriptions = new Map();  // subscription id -> { kind, topic }
 let subscribedChannels = new Map();  // channel id -> subscription id
 let nextSubscription = 1;
+let retryMs = RECONNECT_MS[0];
 
 function onText(ws, text) {
   let m;
@@ -354,11 +375,16 @@ function connect() {
     return;
   }
   ws.binaryType = "arraybuffer";
-  ws.onopen = () => setStatus("connected", "connected");
+  ws.onopen = () => {
+    retryMs = RECONNECT_MS[0];
+    setStatus("connected", "connected");
+  };
   ws.onmessage = (ev) => (typeof ev.data === "string" ? onText(ws, ev.data) : onBinary(ev.data));
+  // Each failed attempt costs a line in the browser's console: the waits grow to RECONNECT_MS[1].
   ws.onclose = () => {
-    setStatus("disconnected", "disconnected, retrying");
-    setTimeout(connect, RECONNECT_MS);
+    setStatus("disconnected", `disconnected, retrying in ${Math.round(retryMs / 1000)} s`);
+    setTimeout(connect, retryMs);
+    retryMs = Math.min(retryMs * 2, RECONNECT_MS[1]);
   };
 }
 

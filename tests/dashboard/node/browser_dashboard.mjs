@@ -246,7 +246,12 @@ async function main() {
     });
 
     step(`opening ${opts.url}`);
-    const resp = await page.goto(opts.url, { waitUntil: "load", timeout });
+    let resp;
+    try {
+      resp = await page.goto(opts.url, { waitUntil: "load", timeout });
+    } catch (e) {
+      throw new Error(`the page did not load: ${e.message}`);
+    }
     if (!resp || !resp.ok()) throw new Error(`the page did not load: HTTP ${resp ? resp.status() : "no response"}`);
 
     const readState = () => page.evaluate(() => {
@@ -363,7 +368,7 @@ async function main() {
           (lis) => lis.slice(0, 10).map((li) => Array.from(li.children, (c) => c.textContent).join(" | ")));
         report.fault = { expected: opts.expectFault, found: null, listed };
         throw new Error(`no fault containing "${opts.expectFault}" within ${opts.timeoutS} s ` +
-          `(${listed.length ? "listed: " + listed.join(" | ") : "the list is empty"})`);
+          `(${listed.length ? "listed: " + listed.join("; ") : "the list is empty"})`);
       }
       report.fault = { expected: opts.expectFault, found, after_s: (Date.now() - t0) / 1000 };
     }
@@ -402,6 +407,8 @@ async function main() {
     report.ok = true;
   } catch (e) {
     report.error = e && e.message ? e.message : String(e);
+    const first = report.page_errors[0] ?? report.console_errors[0];
+    if (first && !report.error.includes(first)) report.error += ` (the page's first error: ${first})`;
   } finally {
     if (browser) await browser.close().catch(() => {});
     fs.rmSync(userDataDir, { recursive: true, force: true });
