@@ -94,6 +94,8 @@ function addSample(trace, t, msg) {
   trace.push(t, PLOTS.map((p) => component(msg, p.field, p.index, p.scale)));
   if (t > tNewest) tNewest = t;
   if (t < tFirst) tFirst = t;
+  // Redraws trim the traces; a hidden page's timers may run only once a minute.
+  if (trace.size > 2 * MAX_SAMPLES) trace.trim(tNewest - WINDOW_S);
   dirty = true;
 }
 
