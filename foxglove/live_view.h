@@ -1,0 +1,110 @@
+#pragma once
+/// The live view of a run or of a replayed log on a Foxglove WebSocket server: every channel of
+/// the rig's contract (contract/channels.h) is advertised under its name with the JSON Schema of
+/// its LCM type (lcmjson/lcm_json.h); its messages go out as JSON, stamped with the rig's
+/// simulated time. One more channel, `rig/verdict`, carries the run's state and verdict.
+///
+/// offer() is called where the messages are recorded (the launcher's recording thread, or the
+/// replay loop): it does not decode anything. It copies the bytes of a message that some client
+/// subscribes to into a bounded queue (a full queue drops the message and counts it) and
+/// returns; the live view's own thread decodes them and hands the JSON to the server, which
+/// queues it for each subscribed client (foxglove_server.h, bounded again per client).
+
+#include <atomic>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "foxglove/foxglove_server.h"
+
+namespace nimble::lcmjson {
+struct LcmStruct;
+}
+
+namespace nimble::foxglove {
+
+/// The topic of the run's state and verdict, and its schema's name.
+inline constexpr const char* kVerdictTopic = "rig/verdict";
+inline constexpr const char* kVerdictSchemaName = "nimble.run_verdict";
+
+struct LiveViewOptions {
+  /// The queue between offer() and the decoding thread: at most this many bytes and messages.
+  std::size_t max_queue_bytes = 4u << 20;
+  std::size_t max_queue_messages = 8192;
+};
+
+/// What the live view counted, with the server's own figures.
+struct LiveViewStats {
+  int64_t offered = 0;      ///< messages offered on a channel with a subscriber
+  int64_t dropped = 0;      ///< of those, dropped because the live view's queue was full
+  int64_t undecodable = 0;  ///< bytes that were not a message of the channel's type (not sent)
+  int64_t published = 0;    ///< messages handed to the server
+  ServerStats server;
+};
+
+class LiveView {
+ public:
+  /// Advertises the contract's channels and `rig/verdict` on `server` (which must outlive this)
+  /// and starts the decoding thread.
+  explicit LiveView(FoxgloveServer& server, LiveViewOptions options = {});
+  /// stop().
+  ~LiveView();
+  LiveView(const LiveView&) = delete;
+  LiveView& operator=(const LiveView&) = delete;
+
+  /// One message of `channel` (LCM bytes). Cheap; never blocks on a client or on decoding.
+  /// Channels outside the contract are ignored.
+  void offer(const std::string& channel, const void* data, std::size_t size);
+  /// The run's state ("running", "done", ...), its verdict text ("" until there is one) and the
+  /// simulated time [s]; sent on `rig/verdict` now and again every second (for clients that
+  /// subscribe later).
+  void set_state(const std::string& state, const std::string& verdict, double t_s);
+  /// Decodes and publishes what is queued, then ends the thread. offer() after stop() is ignored.
+  void stop();
+  /// Waits until everything offered so far has been handed to the server (or `timeout_s`).
+  bool flush(double timeout_s = 2.0);
+
+  /// The newest rig (simulated) time seen in any message [us], -1 before the first.
+  int64_t newest_rig_time_us() const { return newest_rig_us_.load(std::memory_order_relaxed); }
+  LiveViewStats stats() const;
+
+  /// The channel id of `topic` on the server (0 if it has none).
+  uint32_t channel_id(const std::string& topic) const;
+
+ private:
+  struct Route {
+    uint32_t id = 0;
+    const lcmjson::LcmStruct* type = nullptr;
+  };
+  struct Pending {
+    const Route* route = nullptr;
+    std::string bytes;
+  };
+  void run();
+  void publish_state_locked(int64_t now_ns);
+
+  FoxgloveServer& server_;
+  LiveViewOptions options_;
+  std::map<std::string, Route> routes_;  // fixed after construction
+  uint32_t verdict_id_ = 0;
+  std::atomic<int64_t> newest_rig_us_{-1};
+
+  mutable std::mutex mu_;  // everything below
+  std::condition_variable cv_;       // work for the thread, or stop
+  std::condition_variable idle_cv_;  // the thread went idle (flush())
+  std::deque<Pending> queue_;
+  std::size_t queue_bytes_ = 0;
+  bool stopping_ = false, busy_ = false;
+  std::string state_json_;
+  int64_t state_sent_ns_ = 0;
+  LiveViewStats stats_;
+  std::thread thread_;
+};
+
+}  // namespace nimble::foxglove

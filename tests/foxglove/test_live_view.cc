@@ -1,0 +1,179 @@
+/// The live view: the contract's channels advertised with their schemas, LCM messages out as JSON
+/// stamped with rig time, nothing queued for channels no one subscribes to, rig/verdict.
+
+#include <catch2/catch.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nimble/heartbeat_t.hpp>
+#include <nimble/truth_state_t.hpp>
+#include <nlohmann/json.hpp>
+
+#include "contract/channels.h"
+#include "foxglove/live_view.h"
+#include "tests/foxglove/ws_test_client.h"
+
+using namespace nimble;
+using namespace nimble::foxglove;
+using namespace nimble::foxglove::test;
+
+namespace {
+
+template <typename T>
+std::vector<uint8_t> encode(const T& m) {
+  std::vector<uint8_t> out(static_cast<std::size_t>(m.getEncodedSize()));
+  REQUIRE(m.encode(out.data(), 0, static_cast<int>(out.size())) == static_cast<int>(out.size()));
+  return out;
+}
+
+ServerOptions any_port() {
+  ServerOptions o;
+  o.port = 0;
+  return o;
+}
+
+/// The channel advertised as `topic` in an advertise message.
+json channel_of(const json& advertise, const std::string& topic) {
+  for (const auto& c : advertise["channels"]) {
+    if (c["topic"] == topic) return c;
+  }
+  FAIL("no channel " << topic);
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("live view: every channel of the contract and rig/verdict advertised with a JSON Schema",
+          "[foxglove][live_view]") {
+  FoxgloveServer server(any_port());
+  LiveView view(server);
+  server.start();
+  TestClient c;
+  REQUIRE_FALSE(c.connect(server.port(), kSubprotocolV1));
+  CHECK(c.read_json()["op"] == "serverInfo");
+  const json ad = c.read_json();
+  CHECK(ad["channels"].size() == contract::channel_table().size() + 1);
+  const json truth = channel_of(ad, contract::channels::kTruth);
+  CHECK(truth["schemaName"] == "nimble.truth_state_t");
+  CHECK(truth["encoding"] == "json");
+  const json schema = json::parse(truth["schema"].get<std::string>());
+  CHECK(schema["properties"].contains("utime"));
+  CHECK(channel_of(ad, kVerdictTopic)["schemaName"] == kVerdictSchemaName);
+  CHECK(view.channel_id(contract::channels::kTruth) == truth["id"].get<uint32_t>());
+}
+
+TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time; others not queued",
+          "[foxglove][live_view]") {
+  FoxgloveServer server(any_port());
+  LiveView view(server);
+  server.start();
+  TestClient c;
+  REQUIRE_FALSE(c.connect(server.port(), kSubprotocolSdk));
+  c.read_json();
+  c.read_json();
+
+  truth_state_t t{};
+  t.utime = 1234567;
+  t.seq = 3;
+  t.euler_rad[0] = 0.25;
+  t.omega_body_radps[0] = -1.5;
+  const std::vector<uint8_t> bytes = encode(t);
+  // No subscriber yet: nothing is queued or decoded.
+  view.offer(contract::channels::kTruth, bytes.data(), bytes.size());
+  CHECK(view.stats().offered == 0);
+  CHECK(view.newest_rig_time_us() == 1234567);
+
+  const uint32_t truth_id = view.channel_id(contract::channels::kTruth);
+  const uint32_t hb_id = view.channel_id(contract::channels::kHeartbeat);
+  c.send_text(json{{"op", "subscribe"},
+                   {"subscriptions", {{{"id", 1}, {"channelId", truth_id}}, {{"id", 2}, {"channelId", hb_id}}}}}
+                  .dump());
+  REQUIRE(eventually([&] { return server.has_subscribers(truth_id) && server.has_subscribers(hb_id); }));
+  view.offer(contract::channels::kTruth, bytes.data(), bytes.size());
+  // A wall-clock channel's message is stamped with the newest rig time seen.
+  heartbeat_t hb{};
+  hb.utime = 99;  // wall clock
+  hb.process = "plant";
+  hb.config_digest = "d";
+  const std::vector<uint8_t> hb_bytes = encode(hb);
+  view.offer(contract::channels::kHeartbeat, hb_bytes.data(), hb_bytes.size());
+  // Not a message of its type: counted, not sent.
+  const std::string junk = "not an LCM message";
+  view.offer(contract::channels::kTruth, junk.data(), junk.size());
+  view.offer("NOT_A_CHANNEL", junk.data(), junk.size());
+  REQUIRE(view.flush());
+
+  std::map<uint32_t, std::pair<uint64_t, json>> got;
+  for (int i = 0; i < 2; ++i) {
+    std::string frame, payload;
+    bool text = true;
+    REQUIRE(c.read(&frame, &text));
+    REQUIRE_FALSE(text);
+    uint32_t sub = 0;
+    uint64_t ts = 0;
+    REQUIRE(parse_message_data(frame, &sub, &ts, &payload));
+    got[sub] = {ts, json::parse(payload)};
+  }
+  REQUIRE(got.count(1) == 1);
+  CHECK(got[1].first == 1234567000ull);
+  CHECK(got[1].second["utime"] == 1234567);
+  CHECK(got[1].second["euler_rad"][0] == 0.25);
+  CHECK(got[1].second["omega_body_radps"][0] == -1.5);
+  REQUIRE(got.count(2) == 1);
+  CHECK(got[2].second["process"] == "plant");
+  CHECK(got[2].first == 1234567000ull);  // heartbeat_t has no rig time: the newest TRUTH's
+  const LiveViewStats s = view.stats();
+  CHECK(s.offered == 3);
+  CHECK(s.undecodable == 1);
+  CHECK(s.published == 2);
+  CHECK(s.dropped == 0);
+}
+
+TEST_CASE("live view: rig/verdict carries the state, repeated for late subscribers", "[foxglove][live_view]") {
+  FoxgloveServer server(any_port());
+  LiveView view(server);
+  server.start();
+  view.set_state("done", "controlled", 2.5);  // before anyone subscribes
+  TestClient c;
+  REQUIRE_FALSE(c.connect(server.port(), kSubprotocolV1));
+  c.read_json();
+  c.read_json();
+  c.send_text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 9}, {"channelId", view.channel_id(kVerdictTopic)}}}}}
+                  .dump());
+  std::string frame, payload;
+  bool text = true;
+  REQUIRE(c.read(&frame, &text, 3.0));
+  uint32_t sub = 0;
+  uint64_t ts = 0;
+  REQUIRE(parse_message_data(frame, &sub, &ts, &payload));
+  CHECK(sub == 9);
+  const json v = json::parse(payload);
+  CHECK(v["state"] == "done");
+  CHECK(v["verdict"] == "controlled");
+  CHECK(v["t_s"] == 2.5);
+}
+
+TEST_CASE("live view: a full queue drops and counts, offer() stays quick", "[foxglove][live_view]") {
+  FoxgloveServer server(any_port());
+  LiveViewOptions o;
+  o.max_queue_messages = 4;
+  LiveView view(server, o);
+  server.start();
+  TestClient c;
+  REQUIRE_FALSE(c.connect(server.port(), kSubprotocolV1));
+  c.read_json();
+  c.read_json();
+  const uint32_t id = view.channel_id(contract::channels::kTruth);
+  c.send_text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 1}, {"channelId", id}}}}}.dump());
+  REQUIRE(eventually([&] { return server.has_subscribers(id); }));
+  truth_state_t t{};
+  const std::vector<uint8_t> bytes = encode(t);
+  for (int i = 0; i < 10000; ++i) view.offer(contract::channels::kTruth, bytes.data(), bytes.size());
+  REQUIRE(view.flush());
+  const LiveViewStats s = view.stats();
+  CHECK(s.offered == 10000);
+  CHECK(s.dropped > 0);
+  CHECK(s.dropped + s.published == 10000);
+}
