@@ -16,6 +16,10 @@ int run_model_command(const std::vector<std::string>& args);
 /// `rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]`
 int run_run_command(const std::vector<std::string>& args);
 
+/// `rig view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web PORT] [--web-root DIR] [--exit-when-done]
+/// [--salvage]`: a log replayed live on a Foxglove WebSocket server, and the dashboard page (cli/view_command.cc).
+int run_view_command(const std::vector<std::string>& args);
+
 /// `rig sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]`: a
 /// Monte Carlo campaign (launcher/sweep.h).
 int run_sweep_command(const std::vector<std::string>& args);

@@ -16,6 +16,7 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "cli/live_view_setup.h"
 #include "launcher/launcher.h"
 
 namespace nimble::cli {
@@ -77,6 +78,12 @@ int run_run_command(const std::vector<std::string>& args) {
                  "process's output are written next to it")
       ->type_name("FILE");
   cl.add_json(o.json_file, "the run summary");
+  std::string foxglove;
+  cl->add_option("--foxglove", foxglove,
+                 "serve the run live to Foxglove or Lichtblick (Open connection -> Foxglove WebSocket -> "
+                 "ws://HOST:PORT): every channel as JSON, read-only; host 127.0.0.1 unless given, port 0 picks a "
+                 "free one (printed on stderr); e.g. --foxglove 8765 (docs/live_view.md)")
+      ->type_name("[HOST:]PORT");
   each_value(cl->add_option("--set", "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
                                      "--set processes=[plant,controller], --set 'faults=[{target: IMU, kind: off, "
                                      "start_s: 1}]' (quote values with spaces for the shell)")
@@ -91,7 +98,21 @@ int run_run_command(const std::vector<std::string>& args) {
       ->each([&o](const std::string&) { o.progress = false; });
   cl->add_flag("--strict-timing", o.strict_timing, "a real-time degraded run exits 4");
   if (const auto done = cl.parse(args)) return *done;
-  return launcher::run_scenario(o);
+  std::unique_ptr<LiveViewSession> live;
+  if (!foxglove.empty()) {
+    // Bound here, before the launcher moves into the run's network namespace: the socket stays
+    // on this host's network, where Foxglove can reach it.
+    try {
+      live = open_live_view("run", foxglove);
+    } catch (const std::exception& e) {
+      std::cerr << "rig run: --foxglove " << foxglove << ": " << e.what() << "\n";
+      return kExitUsage;
+    }
+    tap_run(*live, o);
+  }
+  const int code = launcher::run_scenario(o);
+  if (live) live->stop();
+  return code;
 }
 
 int run_check_command(const std::vector<std::string>& args) {

@@ -219,6 +219,9 @@ int run_inprocess(const RunPlan& plan_in, const RunOptions& options) {
     InprocessOptions o;
     o.log_file = log_file;
     o.progress = options.progress;
+    o.on_message = options.tap.message;
+    if (options.tap.start) options.tap.start();
+    if (options.tap.state) options.tap.state("running", "", 0.0);
     report = fly_inprocess(plan, o);
   } catch (const ConfigError& e) {
     std::cerr << "rig run: config error: " << e.what() << "\n";

@@ -174,6 +174,8 @@ class ProcessRun {
     std::cerr << "rig run: pid " << ::getpid() << " (watch live: "
               << (in_ns_ ? "rig spy --pid " + std::to_string(::getpid()) : "rig spy --url '" + url_ + "'") << ")\n";
     if (const int code = open_record(); code != kRunOk) return code;
+    // In the run's network namespace now: a follower of the run may start its threads.
+    if (options_.tap.start) options_.tap.start();
     struct sigaction sa{};
     sa.sa_handler = on_interrupt;
     sigemptyset(&sa.sa_mask);
@@ -275,6 +277,7 @@ class ProcessRun {
     bus_->subscribe_raw(".*", [this](const std::string& channel, const void* data, int size, int64_t recv_us) {
       if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
       recorder_->record(channel, data, size, recv_us * 1000);
+      if (options_.tap.message) options_.tap.message(channel, data, size);
       if (lockstep_ && channel == contract::channels::kRigClock) {
         rig_clock_t tick{};
         if (contract::decode_exact(data, size, tick) && tick.sim_time_ns >= logger_next_due_ns_) {
@@ -440,6 +443,7 @@ class ProcessRun {
     start.num_participants = static_cast<int32_t>(start.participants.size());
     bus_->publish(contract::channels::kRunControl, start);
     monitor_.set_t0(start.t0_monotonic_ns);
+    if (options_.tap.state) options_.tap.state("running", "", 0.0);
     return start;
   }
 

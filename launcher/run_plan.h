@@ -4,6 +4,7 @@
 /// over LCM, and in process) fly a RunPlan.
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +39,30 @@ constexpr const char* kClockInprocess = "inprocess";
 /// buffer holds a burst of several hundred milliseconds of the rig's traffic.
 constexpr const char* kNamespaceLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
 
+/// Figures of a RunTap for the run summary: a section `title` in the text, `key` in the JSON.
+struct TapFigures {
+  std::string key;    ///< JSON key, e.g. "live_view"
+  std::string title;  ///< text label, e.g. "live view"
+  std::vector<std::pair<std::string, long long>> values;  ///< name and figure, in order
+  std::string note;   ///< one line after the figures (e.g. where it was served); may be empty
+};
+
+/// Someone besides the recorder who follows a run as it flies (rig run --foxglove: the live
+/// view), in either executor. Every member may be empty.
+struct RunTap {
+  /// Called once when the launcher may start threads (after it moved into the run's network
+  /// namespace, which needs it single-threaded), before any rig process starts.
+  std::function<void()> start;
+  /// Every message of the run, on the recording thread, as the recorder logs it. Must be quick
+  /// and never block: it runs where the log is written (and, in lockstep, paces the run).
+  std::function<void(const std::string& channel, const void* data, int size)> message;
+  /// The run's state: "running" at its start (t_s 0), "done" with the verdict's text at its end
+  /// (t_s: the simulated time reached).
+  std::function<void(const std::string& state, const std::string& verdict, double t_s)> state;
+  /// Its figures for the run summary, asked for once at the end.
+  std::function<TapFigures()> figures;
+};
+
 struct RunOptions {
   std::string scenario_file;
   std::vector<Override> overrides;   ///< --set key=value
@@ -49,6 +74,7 @@ struct RunOptions {
   bool progress = true;              ///< progress line on stderr
   bool print_summary = true;         ///< the run summary on stdout
   bool strict_timing = false;        ///< --strict-timing: a degraded real-time run exits kRunTimingDegraded
+  RunTap tap;                        ///< a live follower of the run (rig run --foxglove); empty: none
 };
 
 /// Settings of the launcher itself (scenario section `run`).

@@ -156,6 +156,14 @@ void write_report_text(std::ostream& out, const RunReport& r) {
         << "). Run rig as root, or give the rig's executables CAP_SYS_NICE and CAP_IPC_LOCK "
            "(setcap cap_sys_nice,cap_ipc_lock+ep build/bin/nimble_*), or set run.realtime_priority: 0\n";
   }
+  for (const TapFigures& t : r.taps) {
+    out << t.title << ":";
+    for (std::size_t i = 0; i < t.values.size(); ++i) {
+      out << (i ? ", " : " ") << t.values[i].first << " " << t.values[i].second;
+    }
+    if (!t.note.empty()) out << " (" << t.note << ")";
+    out << "\n";
+  }
   out << "controlled " << (r.verdict.controlled ? "yes" : "NO") << ", returned to hover "
       << (r.verdict.hover ? "yes" : "no") << "\n";
   out << "result     " << r.verdict.text << "\n";
@@ -333,11 +341,20 @@ std::string report_json(const RunReport& r) {
     }
     w.end_object();
   }
+  for (const TapFigures& t : r.taps) {
+    w.key(t.key).begin_object();
+    for (const auto& v : t.values) w.key(v.first).value(v.second);
+    if (!t.note.empty()) w.key("note").value(t.note);
+    w.end_object();
+  }
   w.end_object();
   return w.str();
 }
 
-int finish_report(const RunReport& report, const RunOptions& options) {
+int finish_report(const RunReport& report_in, const RunOptions& options) {
+  RunReport report = report_in;
+  if (options.tap.state) options.tap.state("done", report.verdict.text, report.sim_time_s);
+  if (options.tap.figures) report.taps.push_back(options.tap.figures());
   // --json -: stdout carries the JSON alone, the text summary goes to stderr.
   const bool json_stdout = options.json_file == "-";
   if (options.print_summary) write_report_text(json_stdout ? std::cerr : std::cout, report);

@@ -11,6 +11,7 @@
 #include "core/rig_values.h"
 
 #include "launcher/run_monitor.h"
+#include "launcher/run_plan.h"
 #include "launcher/verdict.h"
 
 namespace nimble::launcher {
@@ -55,6 +56,7 @@ struct RunReport {
   std::vector<FaultRecord> faults;
   std::vector<ProcessOutcome> processes;
   std::vector<HostSummary> hosts;  ///< where the processes ran (empty: no hosts section)
+  std::vector<TapFigures> taps;    ///< figures of the run's followers (RunOptions::tap), e.g. the live view
   Verdict verdict;
 
   double speed_x_realtime() const { return wall_time_s > 0 ? sim_time_s / wall_time_s : 0.0; }

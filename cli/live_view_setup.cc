@@ -1,0 +1,60 @@
+#include "cli/live_view_setup.h"
+
+#include <iostream>
+
+namespace nimble::cli {
+
+void LiveViewSession::start() {
+  view->start();
+  server->start();
+}
+
+void LiveViewSession::stop() {
+  view->flush(1.0);
+  view->stop();
+  server->stop();
+}
+
+launcher::TapFigures LiveViewSession::figures() const {
+  const foxglove::LiveViewStats s = view->stats();
+  launcher::TapFigures f;
+  f.key = "live_view";
+  f.title = "live view";
+  f.values = {{"clients", s.server.clients_total},
+              {"messages_sent", s.server.messages_sent},
+              {"bytes_sent", s.server.bytes_sent},
+              {"dropped", s.dropped + s.server.dropped},
+              {"refused", s.server.refused + s.server.handshakes_refused},
+              {"protocol_errors", s.server.protocol_errors},
+              {"undecodable", s.undecodable}};
+  f.note = server->url();
+  return f;
+}
+
+std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, const std::string& host_port,
+                                                const std::string& web_root) {
+  foxglove::ServerOptions o;
+  foxglove::parse_host_port(host_port, "127.0.0.1", &o.host, &o.port);
+  o.name = "nimble_rig " + command;
+  o.web_root = web_root;
+  auto session = std::make_unique<LiveViewSession>();
+  session->server = std::make_unique<foxglove::FoxgloveServer>(o);
+  session->view = std::make_unique<foxglove::LiveView>(*session->server);
+  std::cerr << "rig " << command << ": live view on " << session->server->url()
+            << " (Foxglove or Lichtblick: Open connection -> Foxglove WebSocket)\n";
+  return session;
+}
+
+void tap_run(LiveViewSession& session, launcher::RunOptions& options) {
+  LiveViewSession* s = &session;
+  options.tap.start = [s] { s->start(); };
+  options.tap.message = [s](const std::string& channel, const void* data, int size) {
+    s->view->offer(channel, data, static_cast<std::size_t>(size));
+  };
+  options.tap.state = [s](const std::string& state, const std::string& verdict, double t_s) {
+    s->view->set_state(state, verdict, t_s);
+  };
+  options.tap.figures = [s] { return s->figures(); };
+}
+
+}  // namespace nimble::cli

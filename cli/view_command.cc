@@ -1,0 +1,195 @@
+/// `rig view`: a recorded run replayed live to Foxglove, Lichtblick or the dashboard page.
+
+#include <csignal>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/live_view_setup.h"
+#include "contract/channels.h"
+#include "ident/flight_data.h"
+#include "ident/lcm_log.h"
+#include "lcmjson/lcm_json.h"
+
+namespace nimble::cli {
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void on_view_signal(int) { g_stop = 1; }
+
+constexpr const char* kViewDescription =
+    "Replays a rig log live on a Foxglove WebSocket server, as 'rig run --foxglove' serves a run:\n"
+    "every channel as JSON with its schema, at the pace of its rig time (x --speed), stamped with\n"
+    "rig time. Watch it in Foxglove or Lichtblick (Open connection -> Foxglove WebSocket ->\n"
+    "ws://127.0.0.1:8765) or on the dashboard page (--web). After the replay it keeps serving until\n"
+    "Ctrl-C (SIGINT) or SIGTERM, unless --exit-when-done. Without a LOG it serves the page alone.";
+
+constexpr const char* kViewFooter =
+    "Exit code: 0 replayed (or stopped by a signal), 2 bad usage, a log that cannot be read or is damaged\n"
+    "(the error names the byte offset; --salvage replays up to the damage), or a port that cannot be bound.";
+
+void sleep_until(std::chrono::steady_clock::time_point t) {
+  while (!g_stop && std::chrono::steady_clock::now() < t) {
+    const auto left = t - std::chrono::steady_clock::now();
+    std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(left, std::chrono::milliseconds(50)));
+  }
+}
+
+/// What a replay did.
+struct Replay {
+  int64_t events = 0;
+  double rig_s = 0.0;       ///< rig time covered [s]
+  std::string damage;       ///< salvaged: what was left out
+};
+
+/// Replays `file` into `view`, paced by rig time x `speed` (0: as fast as possible).
+/// @throws ident::DataError for a damaged log (without salvage).
+Replay replay(const std::string& file, bool salvage, double speed, foxglove::LiveView& view) {
+  ident::LcmLogReader log(file, salvage);
+  ident::LogEventRecord ev;
+  Replay r;
+  int64_t first_us = -1, rig_us = -1;
+  auto start = std::chrono::steady_clock::now();
+  while (!g_stop && log.next(&ev)) {
+    ++r.events;
+    // Rig time from the channels published at it; the others follow the newest.
+    if (contract::due_in_sim_time(ev.channel)) {
+      if (const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(ev.channel)) {
+        const int64_t t = lcmjson::rig_time_us(*type, ev.data.data(), ev.data.size());
+        if (t >= 0 && t > rig_us) rig_us = t;
+      }
+    }
+    if (rig_us >= 0 && first_us < 0) {
+      first_us = rig_us;
+      start = std::chrono::steady_clock::now();
+    }
+    if (speed > 0 && first_us >= 0) {
+      const double due_s = static_cast<double>(rig_us - first_us) / 1e6 / speed;
+      sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(due_s)));
+    }
+    view.offer(ev.channel, ev.data.data(), ev.data.size());
+  }
+  r.rig_s = first_us >= 0 ? static_cast<double>(rig_us - first_us) / 1e6 : 0.0;
+  r.damage = log.damage();
+  return r;
+}
+
+}  // namespace
+
+int run_view_command(const std::vector<std::string>& args) {
+  std::string log_file, foxglove = std::to_string(kDefaultFoxglovePort), web_root = NIMBLE_DASHBOARD_DIR;
+  double speed = 1.0;
+  int web_port = -1;
+  bool exit_when_done = false, salvage = false;
+  CommandLine cl("rig view", kViewDescription);
+  cl->footer(kViewFooter);
+  cl->add_option("log", log_file, "the rig log (rig run --log) to replay")->type_name("LOG.lcmlog");
+  cl->add_option("--foxglove", foxglove,
+                 "where to serve it: host 127.0.0.1 unless given, port 0 picks a free one (printed on stderr)")
+      ->type_name("[HOST:]PORT")
+      ->capture_default_str();
+  cl->add_option("--speed", speed, "replay speed: 1 as flown, 2 twice as fast, 0 as fast as possible")
+      ->check(CLI::NonNegativeNumber)
+      ->type_name("X")
+      ->capture_default_str();
+  cl->add_option("--web", web_port,
+                 "serve the dashboard page over HTTP on this port of the same host: open "
+                 "http://HOST:PORT/?ws=ws://HOST:FOXGLOVE_PORT (docs/dashboard.md)")
+      ->check(CLI::Range(0, 65535))
+      ->type_name("PORT");
+  cl->add_option("--web-root", web_root, "the page's folder (default: the build's or installation's dashboard)")
+      ->type_name("DIR")
+      ->capture_default_str();
+  cl->add_flag("--exit-when-done", exit_when_done, "exit once the log is replayed (default: keep serving)");
+  cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
+  if (const auto done = cl.parse(args)) return *done;
+  if (log_file.empty() && web_port < 0) {
+    std::cerr << "rig view: nothing to do: give a LOG to replay, or --web PORT to serve the page\n";
+    return kExitUsage;
+  }
+  if (!log_file.empty()) {
+    try {
+      ident::LcmLogReader check(log_file, salvage);  // opens and checks the header now, before serving
+    } catch (const std::exception& e) {
+      std::cerr << "rig view: " << e.what() << "\n";
+      return kExitUsage;
+    }
+  }
+  if (web_port >= 0 && !std::filesystem::is_directory(web_root)) {
+    std::cerr << "rig view: --web-root " << web_root
+              << " is not a directory (build the target 'dashboard', or give --web-root DIR)\n";
+    return kExitUsage;
+  }
+
+  std::unique_ptr<LiveViewSession> live;
+  std::unique_ptr<foxglove::FoxgloveServer> page;
+  try {
+    if (!log_file.empty()) live = open_live_view("view", foxglove);
+    if (web_port >= 0) {
+      foxglove::ServerOptions o;
+      foxglove::parse_host_port(foxglove, "127.0.0.1", &o.host, &o.port);
+      o.port = static_cast<uint16_t>(web_port);
+      o.web_root = web_root;
+      o.name = "nimble_rig view (page)";
+      page = std::make_unique<foxglove::FoxgloveServer>(o);
+      const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(kDefaultFoxglovePort);
+      std::cerr << "rig view: dashboard on http://" << o.host << ":" << page->port() << "/?ws=" << ws << "\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "rig view: " << e.what() << "\n";
+    return kExitUsage;
+  }
+
+  g_stop = 0;
+  struct sigaction sa {};
+  sa.sa_handler = on_view_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  if (live) live->start();
+  if (page) page->start();
+
+  int code = 0;
+  if (live) {
+    live->view->set_state("replaying", "", 0.0);
+    try {
+      const Replay r = replay(log_file, salvage, speed, *live->view);
+      if (!r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
+      char verdict[160];
+      std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time", g_stop ? "stopped after" : "replayed",
+                    static_cast<long long>(r.events), r.rig_s);
+      live->view->set_state(g_stop ? "stopped" : "done", verdict, r.rig_s);
+      std::cerr << "rig view: " << verdict << "\n";
+    } catch (const std::exception& e) {
+      std::cerr << "rig view: " << e.what() << "\n";
+      live->view->set_state("failed", e.what(), 0.0);
+      code = kExitUsage;
+      exit_when_done = true;
+    }
+  }
+  if (!exit_when_done && !g_stop) {
+    std::cerr << "rig view: serving until Ctrl-C\n";
+    while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (live) {
+    live->stop();
+    const launcher::TapFigures f = live->figures();
+    std::cout << f.title << ":";
+    for (std::size_t i = 0; i < f.values.size(); ++i) {
+      std::cout << (i ? ", " : " ") << f.values[i].first << " " << f.values[i].second;
+    }
+    std::cout << " (" << f.note << ")\n";
+  }
+  if (page) page->stop();
+  return code;
+}
+
+}  // namespace nimble::cli
