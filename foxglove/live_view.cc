@@ -1,5 +1,6 @@
 #include "foxglove/live_view.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -48,6 +49,11 @@ LiveView::LiveView(FoxgloveServer& server, LiveViewOptions options) : server_(se
     routes_[spec.name] = Route{server_.add_channel(spec.name, type->full_name(), lcmjson::json_schema(*type)), type};
   }
   verdict_id_ = server_.add_channel(kVerdictTopic, kVerdictSchemaName, kVerdictSchema);
+}
+
+void LiveView::start() {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (thread_.joinable() || stopping_) return;
   thread_ = std::thread([this] { run(); });
 }
 
@@ -82,16 +88,22 @@ void LiveView::offer(const std::string& channel, const void* data, std::size_t s
 }
 
 void LiveView::set_state(const std::string& state, const std::string& verdict, double t_s) {
-  nlohmann::json j{{"state", state}, {"verdict", verdict}, {"t_s", std::isfinite(t_s) ? t_s : 0.0}};
   std::lock_guard<std::mutex> lock(mu_);
-  state_json_ = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  state_ = state;
+  verdict_ = verdict;
+  state_t_s_ = std::isfinite(t_s) ? t_s : 0.0;
+  has_state_ = true;
   publish_state_locked(now_ns());
 }
 
 void LiveView::publish_state_locked(int64_t now) {
-  if (state_json_.empty()) return;
+  if (!has_state_) return;
   const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
-  server_.publish(verdict_id_, static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0), state_json_);
+  const bool live = state_ == "running" || state_ == "replaying";
+  const double t_s = live && rig_us > 0 ? std::max(state_t_s_, static_cast<double>(rig_us) / 1e6) : state_t_s_;
+  const nlohmann::json j{{"state", state_}, {"verdict", verdict_}, {"t_s", t_s}};
+  server_.publish(verdict_id_, static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0),
+                  j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   state_sent_ns_ = now;
 }
 
@@ -133,13 +145,13 @@ void LiveView::run() {
 
 bool LiveView::flush(double timeout_s) {
   std::unique_lock<std::mutex> lock(mu_);
+  if (!thread_.joinable()) return queue_.empty();
   return idle_cv_.wait_for(lock, std::chrono::duration<double>(timeout_s), [this] { return queue_.empty() && !busy_; });
 }
 
 void LiveView::stop() {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    if (stopping_ && !thread_.joinable()) return;
     stopping_ = true;
   }
   cv_.notify_all();

@@ -50,20 +50,23 @@ struct LiveViewStats {
 
 class LiveView {
  public:
-  /// Advertises the contract's channels and `rig/verdict` on `server` (which must outlive this)
-  /// and starts the decoding thread.
+  /// Advertises the contract's channels and `rig/verdict` on `server` (which must outlive this).
+  /// Starts no thread: start() does.
   explicit LiveView(FoxgloveServer& server, LiveViewOptions options = {});
   /// stop().
   ~LiveView();
   LiveView(const LiveView&) = delete;
   LiveView& operator=(const LiveView&) = delete;
 
+  /// Starts the decoding thread (once). Messages offered before are queued.
+  void start();
   /// One message of `channel` (LCM bytes). Cheap; never blocks on a client or on decoding.
   /// Channels outside the contract are ignored.
   void offer(const std::string& channel, const void* data, std::size_t size);
   /// The run's state ("running", "done", ...), its verdict text ("" until there is one) and the
   /// simulated time [s]; sent on `rig/verdict` now and again every second (for clients that
-  /// subscribe later).
+  /// subscribe later). While the state is "running" or "replaying", the repeats carry the newest
+  /// rig time seen.
   void set_state(const std::string& state, const std::string& verdict, double t_s);
   /// Decodes and publishes what is queued, then ends the thread. offer() after stop() is ignored.
   void stop();
@@ -101,7 +104,9 @@ class LiveView {
   std::deque<Pending> queue_;
   std::size_t queue_bytes_ = 0;
   bool stopping_ = false, busy_ = false;
-  std::string state_json_;
+  std::string state_, verdict_;
+  double state_t_s_ = 0.0;
+  bool has_state_ = false;
   int64_t state_sent_ns_ = 0;
   LiveViewStats stats_;
   std::thread thread_;

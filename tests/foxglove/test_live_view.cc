@@ -49,6 +49,7 @@ TEST_CASE("live view: every channel of the contract and rig/verdict advertised w
           "[foxglove][live_view]") {
   FoxgloveServer server(any_port());
   LiveView view(server);
+  view.start();
   server.start();
   TestClient c;
   REQUIRE_FALSE(c.connect(server.port(), kSubprotocolV1));
@@ -68,6 +69,7 @@ TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time;
           "[foxglove][live_view]") {
   FoxgloveServer server(any_port());
   LiveView view(server);
+  view.start();
   server.start();
   TestClient c;
   REQUIRE_FALSE(c.connect(server.port(), kSubprotocolSdk));
@@ -134,6 +136,7 @@ TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time;
 TEST_CASE("live view: rig/verdict carries the state, repeated for late subscribers", "[foxglove][live_view]") {
   FoxgloveServer server(any_port());
   LiveView view(server);
+  view.start();
   server.start();
   view.set_state("done", "controlled", 2.5);  // before anyone subscribes
   TestClient c;
@@ -160,6 +163,7 @@ TEST_CASE("live view: a full queue drops and counts, offer() stays quick", "[fox
   LiveViewOptions o;
   o.max_queue_messages = 4;
   LiveView view(server, o);
+  view.start();
   server.start();
   TestClient c;
   REQUIRE_FALSE(c.connect(server.port(), kSubprotocolV1));
