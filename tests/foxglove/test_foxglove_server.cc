@@ -119,7 +119,7 @@ TEST_CASE("server: a handshake without the protocol's subprotocol is refused", "
   CHECK(f.server.stats().clients_total == 0);
 }
 
-TEST_CASE("server: subscribe gives messageData with the subscription id, timestamp and payload; unsubscribe "
+TEST_CASE("server: subscribe gives messageData with the subscription id, timestamp and payload, unsubscribe "
           "stops them",
           "[foxglove][server]") {
   Fixture f;
@@ -156,7 +156,7 @@ TEST_CASE("server: subscribe gives messageData with the subscription id, timesta
   CHECK(clients[0].subscriptions == 0);
 }
 
-TEST_CASE("server: bad client messages get a status error and are counted; the connection stays",
+TEST_CASE("server: bad client messages get a status error and are counted, the connection stays",
           "[foxglove][server]") {
   Fixture f;
   TestClient c;
@@ -199,7 +199,7 @@ TEST_CASE("server: a frame over the limit closes the connection (1009)", "[foxgl
   CHECK_FALSE(f.server.has_subscribers(f.a));  // its subscriptions went with it
 }
 
-TEST_CASE("server: a client that does not read loses messages, counted; publish() never waits for it",
+TEST_CASE("server: a client that does not read loses messages, counted, and publish() never waits for it",
           "[foxglove][server]") {
   ServerOptions o = any_port();
   o.max_queue_bytes = 256 * 1024;

@@ -65,7 +65,7 @@ TEST_CASE("live view: every channel of the contract and rig/verdict advertised w
   CHECK(view.channel_id(contract::channels::kTruth) == truth["id"].get<uint32_t>());
 }
 
-TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time; others not queued",
+TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time, others not queued",
           "[foxglove][live_view]") {
   FoxgloveServer server(any_port());
   LiveView view(server);
