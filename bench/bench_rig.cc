@@ -19,7 +19,11 @@
 ///   realtime.{latency_p99_us, floor_latency_p99_us, jitter_p99_us, floor_jitter_p99_us}
 ///   realtime.loaded.{latency_p99_us, floor_latency_p99_us}
 ///   lockstep.{speed_x, limit_speed_x, messages_per_sim_s}
-/// (and more beside them). Targets (docs/timing.md "Timing"): latency p99 <= 2.5x the chain floor
+/// (and more beside them). With --foxglove-client, the rig flies once more in real time with
+/// `--foxglove` and one Foxglove WebSocket client (in this program) subscribed to every channel:
+/// the control loop's latency p99 with that client against the quiet run without one
+/// (realtime.foxglove.{latency_p99_us, ratio}; target: within 10 %).
+/// Targets (docs/timing.md "Timing"): latency p99 <= 2.5x the chain floor
 /// quiet and <= 4x loaded, plant jitter p99 <= 2x the wake-up floor, lockstep >= 50 % of the
 /// limit. Not a test: the figures depend on the machine; the ratios to the floors travel.
 
@@ -27,6 +31,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -35,6 +42,10 @@
 #include <string>
 #include <vector>
 
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "cmdline/args.h"
@@ -115,6 +126,78 @@ std::string cpus_text(const std::vector<int>& cpus) {
   return "[" + s + "]";
 }
 
+/// A free TCP port on 127.0.0.1 (bound and released: `rig run --foxglove` takes it next).
+int free_port() {
+  namespace net = boost::asio;
+  net::io_context ioc;
+  net::ip::tcp::acceptor a(ioc, net::ip::tcp::endpoint(net::ip::make_address("127.0.0.1"), 0));
+  return a.local_endpoint().port();
+}
+
+/// A Foxglove WebSocket client on its own thread: connects to 127.0.0.1:`port` (retrying until the
+/// server is up or stop()), subscribes to every advertised channel and reads until the server
+/// closes. Counts what it received.
+class FoxgloveClient {
+ public:
+  explicit FoxgloveClient(int port) : thread_([this, port] { run(port); }) {}
+  ~FoxgloveClient() { stop(); }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  long long messages() const { return messages_; }
+  long long bytes() const { return bytes_; }
+  int channels() const { return channels_; }
+
+ private:
+  void run(int port) {
+    namespace net = boost::asio;
+    namespace beast = boost::beast;
+    namespace websocket = beast::websocket;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!stop_ && std::chrono::steady_clock::now() < give_up) {
+      net::io_context ioc;
+      websocket::stream<net::ip::tcp::socket> ws(ioc);
+      beast::error_code ec;
+      ws.next_layer().connect(net::ip::tcp::endpoint(net::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)), ec);
+      if (ec) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        continue;
+      }
+      ws.set_option(websocket::stream_base::decorator([](websocket::request_type& req) {
+        req.set(beast::http::field::sec_websocket_protocol, "foxglove.websocket.v1");
+      }));
+      ws.handshake("127.0.0.1", "/", ec);
+      if (ec) return;
+      beast::flat_buffer buf;
+      int next_id = 0;
+      for (;;) {
+        ws.read(buf, ec);
+        if (ec) break;
+        if (ws.got_text()) {
+          const auto j = nlohmann::json::parse(beast::buffers_to_string(buf.data()), nullptr, false);
+          if (j.is_object() && j.value("op", "") == "advertise") {
+            nlohmann::json subs = nlohmann::json::array();
+            for (const auto& c : j["channels"]) subs.push_back({{"id", next_id++}, {"channelId", c["id"]}});
+            channels_ += static_cast<int>(subs.size());
+            ws.text(true);
+            ws.write(net::buffer(nlohmann::json{{"op", "subscribe"}, {"subscriptions", subs}}.dump()), ec);
+          }
+        } else {
+          ++messages_;
+          bytes_ += static_cast<long long>(buf.size());
+        }
+        buf.consume(buf.size());
+      }
+      return;  // the server closed: the run is over
+    }
+  }
+  std::atomic<bool> stop_{false};
+  std::atomic<long long> messages_{0}, bytes_{0};
+  std::atomic<int> channels_{0};
+  std::thread thread_;
+};
+
 }  // namespace
 
 /// The figures one bench_rig run reports.
@@ -126,6 +209,9 @@ struct Figures {
   bench::LockstepFloor limit;
   std::size_t participants = 0;
   double speed = 0.0, rig_messages = 0.0;
+  bool foxglove = false;     ///< --foxglove-client: the run with a client below
+  RigRealtime with_client;
+  long long client_messages = 0;
 };
 
 /// The figures as JSON to `file`, under fixed keys. @throws std::runtime_error if it cannot be written.
@@ -150,6 +236,14 @@ void write_figures_json(const std::string& file, const Figures& f) {
   w.key("jitter_p99_us").value(f.loaded.jitter_p99_us);
   w.key("health").value(f.loaded.health);
   w.end_object();
+  if (f.foxglove) {
+    w.key("foxglove").begin_object();
+    w.key("latency_p99_us").value(f.with_client.latency_p99_us);
+    w.key("latency_p99_us_without").value(f.quiet.latency_p99_us);
+    w.key("ratio").value(f.with_client.latency_p99_us / f.quiet.latency_p99_us);
+    w.key("client_messages").value(f.client_messages);
+    w.end_object();
+  }
   w.end_object();
   w.key("lockstep").begin_object();
   w.key("speed_x").value(f.speed);
@@ -170,6 +264,7 @@ int main(int argc, char** argv) {
   std::vector<Override> extra;  // --set key=value, applied to every rig run
   std::string set_args;
   int runs = 3;
+  bool foxglove_client = false;
   cli::CommandLine cl(
       "bench_rig",
       "The rig's timing figures beside the machine's floors, measured in the same run, in a private\n"
@@ -184,6 +279,9 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--json", json_file, "the figures as JSON to FILE, under fixed keys")->type_name("FILE");
+  cl->add_flag("--foxglove-client", foxglove_client,
+               "fly once more in real time with --foxglove and one client subscribed to every channel: the "
+               "control loop's latency p99 with it against without (target: within 10 %)");
   cli::each_value(cl->add_option("--set", "override one scenario value in every rig run; repeatable")
                       ->type_name("KEY.PATH=VALUE")
                       ->allow_extra_args(false)
@@ -235,6 +333,24 @@ int main(int argc, char** argv) {
     if (on_estimate) row("rig: estimator, IMU sample -> ESTIMATE", {quiet.estimator_p50_us, quiet.estimator_p99_us, 0, 0});
     std::printf("  %s\n", quiet.health.c_str());
 
+    RigRealtime with_client;
+    long long client_messages = 0;
+    if (foxglove_client) {
+      const int port = free_port();
+      FoxgloveClient client(port);
+      with_client = realtime_figures(
+          fly(scenario, "--clock realtime --foxglove 127.0.0.1:" + std::to_string(port) + set_args, dir));
+      client.stop();
+      client_messages = client.messages();
+      row("rig + live view, 1 client on every channel: loop latency",
+          {with_client.latency_p50_us, with_client.latency_p99_us, with_client.latency_max_us, 0});
+      std::printf("  the client subscribed to %d channels and received %lld messages (%.1f MB)\n", client.channels(),
+                  client_messages, static_cast<double>(client.bytes()) / 1e6);
+      std::printf("  latency p99 with the client %.1f us, without %.1f us: ratio %.3f (target <= 1.10)\n",
+                  with_client.latency_p99_us, quiet.latency_p99_us, with_client.latency_p99_us / quiet.latency_p99_us);
+      std::printf("  %s\n", with_client.health.c_str());
+    }
+
     std::printf("\nreal time, a busy loop on every CPU%*s p50 [us] p99 [us]  max [us]\n", 17, "");
     bench::Percentiles chain_loaded;
     RigRealtime loaded;
@@ -280,7 +396,8 @@ int main(int argc, char** argv) {
 
     if (!json_file.empty()) {
       write_figures_json(json_file, Figures{plan.scenario.name, hops, wake, chain, chain_loaded, quiet, loaded, limit,
-                                            participants.size(), speed, rig_messages});
+                                            participants.size(), speed, rig_messages, foxglove_client, with_client,
+                                            client_messages});
     }
     fs::remove_all(dir);
   } catch (const std::exception& e) {
