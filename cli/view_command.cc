@@ -82,10 +82,20 @@ Replay replay(const std::string& file, bool salvage, double speed, foxglove::Liv
   return r;
 }
 
+/// The dashboard's folder: the build's (NIMBLE_DASHBOARD_DIR) while it exists, else the
+/// installation's, share/nimble_rig/dashboard next to the bin/ that holds rig.
+std::string default_web_root() {
+  if (std::filesystem::is_directory(NIMBLE_DASHBOARD_DIR)) return NIMBLE_DASHBOARD_DIR;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return NIMBLE_DASHBOARD_DIR;
+  return (exe.parent_path().parent_path() / "share" / "nimble_rig" / "dashboard").string();
+}
+
 }  // namespace
 
 int run_view_command(const std::vector<std::string>& args) {
-  std::string log_file, foxglove = std::to_string(kDefaultFoxglovePort), web_root = NIMBLE_DASHBOARD_DIR;
+  std::string log_file, foxglove = std::to_string(kDefaultFoxglovePort), web_root = default_web_root();
   double speed = 1.0;
   int web_port = -1;
   bool exit_when_done = false, salvage = false;

@@ -38,7 +38,7 @@ YAML::Node json_of(const RigResult& r) {
 TEST_CASE("cli: every command answers --help on stdout with exit 0, and --version names the version", "[cli]") {
   for (const std::string command : {"model", "run", "sweep", "params", "check", "spy", "identify", "validate",
                                     "discrepancy", "discrepancy --power", "export", "turbulence",
-                                    "turbulence-response", "reproduce", "loop"}) {
+                                    "turbulence-response", "reproduce", "loop", "view"}) {
     INFO(command);
     const RigResult r = run_rig(command + " --help");
     CHECK(r.exit_code == 0);
