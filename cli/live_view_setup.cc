@@ -3,6 +3,10 @@
 #include <iostream>
 
 namespace nimble::cli {
+namespace {
+/// The nice value of the live view's threads.
+constexpr int kViewerNice = 10;
+}  // namespace
 
 void LiveViewSession::start() {
   view->start();
@@ -37,9 +41,13 @@ std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, cons
   foxglove::parse_host_port(host_port, "127.0.0.1", &o.host, &o.port);
   o.name = "nimble_rig " + command;
   o.web_root = web_root;
+  // Its threads yield the CPU to the rig's processes, as the launcher itself does in real time.
+  o.thread_nice = kViewerNice;
   auto session = std::make_unique<LiveViewSession>();
   session->server = std::make_unique<foxglove::FoxgloveServer>(o);
-  session->view = std::make_unique<foxglove::LiveView>(*session->server);
+  foxglove::LiveViewOptions vo;
+  vo.thread_nice = kViewerNice;
+  session->view = std::make_unique<foxglove::LiveView>(*session->server, vo);
   std::cerr << "rig " << command << ": live view on " << session->server->url()
             << " (Foxglove or Lichtblick: Open connection -> Foxglove WebSocket)\n";
   return session;

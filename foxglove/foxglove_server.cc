@@ -1,6 +1,12 @@
 #include "foxglove/foxglove_server.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <array>
+#include <cerrno>
+#include <cstring>
 #include <atomic>
 #include <chrono>
 #include <deque>
@@ -505,7 +511,10 @@ std::string FoxgloveServer::url() const {
 void FoxgloveServer::start() {
   if (impl_->running.exchange(true)) return;
   impl_->do_accept();
-  impl_->thread = std::thread([impl = impl_.get()] { impl->ioc.run(); });
+  impl_->thread = std::thread([impl = impl_.get()] {
+    set_thread_nice(impl->options.thread_nice);
+    impl->ioc.run();
+  });
 }
 
 void FoxgloveServer::stop() {
@@ -590,6 +599,13 @@ std::vector<ClientStats> FoxgloveServer::clients() const {
   std::lock_guard<std::mutex> lock(impl_->sessions_mu);
   for (const auto& s : impl_->sessions) out.push_back(s->stats());
   return out;
+}
+
+std::string set_thread_nice(int nice) {
+  if (nice == 0) return "";
+  const auto tid = static_cast<id_t>(::syscall(SYS_gettid));
+  if (::setpriority(PRIO_PROCESS, tid, nice) != 0) return std::strerror(errno);
+  return "";
 }
 
 void parse_host_port(const std::string& text, const std::string& default_host, std::string* host, uint16_t* port) {

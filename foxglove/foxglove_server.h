@@ -39,7 +39,14 @@ struct ServerOptions {
   std::size_t max_frame_bytes = 64u << 10;
   /// A directory served over HTTP GET on the same port ("/" is index.html); "": none.
   std::string web_root;
+  /// The nice value of the I/O thread (0: as the thread that calls start()); a live view of a
+  /// real-time run yields the CPU to the rig's processes.
+  int thread_nice = 0;
 };
+
+/// Sets the calling thread's nice value to `nice` (Linux: nice is per thread); 0 does nothing.
+/// Returns "" or why it could not.
+std::string set_thread_nice(int nice);
 
 /// The server's figures since it was made.
 struct ServerStats {

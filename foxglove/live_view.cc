@@ -54,7 +54,10 @@ LiveView::LiveView(FoxgloveServer& server, LiveViewOptions options) : server_(se
 void LiveView::start() {
   std::lock_guard<std::mutex> lock(mu_);
   if (thread_.joinable() || stopping_) return;
-  thread_ = std::thread([this] { run(); });
+  thread_ = std::thread([this] {
+    set_thread_nice(options_.thread_nice);
+    run();
+  });
 }
 
 LiveView::~LiveView() { stop(); }

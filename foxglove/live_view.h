@@ -37,6 +37,8 @@ struct LiveViewOptions {
   /// The queue between offer() and the decoding thread: at most this many bytes and messages.
   std::size_t max_queue_bytes = 4u << 20;
   std::size_t max_queue_messages = 8192;
+  /// The nice value of the decoding thread (0: as the thread that calls start()).
+  int thread_nice = 0;
 };
 
 /// What the live view counted, with the server's own figures.
