@@ -46,7 +46,8 @@ LiveView::LiveView(FoxgloveServer& server, LiveViewOptions options) : server_(se
   for (const contract::ChannelSpec& spec : contract::channel_table()) {
     const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(spec.name);
     if (type == nullptr) continue;  // lcmjson's test keeps the contract and the types in step
-    routes_[spec.name] = Route{server_.add_channel(spec.name, type->full_name(), lcmjson::json_schema(*type)), type};
+    routes_[spec.name] = Route{server_.add_channel(spec.name, type->full_name(), lcmjson::json_schema(*type)), type,
+                               contract::due_in_sim_time(spec.name) && rig_time_is_cheap(*type)};
   }
   verdict_id_ = server_.add_channel(kVerdictTopic, kVerdictSchemaName, kVerdictSchema);
 }
@@ -73,7 +74,7 @@ void LiveView::offer(const std::string& channel, const void* data, std::size_t s
   if (it == routes_.end()) return;
   const Route& route = it->second;
   // The newest rig time, for the messages that carry none (and rig/verdict).
-  if (contract::due_in_sim_time(channel) && rig_time_is_cheap(*route.type)) {
+  if (route.tracks_rig_time) {
     const int64_t t = lcmjson::rig_time_us(*route.type, data, size);
     if (t > newest_rig_us_.load(std::memory_order_relaxed)) newest_rig_us_.store(t, std::memory_order_relaxed);
   }

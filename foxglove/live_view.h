@@ -86,6 +86,7 @@ class LiveView {
   struct Route {
     uint32_t id = 0;
     const lcmjson::LcmStruct* type = nullptr;
+    bool tracks_rig_time = false;  ///< published at rig time, which sits at a fixed offset: read on offer()
   };
   struct Pending {
     const Route* route = nullptr;
