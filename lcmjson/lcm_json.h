@@ -71,7 +71,7 @@ const LcmStruct* find_rig_type(const std::string& name);
 /// the contract does not know.
 const LcmStruct* rig_type_for_channel(const std::string& channel);
 
-/// The JSON Schema (draft 2020-12) of `type`'s JSON messages: an object with every field
+/// The JSON Schema (draft-07, which Foxglove's and Ajv's readers take) of `type`'s JSON messages: an object with every field
 /// required, integers as "integer" with their range, doubles as "number" or null, booleans,
 /// strings, arrays with their fixed size; each field's comment as "description" and its unit as
 /// "x-unit"; the constants in "x-constants"; the title is the type's full name.
