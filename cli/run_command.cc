@@ -64,16 +64,17 @@ std::string self_dir() {
 }
 
 /// `--mcap F`: the run's own log exported to F after the run (whatever the verdict: a failed
-/// flight is the one most worth looking at). Returns the run's exit code, or kExitUsage if the
-/// export failed after a run that succeeded.
-int export_run_log(const std::string& log, const std::string& mcap_file, int run_code) {
+/// flight is the one most worth looking at). Its line goes where the summary's text goes (stderr
+/// when `--json -` has stdout). Returns the run's exit code, or kExitUsage if the export failed
+/// after a run that succeeded.
+int export_run_log(const std::string& log, const std::string& mcap_file, bool json_on_stdout, int run_code) {
   if (!std::filesystem::exists(log)) {
     std::cerr << "rig run: --mcap " << mcap_file << ": the run wrote no log (" << log << ")\n";
     return run_code != 0 ? run_code : kExitUsage;
   }
   try {
     const mcap::ExportStats stats = mcap::export_log_to_mcap(log, mcap_file, {});
-    std::cout << "mcap       " << mcap::summary_line(stats) << "\n";
+    (json_on_stdout ? std::cerr : std::cout) << "mcap       " << mcap::summary_line(stats) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rig run: --mcap " << mcap_file << ": " << e.what() << "\n";
     return run_code != 0 ? run_code : kExitUsage;
@@ -127,7 +128,8 @@ int run_run_command(const std::vector<std::string>& args) {
       return launcher::run_scenario(o);  // reports the scenario's error itself
     }
   }
-  return export_run_log(o.log_file, mcap_file, launcher::run_scenario(o));
+  const int code = launcher::run_scenario(o);
+  return export_run_log(o.log_file, mcap_file, o.json_file == "-", code);
 }
 
 int run_check_command(const std::vector<std::string>& args) {
