@@ -292,6 +292,14 @@ void McapWriter::flush_chunk() {
   const uint64_t index_start = offset_;
   for (const uint16_t id : chunk_channels_) {
     auto& entries = chunk_index_[id - 1];
+    // Readers look messages up by time: each index in log-time order, even where a channel's
+    // messages were added out of it (ties keep their order in the chunk).
+    const auto by_time = [](const std::pair<uint64_t, uint64_t>& a, const std::pair<uint64_t, uint64_t>& b) {
+      return a.first < b.first;
+    };
+    if (!std::is_sorted(entries.begin(), entries.end(), by_time)) {
+      std::stable_sort(entries.begin(), entries.end(), by_time);
+    }
     ci.message_index_offsets.emplace_back(id, index_start + scratch_.size());
     put8(scratch_, kOpMessageIndex);
     put64(scratch_, 2 + 4 + 16 * static_cast<uint64_t>(entries.size()));

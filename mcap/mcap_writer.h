@@ -9,8 +9,8 @@
 ///
 /// Schemas and channels are written into the chunk that first needs them (and again in the
 /// summary), so a reader that streams the file without the index finds them before their
-/// messages. Messages must be added in non-decreasing log time only if the reader relies on
-/// it: the chunk and file start/end times are the minimum and maximum, whatever the order.
+/// messages. Messages may come in any log-time order: the chunk and file start/end times are
+/// the minimum and maximum, and each message index is written in log-time order.
 ///
 /// The file is written as `<path>.part` and renamed to `<path>` only by a successful close():
 /// a failed or abandoned export never leaves a partial file under the final name.

@@ -152,6 +152,25 @@ TEST_CASE("the checking reader finds a flipped byte, a wrong length and a cut fi
   CHECK_THAT(check::problems_text(check::check(summary_changed)), Catch::Contains("summary"));
 }
 
+TEST_CASE("messages added out of log-time order are indexed in log-time order", "[mcap]") {
+  const std::string path = scratch("unordered.mcap");
+  WriterOptions o;
+  o.compression = Compression::kNone;
+  {
+    McapWriter w(path, o);
+    const uint16_t ch = w.add_channel(0, "X", "json");
+    for (const uint64_t t : {50, 10, 30, 10, 20}) w.add_message(ch, static_cast<uint32_t>(t), t, t, "{}", 2);
+    w.close();
+  }
+  const auto f = check::check(check::slurp_binary(path));
+  INFO(check::problems_text(f));
+  CHECK(f.problems.empty());  // the checking reader requires each index in log-time order
+  CHECK(f.statistics.start == 10);
+  CHECK(f.statistics.end == 50);
+  REQUIRE(f.messages.size() == 5);
+  CHECK(f.messages[0].log_time == 50);  // the chunk keeps the order they came in
+}
+
 TEST_CASE("an MCAP file without messages is valid and says so", "[mcap]") {
   const std::string path = scratch("empty.mcap");
   {
