@@ -135,8 +135,8 @@ int main(int argc, char** argv) {
     std::fprintf(text, "bench_export: %s, %llu events, %d runs each (median), zstd level %d\n", source.c_str(),
                  static_cast<unsigned long long>(zstd_stats.events), runs, level);
     std::fprintf(text, "  %-52s %8.1f MB\n", "LCM log", log_mb);
-    std::fprintf(text, "  %-52s %8.3f s  %8.1f MB (%.2f of the log; target <= 1)\n", "export, zstd (target <= 2 s for 60 s)",
-                 zstd_s, zstd_mb, zstd_mb / log_mb);
+    std::fprintf(text, "  %-52s %8.3f s  %8.1f MB (%.2f of the log; target <= 1)\n",
+                 "export, zstd (target <= 2 s for 60 s)", zstd_s, zstd_mb, zstd_mb / log_mb);
     std::fprintf(text, "  %-52s %8.3f s  %8.1f MB\n", "export, no compression", none_s, none_mb);
     std::fprintf(text, "  %-52s %8.3f s\n", "  of which: log read and JSON decode, nothing written", decode_s);
     std::fprintf(text, "  %-52s %8.3f s\n", "floor: the log read event by event, nothing decoded", floor_s);

@@ -443,10 +443,12 @@ int run_export_command(const std::vector<std::string>& args) {
                    ->check(kFinite & CLI::Range(1e-3, 100000.0))
                    ->capture_default_str()
                    ->type_name("HZ");
-  auto* interp = each_value(cl->add_option("--interpolation", "CSV: cubic (default) or linear")->type_name("MODE")
-                                ->check(CLI::IsMember({"cubic", "linear"})),
-                            [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
-  auto* states = each_value(cl->add_option("--states", "CSV: where the states come from: auto (default), estimate or truth")
+  auto* interp = each_value(
+      cl->add_option("--interpolation", "CSV: cubic (default) or linear")->type_name("MODE")
+          ->check(CLI::IsMember({"cubic", "linear"})),
+      [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
+  auto* states = each_value(cl->add_option("--states", "CSV: where the states come from: auto (default), estimate "
+                                                       "or truth")
                                 ->type_name("SOURCE")
                                 ->check(CLI::IsMember({"auto", "estimate", "truth"})),
                             [&source](const std::string& v) {
@@ -460,9 +462,13 @@ int run_export_command(const std::vector<std::string>& args) {
                    ->type_name("C");
   auto* raw_flag = cl->add_flag("--raw", raw, "MCAP: also each channel's LCM bytes as <CHANNEL>/lcm");
   add_salvage(cl, log_options);
-  cl.add_json(json, "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; damage)");
+  cl.add_json(json,
+              "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; damage)");
   if (const auto done = cl.parse(args)) return *done;
-  if (format.empty()) format = csv.empty() && out_file.size() >= 5 && out_file.compare(out_file.size() - 5, 5, ".mcap") == 0 ? "mcap" : "csv";
+  if (format.empty()) {
+    const bool mcap_name = out_file.size() >= 5 && out_file.compare(out_file.size() - 5, 5, ".mcap") == 0;
+    format = csv.empty() && mcap_name ? "mcap" : "csv";
+  }
   if (format == "mcap") {
     for (const CLI::Option* o : {rate, interp, states}) {
       if (o->count() > 0) return cl.fail(o->get_name() + " is for --format csv");
