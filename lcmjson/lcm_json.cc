@@ -205,9 +205,8 @@ std::string to_json(const LcmStruct& type, const void* data, std::size_t size, J
           break;
         }
         case Kind::kBoolean: {
-          const uint64_t v = in.be(1);
-          if (v > 1) return "field " + f.name + ": boolean byte " + std::to_string(v);
-          json.append(v ? "true" : "false");
+          // As LCM's decoder takes it: any byte but 0 is true.
+          json.append(in.be(1) ? "true" : "false");
           break;
         }
         case Kind::kFloat: {

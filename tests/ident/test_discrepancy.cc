@@ -87,7 +87,7 @@ TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is
 
 TEST_CASE("discrepancy: a lateral gust alone is named lateral_gust from its signature, a deterministic name in at "
           "most 5 % of 24 records",
-          "[discrepancy][null]") {
+          "[discrepancy][null][records]") {
   // A side gust drives v and so correlates the equation error with functions of v in closed
   // loop; the confirmation above the gust band removes most of it (6 of 24 records named
   // lateral_inflow without it). The rate is measured, and must not exceed the null rate bound.
@@ -181,7 +181,7 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
 
 TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign in two thirds of 24 records and in all "
           "but one of the upper half of its range, nothing else is named",
-          "[discrepancy]") {
+          "[discrepancy][records]") {
   // Power grows with the size: Y_vv is drawn from [-0.03, -0.01]; the upper half of the range
   // (|Y_vv| >= 0.02) must be named in all its records but one, the whole range in 16 of 24.
   int hits = 0, large = 0, large_hits = 0;
