@@ -21,8 +21,9 @@ struct LiveViewSession {
 
   /// Starts the view's thread and the server's.
   void start();
-  /// Hands what is queued to the clients, closes them and ends the threads.
+  /// Hands what is queued to the clients, closes them and ends the threads (once).
   void stop();
+  ~LiveViewSession() { stop(); }
   /// The figures for a run summary ("live view: clients 1, sent 1234, ...").
   launcher::TapFigures figures() const;
 };

@@ -19,7 +19,7 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
-    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F|-] [--set k=v] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
+    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
      nimble::cli::run_run_command},
     {"view", "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web PORT] [--exit-when-done]   replay a log live to Foxglove/Lichtblick",
      nimble::cli::run_view_command},
@@ -37,7 +37,7 @@ const Command kCommands[] = {
      nimble::cli::run_validate_command},
     {"discrepancy", "discrepancy <data> --model <model.yaml> [--json F] [--model-out F] ...   name the effect the model misses",
      nimble::cli::run_discrepancy_command},
-    {"export", "export <log.lcmlog> --csv <out.csv> [--rate HZ] [--interpolation cubic|linear] [--states auto|estimate|truth] [--json F|-]   a rig log as identification CSV",
+    {"export", "export <log.lcmlog> (--csv <out.csv> [--rate HZ] [--interpolation cubic|linear] [--states auto|estimate|truth] | --format mcap --out <out.mcap> [--compression zstd|none] [--raw]) [--salvage] [--json F|-]   a rig log as identification CSV, or as MCAP for Foxglove, Lichtblick, PlotJuggler",
      nimble::cli::run_export_command},
     {"turbulence", "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence practical",
      nimble::cli::run_turbulence_command},

@@ -18,6 +18,7 @@
 #include "cli/commands.h"
 #include "cli/live_view_setup.h"
 #include "launcher/launcher.h"
+#include "mcap/log_export.h"
 
 namespace nimble::cli {
 namespace {
@@ -63,6 +64,25 @@ std::string self_dir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
+/// `--mcap F`: the run's own log exported to F after the run (whatever the verdict: a failed
+/// flight is the one most worth looking at). Its line goes where the summary's text goes (stderr
+/// when `--json -` has stdout). Returns the run's exit code, or kExitUsage if the export failed
+/// after a run that succeeded.
+int export_run_log(const std::string& log, const std::string& mcap_file, bool json_on_stdout, int run_code) {
+  if (!std::filesystem::exists(log)) {
+    std::cerr << "rig run: --mcap " << mcap_file << ": the run wrote no log (" << log << ")\n";
+    return run_code != 0 ? run_code : kExitUsage;
+  }
+  try {
+    const mcap::ExportStats stats = mcap::export_log_to_mcap(log, mcap_file, {});
+    (json_on_stdout ? std::cerr : std::cout) << "mcap       " << mcap::summary_line(stats) << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "rig run: --mcap " << mcap_file << ": " << e.what() << "\n";
+    return run_code != 0 ? run_code : kExitUsage;
+  }
+  return run_code;
+}
+
 }  // namespace
 
 int run_run_command(const std::vector<std::string>& args) {
@@ -76,6 +96,11 @@ int run_run_command(const std::vector<std::string>& args) {
   cl->add_option("--log", o.log_file,
                  "the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved scenario and each "
                  "process's output are written next to it")
+      ->type_name("FILE");
+  std::string mcap_file;
+  cl->add_option("--mcap", mcap_file,
+                 "also the run's log as MCAP (zstd; as rig export --format mcap) for Foxglove, Lichtblick, "
+                 "PlotJuggler, written after the run")
       ->type_name("FILE");
   cl.add_json(o.json_file, "the run summary");
   std::string foxglove;
@@ -98,21 +123,32 @@ int run_run_command(const std::vector<std::string>& args) {
       ->each([&o](const std::string&) { o.progress = false; });
   cl->add_flag("--strict-timing", o.strict_timing, "a real-time degraded run exits 4");
   if (const auto done = cl.parse(args)) return *done;
+  // The live view (--foxglove) is bound here, before the launcher moves into the run's network
+  // namespace: the socket stays on this host's network, where Foxglove can reach it. It is closed
+  // when `live` goes, after the run.
   std::unique_ptr<LiveViewSession> live;
   if (!foxglove.empty()) {
-    // Bound here, before the launcher moves into the run's network namespace: the socket stays
-    // on this host's network, where Foxglove can reach it.
     try {
       live = open_live_view("run", foxglove);
     } catch (const std::exception& e) {
-      std::cerr << "rig run: --foxglove " << foxglove << ": " << e.what() << "\n";
-      return kExitUsage;
+      return cl.fail("--foxglove " + foxglove + ": " + e.what());
     }
     tap_run(*live, o);
   }
+  if (mcap_file.empty()) return launcher::run_scenario(o);
+  if (const std::string problem = launcher::writable_problem(mcap_file); !problem.empty()) {
+    return cl.fail("--mcap " + mcap_file + ": " + problem);
+  }
+  // The export needs the log's name: the default one is decided here, as the launcher would.
+  if (o.log_file.empty()) {
+    try {
+      o.log_file = launcher::log_file_for(launcher::load_run_plan(o), o);
+    } catch (const std::exception&) {
+      return launcher::run_scenario(o);  // reports the scenario's error itself
+    }
+  }
   const int code = launcher::run_scenario(o);
-  if (live) live->stop();
-  return code;
+  return export_run_log(o.log_file, mcap_file, o.json_file == "-", code);
 }
 
 int run_check_command(const std::vector<std::string>& args) {

@@ -72,6 +72,11 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"discrepancy --power --scenario " + scenario + " --model m.yaml --effect actuator_delay=0.01 --flights 0",
             "--flights"},
            {"export x.lcmlog --csv y.csv --rate nan", "--rate: 'nan' is not a finite number"},
+           {"export x.lcmlog --format mcap", "--format mcap needs --out FILE"},
+           {"export x.lcmlog --out y.mcap --rate 100", "--rate is for --format csv"},
+           {"export x.lcmlog --csv y.csv --raw", "--raw is for --format mcap"},
+           {"export x.lcmlog --out y.mcap --compression lz4", "--compression: lz4 not in {zstd,none}"},
+           {"export x.lcmlog", "--csv FILE (or --out FILE.mcap for MCAP) is required"},
            {"turbulence x.yaml --welch-segment 1000", "--welch-segment: '1000' is not a power of two >= 8"},
            {"params nosuchsection", "section: nosuchsection not in"},
            {"model", "model is required"},
@@ -95,7 +100,8 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
 
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
   for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
-                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop", "bench_power"}) {
+                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop", "bench_power",
+                                  "bench_export"}) {
     INFO(bench);
     const RigResult r = run_bench(bench, "--help");
     CHECK(r.exit_code == 0);
@@ -183,6 +189,13 @@ TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, exp
   const YAML::Node e = json_of(exported);
   CHECK(e["samples"].as<int>() > 400);
   CHECK(e["interpolation"].as<std::string>() == "linear");
+
+  const RigResult mcap = run_rig("export " + log + " --format mcap --out " + dir + "/hover.mcap --json -");
+  CHECK(mcap.exit_code == 0);
+  const YAML::Node m = json_of(mcap);
+  CHECK(m["messages"].as<int>() > 1000);
+  CHECK(m["channels"]["TRUTH"]["json"].as<int>() > 100);
+  CHECK(mcap.err.find("rig export: ") == 0);  // the one-line summary went to stderr
 
   const RigResult sweep =
       run_rig("sweep " + kConfigs + "hover.yaml --seeds 1-2 --set duration_s=0.5 --json - --jobs 1 --no-progress");

@@ -1,0 +1,163 @@
+#include "mcap/log_export.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "ident/lcm_log.h"
+#include "lcmjson/lcm_json.h"
+
+namespace nimble::mcap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The MCAP registry has no LCM entry: "lcm" is this project's name for both the message encoding
+// (the bytes of one LCM message, fingerprint first) and the schema encoding (the text of the
+// .lcm file declaring the type). Viewers show such channels without decoding them.
+constexpr const char* kLcmEncoding = "lcm";
+
+/// What the export knows of one LCM channel once it has seen it.
+struct ChannelState {
+  const lcmjson::LcmStruct* type = nullptr;  ///< nullptr: the contract does not know the channel
+  uint16_t json_channel = 0;
+  uint16_t raw_channel = 0;
+  ChannelExport* stats = nullptr;
+};
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+uint64_t ns_from_us(int64_t us) { return us > 0 ? static_cast<uint64_t>(us) * 1000u : 0u; }
+
+}  // namespace
+
+ExportStats export_log_to_mcap(const std::string& log_path, const std::string& out_path, const ExportOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::error_code ec;
+  if (fs::exists(out_path, ec) && fs::equivalent(log_path, out_path, ec)) {
+    throw std::invalid_argument("the MCAP file " + out_path + " is the log itself");
+  }
+  ExportStats stats;
+  stats.log = log_path;
+  stats.out = out_path;
+  stats.compression = options.compression;
+
+  ident::LcmLogReader reader(log_path, options.salvage);  // throws DataError for a file that is no log
+  WriterOptions wo;
+  wo.compression = options.compression;
+  wo.chunk_size = options.chunk_size;
+  wo.zstd_level = options.zstd_level;
+  wo.library = std::string("nimble-rig ") + NIMBLE_RIG_VERSION;
+  McapWriter writer(out_path, wo);
+
+  std::unordered_map<std::string, ChannelState> channels;
+  std::unordered_map<const lcmjson::LcmStruct*, uint16_t> json_schemas, lcm_schemas;
+  auto channel_state = [&](const std::string& name) -> ChannelState& {
+    auto it = channels.find(name);
+    if (it != channels.end()) return it->second;
+    ChannelState s;
+    s.type = lcmjson::rig_type_for_channel(name);
+    s.stats = &stats.channels[name];
+    if (s.type != nullptr) {
+      s.stats->type = s.type->full_name();
+      uint16_t& schema = json_schemas[s.type];
+      if (schema == 0) schema = writer.add_schema(s.type->full_name(), "jsonschema", lcmjson::json_schema(*s.type));
+      s.json_channel = writer.add_channel(schema, name, "json");
+      ++stats.mcap_channels;
+    } else {
+      stats.unknown_channels.push_back(name);
+    }
+    if (options.raw) {
+      uint16_t schema = 0;
+      if (s.type != nullptr) {
+        uint16_t& lcm = lcm_schemas[s.type];
+        if (lcm == 0) lcm = writer.add_schema(s.type->full_name(), kLcmEncoding, s.type->source);
+        schema = lcm;
+      }
+      s.raw_channel = writer.add_channel(schema, name + "/lcm", kLcmEncoding);
+      ++stats.mcap_channels;
+    }
+    return channels.emplace(name, s).first->second;
+  };
+
+  ident::LogEventRecord ev;
+  lcmjson::JsonMessage json;
+  int64_t newest_rig_time_us = 0;
+  bool any = false;
+  auto note_time = [&](uint64_t t) {
+    if (!any || t < stats.start_time_ns) stats.start_time_ns = t;
+    if (!any || t > stats.end_time_ns) stats.end_time_ns = t;
+    any = true;
+  };
+  while (reader.next(&ev)) {
+    ++stats.events;
+    ChannelState& ch = channel_state(ev.channel);
+    ++ch.stats->events;
+    const uint32_t sequence = static_cast<uint32_t>(ev.event_number);
+    const uint64_t publish_ns = ns_from_us(ev.timestamp_us);
+    uint64_t log_ns = static_cast<uint64_t>(newest_rig_time_us) * 1000u;
+    if (ch.type == nullptr) {
+      ++stats.unknown_events;
+    } else if (const std::string problem = lcmjson::to_json(*ch.type, ev.data.data(), ev.data.size(), &json);
+               !problem.empty()) {
+      ++ch.stats->undecodable;
+      ++stats.undecodable;
+    } else {
+      // Only -1 means "no rig time"; a negative time is no time the rig could have had either.
+      if (json.rig_time_us >= 0) {
+        log_ns = static_cast<uint64_t>(json.rig_time_us) * 1000u;
+        if (json.rig_time_us > newest_rig_time_us) newest_rig_time_us = json.rig_time_us;
+      }
+      writer.add_message(ch.json_channel, sequence, log_ns, publish_ns, json.json.data(), json.json.size());
+      ++ch.stats->json;
+      note_time(log_ns);
+    }
+    if (ch.raw_channel != 0) {
+      writer.add_message(ch.raw_channel, sequence, log_ns, publish_ns, ev.data.data(), ev.data.size());
+      ++ch.stats->raw;
+      note_time(log_ns);
+    }
+  }
+  stats.damage = reader.damage();
+
+  std::map<std::string, std::string> rig{{"log", fs::path(log_path).filename().string()}};
+  const std::string scenario_file = log_path + ".scenario.yaml";
+  if (fs::is_regular_file(scenario_file, ec)) rig["scenario"] = read_text(scenario_file);
+  if (!stats.damage.empty()) rig["damage"] = stats.damage;
+  writer.add_metadata("rig", rig);
+  writer.close();
+
+  stats.messages = writer.stats().messages;
+  stats.bytes_out = writer.stats().bytes;
+  stats.bytes_in = fs::file_size(log_path, ec);
+  if (ec) stats.bytes_in = 0;
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+std::string summary_line(const ExportStats& s) {
+  std::size_t lcm_channels = s.channels.size();
+  char size[64];
+  const double mib = static_cast<double>(s.bytes_out) / (1024.0 * 1024.0);
+  std::snprintf(size, sizeof size, "%.1f MiB", mib);
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%.2f s", s.seconds);
+  std::string line = std::to_string(s.messages) + " messages on " + std::to_string(s.mcap_channels) +
+                     " MCAP channels (" + std::to_string(lcm_channels) + " LCM channels) -> " + s.out + ", " + size +
+                     " (" + to_string(s.compression) + "), " + seconds;
+  if (s.undecodable > 0) line += "; " + std::to_string(s.undecodable) + " undecodable left out";
+  if (s.unknown_events > 0) {
+    line += "; " + std::to_string(s.unknown_events) + " events on " + std::to_string(s.unknown_channels.size()) +
+            " unknown channels";
+  }
+  return line;
+}
+
+}  // namespace nimble::mcap

@@ -1,0 +1,78 @@
+#pragma once
+/// A rig log (LCM) as an indexed MCAP file, for Foxglove, Lichtblick and PlotJuggler.
+///
+/// One MCAP channel per LCM channel, its topic the LCM channel's name (`TRUTH`), its messages
+/// JSON (message encoding `json`) described by the type's JSON Schema (schema encoding
+/// `jsonschema`, schema name the type's full name, `nimble.truth_state_t`); see
+/// lcmjson/lcm_json.h for both.
+///
+/// Times: log_time is the message's rig (simulated) time, so that every channel of a run lines
+/// up on the rig's clock whatever the run's clock was. A message whose type has no rig time,
+/// or holds -1 there (the wall-clock channels, HEARTBEAT), gets the newest rig time of the log
+/// before it (0 before any). publish_time is the log event's own timestamp, sequence the log's
+/// event number (its low 32 bits).
+///
+/// A message that is not exactly one message of its channel's type (garbage a fault test put on
+/// the bus, recorded like everything else) is left out of the JSON channel and counted.
+/// Channels the rig's contract does not know have no JSON channel; they are counted.
+///
+/// raw: every LCM channel also as `<CHANNEL>/lcm` with the exact LCM bytes of every event
+/// (message encoding `lcm`), the type's .lcm source text as its schema (encoding `lcm`); an
+/// unknown channel as raw only, without a schema.
+///
+/// The metadata record "rig" holds the log's file name and, when `<log>.scenario.yaml` lies
+/// beside the log, the resolved scenario of the run.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mcap/mcap_writer.h"
+
+namespace nimble::mcap {
+
+struct ExportOptions {
+  Compression compression = Compression::kZstd;
+  bool raw = false;       ///< also `<CHANNEL>/lcm` with the LCM bytes
+  bool salvage = false;   ///< a damaged log: export the events before the damage
+  std::size_t chunk_size = 2u << 20;
+  int zstd_level = WriterOptions{}.zstd_level;
+};
+
+/// One LCM channel of the log.
+struct ChannelExport {
+  std::string type;           ///< full type name, "" for a channel the contract does not know
+  uint64_t events = 0;        ///< events of the channel in the log
+  uint64_t json = 0;          ///< messages written as JSON
+  uint64_t undecodable = 0;   ///< events that are not exactly one message of the type
+  uint64_t raw = 0;           ///< messages written to `<CHANNEL>/lcm`
+};
+
+struct ExportStats {
+  std::string log, out;
+  Compression compression = Compression::kZstd;
+  std::map<std::string, ChannelExport> channels;  ///< by LCM channel name
+  std::vector<std::string> unknown_channels;      ///< channels the contract does not know
+  uint64_t events = 0;            ///< events read from the log
+  uint64_t messages = 0;          ///< MCAP messages written (JSON and raw)
+  uint64_t undecodable = 0;       ///< over every channel
+  uint64_t unknown_events = 0;    ///< events on unknown channels
+  uint64_t mcap_channels = 0;
+  uint64_t start_time_ns = 0, end_time_ns = 0;  ///< log times of the first and last message
+  uint64_t bytes_in = 0, bytes_out = 0;
+  double seconds = 0.0;
+  std::string damage;  ///< salvaging: what was wrong with the log ("" if it was whole)
+};
+
+/// Writes the rig log `log_path` as MCAP to `out_path` (through `<out_path>.part`).
+/// @throws ident::DataError for a damaged log (naming the byte offset and the event) unless
+///         salvaging; WriteError when the file cannot be written; std::invalid_argument when
+///         `out_path` is the log itself.
+ExportStats export_log_to_mcap(const std::string& log_path, const std::string& out_path,
+                               const ExportOptions& options = {});
+
+/// One line for people: messages, channels, size, compression, time.
+std::string summary_line(const ExportStats& stats);
+
+}  // namespace nimble::mcap
