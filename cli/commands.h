@@ -16,7 +16,7 @@ int run_model_command(const std::vector<std::string>& args);
 /// `rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]`
 int run_run_command(const std::vector<std::string>& args);
 
-/// `rig view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web PORT] [--web-root DIR] [--exit-when-done]
+/// `rig view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--web-root DIR] [--exit-when-done]
 /// [--salvage]`: a log replayed live on a Foxglove WebSocket server, and the dashboard page (cli/view_command.cc).
 int run_view_command(const std::vector<std::string>& args);
 

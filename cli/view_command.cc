@@ -97,7 +97,7 @@ std::string default_web_root() {
 int run_view_command(const std::vector<std::string>& args) {
   std::string log_file, foxglove = std::to_string(kDefaultFoxglovePort), web_root = default_web_root();
   double speed = 1.0;
-  int web_port = -1;
+  std::string web;
   bool exit_when_done = false, salvage = false;
   CommandLine cl("rig view", kViewDescription);
   cl->footer(kViewFooter);
@@ -110,18 +110,17 @@ int run_view_command(const std::vector<std::string>& args) {
       ->check(CLI::NonNegativeNumber)
       ->type_name("X")
       ->capture_default_str();
-  cl->add_option("--web", web_port,
-                 "serve the dashboard page over HTTP on this port of the same host: open "
-                 "http://HOST:PORT/?ws=ws://HOST:FOXGLOVE_PORT (docs/dashboard.md)")
-      ->check(CLI::Range(0, 65535))
-      ->type_name("PORT");
+  cl->add_option("--web", web,
+                 "serve the dashboard page over HTTP (host: the --foxglove one unless given; port 0 picks a free "
+                 "one): open http://HOST:PORT/?ws=ws://HOST:FOXGLOVE_PORT (docs/dashboard.md)")
+      ->type_name("[HOST:]PORT");
   cl->add_option("--web-root", web_root, "the page's folder (default: the build's or installation's dashboard)")
       ->type_name("DIR")
       ->capture_default_str();
   cl->add_flag("--exit-when-done", exit_when_done, "exit once the log is replayed (default: keep serving)");
   cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
   if (const auto done = cl.parse(args)) return *done;
-  if (log_file.empty() && web_port < 0) {
+  if (log_file.empty() && web.empty()) {
     std::cerr << "rig view: nothing to do: give a LOG to replay, or --web PORT to serve the page\n";
     return kExitUsage;
   }
@@ -133,7 +132,7 @@ int run_view_command(const std::vector<std::string>& args) {
       return kExitUsage;
     }
   }
-  if (web_port >= 0 && !std::filesystem::is_directory(web_root)) {
+  if (!web.empty() && !std::filesystem::is_directory(web_root)) {
     std::cerr << "rig view: --web-root " << web_root
               << " is not a directory (build the target 'dashboard', or give --web-root DIR)\n";
     return kExitUsage;
@@ -143,14 +142,19 @@ int run_view_command(const std::vector<std::string>& args) {
   std::unique_ptr<foxglove::FoxgloveServer> page;
   try {
     if (!log_file.empty()) live = open_live_view("view", foxglove);
-    if (web_port >= 0) {
+    if (!web.empty()) {
       foxglove::ServerOptions o;
-      foxglove::parse_host_port(foxglove, "127.0.0.1", &o.host, &o.port);
-      o.port = static_cast<uint16_t>(web_port);
+      uint16_t ws_port = 0;
+      foxglove::parse_host_port(foxglove, "127.0.0.1", &o.host, &ws_port);
+      try {
+        foxglove::parse_host_port(web, o.host, &o.host, &o.port);
+      } catch (const std::exception& e) {
+        throw std::invalid_argument(std::string("--web: ") + e.what());
+      }
       o.web_root = web_root;
       o.name = "nimble_rig view (page)";
       page = std::make_unique<foxglove::FoxgloveServer>(o);
-      const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(kDefaultFoxglovePort);
+      const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(ws_port);
       std::cerr << "rig view: dashboard on http://" << o.host << ":" << page->port() << "/?ws=" << ws << "\n";
     }
   } catch (const std::exception& e) {
