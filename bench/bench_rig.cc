@@ -159,7 +159,8 @@ class FoxgloveClient {
       net::io_context ioc;
       websocket::stream<net::ip::tcp::socket> ws(ioc);
       beast::error_code ec;
-      ws.next_layer().connect(net::ip::tcp::endpoint(net::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)), ec);
+      const net::ip::tcp::endpoint server(net::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port));
+      ws.next_layer().connect(server, ec);
       if (ec) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
         continue;

@@ -178,8 +178,8 @@ int run_view_command(const std::vector<std::string>& args) {
       const Replay r = replay(log_file, salvage, speed, *live->view);
       if (!r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
       char verdict[160];
-      std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time", g_stop ? "stopped after" : "replayed",
-                    static_cast<long long>(r.events), r.rig_s);
+      std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time",
+                    g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s);
       live->view->set_state(g_stop ? "stopped" : "done", verdict, r.rig_s);
       std::cerr << "rig view: " << verdict << "\n";
     } catch (const std::exception& e) {

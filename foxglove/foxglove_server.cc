@@ -618,7 +618,9 @@ void parse_host_port(const std::string& text, const std::string& default_host, s
     h = text.substr(1, close - 1);
     p = text.substr(close + 2);
   } else if (const std::size_t colon = text.rfind(':'); colon != std::string::npos) {
-    if (text.find(':') != colon) throw std::invalid_argument("'" + text + "': write an IPv6 host in brackets, [::1]:8765");
+    if (text.find(':') != colon) {
+      throw std::invalid_argument("'" + text + "': write an IPv6 host in brackets, [::1]:8765");
+    }
     h = text.substr(0, colon);
     p = text.substr(colon + 1);
   }

@@ -20,14 +20,15 @@ int64_t now_ns() {
 
 constexpr int64_t kStateRepeatNs = 1000000000LL;
 
-const char* const kVerdictSchema = R"({"$schema":"https://json-schema.org/draft/2020-12/schema",)"
-                                   R"("title":"nimble.run_verdict","type":"object",)"
-                                   R"("description":"The run's state and verdict, as the launcher or the replay sees it.",)"
-                                   R"("properties":{)"
-                                   R"("state":{"type":"string","description":"running, done, replaying, ..."},)"
-                                   R"("verdict":{"type":"string","description":"the verdict's text; empty until the end"},)"
-                                   R"("t_s":{"type":"number","description":"simulated time reached","x-unit":"s"}},)"
-                                   R"("required":["state","verdict","t_s"]})";
+const char* const kVerdictSchema =
+    R"({"$schema":"https://json-schema.org/draft/2020-12/schema",)"
+    R"("title":"nimble.run_verdict","type":"object",)"
+    R"("description":"The run's state and verdict, as the launcher or the replay sees it.",)"
+    R"("properties":{)"
+    R"("state":{"type":"string","description":"running, done, replaying, ..."},)"
+    R"("verdict":{"type":"string","description":"the verdict's text; empty until the end"},)"
+    R"("t_s":{"type":"number","description":"simulated time reached","x-unit":"s"}},)"
+    R"("required":["state","verdict","t_s"]})";
 
 /// Whether the rig time of `type` sits at a fixed offset (only fixed-size scalars before it),
 /// so that reading it costs nothing.

@@ -26,12 +26,12 @@ namespace {
 /// A 2 s hover log flown in process, made once per test program.
 const std::string& hover_log() {
   static const std::string log = [] {
-    const std::string dir = (std::filesystem::temp_directory_path() / ("rig_view_" + std::to_string(::getpid()))).string();
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / ("rig_view_" + std::to_string(::getpid()))).string();
     std::filesystem::create_directories(dir);
     const std::string file = dir + "/hover.lcmlog";
-    const auto r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
-                                         "/rig_configs/hover.yaml --clock inprocess --set duration_s=2 --no-progress --log " +
-                                         file);
+    const auto r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml" +
+                                         " --clock inprocess --set duration_s=2 --no-progress --log " + file);
     REQUIRE(r.exit_code == 0);
     return file;
   }();

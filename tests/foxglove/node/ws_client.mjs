@@ -21,7 +21,10 @@ import WebSocket from "ws";
 const { FoxgloveClient } = wsProtocol;
 
 function usage(message) {
-  console.error(`ws_client.mjs: ${message}\nusage: node ws_client.mjs --url URL --topics A,B --seconds S --out FILE [--connect-timeout S]`);
+  console.error(
+    `ws_client.mjs: ${message}\n` +
+      "usage: node ws_client.mjs --url URL --topics A,B --seconds S --out FILE [--connect-timeout S]",
+  );
   process.exit(2);
 }
 
