@@ -6,12 +6,14 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -213,17 +215,21 @@ TEST_CASE("server: a client that does not read loses messages, counted, and publ
   REQUIRE(eventually([&] { return f.server.has_subscribers(f.a); }));
   const std::string payload = "{\"pad\":\"" + std::string(1000, 'x') + "\"}";
   constexpr int kMessages = 20000;  // 20 MB: far beyond the socket buffers and the queue
-  double worst_s = 0.0;
+  std::vector<double> took_s(kMessages);
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < kMessages; ++i) {
     const auto a = std::chrono::steady_clock::now();
     f.server.publish(f.a, static_cast<uint64_t>(i), payload);
-    worst_s = std::max(worst_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+    took_s[static_cast<std::size_t>(i)] = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
   }
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  INFO("total " << total_s << " s, slowest publish() " << worst_s * 1e3 << " ms");
+  std::sort(took_s.begin(), took_s.end());
+  const double p99_s = took_s[took_s.size() * 99 / 100];
+  INFO("total " << total_s << " s, publish() p99 " << p99_s * 1e6 << " us, slowest " << took_s.back() * 1e3 << " ms");
+  // A publisher that waited for the client would wait on every call once the socket is full: the
+  // p99 and the total show it; the slowest single call may include a preemption of this thread.
   CHECK(total_s < 2.0);
-  CHECK(worst_s < 0.05);
+  CHECK(p99_s < 0.001);
   const ServerStats s = f.server.stats();
   CHECK(s.dropped > kMessages / 2);
   CHECK(s.dropped + s.messages_sent <= kMessages);
