@@ -5,6 +5,10 @@
 #include <nlohmann/json.hpp>
 
 #include "foxglove/protocol.h"
+#include "contract/channels.h"
+
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kTruth;
 
 using namespace nimble::foxglove;
 using nlohmann::json;
@@ -40,12 +44,12 @@ TEST_CASE("server messages: serverInfo, advertise, status, messageData", "[foxgl
   CHECK(info["sessionId"] == "s1");
   CHECK(info["metadata"]["scenario"] == "hover");
 
-  const json ad = json::parse(advertise_json({Channel{7, "TRUTH", "nimble.truth_state_t", "{\"type\":\"object\"}"}}));
+  const json ad = json::parse(advertise_json({Channel{7, kTruth, "nimble.truth_state_t", "{\"type\":\"object\"}"}}));
   CHECK(ad["op"] == "advertise");
   REQUIRE(ad["channels"].size() == 1);
   const json& c = ad["channels"][0];
   CHECK(c["id"] == 7);
-  CHECK(c["topic"] == "TRUTH");
+  CHECK(c["topic"] == kTruth);
   CHECK(c["encoding"] == "json");
   CHECK(c["schemaName"] == "nimble.truth_state_t");
   CHECK(c["schemaEncoding"] == "jsonschema");

@@ -10,6 +10,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/run_rig.h"
+#include "contract/channels.h"
+
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kTruth;
 
 using nimble::test::run_rig;
 using nimble::test::RigResult;
@@ -194,7 +198,7 @@ TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, exp
   CHECK(mcap.exit_code == 0);
   const YAML::Node m = json_of(mcap);
   CHECK(m["messages"].as<int>() > 1000);
-  CHECK(m["channels"]["TRUTH"]["json"].as<int>() > 100);
+  CHECK(m["channels"][kTruth]["json"].as<int>() > 100);
   CHECK(mcap.err.find("rig export: ") == 0);  // the one-line summary went to stderr
 
   const RigResult sweep =

@@ -31,6 +31,9 @@
 #include "contract/decode.h"
 #include "lcmjson/lcm_json.h"
 
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kImu;
+
 using nimble::lcmjson::LcmStruct;
 using nlohmann::json;
 
@@ -230,7 +233,7 @@ TEST_CASE("lcmjson: bytes that are not exactly one message are refused with the 
   REQUIRE(type != nullptr);
   nimble::fault_event_t f{};
   f.process = "estimator";
-  f.channel = "IMU";
+  f.channel = kImu;
   f.message = "stale";
   std::vector<uint8_t> bytes(static_cast<std::size_t>(f.getEncodedSize()));
   f.encode(bytes.data(), 0, static_cast<int>(bytes.size()));

@@ -18,6 +18,12 @@
 #include "ident/flight_data.h"
 #include "mcap/log_export.h"
 #include "tests/mcap/mcap_check.h"
+#include "contract/channels.h"
+
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kFault;
+using nimble::contract::channels::kHeartbeat;
+using nimble::contract::channels::kTruth;
 
 namespace fs = std::filesystem;
 namespace check = nimble::test::mcap_check;
@@ -62,13 +68,13 @@ std::vector<Event> sample_events() {
   fault.utime = 1795662219900000;
   fault.rig_utime = -1;
   return {
-      {"TRUTH", encoded(truth(1000)), 11},
-      {"HEARTBEAT", encoded(hb), 12},
-      {"TRUTH", "not a truth message", 13},
-      {"TRUTH", encoded(truth(2000)), 14},
+      {kTruth, encoded(truth(1000)), 11},
+      {kHeartbeat, encoded(hb), 12},
+      {kTruth, "not a truth message", 13},
+      {kTruth, encoded(truth(2000)), 14},
       {"NOT_A_RIG_CHANNEL", std::string("\x01\x02\x00\x03", 4), 15},
-      {"FAULT", encoded(fault), 16},
-      {"TRUTH", encoded(truth(3000)), 17},
+      {kFault, encoded(fault), 16},
+      {kTruth, encoded(truth(3000)), 17},
   };
 }
 
@@ -115,9 +121,9 @@ TEST_CASE("export: JSON channels, rig log times, undecodable and unknown message
   CHECK(stats.events == 7);
   CHECK(stats.messages == 5);  // 3 TRUTH, HEARTBEAT, FAULT
   CHECK(stats.undecodable == 1);
-  CHECK(stats.channels.at("TRUTH").undecodable == 1);
-  CHECK(stats.channels.at("TRUTH").json == 3);
-  CHECK(stats.channels.at("TRUTH").type == "nimble.truth_state_t");
+  CHECK(stats.channels.at(kTruth).undecodable == 1);
+  CHECK(stats.channels.at(kTruth).json == 3);
+  CHECK(stats.channels.at(kTruth).type == "nimble.truth_state_t");
   CHECK(stats.unknown_events == 1);
   REQUIRE(stats.unknown_channels == std::vector<std::string>{"NOT_A_RIG_CHANNEL"});
   CHECK(stats.channels.at("NOT_A_RIG_CHANNEL").type.empty());
@@ -132,13 +138,13 @@ TEST_CASE("export: JSON channels, rig log times, undecodable and unknown message
   CHECK(f.library.rfind("nimble-rig ", 0) == 0);
   const auto t = topics(f);
   REQUIRE(t.size() == 3);  // TRUTH, HEARTBEAT, FAULT: the unknown channel has no JSON channel
-  CHECK(f.channels.at(t.at("TRUTH")).message_encoding == "json");
-  const auto& schema = f.schemas.at(f.channels.at(t.at("TRUTH")).schema_id);
+  CHECK(f.channels.at(t.at(kTruth)).message_encoding == "json");
+  const auto& schema = f.schemas.at(f.channels.at(t.at(kTruth)).schema_id);
   CHECK(schema.name == "nimble.truth_state_t");
   CHECK(schema.encoding == "jsonschema");
   CHECK(schema.data.find("\"euler_rad\"") != std::string::npos);
 
-  const auto truths = on(f, t.at("TRUTH"));
+  const auto truths = on(f, t.at(kTruth));
   REQUIRE(truths.size() == 3);
   CHECK(truths[0].log_time == 1000000);
   CHECK(truths[0].publish_time == 11000);
@@ -149,11 +155,11 @@ TEST_CASE("export: JSON channels, rig log times, undecodable and unknown message
   CHECK(truths[0].data.find("\"utime\":1000") != std::string::npos);
   CHECK(truths[0].data.find("\"euler_rad\":[0.25,0") != std::string::npos);
   // Wall-clock messages take the newest rig time before them.
-  const auto hb = on(f, t.at("HEARTBEAT"));
+  const auto hb = on(f, t.at(kHeartbeat));
   REQUIRE(hb.size() == 1);
   CHECK(hb[0].log_time == 1000000);
   CHECK(hb[0].publish_time == 12000);
-  const auto fault = on(f, t.at("FAULT"));
+  const auto fault = on(f, t.at(kFault));
   REQUIRE(fault.size() == 1);
   CHECK(fault[0].log_time == 2000000);
 
@@ -172,7 +178,7 @@ TEST_CASE("export --raw: every event's exact bytes on <CHANNEL>/lcm, with the .l
   o.raw = true;
   const auto stats = export_log_to_mcap(log, out, o);
   CHECK(stats.messages == 5 + 7);
-  CHECK(stats.channels.at("TRUTH").raw == 4);  // the garbage too: raw is what was recorded
+  CHECK(stats.channels.at(kTruth).raw == 4);  // the garbage too: raw is what was recorded
 
   const auto f = check::check(check::slurp_binary(out));
   INFO(check::problems_text(f));
@@ -226,7 +232,7 @@ TEST_CASE("export: a damaged log is refused with its offset, --salvage exports w
   const auto f = check::check(check::slurp_binary(out));
   INFO(check::problems_text(f));
   REQUIRE(f.problems.empty());
-  CHECK(on(f, topics(f).at("TRUTH")).size() == 2);
+  CHECK(on(f, topics(f).at(kTruth)).size() == 2);
   CHECK_THAT(f.metadata.at("rig").at("damage"), Catch::Contains("damaged at byte"));
 }
 

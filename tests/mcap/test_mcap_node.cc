@@ -18,6 +18,10 @@
 #include "ident/lcm_log.h"
 #include "mcap/mcap_writer.h"
 #include "tests/support/rig_runs.h"
+#include "contract/channels.h"
+
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kTruth;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -141,7 +145,7 @@ TEST_CASE("node: a rig flight as MCAP holds its log's messages, values and times
     lcm::LogFile in(log, "r");
     REQUIRE(in.good());
     while (const lcm::LogEvent* ev = in.readNextEvent()) {
-      if (ev->channel != "TRUTH") continue;
+      if (ev->channel != kTruth) continue;
       nimble::truth_state_t t{};
       REQUIRE(nimble::contract::decode_exact(ev->data, ev->datalen, t));
       truth.push_back(t);
@@ -183,7 +187,7 @@ TEST_CASE("node: a rig flight as MCAP holds its log's messages, values and times
       CHECK(r.at("stream").at("counts").at(kv.first) == kv.second);
       CHECK(r.at("statistics").at("channelMessageCounts").at(kv.first) == kv.second);
     }
-    CHECK(channel(r, "TRUTH").at("schemaName") == "nimble.truth_state_t");
+    CHECK(channel(r, kTruth).at("schemaName") == "nimble.truth_state_t");
     CHECK(r.at("schemas").at("compiled") == r.at("schemas").at("jsonschema"));
     CHECK(r.at("schemas").at("failures").empty());
     CHECK(r.at("validation").at("parsed") == r.at("messages"));

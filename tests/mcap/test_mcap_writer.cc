@@ -14,6 +14,11 @@
 
 #include "mcap/mcap_writer.h"
 #include "tests/mcap/mcap_check.h"
+#include "contract/channels.h"
+
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kImu;
+using nimble::contract::channels::kTruth;
 
 namespace fs = std::filesystem;
 using nimble::mcap::Compression;
@@ -46,8 +51,8 @@ std::vector<Written> write_sample(const std::string& path, WriterOptions options
   McapWriter w(path, options);
   const uint16_t s1 = w.add_schema("nimble.truth_state_t", "jsonschema", R"({"type":"object"})");
   const uint16_t s2 = w.add_schema("nimble.imu_t", "jsonschema", R"({"type":"object","title":"imu"})");
-  const uint16_t truth = w.add_channel(s1, "TRUTH", "json");
-  const uint16_t imu = w.add_channel(s2, "IMU", "json", {{"rate", "512 Hz"}});
+  const uint16_t truth = w.add_channel(s1, kTruth, "json");
+  const uint16_t imu = w.add_channel(s2, kImu, "json", {{"rate", "512 Hz"}});
   const uint16_t raw = w.add_channel(0, "TRUTH/lcm", "lcm");
   w.add_metadata("rig", {{"scenario", "name: hover\n"}, {"log", "run.lcmlog"}});
   std::vector<Written> out;
@@ -89,7 +94,7 @@ TEST_CASE("an MCAP file of three channels reads back whole, in both compressions
   CHECK(f.schemas.at(1).name == "nimble.truth_state_t");
   CHECK(f.schemas.at(2).data == R"({"type":"object","title":"imu"})");
   REQUIRE(f.channels.size() == 3);
-  CHECK(f.channels.at(2).topic == "IMU");
+  CHECK(f.channels.at(2).topic == kImu);
   CHECK(f.channels.at(2).metadata.at("rate") == "512 Hz");
   CHECK(f.channels.at(3).schema_id == 0);
   CHECK(f.channels.at(3).message_encoding == "lcm");

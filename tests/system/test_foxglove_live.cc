@@ -20,6 +20,10 @@
 #include "contract/channels.h"
 #include "../support/rig_runs.h"
 
+// Channel names come from the contract (functional.contract checks that no file spells them).
+using nimble::contract::channels::kEstimate;
+using nimble::contract::channels::kTruth;
+
 using namespace nimble;
 using nlohmann::json;
 
@@ -94,8 +98,8 @@ TEST_CASE("live view of a real-time hover run: Foxglove's client gets TRUTH and 
 
   const json received = json::parse(test::slurp(client_json));
   CHECK(received["subprotocol"] == "foxglove.websocket.v1");
-  CHECK(received["channels"]["TRUTH"]["schemaName"] == "nimble.truth_state_t");
-  CHECK(received["channels"]["ESTIMATE"]["encoding"] == "json");
+  CHECK(received["channels"][kTruth]["schemaName"] == "nimble.truth_state_t");
+  CHECK(received["channels"][kEstimate]["encoding"] == "json");
   CHECK(received["statuses"].empty());
 
   const std::string log = dir + "/run.lcmlog";
@@ -107,16 +111,16 @@ TEST_CASE("live view of a real-time hover run: Foxglove's client gets TRUTH and 
     estimate[e.utime] = {e.euler_rad[0], e.omega_body_radps[0]};
   }
   // TRUTH is stamped with its own rig time.
-  for (const json& m : received["messages"]["TRUTH"]) {
+  for (const json& m : received["messages"][kTruth]) {
     REQUIRE(std::stoll(m["t_ns"].get<std::string>()) == m["msg"]["utime"].get<int64_t>() * 1000);
   }
 
   const YAML::Node summary = YAML::LoadFile(dir + "/summary.json");
   const double sim_s = summary["sim_time_s"].as<double>();
-  const double truth_hz = summary["channels"]["TRUTH"]["count"].as<double>() / sim_s;
-  const double estimate_hz = summary["channels"]["ESTIMATE"]["count"].as<double>() / sim_s;
-  const double got_truth_hz = check_topic(received, truth, "TRUTH");
-  const double got_estimate_hz = check_topic(received, estimate, "ESTIMATE");
+  const double truth_hz = summary["channels"][kTruth]["count"].as<double>() / sim_s;
+  const double estimate_hz = summary["channels"][kEstimate]["count"].as<double>() / sim_s;
+  const double got_truth_hz = check_topic(received, truth, kTruth);
+  const double got_estimate_hz = check_topic(received, estimate, kEstimate);
   INFO("TRUTH " << got_truth_hz << " Hz received, " << truth_hz << " Hz in the log; ESTIMATE " << got_estimate_hz
                 << " Hz, " << estimate_hz << " Hz");
   CHECK(std::fabs(got_truth_hz / truth_hz - 1.0) < 0.03);
@@ -126,7 +130,7 @@ TEST_CASE("live view of a real-time hover run: Foxglove's client gets TRUTH and 
   REQUIRE(live);
   CHECK(live["clients"].as<int>() == 1);
   CHECK(live["messages_sent"].as<long long>() >=
-        static_cast<long long>(received["messages"]["TRUTH"].size() + received["messages"]["ESTIMATE"].size()));
+        static_cast<long long>(received["messages"][kTruth].size() + received["messages"][kEstimate].size()));
   CHECK(live["dropped"].as<long long>() == 0);
   CHECK(live["refused"].as<long long>() == 0);
   CHECK(live["protocol_errors"].as<long long>() == 0);
