@@ -7,6 +7,7 @@
 #include <string>
 
 #include "lcmjson/lcm_json.h"
+#include "transport/clock.h"
 
 namespace nimble::lcmjson {
 
@@ -200,7 +201,7 @@ std::string to_json(const LcmStruct& type, const void* data, std::size_t size, J
         case Kind::kInt64: {
           const int64_t v = static_cast<int64_t>(in.be(8));
           if (!array && fi < 64) scalars[fi] = v;
-          if (static_cast<int>(fi) == type.rig_time_field) out->rig_time_us = v;
+          if (static_cast<int>(fi) == type.rig_time_field && transport::plausible_sim_utime(v)) out->rig_time_us = v;
           append_int(&json, v);
           break;
         }
@@ -259,7 +260,8 @@ int64_t rig_time_us(const LcmStruct& type, const void* data, std::size_t size) {
   }
   if (size < offset + 8) return -1;
   Reader in(static_cast<const uint8_t*>(data) + offset, 8);
-  return static_cast<int64_t>(in.be(8));
+  const int64_t t = static_cast<int64_t>(in.be(8));
+  return transport::plausible_sim_utime(t) ? t : -1;
 }
 
 }  // namespace nimble::lcmjson

@@ -80,7 +80,9 @@ std::string json_schema(const LcmStruct& type);
 /// A decoded message: its JSON text and its rig time.
 struct JsonMessage {
   std::string json;
-  int64_t rig_time_us = -1;  ///< the rig_time_field's value; -1 if the type has none (or it holds -1)
+  /// The rig_time_field's value; -1 if the type has none, or the value cannot be a rig time
+  /// (outside 0..transport::kMaxSimUtime: a garbage message that kept its fingerprint).
+  int64_t rig_time_us = -1;
 };
 
 /// Decodes `size` bytes of one encoded LCM message of `type` into `out` (JSON appended to
@@ -88,8 +90,8 @@ struct JsonMessage {
 /// @return "" on success, else why the bytes are not one message of `type`.
 std::string to_json(const LcmStruct& type, const void* data, std::size_t size, JsonMessage* out);
 
-/// The message's rig time [us] without decoding the rest (-1 if the type has none or the bytes
-/// are too short to hold it).
+/// The message's rig time [us] without decoding the rest (-1 if the type has none, the bytes
+/// are too short to hold it, or the value cannot be a rig time, as JsonMessage::rig_time_us).
 int64_t rig_time_us(const LcmStruct& type, const void* data, std::size_t size);
 
 }  // namespace nimble::lcmjson

@@ -71,6 +71,16 @@ if [[ $status -ne 0 ]]; then
   exit 1
 fi
 
+# The run line's rig time is the run's (garbage on the bus must not move it).
+python3 - "$WORK/browser.json" <<'PY' || exit 1
+import json, re, sys
+report = json.load(open(sys.argv[1]))
+text = report["verdict"]["text"]
+times = [float(x) for x in re.findall(r"([0-9]+(?:\.[0-9]+)?) s", text)]
+if not times or not all(0 <= t <= 15 for t in times):
+    sys.exit("FAIL: the run line %r does not hold the run's rig time (0-15 s)" % text)
+PY
+
 run_status=0
 wait "$run_pid" || run_status=$?
 cat "$WORK/run.out"

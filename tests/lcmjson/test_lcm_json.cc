@@ -200,6 +200,15 @@ TEST_CASE("lcmjson: a truth message's JSON holds its values, NaN as null, and it
   CHECK(j["throttle_pct"].is_null());
   CHECK(m.rig_time_us == 1234567);
   CHECK(nimble::lcmjson::rig_time_us(*type, bytes.data(), bytes.size()) == 1234567);
+
+  // A time no run reaches (garbage that kept the fingerprint) is no rig time: the viewers do not
+  // carry it on to the messages without one.
+  t.utime = 9166731080479000000;
+  t.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  REQUIRE(nimble::lcmjson::to_json(*type, bytes.data(), bytes.size(), &m) == "");
+  CHECK(json::parse(m.json)["utime"] == 9166731080479000000);
+  CHECK(m.rig_time_us == -1);
+  CHECK(nimble::lcmjson::rig_time_us(*type, bytes.data(), bytes.size()) == -1);
 }
 
 TEST_CASE("lcmjson: rig time is utime where it is rig time, rig_utime for a fault, none for the wall-clock channels", "[lcmjson]") {
