@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cmdline/args.h"
+#include "core/bench_timing.h"
 #include "core/json_writer.h"
 #include "ident/lcm_log.h"
 #include "launcher/inprocess.h"
@@ -34,11 +35,6 @@ namespace fs = std::filesystem;
 using namespace nimble;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
 
 /// Median wall seconds of `runs` calls of `f`.
 double timed(int runs, const std::function<void()>& f) {

@@ -29,7 +29,6 @@
 #include <filesystem>
 #include <thread>
 #include <memory>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -196,10 +195,7 @@ int main(int argc, char** argv) {
           {"sweep", {{"runs", kSweepRuns}, {"runs_per_s_1job", runs_per_s_1}, {"runs_per_s_all", runs_per_s_all},
                      {"jobs_all", jobs_all}, {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
           {"reproduce", {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}}}};
-      std::FILE* f = std::fopen(json_file.c_str(), "w");
-      bool written = f != nullptr && std::fputs((j.dump(2) + "\n").c_str(), f) >= 0;
-      if (f != nullptr && std::fclose(f) != 0) written = false;
-      if (!written) throw std::runtime_error("cannot write " + json_file);
+      cli::write_json(json_file, j.dump(2));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_inprocess: %s\n", e.what());
