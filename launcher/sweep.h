@@ -38,6 +38,14 @@ struct ParameterSet {
 /// Every combination of the values, the first --vary varying slowest.
 std::vector<ParameterSet> parameter_sets(const std::vector<Vary>& vary);
 
+/// A run's p, v and phi against rig time: TRUTH sampled on a fixed grid t_k = k dt_s from 0
+/// (the first TRUTH at or after each grid time), for the campaign report's envelopes.
+struct RunTrace {
+  double dt_s = 0.0;              ///< grid step [s]; 0: no trace
+  std::vector<double> p, v, phi;  ///< roll rate [rad/s], lateral velocity [m/s], roll [rad]; same length
+  std::size_t size() const { return p.size(); }
+};
+
 /// The figures of one run that the sweep keeps.
 struct SweepRun {
   std::size_t set = 0;        ///< index into the parameter sets
@@ -48,6 +56,7 @@ struct SweepRun {
   bool hover = false;
   double sim_time_s = 0.0, wall_time_s = 0.0;
   std::map<std::string, double> figures;  ///< by kSweepFigures name; absent if the run had none
+  RunTrace trace;             ///< empty if the run had no TRUTH or no trace was asked for
 };
 
 /// A quantity summarised across runs: its key in SweepRun::figures, its label and unit.
