@@ -1,6 +1,7 @@
 #include "launcher/recorder.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <nimble/rig_clock_t.hpp>
@@ -26,6 +27,7 @@ MonitorConfig monitor_config(const RunPlan& plan) {
       plan.rates, contract::RunShape{plan.lockstep(), logger_period_ms, plan.scenario.processes.size()});
   mc.wall_clock_channels = contract::wall_clock_channels();
   mc.processes = plan.scenario.processes;
+  if (plan.judge.trace_hz > 0) mc.trace_interval_us = std::llround(1e6 / plan.judge.trace_hz);
   return mc;
 }
 

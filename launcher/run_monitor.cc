@@ -256,6 +256,15 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     f.final_v = v;
     f.final_phi = phi;
     f.last_sim_time_s = t.time_s;
+    if (cfg_.trace_interval_us > 0) {
+      f.trace_dt_s = static_cast<double>(cfg_.trace_interval_us) / 1e6;
+      // Every grid time this TRUTH is the first at or after (a gap in TRUTH repeats it).
+      while (static_cast<int64_t>(f.trace_p.size()) * cfg_.trace_interval_us <= utime) {
+        f.trace_p.push_back(p);
+        f.trace_v.push_back(v);
+        f.trace_phi.push_back(phi);
+      }
+    }
     recent_truth_[utime] = TruthPoint{phi, p, v};
     while (!recent_truth_.empty() && recent_truth_.begin()->first < utime - 1000000) {
       recent_truth_.erase(recent_truth_.begin());

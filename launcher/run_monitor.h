@@ -27,6 +27,8 @@ struct MonitorConfig {
   /// The run's processes: a HEARTBEAT, TIMING_HEALTH, FAULT, STEP_ACK or CAN_HEALTH naming
   /// another publisher (the launcher and its logger aside) is not trusted. Empty: any.
   std::vector<std::string> processes;
+  /// Grid step of the flight's trace [us] (FlightSummary::trace_*); 0: no trace.
+  int64_t trace_interval_us = 0;
 };
 
 struct ChannelSummary {
@@ -80,6 +82,10 @@ struct FlightSummary {
   /// Largest |height change| from the start [m].
   double max_abs_height_change_m() const { return std::max(std::fabs(min_height_m), std::fabs(max_height_m)); }
   bool finite = true;
+  /// The trace (MonitorConfig::trace_interval_us > 0): p [rad/s], v [m/s] and phi [rad] of the
+  /// first TRUTH at or after each grid time t_k = k trace_dt_s of rig time.
+  double trace_dt_s = 0.0;
+  std::vector<double> trace_p, trace_v, trace_phi;
 };
 
 /// Estimation error of ESTIMATE against TRUTH at the estimate's IMU time.

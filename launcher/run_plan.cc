@@ -12,6 +12,7 @@
 #include "can_bridge/bridge_config.h"
 #include "contract/channels.h"
 #include "contract/rates.h"
+#include "launcher/campaign.h"
 #include "launcher/scenario_check.h"
 
 namespace nimble::launcher {
@@ -97,6 +98,7 @@ const ParamTable<JudgeConfig>& judge_params() {
       {"hover_p_radps", &C::hover_p_radps, Range::positive(), "rad/s", "final |p| within this: returned to hover"},
       {"hover_v_mps", &C::hover_v_mps, Range::positive(), "m/s", "final |v| within this: returned to hover"},
       {"max_late_fraction", &C::max_late_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a channel's messages late at a receiving process than this is real-time degraded"},
+      {"trace_hz", &C::trace_hz, Range::closed(0.0, 1000.0), "Hz", "the JSON report's trace: p, v and phi of TRUTH at this rate of rig time (0: none; rig sweep --report sets it)"},
       {"max_overrun_fraction", &C::max_overrun_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a process's cycles overrun than this is real-time degraded"},
       {"max_tracking_rms_deg", &C::max_tracking_rms_deg, Range{0.0, 180.0, true, false}, "deg", "RMS over the run of the roll tracking error (the controller's roll reference - the true roll) beyond this: not tracking (nominal flights 10.7 at most, within the loop's margins 14.7)"},
       {"max_tracking_error_deg", &C::max_tracking_error_deg, Range{0.0, 180.0, true, false}, "deg", "largest |roll tracking error| beyond this: not tracking (nominal flights 56.1 at most, within the loop's margins 76)"},
@@ -125,6 +127,7 @@ RunPlan load_run_plan(const RunOptions& options) {
     plan.logger_period_ms = lockstep_options(plan.scenario).logger_period_ms;
     plan.launch = launch_config_from(plan.scenario);
     plan.judge = judge_config_from(plan.scenario);
+    cluster_settings_from(plan.scenario);  // read by rig sweep --backend slurm; checked here
     plan.rates = process_rates(plan.scenario);
     // What every process expects of its inputs: the stream channels' rates of this run.
     std::map<std::string, double> stream_hz;

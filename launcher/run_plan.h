@@ -110,6 +110,9 @@ struct JudgeConfig {
   /// hundred no longer replays the paper's manoeuvres at their timing.
   double max_late_fraction = 0.01;
   double max_overrun_fraction = 0.01;
+  /// The JSON report's `trace`: p, v and phi of TRUTH at this rate of rig time [Hz]; 0: none.
+  /// `rig sweep --report` sets it for the envelopes across seeds.
+  double trace_hz = 0.0;
   /// Roll tracking: the true roll against the controller's roll reference (verdict.h
   /// judge_tracking). The defaults come from flights in process, seeds 1-8. Nominal: every
   /// scenario of rig_configs/, the identification train on the models of sets 1-5, on the truth

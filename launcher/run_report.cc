@@ -253,6 +253,18 @@ std::string report_json(const RunReport& r) {
   w.key("height_final_m").value(f.final_height_m).key("max_abs_height_change_m").value(f.max_abs_height_change_m());
   w.key("w_min_mps").value(f.min_w).key("w_max_mps").value(f.max_w).key("w_initial_mps").value(f.initial_w);
   w.end_object();
+  if (f.trace_dt_s > 0) {
+    w.key("trace").begin_object().key("dt_s").value(f.trace_dt_s);
+    const auto series = [&w](const char* name, const std::vector<double>& xs) {
+      w.key(name).begin_array();
+      for (const double x : xs) w.value(x);
+      w.end_array();
+    };
+    series("p", f.trace_p);
+    series("v", f.trace_v);
+    series("phi", f.trace_phi);
+    w.end_object();
+  }
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
     w.key("estimator").begin_object();

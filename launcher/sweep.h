@@ -54,7 +54,11 @@ struct SweepRun {
   std::string verdict;        ///< the run's result text, or why it could not run
   bool controlled = false;
   bool hover = false;
-  double sim_time_s = 0.0, wall_time_s = 0.0;
+  double sim_time_s = 0.0;
+  /// Where and how fast it ran: the merged JSON's and CSV's `machine` fields, the only ones
+  /// that depend on the machine, the backend, the jobs or the chunk size.
+  double wall_time_s = 0.0, speed_x_realtime = 0.0;
+  std::string host;
   std::map<std::string, double> figures;  ///< by kSweepFigures name; absent if the run had none
   RunTrace trace;             ///< empty if the run had no TRUTH or no trace was asked for
 };
@@ -85,21 +89,20 @@ struct SweepResult {
   std::string clock;
   std::vector<ParameterSet> sets;
   std::vector<SweepRun> runs;   ///< by set, then by seed
+  // How it ran (the `machine` fields): not part of the result's meaning.
   double wall_time_s = 0.0;
-  int jobs = 1;
+  int jobs = 1;                 ///< runs at a time (local), CPUs per task (slurm)
+  std::string backend = "local";
+  std::size_t chunk_size = 0;   ///< runs per array task (slurm); 0: local
 };
-
-/// Loads every run's plan first (a bad value in any set stops the sweep before it starts,
-/// naming the set), then flies the runs, `jobs` at a time, each in a child process, so that a
-/// run that crashes is a failed run, not a failed sweep.
-/// @throws ConfigError naming the file, key, value and parameter set.
-SweepResult run_sweep(const SweepOptions& options);
 
 /// The summary table.
 void write_sweep_text(std::ostream& out, const SweepResult& result);
 /// The sweep as JSON: the sets with their statistics and a `runs` list (seed, verdict, figures).
+/// What depends on where and how it ran sits in `machine` objects (the campaign's and each
+/// run's); everything else is the same for the same campaign on any backend, jobs or chunks.
 std::string sweep_json(const SweepResult& result);
-/// One CSV row per run.
+/// One CSV row per run; the columns that depend on the machine are named machine_*.
 std::string sweep_csv(const SweepResult& result);
 
 }  // namespace nimble::launcher

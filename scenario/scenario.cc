@@ -193,7 +193,7 @@ const std::vector<std::string>& scenario_section_keys() {
   // sensing.ekf): a top-level imu, mocap or estimator section would be read by nobody.
   static const std::vector<std::string> keys = {"plant",    "controller", "sensing", "can_bridge",
                                                 "lockstep", "run",        "summary", "hosts",
-                                                "pilot"};
+                                                "pilot",    "cluster"};
   return keys;
 }
 

@@ -23,7 +23,9 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # nlohmann-json (JSON output and reading run reports), fmt (the run summary's formatting) and
 # CLI11 (the command lines of the rig tool, its processes, benchmarks and tools);
 # zstd and zlib (MCAP export: chunk compression and CRC-32), Debian's headless Chromium (the
-# dashboard's browser test); Node.js and npm (below) for the viewers' assets and their readers.
+# dashboard's browser test); Node.js and npm (below) for the viewers' assets and their readers;
+# Slurm (slurm-wlm: slurmctld, slurmd and the client commands) with munge for `rig sweep
+# --backend slurm` and the test that brings up a one-node cluster (tests/cluster).
 PACKAGES=(
   g++ make cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
@@ -33,6 +35,7 @@ PACKAGES=(
   can-utils iproute2 qemu-system-x86 xz-utils
   python3 python3-numpy
   libzstd-dev zlib1g-dev chromium-headless-shell
+  slurm-wlm munge
 )
 # Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
 command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)

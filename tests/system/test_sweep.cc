@@ -1,17 +1,25 @@
 // System tests of `rig sweep`: a small campaign in process (two parameter sets, three seeds,
 // two jobs) gives per-run verdicts that match single `rig run`s, a JSON runs list and a CSV;
-// bad input stops it before any run, naming the problem; a run that is not ok makes exit 1.
+// bad input stops it before any run, naming the problem; a run that is not ok makes exit 1;
+// a campaign directory survives its launcher being killed and is finished by --resume.
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <string>
+#include <thread>
 
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "../support/campaign_files.h"
 #include "../support/rig_runs.h"
 
 using nimble::test::rig_run;
@@ -102,4 +110,105 @@ TEST_CASE("rig sweep: bad input stops it before any run, naming the problem", "[
   s = rig_sweep(d, kScenario + " --seeds 1-3 --jobs 0");
   CHECK(s.exit_code == 2);
   CHECK(s.output.find("--jobs") != std::string::npos);
+}
+
+namespace {
+
+std::size_t count_run_files(const std::string& campaign) {
+  std::size_t n = 0;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(campaign + "/runs", ec)) {
+    const std::string name = e.path().filename().string();
+    n += name.size() == 15 && name.rfind("run-", 0) == 0;
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resume, nothing lost or flown twice", "[system]") {
+  const std::string d = nimble::test::scratch_dir("sweep_resume");
+  const std::string c = d + "/campaign";
+  const std::string args = kScenario + " --seeds 1-24 --set duration_s=4 --set pilot.enabled=false";
+  // The launcher, one run at a time, killed once some runs have their result.
+  const pid_t rig = ::fork();
+  if (rig == 0) {
+    std::freopen((d + "/killed.txt").c_str(), "w", stderr);
+    ::execl(RIG_BIN, RIG_BIN, "sweep", kScenario.c_str(), "--seeds", "1-24", "--set", "duration_s=4", "--set",
+            "pilot.enabled=false", "--jobs", "1", "--dir", c.c_str(), "--no-progress", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int k = 0; k < 1000 && count_run_files(c) < 5; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(rig, SIGKILL);
+  ::waitpid(rig, nullptr, 0);
+  const std::size_t finished = count_run_files(c);
+  INFO(slurp(d + "/killed.txt"));
+  REQUIRE(finished >= 5);
+  REQUIRE(finished < 24);
+  // What a writer killed mid-file leaves: a temporary name, never merged, removed on resume.
+  { std::ofstream(c + "/runs/run-000023.json.host.1.partial") << "{\"index\": 23, \"rep"; }
+  std::map<std::string, std::filesystem::file_time_type> before;
+  for (const auto& e : std::filesystem::directory_iterator(c + "/runs")) {
+    if (e.path().extension() == ".json") before[e.path().filename().string()] = e.last_write_time();
+  }
+  SweepOutcome collect = rig_sweep(d, "collect " + c);
+  CHECK(collect.exit_code == 3);
+  CHECK(collect.output.find(std::to_string(24 - before.size()) + " of 24 runs have no result") != std::string::npos);
+
+  const SweepOutcome resumed = rig_sweep(d, "--resume " + c + " --jobs 2");
+  INFO(resumed.output);
+  REQUIRE(resumed.exit_code == 0);
+  CHECK(resumed.output.find("resuming " + c + ": " + std::to_string(24 - before.size()) + " of 24 runs without a result") !=
+        std::string::npos);
+  CHECK(!std::filesystem::exists(c + "/runs/run-000023.json.host.1.partial"));
+  CHECK(count_run_files(c) == 24);
+  for (const auto& [name, time] : before) {
+    INFO(name);
+    CHECK(std::filesystem::last_write_time(c + "/runs/" + name) == time);
+  }
+  // The same result as the campaign flown in one go, two at a time.
+  const SweepOutcome whole = rig_sweep(d, args + " --jobs 2 --dir " + d + "/whole");
+  REQUIRE(whole.exit_code == 0);
+  CHECK(nimble::test::json_without_machine(c + "/result.json") == nimble::test::json_without_machine(d + "/whole/result.json"));
+  CHECK(nimble::test::csv_without_machine(c + "/result.csv") == nimble::test::csv_without_machine(d + "/whole/result.csv"));
+
+  // A result file damaged afterwards (a full disk, a bad copy) is named, not merged.
+  std::filesystem::resize_file(c + "/runs/run-000007.json", 40);
+  collect = rig_sweep(d, "collect " + c);
+  CHECK(collect.exit_code == 3);
+  CHECK(collect.output.find("damaged result file " + c + "/runs/run-000007.json (set 1 seed 8)") != std::string::npos);
+}
+
+TEST_CASE("rig sweep: a campaign refuses to go on when its scenario or a file it names changed", "[system]") {
+  const std::string d = nimble::test::scratch_dir("sweep_changed");
+  const std::string model = d + "/model.yaml";
+  {
+    // Set 1's model, its vehicle named by absolute path.
+    std::string text = slurp(kSource + "rig_configs/models/nimble_lateral_set1.yaml");
+    const std::string vehicle = "../vehicles/nimble_no_wifi.yaml";
+    REQUIRE(text.find(vehicle) != std::string::npos);
+    text.replace(text.find(vehicle), vehicle.size(), kSource + "rig_configs/vehicles/nimble_no_wifi.yaml");
+    std::ofstream(model) << text;
+  }
+  const SweepOutcome first = rig_sweep(d, kScenario + " --seeds 1-2 --set duration_s=2 --vary model=" + model + " --dir " + d + "/c");
+  INFO(first.output);
+  REQUIRE(first.exit_code == 0);
+  std::filesystem::remove(d + "/c/runs/run-000001.json");
+  { std::ofstream(model, std::ios::app) << "\n# edited after the campaign was made\n"; }
+  const SweepOutcome resumed = rig_sweep(d, "--resume " + d + "/c");
+  CHECK(resumed.exit_code == 2);
+  CHECK(resumed.output.find("changed since the campaign was made (parameter set 1 'model=" + model + "'") != std::string::npos);
+  // Neither is a directory without a campaign, nor a campaign made twice in one directory.
+  CHECK(rig_sweep(d, "--resume " + d).output.find("no campaign in " + d) != std::string::npos);
+  const SweepOutcome again = rig_sweep(d, kScenario + " --seeds 1-2 --dir " + d + "/c");
+  CHECK(again.exit_code == 2);
+  CHECK(again.output.find("already holds a campaign") != std::string::npos);
+  // No Slurm client on this machine: said so, with the package that has it.
+  const std::string path = std::getenv("PATH");
+  ::setenv("PATH", "/nonexistent", 1);
+  const SweepOutcome slurm = rig_sweep(d, kScenario + " --seeds 1-2 --backend slurm --dir " + d + "/s");
+  ::setenv("PATH", path.c_str(), 1);
+  INFO(slurm.output);
+  CHECK(slurm.exit_code == 2);
+  CHECK(slurm.output.find("sbatch not found: the slurm backend needs Slurm's client commands") != std::string::npos);
 }

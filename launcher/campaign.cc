@@ -1,0 +1,640 @@
+#include "launcher/campaign.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "launcher/inprocess.h"
+#include "scenario/scenario.h"
+#include "transport/clock.h"
+
+namespace nimble::launcher {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+constexpr const char* kManifestFormat = "nimble-rig-campaign/1";
+constexpr const char* kRunFilePrefix = "run-";
+constexpr const char* kPartialSuffix = ".partial";
+
+/// Trace rate of a campaign with a report [Hz]: 20 samples per second of p, v and phi.
+constexpr double kReportTraceHz = 20.0;
+
+std::string hostname() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) return "unknown";
+  return name;
+}
+
+double unix_now() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::string self_exe() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("rig") : exe.string();
+}
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+std::string last_line(const std::string& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!trim(line).empty()) last = trim(line);
+  }
+  return last;
+}
+
+/// Runs per array task when none is given: a task should last long enough that starting it is
+/// small beside it (in process a run of the 30 s flight takes about 0.2 s), and short enough
+/// that a cancelled or failed task loses little.
+std::size_t default_chunk_size(const std::string& clock) {
+  if (clock == kClockInprocess) return 25;
+  if (clock == kClockLockstep) return 4;
+  return 1;
+}
+
+/// The options of run `i`.
+RunOptions run_options(const Campaign& c, std::size_t i, const std::string& bin_dir) {
+  RunOptions r;
+  r.scenario_file = c.scenario_file;
+  r.overrides = c.overrides;
+  const ParameterSet& set = c.sets.at(c.set_of(i));
+  r.overrides.insert(r.overrides.end(), set.overrides.begin(), set.overrides.end());
+  if (c.trace_hz > 0) r.overrides.push_back(Override{"summary.trace_hz", Json(c.trace_hz).dump()});
+  r.clock = c.clock;
+  r.seed = c.seed_of(i);
+  r.bin_dir = bin_dir;
+  r.progress = false;
+  r.print_summary = false;
+  return r;
+}
+
+/// The configuration digest of parameter set `s` (its first run: the seed is part of it).
+std::string set_digest(const Campaign& c, std::size_t s) {
+  const RunOptions o = run_options(c, s * c.seeds_per_set(), "");
+  try {
+    return scenario_digest(load_run_plan(o).scenario);
+  } catch (const ConfigError& e) {
+    throw ConfigError(e.file(), e.key(), e.value(), e.problem() + " (in parameter set '" + c.sets[s].label + "')",
+                      e.line());
+  }
+}
+
+std::string run_tag(const Campaign& c, std::size_t i) {
+  return "set" + std::to_string(c.set_of(i) + 1) + "-seed" + std::to_string(c.seed_of(i));
+}
+
+/// In a child process: flies one run and writes its report to `json_file`. Never returns.
+[[noreturn]] void fly_child(const RunOptions& options, const std::string& json_file, const std::string& log_file,
+                            const std::string& out_file) {
+  const int fd = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd >= 0) {
+    ::dup2(fd, STDOUT_FILENO);
+    ::dup2(fd, STDERR_FILENO);
+    ::close(fd);
+  }
+  int code = kRunFailed;
+  try {
+    const RunPlan plan = load_run_plan(options);
+    if (plan.inprocess()) {
+      InprocessOptions io;
+      io.log_file = log_file;
+      const RunReport report = fly_inprocess(plan, io);
+      std::ofstream out(json_file);
+      out << report_json(report) << "\n";
+      code = out ? report.verdict.exit_code : kRunFailed;
+    } else {
+      // Another clock: `rig run` itself, which makes its own network namespace.
+      std::vector<std::string> args = {self_exe(), "run", options.scenario_file, "--clock", *options.clock,
+                                       "--seed", std::to_string(*options.seed), "--json", json_file,
+                                       "--log", log_file.empty() ? json_file + ".lcmlog" : log_file, "--no-progress"};
+      for (const auto& ov : options.overrides) {
+        args.push_back("--set");
+        args.push_back(ov.key_path + "=" + ov.value);
+      }
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      std::fprintf(stderr, "cannot execute %s: %s\n", argv[0], std::strerror(errno));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+  }
+  std::fflush(stdout);
+  std::fflush(stderr);
+  ::_exit(code);
+}
+
+double number_or_nan(const Json& j, std::initializer_list<const char*> path) {
+  const Json* n = &j;
+  for (const char* key : path) {
+    if (!n->is_object() || !n->contains(key)) return std::numeric_limits<double>::quiet_NaN();
+    n = &(*n)[key];
+  }
+  return n->is_number() ? n->get<double>() : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// The figures of a run from its `rig run --json` report.
+void read_report(const Json& j, SweepRun& run) {
+  constexpr double kDeg = 180.0 / M_PI;
+  run.exit_code = j.at("exit_code").get<int>();
+  run.verdict = j.at("result").get<std::string>();
+  run.controlled = j.at("controlled").get<bool>();
+  run.hover = j.at("returned_to_hover").get<bool>();
+  run.sim_time_s = number_or_nan(j, {"sim_time_s"});
+  run.wall_time_s = number_or_nan(j, {"wall_time_s"});
+  run.speed_x_realtime = number_or_nan(j, {"speed_x_realtime"});
+  auto& f = run.figures;
+  f["max_abs_phi_deg"] = number_or_nan(j, {"max_abs", "phi"}) * kDeg;
+  f["max_abs_p"] = number_or_nan(j, {"max_abs", "p"});
+  f["max_abs_v"] = number_or_nan(j, {"max_abs", "v"});
+  f["range_p"] = number_or_nan(j, {"ranges", "p"});
+  f["range_v"] = number_or_nan(j, {"ranges", "v"});
+  f["range_phi"] = number_or_nan(j, {"ranges", "phi"});
+  f["range_delta_f"] = number_or_nan(j, {"ranges", "delta_f"});
+  f["final_abs_phi_deg"] = std::fabs(number_or_nan(j, {"final", "phi"})) * kDeg;
+  if (j.contains("estimator")) {
+    f["est_phi_rms_deg"] = number_or_nan(j, {"estimator", "phi_rms_deg"});
+    f["est_p_rms"] = number_or_nan(j, {"estimator", "p_rms_radps"});
+    f["est_v_rms"] = number_or_nan(j, {"estimator", "v_rms_mps"});
+  }
+  for (auto it = f.begin(); it != f.end();) it = std::isfinite(it->second) ? std::next(it) : f.erase(it);
+  if (j.contains("trace") && j["trace"].is_object()) {
+    const Json& t = j["trace"];
+    const auto series = [&t](const char* name) {
+      std::vector<double> xs;
+      if (!t.contains(name) || !t[name].is_array()) return xs;
+      for (const auto& x : t[name]) xs.push_back(x.is_number() ? x.get<double>() : std::numeric_limits<double>::quiet_NaN());
+      return xs;
+    };
+    run.trace.dt_s = number_or_nan(t, {"dt_s"});
+    run.trace.p = series("p");
+    run.trace.v = series("v");
+    run.trace.phi = series("phi");
+    if (!(run.trace.dt_s > 0) || run.trace.v.size() != run.trace.p.size() || run.trace.phi.size() != run.trace.p.size()) {
+      run.trace = RunTrace{};
+    }
+  }
+}
+
+Json overrides_json(const std::vector<Override>& overrides) {
+  Json a = Json::array();
+  for (const auto& ov : overrides) a.push_back(Json::array({ov.key_path, ov.value}));
+  return a;
+}
+
+std::vector<Override> overrides_from(const Json& a) {
+  std::vector<Override> out;
+  for (const auto& pair : a) out.push_back(Override{pair.at(0).get<std::string>(), pair.at(1).get<std::string>()});
+  return out;
+}
+
+void fsync_path(const std::string& path, int flags) {
+  const int fd = ::open(path.c_str(), flags);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+/// Slurm's --time formats: minutes, minutes:seconds, hours:minutes:seconds, days-hours,
+/// days-hours:minutes, days-hours:minutes:seconds.
+bool valid_time_limit(const std::string& t) {
+  static const std::regex re(R"(^(\d+|\d+:\d+|\d+:\d+:\d+|\d+-\d+|\d+-\d+:\d+|\d+-\d+:\d+:\d+|UNLIMITED|unlimited|infinite)$)");
+  return std::regex_match(t, re);
+}
+
+}  // namespace
+
+ClusterSettings cluster_settings_from(const Scenario& s) {
+  ClusterSettings c;
+  if (!s.has_section("cluster")) return c;
+  {
+    ConfigMap m = s.section("cluster");
+    c.partition = m.get_string_or("partition", c.partition);
+    c.account = m.get_string_or("account", c.account);
+    c.time_limit = m.get_string_or("time_limit", c.time_limit);
+    if (!valid_time_limit(c.time_limit)) {
+      m.fail("time_limit", "must be a Slurm time limit: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS");
+    }
+    if (m.has("cpus_per_task")) c.cpus_per_task = static_cast<int>(m.get_int("cpus_per_task", Range::closed(1, 1024)));
+    if (m.has("memory_mb_per_cpu")) {
+      c.memory_mb_per_cpu = static_cast<int>(m.get_int("memory_mb_per_cpu", Range::closed(0, 1 << 24)));
+    }
+    if (m.has("chunk_size")) c.chunk_size = static_cast<std::size_t>(m.get_int("chunk_size", Range::closed(1, 1e9)));
+    c.rig = m.get_string_or("rig", c.rig);
+    m.finish();
+  }
+  return c;
+}
+
+std::size_t Campaign::chunk_count() const {
+  const std::size_t n = run_count(), k = std::max<std::size_t>(cluster.chunk_size, 1);
+  return (n + k - 1) / k;
+}
+
+std::vector<std::size_t> Campaign::chunk(std::size_t task) const {
+  std::vector<std::size_t> runs;
+  const std::size_t k = std::max<std::size_t>(cluster.chunk_size, 1);
+  for (std::size_t i = task * k; i < std::min(run_count(), (task + 1) * k); ++i) runs.push_back(i);
+  return runs;
+}
+
+std::string Campaign::run_name(std::size_t run) const {
+  return "set " + std::to_string(set_of(run) + 1) + " seed " + std::to_string(seed_of(run));
+}
+
+std::string Campaign::run_file(std::size_t run) const {
+  char name[32];
+  std::snprintf(name, sizeof name, "%s%06zu.json", kRunFilePrefix, run);
+  return runs_dir() + "/" + name;
+}
+
+void write_file_atomically(const std::string& file, const std::string& text) {
+  const std::string partial = file + "." + hostname() + "." + std::to_string(::getpid()) + kPartialSuffix;
+  {
+    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + partial);
+  }
+  fsync_path(partial, O_RDONLY);
+  if (::rename(partial.c_str(), file.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(partial.c_str());
+    throw std::runtime_error("cannot rename " + partial + " to " + file + ": " + why);
+  }
+  fsync_path(fs::path(file).parent_path().string(), O_RDONLY | O_DIRECTORY);
+}
+
+Campaign create_campaign(const CampaignRequest& request) {
+  const SweepOptions& o = request.sweep;
+  Campaign c;
+  c.scenario_file = fs::absolute(o.base.scenario_file).lexically_normal().string();
+  c.working_dir = fs::current_path().string();
+  c.overrides = o.base.overrides;
+  c.vary = o.vary;
+  c.sets = parameter_sets(o.vary);
+  c.first_seed = o.first_seed;
+  c.last_seed = o.last_seed;
+  if (c.last_seed - c.first_seed >= 100000000ULL) {
+    throw std::invalid_argument("--seeds: at most 100000000 seeds per parameter set");
+  }
+  c.clock = o.base.clock.value_or(kClockInprocess);
+  c.trace_hz = request.report ? kReportTraceHz : 0.0;
+  c.backend = request.backend;
+  c.cluster = request.cluster;
+  if (c.cluster.chunk_size == 0) c.cluster.chunk_size = default_chunk_size(c.clock);
+  if (c.cluster.rig.empty()) c.cluster.rig = self_exe();
+  c.created_unix_s = unix_now();
+
+  // Every set's plan is loaded before anything is written: a bad value stops the campaign at once.
+  RunPlan first;
+  for (std::size_t s = 0; s < c.sets.size(); ++s) {
+    c.set_digests.push_back(set_digest(c, s));
+    if (s == 0) {
+      first = load_run_plan(run_options(c, 0, ""));
+      c.scenario = first.scenario.name;
+    }
+  }
+
+  std::string dir = request.dir;
+  if (dir.empty()) {
+    char stamp[32];
+    const std::time_t now = std::time(nullptr);
+    std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", std::localtime(&now));
+    dir = "rig_campaigns/" + c.scenario + "-" + stamp + "-" + std::to_string(::getpid());
+  }
+  c.dir = fs::absolute(dir).lexically_normal().string();
+  if (fs::exists(c.dir + "/campaign.json")) {
+    throw std::runtime_error(c.dir + " already holds a campaign: `rig sweep --resume " + c.dir +
+                             "` finishes it, `rig sweep collect " + c.dir + "` merges it; or choose another --dir");
+  }
+  c.logs_dir = o.logs_dir.empty() ? "" : fs::absolute(o.logs_dir).lexically_normal().string();
+  std::error_code ec;
+  fs::create_directories(c.runs_dir(), ec);
+  if (ec) throw std::runtime_error("cannot create the campaign directory " + c.runs_dir() + ": " + ec.message());
+  if (!c.logs_dir.empty()) fs::create_directories(c.logs_dir);
+
+  Json m;
+  m["format"] = kManifestFormat;
+  m["scenario"] = c.scenario;
+  m["scenario_file"] = c.scenario_file;
+  m["working_dir"] = c.working_dir;
+  m["overrides"] = overrides_json(c.overrides);
+  m["vary"] = Json::array();
+  for (const Vary& v : c.vary) m["vary"].push_back({{"key", v.key}, {"values", v.values}});
+  m["sets"] = Json::array();
+  for (std::size_t s = 0; s < c.sets.size(); ++s) {
+    m["sets"].push_back({{"label", c.sets[s].label}, {"config_digest", c.set_digests[s]}});
+  }
+  m["seeds"] = {c.first_seed, c.last_seed};
+  m["runs"] = c.run_count();
+  m["clock"] = c.clock;
+  m["trace_hz"] = c.trace_hz;
+  m["logs_dir"] = c.logs_dir;
+  m["backend"] = c.backend;
+  m["cluster"] = {{"partition", c.cluster.partition},     {"account", c.cluster.account},
+                  {"time_limit", c.cluster.time_limit},   {"cpus_per_task", c.cluster.cpus_per_task},
+                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu}, {"chunk_size", c.cluster.chunk_size},
+                  {"rig", c.cluster.rig}};
+  m["created_unix_s"] = c.created_unix_s;
+  m["created_on"] = hostname();
+  write_file_atomically(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
+  write_file_atomically(c.dir + "/campaign.json", m.dump(2) + "\n");
+  return c;
+}
+
+Campaign load_campaign(const std::string& dir_in) {
+  Campaign c;
+  c.dir = fs::absolute(dir_in).lexically_normal().string();
+  const std::string file = c.dir + "/campaign.json";
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("no campaign in " + c.dir + " (" + file + " cannot be read)");
+  try {
+    const Json m = Json::parse(in);
+    if (m.at("format").get<std::string>() != kManifestFormat) {
+      throw std::runtime_error("format '" + m.at("format").get<std::string>() + "', this rig reads " + kManifestFormat);
+    }
+    c.scenario = m.at("scenario").get<std::string>();
+    c.scenario_file = m.at("scenario_file").get<std::string>();
+    c.working_dir = m.at("working_dir").get<std::string>();
+    c.overrides = overrides_from(m.at("overrides"));
+    for (const auto& v : m.at("vary")) {
+      c.vary.push_back(Vary{v.at("key").get<std::string>(), v.at("values").get<std::vector<std::string>>()});
+    }
+    c.sets = parameter_sets(c.vary);
+    const Json& sets = m.at("sets");
+    if (sets.size() != c.sets.size()) throw std::runtime_error("its sets do not match its vary list");
+    for (std::size_t s = 0; s < c.sets.size(); ++s) {
+      if (sets[s].at("label").get<std::string>() != c.sets[s].label) {
+        throw std::runtime_error("set " + std::to_string(s + 1) + "'s label does not match its vary list");
+      }
+      c.set_digests.push_back(sets[s].at("config_digest").get<std::string>());
+    }
+    c.first_seed = m.at("seeds").at(0).get<uint64_t>();
+    c.last_seed = m.at("seeds").at(1).get<uint64_t>();
+    if (c.last_seed < c.first_seed) throw std::runtime_error("its seeds are out of order");
+    if (m.at("runs").get<std::size_t>() != c.run_count()) throw std::runtime_error("its run count does not match");
+    c.clock = m.at("clock").get<std::string>();
+    c.trace_hz = m.at("trace_hz").get<double>();
+    c.logs_dir = m.at("logs_dir").get<std::string>();
+    c.backend = m.at("backend").get<std::string>();
+    if (c.backend != kBackendLocal && c.backend != kBackendSlurm) throw std::runtime_error("unknown backend " + c.backend);
+    const Json& k = m.at("cluster");
+    c.cluster.partition = k.at("partition").get<std::string>();
+    c.cluster.account = k.at("account").get<std::string>();
+    c.cluster.time_limit = k.at("time_limit").get<std::string>();
+    c.cluster.cpus_per_task = k.at("cpus_per_task").get<int>();
+    c.cluster.memory_mb_per_cpu = k.at("memory_mb_per_cpu").get<int>();
+    c.cluster.chunk_size = k.at("chunk_size").get<std::size_t>();
+    c.cluster.rig = k.at("rig").get<std::string>();
+    if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1) throw std::runtime_error("chunk size or CPUs per task below 1");
+    c.created_unix_s = m.at("created_unix_s").get<double>();
+  } catch (const std::exception& e) {
+    throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
+  }
+  return c;
+}
+
+void enter_working_dir(const Campaign& c) {
+  std::error_code ec;
+  fs::current_path(c.working_dir, ec);
+  if (ec) {
+    throw std::runtime_error("cannot enter the campaign's working directory " + c.working_dir + " (" + ec.message() +
+                             "): relative paths of its --set and --vary values resolve there, on every node");
+  }
+}
+
+void check_campaign_inputs(const Campaign& c) {
+  for (std::size_t s = 0; s < c.sets.size(); ++s) {
+    const std::string now = set_digest(c, s);
+    if (now != c.set_digests[s]) {
+      throw ConfigError(c.scenario_file, "", "",
+                        "the scenario or a file it names changed since the campaign was made (parameter set " +
+                            std::to_string(s + 1) + " '" + c.sets[s].label + "': configuration digest " + now +
+                            ", the campaign's " + c.set_digests[s] + "); its runs would not be comparable");
+    }
+  }
+}
+
+std::vector<bool> finished_runs(const Campaign& c) {
+  std::vector<bool> done(c.run_count(), false);
+  DIR* d = ::opendir(c.runs_dir().c_str());
+  if (d == nullptr) return done;
+  const std::size_t prefix = std::strlen(kRunFilePrefix);
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    // run-NNNNNN.json exactly: temporary files end otherwise.
+    if (name.size() != prefix + 6 + 5 || name.compare(0, prefix, kRunFilePrefix) != 0 ||
+        name.compare(prefix + 6, 5, ".json") != 0) {
+      continue;
+    }
+    const std::string digits = name.substr(prefix, 6);
+    if (digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::size_t i = std::stoul(digits);
+    if (i < done.size()) done[i] = true;
+  }
+  ::closedir(d);
+  return done;
+}
+
+std::vector<std::size_t> missing_runs(const Campaign& c) {
+  const std::vector<bool> done = finished_runs(c);
+  std::vector<std::size_t> missing;
+  for (std::size_t i = 0; i < done.size(); ++i) {
+    if (!done[i]) missing.push_back(i);
+  }
+  return missing;
+}
+
+void remove_partial_files(const Campaign& c) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(c.runs_dir(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > std::strlen(kPartialSuffix) &&
+        name.compare(name.size() - std::strlen(kPartialSuffix), std::string::npos, kPartialSuffix) == 0) {
+      fs::remove(e.path(), ec);
+    }
+  }
+}
+
+void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, int jobs, const std::string& where,
+                       const ProgressFn& progress) {
+  const std::vector<bool> done_before = finished_runs(c);
+  std::vector<std::size_t> todo;
+  for (const std::size_t i : runs) {
+    if (i < c.run_count() && !done_before[i]) todo.push_back(i);
+  }
+  const std::string host = hostname();
+  const fs::path work = fs::temp_directory_path() / ("rig_campaign_" + std::to_string(::getpid()));
+  fs::remove_all(work);
+  fs::create_directories(work);
+  const std::string bin_dir = fs::path(self_exe()).parent_path().string();
+  const pid_t parent = ::getpid();
+
+  std::map<pid_t, std::size_t> running;
+  std::map<std::size_t, double> started;
+  std::size_t next = 0, finished = 0, not_ok = 0;
+  const auto files = [&](std::size_t i) {
+    const std::string tag = run_tag(c, i);
+    return std::array<std::string, 3>{(work / (tag + ".json")).string(), (work / (tag + ".out")).string(),
+                                      c.logs_dir.empty() ? std::string() : c.logs_dir + "/" + tag + ".lcmlog"};
+  };
+  while (finished < todo.size()) {
+    while (next < todo.size() && static_cast<int>(running.size()) < std::max(1, jobs)) {
+      const std::size_t i = todo[next];
+      const auto f = files(i);
+      const RunOptions ro = run_options(c, i, bin_dir);
+      std::fflush(stdout);
+      std::fflush(stderr);
+      started[i] = unix_now();
+      const pid_t pid = ::fork();
+      if (pid == 0) {
+        // A run does not outlive the campaign process that waits for it.
+        ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (::getppid() != parent) ::_exit(kRunFailed);
+        fly_child(ro, f[0], f[2], f[1]);
+      }
+      if (pid < 0) throw std::runtime_error(std::string("rig sweep: fork failed: ") + std::strerror(errno));
+      running[pid] = i;
+      ++next;
+    }
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("rig sweep: waitpid failed: ") + std::strerror(errno));
+    }
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    const std::size_t i = it->second;
+    running.erase(it);
+    const auto f = files(i);
+    Json r;
+    r["index"] = i;
+    r["set"] = c.set_of(i) + 1;
+    r["seed"] = c.seed_of(i);
+    bool ok = false;
+    try {
+      std::ifstream in(f[0]);
+      if (!in) throw std::runtime_error("no report");
+      r["report"] = Json::parse(in);
+      ok = r["report"].at("exit_code").get<int>() == kRunOk;
+    } catch (const std::exception&) {
+      const std::string how = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                                                   : "exit code " + std::to_string(WEXITSTATUS(status));
+      const std::string said = last_line(f[1]);
+      r["report"] = nullptr;
+      r["failure"] = "failed: the run ended without a report (" + how + ")" + (said.empty() ? "" : ": " + said);
+    }
+    const double end = unix_now();
+    r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
+                    {"started_unix_s", started[i]}, {"finished_unix_s", end}};
+    write_file_atomically(c.run_file(i), r.dump() + "\n");
+    std::error_code ec;
+    fs::remove(f[0], ec);
+    fs::remove(f[1], ec);
+    ++finished;
+    if (!ok) ++not_ok;
+    if (progress) progress(finished, not_ok);
+  }
+  std::error_code ec;
+  fs::remove_all(work, ec);
+}
+
+SweepResult merge_campaign(const Campaign& c) {
+  const std::vector<std::size_t> missing = missing_runs(c);
+  if (!missing.empty()) {
+    std::string names;
+    for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 5); ++k) {
+      names += (k ? ", " : "") + c.run_name(missing[k]);
+    }
+    if (missing.size() > 5) names += ", ...";
+    throw std::runtime_error(std::to_string(missing.size()) + " of " + std::to_string(c.run_count()) +
+                             " runs have no result (" + names + ")");
+  }
+  SweepResult result;
+  result.scenario = c.scenario;
+  result.clock = c.clock;
+  result.sets = c.sets;
+  result.backend = c.backend;
+  result.chunk_size = c.backend == kBackendSlurm ? c.cluster.chunk_size : 0;
+  double last_end = c.created_unix_s;
+  for (std::size_t i = 0; i < c.run_count(); ++i) {
+    const std::string file = c.run_file(i);
+    SweepRun run;
+    run.set = c.set_of(i);
+    run.seed = c.seed_of(i);
+    try {
+      std::ifstream in(file);
+      const Json r = Json::parse(in);
+      if (r.at("index").get<std::size_t>() != i || r.at("seed").get<uint64_t>() != run.seed) {
+        throw std::runtime_error("it holds another run (index " + r.at("index").dump() + ")");
+      }
+      if (r.at("report").is_null()) {
+        run.exit_code = kRunFailed;
+        run.verdict = r.at("failure").get<std::string>();
+      } else {
+        read_report(r.at("report"), run);
+      }
+      const Json& m = r.at("machine");
+      run.host = m.at("host").get<std::string>();
+      last_end = std::max(last_end, m.at("finished_unix_s").get<double>());
+    } catch (const std::exception& e) {
+      throw std::runtime_error("damaged result file " + file + " (" + c.run_name(i) + "): " + e.what() +
+                               "; delete it and `rig sweep --resume " + c.dir + "` flies the run again");
+    }
+    result.runs.push_back(std::move(run));
+  }
+  result.wall_time_s = last_end - c.created_unix_s;
+  return result;
+}
+
+void progress_bar(std::size_t done, std::size_t total, std::size_t failed, double wall_s, bool tty) {
+  // Not a terminal: a line at every tenth of the campaign, not one per run.
+  if (!tty && done != total && done > 0 &&
+      (done * 10 / std::max<std::size_t>(total, 1)) == ((done - 1) * 10 / std::max<std::size_t>(total, 1))) {
+    return;
+  }
+  constexpr int kWidth = 30;
+  const int filled = total > 0 ? static_cast<int>(kWidth * done / total) : kWidth;
+  std::string bar(static_cast<std::size_t>(filled), '#');
+  bar.resize(kWidth, '-');
+  const std::string not_ok = failed == SIZE_MAX ? std::string() : ", " + std::to_string(failed) + " not ok";
+  std::fprintf(stderr, "%s[%s] %zu/%zu runs%s, %.1f s%s", tty ? "\r" : "", bar.c_str(), done, total, not_ok.c_str(),
+               wall_s, tty ? "" : "\n");
+  if (tty && done == total) std::fprintf(stderr, "\n");
+}
+
+}  // namespace nimble::launcher

@@ -1,0 +1,139 @@
+#pragma once
+/// A campaign of `rig sweep` kept in a directory, so that it can run anywhere, be split any way,
+/// be interrupted and finished later, and be merged whenever its runs are there.
+///
+///   DIR/campaign.json      the manifest: scenario file, --set overrides, --vary sets and their
+///                          configuration digests, seeds, clock, chunk size, backend, cluster settings
+///   DIR/scenario.yaml      the resolved scenario of the first parameter set (for the record)
+///   DIR/runs/run-NNNNNN.json  one file per finished run, written atomically (temporary name,
+///                          fsync, rename): a half-written file is never merged
+///   DIR/logs/              each run's LCM log, if the campaign keeps them
+///   DIR/slurm/             the batch script, the job ids submitted and each task's output
+///   DIR/result.json, DIR/result.csv  the merged result (sweep_json, sweep_csv)
+///
+/// Run i flies parameter set i / S with seed first_seed + i % S (S seeds per set): a run's seed
+/// depends on the campaign and its index alone, never on the machine, the task or the order in
+/// which runs finish, so the merged result is the same however the campaign was split.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "launcher/sweep.h"
+
+namespace nimble::launcher {
+
+inline constexpr const char* kBackendLocal = "local";
+inline constexpr const char* kBackendSlurm = "slurm";
+
+/// The `cluster` settings of a Slurm campaign: command-line options over the scenario's
+/// `cluster:` section over these defaults.
+struct ClusterSettings {
+  std::string partition;        ///< empty: the cluster's default partition
+  std::string account;          ///< empty: the user's default account
+  std::string time_limit = "01:00:00";  ///< per task, as sbatch --time takes it
+  int cpus_per_task = 1;        ///< runs at a time within a task
+  int memory_mb_per_cpu = 0;    ///< sbatch --mem-per-cpu [MB]; 0: the cluster's default
+  std::size_t chunk_size = 0;   ///< runs per array task; 0: about four tasks per CPU of this machine
+  std::string rig;              ///< the rig executable as the nodes see it (default: this one)
+};
+
+/// Reads a resolved scenario's `cluster:` section (absent: the defaults); load_run_plan checks
+/// it, so `rig check` names a bad value before a campaign is submitted.
+/// @throws ConfigError naming the key and value.
+ClusterSettings cluster_settings_from(const Scenario& scenario);
+
+/// The manifest.
+struct Campaign {
+  std::string dir;                    ///< absolute
+  std::string scenario_file;          ///< absolute
+  /// Where `rig sweep` was started: relative paths in --set and --vary values resolve here, on
+  /// every node too (tasks and --resume run in it).
+  std::string working_dir;
+  std::string scenario;               ///< its name
+  std::vector<Override> overrides;    ///< --set, applied to every run
+  std::vector<Vary> vary;
+  std::vector<ParameterSet> sets;
+  std::vector<std::string> set_digests;  ///< each set's configuration digest when the campaign was made
+  uint64_t first_seed = 1, last_seed = 1;
+  std::string clock;
+  double trace_hz = 0.0;              ///< > 0: every run's report carries a trace (rig sweep --report)
+  std::string logs_dir;               ///< keep each run's LCM log here (empty: none kept)
+  std::string backend = kBackendLocal;
+  ClusterSettings cluster;
+  double created_unix_s = 0.0;
+
+  std::size_t seeds_per_set() const { return static_cast<std::size_t>(last_seed - first_seed + 1); }
+  std::size_t run_count() const { return sets.size() * seeds_per_set(); }
+  std::size_t set_of(std::size_t run) const { return run / seeds_per_set(); }
+  uint64_t seed_of(std::size_t run) const { return first_seed + run % seeds_per_set(); }
+  std::size_t chunk_count() const;
+  /// The runs of array task `task`: [task * chunk_size, ...).
+  std::vector<std::size_t> chunk(std::size_t task) const;
+  std::size_t task_of(std::size_t run) const { return run / cluster.chunk_size; }
+  /// "set 2 seed 17" for messages.
+  std::string run_name(std::size_t run) const;
+  std::string run_file(std::size_t run) const;
+  std::string runs_dir() const { return dir + "/runs"; }
+  std::string slurm_dir() const { return dir + "/slurm"; }
+};
+
+/// What `rig sweep` asks for, turned into a campaign.
+struct CampaignRequest {
+  SweepOptions sweep;
+  std::string dir;                 ///< empty: a new directory under rig_campaigns/
+  std::string backend = kBackendLocal;
+  ClusterSettings cluster;         ///< from the scenario's `cluster:` with the options over it
+  bool report = false;             ///< traces for --report
+};
+
+/// Loads every set's plan (a bad value in any set stops here, naming it) and writes the
+/// manifest. The directory must not hold a campaign already.
+/// @throws ConfigError (bad scenario values), std::runtime_error (directory).
+Campaign create_campaign(const CampaignRequest& request);
+
+/// Reads DIR/campaign.json.
+/// @throws std::runtime_error naming the file and what is wrong with it.
+Campaign load_campaign(const std::string& dir);
+
+/// Changes to the campaign's working directory.
+/// @throws std::runtime_error if it is not there (not on a shared file system?).
+void enter_working_dir(const Campaign& campaign);
+
+/// Checks that the scenario and the files it names still give each set's digest of the manifest.
+/// @throws ConfigError naming the set, if the scenario or a file it names changed.
+void check_campaign_inputs(const Campaign& campaign);
+
+/// The runs that have a result file, as flags by run index.
+std::vector<bool> finished_runs(const Campaign& campaign);
+/// The runs without a result file.
+std::vector<std::size_t> missing_runs(const Campaign& campaign);
+/// Removes temporary files that an interrupted writer left in DIR/runs.
+void remove_partial_files(const Campaign& campaign);
+
+/// Progress of a campaign: runs finished (of all), runs not ok among them.
+using ProgressFn = std::function<void(std::size_t finished, std::size_t not_ok)>;
+
+/// Flies `runs` of the campaign that have no result file yet, `jobs` at a time, each in its own
+/// child process (killed if this process dies), and writes each one's result file as it
+/// finishes. A run that crashes is a failed run with a result file, not a failed campaign.
+/// `where` names the task in the result files (e.g. "slurm job 12 task 3"; empty: local).
+void fly_campaign_runs(const Campaign& campaign, const std::vector<std::size_t>& runs, int jobs,
+                       const std::string& where, const ProgressFn& progress);
+
+/// The merged result from the result files.
+/// @throws std::runtime_error naming the missing runs (the first few) or a damaged file.
+SweepResult merge_campaign(const Campaign& campaign);
+
+/// A one-line progress bar on stderr (a line per tenth of the campaign when not a terminal);
+/// `failed` SIZE_MAX: not known (runs finished elsewhere), not shown.
+void progress_bar(std::size_t done, std::size_t total, std::size_t failed, double wall_s, bool tty);
+
+/// Writes `text` to `file` through a temporary file, fsync and rename.
+/// @throws std::runtime_error naming the file.
+void write_file_atomically(const std::string& file, const std::string& text);
+
+}  // namespace nimble::launcher

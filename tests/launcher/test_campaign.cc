@@ -1,0 +1,152 @@
+// A campaign's parts as units: which run flies which set and seed, the array tasks' chunks and
+// sbatch's --array list, the manifest written and read back, a damaged manifest, the scenario's
+// cluster section checked, and atomic result files.
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "launcher/campaign.h"
+#include "launcher/slurm.h"
+#include "scenario/scenario.h"
+
+using namespace nimble::launcher;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kSource = std::string(RIG_SOURCE_DIR) + "/";
+
+std::string scratch(const std::string& tag) {
+  const fs::path d = fs::temp_directory_path() / ("rig_campaign_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d.string();
+}
+
+std::string slurp(const std::string& file) {
+  std::ifstream in(file);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST_CASE("campaign: run i flies set i / S with seed A + i % S, and chunks cover every run once", "[launcher][campaign]") {
+  Campaign c;
+  c.sets = parameter_sets({parse_vary("model=a,b,c")});
+  c.first_seed = 11;
+  c.last_seed = 17;  // S = 7
+  c.cluster.chunk_size = 5;
+  REQUIRE(c.run_count() == 21);
+  CHECK(c.set_of(0) == 0);
+  CHECK(c.seed_of(0) == 11);
+  CHECK(c.set_of(6) == 0);
+  CHECK(c.seed_of(6) == 17);
+  CHECK(c.set_of(7) == 1);
+  CHECK(c.seed_of(7) == 11);
+  CHECK(c.set_of(20) == 2);
+  CHECK(c.seed_of(20) == 17);
+  CHECK(c.run_name(9) == "set 2 seed 13");
+  REQUIRE(c.chunk_count() == 5);
+  std::vector<int> seen(c.run_count(), 0);
+  for (std::size_t t = 0; t < c.chunk_count(); ++t) {
+    for (const std::size_t i : c.chunk(t)) {
+      ++seen[i];
+      CHECK(c.task_of(i) == t);
+    }
+  }
+  CHECK(std::count(seen.begin(), seen.end(), 1) == 21);
+  CHECK(c.chunk(4) == std::vector<std::size_t>{20});
+  CHECK(c.chunk(5).empty());
+}
+
+TEST_CASE("campaign: sbatch's --array list of the tasks", "[launcher][campaign]") {
+  CHECK(array_spec({0, 1, 2, 3}) == "0-3");
+  CHECK(array_spec({7}) == "7");
+  CHECK(array_spec({9, 3, 4, 7, 8, 3}) == "3-4,7-9");
+  CHECK(array_spec({0, 2, 4}) == "0,2,4");
+  CHECK(array_spec({}).empty());
+}
+
+TEST_CASE("campaign: the manifest is written once and read back as it was made", "[launcher][campaign]") {
+  const std::string d = scratch("manifest");
+  CampaignRequest req;
+  req.sweep.base.scenario_file = kSource + "rig_configs/id_doublet_train_fast.yaml";
+  req.sweep.base.overrides = {{"duration_s", "2"}};
+  req.sweep.vary = {parse_vary("summary.hover_phi_deg=4,6")};
+  req.sweep.first_seed = 3;
+  req.sweep.last_seed = 5;
+  req.dir = d + "/c";
+  req.backend = kBackendSlurm;
+  req.cluster.partition = "short";
+  req.cluster.time_limit = "0-00:10:00";
+  req.cluster.cpus_per_task = 2;
+  req.report = true;
+  const Campaign made = create_campaign(req);
+  CHECK(made.cluster.chunk_size == 25);  // in process: the default
+  CHECK(made.trace_hz == 20.0);
+  const Campaign c = load_campaign(d + "/c");
+  CHECK(c.dir == made.dir);
+  CHECK(c.scenario == "id_doublet_train_fast");
+  CHECK(c.run_count() == 6);
+  CHECK(c.sets.size() == 2);
+  CHECK(c.sets[1].label == "summary.hover_phi_deg=6");
+  CHECK(c.set_digests == made.set_digests);
+  CHECK(c.set_digests[0] != c.set_digests[1]);
+  CHECK(c.overrides.size() == 1);
+  CHECK(c.cluster.partition == "short");
+  CHECK(c.cluster.time_limit == "0-00:10:00");
+  CHECK(c.cluster.cpus_per_task == 2);
+  CHECK(c.backend == kBackendSlurm);
+  CHECK(c.working_dir == fs::current_path().string());
+  CHECK_NOTHROW(check_campaign_inputs(c));
+  CHECK(missing_runs(c).size() == 6);
+  CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("already holds a campaign"));
+
+  const std::string script = slurp(write_batch_script(c));
+  CHECK(script.find("#SBATCH --partition=short\n") != std::string::npos);
+  CHECK(script.find("#SBATCH --time=0-00:10:00\n") != std::string::npos);
+  CHECK(script.find("#SBATCH --cpus-per-task=2\n") != std::string::npos);
+  CHECK(script.find("#SBATCH --account") == std::string::npos);  // none given: the user's default
+
+  // A damaged manifest is named with what is wrong.
+  std::string text = slurp(d + "/c/campaign.json");
+  text.replace(text.find("\"seeds\""), 7, "\"seedz\"");
+  std::ofstream(d + "/c/campaign.json") << text;
+  CHECK_THROWS_WITH(load_campaign(d + "/c"), Catch::Contains("damaged campaign manifest " + d + "/c/campaign.json") &&
+                                                  Catch::Contains("seeds"));
+  CHECK_THROWS_WITH(load_campaign(d), Catch::Contains("no campaign in " + d));
+}
+
+TEST_CASE("campaign: result files are written whole or not at all", "[launcher][campaign]") {
+  const std::string d = scratch("atomic");
+  write_file_atomically(d + "/a.json", "{\"x\": 1}\n");
+  CHECK(slurp(d + "/a.json") == "{\"x\": 1}\n");
+  write_file_atomically(d + "/a.json", "{\"x\": 2}\n");
+  CHECK(slurp(d + "/a.json") == "{\"x\": 2}\n");
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(d)) files += e.is_regular_file();
+  CHECK(files == 1);  // no temporary left behind
+  CHECK_THROWS_WITH(write_file_atomically(d + "/missing/b.json", "x"), Catch::Contains(d + "/missing/b.json"));
+}
+
+TEST_CASE("campaign: the scenario's cluster section is checked like any other", "[launcher][campaign]") {
+  const std::string base = kSource + "rig_configs/hover.yaml";
+  const auto cluster = [&](const std::vector<nimble::Override>& ov) {
+    return cluster_settings_from(nimble::load_scenario(base, ov));
+  };
+  CHECK(cluster({}).time_limit == "01:00:00");
+  const ClusterSettings c = cluster({{"cluster", "{partition: gpu, time_limit: \"2-00:00:00\", cpus_per_task: 4, chunk_size: 10}"}});
+  CHECK(c.partition == "gpu");
+  CHECK(c.time_limit == "2-00:00:00");
+  CHECK(c.cpus_per_task == 4);
+  CHECK(c.chunk_size == 10);
+  CHECK_THROWS_WITH(cluster({{"cluster.time_limit", "an hour"}}), Catch::Contains("time_limit") && Catch::Contains("MM:SS"));
+  CHECK_THROWS_WITH(cluster({{"cluster.cpus_per_task", "0"}}), Catch::Contains("cpus_per_task"));
+  CHECK_THROWS_WITH(cluster({{"cluster.partion", "short"}}), Catch::Contains("unknown key"));
+}
