@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -92,12 +93,19 @@ double plant_alone_s(const launcher::RunPlan& plan, double sim_s, int procs) {
   for (int k = 0; k < procs; ++k) {
     const pid_t pid = ::fork();
     if (pid == 0) {
-      plant::PlantConfig cfg = plant::plant_config_from(plan.scenario);
-      auto model = plant::make_plant_model(cfg);
-      const double dt = 1.0 / cfg.rate_hz;
-      const long steps = static_cast<long>(sim_s / dt);
-      volatile double sink = 0.0;
-      for (long i = 0; i < steps; ++i) sink = sink + model->step_once(dt);
+      // As bench_inprocess's floor: the model stepped at its rate with a square wave of delta_f.
+      ConfigMap section = plan.scenario.section("plant");
+      const plant::PlantConfig config = plant::plant_config_from(section);
+      const std::unique_ptr<plant::PlantModel> model = plant::plant_model_for(plan.scenario, config);
+      const plant::ActuatorInput trim = model->trim_command();
+      const long steps = static_cast<long>(sim_s * config.rate_hz);
+      for (long i = 0; i < steps; ++i) {
+        plant::ActuatorInput u = trim;
+        const double half_df = (i / 100) % 2 ? 1.25 : -1.25;
+        u.flap_freq_left_radps += half_df;
+        u.flap_freq_right_radps -= half_df;
+        model->step(u);
+      }
       ::_exit(0);
     }
     pids.push_back(pid);

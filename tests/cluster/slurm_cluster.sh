@@ -103,6 +103,9 @@ TaskPlugin=task/none
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 SchedulerType=sched/backfill
+# Schedule a batch job as it is submitted (Slurm's default delays it up to 3 s, batch_sched_delay,
+# for sites that take thousands of submissions a second).
+SchedulerParameters=batch_sched_delay=0
 AccountingStorageType=accounting_storage/none
 JobAcctGatherType=jobacct_gather/none
 JobCompType=jobcomp/none
