@@ -37,8 +37,9 @@ constexpr const char* kManifestFormat = "nimble-rig-campaign/1";
 constexpr const char* kRunFilePrefix = "run-";
 constexpr const char* kPartialSuffix = ".partial";
 
-/// Trace rate of a campaign with a report [Hz]: 20 samples per second of p, v and phi.
-constexpr double kReportTraceHz = 20.0;
+/// Trace rate of a campaign with a report [Hz]: 50 samples per second of p, v and phi (the
+/// doublets' roll-rate swings, 2-3 Hz, keep their peaks).
+constexpr double kReportTraceHz = 50.0;
 
 std::string hostname() {
   char name[256] = {};

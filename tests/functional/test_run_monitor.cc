@@ -218,3 +218,43 @@ TEST_CASE("roll tracking: the controller's reference against the newest TRUTH at
   CHECK(tr.half_cycles[1].start_s == Approx(0.0055 + 0.0005 * 0.5));  // the interpolated zero crossing
   CHECK(tr.half_cycles[0].reference_range_deg == Approx(0.0));
 }
+
+TEST_CASE("the flight's trace takes the first TRUTH at or after each grid time", "[launcher][monitor]") {
+  MonitorConfig cfg;
+  cfg.lockstep = true;
+  cfg.trace_interval_us = 20000;  // 50 Hz
+  RunMonitor mon(cfg);
+  truth_state_t t{};
+  t.quaternion_wxyz[0] = 1.0;
+  // TRUTH at 1 kHz from 0 to 99 ms, then a gap to 150 ms.
+  std::vector<int64_t> stamps;
+  for (int k = 0; k < 100; ++k) stamps.push_back(1000 * k);
+  stamps.push_back(150000);
+  int64_t seq = 0;
+  for (const int64_t utime : stamps) {
+    t.utime = utime;
+    t.seq = seq++;
+    t.omega_body_radps[0] = 1e-6 * static_cast<double>(utime);  // p tells the stamp it came from
+    t.velocity_body_mps[1] = -t.omega_body_radps[0];
+    t.euler_rad[0] = 2.0 * t.omega_body_radps[0];
+    const auto b = encode(t);
+    mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
+  }
+  const nimble::launcher::FlightSummary& f = mon.flight();
+  CHECK(f.trace_dt_s == Approx(0.02));
+  // Grid times 0, 20, 40, 60, 80 ms from their own TRUTH; 100, 120, 140 ms from the one at 150.
+  REQUIRE(f.trace_p.size() == 8);
+  CHECK(f.trace_p[0] == 0.0);
+  CHECK(f.trace_p[3] == Approx(0.06));
+  CHECK(f.trace_p[4] == Approx(0.08));
+  CHECK(f.trace_p[5] == Approx(0.15));
+  CHECK(f.trace_p[7] == Approx(0.15));
+  CHECK(f.trace_v[3] == Approx(-0.06));
+  CHECK(f.trace_phi[3] == Approx(0.12));
+  // No grid, no trace.
+  RunMonitor plain{MonitorConfig{}};
+  const auto b = encode(t);
+  plain.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
+  CHECK(plain.flight().trace_p.empty());
+  CHECK(plain.flight().trace_dt_s == 0.0);
+}

@@ -89,7 +89,7 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   req.report = true;
   const Campaign made = create_campaign(req);
   CHECK(made.cluster.chunk_size == 25);  // in process: the default
-  CHECK(made.trace_hz == 20.0);
+  CHECK(made.trace_hz == 50.0);
   const Campaign c = load_campaign(d + "/c");
   CHECK(c.dir == made.dir);
   CHECK(c.scenario == "id_doublet_train_fast");
