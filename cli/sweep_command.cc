@@ -104,6 +104,10 @@ int finish(const launcher::Campaign& c, const Outputs& o, bool keep, int jobs, d
       (o.json_file == "-" ? std::cerr : std::cout) << "campaign " << c.dir << ": result.json, result.csv\n";
     }
     if (!o.report_dir.empty()) {
+      if (c.trace_hz <= 0) {
+        std::cerr << "rig sweep: the campaign was made without --report, so its runs carry no trace: the report "
+                     "gives the controlled rates without envelopes\n";
+      }
       launcher::write_sweep_report(result, o.report_dir);
       (o.json_file == "-" ? std::cerr : std::cout) << "report " << o.report_dir << "/index.html\n";
     }

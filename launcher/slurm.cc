@@ -23,9 +23,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// How often the campaign's result files are counted while waiting [ms], and how often Slurm is
-/// asked whether the job still has tasks [ms] (a cluster's controller is shared: not too often).
-constexpr int kFilePollMs = 200;
+/// How often the campaign's result files are counted while waiting [ms] (a listing of the runs
+/// directory: slower for large campaigns on a network file system), and how often Slurm is asked
+/// whether the job still has tasks [ms] (a cluster's controller is shared: not too often).
+constexpr int kFilePollMs = 100;
+constexpr int kFilePollLargeMs = 1000;
+constexpr std::size_t kLargeCampaignRuns = 5000;
 constexpr int kQueuePollMs = 2000;
 
 std::string shell_quote(const std::string& s) {
@@ -287,7 +290,8 @@ void wait_for_job(const Campaign& c, const std::string& job, const std::vector<s
         return;
       }
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(kFilePollMs));
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(c.run_count() > kLargeCampaignRuns ? kFilePollLargeMs : kFilePollMs));
   }
 }
 
