@@ -288,7 +288,7 @@ int run_sweep_command(const std::vector<std::string>& args) {
       ->check(CLI::Range(0, 100))
       ->type_name("N");
   cl->add_flag("--no-wait", no_wait, "slurm: print the job id and return; `rig sweep collect DIR` merges later");
-  cl->add_option("--chunk", chunk, "slurm: runs per array task (default: cluster.chunk_size, else 25 in process, "
+  cl->add_option("--chunk", chunk, "slurm: runs per array task (default: cluster.chunk_size, else 100 in process, "
                                    "4 lockstep, 1 real time)")
       ->check(CLI::Range(1, 1000000))
       ->type_name("N");

@@ -88,7 +88,7 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   req.cluster.cpus_per_task = 2;
   req.report = true;
   const Campaign made = create_campaign(req);
-  CHECK(made.cluster.chunk_size == 25);  // in process: the default
+  CHECK(made.cluster.chunk_size == 100);  // in process: the default
   CHECK(made.trace_hz == 50.0);
   const Campaign c = load_campaign(d + "/c");
   CHECK(c.dir == made.dir);
