@@ -52,12 +52,18 @@ bool update_fixed(EkfState* x, EkfCovariance* P, const Eigen::Matrix<double, M, 
   const Eigen::Matrix<double, kEkfStateDim, M> PHt = P->template leftCols<M>();
   const Eigen::Matrix<double, kEkfStateDim, M> K = llt.solve(PHt.transpose()).transpose();
   *x += K * y;
-  EkfCovariance IKH = EkfCovariance::Identity();
-  IKH.template leftCols<M>() -= K;
-  const EkfCovariance IKHP = IKH.lazyProduct(*P);
-  EkfCovariance Pn = IKHP.lazyProduct(IKH.transpose());
+  // Joseph form (I - K H) P (I - K H)^T + K R K^T with H = [I 0], without forming I - K H:
+  //   X = (I - K H) P = P - K P_top               (P_top: the first M rows of P)
+  //   X (I - K H)^T = X - X_left K^T                (X_left: the first M columns of X)
+  // two 12 x M x 12 products instead of two 12 x 12 x 12.
+  const Eigen::Matrix<double, M, kEkfStateDim> P_top = P->template topRows<M>();
+  EkfCovariance X = *P;
+  X.noalias() -= K.lazyProduct(P_top);
+  const Eigen::Matrix<double, kEkfStateDim, M> X_left = X.template leftCols<M>();
+  EkfCovariance Pn = X;
+  Pn.noalias() -= X_left.lazyProduct(K.transpose());
   const Eigen::Matrix<double, kEkfStateDim, M> KR = K * r_diag.asDiagonal();
-  Pn += KR.lazyProduct(K.transpose());
+  Pn.noalias() += KR.lazyProduct(K.transpose());
   *P = 0.5 * (Pn + Pn.transpose());
   ekf_wrap_angles(x);
   record->accepted = true;
@@ -167,6 +173,7 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
                                     double dt_s) const {
   using Mat6 = EkfLinearisation::Block;
+  using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
   const EkfLinearisation lin0 = ekf_linearise(*x, u0, params_);
   const EkfState& k0 = lin0.x_dot;
@@ -180,36 +187,58 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   // and G = df/du_m = -B (top rows). The products below are the 12x12 formula of the header
   // written blockwise (a third of the operations). Small fixed-size products use lazyProduct
   // (coefficient-based), which is faster than Eigen's blocked GEMM at this size.
+  // B = [B_g B_a]: the gyro-bias columns B_g (6x3) depend on the point, the accelerometer-bias
+  // columns are B_a = [0; -I] at every point (ekf_model.cc), which the products below use.
   const Mat6& A0 = lin0.A;
-  const Mat6& B0 = lin0.B;
   const Mat6& A1 = lin1.A;
-  const Mat6& B1 = lin1.B;
+  const Mat63 Bg0 = lin0.B.leftCols<3>();
+  const Mat63 Bg1 = lin1.B.leftCols<3>();
   const double h2 = 0.5 * dt_s, hh2 = 0.5 * dt_s * dt_s;
-  Mat6 Phi11 = hh2 * A1.lazyProduct(A0) + h2 * (A0 + A1);
+  Mat6 Phi11;
+  Phi11.noalias() = A1.lazyProduct(A0);
+  Phi11 = hh2 * Phi11 + h2 * (A0 + A1);
   Phi11.diagonal().array() += 1.0;
-  const Mat6 Phi12 = hh2 * A1.lazyProduct(B0) + h2 * (B0 + B1);
-  const Mat6 B0S = B0 * input_psd_.asDiagonal();
-  const Mat6 B1S = B1 * input_psd_.asDiagonal();
+  // Phi12 = [dt/2 (B_g0 + B_g1) + dt^2/2 A1 B_g0,  -dt [0; I] - dt^2/2 A1 [0; I]]; A1 [0; I] are
+  // the velocity columns of A1, zero in the attitude rows.
+  Mat6 Phi12;
+  Mat63 A1Bg0;
+  A1Bg0.noalias() = A1.lazyProduct(Bg0);
+  Phi12.leftCols<3>() = hh2 * A1Bg0 + h2 * (Bg0 + Bg1);
+  Phi12.rightCols<3>() = -hh2 * A1.rightCols<3>();
+  Phi12.bottomRightCorner<3, 3>().diagonal().array() -= dt_s;
+  // Qc = G S G^T + diag(0, 0, q_bg, q_ba) = [Q 0; 0 diag(q_bg, q_ba)] with
+  // Q = B S B^T = B_g S_g B_g^T + diag(0, S_a) (S = diag(S_g, S_a)).
+  const auto input_noise = [this](const Mat63& Bg) {
+    const Mat63 BgS = Bg * input_psd_.head<3>().asDiagonal();
+    Mat6 Q;
+    Q.noalias() = BgS.lazyProduct(Bg.transpose());
+    Q.diagonal().tail<3>() += input_psd_.tail<3>();
+    return Q;
+  };
 
   // M = P + dt/2 Qc0
-  EkfCovariance M = *P;
-  M.topLeftCorner<6, 6>() += h2 * B0S.lazyProduct(B0.transpose());
-  M.diagonal().tail<6>() += h2 * bias_rw_psd_;
-  const Mat6 M11 = M.topLeftCorner<6, 6>(), M12 = M.topRightCorner<6, 6>();
-  const Mat6 M21 = M.bottomLeftCorner<6, 6>(), M22 = M.bottomRightCorner<6, 6>();
+  const Mat6 M11 = P->topLeftCorner<6, 6>() + h2 * input_noise(Bg0);
+  const Mat6 M12 = P->topRightCorner<6, 6>();
+  const Mat6 M21 = P->bottomLeftCorner<6, 6>();
+  Mat6 M22 = P->bottomRightCorner<6, 6>();
+  M22.diagonal() += h2 * bias_rw_psd_;
   // Phi M = [X11 X12; M21 M22]
-  const Mat6 X11 = Phi11.lazyProduct(M11) + Phi12.lazyProduct(M21);
-  const Mat6 X12 = Phi11.lazyProduct(M12) + Phi12.lazyProduct(M22);
-  // Phi M Phi^T = [X11 Phi11^T + X12 Phi12^T, X12; X12^T, M22]
-  EkfCovariance Pn;
-  Pn.topLeftCorner<6, 6>() = X11.lazyProduct(Phi11.transpose()) + X12.lazyProduct(Phi12.transpose());
-  Pn.topRightCorner<6, 6>() = X12;
-  Pn.bottomLeftCorner<6, 6>() = X12.transpose();
-  Pn.bottomRightCorner<6, 6>() = M22;
-  // + dt/2 Qc1
-  Pn.topLeftCorner<6, 6>() += h2 * B1S.lazyProduct(B1.transpose());
-  Pn.diagonal().tail<6>() += h2 * bias_rw_psd_;
-  *P = 0.5 * (Pn + Pn.transpose());
+  Mat6 X11, X12;
+  X11.noalias() = Phi11.lazyProduct(M11);
+  X11.noalias() += Phi12.lazyProduct(M21);
+  X12.noalias() = Phi11.lazyProduct(M12);
+  X12.noalias() += Phi12.lazyProduct(M22);
+  // Phi M Phi^T + dt/2 Qc1 = [X11 Phi11^T + X12 Phi12^T + dt/2 Q1, X12; X12^T, M22 + dt/2 diag(q_bg, q_ba)].
+  // P is kept exactly symmetric, so only the top-left block needs symmetrising.
+  Mat6 N11;
+  N11.noalias() = X11.lazyProduct(Phi11.transpose());
+  N11.noalias() += X12.lazyProduct(Phi12.transpose());
+  N11 += h2 * input_noise(Bg1);
+  M22.diagonal() += h2 * bias_rw_psd_;
+  P->topLeftCorner<6, 6>() = 0.5 * (N11 + N11.transpose());
+  P->topRightCorner<6, 6>() = X12;
+  P->bottomLeftCorner<6, 6>() = X12.transpose();
+  P->bottomRightCorner<6, 6>() = M22;
   *x += 0.5 * dt_s * (k0 + k1);
   ekf_wrap_angles(x);
 }
