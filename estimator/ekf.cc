@@ -351,21 +351,28 @@ EkfMeasurementStatus AttitudeVelocityEkf::apply_now(const PoseMeasurement& z) {
 }
 
 EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& z) {
-  const std::int64_t now = history_.back().utime;
   if (too_old(z)) {
     ++counters_.measurements_too_old;
     return EkfMeasurementStatus::kTooOld;
   }
+  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
+  replay(store(z, &status));
+  return status;
+}
+
+std::size_t AttitudeVelocityEkf::store(const PoseMeasurement& z, EkfMeasurementStatus* status) {
   // j: last node strictly before the measurement.
   std::size_t j = history_.size() - 1;
   while (j > 0 && history_[j].utime >= z.utime) --j;
-  if (z.utime < now) ++counters_.rollbacks;
-
+  if (z.utime < history_.back().utime) ++counters_.rollbacks;
   // Insert into the stored measurements, after those with the same or an earlier time.
   auto pos = std::upper_bound(accepted_.begin(), accepted_.end(), z.utime,
                               [](std::int64_t t, const Stored& s) { return t < s.z.utime; });
-  accepted_.insert(pos, Stored{z, true});
+  accepted_.insert(pos, Stored{z, true, status});
+  return j;
+}
 
+void AttitudeVelocityEkf::replay(std::size_t j) {
   EkfState x = history_[j].x;
   EkfCovariance P = history_[j].P;
   std::int64_t t = history_[j].utime;
@@ -373,7 +380,6 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
       std::upper_bound(accepted_.begin(), accepted_.end(), t,
                        [](std::int64_t tt, const Stored& s) { return tt < s.z.utime; }) -
       accepted_.begin());
-  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
   for (std::size_t i = j; i + 1 < history_.size(); ++i) {
     const Node& a = history_[i];
     Node& b = history_[i + 1];
@@ -387,12 +393,15 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
       if (accepted_[k].is_new) {
         const bool ok = update(&x, &P, accepted_[k].z, true, &record);
         report(record);
+        if (accepted_[k].status) {
+          *accepted_[k].status = ok ? EkfMeasurementStatus::kAccepted : EkfMeasurementStatus::kRejectedGate;
+        }
         if (!ok) {
-          status = EkfMeasurementStatus::kRejectedGate;
           accepted_.erase(accepted_.begin() + static_cast<std::ptrdiff_t>(k));
           continue;
         }
         accepted_[k].is_new = false;
+        accepted_[k].status = nullptr;
       } else {
         update(&x, &P, accepted_[k].z, false, &record);
       }
@@ -405,7 +414,6 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
     b.x = x;
     b.P = P;
   }
-  return status;
 }
 
 bool AttitudeVelocityEkf::too_old(const PoseMeasurement& z) const {
@@ -471,28 +479,70 @@ PoseMeasurement AttitudeVelocityEkf::prepared(const PoseMeasurement& z) {
 }
 
 EkfMeasurementStatus AttitudeVelocityEkf::add_measurement(const PoseMeasurement& z) {
-  if (!initialized()) {
-    ++counters_.measurements_invalid;
-    return EkfMeasurementStatus::kNotInitialized;
+  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
+  add_batch(&z, 1, &status);
+  return status;
+}
+
+std::vector<EkfMeasurementStatus> AttitudeVelocityEkf::add_measurements(const std::vector<PoseMeasurement>& zs) {
+  std::vector<EkfMeasurementStatus> status(zs.size(), EkfMeasurementStatus::kAccepted);
+  add_batch(zs.data(), zs.size(), status.data());
+  return status;
+}
+
+void AttitudeVelocityEkf::add_batch(const PoseMeasurement* zs, std::size_t n, EkfMeasurementStatus* status) {
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::size_t from = kNone;  // first node of the replay the stored measurements wait for
+  std::int64_t last_stored_utime = std::numeric_limits<std::int64_t>::min();
+  for (std::size_t i = 0; i < n; ++i) {
+    const PoseMeasurement& z = zs[i];
+    if (!initialized()) {
+      ++counters_.measurements_invalid;
+      status[i] = EkfMeasurementStatus::kNotInitialized;
+      continue;
+    }
+    if (!finite(z)) {
+      ++counters_.measurements_invalid;
+      status[i] = EkfMeasurementStatus::kInvalid;
+      continue;
+    }
+    const std::int64_t now = history_.back().utime;
+    if (config_.latency_mode == EkfLatencyMode::kNaive) {
+      status[i] = apply_now(prepared(z));
+      continue;
+    }
+    if (z.utime > now + history_us_) {
+      ++counters_.measurements_too_new;
+      status[i] = EkfMeasurementStatus::kTooNew;
+      continue;
+    }
+    const std::int64_t ready = ready_utime(z);
+    if (ready > now) {
+      auto pos = std::upper_bound(pending_.begin(), pending_.end(), ready,
+                                  [this](std::int64_t t, const PoseMeasurement& m) { return t < ready_utime(m); });
+      pending_.insert(pos, z);
+      status[i] = EkfMeasurementStatus::kPending;
+      continue;
+    }
+    // One replay serves the measurements stored since the last, with the result of one replay
+    // each: a window offset reads the history, which must hold the earlier measurements first,
+    // and a measurement before one already stored would be gated before it.
+    const bool reads_history =
+        z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
+    if (from != kNone && (reads_history || z.utime < last_stored_utime)) {
+      replay(from);
+      from = kNone;
+    }
+    const PoseMeasurement zp = prepared(z);
+    if (too_old(zp)) {
+      ++counters_.measurements_too_old;
+      status[i] = EkfMeasurementStatus::kTooOld;
+      continue;
+    }
+    from = std::min(from, store(zp, &status[i]));
+    last_stored_utime = zp.utime;
   }
-  if (!finite(z)) {
-    ++counters_.measurements_invalid;
-    return EkfMeasurementStatus::kInvalid;
-  }
-  const std::int64_t now = history_.back().utime;
-  if (config_.latency_mode == EkfLatencyMode::kNaive) return apply_now(prepared(z));
-  if (z.utime > now + history_us_) {
-    ++counters_.measurements_too_new;
-    return EkfMeasurementStatus::kTooNew;
-  }
-  const std::int64_t ready = ready_utime(z);
-  if (ready > now) {
-    auto pos = std::upper_bound(pending_.begin(), pending_.end(), ready,
-                                [this](std::int64_t t, const PoseMeasurement& m) { return t < ready_utime(m); });
-    pending_.insert(pos, z);
-    return EkfMeasurementStatus::kPending;
-  }
-  return insert_in_past(prepared(z));
+  if (from != kNone) replay(from);
 }
 
 }  // namespace nimble
