@@ -429,17 +429,27 @@ bool AttitudeVelocityEkf::velocity_window_offset(const PoseMeasurement& z, Eigen
   const std::int64_t ts = z.velocity_window_start_utime, te = z.velocity_window_end_utime;
   if (!(ts <= z.utime && z.utime <= te && ts < te)) return false;
   if (history_.front().utime > ts || history_.back().utime < te) return false;
-  // World velocity along the history, linear between nodes; its integral over [ts, te] by the
-  // trapezoidal rule, ends interpolated.
-  const auto at = [&](std::size_t i, std::int64_t t) {  // between node i and i + 1
-    const Node& a = history_[i];
-    if (i + 1 >= history_.size() || t <= a.utime) return world_velocity(a.x);
-    const Node& b = history_[i + 1];
-    const double s = static_cast<double>(t - a.utime) / static_cast<double>(b.utime - a.utime);
-    return Eigen::Vector3d((1.0 - s) * world_velocity(a.x) + s * world_velocity(b.x));
-  };
   std::size_t i = 0;
   while (i + 1 < history_.size() && history_[i + 1].utime <= ts) ++i;
+  // World velocity of the nodes from i on [m/s], each evaluated once (a rotation each).
+  std::vector<Eigen::Vector3d> node_velocity(history_.size() - i);
+  std::vector<char> node_velocity_known(history_.size() - i, 0);
+  const auto velocity_of = [&](std::size_t n) -> const Eigen::Vector3d& {
+    if (!node_velocity_known[n - i]) {
+      node_velocity[n - i] = world_velocity(history_[n].x);
+      node_velocity_known[n - i] = 1;
+    }
+    return node_velocity[n - i];
+  };
+  // World velocity along the history, linear between nodes; its integral over [ts, te] by the
+  // trapezoidal rule, ends interpolated.
+  const auto at = [&](std::size_t k, std::int64_t t) {  // between node k and k + 1
+    const Node& a = history_[k];
+    if (k + 1 >= history_.size() || t <= a.utime) return velocity_of(k);
+    const Node& b = history_[k + 1];
+    const double s = static_cast<double>(t - a.utime) / static_cast<double>(b.utime - a.utime);
+    return Eigen::Vector3d((1.0 - s) * velocity_of(k) + s * velocity_of(k + 1));
+  };
   Eigen::Vector3d integral = Eigen::Vector3d::Zero(), v_mid = at(i, ts), v_prev = v_mid;
   std::int64_t t_prev = ts;
   std::size_t mid_node = i;
