@@ -52,12 +52,18 @@ bool update_fixed(EkfState* x, EkfCovariance* P, const Eigen::Matrix<double, M, 
   const Eigen::Matrix<double, kEkfStateDim, M> PHt = P->template leftCols<M>();
   const Eigen::Matrix<double, kEkfStateDim, M> K = llt.solve(PHt.transpose()).transpose();
   *x += K * y;
-  EkfCovariance IKH = EkfCovariance::Identity();
-  IKH.template leftCols<M>() -= K;
-  const EkfCovariance IKHP = IKH.lazyProduct(*P);
-  EkfCovariance Pn = IKHP.lazyProduct(IKH.transpose());
+  // Joseph form (I - K H) P (I - K H)^T + K R K^T with H = [I 0], without forming I - K H:
+  //   X = (I - K H) P = P - K P_top               (P_top: the first M rows of P)
+  //   X (I - K H)^T = X - X_left K^T                (X_left: the first M columns of X)
+  // two 12 x M x 12 products instead of two 12 x 12 x 12.
+  const Eigen::Matrix<double, M, kEkfStateDim> P_top = P->template topRows<M>();
+  EkfCovariance X = *P;
+  X.noalias() -= K.lazyProduct(P_top);
+  const Eigen::Matrix<double, kEkfStateDim, M> X_left = X.template leftCols<M>();
+  EkfCovariance Pn = X;
+  Pn.noalias() -= X_left.lazyProduct(K.transpose());
   const Eigen::Matrix<double, kEkfStateDim, M> KR = K * r_diag.asDiagonal();
-  Pn += KR.lazyProduct(K.transpose());
+  Pn.noalias() += KR.lazyProduct(K.transpose());
   *P = 0.5 * (Pn + Pn.transpose());
   ekf_wrap_angles(x);
   record->accepted = true;
@@ -167,6 +173,7 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
                                     double dt_s) const {
   using Mat6 = EkfLinearisation::Block;
+  using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
   const EkfLinearisation lin0 = ekf_linearise(*x, u0, params_);
   const EkfState& k0 = lin0.x_dot;
@@ -180,36 +187,58 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   // and G = df/du_m = -B (top rows). The products below are the 12x12 formula of the header
   // written blockwise (a third of the operations). Small fixed-size products use lazyProduct
   // (coefficient-based), which is faster than Eigen's blocked GEMM at this size.
+  // B = [B_g B_a]: the gyro-bias columns B_g (6x3) depend on the point, the accelerometer-bias
+  // columns are B_a = [0; -I] at every point (ekf_model.cc), which the products below use.
   const Mat6& A0 = lin0.A;
-  const Mat6& B0 = lin0.B;
   const Mat6& A1 = lin1.A;
-  const Mat6& B1 = lin1.B;
+  const Mat63 Bg0 = lin0.B.leftCols<3>();
+  const Mat63 Bg1 = lin1.B.leftCols<3>();
   const double h2 = 0.5 * dt_s, hh2 = 0.5 * dt_s * dt_s;
-  Mat6 Phi11 = hh2 * A1.lazyProduct(A0) + h2 * (A0 + A1);
+  Mat6 Phi11;
+  Phi11.noalias() = A1.lazyProduct(A0);
+  Phi11 = hh2 * Phi11 + h2 * (A0 + A1);
   Phi11.diagonal().array() += 1.0;
-  const Mat6 Phi12 = hh2 * A1.lazyProduct(B0) + h2 * (B0 + B1);
-  const Mat6 B0S = B0 * input_psd_.asDiagonal();
-  const Mat6 B1S = B1 * input_psd_.asDiagonal();
+  // Phi12 = [dt/2 (B_g0 + B_g1) + dt^2/2 A1 B_g0,  -dt [0; I] - dt^2/2 A1 [0; I]]; A1 [0; I] are
+  // the velocity columns of A1, zero in the attitude rows.
+  Mat6 Phi12;
+  Mat63 A1Bg0;
+  A1Bg0.noalias() = A1.lazyProduct(Bg0);
+  Phi12.leftCols<3>() = hh2 * A1Bg0 + h2 * (Bg0 + Bg1);
+  Phi12.rightCols<3>() = -hh2 * A1.rightCols<3>();
+  Phi12.bottomRightCorner<3, 3>().diagonal().array() -= dt_s;
+  // Qc = G S G^T + diag(0, 0, q_bg, q_ba) = [Q 0; 0 diag(q_bg, q_ba)] with
+  // Q = B S B^T = B_g S_g B_g^T + diag(0, S_a) (S = diag(S_g, S_a)).
+  const auto input_noise = [this](const Mat63& Bg) {
+    const Mat63 BgS = Bg * input_psd_.head<3>().asDiagonal();
+    Mat6 Q;
+    Q.noalias() = BgS.lazyProduct(Bg.transpose());
+    Q.diagonal().tail<3>() += input_psd_.tail<3>();
+    return Q;
+  };
 
   // M = P + dt/2 Qc0
-  EkfCovariance M = *P;
-  M.topLeftCorner<6, 6>() += h2 * B0S.lazyProduct(B0.transpose());
-  M.diagonal().tail<6>() += h2 * bias_rw_psd_;
-  const Mat6 M11 = M.topLeftCorner<6, 6>(), M12 = M.topRightCorner<6, 6>();
-  const Mat6 M21 = M.bottomLeftCorner<6, 6>(), M22 = M.bottomRightCorner<6, 6>();
+  const Mat6 M11 = P->topLeftCorner<6, 6>() + h2 * input_noise(Bg0);
+  const Mat6 M12 = P->topRightCorner<6, 6>();
+  const Mat6 M21 = P->bottomLeftCorner<6, 6>();
+  Mat6 M22 = P->bottomRightCorner<6, 6>();
+  M22.diagonal() += h2 * bias_rw_psd_;
   // Phi M = [X11 X12; M21 M22]
-  const Mat6 X11 = Phi11.lazyProduct(M11) + Phi12.lazyProduct(M21);
-  const Mat6 X12 = Phi11.lazyProduct(M12) + Phi12.lazyProduct(M22);
-  // Phi M Phi^T = [X11 Phi11^T + X12 Phi12^T, X12; X12^T, M22]
-  EkfCovariance Pn;
-  Pn.topLeftCorner<6, 6>() = X11.lazyProduct(Phi11.transpose()) + X12.lazyProduct(Phi12.transpose());
-  Pn.topRightCorner<6, 6>() = X12;
-  Pn.bottomLeftCorner<6, 6>() = X12.transpose();
-  Pn.bottomRightCorner<6, 6>() = M22;
-  // + dt/2 Qc1
-  Pn.topLeftCorner<6, 6>() += h2 * B1S.lazyProduct(B1.transpose());
-  Pn.diagonal().tail<6>() += h2 * bias_rw_psd_;
-  *P = 0.5 * (Pn + Pn.transpose());
+  Mat6 X11, X12;
+  X11.noalias() = Phi11.lazyProduct(M11);
+  X11.noalias() += Phi12.lazyProduct(M21);
+  X12.noalias() = Phi11.lazyProduct(M12);
+  X12.noalias() += Phi12.lazyProduct(M22);
+  // Phi M Phi^T + dt/2 Qc1 = [X11 Phi11^T + X12 Phi12^T + dt/2 Q1, X12; X12^T, M22 + dt/2 diag(q_bg, q_ba)].
+  // P is kept exactly symmetric, so only the top-left block needs symmetrising.
+  Mat6 N11;
+  N11.noalias() = X11.lazyProduct(Phi11.transpose());
+  N11.noalias() += X12.lazyProduct(Phi12.transpose());
+  N11 += h2 * input_noise(Bg1);
+  M22.diagonal() += h2 * bias_rw_psd_;
+  P->topLeftCorner<6, 6>() = 0.5 * (N11 + N11.transpose());
+  P->topRightCorner<6, 6>() = X12;
+  P->bottomLeftCorner<6, 6>() = X12.transpose();
+  P->bottomRightCorner<6, 6>() = M22;
   *x += 0.5 * dt_s * (k0 + k1);
   ekf_wrap_angles(x);
 }
@@ -322,21 +351,28 @@ EkfMeasurementStatus AttitudeVelocityEkf::apply_now(const PoseMeasurement& z) {
 }
 
 EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& z) {
-  const std::int64_t now = history_.back().utime;
   if (too_old(z)) {
     ++counters_.measurements_too_old;
     return EkfMeasurementStatus::kTooOld;
   }
+  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
+  replay(store(z, &status));
+  return status;
+}
+
+std::size_t AttitudeVelocityEkf::store(const PoseMeasurement& z, EkfMeasurementStatus* status) {
   // j: last node strictly before the measurement.
   std::size_t j = history_.size() - 1;
   while (j > 0 && history_[j].utime >= z.utime) --j;
-  if (z.utime < now) ++counters_.rollbacks;
-
+  if (z.utime < history_.back().utime) ++counters_.rollbacks;
   // Insert into the stored measurements, after those with the same or an earlier time.
   auto pos = std::upper_bound(accepted_.begin(), accepted_.end(), z.utime,
                               [](std::int64_t t, const Stored& s) { return t < s.z.utime; });
-  accepted_.insert(pos, Stored{z, true});
+  accepted_.insert(pos, Stored{z, true, status});
+  return j;
+}
 
+void AttitudeVelocityEkf::replay(std::size_t j) {
   EkfState x = history_[j].x;
   EkfCovariance P = history_[j].P;
   std::int64_t t = history_[j].utime;
@@ -344,7 +380,6 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
       std::upper_bound(accepted_.begin(), accepted_.end(), t,
                        [](std::int64_t tt, const Stored& s) { return tt < s.z.utime; }) -
       accepted_.begin());
-  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
   for (std::size_t i = j; i + 1 < history_.size(); ++i) {
     const Node& a = history_[i];
     Node& b = history_[i + 1];
@@ -358,12 +393,15 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
       if (accepted_[k].is_new) {
         const bool ok = update(&x, &P, accepted_[k].z, true, &record);
         report(record);
+        if (accepted_[k].status) {
+          *accepted_[k].status = ok ? EkfMeasurementStatus::kAccepted : EkfMeasurementStatus::kRejectedGate;
+        }
         if (!ok) {
-          status = EkfMeasurementStatus::kRejectedGate;
           accepted_.erase(accepted_.begin() + static_cast<std::ptrdiff_t>(k));
           continue;
         }
         accepted_[k].is_new = false;
+        accepted_[k].status = nullptr;
       } else {
         update(&x, &P, accepted_[k].z, false, &record);
       }
@@ -376,7 +414,6 @@ EkfMeasurementStatus AttitudeVelocityEkf::insert_in_past(const PoseMeasurement& 
     b.x = x;
     b.P = P;
   }
-  return status;
 }
 
 bool AttitudeVelocityEkf::too_old(const PoseMeasurement& z) const {
@@ -392,17 +429,27 @@ bool AttitudeVelocityEkf::velocity_window_offset(const PoseMeasurement& z, Eigen
   const std::int64_t ts = z.velocity_window_start_utime, te = z.velocity_window_end_utime;
   if (!(ts <= z.utime && z.utime <= te && ts < te)) return false;
   if (history_.front().utime > ts || history_.back().utime < te) return false;
-  // World velocity along the history, linear between nodes; its integral over [ts, te] by the
-  // trapezoidal rule, ends interpolated.
-  const auto at = [&](std::size_t i, std::int64_t t) {  // between node i and i + 1
-    const Node& a = history_[i];
-    if (i + 1 >= history_.size() || t <= a.utime) return world_velocity(a.x);
-    const Node& b = history_[i + 1];
-    const double s = static_cast<double>(t - a.utime) / static_cast<double>(b.utime - a.utime);
-    return Eigen::Vector3d((1.0 - s) * world_velocity(a.x) + s * world_velocity(b.x));
-  };
   std::size_t i = 0;
   while (i + 1 < history_.size() && history_[i + 1].utime <= ts) ++i;
+  // World velocity of the nodes from i on [m/s], each evaluated once (a rotation each).
+  std::vector<Eigen::Vector3d> node_velocity(history_.size() - i);
+  std::vector<char> node_velocity_known(history_.size() - i, 0);
+  const auto velocity_of = [&](std::size_t n) -> const Eigen::Vector3d& {
+    if (!node_velocity_known[n - i]) {
+      node_velocity[n - i] = world_velocity(history_[n].x);
+      node_velocity_known[n - i] = 1;
+    }
+    return node_velocity[n - i];
+  };
+  // World velocity along the history, linear between nodes; its integral over [ts, te] by the
+  // trapezoidal rule, ends interpolated.
+  const auto at = [&](std::size_t k, std::int64_t t) {  // between node k and k + 1
+    const Node& a = history_[k];
+    if (k + 1 >= history_.size() || t <= a.utime) return velocity_of(k);
+    const Node& b = history_[k + 1];
+    const double s = static_cast<double>(t - a.utime) / static_cast<double>(b.utime - a.utime);
+    return Eigen::Vector3d((1.0 - s) * velocity_of(k) + s * velocity_of(k + 1));
+  };
   Eigen::Vector3d integral = Eigen::Vector3d::Zero(), v_mid = at(i, ts), v_prev = v_mid;
   std::int64_t t_prev = ts;
   std::size_t mid_node = i;
@@ -442,28 +489,70 @@ PoseMeasurement AttitudeVelocityEkf::prepared(const PoseMeasurement& z) {
 }
 
 EkfMeasurementStatus AttitudeVelocityEkf::add_measurement(const PoseMeasurement& z) {
-  if (!initialized()) {
-    ++counters_.measurements_invalid;
-    return EkfMeasurementStatus::kNotInitialized;
+  EkfMeasurementStatus status = EkfMeasurementStatus::kAccepted;
+  add_batch(&z, 1, &status);
+  return status;
+}
+
+std::vector<EkfMeasurementStatus> AttitudeVelocityEkf::add_measurements(const std::vector<PoseMeasurement>& zs) {
+  std::vector<EkfMeasurementStatus> status(zs.size(), EkfMeasurementStatus::kAccepted);
+  add_batch(zs.data(), zs.size(), status.data());
+  return status;
+}
+
+void AttitudeVelocityEkf::add_batch(const PoseMeasurement* zs, std::size_t n, EkfMeasurementStatus* status) {
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::size_t from = kNone;  // first node of the replay the stored measurements wait for
+  std::int64_t last_stored_utime = std::numeric_limits<std::int64_t>::min();
+  for (std::size_t i = 0; i < n; ++i) {
+    const PoseMeasurement& z = zs[i];
+    if (!initialized()) {
+      ++counters_.measurements_invalid;
+      status[i] = EkfMeasurementStatus::kNotInitialized;
+      continue;
+    }
+    if (!finite(z)) {
+      ++counters_.measurements_invalid;
+      status[i] = EkfMeasurementStatus::kInvalid;
+      continue;
+    }
+    const std::int64_t now = history_.back().utime;
+    if (config_.latency_mode == EkfLatencyMode::kNaive) {
+      status[i] = apply_now(prepared(z));
+      continue;
+    }
+    if (z.utime > now + history_us_) {
+      ++counters_.measurements_too_new;
+      status[i] = EkfMeasurementStatus::kTooNew;
+      continue;
+    }
+    const std::int64_t ready = ready_utime(z);
+    if (ready > now) {
+      auto pos = std::upper_bound(pending_.begin(), pending_.end(), ready,
+                                  [this](std::int64_t t, const PoseMeasurement& m) { return t < ready_utime(m); });
+      pending_.insert(pos, z);
+      status[i] = EkfMeasurementStatus::kPending;
+      continue;
+    }
+    // One replay serves the measurements stored since the last, with the result of one replay
+    // each: a window offset reads the history, which must hold the earlier measurements first,
+    // and a measurement before one already stored would be gated before it.
+    const bool reads_history =
+        z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
+    if (from != kNone && (reads_history || z.utime < last_stored_utime)) {
+      replay(from);
+      from = kNone;
+    }
+    const PoseMeasurement zp = prepared(z);
+    if (too_old(zp)) {
+      ++counters_.measurements_too_old;
+      status[i] = EkfMeasurementStatus::kTooOld;
+      continue;
+    }
+    from = std::min(from, store(zp, &status[i]));
+    last_stored_utime = zp.utime;
   }
-  if (!finite(z)) {
-    ++counters_.measurements_invalid;
-    return EkfMeasurementStatus::kInvalid;
-  }
-  const std::int64_t now = history_.back().utime;
-  if (config_.latency_mode == EkfLatencyMode::kNaive) return apply_now(prepared(z));
-  if (z.utime > now + history_us_) {
-    ++counters_.measurements_too_new;
-    return EkfMeasurementStatus::kTooNew;
-  }
-  const std::int64_t ready = ready_utime(z);
-  if (ready > now) {
-    auto pos = std::upper_bound(pending_.begin(), pending_.end(), ready,
-                                [this](std::int64_t t, const PoseMeasurement& m) { return t < ready_utime(m); });
-    pending_.insert(pos, z);
-    return EkfMeasurementStatus::kPending;
-  }
-  return insert_in_past(prepared(z));
+  if (from != kNone) replay(from);
 }
 
 }  // namespace nimble

@@ -48,8 +48,10 @@
 /// predicts to the measurement time (input interpolated), updates, and re-predicts through the
 /// stored IMU inputs (re-applying later stored measurements) up to the present. A measurement
 /// older than the history is counted and dropped; one stamped ahead of the newest IMU sample (up to
-/// history_s ahead) waits until the IMU catches up. latency_mode naive applies every measurement
-/// to the current state regardless of its time (for comparison only).
+/// history_s ahead) waits until the IMU catches up. add_measurements() takes the measurements of
+/// one frame together: one re-propagation for those in the past, the same result bit for bit.
+/// latency_mode naive applies every measurement to the current state regardless of its time
+/// (for comparison only).
 /// Without measurements (dropout) the filter keeps predicting and its covariance grows.
 ///
 /// Update: Joseph form P = (I - K H) P (I - K H)^T + K R K^T, then symmetrised.
@@ -218,6 +220,12 @@ class AttitudeVelocityEkf {
 
   /// Processes one measurement stamped z.utime (see the top of this header for latency handling).
   EkfMeasurementStatus add_measurement(const PoseMeasurement& z);
+  /// Processes measurements in order (those of one motion-capture frame,
+  /// MocapMeasurementBuilder::push()); returns their statuses in the same order. The result,
+  /// bit for bit, of add_measurement() on each in turn, but the measurements inserted in the past
+  /// share one re-propagation to the present (the attitude of a frame rides along with the
+  /// velocity measurement it completes).
+  std::vector<EkfMeasurementStatus> add_measurements(const std::vector<PoseMeasurement>& zs);
 
   /// Called once per gating decision (also for measurements that were pending).
   void set_update_observer(std::function<void(const EkfUpdateRecord&)> observer) { observer_ = std::move(observer); }
@@ -256,13 +264,25 @@ class AttitudeVelocityEkf {
   struct Stored {
     PoseMeasurement z;
     bool is_new = false;
+    /// While is_new: where the replay writes the gating decision (or null).
+    EkfMeasurementStatus* status = nullptr;
   };
 
   void propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s) const;
   void propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
                           std::int64_t t0, std::int64_t t1) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
+  /// Stores z (already prepared, not too old) and replays from the node before it.
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);
+  /// Stores z as a new measurement whose gating decision goes to `status` at the next replay();
+  /// returns the index of the last history node before z, where that replay must start.
+  std::size_t store(const PoseMeasurement& z, EkfMeasurementStatus* status);
+  /// Restores history node j and re-propagates through the stored inputs to the present, gating
+  /// the new stored measurements and re-applying (without gating) the others; overwrites the nodes.
+  void replay(std::size_t j);
+  /// add_measurement() for n measurements in order (statuses to status[0..n)), one replay for
+  /// those stored together.
+  void add_batch(const PoseMeasurement* zs, std::size_t n, EkfMeasurementStatus* status);
   /// True if z is older than the history (insert_in_past drops it).
   bool too_old(const PoseMeasurement& z) const;
   /// Filter time from which z can be applied: its own time, or the end of its velocity window.

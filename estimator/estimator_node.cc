@@ -3,6 +3,7 @@
 #include <climits>
 #include <iomanip>
 #include <sstream>
+#include <vector>
 
 #include <nimble/fault_event_t.hpp>
 
@@ -100,12 +101,16 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
   if (last_frame_ >= 0 && pose.frame_number > last_frame_ + 1) poses_missing_ += pose.frame_number - last_frame_ - 1;
   last_frame_ = pose.frame_number;
   if (!pose.tracking_valid) ++poses_missing_;
-  for (const PoseMeasurement& z : builder_->push(pose)) {
-    if (!ekf_->initialized()) {
-      ekf_->initialize_from_measurement(z);
-    } else {
-      const EkfMeasurementStatus status = ekf_->add_measurement(z);
-      if (status == EkfMeasurementStatus::kTooOld || status == EkfMeasurementStatus::kTooNew) report_dropped(z, status);
+  std::vector<PoseMeasurement> zs = builder_->push(pose);
+  if (!ekf_->initialized() && !zs.empty()) {
+    ekf_->initialize_from_measurement(zs.front());
+    zs.erase(zs.begin());
+  }
+  // The frame's measurements together: one re-propagation for those that refer to the past.
+  const std::vector<EkfMeasurementStatus> status = ekf_->add_measurements(zs);
+  for (std::size_t i = 0; i < zs.size(); ++i) {
+    if (status[i] == EkfMeasurementStatus::kTooOld || status[i] == EkfMeasurementStatus::kTooNew) {
+      report_dropped(zs[i], status[i]);
     }
   }
   watch_divergence();

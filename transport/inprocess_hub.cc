@@ -10,7 +10,7 @@ void InprocessHub::subscribe(const std::string& pattern, Handler handler) {
   (void)check;
   patterns_.push_back(pattern);
   handlers_.push_back(std::move(handler));
-  std::fill(targets_valid_.begin(), targets_valid_.end(), false);
+  std::fill(targets_valid_.begin(), targets_valid_.end(), 0);
 }
 
 int InprocessHub::intern(const std::string& channel) {
@@ -19,7 +19,7 @@ int InprocessHub::intern(const std::string& channel) {
   ids_.emplace(channel, static_cast<int>(names_.size()));
   names_.push_back(channel);
   targets_.emplace_back();
-  targets_valid_.push_back(false);
+  targets_valid_.push_back(0);
   return static_cast<int>(names_.size() - 1);
 }
 
@@ -30,7 +30,7 @@ const std::vector<int>& InprocessHub::targets(int channel) {
     for (std::size_t i = 0; i < patterns_.size(); ++i) {
       if (std::regex_match(names_[channel], std::regex(patterns_[i]))) t.push_back(static_cast<int>(i));
     }
-    targets_valid_[channel] = true;
+    targets_valid_[channel] = 1;
   }
   return targets_[channel];
 }
@@ -56,8 +56,10 @@ int64_t InprocessHub::drain() {
       const int channel = queue_[index].channel;
       const unsigned char* data = queue_[index].data.data();
       const int size = static_cast<int>(queue_[index].data.size());
-      for (std::size_t k = 0; k < targets(channel).size(); ++k) {
-        handlers_[targets(channel)[k]](names_[channel], data, size);
+      for (std::size_t k = 0;; ++k) {
+        const std::vector<int>& t = targets(channel);  // again after each handler, which may subscribe
+        if (k >= t.size()) break;
+        handlers_[t[k]](names_[channel], data, size);
       }
       ++delivered;
     }

@@ -59,7 +59,7 @@ class InprocessHub {
   std::deque<std::string> names_;  // stable references while handlers run
   std::unordered_map<std::string, int> ids_;
   std::vector<std::vector<int>> targets_;
-  std::vector<bool> targets_valid_;
+  std::vector<char> targets_valid_;  // per channel: targets_ is up to date (char: read per delivery)
   std::vector<Entry> queue_;  // entries [head_, count_) wait; their buffers are reused
   std::size_t head_ = 0, count_ = 0;
   bool draining_ = false;
