@@ -54,6 +54,8 @@ struct Spawned {
 
 /// Runs argv to completion; its wall time and the resources of it and its waited-for children.
 Spawned spawn(const std::vector<std::string>& argv, const std::string& out_file) {
+  std::fflush(stdout);  // the child must not print this process's buffered lines again
+  std::fflush(stderr);
   const auto t0 = std::chrono::steady_clock::now();
   const pid_t pid = ::fork();
   if (pid == 0) {
@@ -88,6 +90,8 @@ double seconds_of(const std::string& cmd) {
 
 /// Wall seconds of `procs` processes each stepping the plant model alone for `sim_s` at once.
 double plant_alone_s(const launcher::RunPlan& plan, double sim_s, int procs) {
+  std::fflush(stdout);
+  std::fflush(stderr);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<pid_t> pids;
   for (int k = 0; k < procs; ++k) {
