@@ -221,15 +221,7 @@ int collect_command(const std::vector<std::string>& args) {
   try {
     const launcher::Campaign c = launcher::load_campaign(dir);
     if (c.backend == launcher::kBackendSlurm) {
-      for (const auto& job : launcher::campaign_jobs(c)) {
-        const auto active = launcher::active_tasks(job);
-        if (!active.empty()) {
-          std::vector<std::size_t> tasks;
-          for (const auto& kv : active) tasks.push_back(kv.first);
-          std::cerr << "rig sweep collect: Slurm job " << job << " still has tasks " << launcher::array_spec(tasks)
-                    << " (" << active.begin()->second << ")\n";
-        }
-      }
+      for (const auto& line : launcher::jobs_still_running(c)) std::cerr << "rig sweep collect: " << line << "\n";
     }
     return finish(c, o, true, 0, 0.0);
   } catch (const std::exception& e) {
@@ -322,16 +314,11 @@ int run_sweep_command(const std::vector<std::string>& args) {
       std::cerr << "rig sweep: resuming " << c.dir << ": " << missing << " of " << c.run_count()
                 << " runs without a result\n";
       if (c.backend == launcher::kBackendSlurm) {
-        for (const auto& job : launcher::campaign_jobs(c)) {
-          const auto active = launcher::active_tasks(job);
-          if (!active.empty()) {
-            std::vector<std::size_t> tasks;
-            for (const auto& kv : active) tasks.push_back(kv.first);
-            std::cerr << "rig sweep: Slurm job " << job << " of this campaign still has tasks "
-                      << launcher::array_spec(tasks) << " (" << active.begin()->second
-                      << "): wait for it (`rig sweep collect " << c.dir << "`) or scancel " << job << " first\n";
-            return kExitUsage;
-          }
+        const std::vector<std::string> running = launcher::jobs_still_running(c);
+        if (!running.empty()) {
+          for (const auto& line : running) std::cerr << "rig sweep: " << line << "\n";
+          std::cerr << "rig sweep: wait for it (`rig sweep collect " << c.dir << "`) or scancel it before --resume\n";
+          return kExitUsage;
         }
         const int code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
         if (code != 0 || no_wait) return code;

@@ -59,21 +59,6 @@ std::string self_exe() {
   return ec ? std::string("rig") : exe.string();
 }
 
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
-}
-
-std::string last_line(const std::string& file) {
-  std::ifstream in(file);
-  std::string line, last;
-  while (std::getline(in, line)) {
-    if (!trim(line).empty()) last = trim(line);
-  }
-  return last;
-}
-
 /// Runs per array task when none is given: a task should last long enough that Slurm's start of
 /// it (about a second) is small beside it, and short enough that a cancelled or failed task loses
 /// little. In process a run of the 30 s flight costs about 0.25 CPU seconds, in lockstep about 6,
@@ -100,11 +85,13 @@ RunOptions run_options(const Campaign& c, std::size_t i, const std::string& bin_
   return r;
 }
 
-/// The configuration digest of parameter set `s` (its first run: the seed is part of it).
-std::string set_digest(const Campaign& c, std::size_t s) {
+/// The plan of parameter set `s`'s first run (its configuration digest names the set: the seed
+/// is part of it).
+/// @throws ConfigError naming the set.
+RunPlan set_plan(const Campaign& c, std::size_t s) {
   const RunOptions o = run_options(c, s * c.seeds_per_set(), "");
   try {
-    return scenario_digest(load_run_plan(o).scenario);
+    return load_run_plan(o);
   } catch (const ConfigError& e) {
     throw ConfigError(e.file(), e.key(), e.value(), e.problem() + " (in parameter set '" + c.sets[s].label + "')",
                       e.line());
@@ -282,6 +269,21 @@ std::string Campaign::run_file(std::size_t run) const {
   return runs_dir() + "/" + name;
 }
 
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r\n");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r\n") - a + 1);
+}
+
+std::string last_line(const std::string& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!trim(line).empty()) last = trim(line);
+  }
+  return last;
+}
+
 void write_file_atomically(const std::string& file, const std::string& text) {
   const std::string partial = file + "." + hostname() + "." + std::to_string(::getpid()) + kPartialSuffix;
   {
@@ -323,12 +325,11 @@ Campaign create_campaign(const CampaignRequest& request) {
   // Every set's plan is loaded before anything is written: a bad value stops the campaign at once.
   RunPlan first;
   for (std::size_t s = 0; s < c.sets.size(); ++s) {
-    c.set_digests.push_back(set_digest(c, s));
-    if (s == 0) {
-      first = load_run_plan(run_options(c, 0, ""));
-      c.scenario = first.scenario.name;
-    }
+    RunPlan plan = set_plan(c, s);
+    c.set_digests.push_back(scenario_digest(plan.scenario));
+    if (s == 0) first = std::move(plan);
   }
+  c.scenario = first.scenario.name;
 
   std::string dir = request.dir;
   if (dir.empty()) {
@@ -440,7 +441,7 @@ void enter_working_dir(const Campaign& c) {
 
 void check_campaign_inputs(const Campaign& c) {
   for (std::size_t s = 0; s < c.sets.size(); ++s) {
-    const std::string now = set_digest(c, s);
+    const std::string now = scenario_digest(set_plan(c, s).scenario);
     if (now != c.set_digests[s]) {
       throw ConfigError(c.scenario_file, "", "",
                         "the scenario or a file it names changed since the campaign was made (parameter set " +

@@ -132,6 +132,12 @@ SweepResult merge_campaign(const Campaign& campaign);
 /// `failed` SIZE_MAX: not known (runs finished elsewhere), not shown.
 void progress_bar(std::size_t done, std::size_t total, std::size_t failed, double wall_s, bool tty);
 
+/// `s` without leading and trailing blanks (spaces, tabs, line ends).
+std::string trim(const std::string& s);
+/// The last line of `file` that is not blank, trimmed (empty if none or no file): what a run or
+/// a task said last before it ended.
+std::string last_line(const std::string& file);
+
 /// Writes `text` to `file` through a temporary file, fsync and rename.
 /// @throws std::runtime_error naming the file.
 void write_file_atomically(const std::string& file, const std::string& text);

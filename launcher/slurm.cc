@@ -43,21 +43,6 @@ std::string job_name(const std::string& scenario) {
   return name.substr(0, 64);
 }
 
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t\r\n") - a + 1);
-}
-
-std::string last_line(const std::string& file) {
-  std::ifstream in(file);
-  std::string line, last;
-  while (std::getline(in, line)) {
-    if (!trim(line).empty()) last = trim(line);
-  }
-  return last;
-}
-
 std::string runs_text(const Campaign& c, const std::vector<std::size_t>& runs) {
   if (runs.empty()) return "no runs";
   if (runs.size() == 1) return "run " + std::to_string(runs[0]) + " (" + c.run_name(runs[0]) + ")";
@@ -242,6 +227,18 @@ std::map<std::size_t, std::string> active_tasks(const std::string& job) {
     }
   }
   return active;
+}
+
+std::vector<std::string> jobs_still_running(const Campaign& c) {
+  std::vector<std::string> lines;
+  for (const auto& job : campaign_jobs(c)) {
+    const auto active = active_tasks(job);
+    if (active.empty()) continue;
+    std::vector<std::size_t> tasks;
+    for (const auto& kv : active) tasks.push_back(kv.first);
+    lines.push_back("Slurm job " + job + " still has tasks " + array_spec(tasks) + " (" + active.begin()->second + ")");
+  }
+  return lines;
 }
 
 std::map<std::size_t, std::string> task_outcomes(const std::string& job) {

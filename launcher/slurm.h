@@ -41,6 +41,10 @@ std::vector<std::string> campaign_jobs(const Campaign& campaign);
 /// @throws std::runtime_error if squeue cannot be run or fails otherwise.
 std::map<std::size_t, std::string> active_tasks(const std::string& job);
 
+/// The campaign's jobs that Slurm still has tasks of, each as "Slurm job J still has tasks
+/// 3-4 (RUNNING)" (the state of its first such task); empty when none.
+std::vector<std::string> jobs_still_running(const Campaign& campaign);
+
 /// How each array task of a finished `job` ended (scontrol show job, while Slurm remembers the
 /// job: MinJobAge), e.g. "COMPLETED exit 0:0", "CANCELLED exit 0:15", "FAILED exit 3:0".
 std::map<std::size_t, std::string> task_outcomes(const std::string& job);

@@ -55,6 +55,14 @@ inline void put_string(std::string& out, const std::string& s) {
   put32(out, static_cast<uint32_t>(s.size()));
   out.append(s);
 }
+/// MCAP's Map<uint16, uint64>: its byte length (10 per entry), then each key and value.
+inline void put_u16_u64_map(std::string& out, const std::vector<std::pair<uint16_t, uint64_t>>& entries) {
+  put32(out, static_cast<uint32_t>(10 * entries.size()));
+  for (const auto& e : entries) {
+    put16(out, e.first);
+    put64(out, e.second);
+  }
+}
 inline void put_string_map(std::string& out, const std::map<std::string, std::string>& m) {
   uint64_t bytes = 0;
   for (const auto& kv : m) bytes += 8 + kv.first.size() + kv.second.size();
@@ -383,11 +391,11 @@ void McapWriter::close() {
     put32(summary, static_cast<uint32_t>(chunk_indexes_.size()));
     put64(summary, stats_.messages > 0 ? message_start_ : 0);
     put64(summary, stats_.messages > 0 ? message_end_ : 0);
-    put32(summary, static_cast<uint32_t>(10 * channels_.size()));
+    std::vector<std::pair<uint16_t, uint64_t>> channel_counts;
     for (std::size_t i = 0; i < channels_.size(); ++i) {
-      put16(summary, static_cast<uint16_t>(i + 1));
-      put64(summary, channels_[i].count);
+      channel_counts.emplace_back(static_cast<uint16_t>(i + 1), channels_[i].count);
     }
+    put_u16_u64_map(summary, channel_counts);
     end_record(summary, at);
   }
   group(kOpStatistics, begin);
@@ -399,11 +407,7 @@ void McapWriter::close() {
     put64(summary, ci.end_time);
     put64(summary, ci.offset);
     put64(summary, ci.length);
-    put32(summary, static_cast<uint32_t>(10 * ci.message_index_offsets.size()));
-    for (const auto& e : ci.message_index_offsets) {
-      put16(summary, e.first);
-      put64(summary, e.second);
-    }
+    put_u16_u64_map(summary, ci.message_index_offsets);
     put64(summary, ci.message_index_length);
     put_string(summary, options_.compression == Compression::kZstd ? "zstd" : "");
     put64(summary, ci.compressed_size);
