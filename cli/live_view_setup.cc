@@ -14,9 +14,12 @@ void LiveViewSession::start() {
 }
 
 void LiveViewSession::stop() {
-  view->flush(1.0);
-  view->stop();
-  server->stop();
+  // A session whose server or view could not be made (open_live_view threw) has nothing to stop.
+  if (view) {
+    view->flush(1.0);
+    view->stop();
+  }
+  if (server) server->stop();
 }
 
 launcher::TapFigures LiveViewSession::figures() const {

@@ -72,12 +72,8 @@ chmod 600 "$dir/munge.key"
 munged --force --socket="$dir/munge.sock" --key-file="$dir/munge.key" --pid-file="$dir/munged.pid" \
   --log-file="$dir/munged.log" --seed-file="$dir/munge.seed" >/dev/null 2>&1 || die "munged did not start"
 
-# Two free ports on the loopback.
-read -r ctld_port slurmd_port < <(/usr/bin/python3 -c '
-import socket
-s = [socket.socket() for _ in range(2)]
-for x in s: x.bind(("127.0.0.1", 0))
-print(*[x.getsockname()[1] for x in s])')
+# Two free ports on the loopback, let go before the daemons start.
+read -r ctld_port slurmd_port <<<"$(/usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../support/free_ports.py" 2)"
 
 host="$(hostname -s)"
 cpus="$(nproc)"

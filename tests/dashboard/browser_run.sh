@@ -19,12 +19,8 @@ mkdir -p "$WORK"
 [[ -d "$BUILD/npm/node_modules/puppeteer-core" ]] || { echo "FAIL: $BUILD/npm/node_modules has no puppeteer-core: run scripts/setup.sh" >&2; exit 1; }
 [[ -x /usr/bin/chromium-headless-shell ]] || { echo "FAIL: /usr/bin/chromium-headless-shell is missing: run scripts/setup.sh" >&2; exit 1; }
 
-# Two free ports on the loopback.
-read -r WS_PORT WEB_PORT < <(python3 -c '
-import socket
-socks = [socket.socket() for _ in range(2)]
-for s in socks: s.bind(("127.0.0.1", 0))
-print(*[s.getsockname()[1] for s in socks])')
+# Two free ports on the loopback, let go before the servers start.
+read -r WS_PORT WEB_PORT <<<"$(/usr/bin/python3 "$SRC/tests/support/free_ports.py" 2)"
 
 pids=()
 cleanup() {
