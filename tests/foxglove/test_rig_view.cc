@@ -3,7 +3,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,6 +57,28 @@ TEST_CASE("rig view: a damaged log is an error naming its offset, --salvage repl
   CHECK(r.exit_code == 0);
   CHECK_THAT(r.err, Catch::Contains("salvaged"));
   CHECK_THAT(r.out, Catch::Contains("live view: clients 0"));
+}
+
+TEST_CASE("rig view and rig run: a live view port in use is named, exit 2, not a crash", "[foxglove][view]") {
+  // A port this test holds, listening.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0);
+  REQUIRE(::listen(fd, 1) == 0);
+  socklen_t len = sizeof a;
+  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0);
+  const std::string busy = "127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  auto r = nimble::test::run_rig("view " + hover_log() + " --foxglove " + busy + " --speed 0 --exit-when-done");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("cannot listen on " + busy));
+  r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
+                            "/rig_configs/hover.yaml --clock inprocess --set duration_s=1 --no-progress --foxglove " + busy);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--foxglove " + busy + ": cannot listen on " + busy));
+  ::close(fd);
 }
 
 TEST_CASE("rig view: bad options are usage errors", "[foxglove][view]") {
