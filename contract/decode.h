@@ -52,6 +52,21 @@ bool decode_exact(const void* data, int size, T& msg, std::string* error = nullp
   return false;
 }
 
+/// decode_exact() for bytes the rig's own encoder wrote for a T in this process (an in-process
+/// run's messages, InprocessHub::delivering_own_encoding()): the same checks but the one that the
+/// bytes encode back, which such bytes pass by construction (LCM's encoder writes booleans as 0
+/// or 1 and strings up to their first NUL, which is what decoding them gives back).
+template <typename T>
+bool decode_own(const void* data, int size, T& msg, std::string* error = nullptr) {
+  try {
+    if (msg.decode(data, 0, size) == size) return true;
+    if (error) *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " + std::to_string(size) + " bytes)";
+  } catch (const std::exception& e) {
+    if (error) *error = "decoding as " + std::string(T::getTypeName()) + " failed: " + e.what();
+  }
+  return false;
+}
+
 /// Largest forward step of a publisher's `seq` taken as genuine: a message further ahead, or
 /// behind, does not continue the sequence and is not trusted (a stray publisher, or random bytes
 /// that happened to decode). At the rig's highest rate this is 10 s of lost messages.

@@ -1,6 +1,7 @@
 #include "estimator/ekf_model.h"
 
 #include <cmath>
+#include <cstring>
 
 #include "core/attitude.h"
 
@@ -61,8 +62,10 @@ void jacobian_from(const Terms& t, const EkfModelParams& params, EkfLinearisatio
   const double qs_rc = t.q * t.sf + t.r * t.cf;  // q sin(phi) + r cos(phi)
   const double qc_rs = t.q * t.cf - t.r * t.sf;  // d/dphi of the above
   const double ct2 = t.ct * t.ct;
-  A.setZero();
-  B.setZero();
+  // Zeroed as bytes: Eigen's setZero() here compiled to a scalar fill loop, a visible share of
+  // each propagation step (all-zero bytes are +0.0).
+  std::memset(A.data(), 0, sizeof(double) * 36);
+  std::memset(B.data(), 0, sizeof(double) * 36);
   // phi_dot
   A(kPhi, kPhi) = qc_rs * t.tt;
   A(kPhi, kTheta) = qs_rc / ct2;

@@ -1,6 +1,7 @@
 #include "transport/inprocess_hub.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <regex>
 
 namespace nimble::transport {
@@ -14,8 +15,14 @@ void InprocessHub::subscribe(const std::string& pattern, Handler handler) {
 }
 
 int InprocessHub::intern(const std::string& channel) {
+  RecentName& recent = recent_[(reinterpret_cast<std::uintptr_t>(&channel) >> 5) % kRecentNames];
+  if (recent.name == &channel && names_[static_cast<std::size_t>(recent.id)] == channel) return recent.id;
   const auto it = ids_.find(channel);
-  if (it != ids_.end()) return it->second;
+  if (it != ids_.end()) {
+    recent = RecentName{&channel, it->second};
+    return it->second;
+  }
+  recent = RecentName{&channel, static_cast<int>(names_.size())};
   ids_.emplace(channel, static_cast<int>(names_.size()));
   names_.push_back(channel);
   targets_.emplace_back();
@@ -35,10 +42,11 @@ const std::vector<int>& InprocessHub::targets(int channel) {
   return targets_[channel];
 }
 
-void InprocessHub::publish(const std::string& channel, const void* data, int size) {
+void InprocessHub::publish(const std::string& channel, const void* data, int size, bool own_encoding) {
   if (count_ == queue_.size()) queue_.emplace_back();
   Entry& e = queue_[count_++];
   e.channel = intern(channel);
+  e.own = own_encoding;
   const auto* bytes = static_cast<const unsigned char*>(data);
   e.data.assign(bytes, bytes + std::max(0, size));
   ++published_;
@@ -56,11 +64,13 @@ int64_t InprocessHub::drain() {
       const int channel = queue_[index].channel;
       const unsigned char* data = queue_[index].data.data();
       const int size = static_cast<int>(queue_[index].data.size());
+      delivering_own_ = queue_[index].own;
       for (std::size_t k = 0;; ++k) {
         const std::vector<int>& t = targets(channel);  // again after each handler, which may subscribe
         if (k >= t.size()) break;
         handlers_[t[k]](names_[channel], data, size);
       }
+      delivering_own_ = false;
       ++delivered;
     }
     head_ = count_ = 0;

@@ -3,6 +3,7 @@
 // lockstep (a participant's ticks and acknowledgements through the hub; a missing
 // acknowledgement is a fault at once, not after a timeout).
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -164,6 +165,44 @@ TEST_CASE("bus: a string of encoded length 0 and a seq that does not continue ar
   REQUIRE(malformed.size() == 2);
   CHECK(malformed[0].find("cannot decode as heartbeat_t") != std::string::npos);
   CHECK(malformed[1].find("does not continue") != std::string::npos);
+}
+
+TEST_CASE("bus on a hub: the rig's own messages skip the encode-back check, raw bytes keep it", "[transport]") {
+  InprocessHub hub;
+  Bus sender(hub), receiver(hub);
+  std::vector<nimble::heartbeat_t> got;
+  std::vector<bool> own_when_delivered;
+  std::vector<std::string> malformed;
+  receiver.subscribe<nimble::heartbeat_t>(ch::kHeartbeat, [&](const nimble::heartbeat_t& h) {
+    got.push_back(h);
+    own_when_delivered.push_back(hub.delivering_own_encoding());
+  });
+  receiver.on_malformed([&](const std::string& c, const std::string& what) { malformed.push_back(c + ": " + what); });
+  nimble::heartbeat_t hb{};
+  hb.process = "plant";
+  hb.seq = 0;
+  sender.publish(ch::kHeartbeat, hb);
+  // The same message as raw bytes with a NUL inside its string: LCM decodes "pl\0nt" but
+  // encodes back "pl", so published raw (as fault injection publishes garbage) it is malformed.
+  hb.seq = 1;
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(hb.getEncodedSize()));
+  REQUIRE(hb.encode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()));
+  const std::string name = "plant";
+  const auto at = std::search(bytes.begin(), bytes.end(), name.begin(), name.end());
+  REQUIRE(at != bytes.end());
+  std::vector<unsigned char> nul_inside = bytes;
+  nul_inside[static_cast<std::size_t>(at - bytes.begin()) + 2] = 0;
+  sender.publish_bytes(ch::kHeartbeat, nul_inside.data(), static_cast<int>(nul_inside.size()));
+  // Raw bytes that do encode back are delivered, checked in full.
+  sender.publish_bytes(ch::kHeartbeat, bytes.data(), static_cast<int>(bytes.size()));
+  receiver.drain();
+  REQUIRE(got.size() == 2);
+  CHECK(own_when_delivered == std::vector<bool>{true, false});
+  CHECK(got[1].seq == 1);
+  CHECK(got[1].process == "plant");
+  CHECK_FALSE(hub.delivering_own_encoding());
+  REQUIRE(malformed.size() == 1);
+  CHECK(malformed[0].find("a string with a NUL inside") != std::string::npos);
 }
 
 namespace {
