@@ -99,14 +99,14 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   const bool tty = ::isatty(STDERR_FILENO);
   std::atomic<int64_t> wall_start_ns{monotonic_ns()};
   int64_t next_progress_ns = 0;  // the recording thread's own
-  MessagePipe pipe([&](const std::string& channel, const void* data, int size, int64_t /*sent*/) {
+  MessagePipe pipe([&](const std::string& channel, const void* data, int size, int64_t /*sent*/, bool own_encoding) {
     // Stamped on arrival here, as the launcher's logger stamps what it receives.
     const int64_t recv_ns = monotonic_ns();
     if (recorder) {
-      recorder->record(channel, data, size, recv_ns);
+      recorder->record(channel, data, size, recv_ns, own_encoding);
       recorder->flush_if_due(recv_ns);
     } else {
-      monitor.on_message(channel, data, size, recv_ns);
+      monitor.on_message(channel, data, size, recv_ns, own_encoding);
     }
     if (options.on_message) options.on_message(channel, data, size);
     if (options.progress && recv_ns >= next_progress_ns && channel == contract::channels::kTruth) {
@@ -119,8 +119,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
       next_progress_ns = recv_ns + (tty ? 200000000LL : 2000000000LL);
     }
   });
-  hub.subscribe(".*", [&pipe](const std::string& channel, const void* data, int size) {
-    pipe.send(&channel, data, size, 0);
+  hub.subscribe(".*", [&pipe, &hub](const std::string& channel, const void* data, int size) {
+    pipe.send(&channel, data, size, 0, hub.delivering_own_encoding());
   });
 
   can::InprocessCanBus can_bus;

@@ -18,12 +18,12 @@ MessagePipe::~MessagePipe() {
   }
 }
 
-void MessagePipe::send(const std::string* channel, const void* data, int size, int64_t recv_ns) {
+void MessagePipe::send(const std::string* channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
   Batch& b = *current_;
   const std::size_t offset = b.bytes.size();
   b.bytes.resize(offset + static_cast<std::size_t>(size));
   if (size > 0) std::memcpy(b.bytes.data() + offset, data, static_cast<std::size_t>(size));
-  b.headers.push_back(Header{channel, recv_ns, offset, size});
+  b.headers.push_back(Header{channel, recv_ns, offset, size, own_encoding});
   if (b.bytes.size() >= batch_bytes_) hand_over();
 }
 
@@ -56,7 +56,7 @@ void MessagePipe::receive_loop() {
     }
     try {
       if (!error_) {
-        for (const Header& h : batch->headers) sink_(*h.channel, batch->bytes.data() + h.offset, h.size, h.recv_ns);
+        for (const Header& h : batch->headers) sink_(*h.channel, batch->bytes.data() + h.offset, h.size, h.recv_ns, h.own_encoding);
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -19,8 +19,9 @@ namespace nimble::launcher {
 class MessagePipe {
  public:
   /// Runs on the receiving thread for every message, in order. `channel` refers to a string
-  /// that lives as long as the pipe is open.
-  using Sink = std::function<void(const std::string& channel, const void* data, int size, int64_t recv_ns)>;
+  /// that lives as long as the pipe is open; `own_encoding` is what send() was told.
+  using Sink =
+      std::function<void(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding)>;
 
   /// Starts the receiving thread. `max_batches`: batches in flight before send() waits.
   explicit MessagePipe(Sink sink, std::size_t batch_bytes = 1 << 17, std::size_t max_batches = 16);
@@ -30,7 +31,9 @@ class MessagePipe {
   MessagePipe& operator=(const MessagePipe&) = delete;
 
   /// Sends one message (copied). `channel` must stay valid until close() returns.
-  void send(const std::string* channel, const void* data, int size, int64_t recv_ns);
+  /// `own_encoding`: the bytes are the rig's own encoding of a message
+  /// (transport::InprocessHub::delivering_own_encoding()), passed on to the sink.
+  void send(const std::string* channel, const void* data, int size, int64_t recv_ns, bool own_encoding = false);
   /// Delivers everything sent and stops the receiving thread. An exception the sink threw is
   /// rethrown here. Idempotent.
   void close();
@@ -41,6 +44,7 @@ class MessagePipe {
     int64_t recv_ns;
     std::size_t offset;
     int size;
+    bool own_encoding;
   };
   struct Batch {
     std::vector<Header> headers;

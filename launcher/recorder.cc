@@ -58,7 +58,7 @@ int64_t Recorder::stamp_us(const std::string& channel, const void* data, int siz
   return last_stamp_us_;
 }
 
-void Recorder::record(const std::string& channel, const void* data, int size, int64_t recv_ns) {
+void Recorder::record(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
   lcm::LogEvent ev;
   ev.eventnum = event_number_++;
   ev.timestamp = stamp_us(channel, data, size);
@@ -66,7 +66,7 @@ void Recorder::record(const std::string& channel, const void* data, int size, in
   ev.datalen = size;
   ev.data = const_cast<void*>(data);
   log_->writeEvent(&ev);
-  monitor_.on_message(channel, data, size, recv_ns);
+  monitor_.on_message(channel, data, size, recv_ns, own_encoding);
 }
 
 void Recorder::flush_if_due(int64_t now_ns, int64_t flush_period_ns) {

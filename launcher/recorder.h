@@ -41,8 +41,8 @@ class Recorder {
   Recorder& operator=(const Recorder&) = delete;
 
   /// Logs one message, stamped as the constructor says, and hands it to the monitor.
-  /// `recv_ns`: its receive time [ns, CLOCK_MONOTONIC].
-  void record(const std::string& channel, const void* data, int size, int64_t recv_ns);
+  /// `recv_ns`: its receive time [ns, CLOCK_MONOTONIC]; `own_encoding` as for RunMonitor::on_message().
+  void record(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding = false);
 
   /// Flushes the log if `flush_period_ns` has passed since the last flush (what is recorded
   /// survives a crash of the recorder up to that age).

@@ -43,15 +43,21 @@ struct StreamMessage {
   std::optional<ControllerStatus> status;
 };
 
+/// decode_exact(), or contract::decode_own() for the rig's own encoding (RunMonitor::on_message()).
 template <class Message>
-std::optional<Message> decoded(const void* data, int size) {
+bool decode_checked(const void* data, int size, Message& m, bool own_encoding) {
+  return own_encoding ? contract::decode_own(data, size, m) : decode_exact(data, size, m);
+}
+
+template <class Message>
+std::optional<Message> decoded(const void* data, int size, bool own_encoding) {
   Message m{};
-  if (!decode_exact(data, size, m)) return std::nullopt;
+  if (!decode_checked(data, size, m, own_encoding)) return std::nullopt;
   return m;
 }
 
 /// The stream message on `channel`, or nothing if the bytes are not exactly its type.
-std::optional<StreamMessage> decode_stream(const std::string& channel, const void* data, int size) {
+std::optional<StreamMessage> decode_stream(const std::string& channel, const void* data, int size, bool own_encoding) {
   StreamMessage s;
   const auto header = [&s](const auto& m) {
     s.utime = m.utime;
@@ -59,24 +65,24 @@ std::optional<StreamMessage> decode_stream(const std::string& channel, const voi
     return std::optional<StreamMessage>(s);
   };
   const auto plain = [&](auto type) -> std::optional<StreamMessage> {
-    const auto m = decoded<decltype(type)>(data, size);
+    const auto m = decoded<decltype(type)>(data, size, own_encoding);
     if (!m) return std::nullopt;
     return header(*m);
   };
   if (channel == kTruth) {
-    const auto m = decoded<truth_state_t>(data, size);
+    const auto m = decoded<truth_state_t>(data, size, own_encoding);
     if (!m) return std::nullopt;
     s.truth = contract::from_message(*m);
     return header(*m);
   }
   if (channel == kEstimate) {
-    const auto m = decoded<estimator_state_t>(data, size);
+    const auto m = decoded<estimator_state_t>(data, size, own_encoding);
     if (!m) return std::nullopt;
     s.estimate = contract::from_message(*m);
     return header(*m);
   }
   if (channel == kMocapPose) {
-    const auto m = decoded<mocap_pose_t>(data, size);
+    const auto m = decoded<mocap_pose_t>(data, size, own_encoding);
     if (!m) return std::nullopt;
     s.latency_us = contract::from_message(*m).latency_us;
     return header(*m);
@@ -86,7 +92,7 @@ std::optional<StreamMessage> decode_stream(const std::string& channel, const voi
   if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return plain(actuator_feedback_t{});
   if (channel == kAttitudeSetpoint) return plain(attitude_setpoint_t{});
   if (channel == kControllerStatus) {
-    const auto m = decoded<controller_status_t>(data, size);
+    const auto m = decoded<controller_status_t>(data, size, own_encoding);
     if (!m) return std::nullopt;
     s.status = contract::from_message(*m);
     return header(*m);
@@ -144,14 +150,14 @@ bool RunMonitor::accept_seq(Counter& c, const std::string& publisher, int64_t se
   return true;
 }
 
-void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns) {
+void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
   // Channels nobody in a run publishes are counted under one name, so that a flood of made-up
   // names cannot grow the table without bound.
   Counter& c = counters_[contract::find_channel(channel) != nullptr || channel == "LCM_SELF_TEST" ? channel : "(other)"];
   // A message is counted and used only once it decodes exactly as its channel's type and
   // continues its publisher's seq; anything else is malformed and left out of every figure.
   const auto take = [&](auto& msg, const std::string& publisher) {
-    if (!decode_exact(data, size, msg) || !known_publisher(cfg_, publisher_of(msg, publisher)) ||
+    if (!decode_checked(data, size, msg, own_encoding) || !known_publisher(cfg_, publisher_of(msg, publisher)) ||
         !accept_seq(c, publisher_of(msg, publisher), msg.seq)) {
       ++c.malformed;
       return false;
@@ -211,7 +217,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
 
   // Stream channels: one publisher; a message that does not decode exactly as its channel's
   // type, or does not continue its seq, is not counted at all.
-  const std::optional<StreamMessage> m = decode_stream(channel, data, size);
+  const std::optional<StreamMessage> m = decode_stream(channel, data, size, own_encoding);
   if (!m || !accept_seq(c, "", m->seq)) {
     ++c.malformed;
     return;

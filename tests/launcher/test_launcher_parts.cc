@@ -135,7 +135,7 @@ TEST_CASE("message pipe: every message arrives on the other thread, in order, wi
   std::thread::id sink_thread;
   {
     MessagePipe pipe(
-        [&](const std::string& channel, const void* data, int size, int64_t stamp) {
+        [&](const std::string& channel, const void* data, int size, int64_t stamp, bool /*own*/) {
           sink_thread = std::this_thread::get_id();
           got.push_back(channel + ":" + std::string(static_cast<const char*>(data), size) + ":" +
                         std::to_string(stamp));
@@ -158,7 +158,7 @@ TEST_CASE("message pipe: every message arrives on the other thread, in order, wi
 
 TEST_CASE("message pipe: an exception in the sink reaches close()", "[launcher]") {
   const std::string c = "C";
-  MessagePipe pipe([](const std::string&, const void*, int, int64_t) { throw std::runtime_error("disk full"); });
+  MessagePipe pipe([](const std::string&, const void*, int, int64_t, bool) { throw std::runtime_error("disk full"); });
   pipe.send(&c, "x", 1, 0);
   CHECK_THROWS_WITH(pipe.close(), "disk full");
 }
