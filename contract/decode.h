@@ -30,15 +30,13 @@ bool encodes_back(const T& msg, const void* data, int size) {
   return msg.encode(buffer.data(), 0, size) == size && std::memcmp(buffer.data(), data, buffer.size()) == 0;
 }
 
-}  // namespace detail
-
-/// Decodes `size` bytes as one T. True only if the bytes are exactly one T (right fingerprint,
-/// nothing short, nothing left over, and bytes the encoder writes back unchanged). On false, `error` (if given) says why.
+/// Decodes `size` bytes as one T; decode_exact() and decode_as() below. With `encodes_back_check`
+/// false the bytes are not encoded again to compare.
 template <typename T>
-bool decode_exact(const void* data, int size, T& msg, std::string* error = nullptr) {
+bool decode_bytes(const void* data, int size, T& msg, std::string* error, bool encodes_back_check) {
   try {
     if (msg.decode(data, 0, size) == size) {
-      if (detail::encodes_back(msg, data, size)) return true;
+      if (!encodes_back_check || encodes_back(msg, data, size)) return true;
       if (error) {
         *error = "cannot decode as " + std::string(T::getTypeName()) + " (a string with a NUL inside or without its terminating NUL, " +
                  std::to_string(size) + " bytes)";
@@ -52,19 +50,22 @@ bool decode_exact(const void* data, int size, T& msg, std::string* error = nullp
   return false;
 }
 
-/// decode_exact() for bytes the rig's own encoder wrote for a T in this process (an in-process
-/// run's messages, InprocessHub::delivering_own_encoding()): the same checks but the one that the
-/// bytes encode back, which such bytes pass by construction (LCM's encoder writes booleans as 0
-/// or 1 and strings up to their first NUL, which is what decoding them gives back).
+}  // namespace detail
+
+/// Decodes `size` bytes as one T. True only if the bytes are exactly one T (right fingerprint,
+/// nothing short, nothing left over, and bytes the encoder writes back unchanged). On false, `error` (if given) says why.
 template <typename T>
-bool decode_own(const void* data, int size, T& msg, std::string* error = nullptr) {
-  try {
-    if (msg.decode(data, 0, size) == size) return true;
-    if (error) *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " + std::to_string(size) + " bytes)";
-  } catch (const std::exception& e) {
-    if (error) *error = "decoding as " + std::string(T::getTypeName()) + " failed: " + e.what();
-  }
-  return false;
+bool decode_exact(const void* data, int size, T& msg, std::string* error = nullptr) {
+  return detail::decode_bytes(data, size, msg, error, true);
+}
+
+/// decode_exact(), except for bytes the rig's own encoder wrote for a T in this process
+/// (`own_encoding`: an in-process run's messages, InprocessHub::delivering_own_encoding()), which
+/// are not encoded again to compare: encoding is a function of the message, so the message they
+/// decode to encodes back to them by construction. Every other check is made.
+template <typename T>
+bool decode_as(const void* data, int size, T& msg, bool own_encoding, std::string* error = nullptr) {
+  return detail::decode_bytes(data, size, msg, error, !own_encoding);
 }
 
 /// Largest forward step of a publisher's `seq` taken as genuine: a message further ahead, or

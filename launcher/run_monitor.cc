@@ -22,7 +22,6 @@ namespace nimble::launcher {
 namespace {
 
 using namespace contract::channels;
-using contract::decode_exact;
 
 /// Publisher names a run's messages may carry besides its processes.
 bool known_publisher(const MonitorConfig& cfg, const std::string& name) {
@@ -43,16 +42,10 @@ struct StreamMessage {
   std::optional<ControllerStatus> status;
 };
 
-/// decode_exact(), or contract::decode_own() for the rig's own encoding (RunMonitor::on_message()).
-template <class Message>
-bool decode_checked(const void* data, int size, Message& m, bool own_encoding) {
-  return own_encoding ? contract::decode_own(data, size, m) : decode_exact(data, size, m);
-}
-
 template <class Message>
 std::optional<Message> decoded(const void* data, int size, bool own_encoding) {
   Message m{};
-  if (!decode_checked(data, size, m, own_encoding)) return std::nullopt;
+  if (!contract::decode_as(data, size, m, own_encoding)) return std::nullopt;
   return m;
 }
 
@@ -157,7 +150,7 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
   // A message is counted and used only once it decodes exactly as its channel's type and
   // continues its publisher's seq; anything else is malformed and left out of every figure.
   const auto take = [&](auto& msg, const std::string& publisher) {
-    if (!decode_checked(data, size, msg, own_encoding) || !known_publisher(cfg_, publisher_of(msg, publisher)) ||
+    if (!contract::decode_as(data, size, msg, own_encoding) || !known_publisher(cfg_, publisher_of(msg, publisher)) ||
         !accept_seq(c, publisher_of(msg, publisher), msg.seq)) {
       ++c.malformed;
       return false;

@@ -151,7 +151,7 @@ class RunMonitor {
   /// Feeds one raw message (channel, encoded bytes, receive time [ns, CLOCK_MONOTONIC]).
   /// `own_encoding`: the bytes are what the rig's own encoder wrote in this process (an
   /// in-process run's messages), which are decoded without checking that they encode back
-  /// (contract::decode_own()); anything else is checked in full.
+  /// (contract::decode_as()); anything else is checked in full.
   void on_message(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding = false);
 
   /// Heartbeat state of each process (heartbeat_t::STATE_*), -1 if never heard.

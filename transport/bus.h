@@ -155,9 +155,7 @@ class Bus {
       // Bytes the rig's own encoder wrote in this process encode back by construction; any
       // other bytes (over LCM, or published raw) are checked in full.
       const bool own = hub_ != nullptr && hub_->delivering_own_encoding();
-      if (!(own ? contract::decode_own(data, size, msg, &error) : contract::decode_exact(data, size, msg, &error))) {
-        return false;
-      }
+      if (!contract::decode_as(data, size, msg, own, &error)) return false;
       if (!track_seq(msg.seq, stats)) {
         error = "seq " + std::to_string(msg.seq) + " does not continue the publisher's " +
                 std::to_string(stats.last_seq) + " (a stray publisher, or bytes that happened to decode)";

@@ -44,7 +44,7 @@ class InprocessHub {
 
   /// While a handler runs: true if the message it is given was written by the rig's own
   /// encoder (see publish()), so that decoding it needs no check that it encodes back
-  /// (contract::decode_own()).
+  /// (contract::decode_as()).
   bool delivering_own_encoding() const { return delivering_own_; }
 
   /// Messages published so far.
