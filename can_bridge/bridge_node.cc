@@ -218,8 +218,17 @@ void CanBridgeNode::on_command_crossed() {
 void CanBridgeNode::log_frame(const ReceivedFrame& rx) {
   if (!candump_) return;
   const int64_t t = rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns();
-  if (rx.is_fd) candump_->write(rx.fd_frame, t, config_.interface);
-  else candump_->write(rx.frame, t, config_.interface);
+  const bool ok = rx.is_fd ? candump_->write(rx.fd_frame, t, config_.interface)
+                           : candump_->write(rx.frame, t, config_.interface);
+  if (!ok) candump_failed();
+}
+
+void CanBridgeNode::candump_failed() {
+  if (candump_failure_reported_) return;
+  candump_failure_reported_ = true;
+  // The bus record lost frames: the run ends on it, named, as it does for the run's own log.
+  node_->fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_OTHER, "candump", candump_->failure());
+  node_->end_run();
 }
 
 void CanBridgeNode::send(const can_frame& frame) {
@@ -227,10 +236,10 @@ void CanBridgeNode::send(const can_frame& frame) {
   if (config_.fd) {
     const canfd_frame fd_frame = to_fd_frame(frame, CANFD_BRS);
     r = socket_->send(fd_frame);
-    if (candump_) candump_->write(fd_frame, realtime_ns(), config_.interface);
+    if (candump_ && !candump_->write(fd_frame, realtime_ns(), config_.interface)) candump_failed();
   } else {
     r = socket_->send(frame);
-    if (candump_) candump_->write(frame, realtime_ns(), config_.interface);
+    if (candump_ && !candump_->write(frame, realtime_ns(), config_.interface)) candump_failed();
   }
   if (r == SendResult::kSent) return;
   node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_QUEUE_DROP, "CAN " + config_.interface,
@@ -356,7 +365,7 @@ void CanBridgeNode::publish_health() {
   h.candump_lines = candump_ ? static_cast<int64_t>(candump_->lines_written()) : 0;
   node_->bus().publish(ch::kCanHealth, contract::to_message(h));
   next_health_wall_ns_ = transport::monotonic_ns() + health_period_ns_;
-  if (candump_) candump_->flush();
+  if (candump_ && !candump_->flush()) candump_failed();
 }
 
 }  // namespace nimble::can

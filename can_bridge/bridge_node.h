@@ -88,6 +88,8 @@ class CanBridgeNode {
   /// Enters or leaves an injected bus-off at `utime` (FAULT CAN_ERROR_FRAME, CAN_HEALTH state).
   void update_bus_off(int64_t utime);
   void log_frame(const ReceivedFrame& rx);
+  /// The candump log could not be written: a FATAL fault naming why, and the run ends.
+  void candump_failed();
   void on_cycle(int64_t sim_time_ns);
   /// A command crossed this side's part of the link; releases a held STEP_ACK once every
   /// due control cycle has its command.
@@ -98,6 +100,7 @@ class CanBridgeNode {
   CanBridgeConfig config_;
   std::unique_ptr<transport::ProcessNode> node_;
   std::unique_ptr<FramePort> socket_;  // the interface, or an in-process bus endpoint
+  bool candump_failure_reported_ = false;
   std::unique_ptr<CandumpWriter> candump_;
   int64_t cycle_period_ns_ = 0;
 

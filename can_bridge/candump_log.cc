@@ -173,17 +173,9 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   return rec;
 }
 
-CandumpWriter::CandumpWriter(const std::string& path) : path_(path) {
-  file_ = std::fopen(path.c_str(), "w");
-  if (file_ == nullptr) {
-    const int err = errno;
-    throw std::runtime_error("cannot open candump log '" + path + "' for writing: " + std::strerror(err));
-  }
-}
+CandumpWriter::CandumpWriter(const std::string& path) : path_(path), file_(path, 64u << 10) {}
 
-CandumpWriter::~CandumpWriter() {
-  if (file_ != nullptr) std::fclose(file_);
-}
+CandumpWriter::~CandumpWriter() = default;
 
 bool CandumpWriter::write(const can_frame& frame, int64_t time_ns, const std::string& interface) {
   return write_line(format_candump_line(frame, time_ns, interface));
@@ -194,21 +186,32 @@ bool CandumpWriter::write(const canfd_frame& frame, int64_t time_ns, const std::
 }
 
 bool CandumpWriter::write_line(std::string line) {
+  if (!failure_.empty()) return false;
   line += '\n';
-  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size()) {
-    ++write_errors_;
+  try {
+    file_.append(line.data(), line.size());
+    file_.end_record();
+  } catch (const OutputError& e) {
+    failure_ = std::string("candump log ") + e.what();
     return false;
   }
-  ++lines_written_;
+  ++lines_;
   return true;
 }
 
 bool CandumpWriter::flush() {
-  if (std::fflush(file_) != 0) {
-    ++write_errors_;
+  if (!failure_.empty()) return false;
+  try {
+    file_.flush();
+  } catch (const OutputError& e) {
+    failure_ = std::string("candump log ") + e.what();
     return false;
   }
   return true;
+}
+
+uint64_t CandumpWriter::lines_written() const {
+  return failure_.empty() ? lines_ : static_cast<uint64_t>(file_.kept_records());
 }
 
 }  // namespace nimble::can

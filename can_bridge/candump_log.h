@@ -13,9 +13,10 @@
 #include <linux/can.h>
 
 #include <cstdint>
-#include <cstdio>
 #include <optional>
 #include <string>
+
+#include "core/output_file.h"
 
 namespace nimble::can {
 
@@ -49,17 +50,18 @@ class CandumpWriter {
   CandumpWriter(const CandumpWriter&) = delete;
   CandumpWriter& operator=(const CandumpWriter&) = delete;
 
-  /// Writes one line; false (and counted) on an I/O error. Never throws.
+  /// Writes one line; false on an I/O error (the log then keeps its whole lines before it and
+  /// takes no more: failure() says why). Never throws.
   bool write(const can_frame& frame, int64_t time_ns, const std::string& interface);
-  /// Writes one CAN FD line; false (and counted) on an I/O error. Never throws.
+  /// Writes one CAN FD line; as write().
   bool write(const canfd_frame& frame, int64_t time_ns, const std::string& interface);
-  /// Flushes buffered lines to the file; false on an I/O error.
+  /// Writes buffered lines to the file; false on an I/O error.
   bool flush();
 
-  /// Lines written so far.
-  uint64_t lines_written() const { return lines_written_; }
-  /// Failed writes and flushes.
-  uint64_t write_errors() const { return write_errors_; }
+  /// Lines accepted so far (after a failure: those in the file).
+  uint64_t lines_written() const;
+  /// "" or why the log could not be written ("candump log F: write failed at byte N: reason").
+  const std::string& failure() const { return failure_; }
   /// The log file's path.
   const std::string& path() const { return path_; }
 
@@ -67,9 +69,9 @@ class CandumpWriter {
   bool write_line(std::string line);
 
   std::string path_;
-  std::FILE* file_ = nullptr;
-  uint64_t lines_written_ = 0;
-  uint64_t write_errors_ = 0;
+  OutputFile file_;
+  uint64_t lines_ = 0;
+  std::string failure_;
 };
 
 }  // namespace nimble::can

@@ -1,5 +1,6 @@
 /// `rig`: the rig's command-line tool. Dispatches to one sub-command.
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -58,6 +59,9 @@ void print_usage(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file over the size limit (RLIMIT_FSIZE) is a write that fails with EFBIG, named by the
+  // writer, not a signal that kills the rig with its outputs half written.
+  std::signal(SIGXFSZ, SIG_IGN);
   if (argc < 2) {
     print_usage(std::cerr);
     return nimble::cli::kExitUsage;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/output_file.h"
 #include "ident/plots.h"
 
 namespace nimble::cli {
@@ -12,10 +13,9 @@ namespace nimble::cli {
 /// `x` formatted with the printf `format` (one double conversion; at most 63 characters).
 std::string fmt(const char* format, double x);
 
-/// The identification plots' gnuplot helpers (ident/plots.h): gp_quote, write_text (as
-/// write_file) and run_gnuplot.
+/// The identification plots' gnuplot helpers (ident/plots.h); files are written with
+/// nimble::write_file (core/output_file.h).
 using ident::gp_quote;
 using ident::run_gnuplot;
-inline void write_file(const std::filesystem::path& path, const std::string& text) { ident::write_text(path, text); }
 
 }  // namespace nimble::cli

@@ -10,6 +10,7 @@
 #include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/config.h"
+#include "core/output_file.h"
 #include "launcher/launcher.h"
 #include "launcher/run_plan.h"
 #include "reproduce/campaign.h"
@@ -82,10 +83,10 @@ int run_reproduce_command(const std::vector<std::string>& args) {
     if (json_file == "-") {
       std::cout << text;
     } else {
-      std::ofstream out(json_file);
-      out << text;
-      if (!out) {
-        std::cerr << "rig reproduce: cannot write " << json_file << "\n";
+      try {
+        write_file(json_file, text);
+      } catch (const OutputError& e) {
+        std::cerr << "rig reproduce: " << e.what() << "\n";
         return kExitUsage;
       }
     }

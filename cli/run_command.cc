@@ -36,7 +36,7 @@ constexpr const char* kRunFooter =
     "network namespace whose loopback carries multicast; 'rig spy --pid PID' joins it. always:\n"
     "fail if one cannot be made; never: the host's network (see rig check).\n"
     "Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
-    "(HEARTBEAT_LOST) or the run stalled, 4 real-time degraded (only with --strict-timing),\n"
+    "(HEARTBEAT_LOST), the run stalled or its log could not be written, 4 real-time degraded (only with --strict-timing),\n"
     "5 completed in the controller's failsafe, 6 controlled but not tracking (the roll tracking error\n"
     "beyond summary.max_tracking_rms_deg or max_tracking_error_deg, or a sustained or growing roll\n"
     "oscillation), 130 interrupted.";
@@ -97,6 +97,15 @@ int run_run_command(const std::vector<std::string>& args) {
                  "the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved scenario and each "
                  "process's output are written next to it")
       ->type_name("FILE");
+  cl->add_option("--log-max-bytes", o.log_max_bytes,
+                 "the log may take at most N bytes: a run whose log is expected to take more is refused before "
+                 "it starts, and one whose log reaches N ends there (failed, the log whole up to it)")
+      ->check(CLI::PositiveNumber)
+      ->type_name("N");
+  cl->add_flag("--no-space-check",
+               "fly even if the log's filesystem has less free space than the log is expected to take (a full "
+               "disk then ends the run, named, with the log whole up to it)")
+      ->each([&o](const std::string&) { o.space_check = false; });
   std::string mcap_file;
   cl->add_option("--mcap", mcap_file,
                  "also the run's log as MCAP (zstd; as rig export --format mcap) for Foxglove, Lichtblick, "

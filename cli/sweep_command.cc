@@ -18,6 +18,7 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "core/output_file.h"
 #include "launcher/campaign.h"
 #include "launcher/slurm.h"
 #include "launcher/sweep.h"
@@ -74,10 +75,13 @@ bool write_text(const std::string& file, const std::string& text) {
     std::cout << text;
     return true;
   }
-  std::ofstream out(file);
-  out << text;
-  if (!out) std::cerr << "rig sweep: cannot write " << file << "\n";
-  return static_cast<bool>(out);
+  try {
+    write_file(file, text);
+    return true;
+  } catch (const OutputError& e) {
+    std::cerr << "rig sweep: " << e.what() << "\n";
+    return false;
+  }
 }
 
 /// Merges the campaign, writes DIR/result.json and DIR/result.csv (kept campaigns) and what
@@ -99,8 +103,8 @@ int finish(const launcher::Campaign& c, const Outputs& o, bool keep, int jobs, d
   written = write_text(o.csv_file, csv) && written;
   try {
     if (keep) {
-      launcher::write_file_atomically(c.dir + "/result.json", json);
-      launcher::write_file_atomically(c.dir + "/result.csv", csv);
+      write_file(c.dir + "/result.json", json);
+      write_file(c.dir + "/result.csv", csv);
       (o.json_file == "-" ? std::cerr : std::cout) << "campaign " << c.dir << ": result.json, result.csv\n";
     }
     if (!o.report_dir.empty()) {

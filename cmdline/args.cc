@@ -6,6 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/output_file.h"
+
 namespace nimble::cli {
 
 double finite_number(const std::string& text) {
@@ -192,10 +194,7 @@ void write_json(const std::string& target, const std::string& json) {
     std::cout << json << "\n";
     return;
   }
-  std::ofstream out(target);
-  if (!out) throw std::runtime_error(target + ": cannot be written");
-  out << json << "\n";
-  if (!out) throw std::runtime_error(target + ": write failed");
+  write_file(target, json + "\n");
 }
 
 }  // namespace nimble::cli

@@ -26,6 +26,8 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 
+#include "core/descriptors.h"
+
 namespace nimble::foxglove {
 
 namespace net = boost::asio;
@@ -449,6 +451,7 @@ void FoxgloveServer::Impl::do_accept() {
 }
 
 void FoxgloveServer::Impl::on_connection(tcp::socket socket) {
+  set_close_on_exec(socket.native_handle());
   beast::error_code ignored;
   socket.set_option(tcp::no_delay(true), ignored);
   std::make_shared<HttpConnection>(this, std::move(socket))->start();
@@ -488,6 +491,8 @@ FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<I
   const std::string where = endpoint_text(endpoint);
   auto& acc = impl_->acceptor;
   acc.open(endpoint.protocol(), ec);
+  // A process the rig starts does not inherit the listening socket (nor, below, a client's).
+  if (!ec && !set_close_on_exec(acc.native_handle())) ec = beast::error_code(errno, beast::system_category());
   if (!ec) acc.set_option(net::socket_base::reuse_address(true), ec);
   if (!ec) acc.bind(endpoint, ec);
   if (!ec) acc.listen(net::socket_base::max_listen_connections, ec);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/json_writer.h"
+#include "core/output_file.h"
 #include "ident/discrepancy.h"
 #include "ident/plots.h"
 #include "ident/spectrum.h"
@@ -453,10 +454,7 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
        << " % of the time\n";
   }
   const std::string report = (std::filesystem::path(dir) / "report.md").string();
-  std::ofstream out(report);
-  if (!out) throw std::runtime_error(report + ": cannot be written");
-  out << md.str();
-  if (!out) throw std::runtime_error(report + ": write failed");
+  write_file(report, md.str());
   files.insert(files.begin(), report);
   return files;
 }

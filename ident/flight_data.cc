@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/output_file.h"
+
 namespace nimble::ident {
 namespace {
 
@@ -271,11 +273,7 @@ std::string format_flight_csv(const FlightData& data) {
 }
 
 void write_flight_csv(const FlightData& data, const std::string& file) {
-  const std::string text = format_flight_csv(data);
-  std::ofstream out(file);
-  if (!out) throw std::runtime_error(file + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(file + ": write failed");
+  write_file(file, format_flight_csv(data));
 }
 
 void validate_flight_data(const FlightData& data) {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/json_writer.h"
+#include "core/output_file.h"
 
 namespace nimble::ident {
 namespace {
@@ -100,10 +101,7 @@ void write_model_yaml(const DerivativeModel& model, const std::string& file, con
   for (const auto& part : relative) ups += part == ".." ? 1 : 0;
   const std::string vehicle_path = (relative.empty() || ups > 2) ? vehicle.string() : relative.string();
   const std::string text = format_model_yaml(model, vehicle_path, comments);
-  std::ofstream out(file);
-  if (!out) throw std::runtime_error(file + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(file + ": write failed");
+  write_file(file, text);
 }
 
 }  // namespace nimble::ident

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/output_file.h"
+
 namespace nimble::ident {
 namespace {
 
@@ -46,7 +48,7 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
     data << "\n";
   }
   const fs::path dat = dir / "derivatives.dat";
-  write_text(dat, data.str());
+  write_file(dat, data.str());
   const fs::path png = dir / "derivatives.png";
   const int n = static_cast<int>(fits.size());
   std::ostringstream s;
@@ -81,7 +83,7 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
     }
     data << "\n\n";
   }
-  write_text(dat, data.str());
+  write_file(dat, data.str());
   const fs::path png = dir / "autocorrelation.png";
   const int n = static_cast<int>(fits.size());
   std::ostringstream s;
@@ -127,7 +129,7 @@ std::string plot_psd(const fs::path& dir, const IdentResult& r) {
       data << "\n\n";
     }
   }
-  write_text(dat, data.str());
+  write_file(dat, data.str());
   const fs::path png = dir / "psd.png";
   const int n = static_cast<int>(r.psd.size());
   const double cutoff = r.options.processing.cutoff_hz;
@@ -166,7 +168,7 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
     data << g(z.real()) << " " << g(z.imag()) << "\n";
     extent = std::max({extent, std::fabs(z.real()), std::fabs(z.imag())});
   }
-  write_text(dat, data.str());
+  write_file(dat, data.str());
   const fs::path png = dir / "eigenvalues.png";
   const double lim = 1.2 * extent;
   std::ostringstream s;
@@ -198,17 +200,10 @@ std::string gp_quote(const std::string& s) {
   return out + "'";
 }
 
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
 void run_gnuplot(const std::filesystem::path& dir, const std::string& name, const std::string& script) {
   const fs::path gp = dir / (name + ".gp");
   const fs::path log = dir / (name + ".log");
-  write_text(gp, script);
+  write_file(gp, script);
   const std::string cmd = "gnuplot " + sh_quote(gp.string()) + " >" + sh_quote(log.string()) + " 2>&1";
   const int status = std::system(cmd.c_str());
   if (status != 0) {
@@ -276,7 +271,7 @@ std::string plot_panels(const std::string& dir, const std::string& name, const s
     }
     data << "\n";
   }
-  write_text(dat, data.str());
+  write_file(dat, data.str());
   const fs::path png = d / (name + ".png");
   const int n = static_cast<int>(panels.size());
   std::ostringstream s;

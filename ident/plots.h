@@ -31,9 +31,6 @@ struct TimePanel {
 /// Single-quoted gnuplot string ('' escapes a quote).
 std::string gp_quote(const std::string& s);
 
-/// Writes `text` to `path`. @throws std::runtime_error if it cannot be written.
-void write_text(const std::filesystem::path& path, const std::string& text);
-
 /// Writes `script` to <dir>/<name>.gp and runs gnuplot on it, its output to <dir>/<name>.log.
 /// @throws std::runtime_error with the log if gnuplot fails.
 void run_gnuplot(const std::filesystem::path& dir, const std::string& name, const std::string& script);

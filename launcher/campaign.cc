@@ -23,6 +23,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/descriptors.h"
+#include "core/output_file.h"
 #include "launcher/inprocess.h"
 #include "scenario/scenario.h"
 #include "transport/clock.h"
@@ -35,7 +37,6 @@ using Json = nlohmann::json;
 
 constexpr const char* kManifestFormat = "nimble-rig-campaign/1";
 constexpr const char* kRunFilePrefix = "run-";
-constexpr const char* kPartialSuffix = ".partial";
 
 /// Trace rate of a campaign with a report [Hz]: 50 samples per second of p, v and phi (the
 /// doublets' roll-rate swings, 2-3 Hz, keep their peaks).
@@ -118,9 +119,13 @@ std::string run_tag(const Campaign& c, std::size_t i) {
       InprocessOptions io;
       io.log_file = log_file;
       const RunReport report = fly_inprocess(plan, io);
-      std::ofstream out(json_file);
-      out << report_json(report) << "\n";
-      code = out ? report.verdict.exit_code : kRunFailed;
+      try {
+        write_file(json_file, report_json(report) + "\n");
+        code = report.verdict.exit_code;
+      } catch (const OutputError& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        code = kRunFailed;
+      }
     } else {
       // Another clock: `rig run` itself, which makes its own network namespace.
       std::vector<std::string> args = {self_exe(), "run", options.scenario_file, "--clock", *options.clock,
@@ -133,6 +138,7 @@ std::string run_tag(const Campaign& c, std::size_t i) {
       std::vector<char*> argv;
       for (auto& a : args) argv.push_back(a.data());
       argv.push_back(nullptr);
+      close_descriptors_from(STDERR_FILENO + 1);
       ::execv(argv[0], argv.data());
       std::fprintf(stderr, "cannot execute %s: %s\n", argv[0], std::strerror(errno));
     }
@@ -208,14 +214,6 @@ std::vector<Override> overrides_from(const Json& a) {
   return out;
 }
 
-void fsync_path(const std::string& path, int flags) {
-  const int fd = ::open(path.c_str(), flags);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
-}
-
 /// Slurm's --time formats: minutes, minutes:seconds, hours:minutes:seconds, days-hours,
 /// days-hours:minutes, days-hours:minutes:seconds.
 bool valid_time_limit(const std::string& t) {
@@ -284,22 +282,6 @@ std::string last_line(const std::string& file) {
   return last;
 }
 
-void write_file_atomically(const std::string& file, const std::string& text) {
-  const std::string partial = file + "." + hostname() + "." + std::to_string(::getpid()) + kPartialSuffix;
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write " + partial);
-  }
-  fsync_path(partial, O_RDONLY);
-  if (::rename(partial.c_str(), file.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    ::unlink(partial.c_str());
-    throw std::runtime_error("cannot rename " + partial + " to " + file + ": " + why);
-  }
-  fsync_path(fs::path(file).parent_path().string(), O_RDONLY | O_DIRECTORY);
-}
 
 Campaign create_campaign(const CampaignRequest& request) {
   const SweepOptions& o = request.sweep;
@@ -373,8 +355,8 @@ Campaign create_campaign(const CampaignRequest& request) {
                   {"rig", c.cluster.rig}};
   m["created_unix_s"] = c.created_unix_s;
   m["created_on"] = hostname();
-  write_file_atomically(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
-  write_file_atomically(c.dir + "/campaign.json", m.dump(2) + "\n");
+  write_file(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
+  write_file(c.dir + "/campaign.json", m.dump(2) + "\n");
   return c;
 }
 
@@ -564,7 +546,7 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
     const double end = unix_now();
     r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
                     {"started_unix_s", started[i]}, {"finished_unix_s", end}};
-    write_file_atomically(c.run_file(i), r.dump() + "\n");
+    write_file(c.run_file(i), r.dump() + "\n");
     std::error_code ec;
     fs::remove(f[0], ec);
     fs::remove(f[1], ec);

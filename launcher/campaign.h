@@ -138,8 +138,5 @@ std::string trim(const std::string& s);
 /// a task said last before it ended.
 std::string last_line(const std::string& file);
 
-/// Writes `text` to `file` through a temporary file, fsync and rename.
-/// @throws std::runtime_error naming the file.
-void write_file_atomically(const std::string& file, const std::string& text);
 
 }  // namespace nimble::launcher

@@ -92,7 +92,12 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   transport::InprocessHub hub;
   RunMonitor monitor(monitor_config(plan));
   std::unique_ptr<Recorder> recorder;
-  if (!options.log_file.empty()) recorder = std::make_unique<Recorder>(options.log_file, monitor, LogStamps::kSimulated);
+  if (!options.log_file.empty()) {
+    recorder = std::make_unique<Recorder>(options.log_file, monitor, LogStamps::kSimulated);
+    recorder->set_max_bytes(options.log_max_bytes);
+  }
+  // Set by the recording thread when the log can no longer be written: the flight then ends.
+  std::atomic<bool> record_failed{false};
 
   // Every message goes, in order, to a second thread that records and monitors it (the
   // launcher's logger, in the other executors); the flight never waits for the disk.
@@ -105,6 +110,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     if (recorder) {
       recorder->record(channel, data, size, recv_ns, own_encoding);
       recorder->flush_if_due(recv_ns);
+      if (recorder->failed()) record_failed.store(true, std::memory_order_relaxed);
     } else {
       monitor.on_message(channel, data, size, recv_ns, own_encoding);
     }
@@ -132,6 +138,10 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     else p.node->join_inprocess();
   }
   if (master == nullptr) throw ConfigError(s.file, "processes", "", "a run needs the process plant");
+  transport::ProcessNode* master_node = master->node;
+  master_node->on_housekeeping([&record_failed, master_node] {
+    if (record_failed.load(std::memory_order_relaxed)) master_node->end_run();
+  });
 
   transport::Bus control(hub);
   run_control_t start;
@@ -177,11 +187,18 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   control.publish(contract::channels::kRunControl, stop);
   hub.drain();
   pipe.close();  // every message recorded and monitored
-  if (recorder) recorder->flush();
+  bool interrupted = g_interrupted != 0;
+  if (recorder) {
+    recorder->close();
+    // A log that lost messages is the run's failure, whatever else ended it.
+    if (recorder->failed()) {
+      failure = recorder->kept().failure;
+      interrupted = false;
+    }
+  }
   const double wall_s = static_cast<double>(monotonic_ns() - wall_start_ns) / 1e9;
   sigaction(SIGINT, &old_int, nullptr);
   sigaction(SIGTERM, &old_term, nullptr);
-  const bool interrupted = g_interrupted != 0;
   if (options.progress && tty) std::fprintf(stderr, "\n");
   if (failure.empty() && master_code != transport::kExitOk) {
     const std::string why = last_fatal_fault(monitor);
@@ -198,6 +215,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages" +
                             (plan.hosts.split() ? "; the hosts section does not apply in process" : "");
   report.log_file = options.log_file;
+  if (recorder) report.log = recorder->kept();
   fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
   for (const auto& p : processes) {
     const int code = &p == master ? master_code : transport::kExitOk;
@@ -218,6 +236,7 @@ int run_inprocess(const RunPlan& plan_in, const RunOptions& options) {
     write_resolved_scenario(plan, log_file);
     InprocessOptions o;
     o.log_file = log_file;
+    o.log_max_bytes = options.log_max_bytes;
     o.progress = options.progress;
     o.on_message = options.tap.message;
     if (options.tap.start) options.tap.start();

@@ -37,6 +37,7 @@
 #include "contract/messages.h"
 #include "contract/rates.h"
 #include "core/json_writer.h"
+#include "core/output_file.h"
 #include "launcher/hosts.h"
 #include "launcher/inprocess.h"
 #include "launcher/netns.h"
@@ -129,10 +130,10 @@ int check_host(const std::string& json_target) {
     if (json_target == "-") {
       std::cout << w.str() << "\n";
     } else {
-      std::ofstream f(json_target);
-      f << w.str() << "\n";
-      if (!f) {
-        std::cerr << "rig check: cannot write " << json_target << "\n";
+      try {
+        write_file(json_target, w.str() + "\n");
+      } catch (const OutputError& e) {
+        std::cerr << "rig check: " << e.what() << "\n";
         return kRunBadInput;
       }
     }
@@ -152,6 +153,15 @@ int run_scenario(const RunOptions& options) {
   if (!options.json_file.empty() && options.json_file != "-") {
     if (const std::string problem = writable_problem(options.json_file); !problem.empty()) {
       std::cerr << "rig run: --json " << options.json_file << ": " << problem << "\n";
+      return kRunBadInput;
+    }
+  }
+  // A log that will not fit is refused now, not found cut after the flight.
+  if (options.space_check || options.log_max_bytes > 0) {
+    const std::string log_file = log_file_for(plan, options);
+    const std::string problem = log_space_problem(plan, log_file, options.log_max_bytes, options.space_check);
+    if (!problem.empty()) {
+      std::cerr << "rig run: refused: " << problem << "\n";
       return kRunBadInput;
     }
   }
@@ -185,12 +195,17 @@ class ProcessRun {
     if (const int code = wait_ready(); code != kRunOk) return code;
     const run_control_t start = start_run();
     bool interrupted = false;
-    const std::string failure = watch(start, interrupted);
+    std::string failure = watch(start, interrupted);
     const double wall_s = static_cast<double>(monotonic_ns() - wall_start_ns_) / 1e9;
     if (options_.progress && ::isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     stop_all(failure.empty() ? lc_.stop_grace_s : 0.5);
     bus_->drain();
-    recorder_->flush();
+    recorder_->close();
+    // A log that lost messages is the run's failure, whatever else ended it.
+    if (recorder_->failed()) {
+      failure = recorder_->kept().failure;
+      interrupted = false;
+    }
     return report(failure, interrupted, wall_s);
   }
 
@@ -266,6 +281,7 @@ class ProcessRun {
     }
     try {
       recorder_ = std::make_unique<Recorder>(log_file_, monitor_, lockstep_ ? LogStamps::kSimulated : LogStamps::kWallClock);
+      recorder_->set_max_bytes(options_.log_max_bytes);
     } catch (const std::exception& e) {
       std::cerr << "rig run: " << e.what() << "\n";
       return kRunBadInput;
@@ -346,7 +362,8 @@ class ProcessRun {
     std::cerr << "rig run: " << message << "\n";
     stop_all(0.5);
     bus_->drain();
-    recorder_->flush();
+    recorder_->close();
+    if (recorder_->failed()) std::cerr << "rig run: " << recorder_->kept().failure << "\n";
     return code;
   }
 
@@ -458,6 +475,7 @@ class ProcessRun {
       bus_->handle_timeout(5);
       const int64_t now = monotonic_ns();
       recorder_->flush_if_due(now);
+      if (recorder_->failed()) return recorder_->kept().failure;
       if (const ChildProcess* dead = supervisor_.reap()) {
         bus_->drain();
         return died_during_run(*dead);
@@ -536,6 +554,7 @@ class ProcessRun {
     report.transport = url_;
     report.transport_detail = ns_detail_;
     report.log_file = log_file_;
+    report.log = recorder_->kept();
     fill_from_monitor(report, monitor_, monitor_.sim_time_s(), wall_s);
     for (const auto& c : supervisor_.children()) {
       report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});

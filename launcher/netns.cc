@@ -23,6 +23,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/descriptors.h"
+
 namespace nimble::launcher {
 namespace {
 
@@ -123,6 +125,7 @@ int run_quiet(const std::vector<std::string>& argv, std::string* output, int net
     ::dup2(pipe_fd[1], 2);
     ::close(pipe_fd[0]);
     ::close(pipe_fd[1]);
+    close_descriptors_from(STDERR_FILENO + 1);
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include <nimble/rig_clock_t.hpp>
@@ -9,6 +10,7 @@
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "contract/rates.h"
+#include "lcmjson/lcm_json.h"
 #include "transport/clock.h"
 
 namespace nimble::launcher {
@@ -31,17 +33,45 @@ MonitorConfig monitor_config(const RunPlan& plan) {
   return mc;
 }
 
+int64_t expected_log_bytes(const RunPlan& plan) {
+  constexpr int kEventHeader = 4 + 8 + 8 + 4 + 4;  // sync, event number, timestamp, two lengths
+  double per_s = 0.0;
+  for (const auto& [channel, hz] : monitor_config(plan).expected_hz) {
+    const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(channel);
+    const int message = type != nullptr ? lcmjson::typical_encoded_size(*type) : 64;
+    per_s += hz * static_cast<double>(kEventHeader + static_cast<int>(channel.size()) + message);
+  }
+  return static_cast<int64_t>(std::ceil(per_s * plan.scenario.duration_s));
+}
+
+std::string log_space_problem(const RunPlan& plan, const std::string& log_file, int64_t max_bytes, bool check_free) {
+  const int64_t expected = expected_log_bytes(plan);
+  char duration[32];
+  std::snprintf(duration, sizeof duration, "%.1f", plan.scenario.duration_s);
+  const std::string need = "the log " + log_file + " is expected to take " + human_bytes(expected) + " (" +
+                           std::to_string(expected) + " bytes for " + duration + " s simulated)";
+  if (max_bytes > 0 && expected > max_bytes) {
+    return need + ", over its limit --log-max-bytes " + std::to_string(max_bytes) +
+           "; raise the limit or shorten the run (duration_s)";
+  }
+  if (!check_free) return "";
+  const int64_t free = free_bytes_at(log_file);
+  const int64_t wanted = max_bytes > 0 ? std::min(expected, max_bytes) : expected;
+  if (free >= 0 && wanted > free) {
+    return need + ", but its filesystem has " + human_bytes(free) + " (" + std::to_string(free) +
+           " bytes) free; free some space, log elsewhere (--log), bound the log (--log-max-bytes) or fly anyway "
+           "(--no-space-check: the run then ends, named, when the disk is full)";
+  }
+  return "";
+}
+
 Recorder::Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps)
-    : file_(log_file), monitor_(monitor), log_(std::make_unique<lcm::LogFile>(log_file, "w")), stamps_(stamps) {
-  if (!log_->good()) throw std::runtime_error("cannot open log " + log_file + " for writing");
-  buffer_ = std::make_unique<char[]>(kWriteBuffer);
-  std::setvbuf(log_->getFilePtr(), buffer_.get(), _IOFBF, kWriteBuffer);
+    : file_(log_file), monitor_(monitor), log_(log_file, kWriteBuffer), stamps_(stamps) {
   last_flush_ns_ = transport::monotonic_ns();
 }
 
 Recorder::~Recorder() {
-  flush();
-  log_.reset();  // closes the file before the buffer goes
+  if (!failed()) checked([this] { log_.flush(); });
 }
 
 int64_t Recorder::stamp_us(const std::string& channel, const void* data, int size) {
@@ -58,15 +88,62 @@ int64_t Recorder::stamp_us(const std::string& channel, const void* data, int siz
   return last_stamp_us_;
 }
 
+template <typename Write>
+void Recorder::checked(Write&& write) {
+  try {
+    write();
+  } catch (const OutputError& e) {
+    const int64_t at = e.offset() >= 0 ? e.offset() : log_.size();
+    const std::string why = e.error_number() != 0 ? std::strerror(e.error_number()) : std::string(e.what());
+    failure_ = "log write failed at byte " + std::to_string(at) + " of " + file_ + ": " + why;
+  }
+}
+
+namespace {
+/// Appends `v` big-endian (the LCM log's byte order).
+template <typename T>
+void put_be(std::string& out, T v) {
+  for (int i = static_cast<int>(sizeof(T)) - 1; i >= 0; --i) {
+    out.push_back(static_cast<char>((static_cast<uint64_t>(v) >> (8 * i)) & 0xFF));
+  }
+}
+constexpr uint32_t kLcmLogSync = 0xEDA1DA01u;  ///< every event's first word (lcm_eventlog.c)
+}  // namespace
+
 void Recorder::record(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
-  lcm::LogEvent ev;
-  ev.eventnum = event_number_++;
-  ev.timestamp = stamp_us(channel, data, size);
-  ev.channel = channel;
-  ev.datalen = size;
-  ev.data = const_cast<void*>(data);
-  log_->writeEvent(&ev);
+  if (!failed()) {
+    // One event of the LCM log format: sync word, event number, timestamp [us], channel
+    // length, data length (big-endian), the channel's name, the data.
+    header_.clear();
+    put_be<uint32_t>(header_, kLcmLogSync);
+    put_be<int64_t>(header_, event_number_);
+    put_be<int64_t>(header_, stamp_us(channel, data, size));
+    put_be<int32_t>(header_, static_cast<int32_t>(channel.size()));
+    put_be<int32_t>(header_, size);
+    header_ += channel;
+    checked([&] {
+      log_.append(header_.data(), header_.size());
+      log_.append(data, static_cast<std::size_t>(size));
+      log_.end_record();
+    });
+    ++event_number_;
+  }
   monitor_.on_message(channel, data, size, recv_ns, own_encoding);
+  if (!failed()) {
+    pending_sim_s_.push_back(monitor_.sim_time_s());
+    // Events in the file no longer need their time, but the newest of them.
+    if (pending_sim_s_.size() >= 4096) forget_kept();
+  }
+}
+
+void Recorder::forget_kept() {
+  const int64_t kept = log_.kept_records();
+  if (kept <= pending_first_) return;
+  const auto n = static_cast<std::size_t>(
+      std::min<int64_t>(kept - pending_first_, static_cast<int64_t>(pending_sim_s_.size())));
+  kept_sim_s_ = pending_sim_s_[n - 1];
+  pending_sim_s_.erase(pending_sim_s_.begin(), pending_sim_s_.begin() + static_cast<std::ptrdiff_t>(n));
+  pending_first_ += static_cast<int64_t>(n);
 }
 
 void Recorder::flush_if_due(int64_t now_ns, int64_t flush_period_ns) {
@@ -75,6 +152,28 @@ void Recorder::flush_if_due(int64_t now_ns, int64_t flush_period_ns) {
   last_flush_ns_ = now_ns;
 }
 
-void Recorder::flush() { std::fflush(log_->getFilePtr()); }
+void Recorder::flush() {
+  if (failed()) return;
+  checked([this] { log_.flush(); });
+  forget_kept();
+}
+
+void Recorder::close() {
+  if (failed()) return;
+  checked([this] { log_.close(); });
+  forget_kept();
+}
+
+LogKept Recorder::kept() const {
+  LogKept k;
+  k.file = file_;
+  k.events = log_.kept_records();
+  k.bytes = log_.kept_bytes();
+  k.sim_time_s = kept_sim_s_;
+  const int64_t known = std::min<int64_t>(k.events - pending_first_, static_cast<int64_t>(pending_sim_s_.size()));
+  if (known > 0) k.sim_time_s = pending_sim_s_[static_cast<std::size_t>(known - 1)];
+  k.failure = failure_;
+  return k;
+}
 
 }  // namespace nimble::launcher

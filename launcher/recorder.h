@@ -5,12 +5,13 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <vector>
 #include <memory>
 #include <string>
 
-#include <lcm/lcm-cpp.hpp>
-
+#include "core/output_file.h"
 #include "launcher/run_monitor.h"
+#include "launcher/run_report.h"
 #include "launcher/run_plan.h"
 
 namespace nimble::launcher {
@@ -19,6 +20,17 @@ namespace nimble::launcher {
 /// clock's own channels (RIG_CLOCK, STEP_ACK with the recorder as a lockstep participant,
 /// but not in process), lateness in real time.
 MonitorConfig monitor_config(const RunPlan& plan);
+
+/// The bytes the LCM log of `plan` is expected to take: per channel its expected rate times an
+/// event (the log's 24-byte event header, the channel's name, the message's typical size,
+/// lcmjson::typical_encoded_size()) over the run's duration; the wall-clock channels at their
+/// wall rate, as if the run took its simulated time (an upper bound faster than real time).
+int64_t expected_log_bytes(const RunPlan& plan);
+
+/// Before a run: "" if the run's log fits, else what is wrong, naming both numbers: a log
+/// expected past its limit `max_bytes` (0: none), or (with `check_free`) past the free space of
+/// its filesystem.
+std::string log_space_problem(const RunPlan& plan, const std::string& log_file, int64_t max_bytes, bool check_free);
 
 /// What the log's event timestamps follow (lcm-logplayer replays at their pace).
 enum class LogStamps {
@@ -29,7 +41,9 @@ enum class LogStamps {
 
 class Recorder {
  public:
-  /// Opens `log_file` for writing (a 1 MiB write buffer).
+  /// Opens `log_file` for writing (a 1 MiB write buffer; the file is the LCM log format, as
+  /// lcm-logger writes it, each event one record of an OutputFile: a failed write cuts the log
+  /// back to its last whole event).
   /// With LogStamps::kSimulated, events before the first RIG_CLOCK tick carry the wall clock;
   /// from the first tick on, an event carries the wall clock of that tick plus the simulated
   /// time of the newest tick recorded, never less than the event before it. So the events of a
@@ -40,8 +54,10 @@ class Recorder {
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  /// Logs one message, stamped as the constructor says, and hands it to the monitor.
+  /// Logs one message, stamped as the constructor says, and hands it to the monitor (also after
+  /// a failed write: the run's figures stay whole, the log keeps what it had).
   /// `recv_ns`: its receive time [ns, CLOCK_MONOTONIC]; `own_encoding` as for RunMonitor::on_message().
+  /// Never throws for a failed write: failed() says so, and the run ends on it.
   void record(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding = false);
 
   /// Flushes the log if `flush_period_ns` has passed since the last flush (what is recorded
@@ -49,16 +65,38 @@ class Recorder {
   void flush_if_due(int64_t now_ns, int64_t flush_period_ns = 100000000LL);
   /// Flushes the log.
   void flush();
+  /// Flushes, syncs and closes the log (the end of a run): a failure here is failed() too.
+  void close();
+
+  /// The log's size limit in bytes (0: none): reaching it ends the recording as a full disk does.
+  void set_max_bytes(int64_t bytes) { log_.set_max_bytes(bytes); }
+
+  /// Whether a write of the log failed: the log then holds its whole events before the failure.
+  bool failed() const { return !failure_.empty(); }
+  /// What the log holds (after close(), for sure).
+  LogKept kept() const;
 
   int64_t events() const { return event_number_; }
   const std::string& file() const { return file_; }
 
  private:
+  /// Runs `write` on the log; a failure is kept in failure_ (the log is cut back to whole events).
+  template <typename Write>
+  void checked(Write&& write);
+  /// Drops the times of events known to be in the file but the newest.
+  void forget_kept();
+
   std::string file_;
   RunMonitor& monitor_;
-  std::unique_ptr<lcm::LogFile> log_;
-  std::unique_ptr<char[]> buffer_;
+  OutputFile log_;
+  std::string failure_;
+  std::string header_;  ///< one event's header and channel, reused
   int64_t event_number_ = 0;
+  /// The simulated time of each event not yet known to be in the file (a whole buffer at most),
+  /// and of the newest one that is: what kept() tells after a failure.
+  std::vector<double> pending_sim_s_;
+  int64_t pending_first_ = 0;  ///< the event number of pending_sim_s_[0]
+  double kept_sim_s_ = 0.0;
   int64_t last_flush_ns_ = 0;
   /// The timestamp of `channel`'s event now [us].
   int64_t stamp_us(const std::string& channel, const void* data, int size);

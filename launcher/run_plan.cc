@@ -12,6 +12,7 @@
 #include "can_bridge/bridge_config.h"
 #include "contract/channels.h"
 #include "contract/rates.h"
+#include "core/output_file.h"
 #include "launcher/campaign.h"
 #include "launcher/scenario_check.h"
 
@@ -162,10 +163,8 @@ std::string write_resolved_scenario(const RunPlan& plan, const std::string& log_
   std::error_code ec;
   if (fs::path(log_file).has_parent_path()) fs::create_directories(fs::path(log_file).parent_path(), ec);
   const std::string resolved_file = log_file + ".scenario.yaml";
-  std::ofstream out(resolved_file);
-  out << "# Resolved scenario of this run (bases merged, overrides applied): " << plan.scenario.file << "\n";
-  out << to_yaml(plan.scenario.root);
-  if (!out) throw std::runtime_error("cannot write " + resolved_file);
+  write_file(resolved_file, "# Resolved scenario of this run (bases merged, overrides applied): " + plan.scenario.file +
+                                "\n" + to_yaml(plan.scenario.root));
   return resolved_file;
 }
 

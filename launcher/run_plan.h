@@ -70,6 +70,8 @@ struct RunOptions {
   std::optional<uint64_t> seed;      ///< --seed N
   std::string log_file;              ///< --log FILE (default: rig_logs/<name>-<time>.lcmlog)
   std::string json_file;             ///< --json FILE
+  int64_t log_max_bytes = 0;         ///< --log-max-bytes N: the log may take at most N bytes (0: no limit)
+  bool space_check = true;           ///< false (--no-space-check): fly even if the log's filesystem looks too small
   std::string bin_dir;               ///< where nimble_plant etc. live (default: next to rig)
   bool progress = true;              ///< progress line on stderr
   bool print_summary = true;         ///< the run summary on stdout

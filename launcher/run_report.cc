@@ -14,6 +14,7 @@
 
 #include "contract/faults.h"
 #include "core/json_writer.h"
+#include "core/output_file.h"
 
 namespace nimble::launcher {
 
@@ -35,7 +36,12 @@ void write_report_text(std::ostream& out, const RunReport& r) {
   out << "\n== run summary: " << r.scenario << " ==\n";
   out << "clock      " << r.clock << ", seed " << r.seed << "\n";
   out << "transport  " << r.transport << (r.transport_detail.empty() ? "" : "  (" + r.transport_detail + ")") << "\n";
-  out << "log        " << r.log_file << "\n";
+  out << "log        " << r.log_file;
+  if (!r.log.file.empty()) {
+    fmt::print(out, ": {} events, {:.3f} s simulated, {}{}", r.log.events, r.log.sim_time_s, human_bytes(r.log.bytes),
+               r.log.failure.empty() ? "" : " (whole events kept before the failure)");
+  }
+  out << "\n";
   fmt::print(out, "time       simulated {:.3f} s, wall {:.3f} s ({:.2f}x real time)\n", sim_s, wall_s,
              wall_s > 0 ? sim_s / wall_s : 0.0);
   out << "\nchannel              count    rate [Hz]  expected   drops   late  malformed\n";
@@ -228,6 +234,12 @@ std::string report_json(const RunReport& r) {
   w.key("config_digest").value(r.config_digest);
   w.key("lcm_url").value(r.transport);
   w.key("log").value(r.log_file);
+  if (!r.log.file.empty()) {
+    w.key("log_kept").begin_object();
+    w.key("events").value(static_cast<long long>(r.log.events)).key("bytes").value(static_cast<long long>(r.log.bytes));
+    w.key("sim_time_s").value(r.log.sim_time_s).key("failure").value(r.log.failure);
+    w.end_object();
+  }
   w.key("controlled").value(r.verdict.controlled);
   w.key("returned_to_hover").value(r.verdict.hover);
   w.key("exit_code").value(r.verdict.exit_code);
@@ -373,9 +385,12 @@ int finish_report(const RunReport& report_in, const RunOptions& options) {
   if (json_stdout) {
     std::cout << report_json(report) << "\n";
   } else if (!options.json_file.empty()) {
-    std::ofstream out(options.json_file);
-    out << report_json(report) << "\n";
-    if (!out) std::cerr << "rig run: cannot write " << options.json_file << "\n";
+    try {
+      write_file(options.json_file, report_json(report) + "\n");
+    } catch (const OutputError& e) {
+      std::cerr << "rig run: --json: " << e.what() << "\n";
+      return report.verdict.exit_code == kRunOk ? kRunFailed : report.verdict.exit_code;
+    }
   }
   return report.verdict.exit_code;
 }

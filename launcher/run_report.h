@@ -26,6 +26,15 @@ struct ProcessOutcome {
   std::string ended;  ///< "exited with code 0", "was killed by signal 9 (Killed)", "running"
 };
 
+/// What a run's log holds: whole events only, also when a write failed.
+struct LogKept {
+  std::string file;
+  int64_t events = 0;      ///< whole events in the file
+  int64_t bytes = 0;
+  double sim_time_s = 0;   ///< the simulated time of its last event
+  std::string failure;     ///< "" or why recording stopped ("log write failed at byte N of F: reason")
+};
+
 /// One host of the run and what ran on it.
 struct HostSummary {
   std::string name;                    ///< as in the scenario's hosts section
@@ -42,6 +51,7 @@ struct RunReport {
   std::string transport;         ///< the LCM URL, or "in process"
   std::string transport_detail;  ///< network namespace etc. (may be empty)
   std::string log_file;
+  LogKept log;                   ///< what the log holds (events 0 and no file: no log was written)
   /// The run's configuration digest (scenario_digest(): the resolved scenario and the content of
   /// every file it names); every process flew with it.
   std::string config_digest;

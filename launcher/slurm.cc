@@ -16,6 +16,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/descriptors.h"
+#include "core/output_file.h"
 #include "transport/clock.h"
 
 namespace nimble::launcher {
@@ -69,6 +71,7 @@ CommandOutput run_command(const std::vector<std::string>& argv) {
     ::close(err_pipe[0]);
     ::close(out_pipe[1]);
     ::close(err_pipe[1]);
+    close_descriptors_from(STDERR_FILENO + 1);
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
@@ -149,7 +152,7 @@ std::string write_batch_script(const Campaign& c) {
     << "exec " << shell_quote(k.rig) << " sweep task " << shell_quote(c.dir)
     << " --task \"$SLURM_ARRAY_TASK_ID\" --jobs \"${SLURM_CPUS_PER_TASK:-" << k.cpus_per_task << "}\"\n";
   const std::string file = c.slurm_dir() + "/sweep.sbatch";
-  write_file_atomically(file, s.str());
+  write_file(file, s.str());
   fs::permissions(file, fs::perms::owner_all | fs::perms::group_read | fs::perms::others_read);
   return file;
 }
@@ -173,8 +176,7 @@ std::string submit_tasks(const Campaign& c, const std::vector<std::size_t>& task
   if (job.empty() || job.find_first_not_of("0123456789") != std::string::npos) {
     throw std::runtime_error("sbatch gave no job id: '" + trim(r.out) + "'");
   }
-  std::ofstream log(c.slurm_dir() + "/jobs.txt", std::ios::app);
-  log << job << " " << spec << "\n";
+  append_to_file(c.slurm_dir() + "/jobs.txt", job + " " + spec + "\n");
   return job;
 }
 

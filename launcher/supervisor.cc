@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/descriptors.h"
 #include "transport/clock.h"
 
 namespace nimble::launcher {
@@ -78,7 +79,7 @@ const ChildProcess& ProcessSupervisor::start(const std::string& name, const std:
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     ::signal(SIGINT, SIG_IGN);
     if (!output_file.empty()) {
-      const int fd = ::open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int fd = ::open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
       if (fd >= 0) {
         ::dup2(fd, STDOUT_FILENO);
         ::dup2(fd, STDERR_FILENO);
@@ -89,6 +90,9 @@ const ChildProcess& ProcessSupervisor::start(const std::string& name, const std:
       std::fprintf(stderr, "cannot enter the network namespace of its host (setns): %s\n", std::strerror(errno));
       ::_exit(127);
     }
+    // The process inherits its standard streams only: not the run's log, the launcher's LCM
+    // sockets, a live view's listening socket or the pipes of other children.
+    close_descriptors_from(STDERR_FILENO + 1);
     ::execv(exe.c_str(), argv.data());
     std::fprintf(stderr, "cannot execute %s: %s\n", exe.c_str(), std::strerror(errno));
     ::_exit(127);

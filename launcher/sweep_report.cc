@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "core/json_writer.h"
+#include "core/output_file.h"
 
 namespace nimble::launcher {
 namespace {
@@ -355,17 +356,6 @@ std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets)
   return out.str();
 }
 
-void write_file(const fs::path& file, const std::string& text) {
-  errno = 0;
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (out) out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  if (out) out.close();
-  if (!out) {
-    const int err = errno;
-    throw std::runtime_error("cannot write the sweep report file " + file.string() +
-                             (err != 0 ? std::string(": ") + std::strerror(err) : std::string()));
-  }
-}
 
 }  // namespace
 

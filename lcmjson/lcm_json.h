@@ -71,6 +71,14 @@ const LcmStruct* find_rig_type(const std::string& name);
 /// the contract does not know.
 const LcmStruct* rig_type_for_channel(const std::string& channel);
 
+/// Bytes a message of `type` typically encodes to: its fingerprint and fields, each string at
+/// kTypicalStringBytes of text and each variable-length array at kTypicalArrayLength elements
+/// (what the rig's messages hold: process, channel and manoeuvre names; a handful of channels).
+/// For sizing logs before a run, not for decoding.
+int typical_encoded_size(const LcmStruct& type);
+inline constexpr int kTypicalStringBytes = 16;
+inline constexpr int kTypicalArrayLength = 6;
+
 /// The JSON Schema (draft-07, which Foxglove's and Ajv's readers take) of `type`'s JSON messages: an object with every field
 /// required, integers as "integer" with their range, doubles as "number" or null, booleans,
 /// strings, arrays with their fixed size; each field's comment as "description" and its unit as

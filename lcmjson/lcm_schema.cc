@@ -1,5 +1,6 @@
 /// JSON Schema of an LCM struct's JSON messages (lcm_json.cc writes them).
 
+#include <cctype>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -36,6 +37,24 @@ Json element_schema(const std::string& type) {
 }
 
 }  // namespace
+
+int typical_encoded_size(const LcmStruct& type) {
+  int bytes = 8;  // the fingerprint
+  for (const LcmField& f : type.fields) {
+    int one = 0;
+    if (f.type == "string") one = 4 + kTypicalStringBytes + 1;  // length, text, NUL
+    else if (f.type == "int8_t" || f.type == "byte" || f.type == "boolean") one = 1;
+    else if (f.type == "int16_t") one = 2;
+    else if (f.type == "int32_t" || f.type == "float") one = 4;
+    else one = 8;  // int64_t, double
+    int count = 1;
+    for (const std::string& d : f.dims) {
+      count *= !d.empty() && std::isdigit(static_cast<unsigned char>(d[0])) ? std::stoi(d) : kTypicalArrayLength;
+    }
+    bytes += one * count;
+  }
+  return bytes;
+}
 
 std::string json_schema(const LcmStruct& type) {
   Json properties = Json::object();

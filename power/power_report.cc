@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/json_writer.h"
+#include "core/output_file.h"
 #include "ident/plots.h"
 
 namespace nimble::power {
@@ -212,7 +213,7 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
       }
       data << "\n\n";
     }
-    ident::write_text(dir / "power_length.dat", data.str());
+    write_file(dir / "power_length.dat", data.str());
     script << "set terminal pngcairo noenhanced size 1000,650\nset output "
            << ident::gp_quote((dir / "power_length.png").string()) << "\n"
            << "set title " << ident::gp_quote("P(" + r.named_as + " named) on " + r.scenario + ", " +
@@ -250,7 +251,7 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
       }
       data << "\n\n";
     }
-    ident::write_text(dir / "power_size.dat", data.str());
+    write_file(dir / "power_size.dat", data.str());
     script << "set terminal pngcairo noenhanced size 1000,650\nset output "
            << ident::gp_quote((dir / "power_size.png").string()) << "\n"
            << "set title " << ident::gp_quote("P(" + r.named_as + " named) on " + r.scenario + " against the size")

@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "controller/manoeuvre.h"
+#include "core/output_file.h"
 
 namespace nimble::power {
 namespace {
@@ -80,11 +81,8 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
                                                                    std::to_string(out.repetitions) + ".yaml");
   YAML::Emitter emitter;
   emitter << repeated(YAML::LoadFile(file), out.repetitions, pad_s);
-  std::ofstream text(path);
-  text << "# " << file << " flown " << out.repetitions << " times, " << number(pad_s)
-       << " s of level hover between (rig discrepancy --power)\n"
-       << emitter.c_str() << "\n";
-  if (!text) throw std::runtime_error("cannot write " + path.string());
+  write_file(path, "# " + file + " flown " + std::to_string(out.repetitions) + " times, " + number(pad_s) +
+                        " s of level hover between (rig discrepancy --power)\n" + emitter.c_str() + "\n");
   out.manoeuvre_file = path.string();
   out.overrides.push_back({"manoeuvre", out.manoeuvre_file});
   return out;

@@ -19,6 +19,7 @@
 #include "core/config.h"
 #include "core/json_writer.h"
 #include "core/model.h"
+#include "core/output_file.h"
 #include "core/vehicle.h"
 #include "ident/closed_loop.h"
 #include "ident/identify.h"
@@ -346,7 +347,7 @@ void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std
     data << c.at("oscillatory re") << " " << -c.at("oscillatory im") << "\n";
   }
   const fs::path dat = fs::path(dir) / "eigenvalues_9_1.dat", png = fs::path(dir) / "eigenvalues_9_1.png";
-  ident::write_text(dat, data.str());
+  write_file(dat, data.str());
   ident::run_gnuplot(dir, "eigenvalues_9_1",
                      "set terminal pngcairo size 900,650\nset output " + ident::gp_quote(png.string()) + "\n"
                      "set title 'Eigenvalues of the identified models, every set (thesis Fig 9.1)'\n"

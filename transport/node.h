@@ -156,6 +156,9 @@ class ProcessNode {
 
   /// Requests a clean stop from a signal handler or a callback.
   static void request_stop() { stop_requested_ = 1; }
+  /// Ends this node's run at its next step, cleanly, as a stop request does (in process: the
+  /// run's recorder could no longer write its log).
+  void end_run() { stop_ = true; }
   /// Installs SIGTERM/SIGINT handlers that call request_stop().
   static void install_signal_handlers();
 

@@ -11,6 +11,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "core/output_file.h"
 #include "launcher/campaign.h"
 #include "launcher/slurm.h"
 #include "scenario/scenario.h"
@@ -125,14 +126,14 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
 
 TEST_CASE("campaign: result files are written whole or not at all", "[launcher][campaign]") {
   const std::string d = scratch("atomic");
-  write_file_atomically(d + "/a.json", "{\"x\": 1}\n");
+  nimble::write_file(d + "/a.json", "{\"x\": 1}\n");
   CHECK(slurp(d + "/a.json") == "{\"x\": 1}\n");
-  write_file_atomically(d + "/a.json", "{\"x\": 2}\n");
+  nimble::write_file(d + "/a.json", "{\"x\": 2}\n");
   CHECK(slurp(d + "/a.json") == "{\"x\": 2}\n");
   std::size_t files = 0;
   for (const auto& e : fs::directory_iterator(d)) files += e.is_regular_file();
   CHECK(files == 1);  // no temporary left behind
-  CHECK_THROWS_WITH(write_file_atomically(d + "/missing/b.json", "x"), Catch::Contains(d + "/missing/b.json"));
+  CHECK_THROWS_WITH(nimble::write_file(d + "/missing/b.json", "x"), Catch::Contains(d + "/missing/b.json"));
 }
 
 TEST_CASE("campaign: the scenario's cluster section is checked like any other", "[launcher][campaign]") {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <nimble/rig_clock_t.hpp>

@@ -3,6 +3,8 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <netinet/in.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -121,4 +123,47 @@ TEST_CASE("supervisor: a child given a network namespace runs in it, a bad one i
   CHECK(s.children()[2].exit_code == 127);
   CHECK(slurp(bad).find("cannot enter the network namespace of its host (setns)") != std::string::npos);
   s.stop(0.0);
+}
+
+TEST_CASE("supervisor: a child inherits only its standard streams, whatever the launcher holds open", "[launcher]") {
+  // Descriptors as a library would leave them: no close-on-exec.
+  const std::string held = scratch("held.lcmlog");
+  const int file_fd = ::open(held.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const int socket_fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  int pipe_fd[2] = {-1, -1};
+  REQUIRE(file_fd >= 0);
+  REQUIRE(socket_fd >= 0);
+  REQUIRE(::pipe(pipe_fd) == 0);
+  ProcessSupervisor s;
+  const std::string out = scratch("fds.out");
+  // ls lists its own descriptors: the standard streams and the directory it reads.
+  s.start("lister", "/bin/ls", {"-l", "/proc/self/fd/"}, out);
+  REQUIRE(s.wait_all(10.0));
+  CHECK(s.children().front().exit_code == 0);
+  const std::string listing = slurp(out);
+  INFO(listing);
+  std::istringstream lines(listing);
+  std::string line;
+  int standard = 0, own = 0, inherited = 0;
+  while (std::getline(lines, line)) {
+    const auto arrow = line.find(" -> ");
+    if (arrow == std::string::npos) continue;
+    const std::string target = line.substr(arrow + 4);
+    std::istringstream words(line.substr(0, arrow));
+    std::string word, fd;
+    while (words >> word) fd = word;
+    if (fd == "0" || fd == "1" || fd == "2") ++standard;
+    else if (target.rfind("/proc/", 0) == 0 && target.size() > 3 && target.compare(target.size() - 3, 3, "/fd") == 0) ++own;
+    else ++inherited;
+  }
+  CHECK(standard == 3);
+  CHECK(own <= 1);
+  CHECK(inherited == 0);
+  CHECK(listing.find("held.lcmlog") == std::string::npos);
+  CHECK(listing.find("socket:") == std::string::npos);
+  CHECK(listing.find("pipe:") == std::string::npos);
+  ::close(file_fd);
+  ::close(socket_fd);
+  ::close(pipe_fd[0]);
+  ::close(pipe_fd[1]);
 }
