@@ -53,7 +53,17 @@ std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, cons
   session->view = std::make_unique<foxglove::LiveView>(*session->server, vo);
   std::cerr << "rig " << command << ": live view on " << session->server->url()
             << " (Foxglove or Lichtblick: Open connection -> Foxglove WebSocket)\n";
+  warn_if_reachable(command, *session->server);
   return session;
+}
+
+void warn_if_reachable(const std::string& command, const foxglove::FoxgloveServer& server) {
+  if (server.loopback()) return;
+  const std::string& h = server.host();
+  std::cerr << "rig " << command << ": warning: listening on " << (h.find(':') != std::string::npos ? "[" + h + "]" : h)
+            << ":" << server.port()
+            << ", not a loopback address: anyone who can reach this port can see the live data and the page "
+               "(nothing is authenticated; use 127.0.0.1 to keep it on this machine)\n";
 }
 
 void tap_run(LiveViewSession& session, launcher::RunOptions& options) {

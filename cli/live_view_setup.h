@@ -35,6 +35,11 @@ struct LiveViewSession {
 std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, const std::string& host_port,
                                                 const std::string& web_root = "");
 
+/// Prints a one-line warning on stderr, prefixed by `command`, if `server` listens on an address
+/// that is not a loopback one (0.0.0.0, ::, a network interface's): nothing is authenticated, so
+/// anyone who can reach the port sees the live data and the page.
+void warn_if_reachable(const std::string& command, const foxglove::FoxgloveServer& server);
+
 /// Makes `options.tap` feed `session`: threads started when the launcher allows, every message
 /// offered, the run's state and verdict on rig/verdict, the figures in the summary.
 void tap_run(LiveViewSession& session, launcher::RunOptions& options);

@@ -156,6 +156,7 @@ int run_view_command(const std::vector<std::string>& args) {
       page = std::make_unique<foxglove::FoxgloveServer>(o);
       const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(ws_port);
       std::cerr << "rig view: dashboard on http://" << o.host << ":" << page->port() << "/?ws=" << ws << "\n";
+      warn_if_reachable("view", *page);
     }
   } catch (const std::exception& e) {
     std::cerr << "rig view: " << e.what() << "\n";

@@ -1,6 +1,9 @@
 #include "foxglove/foxglove_server.h"
 
+#include <fcntl.h>
+#include <linux/openat2.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
@@ -11,10 +14,8 @@
 #include <chrono>
 #include <deque>
 #include <filesystem>
-#include <fstream>
 #include <mutex>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -27,6 +28,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "core/descriptors.h"
+#include "foxglove/web_path.h"
 
 namespace nimble::foxglove {
 
@@ -50,14 +52,39 @@ std::string endpoint_text(const tcp::endpoint& e) {
   return (a.is_v6() ? "[" + a.to_string() + "]" : a.to_string()) + ":" + std::to_string(e.port());
 }
 
-const char* content_type(const std::string& ext) {
-  if (ext == ".html" || ext == ".htm") return "text/html; charset=utf-8";
-  if (ext == ".js" || ext == ".mjs") return "text/javascript; charset=utf-8";
-  if (ext == ".css") return "text/css; charset=utf-8";
-  if (ext == ".png") return "image/png";
-  if (ext == ".json") return "application/json";
-  if (ext == ".svg") return "image/svg+xml";
-  return "application/octet-stream";
+constexpr const char* kTextPlain = "text/plain; charset=utf-8";
+
+/// Reads `file` (canonical, beneath the canonical `root`, as resolve_web_path() gives it) if it is
+/// a regular file. It is opened from the root's descriptor with openat2(RESOLVE_BENEATH |
+/// RESOLVE_NO_SYMLINKS): a component changed into a symlink, or anything leading out of the
+/// root, since the path was resolved is refused. Where the kernel has no openat2 (ENOSYS, or a
+/// seccomp filter's EPERM) it is opened by its path with O_NOFOLLOW. O_NONBLOCK: a FIFO put there
+/// does not hold up the I/O thread (it is not a regular file and is refused).
+bool read_web_file(const std::filesystem::path& root, const std::filesystem::path& file, std::string* body) {
+  const int flags = O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC | O_NOCTTY;
+  const int root_fd = ::open(root.c_str(), O_PATH | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (root_fd < 0) return false;
+  open_how how{};
+  how.flags = static_cast<uint64_t>(flags);
+  how.resolve = RESOLVE_BENEATH | RESOLVE_NO_SYMLINKS | RESOLVE_NO_MAGICLINKS;
+  const std::filesystem::path relative = file.lexically_relative(root);
+  int fd = static_cast<int>(::syscall(SYS_openat2, root_fd, relative.c_str(), &how, sizeof how));
+  const int open_errno = errno;
+  ::close(root_fd);
+  if (fd < 0 && (open_errno == ENOSYS || open_errno == EPERM)) fd = ::open(file.c_str(), flags);
+  if (fd < 0) return false;
+  struct stat st {};
+  bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+  body->clear();
+  char buffer[64 * 1024];
+  while (ok) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n > 0) body->append(buffer, static_cast<std::size_t>(n));
+    else if (n == 0) break;
+    else if (errno != EINTR) ok = false;
+  }
+  ::close(fd);
+  return ok;
 }
 
 }  // namespace
@@ -72,6 +99,8 @@ struct FoxgloveServer::Impl {
   std::atomic<bool> running{false};
   std::string session_id;
   uint16_t port = 0;
+  bool loopback = false;
+  std::filesystem::path web_root;  // canonical; empty: no files served
 
   mutable std::mutex channels_mu;
   std::vector<Channel> channels;  // id i + 1 at index i
@@ -354,16 +383,24 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 
  private:
   void on_read(beast::error_code ec) {
-    if (ec) return;  // closed, timed out or not HTTP: nothing to answer
+    if (ec) {
+      // Bytes that are not an HTTP request (a bad request line or target, headers over the
+      // limit) get a 400; a connection closed or timed out before a whole request, nothing.
+      if (ec.category() == make_error_code(http::error::bad_target).category() && ec != http::error::end_of_stream &&
+          ec != http::error::partial_message && ec != http::error::need_more) {
+        server_->http_requests.fetch_add(1);
+        respond(11, false, http::status::bad_request, kTextPlain, "bad request\n");
+      }
+      return;
+    }
     http::request<http::string_body> req = parser_->release();
     if (websocket::is_upgrade(req)) {
       const std::string sub = choose_subprotocol(std::string(req[http::field::sec_websocket_protocol]));
       if (sub.empty()) {
         server_->handshakes_refused.fetch_add(1);
-        respond(req, http::status::bad_request, "text/plain; charset=utf-8",
+        respond(req, http::status::bad_request, kTextPlain,
                 std::string("This Foxglove WebSocket server speaks the subprotocol ") + kSubprotocolV1 + " (or " +
-                    kSubprotocolSdk + "); the handshake offered neither ('" +
-                    std::string(req[http::field::sec_websocket_protocol]) + "').\n");
+                    kSubprotocolSdk + "); the handshake offered neither.\n");
         return;
       }
       uint64_t id = 0;
@@ -378,51 +415,47 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     serve_file(req);
   }
 
+  /// A file of the web root by the rules of web_path.h; the answers never repeat the request.
   void serve_file(const http::request<http::string_body>& req) {
-    const std::string help = "This is a Foxglove WebSocket server: in Foxglove or Lichtblick, Open connection -> "
-                             "Foxglove WebSocket -> ws://" +
-                             endpoint_text(stream_.socket().local_endpoint(ignored_)) + "\n";
     if (req.method() != http::verb::get && req.method() != http::verb::head) {
-      respond(req, http::status::method_not_allowed, "text/plain; charset=utf-8", "only GET and HEAD\n");
+      respond(req, http::status::method_not_allowed, kTextPlain, "only GET and HEAD\n");
       return;
     }
-    if (server_->options.web_root.empty()) {
-      respond(req, http::status::not_found, "text/plain; charset=utf-8", help);
+    if (server_->web_root.empty()) {
+      respond(req, http::status::not_found, kTextPlain,
+              "This is a Foxglove WebSocket server: in Foxglove or Lichtblick, Open connection -> Foxglove "
+              "WebSocket -> ws://" +
+                  endpoint_text(stream_.socket().local_endpoint(ignored_)) + "\n");
       return;
     }
-    std::string target(req.target());
-    target = target.substr(0, target.find_first_of("?#"));
-    if (target.empty() || target[0] != '/' || target.find("..") != std::string::npos ||
-        target.find('\\') != std::string::npos || target.find('%') != std::string::npos ||
-        target.find('\0') != std::string::npos) {
-      respond(req, http::status::bad_request, "text/plain; charset=utf-8", "bad path\n");
+    const auto target = req.target();
+    const WebPath w = resolve_web_path(server_->web_root, std::string_view(target.data(), target.size()));
+    if (w.status == 400) {
+      respond(req, http::status::bad_request, kTextPlain, "bad request\n");
       return;
     }
-    if (target.back() == '/') target += "index.html";
-    const std::filesystem::path file = std::filesystem::path(server_->options.web_root) / target.substr(1);
-    std::error_code fec;
-    if (!std::filesystem::is_regular_file(file, fec)) {
-      respond(req, http::status::not_found, "text/plain; charset=utf-8", "not found: " + target + "\n" + help);
+    std::string body;
+    if (w.status != 200 || !read_web_file(server_->web_root, w.file, &body)) {
+      respond(req, http::status::not_found, kTextPlain, "not found\n");
       return;
     }
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream body;
-    body << in.rdbuf();
-    if (!in) {
-      respond(req, http::status::internal_server_error, "text/plain; charset=utf-8", "cannot read " + target + "\n");
-      return;
-    }
-    respond(req, http::status::ok, content_type(file.extension().string()), body.str());
+    respond(req, http::status::ok, w.content_type, std::move(body));
   }
 
   void respond(const http::request<http::string_body>& req, http::status status, const char* type,
                std::string body) {
-    auto res = std::make_shared<http::response<http::string_body>>(status, req.version());
+    respond(req.version(), req.method() == http::verb::head, status, type, std::move(body));
+  }
+
+  /// Answers with `body` (only its length for a HEAD request) and closes.
+  void respond(unsigned version, bool head, http::status status, const char* type, std::string body) {
+    auto res = std::make_shared<http::response<http::string_body>>(status, version);
     res->set(http::field::server, "nimble_rig foxglove");
     res->set(http::field::content_type, type);
     res->set(http::field::cache_control, "no-store");
+    res->set("X-Content-Type-Options", "nosniff");
+    if (status == http::status::method_not_allowed) res->set(http::field::allow, "GET, HEAD");
     res->keep_alive(false);
-    const bool head = req.method() == http::verb::head;
     res->body() = std::move(body);
     res->prepare_payload();
     if (head) res->body().clear();
@@ -478,8 +511,12 @@ void FoxgloveServer::Impl::remove_session(const WsSession* s) {
 FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = std::move(options);
   const ServerOptions& o = impl_->options;
-  if (!o.web_root.empty() && !std::filesystem::is_directory(o.web_root)) {
-    throw std::invalid_argument("web root " + o.web_root + " is not a directory");
+  if (!o.web_root.empty()) {
+    std::error_code fec;
+    impl_->web_root = std::filesystem::canonical(o.web_root, fec);
+    if (fec || !std::filesystem::is_directory(impl_->web_root, fec)) {
+      throw std::invalid_argument("web root " + o.web_root + " is not a directory");
+    }
   }
   if (o.max_queue_bytes == 0 || o.max_queue_messages == 0 || o.max_frame_bytes == 0) {
     throw std::invalid_argument("the queue and frame bounds must be positive");
@@ -498,6 +535,10 @@ FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<I
   if (!ec) acc.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw std::runtime_error("cannot listen on " + where + ": " + ec.message());
   impl_->port = acc.local_endpoint().port();
+  const net::ip::address bound = acc.local_endpoint().address();
+  impl_->loopback = bound.is_loopback() ||
+                    (bound.is_v6() && bound.to_v6().is_v4_mapped() &&
+                     net::ip::make_address_v4(net::ip::v4_mapped, bound.to_v6()).is_loopback());
   impl_->session_id = std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
                                          std::chrono::system_clock::now().time_since_epoch())
                                          .count()) +
@@ -508,6 +549,7 @@ FoxgloveServer::~FoxgloveServer() { stop(); }
 
 uint16_t FoxgloveServer::port() const { return impl_->port; }
 const std::string& FoxgloveServer::host() const { return impl_->options.host; }
+bool FoxgloveServer::loopback() const { return impl_->loopback; }
 std::string FoxgloveServer::url() const {
   const std::string& h = impl_->options.host;
   return "ws://" + (h.find(':') != std::string::npos ? "[" + h + "]" : h) + ":" + std::to_string(impl_->port);

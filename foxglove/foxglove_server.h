@@ -11,8 +11,10 @@
 ///
 /// The protocol itself (handshake subprotocols, the messages, one client's subscriptions) is in
 /// protocol.h; this file adds the sockets. The same port optionally serves static files over
-/// plain HTTP GET (a dashboard page): a request that is not a WebSocket upgrade gets a file of
-/// `web_root`.
+/// plain HTTP GET and HEAD (a dashboard page): a request that is not a WebSocket upgrade gets a
+/// file of `web_root` by the rules of web_path.h (only regular files beneath the canonical root,
+/// by a fixed table of types; 400 for a malformed target, 404 for anything else not served, 405
+/// for another method).
 
 #include <cstddef>
 #include <cstdint>
@@ -37,7 +39,8 @@ struct ServerOptions {
   std::size_t max_queue_messages = 8192;
   /// A client frame larger than this closes the connection (close code 1009, too big).
   std::size_t max_frame_bytes = 64u << 10;
-  /// A directory served over HTTP GET on the same port ("/" is index.html); "": none.
+  /// A directory served over HTTP GET and HEAD on the same port ("/" is index.html; web_path.h
+  /// says what is served); "": none.
   std::string web_root;
   /// The nice value of the I/O thread (0: as the thread that calls start()); a live view of a
   /// real-time run yields the CPU to the rig's processes.
@@ -86,6 +89,9 @@ class FoxgloveServer {
   /// The port bound (the one chosen when options.port was 0).
   uint16_t port() const;
   const std::string& host() const;
+  /// Whether the address listened on is a loopback one (127.0.0.0/8, ::1, ::ffff:127.x.y.z);
+  /// false for 0.0.0.0, :: and any other address, which other machines may reach.
+  bool loopback() const;
   /// "ws://127.0.0.1:8765".
   std::string url() const;
 

@@ -1,5 +1,5 @@
 /// `rig view`: a log replayed live to a Foxglove client, a damaged log named by its offset,
-/// --salvage, bad options.
+/// --salvage, bad options, the page server (--web) refusing paths out of its root.
 
 #include <catch2/catch.hpp>
 
@@ -14,9 +14,11 @@
 #include <fstream>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "contract/channels.h"
 #include "foxglove/live_view.h"
+#include "tests/foxglove/http_test_client.h"
 #include "tests/foxglove/ws_test_client.h"
 #include "tests/support/run_rig.h"
 
@@ -154,4 +156,68 @@ TEST_CASE("rig view: a client gets the log's TRUTH at rig time and the replay's 
   // gets most of them.
   CHECK(truths > 500);
   CHECK(in_order);
+}
+
+TEST_CASE("rig view --web: //etc/passwd and other paths out of the root are refused, a warning off loopback",
+          "[foxglove][view][resource]") {
+  const std::filesystem::path base =
+      std::filesystem::temp_directory_path() / ("rig_view_web_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(base);
+  std::filesystem::create_directories(base / "root");
+  std::ofstream(base / "root" / "index.html") << "<html>page</html>";
+  const std::string token = "SECRET-" + std::to_string(::getpid());
+  std::ofstream(base / "secret.txt") << token;
+  const std::string root = (base / "root").string(), err = (base / "view.err").string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(err.c_str(), "w", stderr);
+    std::freopen("/dev/null", "w", stdout);
+    ::execl(RIG_BIN, RIG_BIN, "view", "--web", "127.0.0.1:0", "--web-root", root.c_str(), nullptr);
+    ::_exit(127);
+  }
+  int port = 0;
+  const std::regex line("dashboard on http://127\\.0\\.0\\.1:([0-9]+)/");
+  REQUIRE(eventually(
+      [&] {
+        std::smatch m;
+        const std::string text = nimble::test::slurp(err);
+        if (!std::regex_search(text, m, line)) return false;
+        port = std::stoi(m[1]);
+        return true;
+      },
+      10.0));
+  const std::vector<std::string> targets = {"//etc/passwd",
+                                            "/../../../../etc/passwd",
+                                            "/%2e%2e/%2e%2e/%2e%2e/etc/passwd",
+                                            "/..%2f..%2f..%2fetc%2fpasswd",
+                                            "http://127.0.0.1//etc/passwd",
+                                            "/" + base.string() + "/secret.txt",
+                                            "/../secret.txt",
+                                            "/%2E%2e/secret.txt",
+                                            "/%252e%252e/secret.txt",
+                                            "/%c0%ae%c0%ae/secret.txt",
+                                            "/..%5csecret.txt",
+                                            "/%00/etc/passwd"};
+  for (const std::string& target : targets) {
+    INFO(target);
+    const HttpAnswer a = http_request(static_cast<uint16_t>(port), "GET", target);
+    CHECK((a.status == 400 || a.status == 404));
+    CHECK(a.raw.find("root:") == std::string::npos);
+    CHECK(a.raw.find(token) == std::string::npos);
+  }
+  const HttpAnswer page = http_request(static_cast<uint16_t>(port), "GET", "/");
+  CHECK(page.status == 200);
+  CHECK(page.body == "<html>page</html>");
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(nimble::test::slurp(err).find("warning") == std::string::npos);
+  // On every address: served, with one line that says who can see it.
+  const auto r = nimble::test::run_rig("view --web 0.0.0.0:0 --web-root " + root + " --exit-when-done");
+  CHECK(r.exit_code == 0);
+  CHECK_THAT(r.err, Catch::Contains("rig view: warning: listening on 0.0.0.0:") &&
+                        Catch::Contains("anyone who can reach this port can see the live data and the page"));
+  std::filesystem::remove_all(base);
 }
