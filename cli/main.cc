@@ -22,7 +22,7 @@ const Command kCommands[] = {
      nimble::cli::run_model_command},
     {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
      nimble::cli::run_run_command},
-    {"view", "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--exit-when-done]   replay a log live to Foxglove/Lichtblick",
+    {"view", "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--hold|--loop|--exit-when-done]   replay a log live to Foxglove/Lichtblick",
      nimble::cli::run_view_command},
     {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F|-] [--csv F]   Monte Carlo campaign",
      nimble::cli::run_sweep_command},

@@ -28,8 +28,10 @@ constexpr const char* kViewDescription =
     "Replays a rig log live on a Foxglove WebSocket server, as 'rig run --foxglove' serves a run:\n"
     "every channel as JSON with its schema, at the pace of its rig time (x --speed), stamped with\n"
     "rig time. Watch it in Foxglove or Lichtblick (Open connection -> Foxglove WebSocket ->\n"
-    "ws://127.0.0.1:8765) or on the dashboard page (--web). After the replay it keeps serving until\n"
-    "Ctrl-C (SIGINT) or SIGTERM, unless --exit-when-done. Without a LOG it serves the page alone.";
+    "ws://127.0.0.1:8765) or on the dashboard page (--web). A client that connects late gets each\n"
+    "channel's last 10 s of rig time first. When the replay ends it holds the last frame (--hold, the\n"
+    "default: a page opened then still shows the last 10 s) until Ctrl-C (SIGINT) or SIGTERM, or replays\n"
+    "the log again and again (--loop), or exits (--exit-when-done). Without a LOG it serves the page alone.";
 
 constexpr const char* kViewFooter =
     "Exit code: 0 replayed (or stopped by a signal), 2 bad usage, a log that cannot be read or is damaged\n"
@@ -75,7 +77,7 @@ Replay replay(const std::string& file, bool salvage, double speed, foxglove::Liv
       sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                               std::chrono::duration<double>(due_s)));
     }
-    view.offer(ev.channel, ev.data.data(), ev.data.size());
+    view.offer(ev.channel, ev.data.data(), ev.data.size(), /*wait_for_room=*/true);
   }
   r.rig_s = first_us >= 0 ? static_cast<double>(rig_us - first_us) / 1e6 : 0.0;
   r.damage = log.damage();
@@ -98,7 +100,7 @@ int run_view_command(const std::vector<std::string>& args) {
   std::string log_file, foxglove = std::to_string(kDefaultFoxglovePort), web_root = default_web_root();
   double speed = 1.0;
   std::string web;
-  bool exit_when_done = false, salvage = false;
+  bool exit_when_done = false, salvage = false, loop = false, hold = false;
   CommandLine cl("rig view", kViewDescription);
   cl->footer(kViewFooter);
   cl->add_option("log", log_file, "the rig log (rig run --log) to replay")->type_name("LOG.lcmlog");
@@ -117,11 +119,24 @@ int run_view_command(const std::vector<std::string>& args) {
   cl->add_option("--web-root", web_root, "the page's folder (default: the build's or installation's dashboard)")
       ->type_name("DIR")
       ->capture_default_str();
-  cl->add_flag("--exit-when-done", exit_when_done, "exit once the log is replayed (default: keep serving)");
+  CLI::Option* hold_opt = cl->add_flag(
+      "--hold", hold,
+      "when the replay ends, keep serving its last state: a client that connects then gets the last 10 s of "
+      "rig time (the default)");
+  CLI::Option* loop_opt = cl->add_flag(
+      "--loop", loop, "when the replay ends, replay the log again from its start, until Ctrl-C (needs --speed > 0)");
+  CLI::Option* exit_opt =
+      cl->add_flag("--exit-when-done", exit_when_done, "exit once the log is replayed (default: --hold)");
+  loop_opt->excludes(hold_opt)->excludes(exit_opt);
+  hold_opt->excludes(exit_opt);
   cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
   if (const auto done = cl.parse(args)) return *done;
   if (log_file.empty() && web.empty()) {
     std::cerr << "rig view: nothing to do: give a LOG to replay, or --web PORT to serve the page\n";
+    return kExitUsage;
+  }
+  if (loop && speed == 0) {
+    std::cerr << "rig view: --loop replays at a pace: give --speed X with X > 0\n";
     return kExitUsage;
   }
   if (!log_file.empty()) {
@@ -176,8 +191,18 @@ int run_view_command(const std::vector<std::string>& args) {
   if (live) {
     live->view->set_state("replaying", "", 0.0);
     try {
-      const Replay r = replay(log_file, salvage, speed, *live->view);
-      if (!r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
+      Replay r;
+      for (int pass = 1;; ++pass) {
+        r = replay(log_file, salvage, speed, *live->view);
+        if (pass == 1 && !r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
+        if (!loop || g_stop || r.events == 0) break;
+        if (pass == 1) {
+          std::cerr << "rig view: replayed " << r.events << " events; looping until Ctrl-C\n";
+        }
+        // From the start again: the history of the pass before is not this one's past.
+        live->view->restart();
+        live->view->set_state("replaying", "pass " + std::to_string(pass + 1), 0.0);
+      }
       char verdict[160];
       std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time",
                     g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s);
@@ -191,7 +216,8 @@ int run_view_command(const std::vector<std::string>& args) {
     }
   }
   if (!exit_when_done && !g_stop) {
-    std::cerr << "rig view: serving until Ctrl-C\n";
+    std::cerr << (live ? "rig view: holding the last state (a client that connects gets the last 10 s) until Ctrl-C\n"
+                       : "rig view: serving until Ctrl-C\n");
     while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   if (live) {

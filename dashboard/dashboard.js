@@ -195,11 +195,20 @@ function redrawPlots() {
     xRange = [0, WINDOW_S];
   }
   const { xs, ys } = joined();
+  // What is plotted, for a test to read: samples per source and the rig time they span [s].
+  const span = (tr) => (tr.size ? [tr.t[tr.head], tr.last] : ["", ""]);
+  const [truthFrom, truthTo] = span(truth);
+  const [estimateFrom, estimateTo] = span(estimate);
   for (let k = 0; k < plots.length; k++) {
     const p = plots[k];
     p.u.setData([xs, ys[k][0], ys[k][1]]);
-    p.fig.dataset.truthPoints = String(truth.size);
-    p.fig.dataset.estimatePoints = String(estimate.size);
+    const d = p.fig.dataset;
+    d.truthPoints = String(truth.size);
+    d.estimatePoints = String(estimate.size);
+    d.truthFrom = String(truthFrom);
+    d.truthTo = String(truthTo);
+    d.estimateFrom = String(estimateFrom);
+    d.estimateTo = String(estimateTo);
   }
   const rt = document.getElementById("rigtime");
   rt.textContent = Number.isFinite(tNewest) ? tNewest.toFixed(2) + " s" : "\u2013";

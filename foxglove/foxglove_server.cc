@@ -14,6 +14,8 @@
 #include <chrono>
 #include <deque>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -45,6 +47,7 @@ struct Frame {
   std::string data;
   bool text = false;
   bool message = false;  ///< a messageData frame (counted as a message when sent)
+  bool backlog = false;  ///< of a backlog (deliver_backlog()): bounded by max_backlog_bytes, not the queue's bounds
 };
 
 std::string endpoint_text(const tcp::endpoint& e) {
@@ -110,6 +113,12 @@ struct FoxgloveServer::Impl {
   std::vector<std::shared_ptr<WsSession>> sessions;
   uint64_t next_client_id = 1;
 
+  // New subscriptions are held while a handler is set (set_subscribe_handler()).
+  std::mutex handler_mu;
+  std::function<void(const FoxgloveServer::NewSubscription&)> subscribe_handler;  // under handler_mu
+  std::atomic<bool> hold_subscriptions{false};
+  std::atomic<uint64_t> next_token{1};
+
   std::atomic<int64_t> clients_now{0}, clients_total{0}, handshakes_refused{0}, messages_sent{0}, bytes_sent{0},
       dropped{0}, refused{0}, protocol_errors{0}, oversized_closes{0}, http_requests{0};
 
@@ -126,6 +135,9 @@ struct FoxgloveServer::Impl {
   void on_connection(tcp::socket socket);
   void add_session(const std::shared_ptr<WsSession>& s);
   void remove_session(const WsSession* s);
+  std::shared_ptr<WsSession> find_session(uint64_t client) const;
+  /// Tells the handler of a held subscription; releases it at once if there is none any more.
+  void announce(const FoxgloveServer::NewSubscription& s);
 };
 
 /// One WebSocket client.
@@ -166,6 +178,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (closed_) return;
     const auto it = subs_by_channel_.find(channel);
     if (it == subs_by_channel_.end()) return;
+    if (!held_.empty() && held_.count(channel) != 0) return;  // its backlog will hold this message
     const std::size_t size = kMessageDataHeader + payload.size();
     const ServerOptions& o = server_->options;
     if (data_bytes_ + size > o.max_queue_bytes || data_count_ + 1 > o.max_queue_messages) {
@@ -199,6 +212,46 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     queue_.push_back(std::move(f));
     kick_locked();
   }
+
+  /// Whether the subscription to `channel` is held as `token`. Any thread.
+  bool holds(uint32_t channel, uint64_t token) const {
+    std::lock_guard<std::mutex> lock(mu_);
+    const auto it = held_.find(channel);
+    return !closed_ && it != held_.end() && it->second == token;
+  }
+
+  /// Queues the backlog of the held subscription (`channel`, `token`) and releases it: the
+  /// newest messages that fit max_backlog_bytes, the older ones dropped and counted. Any thread.
+  bool deliver(uint32_t channel, uint64_t token, const std::vector<FoxgloveServer::BacklogMessage>& messages) {
+    std::lock_guard<std::mutex> lock(mu_);
+    const auto held = held_.find(channel);
+    if (closed_ || held == held_.end() || held->second != token) return false;
+    held_.erase(held);
+    const uint32_t sub = subs_by_channel_.at(channel);  // held only while subscribed
+    std::size_t first = messages.size(), bytes = 0;
+    while (first > 0) {
+      const std::size_t size = kMessageDataHeader + messages[first - 1].payload.size();
+      if (backlog_bytes_ + bytes + size > server_->options.max_backlog_bytes) break;
+      bytes += size;
+      --first;
+    }
+    if (first > 0) {
+      dropped_ += static_cast<int64_t>(first);
+      server_->dropped.fetch_add(static_cast<int64_t>(first), std::memory_order_relaxed);
+    }
+    for (std::size_t i = first; i < messages.size(); ++i) {
+      Frame f;
+      f.data = message_data(sub, messages[i].timestamp_ns, messages[i].payload);
+      f.message = true;
+      f.backlog = true;
+      queue_.push_back(std::move(f));
+    }
+    backlog_bytes_ += bytes;
+    if (first < messages.size()) kick_locked();
+    return true;
+  }
+
+  uint64_t id() const { return id_; }
 
   /// Asks for a clean close once the queue is written. Any thread.
   void close() {
@@ -246,9 +299,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     const std::string_view frame(static_cast<const char*>(buffer_.data().data()), buffer_.size());
     std::vector<std::string> replies;
     const SessionCounters before = session_.counters();
+    std::vector<FoxgloveServer::NewSubscription> added;
     if (ws_.got_text()) {
       const std::vector<uint32_t> changed = session_.on_text(frame, &replies);
-      if (!changed.empty()) update_subscriptions(changed);
+      if (!changed.empty()) added = update_subscriptions(changed);
     } else {
       session_.on_binary(frame, &replies);
     }
@@ -256,21 +310,36 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     server_->refused.fetch_add(session_.counters().refused - before.refused);
     server_->protocol_errors.fetch_add(session_.counters().protocol_errors - before.protocol_errors);
     for (auto& r : replies) send_text(std::move(r));
+    for (const auto& s : added) server_->announce(s);
     do_read();
   }
 
   /// Mirrors the session's subscriptions for offer() and the server's per-channel counts.
-  void update_subscriptions(const std::vector<uint32_t>& changed) {
+  /// Returns the new subscriptions it holds (while the server has a subscribe handler).
+  std::vector<FoxgloveServer::NewSubscription> update_subscriptions(const std::vector<uint32_t>& changed) {
+    std::vector<FoxgloveServer::NewSubscription> added;
+    const bool hold = server_->hold_subscriptions.load();
     std::lock_guard<std::mutex> lock(mu_);
     for (uint32_t channel : changed) {
       uint32_t sub = 0;
       const bool now = session_.subscription_of(channel, &sub);
-      const bool was = subs_by_channel_.count(channel) != 0;
+      const auto old = subs_by_channel_.find(channel);
+      const bool was = old != subs_by_channel_.end();
+      const bool fresh = now && (!was || old->second != sub);
       if (now) subs_by_channel_[channel] = sub;
       else subs_by_channel_.erase(channel);
       if (now && !was) server_->subscribers[channel].fetch_add(1);
       if (!now && was) server_->subscribers[channel].fetch_sub(1);
+      if (!now) held_.erase(channel);
+      if (fresh && hold) {
+        const uint64_t token = server_->next_token.fetch_add(1);
+        held_[channel] = token;
+        added.push_back(FoxgloveServer::NewSubscription{id_, channel, token});
+      } else if (fresh) {
+        held_.erase(channel);
+      }
     }
+    return added;
   }
 
   /// Starts writing the queue's front if nothing is being written. Under mu_.
@@ -305,9 +374,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     {
       std::lock_guard<std::mutex> lock(mu_);
       Frame& f = queue_.front();
-      if (f.message) {
+      if (f.backlog) {
+        backlog_bytes_ -= f.data.size();
+      } else if (f.message) {
         data_bytes_ -= f.data.size();
         --data_count_;
+      }
+      if (f.message) {
         if (!ec) {
           ++sent_;
           server_->messages_sent.fetch_add(1, std::memory_order_relaxed);
@@ -339,6 +412,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       closed_ = true;
       for (const auto& kv : subs_by_channel_) server_->subscribers[kv.first].fetch_sub(1);
       subs_by_channel_.clear();
+      held_.clear();
       queue_.erase(queue_.begin() + (writing_ && !queue_.empty() ? 1 : 0), queue_.end());
     }
     if (accepted_) {
@@ -359,8 +433,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
   mutable std::mutex mu_;  // everything below
   std::map<uint32_t, uint32_t> subs_by_channel_;
+  std::map<uint32_t, uint64_t> held_;  // channel -> token of its held subscription
   std::deque<Frame> queue_;
-  std::size_t data_bytes_ = 0, data_count_ = 0, control_bytes_ = 0;
+  std::size_t data_bytes_ = 0, data_count_ = 0, control_bytes_ = 0, backlog_bytes_ = 0;
   bool writing_ = false, closed_ = false, close_requested_ = false, closing_ = false, write_failed_ = false;
   int64_t sent_ = 0, dropped_ = 0;
 };
@@ -508,6 +583,25 @@ void FoxgloveServer::Impl::remove_session(const WsSession* s) {
   }
 }
 
+std::shared_ptr<WsSession> FoxgloveServer::Impl::find_session(uint64_t client) const {
+  std::lock_guard<std::mutex> lock(sessions_mu);
+  for (const auto& s : sessions) {
+    if (s->id() == client) return s;
+  }
+  return nullptr;
+}
+
+void FoxgloveServer::Impl::announce(const FoxgloveServer::NewSubscription& s) {
+  {
+    std::lock_guard<std::mutex> lock(handler_mu);
+    if (subscribe_handler) {
+      subscribe_handler(s);
+      return;
+    }
+  }
+  if (auto session = find_session(s.client)) session->deliver(s.channel, s.token, {});
+}
+
 FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = std::move(options);
   const ServerOptions& o = impl_->options;
@@ -611,6 +705,22 @@ uint32_t FoxgloveServer::add_channel(const std::string& topic, const std::string
 
 bool FoxgloveServer::has_subscribers(uint32_t channel_id) const {
   return channel_id <= kMaxChannels && impl_->subscribers[channel_id].load(std::memory_order_relaxed) > 0;
+}
+
+void FoxgloveServer::set_subscribe_handler(std::function<void(const NewSubscription&)> handler) {
+  std::lock_guard<std::mutex> lock(impl_->handler_mu);
+  impl_->hold_subscriptions.store(static_cast<bool>(handler));
+  impl_->subscribe_handler = std::move(handler);
+}
+
+bool FoxgloveServer::holds(const NewSubscription& s) const {
+  const auto session = impl_->find_session(s.client);
+  return session && session->holds(s.channel, s.token);
+}
+
+bool FoxgloveServer::deliver_backlog(const NewSubscription& s, const std::vector<BacklogMessage>& messages) {
+  const auto session = impl_->find_session(s.client);
+  return session && session->deliver(s.channel, s.token, messages);
 }
 
 void FoxgloveServer::publish(uint32_t channel_id, uint64_t timestamp_ns, std::string_view payload) {

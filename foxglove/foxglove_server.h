@@ -9,6 +9,11 @@
 /// client and counted. A client that does not read therefore costs the publisher nothing but
 /// its drops.
 ///
+/// A new subscription may be held (set_subscribe_handler): publish() leaves it out until the
+/// publisher hands it the messages that came before (deliver_backlog()), so that a client that
+/// subscribes late gets a channel's recent past first, then the live messages, without gap,
+/// repetition or reordering.
+///
 /// The protocol itself (handshake subprotocols, the messages, one client's subscriptions) is in
 /// protocol.h; this file adds the sockets. The same port optionally serves static files over
 /// plain HTTP GET and HEAD (a dashboard page): a request that is not a WebSocket upgrade gets a
@@ -18,6 +23,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -37,6 +43,10 @@ struct ServerOptions {
   /// messages; a message beyond either is dropped for that client and counted.
   std::size_t max_queue_bytes = 8u << 20;
   std::size_t max_queue_messages = 8192;
+  /// Backlogs (deliver_backlog()) waiting in a client's queue: at most this many bytes, beyond
+  /// the bounds above (a backlog is bounded by its publisher, e.g. 10 s of a channel); the
+  /// oldest messages of a backlog that does not fit are dropped and counted.
+  std::size_t max_backlog_bytes = 64u << 20;
   /// A client frame larger than this closes the connection (close code 1009, too big).
   std::size_t max_frame_bytes = 64u << 10;
   /// A directory served over HTTP GET and HEAD on the same port ("/" is index.html; web_path.h
@@ -114,6 +124,31 @@ class FoxgloveServer {
   /// Queues a message of `channel_id` (JSON text) with `timestamp_ns` for every client
   /// subscribed to it. Thread-safe; never waits for a client.
   void publish(uint32_t channel_id, uint64_t timestamp_ns, std::string_view payload);
+  /// A client's new subscription to a channel, held until deliver_backlog() names it.
+  struct NewSubscription {
+    uint64_t client = 0;   ///< ClientStats::id
+    uint32_t channel = 0;
+    uint64_t token = 0;    ///< this subscription (a later one of the same client and channel has another)
+  };
+  /// With a handler, every new subscription starts held: publish() leaves that client out for
+  /// that channel, and `handler` is called (on the I/O thread, with no lock of the server held;
+  /// it must not block) so that the publisher can answer with deliver_backlog(). Without one
+  /// (the default, or nullptr), subscriptions get the live messages at once. Set it before
+  /// clients subscribe; setting nullptr waits for a call in progress, so that the handler's
+  /// owner can go away.
+  void set_subscribe_handler(std::function<void(const NewSubscription&)> handler);
+  /// Whether the subscription `s` is still held (the client has not unsubscribed or gone).
+  bool holds(const NewSubscription& s) const;
+  /// One message of a backlog: its timestamp [ns] and JSON text.
+  struct BacklogMessage {
+    uint64_t timestamp_ns = 0;
+    std::string payload;
+  };
+  /// Queues `messages` (in their order) for the held subscription `s` and releases it: the live
+  /// messages that publish() queues from then on follow them. Returns false (and queues
+  /// nothing) if `s` is not held any more. Thread-safe; never waits for a client.
+  bool deliver_backlog(const NewSubscription& s, const std::vector<BacklogMessage>& messages);
+
   /// Sends a `status` message to every client.
   void broadcast_status(StatusLevel level, const std::string& message);
 

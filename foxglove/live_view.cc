@@ -51,18 +51,26 @@ LiveView::LiveView(FoxgloveServer& server, LiveViewOptions options) : server_(se
                                contract::due_in_sim_time(spec.name) && rig_time_is_cheap(*type)};
   }
   verdict_id_ = server_.add_channel(kVerdictTopic, kVerdictSchemaName, kVerdictSchema);
+  for (const auto& kv : routes_) by_id_[kv.second.id] = &kv.second;
+  if (has_history()) {
+    server_.set_subscribe_handler([this](const FoxgloveServer::NewSubscription& s) { on_subscribe(s); });
+  }
 }
 
 void LiveView::start() {
   std::lock_guard<std::mutex> lock(mu_);
-  if (thread_.joinable() || stopping_) return;
+  if (started_ || stopping_) return;
+  started_ = true;
   thread_ = std::thread([this] {
     set_thread_nice(options_.thread_nice);
     run();
   });
 }
 
-LiveView::~LiveView() { stop(); }
+LiveView::~LiveView() {
+  stop();
+  if (has_history()) server_.set_subscribe_handler(nullptr);
+}
 
 uint32_t LiveView::channel_id(const std::string& topic) const {
   if (topic == kVerdictTopic) return verdict_id_;
@@ -70,26 +78,112 @@ uint32_t LiveView::channel_id(const std::string& topic) const {
   return it == routes_.end() ? 0 : it->second.id;
 }
 
-void LiveView::offer(const std::string& channel, const void* data, std::size_t size) {
+void LiveView::offer(const std::string& channel, const void* data, std::size_t size, bool wait_for_room) {
   const auto it = routes_.find(channel);
   if (it == routes_.end()) return;
   const Route& route = it->second;
   // The newest rig time, for the messages that carry none (and rig/verdict).
-  if (route.tracks_rig_time) {
-    const int64_t t = lcmjson::rig_time_us(*route.type, data, size);
-    if (t > newest_rig_us_.load(std::memory_order_relaxed)) newest_rig_us_.store(t, std::memory_order_relaxed);
-  }
-  if (!server_.has_subscribers(route.id)) return;
-  std::lock_guard<std::mutex> lock(mu_);
-  if (stopping_) return;
-  ++stats_.offered;
-  if (queue_bytes_ + size > options_.max_queue_bytes || queue_.size() + 1 > options_.max_queue_messages) {
-    ++stats_.dropped;
+  int64_t stamp = -1;
+  if (route.tracks_rig_time) stamp = lcmjson::rig_time_us(*route.type, data, size);
+  const bool wanted = server_.has_subscribers(route.id);
+  if (!has_history() && !wanted) {
+    if (stamp > newest_rig_us_.load(std::memory_order_relaxed)) newest_rig_us_.store(stamp, std::memory_order_relaxed);
     return;
   }
-  queue_.push_back(Pending{&route, std::string(static_cast<const char*>(data), size)});
+  std::unique_lock<std::mutex> lock(mu_);
+  const auto full = [&] {
+    return queue_bytes_ + size > options_.max_queue_bytes || queue_.size() + 1 > options_.max_queue_messages;
+  };
+  if (wait_for_room && started_ && full()) room_cv_.wait(lock, [&] { return stopping_ || !full(); });
+  // Under the lock, so that the stamps follow the queue's order (several threads may offer).
+  int64_t newest = newest_rig_us_.load(std::memory_order_relaxed);
+  if (stamp > newest) newest_rig_us_.store(newest = stamp, std::memory_order_relaxed);
+  if (stamp < 0) stamp = newest;
+  if (stopping_) return;
+  if (wanted) ++stats_.offered;
+  if (full()) {
+    ++(wanted ? stats_.dropped : stats_.history_dropped);
+    return;
+  }
+  Pending p;
+  p.route = &route;
+  p.bytes.assign(static_cast<const char*>(data), size);
+  p.stamp_us = stamp;
+  queue_.push_back(std::move(p));
   queue_bytes_ += size;
   if (queue_.size() == 1) cv_.notify_one();
+}
+
+void LiveView::on_subscribe(const FoxgloveServer::NewSubscription& s) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!stopping_) {
+      // Behind every message offered so far: the thread answers it after keeping them.
+      Pending p;
+      p.subscription = s;
+      queue_.push_back(std::move(p));
+      if (queue_.size() == 1) cv_.notify_one();
+      return;
+    }
+  }
+  server_.deliver_backlog(s, {});  // stopped: nothing more is published, nothing to wait for
+}
+
+void LiveView::restart() {
+  std::lock_guard<std::mutex> lock(mu_);
+  newest_rig_us_.store(-1, std::memory_order_relaxed);
+  if (stopping_ || !has_history()) return;
+  Pending p;
+  p.restart = true;
+  queue_.push_back(std::move(p));
+  if (queue_.size() == 1) cv_.notify_one();
+}
+
+void LiveView::keep(const Route& route, int64_t stamp_us, std::string bytes) {
+  History& h = history_[route.id];
+  h.bytes += bytes.size() + sizeof(Kept);
+  h.kept.push_back(Kept{stamp_us, std::move(bytes)});
+  const int64_t newest = newest_rig_us_.load(std::memory_order_relaxed);
+  const auto window_us = static_cast<int64_t>(options_.history_s * 1e6);
+  while (!h.kept.empty() &&
+         (h.bytes > options_.history_bytes || (newest >= 0 && h.kept.front().stamp_us < newest - window_us))) {
+    h.bytes -= h.kept.front().bytes.size() + sizeof(Kept);
+    h.kept.pop_front();
+  }
+}
+
+void LiveView::answer(const FoxgloveServer::NewSubscription& s, lcmjson::JsonMessage* message) {
+  if (s.channel == verdict_id_) {
+    // The newest state, under the lock that set_state() publishes under: nothing in between.
+    std::lock_guard<std::mutex> lock(mu_);
+    std::vector<FoxgloveServer::BacklogMessage> state;
+    if (has_state_) {
+      const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
+      state.push_back({static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0), state_json_locked()});
+    }
+    server_.deliver_backlog(s, state);
+    return;
+  }
+  std::vector<FoxgloveServer::BacklogMessage> backlog;
+  const auto it = history_.find(s.channel);
+  if (it != history_.end() && server_.holds(s)) {
+    // The window of the newest rig time now (a channel that fell silent keeps no older messages).
+    const int64_t newest = newest_rig_us_.load(std::memory_order_relaxed);
+    const auto window_us = static_cast<int64_t>(options_.history_s * 1e6);
+    const Route& route = *by_id_.at(s.channel);
+    backlog.reserve(it->second.kept.size());
+    for (const Kept& k : it->second.kept) {
+      if (newest >= 0 && k.stamp_us < newest - window_us) continue;
+      if (!lcmjson::to_json(*route.type, k.bytes.data(), k.bytes.size(), message).empty()) continue;
+      const int64_t t_us = message->rig_time_us >= 0 ? message->rig_time_us : std::max<int64_t>(k.stamp_us, 0);
+      backlog.push_back({static_cast<uint64_t>(t_us) * 1000u, std::move(message->json)});
+    }
+  }
+  if (server_.deliver_backlog(s, backlog)) {
+    std::lock_guard<std::mutex> lock(mu_);
+    ++stats_.backlogs;
+    stats_.backlog_messages += static_cast<int64_t>(backlog.size());
+  }
 }
 
 void LiveView::set_state(const std::string& state, const std::string& verdict, double t_s) {
@@ -101,14 +195,18 @@ void LiveView::set_state(const std::string& state, const std::string& verdict, d
   publish_state_locked(now_ns());
 }
 
-void LiveView::publish_state_locked(int64_t now) {
-  if (!has_state_) return;
+std::string LiveView::state_json_locked() const {
   const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
   const bool live = state_ == "running" || state_ == "replaying";
   const double t_s = live && rig_us > 0 ? std::max(state_t_s_, static_cast<double>(rig_us) / 1e6) : state_t_s_;
   const nlohmann::json j{{"state", state_}, {"verdict", verdict_}, {"t_s", t_s}};
-  server_.publish(verdict_id_, static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0),
-                  j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+void LiveView::publish_state_locked(int64_t now) {
+  if (!has_state_) return;
+  const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
+  server_.publish(verdict_id_, static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0), state_json_locked());
   state_sent_ns_ = now;
 }
 
@@ -128,18 +226,27 @@ void LiveView::run() {
       queue_bytes_ = 0;
       busy_ = !batch.empty();
     }
+    room_cv_.notify_all();
     int64_t undecodable = 0, published = 0;
-    for (const Pending& p : batch) {
-      const std::string why = lcmjson::to_json(*p.route->type, p.bytes.data(), p.bytes.size(), &message);
-      if (!why.empty()) {
-        ++undecodable;
+    for (Pending& p : batch) {
+      if (p.route == nullptr) {
+        if (p.restart) history_.clear();
+        else answer(p.subscription, &message);
         continue;
       }
-      const int64_t own = message.rig_time_us;
-      const int64_t newest = newest_rig_us_.load(std::memory_order_relaxed);
-      const int64_t t_us = own >= 0 ? own : (newest > 0 ? newest : 0);
-      server_.publish(p.route->id, static_cast<uint64_t>(t_us) * 1000u, message.json);
-      ++published;
+      if (server_.has_subscribers(p.route->id)) {
+        const std::string why = lcmjson::to_json(*p.route->type, p.bytes.data(), p.bytes.size(), &message);
+        if (why.empty()) {
+          const int64_t own = message.rig_time_us;
+          const int64_t t_us = own >= 0 ? own : std::max<int64_t>(p.stamp_us, 0);
+          server_.publish(p.route->id, static_cast<uint64_t>(t_us) * 1000u, message.json);
+          ++published;
+        } else {
+          ++undecodable;
+        }
+      }
+      // Kept whether decodable or not: a late client's backlog leaves out what does not decode.
+      if (has_history()) keep(*p.route, p.stamp_us, std::move(p.bytes));
     }
     batch.clear();
     std::lock_guard<std::mutex> lock(mu_);
@@ -150,7 +257,7 @@ void LiveView::run() {
 
 bool LiveView::flush(double timeout_s) {
   std::unique_lock<std::mutex> lock(mu_);
-  if (!thread_.joinable()) return queue_.empty();
+  if (!started_) return queue_.empty();
   return idle_cv_.wait_for(lock, std::chrono::duration<double>(timeout_s), [this] { return queue_.empty() && !busy_; });
 }
 
@@ -160,6 +267,7 @@ void LiveView::stop() {
     stopping_ = true;
   }
   cv_.notify_all();
+  room_cv_.notify_all();
   if (thread_.joinable()) thread_.join();
 }
 

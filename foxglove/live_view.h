@@ -5,10 +5,20 @@
 /// simulated time. One more channel, `rig/verdict`, carries the run's state and verdict.
 ///
 /// offer() is called where the messages are recorded (the launcher's recording thread, or the
-/// replay loop): it does not decode anything. It copies the bytes of a message that some client
-/// subscribes to into a bounded queue (a full queue drops the message and counts it) and
-/// returns; the live view's own thread decodes them and hands the JSON to the server, which
-/// queues it for each subscribed client (foxglove_server.h, bounded again per client).
+/// replay loop): it does not decode anything. It copies the bytes of a message into a bounded
+/// queue (a full queue drops the message and counts it) and returns; the live view's own thread
+/// keeps them in the channel's history and decodes those that some client subscribes to, handing
+/// the JSON to the server, which queues it for each subscribed client (foxglove_server.h, bounded
+/// again per client).
+///
+/// The history: each channel keeps the LCM bytes of its messages of the last `history_s` of rig
+/// time (bounded in bytes too), so that a client that subscribes late (a page opened after the
+/// replay ended) gets them first: the server holds a new subscription (FoxgloveServer::
+/// set_subscribe_handler), the request joins the queue behind the messages offered before it,
+/// and the live view's thread answers it with the channel's history, decoded then, in the order
+/// offered; live messages follow, without a gap or a repetition. Without history (history_s 0),
+/// only messages some client subscribes to are copied, and a client gets what is published from
+/// the moment it subscribes.
 
 #include <atomic>
 #include <condition_variable>
@@ -25,6 +35,7 @@
 
 namespace nimble::lcmjson {
 struct LcmStruct;
+struct JsonMessage;
 }
 
 namespace nimble::foxglove {
@@ -39,14 +50,26 @@ struct LiveViewOptions {
   std::size_t max_queue_messages = 8192;
   /// The nice value of the decoding thread (0: as the thread that calls start()).
   int thread_nice = 0;
+  /// Each channel's history for clients that subscribe late: its messages of the last
+  /// `history_s` of rig time (before the newest rig time seen on any channel), at most
+  /// `history_bytes` per channel (LCM bytes and the bookkeeping of each message; the oldest
+  /// leave first). 0: no history. The defaults cover the dashboard's 10 s window
+  /// (docs/dashboard.md): 10 s of TRUTH at 1 kHz take 3 MiB.
+  double history_s = 10.0;
+  std::size_t history_bytes = 6u << 20;
 };
 
 /// What the live view counted, with the server's own figures.
 struct LiveViewStats {
   int64_t offered = 0;      ///< messages offered on a channel with a subscriber
   int64_t dropped = 0;      ///< of those, dropped because the live view's queue was full
+  /// Messages of channels without a subscriber that the history missed: the queue was full (a
+  /// run in process can outpace the live view's thread; a replay waits instead).
+  int64_t history_dropped = 0;
   int64_t undecodable = 0;  ///< bytes that were not a message of the channel's type (not sent)
-  int64_t published = 0;    ///< messages handed to the server
+  int64_t published = 0;    ///< messages handed to the server live
+  int64_t backlogs = 0;     ///< histories handed to clients that subscribed
+  int64_t backlog_messages = 0;  ///< messages in those
   ServerStats server;
 };
 
@@ -63,13 +86,18 @@ class LiveView {
   /// Starts the decoding thread (once). Messages offered before are queued.
   void start();
   /// One message of `channel` (LCM bytes). Cheap; never blocks on a client or on decoding.
-  /// Channels outside the contract are ignored.
-  void offer(const std::string& channel, const void* data, std::size_t size);
+  /// Channels outside the contract are ignored. When the queue is full the message is dropped
+  /// and counted, or, with `wait_for_room` (a replay, which sets its own pace), offer() waits
+  /// until the live view's thread has taken the queue (it never waits for a client).
+  void offer(const std::string& channel, const void* data, std::size_t size, bool wait_for_room = false);
   /// The run's state ("running", "done", ...), its verdict text ("" until there is one) and the
   /// simulated time [s]; sent on `rig/verdict` now and again every second (for clients that
   /// subscribe later). While the state is "running" or "replaying", the repeats carry the newest
   /// rig time seen.
   void set_state(const std::string& state, const std::string& verdict, double t_s);
+  /// Rig time starts again (a replay from its start): the histories offered so far are
+  /// forgotten and the newest rig time is forgotten.
+  void restart();
   /// Decodes and publishes what is queued, then ends the thread. offer() after stop() is ignored.
   void stop();
   /// Waits until everything offered so far has been handed to the server (or `timeout_s`).
@@ -88,25 +116,47 @@ class LiveView {
     const lcmjson::LcmStruct* type = nullptr;
     bool tracks_rig_time = false;  ///< published at rig time, which sits at a fixed offset: read on offer()
   };
+  /// An item of the queue: a message of `route`, a new subscription to answer, or a restart.
   struct Pending {
-    const Route* route = nullptr;
+    const Route* route = nullptr;  ///< a message; nullptr: a subscription or a restart
     std::string bytes;
+    int64_t stamp_us = -1;  ///< its rig time: its own, or the newest seen when it was offered
+    bool restart = false;
+    FoxgloveServer::NewSubscription subscription;
+  };
+  /// A message kept in a channel's history.
+  struct Kept {
+    int64_t stamp_us = -1;
+    std::string bytes;
+  };
+  struct History {
+    std::deque<Kept> kept;
+    std::size_t bytes = 0;
   };
   void run();
   void publish_state_locked(int64_t now_ns);
+  std::string state_json_locked() const;
+  void on_subscribe(const FoxgloveServer::NewSubscription& s);
+  /// On the thread: the backlog of a new subscription.
+  void answer(const FoxgloveServer::NewSubscription& s, lcmjson::JsonMessage* scratch);
+  void keep(const Route& route, int64_t stamp_us, std::string bytes);
+  bool has_history() const { return options_.history_s > 0 && options_.history_bytes > 0; }
 
   FoxgloveServer& server_;
   LiveViewOptions options_;
   std::map<std::string, Route> routes_;  // fixed after construction
+  std::map<uint32_t, const Route*> by_id_;  // fixed after construction
+  std::map<uint32_t, History> history_;  // the thread's only (channel id -> its history)
   uint32_t verdict_id_ = 0;
   std::atomic<int64_t> newest_rig_us_{-1};
 
   mutable std::mutex mu_;  // everything below
   std::condition_variable cv_;       // work for the thread, or stop
   std::condition_variable idle_cv_;  // the thread went idle (flush())
+  std::condition_variable room_cv_;  // the thread took the queue (offer() waiting for room)
   std::deque<Pending> queue_;
   std::size_t queue_bytes_ = 0;
-  bool stopping_ = false, busy_ = false;
+  bool started_ = false, stopping_ = false, busy_ = false;
   std::string state_, verdict_;
   double state_t_s_ = 0.0;
   bool has_state_ = false;

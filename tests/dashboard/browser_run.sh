@@ -2,7 +2,7 @@
 # The dashboard in headless Chromium during a real run: `rig run` of the hover scenario in real
 # time with its live view (--foxglove) and an injected fault, `rig view --web` serving the page,
 # and node/browser_dashboard.mjs checking that the page loads, live data arrives, the plots move
-# between two screenshots a second apart, and the injected fault appears on the page.
+# (their canvases drawn differently a second apart), and the injected fault appears on the page.
 #
 #   browser_run.sh RIG_BIN SOURCE_DIR BUILD_DIR WORK_DIR
 #

@@ -1,5 +1,6 @@
-/// `rig view`: a log replayed live to a Foxglove client, a damaged log named by its offset,
-/// --salvage, bad options, the page server (--web) refusing paths out of its root.
+/// `rig view`: a log replayed live to a Foxglove client, a client that connects after the replay
+/// ended (the last 10 s), --loop, a damaged log named by its offset, --salvage, bad options, the
+/// page server (--web) refusing paths out of its root.
 
 #include <catch2/catch.hpp>
 
@@ -10,6 +11,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -28,19 +31,89 @@ using namespace nimble::foxglove::test;
 
 namespace {
 
-/// A 2 s hover log flown in process, made once per test program.
+/// A hover log of `seconds` flown in process (made once per test program and length).
+std::string flown_log(int seconds) {
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("rig_view_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/hover" + std::to_string(seconds) + ".lcmlog";
+  if (std::filesystem::exists(file)) return file;
+  const auto r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml" +
+                                       " --clock inprocess --set duration_s=" + std::to_string(seconds) +
+                                       " --no-progress --log " + file);
+  REQUIRE(r.exit_code == 0);
+  return file;
+}
+
+/// A 2 s hover log.
 const std::string& hover_log() {
-  static const std::string log = [] {
-    const std::string dir =
-        (std::filesystem::temp_directory_path() / ("rig_view_" + std::to_string(::getpid()))).string();
-    std::filesystem::create_directories(dir);
-    const std::string file = dir + "/hover.lcmlog";
-    const auto r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml" +
-                                         " --clock inprocess --set duration_s=2 --no-progress --log " + file);
-    REQUIRE(r.exit_code == 0);
-    return file;
-  }();
+  static const std::string log = flown_log(2);
   return log;
+}
+
+/// `rig view` running with `args` (its stderr in `err`, stdout in `out`), and its port.
+struct ViewProcess {
+  pid_t pid = -1;
+  uint16_t port = 0;
+  std::string err, out;
+
+  /// Starts it and waits until its stderr has the line `ready` (a regular expression) and the
+  /// server's port.
+  ViewProcess(const std::vector<std::string>& args, const std::string& ready) {
+    static int n = 0;
+    err = hover_log() + ".view" + std::to_string(++n) + ".err";
+    out = hover_log() + ".view" + std::to_string(n) + ".out";
+    std::vector<std::string> argv{RIG_BIN, "view"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    pid = ::fork();
+    if (pid == 0) {
+      std::freopen(err.c_str(), "w", stderr);
+      std::freopen(out.c_str(), "w", stdout);
+      std::vector<char*> a;
+      for (auto& s : argv) a.push_back(s.data());
+      a.push_back(nullptr);
+      ::execv(RIG_BIN, a.data());
+      ::_exit(127);
+    }
+    const std::regex line("live view on ws://127\\.0\\.0\\.1:([0-9]+)");
+    const std::regex done(ready);
+    REQUIRE(eventually(
+        [&] {
+          std::smatch m;
+          const std::string text = nimble::test::slurp(err);
+          if (!std::regex_search(text, m, line) || !std::regex_search(text, done)) return false;
+          port = static_cast<uint16_t>(std::stoi(m[1]));
+          return true;
+        },
+        10.0));
+  }
+  /// SIGINT (it keeps serving until told), then its exit code (-1: not an exit).
+  int stop() {
+    ::kill(pid, SIGINT);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    pid = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  ~ViewProcess() {
+    if (pid > 0) stop();
+  }
+};
+
+/// Connects `c` to a rig view on `port` and subscribes to `topics` (subscription i + 1 for
+/// topics[i]).
+void subscribe(TestClient& c, uint16_t port, const std::vector<std::string>& topics) {
+  REQUIRE_FALSE(c.connect(port, kSubprotocolV1));
+  c.read_json();
+  const json ad = c.read_json();
+  json subs = json::array();
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    for (const auto& ch : ad["channels"]) {
+      if (ch["topic"] == topics[i]) subs.push_back({{"id", i + 1}, {"channelId", ch["id"]}});
+    }
+  }
+  REQUIRE(subs.size() == topics.size());
+  c.send_text(json{{"op", "subscribe"}, {"subscriptions", subs}}.dump());
 }
 
 }  // namespace
@@ -88,6 +161,9 @@ TEST_CASE("rig view: bad options are usage errors", "[foxglove][view]") {
   CHECK(nimble::test::run_rig("view " + hover_log() + " --foxglove 70000 --exit-when-done").exit_code == 2);
   CHECK(nimble::test::run_rig("view " + hover_log() + " --speed -1 --exit-when-done").exit_code == 2);
   CHECK(nimble::test::run_rig("view --exit-when-done").exit_code == 2);
+  CHECK(nimble::test::run_rig("view " + hover_log() + " --loop --speed 0").exit_code == 2);
+  CHECK(nimble::test::run_rig("view " + hover_log() + " --loop --exit-when-done").exit_code == 2);
+  CHECK(nimble::test::run_rig("view " + hover_log() + " --hold --exit-when-done").exit_code == 2);
   const auto r = nimble::test::run_rig("view " + hover_log() + " --web 0 --web-root /no/such/dir --exit-when-done");
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("--web-root"));
@@ -95,37 +171,9 @@ TEST_CASE("rig view: bad options are usage errors", "[foxglove][view]") {
 
 TEST_CASE("rig view: a client gets the log's TRUTH at rig time and the replay's end on rig/verdict",
           "[foxglove][view]") {
-  const std::string err = hover_log() + ".view.err";
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::freopen(err.c_str(), "w", stderr);
-    std::freopen("/dev/null", "w", stdout);
-    ::execl(RIG_BIN, RIG_BIN, "view", hover_log().c_str(), "--foxglove", "127.0.0.1:0", "--speed", "0.5", nullptr);
-    ::_exit(127);
-  }
-  int port = 0;
-  const std::regex line("live view on ws://127\\.0\\.0\\.1:([0-9]+)");
-  REQUIRE(eventually(
-      [&] {
-        std::smatch m;
-        const std::string text = nimble::test::slurp(err);
-        if (!std::regex_search(text, m, line)) return false;
-        port = std::stoi(m[1]);
-        return true;
-      },
-      10.0));
+  ViewProcess view({hover_log(), "--foxglove", "127.0.0.1:0", "--speed", "0.5"}, "live view on");
   TestClient c;
-  REQUIRE_FALSE(c.connect(static_cast<uint16_t>(port), kSubprotocolV1));
-  c.read_json();
-  const json ad = c.read_json();
-  uint32_t truth = 0, verdict = 0;
-  for (const auto& ch : ad["channels"]) {
-    if (ch["topic"] == contract::channels::kTruth) truth = ch["id"];
-    if (ch["topic"] == kVerdictTopic) verdict = ch["id"];
-  }
-  c.send_text(json{{"op", "subscribe"},
-                   {"subscriptions", {{{"id", 1}, {"channelId", truth}}, {{"id", 2}, {"channelId", verdict}}}}}
-                  .dump());
+  subscribe(c, view.port, {contract::channels::kTruth, kVerdictTopic});
   int truths = 0;
   bool in_order = true, done = false;
   uint64_t last_ts = 0;
@@ -145,16 +193,12 @@ TEST_CASE("rig view: a client gets the log's TRUTH at rig time and the replay's 
       final_state = m["verdict"];
     }
   }
-  ::kill(pid, SIGINT);  // it keeps serving after the replay until told
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  CHECK(WIFEXITED(status));
-  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(view.stop() == 0);  // it keeps serving after the replay until told
   CHECK(done);
   CHECK_THAT(final_state, Catch::StartsWith("replayed"));
   // Of 2000 at 1 kHz, replayed at half speed (4 s): the client, subscribed within a second or so,
-  // gets most of them.
-  CHECK(truths > 500);
+  // gets them all, the first ones from the history.
+  CHECK(truths > 1900);
   CHECK(in_order);
 }
 
@@ -220,4 +264,90 @@ TEST_CASE("rig view --web: //etc/passwd and other paths out of the root are refu
   CHECK_THAT(r.err, Catch::Contains("rig view: warning: listening on 0.0.0.0:") &&
                         Catch::Contains("anyone who can reach this port can see the live data and the page"));
   std::filesystem::remove_all(base);
+}
+
+TEST_CASE("rig view: a client that connects after the replay ended gets the last 10 s of rig time",
+          "[foxglove][view]") {
+  // 12 s flown, replayed as fast as it reads; it holds the last state by default.
+  ViewProcess view({flown_log(12), "--foxglove", "127.0.0.1:0", "--speed", "0"}, "holding the last state");
+  TestClient c;
+  subscribe(c, view.port, {contract::channels::kTruth, contract::channels::kEstimate, kVerdictTopic});
+  std::vector<int64_t> truth, estimate;
+  std::vector<std::string> verdicts;
+  std::string frame, payload;
+  bool text = false;
+  // The histories come first; rig/verdict repeats every second: two of them and all is there.
+  while (verdicts.size() < 2 && c.read(&frame, &text, 3.0)) {
+    uint32_t sub = 0;
+    uint64_t ts = 0;
+    if (text || !parse_message_data(frame, &sub, &ts, &payload)) continue;
+    const json m = json::parse(payload);
+    if (sub == 1) {
+      CHECK(ts == static_cast<uint64_t>(m["utime"].get<int64_t>()) * 1000u);
+      truth.push_back(m["utime"].get<int64_t>());
+    } else if (sub == 2) {
+      estimate.push_back(m["imu_utime"].get<int64_t>());
+    } else {
+      verdicts.push_back(m["state"].get<std::string>() + ": " + m["verdict"].get<std::string>());
+    }
+  }
+  const int code = view.stop();
+  REQUIRE(verdicts.size() == 2);
+  CHECK_THAT(verdicts[0], Catch::StartsWith("done: replayed"));
+  // TRUTH at 1 kHz: one run, 1 ms apart, that ends at the flight's end and spans 10 s.
+  REQUIRE(truth.size() > 1000);
+  const int64_t span = truth.back() - truth.front();
+  INFO("TRUTH from " << truth.front() << " to " << truth.back() << " us, " << truth.size() << " messages");
+  CHECK(truth.back() >= 11990000);
+  CHECK(span >= 9990000);
+  CHECK(span <= 10000000);
+  CHECK(truth.size() == static_cast<std::size_t>(span / 1000 + 1));
+  bool steps = true;
+  for (std::size_t i = 1; i < truth.size(); ++i) steps = steps && truth[i] - truth[i - 1] == 1000;
+  CHECK(steps);
+  // ESTIMATE too: the same 10 s, in order.
+  REQUIRE(estimate.size() > 1000);
+  CHECK(estimate.back() - estimate.front() <= 10000000);
+  CHECK(estimate.back() - estimate.front() >= 9900000);
+  CHECK(std::is_sorted(estimate.begin(), estimate.end()));
+  CHECK(code == 0);
+  const std::string out = nimble::test::slurp(view.out);
+  CHECK_THAT(out, Catch::Contains("live view: clients 1"));
+  CHECK_THAT(out, Catch::Contains("dropped 0"));
+}
+
+TEST_CASE("rig view --loop: the replay starts again, and the history with it", "[foxglove][view]") {
+  // 2 s replayed at 4x: a pass every half second.
+  ViewProcess view({hover_log(), "--foxglove", "127.0.0.1:0", "--speed", "4", "--loop"}, "looping until Ctrl-C");
+  TestClient c;
+  subscribe(c, view.port, {contract::channels::kTruth, kVerdictTopic});
+  int64_t last = -1, restarts = 0, after = 0;
+  bool in_order = true;
+  std::string frame, payload, pass;
+  bool text = false;
+  // Until a new pass has run for 0.5 s of rig time.
+  while (after < 500 && c.read(&frame, &text, 3.0)) {
+    uint32_t sub = 0;
+    uint64_t ts = 0;
+    if (text || !parse_message_data(frame, &sub, &ts, &payload)) continue;
+    const json m = json::parse(payload);
+    if (sub == 2) {
+      if (m["verdict"].get<std::string>().rfind("pass ", 0) == 0) pass = m["verdict"];
+      continue;
+    }
+    const int64_t t = m["utime"].get<int64_t>();
+    if (last >= 0 && t < last) {
+      ++restarts;
+      in_order = in_order && t <= 1000;  // from the log's start
+    } else if (last >= 0) {
+      in_order = in_order && t == last + 1000;
+    }
+    if (restarts > 0) ++after;
+    last = t;
+  }
+  CHECK(view.stop() == 0);
+  CHECK(restarts >= 1);
+  CHECK(after >= 500);
+  CHECK(in_order);
+  CHECK_THAT(pass, Catch::StartsWith("pass "));
 }

@@ -2,15 +2,21 @@
 // live run.
 //
 //   node browser_dashboard.mjs --url 'http://127.0.0.1:8080/?ws=ws://127.0.0.1:8765'
-//        [--expect-fault TEXT] [--expect-verdict TEXT] [--timeout S] [--interval-ms MS]
-//        [--screenshots DIR] [--chromium PATH] [--min-diff-pixels N]
+//        [--expect-fault TEXT] [--expect-verdict TEXT] [--expect-span S] [--still] [--timeout S]
+//        [--interval-ms MS] [--screenshots DIR] [--chromium PATH] [--min-diff-pixels N]
 //
 // Checks, in order (each wait bounded by --timeout, default 30 s):
-//  1. the page loads and connects: the message counter (#count) rises above zero, then rises again;
-//  2. the roll-angle plot holds truth and estimate samples;
-//  3. two screenshots of the plot area (#plots), --interval-ms apart (default 1000), differ in at
-//     least --min-diff-pixels pixels (default 100): the plots move (with --screenshots DIR, both
-//     are saved there as plots-1.png and plots-2.png, and the whole page at the end as page.png);
+//  1. the page loads and connects: the message counter (#count) rises above zero, then rises again
+//     (not with --still: a page opened after the stream ended gets the last seconds only);
+//  2. the roll-angle plot holds truth and estimate samples; with --expect-span S, both come to
+//     span at least S s of rig time (a late page gets the server's history);
+//  3. the plots move (not with --still): the plots as drawn, captured twice --interval-ms apart
+//     (default 1000), show different rig times and differ in at least --min-diff-pixels pixels
+//     (default 100). What is compared is each plot's canvas (uPlot draws a plot with its axes on
+//     one), so the layout around the plots (a fault list growing beside them stretches their
+//     section) cannot change what is compared; a plot resized between the captures (a change of
+//     width) is captured again. With --screenshots DIR the canvases are saved there as
+//     plots-1-<plot>.png and plots-2-<plot>.png, and the whole page at the end as page.png;
 //  4. with --expect-fault, a fault whose text contains TEXT appears in the fault list (#faults li);
 //  5. with --expect-verdict, the run line (#verdict) comes to contain TEXT;
 //  6. the page logged no console error and threw nothing, every request of the page succeeded,
@@ -27,13 +33,16 @@ import zlib from "node:zlib";
 import puppeteer from "puppeteer-core";
 
 const USAGE = `usage: node browser_dashboard.mjs --url URL [--expect-fault TEXT] [--expect-verdict TEXT]
-       [--timeout S] [--interval-ms MS] [--screenshots DIR] [--chromium PATH] [--min-diff-pixels N]`;
+       [--expect-span S] [--still] [--timeout S] [--interval-ms MS] [--screenshots DIR] [--chromium PATH]
+       [--min-diff-pixels N]`;
 
 function parseArgs(argv) {
   const opts = {
     url: null,
     expectFault: null,
     expectVerdict: null,
+    expectSpan: 0,
+    still: false,
     timeoutS: 30,
     intervalMs: 1000,
     screenshots: null,
@@ -44,6 +53,7 @@ function parseArgs(argv) {
     "--url": "url",
     "--expect-fault": "expectFault",
     "--expect-verdict": "expectVerdict",
+    "--expect-span": "expectSpan",
     "--timeout": "timeoutS",
     "--interval-ms": "intervalMs",
     "--screenshots": "screenshots",
@@ -62,6 +72,10 @@ function parseArgs(argv) {
       console.log(USAGE);
       process.exit(0);
     }
+    if (a === "--still" && v === undefined) {
+      opts.still = true;
+      continue;
+    }
     const key = valued[a];
     if (!key) usageError(`unknown argument ${a}`);
     if (v === undefined) {
@@ -71,7 +85,7 @@ function parseArgs(argv) {
     opts[key] = v;
   }
   if (!opts.url) usageError("--url is required");
-  for (const k of ["timeoutS", "intervalMs", "minDiffPixels"]) {
+  for (const k of ["timeoutS", "intervalMs", "minDiffPixels", "expectSpan"]) {
     const n = Number(opts[k]);
     if (!Number.isFinite(n) || n < 0) usageError(`bad number for ${k}: ${opts[k]}`);
     opts[k] = n;
@@ -145,13 +159,13 @@ function decodePng(buf) {
   return { width, height, bpp, px };
 }
 
-// Pixels that differ between two screenshots of the same region (all of them if the sizes differ).
+// Pixels that differ between two images of the same size (sizes_differ if they are not).
 function comparePngs(a, b) {
   const ia = decodePng(a);
   const ib = decodePng(b);
   const total = ia.width * ia.height;
   if (ia.width !== ib.width || ia.height !== ib.height || ia.bpp !== ib.bpp) {
-    return { width: ia.width, height: ia.height, total, differing: total, sizes_differ: true };
+    return { width: ia.width, height: ia.height, total, differing: 0, sizes_differ: true };
   }
   let differing = 0;
   for (let i = 0; i < total; i++) {
@@ -266,6 +280,8 @@ async function main() {
         rigTime: Number(ds("#rigtime").tS || NaN),
         truthPoints: Number(ds("#plot-phi").truthPoints ?? NaN),
         estimatePoints: Number(ds("#plot-phi").estimatePoints ?? NaN),
+        truthSpan: Number(ds("#plot-phi").truthTo || NaN) - Number(ds("#plot-phi").truthFrom || NaN),
+        estimateSpan: Number(ds("#plot-phi").estimateTo || NaN) - Number(ds("#plot-phi").estimateFrom || NaN),
         faults: document.querySelectorAll("#faults li").length,
       };
     });
@@ -288,14 +304,18 @@ async function main() {
     };
     const first = await waitCount(0, "no message arrived");
     const tFirst = Date.now();
-    await waitCount(first, "the message count did not rise");
-    await sleep(Math.max(0, 500 - (Date.now() - tFirst)));  // a rate over at least half a second
-    const later = (await readState()).count;
-    report.messages = {
-      first,
-      later,
-      per_s: Math.round(((later - first) / Math.max(0.001, (Date.now() - tFirst) / 1000)) * 10) / 10,
-    };
+    if (opts.still) {
+      report.messages = { first };
+    } else {
+      await waitCount(first, "the message count did not rise");
+      await sleep(Math.max(0, 500 - (Date.now() - tFirst)));  // a rate over at least half a second
+      const later = (await readState()).count;
+      report.messages = {
+        first,
+        later,
+        per_s: Math.round(((later - first) / Math.max(0.001, (Date.now() - tFirst) / 1000)) * 10) / 10,
+      };
+    }
 
     // 2. both sources in the plots.
     step("waiting for truth and estimate in the plots");
@@ -309,44 +329,88 @@ async function main() {
       throw new Error(`the plots did not get both truth and estimate within ${opts.timeoutS} s ` +
         `(truth ${s.truthPoints} samples, estimate ${s.estimatePoints})`);
     }
-
-    // 3. the plots move.
-    step("comparing two screenshots of the plots");
-    const plotsEl = await page.$("#plots");
-    await sleep(300);  // a redraw after the first samples
-    const shotA = Buffer.from(await plotsEl.screenshot({ type: "png" }));
-    const stateA = await readState();
-    await sleep(opts.intervalMs);
-    const shotB = Buffer.from(await plotsEl.screenshot({ type: "png" }));
-    const stateB = await readState();
-    const cmp = comparePngs(shotA, shotB);
-    report.plots = {
-      truth_points: stateB.truthPoints,
-      estimate_points: stateB.estimatePoints,
-      rig_time_s: [stateA.rigTime, stateB.rigTime],
-    };
-    report.screenshots = {
-      width: cmp.width,
-      height: cmp.height,
-      interval_ms: opts.intervalMs,
-      differing_pixels: cmp.differing,
-      total_pixels: cmp.total,
-      differing_fraction: Math.round((cmp.differing / Math.max(1, cmp.total)) * 1e4) / 1e4,
-      files: [],
-    };
-    if (opts.screenshots) {
-      fs.mkdirSync(opts.screenshots, { recursive: true });
-      const files = [["plots-1.png", shotA], ["plots-2.png", shotB]];
-      for (const [name, data] of files) {
-        const f = path.join(opts.screenshots, name);
-        fs.writeFileSync(f, data);
-        report.screenshots.files.push(f);
+    if (opts.expectSpan > 0) {
+      step(`waiting for truth and estimate over ${opts.expectSpan} s of rig time`);
+      try {
+        await page.waitForFunction((span) => {
+          const d = document.querySelector("#plot-phi").dataset;
+          return Number(d.truthTo) - Number(d.truthFrom) >= span && Number(d.estimateTo) - Number(d.estimateFrom) >= span;
+        }, { timeout, polling: 100 }, opts.expectSpan);
+      } catch (e) {
+        const s = await readState();
+        throw new Error(`the plots did not come to span ${opts.expectSpan} s of rig time within ${opts.timeoutS} s ` +
+          `(truth ${s.truthSpan} s, estimate ${s.estimateSpan} s)`);
       }
     }
-    if (cmp.sizes_differ) throw new Error("the two screenshots of the plots differ in size");
-    if (cmp.differing < opts.minDiffPixels) {
-      throw new Error(`the plots did not move: ${cmp.differing} pixels differ between two screenshots ` +
-        `${opts.intervalMs} ms apart (at least ${opts.minDiffPixels} wanted)`);
+    const plotted = await readState();
+    report.plots = {
+      truth_points: plotted.truthPoints,
+      estimate_points: plotted.estimatePoints,
+      truth_span_s: plotted.truthSpan,
+      estimate_span_s: plotted.estimateSpan,
+    };
+
+    // 3. the plots move: each plot as drawn on its canvas, with the rig time drawn up to, read in
+    // one go after two animation frames (a pending layout and redraw done).
+    report.screenshots = { interval_ms: opts.intervalMs, files: [] };
+    if (opts.screenshots) fs.mkdirSync(opts.screenshots, { recursive: true });
+    const capture = () => page.evaluate(() => new Promise((resolve) => {
+      requestAnimationFrame(() => requestAnimationFrame(() => {
+        resolve({
+          rigTime: Number(document.querySelector("#rigtime").dataset.tS || NaN),
+          plots: Array.from(document.querySelectorAll("#plots figure.plot"), (fig) => {
+            const c = fig.querySelector("canvas");
+            return { plot: fig.dataset.plot, png: c ? c.toDataURL("image/png") : null };
+          }),
+        });
+      }));
+    }));
+    const pngOf = (p) => Buffer.from(p.png.slice(p.png.indexOf(",") + 1), "base64");
+    if (!opts.still) {
+      step("comparing the plots as drawn twice");
+      await sleep(300);  // a redraw after the first samples
+      let a = null, b = null, cmps = null, resized = 0;
+      const deadline = Date.now() + timeout;
+      for (;;) {
+        a = await capture();
+        await sleep(opts.intervalMs);
+        b = await capture();
+        if (a.plots.length !== 3 || a.plots.some((p) => !p.png) || b.plots.length !== a.plots.length) {
+          throw new Error(`the plots have no canvas to compare (${a.plots.length} plots)`);
+        }
+        cmps = a.plots.map((p, i) => comparePngs(pngOf(p), pngOf(b.plots[i])));
+        if (!cmps.some((c) => c.sizes_differ)) break;
+        resized++;  // a plot changed its size between the captures: the layout was not settled
+        if (Date.now() > deadline) {
+          throw new Error(`the plots kept changing their size for ${opts.timeoutS} s (${resized} pairs of captures)`);
+        }
+      }
+      const differing = cmps.reduce((n, c) => n + c.differing, 0);
+      const total = cmps.reduce((n, c) => n + c.total, 0);
+      report.plots.rig_time_s = [a.rigTime, b.rigTime];
+      Object.assign(report.screenshots, {
+        canvases: cmps.map((c, i) => ({ plot: a.plots[i].plot, width: c.width, height: c.height, differing: c.differing })),
+        resized_pairs: resized,
+        differing_pixels: differing,
+        total_pixels: total,
+        differing_fraction: Math.round((differing / Math.max(1, total)) * 1e4) / 1e4,
+      });
+      if (opts.screenshots) {
+        for (const [k, shot] of [[1, a], [2, b]]) {
+          for (const p of shot.plots) {
+            const f = path.join(opts.screenshots, `plots-${k}-${p.plot}.png`);
+            fs.writeFileSync(f, pngOf(p));
+            report.screenshots.files.push(f);
+          }
+        }
+      }
+      if (!Number.isFinite(a.rigTime) || !Number.isFinite(b.rigTime) || a.rigTime === b.rigTime) {
+        throw new Error(`the plots did not move: both captures ${opts.intervalMs} ms apart show rig time ${a.rigTime} s`);
+      }
+      if (differing < opts.minDiffPixels) {
+        throw new Error(`the plots did not move: ${differing} pixels differ between two captures ` +
+          `${opts.intervalMs} ms apart (at least ${opts.minDiffPixels} wanted)`);
+      }
     }
 
     // 4. the expected fault.
@@ -386,6 +450,7 @@ async function main() {
     }
 
     if (opts.screenshots) {
+      fs.mkdirSync(opts.screenshots, { recursive: true });
       const f = path.join(opts.screenshots, "page.png");
       await page.screenshot({ path: f, fullPage: true });
       report.screenshots.files.push(f);
