@@ -20,6 +20,7 @@
 
 #include "ident/lcm_log.h"
 #include "launcher/inprocess.h"
+#include "launcher/recorder.h"
 #include "launcher/run_plan.h"
 #include "tests/support/small_disk.h"
 
@@ -242,4 +243,26 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
     for (const auto& e : fs::directory_iterator(d)) CHECK(e.path().filename().string().find(".part") == std::string::npos);
   }
   fs::remove_all(outside);
+}
+
+TEST_CASE("the log size expected before a run is at most 15 % above what the flight writes, never below",
+          "[resource]") {
+  const std::string d = scratch("expected");
+  for (const char* scenario : {"hover.yaml", "id_doublet_train_fast.yaml"}) {
+    INFO(scenario);
+    nimble::launcher::RunOptions o;
+    o.scenario_file = std::string(RIG_SOURCE_DIR) + "/rig_configs/" + scenario;
+    o.overrides.push_back({"duration_s", "4"});
+    o.clock = "inprocess";
+    const nimble::launcher::RunPlan plan = nimble::launcher::load_run_plan(o);
+    nimble::launcher::InprocessOptions io;
+    io.log_file = d + "/run.lcmlog";
+    const nimble::launcher::RunReport report = nimble::launcher::fly_inprocess(plan, io);
+    REQUIRE(report.log.failure.empty());
+    const double written = static_cast<double>(fs::file_size(io.log_file));
+    const double expected = static_cast<double>(nimble::launcher::expected_log_bytes(plan));
+    CHECK(expected >= written);
+    CHECK(expected <= 1.15 * written);
+  }
+  fs::remove_all(d);
 }
