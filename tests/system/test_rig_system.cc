@@ -211,7 +211,10 @@ TEST_CASE("a stalled lockstep participant is named with its channel, the run sto
 
 TEST_CASE("command timeout: the plant holds the safe state and reports it", "[system]") {
   const std::string dir = scratch_dir("timeout");
-  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir, "--clock realtime --set duration_s=3");
+  // The controller's own failsafe on a stale input is another test's: a machine loaded enough to
+  // hold the controller off for 50 ms would engage it before the plant's timeout is seen.
+  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
+                                       "--clock realtime --set duration_s=3 --set controller.failsafe.input_stale_s=2");
   const pid_t controller = wait_for_running(rig, "nimble_controller", dir + "/run.lcmlog");
   REQUIRE(controller > 0);
   ::kill(controller, SIGSTOP);
