@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -90,6 +91,25 @@ void warn_damage(const char* command, const std::string& file, const std::string
   if (!damage.empty()) std::cerr << command << ": warning: " << file << ": " << damage << "\n";
 }
 
+/// Counts the undecodable messages a log reader passes over (the channels it does not read), as
+/// the MCAP export counts what it leaves out: `o.other_event` feeds `count`.
+void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count) {
+  o.other_event = [&count](const ident::LogEventRecord& e) { count.add(e); };
+}
+
+/// Says on stderr which undecodable messages a read left out, by channel and count.
+void warn_undecodable(const char* command, const std::string& file, const mcap::UndecodableCount& count) {
+  const std::string text = mcap::undecodable_text(count.by_channel());
+  if (!text.empty()) std::cerr << command << ": warning: " << file << ": " << text << "\n";
+}
+
+/// The undecodable messages by channel as a --json object.
+void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel) {
+  w.key("undecodable_channels").begin_object();
+  for (const auto& [name, n] : by_channel) w.key(name).value(static_cast<long long>(n));
+  w.end_object();
+}
+
 /// The --json report of an MCAP export.
 std::string export_json(const mcap::ExportStats& s) {
   auto n = [](uint64_t v) { return static_cast<long long>(v); };
@@ -100,6 +120,7 @@ std::string export_json(const mcap::ExportStats& s) {
   w.key("events").value(n(s.events)).key("messages").value(n(s.messages));
   w.key("mcap_channels").value(n(s.mcap_channels));
   w.key("undecodable").value(n(s.undecodable)).key("unknown_channel_events").value(n(s.unknown_events));
+  undecodable_json(w, mcap::undecodable_by_channel(s));
   w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
   w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
   w.key("seconds").value(s.seconds).key("damage").value(s.damage);
@@ -189,8 +210,11 @@ int run_identify_command(const std::vector<std::string>& args) {
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
   std::string damage;
+  mcap::UndecodableCount undecodable;
+  count_undecodable(log_options, undecodable);
   const ident::FlightData data = ident::read_flight_data(csv, log_options, &damage);
   warn_damage("rig identify", csv, damage);
+  warn_undecodable("rig identify", csv, undecodable);
   const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
 
   if (!model_out.empty()) {
@@ -224,7 +248,8 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
   cl->footer("With --power, no data: how long to fly to name an effect, by simulated flights of a scenario\n"
              "(rig discrepancy --power --scenario S --model M --effect NAME=SIZE; 'rig discrepancy --power --help').\n"
-             "Exit code: 0 whatever the verdict; 2 bad usage or input.");
+             "Exit code: 0 whatever the verdict; 2 bad usage or input (a record refused as not finite or not\n"
+             "physical, naming its first bad sample).");
   cl->add_option("data", data_files,
                  "flight data: identification CSV or a rig log (.lcmlog); several flights of the same vehicle are "
                  "pooled (each its own folds and noise level; an effect named only on the pooled evidence, each "
@@ -273,8 +298,12 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   std::vector<ident::FlightData> flights;
   for (const auto& data_file : data_files) {
     if (ident::is_lcm_log(data_file)) {
+      mcap::UndecodableCount undecodable;
+      count_undecodable(log_options, undecodable);
       ident::RigLogData log = ident::read_rig_log(data_file, ident::StateSource::kAuto, log_options);
+      log_options.other_event = nullptr;  // it counts into this flight's `undecodable`
       warn_damage("rig discrepancy", data_file, log.damage);
+      warn_undecodable("rig discrepancy", data_file, undecodable);
       flights.push_back(std::move(log.measured));
       if (gains.empty()) gains = log.gain_set;  // the gains the (first) run flew
     } else {
@@ -361,6 +390,8 @@ int run_validate_command(const std::vector<std::string>& args) {
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
   std::string damage;
   ident::FlightData data;
+  mcap::UndecodableCount undecodable;
+  count_undecodable(log_options, undecodable);
   if (ident::is_lcm_log(csv)) {
     ident::RigLogData log = ident::read_rig_log(csv, ident::StateSource::kAuto, log_options);
     damage = log.damage;
@@ -371,6 +402,7 @@ int run_validate_command(const std::vector<std::string>& args) {
   }
   if (gains.empty()) gains = "fast";
   warn_damage("rig validate", csv, damage);
+  warn_undecodable("rig validate", csv, undecodable);
   if (closed_loop) {
     ident::ClosedLoopOptions cl;
     cl.controller = load_controller_config(controller_file);
@@ -432,7 +464,9 @@ int run_export_command(const std::vector<std::string>& args) {
                  "CSV: states come from the estimator (ESTIMATE) when the log has it, else from the plant's\n"
                  "truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. MCAP (docs/viewers.md): one\n"
                  "channel per LCM channel, JSON messages with their JSON Schema, log time = rig time.\n"
-                 "A damaged log is an error naming the byte offset and the event.");
+                 "A damaged log is an error naming the byte offset and the event; a message that is not one of\n"
+                 "its channel's type is left out and named, by channel and count (CSV: those of the channels it\n"
+                 "does not read; a damaged message on a channel it reads is an error naming the event).");
   cl->add_option("log", log, "the rig log (.lcmlog)")->required();
   cl->add_option("--format", format, "csv or mcap (default: mcap when --out ends in .mcap, else csv)")
       ->check(CLI::IsMember({"csv", "mcap"}))
@@ -463,7 +497,8 @@ int run_export_command(const std::vector<std::string>& args) {
   auto* raw_flag = cl->add_flag("--raw", raw, "MCAP: also each channel's LCM bytes as <CHANNEL>/lcm");
   add_salvage(cl, log_options);
   cl.add_json(json,
-              "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; damage)");
+              "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; both: "
+              "undecodable messages by channel, damage)");
   if (const auto done = cl.parse(args)) return *done;
   if (format.empty()) {
     const bool mcap_name = out_file.size() >= 5 && out_file.compare(out_file.size() - 5, 5, ".mcap") == 0;
@@ -487,8 +522,11 @@ int run_export_command(const std::vector<std::string>& args) {
   if (!csv.empty() && !out_file.empty()) return cl.fail("--csv and --out both name the output: give one");
   if (csv.empty()) csv = out_file;
   if (csv.empty()) return cl.fail("--csv FILE (or --out FILE.mcap for MCAP) is required");
+  mcap::UndecodableCount undecodable;
+  count_undecodable(log_options, undecodable);
   const ident::RigLogData data = ident::read_rig_log(log, source, log_options);
   warn_damage("rig export", log, data.damage);
+  warn_undecodable("rig export", log, undecodable);
   const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz, interpolation);
   ident::FlightData out;
   out.source = log;
@@ -506,6 +544,8 @@ int run_export_command(const std::vector<std::string>& args) {
     w.key("log").value(log).key("csv").value(csv).key("samples").value(static_cast<long long>(grid.size()));
     w.key("rate_hz").value(rate_hz).key("interpolation").value(ident::to_string(interpolation));
     w.key("state_source").value(data.state_source).key("damage").value(data.damage);
+    w.key("undecodable").value(static_cast<long long>(undecodable.total()));
+    undecodable_json(w, undecodable.by_channel());
     w.key("columns").begin_array();
     for (const auto& [name, channel] : out.channels) w.value(name);
     w.end_array();

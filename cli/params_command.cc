@@ -8,6 +8,8 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "core/param_table.h"
+#include "core/vehicle.h"
 #include "launcher/run_plan.h"
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
@@ -30,7 +32,9 @@ constexpr const char* kDocPageHead =
     "(`core/param_table.h`): key, default (the struct's own), allowed range, unit and meaning. The loader\n"
     "reads through the same table (a value outside the range is an error naming file, key and value), and\n"
     "the validation of a struct built in code checks the same ranges. `rig params SECTION` prints one\n"
-    "section. The keys a table does not hold are documented in the files that set them: the scenario's top\n"
+    "section. The last section, `vehicle.data_bounds`, is no scenario's: a vehicle file's\n"
+    "(`rig_configs/vehicles/`), the physical bounds of recorded flight data (docs/identification.md).\n"
+    "The keys a table does not hold are documented in the files that set them: the scenario's top\n"
     "level (`scenario/scenario.h`), the manoeuvres (`controller/manoeuvre.h`), the hosts (`launcher/hosts.h`),\n"
     "the faults (`scenario/faults.h`), the CAN interface and candump file names (`can_bridge/bridge_config.h`)\n"
     "and the controller's gain sets (`rig_configs/controller/nimble_attitude.yaml`).\n\n"
@@ -69,6 +73,8 @@ const std::vector<Section>& sections() {
       {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},
       {"sensing.mocap", [] { return params_markdown(mocap_params(), MocapConfig{}, "sensing.mocap."); }},
       {"sensing.ekf", [] { return params_markdown(ekf_params(), EkfConfig{}, "sensing.ekf."); }},
+      // Not a scenario section: the vehicle file's (rig_configs/vehicles/), read by load_vehicle.
+      {"vehicle.data_bounds", [] { return params_markdown(data_bounds_params(), DataBounds{}, "data_bounds."); }},
   };
   return list;
 }

@@ -6,9 +6,10 @@
 # build, that every discovered entry selects exactly one test case; a `;` in a test name is the
 # usual cause of an entry that selects none (CTest splits the name in two). TEST_SPEC registers
 # only the test cases it selects (e.g. "[records]" or "~[records]"), so one executable's cases
-# may carry different labels. Several LABELS (e.g. `LABELS unit resource`) all go on every entry:
-# catch_discover_tests cannot pass a list as a property's value, so they are set by a file CTest
-# includes after the entries' own.
+# may carry different labels. LABELS takes one label or several (`LABELS functional resource`):
+# catch_discover_tests passes its properties on as a flat list, which cannot hold a list value,
+# so several labels are set on the discovered entries by a CTest include file of their own, read
+# after Catch2's (the entries' names come from its TEST_LIST variable).
 include(Catch)
 
 function(rig_discover_tests target)
@@ -25,20 +26,20 @@ function(rig_discover_tests target)
   if(ARG_TEST_SPEC)
     set(spec TEST_SPEC "${ARG_TEST_SPEC}")
   endif()
-  string(MAKE_C_IDENTIFIER "rig_tests_${target}_${ARG_PREFIX}_${ARG_TEST_SPEC}" list)
+  string(MAKE_C_IDENTIFIER "${target}_${ARG_PREFIX}_${ARG_TEST_SPEC}_tests" test_list)
   catch_discover_tests(${target}
     ${spec}
     TEST_PREFIX "${ARG_PREFIX}"
-    TEST_LIST ${list}
+    TEST_LIST ${test_list}
     EXTRA_ARGS --warn NoTests
     PROPERTIES ${properties})
   list(LENGTH ARG_LABELS label_count)
   if(label_count GREATER 1)
-    set(labels_file "${CMAKE_CURRENT_BINARY_DIR}/${list}_labels.cmake")
-    file(WRITE "${labels_file}"
-      "if(${list})\n"
-      "  set_tests_properties(\${${list}} PROPERTIES LABELS \"${ARG_LABELS}\")\n"
-      "endif()\n")
-    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${labels_file}")
+    set(script "${CMAKE_CURRENT_BINARY_DIR}/${test_list}_labels.cmake")
+    file(WRITE "${script}"
+      "foreach(t IN LISTS ${test_list})\n"
+      "  set_tests_properties(\"\${t}\" PROPERTIES LABELS \"${ARG_LABELS}\")\n"
+      "endforeach()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${script}")
   endif()
 endfunction()

@@ -3,7 +3,32 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/param_table.h"
+
 namespace nimble {
+
+const ParamTable<DataBounds>& data_bounds_params() {
+  using C = DataBounds;
+  static const ParamTable<C> table = {
+      {"rate_max_radps", &C::rate_max_radps, Range::positive(), "rad/s",
+       "bound of |p|, |q|, |r|; assumption: above the MPU-6000 gyro's largest range (34.9 rad/s), about 8x the "
+       "thesis's largest |p| (Table 9.4)"},
+      {"speed_max_mps", &C::speed_max_mps, Range::positive(), "m/s",
+       "bound of |u|, |v|, |w|; assumption: about 12x the thesis's fastest flight (v 1.60 m/s, paper Section VI)"},
+      {"angle_max_rad", &C::angle_max_rad, Range::positive(), "rad",
+       "bound of |phi|, |theta|, |phi_sp|: pi, an Euler angle of an attitude lies within +-pi"},
+      {"delta_f_max_radps", &C::delta_f_max_radps, Range::positive(), "rad/s",
+       "bound of |delta_f|, |delta_f_cmd|; assumption: 2x the rig's per-wing ceiling (251 rad/s), about 4x the "
+       "thesis's delta_f range (Table 9)"},
+      {"throttle_max_pct", &C::throttle_max_pct, Range::positive(), "%",
+       "bound of |delta_t|: a throttle is 0-100 % of full scale"},
+      {"servo_max_rad", &C::servo_max_rad, Range::positive(), "rad",
+       "bound of |delta_d|, |delta_w|; assumption: +-90 deg, a hobby servo's full travel"},
+      {"specific_force_max_mps2", &C::specific_force_max_mps2, Range::positive(), "m/s^2",
+       "bound of |ax|, |ay|, |az|; assumption: above the MPU-6000 accelerometer's largest range (16 g, 156.9 m/s^2)"},
+  };
+  return table;
+}
 
 double Vehicle::flap_frequency_radps() const { return 2.0 * M_PI * flap_frequency_hz; }
 
@@ -38,6 +63,12 @@ Vehicle vehicle_from_config(ConfigMap& map) {
   v.flap_frequency_hz = flapping.get_double("mean_frequency_hz", Range::positive());
   v.flap_amplitude_rad = flapping.get_double("amplitude_rad", Range{0.0, M_PI, true, false});
   flapping.finish();
+
+  if (map.has("data_bounds")) {
+    ConfigMap bounds = map.get_map("data_bounds");
+    read_params(bounds, data_bounds_params(), v.data_bounds);
+    bounds.finish();
+  }
 
   v.air_density_kgpm3 = map.get_double("air_density_kgpm3", Range::positive());
   v.gravity_mps2 = map.get_double("gravity_mps2", Range::positive());

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "ident/data_check.h"
 #include "ident/plots.h"
 #include "ident/signal.h"
 
@@ -104,6 +105,7 @@ class EffectForces {
 
 ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                       const ClosedLoopOptions& options) {
+  check_flight_data(data, vehicle);
   if (model.structure != Structure::kLateral3) {
     throw std::invalid_argument("closed-loop validation needs a lateral3 model; '" + model.name + "' is " +
                                 to_string(model.structure));

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -12,6 +13,7 @@
 
 
 #include "core/chi_square.h"
+#include "ident/data_check.h"
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
 #include "ident/discrepancy_parts.h"
@@ -368,14 +370,18 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   // Each flight prepared on its own (filter, derivatives, the applied command), then joined.
   std::vector<UniformData> prepared;
   for (const FlightData& data : flights) {
+    check_flight_data(data, vehicle);
     for (const auto& in : inputs) {
       if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
     }
     PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
     add_applied_command(prep.filtered, options.command_latency_s);
     if (prep.filtered.size() < static_cast<Index>(50 * options.folds)) {
+      char need[96];
+      std::snprintf(need, sizeof need, ": need at least %zu (50 per fold, %.2f s at %.6g Hz)", 50 * options.folds,
+                    static_cast<double>(50 * options.folds - 1) / options.processing.rate_hz, options.processing.rate_hz);
       throw DataError(data.source, -1, -1, "", std::to_string(prep.filtered.size()) + " samples are too few for " +
-                                                   std::to_string(options.folds) + "-fold cross-validation");
+                                                   std::to_string(options.folds) + "-fold cross-validation" + need);
     }
     prepared.push_back(std::move(prep.filtered));
   }

@@ -223,6 +223,7 @@ struct OutputGap {
   double rmse_after = 0.0;   ///< with the named effects, held-out
   double fit_before_pct = 0.0, fit_after_pct = 0.0;
   bool white_before = false, white_after = false;
+  bool white_tested = true;  ///< false: the record is too short for the whiteness lags (DiscrepancyResult::notes)
   double peak_psd_before = 0.0, peak_psd_after = 0.0;  ///< residual PSD at the located frequency (if any)
   /// The output [unit] and its held-out predictions before and after, on the grid t_s.
   Eigen::VectorXd measured, predicted_before, predicted_after;
@@ -351,6 +352,9 @@ struct DiscrepancyResult {
   /// consistency over them. Empty for one flight.
   std::vector<FlightEstimate> flights;
   std::vector<FlightConsistency> consistency;
+  /// Diagnostics skipped because the record is too short for them, each saying how long a
+  /// record it needs (the result stands without them).
+  std::vector<std::string> notes;
 };
 
 /// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally

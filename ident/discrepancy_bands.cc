@@ -113,8 +113,11 @@ void gap_table(const UniformData& d, const DerivativeModel& model, const Discrep
     g.rmse_after = std::sqrt(ra.squaredNorm() / static_cast<double>(n));
     g.fit_before_pct = 100.0 * (1.0 - rb.norm() / std::sqrt(sst));
     g.fit_after_pct = 100.0 * (1.0 - ra.norm() / std::sqrt(sst));
-    g.white_before = residual_whiteness(rb, d.rate_hz, options.whiteness_lags, lag_step).white;
+    const Whiteness wb = residual_whiteness(rb, d.rate_hz, options.whiteness_lags, lag_step);
+    g.white_before = wb.white;
     g.white_after = residual_whiteness(ra, d.rate_hz, options.whiteness_lags, lag_step).white;
+    g.white_tested = wb.tested;
+    if (!wb.tested && e == 0) res.notes.push_back(wb.note);
     for (const auto& f : res.located.frequency) {
       if (f.output != eq.output) continue;
       const Psd pb = periodogram(rb, d.rate_hz), pa = periodogram(ra, d.rate_hz);

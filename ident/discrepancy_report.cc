@@ -41,6 +41,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   j.key("summary").value(r.summary);
   j.key("samples").value(static_cast<long long>(r.samples));
   j.key("rate_hz").value(r.rate_hz);
+  j.key("notes").array(r.notes);
   j.key("effects").begin_array();
   for (const auto& e : r.effects) {
     j.begin_object();
@@ -147,8 +148,13 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.key("rmse_after").value(o.rmse_after);
     j.key("fit_before_pct").value(o.fit_before_pct);
     j.key("fit_after_pct").value(o.fit_after_pct);
-    j.key("white_before").value(o.white_before);
-    j.key("white_after").value(o.white_after);
+    if (o.white_tested) {
+      j.key("white_before").value(o.white_before);
+      j.key("white_after").value(o.white_after);
+    } else {  // too short for the lags: see notes
+      j.key("white_before").null();
+      j.key("white_after").null();
+    }
     j.key("peak_psd_before").value(o.peak_psd_before);
     j.key("peak_psd_after").value(o.peak_psd_after);
     j.end_object();
@@ -289,9 +295,11 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     char line[200];
     std::snprintf(line, sizeof line, "  %-12s  %-8s  %10.4g  %11.4g  %10.4g  %11.1f  %10.1f  %s/%s\n", x.output.c_str(),
                   x.unit.c_str(), x.rmse_model, x.rmse_before, x.rmse_after, x.fit_before_pct, x.fit_after_pct,
-                  x.white_before ? "yes" : "no", x.white_after ? "yes" : "no");
+                  !x.white_tested ? "-" : x.white_before ? "yes" : "no",
+                  !x.white_tested ? "-" : x.white_after ? "yes" : "no");
     o << line;
   }
+  for (const auto& note : r.notes) o << "  " << note << "\n";
   o << "gap by band (where the evidence lives; each band's share of the gap, mean over its equations)\n";
   for (const auto& b : r.gap_bands) {
     std::string eqs;
@@ -410,8 +418,10 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
   for (const auto& o : r.gap) {
     md << "| " << o.output << " | " << o.unit << " | " << g(o.rmse_model) << " | " << g(o.rmse_before) << " | "
        << g(o.rmse_after) << " | " << g(o.fit_before_pct, "%.1f") << " | " << g(o.fit_after_pct, "%.1f") << " | "
-       << (o.white_before ? "yes" : "no") << " | " << (o.white_after ? "yes" : "no") << " |\n";
+       << (!o.white_tested ? "-" : o.white_before ? "yes" : "no") << " | "
+       << (!o.white_tested ? "-" : o.white_after ? "yes" : "no") << " |\n";
   }
+  for (const auto& note : r.notes) md << "\n" << note << "\n";
   if (!r.closed_loop.empty()) {
     md << "\nClosed loop (the model flown by the controller copy on the data's phi_sp), the model as given -> "
           "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after |\n|---|---|---|---|---|\n";

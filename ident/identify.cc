@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "ident/data_check.h"
+
 namespace nimble::ident {
 namespace {
 
@@ -267,6 +269,7 @@ std::vector<StatePsd> state_psds(const UniformData& raw, const std::vector<std::
 IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
                      const IdentOptions& options) {
   if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
+  check_flight_data(data, vehicle);
   IdentResult res;
   res.source = data.source;
   res.options = options;
@@ -360,8 +363,36 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
   res.modes = analyse_modes(res.state_space, vehicle);
   m.published_eigenvalues = res.eigenvalues;
 
+  if (!res.fits.empty() && !res.fits.front().whiteness.tested) res.notes.push_back(res.fits.front().whiteness.note);
+
   res.segments = find_segments(res.data.raw, options.segments);
   res.psd = state_psds(res.data.raw, state_names(options.structure), res.segments, options.psd_segment_s);
+  // A part with no PSD: say what it needs.
+  bool any_hover = false, any_manoeuvre = false;
+  for (const auto& p : res.psd) {
+    any_hover = any_hover || p.has_hover;
+    any_manoeuvre = any_manoeuvre || p.has_manoeuvre;
+  }
+  const UniformData& raw = res.data.raw;
+  const double length_s = raw.size() > 1 ? raw.t_s[raw.size() - 1] - raw.t_s[0] : 0.0;
+  for (const auto& [part, have] : {std::pair<const char*, bool>{"hover", any_hover}, {"manoeuvre", any_manoeuvre}}) {
+    if (have) continue;
+    char buf[320];
+    if (res.segments.how == "|phi_sp| activity") {
+      std::snprintf(buf, sizeof buf,
+                    "%s PSD skipped: needs a %s part of at least %.3g s (|phi_sp| %s %.3g rad, %.3g s beside each "
+                    "manoeuvre), the record (%.2f s) has none",
+                    part, part, options.segments.min_length_s, std::string(part) == "hover" ? "<=" : ">",
+                    options.segments.active_threshold_rad, options.segments.margin_s, length_s);
+    } else if (res.segments.how == "whole record") {
+      std::snprintf(buf, sizeof buf, "%s PSD skipped: without phi_sp the whole record (%.2f s) is the manoeuvre; "
+                    "--hover A:B gives a hover part", part, length_s);
+    } else {
+      std::snprintf(buf, sizeof buf, "%s PSD skipped: no %s range given, or none holds a segment of 8 samples", part,
+                    part);
+    }
+    res.notes.push_back(buf);
+  }
   return res;
 }
 

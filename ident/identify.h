@@ -181,6 +181,9 @@ struct IdentResult {
   std::vector<Mode> modes;
   Segments segments;
   std::vector<StatePsd> psd;
+  /// Diagnostics skipped because the record is too short for them (whiteness, a state PSD), each
+  /// saying how long a record or part it needs; the rest of the result stands.
+  std::vector<std::string> notes;
 };
 
 /// Identifies the lateral model of `data`. `vehicle_file` is recorded in the

@@ -1,6 +1,7 @@
 #include "ident/metrics.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -51,19 +52,27 @@ Whiteness residual_whiteness(const Eigen::VectorXd& residual, double rate_hz, st
   if (max_lag == 0 || lag_step == 0) throw std::invalid_argument("whiteness: max_lag and lag_step must be >= 1");
   const Eigen::Index step = static_cast<Eigen::Index>(lag_step);
   const Eigen::Index nd = (residual.size() + step - 1) / step;
+  Whiteness w;
+  w.lag_step = lag_step;
+  w.lag_step_s = static_cast<double>(lag_step) / rate_hz;
+  w.lags = max_lag;
   if (nd < static_cast<Eigen::Index>(max_lag) + 2) {
-    throw std::invalid_argument("whiteness: " + std::to_string(nd) + " samples after decimation by " +
-                                std::to_string(lag_step) + ", need more than " + std::to_string(max_lag + 1) +
-                                " for " + std::to_string(max_lag) + " lags");
+    // Too short for the lags: say how long a record the test needs, and go on without it.
+    const std::size_t need = whiteness_min_samples(max_lag, lag_step);
+    const double have_s = residual.size() > 0 ? static_cast<double>(residual.size() - 1) / rate_hz : 0.0;
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "whiteness skipped: needs at least %.2f s of data at this decimation (%zu lags of %zu samples, "
+                  "%zu samples at %.6g Hz), the record has %.2f s",
+                  static_cast<double>(need - 1) / rate_hz, max_lag, lag_step, need, rate_hz, have_s);
+    w.tested = false;
+    w.note = buf;
+    return w;
   }
   Eigen::VectorXd dec(nd);
   for (Eigen::Index i = 0; i < nd; ++i) dec[i] = residual[i * step];
-  Whiteness w;
   w.rho = autocorrelation(dec, max_lag);
-  w.lag_step = lag_step;
-  w.lag_step_s = static_cast<double>(lag_step) / rate_hz;
   w.bound = 1.96 / std::sqrt(static_cast<double>(nd));
-  w.lags = max_lag;
   for (std::size_t k = 1; k <= max_lag; ++k) {
     if (std::fabs(w.rho[static_cast<Eigen::Index>(k)]) > w.bound) ++w.outside;
   }
@@ -73,5 +82,7 @@ Whiteness residual_whiteness(const Eigen::VectorXd& residual, double rate_hz, st
   w.white = w.outside <= allowed;
   return w;
 }
+
+std::size_t whiteness_min_samples(std::size_t max_lag, std::size_t lag_step) { return (max_lag + 1) * lag_step + 1; }
 
 }  // namespace nimble::ident

@@ -3,6 +3,7 @@
 /// (thesis Section 5.1, Eqs 5.2-5.5).
 
 #include <cstddef>
+#include <string>
 
 #include <Eigen/Dense>
 
@@ -43,7 +44,11 @@ FitMetrics fit_metrics(const Eigen::VectorXd& measured, const Eigen::VectorXd& e
 /// most the 95 % quantile of Binomial(max_lag, 0.05), i.e. no more than white
 /// noise gives in 95 % of records ("95 % of the lags inside the band", with
 /// the scatter of a finite number of lags allowed for).
+/// A residual too short for max_lag lags after decimation is not tested: `tested` is false and
+/// `note` says how long a record the test needs (never an error: the rest of a report stands).
 struct Whiteness {
+  bool tested = true;            ///< false: too few samples for the lags; only `note` (and lags, lag_step) hold
+  std::string note;              ///< why it was not tested, with the record length it needs ("" if tested)
   Eigen::VectorXd rho;           ///< autocorrelation at lags 0..max_lag (rho[0] = 1)
   std::size_t lag_step = 1;      ///< samples per lag
   double lag_step_s = 0.0;       ///< seconds per lag
@@ -55,11 +60,16 @@ struct Whiteness {
   bool white = false;
 };
 
-/// Whiteness of `residual` sampled at rate_hz.
-/// @throws std::invalid_argument if max_lag or lag_step is 0, or fewer than
-///         max_lag + 2 samples remain after decimation.
+/// Whiteness of `residual` sampled at rate_hz. With fewer than max_lag + 2 samples after
+/// decimation the test is skipped (Whiteness::tested false, its note saying how long a record
+/// it needs: whiteness_min_samples()).
+/// @throws std::invalid_argument if max_lag or lag_step is 0.
 Whiteness residual_whiteness(const Eigen::VectorXd& residual, double rate_hz, std::size_t max_lag,
                              std::size_t lag_step);
+
+/// Fewest samples (at the full rate) the whiteness test needs for max_lag lags of lag_step
+/// samples: max_lag + 2 after decimation, i.e. (max_lag + 1) lag_step + 1.
+std::size_t whiteness_min_samples(std::size_t max_lag, std::size_t lag_step);
 
 /// Smallest k with P(X <= k) >= q for X ~ Binomial(n, p).
 std::size_t binomial_quantile(std::size_t n, double p, double q);

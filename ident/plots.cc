@@ -95,6 +95,17 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   s << "set xlabel 'lag [s]'\nset ylabel 'autocorrelation'\nset key top right\n";
   for (int i = 0; i < n; ++i) {
     const OutputFit& f = fits[static_cast<std::size_t>(i)];
+    if (!f.whiteness.tested) {  // a record too short for the lags: the panel says so, in two lines
+      const std::string& note = f.whiteness.note;
+      const std::size_t cut = note.find(", the record has");
+      s << "set title " << gp_quote("residual of " + f.output + ": whiteness not tested") << " noenhanced\n";
+      s << "set label 1 " << gp_quote(note.substr(0, cut)) << " at graph 0.5, 0.6 center noenhanced\n";
+      if (cut != std::string::npos) {
+        s << "set label 2 " << gp_quote(note.substr(cut + 2)) << " at graph 0.5, 0.4 center noenhanced\n";
+      }
+      s << "plot 0 with lines lc rgb '#bbbbbb' title 'not tested'\nunset label 1\nunset label 2\n";
+      continue;
+    }
     char sub[200];
     std::snprintf(sub, sizeof sub, "residual of %s: %zu of %zu lags outside +-%.3f (%.0f %%, allowed %.0f %%): %s",
                   f.output.c_str(), f.whiteness.outside, f.whiteness.lags, f.whiteness.bound,

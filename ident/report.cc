@@ -44,6 +44,8 @@ std::string metrics_text(const std::vector<OutputFit>& fits) {
 
 std::string whiteness_text(const std::vector<OutputFit>& fits) {
   std::string out;
+  // A record too short for the lags: the test was skipped (one note; every output has the same length).
+  if (!fits.empty() && !fits.front().whiteness.tested) return "  " + fits.front().whiteness.note + "\n";
   if (!fits.empty()) {
     const Whiteness& w = fits.front().whiteness;
     out += fmt("  (residual decimated to lags of %zu samples = %.4f s; %zu lags; 95 %% bounds +-1.96/sqrt(N);"
@@ -74,13 +76,29 @@ void fits_json(JsonWriter& w, const std::vector<OutputFit>& fits) {
     w.end_object();
   }
   w.end_object();
+  // A whiteness test skipped on a short record: null fractions, and the note saying what it needs.
   w.key("whiteness").begin_object();
-  for (const auto& f : fits) w.key(f.output).value(f.whiteness.fraction_outside);
+  for (const auto& f : fits) {
+    w.key(f.output);
+    if (f.whiteness.tested) {
+      w.value(f.whiteness.fraction_outside);
+    } else {
+      w.null();
+    }
+  }
   w.end_object();
   w.key("whiteness_detail").begin_object();
   for (const auto& f : fits) {
     const Whiteness& x = f.whiteness;
     w.key(f.output).begin_object();
+    w.key("tested").value(x.tested);
+    if (!x.tested) {
+      w.key("note").value(x.note);
+      w.key("lags").value(static_cast<long long>(x.lags));
+      w.key("lag_step_samples").value(static_cast<long long>(x.lag_step));
+      w.end_object();
+      continue;
+    }
     w.key("white").value(x.white);
     w.key("fraction_outside").value(x.fraction_outside);
     w.key("allowed_fraction").value(x.allowed_fraction);
@@ -183,6 +201,9 @@ std::string identification_text(const IdentResult& r) {
     const double m = p.has_manoeuvre ? p.manoeuvre.integral_up_to(fc) : NAN;
     out += fmt("  %-8s %-10s %18.4g %18.4g %12.3g\n", p.state.c_str(), ("(" + p.unit + ")^2").c_str(), h, m, m / h);
   }
+  for (const auto& note : r.notes) {
+    if (note.find(" PSD skipped") != std::string::npos) out += "  " + note + "\n";
+  }
   return out;
 }
 
@@ -196,6 +217,7 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
   w.key("method").value(to_string(o.method));
   w.key("inputs").array(r.inputs);
   w.key("inputs_left_out").array(r.inputs_left_out);
+  w.key("notes").array(r.notes);
   w.key("vehicle").begin_object();
   w.key("name").value(r.vehicle.name).key("file").value(r.vehicle.file).key("mass_kg").value(r.vehicle.mass_kg);
   w.end_object();
@@ -329,6 +351,7 @@ std::string validation_json(const ValidationResult& r, const std::vector<std::st
   w.key("vehicle").value(r.vehicle.name);
   w.key("samples").value(static_cast<long long>(r.data.size()));
   w.key("rate_hz").value(r.data.rate_hz);
+  w.key("notes").array(r.notes);
   fits_json(w, r.fits);
   if (!plots.empty()) w.key("plots").array(plots);
   w.end_object();

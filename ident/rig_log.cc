@@ -84,14 +84,14 @@ bool is_lcm_log(const std::string& file) {
 
 RigLogAssembler::RigLogAssembler(std::string source) : source_(std::move(source)) {}
 
-void RigLogAssembler::add(const std::string& channel, const void* data, int size, int64_t event_number,
+bool RigLogAssembler::add(const std::string& channel, const void* data, int size, int64_t event_number,
                           int64_t offset) {
   event_.channel = channel;
   event_.event_number = event_number;
   event_.offset = offset;
   const auto* bytes = static_cast<const uint8_t*>(data);
   event_.data.assign(bytes, bytes + size);
-  add(event_);
+  return add(event_);
 }
 
 Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
@@ -100,7 +100,7 @@ Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
   return *c;
 }
 
-void RigLogAssembler::add(const LogEventRecord& event) {
+bool RigLogAssembler::add(const LogEventRecord& event) {
   const LogEventRecord* ev = &event;
   const std::string& file = source_;
   if (ev->channel == kTruth) {
@@ -131,7 +131,8 @@ void RigLogAssembler::add(const LogEventRecord& event) {
                                                              : m.flap_freq_left_radps - m.flap_freq_right_radps;
     append(input(kDeltaFCmd, "delta_f_cmd"), static_cast<double>(m.utime) * 1e-6, df);
   } else if (ev->channel == kControllerStatus) {
-    if (gain_set_.empty()) gain_set_ = read_value<controller_status_t>(*ev, file).gain_set;
+    if (!gain_set_.empty()) return false;
+    gain_set_ = read_value<controller_status_t>(*ev, file).gain_set;
   } else if (ev->channel == kAttitudeSetpoint) {
     const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
     append(input(kPhiSp, "phi_sp"), static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
@@ -141,7 +142,10 @@ void RigLogAssembler::add(const LogEventRecord& event) {
     append(input(kAx, "ax"), t, m.accel_mps2[0]);
     append(input(kAy, "ay"), t, m.accel_mps2[1]);
     append(input(kAz, "az"), t, m.accel_mps2[2]);
+  } else {
+    return false;
   }
+  return true;
 }
 
 RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage) {
@@ -184,7 +188,9 @@ RigLogData read_rig_log(const std::string& file, StateSource source, const LogRe
   LcmLogReader log(file, options.salvage);
   RigLogAssembler assembler(file);
   LogEventRecord record;
-  while (log.next(&record)) assembler.add(record);
+  while (log.next(&record)) {
+    if (!assembler.add(record) && options.other_event) options.other_event(record);
+  }
   return assembler.finish(source, log.damage());
 }
 

@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "ident/flight_data.h"
@@ -44,6 +45,10 @@ struct LogReadOptions {
   /// A damaged log (truncated, corrupted) is an error naming the byte offset and the event;
   /// with salvage the events before the damage are read and RigLogData::damage says what was left.
   bool salvage = false;
+  /// Called with every event the reader does not decode (channels it does not read, and
+  /// CONTROLLER_STATUS after the first): e.g. to count those that are not a message of their
+  /// channel's type (mcap::UndecodableCount), which the reader would otherwise pass over unseen.
+  std::function<void(const LogEventRecord&)> other_event;
 };
 
 /// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is
@@ -65,11 +70,13 @@ class RigLogAssembler {
   RigLogAssembler& operator=(const RigLogAssembler&) = delete;
   /// One message: its channel and encoded bytes. `event_number` and `offset` name it in errors
   /// (the log's event number and byte offset; -1 for a message that was never in a file).
-  /// @throws DataError naming the event and channel of a message that does not decode.
-  void add(const std::string& channel, const void* data, int size, std::int64_t event_number = -1,
+  /// Returns false for a message it does not read (a channel it does not use, CONTROLLER_STATUS
+  /// after the first), which it does not decode either.
+  /// @throws DataError naming the event and channel of a message it reads that does not decode.
+  bool add(const std::string& channel, const void* data, int size, std::int64_t event_number = -1,
            std::int64_t offset = -1);
   /// One event of a log. @throws DataError as above.
-  void add(const LogEventRecord& event);
+  bool add(const LogEventRecord& event);
   /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
   /// @throws DataError for a missing channel, as read_rig_log().
   RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "");

@@ -1,9 +1,12 @@
 #include "ident/validate.h"
 
+#include "ident/data_check.h"
+
 namespace nimble::ident {
 
 ValidationResult validate_open_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                     const ValidationOptions& options) {
+  check_flight_data(data, vehicle);
   ValidationResult res;
   res.source = data.source;
   res.model = model;
@@ -49,6 +52,7 @@ ValidationResult validate_open_loop(const FlightData& data, const DerivativeMode
     fit.whiteness = residual_whiteness(fit.measured - fit.estimated, d.rate_hz, options.whiteness_lags, lag_step);
     res.fits.push_back(std::move(fit));
   }
+  if (!res.fits.empty() && !res.fits.front().whiteness.tested) res.notes.push_back(res.fits.front().whiteness.note);
   return res;
 }
 

@@ -142,6 +142,39 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
   return stats;
 }
 
+std::map<std::string, uint64_t> undecodable_by_channel(const ExportStats& stats) {
+  std::map<std::string, uint64_t> out;
+  for (const auto& [name, c] : stats.channels) {
+    if (c.undecodable > 0) out[name] = c.undecodable;
+  }
+  return out;
+}
+
+std::string undecodable_text(const std::map<std::string, uint64_t>& by_channel) {
+  uint64_t total = 0;
+  std::string list;
+  for (const auto& [name, n] : by_channel) {
+    if (n == 0) continue;
+    total += n;
+    list += (list.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  }
+  if (total == 0) return "";
+  return std::to_string(total) + " undecodable left out (" + list + ")";
+}
+
+void UndecodableCount::add(const ident::LogEventRecord& event) {
+  const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(event.channel);
+  if (type == nullptr) return;  // a channel the contract does not know: nothing to decode it as
+  thread_local lcmjson::JsonMessage json;
+  if (!lcmjson::to_json(*type, event.data.data(), event.data.size(), &json).empty()) ++by_channel_[event.channel];
+}
+
+uint64_t UndecodableCount::total() const {
+  uint64_t n = 0;
+  for (const auto& [name, count] : by_channel_) n += count;
+  return n;
+}
+
 std::string summary_line(const ExportStats& s) {
   std::size_t lcm_channels = s.channels.size();
   char size[64];
@@ -152,7 +185,7 @@ std::string summary_line(const ExportStats& s) {
   std::string line = std::to_string(s.messages) + " messages on " + std::to_string(s.mcap_channels) +
                      " MCAP channels (" + std::to_string(lcm_channels) + " LCM channels) -> " + s.out + ", " + size +
                      " (" + to_string(s.compression) + "), " + seconds;
-  if (s.undecodable > 0) line += "; " + std::to_string(s.undecodable) + " undecodable left out";
+  if (s.undecodable > 0) line += "; " + undecodable_text(undecodable_by_channel(s));
   if (s.unknown_events > 0) {
     line += "; " + std::to_string(s.unknown_events) + " events on " + std::to_string(s.unknown_channels.size()) +
             " unknown channels";

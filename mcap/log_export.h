@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "ident/lcm_log.h"
 #include "mcap/mcap_writer.h"
 
 namespace nimble::mcap {
@@ -72,7 +73,28 @@ struct ExportStats {
 ExportStats export_log_to_mcap(const std::string& log_path, const std::string& out_path,
                                const ExportOptions& options = {});
 
-/// One line for people: messages, channels, size, compression, time.
+/// One line for people: messages, channels, size, compression, time; what was left out, by channel.
 std::string summary_line(const ExportStats& stats);
+
+/// Undecodable events by channel (ExportStats::channels), for undecodable_text() and --json.
+std::map<std::string, uint64_t> undecodable_by_channel(const ExportStats& stats);
+
+/// What an export left out, for people: "1 undecodable left out (MOCAP_POSE 1)", channels in
+/// name order; "" when nothing was.
+std::string undecodable_text(const std::map<std::string, uint64_t>& by_channel);
+
+/// Counts, by channel, the events of a rig log that are not exactly one message of their
+/// channel's type, by the test the MCAP export leaves them out by (lcmjson::to_json). Events on
+/// channels the contract does not know are not counted. For readers that pass over the channels
+/// they do not use (ident::LogReadOptions::other_event), so that they can say what they left.
+class UndecodableCount {
+ public:
+  void add(const ident::LogEventRecord& event);
+  const std::map<std::string, uint64_t>& by_channel() const { return by_channel_; }
+  uint64_t total() const;
+
+ private:
+  std::map<std::string, uint64_t> by_channel_;
+};
 
 }  // namespace nimble::mcap

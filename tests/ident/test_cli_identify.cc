@@ -4,11 +4,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -363,4 +366,80 @@ TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and 
   const Result folds = run_rig("discrepancy " + csv + " --model x.yaml --folds 2");
   CHECK(folds.exit_code == 2);
   CHECK(folds.err.find("--folds") != std::string::npos);
+}
+
+namespace {
+
+/// A short synthetic set-1 flight as CSV (doublets from 0.3 s); `diverge` makes p, v and phi grow
+/// as exp(6 (t - 1.5)) from 1.5 s on, to millions of rad/s by the end, as a simulation gone
+/// unstable. Returns the file and the time of the first sample whose |p| exceeds 50 rad/s.
+std::pair<std::string, double> short_flight_csv(const std::string& name, double duration_s, bool diverge) {
+  SyntheticOptions o = ident::test::identification_flight(11);
+  o.duration_s = duration_s;
+  o.hover_s = 0.3;
+  o.doublet_gap_s = 0.5;
+  o.tail_hover_s = 0.3;
+  o.throttle_period_s = 1.0;
+  o.throttle_amplitude_pct = 2.0;
+  const DerivativeModel m = ident::test::set1_model();
+  FlightData d = simulate_synthetic(m, load_vehicle(m.vehicle_file), o);
+  double first_bad_s = -1.0;
+  if (diverge) {
+    for (const char* s : {"p", "v", "phi"}) {
+      Channel& c = d.channels.at(s);
+      for (std::size_t k = 0; k < c.values.size(); ++k) {
+        if (c.t_s[k] > 1.5) c.values[k] *= std::exp(6.0 * (c.t_s[k] - 1.5)) * 1e3;
+        if (first_bad_s < 0.0 && std::string(s) == "p" && std::fabs(c.values[k]) > 50.0) first_bad_s = c.t_s[k];
+      }
+    }
+  }
+  const std::string file = (work_dir() / name).string();
+  write_flight_csv(d, file);
+  return {file, first_bad_s};
+}
+
+}  // namespace
+
+TEST_CASE("rig identify, validate and discrepancy refuse a diverged record with exit code 2, naming its first bad "
+          "sample's time, column and bound",
+          "[cli][bad_data]") {
+  const auto [csv, t_bad] = short_flight_csv("diverged.csv", 4.0, true);
+  REQUIRE(t_bad > 1.5);
+  const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1.yaml";
+  char at[160];
+  std::snprintf(at, sizeof at, " rad/s at t = %.4f s exceeds the physical bound 50 rad/s (vehicle file ", t_bad);
+  for (const std::string& args :
+       {"identify " + csv, "validate " + model + " " + csv, "validate " + model + " " + csv + " --closed-loop",
+        "discrepancy " + csv + " --model " + model, "discrepancy " + flight_csv() + " " + csv + " --model " + model}) {
+    const Result r = run_rig(args);
+    INFO(args << "\n" << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(r.out.empty());
+    CHECK(r.err.find(": error: refused: " + csv + ": p = ") != std::string::npos);
+    CHECK(r.err.find(at) != std::string::npos);
+    CHECK(r.err.find("rig_configs/vehicles/nimble_no_wifi.yaml, bound data_bounds.rate_max_radps)") !=
+          std::string::npos);
+  }
+}
+
+TEST_CASE("rig identify completes on a 2.5 s record, the whiteness test skipped with a note saying how long a record "
+          "it needs, in the text and the JSON",
+          "[cli][bad_data]") {
+  const std::string csv = short_flight_csv("short.csv", 2.5, false).first;
+  const std::string note =
+      "whiteness skipped: needs at least 2.79 s of data at this decimation (50 lags of 28 samples, 1429 samples at "
+      "512 Hz), the record has 2.50 s";
+  const std::string json = (work_dir() / "short.json").string();
+  const Result r = run_rig("identify " + csv + " --w0 -0.30 --json " + json);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.empty());
+  CHECK(r.out.find("residual whiteness\n  " + note + "\n") != std::string::npos);
+  CHECK(r.out.find("eigenvalues of the identified model") != std::string::npos);
+  const YAML::Node j = YAML::LoadFile(json);
+  CHECK(j["parameters"]["L_df"]["value"].as<double>() > 0.0);
+  CHECK(j["notes"][0].as<std::string>() == note);
+  CHECK(j["whiteness"]["p_dot"].IsNull());
+  CHECK_FALSE(j["whiteness_detail"]["p_dot"]["tested"].as<bool>());
+  CHECK(j["whiteness_detail"]["v_dot_star"]["note"].as<std::string>() == note);
 }

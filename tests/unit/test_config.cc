@@ -15,6 +15,7 @@
 #include "core/config.h"
 #include "core/json_writer.h"
 #include "core/model.h"
+#include "core/param_table.h"
 #include "core/vehicle.h"
 
 using namespace nimble;
@@ -85,6 +86,29 @@ TEST_CASE("shipped vehicle files load with the thesis values", "[config]") {
   CHECK(w.mass_kg == Approx(29.47e-3));
   CHECK(w.Ixx_kgm2 == Approx(9.76e-5));
   CHECK(w.Izz_kgm2 == Approx(3.34e-5));
+  // The physical bounds of recorded data (data_bounds; sources in the files); a file without the
+  // section (or a key) has the defaults, which are the shipped files' values.
+  // Both files write every key of the table (at the default, checked below).
+  for (const char* file : {"vehicles/nimble_no_wifi.yaml", "vehicles/nimble_wifi.yaml"}) {
+    const std::string text = read_text(kConfigs + file);
+    for (const auto& p : data_bounds_params()) {
+      INFO(file << ": data_bounds." << p.key);
+      CHECK(text.find("\n  " + p.key + ": ") != std::string::npos);
+    }
+  }
+  std::string text = read_text(kConfigs + "vehicles/nimble_no_wifi.yaml");
+  const std::size_t section = text.find("# Physical bounds of recorded flight data");
+  REQUIRE(section != std::string::npos);
+  const Vehicle bare = load_vehicle(write_temp("bare_vehicle.yaml", text.substr(0, section)));
+  for (const Vehicle* x : {&v, &w, &bare}) {
+    CHECK(x->data_bounds.rate_max_radps == 50.0);
+    CHECK(x->data_bounds.speed_max_mps == 20.0);
+    CHECK(x->data_bounds.angle_max_rad == Approx(M_PI));
+    CHECK(x->data_bounds.delta_f_max_radps == 500.0);
+    CHECK(x->data_bounds.throttle_max_pct == 100.0);
+    CHECK(x->data_bounds.servo_max_rad == Approx(M_PI / 2));
+    CHECK(x->data_bounds.specific_force_max_mps2 == 200.0);
+  }
 }
 
 TEST_CASE("every shipped model file loads", "[config]") {
@@ -132,6 +156,12 @@ TEST_CASE("vehicle errors name file, key and value", "[config]") {
   SECTION("non-positive inertia") {
     const auto f = vehicle_with("Izz: 3.32e-5", "Izz: -3.32e-5");
     expect_error([&] { load_vehicle(f); }, f, "inertia_kgm2.Izz", "-3.32e-5", "must be > 0");
+  }
+  SECTION("a data bound not > 0, or unknown") {
+    const auto g = vehicle_with("speed_max_mps: 20.0", "speed_max_mps: 0");
+    expect_error([&] { load_vehicle(g); }, g, "data_bounds.speed_max_mps", "0", "must be > 0");
+    const auto u = vehicle_with("  speed_max_mps: 20.0", "  speed_max_mps: 20.0\n  altitude_max_m: 7");
+    expect_error([&] { load_vehicle(u); }, u, "data_bounds.altitude_max_m", "7", "unknown key");
   }
   SECTION("Ixx*Izz - Ixz^2 <= 0") {
     const auto f = vehicle_with("Ixz: -8.81e-6", "Ixz: -6.0e-5");
