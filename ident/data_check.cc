@@ -88,7 +88,7 @@ void check_flight_data(const FlightData& data, const Vehicle& vehicle) {
     message = bad->channel + " = " + number(bad->value, "%g") + " " + at + " is not a finite number";
   } else {
     const std::string where = vehicle.file.empty() ? "vehicle " + vehicle.name : "vehicle file " + vehicle.file;
-    message = bad->channel + " = " + number(bad->value, "%.3g") + unit + " " + at + " exceeds the physical bound " +
+    message = bad->channel + " = " + number(bad->value, "%.4g") + unit + " " + at + " exceeds the physical bound " +
               number(bad->bound.value, "%g") + unit + " (" + where + ", bound " + bad->bound.key + ")";
   }
   throw RefusedData(data.source, *bad, message);
