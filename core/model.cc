@@ -216,6 +216,10 @@ DerivativeModel model_from_config(ConfigMap& map) {
     }
     effects.finish();
   }
+  if (map.has("terms")) {
+    if (m.structure == Structure::kLongitudinal) map.fail("terms", "the longitudinal structure takes no terms");
+    m.terms = terms_from_config(map, "terms", model_term_equations(m.structure), term_signal_names());
+  }
   map.finish();
   return m;
 }
@@ -227,6 +231,15 @@ const std::vector<std::string>& model_effect_names() {
     return out;
   }();
   return names;
+}
+
+std::vector<std::string> model_term_equations(Structure s) {
+  switch (s) {
+    case Structure::kLateral3: return {"L", "Y"};
+    case Structure::kLateral4: return {"L", "N", "Y"};
+    case Structure::kLongitudinal: return {};
+  }
+  return {};
 }
 
 DerivativeModel load_model(const std::string& file) {
