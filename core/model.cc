@@ -326,6 +326,22 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
   return ss;
 }
 
+Eigen::VectorXd term_state_gain(const DerivativeModel& model, const Vehicle& vehicle, const std::string& equation) {
+  const double Ixx = vehicle.Ixx_kgm2, Izz = vehicle.Izz_kgm2, Ixz = vehicle.Ixz_kgm2, Ic = vehicle.Ic();
+  const double mass = vehicle.mass_kg;
+  if (model.structure == Structure::kLateral3) {
+    if (equation == "L") return Eigen::Vector3d(Izz / Ic, 0.0, 0.0);
+    if (equation == "Y") return Eigen::Vector3d(0.0, 1.0 / mass, 0.0);
+  } else if (model.structure == Structure::kLateral4) {
+    const bool full = model.coupling == RollYawCoupling::kFull;
+    if (equation == "L") return Eigen::Vector4d(Izz / Ic, full ? Ixz / Ic : 0.0, 0.0, 0.0);
+    if (equation == "N") return Eigen::Vector4d(full ? Ixz / Ic : 0.0, Ixx / Ic, 0.0, 0.0);
+    if (equation == "Y") return Eigen::Vector4d(0.0, 0.0, 1.0 / mass, 0.0);
+  }
+  throw std::invalid_argument("model " + model.name + " (" + to_string(model.structure) + ") has no term equation '" +
+                              equation + "'");
+}
+
 DiscreteStateSpace discretize_zoh(const StateSpace& ss, double dt_s) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
     throw std::invalid_argument("discretize_zoh: dt_s must be positive and finite");

@@ -117,6 +117,12 @@ DerivativeModel load_model(const std::string& file);
 /// Builds A and B from the derivatives, the trim and the vehicle (thesis Eqs B.15, B.16).
 StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicle);
 
+/// How a unit force or moment in `equation` (L, N [N m]; Y [N]) enters the state derivative of a
+/// lateral model, in the order of its states (the column of B a control derivative of 1 has):
+/// lateral3 L -> (Izz/Ic, 0, 0), Y -> (0, 1/m, 0); lateral4 with its roll-yaw coupling.
+/// @throws std::invalid_argument for the longitudinal structure or an equation it lacks.
+Eigen::VectorXd term_state_gain(const DerivativeModel& model, const Vehicle& vehicle, const std::string& equation);
+
 /// Exact zero-order-hold discretisation: x[k+1] = Ad x[k] + Bd u[k].
 struct DiscreteStateSpace {
   Eigen::MatrixXd Ad;
