@@ -497,6 +497,19 @@ TEST_CASE("a plant term flown in process is recovered by rig identify --terms an
   INFO("p_dot RMSE with the term " << rmse_with << ", without " << rmse_without);
   CHECK(rmse_with < rmse_without);
 
+  // rig discrepancy takes the model's term as part of the model: refit in the baseline, written back.
+  const std::string augmented = (dir / "augmented.yaml").string();
+  const Result d = run_rig("discrepancy " + log + " --model " + with_term + " --model-out " + augmented + " --json -");
+  INFO(d.err);
+  REQUIRE(d.exit_code == 0);
+  const YAML::Node dj = YAML::Load(d.out);
+  REQUIRE(dj["baseline"]["L:p^3"]);
+  const double refit = dj["baseline"]["L:p^3"]["value"].as<double>();
+  CHECK(std::fabs(refit - truth) <= 3.0 * dj["baseline"]["L:p^3"]["sigma_coloured"].as<double>());
+  const DerivativeModel aug = load_model(augmented);
+  REQUIRE(aug.terms.size() == 1);
+  CHECK(aug.terms[0].coefficient == Approx(dj["augmented"]["L:p^3"]["value"].as<double>()).epsilon(1e-8));
+
   // A model whose term does not parse is refused naming the file, the line and the key.
   const std::string bad = (dir / "bad_term.yaml").string();
   std::ofstream(bad) << base << "terms:\n  - {equation: L, expression: \"p^\", coefficient: 0}\n";
