@@ -496,6 +496,15 @@ TEST_CASE("a plant term flown in process is recovered by rig identify --terms an
   const double rmse_without = YAML::Load(v_without.out)["metrics"]["p_dot"]["rmse"].as<double>();
   INFO("p_dot RMSE with the term " << rmse_with << ", without " << rmse_without);
   CHECK(rmse_with < rmse_without);
+  // Closed loop (the model flown by the controller copy on the logged set-points) flies the term too.
+  const Result cl_with = run_rig("validate " + fitted + " " + log + " --closed-loop --json -");
+  const Result cl_without = run_rig("validate " + without + " " + log + " --closed-loop --json -");
+  REQUIRE(cl_with.exit_code == 0);
+  REQUIRE(cl_without.exit_code == 0);
+  const double cl_rmse_with = YAML::Load(cl_with.out)["closed_loop"]["p"]["rmse"].as<double>();
+  const double cl_rmse_without = YAML::Load(cl_without.out)["closed_loop"]["p"]["rmse"].as<double>();
+  INFO("closed-loop p RMSE with the term " << cl_rmse_with << ", without " << cl_rmse_without);
+  CHECK(cl_rmse_with < cl_rmse_without);
 
   // rig discrepancy takes the model's term as part of the model: refit in the baseline, written back.
   const std::string augmented = (dir / "augmented.yaml").string();
