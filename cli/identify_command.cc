@@ -201,10 +201,16 @@ int run_identify_command(const std::vector<std::string>& args) {
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&opt](const std::string& v) { opt.segments.manoeuvre.push_back(time_range(v)); });
+  std::string terms_file;
+  cl->add_option("--terms", terms_file,
+                 "fit the generic terms of this model file's terms: section alongside the derivatives (their "
+                 "coefficients are regressors, named <equation>:<expression>; docs/models.md, \"Terms\")")
+      ->type_name("MODEL");
   cl.add_json(json, "the report");
   cl->add_option("--model-out", model_out, "write the identified model as a model YAML file")->type_name("FILE");
   cl.add_plots(plots, "");
   if (const auto done = cl.parse(args)) return *done;
+  if (!terms_file.empty()) opt.terms = load_model(terms_file).terms;
   if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();

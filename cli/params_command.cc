@@ -66,6 +66,7 @@ const std::vector<Section>& sections() {
                 params_markdown_rows(plant::initial_params(), plant::InitialState{}, "plant.initial.");
        }},
       {"plant.effects", [] { return plant::effects_markdown(); }},
+      {"plant.terms", [] { return plant::terms_markdown(); }},
       {"pilot", [] { return params_markdown(pilot_params(), PilotConfig{}, "pilot."); }},
       {"can_bridge", [] { return params_markdown(can::can_bridge_params(), can::CanBridgeConfig{}, "can_bridge."); }},
       {"lockstep", [] { return params_markdown(lockstep_params(), LockstepOptions{}, "lockstep."); }},

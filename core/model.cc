@@ -216,6 +216,10 @@ DerivativeModel model_from_config(ConfigMap& map) {
     }
     effects.finish();
   }
+  if (map.has("terms")) {
+    if (m.structure == Structure::kLongitudinal) map.fail("terms", "the longitudinal structure takes no terms");
+    m.terms = terms_from_config(map, "terms", model_term_equations(m.structure), term_signal_names());
+  }
   map.finish();
   return m;
 }
@@ -227,6 +231,15 @@ const std::vector<std::string>& model_effect_names() {
     return out;
   }();
   return names;
+}
+
+std::vector<std::string> model_term_equations(Structure s) {
+  switch (s) {
+    case Structure::kLateral3: return {"L", "Y"};
+    case Structure::kLateral4: return {"L", "N", "Y"};
+    case Structure::kLongitudinal: return {};
+  }
+  return {};
 }
 
 DerivativeModel load_model(const std::string& file) {
@@ -311,6 +324,22 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
     }
   }
   return ss;
+}
+
+Eigen::VectorXd term_state_gain(const DerivativeModel& model, const Vehicle& vehicle, const std::string& equation) {
+  const double Ixx = vehicle.Ixx_kgm2, Izz = vehicle.Izz_kgm2, Ixz = vehicle.Ixz_kgm2, Ic = vehicle.Ic();
+  const double mass = vehicle.mass_kg;
+  if (model.structure == Structure::kLateral3) {
+    if (equation == "L") return Eigen::Vector3d(Izz / Ic, 0.0, 0.0);
+    if (equation == "Y") return Eigen::Vector3d(0.0, 1.0 / mass, 0.0);
+  } else if (model.structure == Structure::kLateral4) {
+    const bool full = model.coupling == RollYawCoupling::kFull;
+    if (equation == "L") return Eigen::Vector4d(Izz / Ic, full ? Ixz / Ic : 0.0, 0.0, 0.0);
+    if (equation == "N") return Eigen::Vector4d(full ? Ixz / Ic : 0.0, Ixx / Ic, 0.0, 0.0);
+    if (equation == "Y") return Eigen::Vector4d(0.0, 0.0, 1.0 / mass, 0.0);
+  }
+  throw std::invalid_argument("model " + model.name + " (" + to_string(model.structure) + ") has no term equation '" +
+                              equation + "'");
 }
 
 DiscreteStateSpace discretize_zoh(const StateSpace& ss, double dt_s) {

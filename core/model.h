@@ -19,6 +19,7 @@
 #include <Eigen/Dense>
 
 #include "core/config.h"
+#include "core/terms.h"
 #include "core/vehicle.h"
 
 namespace nimble {
@@ -77,6 +78,9 @@ struct DerivativeModel {
   /// section `effects:` of a model file, written by rig discrepancy --model-out): effect name
   /// (one of model_effect_names()) -> parameter name -> value, in SI units.
   std::map<std::string, std::map<std::string, double>> effects;
+  /// Generic terms (optional section `terms:`, core/terms.h): each adds coefficient * expression
+  /// to the force or moment of its equation (model_term_equations()), in SI.
+  std::vector<Term> terms;
 
   /// Value of a derivative; @throws std::out_of_range naming it if absent.
   double at(const std::string& name) const;
@@ -86,6 +90,10 @@ struct DerivativeModel {
 /// discrepancy workflow (ident/discrepancy.h), named as the plant's effects where the plant
 /// has them.
 const std::vector<std::string>& model_effect_names();
+
+/// Equations a `terms:` entry of a model of structure `s` may name: L, Y (lateral3); L, N, Y
+/// (lateral4); none for the longitudinal structure.
+std::vector<std::string> model_term_equations(Structure s);
 
 /// Continuous-time linear state-space model xdot = A x + B u.
 struct StateSpace {
@@ -108,6 +116,12 @@ DerivativeModel load_model(const std::string& file);
 
 /// Builds A and B from the derivatives, the trim and the vehicle (thesis Eqs B.15, B.16).
 StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicle);
+
+/// How a unit force or moment in `equation` (L, N [N m]; Y [N]) enters the state derivative of a
+/// lateral model, in the order of its states (the column of B a control derivative of 1 has):
+/// lateral3 L -> (Izz/Ic, 0, 0), Y -> (0, 1/m, 0); lateral4 with its roll-yaw coupling.
+/// @throws std::invalid_argument for the longitudinal structure or an equation it lacks.
+Eigen::VectorXd term_state_gain(const DerivativeModel& model, const Vehicle& vehicle, const std::string& equation);
 
 /// Exact zero-order-hold discretisation: x[k+1] = Ad x[k] + Bd u[k].
 struct DiscreteStateSpace {

@@ -1,5 +1,6 @@
 #include "ident/closed_loop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -176,6 +177,24 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   const double Izz_over_Ic = vehicle.Izz_kgm2 / vehicle.Ic();
   std::vector<double> df_hist, cmd_hist;
   const Eigen::Index cmd_delay = effects.command_delay_samples();
+  // The model's generic terms: flown with the simulated p, v, phi, delta_f and the data's
+  // delta_t; any other signal a term reads (r, u, w, ...) is taken from the data.
+  const std::vector<std::string>& term_names = term_signal_names();
+  std::vector<TermProgram> terms;
+  std::vector<const Eigen::VectorXd*> from_data(term_names.size(), nullptr);
+  for (const auto& term : model.terms) {
+    terms.emplace_back(term.expression, term_names);
+    for (const auto& s : term.expression.signals()) {
+      const auto i = static_cast<std::size_t>(std::find(term_names.begin(), term_names.end(), s) - term_names.begin());
+      if (s == "p" || s == "v" || s == "phi" || s == "delta_f" || (s == "delta_t" && i_dt >= 0)) continue;
+      if (!grid.has(s)) {
+        throw DataError(data.source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s +
+                                                   ", not in the data");
+      }
+      from_data[i] = &grid.at(s);
+    }
+  }
+  std::vector<double> term_in(term_names.size(), 0.0);
   Eigen::Vector4d x(p[0], v[0], phi[0], df[0]);
   for (Eigen::Index k = 0; k < n; ++k) {
     r.simulated["p"][k] = x[0];
@@ -192,8 +211,21 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
     const Eigen::Index back = static_cast<Eigen::Index>(cmd_hist.size()) - 1 - cmd_delay;
     const Eigen::Vector2d u(back >= 0 ? cmd_hist[static_cast<std::size_t>(back)] : 0.0, dt[k]);
     df_hist.push_back(x[3]);
-    const auto [dL, dY] = model.effects.empty() ? std::pair<double, double>{0.0, 0.0}
-                                                : effects.at(k, x[0], x[1], x[2], df_hist);
+    auto [dL, dY] = model.effects.empty() ? std::pair<double, double>{0.0, 0.0}
+                                          : effects.at(k, x[0], x[1], x[2], df_hist);
+    if (!terms.empty()) {
+      for (std::size_t i = 0; i < term_names.size(); ++i) term_in[i] = from_data[i] ? (*from_data[i])[k] : 0.0;
+      term_in[0] = x[0];  // term_signal_names(): p q r u v w phi theta delta_f delta_t delta_d delta_w
+      term_in[4] = x[1];
+      term_in[6] = x[2];
+      term_in[8] = x[3];
+      term_in[9] = dt[k];
+      for (std::size_t i = 0; i < terms.size(); ++i) {
+        const double load = model.terms[i].coefficient * terms[i].evaluate(term_in.data());
+        (model.terms[i].equation == "L" ? dL : dY) += load;
+        terms[i].advance(1.0 / rate_hz);
+      }
+    }
     x = d.Ad * x + d.Bd * u;
     x[0] += Izz_over_Ic * dL / rate_hz;
     x[1] += dY / vehicle.mass_kg / rate_hz;

@@ -348,6 +348,10 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
     if (spec.stochastic) am.effects[name] = given;
   }
   for (const auto& e : res.effects) am.effects[e.name] = e.parameters;
+  for (auto& term : am.terms) {
+    const auto it = res.augmented.find(term_parameter_name(term));
+    if (it != res.augmented.end()) term.coefficient = it->second.value;
+  }
   return am;
 }
 

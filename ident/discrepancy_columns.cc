@@ -242,6 +242,19 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
       }
     }
   }
+  // The model's generic terms (terms:), part of the model as its effects are: refit, not tried.
+  for (const auto& term : model.terms) {
+    const auto eq = std::find_if(m.eqs.begin(), m.eqs.end(), [&](const Eq& e) { return e.name == term.equation; });
+    if (eq == m.eqs.end()) continue;
+    for (const auto& s : term.expression.signals()) {
+      if (!d.has(s)) {
+        throw DataError(source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s + ", not in the data");
+      }
+    }
+    eq->names.push_back(term_parameter_name(term));
+    eq->cols.push_back(term_column(d, term));
+    if (known_values) (*known_values)[term_parameter_name(term)] = term.coefficient;
+  }
   return m;
 }
 

@@ -266,6 +266,24 @@ std::vector<StatePsd> state_psds(const UniformData& raw, const std::vector<std::
   return out;
 }
 
+std::string term_signal_column(const Term& term) { return "term:" + term.expression.to_string(); }
+
+Eigen::VectorXd term_column(const UniformData& data, const Term& term) {
+  const std::vector<std::string> names = term.expression.signals();
+  std::vector<std::vector<double>> values;
+  for (const auto& name : names) {
+    const Eigen::VectorXd& x = data.at(name);
+    values.emplace_back(x.data(), x.data() + x.size());
+  }
+  std::vector<const std::vector<double>*> columns;
+  for (const auto& v : values) columns.push_back(&v);
+  std::vector<double> out = evaluate_along(term.expression, names, columns, 1.0 / data.rate_hz);
+  if (names.empty()) out.assign(static_cast<std::size_t>(data.size()), TermProgram(term.expression, {}).evaluate(nullptr));
+  return Eigen::Map<const Eigen::VectorXd>(out.data(), static_cast<Eigen::Index>(out.size()));
+}
+
+void add_term_column(UniformData& data, const Term& term) { data.signals[term_signal_column(term)] = term_column(data, term); }
+
 IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
                      const IdentOptions& options) {
   if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
@@ -299,6 +317,16 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
     it->regressors.push_back(extra.signal);
     it->parameters.push_back(extra.equation + "_" + extra.signal);
   }
+  for (const auto& term : options.terms) {
+    auto it = std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == term.equation; });
+    if (it == equations.end()) {
+      throw std::invalid_argument("term '" + term_parameter_name(term) + "' (" + term.where + "): structure " +
+                                  to_string(options.structure) + " has no equation '" + term.equation + "'");
+    }
+    require_channels(data, term.expression.signals(), "term " + term_parameter_name(term));
+    it->regressors.push_back(term_signal_column(term));
+    it->parameters.push_back(term_parameter_name(term));
+  }
 
   std::size_t n_params = 0;
   for (const auto& eq : equations) n_params += eq.regressors.size();
@@ -312,6 +340,7 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
 
   res.data = prepare(data, options.structure, options.trim, vehicle.gravity_mps2, options.processing);
   if (options.add_signals) options.add_signals(res.data.filtered);
+  for (const auto& term : options.terms) add_term_column(res.data.filtered, term);
 
   WlsOptions wls;
   wls.variance_window = static_cast<Eigen::Index>(std::lround(options.wls_window_s * options.processing.rate_hz));
@@ -358,6 +387,8 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
     m.derivatives[n] = e.value;
     m.published_sigma[n] = e.sigma;
   }
+  m.terms = options.terms;
+  for (auto& term : m.terms) term.coefficient = res.parameters.at(term_parameter_name(term)).value;
   res.state_space = build_state_space(m, vehicle);
   res.eigenvalues = sorted_eigenvalues(res.state_space.A);
   res.modes = analyse_modes(res.state_space, vehicle);

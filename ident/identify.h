@@ -100,6 +100,11 @@ struct IdentOptions {
   /// add signals for extra regressors.
   std::function<void(UniformData&)> add_signals;
   std::vector<ExtraRegressor> extra_regressors;
+  /// Generic terms (a model file's terms:, core/terms.h), fitted alongside the derivatives: each
+  /// adds the column of its expression, evaluated along the filtered record at its sample time
+  /// (evaluate_along()), to its equation; its coefficient is the parameter "<equation>:<expression>"
+  /// (term_parameter_name()) and the identified model carries the terms with the fitted values.
+  std::vector<Term> terms;
 };
 
 /// Data prepared for regression.
@@ -139,6 +144,15 @@ std::string parameter_name(const std::string& letter, const std::string& regress
 /// @throws std::invalid_argument for the longitudinal structure or an unknown input.
 std::vector<Equation> lateral_equations(Structure structure, const std::vector<std::string>& inputs,
                                         const Vehicle& vehicle);
+
+/// Name of a term's column in prepared data: "term:<expression>".
+std::string term_signal_column(const Term& term);
+/// Adds the column of `term` to `data` (its expression evaluated along the samples at the
+/// data's sample time, stateful operators starting at the first sample; evaluate_along()).
+/// @throws DataError if `data` lacks a signal the expression reads.
+void add_term_column(UniformData& data, const Term& term);
+/// The column add_term_column() adds, without adding it.
+Eigen::VectorXd term_column(const UniformData& data, const Term& term);
 
 /// A measured output and its estimate.
 struct OutputFit {

@@ -70,6 +70,15 @@ std::string format_model_yaml(const DerivativeModel& model, const std::string& v
       for (const auto& [key, value] : params) out << "    " << key << ": " << num(value) << "\n";
     }
   }
+  if (!model.terms.empty()) {
+    out << "# generic terms (docs/models.md, \"Terms\"): coefficient * expression added to the equation's\n"
+           "# force [N] or moment [N m]\n";
+    out << "terms:\n";
+    for (const auto& t : model.terms) {
+      out << "  - {equation: " << t.equation << ", expression: \"" << t.expression.to_string()
+          << "\", coefficient: " << num(t.coefficient) << "}\n";
+    }
+  }
   if (!model.published_eigenvalues.empty() || !model.published_sigma.empty()) {
     out << "published:\n";
     if (!model.published_eigenvalues.empty()) {

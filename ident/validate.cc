@@ -35,7 +35,19 @@ ValidationResult validate_open_loop(const FlightData& data, const DerivativeMode
   Eigen::MatrixXd X(nx, n), U(nu, n);
   for (Eigen::Index i = 0; i < nx; ++i) X.row(i) = d.at(ss.states[static_cast<std::size_t>(i)]).transpose();
   for (Eigen::Index j = 0; j < nu; ++j) U.row(j) = d.at(ss.inputs[static_cast<std::size_t>(j)]).transpose();
-  const Eigen::MatrixXd predicted = ss.A * X + ss.B * U;
+  Eigen::MatrixXd predicted = ss.A * X + ss.B * U;
+  // The model's generic terms: coefficient * expression along the record, through the inertia or mass.
+  for (const auto& term : model.terms) {
+    for (const auto& s : term.expression.signals()) {
+      if (!d.signals.count(s)) {
+        throw DataError(data.source, -1, -1, s, "model " + model.name + " needs column " + s + " for its term " +
+                                                     term_parameter_name(term));
+      }
+    }
+    add_term_column(d, term);
+    predicted += term.coefficient * term_state_gain(model, vehicle, term.equation) *
+                 d.at(term_signal_column(term)).transpose();
+  }
 
   const std::size_t lag_step = whiteness_lag_step(options.whiteness_lag_step, options.processing);
   for (Eigen::Index i = 0; i < nx; ++i) {

@@ -2,6 +2,7 @@
 
 #include "plant/effects/registry.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -127,8 +128,26 @@ PlantConfig plant_config_from(ConfigMap& map) {
     ConfigMap e = map.get_map("effects");
     effects_from(e, c.effects);  // plant/effects/registry.h
   }
+  if (map.has("terms")) c.terms = terms_from_config(map, "terms", plant_term_equations(), term_signal_names());
   map.finish();
   return c;
+}
+
+const std::vector<std::string>& plant_term_equations() {
+  static const std::vector<std::string> names{"L", "Y", "N"};
+  return names;
+}
+
+std::string terms_markdown() {
+  std::string out = kParamsMarkdownHeader;
+  out += "| `plant.terms[].equation` | - | L, Y, N | - | the equation the term adds to: roll moment L, side force Y, "
+         "yaw moment N (lateral4 only) |\n";
+  out += "| `plant.terms[].expression` | - | the term grammar (docs/models.md, \"Terms\"); signals p, q, r, u, v, w, "
+         "phi, theta, delta_f, delta_t, delta_d, delta_w | - | the expression, e.g. `p^3`, `v*abs(v)`, "
+         "`lag(delta_f, 0.02)` |\n";
+  out += "| `plant.terms[].coefficient` | - | finite | N m (L, N) or N (Y) per unit of the expression | "
+         "L, Y or N += coefficient * expression |\n";
+  return out;
 }
 
 PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
@@ -170,6 +189,16 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
     Mq_ = M.at("Mq"); Mu_ = M.at("Mu"); Mw_ = M.at("Mw"); M_dd_ = get_or_zero(M, "M_dd");
     Xq_ = M.at("Xq"); Xu_ = M.at("Xu"); Xw_ = M.at("Xw"); X_dd_ = get_or_zero(M, "X_dd");
     Zq_ = M.at("Zq"); Zu_ = M.at("Zu"); Zw_ = M.at("Zw"); Z_dd_ = get_or_zero(M, "Z_dd");
+  }
+
+  // Generic terms: the plant file's, then the lateral model's.
+  std::vector<Term> terms = cfg_.terms;
+  terms.insert(terms.end(), lateral.terms.begin(), lateral.terms.end());
+  for (const Term& term : terms) {
+    const auto& eqs = plant_term_equations();
+    term_programs_.emplace_back(term.expression, term_signal_names());
+    term_equation_.push_back(static_cast<int>(std::find(eqs.begin(), eqs.end(), term.equation) - eqs.begin()));
+    term_coefficient_.push_back(term.coefficient);
   }
 
   // Trim: thrust equals weight.
@@ -257,6 +286,14 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   for (const PlantEffect& effect : plant_effects()) {
     if (effect.add_loads != nullptr) effect.add_loads(fx, effect_inputs, L, Y);
   }
+  if (!term_programs_.empty()) {
+    double signals[12];
+    term_signals(x, signals);
+    for (std::size_t i = 0; i < term_programs_.size(); ++i) {
+      const double load = term_coefficient_[i] * term_programs_[i].evaluate(signals);
+      (term_equation_[i] == 0 ? L : term_equation_[i] == 1 ? Y : N) += load;
+    }
+  }
   Z -= thrust;
 
   // Translational dynamics (thesis Eq 3.1), body axes.
@@ -300,9 +337,20 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   return dx;
 }
 
+void PlantModel::term_signals(const State& x, double* out) const {
+  // In term_signal_names() order: p q r u v w phi theta delta_f delta_t delta_d delta_w.
+  out[0] = x[kP]; out[1] = x[kQ]; out[2] = x[kR];
+  out[3] = x[kU]; out[4] = x[kV]; out[5] = x[kW];
+  out[6] = x[kPhi]; out[7] = x[kTheta];
+  out[8] = x[kDf]; out[9] = (x[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
+  out[10] = x[kDd]; out[11] = x[kDw];
+}
+
 void PlantModel::step(const ActuatorInput& cmd_in) {
   const ActuatorInput cmd = delayed(cmd_in);
   const double h = dt_s_;
+  double term_start[12];
+  if (!term_programs_.empty()) term_signals(x_, term_start);
   const State k1 = derivative(x_, cmd, t_s_, nullptr, nullptr);
   const State k2 = derivative(x_ + 0.5 * h * k1, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
   const State k3 = derivative(x_ + 0.5 * h * k2, cmd, t_s_ + 0.5 * h, nullptr, nullptr);
@@ -311,6 +359,11 @@ void PlantModel::step(const ActuatorInput& cmd_in) {
   x_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
   flap_phase_rad_ = std::fmod(flap_phase_rad_ + 0.5 * (f_before + x_[kFcoll]) * h, 2.0 * M_PI);
   t_s_ += h;
+  // The terms' lags and backlashes move over the step with the step's starting signals held.
+  for (auto& program : term_programs_) {
+    program.evaluate(term_start);
+    program.advance(h);
+  }
 
   gust_.step(h, rng_, normal_);  // the side gust's step (effects.lateral_gust)
   update_truth(cmd);

@@ -23,6 +23,8 @@
 #include "core/model.h"
 #include "core/param_table.h"
 #include "core/rig_values.h"
+#include "core/term_expression.h"
+#include "core/terms.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
 #include "plant/effects/effects.h"
@@ -85,8 +87,18 @@ struct PlantConfig {
   double vertical_damping_Zw_nspm = -5.9e-3;
   InitialState initial;
   EffectsConfig effects;
+  /// Generic terms (`terms`, core/terms.h): each adds coefficient * expression to the roll
+  /// moment L [N m], the side force Y [N] or the yaw moment N [N m] (N acts with a lateral4
+  /// model only), in the grammar of core/term_expression.h; the expression reads the states
+  /// and inputs by their flight-data names (plant_term_equations()).
+  std::vector<Term> terms;
   uint64_t seed = 1;
 };
+
+/// Equations a plant term may name: L, Y, N.
+const std::vector<std::string>& plant_term_equations();
+/// The `plant.terms` keys as Markdown rows (rig params, docs/configuration.md).
+std::string terms_markdown();
 
 /// Reads the `plant:` section of a scenario.
 /// @throws ConfigError naming the key.
@@ -148,6 +160,8 @@ class PlantModel {
                    Eigen::Vector3d* omega_dot) const;
   void update_truth(const ActuatorInput& u);
   ActuatorInput delayed(const ActuatorInput& cmd);
+  /// The signals a term reads at state x, in term_signal_names() order.
+  void term_signals(const State& x, double* out) const;
 
   DerivativeModel lat_;
   std::optional<DerivativeModel> lon_;
@@ -174,6 +188,12 @@ class PlantModel {
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   CommandDelay<ActuatorInput> delay_;  ///< effects.actuator_delay
+  /// The plant's terms and the lateral model's (config.terms, then the model's terms: section):
+  /// programs bound to term_signal_names(), their equation (0 L, 1 Y, 2 N) and coefficient. The
+  /// programs' stateful operators move once per step (step()), not per Runge-Kutta stage.
+  mutable std::vector<TermProgram> term_programs_;
+  std::vector<int> term_equation_;
+  std::vector<double> term_coefficient_;
   Truth truth_;
 };
 

@@ -175,14 +175,15 @@ YAML::Node load_scenario_tree(const std::string& file, const std::vector<Overrid
 
 ConfigError locate_error(const ConfigError& error, const std::string& scenario_file, const KeyOrigins& origins) {
   if (error.file() != scenario_file || error.key().empty()) return error;
-  // The key itself, or the nearest enclosing key with a recorded origin.
+  // The key itself, or the nearest enclosing key (or list, for "terms[0].expression") with a
+  // recorded origin.
   std::string path = error.key();
   for (;;) {
     const auto it = origins.find(path);
     if (it != origins.end()) {
       return ConfigError(it->second.file, error.key(), error.value(), error.problem(), it->second.line);
     }
-    const auto dot = path.rfind('.');
+    const auto dot = path.find_last_of(".[");
     if (dot == std::string::npos) return error;
     path.erase(dot);
   }

@@ -443,3 +443,87 @@ TEST_CASE("rig identify completes on a 2.5 s record, the whiteness test skipped 
   CHECK_FALSE(j["whiteness_detail"]["p_dot"]["tested"].as<bool>());
   CHECK(j["whiteness_detail"]["v_dot_star"]["note"].as<std::string>() == note);
 }
+
+TEST_CASE("a plant term flown in process is recovered by rig identify --terms and lowers rig validate's error",
+          "[cli][terms]") {
+  // The plant flies L += -2e-5 p^3 [N m] (plant.terms) through the identification doublet train;
+  // the term model is set 1 with that expression at coefficient 0 (its value is what identify fits).
+  const fs::path dir = work_dir();
+  const std::string log = (dir / "terms.lcmlog").string();
+  const double truth = -2.0e-5;
+  const Result flight = run_rig("run " + ident::test::kConfigs + "id_doublet_train_fast.yaml --clock inprocess --seed 1 --log " +
+                                log + " --set 'plant.terms=[{equation: L, expression: \"p^3\", coefficient: -2.0e-5}]'");
+  INFO(flight.out << flight.err);
+  REQUIRE(flight.exit_code == 0);
+
+  const std::string set1 = slurp(ident::test::kConfigs + "models/nimble_lateral_set1.yaml");
+  std::string base = set1;
+  base.replace(base.find("vehicle: ../vehicles/nimble_no_wifi.yaml"), std::string("vehicle: ../vehicles/nimble_no_wifi.yaml").size(),
+               "vehicle: " + ident::test::kConfigs + "vehicles/nimble_no_wifi.yaml");
+  const std::string with_term = (dir / "set1_p3.yaml").string();
+  std::ofstream(with_term) << base << "terms:\n  - {equation: L, expression: \"p^3\", coefficient: 0}\n";
+
+  const std::string json = (dir / "terms_ident.json").string(), fitted = (dir / "fitted.yaml").string();
+  const Result id = run_rig("identify " + log + " --w0 -0.30 --terms " + with_term + " --json " + json + " --model-out " + fitted);
+  INFO(id.out << id.err);
+  REQUIRE(id.exit_code == 0);
+  CHECK(id.out.find("L:p^3") != std::string::npos);
+  const YAML::Node j = YAML::LoadFile(json);
+  REQUIRE(j["parameters"]["L:p^3"]);
+  const double value = j["parameters"]["L:p^3"]["value"].as<double>();
+  const double sigma = j["parameters"]["L:p^3"]["sigma_coloured"].as<double>();
+  INFO("L:p^3 = " << value << " sigma_c " << sigma);
+  CHECK(std::fabs(value - truth) <= 3.0 * sigma);
+  CHECK(sigma < 0.2 * std::fabs(truth));
+  const DerivativeModel back = load_model(fitted);
+  REQUIRE(back.terms.size() == 1);
+  CHECK(back.terms[0].coefficient == Approx(value).epsilon(1e-8));
+
+  // rig validate: the fitted model with its term predicts p_dot better than the same model without it.
+  std::string text = slurp(fitted);
+  const auto from = text.find("# generic terms"), to = text.find("\npublished:") + 1;
+  REQUIRE(from != std::string::npos);
+  REQUIRE(to > from);
+  text.erase(from, to - from);
+  const std::string without = (dir / "fitted_without.yaml").string();
+  std::ofstream(without) << text;
+  const Result v_with = run_rig("validate " + fitted + " " + log + " --json -");
+  const Result v_without = run_rig("validate " + without + " " + log + " --json -");
+  INFO(v_with.err << v_without.err);
+  REQUIRE(v_with.exit_code == 0);
+  REQUIRE(v_without.exit_code == 0);
+  const double rmse_with = YAML::Load(v_with.out)["metrics"]["p_dot"]["rmse"].as<double>();
+  const double rmse_without = YAML::Load(v_without.out)["metrics"]["p_dot"]["rmse"].as<double>();
+  INFO("p_dot RMSE with the term " << rmse_with << ", without " << rmse_without);
+  CHECK(rmse_with < rmse_without);
+  // Closed loop (the model flown by the controller copy on the logged set-points) flies the term too.
+  const Result cl_with = run_rig("validate " + fitted + " " + log + " --closed-loop --json -");
+  const Result cl_without = run_rig("validate " + without + " " + log + " --closed-loop --json -");
+  REQUIRE(cl_with.exit_code == 0);
+  REQUIRE(cl_without.exit_code == 0);
+  const double cl_rmse_with = YAML::Load(cl_with.out)["closed_loop"]["p"]["rmse"].as<double>();
+  const double cl_rmse_without = YAML::Load(cl_without.out)["closed_loop"]["p"]["rmse"].as<double>();
+  INFO("closed-loop p RMSE with the term " << cl_rmse_with << ", without " << cl_rmse_without);
+  CHECK(cl_rmse_with < cl_rmse_without);
+
+  // rig discrepancy takes the model's term as part of the model: refit in the baseline, written back.
+  const std::string augmented = (dir / "augmented.yaml").string();
+  const Result d = run_rig("discrepancy " + log + " --model " + with_term + " --model-out " + augmented + " --json -");
+  INFO(d.err);
+  REQUIRE(d.exit_code == 0);
+  const YAML::Node dj = YAML::Load(d.out);
+  REQUIRE(dj["baseline"]["L:p^3"]);
+  const double refit = dj["baseline"]["L:p^3"]["value"].as<double>();
+  CHECK(std::fabs(refit - truth) <= 3.0 * dj["baseline"]["L:p^3"]["sigma_coloured"].as<double>());
+  const DerivativeModel aug = load_model(augmented);
+  REQUIRE(aug.terms.size() == 1);
+  CHECK(aug.terms[0].coefficient == Approx(dj["augmented"]["L:p^3"]["value"].as<double>()).epsilon(1e-8));
+
+  // A model whose term does not parse is refused naming the file, the line and the key.
+  const std::string bad = (dir / "bad_term.yaml").string();
+  std::ofstream(bad) << base << "terms:\n  - {equation: L, expression: \"p^\", coefficient: 0}\n";
+  const Result refused = run_rig("identify " + log + " --terms " + bad);
+  CHECK(refused.exit_code == 2);
+  CHECK_THAT(refused.err, Catch::Contains(bad + ":") && Catch::Contains("key 'terms[0].expression'") &&
+                              Catch::Contains("does not parse: at position 3: expected an integer power"));
+}

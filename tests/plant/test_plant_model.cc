@@ -623,3 +623,34 @@ TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 
   CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_drift", {{"t_mid_s", 3.0}})),
                     Catch::Contains("effects.effectiveness_drift") && Catch::Contains("rate_per_min"));
 }
+
+TEST_CASE("plant terms add coefficient * expression to the roll moment and side force", "[plant][terms]") {
+  Fixture f;
+  PlantConfig cfg;
+  cfg.initial.p_radps = 2.0;
+  cfg.initial.v_mps = 0.5;
+  const PlantModel base = make_plant(f, cfg);
+  cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("p^3"), -2.0e-5, "test"},
+               nimble::Term{"Y", nimble::TermExpression::parse("v*abs(v)"), -0.02, "test"}};
+  const PlantModel with = make_plant(f, cfg);
+  const double Izz = f.vehicle.Izz_kgm2, Ic = f.vehicle.Ic(), m = f.vehicle.mass_kg;
+  // At the initial state: p_dot += Izz/Ic * (-2e-5 * 8), the side specific force += -0.02 * 0.25 / m.
+  CHECK(with.truth().angular_accel_body_radps2.x() - base.truth().angular_accel_body_radps2.x() ==
+        Approx(Izz / Ic * -2.0e-5 * 8.0).epsilon(1e-9));
+  CHECK(with.truth().specific_force_body_mps2.y() - base.truth().specific_force_body_mps2.y() ==
+        Approx(-0.02 * 0.25 / m).epsilon(1e-9));
+
+  // A lag in the plant: the moment of lag(delta_f, tau) follows delta_f with the time constant.
+  PlantConfig lag_cfg;
+  lag_cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("lag(delta_f, 0.05)"), 1.0e-4, "test"}};
+  PlantModel lagged = make_plant(f, lag_cfg);
+  PlantModel plain = make_plant(f);
+  auto cmd = plain.trim_command();
+  cmd.flap_freq_left_radps += 1.0;
+  for (int i = 0; i < 300; ++i) {
+    lagged.step(cmd);
+    plain.step(cmd);
+  }
+  // After 0.3 s the lagged moment (positive with delta_f) has rolled the vehicle faster.
+  CHECK(lagged.truth().omega_body_radps.x() > plain.truth().omega_body_radps.x());
+}

@@ -1,7 +1,10 @@
 // Unit tests of the linear model core against the thesis's published numbers.
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -224,4 +227,49 @@ TEST_CASE("exact ZOH discretisation matches a fine integration of the continuous
     CHECK(best < 1e-10);
   }
   CHECK_THROWS_AS(discretize_zoh(ss, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("a model file's terms: section is read, and a bad entry is refused naming file, line and key", "[model]") {
+  std::ifstream in(kConfigs + "models/nimble_lateral_set1.yaml");
+  std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto load = [&](const std::string& terms) {
+    const std::string file = kConfigs + "models/terms_test.yaml";  // the relative vehicle path resolves
+    ConfigMap map = ConfigMap::load_string(base + terms, file);
+    return model_from_config(map);
+  };
+  const int line = static_cast<int>(std::count(base.begin(), base.end(), '\n')) + 2;  // the first entry
+  const DerivativeModel m = load(
+      "terms:\n  - {equation: L, expression: \"p^3\", coefficient: -2.0e-5}\n"
+      "  - equation: Y\n    expression: lag(delta_f, 0.02)\n    coefficient: 1.5e-4\n");
+  REQUIRE(m.terms.size() == 2);
+  CHECK(m.terms[0].equation == "L");
+  CHECK(m.terms[0].expression.to_string() == "p^3");
+  CHECK(m.terms[0].coefficient == -2.0e-5);
+  CHECK(m.terms[1].expression.stateful());
+  CHECK(term_parameter_name(m.terms[1]) == "Y:lag(delta_f, 0.02)");
+
+  const auto refused = [&](const std::string& terms) -> std::string {
+    try {
+      load(terms);
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  const std::string where = kConfigs + "models/terms_test.yaml:" + std::to_string(line) + ": ";
+  CHECK(refused("terms:\n  - {equation: L, expression: \"p^\", coefficient: 1}\n") ==
+        where + "key 'terms[0].expression': value 'p^': does not parse: at position 3: expected an integer power in "
+                "[0, 16] after '^', found the end");
+  CHECK(refused("terms:\n  - {equation: L, expression: \"x*p\", coefficient: 1}\n") ==
+        where + "key 'terms[0].expression': value 'x*p': reads an unknown signal 'x' (known: p, q, r, u, v, w, phi, "
+                "theta, delta_f, delta_t, delta_d, delta_w)");
+  CHECK(refused("terms:\n  - {equation: M, expression: \"p\", coefficient: 1}\n") ==
+        where + "key 'terms[0].equation': value 'M': must be one of: L, Y");
+  CHECK_THAT(refused("terms:\n  - {equation: L, expression: \"p\", coefficient: 1, gain: 2}\n"),
+             Catch::Contains("terms[0].gain") && Catch::Contains(where));
+  CHECK_THAT(refused("terms:\n  - {equation: L, expression: \"p\", coefficient: big}\n"),
+             Catch::Contains("terms[0].coefficient") && Catch::Contains(where));
+  CHECK_THAT(refused("terms:\n  - {equation: L, expression: \"p\"}\n"),
+             Catch::Contains("terms[0].coefficient") && Catch::Contains("missing required key"));
+  CHECK_THAT(refused("terms: p^3\n"), Catch::Contains("must be a list of terms"));
 }

@@ -97,6 +97,12 @@ TEST_CASE("scenario tree: every key's origin is recorded (file and line, base fi
   // A key below a recorded one takes the nearest recorded origin; another file's error stays.
   CHECK(nimble::locate_error(nimble::ConfigError(scenario, "plant.vehicle.x", "", "bad"), scenario, origins).line() ==
         5);
+  // An entry of a list (plant.terms[0].expression) takes the list's origin: here --set.
+  nimble::KeyOrigins with_terms;
+  nimble::load_scenario_tree((dir / "scenario.yaml").string(), {{"plant.terms", "[{equation: L}]"}}, &with_terms);
+  CHECK(nimble::locate_error(nimble::ConfigError(scenario, "plant.terms[0].expression", "p^", "bad", 1), scenario,
+                             with_terms)
+            .file() == "--set");
   CHECK(nimble::locate_error(nimble::ConfigError("model.yaml", "Lp", "", "bad", 7), scenario, origins).file() ==
         "model.yaml");
 }
