@@ -270,10 +270,33 @@ std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, cons
   return tests;
 }
 
+/// Candidates that met every entry rule but whose signature failed (CandidateTrial::
+/// signature_holds), and that no later round named: the structure their terms fit is located,
+/// unexplained, once per candidate.
+void signature_findings(const DiscrepancyOptions& options, DiscrepancyResult& res) {
+  for (const auto& t : res.candidates) {
+    if (t.signature_holds) continue;
+    const auto named = [&](const auto& list) {
+      return std::any_of(list.begin(), list.end(), [&](const auto& x) { return x.name == t.name; });
+    };
+    const bool listed = std::any_of(res.located.signature.begin(), res.located.signature.end(),
+                                    [&](const SignatureFinding& f) { return f.candidate == t.name; });
+    if (named(res.effects) || listed) continue;
+    SignatureFinding f;
+    f.candidate = t.name;
+    for (const auto& [eq, F] : t.partial_f) {
+      if (F >= options.partial_f) f.equations.push_back(eq);
+    }
+    f.note = t.name + "'s terms: " + t.signature_note;
+    res.located.signature.push_back(std::move(f));
+  }
+}
+
 /// The verdict and its one-line summary.
 void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
   // Verdict.
-  const bool structure_found = !res.located.frequency.empty() || !res.located.state.empty();
+  const bool structure_found =
+      !res.located.frequency.empty() || !res.located.state.empty() || !res.located.signature.empty();
   if (!res.ambiguous.empty()) {
     res.verdict = "ambiguous";
   } else if (!res.effects.empty()) {
@@ -308,6 +331,11 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "no candidate passes, but the residual has structure:";
     for (const auto& f : res.located.frequency) s << " " << f.output << " peak at " << fmt(f.f_hz) << " Hz;";
     for (const auto& f : res.located.state) s << " " << f.output << " depends nonlinearly on " << f.signal << ";";
+    for (const auto& f : res.located.signature) {
+      std::string eqs;
+      for (const auto& e : f.equations) eqs += (eqs.empty() ? "" : ", ") + e;
+      s << " " << (eqs.empty() ? std::string("the equations") : eqs) << ": " << f.note << ";";
+    }
   } else {
     s << "nothing significant: no candidate passes and the residual shows no structure";
   }
@@ -450,6 +478,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   name_effects(m, wf, res);
   if (gust_result.entered) res.effects.push_back({gust_result.name, gust_result.parameters, gust_result.sigma});
   const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
+  signature_findings(options, res);
   res.alarm_rule.p_critical = wf.p_critical;
   res.alarm_rule.tests = res.candidates.size() + location_tests;
   res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;

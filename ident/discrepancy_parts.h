@@ -230,6 +230,9 @@ struct Workflow {
                const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
                const std::vector<bool>& use_eq, const ChangeProfile& profile, CandidateTrial& t) const;
   void judge(CandidateTrial& t, const std::string& p_eq) const;
+  /// sensor_bias's signature: the same bias in the kinematic relation of p and phi's derivative.
+  /// Sets t.signature_holds and t.signature.
+  void sensor_bias_signature(CandidateTrial& t) const;
 
   // effectiveness_step (discrepancy_timevarying.cc).
   /// Every scan point of the change candidate `spec` on the grid (sample indices of t*): the fold

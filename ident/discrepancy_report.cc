@@ -132,6 +132,18 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
+  // Only with DiscrepancyOptions::signature_checks can there be one; the key is written when there is.
+  if (!r.located.signature.empty()) j.key("signature").begin_array();
+  for (const auto& f : r.located.signature) {
+    j.begin_object();
+    j.key("candidate").value(f.candidate);
+    j.key("equations").begin_array();
+    for (const auto& e : f.equations) j.value(e);
+    j.end_array();
+    j.key("note").value(f.note);
+    j.end_object();
+  }
+  if (!r.located.signature.empty()) j.end_array();
   j.end_object();
   j.key("gap").begin_object();
   j.key("metric").value(r.gap_metric);
@@ -352,7 +364,10 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
       << ", p " << g(f.p_value) << ")\n";
   }
-  if (r.located.frequency.empty() && r.located.state.empty()) {
+  for (const auto& f : r.located.signature) {
+    o << "  signature: " << f.note << "\n";
+  }
+  if (r.located.frequency.empty() && r.located.state.empty() && r.located.signature.empty()) {
     o << "  no periodic component or state dependence\n";
   }
   o << "  where the residual's energy is (descriptive, not tests):\n";

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/distributions/students_t.hpp>
 
 #include "core/chi_square.h"
 #include "ident/metrics.h"
@@ -80,6 +81,7 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
       p_min = f.p;
       p_eq = eqname;
     }
+    if (spec.name == "lateral_inflow") t.signature["p_" + eqname] = f.p;
     if (spec.name == "actuator_delay") {
       // A delayed input acts (mostly) delayed: with the columns delta_f and
       // delta_f(t - tau) - delta_f the delayed fraction is c / theta_df. In closed loop a
@@ -200,6 +202,52 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
 
 }
 
+/// sensor_bias's signature. A bias b of the rate sensor enters wherever p does: in the L and Y
+/// equations (the constant the candidate fits) and in the kinematic relation phi_dot = p (lateral
+/// trim, theta0 = 0), where the measured p exceeds phi's derivative by b. In each held-out block
+/// (the cross-validation folds, contiguous) b_k = (integral of p - increase of phi) / duration,
+/// over the steps of the block's own grid (a jump of the time line, between pooled flights, is
+/// skipped); the blocks' mean is tested against 0 with Student's t on K - 1 degrees of freedom
+/// (the blocks' scatter is the estimate's, whatever the noise's colour), two-sided, at
+/// gust_band_alpha like the confirmation above the gust band: a confirmation of a candidate that
+/// met the alarm rule already, so it can withdraw a name but raise no new alarm.
+void Workflow::sensor_bias_signature(CandidateTrial& t) const {
+  t.signature_holds = true;
+  if (!data.has("p") || !data.has("phi")) return;
+  const VectorXd& p = data.at("p");
+  const VectorXd& phi = data.at("phi");
+  const double step = 1.0 / data.rate_hz;
+  std::vector<double> b;
+  for (const auto& [a, e] : folds) {
+    double integral = 0.0, rise = 0.0, duration = 0.0;
+    for (Index i = a + 1; i < e; ++i) {
+      const double dt = data.t_s[i] - data.t_s[i - 1];
+      if (!(dt > 0.0) || dt > 1.5 * step) continue;
+      integral += 0.5 * (p[i] + p[i - 1]) * dt;
+      rise += phi[i] - phi[i - 1];
+      duration += dt;
+    }
+    if (duration > 0.0) b.push_back((integral - rise) / duration);
+  }
+  const double K = static_cast<double>(b.size());
+  if (b.size() < 3) return;
+  const double mean = std::accumulate(b.begin(), b.end(), 0.0) / K;
+  double ss = 0.0;
+  for (double x : b) ss += (x - mean) * (x - mean);
+  const double se = std::sqrt(ss / (K - 1.0) / K);
+  double p_value = 1.0;
+  if (se > 0.0) {
+    p_value = 2.0 * boost::math::cdf(boost::math::complement(boost::math::students_t(K - 1.0), std::fabs(mean) / se));
+  } else if (mean != 0.0) {
+    p_value = 0.0;
+  }
+  t.signature["kinematic_bias_radps"] = mean;
+  t.signature["sigma_radps"] = se;
+  t.signature["blocks"] = K;
+  t.signature["p_value"] = p_value;
+  t.signature_holds = p_value <= opt.gust_band_alpha;
+}
+
 /// Whether the trial passes every entry rule, and its reason in words.
 void Workflow::judge(CandidateTrial& t, const std::string& p_eq) const {
   const bool significant = t.p_value <= p_critical;
@@ -317,6 +365,40 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     return t;
   }
   judge(t, p_eq);
+  if (opt.signature_checks && t.passed && spec.name == "lateral_inflow") {
+    // lateral_inflow's signature: a side force from sideslip, odd in v and opposing it, whose
+    // roll moment is that force at a short arm (the plant file: 0.01 m). A v|v| term in L with no
+    // side force of that sign beside it is a roll moment the library does not have.
+    const auto pY = t.signature.find("p_Y");
+    const auto yvv = t.parameters.find("Y_vv");
+    const bool side_force = pY != t.signature.end() && pY->second <= opt.gust_band_alpha && yvv != t.parameters.end() &&
+                            yvv->second < 0.0;
+    if (!side_force) {
+      t.signature_holds = false;
+      t.passed = false;
+      t.signature_note = "a v|v| term fits but no side force opposing v goes with it (Y: p " +
+                         (pY == t.signature.end() ? std::string("-") : fmt(pY->second)) + ", Y_vv " +
+                         (yvv == t.parameters.end() ? std::string("-") : fmt(yvv->second)) +
+                         "): not the lateral inflow";
+      t.reason = "fails its signature: " + t.signature_note;
+    }
+  }
+  if (opt.signature_checks && t.passed && spec.name == "sensor_bias") {
+    sensor_bias_signature(t);
+    if (!t.signature_holds) {
+      t.signature_note = "a constant fits but p carries no bias against phi's derivative (kinematic bias " +
+                         fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " +
+                         fmt(t.signature["sigma_radps"]) + ", p " + fmt(t.signature["p_value"]) +
+                         "): not a rate-sensor bias";
+      t.passed = false;
+      t.reason = "fails its signature: it " + t.reason.substr(std::string("passes: ").size()) +
+                 ", but p carries no bias against phi's derivative (kinematic bias " +
+                 fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " + fmt(t.signature["sigma_radps"]) +
+                 " over " + fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
+                 fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
+                 "rate-sensor bias";
+    }
+  }
   if (t.passed) {
     for (const auto& a : P.adds) {
       if (use_eq[a.eq]) best_adds.push_back(a);

@@ -33,6 +33,22 @@
 ///   effectiveness_step    L_df and Y_df change by the fraction f from t* on: a damaged wing,
 ///                         f in [-0.40, -0.15], t* in the middle 60 % of the record
 ///
+/// Forms that are NOT library effects (the out-of-library suite, test_discrepancy_outside.cc): no
+/// candidate of ident/discrepancy.h has their signature, so a library name given to them is a
+/// wrong name. Magnitudes drawn by the seed from the ranges below:
+///   flap_asymmetry        the flap input is 1 + a times as effective for delta_f > 0 as for
+///                         delta_f < 0 (L and Y alike), a in [0.25, 0.45]
+///   cubic_roll_damping    L += Lp3 p^3, Lp3 = -c |Lp| / (2 rad/s)^2, c in [0.5, 1.5]: at
+///                         2 rad/s the cubic term adds c times the linear damping
+///   flap_dead_zone        the flap input acts as sign(d) max(|d| - z, 0), z in [1, 3] rad/s (the
+///                         flap input's RMS on these records is about 9 rad/s)
+///   flap_backlash         the flap input acts through a backlash (play) of total width b in
+///                         [2, 6] rad/s: the acting value follows d only once |d - acting| > b / 2
+///   flap_lag              the flap input acts through a first-order lag 1 / (tau s + 1), tau in
+///                         [10, 40] ms (a lag, not a pure delay)
+///   roll_inflow_only      L += L_vo v|v| with no side-force counterpart, L_vo in [-4e-3,
+///                         -1e-3] N m s^2/m^2 (lateral_inflow predicts Y_vv as well)
+///
 /// With GeneratorOptions::record_command the record carries the controller's command as
 /// channel delta_f_cmd, sampled when it is issued (no measurement noise: it is digital).
 
@@ -59,6 +75,13 @@ struct HiddenEffects {
   double drift_per_min = 0.0;   ///< effectiveness_drift: r [1/min]
   double step_fraction = 0.0;   ///< effectiveness_step: f
   double step_at = 0.5;         ///< effectiveness_step: t* as a fraction of the record's length
+  // Out-of-library forms (see the file comment).
+  double asym = 0.0;            ///< flap_asymmetry: a
+  double cubic_c = 0.0;         ///< cubic_roll_damping: c
+  double dead_zone = 0.0;       ///< flap_dead_zone: z [rad/s]
+  double backlash = 0.0;        ///< flap_backlash: b [rad/s]
+  double lag_s = 0.0;           ///< flap_lag: tau [s]
+  double L_vv_only = 0.0;       ///< roll_inflow_only: L_vo [N m s^2/m^2]
 };
 
 struct GeneratorOptions {
@@ -93,6 +116,13 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   h.drift_per_min = -(0.02 + 0.06 * u01(rng)) * h.scale;
   h.step_fraction = -(0.15 + 0.25 * u01(rng)) * h.scale;
   h.step_at = 0.2 + 0.6 * u01(rng);
+  // Drawn after the library effects' magnitudes, so that those stay what they were for a seed.
+  h.asym = (0.25 + 0.20 * u01(rng)) * h.scale;
+  h.cubic_c = (0.5 + 1.0 * u01(rng)) * h.scale;
+  h.dead_zone = (1.0 + 2.0 * u01(rng)) * h.scale;
+  h.backlash = (2.0 + 4.0 * u01(rng)) * h.scale;
+  h.lag_s = (0.010 + 0.030 * u01(rng)) * h.scale;
+  h.L_vv_only = -(1.0e-3 + 3.0e-3 * u01(rng)) * h.scale;
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -111,6 +141,10 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool dihedral = h.on.count("dihedral_coupling") > 0, yaw_alias = h.on.count("yaw_alias") > 0;
   const bool cmd_delay = h.on.count("command_delay") > 0;
   const bool drift = h.on.count("effectiveness_drift") > 0, step = h.on.count("effectiveness_step") > 0;
+  const bool asym = h.on.count("flap_asymmetry") > 0, cubic = h.on.count("cubic_roll_damping") > 0;
+  const bool dead_zone = h.on.count("flap_dead_zone") > 0, backlash = h.on.count("flap_backlash") > 0;
+  const bool lag = h.on.count("flap_lag") > 0, roll_inflow_only = h.on.count("roll_inflow_only") > 0;
+  const double Lp3 = -h.cubic_c * std::fabs(Lp) / 4.0;
   // The flap input's effectiveness at time t (effectiveness_drift, effectiveness_step).
   auto effectiveness = [&](double t) {
     double k = 1.0;
@@ -155,6 +189,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
 
   // State: p, v, phi, delta_f, v_gust.
   double p = 0, v = 0, phi = 0, df = 0, vg = 0;
+  double df_play = 0.0, df_lagged = 0.0;  // flap_backlash's acting value, flap_lag's state
+  const double a_lag = lag ? 1.0 - std::exp(-dt / h.lag_s) : 1.0;
   std::deque<std::pair<double, double>> df_hist;  // (t, df) for the delayed input
   auto df_at = [&](double t) {
     if (!delay) return df;
@@ -179,6 +215,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     const double ke = effectiveness(t);
     double L = ks * (Lp * P + Lv * vrel) + ke * L_df * dfin + L_dt * dtp + Lw;
     double Y = ks * (Yp * P + Yv * vrel) + ke * Y_df * dfin + Y_dt * dtp + Yw;
+    if (cubic) L += Lp3 * P * P * P;
+    if (roll_inflow_only) L += h.L_vv_only * vrel * std::fabs(vrel);
     if (dihedral) {
       L += L_dd * dd_of(t);
       Y += Y_dd * dd_of(t);
@@ -237,7 +275,19 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
       cmd_held = cmd_hist.front().first <= t - h.delay_s + 1e-12 ? cmd_hist.front().second : 0.0;
     }
     const double Lw = o.moment_noise_Nm * n01(rng), Yw = o.force_noise_N * n01(rng);
-    const double dfin = df_at(t);
+    double dfin = df_at(t);
+    // Out-of-library forms of the flap input (held over the step, as the delayed input).
+    if (asym && dfin > 0.0) dfin *= 1.0 + h.asym;
+    if (dead_zone) dfin = std::copysign(std::max(std::fabs(dfin) - h.dead_zone, 0.0), dfin);
+    if (backlash) {
+      if (dfin - df_play > 0.5 * h.backlash) df_play = dfin - 0.5 * h.backlash;
+      if (dfin - df_play < -0.5 * h.backlash) df_play = dfin + 0.5 * h.backlash;
+      dfin = df_play;
+    }
+    if (lag) {
+      df_lagged += a_lag * (dfin - df_lagged);
+      dfin = df_lagged;
+    }
     double x[4] = {p, v, phi, df}, k1[4], k2[4], k3[4], k4[4], tmp[4];
     deriv(t, x, dfin, Lw, Yw, k1);
     for (int j = 0; j < 4; ++j) tmp[j] = x[j] + 0.5 * dt * k1[j];
