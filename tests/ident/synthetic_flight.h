@@ -37,4 +37,17 @@ inline SyntheticOptions identification_flight(std::uint64_t seed) {
   return o;
 }
 
+/// A short identification flight of `duration_s` (a few seconds: doublets from 0.3 s, 0.5 s apart),
+/// for the tests of short and damaged records.
+inline SyntheticOptions short_identification_flight(double duration_s, std::uint64_t seed) {
+  SyntheticOptions o = identification_flight(seed);
+  o.duration_s = duration_s;
+  o.hover_s = 0.3;
+  o.doublet_gap_s = 0.5;
+  o.tail_hover_s = 0.3;
+  o.throttle_period_s = 1.0;
+  o.throttle_amplitude_pct = 2.0;
+  return o;
+}
+
 }  // namespace nimble::ident::test

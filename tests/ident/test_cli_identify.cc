@@ -374,13 +374,7 @@ namespace {
 /// as exp(6 (t - 1.5)) from 1.5 s on, to millions of rad/s by the end, as a simulation gone
 /// unstable. Returns the file and the time of the first sample whose |p| exceeds 50 rad/s.
 std::pair<std::string, double> short_flight_csv(const std::string& name, double duration_s, bool diverge) {
-  SyntheticOptions o = ident::test::identification_flight(11);
-  o.duration_s = duration_s;
-  o.hover_s = 0.3;
-  o.doublet_gap_s = 0.5;
-  o.tail_hover_s = 0.3;
-  o.throttle_period_s = 1.0;
-  o.throttle_amplitude_pct = 2.0;
+  const SyntheticOptions o = ident::test::short_identification_flight(duration_s, 11);
   const DerivativeModel m = ident::test::set1_model();
   FlightData d = simulate_synthetic(m, load_vehicle(m.vehicle_file), o);
   double first_bad_s = -1.0;

@@ -25,13 +25,7 @@ namespace {
 
 /// A 4 s synthetic set-1 flight (doublets from 0.3 s).
 FlightData short_flight(double duration_s, std::uint64_t seed) {
-  SyntheticOptions o = test::identification_flight(seed);
-  o.duration_s = duration_s;
-  o.hover_s = 0.3;
-  o.doublet_gap_s = 0.5;
-  o.tail_hover_s = 0.3;
-  o.throttle_period_s = 1.0;
-  o.throttle_amplitude_pct = 2.0;
+  const SyntheticOptions o = test::short_identification_flight(duration_s, seed);
   const DerivativeModel m = test::set1_model();
   FlightData d = simulate_synthetic(m, load_vehicle(m.vehicle_file), o);
   d.source = "flight_" + std::to_string(seed) + ".csv";
