@@ -55,10 +55,8 @@ void sync_directory_of(const std::string& file) {
 void write_file(const std::string& file, std::string_view text) {
   struct stat st{};
   const bool in_place = ::stat(file.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
-  char host[256] = {};
-  if (::gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "host");
   const std::string target =
-      in_place ? file : file + "." + host + "." + std::to_string(::getpid()) + kPartialSuffix;
+      in_place ? file : file + "." + host_name() + "." + std::to_string(::getpid()) + kPartialSuffix;
   const int fd = in_place ? ::open(target.c_str(), O_WRONLY | O_CLOEXEC)
                           : ::open(target.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd < 0) {
@@ -219,6 +217,12 @@ int64_t free_bytes_at(const std::string& path) {
   struct statvfs vfs{};
   if (::statvfs(p.c_str(), &vfs) != 0) return -1;
   return static_cast<int64_t>(vfs.f_bavail) * static_cast<int64_t>(vfs.f_frsize);
+}
+
+std::string host_name() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) return "unknown";
+  return name;
 }
 
 std::string human_bytes(int64_t bytes) {

@@ -111,6 +111,10 @@ class OutputFile {
 /// the file does not exist yet); -1 if it cannot be told.
 int64_t free_bytes_at(const std::string& path);
 
+/// This machine's host name ("unknown" if it cannot be told): in write_file()'s temporary names,
+/// and where a record says which machine wrote it.
+std::string host_name();
+
 /// "12.3 MB" (decimal units), for messages about sizes.
 std::string human_bytes(int64_t bytes);
 

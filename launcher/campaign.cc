@@ -42,12 +42,6 @@ constexpr const char* kRunFilePrefix = "run-";
 /// doublets' roll-rate swings, 2-3 Hz, keep their peaks).
 constexpr double kReportTraceHz = 50.0;
 
-std::string hostname() {
-  char name[256] = {};
-  if (::gethostname(name, sizeof name - 1) != 0) return "unknown";
-  return name;
-}
-
 double unix_now() {
   timespec ts{};
   ::clock_gettime(CLOCK_REALTIME, &ts);
@@ -354,7 +348,7 @@ Campaign create_campaign(const CampaignRequest& request) {
                   {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu}, {"chunk_size", c.cluster.chunk_size},
                   {"rig", c.cluster.rig}};
   m["created_unix_s"] = c.created_unix_s;
-  m["created_on"] = hostname();
+  m["created_on"] = host_name();
   write_file(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
   write_file(c.dir + "/campaign.json", m.dump(2) + "\n");
   return c;
@@ -481,7 +475,7 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
   for (const std::size_t i : runs) {
     if (i < c.run_count() && !done_before[i]) todo.push_back(i);
   }
-  const std::string host = hostname();
+  const std::string host = host_name();
   const fs::path work = fs::temp_directory_path() / ("rig_campaign_" + std::to_string(::getpid()));
   fs::remove_all(work);
   fs::create_directories(work);
