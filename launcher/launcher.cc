@@ -156,17 +156,20 @@ int run_scenario(const RunOptions& options) {
       return kRunBadInput;
     }
   }
+  // The log's name is decided once (a default one carries the time), then checked and flown.
+  RunOptions resolved = options;
+  resolved.log_file = log_file_for(plan, options);
   // A log that will not fit is refused now, not found cut after the flight.
   if (options.space_check || options.log_max_bytes > 0) {
-    const std::string log_file = log_file_for(plan, options);
-    const std::string problem = log_space_problem(plan, log_file, options.log_max_bytes, options.space_check);
+    const std::string problem =
+        log_space_problem(plan, resolved.log_file, options.log_max_bytes, options.space_check);
     if (!problem.empty()) {
       std::cerr << "rig run: refused: " << problem << "\n";
       return kRunBadInput;
     }
   }
-  if (plan.inprocess()) return run_inprocess(plan, options);
-  return run_processes(plan, options);
+  if (plan.inprocess()) return run_inprocess(plan, resolved);
+  return run_processes(plan, resolved);
 }
 
 namespace {
