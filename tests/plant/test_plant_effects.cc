@@ -1,0 +1,430 @@
+// The plant flies what a model file carries beside its derivatives: every effect of its
+// effects: section with the model's coefficients, and its terms.
+
+#include <cmath>
+#include <complex>
+#include <fstream>
+#include <sstream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "core/effects.h"
+#include "core/model.h"
+#include "core/modes.h"
+#include "plant/effects/registry.h"
+#include "plant/plant_model.h"
+#include "plant_fixture.h"
+
+using namespace nimble;
+using nimble::plant::ActuatorInput;
+using nimble::plant::PlantConfig;
+using nimble::plant::PlantModel;
+using nimble::model_effect_names;
+
+using namespace nimble::plant_test;
+
+// ---------------------------------------------------------------------------------------
+// Every effect a model file's effects: section can carry flies with the model's coefficients.
+
+TEST_CASE("every effect name a model may carry is one the plant flies", "[plant][model_effects]") {
+  // A valid section per name; the table must cover core's list of names.
+  const std::map<std::string, std::map<std::string, double>> sections{
+      {"kinematic_coupling", {{"Y_pw", 0.02876}}},
+      {"gravity_nonlinearity", {{"Y_gphi", 0.02876}}},
+      {"lateral_inflow", {{"L_vv", -2e-4}, {"Y_vv", -0.02}}},
+      {"forward_speed_coupling", {{"L_up", -1e-4}, {"L_uv", -2e-4}, {"Y_up", 1e-3}, {"Y_uv", -0.03}}},
+      {"actuator_delay", {{"delay_s", 0.02}, {"L_df_delayed", 1e-4}, {"Y_df_delayed", -8e-4},
+                          {"L_df_fraction_delayed", 0.9}, {"Y_df_fraction_delayed", 0.9}, {"F_cmd_delayed", 0.5}}},
+      {"sensor_bias", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
+      {"dihedral_coupling", {{"L_dd", 1.4e-3}, {"Y_dd", -0.06}}},
+      {"yaw_coupling", {{"Lr", -2.8e-4}, {"Yr", 8.4e-3}}},
+      {"flapping_forcing", {{"flapping_hz", 16.5}, {"L_sin1", 1e-3}, {"L_cos1", 1e-3}, {"L_amp1", std::sqrt(2e-6)}}},
+      {"lateral_gust", {{"sigma_mps", 0.1}, {"tau_s", 0.5}}},
+      {"effectiveness_drift", {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}, {"rate_per_min", -0.05}, {"t_mid_s", 20.0}}},
+      {"effectiveness_step", {{"L_df_step", -2.6e-5}, {"Y_df_step", 2.2e-4}, {"t_change_s", 12.0}, {"fraction", -0.25}}},
+  };
+  for (const auto& name : model_effect_names()) {
+    INFO("effect " << name);
+    REQUIRE(sections.count(name) == 1);
+    const Fixture f = with_effect(name, sections.at(name));
+    CHECK_NOTHROW(make_plant(f));
+  }
+  const auto& eom = nimble::plant::effects_in_equations_of_motion();
+  CHECK(eom == std::vector<std::string>{"kinematic_coupling", "gravity_nonlinearity"});
+}
+
+TEST_CASE("the effect registry and the plant agree: every regressor parameter of every effect flies, every plant "
+          "effect flies a registry effect and is written in the plant file",
+          "[plant][model_effects]") {
+  // Built from the registry (core/effects.h) alone: an effect added there without its plant
+  // side (plant/effects/registry.cc) fails here.
+  for (const auto& spec : nimble::effect_registry()) {
+    std::map<std::string, double> section;
+    for (const auto& term : spec.terms) section[term.parameter] = 1e-4;
+    if (spec.name == "actuator_delay") section["delay_s"] = 0.02;  // the scanned delay
+    if (spec.name == "flapping_forcing") section["flapping_hz"] = 16.5;  // the scanned frequency
+    if (spec.name == "lateral_gust") section = {{"sigma_mps", 0.1}, {"tau_s", 0.5}};  // stochastic: no terms
+    if (spec.name == "effectiveness_step") section["t_change_s"] = 12.0;  // the scanned change time
+    // The drift's coefficients are per second of the model's L_df (1.06e-4) and Y_df (-8.63e-4):
+    // 1e-4 would be a rate of 57 per minute; -5 %/min is the plant file's.
+    if (spec.name == "effectiveness_drift") section = {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}};
+    INFO("effect " << spec.name);
+    CHECK_NOTHROW(make_plant(with_effect(spec.name, section)));
+  }
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
+  std::stringstream plant_file;
+  plant_file << in.rdbuf();
+  for (const auto& effect : nimble::plant::plant_effects()) {
+    INFO("plant effect " << effect.name);
+    CHECK(nimble::find_effect(effect.model_effect) != nullptr);
+    CHECK(plant_file.str().find("\n  " + effect.name + ":") != std::string::npos);
+    CHECK(effect.markdown_rows("x.").find("`x.enabled`") != std::string::npos);
+  }
+}
+
+TEST_CASE("a model effect the plant does not know is refused with its name", "[plant][model_effects]") {
+  const Fixture unknown = with_effect("wind_shear", {{"k", 1.0}});
+  CHECK_THROWS_AS(make_plant(unknown), std::invalid_argument);
+  CHECK_THROWS_WITH(make_plant(unknown), Catch::Contains("wind_shear") && Catch::Contains("nimble_lateral_set1.yaml"));
+  // A parameter the effect does not have, a missing required one, an out-of-range value.
+  CHECK_THROWS_WITH(make_plant(with_effect("lateral_inflow", {{"L_vvv", 1e-4}})),
+                    Catch::Contains("effects.lateral_inflow.L_vvv"));
+  CHECK_THROWS_WITH(make_plant(with_effect("flapping_forcing", {{"L_sin0", 1e-3}})),
+                    Catch::Contains("effects.flapping_forcing.L_sin0"));
+  CHECK_THROWS_WITH(make_plant(with_effect("actuator_delay", {{"L_df_delayed", 1e-4}})),
+                    Catch::Contains("effects.actuator_delay") && Catch::Contains("delay_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("lateral_gust", {{"sigma_mps", 0.1}})),
+                    Catch::Contains("effects.lateral_gust") && Catch::Contains("tau_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("actuator_delay", {{"delay_s", 2.0}})),
+                    Catch::Contains("effects.actuator_delay.delay_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("sensor_bias", {{"L_0", NAN}})), Catch::Contains("effects.sensor_bias.L_0"));
+}
+
+TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0) v terms", "[plant][model_effects]") {
+  // u moves only with a longitudinal model: fly set 1 with it, perturbed in u, v and p.
+  const DerivativeModel lon = load_model(kModels + "nimble_longitudinal.yaml");
+  const double L_up = -1.5e-4, L_uv = 3.0e-4, Y_up = 2.0e-3, Y_uv = -0.03;
+  Fixture f;
+  const Fixture g = with_effect("forward_speed_coupling", {{"L_up", L_up}, {"L_uv", L_uv}, {"Y_up", Y_up}, {"Y_uv", Y_uv}});
+  PlantConfig cfg;
+  cfg.initial.u_mps = 0.6;
+  cfg.initial.v_mps = 0.4;
+  cfg.initial.p_radps = 0.3;
+  const PlantModel plain(f.model, lon, f.vehicle, cfg), coupled(g.model, lon, f.vehicle, cfg);
+  const double du = 0.6 - f.model.trim.u0_mps, v = 0.4, p = 0.3;
+  REQUIRE(plain.truth().velocity_body_mps.x() == Approx(f.model.trim.u0_mps + 0.6));
+  // Truth at t = 0: p_dot = Izz/Ic L (lateral3, no N), side specific force Y/m.
+  const double dL = L_up * du * p + L_uv * du * v, dY = Y_up * du * p + Y_uv * du * v;
+  const double Izz_over_Ic = f.vehicle.Izz_kgm2 / f.vehicle.Ic();
+  CHECK(coupled.truth().angular_accel_body_radps2.x() - plain.truth().angular_accel_body_radps2.x() ==
+        Approx(Izz_over_Ic * dL).epsilon(1e-9));
+  CHECK(coupled.truth().specific_force_body_mps2.y() - plain.truth().specific_force_body_mps2.y() ==
+        Approx(dY / f.vehicle.mass_kg).epsilon(1e-9));
+  CHECK(std::fabs(Izz_over_Ic * dL) > 1e-3);  // a change the check can see
+
+  // The model's section replaces the plant file's one-gain form; with coefficients k Lp, k Lv,
+  // k Yp, k Yv it flies as the gain k does (lateral3).
+  const double k = 0.5;
+  PlantConfig by_gain = cfg;
+  by_gain.effects.forward_speed_coupling.enabled = true;
+  by_gain.effects.forward_speed_coupling.gain_per_mps = k;
+  const Fixture h = with_effect("forward_speed_coupling", {{"L_up", k * f.model.at("Lp")},
+                                                           {"L_uv", k * f.model.at("Lv")},
+                                                           {"Y_up", k * f.model.at("Yp")},
+                                                           {"Y_uv", k * f.model.at("Yv")}});
+  PlantModel a(f.model, lon, f.vehicle, by_gain), b(h.model, lon, f.vehicle, by_gain);
+  for (int i = 0; i < 300; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == Approx(a.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(b.truth().velocity_body_mps.y() == Approx(a.truth().velocity_body_mps.y()).epsilon(1e-9));
+
+  // A plant file with both forms is refused.
+  PlantConfig both = by_gain;
+  both.effects.forward_speed_coupling.Y_uv_ns2pm2 = 0.01;
+  CHECK_THROWS_WITH(PlantModel(f.model, lon, f.vehicle, both), Catch::Contains("forward_speed_coupling"));
+}
+
+TEST_CASE("actuator delay from the model postpones the delta_f response by delay_s", "[plant][model_effects]") {
+  // The plant file's delay (50 ms) is replaced by the model's (20 ms).
+  const Fixture g = with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
+  PlantConfig cfg;
+  cfg.effects.actuator_delay.enabled = true;
+  cfg.effects.actuator_delay.delay_s = 0.050;
+  PlantModel plant = make_plant(g, cfg), undelayed = make_plant(Fixture{});
+  ActuatorInput cmd = plant.trim_command();
+  cmd.flap_freq_left_radps += 10;
+  for (int i = 0; i < 20; ++i) {
+    plant.step(cmd);
+    undelayed.step(cmd);
+    REQUIRE(std::fabs(plant.truth().delta_f_radps) < 1e-12);
+  }
+  CHECK(undelayed.truth().delta_f_radps > 0.1);
+  std::vector<double> reference;  // the undelayed response from its start
+  PlantModel ref = make_plant(Fixture{});
+  for (int i = 0; i < 30; ++i) {
+    ref.step(cmd);
+    reference.push_back(ref.truth().delta_f_radps);
+  }
+  for (int i = 0; i < 30; ++i) {
+    plant.step(cmd);
+    REQUIRE(plant.truth().delta_f_radps == Approx(reference[static_cast<std::size_t>(i)]).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("flapping forcing from the model oscillates at the plant's flapping frequency", "[plant][model_effects]") {
+  // Amplitude hypot(L_sin1, L_cos1) = 2e-3 N m at the plant's flapping frequency (about 16.3 Hz
+  // at trim), not at the model's flapping_hz (given 12 Hz here).
+  const Fixture g = with_effect("flapping_forcing", {{"flapping_hz", 12.0}, {"L_sin1", 1.2e-3}, {"L_cos1", -1.6e-3}});
+  PlantModel plant = make_plant(g);
+  const double w = plant.trim_flap_frequency_radps();
+  std::complex<double> at_f = 0, at_model_f = 0;
+  for (int i = 0; i < 1000; ++i) {
+    plant.step(plant.trim_command());
+    const double t = plant.truth().time_s, p = plant.truth().omega_body_radps.x();
+    at_f += p * std::exp(std::complex<double>(0, -w * t));
+    at_model_f += p * std::exp(std::complex<double>(0, -2 * M_PI * 12.0 * t));
+  }
+  const double amp = 2.0 * std::abs(at_f) / 1000.0;
+  CHECK(amp == Approx(2e-3 * g.vehicle.Izz_kgm2 / g.vehicle.Ic() / w).epsilon(0.15));
+  CHECK(std::abs(at_model_f) < 0.2 * std::abs(at_f));
+
+  // Both equations and two harmonics: the same as the plant file's forcing with the
+  // amplitudes hypot(sin_h, cos_h), with the plant's seeded phases.
+  const Fixture h = with_effect("flapping_forcing", {{"flapping_hz", 16.0}, {"L_sin1", 1.2e-3}, {"L_cos1", -1.6e-3},
+                                                     {"L_sin2", 0.6e-3}, {"L_cos2", 0.8e-3}, {"Y_cos1", 1.0e-2},
+                                                     {"Y_sin2", -3.0e-3}, {"Y_cos2", 4.0e-3}});
+  PlantConfig by_config;
+  by_config.effects.flapping_forcing.enabled = true;
+  by_config.effects.flapping_forcing.roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
+  by_config.effects.flapping_forcing.side_force_amplitudes_n = {1.0e-2, 5.0e-3};
+  PlantConfig other;  // the plant file's own forcing, replaced by the model's
+  other.effects.flapping_forcing = by_config.effects.flapping_forcing;
+  other.effects.flapping_forcing.roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
+  PlantModel a = make_plant(Fixture{}, by_config), b = make_plant(h, other);
+  for (int i = 0; i < 500; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == Approx(a.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(b.truth().velocity_body_mps.y() == Approx(a.truth().velocity_body_mps.y()).epsilon(1e-9));
+  CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-4);
+}
+
+TEST_CASE("sensor_bias from the model is a constant roll moment and side force", "[plant][model_effects]") {
+  const double L0 = 1.0e-4, Y0 = -2.0e-3;
+  const Fixture g = with_effect("sensor_bias", {{"L_0", L0}, {"Y_0", Y0}});
+  const PlantModel plain = make_plant(Fixture{});
+  PlantModel biased = make_plant(g);
+  REQUIRE(plain.truth().angular_accel_body_radps2.x() == 0.0);
+  CHECK(biased.truth().angular_accel_body_radps2.x() == Approx(g.vehicle.Izz_kgm2 / g.vehicle.Ic() * L0).epsilon(1e-12));
+  CHECK(biased.truth().specific_force_body_mps2.y() == Approx(Y0 / g.vehicle.mass_kg).epsilon(1e-12));
+  // The same as the plant file's constant load.
+  PlantConfig by_config;
+  by_config.effects.constant_load = {true, L0, Y0};
+  PlantModel a = make_plant(Fixture{}, by_config);
+  for (int i = 0; i < 200; ++i) {
+    a.step(a.trim_command());
+    biased.step(biased.trim_command());
+  }
+  CHECK(biased.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(biased.truth().omega_body_radps.x() > 1e-3);
+}
+
+TEST_CASE("dihedral_coupling from the model sets the dihedral derivatives", "[plant][model_effects]") {
+  const double L_dd = 1.41e-3, Y_dd = -6.06e-2;
+  const Fixture g = with_effect("dihedral_coupling", {{"L_dd", L_dd}, {"Y_dd", Y_dd}});
+  Fixture d;  // the same derivatives in the model's derivatives
+  d.model.derivatives["L_dd"] = L_dd;
+  d.model.derivatives["Y_dd"] = Y_dd;
+  PlantModel a = make_plant(d), b = make_plant(g), plain = make_plant(Fixture{});
+  ActuatorInput cmd = a.trim_command();
+  cmd.dihedral_rad = 0.1;
+  for (int i = 0; i < 300; ++i) {
+    a.step(cmd);
+    b.step(cmd);
+    plain.step(cmd);
+  }
+  CHECK(b.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(b.truth().velocity_body_mps.y() == a.truth().velocity_body_mps.y());
+  CHECK(std::fabs(b.truth().omega_body_radps.x()) > 1e-3);
+  CHECK(std::fabs(plain.truth().omega_body_radps.x()) < 1e-12);
+  // Given both as a derivative and in effects: refused, naming it.
+  Fixture both = d;
+  both.model.effects["dihedral_coupling"] = {{"L_dd", L_dd}};
+  CHECK_THROWS_WITH(make_plant(both), Catch::Contains("effects.dihedral_coupling.L_dd"));
+}
+
+TEST_CASE("yaw_coupling from the model sets Lr and Yr (acting where r is a state)", "[plant][model_effects]") {
+  // Lateral4: the model without Lr, Yr among its derivatives but in effects flies as the original.
+  const DerivativeModel full = load_model(kModels + "nimble_lateral4_yaw.yaml");
+  const Vehicle vehicle = load_vehicle(full.vehicle_file);
+  DerivativeModel moved = full, without = full;
+  moved.derivatives.erase("Lr");
+  moved.derivatives.erase("Yr");
+  without.derivatives.erase("Lr");
+  without.derivatives.erase("Yr");
+  moved.effects["yaw_coupling"] = {{"Lr", full.at("Lr")}, {"Yr", full.at("Yr")}};
+  PlantConfig cfg;
+  cfg.initial.r_radps = 0.5;
+  PlantModel a(full, std::nullopt, vehicle, cfg), b(moved, std::nullopt, vehicle, cfg), c(without, std::nullopt, vehicle, cfg);
+  for (int i = 0; i < 300; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+    c.step(c.trim_command());
+  }
+  CHECK(b.truth().omega_body_radps.x() == a.truth().omega_body_radps.x());
+  CHECK(b.truth().velocity_body_mps.y() == a.truth().velocity_body_mps.y());
+  CHECK(std::fabs(c.truth().omega_body_radps.x() - a.truth().omega_body_radps.x()) > 1e-3);
+}
+
+TEST_CASE("lateral_gust from the model has the model's sigma and tau", "[plant][model_effects]") {
+  const Fixture g = with_effect("lateral_gust", {{"sigma_mps", 0.2}, {"tau_s", 0.05}});
+  PlantConfig file_gust;  // the plant file's gust, replaced by the model's
+  file_gust.effects.lateral_gust = {true, 1.0, 0.5};
+  file_gust.seed = 7;
+  PlantConfig by_config;
+  by_config.effects.lateral_gust = {true, 0.2, 0.05};
+  by_config.seed = 7;
+  PlantModel a = make_plant(g, file_gust), b = make_plant(Fixture{}, by_config);
+  CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
+}
+
+TEST_CASE("kinematic and gravity terms from the model are the plant's equations of motion", "[plant][model_effects]") {
+  // Set 1 with kinematic_coupling and gravity_nonlinearity flies exactly as set 1: the plant's
+  // equations of motion carry p w and g sin(phi) already.
+  const Fixture f;
+  Fixture k;
+  k.model = load_model(kModels + "nimble_lateral_set1_kinematic.yaml");
+  REQUIRE(k.model.effects.count("kinematic_coupling") == 1);
+  REQUIRE(k.model.effects.count("gravity_nonlinearity") == 1);
+  PlantConfig cfg;
+  cfg.initial.phi_rad = 0.3;
+  cfg.initial.p_radps = 0.5;
+  PlantModel a = make_plant(f, cfg), b = make_plant(k, cfg);
+  for (int i = 0; i < 500; ++i) {
+    a.step(a.trim_command());
+    b.step(b.trim_command());
+  }
+  CHECK(b.state() == a.state());
+}
+
+TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df changed by their fractions",
+          "[plant][model_effects]") {
+  const double fL = -0.3, fY = -0.2;
+  ActuatorInput cmd;
+  auto flown = [&](PlantModel plant, int steps) {
+    cmd = plant.trim_command();
+    cmd.flap_freq_left_radps += 10;
+    for (int i = 0; i < steps; ++i) plant.step(cmd);
+    return plant;
+  };
+  // Changed from the start: the same as a model with the changed derivatives.
+  PlantConfig from_start;
+  from_start.effects.effectiveness_step = {true, 0.0, fL, fY};
+  Fixture scaled;
+  scaled.model.derivatives["L_df"] *= 1.0 + fL;
+  scaled.model.derivatives["Y_df"] *= 1.0 + fY;
+  const PlantModel a = flown(make_plant(Fixture{}, from_start), 300), b = flown(make_plant(scaled), 300);
+  CHECK(a.truth().omega_body_radps.x() == Approx(b.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK(a.truth().velocity_body_mps.y() == Approx(b.truth().velocity_body_mps.y()).epsilon(1e-9));
+  CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-2);
+  // Changed at 0.3 s: the plain plant's flight until then, another after.
+  PlantConfig later;
+  later.effects.effectiveness_step = {true, 0.3, fL, fY};
+  const int before = static_cast<int>(0.3 / make_plant(Fixture{}).dt_s()) - 1;
+  CHECK(flown(make_plant(Fixture{}, later), before).truth().omega_body_radps.x() ==
+        flown(make_plant(Fixture{}), before).truth().omega_body_radps.x());
+  CHECK(std::fabs(flown(make_plant(Fixture{}, later), 600).truth().omega_body_radps.x() -
+                  flown(make_plant(Fixture{}), 600).truth().omega_body_radps.x()) > 1e-3);
+
+  // From a model: the fractions are the coefficients over the model's L_df and Y_df.
+  const Fixture g = with_effect("effectiveness_step", {{"L_df_step", fL * 1.06e-4}, {"Y_df_step", fY * -8.63e-4},
+                                                       {"t_change_s", 0.3}, {"t_change_lo_s", 0.2}});
+  const PlantModel c = flown(make_plant(g), 600), d = flown(make_plant(Fixture{}, later), 600);
+  CHECK(c.truth().omega_body_radps.x() == Approx(d.truth().omega_body_radps.x()).epsilon(1e-9));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_step", {{"L_df_step", -1e-5}})),
+                    Catch::Contains("effects.effectiveness_step") && Catch::Contains("t_change_s"));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_step", {{"L_df_step", -5e-4}, {"t_change_s", 1.0}})),
+                    Catch::Contains("effects.effectiveness_step.L_df_step / L_df"));
+}
+
+TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 60, clamped at 0, and a model's "
+          "coefficients give the rate",
+          "[plant][model_effects]") {
+  plant::EffectivenessDriftConfig c{true, -0.05, 10.0};
+  double L = 0.0, Y = 0.0;
+  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);  // 30 s after t_ref: -2.5 %
+  CHECK(L == Approx(-0.025 * 2e-3));
+  CHECK(Y == Approx(-0.025 * -1e-2));
+  L = Y = 0.0;
+  plant::add_effectiveness_drift(c, 10.0 + 3600.0, 2e-3, -1e-2, L, Y);  // an hour later: no input left, not reversed
+  CHECK(L == Approx(-2e-3));
+  c.enabled = false;
+  L = 0.0;
+  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);
+  CHECK(L == 0.0);
+
+  // Flown: differs from the plain plant, and not at all with rate 0.
+  auto flown = [](PlantModel plant) {
+    ActuatorInput cmd = plant.trim_command();
+    cmd.flap_freq_left_radps += 10;
+    for (int i = 0; i < 600; ++i) plant.step(cmd);
+    return plant.truth().omega_body_radps.x();
+  };
+  PlantConfig drift, none;
+  drift.effects.effectiveness_drift = {true, -0.5, 0.0};
+  none.effects.effectiveness_drift = {true, 0.0, 0.0};
+  CHECK(flown(make_plant(Fixture{}, none)) == flown(make_plant(Fixture{})));
+  CHECK(std::fabs(flown(make_plant(Fixture{}, drift)) - flown(make_plant(Fixture{}))) > 1e-5);
+
+  // From a model: rate = 60 L_df_rate / L_df (per minute), t_ref = t_mid_s.
+  const Fixture f;
+  const std::map<std::string, double> params{{"L_df_rate", -0.05 / 60.0 * 1.06e-4}, {"Y_df_rate", 1e-6}, {"t_mid_s", 30.0}};
+  plant::EffectivenessDriftConfig m;
+  plant::effectiveness_drift_from_model({f.model, "effectiveness_drift", params}, m);
+  CHECK(m.enabled);
+  CHECK(m.rate_per_min == Approx(-0.05));
+  CHECK(m.t_ref_s == 30.0);
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_drift", {{"L_df_rate", 1e-4}})),
+                    Catch::Contains("effects.effectiveness_drift.L_df_rate / L_df per minute"));
+  CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_drift", {{"t_mid_s", 3.0}})),
+                    Catch::Contains("effects.effectiveness_drift") && Catch::Contains("rate_per_min"));
+}
+
+TEST_CASE("plant terms add coefficient * expression to the roll moment and side force", "[plant][terms]") {
+  Fixture f;
+  PlantConfig cfg;
+  cfg.initial.p_radps = 2.0;
+  cfg.initial.v_mps = 0.5;
+  const PlantModel base = make_plant(f, cfg);
+  cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("p^3"), -2.0e-5, "test"},
+               nimble::Term{"Y", nimble::TermExpression::parse("v*abs(v)"), -0.02, "test"}};
+  const PlantModel with = make_plant(f, cfg);
+  const double Izz = f.vehicle.Izz_kgm2, Ic = f.vehicle.Ic(), m = f.vehicle.mass_kg;
+  // At the initial state: p_dot += Izz/Ic * (-2e-5 * 8), the side specific force += -0.02 * 0.25 / m.
+  CHECK(with.truth().angular_accel_body_radps2.x() - base.truth().angular_accel_body_radps2.x() ==
+        Approx(Izz / Ic * -2.0e-5 * 8.0).epsilon(1e-9));
+  CHECK(with.truth().specific_force_body_mps2.y() - base.truth().specific_force_body_mps2.y() ==
+        Approx(-0.02 * 0.25 / m).epsilon(1e-9));
+
+  // A lag in the plant: the moment of lag(delta_f, tau) follows delta_f with the time constant.
+  PlantConfig lag_cfg;
+  lag_cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("lag(delta_f, 0.05)"), 1.0e-4, "test"}};
+  PlantModel lagged = make_plant(f, lag_cfg);
+  PlantModel plain = make_plant(f);
+  auto cmd = plain.trim_command();
+  cmd.flap_freq_left_radps += 1.0;
+  for (int i = 0; i < 300; ++i) {
+    lagged.step(cmd);
+    plain.step(cmd);
+  }
+  // After 0.3 s the lagged moment (positive with delta_f) has rolled the vehicle faster.
+  CHECK(lagged.truth().omega_body_radps.x() > plain.truth().omega_body_radps.x());
+}
