@@ -26,11 +26,6 @@
 
 namespace nimble::foxglove {
 
-namespace net = boost::asio;
-namespace beast = boost::beast;
-namespace http = beast::http;
-namespace websocket = beast::websocket;
-using tcp = net::ip::tcp;
 namespace {
 
 /// A frame waiting in a client's queue.
