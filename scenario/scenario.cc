@@ -6,6 +6,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <system_error>
 #include <utility>
 
 #include "contract/channels.h"
@@ -274,7 +275,12 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   }
   map.finish();
   for (const auto& f : {s.model_file, s.longitudinal_model_file, s.vehicle_file}) {
-    if (!f.empty() && !fs::exists(f)) throw ConfigError(file, "model", f, "file not found");
+    if (f.empty()) continue;
+    std::error_code ec;
+    const bool found = fs::exists(f, ec);
+    // A name the file system refuses (too long, a component that is not a folder) is named as such.
+    if (ec && ec != std::errc::no_such_file_or_directory) throw ConfigError(file, "model", f, "cannot be looked up: " + ec.message());
+    if (!found) throw ConfigError(file, "model", f, "file not found");
   }
   return s;
 }

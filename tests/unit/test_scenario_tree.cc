@@ -64,6 +64,23 @@ TEST_CASE("scenario: a top-level section that no process reads is refused, namin
   }
 }
 
+TEST_CASE("scenario: a model file name the file system refuses (a component over 255 bytes) is a ConfigError "
+          "naming the key and the reason, not an escaping filesystem_error",
+          "[scenario]") {
+  YAML::Node t = YAML::Load("name: t\nduration_s: 1\nclock: lockstep\nseed: 1\nprocesses: [plant]\n");
+  t["model"] = std::string(RIG_SOURCE_DIR) + "/rig_configs/models/" + std::string(300, 'a') + ".yaml";
+  try {
+    nimble::scenario_from_tree(t, "t.yaml");
+    FAIL("a model name too long for the file system was accepted");
+  } catch (const nimble::ConfigError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find("model") != std::string::npos);
+    CHECK(std::string(e.what()).find("cannot be looked up") != std::string::npos);
+  }
+  t["model"] = std::string(RIG_SOURCE_DIR) + "/rig_configs/models/absent.yaml";
+  CHECK_THROWS_WITH(nimble::scenario_from_tree(t, "t.yaml"), Catch::Contains("file not found"));
+}
+
 TEST_CASE("scenario tree: every key's origin is recorded (file and line, base files, --set), and an error is "
           "moved there",
           "[scenario]") {
