@@ -122,7 +122,13 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
     PreparedData wide = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, wide_proc);
     add_applied_command(wide.filtered, options.command_latency_s);
     Model wm = build_baseline(wide.filtered, equations, model, vehicle, data.source, nullptr, nullptr);
+    for (const Term& term : m.found_terms) {
+      for (std::size_t e = 0; e < wm.eqs.size(); ++e) {
+        if (wm.eqs[e].name == term.equation) wm.added[e].push_back({e, {term_parameter_name(term)}, {term_column(wide.filtered, term)}});
+      }
+    }
     for (const auto& name : m.effect_names) {
+      if (is_found_term(name)) continue;
       const CandidateSpec& spec = *find_effect(name);
       Index k = 0;
       for (const auto& t : res.candidates) {
@@ -208,8 +214,32 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
 /// The named effects with their parameters from the augmented fit (flapping forcing is named by
 /// the wideband stage).
 void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
+  for (const Term& term : m.found_terms) {
+    NamedEffect eff;
+    eff.name = "term";
+    eff.equation = term.equation;
+    eff.expression = term.expression.to_string();
+    const std::string param = term_parameter_name(term);
+    const auto it = res.augmented.find(param);
+    if (it != res.augmented.end()) {
+      eff.coefficient = it->second.value;
+      eff.interval[0] = it->second.value - 1.96 * it->second.sigma_coloured;
+      eff.interval[1] = it->second.value + 1.96 * it->second.sigma_coloured;
+      eff.parameters[param] = it->second.value;
+      eff.sigma[param] = it->second.sigma_coloured;
+    }
+    for (const auto& t : res.candidates) {
+      if (t.name == "term" && t.entered && t.equation == term.equation && t.expression == eff.expression) {
+        eff.alternatives = t.alternatives;
+      }
+      // Why each library effect was ruled out: its first trial (it was tried before any term).
+      if (t.name == "term" || t.round != 1) continue;
+      eff.ruled_out.emplace_back(t.name, t.reason);
+    }
+    res.effects.push_back(std::move(eff));
+  }
   for (const auto& name : m.effect_names) {
-    if (name == "flapping_forcing") continue;  // named with its parameters by the wideband stage
+    if (name == "flapping_forcing" || is_found_term(name)) continue;  // flapping: named by the wideband stage
     NamedEffect eff;
     eff.name = name;
     const CandidateSpec& spec = *find_effect(name);
@@ -309,7 +339,10 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
   std::ostringstream s;
   if (res.verdict == "effects" || res.verdict == "ambiguous") {
     s << "named:";
-    for (const auto& e : res.effects) s << " " << e.name;
+    for (const auto& e : res.effects) {
+      s << " " << e.name;
+      if (e.name == "term") s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (no library effect fits)";
+    }
     for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
     s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after) << " in the identification band";
     for (std::size_t i = 1; i < res.gap_bands.size(); ++i) {
@@ -375,7 +408,13 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
     }
     if (spec.stochastic) am.effects[name] = given;
   }
-  for (const auto& e : res.effects) am.effects[e.name] = e.parameters;
+  for (const auto& e : res.effects) {
+    if (e.name == "term") {
+      am.terms.push_back(Term{e.equation, TermExpression::parse(e.expression), e.coefficient, "rig discrepancy " + source});
+    } else {
+      am.effects[e.name] = e.parameters;
+    }
+  }
   for (auto& term : am.terms) {
     const auto it = res.augmented.find(term_parameter_name(term));
     if (it != res.augmented.end()) term.coefficient = it->second.value;
@@ -467,6 +506,8 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
 
   stepwise_search(wf, pool, known, m, res);
+  // The open world: no library effect earned its name (and none is ambiguous).
+  if (options.term_search && m.effect_names.empty() && res.ambiguous.empty()) term_search(wf, inputs, m, res);
   std::vector<BandGap> wide_bands;
   if (!pooled) wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
 
@@ -476,11 +517,25 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
   const CandidateTrial gust_result = gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
   name_effects(m, wf, res);
-  if (gust_result.entered) res.effects.push_back({gust_result.name, gust_result.parameters, gust_result.sigma});
+  if (gust_result.entered) {
+    NamedEffect gust;
+    gust.name = gust_result.name;
+    gust.parameters = gust_result.parameters;
+    gust.sigma = gust_result.sigma;
+    res.effects.push_back(std::move(gust));
+  }
   const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
   signature_findings(options, res);
   res.alarm_rule.p_critical = wf.p_critical;
-  res.alarm_rule.tests = res.candidates.size() + location_tests;
+  // Each library trial is a test; the open-world search is one test per round (Bonferroni over
+  // its families inside), however many of its trials are listed.
+  std::size_t term_rounds = 0;
+  for (const auto& t : res.candidates) {
+    if (t.name == "term") term_rounds = std::max(term_rounds, t.round);
+  }
+  res.alarm_rule.tests = static_cast<std::size_t>(std::count_if(res.candidates.begin(), res.candidates.end(),
+                                                                [](const CandidateTrial& t) { return t.name != "term"; })) +
+                         term_rounds + location_tests;
   res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;
   gap_table(d, model, options, known_values, m, cv_before, cv_after, res);
   gap_bands(d, options, m, cv_before, cv_after, std::move(wide_bands), res);

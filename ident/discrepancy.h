@@ -120,6 +120,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -191,12 +192,21 @@ struct DiscrepancyOptions {
   /// a side force opposing v. A failed signature withdraws the name and reports the structure as
   /// `unexplained` (Located::signature). Off by default: with them the out-of-library wrong-name
   /// rate is 21 % (target 2 %), so they are not yet the naming rule.
-  bool signature_checks = false;
+  bool signature_checks = true;
+  /// The open world (docs/discrepancy.md "Terms"): when no library effect earns its name, search
+  /// generic terms (ident/discrepancy_parts.h term_families) under the same entry rules and
+  /// family-wise bound, up to term_rounds terms.
+  bool term_search = true;
+  std::size_t term_rounds = 2;
 };
 
 /// Statistics of one candidate tried in one round.
 struct CandidateTrial {
-  std::string name;
+  std::string name;             ///< a library effect, or "term" (the open-world search)
+  /// "term": the equation and the expression tried (the scan's best point), and the passing
+  /// forms that explain the same thing (|rho| above the collinearity bound) when it entered.
+  std::string equation, expression;
+  std::vector<std::string> alternatives;
   std::size_t round = 0;
   bool available = true;        ///< false: the data lacks a channel it needs, or a regressor is not excited
   bool passed = false;          ///< met every criterion in this round
@@ -230,12 +240,20 @@ struct CandidateTrial {
 
 /// A named effect with its parameters.
 struct NamedEffect {
-  std::string name;
+  std::string name;  ///< a library effect, or "term": a generic term the open-world search found
   /// Regression parameters, plus delay_s when scanned; effectiveness_drift: rate_per_min with
   /// rate_per_min_lo, _hi (95 %) and t_mid_s; effectiveness_step: t_change_s with
   /// t_change_lo_s, _hi_s (95 %) and fraction with fraction_lo, _hi.
   std::map<std::string, double> parameters;
   std::map<std::string, double> sigma;       ///< coloured-residual standard deviations
+  /// "term": the equation it enters, its expression (core/term_expression.h), its coefficient
+  /// [N m or N per unit of the expression] with the 95 % interval (coefficient +- 1.96 coloured
+  /// sigma), the other forms that fit as well, and why each library effect was ruled out.
+  std::string equation, expression;
+  double coefficient = 0.0;
+  double interval[2] = {0.0, 0.0};
+  std::vector<std::string> alternatives;
+  std::vector<std::pair<std::string, std::string>> ruled_out;  ///< (library effect, reason)
 };
 
 /// Held-out fit of one equation output.

@@ -165,14 +165,21 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
     }
   }
   for (const auto& name : m.effect_names) {
-    const CandidateSpec& spec = *find_effect(name);
-    if (spec.wideband || spec.stochastic) continue;
+    // The effect's parameters: a library effect's terms, or a found term's one coefficient.
+    std::vector<std::string> params;
+    if (is_found_term(name)) {
+      params.push_back(name.substr(std::string(kTermPrefix).size()));
+    } else {
+      const CandidateSpec& spec = *find_effect(name);
+      if (spec.wideband || spec.stochastic) continue;
+      for (const auto& t : spec.terms) params.push_back(t.parameter);
+    }
     std::vector<std::size_t> eqs;
     std::vector<VectorXd> contribution(m.eqs.size(), VectorXd::Zero(d.size()));
     for (std::size_t e = 0; e < m.eqs.size(); ++e) {
       for (const auto& add : m.added[e]) {
-        const bool mine = std::any_of(spec.terms.begin(), spec.terms.end(), [&](const EffectTerm& t) {
-          return std::find(add.names.begin(), add.names.end(), t.parameter) != add.names.end();
+        const bool mine = std::any_of(params.begin(), params.end(), [&](const std::string& p) {
+          return std::find(add.names.begin(), add.names.end(), p) != add.names.end();
         });
         if (!mine) continue;
         for (std::size_t j = 0; j < add.cols.size(); ++j) {
@@ -205,7 +212,8 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
       VectorXd th;
       if (solve(X.transpose() * X, X.transpose() * contribution[e], th)) unique[e] -= X * th;
     }
-    res.gap_bands.push_back(band_gap(name, m, eqs, cv_before, cv_after, d.rate_hz, lo, hi, &unique));
+    res.gap_bands.push_back(band_gap(is_found_term(name) ? "term " + params.front() : name, m, eqs, cv_before, cv_after,
+                                     d.rate_hz, lo, hi, &unique));
   }
   for (auto& b : wide) res.gap_bands.push_back(std::move(b));
 }

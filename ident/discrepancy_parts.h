@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/terms.h"
 #include "ident/discrepancy.h"
 #include "ident/spectrum.h"
 
@@ -90,7 +91,10 @@ struct BatchRule {
 struct Model {
   std::vector<Eq> eqs;
   std::vector<std::vector<Addition>> added;  // per equation, the additions that entered
+  /// The effects that entered, in order: library names, and the terms the open-world search
+  /// found as kTermPrefix + their parameter name ("term:L:p^3"), each also in found_terms.
   std::vector<std::string> effect_names;
+  std::vector<Term> found_terms;
 
   MatrixXd X(std::size_t e) const { return augmented_design(eqs[e], added[e]); }
   std::vector<std::string> names(std::size_t e) const {
@@ -200,6 +204,43 @@ struct HighPassed {
 /// infinite when !ok or a fit is singular.
 void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool ok);
 
+/// Model::effect_names' prefix of a term found by the open-world search.
+inline constexpr const char* kTermPrefix = "term:";
+inline bool is_found_term(const std::string& effect_name) { return effect_name.rfind(kTermPrefix, 0) == 0; }
+
+/// The open-world search's scanned families (dead zone and backlash widths, lag time constants):
+/// points per scan, and the lag's time constants [s] (also the delay's lag signature).
+inline constexpr std::size_t kTermScanPoints = 12;
+inline constexpr double kLagGridS[2] = {0.004, 0.100};
+/// A delay's signature fails when a first-order lag predicts the held-out data better by more
+/// than this many standard errors of the difference: the one-sided 1 % point of the normal, so a
+/// true delay that a lag fits as well loses its name at most 1 % of the time.
+inline constexpr double kLagSignatureSigmas = 2.326;
+
+/// One family of generic terms: one expression, or one per point of a scanned parameter.
+struct TermFamily {
+  std::string label;  ///< e.g. "p^3", "deadzone(delta_f, w)"
+  std::vector<TermExpression> points;
+};
+
+/// The open world's families on `d` (ident/discrepancy.h, "Terms"): for each of p, v and the
+/// excited `inputs`: x^2, x^3, x*abs(x), sign(x), and abs(x) (states) or pos(x) (inputs); the
+/// products of two and three of them to degree 3; for each input its dead zone and backlash
+/// (width scanned over 1-40 % of its largest magnitude) and first-order lag (4-100 ms).
+std::vector<TermFamily> term_families(const UniformData& d, const std::vector<std::string>& inputs);
+
+struct Workflow;
+
+/// The open-world search, run when no library effect earned its name: each round tries every
+/// family in the roll-moment and side-force equations with the entry rules of a library
+/// candidate, Bonferroni over the scan and over every family and equation; the passing term with
+/// the largest held-out drop enters (its passing rivals that correlate above the collinearity
+/// bound listed as its alternatives), up to DiscrepancyOptions::term_rounds. The trials that
+/// passed, or the closest one when none did, go to res.candidates (name "term"). Returns the
+/// effect names of the terms that entered.
+std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m,
+                                     DiscrepancyResult& res);
+
 struct Workflow {
   const DiscrepancyOptions& opt;
   const Vehicle& vehicle;
@@ -233,6 +274,14 @@ struct Workflow {
   /// sensor_bias's signature: the same bias in the kinematic relation of p and phi's derivative.
   /// Sets t.signature_holds and t.signature.
   void sensor_bias_signature(CandidateTrial& t) const;
+  /// actuator_delay's signature: a pure delay, not a first-order lag (discrepancy_terms.cc).
+  /// Sets t.signature_holds, t.signature_note and t.signature (lag_tau_s, lag_heldout_drop, _se).
+  void delay_lag_signature(const Model& m, const ScanPoint& P, const std::string& p_eq, CandidateTrial& t) const;
+  /// One family of generic terms in equation `eq` (discrepancy_terms.cc), its p Bonferroni over
+  /// the scan and `family_count`; fills the trial and, when it passes, its addition.
+  CandidateTrial term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,
+                            const std::vector<VectorXd>& base_cv, std::size_t round, std::size_t family_count,
+                            std::vector<Addition>& best_adds) const;
 
   // effectiveness_step (discrepancy_timevarying.cc).
   /// Every scan point of the change candidate `spec` on the grid (sample indices of t*): the fold

@@ -46,6 +46,21 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   for (const auto& e : r.effects) {
     j.begin_object();
     j.key("name").value(e.name);
+    if (e.name == "term") {
+      j.key("equation").value(e.equation);
+      j.key("expression").value(e.expression);
+      j.key("coefficient").value(e.coefficient);
+      j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
+      j.key("alternatives").array(e.alternatives);
+      j.key("ruled_out").begin_array();
+      for (const auto& [name, reason] : e.ruled_out) {
+        j.begin_object();
+        j.key("name").value(name);
+        j.key("reason").value(reason);
+        j.end_object();
+      }
+      j.end_array();
+    }
     j.key("parameters");
     number_map(j, e.parameters);
     j.key("sigma");
@@ -65,6 +80,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.key("passed").value(t.passed);
     j.key("entered").value(t.entered);
     j.key("reason").value(t.reason);
+    if (t.name == "term") {
+      j.key("equation").value(t.equation);
+      j.key("expression").value(t.expression);
+    }
     if (t.available) {
       j.key("partial_f");
       number_map(j, t.partial_f);
@@ -257,6 +276,19 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
     for (const auto& e : r.effects) {
       o << "  " << e.name << "\n";
+      if (e.name == "term") {
+        o << "    " << e.equation << " += " << g(e.coefficient) << " * " << e.expression << "  (95 % interval " << g(e.interval[0])
+          << " .. " << g(e.interval[1]) << ")\n";
+        if (!e.alternatives.empty()) {
+          o << "    forms that fit as well:";
+          for (const auto& a : e.alternatives) o << " " << a;
+          o << "\n";
+        }
+        o << "    library effects ruled out:\n";
+        for (const auto& [name, reason] : e.ruled_out) o << "      " << name << ": " << reason << "\n";
+        o << "\n";
+        continue;
+      }
       const auto& q = e.parameters;
       if (q.count("rate_per_min")) {
         o << "    drift of the flap input's effectiveness: " << g(100.0 * q.at("rate_per_min")) << " %/min (95 % interval "

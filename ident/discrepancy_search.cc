@@ -335,6 +335,13 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
       t.reason = "fails its signature: " + t.signature_note;
     }
   }
+  if (opt.signature_checks && t.passed && spec.name == "actuator_delay") {
+    delay_lag_signature(m, P, p_eq, t);
+    if (!t.signature_holds) {
+      t.passed = false;
+      t.reason = "fails its signature: " + t.signature_note;
+    }
+  }
   if (opt.signature_checks && t.passed && spec.name == "sensor_bias") {
     sensor_bias_signature(t);
     if (!t.signature_holds) {
