@@ -506,10 +506,11 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
 
   stepwise_search(wf, pool, known, m, res);
-  // The open world: no library effect earned its name (and none is ambiguous).
-  if (options.term_search && m.effect_names.empty() && res.ambiguous.empty()) term_search(wf, inputs, m, res);
   std::vector<BandGap> wide_bands;
   if (!pooled) wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
+  // The open world: no library effect earned its name (in the stepwise search or the wideband
+  // stage), and none is ambiguous.
+  if (options.term_search && m.effect_names.empty() && res.ambiguous.empty()) term_search(wf, inputs, m, res);
 
   // The augmented fit and the gap after.
   std::vector<VectorXd> aug_resid;

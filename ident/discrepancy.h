@@ -236,6 +236,7 @@ struct CandidateTrial {
   /// blocks, blocks, p_value).
   std::map<std::string, double> signature;
   std::string signature_note;  ///< what the signature predicted and what the data showed, when it failed
+  std::string signature_rival;  ///< the generic term its form was compared with (rival_heldout_drop in signature)
 };
 
 /// A named effect with its parameters.

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -212,19 +213,31 @@ inline bool is_found_term(const std::string& effect_name) { return effect_name.r
 /// points per scan, and the lag's time constants [s] (also the delay's lag signature).
 inline constexpr std::size_t kTermScanPoints = 12;
 inline constexpr double kLagGridS[2] = {0.004, 0.100};
-/// A delay's signature fails when a first-order lag predicts the held-out data better by more
-/// than this many standard errors of the difference: the one-sided 1 % point of the normal, so a
-/// true delay that a lag fits as well loses its name at most 1 % of the time.
-inline constexpr double kLagSignatureSigmas = 2.326;
 
 /// One family of generic terms: one expression, or one per point of a scanned parameter.
 struct TermFamily {
   std::string label;  ///< e.g. "p^3", "deadzone(delta_f, w)"
   std::vector<TermExpression> points;
+  /// For a form an input acts through (its dead zone, backlash or lag): the input. The input
+  /// must act mostly through it (Workflow::term_trial).
+  std::string acts_through;
+  /// A linear filter of a signal (the lag): no excitation confirmation, which cannot see a
+  /// linear form (Workflow::term_trial).
+  bool linear = false;
+};
+
+struct LocationFrame;
+
+/// What the open-world search tests a term against in one equation: the location frame of the
+/// current model and the record's excitation (LocationFrame), and the record with each signal
+/// replaced by its excitation part (its projection on the excitation's bank).
+struct TermConfirmation {
+  std::unique_ptr<LocationFrame> frame;
+  UniformData excitation_parts;
 };
 
 /// The open world's families on `d` (ident/discrepancy.h, "Terms"): for each of p, v and the
-/// excited `inputs`: x^2, x^3, x*abs(x), sign(x), and abs(x) (states) or pos(x) (inputs); the
+/// excited `inputs`: x^2, x^3, x*abs(x), and abs(x) (states) or pos(x) (inputs); the
 /// products of two and three of them to degree 3; for each input its dead zone and backlash
 /// (width scanned over 1-40 % of its largest magnitude) and first-order lag (4-100 ms).
 std::vector<TermFamily> term_families(const UniformData& d, const std::vector<std::string>& inputs);
@@ -232,9 +245,10 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
 struct Workflow;
 
 /// The open-world search, run when no library effect earned its name: each round tries every
-/// family in the roll-moment and side-force equations with the entry rules of a library
-/// candidate, Bonferroni over the scan and over every family and equation; the passing term with
-/// the largest held-out drop enters (its passing rivals that correlate above the collinearity
+/// family in the roll-moment and side-force equations without a term yet (one form per
+/// equation: a later round looks for the effect in the other one) with the entry rules of a
+/// library candidate, Bonferroni over the scan and over every family and equation; the passing
+/// term with the largest held-out drop enters (its passing rivals that correlate above the collinearity
 /// bound listed as its alternatives), up to DiscrepancyOptions::term_rounds. The trials that
 /// passed, or the closest one when none did, go to res.candidates (name "term"). Returns the
 /// effect names of the terms that entered.
@@ -274,14 +288,21 @@ struct Workflow {
   /// sensor_bias's signature: the same bias in the kinematic relation of p and phi's derivative.
   /// Sets t.signature_holds and t.signature.
   void sensor_bias_signature(CandidateTrial& t) const;
-  /// actuator_delay's signature: a pure delay, not a first-order lag (discrepancy_terms.cc).
-  /// Sets t.signature_holds, t.signature_note and t.signature (lag_tau_s, lag_heldout_drop, _se).
-  void delay_lag_signature(const Model& m, const ScanPoint& P, const std::string& p_eq, CandidateTrial& t) const;
+  /// Every library effect's signature: its form is the data's, no generic term encompasses it
+  /// (discrepancy_terms.cc). Sets t.signature_holds, t.signature_note, t.signature_rival and
+  /// t.signature (rival_p_<eq>, own_p_<eq>).
+  void rival_form_signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const;
   /// One family of generic terms in equation `eq` (discrepancy_terms.cc), its p Bonferroni over
   /// the scan and `family_count`; fills the trial and, when it passes, its addition.
+  /// A dead zone, backlash or lag of an input passes only if the input acts mostly through it.
+  void acts_through(const TermFamily& fam, const Model& m, std::size_t eq, const ScanPoint& P, CandidateTrial& t) const;
+  /// A term passes only if it is also significant seen through the excitation (the location
+  /// tests' frame), Bonferroni over `family_count`, at gust_band_alpha.
+  void excitation_confirms(const TermExpression& expr, const std::string& eqname, std::size_t family_count,
+                           const TermConfirmation& confirm, CandidateTrial& t) const;
   CandidateTrial term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,
                             const std::vector<VectorXd>& base_cv, std::size_t round, std::size_t family_count,
-                            std::vector<Addition>& best_adds) const;
+                            const TermConfirmation& confirm, std::vector<Addition>& best_adds) const;
 
   // effectiveness_step (discrepancy_timevarying.cc).
   /// Every scan point of the change candidate `spec` on the grid (sample indices of t*): the fold
@@ -556,6 +577,11 @@ struct LocationRule {
   Folds folds;                 ///< the held-out rule's folds (the workflow's)
   double heldout_sigmas = 1.0;  ///< DiscrepancyOptions::heldout_sigmas
 };
+
+/// Wald test that the frame's residual does not depend on the columns C (partialled on the
+/// frame's span), batch-means covariance, Hotelling's reference: the p-value; `partial_r` (if
+/// given) the square root of the share of the residual's sum of squares they explain.
+double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block, double* partial_r);
 
 void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::string& output, const UniformData& d,
                     const LocationRule& rule, std::vector<StateFinding>& out);

@@ -202,12 +202,13 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
 
 /// Whether the trial passes every entry rule, and its reason in words.
 void Workflow::judge(CandidateTrial& t, const std::string& p_eq) const {
+  const double heldout_sigmas = opt.heldout_sigmas;
   const bool significant = t.p_value <= p_critical;
   const bool pse_falls = !p_eq.empty() && t.pse_after.at(p_eq) < t.pse_before.at(p_eq);
   const auto frac = t.parameters.find(delayed_input(p_eq) + "_fraction_delayed");
   const bool consistent = frac == t.parameters.end() || frac->second >= 0.5;
   const bool above_gusts = t.highpass_p <= opt.gust_band_alpha;
-  const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > opt.heldout_sigmas * t.heldout_se;
+  const bool heldout = t.heldout_drop > 0.0 && t.heldout_drop > heldout_sigmas * t.heldout_se;
   t.passed = significant && pse_falls && heldout && consistent && above_gusts;
   std::ostringstream why;
   if (t.passed) {
@@ -232,7 +233,7 @@ void Workflow::judge(CandidateTrial& t, const std::string& p_eq) const {
     }
     if (!heldout) {
       why << " held-out error change " << fmt(-100.0 * t.heldout_drop) << " % is not a drop beyond "
-          << fmt(opt.heldout_sigmas) << " standard errors (" << fmt(100.0 * t.heldout_se) << " %)";
+          << fmt(heldout_sigmas) << " standard errors (" << fmt(100.0 * t.heldout_se) << " %)";
     }
   }
   t.reason = why.str();
@@ -335,13 +336,6 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
       t.reason = "fails its signature: " + t.signature_note;
     }
   }
-  if (opt.signature_checks && t.passed && spec.name == "actuator_delay") {
-    delay_lag_signature(m, P, p_eq, t);
-    if (!t.signature_holds) {
-      t.passed = false;
-      t.reason = "fails its signature: " + t.signature_note;
-    }
-  }
   if (opt.signature_checks && t.passed && spec.name == "sensor_bias") {
     sensor_bias_signature(t);
     if (!t.signature_holds) {
@@ -356,6 +350,13 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
                  " over " + fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
                  fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
                  "rate-sensor bias";
+    }
+  }
+  if (opt.signature_checks && t.passed) {
+    rival_form_signature(spec, m, P, t);
+    if (!t.signature_holds) {
+      t.passed = false;
+      t.reason = "fails its signature: " + t.signature_note;
     }
   }
   if (t.passed) {

@@ -42,23 +42,6 @@ TermFamily family(const std::string& label, const std::vector<std::string>& text
   return f;
 }
 
-/// Held-out residual of equation `e` of `m` with `a` appended: each fold predicted by the fit on
-/// the others. Empty if a fit is singular.
-VectorXd heldout_with(const Model& m, std::size_t e, const Addition& a, const Folds& folds) {
-  std::vector<Addition> all = m.added[e];
-  all.push_back(a);
-  const MatrixXd C = augmented_design(m.eqs[e], all);
-  const FoldStats fs = fold_stats(C, m.eqs[e].y, folds);
-  VectorXd out(m.eqs[e].y.size());
-  for (std::size_t k = 0; k < folds.size(); ++k) {
-    VectorXd th;
-    if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) return {};
-    const auto [lo, hi] = folds[k];
-    out.segment(lo, hi - lo) = m.eqs[e].y.segment(lo, hi - lo) - C.middleRows(lo, hi - lo) * th;
-  }
-  return out;
-}
-
 }  // namespace
 
 std::vector<TermFamily> term_families(const UniformData& d, const std::vector<std::string>& inputs) {
@@ -72,13 +55,14 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
   std::vector<TermFamily> out;
   const auto is_input = [&](const std::string& s) { return std::find(ins.begin(), ins.end(), s) != ins.end(); };
   // Powers and odd and even functions of one signal. (Its linear term is in the model, so a
-  // one-sided pos(x) and abs(x) span the same: pos(x) reads as "more effective one way" for an
-  // input, abs(x) as an even dependence for a state.)
+  // one-sided pos(x) and abs(x) = sign(x) x span the same: pos(x) reads as "more effective one
+  // way" for an input, abs(x) as an even dependence for a state.) Not sign(x) alone: a column
+  // that switches with the noise of a signal near zero fits a constant and high-frequency
+  // leftovers (measured: sign(p) entered beside a sensor bias and a flapping forcing).
   for (const auto& x : all) {
     out.push_back(family(x + "^2", {x + "^2"}));
     out.push_back(family(x + "^3", {x + "^3"}));
     out.push_back(family(x + "*abs(" + x + ")", {x + "*abs(" + x + ")"}));
-    out.push_back(family("sign(" + x + ")", {"sign(" + x + ")"}));
     out.push_back(is_input(x) ? family("pos(" + x + ")", {"pos(" + x + ")"}) : family("abs(" + x + ")", {"abs(" + x + ")"}));
   }
   // Products to degree 3.
@@ -108,13 +92,72 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
     out.push_back(family("deadzone(" + x + ", w)", dz));
     out.push_back(family("backlash(" + x + ", w)", bl));
     out.push_back(family("lag(" + x + ", tau)", lag));
+    for (std::size_t i = out.size() - 3; i < out.size(); ++i) out[i].acts_through = x;
+    out.back().linear = true;
   }
   return out;
 }
 
+void Workflow::acts_through(const TermFamily& fam, const Model& m, std::size_t eq, const ScanPoint& P,
+                            CandidateTrial& t) const {
+  // The input acts (mostly) through the form, as a delayed input acts mostly delayed
+  // (actuator_delay): beside the input's own column, the form's coefficient has the sign of the
+  // input's total effect and is at least half of it. A form that only corrects the input's
+  // linear effect (a long lag with the opposite sign fits a closed-loop record's low-frequency
+  // misfit) is not the input's dead zone, backlash or lag.
+  const std::string& eqname = m.eqs[eq].name;
+  const std::string input_param = eqname + "_d" + fam.acts_through.substr(fam.acts_through.size() - 1);
+  const std::vector<std::string> names = m.names(eq);
+  const auto it = std::find(names.begin(), names.end(), input_param);
+  if (it == names.end()) return;
+  std::vector<Addition> all = m.added[eq];
+  all.push_back(P.adds.front());
+  const MatrixXd C = augmented_design(m.eqs[eq], all);
+  VectorXd th;
+  if (!solve(C.transpose() * C, C.transpose() * m.eqs[eq].y, th)) return;
+  const double own = th[static_cast<Index>(it - names.begin())], form = th[C.cols() - 1];
+  const double fraction = own + form != 0.0 ? form / (own + form) : 0.0;
+  t.parameters["fraction_through_form"] = fraction;
+  if (fraction < 0.5) {
+    t.passed = false;
+    t.reason = "fails: " + fam.acts_through + " does not act mostly through " + t.expression + " (fraction " + fmt(fraction) +
+               " < 0.5 of its effect in " + eqname + "): a correction of its linear effect, not its form; " +
+               t.reason.substr(t.reason.find(':') + 1);
+  }
+}
+
+void Workflow::excitation_confirms(const TermExpression& expr, const std::string& eqname, std::size_t family_count,
+                                   const TermConfirmation& confirm, CandidateTrial& t) const {
+  // Seen through the excitation, as the location tests see a state (state_findings): the term of
+  // the signals' excitation parts against the residual of the model and the excitation's bank.
+  // Under a linear plant that residual is process and measurement noise, independent of any
+  // function of the excitation, so the test holds its level in closed loop with noisy
+  // regressors, where the term of the measured signals can fit the regression's own bias.
+  if (!confirm.frame) {
+    t.passed = false;
+    t.reason = "fails: no exogenous signal to confirm the term against (" + t.reason + ")";
+    return;
+  }
+  const Term term{eqname, expr, 0.0, ""};
+  const VectorXd col = term_column(confirm.excitation_parts, term);
+  double p = 1.0;
+  if (col.allFinite() && excited(col, "")) {
+    MatrixXd C(col.size(), 1);
+    C.col(0) = col;
+    p = std::min(1.0, frame_wald(*confirm.frame, C, batch.min_block, nullptr) * static_cast<double>(family_count));
+  }
+  t.signature["excitation_p"] = p;
+  if (p > opt.gust_band_alpha) {
+    t.passed = false;
+    t.reason = "fails: not confirmed through the excitation (p " + fmt(p) + " > " + fmt(opt.gust_band_alpha) +
+               " for the term of the signals' excitation parts against the residual of the model and the excitation, "
+               "Bonferroni over " + std::to_string(family_count) + " terms); " + t.reason.substr(t.reason.find(':') + 1);
+  }
+}
+
 CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,
                                     const std::vector<VectorXd>& base_cv, std::size_t round, std::size_t family_count,
-                                    std::vector<Addition>& best_adds) const {
+                                    const TermConfirmation& confirm, std::vector<Addition>& best_adds) const {
   CandidateTrial t;
   t.name = "term";
   t.round = round;
@@ -157,7 +200,11 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   CandidateSpec spec;
   spec.name = "term";
   spec.scanned = points.size() > 1;
-  const ScanPoint& P = points[best];
+  // The coefficient's coloured variance rests on the blocks where the term's column has its
+  // energy: a product with the throttle lives in the throttle's doublets. Its Wald tail counts
+  // Kish's effective blocks, as effectiveness_step's does (ChangeProfile), not the record's.
+  ScanPoint P = points[best];
+  P.effective_blocks = change_profile(m, P).kish;
   std::vector<bool> use_eq(neq, false);
   std::string p_eq;
   const double p_min = significance(spec, m, P, rss_before, points.size(), t, use_eq, p_eq);
@@ -165,60 +212,99 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   t.p_value = std::min(1.0, p_min * static_cast<double>(points.size()) * static_cast<double>(family_count));
   use_eq.assign(neq, false);
   use_eq[eq] = t.p_value <= p_critical;
-  if (!p_eq.empty()) t.highpass_p = above_gust_band(m, P, points.size());
+  // The confirmation above the gust band at the family's level too: a slow form (a long lag of
+  // the input, a product of slow signals) fits a closed-loop record's low-frequency misfit.
+  if (!p_eq.empty()) t.highpass_p = std::min(1.0, above_gust_band(m, P, points.size()) * static_cast<double>(family_count));
   if (!heldout(spec, m, points, best, base, base_cv, use_eq, ChangeProfile{}, t)) {
     t.reason = "a cross-validation fit is singular (the term is not excited in every block)";
     return t;
   }
   judge(t, p_eq);
+  if (t.passed && !fam.acts_through.empty()) acts_through(fam, m, eq, P, t);
+  if (t.passed && !fam.linear) excitation_confirms(fam.points[best], m.eqs[eq].name, family_count, confirm, t);
   if (t.passed) best_adds = P.adds;
   return t;
 }
 
-void Workflow::delay_lag_signature(const Model& m, const ScanPoint& P, const std::string& p_eq, CandidateTrial& t) const {
-  // A pure delay keeps the input's gain at every frequency; a first-order lag's falls with
-  // frequency. Both fit a late response with one column beside the input; the one that predicts
-  // held-out data better, by more than kLagSignatureSigmas standard errors of the difference,
-  // is the form. Tested in the equation where the delay was most significant.
-  const auto e_it = std::find_if(m.eqs.begin(), m.eqs.end(), [&](const Eq& e) { return e.name == p_eq; });
-  if (e_it == m.eqs.end() || p_eq == "F" || !data.has("delta_f")) return;
-  const std::size_t e = static_cast<std::size_t>(e_it - m.eqs.begin());
-  const auto delay_add = std::find_if(P.adds.begin(), P.adds.end(), [&](const Addition& a) { return a.eq == e; });
-  if (delay_add == P.adds.end()) return;
-  const VectorXd delay_cv = heldout_with(m, e, *delay_add, folds);
-  if (delay_cv.size() == 0) return;
-  // The lag's time constant: the best full-data fit on the grid.
-  const std::vector<double> rss_before{full_rss(model_stats(m, folds)[e])};
-  double best_rss = std::numeric_limits<double>::infinity();
-  Addition lag_add;
-  double tau_best = 0.0;
-  for (double tau : log_grid(kLagGridS[0], kLagGridS[1], kTermScanPoints)) {
-    const Term term{p_eq, TermExpression::parse("lag(delta_f, " + number_text(tau) + ")"), 0.0, ""};
-    Addition a{e, {term_parameter_name(term)}, {term_column(data, term)}};
-    std::vector<Addition> all = m.added[e];
-    all.push_back(a);
-    const FoldStats fs = fold_stats(augmented_design(m.eqs[e], all), m.eqs[e].y, {{0, m.eqs[e].y.size()}});
-    const double r = full_rss(fs);
-    if (std::isfinite(r) && r < best_rss) {
-      best_rss = r;
-      lag_add = std::move(a);
-      tau_best = tau;
+void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {
+  // A library effect's form must be the data's form. In each equation the effect enters (the
+  // roll moment and the side force; not the actuator's own equation, where a lag is the
+  // actuator's pole, which the baseline refits), the generic term that alone fits all the data best
+  // (term_families: the open world's, among them a first-order lag of the input, which a pure
+  // delay is told from by its gain falling with frequency) is fitted together with the effect's
+  // own terms. The effect's form is not the data's when the rival, alone, fits better than the
+  // effect's terms alone, and is significant beside them (Wald, coloured covariance, at
+  // gust_band_alpha with Bonferroni over every generic column tried and the equations compared).
+  const std::vector<std::string>& inputs = opt.inputs.empty() ? model.inputs : opt.inputs;
+  const std::vector<TermFamily> families = term_families(data, inputs);
+  const double alpha = opt.gust_band_alpha;
+  std::size_t compared = 0;
+  for (const Addition& own : P.adds) compared += m.eqs[own.eq].name == "L" || m.eqs[own.eq].name == "Y";
+  std::string rivals;
+  for (const Addition& own : P.adds) {
+    const std::string& eq = m.eqs[own.eq].name;
+    if (eq != "L" && eq != "Y") continue;
+    const std::size_t e = own.eq;
+    std::vector<Addition> with_own = m.added[e];
+    with_own.push_back(own);
+    double best_rss = std::numeric_limits<double>::infinity();
+    Addition rival;
+    std::string rival_text;
+    std::size_t tried = 0;
+    const Folds whole{{0, m.eqs[e].y.size()}};
+    for (const TermFamily& fam : families) {
+      for (const TermExpression& expr : fam.points) {
+        const Term term{eq, expr, 0.0, ""};
+        Addition a{e, {term_parameter_name(term)}, {term_column(data, term)}};
+        if (!a.cols.front().allFinite() || !excited(a.cols.front(), "")) continue;
+        ++tried;
+        std::vector<Addition> all = m.added[e];
+        all.push_back(a);
+        const double r = full_rss(fold_stats(augmented_design(m.eqs[e], all), m.eqs[e].y, whole));
+        if (std::isfinite(r) && r < best_rss) {
+          best_rss = r;
+          rival = std::move(a);
+          rival_text = expr.to_string();
+        }
+      }
+    }
+    if (!std::isfinite(best_rss)) continue;
+    std::vector<Addition> all = with_own;
+    all.push_back(rival);
+    const MatrixXd C = augmented_design(m.eqs[e], all);
+    const VectorXd& y = m.eqs[e].y;
+    VectorXd theta;
+    if (!solve(C.transpose() * C, C.transpose() * y, theta)) continue;
+    const VectorXd resid = y - C * theta;
+    const Index block = batch.block(resid);
+    const MatrixXd cov = coloured_covariance(C, resid, block);
+    const double blocks = block_count(C.rows(), block);
+    const Index q = C.cols();
+    const Index k_own = static_cast<Index>(own.cols.size());
+    const double w_rival = theta[q - 1] * theta[q - 1] / cov(q - 1, q - 1);
+    const VectorXd th_own = theta.segment(q - 1 - k_own, k_own);
+    const double w_own = th_own.dot(cov.block(q - 1 - k_own, q - 1 - k_own, k_own, k_own).ldlt().solve(th_own));
+    const double p_rival =
+        std::min(1.0, wald_tail(w_rival, 1, blocks) * static_cast<double>(tried) * static_cast<double>(compared));
+    const double p_own = wald_tail(w_own, k_own, blocks);
+    t.signature["rival_p_" + eq] = p_rival;
+    t.signature["own_p_" + eq] = p_own;
+    rivals += (rivals.empty() ? "" : ", ") + eq + ": " + rival_text;
+    // Each alone: the rival's fit against the effect's own, with the same model beside.
+    std::vector<Addition> with_rival = m.added[e];
+    with_rival.push_back(rival);
+    const double rss_own = full_rss(fold_stats(augmented_design(m.eqs[e], with_own), y, whole));
+    const double rss_rival = full_rss(fold_stats(augmented_design(m.eqs[e], with_rival), y, whole));
+    t.signature["rival_rss_ratio_" + eq] = rss_rival / rss_own;
+    if (p_rival <= alpha && rss_rival < rss_own && t.signature_holds) {
+      t.signature_holds = false;
+      t.signature_note = "in " + eq + " the generic term " + rival_text + " fits better than " + spec.name +
+                         "'s terms (residual sum of squares " + fmt(rss_rival / rss_own) + " of theirs) and is " +
+                         "significant beside them (p " + fmt(p_rival) + ", Bonferroni over " + std::to_string(tried) +
+                         " terms; theirs beside it p " + fmt(p_own) + "): the data's form is not " + spec.name + "'s";
     }
   }
-  if (!std::isfinite(best_rss)) return;
-  const VectorXd lag_cv = heldout_with(m, e, lag_add, folds);
-  if (lag_cv.size() == 0) return;
-  double drop = 0.0, se = 0.0;
-  heldout_drop({delay_cv}, {lag_cv}, batch, drop, se);
-  t.signature["lag_tau_s"] = tau_best;
-  t.signature["lag_heldout_drop"] = drop;
-  t.signature["lag_heldout_se"] = se;
-  if (drop > kLagSignatureSigmas * se) {
-    t.signature_holds = false;
-    t.signature_note = "a first-order lag of delta_f (tau " + fmt(tau_best) + " s) predicts held-out " + p_eq +
-                       " better than the delay of " + fmt(t.delay_s) + " s (by " + fmt(100.0 * drop) + " % +- " +
-                       fmt(100.0 * se) + "): the input's gain falls with frequency, which a pure delay's does not";
-  }
+  t.signature_rival = rivals;
 }
 
 std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m,
@@ -230,10 +316,29 @@ std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::
     if (m.eqs[e].name == "L" || m.eqs[e].name == "Y") eqs.push_back(e);
   }
   const std::size_t family_count = families.size() * eqs.size();
+  // The excitation (the location tests' bank) and each signal's excitation part.
+  const Excitation ex = excitation_bank(wf.data, wf.opt.excitation);
+  UniformData excitation_parts = wf.data;
+  if (!ex.signals.empty()) {
+    const Span span(ex.Z);
+    for (auto& [name, x] : excitation_parts.signals) {
+      if (x.size() == ex.Z.rows()) x = span.project(x);
+    }
+  }
   std::vector<std::pair<std::size_t, std::string>> done;  // (equation, family label) entered
   for (std::size_t round = 1; round <= wf.opt.term_rounds; ++round) {
     const std::vector<FoldStats> base = model_stats(m, wf.folds);
     const std::vector<VectorXd> base_cv = heldout_residuals(m, wf.folds);
+    std::map<std::size_t, TermConfirmation> confirm;
+    for (std::size_t e : eqs) {
+      if (ex.signals.empty()) {
+        confirm[e];
+        continue;
+      }
+      TermConfirmation& c = confirm[e];
+      c.frame = std::make_unique<LocationFrame>(m.X(e), m.eqs[e].y, ex.Z);
+      c.excitation_parts = excitation_parts;
+    }
     struct Pass {
       CandidateTrial trial;
       std::vector<Addition> adds;
@@ -244,9 +349,10 @@ std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::
     closest.p_value = 2.0;
     for (std::size_t e : eqs) {
       for (const TermFamily& fam : families) {
-        if (std::find(done.begin(), done.end(), std::make_pair(e, fam.label)) != done.end()) continue;
+        // One form per equation: a later round looks for the effect in the other equation.
+        if (std::any_of(done.begin(), done.end(), [&](const auto& d) { return d.first == e; })) continue;
         std::vector<Addition> adds;
-        CandidateTrial t = wf.term_trial(fam, e, m, base, base_cv, round, family_count, adds);
+        CandidateTrial t = wf.term_trial(fam, e, m, base, base_cv, round, family_count, confirm.at(e), adds);
         if (!t.available) continue;
         if (t.passed) {
           passing.push_back({std::move(t), std::move(adds), fam.label});

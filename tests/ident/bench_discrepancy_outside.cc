@@ -105,13 +105,21 @@ Tally measure(const DiscrepancyOptions& opt, const char* title) {
       if (r.verdict == "effects" && library_name) {
         ++t.wrong_name;
         for (const auto& e : r.effects) ++t.names[e.name];
+        // Why the named effect's signature held: its rival form's encompassing test.
+        for (const auto& c : r.candidates) {
+          if (!c.entered || c.name == "term") continue;
+          std::printf("    %s entered; rivals %s:", c.name.c_str(), c.signature_rival.c_str());
+          for (const auto& [k, v] : c.signature) std::printf(" %s %.3g", k.c_str(), v);
+          std::printf("\n");
+        }
       } else if (r.verdict == "effects" && std::any_of(r.effects.begin(), r.effects.end(), [](const NamedEffect& e) { return e.name == "term"; })) {
         bool right = false;
         for (const auto& e : r.effects) {
           if (e.name != "term") continue;
           const bool eq_ok = std::string(form.output).empty() || (std::string(form.output) == "p_dot") == (e.equation == "L");
           if (eq_ok && e.expression.rfind(form.expression, 0) == 0) right = true;
-          ++t.names["term " + e.equation + ": " + e.expression.substr(0, e.expression.find('(') == std::string::npos ? e.expression.size() : e.expression.find(',') == std::string::npos ? e.expression.size() : e.expression.find(','))];
+          // The form without its scanned number: "deadzone(delta_f" for "deadzone(delta_f, 1.5)".
+          ++t.names["term " + e.equation + ": " + e.expression.substr(0, e.expression.find(','))];
         }
         ++(right ? t.term_right : t.term_other);
       } else if (r.verdict == "effects") {
