@@ -95,6 +95,11 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
     CandidateTrial& win = res.candidates[passing[best].trial];
     win.entered = true;
     win.reason = "entered: " + win.reason;
+    if (!win.ambiguous_with.empty()) {
+      // Its signature held, but a generic form fits this record as well (rival_form_signature).
+      res.ambiguous.push_back({win.name, win.ambiguous_with});
+      win.reason += "; explains the same as the generic " + win.ambiguous_with + " (" + win.tell_apart + ")";
+    }
     entered.push_back(win.name);
     for (auto& a : passing[best].adds) m.added[a.eq].push_back(std::move(a));
     m.effect_names.push_back(win.name);

@@ -236,7 +236,11 @@ struct CandidateTrial {
   /// blocks, blocks, p_value).
   std::map<std::string, double> signature;
   std::string signature_note;  ///< what the signature predicted and what the data showed, when it failed
-  std::string signature_rival;  ///< the generic term its form was compared with (rival_heldout_drop in signature)
+  std::string signature_rival;  ///< the generic terms its form was compared with, per equation
+  /// A generic form this record cannot tell from the effect's (it fits as well alone, neither adds
+  /// to the other): "term L: lag(delta_f, 0.0232)"; the verdict is then ambiguous. And what would
+  /// tell them apart.
+  std::string ambiguous_with, tell_apart;
 };
 
 /// A named effect with its parameters.

@@ -84,6 +84,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
       j.key("equation").value(t.equation);
       j.key("expression").value(t.expression);
     }
+    if (!t.ambiguous_with.empty()) {
+      j.key("ambiguous_with").value(t.ambiguous_with);
+      j.key("tell_apart").value(t.tell_apart);
+    }
     if (t.available) {
       j.key("partial_f");
       number_map(j, t.partial_f);

@@ -42,6 +42,16 @@ TermFamily family(const std::string& label, const std::vector<std::string>& text
   return f;
 }
 
+/// What would tell a library effect from a generic form that fits a record as well.
+std::string fam_tell_apart(const std::string& rival, const std::string& effect) {
+  if (rival.rfind("lag(", 0) == 0 && effect == "actuator_delay") {
+    return "a pure delay keeps the input's gain at every frequency, a first-order lag's falls above 1 / (2 pi tau): a "
+           "flap input with more power above that frequency (faster doublets, a chirp) tells them apart";
+  }
+  return "a manoeuvre that moves the signals of " + rival + " and of " + effect +
+         "'s terms differently (other amplitudes, both signs, other frequencies) tells them apart";
+}
+
 }  // namespace
 
 std::vector<TermFamily> term_families(const UniformData& d, const std::vector<std::string>& inputs) {
@@ -240,7 +250,8 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   const double alpha = opt.gust_band_alpha;
   std::size_t compared = 0;
   for (const Addition& own : P.adds) compared += m.eqs[own.eq].name == "L" || m.eqs[own.eq].name == "Y";
-  std::string rivals;
+  std::string rivals, tied_with;
+  bool all_tied = true;
   for (const Addition& own : P.adds) {
     const std::string& eq = m.eqs[own.eq].name;
     if (eq != "L" && eq != "Y") continue;
@@ -296,6 +307,16 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
     const double rss_own = full_rss(fold_stats(augmented_design(m.eqs[e], with_own), y, whole));
     const double rss_rival = full_rss(fold_stats(augmented_design(m.eqs[e], with_rival), y, whole));
     t.signature["rival_rss_ratio_" + eq] = rss_rival / rss_own;
+    // Alone the rival fits better and beside it the effect's terms add nothing, but it is not
+    // significant beside them either: in this equation the record cannot tell the two forms
+    // apart. Judged only where the effect's terms met the partial-F rule (an equation where the
+    // effect is weak tells nothing).
+    const auto F = t.partial_f.find(eq);
+    if (F != t.partial_f.end() && F->second >= opt.partial_f) {
+      const bool tie = rss_rival < rss_own && p_own > alpha && p_rival > alpha;
+      all_tied = all_tied && tie;
+      if (tie && tied_with.empty()) tied_with = "term " + eq + ": " + rival_text;
+    }
     if (p_rival <= alpha && rss_rival < rss_own && t.signature_holds) {
       t.signature_holds = false;
       t.signature_note = "in " + eq + " the generic term " + rival_text + " fits better than " + spec.name +
@@ -305,6 +326,11 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
     }
   }
   t.signature_rival = rivals;
+  // Ambiguous when every equation where the effect is significant is a tie.
+  if (all_tied && !tied_with.empty() && t.signature_holds) {
+    t.ambiguous_with = tied_with;
+    t.tell_apart = fam_tell_apart(tied_with.substr(tied_with.find(": ") + 2), spec.name);
+  }
 }
 
 std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m,
