@@ -346,7 +346,7 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "named:";
     for (const auto& e : res.effects) {
       s << " " << e.name;
-      if (e.name == "term") s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (no library effect fits)";
+      if (e.name == "term") s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (a form outside the library)";
     }
     for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
     s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after) << " in the identification band";
@@ -513,9 +513,8 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   stepwise_search(wf, pool, known, m, res);
   std::vector<BandGap> wide_bands;
   if (!pooled) wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
-  // The open world: no library effect earned its name (in the stepwise search or the wideband
-  // stage), and none is ambiguous.
-  if (options.term_search && m.effect_names.empty() && res.ambiguous.empty()) term_search(wf, inputs, m, res);
+  // The open world: what the library's named effects leave (none may be ambiguous).
+  if (options.term_search && res.ambiguous.empty()) term_search(wf, inputs, m, res);
 
   // The augmented fit and the gap after.
   std::vector<VectorXd> aug_resid;

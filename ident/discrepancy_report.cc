@@ -374,7 +374,7 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   }
   o << "\ncandidates (p_critical = P(chi2_1 >= F) of the partial-F rule)\n";
   for (const auto& t : r.candidates) {
-    o << "  round " << t.round << "  " << t.name << ": ";
+    o << "  round " << t.round << "  " << t.name << (t.name == "term" ? " " + t.equation + " " + t.expression : "") << ": ";
     if (!t.available) {
       o << "not tried: " << t.reason << "\n";
       continue;
@@ -486,7 +486,7 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
   for (const auto& t : r.candidates) {
     std::string f;
     for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + g(v);
-    md << "| " << t.round << " | " << t.name << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
+    md << "| " << t.round << " | " << t.name << (t.name == "term" ? " " + t.equation + " `" + t.expression + "`" : "") << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
        << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
        << " | " << t.reason << " |\n";
   }
