@@ -193,6 +193,15 @@ struct DiscrepancyOptions {
   /// `unexplained` (Located::signature). Off by default: with them the out-of-library wrong-name
   /// rate is 21 % (target 2 %), so they are not yet the naming rule.
   bool signature_checks = true;
+  /// lateral_inflow's arm [m]: its roll moment is its side force at this arm, L_vv = arm Y_vv
+  /// (the plant file's lateral_inflow, rig_configs/plant/nimble_plant.yaml: -2e-4 / -0.02).
+  double inflow_arm_m = 0.01;
+  /// How far the estimated L_vv / (arm Y_vv) may lie from 1 before the arm's test counts: a
+  /// factor either way. An assumption: the vortex's centre of pressure is known to a factor of
+  /// about 2 (the plant file's arm is a size, not a measurement), and closed-loop estimates of
+  /// the two derivatives are biased by 30-40 % (measured on the 30 deg doublet with the inflow
+  /// flown: Y_vv -0.0068 for -0.005).
+  double inflow_arm_factor = 3.0;
   /// The open world (docs/discrepancy.md "Terms"): when no library effect earns its name, search
   /// generic terms (ident/discrepancy_parts.h term_families) under the same entry rules and
   /// family-wise bound, up to term_rounds terms.

@@ -237,14 +237,15 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
 }
 
 void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {
-  // A library effect's form must be the data's form. In each equation the effect enters (the
-  // roll moment and the side force; not the actuator's own equation, where a lag is the
-  // actuator's pole, which the baseline refits), the generic term that alone fits all the data best
-  // (term_families: the open world's, among them a first-order lag of the input, which a pure
-  // delay is told from by its gain falling with frequency) is fitted together with the effect's
-  // own terms. The effect's form is not the data's when the rival, alone, fits better than the
-  // effect's terms alone, and is significant beside them (Wald, coloured covariance, at
-  // gust_band_alpha with Bonferroni over every generic column tried and the equations compared).
+  // A library effect's form must be the data's form. In each equation where the effect's terms
+  // met the partial-F rule (the roll moment and the side force; not the actuator's own equation,
+  // where a lag is the actuator's pole, which the baseline refits), the generic term that alone
+  // fits all the data best (term_families: the open world's, among them a first-order lag of the
+  // input, which a pure delay is told from by its gain falling with frequency) is fitted together
+  // with the effect's own terms, each tested beside the other (Wald, coloured covariance, at
+  // gust_band_alpha; the rival Bonferroni over every generic column tried and the equations).
+  // The signature fails where the rival encompasses the effect (below); a delay and a lag that
+  // tie in every such equation make the verdict ambiguous.
   const std::vector<std::string>& inputs = opt.inputs.empty() ? model.inputs : opt.inputs;
   const std::vector<TermFamily> families = term_families(data, inputs);
   const double alpha = opt.gust_band_alpha;
@@ -255,6 +256,10 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   for (const Addition& own : P.adds) {
     const std::string& eq = m.eqs[own.eq].name;
     if (eq != "L" && eq != "Y") continue;
+    // Only where the effect's terms met the partial-F rule: in an equation where the effect is
+    // weak, a rival fits what the effect does not claim.
+    const auto F = t.partial_f.find(eq);
+    if (F == t.partial_f.end() || F->second < opt.partial_f) continue;
     const std::size_t e = own.eq;
     std::vector<Addition> with_own = m.added[e];
     with_own.push_back(own);
@@ -301,23 +306,28 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
     t.signature["rival_p_" + eq] = p_rival;
     t.signature["own_p_" + eq] = p_own;
     rivals += (rivals.empty() ? "" : ", ") + eq + ": " + rival_text;
+    const bool confusable = spec.name == "actuator_delay" && rival_text.rfind("lag(", 0) == 0;
     // Each alone: the rival's fit against the effect's own, with the same model beside.
     std::vector<Addition> with_rival = m.added[e];
     with_rival.push_back(rival);
     const double rss_own = full_rss(fold_stats(augmented_design(m.eqs[e], with_own), y, whole));
     const double rss_rival = full_rss(fold_stats(augmented_design(m.eqs[e], with_rival), y, whole));
     t.signature["rival_rss_ratio_" + eq] = rss_rival / rss_own;
-    // Alone the rival fits better and beside it the effect's terms add nothing, but it is not
-    // significant beside them either: in this equation the record cannot tell the two forms
-    // apart. Judged only where the effect's terms met the partial-F rule (an equation where the
-    // effect is weak tells nothing).
-    const auto F = t.partial_f.find(eq);
-    if (F != t.partial_f.end() && F->second >= opt.partial_f) {
-      const bool tie = rss_rival < rss_own && p_own > alpha && p_rival > alpha;
-      all_tied = all_tied && tie;
-      if (tie && tied_with.empty()) tied_with = "term " + eq + ": " + rival_text;
-    }
-    if (p_rival <= alpha && rss_rival < rss_own && t.signature_holds) {
+    // A tie: alone the rival fits better and beside it the effect's terms add nothing, but it is
+    // not significant beside them either, so in this equation the record cannot tell the two
+    // forms apart. A verdict only between a pure delay and a first-order lag, two physics (a
+    // transport delay, the actuator's own dynamics) that a record of slow manoeuvres cannot tell
+    // apart; another shape of the same dependence that fits as well (v^3 beside v|v|) is the
+    // same effect with another law, reported with the rival's figures but not as ambiguous.
+    const bool tie = confusable && rss_rival < rss_own && p_own > alpha && p_rival > alpha;
+    all_tied = all_tied && tie;
+    if (tie && tied_with.empty()) tied_with = "term " + eq + ": " + rival_text;
+    // The rival encompasses the effect: alone it fits better, beside the effect's terms it is
+    // significant, and they add nothing beside it. For the delay and a lag (the one pair of
+    // physics the rig knows to be confusable), a lag significant beside the delay and better
+    // alone is enough: a delay beside a lag only mends the lag's grid.
+    const bool encompassed = p_rival <= alpha && rss_rival < rss_own && (confusable || p_own > alpha);
+    if (encompassed && t.signature_holds) {
       t.signature_holds = false;
       t.signature_note = "in " + eq + " the generic term " + rival_text + " fits better than " + spec.name +
                          "'s terms (residual sum of squares " + fmt(rss_rival / rss_own) + " of theirs) and is " +
