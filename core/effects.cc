@@ -43,8 +43,15 @@ const std::vector<EffectSpec>& effect_registry() {
        true, false, false,
        "effects.actuator_delay: pure command delay of delay_s"},
       {"sensor_bias",
-       "constant in both equations: a constant offset of a measured rate or velocity (or a "
-       "constant moment and force)",
+       "constant in both equations from a biased measurement: the rate gyro's p carries a constant "
+       "offset, which the kinematics show (p against phi's derivative)",
+       {},
+       {{"L", "L_0", "1"}, {"Y", "Y_0", "1"}},
+       false, false, false,
+       "effects.constant_load: constant roll moment L_0 and side force Y_0"},
+      {"constant_load",
+       "a constant roll moment and side force (an offset trim: an asymmetric mass or wing) with "
+       "no bias of the rate gyro (p agrees with phi's derivative)",
        {},
        {{"L", "L_0", "1"}, {"Y", "Y_0", "1"}},
        false, false, false,

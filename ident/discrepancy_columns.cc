@@ -125,7 +125,7 @@ std::vector<Addition> candidate_columns(const CandidateSpec& spec, const Uniform
     c.head(std::clamp<Index>(scan, 0, n)).setZero();
     add(L, "L_df_step", c);
     add(Y, "Y_df_step", c);
-  } else if (spec.name == "sensor_bias") {
+  } else if (is_constant_effect(spec.name)) {
     add(L, "L_0", VectorXd::Ones(n));
     add(Y, "Y_0", VectorXd::Ones(n));
   } else if (spec.name == "dihedral_coupling") {

@@ -205,6 +205,11 @@ struct HighPassed {
 /// infinite when !ok or a fit is singular.
 void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool ok);
 
+/// sensor_bias and constant_load: the same constant columns in L and Y, told apart by the
+/// kinematics (Workflow::sensor_bias_signature); exempt from the excitation floor and the test
+/// above the gust band, where a constant has no content.
+inline bool is_constant_effect(const std::string& name) { return name == "sensor_bias" || name == "constant_load"; }
+
 /// Model::effect_names' prefix of a term found by the open-world search.
 inline constexpr const char* kTermPrefix = "term:";
 inline bool is_found_term(const std::string& effect_name) { return effect_name.rfind(kTermPrefix, 0) == 0; }

@@ -42,7 +42,7 @@ std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m,
     bool ok = true;
     for (const auto& a : pt.adds) {
       for (const auto& c : a.cols) {
-        const bool constant = spec.name == "sensor_bias";
+        const bool constant = is_constant_effect(spec.name);
         if (!constant && !excited(c, "")) ok = false;
       }
       std::vector<Addition> all = m.added[a.eq];
@@ -311,7 +311,7 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
   // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
   // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
   // there and is exempt.
-  if (!p_eq.empty() && spec.name != "sensor_bias") t.highpass_p = above_gust_band(m, P, delays.size());
+  if (!p_eq.empty() && !is_constant_effect(spec.name)) t.highpass_p = above_gust_band(m, P, delays.size());
   t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
   if (!heldout(spec, m, points, best, base, base_cv, use_eq, profile, t)) {
     t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";
@@ -364,6 +364,18 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
                  " over " + fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
                  fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
                  "rate-sensor bias";
+    }
+  }
+  if (opt.signature_checks && t.passed && spec.name == "constant_load") {
+    // A constant load's signature is the sensor bias's absent: p agrees with phi's derivative.
+    sensor_bias_signature(t);
+    t.signature_holds = !t.signature_holds;
+    if (!t.signature_holds) {
+      t.signature_note = "a constant fits and p carries a bias against phi's derivative (kinematic bias " +
+                         fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " + fmt(t.signature["sigma_radps"]) +
+                         ", p " + fmt(t.signature["p_value"]) + "): a rate-sensor bias, not a load";
+      t.passed = false;
+      t.reason = "fails its signature: " + t.signature_note;
     }
   }
   if (opt.signature_checks && t.passed) {

@@ -41,7 +41,7 @@ const std::vector<PlantEffect>& plant_effects() {
        }},
       {"constant_load",
        [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
-       [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "sensor_bias",
+       [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "constant_load",
        [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); },
        [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); }},
       {"lateral_inflow",
@@ -132,6 +132,12 @@ void apply_model_effects(const DerivativeModel& model, EffectsConfig& fx, std::m
         std::find_if(all.begin(), all.end(), [&](const PlantEffect& e) { return e.model_effect == name; });
     if (plant_effect != all.end()) {
       plant_effect->from_model(s, fx);
+    } else if (name == "sensor_bias") {
+      // The discrepancy library's sensor_bias fits the same constant L_0 and Y_0 as constant_load
+      // (they differ in what the rate gyro shows against the kinematics): the plant flies it as
+      // that constant load, the same moment and force (a bias of the simulated IMU is
+      // sensing.imu's, not the model's).
+      constant_load_from_model(s, fx.constant_load);
     } else if (name == "dihedral_coupling") {
       // Regressor delta_d in L and Y: the dihedral derivatives.
       s.check_keys({"L_dd", "Y_dd"});

@@ -44,6 +44,7 @@ const std::vector<LibraryCase>& library_cases() {
       {"actuator_delay", "actuator_delay", false, 20.0, 40.0},
       {"command_delay", "actuator_delay", true, 20.0, 40.0},
       {"sensor_bias", "sensor_bias", false, 20.0, 40.0},
+      {"constant_load", "constant_load", false, 20.0, 40.0},
       {"flapping_forcing", "flapping_forcing", false, 20.0, 40.0},
       {"effectiveness_step", "effectiveness_step", false, 30.0, 40.0},
       {"effectiveness_drift", "effectiveness_drift", false, 120.0, 120.0},

@@ -13,6 +13,8 @@
 ///   forward_speed_coupling  Lp, Lv, Yp, Yv scale with (1 + k (u - u0)), k in [0.3, 0.7] per m/s
 ///   actuator_delay        the flap input acts tau later than recorded, tau in [12, 40] ms
 ///   sensor_bias           the recorded p carries a constant bias b in [0.02, 0.06] rad/s
+///   constant_load         L += L0, Y += Y0: a constant roll moment and side force (an offset
+///                         trim), L0 in [1, 3] x 1e-5 N m, Y0 = 50 m^-1 L0; p is not biased
 ///   flapping_forcing      L += A_L (sin(2 pi f t + a) + 0.5 sin(4 pi f t + b)), Y likewise with A_Y;
 ///                         f in [14, 20] Hz, A_L in [1, 3] mN m, A_Y = 5 m^-1 A_L (the plant
 ///                         file's 2 mN m and 10 mN)
@@ -82,6 +84,7 @@ struct HiddenEffects {
   double backlash = 0.0;        ///< flap_backlash: b [rad/s]
   double lag_s = 0.0;           ///< flap_lag: tau [s]
   double L_vv_only = 0.0;       ///< roll_inflow_only: L_vo [N m s^2/m^2]
+  double load_L = 0.0, load_Y = 0.0;  ///< constant_load: L0 [N m], Y0 [N]
 };
 
 struct GeneratorOptions {
@@ -123,6 +126,8 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   h.backlash = (2.0 + 4.0 * u01(rng)) * h.scale;
   h.lag_s = (0.010 + 0.030 * u01(rng)) * h.scale;
   h.L_vv_only = -(1.0e-3 + 3.0e-3 * u01(rng)) * h.scale;
+  h.load_L = (1.0e-5 + 2.0e-5 * u01(rng)) * h.scale;
+  h.load_Y = 50.0 * h.load_L;
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -144,6 +149,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool asym = h.on.count("flap_asymmetry") > 0, cubic = h.on.count("cubic_roll_damping") > 0;
   const bool dead_zone = h.on.count("flap_dead_zone") > 0, backlash = h.on.count("flap_backlash") > 0;
   const bool lag = h.on.count("flap_lag") > 0, roll_inflow_only = h.on.count("roll_inflow_only") > 0;
+  const bool load = h.on.count("constant_load") > 0;
   const double Lp3 = -h.cubic_c * std::fabs(Lp) / 4.0;
   // The flap input's effectiveness at time t (effectiveness_drift, effectiveness_step).
   auto effectiveness = [&](double t) {
@@ -216,6 +222,10 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     double L = ks * (Lp * P + Lv * vrel) + ke * L_df * dfin + L_dt * dtp + Lw;
     double Y = ks * (Yp * P + Yv * vrel) + ke * Y_df * dfin + Y_dt * dtp + Yw;
     if (cubic) L += Lp3 * P * P * P;
+    if (load) {
+      L += h.load_L;
+      Y += h.load_Y;
+    }
     if (roll_inflow_only) L += h.L_vv_only * vrel * std::fabs(vrel);
     if (dihedral) {
       L += L_dd * dd_of(t);

@@ -41,6 +41,7 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
       {"actuator_delay", {{"delay_s", 0.02}, {"L_df_delayed", 1e-4}, {"Y_df_delayed", -8e-4},
                           {"L_df_fraction_delayed", 0.9}, {"Y_df_fraction_delayed", 0.9}, {"F_cmd_delayed", 0.5}}},
       {"sensor_bias", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
+      {"constant_load", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
       {"dihedral_coupling", {{"L_dd", 1.4e-3}, {"Y_dd", -0.06}}},
       {"yaw_coupling", {{"Lr", -2.8e-4}, {"Yr", 8.4e-3}}},
       {"flapping_forcing", {{"flapping_hz", 16.5}, {"L_sin1", 1e-3}, {"L_cos1", 1e-3}, {"L_amp1", std::sqrt(2e-6)}}},

@@ -105,7 +105,7 @@ TEST_CASE("power: SIZE sets the effect's main parameter and keeps the scenario's
     CHECK_NOTHROW(plan_of("nonlinear_doublet_30deg.yaml", power::size_overrides(nl.scenario.root, e.effect, size)));
   }
   CHECK(power::parse_effect_sizes("lateral_inflow=-0.03:-0.01:0.01").sizes.size() == 3);
-  CHECK(power::sized_effect("constant_load").named_as == "sensor_bias");
+  CHECK(power::sized_effect("constant_load").named_as == "constant_load");
   // A size whose companions leave their range is refused, naming them.
   CHECK_THROWS_WITH(power::size_overrides(nl.scenario.root, "flapping_forcing", 0.5),
                     Catch::Contains("side_force_amplitudes_n 2.5, not in [-1, 1]"));
