@@ -382,6 +382,8 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << t.reason;
     if (t.parameters.count("t_change_s")) {
       o << "  [change at " << g(t.parameters.at("t_change_s")) << " s of " << t.scan_points << " scanned]";
+    } else if (t.name == "term" && t.scan_points > 1) {
+      o << "  [the best of " << t.scan_points << " scanned]";
     } else if (t.scan_points > 1 && t.parameters.count("flapping_hz") == 0) {
       o << "  [delay " << g(1e3 * t.delay_s) << " ms of " << t.scan_points << " scanned]";
     }
