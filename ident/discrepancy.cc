@@ -479,7 +479,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::map<std::string, double> known_values;
   Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
 
-  Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0, {}};
+  Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0, {}, {}};
   wf.batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
   wf.p_critical = chi_square_survival(options.partial_f, 1.0);
 

@@ -272,6 +272,10 @@ struct Workflow {
   /// candidate of a round, computed again when the model has gained columns. The model of the
   /// search only grows, so its number of columns names it.
   mutable std::map<std::size_t, HighPassed> high_passed;
+  /// The open world's term columns on `data`, by expression (the same in every equation and
+  /// round, and in the rival scans): term_column() once each.
+  mutable std::map<std::string, VectorXd> term_columns;
+  const VectorXd& term_column_of(const TermExpression& expr) const;
 
   /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
   /// the additions it would make.
@@ -358,6 +362,12 @@ void time_varying_parameters(const Model& m, const BatchRule& batch, const Unifo
 // --- discrepancy_stats.cc ---
 
 FoldStats fold_stats(const MatrixXd& C, const VectorXd& y, const Folds& folds);
+
+/// fold_stats() of [X, c] from those of X (`base`, on the same y and folds): each fold's Gram
+/// matrix bordered by X_k' c_k and c_k' c_k, in n q operations instead of n q^2 (the open world's
+/// scans try a hundred columns on one model).
+FoldStats fold_stats_with(const FoldStats& base, const MatrixXd& X, const VectorXd& y, const VectorXd& c,
+                          const Folds& folds);
 
 /// G x = B solved with column scaling (G scaled to unit diagonal, LDLT), for any number of
 /// right-hand sides; `ok` false if G is (numerically) singular.

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
+#include <utility>
 
 #include <boost/math/distributions/fisher_f.hpp>
 
@@ -159,6 +161,8 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
     return true;
   }
   bool cv_ok = true;
+  // The designs of each scan point picked, built once (a fold picks one; most pick the same).
+  std::map<std::size_t, std::vector<std::pair<Addition, MatrixXd>>> designs;
   for (std::size_t k = 0; k < K && cv_ok; ++k) {
     std::size_t pick = best;
     if (spec.scanned) {
@@ -180,11 +184,19 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
       }
     }
     const auto [a, b] = folds[k];
-    for (const auto& add : columns_of(spec, points[pick])) {
+    auto found = designs.find(pick);
+    if (found == designs.end()) {
+      std::vector<std::pair<Addition, MatrixXd>> built;
+      for (auto& add : columns_of(spec, points[pick])) {
+        std::vector<Addition> all = m.added[add.eq];
+        all.push_back(add);
+        MatrixXd C = augmented_design(m.eqs[add.eq], all);
+        built.emplace_back(std::move(add), std::move(C));
+      }
+      found = designs.emplace(pick, std::move(built)).first;
+    }
+    for (const auto& [add, C] : found->second) {
       if (!use_eq[add.eq] && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) continue;
-      std::vector<Addition> all = m.added[add.eq];
-      all.push_back(add);
-      const MatrixXd C = augmented_design(m.eqs[add.eq], all);
       const FoldStats& fs = points[pick].stats[add.eq];
       VectorXd th;
       if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) {

@@ -43,6 +43,34 @@ FoldStats fold_stats(const MatrixXd& C, const VectorXd& y, const Folds& folds) {
   return f;
 }
 
+FoldStats fold_stats_with(const FoldStats& base, const MatrixXd& X, const VectorXd& y, const VectorXd& c,
+                          const Folds& folds) {
+  const Index q = X.cols();
+  FoldStats f;
+  f.Gt = MatrixXd::Zero(q + 1, q + 1);
+  f.bt = VectorXd::Zero(q + 1);
+  for (std::size_t k = 0; k < folds.size(); ++k) {
+    const auto [a, e] = folds[k];
+    const auto ck = c.segment(a, e - a);
+    MatrixXd G(q + 1, q + 1);
+    G.topLeftCorner(q, q) = base.G[k];
+    const VectorXd xc = X.middleRows(a, e - a).transpose() * ck;
+    G.topRightCorner(q, 1) = xc;
+    G.bottomLeftCorner(1, q) = xc.transpose();
+    G(q, q) = ck.squaredNorm();
+    VectorXd b(q + 1);
+    b.head(q) = base.b[k];
+    b[q] = ck.dot(y.segment(a, e - a));
+    f.Gt += G;
+    f.bt += b;
+    f.G.push_back(std::move(G));
+    f.b.push_back(std::move(b));
+    f.s.push_back(base.s[k]);
+    f.st += base.s[k];
+  }
+  return f;
+}
+
 /// Solves G theta = b with column scaling; false if G is (numerically) singular.
 ScaledSolver::ScaledSolver(const MatrixXd& G)
     : scale(G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse()),

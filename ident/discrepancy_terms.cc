@@ -108,6 +108,13 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
   return out;
 }
 
+const VectorXd& Workflow::term_column_of(const TermExpression& expr) const {
+  const std::string key = expr.to_string();
+  auto it = term_columns.find(key);
+  if (it == term_columns.end()) it = term_columns.emplace(key, term_column(data, Term{"L", expr, 0.0, ""})).first;
+  return it->second;
+}
+
 void Workflow::acts_through(const TermFamily& fam, const Model& m, std::size_t eq, const ScanPoint& P,
                             CandidateTrial& t) const {
   // The input acts (mostly) through the form, as a delayed input acts mostly delayed
@@ -178,19 +185,21 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   std::vector<double> rss_before(neq);
   for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
   std::vector<ScanPoint> points;
+  const MatrixXd X = m.X(eq);
+  const VectorXd& w = m.eqs[eq].w;
   for (std::size_t i = 0; i < fam.points.size(); ++i) {
     ScanPoint pt;
     pt.k = static_cast<Index>(i);
     const Term term{m.eqs[eq].name, fam.points[i], 0.0, ""};
-    VectorXd col = term_column(data, term);
+    VectorXd col = term_column_of(fam.points[i]);
     const bool ok = col.allFinite() && excited(col, "");
     pt.adds = {Addition{eq, {term_parameter_name(term)}, {std::move(col)}}};
     pt.touched.assign(neq, false);
     pt.stats.resize(neq);
     if (ok) {
-      std::vector<Addition> all = m.added[eq];
-      all.push_back(pt.adds.front());
-      pt.stats[eq] = fold_stats(augmented_design(m.eqs[eq], all), m.eqs[eq].y, folds);
+      // The model's fold statistics bordered by the term's column (as augmented_design weights it).
+      const VectorXd& c = pt.adds.front().cols.front();
+      pt.stats[eq] = fold_stats_with(base[eq], X, m.eqs[eq].y, w.size() ? VectorXd(c.cwiseProduct(w)) : c, folds);
       pt.touched[eq] = true;
     }
     close_scan_point(pt, rss_before, ok);
@@ -268,15 +277,18 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
     std::string rival_text;
     std::size_t tried = 0;
     const Folds whole{{0, m.eqs[e].y.size()}};
+    const MatrixXd X = m.X(e);
+    const FoldStats model_whole = fold_stats(X, m.eqs[e].y, whole);
+    const VectorXd& w = m.eqs[e].w;
     for (const TermFamily& fam : families) {
       for (const TermExpression& expr : fam.points) {
         const Term term{eq, expr, 0.0, ""};
-        Addition a{e, {term_parameter_name(term)}, {term_column(data, term)}};
+        Addition a{e, {term_parameter_name(term)}, {term_column_of(expr)}};
         if (!a.cols.front().allFinite() || !excited(a.cols.front(), "")) continue;
         ++tried;
-        std::vector<Addition> all = m.added[e];
-        all.push_back(a);
-        const double r = full_rss(fold_stats(augmented_design(m.eqs[e], all), m.eqs[e].y, whole));
+        const VectorXd& c = a.cols.front();
+        const double r =
+            full_rss(fold_stats_with(model_whole, X, m.eqs[e].y, w.size() ? VectorXd(c.cwiseProduct(w)) : c, whole));
         if (std::isfinite(r) && r < best_rss) {
           best_rss = r;
           rival = std::move(a);
