@@ -120,7 +120,7 @@ TEST_CASE("discrepancy: a lateral gust alone is named lateral_gust from its sign
   CHECK(gust >= 22);
 }
 
-TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its delay", "[discrepancy]") {
+TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its delay", "[discrepancy][records]") {
   int hits = 0;
   const int seeds = 8;
   for (int s = 1; s <= seeds; ++s) {
@@ -141,7 +141,7 @@ TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its del
 
 TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named from the recorded command, and with "
           "no delay the recorded command names nothing",
-          "[discrepancy]") {
+          "[discrepancy][records]") {
   // The recorded delta_f is the actuator's output, so the L and Y equations cannot see a delay
   // before the actuator; the actuator equation (delta_f against the recorded command) does.
   // The generator's command path has no latency of its own: command_latency_s 0.
@@ -280,7 +280,7 @@ TEST_CASE("discrepancy: a sensor bias's gap shrinks where it lives, at 0 Hz", "[
 
 TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexplained, in the side-force equation) "
           "and, with the open-world search, found as the term v*abs(v) in Y",
-          "[discrepancy]") {
+          "[discrepancy][records]") {
   // A lateral inflow at three times its drawn size (Y_vv -0.03..-0.09) with its candidate
   // withheld: no name can explain it. Without the term search the side-force residual is located
   // on v (the state test sees it through the excitation); with it, its form is found. (The false-
@@ -346,7 +346,7 @@ TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguou
   CHECK(names(r) == std::vector<std::string>{"dihedral_coupling"});
 }
 
-TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepancy]") {
+TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepancy][records]") {
   // Kinematic coupling (large) with forward-speed coupling of a drawn size: the first is named
   // every time; both in 7 of 8; never anything else.
   int both = 0;
