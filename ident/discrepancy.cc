@@ -16,6 +16,7 @@
 #include "ident/data_check.h"
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
+#include "ident/discrepancy_location.h"
 #include "ident/discrepancy_parts.h"
 
 namespace nimble::ident {

@@ -4,6 +4,7 @@
 // test here is an alarm test, held to the one rule of the workflow (ident/README.md "One error
 // rate for every alarm").
 
+#include "ident/discrepancy_location.h"
 #include "ident/discrepancy_parts.h"
 
 #include <algorithm>

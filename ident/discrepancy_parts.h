@@ -2,9 +2,10 @@
 /// The parts of the discrepancy workflow (ident/discrepancy.h), shared by the files that hold
 /// them: the least squares from per-fold statistics and the tests on them
 /// (discrepancy_stats.cc), the equations and the candidates' regressor columns
-/// (discrepancy_columns.cc), the trials of the stepwise search (discrepancy_search.cc), the
-/// location of what is left in the residual (discrepancy_locate.cc); discrepancy.cc joins them
-/// into find_discrepancy(). Not an interface: nothing outside those files includes it.
+/// (discrepancy_columns.cc), the trials of the stepwise search (discrepancy_search.cc); the
+/// location of what is left in the residual is declared in discrepancy_location.h
+/// (discrepancy_locate.cc); discrepancy.cc joins them into find_discrepancy(). Not an
+/// interface: nothing outside those files includes it.
 
 #include <cstddef>
 #include <map>
@@ -205,6 +206,12 @@ struct HighPassed {
 /// infinite when !ok or a fit is singular.
 void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool ok);
 
+/// The scan point of the smallest total relative RSS (its rss_rel infinite: none can be fitted).
+std::size_t best_scan_point(const std::vector<ScanPoint>& points);
+
+/// Each equation's RSS of the fit on all folds (full_rss of each).
+std::vector<double> full_rss_each(const std::vector<FoldStats>& stats);
+
 /// sensor_bias and constant_load: the same constant columns in L and Y, told apart by the
 /// kinematics (Workflow::sensor_bias_signature); exempt from the excitation floor and the test
 /// above the gust band, where a constant has no content.
@@ -234,11 +241,12 @@ struct TermFamily {
 struct LocationFrame;
 
 /// What the open-world search tests a term against in one equation: the location frame of the
-/// current model and the record's excitation (LocationFrame), and the record with each signal
-/// replaced by its excitation part (its projection on the excitation's bank).
+/// current model and the record's excitation (LocationFrame; none without an exogenous signal),
+/// and the record with each signal replaced by its excitation part (its projection on the
+/// excitation's bank), one for every equation and round.
 struct TermConfirmation {
   std::unique_ptr<LocationFrame> frame;
-  UniformData excitation_parts;
+  const UniformData* excitation_parts = nullptr;
 };
 
 /// The open world's families on `d` (ident/discrepancy.h, "Terms"): for each of p, v and the
@@ -528,90 +536,6 @@ CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds&
                               double p_critical, const BatchRule& batch,
                               std::vector<VectorXd>* heldout_before = nullptr,
                               std::vector<VectorXd>* heldout_after = nullptr);
-
-// --- discrepancy_locate.cc ---
-
-// ---------------------------------------------------------------------------------------
-// Location.
-
-/// The excitation of the record: its exogenous signals (DiscrepancyOptions::excitation, those the
-/// data has and that move) through orthonormal discrete Laguerre filter banks of
-/// kExcitationOrder filters at each of kExcitationTimeConstants, plus a constant. The closed
-/// loop's linear response to the excitation lies (nearly) in their span, whatever the
-/// manoeuvre's shape; the measurement noise and the process noise are independent of it.
-inline constexpr double kExcitationTimeConstants[] = {0.05, 0.5};  ///< [s]: the roll loop's and the side drift's
-inline constexpr int kExcitationOrder = 8;
-struct Excitation {
-  std::vector<std::string> signals;  ///< the exogenous signals used (empty: none, no location test)
-  MatrixXd Z;                        ///< the bank's columns
-};
-Excitation excitation_bank(const UniformData& d, const std::vector<std::string>& names);
-
-/// The column span of a matrix, by an orthonormal basis Q: from the eigen-decomposition of its
-/// column-scaled Gram matrix, directions below kSpanTolerance of the largest dropped (the
-/// Laguerre banks of neighbouring time constants, and a model's intercept against the bank's
-/// constant, are nearly collinear; a projection needs only the span).
-inline constexpr double kSpanTolerance = 1e-10;
-/// The location tests' batch means have at least this many blocks (score_block()).
-inline constexpr Index kMinScoreBlocks = 10;
-struct Span {
-  explicit Span(const MatrixXd& A);
-  MatrixXd Q;
-  VectorXd project(const VectorXd& c) const { return Q * (Q.transpose() * c); }
-  VectorXd residualise(const VectorXd& c) const { return c - project(c); }
-  Index rank() const { return Q.cols(); }
-};
-
-/// One equation as the location tests see it: y against the span of [X, Z], the baseline
-/// design and the excitation's bank. The residual keeps what is neither the model's linear
-/// structure nor a linear response to the excitation: under a linear plant that is process and
-/// measurement noise, independent of the excitation however biased the baseline fit is by noisy
-/// regressors (errors in variables) or by the feedback.
-struct LocationFrame {
-  LocationFrame(const MatrixXd& X, const VectorXd& y, const MatrixXd& Z);
-  VectorXd y;
-  MatrixXd excitation_columns;  ///< Z
-  Span excitation;            ///< span of Z
-  Span model_and_excitation;  ///< span of [X, Z]
-  VectorXd residual;          ///< y minus its projection on [X, Z]
-};
-
-/// Dependence of the frame's residual on a nonlinear function (z^2 and z^3, z standardised) of
-/// each state and input's excitation part (its projection on the bank). Under a linear plant
-/// the residual is independent of any function of the excitation, so the test holds its level
-/// on closed-loop, non-Gaussian manoeuvres with noisy regressors; a measured signal's own
-/// z^2, z^3 would not (noise in a regressor makes its conditional mean nonlinear in the
-/// measurement when the manoeuvre is not Gaussian). Wald test with the coloured covariance,
-/// Bonferroni over the signals tested, significant at alpha.
-/// The thresholds of a location test: its level (the workflow's p_critical), the batch means'
-/// shortest block, and the confirmation above the gust band that every candidate passes too.
-struct LocationRule {
-  double alpha = 0.0;
-  Index min_block = 1;
-  double gust_band_hz = 2.0, gust_band_alpha = 0.01;
-  Folds folds;                 ///< the held-out rule's folds (the workflow's)
-  double heldout_sigmas = 1.0;  ///< DiscrepancyOptions::heldout_sigmas
-};
-
-/// Wald test that the frame's residual does not depend on the columns C (partialled on the
-/// frame's span), batch-means covariance, Hotelling's reference: the p-value; `partial_r` (if
-/// given) the square root of the share of the residual's sum of squares they explain.
-double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block, double* partial_r);
-
-void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::string& output, const UniformData& d,
-                    const LocationRule& rule, std::vector<StateFinding>& out);
-
-/// A periodic component of the frame's residual: the frequency in [f_lo, f_hi] where its
-/// periodogram is largest, and the Wald test of sin and cos at it (frame_wald), Bonferroni over
-/// the band's independent frequencies ((f_hi - f_lo) T). Against a residual whose spectrum
-/// is not flat (a lightly damped loop driven by process noise has a resonance) the score's
-/// batch means carry the residual's own power at that frequency, so a resonance is not a line;
-/// a periodic force is. Reported (ratio: periodogram / local median, for the reader) at alpha.
-void frequency_peaks(const LocationFrame& frame, const std::string& output, double scale, double rate, double f_lo,
-                     double f_hi, const LocationRule& rule, std::vector<FrequencyFinding>& out);
-
-void time_findings(const std::string& output, const VectorXd& r, const UniformData& d, const Segments& seg,
-                   double window_s, std::vector<TimeFinding>& out);
 
 // --- discrepancy_bands.cc ---
 

@@ -28,6 +28,20 @@ void close_scan_point(ScanPoint& pt, const std::vector<double>& rss_before, bool
   if (!ok) pt.rss_rel = std::numeric_limits<double>::infinity();
 }
 
+std::size_t best_scan_point(const std::vector<ScanPoint>& points) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].rss_rel < points[best].rss_rel) best = i;
+  }
+  return best;
+}
+
+std::vector<double> full_rss_each(const std::vector<FoldStats>& stats) {
+  std::vector<double> out;
+  for (const auto& f : stats) out.push_back(full_rss(f));
+  return out;
+}
+
 /// Every scan point of `spec` (one, or one per delay): its columns and the fold statistics
 /// of each equation it touches, with its total relative RSS (infinite if it cannot be fitted).
 std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m, const std::vector<Index>& delays,
@@ -284,14 +298,10 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
   }
   t.scan_points = delays.size();
 
-  std::vector<double> rss_before(neq);
-  for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+  const std::vector<double> rss_before = full_rss_each(base);
   const std::vector<ScanPoint> points =
       change ? scan_change(spec, m, delays, base, rss_before) : scan(spec, m, delays, rss_before);
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < points.size(); ++i) {
-    if (points[i].rss_rel < points[best].rss_rel) best = i;
-  }
+  const std::size_t best = best_scan_point(points);
   if (!std::isfinite(points[best].rss_rel)) {
     t.available = false;
     t.reason = "its regressors are not excited or cannot be separated from the model's";

@@ -3,6 +3,7 @@
 // same entry rules and the same family-wise bound (term_families, term_search); and the signature
 // that tells the library's pure delay from a first-order lag (delay_lag_signature).
 
+#include "ident/discrepancy_location.h"
 #include "ident/discrepancy_parts.h"
 
 #include <algorithm>
@@ -156,7 +157,7 @@ void Workflow::excitation_confirms(const TermExpression& expr, const std::string
     return;
   }
   const Term term{eqname, expr, 0.0, ""};
-  const VectorXd col = term_column(confirm.excitation_parts, term);
+  const VectorXd col = term_column(*confirm.excitation_parts, term);
   double p = 1.0;
   if (col.allFinite() && excited(col, "")) {
     MatrixXd C(col.size(), 1);
@@ -182,8 +183,7 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   t.equation = m.eqs[eq].name;
   t.expression = fam.label;
   const std::size_t neq = m.eqs.size();
-  std::vector<double> rss_before(neq);
-  for (std::size_t e = 0; e < neq; ++e) rss_before[e] = full_rss(base[e]);
+  const std::vector<double> rss_before = full_rss_each(base);
   std::vector<ScanPoint> points;
   const MatrixXd X = m.X(eq);
   const VectorXd& w = m.eqs[eq].w;
@@ -205,10 +205,7 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
     close_scan_point(pt, rss_before, ok);
     points.push_back(std::move(pt));
   }
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < points.size(); ++i) {
-    if (points[i].rss_rel < points[best].rss_rel) best = i;
-  }
+  const std::size_t best = best_scan_point(points);
   if (!std::isfinite(points[best].rss_rel)) {
     t.available = false;
     t.reason = "its column is not excited or cannot be separated from the model's";
@@ -385,7 +382,7 @@ std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::
       }
       TermConfirmation& c = confirm[e];
       c.frame = std::make_unique<LocationFrame>(m.X(e), m.eqs[e].y, ex.Z);
-      c.excitation_parts = excitation_parts;
+      c.excitation_parts = &excitation_parts;
     }
     struct Pass {
       CandidateTrial trial;
