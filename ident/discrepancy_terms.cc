@@ -1,7 +1,8 @@
 // The discrepancy workflow (ident/discrepancy.h), part: the open world. When no library effect
 // earns its name, generic terms in the grammar of core/term_expression.h are searched under the
 // same entry rules and the same family-wise bound (term_families, term_search); and the signature
-// that tells the library's pure delay from a first-order lag (delay_lag_signature).
+// every library effect shares, that no generic term's form fits the data better than its own
+// (rival_form_signature), which tells the library's pure delay from a first-order lag.
 
 #include "ident/discrepancy_location.h"
 #include "ident/discrepancy_parts.h"
@@ -43,8 +44,11 @@ TermFamily family(const std::string& label, const std::vector<std::string>& text
   return f;
 }
 
+/// A family of one expression, labelled by it.
+TermFamily single(const std::string& text) { return family(text, {text}); }
+
 /// What would tell a library effect from a generic form that fits a record as well.
-std::string fam_tell_apart(const std::string& rival, const std::string& effect) {
+std::string tell_apart(const std::string& rival, const std::string& effect) {
   if (rival.rfind("lag(", 0) == 0 && effect == "actuator_delay") {
     return "a pure delay keeps the input's gain at every frequency, a first-order lag's falls above 1 / (2 pi tau): a "
            "flap input with more power above that frequency (faster doublets, a chirp) tells them apart";
@@ -71,22 +75,20 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
   // that switches with the noise of a signal near zero fits a constant and high-frequency
   // leftovers (measured: sign(p) entered beside a sensor bias and a flapping forcing).
   for (const auto& x : all) {
-    out.push_back(family(x + "^2", {x + "^2"}));
-    out.push_back(family(x + "^3", {x + "^3"}));
-    out.push_back(family(x + "*abs(" + x + ")", {x + "*abs(" + x + ")"}));
-    out.push_back(is_input(x) ? family("pos(" + x + ")", {"pos(" + x + ")"}) : family("abs(" + x + ")", {"abs(" + x + ")"}));
+    out.push_back(single(x + "^2"));
+    out.push_back(single(x + "^3"));
+    out.push_back(single(x + "*abs(" + x + ")"));
+    out.push_back(single((is_input(x) ? "pos(" : "abs(") + x + ")"));
   }
   // Products to degree 3.
   for (std::size_t i = 0; i < all.size(); ++i) {
     for (std::size_t j = i + 1; j < all.size(); ++j) {
       const std::string& x = all[i];
       const std::string& y = all[j];
-      out.push_back(family(x + "*" + y, {x + "*" + y}));
-      out.push_back(family(x + "^2*" + y, {x + "^2*" + y}));
-      out.push_back(family(x + "*" + y + "^2", {x + "*" + y + "^2"}));
-      for (std::size_t k = j + 1; k < all.size(); ++k) {
-        out.push_back(family(x + "*" + y + "*" + all[k], {x + "*" + y + "*" + all[k]}));
-      }
+      out.push_back(single(x + "*" + y));
+      out.push_back(single(x + "^2*" + y));
+      out.push_back(single(x + "*" + y + "^2"));
+      for (std::size_t k = j + 1; k < all.size(); ++k) out.push_back(single(x + "*" + y + "*" + all[k]));
     }
   }
   // An input's dead zone and backlash of width w (scanned from 1 % to 40 % of its largest
@@ -124,16 +126,18 @@ void Workflow::acts_through(const TermFamily& fam, const Model& m, std::size_t e
   // linear effect (a long lag with the opposite sign fits a closed-loop record's low-frequency
   // misfit) is not the input's dead zone, backlash or lag.
   const std::string& eqname = m.eqs[eq].name;
-  const std::string input_param = eqname + "_d" + fam.acts_through.substr(fam.acts_through.size() - 1);
   const std::vector<std::string> names = m.names(eq);
+  std::string input_param;  // the input's derivative in this equation, e.g. L_df
+  for (const auto& d : control_derivative_names(Structure::kLateral3, fam.acts_through)) {
+    if (d.rfind(eqname + "_", 0) == 0) input_param = d;
+  }
   const auto it = std::find(names.begin(), names.end(), input_param);
   if (it == names.end()) return;
-  std::vector<Addition> all = m.added[eq];
-  all.push_back(P.adds.front());
-  const MatrixXd C = augmented_design(m.eqs[eq], all);
+  // The fit on all folds, from the scan point's statistics: the model's columns, then the form's.
+  const FoldStats& fs = P.stats[eq];
   VectorXd th;
-  if (!solve(C.transpose() * C, C.transpose() * m.eqs[eq].y, th)) return;
-  const double own = th[static_cast<Index>(it - names.begin())], form = th[C.cols() - 1];
+  if (!solve(fs.Gt, fs.bt, th)) return;
+  const double own = th[static_cast<Index>(it - names.begin())], form = th[th.size() - 1];
   const double fraction = own + form != 0.0 ? form / (own + form) : 0.0;
   t.parameters["fraction_through_form"] = fraction;
   if (fraction < 0.5) {
@@ -348,7 +352,7 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   // Ambiguous when every equation where the effect is significant is a tie.
   if (all_tied && !tied_with.empty() && t.signature_holds) {
     t.ambiguous_with = tied_with;
-    t.tell_apart = fam_tell_apart(tied_with.substr(tied_with.find(": ") + 2), spec.name);
+    t.tell_apart = tell_apart(tied_with.substr(tied_with.find(": ") + 2), spec.name);
   }
 }
 
