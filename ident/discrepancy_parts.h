@@ -263,10 +263,9 @@ struct Workflow;
 /// library candidate, Bonferroni over the scan and over every family and equation; the passing
 /// term with the largest held-out drop enters (its passing rivals that correlate above the collinearity
 /// bound listed as its alternatives), up to DiscrepancyOptions::term_rounds. The trials that
-/// passed, or the closest one when none did, go to res.candidates (name "term"). Returns the
-/// effect names of the terms that entered.
-std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m,
-                                     DiscrepancyResult& res);
+/// passed, or the closest one when none did, go to res.candidates (name "term"); the terms that
+/// entered join `m` (Model::effect_names, found_terms, added).
+void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m, DiscrepancyResult& res);
 
 struct Workflow {
   const DiscrepancyOptions& opt;
@@ -302,9 +301,17 @@ struct Workflow {
                const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
                const std::vector<bool>& use_eq, const ChangeProfile& profile, CandidateTrial& t) const;
   void judge(CandidateTrial& t, const std::string& p_eq) const;
+  /// The rest of a candidate's signature, once it met every entry rule (discrepancy_signatures.cc):
+  /// lateral_inflow's arm, the kinematics that tell sensor_bias from constant_load, and every
+  /// effect's form (rival_form_signature). A failed signature withdraws the pass and says why.
+  void signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const;
   /// sensor_bias's signature: the same bias in the kinematic relation of p and phi's derivative.
   /// Sets t.signature_holds and t.signature.
   void sensor_bias_signature(CandidateTrial& t) const;
+  /// lateral_inflow's signature: its roll moment is its side force at the inflow's arm
+  /// (DiscrepancyOptions::inflow_arm_m, inflow_arm_factor). Sets t.signature_holds, the note and
+  /// t.signature (arm_z, arm_p, arm_ratio).
+  void inflow_arm_signature(CandidateTrial& t) const;
   /// Every library effect's signature: its form is the data's, no generic term encompasses it
   /// (discrepancy_terms.cc). Sets t.signature_holds, t.signature_note, t.signature_rival and
   /// t.signature (rival_p_<eq>, own_p_<eq>).

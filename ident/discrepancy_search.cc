@@ -340,73 +340,8 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     return t;
   }
   judge(t, p_eq);
-  if (opt.signature_checks && t.passed && spec.name == "lateral_inflow") {
-    // lateral_inflow's signature: one side force from sideslip, odd in v, whose roll moment is
-    // that force at the inflow's arm: L_vv = arm Y_vv. Tested as L_vv - arm Y_vv = 0 with the two
-    // equations' coloured sigmas, two-sided at gust_band_alpha, unless the ratio L_vv / (arm Y_vv)
-    // is within inflow_arm_factor of 1 (closed-loop estimates of both carry biases their sigmas
-    // do not hold). A side force too small to see
-    // agrees with a small roll moment; a v|v| roll moment with no side force of its size beside
-    // it (or a side force of the other sign) is a moment the library does not have.
-    const auto L = t.parameters.find("L_vv"), Y = t.parameters.find("Y_vv");
-    const auto sL = t.sigma.find("L_vv"), sY = t.sigma.find("Y_vv");
-    if (L != t.parameters.end() && Y != t.parameters.end() && sL != t.sigma.end() && sY != t.sigma.end()) {
-      const double a = opt.inflow_arm_m;
-      const double diff = L->second - a * Y->second;
-      const double sd = std::sqrt(sL->second * sL->second + a * a * sY->second * sY->second);
-      const double z = sd > 0.0 ? diff / sd : 0.0;
-      const double p = std::erfc(std::fabs(z) / std::sqrt(2.0));
-      const double ratio = Y->second != 0.0 ? L->second / (a * Y->second) : std::numeric_limits<double>::infinity();
-      t.signature["arm_z"] = z;
-      t.signature["arm_p"] = p;
-      t.signature["arm_ratio"] = ratio;
-      const bool within = ratio >= 1.0 / opt.inflow_arm_factor && ratio <= opt.inflow_arm_factor;
-      if (p <= opt.gust_band_alpha && !within) {
-        t.signature_holds = false;
-        t.passed = false;
-        t.signature_note = "its roll moment is not its side force at the inflow's arm (L_vv " + fmt(L->second) +
-                           ", Y_vv " + fmt(Y->second) + ", arm " + fmt(a) + " m: their ratio " + fmt(ratio) +
-                           " of the arm's, L_vv - arm Y_vv " + fmt(z) +
-                           " sigma from 0, p " + fmt(p) + "): not the lateral inflow";
-        t.reason = "fails its signature: " + t.signature_note;
-      }
-    }
-  }
-  if (opt.signature_checks && t.passed && spec.name == "sensor_bias") {
-    sensor_bias_signature(t);
-    if (!t.signature_holds) {
-      t.signature_note = "a constant fits but p carries no bias against phi's derivative (kinematic bias " +
-                         fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " +
-                         fmt(t.signature["sigma_radps"]) + ", p " + fmt(t.signature["p_value"]) +
-                         "): not a rate-sensor bias";
-      t.passed = false;
-      t.reason = "fails its signature: it " + t.reason.substr(std::string("passes: ").size()) +
-                 ", but p carries no bias against phi's derivative (kinematic bias " +
-                 fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " + fmt(t.signature["sigma_radps"]) +
-                 " over " + fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
-                 fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
-                 "rate-sensor bias";
-    }
-  }
-  if (opt.signature_checks && t.passed && spec.name == "constant_load") {
-    // A constant load's signature is the sensor bias's absent: p agrees with phi's derivative.
-    sensor_bias_signature(t);
-    t.signature_holds = !t.signature_holds;
-    if (!t.signature_holds) {
-      t.signature_note = "a constant fits and p carries a bias against phi's derivative (kinematic bias " +
-                         fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " + fmt(t.signature["sigma_radps"]) +
-                         ", p " + fmt(t.signature["p_value"]) + "): a rate-sensor bias, not a load";
-      t.passed = false;
-      t.reason = "fails its signature: " + t.signature_note;
-    }
-  }
-  if (opt.signature_checks && t.passed) {
-    rival_form_signature(spec, m, P, t);
-    if (!t.signature_holds) {
-      t.passed = false;
-      t.reason = "fails its signature: " + t.signature_note;
-    }
-  }
+  // The rest of the effect's signature (discrepancy_signatures.cc).
+  if (opt.signature_checks && t.passed) signature(spec, m, P, t);
   if (t.passed) {
     for (const auto& a : P.adds) {
       if (use_eq[a.eq]) best_adds.push_back(a);

@@ -6,6 +6,8 @@
 #include "ident/discrepancy_parts.h"
 
 #include <cmath>
+#include <limits>
+#include <string>
 #include <numeric>
 #include <vector>
 
@@ -57,6 +59,71 @@ void Workflow::sensor_bias_signature(CandidateTrial& t) const {
   t.signature["blocks"] = K;
   t.signature["p_value"] = p_value;
   t.signature_holds = p_value <= opt.gust_band_alpha;
+}
+
+/// lateral_inflow's signature: one side force from sideslip, odd in v, whose roll moment is that
+/// force at the inflow's arm, L_vv = arm Y_vv. Tested as L_vv - arm Y_vv = 0 with the two
+/// equations' coloured sigmas, two-sided at gust_band_alpha, unless the ratio L_vv / (arm Y_vv)
+/// is within inflow_arm_factor of 1 (closed-loop estimates of both carry biases their sigmas do
+/// not hold). A side force too small to see agrees with a small roll moment; a v|v| roll moment
+/// with no side force of its size beside it (or a side force of the other sign) is a moment the
+/// library does not have.
+void Workflow::inflow_arm_signature(CandidateTrial& t) const {
+  const auto L = t.parameters.find("L_vv"), Y = t.parameters.find("Y_vv");
+  const auto sL = t.sigma.find("L_vv"), sY = t.sigma.find("Y_vv");
+  if (L == t.parameters.end() || Y == t.parameters.end() || sL == t.sigma.end() || sY == t.sigma.end()) return;
+  const double a = opt.inflow_arm_m;
+  const double diff = L->second - a * Y->second;
+  const double sd = std::sqrt(sL->second * sL->second + a * a * sY->second * sY->second);
+  const double z = sd > 0.0 ? diff / sd : 0.0;
+  const double p = std::erfc(std::fabs(z) / std::sqrt(2.0));
+  const double ratio = Y->second != 0.0 ? L->second / (a * Y->second) : std::numeric_limits<double>::infinity();
+  t.signature["arm_z"] = z;
+  t.signature["arm_p"] = p;
+  t.signature["arm_ratio"] = ratio;
+  const bool within = ratio >= 1.0 / opt.inflow_arm_factor && ratio <= opt.inflow_arm_factor;
+  if (p <= opt.gust_band_alpha && !within) {
+    t.signature_holds = false;
+    t.signature_note = "its roll moment is not its side force at the inflow's arm (L_vv " + fmt(L->second) + ", Y_vv " +
+                       fmt(Y->second) + ", arm " + fmt(a) + " m: their ratio " + fmt(ratio) +
+                       " of the arm's, L_vv - arm Y_vv " + fmt(z) + " sigma from 0, p " + fmt(p) +
+                       "): not the lateral inflow";
+  }
+}
+
+void Workflow::signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {
+  std::string reason;  // the failed signature's reason, when it is not "fails its signature: " + the note
+  if (spec.name == "lateral_inflow") {
+    inflow_arm_signature(t);
+  } else if (is_constant_effect(spec.name)) {
+    // sensor_bias and constant_load fit the same constant; the kinematics tell which it is.
+    sensor_bias_signature(t);
+    const bool biased = t.signature_holds;
+    const std::string figures = "kinematic bias " + fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " +
+                                fmt(t.signature["sigma_radps"]);
+    if (spec.name == "sensor_bias" && !biased) {
+      t.signature_note = "a constant fits but p carries no bias against phi's derivative (" + figures + ", p " +
+                         fmt(t.signature["p_value"]) + "): not a rate-sensor bias";
+      reason = "fails its signature: it " + t.reason.substr(std::string("passes: ").size()) +
+               ", but p carries no bias against phi's derivative (" + figures + " over " +
+               fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
+               fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
+               "rate-sensor bias";
+    } else if (spec.name == "constant_load") {
+      // A constant load's signature is the sensor bias's absent: p agrees with phi's derivative.
+      t.signature_holds = !biased;
+      if (biased) {
+        t.signature_note = "a constant fits and p carries a bias against phi's derivative (" + figures + ", p " +
+                           fmt(t.signature["p_value"]) + "): a rate-sensor bias, not a load";
+      }
+    }
+  }
+  // Every effect: its form is the data's (discrepancy_terms.cc).
+  if (t.signature_holds) rival_form_signature(spec, m, P, t);
+  if (!t.signature_holds) {
+    t.passed = false;
+    t.reason = reason.empty() ? "fails its signature: " + t.signature_note : reason;
+  }
 }
 
 }  // namespace nimble::ident::discrepancy_parts

@@ -356,9 +356,7 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   }
 }
 
-std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m,
-                                     DiscrepancyResult& res) {
-  std::vector<std::string> entered;
+void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m, DiscrepancyResult& res) {
   const std::vector<TermFamily> families = term_families(wf.data, inputs);
   std::vector<std::size_t> eqs;  // the roll moment and the side force (not the actuator's own equation)
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
@@ -367,44 +365,41 @@ std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::
   const std::size_t family_count = families.size() * eqs.size();
   // The excitation (the location tests' bank) and each signal's excitation part.
   const Excitation ex = excitation_bank(wf.data, wf.opt.excitation);
-  UniformData excitation_parts = wf.data;
+  UniformData excitation_parts;
   if (!ex.signals.empty()) {
+    excitation_parts = wf.data;
     const Span span(ex.Z);
     for (auto& [name, x] : excitation_parts.signals) {
       if (x.size() == ex.Z.rows()) x = span.project(x);
     }
   }
-  std::vector<std::pair<std::size_t, std::string>> done;  // (equation, family label) entered
+  std::vector<std::size_t> done;  // the equations a term entered
   for (std::size_t round = 1; round <= wf.opt.term_rounds; ++round) {
     const std::vector<FoldStats> base = model_stats(m, wf.folds);
     const std::vector<VectorXd> base_cv = heldout_residuals(m, wf.folds);
-    std::map<std::size_t, TermConfirmation> confirm;
+    std::map<std::size_t, TermConfirmation> confirm;  // without an exogenous signal: no frame
     for (std::size_t e : eqs) {
-      if (ex.signals.empty()) {
-        confirm[e];
-        continue;
-      }
       TermConfirmation& c = confirm[e];
+      if (ex.signals.empty()) continue;
       c.frame = std::make_unique<LocationFrame>(m.X(e), m.eqs[e].y, ex.Z);
       c.excitation_parts = &excitation_parts;
     }
     struct Pass {
       CandidateTrial trial;
       std::vector<Addition> adds;
-      std::string label;
     };
     std::vector<Pass> passing;
     CandidateTrial closest;  // the smallest p of the round, reported when nothing passes
     closest.p_value = 2.0;
     for (std::size_t e : eqs) {
+      // One form per equation: a later round looks for the effect in the other equation.
+      if (std::find(done.begin(), done.end(), e) != done.end()) continue;
       for (const TermFamily& fam : families) {
-        // One form per equation: a later round looks for the effect in the other equation.
-        if (std::any_of(done.begin(), done.end(), [&](const auto& d) { return d.first == e; })) continue;
         std::vector<Addition> adds;
         CandidateTrial t = wf.term_trial(fam, e, m, base, base_cv, round, family_count, confirm.at(e), adds);
         if (!t.available) continue;
         if (t.passed) {
-          passing.push_back({std::move(t), std::move(adds), fam.label});
+          passing.push_back({std::move(t), std::move(adds)});
         } else if (t.p_value < closest.p_value) {
           closest = std::move(t);
         }
@@ -430,15 +425,13 @@ std::vector<std::string> term_search(const Workflow& wf, const std::vector<std::
     }
     win.trial.entered = true;
     win.trial.reason = "entered: " + win.trial.reason;
-    done.emplace_back(wa.eq, win.label);
+    done.push_back(wa.eq);
     Term term{m.eqs[wa.eq].name, TermExpression::parse(win.trial.expression), 0.0, "rig discrepancy"};
-    entered.push_back(kTermPrefix + term_parameter_name(term));
-    m.effect_names.push_back(entered.back());
+    m.effect_names.push_back(kTermPrefix + term_parameter_name(term));
     m.found_terms.push_back(std::move(term));
     m.added[wa.eq].push_back(wa);
     for (auto& p : passing) res.candidates.push_back(std::move(p.trial));
   }
-  return entered;
 }
 
 }  // namespace nimble::ident::discrepancy_parts
