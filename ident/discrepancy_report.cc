@@ -18,6 +18,12 @@
 namespace nimble::ident {
 namespace {
 
+/// A trial's candidate as the reports name it: a term with its equation and expression (the
+/// expression between `quote`s).
+std::string trial_name(const CandidateTrial& t, const std::string& quote) {
+  return t.name == "term" ? t.name + " " + t.equation + " " + quote + t.expression + quote : t.name;
+}
+
 void number_map(JsonWriter& j, const std::map<std::string, double>& m) {
   j.begin_object();
   for (const auto& [k, v] : m) j.key(k).value(v);
@@ -374,7 +380,7 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   }
   o << "\ncandidates (p_critical = P(chi2_1 >= F) of the partial-F rule)\n";
   for (const auto& t : r.candidates) {
-    o << "  round " << t.round << "  " << t.name << (t.name == "term" ? " " + t.equation + " " + t.expression : "") << ": ";
+    o << "  round " << t.round << "  " << trial_name(t, "") << ": ";
     if (!t.available) {
       o << "not tried: " << t.reason << "\n";
       continue;
@@ -488,7 +494,7 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
   for (const auto& t : r.candidates) {
     std::string f;
     for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + g(v);
-    md << "| " << t.round << " | " << t.name << (t.name == "term" ? " " + t.equation + " `" + t.expression + "`" : "") << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
+    md << "| " << t.round << " | " << trial_name(t, "`") << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
        << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
        << " | " << t.reason << " |\n";
   }
