@@ -1,7 +1,7 @@
 // The discrepancy workflow on the effects its library knows: how often each is named exactly
 // (the verdict `effects` with that one name and nothing beside it: no second effect, no `term`),
 // with the workflow's defaults (signature checks and the open-world term search on) or, with
-// --closed-world, without them (the second round's workflow), so that the two can be set side
+// --closed-world, without them (the workflow before its signatures and term search), so that the two can be set side
 // by side. Each record draws its magnitude (discrepancy_generator.h's ranges), length (20-40 s;
 // 120 s for the drift, which is per minute), model set (1-5) and seed; the command delay's
 // records carry the controller's command, which is the only place it shows.

@@ -1,17 +1,18 @@
-// The discrepancy workflow on effects that are NOT in its library (issue #38, part 4): what it
-// says about a missing effect it has no name for. The right answer is `unexplained` with where
-// the structure was found (or `none` for an effect too small to see); a library name is a wrong
-// name, which sends a user to calibrate away something that does not exist, and is worse than
-// no name. Forms and their ranges: discrepancy_generator.h ("Forms that are NOT library
-// effects"); each record draws its magnitude, length (20-40 s), model set (1-5) and seed, and
-// every other record carries the controller's command (the actuator equation F joins).
+// The discrepancy workflow on effects that are NOT in its library: what it says about a missing
+// effect it has no name for. The right answer is the effect's form, a `term` (the open world's
+// search), or `unexplained` with where the structure was found (or `none` for an effect too small
+// to see); a library name is a wrong name, which sends a user to calibrate away something that
+// does not exist, and is worse than no name. Forms and their ranges: discrepancy_generator.h
+// ("Forms that are NOT library effects"); each record draws its magnitude, length (20-40 s),
+// model set (1-5) and seed, and every other record carries the controller's command (the
+// actuator equation F joins).
 //
 // A measurement, not a test: it prints, per form, how often a library name is given (wrong
-// name), `ambiguous`, `unexplained` (and whether its location is the form's: the equation and
-// signal it acts through), and `none`, each with its 95 % Wilson interval, for the workflow as it
-// is and with DiscrepancyOptions::signature_checks (off by default), beside the target of a
-// wrong name in at most 2 % of the records. About 40 s for each of the two passes:
-//   build/bin/bench_discrepancy_outside
+// name), the form's term is found, another term, `ambiguous`, `unexplained` (and whether its
+// location is the form's: the equation and signal it acts through), and `none`, each with its
+// 95 % Wilson interval, beside the target of a wrong name in at most 2 % of the records; with
+// --closed-world, for the workflow without signatures and term search. About 50 s:
+//   build/bin/bench_discrepancy_outside [--closed-world]
 
 #include <algorithm>
 #include <chrono>
@@ -165,7 +166,7 @@ Tally measure(const DiscrepancyOptions& opt, const char* title) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // --closed-world: the signature checks and the term search off (the second round's workflow).
+  // --closed-world: the signature checks and the term search off (the workflow before its signatures and term search).
   DiscrepancyOptions opt;
   const bool closed = argc > 1 && std::string(argv[1]) == "--closed-world";
   if (closed) {
