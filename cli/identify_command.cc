@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "estimator/sensing_config.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
 #include "ident/closed_loop.h"
@@ -79,6 +80,35 @@ void add_processing(CommandLine& cl, ident::ProcessingOptions& p) {
 /// --salvage: read a damaged log up to the damage.
 void add_salvage(CommandLine& cl, ident::LogReadOptions& o) {
   cl->add_flag("--salvage", o.salvage, "a damaged rig log: read the events before the damage and say what was left");
+}
+
+/// --states SOURCE and --sensing FILE: where a rig log's states come from, and the sensing the
+/// smoother's filter is matched to.
+void add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file) {
+  each_value(cl->add_option("--states", "rig log: where the states come from: auto (the estimator's if the log has "
+                                        "them, else the truth), estimate, truth, or smoothed (made offline from the "
+                                        "log's IMU and motion capture by the fixed-interval smoother, as the thesis's "
+                                        "identification data were)")
+                 ->type_name("SOURCE")
+                 ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed"})),
+             [&o](const std::string& v) {
+               o.states = v == "estimate"   ? ident::StateSource::kEstimate
+                          : v == "truth"    ? ident::StateSource::kTruth
+                          : v == "smoothed" ? ident::StateSource::kSmoothed
+                                            : ident::StateSource::kAuto;
+             });
+  cl->add_option("--sensing", sensing_file,
+                 "--states smoothed: the sensing the flight flew with (its IMU, motion capture and EKF; default "
+                 "rig_configs/sensing/default_sensing.yaml)")
+      ->type_name("FILE");
+}
+
+/// The smoother's model from --sensing (or the default sensing file).
+void apply_sensing(ident::LogReadOptions& o, const std::string& sensing_file) {
+  if (o.states != ident::StateSource::kSmoothed) return;
+  const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);
+  o.smoothing.ekf = smoother_ekf_config(sensing);
+  o.smoothing.differentiator = sensing.velocity_differentiator;
 }
 
 /// --vehicle FILE.
@@ -170,6 +200,8 @@ int run_identify_command(const std::vector<std::string>& args) {
              [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
   add_vehicle(cl, vehicle_file, "rig_configs/vehicles/nimble_no_wifi.yaml");
   add_salvage(cl, log_options);
+  std::string sensing_file;
+  add_states(cl, log_options, sensing_file);
   each_value(cl->add_option("--inputs", "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
                                         "when the data has them)")
                  ->type_name("LIST"),
@@ -215,6 +247,7 @@ int run_identify_command(const std::vector<std::string>& args) {
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
+  apply_sensing(log_options, sensing_file);
   std::string damage;
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);

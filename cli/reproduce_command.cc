@@ -1,7 +1,10 @@
 /// `rig reproduce thesis`: the thesis's campaign flown, identified, validated and set beside the
 /// published tables (reproduce/campaign.h).
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
+#include <stdexcept>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -13,9 +16,33 @@
 #include "core/output_file.h"
 #include "launcher/launcher.h"
 #include "launcher/run_plan.h"
+#include "launcher/sweep.h"
 #include "reproduce/campaign.h"
 
 namespace nimble::cli {
+namespace {
+
+/// "1-5", "1,3,7" or "1-3,8": each item A or A-B (launcher::parse_seed_range); at most 1000 seeds, none twice.
+std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
+  std::vector<std::uint64_t> seeds;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = text.find(',', start);
+    const auto [a, b] = launcher::parse_seed_range(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (b - a >= 1000 || seeds.size() + (b - a + 1) > 1000) throw std::invalid_argument("at most 1000 seeds");
+    for (std::uint64_t s = a; s <= b; ++s) {
+      if (std::find(seeds.begin(), seeds.end(), s) != seeds.end()) {
+        throw std::invalid_argument("seed " + std::to_string(s) + " is named twice");
+      }
+      seeds.push_back(s);
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return seeds;
+}
+
+}  // namespace
 
 int run_reproduce_command(const std::vector<std::string>& args) {
   namespace fs = std::filesystem;
@@ -31,8 +58,10 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                  "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
                  "thesis did, validates it on the others, and prints every table it reproduces beside the\n"
                  "published one (Tables 9.4, 9.5, 9.6, 4, 7, 8, 9, 10, 11, 15, 16, 8.8), each cell with its\n"
-                 "verdict: match (within the table's tolerance), explained (a reason in the campaign file) or\n"
-                 "differs.");
+                 "category and verdict (reproduce/verdict.h): the rig's own flights are match (within the\n"
+                 "thesis's tolerance), explained (a reason whose check holds in the same run), differs or\n"
+                 "inconclusive (the rig's own interval wider than the tolerance); calibrated and model cells\n"
+                 "match or differ; fit metrics of the very model the plant flies are not comparable.");
   cl->footer("Exit code: 0 no cell differs, 1 some cell differs, 2 bad input or a flight that could not fly.\n"
              "Example: rig reproduce thesis --json tables.json --report report/");
   cl->add_option("what", what, "the campaign to reproduce")->required()->check(CLI::IsMember({"thesis"}));
@@ -42,10 +71,16 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       ->check(CLI::IsMember({std::string(launcher::kClockInprocess), std::string(launcher::kClockLockstep),
                               std::string(launcher::kClockRealtime)}))
       ->capture_default_str();
-  cl->add_option("--seed", o.seed, "the seed of every flight")->capture_default_str();
+  std::string seeds = "1-5";
+  cl->add_option("--seeds", seeds,
+                 "the seeds every flight is flown with, a list or ranges (e.g. 1-10 or 1,3,7); each cell is judged "
+                 "on the mean over them, with its interval")
+      ->capture_default_str()
+      ->type_name("LIST");
   cl->add_option("--states", o.states,
-                 "states for identification and validation: estimate (the EKF's, as the thesis's) or truth")
-      ->check(CLI::IsMember({"estimate", "truth"}))
+                 "states for identification and validation: smoothed (made offline from the recorded IMU and motion "
+                 "capture, as the thesis's were), estimate (the on-board EKF's) or truth")
+      ->check(CLI::IsMember({"smoothed", "estimate", "truth"}))
       ->capture_default_str();
   cl->add_option("--logs", o.work_dir, "where the flights' logs go")->capture_default_str()->type_name("DIR");
   cl->add_option("--controller", o.controller_file, "the controller copy of the closed-loop validation")
@@ -58,6 +93,12 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       ->type_name("DIR");
   cl->add_flag("--no-progress", "no line per flight on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
+  try {
+    o.seeds = parse_seed_list(seeds);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "rig reproduce: --seeds " << seeds << ": " << e.what() << "\n";
+    return kExitUsage;
+  }
   if (!json_file.empty() && json_file != "-") {
     if (const std::string problem = launcher::writable_problem(json_file); !problem.empty()) {
       std::cerr << "rig reproduce: --json " << json_file << ": " << problem << "\n";
@@ -91,7 +132,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       }
     }
   }
-  return result.counts().at("differs") > 0 ? 1 : 0;
+  return result.differing() > 0 ? 1 : 0;
 }
 
 }  // namespace nimble::cli

@@ -22,13 +22,15 @@ set(NIMBLE_INSTALL_PYTHONDIR "lib/python3/dist-packages")
 install(TARGETS rig nimble_plant nimble_controller nimble_estimator nimble_mocap nimble_can_bridge
         RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
 
-set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_messages nimble_ident nimble_ident_lcm)
+set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_messages nimble_ident nimble_ident_lcm
+    nimble_estimation)
 set_target_properties(nimble_lcmtypes PROPERTIES EXPORT_NAME lcmtypes)
 set_target_properties(nimble_core PROPERTIES EXPORT_NAME core)
 set_target_properties(nimble_contract PROPERTIES EXPORT_NAME contract)
 set_target_properties(nimble_messages PROPERTIES EXPORT_NAME messages)
 set_target_properties(nimble_ident PROPERTIES EXPORT_NAME ident)
 set_target_properties(nimble_ident_lcm PROPERTIES EXPORT_NAME ident_lcm)
+set_target_properties(nimble_estimation PROPERTIES EXPORT_NAME estimation)
 foreach(t IN LISTS nimble_exported)
   target_include_directories(${t} INTERFACE "$<INSTALL_INTERFACE:${NIMBLE_INSTALL_INCLUDEDIR}>")
 endforeach()
@@ -36,7 +38,7 @@ install(TARGETS ${nimble_exported} EXPORT nimble_rigTargets
         ARCHIVE DESTINATION "${CMAKE_INSTALL_LIBDIR}")
 install(EXPORT nimble_rigTargets NAMESPACE nimble_rig:: DESTINATION "${NIMBLE_INSTALL_CMAKEDIR}")
 
-foreach(dir core contract ident)
+foreach(dir core contract ident estimator)
   install(DIRECTORY "${PROJECT_SOURCE_DIR}/${dir}/" DESTINATION "${NIMBLE_INSTALL_INCLUDEDIR}/${dir}"
           FILES_MATCHING PATTERN "*.h")
 endforeach()

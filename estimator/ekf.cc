@@ -171,7 +171,7 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 }
 
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                    double dt_s) const {
+                                    double dt_s, EkfCovariance* Phi) const {
   using Mat6 = EkfLinearisation::Block;
   using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
@@ -241,10 +241,17 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   P->bottomRightCorner<6, 6>() = M22;
   *x += 0.5 * dt_s * (k0 + k1);
   ekf_wrap_angles(x);
+  if (Phi != nullptr) {
+    EkfCovariance step = EkfCovariance::Identity();
+    step.topLeftCorner<6, 6>() = Phi11;
+    step.topRightCorner<6, 6>() = Phi12;
+    *Phi = step * *Phi;
+  }
 }
 
 void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0,
-                                             const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
+                                             const EkfInput& u1, std::int64_t t0, std::int64_t t1,
+                                             EkfCovariance* Phi) const {
   if (t1 <= t0) return;
   const double dt_s = 1e-6 * (static_cast<double>(t1) - static_cast<double>(t0));
   // At most kMaxSubsteps: an IMU time far ahead (a stray message, found by fuzz_node_estimator)
@@ -255,8 +262,24 @@ void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, cons
   for (int i = 0; i < steps; ++i) {
     const EkfInput ua = u0 + (static_cast<double>(i) / steps) * (u1 - u0);
     const EkfInput ub = u0 + (static_cast<double>(i + 1) / steps) * (u1 - u0);
-    propagate(x, P, ua, ub, h);
+    propagate(x, P, ua, ub, h, Phi);
   }
+}
+
+EkfCovariance AttitudeVelocityEkf::predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0,
+                                                   const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
+  EkfCovariance Phi = EkfCovariance::Identity();
+  propagate_interval(x, P, u0, u1, t0, t1, &Phi);
+  return Phi;
+}
+
+void AttitudeVelocityEkf::release_history() {
+  if (node_observer_) {
+    for (const Node& n : history_) node_observer_(n);
+  }
+  history_.clear();
+  accepted_.clear();
+  pending_.clear();
 }
 
 bool AttitudeVelocityEkf::predict(const ImuSample& sample) {
@@ -313,7 +336,10 @@ bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input)
 
 void AttitudeVelocityEkf::trim() {
   const std::int64_t cutoff = history_.back().utime - history_us_;
-  while (history_.size() >= 2 && history_[1].utime <= cutoff) history_.pop_front();
+  while (history_.size() >= 2 && history_[1].utime <= cutoff) {
+    if (node_observer_) node_observer_(history_.front());
+    history_.pop_front();
+  }
   while (!accepted_.empty() && accepted_.front().z.utime <= history_.front().utime) accepted_.pop_front();
 }
 

@@ -197,6 +197,16 @@ struct EkfCounters {
   std::int64_t velocity_window_uncovered = 0;  ///< velocity windows the history did not cover (no offset applied)
 };
 
+/// One node of the filter's history: an IMU sample's time and input, and the state and
+/// covariance after every measurement up to that time.
+struct EkfNode {
+  std::int64_t utime = 0;  ///< [us]
+  EkfInput u = EkfInput::Zero();
+  bool has_input = false;
+  EkfState x = EkfState::Zero();
+  EkfCovariance P = EkfCovariance::Identity();
+};
+
 /// The EKF. See the top of this header.
 class AttitudeVelocityEkf {
  public:
@@ -229,6 +239,18 @@ class AttitudeVelocityEkf {
 
   /// Called once per gating decision (also for measurements that were pending).
   void set_update_observer(std::function<void(const EkfUpdateRecord&)> observer) { observer_ = std::move(observer); }
+  /// Called with each history node when it is final: when it leaves the history (no measurement
+  /// can reach it any more), and by release_history() for the rest. A fixed-interval smoother
+  /// (estimator/smoother.h) collects the filtered trajectory this way.
+  void set_node_observer(std::function<void(const EkfNode&)> observer) { node_observer_ = std::move(observer); }
+  /// End of data: hands every node still in the history to the node observer, oldest first, and
+  /// leaves the filter uninitialised. Measurements still pending are dropped.
+  void release_history();
+  /// The prediction of the filter from t0 to t1 [us] with the input linear from u0 to u1, as
+  /// predict() makes it (substeps included); returns the transition matrix Phi of the whole
+  /// interval (the product of the substeps' exact Jacobians).
+  EkfCovariance predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
+                                std::int64_t t0, std::int64_t t1) const;
 
   /// State at the newest IMU sample.
   const EkfState& state() const { return history_.back().x; }
@@ -252,14 +274,7 @@ class AttitudeVelocityEkf {
   std::size_t history_size() const { return history_.size(); }
 
  private:
-  /// One IMU sample of the history: time, input, and state/covariance after every measurement up to utime.
-  struct Node {
-    std::int64_t utime = 0;
-    EkfInput u = EkfInput::Zero();
-    bool has_input = false;
-    EkfState x = EkfState::Zero();
-    EkfCovariance P = EkfCovariance::Identity();
-  };
+  using Node = EkfNode;
   /// An accepted measurement kept for re-application; is_new while it waits for its gating decision.
   struct Stored {
     PoseMeasurement z;
@@ -268,9 +283,11 @@ class AttitudeVelocityEkf {
     EkfMeasurementStatus* status = nullptr;
   };
 
-  void propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s) const;
+  /// One Heun step; with `Phi`, also its transition matrix, left-multiplied into *Phi.
+  void propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s,
+                 EkfCovariance* Phi = nullptr) const;
   void propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                          std::int64_t t0, std::int64_t t1) const;
+                          std::int64_t t0, std::int64_t t1, EkfCovariance* Phi = nullptr) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
   /// Stores z (already prepared, not too old) and replays from the node before it.
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);
@@ -308,6 +325,7 @@ class AttitudeVelocityEkf {
   EkfCounters counters_;
   double last_nis_ = -1.0;
   std::function<void(const EkfUpdateRecord&)> observer_;
+  std::function<void(const EkfNode&)> node_observer_;
 };
 
 }  // namespace nimble

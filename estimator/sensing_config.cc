@@ -125,4 +125,11 @@ EkfConfig ekf_config_matched_to_sensors(const EkfConfig& base, const ImuModelCon
   return c;
 }
 
+EkfConfig smoother_ekf_config(const SensingConfig& sensing) {
+  MatchedNoiseOptions options;
+  options.include_vibration = true;
+  return ekf_config_matched_to_sensors(sensing.ekf, sensing.imu, sensing.mocap, sensing.velocity_differentiator,
+                                       options);
+}
+
 }  // namespace nimble

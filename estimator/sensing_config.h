@@ -75,4 +75,11 @@ EkfConfig ekf_config_matched_to_sensors(const EkfConfig& base, const ImuModelCon
                                         const VelocityDifferentiatorConfig& differentiator,
                                         const MatchedNoiseOptions& options = {});
 
+/// The EKF of the offline smoother (estimator/smoother.h) for a flight flown with `sensing`: its
+/// EKF with the process and measurement noise matched to the sensors that made the data
+/// (ekf_config_matched_to_sensors, vibration included): offline the sensors are known, and the
+/// thesis's Eq 8.2 Q, which over-bounds the real vehicle's vibration, would make the smoother
+/// lean on the motion capture more than the emulated IMU deserves.
+EkfConfig smoother_ekf_config(const SensingConfig& sensing);
+
 }  // namespace nimble

@@ -3,11 +3,13 @@
 #include <array>
 #include <cstdint>
 #include <fstream>
+#include <stdexcept>
 #include <utility>
 
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "contract/messages.h"
+#include "estimator/smoother.h"
 #include "ident/lcm_log.h"
 
 namespace nimble::ident {
@@ -68,6 +70,16 @@ auto read_value(const LogEventRecord& ev, const std::string& file) {
 }
 
 }  // namespace
+
+const char* state_source_name(StateSource source) {
+  switch (source) {
+    case StateSource::kEstimate: return "estimate";
+    case StateSource::kTruth: return "truth";
+    case StateSource::kSmoothed: return "smoothed";
+    case StateSource::kAuto: break;
+  }
+  return "auto";
+}
 
 double estimate_time_s(std::int64_t utime, std::int64_t imu_utime) {
   // A time of the IMU sample after the publication cannot be right: keep the publication time.
@@ -138,17 +150,20 @@ bool RigLogAssembler::add(const LogEventRecord& event) {
     append(input(kPhiSp, "phi_sp"), static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
   } else if (ev->channel == kImu) {
     const ImuSample m = read_value<imu_sample_t>(*ev, file);
+    if (smoothing_) imu_.push_back(m);
     const double t = static_cast<double>(m.utime) * 1e-6;
     append(input(kAx, "ax"), t, m.accel_mps2[0]);
     append(input(kAy, "ay"), t, m.accel_mps2[1]);
     append(input(kAz, "az"), t, m.accel_mps2[2]);
+  } else if (smoothing_ && ev->channel == kMocapPose) {
+    poses_.push_back(read_value<mocap_pose_t>(*ev, file));
   } else {
     return false;
   }
   return true;
 }
 
-RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage) {
+RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage, const SmoothingOptions& smoothing) {
   const std::string& file = source_;
   FlightData& inputs = inputs_;
   if (!inputs.has("delta_f")) {
@@ -162,15 +177,31 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
     if (!moved) inputs.channels.erase(servo);
   }
   RigLogData out;
+  if (source == StateSource::kSmoothed) {
+    if (!smoothing_) throw std::logic_error("RigLogAssembler: smoothed states need collect_for_smoothing()");
+    if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples to smooth");
+    if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames to smooth");
+    const std::vector<SmoothedSample> smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu_, poses_);
+    if (smoothed.empty()) {
+      throw DataError(file, -1, -1, kMocapPose, "no motion-capture frame gave a measurement: nothing to smooth");
+    }
+    FlightData states;
+    std::array<Channel*, 9> channels{};
+    for (const SmoothedSample& s : smoothed) {
+      const double t = static_cast<double>(s.utime) * 1e-6;
+      append_states(states, channels, t, s.rate_radps, s.x.segment<3>(kU), s.x.head<3>());
+    }
+    estimate_ = std::move(states);
+  }
   bool use_estimate = false;
-  if (source == StateSource::kEstimate) {
+  if (source == StateSource::kEstimate || source == StateSource::kSmoothed) {
     if (!estimate_.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
     use_estimate = true;
   } else if (source == StateSource::kAuto) {
     use_estimate = estimate_.has("p");
   }
   if (!use_estimate && !truth_.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
-  out.state_source = use_estimate ? "estimate" : "truth";
+  out.state_source = source == StateSource::kSmoothed ? "smoothed" : use_estimate ? "estimate" : "truth";
   out.damage = damage;
   out.gain_set = gain_set_;
   out.measured = use_estimate ? std::move(estimate_) : truth_;
@@ -187,16 +218,17 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
 RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
   LcmLogReader log(file, options.salvage);
   RigLogAssembler assembler(file);
+  if (source == StateSource::kSmoothed) assembler.collect_for_smoothing();
   LogEventRecord record;
   while (log.next(&record)) {
     if (!assembler.add(record) && options.other_event) options.other_event(record);
   }
-  return assembler.finish(source, log.damage());
+  return assembler.finish(source, log.damage(), options.smoothing);
 }
 
 FlightData read_flight_data(const std::string& file, const LogReadOptions& options, std::string* damage) {
   if (!is_lcm_log(file)) return read_flight_csv(file);
-  RigLogData log = read_rig_log(file, StateSource::kAuto, options);
+  RigLogData log = read_rig_log(file, options.states, options);
   if (damage) *damage = log.damage;
   return std::move(log.measured);
 }

@@ -19,6 +19,9 @@
 #include <functional>
 #include <string>
 
+#include "core/rig_values.h"
+#include "estimator/ekf.h"
+#include "estimator/mocap_measurement.h"
 #include "ident/flight_data.h"
 #include "ident/lcm_log.h"
 
@@ -29,13 +32,26 @@ enum class StateSource {
   kAuto,      ///< ESTIMATE if the log has it, else TRUTH
   kEstimate,  ///< ESTIMATE (error if absent)
   kTruth,     ///< TRUTH
+  kSmoothed,  ///< made offline from the log's IMU and MOCAP_POSE by the fixed-interval smoother
+              ///< (estimator/smoother.h), as the thesis's identification data were made
 };
+
+/// The filter model of StateSource::kSmoothed: the flight's own sensing configuration where it is
+/// known (the scenario's `sensing` section), else the defaults, which are
+/// rig_configs/sensing/default_sensing.yaml's.
+struct SmoothingOptions {
+  EkfConfig ekf;
+  VelocityDifferentiatorConfig differentiator;
+};
+
+/// The name of a state source as commands and reports print it: "auto", "estimate", "truth", "smoothed".
+const char* state_source_name(StateSource source);
 
 /// A rig log as flight data.
 struct RigLogData {
   FlightData measured;       ///< states (per StateSource), inputs, set-points, at their own rates
   FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
-  std::string state_source;  ///< "estimate" or "truth"
+  std::string state_source;  ///< "estimate", "truth" or "smoothed"
   std::string gain_set;      ///< the roll gain set the controller flew (CONTROLLER_STATUS; empty if none)
   std::string damage;        ///< read with salvage from a damaged log: where and how much was left ("" if whole)
 };
@@ -49,6 +65,10 @@ struct LogReadOptions {
   /// CONTROLLER_STATUS after the first): e.g. to count those that are not a message of their
   /// channel's type (mcap::UndecodableCount), which the reader would otherwise pass over unseen.
   std::function<void(const LogEventRecord&)> other_event;
+  /// Where read_flight_data() takes the states from (read_rig_log() takes its own argument).
+  StateSource states = StateSource::kAuto;
+  /// The smoother's model, for StateSource::kSmoothed.
+  SmoothingOptions smoothing;
 };
 
 /// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is
@@ -75,11 +95,17 @@ class RigLogAssembler {
   /// @throws DataError naming the event and channel of a message it reads that does not decode.
   bool add(const std::string& channel, const void* data, int size, std::int64_t event_number = -1,
            std::int64_t offset = -1);
+  /// Keep the IMU samples and motion-capture frames (decoding MOCAP_POSE, which it otherwise
+  /// passes over) for finish(StateSource::kSmoothed). Call before the first add().
+  void collect_for_smoothing() { smoothing_ = true; }
   /// One event of a log. @throws DataError as above.
   bool add(const LogEventRecord& event);
   /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
   /// @throws DataError for a missing channel, as read_rig_log().
-  RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "");
+  /// @throws DataError for kSmoothed on a log without IMU or MOCAP_POSE, or without
+  ///         collect_for_smoothing().
+  RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "",
+                    const SmoothingOptions& smoothing = {});
 
  private:
   enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
@@ -91,6 +117,9 @@ class RigLogAssembler {
   std::array<Channel*, 9> estimate_states_{}, truth_states_{};  ///< p q r u v w phi theta psi, once made
   std::array<Channel*, kInputSlots> input_channels_{};
   std::string gain_set_;
+  bool smoothing_ = false;
+  std::vector<ImuSample> imu_;     ///< for the smoother
+  std::vector<MocapPose> poses_;   ///< for the smoother
   LogEventRecord event_;  ///< reused by add(channel, data, ...)
 };
 

@@ -22,8 +22,14 @@
 /// w0 during the flight; the coefficient found is reported (it is the mass when the plant is
 /// the rig's).
 ///
-/// Verdicts: `match` within the table's tolerance, `explained` outside it with a reason written
-/// in the campaign file, `differs` otherwise.
+/// Verdicts and categories: reproduce/verdict.h. Every cell is judged on the mean over the
+/// seeds flown (--seeds); a reason's check that names a cause flies the table's flight again
+/// with that cause added, with the same seeds.
+///
+/// The closed-loop causes (campaign file `closed_loop_causes`): the closed-loop tables 9-11 flown
+/// again with each cause the thesis gives for its closed-loop misfit, sized from elsewhere (the
+/// practical's turbulence, the plant's flapping forcing), and where their cells move reported
+/// beside the published values, whichever way.
 
 #include <cstdint>
 #include <map>
@@ -31,26 +37,37 @@
 #include <string>
 #include <vector>
 
-namespace nimble::reproduce {
+#include "reproduce/verdict.h"
 
-/// One cell of a reproduced table.
-struct Cell {
-  std::string row, column;
-  double published = 0.0;
-  double rig = 0.0;
-  std::string verdict;  ///< "match", "explained" or "differs"
-  std::string reason;   ///< the campaign file's reason (explained), or why it differs
-};
+namespace nimble::reproduce {
 
 struct Table {
   std::string id;     ///< thesis table number, e.g. "9.4"
   std::string title;
-  std::string tolerance;  ///< what `match` means, in words
+  std::string category;  ///< reproduce/verdict.h
+  std::string why;       ///< what a calibrated, model or not-comparable table's cells are
   std::vector<Cell> cells;
+};
+
+/// One closed-loop cell flown with and without one cause of the thesis's misfit.
+struct CauseCell {
+  std::string table, row, column;
+  double published = 0.0;
+  double rig = 0.0;         ///< mean over the seeds, without the cause
+  double with_cause = 0.0;  ///< mean over the seeds, with it
+  double interval = 0.0;    ///< 95 % half-width of with_cause's mean
+};
+
+struct CauseStudy {
+  std::string name;    ///< e.g. "flapping forcing"
+  std::string source;  ///< where its size comes from
+  std::vector<std::string> overrides;  ///< key=value
+  std::vector<CauseCell> cells;
 };
 
 struct FlightRecord {
   std::string name;      ///< the campaign file's flight name
+  std::uint64_t seed = 1;
   std::string scenario;  ///< scenario file
   std::string log;       ///< its log
   std::string result;    ///< the run's verdict text
@@ -62,26 +79,30 @@ struct FlightRecord {
 struct CampaignResult {
   std::string campaign;  ///< campaign file
   std::string clock;
-  std::uint64_t seed = 1;
+  std::vector<std::uint64_t> seeds;
   std::string states;  ///< where the measured states come from
   std::vector<FlightRecord> flights;
   std::vector<Table> tables;
+  std::vector<CauseStudy> causes;
   double wall_s = 0.0;
-  /// Cells by verdict.
-  std::map<std::string, int> counts() const;
+  /// Cells by category and verdict; a cell that repeats an earlier one's numbers counts once.
+  std::map<std::string, std::map<std::string, int>> counts() const;
+  /// Cells of the flights category with verdict `differs`.
+  int differing() const;
 };
 
 struct CampaignOptions {
   std::string campaign_file;
   std::string clock = "inprocess";  ///< inprocess, lockstep or realtime (the last two through `rig run`)
-  std::uint64_t seed = 1;
+  std::vector<std::uint64_t> seeds{1, 2, 3, 4, 5};  ///< every flight is flown with each
   std::string work_dir;             ///< logs land here
   std::string rig_exe;              ///< `rig` itself, for the lockstep and real-time clocks
   std::string report_dir;           ///< figures (empty: none)
   std::string controller_file;      ///< the controller copy of the closed-loop validation
-  /// Where the identification and validation take the states: "estimate" (the EKF's, as the
-  /// thesis's data came through its EKF; the default) or "truth" (the plant's).
-  std::string states = "estimate";
+  /// Where the identification and validation take the states: "smoothed" (made offline from the
+  /// log's IMU and motion capture, as the thesis's were; the default), "estimate" (the on-board
+  /// EKF's) or "truth" (the plant's).
+  std::string states = "smoothed";
   bool progress = false;            ///< a line per flight on stderr
 };
 
@@ -92,8 +113,9 @@ CampaignResult run_campaign(const CampaignOptions& options);
 /// The tables side by side as text.
 std::string campaign_text(const CampaignResult& result);
 
-/// `{"tables": [{"id", "title", "tolerance", "cells": [{"row", "column", "published", "rig", "verdict",
-/// "reason"}]}], "counts": {...}, "flights": [...]}`.
+/// `{"tables": [{"id", "title", "category", "cells": [{"row", "column", "published", "rig", "rig_sd",
+/// "interval", "seeds", "tolerance", "tolerance_basis", "verdict", "reason", "check": {"predicate", "holds",
+/// "value"}, "repeats"}]}], "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
 std::string campaign_json(const CampaignResult& result);
 
 }  // namespace nimble::reproduce

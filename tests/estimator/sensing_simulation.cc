@@ -71,6 +71,7 @@ SensingRunResult run_sensing_simulation(const SensingRunConfig& cfg) {
       const TruthSample& tr = truth.advance_to(t_imu);
       const ImuSample sample = imu.sample(tr.imu_input());
       ekf.predict(sample);
+      result.imu.push_back(sample);
       ++imu_index;
       if (++record_counter >= cfg.record_every) {
         record_counter = 0;
@@ -89,6 +90,7 @@ SensingRunResult run_sensing_simulation(const SensingRunConfig& cfg) {
       MocapPose pose = in_flight.front();
       in_flight.pop_front();
       if (cfg.pose_hook) cfg.pose_hook(pose);
+      result.poses.push_back(pose);
       for (const PoseMeasurement& z : builder.push(pose)) ekf.add_measurement(z);
     }
   }

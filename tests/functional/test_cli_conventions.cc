@@ -86,7 +86,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"model", "model is required"},
            {"reproduce", "what is required"},
            {"reproduce paper", "what: paper not in {thesis}"},
-           {"reproduce thesis --states guess", "--states: guess not in {estimate,truth}"},
+           {"reproduce thesis --states guess", "--states: guess not in {smoothed,estimate,truth}"},
        }) {
     INFO(c.args);
     const RigResult r = run_rig(c.args);

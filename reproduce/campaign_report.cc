@@ -1,0 +1,183 @@
+/// `rig reproduce thesis`'s tables as text and JSON, and the counts by category and verdict.
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/json_writer.h"
+#include "reproduce/campaign.h"
+
+namespace nimble::reproduce {
+namespace {
+
+/// Share of `match` among the judged cells of the rig's own flights (repeats counted once).
+double match_share(const CampaignResult& r) {
+  const auto counts = r.counts();
+  const auto it = counts.find("flights");
+  if (it == counts.end()) return 0.0;
+  int total = 0;
+  for (const auto& [verdict, n] : it->second) total += n;
+  const auto m = it->second.find("match");
+  return total > 0 && m != it->second.end() ? static_cast<double>(m->second) / total : 0.0;
+}
+
+std::string seeds_text(const std::vector<std::uint64_t>& seeds) {
+  std::string s;
+  for (std::size_t i = 0; i < seeds.size(); ++i) s += (i ? "," : "") + std::to_string(seeds[i]);
+  return s;
+}
+
+}  // namespace
+
+std::map<std::string, std::map<std::string, int>> CampaignResult::counts() const {
+  std::map<std::string, std::map<std::string, int>> c;
+  for (const auto& t : tables) {
+    for (const auto& cell : t.cells) {
+      if (cell.repeats.empty()) ++c[cell.category][cell.verdict];
+    }
+  }
+  return c;
+}
+
+int CampaignResult::differing() const {
+  int n = 0;
+  for (const auto& t : tables) {
+    for (const auto& cell : t.cells) n += (cell.verdict == "differs" && cell.repeats.empty()) ? 1 : 0;
+  }
+  return n;
+}
+
+std::string campaign_text(const CampaignResult& r) {
+  namespace fs = std::filesystem;
+  std::ostringstream out;
+  out << fmt::format("== rig reproduce thesis: {} flights, clock {}, seeds {}, states {}, {:.1f} s ==\n",
+                     r.flights.size(), r.clock, seeds_text(r.seeds), r.states, r.wall_s);
+  int failed = 0;
+  for (const auto& f : r.flights) failed += f.result == "ok" ? 0 : 1;
+  out << fmt::format("  flights not ok: {}\n", failed);
+  for (const auto& f : r.flights) {
+    if (f.result != "ok") out << fmt::format("  {} seed {}: {}\n", f.name, f.seed, f.result);
+  }
+  for (const auto& t : r.tables) {
+    out << fmt::format("\nTable {}: {}  [{}]\n", t.id, t.title, t.category);
+    if (!t.why.empty()) out << "  " << t.why << "\n";
+    out << fmt::format("  {:<10} {:<16} {:>10} {:>10} {:>9} {:>9}  {}\n", "row", "column", "published", "rig",
+                       "+-95%", "tol", "verdict");
+    std::vector<std::string> notes;
+    for (const auto& c : t.cells) {
+      std::string note;
+      if (!c.repeats.empty()) note = " (repeats " + c.repeats + ")";
+      if (c.verdict == "explained" || (c.verdict == "differs" && c.has_check)) {
+        const std::string text = c.verdict == "explained"
+                                     ? c.reason + " [check: " + c.check.predicate + "; found: " + c.check.value + "]"
+                                     : c.reason;
+        auto it = std::find(notes.begin(), notes.end(), text);
+        if (it == notes.end()) it = notes.insert(notes.end(), text);
+        note += fmt::format(" [{}]", it - notes.begin() + 1);
+      } else if (!c.reason.empty() && c.verdict != "not comparable") {
+        note += " (" + c.reason + ")";
+      }
+      out << fmt::format("  {:<10} {:<16} {:>10.4g} {:>10.4g} {:>9.2g} {:>9.3g}  {}{}\n", c.row, c.column, c.published,
+                         c.rig, c.interval, c.tolerance, c.verdict, note);
+    }
+    for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
+  }
+  if (!r.causes.empty()) {
+    out << "\nWhat the closed-loop tables would need: Tables 9-11 flown again with each cause the thesis gives\n"
+           "for its closed-loop misfit, sized from elsewhere (R2; mean over the seeds)\n";
+    for (const auto& s : r.causes) {
+      std::string ov;
+      for (const auto& o : s.overrides) ov += (ov.empty() ? "" : ", ") + o;
+      out << fmt::format("  {} ({}; {})\n", s.name, s.source, ov);
+      out << fmt::format("    {:<6} {:<8} {:>10} {:>10} {:>12} {:>8}  {}\n", "table", "row", "published", "rig",
+                         "with cause", "+-95%", "moved");
+      for (const auto& c : s.cells) {
+        const double before = std::fabs(c.rig - c.published), after = std::fabs(c.with_cause - c.published);
+        out << fmt::format("    {:<6} {:<8} {:>10.3g} {:>10.3g} {:>12.3g} {:>8.2g}  {}\n", c.table, c.row, c.published,
+                           c.rig, c.with_cause, c.interval,
+                           after < before ? fmt::format("toward, {:.0f} % of the gap", 100 * (before - after) / before)
+                                          : fmt::format("away, by {:.3g}", after - before));
+      }
+    }
+  }
+  out << "\ncells by category and verdict (a cell repeating another's numbers counted once):\n";
+  for (const auto& [category, verdicts] : r.counts()) {
+    std::string line;
+    int total = 0;
+    for (const auto& [verdict, n] : verdicts) {
+      line += fmt::format("{}{} {}", line.empty() ? "" : ", ", n, verdict);
+      total += n;
+    }
+    out << fmt::format("  {:<15} {} (of {})\n", category, line, total);
+  }
+  out << fmt::format("match share of the rig's own flights: {:.0f} %\n", 100 * match_share(r));
+  return out.str();
+}
+
+std::string campaign_json(const CampaignResult& r) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("campaign").value(r.campaign).key("clock").value(r.clock);
+  w.key("seeds").begin_array();
+  for (const auto s : r.seeds) w.value(static_cast<long long>(s));
+  w.end_array();
+  w.key("states").value(r.states);
+  w.key("wall_s").value(r.wall_s);
+  w.key("flights").begin_array();
+  for (const auto& f : r.flights) {
+    w.begin_object().key("name").value(f.name).key("seed").value(static_cast<long long>(f.seed));
+    w.key("scenario").value(f.scenario).key("log").value(f.log);
+    w.key("result").value(f.result).key("controlled").value(f.controlled).key("sim_s").value(f.sim_s);
+    w.key("wall_s").value(f.wall_s).end_object();
+  }
+  w.end_array();
+  w.key("tables").begin_array();
+  for (const auto& t : r.tables) {
+    w.begin_object().key("id").value(t.id).key("title").value(t.title).key("category").value(t.category);
+    w.key("why").value(t.why);
+    w.key("cells").begin_array();
+    for (const auto& c : t.cells) {
+      w.begin_object().key("row").value(c.row).key("column").value(c.column);
+      w.key("published").value(c.published).key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
+      w.key("interval").value(c.interval).key("seeds").value(c.seeds);
+      w.key("tolerance").value(c.tolerance).key("tolerance_basis").value(c.tolerance_basis);
+      w.key("verdict").value(c.verdict).key("reason").value(c.reason);
+      if (c.has_check) {
+        w.key("check").begin_object().key("predicate").value(c.check.predicate).key("holds").value(c.check.holds);
+        w.key("value").value(c.check.value).end_object();
+      }
+      w.key("repeats").value(c.repeats).end_object();
+    }
+    w.end_array().end_object();
+  }
+  w.end_array();
+  w.key("causes").begin_array();
+  for (const auto& s : r.causes) {
+    w.begin_object().key("name").value(s.name).key("source").value(s.source);
+    w.key("overrides").begin_array();
+    for (const auto& o : s.overrides) w.value(o);
+    w.end_array();
+    w.key("cells").begin_array();
+    for (const auto& c : s.cells) {
+      w.begin_object().key("table").value(c.table).key("row").value(c.row).key("column").value(c.column);
+      w.key("published").value(c.published).key("rig").value(c.rig).key("with_cause").value(c.with_cause);
+      w.key("interval").value(c.interval).end_object();
+    }
+    w.end_array().end_object();
+  }
+  w.end_array();
+  w.key("counts").begin_object();
+  for (const auto& [category, verdicts] : r.counts()) {
+    w.key(category).begin_object();
+    for (const auto& [verdict, n] : verdicts) w.key(verdict).value(n);
+    w.end_object();
+  }
+  w.end_object();
+  w.key("match_share").value(match_share(r));
+  w.end_object();
+  return w.str();
+}
+
+}  // namespace nimble::reproduce

@@ -1,0 +1,197 @@
+#include "reproduce/campaign_spec.h"
+
+#include <filesystem>
+
+#include <yaml-cpp/yaml.h>
+
+#include "core/config.h"
+
+namespace nimble::reproduce {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string resolve(const std::string& file, const std::string& path) {
+  return (fs::path(path).is_absolute() ? fs::path(path) : fs::path(file).parent_path() / path).lexically_normal().string();
+}
+
+/// A mapping of scalars as strings (scenario overrides).
+std::map<std::string, std::string> string_map(ConfigMap& parent, const std::string& key) {
+  const YAML::Node node = parent.get_node(key);
+  if (!node.IsMap() || node.size() == 0) parent.fail(key, "must map scenario keys to values");
+  std::map<std::string, std::string> out;
+  for (const auto& item : node) {
+    if (!item.second.IsScalar()) parent.fail(key, "the value of " + item.first.as<std::string>() + " must be a scalar");
+    out[item.first.as<std::string>()] = item.second.as<std::string>();
+  }
+  return out;
+}
+
+Reason load_reason(const YAML::Node& node, const std::string& file, const std::string& path, const TableSpec& t,
+                   const std::string& id) {
+  ConfigMap r(node, file, path);
+  Reason out;
+  out.cells = r.get_string_list("cells");
+  if (out.cells.empty()) r.fail("cells", "must name at least one cell");
+  for (const std::string& cell : out.cells) {
+    if (cell.find('*') != std::string::npos) {
+      r.fail("cells", "'" + cell + "': no wildcards; a reason names each cell it explains (\"row / column\")");
+    }
+    const auto slash = cell.find(" / ");
+    const std::string row = slash == std::string::npos ? "" : cell.substr(0, slash);
+    const std::string col = slash == std::string::npos ? "" : cell.substr(slash + 3);
+    const auto pr = t.published.find(row);
+    if (pr == t.published.end() || pr->second.count(col) == 0) {
+      r.fail("cells", "'" + cell + "' is not a published cell of this table (\"row / column\")");
+    }
+    if (t.reason_for(cell) != nullptr) r.fail("cells", "'" + cell + "' already has a reason");
+  }
+  out.text = r.get_string("text");
+  if (r.has("rig")) out.rig = r.get_enum("rig", {"above", "below"});
+  if (r.has("max_off")) out.max_off = r.get_double("max_off", Range::closed(0.0, 1e9));
+  if (r.has("states")) out.states = r.get_string_list("states");
+  for (const auto& s : out.states) {
+    if (s != "smoothed" && s != "estimate" && s != "truth") r.fail("states", "'" + s + "': smoothed, estimate or truth");
+  }
+  if (r.has("with")) {
+    if (table_flight(id).empty()) r.fail("with", "table " + id + " has no flight of its own to fly with a cause");
+    out.with = string_map(r, "with");
+    if (r.has("moves")) out.moves = r.get_enum("moves", {"toward", "away"});
+    if (r.has("at_least")) out.at_least = r.get_double("at_least", Range::closed(0.0, 1.0));
+  }
+  if (out.rig.empty() && out.max_off < 0 && out.with.empty()) {
+    r.fail("rig", "a reason needs a predicate the run can check: rig (above/below), max_off or with");
+  }
+  r.finish();
+  return out;
+}
+
+}  // namespace
+
+const std::vector<std::string>& campaign_table_ids() {
+  static const std::vector<std::string> ids = {"9.4", "9.5", "9.5-model", "9.6", "9.6-model", "8.8", "4", "7", "8",
+                                               "9",   "10",  "11",        "12",  "13",        "14",  "15", "16"};
+  return ids;
+}
+
+std::string table_flight(const std::string& id) {
+  static const std::map<std::string, std::string> flights = {
+      {"7", "ol_doublet"}, {"8", "ol_112"}, {"12", "coupled"}, {"13", "coupled"}, {"14", "coupled"},
+      {"15", "nonlinear_30"}, {"16", "nonlinear_20"}, {"9", "identification"}, {"10", "cl_doublet_train"},
+      {"11", "cl_112"}};
+  const auto it = flights.find(id);
+  return it == flights.end() ? "" : it->second;
+}
+
+CampaignSpec load_campaign(const std::string& file) {
+  CampaignSpec c;
+  c.file = file;
+  ConfigMap root = ConfigMap::load_file(file);
+  root.get_string("name");
+  {
+    ConfigMap flights = root.get_map("flights");
+    for (const char* name : {"identification", "ol_doublet", "ol_112", "cl_doublet_train", "cl_112", "coupled",
+                             "nonlinear_20", "nonlinear_30"}) {
+      c.flights[name] = resolve(file, flights.get_string(name));
+    }
+    flights.finish();
+  }
+  {
+    const YAML::Node sets = root.get_node("sets");
+    if (!sets.IsMap() || sets.size() == 0) root.fail("sets", "must map each set's row name to its model and manoeuvre");
+    for (const auto& item : sets) {
+      const std::string row = item.first.as<std::string>();
+      ConfigMap set(item.second, file, root.key_path("sets") + "." + row);
+      c.sets.push_back({row, resolve(file, set.get_string("model")),
+                        set.has("manoeuvre") ? resolve(file, set.get_string("manoeuvre")) : ""});
+      set.finish();
+    }
+  }
+  c.lateral4_model = resolve(file, root.get_string("lateral4_model"));
+  {
+    ConfigMap cm = root.get_map("coupled_models");
+    for (const char* id : {"13", "14"}) c.coupled_models[id] = resolve(file, cm.get_string(id));
+    cm.finish();
+  }
+  if (root.has("closed_loop_causes")) {
+    const YAML::Node causes = root.get_node("closed_loop_causes");
+    if (!causes.IsSequence()) root.fail("closed_loop_causes", "must be a list of {name, source, with}");
+    for (std::size_t i = 0; i < causes.size(); ++i) {
+      ConfigMap m(causes[i], file, root.key_path("closed_loop_causes") + "[" + std::to_string(i) + "]");
+      CauseSpec cause;
+      cause.name = m.get_string("name");
+      cause.source = m.get_string("source");
+      cause.with = string_map(m, "with");
+      m.finish();
+      c.causes.push_back(cause);
+    }
+  }
+  ConfigMap tables = root.get_map("tables");
+  for (const std::string& id : campaign_table_ids()) {
+    ConfigMap t = tables.get_map(id);
+    TableSpec s;
+    s.title = t.get_string("title");
+    const std::string category = t.get_enum("category", {"flights", "calibrated", "model", "not comparable"});
+    s.category = category == "flights"      ? Category::kFlights
+                 : category == "calibrated" ? Category::kCalibrated
+                 : category == "model"      ? Category::kModel
+                                            : Category::kNotComparable;
+    if (s.category != Category::kFlights) s.why = t.get_string("why");
+    {
+      ConfigMap tol = t.get_map("tolerance");
+      s.relative = tol.get_double_or("relative", 0.0, Range::closed(0.0, 10.0));
+      s.thesis_sigmas = tol.get_double_or("thesis_sigmas", 0.0, Range::closed(0.0, 10.0));
+      s.min_seeds = static_cast<int>(tol.get_double_or("min_seeds", 1.0, Range::closed(1.0, 1000.0)));
+      if (tol.has("absolute")) {
+        const YAML::Node a = tol.get_node("absolute");
+        ConfigMap am = tol.get_map("absolute");
+        for (const auto& item : a) {
+          const std::string col = item.first.as<std::string>();
+          s.absolute[col] = am.get_double(col, Range::closed(0.0, 1e6));
+        }
+        am.finish();
+      }
+      tol.finish();
+    }
+    const YAML::Node published = t.get_node("published");
+    if (!published.IsMap() || published.size() == 0) t.fail("published", "must map rows to their published columns");
+    for (const auto& row : published) {
+      const std::string name = row.first.as<std::string>();
+      s.row_order.push_back(name);
+      ConfigMap cols(row.second, file, t.key_path("published") + "." + name);
+      for (const auto& col : row.second) {
+        const std::string cname = col.first.as<std::string>();
+        s.published[name][cname] = cols.get_double(cname);
+        s.column_order[name].push_back(cname);
+      }
+      cols.finish();
+    }
+    if (t.has("thesis_sigma")) {
+      const YAML::Node ts = t.get_node("thesis_sigma");
+      ConfigMap tm = t.get_map("thesis_sigma");
+      for (const auto& item : ts) {
+        const std::string cell = item.first.as<std::string>();
+        s.thesis_sigma[cell] = tm.get_double(cell, Range::closed(0.0, 1e9));
+      }
+      tm.finish();
+    }
+    if (t.has("reasons")) {
+      if (s.category != Category::kFlights) {
+        t.fail("reasons", "only a table of the rig's own flights (category flights) has reasons");
+      }
+      const YAML::Node rs = t.get_node("reasons");
+      if (!rs.IsSequence()) t.fail("reasons", "must be a list of {cells, text, and a predicate}");
+      for (std::size_t i = 0; i < rs.size(); ++i) {
+        s.reasons.push_back(load_reason(rs[i], file, t.key_path("reasons") + "[" + std::to_string(i) + "]", s, id));
+      }
+    }
+    if (t.has("explained")) t.fail("explained", "replaced by reasons: each names its cells and a checked predicate");
+    t.finish();
+    c.tables[id] = s;
+  }
+  tables.finish();
+  root.finish();
+  return c;
+}
+
+}  // namespace nimble::reproduce

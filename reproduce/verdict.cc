@@ -1,0 +1,167 @@
+#include "reproduce/verdict.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace nimble::reproduce {
+namespace {
+
+/// Student t quantile 0.975 for 1..30 degrees of freedom (standard tables); 1.96 beyond.
+double t975(int dof) {
+  static const double kT[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                              2.201,  2.179, 2.160,       2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                              2.080,  2.074, 2.069,       2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+  if (dof < 1) return NAN;
+  return dof <= 30 ? kT[dof - 1] : 1.96;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+}  // namespace
+
+const char* category_name(Category c) {
+  switch (c) {
+    case Category::kFlights: return "flights";
+    case Category::kCalibrated: return "calibrated";
+    case Category::kModel: return "model";
+    case Category::kNotComparable: return "not comparable";
+  }
+  return "?";
+}
+
+const Reason* TableSpec::reason_for(const std::string& cell) const {
+  for (const Reason& r : reasons) {
+    if (std::find(r.cells.begin(), r.cells.end(), cell) != r.cells.end()) return &r;
+  }
+  return nullptr;
+}
+
+void mean_interval(const std::vector<double>& x, double* mean, double* sd, double* half_width) {
+  const int n = static_cast<int>(x.size());
+  double m = 0.0;
+  for (double v : x) m += v;
+  m = n > 0 ? m / n : NAN;
+  double ss = 0.0;
+  for (double v : x) ss += (v - m) * (v - m);
+  const double s = n > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+  *mean = m;
+  *sd = s;
+  *half_width = n > 1 ? t975(n - 1) * s / std::sqrt(static_cast<double>(n)) : 0.0;
+}
+
+Cell judge(const TableSpec& t, const std::string& row, const std::string& column, const std::vector<double>& rig,
+           const JudgeContext& context) {
+  Cell c;
+  c.row = row;
+  c.column = column;
+  c.published = t.published.at(row).at(column);
+  c.seeds = static_cast<int>(rig.size());
+  mean_interval(rig, &c.rig, &c.rig_sd, &c.interval);
+  c.category = category_name(t.category);
+  const std::string key = row + " / " + column;
+  // The tolerance: the thesis's sigma where it gives one, else relative, else absolute by column.
+  if (const auto s = t.thesis_sigma.find(key); s != t.thesis_sigma.end() && t.thesis_sigmas > 0) {
+    c.tolerance = t.thesis_sigmas * s->second;
+    c.tolerance_basis = fmt::format("{:g} x the thesis's sigma {:.3g}", t.thesis_sigmas, s->second);
+  } else if (const auto a = t.absolute.find(column); a != t.absolute.end()) {
+    c.tolerance = a->second;
+    c.tolerance_basis = fmt::format("{:g} absolute", a->second);
+  } else {
+    c.tolerance = t.relative * std::fabs(c.published);
+    c.tolerance_basis = fmt::format("{:g} % of the published value", 100 * t.relative);
+  }
+  if (t.category == Category::kNotComparable) {
+    c.verdict = "not comparable";
+    c.reason = t.why;
+    return c;
+  }
+  const double off = c.rig - c.published;
+  if (!std::isfinite(c.rig)) {
+    c.verdict = "differs";
+    c.reason = "the rig has no value";
+    return c;
+  }
+  if (t.category == Category::kFlights) {
+    if (c.seeds < t.min_seeds) {
+      c.verdict = "inconclusive";
+      c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
+      return c;
+    }
+    if (c.interval > c.tolerance) {
+      c.verdict = "inconclusive";
+      c.reason = fmt::format("the rig's own interval +-{:.3g} ({} seeds) is wider than the tolerance {:.3g}",
+                             c.interval, c.seeds, c.tolerance);
+      return c;
+    }
+  }
+  if (std::fabs(off) <= c.tolerance) {
+    c.verdict = "match";
+    return c;
+  }
+  const Reason* why = t.category == Category::kFlights ? t.reason_for(key) : nullptr;
+  if (why == nullptr) {
+    c.verdict = "differs";
+    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}", off, c.tolerance);
+    return c;
+  }
+  // The reason's predicate, every part checked.
+  std::vector<std::string> parts, found;
+  bool holds = true;
+  if (!why->rig.empty()) {
+    parts.push_back("rig " + why->rig + " published");
+    const bool ok = why->rig == "above" ? off > 0 : off < 0;
+    found.push_back(fmt::format("rig {} published by {:.3g}", off > 0 ? "above" : "below", std::fabs(off)));
+    holds = holds && ok;
+  }
+  if (why->max_off >= 0) {
+    parts.push_back(fmt::format("|rig - published| <= {:g}", why->max_off));
+    holds = holds && std::fabs(off) <= why->max_off;
+  }
+  if (!why->states.empty()) {
+    parts.push_back("states from " + join(why->states));
+    const bool ok = std::find(why->states.begin(), why->states.end(), context.states) != why->states.end();
+    found.push_back("states from " + context.states);
+    holds = holds && ok;
+  }
+  if (!why->with.empty()) {
+    std::vector<std::string> set;
+    for (const auto& [k, v] : why->with) set.push_back(k + "=" + v);
+    parts.push_back(fmt::format("with {} the cell moves {} the published value by >= {:g} of the gap", join(set),
+                                why->moves, why->at_least));
+    if (context.with_values.empty()) {
+      found.push_back("the flight with the cause was not flown");
+      holds = false;
+    } else {
+      double m = 0, sd = 0, hw = 0;
+      mean_interval(context.with_values, &m, &sd, &hw);
+      const double gap = std::fabs(off);
+      const double moved = gap - std::fabs(m - c.published);  // > 0: toward
+      const double share = gap > 0 ? moved / gap : 0.0;
+      const bool ok = why->moves == "toward" ? share >= why->at_least : -share >= why->at_least;
+      found.push_back(fmt::format("with the cause {:.4g} (moved {:.0f} % of the gap {})", m, 100 * std::fabs(share),
+                                  share >= 0 ? "toward" : "away"));
+      holds = holds && ok;
+    }
+  }
+  c.has_check = true;
+  c.check.predicate = parts.empty() ? "(none)" : join(parts);
+  c.check.holds = holds && !parts.empty();
+  c.check.value = join(found);
+  if (c.check.holds) {
+    c.verdict = "explained";
+    c.reason = why->text;
+  } else {
+    c.verdict = "differs";
+    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}; the reason's check fails: {} (found: {})", off,
+                           c.tolerance, c.check.predicate, c.check.value);
+  }
+  return c;
+}
+
+}  // namespace nimble::reproduce

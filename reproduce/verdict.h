@@ -1,0 +1,112 @@
+#pragma once
+/// The verdict of one cell of a reproduced table: the rules of `rig reproduce thesis`, apart from
+/// the flights that feed them (reproduce/campaign.h).
+///
+/// Categories (each table has one, from the campaign file):
+///  - flights: numbers the rig's own flights and pipeline produce. Verdicts `match` (within the
+///    tolerance), `explained` (outside it, with a reason whose check holds in this run),
+///    `differs` (outside it, no reason or a reason whose check fails) or `inconclusive` (the
+///    rig's own seed-to-seed interval is wider than the tolerance: too noisy to judge).
+///  - calibrated: numbers the rig was tuned to; `match` or `differs`, never explained.
+///  - model: arithmetic on the transcribed model (a transcription check); `match` or `differs`.
+///  - not comparable: fit metrics where the rig's plant is the very model being validated; the
+///    rig's figure is printed beside the thesis's with the table's statement of why, and no verdict.
+///
+/// Tolerance (never widened by the rig's noise): where the campaign file gives the thesis's
+/// standard deviation of a cell, k of those (k the table's `thesis_sigmas`); else `relative`
+/// times |published| (an eigenvalue's real part relative to the real part) or, per column, an
+/// `absolute` one.
+/// The rig's value is the mean over the seeds flown; its interval is the 95 % half-width of
+/// that mean (Student t, n - 1 degrees of freedom), reported beside it. A table may ask for a
+/// least number of seeds (`min_seeds`): with fewer, its flight cells are `inconclusive`.
+///
+/// A reason belongs to the cells it lists ("row / column", no wildcards) and carries the
+/// predicate the command checks in the same run: the direction of the rig's value against the
+/// published one (`rig: above | below`), optionally a bound on the size of the difference
+/// (`max_off`), the state sources it applies to (`states`), and where it names a cause, a second
+/// flight with that cause added (`with`: scenario overrides) that must move the cell toward
+/// (or away from) the published value by at least `at_least` of the gap. A predicate that does
+/// not hold makes the cell `differs`, and says which part failed.
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace nimble::reproduce {
+
+/// What a table's cells are.
+enum class Category { kFlights, kCalibrated, kModel, kNotComparable };
+
+/// "flights", "calibrated", "model", "not comparable".
+const char* category_name(Category c);
+
+/// A reason for cells outside the tolerance, with its predicate.
+struct Reason {
+  std::vector<std::string> cells;  ///< "row / column", each named explicitly
+  std::string text;
+  std::string rig;                 ///< "above" or "below": where the rig's value lies
+  double max_off = -1.0;           ///< bound on |rig - published| (< 0: none)
+  std::vector<std::string> states; ///< state sources it holds for (empty: any)
+  std::map<std::string, std::string> with;  ///< scenario overrides adding the cause (empty: none)
+  std::string moves = "toward";    ///< with `with`: "toward" or "away" from the published value
+  double at_least = 0.1;           ///< with `with`: the least share of the gap it must move
+};
+
+/// A table of the campaign file.
+struct TableSpec {
+  std::string title;
+  Category category = Category::kFlights;
+  std::string why;  ///< calibrated, model, not comparable: what the cells are (printed)
+  double relative = 0.0;                   ///< tolerance relative to |published|
+  std::map<std::string, double> absolute;  ///< by column
+  double thesis_sigmas = 0.0;              ///< k: tolerance k * thesis sigma where given
+  std::map<std::string, double> thesis_sigma;  ///< "row / column" -> the thesis's sigma
+  int min_seeds = 1;
+  std::map<std::string, std::map<std::string, double>> published;  ///< row -> column -> value
+  std::vector<std::string> row_order;
+  std::map<std::string, std::vector<std::string>> column_order;    ///< row -> columns as written
+  std::vector<Reason> reasons;
+  /// The reason naming `cell` ("row / column"), or null.
+  const Reason* reason_for(const std::string& cell) const;
+};
+
+/// The predicate of a reason as evaluated.
+struct Check {
+  std::string predicate;  ///< in words
+  bool holds = false;
+  std::string value;      ///< what was found
+};
+
+/// One judged cell.
+struct Cell {
+  std::string row, column;
+  double published = 0.0;
+  double rig = 0.0;          ///< mean over the seeds
+  double rig_sd = 0.0;       ///< seed-to-seed standard deviation (0 with one seed)
+  double interval = 0.0;     ///< 95 % half-width of the mean (0 with one seed)
+  int seeds = 0;
+  double tolerance = 0.0;    ///< |rig - published| allowed for a match
+  std::string tolerance_basis;  ///< "2 thesis sigma", "5 % of the value", "absolute"
+  std::string category;
+  std::string verdict;       ///< match, explained, differs, inconclusive, not comparable
+  std::string reason;        ///< the reason (explained) or why it differs / is not judged
+  bool has_check = false;
+  Check check;
+  std::string repeats;       ///< "table / row / column" of an earlier cell with the same numbers
+};
+
+/// What judge() needs beyond the numbers.
+struct JudgeContext {
+  std::string states;  ///< the run's state source
+  /// The cell's values over the seeds on the flight with the reason's `with` (empty: not flown).
+  std::vector<double> with_values;
+};
+
+/// Judges one cell (see the top of this header).
+Cell judge(const TableSpec& table, const std::string& row, const std::string& column, const std::vector<double>& rig,
+           const JudgeContext& context);
+
+/// Mean, standard deviation and 95 % half-width of the mean of `x`.
+void mean_interval(const std::vector<double>& x, double* mean, double* sd, double* half_width);
+
+}  // namespace nimble::reproduce
