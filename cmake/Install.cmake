@@ -2,11 +2,11 @@
 #
 #   bin/                          rig and the rig's processes (rig finds them next to itself)
 #   lib/                          the libraries for reuse (static): nimble_core, nimble_contract,
-#                                 nimble_messages, nimble_ident, nimble_ident_lcm
-#   include/nimble_rig/           their headers (core/, contract/, ident/) and the generated
+#                                 nimble_messages, nimble_ident, nimble_ident_lcm, nimble_estimation
+#   include/nimble_rig/           their headers (core/, contract/, ident/, estimator/) and the generated
 #                                 LCM types (nimble/<type>.hpp)
 #   lib/cmake/nimble_rig/         find_package(nimble_rig): nimble_rig::lcmtypes, ::core,
-#                                 ::contract, ::messages, ::ident, ::ident_lcm
+#                                 ::contract, ::messages, ::ident, ::ident_lcm, ::estimation
 #   lib/pkgconfig/nimble_rig.pc   the same for pkg-config
 #   lib/python3/dist-packages/    nimble (the LCM types, generated) and nimble_rig (log reader)
 #   share/java/                   nimble_lcmtypes.jar (lcm-spy, lcm-logplayer-gui)

@@ -108,6 +108,8 @@ CampaignSpec load_campaign(const std::string& file) {
     }
   }
   c.lateral4_model = resolve(file, root.get_string("lateral4_model"));
+  // The sizes reasons' checks fly: read through the YAML anchors of the reasons that use them.
+  if (root.has("sizes")) root.get_node("sizes");
   {
     ConfigMap cm = root.get_map("coupled_models");
     for (const char* id : {"13", "14"}) c.coupled_models[id] = resolve(file, cm.get_string(id));

@@ -144,8 +144,11 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
       const double moved = gap - std::fabs(m - c.published);  // > 0: toward
       const double share = gap > 0 ? moved / gap : 0.0;
       const bool ok = why->moves == "toward" ? share >= why->at_least : -share >= why->at_least;
-      found.push_back(fmt::format("with the cause {:.4g} (moved {:.0f} % of the gap {})", m, 100 * std::fabs(share),
-                                  share >= 0 ? "toward" : "away"));
+      const bool past = (m - c.published) * off < 0;  // crossed the published value
+      found.push_back(past ? fmt::format("with the cause {:.4g}, past the published value by {:.0f} % of the gap", m,
+                                         100 * std::fabs(m - c.published) / gap)
+                           : fmt::format("with the cause {:.4g} (moved {:.0f} % of the gap {})", m,
+                                         100 * std::fabs(share), share >= 0 ? "toward" : "away"));
       holds = holds && ok;
     }
   }
