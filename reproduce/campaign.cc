@@ -226,6 +226,9 @@ void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std
                      "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
 }
 
+/// The derivatives whose identification is checked against the plant's.
+constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
+
 /// One run of the campaign: the flights of every seed, the values of every table.
 class CampaignRun {
  public:
@@ -250,6 +253,22 @@ class CampaignRun {
   }
 
   std::map<std::string, std::vector<CellMap>>& values() { return values_; }
+
+  /// The identified derivatives against the plant's, over the seeds flown.
+  std::vector<PlantCheck> plant_check() const {
+    std::vector<PlantCheck> out;
+    for (const auto& set : spec_.sets) {
+      for (const char* d : kCheckedDerivatives) {
+        PlantCheck c;
+        c.row = set.row;
+        c.derivative = d;
+        c.plant = plant_.at(set.row).at(d);
+        mean_interval(identified_.at(set.row).at(d), &c.mean, &c.sd, &c.interval);
+        out.push_back(c);
+      }
+    }
+    return out;
+  }
 
  private:
   ident::RigLogData read(const Flown& f) const {
@@ -283,6 +302,10 @@ class CampaignRun {
       const Vehicle vehicle = load_vehicle(truth.vehicle_file);
       ident::IdentResult id = identify_flight(read(f).measured, vehicle, truth.vehicle_file, "rig_" + set.row);
       put_eigenvalues(t95, set.row, id.eigenvalues);
+      for (const char* d : kCheckedDerivatives) {
+        identified_[set.row][d].push_back(id.parameters.at(d).value);
+        plant_[set.row][d] = truth.derivatives.at(d);
+      }
       all_eigenvalues.emplace_back(set.row, id.eigenvalues);
       if (first) {
         put_nondimensional(t96, set.row, [&id](const char* n) { return id.parameters.at(n).value; }, id.vehicle);
@@ -367,6 +390,8 @@ class CampaignRun {
   std::map<std::string, Flown> flown_;
   int variants_ = 0;
   std::map<std::string, std::vector<CellMap>> values_;
+  std::map<std::string, std::map<std::string, std::vector<double>>> identified_;  ///< row -> derivative -> seeds
+  std::map<std::string, std::map<std::string, double>> plant_;                    ///< row -> derivative
 };
 
 /// The values of `cell` over the seeds (NaN where a seed has none).
@@ -417,6 +442,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
 
   CampaignRun run(o, spec, result);
   for (std::size_t i = 0; i < o.seeds.size(); ++i) run.fly_seed(o.seeds[i], i == 0);
+  result.plant_check = run.plant_check();
   auto& values = run.values();
   // The tables that are arithmetic on the model files: the same on every seed.
   {

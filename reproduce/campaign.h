@@ -58,6 +58,17 @@ struct CauseCell {
   double interval = 0.0;    ///< 95 % half-width of with_cause's mean
 };
 
+/// A derivative identified from the identification flights against the plant's own (the model the
+/// flight flew): the rig's check of its states and pipeline, not a thesis cell.
+struct PlantCheck {
+  std::string row;         ///< "set N"
+  std::string derivative;  ///< e.g. "Yv"
+  double plant = 0.0;
+  double mean = 0.0;       ///< over the seeds
+  double sd = 0.0;         ///< seed-to-seed
+  double interval = 0.0;   ///< 95 % half-width of the mean
+};
+
 struct CauseStudy {
   std::string name;    ///< e.g. "flapping forcing"
   std::string source;  ///< where its size comes from
@@ -84,6 +95,7 @@ struct CampaignResult {
   std::vector<FlightRecord> flights;
   std::vector<Table> tables;
   std::vector<CauseStudy> causes;
+  std::vector<PlantCheck> plant_check;
   double wall_s = 0.0;
   /// Cells by category and verdict; a cell that repeats an earlier one's numbers counts once.
   std::map<std::string, std::map<std::string, int>> counts() const;
@@ -114,7 +126,7 @@ CampaignResult run_campaign(const CampaignOptions& options);
 std::string campaign_text(const CampaignResult& result);
 
 /// `{"tables": [{"id", "title", "category", "cells": [{"row", "column", "published", "rig", "rig_sd",
-/// "interval", "seeds", "tolerance", "tolerance_basis", "verdict", "reason", "check": {"predicate", "holds",
+/// "interval", "seeds", "tolerance", "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds",
 /// "value"}, "repeats"}]}], "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
 std::string campaign_json(const CampaignResult& result);
 

@@ -69,10 +69,12 @@ std::string campaign_text(const CampaignResult& r) {
     for (const auto& c : t.cells) {
       std::string note;
       if (!c.repeats.empty()) note = " (repeats " + c.repeats + ")";
-      if (c.verdict == "explained" || (c.verdict == "differs" && c.has_check)) {
+      const bool tuned = c.category == "calibrated" && !c.reason.empty() && t.category != "calibrated";
+      if (c.verdict == "explained" || (c.verdict == "differs" && c.has_check) || tuned) {
         const std::string text = c.verdict == "explained"
                                      ? c.reason + " [check: " + c.check.predicate + "; found: " + c.check.value + "]"
                                      : c.reason;
+        if (tuned) note += " calibrated";
         auto it = std::find(notes.begin(), notes.end(), text);
         if (it == notes.end()) it = notes.insert(notes.end(), text);
         note += fmt::format(" [{}]", it - notes.begin() + 1);
@@ -83,6 +85,17 @@ std::string campaign_text(const CampaignResult& r) {
                          c.rig, c.interval, c.tolerance, c.verdict, note);
     }
     for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
+  }
+  if (!r.plant_check.empty()) {
+    out << fmt::format("\nThe identification against the plant (not a thesis cell: each set's flight flew that set's "
+                       "model; states {}, mean over the seeds)\n",
+                       r.states);
+    out << fmt::format("  {:<7} {:<10} {:>11} {:>11} {:>9} {:>9} {:>8}\n", "row", "derivative", "plant", "identified",
+                       "sd", "+-95%", "error");
+    for (const auto& c : r.plant_check) {
+      out << fmt::format("  {:<7} {:<10} {:>11.4g} {:>11.4g} {:>9.2g} {:>9.2g} {:>7.1f}%\n", c.row, c.derivative,
+                         c.plant, c.mean, c.sd, c.interval, 100 * (c.mean / c.plant - 1));
+    }
   }
   if (!r.causes.empty()) {
     out << "\nWhat the closed-loop tables would need: Tables 9-11 flown again with each cause the thesis gives\n"
@@ -143,7 +156,7 @@ std::string campaign_json(const CampaignResult& r) {
       w.key("published").value(c.published).key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
       w.key("interval").value(c.interval).key("seeds").value(c.seeds);
       w.key("tolerance").value(c.tolerance).key("tolerance_basis").value(c.tolerance_basis);
-      w.key("verdict").value(c.verdict).key("reason").value(c.reason);
+      w.key("category").value(c.category).key("verdict").value(c.verdict).key("reason").value(c.reason);
       if (c.has_check) {
         w.key("check").begin_object().key("predicate").value(c.check.predicate).key("holds").value(c.check.holds);
         w.key("value").value(c.check.value).end_object();
@@ -166,6 +179,12 @@ std::string campaign_json(const CampaignResult& r) {
       w.key("interval").value(c.interval).end_object();
     }
     w.end_array().end_object();
+  }
+  w.end_array();
+  w.key("plant_check").begin_array();
+  for (const auto& c : r.plant_check) {
+    w.begin_object().key("row").value(c.row).key("derivative").value(c.derivative).key("plant").value(c.plant);
+    w.key("mean").value(c.mean).key("sd").value(c.sd).key("interval").value(c.interval).end_object();
   }
   w.end_array();
   w.key("counts").begin_object();

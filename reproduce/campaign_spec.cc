@@ -177,6 +177,20 @@ CampaignSpec load_campaign(const std::string& file) {
       }
       tm.finish();
     }
+    if (t.has("calibrated")) {
+      if (s.category != Category::kFlights) t.fail("calibrated", "names the tuned cells of a flights table");
+      ConfigMap cal = t.get_map("calibrated");
+      s.calibrated_cells = cal.get_string_list("cells");
+      s.calibrated_why = cal.get_string("why");
+      cal.finish();
+      for (const std::string& cell : s.calibrated_cells) {
+        const auto slash = cell.find(" / ");
+        const auto pr = slash == std::string::npos ? s.published.end() : s.published.find(cell.substr(0, slash));
+        if (pr == s.published.end() || pr->second.count(cell.substr(slash + 3)) == 0) {
+          t.fail("calibrated", "'" + cell + "' is not a published cell of this table (\"row / column\")");
+        }
+      }
+    }
     if (t.has("reasons")) {
       if (s.category != Category::kFlights) {
         t.fail("reasons", "only a table of the rig's own flights (category flights) has reasons");

@@ -63,8 +63,10 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   c.published = t.published.at(row).at(column);
   c.seeds = static_cast<int>(rig.size());
   mean_interval(rig, &c.rig, &c.rig_sd, &c.interval);
-  c.category = category_name(t.category);
   const std::string key = row + " / " + column;
+  const bool calibrated = std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
+  const Category category = calibrated ? Category::kCalibrated : t.category;
+  c.category = category_name(category);
   // The tolerance: the thesis's sigma where it gives one, else relative, else absolute by column.
   if (const auto s = t.thesis_sigma.find(key); s != t.thesis_sigma.end() && t.thesis_sigmas > 0) {
     c.tolerance = t.thesis_sigmas * s->second;
@@ -76,7 +78,7 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.tolerance = t.relative * std::fabs(c.published);
     c.tolerance_basis = fmt::format("{:g} % of the published value", 100 * t.relative);
   }
-  if (t.category == Category::kNotComparable) {
+  if (category == Category::kNotComparable) {
     c.verdict = "not comparable";
     c.reason = t.why;
     return c;
@@ -87,7 +89,7 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.reason = "the rig has no value";
     return c;
   }
-  if (t.category == Category::kFlights) {
+  if (category == Category::kFlights) {
     if (c.seeds < t.min_seeds) {
       c.verdict = "inconclusive";
       c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
@@ -102,9 +104,10 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   }
   if (std::fabs(off) <= c.tolerance) {
     c.verdict = "match";
+    if (calibrated) c.reason = t.calibrated_why;
     return c;
   }
-  const Reason* why = t.category == Category::kFlights ? t.reason_for(key) : nullptr;
+  const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
   if (why == nullptr) {
     c.verdict = "differs";
     c.reason = fmt::format("off by {:.3g}, allowed {:.3g}", off, c.tolerance);

@@ -57,6 +57,10 @@ struct TableSpec {
   std::string title;
   Category category = Category::kFlights;
   std::string why;  ///< calibrated, model, not comparable: what the cells are (printed)
+  /// Cells of a flights table the rig was tuned to ("row / column"): judged as calibrated, with
+  /// `calibrated_why`; the rest of the table is held out of the calibration.
+  std::vector<std::string> calibrated_cells;
+  std::string calibrated_why;
   double relative = 0.0;                   ///< tolerance relative to |published|
   std::map<std::string, double> absolute;  ///< by column
   double thesis_sigmas = 0.0;              ///< k: tolerance k * thesis sigma where given

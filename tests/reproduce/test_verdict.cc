@@ -102,3 +102,22 @@ TEST_CASE("verdict: calibrated and model cells match or differ, and not comparab
   CHECK(nc.rig == Approx(0.99));
   CHECK(nc.reason == "why");
 }
+
+TEST_CASE("verdict: a tuned cell of a flights table is calibrated, the cells held out are judged", "[verdict]") {
+  TableSpec t = table();
+  t.published["p_dot"]["rxy"] = 0.95;
+  t.calibrated_cells = {"p_dot / R2"};
+  t.calibrated_why = "tuned";
+  Reason r;
+  r.cells = {"p_dot / R2", "p_dot / rxy"};
+  r.text = "would explain";
+  r.rig = "above";
+  t.reasons = {r};
+  const Cell tuned = judge(t, "p_dot", "R2", {0.99}, ctx());
+  CHECK(tuned.category == "calibrated");
+  CHECK(tuned.verdict == "differs");  // a calibrated cell is never explained
+  CHECK(judge(t, "p_dot", "R2", {0.91}, ctx()).reason == "tuned");
+  const Cell held_out = judge(t, "p_dot", "rxy", {0.999}, ctx());
+  CHECK(held_out.category == "flights");
+  CHECK(held_out.verdict == "explained");
+}
