@@ -245,11 +245,14 @@ class CampaignRun {
   }
 
   /// A reason's flight with its cause: the table's values on the table's flight flown with `with`.
-  void fly_with(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
-                std::vector<CellMap>& out) {
+  /// Returns "" if the flight flew as its scenario asks, else its name, seed and result.
+  std::string fly_with(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
+                       std::vector<CellMap>& out) {
     seed_ = seed;
     plots_ = false;
-    out.push_back(table_on(id, flight_with(table_flight(id), with)));
+    const Flown& f = flight_with(table_flight(id), with);
+    out.push_back(table_on(id, f));
+    return f.record.result == "ok" ? "" : fmt::format("{} seed {}: {}", f.record.name, seed, f.record.result);
   }
 
   std::map<std::string, std::vector<CellMap>>& values() { return values_; }
@@ -461,12 +464,17 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   }
   // The flights with each reason's cause, and the closed-loop causes.
   std::map<std::string, std::map<std::string, std::vector<CellMap>>> with;  // table -> overrides -> seeds
+  std::map<std::string, std::map<std::string, std::string>> with_failure;  // table -> overrides -> first failure
   for (const std::string& id : campaign_table_ids()) {
     for (const Reason& r : spec.tables.at(id).reasons) {
       if (r.with.empty()) continue;
       auto& seeds = with[id][overrides_key(r.with)];
       if (!seeds.empty()) continue;
-      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, r.with, seeds);
+      std::string& failure = with_failure[id][overrides_key(r.with)];
+      for (const std::uint64_t seed : o.seeds) {
+        const std::string f = run.fly_with(seed, id, r.with, seeds);
+        if (failure.empty()) failure = f;
+      }
     }
   }
   for (const CauseSpec& cause : spec.causes) {
@@ -476,7 +484,10 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     for (const auto& [k, v] : cause.with) study.overrides.push_back(k + "=" + v);
     for (const std::string id : {"9", "10", "11"}) {
       std::vector<CellMap> seeds;
-      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, cause.with, seeds);
+      for (const std::uint64_t seed : o.seeds) {
+        const std::string f = run.fly_with(seed, id, cause.with, seeds);
+        if (!f.empty()) study.failures.push_back(f);
+      }
       const TableSpec& t = spec.tables.at(id);
       for (const auto& row : t.row_order) {
         CauseCell c;
@@ -510,6 +521,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
         ctx.states = o.states;
         if (const Reason* r = spec_t.reason_for(key); r != nullptr && !r->with.empty()) {
           ctx.with_values = over_seeds(with[id][overrides_key(r->with)], key);
+          ctx.with_failure = with_failure[id][overrides_key(r->with)];
         }
         const std::vector<double> x = over_seeds(values.at(id), key);
         raw[id][key] = x;

@@ -74,6 +74,7 @@ struct CauseStudy {
   std::string source;  ///< where its size comes from
   std::vector<std::string> overrides;  ///< key=value
   std::vector<CauseCell> cells;
+  std::vector<std::string> failures;   ///< flights with the cause that did not fly as their scenario asks
 };
 
 struct FlightRecord {

@@ -104,6 +104,7 @@ std::string campaign_text(const CampaignResult& r) {
       std::string ov;
       for (const auto& o : s.overrides) ov += (ov.empty() ? "" : ", ") + o;
       out << fmt::format("  {} ({}; {})\n", s.name, s.source, ov);
+      for (const auto& f : s.failures) out << "    not as asked: " << f << "\n";
       out << fmt::format("    {:<6} {:<8} {:>10} {:>10} {:>12} {:>8}  {}\n", "table", "row", "published", "rig",
                          "with cause", "+-95%", "moved");
       for (const auto& c : s.cells) {
@@ -171,6 +172,9 @@ std::string campaign_json(const CampaignResult& r) {
     w.begin_object().key("name").value(s.name).key("source").value(s.source);
     w.key("overrides").begin_array();
     for (const auto& o : s.overrides) w.value(o);
+    w.end_array();
+    w.key("failures").begin_array();
+    for (const auto& f : s.failures) w.value(f);
     w.end_array();
     w.key("cells").begin_array();
     for (const auto& c : s.cells) {

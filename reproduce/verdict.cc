@@ -140,6 +140,9 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     if (context.with_values.empty()) {
       found.push_back("the flight with the cause was not flown");
       holds = false;
+    } else if (!context.with_failure.empty()) {
+      found.push_back("the flight with the cause did not fly as its scenario asks: " + context.with_failure);
+      holds = false;
     } else {
       double m = 0, sd = 0, hw = 0;
       mean_interval(context.with_values, &m, &sd, &hw);

@@ -104,6 +104,9 @@ struct JudgeContext {
   std::string states;  ///< the run's state source
   /// The cell's values over the seeds on the flight with the reason's `with` (empty: not flown).
   std::vector<double> with_values;
+  /// How a flight with the cause went wrong ("" if every one flew as its scenario asks): a cause
+  /// that stops the flight (a failsafe, a diverged estimator) cannot explain a cell.
+  std::string with_failure;
 };
 
 /// Judges one cell (see the top of this header).

@@ -121,3 +121,19 @@ TEST_CASE("verdict: a tuned cell of a flights table is calibrated, the cells hel
   CHECK(held_out.category == "flights");
   CHECK(held_out.verdict == "explained");
 }
+
+TEST_CASE("verdict: a cause whose flight did not fly as asked explains nothing", "[verdict]") {
+  TableSpec t = table();
+  Reason r;
+  r.cells = {"p_dot / R2"};
+  r.text = "vibration";
+  r.with = {{"sensing.imu.vibration_enabled", "true"}};
+  t.reasons = {r};
+  JudgeContext c = ctx();
+  c.with_values = {0.90};  // all the way to the published value
+  CHECK(judge(t, "p_dot", "R2", {0.99}, c).verdict == "explained");
+  c.with_failure = "ol_doublet_with_1 seed 1: completed in failsafe";
+  const Cell failed = judge(t, "p_dot", "R2", {0.99}, c);
+  CHECK(failed.verdict == "differs");
+  CHECK_THAT(failed.check.value, Catch::Contains("failsafe"));
+}
