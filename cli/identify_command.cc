@@ -247,7 +247,15 @@ int run_identify_command(const std::vector<std::string>& args) {
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
-  apply_sensing(log_options, sensing_file);
+  if (log_options.states != ident::StateSource::kAuto && !ident::is_lcm_log(csv)) {
+    return cl.fail("--states: " + csv + " is not a rig log; a CSV file carries its own states");
+  }
+  try {
+    apply_sensing(log_options, sensing_file);
+  } catch (const ConfigError& e) {
+    std::cerr << "rig identify: --sensing: " << e.what() << "\n";
+    return kExitUsage;
+  }
   std::string damage;
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);

@@ -96,8 +96,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   try {
     o.seeds = parse_seed_list(seeds);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "rig reproduce: --seeds " << seeds << ": " << e.what() << "\n";
-    return kExitUsage;
+    return cl.fail("--seeds " + seeds + ": " + e.what());
   }
   if (!json_file.empty() && json_file != "-") {
     if (const std::string problem = launcher::writable_problem(json_file); !problem.empty()) {

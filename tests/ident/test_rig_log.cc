@@ -324,3 +324,47 @@ TEST_CASE("rig export --csv of a log with one damaged payload names what it left
   CHECK(m.out.find("; 1 undecodable left out (MOCAP_POSE 1)") != std::string::npos);
   CHECK(nimble::test::slurp(mjson).find("\"undecodable_channels\":{\"MOCAP_POSE\":1}") != std::string::npos);
 }
+
+TEST_CASE("smoothed states of a rig flight: made offline from its IMU and motion capture, closer to the truth than "
+          "the on-board estimate, and rig identify --states smoothed reads them",
+          "[ident]") {
+  const std::string log = temp_log("smoothed.lcmlog");
+  const auto fly = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
+                                         "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --seed 3 --log " +
+                                         log + " --no-progress --set duration_s=8");
+  INFO(fly.out << fly.err);
+  REQUIRE(fly.exit_code == 0);
+  const RigLogData estimate = read_rig_log(log, StateSource::kEstimate);
+  const RigLogData smoothed = read_rig_log(log, StateSource::kSmoothed);
+  CHECK(smoothed.state_source == "smoothed");
+  // rms error of v and phi against the truth, on the states' own instants (truth at 1 kHz, linear between).
+  const auto rms = [](const Channel& x, const Channel& truth) {
+    double se = 0;
+    int n = 0;
+    std::size_t j = 1;
+    for (std::size_t i = 0; i < x.t_s.size(); ++i) {
+      if (x.t_s[i] < 1.0) continue;  // after the filters' first second
+      while (j < truth.t_s.size() && truth.t_s[j] < x.t_s[i]) ++j;
+      if (j >= truth.t_s.size()) break;
+      const double s = (x.t_s[i] - truth.t_s[j - 1]) / (truth.t_s[j] - truth.t_s[j - 1]);
+      const double e = x.values[i] - ((1 - s) * truth.values[j - 1] + s * truth.values[j]);
+      se += e * e;
+      ++n;
+    }
+    return std::sqrt(se / n);
+  };
+  for (const char* ch : {"v", "phi"}) {
+    const double e_est = rms(estimate.measured.at(ch), estimate.truth.at(ch));
+    const double e_smo = rms(smoothed.measured.at(ch), smoothed.truth.at(ch));
+    INFO(ch << ": estimate " << e_est << ", smoothed " << e_smo);
+    CHECK(e_smo < 0.9 * e_est);
+  }
+  const auto id = nimble::test::run_rig("identify " + log + " --states smoothed --json -");
+  INFO(id.out << id.err);
+  CHECK(id.exit_code == 0);
+  CHECK(id.out.find("\"Yv\"") != std::string::npos);
+  // A log without the recorded sensors has nothing to smooth, and says which.
+  const std::string bare = temp_log("no_mocap.lcmlog");
+  write_lockstep_log(bare, 1.0);
+  CHECK(what_of([&] { read_rig_log(bare, StateSource::kSmoothed); }).find("to smooth") != std::string::npos);
+}
