@@ -27,6 +27,28 @@ std::map<std::string, std::string> string_map(ConfigMap& parent, const std::stri
   return out;
 }
 
+/// A mapping of numbers in `range` (keys kept as written).
+std::map<std::string, double> double_map(ConfigMap& parent, const std::string& key, const Range& range) {
+  const YAML::Node node = parent.get_node(key);
+  ConfigMap m = parent.get_map(key);
+  std::map<std::string, double> out;
+  for (const auto& item : node) {
+    const std::string k = item.first.as<std::string>();
+    out[k] = m.get_double(k, range);
+  }
+  m.finish();
+  return out;
+}
+
+/// Fails on `key` unless `cell` ("row / column") is a published cell of `t`.
+void require_cell(const ConfigMap& m, const std::string& key, const TableSpec& t, const std::string& cell) {
+  const auto slash = cell.find(" / ");
+  const auto pr = slash == std::string::npos ? t.published.end() : t.published.find(cell.substr(0, slash));
+  if (pr == t.published.end() || pr->second.count(cell.substr(slash + 3)) == 0) {
+    m.fail(key, "'" + cell + "' is not a published cell of this table (\"row / column\")");
+  }
+}
+
 Reason load_reason(const YAML::Node& node, const std::string& file, const std::string& path, const TableSpec& t,
                    const std::string& id) {
   ConfigMap r(node, file, path);
@@ -37,13 +59,7 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
     if (cell.find('*') != std::string::npos) {
       r.fail("cells", "'" + cell + "': no wildcards; a reason names each cell it explains (\"row / column\")");
     }
-    const auto slash = cell.find(" / ");
-    const std::string row = slash == std::string::npos ? "" : cell.substr(0, slash);
-    const std::string col = slash == std::string::npos ? "" : cell.substr(slash + 3);
-    const auto pr = t.published.find(row);
-    if (pr == t.published.end() || pr->second.count(col) == 0) {
-      r.fail("cells", "'" + cell + "' is not a published cell of this table (\"row / column\")");
-    }
+    require_cell(r, "cells", t, cell);
     if (t.reason_for(cell) != nullptr) r.fail("cells", "'" + cell + "' already has a reason");
   }
   out.text = r.get_string("text");
@@ -144,15 +160,7 @@ CampaignSpec load_campaign(const std::string& file) {
       s.relative = tol.get_double_or("relative", 0.0, Range::closed(0.0, 10.0));
       s.thesis_sigmas = tol.get_double_or("thesis_sigmas", 0.0, Range::closed(0.0, 10.0));
       s.min_seeds = static_cast<int>(tol.get_double_or("min_seeds", 1.0, Range::closed(1.0, 1000.0)));
-      if (tol.has("absolute")) {
-        const YAML::Node a = tol.get_node("absolute");
-        ConfigMap am = tol.get_map("absolute");
-        for (const auto& item : a) {
-          const std::string col = item.first.as<std::string>();
-          s.absolute[col] = am.get_double(col, Range::closed(0.0, 1e6));
-        }
-        am.finish();
-      }
+      if (tol.has("absolute")) s.absolute = double_map(tol, "absolute", Range::closed(0.0, 1e6));
       tol.finish();
     }
     const YAML::Node published = t.get_node("published");
@@ -169,13 +177,8 @@ CampaignSpec load_campaign(const std::string& file) {
       cols.finish();
     }
     if (t.has("thesis_sigma")) {
-      const YAML::Node ts = t.get_node("thesis_sigma");
-      ConfigMap tm = t.get_map("thesis_sigma");
-      for (const auto& item : ts) {
-        const std::string cell = item.first.as<std::string>();
-        s.thesis_sigma[cell] = tm.get_double(cell, Range::closed(0.0, 1e9));
-      }
-      tm.finish();
+      s.thesis_sigma = double_map(t, "thesis_sigma", Range::closed(0.0, 1e9));
+      for (const auto& [cell, sigma] : s.thesis_sigma) require_cell(t, "thesis_sigma", s, cell);
     }
     if (t.has("calibrated")) {
       if (s.category != Category::kFlights) t.fail("calibrated", "names the tuned cells of a flights table");
@@ -183,13 +186,7 @@ CampaignSpec load_campaign(const std::string& file) {
       s.calibrated_cells = cal.get_string_list("cells");
       s.calibrated_why = cal.get_string("why");
       cal.finish();
-      for (const std::string& cell : s.calibrated_cells) {
-        const auto slash = cell.find(" / ");
-        const auto pr = slash == std::string::npos ? s.published.end() : s.published.find(cell.substr(0, slash));
-        if (pr == s.published.end() || pr->second.count(cell.substr(slash + 3)) == 0) {
-          t.fail("calibrated", "'" + cell + "' is not a published cell of this table (\"row / column\")");
-        }
-      }
+      for (const std::string& cell : s.calibrated_cells) require_cell(t, "calibrated", s, cell);
     }
     if (t.has("reasons")) {
       if (s.category != Category::kFlights) {
