@@ -1,3 +1,5 @@
+/// The fixed-interval smoother of a recorded flight (estimator/smoother.h).
+
 #include "estimator/smoother.h"
 
 #include <algorithm>

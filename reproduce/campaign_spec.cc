@@ -1,3 +1,5 @@
+/// Reading and checking the campaign file of `rig reproduce thesis` (reproduce/campaign_spec.h).
+
 #include "reproduce/campaign_spec.h"
 
 #include <filesystem>

@@ -1,3 +1,5 @@
+/// The verdict of one cell of `rig reproduce thesis` (reproduce/verdict.h).
+
 #include "reproduce/verdict.h"
 
 #include <algorithm>
