@@ -149,7 +149,8 @@ int run_view_command(const std::vector<std::string>& args) {
   }
   if (!web.empty() && !std::filesystem::is_directory(web_root)) {
     std::cerr << "rig view: --web-root " << web_root
-              << " is not a directory (build the target 'dashboard', or give --web-root DIR)\n";
+              << " is not a directory (build the target 'dashboard' with the build's npm packages installed: "
+                 "scripts/setup.sh; or give --web-root DIR)\n";
     return kExitUsage;
   }
 

@@ -8,6 +8,8 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
 export BUILD_DIR
-"$ROOT/scripts/setup.sh"
+# Only what the main job needs: its packages (PROFILE=main) and the rig with its processes (the
+# target rig depends on them), not the tests and benchmarks.
+PROFILE=main TARGETS=rig "$ROOT/scripts/setup.sh"
 cd "$ROOT"
 exec "$BUILD_DIR/bin/rig" run rig_configs/id_doublet_train_fast.yaml "$@"

@@ -6,6 +6,9 @@
 #   SANITIZE   1: the clang build with AddressSanitizer, UndefinedBehaviorSanitizer and the
 #              libFuzzer targets of fuzz/ (cmake/Sanitizers.cmake); use its own BUILD_DIR
 #   TARGETS    build only these targets (space separated; default: all)
+#   PROFILE    all (default): every package the tests need; main: only what building and flying
+#              the rig needs (scripts/main.sh): no browser, Slurm, qemu, gnuplot, numpy or npm
+#              packages (the dashboard page is then left out with a note)
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,19 +29,26 @@ BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 # dashboard's browser test); Node.js and npm (below) for the viewers' assets and their readers;
 # Slurm (slurm-wlm: slurmctld, slurmd and the client commands) with munge for `rig sweep
 # --backend slurm` and the test that brings up a one-node cluster (tests/cluster).
+# ccache: compiled objects reused across builds (CMakeLists.txt, RIG_CCACHE).
+PROFILE="${PROFILE:-all}"
 PACKAGES=(
-  g++ make cmake pkg-config
+  g++ make cmake pkg-config ccache
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev
   libeigen3-dev libyaml-cpp-dev catch2 libboost-dev nlohmann-json3-dev libfmt-dev libcli11-dev
   default-jdk-headless
-  gnuplot-nox
-  can-utils iproute2 qemu-system-x86 xz-utils
-  python3 python3-numpy
-  libzstd-dev zlib1g-dev chromium-headless-shell
-  slurm-wlm munge
+  iproute2
+  libzstd-dev zlib1g-dev
 )
-# Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
-command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
+case "$PROFILE" in
+  main) ;;
+  all)
+    PACKAGES+=(gnuplot-nox can-utils qemu-system-x86 xz-utils python3 python3-numpy chromium-headless-shell
+               slurm-wlm munge)
+    # Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
+    command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
+    ;;
+  *) echo "setup: PROFILE must be main or all, not '$PROFILE'" >&2; exit 2 ;;
+esac
 CMAKE_ARGS=()
 if [[ "${SANITIZE:-0}" == 1 ]]; then
   # clang, its sanitizer and libFuzzer runtimes, and llvm-symbolizer for readable reports.
@@ -66,7 +76,7 @@ fi
 # The npm packages of tools/npm/package-lock.json in $BUILD_DIR/npm: the dashboard's plotting
 # library (copied into the build's web assets) and, for the tests, the MCAP reader, the Foxglove
 # WebSocket client and puppeteer-core. Installed again only when the lock file changed.
-if [[ "${SANITIZE:-0}" != 1 ]]; then
+if [[ "${SANITIZE:-0}" != 1 && "$PROFILE" == all ]]; then
   NPM_DIR="$BUILD_DIR/npm"
   if ! cmp -s "$ROOT/tools/npm/package-lock.json" "$NPM_DIR/package-lock.json" || [[ ! -d "$NPM_DIR/node_modules" ]]; then
     mkdir -p "$NPM_DIR"
