@@ -53,8 +53,16 @@ CanLinkFaults::Fate CanLinkFaults::fate(Direction d, int64_t message, int frame,
       if (uniform(*f, d, message, frame, 0) >= f->probability || data_len <= 0) return Fate::kSent;
       if (bit != nullptr) *bit = static_cast<int>(uniform(*f, d, message, frame, 1) * 8.0 * data_len);
       return Fate::kCorrupted;
-    default: return Fate::kSent;
+    case contract::FaultKind::kOff:
+    case contract::FaultKind::kStuck:
+    case contract::FaultKind::kGarbage:
+    case contract::FaultKind::kWrong:
+    case contract::FaultKind::kSlow:
+    case contract::FaultKind::kDelayed:
+    case contract::FaultKind::kIntermittent:
+      return Fate::kSent;  // faults of a channel act at its publisher (transport/fault_injector.h)
   }
+  return Fate::kSent;
 }
 
 bool CanLinkFaults::arrives(Direction d, int64_t message, int frames, int64_t utime) const {

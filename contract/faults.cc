@@ -22,18 +22,25 @@ std::vector<std::string> names_of() {
 
 }  // namespace
 
+const std::vector<FaultKindInfo>& fault_kinds() {
+  static const std::vector<FaultKindInfo> kinds = {
+      {FaultKind::kOff, "off", FaultTarget::kChannel, ""},
+      {FaultKind::kStuck, "stuck", FaultTarget::kChannel, ""},
+      {FaultKind::kGarbage, "garbage", FaultTarget::kChannel, "mode (bytes | nan), field"},
+      {FaultKind::kWrong, "wrong", FaultTarget::kChannel, "scale, bias, field"},
+      {FaultKind::kSlow, "slow", FaultTarget::kChannel, "divisor"},
+      {FaultKind::kDelayed, "delayed", FaultTarget::kChannel, "delay_ms"},
+      {FaultKind::kIntermittent, "intermittent", FaultTarget::kChannel, "probability"},
+      {FaultKind::kCanLoss, "loss", FaultTarget::kCanLink, "probability"},
+      {FaultKind::kCanCorrupt, "corrupt", FaultTarget::kCanLink, "probability"},
+      {FaultKind::kCanBusOff, "bus_off", FaultTarget::kCanLink, ""},
+  };
+  return kinds;
+}
+
 const char* fault_kind_name(FaultKind kind) {
-  switch (kind) {
-    case FaultKind::kOff: return "off";
-    case FaultKind::kStuck: return "stuck";
-    case FaultKind::kGarbage: return "garbage";
-    case FaultKind::kWrong: return "wrong";
-    case FaultKind::kSlow: return "slow";
-    case FaultKind::kDelayed: return "delayed";
-    case FaultKind::kIntermittent: return "intermittent";
-    case FaultKind::kCanLoss: return "loss";
-    case FaultKind::kCanCorrupt: return "corrupt";
-    case FaultKind::kCanBusOff: return "bus_off";
+  for (const FaultKindInfo& k : fault_kinds()) {
+    if (k.kind == kind) return k.name;
   }
   return "?";
 }
@@ -77,7 +84,9 @@ std::string FaultSpec::describe() const {
     case FaultKind::kIntermittent:
     case FaultKind::kCanLoss:
     case FaultKind::kCanCorrupt: std::snprintf(param, sizeof param, " (p = %g)", probability); break;
-    default: break;
+    case FaultKind::kOff:
+    case FaultKind::kStuck:
+    case FaultKind::kCanBusOff: break;  // no parameter
   }
   return "fault " + std::to_string(index) + " (" + what + param + ", " + window + ")";
 }

@@ -35,6 +35,27 @@ enum class FaultKind {
   kCanBusOff,     ///< CAN link: the transmitting controller goes bus-off (sends nothing, reports it)
 };
 
+/// What a kind of fault acts on.
+enum class FaultTarget {
+  kChannel,  ///< an LCM channel at its publisher (transport/fault_injector.h)
+  kCanLink,  ///< the CAN frames between the two sides of the bridge (can_bridge/can_faults.h)
+};
+
+/// One kind of fault as the rig knows it. fault_kinds() is the one list of them: the scenario
+/// loader takes its names and parameters from it, and every switch over FaultKind that acts on
+/// a fault (its parameters in scenario/faults.cc, its injection in transport/fault_injector.cc
+/// or can_bridge/can_faults.cc, its description) has no `default:`, so that a new kind does not
+/// compile until each of them handles it (docs/faults.md, "Adding a fault kind").
+struct FaultKindInfo {
+  FaultKind kind;
+  const char* name;     ///< in a scenario's `kind:`
+  FaultTarget target;
+  const char* params;   ///< its `params:` keys, as docs/faults.md lists them ("" for none)
+};
+
+/// Every kind, in the order of the enumeration.
+const std::vector<FaultKindInfo>& fault_kinds();
+
 /// The name of `kind` in a scenario (off, stuck, garbage, wrong, slow, delayed, intermittent,
 /// loss, corrupt, bus_off).
 const char* fault_kind_name(FaultKind kind);

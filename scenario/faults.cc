@@ -11,18 +11,6 @@ namespace {
 
 using contract::FaultKind;
 
-struct KindName {
-  const char* name;
-  FaultKind kind;
-};
-constexpr KindName kChannelKinds[] = {
-    {"off", FaultKind::kOff},         {"stuck", FaultKind::kStuck}, {"garbage", FaultKind::kGarbage},
-    {"wrong", FaultKind::kWrong},     {"slow", FaultKind::kSlow},   {"delayed", FaultKind::kDelayed},
-    {"intermittent", FaultKind::kIntermittent},
-};
-constexpr KindName kCanKinds[] = {
-    {"loss", FaultKind::kCanLoss}, {"corrupt", FaultKind::kCanCorrupt}, {"bus_off", FaultKind::kCanBusOff}};
-
 /// The process that publishes `channel` in a run: the contract's single publisher (its first
 /// word: "plant (emulated onboard IMU)" is the plant).
 std::string publisher_of(const std::string& channel) {
@@ -58,14 +46,16 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
     targets.push_back(contract::kFaultTargetCan);
     f.target = m.get_enum("target", targets);
     const bool can = f.target == contract::kFaultTargetCan;
+    // The kinds of this target, from the one list of kinds (contract/faults.h).
+    const contract::FaultTarget target_class = can ? contract::FaultTarget::kCanLink : contract::FaultTarget::kChannel;
     std::vector<std::string> kind_names;
-    for (const KindName& k : can ? std::vector<KindName>(std::begin(kCanKinds), std::end(kCanKinds))
-                                 : std::vector<KindName>(std::begin(kChannelKinds), std::end(kChannelKinds))) {
-      kind_names.push_back(k.name);
+    for (const contract::FaultKindInfo& k : contract::fault_kinds()) {
+      if (k.target == target_class) kind_names.push_back(k.name);
     }
     const std::string kind = m.get_enum("kind", kind_names);
-    for (const KindName& k : kChannelKinds) if (!can && kind == k.name) f.kind = k.kind;
-    for (const KindName& k : kCanKinds) if (can && kind == k.name) f.kind = k.kind;
+    for (const contract::FaultKindInfo& k : contract::fault_kinds()) {
+      if (k.target == target_class && kind == k.name) f.kind = k.kind;
+    }
 
     const double start_s = m.get_double("start_s", Range::non_negative());
     if (start_s >= duration_s) {
@@ -112,7 +102,9 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
       case FaultKind::kCanCorrupt:
         f.probability = p.get_double("probability", Range{0.0, 1.0, true, false});
         break;
-      default: break;
+      case FaultKind::kOff:
+      case FaultKind::kStuck:
+      case FaultKind::kCanBusOff: break;  // no parameters: p.finish() refuses any
     }
     // Over the CAN link the bridge forwards one command per control cycle, and in lockstep its
     // rig side waits for each: a command that is never published (or never decodes) would stall

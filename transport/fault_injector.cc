@@ -139,7 +139,11 @@ void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessa
       send_now(msg.encode());
       return;
     }
-    default:
+    case FaultKind::kCanLoss:
+    case FaultKind::kCanCorrupt:
+    case FaultKind::kCanBusOff:
+      // Faults of the CAN link act on its frames (can_bridge/can_faults.h), never on a channel:
+      // the scenario loader gives them no channel target.
       *msg.seq = cs.next_seq++;
       send_now(msg.encode());
       return;

@@ -255,3 +255,31 @@ TEST_CASE("fault code names: every CODE_ constant of fault_event_t.lcm has its n
   CHECK(checked >= 19);
   CHECK(nimble::contract::fault_code_name(999) == "code 999");
 }
+
+TEST_CASE("fault kinds: one list names every kind once, in the enumeration's order, and docs/faults.md lists each with "
+          "its parameters",
+          "[fault_injector]") {
+  const auto& kinds = nimble::contract::fault_kinds();
+  REQUIRE(kinds.size() == static_cast<std::size_t>(FaultKind::kCanBusOff) + 1);
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/docs/faults.md");
+  REQUIRE(in.good());
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    INFO(kinds[i].name);
+    CHECK(static_cast<std::size_t>(kinds[i].kind) == i);
+    CHECK(std::string(nimble::contract::fault_kind_name(kinds[i].kind)) == kinds[i].name);
+    for (std::size_t j = 0; j < i; ++j) CHECK(std::string(kinds[j].name) != kinds[i].name);
+    // Each kind is accepted by the scenario loader on its own kind of target, with no parameter
+    // when it takes none.
+    const bool can = kinds[i].target == nimble::contract::FaultTarget::kCanLink;
+    if (std::string(kinds[i].params).empty()) {
+      const auto f = nimble::faults_from(
+          YAML::Load(std::string("[{target: ") + (can ? "CAN" : "IMU") + ", kind: " + kinds[i].name + ", start_s: 1}]"),
+          "s.yaml", {"plant", "controller", "estimator", "mocap", "can_flight", "can_rig"}, can, 5.0);
+      REQUIRE(f.size() == 1);
+      CHECK(f[0].kind == kinds[i].kind);
+    }
+    // The documentation's table of kinds has its row: "| `name` |".
+    CHECK(doc.find(std::string("| `") + kinds[i].name + "`") != std::string::npos);
+  }
+}
