@@ -1,7 +1,9 @@
 #pragma once
-/// Sub-commands of the `rig` command-line tool. Each takes the arguments after
-/// its name and returns the process exit code: 0 success, 1 the command ran but
-/// its check failed, 2 bad usage or bad input (message on stderr).
+/// Sub-commands of the `rig` command-line tool, one file each (cli/<name>_command.cc). Each takes
+/// the arguments after its name and returns the process exit code: 0 success, 1 the command ran
+/// but its check failed, 2 bad usage or bad input (message on stderr). Their one-line usage is
+/// written once, in cli/main.cc's command table (`rig --help`); each command's options in its
+/// own file (`rig <command> --help`).
 
 #include <string>
 #include <vector>
@@ -10,63 +12,37 @@
 
 namespace nimble::cli {
 
-/// `rig model <model.yaml> [--vehicle <vehicle.yaml>] [--json]`
+/// cli/model_command.cc.
 int run_model_command(const std::vector<std::string>& args);
-
-/// `rig run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--json F] [--set k=v] [--seed N]`
+/// cli/run_command.cc.
 int run_run_command(const std::vector<std::string>& args);
-
-/// `rig view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--web-root DIR] [--exit-when-done]
-/// [--salvage]`: a log replayed live on a Foxglove WebSocket server, and the dashboard page (cli/view_command.cc).
+/// cli/view_command.cc.
 int run_view_command(const std::vector<std::string>& args);
-
-/// `rig sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F] [--csv F]`: a
-/// Monte Carlo campaign (launcher/sweep.h).
+/// cli/sweep_command.cc.
 int run_sweep_command(const std::vector<std::string>& args);
-
-/// `rig params [SECTION]`: parameter tables (key, default, range, unit, meaning).
+/// cli/params_command.cc.
 int run_params_command(const std::vector<std::string>& args);
-
-/// `rig check`: can this host run LCM multicast (directly or in a private namespace)?
+/// cli/check_command.cc.
 int run_check_command(const std::vector<std::string>& args);
-
-/// `rig spy [--pid PID] [--url URL]`: lcm-spy with the rig's types.
+/// cli/spy_command.cc.
 int run_spy_command(const std::vector<std::string>& args);
-
-/// `rig identify <data.csv> [--structure lateral3|lateral4] [--method ols|wls] [--vehicle F] [--w0 M_PER_S]
-/// [--rate HZ] [--cutoff HZ] [--order N] [--json F] [--model-out F] [--plots DIR] ...`: identification
-/// of the lateral model from CSV flight data (cli/identify_command.cc).
+/// cli/identify_command.cc.
 int run_identify_command(const std::vector<std::string>& args);
-
-/// `rig discrepancy <data> --model <model.yaml> [--json F] [--model-out F] [--candidates LIST] ...`: the
-/// discrepancy workflow (ident/discrepancy.h).
+/// cli/discrepancy_command.cc.
 int run_discrepancy_command(const std::vector<std::string>& args);
-/// `rig discrepancy --power --scenario S --model M --effect NAME=SIZE[,...] [--lengths S,...] [--flights N]
-/// [--verify N] [--json F|-] [--plots DIR] ...`: how long to fly to name an effect (cli/power_command.cc,
-/// power/power_campaign.h). run_discrepancy_command hands every command line with --power to it.
+/// cli/power_command.cc. run_discrepancy_command hands it every command line with --power
 int run_discrepancy_power_command(const std::vector<std::string>& args);
-/// `rig validate <model.yaml> <data.csv> [--json F] [--plots DIR] ...`: open-loop validation.
+/// cli/validate_command.cc.
 int run_validate_command(const std::vector<std::string>& args);
-
-/// `rig export <log.lcmlog> --csv <out.csv> [--rate HZ] [--states auto|estimate|truth]`
+/// cli/export_command.cc.
 int run_export_command(const std::vector<std::string>& args);
-
-/// `rig turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]`: the
-/// Ce500 practical, aircraft responses to atmospheric turbulence (cli/turbulence_command.cc).
+/// cli/turbulence_command.cc.
 int run_turbulence_command(const std::vector<std::string>& args);
-
-/// `rig turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--skip S] [--f-max HZ] [--json F|-]
-/// [--plots DIR]`: a rig flight in Dryden side gusts against the closed-loop linear model's PSDs and
-/// variances (cli/turbulence_response_command.cc, turbulence/hover_gust_response.h).
+/// cli/turbulence_response_command.cc.
 int run_turbulence_response_command(const std::vector<std::string>& args);
-
-/// `rig reproduce thesis [--clock C] [--seed N] [--json F|-] [--report DIR]`: the thesis's campaign and
-/// its tables (reproduce/campaign.h).
+/// cli/reproduce_command.cc.
 int run_reproduce_command(const std::vector<std::string>& args);
-
-/// `rig loop <scenario.yaml> [--model F] [--gains NAME|KP,KD] [--all-sets] [--break actuator|sensor]
-/// [--design phase_margin_deg=P,crossover_hz=F] [--gains-out F] [--fly] [--json F|-] [--plots DIR]`: the roll
-/// loop's margins, poles and bandwidth, and a PD design (cli/loop_command.cc).
+/// cli/loop_command.cc.
 int run_loop_command(const std::vector<std::string>& args);
 
 }  // namespace nimble::cli

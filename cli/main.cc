@@ -32,7 +32,7 @@ const Command kCommands[] = {
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",
      nimble::cli::run_spy_command},
-    {"identify", "identify <data.csv|log.lcmlog> [--structure lateral3|lateral4] [--method ols|wls] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
+    {"identify", "identify <data.csv|log.lcmlog> [--structure lateral3|lateral4] [--method ols|wls] [--states auto|estimate|truth|smoothed] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
      nimble::cli::run_identify_command},
     {"validate", "validate <model.yaml> <data.csv|log.lcmlog> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
      nimble::cli::run_validate_command},
@@ -46,7 +46,7 @@ const Command kCommands[] = {
      nimble::cli::run_turbulence_response_command},
     {"loop", "loop <scenario.yaml> [--all-sets] [--gains NAME|KP,KD] [--break actuator|sensor] [--design ...] [--json F|-] [--plots DIR]   the roll loop's margins, poles, bandwidth; PD design",
      nimble::cli::run_loop_command},
-    {"reproduce", "reproduce thesis [--clock C] [--seed N] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
+    {"reproduce", "reproduce thesis [--seeds LIST] [--states smoothed|estimate|truth] [--clock C] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
      nimble::cli::run_reproduce_command},
 };
 

@@ -1,0 +1,171 @@
+/// `rig export`: a rig log as identification CSV, or as MCAP for Foxglove, Lichtblick and PlotJuggler.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cmdline/args.h"
+#include "cli/commands.h"
+#include "core/model.h"
+#include "ident/flight_data.h"
+#include "ident/rig_log.h"
+#include "core/json_writer.h"
+#include "ident/signal.h"
+#include "ident/report.h"
+#include "mcap/log_export.h"
+#include "cli/log_input.h"
+#include "core/config.h"
+
+namespace nimble::cli {
+namespace {
+
+/// The --json report of an MCAP export.
+std::string export_json(const mcap::ExportStats& s) {
+  auto n = [](uint64_t v) { return static_cast<long long>(v); };
+  JsonWriter w;
+  w.begin_object();
+  w.key("log").value(s.log).key("out").value(s.out).key("format").value("mcap");
+  w.key("compression").value(mcap::to_string(s.compression));
+  w.key("events").value(n(s.events)).key("messages").value(n(s.messages));
+  w.key("mcap_channels").value(n(s.mcap_channels));
+  w.key("undecodable").value(n(s.undecodable)).key("unknown_channel_events").value(n(s.unknown_events));
+  undecodable_json(w, mcap::undecodable_by_channel(s));
+  w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
+  w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
+  w.key("seconds").value(s.seconds).key("damage").value(s.damage);
+  w.key("channels").begin_object();
+  for (const auto& kv : s.channels) {
+    w.key(kv.first).begin_object();
+    w.key("type").value(kv.second.type).key("events").value(n(kv.second.events));
+    w.key("json").value(n(kv.second.json)).key("undecodable").value(n(kv.second.undecodable));
+    w.key("raw").value(n(kv.second.raw));
+    w.end_object();
+  }
+  w.end_object();
+  w.key("unknown_channels").begin_array();
+  for (const auto& c : s.unknown_channels) w.value(c);
+  w.end_array();
+  w.end_object();
+  return w.str();
+}
+
+/// `rig export --format mcap`: the log as MCAP, the one-line summary, the --json report.
+int export_mcap(const std::string& log, const std::string& out, const mcap::ExportOptions& options,
+                const std::string& json) {
+  const mcap::ExportStats stats = mcap::export_log_to_mcap(log, out, options);
+  warn_damage("rig export", log, stats.damage);
+  (json == "-" ? std::cerr : std::cout) << "rig export: " << mcap::summary_line(stats) << "\n";
+  if (!json.empty()) write_json(json, export_json(stats));
+  return 0;
+}
+
+
+}  // namespace
+
+int run_export_command(const std::vector<std::string>& args) {
+  std::string log, csv, out_file, format, compression = "zstd", json;
+  bool raw = false;
+  double rate_hz = 512.0;
+  ident::LogReadOptions log_options;
+  ident::Interpolation interpolation = ident::Interpolation::kCubic;
+  CommandLine cl("rig export",
+                 "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
+                 "resampled onto one grid, or as MCAP for Foxglove, Lichtblick and PlotJuggler.\n"
+                 "CSV: states come from the estimator (ESTIMATE) when the log has it, else from the plant's\n"
+                 "truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. MCAP (docs/viewers.md): one\n"
+                 "channel per LCM channel, JSON messages with their JSON Schema, log time = rig time.\n"
+                 "A damaged log is an error naming the byte offset and the event; a message that is not one of\n"
+                 "its channel's type is left out and named, by channel and count (CSV: those of the channels it\n"
+                 "does not read; a damaged message on a channel it reads is an error naming the event).");
+  cl->add_option("log", log, "the rig log (.lcmlog)")->required();
+  cl->add_option("--format", format, "csv or mcap (default: mcap when --out ends in .mcap, else csv)")
+      ->check(CLI::IsMember({"csv", "mcap"}))
+      ->type_name("FORMAT");
+  cl->add_option("--csv", csv, "the CSV file to write (--format csv)")->type_name("FILE");
+  cl->add_option("--out", out_file, "the file to write (either format)")->type_name("FILE");
+  auto* rate = cl->add_option("--rate", rate_hz, "CSV: the grid's rate [Hz]")
+                   ->check(kFinite & CLI::Range(1e-3, 100000.0))
+                   ->capture_default_str()
+                   ->type_name("HZ");
+  auto* interp = each_value(
+      cl->add_option("--interpolation", "CSV: cubic (default) or linear")->type_name("MODE")
+          ->check(CLI::IsMember({"cubic", "linear"})),
+      [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
+  std::string sensing_file;
+  auto* states = add_states(cl, log_options, sensing_file);
+  auto* comp = cl->add_option("--compression", compression, "MCAP: chunk compression, zstd or none")
+                   ->check(CLI::IsMember({"zstd", "none"}))
+                   ->capture_default_str()
+                   ->type_name("C");
+  auto* raw_flag = cl->add_flag("--raw", raw, "MCAP: also each channel's LCM bytes as <CHANNEL>/lcm");
+  add_salvage(cl, log_options);
+  cl.add_json(json,
+              "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; both: "
+              "undecodable messages by channel, damage)");
+  if (const auto done = cl.parse(args)) return *done;
+  if (format.empty()) {
+    const bool mcap_name = out_file.size() >= 5 && out_file.compare(out_file.size() - 5, 5, ".mcap") == 0;
+    format = csv.empty() && mcap_name ? "mcap" : "csv";
+  }
+  if (format == "mcap") {
+    for (const CLI::Option* o : {rate, interp, states}) {
+      if (o->count() > 0) return cl.fail(o->get_name() + " is for --format csv");
+    }
+    if (!csv.empty()) return cl.fail("--csv is for --format csv; the MCAP file is --out");
+    if (out_file.empty()) return cl.fail("--format mcap needs --out FILE");
+    mcap::ExportOptions options;
+    options.compression = mcap::compression_from_string(compression);
+    options.raw = raw;
+    options.salvage = log_options.salvage;
+    return export_mcap(log, out_file, options, json);
+  }
+  for (const CLI::Option* o : {comp, raw_flag}) {
+    if (o->count() > 0) return cl.fail(o->get_name() + " is for --format mcap");
+  }
+  if (!csv.empty() && !out_file.empty()) return cl.fail("--csv and --out both name the output: give one");
+  if (csv.empty()) csv = out_file;
+  if (csv.empty()) return cl.fail("--csv FILE (or --out FILE.mcap for MCAP) is required");
+  mcap::UndecodableCount undecodable;
+  count_undecodable(log_options, undecodable);
+  try {
+    apply_sensing(log_options, sensing_file);
+  } catch (const ConfigError& e) {
+    return cl.fail(std::string("--sensing: ") + e.what());
+  }
+  const ident::RigLogData data = ident::read_rig_log(log, log_options.states, log_options);
+  warn_damage("rig export", log, data.damage);
+  warn_undecodable("rig export", log, undecodable);
+  const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz, interpolation);
+  ident::FlightData out;
+  out.source = log;
+  const std::vector<double> t(grid.t_s.data(), grid.t_s.data() + grid.t_s.size());
+  for (const auto& [name, values] : grid.signals) {
+    if (!ident::is_known_channel(name)) continue;
+    out.channels[name] = ident::Channel{t, std::vector<double>(values.data(), values.data() + values.size())};
+  }
+  ident::write_flight_csv(out, csv);
+  (json == "-" ? std::cerr : std::cout) << "rig export: " << grid.size() << " samples at " << rate_hz
+                                        << " Hz (states from " << data.state_source << ") -> " << csv << "\n";
+  if (!json.empty()) {
+    JsonWriter w;
+    w.begin_object();
+    w.key("log").value(log).key("csv").value(csv).key("samples").value(static_cast<long long>(grid.size()));
+    w.key("rate_hz").value(rate_hz).key("interpolation").value(ident::to_string(interpolation));
+    w.key("state_source").value(data.state_source).key("damage").value(data.damage);
+    w.key("undecodable").value(static_cast<long long>(undecodable.total()));
+    undecodable_json(w, undecodable.by_channel());
+    w.key("columns").begin_array();
+    for (const auto& [name, channel] : out.channels) w.value(name);
+    w.end_array();
+    w.end_object();
+    write_json(json, w.str());
+  }
+  return 0;
+}
+
+}  // namespace nimble::cli

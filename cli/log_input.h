@@ -1,0 +1,56 @@
+#pragma once
+/// What the commands that read flight data share (identify, validate, discrepancy, export): the
+/// options that say how a rig log is read, the processing options, and how a damaged or
+/// partly undecodable log is reported.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cmdline/args.h"
+#include "core/json_writer.h"
+#include "ident/identify.h"
+#include "ident/rig_log.h"
+#include "ident/signal.h"
+#include "mcap/log_export.h"
+
+namespace nimble::cli {
+
+/// "A:B" [s] as a time range. @throws std::invalid_argument naming the text.
+ident::TimeRange time_range(const std::string& text);
+
+/// "a,b,c" as a list (empty items left out).
+std::vector<std::string> split_list(const std::string& text);
+
+/// --rate, --cutoff, --order, --interpolation: the processing every analysis command shares.
+void add_processing(CommandLine& cl, ident::ProcessingOptions& p);
+
+/// --salvage: read a damaged log up to the damage.
+void add_salvage(CommandLine& cl, ident::LogReadOptions& o);
+
+/// --states SOURCE and --sensing FILE: where a rig log's states come from, and the sensing the
+/// smoother's filter is matched to. Returns the --states option.
+CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file);
+
+/// The smoother's model from --sensing (or the default sensing file), for --states smoothed.
+/// @throws ConfigError for a bad sensing file.
+void apply_sensing(ident::LogReadOptions& o, const std::string& sensing_file);
+
+/// --vehicle FILE.
+void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text);
+
+/// Says on stderr what a salvaged read left out.
+void warn_damage(const char* command, const std::string& file, const std::string& damage);
+
+/// Counts the undecodable messages a log reader passes over (the channels it does not read), as
+/// the MCAP export counts what it leaves out: `o.other_event` feeds `count`.
+void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count);
+
+/// Says on stderr which undecodable messages a read left out, by channel and count.
+void warn_undecodable(const char* command, const std::string& file, const mcap::UndecodableCount& count);
+
+/// The undecodable messages by channel as a --json object.
+void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel);
+
+}  // namespace nimble::cli
