@@ -274,7 +274,8 @@ TEST_CASE("fault kinds: one list names every kind once, in the enumeration's ord
     const bool can = kinds[i].target == nimble::contract::FaultTarget::kCanLink;
     if (std::string(kinds[i].params).empty()) {
       const auto f = nimble::faults_from(
-          YAML::Load(std::string("[{target: ") + (can ? "CAN" : "IMU") + ", kind: " + kinds[i].name + ", start_s: 1}]"),
+          YAML::Load("[{target: " + (can ? nimble::contract::kFaultTargetCan : nimble::contract::channels::kImu) +
+                     ", kind: " + kinds[i].name + ", start_s: 1}]"),
           "s.yaml", {"plant", "controller", "estimator", "mocap", "can_flight", "can_rig"}, can, 5.0);
       REQUIRE(f.size() == 1);
       CHECK(f[0].kind == kinds[i].kind);
