@@ -92,11 +92,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   if (log_options.states != ident::StateSource::kAuto && !ident::is_lcm_log(csv)) {
     return cl.fail("--states: " + csv + " is not a rig log; a CSV file carries its own states");
   }
-  try {
-    apply_sensing(log_options, sensing_file);
-  } catch (const ConfigError& e) {
-    return cl.fail(std::string("--sensing: ") + e.what());
-  }
+  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
   std::string damage;
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);

@@ -83,11 +83,16 @@ CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& 
 }
 
 /// The smoother's model from --sensing (or the default sensing file).
-void apply_sensing(ident::LogReadOptions& o, const std::string& sensing_file) {
-  if (o.states != ident::StateSource::kSmoothed) return;
-  const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);
-  o.smoothing.ekf = smoother_ekf_config(sensing);
-  o.smoothing.differentiator = sensing.velocity_differentiator;
+std::optional<int> apply_sensing(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file) {
+  if (o.states != ident::StateSource::kSmoothed) return std::nullopt;
+  try {
+    const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);
+    o.smoothing.ekf = smoother_ekf_config(sensing);
+    o.smoothing.differentiator = sensing.velocity_differentiator;
+  } catch (const ConfigError& e) {
+    return cl.fail(std::string("--sensing: ") + e.what());
+  }
+  return std::nullopt;
 }
 
 /// --vehicle FILE.

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,8 +35,8 @@ void add_salvage(CommandLine& cl, ident::LogReadOptions& o);
 CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file);
 
 /// The smoother's model from --sensing (or the default sensing file), for --states smoothed.
-/// @throws ConfigError for a bad sensing file.
-void apply_sensing(ident::LogReadOptions& o, const std::string& sensing_file);
+/// Returns the exit code of a usage error naming a bad sensing file (reported through `cl`).
+std::optional<int> apply_sensing(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file);
 
 /// --vehicle FILE.
 void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text);

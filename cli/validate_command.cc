@@ -61,11 +61,7 @@ int run_validate_command(const std::vector<std::string>& args) {
       ->capture_default_str()
       ->type_name("FILE");
   if (const auto done = cl.parse(args)) return *done;
-  try {
-    apply_sensing(log_options, sensing_file);
-  } catch (const ConfigError& e) {
-    return cl.fail(std::string("--sensing: ") + e.what());
-  }
+  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
   if (!plots.empty()) ident::require_gnuplot();
 
   const DerivativeModel model = load_model(model_file);
