@@ -7,6 +7,8 @@
    (Scenario::expected_rate()), never a number written in the call.
 3. No include runs up to the programs: cli/ is included only from cli/; launcher/ only from
    launcher/ and the folders above it (cli/, reproduce/, power/, bench/, tools/, fuzz/).
+4. No source file is longer than MAX_LINES: a longer one holds more than one job, and is split
+   by job.
 
 Usage: check_house_rules.py <source dir>. Prints every breach as file:line and exits 1 if
 there is one.
@@ -17,6 +19,7 @@ import sys
 
 SKIP_DIRS = {"tests", "lcmtypes", ".git", "corpus"}
 ABOVE_LAUNCHER = {"launcher", "cli", "reproduce", "power", "bench", "tools", "fuzz"}
+MAX_LINES = 650
 
 
 def sources(root):
@@ -49,6 +52,8 @@ def main():
     for rel, lines in sources(root):
         checked += 1
         top = rel.parts[0]
+        if len(lines) > MAX_LINES:
+            breaches.append("%s: %d lines, over %d: split it by job" % (rel, len(lines), MAX_LINES))
         for n, line in enumerate(lines, 1):
             code = line.split("//", 1)[0]
             if str(rel) != "contract/channels.h":
