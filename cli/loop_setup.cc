@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "controller/manoeuvre.h"
+#include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 
 namespace nimble::cli {
@@ -41,11 +42,10 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
     // The plant applies the newest command issued at least delay_s before each of its steps.
     s.actuator_delay_s = std::ceil(fx.actuator_delay.delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
   }
-  if (fx.flapping_forcing.enabled) s.nonlinear_effects.push_back("flapping_forcing");
-  if (fx.lateral_inflow.enabled) s.nonlinear_effects.push_back("lateral_inflow");
-  if (fx.forward_speed_coupling.enabled) s.nonlinear_effects.push_back("forward_speed_coupling");
-  if (fx.lateral_gust.enabled) s.nonlinear_effects.push_back("lateral_gust");
-  if (fx.constant_load.enabled) s.nonlinear_effects.push_back("constant_load");
+  // Every enabled plant effect but the delay, which the linear loop models, from the registry.
+  for (const plant::PlantEffect& e : plant::plant_effects()) {
+    if (e.name != "actuator_delay" && e.enabled(fx)) s.nonlinear_effects.push_back(e.name);
+  }
 
   s.model = load_model(model_file.empty() ? scenario.model_file : model_file);
   s.vehicle = load_vehicle(scenario.vehicle_file.empty() || !model_file.empty() ? s.model.vehicle_file

@@ -38,31 +38,36 @@ const std::vector<PlantEffect>& plant_effects() {
        [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_forward_speed_coupling(e.forward_speed_coupling, in.du, in.p, in.v_rel, L, Y);
-       }},
+       },
+       [](const EffectsConfig& e) { return e.forward_speed_coupling.enabled; }},
       {"constant_load",
        [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "constant_load",
        [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); },
-       [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); }},
+       [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); },
+       [](const EffectsConfig& e) { return e.constant_load.enabled; }},
       {"lateral_inflow",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix); }, "lateral_inflow",
        [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_lateral_inflow(e.lateral_inflow, in.v_rel, L, Y);
-       }},
+       },
+       [](const EffectsConfig& e) { return e.lateral_inflow.enabled; }},
       {"flapping_forcing",
        [](ConfigMap& m, EffectsConfig& e) { e.flapping_forcing = flapping_forcing_from(m); },
        flapping_forcing_markdown_rows, "flapping_forcing",
        [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.flapping_forcing); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_flapping_forcing(e.flapping_forcing, in.flap_phase_rad, *in.phases_roll, *in.phases_side, L, Y);
-       }},
+       },
+       [](const EffectsConfig& e) { return e.flapping_forcing.enabled; }},
       {"actuator_delay",
        [](ConfigMap& m, EffectsConfig& e) { e.actuator_delay = actuator_delay_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix); }, "actuator_delay",
        [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); },
-       nullptr},  // on the commands: PlantModel::delayed()
+       nullptr,  // on the commands: PlantModel::delayed()
+       [](const EffectsConfig& e) { return e.actuator_delay.enabled; }},
       {"lateral_gust",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_gust = lateral_gust_from(m); },
        [](const std::string& prefix) {
@@ -70,7 +75,8 @@ const std::vector<PlantEffect>& plant_effects() {
                 "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
        },
        "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); },
-       nullptr},  // on the velocity the aerodynamics see: LoadInputs::v_rel
+       nullptr,  // on the velocity the aerodynamics see: LoadInputs::v_rel
+       [](const EffectsConfig& e) { return e.lateral_gust.enabled; }},
       {"effectiveness_drift",
        [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_drift = effectiveness_drift_from(m); },
        [](const std::string& prefix) {
@@ -80,7 +86,8 @@ const std::vector<PlantEffect>& plant_effects() {
        [](const ModelSection& s, EffectsConfig& e) { effectiveness_drift_from_model(s, e.effectiveness_drift); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_effectiveness_drift(e.effectiveness_drift, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
-       }},
+       },
+       [](const EffectsConfig& e) { return e.effectiveness_drift.enabled; }},
       {"effectiveness_step",
        [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_step = effectiveness_step_from(m); },
        [](const std::string& prefix) {
@@ -90,7 +97,8 @@ const std::vector<PlantEffect>& plant_effects() {
        [](const ModelSection& s, EffectsConfig& e) { effectiveness_step_from_model(s, e.effectiveness_step); },
        [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
          add_effectiveness_step(e.effectiveness_step, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
-       }},
+       },
+       [](const EffectsConfig& e) { return e.effectiveness_step.enabled; }},
   };
   return effects;
 }

@@ -30,6 +30,8 @@ struct PlantEffect {
   /// Adds its roll moment L and side force Y (nullptr: an effect that acts otherwise, on the
   /// commands or on the velocity the aerodynamics see).
   void (*add_loads)(const EffectsConfig& effects, const LoadInputs& in, double& L, double& Y);
+  /// True if the effect is on in `effects` (what `rig loop` names as left out of its linear loop).
+  bool (*enabled)(const EffectsConfig& effects);
 };
 
 /// Every plant effect, in the order the plant adds their loads (PlantModel::derivative()).

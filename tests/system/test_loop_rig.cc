@@ -20,6 +20,7 @@
 
 #include "../support/modal_fit.h"
 #include "../support/rig_runs.h"
+#include "plant/effects/registry.h"
 #include <nimble/controller_status_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
@@ -290,4 +291,23 @@ TEST_CASE("rig loop: robustness over an identified model's +-2 sigma box from ri
   bool lv = false;
   for (const auto& n : pbox["unstable_alone"]) lv = lv || n.as<std::string>().rfind("Lv", 0) == 0;
   CHECK(lv);
+}
+
+TEST_CASE("rig loop names every plant effect on that its linear loop leaves out, from the effect registry",
+          "[system]") {
+  const std::string dir = nimble::test::scratch_dir("loop_effects");
+  // Every plant effect of the registry but actuator_delay, which the linear loop models as a delay.
+  REQUIRE(nimble::plant::plant_effects().size() >= 8);
+  for (const auto& e : nimble::plant::plant_effects()) {
+    if (e.name == "actuator_delay") continue;
+    const std::string& effect = e.name;
+    INFO(effect);
+    const std::string cmd = std::string(RIG_BIN) + " loop " + kConfigs + "hover.yaml --set plant.effects." + effect +
+                            ".enabled=true >" + dir + "/out.txt 2>&1";
+    const int status = std::system(cmd.c_str());
+    const std::string out = nimble::test::slurp(dir + "/out.txt");
+    INFO(out);
+    CHECK(WIFEXITED(status));
+    CHECK(out.find("plant effects on: " + effect) != std::string::npos);
+  }
 }
