@@ -69,12 +69,7 @@ CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& 
                                         "identification data were)")
                  ->type_name("SOURCE")
                  ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed"})),
-             [&o](const std::string& v) {
-               o.states = v == "estimate"   ? ident::StateSource::kEstimate
-                          : v == "truth"    ? ident::StateSource::kTruth
-                          : v == "smoothed" ? ident::StateSource::kSmoothed
-                                            : ident::StateSource::kAuto;
-             });
+             [&o](const std::string& v) { o.states = ident::state_source_from_name(v); });
   cl->add_option("--sensing", sensing_file,
                  "--states smoothed: the sensing the flight flew with (its IMU, motion capture and EKF; default "
                  "rig_configs/sensing/default_sensing.yaml)")

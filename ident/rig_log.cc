@@ -69,16 +69,28 @@ auto read_value(const LogEventRecord& ev, const std::string& file) {
   return contract::from_message(decode_or_throw<T>(ev, file));
 }
 
+/// Each state source with its name.
+constexpr std::pair<StateSource, const char*> kStateSourceNames[] = {
+    {StateSource::kAuto, "auto"},
+    {StateSource::kEstimate, "estimate"},
+    {StateSource::kTruth, "truth"},
+    {StateSource::kSmoothed, "smoothed"},
+};
+
 }  // namespace
 
 const char* state_source_name(StateSource source) {
-  switch (source) {
-    case StateSource::kEstimate: return "estimate";
-    case StateSource::kTruth: return "truth";
-    case StateSource::kSmoothed: return "smoothed";
-    case StateSource::kAuto: break;
+  for (const auto& [s, name] : kStateSourceNames) {
+    if (s == source) return name;
   }
-  return "auto";
+  return "?";
+}
+
+StateSource state_source_from_name(const std::string& name) {
+  for (const auto& [s, n] : kStateSourceNames) {
+    if (name == n) return s;
+  }
+  throw std::invalid_argument("state source '" + name + "': auto, estimate, truth or smoothed");
 }
 
 double estimate_time_s(std::int64_t utime, std::int64_t imu_utime) {
@@ -163,6 +175,24 @@ bool RigLogAssembler::add(const LogEventRecord& event) {
   return true;
 }
 
+FlightData RigLogAssembler::smoothed_states(const SmoothingOptions& smoothing) const {
+  const std::string& file = source_;
+  if (!smoothing_) throw std::logic_error("RigLogAssembler: smoothed states need collect_for_smoothing()");
+  if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples to smooth");
+  if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames to smooth");
+  const std::vector<SmoothedSample> smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu_, poses_);
+  if (smoothed.empty()) {
+    throw DataError(file, -1, -1, kMocapPose, "no motion-capture frame gave a measurement: nothing to smooth");
+  }
+  FlightData states;
+  std::array<Channel*, 9> channels{};
+  for (const SmoothedSample& s : smoothed) {
+    append_states(states, channels, static_cast<double>(s.utime) * 1e-6, s.rate_radps, s.x.segment<3>(kU),
+                  s.x.head<3>());
+  }
+  return states;
+}
+
 RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage, const SmoothingOptions& smoothing) {
   const std::string& file = source_;
   FlightData& inputs = inputs_;
@@ -176,35 +206,22 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
     for (const double x : inputs.channels[servo].values) moved = moved || x != 0.0;
     if (!moved) inputs.channels.erase(servo);
   }
+  // The states: the source asked for (auto: the estimator's if the log has them, else the truth).
+  const StateSource chosen =
+      source == StateSource::kAuto ? (estimate_.has("p") ? StateSource::kEstimate : StateSource::kTruth) : source;
   RigLogData out;
-  if (source == StateSource::kSmoothed) {
-    if (!smoothing_) throw std::logic_error("RigLogAssembler: smoothed states need collect_for_smoothing()");
-    if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples to smooth");
-    if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames to smooth");
-    const std::vector<SmoothedSample> smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu_, poses_);
-    if (smoothed.empty()) {
-      throw DataError(file, -1, -1, kMocapPose, "no motion-capture frame gave a measurement: nothing to smooth");
-    }
-    FlightData states;
-    std::array<Channel*, 9> channels{};
-    for (const SmoothedSample& s : smoothed) {
-      const double t = static_cast<double>(s.utime) * 1e-6;
-      append_states(states, channels, t, s.rate_radps, s.x.segment<3>(kU), s.x.head<3>());
-    }
-    estimate_ = std::move(states);
-  }
-  bool use_estimate = false;
-  if (source == StateSource::kEstimate || source == StateSource::kSmoothed) {
+  if (chosen == StateSource::kSmoothed) {
+    out.measured = smoothed_states(smoothing);
+  } else if (chosen == StateSource::kEstimate) {
     if (!estimate_.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
-    use_estimate = true;
-  } else if (source == StateSource::kAuto) {
-    use_estimate = estimate_.has("p");
+    out.measured = std::move(estimate_);
+  } else {
+    if (!truth_.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
+    out.measured = truth_;
   }
-  if (!use_estimate && !truth_.has("p")) throw DataError(file, -1, -1, kTruth, "the log has neither ESTIMATE nor TRUTH");
-  out.state_source = source == StateSource::kSmoothed ? "smoothed" : use_estimate ? "estimate" : "truth";
+  out.state_source = state_source_name(chosen);
   out.damage = damage;
   out.gain_set = gain_set_;
-  out.measured = use_estimate ? std::move(estimate_) : truth_;
   out.measured.source = file;
   for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;
   if (truth_.has("p")) {

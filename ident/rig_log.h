@@ -46,6 +46,8 @@ struct SmoothingOptions {
 
 /// The name of a state source as commands and reports print it: "auto", "estimate", "truth", "smoothed".
 const char* state_source_name(StateSource source);
+/// The state source of such a name. @throws std::invalid_argument for another name.
+StateSource state_source_from_name(const std::string& name);
 
 /// A rig log as flight data.
 struct RigLogData {
@@ -108,6 +110,8 @@ class RigLogAssembler {
                     const SmoothingOptions& smoothing = {});
 
  private:
+  /// The states smoothed offline from the collected IMU samples and frames (finish()).
+  FlightData smoothed_states(const SmoothingOptions& smoothing) const;
   enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
   /// The input channel `name`, made on first use; looked up by slot after that.
   Channel& input(InputSlot slot, const char* name);

@@ -277,10 +277,7 @@ class CampaignRun {
   ident::RigLogData read(const Flown& f) const {
     ident::LogReadOptions ro;
     ro.smoothing = f.smoothing;
-    const ident::StateSource source = o_.states == "truth"      ? ident::StateSource::kTruth
-                                      : o_.states == "estimate" ? ident::StateSource::kEstimate
-                                                                : ident::StateSource::kSmoothed;
-    return ident::read_rig_log(f.record.log, source, ro);
+    return ident::read_rig_log(f.record.log, ident::state_source_from_name(o_.states), ro);
   }
 
   std::vector<Override> set_overrides(const CampaignSpec::Set& set) const {
