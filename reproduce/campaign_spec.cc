@@ -65,9 +65,12 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
     if (t.reason_for(cell) != nullptr) r.fail("cells", "'" + cell + "' already has a reason");
   }
   out.text = r.get_string("text");
-  if (r.has("rig")) out.rig = r.get_enum("rig", {"above", "below"});
-  if (r.has("max_off")) out.max_off = r.get_double("max_off", Range::closed(0.0, 1e9));
-  if (r.has("states")) out.states = r.get_string_list("states");
+  // Every reason says where the rig's value lies, how far off it may be, and for which states
+  // it holds: the run checks all three (reproduce/verdict.h).
+  out.rig = r.get_enum("rig", {"above", "below"});
+  out.max_off = r.get_double("max_off", Range::closed(0.0, 1e9));
+  out.states = r.get_string_list("states");
+  if (out.states.empty()) r.fail("states", "must name the state sources the reason holds for");
   for (const auto& s : out.states) {
     if (s != "smoothed" && s != "estimate" && s != "truth") r.fail("states", "'" + s + "': smoothed, estimate or truth");
   }
@@ -76,9 +79,6 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
     out.with = string_map(r, "with");
     if (r.has("moves")) out.moves = r.get_enum("moves", {"toward", "away"});
     if (r.has("at_least")) out.at_least = r.get_double("at_least", Range::closed(0.0, 1.0));
-  }
-  if (out.rig.empty() && out.max_off < 0 && out.with.empty()) {
-    r.fail("rig", "a reason needs a predicate the run can check: rig (above/below), max_off or with");
   }
   r.finish();
   return out;

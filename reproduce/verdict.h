@@ -22,11 +22,11 @@
 ///
 /// A reason belongs to the cells it lists ("row / column", no wildcards) and carries the
 /// predicate the command checks in the same run: the direction of the rig's value against the
-/// published one (`rig: above | below`), optionally a bound on the size of the difference
-/// (`max_off`), the state sources it applies to (`states`), and where it names a cause, a second
-/// flight with that cause added (`with`: scenario overrides) that must move the cell toward
-/// (or away from) the published value by at least `at_least` of the gap. A predicate that does
-/// not hold makes the cell `differs`, and says which part failed.
+/// published one (`rig: above | below`), a bound on the size of the difference (`max_off`) and
+/// the state sources it applies to (`states`), all three required by the campaign file; and where
+/// it names a cause, a second flight with that cause added (`with`: scenario overrides) that
+/// must move the cell toward (or away from) the published value by at least `at_least` of the
+/// gap. A predicate that does not hold makes the cell `differs`, and says which part failed.
 
 #include <map>
 #include <string>
@@ -44,9 +44,9 @@ const char* category_name(Category c);
 struct Reason {
   std::vector<std::string> cells;  ///< "row / column", each named explicitly
   std::string text;
-  std::string rig;                 ///< "above" or "below": where the rig's value lies
-  double max_off = -1.0;           ///< bound on |rig - published| (< 0: none)
-  std::vector<std::string> states; ///< state sources it holds for (empty: any)
+  std::string rig;                 ///< "above" or "below": where the rig's value lies ("" unchecked)
+  double max_off = -1.0;           ///< bound on |rig - published| (< 0 unchecked)
+  std::vector<std::string> states; ///< state sources it holds for (empty unchecked)
   std::map<std::string, std::string> with;  ///< scenario overrides adding the cause (empty: none)
   std::string moves = "toward";    ///< with `with`: "toward" or "away" from the published value
   double at_least = 0.1;           ///< with `with`: the least share of the gap it must move

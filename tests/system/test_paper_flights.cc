@@ -250,6 +250,14 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
     INFO(rw.out << rw.err);
     CHECK(rw.exit_code == 2);
     CHECK_THAT(rw.err, Catch::Contains("no wildcards"));
+    // A reason without a bound on the size of the difference is refused, naming the key.
+    w["tables"]["15"]["reasons"] = YAML::Load("[{cells: ['p_dot / R2'], text: closer, rig: above, states: [smoothed]}]");
+    std::ofstream(dir + "/unbounded.yaml") << w;
+    const auto rb = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/unbounded.yaml --logs " +
+                                          dir);
+    INFO(rb.out << rb.err);
+    CHECK(rb.exit_code == 2);
+    CHECK_THAT(rb.err, Catch::Contains("max_off"));
   }
   // An output that cannot be written is named before anything flies.
   const auto out = nimble::test::run_rig("reproduce thesis --no-progress --logs " + dir + "/never --json " + dir +
