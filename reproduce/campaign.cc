@@ -43,11 +43,16 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 /// A flown flight: its log and the figures of its summary.
 struct Flown {
   FlightRecord record;
-  ident::SmoothingOptions smoothing;  ///< the smoother's model: the flight's own sensing
+  ident::SmoothingOptions smoothing;  ///< the smoother's model: the flight's own sensing (states smoothed)
   double range_p = 0, range_v = 0, range_phi = 0;
 };
 
-const std::string& scenario_file_of(const Flown& f) { return f.record.scenario; }
+/// The smoother's model for a flight flown with `scenario`: its own sensing (smoother_ekf_config).
+ident::SmoothingOptions smoothing_of(const Scenario& scenario) {
+  ConfigMap section = scenario.section("sensing");
+  const SensingConfig sensing = sensing_config_from(section);
+  return {smoother_ekf_config(sensing), sensing.velocity_differentiator};
+}
 
 Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name, const std::string& scenario,
           const std::vector<Override>& overrides) {
@@ -69,6 +74,7 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
     launcher::InprocessOptions io;
     io.log_file = f.record.log;
     const launcher::RunReport report = launcher::fly_inprocess(plan, io);
+    if (o.states == "smoothed") f.smoothing = smoothing_of(plan.scenario);
     f.record.result = report.verdict.text;
     f.record.controlled = report.verdict.controlled;
     f.record.sim_s = report.sim_time_s;
@@ -90,13 +96,7 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
     f.range_p = j["ranges"]["p"].as<double>();
     f.range_v = j["ranges"]["v"].as<double>();
     f.range_phi = j["ranges"]["phi"].as<double>();
-  }
-  {
-    const Scenario scenario = load_scenario(scenario_file_of(f), overrides);
-    ConfigMap section = scenario.section("sensing");
-    const SensingConfig sensing = sensing_config_from(section);
-    f.smoothing.ekf = smoother_ekf_config(sensing);
-    f.smoothing.differentiator = sensing.velocity_differentiator;
+    if (o.states == "smoothed") f.smoothing = smoothing_of(load_scenario(scenario, overrides));
   }
   f.record.wall_s = seconds_since(t0);
   if (o.progress) {
