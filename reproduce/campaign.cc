@@ -226,6 +226,13 @@ void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std
                      "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
 }
 
+/// A table's values on its flight flown with a cause, over the seeds, and the flights with the
+/// cause that did not fly as their scenario asks.
+struct WithCause {
+  std::vector<CellMap> seeds;
+  std::vector<std::string> failures;
+};
+
 /// The derivatives whose identification is checked against the plant's.
 constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
 
@@ -244,15 +251,15 @@ class CampaignRun {
     }
   }
 
-  /// A reason's flight with its cause: the table's values on the table's flight flown with `with`.
-  /// Returns "" if the flight flew as its scenario asks, else its name, seed and result.
-  std::string fly_with(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
-                       std::vector<CellMap>& out) {
+  /// Table `id`'s flight flown on `seed` with a cause (`with`): its values, and the flight named
+  /// in `out.failures` if it did not fly as its scenario asks.
+  void fly_with(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
+                WithCause& out) {
     seed_ = seed;
     plots_ = false;
     const Flown& f = flight_with(table_flight(id), with);
-    out.push_back(table_on(id, f));
-    return f.record.result == "ok" ? "" : fmt::format("{} seed {}: {}", f.record.name, seed, f.record.result);
+    out.seeds.push_back(table_on(id, f));
+    if (f.record.result != "ok") out.failures.push_back(fmt::format("{} seed {}: {}", f.record.name, seed, f.record.result));
   }
 
   std::map<std::string, std::vector<CellMap>>& values() { return values_; }
@@ -460,18 +467,13 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     values["8.8"] = {table_8_8(spec)};
   }
   // The flights with each reason's cause, and the closed-loop causes.
-  std::map<std::string, std::map<std::string, std::vector<CellMap>>> with;  // table -> overrides -> seeds
-  std::map<std::string, std::map<std::string, std::string>> with_failure;  // table -> overrides -> first failure
+  std::map<std::string, std::map<std::string, WithCause>> with;  // table -> overrides -> flights
   for (const std::string& id : campaign_table_ids()) {
     for (const Reason& r : spec.tables.at(id).reasons) {
       if (r.with.empty()) continue;
-      auto& seeds = with[id][overrides_key(r.with)];
-      if (!seeds.empty()) continue;
-      std::string& failure = with_failure[id][overrides_key(r.with)];
-      for (const std::uint64_t seed : o.seeds) {
-        const std::string f = run.fly_with(seed, id, r.with, seeds);
-        if (failure.empty()) failure = f;
-      }
+      WithCause& flown = with[id][overrides_key(r.with)];
+      if (!flown.seeds.empty()) continue;
+      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, r.with, flown);
     }
   }
   for (const CauseSpec& cause : spec.causes) {
@@ -480,11 +482,9 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     study.source = cause.source;
     for (const auto& [k, v] : cause.with) study.overrides.push_back(k + "=" + v);
     for (const std::string id : {"9", "10", "11"}) {
-      std::vector<CellMap> seeds;
-      for (const std::uint64_t seed : o.seeds) {
-        const std::string f = run.fly_with(seed, id, cause.with, seeds);
-        if (!f.empty()) study.failures.push_back(f);
-      }
+      WithCause flown;
+      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, cause.with, flown);
+      study.failures.insert(study.failures.end(), flown.failures.begin(), flown.failures.end());
       const TableSpec& t = spec.tables.at(id);
       for (const auto& row : t.row_order) {
         CauseCell c;
@@ -495,7 +495,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
         c.published = t.published.at(row).at("R2");
         double sd = 0, hw = 0;
         mean_interval(over_seeds(values.at(id), row + " / R2"), &c.rig, &sd, &hw);
-        mean_interval(over_seeds(seeds, row + " / R2"), &c.with_cause, &sd, &c.interval);
+        mean_interval(over_seeds(flown.seeds, row + " / R2"), &c.with_cause, &sd, &c.interval);
         study.cells.push_back(c);
       }
     }
@@ -517,8 +517,9 @@ CampaignResult run_campaign(const CampaignOptions& o) {
         JudgeContext ctx;
         ctx.states = o.states;
         if (const Reason* r = spec_t.reason_for(key); r != nullptr && !r->with.empty()) {
-          ctx.with_values = over_seeds(with[id][overrides_key(r->with)], key);
-          ctx.with_failure = with_failure[id][overrides_key(r->with)];
+          const WithCause& flown = with[id][overrides_key(r->with)];
+          ctx.with_values = over_seeds(flown.seeds, key);
+          if (!flown.failures.empty()) ctx.with_failure = flown.failures.front();
         }
         const std::vector<double> x = over_seeds(values.at(id), key);
         raw[id][key] = x;
