@@ -81,10 +81,7 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
   // Backward pass.
   const std::size_t n = nodes.size();
   std::vector<EkfState> xs(n);
-  EkfCovariance Ps = nodes.back().P;
   xs[n - 1] = nodes.back().x;
-  std::vector<Eigen::Matrix<double, kEkfStateDim, 1>> sigma(n);
-  sigma[n - 1] = Ps.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (std::size_t k = n - 1; k-- > 0;) {
     const EkfNode& a = nodes[k];
     const EkfNode& b = nodes[k + 1];
@@ -96,9 +93,6 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
     for (int i = 0; i < 3; ++i) dx(i) = wrap_pi(dx(i));
     xs[k] = a.x + C * dx;
     for (int i = 0; i < 3; ++i) xs[k](i) = wrap_pi(xs[k](i));
-    EkfCovariance next = a.P + C * (Ps - P_pred) * C.transpose();
-    Ps = 0.5 * (next + next.transpose());
-    sigma[k] = Ps.diagonal().cwiseMax(0.0).cwiseSqrt();
   }
 
   // One sample per recorded IMU sample.
@@ -113,7 +107,6 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
     o.utime = s.utime;
     o.x = xs[k];
     o.rate_radps = s.gyro_radps - xs[k].segment<3>(kBiasP);
-    o.sigma = sigma[k];
     out.push_back(o);
   }
   return out;

@@ -11,7 +11,6 @@
 /// measurement is applied at a node and the recursion below is exact for the filter's model.
 /// Backward pass (Rauch-Tung-Striebel): for nodes k = N-1 .. 0,
 ///   x_k|N = x_k|k + C_k (x_k+1|N - x_k+1|k),   C_k = P_k|k Phi_k^T P_k+1|k^-1,
-///   P_k|N = P_k|k + C_k (P_k+1|N - P_k+1|k) C_k^T,
 /// with x_k+1|k, P_k+1|k and Phi_k the filter's own prediction from node k to node k+1
 /// (AttitudeVelocityEkf::predict_between) and angle differences wrapped into (-pi, pi].
 /// The smoothed estimate at a time uses the data before and after it: no lag, and an error
