@@ -84,7 +84,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   cl->add_option("--report", report, "report.md with PNG plots (gnuplot, Debian package gnuplot-nox)")
       ->type_name("DIR");
   if (const auto done = cl.parse(args)) return *done;
-  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
+  if (const auto failed = apply_states(cl, log_options, sensing_file, data_files)) return *failed;
   if (!report.empty()) ident::require_gnuplot();  // fail before the work, not after
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;

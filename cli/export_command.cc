@@ -132,7 +132,7 @@ int run_export_command(const std::vector<std::string>& args) {
   if (csv.empty()) return cl.fail("--csv FILE (or --out FILE.mcap for MCAP) is required");
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);
-  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
+  if (const auto failed = apply_states(cl, log_options, sensing_file, {log})) return *failed;
   const ident::RigLogData data = ident::read_rig_log(log, log_options.states, log_options);
   warn_damage("rig export", log, data.damage);
   warn_undecodable("rig export", log, undecodable);

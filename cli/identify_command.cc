@@ -89,10 +89,7 @@ int run_identify_command(const std::vector<std::string>& args) {
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);
-  if (log_options.states != ident::StateSource::kAuto && !ident::is_lcm_log(csv)) {
-    return cl.fail("--states: " + csv + " is not a rig log; a CSV file carries its own states");
-  }
-  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
+  if (const auto failed = apply_states(cl, log_options, sensing_file, {csv})) return *failed;
   std::string damage;
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);

@@ -2,6 +2,7 @@
 
 #include "cli/log_input.h"
 
+#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 
@@ -77,8 +78,15 @@ CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& 
   return states;
 }
 
-/// The smoother's model from --sensing (or the default sensing file).
-std::optional<int> apply_sensing(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file) {
+std::optional<int> apply_states(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
+                                const std::vector<std::string>& data_files) {
+  if (o.states == ident::StateSource::kAuto) return std::nullopt;
+  for (const std::string& file : data_files) {
+    // (a file that is not there is named by the reader)
+    if (std::filesystem::exists(file) && !ident::is_lcm_log(file)) {
+      return cl.fail("--states: " + file + " is not a rig log; a CSV file carries its own states");
+    }
+  }
   if (o.states != ident::StateSource::kSmoothed) return std::nullopt;
   try {
     const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);

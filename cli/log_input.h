@@ -34,9 +34,11 @@ void add_salvage(CommandLine& cl, ident::LogReadOptions& o);
 /// smoother's filter is matched to. Returns the --states option.
 CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file);
 
-/// The smoother's model from --sensing (or the default sensing file), for --states smoothed.
-/// Returns the exit code of a usage error naming a bad sensing file (reported through `cl`).
-std::optional<int> apply_sensing(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file);
+/// Checks --states against the data files (a CSV file carries its own states: --states is for rig
+/// logs) and sets the smoother's model from --sensing (or the default sensing file) for --states
+/// smoothed. Returns the exit code of a usage error naming the file (reported through `cl`).
+std::optional<int> apply_states(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
+                                const std::vector<std::string>& data_files);
 
 /// --vehicle FILE.
 void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text);

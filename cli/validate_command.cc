@@ -61,7 +61,7 @@ int run_validate_command(const std::vector<std::string>& args) {
       ->capture_default_str()
       ->type_name("FILE");
   if (const auto done = cl.parse(args)) return *done;
-  if (const auto failed = apply_sensing(cl, log_options, sensing_file)) return *failed;
+  if (const auto failed = apply_states(cl, log_options, sensing_file, {csv})) return *failed;
   if (!plots.empty()) ident::require_gnuplot();
 
   const DerivativeModel model = load_model(model_file);

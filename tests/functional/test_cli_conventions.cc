@@ -89,6 +89,8 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"reproduce thesis --states guess", "--states: guess not in {smoothed,estimate,truth}"},
            {"reproduce thesis --seeds 5-1", "--seeds 5-1: --seeds needs A-B"},
            {"identify /dev/null --states smoothed", "--states: /dev/null is not a rig log"},
+           {"validate x.yaml /dev/null --states truth", "--states: /dev/null is not a rig log"},
+           {"discrepancy /dev/null --model x.yaml --states smoothed", "--states: /dev/null is not a rig log"},
            {"identify x.lcmlog --states guess", "--states: guess not in {auto,estimate,truth,smoothed}"},
        }) {
     INFO(c.args);
