@@ -42,9 +42,9 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
     // The plant applies the newest command issued at least delay_s before each of its steps.
     s.actuator_delay_s = std::ceil(fx.actuator_delay.delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
   }
-  // Every enabled plant effect but the delay, which the linear loop models, from the registry.
+  // Every enabled plant effect the linear loop leaves out, from the registry.
   for (const plant::PlantEffect& e : plant::plant_effects()) {
-    if (e.name != "actuator_delay" && e.enabled(fx)) s.nonlinear_effects.push_back(e.name);
+    if (!e.in_linear_loop && e.enabled(fx)) s.nonlinear_effects.push_back(e.name);
   }
 
   s.model = load_model(model_file.empty() ? scenario.model_file : model_file);

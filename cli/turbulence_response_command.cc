@@ -25,6 +25,7 @@
 #include "core/vehicle.h"
 #include "ident/plots.h"
 #include "ident/rig_log.h"
+#include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "turbulence/hover_gust_response.h"
@@ -64,12 +65,10 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
                                 "sigma_mps > 0 (it is " + std::string(gust.enabled ? "enabled" : "disabled") + ", " +
                                 plant::to_string(gust.form) + ", sigma " + fmt("%g", gust.sigma_mps) + " m/s)");
   }
-  const auto& fx = plant.effects;
-  if (fx.flapping_forcing.enabled) s.other_effects.push_back("flapping_forcing");
-  if (fx.lateral_inflow.enabled) s.other_effects.push_back("lateral_inflow");
-  if (fx.forward_speed_coupling.enabled) s.other_effects.push_back("forward_speed_coupling");
-  if (fx.actuator_delay.enabled) s.other_effects.push_back("actuator_delay");
-  if (fx.constant_load.enabled) s.other_effects.push_back("constant_load");
+  // Every other enabled plant effect (the linear hover loop leaves them out), from the registry.
+  for (const plant::PlantEffect& e : plant::plant_effects()) {
+    if (e.name != "lateral_gust" && e.enabled(plant.effects)) s.other_effects.push_back(e.name);
+  }
 
   s.model = load_model(scenario.model_file);
   s.vehicle = load_vehicle(scenario.vehicle_file.empty() ? s.model.vehicle_file : scenario.vehicle_file);

@@ -167,11 +167,6 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   // kinematic_coupling and gravity_nonlinearity are in the equations of motion already; an
   // effect the plant does not know is refused. The mapping: plant/effects/registry.h.
   apply_model_effects(lateral, cfg_.effects, lat_.derivatives);
-  const auto& fsc = cfg_.effects.forward_speed_coupling;
-  if (fsc.enabled && fsc.gain_per_mps != 0.0 && fsc.has_coefficients()) {
-    throw std::invalid_argument(
-        "plant: forward_speed_coupling has both gain_per_mps and the coefficients L_up, L_uv, Y_up, Y_uv; give one form");
-  }
   lateral4_ = lat_.structure == Structure::kLateral4;
   active_r_ = lateral4_;
   active_q_ = lon_.has_value();
@@ -217,15 +212,10 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   x_[kV] = cfg_.initial.v_mps;
   x_[kFcoll] = f_trim_radps_;
 
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.roll_moment_amplitudes_nm.size(); ++h) {
-    forcing_phase_roll_.push_back(phase(rng_));
-  }
-  for (std::size_t h = 0; h < cfg_.effects.flapping_forcing.side_force_amplitudes_n.size(); ++h) {
-    forcing_phase_side_.push_back(phase(rng_));
-  }
-  // The Dryden gust draws its stationary start here, after the forcing's phases.
-  gust_ = GustProcess(cfg_.effects.lateral_gust, dt_s_, rng_, normal_);
+  // The effects' processes, in the registry's order: the draws of the seeded ones (the
+  // flapping forcing's phases, a Dryden gust's start) come from the plant's stream here.
+  ProcessContext context{dt_s_, rng_, normal_};
+  effects_ = make_effect_processes(cfg_.effects, context);
   update_truth(trim_command());
 }
 
@@ -233,8 +223,16 @@ ActuatorInput PlantModel::trim_command() const {
   return ActuatorInput{f_trim_radps_, f_trim_radps_, 0.0, 0.0};
 }
 
-ActuatorInput PlantModel::delayed(const ActuatorInput& cmd) {
-  return delay_.apply(cfg_.effects.actuator_delay, t_s_, cmd, trim_command());
+ActuatorInput PlantModel::actuated(const ActuatorInput& cmd) {
+  ActuatorInput out = cmd;
+  for (auto& effect : effects_) out = effect->command(t_s_, out, trim_command());
+  return out;
+}
+
+double PlantModel::side_wind_mps() const {
+  double wind = 0.0;
+  for (const auto& effect : effects_) wind += effect->side_wind_mps();
+  return wind;
 }
 
 PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u, double t,
@@ -266,10 +264,11 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   const double thrust = cfg_.thrust.thrust_n(x[kFcoll]);
 
   // Aerodynamic perturbation forces and moments.
-  const EffectsConfig& fx = cfg_.effects;
-  const double v_rel = v - (fx.lateral_gust.enabled ? gust_.velocity_mps() : 0.0);
+  // The effects act on the velocity the aerodynamics see and scale the stability derivatives.
+  const double v_rel = v - side_wind_mps();
   const double du = uu - trim.u0_mps, dw_vel = w - trim.w0_mps;
-  const double k_speed = forward_speed_factor(fx.forward_speed_coupling, du);
+  double k_speed = 1.0;
+  for (const auto& effect : effects_) k_speed *= effect->stability_factor(du);
 
   double L = k_speed * (Lp_ * p + Lr_ * r + Lv_ * v_rel) + L_df_ * df + L_dt_ * dt_pct + L_dd_ * dd + L_dw_ * dw;
   double N = k_speed * (Np_ * p + Nr_ * r + Nv_ * v_rel) + N_df_ * df + N_dt_ * dt_pct + N_dd_ * dd + N_dw_ * dw;
@@ -280,12 +279,9 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
     X = Xq_ * q + Xu_ * du + Xw_ * dw_vel + X_dd_ * dd;
     Z = Zq_ * q + Zu_ * du + Zw_ * dw_vel + Z_dd_ * dd;
   }
-  // The plant's effects (plant/effects/registry.h), each adding its loads, in the registry's order.
-  const LoadInputs effect_inputs{du, p, v_rel, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), &forcing_phase_roll_,
-                                 &forcing_phase_side_, t, L_df_ * df, Y_df_ * df};
-  for (const PlantEffect& effect : plant_effects()) {
-    if (effect.add_loads != nullptr) effect.add_loads(fx, effect_inputs, L, Y);
-  }
+  // The effects' loads, in the registry's order.
+  const LoadInputs effect_inputs{du, p, v_rel, flap_phase_rad_ + x_[kFcoll] * (t - t_s_), t, L_df_ * df, Y_df_ * df};
+  for (const auto& effect : effects_) effect->add_loads(effect_inputs, L, Y);
   if (!term_programs_.empty()) {
     double signals[12];
     term_signals(x, signals);
@@ -347,7 +343,7 @@ void PlantModel::term_signals(const State& x, double* out) const {
 }
 
 void PlantModel::step(const ActuatorInput& cmd_in) {
-  const ActuatorInput cmd = delayed(cmd_in);
+  const ActuatorInput cmd = actuated(cmd_in);
   const double h = dt_s_;
   double term_start[12];
   if (!term_programs_.empty()) term_signals(x_, term_start);
@@ -365,7 +361,7 @@ void PlantModel::step(const ActuatorInput& cmd_in) {
     program.advance(h);
   }
 
-  gust_.step(h, rng_, normal_);  // the side gust's step (effects.lateral_gust)
+  for (auto& effect : effects_) effect->step(h, rng_, normal_);
   update_truth(cmd);
 }
 
@@ -387,7 +383,7 @@ void PlantModel::update_truth(const ActuatorInput& u) {
   tr.throttle_pct = (x_[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
   tr.dihedral_rad = x_[kDd];
   tr.wing_root_rad = x_[kDw];
-  tr.gust_v_mps = gust_.velocity_mps();
+  tr.gust_v_mps = side_wind_mps();
 }
 
 }  // namespace nimble::plant

@@ -27,7 +27,9 @@
 #include "core/terms.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
+#include "plant/actuator_input.h"
 #include "plant/effects/effects.h"
+#include "plant/effects/effect_process.h"
 
 namespace nimble::plant {
 
@@ -113,13 +115,8 @@ const ParamTable<ServoConfig>& servo_params();                 ///< `servo`
 const ParamTable<ThrustCurve>& thrust_params();                ///< `thrust`
 const ParamTable<InitialState>& initial_params();              ///< `initial`
 
-/// Actuator command as the plant receives it.
-struct ActuatorInput {
-  double flap_freq_left_radps = 0.0;
-  double flap_freq_right_radps = 0.0;
-  double dihedral_rad = 0.0;
-  double wing_root_rad = 0.0;
-};
+/// Actuator command as the plant receives it: plant/actuator_input.h.
+using plant::ActuatorInput;
 
 /// Truth of the rigid body and actuators at one instant: the value TRUTH carries
 /// (core/rig_values.h).
@@ -159,7 +156,10 @@ class PlantModel {
   State derivative(const State& x, const ActuatorInput& u, double t, Eigen::Vector3d* specific_force,
                    Eigen::Vector3d* omega_dot) const;
   void update_truth(const ActuatorInput& u);
-  ActuatorInput delayed(const ActuatorInput& cmd);
+  /// The command the actuators see: `cmd` through every effect's command hook.
+  ActuatorInput actuated(const ActuatorInput& cmd);
+  /// The side wind the aerodynamics see: the sum of the effects' [m/s].
+  double side_wind_mps() const;
   /// The signals a term reads at state x, in term_signal_names() order.
   void term_signals(const State& x, double* out) const;
 
@@ -183,11 +183,10 @@ class PlantModel {
   State x_;
   double t_s_ = 0.0;
   double flap_phase_rad_ = 0.0;
-  GustProcess gust_;  ///< the side gust (effects.lateral_gust)
-  std::vector<double> forcing_phase_roll_, forcing_phase_side_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
-  CommandDelay<ActuatorInput> delay_;  ///< effects.actuator_delay
+  /// The process of every effect that acts (plant/effects/registry.h), in the registry's order.
+  std::vector<std::unique_ptr<EffectProcess>> effects_;
   /// The plant's terms and the lateral model's (config.terms, then the model's terms: section):
   /// programs bound to term_signal_names(), their equation (0 L, 1 Y, 2 N) and coefficient. The
   /// programs' stateful operators move once per step (step()), not per Runge-Kutta stage.

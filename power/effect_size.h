@@ -3,14 +3,9 @@
 /// number per plant effect (plant/effects/), the value of its main plant parameter, in that
 /// parameter's unit, within its range.
 ///
-/// | effect                 | SIZE sets (plant.effects.<effect>.)  | unit      | the others                         |
-/// |------------------------|--------------------------------------|-----------|------------------------------------|
-/// | lateral_inflow         | Y_vv_ns2pm2                          | N s^2/m^2 | L_vv keeps its ratio to Y_vv       |
-/// | forward_speed_coupling | gain_per_mps                         | 1/(m/s)   | the explicit coefficients as set   |
-/// | constant_load          | roll_moment_nm                       | N m       | side_force_n keeps its ratio       |
-/// | flapping_forcing       | roll_moment_amplitudes_nm[0]         | N m       | every amplitude scales with it     |
-/// | actuator_delay         | delay_s                              | s         | -                                  |
-/// | lateral_gust           | sigma_mps                            | m/s       | form, tau_s, time_scale_s as set   |
+/// Each plant effect declares what its SIZE sets in its own file (`<name>_sizing()`,
+/// plant/effects/effect_sizing.h); `rig discrepancy --help` lists them. E.g. lateral_inflow:
+/// SIZE sets Y_vv_ns2pm2 [N s^2/m^2] and L_vv keeps its ratio to Y_vv.
 ///
 /// "Keeps its ratio": the scenario's own values (after its --set) fix the shape of the effect,
 /// SIZE its scale: lateral inflow with SIZE -0.035 on a scenario that flies Y_vv -0.07 and
@@ -25,6 +20,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
+#include "plant/effects/effect_sizing.h"
 #include "scenario/scenario.h"
 
 namespace nimble::power {
@@ -37,6 +33,8 @@ struct SizedEffect {
   Range range;            ///< of SIZE (the parameter's range in the plant's table)
   std::string named_as;   ///< the name the discrepancy workflow gives it (core/effects.h)
   std::string scales;     ///< what else SIZE moves (help text)
+  /// The effect's values at a size (plant/effects/effect_sizing.h).
+  std::vector<plant::EffectValue> (*values)(const YAML::Node& section, double size) = nullptr;
 };
 
 /// Every sizable effect, in the plant registry's order.

@@ -43,4 +43,30 @@ void actuator_delay_from_model(const ModelSection& s, ActuatorDelayConfig& c) {
   c.delay_s = s.required("delay_s", range_of(actuator_delay_params(), "delay_s"));
 }
 
+namespace {
+
+class ActuatorDelayProcess : public EffectProcess {
+ public:
+  explicit ActuatorDelayProcess(const ActuatorDelayConfig& config) : config_(config) {}
+  ActuatorInput command(double t_s, const ActuatorInput& issued, const ActuatorInput& trim) override {
+    return delay_.apply(config_, t_s, issued, trim);
+  }
+
+ private:
+  ActuatorDelayConfig config_;
+  CommandDelay<ActuatorInput> delay_;
+};
+
+}  // namespace
+
+std::unique_ptr<EffectProcess> actuator_delay_process(const ActuatorDelayConfig& config) {
+  if (!config.enabled || config.delay_s <= 0.0) return nullptr;
+  return std::make_unique<ActuatorDelayProcess>(config);
+}
+
+EffectSizing actuator_delay_sizing() {
+  return {"delay_s", "s", range_of(actuator_delay_params(), "delay_s"), "nothing else",
+          [](const YAML::Node&, double size) { return parameter_alone("delay_s", size); }};
+}
+
 }  // namespace nimble::plant

@@ -5,10 +5,13 @@
 /// regression finds on the actuator's output.
 
 #include <deque>
+#include <memory>
 #include <utility>
 
 #include "core/config.h"
 #include "core/param_table.h"
+#include "plant/effects/effect_process.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -44,5 +47,12 @@ class CommandDelay {
  private:
   std::deque<std::pair<double, Command>> line_;
 };
+
+/// The effect's process: a CommandDelay of the plant's commands; none when it is off or its
+/// delay is not positive.
+std::unique_ptr<EffectProcess> actuator_delay_process(const ActuatorDelayConfig& config);
+
+/// SIZE sets delay_s.
+EffectSizing actuator_delay_sizing();
 
 }  // namespace nimble::plant

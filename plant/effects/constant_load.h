@@ -5,6 +5,7 @@
 
 #include "core/config.h"
 #include "core/param_table.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -30,5 +31,8 @@ inline void add_constant_load(const ConstantLoadConfig& c, double& L, double& Y)
   L += c.roll_moment_nm;
   Y += c.side_force_n;
 }
+
+/// SIZE sets roll_moment_nm; side_force_n keeps its ratio to it (none if the scenario's moment is 0).
+EffectSizing constant_load_sizing();
 
 }  // namespace nimble::plant

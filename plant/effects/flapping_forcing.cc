@@ -1,13 +1,20 @@
 #include "plant/effects/flapping_forcing.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
+#include <random>
+#include <stdexcept>
+#include <utility>
 
 namespace nimble::plant {
 namespace {
 
 /// Harmonics the plant accepts from a model (the workflow fits 2).
 constexpr int kMaxHarmonics = 10;
+
+/// The range of every amplitude (N or N m): the plant file's and a model's alike.
+const Range kAmplitudeRange = Range::closed(-1.0, 1.0);
 
 /// A list of amplitudes: finite numbers of magnitude at most 1 (N or N m).
 std::vector<double> read_amplitudes(ConfigMap& map, const std::string& key) {
@@ -24,7 +31,7 @@ std::vector<double> read_amplitudes(ConfigMap& map, const std::string& key) {
     } catch (const YAML::Exception&) {
       map.fail(key, "must be a list of numbers");
     }
-    if (!std::isfinite(out.back()) || std::fabs(out.back()) > 1.0) {
+    if (!std::isfinite(out.back()) || !kAmplitudeRange.contains(out.back())) {
       map.fail(key, "entries must be finite and at most 1 in magnitude (N or N m)");
     }
   }
@@ -71,7 +78,7 @@ std::vector<double> harmonic_amplitudes(const ModelSection& s, char eq) {
     } else if (amp_of.count(h)) {
       a = std::fabs(amp_of[h]);
     }
-    if (a > 1.0) {
+    if (!kAmplitudeRange.contains(a)) {
       s.fail("harmonic " + std::to_string(h) + " of " + std::string(1, eq) + " has amplitude " + std::to_string(a) +
              ", more than 1 (N or N m), which the plant file's amplitudes may not exceed either");
     }
@@ -81,6 +88,33 @@ std::vector<double> harmonic_amplitudes(const ModelSection& s, char eq) {
 }
 
 }  // namespace
+
+namespace {
+
+class FlappingForcingProcess : public EffectProcess {
+ public:
+  FlappingForcingProcess(const FlappingForcingConfig& config, std::vector<double> phases_roll,
+                         std::vector<double> phases_side)
+      : config_(config), phases_roll_(std::move(phases_roll)), phases_side_(std::move(phases_side)) {}
+  void add_loads(const LoadInputs& in, double& L, double& Y) const override {
+    add_flapping_forcing(config_, in.flap_phase_rad, phases_roll_, phases_side_, L, Y);
+  }
+
+ private:
+  FlappingForcingConfig config_;
+  std::vector<double> phases_roll_, phases_side_;
+};
+
+}  // namespace
+
+std::unique_ptr<EffectProcess> flapping_forcing_process(const FlappingForcingConfig& config, ProcessContext& context) {
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  std::vector<double> roll, side;
+  for (std::size_t h = 0; h < config.roll_moment_amplitudes_nm.size(); ++h) roll.push_back(phase(context.rng));
+  for (std::size_t h = 0; h < config.side_force_amplitudes_n.size(); ++h) side.push_back(phase(context.rng));
+  if (!config.enabled) return nullptr;
+  return std::make_unique<FlappingForcingProcess>(config, std::move(roll), std::move(side));
+}
 
 std::string flapping_forcing_markdown_rows(const std::string& prefix) {
   return "| `" + prefix + "enabled` | false | true, false | - | fly the effect (required) |\n"
@@ -117,6 +151,27 @@ void flapping_forcing_from_model(const ModelSection& s, FlappingForcingConfig& c
   c.enabled = true;
   c.roll_moment_amplitudes_nm = harmonic_amplitudes(s, 'L');
   c.side_force_amplitudes_n = harmonic_amplitudes(s, 'Y');
+}
+
+EffectSizing flapping_forcing_sizing() {
+  return {"roll_moment_amplitudes_nm[0]", "N m", kAmplitudeRange,
+          "every amplitude of both lists scales with the first roll amplitude", [](const YAML::Node& section, double size) {
+            std::vector<double> roll = section_list(section, "roll_moment_amplitudes_nm");
+            std::vector<double> side = section_list(section, "side_force_amplitudes_n");
+            if (roll.empty() || roll[0] == 0.0) {
+              throw std::invalid_argument("the scenario has no first roll amplitude to scale from");
+            }
+            const double k = size / roll[0];
+            for (auto& a : roll) a = companion_within("roll_moment_amplitudes_nm", k * a, kAmplitudeRange);
+            for (auto& a : side) a = companion_within("side_force_amplitudes_n", k * a, kAmplitudeRange);
+            const auto list = [](const std::vector<double>& values) {
+              std::string out = "[";
+              for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + size_text(values[i]);
+              return out + "]";
+            };
+            return std::vector<EffectValue>{{"roll_moment_amplitudes_nm", list(roll)},
+                                            {"side_force_amplitudes_n", list(side)}};
+          }};
 }
 
 }  // namespace nimble::plant

@@ -7,10 +7,14 @@
 /// harmonic h; its flapping_hz is not needed (the plant forces at its own flapping frequency).
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
+
 #include "core/config.h"
+#include "plant/effects/effect_process.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -44,5 +48,14 @@ inline void add_flapping_forcing(const FlappingForcingConfig& c, double phase, c
     Y += c.side_force_amplitudes_n[h] * std::sin(static_cast<double>(h + 1) * phase + phases_side[h]);
   }
 }
+
+/// The effect's process, with the phase of each harmonic drawn from the plant's stream (the roll
+/// moment's, then the side force's, uniform in [0, 2 pi)). The phases are drawn whether the
+/// effect is on or not, so switching it leaves the draws of every effect made after it as they
+/// were; none when it is off.
+std::unique_ptr<EffectProcess> flapping_forcing_process(const FlappingForcingConfig& config, ProcessContext& context);
+
+/// SIZE sets the first roll amplitude; every amplitude of both lists scales with it.
+EffectSizing flapping_forcing_sizing();
 
 }  // namespace nimble::plant

@@ -1,5 +1,7 @@
 #include "plant/effects/forward_speed_coupling.h"
 
+#include <stdexcept>
+
 namespace nimble::plant {
 
 const ParamTable<ForwardSpeedCouplingConfig>& forward_speed_coupling_params() {
@@ -44,6 +46,37 @@ void forward_speed_coupling_from_model(const ModelSection& s, ForwardSpeedCoupli
   c.L_uv_ns2pm = s.or_zero("L_uv", range_of(t, "L_uv_ns2pm"));
   c.Y_up_ns2pm = s.or_zero("Y_up", range_of(t, "Y_up_ns2pm"));
   c.Y_uv_ns2pm2 = s.or_zero("Y_uv", range_of(t, "Y_uv_ns2pm2"));
+}
+
+namespace {
+
+class ForwardSpeedCouplingProcess : public EffectProcess {
+ public:
+  explicit ForwardSpeedCouplingProcess(const ForwardSpeedCouplingConfig& config) : config_(config) {}
+  double stability_factor(double du) const override { return forward_speed_factor(config_, du); }
+  void add_loads(const LoadInputs& in, double& L, double& Y) const override {
+    add_forward_speed_coupling(config_, in.du, in.p, in.v_rel, L, Y);
+  }
+
+ private:
+  ForwardSpeedCouplingConfig config_;
+};
+
+}  // namespace
+
+std::unique_ptr<EffectProcess> forward_speed_coupling_process(const ForwardSpeedCouplingConfig& config) {
+  if (!config.enabled) return nullptr;
+  if (config.gain_per_mps != 0.0 && config.has_coefficients()) {
+    throw std::invalid_argument(
+        "plant: forward_speed_coupling has both gain_per_mps and the coefficients L_up, L_uv, Y_up, Y_uv; give one form");
+  }
+  return std::make_unique<ForwardSpeedCouplingProcess>(config);
+}
+
+EffectSizing forward_speed_coupling_sizing() {
+  return {"gain_per_mps", "1/(m/s)", range_of(forward_speed_coupling_params(), "gain_per_mps"),
+          "the explicit coefficients stay as set",
+          [](const YAML::Node&, double size) { return parameter_alone("gain_per_mps", size); }};
 }
 
 }  // namespace nimble::plant

@@ -10,8 +10,12 @@
 /// held at trim and the effect is inert). Flies the model effect forward_speed_coupling in the
 /// four-coefficient form.
 
+#include <memory>
+
 #include "core/config.h"
 #include "core/param_table.h"
+#include "plant/effects/effect_process.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -51,5 +55,14 @@ inline void add_forward_speed_coupling(const ForwardSpeedCouplingConfig& c, doub
   L += c.L_up_ns2 * du * p + c.L_uv_ns2pm * du * v_rel;
   Y += c.Y_up_ns2pm * du * p + c.Y_uv_ns2pm2 * du * v_rel;
 }
+
+/// The effect's process: the factor on the stability derivatives and the four-coefficient loads;
+/// none when it is off.
+/// @throws std::invalid_argument for a gain together with a coefficient (a model's effect
+///         replaces the gain, so this is a plant file that gives both).
+std::unique_ptr<EffectProcess> forward_speed_coupling_process(const ForwardSpeedCouplingConfig& config);
+
+/// SIZE sets gain_per_mps; the explicit coefficients stay as set.
+EffectSizing forward_speed_coupling_sizing();
 
 }  // namespace nimble::plant

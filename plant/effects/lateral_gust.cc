@@ -41,6 +41,27 @@ void lateral_gust_from_model(const ModelSection& s, LateralGustConfig& c) {
   c.tau_s = s.required("tau_s", range_of(lateral_gust_params(), "tau_s"));
 }
 
+namespace {
+
+class LateralGustProcess : public EffectProcess {
+ public:
+  explicit LateralGustProcess(const GustProcess& gust) : gust_(gust) {}
+  double side_wind_mps() const override { return gust_.velocity_mps(); }
+  void step(double h, std::mt19937_64& rng, std::normal_distribution<double>& normal) override {
+    gust_.step(h, rng, normal);
+  }
+
+ private:
+  GustProcess gust_;
+};
+
+}  // namespace
+
+std::unique_ptr<EffectProcess> lateral_gust_process(const LateralGustConfig& config, ProcessContext& context) {
+  if (!config.enabled) return nullptr;
+  return std::make_unique<LateralGustProcess>(GustProcess(config, context.dt_s, context.rng, context.normal));
+}
+
 GustProcess::GustProcess(const LateralGustConfig& config, double dt_s, std::mt19937_64& rng,
                          std::normal_distribution<double>& normal)
     : c_(config) {
@@ -75,6 +96,11 @@ void GustProcess::step(double h, std::mt19937_64& rng, std::normal_distribution<
     const double a = std::exp(-h / c_.tau_s);
     v_ = a * v_ + c_.sigma_mps * std::sqrt(1.0 - a * a) * normal(rng);
   }
+}
+
+EffectSizing lateral_gust_sizing() {
+  return {"sigma_mps", "m/s", range_of(lateral_gust_params(), "sigma_mps"), "form, tau_s and time_scale_s stay as set",
+          [](const YAML::Node&, double size) { return parameter_alone("sigma_mps", size); }};
 }
 
 }  // namespace nimble::plant

@@ -13,6 +13,7 @@
 /// Flies the model effect lateral_gust (sigma_mps, tau_s: Gauss-Markov). The plant file's
 /// defaults and where they come from: rig_configs/plant/nimble_plant.yaml.
 
+#include <memory>
 #include <random>
 #include <string>
 
@@ -20,6 +21,8 @@
 
 #include "core/config.h"
 #include "core/param_table.h"
+#include "plant/effects/effect_process.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -73,5 +76,13 @@ class GustProcess {
   Eigen::RowVector2d C_ = Eigen::RowVector2d::Zero();
   Eigen::Vector2d z_ = Eigen::Vector2d::Zero();
 };
+
+/// The effect's process: the gust (a Dryden gust draws its stationary start when it is made) as
+/// the side wind the aerodynamics see, one GustProcess step per plant step; none when it is off.
+/// @throws std::invalid_argument as GustProcess.
+std::unique_ptr<EffectProcess> lateral_gust_process(const LateralGustConfig& config, ProcessContext& context);
+
+/// SIZE sets sigma_mps; form, tau_s and time_scale_s stay as set.
+EffectSizing lateral_gust_sizing();
 
 }  // namespace nimble::plant

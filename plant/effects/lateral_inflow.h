@@ -6,6 +6,7 @@
 
 #include "core/config.h"
 #include "core/param_table.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/model_section.h"
 
 namespace nimble::plant {
@@ -31,5 +32,8 @@ inline void add_lateral_inflow(const LateralInflowConfig& c, double v_rel, doubl
   Y += c.Y_vv_ns2pm2 * v_rel * std::fabs(v_rel);
   L += c.L_vv_ns2pm * v_rel * std::fabs(v_rel);
 }
+
+/// SIZE sets Y_vv_ns2pm2; L_vv_ns2pm keeps its ratio to it (0.01 m if the scenario's Y_vv is 0).
+EffectSizing lateral_inflow_sizing();
 
 }  // namespace nimble::plant

@@ -36,38 +36,39 @@ const std::vector<PlantEffect>& plant_effects() {
        [](const std::string& prefix) { return params_markdown_rows(forward_speed_coupling_params(), ForwardSpeedCouplingConfig{}, prefix); },
        "forward_speed_coupling",
        [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.forward_speed_coupling); },
-       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
-         add_forward_speed_coupling(e.forward_speed_coupling, in.du, in.p, in.v_rel, L, Y);
-       },
-       [](const EffectsConfig& e) { return e.forward_speed_coupling.enabled; }},
+       [](const EffectsConfig& e, ProcessContext&) { return forward_speed_coupling_process(e.forward_speed_coupling); },
+       [](const EffectsConfig& e) { return e.forward_speed_coupling.enabled; }, forward_speed_coupling_sizing},
       {"constant_load",
        [](ConfigMap& m, EffectsConfig& e) { e.constant_load = constant_load_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "constant_load",
        [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.constant_load); },
-       [](const EffectsConfig& e, const LoadInputs&, double& L, double& Y) { add_constant_load(e.constant_load, L, Y); },
-       [](const EffectsConfig& e) { return e.constant_load.enabled; }},
+       [](const EffectsConfig& e, ProcessContext&) {
+         return load_process<ConstantLoadConfig>(
+             e.constant_load, [](const ConstantLoadConfig& c, const LoadInputs&, double& L, double& Y) { add_constant_load(c, L, Y); });
+       },
+       [](const EffectsConfig& e) { return e.constant_load.enabled; }, constant_load_sizing},
       {"lateral_inflow",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_inflow = lateral_inflow_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix); }, "lateral_inflow",
        [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.lateral_inflow); },
-       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
-         add_lateral_inflow(e.lateral_inflow, in.v_rel, L, Y);
+       [](const EffectsConfig& e, ProcessContext&) {
+         return load_process<LateralInflowConfig>(
+             e.lateral_inflow,
+             [](const LateralInflowConfig& c, const LoadInputs& in, double& L, double& Y) { add_lateral_inflow(c, in.v_rel, L, Y); });
        },
-       [](const EffectsConfig& e) { return e.lateral_inflow.enabled; }},
+       [](const EffectsConfig& e) { return e.lateral_inflow.enabled; }, lateral_inflow_sizing},
       {"flapping_forcing",
        [](ConfigMap& m, EffectsConfig& e) { e.flapping_forcing = flapping_forcing_from(m); },
        flapping_forcing_markdown_rows, "flapping_forcing",
        [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.flapping_forcing); },
-       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
-         add_flapping_forcing(e.flapping_forcing, in.flap_phase_rad, *in.phases_roll, *in.phases_side, L, Y);
-       },
-       [](const EffectsConfig& e) { return e.flapping_forcing.enabled; }},
+       [](const EffectsConfig& e, ProcessContext& c) { return flapping_forcing_process(e.flapping_forcing, c); },
+       [](const EffectsConfig& e) { return e.flapping_forcing.enabled; }, flapping_forcing_sizing},
       {"actuator_delay",
        [](ConfigMap& m, EffectsConfig& e) { e.actuator_delay = actuator_delay_from(m); },
        [](const std::string& prefix) { return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix); }, "actuator_delay",
        [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.actuator_delay); },
-       nullptr,  // on the commands: PlantModel::delayed()
-       [](const EffectsConfig& e) { return e.actuator_delay.enabled; }},
+       [](const EffectsConfig& e, ProcessContext&) { return actuator_delay_process(e.actuator_delay); },
+       [](const EffectsConfig& e) { return e.actuator_delay.enabled; }, actuator_delay_sizing, true},
       {"lateral_gust",
        [](ConfigMap& m, EffectsConfig& e) { e.lateral_gust = lateral_gust_from(m); },
        [](const std::string& prefix) {
@@ -75,8 +76,8 @@ const std::vector<PlantEffect>& plant_effects() {
                 "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
        },
        "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.lateral_gust); },
-       nullptr,  // on the velocity the aerodynamics see: LoadInputs::v_rel
-       [](const EffectsConfig& e) { return e.lateral_gust.enabled; }},
+       [](const EffectsConfig& e, ProcessContext& c) { return lateral_gust_process(e.lateral_gust, c); },
+       [](const EffectsConfig& e) { return e.lateral_gust.enabled; }, lateral_gust_sizing},
       {"effectiveness_drift",
        [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_drift = effectiveness_drift_from(m); },
        [](const std::string& prefix) {
@@ -84,10 +85,13 @@ const std::vector<PlantEffect>& plant_effects() {
        },
        "effectiveness_drift",
        [](const ModelSection& s, EffectsConfig& e) { effectiveness_drift_from_model(s, e.effectiveness_drift); },
-       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
-         add_effectiveness_drift(e.effectiveness_drift, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+       [](const EffectsConfig& e, ProcessContext&) {
+         return load_process<EffectivenessDriftConfig>(
+             e.effectiveness_drift, [](const EffectivenessDriftConfig& c, const LoadInputs& in, double& L, double& Y) {
+               add_effectiveness_drift(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+             });
        },
-       [](const EffectsConfig& e) { return e.effectiveness_drift.enabled; }},
+       [](const EffectsConfig& e) { return e.effectiveness_drift.enabled; }, nullptr},
       {"effectiveness_step",
        [](ConfigMap& m, EffectsConfig& e) { e.effectiveness_step = effectiveness_step_from(m); },
        [](const std::string& prefix) {
@@ -95,12 +99,24 @@ const std::vector<PlantEffect>& plant_effects() {
        },
        "effectiveness_step",
        [](const ModelSection& s, EffectsConfig& e) { effectiveness_step_from_model(s, e.effectiveness_step); },
-       [](const EffectsConfig& e, const LoadInputs& in, double& L, double& Y) {
-         add_effectiveness_step(e.effectiveness_step, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+       [](const EffectsConfig& e, ProcessContext&) {
+         return load_process<EffectivenessStepConfig>(
+             e.effectiveness_step, [](const EffectivenessStepConfig& c, const LoadInputs& in, double& L, double& Y) {
+               add_effectiveness_step(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
+             });
        },
-       [](const EffectsConfig& e) { return e.effectiveness_step.enabled; }},
+       [](const EffectsConfig& e) { return e.effectiveness_step.enabled; }, nullptr},
   };
   return effects;
+}
+
+std::vector<std::unique_ptr<EffectProcess>> make_effect_processes(const EffectsConfig& effects,
+                                                                  ProcessContext& context) {
+  std::vector<std::unique_ptr<EffectProcess>> out;
+  for (const PlantEffect& effect : plant_effects()) {
+    if (auto process = effect.make(effects, context)) out.push_back(std::move(process));
+  }
+  return out;
 }
 
 void effects_from(ConfigMap& section, EffectsConfig& effects) {

@@ -6,6 +6,7 @@
 /// constructor and `rig params plant.effects` read it. Adding an effect: README.md here.
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,15 +28,29 @@ struct PlantEffect {
   /// Sets `effects` from that section of a model. @throws std::invalid_argument naming the
   /// model, the effect and the parameter.
   void (*from_model)(const ModelSection& section, EffectsConfig& effects);
-  /// Adds its roll moment L and side force Y (nullptr: an effect that acts otherwise, on the
-  /// commands or on the velocity the aerodynamics see).
-  void (*add_loads)(const EffectsConfig& effects, const LoadInputs& in, double& L, double& Y);
+  /// Its process while the plant flies (effect_process.h: on the commands, the side wind, the
+  /// stability derivatives, the loads, with its state), or none when the effect does nothing
+  /// in `effects`. The plant makes every effect's process, in this list's order, when it is made.
+  /// @throws std::invalid_argument for a configuration the effect cannot fly.
+  std::unique_ptr<EffectProcess> (*make)(const EffectsConfig& effects, ProcessContext& context);
   /// True if the effect is on in `effects` (what `rig loop` names as left out of its linear loop).
   bool (*enabled)(const EffectsConfig& effects);
+  /// What one number SIZE sets (effect_sizing.h: `rig discrepancy --power`), or nullptr for an
+  /// effect that is not sized by one number.
+  EffectSizing (*sizing)();
+  /// True if its process acts only on the commands, which the linear loop of `rig loop` models
+  /// as a delay (so `rig loop` does not name it as left out).
+  bool in_linear_loop = false;
 };
 
-/// Every plant effect, in the order the plant adds their loads (PlantModel::derivative()).
+/// Every plant effect, in the order the plant makes their processes and calls their hooks
+/// (PlantModel::derivative()).
 const std::vector<PlantEffect>& plant_effects();
+
+/// The processes of every effect that acts in `effects`, in plant_effects()'s order.
+/// @throws std::invalid_argument naming the effect whose configuration cannot fly.
+std::vector<std::unique_ptr<EffectProcess>> make_effect_processes(const EffectsConfig& effects,
+                                                                  ProcessContext& context);
 
 /// Reads the `effects` section of the plant: every key one of plant_effects().
 /// @throws ConfigError naming the key (an unknown effect names the known ones).

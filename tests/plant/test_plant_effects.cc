@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 #include <map>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -428,4 +429,60 @@ TEST_CASE("plant terms add coefficient * expression to the roll moment and side 
   }
   // After 0.3 s the lagged moment (positive with delta_f) has rolled the vehicle faster.
   CHECK(lagged.truth().omega_body_radps.x() > plain.truth().omega_body_radps.x());
+}
+
+// ---------------------------------------------------------------------------------------
+// The plant holds one process per effect that acts, from the registry, and has no line for any
+// one effect.
+
+TEST_CASE("effects act through their processes: none when all are off, one per effect that is on",
+          "[plant][effect_process]") {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  plant::ProcessContext context{1e-3, rng, normal};
+  plant::EffectsConfig off;
+  CHECK(plant::make_effect_processes(off, context).empty());
+
+  plant::EffectsConfig on;
+  on.lateral_inflow.enabled = true;
+  on.lateral_inflow.Y_vv_ns2pm2 = -0.02;
+  on.actuator_delay.enabled = true;
+  on.actuator_delay.delay_s = 0.0;  // on with no delay: acts on nothing, so no process
+  on.lateral_gust.enabled = true;
+  on.lateral_gust.sigma_mps = 0.3;
+  const auto processes = plant::make_effect_processes(on, context);
+  REQUIRE(processes.size() == 2);
+  double L = 0.0, Y = 0.0;
+  plant::LoadInputs in;
+  in.v_rel = 2.0;
+  processes[0]->add_loads(in, L, Y);
+  CHECK(Y == Approx(-0.02 * 4.0));
+  CHECK(processes[0]->side_wind_mps() == 0.0);
+  // Only the gust has a wind, and it moves with its steps.
+  for (int k = 0; k < 100; ++k) processes[1]->step(1e-3, rng, normal);
+  CHECK(processes[1]->side_wind_mps() != 0.0);
+}
+
+TEST_CASE("the flapping forcing draws its phases whether it is on or not: the gust's draws stay where they were",
+          "[plant][effect_process]") {
+  const auto gust_after = [](bool forcing_on) {
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    plant::ProcessContext context{1e-3, rng, normal};
+    plant::EffectsConfig fx;
+    fx.flapping_forcing.enabled = forcing_on;
+    fx.flapping_forcing.roll_moment_amplitudes_nm = {2e-3, 1e-3};
+    fx.flapping_forcing.side_force_amplitudes_n = {1e-2};
+    fx.lateral_gust.enabled = true;
+    fx.lateral_gust.form = plant::GustForm::kDryden;
+    fx.lateral_gust.sigma_mps = 0.5;
+    auto processes = plant::make_effect_processes(fx, context);
+    REQUIRE(processes.size() == (forcing_on ? 2u : 1u));
+    for (int k = 0; k < 50; ++k) {
+      for (auto& p : processes) p->step(1e-3, rng, normal);
+    }
+    return processes.back()->side_wind_mps();
+  };
+  CHECK(gust_after(true) == gust_after(false));
+  CHECK(gust_after(true) != 0.0);
 }
