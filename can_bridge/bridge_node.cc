@@ -7,6 +7,7 @@
 #include <ctime>
 
 #include "contract/messages.h"
+#include "contract/rates.h"
 #include <nimble/fault_event_t.hpp>
 
 #include "transport/clock.h"
@@ -31,10 +32,11 @@ std::string hex_id(const can_frame& f) {
   return buf;
 }
 
-/// The controller's rate: one command per control cycle (controller section, default 512 Hz).
+/// The controller's rate: one command per control cycle (the controller section's, else the
+/// contract's default).
 double controller_rate_hz(const Scenario& scenario) {
   const YAML::Node rate = scenario.root["controller"]["rate_hz"];
-  return rate ? rate.as<double>() : 512.0;
+  return rate ? rate.as<double>() : contract::kDefaultControlRateHz;
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 /// Sub-commands of the `rig` command-line tool, one file each (cli/<name>_command.cc). Each takes
 /// the arguments after its name and returns the process exit code: 0 success, 1 the command ran
 /// but its check failed, 2 bad usage or bad input (message on stderr). Their one-line usage is
-/// written once, in cli/main.cc's command table (`rig --help`); each command's options in its
+/// written once, in cli/rig_main.cc's command table (`rig --help`); each command's options in its
 /// own file (`rig <command> --help`).
 
 #include <string>

@@ -36,7 +36,7 @@ constexpr const char* kDocPageHead =
     "(`rig_configs/vehicles/`), the physical bounds of recorded flight data (docs/identification.md).\n"
     "The keys a table does not hold are documented in the files that set them: the scenario's top\n"
     "level (`scenario/scenario.h`), the manoeuvres (`controller/manoeuvre.h`), the hosts (`launcher/hosts.h`),\n"
-    "the faults (`scenario/faults.h`), the CAN interface and candump file names (`can_bridge/bridge_config.h`)\n"
+    "the faults (`scenario/fault_section.h`), the CAN interface and candump file names (`can_bridge/bridge_config.h`)\n"
     "and the controller's gain sets (`rig_configs/controller/nimble_attitude.yaml`).\n\n"
     "`functional.cli` also checks that every tabled sensing key is written at its default in\n"
     "`rig_configs/sensing/default_sensing.yaml` and every tabled plant key in\n"

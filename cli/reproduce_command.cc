@@ -1,5 +1,5 @@
 /// `rig reproduce thesis`: the thesis's campaign flown, identified, validated and set beside the
-/// published tables (reproduce/campaign.h).
+/// published tables (reproduce/thesis_campaign.h).
 
 #include <algorithm>
 #include <cstdint>
@@ -17,7 +17,7 @@
 #include "launcher/launcher.h"
 #include "launcher/run_plan.h"
 #include "launcher/sweep.h"
-#include "reproduce/campaign.h"
+#include "reproduce/thesis_campaign.h"
 
 namespace nimble::cli {
 namespace {
@@ -58,7 +58,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                  "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
                  "thesis did, validates it on the others, and prints every table it reproduces beside the\n"
                  "published one (Tables 9.4, 9.5, 9.6, 4, 7, 8, 9, 10, 11, 15, 16, 8.8), each cell with its\n"
-                 "category and verdict (reproduce/verdict.h): the rig's own flights are match (within the\n"
+                 "category and verdict (reproduce/cell_verdict.h): the rig's own flights are match (within the\n"
                  "thesis's tolerance), explained (a reason whose check holds in the same run), differs or\n"
                  "inconclusive (the rig's own interval wider than the tolerance); calibrated and model cells\n"
                  "match or differ; fit metrics of the very model the plant flies are not comparable.");

@@ -4,7 +4,7 @@
 /// A fault acts on one target (a channel, or the CAN link) from start_s for duration_s of
 /// simulated time. It is applied in the transport at the publisher (transport/fault_injector.h),
 /// so every consumer sees the same fault and a lockstep run stays deterministic. This file is
-/// the plain data and the per-type value fields; scenario/faults.h reads and validates the
+/// the plain data and the per-type value fields; scenario/fault_section.h reads and validates the
 /// section, transport/fault_injector.h applies it.
 
 #include <cstdint>
@@ -43,7 +43,7 @@ enum class FaultTarget {
 
 /// One kind of fault as the rig knows it. fault_kinds() is the one list of them: the scenario
 /// loader takes its names and parameters from it, and every switch over FaultKind that acts on
-/// a fault (its parameters in scenario/faults.cc, its injection in transport/fault_injector.cc
+/// a fault (its parameters in scenario/fault_section.cc, its injection in transport/fault_injector.cc
 /// or can_bridge/can_faults.cc, its description) has no `default:`, so that a new kind does not
 /// compile until each of them handles it (docs/faults.md, "Adding a fault kind").
 struct FaultKindInfo {

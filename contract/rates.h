@@ -12,6 +12,11 @@
 
 namespace nimble::contract {
 
+/// The control rate of the onboard loop [Hz], the IMU's rate (thesis Section 8.1: the onboard
+/// IMU at 512 Hz; the loop runs on its samples): `controller.rate_hz`'s default, and so the rate
+/// of ACTUATOR_CMD and of the CAN bridge's cycle when a scenario does not set it.
+inline constexpr double kDefaultControlRateHz = 512.0;
+
 /// Rates the processes of a scenario run at [Hz].
 struct ProcessRates {
   double plant_hz = 0.0;       ///< plant.rate_hz: the integration step, the lockstep step

@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "contract/rates.h"
 #include "controller/low_pass.h"
 #include "controller/reference_generator.h"
 #include "core/config.h"
@@ -56,7 +57,7 @@ struct GainSet {
 /// Sources and assumptions: rig_configs/controller/nimble_attitude.yaml.
 struct ControllerConfig {
   /// Control rate [Hz]; the onboard loop and the IMU run at 512 Hz.
-  double rate_hz = 512.0;
+  double rate_hz = contract::kDefaultControlRateHz;
   /// Roll reference generator (onboard int_euler values).
   ReferenceGeneratorConfig roll_reference{};
   /// Pitch reference generator (onboard int_euler values).

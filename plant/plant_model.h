@@ -28,7 +28,7 @@
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
 #include "plant/actuator_input.h"
-#include "plant/effects/effects.h"
+#include "plant/effects/effects_config.h"
 #include "plant/effects/effect_process.h"
 
 namespace nimble::plant {

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/json_writer.h"
-#include "reproduce/campaign.h"
+#include "reproduce/thesis_campaign.h"
 
 namespace nimble::reproduce {
 namespace {

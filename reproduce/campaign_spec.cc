@@ -66,7 +66,7 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
   }
   out.text = r.get_string("text");
   // Every reason says where the rig's value lies, how far off it may be, and for which states
-  // it holds: the run checks all three (reproduce/verdict.h).
+  // it holds: the run checks all three (reproduce/cell_verdict.h).
   out.rig = r.get_enum("rig", {"above", "below"});
   out.max_off = r.get_double("max_off", Range::closed(0.0, 1e9));
   out.states = r.get_string_list("states");

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "reproduce/verdict.h"
+#include "reproduce/cell_verdict.h"
 
 namespace nimble::reproduce {
 

@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "contract/channels.h"
-#include "scenario/faults.h"
+#include "scenario/fault_section.h"
 
 namespace nimble {
 namespace {

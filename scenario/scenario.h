@@ -72,7 +72,7 @@ struct Scenario {
   /// How actuator commands and feedback travel between controller and plant: "lcm"
   /// (directly) or "can" (through nimble_can_bridge and SocketCAN; section can_bridge).
   std::string actuator_link = "lcm";
-  /// Faults injected into the run (section `faults`, scenario/faults.h); empty: none.
+  /// Faults injected into the run (section `faults`, scenario/fault_section.h); empty: none.
   std::vector<contract::FaultSpec> faults;
   /// The rate each stream channel of the run is expected at [Hz] (contract::expected_rates() of
   /// the configured process rates). The launcher derives it when it plans the run and writes it

@@ -12,7 +12,7 @@
 
 #include "core/config.h"
 #include "core/model.h"
-#include "plant/effects/effects.h"
+#include "plant/effects/effects_config.h"
 
 namespace nimble::plant {
 

@@ -1,9 +1,9 @@
-// The verdict rules of `rig reproduce thesis` (reproduce/verdict.h): every cell can fail, and a
+// The verdict rules of `rig reproduce thesis` (reproduce/cell_verdict.h): every cell can fail, and a
 // reason explains a cell only while its predicate holds in the same run.
 
 #include <catch2/catch.hpp>
 
-#include "reproduce/verdict.h"
+#include "reproduce/cell_verdict.h"
 
 using namespace nimble::reproduce;
 

@@ -1,5 +1,5 @@
 // The fault injector at the publisher (transport/fault_injector.h), the faults section's reader
-// (scenario/faults.h) and the estimator's divergence monitor (estimator/divergence_monitor.h).
+// (scenario/fault_section.h) and the estimator's divergence monitor (estimator/divergence_monitor.h).
 
 #include <cmath>
 #include <fstream>
@@ -17,7 +17,7 @@
 #include "contract/decode.h"
 #include "core/config.h"
 #include "estimator/divergence_monitor.h"
-#include "scenario/faults.h"
+#include "scenario/fault_section.h"
 #include "transport/bus.h"
 #include "transport/inprocess_hub.h"
 

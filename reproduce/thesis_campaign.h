@@ -22,7 +22,7 @@
 /// w0 during the flight; the coefficient found is reported (it is the mass when the plant is
 /// the rig's).
 ///
-/// Verdicts and categories: reproduce/verdict.h. Every cell is judged on the mean over the
+/// Verdicts and categories: reproduce/cell_verdict.h. Every cell is judged on the mean over the
 /// seeds flown (--seeds); a reason's check that names a cause flies the table's flight again
 /// with that cause added, with the same seeds.
 ///
@@ -37,14 +37,14 @@
 #include <string>
 #include <vector>
 
-#include "reproduce/verdict.h"
+#include "reproduce/cell_verdict.h"
 
 namespace nimble::reproduce {
 
 struct Table {
   std::string id;     ///< thesis table number, e.g. "9.4"
   std::string title;
-  std::string category;  ///< reproduce/verdict.h
+  std::string category;  ///< reproduce/cell_verdict.h
   std::string why;       ///< what a calibrated, model or not-comparable table's cells are
   std::vector<Cell> cells;
 };

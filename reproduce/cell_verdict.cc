@@ -1,6 +1,6 @@
-/// The verdict of one cell of `rig reproduce thesis` (reproduce/verdict.h).
+/// The verdict of one cell of `rig reproduce thesis` (reproduce/cell_verdict.h).
 
-#include "reproduce/verdict.h"
+#include "reproduce/cell_verdict.h"
 
 #include <algorithm>
 #include <cmath>

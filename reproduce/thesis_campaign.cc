@@ -1,4 +1,4 @@
-#include "reproduce/campaign.h"
+#include "reproduce/thesis_campaign.h"
 
 #include <algorithm>
 #include <array>

@@ -1,6 +1,6 @@
 #pragma once
 /// The verdict of one cell of a reproduced table: the rules of `rig reproduce thesis`, apart from
-/// the flights that feed them (reproduce/campaign.h).
+/// the flights that feed them (reproduce/thesis_campaign.h).
 ///
 /// Categories (each table has one, from the campaign file):
 ///  - flights: numbers the rig's own flights and pipeline produce. Verdicts `match` (within the

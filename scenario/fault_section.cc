@@ -1,4 +1,4 @@
-#include "scenario/faults.h"
+#include "scenario/fault_section.h"
 
 #include <algorithm>
 #include <cmath>
