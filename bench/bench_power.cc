@@ -21,8 +21,8 @@
 
 #include "cmdline/args.h"
 #include "launcher/run_plan.h"
-#include "power/effect_size.h"
-#include "power/power_campaign.h"
+#include "detection_power/effect_size.h"
+#include "detection_power/power_campaign.h"
 
 namespace {
 
@@ -38,7 +38,7 @@ std::string load_average() {
 int main(int argc, char** argv) {
   using namespace nimble;
   const std::string configs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
-  power::PowerOptions o;
+  detection_power::PowerOptions o;
   o.scenario_file = configs + "cl_doublet_train_slow.yaml";
   o.model_file = configs + "models/nimble_lateral_set1_kinematic.yaml";
   o.flights = 200;
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
   if (const auto done = cl.parse(argc, argv)) return *done;
   try {
-    const power::EffectSizes e = power::parse_effect_sizes(effect);
+    const detection_power::EffectSizes e = detection_power::parse_effect_sizes(effect);
     if (e.sizes.size() != 1) return cl.fail("--effect: one size");
     o.effect = e.effect;
     o.sizes = e.sizes;
@@ -71,8 +71,8 @@ int main(int argc, char** argv) {
       ro.scenario_file = o.scenario_file;
       o.lengths_s = {launcher::load_run_plan(ro).scenario.duration_s};
     }
-    const power::PowerResult r = power::run_power(o);
-    const power::PowerCell& c = r.cells.front();
+    const detection_power::PowerResult r = detection_power::run_power(o);
+    const detection_power::PowerCell& c = r.cells.front();
     const double n = static_cast<double>(c.flights.size());
     std::printf("bench_power: %s, %s = %g %s, %.4g s records, %zu flights, %d jobs\n", r.scenario.c_str(),
                 r.parameter.c_str(), c.size, r.unit.c_str(), c.length_s, c.flights.size(), r.jobs);

@@ -1,4 +1,4 @@
-/// `rig discrepancy --power`: how long to fly to name an effect (power/power_campaign.h).
+/// `rig discrepancy --power`: how long to fly to name an effect (detection_power/power_campaign.h).
 
 #include <algorithm>
 #include <iostream>
@@ -10,9 +10,9 @@
 #include "cmdline/args.h"
 #include "core/effects.h"
 #include "ident/plots.h"
-#include "power/effect_size.h"
-#include "power/power_campaign.h"
-#include "power/power_report.h"
+#include "detection_power/effect_size.h"
+#include "detection_power/power_campaign.h"
+#include "detection_power/power_report.h"
 
 namespace nimble::cli {
 namespace {
@@ -28,7 +28,7 @@ constexpr const char* kPowerDescription =
 
 std::string power_footer() {
   std::string out = "SIZE sets one plant parameter (plant.effects.<effect>.<parameter>):\n";
-  for (const auto& e : power::sized_effects()) {
+  for (const auto& e : detection_power::sized_effects()) {
     out += "  " + e.effect + "=" + e.parameter + " [" + e.unit + "], " + e.range.describe() + "; " + e.scales +
            "; named " + e.named_as + "\n";
   }
@@ -49,7 +49,7 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   for (const auto& a : args_in) {
     if (a != "--power") args.push_back(a);
   }
-  power::PowerOptions o;
+  detection_power::PowerOptions o;
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string json, plots;
   CommandLine cl("rig discrepancy --power", kPowerDescription);
@@ -58,11 +58,11 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   cl->add_option("--model", o.model_file, "the model (lateral3) the workflow checks")->type_name("FILE")->required();
   each_value(cl->add_option("--effect")
                  ->description("the plant effect and its sizes, a list A,B or a grid FROM:TO:STEP: " +
-                               power::sized_effect_list())
+                               detection_power::sized_effect_list())
                  ->type_name("NAME=SIZE")
                  ->required(),
              [&o](const std::string& v) {
-               const power::EffectSizes e = power::parse_effect_sizes(v);
+               const detection_power::EffectSizes e = detection_power::parse_effect_sizes(v);
                o.effect = e.effect;
                o.sizes = e.sizes;
              });
@@ -118,19 +118,19 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();  // fail before the flights, not after
 
-  power::PowerResult result;
+  detection_power::PowerResult result;
   try {
-    result = power::run_power(o);
+    result = detection_power::run_power(o);
   } catch (const ConfigError& e) {
     std::cerr << "rig discrepancy --power: config error: " << e.what() << "\n";
     return kExitUsage;
   }
   std::vector<std::string> pngs;
-  if (!plots.empty()) pngs = power::write_power_plots(result, plots);
+  if (!plots.empty()) pngs = detection_power::write_power_plots(result, plots);
   std::ostream& text = json == "-" ? std::cerr : std::cout;
-  text << power::power_text(result);
+  text << detection_power::power_text(result);
   for (const auto& p : pngs) text << "plot " << p << "\n";
-  if (!json.empty()) write_json(json, power::power_json(result, pngs));
+  if (!json.empty()) write_json(json, detection_power::power_json(result, pngs));
   return 0;
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-/// How one number sizes a plant effect (`rig discrepancy --power --effect NAME=SIZE`, power/):
+/// How one number sizes a plant effect (`rig discrepancy --power --effect NAME=SIZE`, detection_power/):
 /// SIZE is the value of the effect's main parameter, in that parameter's unit and range, and
 /// the effect's other values keep the shape the scenario gives them. Each sizable effect
 /// declares its sizing in its own file; the registry (registry.h) carries it.

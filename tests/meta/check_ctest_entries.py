@@ -8,7 +8,10 @@ runs a Catch2 executable with a test spec, asks the executable which test cases 
 (--list-test-names-only). It fails, naming the entry, when a spec selects no case or several, when
 an entry lacks `--warn NoTests`, or when a test case of an executable is selected by no entry.
 
-Usage: check_ctest_entries.py BUILD_DIR
+Usage: check_ctest_entries.py BUILD_DIR [LABEL_REGEX]
+With LABEL_REGEX only the entries of those labels are checked: the sanitizer build builds only
+what its pass runs (target sanitizer_pass), and the other executables' entries are the first
+build's to check.
 """
 import json
 import subprocess
@@ -32,10 +35,11 @@ def catch_list(exe, spec=None):
 
 
 def main():
-    if len(sys.argv) != 2:
+    if len(sys.argv) not in (2, 3):
         print(__doc__, file=sys.stderr)
         return 2
-    shown = subprocess.run(["ctest", "--test-dir", sys.argv[1], "--show-only=json-v1"],
+    labels = ["-L", sys.argv[2]] if len(sys.argv) == 3 else []
+    shown = subprocess.run(["ctest", "--test-dir", sys.argv[1], "--show-only=json-v1"] + labels,
                            capture_output=True, text=True, check=True).stdout
     tests = json.loads(shown)["tests"]
     problems = []

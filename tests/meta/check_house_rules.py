@@ -6,7 +6,7 @@
 2. No rate literal in a process: every set_expected_rate() takes its rate from the run
    (Scenario::expected_rate()), never a number written in the call.
 3. No include runs up to the programs: cli/ is included only from cli/; launcher/ only from
-   launcher/ and the folders above it (cli/, reproduce/, power/, bench/, tools/, fuzz/).
+   launcher/ and the folders above it (cli/, reproduce/, detection_power/, bench/, tools/, fuzz/).
 4. No source file is longer than MAX_LINES: a longer one holds more than one job, and is split
    by job.
 5. No function is longer than MAX_FUNCTION_LINES (from its header's line to its closing brace).
@@ -28,7 +28,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from cxx_functions import functions  # noqa: E402
 
 SKIP_DIRS = {"tests", "lcmtypes", ".git", "corpus"}
-ABOVE_LAUNCHER = {"launcher", "cli", "reproduce", "power", "bench", "tools", "fuzz"}
+ABOVE_LAUNCHER = {"launcher", "cli", "reproduce", "detection_power", "bench", "tools", "fuzz"}
 MAX_LINES = 650
 MAX_FUNCTION_LINES = 120
 PROCESS_ROOMS = {"plant", "controller", "estimator", "mocap", "can_bridge", "sensors", "transport"}

@@ -16,10 +16,10 @@
 #include "controller/manoeuvre.h"
 #include "ident/rig_log.h"
 #include "launcher/run_plan.h"
-#include "power/effect_size.h"
-#include "power/power_curve.h"
-#include "power/power_flight.h"
-#include "power/record_length.h"
+#include "detection_power/effect_size.h"
+#include "detection_power/power_curve.h"
+#include "detection_power/power_flight.h"
+#include "detection_power/record_length.h"
 
 namespace {
 
@@ -49,8 +49,8 @@ std::string value_of(const std::vector<Override>& overrides, const std::string& 
 TEST_CASE("power: a flight's data assembled in memory are the data read from its log", "[power]") {
   const std::string dir = test::scratch_dir("power_memory");
   launcher::RunPlan plan = plan_of("nonlinear_doublet_30deg.yaml", {{"duration_s", "3.0"}});
-  const uint64_t seed = power::flight_seed(1, 0);
-  const ident::FlightData memory = power::fly_to_data(plan, seed, dir + "/run.lcmlog");
+  const uint64_t seed = detection_power::flight_seed(1, 0);
+  const ident::FlightData memory = detection_power::fly_to_data(plan, seed, dir + "/run.lcmlog");
   const ident::FlightData log = ident::read_rig_log(dir + "/run.lcmlog").measured;
   REQUIRE(memory.channels.size() == log.channels.size());
   for (const auto& [name, c] : log.channels) {
@@ -61,7 +61,7 @@ TEST_CASE("power: a flight's data assembled in memory are the data read from its
   }
   CHECK(memory.at("p").t_s.size() > 1000);
   // The seed set on a loaded plan is the plan --seed gives: the same configuration digest.
-  power::set_seed(plan, seed);
+  detection_power::set_seed(plan, seed);
   CHECK(nimble::scenario_digest(plan.scenario) ==
         nimble::scenario_digest(plan_of("nonlinear_doublet_30deg.yaml", {{"duration_s", "3.0"}}, seed).scenario));
 }
@@ -70,11 +70,11 @@ TEST_CASE("power: a longer record flies the scenario's block again, cut at the l
   const std::string dir = test::scratch_dir("power_length");
   const launcher::RunPlan plan = plan_of("cl_doublet_train_slow.yaml");
   const Manoeuvre m = load_manoeuvre(plan.scenario.root["manoeuvre"].as<std::string>());
-  REQUIRE(power::block_length_s(plan.scenario) == Approx(9.0));
+  REQUIRE(detection_power::block_length_s(plan.scenario) == Approx(9.0));
   // The scenario's own length: nothing to change.
-  CHECK(power::record_length(plan.scenario, 9.0, dir).overrides.empty());
+  CHECK(detection_power::record_length(plan.scenario, 9.0, dir).overrides.empty());
   // 2.5 blocks: three repetitions with the scenario's hover between, the run cut at 22.5 s.
-  const power::RecordLength r = power::record_length(plan.scenario, 22.5, dir);
+  const detection_power::RecordLength r = detection_power::record_length(plan.scenario, 22.5, dir);
   CHECK(r.repetitions == 3);
   CHECK(value_of(r.overrides, "duration_s") == "22.5");
   const Manoeuvre repeated = load_manoeuvre(r.manoeuvre_file);
@@ -84,53 +84,53 @@ TEST_CASE("power: a longer record flies the scenario's block again, cut at the l
   CHECK(repeated.segments[m.segments.size() + 1].name == m.segments[0].name + "_2");
   const launcher::RunPlan longer = plan_of("cl_doublet_train_slow.yaml", r.overrides);
   CHECK(longer.scenario.duration_s == Approx(22.5));
-  CHECK_THROWS_AS(power::record_length(plan.scenario, 0.0, dir), std::invalid_argument);
+  CHECK_THROWS_AS(detection_power::record_length(plan.scenario, 0.0, dir), std::invalid_argument);
 }
 
 TEST_CASE("power: SIZE sets the effect's main parameter and keeps the scenario's ratios", "[power]") {
   const launcher::RunPlan nl = plan_of("nonlinear_doublet_30deg.yaml");  // lateral inflow -0.07, -7e-4
-  const auto inflow = power::size_overrides(nl.scenario.root, "lateral_inflow", -0.035);
+  const auto inflow = detection_power::size_overrides(nl.scenario.root, "lateral_inflow", -0.035);
   CHECK(value_of(inflow, "plant.effects.lateral_inflow.enabled") == "true");
   CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.Y_vv_ns2pm2")) == Approx(-0.035));
   CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.L_vv_ns2pm")) == Approx(-3.5e-4));
-  CHECK(power::size_overrides(nl.scenario.root, "lateral_inflow", 0.0).size() == 1);  // off: the null case
-  const auto flapping = power::size_overrides(nl.scenario.root, "flapping_forcing", 1e-3);  // plant file: 2e-3, ...
+  CHECK(detection_power::size_overrides(nl.scenario.root, "lateral_inflow", 0.0).size() == 1);  // off: the null case
+  const auto flapping = detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 1e-3);  // plant file: 2e-3, ...
   CHECK(value_of(flapping, "plant.effects.flapping_forcing.roll_moment_amplitudes_nm") == "[0.001,0.0005,0.00025]");
-  const auto delay = power::size_overrides(nl.scenario.root, "actuator_delay", 0.01);
+  const auto delay = detection_power::size_overrides(nl.scenario.root, "actuator_delay", 0.01);
   CHECK(std::stod(value_of(delay, "plant.effects.actuator_delay.delay_s")) == 0.01);
   // Every override loads: the plant accepts what SIZE sets.
-  for (const auto& e : power::sized_effects()) {
+  for (const auto& e : detection_power::sized_effects()) {
     INFO(e.effect);
     const double size = e.effect == "flapping_forcing" ? 1e-3 : 0.1 * e.range.hi;
-    CHECK_NOTHROW(plan_of("nonlinear_doublet_30deg.yaml", power::size_overrides(nl.scenario.root, e.effect, size)));
+    CHECK_NOTHROW(plan_of("nonlinear_doublet_30deg.yaml", detection_power::size_overrides(nl.scenario.root, e.effect, size)));
   }
-  CHECK(power::parse_effect_sizes("lateral_inflow=-0.03:-0.01:0.01").sizes.size() == 3);
-  CHECK(power::sized_effect("constant_load").named_as == "constant_load");
+  CHECK(detection_power::parse_effect_sizes("lateral_inflow=-0.03:-0.01:0.01").sizes.size() == 3);
+  CHECK(detection_power::sized_effect("constant_load").named_as == "constant_load");
   // A size whose companions leave their range is refused, naming them.
-  CHECK_THROWS_WITH(power::size_overrides(nl.scenario.root, "flapping_forcing", 0.5),
+  CHECK_THROWS_WITH(detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 0.5),
                     Catch::Contains("side_force_amplitudes_n 2.5, not in [-1, 1]"));
-  CHECK_THROWS_WITH(power::parse_effect_sizes("inflow=1"), Catch::Contains("unknown effect 'inflow'") &&
+  CHECK_THROWS_WITH(detection_power::parse_effect_sizes("inflow=1"), Catch::Contains("unknown effect 'inflow'") &&
                                                                 Catch::Contains("actuator_delay=delay_s [s]"));
-  CHECK_THROWS_WITH(power::parse_effect_sizes("actuator_delay=0.9"),
+  CHECK_THROWS_WITH(detection_power::parse_effect_sizes("actuator_delay=0.9"),
                     Catch::Contains("plant.effects.actuator_delay.delay_s") && Catch::Contains("in [0, 0.5]"));
-  CHECK_THROWS_WITH(power::parse_effect_sizes("lateral_gust=big"), Catch::Contains("lateral_gust"));
+  CHECK_THROWS_WITH(detection_power::parse_effect_sizes("lateral_gust=big"), Catch::Contains("lateral_gust"));
 }
 
 TEST_CASE("power: the curve's statistics: Wilson intervals and the target crossing", "[power]") {
-  const power::Proportion p = power::wilson(90, 100);
+  const detection_power::Proportion p = detection_power::wilson(90, 100);
   CHECK(p.lo == Approx(0.8256).epsilon(1e-3));
   CHECK(p.hi == Approx(0.9448).epsilon(1e-3));
-  CHECK(power::normal_quantile(0.9) == Approx(1.2815516).epsilon(1e-6));
+  CHECK(detection_power::normal_quantile(0.9) == Approx(1.2815516).epsilon(1e-6));
   // Probit linear in sqrt(length): 50 % at 4 s and 97.7 % (z = 2) at 16 s put 90 % (z = 1.28) at
   // sqrt(L) = 2 + 1.28 / 2 * 2.
   const std::vector<double> x = {4.0, 16.0};
-  const power::Crossing c = power::crossing(x, {power::wilson(500, 1000), power::wilson(977, 1000)}, 0.9, true);
+  const detection_power::Crossing c = detection_power::crossing(x, {detection_power::wilson(500, 1000), detection_power::wilson(977, 1000)}, 0.9, true);
   REQUIRE(c.bracketed);
-  const double z977 = power::normal_quantile(0.977);
-  CHECK(c.value == Approx(std::pow(2.0 + power::normal_quantile(0.9) / z977 * 2.0, 2)).epsilon(1e-9));
+  const double z977 = detection_power::normal_quantile(0.977);
+  CHECK(c.value == Approx(std::pow(2.0 + detection_power::normal_quantile(0.9) / z977 * 2.0, 2)).epsilon(1e-9));
   // A dip is pooled away; a curve that never reaches the target says so.
-  CHECK_FALSE(power::crossing({1, 2, 3}, {power::wilson(5, 10), power::wilson(3, 10), power::wilson(6, 10)}, 0.9, true).reached);
-  CHECK(power::crossing({1, 2}, {power::wilson(10, 10), power::wilson(10, 10)}, 0.9, true).note.find("at or below") == 0);
+  CHECK_FALSE(detection_power::crossing({1, 2, 3}, {detection_power::wilson(5, 10), detection_power::wilson(3, 10), detection_power::wilson(6, 10)}, 0.9, true).reached);
+  CHECK(detection_power::crossing({1, 2}, {detection_power::wilson(10, 10), detection_power::wilson(10, 10)}, 0.9, true).note.find("at or below") == 0);
 }
 
 TEST_CASE("rig discrepancy --power: a few flights give every cell its proportions, and on a clear case more "
@@ -216,7 +216,7 @@ TEST_CASE("rig discrepancy --power: at the recommended length, fresh seeds name 
   REQUIRE(d["verification"].size() == 1);
   const YAML::Node v = d["verification"][0]["named"];
   REQUIRE(v["n"].as<int>() == 200);
-  const power::Proportion p = power::wilson(v["count"].as<int>(), 200, 2.5758293035489);
+  const detection_power::Proportion p = detection_power::wilson(v["count"].as<int>(), 200, 2.5758293035489);
   WARN("recommended " << length << " s; fresh seeds named it " << v["count"].as<int>() << "/200 = " << 100 * p.p
                       << " % (99 % interval " << 100 * p.lo << "-" << 100 * p.hi << " %)");
   CHECK(length > 6.0);

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 /// Runs `work(i)` for every i in [0, n) in min(jobs, n) forked workers, each item once, and
 /// returns their results by index. `work` runs in a worker and returns one line (no newline).
@@ -20,4 +20,4 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
                                         const std::function<std::string(std::size_t, const std::string&)>& died,
                                         const std::function<void(std::size_t)>& progress = nullptr);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -1,4 +1,4 @@
-#include "power/effect_size.h"
+#include "detection_power/effect_size.h"
 
 #include <cmath>
 #include <cstdio>
@@ -8,7 +8,7 @@
 #include "cmdline/args.h"
 #include "plant/effects/registry.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 [[noreturn]] void fail(const SizedEffect& e, const std::string& problem) {
@@ -86,4 +86,4 @@ std::vector<Override> size_overrides(const YAML::Node& tree, const std::string& 
   return out;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -44,10 +44,10 @@
 
 #include "ident/discrepancy.h"
 #include "launcher/run_plan.h"
-#include "power/power_curve.h"
-#include "power/power_flight.h"
+#include "detection_power/power_curve.h"
+#include "detection_power/power_flight.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 struct PowerOptions {
   std::string scenario_file;
@@ -120,4 +120,4 @@ struct PowerResult {
 /// size the plant refuses); std::invalid_argument for a bad effect, size or length.
 PowerResult run_power(const PowerOptions& options);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

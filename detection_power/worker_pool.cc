@@ -1,4 +1,4 @@
-#include "power/worker_pool.h"
+#include "detection_power/worker_pool.h"
 
 #include <poll.h>
 #include <sys/wait.h>
@@ -11,7 +11,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
@@ -186,4 +186,4 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
   return results;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

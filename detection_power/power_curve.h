@@ -22,7 +22,7 @@
 
 #include "core/proportion.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 using nimble::Proportion;  // a count with its Wilson score interval (core/proportion.h)
 using nimble::wilson;
@@ -43,4 +43,4 @@ struct Crossing {
 /// (sqrt_x) or |x|; the sign of x is kept.
 Crossing crossing(const std::vector<double>& x, const std::vector<Proportion>& p, double target, bool sqrt_x);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

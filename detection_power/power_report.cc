@@ -1,4 +1,4 @@
-#include "power/power_report.h"
+#include "detection_power/power_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include "core/output_file.h"
 #include "ident/plots.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 namespace fs = std::filesystem;
@@ -269,4 +269,4 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
   return pngs;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -15,7 +15,7 @@
 
 #include "scenario/scenario.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 /// How a scenario is flown for `length_s`.
 struct RecordLength {
@@ -34,4 +34,4 @@ double block_length_s(const Scenario& scenario);
 /// ConfigError if the manoeuvre cannot be loaded; std::runtime_error if it cannot be written.
 RecordLength record_length(const Scenario& scenario, double length_s, const std::string& dir);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

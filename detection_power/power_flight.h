@@ -13,7 +13,7 @@
 #include "ident/discrepancy.h"
 #include "launcher/run_plan.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 /// What the workflow is asked on every flight: `rig discrepancy <log> --model M`.
 struct FlightCheck {
@@ -60,4 +60,4 @@ ident::FlightData fly_to_data(launcher::RunPlan plan, std::uint64_t seed, const 
 /// (splitmix64), within the scenario's seed range [0, 9e15).
 std::uint64_t flight_seed(std::uint64_t campaign_seed, std::uint64_t index);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -23,7 +23,7 @@
 #include "plant/effects/effect_sizing.h"
 #include "scenario/scenario.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 /// One plant effect that the power analysis can size.
 struct SizedEffect {
@@ -65,4 +65,4 @@ EffectSizes parse_effect_sizes(const std::string& text);
 ///         leaves its range.
 std::vector<Override> size_overrides(const YAML::Node& scenario_tree, const std::string& effect, double size);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -1,4 +1,4 @@
-#include "power/record_length.h"
+#include "detection_power/record_length.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@
 #include "controller/manoeuvre.h"
 #include "core/output_file.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 /// The shortest text that reads back as `x`.
@@ -88,4 +88,4 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
   return out;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "power/power_campaign.h"
+#include "detection_power/power_campaign.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 
 /// The tables (naming probability with its interval, other names, alarms per cell), the
 /// recommended length per size, the smallest size per length, the verification and the time.
@@ -28,4 +28,4 @@ std::string power_json(const PowerResult& result, const std::vector<std::string>
 /// @throws std::runtime_error if gnuplot is missing or fails.
 std::vector<std::string> write_power_plots(const PowerResult& result, const std::string& dir);
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

@@ -1,4 +1,4 @@
-#include "power/power_campaign.h"
+#include "detection_power/power_campaign.h"
 
 #include <unistd.h>
 
@@ -9,12 +9,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "power/effect_size.h"
-#include "power/record_length.h"
-#include "power/worker_pool.h"
+#include "detection_power/effect_size.h"
+#include "detection_power/record_length.h"
+#include "detection_power/worker_pool.h"
 #include "transport/clock.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 namespace fs = std::filesystem;
@@ -367,4 +367,4 @@ PowerResult run_power(const PowerOptions& o) {
   return r;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

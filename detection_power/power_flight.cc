@@ -1,4 +1,4 @@
-#include "power/power_flight.h"
+#include "detection_power/power_flight.h"
 
 #include <time.h>
 
@@ -11,7 +11,7 @@
 #include "launcher/inprocess.h"
 #include "transport/clock.h"
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 double seconds_since(std::int64_t start_ns) {
@@ -118,4 +118,4 @@ FlightOutcome fly_and_check(launcher::RunPlan plan, std::uint64_t seed, const Fl
   return out;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power

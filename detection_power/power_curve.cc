@@ -1,11 +1,11 @@
-#include "power/power_curve.h"
+#include "detection_power/power_curve.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 
-namespace nimble::power {
+namespace nimble::detection_power {
 namespace {
 
 std::string num(double x) {
@@ -114,4 +114,4 @@ Crossing crossing(const std::vector<double>& x, const std::vector<Proportion>& p
   return r;
 }
 
-}  // namespace nimble::power
+}  // namespace nimble::detection_power
