@@ -16,19 +16,19 @@
 #include "core/output_file.h"
 #include "launcher/launcher.h"
 #include "launcher/run_plan.h"
-#include "launcher/sweep.h"
+#include "campaign/sweep.h"
 #include "reproduce/thesis_campaign.h"
 
 namespace nimble::cli {
 namespace {
 
-/// "1-5", "1,3,7" or "1-3,8": each item A or A-B (launcher::parse_seed_range); at most 1000 seeds, none twice.
+/// "1-5", "1,3,7" or "1-3,8": each item A or A-B (campaign::parse_seed_range); at most 1000 seeds, none twice.
 std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
   std::vector<std::uint64_t> seeds;
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = text.find(',', start);
-    const auto [a, b] = launcher::parse_seed_range(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    const auto [a, b] = campaign::parse_seed_range(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (b - a >= 1000 || seeds.size() + (b - a + 1) > 1000) throw std::invalid_argument("at most 1000 seeds");
     for (std::uint64_t s = a; s <= b; ++s) {
       if (std::find(seeds.begin(), seeds.end(), s) != seeds.end()) {

@@ -19,10 +19,10 @@
 #include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/output_file.h"
-#include "launcher/campaign.h"
-#include "launcher/slurm.h"
-#include "launcher/sweep.h"
-#include "launcher/sweep_report.h"
+#include "campaign/campaign.h"
+#include "campaign/slurm.h"
+#include "campaign/sweep.h"
+#include "campaign/sweep_report.h"
 #include "transport/clock.h"
 
 namespace nimble::cli {
@@ -86,19 +86,19 @@ bool write_text(const std::string& file, const std::string& text) {
 
 /// Merges the campaign, writes DIR/result.json and DIR/result.csv (kept campaigns) and what
 /// the options ask for, prints the summary; returns the exit code.
-int finish(const launcher::Campaign& c, const Outputs& o, bool keep, int jobs, double wall_s) {
-  launcher::SweepResult result;
+int finish(const campaign::Campaign& c, const Outputs& o, bool keep, int jobs, double wall_s) {
+  campaign::SweepResult result;
   try {
-    result = launcher::merge_campaign(c);
+    result = campaign::merge_campaign(c);
   } catch (const std::exception& e) {
     std::cerr << "rig sweep: campaign " << c.dir << " incomplete: " << e.what() << "\n"
               << "  `rig sweep --resume " << c.dir << "` flies the missing runs\n";
     return kExitIncomplete;
   }
-  result.jobs = c.backend == launcher::kBackendSlurm ? c.cluster.cpus_per_task : jobs;
+  result.jobs = c.backend == campaign::kBackendSlurm ? c.cluster.cpus_per_task : jobs;
   if (wall_s > 0) result.wall_time_s = wall_s;
-  const std::string json = launcher::sweep_json(result) + "\n", csv = launcher::sweep_csv(result);
-  launcher::write_sweep_text(o.json_file == "-" ? std::cerr : std::cout, result);
+  const std::string json = campaign::sweep_json(result) + "\n", csv = campaign::sweep_csv(result);
+  campaign::write_sweep_text(o.json_file == "-" ? std::cerr : std::cout, result);
   bool written = write_text(o.json_file, json);
   written = write_text(o.csv_file, csv) && written;
   try {
@@ -112,7 +112,7 @@ int finish(const launcher::Campaign& c, const Outputs& o, bool keep, int jobs, d
         std::cerr << "rig sweep: the campaign was made without --report, so its runs carry no trace: the report "
                      "gives the controlled rates without envelopes\n";
       }
-      launcher::write_sweep_report(result, o.report_dir);
+      campaign::write_sweep_report(result, o.report_dir);
       (o.json_file == "-" ? std::cerr : std::cout) << "report " << o.report_dir << "/index.html\n";
     }
   } catch (const std::exception& e) {
@@ -126,23 +126,23 @@ int finish(const launcher::Campaign& c, const Outputs& o, bool keep, int jobs, d
   return 0;
 }
 
-launcher::ProgressFn progress_fn(bool enabled, std::size_t total, std::size_t already, int64_t start_ns) {
+campaign::ProgressFn progress_fn(bool enabled, std::size_t total, std::size_t already, int64_t start_ns) {
   if (!enabled) return {};
   const bool tty = ::isatty(STDERR_FILENO);
   return [=](std::size_t finished, std::size_t not_ok) {
-    launcher::progress_bar(already + finished, total, not_ok,
+    campaign::progress_bar(already + finished, total, not_ok,
                            static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9, tty);
   };
 }
 
 /// Submits the campaign's tasks that miss runs, waits, resubmits up to `retries` times.
 /// Returns 0 when every run has a result, kExitIncomplete otherwise (having named the tasks).
-int run_on_slurm(const launcher::Campaign& c, int retries, bool wait, bool progress, int64_t start_ns) {
+int run_on_slurm(const campaign::Campaign& c, int retries, bool wait, bool progress, int64_t start_ns) {
   for (int attempt = 0;; ++attempt) {
-    const std::vector<std::size_t> tasks = launcher::tasks_with_missing_runs(c);
+    const std::vector<std::size_t> tasks = campaign::tasks_with_missing_runs(c);
     if (tasks.empty()) return 0;
-    const std::string job = launcher::submit_tasks(c, tasks);
-    std::cerr << "rig sweep: submitted Slurm job " << job << " (array tasks " << launcher::array_spec(tasks) << " of "
+    const std::string job = campaign::submit_tasks(c, tasks);
+    std::cerr << "rig sweep: submitted Slurm job " << job << " (array tasks " << campaign::array_spec(tasks) << " of "
               << c.chunk_count() << ", up to " << c.cluster.chunk_size << " runs each) for " << c.dir << "\n";
     if (!wait) {
       std::cout << job << "\n";
@@ -152,19 +152,19 @@ int run_on_slurm(const launcher::Campaign& c, int retries, bool wait, bool progr
     if (attempt == 0) {
       std::cerr << "  waiting (Ctrl-C leaves the job running: `rig sweep collect " << c.dir << "` later)\n";
     }
-    launcher::wait_for_job(c, job, tasks,
+    campaign::wait_for_job(c, job, tasks,
                            [&](std::size_t finished, std::size_t) {
                              if (progress) {
-                               launcher::progress_bar(finished, c.run_count(), SIZE_MAX,
+                               campaign::progress_bar(finished, c.run_count(), SIZE_MAX,
                                                       static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9,
                                                       ::isatty(STDERR_FILENO));
                              }
                            });
-    const std::vector<std::string> lines = launcher::describe_missing(c, job, tasks);
+    const std::vector<std::string> lines = campaign::describe_missing(c, job, tasks);
     if (lines.empty()) return 0;
     for (const auto& line : lines) std::cerr << "rig sweep: " << line << "\n";
     if (attempt >= retries) {
-      std::cerr << "rig sweep: " << launcher::missing_runs(c).size() << " runs without a result"
+      std::cerr << "rig sweep: " << campaign::missing_runs(c).size() << " runs without a result"
                 << (retries > 0 ? " after " + std::to_string(retries) + " retr" + (retries == 1 ? "y" : "ies") : "")
                 << "; `rig sweep --resume " << c.dir << "` submits them again\n";
       return kExitIncomplete;
@@ -186,18 +186,18 @@ int task_command(const std::vector<std::string>& args) {
   cl->add_option("--jobs", jobs, "runs at a time (default: the campaign's CPUs per task)")->check(CLI::Range(1, 1024));
   if (const auto done = cl.parse(args)) return *done;
   try {
-    const launcher::Campaign c = launcher::load_campaign(dir);
+    const campaign::Campaign c = campaign::load_campaign(dir);
     if (task >= c.chunk_count()) {
       return cl.fail("--task " + std::to_string(task) + ": the campaign has tasks 0-" + std::to_string(c.chunk_count() - 1));
     }
-    launcher::enter_working_dir(c);
-    launcher::check_campaign_inputs(c);
+    campaign::enter_working_dir(c);
+    campaign::check_campaign_inputs(c);
     const char* job = std::getenv("SLURM_ARRAY_JOB_ID");
     const std::string where = (job ? "slurm job " + std::string(job) + " " : std::string()) + "task " + std::to_string(task);
     const std::vector<std::size_t> runs = c.chunk(task);
     std::cerr << "rig sweep task: " << c.dir << " task " << task << ", runs " << runs.front() << "-" << runs.back() << "\n";
-    launcher::fly_campaign_runs(c, runs, jobs > 0 ? jobs : c.cluster.cpus_per_task, where, {});
-    const std::vector<bool> done = launcher::finished_runs(c);
+    campaign::fly_campaign_runs(c, runs, jobs > 0 ? jobs : c.cluster.cpus_per_task, where, {});
+    const std::vector<bool> done = campaign::finished_runs(c);
     for (const std::size_t i : runs) {
       if (!done[i]) {
         std::cerr << "rig sweep task: " << c.run_name(i) << " has no result\n";
@@ -223,9 +223,9 @@ int collect_command(const std::vector<std::string>& args) {
   add_outputs(cl, o);
   if (const auto done = cl.parse(args)) return *done;
   try {
-    const launcher::Campaign c = launcher::load_campaign(dir);
-    if (c.backend == launcher::kBackendSlurm) {
-      for (const auto& line : launcher::jobs_still_running(c)) std::cerr << "rig sweep collect: " << line << "\n";
+    const campaign::Campaign c = campaign::load_campaign(dir);
+    if (c.backend == campaign::kBackendSlurm) {
+      for (const auto& line : campaign::jobs_still_running(c)) std::cerr << "rig sweep collect: " << line << "\n";
     }
     return finish(c, o, true, 0, 0.0);
   } catch (const std::exception& e) {
@@ -240,8 +240,8 @@ int run_sweep_command(const std::vector<std::string>& args) {
   if (!args.empty() && args[0] == "task") return task_command({args.begin() + 1, args.end()});
   if (!args.empty() && args[0] == "collect") return collect_command({args.begin() + 1, args.end()});
 
-  launcher::CampaignRequest req;
-  launcher::SweepOptions& o = req.sweep;
+  campaign::CampaignRequest req;
+  campaign::SweepOptions& o = req.sweep;
   o.jobs = default_jobs();
   Outputs out;
   std::string resume_dir, chunk_text;
@@ -253,12 +253,12 @@ int run_sweep_command(const std::vector<std::string>& args) {
   cl->footer(kSweepFooter);
   cl->add_option("scenario", o.base.scenario_file, "the scenario file");
   auto* seeds = cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B");
-  each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = launcher::parse_seed_range(v); });
+  each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
   each_value(cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
                  ->type_name("KEY=V1,V2,...")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&o](const std::string& v) { o.vary.push_back(launcher::parse_vary(v)); });
+             [&o](const std::string& v) { o.vary.push_back(campaign::parse_vary(v)); });
   auto* jobs = cl->add_option("--jobs", o.jobs, "local: runs at a time (default: one per CPU)")
                    ->check(CLI::Range(1, 256))
                    ->type_name("N");
@@ -273,7 +273,7 @@ int run_sweep_command(const std::vector<std::string>& args) {
   cl->add_option("--logs", o.logs_dir, "keep each run's LCM log in DIR (slurm: on the shared file system)")->type_name("DIR");
   add_outputs(cl, out);
   cl->add_option("--backend", req.backend, "local (default) or slurm")
-      ->check(CLI::IsMember({std::string(launcher::kBackendLocal), std::string(launcher::kBackendSlurm)}));
+      ->check(CLI::IsMember({std::string(campaign::kBackendLocal), std::string(campaign::kBackendSlurm)}));
   cl->add_option("--dir", req.dir,
                  "the campaign directory (slurm: on a file system every node sees; default rig_campaigns/<name>-<time>; "
                  "local: kept only if given)")
@@ -310,15 +310,15 @@ int run_sweep_command(const std::vector<std::string>& args) {
       if (!o.base.scenario_file.empty() || seeds->count() > 0) {
         return cl.fail("--resume DIR takes the campaign's own scenario and seeds; give neither");
       }
-      const launcher::Campaign c = launcher::load_campaign(resume_dir);
-      launcher::remove_partial_files(c);
-      launcher::enter_working_dir(c);
-      launcher::check_campaign_inputs(c);
-      const std::size_t missing = launcher::missing_runs(c).size();
+      const campaign::Campaign c = campaign::load_campaign(resume_dir);
+      campaign::remove_partial_files(c);
+      campaign::enter_working_dir(c);
+      campaign::check_campaign_inputs(c);
+      const std::size_t missing = campaign::missing_runs(c).size();
       std::cerr << "rig sweep: resuming " << c.dir << ": " << missing << " of " << c.run_count()
                 << " runs without a result\n";
-      if (c.backend == launcher::kBackendSlurm) {
-        const std::vector<std::string> running = launcher::jobs_still_running(c);
+      if (c.backend == campaign::kBackendSlurm) {
+        const std::vector<std::string> running = campaign::jobs_still_running(c);
         if (!running.empty()) {
           for (const auto& line : running) std::cerr << "rig sweep: " << line << "\n";
           std::cerr << "rig sweep: wait for it (`rig sweep collect " << c.dir << "`) or scancel it before --resume\n";
@@ -329,14 +329,14 @@ int run_sweep_command(const std::vector<std::string>& args) {
         return finish(c, out, true, 0, 0.0);
       }
       const int n_jobs = jobs->count() > 0 ? o.jobs : default_jobs();
-      launcher::fly_campaign_runs(c, launcher::missing_runs(c), n_jobs, "",
+      campaign::fly_campaign_runs(c, campaign::missing_runs(c), n_jobs, "",
                                   progress_fn(out.progress, c.run_count(), c.run_count() - missing, start_ns));
       return finish(c, out, true, n_jobs, 0.0);
     }
 
     if (o.base.scenario_file.empty()) return cl.fail("a scenario file (or --resume DIR) is required");
     if (seeds->count() == 0) return cl.fail("--seeds is required: A-B, the seeds each parameter set is flown with");
-    const bool slurm = req.backend == launcher::kBackendSlurm;
+    const bool slurm = req.backend == campaign::kBackendSlurm;
     if (!slurm && (no_wait || retries > 0)) return cl.fail("--no-wait and --retries are for --backend slurm");
     // The scenario's cluster section, then the options over it.
     req.cluster = launcher::cluster_settings_from(launcher::load_run_plan(o.base).scenario);
@@ -351,13 +351,13 @@ int run_sweep_command(const std::vector<std::string>& args) {
     const bool keep = slurm || !req.dir.empty();
     if (!keep) req.dir = (fs::temp_directory_path() / ("rig_sweep_" + std::to_string(::getpid()))).string();
     if (!keep) fs::remove_all(req.dir);
-    const launcher::Campaign c = launcher::create_campaign(req);
+    const campaign::Campaign c = campaign::create_campaign(req);
     int code = 0;
     if (slurm) {
       code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
       if (code == 0 && !no_wait) code = finish(c, out, true, 0, 0.0);
     } else {
-      launcher::fly_campaign_runs(c, launcher::missing_runs(c), o.jobs, "",
+      campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "",
                                   progress_fn(out.progress, c.run_count(), 0, start_ns));
       code = finish(c, out, keep, o.jobs, static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9);
     }

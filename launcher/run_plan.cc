@@ -13,7 +13,7 @@
 #include "contract/channels.h"
 #include "contract/rates.h"
 #include "core/output_file.h"
-#include "launcher/campaign.h"
+#include "launcher/cluster_section.h"
 #include "launcher/scenario_check.h"
 
 namespace nimble::launcher {

@@ -12,11 +12,12 @@
 #include <catch2/catch.hpp>
 
 #include "core/output_file.h"
-#include "launcher/campaign.h"
-#include "launcher/slurm.h"
+#include "campaign/campaign.h"
+#include "campaign/slurm.h"
 #include "scenario/scenario.h"
 
 using namespace nimble::launcher;
+using namespace nimble::campaign;
 namespace fs = std::filesystem;
 
 namespace {

@@ -28,10 +28,11 @@
 #include "launcher/message_pipe.h"
 #include "launcher/recorder.h"
 #include "launcher/run_report.h"
-#include "launcher/sweep.h"
+#include "campaign/sweep.h"
 #include "launcher/verdict.h"
 
 using namespace nimble::launcher;
+using namespace nimble::campaign;
 
 namespace {
 

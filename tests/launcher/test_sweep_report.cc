@@ -19,10 +19,11 @@
 #include <nlohmann/json.hpp>
 
 #include "core/proportion.h"
-#include "launcher/sweep.h"
-#include "launcher/sweep_report.h"
+#include "campaign/sweep.h"
+#include "campaign/sweep_report.h"
 
 using namespace nimble::launcher;
+using namespace nimble::campaign;
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 

@@ -1,4 +1,4 @@
-#include "launcher/sweep_report.h"
+#include "campaign/sweep_report.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -15,7 +15,10 @@
 #include "core/json_writer.h"
 #include "core/output_file.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
+
+// One run is the launcher's (run plan, executors, report); a campaign flies many.
+using namespace launcher;
 namespace {
 
 namespace fs = std::filesystem;
@@ -419,4 +422,4 @@ void write_sweep_report(const SweepResult& result, const std::string& dir) {
   for (const auto& file : files) write_file(fs::path(dir) / file.first, file.second);
 }
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

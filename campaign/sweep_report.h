@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "core/proportion.h"
-#include "launcher/sweep.h"
+#include "campaign/sweep.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
 
 /// One quantity across the runs of a set, on the set's time grid t_k = k dt_s.
 struct Envelope {
@@ -46,4 +46,4 @@ std::vector<SetReport> sweep_report_sets(const SweepResult& result);
 /// @throws std::runtime_error naming the directory or the file that could not be written.
 void write_sweep_report(const SweepResult& result, const std::string& dir);
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

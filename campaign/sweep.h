@@ -14,7 +14,7 @@
 
 #include "launcher/run_plan.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
 
 /// One --vary key=v1,v2,...
 struct Vary {
@@ -76,7 +76,7 @@ const std::vector<SweepFigure>& sweep_figures();
 double percentile(std::vector<double> values, double pct);
 
 struct SweepOptions {
-  RunOptions base;              ///< scenario, --set, --clock (default inprocess), bin_dir
+  launcher::RunOptions base;              ///< scenario, --set, --clock (default inprocess), bin_dir
   uint64_t first_seed = 1, last_seed = 1;
   std::vector<Vary> vary;
   int jobs = 1;                 ///< runs at once (each in its own child process)
@@ -105,4 +105,4 @@ std::string sweep_json(const SweepResult& result);
 /// One CSV row per run; the columns that depend on the machine are named machine_*.
 std::string sweep_csv(const SweepResult& result);
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

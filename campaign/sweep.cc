@@ -1,4 +1,4 @@
-#include "launcher/sweep.h"
+#include "campaign/sweep.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,10 @@
 
 #include "core/json_writer.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
+
+// One run is the launcher's (run plan, executors, report); a campaign flies many.
+using namespace launcher;
 namespace {
 
 std::string trim(const std::string& s) {
@@ -268,4 +271,4 @@ std::string sweep_csv(const SweepResult& r) {
   return out.str();
 }
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

@@ -22,29 +22,13 @@
 #include <string>
 #include <vector>
 
-#include "launcher/sweep.h"
+#include "campaign/sweep.h"
+#include "launcher/cluster_section.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
 
 inline constexpr const char* kBackendLocal = "local";
 inline constexpr const char* kBackendSlurm = "slurm";
-
-/// The `cluster` settings of a Slurm campaign: command-line options over the scenario's
-/// `cluster:` section over these defaults.
-struct ClusterSettings {
-  std::string partition;        ///< empty: the cluster's default partition
-  std::string account;          ///< empty: the user's default account
-  std::string time_limit = "01:00:00";  ///< per task, as sbatch --time takes it
-  int cpus_per_task = 1;        ///< runs at a time within a task
-  int memory_mb_per_cpu = 0;    ///< sbatch --mem-per-cpu [MB]; 0: the cluster's default
-  std::size_t chunk_size = 0;   ///< runs per array task; 0: about four tasks per CPU of this machine
-  std::string rig;              ///< the rig executable as the nodes see it (default: this one)
-};
-
-/// Reads a resolved scenario's `cluster:` section (absent: the defaults); load_run_plan checks
-/// it, so `rig check` names a bad value before a campaign is submitted.
-/// @throws ConfigError naming the key and value.
-ClusterSettings cluster_settings_from(const Scenario& scenario);
 
 /// The manifest.
 struct Campaign {
@@ -63,7 +47,7 @@ struct Campaign {
   double trace_hz = 0.0;              ///< > 0: every run's report carries a trace (rig sweep --report)
   std::string logs_dir;               ///< keep each run's LCM log here (empty: none kept)
   std::string backend = kBackendLocal;
-  ClusterSettings cluster;
+  launcher::ClusterSettings cluster;
   double created_unix_s = 0.0;
 
   std::size_t seeds_per_set() const { return static_cast<std::size_t>(last_seed - first_seed + 1); }
@@ -86,7 +70,7 @@ struct CampaignRequest {
   SweepOptions sweep;
   std::string dir;                 ///< empty: a new directory under rig_campaigns/
   std::string backend = kBackendLocal;
-  ClusterSettings cluster;         ///< from the scenario's `cluster:` with the options over it
+  launcher::ClusterSettings cluster;         ///< from the scenario's `cluster:` with the options over it
   bool report = false;             ///< traces for --report
 };
 
@@ -139,4 +123,4 @@ std::string trim(const std::string& s);
 std::string last_line(const std::string& file);
 
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

@@ -1,4 +1,4 @@
-#include "launcher/campaign.h"
+#include "campaign/campaign.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -29,7 +29,10 @@
 #include "scenario/scenario.h"
 #include "transport/clock.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
+
+// One run is the launcher's (run plan, executors, report); a campaign flies many.
+using namespace launcher;
 namespace {
 
 namespace fs = std::filesystem;
@@ -208,36 +211,7 @@ std::vector<Override> overrides_from(const Json& a) {
   return out;
 }
 
-/// Slurm's --time formats: minutes, minutes:seconds, hours:minutes:seconds, days-hours,
-/// days-hours:minutes, days-hours:minutes:seconds.
-bool valid_time_limit(const std::string& t) {
-  static const std::regex re(R"(^(\d+|\d+:\d+|\d+:\d+:\d+|\d+-\d+|\d+-\d+:\d+|\d+-\d+:\d+:\d+|UNLIMITED|unlimited|infinite)$)");
-  return std::regex_match(t, re);
-}
-
 }  // namespace
-
-ClusterSettings cluster_settings_from(const Scenario& s) {
-  ClusterSettings c;
-  if (!s.has_section("cluster")) return c;
-  {
-    ConfigMap m = s.section("cluster");
-    c.partition = m.get_string_or("partition", c.partition);
-    c.account = m.get_string_or("account", c.account);
-    c.time_limit = m.get_string_or("time_limit", c.time_limit);
-    if (!valid_time_limit(c.time_limit)) {
-      m.fail("time_limit", "must be a Slurm time limit: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS");
-    }
-    if (m.has("cpus_per_task")) c.cpus_per_task = static_cast<int>(m.get_int("cpus_per_task", Range::closed(1, 1024)));
-    if (m.has("memory_mb_per_cpu")) {
-      c.memory_mb_per_cpu = static_cast<int>(m.get_int("memory_mb_per_cpu", Range::closed(0, 1 << 24)));
-    }
-    if (m.has("chunk_size")) c.chunk_size = static_cast<std::size_t>(m.get_int("chunk_size", Range::closed(1, 1e9)));
-    c.rig = m.get_string_or("rig", c.rig);
-    m.finish();
-  }
-  return c;
-}
 
 std::size_t Campaign::chunk_count() const {
   const std::size_t n = run_count(), k = std::max<std::size_t>(cluster.chunk_size, 1);
@@ -616,4 +590,4 @@ void progress_bar(std::size_t done, std::size_t total, std::size_t failed, doubl
   if (tty && done == total) std::fprintf(stderr, "\n");
 }
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

@@ -1,5 +1,5 @@
 #pragma once
-/// The Slurm backend of `rig sweep`: a campaign (launcher/campaign.h) as one array job, each
+/// The Slurm backend of `rig sweep`: a campaign (campaign/campaign.h) as one array job, each
 /// task a chunk of runs flown by `rig sweep task DIR --task K` on whichever node Slurm gives it.
 /// The rig talks to Slurm through its client commands (sbatch, squeue, scontrol), as a user
 /// would; nothing needs Slurm's accounting database.
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "launcher/campaign.h"
+#include "campaign/campaign.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
 
 /// The result of a command run by the backend.
 struct CommandOutput {
@@ -62,4 +62,4 @@ std::vector<std::string> describe_missing(const Campaign& campaign, const std::s
 /// The array tasks that hold the runs without results.
 std::vector<std::size_t> tasks_with_missing_runs(const Campaign& campaign);
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign

@@ -1,4 +1,4 @@
-#include "launcher/slurm.h"
+#include "campaign/slurm.h"
 
 #include <poll.h>
 #include <sys/wait.h>
@@ -20,7 +20,10 @@
 #include "core/output_file.h"
 #include "transport/clock.h"
 
-namespace nimble::launcher {
+namespace nimble::campaign {
+
+// One run is the launcher's (run plan, executors, report); a campaign flies many.
+using namespace launcher;
 namespace {
 
 namespace fs = std::filesystem;
@@ -342,4 +345,4 @@ std::vector<std::string> describe_missing(const Campaign& c, const std::string& 
   return lines;
 }
 
-}  // namespace nimble::launcher
+}  // namespace nimble::campaign
