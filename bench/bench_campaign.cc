@@ -127,6 +127,109 @@ std::string five_sets() {
   return vary;
 }
 
+/// 1. One run by clock: its CPU and wall seconds, largest RSS, log bytes and runs per hour.
+void per_run_figures(const std::string& rig, const std::string& scenario, double duration_s, const std::string& dir,
+                     nlohmann::json& j) {
+  std::printf("\n  %-10s %9s %9s %12s %14s %16s\n", "clock", "CPU s", "wall s", "largest RSS", "log per sim s",
+              "runs per hour");
+  for (const char* clock : {"inprocess", "lockstep", "realtime"}) {
+    const std::string log = dir + "/" + clock + ".lcmlog", json = dir + "/" + clock + ".json";
+    const Spawned s = spawn({rig, "run", scenario, "--clock", clock, "--seed", "1", "--set",
+                             "duration_s=" + std::to_string(duration_s), "--log", log, "--json", json, "--no-progress"},
+                            dir + "/" + clock + ".out");
+    if (s.exit_code != 0 || !fs::exists(json)) {
+      std::printf("  %-10s failed (exit %d; %s)\n", clock, s.exit_code, (dir + "/" + clock + ".out").c_str());
+      j["per_run"][clock] = {{"failed", true}};
+      continue;
+    }
+    const double sim_s = YAML::LoadFile(json)["sim_time_s"].as<double>();
+    const double log_kb_per_s = static_cast<double>(fs::file_size(log)) / 1024.0 / sim_s;
+    const bool realtime = std::string(clock) == "realtime";
+    // In process and lockstep a run is bound by CPU: runs per core-hour. In real time it is
+    // bound by the clock: runs per hour for each run flown at a time.
+    const double per_hour = realtime ? 3600.0 / s.wall_s : 3600.0 / s.cpu_s;
+    std::printf("  %-10s %9.2f %9.2f %9.0f MB %11.0f kB %10.0f %s\n", clock, s.cpu_s, s.wall_s, s.max_rss_mb,
+                log_kb_per_s, per_hour, realtime ? "per slot" : "per core");
+    j["per_run"][clock] = {{"cpu_s", s.cpu_s},           {"wall_s", s.wall_s},
+                           {"max_rss_mb", s.max_rss_mb}, {"log_bytes_per_sim_s", log_kb_per_s * 1024.0},
+                           {"sim_s", sim_s},             {realtime ? "runs_per_hour_per_slot" : "runs_per_core_hour", per_hour}};
+    fs::remove(log);
+  }
+}
+
+/// 2. Scaling: the machine's (the plant model alone) against the sweep's.
+void scaling_figures(const std::string& rig, const std::string& scenario, int cpus, int repeats, nlohmann::json& j) {
+  launcher::RunOptions base;
+  base.scenario_file = scenario;
+  base.clock = launcher::kClockInprocess;
+  const launcher::RunPlan plan = launcher::load_run_plan(base);
+  std::vector<double> one, all;
+  for (int k = 0; k < 3; ++k) {
+    one.push_back(plant_alone_s(plan, 60.0, 1));
+    all.push_back(plant_alone_s(plan, 60.0, cpus));
+  }
+  const double machine_scaling = cpus * median(one) / median(all);
+  const std::string sweep = rig + " sweep " + scenario + " --seeds 1-20 --vary " + five_sets() + " --no-progress >/dev/null";
+  std::vector<double> s1, sn;
+  for (int k = 0; k < repeats; ++k) {
+    s1.push_back(std::abs(seconds_of(sweep + " --jobs 1")));
+    sn.push_back(std::abs(seconds_of(sweep + " --jobs " + std::to_string(cpus))));
+  }
+  const double sweep_scaling = median(s1) / median(sn);
+  std::printf("\n  the plant model alone, %d processes at once against one: %.2fx (the machine's floor)\n", cpus,
+              machine_scaling);
+  std::printf("  rig sweep, 5 sets x 20 seeds, %d jobs against one: %.2fx (%.1f and %.1f runs/s), %.2f of the floor\n",
+              cpus, sweep_scaling, 100.0 / median(s1), 100.0 / median(sn), sweep_scaling / machine_scaling);
+  j["scaling"] = {{"machine_x", machine_scaling},
+                  {"sweep_x", sweep_scaling},
+                  {"sweep_runs_per_s_1job", 100.0 / median(s1)},
+                  {"sweep_runs_per_s_all", 100.0 / median(sn)},
+                  {"ratio_to_machine", sweep_scaling / machine_scaling}};
+}
+
+/// 3. Slurm against local, on a one-node cluster; false if the cluster did not start.
+bool slurm_figures(const std::string& rig, const std::string& scenario, const std::string& dir, int cpus,
+                   int campaign_runs, int repeats, nlohmann::json& j) {
+  const std::string cluster = dir + "/cluster";
+  const std::string start = std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh start " + cluster + " >" +
+                            dir + "/cluster.txt 2>&1";
+  if (std::system(start.c_str()) != 0) {
+    std::fprintf(stderr, "bench_campaign: the cluster did not start (%s/cluster.txt)\n", dir.c_str());
+    return false;
+  }
+  ::setenv("SLURM_CONF", (cluster + "/slurm.conf").c_str(), 1);
+  const int seeds = campaign_runs / 5;
+  const std::string campaign = rig + " sweep " + scenario + " --seeds 1-" + std::to_string(seeds) + " --vary " +
+                               five_sets() + " --no-progress";
+  std::vector<double> local, one_wave, chunks;
+  for (int k = 0; k < repeats; ++k) {
+    const std::string tag = std::to_string(k);
+    local.push_back(seconds_of(campaign + " --jobs " + std::to_string(cpus) + " --dir " + dir + "/local" + tag +
+                               " >/dev/null 2>&1"));
+    one_wave.push_back(seconds_of(campaign + " --backend slurm --chunk " +
+                                  std::to_string((5 * seeds + cpus - 1) / cpus) + " --dir " + dir + "/wave" + tag +
+                                  " >/dev/null 2>&1"));
+    chunks.push_back(seconds_of(campaign + " --backend slurm --chunk 25 --dir " + dir + "/chunks" + tag + " >/dev/null 2>&1"));
+  }
+  std::system((std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh stop " + cluster + " >/dev/null 2>&1").c_str());
+  const double l = median(local), w = median(one_wave), c = median(chunks);
+  std::printf("\n  a campaign of %d runs (5 sets x %d seeds), median of %d, command to merged result:\n", 5 * seeds,
+              seeds, repeats);
+  std::printf("    local, %d jobs:                          %7.2f s%s\n", cpus, std::abs(l), l < 0 ? " (failed)" : "");
+  std::printf("    slurm, %d tasks of %d runs (one wave):   %7.2f s%s  overhead %+.1f %% (target <= 20 %%)\n", cpus,
+              (5 * seeds + cpus - 1) / cpus, std::abs(w), w < 0 ? " (failed)" : "", 100.0 * (std::abs(w) / std::abs(l) - 1));
+  std::printf("    slurm, chunks of 25 runs (%2d tasks):     %7.2f s%s  overhead %+.1f %%\n", (5 * seeds + 24) / 25, std::abs(c),
+              c < 0 ? " (failed)" : "", 100.0 * (std::abs(c) / std::abs(l) - 1));
+  j["slurm"] = {{"runs", 5 * seeds},
+                {"local_s", std::abs(l)},
+                {"slurm_one_wave_s", std::abs(w)},
+                {"slurm_chunks_of_25_s", std::abs(c)},
+                {"overhead_one_wave", std::abs(w) / std::abs(l) - 1},
+                {"overhead_chunks_of_25", std::abs(c) / std::abs(l) - 1},
+                {"all_ok", l > 0 && w > 0 && c > 0}};
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -159,101 +262,9 @@ int main(int argc, char** argv) {
   std::printf("bench_campaign: %s, %.0f s simulated per run, %d CPUs\n", fs::path(scenario).filename().c_str(),
               duration_s, cpus);
 
-  // 1. One run by clock.
-  std::printf("\n  %-10s %9s %9s %12s %14s %16s\n", "clock", "CPU s", "wall s", "largest RSS", "log per sim s",
-              "runs per hour");
-  for (const char* clock : {"inprocess", "lockstep", "realtime"}) {
-    const std::string log = dir + "/" + clock + ".lcmlog", json = dir + "/" + clock + ".json";
-    const Spawned s = spawn({rig, "run", scenario, "--clock", clock, "--seed", "1", "--set",
-                             "duration_s=" + std::to_string(duration_s), "--log", log, "--json", json, "--no-progress"},
-                            dir + "/" + clock + ".out");
-    if (s.exit_code != 0 || !fs::exists(json)) {
-      std::printf("  %-10s failed (exit %d; %s)\n", clock, s.exit_code, (dir + "/" + clock + ".out").c_str());
-      j["per_run"][clock] = {{"failed", true}};
-      continue;
-    }
-    const double sim_s = YAML::LoadFile(json)["sim_time_s"].as<double>();
-    const double log_kb_per_s = static_cast<double>(fs::file_size(log)) / 1024.0 / sim_s;
-    const bool realtime = std::string(clock) == "realtime";
-    // In process and lockstep a run is bound by CPU: runs per core-hour. In real time it is
-    // bound by the clock: runs per hour for each run flown at a time.
-    const double per_hour = realtime ? 3600.0 / s.wall_s : 3600.0 / s.cpu_s;
-    std::printf("  %-10s %9.2f %9.2f %9.0f MB %11.0f kB %10.0f %s\n", clock, s.cpu_s, s.wall_s, s.max_rss_mb,
-                log_kb_per_s, per_hour, realtime ? "per slot" : "per core");
-    j["per_run"][clock] = {{"cpu_s", s.cpu_s},           {"wall_s", s.wall_s},
-                           {"max_rss_mb", s.max_rss_mb}, {"log_bytes_per_sim_s", log_kb_per_s * 1024.0},
-                           {"sim_s", sim_s},             {realtime ? "runs_per_hour_per_slot" : "runs_per_core_hour", per_hour}};
-    fs::remove(log);
-  }
-
-  // 2. Scaling: the machine's against the sweep's.
-  launcher::RunOptions base;
-  base.scenario_file = scenario;
-  base.clock = launcher::kClockInprocess;
-  const launcher::RunPlan plan = launcher::load_run_plan(base);
-  std::vector<double> one, all;
-  for (int k = 0; k < 3; ++k) {
-    one.push_back(plant_alone_s(plan, 60.0, 1));
-    all.push_back(plant_alone_s(plan, 60.0, cpus));
-  }
-  const double machine_scaling = cpus * median(one) / median(all);
-  const std::string sweep = rig + " sweep " + scenario + " --seeds 1-20 --vary " + five_sets() + " --no-progress >/dev/null";
-  std::vector<double> s1, sn;
-  for (int k = 0; k < repeats; ++k) {
-    s1.push_back(std::abs(seconds_of(sweep + " --jobs 1")));
-    sn.push_back(std::abs(seconds_of(sweep + " --jobs " + std::to_string(cpus))));
-  }
-  const double sweep_scaling = median(s1) / median(sn);
-  std::printf("\n  the plant model alone, %d processes at once against one: %.2fx (the machine's floor)\n", cpus,
-              machine_scaling);
-  std::printf("  rig sweep, 5 sets x 20 seeds, %d jobs against one: %.2fx (%.1f and %.1f runs/s), %.2f of the floor\n",
-              cpus, sweep_scaling, 100.0 / median(s1), 100.0 / median(sn), sweep_scaling / machine_scaling);
-  j["scaling"] = {{"machine_x", machine_scaling},
-                  {"sweep_x", sweep_scaling},
-                  {"sweep_runs_per_s_1job", 100.0 / median(s1)},
-                  {"sweep_runs_per_s_all", 100.0 / median(sn)},
-                  {"ratio_to_machine", sweep_scaling / machine_scaling}};
-
-  // 3. Slurm against local.
-  if (slurm) {
-    const std::string cluster = dir + "/cluster";
-    const std::string start = std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh start " + cluster + " >" +
-                              dir + "/cluster.txt 2>&1";
-    if (std::system(start.c_str()) != 0) {
-      std::fprintf(stderr, "bench_campaign: the cluster did not start (%s/cluster.txt)\n", dir.c_str());
-      return 1;
-    }
-    ::setenv("SLURM_CONF", (cluster + "/slurm.conf").c_str(), 1);
-    const int seeds = campaign_runs / 5;
-    const std::string campaign = rig + " sweep " + scenario + " --seeds 1-" + std::to_string(seeds) + " --vary " +
-                                 five_sets() + " --no-progress";
-    std::vector<double> local, one_wave, chunks;
-    for (int k = 0; k < repeats; ++k) {
-      const std::string tag = std::to_string(k);
-      local.push_back(seconds_of(campaign + " --jobs " + std::to_string(cpus) + " --dir " + dir + "/local" + tag +
-                                 " >/dev/null 2>&1"));
-      one_wave.push_back(seconds_of(campaign + " --backend slurm --chunk " +
-                                    std::to_string((5 * seeds + cpus - 1) / cpus) + " --dir " + dir + "/wave" + tag +
-                                    " >/dev/null 2>&1"));
-      chunks.push_back(seconds_of(campaign + " --backend slurm --chunk 25 --dir " + dir + "/chunks" + tag + " >/dev/null 2>&1"));
-    }
-    std::system((std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh stop " + cluster + " >/dev/null 2>&1").c_str());
-    const double l = median(local), w = median(one_wave), c = median(chunks);
-    std::printf("\n  a campaign of %d runs (5 sets x %d seeds), median of %d, command to merged result:\n", 5 * seeds,
-                seeds, repeats);
-    std::printf("    local, %d jobs:                          %7.2f s%s\n", cpus, std::abs(l), l < 0 ? " (failed)" : "");
-    std::printf("    slurm, %d tasks of %d runs (one wave):   %7.2f s%s  overhead %+.1f %% (target <= 20 %%)\n", cpus,
-                (5 * seeds + cpus - 1) / cpus, std::abs(w), w < 0 ? " (failed)" : "", 100.0 * (std::abs(w) / std::abs(l) - 1));
-    std::printf("    slurm, chunks of 25 runs (%2d tasks):     %7.2f s%s  overhead %+.1f %%\n", (5 * seeds + 24) / 25, std::abs(c),
-                c < 0 ? " (failed)" : "", 100.0 * (std::abs(c) / std::abs(l) - 1));
-    j["slurm"] = {{"runs", 5 * seeds},
-                  {"local_s", std::abs(l)},
-                  {"slurm_one_wave_s", std::abs(w)},
-                  {"slurm_chunks_of_25_s", std::abs(c)},
-                  {"overhead_one_wave", std::abs(w) / std::abs(l) - 1},
-                  {"overhead_chunks_of_25", std::abs(c) / std::abs(l) - 1},
-                  {"all_ok", l > 0 && w > 0 && c > 0}};
-  }
+  per_run_figures(rig, scenario, duration_s, dir, j);
+  scaling_figures(rig, scenario, cpus, repeats, j);
+  if (slurm && !slurm_figures(rig, scenario, dir, cpus, campaign_runs, repeats, j)) return 1;
   if (!json_file.empty()) cli::write_json(json_file, j.dump(2));
   fs::remove_all(dir);
   return 0;

@@ -65,6 +65,7 @@
 #include <nimble/heartbeat_t.hpp>
 #include <nimble/run_control_t.hpp>
 
+#include "bench/can_bridge_commands.h"
 #include "cmdline/args.h"
 #include "contract/channels.h"
 #include "launcher/netns.h"
@@ -80,6 +81,8 @@ using nimble::can_health_t;
 using nimble::fault_event_t;
 using nimble::heartbeat_t;
 using nimble::run_control_t;
+using nimble::bench::make_command;
+using nimble::bench::same_values;
 
 const std::string& kCmd = nimble::contract::channels::kActuatorCommand;
 const std::string& kCmdCan = nimble::contract::channels::kActuatorCommandCan;
@@ -129,38 +132,6 @@ void print(const char* what, const Summary& s) {
   }
   std::printf("  %-46s p50 %8.1f us   p99 %8.1f us   max %8.1f us   (n = %zu)\n", what, s.p50_us, s.p99_us,
               s.max_us, s.n);
-}
-
-// ---- the commands -----------------------------------------------------------------------------
-
-/// Command number `seq`: values on the frame layout's resolution, so they cross the link exactly.
-actuator_command_t make_command(int64_t seq) {
-  actuator_command_t c{};
-  c.utime = seq;  // overwritten with the publish time below; not carried by the frames
-  c.seq = seq;
-  c.mode = actuator_command_t::MODE_DELTA_F;
-  const int k = static_cast<int>(seq % 200) - 100;  // delta_f = 0.02 k rad/s
-  c.flap_freq_collective_radps = 106.80;
-  c.delta_f_radps = 0.02 * k;
-  c.flap_freq_left_radps = 106.80 + 0.01 * k;
-  c.flap_freq_right_radps = 106.80 - 0.01 * k;
-  c.throttle_pct = 55.0 + 0.01 * static_cast<double>(seq % 100);
-  c.dihedral_rad = 0.0001 * static_cast<double>(seq % 1000 - 500);
-  c.wing_root_rad = -0.0001 * static_cast<double>(seq % 700 - 350);
-  c.input_utime = -1;
-  c.rolling_counter = static_cast<int8_t>(seq % 16);
-  c.source = "bench_can_bridge";
-  return c;
-}
-
-bool same_values(const actuator_command_t& a, const actuator_command_t& b) {
-  auto near = [](double x, double y, double tol) { return std::fabs(x - y) <= tol; };
-  return a.mode == b.mode && near(a.flap_freq_left_radps, b.flap_freq_left_radps, 1e-6) &&
-         near(a.flap_freq_right_radps, b.flap_freq_right_radps, 1e-6) &&
-         near(a.delta_f_radps, b.delta_f_radps, 1e-6) &&
-         near(a.flap_freq_collective_radps, b.flap_freq_collective_radps, 1e-6) &&
-         near(a.throttle_pct, b.throttle_pct, 1e-6) && near(a.dihedral_rad, b.dihedral_rad, 1e-7) &&
-         near(a.wing_root_rad, b.wing_root_rad, 1e-7) && a.rolling_counter == b.rolling_counter;
 }
 
 // ---- the receiving side -----------------------------------------------------------------------
@@ -465,6 +436,78 @@ int report(const Options& opt, Receiver& rx, const std::vector<int64_t>& sent, i
   return can.n > 0 ? 0 : 1;
 }
 
+/// Both bridges on CPU 0, as `rig run` places the rig's processes (run.rig_cpus): vcan hands a
+/// frame to the receive path of the CPU that sent it, so a sender that migrates between CPUs
+/// can have its frames delivered out of order, which the counter check then drops as stale.
+void start_bridges(ProcessSupervisor& supervisor, const std::string& bridge, const std::string& scenario_file) {
+  cpu_set_t all_cpus, cpu0;
+  const bool pinned = sched_getaffinity(0, sizeof all_cpus, &all_cpus) == 0;
+  CPU_ZERO(&cpu0);
+  CPU_SET(0, &cpu0);
+  if (pinned) sched_setaffinity(0, sizeof cpu0, &cpu0);
+  for (const std::string name : {"can_flight", "can_rig"}) {
+    supervisor.start(name, bridge, {"--name", name, "--scenario", scenario_file, "--lcm-url", kUrl});
+  }
+  if (pinned) sched_setaffinity(0, sizeof all_cpus, &all_cpus);
+}
+
+/// Publishes the commands at `period_ns` on absolute deadlines; returns each one's publish time.
+/// `late` counts the times the publisher fell behind by more than a period.
+std::vector<int64_t> publish_commands(lcm::LCM& pub, int64_t total, int64_t period_ns, int64_t& late) {
+  std::vector<int64_t> sent(total, -1);
+  int64_t deadline = monotonic_ns() + period_ns;
+  for (int64_t seq = 0; seq < total; ++seq) {
+    timespec ts{static_cast<time_t>(deadline / 1000000000), static_cast<long>(deadline % 1000000000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    actuator_command_t c = make_command(seq);
+    const int64_t t = monotonic_ns();
+    c.utime = t / 1000;
+    sent[seq] = t;
+    pub.publish(kCmd, &c);
+    deadline += period_ns;
+    // Behind by more than a period (a stalled publisher): skip ahead instead of bursting.
+    const int64_t now = monotonic_ns();
+    if (now > deadline + period_ns) {
+      ++late;
+      deadline = now + period_ns;
+    }
+  }
+  return sent;
+}
+
+/// Waits until every command has come in both ways, or for 3 s of silence.
+void wait_for_commands(Receiver& rx, int64_t total) {
+  int64_t last_progress = monotonic_ns();
+  int64_t last_seen = -1;
+  while (rx.direct_count.load(std::memory_order_acquire) < total || rx.can_count.load(std::memory_order_acquire) < total) {
+    const int64_t seen = rx.direct_count.load() + rx.can_count.load();
+    if (seen != last_seen) {
+      last_seen = seen;
+      last_progress = monotonic_ns();
+    } else if (monotonic_ns() - last_progress > 3000000000LL) {
+      break;
+    }
+    sleep_ms(10);
+  }
+}
+
+/// Stops the bridges with RUN_CONTROL COMMAND_STOP (then signals) and reaps them; returns how.
+std::string stop_bridges(lcm::LCM& pub, int64_t& rc_seq, ProcessSupervisor& supervisor) {
+  publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
+  bool exited = supervisor.wait_all(2.0);
+  if (!exited) {
+    publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
+    exited = supervisor.wait_all(3.0);
+  }
+  std::string stop_how = "RUN_CONTROL COMMAND_STOP";
+  if (!exited) {
+    stop_how += ", then SIGTERM (then SIGKILL if needed)";
+    supervisor.stop(0.0);
+  }
+  return stop_how;
+}
+
 int run(const Options& opt) {
   // 1. Private network namespace with multicast loopback, and vcan0 in it (before any thread).
   nimble::launcher::NamespaceResult ns;
@@ -518,19 +561,8 @@ int run(const Options& opt) {
     }
   } join_rx{stop_rx, rx_thread};
 
-  // Both bridges on CPU 0, as `rig run` places the rig's processes (run.rig_cpus): vcan hands a
-  // frame to the receive path of the CPU that sent it, so a sender that migrates between CPUs
-  // can have its frames delivered out of order, which the counter check then drops as stale.
-  cpu_set_t all_cpus, cpu0;
-  const bool pinned = sched_getaffinity(0, sizeof all_cpus, &all_cpus) == 0;
-  CPU_ZERO(&cpu0);
-  CPU_SET(0, &cpu0);
-  if (pinned) sched_setaffinity(0, sizeof cpu0, &cpu0);
   ProcessSupervisor supervisor;
-  for (const std::string name : {"can_flight", "can_rig"}) {
-    supervisor.start(name, bridge, {"--name", name, "--scenario", scenario_file, "--lcm-url", kUrl});
-  }
-  if (pinned) sched_setaffinity(0, sizeof all_cpus, &all_cpus);
+  start_bridges(supervisor, bridge, scenario_file);
   const std::vector<ChildProcess>& children = supervisor.children();
   auto abort_run = [&](const std::string& why) {
     std::fprintf(stderr, "bench_can_bridge: %s\n", why.c_str());
@@ -554,54 +586,13 @@ int run(const Options& opt) {
   sleep_ms(300);  // let the start-up messages settle
 
   // 4. The commands.
-  std::vector<int64_t> sent(total, -1);
   int64_t late = 0;
-  int64_t deadline = monotonic_ns() + period_ns;
-  for (int64_t seq = 0; seq < total; ++seq) {
-    timespec ts{static_cast<time_t>(deadline / 1000000000), static_cast<long>(deadline % 1000000000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
-    actuator_command_t c = make_command(seq);
-    const int64_t t = monotonic_ns();
-    c.utime = t / 1000;
-    sent[seq] = t;
-    pub.publish(kCmd, &c);
-    deadline += period_ns;
-    // Behind by more than a period (a stalled publisher): skip ahead instead of bursting.
-    const int64_t now = monotonic_ns();
-    if (now > deadline + period_ns) {
-      ++late;
-      deadline = now + period_ns;
-    }
-  }
+  const std::vector<int64_t> sent = publish_commands(pub, total, period_ns, late);
   // Everything in, or 3 s of silence.
-  {
-    int64_t last_progress = monotonic_ns();
-    int64_t last_seen = -1;
-    while (rx.direct_count.load(std::memory_order_acquire) < total || rx.can_count.load(std::memory_order_acquire) < total) {
-      const int64_t seen = rx.direct_count.load() + rx.can_count.load();
-      if (seen != last_seen) {
-        last_seen = seen;
-        last_progress = monotonic_ns();
-      } else if (monotonic_ns() - last_progress > 3000000000LL) {
-        break;
-      }
-      sleep_ms(10);
-    }
-  }
+  wait_for_commands(rx, total);
 
   // 5. Stop the bridges, reap them; their last CAN_HEALTH goes out as they exit.
-  publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
-  bool exited = supervisor.wait_all(2.0);
-  if (!exited) {
-    publish_run_control(pub, &rc_seq, run_control_t::COMMAND_STOP, 0);
-    exited = supervisor.wait_all(3.0);
-  }
-  std::string stop_how = "RUN_CONTROL COMMAND_STOP";
-  if (!exited) {
-    stop_how += ", then SIGTERM (then SIGKILL if needed)";
-    supervisor.stop(0.0);
-  }
+  const std::string stop_how = stop_bridges(pub, rc_seq, supervisor);
   sleep_ms(300);  // the final CAN_HEALTH through the receiving thread
   stop_rx = true;
   rx_thread.join();

@@ -259,20 +259,12 @@ void write_figures_json(const std::string& file, const Figures& f) {
   if (!out) throw std::runtime_error("cannot write " + file);
 }
 
-int main(int argc, char** argv) {
-  std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
-  std::string json_file;
-  std::vector<Override> extra;  // --set key=value, applied to every rig run
-  std::string set_args;
-  int runs = 3;
-  bool foxglove_client = false;
-  cli::CommandLine cl(
-      "bench_rig",
-      "The rig's timing figures beside the machine's floors, measured in the same run, in a private\n"
-      "network namespace: real time quiet and loaded (control-loop latency, plant wake-up jitter)\n"
-      "against a bare SCHED_FIFO wake-up and a bare LCM chain, and lockstep against a bare lockstep\n"
-      "master.");
-  cl->footer("Not a test: the figures depend on the machine; the ratios to the floors travel.");
+namespace {
+
+/// The command line: the scenario, --runs, --json, --foxglove-client and the --set overrides
+/// (kept both parsed, `extra`, and as rig arguments, `set_args`).
+void add_options(cli::CommandLine& cl, std::string& scenario, std::string& json_file, std::vector<Override>& extra,
+                 std::string& set_args, int& runs, bool& foxglove_client) {
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)")
       ->type_name("SCENARIO.YAML");
   cl->add_option("--runs", runs, "lockstep runs (the median is reported)")
@@ -291,6 +283,82 @@ int main(int argc, char** argv) {
                     extra.push_back(parse_override(v));
                     set_args += " --set " + v;
                   });
+}
+
+/// Flies the rig once more in real time with --foxglove and one client on every channel, and
+/// prints its loop latency against the quiet run's; `client_messages` gets what the client received.
+RigRealtime fly_with_client(const std::string& scenario, const std::string& set_args, const std::string& dir,
+                            const RigRealtime& quiet, long long& client_messages) {
+  RigRealtime with_client;
+  const int port = free_port();
+  FoxgloveClient client(port);
+  with_client = realtime_figures(
+      fly(scenario, "--clock realtime --foxglove 127.0.0.1:" + std::to_string(port) + set_args, dir));
+  client.stop();
+  client_messages = client.messages();
+  row("rig + live view, 1 client on every channel: loop latency",
+      {with_client.latency_p50_us, with_client.latency_p99_us, with_client.latency_max_us, 0});
+  std::printf("  the client subscribed to %d channels and received %lld messages (%.1f MB)\n", client.channels(),
+              client_messages, static_cast<double>(client.bytes()) / 1e6);
+  std::printf("  latency p99 with the client %.1f us, without %.1f us: ratio %.3f (target <= 1.10)\n",
+              with_client.latency_p99_us, quiet.latency_p99_us, with_client.latency_p99_us / quiet.latency_p99_us);
+  std::printf("  %s\n", with_client.health.c_str());
+  return with_client;
+}
+
+/// The lockstep figures: the bare floor with the rig's participants and schedule, and the rig's.
+struct Lockstep {
+  bench::LockstepFloor limit;
+  std::size_t participants = 0;
+  double speed = 0.0;         ///< the rig's, median of the runs [x real time]
+  double rig_messages = 0.0;  ///< per simulated second
+};
+
+/// Measures the lockstep floor, then flies the rig in lockstep `runs` times; prints both.
+Lockstep measure_lockstep(const RunOptions& ro, const std::string& scenario, const std::string& set_args,
+                          const std::string& dir, const std::string& url, const bench::FloorSettings& rig_like,
+                          int runs) {
+  RunOptions lo = ro;
+  lo.clock = kClockLockstep;
+  const RunPlan lplan = load_run_plan(lo);
+  const auto participants = contract::lockstep_participants(
+      lplan.rates, contract::RunShape{true, lplan.logger_period_ms, lplan.scenario.processes.size()});
+  const int64_t step_ns = std::llround(1e9 / lplan.rates.plant_hz);
+  const bench::LockstepFloor limit = bench::lockstep_floor(url, step_ns, participants, 3.0, rig_like);
+  std::vector<double> speeds;
+  double rig_messages = 0.0;
+  for (int i = 0; i < runs; ++i) {
+    const YAML::Node s = fly(scenario, "--clock lockstep" + set_args, dir);
+    speeds.push_back(s["speed_x_realtime"].as<double>());
+    rig_messages = messages_per_sim_s(s);
+  }
+  const double speed = median(speeds);
+  std::printf("\nlockstep%*s speed [x real time]  messages per simulated s\n", 44, "");
+  std::printf("  %-50s %10.1f %16.0f\n",
+              ("floor: bare master + " + std::to_string(participants.size()) + " participants, rig schedule").c_str(),
+              limit.speed_x, limit.messages_per_sim_s);
+  std::printf("  %-50s %10.1f %16.0f   (median of %d; %.0f %% of the floor)\n", "rig", speed, rig_messages, runs,
+              100.0 * speed / limit.speed_x);
+  return Lockstep{limit, participants.size(), speed, rig_messages};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/id_doublet_train_fast.yaml";
+  std::string json_file;
+  std::vector<Override> extra;  // --set key=value, applied to every rig run
+  std::string set_args;
+  int runs = 3;
+  bool foxglove_client = false;
+  cli::CommandLine cl(
+      "bench_rig",
+      "The rig's timing figures beside the machine's floors, measured in the same run, in a private\n"
+      "network namespace: real time quiet and loaded (control-loop latency, plant wake-up jitter)\n"
+      "against a bare SCHED_FIFO wake-up and a bare LCM chain, and lockstep against a bare lockstep\n"
+      "master.");
+  cl->footer("Not a test: the figures depend on the machine; the ratios to the floors travel.");
+  add_options(cl, scenario, json_file, extra, set_args, runs, foxglove_client);
   if (const auto done = cl.parse(argc, argv)) return *done;
   try {
     RunOptions ro;
@@ -336,21 +404,7 @@ int main(int argc, char** argv) {
 
     RigRealtime with_client;
     long long client_messages = 0;
-    if (foxglove_client) {
-      const int port = free_port();
-      FoxgloveClient client(port);
-      with_client = realtime_figures(
-          fly(scenario, "--clock realtime --foxglove 127.0.0.1:" + std::to_string(port) + set_args, dir));
-      client.stop();
-      client_messages = client.messages();
-      row("rig + live view, 1 client on every channel: loop latency",
-          {with_client.latency_p50_us, with_client.latency_p99_us, with_client.latency_max_us, 0});
-      std::printf("  the client subscribed to %d channels and received %lld messages (%.1f MB)\n", client.channels(),
-                  client_messages, static_cast<double>(client.bytes()) / 1e6);
-      std::printf("  latency p99 with the client %.1f us, without %.1f us: ratio %.3f (target <= 1.10)\n",
-                  with_client.latency_p99_us, quiet.latency_p99_us, with_client.latency_p99_us / quiet.latency_p99_us);
-      std::printf("  %s\n", with_client.health.c_str());
-    }
+    if (foxglove_client) with_client = fly_with_client(scenario, set_args, dir, quiet, client_messages);
 
     std::printf("\nreal time, a busy loop on every CPU%*s p50 [us] p99 [us]  max [us]\n", 17, "");
     bench::Percentiles chain_loaded;
@@ -366,28 +420,9 @@ int main(int argc, char** argv) {
         {loaded.latency_p50_us, loaded.latency_p99_us, loaded.latency_max_us, 0});
     std::printf("  %s\n", loaded.health.c_str());
 
-    // Lockstep: the rig's participants and schedule, bare; then the rig.
-    RunOptions lo = ro;
-    lo.clock = kClockLockstep;
-    const RunPlan lplan = load_run_plan(lo);
-    const auto participants = contract::lockstep_participants(
-        lplan.rates, contract::RunShape{true, lplan.logger_period_ms, lplan.scenario.processes.size()});
-    const int64_t step_ns = std::llround(1e9 / lplan.rates.plant_hz);
-    const bench::LockstepFloor limit = bench::lockstep_floor(url, step_ns, participants, 3.0, rig_like);
-    std::vector<double> speeds;
-    double rig_messages = 0.0;
-    for (int i = 0; i < runs; ++i) {
-      const YAML::Node s = fly(scenario, "--clock lockstep" + set_args, dir);
-      speeds.push_back(s["speed_x_realtime"].as<double>());
-      rig_messages = messages_per_sim_s(s);
-    }
-    const double speed = median(speeds);
-    std::printf("\nlockstep%*s speed [x real time]  messages per simulated s\n", 44, "");
-    std::printf("  %-50s %10.1f %16.0f\n",
-                ("floor: bare master + " + std::to_string(participants.size()) + " participants, rig schedule").c_str(),
-                limit.speed_x, limit.messages_per_sim_s);
-    std::printf("  %-50s %10.1f %16.0f   (median of %d; %.0f %% of the floor)\n", "rig", speed, rig_messages, runs,
-                100.0 * speed / limit.speed_x);
+    const Lockstep lockstep = measure_lockstep(ro, scenario, set_args, dir, url, rig_like, runs);
+    const bench::LockstepFloor& limit = lockstep.limit;
+    const double speed = lockstep.speed;
 
     const double r_quiet = quiet.latency_p99_us / chain.p99_us, r_loaded = loaded.latency_p99_us / chain_loaded.p99_us;
     const double r_jitter = quiet.jitter_p99_us / wake.p99_us;
@@ -397,8 +432,8 @@ int main(int argc, char** argv) {
 
     if (!json_file.empty()) {
       write_figures_json(json_file, Figures{plan.scenario.name, hops, wake, chain, chain_loaded, quiet, loaded, limit,
-                                            participants.size(), speed, rig_messages, foxglove_client, with_client,
-                                            client_messages});
+                                            lockstep.participants, speed, lockstep.rig_messages, foxglove_client,
+                                            with_client, client_messages});
     }
     fs::remove_all(dir);
   } catch (const std::exception& e) {

@@ -234,23 +234,9 @@ int collect_command(const std::vector<std::string>& args) {
   }
 }
 
-}  // namespace
-
-int run_sweep_command(const std::vector<std::string>& args) {
-  if (!args.empty() && args[0] == "task") return task_command({args.begin() + 1, args.end()});
-  if (!args.empty() && args[0] == "collect") return collect_command({args.begin() + 1, args.end()});
-
-  campaign::CampaignRequest req;
-  campaign::SweepOptions& o = req.sweep;
-  o.jobs = default_jobs();
-  Outputs out;
-  std::string resume_dir, chunk_text;
-  bool no_wait = false;
-  int retries = 0;
-  launcher::ClusterSettings cli_cluster;
-  std::size_t chunk = 0;
-  CommandLine cl("rig sweep", kSweepDescription);
-  cl->footer(kSweepFooter);
+/// The sweep's own options: the scenario, seeds, --vary sets, how many at a time, clock, overrides
+/// and logs; returns the options --seeds and --jobs (whether they were given).
+std::pair<CLI::Option*, CLI::Option*> add_sweep_options(CommandLine& cl, campaign::SweepOptions& o) {
   cl->add_option("scenario", o.base.scenario_file, "the scenario file");
   auto* seeds = cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B");
   each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
@@ -271,7 +257,13 @@ int run_sweep_command(const std::vector<std::string>& args) {
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&o](const std::string& v) { o.base.overrides.push_back(parse_override(v)); });
   cl->add_option("--logs", o.logs_dir, "keep each run's LCM log in DIR (slurm: on the shared file system)")->type_name("DIR");
-  add_outputs(cl, out);
+  return {seeds, jobs};
+}
+
+/// The campaign's options: backend, directory, --resume, and the Slurm settings over the
+/// scenario's cluster section.
+void add_campaign_options(CommandLine& cl, campaign::CampaignRequest& req, std::string& resume_dir, int& retries,
+                          bool& no_wait, std::size_t& chunk, launcher::ClusterSettings& cli_cluster) {
   cl->add_option("--backend", req.backend, "local (default) or slurm")
       ->check(CLI::IsMember({std::string(campaign::kBackendLocal), std::string(campaign::kBackendSlurm)}));
   cl->add_option("--dir", req.dir,
@@ -302,6 +294,90 @@ int run_sweep_command(const std::vector<std::string>& args) {
   cli_cluster.time_limit.clear();
   cli_cluster.cpus_per_task = 0;
   cli_cluster.memory_mb_per_cpu = -1;
+}
+
+/// `rig sweep --resume DIR`: flies (or submits) the campaign's runs that have no result yet.
+int resume_campaign(const std::string& resume_dir, int retries, bool no_wait, int n_jobs, const Outputs& out,
+                    int64_t start_ns) {
+  const campaign::Campaign c = campaign::load_campaign(resume_dir);
+  campaign::remove_partial_files(c);
+  campaign::enter_working_dir(c);
+  campaign::check_campaign_inputs(c);
+  const std::size_t missing = campaign::missing_runs(c).size();
+  std::cerr << "rig sweep: resuming " << c.dir << ": " << missing << " of " << c.run_count()
+            << " runs without a result\n";
+  if (c.backend == campaign::kBackendSlurm) {
+    const std::vector<std::string> running = campaign::jobs_still_running(c);
+    if (!running.empty()) {
+      for (const auto& line : running) std::cerr << "rig sweep: " << line << "\n";
+      std::cerr << "rig sweep: wait for it (`rig sweep collect " << c.dir << "`) or scancel it before --resume\n";
+      return kExitUsage;
+    }
+    const int code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
+    if (code != 0 || no_wait) return code;
+    return finish(c, out, true, 0, 0.0);
+  }
+  campaign::fly_campaign_runs(c, campaign::missing_runs(c), n_jobs, "",
+                              progress_fn(out.progress, c.run_count(), c.run_count() - missing, start_ns));
+  return finish(c, out, true, n_jobs, 0.0);
+}
+
+/// Makes the campaign the request asks for (the scenario's cluster section, then the options over
+/// it) and flies it here or on Slurm; a local campaign without --dir is removed after.
+int fly_campaign(campaign::CampaignRequest& req, const launcher::ClusterSettings& cli_cluster, std::size_t chunk,
+                 const Outputs& out, int retries, bool no_wait, int64_t start_ns) {
+  const campaign::SweepOptions& o = req.sweep;
+  const bool slurm = req.backend == campaign::kBackendSlurm;
+  // The scenario's cluster section, then the options over it.
+  req.cluster = launcher::cluster_settings_from(launcher::load_run_plan(o.base).scenario);
+  if (!cli_cluster.partition.empty()) req.cluster.partition = cli_cluster.partition;
+  if (!cli_cluster.account.empty()) req.cluster.account = cli_cluster.account;
+  if (!cli_cluster.time_limit.empty()) req.cluster.time_limit = cli_cluster.time_limit;
+  if (cli_cluster.cpus_per_task > 0) req.cluster.cpus_per_task = cli_cluster.cpus_per_task;
+  if (cli_cluster.memory_mb_per_cpu >= 0) req.cluster.memory_mb_per_cpu = cli_cluster.memory_mb_per_cpu;
+  if (!cli_cluster.rig.empty()) req.cluster.rig = fs::absolute(cli_cluster.rig).string();
+  if (chunk > 0) req.cluster.chunk_size = chunk;
+  req.report = !out.report_dir.empty();
+  const bool keep = slurm || !req.dir.empty();
+  if (!keep) req.dir = (fs::temp_directory_path() / ("rig_sweep_" + std::to_string(::getpid()))).string();
+  if (!keep) fs::remove_all(req.dir);
+  const campaign::Campaign c = campaign::create_campaign(req);
+  int code = 0;
+  if (slurm) {
+    code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
+    if (code == 0 && !no_wait) code = finish(c, out, true, 0, 0.0);
+  } else {
+    campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "",
+                                progress_fn(out.progress, c.run_count(), 0, start_ns));
+    code = finish(c, out, keep, o.jobs, static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9);
+  }
+  if (!keep) {
+    std::error_code ec;
+    fs::remove_all(c.dir, ec);
+  }
+  return code;
+}
+
+}  // namespace
+
+int run_sweep_command(const std::vector<std::string>& args) {
+  if (!args.empty() && args[0] == "task") return task_command({args.begin() + 1, args.end()});
+  if (!args.empty() && args[0] == "collect") return collect_command({args.begin() + 1, args.end()});
+
+  campaign::CampaignRequest req;
+  campaign::SweepOptions& o = req.sweep;
+  o.jobs = default_jobs();
+  Outputs out;
+  std::string resume_dir, chunk_text;
+  bool no_wait = false;
+  int retries = 0;
+  launcher::ClusterSettings cli_cluster;
+  std::size_t chunk = 0;
+  CommandLine cl("rig sweep", kSweepDescription);
+  cl->footer(kSweepFooter);
+  const auto [seeds, jobs] = add_sweep_options(cl, o);
+  add_outputs(cl, out);
+  add_campaign_options(cl, req, resume_dir, retries, no_wait, chunk, cli_cluster);
   if (const auto done = cl.parse(args)) return *done;
 
   const int64_t start_ns = transport::monotonic_ns();
@@ -310,62 +386,15 @@ int run_sweep_command(const std::vector<std::string>& args) {
       if (!o.base.scenario_file.empty() || seeds->count() > 0) {
         return cl.fail("--resume DIR takes the campaign's own scenario and seeds; give neither");
       }
-      const campaign::Campaign c = campaign::load_campaign(resume_dir);
-      campaign::remove_partial_files(c);
-      campaign::enter_working_dir(c);
-      campaign::check_campaign_inputs(c);
-      const std::size_t missing = campaign::missing_runs(c).size();
-      std::cerr << "rig sweep: resuming " << c.dir << ": " << missing << " of " << c.run_count()
-                << " runs without a result\n";
-      if (c.backend == campaign::kBackendSlurm) {
-        const std::vector<std::string> running = campaign::jobs_still_running(c);
-        if (!running.empty()) {
-          for (const auto& line : running) std::cerr << "rig sweep: " << line << "\n";
-          std::cerr << "rig sweep: wait for it (`rig sweep collect " << c.dir << "`) or scancel it before --resume\n";
-          return kExitUsage;
-        }
-        const int code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
-        if (code != 0 || no_wait) return code;
-        return finish(c, out, true, 0, 0.0);
-      }
       const int n_jobs = jobs->count() > 0 ? o.jobs : default_jobs();
-      campaign::fly_campaign_runs(c, campaign::missing_runs(c), n_jobs, "",
-                                  progress_fn(out.progress, c.run_count(), c.run_count() - missing, start_ns));
-      return finish(c, out, true, n_jobs, 0.0);
+      return resume_campaign(resume_dir, retries, no_wait, n_jobs, out, start_ns);
     }
 
     if (o.base.scenario_file.empty()) return cl.fail("a scenario file (or --resume DIR) is required");
     if (seeds->count() == 0) return cl.fail("--seeds is required: A-B, the seeds each parameter set is flown with");
     const bool slurm = req.backend == campaign::kBackendSlurm;
     if (!slurm && (no_wait || retries > 0)) return cl.fail("--no-wait and --retries are for --backend slurm");
-    // The scenario's cluster section, then the options over it.
-    req.cluster = launcher::cluster_settings_from(launcher::load_run_plan(o.base).scenario);
-    if (!cli_cluster.partition.empty()) req.cluster.partition = cli_cluster.partition;
-    if (!cli_cluster.account.empty()) req.cluster.account = cli_cluster.account;
-    if (!cli_cluster.time_limit.empty()) req.cluster.time_limit = cli_cluster.time_limit;
-    if (cli_cluster.cpus_per_task > 0) req.cluster.cpus_per_task = cli_cluster.cpus_per_task;
-    if (cli_cluster.memory_mb_per_cpu >= 0) req.cluster.memory_mb_per_cpu = cli_cluster.memory_mb_per_cpu;
-    if (!cli_cluster.rig.empty()) req.cluster.rig = fs::absolute(cli_cluster.rig).string();
-    if (chunk > 0) req.cluster.chunk_size = chunk;
-    req.report = !out.report_dir.empty();
-    const bool keep = slurm || !req.dir.empty();
-    if (!keep) req.dir = (fs::temp_directory_path() / ("rig_sweep_" + std::to_string(::getpid()))).string();
-    if (!keep) fs::remove_all(req.dir);
-    const campaign::Campaign c = campaign::create_campaign(req);
-    int code = 0;
-    if (slurm) {
-      code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
-      if (code == 0 && !no_wait) code = finish(c, out, true, 0, 0.0);
-    } else {
-      campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "",
-                                  progress_fn(out.progress, c.run_count(), 0, start_ns));
-      code = finish(c, out, keep, o.jobs, static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9);
-    }
-    if (!keep) {
-      std::error_code ec;
-      fs::remove_all(c.dir, ec);
-    }
-    return code;
+    return fly_campaign(req, cli_cluster, chunk, out, retries, no_wait, start_ns);
   } catch (const ConfigError& e) {
     std::cerr << "rig sweep: config error: " << e.what() << "\n";
     return kExitUsage;

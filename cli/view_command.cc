@@ -94,6 +94,86 @@ std::string default_web_root() {
   return (exe.parent_path().parent_path() / "share" / "nimble_rig" / "dashboard").string();
 }
 
+/// Whether there is something to do and the inputs for it are there; if not, says why.
+bool inputs_ok(const std::string& log_file, const std::string& web, const std::string& web_root, bool loop,
+               double speed, bool salvage) {
+  if (log_file.empty() && web.empty()) {
+    std::cerr << "rig view: nothing to do: give a LOG to replay, or --web PORT to serve the page\n";
+    return false;
+  }
+  if (loop && speed == 0) {
+    std::cerr << "rig view: --loop replays at a pace: give --speed X with X > 0\n";
+    return false;
+  }
+  if (!log_file.empty()) {
+    try {
+      ident::LcmLogReader check(log_file, salvage);  // opens and checks the header now, before serving
+    } catch (const std::exception& e) {
+      std::cerr << "rig view: " << e.what() << "\n";
+      return false;
+    }
+  }
+  if (!web.empty() && !std::filesystem::is_directory(web_root)) {
+    std::cerr << "rig view: --web-root " << web_root
+              << " is not a directory (build the target 'dashboard' with the build's npm packages installed: "
+                 "scripts/setup.sh; or give --web-root DIR)\n";
+    return false;
+  }
+  return true;
+}
+
+/// Serves the dashboard page on `web`, pointing it to the replay's WebSocket server (or --foxglove's).
+std::unique_ptr<foxglove::FoxgloveServer> open_page(const std::string& web, const std::string& foxglove,
+                                                    const std::string& web_root, LiveViewSession* live) {
+  std::unique_ptr<foxglove::FoxgloveServer> page;
+  foxglove::ServerOptions o;
+  uint16_t ws_port = 0;
+  foxglove::parse_host_port(foxglove, "127.0.0.1", &o.host, &ws_port);
+  try {
+    foxglove::parse_host_port(web, o.host, &o.host, &o.port);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("--web: ") + e.what());
+  }
+  o.web_root = web_root;
+  o.name = "nimble_rig view (page)";
+  page = std::make_unique<foxglove::FoxgloveServer>(o);
+  const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(ws_port);
+  std::cerr << "rig view: dashboard on http://" << o.host << ":" << page->port() << "/?ws=" << ws << "\n";
+  warn_if_reachable("view", *page);
+  return page;
+}
+
+/// Replays the log into the live view, once or in a loop; returns the exit code (a failed replay
+/// ends the command: `exit_when_done`).
+int replay_to_view(LiveViewSession* live, const std::string& log_file, bool salvage, double speed, bool loop,
+                   bool& exit_when_done) {
+  live->view->set_state("replaying", "", 0.0);
+  try {
+    Replay r;
+    for (int pass = 1;; ++pass) {
+      r = replay(log_file, salvage, speed, *live->view);
+      if (pass == 1 && !r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
+      if (!loop || g_stop || r.events == 0) break;
+      if (pass == 1) {
+        std::cerr << "rig view: replayed " << r.events << " events; looping until Ctrl-C\n";
+      }
+      // From the start again: the history of the pass before is not this one's past.
+      live->view->restart();
+      live->view->set_state("replaying", "pass " + std::to_string(pass + 1), 0.0);
+    }
+    char verdict[160];
+    std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time",
+                  g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s);
+    live->view->set_state(g_stop ? "stopped" : "done", verdict, r.rig_s);
+    std::cerr << "rig view: " << verdict << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "rig view: " << e.what() << "\n";
+    live->view->set_state("failed", e.what(), 0.0);
+    exit_when_done = true;
+    return kExitUsage;
+  }
+  return 0;
+}
 }  // namespace
 
 int run_view_command(const std::vector<std::string>& args) {
@@ -131,48 +211,14 @@ int run_view_command(const std::vector<std::string>& args) {
   hold_opt->excludes(exit_opt);
   cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
   if (const auto done = cl.parse(args)) return *done;
-  if (log_file.empty() && web.empty()) {
-    std::cerr << "rig view: nothing to do: give a LOG to replay, or --web PORT to serve the page\n";
-    return kExitUsage;
-  }
-  if (loop && speed == 0) {
-    std::cerr << "rig view: --loop replays at a pace: give --speed X with X > 0\n";
-    return kExitUsage;
-  }
-  if (!log_file.empty()) {
-    try {
-      ident::LcmLogReader check(log_file, salvage);  // opens and checks the header now, before serving
-    } catch (const std::exception& e) {
-      std::cerr << "rig view: " << e.what() << "\n";
-      return kExitUsage;
-    }
-  }
-  if (!web.empty() && !std::filesystem::is_directory(web_root)) {
-    std::cerr << "rig view: --web-root " << web_root
-              << " is not a directory (build the target 'dashboard' with the build's npm packages installed: "
-                 "scripts/setup.sh; or give --web-root DIR)\n";
-    return kExitUsage;
-  }
+  if (!inputs_ok(log_file, web, web_root, loop, speed, salvage)) return kExitUsage;
 
   std::unique_ptr<LiveViewSession> live;
   std::unique_ptr<foxglove::FoxgloveServer> page;
   try {
     if (!log_file.empty()) live = open_live_view("view", foxglove);
     if (!web.empty()) {
-      foxglove::ServerOptions o;
-      uint16_t ws_port = 0;
-      foxglove::parse_host_port(foxglove, "127.0.0.1", &o.host, &ws_port);
-      try {
-        foxglove::parse_host_port(web, o.host, &o.host, &o.port);
-      } catch (const std::exception& e) {
-        throw std::invalid_argument(std::string("--web: ") + e.what());
-      }
-      o.web_root = web_root;
-      o.name = "nimble_rig view (page)";
-      page = std::make_unique<foxglove::FoxgloveServer>(o);
-      const std::string ws = live ? live->server->url() : "ws://" + o.host + ":" + std::to_string(ws_port);
-      std::cerr << "rig view: dashboard on http://" << o.host << ":" << page->port() << "/?ws=" << ws << "\n";
-      warn_if_reachable("view", *page);
+      page = open_page(web, foxglove, web_root, live.get());
     }
   } catch (const std::exception& e) {
     std::cerr << "rig view: " << e.what() << "\n";
@@ -189,33 +235,7 @@ int run_view_command(const std::vector<std::string>& args) {
   if (page) page->start();
 
   int code = 0;
-  if (live) {
-    live->view->set_state("replaying", "", 0.0);
-    try {
-      Replay r;
-      for (int pass = 1;; ++pass) {
-        r = replay(log_file, salvage, speed, *live->view);
-        if (pass == 1 && !r.damage.empty()) std::cerr << "rig view: salvaged " << log_file << ": " << r.damage << "\n";
-        if (!loop || g_stop || r.events == 0) break;
-        if (pass == 1) {
-          std::cerr << "rig view: replayed " << r.events << " events; looping until Ctrl-C\n";
-        }
-        // From the start again: the history of the pass before is not this one's past.
-        live->view->restart();
-        live->view->set_state("replaying", "pass " + std::to_string(pass + 1), 0.0);
-      }
-      char verdict[160];
-      std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time",
-                    g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s);
-      live->view->set_state(g_stop ? "stopped" : "done", verdict, r.rig_s);
-      std::cerr << "rig view: " << verdict << "\n";
-    } catch (const std::exception& e) {
-      std::cerr << "rig view: " << e.what() << "\n";
-      live->view->set_state("failed", e.what(), 0.0);
-      code = kExitUsage;
-      exit_when_done = true;
-    }
-  }
+  if (live) code = replay_to_view(live.get(), log_file, salvage, speed, loop, exit_when_done);
   if (!exit_when_done && !g_stop) {
     std::cerr << (live ? "rig view: holding the last state (a client that connects gets the last 10 s) until Ctrl-C\n"
                        : "rig view: serving until Ctrl-C\n");

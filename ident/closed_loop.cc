@@ -102,10 +102,9 @@ class EffectForces {
   double t_change_s_ = 0.0;  ///< effectiveness_step: the change [s]
 };
 
-}  // namespace
-
-ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
-                                      const ClosedLoopOptions& options) {
+/// Checks the model and the data for a closed-loop validation; returns the columns of delta_f and
+/// delta_t among the model's inputs (-1: not an input).
+std::pair<int, int> input_columns(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle) {
   check_flight_data(data, vehicle);
   if (model.structure != Structure::kLateral3) {
     throw std::invalid_argument("closed-loop validation needs a lateral3 model; '" + model.name + "' is " +
@@ -125,13 +124,14 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   if (i_dt >= 0 && !data.has("delta_t")) {
     throw DataError(data.source, -1, -1, "delta_t", "the model has delta_t; the data must too");
   }
+  return {i_df, i_dt};
+}
 
+/// Plant x = [p v phi delta_f], inputs [delta_f_cmd, delta_t]: the model with the flap
+/// actuator of Eq 33 in front of it, exact ZOH at the controller's rate.
+DiscreteStateSpace closed_loop_plant(const DerivativeModel& model, const Vehicle& vehicle, int i_df, int i_dt,
+                                     const ClosedLoopOptions& options) {
   const double rate_hz = options.controller.rate_hz;
-  const UniformData grid = resample_uniform(data, rate_hz, options.interpolation);
-  const Eigen::Index n = grid.size();
-
-  // Plant x = [p v phi delta_f], inputs [delta_f_cmd, delta_t]: the model with the flap
-  // actuator of Eq 33 in front of it, exact ZOH at the controller's rate.
   const StateSpace lateral = build_state_space(model, vehicle);
   StateSpace plant;
   plant.states = {"p", "v", "phi", "delta_f"};
@@ -145,7 +145,41 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   plant.A(3, 3) = -options.flap_pole_radps;
   plant.B(3, 0) = options.flap_gain_per_s;
   if (i_dt >= 0) plant.B.block(0, 1, 3, 1) = lateral.B.col(i_dt);
-  const DiscreteStateSpace d = discretize_zoh(plant, 1.0 / rate_hz);
+  return discretize_zoh(plant, 1.0 / rate_hz);
+}
+
+/// The model's generic terms, compiled; `from_data` gets the data's column of each signal a term
+/// reads that is not simulated.
+std::vector<TermProgram> compile_terms(const FlightData& data, const DerivativeModel& model, const UniformData& grid,
+                                       int i_dt, std::vector<const Eigen::VectorXd*>& from_data) {
+  const std::vector<std::string>& term_names = term_signal_names();
+  std::vector<TermProgram> terms;
+  for (const auto& term : model.terms) {
+    terms.emplace_back(term.expression, term_names);
+    for (const auto& s : term.expression.signals()) {
+      const auto i = static_cast<std::size_t>(std::find(term_names.begin(), term_names.end(), s) - term_names.begin());
+      if (s == "p" || s == "v" || s == "phi" || s == "delta_f" || (s == "delta_t" && i_dt >= 0)) continue;
+      if (!grid.has(s)) {
+        throw DataError(data.source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s +
+                                                   ", not in the data");
+      }
+      from_data[i] = &grid.at(s);
+    }
+  }
+  return terms;
+}
+
+}  // namespace
+
+ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
+                                      const ClosedLoopOptions& options) {
+  const auto [i_df, i_dt] = input_columns(data, model, vehicle);
+
+  const double rate_hz = options.controller.rate_hz;
+  const UniformData grid = resample_uniform(data, rate_hz, options.interpolation);
+  const Eigen::Index n = grid.size();
+
+  const DiscreteStateSpace d = closed_loop_plant(model, vehicle, i_df, i_dt, options);
 
   AttitudeController controller(options.controller);
   if (!controller.select_gain_set(options.gain_set)) {
@@ -180,20 +214,8 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
   // The model's generic terms: flown with the simulated p, v, phi, delta_f and the data's
   // delta_t; any other signal a term reads (r, u, w, ...) is taken from the data.
   const std::vector<std::string>& term_names = term_signal_names();
-  std::vector<TermProgram> terms;
   std::vector<const Eigen::VectorXd*> from_data(term_names.size(), nullptr);
-  for (const auto& term : model.terms) {
-    terms.emplace_back(term.expression, term_names);
-    for (const auto& s : term.expression.signals()) {
-      const auto i = static_cast<std::size_t>(std::find(term_names.begin(), term_names.end(), s) - term_names.begin());
-      if (s == "p" || s == "v" || s == "phi" || s == "delta_f" || (s == "delta_t" && i_dt >= 0)) continue;
-      if (!grid.has(s)) {
-        throw DataError(data.source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s +
-                                                   ", not in the data");
-      }
-      from_data[i] = &grid.at(s);
-    }
-  }
+  std::vector<TermProgram> terms = compile_terms(data, model, grid, i_dt, from_data);
   std::vector<double> term_in(term_names.size(), 0.0);
   Eigen::Vector4d x(p[0], v[0], phi[0], df[0]);
   for (Eigen::Index k = 0; k < n; ++k) {

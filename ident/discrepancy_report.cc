@@ -36,18 +36,8 @@ std::string g(double x, const char* f = "%.4g") {
   return buf;
 }
 
-}  // namespace
-
-std::string discrepancy_json(const DiscrepancyResult& r) {
-  JsonWriter j;
-  j.begin_object();
-  j.key("source").value(r.source);
-  j.key("model").value(r.model_name);
-  j.key("verdict").value(r.verdict);
-  j.key("summary").value(r.summary);
-  j.key("samples").value(static_cast<long long>(r.samples));
-  j.key("rate_hz").value(r.rate_hz);
-  j.key("notes").array(r.notes);
+/// Each named effect with its parameters; a term also with its equation, interval and the forms it beat.
+void write_effects(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("effects").begin_array();
   for (const auto& e : r.effects) {
     j.begin_object();
@@ -74,9 +64,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
-  j.key("ambiguous").begin_array();
-  for (const auto& pair : r.ambiguous) j.array(pair);
-  j.end_array();
+}
+
+/// Every candidate tried, round by round, with its test statistics where it could be tried.
+void write_candidates(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("candidates").begin_array();
   for (const auto& t : r.candidates) {
     j.begin_object();
@@ -119,11 +110,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
-  j.key("alarm_rule").begin_object();
-  j.key("p_critical").value(r.alarm_rule.p_critical);
-  j.key("tests").value(static_cast<long long>(r.alarm_rule.tests));
-  j.key("family_wise").value(r.alarm_rule.family_wise);
-  j.end_object();
+}
+
+/// Where the residual is: in time, in frequency, in the states and in the candidates' signatures.
+void write_located(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("located").begin_object();
   j.key("excitation").begin_array();
   for (const auto& x : r.located.excitation) j.value(x);
@@ -174,6 +164,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   }
   if (!r.located.signature.empty()) j.end_array();
   j.end_object();
+}
+
+/// The held-out gap before and after the named effects, by output and by band.
+void write_gap(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("gap").begin_object();
   j.key("metric").value(r.gap_metric);
   j.key("before").value(r.gap_before);
@@ -218,6 +212,9 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   }
   j.end_array();
   j.end_object();
+}
+
+void write_closed_loop(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("closed_loop").begin_object();
   j.key("note").value(r.closed_loop_note);
   j.key("outputs").begin_array();
@@ -232,6 +229,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   }
   j.end_array();
   j.end_object();
+}
+
+/// Each pooled flight's own estimate of the named effects.
+void write_flights(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("flights").begin_array();
   for (const auto& f : r.flights) {
     j.begin_object();
@@ -248,6 +249,10 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
+}
+
+/// Whether each named effect is the same in all the pooled flights.
+void write_consistency(JsonWriter& j, const DiscrepancyResult& r) {
   j.key("consistency").begin_array();
   for (const auto& c : r.consistency) {
     j.begin_object();
@@ -260,28 +265,23 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
     j.end_object();
   }
   j.end_array();
-  auto params = [&](const char* key, const std::map<std::string, ParameterEstimate>& m) {
-    j.key(key).begin_object();
-    for (const auto& [name, e] : m) {
-      j.key(name).begin_object();
-      j.key("value").value(e.value);
-      j.key("sigma").value(e.sigma);
-      j.key("sigma_coloured").value(e.sigma_coloured);
-      j.end_object();
-    }
-    j.end_object();
-  };
-  params("baseline", r.baseline);
-  params("augmented", r.augmented);
-  j.end_object();
-  return j.str();
 }
 
-std::string discrepancy_text(const DiscrepancyResult& r) {
-  std::ostringstream o;
-  o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
-    << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";
-  o << "verdict: " << r.verdict << ": " << r.summary << "\n\n";
+/// A model's parameter estimates under `key`: each value with its sigma, white and coloured.
+void write_parameters(JsonWriter& j, const char* key, const std::map<std::string, ParameterEstimate>& m) {
+  j.key(key).begin_object();
+  for (const auto& [name, e] : m) {
+    j.key(name).begin_object();
+    j.key("value").value(e.value);
+    j.key("sigma").value(e.sigma);
+    j.key("sigma_coloured").value(e.sigma_coloured);
+    j.end_object();
+  }
+  j.end_object();
+}
+
+/// The named effects in words: a term as its equation, a drift or a change as what it does.
+void print_effects(std::ostream& o, const DiscrepancyResult& r) {
   if (!r.effects.empty()) {
     o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
     for (const auto& e : r.effects) {
@@ -323,6 +323,10 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     }
     o << "\n";
   }
+}
+
+/// Each pooled flight's noise and estimates, and whether the effects agree across flights.
+void print_flights(std::ostream& o, const DiscrepancyResult& r) {
   if (!r.flights.empty()) {
     o << "pooled flights (each its own folds and noise level; each flight's own estimate of the named effects)\n";
     for (const auto& f : r.flights) {
@@ -342,6 +346,10 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     }
     o << "\n";
   }
+}
+
+/// The held-out gap table by output, the notes, and the gap by band.
+void print_gap(std::ostream& o, const DiscrepancyResult& r) {
   o << "gap on held-out data: " << g(r.gap_before) << " -> " << g(r.gap_after)
     << "  (1 - R^2 of the equation error, mean over the equations)\n";
   o << "  output        unit      RMSE model  RMSE before  RMSE after  fit% before  fit% after  white before/after\n";
@@ -365,6 +373,9 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     o << line;
     if (!b.note.empty()) o << "    " << b.note << "\n";
   }
+}
+
+void print_closed_loop(std::ostream& o, const DiscrepancyResult& r) {
   if (!r.closed_loop.empty()) {
     o << "\nclosed loop (model flown by the controller copy on phi_sp";
     if (!r.closed_loop_note.empty()) o << ", " << r.closed_loop_note;
@@ -378,6 +389,9 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   } else if (!r.closed_loop_note.empty()) {
     o << "\nclosed loop: " << r.closed_loop_note << "\n";
   }
+}
+
+void print_candidates(std::ostream& o, const DiscrepancyResult& r) {
   o << "\ncandidates (p_critical = P(chi2_1 >= F) of the partial-F rule)\n";
   for (const auto& t : r.candidates) {
     o << "  round " << t.round << "  " << trial_name(t, "") << ": ";
@@ -395,6 +409,10 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
     }
     o << "\n";
   }
+}
+
+/// The located findings: the tests' alarms first, then where the residual's energy is.
+void print_located(std::ostream& o, const DiscrepancyResult& r) {
   o << "\nlocated (baseline structure's residual, beside the linear response to the excitation";
   for (const auto& x : r.located.excitation) o << " " << x;
   o << "; each test at p_critical " << g(r.alarm_rule.p_critical) << ", " << r.alarm_rule.tests
@@ -420,6 +438,52 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
       << " s carries " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
       << g(100.0 * f.time_share, "%.1f") << " % of the time\n";
   }
+}
+
+}  // namespace
+
+std::string discrepancy_json(const DiscrepancyResult& r) {
+  JsonWriter j;
+  j.begin_object();
+  j.key("source").value(r.source);
+  j.key("model").value(r.model_name);
+  j.key("verdict").value(r.verdict);
+  j.key("summary").value(r.summary);
+  j.key("samples").value(static_cast<long long>(r.samples));
+  j.key("rate_hz").value(r.rate_hz);
+  j.key("notes").array(r.notes);
+  write_effects(j, r);
+  j.key("ambiguous").begin_array();
+  for (const auto& pair : r.ambiguous) j.array(pair);
+  j.end_array();
+  write_candidates(j, r);
+  j.key("alarm_rule").begin_object();
+  j.key("p_critical").value(r.alarm_rule.p_critical);
+  j.key("tests").value(static_cast<long long>(r.alarm_rule.tests));
+  j.key("family_wise").value(r.alarm_rule.family_wise);
+  j.end_object();
+  write_located(j, r);
+  write_gap(j, r);
+  write_closed_loop(j, r);
+  write_flights(j, r);
+  write_consistency(j, r);
+  write_parameters(j, "baseline", r.baseline);
+  write_parameters(j, "augmented", r.augmented);
+  j.end_object();
+  return j.str();
+}
+
+std::string discrepancy_text(const DiscrepancyResult& r) {
+  std::ostringstream o;
+  o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
+    << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";
+  o << "verdict: " << r.verdict << ": " << r.summary << "\n\n";
+  print_effects(o, r);
+  print_flights(o, r);
+  print_gap(o, r);
+  print_closed_loop(o, r);
+  print_candidates(o, r);
+  print_located(o, r);
   return o.str();
 }
 

@@ -284,30 +284,28 @@ Eigen::VectorXd term_column(const UniformData& data, const Term& term) {
 
 void add_term_column(UniformData& data, const Term& term) { data.signals[term_signal_column(term)] = term_column(data, term); }
 
-IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
-                     const IdentOptions& options) {
-  if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
-  check_flight_data(data, vehicle);
-  IdentResult res;
-  res.source = data.source;
-  res.options = options;
-  res.vehicle = vehicle;
+namespace {
+
+/// The identification's inputs: those asked for, or the excited ones; in the canonical order, each once.
+void choose_inputs(const FlightData& data, const IdentOptions& options, IdentResult& res) {
   res.inputs = options.inputs.empty() ? default_inputs(data, &res.inputs_left_out) : options.inputs;
-  // Inputs in the canonical order, each once.
-  {
-    std::vector<std::string> ordered;
-    for (const auto& name : kInputOrder) {
-      if (std::find(res.inputs.begin(), res.inputs.end(), name) != res.inputs.end()) ordered.push_back(name);
-    }
-    for (const auto& in : res.inputs) {
-      if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
-    }
-    res.inputs = ordered;
+  std::vector<std::string> ordered;
+  for (const auto& name : kInputOrder) {
+    if (std::find(res.inputs.begin(), res.inputs.end(), name) != res.inputs.end()) ordered.push_back(name);
   }
+  for (const auto& in : res.inputs) {
+    if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
+  }
+  res.inputs = ordered;
   if (res.inputs.empty()) throw std::invalid_argument("identification needs at least one input");
   require_channels(data, res.inputs, "input list");
+}
 
-  std::vector<Equation> equations = lateral_equations(options.structure, res.inputs, vehicle);
+/// The structure's equations with the extra regressors and terms; throws if the data are too few
+/// for their parameters.
+std::vector<Equation> equations_for(const FlightData& data, const Vehicle& vehicle, const std::vector<std::string>& inputs,
+                                    const IdentOptions& options) {
+  std::vector<Equation> equations = lateral_equations(options.structure, inputs, vehicle);
   for (const auto& extra : options.extra_regressors) {
     auto it = std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == extra.equation; });
     if (it == equations.end()) {
@@ -327,7 +325,6 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
     it->regressors.push_back(term_signal_column(term));
     it->parameters.push_back(term_parameter_name(term));
   }
-
   std::size_t n_params = 0;
   for (const auto& eq : equations) n_params += eq.regressors.size();
   const std::size_t rows = data.min_samples();
@@ -337,21 +334,11 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
                         std::to_string(n_params) + " parameters: need at least " + std::to_string(10 * n_params) +
                         " (10 per parameter)");
   }
+  return equations;
+}
 
-  res.data = prepare(data, options.structure, options.trim, vehicle.gravity_mps2, options.processing);
-  if (options.add_signals) options.add_signals(res.data.filtered);
-  for (const auto& term : options.terms) add_term_column(res.data.filtered, term);
-
-  WlsOptions wls;
-  wls.variance_window = static_cast<Eigen::Index>(std::lround(options.wls_window_s * options.processing.rate_hz));
-  wls.cross_equation = options.wls_cross_equation;
-  CovarianceOptions cov;
-  cov.correlation_lags = static_cast<Eigen::Index>(coloured_lags(options.coloured_lags, options.processing));
-  res.regression = estimate(res.data.filtered.signals, equations, options.method, wls, cov);
-  res.parameters = res.regression.parameters();
-  res.parameter_order = res.regression.parameter_names;
-  res.correlated = correlated_pairs(res.regression, options.correlation_threshold);
-
+/// Each equation's fit: measured against estimated, its metrics and its residual's whiteness.
+void fit_outputs(const IdentOptions& options, IdentResult& res) {
   const std::size_t lag_step = whiteness_lag_step(options.whiteness_lag_step, options.processing);
   for (const auto& eq : res.regression.equations) {
     OutputFit fit;
@@ -364,8 +351,11 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
                                        options.whiteness_lags, lag_step);
     res.fits.push_back(std::move(fit));
   }
+}
 
-  // The identified linear model.
+/// The identified linear model, its state space, eigenvalues and modes.
+void build_model(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
+                 const IdentOptions& options, IdentResult& res) {
   DerivativeModel& m = res.model;
   const std::string stem = std::filesystem::path(data.source).stem().string();
   m.name = options.model_name.empty() ? (stem.empty() ? "identified" : stem) + "_" + to_string(options.structure) +
@@ -393,9 +383,10 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
   res.eigenvalues = sorted_eigenvalues(res.state_space.A);
   res.modes = analyse_modes(res.state_space, vehicle);
   m.published_eigenvalues = res.eigenvalues;
+}
 
-  if (!res.fits.empty() && !res.fits.front().whiteness.tested) res.notes.push_back(res.fits.front().whiteness.note);
-
+/// The states' PSDs in hover and in the manoeuvres; a note for a part with none, saying what it needs.
+void add_state_psds(const IdentOptions& options, IdentResult& res) {
   res.segments = find_segments(res.data.raw, options.segments);
   res.psd = state_psds(res.data.raw, state_names(options.structure), res.segments, options.psd_segment_s);
   // A part with no PSD: say what it needs.
@@ -424,6 +415,41 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
     }
     res.notes.push_back(buf);
   }
+}
+
+}  // namespace
+
+IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
+                     const IdentOptions& options) {
+  if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
+  check_flight_data(data, vehicle);
+  IdentResult res;
+  res.source = data.source;
+  res.options = options;
+  res.vehicle = vehicle;
+  choose_inputs(data, options, res);
+  std::vector<Equation> equations = equations_for(data, vehicle, res.inputs, options);
+
+  res.data = prepare(data, options.structure, options.trim, vehicle.gravity_mps2, options.processing);
+  if (options.add_signals) options.add_signals(res.data.filtered);
+  for (const auto& term : options.terms) add_term_column(res.data.filtered, term);
+
+  WlsOptions wls;
+  wls.variance_window = static_cast<Eigen::Index>(std::lround(options.wls_window_s * options.processing.rate_hz));
+  wls.cross_equation = options.wls_cross_equation;
+  CovarianceOptions cov;
+  cov.correlation_lags = static_cast<Eigen::Index>(coloured_lags(options.coloured_lags, options.processing));
+  res.regression = estimate(res.data.filtered.signals, equations, options.method, wls, cov);
+  res.parameters = res.regression.parameters();
+  res.parameter_order = res.regression.parameter_names;
+  res.correlated = correlated_pairs(res.regression, options.correlation_threshold);
+
+  fit_outputs(options, res);
+  build_model(data, vehicle, vehicle_file, options, res);
+
+  if (!res.fits.empty() && !res.fits.front().whiteness.tested) res.notes.push_back(res.fits.front().whiteness.note);
+
+  add_state_psds(options, res);
   return res;
 }
 

@@ -121,6 +121,100 @@ void ranges_json(JsonWriter& w, const std::vector<TimeRange>& ranges) {
   w.end_array();
 }
 
+/// Each parameter with its sigmas, each equation's correlation matrix, and the pairs over the threshold.
+void parameters_json(JsonWriter& w, const IdentResult& r) {
+  w.key("parameters").begin_object();
+  for (const auto& name : r.parameter_order) {
+    const ParameterEstimate& e = r.parameters.at(name);
+    w.key(name).begin_object();
+    w.key("value").value(e.value);
+    w.key("sigma").value(e.sigma);
+    w.key("sigma_pct").value(pct(e.sigma, e.value));
+    w.key("sigma_coloured").value(e.sigma_coloured);
+    w.key("sigma_coloured_pct").value(pct(e.sigma_coloured, e.value));
+    w.end_object();
+  }
+  w.end_object();
+  w.key("correlation").begin_object();
+  for (const auto& eq : r.regression.equations) {
+    w.key(eq.equation.name).begin_object();
+    w.key("parameters").array(eq.equation.parameters);
+    w.key("matrix").begin_array();
+    for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
+      w.begin_array();
+      for (Eigen::Index j = 0; j < eq.correlation.cols(); ++j) w.value(eq.correlation(i, j));
+      w.end_array();
+    }
+    w.end_array();
+    w.end_object();
+  }
+  w.end_object();
+  w.key("correlation_threshold").value(r.options.correlation_threshold);
+  w.key("correlated_pairs").begin_array();
+  for (const auto& c : r.correlated) {
+    w.begin_object().key("equation").value(c.equation).key("a").value(c.a).key("b").value(c.b);
+    w.key("rho").value(c.rho).end_object();
+  }
+  w.end_array();
+}
+
+/// The identified model's eigenvalues and modes, each mode's eigenvector by state.
+void modes_json(JsonWriter& w, const IdentResult& r) {
+  w.key("eigenvalues").begin_array();
+  for (const auto& z : r.eigenvalues) w.begin_array().value(z.real()).value(z.imag()).end_array();
+  w.end_array();
+  w.key("modes").begin_array();
+  for (const auto& m : r.modes) {
+    w.begin_object();
+    w.key("eigenvalue").begin_array().value(m.eigenvalue.real()).value(m.eigenvalue.imag()).end_array();
+    w.key("oscillatory").value(m.oscillatory).key("stable").value(m.stable);
+    w.key("natural_frequency_radps").value(m.natural_frequency_radps).key("damping_ratio").value(m.damping_ratio);
+    w.key("eigenvector_nondim").begin_object();
+    for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
+      const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
+      w.key(r.state_space.states[i]).begin_object();
+      w.key("magnitude").value(std::abs(c)).key("phase_deg").value(phase_deg(c));
+      w.end_object();
+    }
+    w.end_object();
+    w.end_object();
+  }
+  w.end_array();
+}
+
+/// The hover and manoeuvre segments, and each state's PSD in each.
+void segments_json(JsonWriter& w, const IdentResult& r) {
+  const IdentOptions& o = r.options;
+  w.key("segments").begin_object();
+  w.key("how").value(r.segments.how);
+  w.key("hover");
+  ranges_json(w, r.segments.hover);
+  w.key("manoeuvre");
+  ranges_json(w, r.segments.manoeuvre);
+  w.end_object();
+  w.key("psd").begin_object();
+  for (const auto& p : r.psd) {
+    w.key(p.state).begin_object();
+    w.key("unit").value("(" + p.unit + ")^2/Hz");
+    for (const auto* part : {&p.hover, &p.manoeuvre}) {
+      const bool have = part == &p.hover ? p.has_hover : p.has_manoeuvre;
+      w.key(part == &p.hover ? "hover" : "manoeuvre");
+      if (!have) {
+        w.null();
+        continue;
+      }
+      w.begin_object();
+      w.key("variance").value(part->integral());
+      w.key("variance_below_cutoff").value(part->integral_up_to(o.processing.cutoff_hz));
+      w.key("df_hz").value(part->df_hz);
+      w.key("segments").value(static_cast<long long>(part->segments));
+      w.end_object();
+    }
+    w.end_object();
+  }
+  w.end_object();
+}
+
 }  // namespace
 
 std::string identification_text(const IdentResult& r) {
@@ -238,92 +332,10 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
     w.key("scale_factor").value(r.regression.scale_factor);
     w.end_object();
   }
-
-  w.key("parameters").begin_object();
-  for (const auto& name : r.parameter_order) {
-    const ParameterEstimate& e = r.parameters.at(name);
-    w.key(name).begin_object();
-    w.key("value").value(e.value);
-    w.key("sigma").value(e.sigma);
-    w.key("sigma_pct").value(pct(e.sigma, e.value));
-    w.key("sigma_coloured").value(e.sigma_coloured);
-    w.key("sigma_coloured_pct").value(pct(e.sigma_coloured, e.value));
-    w.end_object();
-  }
-  w.end_object();
-  w.key("correlation").begin_object();
-  for (const auto& eq : r.regression.equations) {
-    w.key(eq.equation.name).begin_object();
-    w.key("parameters").array(eq.equation.parameters);
-    w.key("matrix").begin_array();
-    for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
-      w.begin_array();
-      for (Eigen::Index j = 0; j < eq.correlation.cols(); ++j) w.value(eq.correlation(i, j));
-      w.end_array();
-    }
-    w.end_array();
-    w.end_object();
-  }
-  w.end_object();
-  w.key("correlation_threshold").value(o.correlation_threshold);
-  w.key("correlated_pairs").begin_array();
-  for (const auto& c : r.correlated) {
-    w.begin_object().key("equation").value(c.equation).key("a").value(c.a).key("b").value(c.b);
-    w.key("rho").value(c.rho).end_object();
-  }
-  w.end_array();
-
+  parameters_json(w, r);
   fits_json(w, r.fits);
-
-  w.key("eigenvalues").begin_array();
-  for (const auto& z : r.eigenvalues) w.begin_array().value(z.real()).value(z.imag()).end_array();
-  w.end_array();
-  w.key("modes").begin_array();
-  for (const auto& m : r.modes) {
-    w.begin_object();
-    w.key("eigenvalue").begin_array().value(m.eigenvalue.real()).value(m.eigenvalue.imag()).end_array();
-    w.key("oscillatory").value(m.oscillatory).key("stable").value(m.stable);
-    w.key("natural_frequency_radps").value(m.natural_frequency_radps).key("damping_ratio").value(m.damping_ratio);
-    w.key("eigenvector_nondim").begin_object();
-    for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
-      const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
-      w.key(r.state_space.states[i]).begin_object();
-      w.key("magnitude").value(std::abs(c)).key("phase_deg").value(phase_deg(c));
-      w.end_object();
-    }
-    w.end_object();
-    w.end_object();
-  }
-  w.end_array();
-
-  w.key("segments").begin_object();
-  w.key("how").value(r.segments.how);
-  w.key("hover");
-  ranges_json(w, r.segments.hover);
-  w.key("manoeuvre");
-  ranges_json(w, r.segments.manoeuvre);
-  w.end_object();
-  w.key("psd").begin_object();
-  for (const auto& p : r.psd) {
-    w.key(p.state).begin_object();
-    w.key("unit").value("(" + p.unit + ")^2/Hz");
-    for (const auto* part : {&p.hover, &p.manoeuvre}) {
-      const bool have = part == &p.hover ? p.has_hover : p.has_manoeuvre;
-      w.key(part == &p.hover ? "hover" : "manoeuvre");
-      if (!have) {
-        w.null();
-        continue;
-      }
-      w.begin_object();
-      w.key("variance").value(part->integral());
-      w.key("variance_below_cutoff").value(part->integral_up_to(o.processing.cutoff_hz));
-      w.key("df_hz").value(part->df_hz);
-      w.key("segments").value(static_cast<long long>(part->segments));
-      w.end_object();
-    }
-    w.end_object();
-  }
-  w.end_object();
+  modes_json(w, r);
+  segments_json(w, r);
   if (!model_out.empty()) w.key("model_out").value(model_out);
   if (!plots.empty()) w.key("plots").array(plots);
   w.end_object();

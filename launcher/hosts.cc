@@ -67,91 +67,72 @@ bool parse_ipv4_prefix(const std::string& text, unsigned* address, int* prefix) 
   return true;
 }
 
-HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& launch) {
-  HostPlacement placement;
-  if (!scenario.has_section("hosts")) return placement;
-  const std::string usage = "must be a mapping of host names to the processes each runs, e.g. "
-                            "{sim: [plant, mocap], flight: [controller, estimator]}";
-  if (!scenario.root["hosts"].IsMap()) {
-    throw ConfigError(scenario.file, "hosts", yaml_text(scenario.root["hosts"]), usage);
-  }
-  ConfigMap section(scenario.root["hosts"], scenario.file, "hosts");
-  const std::vector<std::string> names = section.keys();
-  if (names.empty()) throw ConfigError(scenario.file, "hosts", "{}", usage);
-  if (names.size() > kMaxHosts) {
-    throw ConfigError(scenario.file, "hosts", join(names),
-                      "at most " + std::to_string(kMaxHosts) +
-                          " hosts (the launcher's and one other, joined by one emulated link)");
-  }
-  std::map<std::string, std::string> placed;  // process -> host
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    const std::string& name = names[i];
-    if (!valid_host_name(name)) {
-      section.fail(name, "host name '" + name + "' must be 1 to " + std::to_string(kMaxHostNameLength) +
-                             " letters, digits, '-' or '_'");
-    }
-    HostConfig host;
-    host.name = name;
-    host.address = kDefaultHostAddresses[i];
-    std::vector<std::string> listed;
-    const YAML::Node node = scenario.root["hosts"][name];
-    std::string list_key = section.key_path(name);
-    if (node.IsSequence()) {
-      listed = section.get_string_list(name);
-    } else if (node.IsMap()) {
-      ConfigMap host_map = section.get_map(name);
-      listed = host_map.get_string_list("processes");
-      list_key = host_map.key_path("processes");
-      if (host_map.has("start")) host.by_hand = host_map.get_enum("start", {"launcher", "by_hand"}) == "by_hand";
-      if (host.by_hand && i == 0) {
-        host_map.fail("start", "the first host is the launcher's: its processes are started by the launcher");
-      }
-      if (host.by_hand && host_map.has("address")) {
-        host_map.fail("address", "is the address of the emulated link's end; a host started by hand is a machine of "
-                                 "the lab network with its own address");
-      }
-      if (host_map.has("address")) {
-        host.address = host_map.get_string("address");
-        unsigned a = 0;
-        int prefix = 0;
-        if (!parse_ipv4_prefix(host.address, &a, &prefix)) {
-          host_map.fail("address", "must be an IPv4 address with its prefix length (1 to 30), e.g. 10.76.67.2/30");
-        }
-      }
-      host_map.finish();
-    } else {
-      section.fail(name, "must be a list of processes, e.g. [controller, estimator], or a mapping with "
-                         "processes: (and address: or start:)");
-    }
-    for (const auto& p : listed) {
-      if (!scenario.runs(p)) {
-        throw ConfigError(scenario.file, list_key, p,
-                          "process '" + p + "' is not one of the run's processes (" + join(scenario.processes) + ")");
-      }
-      const auto [it, fresh] = placed.emplace(p, name);
-      if (!fresh) {
-        throw ConfigError(scenario.file, list_key, p,
-                          "process '" + p + "' is placed twice (" +
-                              (it->second == name ? "on host '" + name + "'" : "on hosts '" + it->second + "' and '" + name + "'") +
-                              ")");
-      }
-    }
-    if (listed.empty() && i > 0) {
-      throw ConfigError(scenario.file, list_key, "[]", "host '" + name + "' runs no process");
-    }
-    placement.hosts.push_back(host);
-  }
-  section.finish();
-  // Each host's processes in the order of the scenario; the unplaced ones on the launcher's host.
-  for (const auto& p : scenario.processes) {
-    const auto it = placed.find(p);
-    const std::string& host = it == placed.end() ? names.front() : it->second;
-    for (auto& h : placement.hosts) {
-      if (h.name == host) h.processes.push_back(p);
-    }
-  }
-  if (!placement.split()) return placement;
+namespace {
 
+/// One host of the hosts: section, the `i`th: its name, address and how it is started; each of its
+/// processes is entered in `placed` (process -> host).
+HostConfig read_host(const Scenario& scenario, ConfigMap& section, const std::string& name, std::size_t i,
+                     std::map<std::string, std::string>& placed) {
+  if (!valid_host_name(name)) {
+    section.fail(name, "host name '" + name + "' must be 1 to " + std::to_string(kMaxHostNameLength) +
+                           " letters, digits, '-' or '_'");
+  }
+  HostConfig host;
+  host.name = name;
+  host.address = kDefaultHostAddresses[i];
+  std::vector<std::string> listed;
+  const YAML::Node node = scenario.root["hosts"][name];
+  std::string list_key = section.key_path(name);
+  if (node.IsSequence()) {
+    listed = section.get_string_list(name);
+  } else if (node.IsMap()) {
+    ConfigMap host_map = section.get_map(name);
+    listed = host_map.get_string_list("processes");
+    list_key = host_map.key_path("processes");
+    if (host_map.has("start")) host.by_hand = host_map.get_enum("start", {"launcher", "by_hand"}) == "by_hand";
+    if (host.by_hand && i == 0) {
+      host_map.fail("start", "the first host is the launcher's: its processes are started by the launcher");
+    }
+    if (host.by_hand && host_map.has("address")) {
+      host_map.fail("address", "is the address of the emulated link's end; a host started by hand is a machine of "
+                               "the lab network with its own address");
+    }
+    if (host_map.has("address")) {
+      host.address = host_map.get_string("address");
+      unsigned a = 0;
+      int prefix = 0;
+      if (!parse_ipv4_prefix(host.address, &a, &prefix)) {
+        host_map.fail("address", "must be an IPv4 address with its prefix length (1 to 30), e.g. 10.76.67.2/30");
+      }
+    }
+    host_map.finish();
+  } else {
+    section.fail(name, "must be a list of processes, e.g. [controller, estimator], or a mapping with "
+                       "processes: (and address: or start:)");
+  }
+  for (const auto& p : listed) {
+    if (!scenario.runs(p)) {
+      throw ConfigError(scenario.file, list_key, p,
+                        "process '" + p + "' is not one of the run's processes (" + join(scenario.processes) + ")");
+    }
+    const auto [it, fresh] = placed.emplace(p, name);
+    if (!fresh) {
+      throw ConfigError(scenario.file, list_key, p,
+                        "process '" + p + "' is placed twice (" +
+                            (it->second == name ? "on host '" + name + "'" : "on hosts '" + it->second + "' and '" + name + "'") +
+                            ")");
+    }
+  }
+  if (listed.empty() && i > 0) {
+    throw ConfigError(scenario.file, list_key, "[]", "host '" + name + "' runs no process");
+  }
+  return host;
+}
+
+/// The checks of a run over two hosts: the link's addresses, the CAN bridge's sides, and the
+/// launcher's settings for a second host started by hand or emulated.
+void check_two_hosts(const Scenario& scenario, const LaunchConfig& launch, const HostPlacement& placement,
+                     const std::map<std::string, std::string>& placed) {
   const HostConfig& first = placement.hosts[0];
   const HostConfig& second = placement.hosts[1];
   if (!second.by_hand) {
@@ -191,7 +172,7 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
                         where + ": fly it in lockstep; in real time every process keeps the start time, the "
                                 "launcher's CLOCK_MONOTONIC, which another machine does not share");
     }
-    return placement;
+    return;
   }
   for (const auto& p : launch.external_processes) {
     if (placement.host_index(p) > 0) {
@@ -210,6 +191,41 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
                       std::string("a run over two emulated hosts flies on its own URL across the emulated link (") +
                           kTwoHostLcmUrl + "): leave run.lcm_url at auto (or start: by_hand on two real machines)");
   }
+}
+
+}  // namespace
+
+HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& launch) {
+  HostPlacement placement;
+  if (!scenario.has_section("hosts")) return placement;
+  const std::string usage = "must be a mapping of host names to the processes each runs, e.g. "
+                            "{sim: [plant, mocap], flight: [controller, estimator]}";
+  if (!scenario.root["hosts"].IsMap()) {
+    throw ConfigError(scenario.file, "hosts", yaml_text(scenario.root["hosts"]), usage);
+  }
+  ConfigMap section(scenario.root["hosts"], scenario.file, "hosts");
+  const std::vector<std::string> names = section.keys();
+  if (names.empty()) throw ConfigError(scenario.file, "hosts", "{}", usage);
+  if (names.size() > kMaxHosts) {
+    throw ConfigError(scenario.file, "hosts", join(names),
+                      "at most " + std::to_string(kMaxHosts) +
+                          " hosts (the launcher's and one other, joined by one emulated link)");
+  }
+  std::map<std::string, std::string> placed;  // process -> host
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    placement.hosts.push_back(read_host(scenario, section, names[i], i, placed));
+  }
+  section.finish();
+  // Each host's processes in the order of the scenario; the unplaced ones on the launcher's host.
+  for (const auto& p : scenario.processes) {
+    const auto it = placed.find(p);
+    const std::string& host = it == placed.end() ? names.front() : it->second;
+    for (auto& h : placement.hosts) {
+      if (h.name == host) h.processes.push_back(p);
+    }
+  }
+  if (!placement.split()) return placement;
+  check_two_hosts(scenario, launch, placement, placed);
   return placement;
 }
 

@@ -85,6 +85,96 @@ std::string last_fatal_fault(const RunMonitor& monitor) {
   return "";
 }
 
+/// The progress line of the run: simulated and wall time, speed, TRUTH messages.
+void print_progress(const RunMonitor& monitor, double duration_s, double wall, bool tty) {
+  char line[160];
+  std::snprintf(line, sizeof line, "[inprocess] sim %7.2f / %.2f s   wall %7.2f s   %7.1fx   TRUTH %lld",
+                monitor.sim_time_s(), duration_s, wall, wall > 0 ? monitor.sim_time_s() / wall : 0.0,
+                static_cast<long long>(monitor.truth_count()));
+  std::fprintf(stderr, tty ? "\r%s" : "%s\n", line);
+}
+
+/// Builds the run's processes; returns the lockstep master, the plant (the others join in process).
+Process* build_processes(const Scenario& s, transport::InprocessHub& hub, can::InprocessCanBus& can_bus,
+                         std::vector<Process>& processes) {
+  Process* master = nullptr;
+  for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus));
+  for (auto& p : processes) {
+    if (p.name == "plant") master = &p;
+    else p.node->join_inprocess();
+  }
+  if (master == nullptr) throw ConfigError(s.file, "processes", "", "a run needs the process plant");
+  return master;
+}
+
+/// The START message: the run's lockstep clock, duration, id and participants (all but the master).
+run_control_t start_message(const Scenario& s, const std::vector<Process>& processes, const Process* master) {
+  run_control_t start;
+  start.utime = transport::wall_us();
+  start.seq = 0;
+  start.command = run_control_t::COMMAND_START;
+  start.clock_mode = run_control_t::CLOCK_MODE_LOCKSTEP;
+  start.t0_monotonic_ns = 0;
+  start.duration_ns = static_cast<int64_t>(std::llround(s.duration_s * 1e9));
+  start.run_id = s.name + "-" + std::to_string(::getpid());
+  for (const auto& p : processes) {
+    if (&p != master) start.participants.push_back(p.name);
+  }
+  start.num_participants = static_cast<int32_t>(start.participants.size());
+  return start;
+}
+
+/// Flies the run: the master's loop, then each participant's finish; returns what a process threw, if one did.
+std::string fly_processes(Process* master, std::vector<Process>& processes, int& master_code) {
+  std::string failure;
+  try {
+    master_code = master->run();
+    for (auto& p : processes) {
+      if (&p == master) continue;
+      if (p.finish) p.finish();
+      p.node->finish_inprocess();
+    }
+  } catch (const std::exception& e) {
+    failure = "a process threw during the run at simulated t = " +
+              std::to_string(static_cast<double>(master->node->sim_time_ns()) / 1e9) + " s: " + e.what();
+  }
+  return failure;
+}
+
+/// How the flight ended.
+struct Ending {
+  int master_code = transport::kExitOk;
+  std::string failure;
+  bool interrupted = false;
+  double wall_s = 0.0;
+};
+
+/// The run's report: what was flown, how, the monitor's figures, each process's outcome and the verdict.
+RunReport report_of(const RunPlan& plan, const InprocessOptions& options, int64_t published, const Recorder* recorder,
+                    const RunMonitor& monitor, const std::vector<Process>& processes, const Process* master,
+                    const Ending& end) {
+  const Scenario& s = plan.scenario;
+  RunReport report;
+  report.scenario = s.name;
+  report.clock = kClockInprocess;
+  report.seed = s.seed;
+  if (options.config_digest) report.config_digest = scenario_digest(s);
+  report.transport = "in process";
+  report.transport_detail = "one thread, no transport; " + std::to_string(published) + " messages" +
+                            (plan.hosts.split() ? "; the hosts section does not apply in process" : "");
+  report.log_file = options.log_file;
+  if (recorder) report.log = recorder->kept();
+  fill_from_monitor(report, monitor, monitor.sim_time_s(), end.wall_s);
+  for (const auto& p : processes) {
+    const int code = &p == master ? end.master_code : transport::kExitOk;
+    report.processes.push_back(ProcessOutcome{p.name, static_cast<long long>(::getpid()), true, code, 0,
+                                              "in process, returned " + std::to_string(code)});
+  }
+  report.verdict = judge_run(report.flight, plan.judge, end.interrupted, end.failure, {}, false, failsafe_of(monitor),
+                             judge_tracking(report.tracking, plan.judge));
+  return report;
+}
+
 }  // namespace
 
 RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
@@ -117,11 +207,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
     if (options.on_message) options.on_message(channel, data, size);
     if (options.progress && recv_ns >= next_progress_ns && channel == contract::channels::kTruth) {
       const double wall = static_cast<double>(recv_ns - wall_start_ns) / 1e9;
-      char line[160];
-      std::snprintf(line, sizeof line, "[inprocess] sim %7.2f / %.2f s   wall %7.2f s   %7.1fx   TRUTH %lld",
-                    monitor.sim_time_s(), s.duration_s, wall, wall > 0 ? monitor.sim_time_s() / wall : 0.0,
-                    static_cast<long long>(monitor.truth_count()));
-      std::fprintf(stderr, tty ? "\r%s" : "%s\n", line);
+      print_progress(monitor, s.duration_s, wall, tty);
       next_progress_ns = recv_ns + (tty ? 200000000LL : 2000000000LL);
     }
   });
@@ -131,31 +217,14 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
 
   can::InprocessCanBus can_bus;
   std::vector<Process> processes;
-  Process* master = nullptr;
-  for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus));
-  for (auto& p : processes) {
-    if (p.name == "plant") master = &p;
-    else p.node->join_inprocess();
-  }
-  if (master == nullptr) throw ConfigError(s.file, "processes", "", "a run needs the process plant");
+  Process* master = build_processes(s, hub, can_bus, processes);
   transport::ProcessNode* master_node = master->node;
   master_node->on_housekeeping([&record_failed, master_node] {
     if (record_failed.load(std::memory_order_relaxed)) master_node->end_run();
   });
 
   transport::Bus control(hub);
-  run_control_t start;
-  start.utime = transport::wall_us();
-  start.seq = 0;
-  start.command = run_control_t::COMMAND_START;
-  start.clock_mode = run_control_t::CLOCK_MODE_LOCKSTEP;
-  start.t0_monotonic_ns = 0;
-  start.duration_ns = static_cast<int64_t>(std::llround(s.duration_s * 1e9));
-  start.run_id = s.name + "-" + std::to_string(::getpid());
-  for (const auto& p : processes) {
-    if (&p != master) start.participants.push_back(p.name);
-  }
-  start.num_participants = static_cast<int32_t>(start.participants.size());
+  run_control_t start = start_message(s, processes, master);
   wall_start_ns = monotonic_ns();  // the run starts here; building it is not timed
   control.publish(contract::channels::kRunControl, start);
   hub.drain();
@@ -167,19 +236,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
 
-  std::string failure;
   int master_code = transport::kExitOk;
-  try {
-    master_code = master->run();
-    for (auto& p : processes) {
-      if (&p == master) continue;
-      if (p.finish) p.finish();
-      p.node->finish_inprocess();
-    }
-  } catch (const std::exception& e) {
-    failure = "a process threw during the run at simulated t = " +
-              std::to_string(static_cast<double>(master->node->sim_time_ns()) / 1e9) + " s: " + e.what();
-  }
+  std::string failure = fly_processes(master, processes, master_code);
   run_control_t stop = start;
   stop.seq = 1;
   stop.utime = transport::wall_us();
@@ -206,25 +264,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
               std::to_string(monitor.sim_time_s()) + " s" + (why.empty() ? "" : ": " + why);
   }
 
-  RunReport report;
-  report.scenario = s.name;
-  report.clock = kClockInprocess;
-  report.seed = s.seed;
-  if (options.config_digest) report.config_digest = scenario_digest(s);
-  report.transport = "in process";
-  report.transport_detail = "one thread, no transport; " + std::to_string(hub.published()) + " messages" +
-                            (plan.hosts.split() ? "; the hosts section does not apply in process" : "");
-  report.log_file = options.log_file;
-  if (recorder) report.log = recorder->kept();
-  fill_from_monitor(report, monitor, monitor.sim_time_s(), wall_s);
-  for (const auto& p : processes) {
-    const int code = &p == master ? master_code : transport::kExitOk;
-    report.processes.push_back(ProcessOutcome{p.name, static_cast<long long>(::getpid()), true, code, 0,
-                                              "in process, returned " + std::to_string(code)});
-  }
-  report.verdict = judge_run(report.flight, plan.judge, interrupted, failure, {}, false, failsafe_of(monitor),
-                             judge_tracking(report.tracking, plan.judge));
-  return report;
+  return report_of(plan, options, hub.published(), recorder.get(), monitor, processes, master,
+                   Ending{master_code, failure, interrupted, wall_s});
 }
 
 int run_inprocess(const RunPlan& plan_in, const RunOptions& options) {

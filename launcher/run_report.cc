@@ -30,20 +30,10 @@ void fill_from_monitor(RunReport& r, const RunMonitor& monitor, double sim_s, do
   r.faults = monitor.faults();
 }
 
-void write_report_text(std::ostream& out, const RunReport& r) {
-  const FlightSummary& f = r.flight;
-  const double sim_s = r.sim_time_s, wall_s = r.wall_time_s;
-  out << "\n== run summary: " << r.scenario << " ==\n";
-  out << "clock      " << r.clock << ", seed " << r.seed << "\n";
-  out << "transport  " << r.transport << (r.transport_detail.empty() ? "" : "  (" + r.transport_detail + ")") << "\n";
-  out << "log        " << r.log_file;
-  if (!r.log.file.empty()) {
-    fmt::print(out, ": {} events, {:.3f} s simulated, {}{}", r.log.events, r.log.sim_time_s, human_bytes(r.log.bytes),
-               r.log.failure.empty() ? "" : " (whole events kept before the failure)");
-  }
-  out << "\n";
-  fmt::print(out, "time       simulated {:.3f} s, wall {:.3f} s ({:.2f}x real time)\n", sim_s, wall_s,
-             wall_s > 0 ? sim_s / wall_s : 0.0);
+namespace {
+
+/// The channels' counts and rates, then each process's loop timing and message latency.
+void print_channels_and_timing(std::ostream& out, const RunReport& r) {
   out << "\nchannel              count    rate [Hz]  expected   drops   late  malformed\n";
   for (const auto& [name, c] : r.channels) {
     fmt::print(out, "{:<18} {:>8} {:>10.1f} {:>9.1f} {:>7} {:>6} {:>9}{}\n", name, c.count, c.rate_hz, c.expected_hz,
@@ -66,6 +56,11 @@ void write_report_text(std::ostream& out, const RunReport& r) {
     fmt::print(out, "{} {}: p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us over {} messages\n", name, what,
                t.latency_p50_us, t.latency_p99_us, t.latency_max_us, t.latency_count);
   }
+}
+
+/// The flight's extremes, ranges, final state and vertical excursion.
+void print_flight(std::ostream& out, const RunReport& r) {
+  const FlightSummary& f = r.flight;
   fmt::print(out, "\nflight     max |p| {:.4g} rad/s, max |v| {:.4g} m/s, max |phi| {:.4g} deg", f.max_abs_p, f.max_abs_v,
              f.max_abs_phi * 180 / M_PI);
   if (f.max_abs_theta > 0.0) fmt::print(out, ", max |theta| {:.4g} deg", f.max_abs_theta * 180 / M_PI);
@@ -77,6 +72,10 @@ void write_report_text(std::ostream& out, const RunReport& r) {
              f.final_phi * 180 / M_PI);
   fmt::print(out, "vertical   height {:+.2f} .. {:+.2f} m from the start (final {:+.2f} m), w {:.2f} .. {:.2f} m/s (initial {:.2f})\n",
              f.min_height_m, f.max_height_m, f.final_height_m, f.min_w, f.max_w, f.initial_w);
+}
+
+/// The estimator's errors and pose bookkeeping, and the roll tracking, where the run had them.
+void print_estimator_and_tracking(std::ostream& out, const RunReport& r) {
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
     fmt::print(out,
@@ -98,6 +97,10 @@ void write_report_text(std::ostream& out, const RunReport& r) {
                o.detected ? fmt::format("{} (damping ratio {:.3f}, {} cycles)", o.text, o.damping_ratio, o.cycles)
                           : std::string("no roll oscillation"));
   }
+}
+
+/// Each side of the CAN bridge: what it carried and what it rejected.
+void print_can_health(std::ostream& out, const RunReport& r) {
   for (const auto& [name, h] : r.can_health) {
     fmt::print(out,
                "{:<10} {}: {} messages to CAN, {} to LCM; frames sent {}, received {}; rejected: unknown id {}, wrong "
@@ -111,6 +114,9 @@ void write_report_text(std::ostream& out, const RunReport& r) {
     }
     if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
   }
+}
+
+void print_faults(std::ostream& out, const RunReport& r) {
   // Faults by process and code, in order of first appearance: the first message of each and
   // how many followed (the JSON summary lists them all).
   out << "faults     " << r.faults.size() << "\n";
@@ -134,6 +140,10 @@ void write_report_text(std::ostream& out, const RunReport& r) {
       break;
     }
   }
+}
+
+/// Each process with how it ended, and the hosts they ran on.
+void print_processes_and_hosts(std::ostream& out, const RunReport& r) {
   out << "processes ";
   for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";
   out << "\n";
@@ -149,8 +159,10 @@ void write_report_text(std::ostream& out, const RunReport& r) {
     }
     out << "\n";
   }
-  if (r.verdict.timing.judged) out << "timing     " << r.verdict.timing.text << "\n";
-  // Real-time priority that could not be applied: one line, with what to do.
+}
+
+/// Real-time priority that could not be applied: one line, with what to do.
+void print_priority(std::ostream& out, const RunReport& r) {
   std::string no_priority, why;
   for (const auto& fr : r.faults) {
     if (fr.code != fault_event_t::CODE_REALTIME_UNAVAILABLE) continue;
@@ -162,6 +174,31 @@ void write_report_text(std::ostream& out, const RunReport& r) {
         << "). Run rig as root, or give the rig's executables CAP_SYS_NICE and CAP_IPC_LOCK "
            "(setcap cap_sys_nice,cap_ipc_lock+ep build/bin/nimble_*), or set run.realtime_priority: 0\n";
   }
+}
+
+}  // namespace
+
+void write_report_text(std::ostream& out, const RunReport& r) {
+  const double sim_s = r.sim_time_s, wall_s = r.wall_time_s;
+  out << "\n== run summary: " << r.scenario << " ==\n";
+  out << "clock      " << r.clock << ", seed " << r.seed << "\n";
+  out << "transport  " << r.transport << (r.transport_detail.empty() ? "" : "  (" + r.transport_detail + ")") << "\n";
+  out << "log        " << r.log_file;
+  if (!r.log.file.empty()) {
+    fmt::print(out, ": {} events, {:.3f} s simulated, {}{}", r.log.events, r.log.sim_time_s, human_bytes(r.log.bytes),
+               r.log.failure.empty() ? "" : " (whole events kept before the failure)");
+  }
+  out << "\n";
+  fmt::print(out, "time       simulated {:.3f} s, wall {:.3f} s ({:.2f}x real time)\n", sim_s, wall_s,
+             wall_s > 0 ? sim_s / wall_s : 0.0);
+  print_channels_and_timing(out, r);
+  print_flight(out, r);
+  print_estimator_and_tracking(out, r);
+  print_can_health(out, r);
+  print_faults(out, r);
+  print_processes_and_hosts(out, r);
+  if (r.verdict.timing.judged) out << "timing     " << r.verdict.timing.text << "\n";
+  print_priority(out, r);
   for (const TapFigures& t : r.taps) {
     out << t.title << ":";
     for (std::size_t i = 0; i < t.values.size(); ++i) {
@@ -222,38 +259,9 @@ void write_can_json(JsonWriter& w, const std::map<std::string, nimble::CanHealth
   w.end_object();
 }
 
-}  // namespace
-
-std::string report_json(const RunReport& r) {
+/// The flight's extremes, ranges, final state, vertical excursion and its trace where kept.
+void write_flight_json(JsonWriter& w, const RunReport& r) {
   const FlightSummary& f = r.flight;
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(r.scenario);
-  w.key("clock").value(r.clock);
-  w.key("seed").value(static_cast<long long>(r.seed));
-  w.key("config_digest").value(r.config_digest);
-  w.key("lcm_url").value(r.transport);
-  w.key("log").value(r.log_file);
-  if (!r.log.file.empty()) {
-    w.key("log_kept").begin_object();
-    w.key("events").value(static_cast<long long>(r.log.events)).key("bytes").value(static_cast<long long>(r.log.bytes));
-    w.key("sim_time_s").value(r.log.sim_time_s).key("failure").value(r.log.failure);
-    w.end_object();
-  }
-  w.key("controlled").value(r.verdict.controlled);
-  w.key("returned_to_hover").value(r.verdict.hover);
-  w.key("exit_code").value(r.verdict.exit_code);
-  w.key("result").value(r.verdict.text);
-  if (r.verdict.timing.judged) {
-    const TimingVerdict& tv = r.verdict.timing;
-    w.key("realtime_health").begin_object();
-    w.key("degraded").value(tv.degraded).key("worst_process").value(tv.worst);
-    w.key("worst_fraction").value(tv.worst_fraction).key("text").value(tv.text);
-    w.end_object();
-  }
-  w.key("sim_time_s").value(r.sim_time_s);
-  w.key("wall_time_s").value(r.wall_time_s);
-  w.key("speed_x_realtime").value(r.speed_x_realtime());
   w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).key("psi").value(f.max_abs_psi).end_object();
   w.key("ranges").begin_object();
   w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
@@ -277,6 +285,9 @@ std::string report_json(const RunReport& r) {
     series("phi", f.trace_phi);
     w.end_object();
   }
+}
+
+void write_estimator_json(JsonWriter& w, const RunReport& r) {
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
     w.key("estimator").begin_object();
@@ -293,8 +304,9 @@ std::string report_json(const RunReport& r) {
     w.key("imu_gaps").value(static_cast<long long>(est.imu_gaps));
     w.end_object();
   }
-  write_tracking_json(w, r);
-  if (!r.can_health.empty()) write_can_json(w, r.can_health);
+}
+
+void write_channels_json(JsonWriter& w, const RunReport& r) {
   w.key("channels").begin_object();
   for (const auto& [name, c] : r.channels) {
     w.key(name).begin_object();
@@ -308,6 +320,10 @@ std::string report_json(const RunReport& r) {
     w.end_object();
   }
   w.end_object();
+}
+
+/// Each process's loop timing, message latency and what it received.
+void write_timing_json(JsonWriter& w, const RunReport& r) {
   w.key("timing").begin_object();
   for (const auto& [name, t] : r.timing) {
     w.key(name).begin_object();
@@ -331,6 +347,10 @@ std::string report_json(const RunReport& r) {
     w.end_object();
   }
   w.end_object();
+}
+
+/// Every fault, each process with how it ended, and the hosts they ran on.
+void write_faults_processes_hosts_json(JsonWriter& w, const RunReport& r) {
   w.key("faults").begin_array();
   for (const auto& fr : r.faults) {
     w.begin_object();
@@ -365,6 +385,46 @@ std::string report_json(const RunReport& r) {
     }
     w.end_object();
   }
+}
+
+}  // namespace
+
+std::string report_json(const RunReport& r) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("scenario").value(r.scenario);
+  w.key("clock").value(r.clock);
+  w.key("seed").value(static_cast<long long>(r.seed));
+  w.key("config_digest").value(r.config_digest);
+  w.key("lcm_url").value(r.transport);
+  w.key("log").value(r.log_file);
+  if (!r.log.file.empty()) {
+    w.key("log_kept").begin_object();
+    w.key("events").value(static_cast<long long>(r.log.events)).key("bytes").value(static_cast<long long>(r.log.bytes));
+    w.key("sim_time_s").value(r.log.sim_time_s).key("failure").value(r.log.failure);
+    w.end_object();
+  }
+  w.key("controlled").value(r.verdict.controlled);
+  w.key("returned_to_hover").value(r.verdict.hover);
+  w.key("exit_code").value(r.verdict.exit_code);
+  w.key("result").value(r.verdict.text);
+  if (r.verdict.timing.judged) {
+    const TimingVerdict& tv = r.verdict.timing;
+    w.key("realtime_health").begin_object();
+    w.key("degraded").value(tv.degraded).key("worst_process").value(tv.worst);
+    w.key("worst_fraction").value(tv.worst_fraction).key("text").value(tv.text);
+    w.end_object();
+  }
+  w.key("sim_time_s").value(r.sim_time_s);
+  w.key("wall_time_s").value(r.wall_time_s);
+  w.key("speed_x_realtime").value(r.speed_x_realtime());
+  write_flight_json(w, r);
+  write_estimator_json(w, r);
+  write_tracking_json(w, r);
+  if (!r.can_health.empty()) write_can_json(w, r.can_health);
+  write_channels_json(w, r);
+  write_timing_json(w, r);
+  write_faults_processes_hosts_json(w, r);
   for (const TapFigures& t : r.taps) {
     w.key(t.key).begin_object();
     for (const auto& v : t.values) w.key(v.first).value(v.second);

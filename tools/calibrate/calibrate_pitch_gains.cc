@@ -60,6 +60,62 @@ void print_point(const PitchGainPoint& p, double map, const char* note = "") {
               r.max_real_per_s, r.has_oscillatory ? std::abs(r.least_damped) : NAN, r.stable ? "yes" : "NO", note);
 }
 
+/// The loop's options: the controller file's, with the plant file's servo, --map and the
+/// discrete loop's extra delay.
+PitchLoopOptions loop_options(const ControllerConfig& config, const std::string& plant_file, double map,
+                              bool continuous, int delay_steps) {
+  PitchLoopOptions options = pitch_loop_options(config);
+  {
+    // Only the servo section of the plant file is read here.
+    ConfigMap plant = ConfigMap::load_file(plant_file);
+    if (plant.has("servo")) {
+      ConfigMap servo = plant.get_map("servo");
+      options.servo_wn2_rad2ps2 = servo.get_double_or("wn2_rad2ps2", options.servo_wn2_rad2ps2, Range::positive());
+      options.servo_c1_radps = servo.get_double_or("c1_radps", options.servo_c1_radps, Range::positive());
+      servo.finish();
+    }
+  }
+  if (std::isfinite(map)) options.pitch_cmd_to_dihedral_rad = map;
+  options.continuous = continuous;
+  options.delay_steps = continuous ? 0 : delay_steps;
+  return options;
+}
+
+/// What is scanned: the model, its trim, the loop, the open loop's poles and the grid.
+void print_setup(const DerivativeModel& model, const Vehicle& vehicle, const StateSpace& lon,
+                 const PitchLoopOptions& options, bool continuous, const std::vector<double>& kp_values,
+                 const std::vector<double>& kd_values) {
+  std::printf("model %s (%s), vehicle %s; trim u0 %.3f m/s, w0 %.3f m/s, theta0 %.3f rad\n", model.name.c_str(),
+              model.source.c_str(), vehicle.name.c_str(), model.trim.u0_mps, model.trim.w0_mps,
+              model.trim.theta0_rad);
+  std::printf("loop: %s; servo %.1f/(s^2 + %.2f s + %.1f); low-pass %.1f Hz Butterworth; "
+              "pitch_cmd_to_dihedral_rad %.4f\n",
+              continuous ? "continuous" : "discrete at the controller rate, zero-order hold", options.servo_wn2_rad2ps2,
+              options.servo_c1_radps, options.servo_wn2_rad2ps2, options.lowpass_cutoff_hz,
+              options.pitch_cmd_to_dihedral_rad);
+  if (!continuous) {
+    std::printf("controller %.0f Hz, command delay %d control period(s)\n", options.rate_hz, options.delay_steps);
+  }
+  const PitchLoopPoles open = analyse_pitch_loop(lon, GainSet{0.0, 0.0}, options);
+  std::printf("open loop (kp = kd = 0): max real part %.3f /s\n", open.max_real_per_s);
+  std::printf("grid: kp %zu values %.4f..%.4f, kd %zu values %.4f..%.4f\n", kp_values.size(), kp_values.front(),
+              kp_values.back(), kd_values.size(), kd_values.front(), kd_values.back());
+  std::printf("min_zeta: smallest damping ratio of the complex closed-loop poles (real poles excluded);\n"
+              "wn: natural frequency of that pole; Kp_eff, Kd_eff = gain * map (dihedral rad per rad, per rad/s)\n\n");
+}
+
+/// The best gain pair of the scan, and its closed-loop poles.
+void print_best(const PitchGainPoint& best, const PitchLoopOptions& options) {
+  std::printf("\nbest: kp_per_rad %.4f, kd_per_radps %.4f (Kp_eff %.5f rad/rad, Kd_eff %.5f rad/(rad/s)); "
+              "smallest damping %.3f at wn %.2f rad/s; max real part %.3f /s\n",
+              best.gains.kp_per_rad, best.gains.kd_per_radps, best.gains.kp_per_rad * options.pitch_cmd_to_dihedral_rad,
+              best.gains.kd_per_radps * options.pitch_cmd_to_dihedral_rad, best.poles.min_damping,
+              std::abs(best.poles.least_damped), best.poles.max_real_per_s);
+  std::printf("closed-loop poles [1/s]:");
+  for (const auto& s : best.poles.poles_s) std::printf("  %s", format_pole(s).c_str());
+  std::printf("\n");
+}
+
 }  // namespace
 
 /// The scan, per kp the best kd (a stable one with the largest damping, else the least
@@ -158,38 +214,8 @@ int main(int argc, char** argv) {
     const Vehicle vehicle = load_vehicle(model.vehicle_file);
     const StateSpace lon = build_state_space(model, vehicle);
     const ControllerConfig config = load_controller_config(controller_file);
-    PitchLoopOptions options = pitch_loop_options(config);
-    {
-      // Only the servo section of the plant file is read here.
-      ConfigMap plant = ConfigMap::load_file(plant_file);
-      if (plant.has("servo")) {
-        ConfigMap servo = plant.get_map("servo");
-        options.servo_wn2_rad2ps2 = servo.get_double_or("wn2_rad2ps2", options.servo_wn2_rad2ps2, Range::positive());
-        options.servo_c1_radps = servo.get_double_or("c1_radps", options.servo_c1_radps, Range::positive());
-        servo.finish();
-      }
-    }
-    if (std::isfinite(map)) options.pitch_cmd_to_dihedral_rad = map;
-    options.continuous = continuous;
-    options.delay_steps = continuous ? 0 : delay_steps;
-
-    std::printf("model %s (%s), vehicle %s; trim u0 %.3f m/s, w0 %.3f m/s, theta0 %.3f rad\n", model.name.c_str(),
-                model.source.c_str(), vehicle.name.c_str(), model.trim.u0_mps, model.trim.w0_mps,
-                model.trim.theta0_rad);
-    std::printf("loop: %s; servo %.1f/(s^2 + %.2f s + %.1f); low-pass %.1f Hz Butterworth; "
-                "pitch_cmd_to_dihedral_rad %.4f\n",
-                continuous ? "continuous" : "discrete at the controller rate, zero-order hold", options.servo_wn2_rad2ps2,
-                options.servo_c1_radps, options.servo_wn2_rad2ps2, options.lowpass_cutoff_hz,
-                options.pitch_cmd_to_dihedral_rad);
-    if (!continuous) {
-      std::printf("controller %.0f Hz, command delay %d control period(s)\n", options.rate_hz, options.delay_steps);
-    }
-    const PitchLoopPoles open = analyse_pitch_loop(lon, GainSet{0.0, 0.0}, options);
-    std::printf("open loop (kp = kd = 0): max real part %.3f /s\n", open.max_real_per_s);
-    std::printf("grid: kp %zu values %.4f..%.4f, kd %zu values %.4f..%.4f\n", kp_values.size(), kp_values.front(),
-                kp_values.back(), kd_values.size(), kd_values.front(), kd_values.back());
-    std::printf("min_zeta: smallest damping ratio of the complex closed-loop poles (real poles excluded);\n"
-                "wn: natural frequency of that pole; Kp_eff, Kd_eff = gain * map (dihedral rad per rad, per rad/s)\n\n");
+    const PitchLoopOptions options = loop_options(config, plant_file, map, continuous, delay_steps);
+    print_setup(model, vehicle, lon, options, continuous, kp_values, kd_values);
 
     const PitchGainScan scan = scan_pitch_gains(lon, options, kp_values, kd_values);
     print_scan(scan, kp_values.size(), kd_values.size(), full, options.pitch_cmd_to_dihedral_rad);
@@ -206,15 +232,7 @@ int main(int argc, char** argv) {
       std::printf("\nno stable gain pair in the grid\n");
       return 1;
     }
-    const PitchGainPoint& best = scan.points[*scan.best];
-    std::printf("\nbest: kp_per_rad %.4f, kd_per_radps %.4f (Kp_eff %.5f rad/rad, Kd_eff %.5f rad/(rad/s)); "
-                "smallest damping %.3f at wn %.2f rad/s; max real part %.3f /s\n",
-                best.gains.kp_per_rad, best.gains.kd_per_radps, best.gains.kp_per_rad * options.pitch_cmd_to_dihedral_rad,
-                best.gains.kd_per_radps * options.pitch_cmd_to_dihedral_rad, best.poles.min_damping,
-                std::abs(best.poles.least_damped), best.poles.max_real_per_s);
-    std::printf("closed-loop poles [1/s]:");
-    for (const auto& s : best.poles.poles_s) std::printf("  %s", format_pole(s).c_str());
-    std::printf("\n");
+    print_best(scan.points[*scan.best], options);
   } catch (const std::exception& e) {
     std::cerr << "calibrate_pitch_gains: " << e.what() << "\n";
     return 2;
