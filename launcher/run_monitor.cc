@@ -143,6 +143,80 @@ bool RunMonitor::accept_seq(Counter& c, const std::string& publisher, int64_t se
   return true;
 }
 
+void RunMonitor::add_truth(const Truth& t, int64_t utime) {
+  const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
+  FlightSummary& f = flight_;
+  if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi) || !std::isfinite(t.euler_rad[1])) f.finite = false;
+  if (f.samples == 0) {
+    f.min_p = f.max_p = p;
+    f.min_v = f.max_v = v;
+    f.min_phi = f.max_phi = phi;
+    f.min_df = f.max_df = t.delta_f_radps;
+    start_down_m_ = t.position_ned_m[2];
+    f.min_w = f.max_w = f.initial_w = t.velocity_body_mps[2];
+  }
+  const double height = start_down_m_ - t.position_ned_m[2], w = t.velocity_body_mps[2];
+  if (!std::isfinite(height) || !std::isfinite(w)) f.finite = false;
+  f.min_height_m = std::min(f.min_height_m, height); f.max_height_m = std::max(f.max_height_m, height);
+  f.final_height_m = height;
+  f.min_w = std::min(f.min_w, w); f.max_w = std::max(f.max_w, w);
+  ++f.samples;
+  f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
+  f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
+  f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
+  f.max_abs_theta = std::max(f.max_abs_theta, std::fabs(t.euler_rad[1]));
+  f.max_abs_psi = std::max(f.max_abs_psi, std::fabs(t.euler_rad[2]));
+  f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
+  f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
+  f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);
+  f.min_df = std::min(f.min_df, t.delta_f_radps); f.max_df = std::max(f.max_df, t.delta_f_radps);
+  f.final_p = p;
+  f.final_v = v;
+  f.final_phi = phi;
+  f.last_sim_time_s = t.time_s;
+  if (cfg_.trace_interval_us > 0) {
+    f.trace_dt_s = static_cast<double>(cfg_.trace_interval_us) / 1e6;
+    // Every grid time this TRUTH is the first at or after (a gap in TRUTH repeats it).
+    while (static_cast<int64_t>(f.trace_p.size()) * cfg_.trace_interval_us <= utime) {
+      f.trace_p.push_back(p);
+      f.trace_v.push_back(v);
+      f.trace_phi.push_back(phi);
+    }
+  }
+  recent_truth_[utime] = TruthPoint{phi, p, v};
+  while (!recent_truth_.empty() && recent_truth_.begin()->first < utime - 1000000) {
+    recent_truth_.erase(recent_truth_.begin());
+  }
+}
+
+void RunMonitor::add_estimate(const Estimate& e) {
+  est_.poses_accepted = e.poses_accepted;
+  est_.poses_rejected = e.poses_rejected;
+  est_.poses_missing = e.poses_missing;
+  est_.poses_too_old = e.poses_too_old;
+  est_.poses_too_new = e.poses_too_new;
+  est_.velocity_windows_uncovered = e.velocity_windows_uncovered;
+  est_.imu_rejected = e.imu_rejected;
+  est_.imu_gaps = e.imu_gaps;
+  const auto it = recent_truth_.find(e.imu_utime);
+  if (it == recent_truth_.end()) return;
+  const double dphi = (e.euler_rad[0] - it->second.phi) * 180.0 / M_PI;
+  est_phi2_ += dphi * dphi;
+  est_p2_ += std::pow(e.omega_body_radps[0] - it->second.p, 2);
+  est_v2_ += std::pow(e.velocity_body_mps[1] - it->second.v, 2);
+  est_.phi_max_deg = std::max(est_.phi_max_deg, std::fabs(dphi));
+  ++est_.samples;
+}
+
+void RunMonitor::add_status(const ControllerStatus& status, int64_t utime) {
+  // The true roll the cycle saw: the newest TRUTH at or before its time.
+  auto it = recent_truth_.upper_bound(utime);
+  if (it == recent_truth_.begin()) return;
+  --it;
+  const double error = std::remainder(status.roll_ref_rad - it->second.phi, 2.0 * M_PI);
+  tracking_.add(static_cast<double>(utime) / 1e6, error * 180.0 / M_PI, status.roll_ref_rad * 180.0 / M_PI);
+}
+
 void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
   // Channels nobody in a run publishes are counted under one name, so that a flood of made-up
   // names cannot grow the table without bound.
@@ -223,79 +297,9 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     const int64_t lag_us = (recv_ns - cfg_.t0_monotonic_ns) / 1000 - due_us;
     if (lag_us > cfg_.late_threshold_us) ++c.late;
   }
-  if (m->truth) {
-    const Truth& t = *m->truth;
-    const double p = t.omega_body_radps[0], v = t.velocity_body_mps[1], phi = t.euler_rad[0];
-    FlightSummary& f = flight_;
-    if (!std::isfinite(p) || !std::isfinite(v) || !std::isfinite(phi) || !std::isfinite(t.euler_rad[1])) f.finite = false;
-    if (f.samples == 0) {
-      f.min_p = f.max_p = p;
-      f.min_v = f.max_v = v;
-      f.min_phi = f.max_phi = phi;
-      f.min_df = f.max_df = t.delta_f_radps;
-      start_down_m_ = t.position_ned_m[2];
-      f.min_w = f.max_w = f.initial_w = t.velocity_body_mps[2];
-    }
-    const double height = start_down_m_ - t.position_ned_m[2], w = t.velocity_body_mps[2];
-    if (!std::isfinite(height) || !std::isfinite(w)) f.finite = false;
-    f.min_height_m = std::min(f.min_height_m, height); f.max_height_m = std::max(f.max_height_m, height);
-    f.final_height_m = height;
-    f.min_w = std::min(f.min_w, w); f.max_w = std::max(f.max_w, w);
-    ++f.samples;
-    f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
-    f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
-    f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
-    f.max_abs_theta = std::max(f.max_abs_theta, std::fabs(t.euler_rad[1]));
-    f.max_abs_psi = std::max(f.max_abs_psi, std::fabs(t.euler_rad[2]));
-    f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
-    f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
-    f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);
-    f.min_df = std::min(f.min_df, t.delta_f_radps); f.max_df = std::max(f.max_df, t.delta_f_radps);
-    f.final_p = p;
-    f.final_v = v;
-    f.final_phi = phi;
-    f.last_sim_time_s = t.time_s;
-    if (cfg_.trace_interval_us > 0) {
-      f.trace_dt_s = static_cast<double>(cfg_.trace_interval_us) / 1e6;
-      // Every grid time this TRUTH is the first at or after (a gap in TRUTH repeats it).
-      while (static_cast<int64_t>(f.trace_p.size()) * cfg_.trace_interval_us <= utime) {
-        f.trace_p.push_back(p);
-        f.trace_v.push_back(v);
-        f.trace_phi.push_back(phi);
-      }
-    }
-    recent_truth_[utime] = TruthPoint{phi, p, v};
-    while (!recent_truth_.empty() && recent_truth_.begin()->first < utime - 1000000) {
-      recent_truth_.erase(recent_truth_.begin());
-    }
-  }
-  if (m->estimate) {
-    const Estimate& e = *m->estimate;
-    est_.poses_accepted = e.poses_accepted;
-    est_.poses_rejected = e.poses_rejected;
-    est_.poses_missing = e.poses_missing;
-    est_.poses_too_old = e.poses_too_old;
-    est_.poses_too_new = e.poses_too_new;
-    est_.velocity_windows_uncovered = e.velocity_windows_uncovered;
-    est_.imu_rejected = e.imu_rejected;
-    est_.imu_gaps = e.imu_gaps;
-    const auto it = recent_truth_.find(e.imu_utime);
-    if (it == recent_truth_.end()) return;
-    const double dphi = (e.euler_rad[0] - it->second.phi) * 180.0 / M_PI;
-    est_phi2_ += dphi * dphi;
-    est_p2_ += std::pow(e.omega_body_radps[0] - it->second.p, 2);
-    est_v2_ += std::pow(e.velocity_body_mps[1] - it->second.v, 2);
-    est_.phi_max_deg = std::max(est_.phi_max_deg, std::fabs(dphi));
-    ++est_.samples;
-  }
-  if (m->status) {
-    // The true roll the cycle saw: the newest TRUTH at or before its time.
-    auto it = recent_truth_.upper_bound(utime);
-    if (it == recent_truth_.begin()) return;
-    --it;
-    const double error = std::remainder(m->status->roll_ref_rad - it->second.phi, 2.0 * M_PI);
-    tracking_.add(static_cast<double>(utime) / 1e6, error * 180.0 / M_PI, m->status->roll_ref_rad * 180.0 / M_PI);
-  }
+  if (m->truth) add_truth(*m->truth, utime);
+  if (m->estimate) add_estimate(*m->estimate);
+  if (m->status) add_status(*m->status, utime);
 }
 
 EstimatorSummary RunMonitor::estimator() const {

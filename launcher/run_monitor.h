@@ -196,6 +196,11 @@ class RunMonitor {
   /// Counts gaps in `publisher`'s seq as drops; false (nothing counted) if `seq` does not
   /// continue its sequence (contract::seq_continues).
   bool accept_seq(Counter& c, const std::string& publisher, int64_t seq);
+  /// A stream message's part of the figures: the flight from TRUTH (and the recent truth the
+  /// others are held against), the estimator's error and counters, the roll tracking.
+  void add_truth(const Truth& truth, int64_t utime);
+  void add_estimate(const Estimate& estimate);
+  void add_status(const ControllerStatus& status, int64_t utime);
   template <typename T>
   static const std::string& publisher_of(const T& msg, const std::string& fallback) {
     if constexpr (has_process<T>::value) {
