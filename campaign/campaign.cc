@@ -23,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "campaign/worker_pool.h"
 #include "core/descriptors.h"
 #include "core/output_file.h"
 #include "launcher/inprocess.h"
@@ -100,16 +101,57 @@ std::string run_tag(const Campaign& c, std::size_t i) {
   return "set" + std::to_string(c.set_of(i) + 1) + "-seed" + std::to_string(c.seed_of(i));
 }
 
-/// In a child process: flies one run and writes its report to `json_file`. Never returns.
-[[noreturn]] void fly_child(const RunOptions& options, const std::string& json_file, const std::string& log_file,
-                            const std::string& out_file) {
-  const int fd = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+/// The end of a child process as the result files name it.
+std::string how_it_ended(int status) {
+  return WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                             : "exit code " + std::to_string(WEXITSTATUS(status));
+}
+
+/// `rig run` itself for a clock other than in process (it makes its own network namespace), in a
+/// child that does not outlive this worker; returns how it ended.
+std::string run_rig(const RunOptions& options, const std::string& json_file, const std::string& log_file) {
+  std::vector<std::string> args = {self_exe(), "run", options.scenario_file, "--clock", *options.clock,
+                                   "--seed", std::to_string(*options.seed), "--json", json_file,
+                                   "--log", log_file.empty() ? json_file + ".lcmlog" : log_file, "--no-progress"};
+  for (const auto& ov : options.overrides) {
+    args.push_back("--set");
+    args.push_back(ov.key_path + "=" + ov.value);
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t worker = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("rig sweep: fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != worker) ::_exit(kRunFailed);
+    close_descriptors_from(STDERR_FILENO + 1);
+    ::execv(argv[0], argv.data());
+    std::fprintf(stderr, "cannot execute %s: %s\n", argv[0], std::strerror(errno));
+    ::_exit(kRunFailed);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw std::runtime_error(std::string("rig sweep: waitpid failed: ") + std::strerror(errno));
+  }
+  return how_it_ended(status);
+}
+
+/// In a worker: flies one run, with what it prints in `out_file` and its report in `json_file`;
+/// returns how it ended ("exit code N", "killed by signal S").
+std::string fly_run(const RunOptions& options, const std::string& json_file, const std::string& log_file,
+                    const std::string& out_file) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const int saved_out = ::dup(STDOUT_FILENO), saved_err = ::dup(STDERR_FILENO);
+  const int fd = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd >= 0) {
     ::dup2(fd, STDOUT_FILENO);
     ::dup2(fd, STDERR_FILENO);
     ::close(fd);
   }
-  int code = kRunFailed;
+  std::string how = "exit code " + std::to_string(kRunFailed);
   try {
     const RunPlan plan = load_run_plan(options);
     if (plan.inprocess()) {
@@ -118,33 +160,25 @@ std::string run_tag(const Campaign& c, std::size_t i) {
       const RunReport report = fly_inprocess(plan, io);
       try {
         write_file(json_file, report_json(report) + "\n");
-        code = report.verdict.exit_code;
+        how = "exit code " + std::to_string(report.verdict.exit_code);
       } catch (const OutputError& e) {
         std::fprintf(stderr, "%s\n", e.what());
-        code = kRunFailed;
       }
     } else {
-      // Another clock: `rig run` itself, which makes its own network namespace.
-      std::vector<std::string> args = {self_exe(), "run", options.scenario_file, "--clock", *options.clock,
-                                       "--seed", std::to_string(*options.seed), "--json", json_file,
-                                       "--log", log_file.empty() ? json_file + ".lcmlog" : log_file, "--no-progress"};
-      for (const auto& ov : options.overrides) {
-        args.push_back("--set");
-        args.push_back(ov.key_path + "=" + ov.value);
-      }
-      std::vector<char*> argv;
-      for (auto& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      close_descriptors_from(STDERR_FILENO + 1);
-      ::execv(argv[0], argv.data());
-      std::fprintf(stderr, "cannot execute %s: %s\n", argv[0], std::strerror(errno));
+      how = run_rig(options, json_file, log_file);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s\n", e.what());
   }
   std::fflush(stdout);
   std::fflush(stderr);
-  ::_exit(code);
+  for (const auto& [saved, target] : {std::pair{saved_out, STDOUT_FILENO}, std::pair{saved_err, STDERR_FILENO}}) {
+    if (saved >= 0) {
+      ::dup2(saved, target);
+      ::close(saved);
+    }
+  }
+  return how;
 }
 
 double number_or_nan(const Json& j, std::initializer_list<const char*> path) {
@@ -454,45 +488,25 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
   fs::remove_all(work);
   fs::create_directories(work);
   const std::string bin_dir = fs::path(self_exe()).parent_path().string();
-  const pid_t parent = ::getpid();
-
-  std::map<pid_t, std::size_t> running;
-  std::map<std::size_t, double> started;
-  std::size_t next = 0, finished = 0, not_ok = 0;
   const auto files = [&](std::size_t i) {
     const std::string tag = run_tag(c, i);
     return std::array<std::string, 3>{(work / (tag + ".json")).string(), (work / (tag + ".out")).string(),
                                       c.logs_dir.empty() ? std::string() : c.logs_dir + "/" + tag + ".lcmlog"};
   };
-  while (finished < todo.size()) {
-    while (next < todo.size() && static_cast<int>(running.size()) < std::max(1, jobs)) {
-      const std::size_t i = todo[next];
-      const auto f = files(i);
-      const RunOptions ro = run_options(c, i, bin_dir);
-      std::fflush(stdout);
-      std::fflush(stderr);
-      started[i] = unix_now();
-      const pid_t pid = ::fork();
-      if (pid == 0) {
-        // A run does not outlive the campaign process that waits for it.
-        ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-        if (::getppid() != parent) ::_exit(kRunFailed);
-        fly_child(ro, f[0], f[2], f[1]);
-      }
-      if (pid < 0) throw std::runtime_error(std::string("rig sweep: fork failed: ") + std::strerror(errno));
-      running[pid] = i;
-      ++next;
-    }
-    int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, 0);
-    if (pid < 0) {
-      if (errno == EINTR) continue;
-      throw std::runtime_error(std::string("rig sweep: waitpid failed: ") + std::strerror(errno));
-    }
-    const auto it = running.find(pid);
-    if (it == running.end()) continue;
-    const std::size_t i = it->second;
-    running.erase(it);
+
+  // Each run in a worker of the pool; its result file written here as it finishes.
+  std::map<std::size_t, double> started;
+  std::size_t not_ok = 0;
+  PoolWork pool;
+  pool.work = [&](std::size_t k) {
+    const std::size_t i = todo[k];
+    const auto f = files(i);
+    return fly_run(run_options(c, i, bin_dir), f[0], f[2], f[1]);
+  };
+  pool.died = [](std::size_t, const std::string& how) { return how; };  // the run ended with its worker
+  pool.started = [&](std::size_t k) { started[todo[k]] = unix_now(); };
+  pool.finished = [&](std::size_t k, const std::string& how, std::size_t finished) {
+    const std::size_t i = todo[k];
     const auto f = files(i);
     Json r;
     r["index"] = i;
@@ -505,23 +519,20 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
       r["report"] = Json::parse(in);
       ok = r["report"].at("exit_code").get<int>() == kRunOk;
     } catch (const std::exception&) {
-      const std::string how = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
-                                                   : "exit code " + std::to_string(WEXITSTATUS(status));
       const std::string said = last_line(f[1]);
       r["report"] = nullptr;
       r["failure"] = "failed: the run ended without a report (" + how + ")" + (said.empty() ? "" : ": " + said);
     }
-    const double end = unix_now();
     r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
-                    {"started_unix_s", started[i]}, {"finished_unix_s", end}};
+                    {"started_unix_s", started[i]}, {"finished_unix_s", unix_now()}};
     write_file(c.run_file(i), r.dump() + "\n");
     std::error_code ec;
     fs::remove(f[0], ec);
     fs::remove(f[1], ec);
-    ++finished;
     if (!ok) ++not_ok;
     if (progress) progress(finished, not_ok);
-  }
+  };
+  run_in_workers(todo.size(), jobs, pool);
   std::error_code ec;
   fs::remove_all(work, ec);
 }

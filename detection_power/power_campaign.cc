@@ -11,7 +11,7 @@
 
 #include "detection_power/effect_size.h"
 #include "detection_power/record_length.h"
-#include "detection_power/worker_pool.h"
+#include "campaign/worker_pool.h"
 #include "transport/clock.h"
 
 namespace nimble::detection_power {
@@ -117,19 +117,19 @@ void fly_cells(const std::vector<CellPlan>& plans, std::vector<PowerCell>& cells
                  done, n, static_cast<double>(transport::monotonic_ns() - start) / 1e9);
     if (tty && done == n) std::fprintf(stderr, "\n");
   };
-  const auto lines = run_in_workers(
-      n, jobs,
-      [&](std::size_t item) {
-        const std::size_t c = item / static_cast<std::size_t>(flights), i = item % static_cast<std::size_t>(flights);
-        return encode(fly_and_check(plans[c].plan, flight_seed(campaign_seed, i), check));
-      },
-      [&](std::size_t item, const std::string& how) {
-        FlightOutcome o;
-        o.seed = flight_seed(campaign_seed, item % static_cast<std::size_t>(flights));
-        o.error = "the worker flying it died (" + how + ")";
-        return encode(o);
-      },
-      show);
+  campaign::PoolWork pool;
+  pool.work = [&](std::size_t item) {
+    const std::size_t c = item / static_cast<std::size_t>(flights), i = item % static_cast<std::size_t>(flights);
+    return encode(fly_and_check(plans[c].plan, flight_seed(campaign_seed, i), check));
+  };
+  pool.died = [&](std::size_t item, const std::string& how) {
+    FlightOutcome o;
+    o.seed = flight_seed(campaign_seed, item % static_cast<std::size_t>(flights));
+    o.error = "the worker flying it died (" + how + ")";
+    return encode(o);
+  };
+  pool.finished = [&](std::size_t, const std::string&, std::size_t done) { show(done); };
+  const auto lines = campaign::run_in_workers(n, jobs, pool);
   for (std::size_t item = 0; item < n; ++item) {
     cells[item / static_cast<std::size_t>(flights)].flights.push_back(decode(lines[item]));
   }

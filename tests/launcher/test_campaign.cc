@@ -4,9 +4,13 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <stdexcept>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -14,6 +18,7 @@
 #include "core/output_file.h"
 #include "campaign/campaign.h"
 #include "campaign/slurm.h"
+#include "campaign/worker_pool.h"
 #include "scenario/scenario.h"
 
 using namespace nimble::launcher;
@@ -151,4 +156,47 @@ TEST_CASE("campaign: the scenario's cluster section is checked like any other", 
   CHECK_THROWS_WITH(cluster({{"cluster.time_limit", "an hour"}}), Catch::Contains("time_limit") && Catch::Contains("MM:SS"));
   CHECK_THROWS_WITH(cluster({{"cluster.cpus_per_task", "0"}}), Catch::Contains("cpus_per_task"));
   CHECK_THROWS_WITH(cluster({{"cluster.partion", "short"}}), Catch::Contains("unknown key"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The one worker pool every campaign flies its runs in.
+
+TEST_CASE("worker pool: every item once, results by index, each reported as it finishes, a crash costs one item",
+          "[campaign][worker_pool]") {
+  const std::size_t n = 23;
+  std::vector<int> started(n, 0), finished(n, 0);
+  std::vector<std::size_t> done_seen;
+  PoolWork pool;
+  pool.work = [](std::size_t i) -> std::string {
+    if (i == 7) ::abort();                                   // the worker dies on item 7
+    if (i == 11) throw std::runtime_error("bad\nitem");      // an item that fails, in words
+    return "item " + std::to_string(i) + " in " + std::to_string(::getpid());
+  };
+  pool.died = [](std::size_t i, const std::string& how) { return "died on " + std::to_string(i) + ": " + how; };
+  pool.started = [&](std::size_t i) { ++started.at(i); };
+  pool.finished = [&](std::size_t i, const std::string& line, std::size_t done) {
+    ++finished.at(i);
+    done_seen.push_back(done);
+    CHECK(!line.empty());
+  };
+  const std::vector<std::string> results = run_in_workers(n, 3, pool);
+  REQUIRE(results.size() == n);
+  std::set<std::string> pids;
+  for (std::size_t i = 0; i < n; ++i) {
+    INFO("item " << i);
+    CHECK(started[i] == 1);
+    CHECK(finished[i] == 1);
+    if (i == 7) {
+      CHECK(results[i] == "died on 7: killed by signal 6");
+    } else if (i == 11) {
+      CHECK(results[i] == "error bad item");
+    } else {
+      REQUIRE(results[i].rfind("item " + std::to_string(i) + " in ", 0) == 0);
+      pids.insert(results[i].substr(results[i].rfind(' ') + 1));
+    }
+  }
+  // Forked once each, not per item: three workers and the one that replaced the dead one.
+  CHECK(pids.size() <= 4);
+  CHECK(pids.count(std::to_string(::getpid())) == 0);
+  for (std::size_t k = 0; k < done_seen.size(); ++k) CHECK(done_seen[k] == k + 1);
 }

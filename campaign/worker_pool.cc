@@ -1,6 +1,7 @@
-#include "detection_power/worker_pool.h"
+#include "campaign/worker_pool.h"
 
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,7 +12,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace nimble::detection_power {
+namespace nimble::campaign {
 namespace {
 
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
@@ -71,9 +72,13 @@ Worker spawn(std::vector<Worker>& all, const std::function<std::string(std::size
   if (::pipe(from) != 0) fail("pipe");
   std::fflush(stdout);
   std::fflush(stderr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) fail("fork");
   if (pid == 0) {
+    // A worker does not outlive the pool that feeds it.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(1);
     for (const Worker& w : all) {
       if (w.to_fd >= 0) ::close(w.to_fd);
       if (w.from_fd >= 0) ::close(w.from_fd);
@@ -107,9 +112,8 @@ void retire(Worker& w) {
 
 }  // namespace
 
-std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::function<std::string(std::size_t)>& work,
-                                        const std::function<std::string(std::size_t, const std::string&)>& died,
-                                        const std::function<void(std::size_t)>& progress) {
+std::vector<std::string> run_in_workers(std::size_t n, int jobs, const PoolWork& pool) {
+  const auto& work = pool.work;
   std::vector<std::string> results(n);
   if (n == 0) return results;
   struct sigaction ignore{}, old_pipe{};
@@ -126,6 +130,7 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
     }
     const std::uint64_t index = next;
     w.item = next++;
+    if (pool.started) pool.started(w.item);
     write_all(w.to_fd, &index, sizeof index);  // a worker that died is seen as end of file below
   };
   const std::size_t count = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(1, jobs)));
@@ -156,11 +161,12 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
         w.buffer.append(chunk, static_cast<std::size_t>(k));
         const std::size_t eol = w.buffer.find('\n');
         if (eol == std::string::npos) continue;
-        results[w.item] = w.buffer.substr(0, eol);
+        const std::size_t item = w.item;
+        results[item] = w.buffer.substr(0, eol);
         w.buffer.erase(0, eol + 1);
         w.item = kNone;
         ++done;
-        if (progress) progress(done);
+        if (pool.finished) pool.finished(item, results[item], done);
         dispatch(w);
         continue;
       }
@@ -168,10 +174,10 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
       const std::size_t item = w.item;
       retire(w);
       w.item = kNone;
-      results[item] = died(item, how_it_ended(w.pid));
+      results[item] = pool.died(item, how_it_ended(w.pid));
       w.pid = -1;
       ++done;
-      if (progress) progress(done);
+      if (pool.finished) pool.finished(item, results[item], done);
       if (next < n) {
         workers.push_back(spawn(workers, work));
         dispatch(workers.back());
@@ -186,4 +192,4 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const std::func
   return results;
 }
 
-}  // namespace nimble::detection_power
+}  // namespace nimble::campaign
