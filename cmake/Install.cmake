@@ -3,8 +3,9 @@
 #   bin/                          rig and the rig's processes (rig finds them next to itself)
 #   lib/                          the libraries for reuse (static): nimble_core, nimble_contract,
 #                                 nimble_messages, nimble_ident, nimble_ident_lcm, nimble_estimation
-#   include/nimble_rig/           their headers (core/, contract/, ident/, estimator/) and the generated
-#                                 LCM types (nimble/<type>.hpp)
+#   include/nimble_rig/           their headers (core/, contract/, ident/, estimator/), the generated
+#                                 LCM types (nimble/<type>.hpp) and their list (nimble/rig_message_list.hpp,
+#                                 which contract/messages.h and contract/faults.cc include)
 #   lib/cmake/nimble_rig/         find_package(nimble_rig): nimble_rig::lcmtypes, ::core,
 #                                 ::contract, ::messages, ::ident, ::ident_lcm, ::estimation
 #   lib/pkgconfig/nimble_rig.pc   the same for pkg-config
@@ -44,6 +45,7 @@ foreach(dir core contract ident estimator)
 endforeach()
 install(DIRECTORY "${PROJECT_BINARY_DIR}/lcmtypes/nimble_lcmtypes_cpp/nimble"
         DESTINATION "${NIMBLE_INSTALL_INCLUDEDIR}")
+install(FILES "${RIG_MESSAGE_LIST_DIR}/nimble/rig_message_list.hpp" DESTINATION "${NIMBLE_INSTALL_INCLUDEDIR}/nimble")
 
 configure_package_config_file("${PROJECT_SOURCE_DIR}/cmake/nimble_rigConfig.cmake.in"
   "${PROJECT_BINARY_DIR}/nimble_rigConfig.cmake" INSTALL_DESTINATION "${NIMBLE_INSTALL_CMAKEDIR}")

@@ -48,6 +48,11 @@ const std::vector<ChannelSpec>& channel_table() {
   return table;
 }
 
+const std::vector<std::string>& types_without_channel() {
+  static const std::vector<std::string> types = {};
+  return types;
+}
+
 const ChannelSpec* find_channel(const std::string& name) {
   for (const auto& c : channel_table()) {
     if (c.name == name) return &c;

@@ -48,6 +48,11 @@ struct ChannelSpec {
 /// Every channel of the rig, in the order of lcmtypes/README.md.
 const std::vector<ChannelSpec>& channel_table();
 
+/// The message types of lcmtypes/ that no channel carries, declared so: every other type has a
+/// row in channel_table(), and functional.message_list fails for a type that has neither. None
+/// today.
+const std::vector<std::string>& types_without_channel();
+
 /// The channel called `name`, or nullptr.
 const ChannelSpec* find_channel(const std::string& name);
 

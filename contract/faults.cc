@@ -1,26 +1,60 @@
 #include "contract/faults.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
+#include <iterator>
+
+#include <nimble/rig_message_list.hpp>
 
 #include "contract/channels.h"
 
 namespace nimble::contract {
 namespace {
 
-void add(ValueFields& out, const std::string& name, double* values, int n) {
-  for (int i = 0; i < n; ++i) out.emplace_back(name + "[" + std::to_string(i) + "]", values + i);
-}
-void add(ValueFields& out, const std::string& name, double* value) { out.emplace_back(name, value); }
+/// The double fields that are not values a fault may change: statistics of the estimate (its
+/// covariance, the last innovation's NIS), which no sensor or link fault would alter on its own.
+/// Every other double field of a message is a value field.
+constexpr std::pair<const char*, const char*> kNotValueFields[] = {
+    {"estimator_state_t", "cov_diag"},
+    {"estimator_state_t", "last_nis"},
+};
 
-template <typename T>
-std::vector<std::string> names_of() {
-  T m{};
-  std::vector<std::string> out;
-  for (const auto& f : value_fields(m)) out.push_back(f.first);
-  return out;
+bool is_value_field(const char* type, const char* field) {
+  return std::none_of(std::begin(kNotValueFields), std::end(kNotValueFields), [&](const auto& excluded) {
+    return std::strcmp(excluded.first, type) == 0 && std::strcmp(excluded.second, field) == 0;
+  });
 }
+
+/// Collects the value fields of a message of type `type` from its field visitor.
+struct ValueFieldCollector {
+  const char* type;
+  ValueFields& out;
+
+  void operator()(const char* name, double& value) const {
+    if (is_value_field(type, name)) out.emplace_back(name, &value);
+  }
+  template <std::size_t N>
+  void operator()(const char* name, double (&values)[N]) const {
+    if (!is_value_field(type, name)) return;
+    for (std::size_t i = 0; i < N; ++i) out.emplace_back(std::string(name) + "[" + std::to_string(i) + "]", &values[i]);
+  }
+  /// Not a double or a fixed array of them: utime, seq, counters, flags, strings, variable-length arrays.
+  template <class Other>
+  void operator()(const char*, Other&) const {}
+};
 
 }  // namespace
+
+template <class Message>
+ValueFields value_fields(Message& m) {
+  ValueFields out;
+  for_each_field(m, ValueFieldCollector{Message::getTypeName(), out});
+  return out;
+}
+#define NIMBLE_VALUE_FIELDS_OF(T) template ValueFields value_fields<T>(T&);
+NIMBLE_RIG_MESSAGES(NIMBLE_VALUE_FIELDS_OF)
+#undef NIMBLE_VALUE_FIELDS_OF
 
 const std::vector<FaultKindInfo>& fault_kinds() {
   static const std::vector<FaultKindInfo> kinds = {
@@ -91,62 +125,16 @@ std::string FaultSpec::describe() const {
   return "fault " + std::to_string(index) + " (" + what + param + ", " + window + ")";
 }
 
-ValueFields value_fields(imu_sample_t& m) {
-  ValueFields out;
-  add(out, "gyro_radps", m.gyro_radps, 3);
-  add(out, "accel_mps2", m.accel_mps2, 3);
-  add(out, "temperature_degc", &m.temperature_degc);
-  return out;
-}
-
-ValueFields value_fields(mocap_pose_t& m) {
-  ValueFields out;
-  add(out, "position_m", m.position_m, 3);
-  add(out, "quaternion_wxyz", m.quaternion_wxyz, 4);
-  add(out, "mean_marker_error_m", &m.mean_marker_error_m);
-  return out;
-}
-
-ValueFields value_fields(estimator_state_t& m) {
-  ValueFields out;
-  add(out, "euler_rad", m.euler_rad, 3);
-  add(out, "velocity_body_mps", m.velocity_body_mps, 3);
-  add(out, "gyro_bias_radps", m.gyro_bias_radps, 3);
-  add(out, "accel_bias_mps2", m.accel_bias_mps2, 3);
-  add(out, "omega_body_radps", m.omega_body_radps, 3);
-  return out;
-}
-
-ValueFields value_fields(actuator_command_t& m) {
-  ValueFields out;
-  add(out, "flap_freq_left_radps", &m.flap_freq_left_radps);
-  add(out, "flap_freq_right_radps", &m.flap_freq_right_radps);
-  add(out, "delta_f_radps", &m.delta_f_radps);
-  add(out, "flap_freq_collective_radps", &m.flap_freq_collective_radps);
-  add(out, "throttle_pct", &m.throttle_pct);
-  add(out, "dihedral_rad", &m.dihedral_rad);
-  add(out, "wing_root_rad", &m.wing_root_rad);
-  return out;
-}
-
-ValueFields value_fields(actuator_feedback_t& m) {
-  ValueFields out;
-  add(out, "flap_freq_left_radps", &m.flap_freq_left_radps);
-  add(out, "flap_freq_right_radps", &m.flap_freq_right_radps);
-  add(out, "delta_f_radps", &m.delta_f_radps);
-  add(out, "dihedral_rad", &m.dihedral_rad);
-  add(out, "wing_root_rad", &m.wing_root_rad);
-  add(out, "throttle_pct", &m.throttle_pct);
-  return out;
-}
-
 std::vector<std::string> value_field_names(const std::string& channel) {
-  if (channel == channels::kImu) return names_of<imu_sample_t>();
-  if (channel == channels::kMocapPose) return names_of<mocap_pose_t>();
-  if (channel == channels::kEstimate) return names_of<estimator_state_t>();
-  if (channel == channels::kActuatorCommand) return names_of<actuator_command_t>();
-  if (channel == channels::kActuatorFeedback) return names_of<actuator_feedback_t>();
-  return {};
+  const std::vector<std::string>& targets = fault_channel_targets();
+  const ChannelSpec* spec = find_channel(channel);
+  std::vector<std::string> out;
+  if (spec == nullptr || std::find(targets.begin(), targets.end(), channel) == targets.end()) return out;
+  with_message_type(spec->type, [&out](auto type) {
+    typename decltype(type)::type m{};
+    for (const auto& f : value_fields(m)) out.push_back(f.first);
+  });
+  return out;
 }
 
 bool field_selected(const std::string& selector, const std::string& name) {

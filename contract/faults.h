@@ -13,12 +13,6 @@
 #include <utility>
 #include <vector>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-
 namespace nimble::contract {
 
 /// What a fault does to its target's messages while it is active.
@@ -93,11 +87,12 @@ std::string fault_code_name(int32_t code);
 /// The value fields of a message that faults may change (wrong, garbage nan): physical
 /// quantities only, never utime, seq, counters or flags. Name and address of each element.
 using ValueFields = std::vector<std::pair<std::string, double*>>;
-ValueFields value_fields(imu_sample_t& m);
-ValueFields value_fields(mocap_pose_t& m);
-ValueFields value_fields(estimator_state_t& m);
-ValueFields value_fields(actuator_command_t& m);
-ValueFields value_fields(actuator_feedback_t& m);
+/// Every double field of message `m` (a scalar, or each element of a fixed-size array, in .lcm
+/// order, from the generated list nimble/rig_message_list.hpp), except the few that are
+/// statistics of a value rather than a value (faults.cc lists them: the estimate's cov_diag and
+/// last_nis). Defined in faults.cc for every message type.
+template <class Message>
+ValueFields value_fields(Message& m);
 
 /// The value field names of the message on `channel` (a fault target), e.g. "gyro_radps[0]".
 std::vector<std::string> value_field_names(const std::string& channel);

@@ -8,21 +8,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/can_health_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/step_ack_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
+#include <nimble/rig_message_list.hpp>
 
 #include "contract/decode.h"
 
@@ -95,11 +81,9 @@ void write_file(const std::string& path, const uint8_t* data, std::size_t size) 
 
 const std::vector<LcmType>& lcm_types() {
   static const std::vector<LcmType> types = {
-      make_type<actuator_command_t>(),  make_type<actuator_feedback_t>(), make_type<attitude_setpoint_t>(),
-      make_type<can_health_t>(),        make_type<controller_status_t>(), make_type<estimator_state_t>(),
-      make_type<fault_event_t>(),       make_type<heartbeat_t>(),         make_type<imu_sample_t>(),
-      make_type<mocap_pose_t>(),        make_type<rig_clock_t>(),         make_type<run_control_t>(),
-      make_type<step_ack_t>(),          make_type<timing_health_t>(),     make_type<truth_state_t>(),
+#define NIMBLE_FUZZ_TYPE(T) make_type<T>(),
+      NIMBLE_RIG_MESSAGES(NIMBLE_FUZZ_TYPE)
+#undef NIMBLE_FUZZ_TYPE
   };
   return types;
 }

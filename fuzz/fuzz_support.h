@@ -38,7 +38,7 @@ struct LcmType {
   /// if the re-encoded size is not the input's or the second encoding differs from the first.
   std::function<void(const uint8_t*, int)> check_round_trip;
 };
-/// Every type of lcmtypes/, in file order.
+/// Every type of lcmtypes/, in file order (the generated list, nimble/rig_message_list.hpp).
 const std::vector<LcmType>& lcm_types();
 /// The type called `name`, or nullptr.
 const LcmType* find_lcm_type(const std::string& name);

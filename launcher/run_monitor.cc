@@ -9,8 +9,7 @@
 
 #include <nimble/fault_event_t.hpp>
 #include <nimble/heartbeat_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/run_control_t.hpp>
+#include <nimble/rig_message_list.hpp>
 #include <nimble/step_ack_t.hpp>
 #include <nimble/timing_health_t.hpp>
 
@@ -49,18 +48,15 @@ std::optional<Message> decoded(const void* data, int size, bool own_encoding) {
   return m;
 }
 
-/// The stream message on `channel`, or nothing if the bytes are not exactly its type.
+/// The stream message on `channel`, or nothing if the bytes are not exactly its channel's type
+/// (contract/channels.h). The channels the summary reads are decoded to their values; any other
+/// channel of the contract to its header, whatever its type (the generated list of types).
 std::optional<StreamMessage> decode_stream(const std::string& channel, const void* data, int size, bool own_encoding) {
   StreamMessage s;
   const auto header = [&s](const auto& m) {
     s.utime = m.utime;
     s.seq = m.seq;
     return std::optional<StreamMessage>(s);
-  };
-  const auto plain = [&](auto type) -> std::optional<StreamMessage> {
-    const auto m = decoded<decltype(type)>(data, size, own_encoding);
-    if (!m) return std::nullopt;
-    return header(*m);
   };
   if (channel == kTruth) {
     const auto m = decoded<truth_state_t>(data, size, own_encoding);
@@ -80,19 +76,19 @@ std::optional<StreamMessage> decode_stream(const std::string& channel, const voi
     s.latency_us = contract::from_message(*m).latency_us;
     return header(*m);
   }
-  if (channel == kImu) return plain(imu_sample_t{});
-  if (channel == kActuatorCommand || channel == kActuatorCommandCan) return plain(actuator_command_t{});
-  if (channel == kActuatorFeedback || channel == kActuatorFeedbackCan) return plain(actuator_feedback_t{});
-  if (channel == kAttitudeSetpoint) return plain(attitude_setpoint_t{});
   if (channel == kControllerStatus) {
     const auto m = decoded<controller_status_t>(data, size, own_encoding);
     if (!m) return std::nullopt;
     s.status = contract::from_message(*m);
     return header(*m);
   }
-  if (channel == kRigClock) return plain(rig_clock_t{});
-  if (channel == kRunControl) return plain(run_control_t{});
-  return std::nullopt;  // not a stream channel of the contract
+  const contract::ChannelSpec* spec = contract::find_channel(channel);
+  if (spec == nullptr) return std::nullopt;  // not a channel of the contract
+  std::optional<StreamMessage> out;
+  with_message_type(spec->type, [&](auto type) {
+    if (const auto m = decoded<typename decltype(type)::type>(data, size, own_encoding)) out = header(*m);
+  });
+  return out;
 }
 
 }  // namespace

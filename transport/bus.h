@@ -52,10 +52,6 @@ struct ChannelStats {
 
 namespace detail {
 template <typename T, typename = void>
-struct has_value_fields : std::false_type {};
-template <typename T>
-struct has_value_fields<T, std::void_t<decltype(contract::value_fields(std::declval<T&>()))>> : std::true_type {};
-template <typename T, typename = void>
 struct has_latency_us : std::false_type {};
 template <typename T>
 struct has_latency_us<T, std::void_t<decltype(std::declval<T>().latency_us)>> : std::true_type {};
@@ -86,11 +82,9 @@ class Bus {
   /// On a channel the scenario faults, the message goes through the fault injector.
   template <typename T>
   void publish(const std::string& channel, const T& msg) {
-    if constexpr (detail::has_value_fields<T>::value) {
-      if (injector_ != nullptr && injector_->targets(channel)) {
-        publish_faulted(channel, msg);
-        return;
-      }
+    if (injector_ != nullptr && injector_->targets(channel)) {
+      publish_faulted(channel, msg);
+      return;
     }
     publish_now(channel, msg);
   }

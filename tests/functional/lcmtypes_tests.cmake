@@ -46,3 +46,12 @@ rig_discover_tests(test_run_monitor PREFIX "functional.monitor." LABELS function
 add_executable(test_messages ${CMAKE_CURRENT_LIST_DIR}/test_messages.cc)
 target_link_libraries(test_messages PRIVATE rig_catch_main nimble_messages)
 rig_discover_tests(test_messages PREFIX "functional.messages." LABELS functional)
+
+# The one list of message types (nimble/rig_message_list.hpp): every .lcm file in it, in the
+# viewers' types and in the fuzz targets' (fuzz/fuzz_support.cc, built here without libFuzzer);
+# every channel's type listed, every type on a channel, every periodic channel with its rate.
+add_executable(test_message_list ${CMAKE_CURRENT_LIST_DIR}/test_message_list.cc ${PROJECT_SOURCE_DIR}/fuzz/fuzz_support.cc)
+target_link_libraries(test_message_list PRIVATE rig_catch_main nimble_lcmjson nimble_contract nimble_lcmtypes)
+target_include_directories(test_message_list PRIVATE ${PROJECT_SOURCE_DIR})
+target_compile_definitions(test_message_list PRIVATE RIG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+rig_discover_tests(test_message_list PREFIX "functional.message_list." LABELS functional)

@@ -4,29 +4,17 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <catch2/catch.hpp>
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/can_health_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/step_ack_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
+#include <nimble/rig_message_list.hpp>
 
 #include "contract/channels.h"
+#include "contract/faults.h"
 #include "contract/rates.h"
 
 using namespace nimble;
@@ -35,9 +23,25 @@ using namespace nimble::contract::channels;
 
 namespace {
 
-template <typename... T>
+/// Every type of lcmtypes/ (the generated list).
 std::set<std::string> type_names() {
-  return {T::getTypeName()...};
+  std::set<std::string> names;
+  for_each_message_type([&names](auto type) { names.insert(decltype(type)::type::getTypeName()); });
+  return names;
+}
+
+/// The values of the channel name constants of contract/channels.h (`inline const std::string
+/// kName = "NAME";`), read from the header as tests/meta/check_house_rules.py reads them.
+std::set<std::string> channel_constants() {
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/contract/channels.h");
+  REQUIRE(in.good());
+  const std::regex constant(R"re(inline const std::string k\w+ = "([A-Z_]+)";)re");
+  std::set<std::string> names;
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (std::regex_search(line, m, constant)) names.insert(m[1]);
+  }
+  return names;
 }
 
 /// The rows of the table under `## Channels` in lcmtypes/README.md (without header and rule).
@@ -65,15 +69,9 @@ std::vector<std::string> readme_channel_rows() {
 }  // namespace
 
 TEST_CASE("the channel table names every channel once, with a generated LCM type", "[contract]") {
-  const std::set<std::string> types =
-      type_names<truth_state_t, imu_sample_t, mocap_pose_t, attitude_setpoint_t, estimator_state_t, actuator_command_t,
-                 actuator_feedback_t, can_health_t, controller_status_t, rig_clock_t, step_ack_t, run_control_t,
-                 heartbeat_t, timing_health_t, fault_event_t>();
-  const std::set<std::string> constants = {kTruth,       kImu,           kMocapPose,          kAttitudeSetpoint,
-                                           kEstimate,    kActuatorCommand, kActuatorFeedback, kActuatorCommandCan,
-                                           kActuatorFeedbackCan, kCanHealth, kControllerStatus, kRigClock,
-                                           kStepAck,     kRunControl,    kHeartbeat,          kTimingHealth,
-                                           kFault};
+  const std::set<std::string> types = type_names();
+  const std::set<std::string> constants = channel_constants();
+  REQUIRE(constants.size() >= 17);
   std::set<std::string> names;
   for (const ChannelSpec& c : channel_table()) {
     INFO(c.name);
@@ -155,7 +153,19 @@ TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
         {kTruth, 500.0},           {kImu, 512.0},         {kActuatorCommand, 512.0}, {kAttitudeSetpoint, 512.0},
         {kControllerStatus, 512.0}, {kEstimate, 512.0},   {kActuatorFeedback, 100.0}, {kHeartbeat, 6.0},
         {kTimingHealth, 3.0}};
-    CHECK(expected_rates(r, RunShape{false, 10.0, 3}) == expected);
+    const auto hz = expected_rates(r, RunShape{false, 10.0, 3});
+    for (const auto& [channel, rate] : expected) {
+      INFO(channel);
+      const auto it = hz.find(channel);
+      REQUIRE(it != hz.end());
+      CHECK(it->second == rate);
+    }
+    // Nothing of the processes and links this run has not (every other periodic channel has a
+    // rate in a run with all of them: functional.message_list).
+    for (const auto& channel : {kMocapPose, kActuatorCommandCan, kActuatorFeedbackCan, kCanHealth, kRigClock, kStepAck}) {
+      INFO(channel);
+      CHECK(hz.count(channel) == 0);
+    }
   }
   SECTION("lockstep over the CAN link") {
     r.estimator_hz = 0.0;
@@ -170,4 +180,39 @@ TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
     CHECK(hz.at(kRigClock) >= 512);
     CHECK(hz.at(kRigClock) <= 612);
   }
+}
+
+TEST_CASE("the value fields a fault may change, per target channel", "[contract]") {
+  // Every double field of the channel's type, in .lcm order, but the estimate's statistics.
+  const auto elements = [](const std::string& name, int n) {
+    std::vector<std::string> out;
+    for (int i = 0; i < n; ++i) out.push_back(name + "[" + std::to_string(i) + "]");
+    return out;
+  };
+  const auto join = [](std::vector<std::vector<std::string>> parts) {
+    std::vector<std::string> out;
+    for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+    return out;
+  };
+  CHECK(value_field_names(kImu) ==
+        join({elements("gyro_radps", 3), elements("accel_mps2", 3), {"temperature_degc"}}));
+  CHECK(value_field_names(kMocapPose) ==
+        join({elements("position_m", 3), elements("quaternion_wxyz", 4), {"mean_marker_error_m"}}));
+  CHECK(value_field_names(kEstimate) == join({elements("euler_rad", 3), elements("velocity_body_mps", 3),
+                                              elements("gyro_bias_radps", 3), elements("accel_bias_mps2", 3),
+                                              elements("omega_body_radps", 3)}));
+  CHECK(value_field_names(kActuatorCommand) ==
+        std::vector<std::string>{"flap_freq_left_radps", "flap_freq_right_radps", "delta_f_radps",
+                                 "flap_freq_collective_radps", "throttle_pct", "dihedral_rad", "wing_root_rad"});
+  CHECK(value_field_names(kActuatorFeedback) ==
+        std::vector<std::string>{"flap_freq_left_radps", "flap_freq_right_radps", "delta_f_radps", "dihedral_rad",
+                                 "wing_root_rad", "throttle_pct"});
+  // Not a fault target: no value fields to change.
+  CHECK(value_field_names(kTruth).empty());
+  // The addresses are the message's own fields.
+  imu_sample_t m{};
+  const ValueFields fields = value_fields(m);
+  REQUIRE(fields.size() == 7);
+  CHECK(fields[0].second == &m.gyro_radps[0]);
+  CHECK(fields[6].second == &m.temperature_degc);
 }

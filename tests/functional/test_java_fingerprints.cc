@@ -10,48 +10,14 @@
 
 #include <catch2/catch.hpp>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/can_health_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/step_ack_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
-
-namespace {
-
-template <typename T>
-void add(std::map<std::string, uint64_t>& m) {
-  m[std::string("nimble.") + T::getTypeName()] = static_cast<uint64_t>(T::getHash());
-}
-
-}  // namespace
+#include <nimble/rig_message_list.hpp>
 
 TEST_CASE("Java and C++ fingerprints agree for every type", "[lcmtypes][java]") {
   std::map<std::string, uint64_t> cpp;
-  add<nimble::actuator_command_t>(cpp);
-  add<nimble::actuator_feedback_t>(cpp);
-  add<nimble::attitude_setpoint_t>(cpp);
-  add<nimble::can_health_t>(cpp);
-  add<nimble::controller_status_t>(cpp);
-  add<nimble::estimator_state_t>(cpp);
-  add<nimble::fault_event_t>(cpp);
-  add<nimble::heartbeat_t>(cpp);
-  add<nimble::imu_sample_t>(cpp);
-  add<nimble::mocap_pose_t>(cpp);
-  add<nimble::rig_clock_t>(cpp);
-  add<nimble::run_control_t>(cpp);
-  add<nimble::step_ack_t>(cpp);
-  add<nimble::timing_health_t>(cpp);
-  add<nimble::truth_state_t>(cpp);
+  nimble::for_each_message_type([&cpp](auto type) {
+    using T = typename decltype(type)::type;
+    cpp[std::string("nimble.") + T::getTypeName()] = static_cast<uint64_t>(T::getHash());
+  });
 
   std::string cmd = std::string(JAVA_EXE) + " -cp " + FINGERPRINT_CLASSES + ":" + TYPES_JAR + ":" + LCM_JAR +
                     " PrintFingerprints";

@@ -5,21 +5,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/can_health_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/step_ack_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
+#include <nimble/rig_message_list.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -38,22 +24,15 @@ namespace {
 
 using namespace rig_test;
 
-// Rig channel of each type (lcmtypes/README.md).
-const std::string& channel_of(const nimble::truth_state_t*) { return kTruth; }
-const std::string& channel_of(const nimble::imu_sample_t*) { return kImu; }
-const std::string& channel_of(const nimble::mocap_pose_t*) { return kMocapPose; }
-const std::string& channel_of(const nimble::actuator_command_t*) { return kActuatorCommand; }
-const std::string& channel_of(const nimble::actuator_feedback_t*) { return kActuatorFeedback; }
-const std::string& channel_of(const nimble::attitude_setpoint_t*) { return kAttitudeSetpoint; }
-const std::string& channel_of(const nimble::estimator_state_t*) { return kEstimate; }
-const std::string& channel_of(const nimble::controller_status_t*) { return kControllerStatus; }
-const std::string& channel_of(const nimble::rig_clock_t*) { return kRigClock; }
-const std::string& channel_of(const nimble::step_ack_t*) { return kStepAck; }
-const std::string& channel_of(const nimble::run_control_t*) { return kRunControl; }
-const std::string& channel_of(const nimble::heartbeat_t*) { return kHeartbeat; }
-const std::string& channel_of(const nimble::timing_health_t*) { return kTimingHealth; }
-const std::string& channel_of(const nimble::fault_event_t*) { return kFault; }
-const std::string& channel_of(const nimble::can_health_t*) { return kCanHealth; }
+// The first channel of the contract (contract/channels.h) that carries type T.
+template <typename T>
+std::string channel_of() {
+  for (const auto& c : nimble::contract::channel_table()) {
+    if (c.type == T::getTypeName()) return c.name;
+  }
+  FAIL("no channel carries " << T::getTypeName());
+  return "";
+}
 
 template <typename T>
 T make_sample() {
@@ -89,12 +68,8 @@ class Receiver {
 
 }  // namespace
 
-#define RIG_LCM_TYPES                                                                       \
-  nimble::truth_state_t, nimble::imu_sample_t, nimble::mocap_pose_t,                        \
-      nimble::actuator_command_t, nimble::actuator_feedback_t, nimble::attitude_setpoint_t, \
-      nimble::estimator_state_t, nimble::controller_status_t, nimble::rig_clock_t,          \
-      nimble::step_ack_t, nimble::run_control_t, nimble::heartbeat_t, nimble::timing_health_t, \
-      nimble::fault_event_t, nimble::can_health_t
+// Every type of lcmtypes/ (the generated list, nimble/rig_message_list.hpp).
+#define RIG_LCM_TYPES NIMBLE_RIG_MESSAGE_TYPES
 
 TEMPLATE_TEST_CASE("encode and decode preserve every field", "[lcmtypes]", RIG_LCM_TYPES) {
   const TestType in = make_sample<TestType>();
@@ -153,7 +128,7 @@ TEMPLATE_TEST_CASE("publish and receive over memq://", "[lcmtypes][memq]", RIG_L
   lcm::LCM lcm("memq://");
   REQUIRE(lcm.good());
 
-  const std::string channel = channel_of(static_cast<const TestType*>(nullptr));
+  const std::string channel = channel_of<TestType>();
   Receiver<TestType> receiver;
   lcm::Subscription* sub = lcm.subscribe(channel, &Receiver<TestType>::on_message, &receiver);
   REQUIRE(sub != nullptr);
@@ -296,16 +271,10 @@ TEST_CASE("decode_exact refuses a string the encoder cannot write back", "[lcmty
 }
 
 TEST_CASE("every type has its own fingerprint", "[lcmtypes]") {
-  const std::vector<int64_t> hashes = {
-      nimble::truth_state_t::getHash(),      nimble::imu_sample_t::getHash(),
-      nimble::mocap_pose_t::getHash(),       nimble::actuator_command_t::getHash(),
-      nimble::actuator_feedback_t::getHash(), nimble::attitude_setpoint_t::getHash(),
-      nimble::estimator_state_t::getHash(),  nimble::controller_status_t::getHash(),
-      nimble::rig_clock_t::getHash(),        nimble::step_ack_t::getHash(),
-      nimble::run_control_t::getHash(),
-      nimble::heartbeat_t::getHash(),        nimble::timing_health_t::getHash(),
-      nimble::fault_event_t::getHash(),      nimble::can_health_t::getHash()};
+  std::vector<int64_t> hashes;
+  nimble::for_each_message_type([&hashes](auto type) { hashes.push_back(decltype(type)::type::getHash()); });
   const std::set<int64_t> unique(hashes.begin(), hashes.end());
+  REQUIRE(hashes.size() == static_cast<std::size_t>(nimble::kRigMessageCount));
   REQUIRE(unique.size() == hashes.size());
 }
 

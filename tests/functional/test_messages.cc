@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -145,29 +147,52 @@ TEST_CASE("messages: an actuator command gives the plant every field it reads", 
   CHECK(c.wing_root_rad == 0.0625);
 }
 
-// Every stream message, each field distinct: message -> value -> message gives the same message,
-// field by field. A field the conversion leaves out comes back as its default and is named.
+namespace {
+
+// True if message type M has a value (contract/messages.h declares its from_message).
+template <typename M, typename = void>
+struct has_value : std::false_type {};
+template <typename M>
+struct has_value<M, std::void_t<decltype(contract::from_message(std::declval<const M&>()))>> : std::true_type {};
+
+// True if value type V converts to its message alone (the header is in the value).
+template <typename V, typename = void>
+struct header_in_value : std::false_type {};
+template <typename V>
+struct header_in_value<V, std::void_t<decltype(contract::to_message(std::declval<const V&>()))>> : std::true_type {};
+
+// The message of the value of `m`: to_message(value), or to_message(value, utime, seq, step)
+// where the header is not in the value (the truth).
+template <typename M, typename V>
+M message_again(const V& value, const M& m) {
+  if constexpr (header_in_value<V>::value) {
+    return contract::to_message(value);
+  } else {
+    return contract::to_message(value, m.utime, m.seq, m.step);
+  }
+}
+
+}  // namespace
+
+// Every message with a value (the generated list of types, contract/messages.h's pairs), each
+// field distinct: message -> value -> message gives the same message, field by field. A field the
+// conversion leaves out comes back as its default and is named.
 TEST_CASE("messages: every stream message goes to its value and back with every field", "[contract]") {
   rig_test::Distinct g;
-  const auto back_and_forth = [&g](auto message) {
-    rig_test::fill(message, g);
-    rig_test::require_equal(message, contract::to_message(contract::from_message(message)));
-  };
-  back_and_forth(imu_sample_t{});
-  back_and_forth(actuator_command_t{});
-  back_and_forth(actuator_feedback_t{});
-  back_and_forth(attitude_setpoint_t{});
-  back_and_forth(estimator_state_t{});
-  back_and_forth(controller_status_t{});
-  back_and_forth(can_health_t{});
-  back_and_forth(fault_event_t{});
-  truth_state_t t{};
-  rig_test::fill(t, g);
-  rig_test::require_equal(t, contract::to_message(contract::from_message(t), t.utime, t.seq, t.step));
+  std::vector<std::string> with_value;
+  nimble::for_each_message_type([&](auto type) {
+    using M = typename decltype(type)::type;
+    if constexpr (has_value<M>::value) {
+      INFO(M::getTypeName());
+      with_value.push_back(M::getTypeName());
+      M message{};
+      rig_test::fill(message, g);
+      rig_test::require_equal(message, message_again(contract::from_message(message), message));
+    }
+  });
+  CHECK(with_value.size() >= 10);  // the values of core/rig_values.h today, each with its message
   // The pose's message time is its exposure (utime); the value adds when it is published.
   mocap_pose_t p{};
   rig_test::fill(p, g);
-  const MocapPose pose = contract::from_message(p);
-  CHECK(pose.publish_utime == p.utime + p.latency_us);
-  rig_test::require_equal(p, contract::to_message(pose));
+  CHECK(contract::from_message(p).publish_utime == p.utime + p.latency_us);
 }

@@ -12,6 +12,7 @@ PREFIX="$WORK/prefix"
 
 cmake --install "$BUILD" --prefix "$PREFIX" > "$WORK/install.log"
 for f in bin/rig bin/nimble_plant lib/libnimble_ident.a include/nimble_rig/nimble/truth_state_t.hpp \
+         include/nimble_rig/nimble/rig_message_list.hpp \
          include/nimble_rig/ident/identify.h lib/cmake/nimble_rig/nimble_rigConfig.cmake \
          lib/pkgconfig/nimble_rig.pc share/java/nimble_lcmtypes.jar share/nimble_rig/nimble_rig.dbc \
          share/nimble_rig/lcmtypes/truth_state_t.lcm share/nimble_rig/rig_configs/hover.yaml \

@@ -11,21 +11,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/can_health_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/rig_clock_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/step_ack_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
+#include <nimble/rig_message_list.hpp>
 
 #include "contract/channels.h"
 #include "contract/decode.h"
@@ -157,22 +143,8 @@ void check_against_generated(std::mt19937_64& rng) {
 TEST_CASE("lcmjson: every rig type parsed from its .lcm file has lcm-gen's fingerprint, and its JSON encodes back to the same bytes",
           "[lcmjson]") {
   std::mt19937_64 rng(7);
-  CHECK(nimble::lcmjson::rig_types().size() == 15);
-  check_against_generated<nimble::actuator_command_t>(rng);
-  check_against_generated<nimble::actuator_feedback_t>(rng);
-  check_against_generated<nimble::attitude_setpoint_t>(rng);
-  check_against_generated<nimble::can_health_t>(rng);
-  check_against_generated<nimble::controller_status_t>(rng);
-  check_against_generated<nimble::estimator_state_t>(rng);
-  check_against_generated<nimble::fault_event_t>(rng);
-  check_against_generated<nimble::heartbeat_t>(rng);
-  check_against_generated<nimble::imu_sample_t>(rng);
-  check_against_generated<nimble::mocap_pose_t>(rng);
-  check_against_generated<nimble::rig_clock_t>(rng);
-  check_against_generated<nimble::run_control_t>(rng);
-  check_against_generated<nimble::step_ack_t>(rng);
-  check_against_generated<nimble::timing_health_t>(rng);
-  check_against_generated<nimble::truth_state_t>(rng);
+  CHECK(nimble::lcmjson::rig_types().size() == static_cast<std::size_t>(nimble::kRigMessageCount));
+  nimble::for_each_message_type([&rng](auto type) { check_against_generated<typename decltype(type)::type>(rng); });
 }
 
 TEST_CASE("lcmjson: a truth message's JSON holds its values, NaN as null, and its rig time", "[lcmjson]") {

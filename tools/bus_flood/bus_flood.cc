@@ -22,18 +22,7 @@
 #include <vector>
 
 #include <lcm/lcm.h>
-#include <nimble/actuator_command_t.hpp>
-#include <nimble/actuator_feedback_t.hpp>
-#include <nimble/attitude_setpoint_t.hpp>
-#include <nimble/controller_status_t.hpp>
-#include <nimble/estimator_state_t.hpp>
-#include <nimble/fault_event_t.hpp>
-#include <nimble/heartbeat_t.hpp>
-#include <nimble/imu_sample_t.hpp>
-#include <nimble/mocap_pose_t.hpp>
-#include <nimble/run_control_t.hpp>
-#include <nimble/timing_health_t.hpp>
-#include <nimble/truth_state_t.hpp>
+#include <nimble/rig_message_list.hpp>
 
 #include "cmdline/args.h"
 #include "contract/channels.h"
@@ -51,13 +40,21 @@ void sleep_until(int64_t t_ns) {
   clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 }
 
-/// The 8-byte fingerprint of each channel's type, from an encoded default message.
-template <typename T>
-std::vector<unsigned char> fingerprint() {
-  T msg{};
-  std::vector<unsigned char> b(static_cast<std::size_t>(msg.getEncodedSize()));
-  msg.encode(b.data(), 0, static_cast<int>(b.size()));
-  return std::vector<unsigned char>(b.begin(), b.begin() + 8);
+/// The 8-byte fingerprint messages of `channel`'s type start with (the type from the channel
+/// table, contract/channels.h; its hash from the generated list of types): big-endian, as LCM
+/// encodes it.
+std::vector<unsigned char> fingerprint(const std::string& channel) {
+  const nimble::contract::ChannelSpec* spec = nimble::contract::find_channel(channel);
+  uint64_t hash = 0;
+  if (spec == nullptr || !nimble::with_message_type(spec->type, [&hash](auto type) {
+        hash = static_cast<uint64_t>(decltype(type)::type::getHash());
+      })) {
+    std::fprintf(stderr, "bus_flood: channel %s has no message type\n", channel.c_str());
+    std::exit(1);
+  }
+  std::vector<unsigned char> b(8);
+  for (int i = 0; i < 8; ++i) b[static_cast<std::size_t>(i)] = static_cast<unsigned char>(hash >> (56 - 8 * i));
+  return b;
 }
 
 }  // namespace
@@ -103,18 +100,18 @@ int main(int argc, char** argv) {
     int first_string_offset;  ///< byte offset of the first string's length, -1 if none
   };
   const std::vector<Target> targets = {
-      {ch::kTruth, fingerprint<nimble::truth_state_t>(), -1},
-      {ch::kImu, fingerprint<nimble::imu_sample_t>(), -1},
-      {ch::kMocapPose, fingerprint<nimble::mocap_pose_t>(), -1},
-      {ch::kEstimate, fingerprint<nimble::estimator_state_t>(), -1},
-      {ch::kActuatorCommand, fingerprint<nimble::actuator_command_t>(), -1},
-      {ch::kActuatorFeedback, fingerprint<nimble::actuator_feedback_t>(), -1},
-      {ch::kAttitudeSetpoint, fingerprint<nimble::attitude_setpoint_t>(), -1},
-      {ch::kControllerStatus, fingerprint<nimble::controller_status_t>(), -1},
-      {ch::kHeartbeat, fingerprint<nimble::heartbeat_t>(), 24},
-      {ch::kTimingHealth, fingerprint<nimble::timing_health_t>(), 24},
-      {ch::kFault, fingerprint<nimble::fault_event_t>(), 24},
-      {ch::kRunControl, fingerprint<nimble::run_control_t>(), -1},
+      {ch::kTruth, fingerprint(ch::kTruth), -1},
+      {ch::kImu, fingerprint(ch::kImu), -1},
+      {ch::kMocapPose, fingerprint(ch::kMocapPose), -1},
+      {ch::kEstimate, fingerprint(ch::kEstimate), -1},
+      {ch::kActuatorCommand, fingerprint(ch::kActuatorCommand), -1},
+      {ch::kActuatorFeedback, fingerprint(ch::kActuatorFeedback), -1},
+      {ch::kAttitudeSetpoint, fingerprint(ch::kAttitudeSetpoint), -1},
+      {ch::kControllerStatus, fingerprint(ch::kControllerStatus), -1},
+      {ch::kHeartbeat, fingerprint(ch::kHeartbeat), 24},
+      {ch::kTimingHealth, fingerprint(ch::kTimingHealth), 24},
+      {ch::kFault, fingerprint(ch::kFault), 24},
+      {ch::kRunControl, fingerprint(ch::kRunControl), -1},
   };
   lcm_t* lcm = lcm_create(url.c_str());
   if (lcm == nullptr) {
