@@ -238,12 +238,12 @@ int main(int argc, char** argv) {
   int campaign_runs = 200, repeats = 3;
   bool slurm = false;
   std::string json_file;
-  cli::CommandLine cl("bench_campaign", "What one run of a campaign costs by clock, the sweep's scaling against the "
+  cmdline::CommandLine cl("bench_campaign", "What one run of a campaign costs by clock, the sweep's scaling against the "
                                         "machine's own, and Slurm's overhead over local (--slurm).");
   cl->footer("Not a test: the figures depend on the machine; the ratios travel.");
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)");
   cl->add_option("--duration", duration_s, "simulated seconds of each run")
-      ->check(cli::kFinite & CLI::Range(1.0, 3600.0))
+      ->check(cmdline::kFinite & CLI::Range(1.0, 3600.0))
       ->capture_default_str();
   cl->add_option("--campaign-runs", campaign_runs, "runs of the Slurm comparison (a multiple of 5)")
       ->check(CLI::Range(5, 100000))
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
   per_run_figures(rig, scenario, duration_s, dir, j);
   scaling_figures(rig, scenario, cpus, repeats, j);
   if (slurm && !slurm_figures(rig, scenario, dir, cpus, campaign_runs, repeats, j)) return 1;
-  if (!json_file.empty()) cli::write_json(json_file, j.dump(2));
+  if (!json_file.empty()) cmdline::write_json(json_file, j.dump(2));
   fs::remove_all(dir);
   return 0;
 }

@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
   std::string iface = "vcan0";
   int count = 2000;
   int warmup = 200;
-  nimble::cli::CommandLine cl(
+  nimble::cmdline::CommandLine cl(
       "bench_can",
       "Latency of the CAN path on a (virtual) CAN interface, printed as p50 / p99 / max: one frame send ->\n"
       "receive on a second socket; actuator_command_t -> 2 frames -> decoded command; a round trip through\n"

@@ -605,7 +605,7 @@ int run(const Options& opt) {
 
 int main(int argc, char** argv) {
   Options opt;
-  nimble::cli::CommandLine cl(
+  nimble::cmdline::CommandLine cl(
       "bench_can_bridge",
       "The latency the CAN actuator link adds, through the real bridge processes: commands published on\n"
       "ACTUATOR_CMD at a fixed rate, received directly and after can_flight -> vcan0 -> can_rig, in a\n"
@@ -616,7 +616,7 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--rate", opt.rate_hz, "publish rate (the controller's)")
-      ->check(nimble::cli::kFinite & CLI::Range(1e-3, 1e5))
+      ->check(nimble::cmdline::kFinite & CLI::Range(1e-3, 1e5))
       ->type_name("HZ")
       ->capture_default_str();
   cl->add_option("--warmup", opt.warmup, "commands sent first and not counted")

@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
   int runs = 3;
   int level = mcap::ExportOptions{}.zstd_level;
   double duration_s = 60.0;
-  cli::CommandLine cl("bench_export",
+  cmdline::CommandLine cl("bench_export",
                       "Times rig export --format mcap (zstd and none) on a flight's log against the machine's\n"
                       "floor measured in the same run (the log read event by event, nothing decoded), and\n"
                       "prints the sizes.");
@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--duration", duration_s, "simulated seconds of the flight flown when no log is given")
-      ->check(cli::kFinite & CLI::Range(0.1, 3600.0))
+      ->check(cmdline::kFinite & CLI::Range(0.1, 3600.0))
       ->type_name("S")
       ->capture_default_str();
   cl->add_option("--level", level, "zstd level of the zstd export (the export's own by default)")
@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
       w.key("floor_seconds").value(floor_s);
       w.key("ratio_zstd_floor").value(zstd_s / floor_s);
       w.end_object();
-      cli::write_json(json, w.str());
+      cmdline::write_json(json, w.str());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_export: %s\n", e.what());

@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
   int runs = 5;
   double duration_s = 30.0;
   std::string json_file;
-  cli::CommandLine cl("bench_inprocess",
+  cmdline::CommandLine cl("bench_inprocess",
                       "Times the in-process executor on a flight against the machine's floor (the plant model\n"
                       "alone) measured in the same run, and rig sweep.");
   cl->footer("Not a test: the figures depend on the machine; the ratio to the floor travels.");
@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--duration", duration_s, "simulated seconds of each flight")
-      ->check(cli::kFinite & CLI::Range(0.001, 1e6))
+      ->check(cmdline::kFinite & CLI::Range(0.001, 1e6))
       ->type_name("S")
       ->capture_default_str();
   cl->add_option("--json", json_file, "the figures as JSON to FILE, under fixed keys")->type_name("FILE");
@@ -195,7 +195,7 @@ int main(int argc, char** argv) {
           {"sweep", {{"runs", kSweepRuns}, {"runs_per_s_1job", runs_per_s_1}, {"runs_per_s_all", runs_per_s_all},
                      {"jobs_all", jobs_all}, {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
           {"reproduce", {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}}}};
-      cli::write_json(json_file, j.dump(2));
+      cmdline::write_json(json_file, j.dump(2));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_inprocess: %s\n", e.what());

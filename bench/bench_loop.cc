@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   int reps = 15;
   std::string json;
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml";
-  cli::CommandLine cl("bench_loop",
+  cmdline::CommandLine cl("bench_loop",
                       "Times rig loop --all-sets (a whole process) and one loop's analysis against the machine's\n"
                       "floor measured in the same run: one frequency response of the roll loop (600 points).");
   cl->footer("Not a test: the figures depend on the machine; the ratios to the floor travel. Target: rig loop "
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
     w.key("all_sets_ms").value(all).key("all_sets_per_floor").value(all / floor);
     w.key("process_start_ms").value(version_ms).key("target_ms").value(100.0);
     w.end_object();
-    cli::write_json(json, w.str());
+    cmdline::write_json(json, w.str());
   }
   return 0;
 }

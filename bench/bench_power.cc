@@ -46,14 +46,14 @@ int main(int argc, char** argv) {
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string effect = "actuator_delay=0.004";
   double length_s = 0.0;
-  cli::CommandLine cl("bench_power",
+  cmdline::CommandLine cl("bench_power",
                       "The time of rig discrepancy --power for one effect size and one record length: N flights\n"
                       "of the in-process rig, the discrepancy workflow on each; wall time and where it goes.");
   cl->add_option("--scenario", o.scenario_file, "the scenario")->capture_default_str()->type_name("FILE");
   cl->add_option("--model", o.model_file, "the model the workflow checks")->capture_default_str()->type_name("FILE");
   cl->add_option("--effect", effect, "the effect and its one size")->capture_default_str()->type_name("NAME=SIZE");
   cl->add_option("--length", length_s, "record length [s] (default: the scenario's)")
-      ->check(cli::kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->type_name("S");
   cl->add_option("--flights", o.flights, "flights")->check(CLI::Range(1, 100000))->capture_default_str()->type_name("N");
   cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
                 100 * c.alarm.p);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_power: %s\n", e.what());
-    return cli::kExitUsage;
+    return cmdline::kExitUsage;
   }
   return 0;
 }

@@ -263,7 +263,7 @@ namespace {
 
 /// The command line: the scenario, --runs, --json, --foxglove-client and the --set overrides
 /// (kept both parsed, `extra`, and as rig arguments, `set_args`).
-void add_options(cli::CommandLine& cl, std::string& scenario, std::string& json_file, std::vector<Override>& extra,
+void add_options(cmdline::CommandLine& cl, std::string& scenario, std::string& json_file, std::vector<Override>& extra,
                  std::string& set_args, int& runs, bool& foxglove_client) {
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)")
       ->type_name("SCENARIO.YAML");
@@ -275,7 +275,7 @@ void add_options(cli::CommandLine& cl, std::string& scenario, std::string& json_
   cl->add_flag("--foxglove-client", foxglove_client,
                "fly once more in real time with --foxglove and one client subscribed to every channel: the "
                "control loop's latency p99 with it against without (target: within 10 %)");
-  cli::each_value(cl->add_option("--set", "override one scenario value in every rig run; repeatable")
+  cmdline::each_value(cl->add_option("--set", "override one scenario value in every rig run; repeatable")
                       ->type_name("KEY.PATH=VALUE")
                       ->allow_extra_args(false)
                       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -351,7 +351,7 @@ int main(int argc, char** argv) {
   std::string set_args;
   int runs = 3;
   bool foxglove_client = false;
-  cli::CommandLine cl(
+  cmdline::CommandLine cl(
       "bench_rig",
       "The rig's timing figures beside the machine's floors, measured in the same run, in a private\n"
       "network namespace: real time quiet and loaded (control-loop latency, plant wake-up jitter)\n"

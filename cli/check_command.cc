@@ -11,7 +11,7 @@ namespace nimble::cli {
 
 int run_check_command(const std::vector<std::string>& args) {
   std::string json;
-  CommandLine cl("rig check",
+  cmdline::CommandLine cl("rig check",
                  "Can this host run the rig's LCM multicast, directly or in a private network namespace?\n"
                  "Prints what works and the commands that fix what does not.");
   cl->footer("Exit code: 0 if a run can start, 1 if not, 2 bad usage.");

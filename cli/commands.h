@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "cmdline/args.h"  // kExitUsage
+#include "cmdline/args.h"  // cmdline::kExitUsage
 
 namespace nimble::cli {
 

@@ -33,7 +33,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   std::string model_file, vehicle_file, json, model_out, report, gains;
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("rig discrepancy",
+  cmdline::CommandLine cl("rig discrepancy",
                  "Where the model and the measured data disagree, which physical effect the model is\n"
                  "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
                  "did not see (ident/README.md, \"Discrepancy workflow\").");
@@ -51,7 +51,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   std::string sensing_file;
   add_states(cl, log_options, sensing_file);
   add_vehicle(cl, vehicle_file, "the model's");
-  each_value(cl->add_option("--candidates")
+  cmdline::each_value(cl->add_option("--candidates")
                  ->description("comma-separated candidate effects to try (default: all the data supports): " +
                                effect_name_list())
                  ->type_name("LIST"),
@@ -61,17 +61,17 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
       ->capture_default_str()
       ->type_name("K");
   cl->add_option("--partial-f", opt.partial_f, "significance rule (SIDPAC)")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->capture_default_str()
       ->type_name("F");
   cl->add_option("--delay-max", opt.delay_max_s, "actuator_delay scan limit [s], in (0, 1]")
-      ->check(kFinite & CLI::Range(1e-9, 1.0))
+      ->check(cmdline::kFinite & CLI::Range(1e-9, 1.0))
       ->capture_default_str()
       ->type_name("S");
   cl->add_option("--command-latency", opt.command_latency_s,
                  "known latency of the flap command path [s], in [0, 0.1], not named as a delay (default: one "
                  "controller tick of the rig)")
-      ->check(kFinite & CLI::Range(0.0, 0.1))
+      ->check(cmdline::kFinite & CLI::Range(0.0, 0.1))
       ->type_name("S");
   cl->add_option("--gains", gains,
                  "roll gain set of the closed-loop controller copy (default: the log's CONTROLLER_STATUS gain "
@@ -141,7 +141,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   if (json != "-") std::cout << ident::discrepancy_text(result);
   if (!model_out.empty() && json != "-") std::cout << "\nmodel written to " << model_out << "\n";
   if (!report_files.empty() && json != "-") std::cout << "report written to " << report_files.front() << "\n";
-  if (!json.empty()) write_json(json, ident::discrepancy_json(result));
+  if (!json.empty()) cmdline::write_json(json, ident::discrepancy_json(result));
   return 0;
 }
 

@@ -60,7 +60,7 @@ int export_mcap(const std::string& log, const std::string& out, const mcap::Expo
   const mcap::ExportStats stats = mcap::export_log_to_mcap(log, out, options);
   warn_damage("rig export", log, stats.damage);
   (json == "-" ? std::cerr : std::cout) << "rig export: " << mcap::summary_line(stats) << "\n";
-  if (!json.empty()) write_json(json, export_json(stats));
+  if (!json.empty()) cmdline::write_json(json, export_json(stats));
   return 0;
 }
 
@@ -73,7 +73,7 @@ int run_export_command(const std::vector<std::string>& args) {
   double rate_hz = 512.0;
   ident::LogReadOptions log_options;
   ident::Interpolation interpolation = ident::Interpolation::kCubic;
-  CommandLine cl("rig export",
+  cmdline::CommandLine cl("rig export",
                  "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
                  "resampled onto one grid, or as MCAP for Foxglove, Lichtblick and PlotJuggler.\n"
                  "CSV: states come from the estimator (ESTIMATE) when the log has it, else from the plant's\n"
@@ -89,10 +89,10 @@ int run_export_command(const std::vector<std::string>& args) {
   cl->add_option("--csv", csv, "the CSV file to write (--format csv)")->type_name("FILE");
   cl->add_option("--out", out_file, "the file to write (either format)")->type_name("FILE");
   auto* rate = cl->add_option("--rate", rate_hz, "CSV: the grid's rate [Hz]")
-                   ->check(kFinite & CLI::Range(1e-3, 100000.0))
+                   ->check(cmdline::kFinite & CLI::Range(1e-3, 100000.0))
                    ->capture_default_str()
                    ->type_name("HZ");
-  auto* interp = each_value(
+  auto* interp = cmdline::each_value(
       cl->add_option("--interpolation", "CSV: cubic (default) or linear")->type_name("MODE")
           ->check(CLI::IsMember({"cubic", "linear"})),
       [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
@@ -159,7 +159,7 @@ int run_export_command(const std::vector<std::string>& args) {
     for (const auto& [name, channel] : out.channels) w.value(name);
     w.end_array();
     w.end_object();
-    write_json(json, w.str());
+    cmdline::write_json(json, w.str());
   }
   return 0;
 }

@@ -28,49 +28,49 @@ int run_identify_command(const std::vector<std::string>& args) {
   std::string csv, vehicle_file, json, model_out, plots;
   ident::IdentOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("rig identify",
+  cmdline::CommandLine cl("rig identify",
                  "Identifies the dimensional stability and control derivatives of the lateral model from\n"
                  "flight data, a CSV file or a rig log (read by its content; equation error, thesis\n"
                  "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
                  "accuracy metrics, residual whiteness, eigenvalues and modes, and state PSDs.");
   cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
-  each_value(cl->add_option("--structure", "model structure: lateral3 (default) or lateral4")
+  cmdline::each_value(cl->add_option("--structure", "model structure: lateral3 (default) or lateral4")
                  ->type_name("NAME")
                  ->check(CLI::IsMember({"lateral3", "lateral4"})),
              [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
-  each_value(cl->add_option("--method", "estimator: wls (default) or ols")->type_name("NAME")->check(CLI::IsMember({"ols", "wls"})),
+  cmdline::each_value(cl->add_option("--method", "estimator: wls (default) or ols")->type_name("NAME")->check(CLI::IsMember({"ols", "wls"})),
              [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
   add_vehicle(cl, vehicle_file, "rig_configs/vehicles/nimble_no_wifi.yaml");
   add_salvage(cl, log_options);
   std::string sensing_file;
   add_states(cl, log_options, sensing_file);
-  each_value(cl->add_option("--inputs", "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
+  cmdline::each_value(cl->add_option("--inputs", "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
                                         "when the data has them)")
                  ->type_name("LIST"),
              [&opt](const std::string& v) { opt.inputs = split_list(v); });
   cl->add_option("--w0", opt.trim.w0_mps, "trim vertical velocity of Eq 21 [m/s]")
-      ->check(kFinite)
+      ->check(cmdline::kFinite)
       ->capture_default_str()
       ->type_name("M_PER_S");
   cl->add_option("--u0", opt.trim.u0_mps, "trim forward velocity, lateral4 [m/s]")
-      ->check(kFinite)
+      ->check(cmdline::kFinite)
       ->capture_default_str()
       ->type_name("M_PER_S");
   add_processing(cl, opt.processing);
   cl->add_option("--wls-window", opt.wls_window_s, "WLS residual-covariance window [s]")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->capture_default_str()
       ->type_name("S");
   cl->add_option("--lags", opt.whiteness_lags, "whiteness lags")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str()
       ->type_name("N");
-  each_value(cl->add_option("--hover", "a hover PSD segment [s] (repeatable; default from |phi_sp|)")
+  cmdline::each_value(cl->add_option("--hover", "a hover PSD segment [s] (repeatable; default from |phi_sp|)")
                  ->type_name("A:B")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&opt](const std::string& v) { opt.segments.hover.push_back(time_range(v)); });
-  each_value(cl->add_option("--manoeuvre", "a manoeuvre PSD segment [s] (repeatable; default from |phi_sp|)")
+  cmdline::each_value(cl->add_option("--manoeuvre", "a manoeuvre PSD segment [s] (repeatable; default from |phi_sp|)")
                  ->type_name("A:B")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -113,7 +113,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   for (const auto& p : pngs) {
     if (json != "-") std::cout << "plot " << p << "\n";
   }
-  if (!json.empty()) write_json(json, ident::identification_json(result, model_out, pngs));
+  if (!json.empty()) cmdline::write_json(json, ident::identification_json(result, model_out, pngs));
   return 0;
 }
 

@@ -37,34 +37,34 @@ std::vector<std::string> split_list(const std::string& text) {
 }
 
 /// --rate, --cutoff, --order, --interpolation: the processing every analysis command shares.
-void add_processing(CommandLine& cl, ident::ProcessingOptions& p) {
+void add_processing(cmdline::CommandLine& cl, ident::ProcessingOptions& p) {
   cl->add_option("--rate", p.rate_hz, "resampling rate [Hz]")
-      ->check(kFinite & CLI::Range(1e-3, 1e6))
+      ->check(cmdline::kFinite & CLI::Range(1e-3, 1e6))
       ->capture_default_str()
       ->type_name("HZ");
   cl->add_option("--cutoff", p.cutoff_hz, "low-pass cut-off [Hz]")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->capture_default_str()
       ->type_name("HZ");
   cl->add_option("--order", p.filter_order, "Butterworth order, 0 = no low-pass")
       ->check(CLI::Range(0, 40))
       ->capture_default_str()
       ->type_name("N");
-  each_value(cl->add_option("--interpolation", "resampling of every channel: cubic (default) or linear")
+  cmdline::each_value(cl->add_option("--interpolation", "resampling of every channel: cubic (default) or linear")
                  ->type_name("MODE")
                  ->check(CLI::IsMember({"cubic", "linear"})),
              [&p](const std::string& v) { p.interpolation = ident::interpolation_from_string(v); });
 }
 
 /// --salvage: read a damaged log up to the damage.
-void add_salvage(CommandLine& cl, ident::LogReadOptions& o) {
+void add_salvage(cmdline::CommandLine& cl, ident::LogReadOptions& o) {
   cl->add_flag("--salvage", o.salvage, "a damaged rig log: read the events before the damage and say what was left");
 }
 
 /// --states SOURCE and --sensing FILE: where a rig log's states come from, and the sensing the
 /// smoother's filter is matched to.
-CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file) {
-  auto* states = each_value(cl->add_option("--states", "rig log: where the states come from: auto (the estimator's if the log has "
+CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file) {
+  auto* states = cmdline::each_value(cl->add_option("--states", "rig log: where the states come from: auto (the estimator's if the log has "
                                         "them, else the truth), estimate, truth, or smoothed (made offline from the "
                                         "log's IMU and motion capture by the fixed-interval smoother, as the thesis's "
                                         "identification data were)")
@@ -78,7 +78,7 @@ CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& 
   return states;
 }
 
-std::optional<int> apply_states(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
+std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
                                 const std::vector<std::string>& data_files) {
   if (o.states == ident::StateSource::kAuto) return std::nullopt;
   for (const std::string& file : data_files) {
@@ -99,7 +99,7 @@ std::optional<int> apply_states(const CommandLine& cl, ident::LogReadOptions& o,
 }
 
 /// --vehicle FILE.
-void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text) {
+void add_vehicle(cmdline::CommandLine& cl, std::string& file, const std::string& default_text) {
   cl->add_option("--vehicle", file, "the vehicle (default " + default_text + ")")->type_name("FILE");
 }
 

@@ -25,23 +25,23 @@ ident::TimeRange time_range(const std::string& text);
 std::vector<std::string> split_list(const std::string& text);
 
 /// --rate, --cutoff, --order, --interpolation: the processing every analysis command shares.
-void add_processing(CommandLine& cl, ident::ProcessingOptions& p);
+void add_processing(cmdline::CommandLine& cl, ident::ProcessingOptions& p);
 
 /// --salvage: read a damaged log up to the damage.
-void add_salvage(CommandLine& cl, ident::LogReadOptions& o);
+void add_salvage(cmdline::CommandLine& cl, ident::LogReadOptions& o);
 
 /// --states SOURCE and --sensing FILE: where a rig log's states come from, and the sensing the
 /// smoother's filter is matched to. Returns the --states option.
-CLI::Option* add_states(CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file);
+CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file);
 
 /// Checks --states against the data files (a CSV file carries its own states: --states is for rig
 /// logs) and sets the smoother's model from --sensing (or the default sensing file) for --states
 /// smoothed. Returns the exit code of a usage error naming the file (reported through `cl`).
-std::optional<int> apply_states(const CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
+std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
                                 const std::vector<std::string>& data_files);
 
 /// --vehicle FILE.
-void add_vehicle(CommandLine& cl, std::string& file, const std::string& default_text);
+void add_vehicle(cmdline::CommandLine& cl, std::string& file, const std::string& default_text);
 
 /// Says on stderr what a salvaged read left out.
 void warn_damage(const char* command, const std::string& file, const std::string& damage);

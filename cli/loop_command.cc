@@ -48,7 +48,7 @@ std::vector<std::pair<std::string, GainSet>> gain_sets_of(const LoopSetup& s, co
   }
   const std::string name = text.empty() ? s.gain_set : text;
   if (name.find(',') != std::string::npos) {
-    const std::vector<double> v = number_list(name);
+    const std::vector<double> v = cmdline::number_list(name);
     if (v.size() != 2 || v[0] < 0.0 || v[1] < 0.0) {
       throw std::invalid_argument("--gains KP,KD takes two gains >= 0, got '" + name + "'");
     }
@@ -146,7 +146,7 @@ DesignRequest parse_design(const std::string& text) {
     const auto eq = item.find('=');
     const std::string key = item.substr(0, eq);
     if (eq == std::string::npos) throw std::invalid_argument("--design: '" + item + "' is not KEY=VALUE");
-    const double v = finite_number(item.substr(eq + 1));
+    const double v = cmdline::finite_number(item.substr(eq + 1));
     if (key == "phase_margin_deg") {
       r.phase_margin_deg = v;
     } else if (key == "crossover_hz") {
@@ -192,14 +192,14 @@ int run_loop_command(const std::vector<std::string>& args) {
   std::string design_text_arg, gains_out, design_name = "designed", fly_log;
   bool all_sets = false, fly = false;
   std::vector<Override> overrides;
-  CommandLine cl("rig loop", kDescription);
+  cmdline::CommandLine cl("rig loop", kDescription);
   cl->footer("Exit code: 0 if every analysed loop is stable (and a design is feasible and its flight ok), 1 if "
              "not, 2 bad usage or input.");
   cl->add_option("scenario", scenario, "the scenario: model, controller, actuator and timing")->required();
   cl->add_option("--model", model_file, "a lateral3 model in place of the scenario's")->type_name("FILE");
   cl->add_option("--gains", gains_text, "a gain set of the controller, or KP,KD (default: the manoeuvre's set)")
       ->type_name("NAME|KP,KD");
-  each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
+  cmdline::each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
                  ->type_name("KEY.PATH=VALUE")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -276,7 +276,7 @@ int run_loop_command(const std::vector<std::string>& args) {
     if (!quiet) std::cout << "  written " << gains_out << "\n";
   }
   if (design && design->design.feasible && fly) fly_design(*design, s, scenario, overrides, fly_log);
-  if (!json.empty()) write_json(json, loop_json(s, rows, worst, design.get()));
+  if (!json.empty()) cmdline::write_json(json, loop_json(s, rows, worst, design.get()));
   if (!plots.empty()) {
     std::vector<LoopRow> plotted;
     for (const LoopRow& r : rows) {

@@ -199,7 +199,7 @@ std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const 
 
 int run_model_command(const std::vector<std::string>& args) {
   std::string model_file, vehicle_file, json;
-  CommandLine cl("rig model",
+  cmdline::CommandLine cl("rig model",
                  "Builds A and B of the model's structure from its derivatives and vehicle, prints the\n"
                  "eigenvalues, the mode table and the non-dimensional eigenvectors.");
   cl->add_option("model", model_file, "the model file (rig_configs/models/*.yaml)")->required();
@@ -217,7 +217,7 @@ int run_model_command(const std::vector<std::string>& args) {
   if (json.empty()) {
     print_text(model, vehicle, ss, eig, modes);
   } else {
-    write_json(json, to_json(model, vehicle, ss, eig, modes));
+    cmdline::write_json(json, to_json(model, vehicle, ss, eig, modes));
   }
   return 0;
 }

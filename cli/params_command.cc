@@ -86,7 +86,7 @@ int run_params_command(const std::vector<std::string>& args) {
   std::string section;
   std::vector<std::string> names;
   for (const auto& s : sections()) names.push_back(s.name);
-  CommandLine cl("rig params",
+  cmdline::CommandLine cl("rig params",
                  "The parameters of a scenario section (default: every section that has a table): key,\n"
                  "default, allowed range, unit and meaning, as Markdown. The same table the loader and\n"
                  "the validation use.");

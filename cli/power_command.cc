@@ -52,11 +52,11 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   detection_power::PowerOptions o;
   o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string json, plots;
-  CommandLine cl("rig discrepancy --power", kPowerDescription);
+  cmdline::CommandLine cl("rig discrepancy --power", kPowerDescription);
   cl->footer(power_footer());
   cl->add_option("--scenario", o.scenario_file, "the scenario to fly")->type_name("FILE")->required();
   cl->add_option("--model", o.model_file, "the model (lateral3) the workflow checks")->type_name("FILE")->required();
-  each_value(cl->add_option("--effect")
+  cmdline::each_value(cl->add_option("--effect")
                  ->description("the plant effect and its sizes, a list A,B or a grid FROM:TO:STEP: " +
                                detection_power::sized_effect_list())
                  ->type_name("NAME=SIZE")
@@ -66,11 +66,11 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
                o.effect = e.effect;
                o.sizes = e.sizes;
              });
-  each_value(cl->add_option("--lengths", "record lengths [s], a list or FROM:TO:STEP (default: the scenario's block "
+  cmdline::each_value(cl->add_option("--lengths", "record lengths [s], a list or FROM:TO:STEP (default: the scenario's block "
                                          "times 1, 2, 4, 8)")
                  ->type_name("S"),
              [&o](const std::string& v) {
-               o.lengths_s = number_grid(v);
+               o.lengths_s = cmdline::number_grid(v);
                for (const double l : o.lengths_s) {
                  if (!(l > 0.0)) throw std::invalid_argument("a record length must be > 0 s, got " + v);
                }
@@ -79,10 +79,10 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str()
       ->type_name("N");
-  cl->add_option("--seed", o.seed, "the campaign's seed")->check(kWholeNumber)->capture_default_str()->type_name("N");
+  cl->add_option("--seed", o.seed, "the campaign's seed")->check(cmdline::kWholeNumber)->capture_default_str()->type_name("N");
   cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
   cl->add_option("--target", o.target, "the naming probability a recommended length reaches")
-      ->check(kFinite & CLI::Range(0.01, 0.999))
+      ->check(cmdline::kFinite & CLI::Range(0.01, 0.999))
       ->capture_default_str()
       ->type_name("P");
   cl->add_option("--refine", o.refine, "rounds of refinement of each recommended length (a cell at the interpolated "
@@ -93,13 +93,13 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   cl->add_option("--verify", o.verify, "fly N fresh seeds at each recommended length and report the rate there")
       ->check(CLI::Range(0, 100000))
       ->type_name("N");
-  each_value(cl->add_option("--set", "override one scenario value in every flight, parsed as YAML (repeatable)")
+  cmdline::each_value(cl->add_option("--set", "override one scenario value in every flight, parsed as YAML (repeatable)")
                  ->type_name("KEY.PATH=VALUE")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
   cl->add_option("--vehicle", o.vehicle_file, "the vehicle of the workflow (default: the model's)")->type_name("FILE");
-  each_value(cl->add_option("--candidates")
+  cmdline::each_value(cl->add_option("--candidates")
                  ->description("comma-separated candidate effects the workflow tries (default: all the data "
                                "supports): " + effect_name_list())
                  ->type_name("LIST"),
@@ -123,14 +123,14 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
     result = detection_power::run_power(o);
   } catch (const ConfigError& e) {
     std::cerr << "rig discrepancy --power: config error: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
   std::vector<std::string> pngs;
   if (!plots.empty()) pngs = detection_power::write_power_plots(result, plots);
   std::ostream& text = json == "-" ? std::cerr : std::cout;
   text << detection_power::power_text(result);
   for (const auto& p : pngs) text << "plot " << p << "\n";
-  if (!json.empty()) write_json(json, detection_power::power_json(result, pngs));
+  if (!json.empty()) cmdline::write_json(json, detection_power::power_json(result, pngs));
   return 0;
 }
 

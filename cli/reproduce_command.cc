@@ -52,7 +52,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   o.work_dir = "rig_logs/reproduce";
   o.progress = true;
   std::string what, json_file;
-  CommandLine cl("rig reproduce",
+  cmdline::CommandLine cl("rig reproduce",
                  "Flies the thesis's campaign (identification train on every identification set's model;\n"
                  "open-loop 6 Hz doublet and 1-1-2; closed-loop slow train and 1-1-2s; coupled doublet; 20 and\n"
                  "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
@@ -101,7 +101,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   if (!json_file.empty() && json_file != "-") {
     if (const std::string problem = launcher::writable_problem(json_file); !problem.empty()) {
       std::cerr << "rig reproduce: --json " << json_file << ": " << problem << "\n";
-      return kExitUsage;
+      return cmdline::kExitUsage;
     }
   }
   std::error_code ec;
@@ -112,10 +112,10 @@ int run_reproduce_command(const std::vector<std::string>& args) {
     result = reproduce::run_campaign(o);
   } catch (const ConfigError& e) {
     std::cerr << "rig reproduce: config error: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << "rig reproduce: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
   (json_file == "-" ? std::cerr : std::cout) << reproduce::campaign_text(result);
   if (!json_file.empty()) {
@@ -127,7 +127,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
         write_file(json_file, text);
       } catch (const OutputError& e) {
         std::cerr << "rig reproduce: " << e.what() << "\n";
-        return kExitUsage;
+        return cmdline::kExitUsage;
       }
     }
   }

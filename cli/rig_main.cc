@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   std::signal(SIGXFSZ, SIG_IGN);
   if (argc < 2) {
     print_usage(std::cerr);
-    return nimble::cli::kExitUsage;
+    return nimble::cmdline::kExitUsage;
   }
   const std::string name = argv[1];
   if (name == "help" || name == "--help" || name == "-h") {
@@ -82,11 +82,11 @@ int main(int argc, char** argv) {
         return c.run(args);
       } catch (const std::exception& e) {
         std::cerr << "rig " << name << ": error: " << e.what() << "\n";
-        return nimble::cli::kExitUsage;
+        return nimble::cmdline::kExitUsage;
       }
     }
   }
   std::cerr << "rig: unknown command '" << name << "'\n";
   print_usage(std::cerr);
-  return nimble::cli::kExitUsage;
+  return nimble::cmdline::kExitUsage;
 }

@@ -34,19 +34,19 @@ constexpr const char* kRunFooter =
 
 /// `--mcap F`: the run's own log exported to F after the run (whatever the verdict: a failed
 /// flight is the one most worth looking at). Its line goes where the summary's text goes (stderr
-/// when `--json -` has stdout). Returns the run's exit code, or kExitUsage if the export failed
+/// when `--json -` has stdout). Returns the run's exit code, or cmdline::kExitUsage if the export failed
 /// after a run that succeeded.
 int export_run_log(const std::string& log, const std::string& mcap_file, bool json_on_stdout, int run_code) {
   if (!std::filesystem::exists(log)) {
     std::cerr << "rig run: --mcap " << mcap_file << ": the run wrote no log (" << log << ")\n";
-    return run_code != 0 ? run_code : kExitUsage;
+    return run_code != 0 ? run_code : cmdline::kExitUsage;
   }
   try {
     const mcap::ExportStats stats = mcap::export_log_to_mcap(log, mcap_file, {});
     (json_on_stdout ? std::cerr : std::cout) << "mcap       " << mcap::summary_line(stats) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rig run: --mcap " << mcap_file << ": " << e.what() << "\n";
-    return run_code != 0 ? run_code : kExitUsage;
+    return run_code != 0 ? run_code : cmdline::kExitUsage;
   }
   return run_code;
 }
@@ -55,7 +55,7 @@ int export_run_log(const std::string& log, const std::string& mcap_file, bool js
 
 int run_run_command(const std::vector<std::string>& args) {
   launcher::RunOptions o;
-  CommandLine cl("rig run", kRunDescription);
+  cmdline::CommandLine cl("rig run", kRunDescription);
   cl->footer(kRunFooter);
   cl->add_option("scenario", o.scenario_file, "the scenario file (rig_configs/*.yaml)")->required();
   cl->add_option("--clock", o.clock, "realtime, lockstep or inprocess (default: the scenario's clock)")
@@ -86,7 +86,7 @@ int run_run_command(const std::vector<std::string>& args) {
                  "ws://HOST:PORT): every channel as JSON, read-only; host 127.0.0.1 unless given, port 0 picks a "
                  "free one (printed on stderr); e.g. --foxglove 8765 (docs/live_view.md)")
       ->type_name("[HOST:]PORT");
-  each_value(cl->add_option("--set", "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
+  cmdline::each_value(cl->add_option("--set", "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
                                      "--set processes=[plant,controller], --set 'faults=[{target: IMU, kind: off, "
                                      "start_s: 1}]' (quote values with spaces for the shell)")
                  ->type_name("KEY.PATH=VALUE")
@@ -94,7 +94,7 @@ int run_run_command(const std::vector<std::string>& args) {
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
   cl->add_option("--seed", o.seed, "the run's seed (a whole number >= 0; default: the scenario's seed)")
-      ->check(kWholeNumber)
+      ->check(cmdline::kWholeNumber)
       ->type_name("N");
   cl->add_flag("--no-progress", "no progress line on stderr (for logs and scripts)")
       ->each([&o](const std::string&) { o.progress = false; });

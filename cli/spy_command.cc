@@ -47,7 +47,7 @@ std::string self_dir() {
 int run_spy_command(const std::vector<std::string>& args) {
   std::string url;
   std::string pid;
-  CommandLine cl("rig spy",
+  cmdline::CommandLine cl("rig spy",
                  "Starts lcm-spy with the rig's type jar on its classpath. lcm-spy is a window: it needs a\n"
                  "display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).");
   cl->add_option("--pid", pid,
@@ -60,17 +60,17 @@ int run_spy_command(const std::vector<std::string>& args) {
   const std::string jar = std::filesystem::path(self_dir()).parent_path().string() + "/share/java/nimble_lcmtypes.jar";
   if (!std::filesystem::exists(jar)) {
     std::cerr << "rig spy: type jar not found at " << jar << " (build the project first)\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
   if (!pid.empty()) {
     if (pid.find_first_not_of("0123456789") != std::string::npos || !std::filesystem::exists("/proc/" + pid)) {
       std::cerr << "rig spy: no process " << pid << " (is 'rig run' still running? it prints its pid at start)\n";
-      return kExitUsage;
+      return cmdline::kExitUsage;
     }
     if (namespace_inode(pid, "net") == namespace_inode("self", "net")) {
       std::cerr << "rig spy: pid " << pid << " runs on this host's network, not in a namespace of its own: "
                    "watch it with the URL it printed at start (rig spy --url '...')\n";
-      return kExitUsage;
+      return cmdline::kExitUsage;
     }
     // A run started without root made its network namespace inside a user namespace it owns:
     // join that first (its owner holds every capability there), then the network namespace.
@@ -82,7 +82,7 @@ int run_spy_command(const std::vector<std::string>& args) {
     if (!problem.empty()) {
       std::cerr << "rig spy: cannot watch the run of pid " << pid << ": " << problem
                 << " (only its own user, or root, may join it)\n";
-      return kExitUsage;
+      return cmdline::kExitUsage;
     }
     if (url.empty()) url = "udpm://239.255.76.67:7667?ttl=0";
   }
@@ -91,7 +91,7 @@ int run_spy_command(const std::vector<std::string>& args) {
   if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0')) {
     std::cerr << "rig spy: no display (DISPLAY is not set): lcm-spy is a window. Run it on a desktop, over "
                  "ssh -X, or headless with xvfb-run rig spy ...\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
   std::string classpath = jar + ":/usr/share/java/lcm.jar";
   if (std::filesystem::exists("/usr/share/java/jchart2d.jar")) classpath += ":/usr/share/java/jchart2d.jar";
@@ -108,7 +108,7 @@ int run_spy_command(const std::vector<std::string>& args) {
   ::execvp("lcm-spy", argv.data());
   std::cerr << "rig spy: cannot start lcm-spy (Debian package liblcm-java / liblcm-bin): " << std::strerror(errno)
             << "\n";
-  return kExitUsage;
+  return cmdline::kExitUsage;
 }
 
 }  // namespace nimble::cli

@@ -59,7 +59,7 @@ struct Outputs {
   bool progress = true;
 };
 
-void add_outputs(CommandLine& cl, Outputs& o) {
+void add_outputs(cmdline::CommandLine& cl, Outputs& o) {
   cl.add_json(o.json_file, "the sets and a 'runs' list (seed, verdict, figures; `machine` fields say where it ran)");
   cl->add_option("--csv", o.csv_file, "one row per run (machine_* columns say where it ran)")->type_name("FILE");
   cl->add_option("--report", o.report_dir,
@@ -119,7 +119,7 @@ int finish(const campaign::Campaign& c, const Outputs& o, bool keep, int jobs, d
     std::cerr << "rig sweep: " << e.what() << "\n";
     written = false;
   }
-  if (!written) return kExitUsage;
+  if (!written) return cmdline::kExitUsage;
   for (const auto& run : result.runs) {
     if (run.exit_code != launcher::kRunOk) return 1;
   }
@@ -179,7 +179,7 @@ int task_command(const std::vector<std::string>& args) {
   std::string dir;
   std::size_t task = 0;
   int jobs = 0;
-  CommandLine cl("rig sweep task", "Flies the runs of one array task of a campaign that have no result yet (what the "
+  cmdline::CommandLine cl("rig sweep task", "Flies the runs of one array task of a campaign that have no result yet (what the "
                                    "campaign's batch script runs on a node), each run's result file written atomically.");
   cl->add_option("dir", dir, "the campaign directory")->required();
   cl->add_option("--task", task, "the array task (SLURM_ARRAY_TASK_ID)")->required();
@@ -210,13 +210,13 @@ int task_command(const std::vector<std::string>& args) {
   } catch (const std::exception& e) {
     std::cerr << "rig sweep task: " << e.what() << "\n";
   }
-  return kExitUsage;
+  return cmdline::kExitUsage;
 }
 
 int collect_command(const std::vector<std::string>& args) {
   std::string dir;
   Outputs o;
-  CommandLine cl("rig sweep collect", "Merges a campaign's runs (rig sweep --backend slurm --no-wait, or one that was "
+  cmdline::CommandLine cl("rig sweep collect", "Merges a campaign's runs (rig sweep --backend slurm --no-wait, or one that was "
                                       "interrupted): the summary, DIR/result.json and DIR/result.csv. Runs without a "
                                       "result are named, with the Slurm jobs still running, and exit 3.");
   cl->add_option("dir", dir, "the campaign directory")->required();
@@ -230,17 +230,17 @@ int collect_command(const std::vector<std::string>& args) {
     return finish(c, o, true, 0, 0.0);
   } catch (const std::exception& e) {
     std::cerr << "rig sweep collect: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
 }
 
 /// The sweep's own options: the scenario, seeds, --vary sets, how many at a time, clock, overrides
 /// and logs; returns the options --seeds and --jobs (whether they were given).
-std::pair<CLI::Option*, CLI::Option*> add_sweep_options(CommandLine& cl, campaign::SweepOptions& o) {
+std::pair<CLI::Option*, CLI::Option*> add_sweep_options(cmdline::CommandLine& cl, campaign::SweepOptions& o) {
   cl->add_option("scenario", o.base.scenario_file, "the scenario file");
   auto* seeds = cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B");
-  each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
-  each_value(cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
+  cmdline::each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
+  cmdline::each_value(cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
                  ->type_name("KEY=V1,V2,...")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -251,7 +251,7 @@ std::pair<CLI::Option*, CLI::Option*> add_sweep_options(CommandLine& cl, campaig
   cl->add_option("--clock", o.base.clock, "inprocess (default), lockstep or realtime")
       ->check(CLI::IsMember({std::string(launcher::kClockInprocess), std::string(launcher::kClockLockstep),
                               std::string(launcher::kClockRealtime)}));
-  each_value(cl->add_option("--set", "override one scenario value in every run, parsed as YAML (repeatable)")
+  cmdline::each_value(cl->add_option("--set", "override one scenario value in every run, parsed as YAML (repeatable)")
                  ->type_name("KEY.PATH=VALUE")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -262,7 +262,7 @@ std::pair<CLI::Option*, CLI::Option*> add_sweep_options(CommandLine& cl, campaig
 
 /// The campaign's options: backend, directory, --resume, and the Slurm settings over the
 /// scenario's cluster section.
-void add_campaign_options(CommandLine& cl, campaign::CampaignRequest& req, std::string& resume_dir, int& retries,
+void add_campaign_options(cmdline::CommandLine& cl, campaign::CampaignRequest& req, std::string& resume_dir, int& retries,
                           bool& no_wait, std::size_t& chunk, launcher::ClusterSettings& cli_cluster) {
   cl->add_option("--backend", req.backend, "local (default) or slurm")
       ->check(CLI::IsMember({std::string(campaign::kBackendLocal), std::string(campaign::kBackendSlurm)}));
@@ -311,7 +311,7 @@ int resume_campaign(const std::string& resume_dir, int retries, bool no_wait, in
     if (!running.empty()) {
       for (const auto& line : running) std::cerr << "rig sweep: " << line << "\n";
       std::cerr << "rig sweep: wait for it (`rig sweep collect " << c.dir << "`) or scancel it before --resume\n";
-      return kExitUsage;
+      return cmdline::kExitUsage;
     }
     const int code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
     if (code != 0 || no_wait) return code;
@@ -373,7 +373,7 @@ int run_sweep_command(const std::vector<std::string>& args) {
   int retries = 0;
   launcher::ClusterSettings cli_cluster;
   std::size_t chunk = 0;
-  CommandLine cl("rig sweep", kSweepDescription);
+  cmdline::CommandLine cl("rig sweep", kSweepDescription);
   cl->footer(kSweepFooter);
   const auto [seeds, jobs] = add_sweep_options(cl, o);
   add_outputs(cl, out);
@@ -397,10 +397,10 @@ int run_sweep_command(const std::vector<std::string>& args) {
     return fly_campaign(req, cli_cluster, chunk, out, retries, no_wait, start_ns);
   } catch (const ConfigError& e) {
     std::cerr << "rig sweep: config error: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << "rig sweep: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
 }
 

@@ -398,22 +398,22 @@ int run_turbulence_command(const std::vector<std::string>& args) {
   std::optional<double> duration, dt;
   std::optional<std::uint64_t> seed;
   std::optional<std::size_t> segment;
-  CommandLine cl("rig turbulence", kDescription);
+  cmdline::CommandLine cl("rig turbulence", kDescription);
   cl->footer("Exit code: 0, or 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance;\n"
              "2 bad usage or input.");
   cl->add_option("practical", file, "the practical's file (rig_configs/turbulence/ce500_practical.yaml)")->required();
   cl->add_option("--duration", duration, "record length [s] (default: the file's simulation.duration_s)")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->type_name("S");
   cl->add_option("--dt", dt, "time step [s] (default: the file's simulation.dt_s, 0.05 as the practical)")
-      ->check(kFinite & CLI::Range(1e-9, 1.0))
+      ->check(cmdline::kFinite & CLI::Range(1e-9, 1.0))
       ->type_name("S");
   cl->add_option("--seed", seed, "noise seed (default: the file's simulation.seed)")
-      ->check(kWholeNumber)
+      ->check(cmdline::kWholeNumber)
       ->type_name("N");
   cl->add_option("--welch-segment", segment,
                  "Welch segment length [samples], a power of two >= 8 (default N/8 rounded down)")
-      ->check(kPowerOfTwo)
+      ->check(cmdline::kPowerOfTwo)
       ->type_name("M");
   cl.add_json(json, "the report");
   cl.add_plots(plots, "psd_matrix.png, time_histories.png, pole_map.png");
@@ -429,7 +429,7 @@ int run_turbulence_command(const std::vector<std::string>& args) {
   const Ce500Analysis a = analyse_ce500(config, options);
 
   if (json != "-") std::cout << report_text(a);
-  if (!json.empty()) write_json(json, report_json(a));
+  if (!json.empty()) cmdline::write_json(json, report_json(a));
   if (!plots.empty()) {
     const fs::path dir(plots);
     fs::create_directories(dir);

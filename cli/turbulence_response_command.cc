@@ -295,30 +295,30 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   ResponseComparisonOptions options;
   options.welch_segment = 8192;
   options.f_max_hz = 10.0;
-  CommandLine cl("rig turbulence-response", kDescription);
+  cmdline::CommandLine cl("rig turbulence-response", kDescription);
   cl->footer("Exit code: 0 if every check agrees, 1 if one does not, 2 bad usage or input.");
   cl->add_option("scenario", scenario, "the scenario the flight was flown with")->required();
   cl->add_option("log", log, "the flight's LCM log")->required();
-  each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
+  cmdline::each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
                  ->type_name("KEY.PATH=VALUE")
                  ->allow_extra_args(false)
                  ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
              [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
   cl->add_option("--skip", skip_s, "drop the first S seconds of the flight (start-up)")
       ->capture_default_str()
-      ->check(kFinite & CLI::NonNegativeNumber)
+      ->check(cmdline::kFinite & CLI::NonNegativeNumber)
       ->type_name("S");
   cl->add_option("--f-max", options.f_max_hz,
                  "compare up to this frequency [Hz]: above the closed-loop roll mode (2.4 Hz) and the flap "
                  "actuator (2 Hz), below the 15 Hz low-pass and the flapping frequency; on the truth the model "
                  "holds to 20 Hz and beyond")
       ->capture_default_str()
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->type_name("HZ");
   cl->add_option("--welch-segment", options.welch_segment,
                  "Welch segment [samples], a power of two >= 8 (8192: 8.2 s at 1 kHz)")
       ->capture_default_str()
-      ->check(kPowerOfTwo)
+      ->check(cmdline::kPowerOfTwo)
       ->type_name("M");
   cl.add_json(json, "the report");
   cl.add_plots(plots,
@@ -334,7 +334,7 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   const ResponseComparison c = compare_hover_response(loop, records, dt_s, options);
 
   if (json != "-") std::cout << report_text(scenario, log, s, c, skip_s);
-  if (!json.empty()) write_json(json, report_json(scenario, log, s, c));
+  if (!json.empty()) cmdline::write_json(json, report_json(scenario, log, s, c));
   if (!plots.empty()) {
     const fs::path dir(plots);
     fs::create_directories(dir);

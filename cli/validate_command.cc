@@ -32,7 +32,7 @@ int run_validate_command(const std::vector<std::string>& args) {
   bool closed_loop = false;
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
-  CommandLine cl("rig validate",
+  cmdline::CommandLine cl("rig validate",
                  "Open-loop validation: the state derivatives predicted by the model from the measured\n"
                  "states and inputs against the measured ones (thesis Tables 7-8).");
   cl->add_option("model", model_file, "the model file")->required();
@@ -115,7 +115,7 @@ int run_validate_command(const std::vector<std::string>& args) {
     if (json != "-") {
       for (const auto& p : pngs) std::cout << "plot " << p << "\n";
     }
-    if (!json.empty()) write_json(json, w.str());
+    if (!json.empty()) cmdline::write_json(json, w.str());
     return 0;
   }
   const ident::ValidationResult result = ident::validate_open_loop(data, model, vehicle, opt);
@@ -125,7 +125,7 @@ int run_validate_command(const std::vector<std::string>& args) {
     std::cout << ident::validation_text(result);
     for (const auto& p : pngs) std::cout << "plot " << p << "\n";
   }
-  if (!json.empty()) write_json(json, ident::validation_json(result, pngs));
+  if (!json.empty()) cmdline::write_json(json, ident::validation_json(result, pngs));
   return 0;
 }
 

@@ -170,7 +170,7 @@ int replay_to_view(LiveViewSession* live, const std::string& log_file, bool salv
     std::cerr << "rig view: " << e.what() << "\n";
     live->view->set_state("failed", e.what(), 0.0);
     exit_when_done = true;
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
   return 0;
 }
@@ -181,7 +181,7 @@ int run_view_command(const std::vector<std::string>& args) {
   double speed = 1.0;
   std::string web;
   bool exit_when_done = false, salvage = false, loop = false, hold = false;
-  CommandLine cl("rig view", kViewDescription);
+  cmdline::CommandLine cl("rig view", kViewDescription);
   cl->footer(kViewFooter);
   cl->add_option("log", log_file, "the rig log (rig run --log) to replay")->type_name("LOG.lcmlog");
   cl->add_option("--foxglove", foxglove,
@@ -211,7 +211,7 @@ int run_view_command(const std::vector<std::string>& args) {
   hold_opt->excludes(exit_opt);
   cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
   if (const auto done = cl.parse(args)) return *done;
-  if (!inputs_ok(log_file, web, web_root, loop, speed, salvage)) return kExitUsage;
+  if (!inputs_ok(log_file, web, web_root, loop, speed, salvage)) return cmdline::kExitUsage;
 
   std::unique_ptr<LiveViewSession> live;
   std::unique_ptr<foxglove::FoxgloveServer> page;
@@ -222,7 +222,7 @@ int run_view_command(const std::vector<std::string>& args) {
     }
   } catch (const std::exception& e) {
     std::cerr << "rig view: " << e.what() << "\n";
-    return kExitUsage;
+    return cmdline::kExitUsage;
   }
 
   g_stop = 0;

@@ -8,7 +8,7 @@
 
 #include "core/output_file.h"
 
-namespace nimble::cli {
+namespace nimble::cmdline {
 
 double finite_number(const std::string& text) {
   std::size_t used = 0;
@@ -197,4 +197,4 @@ void write_json(const std::string& target, const std::string& json) {
   write_file(target, json + "\n");
 }
 
-}  // namespace nimble::cli
+}  // namespace nimble::cmdline

@@ -18,7 +18,7 @@
 
 #include <CLI/CLI.hpp>
 
-namespace nimble::cli {
+namespace nimble::cmdline {
 
 /// Exit code for bad usage or bad input (every command line of the rig).
 constexpr int kExitUsage = 2;
@@ -84,4 +84,4 @@ CLI::Option* each_value(CLI::Option* option, std::function<void(const std::strin
 /// @throws std::runtime_error if the file cannot be written.
 void write_json(const std::string& target, const std::string& json);
 
-}  // namespace nimble::cli
+}  // namespace nimble::cmdline

@@ -60,7 +60,7 @@ EffectSizes parse_effect_sizes(const std::string& text) {
   EffectSizes out;
   out.effect = e.effect;
   try {
-    out.sizes = cli::number_grid(text.substr(eq + 1));
+    out.sizes = cmdline::number_grid(text.substr(eq + 1));
   } catch (const std::invalid_argument& bad) {
     fail(e, "SIZE '" + text.substr(eq + 1) + "': " + bad.what());
   }

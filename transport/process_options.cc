@@ -43,7 +43,7 @@ std::optional<int> parse_node_options(int argc, char** argv, const std::string& 
                                       const std::string& default_name, NodeOptions& options) {
   NodeOptions o;
   o.name = default_name;
-  cli::CommandLine cl(program, "The rig's " + default_name +
+  cmdline::CommandLine cl(program, "The rig's " + default_name +
                                    " process. 'rig run' starts it with the resolved scenario it writes next to\n"
                                    "the log and the run's LCM URL; it announces HEARTBEAT READY, waits for RUN_CONTROL\n"
                                    "start and runs until stopped.");

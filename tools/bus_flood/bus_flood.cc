@@ -66,26 +66,26 @@ int main(int argc, char** argv) {
   long burst = 0;
   std::size_t max_bytes = 600;
   unsigned long seed = 1;
-  nimble::cli::CommandLine cl(
+  nimble::cmdline::CommandLine cl(
       "bus_flood",
       "Publishes garbage on the rig's channels through liblcm, to test that a run survives it: each\n"
       "message goes to one of the rig's channels drawn at random, with 0 to --max-bytes random bytes,\n"
       "half of them behind the channel type's real fingerprint. Prints how many it sent.");
   cl->add_option("--url", url, "the LCM URL to publish on")->type_name("URL")->capture_default_str();
   cl->add_option("--rate", rate, "messages per second (without --burst)")
-      ->check(nimble::cli::kFinite & CLI::Range(1e-3, 1e9))
+      ->check(nimble::cmdline::kFinite & CLI::Range(1e-3, 1e9))
       ->type_name("HZ")
       ->capture_default_str();
   cl->add_option("--seconds", seconds, "how long it floods")
-      ->check(nimble::cli::kFinite & CLI::Range(0.0, 1e6))
+      ->check(nimble::cmdline::kFinite & CLI::Range(0.0, 1e6))
       ->type_name("S")
       ->capture_default_str();
   cl->add_option("--burst", burst, "N messages as fast as it can once per second instead of --rate (0: off)")
-      ->check(nimble::cli::kWholeNumber)
+      ->check(nimble::cmdline::kWholeNumber)
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--seed", seed, "the seed of the random choices")
-      ->check(nimble::cli::kWholeNumber)
+      ->check(nimble::cmdline::kWholeNumber)
       ->type_name("N")
       ->capture_default_str();
   cl->add_option("--max-bytes", max_bytes, "the longest payload (LCM fragments those over about 64 KB)")

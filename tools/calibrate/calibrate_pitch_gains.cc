@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
   int delay_steps = 0;
   double u0 = NAN, w0 = NAN, theta0 = NAN;
 
-  cli::CommandLine cl(
+  cmdline::CommandLine cl(
       "calibrate_pitch_gains",
       "Scans the pitch PD gains kp, kd (fixed dihedral map) on the linear closed loop of the longitudinal\n"
       "model and picks the pair whose closed loop is stable and whose least-damped complex poles are best\n"
@@ -176,34 +176,34 @@ int main(int argc, char** argv) {
                  "the plant, of which only the servo is read (default rig_configs/plant/nimble_plant.yaml)")
       ->type_name("FILE");
   cl->add_option("--map", map, "pitch_cmd_to_dihedral_rad (default: the controller file's)")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("RAD");
-  cli::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0.005:0.300:0.005)")->type_name("LIST"),
-                  [&kp_values](const std::string& v) { kp_values = cli::number_grid(v); });
-  cli::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0.0005:0.0400:0.0005)")->type_name("LIST"),
-                  [&kd_values](const std::string& v) { kd_values = cli::number_grid(v); });
+  cmdline::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0.005:0.300:0.005)")->type_name("LIST"),
+                  [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
+  cmdline::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0.0005:0.0400:0.0005)")->type_name("LIST"),
+                  [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
   cl->add_flag("--continuous", continuous, "the continuous loop instead of the discrete one at the controller rate");
   cl->add_option("--delay-steps", delay_steps, "extra command delay of the discrete loop [control periods]")
       ->check(CLI::Range(0, 100))
       ->type_name("N")
       ->capture_default_str();
-  cli::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
+  cmdline::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
                       ->type_name("KP,KD")
                       ->allow_extra_args(false)
                       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
                   [&checks](const std::string& v) {
-                    const std::vector<double> g = cli::number_list(v, ',');
+                    const std::vector<double> g = cmdline::number_list(v, ',');
                     if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
                     checks.push_back({g[0], g[1]});
                   });
   cl->add_flag("--full", full, "print every grid point, not only the best kd per kp");
   cl->add_option("--u0", u0, "replaces the model's trim u0 (the linearisation point, Eq B.15)")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("MPS");
   cl->add_option("--w0", w0, "replaces the model's trim w0 (enters A as the -w0 q term of udot, e.g. a climb)")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("MPS");
-  cl->add_option("--theta0", theta0, "replaces the model's trim theta0")->check(cli::kFinite)->type_name("RAD");
+  cl->add_option("--theta0", theta0, "replaces the model's trim theta0")->check(cmdline::kFinite)->type_name("RAD");
   if (const auto done = cl.parse(argc, argv)) return *done;
 
   try {

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   LinearLoopOptions options;
   TargetRanges target;
 
-  cli::CommandLine cl(
+  cmdline::CommandLine cl(
       "calibrate_roll_map",
       "Sweeps roll_cmd_to_delta_f_radps (and the doublet amplitude of a manoeuvre) on the linear closed\n"
       "loop and prints the state and delta_f ranges next to the published ones (thesis Table 9.4 set 1,\n"
@@ -86,30 +86,30 @@ int main(int argc, char** argv) {
                  "doublet train)")
       ->type_name("FILE");
   cl->add_option("--gain-set", gain_set, "the roll gain set of the controller")->type_name("NAME")->capture_default_str();
-  cli::each_value(cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")
+  cmdline::each_value(cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")
                       ->type_name("A,B,.."),
-                  [&maps](const std::string& v) { maps = cli::number_list(v); });
-  cli::each_value(cl->add_option("--amplitudes-deg", "the roll doublet amplitudes (default: the manoeuvre's own)")
+                  [&maps](const std::string& v) { maps = cmdline::number_list(v); });
+  cmdline::each_value(cl->add_option("--amplitudes-deg", "the roll doublet amplitudes (default: the manoeuvre's own)")
                       ->type_name("A,B,.."),
-                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = cli::number_list(v); });
+                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = cmdline::number_list(v); });
   cl->add_option("--tail-s", options.tail_s, "hover simulated after the manoeuvre")
-      ->check(cli::kFinite & CLI::NonNegativeNumber)
+      ->check(cmdline::kFinite & CLI::NonNegativeNumber)
       ->type_name("S")
       ->capture_default_str();
   cl->add_option("--target-p", target.p_radps, "published range of p [rad/s]")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("R")
       ->capture_default_str();
   cl->add_option("--target-v", target.v_mps, "published range of v [m/s]")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("R")
       ->capture_default_str();
   cl->add_option("--target-phi", target.phi_rad, "published range of phi [rad]")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("R")
       ->capture_default_str();
   cl->add_option("--target-df", target.delta_f_radps, "published range of delta_f [rad/s]")
-      ->check(cli::kFinite)
+      ->check(cmdline::kFinite)
       ->type_name("R")
       ->capture_default_str();
   if (const auto done = cl.parse(argc, argv)) return *done;

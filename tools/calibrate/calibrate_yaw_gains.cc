@@ -69,11 +69,11 @@ int main(int argc, char** argv) {
   std::string model_file = src + "/rig_configs/models/nimble_lateral4_yaw.yaml";
   std::string controller_file = src + "/rig_configs/controller/nimble_attitude.yaml";
   std::string gain_set = "fast";
-  std::vector<double> kp_values = cli::number_grid("0:1.5:0.01");
-  std::vector<double> kd_values = cli::number_grid("0:0.3:0.005");
+  std::vector<double> kp_values = cmdline::number_grid("0:1.5:0.01");
+  std::vector<double> kd_values = cmdline::number_grid("0:0.3:0.005");
   std::vector<GainSet> checks;
 
-  cli::CommandLine cl("calibrate_yaw_gains",
+  cmdline::CommandLine cl("calibrate_yaw_gains",
                       "Scans the yaw PD gains kp, kd (fixed wing-root map) on the linear roll-yaw loop of the\n"
                       "four-state model with the roll loop of a gain set, and picks the pair whose closed loop is\n"
                       "stable and whose least-damped complex poles are best damped.");
@@ -85,16 +85,16 @@ int main(int argc, char** argv) {
                  "the controller: roll gains and map, yaw map, cut-off (default rig_configs/controller/nimble_attitude.yaml)")
       ->type_name("FILE");
   cl->add_option("--gain-set", gain_set, "the roll gain set flown with the yaw loop")->capture_default_str();
-  cli::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0:1.5:0.01)")->type_name("LIST"),
-                  [&kp_values](const std::string& v) { kp_values = cli::number_grid(v); });
-  cli::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0:0.3:0.005)")->type_name("LIST"),
-                  [&kd_values](const std::string& v) { kd_values = cli::number_grid(v); });
-  cli::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
+  cmdline::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0:1.5:0.01)")->type_name("LIST"),
+                  [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
+  cmdline::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0:0.3:0.005)")->type_name("LIST"),
+                  [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
+  cmdline::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
                       ->type_name("KP,KD")
                       ->allow_extra_args(false)
                       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
                   [&checks](const std::string& v) {
-                    const std::vector<double> g = cli::number_list(v, ',');
+                    const std::vector<double> g = cmdline::number_list(v, ',');
                     if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
                     checks.push_back({g[0], g[1]});
                   });
