@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cmdline/args.h"
@@ -81,6 +82,12 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                  "states for identification and validation: smoothed (made offline from the recorded IMU and motion "
                  "capture, as the thesis's were), estimate (the on-board EKF's) or truth")
       ->check(CLI::IsMember({"smoothed", "estimate", "truth"}))
+      ->capture_default_str();
+  o.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  cl->add_option("--jobs", o.jobs,
+                 "seeds flown at a time, each in a worker process (default: this machine's CPUs); the tables are "
+                 "the same for any number")
+      ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   cl->add_option("--logs", o.work_dir, "where the flights' logs go")->capture_default_str()->type_name("DIR");
   cl->add_option("--controller", o.controller_file, "the controller copy of the closed-loop validation")

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -29,6 +30,8 @@
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include "reproduce/campaign_spec.h"
+#include "reproduce/seed_values.h"
+#include "campaign/worker_pool.h"
 #include "estimator/sensing_config.h"
 #include "scenario/scenario.h"
 
@@ -121,9 +124,6 @@ ident::IdentResult identify_flight(const ident::FlightData& data, const Vehicle&
   opt.extra_regressors = {{"Y", "pw"}, {"Y", "gphi"}};
   return ident::identify(data, vehicle, vehicle_file, opt);
 }
-
-/// The values of one table's cells on one seed: "row / column" -> value.
-using CellMap = std::map<std::string, double>;
 
 void put_fit(CellMap& m, const std::string& row, const ident::FitMetrics& f) {
   m[row + " / rxy"] = f.rxy;
@@ -251,33 +251,34 @@ class CampaignRun {
     }
   }
 
-  /// Table `id`'s flight flown on `seed` with a cause (`with`): its values, and the flight named
-  /// in `out.failures` if it did not fly as its scenario asks.
-  void fly_with(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
-                WithCause& out) {
+  /// Table `id`'s flight flown on `seed` with a cause (`with`), labelled `label` if it is not
+  /// flown yet: its values, the flight named in `failure` if it did not fly as its scenario asks,
+  /// and its record if this call flew it.
+  WithFlight fly_item(std::uint64_t seed, const std::string& id, const std::map<std::string, std::string>& with,
+                      const std::string& label) {
     seed_ = seed;
     plots_ = false;
-    const Flown& f = flight_with(table_flight(id), with);
-    out.seeds.push_back(table_on(id, f));
-    if (f.record.result != "ok") out.failures.push_back(fmt::format("{} seed {}: {}", f.record.name, seed, f.record.result));
+    const std::size_t flown_before = result_.flights.size();
+    const Flown& f = flight_with(table_flight(id), with, label);
+    WithFlight out;
+    out.cells = table_on(id, f);
+    if (f.record.result != "ok") out.failure = fmt::format("{} seed {}: {}", f.record.name, seed, f.record.result);
+    if (result_.flights.size() > flown_before) out.record = result_.flights.back();
+    return out;
   }
 
-  std::map<std::string, std::vector<CellMap>>& values() { return values_; }
-
-  /// The identified derivatives against the plant's, over the seeds flown.
-  std::vector<PlantCheck> plant_check() const {
-    std::vector<PlantCheck> out;
-    for (const auto& set : spec_.sets) {
-      for (const char* d : kCheckedDerivatives) {
-        PlantCheck c;
-        c.row = set.row;
-        c.derivative = d;
-        c.plant = plant_.at(set.row).at(d);
-        mean_interval(identified_.at(set.row).at(d), &c.mean, &c.sd, &c.interval);
-        out.push_back(c);
-      }
+  /// What this run flew on its one seed (fly_seed()): every table's values, the identified and
+  /// the plant's derivatives, the flights' records.
+  SeedValues seed_values() const {
+    SeedValues v;
+    v.seed = seed_;
+    for (const auto& [id, seeds] : values_) v.tables[id] = seeds.back();
+    for (const auto& [row, derivatives] : identified_) {
+      for (const auto& [d, values] : derivatives) v.identified[row][d] = values.back();
     }
-    return out;
+    v.plant = plant_;
+    v.flights = result_.flights;
+    return v;
   }
 
  private:
@@ -340,16 +341,17 @@ class CampaignRun {
     return flight_with(flight, {});
   }
 
-  /// The flight `name` on this seed with `with`, flown once.
-  const Flown& flight_with(const std::string& name, const std::map<std::string, std::string>& with) {
+  /// The flight `name` on this seed with `with`, flown once; a flight with a cause is labelled
+  /// `label` (the campaign's plan numbers them, plan_items()).
+  const Flown& flight_with(const std::string& name, const std::map<std::string, std::string>& with,
+                           const std::string& label = "") {
     const std::string key = fmt::format("{}|{}|{}", seed_, name, overrides_key(with));
     auto it = flown_.find(key);
     if (it != flown_.end()) return it->second;
     std::vector<Override> ov;
     if (name == "identification") ov = set_overrides(spec_.sets.front());
     for (const auto& [k, v] : with) ov.push_back({k, v});
-    const std::string label = with.empty() ? name : fmt::format("{}_with_{}", name, ++variants_);
-    Flown f = fly(o_, seed_, label, spec_.flights.at(name), ov);
+    Flown f = fly(o_, seed_, with.empty() ? name : label, spec_.flights.at(name), ov);
     result_.flights.push_back(f.record);
     return flown_.emplace(key, std::move(f)).first->second;
   }
@@ -395,7 +397,6 @@ class CampaignRun {
   std::map<std::uint64_t, ident::IdentResult> set1_;  ///< set 1's identified model, by seed
   std::map<std::uint64_t, Flown> set1_flight_;        ///< set 1's identification flight, by seed
   std::map<std::string, Flown> flown_;
-  int variants_ = 0;
   std::map<std::string, std::vector<CellMap>> values_;
   std::map<std::string, std::map<std::string, std::vector<double>>> identified_;  ///< row -> derivative -> seeds
   std::map<std::string, std::map<std::string, double>> plant_;                    ///< row -> derivative
@@ -430,6 +431,93 @@ void mark_repeats(std::vector<Table>& tables, const std::map<std::string, std::m
   }
 }
 
+
+/// The flights with a cause, in the order the campaign flies them on each seed: the reasons'
+/// causes (each table and cause once), then every closed-loop cause on Tables 9-11.
+struct PlanItem {
+  std::string table;
+  std::map<std::string, std::string> with;
+};
+
+std::vector<PlanItem> plan_items(const CampaignSpec& spec) {
+  std::vector<PlanItem> items;
+  std::set<std::string> seen;
+  for (const std::string& id : campaign_table_ids()) {
+    for (const Reason& r : spec.tables.at(id).reasons) {
+      if (!r.with.empty() && seen.insert(id + "|" + overrides_key(r.with)).second) items.push_back({id, r.with});
+    }
+  }
+  for (const CauseSpec& cause : spec.causes) {
+    for (const std::string id : {"9", "10", "11"}) items.push_back({id, cause.with});
+  }
+  return items;
+}
+
+/// Each item's flight's label on each seed: "<flight>_with_<k>", k counting the flights with a
+/// cause item by item and seed by seed; a flight two items share (the same flight, cause and
+/// seed) is flown once, under the first item's label.
+std::vector<std::vector<std::string>> plan_labels(const std::vector<PlanItem>& items,
+                                                  const std::vector<std::uint64_t>& seeds) {
+  std::vector<std::vector<std::string>> labels(items.size(), std::vector<std::string>(seeds.size()));
+  std::map<std::string, std::string> label_of;
+  int k = 0;
+  for (std::size_t j = 0; j < items.size(); ++j) {
+    const std::string flight = table_flight(items[j].table);
+    for (std::size_t i = 0; i < seeds.size(); ++i) {
+      const std::string key = fmt::format("{}|{}|{}", seeds[i], flight, overrides_key(items[j].with));
+      auto it = label_of.find(key);
+      if (it == label_of.end()) it = label_of.emplace(key, fmt::format("{}_with_{}", flight, ++k)).first;
+      labels[j][i] = it->second;
+    }
+  }
+  return labels;
+}
+
+/// The identified derivatives against the plant's, over the seeds flown.
+std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<SeedValues>& seeds) {
+  std::vector<PlantCheck> out;
+  for (const auto& set : spec.sets) {
+    for (const char* d : kCheckedDerivatives) {
+      PlantCheck c;
+      c.row = set.row;
+      c.derivative = d;
+      c.plant = seeds.front().plant.at(set.row).at(d);
+      std::vector<double> x;
+      for (const SeedValues& v : seeds) x.push_back(v.identified.at(set.row).at(d));
+      mean_interval(x, &c.mean, &c.sd, &c.interval);
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+/// Every seed flown in the campaigns' worker pool (`jobs` at a time), each with all its flights
+/// (its own and those with a cause), and read back in the seeds' order.
+std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& spec, const std::vector<PlanItem>& items) {
+  const auto labels = plan_labels(items, o.seeds);
+  campaign::PoolWork pool;
+  pool.work = [&](std::size_t i) {
+    CampaignResult flown;
+    CampaignRun run(o, spec, flown);
+    run.fly_seed(o.seeds[i], i == 0);
+    SeedValues v = run.seed_values();
+    for (std::size_t j = 0; j < items.size(); ++j) {
+      v.with.push_back(run.fly_item(o.seeds[i], items[j].table, items[j].with, labels[j][i]));
+    }
+    return seed_values_line(v);
+  };
+  pool.died = [](std::size_t, const std::string& how) { return "error the worker flying it died (" + how + ")"; };
+  const std::vector<std::string> lines = campaign::run_in_workers(o.seeds.size(), std::max(1, o.jobs), pool);
+  std::vector<SeedValues> seeds;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].rfind("error ", 0) == 0) {
+      throw std::runtime_error(fmt::format("rig reproduce: seed {}: {}", o.seeds[i], lines[i].substr(6)));
+    }
+    seeds.push_back(seed_values_from_line(lines[i]));
+  }
+  return seeds;
+}
+
 }  // namespace
 
 CampaignResult run_campaign(const CampaignOptions& o) {
@@ -447,10 +535,14 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   result.clock = o.clock;
   result.seeds = o.seeds;
 
-  CampaignRun run(o, spec, result);
-  for (std::size_t i = 0; i < o.seeds.size(); ++i) run.fly_seed(o.seeds[i], i == 0);
-  result.plant_check = run.plant_check();
-  auto& values = run.values();
+  const std::vector<PlanItem> items = plan_items(spec);
+  const std::vector<SeedValues> seeds = fly_seeds(o, spec, items);
+  std::map<std::string, std::vector<CellMap>> values;
+  for (const SeedValues& v : seeds) {
+    result.flights.insert(result.flights.end(), v.flights.begin(), v.flights.end());
+    for (const auto& [id, cells] : v.tables) values[id].push_back(cells);
+  }
+  result.plant_check = plant_check(spec, seeds);
   // The tables that are arithmetic on the model files: the same on every seed.
   {
     CellMap eig, nd;
@@ -466,15 +558,19 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     values["9.6-model"] = {nd};
     values["8.8"] = {table_8_8(spec)};
   }
-  // The flights with each reason's cause, and the closed-loop causes.
-  std::map<std::string, std::map<std::string, WithCause>> with;  // table -> overrides -> flights
-  for (const std::string& id : campaign_table_ids()) {
-    for (const Reason& r : spec.tables.at(id).reasons) {
-      if (r.with.empty()) continue;
-      WithCause& flown = with[id][overrides_key(r.with)];
-      if (!flown.seeds.empty()) continue;
-      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, r.with, flown);
+  // The flights with each cause, over the seeds, item by item.
+  std::vector<WithCause> flown(items.size());
+  for (std::size_t j = 0; j < items.size(); ++j) {
+    for (const SeedValues& v : seeds) {
+      flown[j].seeds.push_back(v.with[j].cells);
+      if (!v.with[j].failure.empty()) flown[j].failures.push_back(v.with[j].failure);
+      if (v.with[j].record) result.flights.push_back(*v.with[j].record);
     }
+  }
+  std::map<std::string, std::map<std::string, WithCause>> with;  // table -> overrides -> flights
+  std::size_t j = 0;
+  for (; j < items.size() && j < items.size() - 3 * spec.causes.size(); ++j) {
+    with[items[j].table][overrides_key(items[j].with)] = flown[j];
   }
   for (const CauseSpec& cause : spec.causes) {
     CauseStudy study;
@@ -482,9 +578,8 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     study.source = cause.source;
     for (const auto& [k, v] : cause.with) study.overrides.push_back(k + "=" + v);
     for (const std::string id : {"9", "10", "11"}) {
-      WithCause flown;
-      for (const std::uint64_t seed : o.seeds) run.fly_with(seed, id, cause.with, flown);
-      study.failures.insert(study.failures.end(), flown.failures.begin(), flown.failures.end());
+      const WithCause& cause_flown = flown[j++];
+      study.failures.insert(study.failures.end(), cause_flown.failures.begin(), cause_flown.failures.end());
       const TableSpec& t = spec.tables.at(id);
       for (const auto& row : t.row_order) {
         CauseCell c;
@@ -495,7 +590,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
         c.published = t.published.at(row).at("R2");
         double sd = 0, hw = 0;
         mean_interval(over_seeds(values.at(id), row + " / R2"), &c.rig, &sd, &hw);
-        mean_interval(over_seeds(flown.seeds, row + " / R2"), &c.with_cause, &sd, &c.interval);
+        mean_interval(over_seeds(cause_flown.seeds, row + " / R2"), &c.with_cause, &sd, &c.interval);
         study.cells.push_back(c);
       }
     }

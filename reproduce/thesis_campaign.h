@@ -117,6 +117,9 @@ struct CampaignOptions {
   /// EKF's) or "truth" (the plant's).
   std::string states = "smoothed";
   bool progress = false;            ///< a line per flight on stderr
+  /// Seeds flown at a time, each in a worker of the campaigns' pool (campaign/worker_pool.h); the
+  /// tables are the same for any number.
+  int jobs = 1;
 };
 
 /// Flies the campaign and builds the tables.

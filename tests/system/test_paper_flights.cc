@@ -224,6 +224,30 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   CHECK(j["causes"].size() == 3);
 }
 
+TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown one at a time or two at once",
+          "[system]") {
+  // Each seed is one item of the campaigns' worker pool; what comes back must not depend on how
+  // many workers flew them (wall times and the logs' directory aside).
+  const std::string dir = nimble::test::scratch_dir("paper_reproduce_jobs");
+  std::string tables[2];
+  for (const int jobs : {1, 2}) {
+    const std::string json = dir + "/tables" + std::to_string(jobs) + ".json";
+    const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-2 --jobs " + std::to_string(jobs) +
+                                         " --logs " + dir + "/logs" + std::to_string(jobs) + " --json " + json);
+    INFO(r.out << r.err);
+    REQUIRE((r.exit_code == 0 || r.exit_code == 1));
+    YAML::Node j = YAML::LoadFile(json);
+    j.remove("wall_s");
+    for (auto f : j["flights"]) {
+      f.remove("wall_s");
+      f["log"] = std::filesystem::path(f["log"].as<std::string>()).filename().string();
+    }
+    CHECK(j["flights"].size() > 30);
+    tables[jobs - 1] = YAML::Dump(j);
+  }
+  CHECK(tables[0] == tables[1]);
+}
+
 TEST_CASE("rig reproduce: a campaign file with a table left out is refused, naming the key", "[system]") {
   const std::string dir = nimble::test::scratch_dir("paper_reproduce_bad");
   YAML::Node c = YAML::LoadFile(kConfigs + "reproduce/thesis.yaml");

@@ -1,0 +1,101 @@
+#include "reproduce/seed_values.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace nimble::reproduce {
+namespace {
+
+using Json = nlohmann::json;
+
+/// A double as JSON: a number (nlohmann writes the shortest text that reads back to the same
+/// double), or null for NaN, which JSON has not.
+Json number(double x) { return std::isnan(x) ? Json(nullptr) : Json(x); }
+double number_of(const Json& j) { return j.is_null() ? std::numeric_limits<double>::quiet_NaN() : j.get<double>(); }
+
+Json cells_json(const CellMap& m) {
+  Json j = Json::object();
+  for (const auto& [k, v] : m) j[k] = number(v);
+  return j;
+}
+CellMap cells_of(const Json& j) {
+  CellMap m;
+  for (auto it = j.begin(); it != j.end(); ++it) m[it.key()] = number_of(it.value());
+  return m;
+}
+
+Json nested_json(const std::map<std::string, std::map<std::string, double>>& m) {
+  Json j = Json::object();
+  for (const auto& [row, values] : m) j[row] = cells_json(values);
+  return j;
+}
+std::map<std::string, std::map<std::string, double>> nested_of(const Json& j) {
+  std::map<std::string, std::map<std::string, double>> m;
+  for (auto it = j.begin(); it != j.end(); ++it) m[it.key()] = cells_of(it.value());
+  return m;
+}
+
+Json record_json(const FlightRecord& r) {
+  return {{"name", r.name}, {"seed", r.seed}, {"scenario", r.scenario}, {"log", r.log}, {"result", r.result},
+          {"controlled", r.controlled}, {"sim_s", number(r.sim_s)}, {"wall_s", number(r.wall_s)}};
+}
+FlightRecord record_of(const Json& j) {
+  FlightRecord r;
+  r.name = j.at("name").get<std::string>();
+  r.seed = j.at("seed").get<std::uint64_t>();
+  r.scenario = j.at("scenario").get<std::string>();
+  r.log = j.at("log").get<std::string>();
+  r.result = j.at("result").get<std::string>();
+  r.controlled = j.at("controlled").get<bool>();
+  r.sim_s = number_of(j.at("sim_s"));
+  r.wall_s = number_of(j.at("wall_s"));
+  return r;
+}
+
+}  // namespace
+
+std::string seed_values_line(const SeedValues& v) {
+  Json j;
+  j["seed"] = v.seed;
+  j["tables"] = Json::object();
+  for (const auto& [id, cells] : v.tables) j["tables"][id] = cells_json(cells);
+  j["identified"] = nested_json(v.identified);
+  j["plant"] = nested_json(v.plant);
+  j["flights"] = Json::array();
+  for (const FlightRecord& r : v.flights) j["flights"].push_back(record_json(r));
+  j["with"] = Json::array();
+  for (const WithFlight& w : v.with) {
+    j["with"].push_back({{"cells", cells_json(w.cells)},
+                         {"failure", w.failure},
+                         {"record", w.record ? record_json(*w.record) : Json(nullptr)}});
+  }
+  return j.dump();
+}
+
+SeedValues seed_values_from_line(const std::string& line) {
+  try {
+    const Json j = Json::parse(line);
+    SeedValues v;
+    v.seed = j.at("seed").get<std::uint64_t>();
+    for (auto it = j.at("tables").begin(); it != j.at("tables").end(); ++it) v.tables[it.key()] = cells_of(it.value());
+    v.identified = nested_of(j.at("identified"));
+    v.plant = nested_of(j.at("plant"));
+    for (const Json& r : j.at("flights")) v.flights.push_back(record_of(r));
+    for (const Json& w : j.at("with")) {
+      WithFlight f;
+      f.cells = cells_of(w.at("cells"));
+      f.failure = w.at("failure").get<std::string>();
+      if (!w.at("record").is_null()) f.record = record_of(w.at("record"));
+      v.with.push_back(std::move(f));
+    }
+    return v;
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("rig reproduce: a seed's values do not read back (" + std::string(e.what()) + "): " +
+                             line.substr(0, 200));
+  }
+}
+
+}  // namespace nimble::reproduce

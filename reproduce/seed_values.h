@@ -1,0 +1,46 @@
+#pragma once
+/// What one seed of `rig reproduce thesis` gives: the values of every table's cells on its
+/// flights, the derivatives it identified, its flights' records, and the values of every flight
+/// flown with a cause. Each seed is one item of the campaigns' worker pool
+/// (campaign/worker_pool.h): a worker flies it and hands it over as one line of JSON, which reads
+/// back exactly (doubles to the bit, NaN included), so the tables come out the same whether the
+/// seeds flew in one process or in several.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "reproduce/thesis_campaign.h"
+
+namespace nimble::reproduce {
+
+/// The values of one table's cells on one seed: "row / column" -> value.
+using CellMap = std::map<std::string, double>;
+
+/// One flight flown with a cause on this seed: its table's values, why it did not fly as its
+/// scenario asks (empty if it did), and its record if this item flew it (a flight two items share
+/// is flown once).
+struct WithFlight {
+  CellMap cells;
+  std::string failure;
+  std::optional<FlightRecord> record;
+};
+
+struct SeedValues {
+  std::uint64_t seed = 1;
+  std::map<std::string, CellMap> tables;                        ///< table id -> its cells
+  std::map<std::string, std::map<std::string, double>> identified;  ///< set row -> derivative -> value
+  std::map<std::string, std::map<std::string, double>> plant;       ///< set row -> derivative -> the plant's
+  std::vector<FlightRecord> flights;                            ///< the seed's own flights, in flying order
+  std::vector<WithFlight> with;                                 ///< one per flight with a cause, in the plan's order
+};
+
+/// One line of JSON.
+std::string seed_values_line(const SeedValues& values);
+
+/// Reads seed_values_line()'s output. @throws std::runtime_error naming what is wrong.
+SeedValues seed_values_from_line(const std::string& line);
+
+}  // namespace nimble::reproduce
