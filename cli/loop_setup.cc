@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "controller/manoeuvre.h"
+#include "plant/effects/actuator_delay.h"
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 
@@ -38,9 +39,9 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
   s.flap_pole_radps = plant.flap.pole_radps;
   s.plant_rate_hz = plant.rate_hz;
   const auto& fx = plant.effects;
-  if (fx.actuator_delay.enabled && fx.actuator_delay.delay_s > 0.0) {
+  if (fx.get<plant::ActuatorDelayConfig>().enabled && fx.get<plant::ActuatorDelayConfig>().delay_s > 0.0) {
     // The plant applies the newest command issued at least delay_s before each of its steps.
-    s.actuator_delay_s = std::ceil(fx.actuator_delay.delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
+    s.actuator_delay_s = std::ceil(fx.get<plant::ActuatorDelayConfig>().delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
   }
   // Every enabled plant effect the linear loop leaves out, from the registry.
   for (const plant::PlantEffect& e : plant::plant_effects()) {

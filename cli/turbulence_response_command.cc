@@ -25,6 +25,7 @@
 #include "core/vehicle.h"
 #include "ident/plots.h"
 #include "ident/rig_log.h"
+#include "plant/effects/lateral_gust.h"
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
@@ -59,7 +60,7 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
   Setup s;
   ConfigMap plant_section = scenario.section("plant");
   const plant::PlantConfig plant = plant::plant_config_from(plant_section);
-  const auto& gust = plant.effects.lateral_gust;
+  const auto& gust = plant.effects.get<plant::LateralGustConfig>();
   if (!gust.enabled || gust.form != plant::GustForm::kDryden || !(gust.sigma_mps > 0.0)) {
     throw std::invalid_argument(file + ": plant.effects.lateral_gust must be enabled with form dryden and "
                                 "sigma_mps > 0 (it is " + std::string(gust.enabled ? "enabled" : "disabled") + ", " +

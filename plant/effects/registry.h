@@ -12,7 +12,10 @@
 
 #include "core/config.h"
 #include "core/model.h"
+#include "plant/effects/effect_process.h"
+#include "plant/effects/effect_sizing.h"
 #include "plant/effects/effects_config.h"
+#include "plant/effects/model_section.h"
 
 namespace nimble::plant {
 

@@ -17,6 +17,14 @@
 #include "core/effects.h"
 #include "core/model.h"
 #include "core/modes.h"
+#include "plant/effects/actuator_delay.h"
+#include "plant/effects/constant_load.h"
+#include "plant/effects/effectiveness_drift.h"
+#include "plant/effects/effectiveness_step.h"
+#include "plant/effects/flapping_forcing.h"
+#include "plant/effects/forward_speed_coupling.h"
+#include "plant/effects/lateral_gust.h"
+#include "plant/effects/lateral_inflow.h"
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 #include "plant_fixture.h"
@@ -142,8 +150,8 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
   // k Yp, k Yv it flies as the gain k does (lateral3).
   const double k = 0.5;
   PlantConfig by_gain = cfg;
-  by_gain.effects.forward_speed_coupling.enabled = true;
-  by_gain.effects.forward_speed_coupling.gain_per_mps = k;
+  by_gain.effects.get<plant::ForwardSpeedCouplingConfig>().enabled = true;
+  by_gain.effects.get<plant::ForwardSpeedCouplingConfig>().gain_per_mps = k;
   const Fixture h = with_effect("forward_speed_coupling", {{"L_up", k * f.model.at("Lp")},
                                                            {"L_uv", k * f.model.at("Lv")},
                                                            {"Y_up", k * f.model.at("Yp")},
@@ -158,7 +166,7 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
 
   // A plant file with both forms is refused.
   PlantConfig both = by_gain;
-  both.effects.forward_speed_coupling.Y_uv_ns2pm2 = 0.01;
+  both.effects.get<plant::ForwardSpeedCouplingConfig>().Y_uv_ns2pm2 = 0.01;
   CHECK_THROWS_WITH(PlantModel(f.model, lon, f.vehicle, both), Catch::Contains("forward_speed_coupling"));
 }
 
@@ -166,8 +174,8 @@ TEST_CASE("actuator delay from the model postpones the delta_f response by delay
   // The plant file's delay (50 ms) is replaced by the model's (20 ms).
   const Fixture g = with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
   PlantConfig cfg;
-  cfg.effects.actuator_delay.enabled = true;
-  cfg.effects.actuator_delay.delay_s = 0.050;
+  cfg.effects.get<plant::ActuatorDelayConfig>().enabled = true;
+  cfg.effects.get<plant::ActuatorDelayConfig>().delay_s = 0.050;
   PlantModel plant = make_plant(g, cfg), undelayed = make_plant(Fixture{});
   ActuatorInput cmd = plant.trim_command();
   cmd.flap_freq_left_radps += 10;
@@ -212,12 +220,12 @@ TEST_CASE("flapping forcing from the model oscillates at the plant's flapping fr
                                                      {"L_sin2", 0.6e-3}, {"L_cos2", 0.8e-3}, {"Y_cos1", 1.0e-2},
                                                      {"Y_sin2", -3.0e-3}, {"Y_cos2", 4.0e-3}});
   PlantConfig by_config;
-  by_config.effects.flapping_forcing.enabled = true;
-  by_config.effects.flapping_forcing.roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
-  by_config.effects.flapping_forcing.side_force_amplitudes_n = {1.0e-2, 5.0e-3};
+  by_config.effects.get<plant::FlappingForcingConfig>().enabled = true;
+  by_config.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
+  by_config.effects.get<plant::FlappingForcingConfig>().side_force_amplitudes_n = {1.0e-2, 5.0e-3};
   PlantConfig other;  // the plant file's own forcing, replaced by the model's
-  other.effects.flapping_forcing = by_config.effects.flapping_forcing;
-  other.effects.flapping_forcing.roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
+  other.effects.get<plant::FlappingForcingConfig>() = by_config.effects.get<plant::FlappingForcingConfig>();
+  other.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
   PlantModel a = make_plant(Fixture{}, by_config), b = make_plant(h, other);
   for (int i = 0; i < 500; ++i) {
     a.step(a.trim_command());
@@ -238,7 +246,7 @@ TEST_CASE("sensor_bias from the model is a constant roll moment and side force",
   CHECK(biased.truth().specific_force_body_mps2.y() == Approx(Y0 / g.vehicle.mass_kg).epsilon(1e-12));
   // The same as the plant file's constant load.
   PlantConfig by_config;
-  by_config.effects.constant_load = {true, L0, Y0};
+  by_config.effects.get<plant::ConstantLoadConfig>() = {true, L0, Y0};
   PlantModel a = make_plant(Fixture{}, by_config);
   for (int i = 0; i < 200; ++i) {
     a.step(a.trim_command());
@@ -298,10 +306,10 @@ TEST_CASE("yaw_coupling from the model sets Lr and Yr (acting where r is a state
 TEST_CASE("lateral_gust from the model has the model's sigma and tau", "[plant][model_effects]") {
   const Fixture g = with_effect("lateral_gust", {{"sigma_mps", 0.2}, {"tau_s", 0.05}});
   PlantConfig file_gust;  // the plant file's gust, replaced by the model's
-  file_gust.effects.lateral_gust = {true, 1.0, 0.5};
+  file_gust.effects.get<plant::LateralGustConfig>() = {true, 1.0, 0.5};
   file_gust.seed = 7;
   PlantConfig by_config;
-  by_config.effects.lateral_gust = {true, 0.2, 0.05};
+  by_config.effects.get<plant::LateralGustConfig>() = {true, 0.2, 0.05};
   by_config.seed = 7;
   PlantModel a = make_plant(g, file_gust), b = make_plant(Fixture{}, by_config);
   CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
@@ -338,7 +346,7 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
   };
   // Changed from the start: the same as a model with the changed derivatives.
   PlantConfig from_start;
-  from_start.effects.effectiveness_step = {true, 0.0, fL, fY};
+  from_start.effects.get<plant::EffectivenessStepConfig>() = {true, 0.0, fL, fY};
   Fixture scaled;
   scaled.model.derivatives["L_df"] *= 1.0 + fL;
   scaled.model.derivatives["Y_df"] *= 1.0 + fY;
@@ -348,7 +356,7 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
   CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-2);
   // Changed at 0.3 s: the plain plant's flight until then, another after.
   PlantConfig later;
-  later.effects.effectiveness_step = {true, 0.3, fL, fY};
+  later.effects.get<plant::EffectivenessStepConfig>() = {true, 0.3, fL, fY};
   const int before = static_cast<int>(0.3 / make_plant(Fixture{}).dt_s()) - 1;
   CHECK(flown(make_plant(Fixture{}, later), before).truth().omega_body_radps.x() ==
         flown(make_plant(Fixture{}), before).truth().omega_body_radps.x());
@@ -390,8 +398,8 @@ TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 
     return plant.truth().omega_body_radps.x();
   };
   PlantConfig drift, none;
-  drift.effects.effectiveness_drift = {true, -0.5, 0.0};
-  none.effects.effectiveness_drift = {true, 0.0, 0.0};
+  drift.effects.get<plant::EffectivenessDriftConfig>() = {true, -0.5, 0.0};
+  none.effects.get<plant::EffectivenessDriftConfig>() = {true, 0.0, 0.0};
   CHECK(flown(make_plant(Fixture{}, none)) == flown(make_plant(Fixture{})));
   CHECK(std::fabs(flown(make_plant(Fixture{}, drift)) - flown(make_plant(Fixture{}))) > 1e-5);
 
@@ -453,12 +461,12 @@ TEST_CASE("effects act through their processes: none when all are off, one per e
   CHECK(plant::make_effect_processes(off, context).empty());
 
   plant::EffectsConfig on;
-  on.lateral_inflow.enabled = true;
-  on.lateral_inflow.Y_vv_ns2pm2 = -0.02;
-  on.actuator_delay.enabled = true;
-  on.actuator_delay.delay_s = 0.0;  // on with no delay: acts on nothing, so no process
-  on.lateral_gust.enabled = true;
-  on.lateral_gust.sigma_mps = 0.3;
+  on.get<plant::LateralInflowConfig>().enabled = true;
+  on.get<plant::LateralInflowConfig>().Y_vv_ns2pm2 = -0.02;
+  on.get<plant::ActuatorDelayConfig>().enabled = true;
+  on.get<plant::ActuatorDelayConfig>().delay_s = 0.0;  // on with no delay: acts on nothing, so no process
+  on.get<plant::LateralGustConfig>().enabled = true;
+  on.get<plant::LateralGustConfig>().sigma_mps = 0.3;
   const auto processes = plant::make_effect_processes(on, context);
   REQUIRE(processes.size() == 2);
   double L = 0.0, Y = 0.0;
@@ -479,12 +487,12 @@ TEST_CASE("the flapping forcing draws its phases whether it is on or not: the gu
     std::normal_distribution<double> normal(0.0, 1.0);
     plant::ProcessContext context{1e-3, rng, normal};
     plant::EffectsConfig fx;
-    fx.flapping_forcing.enabled = forcing_on;
-    fx.flapping_forcing.roll_moment_amplitudes_nm = {2e-3, 1e-3};
-    fx.flapping_forcing.side_force_amplitudes_n = {1e-2};
-    fx.lateral_gust.enabled = true;
-    fx.lateral_gust.form = plant::GustForm::kDryden;
-    fx.lateral_gust.sigma_mps = 0.5;
+    fx.get<plant::FlappingForcingConfig>().enabled = forcing_on;
+    fx.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2e-3, 1e-3};
+    fx.get<plant::FlappingForcingConfig>().side_force_amplitudes_n = {1e-2};
+    fx.get<plant::LateralGustConfig>().enabled = true;
+    fx.get<plant::LateralGustConfig>().form = plant::GustForm::kDryden;
+    fx.get<plant::LateralGustConfig>().sigma_mps = 0.5;
     auto processes = plant::make_effect_processes(fx, context);
     REQUIRE(processes.size() == (forcing_on ? 2u : 1u));
     for (int k = 0; k < 50; ++k) {
