@@ -101,12 +101,6 @@ std::string run_tag(const Campaign& c, std::size_t i) {
   return "set" + std::to_string(c.set_of(i) + 1) + "-seed" + std::to_string(c.seed_of(i));
 }
 
-/// The end of a child process as the result files name it.
-std::string how_it_ended(int status) {
-  return WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
-                             : "exit code " + std::to_string(WEXITSTATUS(status));
-}
-
 /// `rig run` itself for a clock other than in process (it makes its own network namespace), in a
 /// child that does not outlive this worker; returns how it ended.
 std::string run_rig(const RunOptions& options, const std::string& json_file, const std::string& log_file) {
@@ -135,7 +129,7 @@ std::string run_rig(const RunOptions& options, const std::string& json_file, con
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) throw std::runtime_error(std::string("rig sweep: waitpid failed: ") + std::strerror(errno));
   }
-  return how_it_ended(status);
+  return exit_description(status);
 }
 
 /// In a worker: flies one run, with what it prints in `out_file` and its report in `json_file`;

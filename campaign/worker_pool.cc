@@ -100,8 +100,7 @@ std::string how_it_ended(pid_t pid) {
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
-  return "exit code " + std::to_string(WEXITSTATUS(status));
+  return exit_description(status);
 }
 
 void retire(Worker& w) {
@@ -111,6 +110,11 @@ void retire(Worker& w) {
 }
 
 }  // namespace
+
+std::string exit_description(int status) {
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+  return "exit code " + std::to_string(WEXITSTATUS(status));
+}
 
 std::vector<std::string> run_in_workers(std::size_t n, int jobs, const PoolWork& pool) {
   const auto& work = pool.work;

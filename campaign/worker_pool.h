@@ -26,6 +26,10 @@ struct PoolWork {
   std::function<void(std::size_t, const std::string&, std::size_t done)> finished;
 };
 
+/// How a child process ended, from its wait status: "exit code N" or "killed by signal S" (the
+/// words a campaign's result files and a died() callback give).
+std::string exit_description(int status);
+
 /// Does every item i in [0, n) once, in min(jobs, n) forked workers, and returns the results by
 /// index. A worker does not outlive the caller (it is killed if the caller dies). The caller must
 /// have no other threads running (fork).

@@ -2,6 +2,8 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -43,6 +45,15 @@ ConfigError::ConfigError(std::string file, std::string key, std::string value,
       value_(std::move(value)),
       problem_(std::move(problem)),
       line_(line) {}
+
+std::string shortest_text(double x) {
+  char text[40];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, x);
+    if (std::strtod(text, nullptr) == x) break;
+  }
+  return text;
+}
 
 bool Range::contains(double x) const {
   const bool above = lo_open ? x > lo : x >= lo;

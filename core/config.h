@@ -71,6 +71,10 @@ struct Range {
   std::string describe() const;
 };
 
+/// The shortest text that reads back as `x` (15 to 17 significant digits): a number written into
+/// an override or a file, read back to the same double.
+std::string shortest_text(double x);
+
 /// One YAML mapping of a config file, with strict key accounting.
 ///
 /// Each accessor marks its key as used; `finish()` then reports any key that

@@ -65,14 +65,14 @@ EffectSizes parse_effect_sizes(const std::string& text) {
     fail(e, "SIZE '" + text.substr(eq + 1) + "': " + bad.what());
   }
   for (const double s : out.sizes) {
-    if (!e.range.contains(s)) fail(e, "SIZE " + plant::size_text(s) + " is not " + e.range.describe());
+    if (!e.range.contains(s)) fail(e, "SIZE " + shortest_text(s) + " is not " + e.range.describe());
   }
   return out;
 }
 
 std::vector<Override> size_overrides(const YAML::Node& tree, const std::string& effect, double size) {
   const SizedEffect& e = sized_effect(effect);
-  if (!e.range.contains(size)) fail(e, "SIZE " + plant::size_text(size) + " is not " + e.range.describe());
+  if (!e.range.contains(size)) fail(e, "SIZE " + shortest_text(size) + " is not " + e.range.describe());
   const std::string prefix = "plant.effects." + effect + ".";
   std::vector<Override> out = {{prefix + "enabled", size == 0.0 ? "false" : "true"}};
   if (size == 0.0) return out;

@@ -16,16 +16,6 @@
 namespace nimble::detection_power {
 namespace {
 
-/// The shortest text that reads back as `x`.
-std::string number(double x) {
-  char text[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, x);
-    if (std::strtod(text, nullptr) == x) break;
-  }
-  return text;
-}
-
 std::string manoeuvre_file_of(const Scenario& scenario) {
   const YAML::Node m = scenario.root["manoeuvre"];
   if (!m || !m.IsScalar()) {
@@ -65,7 +55,7 @@ double block_length_s(const Scenario& scenario) {
 
 RecordLength record_length(const Scenario& scenario, double length_s, const std::string& dir) {
   if (!(std::isfinite(length_s) && length_s > 0.0)) {
-    throw std::invalid_argument("record length " + number(length_s) + " s: must be > 0");
+    throw std::invalid_argument("record length " + shortest_text(length_s) + " s: must be > 0");
   }
   RecordLength out;
   out.length_s = length_s;
@@ -73,7 +63,7 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
   const Manoeuvre manoeuvre = load_manoeuvre(file);
   out.block_s = std::max(scenario.duration_s, manoeuvre.duration_s());
   out.repetitions = std::max(1, static_cast<int>(std::ceil(length_s / out.block_s - 1e-9)));
-  if (length_s != scenario.duration_s) out.overrides.push_back({"duration_s", number(length_s)});
+  if (length_s != scenario.duration_s) out.overrides.push_back({"duration_s", shortest_text(length_s)});
   if (out.repetitions == 1) return out;
 
   const double pad_s = out.block_s - manoeuvre.duration_s();
@@ -81,7 +71,7 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
                                                                    std::to_string(out.repetitions) + ".yaml");
   YAML::Emitter emitter;
   emitter << repeated(YAML::LoadFile(file), out.repetitions, pad_s);
-  write_file(path, "# " + file + " flown " + std::to_string(out.repetitions) + " times, " + number(pad_s) +
+  write_file(path, "# " + file + " flown " + std::to_string(out.repetitions) + " times, " + shortest_text(pad_s) +
                         " s of level hover between (rig discrepancy --power)\n" + emitter.c_str() + "\n");
   out.manoeuvre_file = path.string();
   out.overrides.push_back({"manoeuvre", out.manoeuvre_file});

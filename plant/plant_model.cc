@@ -225,7 +225,8 @@ ActuatorInput PlantModel::trim_command() const {
 
 ActuatorInput PlantModel::actuated(const ActuatorInput& cmd) {
   ActuatorInput out = cmd;
-  for (auto& effect : effects_) out = effect->command(t_s_, out, trim_command());
+  const ActuatorInput trim = trim_command();
+  for (auto& effect : effects_) out = effect->command(t_s_, out, trim);
   return out;
 }
 

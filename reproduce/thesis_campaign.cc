@@ -201,6 +201,11 @@ std::string overrides_key(const std::map<std::string, std::string>& with) {
   return k;
 }
 
+/// A flight of the campaign: `flight` flown on `seed` with `with`; flown once per key.
+std::string flight_key(std::uint64_t seed, const std::string& flight, const std::map<std::string, std::string>& with) {
+  return fmt::format("{}|{}|{}", seed, flight, overrides_key(with));
+}
+
 /// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
 void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std::string, std::vector<std::complex<double>>>>& rig,
                          const TableSpec& published) {
@@ -345,7 +350,7 @@ class CampaignRun {
   /// `label` (the campaign's plan numbers them, plan_items()).
   const Flown& flight_with(const std::string& name, const std::map<std::string, std::string>& with,
                            const std::string& label = "") {
-    const std::string key = fmt::format("{}|{}|{}", seed_, name, overrides_key(with));
+    const std::string key = flight_key(seed_, name, with);
     auto it = flown_.find(key);
     if (it != flown_.end()) return it->second;
     std::vector<Override> ov;
@@ -432,6 +437,9 @@ void mark_repeats(std::vector<Table>& tables, const std::map<std::string, std::m
 }
 
 
+/// The closed-loop tables every closed-loop cause is flown on.
+const std::array<const char*, 3> kClosedLoopTables = {"9", "10", "11"};
+
 /// The flights with a cause, in the order the campaign flies them on each seed: the reasons'
 /// causes (each table and cause once), then every closed-loop cause on Tables 9-11.
 struct PlanItem {
@@ -448,7 +456,7 @@ std::vector<PlanItem> plan_items(const CampaignSpec& spec) {
     }
   }
   for (const CauseSpec& cause : spec.causes) {
-    for (const std::string id : {"9", "10", "11"}) items.push_back({id, cause.with});
+    for (const std::string id : kClosedLoopTables) items.push_back({id, cause.with});
   }
   return items;
 }
@@ -464,7 +472,7 @@ std::vector<std::vector<std::string>> plan_labels(const std::vector<PlanItem>& i
   for (std::size_t j = 0; j < items.size(); ++j) {
     const std::string flight = table_flight(items[j].table);
     for (std::size_t i = 0; i < seeds.size(); ++i) {
-      const std::string key = fmt::format("{}|{}|{}", seeds[i], flight, overrides_key(items[j].with));
+      const std::string key = flight_key(seeds[i], flight, items[j].with);
       auto it = label_of.find(key);
       if (it == label_of.end()) it = label_of.emplace(key, fmt::format("{}_with_{}", flight, ++k)).first;
       labels[j][i] = it->second;
@@ -569,7 +577,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   }
   std::map<std::string, std::map<std::string, WithCause>> with;  // table -> overrides -> flights
   std::size_t j = 0;
-  for (; j < items.size() && j < items.size() - 3 * spec.causes.size(); ++j) {
+  for (; j < items.size() - kClosedLoopTables.size() * spec.causes.size(); ++j) {
     with[items[j].table][overrides_key(items[j].with)] = flown[j];
   }
   for (const CauseSpec& cause : spec.causes) {
@@ -577,7 +585,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     study.name = cause.name;
     study.source = cause.source;
     for (const auto& [k, v] : cause.with) study.overrides.push_back(k + "=" + v);
-    for (const std::string id : {"9", "10", "11"}) {
+    for (const std::string id : kClosedLoopTables) {
       const WithCause& cause_flown = flown[j++];
       study.failures.insert(study.failures.end(), cause_flown.failures.begin(), cause_flown.failures.end());
       const TableSpec& t = spec.tables.at(id);

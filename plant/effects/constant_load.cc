@@ -30,10 +30,8 @@ void constant_load_from_model(const ModelSection& s, ConstantLoadConfig& c) {
 EffectSizing constant_load_sizing() {
   return {"roll_moment_nm", "N m", range_of(constant_load_params(), "roll_moment_nm"),
           "side_force_n keeps its ratio to the moment", [](const YAML::Node& section, double size) {
-            const double l = section_number(section, "roll_moment_nm", 0.0);
-            const double ratio = l != 0.0 ? section_number(section, "side_force_n", 0.0) / l : 0.0;
-            const double y = companion_within("side_force_n", ratio * size, range_of(constant_load_params(), "side_force_n"));
-            return std::vector<EffectValue>{{"roll_moment_nm", size_text(size)}, {"side_force_n", size_text(y)}};
+            return with_companion_ratio(section, size, "roll_moment_nm", "side_force_n",
+                                        range_of(constant_load_params(), "side_force_n"), 0.0);
           }};
 }
 

@@ -1,19 +1,8 @@
 #include "plant/effects/effect_sizing.h"
 
-#include <cstdio>
-#include <cstdlib>
 #include <stdexcept>
 
 namespace nimble::plant {
-
-std::string size_text(double x) {
-  char text[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, x);
-    if (std::strtod(text, nullptr) == x) break;
-  }
-  return text;
-}
 
 double section_number(const YAML::Node& section, const std::string& key, double fallback) {
   if (!section || !section.IsMap()) return fallback;
@@ -33,14 +22,23 @@ std::vector<double> section_list(const YAML::Node& section, const std::string& k
 
 double companion_within(const std::string& key, double value, const Range& range) {
   if (!range.contains(value)) {
-    throw std::invalid_argument("the scenario's ratio makes " + key + " " + size_text(value) + ", not " +
+    throw std::invalid_argument("the scenario's ratio makes " + key + " " + shortest_text(value) + ", not " +
                                 range.describe());
   }
   return value;
 }
 
+std::vector<EffectValue> with_companion_ratio(const YAML::Node& section, double size, const std::string& parameter,
+                                              const std::string& companion, const Range& companion_range,
+                                              double ratio_if_zero) {
+  const double main = section_number(section, parameter, 0.0);
+  const double ratio = main != 0.0 ? section_number(section, companion, 0.0) / main : ratio_if_zero;
+  const double value = companion_within(companion, ratio * size, companion_range);
+  return {{parameter, shortest_text(size)}, {companion, shortest_text(value)}};
+}
+
 std::vector<EffectValue> parameter_alone(const std::string& parameter, double size) {
-  return {{parameter, size_text(size)}};
+  return {{parameter, shortest_text(size)}};
 }
 
 }  // namespace nimble::plant

@@ -29,9 +29,6 @@ struct EffectSizing {
   std::vector<EffectValue> (*values)(const YAML::Node& section, double size) = nullptr;
 };
 
-/// The shortest text that reads back as `x` (a size written into an override).
-std::string size_text(double x);
-
 /// The section's number `key`, or `fallback` if it has none.
 double section_number(const YAML::Node& section, const std::string& key, double fallback);
 
@@ -41,6 +38,13 @@ std::vector<double> section_list(const YAML::Node& section, const std::string& k
 /// `value` of companion `key` if it is within `range`.
 /// @throws std::invalid_argument "the scenario's ratio makes <key> <value>, not <range>".
 double companion_within(const std::string& key, double value, const Range& range);
+
+/// The values that fly an effect at `size` whose `companion` keeps its ratio to `parameter` as
+/// the scenario's section gives them (`ratio_if_zero` where the section's parameter is 0 or absent).
+/// @throws std::invalid_argument (companion_within()) if the companion leaves `companion_range`.
+std::vector<EffectValue> with_companion_ratio(const YAML::Node& section, double size, const std::string& parameter,
+                                              const std::string& companion, const Range& companion_range,
+                                              double ratio_if_zero);
 
 /// The sizing of an effect whose SIZE sets `parameter` alone.
 std::vector<EffectValue> parameter_alone(const std::string& parameter, double size);

@@ -166,7 +166,7 @@ EffectSizing flapping_forcing_sizing() {
             for (auto& a : side) a = companion_within("side_force_amplitudes_n", k * a, kAmplitudeRange);
             const auto list = [](const std::vector<double>& values) {
               std::string out = "[";
-              for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + size_text(values[i]);
+              for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + shortest_text(values[i]);
               return out + "]";
             };
             return std::vector<EffectValue>{{"roll_moment_amplitudes_nm", list(roll)},

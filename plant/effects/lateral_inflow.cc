@@ -30,10 +30,8 @@ void lateral_inflow_from_model(const ModelSection& s, LateralInflowConfig& c) {
 EffectSizing lateral_inflow_sizing() {
   return {"Y_vv_ns2pm2", "N s^2/m^2", range_of(lateral_inflow_params(), "Y_vv_ns2pm2"),
           "L_vv_ns2pm keeps its ratio to Y_vv (0.01 m if Y_vv is 0)", [](const YAML::Node& section, double size) {
-            const double y = section_number(section, "Y_vv_ns2pm2", 0.0);
-            const double ratio = y != 0.0 ? section_number(section, "L_vv_ns2pm", 0.0) / y : 0.01;
-            const double l = companion_within("L_vv_ns2pm", ratio * size, range_of(lateral_inflow_params(), "L_vv_ns2pm"));
-            return std::vector<EffectValue>{{"Y_vv_ns2pm2", size_text(size)}, {"L_vv_ns2pm", size_text(l)}};
+            return with_companion_ratio(section, size, "Y_vv_ns2pm2", "L_vv_ns2pm",
+                                        range_of(lateral_inflow_params(), "L_vv_ns2pm"), 0.01);
           }};
 }
 
