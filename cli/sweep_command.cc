@@ -1,5 +1,5 @@
-/// `rig sweep`: a Monte Carlo campaign over a scenario (launcher/sweep.h), on this machine or on
-/// a Slurm cluster (launcher/campaign.h, launcher/slurm.h).
+/// `rig sweep`: a Monte Carlo campaign over a scenario (campaign/sweep.h), on this machine or on
+/// a Slurm cluster (campaign/campaign.h, campaign/slurm.h).
 ///
 ///   rig sweep SCENARIO --seeds A-B [--vary ...] [--backend local|slurm] [--dir DIR] ...
 ///   rig sweep --resume DIR      finish a campaign that was interrupted

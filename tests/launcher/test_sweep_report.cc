@@ -1,4 +1,4 @@
-// Unit tests of the sweep's campaign report (launcher/sweep_report.h) on synthetic runs: the
+// Unit tests of the sweep's campaign report (campaign/sweep_report.h) on synthetic runs: the
 // envelopes' percentiles (numpy's linear rule) and their n where short traces end, the controlled
 // rate and its Wilson interval, escaping of labels in every file, byte-identical output, and the
 // refusals (mixed dt_s) and write errors.
