@@ -8,6 +8,9 @@
 #   BUILD_DIR      build directory of the first pass (default: build)
 #   SAN_BUILD_DIR  build directory of the sanitizer pass (default: build-san)
 #   SANITIZE_PASS  1: always run the sanitizer pass, 0: never (default: only without arguments)
+# Each pass's tests write their files under <build dir>/test-tmp (TMPDIR), emptied when the pass
+# starts: a test removes its files when it passes and keeps them when it fails (the path is in its
+# output), so what is left there after a pass is what failed tests wrote, until the next run.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
@@ -15,8 +18,25 @@ SAN_BUILD_DIR="${SAN_BUILD_DIR:-$ROOT/build-san}"
 SANITIZE_PASS="${SANITIZE_PASS:-$([[ $# -eq 0 ]] && echo 1 || echo 0)}"
 export BUILD_DIR
 "$ROOT/scripts/setup.sh"
+
+# Runs ctest in build directory $1 with the other arguments, TMPDIR a fresh <$1>/test-tmp.
+run_ctest() {
+  local dir="$1"
+  shift
+  rm -rf "$dir/test-tmp"
+  mkdir -p "$dir/test-tmp"
+  local rc=0
+  TMPDIR="$dir/test-tmp" ctest --test-dir "$dir" --output-on-failure -j "$(nproc)" "$@" || rc=$?
+  local left
+  left="$(du -sh "$dir/test-tmp" 2>/dev/null | cut -f1)"
+  if [[ -n "$(ls -A "$dir/test-tmp")" ]]; then
+    echo "== files left by failed or killed tests: $left in $dir/test-tmp"
+  fi
+  return "$rc"
+}
+
 status=0
-ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "$@" || status=$?
+run_ctest "$BUILD_DIR" "$@" || status=$?
 
 if [[ "$SANITIZE_PASS" == 1 ]]; then
   start=$(date +%s)
@@ -26,7 +46,7 @@ if [[ "$SANITIZE_PASS" == 1 ]]; then
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
   export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}"
-  ctest --test-dir "$SAN_BUILD_DIR" --output-on-failure -j "$(nproc)" -L 'unit|functional|fuzz' || status=$?
+  run_ctest "$SAN_BUILD_DIR" -L 'unit|functional|fuzz' || status=$?
   echo "== sanitizer pass took $(( $(date +%s) - start )) s"
 fi
 exit "$status"

@@ -19,6 +19,7 @@
 #include "can_bridge/can_socket.h"
 #include "can_bridge/candump_log.h"
 #include "can_bridge/error_frame.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::can;
 using Catch::Matchers::Contains;
@@ -233,7 +234,7 @@ TEST_CASE("FD frames convert to and from classical frames of up to 8 bytes", "[f
 }
 
 TEST_CASE("CandumpWriter writes one parseable line per frame", "[candump]") {
-  const auto path = std::filesystem::temp_directory_path() / ("rig_candump_" + std::to_string(::getpid()) + ".log");
+  const std::filesystem::path path = nimble::test::scratch_file("candump", "candump.log");
   {
     CandumpWriter w(path.string());
     CHECK(w.write(data_frame(0x181, {1, 2, 3, 4, 5, 6, 7, 8}), 1000000000, "vcan0"));

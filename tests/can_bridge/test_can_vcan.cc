@@ -29,6 +29,7 @@
 #include "can_bridge/codec.h"
 #include "can_bridge/crc8.h"
 #include "can_bridge/frame_layout.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::can;
 using nimble::actuator_command_t;
@@ -243,7 +244,7 @@ canfd_frame fd_frame(uint32_t id, uint8_t flags, unsigned len, uint8_t seed) {
 }
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))).string();
+  return nimble::test::scratch_path(name);
 }
 
 }  // namespace

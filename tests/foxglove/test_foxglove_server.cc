@@ -24,6 +24,7 @@
 
 #include "foxglove/foxglove_server.h"
 #include "tests/foxglove/ws_test_client.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::foxglove;
 using namespace nimble::foxglove::test;
@@ -245,8 +246,7 @@ TEST_CASE("server: a client that does not read loses messages, counted, and publ
 }
 
 TEST_CASE("server: static files over HTTP on the same port", "[foxglove][server]") {
-  const std::filesystem::path root =
-      std::filesystem::temp_directory_path() / ("rig_fox_web_" + std::to_string(::getpid()));
+  const std::filesystem::path root = nimble::test::scratch_dir("fox_web");
   std::filesystem::create_directories(root / "js");
   std::ofstream(root / "index.html") << "<html>dashboard</html>";
   std::ofstream(root / "js" / "app.js") << "console.log(1);";

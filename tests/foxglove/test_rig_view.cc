@@ -24,6 +24,7 @@
 #include "tests/foxglove/http_test_client.h"
 #include "tests/foxglove/ws_test_client.h"
 #include "tests/support/run_rig.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble;
 using namespace nimble::foxglove;
@@ -33,10 +34,7 @@ namespace {
 
 /// A hover log of `seconds` flown in process (made once per test program and length).
 std::string flown_log(int seconds) {
-  const std::string dir =
-      (std::filesystem::temp_directory_path() / ("rig_view_" + std::to_string(::getpid()))).string();
-  std::filesystem::create_directories(dir);
-  const std::string file = dir + "/hover" + std::to_string(seconds) + ".lcmlog";
+  const std::string file = nimble::test::scratch_file("view", "hover" + std::to_string(seconds) + ".lcmlog");
   if (std::filesystem::exists(file)) return file;
   const auto r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml" +
                                        " --clock inprocess --set duration_s=" + std::to_string(seconds) +
@@ -204,9 +202,7 @@ TEST_CASE("rig view: a client gets the log's TRUTH at rig time and the replay's 
 
 TEST_CASE("rig view --web: //etc/passwd and other paths out of the root are refused, a warning off loopback",
           "[foxglove][view][resource]") {
-  const std::filesystem::path base =
-      std::filesystem::temp_directory_path() / ("rig_view_web_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(base);
+  const std::filesystem::path base = nimble::test::scratch_dir("view_web");
   std::filesystem::create_directories(base / "root");
   std::ofstream(base / "root" / "index.html") << "<html>page</html>";
   const std::string token = "SECRET-" + std::to_string(::getpid());

@@ -18,6 +18,7 @@
 #include "foxglove/foxglove_server.h"
 #include "foxglove/web_path.h"
 #include "tests/foxglove/http_test_client.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::foxglove;
 using namespace nimble::foxglove::test;
@@ -30,8 +31,7 @@ namespace {
 /// unknown type; next to it, outside, files holding `token`.
 struct WebRoot {
   WebRoot() {
-    base = fs::temp_directory_path() / ("rig_web_path_" + std::to_string(::getpid()));
-    fs::remove_all(base);
+    base = nimble::test::scratch_dir("web_path");
     root = base / "root";
     fs::create_directories(root / "sub");
     fs::create_directories(root / ".git");

@@ -14,6 +14,7 @@
 
 #include "../support/run_rig.h"
 #include "contract/channels.h"
+#include "tests/support/scratch.h"
 
 // Channel names come from the contract (functional.contract checks that no file spells them).
 using nimble::contract::channels::kTruth;
@@ -118,7 +119,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
   }
   // --opt=value is the same as --opt value.
   const RigResult eq = run_rig("run " + scenario + " --clock=inprocess --set=duration_s=0.3 --no-progress --log " +
-                               (std::filesystem::temp_directory_path() / "rig_cli_eq.lcmlog").string());
+                               nimble::test::scratch_file("cli_eq", "eq.lcmlog"));
   CHECK(eq.exit_code == 0);
   CHECK(eq.out.find("clock      inprocess") != std::string::npos);
 }
@@ -196,9 +197,7 @@ TEST_CASE("cli: the calibration tools and bus_flood answer --help and check thei
 }
 
 TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, export, model)", "[cli]") {
-  const std::string dir = (std::filesystem::temp_directory_path() / ("rig_cli_json_" + std::to_string(::getpid()))).string();
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = nimble::test::scratch_dir("cli_json");
   const std::string log = dir + "/hover.lcmlog";
 
   const RigResult run = run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " +

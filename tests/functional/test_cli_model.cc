@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/run_rig.h"
+#include "tests/support/scratch.h"
 
 namespace {
 
@@ -87,12 +88,12 @@ TEST_CASE("rig model errors go to stderr with exit code 2", "[cli]") {
     CHECK(r.err.find("file not found") != std::string::npos);
   }
   SECTION("config error names the key") {
-    const auto path = std::filesystem::temp_directory_path() / ("rig_bad_model_" + std::to_string(::getpid()) + ".yaml");
+    const std::string path = nimble::test::scratch_file("bad_model", "model.yaml");
     std::string text = slurp(kConfigs + "models/nimble_lateral_set1.yaml");
     text.replace(text.find("Lp: -2.43e-04"), 13, "Lp: minus_two");
     text.replace(text.find("../vehicles/"), 12, kConfigs + "vehicles/");
     std::ofstream(path) << text;
-    const Result r = run_rig("model " + path.string() + " --json");
+    const Result r = run_rig("model " + path + " --json");
     std::filesystem::remove(path);
     CHECK(r.exit_code == 2);
     CHECK(r.out.empty());

@@ -24,6 +24,7 @@
 #include "discrepancy_generator.h"
 #include "synthetic_flight.h"
 #include "../support/run_rig.h"
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 using namespace nimble;
@@ -33,9 +34,7 @@ namespace {
 
 
 fs::path work_dir() {
-  const fs::path dir = fs::temp_directory_path() / ("rig_test_cli_identify_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
+  return fs::path(nimble::test::scratch_file("test_cli_identify", "")).parent_path();
 }
 
 using nimble::test::run_rig;

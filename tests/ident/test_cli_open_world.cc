@@ -16,6 +16,7 @@
 #include "core/model.h"
 #include "synthetic_flight.h"
 #include "../support/run_rig.h"
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 using namespace nimble;
@@ -23,9 +24,7 @@ using namespace nimble;
 namespace {
 
 fs::path work_dir() {
-  const fs::path dir = fs::temp_directory_path() / ("rig_test_open_world_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
+  return fs::path(nimble::test::scratch_file("test_open_world", "")).parent_path();
 }
 
 /// A 24 s identification flight: the 7 and 4 Hz train's doublets and two slower ones, four times

@@ -19,6 +19,7 @@
 #include "discrepancy_generator.h"
 #include "ident/discrepancy.h"
 #include "ident/model_writer.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble;
 using namespace nimble::ident;
@@ -26,14 +27,14 @@ using namespace nimble::ident;
 namespace {
 
 DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed, double scale = 1.0) {
-  test::HiddenEffects h;
+  ident::test::HiddenEffects h;
   h.on = effects;
   h.scale = scale;
-  test::draw_magnitudes(h, seed);
-  test::GeneratorOptions o;
+  ident::test::draw_magnitudes(h, seed);
+  ident::test::GeneratorOptions o;
   o.seed = seed;
-  const FlightData d = test::generate_flight(test::set1().model, test::set1().vehicle, h, o);
-  DiscrepancyResult r = find_discrepancy(d, test::set1().model, test::set1().vehicle, {});
+  const FlightData d = ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o);
+  DiscrepancyResult r = find_discrepancy(d, ident::test::set1().model, ident::test::set1().vehicle, {});
   // Where an effect is named, some band shows the gap shrinking by at least 20 %, or each
   // effect band says why it cannot.
   if (!r.effects.empty()) {
@@ -75,13 +76,13 @@ TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is
     REQUIRE(named(r, "kinematic_coupling"));
     CHECK(r.effects.size() == 1);
     const NamedEffect& e = r.effects.front();
-    const double m = test::set1().vehicle.mass_kg;
+    const double m = ident::test::set1().vehicle.mass_kg;
     CHECK(std::fabs(e.parameters.at("Y_pw") - m) < 5.0 * e.sigma.at("Y_pw"));
     CHECK(r.gap_after < 0.5 * r.gap_before);
     // The refit Yp comes back to the model's value once the effect is in (Eq 21's bias gone).
     const auto& yp = r.augmented.at("Yp");
-    CHECK(std::fabs(yp.value - test::set1().model.at("Yp")) < 4.0 * yp.sigma_coloured + 1e-9);
-    CHECK(std::fabs(r.baseline.at("Yp").value - test::set1().model.at("Yp")) > std::fabs(yp.value - test::set1().model.at("Yp")));
+    CHECK(std::fabs(yp.value - ident::test::set1().model.at("Yp")) < 4.0 * yp.sigma_coloured + 1e-9);
+    CHECK(std::fabs(r.baseline.at("Yp").value - ident::test::set1().model.at("Yp")) > std::fabs(yp.value - ident::test::set1().model.at("Yp")));
   }
 }
 
@@ -124,9 +125,9 @@ TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its del
   int hits = 0;
   const int seeds = 8;
   for (int s = 1; s <= seeds; ++s) {
-    test::HiddenEffects h;
+    ident::test::HiddenEffects h;
     h.on = {"actuator_delay"};
-    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    ident::test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
     const DiscrepancyResult r = run({"actuator_delay"}, static_cast<std::uint64_t>(s));
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
@@ -149,14 +150,14 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
   opt.command_latency_s = 0.0;
   int hits = 0, null_named = 0;
   for (int s = 1; s <= 6; ++s) {
-    test::HiddenEffects h;
+    ident::test::HiddenEffects h;
     h.on = {"command_delay"};
-    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
-    test::GeneratorOptions o;
+    ident::test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    ident::test::GeneratorOptions o;
     o.seed = static_cast<std::uint64_t>(s);
     o.record_command = true;
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
-                                                 test::set1().model, test::set1().vehicle, opt);
+    const DiscrepancyResult r = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
+                                                 ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
     if (named(r, "actuator_delay")) {
@@ -166,9 +167,9 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
       CHECK(e.parameters.count("F_cmd_delayed") == 1);
       CHECK(r.gap_after < r.gap_before);
     }
-    test::HiddenEffects none;
-    const DiscrepancyResult n0 = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, none, o),
-                                                  test::set1().model, test::set1().vehicle, opt);
+    ident::test::HiddenEffects none;
+    const DiscrepancyResult n0 = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, none, o),
+                                                  ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("null seed " << s << ": " << n0.summary);
     null_named += !n0.effects.empty();
     // The actuator equation is part of the model when the command is recorded.
@@ -188,8 +189,8 @@ TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign i
   const int seeds = 24;
   for (int s = 1; s <= seeds; ++s) {
     const DiscrepancyResult r = run({"lateral_inflow"}, static_cast<std::uint64_t>(s));
-    test::HiddenEffects h;
-    test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
+    ident::test::HiddenEffects h;
+    ident::test::draw_magnitudes(h, static_cast<std::uint64_t>(s));
     const bool is_large = h.Y_vv <= -0.02;
     large += is_large;
     INFO("seed " << s << " Y_vv " << h.Y_vv << ": " << r.summary);
@@ -228,9 +229,9 @@ TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign o
 
 TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its frequency", "[discrepancy]") {
   for (std::uint64_t s = 1; s <= 4; ++s) {
-    test::HiddenEffects h;
+    ident::test::HiddenEffects h;
     h.on = {"flapping_forcing"};
-    test::draw_magnitudes(h, s);
+    ident::test::draw_magnitudes(h, s);
     const DiscrepancyResult r = run({"flapping_forcing"}, s);
     INFO("seed " << s << " f " << h.flap_hz << ": " << r.summary);
     REQUIRE(names(r) == std::vector<std::string>{"flapping_forcing"});
@@ -257,14 +258,14 @@ TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its fre
 TEST_CASE("discrepancy: a sensor bias's gap shrinks where it lives, at 0 Hz", "[discrepancy]") {
   int named_bias = 0;
   for (std::uint64_t s = 1; s <= 6; ++s) {
-    test::HiddenEffects h;
+    ident::test::HiddenEffects h;
     h.on = {"sensor_bias"};
     h.scale = 2.0;  // 0.04-0.12 rad/s: named in most records (at 1x the smaller biases hide in the noise)
-    test::draw_magnitudes(h, s);
-    test::GeneratorOptions o;
+    ident::test::draw_magnitudes(h, s);
+    ident::test::GeneratorOptions o;
     o.seed = s;
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
-                                                 test::set1().model, test::set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
+                                                 ident::test::set1().model, ident::test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     if (!named(r, "sensor_bias")) continue;
     ++named_bias;
@@ -288,24 +289,24 @@ TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexpl
   int located = 0, found = 0;
   const int seeds = 8;
   for (std::uint64_t s = 1; s <= static_cast<std::uint64_t>(seeds); ++s) {
-    test::HiddenEffects h;
+    ident::test::HiddenEffects h;
     h.on = {"lateral_inflow"};
     h.scale = 3.0;
-    test::draw_magnitudes(h, s);
-    test::GeneratorOptions o;
+    ident::test::draw_magnitudes(h, s);
+    ident::test::GeneratorOptions o;
     o.seed = s;
-    const FlightData data = test::generate_flight(test::set1().model, test::set1().vehicle, h, o);
+    const FlightData data = ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o);
     DiscrepancyOptions opt;
     opt.candidates = {"sensor_bias", "actuator_delay"};
     opt.term_search = false;
-    const DiscrepancyResult closed = find_discrepancy(data, test::set1().model, test::set1().vehicle, opt);
+    const DiscrepancyResult closed = find_discrepancy(data, ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("seed " << s << " Y_vv " << h.Y_vv << ", closed world: " << closed.summary);
     CHECK(closed.effects.empty());
     const bool side_force = std::any_of(closed.located.state.begin(), closed.located.state.end(),
                                         [](const StateFinding& f) { return f.output == "v_dot_star"; });
     located += closed.verdict == "unexplained" && side_force;
     opt.term_search = true;
-    const DiscrepancyResult open = find_discrepancy(data, test::set1().model, test::set1().vehicle, opt);
+    const DiscrepancyResult open = find_discrepancy(data, ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("open world: " << open.summary);
     for (const auto& e : open.effects) CHECK(e.name == "term");  // never a library name
     const auto term = std::find_if(open.effects.begin(), open.effects.end(), [](const NamedEffect& e) {
@@ -388,17 +389,15 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
   }
   DiscrepancyOptions bad;
   bad.candidates = {"lateral_inflow", "warp_drive"};
-  CHECK_THROWS_WITH(find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, {}, {}), test::set1().model,
-                                     test::set1().vehicle, bad),
+  CHECK_THROWS_WITH(find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, {}, {}), ident::test::set1().model,
+                                     ident::test::set1().vehicle, bad),
                     Catch::Contains("unknown candidate 'warp_drive'"));
 }
 
 TEST_CASE("discrepancy: the augmented model carries the named effect and reads back from its file", "[discrepancy]") {
   const DiscrepancyResult r = run({"kinematic_coupling"}, 2);
   REQUIRE(r.augmented_model.effects.count("kinematic_coupling") == 1);
-  const auto dir = std::filesystem::temp_directory_path() / ("nimble_discrepancy_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / "augmented.yaml").string();
+  const std::string file = nimble::test::scratch_file("discrepancy", "augmented.yaml");
   write_model_yaml(r.augmented_model, file, {"test"});
   const DerivativeModel back = load_model(file);
   CHECK(back.effects.at("kinematic_coupling").at("Y_pw") ==
@@ -411,8 +410,7 @@ TEST_CASE("discrepancy: the augmented model carries the named effect and reads b
     const auto at = text.find("effects:\n");
     REQUIRE(at != std::string::npos);
     text.insert(at + 9, "  warp_drive:\n    c: 1\n");
-    std::ofstream(dir / "bad.yaml") << text;
+    std::ofstream(nimble::test::scratch_file("discrepancy", "bad.yaml")) << text;
   }
-  CHECK_THROWS_WITH(load_model((dir / "bad.yaml").string()), Catch::Contains("unknown effect"));
-  std::filesystem::remove_all(dir);
+  CHECK_THROWS_WITH(load_model(nimble::test::scratch_file("discrepancy", "bad.yaml")), Catch::Contains("unknown effect"));
 }

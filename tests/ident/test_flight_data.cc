@@ -10,6 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include "ident/flight_data.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::ident;
 
@@ -86,7 +87,7 @@ TEST_CASE("CSV written by format_flight_csv reads back bit for bit", "[flight_da
     CHECK(back.at(name).values == c.values);
   }
   // through a file as well
-  const auto path = std::filesystem::temp_directory_path() / ("rig_flight_" + std::to_string(::getpid()) + ".csv");
+  const std::filesystem::path path = nimble::test::scratch_file("flight", "flight.csv");
   write_flight_csv(d, path.string());
   CHECK(read_flight_csv(path.string()).at("delta_d").values == d.at("delta_d").values);
   std::filesystem::remove(path);

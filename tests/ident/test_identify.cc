@@ -17,6 +17,7 @@
 #include "ident/synthetic.h"
 #include "ident/validate.h"
 #include "synthetic_flight.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble;
 using namespace nimble::ident;
@@ -36,9 +37,7 @@ IdentOptions options_for(const DerivativeModel& truth, Method method) {
 double rel_sigma(const ParameterEstimate& e) { return e.sigma_coloured / std::fabs(e.value); }
 
 std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rig_test_ident_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
+  return nimble::test::scratch_file("test_ident", name);
 }
 
 /// The lateral4 model of thesis Table 8.3 reduced to the inputs delta_f and
@@ -449,9 +448,9 @@ TEST_CASE("states stamped 1.5 ms late against the inputs make the roll damping L
 
 TEST_CASE("a servo input enters only when it is excited beyond its floor, otherwise it is left out with a note",
           "[identify]") {
-  const DerivativeModel truth = test::set1_model();
+  const DerivativeModel truth = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
-  FlightData data = simulate_synthetic(truth, vehicle, test::identification_flight(3));
+  FlightData data = simulate_synthetic(truth, vehicle, ident::test::identification_flight(3));
   const Channel& df = data.at("delta_f");
   // A dihedral that only jitters at the servo resolution (as on a roll-only rig flight)...
   Channel dd{df.t_s, std::vector<double>(df.t_s.size())};

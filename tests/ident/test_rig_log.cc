@@ -24,6 +24,7 @@
 #include "ident/rig_log.h"
 #include "ident/signal.h"
 #include "../support/run_rig.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble;
 using namespace nimble::ident;
@@ -32,9 +33,7 @@ using namespace nimble::contract::channels;
 namespace {
 
 std::string temp_log(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rig_test_rig_log_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
+  return nimble::test::scratch_file("test_rig_log", name);
 }
 
 template <typename T>

@@ -20,6 +20,7 @@
 #include "campaign/slurm.h"
 #include "campaign/worker_pool.h"
 #include "scenario/scenario.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::launcher;
 using namespace nimble::campaign;
@@ -30,10 +31,7 @@ namespace {
 const std::string kSource = std::string(RIG_SOURCE_DIR) + "/";
 
 std::string scratch(const std::string& tag) {
-  const fs::path d = fs::temp_directory_path() / ("rig_campaign_" + tag + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return nimble::test::scratch_dir("campaign_" + tag);
 }
 
 std::string slurp(const std::string& file) {

@@ -30,6 +30,7 @@
 #include "launcher/run_report.h"
 #include "campaign/sweep.h"
 #include "launcher/verdict.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::launcher;
 using namespace nimble::campaign;
@@ -328,7 +329,7 @@ std::vector<int64_t> record_ticks(const std::string& file, LogStamps stamps, int
 }  // namespace
 
 TEST_CASE("recorder: lockstep logs carry simulated time, real-time logs the wall clock", "[launcher]") {
-  const std::string file = "/tmp/test_recorder_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string file = nimble::test::scratch_file("recorder", "recorder.lcmlog");
   const int ticks = 3001;  // 3 s of simulated time, written in a few milliseconds
   const std::vector<int64_t> sim = record_ticks(file, LogStamps::kSimulated, ticks);
   REQUIRE(sim.size() == static_cast<std::size_t>(1 + 2 * ticks));

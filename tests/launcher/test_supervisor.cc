@@ -17,6 +17,7 @@
 #include <catch2/catch.hpp>
 
 #include "launcher/supervisor.h"
+#include "tests/support/scratch.h"
 
 using nimble::launcher::ChildProcess;
 using nimble::launcher::ProcessSupervisor;
@@ -24,9 +25,7 @@ using nimble::launcher::ProcessSupervisor;
 namespace {
 
 std::string scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rig_supervisor_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
+  return nimble::test::scratch_file("supervisor", name);
 }
 
 std::string slurp(const std::string& file) {

@@ -21,6 +21,7 @@
 #include "core/proportion.h"
 #include "campaign/sweep.h"
 #include "campaign/sweep_report.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble::launcher;
 using namespace nimble::campaign;
@@ -57,7 +58,7 @@ SweepResult with_sets(const std::vector<std::string>& labels) {
 
 /// A fresh, empty directory for one test.
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("test_sweep_report_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path d = nimble::test::scratch_path("sweep_report_" + name);
   fs::remove_all(d);
   return d;
 }

@@ -19,6 +19,7 @@
 #include "mcap/log_export.h"
 #include "tests/mcap/mcap_check.h"
 #include "contract/channels.h"
+#include "tests/support/scratch.h"
 
 // Channel names come from the contract (functional.contract checks that no file spells them).
 using nimble::contract::channels::kFault;
@@ -33,9 +34,7 @@ using nimble::mcap::export_log_to_mcap;
 namespace {
 
 std::string scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rig_mcap_export_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+  return nimble::test::scratch_file("mcap_export", name);
 }
 
 template <typename T>

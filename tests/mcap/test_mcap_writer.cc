@@ -15,6 +15,7 @@
 #include "mcap/mcap_writer.h"
 #include "tests/mcap/mcap_check.h"
 #include "contract/channels.h"
+#include "tests/support/scratch.h"
 
 // Channel names come from the contract (functional.contract checks that no file spells them).
 using nimble::contract::channels::kImu;
@@ -30,9 +31,7 @@ namespace check = nimble::test::mcap_check;
 namespace {
 
 std::string scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rig_mcap_writer_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
+  const fs::path p = nimble::test::scratch_file("mcap_writer", name);
   fs::remove(p);
   fs::remove(p.string() + ".part");
   return p.string();

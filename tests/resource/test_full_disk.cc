@@ -23,6 +23,7 @@
 #include "launcher/recorder.h"
 #include "launcher/run_plan.h"
 #include "tests/support/small_disk.h"
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -33,10 +34,7 @@ namespace {
 constexpr int64_t kDiskBytes = 300 * 1000;  // the 300 kB disk
 
 std::string scratch(const std::string& tag) {
-  const fs::path d = fs::temp_directory_path() / ("rig_full_disk_" + tag + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return nimble::test::scratch_dir("full_disk_" + tag);
 }
 
 struct Ran {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 
@@ -58,9 +59,7 @@ std::string comm_of(pid_t pid) {
 
 TEST_CASE("the processes of a run inherit nothing of the launcher's: log, LCM sockets, live view socket",
           "[resource]") {
-  const fs::path dir = fs::temp_directory_path() / ("rig_inherit_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = nimble::test::scratch_dir("inherit");
   const std::string log = (dir / "run.lcmlog").string();
   const pid_t rig = ::fork();
   REQUIRE(rig >= 0);

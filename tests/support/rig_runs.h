@@ -22,22 +22,9 @@
 
 #include "contract/channels.h"
 #include "run_rig.h"
+#include "scratch.h"
 
 namespace nimble::test {
-
-/// The directory scratch_dir(tag) made: <tmp>/rig_<tag>_<pid>.
-inline std::string scratch_path(const std::string& tag) {
-  return (std::filesystem::temp_directory_path() / ("rig_" + tag + "_" + std::to_string(::getpid()))).string();
-}
-
-/// A fresh, empty directory for one test's files: <tmp>/rig_<tag>_<pid>.
-inline std::string scratch_dir(const std::string& tag) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("rig_" + tag + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir.string();
-}
 
 /// Outcome of one `rig run`.
 struct RunResult {

@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/run_rig.h"
+#include "tests/support/scratch.h"
 
 namespace {
 
@@ -84,8 +85,7 @@ TEST_CASE("rig turbulence rejects bad usage and bad files with exit 2 and a mess
 }
 
 TEST_CASE("rig turbulence --plots writes PNGs, or says gnuplot is missing", "[cli][turbulence]") {
-  const auto dir = std::filesystem::temp_directory_path() / ("rig_turbulence_plots_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
+  const std::filesystem::path dir = nimble::test::scratch_path("turbulence_plots");
   // Without gnuplot on the PATH: a clear error, not a crash.
   const Result none = run_rig("turbulence " + kPractical + " --duration 100 --plots " + dir.string(), "PATH=/nonexistent");
   CHECK(none.exit_code == 2);

@@ -17,6 +17,7 @@
 #include "core/model.h"
 #include "core/param_table.h"
 #include "core/vehicle.h"
+#include "tests/support/scratch.h"
 
 using namespace nimble;
 
@@ -31,11 +32,9 @@ std::string read_text(const std::string& path) {
 
 /// Writes `text` to a fresh file in a per-test temporary directory.
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rig_test_config_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto path = dir / name;
+  const std::string path = nimble::test::scratch_file("test_config", name);
   std::ofstream(path) << text;
-  return path.string();
+  return path;
 }
 
 /// The shipped vehicle file with one line replaced (regex on the whole text).

@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/output_file.h"
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -23,10 +24,7 @@ using nimble::OutputFile;
 namespace {
 
 std::string scratch(const std::string& tag) {
-  const fs::path d = fs::temp_directory_path() / ("rig_output_file_" + tag + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return nimble::test::scratch_dir("output_file_" + tag);
 }
 
 std::string read_all(const std::string& file) {

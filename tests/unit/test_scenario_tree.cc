@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 
 #include "scenario/scenario.h"
+#include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 
@@ -16,7 +17,7 @@ namespace {
 
 /// A scratch folder with a scenario that uses a section base and path-like keys inside sections.
 fs::path write_tree() {
-  const fs::path dir = fs::temp_directory_path() / ("rig_scenario_tree_" + std::to_string(::getpid()));
+  const fs::path dir = nimble::test::scratch_dir("scenario_tree");
   fs::create_directories(dir / "sub");
   std::ofstream(dir / "sub" / "plant_base.yaml") << "rate_hz: 1000\n"
                                                     "effects:\n"
@@ -128,7 +129,7 @@ TEST_CASE("scenario tree: a base that is not a file name (a mapping, a list) is 
           "[scenario]") {
   // Found by fuzz_scenario_yaml: a mapping under plant.base escaped the loader as a yaml-cpp
   // conversion error instead of a ConfigError.
-  const fs::path dir = fs::temp_directory_path() / ("rig_scenario_base_" + std::to_string(::getpid()));
+  const fs::path dir = nimble::test::scratch_dir("scenario_base");
   fs::create_directories(dir);
   for (const std::string& base : {std::string("\n    enabled: true\n"), std::string(" [a.yaml, b.yaml]\n")}) {
     INFO(base);
@@ -148,8 +149,7 @@ TEST_CASE("scenario digest: it covers the content of every file the scenario nam
           "[scenario]") {
   // A scenario in a scratch folder with its own copies of the model, the model's vehicle and the
   // manoeuvre, so that each can be changed under the same path.
-  const fs::path dir = fs::temp_directory_path() / ("rig_scenario_digest_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = nimble::test::scratch_dir("scenario_digest");
   fs::create_directories(dir / "models");
   fs::create_directories(dir / "vehicles");
   const fs::path configs = fs::path(RIG_SOURCE_DIR) / "rig_configs";
