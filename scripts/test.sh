@@ -2,7 +2,8 @@
 # Installs what is missing, builds, and runs every test through CTest; then the sanitizer pass:
 # builds the clang build with AddressSanitizer, UndefinedBehaviorSanitizer and the libFuzzer
 # targets (build-san/, cmake/Sanitizers.cmake), only what the pass runs (target sanitizer_pass),
-# and runs the unit, functional and fuzz tests there.
+# and runs the unit, functional and fuzz tests there, less those labelled heavy (over 15 s each
+# under the sanitizers; the first pass runs them).
 # Exits non-zero on any failure in either pass. Extra arguments go to the first pass's ctest
 # (e.g. -L unit); with arguments the sanitizer pass is left out unless SANITIZE_PASS=1.
 #   BUILD_DIR      build directory of the first pass (default: build)
@@ -40,13 +41,13 @@ run_ctest "$BUILD_DIR" "$@" || status=$?
 
 if [[ "$SANITIZE_PASS" == 1 ]]; then
   start=$(date +%s)
-  echo "== sanitizer pass: ASan + UBSan build in $SAN_BUILD_DIR, ctest -L 'unit|functional|fuzz'"
+  echo "== sanitizer pass: ASan + UBSan build in $SAN_BUILD_DIR, ctest -L 'unit|functional|fuzz' -LE heavy"
   BUILD_DIR="$SAN_BUILD_DIR" SANITIZE=1 TARGETS=sanitizer_pass "$ROOT/scripts/setup.sh"
   # Leaks and undefined behaviour fail the test that shows them; reports name file and line.
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
   export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}"
-  run_ctest "$SAN_BUILD_DIR" -L 'unit|functional|fuzz' || status=$?
+  run_ctest "$SAN_BUILD_DIR" -L 'unit|functional|fuzz' -LE heavy || status=$?
   echo "== sanitizer pass took $(( $(date +%s) - start )) s"
 fi
 exit "$status"

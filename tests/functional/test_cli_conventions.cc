@@ -124,7 +124,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
   CHECK(eq.out.find("clock      inprocess") != std::string::npos);
 }
 
-TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli]") {
+TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli][programs]") {
   for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
                                   "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop", "bench_power",
                                   "bench_export"}) {
@@ -165,7 +165,8 @@ TEST_CASE("cli: every rig process answers --help on stdout with exit 0 and names
   CHECK(no_value.err.find("--scenario") != std::string::npos);
 }
 
-TEST_CASE("cli: the calibration tools and bus_flood answer --help and check their values before running", "[cli]") {
+TEST_CASE("cli: the calibration tools and bus_flood answer --help and check their values before running",
+          "[cli][programs]") {
   for (const std::string tool : {"calibrate_pitch_gains", "calibrate_roll_map", "bus_flood"}) {
     INFO(tool);
     const RigResult r = run_bench(tool, "--help");

@@ -278,7 +278,7 @@ TEST_CASE("rig identify errors name the file, row and column, with exit code 2",
   }
 }
 
-TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and report with plots", "[cli]") {
+TEST_CASE("rig discrepancy: text, JSON with the fixed keys, augmented model and report with plots", "[cli][heavy]") {
   const fs::path dir = work_dir() / "discrepancy";
   fs::create_directories(dir);
   const DerivativeModel set1 = ident::test::set1_model();

@@ -67,7 +67,7 @@ std::string long_train_scenario(const fs::path& dir) {
 
 TEST_CASE("an asymmetric flap effectiveness flown by the plant is found by rig discrepancy as the term pos(delta_f) in "
           "L, not named a sensor bias, written into the model, and the model with it predicts the flight better",
-          "[cli][terms][open_world]") {
+          "[cli][terms][open_world][heavy]") {
   const fs::path dir = work_dir();
   const std::string log = (dir / "asym.lcmlog").string();
   const double truth = 3.5e-5;  // N m per rad/s: a third of set 1's L_df more for delta_f > 0

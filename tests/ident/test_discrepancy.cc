@@ -68,7 +68,7 @@ bool named(const DiscrepancyResult& r, const std::string& name) {
 // false-alarm rate (names, ambiguous, unexplained) over 240 of them.
 
 TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is the mass, the held-out gap shrinks",
-          "[discrepancy]") {
+          "[discrepancy][heavy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
     const DiscrepancyResult r = run({"kinematic_coupling"}, s);
     INFO("seed " << s << ": " << r.summary);
@@ -213,7 +213,7 @@ TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign i
   CHECK(large_hits >= large - 1);
 }
 
-TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign of its gain", "[discrepancy]") {
+TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign of its gain", "[discrepancy][heavy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
     const DiscrepancyResult r = run({"forward_speed_coupling"}, s);
     INFO("seed " << s << ": " << r.summary);
@@ -227,7 +227,7 @@ TEST_CASE("discrepancy: a hidden forward-speed coupling is named with the sign o
   }
 }
 
-TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its frequency", "[discrepancy]") {
+TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its frequency", "[discrepancy][heavy]") {
   for (std::uint64_t s = 1; s <= 4; ++s) {
     ident::test::HiddenEffects h;
     h.on = {"flapping_forcing"};
@@ -255,7 +255,7 @@ TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its fre
   }
 }
 
-TEST_CASE("discrepancy: a sensor bias's gap shrinks where it lives, at 0 Hz", "[discrepancy]") {
+TEST_CASE("discrepancy: a sensor bias's gap shrinks where it lives, at 0 Hz", "[discrepancy][heavy]") {
   int named_bias = 0;
   for (std::uint64_t s = 1; s <= 6; ++s) {
     ident::test::HiddenEffects h;
@@ -328,7 +328,7 @@ TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexpl
   CHECK(found >= seeds - 1);
 }
 
-TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguous, naming both", "[discrepancy]") {
+TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguous, naming both", "[discrepancy][heavy]") {
   // The dihedral acts (thesis Table B.2 derivatives); the record's yaw rate follows the dihedral,
   // so yaw_coupling explains the same residual as dihedral_coupling.
   for (std::uint64_t s = 1; s <= 2; ++s) {
@@ -362,7 +362,7 @@ TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepanc
   CHECK(both >= 7);
 }
 
-TEST_CASE("discrepancy: an effect too small to matter (2 % of its physical range) is not named", "[discrepancy]") {
+TEST_CASE("discrepancy: an effect too small to matter (2 % of its physical range) is not named", "[discrepancy][heavy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
     const DiscrepancyResult r = run({"forward_speed_coupling"}, s, 0.02);
     INFO("seed " << s << ": " << r.summary);

@@ -153,7 +153,7 @@ TEST_CASE("more throttle excitation makes L_dt better determined", "[identify]")
 }
 
 TEST_CASE("the coloured-residual sigma matches the spread over flights and the white one is 5x too small",
-          "[identify][montecarlo]") {
+          "[identify][montecarlo][heavy]") {
   const DerivativeModel truth = set1_model();
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
   const IdentOptions o = options_for(truth, Method::kOls);
