@@ -1,6 +1,5 @@
 #include "campaign/campaign.h"
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -257,10 +256,10 @@ std::string Campaign::run_name(std::size_t run) const {
   return "set " + std::to_string(set_of(run) + 1) + " seed " + std::to_string(seed_of(run));
 }
 
-std::string Campaign::run_file(std::size_t run) const {
+std::string Campaign::run_key(std::size_t run) const {
   char name[32];
-  std::snprintf(name, sizeof name, "%s%06zu.json", kRunFilePrefix, run);
-  return runs_dir() + "/" + name;
+  std::snprintf(name, sizeof name, "%s%06zu", kRunFilePrefix, run);
+  return name;
 }
 
 std::string trim(const std::string& s) {
@@ -431,22 +430,8 @@ void check_campaign_inputs(const Campaign& c) {
 
 std::vector<bool> finished_runs(const Campaign& c) {
   std::vector<bool> done(c.run_count(), false);
-  DIR* d = ::opendir(c.runs_dir().c_str());
-  if (d == nullptr) return done;
-  const std::size_t prefix = std::strlen(kRunFilePrefix);
-  while (const dirent* e = ::readdir(d)) {
-    const std::string name = e->d_name;
-    // run-NNNNNN.json exactly: temporary files end otherwise.
-    if (name.size() != prefix + 6 + 5 || name.compare(0, prefix, kRunFilePrefix) != 0 ||
-        name.compare(prefix + 6, 5, ".json") != 0) {
-      continue;
-    }
-    const std::string digits = name.substr(prefix, 6);
-    if (digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const std::size_t i = std::stoul(digits);
-    if (i < done.size()) done[i] = true;
-  }
-  ::closedir(d);
+  const ResultFiles files = c.files();
+  for (std::size_t i = 0; i < done.size(); ++i) done[i] = files.has(c.run_key(i));
   return done;
 }
 
@@ -459,16 +444,7 @@ std::vector<std::size_t> missing_runs(const Campaign& c) {
   return missing;
 }
 
-void remove_partial_files(const Campaign& c) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(c.runs_dir(), ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.size() > std::strlen(kPartialSuffix) &&
-        name.compare(name.size() - std::strlen(kPartialSuffix), std::string::npos, kPartialSuffix) == 0) {
-      fs::remove(e.path(), ec);
-    }
-  }
-}
+void remove_partial_files(const Campaign& c) { c.files().remove_partial(); }
 
 void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, int jobs, const std::string& where,
                        const ProgressFn& progress) {
@@ -519,7 +495,7 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
     }
     r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
                     {"started_unix_s", started[i]}, {"finished_unix_s", unix_now()}};
-    write_file(c.run_file(i), r.dump() + "\n");
+    c.files().write(c.run_key(i), r.dump());
     std::error_code ec;
     fs::remove(f[0], ec);
     fs::remove(f[1], ec);

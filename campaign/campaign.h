@@ -6,7 +6,8 @@
 ///                          configuration digests, seeds, clock, chunk size, backend, cluster settings
 ///   DIR/scenario.yaml      the resolved scenario of the first parameter set (for the record)
 ///   DIR/runs/run-NNNNNN.json  one file per finished run, written atomically (temporary name,
-///                          fsync, rename): a half-written file is never merged
+///                          fsync, rename): a half-written file is never merged (the campaigns'
+///                          one result model, result_files.h)
 ///   DIR/logs/              each run's LCM log, if the campaign keeps them
 ///   DIR/slurm/             the batch script, the job ids submitted and each task's output
 ///   DIR/result.json, DIR/result.csv  the merged result (sweep_json, sweep_csv)
@@ -22,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "campaign/result_files.h"
 #include "campaign/sweep.h"
 #include "launcher/cluster_section.h"
 
@@ -60,8 +62,11 @@ struct Campaign {
   std::size_t task_of(std::size_t run) const { return run / cluster.chunk_size; }
   /// "set 2 seed 17" for messages.
   std::string run_name(std::size_t run) const;
-  std::string run_file(std::size_t run) const;
-  std::string runs_dir() const { return dir + "/runs"; }
+  /// The run's key among the result files: run-NNNNNN.
+  std::string run_key(std::size_t run) const;
+  std::string run_file(std::size_t run) const { return files().file(run_key(run)); }
+  ResultFiles files() const { return ResultFiles(dir); }
+  std::string runs_dir() const { return files().runs_dir(); }
   std::string slurm_dir() const { return dir + "/slurm"; }
 };
 

@@ -2,8 +2,10 @@
 /// The campaigns' one worker pool: work items run in forked worker processes, each worker forked
 /// once and then taking one item after another, so that what the parent built before (run plans,
 /// models) costs nothing per item, and an item that crashes its worker costs only that item.
-/// `rig sweep`'s local backend (campaign.h), every Slurm task's share of a campaign and
-/// `rig discrepancy --power` (detection_power/) fly their runs through it.
+/// `rig sweep`'s local backend (campaign.h), every Slurm task's share of a campaign,
+/// `rig reproduce thesis` (reproduce/) and `rig discrepancy --power` (detection_power/) fly their
+/// runs through it; the last two through run_kept() (result_files.h), which keeps each result in
+/// a campaign directory.
 
 #include <cstddef>
 #include <functional>

@@ -114,6 +114,11 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
              });
   cl.add_json(json, "the cells, recommendations, verification and timing");
   cl.add_plots(plots, "power_length.png, power_size.png");
+  cl->add_option("--dir", o.result_dir,
+                 "keep each flight's outcome in this campaign directory as it finishes (DIR/campaign.json, "
+                 "DIR/runs/); started again with the same scenario, effect, model and candidates, the command flies "
+                 "only the flights DIR lacks, and a DIR of another campaign is refused, naming what differs")
+      ->type_name("DIR");
   cl->add_flag("--no-progress", "no progress line on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
   if (!plots.empty()) ident::require_gnuplot();  // fail before the flights, not after

@@ -90,6 +90,11 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   cl->add_option("--logs", o.work_dir, "where the flights' logs go")->capture_default_str()->type_name("DIR");
+  cl->add_option("--dir", o.result_dir,
+                 "keep each seed's values in this campaign directory as it finishes (DIR/campaign.json, "
+                 "DIR/runs/seed-N.json); started again with the same campaign, the command flies only the seeds "
+                 "DIR lacks, and a DIR of another campaign is refused, naming what differs")
+      ->type_name("DIR");
   cl->add_option("--controller", o.controller_file, "the controller copy of the closed-loop validation")
       ->type_name("FILE");
   cl.add_json(json_file, "the tables: {\"tables\": [{\"id\", \"title\", \"cells\": [{\"row\", \"column\", "

@@ -6,12 +6,17 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
+#include "core/config.h"
 #include "detection_power/effect_size.h"
+#include "scenario/scenario.h"
 #include "detection_power/record_length.h"
-#include "campaign/worker_pool.h"
+#include "campaign/result_files.h"
 #include "transport/clock.h"
 
 namespace nimble::detection_power {
@@ -103,9 +108,20 @@ CellPlan plan_cell(const PowerOptions& o, const YAML::Node& tree, const Scenario
   return c;
 }
 
-/// Flies `flights` seeds of `campaign_seed` in every cell; fills the cells' flights.
+/// A flight's key among a campaign directory's result files: its size, length and seed decide it.
+std::string flight_key(double size, double length_s, std::uint64_t seed) {
+  std::string key = "size" + shortest_text(size) + "_length" + shortest_text(length_s) + "_seed" + std::to_string(seed);
+  for (char& ch : key) {
+    if (ch == '+') ch = 'p';
+  }
+  return key;
+}
+
+/// Flies `flights` seeds of `campaign_seed` in every cell; fills the cells' flights. With
+/// `files`, a flight that has a result there is read, not flown, and each one flown is kept.
 void fly_cells(const std::vector<CellPlan>& plans, std::vector<PowerCell>& cells, int flights,
-               std::uint64_t campaign_seed, const FlightCheck& check, int jobs, bool progress, const char* what) {
+               std::uint64_t campaign_seed, const FlightCheck& check, int jobs, bool progress, const char* what,
+               const campaign::ResultFiles* files) {
   const std::size_t n = plans.size() * static_cast<std::size_t>(flights);
   const bool tty = ::isatty(STDERR_FILENO);
   const std::int64_t start = transport::monotonic_ns();
@@ -129,7 +145,14 @@ void fly_cells(const std::vector<CellPlan>& plans, std::vector<PowerCell>& cells
     return encode(o);
   };
   pool.finished = [&](std::size_t, const std::string&, std::size_t done) { show(done); };
-  const auto lines = campaign::run_in_workers(n, jobs, pool);
+  campaign::KeptItems kept;
+  for (std::size_t item = 0; item < n; ++item) {
+    const CellPlan& c = plans[item / static_cast<std::size_t>(flights)];
+    kept.keys.push_back(flight_key(c.size, c.length.length_s,
+                                   flight_seed(campaign_seed, item % static_cast<std::size_t>(flights))));
+  }
+  kept.keep = [](const std::string& line) { return decode(line).error.empty(); };
+  const auto lines = campaign::run_kept(kept, jobs, pool, files);
   for (std::size_t item = 0; item < n; ++item) {
     cells[item / static_cast<std::size_t>(flights)].flights.push_back(decode(lines[item]));
   }
@@ -169,6 +192,22 @@ void tally(PowerCell& c, const std::string& named_as) {
   c.alarm = wilson(alarm, n);
 }
 
+/// The manifest of a power campaign kept in a directory: what decides a flight's outcome besides
+/// its size, length and seed (its key). The scenario as flown (scenario_digest of the plan with
+/// --set: the file and all it names), the effect, the model and vehicle the workflow checks and
+/// its candidates, and the rig's executable, by content.
+std::string power_manifest(const PowerOptions& o, const launcher::RunPlan& base, const FlightCheck& check) {
+  nlohmann::json m;
+  m["campaign"] = "rig discrepancy --power";
+  m["scenario digest"] = scenario_digest(base.scenario);
+  m["effect"] = o.effect;
+  m["model digest"] = file_digest(o.model_file);
+  m["vehicle digest"] = file_digest(check.vehicle.file);
+  m["candidates"] = check.options.candidates;
+  m["rig digest"] = file_digest("/proc/self/exe");
+  return m.dump();
+}
+
 /// A length rounded to 0.01 s (refined lengths: a record is flown at whole plant steps anyway).
 double rounded_length(double length_s) { return std::max(0.01, std::round(length_s * 100.0) / 100.0); }
 
@@ -194,7 +233,7 @@ class Campaign {
       cells.push_back(c);
     }
     if (cells.empty()) return cells;
-    fly_cells(plans, cells, flights, seed, check_, r_.jobs, o_.progress, kind.c_str());
+    fly_cells(plans, cells, flights, seed, check_, r_.jobs, o_.progress, kind.c_str(), files_ ? &*files_ : nullptr);
     for (PowerCell& c : cells) tally(c, r_.named_as);
     return cells;
   }
@@ -242,6 +281,9 @@ class Campaign {
   const launcher::RunPlan& base_;
   const FlightCheck& check_;
   std::string dir_;
+
+ public:
+  std::optional<campaign::ResultFiles> files_;  ///< the campaign directory, if the results are kept
 };
 
 /// The grid's lengths: the user's, or the scenario's block times 1, 2, 4.
@@ -305,6 +347,7 @@ PowerResult run_power(const PowerOptions& o) {
     }
   } cleanup{dir};
   Campaign campaign(o, r, base, check, dir.string());
+  if (!o.result_dir.empty()) campaign.files_ = campaign::open_result_dir(o.result_dir, power_manifest(o, base, check));
   // Every plan of the grid loads before anything flies: a size the plant refuses stops it here.
   std::vector<std::pair<double, double>> grid;
   for (const double size : r.sizes) {

@@ -67,6 +67,9 @@ struct PowerOptions {
   int refine = 3;                    ///< rounds of refinement of each recommended length
   int verify = 0;                    ///< fresh flights at each recommended length
   bool progress = true;              ///< progress line on stderr
+  /// A campaign directory (campaign/result_files.h) keeping each flight's outcome as it finishes
+  /// (empty: none): the same campaign started again there flies only the flights it lacks.
+  std::string result_dir;
 };
 
 /// One cell: a size flown for a length.

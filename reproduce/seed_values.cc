@@ -1,10 +1,14 @@
 #include "reproduce/seed_values.h"
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "reproduce/campaign_spec.h"
+#include "scenario/scenario.h"
 
 namespace nimble::reproduce {
 namespace {
@@ -96,6 +100,29 @@ SeedValues seed_values_from_line(const std::string& line) {
     throw std::runtime_error("rig reproduce: a seed's values do not read back (" + std::string(e.what()) + "): " +
                              line.substr(0, 200));
   }
+}
+
+std::string seed_key(std::uint64_t seed) { return "seed-" + std::to_string(seed); }
+
+std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
+  namespace fs = std::filesystem;
+  const auto absolute = [](const std::string& p) { return fs::absolute(p).lexically_normal().string(); };
+  Json m;
+  m["campaign"] = "rig reproduce thesis";
+  m["campaign file"] = absolute(o.campaign_file);
+  m["campaign file digest"] = file_digest(o.campaign_file);
+  m["clock"] = o.clock;
+  m["states"] = o.states;
+  m["logs"] = absolute(o.work_dir);
+  m["controller digest"] = file_digest(o.controller_file);
+  m["rig digest"] = file_digest("/proc/self/exe");
+  for (const auto& [name, scenario] : spec.flights) {
+    m["scenario " + name] = scenario_digest(load_scenario(scenario));
+  }
+  for (const auto& set : spec.sets) m["model " + set.row] = file_digest(set.model);
+  m["model lateral4"] = file_digest(spec.lateral4_model);
+  for (const auto& [id, model] : spec.coupled_models) m["model " + id] = file_digest(model);
+  return m.dump();
 }
 
 }  // namespace nimble::reproduce

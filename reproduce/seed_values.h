@@ -43,4 +43,17 @@ std::string seed_values_line(const SeedValues& values);
 /// Reads seed_values_line()'s output. @throws std::runtime_error naming what is wrong.
 SeedValues seed_values_from_line(const std::string& line);
 
+struct CampaignSpec;
+
+/// A seed's key among a campaign directory's result files (campaign/result_files.h): seed-N.
+std::string seed_key(std::uint64_t seed);
+
+/// The manifest of `rig reproduce thesis --dir`: what makes a seed's values the same in two
+/// campaigns, so that a directory's stored seeds are only used by the campaign that flew them.
+/// The campaign file, every scenario it flies (scenario_digest: the file and all it names), every
+/// model it reads and the controller copy, by content; the clock, the states, the logs'
+/// directory (the records point there); and the rig's executable, by content. The seeds are not
+/// in it: a campaign with more seeds flies only the new ones.
+std::string seeds_manifest(const CampaignOptions& options, const CampaignSpec& spec);
+
 }  // namespace nimble::reproduce

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -31,7 +32,7 @@
 #include "launcher/run_plan.h"
 #include "reproduce/campaign_spec.h"
 #include "reproduce/seed_values.h"
-#include "campaign/worker_pool.h"
+#include "campaign/result_files.h"
 #include "estimator/sensing_config.h"
 #include "scenario/scenario.h"
 
@@ -462,8 +463,9 @@ std::vector<PlanItem> plan_items(const CampaignSpec& spec) {
 }
 
 /// Each item's flight's label on each seed: "<flight>_with_<k>", k counting the flights with a
-/// cause item by item and seed by seed; a flight two items share (the same flight, cause and
-/// seed) is flown once, under the first item's label.
+/// cause item by item, the same on every seed (so a seed kept in a campaign directory reads back
+/// with the labels any seed list gives it); a flight two items share (the same flight and cause)
+/// is flown once per seed, under the first item's label.
 std::vector<std::vector<std::string>> plan_labels(const std::vector<PlanItem>& items,
                                                   const std::vector<std::uint64_t>& seeds) {
   std::vector<std::vector<std::string>> labels(items.size(), std::vector<std::string>(seeds.size()));
@@ -472,7 +474,7 @@ std::vector<std::vector<std::string>> plan_labels(const std::vector<PlanItem>& i
   for (std::size_t j = 0; j < items.size(); ++j) {
     const std::string flight = table_flight(items[j].table);
     for (std::size_t i = 0; i < seeds.size(); ++i) {
-      const std::string key = flight_key(seeds[i], flight, items[j].with);
+      const std::string key = flight_key(0, flight, items[j].with);
       auto it = label_of.find(key);
       if (it == label_of.end()) it = label_of.emplace(key, fmt::format("{}_with_{}", flight, ++k)).first;
       labels[j][i] = it->second;
@@ -515,7 +517,15 @@ std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& 
     return seed_values_line(v);
   };
   pool.died = [](std::size_t, const std::string& how) { return "error the worker flying it died (" + how + ")"; };
-  const std::vector<std::string> lines = campaign::run_in_workers(o.seeds.size(), std::max(1, o.jobs), pool);
+  campaign::KeptItems kept;
+  for (const std::uint64_t seed : o.seeds) kept.keys.push_back(seed_key(seed));
+  kept.keep = [](const std::string& line) { return line.rfind("error ", 0) != 0; };
+  // Only a flight flown now draws the figures: the first seed flies again for --report.
+  kept.redo = [&o](std::size_t i) { return i == 0 && !o.report_dir.empty(); };
+  std::optional<campaign::ResultFiles> files;
+  if (!o.result_dir.empty()) files = campaign::open_result_dir(o.result_dir, seeds_manifest(o, spec));
+  const std::vector<std::string> lines =
+      campaign::run_kept(kept, std::max(1, o.jobs), pool, files ? &*files : nullptr);
   std::vector<SeedValues> seeds;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i].rfind("error ", 0) == 0) {

@@ -120,6 +120,9 @@ struct CampaignOptions {
   /// Seeds flown at a time, each in a worker of the campaigns' pool (campaign/worker_pool.h); the
   /// tables are the same for any number.
   int jobs = 1;
+  /// A campaign directory (campaign/result_files.h) keeping each seed's values as it finishes
+  /// (empty: none): the same campaign started again there flies only the seeds it lacks.
+  std::string result_dir;
 };
 
 /// Flies the campaign and builds the tables.

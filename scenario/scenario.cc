@@ -377,14 +377,39 @@ std::vector<std::pair<std::string, std::string>> named_files(const Scenario& sce
   return files;
 }
 
-std::string scenario_digest(const Scenario& scenario) {
+namespace {
+
+/// The digests' FNV-1a over bytes fed in turn.
+struct Digest {
   uint64_t h = 1469598103934665603ULL;
-  const auto feed = [&h](const std::string& bytes) {
+  void feed(const std::string& bytes) {
     for (const unsigned char c : bytes) {
       h ^= c;
       h *= 1099511628211ULL;
     }
-  };
+  }
+  std::string hex() const {
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+  }
+};
+
+}  // namespace
+
+std::string file_digest(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "unreadable";
+  std::ostringstream content;
+  content << in.rdbuf();
+  Digest d;
+  d.feed(content.str());
+  return d.hex();
+}
+
+std::string scenario_digest(const Scenario& scenario) {
+  Digest d;
+  const auto feed = [&d](const std::string& bytes) { d.feed(bytes); };
   feed(to_yaml(scenario.root));
   for (const auto& [what, path] : named_files(scenario)) {
     std::ifstream in(path, std::ios::binary);
@@ -393,9 +418,7 @@ std::string scenario_digest(const Scenario& scenario) {
     // A file that cannot be read digests as such (its loader names the problem).
     feed(what + '\0' + path + '\0' + (in ? content.str() : std::string("(unreadable)")) + '\0');
   }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
+  return d.hex();
 }
 
 std::string to_yaml(const YAML::Node& node) {

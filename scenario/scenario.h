@@ -168,6 +168,10 @@ std::vector<std::pair<std::string, std::string>> named_files(const Scenario& sce
 /// process whose digest is not the run's; the run summary carries it (`config_digest`).
 std::string scenario_digest(const Scenario& scenario);
 
+/// Digest of a file's bytes, the same function as scenario_digest()'s (16 hex digits);
+/// "unreadable" for a file that cannot be read.
+std::string file_digest(const std::string& path);
+
 /// Writes a tree as YAML text.
 std::string to_yaml(const YAML::Node& node);
 

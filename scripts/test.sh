@@ -31,7 +31,7 @@ run_ctest() {
   local left
   left="$(du -sh "$dir/test-tmp" 2>/dev/null | cut -f1)"
   if [[ -n "$(ls -A "$dir/test-tmp")" ]]; then
-    echo "== files left by failed or killed tests: $left in $dir/test-tmp"
+    echo "== files left in $dir/test-tmp by failed tests or by processes the tests killed: $left"
   fi
   return "$rc"
 }

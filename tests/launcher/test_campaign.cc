@@ -198,3 +198,84 @@ TEST_CASE("worker pool: every item once, results by index, each reported as it f
   CHECK(pids.count(std::to_string(::getpid())) == 0);
   for (std::size_t k = 0; k < done_seen.size(); ++k) CHECK(done_seen[k] == k + 1);
 }
+
+// The one result model of a campaign directory (result_files.h).
+
+TEST_CASE("result files: a campaign directory takes its own manifest again and refuses another, naming the key",
+          "[campaign][result_files]") {
+  const std::string dir = scratch("results") + "/c";
+  const std::string manifest = R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})";
+  const ResultFiles files = open_result_dir(dir, manifest);
+  CHECK(fs::is_directory(files.runs_dir()));
+  CHECK(fs::exists(files.manifest_file()));
+  files.write("seed-3", "three");
+  CHECK(files.has("seed-3"));
+  CHECK(files.read("seed-3") == std::optional<std::string>("three"));
+  CHECK(!files.read("seed-4"));
+  std::ofstream(files.runs_dir() + "/seed-4.json.host.1.partial") << "half";
+
+  // The same manifest (keys in any order): the same campaign, its results there, the partial file gone.
+  const ResultFiles again = open_result_dir(dir, R"({"clock": "inprocess", "campaign": "test", "scenario digest": "00aa"})");
+  CHECK(again.read("seed-3") == std::optional<std::string>("three"));
+  CHECK(!fs::exists(files.runs_dir() + "/seed-4.json.host.1.partial"));
+
+  CHECK_THROWS_WITH(open_result_dir(dir, R"({"campaign": "test", "scenario digest": "00bb", "clock": "inprocess"})"),
+                    Catch::Contains("holds another campaign") && Catch::Contains("scenario digest is \"00aa\"") &&
+                        Catch::Contains("\"00bb\""));
+  CHECK_THROWS_WITH(open_result_dir(dir, R"({"campaign": "test", "scenario digest": "00aa"})"),
+                    Catch::Contains("it has clock"));
+  const std::string other = scratch("results") + "/other";
+  fs::create_directories(other);
+  std::ofstream(other + "/notes.txt") << "mine";
+  CHECK_THROWS_WITH(open_result_dir(other, manifest), Catch::Contains("not empty and holds no campaign"));
+  CHECK(fs::exists(other + "/notes.txt"));
+  CHECK_THROWS_WITH(files.file("../x"), Catch::Contains("'../x'"));
+}
+
+TEST_CASE("result files: started again, a campaign does only the items without a kept result, and keeps what "
+          "the first start finished",
+          "[campaign][result_files]") {
+  const std::string dir = scratch("kept");
+  const ResultFiles files = open_result_dir(dir + "/c", R"({"campaign": "test"})");
+  const std::string calls = dir + "/calls.txt";  // each item done appends its index (items run in workers)
+  KeptItems items;
+  for (std::size_t i = 0; i < 6; ++i) items.keys.push_back("item-" + std::to_string(i));
+  items.keep = [](const std::string& line) { return line.rfind("error ", 0) != 0; };
+  bool fail_four = true;
+  PoolWork pool;
+  pool.work = [&](std::size_t i) -> std::string {
+    std::ofstream(calls, std::ios::app) << i << "\n";
+    if (i == 4 && fail_four) throw std::runtime_error("not this time");
+    return "value " + std::to_string(i * i);
+  };
+  pool.died = [](std::size_t, const std::string& how) { return "error " + how; };
+  std::vector<std::size_t> done_seen;
+  pool.finished = [&](std::size_t, const std::string&, std::size_t done) { done_seen.push_back(done); };
+  const auto called = [&] {
+    std::ifstream in(calls);
+    std::multiset<std::size_t> s;
+    for (std::size_t i; in >> i;) s.insert(i);
+    fs::remove(calls);
+    return s;
+  };
+
+  const std::vector<std::string> first = run_kept(items, 2, pool, &files);
+  CHECK(first[4] == "error not this time");
+  CHECK(called() == std::multiset<std::size_t>{0, 1, 2, 3, 4, 5});
+  CHECK(!files.has("item-4"));  // a failed item is not kept: it is done again next time
+  CHECK(files.read("item-5") == std::optional<std::string>("value 25"));
+
+  fail_four = false;
+  done_seen.clear();
+  items.redo = [](std::size_t i) { return i == 1; };
+  const std::vector<std::string> second = run_kept(items, 2, pool, &files);
+  CHECK(called() == std::multiset<std::size_t>{1, 4});
+  for (std::size_t i = 0; i < 6; ++i) CHECK(second[i] == "value " + std::to_string(i * i));
+  CHECK(done_seen == std::vector<std::size_t>{5, 6});  // counting the four read
+
+  items.redo = nullptr;
+  CHECK(run_kept(items, 2, pool, &files) == second);
+  CHECK(called().empty());
+  CHECK(run_kept(items, 2, pool, nullptr) == second);  // without a directory: every item done
+  CHECK(called().size() == 6);
+}

@@ -224,16 +224,15 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   CHECK(j["causes"].size() == 3);
 }
 
-TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown one at a time or two at once",
+TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown one at a time, two at once, or one "
+          "now and the other later in a campaign directory",
           "[system]") {
   // Each seed is one item of the campaigns' worker pool; what comes back must not depend on how
-  // many workers flew them (wall times and the logs' directory aside).
+  // many workers flew them (wall times and the logs' directory aside), nor on whether a seed was
+  // kept in a campaign directory (--dir) and read back instead of flown.
   const std::string dir = nimble::test::scratch_dir("paper_reproduce_jobs");
-  std::string tables[2];
-  for (const int jobs : {1, 2}) {
-    const std::string json = dir + "/tables" + std::to_string(jobs) + ".json";
-    const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-2 --jobs " + std::to_string(jobs) +
-                                         " --logs " + dir + "/logs" + std::to_string(jobs) + " --json " + json);
+  const auto tables = [&](const std::string& seeds, const std::string& args, const std::string& json) {
+    const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds " + seeds + " " + args + " --json " + json);
     INFO(r.out << r.err);
     REQUIRE((r.exit_code == 0 || r.exit_code == 1));
     YAML::Node j = YAML::LoadFile(json);
@@ -242,10 +241,30 @@ TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown on
       f.remove("wall_s");
       f["log"] = std::filesystem::path(f["log"].as<std::string>()).filename().string();
     }
-    CHECK(j["flights"].size() > 30);
-    tables[jobs - 1] = YAML::Dump(j);
+    return j;
+  };
+  const YAML::Node one = tables("1-2", "--jobs 1 --logs " + dir + "/logs1", dir + "/tables1.json");
+  CHECK(one["flights"].size() > 30);
+  CHECK(YAML::Dump(tables("1-2", "--jobs 2 --logs " + dir + "/logs2", dir + "/tables2.json")) == YAML::Dump(one));
+
+  // Seed 1 into a campaign directory; its logs then removed: started again with seeds 1-2, the
+  // campaign flies seed 2 alone (only its logs appear) and gives the same tables.
+  const std::string kept = "--dir " + dir + "/campaign --logs " + dir + "/logs3";
+  tables("1", kept, dir + "/tables3a.json");
+  CHECK(std::filesystem::exists(dir + "/campaign/runs/seed-1.json"));
+  std::filesystem::remove_all(dir + "/logs3");
+  CHECK(YAML::Dump(tables("1-2", kept, dir + "/tables3.json")) == YAML::Dump(one));
+  std::size_t logs = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir + "/logs3")) {
+    INFO(e.path());
+    CHECK(e.path().filename().string().find("seed1") == std::string::npos);
+    ++logs;
   }
-  CHECK(tables[0] == tables[1]);
+  CHECK(logs > 5);
+  // Another campaign in the same directory is refused before it flies, naming what differs.
+  const auto other = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-2 --states truth " + kept);
+  CHECK(other.exit_code == 2);
+  CHECK(other.err.find("holds another campaign: its states is \"smoothed\", this one's \"truth\"") != std::string::npos);
 }
 
 TEST_CASE("rig reproduce: a campaign file with a table left out is refused, naming the key", "[system]") {

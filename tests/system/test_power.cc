@@ -3,7 +3,9 @@
 // errors on a few flights, and the check the command exists for: at the length it recommends,
 // fresh seeds name the effect with the target probability.
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <optional>
 #include <filesystem>
 #include <string>
@@ -168,6 +170,53 @@ TEST_CASE("rig discrepancy --power: a few flights give every cell its proportion
   CHECK(d["timing"]["workflow_cpu_s_mean"].as<double>() > 0.0);
   CHECK(std::filesystem::exists(dir + "/plots/power_length.png"));
   CHECK(std::filesystem::exists(dir + "/plots/power_size.png"));
+}
+
+TEST_CASE("rig discrepancy --power --dir: started again, the campaign flies only the flights it lacks, reading the "
+          "others from its directory",
+          "[power]") {
+  const std::string dir = test::scratch_dir("power_dir");
+  const std::string base = "discrepancy --power --scenario " + kConfigs + "cl_doublet_train_slow.yaml --model " + kModel +
+                           " --lengths 9 --refine 0 --no-progress --dir " + dir + "/campaign";
+  const auto count_runs = [&] {
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(dir + "/campaign/runs")) files.push_back(e.path().string());
+    return files;
+  };
+  const auto first = test::run_rig(base + " --effect actuator_delay=0.006 --flights 2");
+  INFO(first.out << first.err);
+  REQUIRE(first.exit_code == 0);
+  const std::vector<std::string> kept = count_runs();
+  REQUIRE(kept.size() == 2);
+  // A stored flight's wall time set to 1000 s: only a result read back, not flown again, carries it.
+  std::string line;
+  std::getline(std::ifstream(kept[0]) >> std::ws, line);
+  std::vector<std::string> f;
+  for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
+    b = std::min(line.find('\t', a), line.size());
+    f.push_back(line.substr(a, b - a));
+  }
+  REQUIRE(f.size() == 12);
+  f[6] = "1000";
+  std::string changed;
+  for (std::size_t k = 0; k < f.size(); ++k) changed += (k ? "\t" : "") + f[k];
+  std::ofstream(kept[0]) << changed << "\n";
+
+  const auto second = test::run_rig(base + " --effect actuator_delay=0.006 --flights 3 --json " + dir + "/power.json");
+  INFO(second.out << second.err);
+  REQUIRE(second.exit_code == 0);
+  CHECK(count_runs().size() == 3);
+  const YAML::Node d = YAML::LoadFile(dir + "/power.json");
+  CHECK(d["timing"]["flights"].as<int>() == 3);
+  CHECK(d["timing"]["flight_s_mean"].as<double>() > 1000.0 / 3);
+  CHECK(d["cells"][0]["named"]["n"].as<int>() == 3);
+
+  // Another campaign in the same directory is refused before it flies, naming what differs.
+  const auto other = test::run_rig(base + " --effect lateral_inflow=-0.005 --flights 2");
+  CHECK(other.exit_code == 2);
+  CHECK(other.err.find("holds another campaign: its effect is \"actuator_delay\", this one's \"lateral_inflow\"") !=
+        std::string::npos);
+  CHECK(count_runs().size() == 3);
 }
 
 TEST_CASE("rig discrepancy --power: bad input is named before anything flies, exit 2", "[power]") {
