@@ -23,13 +23,14 @@
 #include "core/json_writer.h"
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "core/constants.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace nimble;
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 
 /// The loop of hover: set 1, fast gains, on the estimate (latency 2 control periods).
 struct Loop {

@@ -1,5 +1,7 @@
 #include "campaign/sweep.h"
 
+#include "campaign/campaign.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,12 +16,6 @@ namespace nimble::campaign {
 // One run is the launcher's (run plan, executors, report); a campaign flies many.
 using namespace launcher;
 namespace {
-
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
-}
 
 /// The percentiles the summary and the JSON give, and their JSON names.
 constexpr double kPercentiles[] = {0.0, 5.0, 50.0, 95.0, 100.0};

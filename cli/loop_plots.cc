@@ -10,12 +10,13 @@
 
 #include "cli/loop_report.h"
 #include "cli/report_files.h"
+#include "core/constants.h"
 
 namespace nimble::cli {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
 
 std::string colour(std::size_t i) { return kColours[i % (sizeof kColours / sizeof kColours[0])]; }

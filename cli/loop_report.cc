@@ -6,12 +6,13 @@
 
 #include "cli/report_files.h"
 #include "core/json_writer.h"
+#include "core/constants.h"
 
 namespace nimble::cli {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 
 std::string or_none(const char* format, double x, const char* none = "none") {
   return std::isfinite(x) ? fmt(format, x) : std::string(none);

@@ -6,18 +6,15 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+#include "core/constants.h"
+#include "core/config.h"
 
 namespace nimble {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 /// T = 2 (0.0114 f_hz - 0.0449) N (thesis Eq 4.18).
 
-std::string num(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
 
 /// A bad parameter: its key path as in the YAML file, its value and what is wrong.
 class InvalidParameter : public std::invalid_argument {
@@ -36,7 +33,7 @@ class InvalidParameter : public std::invalid_argument {
 };
 
 [[noreturn]] void bad(const std::string& name, double value, const std::string& allowed) {
-  throw InvalidParameter(name, num(value), "must be " + allowed);
+  throw InvalidParameter(name, general_text(value), "must be " + allowed);
 }
 
 void check(bool ok, const std::string& name, double value, const std::string& allowed) {
@@ -143,10 +140,10 @@ double flap_thrust_n(double f_radps) { return ThrustCurve{}.thrust_n(f_radps); }
 
 double hover_flap_frequency_radps(double mass_kg, double gravity_mps2) {
   if (!(std::isfinite(mass_kg) && mass_kg > 0.0)) {
-    throw std::invalid_argument("hover_flap_frequency_radps: mass_kg must be > 0, got " + num(mass_kg));
+    throw std::invalid_argument("hover_flap_frequency_radps: mass_kg must be > 0, got " + general_text(mass_kg));
   }
   if (!(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0)) {
-    throw std::invalid_argument("hover_flap_frequency_radps: gravity_mps2 must be > 0, got " + num(gravity_mps2));
+    throw std::invalid_argument("hover_flap_frequency_radps: gravity_mps2 must be > 0, got " + general_text(gravity_mps2));
   }
   return ThrustCurve{}.frequency_radps(mass_kg * gravity_mps2);
 }
@@ -175,7 +172,7 @@ void validate(const ControllerConfig& c) {
   check_gains("yaw", c.yaw_gains);
   check(c.flap_freq_max_radps > c.flap_freq_min_radps,
         "limits.flap_freq_max_radps", c.flap_freq_max_radps,
-        "in (flap_freq_min_radps = " + num(c.flap_freq_min_radps) + ", 1000]");
+        "in (flap_freq_min_radps = " + general_text(c.flap_freq_min_radps) + ", 1000]");
   check(c.f_trim_radps >= c.flap_freq_min_radps && c.f_trim_radps <= c.flap_freq_max_radps,
         "throttle.f_trim_radps", c.f_trim_radps, "within [flap_freq_min_radps, flap_freq_max_radps]");
 }

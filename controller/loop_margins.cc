@@ -8,11 +8,12 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#include "core/constants.h"
 
 namespace nimble {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 

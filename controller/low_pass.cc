@@ -4,10 +4,11 @@
 #include <complex>
 #include <stdexcept>
 #include <string>
+#include "core/constants.h"
 
 namespace nimble {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 }  // namespace
 
 SecondOrderLowPass::SecondOrderLowPass(double cutoff_hz, double sample_rate_hz)

@@ -5,11 +5,13 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+#include "core/constants.h"
+#include "core/config.h"
 
 namespace nimble {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr double kDegToRad = kPi / 180.0;
 constexpr double kLimitDeg = 60.0;           // onboard roll set-point limit
 constexpr double kMaxMainFrequencyHz = 50.0;  // pulses of at least 10 ms (5 control steps at 512 Hz)
@@ -21,11 +23,6 @@ const Range kDeltaThrottlePct = Range::closed(-100.0, 100.0);
 // THRF of a 60 deg set-point is 2.
 const Range kThrottleFactor = Range::closed(1.0, 2.0);
 
-std::string num(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
 
 Axis axis_from(ConfigMap& seg, bool required) {
   if (!required && !seg.has("axis")) return Axis::kRoll;
@@ -36,8 +33,8 @@ Axis axis_from(ConfigMap& seg, bool required) {
 void check_pulse_limit(ConfigMap& seg, const Segment& s) {
   const double base = s.axis == Axis::kRoll ? s.roll_rad : s.pitch_rad;
   if (std::fabs(base) + s.amplitude_rad > kManoeuvreAngleLimitRad + 1e-12) {
-    seg.fail("amplitude_deg", "offset " + num(base / kDegToRad) + " deg plus/minus the amplitude exceeds the " +
-                                  num(kLimitDeg) + " deg set-point limit");
+    seg.fail("amplitude_deg", "offset " + general_text(base / kDegToRad) + " deg plus/minus the amplitude exceeds the " +
+                                  general_text(kLimitDeg) + " deg set-point limit");
   }
 }
 
@@ -179,7 +176,7 @@ double Manoeuvre::max_abs_roll_rad() const {
 double throttle_factor_for(double max_abs_roll_rad) {
   if (!(std::isfinite(max_abs_roll_rad) && max_abs_roll_rad >= 0.0 && max_abs_roll_rad < 0.5 * kPi)) {
     throw std::invalid_argument("throttle_factor_for: max |roll set-point| must be in [0, pi/2) rad, got " +
-                                num(max_abs_roll_rad));
+                                general_text(max_abs_roll_rad));
   }
   return 1.0 / std::cos(max_abs_roll_rad);
 }
@@ -238,7 +235,7 @@ ManoeuvrePlayer::ManoeuvrePlayer(Manoeuvre manoeuvre, double trim_throttle_pct)
     : manoeuvre_(std::move(manoeuvre)), trim_throttle_pct_(trim_throttle_pct) {
   if (!(std::isfinite(trim_throttle_pct) && trim_throttle_pct > 0.0 && trim_throttle_pct < 100.0)) {
     throw std::invalid_argument("manoeuvre player: trim_throttle_pct must be in (0, 100), got " +
-                                num(trim_throttle_pct));
+                                general_text(trim_throttle_pct));
   }
   if (manoeuvre_.segments.empty()) {
     throw std::invalid_argument("manoeuvre player: manoeuvre '" + manoeuvre_.name + "' has no segments");
@@ -249,12 +246,12 @@ ManoeuvrePlayer::ManoeuvrePlayer(Manoeuvre manoeuvre, double trim_throttle_pct)
     const double throttle = trim_throttle_pct_ + s.delta_throttle_pct;
     if (throttle < 0.0 || throttle > 100.0) {
       throw std::invalid_argument("manoeuvre '" + manoeuvre_.name + "' segment " + std::to_string(i) + " '" + s.name +
-                                  "': trim " + num(trim_throttle_pct_) + " % + delta_throttle_pct " +
-                                  num(s.delta_throttle_pct) + " % is outside [0, 100] %");
+                                  "': trim " + general_text(trim_throttle_pct_) + " % + delta_throttle_pct " +
+                                  general_text(s.delta_throttle_pct) + " % is outside [0, 100] %");
     }
     if (!(std::isfinite(s.duration_s) && s.duration_s > 0.0)) {
       throw std::invalid_argument("manoeuvre '" + manoeuvre_.name + "' segment " + std::to_string(i) + " '" + s.name +
-                                  "': duration must be > 0 s, got " + num(s.duration_s));
+                                  "': duration must be > 0 s, got " + general_text(s.duration_s));
     }
     starts_.push_back(t);
     t += s.duration_s;

@@ -8,11 +8,12 @@
 #include <Eigen/Eigenvalues>
 
 #include "controller/low_pass.h"
+#include "core/constants.h"
 
 namespace nimble {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr int kPlantStates = 6;  // q u w theta delta_d delta_d_rate
 constexpr int kQ = 0, kTheta = 3;
 

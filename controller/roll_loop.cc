@@ -6,18 +6,15 @@
 #include <string>
 
 #include "controller/low_pass.h"
+#include "core/constants.h"
+#include "core/config.h"
 
 namespace nimble {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr int kP = 0, kPhi = 2, kPlant = 4;  // [p v phi delta_f]
 
-std::string num(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
 
 /// What the assembled system is for.
 enum class Mode { kActuator, kPhi, kP, kSetpoint };
@@ -50,14 +47,14 @@ struct Assembled {
 
 void check_config(const RollLoopConfig& c) {
   if (!(std::isfinite(c.rate_hz) && c.rate_hz > 0.0)) {
-    throw std::invalid_argument("roll loop: rate must be > 0 Hz, got " + num(c.rate_hz));
+    throw std::invalid_argument("roll loop: rate must be > 0 Hz, got " + general_text(c.rate_hz));
   }
   if (!(std::isfinite(c.lowpass_cutoff_hz) && c.lowpass_cutoff_hz > 0.0 && c.lowpass_cutoff_hz < 0.5 * c.rate_hz)) {
-    throw std::invalid_argument("roll loop: low-pass cut-off must be in (0, rate/2), got " + num(c.lowpass_cutoff_hz) +
+    throw std::invalid_argument("roll loop: low-pass cut-off must be in (0, rate/2), got " + general_text(c.lowpass_cutoff_hz) +
                                 " Hz");
   }
   if (!(std::isfinite(c.latency_s) && c.latency_s >= 0.0 && c.latency_s <= 1.0)) {
-    throw std::invalid_argument("roll loop: latency must be in [0, 1] s, got " + num(c.latency_s));
+    throw std::invalid_argument("roll loop: latency must be in [0, 1] s, got " + general_text(c.latency_s));
   }
   if (!(std::isfinite(c.gains.kp_per_rad) && std::isfinite(c.gains.kd_per_radps) &&
         std::isfinite(c.roll_cmd_to_delta_f_radps))) {
@@ -304,7 +301,7 @@ namespace {
 RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, const DesignRequest& request) {
   RollDesign d;
   d.lowpass_cutoff_hz = config.lowpass_cutoff_hz;
-  const std::string with = "with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass ";
+  const std::string with = "with the " + general_text(config.lowpass_cutoff_hz) + " Hz low-pass ";
   const double w = 2.0 * kPi * request.crossover_hz;
   const std::complex<double> target = std::polar(1.0, (-180.0 + request.phase_margin_deg) * kPi / 180.0);
   // L is linear in (kp, kd): L = kp L(1, 0) + kd L(0, 1).
@@ -315,26 +312,26 @@ RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, c
   const std::complex<double> b = LoopResponse(roll_broken_loop(lateral, c, LoopBreak::kActuator)).ratio(w);
   const double det = a.real() * b.imag() - b.real() * a.imag();
   if (std::abs(det) < 1e-300) {
-    d.note = "the gains cannot shape the loop at " + num(request.crossover_hz) + " Hz";
+    d.note = "the gains cannot shape the loop at " + general_text(request.crossover_hz) + " Hz";
     return d;
   }
   const double kp = (target.real() * b.imag() - b.real() * target.imag()) / det;
   const double kd = (a.real() * target.imag() - target.real() * a.imag()) / det;
   d.gains = {kp, kd};
   if (kp < 0.0 || kd < 0.0) {
-    d.note = with + "it needs kp " + num(kp) + ", kd " + num(kd) + ": a negative gain";
+    d.note = with + "it needs kp " + general_text(kp) + ", kd " + general_text(kd) + ": a negative gain";
     return d;
   }
   c.gains = d.gains;
   d.analysis = analyse_roll_loop(lateral, c);
   if (!d.analysis.margins.closed_loop_stable) {
-    d.note = with + "kp " + num(kp) + ", kd " + num(kd) + " leave the closed loop unstable";
+    d.note = with + "kp " + general_text(kp) + ", kd " + general_text(kd) + " leave the closed loop unstable";
   } else if (std::abs(d.analysis.margins.phase_margin_deg - request.phase_margin_deg) > 1.0) {
-    d.note = with + "another crossover (" + num(d.analysis.margins.crossover_hz) + " Hz) has the smaller phase margin, " +
-             num(d.analysis.margins.phase_margin_deg) + " deg";
+    d.note = with + "another crossover (" + general_text(d.analysis.margins.crossover_hz) + " Hz) has the smaller phase margin, " +
+             general_text(d.analysis.margins.phase_margin_deg) + " deg";
   } else if (d.analysis.dc_gain < request.min_dc_gain) {
-    d.note = with + "kp " + num(kp) + ", kd " + num(kd) + " track phi_ref at 0 Hz only by " + num(d.analysis.dc_gain) +
-             " (at least " + num(request.min_dc_gain) + " asked)";
+    d.note = with + "kp " + general_text(kp) + ", kd " + general_text(kd) + " track phi_ref at 0 Hz only by " + general_text(d.analysis.dc_gain) +
+             " (at least " + general_text(request.min_dc_gain) + " asked)";
   } else {
     d.feasible = true;
   }
@@ -345,11 +342,11 @@ RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, c
 
 RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& config, const DesignRequest& request) {
   if (!(request.phase_margin_deg > 0.0 && request.phase_margin_deg < 90.0)) {
-    throw std::invalid_argument("design: phase_margin_deg must be in (0, 90), got " + num(request.phase_margin_deg));
+    throw std::invalid_argument("design: phase_margin_deg must be in (0, 90), got " + general_text(request.phase_margin_deg));
   }
   if (!(request.crossover_hz > 0.0 && request.crossover_hz < config.rate_hz / 4.0)) {
-    throw std::invalid_argument("design: crossover_hz must be in (0, " + num(config.rate_hz / 4.0) + "), got " +
-                                num(request.crossover_hz));
+    throw std::invalid_argument("design: crossover_hz must be in (0, " + general_text(config.rate_hz / 4.0) + "), got " +
+                                general_text(request.crossover_hz));
   }
   std::vector<double> cutoffs{config.lowpass_cutoff_hz};
   for (const double f : {20.0, 25.0, 30.0, 40.0, 50.0, 64.0}) {
@@ -361,16 +358,16 @@ RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& co
     c.lowpass_cutoff_hz = cutoff;
     RollDesign d = try_design(lateral, c, request);
     if (d.feasible) {
-      d.note = cutoff == config.lowpass_cutoff_hz ? "on the configured " + num(cutoff) + " Hz low-pass"
-                                                  : "the low-pass cut-off raised from " + num(config.lowpass_cutoff_hz) +
-                                                        " to " + num(cutoff) + " Hz: " + first_why;
+      d.note = cutoff == config.lowpass_cutoff_hz ? "on the configured " + general_text(cutoff) + " Hz low-pass"
+                                                  : "the low-pass cut-off raised from " + general_text(config.lowpass_cutoff_hz) +
+                                                        " to " + general_text(cutoff) + " Hz: " + first_why;
       return d;
     }
     if (first_why.empty()) first_why = d.note;
   }
   // Where the request can be met: the crossovers at which it is feasible on the configured loop.
   RollDesign none;
-  none.note = "no PD gains reach it up to a " + num(cutoffs.back()) + " Hz low-pass (" + first_why + ")";
+  none.note = "no PD gains reach it up to a " + general_text(cutoffs.back()) + " Hz low-pass (" + first_why + ")";
   DesignRequest probe = request;
   double lo = 0.0, hi = 0.0;
   for (int i = 0; i <= 80; ++i) {
@@ -381,11 +378,11 @@ RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& co
       hi = probe.crossover_hz;
     }
   }
-  none.note += lo > 0.0 ? "; with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass a " +
-                              num(request.phase_margin_deg) + " deg margin is reached at crossovers " + num(lo) + " to " +
-                              num(hi) + " Hz"
-                        : "; with the " + num(config.lowpass_cutoff_hz) + " Hz low-pass no crossover from 0.1 to 10 Hz "
-                              "reaches a " + num(request.phase_margin_deg) + " deg margin";
+  none.note += lo > 0.0 ? "; with the " + general_text(config.lowpass_cutoff_hz) + " Hz low-pass a " +
+                              general_text(request.phase_margin_deg) + " deg margin is reached at crossovers " + general_text(lo) + " to " +
+                              general_text(hi) + " Hz"
+                        : "; with the " + general_text(config.lowpass_cutoff_hz) + " Hz low-pass no crossover from 0.1 to 10 Hz "
+                              "reaches a " + general_text(request.phase_margin_deg) + " deg margin";
   return none;
 }
 

@@ -46,6 +46,12 @@ ConfigError::ConfigError(std::string file, std::string key, std::string value,
       problem_(std::move(problem)),
       line_(line) {}
 
+std::string general_text(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
 std::string shortest_text(double x) {
   char text[40];
   for (int digits = 15; digits <= 17; ++digits) {

@@ -75,6 +75,9 @@ struct Range {
 /// an override or a file, read back to the same double.
 std::string shortest_text(double x);
 
+/// `x` as printf's %g writes it (six significant digits): numbers in messages.
+std::string general_text(double x);
+
 /// One YAML mapping of a config file, with strict key accounting.
 ///
 /// Each accessor marks its key as used; `finish()` then reports any key that

@@ -8,7 +8,7 @@
 namespace nimble::detection_power {
 namespace {
 
-std::string num(double x) {
+std::string text_4g(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.4g", x);
   return text;
@@ -69,7 +69,7 @@ Crossing crossing(const std::vector<double>& x, const std::vector<Proportion>& p
   if (p[0] >= target) {
     r.reached = true;
     r.value = x[0];
-    r.note = "at or below " + num(x[0]) + ", the first value flown";
+    r.note = "at or below " + text_4g(x[0]) + ", the first value flown";
     return r;
   }
   const auto axis = [sqrt_x](double v) { return sqrt_x ? std::sqrt(std::fabs(v)) : std::fabs(v); };
@@ -106,11 +106,11 @@ Crossing crossing(const std::vector<double>& x, const std::vector<Proportion>& p
     r.lo_x = x[i - 1];
     r.hi_x = x[i];
     r.note = fitted ? "fitted to the " + std::to_string(inside) + " values inside the transition, between " +
-                          num(x[i - 1]) + " and " + num(x[i])
-                    : "interpolated between " + num(x[i - 1]) + " and " + num(x[i]);
+                          text_4g(x[i - 1]) + " and " + text_4g(x[i])
+                    : "interpolated between " + text_4g(x[i - 1]) + " and " + text_4g(x[i]);
     return r;
   }
-  r.note = "not reached by " + num(x[m - 1]) + " (there " + num(100 * p[m - 1]) + " %)";
+  r.note = "not reached by " + text_4g(x[m - 1]) + " (there " + text_4g(100 * p[m - 1]) + " %)";
   return r;
 }
 

@@ -33,9 +33,9 @@ namespace {
 
 using transport::monotonic_ns;
 
-volatile std::sig_atomic_t g_interrupted = 0;
+volatile std::sig_atomic_t g_flight_interrupted = 0;
 extern "C" void on_inprocess_interrupt(int) {
-  g_interrupted = 1;
+  g_flight_interrupted = 1;
   transport::ProcessNode::request_stop();
 }
 
@@ -229,7 +229,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   control.publish(contract::channels::kRunControl, start);
   hub.drain();
 
-  g_interrupted = 0;
+  g_flight_interrupted = 0;
   struct sigaction sa{}, old_int{}, old_term{};
   sa.sa_handler = on_inprocess_interrupt;
   sigemptyset(&sa.sa_mask);
@@ -245,7 +245,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   control.publish(contract::channels::kRunControl, stop);
   hub.drain();
   pipe.close();  // every message recorded and monitored
-  bool interrupted = g_interrupted != 0;
+  bool interrupted = g_flight_interrupted != 0;
   if (recorder) {
     recorder->close();
     // A log that lost messages is the run's failure, whatever else ended it.

@@ -68,8 +68,8 @@ namespace {
 namespace fs = std::filesystem;
 using transport::monotonic_ns;
 
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_interrupt(int) { g_interrupted = 1; }
+volatile std::sig_atomic_t g_launch_interrupted = 0;
+extern "C" void on_interrupt(int) { g_launch_interrupted = 1; }
 
 std::string self_dir() {
   std::error_code ec;
@@ -437,7 +437,7 @@ class ProcessRun {
         if (const std::string problem = digest_problem(); !problem.empty()) return fail(problem, kRunBadInput);
         return kRunOk;
       }
-      if (g_interrupted) return fail("interrupted while waiting for processes to be ready");
+      if (g_launch_interrupted) return fail("interrupted while waiting for processes to be ready");
       if (monotonic_ns() > ready_deadline) {
         return fail("timed out after " + std::to_string(lc_.ready_timeout_s) +
                     " s waiting for HEARTBEAT READY from: " + waiting + hosts_hint(plan_.hosts, waiting));
@@ -483,7 +483,7 @@ class ProcessRun {
         bus_->drain();
         return died_during_run(*dead);
       }
-      if (g_interrupted) {
+      if (g_launch_interrupted) {
         interrupted = true;
         return "";
       }

@@ -53,7 +53,8 @@ CMAKE_ARGS=()
 if [[ "${SANITIZE:-0}" == 1 ]]; then
   # clang, its sanitizer and libFuzzer runtimes, and llvm-symbolizer for readable reports.
   PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14)
-  CMAKE_ARGS+=(-DCMAKE_CXX_COMPILER=clang++-14 -DRIG_SANITIZE=ON -DRIG_FUZZ=ON)
+  # Unity builds of the libraries and programs (RIG_UNITY in CMakeLists.txt): a third less time.
+  CMAKE_ARGS+=(-DCMAKE_CXX_COMPILER=clang++-14 -DRIG_SANITIZE=ON -DRIG_FUZZ=ON -DRIG_UNITY=ON)
 fi
 
 missing=()

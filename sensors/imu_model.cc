@@ -9,7 +9,7 @@
 namespace nimble {
 namespace {
 
-[[noreturn]] void invalid(const std::string& field, double value, const std::string& allowed) {
+[[noreturn]] void imu_invalid(const std::string& field, double value, const std::string& allowed) {
   std::ostringstream out;
   out << "ImuModelConfig." << field << " = " << value << ": must be " << allowed;
   throw std::invalid_argument(out.str());
@@ -17,7 +17,7 @@ namespace {
 
 void require_non_negative(const std::string& field, const Eigen::Vector3d& v) {
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(v[i]) || v[i] < 0.0) invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
+    if (!std::isfinite(v[i]) || v[i] < 0.0) imu_invalid(field + "[" + std::to_string(i) + "]", v[i], ">= 0");
   }
 }
 
@@ -61,7 +61,7 @@ void validate(const ImuModelConfig& c) {
   for (std::size_t i = 0; i < c.flapping_harmonics.size(); ++i) {
     const auto& h = c.flapping_harmonics[i];
     const std::string name = "flapping_harmonics[" + std::to_string(i) + "]";
-    if (h.harmonic < 1) invalid(name + ".harmonic", h.harmonic, ">= 1");
+    if (h.harmonic < 1) imu_invalid(name + ".harmonic", h.harmonic, ">= 1");
     require_non_negative(name + ".gyro_amplitude_radps", h.gyro_amplitude_radps);
     require_non_negative(name + ".accel_amplitude_mps2", h.accel_amplitude_mps2);
   }

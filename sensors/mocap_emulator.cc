@@ -11,7 +11,7 @@
 namespace nimble {
 namespace {
 
-[[noreturn]] void invalid(const std::string& field, double value, const std::string& allowed) {
+[[noreturn]] void mocap_invalid(const std::string& field, double value, const std::string& allowed) {
   std::ostringstream out;
   out << "MocapConfig." << field << " = " << value << ": must be " << allowed;
   throw std::invalid_argument(out.str());
@@ -44,10 +44,10 @@ void validate(const MocapConfig& c) {
   // And what relates two of them.
   const double period = 1e6 / c.frame_rate_hz;
   if (std::fabs(period - std::round(period)) > 1e-6) {
-    invalid("frame_rate_hz", c.frame_rate_hz, "such that 1e6 / frame_rate_hz is a whole number of microseconds");
+    mocap_invalid("frame_rate_hz", c.frame_rate_hz, "such that 1e6 / frame_rate_hz is a whole number of microseconds");
   }
   if (c.exposure_us > c.frame_period_us()) {
-    invalid("exposure_us", static_cast<double>(c.exposure_us), "in [0, frame period]");
+    mocap_invalid("exposure_us", static_cast<double>(c.exposure_us), "in [0, frame period]");
   }
 }
 

@@ -12,8 +12,6 @@
 namespace nimble::turbulence {
 namespace {
 
-constexpr Eigen::Index kAircraft = 4;
-constexpr Eigen::Index kGust = 6;
 /// A published value is "explained" by a cause that predicts it within this ratio.
 constexpr double kExplainedRatio = 1.10;
 /// ... and a published sample variance if it lies within this many sigma of the sampling spread.
@@ -23,28 +21,28 @@ constexpr double kExplainedSigmas = 2.0;
 /// [aircraft of a (4), aircraft of b (4), gust filters (6, shared)], outputs [a's; b's].
 /// Exactly discretised, this samples both responses to one turbulence record.
 LinearSystem share_gusts(const LinearSystem& a, const LinearSystem& b) {
-  if ((a.A.bottomRightCorner(kGust, kGust) - b.A.bottomRightCorner(kGust, kGust)).norm() != 0.0 ||
-      (a.B.bottomRows(kGust) - b.B.bottomRows(kGust)).norm() != 0.0) {
+  if ((a.A.bottomRightCorner(kCe500GustStates, kCe500GustStates) - b.A.bottomRightCorner(kCe500GustStates, kCe500GustStates)).norm() != 0.0 ||
+      (a.B.bottomRows(kCe500GustStates) - b.B.bottomRows(kCe500GustStates)).norm() != 0.0) {
     throw std::invalid_argument("share_gusts: the two systems have different gust filters");
   }
-  const Eigen::Index n = 2 * kAircraft + kGust;
+  const Eigen::Index n = 2 * kCe500AircraftStates + kCe500GustStates;
   LinearSystem s;
   s.A = Eigen::MatrixXd::Zero(n, n);
   s.B = Eigen::MatrixXd::Zero(n, a.n_inputs());
   s.C = Eigen::MatrixXd::Zero(a.n_outputs() + b.n_outputs(), n);
   s.D = Eigen::MatrixXd::Zero(s.C.rows(), a.n_inputs());
   const auto place = [&](const LinearSystem& x, Eigen::Index row, Eigen::Index out) {
-    s.A.block(row, row, kAircraft, kAircraft) = x.A.topLeftCorner(kAircraft, kAircraft);
-    s.A.block(row, 2 * kAircraft, kAircraft, kGust) = x.A.topRightCorner(kAircraft, kGust);
-    s.B.middleRows(row, kAircraft) = x.B.topRows(kAircraft);
-    s.C.block(out, row, x.n_outputs(), kAircraft) = x.C.leftCols(kAircraft);
-    s.C.block(out, 2 * kAircraft, x.n_outputs(), kGust) = x.C.rightCols(kGust);
+    s.A.block(row, row, kCe500AircraftStates, kCe500AircraftStates) = x.A.topLeftCorner(kCe500AircraftStates, kCe500AircraftStates);
+    s.A.block(row, 2 * kCe500AircraftStates, kCe500AircraftStates, kCe500GustStates) = x.A.topRightCorner(kCe500AircraftStates, kCe500GustStates);
+    s.B.middleRows(row, kCe500AircraftStates) = x.B.topRows(kCe500AircraftStates);
+    s.C.block(out, row, x.n_outputs(), kCe500AircraftStates) = x.C.leftCols(kCe500AircraftStates);
+    s.C.block(out, 2 * kCe500AircraftStates, x.n_outputs(), kCe500GustStates) = x.C.rightCols(kCe500GustStates);
     s.D.middleRows(out, x.n_outputs()) = x.D;
   };
   place(a, 0, 0);
-  place(b, kAircraft, a.n_outputs());
-  s.A.bottomRightCorner(kGust, kGust) = a.A.bottomRightCorner(kGust, kGust);
-  s.B.bottomRows(kGust) = a.B.bottomRows(kGust);
+  place(b, kCe500AircraftStates, a.n_outputs());
+  s.A.bottomRightCorner(kCe500GustStates, kCe500GustStates) = a.A.bottomRightCorner(kCe500GustStates, kCe500GustStates);
+  s.B.bottomRows(kCe500GustStates) = a.B.bottomRows(kCe500GustStates);
   s.validate();
   return s;
 }

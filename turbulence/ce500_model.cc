@@ -8,8 +8,6 @@ namespace nimble::turbulence {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr Eigen::Index kStates = 10;
-constexpr Eigen::Index kAircraft = 4;
 
 // State and input indices.
 enum State : Eigen::Index { kBeta = 0, kPhi, kP, kR, kUg, kUgStar, kAg, kAgStar, kBg, kBgStar };
@@ -45,7 +43,7 @@ void set_outputs(const Ce500Config& config, const Eigen::RowVectorXd& side_force
                  const Eigen::RowVectorXd& side_force_input_row, LinearSystem& sys) {
   const double V = config.flight.V_mps;
   const double two_v_over_b = 2.0 * V / config.flight.b_m;
-  sys.C = Eigen::MatrixXd::Zero(5, kStates);
+  sys.C = Eigen::MatrixXd::Zero(5, kCe500States);
   sys.D = Eigen::MatrixXd::Zero(5, sys.B.cols());
   sys.C(0, kBeta) = kRadToDeg;
   sys.C(1, kPhi) = kRadToDeg;
@@ -103,8 +101,8 @@ Ce500Coefficients ce500_coefficients(const Ce500Config& config) {
 LinearSystem ce500_full_model(const Ce500Config& config) {
   const Ce500Coefficients k = ce500_coefficients(config);
   LinearSystem s;
-  s.A = Eigen::MatrixXd::Zero(kStates, kStates);
-  s.B = Eigen::MatrixXd::Zero(kStates, 5);
+  s.A = Eigen::MatrixXd::Zero(kCe500States, kCe500States);
+  s.B = Eigen::MatrixXd::Zero(kCe500States, 5);
   s.A.row(kBeta) << k.y_b, k.y_phi, k.y_p, k.y_r, 0, 0, 0, 0, k.y_bg, 0;
   s.A(kPhi, kP) = 2.0 * config.flight.V_mps / config.flight.b_m;
   s.A.row(kP) << k.l_b, 0, k.l_p, k.l_r, k.l_ug, 0, k.l_ag, 0, k.l_bg, 0;
@@ -123,7 +121,7 @@ LinearSystem ce500_full_model(const Ce500Config& config) {
 }
 
 Eigen::RowVectorXd ce500_roll_damper_gain(const Ce500Config& config) {
-  Eigen::RowVectorXd K = Eigen::RowVectorXd::Zero(kStates);
+  Eigen::RowVectorXd K = Eigen::RowVectorXd::Zero(kCe500States);
   K[kPhi] = config.K_phi;
   K[kP] = config.K_p;
   return K;
@@ -170,14 +168,14 @@ LinearSystem ce500_reduced_model(const Ce500Config& config, bool with_damper) {
 
   const Ce500Coefficients k = ce500_coefficients(config);
   LinearSystem s;
-  s.A = Eigen::MatrixXd::Zero(kStates, kStates);
-  s.B = Eigen::MatrixXd::Zero(kStates, 5);
-  s.A.topLeftCorner(kAircraft, kAircraft) = Pinv * Q;
-  s.A.topRightCorner(kAircraft, kStates - kAircraft) = Pinv * Qg;
+  s.A = Eigen::MatrixXd::Zero(kCe500States, kCe500States);
+  s.B = Eigen::MatrixXd::Zero(kCe500States, 5);
+  s.A.topLeftCorner(kCe500AircraftStates, kCe500AircraftStates) = Pinv * Q;
+  s.A.topRightCorner(kCe500AircraftStates, kCe500States - kCe500AircraftStates) = Pinv * Qg;
   if (config.reduced_gust_columns == ReducedGustColumns::kFullModelRows) s.A(kBeta, kBg) = k.y_bg;
-  s.B.topLeftCorner(kAircraft, 2) = Pinv * R;
+  s.B.topLeftCorner(kCe500AircraftStates, 2) = Pinv * R;
   add_filters(k, s.A, s.B);
-  s.C = Eigen::MatrixXd::Zero(0, kStates);
+  s.C = Eigen::MatrixXd::Zero(0, kCe500States);
   s.D = Eigen::MatrixXd::Zero(0, s.B.cols());
   s.states = state_names();
   s.inputs = input_names();
@@ -205,9 +203,9 @@ std::vector<ShapingFilter> ce500_gust_filters(const Ce500Config& config) {
 }
 
 std::vector<NamedEigenvalue> ce500_named_eigenvalues(const LinearSystem& sys) {
-  if (sys.n_states() != kStates) throw std::invalid_argument("ce500_named_eigenvalues: need the 10-state model");
+  if (sys.n_states() != kCe500States) throw std::invalid_argument("ce500_named_eigenvalues: need the 10-state model");
   std::vector<NamedEigenvalue> out;
-  const Eigen::MatrixXd Aa = sys.A.topLeftCorner(kAircraft, kAircraft);
+  const Eigen::MatrixXd Aa = sys.A.topLeftCorner(kCe500AircraftStates, kCe500AircraftStates);
   const Eigen::EigenSolver<Eigen::MatrixXd> es(Aa);
   std::vector<int> pairs, reals;
   for (int i = 0; i < 4; ++i) {

@@ -54,6 +54,12 @@
 
 namespace nimble::turbulence {
 
+/// The state layout of the CE-500 model: the aircraft's four states (beta, phi, pb/2V, rb/2V)
+/// first, then the six of the gust filters.
+inline constexpr Eigen::Index kCe500AircraftStates = 4;
+inline constexpr Eigen::Index kCe500GustStates = 6;
+inline constexpr Eigen::Index kCe500States = kCe500AircraftStates + kCe500GustStates;
+
 /// The dimensional coefficients of the full model [1/s].
 struct Ce500Coefficients {
   double y_b = 0, y_phi = 0, y_p = 0, y_r = 0, y_dr = 0, y_bg = 0;

@@ -6,13 +6,14 @@
 #include <catch2/catch.hpp>
 
 #include "controller/low_pass.h"
+#include "core/constants.h"
 
 using namespace nimble;
 
 namespace {
 
 constexpr double kFs = 512.0;
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 
 /// Steady-state amplitude of the filter's response to a unit sine at f_hz, by simulation.
 double simulated_gain(double f_hz, double fc_hz = 15.0) {

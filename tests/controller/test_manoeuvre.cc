@@ -15,13 +15,14 @@
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "core/config.h"
+#include "core/constants.h"
 
 using namespace nimble;
 
 namespace {
 
 const std::string kManoeuvres = std::string(RIG_SOURCE_DIR) + "/rig_configs/manoeuvres/";
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kTrim = 60.0;
 

@@ -7,13 +7,14 @@
 #include <catch2/catch.hpp>
 
 #include "controller/reference_generator.h"
+#include "core/constants.h"
 
 using namespace nimble;
 
 namespace {
 
 constexpr double kDt = 1.0 / 512.0;
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 constexpr double kDeg = kPi / 180.0;
 
 /// Unit-step response of omega^2 / (s^2 + 2 zeta omega s + omega^2), zeta < 1.

@@ -18,12 +18,13 @@
 #include "controller/roll_loop.h"
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "core/constants.h"
 
 using namespace nimble;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
 StateSpace lateral_set(int n) {

@@ -25,8 +25,8 @@ namespace {
 
 /// A 4 s synthetic set-1 flight (doublets from 0.3 s).
 FlightData short_flight(double duration_s, std::uint64_t seed) {
-  const SyntheticOptions o = test::short_identification_flight(duration_s, seed);
-  const DerivativeModel m = test::set1_model();
+  const SyntheticOptions o = ident::test::short_identification_flight(duration_s, seed);
+  const DerivativeModel m = ident::test::set1_model();
   FlightData d = simulate_synthetic(m, load_vehicle(m.vehicle_file), o);
   d.source = "flight_" + std::to_string(seed) + ".csv";
   return d;
@@ -76,7 +76,7 @@ std::string refusal(F&& f) {
 TEST_CASE("bad data: a diverged record is refused by identify, validate and discrepancy, alone or pooled, naming "
           "its first bad sample's time, channel and bound",
           "[data_check][bad_data]") {
-  const DerivativeModel model = test::set1_model();
+  const DerivativeModel model = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   REQUIRE(vehicle.data_bounds.rate_max_radps == 50.0);
   const FlightData good = short_flight(4.0, 3);
@@ -115,7 +115,7 @@ TEST_CASE("bad data: a diverged record is refused by identify, validate and disc
 
 TEST_CASE("bad data: a NaN or infinite sample is refused wherever it is, naming its time and channel",
           "[data_check][bad_data]") {
-  const DerivativeModel model = test::set1_model();
+  const DerivativeModel model = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   const FlightData good = short_flight(4.0, 4);
   FlightData bad = good;
@@ -150,7 +150,7 @@ TEST_CASE("bad data: a NaN or infinite sample is refused wherever it is, naming 
 TEST_CASE("short record: identify, validate and discrepancy complete on 2.5 s, the whiteness test skipped with a "
           "note saying how long a record it needs",
           "[data_check][bad_data]") {
-  const DerivativeModel model = test::set1_model();
+  const DerivativeModel model = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   const FlightData d = short_flight(2.5, 5);
   // 50 lags of 28 samples (512 Hz, 9 Hz cut-off) need (50 + 1) 28 + 1 = 1429 samples, 2.79 s.

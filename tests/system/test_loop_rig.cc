@@ -23,13 +23,14 @@
 #include "plant/effects/registry.h"
 #include <nimble/controller_status_t.hpp>
 #include <nimble/truth_state_t.hpp>
+#include "core/constants.h"
 
 using nimble::test::rig_run;
 using nimble::test::RunResult;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
 /// The gain sets as the controller file has them.

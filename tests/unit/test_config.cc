@@ -18,12 +18,13 @@
 #include "core/param_table.h"
 #include "core/vehicle.h"
 #include "tests/support/scratch.h"
+#include "tests/support/configs.h"
 
 using namespace nimble;
 
 namespace {
 
-const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+using nimble::test::kConfigs;
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path);

@@ -13,12 +13,13 @@
 #include "core/model.h"
 #include "core/modes.h"
 #include "core/vehicle.h"
+#include "tests/support/configs.h"
 
 using namespace nimble;
 
 namespace {
 
-const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+using nimble::test::kConfigs;
 
 // Published eigenvalues, thesis Table 9.5 (typed here independently of the YAML files).
 // Per-eigenvalue tolerance: 2 %, except sets 3 and 5 whose oscillatory pair the

@@ -26,12 +26,13 @@
 #include "core/config.h"
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "core/constants.h"
 
 using namespace nimble;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using nimble::kPi;
 
 /// Sets every doublet/112 amplitude on the roll axis to `amplitude_rad` and
 /// recomputes an automatic throttle factor.
