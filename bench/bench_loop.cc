@@ -30,8 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace nimble;
 
-using nimble::kPi;
-
 /// The loop of hover: set 1, fast gains, on the estimate (latency 2 control periods).
 struct Loop {
   StateSpace lateral;

@@ -16,7 +16,6 @@ namespace nimble::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using nimble::kPi;
 const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
 
 std::string colour(std::size_t i) { return kColours[i % (sizeof kColours / sizeof kColours[0])]; }

@@ -12,7 +12,6 @@ namespace nimble::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using nimble::kPi;
 
 std::string or_none(const char* format, double x, const char* none = "none") {
   return std::isfinite(x) ? fmt(format, x) : std::string(none);

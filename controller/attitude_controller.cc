@@ -6,15 +6,14 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+
 #include "core/constants.h"
 #include "core/config.h"
 
 namespace nimble {
 namespace {
 
-using nimble::kPi;
 /// T = 2 (0.0114 f_hz - 0.0449) N (thesis Eq 4.18).
-
 
 /// A bad parameter: its key path as in the YAML file, its value and what is wrong.
 class InvalidParameter : public std::invalid_argument {

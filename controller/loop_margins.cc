@@ -8,12 +8,12 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+
 #include "core/constants.h"
 
 namespace nimble {
 namespace {
 
-using nimble::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 

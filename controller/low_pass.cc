@@ -4,12 +4,10 @@
 #include <complex>
 #include <stdexcept>
 #include <string>
+
 #include "core/constants.h"
 
 namespace nimble {
-namespace {
-using nimble::kPi;
-}  // namespace
 
 SecondOrderLowPass::SecondOrderLowPass(double cutoff_hz, double sample_rate_hz)
     : cutoff_hz_(cutoff_hz), sample_rate_hz_(sample_rate_hz) {

@@ -5,13 +5,13 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+
 #include "core/constants.h"
 #include "core/config.h"
 
 namespace nimble {
 namespace {
 
-using nimble::kPi;
 constexpr double kDegToRad = kPi / 180.0;
 constexpr double kLimitDeg = 60.0;           // onboard roll set-point limit
 constexpr double kMaxMainFrequencyHz = 50.0;  // pulses of at least 10 ms (5 control steps at 512 Hz)
@@ -22,7 +22,6 @@ const Range kFrequencyHz{0.0, kMaxMainFrequencyHz, true, false};
 const Range kDeltaThrottlePct = Range::closed(-100.0, 100.0);
 // THRF of a 60 deg set-point is 2.
 const Range kThrottleFactor = Range::closed(1.0, 2.0);
-
 
 Axis axis_from(ConfigMap& seg, bool required) {
   if (!required && !seg.has("axis")) return Axis::kRoll;

@@ -13,7 +13,6 @@
 namespace nimble {
 namespace {
 
-using nimble::kPi;
 constexpr int kPlantStates = 6;  // q u w theta delta_d delta_d_rate
 constexpr int kQ = 0, kTheta = 3;
 

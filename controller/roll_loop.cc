@@ -12,9 +12,7 @@
 namespace nimble {
 namespace {
 
-using nimble::kPi;
 constexpr int kP = 0, kPhi = 2, kPlant = 4;  // [p v phi delta_f]
-
 
 /// What the assembled system is for.
 enum class Mode { kActuator, kPhi, kP, kSetpoint };

@@ -13,7 +13,6 @@ using namespace nimble;
 namespace {
 
 constexpr double kFs = 512.0;
-using nimble::kPi;
 
 /// Steady-state amplitude of the filter's response to a unit sine at f_hz, by simulation.
 double simulated_gain(double f_hz, double fc_hz = 15.0) {

@@ -22,7 +22,6 @@ using namespace nimble;
 namespace {
 
 const std::string kManoeuvres = std::string(RIG_SOURCE_DIR) + "/rig_configs/manoeuvres/";
-using nimble::kPi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kTrim = 60.0;
 

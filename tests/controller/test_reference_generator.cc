@@ -14,7 +14,6 @@ using namespace nimble;
 namespace {
 
 constexpr double kDt = 1.0 / 512.0;
-using nimble::kPi;
 constexpr double kDeg = kPi / 180.0;
 
 /// Unit-step response of omega^2 / (s^2 + 2 zeta omega s + omega^2), zeta < 1.

@@ -24,7 +24,6 @@ using namespace nimble;
 
 namespace {
 
-using nimble::kPi;
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
 StateSpace lateral_set(int n) {

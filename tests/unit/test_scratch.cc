@@ -1,9 +1,6 @@
 // The test files' lifetime (tests/support/scratch.h): a passing test run removes its scratch
 // directories, a failing one keeps them and names them. Checked by running this executable's own
 // hidden cases, one that passes and one that fails, as child processes.
-#include <sys/wait.h>
-
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -11,28 +8,15 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/support/run_program.h"
 #include "tests/support/scratch.h"
 
 namespace {
 
-struct Child {
-  int exit_code = -1;
-  std::string out;
-};
-
-/// Runs this executable with a test spec; stdout and stderr together.
-Child run_self(const std::string& spec) {
+/// Runs this executable with a test spec.
+nimble::test::RigResult run_self(const std::string& spec) {
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-  const std::string cmd = "RIG_KEEP_TEST_FILES= '" + self + "' '" + spec + "' 2>&1";
-  Child c;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) c.out.append(buf, n);
-  const int status = ::pclose(p);
-  c.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return c;
+  return nimble::test::run_program("'" + self + "'", "'" + spec + "'", "RIG_KEEP_TEST_FILES=");
 }
 
 /// The directory a child printed as "scratch: <path>".
@@ -61,19 +45,19 @@ TEST_CASE("scratch probe that fails", "[.scratch_fail]") {
 
 TEST_CASE("test files: a passing test's scratch directory is removed at its end, a failing test's is kept and named",
           "[scratch]") {
-  const Child pass = run_self("[.scratch_pass]");
-  INFO(pass.out);
+  const auto pass = run_self("[.scratch_pass]");
+  INFO(pass.out << pass.err);
   REQUIRE(pass.exit_code == 0);
   const std::string pass_dir = printed_dir(pass.out);
   REQUIRE(!pass_dir.empty());
   CHECK(!std::filesystem::exists(pass_dir));
 
-  const Child fail = run_self("[.scratch_fail]");
-  INFO(fail.out);
+  const auto fail = run_self("[.scratch_fail]");
+  INFO(fail.out << fail.err);
   CHECK(fail.exit_code != 0);
   const std::string fail_dir = printed_dir(fail.out);
   REQUIRE(!fail_dir.empty());
   CHECK(std::filesystem::exists(fail_dir + "/data.txt"));
-  CHECK(fail.out.find("test files kept in " + fail_dir) != std::string::npos);
+  CHECK(fail.err.find("test files kept in " + fail_dir) != std::string::npos);
   std::filesystem::remove_all(fail_dir);
 }

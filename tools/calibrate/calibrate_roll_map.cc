@@ -32,8 +32,6 @@ using namespace nimble;
 
 namespace {
 
-using nimble::kPi;
-
 /// Sets every doublet/112 amplitude on the roll axis to `amplitude_rad` and
 /// recomputes an automatic throttle factor.
 Manoeuvre with_amplitude(Manoeuvre m, double amplitude_rad) {
