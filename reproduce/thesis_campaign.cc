@@ -462,23 +462,20 @@ std::vector<PlanItem> plan_items(const CampaignSpec& spec) {
   return items;
 }
 
-/// Each item's flight's label on each seed: "<flight>_with_<k>", k counting the flights with a
-/// cause item by item, the same on every seed (so a seed kept in a campaign directory reads back
+/// Each item's flight's label, the same on every seed: "<flight>_with_<k>", k counting the flights with a
+/// cause item by item (so a seed kept in a campaign directory reads back
 /// with the labels any seed list gives it); a flight two items share (the same flight and cause)
 /// is flown once per seed, under the first item's label.
-std::vector<std::vector<std::string>> plan_labels(const std::vector<PlanItem>& items,
-                                                  const std::vector<std::uint64_t>& seeds) {
-  std::vector<std::vector<std::string>> labels(items.size(), std::vector<std::string>(seeds.size()));
-  std::map<std::string, std::string> label_of;
+std::vector<std::string> plan_labels(const std::vector<PlanItem>& items) {
+  std::vector<std::string> labels(items.size());
+  std::map<std::string, std::string> label_of;  // flight and cause -> label
   int k = 0;
   for (std::size_t j = 0; j < items.size(); ++j) {
     const std::string flight = table_flight(items[j].table);
-    for (std::size_t i = 0; i < seeds.size(); ++i) {
-      const std::string key = flight_key(0, flight, items[j].with);
-      auto it = label_of.find(key);
-      if (it == label_of.end()) it = label_of.emplace(key, fmt::format("{}_with_{}", flight, ++k)).first;
-      labels[j][i] = it->second;
-    }
+    const std::string key = flight + "|" + overrides_key(items[j].with);
+    auto it = label_of.find(key);
+    if (it == label_of.end()) it = label_of.emplace(key, fmt::format("{}_with_{}", flight, ++k)).first;
+    labels[j] = it->second;
   }
   return labels;
 }
@@ -504,7 +501,7 @@ std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<
 /// Every seed flown in the campaigns' worker pool (`jobs` at a time), each with all its flights
 /// (its own and those with a cause), and read back in the seeds' order.
 std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& spec, const std::vector<PlanItem>& items) {
-  const auto labels = plan_labels(items, o.seeds);
+  const std::vector<std::string> labels = plan_labels(items);
   campaign::PoolWork pool;
   pool.work = [&](std::size_t i) {
     CampaignResult flown;
@@ -512,7 +509,7 @@ std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& 
     run.fly_seed(o.seeds[i], i == 0);
     SeedValues v = run.seed_values();
     for (std::size_t j = 0; j < items.size(); ++j) {
-      v.with.push_back(run.fly_item(o.seeds[i], items[j].table, items[j].with, labels[j][i]));
+      v.with.push_back(run.fly_item(o.seeds[i], items[j].table, items[j].with, labels[j]));
     }
     return seed_values_line(v);
   };
