@@ -46,9 +46,11 @@ ConfigError::ConfigError(std::string file, std::string key, std::string value,
       problem_(std::move(problem)),
       line_(line) {}
 
-std::string general_text(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
+std::string general_text(double x) { return fmt("%g", x); }
+
+std::string fmt(const char* format, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
   return buf;
 }
 

@@ -78,6 +78,10 @@ std::string shortest_text(double x);
 /// `x` as printf's %g writes it (six significant digits): numbers in messages.
 std::string general_text(double x);
 
+/// `x` formatted with the printf `format` (one double conversion; at most 63 characters):
+/// numbers in reports and plots.
+std::string fmt(const char* format, double x);
+
 /// One YAML mapping of a config file, with strict key accounting.
 ///
 /// Each accessor marks its key as used; `finish()` then reports any key that

@@ -1,4 +1,4 @@
-#include "cli/loop_setup.h"
+#include "loop/loop_setup.h"
 
 #include <cmath>
 #include <fstream>
@@ -12,7 +12,7 @@
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
 
-namespace nimble::cli {
+namespace nimble::loop {
 
 RollLoopConfig LoopSetup::loop_config(const GainSet& gains) const {
   RollLoopConfig c = roll_loop_config(controller, gains);
@@ -135,4 +135,4 @@ DerivativeModel box_point(const DerivativeModel& model, const DerivativeBox& box
   return m;
 }
 
-}  // namespace nimble::cli
+}  // namespace nimble::loop

@@ -1,13 +1,14 @@
 #pragma once
-/// The analyses `rig loop` reports, their text, JSON and plots (cli/loop_command.cc).
+/// The analyses `rig loop` reports (cli/loop_command.cc; loop/loop_study.h runs them), their
+/// text, JSON and plots, and the frequency response the plots draw.
 
 #include <string>
 #include <vector>
 
-#include "cli/loop_setup.h"
+#include "loop/loop_setup.h"
 #include "controller/roll_loop.h"
 
-namespace nimble::cli {
+namespace nimble::loop {
 
 /// One analysed loop: a model with a gain set, broken at one point.
 struct LoopRow {
@@ -69,4 +70,15 @@ std::string loop_json(const LoopSetup& setup, const std::vector<LoopRow>& rows, 
 /// returns the PNG paths. @throws std::runtime_error if gnuplot fails.
 std::vector<std::string> plot_loops(const std::string& dir, const std::vector<LoopRow>& rows);
 
-}  // namespace nimble::cli
+/// The frequencies the Bode and Nyquist plots draw the loops at [rad/s]: 800 points, evenly
+/// spaced in log frequency from 0.01 Hz to the Nyquist frequency of a controller at `rate_hz`.
+std::vector<double> response_grid_radps(double rate_hz);
+
+/// The frequency response of `row`'s loop at `omega_radps`: its return ratio L at the break and
+/// phi/phi_ref (controller/roll_loop.h roll_loop_response).
+RollLoopResponse row_response(const LoopRow& row, const std::vector<double>& omega_radps);
+
+/// The same on response_grid_radps(row.config.rate_hz): what plot_loops draws for `row`.
+RollLoopResponse row_response(const LoopRow& row);
+
+}  // namespace nimble::loop

@@ -13,7 +13,7 @@
 #include "core/vehicle.h"
 #include "scenario/scenario.h"
 
-namespace nimble::cli {
+namespace nimble::loop {
 
 /// The loop of a scenario, as the rig flies it.
 struct LoopSetup {
@@ -81,4 +81,4 @@ DerivativeBox derivative_box(const DerivativeModel& model);
 DerivativeModel box_point(const DerivativeModel& model, const DerivativeBox& box, const std::vector<int>& signs,
                           double k = 2.0);
 
-}  // namespace nimble::cli
+}  // namespace nimble::loop

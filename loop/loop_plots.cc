@@ -1,5 +1,5 @@
 // `rig loop --plots`: Bode and Nyquist of the return ratio with the margins marked, the
-// closed-loop step of phi, and the pole-zero map (cli/loop_report.h plot_loops).
+// closed-loop step of phi, and the pole-zero map (loop/loop_report.h plot_loops).
 
 #include <cmath>
 #include <complex>
@@ -8,14 +8,19 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "cli/loop_report.h"
-#include "cli/report_files.h"
+#include "core/config.h"
 #include "core/constants.h"
+#include "core/output_file.h"
+#include "ident/plots.h"
+#include "loop/loop_report.h"
 
-namespace nimble::cli {
+namespace nimble::loop {
 namespace {
 
 namespace fs = std::filesystem;
+using ident::gp_quote;
+using ident::run_gnuplot;
+
 const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
 
 std::string colour(std::size_t i) { return kColours[i % (sizeof kColours / sizeof kColours[0])]; }
@@ -176,17 +181,28 @@ std::string plot_poles(const fs::path& dir, const std::vector<LoopRow>& rows) {
 
 }  // namespace
 
+std::vector<double> response_grid_radps(double rate_hz) {
+  std::vector<double> w;
+  const double nyquist = kPi * rate_hz;
+  for (int i = 0; i < 800; ++i) w.push_back(2 * kPi * 0.01 * std::pow(nyquist / (2 * kPi * 0.01), i / 799.0));
+  return w;
+}
+
+RollLoopResponse row_response(const LoopRow& row, const std::vector<double>& omega_radps) {
+  return roll_loop_response(row.lateral, row.config, row.where, omega_radps);
+}
+
+RollLoopResponse row_response(const LoopRow& row) { return row_response(row, response_grid_radps(row.config.rate_hz)); }
+
 std::vector<std::string> plot_loops(const std::string& dir_name, const std::vector<LoopRow>& rows) {
   const fs::path dir(dir_name);
   fs::create_directories(dir);
   if (rows.empty()) return {};
-  std::vector<double> w;
-  const double nyquist = kPi * rows.front().config.rate_hz;
-  for (int i = 0; i < 800; ++i) w.push_back(2 * kPi * 0.01 * std::pow(nyquist / (2 * kPi * 0.01), i / 799.0));
-  // One frequency response per loop, for the Bode and the Nyquist plot.
+  // One frequency response per loop, on one grid, for the Bode and the Nyquist plot.
+  const std::vector<double> w = response_grid_radps(rows.front().config.rate_hz);
   std::vector<RollLoopResponse> resp;
-  for (const LoopRow& r : rows) resp.push_back(roll_loop_response(r.lateral, r.config, r.where, w));
+  for (const LoopRow& r : rows) resp.push_back(row_response(r, w));
   return {plot_bode(dir, rows, resp), plot_nyquist(dir, rows, resp), plot_step(dir, rows), plot_poles(dir, rows)};
 }
 
-}  // namespace nimble::cli
+}  // namespace nimble::loop

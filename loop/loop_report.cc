@@ -1,14 +1,14 @@
-#include "cli/loop_report.h"
+#include "loop/loop_report.h"
 
 #include <cmath>
 #include <filesystem>
 #include <sstream>
 
-#include "cli/report_files.h"
-#include "core/json_writer.h"
+#include "core/config.h"
 #include "core/constants.h"
+#include "core/json_writer.h"
 
-namespace nimble::cli {
+namespace nimble::loop {
 namespace {
 
 namespace fs = std::filesystem;
@@ -275,4 +275,4 @@ std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, cons
   return w.str();
 }
 
-}  // namespace nimble::cli
+}  // namespace nimble::loop
