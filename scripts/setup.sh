@@ -43,7 +43,9 @@ case "$PROFILE" in
   main) ;;
   all)
     PACKAGES+=(gnuplot-nox can-utils qemu-system-x86 xz-utils python3 python3-numpy chromium-headless-shell
-               slurm-wlm munge)
+               slurm-wlm munge
+               # the rig from Python: the compiled module (python/) and its tests
+               pybind11-dev python3-dev python3-pytest)
     # Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
     command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
     ;;

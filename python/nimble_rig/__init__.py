@@ -1,4 +1,10 @@
-"""Python access to the Delfly Nimble rig's LCM logs.
+"""Python access to the Delfly Nimble rig: its LCM logs, and (compiled module) its scenarios and
+flights.
+
+    import nimble_rig
+    s = nimble_rig.load_scenario("rig_configs/id_doublet_train_fast.yaml")
+    f = nimble_rig.fly(s, seed=1)               # in process, at the C++ speed
+    f.report["result"], f.channels["TRUTH"]["euler_rad"][:, 0]
 
     from nimble_rig import read_log
     log = read_log("rig_logs/hover.lcmlog")
@@ -13,4 +19,11 @@ lcmtypes/*.lcm (installed next to this one); LCM's own Python module is not need
 from .log import LogError, RigLog, read_log
 
 __all__ = ["LogError", "RigLog", "read_log"]
+
+try:  # the compiled module (python/rig_module.cc), where the build had pybind11
+    from ._rig import ConfigError, Flight, Scenario, fly, load_scenario
+
+    __all__ += ["ConfigError", "Flight", "Scenario", "fly", "load_scenario"]
+except ImportError:  # the log reader alone
+    pass
 __version__ = "@PROJECT_VERSION@"

@@ -1,0 +1,87 @@
+"""nimble_rig's compiled module (python/rig_module.cc) on real flights: the same truth as
+`rig run --clock inprocess`, the arrays read_log gives, scenario errors with file and line, and
+SIGINT ending a flight as it ends `rig run`. Run by ctest (tests/CMakeLists.txt, python.module)
+with PYTHONPATH at the build tree's python/ and RIG_BIN, RIG_SOURCE_DIR set."""
+import json
+import os
+import signal
+import struct
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import nimble_rig
+
+SOURCE = os.environ["RIG_SOURCE_DIR"]
+RIG = os.environ["RIG_BIN"]
+TRAIN = os.path.join(SOURCE, "rig_configs", "id_doublet_train_fast.yaml")
+HOVER = os.path.join(SOURCE, "rig_configs", "hover.yaml")
+
+
+def truth_messages(path):
+    """Every TRUTH message of an LCM log, as bytes, in log order."""
+    data = open(path, "rb").read()
+    out, i = [], 0
+    while i + 28 <= len(data):
+        _, _, _, clen, dlen = struct.unpack(">IqqII", data[i:i + 28])
+        channel = data[i + 28:i + 28 + clen].decode()
+        if channel == "TRUTH":
+            out.append(data[i + 28 + clen:i + 28 + clen + dlen])
+        i += 28 + clen + dlen
+    return out
+
+
+def test_a_flight_from_python_has_the_truth_of_rig_run_and_read_logs_arrays(tmp_path):
+    scenario = nimble_rig.load_scenario(TRAIN)
+    assert scenario.name and scenario.duration_s > 0
+    flight = nimble_rig.fly(scenario, seed=1, log=str(tmp_path / "py.lcmlog"))
+    done = subprocess.run([RIG, "run", TRAIN, "--clock", "inprocess", "--seed", "1", "--no-progress",
+                           "--log", str(tmp_path / "cli.lcmlog"), "--json", str(tmp_path / "cli.json")],
+                          capture_output=True, text=True)
+    assert done.returncode in (0, 1), done.stderr
+    ours, theirs = truth_messages(tmp_path / "py.lcmlog"), truth_messages(tmp_path / "cli.lcmlog")
+    assert len(ours) > 1000
+    assert ours == theirs
+    cli = json.load(open(tmp_path / "cli.json"))
+    assert flight.report["result"] == cli["result"]
+    assert flight.report["exit_code"] == cli["exit_code"]
+    assert set(flight.report) == set(cli)
+    # Every channel of the flight, laid out as read_log lays out the same log.
+    log = nimble_rig.read_log(str(tmp_path / "py.lcmlog"))
+    assert set(flight.channels) == set(log.channels())
+    for channel in ("TRUTH", "IMU", "ESTIMATE", "ACTUATOR_CMD"):
+        for field, values in flight.channels[channel].items():
+            if values.dtype != object:
+                np.testing.assert_array_equal(values, log[channel][field], err_msg=channel + "." + field)
+    assert flight.channels["TRUTH"]["euler_rad"].shape == (len(ours), 3)
+
+
+def test_a_bad_value_raises_config_error_with_file_line_and_key(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("base: %s\nname: bad\nduration_s: -3\n" % TRAIN)
+    with pytest.raises(nimble_rig.ConfigError) as caught:
+        nimble_rig.load_scenario(str(bad))
+    e = caught.value
+    assert e.file.endswith("bad.yaml")
+    assert e.line == 3
+    assert e.key == "duration_s"
+    assert "duration_s" in str(e)
+    with pytest.raises(nimble_rig.ConfigError) as caught:
+        nimble_rig.load_scenario(TRAIN, {"plant.effects.lateral_gust.sigma_mps": 99.0})
+    assert "sigma_mps" in str(caught.value)
+    with pytest.raises(ValueError):
+        nimble_rig.fly(nimble_rig.load_scenario(TRAIN), clock="lockstep")
+
+
+def test_sigint_ends_a_flight_as_it_ends_rig_run(tmp_path):
+    scenario = nimble_rig.load_scenario(HOVER, {"duration_s": 3000})
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    flight = nimble_rig.fly(scenario, seed=1, log=str(tmp_path / "hover.lcmlog"))
+    timer.join()
+    assert flight.report["result"] == "interrupted"
+    assert 0 < flight.report["sim_time_s"] < 3000
+    log = nimble_rig.read_log(str(tmp_path / "hover.lcmlog"))
+    assert len(log["TRUTH"]["utime"]) == len(flight.channels["TRUTH"]["utime"]) > 0
