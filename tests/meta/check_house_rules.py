@@ -28,7 +28,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from cxx_functions import functions  # noqa: E402
 
 SKIP_DIRS = {"tests", "lcmtypes", ".git", "corpus"}
-ABOVE_LAUNCHER = {"launcher", "campaign", "cli", "reproduce", "detection_power", "bench", "tools", "fuzz"}
+ABOVE_LAUNCHER = {"launcher", "campaign", "cli", "python", "reproduce", "detection_power", "bench", "tools", "fuzz"}
 MAX_LINES = 650
 MAX_FUNCTION_LINES = 120
 PROCESS_ROOMS = {"plant", "controller", "estimator", "mocap", "can_bridge", "sensors", "transport"}
