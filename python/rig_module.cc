@@ -7,22 +7,31 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
 #include <nimble/rig_message_list.hpp>
 
+#include "campaign/campaign.h"
+#include "campaign/sweep.h"
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "core/config.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include "launcher/run_report.h"
+#include "transport/clock.h"
+#include "transport/node.h"
 
 namespace py = pybind11;
 
@@ -239,6 +248,7 @@ Flight fly(const Scenario& scenario, std::optional<std::uint64_t> seed, const st
     // The flight runs without the GIL; SIGINT during it ends it as it ends `rig run` (result
     // interrupted, the log whole up to there).
     py::gil_scoped_release free;
+    transport::ProcessNode::clear_stop_request();  // a Ctrl-C of an earlier flight is spent
     try {
       report = launcher::fly_inprocess(plan, io);
     } catch (const ConfigError& e) {
@@ -250,6 +260,58 @@ Flight fly(const Scenario& scenario, std::optional<std::uint64_t> seed, const st
   f.report = py::module_::import("json").attr("loads")(launcher::report_json(report));
   f.channels = channels_dict(collector);
   return f;
+}
+
+/// A sweep from Python: the campaign engine's local backend on a campaign directory made for it
+/// (`dir`, or a temporary one removed afterwards); returns `rig sweep --json`'s content.
+py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dict& vary, int jobs,
+               const std::optional<std::string>& dir) {
+  campaign::CampaignRequest req;
+  campaign::SweepOptions& o = req.sweep;
+  o.base = scenario.options;
+  o.base.clock = std::string(launcher::kClockInprocess);
+  try {
+    std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(seeds);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error("seeds '" + seeds + "': " + e.what());
+  }
+  py::module_ json = py::module_::import("json");
+  for (const auto& [key, values] : vary) {
+    campaign::Vary v;
+    v.key = key.cast<std::string>();
+    for (const auto& value : values) {
+      v.values.push_back(py::isinstance<py::str>(value) ? value.cast<std::string>()
+                                                         : json.attr("dumps")(value).cast<std::string>());
+    }
+    o.vary.push_back(v);
+  }
+  o.jobs = std::max(1, jobs);
+  o.progress = false;
+  const bool keep = dir.has_value();
+  req.dir = keep ? *dir
+                 : (std::filesystem::temp_directory_path() / ("rig_py_sweep_" + std::to_string(::getpid()))).string();
+  if (!keep) std::filesystem::remove_all(req.dir);
+  campaign::Campaign c;
+  try {
+    c = campaign::create_campaign(req);
+  } catch (const ConfigError& e) {
+    raise_config_error(e);
+  }
+  campaign::SweepResult result;
+  const std::int64_t start = transport::monotonic_ns();
+  {
+    py::gil_scoped_release free;
+    transport::ProcessNode::clear_stop_request();  // a Ctrl-C of an earlier flight is spent
+    campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "", nullptr);
+  }
+  result = campaign::merge_campaign(c);
+  result.jobs = o.jobs;
+  result.wall_time_s = static_cast<double>(transport::monotonic_ns() - start) / 1e9;
+  if (!keep) {
+    std::error_code ec;
+    std::filesystem::remove_all(c.dir, ec);
+  }
+  return json.attr("loads")(campaign::sweep_json(result));
 }
 
 }  // namespace
@@ -290,4 +352,10 @@ PYBIND11_MODULE(_rig, m) {
         "Flies the scenario in process (the GIL released) and returns a Flight; log: also write the LCM log "
         "there. The TRUTH is byte for byte that of `rig run --clock inprocess` with the same seed. SIGINT "
         "during the flight ends it with result interrupted.");
+  m.def("sweep", &sweep, py::arg("scenario"), py::arg("seeds") = "1-10", py::arg("vary") = py::dict(),
+        py::arg("jobs") = 1, py::arg("dir") = py::none(),
+        "Flies the scenario over seeds ('1-100') and parameter sets (vary={'key.path': [v1, v2]}) in process, "
+        "`jobs` runs at a time, with the campaign engine of `rig sweep` (its local backend), and returns "
+        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there. Raises ConfigError "
+        "for a bad value in any set.");
 }

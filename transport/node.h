@@ -156,6 +156,10 @@ class ProcessNode {
 
   /// Requests a clean stop from a signal handler or a callback.
   static void request_stop() { stop_requested_ = 1; }
+  /// Withdraws a stop request: a library that flies again after an interrupted flight (the
+  /// Python module) starts the next one clean. The rig's commands never do: after Ctrl-C, what
+  /// they would fly next stops too.
+  static void clear_stop_request() { stop_requested_ = 0; }
   /// Ends this node's run at its next step, cleanly, as a stop request does (in process: the
   /// run's recorder could no longer write its log).
   void end_run() { stop_ = true; }

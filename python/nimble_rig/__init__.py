@@ -21,9 +21,9 @@ from .log import LogError, RigLog, read_log
 __all__ = ["LogError", "RigLog", "read_log"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
-    from ._rig import ConfigError, Flight, Scenario, fly, load_scenario
+    from ._rig import ConfigError, Flight, Scenario, fly, load_scenario, sweep
 
-    __all__ += ["ConfigError", "Flight", "Scenario", "fly", "load_scenario"]
+    __all__ += ["ConfigError", "Flight", "Scenario", "fly", "load_scenario", "sweep"]
 except ImportError:  # the log reader alone
     pass
 __version__ = "@PROJECT_VERSION@"

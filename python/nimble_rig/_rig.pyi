@@ -1,5 +1,5 @@
 """Type stubs of nimble_rig's compiled module (python/rig_module.cc), for editors."""
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 
@@ -34,4 +34,9 @@ def load_scenario(path: str, overrides: Dict[str, Any] = ...) -> Scenario:
 def fly(scenario: Scenario, seed: Optional[int] = None, clock: str = "inprocess",
         log: Optional[str] = None) -> Flight:
     """Flies the scenario in process (the GIL released); SIGINT ends it with result interrupted."""
+    ...
+
+def sweep(scenario: Scenario, seeds: str = "1-10", vary: Dict[str, List[Any]] = ..., jobs: int = 1,
+          dir: Optional[str] = None) -> Dict[str, Any]:
+    """Flies the scenario over seeds and parameter sets with `rig sweep`'s engine; its --json content."""
     ...

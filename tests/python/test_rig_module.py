@@ -85,3 +85,29 @@ def test_sigint_ends_a_flight_as_it_ends_rig_run(tmp_path):
     assert 0 < flight.report["sim_time_s"] < 3000
     log = nimble_rig.read_log(str(tmp_path / "hover.lcmlog"))
     assert len(log["TRUTH"]["utime"]) == len(flight.channels["TRUTH"]["utime"]) > 0
+    # The Ctrl-C is spent: the next flight flies whole.
+    again = nimble_rig.fly(nimble_rig.load_scenario(HOVER, {"duration_s": 1}), seed=1)
+    assert again.report["result"] == "ok"
+    assert again.report["sim_time_s"] == 1.0
+
+
+def _without_times(result):
+    """A sweep's JSON without what depends on the machine and the jobs ("machine": wall times,
+    speeds, hosts)."""
+    result = json.loads(json.dumps(result))
+    result.pop("machine")
+    for run in result["runs"]:
+        run.pop("machine")
+    return result
+
+
+def test_sweep_gives_what_rig_sweep_gives(tmp_path):
+    models = [os.path.join(SOURCE, "rig_configs", "models", f"nimble_lateral_set{k}.yaml") for k in (1, 2)]
+    scenario = nimble_rig.load_scenario(HOVER, {"duration_s": 1})
+    got = nimble_rig.sweep(scenario, seeds="1-3", vary={"model": models}, jobs=2)
+    out = tmp_path / "sweep.json"
+    subprocess.run([RIG, "sweep", HOVER, "--seeds", "1-3", "--set", "duration_s=1", "--vary", "model=" + ",".join(models),
+                    "--jobs", "1", "--no-progress", "--json", str(out)], check=True, capture_output=True)
+    expected = json.loads(out.read_text())
+    assert len(got["runs"]) == 6
+    assert _without_times(got) == _without_times(expected)
