@@ -106,28 +106,9 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   }
   if (gains.empty()) gains = "fast";
   ident::DiscrepancyResult result = ident::find_discrepancy(flights, model, vehicle, opt);
-  const ident::FlightData& data = flights.front();
   // Closed loop before and after, as rig validate --closed-loop.
-  if (flights.size() > 1) {
-    result.closed_loop_note = "not flown for pooled flights: run rig discrepancy on one flight for it";
-  } else if (!data.has("phi_sp")) {
-    result.closed_loop_note = "the data has no phi_sp";
-  } else {
-    try {
-      ident::ClosedLoopOptions cl;
-      cl.controller = load_controller_config(NIMBLE_DEFAULT_CONTROLLER);
-      cl.gain_set = gains;
-      const ident::ClosedLoopResult before = ident::validate_closed_loop(data, model, vehicle, cl);
-      const ident::ClosedLoopResult after = ident::validate_closed_loop(data, result.augmented_model, vehicle, cl);
-      for (const char* s : {"p", "v", "phi", "delta_f"}) {
-        result.closed_loop.push_back({s, before.fits.at(s).r2, after.fits.at(s).r2, before.fits.at(s).rmse,
-                                      after.fits.at(s).rmse});
-      }
-      result.closed_loop_note = "gains " + gains;
-    } catch (const std::exception& e) {
-      result.closed_loop_note = std::string("not flown: ") + e.what();
-    }
-  }
+  ident::compare_closed_loop(result, flights, model, vehicle, load_controller_config(ident::default_controller_file()),
+                             gains);
   std::string data_file;
   for (const auto& f : data_files) data_file += (data_file.empty() ? "" : ", ") + f;
   if (!model_out.empty()) {

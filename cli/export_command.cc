@@ -24,43 +24,13 @@
 namespace nimble::cli {
 namespace {
 
-/// The --json report of an MCAP export.
-std::string export_json(const mcap::ExportStats& s) {
-  auto n = [](uint64_t v) { return static_cast<long long>(v); };
-  JsonWriter w;
-  w.begin_object();
-  w.key("log").value(s.log).key("out").value(s.out).key("format").value("mcap");
-  w.key("compression").value(mcap::to_string(s.compression));
-  w.key("events").value(n(s.events)).key("messages").value(n(s.messages));
-  w.key("mcap_channels").value(n(s.mcap_channels));
-  w.key("undecodable").value(n(s.undecodable)).key("unknown_channel_events").value(n(s.unknown_events));
-  undecodable_json(w, mcap::undecodable_by_channel(s));
-  w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
-  w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
-  w.key("seconds").value(s.seconds).key("damage").value(s.damage);
-  w.key("channels").begin_object();
-  for (const auto& kv : s.channels) {
-    w.key(kv.first).begin_object();
-    w.key("type").value(kv.second.type).key("events").value(n(kv.second.events));
-    w.key("json").value(n(kv.second.json)).key("undecodable").value(n(kv.second.undecodable));
-    w.key("raw").value(n(kv.second.raw));
-    w.end_object();
-  }
-  w.end_object();
-  w.key("unknown_channels").begin_array();
-  for (const auto& c : s.unknown_channels) w.value(c);
-  w.end_array();
-  w.end_object();
-  return w.str();
-}
-
 /// `rig export --format mcap`: the log as MCAP, the one-line summary, the --json report.
 int export_mcap(const std::string& log, const std::string& out, const mcap::ExportOptions& options,
                 const std::string& json) {
   const mcap::ExportStats stats = mcap::export_log_to_mcap(log, out, options);
   warn_damage("rig export", log, stats.damage);
   (json == "-" ? std::cerr : std::cout) << "rig export: " << mcap::summary_line(stats) << "\n";
-  if (!json.empty()) cmdline::write_json(json, export_json(stats));
+  if (!json.empty()) cmdline::write_json(json, mcap::export_json(stats));
   return 0;
 }
 
@@ -154,7 +124,7 @@ int run_export_command(const std::vector<std::string>& args) {
     w.key("rate_hz").value(rate_hz).key("interpolation").value(ident::to_string(interpolation));
     w.key("state_source").value(data.state_source).key("damage").value(data.damage);
     w.key("undecodable").value(static_cast<long long>(undecodable.total()));
-    undecodable_json(w, undecodable.by_channel());
+    mcap::undecodable_json(w, undecodable.by_channel());
     w.key("columns").begin_array();
     for (const auto& [name, channel] : out.channels) w.value(name);
     w.end_array();

@@ -120,11 +120,4 @@ void warn_undecodable(const char* command, const std::string& file, const mcap::
   if (!text.empty()) std::cerr << command << ": warning: " << file << ": " << text << "\n";
 }
 
-/// The undecodable messages by channel as a --json object.
-void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel) {
-  w.key("undecodable_channels").begin_object();
-  for (const auto& [name, n] : by_channel) w.key(name).value(static_cast<long long>(n));
-  w.end_object();
-}
-
 }  // namespace nimble::cli

@@ -53,7 +53,4 @@ void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count);
 /// Says on stderr which undecodable messages a read left out, by channel and count.
 void warn_undecodable(const char* command, const std::string& file, const mcap::UndecodableCount& count);
 
-/// The undecodable messages by channel as a --json object.
-void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel);
-
 }  // namespace nimble::cli

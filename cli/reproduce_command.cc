@@ -13,6 +13,7 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "ident/closed_loop.h"
 #include "core/config.h"
 #include "core/output_file.h"
 #include "launcher/launcher.h"
@@ -49,7 +50,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   namespace fs = std::filesystem;
   reproduce::CampaignOptions o;
   o.campaign_file = NIMBLE_DEFAULT_CAMPAIGN;
-  o.controller_file = NIMBLE_DEFAULT_CONTROLLER;
+  o.controller_file = ident::default_controller_file();
   o.work_dir = "rig_logs/reproduce";
   o.progress = true;
   std::string what, json_file;

@@ -28,7 +28,7 @@ namespace nimble::cli {
 
 int run_validate_command(const std::vector<std::string>& args) {
   std::string model_file, csv, vehicle_file, json, plots;
-  std::string gains, controller_file = NIMBLE_DEFAULT_CONTROLLER;
+  std::string gains, controller_file = ident::default_controller_file();
   bool closed_loop = false;
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
@@ -89,33 +89,17 @@ int run_validate_command(const std::vector<std::string>& args) {
     const ident::ClosedLoopResult r = ident::validate_closed_loop(data, model, vehicle, cl);
     std::vector<std::string> pngs;
     if (!plots.empty()) pngs = ident::plot_closed_loop(r, plots);
-    JsonWriter w;
-    w.begin_object();
-    w.key("source").value(r.source).key("model").value(model.name).key("gain_set").value(r.gain_set);
-    w.key("rate_hz").value(r.rate_hz).key("samples").value(static_cast<long long>(r.t_s.size()));
-    w.key("closed_loop").begin_object();
     if (json != "-") {
       std::printf("closed-loop validation of %s on %s (gains %s, %lld samples at %.0f Hz)\n", model.name.c_str(),
                   r.source.c_str(), r.gain_set.c_str(), static_cast<long long>(r.t_s.size()), r.rate_hz);
       std::printf("  %-8s %8s %8s %12s %12s %10s\n", "output", "r_xy", "R2", "RMSE", "range", "RMSE[%rng]");
-    }
-    for (const char* name : {"p", "v", "phi", "delta_f"}) {
-      const ident::FitMetrics& f = r.fits.at(name);
-      if (json != "-") {
+      for (const char* name : {"p", "v", "phi", "delta_f"}) {
+        const ident::FitMetrics& f = r.fits.at(name);
         std::printf("  %-8s %8.3f %8.3f %12.4g %12.4g %10.2f\n", name, f.rxy, f.r2, f.rmse, f.range, f.rmse_pct_range);
       }
-      w.key(name).begin_object();
-      w.key("rxy").value(f.rxy).key("r2").value(f.r2).key("rmse").value(f.rmse);
-      w.key("range").value(f.range).key("rmse_pct_range").value(f.rmse_pct_range);
-      w.end_object();
-    }
-    w.end_object();
-    if (!pngs.empty()) w.key("plots").array(pngs);
-    w.end_object();
-    if (json != "-") {
       for (const auto& p : pngs) std::cout << "plot " << p << "\n";
     }
-    if (!json.empty()) cmdline::write_json(json, w.str());
+    if (!json.empty()) cmdline::write_json(json, ident::closed_loop_json(r, pngs));
     return 0;
   }
   const ident::ValidationResult result = ident::validate_open_loop(data, model, vehicle, opt);

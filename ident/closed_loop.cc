@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "core/json_writer.h"
 #include "ident/data_check.h"
 #include "ident/plots.h"
 #include "ident/signal.h"
@@ -300,6 +301,53 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
   }
   return {plot_time_histories(dir, "closed_loop", title, r.t_s, panels),
           plot_autocorrelation(dir, fits, "residual autocorrelation, closed loop: " + r.model + " on " + r.source)};
+}
+
+std::string closed_loop_json(const ClosedLoopResult& r, const std::vector<std::string>& plots) {
+  JsonWriter w;
+  w.begin_object();
+  w.key("source").value(r.source).key("model").value(r.model).key("gain_set").value(r.gain_set);
+  w.key("rate_hz").value(r.rate_hz).key("samples").value(static_cast<long long>(r.t_s.size()));
+  w.key("closed_loop").begin_object();
+  for (const char* name : {"p", "v", "phi", "delta_f"}) {
+    const FitMetrics& f = r.fits.at(name);
+    w.key(name).begin_object();
+    w.key("rxy").value(f.rxy).key("r2").value(f.r2).key("rmse").value(f.rmse);
+    w.key("range").value(f.range).key("rmse_pct_range").value(f.rmse_pct_range);
+    w.end_object();
+  }
+  w.end_object();
+  if (!plots.empty()) w.key("plots").array(plots);
+  w.end_object();
+  return w.str();
+}
+
+std::string default_controller_file() { return NIMBLE_DEFAULT_CONTROLLER; }
+
+void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights, const DerivativeModel& model,
+                         const Vehicle& vehicle, const ControllerConfig& controller, const std::string& gains) {
+  if (flights.size() > 1) {
+    result.closed_loop_note = "not flown for pooled flights: run rig discrepancy on one flight for it";
+    return;
+  }
+  if (flights.empty() || !flights.front().has("phi_sp")) {
+    result.closed_loop_note = "the data has no phi_sp";
+    return;
+  }
+  try {
+    ClosedLoopOptions options;
+    options.controller = controller;
+    options.gain_set = gains;
+    const ClosedLoopResult before = validate_closed_loop(flights.front(), model, vehicle, options);
+    const ClosedLoopResult after = validate_closed_loop(flights.front(), result.augmented_model, vehicle, options);
+    for (const char* s : {"p", "v", "phi", "delta_f"}) {
+      result.closed_loop.push_back(
+          {s, before.fits.at(s).r2, after.fits.at(s).r2, before.fits.at(s).rmse, after.fits.at(s).rmse});
+    }
+    result.closed_loop_note = "gains " + gains;
+  } catch (const std::exception& e) {
+    result.closed_loop_note = std::string("not flown: ") + e.what();
+  }
 }
 
 }  // namespace nimble::ident

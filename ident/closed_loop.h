@@ -14,6 +14,7 @@
 #include "controller/attitude_controller.h"
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "ident/discrepancy.h"
 #include "ident/flight_data.h"
 #include "ident/metrics.h"
 #include "ident/signal.h"
@@ -57,5 +58,20 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
 /// autocorrelation of each of them with the 95 % bounds (thesis Figs C.4-C.9). Returns the PNG paths.
 /// @throws std::runtime_error if gnuplot (Debian package gnuplot-nox) is missing or fails.
 std::vector<std::string> plot_closed_loop(const ClosedLoopResult& result, const std::string& dir);
+
+/// The closed-loop validation as `rig validate --closed-loop --json` reports it: source, model,
+/// gain set, rate, samples and each of p, v, phi, delta_f's fit; `plots` recorded when not empty.
+std::string closed_loop_json(const ClosedLoopResult& result, const std::vector<std::string>& plots);
+
+/// The controller configuration the closed-loop copies fly unless told otherwise:
+/// rig_configs/controller/nimble_attitude.yaml of the source tree this library was built from.
+std::string default_controller_file();
+
+/// The closed loop before and after a discrepancy refit (result.closed_loop, closed_loop_note), as
+/// `rig discrepancy` reports it: `model` and result.augmented_model each flown by the controller
+/// copy `controller` with `gains` on the one flight's phi_sp. Pooled flights, a flight without
+/// phi_sp or a failing simulation are not flown, and closed_loop_note says why.
+void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights, const DerivativeModel& model,
+                         const Vehicle& vehicle, const ControllerConfig& controller, const std::string& gains);
 
 }  // namespace nimble::ident

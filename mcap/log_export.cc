@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/json_writer.h"
 #include "ident/lcm_log.h"
 #include "lcmjson/lcm_json.h"
 
@@ -191,6 +192,41 @@ std::string summary_line(const ExportStats& s) {
             " unknown channels";
   }
   return line;
+}
+
+void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel) {
+  w.key("undecodable_channels").begin_object();
+  for (const auto& [name, n] : by_channel) w.key(name).value(static_cast<long long>(n));
+  w.end_object();
+}
+
+std::string export_json(const ExportStats& s) {
+  auto n = [](uint64_t v) { return static_cast<long long>(v); };
+  JsonWriter w;
+  w.begin_object();
+  w.key("log").value(s.log).key("out").value(s.out).key("format").value("mcap");
+  w.key("compression").value(to_string(s.compression));
+  w.key("events").value(n(s.events)).key("messages").value(n(s.messages));
+  w.key("mcap_channels").value(n(s.mcap_channels));
+  w.key("undecodable").value(n(s.undecodable)).key("unknown_channel_events").value(n(s.unknown_events));
+  undecodable_json(w, undecodable_by_channel(s));
+  w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
+  w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
+  w.key("seconds").value(s.seconds).key("damage").value(s.damage);
+  w.key("channels").begin_object();
+  for (const auto& kv : s.channels) {
+    w.key(kv.first).begin_object();
+    w.key("type").value(kv.second.type).key("events").value(n(kv.second.events));
+    w.key("json").value(n(kv.second.json)).key("undecodable").value(n(kv.second.undecodable));
+    w.key("raw").value(n(kv.second.raw));
+    w.end_object();
+  }
+  w.end_object();
+  w.key("unknown_channels").begin_array();
+  for (const auto& c : s.unknown_channels) w.value(c);
+  w.end_array();
+  w.end_object();
+  return w.str();
 }
 
 }  // namespace nimble::mcap

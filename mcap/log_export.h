@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "core/json_writer.h"
 #include "ident/lcm_log.h"
 #include "mcap/mcap_writer.h"
 
@@ -82,6 +83,13 @@ std::map<std::string, uint64_t> undecodable_by_channel(const ExportStats& stats)
 /// What an export left out, for people: "1 undecodable left out (MOCAP_POSE 1)", channels in
 /// name order; "" when nothing was.
 std::string undecodable_text(const std::map<std::string, uint64_t>& by_channel);
+
+/// The undecodable messages by channel as the "undecodable_channels" object of a --json report.
+void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel);
+
+/// An export as `rig export --format mcap --json` reports it: counts, times, sizes, damage, and
+/// per channel its type, events, JSON messages, undecodable and raw messages.
+std::string export_json(const ExportStats& stats);
 
 /// Counts, by channel, the events of a rig log that are not exactly one message of their
 /// channel's type, by the test the MCAP export leaves them out by (lcmjson::to_json). Events on

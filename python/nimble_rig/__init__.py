@@ -21,9 +21,11 @@ from .log import LogError, RigLog, read_log
 __all__ = ["LogError", "RigLog", "read_log"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
-    from ._rig import ConfigError, Flight, Scenario, fly, load_scenario, sweep
+    from ._rig import (ConfigError, DataError, Flight, Scenario, discrepancy, export_mcap, fly, identify,
+                       load_scenario, sweep, validate)
 
-    __all__ += ["ConfigError", "Flight", "Scenario", "fly", "load_scenario", "sweep"]
+    __all__ += ["ConfigError", "DataError", "Flight", "Scenario", "discrepancy", "export_mcap", "fly", "identify",
+                "load_scenario", "sweep", "validate"]
 except ImportError:  # the log reader alone
     pass
 __version__ = "@PROJECT_VERSION@"

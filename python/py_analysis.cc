@@ -1,0 +1,324 @@
+/// identify, validate, discrepancy and export_mcap of nimble_rig._rig: the library code of
+/// `rig identify`, `rig validate`, `rig discrepancy` and `rig export --format mcap`, on a rig log,
+/// a CSV file or a dict of numpy arrays; each returns the command's --json content as a dict, with
+/// the signals behind it as arrays.
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "controller/attitude_controller.h"
+#include "core/model.h"
+#include "core/vehicle.h"
+#include "estimator/sensing_config.h"
+#include "ident/closed_loop.h"
+#include "ident/discrepancy.h"
+#include "ident/identify.h"
+#include "ident/model_writer.h"
+#include "ident/report.h"
+#include "ident/validate.h"
+#include "mcap/log_export.h"
+#include "python/py_module.h"
+
+namespace nimble::python {
+
+namespace {
+
+bool is_path(const py::handle& data) {
+  return py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__");
+}
+
+std::string path_of(const py::handle& data) {
+  return py::module_::import("os").attr("fspath")(data).cast<std::string>();
+}
+
+/// A dict of arrays on one time base 't' as flight data, checked as a CSV file is.
+ident::FlightData dict_data(const py::dict& d) {
+  if (!d.contains("t")) throw std::invalid_argument("data: the dict has no 't' (time [s]) array");
+  using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  const Doubles t = Doubles::ensure(d["t"]);
+  if (!t || t.ndim() != 1) throw std::invalid_argument("data: 't' is not a one-dimensional array of numbers");
+  const std::vector<double> t_s(t.data(), t.data() + t.size());
+  ident::FlightData out;
+  out.source = "data (dict of arrays)";
+  for (const auto& [key, value] : d) {
+    const std::string name = key.cast<std::string>();
+    if (name == "t") continue;
+    if (!ident::is_known_channel(name)) {
+      std::string known;
+      for (const auto& spec : ident::channel_specs()) known += (known.empty() ? "" : ", ") + spec.name;
+      throw std::invalid_argument("data: unknown channel '" + name + "' (known: " + known + ")");
+    }
+    const Doubles a = Doubles::ensure(value);
+    if (!a || a.ndim() != 1) throw std::invalid_argument("data: '" + name + "' is not a one-dimensional array of numbers");
+    if (a.size() != t.size()) {
+      throw std::invalid_argument("data: '" + name + "' has " + std::to_string(a.size()) + " samples, 't' has " +
+                                  std::to_string(t.size()));
+    }
+    out.channels[name] = ident::Channel{t_s, std::vector<double>(a.data(), a.data() + a.size())};
+  }
+  for (const auto& spec : ident::channel_specs()) {
+    if (spec.required && !out.has(spec.name)) {
+      throw ident::DataError(out.source, -1, -1, spec.name, "missing required channel '" + spec.name + "'");
+    }
+  }
+  ident::validate_flight_data(out);
+  return out;
+}
+
+/// The processing options given (None: the commands' defaults).
+ident::ProcessingOptions processing_of(std::optional<double> rate_hz, std::optional<double> cutoff_hz,
+                                       std::optional<int> order, const std::string& interpolation) {
+  ident::ProcessingOptions p;
+  if (rate_hz) p.rate_hz = *rate_hz;
+  if (cutoff_hz) p.cutoff_hz = *cutoff_hz;
+  if (order) p.filter_order = *order;
+  p.interpolation = ident::interpolation_from_string(interpolation);
+  return p;
+}
+
+/// The vehicle of an analysis: `file`, else `fallback`.
+Vehicle vehicle_of(const std::optional<std::string>& file, const std::string& fallback) {
+  return load_vehicle(file.value_or(fallback));
+}
+
+/// Every signal of `u` (with its time base as "t") as arrays.
+py::dict signals_of(const ident::UniformData& u) {
+  py::dict out;
+  out["t"] = array_of(u.t_s);
+  for (const auto& [name, v] : u.signals) out[name.c_str()] = array_of(v);
+  return out;
+}
+
+py::dict identify(const py::object& data, const std::string& structure, const std::string& method,
+                  const std::optional<std::vector<std::string>>& inputs, const std::optional<std::string>& vehicle,
+                  const std::optional<std::string>& model_out, const std::string& states,
+                  const std::optional<std::string>& sensing, bool salvage, std::optional<double> rate_hz,
+                  std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
+  ident::IdentOptions o;
+  o.structure = structure_from_string(structure);
+  o.method = ident::method_from_string(method);
+  if (inputs) o.inputs = *inputs;
+  o.processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
+  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage);
+  const std::string vehicle_file = vehicle.value_or(ident::default_vehicle_file());
+  const Vehicle v = load_vehicle(vehicle_file);
+  ident::IdentResult r;
+  {
+    py::gil_scoped_release free;
+    r = ident::identify(in.data, v, vehicle_file, o);
+  }
+  if (model_out) {
+    ident::write_model_yaml(r.model, *model_out,
+                            {"Identified by nimble_rig.identify from " + in.data.source + ".",
+                             "Structure " + to_string(o.structure) + ", " + ident::to_string(o.method) +
+                                 "; published: holds the eigenvalues and the standard deviations of this identification",
+                             "(white-residual formula)."});
+  }
+  py::dict out = json_value(ident::identification_json(r, model_out.value_or(""), {}));
+  out["signals"] = signals_of(r.data.filtered);
+  py::list equations;
+  for (const ident::EquationResult& e : r.regression.equations) {
+    py::dict q;
+    q["name"] = e.equation.name;
+    q["dependent"] = e.equation.dependent;
+    q["scale"] = e.equation.scale;
+    q["regressors"] = e.equation.regressors;
+    q["parameters"] = e.equation.parameters;
+    q["y"] = array_of(e.y);
+    q["theta"] = array_of(e.theta);
+    equations.append(q);
+  }
+  out["equations"] = equations;
+  return out;
+}
+
+py::dict validate(const std::string& model_file, const py::object& data, bool closed_loop,
+                  const std::optional<std::string>& gains, const std::optional<std::string>& controller,
+                  const std::optional<std::string>& vehicle, const std::string& states,
+                  const std::optional<std::string>& sensing, bool salvage, std::optional<double> rate_hz,
+                  std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
+  const DerivativeModel model = load_model(model_file);
+  const Vehicle v = vehicle_of(vehicle, model.vehicle_file);
+  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage);
+  const ident::ProcessingOptions processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
+  if (closed_loop) {
+    ident::ClosedLoopOptions o;
+    o.controller = load_controller_config(controller.value_or(ident::default_controller_file()));
+    o.gain_set = gains.value_or(in.gain_set.empty() ? "fast" : in.gain_set);
+    o.interpolation = processing.interpolation;
+    ident::ClosedLoopResult r;
+    {
+      py::gil_scoped_release free;
+      r = ident::validate_closed_loop(in.data, model, v, o);
+    }
+    py::dict out = json_value(ident::closed_loop_json(r, {}));
+    out["t"] = array_of(r.t_s);
+    py::dict measured, simulated;
+    for (const auto& [name, x] : r.measured) measured[name.c_str()] = array_of(x);
+    for (const auto& [name, x] : r.simulated) simulated[name.c_str()] = array_of(x);
+    out["measured"] = measured;
+    out["simulated"] = simulated;
+    out["phi_sp"] = array_of(r.phi_sp);
+    out["phi_ref"] = array_of(r.phi_ref);
+    return out;
+  }
+  ident::ValidationOptions o;
+  o.processing = processing;
+  ident::ValidationResult r;
+  {
+    py::gil_scoped_release free;
+    r = ident::validate_open_loop(in.data, model, v, o);
+  }
+  py::dict out = json_value(ident::validation_json(r, {}));
+  out["t"] = array_of(r.data.t_s);
+  py::dict measured, predicted;
+  for (const ident::OutputFit& f : r.fits) {
+    measured[f.output.c_str()] = array_of(f.measured);
+    predicted[f.output.c_str()] = array_of(f.estimated);
+  }
+  out["measured"] = measured;
+  out["predicted"] = predicted;
+  return out;
+}
+
+py::dict discrepancy(const py::object& data, const std::string& model_file,
+                     const std::optional<std::vector<std::string>>& candidates, std::optional<std::size_t> folds,
+                     std::optional<double> partial_f, std::optional<double> delay_max_s,
+                     std::optional<double> command_latency_s, const std::optional<std::string>& gains,
+                     const std::optional<std::string>& vehicle, const std::optional<std::string>& model_out,
+                     const std::string& states, const std::optional<std::string>& sensing, bool salvage) {
+  ident::DiscrepancyOptions o;
+  if (candidates) o.candidates = *candidates;
+  if (folds) o.folds = *folds;
+  if (partial_f) o.partial_f = *partial_f;
+  if (delay_max_s) o.delay_max_s = *delay_max_s;
+  if (command_latency_s) o.command_latency_s = *command_latency_s;
+  const DerivativeModel model = load_model(model_file);
+  const Vehicle v = vehicle_of(vehicle, model.vehicle_file);
+  // One flight, or several of the same vehicle pooled (a list).
+  std::vector<ident::FlightData> flights;
+  std::string gain_set = gains.value_or("");
+  const bool pooled = py::isinstance<py::list>(data) || py::isinstance<py::tuple>(data);
+  for (const py::handle item : pooled ? py::iterable(data) : py::iterable(py::make_tuple(data))) {
+    DataInput in = flight_data_of(py::reinterpret_borrow<py::object>(item), states, sensing.value_or(""), salvage);
+    if (gain_set.empty()) gain_set = in.gain_set;
+    flights.push_back(std::move(in.data));
+  }
+  if (flights.empty()) throw std::invalid_argument("data: an empty list of flights");
+  if (gain_set.empty()) gain_set = "fast";
+  const ControllerConfig controller = load_controller_config(ident::default_controller_file());
+  ident::DiscrepancyResult r;
+  {
+    py::gil_scoped_release free;
+    r = ident::find_discrepancy(flights, model, v, o);
+    ident::compare_closed_loop(r, flights, model, v, controller, gain_set);
+  }
+  if (model_out) {
+    ident::write_model_yaml(r.augmented_model, *model_out,
+                            {"Refit by nimble_rig.discrepancy from " + flights.front().source + " on " + model_file + ".",
+                             "Verdict: " + r.verdict + ". " + r.summary,
+                             "published.sigma: coloured-residual standard deviations of this refit."});
+  }
+  return json_value(ident::discrepancy_json(r));
+}
+
+py::dict export_mcap(const py::object& log, const py::object& out, bool raw, const std::string& compression,
+                     bool salvage) {
+  mcap::ExportOptions o;
+  o.raw = raw;
+  o.salvage = salvage;
+  o.compression = mcap::compression_from_string(compression);
+  const std::string log_path = path_of(log), out_path = path_of(out);
+  mcap::ExportStats stats;
+  {
+    py::gil_scoped_release free;
+    stats = mcap::export_log_to_mcap(log_path, out_path, o);
+  }
+  return json_value(mcap::export_json(stats));
+}
+
+}  // namespace
+
+DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
+                         bool salvage) {
+  ident::LogReadOptions o;
+  o.salvage = salvage;
+  o.states = ident::state_source_from_name(states);
+  DataInput in;
+  if (py::isinstance<py::dict>(data)) {
+    if (o.states != ident::StateSource::kAuto) {
+      throw std::invalid_argument("states='" + states + "': the data is a dict of arrays, which carries its own states");
+    }
+    in.data = dict_data(data.cast<py::dict>());
+    return in;
+  }
+  if (!is_path(data)) throw std::invalid_argument("data: a path (rig log or CSV file) or a dict of arrays, not " +
+                                                  py::str(py::type::of(data)).cast<std::string>());
+  const std::string file = path_of(data);
+  if (!ident::is_lcm_log(file)) {
+    if (o.states != ident::StateSource::kAuto && std::filesystem::exists(file)) {
+      throw std::invalid_argument("states='" + states + "': " + file + " is not a rig log; a CSV file carries its own states");
+    }
+    in.data = ident::read_flight_data(file, o);
+    return in;
+  }
+  if (o.states == ident::StateSource::kSmoothed) {
+    if (sensing.empty()) throw std::invalid_argument("states='smoothed' needs sensing= (the flight's sensing file)");
+    const SensingConfig s = load_sensing_config(sensing);
+    o.smoothing.ekf = smoother_ekf_config(s);
+    o.smoothing.differentiator = s.velocity_differentiator;
+  }
+  ident::RigLogData log;
+  {
+    py::gil_scoped_release free;
+    log = ident::read_rig_log(file, o.states, o);
+  }
+  in.data = std::move(log.measured);
+  in.gain_set = log.gain_set;
+  return in;
+}
+
+void add_analysis(py::module_& m) {
+  m.def("identify", &identify, py::arg("data"), py::kw_only(), py::arg("structure") = "lateral3",
+        py::arg("method") = "wls", py::arg("inputs") = py::none(), py::arg("vehicle") = py::none(),
+        py::arg("model_out") = py::none(), py::arg("states") = "auto", py::arg("sensing") = py::none(),
+        py::arg("salvage") = false, py::arg("rate_hz") = py::none(), py::arg("cutoff_hz") = py::none(),
+        py::arg("order") = py::none(), py::arg("interpolation") = "cubic",
+        "Identifies the lateral model's dimensional derivatives from flight data (equation error, as "
+        "`rig identify`). data: a rig log or CSV path, or a dict of numpy arrays {'t', 'p', 'v', 'phi', "
+        "'delta_f', 'delta_t', ...}. Returns `rig identify --json`'s content as a dict (parameters, metrics, "
+        "eigenvalues, ...) plus 'signals' (the resampled, filtered signals the regression used, 't' first) and "
+        "'equations' (per equation its regressors, parameters, y = scale * dependent, theta). model_out: write "
+        "the identified model file there. Raises DataError for bad data, ValueError for a bad option.");
+  m.def("validate", &validate, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("closed_loop") = false,
+        py::arg("gains") = py::none(), py::arg("controller") = py::none(), py::arg("vehicle") = py::none(),
+        py::arg("states") = "auto", py::arg("sensing") = py::none(), py::arg("salvage") = false,
+        py::arg("rate_hz") = py::none(), py::arg("cutoff_hz") = py::none(), py::arg("order") = py::none(),
+        py::arg("interpolation") = "cubic",
+        "Validates a model file on flight data, as `rig validate`: open loop (the state derivatives predicted "
+        "from the measured states; 't', 'measured', 'predicted' arrays beside the --json content) or, "
+        "closed_loop=True, the model flown by the controller copy on the data's phi_sp (gains: the log's set, "
+        "'fast' for other data; 't', 'measured', 'simulated' {p, v, phi, delta_f}, 'phi_sp', 'phi_ref').");
+  m.def("discrepancy", &discrepancy, py::arg("data"), py::kw_only(), py::arg("model"),
+        py::arg("candidates") = py::none(), py::arg("folds") = py::none(), py::arg("partial_f") = py::none(),
+        py::arg("delay_max_s") = py::none(), py::arg("command_latency_s") = py::none(), py::arg("gains") = py::none(),
+        py::arg("vehicle") = py::none(), py::arg("model_out") = py::none(), py::arg("states") = "auto",
+        py::arg("sensing") = py::none(), py::arg("salvage") = false,
+        "The discrepancy workflow, as `rig discrepancy`: where the model and the data disagree, the effect the "
+        "model misses (by name, or unexplained / ambiguous), the refit and the gap before and after on held-out "
+        "data. data: one flight (path or dict of arrays) or a list of flights pooled. Returns `rig discrepancy "
+        "--json`'s content as a dict; model_out: write the refit model there.");
+  m.def("export_mcap", &export_mcap, py::arg("log"), py::arg("out"), py::kw_only(), py::arg("raw") = false,
+        py::arg("compression") = "zstd", py::arg("salvage") = false,
+        "Writes a rig log as MCAP (Foxglove, Lichtblick, PlotJuggler), as `rig export --format mcap`, and "
+        "returns its --json content (messages per channel, what was left out). A damaged log raises DataError "
+        "naming the byte offset unless salvage=True.");
+}
+
+}  // namespace nimble::python

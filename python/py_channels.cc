@@ -1,0 +1,125 @@
+#include "python/py_channels.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <type_traits>
+
+#include <nimble/rig_message_list.hpp>
+
+#include "contract/channels.h"
+#include "contract/decode.h"
+
+namespace nimble::python {
+
+namespace py = pybind11;
+
+namespace {
+
+template <class T>
+struct is_vector : std::false_type {};
+template <class T, class A>
+struct is_vector<std::vector<T, A>> : std::true_type {};
+
+/// Appends one message's fields to `c` (its columns made at the first message).
+template <class M>
+void append(M& m, ChannelColumns& c) {
+  const bool first = c.messages == 0;
+  std::size_t k = 0;
+  for_each_field(m, [&](const char* name, auto& field) {
+    using T = std::remove_cv_t<std::remove_reference_t<decltype(field)>>;
+    if (first) {
+      c.names.emplace_back(name);
+      c.columns.emplace_back();
+    }
+    Column& col = c.columns[k++];
+    if constexpr (std::is_arithmetic_v<T>) {
+      col.kind = std::is_floating_point_v<T> ? Column::kFloat : Column::kInt;
+      if constexpr (std::is_floating_point_v<T>) col.f.push_back(field);
+      else col.i.push_back(static_cast<std::int64_t>(field));
+    } else if constexpr (std::is_array_v<T> && std::is_arithmetic_v<std::remove_extent_t<T>>) {
+      using E = std::remove_extent_t<T>;
+      col.row = true;
+      col.width = std::extent_v<T>;
+      col.kind = std::is_floating_point_v<E> ? Column::kFloat : Column::kInt;
+      for (std::size_t j = 0; j < std::extent_v<T>; ++j) {
+        if constexpr (std::is_floating_point_v<E>) col.f.push_back(field[j]);
+        else col.i.push_back(static_cast<std::int64_t>(field[j]));
+      }
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      col.kind = Column::kObject;
+      col.strings = true;
+      col.scalar_string = true;
+      col.so.push_back({field});
+    } else if constexpr (is_vector<T>::value) {
+      using E = typename T::value_type;
+      col.kind = Column::kObject;
+      if constexpr (std::is_arithmetic_v<E>) {
+        col.fo.emplace_back(field.begin(), field.end());
+      } else if constexpr (std::is_same_v<E, std::string>) {
+        col.strings = true;
+        col.so.push_back(field);
+      } else {
+        col.fo.emplace_back();  // nested variable-length arrays: not carried
+      }
+    } else {
+      col.kind = Column::kObject;
+      col.fo.emplace_back();  // a fixed array of strings or of arrays: not carried
+    }
+  });
+  ++c.messages;
+}
+
+}  // namespace
+
+void ChannelCollector::add(const std::string& channel, const void* data, int size) {
+  const contract::ChannelSpec* spec = contract::find_channel(channel);
+  if (spec == nullptr) return;
+  with_message_type(spec->type, [&](auto type) {
+    using M = typename decltype(type)::type;
+    M m{};
+    if (contract::decode_exact(data, size, m)) append(m, channels_[channel]);
+  });
+}
+
+namespace {
+
+template <class T>
+py::array_t<T> numpy_of(const std::vector<T>& values, std::size_t n, std::size_t width, bool row) {
+  std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(n)};
+  if (row) shape.push_back(static_cast<py::ssize_t>(width));
+  py::array_t<T> a(shape);
+  if (!values.empty()) std::memcpy(a.mutable_data(), values.data(), values.size() * sizeof(T));
+  return a;
+}
+
+}  // namespace
+
+py::dict channels_dict(const ChannelCollector& collector) {
+  py::dict out;
+  py::module_ np = py::module_::import("numpy");
+  for (const auto& [channel, c] : collector.channels()) {
+    py::dict fields;
+    for (std::size_t k = 0; k < c.names.size(); ++k) {
+      const Column& col = c.columns[k];
+      if (col.kind == Column::kFloat) {
+        fields[c.names[k].c_str()] = numpy_of(col.f, c.messages, col.width, col.row);
+      } else if (col.kind == Column::kInt) {
+        fields[c.names[k].c_str()] = numpy_of(col.i, c.messages, col.width, col.row);
+      } else {
+        py::list items;
+        if (col.strings) {
+          for (const auto& s : col.so) items.append(col.scalar_string ? py::cast(s.front()) : py::cast(s));
+        } else {
+          for (const auto& v : col.fo) items.append(numpy_of(v, v.size(), 1, false));
+        }
+        fields[c.names[k].c_str()] = np.attr("array")(items, py::arg("dtype") = "object");
+      }
+    }
+    out[channel.c_str()] = fields;
+  }
+  return out;
+}
+
+}  // namespace nimble::python

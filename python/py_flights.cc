@@ -1,0 +1,163 @@
+/// load_scenario, fly and sweep of nimble_rig._rig: a scenario loaded with `rig run`'s checks, one
+/// flight in process with the GIL released and its channels as numpy arrays, and `rig sweep`'s
+/// campaign engine (its local backend).
+
+#include <pybind11/stl.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <tuple>
+
+#include "campaign/campaign.h"
+#include "campaign/sweep.h"
+#include "launcher/inprocess.h"
+#include "launcher/run_report.h"
+#include "python/py_channels.h"
+#include "python/py_module.h"
+#include "transport/clock.h"
+#include "transport/node.h"
+
+namespace nimble::python {
+namespace {
+
+std::shared_ptr<Scenario> load_scenario(const std::string& path, const py::dict& overrides) {
+  auto s = std::make_shared<Scenario>();
+  s->options.scenario_file = path;
+  s->options.overrides = overrides_of(overrides);
+  s->options.progress = false;
+  s->options.print_summary = false;
+  s->plan = launcher::load_run_plan(s->options);
+  return s;
+}
+
+/// One flight: the report (`rig run --json`'s content) and every channel's arrays.
+struct Flight {
+  py::dict report;
+  py::dict channels;
+};
+
+Flight fly(const Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock,
+           const std::optional<std::string>& log) {
+  if (clock != launcher::kClockInprocess) {
+    throw py::value_error("clock '" + clock + "': a flight from Python is flown in process (clock='inprocess'); "
+                          "the lockstep and real-time clocks run separate processes: use `rig run`");
+  }
+  // The plan of this flight: the scenario's, flown in process, with `seed` (as `rig run --clock
+  // inprocess --seed N` plans it, so the report is the same).
+  launcher::RunOptions options = scenario.options;
+  options.clock = clock;
+  if (seed) options.seed = *seed;
+  const launcher::RunPlan plan = launcher::load_run_plan(options);
+  ChannelCollector collector;
+  launcher::InprocessOptions io;
+  io.log_file = log.value_or("");
+  io.on_message = [&collector](const std::string& channel, const void* data, int size) {
+    collector.add(channel, data, size);
+  };
+  launcher::RunReport report;
+  {
+    // The flight runs without the GIL; SIGINT during it ends it as it ends `rig run` (result
+    // interrupted, the log whole up to there).
+    py::gil_scoped_release free;
+    transport::ProcessNode::clear_stop_request();  // a Ctrl-C of an earlier flight is spent
+    report = launcher::fly_inprocess(plan, io);
+  }
+  Flight f;
+  f.report = json_value(launcher::report_json(report));
+  f.channels = channels_dict(collector);
+  return f;
+}
+
+/// A sweep from Python: the campaign engine's local backend on a campaign directory made for it
+/// (`dir`, or a temporary one removed afterwards); returns `rig sweep --json`'s content.
+py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dict& vary, int jobs,
+               const std::optional<std::string>& dir) {
+  campaign::CampaignRequest req;
+  campaign::SweepOptions& o = req.sweep;
+  o.base = scenario.options;
+  o.base.clock = std::string(launcher::kClockInprocess);
+  try {
+    std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(seeds);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error("seeds '" + seeds + "': " + e.what());
+  }
+  for (const auto& [key, values] : vary) {
+    campaign::Vary v;
+    v.key = key.cast<std::string>();
+    for (const auto& value : values) {
+      v.values.push_back(value_text(value));
+    }
+    o.vary.push_back(v);
+  }
+  o.jobs = std::max(1, jobs);
+  o.progress = false;
+  const bool keep = dir.has_value();
+  req.dir = keep ? *dir
+                 : (std::filesystem::temp_directory_path() / ("rig_py_sweep_" + std::to_string(::getpid()))).string();
+  if (!keep) std::filesystem::remove_all(req.dir);
+  // A temporary directory goes whatever happens (an error, a Ctrl-C).
+  struct RemoveAfter {
+    std::string dir;
+    ~RemoveAfter() {
+      std::error_code ec;
+      if (!dir.empty()) std::filesystem::remove_all(dir, ec);
+    }
+  } remove_after{keep ? "" : req.dir};
+  campaign::Campaign c = campaign::create_campaign(req);
+  campaign::SweepResult result;
+  const std::int64_t start = transport::monotonic_ns();
+  {
+    py::gil_scoped_release free;
+    transport::ProcessNode::clear_stop_request();  // a Ctrl-C of an earlier flight is spent
+    campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "", nullptr);
+  }
+  result = campaign::merge_campaign(c);
+  result.jobs = o.jobs;
+  result.wall_time_s = static_cast<double>(transport::monotonic_ns() - start) / 1e9;
+  return json_value(campaign::sweep_json(result));
+}
+
+}  // namespace
+
+void add_flights(py::module_& m) {
+  py::class_<Scenario, std::shared_ptr<Scenario>>(m, "Scenario",
+                                                  "A scenario loaded and checked as `rig run` loads it.")
+      .def_property_readonly("file", [](const Scenario& s) { return s.options.scenario_file; },
+                             "the scenario file")
+      .def_property_readonly("name", [](const Scenario& s) { return s.plan.scenario.name; }, "its name")
+      .def_property_readonly("seed", [](const Scenario& s) { return s.plan.scenario.seed; },
+                             "its seed (fly() flies it unless given another)")
+      .def_property_readonly("duration_s", [](const Scenario& s) { return s.plan.scenario.duration_s; },
+                             "its duration [s] of simulated time")
+      .def("__repr__", [](const Scenario& s) {
+        return "<nimble_rig.Scenario '" + s.plan.scenario.name + "' from " + s.options.scenario_file + ">";
+      });
+
+  py::class_<Flight>(m, "Flight", "One flight: .report (the `rig run --json` content) and .channels.")
+      .def_readonly("report", &Flight::report, "the run's report: `rig run --json`'s content as a dict")
+      .def_readonly("channels", &Flight::channels,
+                    "channel -> field -> numpy array, one row per message (read_log's layout)");
+
+  m.def("load_scenario", &load_scenario, py::arg("path"), py::arg("overrides") = py::dict(),
+        "Loads a scenario with the same checks as `rig run`; overrides are --set values "
+        "({'plant.effects.lateral_gust.enabled': True}). Raises ConfigError naming the file, line and key.");
+  m.def("fly", &fly, py::arg("scenario"), py::arg("seed") = py::none(), py::arg("clock") = "inprocess",
+        py::arg("log") = py::none(),
+        "Flies the scenario in process (the GIL released) and returns a Flight; log: also write the LCM log "
+        "there. The TRUTH is byte for byte that of `rig run --clock inprocess` with the same seed. SIGINT "
+        "during the flight ends it with result interrupted.");
+  m.def("sweep", &sweep, py::arg("scenario"), py::arg("seeds") = "1-10", py::arg("vary") = py::dict(),
+        py::arg("jobs") = 1, py::arg("dir") = py::none(),
+        "Flies the scenario over seeds ('1-100') and parameter sets (vary={'key.path': [v1, v2]}) in process, "
+        "`jobs` runs at a time, with the campaign engine of `rig sweep` (its local backend), and returns "
+        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there. Raises ConfigError "
+        "for a bad value in any set.");
+}
+
+}  // namespace nimble::python

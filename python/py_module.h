@@ -1,0 +1,62 @@
+#pragma once
+/// What the files of nimble_rig._rig share: the loaded scenario, how Python values become the
+/// rig's (overrides, flight data), and the functions each file adds to the module.
+/// python/rig_module.cc makes the module; docs/python.md describes it.
+
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "ident/flight_data.h"
+#include "ident/rig_log.h"
+#include "launcher/run_plan.h"
+
+namespace nimble::python {
+
+namespace py = pybind11;
+
+/// A scenario loaded as `rig run` loads it: the run plan, checked.
+struct Scenario {
+  launcher::RunOptions options;
+  launcher::RunPlan plan;
+};
+
+/// The overrides of a dict ({'plant.effects.lateral_gust.enabled': True}): each value as YAML
+/// text (a str as it is, anything else as JSON, which is YAML).
+std::vector<Override> overrides_of(const py::dict& overrides);
+
+/// A value of a dict or list as the text `--set` would give it.
+std::string value_text(const py::handle& value);
+
+/// Flight data given to an analysis: a rig log, a CSV file, or a dict of numpy arrays.
+struct DataInput {
+  ident::FlightData data;
+  std::string gain_set;  ///< the gain set a rig log's controller flew ("" otherwise)
+};
+
+/// `data` as flight data: a path (str or os.PathLike) of a rig log or an identification CSV
+/// (read by content, as the commands read it), or a dict {'t': array, 'p': array, ...} of the
+/// channels of ident/flight_data.h on one time base ('t' [s], strictly increasing). `states`
+/// (auto, estimate, truth, smoothed) says where a log's states come from; `sensing` is the
+/// sensing file of the smoother (states='smoothed').
+/// @throws ident::DataError naming the channel and sample; std::invalid_argument for an unknown
+///         channel, a length that differs from t's, or states given for data that is not a log.
+DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
+                         bool salvage);
+
+/// A numpy array of an Eigen vector (one copy, no Python work per sample).
+py::object array_of(const Eigen::VectorXd& v);
+
+/// A JSON text as Python objects (json.loads).
+py::object json_value(const std::string& text);
+
+/// Adds load_scenario, fly, sweep and their classes (python/py_flights.cc).
+void add_flights(py::module_& m);
+/// Adds identify, validate, discrepancy, export_mcap (python/py_analysis.cc).
+void add_analysis(py::module_& m);
+/// Adds loop (python/py_loop.cc).
+void add_loop(py::module_& m);
+
+}  // namespace nimble::python
