@@ -6,6 +6,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -46,6 +47,12 @@ ident::FlightData dict_data(const py::dict& d) {
   const std::vector<double> t_s(t.data(), t.data() + t.size());
   ident::FlightData out;
   out.source = "data (dict of arrays)";
+  for (std::size_t i = 0; i < t_s.size(); ++i) {
+    if (!std::isfinite(t_s[i])) throw ident::DataError(out.source, -1, static_cast<int>(i + 1), "t", "time is not finite");
+    if (i > 0 && !(t_s[i] > t_s[i - 1])) {
+      throw ident::DataError(out.source, -1, static_cast<int>(i + 1), "t", "time does not increase");
+    }
+  }
   for (const auto& [key, value] : d) {
     const std::string name = key.cast<std::string>();
     if (name == "t") continue;
@@ -63,7 +70,7 @@ ident::FlightData dict_data(const py::dict& d) {
     out.channels[name] = ident::Channel{t_s, std::vector<double>(a.data(), a.data() + a.size())};
   }
   for (const auto& spec : ident::channel_specs()) {
-    if (spec.required && !out.has(spec.name)) {
+    if (spec.required && spec.name != "t" && !out.has(spec.name)) {
       throw ident::DataError(out.source, -1, -1, spec.name, "missing required channel '" + spec.name + "'");
     }
   }

@@ -1,0 +1,120 @@
+"""nimble_rig's analyses (python/py_analysis.cc) on a real flight: each gives what its command's
+--json gives, on a rig log, a CSV file and a dict of numpy arrays alike; identify() against a
+numpy least-squares fit of the same regressors; the errors carry where the problem is."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import nimble_rig
+
+SOURCE = os.environ["RIG_SOURCE_DIR"]
+RIG = os.environ["RIG_BIN"]
+TRAIN = os.path.join(SOURCE, "rig_configs", "id_doublet_train_fast.yaml")
+SET1 = os.path.join(SOURCE, "rig_configs", "models", "nimble_lateral_set1.yaml")
+ARRAYS = ("signals", "equations", "t", "measured", "predicted", "simulated", "phi_sp", "phi_ref")
+
+
+@pytest.fixture(scope="module")
+def train(tmp_path_factory):
+    """The identification train flown once from Python (seed 1), its log and its CSV export."""
+    d = tmp_path_factory.mktemp("train")
+    log = str(d / "train.lcmlog")
+    nimble_rig.fly(nimble_rig.load_scenario(TRAIN), seed=1, log=log)
+    csv = str(d / "train.csv")
+    subprocess.run([RIG, "export", log, "--csv", csv], check=True, capture_output=True)
+    return {"dir": d, "log": log, "csv": csv}
+
+
+def rig_json(*args):
+    """`rig ARGS --json -` as Python objects."""
+    done = subprocess.run([RIG, *args, "--json", "-"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def without_arrays(result):
+    return {k: v for k, v in result.items() if k not in ARRAYS}
+
+
+def csv_arrays(path):
+    """An identification CSV as a dict of arrays (the user's own measurements, no file given)."""
+    with open(path) as f:
+        lines = [line for line in f if not line.startswith("#")]
+    table = np.genfromtxt(lines, delimiter=",", names=True)
+    return {name: np.asarray(table[name]) for name in table.dtype.names}
+
+
+def test_identify_gives_rig_identify_and_numpy_least_squares(train):
+    got = nimble_rig.identify(train["log"], method="ols")
+    assert without_arrays(got) == rig_json("identify", train["log"], "--method", "ols")
+    signals = got["signals"]
+    assert signals["t"].shape == signals["p"].shape and len(signals["t"]) > 2000
+    for eq in got["equations"]:
+        x = np.column_stack([signals[r] for r in eq["regressors"]])
+        theta, *_ = np.linalg.lstsq(x, eq["y"], rcond=None)
+        ours = np.array([got["parameters"][p]["value"] for p in eq["parameters"]])
+        np.testing.assert_allclose(ours, theta, rtol=1e-7, atol=1e-12, err_msg=eq["name"])
+        assert np.allclose(eq["y"], eq["scale"] * signals[eq["dependent"]])
+
+
+def test_identify_takes_a_csv_file_and_a_dict_of_arrays_alike(train, tmp_path):
+    from_csv = nimble_rig.identify(train["csv"], model_out=str(tmp_path / "m.yaml"))
+    from_dict = nimble_rig.identify(csv_arrays(train["csv"]))
+    for name, p in from_csv["parameters"].items():
+        assert from_dict["parameters"][name]["value"] == pytest.approx(p["value"], rel=1e-12), name
+    assert (tmp_path / "m.yaml").read_text().startswith("#")
+    assert from_csv == {**from_csv, **without_arrays(from_csv)}
+
+
+def test_validate_gives_rig_validate_open_and_closed_loop(train):
+    open_loop = nimble_rig.validate(SET1, train["log"])
+    assert without_arrays(open_loop) == rig_json("validate", SET1, train["log"])
+    assert set(open_loop["measured"]) == set(open_loop["metrics"])
+    closed = nimble_rig.validate(SET1, train["log"], closed_loop=True)
+    assert without_arrays(closed) == rig_json("validate", SET1, train["log"], "--closed-loop")
+    n = closed["samples"]
+    assert closed["t"].shape == (n,) and closed["simulated"]["phi"].shape == (n,)
+    # The R^2 the report gives is that of the arrays handed over.
+    m, s = closed["measured"]["phi"], closed["simulated"]["phi"]
+    r2 = 1 - np.sum((m - s) ** 2) / np.sum((m - m.mean()) ** 2)
+    assert r2 == pytest.approx(closed["closed_loop"]["phi"]["r2"], rel=1e-9)
+
+
+def test_discrepancy_gives_rig_discrepancy(train):
+    got = nimble_rig.discrepancy(train["log"], model=SET1)
+    assert got == rig_json("discrepancy", train["log"], "--model", SET1)
+    assert got["verdict"]
+
+
+def test_export_mcap_gives_rig_export(train, tmp_path):
+    got = nimble_rig.export_mcap(train["log"], tmp_path / "py.mcap")
+    expected = rig_json("export", train["log"], "--out", str(tmp_path / "cli.mcap"))
+    for key in ("events", "messages", "mcap_channels", "undecodable", "channels", "start_time_ns", "end_time_ns"):
+        assert got[key] == expected[key], key
+    assert (tmp_path / "py.mcap").read_bytes()[:8] == b"\x89MCAP0\r\n"
+
+
+def test_bad_data_raises_data_error_naming_the_channel_and_sample(train, tmp_path):
+    data = csv_arrays(train["csv"])
+    data["t"] = data["t"].copy()
+    data["t"][7] = data["t"][6]
+    with pytest.raises(nimble_rig.DataError) as caught:
+        nimble_rig.identify(data)
+    assert caught.value.column == "t" and "increas" in str(caught.value)
+    data = csv_arrays(train["csv"])
+    data["phi"] = data["phi"].copy()
+    data["phi"][3] = np.nan
+    with pytest.raises(nimble_rig.DataError) as caught:
+        nimble_rig.identify(data)
+    assert caught.value.column == "phi"
+    with pytest.raises(ValueError, match="unknown channel 'roll'"):
+        nimble_rig.identify({"t": np.arange(3.0), "roll": np.zeros(3)})
+    with pytest.raises(ValueError, match="not a rig log"):
+        nimble_rig.identify(train["csv"], states="truth")
+    damaged = tmp_path / "damaged.lcmlog"
+    damaged.write_bytes(open(train["log"], "rb").read()[:200000] + b"\x00" * 40)
+    with pytest.raises(nimble_rig.DataError):
+        nimble_rig.identify(str(damaged))
