@@ -71,16 +71,77 @@ void append(M& m, ChannelColumns& c) {
   ++c.messages;
 }
 
+template <class M>
+void decode_append(const void* data, int size, ChannelColumns& into) {
+  M m{};
+  if (contract::decode_exact(data, size, m)) append(m, into);
+}
+
 }  // namespace
 
+ChannelCollector::ChannelCollector() : worker_([this] { decode_batches(); }) {}
+
+ChannelCollector::~ChannelCollector() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+  }
+  wake_.notify_one();
+  worker_.join();
+}
+
 void ChannelCollector::add(const std::string& channel, const void* data, int size) {
-  const contract::ChannelSpec* spec = contract::find_channel(channel);
-  if (spec == nullptr) return;
-  with_message_type(spec->type, [&](auto type) {
-    using M = typename decltype(type)::type;
-    M m{};
-    if (contract::decode_exact(data, size, m)) append(m, channels_[channel]);
-  });
+  auto [it, fresh] = sinks_.emplace(channel, Sink{});
+  if (fresh) {
+    if (const contract::ChannelSpec* spec = contract::find_channel(channel)) {
+      with_message_type(spec->type, [&](auto type) {
+        using M = typename decltype(type)::type;
+        // (a new node of channels_: the decoder only ever touches nodes made earlier, through their
+        // address, never the tree)
+        it->second = Sink{&decode_append<M>, &channels_[channel]};
+      });
+    }
+  }
+  const Sink& sink = it->second;
+  if (sink.decode == nullptr || size < 0) return;
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  filling_.items.push_back({sink.decode, sink.columns, filling_.bytes.size(), size});
+  filling_.bytes.insert(filling_.bytes.end(), bytes, bytes + size);
+  if (filling_.items.size() >= 2048) hand_over();
+}
+
+void ChannelCollector::hand_over() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(filling_));
+    ++pending_batches_;
+  }
+  filling_ = Batch{};
+  wake_.notify_one();
+}
+
+void ChannelCollector::decode_batches() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    wake_.wait(lock, [this] { return done_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // done, and nothing left
+    std::vector<Batch> batches;
+    batches.swap(queue_);
+    lock.unlock();
+    for (const Batch& b : batches) {
+      for (const Batch::Item& item : b.items) item.decode(b.bytes.data() + item.offset, item.size, *item.columns);
+    }
+    lock.lock();
+    pending_batches_ -= batches.size();
+    if (pending_batches_ == 0) idle_.notify_all();
+  }
+}
+
+const std::map<std::string, ChannelColumns>& ChannelCollector::channels() {
+  if (!filling_.items.empty()) hand_over();
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return pending_batches_ == 0; });
+  return channels_;
 }
 
 namespace {
@@ -96,7 +157,7 @@ py::array_t<T> numpy_of(const std::vector<T>& values, std::size_t n, std::size_t
 
 }  // namespace
 
-py::dict channels_dict(const ChannelCollector& collector) {
+py::dict channels_dict(ChannelCollector& collector) {
   py::dict out;
   py::module_ np = py::module_::import("numpy");
   for (const auto& [channel, c] : collector.channels()) {

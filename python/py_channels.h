@@ -5,9 +5,12 @@
 
 #include <pybind11/pybind11.h>
 
+#include <condition_variable>
 #include <cstdint>
 #include <map>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace nimble::python {
@@ -34,17 +37,54 @@ struct ChannelColumns {
 };
 
 /// Every message of a run, by channel, decoded as its channel's type (contract/channels.h).
-/// add() needs no Python: it runs while the flight flies without the GIL.
+/// add() is called by the flight (no Python, no GIL): it copies the message's bytes into a batch;
+/// full batches are decoded into columns by a thread of the collector's own, so that on a machine
+/// with a second core the decoding costs the flight little. channels() waits for the last batch.
 class ChannelCollector {
  public:
+  ChannelCollector();
+  ~ChannelCollector();
+  ChannelCollector(const ChannelCollector&) = delete;
+  ChannelCollector& operator=(const ChannelCollector&) = delete;
+
   void add(const std::string& channel, const void* data, int size);
-  const std::map<std::string, ChannelColumns>& channels() const { return channels_; }
+  /// Every column, once every message added has been decoded.
+  const std::map<std::string, ChannelColumns>& channels();
+
+  using Decode = void (*)(const void* data, int size, ChannelColumns& into);
+  /// Messages of one batch: where each one's bytes are and which channel it is.
+  struct Batch {
+    std::vector<unsigned char> bytes;
+    struct Item {
+      Decode decode;
+      ChannelColumns* columns;
+      std::size_t offset;
+      int size;
+    };
+    std::vector<Item> items;
+  };
 
  private:
-  std::map<std::string, ChannelColumns> channels_;
+  void hand_over();
+  void decode_batches();
+
+  struct Sink {
+    Decode decode = nullptr;  ///< nullptr: not a channel of the contract
+    ChannelColumns* columns = nullptr;
+  };
+  std::map<std::string, Sink> sinks_;  ///< by channel, made at its first message
+  std::map<std::string, ChannelColumns> channels_;  ///< (a node's columns stay where they are)
+  std::size_t pending_batches_ = 0;  ///< handed over, not yet decoded
+  std::condition_variable idle_;
+  Batch filling_;
+  std::vector<Batch> queue_;
+  bool done_ = false;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::thread worker_;
 };
 
 /// channel -> field -> numpy array (read_log's layout); called with the GIL held.
-pybind11::dict channels_dict(const ChannelCollector& collector);
+pybind11::dict channels_dict(ChannelCollector& collector);
 
 }  // namespace nimble::python

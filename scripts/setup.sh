@@ -44,8 +44,10 @@ case "$PROFILE" in
   all)
     PACKAGES+=(gnuplot-nox can-utils qemu-system-x86 xz-utils python3 python3-numpy chromium-headless-shell
                slurm-wlm munge
-               # the rig from Python: the compiled module (python/) and its tests
-               pybind11-dev python3-dev python3-pytest)
+               # the rig from Python: the compiled module (python/), its tests (scipy.signal checks the
+               # loop analysis) and the notebook in docs/ (executed by nbconvert, plots by matplotlib)
+               pybind11-dev python3-dev python3-pytest python3-scipy python3-matplotlib python3-yaml
+               jupyter-nbconvert python3-ipykernel)
     # Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
     command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
     ;;

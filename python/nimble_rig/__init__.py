@@ -26,6 +26,6 @@ try:  # the compiled module (python/rig_module.cc), where the build had pybind11
 
     __all__ += ["ConfigError", "DataError", "Flight", "Scenario", "discrepancy", "export_mcap", "fly", "identify",
                 "load_scenario", "sweep", "validate"]
-except ImportError:  # the log reader alone
+except ModuleNotFoundError:  # built without pybind11: the log reader alone (a module that fails to load raises)
     pass
 __version__ = "@PROJECT_VERSION@"

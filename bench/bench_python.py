@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""bench_python: a flight from Python against the same flight by `rig run --clock inprocess`.
+
+    PYTHONPATH=build/python python3 bench/bench_python.py [--rig build/bin/rig] [--runs N]
+        [--scenario F] [--duration S] [--json F]
+
+Flies the scenario (default rig_configs/id_doublet_train_fast.yaml for 30 s of simulated time,
+seed 1, its LCM log written, as `rig run` writes one), N times each way (default 7), alternating,
+in one run on one machine, and prints the medians of:
+ - the flight alone: each run's own report (wall_time_s: from the first to the last step, the
+   log written), from nimble_rig.fly() and from `rig run --clock inprocess`;
+ - what the user waits for: nimble_rig.load_scenario() + fly(), every channel handed over as
+   numpy arrays, against `rig run`'s process from start to exit (its own loading, no arrays);
+ - the ratio Python / rig of each; the target is a flight from Python within 5 % of rig run's
+   (ratio <= 1.05). Both sides run on this machine in this run, so the ratio travels.
+Not a test: figures depend on the machine and on what else runs on it.
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import nimble_rig
+
+
+def main():
+    source = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rig", default=os.path.join(source, "build", "bin", "rig"))
+    ap.add_argument("--scenario", default=os.path.join(source, "rig_configs", "id_doublet_train_fast.yaml"))
+    ap.add_argument("--duration", type=float, default=30.0, help="simulated seconds [s]")
+    ap.add_argument("--runs", type=int, default=7)
+    ap.add_argument("--json", help="write the figures here")
+    a = ap.parse_args()
+    if a.runs < 1 or a.duration <= 0:
+        ap.error("--runs must be >= 1 and --duration > 0")
+
+    py_flight, py_total, rig_flight, rig_total = [], [], [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        log_py, log_rig, report = (os.path.join(tmp, n) for n in ("py.lcmlog", "rig.lcmlog", "rig.json"))
+        command = [a.rig, "run", a.scenario, "--clock", "inprocess", "--seed", "1", "--set",
+                   "duration_s=%g" % a.duration, "--no-progress", "--log", log_rig, "--json", report]
+        for _ in range(a.runs):
+            start = time.perf_counter()
+            flight = nimble_rig.fly(nimble_rig.load_scenario(a.scenario, {"duration_s": a.duration}), seed=1, log=log_py)
+            py_total.append(time.perf_counter() - start)
+            py_flight.append(flight.report["wall_time_s"])
+            if flight.report["result"] != "ok":
+                sys.exit("bench_python: the flight from Python ended " + flight.report["result"])
+            start = time.perf_counter()
+            done = subprocess.run(command, capture_output=True, text=True)
+            rig_total.append(time.perf_counter() - start)
+            if done.returncode != 0:
+                sys.exit("bench_python: rig run failed: " + done.stderr)
+            with open(report) as f:
+                rig_flight.append(json.load(f)["wall_time_s"])
+
+    med = statistics.median
+    figures = {
+        "scenario": a.scenario, "sim_time_s": a.duration, "runs": a.runs,
+        "flight_s": {"python": med(py_flight), "rig_run": med(rig_flight), "ratio": med(py_flight) / med(rig_flight)},
+        "total_s": {"python": med(py_total), "rig_run": med(rig_total), "ratio": med(py_total) / med(rig_total)},
+    }
+    figures["within_5_percent"] = figures["flight_s"]["ratio"] <= 1.05 and figures["total_s"]["ratio"] <= 1.05
+    print("bench_python: %s, %g s simulated, seed 1, log written, medians of %d runs each (alternating)"
+          % (os.path.basename(a.scenario), a.duration, a.runs))
+    for key, what in (("flight_s", "the flight (its report's wall time)"),
+                      ("total_s", "load + fly + arrays / rig run's process")):
+        f = figures[key]
+        print("  %-42s python %7.3f s (%5.0fx)  rig run %7.3f s (%5.0fx)  ratio %.3f"
+              % (what, f["python"], a.duration / f["python"], f["rig_run"], a.duration / f["rig_run"], f["ratio"]))
+    print("  within 5 %% of rig run: %s" % ("yes" if figures["within_5_percent"] else "NO"))
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(figures, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
