@@ -95,5 +95,5 @@ PYBIND11_MODULE(_rig, m) {
   py::register_exception_translator(&translate);
   add_flights(m);
   add_analysis(m);
-  // add_loop(m);
+  add_loop(m);
 }

@@ -22,10 +22,10 @@ __all__ = ["LogError", "RigLog", "read_log"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
     from ._rig import (ConfigError, DataError, Flight, Scenario, discrepancy, export_mcap, fly, identify,
-                       load_scenario, sweep, validate)
+                       load_scenario, loop, sweep, validate)
 
     __all__ += ["ConfigError", "DataError", "Flight", "Scenario", "discrepancy", "export_mcap", "fly", "identify",
-                "load_scenario", "sweep", "validate"]
+                "load_scenario", "loop", "sweep", "validate"]
 except ModuleNotFoundError:  # built without pybind11: the log reader alone (a module that fails to load raises)
     pass
 __version__ = "@PROJECT_VERSION@"
