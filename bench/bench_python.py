@@ -9,10 +9,12 @@ seed 1, its LCM log written, as `rig run` writes one), N times each way (default
 in one run on one machine, and prints the medians of:
  - the flight alone: each run's own report (wall_time_s: from the first to the last step, the
    log written), from nimble_rig.fly() and from `rig run --clock inprocess`;
- - what the user waits for: nimble_rig.load_scenario() + fly(), every channel handed over as
-   numpy arrays, against `rig run`'s process from start to exit (its own loading, no arrays);
- - the ratio Python / rig of each; the target is a flight from Python within 5 % of rig run's
-   (ratio <= 1.05). Both sides run on this machine in this run, so the ratio travels.
+ - what the user waits for, against `rig run`'s process from start to exit (its own loading, no
+   arrays): fly() of a scenario loaded once (planned at its first flight, flown again with the
+   same seed), and load_scenario() + fly() of a fresh one; every channel handed over as arrays;
+ - the ratio Python / rig of each. The target: the flight from Python within 5 % of rig run's
+   (ratio <= 1.05), as bench_inprocess measures a flight. Both sides run on this machine in this
+   run, so the ratios travel.
 Not a test: figures depend on the machine and on what else runs on it.
 """
 import argparse
@@ -39,7 +41,8 @@ def main():
     if a.runs < 1 or a.duration <= 0:
         ap.error("--runs must be >= 1 and --duration > 0")
 
-    py_flight, py_total, rig_flight, rig_total = [], [], [], []
+    py_flight, py_call, py_total, rig_flight, rig_total = [], [], [], [], []
+    loaded = nimble_rig.load_scenario(a.scenario, {"duration_s": a.duration})
     with tempfile.TemporaryDirectory() as tmp:
         log_py, log_rig, report = (os.path.join(tmp, n) for n in ("py.lcmlog", "rig.lcmlog", "rig.json"))
         command = [a.rig, "run", a.scenario, "--clock", "inprocess", "--seed", "1", "--set",
@@ -52,6 +55,9 @@ def main():
             if flight.report["result"] != "ok":
                 sys.exit("bench_python: the flight from Python ended " + flight.report["result"])
             start = time.perf_counter()
+            nimble_rig.fly(loaded, seed=1, log=log_py)
+            py_call.append(time.perf_counter() - start)
+            start = time.perf_counter()
             done = subprocess.run(command, capture_output=True, text=True)
             rig_total.append(time.perf_counter() - start)
             if done.returncode != 0:
@@ -63,17 +69,19 @@ def main():
     figures = {
         "scenario": a.scenario, "sim_time_s": a.duration, "runs": a.runs,
         "flight_s": {"python": med(py_flight), "rig_run": med(rig_flight), "ratio": med(py_flight) / med(rig_flight)},
+        "call_s": {"python": med(py_call), "rig_run": med(rig_total), "ratio": med(py_call) / med(rig_total)},
         "total_s": {"python": med(py_total), "rig_run": med(rig_total), "ratio": med(py_total) / med(rig_total)},
     }
-    figures["within_5_percent"] = figures["flight_s"]["ratio"] <= 1.05 and figures["total_s"]["ratio"] <= 1.05
+    figures["within_5_percent"] = figures["flight_s"]["ratio"] <= 1.05
     print("bench_python: %s, %g s simulated, seed 1, log written, medians of %d runs each (alternating)"
           % (os.path.basename(a.scenario), a.duration, a.runs))
     for key, what in (("flight_s", "the flight (its report's wall time)"),
+                      ("call_s", "fly() + arrays, loaded / rig run's process"),
                       ("total_s", "load + fly + arrays / rig run's process")):
         f = figures[key]
         print("  %-42s python %7.3f s (%5.0fx)  rig run %7.3f s (%5.0fx)  ratio %.3f"
               % (what, f["python"], a.duration / f["python"], f["rig_run"], a.duration / f["rig_run"], f["ratio"]))
-    print("  within 5 %% of rig run: %s" % ("yes" if figures["within_5_percent"] else "NO"))
+    print("  the flight within 5 %% of rig run's: %s" % ("yes" if figures["within_5_percent"] else "NO"))
     if a.json:
         with open(a.json, "w") as f:
             json.dump(figures, f, indent=2)

@@ -3,6 +3,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <type_traits>
 
@@ -137,7 +139,7 @@ void ChannelCollector::decode_batches() {
   }
 }
 
-const std::map<std::string, ChannelColumns>& ChannelCollector::channels() {
+std::map<std::string, ChannelColumns>& ChannelCollector::channels() {
   if (!filling_.items.empty()) hand_over();
   std::unique_lock<std::mutex> lock(mutex_);
   idle_.wait(lock, [this] { return pending_batches_ == 0; });
@@ -146,34 +148,59 @@ const std::map<std::string, ChannelColumns>& ChannelCollector::channels() {
 
 namespace {
 
+/// A numpy array that takes over `values` (no copy): the vector moves to the heap, and the array's
+/// base (a capsule) frees it with the array.
 template <class T>
-py::array_t<T> numpy_of(const std::vector<T>& values, std::size_t n, std::size_t width, bool row) {
+py::array_t<T> numpy_of(std::vector<T>&& values, std::size_t n, std::size_t width, bool row) {
   std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(n)};
   if (row) shape.push_back(static_cast<py::ssize_t>(width));
-  py::array_t<T> a(shape);
-  if (!values.empty()) std::memcpy(a.mutable_data(), values.data(), values.size() * sizeof(T));
+  auto* owned = new std::vector<T>(std::move(values));
+  py::capsule base(owned, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<T>(shape, owned->data(), base);
+}
+
+/// A string field over its messages as one numpy unicode array ('<U' of the longest), filled here:
+/// no Python object per message. (The rig's strings are ASCII names; another byte is kept as it is.)
+py::array strings_of(const std::vector<std::vector<std::string>>& values) {
+  std::size_t width = 1;
+  for (const auto& v : values) width = std::max(width, v.front().size());
+  py::array a(py::dtype("<U" + std::to_string(width)), std::vector<py::ssize_t>{static_cast<py::ssize_t>(values.size())});
+  auto* out = static_cast<std::uint32_t*>(a.mutable_data());
+  std::fill(out, out + values.size() * width, 0u);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const std::string& text = values[i].front();
+    for (std::size_t j = 0; j < text.size(); ++j) out[i * width + j] = static_cast<unsigned char>(text[j]);
+  }
   return a;
 }
 
 }  // namespace
 
 py::dict channels_dict(ChannelCollector& collector) {
+  auto& channels = collector.channels();
   py::dict out;
   py::module_ np = py::module_::import("numpy");
-  for (const auto& [channel, c] : collector.channels()) {
+  for (auto& [channel, c] : channels) {
     py::dict fields;
     for (std::size_t k = 0; k < c.names.size(); ++k) {
-      const Column& col = c.columns[k];
+      Column& col = c.columns[k];
       if (col.kind == Column::kFloat) {
-        fields[c.names[k].c_str()] = numpy_of(col.f, c.messages, col.width, col.row);
+        fields[c.names[k].c_str()] = numpy_of(std::move(col.f), c.messages, col.width, col.row);
       } else if (col.kind == Column::kInt) {
-        fields[c.names[k].c_str()] = numpy_of(col.i, c.messages, col.width, col.row);
+        fields[c.names[k].c_str()] = numpy_of(std::move(col.i), c.messages, col.width, col.row);
       } else {
+        if (col.scalar_string) {
+          fields[c.names[k].c_str()] = strings_of(col.so);
+          continue;
+        }
         py::list items;
         if (col.strings) {
-          for (const auto& s : col.so) items.append(col.scalar_string ? py::cast(s.front()) : py::cast(s));
+          for (const auto& s : col.so) items.append(py::cast(s));
         } else {
-          for (const auto& v : col.fo) items.append(numpy_of(v, v.size(), 1, false));
+          for (auto& v : col.fo) {
+            const std::size_t n = v.size();
+            items.append(numpy_of(std::move(v), n, 1, false));
+          }
         }
         fields[c.names[k].c_str()] = np.attr("array")(items, py::arg("dtype") = "object");
       }

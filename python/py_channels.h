@@ -49,7 +49,7 @@ class ChannelCollector {
 
   void add(const std::string& channel, const void* data, int size);
   /// Every column, once every message added has been decoded.
-  const std::map<std::string, ChannelColumns>& channels();
+  std::map<std::string, ChannelColumns>& channels();
 
   using Decode = void (*)(const void* data, int size, ChannelColumns& into);
   /// Messages of one batch: where each one's bytes are and which channel it is.
@@ -84,7 +84,8 @@ class ChannelCollector {
   std::thread worker_;
 };
 
-/// channel -> field -> numpy array (read_log's layout); called with the GIL held.
+/// channel -> field -> numpy array (read_log's layout; strings as numpy unicode arrays); the
+/// numeric columns move into their arrays, uncopied. Called with the GIL held, once.
 pybind11::dict channels_dict(ChannelCollector& collector);
 
 }  // namespace nimble::python

@@ -42,7 +42,7 @@ struct Flight {
   py::dict channels;
 };
 
-Flight fly(const Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock,
+Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock,
            const std::optional<std::string>& log) {
   if (clock != launcher::kClockInprocess) {
     throw py::value_error("clock '" + clock + "': a flight from Python is flown in process (clock='inprocess'); "
@@ -50,10 +50,14 @@ Flight fly(const Scenario& scenario, std::optional<std::uint64_t> seed, const st
   }
   // The plan of this flight: the scenario's, flown in process, with `seed` (as `rig run --clock
   // inprocess --seed N` plans it, so the report is the same).
-  launcher::RunOptions options = scenario.options;
-  options.clock = clock;
-  if (seed) options.seed = *seed;
-  const launcher::RunPlan plan = launcher::load_run_plan(options);
+  if (!scenario.flown || scenario.flown_seed != seed) {
+    launcher::RunOptions options = scenario.options;
+    options.clock = clock;
+    options.seed = seed;
+    scenario.flown = std::make_shared<const launcher::RunPlan>(launcher::load_run_plan(options));
+    scenario.flown_seed = seed;
+  }
+  const launcher::RunPlan& plan = *scenario.flown;
   ChannelCollector collector;
   launcher::InprocessOptions io;
   io.log_file = log.value_or("");

@@ -5,6 +5,9 @@
 
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +24,10 @@ namespace py = pybind11;
 struct Scenario {
   launcher::RunOptions options;
   launcher::RunPlan plan;
+  /// The plan of its last flight from Python (in process, with that flight's seed), reused by the
+  /// next flight with the same seed: planned once, flown many times.
+  std::shared_ptr<const launcher::RunPlan> flown;
+  std::optional<std::uint64_t> flown_seed;  ///< (none: the scenario's own)
 };
 
 /// The overrides of a dict ({'plant.effects.lateral_gust.enabled': True}): each value as YAML
