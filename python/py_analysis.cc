@@ -34,10 +34,6 @@ bool is_path(const py::handle& data) {
   return py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__");
 }
 
-std::string path_of(const py::handle& data) {
-  return py::module_::import("os").attr("fspath")(data).cast<std::string>();
-}
-
 /// A dict of arrays on one time base 't' as flight data, checked as a CSV file is.
 ident::FlightData dict_data(const py::dict& d) {
   if (!d.contains("t")) throw std::invalid_argument("data: the dict has no 't' (time [s]) array");
@@ -145,12 +141,12 @@ py::dict identify(const py::object& data, const std::string& structure, const st
   return out;
 }
 
-py::dict validate(const std::string& model_file, const py::object& data, bool closed_loop,
+py::dict validate(const py::object& model_path, const py::object& data, bool closed_loop,
                   const std::optional<std::string>& gains, const std::optional<std::string>& controller,
                   const std::optional<std::string>& vehicle, const std::string& states,
                   const std::optional<std::string>& sensing, bool salvage, std::optional<double> rate_hz,
                   std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
-  const DerivativeModel model = load_model(model_file);
+  const DerivativeModel model = load_model(path_text(model_path));
   const Vehicle v = vehicle_of(vehicle, model.vehicle_file);
   const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage);
   const ident::ProcessingOptions processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
@@ -194,12 +190,13 @@ py::dict validate(const std::string& model_file, const py::object& data, bool cl
   return out;
 }
 
-py::dict discrepancy(const py::object& data, const std::string& model_file,
+py::dict discrepancy(const py::object& data, const py::object& model_path,
                      const std::optional<std::vector<std::string>>& candidates, std::optional<std::size_t> folds,
                      std::optional<double> partial_f, std::optional<double> delay_max_s,
                      std::optional<double> command_latency_s, const std::optional<std::string>& gains,
                      const std::optional<std::string>& vehicle, const std::optional<std::string>& model_out,
                      const std::string& states, const std::optional<std::string>& sensing, bool salvage) {
+  const std::string model_file = path_text(model_path);
   ident::DiscrepancyOptions o;
   if (candidates) o.candidates = *candidates;
   if (folds) o.folds = *folds;
@@ -241,7 +238,7 @@ py::dict export_mcap(const py::object& log, const py::object& out, bool raw, con
   o.raw = raw;
   o.salvage = salvage;
   o.compression = mcap::compression_from_string(compression);
-  const std::string log_path = path_of(log), out_path = path_of(out);
+  const std::string log_path = path_text(log), out_path = path_text(out);
   mcap::ExportStats stats;
   {
     py::gil_scoped_release free;
@@ -267,7 +264,7 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
   }
   if (!is_path(data)) throw std::invalid_argument("data: a path (rig log or CSV file) or a dict of arrays, not " +
                                                   py::str(py::type::of(data)).cast<std::string>());
-  const std::string file = path_of(data);
+  const std::string file = path_text(data);
   if (!ident::is_lcm_log(file)) {
     if (o.states != ident::StateSource::kAuto && std::filesystem::exists(file)) {
       throw std::invalid_argument("states='" + states + "': " + file + " is not a rig log; a CSV file carries its own states");

@@ -16,6 +16,7 @@
 
 #include "campaign/campaign.h"
 #include "campaign/sweep.h"
+#include "campaign/sweep_report.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_report.h"
 #include "python/py_channels.h"
@@ -26,9 +27,9 @@
 namespace nimble::python {
 namespace {
 
-std::shared_ptr<Scenario> load_scenario(const std::string& path, const py::dict& overrides) {
+std::shared_ptr<Scenario> load_scenario(const py::object& path, const py::dict& overrides) {
   auto s = std::make_shared<Scenario>();
-  s->options.scenario_file = path;
+  s->options.scenario_file = path_text(path);
   s->options.overrides = overrides_of(overrides);
   s->options.progress = false;
   s->options.print_summary = false;
@@ -43,7 +44,7 @@ struct Flight {
 };
 
 Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock,
-           const std::optional<std::string>& log) {
+           const py::object& log) {
   if (clock != launcher::kClockInprocess) {
     throw py::value_error("clock '" + clock + "': a flight from Python is flown in process (clock='inprocess'); "
                           "the lockstep and real-time clocks run separate processes: use `rig run`");
@@ -60,7 +61,7 @@ Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::str
   const launcher::RunPlan& plan = *scenario.flown;
   ChannelCollector collector;
   launcher::InprocessOptions io;
-  io.log_file = log.value_or("");
+  io.log_file = log.is_none() ? "" : path_text(log);
   io.on_message = [&collector](const std::string& channel, const void* data, int size) {
     collector.add(channel, data, size);
   };
@@ -80,8 +81,36 @@ Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::str
 
 /// A sweep from Python: the campaign engine's local backend on a campaign directory made for it
 /// (`dir`, or a temporary one removed afterwards); returns `rig sweep --json`'s content.
+/// The envelopes of rig sweep --report, per parameter set, as arrays.
+py::list envelopes_of(const campaign::SweepResult& result) {
+  py::list sets;
+  auto vec = [](const std::vector<double>& v) {
+    return array_of(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+  };
+  for (const campaign::SetReport& r : campaign::sweep_report_sets(result)) {
+    py::dict set;
+    set["label"] = r.label;
+    set["runs"] = r.runs;
+    set["controlled"] = r.controlled;
+    set["traces"] = r.traces;
+    set["controlled_rate"] = py::make_tuple(r.rate.p, r.rate.lo, r.rate.hi);  // with its 95 % Wilson interval
+    set["t_s"] = vec(r.phi_deg.t_s);
+    using Named = std::pair<const char*, const campaign::Envelope*>;
+    for (const auto& [name, e] : {Named{"p", &r.p}, Named{"v", &r.v}, Named{"phi_deg", &r.phi_deg}}) {
+      py::dict q;
+      q["p5"] = vec(e->p5);
+      q["p50"] = vec(e->p50);
+      q["p95"] = vec(e->p95);
+      q["n"] = e->n;
+      set[name] = q;
+    }
+    sets.append(set);
+  }
+  return sets;
+}
+
 py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dict& vary, int jobs,
-               const std::optional<std::string>& dir) {
+               const std::optional<std::string>& dir, bool envelopes, const std::optional<std::string>& report) {
   campaign::CampaignRequest req;
   campaign::SweepOptions& o = req.sweep;
   o.base = scenario.options;
@@ -101,6 +130,7 @@ py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dic
   }
   o.jobs = std::max(1, jobs);
   o.progress = false;
+  req.report = envelopes || report.has_value();
   const bool keep = dir.has_value();
   req.dir = keep ? *dir
                  : (std::filesystem::temp_directory_path() / ("rig_py_sweep_" + std::to_string(::getpid()))).string();
@@ -124,7 +154,10 @@ py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dic
   result = campaign::merge_campaign(c);
   result.jobs = o.jobs;
   result.wall_time_s = static_cast<double>(transport::monotonic_ns() - start) / 1e9;
-  return json_value(campaign::sweep_json(result));
+  py::dict out = json_value(campaign::sweep_json(result));
+  if (req.report) out["envelopes"] = envelopes_of(result);
+  if (report) campaign::write_sweep_report(result, *report);
+  return out;
 }
 
 }  // namespace
@@ -157,11 +190,13 @@ void add_flights(py::module_& m) {
         "there. The TRUTH is byte for byte that of `rig run --clock inprocess` with the same seed. SIGINT "
         "during the flight ends it with result interrupted.");
   m.def("sweep", &sweep, py::arg("scenario"), py::arg("seeds") = "1-10", py::arg("vary") = py::dict(),
-        py::arg("jobs") = 1, py::arg("dir") = py::none(),
+        py::arg("jobs") = 1, py::arg("dir") = py::none(), py::arg("envelopes") = false, py::arg("report") = py::none(),
         "Flies the scenario over seeds ('1-100') and parameter sets (vary={'key.path': [v1, v2]}) in process, "
         "`jobs` runs at a time, with the campaign engine of `rig sweep` (its local backend), and returns "
-        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there. Raises ConfigError "
-        "for a bad value in any set.");
+        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there. envelopes: also "
+        "'envelopes', per parameter set the 5/50/95 % percentiles of p, v and phi across seeds against time "
+        "(rig sweep --report's figures, as arrays); report: write rig sweep --report's files into that "
+        "directory. Raises ConfigError for a bad value in any set.");
 }
 
 }  // namespace nimble::python

@@ -48,7 +48,7 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
     r.scenario_file = s.options.scenario_file;
     r.overrides = s.options.overrides;
   } else {
-    r.scenario_file = py::module_::import("os").attr("fspath")(scenario).cast<std::string>();
+    r.scenario_file = path_text(scenario);
   }
   for (const Override& o : overrides_of(overrides)) r.overrides.push_back(o);
   r.model_file = model.value_or("");

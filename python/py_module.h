@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "core/config.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
@@ -55,6 +57,9 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
 
 /// A numpy array of an Eigen vector (one copy, no Python work per sample).
 py::object array_of(const Eigen::VectorXd& v);
+
+/// A path given as str or os.PathLike (pathlib.Path) as text. @throws TypeError for anything else.
+std::string path_text(const py::handle& path);
 
 /// A JSON text as Python objects (json.loads).
 py::object json_value(const std::string& text);

@@ -35,6 +35,10 @@ py::object array_of(const Eigen::VectorXd& v) {
   return std::move(a);
 }
 
+std::string path_text(const py::handle& path) {
+  return py::module_::import("os").attr("fspath")(path).cast<std::string>();
+}
+
 py::object json_value(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
 namespace {

@@ -111,3 +111,24 @@ def test_sweep_gives_what_rig_sweep_gives(tmp_path):
     expected = json.loads(out.read_text())
     assert len(got["runs"]) == 6
     assert _without_times(got) == _without_times(expected)
+
+
+def test_sweep_envelopes_are_rig_sweep_reports(tmp_path):
+    scenario = nimble_rig.load_scenario(HOVER, {"duration_s": 1, "plant.effects.lateral_gust.enabled": True})
+    got = nimble_rig.sweep(scenario, seeds="1-5", jobs=2, envelopes=True, report=str(tmp_path / "py"))
+    subprocess.run([RIG, "sweep", HOVER, "--seeds", "1-5", "--set", "duration_s=1", "--set",
+                    "plant.effects.lateral_gust.enabled=true", "--no-progress", "--report", str(tmp_path / "cli")],
+                   check=True, capture_output=True)
+    csv = (tmp_path / "cli" / "envelopes.csv").read_text()
+    assert (tmp_path / "py" / "envelopes.csv").read_text() == csv
+    (env,) = got["envelopes"]
+    assert env["runs"] == 5 and env["traces"] == 5
+    rows = [line.split(",") for line in csv.splitlines()[1:]]
+    for quantity in ("p", "v", "phi_deg"):
+        mine = [r for r in rows if r[2] == (quantity if quantity != "phi_deg" else "phi")]
+        assert len(mine) == len(env["t_s"]) > 10
+        np.testing.assert_array_equal(env["t_s"], [float(r[4]) for r in mine])
+        for column, key in ((6, "p5"), (7, "p50"), (8, "p95")):
+            np.testing.assert_allclose(env[quantity][key], [float(r[column]) for r in mine], rtol=1e-15, atol=0,
+                                       err_msg=quantity + " " + key)
+        assert env[quantity]["n"] == [int(r[5]) for r in mine]
