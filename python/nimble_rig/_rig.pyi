@@ -1,7 +1,16 @@
-"""Type stubs of nimble_rig's compiled module (python/rig_module.cc), for editors."""
-from typing import Any, Dict, List, Optional
+"""Type stubs of nimble_rig's compiled module (python/rig_module.cc and its py_*.cc files), for
+editors. python.module (tests/python/test_stubs.py) checks that every function and class of the
+module is here with the module's own parameter names."""
+import os
+from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
+
+PathLike = Union[str, os.PathLike]
+#: Flight data: a rig log or identification CSV path, or channel name -> numpy array on one time
+#: base ('t' [s] strictly increasing; 'p', 'v', 'phi', 'delta_f', 'delta_t', ... of
+#: ident/flight_data.h).
+Data = Union[PathLike, Dict[str, np.ndarray]]
 
 class ConfigError(ValueError):
     """A bad scenario or configuration value; str(e) is the rig's message."""
@@ -9,6 +18,14 @@ class ConfigError(ValueError):
     line: int
     key: str
     value: str
+    problem: str
+
+class DataError(ValueError):
+    """Bad flight data; str(e) is the rig's message."""
+    source: str
+    line: int
+    row: int
+    column: str
     problem: str
 
 class Scenario:
@@ -24,19 +41,58 @@ class Scenario:
 
 class Flight:
     """One flight: the report and every channel's arrays."""
-    report: Dict[str, Any]
-    channels: Dict[str, Dict[str, np.ndarray]]
+    @property
+    def report(self) -> Dict[str, Any]: ...
+    @property
+    def channels(self) -> Dict[str, Dict[str, np.ndarray]]: ...
 
-def load_scenario(path: str, overrides: Dict[str, Any] = ...) -> Scenario:
+def load_scenario(path: PathLike, overrides: Dict[str, Any] = ...) -> Scenario:
     """Loads a scenario with the same checks as `rig run`; overrides are --set values. Raises ConfigError."""
     ...
 
 def fly(scenario: Scenario, seed: Optional[int] = None, clock: str = "inprocess",
-        log: Optional[str] = None) -> Flight:
+        log: Optional[PathLike] = None) -> Flight:
     """Flies the scenario in process (the GIL released); SIGINT ends it with result interrupted."""
     ...
 
 def sweep(scenario: Scenario, seeds: str = "1-10", vary: Dict[str, List[Any]] = ..., jobs: int = 1,
-          dir: Optional[str] = None) -> Dict[str, Any]:
-    """Flies the scenario over seeds and parameter sets with `rig sweep`'s engine; its --json content."""
+          dir: Optional[str] = None, envelopes: bool = False, report: Optional[str] = None) -> Dict[str, Any]:
+    """Flies the scenario over seeds and parameter sets with `rig sweep`'s engine; its --json content
+    (with envelopes: the percentiles of p, v, phi across seeds against time, as arrays)."""
+    ...
+
+def identify(data: Data, *, structure: str = "lateral3", method: str = "wls", inputs: Optional[List[str]] = None,
+             vehicle: Optional[str] = None, model_out: Optional[str] = None, states: str = "auto",
+             sensing: Optional[str] = None, salvage: bool = False, rate_hz: Optional[float] = None,
+             cutoff_hz: Optional[float] = None, order: Optional[int] = None,
+             interpolation: str = "cubic") -> Dict[str, Any]:
+    """`rig identify --json`'s content, plus 'signals' and 'equations' (regressors, y, theta) as arrays."""
+    ...
+
+def validate(model: PathLike, data: Data, *, closed_loop: bool = False, gains: Optional[str] = None,
+             controller: Optional[str] = None, vehicle: Optional[str] = None, states: str = "auto",
+             sensing: Optional[str] = None, salvage: bool = False, rate_hz: Optional[float] = None,
+             cutoff_hz: Optional[float] = None, order: Optional[int] = None,
+             interpolation: str = "cubic") -> Dict[str, Any]:
+    """`rig validate [--closed-loop] --json`'s content, plus 't', 'measured' and 'predicted' or 'simulated'."""
+    ...
+
+def discrepancy(data: Union[Data, Sequence[Data]], *, model: PathLike, candidates: Optional[List[str]] = None,
+                folds: Optional[int] = None, partial_f: Optional[float] = None,
+                delay_max_s: Optional[float] = None, command_latency_s: Optional[float] = None,
+                gains: Optional[str] = None, vehicle: Optional[str] = None, model_out: Optional[str] = None,
+                states: str = "auto", sensing: Optional[str] = None, salvage: bool = False) -> Dict[str, Any]:
+    """`rig discrepancy --json`'s content: the verdict, the named effects, the gap before and after."""
+    ...
+
+def loop(scenario: Union[PathLike, Scenario], *, model: Optional[str] = None, gains: Optional[str] = None,
+         overrides: Dict[str, Any] = ..., on: Optional[str] = None, clock: Optional[str] = None,
+         break_at: str = "actuator", all_sets: bool = False, box: Optional[str] = None,
+         design: Optional[str] = None, design_name: str = "designed") -> Dict[str, Any]:
+    """`rig loop --json`'s content; each loop with 'frequency_hz', 'ratio', 'tracking' and 'discrete'."""
+    ...
+
+def export_mcap(log: PathLike, out: PathLike, *, raw: bool = False, compression: str = "zstd",
+                salvage: bool = False) -> Dict[str, Any]:
+    """Writes the rig log as MCAP; `rig export --format mcap --json`'s content."""
     ...

@@ -64,3 +64,21 @@ assert 0 < len(half["TRUTH"]["utime"]) < n and half.damage
 print("install: Python read %d TRUTH samples, phi max %.4f rad; a cut log is refused and salvaged"
       % (n, abs(truth["euler_rad"][:, 0]).max()))
 PY
+
+# The compiled module, where the build had pybind11: the installed package flies the installed
+# scenario in process and gives the installed rig's TRUTH.
+if compgen -G "$BUILD/python/nimble_rig/_rig*.so" > /dev/null; then
+  PYTHONPATH="$PREFIX/lib/python3/dist-packages" /usr/bin/python3 - "$PREFIX" "$WORK/hover.lcmlog" <<'PY'
+import sys
+import numpy as np
+import nimble_rig
+from nimble_rig import _rig
+prefix, log = sys.argv[1], sys.argv[2]
+assert _rig.__file__.startswith(prefix), _rig.__file__
+flight = nimble_rig.fly(nimble_rig.load_scenario(prefix + "/share/nimble_rig/rig_configs/hover.yaml", {"duration_s": 1}))
+np.testing.assert_array_equal(flight.channels["TRUTH"]["euler_rad"], nimble_rig.read_log(log)["TRUTH"]["euler_rad"])
+print("install: the installed nimble_rig._rig flew hover with the installed rig's TRUTH")
+PY
+else
+  echo "install: nimble_rig._rig was not built here (no pybind11): its installed copy is not checked"
+fi
