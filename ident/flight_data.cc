@@ -276,6 +276,50 @@ void write_flight_csv(const FlightData& data, const std::string& file) {
   write_file(file, format_flight_csv(data));
 }
 
+namespace {
+
+/// Checks sample k (0-based) of the time stamps `t_s` of `column`: finite, and after the one before.
+void check_time_at(const std::string& source, const std::string& column, const std::vector<double>& t_s,
+                   std::size_t k) {
+  const int sample = static_cast<int>(k) + 1;
+  if (!std::isfinite(t_s[k])) throw DataError(source, -1, sample, column, "sample is not a finite number");
+  if (k > 0 && !(t_s[k] > t_s[k - 1])) {
+    throw DataError(source, -1, sample, column,
+                    "time " + format_number(t_s[k]) + " s does not increase (previous " + format_number(t_s[k - 1]) +
+                        " s)");
+  }
+}
+
+}  // namespace
+
+FlightData flight_data_from_columns(const std::string& source, const std::vector<double>& t_s,
+                                    std::map<std::string, std::vector<double>> columns) {
+  for (std::size_t k = 0; k < t_s.size(); ++k) check_time_at(source, "t", t_s, k);
+  FlightData out;
+  out.source = source;
+  for (auto& [name, values] : columns) {
+    if (!is_known_channel(name)) {
+      std::vector<std::string> known;
+      for (const auto& spec : channel_specs()) {
+        if (spec.name != "t") known.push_back(spec.name);
+      }
+      throw std::invalid_argument(source + ": unknown channel '" + name + "' (known: " + join(known) + ")");
+    }
+    if (values.size() != t_s.size()) {
+      throw std::invalid_argument(source + ": '" + name + "' has " + std::to_string(values.size()) + " samples, 't' has " +
+                                  std::to_string(t_s.size()));
+    }
+    out.channels[name] = Channel{t_s, std::move(values)};
+  }
+  for (const auto& spec : channel_specs()) {
+    if (spec.required && spec.name != "t" && !out.has(spec.name)) {
+      throw DataError(source, -1, -1, spec.name, "missing required channel '" + spec.name + "'");
+    }
+  }
+  validate_flight_data(out);
+  return out;
+}
+
 void validate_flight_data(const FlightData& data) {
   for (const auto& [name, c] : data.channels) {
     if (c.t_s.size() != c.values.size()) {
@@ -284,15 +328,10 @@ void validate_flight_data(const FlightData& data) {
                           " time stamps");
     }
     for (std::size_t k = 0; k < c.values.size(); ++k) {
-      const int sample = static_cast<int>(k) + 1;
-      if (!std::isfinite(c.values[k]) || !std::isfinite(c.t_s[k])) {
-        throw DataError(data.source, -1, sample, name, "sample is not a finite number");
+      if (!std::isfinite(c.values[k])) {
+        throw DataError(data.source, -1, static_cast<int>(k) + 1, name, "sample is not a finite number");
       }
-      if (k > 0 && !(c.t_s[k] > c.t_s[k - 1])) {
-        throw DataError(data.source, -1, sample, name,
-                        "time " + format_number(c.t_s[k]) + " s does not increase (previous " +
-                            format_number(c.t_s[k - 1]) + " s)");
-      }
+      check_time_at(data.source, name, c.t_s, k);
     }
   }
 }

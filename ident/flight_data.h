@@ -106,6 +106,15 @@ std::string format_flight_csv(const FlightData& data);
 /// @throws std::runtime_error if the file cannot be written; as format_flight_csv.
 void write_flight_csv(const FlightData& data, const std::string& file);
 
+/// Flight data from columns on one time base (a user's own arrays, no file): `t_s` [s] finite and
+/// strictly increasing; every column a known channel (not "t") with one value per time stamp;
+/// the required channels present; every value finite. `source` names it in errors.
+/// @throws DataError naming the column ("t" for the time base) and the 1-based sample, or the
+///         missing required channel; std::invalid_argument for an unknown channel (listing the
+///         known ones) or a column whose length is not that of `t_s`.
+FlightData flight_data_from_columns(const std::string& source, const std::vector<double>& t_s,
+                                    std::map<std::string, std::vector<double>> columns);
+
 /// Checks that every channel has as many values as time stamps, finite values
 /// and strictly increasing time.
 /// @throws DataError naming the channel and the 1-based sample index.

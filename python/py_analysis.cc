@@ -6,8 +6,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
-#include <cmath>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -34,44 +34,22 @@ bool is_path(const py::handle& data) {
   return py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__");
 }
 
-/// A dict of arrays on one time base 't' as flight data, checked as a CSV file is.
+/// A dict of arrays on one time base 't' as flight data, checked as ident::flight_data_from_columns
+/// checks a user's columns.
 ident::FlightData dict_data(const py::dict& d) {
   if (!d.contains("t")) throw std::invalid_argument("data: the dict has no 't' (time [s]) array");
   using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
-  const Doubles t = Doubles::ensure(d["t"]);
-  if (!t || t.ndim() != 1) throw std::invalid_argument("data: 't' is not a one-dimensional array of numbers");
-  const std::vector<double> t_s(t.data(), t.data() + t.size());
-  ident::FlightData out;
-  out.source = "data (dict of arrays)";
-  for (std::size_t i = 0; i < t_s.size(); ++i) {
-    if (!std::isfinite(t_s[i])) throw ident::DataError(out.source, -1, static_cast<int>(i + 1), "t", "time is not finite");
-    if (i > 0 && !(t_s[i] > t_s[i - 1])) {
-      throw ident::DataError(out.source, -1, static_cast<int>(i + 1), "t", "time does not increase");
-    }
-  }
-  for (const auto& [key, value] : d) {
-    const std::string name = key.cast<std::string>();
-    if (name == "t") continue;
-    if (!ident::is_known_channel(name)) {
-      std::string known;
-      for (const auto& spec : ident::channel_specs()) known += (known.empty() ? "" : ", ") + spec.name;
-      throw std::invalid_argument("data: unknown channel '" + name + "' (known: " + known + ")");
-    }
+  const auto column = [](const py::handle& value, const std::string& name) {
     const Doubles a = Doubles::ensure(value);
     if (!a || a.ndim() != 1) throw std::invalid_argument("data: '" + name + "' is not a one-dimensional array of numbers");
-    if (a.size() != t.size()) {
-      throw std::invalid_argument("data: '" + name + "' has " + std::to_string(a.size()) + " samples, 't' has " +
-                                  std::to_string(t.size()));
-    }
-    out.channels[name] = ident::Channel{t_s, std::vector<double>(a.data(), a.data() + a.size())};
+    return std::vector<double>(a.data(), a.data() + a.size());
+  };
+  std::map<std::string, std::vector<double>> columns;
+  for (const auto& [key, value] : d) {
+    const std::string name = key.cast<std::string>();
+    if (name != "t") columns[name] = column(value, name);
   }
-  for (const auto& spec : ident::channel_specs()) {
-    if (spec.required && spec.name != "t" && !out.has(spec.name)) {
-      throw ident::DataError(out.source, -1, -1, spec.name, "missing required channel '" + spec.name + "'");
-    }
-  }
-  ident::validate_flight_data(out);
-  return out;
+  return ident::flight_data_from_columns("data (dict of arrays)", column(d["t"], "t"), std::move(columns));
 }
 
 /// The processing options given (None: the commands' defaults).

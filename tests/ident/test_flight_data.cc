@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <map>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -209,4 +211,44 @@ TEST_CASE("validate_flight_data names channel and sample of a log-reader record"
   }
   d.channels["p"] = Channel{{0.0, 0.002}, {0.0}};
   CHECK_THROWS_AS(validate_flight_data(d), DataError);
+}
+
+TEST_CASE("flight_data_from_columns checks a user's columns on one time base and names what is wrong",
+          "[flight_data]") {
+  const std::vector<double> t{0.0, 0.01, 0.02};
+  const std::vector<double> x{0.1, 0.2, 0.3};
+  std::map<std::string, std::vector<double>> columns{{"p", x}, {"v", x}, {"phi", x}, {"delta_f", x}, {"delta_t", x}};
+  const FlightData d = flight_data_from_columns("arrays", t, columns);
+  CHECK(d.source == "arrays");
+  CHECK(d.channels.size() == 5);
+  CHECK(d.at("phi").t_s == t);
+  CHECK(d.at("phi").values == x);
+  // The time base is checked first and named "t", with the sample.
+  try {
+    flight_data_from_columns("arrays", {0.0, 0.01, 0.01}, columns);
+    FAIL("no error");
+  } catch (const DataError& e) {
+    CHECK(e.column() == "t");
+    CHECK(e.row() == 3);
+    CHECK(e.problem().find("does not increase") != std::string::npos);
+  }
+  auto bad = columns;
+  bad["phi"][1] = std::nan("");
+  try {
+    flight_data_from_columns("arrays", t, bad);
+    FAIL("no error");
+  } catch (const DataError& e) {
+    CHECK(e.column() == "phi");
+    CHECK(e.row() == 2);
+  }
+  bad = columns;
+  bad.erase("delta_t");
+  CHECK_THROWS_WITH(flight_data_from_columns("arrays", t, bad), Catch::Contains("missing required channel 'delta_t'"));
+  bad = columns;
+  bad["roll"] = x;
+  CHECK_THROWS_WITH(flight_data_from_columns("arrays", t, bad),
+                    Catch::Contains("unknown channel 'roll'") && !Catch::Contains("known: t,"));
+  bad = columns;
+  bad["v"].pop_back();
+  CHECK_THROWS_WITH(flight_data_from_columns("arrays", t, bad), Catch::Contains("'v' has 2 samples, 't' has 3"));
 }
