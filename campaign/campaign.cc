@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -442,6 +443,19 @@ std::vector<std::size_t> missing_runs(const Campaign& c) {
     if (!done[i]) missing.push_back(i);
   }
   return missing;
+}
+
+TemporaryCampaignDir::TemporaryCampaignDir() {
+  static std::atomic<unsigned> made{0};
+  path_ = (fs::temp_directory_path() /
+           ("rig_sweep_" + std::to_string(::getpid()) + "_" + std::to_string(made.fetch_add(1) + 1)))
+              .string();
+  fs::remove_all(path_);
+}
+
+TemporaryCampaignDir::~TemporaryCampaignDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
 }
 
 void remove_partial_files(const Campaign& c) { c.files().remove_partial(); }

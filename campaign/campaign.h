@@ -79,6 +79,21 @@ struct CampaignRequest {
   bool report = false;             ///< traces for --report
 };
 
+/// The directory of a sweep that keeps none (no --dir): rig_sweep_<pid>_<n> under TMPDIR, made
+/// fresh (what a stale one held removed), and removed when this goes out of scope, whatever
+/// happened meanwhile (an error, an interrupted flight).
+class TemporaryCampaignDir {
+ public:
+  TemporaryCampaignDir();
+  ~TemporaryCampaignDir();
+  TemporaryCampaignDir(const TemporaryCampaignDir&) = delete;
+  TemporaryCampaignDir& operator=(const TemporaryCampaignDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
 /// Loads every set's plan (a bad value in any set stops here, naming it) and writes the
 /// manifest. The directory must not hold a campaign already.
 /// @throws ConfigError (bad scenario values), std::runtime_error (directory).

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -339,8 +340,8 @@ int fly_campaign(campaign::CampaignRequest& req, const launcher::ClusterSettings
   if (chunk > 0) req.cluster.chunk_size = chunk;
   req.report = !out.report_dir.empty();
   const bool keep = slurm || !req.dir.empty();
-  if (!keep) req.dir = (fs::temp_directory_path() / ("rig_sweep_" + std::to_string(::getpid()))).string();
-  if (!keep) fs::remove_all(req.dir);
+  std::optional<campaign::TemporaryCampaignDir> temporary;  // removed on return, whatever happened
+  if (!keep) req.dir = temporary.emplace().path();
   const campaign::Campaign c = campaign::create_campaign(req);
   int code = 0;
   if (slurm) {
@@ -350,10 +351,6 @@ int fly_campaign(campaign::CampaignRequest& req, const launcher::ClusterSettings
     campaign::fly_campaign_runs(c, campaign::missing_runs(c), o.jobs, "",
                                 progress_fn(out.progress, c.run_count(), 0, start_ns));
     code = finish(c, out, keep, o.jobs, static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9);
-  }
-  if (!keep) {
-    std::error_code ec;
-    fs::remove_all(c.dir, ec);
   }
   return code;
 }

@@ -4,11 +4,9 @@
 
 #include <pybind11/stl.h>
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdint>
-#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -131,18 +129,8 @@ py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dic
   o.jobs = std::max(1, jobs);
   o.progress = false;
   req.report = envelopes || report.has_value();
-  const bool keep = dir.has_value();
-  req.dir = keep ? *dir
-                 : (std::filesystem::temp_directory_path() / ("rig_py_sweep_" + std::to_string(::getpid()))).string();
-  if (!keep) std::filesystem::remove_all(req.dir);
-  // A temporary directory goes whatever happens (an error, a Ctrl-C).
-  struct RemoveAfter {
-    std::string dir;
-    ~RemoveAfter() {
-      std::error_code ec;
-      if (!dir.empty()) std::filesystem::remove_all(dir, ec);
-    }
-  } remove_after{keep ? "" : req.dir};
+  std::optional<campaign::TemporaryCampaignDir> temporary;  // removed on return, whatever happened
+  req.dir = dir ? *dir : temporary.emplace().path();
   campaign::Campaign c = campaign::create_campaign(req);
   campaign::SweepResult result;
   const std::int64_t start = transport::monotonic_ns();
