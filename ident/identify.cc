@@ -135,12 +135,7 @@ PreparedData prepare(const FlightData& data, Structure structure, const Trim& tr
   require_channels(data, states, "structure " + to_string(structure));
   PreparedData out;
   out.raw = resample_uniform(data, options.rate_hz, options.interpolation);
-  out.filtered = out.raw;
-  if (options.filter_order > 0) {
-    const auto sos = butterworth_lowpass(options.filter_order, options.cutoff_hz, options.rate_hz);
-    const std::size_t pad = options.padding ? options.padding : default_padding(options.cutoff_hz, options.rate_hz);
-    for (auto& [name, y] : out.filtered.signals) y = filtfilt(sos, y, pad);
-  }
+  out.filtered = lowpass_filtered(out.raw, options);
   UniformData& f = out.filtered;
   for (const auto& s : states) f.signals[s + "_dot"] = differentiate(f.at(s), f.rate_hz);
   if (structure == Structure::kLateral3 || structure == Structure::kLateral4) {

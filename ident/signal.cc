@@ -237,13 +237,16 @@ Eigen::VectorXd differentiate(const Eigen::VectorXd& x, double rate_hz) {
   return d;
 }
 
-UniformData process(const FlightData& data, const ProcessingOptions& options) {
-  UniformData out = resample_uniform(data, options.rate_hz, options.interpolation);
-  if (options.filter_order == 0) return out;
+UniformData lowpass_filtered(UniformData u, const ProcessingOptions& options) {
+  if (options.filter_order == 0) return u;
   const auto sos = butterworth_lowpass(options.filter_order, options.cutoff_hz, options.rate_hz);
   const std::size_t pad = options.padding ? options.padding : default_padding(options.cutoff_hz, options.rate_hz);
-  for (auto& [name, y] : out.signals) y = filtfilt(sos, y, pad);
-  return out;
+  for (auto& [name, y] : u.signals) y = filtfilt(sos, y, pad);
+  return u;
+}
+
+UniformData process(const FlightData& data, const ProcessingOptions& options) {
+  return lowpass_filtered(resample_uniform(data, options.rate_hz, options.interpolation), options);
 }
 
 }  // namespace nimble::ident

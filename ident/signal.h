@@ -137,7 +137,12 @@ struct ProcessingOptions {
   std::size_t padding = 0;    ///< filtfilt edge padding [samples]; 0: default_padding()
 };
 
-/// Resamples, then low-pass filters every signal with filtfilt.
+/// Every signal of `u` low-pass filtered as `options` says (Butterworth of filter_order at cutoff_hz,
+/// zero phase by filtfilt); order 0: `u` as it is.
+/// @throws std::invalid_argument for an order outside 0..40 or a cut-off outside (0, rate/2).
+UniformData lowpass_filtered(UniformData u, const ProcessingOptions& options);
+
+/// Resamples, then low-pass filters every signal with filtfilt (lowpass_filtered).
 /// @throws std::invalid_argument on invalid options (see butterworth_lowpass);
 ///         as resample_uniform.
 UniformData process(const FlightData& data, const ProcessingOptions& options);

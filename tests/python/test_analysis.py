@@ -112,6 +112,8 @@ def test_bad_data_raises_data_error_naming_the_channel_and_sample(train, tmp_pat
     assert caught.value.column == "phi"
     with pytest.raises(ValueError, match="unknown channel 'roll'"):
         nimble_rig.identify({"t": np.arange(3.0), "roll": np.zeros(3)})
+    with pytest.raises(ValueError, match="order must be in"):
+        nimble_rig.identify(train["log"], order=-1)
     with pytest.raises(ValueError, match="not a rig log"):
         nimble_rig.identify(train["csv"], states="truth")
     damaged = tmp_path / "damaged.lcmlog"
