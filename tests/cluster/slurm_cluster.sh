@@ -90,8 +90,10 @@ CredType=cred/munge
 AuthInfo=socket=$dir/munge.sock
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool
-SlurmctldPidFile=$dir/slurmctld.pid
-SlurmdPidFile=$dir/slurmd.pid
+# The daemons' own PID files, apart from the ones this script writes and reads (a daemon rewrites
+# its file as it starts: read then, it can be empty).
+SlurmctldPidFile=$dir/slurmctld.daemon.pid
+SlurmdPidFile=$dir/slurmd.daemon.pid
 SlurmctldLogFile=$dir/slurmctld.log
 SlurmdLogFile=$dir/slurmd.log
 ProctrackType=proctrack/linuxproc
@@ -118,13 +120,15 @@ export SLURM_CONF="$dir/slurm.conf"
 # In sessions of their own (setsid execs them in place: $! is the daemon), so that a test's
 # process group is not theirs.
 setsid slurmctld -D -c -f "$SLURM_CONF" >>"$dir/slurmctld.out" 2>&1 &
-echo $! >"$dir/slurmctld.pid"
+ctld_pid=$!
+echo "$ctld_pid" >"$dir/slurmctld.pid"
 setsid slurmd -D -f "$SLURM_CONF" >>"$dir/slurmd.out" 2>&1 &
-echo $! >"$dir/slurmd.pid"
+slurmd_pid=$!
+echo "$slurmd_pid" >"$dir/slurmd.pid"
 
 for _ in $(seq 150); do
-  kill -0 "$(cat "$dir/slurmctld.pid")" 2>/dev/null || die "slurmctld exited"
-  kill -0 "$(cat "$dir/slurmd.pid")" 2>/dev/null || die "slurmd exited"
+  kill -0 "$ctld_pid" 2>/dev/null || die "slurmctld exited"
+  kill -0 "$slurmd_pid" 2>/dev/null || die "slurmd exited"
   state="$(sinfo -h -N -o '%T' 2>/dev/null | head -n1 || true)"
   if [[ "$state" == idle* ]]; then
     echo "export SLURM_CONF=$SLURM_CONF"
