@@ -8,6 +8,9 @@
 #include <map>
 #include <sstream>
 
+#include "core/input_file.h"
+#include "core/yaml_input.h"
+
 namespace nimble {
 namespace {
 
@@ -138,34 +141,21 @@ void check_unique_keys_at(const YAML::Node& node, const std::string& file, const
 void check_unique_keys(const YAML::Node& root, const std::string& file) { check_unique_keys_at(root, file, ""); }
 
 void check_readable_file(const std::string& file, const std::string& referrer_key) {
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw ConfigError(file, referrer_key, "", "file not found");
-  if (std::filesystem::is_directory(file, ec)) {
-    throw ConfigError(file, referrer_key, "", "is a directory, not a file");
+  try {
+    check_input_file(file, InputKind::kConfig);
+  } catch (const InputFileError& e) {
+    throw ConfigError(file, referrer_key, "", e.problem());
   }
 }
 
 ConfigMap ConfigMap::load_file(const std::string& file) {
-  check_readable_file(file);
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(file, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(file, "", "", "cannot be read");
-  }
+  const YAML::Node root = load_yaml_file(file);
   check_unique_keys(root, file);
   return ConfigMap(root, file, "");
 }
 
 ConfigMap ConfigMap::load_string(const std::string& text, const std::string& origin) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(origin, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
-  }
+  const YAML::Node root = load_yaml_text(text, origin);
   check_unique_keys(root, origin);
   return ConfigMap(root, origin, "");
 }

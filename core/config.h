@@ -47,8 +47,10 @@ class ConfigError : public std::runtime_error {
 /// @throws ConfigError naming `file`, the key path and both lines (or the key's line).
 void check_unique_keys(const YAML::Node& root, const std::string& file);
 
-/// Refuses a path that is a directory or does not exist, as the YAML loaders' callers expect.
-/// @throws ConfigError naming `file` ("file not found", "is a directory, not a file").
+/// Refuses, before it is read, a configuration file that does not exist, is no regular file (a
+/// directory, a FIFO, a device) or is above the bound of a configuration file (core/input_file.h).
+/// @throws ConfigError naming `file` ("file not found", "is a directory, not a file", "is not a
+///         regular file (a FIFO)", the bound).
 void check_readable_file(const std::string& file, const std::string& referrer_key = "");
 
 /// Closed or open interval used to validate numeric config values.
@@ -92,8 +94,10 @@ class ConfigMap {
   /// @throws ConfigError if `node` is not a mapping.
   ConfigMap(YAML::Node node, std::string file, std::string path);
 
-  /// Parses `file` and returns its root mapping.
-  /// @throws ConfigError if the file cannot be read, is not valid YAML or its root is not a mapping.
+  /// Parses `file` (read within its bounds: core/yaml_input.h) and returns its root mapping.
+  /// @throws ConfigError if the file cannot be read, is no regular file, is above the bound of a
+  ///         configuration file, is not valid YAML, expands its aliases past the bounds or its root
+  ///         is not a mapping.
   static ConfigMap load_file(const std::string& file);
 
   /// Parses YAML text (for tests and inline overrides); `origin` names it in errors.

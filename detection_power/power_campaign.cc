@@ -204,7 +204,7 @@ std::string power_manifest(const PowerOptions& o, const launcher::RunPlan& base,
   m["model digest"] = file_digest(o.model_file);
   m["vehicle digest"] = file_digest(check.vehicle.file);
   m["candidates"] = check.options.candidates;
-  m["rig digest"] = file_digest("/proc/self/exe");
+  m["rig digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
   return m.dump();
 }
 

@@ -12,6 +12,7 @@
 
 #include "controller/manoeuvre.h"
 #include "core/output_file.h"
+#include "core/yaml_input.h"
 
 namespace nimble::detection_power {
 namespace {
@@ -70,7 +71,7 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
   const std::filesystem::path path = std::filesystem::path(dir) / (std::filesystem::path(file).stem().string() + "_x" +
                                                                    std::to_string(out.repetitions) + ".yaml");
   YAML::Emitter emitter;
-  emitter << repeated(YAML::LoadFile(file), out.repetitions, pad_s);
+  emitter << repeated(load_yaml_file(file), out.repetitions, pad_s);
   write_file(path, "# " + file + " flown " + std::to_string(out.repetitions) + " times, " + shortest_text(pad_s) +
                         " s of level hover between (rig discrepancy --power)\n" + emitter.c_str() + "\n");
   out.manoeuvre_file = path.string();

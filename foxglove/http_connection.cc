@@ -16,6 +16,7 @@
 #include <string_view>
 #include <utility>
 
+#include "core/input_file.h"
 #include "foxglove/protocol.h"
 #include "foxglove/server_impl.h"
 #include "foxglove/web_path.h"
@@ -31,7 +32,8 @@ constexpr const char* kTextPlain = "text/plain; charset=utf-8";
 /// RESOLVE_NO_SYMLINKS): a component changed into a symlink, or anything leading out of the
 /// root, since the path was resolved is refused. Where the kernel has no openat2 (ENOSYS, or a
 /// seccomp filter's EPERM) it is opened by its path with O_NOFOLLOW. O_NONBLOCK: a FIFO put there
-/// does not hold up the I/O thread (it is not a regular file and is refused).
+/// does not hold up the I/O thread (it is not a regular file and is refused); a file above the
+/// bound of a web root's file (core/input_file.h) is refused too.
 bool read_web_file(const std::filesystem::path& root, const std::filesystem::path& file, std::string* body) {
   const int flags = O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC | O_NOCTTY;
   const int root_fd = ::open(root.c_str(), O_PATH | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
@@ -45,15 +47,12 @@ bool read_web_file(const std::filesystem::path& root, const std::filesystem::pat
   ::close(root_fd);
   if (fd < 0 && (open_errno == ENOSYS || open_errno == EPERM)) fd = ::open(file.c_str(), flags);
   if (fd < 0) return false;
-  struct stat st {};
-  bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
-  body->clear();
-  char buffer[64 * 1024];
-  while (ok) {
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n > 0) body->append(buffer, static_cast<std::size_t>(n));
-    else if (n == 0) break;
-    else if (errno != EINTR) ok = false;
+  bool ok = true;
+  try {
+    *body = read_input_descriptor(fd, file.string(), InputKind::kWebFile);  // a regular file within its bound
+  } catch (const InputFileError&) {
+    body->clear();
+    ok = false;
   }
   ::close(fd);
   return ok;

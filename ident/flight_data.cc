@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/input_file.h"
 #include "core/output_file.h"
 
 namespace nimble::ident {
@@ -230,11 +231,13 @@ FlightData parse_flight_csv(const std::string& text, const std::string& source) 
 }
 
 FlightData read_flight_csv(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw DataError(file, -1, -1, "", "cannot be read (file not found or no permission)");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_flight_csv(text.str(), file);
+  std::string text;
+  try {
+    text = read_input_file(file, InputKind::kRecord);  // a regular file within a record's bound
+  } catch (const InputFileError& e) {
+    throw DataError(file, -1, -1, "", e.problem());
+  }
+  return parse_flight_csv(text, file);
 }
 
 std::string format_flight_csv(const FlightData& data) {

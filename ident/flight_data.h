@@ -93,7 +93,9 @@ class DataError : public std::runtime_error {
 ///         fewer than two data rows.
 FlightData parse_flight_csv(const std::string& text, const std::string& source);
 
-/// Reads a CSV file. @throws DataError as parse_flight_csv, or if the file cannot be read.
+/// Reads a CSV file, refused before it is read if it is no regular file or is above the bound of
+/// a flight record (kMaxRecordSamples rows of kMaxRecordLineBytes, core/input_file.h).
+/// @throws DataError as parse_flight_csv, or naming the file if it cannot be read or is refused.
 FlightData read_flight_csv(const std::string& file);
 
 /// CSV text of `data`: a units comment line, the header (canonical order) and

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "core/input_file.h"
 #include "ident/flight_data.h"
 
 namespace nimble::ident {
@@ -21,7 +22,11 @@ uint64_t big_endian(const unsigned char* p, int n) {
 
 LcmLogReader::LcmLogReader(const std::string& file, bool salvage) : file_(file), salvage_(salvage) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) throw DataError(file, -1, -1, "", "is a directory, not a log");
+  try {
+    check_input_file(file, InputKind::kLcmLog);  // no byte is read of a FIFO, a device or a huge file
+  } catch (const InputFileError& e) {
+    throw DataError(file, -1, -1, "", e.problem());
+  }
   in_.open(file, std::ios::binary);
   if (!in_) throw DataError(file, -1, -1, "", "cannot be opened");
   size_ = static_cast<int64_t>(std::filesystem::file_size(file, ec));

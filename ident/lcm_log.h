@@ -26,7 +26,9 @@ struct LogEventRecord {
 class LcmLogReader {
  public:
   /// Opens `file`. `salvage`: at damage, end the log there (see damage()) instead of throwing.
-  /// @throws DataError if the file cannot be opened or does not start as an LCM log.
+  /// @throws DataError if the file cannot be opened, is no regular file (a FIFO, a device) or is
+  ///         above the bound of an LCM log (kMaxLcmLogBytes, core/input_file.h), checked before any
+  ///         byte is read, or does not start as an LCM log.
   LcmLogReader(const std::string& file, bool salvage = false);
 
   /// Reads the next event into `ev`; false at the end of the log (or, salvaging, at damage).

@@ -9,6 +9,7 @@
 #include "contract/channels.h"
 #include "contract/decode.h"
 #include "contract/messages.h"
+#include "core/input_file.h"
 #include "estimator/smoother.h"
 #include "ident/lcm_log.h"
 
@@ -100,6 +101,11 @@ double estimate_time_s(std::int64_t utime, std::int64_t imu_utime) {
 }
 
 bool is_lcm_log(const std::string& file) {
+  try {
+    check_input_file(file, InputKind::kLcmLog);  // no byte is read of a FIFO, a device or a huge file
+  } catch (const InputFileError& e) {
+    throw DataError(file, -1, -1, "", e.problem());
+  }
   std::ifstream in(file, std::ios::binary);
   unsigned char magic[4] = {0, 0, 0, 0};
   in.read(reinterpret_cast<char*>(magic), 4);

@@ -78,6 +78,8 @@ struct LogReadOptions {
 double estimate_time_s(std::int64_t utime, std::int64_t imu_utime);
 
 /// True if `file` starts with the LCM log event sync word.
+/// @throws DataError naming the file, before any byte is read, if it does not exist, is no regular
+///         file (a FIFO, /dev/zero) or is above the bound of an LCM log (core/input_file.h).
 bool is_lcm_log(const std::string& file);
 
 /// What read_rig_log() does with a log, one message at a time: the rig's messages, in the order

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "controller/manoeuvre.h"
+#include "core/input_file.h"
 #include "plant/effects/actuator_delay.h"
 #include "plant/effects/registry.h"
 #include "plant/plant_model.h"
@@ -87,11 +88,15 @@ DerivativeBox derivative_box(const std::string& file) {
     b.source = file;
     return b;
   }
-  std::ifstream in(file);
-  if (!in) throw std::invalid_argument("derivative box: cannot read " + file);
+  std::string text;
+  try {
+    text = read_input_file(file, InputKind::kConfig);  // a regular file within a configuration file's bound
+  } catch (const InputFileError& e) {
+    throw std::invalid_argument(std::string("derivative box: ") + e.what());
+  }
   nlohmann::json j;
   try {
-    in >> j;
+    j = nlohmann::json::parse(text);
   } catch (const std::exception& e) {
     throw std::invalid_argument("derivative box: " + file + " is not JSON: " + e.what());
   }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/input_file.h"
 #include "core/json_writer.h"
 #include "ident/lcm_log.h"
 #include "lcmjson/lcm_json.h"
@@ -30,10 +31,6 @@ struct ChannelState {
   ChannelExport* stats = nullptr;
 };
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 uint64_t ns_from_us(int64_t us) { return us > 0 ? static_cast<uint64_t>(us) * 1000u : 0u; }
 
@@ -130,7 +127,15 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
 
   std::map<std::string, std::string> rig{{"log", fs::path(log_path).filename().string()}};
   const std::string scenario_file = log_path + ".scenario.yaml";
-  if (fs::is_regular_file(scenario_file, ec)) rig["scenario"] = read_text(scenario_file);
+  if (fs::exists(scenario_file, ec)) {
+    // A scenario beside the log that cannot be read, or is no regular file within a configuration
+    // file's bound, is named in the metadata instead of read.
+    try {
+      rig["scenario"] = read_input_file(scenario_file, InputKind::kConfig);
+    } catch (const InputFileError& e) {
+      rig["scenario"] = std::string("(not read: ") + e.what() + ")";
+    }
+  }
   if (!stats.damage.empty()) rig["damage"] = stats.damage;
   writer.add_metadata("rig", rig);
   writer.close();

@@ -115,7 +115,7 @@ std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
   m["states"] = o.states;
   m["logs"] = absolute(o.work_dir);
   m["controller digest"] = file_digest(o.controller_file);
-  m["rig digest"] = file_digest("/proc/self/exe");
+  m["rig digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
   for (const auto& [name, scenario] : spec.flights) {
     m["scenario " + name] = scenario_digest(load_scenario(scenario));
   }

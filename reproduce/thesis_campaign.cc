@@ -23,6 +23,7 @@
 #include "core/model.h"
 #include "core/output_file.h"
 #include "core/vehicle.h"
+#include "core/yaml_input.h"
 #include "ident/closed_loop.h"
 #include "ident/identify.h"
 #include "ident/plots.h"
@@ -93,7 +94,7 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
     cmd += " > '" + (fs::path(o.work_dir) / fmt::format("{}_seed{}.out", name, seed)).string() + "' 2>&1";
     std::system(cmd.c_str());
     if (!fs::exists(json)) throw std::runtime_error("flight " + name + ": rig run wrote no report (" + cmd + ")");
-    const YAML::Node j = YAML::LoadFile(json);
+    const YAML::Node j = load_yaml_file(json, "", InputKind::kCampaign);
     f.record.result = j["result"].as<std::string>();
     f.record.controlled = j["controlled"].as<bool>();
     f.record.sim_s = j["sim_time_s"].as<double>();

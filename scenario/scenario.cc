@@ -10,6 +10,8 @@
 #include <utility>
 
 #include "contract/channels.h"
+#include "core/input_file.h"
+#include "core/yaml_input.h"
 #include "scenario/fault_section.h"
 
 namespace nimble {
@@ -22,6 +24,9 @@ namespace fs = std::filesystem;
 /// top-level names (a plant option called `model`, say) is a value, not a path.
 /// The key of the run's expected channel rates in a resolved scenario (Scenario::expected_rates_hz).
 const std::string kExpectedRatesKey = "expected_rates_hz";
+
+/// The deepest chain of `base:` files (scenario -> base -> its base ...) a scenario may have.
+constexpr std::size_t kMaxBaseDepth = 16;
 
 const std::set<std::string> kTopLevelPathKeys = {"model", "longitudinal_model", "vehicle", "manoeuvre", "base"};
 
@@ -43,18 +48,18 @@ void absolutise_paths(YAML::Node node, const fs::path& dir, bool top_level) {
   }
 }
 
+/// A scenario or base file, read within the bounds of a configuration file (core/yaml_input.h).
 YAML::Node load_yaml(const std::string& file, const std::string& referrer_key) {
-  check_readable_file(file, referrer_key);
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(file, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(file, referrer_key, "", "cannot be read");
-  }
+  YAML::Node root = load_yaml_file(file, referrer_key);
   check_unique_keys(root, file);
   return root;
+}
+
+/// The file `path` names, for comparing the files of a chain of bases.
+std::string file_identity(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(path, ec);
+  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
 }
 
 /// Merges `over` onto a copy of `under` (mappings recursively; everything else replaced).
@@ -93,26 +98,40 @@ void record_origins(const YAML::Node& node, const std::string& file, const std::
 /// Resolves `base:` files in `node` (at `path` of `file`, which is mounted at `mount` of the
 /// scenario); `at_root`: node is the scenario root. Each base file's keys are recorded in
 /// `origins` where the files above it did not give them.
-YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path, int depth, bool at_root,
-                         const std::string& mount, KeyOrigins* origins) {
-  if (depth > 16) throw ConfigError(file, path, "", "base files nest too deeply (a cycle?)");
+/// `chain`: the files from the scenario down to `file` (file last), to name a cycle whole.
+YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path,
+                         const std::vector<std::string>& chain, bool at_root, const std::string& mount,
+                         KeyOrigins* origins) {
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
     if (out["base"]) {
       const std::string base_key = path.empty() ? "base" : path + ".base";
       if (!out["base"].IsScalar()) throw ConfigError(file, base_key, "", "must be the name of a base file");
       const std::string base_file = out["base"].as<std::string>();
+      std::vector<std::string> below = chain;
+      below.push_back(base_file);
+      const std::string identity = file_identity(base_file);
+      for (std::size_t i = 0; i + 1 < below.size(); ++i) {
+        if (file_identity(below[i]) != identity) continue;
+        std::string cycle;
+        for (std::size_t k = i; k < below.size(); ++k) cycle += (k > i ? " -> " : "") + below[k];
+        throw ConfigError(file, base_key, base_file, "base files form a cycle: " + cycle);
+      }
+      if (below.size() > kMaxBaseDepth + 1) {
+        throw ConfigError(file, base_key, base_file,
+                          "base files nest deeper than " + std::to_string(kMaxBaseDepth) + " levels");
+      }
       YAML::Node base = load_yaml(base_file, base_key);
       const std::string base_mount = join_path(mount, path);
       record_origins(base, base_file, base_mount, false, origins);
       absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);
-      base = resolve_bases(base, base_file, "", depth + 1, at_root, base_mount, origins);
+      base = resolve_bases(base, base_file, "", below, at_root, base_mount, origins);
       out.remove("base");
       out = merge(base, out);
     }
     for (auto it = out.begin(); it != out.end(); ++it) {
       const std::string key = it->first.as<std::string>();
-      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, depth, false, mount, origins);
+      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, chain, false, mount, origins);
     }
     return out;
   }
@@ -134,13 +153,14 @@ YAML::Node load_scenario_tree(const std::string& file, const std::vector<Overrid
   if (!root.IsMap()) throw ConfigError(file, "", "", "a scenario must be a YAML mapping");
   record_origins(root, file, "", false, origins);
   absolutise_paths(root, fs::absolute(file).parent_path(), true);
-  root = resolve_bases(root, file, "", 0, true, "", origins);
+  root = resolve_bases(root, file, "", {file}, true, "", origins);
   for (const auto& o : overrides) {
     YAML::Node value;
     try {
-      value = YAML::Load(o.value);
-    } catch (const YAML::Exception& e) {
-      throw ConfigError("--set", o.key_path, o.value, "value is not valid YAML");
+      value = load_yaml_text(o.value, "--set");
+    } catch (const ConfigError& e) {
+      const bool invalid = e.problem().rfind("not valid YAML", 0) == 0;
+      throw ConfigError("--set", o.key_path, o.value, invalid ? "value is not valid YAML" : e.problem());
     }
     // Walk down the dotted path, creating mappings as needed.
     std::vector<std::string> parts;
@@ -355,12 +375,13 @@ std::vector<std::pair<std::string, std::string>> named_files(const Scenario& sce
   // The vehicle a model file names, relative to the model (core/model.h); none if unreadable.
   const auto model_vehicle = [](const std::string& model) -> std::string {
     try {
-      const YAML::Node root = YAML::LoadFile(model);
+      const YAML::Node root = load_yaml_file(model);
       if (root.IsMap() && root["vehicle"] && root["vehicle"].IsScalar()) {
         const fs::path v(root["vehicle"].Scalar());
         return v.is_relative() ? (fs::path(model).parent_path() / v).string() : v.string();
       }
     } catch (const YAML::Exception&) {
+    } catch (const ConfigError&) {
     }
     return "";
   };
@@ -397,13 +418,13 @@ struct Digest {
 
 }  // namespace
 
-std::string file_digest(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "unreadable";
-  std::ostringstream content;
-  content << in.rdbuf();
+std::string file_digest(const std::string& path, InputKind kind) {
   Digest d;
-  d.feed(content.str());
+  try {
+    d.feed(read_input_file(path, kind));
+  } catch (const InputFileError&) {
+    return "unreadable";
+  }
   return d.hex();
 }
 
@@ -412,11 +433,14 @@ std::string scenario_digest(const Scenario& scenario) {
   const auto feed = [&d](const std::string& bytes) { d.feed(bytes); };
   feed(to_yaml(scenario.root));
   for (const auto& [what, path] : named_files(scenario)) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream content;
-    content << in.rdbuf();
     // A file that cannot be read digests as such (its loader names the problem).
-    feed(what + '\0' + path + '\0' + (in ? content.str() : std::string("(unreadable)")) + '\0');
+    std::string content;
+    try {
+      content = read_input_file(path, InputKind::kConfig);
+    } catch (const InputFileError&) {
+      content = "(unreadable)";
+    }
+    feed(what + '\0' + path + '\0' + content + '\0');
   }
   return d.hex();
 }

@@ -20,6 +20,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
+#include "core/input_file.h"
 #include "contract/faults.h"
 #include "core/param_table.h"
 
@@ -169,8 +170,9 @@ std::vector<std::pair<std::string, std::string>> named_files(const Scenario& sce
 std::string scenario_digest(const Scenario& scenario);
 
 /// Digest of a file's bytes, the same function as scenario_digest()'s (16 hex digits);
-/// "unreadable" for a file that cannot be read.
-std::string file_digest(const std::string& path);
+/// "unreadable" for a file that cannot be read, is no regular file or is above the bound of
+/// `kind` (core/input_file.h; the rig's own program: InputKind::kProgram).
+std::string file_digest(const std::string& path, InputKind kind = InputKind::kConfig);
 
 /// Writes a tree as YAML text.
 std::string to_yaml(const YAML::Node& node);

@@ -8,6 +8,8 @@ decodes it. A damaged log (a wrong sync word, a truncated event) is an error tha
 file, the byte offset and the event number; salvage=True keeps what precedes the damage.
 """
 
+import os
+import stat
 import struct
 
 import numpy as np
@@ -17,6 +19,8 @@ import nimble
 _SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")
 _MAX_CHANNEL = 256
+#: The largest LCM log read (the rig's kMaxLcmLogBytes, core/input_file.h; docs/tool.md).
+MAX_LOG_BYTES = 2_000_000_000
 
 
 class LogError(Exception):
@@ -30,6 +34,43 @@ def _types_by_fingerprint():
         if isinstance(cls, type) and hasattr(cls, "_get_packed_fingerprint"):
             found[cls._get_packed_fingerprint()] = cls
     return found
+
+
+def _file_type(mode):
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a file"
+
+
+def _read_bounded(path):
+    """The bytes of `path`, refused before any is read unless it is a regular file within MAX_LOG_BYTES.
+
+    Opened without blocking (a FIFO does not wait for a writer) and checked on the descriptor;
+    a file that grows past the bound while it is read is refused too.
+    """
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    st = os.fstat(fd)
+    problem = None
+    if not stat.S_ISREG(st.st_mode):
+        problem = "is not a regular file (%s)" % _file_type(st.st_mode)
+    elif st.st_size > MAX_LOG_BYTES:
+        problem = "is %.1f GB, above the %.1f GB bound for an LCM log" % (st.st_size / 1e9, MAX_LOG_BYTES / 1e9)
+    if problem is not None:
+        os.close(fd)
+        raise LogError("%s %s" % (path, problem))
+    with os.fdopen(fd, "rb") as f:
+        parts, total = [], 0
+        while True:
+            part = f.read(max(st.st_size - total, 1 << 20))
+            if not part:
+                return parts[0] if len(parts) == 1 else b"".join(parts)
+            total += len(part)
+            if total > MAX_LOG_BYTES:
+                raise LogError("%s grew past the %.1f GB bound for an LCM log while it was read"
+                               % (path, MAX_LOG_BYTES / 1e9))
+            parts.append(part)
 
 
 def _columns(messages):
@@ -88,11 +129,12 @@ def read_log(path, channels=None, salvage=False):
     """Reads the LCM log at `path`; `channels` (a collection of names) keeps only those.
 
     Raises LogError naming the byte offset and event number of any damage, unless `salvage`,
-    which keeps the events before it and records what was wrong in RigLog.damage.
+    which keeps the events before it and records what was wrong in RigLog.damage; and, before
+    reading a byte, naming the file if it is no regular file (a FIFO, /dev/zero) or is above
+    MAX_LOG_BYTES.
     """
     types = _types_by_fingerprint()
-    with open(path, "rb") as f:
-        data = f.read()
+    data = _read_bounded(os.fspath(path))
     offset, events, damage = 0, 0, None
     messages, stamps, undecoded = {}, {}, {}
     while offset < len(data):
