@@ -173,7 +173,7 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line) {
   return rec;
 }
 
-CandumpWriter::CandumpWriter(const std::string& path) : path_(path), file_(path, 64u << 10) {}
+CandumpWriter::CandumpWriter(const std::string& path) : path_(path), file_(path, 64u << 10, "the candump log") {}
 
 CandumpWriter::~CandumpWriter() = default;
 

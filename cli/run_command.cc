@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cmdline/args.h"
+#include "core/output_lock.h"
 #include "cli/commands.h"
 #include "cli/live_view_setup.h"
 #include "launcher/launcher.h"
@@ -32,23 +33,20 @@ constexpr const char* kRunFooter =
     "beyond summary.max_tracking_rms_deg or max_tracking_error_deg, or a sustained or growing roll\n"
     "oscillation), 130 interrupted.";
 
-/// `--mcap F`: the run's own log exported to F after the run (whatever the verdict: a failed
-/// flight is the one most worth looking at). Its line goes where the summary's text goes (stderr
-/// when `--json -` has stdout). Returns the run's exit code, or cmdline::kExitUsage if the export failed
-/// after a run that succeeded.
-int export_run_log(const std::string& log, const std::string& mcap_file, bool json_on_stdout, int run_code) {
-  if (!std::filesystem::exists(log)) {
-    std::cerr << "rig run: --mcap " << mcap_file << ": the run wrote no log (" << log << ")\n";
-    return run_code != 0 ? run_code : cmdline::kExitUsage;
-  }
+/// `--mcap F`: the run's own log exported to F after the run, before its summary (whatever the
+/// verdict: a failed flight is the one most worth looking at). Its line goes where the summary's
+/// text goes (stderr when `--json -` has stdout). Returns "" or what failed: an export that fails
+/// after an ok run makes it `failed` (exit 3), in the result line and the exit code alike.
+std::string export_run_log(const std::string& log, const std::string& mcap_file, bool json_on_stdout) {
+  if (!std::filesystem::exists(log)) return "--mcap " + mcap_file + ": the run wrote no log (" + log + ")";
   try {
     const mcap::ExportStats stats = mcap::export_log_to_mcap(log, mcap_file, {});
     (json_on_stdout ? std::cerr : std::cout) << "mcap       " << mcap::summary_line(stats) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rig run: --mcap " << mcap_file << ": " << e.what() << "\n";
-    return run_code != 0 ? run_code : cmdline::kExitUsage;
+    return "--mcap " + mcap_file + ": " + e.what();
   }
-  return run_code;
+  return "";
 }
 
 }  // namespace
@@ -116,16 +114,26 @@ int run_run_command(const std::vector<std::string>& args) {
   if (const std::string problem = launcher::writable_problem(mcap_file); !problem.empty()) {
     return cl.fail("--mcap " + mcap_file + ": " + problem);
   }
-  // The export needs the log's name: the default one is decided here, as the launcher would.
-  if (o.log_file.empty()) {
-    try {
-      o.log_file = launcher::log_file_for(launcher::load_run_plan(o), o);
-    } catch (const std::exception&) {
-      return launcher::run_scenario(o);  // reports the scenario's error itself
-    }
+  // One writer per MCAP file: it is written as FILE.part and renamed, so the part is taken now,
+  // before the flight, and held to the end (the export goes on under this lock).
+  const std::string part = mcap::part_file_of(mcap_file);
+  const bool part_was_there = std::filesystem::exists(part);
+  OutputLock mcap_lock;
+  try {
+    mcap_lock = OutputLock::file(part, "the MCAP file");
+  } catch (const OutputError& e) {
+    std::cerr << "rig run: refused: --mcap: " << e.what() << "\n";
+    return launcher::kRunBadInput;
   }
+  const bool json_on_stdout = o.json_file == "-";
+  o.after_log = [&](const std::string& log) { return export_run_log(log, mcap_file, json_on_stdout); };
   const int code = launcher::run_scenario(o);
-  return export_run_log(o.log_file, mcap_file, o.json_file == "-", code);
+  // A part this run made and never wrote (refused before the flight) is not left behind.
+  std::error_code ec;
+  if (!part_was_there && std::filesystem::is_regular_file(part, ec) && std::filesystem::file_size(part, ec) == 0) {
+    std::filesystem::remove(part, ec);
+  }
+  return code;
 }
 
 }  // namespace nimble::cli

@@ -1,5 +1,7 @@
 #include "core/output_file.h"
 
+#include "core/output_lock.h"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -106,12 +108,27 @@ void append_to_file(const std::string& file, std::string_view text) {
   }
 }
 
-OutputFile::OutputFile(const std::string& file, std::size_t buffer_bytes)
+OutputFile::OutputFile(const std::string& file, std::size_t buffer_bytes, const std::string& what)
     : file_(file), capacity_(buffer_bytes > 0 ? buffer_bytes : 1) {
-  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  // Not O_TRUNC: another writer's bytes are cut only once the file is ours.
+  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
   if (fd_ < 0) {
     const int e = errno;
     throw OutputError("cannot open " + file + " for writing: " + reason(e), e, -1);
+  }
+  try {
+    lock_open_output(fd_, file, what);
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    throw;
+  }
+  struct stat st{};
+  if (::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode) && ::ftruncate(fd_, 0) != 0) {
+    const int e = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw OutputError("cannot truncate " + file + " for writing: " + reason(e), e, -1);
   }
   buffer_.reserve(capacity_);
 }

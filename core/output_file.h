@@ -54,9 +54,13 @@ void append_to_file(const std::string& file, std::string_view text);
 /// A file written in pieces, buffered, every write checked.
 class OutputFile {
  public:
-  /// Creates (or truncates) `file` for writing, with a write buffer of `buffer_bytes`.
-  /// @throws OutputError naming the file if it cannot be opened.
-  explicit OutputFile(const std::string& file, std::size_t buffer_bytes = 1u << 20);
+  /// Creates (or truncates) `file` for writing, with a write buffer of `buffer_bytes`. A regular
+  /// file is first taken for this writer (core/output_lock.h): while another writer holds it, it
+  /// is refused untouched (OutputBusy naming `what`, the file and the holder), unless this process
+  /// took it already through an OutputLock.
+  /// @throws OutputError naming the file if it cannot be opened, OutputBusy if it is held.
+  explicit OutputFile(const std::string& file, std::size_t buffer_bytes = 1u << 20,
+                      const std::string& what = "the file");
   /// Closes the file; what is buffered is written, errors are not reported (call close()).
   ~OutputFile();
   OutputFile(const OutputFile&) = delete;

@@ -38,6 +38,7 @@
 #include "contract/rates.h"
 #include "core/json_writer.h"
 #include "core/output_file.h"
+#include "core/output_lock.h"
 #include "launcher/hosts.h"
 #include "launcher/inprocess.h"
 #include "launcher/netns.h"
@@ -167,6 +168,15 @@ int run_scenario(const RunOptions& options) {
       std::cerr << "rig run: refused: " << problem << "\n";
       return kRunBadInput;
     }
+  }
+  // One writer per log: the log is taken before anything of the run is written (the resolved
+  // scenario, the candump log, the processes' output files beside it), and held to the end.
+  OutputLock log_lock;
+  try {
+    log_lock = OutputLock::file(resolved.log_file, "the log");
+  } catch (const OutputError& e) {
+    std::cerr << "rig run: refused: " << e.what() << "\n";
+    return kRunBadInput;
   }
   if (plan.inprocess()) return run_inprocess(plan, resolved);
   return run_processes(plan, resolved);

@@ -66,7 +66,7 @@ std::string log_space_problem(const RunPlan& plan, const std::string& log_file, 
 }
 
 Recorder::Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps)
-    : file_(log_file), monitor_(monitor), log_(log_file, kWriteBuffer), stamps_(stamps) {
+    : file_(log_file), monitor_(monitor), log_(log_file, kWriteBuffer, "the log"), stamps_(stamps) {
   last_flush_ns_ = transport::monotonic_ns();
 }
 

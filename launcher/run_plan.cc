@@ -46,7 +46,12 @@ LaunchConfig launch_config_from(const Scenario& s) {
   c.lcm_url = m.get_string_or("lcm_url", c.lcm_url);
   c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
                                                    : m.get_string_or("network_namespace", "auto");
-  process_run_options_from(m);  // the processes' own keys of the section, checked where they are defined
+  // The processes' own keys of the section, checked where they are defined.
+  const ProcessRunOptions processes = process_run_options_from(m);
+  if (processes.start_wait_s <= c.ready_timeout_s) {
+    m.fail("start_wait_s", "must be above run.ready_timeout_s (" + std::to_string(c.ready_timeout_s) +
+                               " s): a process would give up waiting for the start before the launcher stops waiting for it");
+  }
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
   if (m.has("external_processes")) {

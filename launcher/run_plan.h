@@ -75,6 +75,10 @@ struct RunOptions {
   std::string bin_dir;               ///< where nimble_plant etc. live (default: next to rig)
   bool progress = true;              ///< progress line on stderr
   bool print_summary = true;         ///< the run summary on stdout
+  /// A step after the log is closed and before the summary (rig run --mcap: the export), given
+  /// the log's name: "" when it succeeded, else what failed, which turns the run's result into
+  /// `failed: ...` (exit 3) so that the summary and the exit code agree.
+  std::function<std::string(const std::string& log_file)> after_log;
   bool strict_timing = false;        ///< --strict-timing: a degraded real-time run exits kRunTimingDegraded
   RunTap tap;                        ///< a live follower of the run (rig run --foxglove); empty: none
 };

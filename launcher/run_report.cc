@@ -437,21 +437,34 @@ std::string report_json(const RunReport& r) {
 
 int finish_report(const RunReport& report_in, const RunOptions& options) {
   RunReport report = report_in;
+  // What the run writes after its log (--mcap's export, the --json file) is written before the
+  // summary, so that the result line and the exit code say the same thing: an output that could
+  // not be written turns an ok run into a failed one, named.
+  const auto output_failed = [&report](const std::string& what) {
+    if (report.verdict.exit_code == kRunOk) {
+      report.verdict.exit_code = kRunFailed;
+      report.verdict.text = "failed: " + what;
+    } else {
+      report.verdict.text += "; and " + what;
+    }
+  };
+  if (options.after_log) {
+    if (const std::string problem = options.after_log(report.log_file); !problem.empty()) output_failed(problem);
+  }
   if (options.tap.state) options.tap.state("done", report.verdict.text, report.sim_time_s);
   if (options.tap.figures) report.taps.push_back(options.tap.figures());
   // --json -: stdout carries the JSON alone, the text summary goes to stderr.
   const bool json_stdout = options.json_file == "-";
-  if (options.print_summary) write_report_text(json_stdout ? std::cerr : std::cout, report);
-  if (json_stdout) {
-    std::cout << report_json(report) << "\n";
-  } else if (!options.json_file.empty()) {
+  if (!json_stdout && !options.json_file.empty()) {
     try {
       write_file(options.json_file, report_json(report) + "\n");
     } catch (const OutputError& e) {
       std::cerr << "rig run: --json: " << e.what() << "\n";
-      return report.verdict.exit_code == kRunOk ? kRunFailed : report.verdict.exit_code;
+      output_failed(std::string("--json: ") + e.what());
     }
   }
+  if (options.print_summary) write_report_text(json_stdout ? std::cerr : std::cout, report);
+  if (json_stdout) std::cout << report_json(report) << "\n";
   return report.verdict.exit_code;
 }
 

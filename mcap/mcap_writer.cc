@@ -1,5 +1,6 @@
 #include "mcap/mcap_writer.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
@@ -9,6 +10,8 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+
+#include "core/output_lock.h"
 
 namespace nimble::mcap {
 namespace {
@@ -115,7 +118,7 @@ Compression compression_from_string(const std::string& text) {
 }
 
 McapWriter::McapWriter(const std::string& path, WriterOptions options)
-    : path_(path), part_path_(path + ".part"), options_(std::move(options)) {
+    : path_(path), part_path_(part_file_of(path)), options_(std::move(options)) {
   if (options_.chunk_size == 0) throw std::invalid_argument("MCAP chunk size must be > 0");
   if (options_.compression == Compression::kZstd) {
     if (options_.zstd_level < ZSTD_minCLevel() || options_.zstd_level > ZSTD_maxCLevel()) {
@@ -126,9 +129,19 @@ McapWriter::McapWriter(const std::string& path, WriterOptions options)
     ZSTD_CCtx_setParameter(zstd_->cctx, ZSTD_c_compressionLevel, options_.zstd_level);
     ZSTD_CCtx_setParameter(zstd_->cctx, ZSTD_c_checksumFlag, 0);
   }
-  file_ = std::fopen(part_path_.c_str(), "wb");
-  if (file_ == nullptr) {
-    throw WriteError("cannot create " + part_path_ + ": " + std::strerror(errno));
+  // Not truncated before it is ours: another writer's part stays whole (OutputBusy names it).
+  const int fd = ::open(part_path_.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) throw WriteError("cannot create " + part_path_ + ": " + std::strerror(errno));
+  try {
+    lock_open_output(fd, path_, "the MCAP file");
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  if (::ftruncate(fd, 0) != 0 || (file_ = ::fdopen(fd, "wb")) == nullptr) {
+    const int e = errno;
+    ::close(fd);
+    throw WriteError("cannot create " + part_path_ + ": " + std::strerror(e));
   }
   std::setvbuf(file_, nullptr, _IOFBF, 1u << 20);
   chunk_.reserve(options_.chunk_size + (64u << 10));

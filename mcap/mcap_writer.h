@@ -13,7 +13,9 @@
 /// the minimum and maximum, and each message index is written in log-time order.
 ///
 /// The file is written as `<path>.part` and renamed to `<path>` only by a successful close():
-/// a failed or abandoned export never leaves a partial file under the final name.
+/// a failed or abandoned export never leaves a partial file under the final name. The part is
+/// taken for this writer (core/output_lock.h) before it is truncated: a second writer of the same
+/// file is refused (nimble::OutputBusy, naming the holder) and the first one's part stays whole.
 
 #include <cstddef>
 #include <cstdint>
@@ -26,6 +28,9 @@
 #include <vector>
 
 namespace nimble::mcap {
+
+/// The name the file `path` is written under until it is whole: `<path>.part`.
+inline std::string part_file_of(const std::string& path) { return path + ".part"; }
 
 /// Compression of the chunks.
 enum class Compression { kNone, kZstd };

@@ -337,6 +337,7 @@ const ParamTable<ProcessRunOptions>& process_run_params() {
       {"spin_us", &C::spin_us, Range::closed(0, 1000), "us", "real time: spin this long before each deadline instead of sleeping (0 = sleep)"},
       {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us", "real time: a stream message received later than this after its due time is late"},
       {"channel_filter", &C::channel_filter, Range::closed(0, 1), "-", "1: each process's LCM socket drops, in the kernel, the channels the process does not take; 0: every message wakes every process"},
+      {"start_wait_s", &C::start_wait_s, Range{0.0, 86400.0, true, false}, "s", "a process waits this long for the run's start, then gives up, named (one started by hand for a run that was refused or whose launcher is gone); above run.ready_timeout_s"},
   };
   return table;
 }

@@ -131,6 +131,11 @@ struct ProcessRunOptions {
   /// the kernel, so a message wakes only the processes that take it (docs/timing.md "Timing");
   /// 0: LCM's own behaviour, every message wakes every process of the run.
   int channel_filter = 1;
+  /// How long a process waits for the run's start (RUN_CONTROL start) before it gives up, named
+  /// [s]: a process started by hand for a run that is refused, or whose launcher never starts or
+  /// died, ends instead of waiting for ever. Kept above run.ready_timeout_s (the launcher's own
+  /// wait for every READY), which the launcher checks.
+  double start_wait_s = 120.0;
 };
 
 /// The `lockstep` section.

@@ -33,7 +33,24 @@ run_ctest() {
   if [[ -n "$(ls -A "$dir/test-tmp")" ]]; then
     echo "== files left in $dir/test-tmp by failed tests or by processes the tests killed: $left"
   fi
+  leftover_processes "$dir" || rc=1
   return "$rc"
+}
+
+# After a pass, no process of the rig's own executables (<build dir>/bin) may still run: each test
+# ends what it started (tests/catch_main.cc reaps what a case left). Names, kills and fails on any.
+leftover_processes() {
+  local bin
+  bin="$(cd "$1" && pwd)/bin/"
+  local found=0 pid exe
+  for pid in $(ls /proc | grep -E '^[0-9]+$'); do
+    exe="$(readlink "/proc/$pid/exe" 2>/dev/null)" || continue
+    [[ "$exe" == "$bin"* ]] || continue
+    echo "== a process outlived the tests: pid $pid: $(tr '\0' ' ' < "/proc/$pid/cmdline" 2>/dev/null)"
+    kill -9 "$pid" 2>/dev/null || true
+    found=1
+  done
+  return "$found"
 }
 
 status=0

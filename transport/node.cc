@@ -43,6 +43,7 @@ ProcessNode::ProcessNode(const NodeOptions& options, const RealtimeSettings& rea
       bus_(options.hub != nullptr ? Bus(*options.hub) : Bus(options.lcm_url)),
       late_threshold_ns_(realtime.late_threshold_ns) {
   spin_ns_ = realtime.spin_ns;
+  if (options.hub == nullptr) start_wait_ns_ = realtime.start_wait_ns;
   bus_.enable_channel_filter(realtime.channel_filter);
   bus_.on_malformed([this](const std::string& channel, const std::string& what) {
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, channel,
@@ -156,7 +157,12 @@ bool ProcessNode::wait_for_start() {
               "; every message of the run wakes this process");
   }
   publish_heartbeat(heartbeat_t::STATE_READY);
+  const int64_t give_up_ns = start_wait_ns_ > 0 ? monotonic_ns() + start_wait_ns_ : kNever;
   while (!started_ && !stop_) {
+    if (monotonic_ns() >= give_up_ns) {
+      start_wait_expired_ = true;
+      return false;
+    }
     wait_io(20000000);
     housekeeping();
   }
@@ -185,6 +191,18 @@ int ProcessNode::run() {
   if (inprocess() && !master_) throw std::logic_error("in process only the lockstep master runs; see join_inprocess()");
   subscribe_lockstep_side();
   if (!wait_for_start()) {
+    if (start_wait_expired_) {
+      // Started by hand for a run that was refused, or whose launcher is gone: nobody will start
+      // or stop this process, so it ends, saying why.
+      char waited[32];
+      std::snprintf(waited, sizeof waited, "%.1f s", 1e-9 * static_cast<double>(start_wait_ns_));
+      const std::string why = "no run started within " + std::string(waited) +
+                              " (run.start_wait_s): the run was refused or its launcher is gone; giving up";
+      fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_COMMAND_TIMEOUT, contract::channels::kRunControl, why);
+      std::fprintf(stderr, "%s: %s\n", name_.c_str(), why.c_str());
+      publish_heartbeat(heartbeat_t::STATE_STOPPING);
+      return kExitFault;
+    }
     publish_heartbeat(heartbeat_t::STATE_STOPPING);
     return kExitOk;
   }

@@ -249,6 +249,8 @@ class ProcessNode {
   int64_t last_acked_step_ = -1;
   void run_deferred();
   int64_t spin_ns_ = 0;
+  int64_t start_wait_ns_ = 0;      ///< give up waiting for the start after this long (0: never)
+  bool start_wait_expired_ = false;
   int64_t loop_count_ = 0;
   int64_t overruns_ = 0;
 

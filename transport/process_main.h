@@ -22,6 +22,7 @@ inline RealtimeSettings realtime_settings(const Scenario& scenario) {
   r.spin_ns = static_cast<int64_t>(run.spin_us) * 1000;
   r.late_threshold_ns = run.late_threshold_us * 1000;
   r.channel_filter = run.channel_filter != 0;
+  r.start_wait_ns = static_cast<int64_t>(run.start_wait_s * 1e9);
   return r;
 }
 

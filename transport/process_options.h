@@ -31,6 +31,8 @@ struct RealtimeSettings {
   int64_t spin_ns = 0;            ///< wake this long before each deadline and spin to it
   int64_t late_threshold_ns = 0;  ///< a received stream message later than this is late (0: not counted)
   bool channel_filter = false;    ///< drop unsubscribed channels in the kernel (Bus::enable_channel_filter)
+  /// Over LCM: give up waiting for RUN_CONTROL start after this long (0: wait until stopped).
+  int64_t start_wait_ns = 0;
 };
 
 /// Puts the calling process under SCHED_FIFO at `priority` (1..99) with its memory locked,

@@ -1,6 +1,7 @@
 // Functional tests: the plant, controller, estimator and motion-capture processes' node classes on
 // the in-process memq:// provider, the test playing the other side of the lockstep protocol.
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -572,4 +573,25 @@ TEST_CASE("estimator and mocap nodes: an input time outside any run is refused w
   CHECK(transport::plausible_sim_utime(0));
   CHECK(transport::plausible_sim_utime(transport::kMaxSimUtime));
   CHECK_FALSE(transport::plausible_sim_utime(-1));
+}
+
+TEST_CASE("a process whose run never starts gives up after run.start_wait_s, named, with a FAULT",
+          "[controller][process]") {
+  // A node started by hand for a run that is refused (or whose launcher died) is told by nobody;
+  // it must end by itself instead of waiting for ever.
+  const Scenario scenario = load_scenario(kConfigs + "hover.yaml", {{"run.start_wait_s", "0.3"}});
+  ControllerNode controller(scenario, {"controller", "", "memq://"});
+  transport::Bus& bus = controller.node().bus();
+  std::vector<fault_event_t> faults;
+  bus.subscribe<fault_event_t>(kFault, [&](const fault_event_t& f) { faults.push_back(f); });
+  const auto t0 = std::chrono::steady_clock::now();
+  const int code = controller.run();
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  bus.drain();
+  CHECK(code == transport::kExitFault);
+  CHECK(waited_s >= 0.3);
+  CHECK(waited_s < 5.0);
+  REQUIRE_FALSE(faults.empty());
+  CHECK(faults.back().code == fault_event_t::CODE_COMMAND_TIMEOUT);
+  CHECK(std::string(faults.back().message).find("no run started within 0.3 s (run.start_wait_s)") != std::string::npos);
 }

@@ -226,6 +226,9 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
       {"rig run --json", " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
                              "/h.lcmlog --no-progress --json " + d + "/run.json",
        d + "/run.json"},
+      {"rig run --mcap", " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
+                             "/m.lcmlog --no-progress --mcap " + d + "/run.mcap",
+       d + "/run.mcap"},
       {"rig sweep --csv", " sweep rig_configs/hover.yaml --seeds 1-3 --set duration_s=0.5 --no-progress --csv " + d +
                               "/sweep.csv",
        d + "/sweep.csv"},
@@ -236,6 +239,12 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
     CHECK(r.exit_code != 0);
     CHECK_THAT(r.output, Contains(disk.error_text()));
     CHECK_THAT(r.output, Contains(w.output));
+    // A run whose output after the flight failed says so in its result line, as its exit code does.
+    if (w.what.rfind("rig run", 0) == 0) {
+      CHECK(r.exit_code == 3);
+      CHECK_THAT(r.output, Contains("result     failed: "));
+      CHECK_THAT(r.output, !Contains("result     ok"));
+    }
     // Nothing half written under the output's name, no temporary file left.
     CHECK_FALSE(fs::exists(w.output));
     for (const auto& e : fs::directory_iterator(d)) CHECK(e.path().filename().string().find(".part") == std::string::npos);
