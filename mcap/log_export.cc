@@ -31,6 +31,15 @@ struct ChannelState {
   ChannelExport* stats = nullptr;
 };
 
+/// The scenario recorded beside a log; one that cannot be read, or is no regular file within a
+/// configuration file's bound, is named instead of read.
+std::string scenario_text(const std::string& file) {
+  try {
+    return read_input_file(file, InputKind::kConfig);
+  } catch (const InputFileError& e) {
+    return std::string("(not read: ") + e.what() + ")";
+  }
+}
 
 uint64_t ns_from_us(int64_t us) { return us > 0 ? static_cast<uint64_t>(us) * 1000u : 0u; }
 
@@ -127,15 +136,7 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
 
   std::map<std::string, std::string> rig{{"log", fs::path(log_path).filename().string()}};
   const std::string scenario_file = log_path + ".scenario.yaml";
-  if (fs::exists(scenario_file, ec)) {
-    // A scenario beside the log that cannot be read, or is no regular file within a configuration
-    // file's bound, is named in the metadata instead of read.
-    try {
-      rig["scenario"] = read_input_file(scenario_file, InputKind::kConfig);
-    } catch (const InputFileError& e) {
-      rig["scenario"] = std::string("(not read: ") + e.what() + ")";
-    }
-  }
+  if (fs::exists(scenario_file, ec)) rig["scenario"] = scenario_text(scenario_file);
   if (!stats.damage.empty()) rig["damage"] = stats.damage;
   writer.add_metadata("rig", rig);
   writer.close();
