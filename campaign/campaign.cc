@@ -39,7 +39,9 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-constexpr const char* kManifestFormat = "nimble-rig-campaign/1";
+constexpr const char* kManifestFormat = "nimble-rig-campaign/2";
+/// The manifest's "campaign": which command's campaign a directory holds.
+constexpr const char* kSweepCampaign = "rig sweep";
 constexpr const char* kRunFilePrefix = "run-";
 
 /// Trace rate of a campaign with a report [Hz]: 50 samples per second of p, v and phi (the
@@ -239,6 +241,78 @@ std::vector<Override> overrides_from(const Json& a) {
   return out;
 }
 
+/// The manifest: everything that makes two sweeps different (open_result_dir() adds when, where and
+/// by which process it was made).
+Json manifest_of(const Campaign& c) {
+  Json m;
+  m["campaign"] = kSweepCampaign;
+  m["format"] = kManifestFormat;
+  m["scenario"] = c.scenario;
+  m["scenario_file"] = c.scenario_file;
+  m["working_dir"] = c.working_dir;
+  m["overrides"] = overrides_json(c.overrides);
+  m["vary"] = Json::array();
+  for (const Vary& v : c.vary) m["vary"].push_back({{"key", v.key}, {"values", v.values}});
+  m["sets"] = Json::array();
+  for (std::size_t s = 0; s < c.sets.size(); ++s) {
+    m["sets"].push_back({{"label", c.sets[s].label}, {"config_digest", c.set_digests[s]}});
+  }
+  m["seeds"] = {c.first_seed, c.last_seed};
+  m["runs"] = c.run_count();
+  m["clock"] = c.clock;
+  m["trace_hz"] = c.trace_hz;
+  m["logs_dir"] = c.logs_dir;
+  m["backend"] = c.backend;
+  m["cluster"] = {{"partition", c.cluster.partition},     {"account", c.cluster.account},
+                  {"time_limit", c.cluster.time_limit},   {"cpus_per_task", c.cluster.cpus_per_task},
+                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu}, {"chunk_size", c.cluster.chunk_size},
+                  {"rig", c.cluster.rig}};
+  return m;
+}
+
+/// The campaign the manifest `m` describes, into `c`.
+/// @throws std::exception saying what is missing or wrong.
+void read_manifest_fields(const Json& m, Campaign& c) {
+  if (m.at("format").get<std::string>() != kManifestFormat) {
+    throw std::runtime_error("format '" + m.at("format").get<std::string>() + "', this rig reads " + kManifestFormat);
+  }
+  c.scenario = m.at("scenario").get<std::string>();
+  c.scenario_file = m.at("scenario_file").get<std::string>();
+  c.working_dir = m.at("working_dir").get<std::string>();
+  c.overrides = overrides_from(m.at("overrides"));
+  for (const auto& v : m.at("vary")) {
+    c.vary.push_back(Vary{v.at("key").get<std::string>(), v.at("values").get<std::vector<std::string>>()});
+  }
+  c.sets = parameter_sets(c.vary);
+  const Json& sets = m.at("sets");
+  if (sets.size() != c.sets.size()) throw std::runtime_error("its sets do not match its vary list");
+  for (std::size_t s = 0; s < c.sets.size(); ++s) {
+    if (sets[s].at("label").get<std::string>() != c.sets[s].label) {
+      throw std::runtime_error("set " + std::to_string(s + 1) + "'s label does not match its vary list");
+    }
+    c.set_digests.push_back(sets[s].at("config_digest").get<std::string>());
+  }
+  c.first_seed = m.at("seeds").at(0).get<uint64_t>();
+  c.last_seed = m.at("seeds").at(1).get<uint64_t>();
+  if (c.last_seed < c.first_seed) throw std::runtime_error("its seeds are out of order");
+  if (m.at("runs").get<std::size_t>() != c.run_count()) throw std::runtime_error("its run count does not match");
+  c.clock = m.at("clock").get<std::string>();
+  c.trace_hz = m.at("trace_hz").get<double>();
+  c.logs_dir = m.at("logs_dir").get<std::string>();
+  c.backend = m.at("backend").get<std::string>();
+  if (c.backend != kBackendLocal && c.backend != kBackendSlurm) throw std::runtime_error("unknown backend " + c.backend);
+  const Json& k = m.at("cluster");
+  c.cluster.partition = k.at("partition").get<std::string>();
+  c.cluster.account = k.at("account").get<std::string>();
+  c.cluster.time_limit = k.at("time_limit").get<std::string>();
+  c.cluster.cpus_per_task = k.at("cpus_per_task").get<int>();
+  c.cluster.memory_mb_per_cpu = k.at("memory_mb_per_cpu").get<int>();
+  c.cluster.chunk_size = k.at("chunk_size").get<std::size_t>();
+  c.cluster.rig = k.at("rig").get<std::string>();
+  if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1) throw std::runtime_error("chunk size or CPUs per task below 1");
+  c.created_unix_s = m.at("made").at("unix_s").get<double>();
+}
+
 }  // namespace
 
 std::size_t Campaign::chunk_count() const {
@@ -298,7 +372,6 @@ Campaign create_campaign(const CampaignRequest& request) {
   c.cluster = request.cluster;
   if (c.cluster.chunk_size == 0) c.cluster.chunk_size = default_chunk_size(c.clock);
   if (c.cluster.rig.empty()) c.cluster.rig = self_exe();
-  c.created_unix_s = unix_now();
 
   // Every set's plan is loaded before anything is written: a bad value stops the campaign at once.
   RunPlan first;
@@ -317,42 +390,12 @@ Campaign create_campaign(const CampaignRequest& request) {
     dir = "rig_campaigns/" + c.scenario + "-" + stamp + "-" + std::to_string(::getpid());
   }
   c.dir = fs::absolute(dir).lexically_normal().string();
-  if (fs::exists(c.dir + "/campaign.json")) {
-    throw std::runtime_error(c.dir + " already holds a campaign: `rig sweep --resume " + c.dir +
-                             "` finishes it, `rig sweep collect " + c.dir + "` merges it; or choose another --dir");
-  }
   c.logs_dir = o.logs_dir.empty() ? "" : fs::absolute(o.logs_dir).lexically_normal().string();
-  std::error_code ec;
-  fs::create_directories(c.runs_dir(), ec);
-  if (ec) throw std::runtime_error("cannot create the campaign directory " + c.runs_dir() + ": " + ec.message());
+  // The campaigns' one manifest: the directory is taken, and is new, empty or this campaign's.
+  c.results = open_result_dir(c.dir, manifest_of(c).dump());
+  if (c.results.made()) write_file(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
   if (!c.logs_dir.empty()) fs::create_directories(c.logs_dir);
-
-  Json m;
-  m["format"] = kManifestFormat;
-  m["scenario"] = c.scenario;
-  m["scenario_file"] = c.scenario_file;
-  m["working_dir"] = c.working_dir;
-  m["overrides"] = overrides_json(c.overrides);
-  m["vary"] = Json::array();
-  for (const Vary& v : c.vary) m["vary"].push_back({{"key", v.key}, {"values", v.values}});
-  m["sets"] = Json::array();
-  for (std::size_t s = 0; s < c.sets.size(); ++s) {
-    m["sets"].push_back({{"label", c.sets[s].label}, {"config_digest", c.set_digests[s]}});
-  }
-  m["seeds"] = {c.first_seed, c.last_seed};
-  m["runs"] = c.run_count();
-  m["clock"] = c.clock;
-  m["trace_hz"] = c.trace_hz;
-  m["logs_dir"] = c.logs_dir;
-  m["backend"] = c.backend;
-  m["cluster"] = {{"partition", c.cluster.partition},     {"account", c.cluster.account},
-                  {"time_limit", c.cluster.time_limit},   {"cpus_per_task", c.cluster.cpus_per_task},
-                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu}, {"chunk_size", c.cluster.chunk_size},
-                  {"rig", c.cluster.rig}};
-  m["created_unix_s"] = c.created_unix_s;
-  m["created_on"] = host_name();
-  write_file(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
-  write_file(c.dir + "/campaign.json", m.dump(2) + "\n");
+  c.created_unix_s = load_campaign(c.dir).created_unix_s;
   return c;
 }
 
@@ -362,49 +405,29 @@ Campaign load_campaign(const std::string& dir_in) {
   const std::string file = c.dir + "/campaign.json";
   std::ifstream in(file);
   if (!in) throw std::runtime_error("no campaign in " + c.dir + " (" + file + " cannot be read)");
+  Json m;
   try {
-    const Json m = Json::parse(in);
-    if (m.at("format").get<std::string>() != kManifestFormat) {
-      throw std::runtime_error("format '" + m.at("format").get<std::string>() + "', this rig reads " + kManifestFormat);
-    }
-    c.scenario = m.at("scenario").get<std::string>();
-    c.scenario_file = m.at("scenario_file").get<std::string>();
-    c.working_dir = m.at("working_dir").get<std::string>();
-    c.overrides = overrides_from(m.at("overrides"));
-    for (const auto& v : m.at("vary")) {
-      c.vary.push_back(Vary{v.at("key").get<std::string>(), v.at("values").get<std::vector<std::string>>()});
-    }
-    c.sets = parameter_sets(c.vary);
-    const Json& sets = m.at("sets");
-    if (sets.size() != c.sets.size()) throw std::runtime_error("its sets do not match its vary list");
-    for (std::size_t s = 0; s < c.sets.size(); ++s) {
-      if (sets[s].at("label").get<std::string>() != c.sets[s].label) {
-        throw std::runtime_error("set " + std::to_string(s + 1) + "'s label does not match its vary list");
-      }
-      c.set_digests.push_back(sets[s].at("config_digest").get<std::string>());
-    }
-    c.first_seed = m.at("seeds").at(0).get<uint64_t>();
-    c.last_seed = m.at("seeds").at(1).get<uint64_t>();
-    if (c.last_seed < c.first_seed) throw std::runtime_error("its seeds are out of order");
-    if (m.at("runs").get<std::size_t>() != c.run_count()) throw std::runtime_error("its run count does not match");
-    c.clock = m.at("clock").get<std::string>();
-    c.trace_hz = m.at("trace_hz").get<double>();
-    c.logs_dir = m.at("logs_dir").get<std::string>();
-    c.backend = m.at("backend").get<std::string>();
-    if (c.backend != kBackendLocal && c.backend != kBackendSlurm) throw std::runtime_error("unknown backend " + c.backend);
-    const Json& k = m.at("cluster");
-    c.cluster.partition = k.at("partition").get<std::string>();
-    c.cluster.account = k.at("account").get<std::string>();
-    c.cluster.time_limit = k.at("time_limit").get<std::string>();
-    c.cluster.cpus_per_task = k.at("cpus_per_task").get<int>();
-    c.cluster.memory_mb_per_cpu = k.at("memory_mb_per_cpu").get<int>();
-    c.cluster.chunk_size = k.at("chunk_size").get<std::size_t>();
-    c.cluster.rig = k.at("rig").get<std::string>();
-    if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1) throw std::runtime_error("chunk size or CPUs per task below 1");
-    c.created_unix_s = m.at("created_unix_s").get<double>();
+    m = Json::parse(in);
   } catch (const std::exception& e) {
     throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
   }
+  if (!m.is_object() || m.value(std::string("campaign"), Json()) != kSweepCampaign) {
+    throw std::runtime_error(c.dir + " holds no campaign of rig sweep (" + file + "'s campaign is " +
+                             (m.is_object() && m.contains("campaign") ? m["campaign"].dump() : std::string("missing")) +
+                             ")");
+  }
+  try {
+    read_manifest_fields(m, c);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
+  }
+  c.results = attach_result_dir(c.dir);
+  return c;
+}
+
+Campaign open_campaign(const std::string& dir) {
+  Campaign c = load_campaign(dir);
+  c.results = open_result_dir(c.dir, read_manifest(c.dir));
   return c;
 }
 
@@ -458,14 +481,11 @@ TemporaryCampaignDir::~TemporaryCampaignDir() {
   fs::remove_all(path_, ec);
 }
 
-void remove_partial_files(const Campaign& c) { c.files().remove_partial(); }
-
 void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, int jobs, const std::string& where,
                        const ProgressFn& progress) {
-  const std::vector<bool> done_before = finished_runs(c);
   std::vector<std::size_t> todo;
   for (const std::size_t i : runs) {
-    if (i < c.run_count() && !done_before[i]) todo.push_back(i);
+    if (i < c.run_count()) todo.push_back(i);
   }
   const std::string host = host_name();
   const fs::path work = fs::temp_directory_path() / ("rig_campaign_" + std::to_string(::getpid()));
@@ -477,46 +497,55 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
     return std::array<std::string, 3>{(work / (tag + ".json")).string(), (work / (tag + ".out")).string(),
                                       c.logs_dir.empty() ? std::string() : c.logs_dir + "/" + tag + ".lcmlog"};
   };
-
-  // Each run in a worker of the pool; its result file written here as it finishes.
-  std::map<std::size_t, double> started;
-  std::size_t not_ok = 0;
-  PoolWork pool;
-  pool.work = [&](std::size_t k) {
-    const std::size_t i = todo[k];
-    const auto f = files(i);
-    return fly_run(run_options(c, i, bin_dir), f[0], f[2], f[1]);
-  };
-  pool.died = [](std::size_t, const std::string& how) { return how; };  // the run ended with its worker
-  pool.started = [&](std::size_t k) { started[todo[k]] = unix_now(); };
-  pool.finished = [&](std::size_t k, const std::string& how, std::size_t finished) {
-    const std::size_t i = todo[k];
+  // A run's result: its index, set, seed, report (or why it has none) and where it ran.
+  const auto result = [&](std::size_t i, const std::string& how, double started_s) {
     const auto f = files(i);
     Json r;
     r["index"] = i;
     r["set"] = c.set_of(i) + 1;
     r["seed"] = c.seed_of(i);
-    bool ok = false;
     try {
       std::ifstream in(f[0]);
       if (!in) throw std::runtime_error("no report");
       r["report"] = Json::parse(in);
-      ok = r["report"].at("exit_code").get<int>() == kRunOk;
+      r["report"].at("exit_code").get<int>();
     } catch (const std::exception&) {
       const std::string said = last_line(f[1]);
       r["report"] = nullptr;
       r["failure"] = "failed: the run ended without a report (" + how + ")" + (said.empty() ? "" : ": " + said);
     }
     r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
-                    {"started_unix_s", started[i]}, {"finished_unix_s", unix_now()}};
-    c.files().write(c.run_key(i), r.dump());
+                    {"started_unix_s", started_s}, {"finished_unix_s", unix_now()}};
     std::error_code ec;
     fs::remove(f[0], ec);
     fs::remove(f[1], ec);
+    return r.dump();
+  };
+
+  // Each run in a worker of the pool, which hands back its result; run_kept writes its file as it
+  // finishes (a run whose worker died has one too: a failed run, not a failed campaign).
+  std::map<std::size_t, double> started;
+  std::size_t not_ok = 0;
+  PoolWork pool;
+  pool.forget = true;
+  pool.work = [&](std::size_t k) {
+    const std::size_t i = todo[k];
+    const auto f = files(i);
+    const double start = unix_now();
+    return result(i, fly_run(run_options(c, i, bin_dir), f[0], f[2], f[1]), start);
+  };
+  pool.died = [&](std::size_t k, const std::string& how) { return result(todo[k], how, started[todo[k]]); };
+  pool.started = [&](std::size_t k) { started[todo[k]] = unix_now(); };
+  pool.finished = [&](std::size_t, const std::string& r, std::size_t finished) {
+    const Json j = Json::parse(r, nullptr, false);
+    const bool ok = j.is_object() && j.contains("report") && j["report"].is_object() &&
+                    j["report"].value("exit_code", -1) == kRunOk;
     if (!ok) ++not_ok;
     if (progress) progress(finished, not_ok);
   };
-  run_in_workers(todo.size(), jobs, pool);
+  KeptItems items;
+  for (const std::size_t i : todo) items.keys.push_back(c.run_key(i));
+  run_kept(items, jobs, pool, &c.files());
   std::error_code ec;
   fs::remove_all(work, ec);
 }
@@ -545,8 +574,7 @@ SweepResult merge_campaign(const Campaign& c) {
     run.set = c.set_of(i);
     run.seed = c.seed_of(i);
     try {
-      std::ifstream in(file);
-      const Json r = Json::parse(in);
+      const Json r = Json::parse(c.files().read(c.run_key(i)).value_or(""));
       if (r.at("index").get<std::size_t>() != i || r.at("seed").get<uint64_t>() != run.seed) {
         throw std::runtime_error("it holds another run (index " + r.at("index").dump() + ")");
       }
@@ -559,6 +587,8 @@ SweepResult merge_campaign(const Campaign& c) {
       const Json& m = r.at("machine");
       run.host = m.at("host").get<std::string>();
       last_end = std::max(last_end, m.at("finished_unix_s").get<double>());
+    } catch (const ForeignResult&) {
+      throw;
     } catch (const std::exception& e) {
       throw std::runtime_error("damaged result file " + file + " (" + c.run_name(i) + "): " + e.what() +
                                "; delete it and `rig sweep --resume " + c.dir + "` flies the run again");

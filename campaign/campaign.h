@@ -6,8 +6,10 @@
 ///                          configuration digests, seeds, clock, chunk size, backend, cluster settings
 ///   DIR/scenario.yaml      the resolved scenario of the first parameter set (for the record)
 ///   DIR/runs/run-NNNNNN.json  one file per finished run, written atomically (temporary name,
-///                          fsync, rename): a half-written file is never merged (the campaigns'
-///                          one result model, result_files.h)
+///                          fsync, rename): a half-written file is never merged; its first line
+///                          names the campaign, so another's is refused (the campaigns' one result
+///                          model, result_files.h: the same manifest, lock and result files as
+///                          rig reproduce thesis --dir and rig discrepancy --power --dir)
 ///   DIR/logs/              each run's LCM log, if the campaign keeps them
 ///   DIR/slurm/             the batch script, the job ids submitted and each task's output
 ///   DIR/result.json, DIR/result.csv  the merged result (sweep_json, sweep_csv)
@@ -50,7 +52,10 @@ struct Campaign {
   std::string logs_dir;               ///< keep each run's LCM log here (empty: none kept)
   std::string backend = kBackendLocal;
   launcher::ClusterSettings cluster;
-  double created_unix_s = 0.0;
+  double created_unix_s = 0.0;        ///< when the campaign was made (the manifest's "made")
+  /// Its directory's manifest and result files: held by this process (create_campaign,
+  /// open_campaign) or written beside the one that holds it (load_campaign: an array task).
+  ResultFiles results;
 
   std::size_t seeds_per_set() const { return static_cast<std::size_t>(last_seed - first_seed + 1); }
   std::size_t run_count() const { return sets.size() * seeds_per_set(); }
@@ -65,7 +70,7 @@ struct Campaign {
   /// The run's key among the result files: run-NNNNNN.
   std::string run_key(std::size_t run) const;
   std::string run_file(std::size_t run) const { return files().file(run_key(run)); }
-  ResultFiles files() const { return ResultFiles(dir); }
+  const ResultFiles& files() const { return results; }
   std::string runs_dir() const { return files().runs_dir(); }
   std::string slurm_dir() const { return dir + "/slurm"; }
 };
@@ -94,12 +99,21 @@ class TemporaryCampaignDir {
   std::string path_;
 };
 
-/// Loads every set's plan (a bad value in any set stops here, naming it) and writes the
-/// manifest. The directory must not hold a campaign already.
-/// @throws ConfigError (bad scenario values), std::runtime_error (directory).
+/// Loads every set's plan (a bad value in any set stops here, naming it) and takes the directory
+/// through open_result_dir() (one writer; a new or empty directory gets the manifest and
+/// scenario.yaml, one that holds this same campaign is taken to be finished: files().made() says
+/// which; anything else is refused untouched).
+/// @throws ConfigError (bad scenario values), OutputBusy (another process holds the directory),
+///         std::runtime_error (the directory holds something else), ForeignResult.
 Campaign create_campaign(const CampaignRequest& request);
 
-/// Reads DIR/campaign.json.
+/// Reads DIR/campaign.json and takes DIR as its one writer (rig sweep --resume, collect), its
+/// partial files removed and its result files checked.
+/// @throws as load_campaign(), and OutputBusy, ForeignResult.
+Campaign open_campaign(const std::string& dir);
+
+/// Reads DIR/campaign.json without taking DIR: for an array task, which writes its runs' results
+/// while the `rig sweep` that submitted it holds DIR.
 /// @throws std::runtime_error naming the file and what is wrong with it.
 Campaign load_campaign(const std::string& dir);
 
@@ -115,21 +129,20 @@ void check_campaign_inputs(const Campaign& campaign);
 std::vector<bool> finished_runs(const Campaign& campaign);
 /// The runs without a result file.
 std::vector<std::size_t> missing_runs(const Campaign& campaign);
-/// Removes temporary files that an interrupted writer left in DIR/runs.
-void remove_partial_files(const Campaign& campaign);
 
 /// Progress of a campaign: runs finished (of all), runs not ok among them.
 using ProgressFn = std::function<void(std::size_t finished, std::size_t not_ok)>;
 
-/// Flies `runs` of the campaign that have no result file yet, `jobs` at a time, each in its own
-/// child process (killed if this process dies), and writes each one's result file as it
+/// Flies `runs` of the campaign that have no result file yet, `jobs` at a time, in the campaigns'
+/// worker pool through run_kept() (result_files.h), and writes each one's result file as it
 /// finishes. A run that crashes is a failed run with a result file, not a failed campaign.
 /// `where` names the task in the result files (e.g. "slurm job 12 task 3"; empty: local).
 void fly_campaign_runs(const Campaign& campaign, const std::vector<std::size_t>& runs, int jobs,
                        const std::string& where, const ProgressFn& progress);
 
 /// The merged result from the result files.
-/// @throws std::runtime_error naming the missing runs (the first few) or a damaged file.
+/// @throws std::runtime_error naming the missing runs (the first few) or a damaged file;
+///         ForeignResult naming a file that is not this campaign's.
 SweepResult merge_campaign(const Campaign& campaign);
 
 /// A one-line progress bar on stderr (a line per tenth of the campaign when not a terminal);

@@ -1,6 +1,12 @@
 #include "campaign/result_files.h"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -9,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/output_file.h"
+#include "core/output_lock.h"
 
 namespace nimble::campaign {
 
@@ -16,6 +23,18 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
+
+/// What a manifest records without making the campaign another: when, where, by which process.
+constexpr const char* kMadeKey = "made";
+/// The key compared first: which command's campaign it is.
+constexpr const char* kCampaignKey = "campaign";
+constexpr const char* kReadAgain = "; remove it and the item is done again, or use the directory it came from";
+
+double unix_time_s() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 bool key_ok(const std::string& key) {
   if (key.empty() || key[0] == '.') return false;
@@ -27,13 +46,106 @@ bool key_ok(const std::string& key) {
   return true;
 }
 
-Json read_manifest(const std::string& file) {
-  std::ifstream in(file);
+std::string slurp(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read " + file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw std::runtime_error("cannot read " + file);
+  return text.str();
+}
+
+Json parse_manifest(const std::string& file) {
   try {
-    return Json::parse(in);
+    Json m = Json::parse(slurp(file));
+    if (!m.is_object()) throw std::runtime_error("not a JSON object");
+    return m;
   } catch (const std::exception& e) {
-    throw std::runtime_error(file + " is not a campaign manifest (" + e.what() + ")");
+    throw std::runtime_error(file + " is not a campaign manifest (" + std::string(e.what()) + ")");
+  }
+}
+
+/// The identity of a campaign: the digest (FNV-1a, 16 hex digits) of its manifest's bytes as
+/// written, "made" and all: two campaigns made apart with the same options are two campaigns.
+std::string identity_of(const std::string& manifest_text) {
+  uint64_t h = 1469598103934665603ULL;
+  for (const unsigned char c : manifest_text) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string campaign_line(const std::string& identity, const std::string& key) {
+  return Json{{kCampaignKey, identity}, {"item", key}}.dump();
+}
+
+bool is_partial(const std::string& name) {
+  const std::size_t n = std::strlen(kPartialSuffix);
+  return name.size() > n && name.compare(name.size() - n, std::string::npos, kPartialSuffix) == 0;
+}
+
+/// Why `line` (a result file's first line) is not the campaign line of `key` in campaign
+/// `identity`; empty if it is.
+std::string line_problem(const std::string& line, const std::string& identity, const std::string& key,
+                         const std::string& manifest_file) {
+  Json head;
+  try {
+    head = Json::parse(line);
+  } catch (const std::exception&) {
+  }
+  if (!head.is_object() || !head.contains(kCampaignKey) || !head[kCampaignKey].is_string() || !head.contains("item") ||
+      !head["item"].is_string()) {
+    return "it does not start with a campaign line (a file of the user's, of another program or of an older rig)";
+  }
+  const std::string theirs = head[kCampaignKey].get<std::string>();
+  if (theirs != identity) {
+    return "it is a result of another campaign (campaign " + theirs + "; this one, " + manifest_file + ", is " +
+           identity + ")";
+  }
+  if (head["item"].get<std::string>() != key) {
+    return "it holds item " + head["item"].get<std::string>() + ", not " + key;
+  }
+  return "";
+}
+
+/// The first entries of DIR, for a message ("scenario.yaml, runs/, ...").
+std::string some_entries(const std::string& dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    names.push_back(e.path().filename().string() + (e.is_directory(ec) ? "/" : ""));
+  }
+  std::sort(names.begin(), names.end());
+  std::string text;
+  for (std::size_t k = 0; k < std::min<std::size_t>(names.size(), 4); ++k) text += (k ? ", " : "") + names[k];
+  if (names.size() > 4) text += ", ... (" + std::to_string(names.size()) + " entries)";
+  return text;
+}
+
+/// Refuses unless `have` (DIR's manifest) is `want`, apart from what it records: names the first
+/// key that differs, the campaign key first.
+void check_same_campaign(const std::string& dir, const Json& want, const Json& have) {
+  std::vector<std::string> keys;
+  if (want.contains(kCampaignKey)) keys.push_back(kCampaignKey);
+  for (const auto& [key, value] : want.items()) {
+    if (key != kCampaignKey) keys.push_back(key);
+  }
+  for (const std::string& key : keys) {
+    const auto it = have.find(key);
+    if (it == have.end() || *it != want[key]) {
+      throw std::runtime_error(dir + " holds another campaign: its " + key + " is " +
+                               (it == have.end() ? std::string("missing") : it->dump()) + ", this one's " +
+                               want[key].dump() + " (a new directory, or the same options, finishes it)");
+    }
+  }
+  for (const auto& [key, value] : have.items()) {
+    if (key != kMadeKey && !want.contains(key)) {
+      throw std::runtime_error(dir + " holds another campaign: it has " + key + " = " + value.dump() +
+                               ", which this one does not");
+    }
   }
 }
 
@@ -53,57 +165,89 @@ std::optional<std::string> ResultFiles::read(const std::string& key) const {
   const std::string f = file(key);
   std::error_code ec;
   if (!fs::exists(f, ec)) return std::nullopt;
-  std::ifstream in(f, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in) throw std::runtime_error("cannot read the result file " + f);
-  std::string s = text.str();
+  if (!fs::is_regular_file(f, ec)) throw ForeignResult(f + " is not a result file of a campaign: not a regular file");
+  std::string s;
+  try {
+    s = slurp(f);
+  } catch (const std::exception&) {
+    throw std::runtime_error("cannot read the result file " + f);
+  }
+  const std::size_t eol = s.find('\n');
+  if (eol == std::string::npos) throw std::runtime_error("the result file " + f + " ends within its campaign line");
+  const std::string problem = line_problem(s.substr(0, eol), identity_, key, manifest_file());
+  if (!problem.empty()) throw ForeignResult(f + " is not a result of this campaign: " + problem + kReadAgain);
+  s.erase(0, eol + 1);
   if (!s.empty() && s.back() == '\n') s.pop_back();
   return s;
 }
 
-void ResultFiles::write(const std::string& key, const std::string& text) const { write_file(file(key), text + "\n"); }
+void ResultFiles::write(const std::string& key, const std::string& text) const {
+  write_file(file(key), campaign_line(identity_, key) + "\n" + text + "\n");
+}
 
 void ResultFiles::remove_partial() const {
   std::error_code ec;
-  const std::size_t n = std::strlen(kPartialSuffix);
   for (const auto& e : fs::directory_iterator(runs_dir(), ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.size() > n && name.compare(name.size() - n, std::string::npos, kPartialSuffix) == 0) {
-      fs::remove(e.path(), ec);
-    }
+    if (is_partial(e.path().filename().string())) fs::remove(e.path(), ec);
   }
+}
+
+void ResultFiles::check_all() const {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(runs_dir(), ec)) {
+    const std::string name = e.path().filename().string(), f = e.path().string();
+    if (is_partial(name)) continue;
+    const std::string key = name.size() > 5 ? name.substr(0, name.size() - 5) : "";
+    if (name.compare(key.size(), std::string::npos, ".json") != 0 || !key_ok(key) || !e.is_regular_file(ec)) {
+      throw ForeignResult(f + " is not a result file of a campaign (a result file is runs/<item>.json)" + kReadAgain);
+    }
+    std::ifstream in(f, std::ios::binary);
+    std::string line;
+    if (!std::getline(in, line) || in.eof()) continue;  // cut short: read() names it as damaged
+    const std::string problem = line_problem(line, identity_, key, manifest_file());
+    if (!problem.empty()) throw ForeignResult(f + " is not a result of this campaign: " + problem + kReadAgain);
+  }
+}
+
+std::string read_manifest(const std::string& dir) {
+  const std::string file = ResultFiles(fs::absolute(dir).lexically_normal().string(), "").manifest_file();
+  std::error_code ec;
+  if (!fs::exists(file, ec)) throw std::runtime_error("no campaign in " + fs::path(file).parent_path().string() + " (no " + file + ")");
+  Json m = parse_manifest(file);
+  m.erase(kMadeKey);
+  return m.dump();
+}
+
+ResultFiles attach_result_dir(const std::string& dir) {
+  const std::string abs = fs::absolute(dir).lexically_normal().string();
+  read_manifest(abs);
+  return ResultFiles(abs, identity_of(slurp(ResultFiles(abs, "").manifest_file())));
 }
 
 ResultFiles open_result_dir(const std::string& dir, const std::string& manifest) {
   const Json want = Json::parse(manifest);
-  ResultFiles files(fs::absolute(dir).lexically_normal().string());
-  if (fs::exists(files.manifest_file())) {
-    const Json have = read_manifest(files.manifest_file());
-    for (const auto& [key, value] : want.items()) {
-      const auto it = have.find(key);
-      if (it == have.end() || *it != value) {
-        throw std::runtime_error(files.dir() + " holds another campaign: its " + key + " is " +
-                                 (it == have.end() ? std::string("missing") : it->dump()) + ", this one's " +
-                                 value.dump() + " (a new directory, or the same options, finishes it)");
-      }
-    }
-    for (const auto& [key, value] : have.items()) {
-      if (!want.contains(key)) {
-        throw std::runtime_error(files.dir() + " holds another campaign: it has " + key + " = " + value.dump() +
-                                 ", which this one does not");
-      }
-    }
+  ResultFiles files(fs::absolute(dir).lexically_normal().string(), "");
+  // One writer: nothing is read or written in DIR before it is ours.
+  files.lock_ = std::make_shared<const OutputLock>(OutputLock::directory(files.dir(), "the campaign directory"));
+  std::error_code ec;
+  if (fs::exists(files.manifest_file(), ec)) {
+    check_same_campaign(files.dir(), want, parse_manifest(files.manifest_file()));
   } else {
-    std::error_code ec;
-    if (fs::exists(files.dir(), ec) && !fs::is_empty(files.dir(), ec)) {
-      throw std::runtime_error(files.dir() + " is not empty and holds no campaign (no campaign.json)");
+    if (!fs::is_empty(files.dir(), ec)) {
+      throw std::runtime_error(files.dir() + " is not empty and holds no campaign (no campaign.json; it holds " +
+                               some_entries(files.dir()) +
+                               "): a campaign directory is new, empty or the campaign's own; nothing in it was touched");
     }
+    Json m = want;
+    m[kMadeKey] = {{"unix_s", unix_time_s()}, {"host", host_name()}, {"pid", ::getpid()}};
     fs::create_directories(files.runs_dir());
-    write_file(files.manifest_file(), want.dump(2) + "\n");
+    write_file(files.manifest_file(), m.dump(2) + "\n");
+    files.made_ = true;
   }
+  files.identity_ = identity_of(slurp(files.manifest_file()));
   fs::create_directories(files.runs_dir());
   files.remove_partial();
+  files.check_all();
   return files;
 }
 
@@ -115,13 +259,14 @@ std::vector<std::string> run_kept(const KeptItems& items, int jobs, const PoolWo
     const bool again = files == nullptr || (items.redo && items.redo(i));
     const std::optional<std::string> kept = again ? std::nullopt : files->read(items.keys[i]);
     if (kept) {
-      results[i] = *kept;
+      if (!pool.forget) results[i] = *kept;
     } else {
       todo.push_back(i);
     }
   }
   const std::size_t read = n - todo.size();
   PoolWork mapped;
+  mapped.forget = pool.forget;
   mapped.work = [&](std::size_t k) { return pool.work(todo[k]); };
   mapped.died = [&](std::size_t k, const std::string& how) { return pool.died(todo[k], how); };
   if (pool.started) mapped.started = [&](std::size_t k) { pool.started(todo[k]); };
@@ -130,7 +275,9 @@ std::vector<std::string> run_kept(const KeptItems& items, int jobs, const PoolWo
     if (pool.finished) pool.finished(todo[k], result, read + done);
   };
   const std::vector<std::string> done = run_in_workers(todo.size(), jobs, mapped);
-  for (std::size_t k = 0; k < todo.size(); ++k) results[todo[k]] = done[k];
+  if (!pool.forget) {
+    for (std::size_t k = 0; k < todo.size(); ++k) results[todo[k]] = done[k];
+  }
   return results;
 }
 

@@ -171,6 +171,7 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const PoolWork&
         w.item = kNone;
         ++done;
         if (pool.finished) pool.finished(item, results[item], done);
+        if (pool.forget) std::string().swap(results[item]);
         dispatch(w);
         continue;
       }
@@ -182,6 +183,7 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const PoolWork&
       w.pid = -1;
       ++done;
       if (pool.finished) pool.finished(item, results[item], done);
+      if (pool.forget) std::string().swap(results[item]);
       if (next < n) {
         workers.push_back(spawn(workers, work));
         dispatch(workers.back());

@@ -26,6 +26,9 @@ struct PoolWork {
   /// Item i is done with this result, and `done` items are (optional): a campaign writes each
   /// run's result as it comes, so an interrupted one keeps every finished run.
   std::function<void(std::size_t, const std::string&, std::size_t done)> finished;
+  /// The results go to `finished` only and are returned empty: a campaign of many large results
+  /// (the sweep's runs, each kept in its file) does not hold them all in memory.
+  bool forget = false;
 };
 
 /// How a child process ended, from its wait status: "exit code N" or "killed by signal S" (the

@@ -91,6 +91,9 @@ int finish(const campaign::Campaign& c, const Outputs& o, bool keep, int jobs, d
   campaign::SweepResult result;
   try {
     result = campaign::merge_campaign(c);
+  } catch (const campaign::ForeignResult& e) {
+    std::cerr << "rig sweep: " << e.what() << "\n";
+    return cmdline::kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << "rig sweep: campaign " << c.dir << " incomplete: " << e.what() << "\n"
               << "  `rig sweep --resume " << c.dir << "` flies the missing runs\n";
@@ -224,7 +227,7 @@ int collect_command(const std::vector<std::string>& args) {
   add_outputs(cl, o);
   if (const auto done = cl.parse(args)) return *done;
   try {
-    const campaign::Campaign c = campaign::load_campaign(dir);
+    const campaign::Campaign c = campaign::open_campaign(dir);
     if (c.backend == campaign::kBackendSlurm) {
       for (const auto& line : campaign::jobs_still_running(c)) std::cerr << "rig sweep collect: " << line << "\n";
     }
@@ -297,11 +300,10 @@ void add_campaign_options(cmdline::CommandLine& cl, campaign::CampaignRequest& r
   cli_cluster.memory_mb_per_cpu = -1;
 }
 
-/// `rig sweep --resume DIR`: flies (or submits) the campaign's runs that have no result yet.
-int resume_campaign(const std::string& resume_dir, int retries, bool no_wait, int n_jobs, const Outputs& out,
+/// Flies (or submits) the runs of a campaign this process holds that have no result yet: `rig
+/// sweep --resume DIR`, or `rig sweep ... --dir DIR` again on the same campaign.
+int finish_campaign(const campaign::Campaign& c, int retries, bool no_wait, int n_jobs, const Outputs& out,
                     int64_t start_ns) {
-  const campaign::Campaign c = campaign::load_campaign(resume_dir);
-  campaign::remove_partial_files(c);
   campaign::enter_working_dir(c);
   campaign::check_campaign_inputs(c);
   const std::size_t missing = campaign::missing_runs(c).size();
@@ -343,6 +345,7 @@ int fly_campaign(campaign::CampaignRequest& req, const launcher::ClusterSettings
   std::optional<campaign::TemporaryCampaignDir> temporary;  // removed on return, whatever happened
   if (!keep) req.dir = temporary.emplace().path();
   const campaign::Campaign c = campaign::create_campaign(req);
+  if (!c.files().made()) return finish_campaign(c, retries, no_wait, o.jobs, out, start_ns);  // the same campaign
   int code = 0;
   if (slurm) {
     code = run_on_slurm(c, retries, !no_wait, out.progress, start_ns);
@@ -384,7 +387,7 @@ int run_sweep_command(const std::vector<std::string>& args) {
         return cl.fail("--resume DIR takes the campaign's own scenario and seeds; give neither");
       }
       const int n_jobs = jobs->count() > 0 ? o.jobs : default_jobs();
-      return resume_campaign(resume_dir, retries, no_wait, n_jobs, out, start_ns);
+      return finish_campaign(campaign::open_campaign(resume_dir), retries, no_wait, n_jobs, out, start_ns);
     }
 
     if (o.base.scenario_file.empty()) return cl.fail("a scenario file (or --resume DIR) is required");

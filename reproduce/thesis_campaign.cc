@@ -500,8 +500,10 @@ std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<
 }
 
 /// Every seed flown in the campaigns' worker pool (`jobs` at a time), each with all its flights
-/// (its own and those with a cause), and read back in the seeds' order.
-std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& spec, const std::vector<PlanItem>& items) {
+/// (its own and those with a cause), and read back in the seeds' order; with `files`, a seed kept
+/// there is read, not flown, and each one flown is kept.
+std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& spec,
+                                  const std::vector<PlanItem>& items, const campaign::ResultFiles* files) {
   const std::vector<std::string> labels = plan_labels(items);
   campaign::PoolWork pool;
   pool.work = [&](std::size_t i) {
@@ -520,10 +522,7 @@ std::vector<SeedValues> fly_seeds(const CampaignOptions& o, const CampaignSpec& 
   kept.keep = [](const std::string& line) { return line.rfind("error ", 0) != 0; };
   // Only a flight flown now draws the figures: the first seed flies again for --report.
   kept.redo = [&o](std::size_t i) { return i == 0 && !o.report_dir.empty(); };
-  std::optional<campaign::ResultFiles> files;
-  if (!o.result_dir.empty()) files = campaign::open_result_dir(o.result_dir, seeds_manifest(o, spec));
-  const std::vector<std::string> lines =
-      campaign::run_kept(kept, std::max(1, o.jobs), pool, files ? &*files : nullptr);
+  const std::vector<std::string> lines = campaign::run_kept(kept, std::max(1, o.jobs), pool, files);
   std::vector<SeedValues> seeds;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i].rfind("error ", 0) == 0) {
@@ -540,6 +539,9 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   const auto t0 = Clock::now();
   if (o.seeds.empty()) throw ConfigError(o.campaign_file, "seeds", "", "at least one seed");
   const CampaignSpec spec = load_campaign(o.campaign_file);
+  // The campaign directory, taken before anything is written (one writer) and held to the end.
+  std::optional<campaign::ResultFiles> files;
+  if (!o.result_dir.empty()) files = campaign::open_result_dir(o.result_dir, seeds_manifest(o, spec));
   fs::create_directories(o.work_dir);
   if (!o.report_dir.empty()) {
     ident::require_gnuplot();
@@ -552,7 +554,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   result.seeds = o.seeds;
 
   const std::vector<PlanItem> items = plan_items(spec);
-  const std::vector<SeedValues> seeds = fly_seeds(o, spec, items);
+  const std::vector<SeedValues> seeds = fly_seeds(o, spec, items, files ? &*files : nullptr);
   std::map<std::string, std::vector<CellMap>> values;
   for (const SeedValues& v : seeds) {
     result.flights.insert(result.flights.end(), v.flights.begin(), v.flights.end());

@@ -106,7 +106,10 @@ std::string where_of(const std::string& campaign, std::size_t run) {
   char name[32];
   std::snprintf(name, sizeof name, "/runs/run-%06zu.json", run);
   std::ifstream in(campaign + name);
-  return nlohmann::json::parse(in)["machine"]["where"].get<std::string>();
+  std::string campaign_line, result;  // the first line names the campaign (campaign/result_files.h)
+  std::getline(in, campaign_line);
+  std::getline(in, result);
+  return nlohmann::json::parse(result)["machine"]["where"].get<std::string>();
 }
 
 }  // namespace

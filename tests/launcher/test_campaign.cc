@@ -14,6 +14,7 @@
 #include <string>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include "core/output_file.h"
 #include "campaign/campaign.h"
@@ -92,7 +93,9 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   req.cluster.time_limit = "0-00:10:00";
   req.cluster.cpus_per_task = 2;
   req.report = true;
-  const Campaign made = create_campaign(req);
+  Campaign made = create_campaign(req);
+  CHECK(made.files().made());
+  CHECK(made.files().held());
   CHECK(made.cluster.chunk_size == 100);  // in process: the default
   CHECK(made.trace_hz == 50.0);
   const Campaign c = load_campaign(d + "/c");
@@ -111,7 +114,20 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   CHECK(c.working_dir == fs::current_path().string());
   CHECK_NOTHROW(check_campaign_inputs(c));
   CHECK(missing_runs(c).size() == 6);
-  CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("already holds a campaign"));
+  // One writer: the directory is held while the campaign that took it lives, even by this process.
+  CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("the campaign directory " + d + "/c is being written by") &&
+                                              Catch::Contains("pid " + std::to_string(::getpid())));
+  CHECK(!c.files().held());  // load_campaign takes nothing (an array task beside the holder)
+  made = Campaign{};  // released
+  {
+    const Campaign again = create_campaign(req);  // the same campaign: taken to be finished
+    CHECK(!again.files().made());
+    CHECK(again.created_unix_s == c.created_unix_s);
+    CHECK(again.files().identity() == c.files().identity());
+    req.sweep.last_seed = 6;
+    CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("is being written by"));
+  }
+  CHECK_THROWS_WITH(create_campaign(req), Catch::Contains(d + "/c holds another campaign: its runs is 6, this one's 8"));
 
   const std::string script = slurp(write_batch_script(c));
   CHECK(script.find("#SBATCH --partition=short\n") != std::string::npos);
@@ -203,33 +219,79 @@ TEST_CASE("worker pool: every item once, results by index, each reported as it f
 
 TEST_CASE("result files: a campaign directory takes its own manifest again and refuses another, naming the key",
           "[campaign][result_files]") {
-  const std::string dir = scratch("results") + "/c";
+  const std::string base = scratch("results");
+  const std::string dir = base + "/c";
   const std::string manifest = R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})";
-  const ResultFiles files = open_result_dir(dir, manifest);
-  CHECK(fs::is_directory(files.runs_dir()));
-  CHECK(fs::exists(files.manifest_file()));
-  files.write("seed-3", "three");
-  CHECK(files.has("seed-3"));
-  CHECK(files.read("seed-3") == std::optional<std::string>("three"));
-  CHECK(!files.read("seed-4"));
-  std::ofstream(files.runs_dir() + "/seed-4.json.host.1.partial") << "half";
+  std::string identity;
+  {
+    const ResultFiles files = open_result_dir(dir, manifest);
+    CHECK(files.made());
+    CHECK(fs::is_directory(files.runs_dir()));
+    CHECK(fs::exists(files.manifest_file()));
+    files.write("seed-3", "three");
+    CHECK(files.has("seed-3"));
+    CHECK(files.read("seed-3") == std::optional<std::string>("three"));
+    CHECK(!files.read("seed-4"));
+    std::ofstream(files.runs_dir() + "/seed-4.json.host.1.partial") << "half";
+    // One writer: held while it lives (this process's second open is refused like any other's).
+    CHECK_THROWS_WITH(open_result_dir(dir, manifest), Catch::Contains("the campaign directory " + dir + " is being written by") &&
+                                                          Catch::Contains("pid " + std::to_string(::getpid())));
+    identity = files.identity();
+    // A writer beside the holder (an array task) takes nothing and writes this campaign's results.
+    const ResultFiles beside = attach_result_dir(dir);
+    CHECK(!beside.held());
+    CHECK(beside.identity() == identity);
+  }
 
   // The same manifest (keys in any order): the same campaign, its results there, the partial file gone.
   const ResultFiles again = open_result_dir(dir, R"({"clock": "inprocess", "campaign": "test", "scenario digest": "00aa"})");
+  CHECK(!again.made());
+  CHECK(again.identity() == identity);
   CHECK(again.read("seed-3") == std::optional<std::string>("three"));
-  CHECK(!fs::exists(files.runs_dir() + "/seed-4.json.host.1.partial"));
+  CHECK(!fs::exists(again.runs_dir() + "/seed-4.json.host.1.partial"));
+  CHECK(read_manifest(dir) == nlohmann::json::parse(R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})").dump());
 
-  CHECK_THROWS_WITH(open_result_dir(dir, R"({"campaign": "test", "scenario digest": "00bb", "clock": "inprocess"})"),
-                    Catch::Contains("holds another campaign") && Catch::Contains("scenario digest is \"00aa\"") &&
-                        Catch::Contains("\"00bb\""));
-  CHECK_THROWS_WITH(open_result_dir(dir, R"({"campaign": "test", "scenario digest": "00aa"})"),
-                    Catch::Contains("it has clock"));
-  const std::string other = scratch("results") + "/other";
+  const std::string other = base + "/other";
   fs::create_directories(other);
   std::ofstream(other + "/notes.txt") << "mine";
-  CHECK_THROWS_WITH(open_result_dir(other, manifest), Catch::Contains("not empty and holds no campaign"));
-  CHECK(fs::exists(other + "/notes.txt"));
-  CHECK_THROWS_WITH(files.file("../x"), Catch::Contains("'../x'"));
+  CHECK_THROWS_WITH(open_result_dir(other, manifest), Catch::Contains("not empty and holds no campaign") &&
+                                                          Catch::Contains("it holds notes.txt"));
+  CHECK(slurp(other + "/notes.txt") == "mine");
+  CHECK(!fs::exists(other + "/campaign.json"));
+  CHECK_THROWS_WITH(again.file("../x"), Catch::Contains("'../x'"));
+
+  // A campaign made apart with the same options is another campaign: its result files are refused,
+  // named, when read and when the directory is opened; so are another item's and a stray file.
+  const std::string twin = base + "/twin";
+  {
+    const ResultFiles t = open_result_dir(twin, manifest);
+    CHECK(t.identity() != identity);
+    t.write("seed-5", "five of the twin");
+    t.write("seed-6", "six of the twin");
+  }
+  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00bb", "clock": "inprocess"})"),
+                    Catch::Contains(twin + " holds another campaign") && Catch::Contains("scenario digest is \"00aa\"") &&
+                        Catch::Contains("\"00bb\""));
+  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00aa"})"), Catch::Contains("it has clock"));
+  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "power", "clock": "lockstep"})"),
+                    Catch::Contains("its campaign is \"test\", this one's \"power\""));
+  fs::copy_file(twin + "/runs/seed-5.json", again.runs_dir() + "/seed-5.json");
+  CHECK_THROWS_AS(again.read("seed-5"), ForeignResult);
+  CHECK_THROWS_WITH(again.read("seed-5"), Catch::Contains(again.runs_dir() + "/seed-5.json is not a result of this campaign") &&
+                                             Catch::Contains("another campaign"));
+  CHECK_THROWS_WITH(again.check_all(), Catch::Contains("seed-5.json"));
+  fs::remove(again.runs_dir() + "/seed-5.json");
+  fs::copy_file(again.runs_dir() + "/seed-3.json", again.runs_dir() + "/seed-7.json");
+  CHECK_THROWS_WITH(again.read("seed-7"), Catch::Contains("it holds item seed-3, not seed-7"));
+  fs::remove(again.runs_dir() + "/seed-7.json");
+  std::ofstream(again.runs_dir() + "/seed-8.json") << "{\"index\": 8}\n";
+  CHECK_THROWS_WITH(again.read("seed-8"), Catch::Contains("does not start with a campaign line"));
+  fs::remove(again.runs_dir() + "/seed-8.json");
+  std::ofstream(again.runs_dir() + "/notes.txt") << "mine";
+  CHECK_THROWS_WITH(again.check_all(), Catch::Contains(again.runs_dir() + "/notes.txt is not a result file of a campaign"));
+  fs::remove(again.runs_dir() + "/notes.txt");
+  CHECK_NOTHROW(again.check_all());
+  CHECK(again.read("seed-3") == std::optional<std::string>("three"));
 }
 
 TEST_CASE("result files: started again, a campaign does only the items without a kept result, and keeps what "

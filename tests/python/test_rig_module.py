@@ -2,6 +2,7 @@
 `rig run --clock inprocess`, the arrays read_log gives, scenario errors with file and line, and
 SIGINT ending a flight as it ends `rig run`. Run by ctest (tests/CMakeLists.txt, python.module)
 with PYTHONPATH at the build tree's python/ and RIG_BIN, RIG_SOURCE_DIR set."""
+import fcntl
 import json
 import os
 import signal
@@ -111,6 +112,37 @@ def test_sweep_gives_what_rig_sweep_gives(tmp_path):
     expected = json.loads(out.read_text())
     assert len(got["runs"]) == 6
     assert _without_times(got) == _without_times(expected)
+
+
+def test_sweep_dir_is_the_campaigns_own_and_has_one_writer(tmp_path):
+    """sweep(dir=...) refuses what rig sweep --dir refuses, by the same code: a directory of the
+    user's (left untouched) and one that another writer holds (naming its pid); its own campaign
+    there is finished, not flown again."""
+    scenario = nimble_rig.load_scenario(HOVER, {"duration_s": 0.5})
+    user = tmp_path / "user"
+    user.mkdir()
+    (user / "scenario.yaml").write_text("name: mine\n")
+    with pytest.raises(RuntimeError, match=f"{user} is not empty and holds no campaign .*it holds scenario.yaml"):
+        nimble_rig.sweep(scenario, seeds="1-2", dir=str(user))
+    assert (user / "scenario.yaml").read_text() == "name: mine\n"
+    assert [p.name for p in user.iterdir()] == ["scenario.yaml"]
+
+    held = tmp_path / "held"
+    held.mkdir()
+    fd = os.open(held, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(RuntimeError, match=rf"the campaign directory {held} is being written by another process "
+                                               rf"\(pid {os.getpid()}"):
+            nimble_rig.sweep(scenario, seeds="1-2", dir=str(held))
+        assert list(held.iterdir()) == []
+    finally:
+        os.close(fd)
+    first = nimble_rig.sweep(scenario, seeds="1-2", dir=str(held))
+    kept = {p.name: p.stat().st_mtime_ns for p in (held / "runs").iterdir()}
+    again = nimble_rig.sweep(scenario, seeds="1-2", dir=str(held))
+    assert {p.name: p.stat().st_mtime_ns for p in (held / "runs").iterdir()} == kept
+    assert _without_times(again) == _without_times(first)
 
 
 def test_sweep_envelopes_are_rig_sweep_reports(tmp_path):

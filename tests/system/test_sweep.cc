@@ -198,11 +198,12 @@ TEST_CASE("rig sweep: a campaign refuses to go on when its scenario or a file it
   const SweepOutcome resumed = rig_sweep(d, "--resume " + d + "/c");
   CHECK(resumed.exit_code == 2);
   CHECK(resumed.output.find("changed since the campaign was made (parameter set 1 'model=" + model + "'") != std::string::npos);
-  // Neither is a directory without a campaign, nor a campaign made twice in one directory.
+  // Neither is a directory without a campaign, nor another campaign made in one directory.
   CHECK(rig_sweep(d, "--resume " + d).output.find("no campaign in " + d) != std::string::npos);
   const SweepOutcome again = rig_sweep(d, kScenario + " --seeds 1-2 --dir " + d + "/c");
   CHECK(again.exit_code == 2);
-  CHECK(again.output.find("already holds a campaign") != std::string::npos);
+  CHECK(again.output.find(d + "/c holds another campaign: its overrides is [[\"duration_s\",\"2\"]], this one's []") !=
+        std::string::npos);
   // No Slurm client on this machine: said so, with the package that has it.
   const std::string path = std::getenv("PATH");
   ::setenv("PATH", "/nonexistent", 1);
