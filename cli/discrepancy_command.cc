@@ -89,6 +89,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);
+  log_options.refuse_beyond_bounds = vehicle;  // a log with garbage that decoded is refused as it is read
   std::vector<ident::FlightData> flights;
   for (const auto& data_file : data_files) {
     if (ident::is_lcm_log(data_file)) {

@@ -11,7 +11,11 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "core/data_bounds.h"
 #include "core/model.h"
+#include "core/vehicle.h"
+#include "ident/data_check.h"
+#include "ident/identify.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
 #include "core/json_writer.h"
@@ -29,6 +33,7 @@ int export_mcap(const std::string& log, const std::string& out, const mcap::Expo
                 const std::string& json) {
   const mcap::ExportStats stats = mcap::export_log_to_mcap(log, out, options);
   warn_damage("rig export", log, stats.damage);
+  if (stats.beyond) warn_beyond_bounds("rig export", log, *stats.beyond);
   (json == "-" ? std::cerr : std::cout) << "rig export: " << mcap::summary_line(stats) << "\n";
   if (!json.empty()) cmdline::write_json(json, mcap::export_json(stats));
   return 0;
@@ -51,7 +56,9 @@ int run_export_command(const std::vector<std::string>& args) {
                  "channel per LCM channel, JSON messages with their JSON Schema, log time = rig time.\n"
                  "A damaged log is an error naming the byte offset and the event; a message that is not one of\n"
                  "its channel's type is left out and named, by channel and count (CSV: those of the channels it\n"
-                 "does not read; a damaged message on a channel it reads is an error naming the event).");
+                 "does not read; a damaged message on a channel it reads is an error naming the event). A message\n"
+                 "with a value beyond the vehicle's physical bounds (its data_bounds) is left out and named by\n"
+                 "channel, field, time and count (--strict: the export is refused).");
   cl->add_option("log", log, "the rig log (.lcmlog)")->required();
   cl->add_option("--format", format, "csv or mcap (default: mcap when --out ends in .mcap, else csv)")
       ->check(CLI::IsMember({"csv", "mcap"}))
@@ -74,10 +81,17 @@ int run_export_command(const std::vector<std::string>& args) {
                    ->type_name("C");
   auto* raw_flag = cl->add_flag("--raw", raw, "MCAP: also each channel's LCM bytes as <CHANNEL>/lcm");
   add_salvage(cl, log_options);
+  std::string vehicle_file;
+  bool strict = false;
+  add_vehicle(cl, vehicle_file, ident::default_vehicle_file() + ": its data_bounds");
+  cl->add_flag("--strict", strict,
+               "refuse the log (exit 2) if a message has a value beyond the vehicle's physical bounds, instead of "
+               "leaving it out with a warning");
   cl.add_json(json,
               "what was exported (CSV: samples, rate, columns, state source; MCAP: messages per channel; both: "
               "undecodable messages by channel, damage)");
   if (const auto done = cl.parse(args)) return *done;
+  const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? ident::default_vehicle_file() : vehicle_file);
   if (format.empty()) {
     const bool mcap_name = out_file.size() >= 5 && out_file.compare(out_file.size() - 5, 5, ".mcap") == 0;
     format = csv.empty() && mcap_name ? "mcap" : "csv";
@@ -92,6 +106,8 @@ int run_export_command(const std::vector<std::string>& args) {
     options.compression = mcap::compression_from_string(compression);
     options.raw = raw;
     options.salvage = log_options.salvage;
+    options.vehicle = vehicle;
+    options.strict = strict;
     return export_mcap(log, out_file, options, json);
   }
   for (const CLI::Option* o : {comp, raw_flag}) {
@@ -103,9 +119,13 @@ int run_export_command(const std::vector<std::string>& args) {
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);
   if (const auto failed = apply_states(cl, log_options, sensing_file, {log})) return *failed;
+  BoundsTally beyond(vehicle);
+  log_options.beyond_bounds = &beyond;  // messages beyond the bounds are left out, never resampled
   const ident::RigLogData data = ident::read_rig_log(log, log_options.states, log_options);
+  if (strict && !beyond.empty()) throw ident::RefusedData(log, beyond);
   warn_damage("rig export", log, data.damage);
   warn_undecodable("rig export", log, undecodable);
+  warn_beyond_bounds("rig export", log, beyond);
   const ident::UniformData grid = ident::resample_uniform(data.measured, rate_hz, interpolation);
   ident::FlightData out;
   out.source = log;
@@ -125,6 +145,7 @@ int run_export_command(const std::vector<std::string>& args) {
     w.key("state_source").value(data.state_source).key("damage").value(data.damage);
     w.key("undecodable").value(static_cast<long long>(undecodable.total()));
     mcap::undecodable_json(w, undecodable.by_channel());
+    beyond.json(w);
     w.key("columns").begin_array();
     for (const auto& [name, channel] : out.channels) w.value(name);
     w.end_array();

@@ -93,6 +93,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   std::string damage;
   mcap::UndecodableCount undecodable;
   count_undecodable(log_options, undecodable);
+  log_options.refuse_beyond_bounds = vehicle;  // a log with garbage that decoded is refused as it is read
   const ident::FlightData data = ident::read_flight_data(csv, log_options, &damage);
   warn_damage("rig identify", csv, damage);
   warn_undecodable("rig identify", csv, undecodable);

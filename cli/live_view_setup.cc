@@ -2,6 +2,8 @@
 
 #include <iostream>
 
+#include "ident/identify.h"
+
 namespace nimble::cli {
 namespace {
 /// The nice value of the live view's threads.
@@ -33,13 +35,15 @@ launcher::TapFigures LiveViewSession::figures() const {
               {"dropped", s.dropped + s.server.dropped},
               {"refused", s.server.refused + s.server.handshakes_refused},
               {"protocol_errors", s.server.protocol_errors},
-              {"undecodable", s.undecodable}};
+              {"undecodable", s.undecodable},
+              {"beyond_bounds", s.beyond_bounds}};
   f.note = server->url();
+  if (!s.beyond_bounds_text.empty()) f.note += "; left out: " + s.beyond_bounds_text;
   return f;
 }
 
 std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, const std::string& host_port,
-                                                const std::string& web_root) {
+                                                const std::string& web_root, const std::string& vehicle_file) {
   foxglove::ServerOptions o;
   foxglove::parse_host_port(host_port, "127.0.0.1", &o.host, &o.port);
   o.name = "nimble_rig " + command;
@@ -50,6 +54,7 @@ std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, cons
   session->server = std::make_unique<foxglove::FoxgloveServer>(o);
   foxglove::LiveViewOptions vo;
   vo.thread_nice = kViewerNice;
+  vo.vehicle = load_vehicle(vehicle_file.empty() ? ident::default_vehicle_file() : vehicle_file);
   session->view = std::make_unique<foxglove::LiveView>(*session->server, vo);
   std::cerr << "rig " << command << ": live view on " << session->server->url()
             << " (Foxglove or Lichtblick: Open connection -> Foxglove WebSocket)\n";

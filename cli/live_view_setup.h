@@ -30,10 +30,11 @@ struct LiveViewSession {
 
 /// Binds the server of `host_port` ("[HOST:]PORT", host 127.0.0.1 by default; port 0: a free
 /// one) and advertises the rig's channels; serves `web_root` too if not empty. Starts no thread.
-/// Prints where it listens on stderr, prefixed by `command`.
+/// Prints where it listens on stderr, prefixed by `command`. The view leaves out the messages
+/// beyond the physical bounds of `vehicle_file` (default: ident::default_vehicle_file()).
 /// @throws std::invalid_argument / std::runtime_error naming what is wrong.
 std::unique_ptr<LiveViewSession> open_live_view(const std::string& command, const std::string& host_port,
-                                                const std::string& web_root = "");
+                                                const std::string& web_root = "", const std::string& vehicle_file = "");
 
 /// Prints a one-line warning on stderr, prefixed by `command`, if `server` listens on an address
 /// that is not a loopback one (0.0.0.0, ::, a network interface's): nothing is authenticated, so

@@ -114,6 +114,11 @@ void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count) 
   o.other_event = [&count](const ident::LogEventRecord& e) { count.add(e); };
 }
 
+/// Says on stderr which messages beyond the vehicle's physical bounds a read left out.
+void warn_beyond_bounds(const char* command, const std::string& file, const BoundsTally& beyond) {
+  if (!beyond.empty()) std::cerr << command << ": warning: " << file << ": left out: " << beyond.text() << "\n";
+}
+
 /// Says on stderr which undecodable messages a read left out, by channel and count.
 void warn_undecodable(const char* command, const std::string& file, const mcap::UndecodableCount& count) {
   const std::string text = mcap::undecodable_text(count.by_channel());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cmdline/args.h"
+#include "core/data_bounds.h"
 #include "core/json_writer.h"
 #include "ident/identify.h"
 #include "ident/rig_log.h"
@@ -49,6 +50,10 @@ void warn_damage(const char* command, const std::string& file, const std::string
 /// Counts the undecodable messages a log reader passes over (the channels it does not read), as
 /// the MCAP export counts what it leaves out: `o.other_event` feeds `count`.
 void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count);
+
+/// Says on stderr which messages beyond the vehicle's physical bounds a read left out, by channel,
+/// field, time and count (nothing when there were none).
+void warn_beyond_bounds(const char* command, const std::string& file, const BoundsTally& beyond);
 
 /// Says on stderr which undecodable messages a read left out, by channel and count.
 void warn_undecodable(const char* command, const std::string& file, const mcap::UndecodableCount& count);

@@ -66,6 +66,7 @@ int run_validate_command(const std::vector<std::string>& args) {
 
   const DerivativeModel model = load_model(model_file);
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);
+  log_options.refuse_beyond_bounds = vehicle;  // a log with garbage that decoded is refused as it is read
   std::string damage;
   ident::FlightData data;
   mcap::UndecodableCount undecodable;

@@ -13,6 +13,7 @@
 
 #include "cli/commands.h"
 #include "cli/live_view_setup.h"
+#include "ident/identify.h"
 #include "contract/channels.h"
 #include "ident/flight_data.h"
 #include "ident/lcm_log.h"
@@ -161,11 +162,17 @@ int replay_to_view(LiveViewSession* live, const std::string& log_file, bool salv
       live->view->restart();
       live->view->set_state("replaying", "pass " + std::to_string(pass + 1), 0.0);
     }
-    char verdict[160];
-    std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time",
-                  g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s);
+    char verdict[200];
+    live->view->flush(2.0);
+    const foxglove::LiveViewStats st = live->view->stats();
+    std::snprintf(verdict, sizeof verdict, "%s %lld events, %.2f s of rig time%s",
+                  g_stop ? "stopped after" : "replayed", static_cast<long long>(r.events), r.rig_s,
+                  st.beyond_bounds > 0 ? "; messages beyond the physical bounds left out" : "");
     live->view->set_state(g_stop ? "stopped" : "done", verdict, r.rig_s);
     std::cerr << "rig view: " << verdict << "\n";
+    if (st.beyond_bounds > 0) {
+      std::cerr << "rig view: warning: " << log_file << ": left out: " << st.beyond_bounds_text << "\n";
+    }
   } catch (const std::exception& e) {
     std::cerr << "rig view: " << e.what() << "\n";
     live->view->set_state("failed", e.what(), 0.0);
@@ -210,13 +217,18 @@ int run_view_command(const std::vector<std::string>& args) {
   loop_opt->excludes(hold_opt)->excludes(exit_opt);
   hold_opt->excludes(exit_opt);
   cl->add_flag("--salvage", salvage, "a damaged rig log: replay the events before the damage and say what was left");
+  std::string vehicle_file;
+  cl->add_option("--vehicle", vehicle_file,
+                 "the vehicle whose physical bounds (data_bounds) a message must keep to be shown (default " +
+                     ident::default_vehicle_file() + ")")
+      ->type_name("FILE");
   if (const auto done = cl.parse(args)) return *done;
   if (!inputs_ok(log_file, web, web_root, loop, speed, salvage)) return cmdline::kExitUsage;
 
   std::unique_ptr<LiveViewSession> live;
   std::unique_ptr<foxglove::FoxgloveServer> page;
   try {
-    if (!log_file.empty()) live = open_live_view("view", foxglove);
+    if (!log_file.empty()) live = open_live_view("view", foxglove, "", vehicle_file);
     if (!web.empty()) {
       page = open_page(web, foxglove, web_root, live.get());
     }

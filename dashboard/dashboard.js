@@ -282,9 +282,12 @@ function showVerdict(msg) {
   const state = typeof msg.state === "string" ? msg.state : "unknown";
   const verdict = typeof msg.verdict === "string" ? msg.verdict : "";
   const t = typeof msg.t_s === "number" && Number.isFinite(msg.t_s) ? msg.t_s.toFixed(1) + " s" : "";
+  // Messages the server left out for a value beyond the vehicle's physical bounds: named, never plotted.
+  const beyond = typeof msg.beyond_bounds === "string" ? "left out: " + msg.beyond_bounds : "";
   el.dataset.state = state;
   el.dataset.verdict = verdict;
-  el.textContent = [state, t, verdict].filter((s) => s !== "").join(" \u00b7 ");
+  el.dataset.beyondBounds = beyond;
+  el.textContent = [state, t, verdict, beyond].filter((s) => s !== "").join(" \u00b7 ");
 }
 
 let messageCount = 0;

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "contract/channels.h"
+#include "contract/message_bounds.h"
 #include "lcmjson/lcm_json.h"
 
 namespace nimble::foxglove {
@@ -27,7 +28,9 @@ const char* const kVerdictSchema =
     R"("properties":{)"
     R"("state":{"type":"string","description":"running, done, replaying, ..."},)"
     R"("verdict":{"type":"string","description":"the verdict's text; empty until the end"},)"
-    R"("t_s":{"type":"number","description":"simulated time reached","x-unit":"s"}},)"
+    R"("t_s":{"type":"number","description":"simulated time reached","x-unit":"s"},)"
+    R"("beyond_bounds":{"type":"string","description":"messages left out with a value beyond the vehicle's )"
+    R"(physical bounds: channel, field, time and count; absent when there are none"}},)"
     R"("required":["state","verdict","t_s"]})";
 
 /// Whether the rig time of `type` sits at a fixed offset (only fixed-size scalars before it),
@@ -48,8 +51,10 @@ LiveView::LiveView(FoxgloveServer& server, LiveViewOptions options) : server_(se
     const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(spec.name);
     if (type == nullptr) continue;  // lcmjson's test keeps the contract and the types in step
     routes_[spec.name] = Route{server_.add_channel(spec.name, type->full_name(), lcmjson::json_schema(*type)), type,
-                               contract::due_in_sim_time(spec.name) && rig_time_is_cheap(*type)};
+                               contract::due_in_sim_time(spec.name) && rig_time_is_cheap(*type), spec.name,
+                               options_.vehicle.has_value() && contract::type_has_bounds(spec.type)};
   }
+  if (options_.vehicle) beyond_.emplace(*options_.vehicle);
   verdict_id_ = server_.add_channel(kVerdictTopic, kVerdictSchemaName, kVerdictSchema);
   for (const auto& kv : routes_) by_id_[kv.second.id] = &kv.second;
   if (has_history()) {
@@ -199,7 +204,8 @@ std::string LiveView::state_json_locked() const {
   const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
   const bool live = state_ == "running" || state_ == "replaying";
   const double t_s = live && rig_us > 0 ? std::max(state_t_s_, static_cast<double>(rig_us) / 1e6) : state_t_s_;
-  const nlohmann::json j{{"state", state_}, {"verdict", verdict_}, {"t_s", t_s}};
+  nlohmann::json j{{"state", state_}, {"verdict", verdict_}, {"t_s", t_s}};
+  if (stats_.beyond_bounds > 0) j["beyond_bounds"] = stats_.beyond_bounds_text;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -208,6 +214,19 @@ void LiveView::publish_state_locked(int64_t now) {
   const int64_t rig_us = newest_rig_us_.load(std::memory_order_relaxed);
   server_.publish(verdict_id_, static_cast<uint64_t>(rig_us > 0 ? rig_us * 1000 : 0), state_json_locked());
   state_sent_ns_ = now;
+}
+
+bool LiveView::beyond_bounds(const Route& route, int64_t stamp_us, const std::string& bytes) {
+  if (!route.bounded) return false;
+  const uint64_t before = beyond_->messages();
+  const int64_t t_us = route.tracks_rig_time ? stamp_us : lcmjson::rig_time_us(*route.type, bytes.data(), bytes.size());
+  contract::check_message_bounds(route.channel, bytes.data(), static_cast<int>(bytes.size()),
+                                 static_cast<double>(t_us) * 1e-6, *beyond_);
+  if (beyond_->messages() == before) return false;
+  std::lock_guard<std::mutex> lock(mu_);
+  stats_.beyond_bounds = static_cast<int64_t>(beyond_->messages());
+  stats_.beyond_bounds_text = beyond_->text();
+  return true;
 }
 
 void LiveView::run() {
@@ -234,6 +253,8 @@ void LiveView::run() {
         else answer(p.subscription, &message);
         continue;
       }
+      // Garbage that decoded: not plotted as a number (not sent), not kept for late clients.
+      if (beyond_bounds(*p.route, p.stamp_us, p.bytes)) continue;
       if (server_.has_subscribers(p.route->id)) {
         const std::string why = lcmjson::to_json(*p.route->type, p.bytes.data(), p.bytes.size(), &message);
         if (why.empty()) {

@@ -27,10 +27,13 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "core/data_bounds.h"
+#include "core/vehicle.h"
 #include "foxglove/foxglove_server.h"
 
 namespace nimble::lcmjson {
@@ -57,6 +60,10 @@ struct LiveViewOptions {
   /// (docs/dashboard.md): 10 s of TRUTH at 1 kHz take 3 MiB.
   double history_s = 10.0;
   std::size_t history_bytes = 6u << 20;
+  /// Check every message against this vehicle's physical bounds (contract/message_bounds.h): a
+  /// message with a field beyond them is neither sent nor kept, and is counted and named
+  /// (LiveViewStats::beyond_bounds, and `beyond_bounds` on rig/verdict). None: not checked.
+  std::optional<Vehicle> vehicle;
 };
 
 /// What the live view counted, with the server's own figures.
@@ -67,6 +74,8 @@ struct LiveViewStats {
   /// run in process can outpace the live view's thread; a replay waits instead).
   int64_t history_dropped = 0;
   int64_t undecodable = 0;  ///< bytes that were not a message of the channel's type (not sent)
+  int64_t beyond_bounds = 0;      ///< messages with a field beyond the vehicle's bounds (not sent, not kept)
+  std::string beyond_bounds_text; ///< which: channel, field, time and count (BoundsTally::text()); "" if none
   int64_t published = 0;    ///< messages handed to the server live
   int64_t backlogs = 0;     ///< histories handed to clients that subscribed
   int64_t backlog_messages = 0;  ///< messages in those
@@ -115,6 +124,8 @@ class LiveView {
     uint32_t id = 0;
     const lcmjson::LcmStruct* type = nullptr;
     bool tracks_rig_time = false;  ///< published at rig time, which sits at a fixed offset: read on offer()
+    std::string channel;
+    bool bounded = false;  ///< its type has fields with a physical bound (checked on the thread)
   };
   /// An item of the queue: a message of `route`, a new subscription to answer, or a restart.
   struct Pending {
@@ -134,6 +145,8 @@ class LiveView {
     std::size_t bytes = 0;
   };
   void run();
+  /// On the thread: true (counted) if the message has a field beyond the vehicle's bounds.
+  bool beyond_bounds(const Route& route, int64_t stamp_us, const std::string& bytes);
   void publish_state_locked(int64_t now_ns);
   std::string state_json_locked() const;
   void on_subscribe(const FoxgloveServer::NewSubscription& s);
@@ -162,6 +175,7 @@ class LiveView {
   bool has_state_ = false;
   int64_t state_sent_ns_ = 0;
   LiveViewStats stats_;
+  std::optional<BoundsTally> beyond_;  ///< the thread's own: messages beyond the vehicle's bounds
   std::thread thread_;
 };
 

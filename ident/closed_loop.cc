@@ -107,6 +107,7 @@ class EffectForces {
 /// delta_t among the model's inputs (-1: not an input).
 std::pair<int, int> input_columns(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle) {
   check_flight_data(data, vehicle);
+  check_excitation(data, state_names(model.structure), model.inputs);
   if (model.structure != Structure::kLateral3) {
     throw std::invalid_argument("closed-loop validation needs a lateral3 model; '" + model.name + "' is " +
                                 to_string(model.structure));

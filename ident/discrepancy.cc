@@ -448,6 +448,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::vector<UniformData> prepared;
   for (const FlightData& data : flights) {
     check_flight_data(data, vehicle);
+    check_excitation(data, state_names(model.structure), inputs);
     for (const auto& in : inputs) {
       if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
     }

@@ -2,12 +2,14 @@
 /// Markdown report draws its figures with gnuplot (ident/plots.h).
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/json_writer.h"
 #include "core/output_file.h"
@@ -34,6 +36,30 @@ std::string g(double x, const char* f = "%.4g") {
   char buf[48];
   std::snprintf(buf, sizeof buf, f, x);
   return buf;
+}
+
+/// The gap's numbers, each finite: a gap of nan (a record without excitation that reached the
+/// workflow) is an error here, never a printed "nan" or a JSON null.
+void require_finite_gap(const DiscrepancyResult& r) {
+  const auto need = [&r](double x, const std::string& what) {
+    if (!std::isfinite(x)) {
+      throw std::logic_error("discrepancy of " + r.source + ": " + what + " is " + g(x) +
+                             ", not a finite number: no gap is reported from it");
+    }
+  };
+  need(r.gap_before, "the held-out gap before");
+  need(r.gap_after, "the held-out gap after");
+  for (const auto& o : r.gap) {
+    for (const auto& [x, what] : {std::pair{o.rmse_model, "RMSE of the model"}, {o.rmse_before, "RMSE before"},
+                                  {o.rmse_after, "RMSE after"}, {o.fit_before_pct, "fit before"},
+                                  {o.fit_after_pct, "fit after"}}) {
+      need(x, std::string(what) + " of " + o.output);
+    }
+  }
+  for (const auto& b : r.gap_bands) {
+    need(b.before, "the gap before in band " + b.name);
+    need(b.after, "the gap after in band " + b.name);
+  }
 }
 
 /// Each named effect with its parameters; a term also with its equation, interval and the forms it beat.
@@ -443,6 +469,7 @@ void print_located(std::ostream& o, const DiscrepancyResult& r) {
 }  // namespace
 
 std::string discrepancy_json(const DiscrepancyResult& r) {
+  require_finite_gap(r);
   JsonWriter j;
   j.begin_object();
   j.key("source").value(r.source);
@@ -474,6 +501,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
 }
 
 std::string discrepancy_text(const DiscrepancyResult& r) {
+  require_finite_gap(r);
   std::ostringstream o;
   o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
     << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";

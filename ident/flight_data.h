@@ -19,6 +19,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace nimble::ident {
@@ -52,6 +53,9 @@ struct Channel {
 struct FlightData {
   std::string source;  ///< file or log it came from, used in messages
   std::map<std::string, Channel> channels;
+  /// Where a channel read from a log came from: its LCM channel and message field
+  /// ("TRUTH", "omega_body_radps[0]"), for naming its samples (ident/data_check.h); none for a CSV file.
+  std::map<std::string, std::pair<std::string, std::string>> origin;
 
   /// True if the record has channel `name`.
   bool has(const std::string& name) const { return channels.count(name) != 0; }

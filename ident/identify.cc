@@ -424,6 +424,7 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
   res.vehicle = vehicle;
   choose_inputs(data, options, res);
   std::vector<Equation> equations = equations_for(data, vehicle, res.inputs, options);
+  check_excitation(data, state_names(options.structure), res.inputs);
 
   res.data = prepare(data, options.structure, options.trim, vehicle.gravity_mps2, options.processing);
   if (options.add_signals) options.add_signals(res.data.filtered);

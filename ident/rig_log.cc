@@ -8,9 +8,11 @@
 
 #include "contract/channels.h"
 #include "contract/decode.h"
+#include "contract/message_bounds.h"
 #include "contract/messages.h"
 #include "core/input_file.h"
 #include "estimator/smoother.h"
+#include "ident/data_check.h"
 #include "ident/lcm_log.h"
 
 namespace nimble::ident {
@@ -68,6 +70,35 @@ T decode_or_throw(const LogEventRecord& ev, const std::string& file) {
 template <typename T>
 auto read_value(const LogEventRecord& ev, const std::string& file) {
   return contract::from_message(decode_or_throw<T>(ev, file));
+}
+
+/// Where each channel of a log's flight data comes from: its channel's field (states: the field of
+/// ESTIMATE or TRUTH, whichever they are taken from).
+constexpr std::pair<const char*, const char*> kStateFields[] = {
+    {"p", "omega_body_radps[0]"},  {"q", "omega_body_radps[1]"},  {"r", "omega_body_radps[2]"},
+    {"u", "velocity_body_mps[0]"}, {"v", "velocity_body_mps[1]"}, {"w", "velocity_body_mps[2]"},
+    {"phi", "euler_rad[0]"},       {"theta", "euler_rad[1]"},     {"psi", "euler_rad[2]"},
+};
+struct InputOrigin {
+  const char* name;
+  const std::string* channel;
+  const char* field;
+};
+const InputOrigin kInputFields[] = {
+    {"delta_f", &kActuatorFeedback, "delta_f_radps"}, {"delta_t", &kActuatorFeedback, "throttle_pct"},
+    {"delta_d", &kActuatorFeedback, "dihedral_rad"},  {"delta_w", &kActuatorFeedback, "wing_root_rad"},
+    {"delta_f_cmd", &kActuatorCommand, "delta_f_radps"}, {"phi_sp", &kAttitudeSetpoint, "roll_sp_rad"},
+    {"ax", &kImu, "accel_mps2[0]"}, {"ay", &kImu, "accel_mps2[1]"}, {"az", &kImu, "accel_mps2[2]"},
+};
+
+/// Names the origin of every channel of `d` whose states come from `state_channel` ("" : none).
+void set_origin(FlightData& d, const std::string& state_channel) {
+  for (const auto& [name, field] : kStateFields) {
+    if (d.has(name) && !state_channel.empty()) d.origin[name] = {state_channel, field};
+  }
+  for (const InputOrigin& o : kInputFields) {
+    if (d.has(o.name)) d.origin[o.name] = {*o.channel, o.field};
+  }
 }
 
 /// Each state source with its name.
@@ -130,25 +161,36 @@ Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
   return *c;
 }
 
+template <class M>
+bool RigLogAssembler::within(const LogEventRecord& ev, const M& message, double t_s) const {
+  return beyond_ == nullptr || contract::message_within_bounds(ev.channel, message, t_s, *beyond_, ev.event_number);
+}
+
 bool RigLogAssembler::add(const LogEventRecord& event) {
   const LogEventRecord* ev = &event;
   const std::string& file = source_;
   if (ev->channel == kTruth) {
     const auto message = decode_or_throw<truth_state_t>(*ev, file);
+    const double t = static_cast<double>(message.utime) * 1e-6;
+    if (!within(*ev, message, t)) return true;
     const Truth m = contract::from_message(message);
-    append_states(truth_, truth_states_, static_cast<double>(message.utime) * 1e-6, m.omega_body_radps,
-                  m.velocity_body_mps, m.euler_rad);
+    append_states(truth_, truth_states_, t, m.omega_body_radps, m.velocity_body_mps, m.euler_rad);
   } else if (ev->channel == kEstimate) {
     // The estimate describes the instant of the newest IMU sample it has integrated
     // (imu_utime): its rate is that sample's gyro minus the bias, attitude and velocity are
     // propagated to it. utime is when it was published, which in lockstep is the next
     // estimator tick, 1-2 ms later (see estimate_time_s()).
-    const Estimate m = read_value<estimator_state_t>(*ev, file);
-    append_states(estimate_, estimate_states_, estimate_time_s(m.utime, m.imu_utime), m.omega_body_radps,
-                  m.velocity_body_mps, m.euler_rad, Repeat::kReplace);
+    const auto message = decode_or_throw<estimator_state_t>(*ev, file);
+    const double t = estimate_time_s(message.utime, message.imu_utime);
+    if (!within(*ev, message, t)) return true;
+    const Estimate m = contract::from_message(message);
+    append_states(estimate_, estimate_states_, t, m.omega_body_radps, m.velocity_body_mps, m.euler_rad,
+                  Repeat::kReplace);
   } else if (ev->channel == kActuatorFeedback) {
-    const ActuatorFeedback m = read_value<actuator_feedback_t>(*ev, file);
-    const double t = static_cast<double>(m.utime) * 1e-6;
+    const auto message = decode_or_throw<actuator_feedback_t>(*ev, file);
+    const double t = static_cast<double>(message.utime) * 1e-6;
+    if (!within(*ev, message, t)) return true;
+    const ActuatorFeedback m = contract::from_message(message);
     append(input(kDeltaF, "delta_f"), t, m.delta_f_radps);
     append(input(kDeltaT, "delta_t"), t, m.throttle_pct);
     append(input(kDeltaD, "delta_d"), t, m.dihedral_rad);
@@ -156,20 +198,27 @@ bool RigLogAssembler::add(const LogEventRecord& event) {
   } else if (ev->channel == kActuatorCommand) {
     // The flight board's command, the flap actuator's input (what the plant receives, over
     // LCM or after the CAN bridge, is this command, late by the link and any actuator delay).
-    const ActuatorCommand m = read_value<actuator_command_t>(*ev, file);
+    const auto message = decode_or_throw<actuator_command_t>(*ev, file);
+    const double t = static_cast<double>(message.utime) * 1e-6;
+    if (!within(*ev, message, t)) return true;
+    const ActuatorCommand m = contract::from_message(message);
     const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
                                                              : m.flap_freq_left_radps - m.flap_freq_right_radps;
-    append(input(kDeltaFCmd, "delta_f_cmd"), static_cast<double>(m.utime) * 1e-6, df);
+    append(input(kDeltaFCmd, "delta_f_cmd"), t, df);
   } else if (ev->channel == kControllerStatus) {
     if (!gain_set_.empty()) return false;
     gain_set_ = read_value<controller_status_t>(*ev, file).gain_set;
   } else if (ev->channel == kAttitudeSetpoint) {
-    const AttitudeSetpoint m = read_value<attitude_setpoint_t>(*ev, file);
-    append(input(kPhiSp, "phi_sp"), static_cast<double>(m.utime) * 1e-6, m.roll_sp_rad);
+    const auto message = decode_or_throw<attitude_setpoint_t>(*ev, file);
+    const double t = static_cast<double>(message.utime) * 1e-6;
+    if (!within(*ev, message, t)) return true;
+    append(input(kPhiSp, "phi_sp"), t, contract::from_message(message).roll_sp_rad);
   } else if (ev->channel == kImu) {
-    const ImuSample m = read_value<imu_sample_t>(*ev, file);
+    const auto message = decode_or_throw<imu_sample_t>(*ev, file);
+    const double t = static_cast<double>(message.utime) * 1e-6;
+    if (!within(*ev, message, t)) return true;
+    const ImuSample m = contract::from_message(message);
     if (smoothing_) imu_.push_back(m);
-    const double t = static_cast<double>(m.utime) * 1e-6;
     append(input(kAx, "ax"), t, m.accel_mps2[0]);
     append(input(kAy, "ay"), t, m.accel_mps2[1]);
     append(input(kAz, "az"), t, m.accel_mps2[2]);
@@ -230,10 +279,12 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
   out.gain_set = gain_set_;
   out.measured.source = file;
   for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;
+  set_origin(out.measured, chosen == StateSource::kEstimate ? kEstimate : chosen == StateSource::kTruth ? kTruth : "");
   if (truth_.has("p")) {
     out.truth = std::move(truth_);
     out.truth.source = file + " (truth)";
     for (const auto& [name, c] : inputs.channels) out.truth.channels[name] = c;
+    set_origin(out.truth, kTruth);
   }
   return out;
 }
@@ -242,10 +293,14 @@ RigLogData read_rig_log(const std::string& file, StateSource source, const LogRe
   LcmLogReader log(file, options.salvage);
   RigLogAssembler assembler(file);
   if (source == StateSource::kSmoothed) assembler.collect_for_smoothing();
+  std::optional<BoundsTally> refuse;
+  if (options.refuse_beyond_bounds && options.beyond_bounds == nullptr) refuse.emplace(*options.refuse_beyond_bounds);
+  assembler.leave_out_beyond(refuse ? &*refuse : options.beyond_bounds);
   LogEventRecord record;
   while (log.next(&record)) {
     if (!assembler.add(record) && options.other_event) options.other_event(record);
   }
+  if (refuse && !refuse->empty()) throw RefusedData(file, *refuse);
   return assembler.finish(source, log.damage(), options.smoothing);
 }
 

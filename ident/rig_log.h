@@ -17,9 +17,12 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 
+#include "core/data_bounds.h"
 #include "core/rig_values.h"
+#include "core/vehicle.h"
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
 #include "ident/flight_data.h"
@@ -71,6 +74,15 @@ struct LogReadOptions {
   StateSource states = StateSource::kAuto;
   /// The smoother's model, for StateSource::kSmoothed.
   SmoothingOptions smoothing;
+  /// When set: every message read is checked against the vehicle's physical bounds
+  /// (contract/message_bounds.h); a message with a field beyond them is left out, each such field
+  /// counted here by channel, field and time (what an export does; the analyses leave this unset
+  /// and refuse the record instead, ident/data_check.h).
+  BoundsTally* beyond_bounds = nullptr;
+  /// When set (and beyond_bounds is not): every message read is checked against this vehicle's
+  /// physical bounds, and a log with a message beyond them is refused (RefusedData, naming the
+  /// channel, field, time and count, ident/data_check.h): what the analyses do.
+  std::optional<Vehicle> refuse_beyond_bounds;
 };
 
 /// Time [s] an estimator_state_t describes: imu_utime [us], or utime [us] if imu_utime is
@@ -102,6 +114,9 @@ class RigLogAssembler {
   /// Keep the IMU samples and motion-capture frames (decoding MOCAP_POSE, which it otherwise
   /// passes over) for finish(StateSource::kSmoothed). Call before the first add().
   void collect_for_smoothing() { smoothing_ = true; }
+  /// Leave out every message with a field beyond the bounds of `tally`, counting them there
+  /// (LogReadOptions::beyond_bounds). Call before the first add().
+  void leave_out_beyond(BoundsTally* tally) { beyond_ = tally; }
   /// One event of a log. @throws DataError as above.
   bool add(const LogEventRecord& event);
   /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
@@ -123,7 +138,12 @@ class RigLogAssembler {
   std::array<Channel*, 9> estimate_states_{}, truth_states_{};  ///< p q r u v w phi theta psi, once made
   std::array<Channel*, kInputSlots> input_channels_{};
   std::string gain_set_;
+  /// The message, decoded, passes the bounds (true without leave_out_beyond()).
+  template <class M>
+  bool within(const LogEventRecord& event, const M& message, double t_s) const;
+
   bool smoothing_ = false;
+  BoundsTally* beyond_ = nullptr;
   std::vector<ImuSample> imu_;     ///< for the smoother
   std::vector<MocapPose> poses_;   ///< for the smoother
   LogEventRecord event_;  ///< reused by add(channel, data, ...)

@@ -7,6 +7,7 @@ namespace nimble::ident {
 ValidationResult validate_open_loop(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                     const ValidationOptions& options) {
   check_flight_data(data, vehicle);
+  check_excitation(data, state_names(model.structure), model.inputs);
   ValidationResult res;
   res.source = data.source;
   res.model = model;

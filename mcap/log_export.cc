@@ -9,7 +9,9 @@
 #include <unordered_map>
 
 #include "core/input_file.h"
+#include "contract/message_bounds.h"
 #include "core/json_writer.h"
+#include "ident/data_check.h"
 #include "ident/lcm_log.h"
 #include "lcmjson/lcm_json.h"
 
@@ -55,6 +57,7 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
   stats.log = log_path;
   stats.out = out_path;
   stats.compression = options.compression;
+  if (options.vehicle) stats.beyond.emplace(*options.vehicle);
 
   ident::LcmLogReader reader(log_path, options.salvage);  // throws DataError for a file that is no log
   WriterOptions wo;
@@ -117,14 +120,24 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
       ++ch.stats->undecodable;
       ++stats.undecodable;
     } else {
-      // Only -1 means "no rig time"; a negative time is no time the rig could have had either.
-      if (json.rig_time_us >= 0) {
-        log_ns = static_cast<uint64_t>(json.rig_time_us) * 1000u;
-        if (json.rig_time_us > newest_rig_time_us) newest_rig_time_us = json.rig_time_us;
+      const int64_t t_us = json.rig_time_us != -1 ? json.rig_time_us : newest_rig_time_us;  // its own time
+      if (stats.beyond && contract::check_message_bounds(ev.channel, ev.data.data(), static_cast<int>(ev.data.size()),
+                                                         static_cast<double>(t_us) * 1e-6, *stats.beyond,
+                                                         ev.event_number) == contract::BoundsResult::kBeyond) {
+        // Garbage that decoded: left out (its time, too, is no time the rig had).
+        if (options.strict) throw ident::RefusedData(log_path, *stats.beyond);
+        ++ch.stats->beyond_bounds;
+        ++stats.beyond_bounds;
+      } else {
+        // Only -1 means "no rig time"; a negative time is no time the rig could have had either.
+        if (json.rig_time_us >= 0) {
+          log_ns = static_cast<uint64_t>(json.rig_time_us) * 1000u;
+          if (json.rig_time_us > newest_rig_time_us) newest_rig_time_us = json.rig_time_us;
+        }
+        writer.add_message(ch.json_channel, sequence, log_ns, publish_ns, json.json.data(), json.json.size());
+        ++ch.stats->json;
+        note_time(log_ns);
       }
-      writer.add_message(ch.json_channel, sequence, log_ns, publish_ns, json.json.data(), json.json.size());
-      ++ch.stats->json;
-      note_time(log_ns);
     }
     if (ch.raw_channel != 0) {
       writer.add_message(ch.raw_channel, sequence, log_ns, publish_ns, ev.data.data(), ev.data.size());
@@ -147,6 +160,24 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
   if (ec) stats.bytes_in = 0;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
+}
+
+LogBounds check_log_bounds(const std::string& log_path, const Vehicle& vehicle, bool salvage) {
+  LogBounds out(vehicle);
+  ident::LcmLogReader reader(log_path, salvage);
+  ident::LogEventRecord ev;
+  while (reader.next(&ev)) {
+    const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(ev.channel);
+    if (type == nullptr) continue;
+    const int64_t t_us = lcmjson::rig_time_us(*type, ev.data.data(), ev.data.size());
+    if (contract::check_message_bounds(ev.channel, ev.data.data(), static_cast<int>(ev.data.size()),
+                                       static_cast<double>(t_us) * 1e-6, out.tally,
+                                       ev.event_number) == contract::BoundsResult::kBeyond) {
+      out.offsets.push_back(ev.offset);
+    }
+  }
+  out.damage = reader.damage();
+  return out;
 }
 
 std::map<std::string, uint64_t> undecodable_by_channel(const ExportStats& stats) {
@@ -193,6 +224,13 @@ std::string summary_line(const ExportStats& s) {
                      " MCAP channels (" + std::to_string(lcm_channels) + " LCM channels) -> " + s.out + ", " + size +
                      " (" + to_string(s.compression) + "), " + seconds;
   if (s.undecodable > 0) line += "; " + undecodable_text(undecodable_by_channel(s));
+  if (s.beyond_bounds > 0) {
+    std::string list;
+    for (const auto& [name, c] : s.channels) {
+      if (c.beyond_bounds > 0) list += (list.empty() ? "" : ", ") + name + " " + std::to_string(c.beyond_bounds);
+    }
+    line += "; " + std::to_string(s.beyond_bounds) + " beyond the physical bounds left out (" + list + ")";
+  }
   if (s.unknown_events > 0) {
     line += "; " + std::to_string(s.unknown_events) + " events on " + std::to_string(s.unknown_channels.size()) +
             " unknown channels";
@@ -219,11 +257,14 @@ std::string export_json(const ExportStats& s) {
   w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
   w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
   w.key("seconds").value(s.seconds).key("damage").value(s.damage);
+  w.key("beyond_bounds_messages").value(n(s.beyond_bounds));
+  if (s.beyond) s.beyond->json(w);
   w.key("channels").begin_object();
   for (const auto& kv : s.channels) {
     w.key(kv.first).begin_object();
     w.key("type").value(kv.second.type).key("events").value(n(kv.second.events));
     w.key("json").value(n(kv.second.json)).key("undecodable").value(n(kv.second.undecodable));
+    w.key("beyond_bounds").value(n(kv.second.beyond_bounds));
     w.key("raw").value(n(kv.second.raw));
     w.end_object();
   }

@@ -16,6 +16,11 @@
 /// the bus, recorded like everything else) is left out of the JSON channel and counted.
 /// Channels the rig's contract does not know have no JSON channel; they are counted.
 ///
+/// Physical bounds (ExportOptions::vehicle): a message with a field beyond the vehicle's bounds
+/// (contract/message_bounds.h: garbage that decoded) is left out of the JSON channel and named by
+/// channel, field, time and count (ExportStats::beyond); with `strict` the export is refused
+/// instead (ident::RefusedData), and no MCAP file is left.
+///
 /// raw: every LCM channel also as `<CHANNEL>/lcm` with the exact LCM bytes of every event
 /// (message encoding `lcm`), the type's .lcm source text as its schema (encoding `lcm`); an
 /// unknown channel as raw only, without a schema.
@@ -25,10 +30,13 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/data_bounds.h"
 #include "core/json_writer.h"
+#include "core/vehicle.h"
 #include "ident/lcm_log.h"
 #include "mcap/mcap_writer.h"
 
@@ -40,6 +48,9 @@ struct ExportOptions {
   bool salvage = false;   ///< a damaged log: export the events before the damage
   std::size_t chunk_size = 2u << 20;
   int zstd_level = WriterOptions{}.zstd_level;
+  /// Check the messages against this vehicle's data bounds (none: not checked).
+  std::optional<Vehicle> vehicle;
+  bool strict = false;    ///< a message beyond the bounds refuses the export
 };
 
 /// One LCM channel of the log.
@@ -48,6 +59,7 @@ struct ChannelExport {
   uint64_t events = 0;        ///< events of the channel in the log
   uint64_t json = 0;          ///< messages written as JSON
   uint64_t undecodable = 0;   ///< events that are not exactly one message of the type
+  uint64_t beyond_bounds = 0; ///< messages left out with a field beyond the vehicle's bounds
   uint64_t raw = 0;           ///< messages written to `<CHANNEL>/lcm`
 };
 
@@ -65,11 +77,13 @@ struct ExportStats {
   uint64_t bytes_in = 0, bytes_out = 0;
   double seconds = 0.0;
   std::string damage;  ///< salvaging: what was wrong with the log ("" if it was whole)
+  uint64_t beyond_bounds = 0;         ///< messages left out, over every channel
+  std::optional<BoundsTally> beyond;  ///< their fields, when the export checked the bounds
 };
 
 /// Writes the rig log `log_path` as MCAP to `out_path` (through `<out_path>.part`).
 /// @throws ident::DataError for a damaged log (naming the byte offset and the event) unless
-///         salvaging; WriteError when the file cannot be written; std::invalid_argument when
+///         salvaging; ident::RefusedData for a message beyond the bounds with `strict`; WriteError when the file cannot be written; std::invalid_argument when
 ///         `out_path` is the log itself.
 ExportStats export_log_to_mcap(const std::string& log_path, const std::string& out_path,
                                const ExportOptions& options = {});
@@ -90,6 +104,17 @@ void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_c
 /// An export as `rig export --format mcap --json` reports it: counts, times, sizes, damage, and
 /// per channel its type, events, JSON messages, undecodable and raw messages.
 std::string export_json(const ExportStats& stats);
+
+/// The messages of a rig log beyond the physical bounds (ExportOptions::vehicle's check, without
+/// writing anything): their byte offsets in the log, the tally naming them, and any damage.
+struct LogBounds {
+  explicit LogBounds(const Vehicle& vehicle) : tally(vehicle) {}
+  BoundsTally tally;
+  std::vector<int64_t> offsets;
+  std::string damage;
+};
+/// @throws ident::DataError for a damaged log unless salvaging.
+LogBounds check_log_bounds(const std::string& log_path, const Vehicle& vehicle, bool salvage = false);
 
 /// Counts, by channel, the events of a rig log that are not exactly one message of their
 /// channel's type, by the test the MCAP export leaves them out by (lcmjson::to_json). Events on

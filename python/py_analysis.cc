@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "controller/attitude_controller.h"
+#include "core/data_bounds.h"
+#include "core/json_writer.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "estimator/sensing_config.h"
@@ -86,9 +88,9 @@ py::dict identify(const py::object& data, const std::string& structure, const st
   o.method = ident::method_from_string(method);
   if (inputs) o.inputs = *inputs;
   o.processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
-  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage);
   const std::string vehicle_file = vehicle.value_or(ident::default_vehicle_file());
   const Vehicle v = load_vehicle(vehicle_file);
+  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage, &v);
   ident::IdentResult r;
   {
     py::gil_scoped_release free;
@@ -126,7 +128,7 @@ py::dict validate(const py::object& model_path, const py::object& data, bool clo
                   std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
   const DerivativeModel model = load_model(path_text(model_path));
   const Vehicle v = vehicle_of(vehicle, model.vehicle_file);
-  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage);
+  const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage, &v);
   const ident::ProcessingOptions processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
   if (closed_loop) {
     ident::ClosedLoopOptions o;
@@ -188,7 +190,8 @@ py::dict discrepancy(const py::object& data, const py::object& model_path,
   std::string gain_set = gains.value_or("");
   const bool pooled = py::isinstance<py::list>(data) || py::isinstance<py::tuple>(data);
   for (const py::handle item : pooled ? py::iterable(data) : py::iterable(py::make_tuple(data))) {
-    DataInput in = flight_data_of(py::reinterpret_borrow<py::object>(item), states, sensing.value_or(""), salvage);
+    DataInput in =
+        flight_data_of(py::reinterpret_borrow<py::object>(item), states, sensing.value_or(""), salvage, &v);
     if (gain_set.empty()) gain_set = in.gain_set;
     flights.push_back(std::move(in.data));
   }
@@ -210,27 +213,57 @@ py::dict discrepancy(const py::object& data, const py::object& model_path,
   return json_value(ident::discrepancy_json(r));
 }
 
+/// A Python warning naming what a reader left out beyond the bounds (nothing if none).
+void warn_beyond(const std::string& log, const BoundsTally& beyond) {
+  if (beyond.empty()) return;
+  const std::string text = log + ": left out: " + beyond.text();
+  if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 1) != 0) throw py::error_already_set();
+}
+
 py::dict export_mcap(const py::object& log, const py::object& out, bool raw, const std::string& compression,
-                     bool salvage) {
+                     bool salvage, const std::optional<std::string>& vehicle, bool strict) {
   mcap::ExportOptions o;
   o.raw = raw;
   o.salvage = salvage;
   o.compression = mcap::compression_from_string(compression);
+  o.vehicle = load_vehicle(vehicle.value_or(ident::default_vehicle_file()));
+  o.strict = strict;
   const std::string log_path = path_text(log), out_path = path_text(out);
   mcap::ExportStats stats;
   {
     py::gil_scoped_release free;
     stats = mcap::export_log_to_mcap(log_path, out_path, o);
   }
+  if (stats.beyond) warn_beyond(log_path, *stats.beyond);
   return json_value(mcap::export_json(stats));
+}
+
+/// The messages of a log beyond the vehicle's bounds, for read_log: their byte offsets and the tally.
+py::dict log_bounds(const py::object& log, const std::optional<std::string>& vehicle, bool salvage) {
+  const Vehicle v = load_vehicle(vehicle.value_or(ident::default_vehicle_file()));
+  const std::string path = path_text(log);
+  std::optional<mcap::LogBounds> found;
+  {
+    py::gil_scoped_release free;
+    found.emplace(mcap::check_log_bounds(path, v, salvage));
+  }
+  JsonWriter w;
+  w.begin_object();
+  found->tally.json(w);
+  w.key("text").value(found->tally.empty() ? std::string() : found->tally.text());
+  w.end_object();
+  py::dict out = json_value(w.str());
+  out["offsets"] = found->offsets;
+  return out;
 }
 
 }  // namespace
 
 DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
-                         bool salvage) {
+                         bool salvage, const Vehicle* vehicle) {
   ident::LogReadOptions o;
   o.salvage = salvage;
+  if (vehicle != nullptr) o.refuse_beyond_bounds = *vehicle;
   o.states = ident::state_source_from_name(states);
   DataInput in;
   if (py::isinstance<py::dict>(data)) {
@@ -297,10 +330,19 @@ void add_analysis(py::module_& m) {
         "data. data: one flight (path or dict of arrays) or a list of flights pooled. Returns `rig discrepancy "
         "--json`'s content as a dict; model_out: write the refit model there.");
   m.def("export_mcap", &export_mcap, py::arg("log"), py::arg("out"), py::kw_only(), py::arg("raw") = false,
-        py::arg("compression") = "zstd", py::arg("salvage") = false,
+        py::arg("compression") = "zstd", py::arg("salvage") = false, py::arg("vehicle") = py::none(),
+        py::arg("strict") = false,
         "Writes a rig log as MCAP (Foxglove, Lichtblick, PlotJuggler), as `rig export --format mcap`, and "
         "returns its --json content (messages per channel, what was left out). A damaged log raises DataError "
-        "naming the byte offset unless salvage=True.");
+        "naming the byte offset unless salvage=True. A message with a value beyond the physical bounds of "
+        "vehicle (default the rig's) is left out with a UserWarning naming its channel, field, time and count "
+        "('beyond_bounds' in the result); strict=True raises DataError instead.");
+  m.def("log_bounds", &log_bounds, py::arg("log"), py::kw_only(), py::arg("vehicle") = py::none(),
+        py::arg("salvage") = false,
+        "The messages of a rig log with a value beyond the physical bounds of vehicle (default the rig's): "
+        "'beyond_bounds' (count, and per channel and field its count, bound, first time and value), 'text' "
+        "(the same for people, '' if none) and 'offsets' (each such message's byte offset in the log). "
+        "read_log uses it to leave them out.");
 }
 
 }  // namespace nimble::python

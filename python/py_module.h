@@ -49,11 +49,12 @@ struct DataInput {
 /// (read by content, as the commands read it), or a dict {'t': array, 'p': array, ...} of the
 /// channels of ident/flight_data.h on one time base ('t' [s], strictly increasing). `states`
 /// (auto, estimate, truth, smoothed) says where a log's states come from; `sensing` is the
-/// sensing file of the smoother (states='smoothed').
+/// sensing file of the smoother (states='smoothed'). With `vehicle`, a log with a message beyond
+/// its physical bounds is refused as it is read (ident::LogReadOptions::refuse_beyond_bounds).
 /// @throws ident::DataError naming the channel and sample; std::invalid_argument for an unknown
 ///         channel, a length that differs from t's, or states given for data that is not a log.
 DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
-                         bool salvage);
+                         bool salvage, const Vehicle* vehicle = nullptr);
 
 /// A numpy array of an Eigen vector (one copy, no Python work per sample).
 py::object array_of(const Eigen::VectorXd& v);

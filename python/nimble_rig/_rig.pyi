@@ -93,6 +93,12 @@ def loop(scenario: Union[PathLike, Scenario], *, model: Optional[str] = None, ga
     ...
 
 def export_mcap(log: PathLike, out: PathLike, *, raw: bool = False, compression: str = "zstd",
-                salvage: bool = False) -> Dict[str, Any]:
-    """Writes the rig log as MCAP; `rig export --format mcap --json`'s content."""
+                salvage: bool = False, vehicle: Optional[PathLike] = None, strict: bool = False) -> Dict[str, Any]:
+    """Writes the rig log as MCAP; `rig export --format mcap --json`'s content. Messages beyond the
+    vehicle's physical bounds are left out with a UserWarning (strict=True: DataError)."""
+    ...
+
+
+def log_bounds(log: PathLike, *, vehicle: Optional[PathLike] = None, salvage: bool = False) -> Dict[str, Any]:
+    """The messages of a rig log beyond the vehicle's physical bounds: 'beyond_bounds', 'text', 'offsets'."""
     ...

@@ -6,11 +6,16 @@ An LCM log is a sequence of events, each
 Each message's first 8 bytes are its type's fingerprint, which names the nimble type that
 decodes it. A damaged log (a wrong sync word, a truncated event) is an error that names the
 file, the byte offset and the event number; salvage=True keeps what precedes the damage.
+
+A message with a value beyond the vehicle's physical bounds (garbage that decoded: the vehicle
+file's data_bounds) is left out and named by a UserWarning and RigLog.beyond_bounds, by the rig's
+own check (nimble_rig._rig.log_bounds), where the compiled module was built.
 """
 
 import os
 import stat
 import struct
+import warnings
 
 import numpy as np
 
@@ -98,7 +103,7 @@ class RigLog:
     real-time run, simulated time for a lockstep or in-process run).
     """
 
-    def __init__(self, path, channels, undecoded, events, damage):
+    def __init__(self, path, channels, undecoded, events, damage, beyond_bounds=None):
         self.path = path
         self._channels = channels
         #: channel -> number of messages of no nimble type (or that did not decode)
@@ -107,6 +112,10 @@ class RigLog:
         self.events = events
         #: None, or what was wrong where (with salvage=True)
         self.damage = damage
+        #: None (not checked: no compiled module), or the messages left out for a value beyond the
+        #: vehicle's physical bounds: {"messages", "samples", "bounds", "text", "channels": [{"channel",
+        #: "field", "quantity", "count", "bound", "first_t_s", "first_value", ...}]}
+        self.beyond_bounds = beyond_bounds
 
     def channels(self):
         return sorted(self._channels)
@@ -125,8 +134,23 @@ class RigLog:
         return "RigLog(%r, %d events; %s)" % (self.path, self.events, counts)
 
 
-def read_log(path, channels=None, salvage=False):
+def _beyond_bounds(path, vehicle, salvage):
+    """The rig's check of the log against the vehicle's bounds (None without the compiled module)."""
+    try:
+        from . import _rig
+    except ModuleNotFoundError:
+        return None
+    try:
+        return _rig.log_bounds(path, vehicle=vehicle, salvage=salvage)
+    except _rig.DataError:
+        return None  # a damaged log: named by the reader below
+
+
+def read_log(path, channels=None, salvage=False, vehicle=None):
     """Reads the LCM log at `path`; `channels` (a collection of names) keeps only those.
+
+    A message with a value beyond the physical bounds of `vehicle` (a vehicle file; default the
+    rig's) is left out, named by a UserWarning and RigLog.beyond_bounds (with the compiled module).
 
     Raises LogError naming the byte offset and event number of any damage, unless `salvage`,
     which keeps the events before it and records what was wrong in RigLog.damage; and, before
@@ -135,6 +159,8 @@ def read_log(path, channels=None, salvage=False):
     """
     types = _types_by_fingerprint()
     data = _read_bounded(os.fspath(path))
+    bounds = _beyond_bounds(os.fspath(path), vehicle, salvage)
+    beyond = set(bounds["offsets"]) if bounds else set()
     offset, events, damage = 0, 0, None
     messages, stamps, undecoded = {}, {}, {}
     while offset < len(data):
@@ -156,12 +182,15 @@ def read_log(path, channels=None, salvage=False):
                 raise LogError(message + "; read_log(..., salvage=True) keeps the events before it")
             damage = message
             break
+        event_offset = offset
         start = offset + _HEADER.size
         channel = data[start:start + channel_len].decode("utf-8", "replace")
         payload = data[start + channel_len:start + channel_len + data_len]
         offset = start + channel_len + data_len
         events += 1
         if channels is not None and channel not in channels:
+            continue
+        if event_offset in beyond:
             continue
         cls = types.get(payload[:8])
         msg = None
@@ -182,4 +211,8 @@ def read_log(path, channels=None, salvage=False):
         columns = _columns(msgs)
         columns["log_utime"] = np.asarray(stamps[channel], dtype=np.int64)
         decoded[channel] = columns
-    return RigLog(path, decoded, undecoded, events, damage)
+    if bounds and bounds["text"]:
+        warnings.warn("%s: left out: %s" % (path, bounds["text"]), UserWarning, stacklevel=2)
+    if bounds is not None:
+        bounds = dict(bounds.pop("beyond_bounds"), text=bounds["text"])
+    return RigLog(path, decoded, undecoded, events, damage, bounds)
