@@ -32,7 +32,8 @@ inline constexpr std::uint64_t kMaxRecordSamples = 1'000'000;
 /// The longest row of a flight record: every channel (t and 16 more) at 17 significant digits
 /// with sign and exponent takes under 450 bytes.
 inline constexpr std::uint64_t kMaxRecordLineBytes = 512;
-/// The largest LCM log the rig reads (a lockstep run writes about 40 MB per simulated minute).
+/// The largest LCM log the rig reads: a run writes about 1 MB per simulated second (docs/campaigns.md),
+/// so over half an hour of flight.
 inline constexpr std::uint64_t kMaxLcmLogBytes = 2'000'000'000;
 
 /// A kind's name in messages ("an LCM log") and its bound in bytes.

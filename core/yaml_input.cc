@@ -29,9 +29,13 @@ class ExpansionCounter : public YAML::EventHandler {
   }
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
     const auto it = anchors_.find(anchor);
-    // An alias of an anchor still open (a node that contains itself) is yaml-cpp's to refuse.
-    const Size s = it == anchors_.end() ? Size{1, 0} : it->second;
-    add(mark, s);
+    if (it == anchors_.end()) {
+      // The parser refuses an unknown anchor, so this one is still open: an alias inside the node
+      // it names, which yaml-cpp builds as a node that contains itself (endless to walk).
+      throw ConfigError(source_, "", "", "a YAML alias inside the node its anchor names (a cycle)",
+                        mark.is_null() ? -1 : mark.line + 1);
+    }
+    add(mark, it->second);
   }
   void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                        YAML::EmitterStyle::value) override {
@@ -118,8 +122,9 @@ void check_yaml_expansion(const std::string& text, const std::string& source) {
   try {
     YAML::Parser parser(in);
     ExpansionCounter counter(source);
-    while (parser.HandleNextDocument(counter)) {
-    }
+    // The first document only: the one YAML::Load builds (and asking yaml-cpp 0.7 for the next
+    // document after some malformed text returns true for ever).
+    parser.HandleNextDocument(counter);
   } catch (const YAML::ParserException& e) {
     throw ConfigError(source, "", "", "not valid YAML: " + e.msg, e.mark.line + 1);
   }

@@ -7,8 +7,10 @@
 /// times, are 10^10 nodes to walk. Every YAML document the rig loads is therefore first read as
 /// yaml-cpp's event stream, counting each anchor's size and depth as expanded, and refused above
 /// kMaxYamlNodes nodes or kMaxYamlDepth levels, naming the file and the line where the bound was
-/// passed. The bounds are far above any configuration (the largest shipped file, the thesis
-/// campaign with its anchors, expands to 847 nodes and 5 levels).
+/// passed; an alias inside the node its own anchor names (`&a [*a]`, which yaml-cpp builds as a
+/// node containing itself, and which crashed every walk of it) is refused as a cycle. The bounds
+/// are far above any configuration (the largest shipped file, the thesis campaign with its
+/// anchors, expands to 847 nodes and 5 levels).
 
 #include <cstdint>
 #include <string>
@@ -24,8 +26,9 @@ inline constexpr std::uint64_t kMaxYamlNodes = 100'000;
 /// The deepest nesting of sequences and mappings a YAML document may expand to.
 inline constexpr int kMaxYamlDepth = 64;
 
-/// Refuses YAML `text` whose documents expand (aliases included) to more than kMaxYamlNodes
-/// nodes or kMaxYamlDepth levels. `source` names it in errors.
+/// Refuses YAML `text` whose first document (the one yaml-cpp's Load builds) expands, aliases
+/// included, to more than kMaxYamlNodes nodes or kMaxYamlDepth levels, or holds an alias inside
+/// its own anchor's node. `source` names it in errors.
 /// @throws ConfigError naming `source` and the line; "not valid YAML" for text that does not parse.
 void check_yaml_expansion(const std::string& text, const std::string& source);
 

@@ -181,7 +181,10 @@ void add_flights(py::module_& m) {
         py::arg("jobs") = 1, py::arg("dir") = py::none(), py::arg("envelopes") = false, py::arg("report") = py::none(),
         "Flies the scenario over seeds ('1-100') and parameter sets (vary={'key.path': [v1, v2]}) in process, "
         "`jobs` runs at a time, with the campaign engine of `rig sweep` (its local backend), and returns "
-        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there. envelopes: also "
+        "`rig sweep --json`'s content as a dict. dir: keep the campaign directory there, taken as rig sweep "
+        "--dir takes it (one writer: RuntimeError naming the holder's pid if another process holds it; a "
+        "directory that is not empty and holds no campaign is refused untouched; this same campaign there is "
+        "finished, not flown again). envelopes: also "
         "'envelopes', per parameter set the 5/50/95 % percentiles of p, v and phi across seeds against time "
         "(rig sweep --report's figures, as arrays); report: write rig sweep --report's files into that "
         "directory. Raises ConfigError for a bad value in any set.");

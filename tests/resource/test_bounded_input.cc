@@ -121,6 +121,13 @@ TEST_CASE("a YAML alias bomb is refused at once, naming the file and line", "[re
           "YAML aliases expand");
 }
 
+TEST_CASE("a YAML alias inside its own anchor's node is refused as a cycle, not walked for ever", "[resource]") {
+  // yaml-cpp builds it as a node that contains itself: every walk of it overflowed the stack.
+  const std::string scenario = write("self_alias.yaml", "base: hover.yaml\nplant: &p\n  x: [1, *p]\n");
+  refused("run " + scenario + " --clock inprocess --no-progress", scenario + ":3:", "(a cycle)");
+  refused("model " + scenario, scenario + ":3:", "a YAML alias inside the node its anchor names");
+}
+
 TEST_CASE("a base: cycle is refused naming every file of it", "[resource]") {
   const std::string a = nimble::test::scratch_file("bounded_input", "cycle_a.yaml");
   const std::string b = nimble::test::scratch_file("bounded_input", "cycle_b.yaml");
