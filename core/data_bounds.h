@@ -38,7 +38,7 @@ class BoundsTally {
  public:
   /// One channel and field with samples beyond its bound.
   struct Entry {
-    std::string channel;   ///< LCM channel ("TRUTH"), or "" for a record's column
+    std::string channel;   ///< LCM channel (TRUTH), or "" for a record's column
     std::string field;     ///< message field ("omega_body_radps[0]"), or the column ("p")
     std::string quantity;  ///< the bounded quantity ("p")
     std::uint64_t count = 0;

@@ -54,7 +54,7 @@ struct FlightData {
   std::string source;  ///< file or log it came from, used in messages
   std::map<std::string, Channel> channels;
   /// Where a channel read from a log came from: its LCM channel and message field
-  /// ("TRUTH", "omega_body_radps[0]"), for naming its samples (ident/data_check.h); none for a CSV file.
+  /// (TRUTH, omega_body_radps[0]), for naming its samples (ident/data_check.h); none for a CSV file.
   std::map<std::string, std::pair<std::string, std::string>> origin;
 
   /// True if the record has channel `name`.

@@ -21,6 +21,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "contract/channels.h"
 #include "core/data_bounds.h"
 #include "core/vehicle.h"
 #include "ident/lcm_log.h"
@@ -60,7 +61,7 @@ const Garbled& garbled() {
     nimble::ident::LcmLogReader reader(clean);
     nimble::ident::LogEventRecord ev;
     while (reader.next(&ev)) {
-      if (ev.channel == "TRUTH") truth.push_back(ev);
+      if (ev.channel == nimble::contract::channels::kTruth) truth.push_back(ev);
     }
     REQUIRE(truth.size() > 100);
     const nimble::ident::LogEventRecord& victim = truth[truth.size() / 2];
