@@ -168,6 +168,12 @@ TEST_CASE("slurm: a cancelled array task is named with its runs, and --resume fi
   }
   REQUIRE(!job.empty());
   CHECK(shell("scancel " + job + "_3") == 0);
+  // While it waits for its tasks, the submitting rig sweep holds the directory (the tasks write their
+  // runs beside it): a second sweep on it is refused at once, naming the holder.
+  const Outcome second = rig_sweep(d, "second", "--resume " + c);
+  CHECK(second.exit_code == 2);
+  CHECK(second.output.find("the campaign directory " + c + " is being written by another process (pid ") !=
+        std::string::npos);
   waiting.join();
   const std::string said = slurp(d + "/waiting.txt");
   INFO(said);
