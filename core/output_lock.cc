@@ -32,7 +32,7 @@ std::set<std::pair<dev_t, ino_t>>& held_set() {
   return s;
 }
 
-std::string reason(int e) { return e != 0 ? std::strerror(e) : "unknown error"; }
+std::string lock_reason(int e) { return e != 0 ? std::strerror(e) : "unknown error"; }
 
 /// The command line of process `pid`, arguments joined by spaces ("" if it cannot be read).
 std::string command_of(int pid) {
@@ -119,7 +119,7 @@ struct stat lock_or_close(int fd, const std::string& path, const std::string& wh
   if (::fstat(fd, &st) != 0) {
     const int e = errno;
     ::close(fd);
-    throw OutputError("cannot take " + what + " " + path + ": " + reason(e), e, -1);
+    throw OutputError("cannot take " + what + " " + path + ": " + lock_reason(e), e, -1);
   }
   if (std::string(kind) == "file" && !S_ISREG(st.st_mode)) {
     ::close(fd);
@@ -130,7 +130,7 @@ struct stat lock_or_close(int fd, const std::string& path, const std::string& wh
     const int e = errno;
     ::close(fd);
     if (e == EWOULDBLOCK) refuse(what, path, st.st_dev, st.st_ino, kind);
-    throw OutputError("cannot lock " + what + " " + path + ": " + reason(e), e, -1);
+    throw OutputError("cannot lock " + what + " " + path + ": " + lock_reason(e), e, -1);
   }
   return st;
 }
@@ -145,7 +145,7 @@ OutputLock OutputLock::file(const std::string& path, const std::string& what) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0666);
   if (fd < 0) {
     const int e = errno;
-    throw OutputError("cannot open " + what + " " + path + " for writing: " + reason(e), e, -1);
+    throw OutputError("cannot open " + what + " " + path + " for writing: " + lock_reason(e), e, -1);
   }
   const struct stat st = lock_or_close(fd, path, what, "file");
   return OutputLock(fd, path, st.st_dev, st.st_ino);
@@ -157,7 +157,7 @@ OutputLock OutputLock::directory(const std::string& dir, const std::string& what
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) {
     const int e = errno;
-    throw OutputError("cannot open " + what + " " + dir + ": " + reason(e), e, -1);
+    throw OutputError("cannot open " + what + " " + dir + ": " + lock_reason(e), e, -1);
   }
   const struct stat st = lock_or_close(fd, dir, what, "directory");
   return OutputLock(fd, dir, st.st_dev, st.st_ino);
@@ -184,7 +184,7 @@ void lock_open_output(int fd, const std::string& path, const std::string& what) 
     if (errno == EINTR) continue;
     const int e = errno;
     if (e == EWOULDBLOCK) refuse(what, path, st.st_dev, st.st_ino, "file");
-    throw OutputError("cannot lock " + what + " " + path + ": " + reason(e), e, -1);
+    throw OutputError("cannot lock " + what + " " + path + ": " + lock_reason(e), e, -1);
   }
 }
 

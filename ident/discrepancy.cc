@@ -33,9 +33,21 @@ void check_request(const DerivativeModel& model, const DiscrepancyOptions& optio
     throw std::invalid_argument("rig discrepancy works on lateral3 models; '" + model.name + "' is " +
                                 to_string(model.structure));
   }
-  if (options.folds < 4) throw std::invalid_argument("discrepancy: folds must be >= 4");
-  if (!(options.partial_f > 0.0)) throw std::invalid_argument("discrepancy: partial F must be > 0");
-  if (!(options.delay_max_s > 0.0)) throw std::invalid_argument("discrepancy: delay_max_s must be > 0");
+  // The command line's ranges (rig discrepancy --help), checked here for every front end (Python).
+  const auto value = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string(std::isnan(v) ? "nan" : "inf"); };
+  if (options.folds < 4 || options.folds > 100) {
+    throw std::invalid_argument("discrepancy: folds must be in [4, 100], not " + std::to_string(options.folds));
+  }
+  if (!std::isfinite(options.partial_f) || !(options.partial_f > 0.0)) {
+    throw std::invalid_argument("discrepancy: partial_f must be finite and > 0, not " + value(options.partial_f));
+  }
+  if (!std::isfinite(options.delay_max_s) || !(options.delay_max_s >= 1e-9 && options.delay_max_s <= 1.0)) {
+    throw std::invalid_argument("discrepancy: delay_max_s must be in (0, 1] s, not " + value(options.delay_max_s));
+  }
+  if (!std::isfinite(options.command_latency_s) || !(options.command_latency_s >= 0.0 && options.command_latency_s <= 0.1)) {
+    throw std::invalid_argument("discrepancy: command_latency_s must be in [0, 0.1] s, not " +
+                                value(options.command_latency_s));
+  }
   for (const auto& name : options.candidates) {
     if (find_effect(name) == nullptr) {
       throw std::invalid_argument("unknown candidate '" + name + "' (known: " + effect_name_list() + ")");

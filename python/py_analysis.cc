@@ -6,6 +6,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -57,6 +58,17 @@ ident::FlightData dict_data(const py::dict& d) {
 /// The processing options given (None: the commands' defaults).
 ident::ProcessingOptions processing_of(std::optional<double> rate_hz, std::optional<double> cutoff_hz,
                                        std::optional<int> order, const std::string& interpolation) {
+  // The command line's ranges (--rate, --cutoff, --order: cli/log_input.cc add_processing).
+  const auto text = [](double v) { return std::isnan(v) ? std::string("nan") : std::to_string(v); };
+  if (rate_hz && !(std::isfinite(*rate_hz) && *rate_hz >= 1e-3 && *rate_hz <= 1e6)) {
+    throw py::value_error("rate_hz must be finite and in [0.001, 1e6] Hz, not " + text(*rate_hz));
+  }
+  if (cutoff_hz && !(std::isfinite(*cutoff_hz) && *cutoff_hz > 0.0)) {
+    throw py::value_error("cutoff_hz must be finite and > 0 Hz, not " + text(*cutoff_hz));
+  }
+  if (order && (*order < 0 || *order > 40)) {
+    throw py::value_error("order must be in [0, 40] (0: no low-pass), not " + std::to_string(*order));
+  }
   ident::ProcessingOptions p;
   if (rate_hz) p.rate_hz = *rate_hz;
   if (cutoff_hz) p.cutoff_hz = *cutoff_hz;

@@ -126,7 +126,10 @@ py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dic
     }
     o.vary.push_back(v);
   }
-  o.jobs = std::max(1, jobs);
+  if (jobs < 1 || jobs > 256) {  // rig sweep --jobs's range
+    throw py::value_error("jobs must be in [1, 256] (runs at a time), not " + std::to_string(jobs));
+  }
+  o.jobs = jobs;
   o.progress = false;
   req.report = envelopes || report.has_value();
   std::optional<campaign::TemporaryCampaignDir> temporary;  // removed on return, whatever happened

@@ -120,3 +120,16 @@ def test_bad_data_raises_data_error_naming_the_channel_and_sample(train, tmp_pat
     damaged.write_bytes(open(train["log"], "rb").read()[:200000] + b"\x00" * 40)
     with pytest.raises(nimble_rig.DataError):
         nimble_rig.identify(str(damaged))
+
+
+def test_options_out_of_the_command_lines_ranges_are_refused_as_there(train):
+    """nan, inf and out-of-range options raise ValueError naming them, as the command line refuses them."""
+    for bad in ({"command_latency_s": float("nan")}, {"delay_max_s": float("inf")}, {"delay_max_s": 0.0},
+                {"partial_f": float("nan")}, {"folds": 2}, {"command_latency_s": 0.5}):
+        name = next(iter(bad))
+        with pytest.raises(ValueError, match=name):
+            nimble_rig.discrepancy(train["log"], model=SET1, **bad)
+    for bad in ({"rate_hz": float("nan")}, {"cutoff_hz": float("inf")}, {"cutoff_hz": -1.0}, {"order": 41}):
+        name = next(iter(bad))
+        with pytest.raises(ValueError, match=name):
+            nimble_rig.identify(train["log"], **bad)

@@ -164,3 +164,10 @@ def test_sweep_envelopes_are_rig_sweep_reports(tmp_path):
             np.testing.assert_allclose(env[quantity][key], [float(r[column]) for r in mine], rtol=1e-15, atol=0,
                                        err_msg=quantity + " " + key)
         assert env[quantity]["n"] == [int(r[5]) for r in mine]
+
+
+def test_sweep_jobs_out_of_rig_sweeps_range_are_refused():
+    scenario = nimble_rig.load_scenario(HOVER, {"duration_s": 1})
+    for jobs in (0, -5, 257):
+        with pytest.raises(ValueError, match=r"jobs must be in \[1, 256\]"):
+            nimble_rig.sweep(scenario, seeds="1-2", jobs=jobs)
