@@ -34,8 +34,8 @@ using nimble::test::run_rig;
 using nimble::test::slurp;
 
 const std::string kSource = std::string(RIG_SOURCE_DIR) + "/";
-/// A tiny campaign: three half-second hovers in process, one at a time.
-const std::string kSweep = "sweep " + kSource + "rig_configs/hover.yaml --set duration_s=0.5 --jobs 1 --no-progress";
+/// A tiny campaign: three hovers of 0.2 s in process, one at a time.
+const std::string kSweep = "sweep " + kSource + "rig_configs/hover.yaml --set duration_s=0.2 --jobs 1 --no-progress";
 
 /// `rig ARGS` started now, its stdout and stderr into `out`; returns its pid.
 pid_t start_rig(const std::vector<std::string>& args, const std::string& out) {
@@ -63,7 +63,7 @@ int exit_code(pid_t pid) {
 }
 
 std::vector<std::string> sweep_args(const std::string& seeds, const std::string& dir) {
-  return {"sweep", kSource + "rig_configs/hover.yaml", "--set", "duration_s=0.5", "--jobs", "1", "--no-progress",
+  return {"sweep", kSource + "rig_configs/hover.yaml", "--set", "duration_s=0.2", "--jobs", "1", "--no-progress",
           "--seeds", seeds, "--dir", dir};
 }
 
