@@ -25,6 +25,7 @@
 
 #include "campaign/worker_pool.h"
 #include "core/descriptors.h"
+#include "core/input_file.h"
 #include "core/output_file.h"
 #include "launcher/inprocess.h"
 #include "scenario/scenario.h"
@@ -403,11 +404,15 @@ Campaign load_campaign(const std::string& dir_in) {
   Campaign c;
   c.dir = fs::absolute(dir_in).lexically_normal().string();
   const std::string file = c.dir + "/campaign.json";
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("no campaign in " + c.dir + " (" + file + " cannot be read)");
+  std::string text;
+  try {
+    text = read_input_file(file, InputKind::kCampaign);  // a regular file within a campaign file's bound
+  } catch (const InputFileError& e) {
+    throw std::runtime_error("no campaign in " + c.dir + " (" + e.what() + ")");
+  }
   Json m;
   try {
-    m = Json::parse(in);
+    m = Json::parse(text);
   } catch (const std::exception& e) {
     throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
   }
@@ -505,9 +510,7 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
     r["set"] = c.set_of(i) + 1;
     r["seed"] = c.seed_of(i);
     try {
-      std::ifstream in(f[0]);
-      if (!in) throw std::runtime_error("no report");
-      r["report"] = Json::parse(in);
+      r["report"] = Json::parse(read_input_file(f[0], InputKind::kCampaign));
       r["report"].at("exit_code").get<int>();
     } catch (const std::exception&) {
       const std::string said = last_line(f[1]);

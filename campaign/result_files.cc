@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/input_file.h"
 #include "core/output_file.h"
 #include "core/output_lock.h"
 
@@ -46,14 +47,9 @@ bool key_ok(const std::string& key) {
   return true;
 }
 
-std::string slurp(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw std::runtime_error("cannot read " + file);
-  return text.str();
-}
+/// A manifest or result file, whole: a regular file within a campaign file's bound
+/// (core/input_file.h). @throws InputFileError naming the file and the problem.
+std::string slurp(const std::string& file) { return read_input_file(file, InputKind::kCampaign); }
 
 Json parse_manifest(const std::string& file) {
   try {
@@ -169,8 +165,8 @@ std::optional<std::string> ResultFiles::read(const std::string& key) const {
   std::string s;
   try {
     s = slurp(f);
-  } catch (const std::exception&) {
-    throw std::runtime_error("cannot read the result file " + f);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("cannot read the result file " + f + ": " + e.what());
   }
   const std::size_t eol = s.find('\n');
   if (eol == std::string::npos) throw std::runtime_error("the result file " + f + " ends within its campaign line");
@@ -201,6 +197,7 @@ void ResultFiles::check_all() const {
     if (name.compare(key.size(), std::string::npos, ".json") != 0 || !key_ok(key) || !e.is_regular_file(ec)) {
       throw ForeignResult(f + " is not a result file of a campaign (a result file is runs/<item>.json)" + kReadAgain);
     }
+    check_input_file(f, InputKind::kCampaign);  // its first line is read: within a campaign file's bound
     std::ifstream in(f, std::ios::binary);
     std::string line;
     if (!std::getline(in, line) || in.eof()) continue;  // cut short: read() names it as damaged

@@ -139,6 +139,18 @@ TEST_CASE("a base: cycle is refused naming every file of it", "[resource]") {
           a + " -> " + b + " -> " + c + " -> " + a);
 }
 
+TEST_CASE("a campaign manifest that is a FIFO or /dev/zero is refused naming it", "[resource]") {
+  const std::string pipe = fifo();
+  for (const std::string& bad : {pipe, std::string("/dev/zero")}) {
+    const std::string dir = nimble::test::scratch_dir("bounded_input_campaign");
+    fs::create_symlink(bad, fs::path(dir) / "campaign.json");
+    const std::string manifest = dir + "/campaign.json";
+    const std::string problem = bad == pipe ? "(a FIFO)" : "(a character device)";
+    refused("sweep --resume " + dir, manifest, "is not a regular file " + problem);
+    refused("sweep collect " + dir, manifest, "is not a regular file " + problem);
+  }
+}
+
 TEST_CASE("/proc/self/mem and a directory as a scenario are refused naming the file", "[resource]") {
   const auto r = run_rig("run /proc/self/mem --clock inprocess --no-progress </dev/null", "timeout 20");
   INFO(r.err);
