@@ -87,6 +87,27 @@ TEST_CASE("a FIFO into every command that takes a file is refused, not waited on
   for (const std::string& args : commands_with(pipe)) refused(args, pipe, "is not a regular file (a FIFO)");
 }
 
+TEST_CASE("a file above the bound of its kind is refused before it is read, naming the size and the bound",
+          "[resource]") {
+  // Sparse files: their size is what the bound looks at, and nothing of them is read.
+  const auto sparse = [](const std::string& name, std::uintmax_t bytes) {
+    const std::string path = nimble::test::scratch_file("bounded_input", name);
+    std::ofstream{path};
+    fs::resize_file(path, bytes);
+    return path;
+  };
+  const std::string log = sparse("huge.lcmlog", 2'100'000'000);
+  refused("identify " + log, log, "is 2.1 GB, above the 2.0 GB bound for an LCM log");
+  refused("export " + log + " --format mcap --out " + log + ".mcap", log, "above the 2.0 GB bound for an LCM log");
+  const std::string csv = sparse("huge.csv", 600'000'000);
+  refused("identify " + csv, csv, "is 600.0 MB, above the 512.0 MB bound for a flight record");
+  const std::string scenario = sparse("huge.yaml", 5'000'000);
+  refused("run " + scenario + " --clock inprocess --no-progress", scenario,
+          "is 5.0 MB, above the 4.0 MB bound for a configuration file");
+  for (const std::string& f : {log, csv, scenario}) fs::remove(f);
+  CHECK_FALSE(fs::exists(log + ".mcap"));
+}
+
 TEST_CASE("a FIFO as a base: file is refused, naming it and the key", "[resource]") {
   const std::string pipe = fifo();
   const std::string scenario = write("fifo_base.yaml", "base: " + pipe + "\nduration_s: 1\n");
