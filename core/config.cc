@@ -8,7 +8,6 @@
 #include <map>
 #include <sstream>
 
-#include "core/input_file.h"
 #include "core/yaml_input.h"
 
 namespace nimble {
@@ -139,14 +138,6 @@ void check_unique_keys_at(const YAML::Node& node, const std::string& file, const
 }  // namespace
 
 void check_unique_keys(const YAML::Node& root, const std::string& file) { check_unique_keys_at(root, file, ""); }
-
-void check_readable_file(const std::string& file, const std::string& referrer_key) {
-  try {
-    check_input_file(file, InputKind::kConfig);
-  } catch (const InputFileError& e) {
-    throw ConfigError(file, referrer_key, "", e.problem());
-  }
-}
 
 ConfigMap ConfigMap::load_file(const std::string& file) {
   const YAML::Node root = load_yaml_file(file);

@@ -47,12 +47,6 @@ class ConfigError : public std::runtime_error {
 /// @throws ConfigError naming `file`, the key path and both lines (or the key's line).
 void check_unique_keys(const YAML::Node& root, const std::string& file);
 
-/// Refuses, before it is read, a configuration file that does not exist, is no regular file (a
-/// directory, a FIFO, a device) or is above the bound of a configuration file (core/input_file.h).
-/// @throws ConfigError naming `file` ("file not found", "is a directory, not a file", "is not a
-///         regular file (a FIFO)", the bound).
-void check_readable_file(const std::string& file, const std::string& referrer_key = "");
-
 /// Closed or open interval used to validate numeric config values.
 struct Range {
   double lo = -std::numeric_limits<double>::infinity();
