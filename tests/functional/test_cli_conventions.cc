@@ -105,9 +105,10 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"reproduce paper", "what: paper not in {thesis}"},
            {"reproduce thesis --states guess", "--states: guess not in {smoothed,estimate,truth}"},
            {"reproduce thesis --seeds 5-1", "--seeds 5-1: --seeds needs A-B"},
-           {"identify /dev/null --states smoothed", "--states: /dev/null is not a rig log"},
-           {"validate x.yaml /dev/null --states truth", "--states: /dev/null is not a rig log"},
-           {"discrepancy /dev/null --model x.yaml --states smoothed", "--states: /dev/null is not a rig log"},
+           // A regular file that is no rig log (/dev/null is refused before, as no regular file).
+           {"identify " + scenario + " --states smoothed", "--states: " + scenario + " is not a rig log"},
+           {"validate x.yaml " + scenario + " --states truth", "--states: " + scenario + " is not a rig log"},
+           {"discrepancy " + scenario + " --model x.yaml --states smoothed", "--states: " + scenario + " is not a rig log"},
            {"identify x.lcmlog --states guess", "--states: guess not in {auto,estimate,truth,smoothed}"},
        }) {
     INFO(c.args);
