@@ -91,6 +91,12 @@ if [[ "${SANITIZE:-0}" != 1 && "$PROFILE" == all ]]; then
   fi
 fi
 
+# ccache (CMakeLists.txt, RIG_CCACHE): paths below the checkout are hashed relative to it and the
+# build directory is left out of the hash, so a fresh clone of the rig in another folder of this
+# machine (CI's) reuses the objects compiled here instead of compiling everything again. A reused
+# object's debug information names the folder it was first compiled in.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
+export CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" "${CMAKE_ARGS[@]}" >/dev/null
 if [[ -n "${TARGETS:-}" ]]; then
   # shellcheck disable=SC2086  # a list of target names
