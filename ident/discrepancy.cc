@@ -359,6 +359,10 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
     s << "named:";
     for (const auto& e : res.effects) {
       s << " " << e.name;
+      if (!e.channel.empty()) {
+        s << " " << e.channel << (e.against.empty() ? "" : " against " + e.against) << " " << fmt(e.coefficient) << " "
+          << e.unit << " [" << fmt(e.interval[0]) << ", " << fmt(e.interval[1]) << "]";
+      }
       if (e.name == "term") s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (a form outside the library)";
     }
     for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
@@ -427,6 +431,7 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
     if (spec.stochastic) am.effects[name] = given;
   }
   for (const auto& e : res.effects) {
+    if (!e.channel.empty()) continue;  // a sensor error: the record was corrected, the model is not changed
     if (e.name == "term") {
       am.terms.push_back(Term{e.equation, TermExpression::parse(e.expression), e.coefficient, "rig discrepancy " + source});
     } else {
@@ -458,12 +463,14 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::vector<std::string> inputs = options.inputs.empty() ? model.inputs : options.inputs;
   // Each flight prepared on its own (filter, derivatives, the applied command), then joined.
   std::vector<UniformData> prepared;
-  for (const FlightData& data : flights) {
-    check_flight_data(data, vehicle);
-    check_excitation(data, state_names(model.structure), inputs);
+  std::vector<FlightData> aligned;  // each flight corrected by its data-compatibility stage
+  for (const FlightData& recorded : flights) {
+    check_flight_data(recorded, vehicle);
+    check_excitation(recorded, state_names(model.structure), inputs);
     for (const auto& in : inputs) {
-      if (!data.has(in)) throw DataError(data.source, -1, -1, in, "the model's input " + in + " is not in the data");
+      if (!recorded.has(in)) throw DataError(recorded.source, -1, -1, in, "the model's input " + in + " is not in the data");
     }
+    const FlightData& data = aligned.emplace_back(compatibility_stage(recorded, model, vehicle, inputs, options, res));
     PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
     add_applied_command(prep.filtered, options.command_latency_s);
     if (prep.filtered.size() < static_cast<Index>(50 * options.folds)) {
@@ -478,7 +485,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::vector<std::pair<Index, Index>> rows;
   const UniformData d = join_flights(prepared, rows);
   prepared.clear();
-  const FlightData& data = flights.front();
+  const FlightData& data = aligned.front();
   res.source = d.source;
   const Index n = d.size();
   res.rate_hz = d.rate_hz;
@@ -545,6 +552,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   }
   const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
   signature_findings(options, res);
+  const std::size_t compatibility_tests = sensor_findings(res);
   res.alarm_rule.p_critical = wf.p_critical;
   // Each library trial is a test; the open-world search is one test per round (Bonferroni over
   // its families inside), however many of its trials are listed.
@@ -554,7 +562,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   }
   res.alarm_rule.tests = static_cast<std::size_t>(std::count_if(res.candidates.begin(), res.candidates.end(),
                                                                 [](const CandidateTrial& t) { return t.name != "term"; })) +
-                         term_rounds + location_tests;
+                         term_rounds + location_tests + compatibility_tests;
   res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;
   gap_table(d, model, options, known_values, m, cv_before, cv_after, res);
   gap_bands(d, options, m, cv_before, cv_after, std::move(wide_bands), res);

@@ -139,6 +139,7 @@
 
 #include "core/model.h"
 #include "core/vehicle.h"
+#include "ident/data_compatibility.h"
 #include "ident/flight_data.h"
 #include "ident/identify.h"
 #include "core/effects.h"
@@ -218,6 +219,9 @@ struct DiscrepancyOptions {
   /// family-wise bound, up to term_rounds terms.
   bool term_search = true;
   std::size_t term_rounds = 2;
+  /// The data-compatibility stage, first on every flight (ident/data_compatibility.h): the gyro's
+  /// scale, bias and clock against the attitude from the kinematics, corrected before the search.
+  CompatibilityOptions compatibility;
 };
 
 /// Statistics of one candidate tried in one round.
@@ -279,6 +283,10 @@ struct NamedEffect {
   double interval[2] = {0.0, 0.0};
   std::vector<std::string> alternatives;
   std::vector<std::pair<std::string, std::string>> ruled_out;  ///< (library effect, reason)
+  /// A sensor error of the compatibility stage (sensor_scale, time_offset, sensor_bias from the
+  /// kinematics): the sensor's channel, the source it was compared with, the unit of its value
+  /// (coefficient, with interval), and the flight it was found in. Empty for a model effect.
+  std::string channel, against, unit, flight;
 };
 
 /// Held-out fit of one equation output.
@@ -431,6 +439,8 @@ struct DiscrepancyResult {
   /// Diagnostics skipped because the record is too short for them, each saying how long a
   /// record it needs (the result stands without them).
   std::vector<std::string> notes;
+  /// The data-compatibility stage of each flight (empty when it is off).
+  std::vector<CompatibilityResult> compatibility;
 };
 
 /// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally

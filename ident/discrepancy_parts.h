@@ -605,4 +605,19 @@ std::vector<std::vector<double>> weight_flights(Model& m, const std::vector<Vect
 void flight_consistency(const Model& m, const BatchRule& batch, const std::vector<std::pair<Index, Index>>& rows,
                         double alpha, DiscrepancyResult& res);
 
+// --- discrepancy_compat.cc ---
+
+/// The data-compatibility stage of one flight (ident/data_compatibility.h): checks the record,
+/// names its significant sensor errors whose signatures hold in res.effects (with channel and
+/// interval), keeps the stage's result in res.compatibility (with the baseline's held-out gap on
+/// the record as recorded when a correction was made) and returns the corrected record.
+FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel& model, const Vehicle& vehicle,
+                               const std::vector<std::string>& inputs, const DiscrepancyOptions& options,
+                               DiscrepancyResult& res);
+
+/// The stage's significant errors without their signature located as structure (unexplained);
+/// actuator_delay ambiguous with a time offset where a flight's kinematics were not checked.
+/// Returns the stage's alarm tests (three per checked flight).
+std::size_t sensor_findings(DiscrepancyResult& res);
+
 }  // namespace nimble::ident::discrepancy_parts

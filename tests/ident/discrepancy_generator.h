@@ -35,6 +35,12 @@
 ///   effectiveness_step    L_df and Y_df change by the fraction f from t* on: a damaged wing,
 ///                         f in [-0.40, -0.15], t* in the middle 60 % of the record
 ///
+/// The sensors' own errors (the data-compatibility stage, ident/data_compatibility.h): the
+/// dynamics are untouched, only the recorded gyro channel p differs from the truth:
+///   sensor_scale          p recorded as (1 + k) p, |k| in [0.05, 0.15], either sign
+///   time_offset           p recorded tau late (its sample of t - tau stamped t; tau < 0: early),
+///                         |tau| in [10, 50] ms, either sign: the IMU's clock against the motion capture
+///
 /// Forms that are NOT library effects (the out-of-library suite, test_discrepancy_outside.cc): no
 /// candidate of ident/discrepancy.h has their signature, so a library name given to them is a
 /// wrong name. Magnitudes drawn by the seed from the ranges below:
@@ -62,6 +68,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -85,6 +92,8 @@ struct HiddenEffects {
   double lag_s = 0.0;           ///< flap_lag: tau [s]
   double L_vv_only = 0.0;       ///< roll_inflow_only: L_vo [N m s^2/m^2]
   double load_L = 0.0, load_Y = 0.0;  ///< constant_load: L0 [N m], Y0 [N]
+  double scale_k = 0.0;         ///< sensor_scale: k
+  double offset_s = 0.0;        ///< time_offset: tau [s]
 };
 
 struct GeneratorOptions {
@@ -128,6 +137,9 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   h.L_vv_only = -(1.0e-3 + 3.0e-3 * u01(rng)) * h.scale;
   h.load_L = (1.0e-5 + 2.0e-5 * u01(rng)) * h.scale;
   h.load_Y = 50.0 * h.load_L;
+  // The sensors' errors, drawn last for the same reason.
+  h.scale_k = (u01(rng) < 0.5 ? -1.0 : 1.0) * (0.05 + 0.10 * u01(rng)) * h.scale;
+  h.offset_s = (u01(rng) < 0.5 ? -1.0 : 1.0) * (0.010 + 0.040 * u01(rng)) * h.scale;
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -150,6 +162,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool dead_zone = h.on.count("flap_dead_zone") > 0, backlash = h.on.count("flap_backlash") > 0;
   const bool lag = h.on.count("flap_lag") > 0, roll_inflow_only = h.on.count("roll_inflow_only") > 0;
   const bool load = h.on.count("constant_load") > 0;
+  const bool scale_err = h.on.count("sensor_scale") > 0, offset_err = h.on.count("time_offset") > 0;
+  std::vector<double> p_true;  // every step's p, for a recorded p off in time (time_offset)
   const double Lp3 = -h.cubic_c * std::fabs(Lp) / 4.0;
   // The flap input's effectiveness at time t (effectiveness_drift, effectiveness_step).
   auto effectiveness = [&](double t) {
@@ -262,7 +276,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
         d.channels[c].t_s.push_back(t);
         d.channels[c].values.push_back(val);
       };
-      rec("p", p + (bias ? h.bias_p : 0.0) + o.noise_p * n01(rng));
+      rec("p", (scale_err ? 1.0 + h.scale_k : 1.0) * p + (bias ? h.bias_p : 0.0) + o.noise_p * n01(rng));
       rec("v", v + o.noise_v * n01(rng));
       rec("phi", phi + o.noise_phi * n01(rng));
       rec("u", u_of(t) + o.noise_w * n01(rng));
@@ -274,6 +288,7 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
       if (yaw_alias) rec("r", 2.0 * dd_of(t) * (1.0 + 0.01 * n01(rng)));
       if (o.record_command) rec("delta_f_cmd", command(t, p, phi));
     }
+    if (offset_err) p_true.push_back(p);
     if (i == steps) break;
     if (delay) {
       df_hist.emplace_back(t, df);
@@ -311,6 +326,19 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     phi += dt / 6.0 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2]);
     df += dt / 6.0 * (k1[3] + 2 * k2[3] + 2 * k3[3] + k4[3]);
     if (gust) vg = a_g * vg + 0.1 * std::sqrt(1.0 - a_g * a_g) * n01(rng);
+  }
+  if (offset_err) {
+    // The recorded p at t is the truth at t - tau (linear between the 2048 Hz steps; held at the
+    // record's ends), with the scale, bias and noise it was recorded with.
+    Channel& pc = d.channels["p"];
+    for (std::size_t j = 0; j < pc.t_s.size(); ++j) {
+      const double at = pc.t_s[j] - h.offset_s, pos = std::clamp(at / dt, 0.0, static_cast<double>(steps));
+      const auto i0 = std::min(static_cast<std::size_t>(pos), p_true.size() - 2);
+      const double f = pos - static_cast<double>(i0);
+      const double now = p_true[static_cast<std::size_t>(j) * sub];
+      const double then = (1.0 - f) * p_true[i0] + f * p_true[i0 + 1];
+      pc.values[j] += (scale_err ? 1.0 + h.scale_k : 1.0) * (then - now);
+    }
   }
   return d;
 }

@@ -1,0 +1,441 @@
+// The discrepancy workflow (ident/discrepancy.h), part: data compatibility, the sensors' own errors
+// estimated from the kinematics before any aerodynamic term (ident/data_compatibility.h).
+
+#include "ident/data_compatibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
+#include "core/chi_square.h"
+#include "ident/discrepancy_parts.h"
+#include "ident/identify.h"
+
+namespace nimble::ident {
+
+namespace {
+
+using namespace discrepancy_parts;
+
+std::string num(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", x);
+  return b;
+}
+
+/// Median interval between a channel's stamps [s] (0 for fewer than 2 samples).
+double median_interval(const Channel& c) {
+  if (c.t_s.size() < 2) return 0.0;
+  std::vector<double> d(c.t_s.size() - 1);
+  for (std::size_t i = 1; i < c.t_s.size(); ++i) d[i - 1] = c.t_s[i] - c.t_s[i - 1];
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+/// A least-squares fit with its coloured covariance. Rows outside a subset are zero in X and y,
+/// so the batch means run over the record's own contiguous blocks.
+struct LsFit {
+  VectorXd theta;
+  MatrixXd cov;
+  double blocks = 0.0;
+  bool ok = false;
+};
+
+LsFit fit(const MatrixXd& X, const VectorXd& y, Index min_block) {
+  LsFit f;
+  const MatrixXd G = X.transpose() * X;
+  const Eigen::LDLT<MatrixXd> ldlt(G);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12 * G.diagonal().maxCoeff()).all()) return f;
+  f.theta = ldlt.solve(X.transpose() * y);
+  const VectorXd e = y - X * f.theta;
+  const BatchRule rule{min_block};
+  const Index block = rule.block(e);
+  f.cov = coloured_covariance(X, e, block);
+  f.blocks = block_count(X.rows(), block);
+  f.ok = f.theta.allFinite() && f.cov.allFinite();
+  return f;
+}
+
+double sd(const MatrixXd& cov, const VectorXd& g) { return std::sqrt(std::max(0.0, g.dot(cov * g))); }
+
+/// tau of a fit on [x_L, xdot_L, (1)]: L / rate + beta / a, and its standard deviation.
+void tau_of(const LsFit& f, double shift_s, double& tau, double& sigma) {
+  const double a = f.theta[0], beta = f.theta[1];
+  tau = shift_s + beta / a;
+  VectorXd g = VectorXd::Zero(f.theta.size());
+  g[0] = -beta / (a * a);
+  g[1] = 1.0 / a;
+  sigma = sd(f.cov, g);
+}
+
+/// k of a fit: 1 / a - 1, and its standard deviation.
+void scale_of(const LsFit& f, double& k, double& sigma) {
+  const double a = f.theta[0];
+  k = 1.0 / a - 1.0;
+  VectorXd g = VectorXd::Zero(f.theta.size());
+  g[0] = -1.0 / (a * a);
+  sigma = sd(f.cov, g);
+}
+
+/// b of a fit with an intercept (last column): -c / a, and its standard deviation.
+void bias_of(const LsFit& f, double& b, double& sigma) {
+  const Index q = f.theta.size();
+  const double a = f.theta[0], c = f.theta[q - 1];
+  b = -c / a;
+  VectorXd g = VectorXd::Zero(q);
+  g[0] = c / (a * a);
+  g[q - 1] = -1.0 / a;
+  sigma = sd(f.cov, g);
+}
+
+/// Whether two estimates of the same error agree: their difference beyond the tolerance, against
+/// its standard deviation, within the two-sided normal quantile of alpha.
+bool agree(double v1, double s1, double v2, double s2, double tol, double alpha, std::string& note,
+           const std::string& what, const std::string& unit) {
+  const double z = boost::math::quantile(boost::math::complement(boost::math::normal(), 0.5 * alpha));
+  const double sd_diff = std::hypot(s1, s2);
+  const double excess = std::max(0.0, std::fabs(v1 - v2) - tol);
+  const bool ok = excess <= z * sd_diff;
+  note = what + ": " + num(v1) + " +- " + num(s1) + " and " + num(v2) + " +- " + num(s2) + " " + unit +
+         (ok ? " agree" : " differ beyond the tolerance (" + num(excess / sd_diff) + " sd, limit " + num(z) + ")");
+  return ok;
+}
+
+/// Tests one error: its excess over the tolerance, the interval.
+void test_error(SensorError& e, double blocks, double p_critical) {
+  const double tq = boost::math::quantile(boost::math::students_t(std::max(1.0, blocks - 1.0)), 0.975);
+  e.interval[0] = e.value - tq * e.sigma;
+  e.interval[1] = e.value + tq * e.sigma;
+  const double excess = std::max(0.0, std::fabs(e.value) - e.tolerance);
+  const double w = e.sigma > 0.0 ? (excess / e.sigma) * (excess / e.sigma) : (excess > 0.0 ? INFINITY : 0.0);
+  e.p_value = wald_tail(w, 1, blocks);
+  e.significant = e.p_value <= p_critical;
+}
+
+/// The columns of the kinematic regression at a shift of L samples over rows [r0, r0 + n).
+MatrixXd kin_design(const VectorXd& x, const VectorXd& xd, Index r0, Index n, Index L, bool intercept) {
+  MatrixXd X(n, intercept ? 3 : 2);
+  X.col(0) = x.segment(r0 + L, n);
+  X.col(1) = xd.segment(r0 + L, n);
+  if (intercept) X.col(2).setOnes();
+  return X;
+}
+
+/// The whole-sample shift of x (in -M..M) that fits y best (least RSS with a gain and an offset).
+Index best_shift(const VectorXd& x, const VectorXd& y, Index r0, Index n, Index M) {
+  std::vector<double> s1(static_cast<std::size_t>(x.size()) + 1, 0.0), s2(s1.size(), 0.0);
+  for (Index i = 0; i < x.size(); ++i) {
+    s1[static_cast<std::size_t>(i) + 1] = s1[static_cast<std::size_t>(i)] + x[i];
+    s2[static_cast<std::size_t>(i) + 1] = s2[static_cast<std::size_t>(i)] + x[i] * x[i];
+  }
+  const VectorXd ys = y.segment(r0, n);
+  const double N = static_cast<double>(n), sy = ys.sum();
+  Index best = 0;
+  double best_rss = INFINITY;
+  for (Index L = -M; L <= M; ++L) {
+    const auto a = static_cast<std::size_t>(r0 + L), b = static_cast<std::size_t>(r0 + L + n);
+    const double sx = s1[b] - s1[a], sxx = s2[b] - s2[a] - sx * sx / N;
+    const double sxy = x.segment(r0 + L, n).dot(ys) - sx * sy / N;
+    if (sxx <= 0.0) continue;
+    const double rss = -sxy * sxy / sxx;  // RSS minus the constant centred sum of squares of y
+    if (rss < best_rss) {
+      best_rss = rss;
+      best = L;
+    }
+  }
+  return best;
+}
+
+/// Rows of X and y kept where `keep` is true, the others zero (see LsFit).
+LsFit fit_subset(MatrixXd X, VectorXd y, const std::vector<char>& keep, Index min_block) {
+  for (Index i = 0; i < y.size(); ++i) {
+    if (!keep[static_cast<std::size_t>(i)]) {
+      X.row(i).setZero();
+      y[i] = 0.0;
+    }
+  }
+  return fit(X, y, min_block);
+}
+
+/// Held-out squared error of y by X over contiguous folds, over the variance of y.
+double heldout_gap(const MatrixXd& X, const VectorXd& y, std::size_t folds) {
+  const Index n = y.size(), K = static_cast<Index>(folds);
+  const MatrixXd Gt = X.transpose() * X;
+  const VectorXd bt = X.transpose() * y;
+  double sse = 0.0;
+  for (Index k = 0; k < K; ++k) {
+    const Index a = n * k / K, e = n * (k + 1) / K;
+    const auto Xk = X.middleRows(a, e - a);
+    const auto yk = y.segment(a, e - a);
+    const VectorXd th = (Gt - Xk.transpose() * Xk).ldlt().solve(bt - Xk.transpose() * yk);
+    sse += (yk - Xk * th).squaredNorm();
+  }
+  const double var = (y.array() - y.mean()).square().sum();
+  return var > 0.0 ? sse / var : 0.0;
+}
+
+}  // namespace
+
+CompatibilityResult check_compatibility(const FlightData& data, const ProcessingOptions& processing,
+                                        const CompatibilityOptions& options, double p_critical, std::size_t folds,
+                                        std::size_t min_block) {
+  if (!(options.max_offset_s >= 0.0) || !(options.scale_tolerance >= 0.0) || !(options.bias_tolerance_radps >= 0.0) ||
+      !(options.time_tolerance_s >= 0.0) || !(options.signature_alpha > 0.0 && options.signature_alpha < 1.0)) {
+    throw std::invalid_argument("discrepancy: invalid compatibility options (offsets and tolerances >= 0, alpha in (0, 1))");
+  }
+  CompatibilityResult res;
+  res.source = data.source;
+  if (!data.has("p") || !data.has("phi")) {
+    res.note = "the record lacks p or phi: the kinematics cannot be checked";
+    return res;
+  }
+  const bool full = data.has("q") && data.has("r") && data.has("theta");
+  FlightData sub;
+  sub.source = data.source;
+  for (const char* c : {"p", "phi", "q", "r", "theta"}) {
+    if (data.has(c) && (full || std::string(c) == "p" || std::string(c) == "phi")) sub.channels[c] = data.at(c);
+  }
+  const UniformData u = process(sub, processing);
+  const double fs = u.rate_hz;
+  VectorXd x = u.at("p");
+  const VectorXd& phi = u.at("phi");
+  if (full) {
+    const VectorXd &q = u.at("q"), &r = u.at("r"), &th = u.at("theta");
+    x.array() += th.array().tan() * (q.array() * phi.array().sin() + r.array() * phi.array().cos());
+  }
+  res.equation = full ? "phi_dot = p + tan(theta) (q sin(phi) + r cos(phi))" : "phi_dot = p";
+  const VectorXd y = differentiate(phi, fs);
+  const VectorXd xd = differentiate(x, fs);
+  const Index M = static_cast<Index>(std::ceil(options.max_offset_s * fs));
+  const Index r0 = M + 4, n = u.size() - 2 * r0;
+  if (n < static_cast<Index>(50 * folds)) {
+    res.note = "the record is too short for the kinematic check with offsets up to " + num(options.max_offset_s) + " s";
+    return res;
+  }
+  const VectorXd ys = y.segment(r0, n);
+  const Index L = best_shift(x, y, r0, n, M);
+  const MatrixXd X = kin_design(x, xd, r0, n, L, true);
+  const LsFit f = fit(X, ys, static_cast<Index>(min_block));
+  if (!f.ok || std::fabs(f.theta[0]) < 0.1) {
+    res.note = "p does not follow phi's derivative (no gain between them): the kinematics cannot be checked";
+    return res;
+  }
+  res.ran = true;
+  res.samples = static_cast<std::size_t>(n);
+  res.blocks = f.blocks;
+  const double shift_s = static_cast<double>(L) / fs;
+
+  const auto error = [](const char* name, const char* unit) {
+    SensorError e;
+    e.name = name;
+    e.channel = "p";
+    e.against = "phi";
+    e.unit = unit;
+    return e;
+  };
+  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"), bias = error("sensor_bias", "rad/s");
+  scale_of(f, scale.value, scale.sigma);
+  tau_of(f, shift_s, offset.value, offset.sigma);
+  bias_of(f, bias.value, bias.sigma);
+  scale.tolerance = options.scale_tolerance;
+  bias.tolerance = options.bias_tolerance_radps;
+  offset.tolerance = options.time_tolerance_s > 0.0
+                         ? options.time_tolerance_s
+                         : std::max(median_interval(data.at("p")), median_interval(data.at("phi")));
+  for (SensorError* e : {&scale, &offset, &bias}) test_error(*e, f.blocks, p_critical);
+
+  const auto mb = static_cast<Index>(min_block);
+  const double alpha = options.signature_alpha;
+  if (scale.significant) {
+    // Grows with the signal: the same scale on the samples of small and of large |p|.
+    VectorXd ax = X.col(0).cwiseAbs();
+    std::vector<double> sorted(ax.data(), ax.data() + ax.size());
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double med = sorted[sorted.size() / 2];
+    std::vector<char> lo(static_cast<std::size_t>(n)), hi(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+      lo[static_cast<std::size_t>(i)] = ax[i] <= med;
+      hi[static_cast<std::size_t>(i)] = ax[i] > med;
+    }
+    const LsFit fl = fit_subset(X, ys, lo, mb), fh = fit_subset(X, ys, hi, mb);
+    if (fl.ok && fh.ok) {
+      double kl, sl, kh, sh;
+      scale_of(fl, kl, sl);
+      scale_of(fh, kh, sh);
+      scale.signature_holds = agree(kl, sl, kh, sh, scale.tolerance, alpha, scale.signature_note,
+                                    "scale on the smaller and the larger half of |p|", "");
+    }
+  }
+  if (offset.significant) {
+    // A pure time shift: the same lag below and above p's RMS frequency.
+    const double f_split = std::clamp(std::sqrt(xd.squaredNorm() / std::max(1e-300, x.squaredNorm())) / (2.0 * M_PI),
+                                      0.5, 0.8 * (processing.filter_order > 0 ? processing.cutoff_hz : 0.5 * fs));
+    const VectorXd xh = high_pass(x, f_split, fs), yh = high_pass(y, f_split, fs);
+    const VectorXd xl = x - xh, yl = y - yh;
+    const LsFit fh = fit(kin_design(xh, differentiate(xh, fs), r0, n, L, false), yh.segment(r0, n), mb);
+    const LsFit fl = fit(kin_design(xl, differentiate(xl, fs), r0, n, L, true), yl.segment(r0, n), mb);
+    if (fl.ok && fh.ok) {
+      double tl, sl, th, sh;
+      tau_of(fl, shift_s, tl, sl);
+      tau_of(fh, shift_s, th, sh);
+      offset.signature_holds = agree(tl, sl, th, sh, offset.tolerance, alpha, offset.signature_note,
+                                     "lag below and above " + num(f_split) + " Hz", "s");
+    }
+  }
+  if (bias.significant) {
+    // Constant: the same bias in both halves of the record.
+    std::vector<char> first(static_cast<std::size_t>(n)), second(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+      first[static_cast<std::size_t>(i)] = i < n / 2;
+      second[static_cast<std::size_t>(i)] = i >= n / 2;
+    }
+    const LsFit f1 = fit_subset(X, ys, first, mb), f2 = fit_subset(X, ys, second, mb);
+    if (f1.ok && f2.ok) {
+      double b1, s1, b2, s2;
+      bias_of(f1, b1, s1);
+      bias_of(f2, b2, s2);
+      bias.signature_holds = agree(b1, s1, b2, s2, bias.tolerance, alpha, bias.signature_note,
+                                   "bias in the first and the second half", "rad/s");
+    }
+  }
+  for (SensorError* e : {&scale, &offset, &bias}) {
+    e->named = e->significant && e->signature_holds;
+    e->corrected = e->significant;
+    res.errors.push_back(*e);
+  }
+
+  MatrixXd X0(n, 1);
+  X0.col(0) = x.segment(r0, n);
+  const VectorXd e0 = ys - X0.col(0);
+  const double var = (ys.array() - ys.mean()).square().sum();
+  res.kinematic_gap_before = var > 0.0 ? e0.squaredNorm() / var : 0.0;
+  res.kinematic_gap_after = heldout_gap(X, ys, folds);
+  return res;
+}
+
+FlightData corrected_record(const FlightData& data, const CompatibilityResult& result,
+                            const CompatibilityOptions& options) {
+  double k = 0.0, tau = 0.0, b = 0.0;
+  bool any = false;
+  for (const auto& e : result.errors) {
+    if (!e.corrected) continue;
+    any = true;
+    if (e.name == "sensor_scale") k = e.value;
+    if (e.name == "time_offset") tau = e.value;
+    if (e.name == "sensor_bias") b = e.value;
+  }
+  if (!any) return data;
+  FlightData out = data;
+  if (tau != 0.0) {
+    for (const auto& c : options.imu_channels) {
+      auto it = out.channels.find(c);
+      if (it == out.channels.end()) continue;
+      for (double& t : it->second.t_s) t -= tau;
+    }
+  }
+  if (k != 0.0 || b != 0.0) {
+    for (double& v : out.channels.at("p").values) v = (v - b) / (1.0 + k);
+  }
+  return out;
+}
+
+}  // namespace nimble::ident
+
+namespace nimble::ident::discrepancy_parts {
+
+namespace {
+
+/// The workflow's held-out gap of the baseline structure (L, Y and F) on one flight as recorded.
+double baseline_gap(const FlightData& recorded, const DerivativeModel& model, const Vehicle& vehicle,
+                    const std::vector<std::string>& inputs, const DiscrepancyOptions& options) {
+  PreparedData prep = prepare(recorded, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
+  add_applied_command(prep.filtered, options.command_latency_s);
+  const UniformData& d = prep.filtered;
+  const Model m = build_baseline(d, lateral_equations(Structure::kLateral3, inputs, vehicle), model, vehicle,
+                                 recorded.source, nullptr, nullptr);
+  const std::vector<VectorXd> cv = heldout_residuals(m, flight_folds({{0, d.size()}}, options.folds));
+  double gap = 0.0;
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
+    const VectorXd& y = m.eqs[e].y;
+    gap += cv[e].squaredNorm() / (y.array() - y.mean()).square().sum();
+  }
+  return gap / static_cast<double>(m.eqs.size());
+}
+
+const char* parameter_of(const std::string& error) {
+  if (error == "sensor_scale") return "scale_factor";
+  if (error == "time_offset") return "offset_s";
+  return "bias_radps";
+}
+
+}  // namespace
+
+FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel& model, const Vehicle& vehicle,
+                               const std::vector<std::string>& inputs, const DiscrepancyOptions& options,
+                               DiscrepancyResult& res) {
+  if (!options.compatibility.enabled) return recorded;
+  const double p_critical = chi_square_survival(options.partial_f, 1.0);
+  const std::size_t min_block = 4 * whiteness_lag_step(0, options.processing);
+  CompatibilityResult c =
+      check_compatibility(recorded, options.processing, options.compatibility, p_critical, options.folds, min_block);
+  FlightData out = corrected_record(recorded, c, options.compatibility);
+  for (const SensorError& e : c.errors) {
+    if (e.corrected) {
+      c.corrections.push_back(e.name == "time_offset"
+                                  ? "the IMU's channels restamped by " + num(-e.value) + " s"
+                                  : (e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
+                                                              : "p less its bias " + num(e.value) + " rad/s"));
+    }
+    if (!e.named) continue;
+    NamedEffect n;
+    n.name = e.name;
+    n.channel = e.channel;
+    n.against = e.name == "time_offset" ? e.against : "";
+    n.unit = e.unit;
+    n.flight = recorded.source;
+    n.coefficient = e.value;
+    n.interval[0] = e.interval[0];
+    n.interval[1] = e.interval[1];
+    n.parameters[parameter_of(e.name)] = e.value;
+    n.sigma[parameter_of(e.name)] = e.sigma;
+    res.effects.push_back(std::move(n));
+  }
+  if (!c.corrections.empty()) c.aero_gap_uncorrected = baseline_gap(recorded, model, vehicle, inputs, options);
+  res.compatibility.push_back(std::move(c));
+  return out;
+}
+
+std::size_t sensor_findings(DiscrepancyResult& res) {
+  std::size_t tests = 0;
+  bool unchecked = false;
+  for (const CompatibilityResult& c : res.compatibility) {
+    unchecked = unchecked || !c.ran;
+    if (!c.ran) continue;
+    tests += c.errors.size();
+    for (const SensorError& e : c.errors) {
+      if (!e.significant || e.signature_holds) continue;
+      SignatureFinding f;
+      f.candidate = e.name;
+      f.equations = {"kinematics"};
+      f.note = "the kinematics of " + c.source + " show a significant " + e.name + " of " + e.channel + " (" +
+               num(e.value) + " " + e.unit + ") without its signature: " + e.signature_note +
+               "; the record was corrected for it, unnamed";
+      res.located.signature.push_back(std::move(f));
+    }
+  }
+  const bool delay = std::any_of(res.effects.begin(), res.effects.end(),
+                                 [](const NamedEffect& e) { return e.name == "actuator_delay"; });
+  if (delay && unchecked) {
+    // Without the kinematic check a late gyro and a late actuator look alike in L and Y.
+    res.ambiguous.push_back({"actuator_delay", "time_offset"});
+    res.notes.push_back("actuator_delay could be a time offset of the IMU: the record's kinematics were not checked (" +
+                        res.compatibility.front().note +
+                        "); a record with p and phi, p excited, tells them apart (a time offset shows in phi_dot = p)");
+  }
+  return tests;
+}
+
+}  // namespace nimble::ident::discrepancy_parts

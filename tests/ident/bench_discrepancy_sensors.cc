@@ -1,0 +1,152 @@
+// The discrepancy workflow's data-compatibility stage (ident/data_compatibility.h) on records whose
+// gyro has its own errors: a scale factor (5-15 %, either sign), a time offset against the attitude
+// (10-50 ms, either sign), a bias (0.02-0.06 rad/s), and, beside them, records with an actuator
+// delay (which must not be taken for a time offset) and records where nothing is missing. Each
+// record draws its magnitude (discrepancy_generator.h), length (20-40 s), model set (1-5) and seed.
+//
+// A measurement, not a test: per case it prints how often the error is named (with the right
+// sign), how often the true value lies inside the 95 % interval, the value's error, every other
+// name given (a wrong name: an aerodynamic effect, a term, or another sensor error), and for the
+// nulls every alarm (a name, `ambiguous`, `unexplained`); and the stage's time per record.
+//   build/bin/bench_discrepancy_sensors [records per case, default 20] [null records, default 200]
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/proportion.h"
+#include "discrepancy_generator.h"
+#include "ident/data_compatibility.h"
+#include "ident/discrepancy.h"
+
+using namespace nimble;
+using namespace nimble::ident;
+
+namespace {
+
+struct Case {
+  const char* hidden;  ///< the generator's effect; "" for the nulls
+  const char* name;    ///< the name it should get
+};
+
+const std::vector<Case>& cases() {
+  static const std::vector<Case> c{{"sensor_scale", "sensor_scale"},
+                                   {"time_offset", "time_offset"},
+                                   {"sensor_bias", "sensor_bias"},
+                                   {"actuator_delay", "actuator_delay"}};
+  return c;
+}
+
+double truth_of(const test::HiddenEffects& h, const std::string& name) {
+  if (name == "sensor_scale") return h.scale_k;
+  if (name == "time_offset") return h.offset_s;
+  if (name == "sensor_bias") return h.bias_p;
+  return h.delay_s;
+}
+
+struct Record {
+  FlightData data;
+  test::HiddenEffects h;
+  const test::ModelSet* set = nullptr;
+  double duration_s = 0.0;
+};
+
+Record make(const char* hidden, std::uint64_t seed, int i) {
+  Record r;
+  std::mt19937_64 rng(seed * 31u + 11u);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  r.set = &test::model_set(1 + i % 5);
+  if (*hidden) r.h.on = {hidden};
+  test::draw_magnitudes(r.h, seed);
+  test::GeneratorOptions o;
+  o.seed = seed;
+  o.duration_s = r.duration_s = 20.0 + 20.0 * u(rng);
+  r.data = test::generate_flight(r.set->model, r.set->vehicle, r.h, o);
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int per_case = argc > 1 ? std::max(1, std::atoi(argv[1])) : 20;
+  const int nulls = argc > 2 ? std::max(0, std::atoi(argv[2])) : 200;
+  const DiscrepancyOptions opt;
+  double stage_s = 0.0;
+  int stage_runs = 0;
+  std::printf("case            records  named        in interval  median |error|  wrong names  other verdicts\n");
+  int index = 0;
+  for (const Case& c : cases()) {
+    int named = 0, inside = 0, wrong = 0, other = 0;
+    std::vector<double> err;
+    std::map<std::string, int> wrongs;
+    for (int i = 0; i < per_case; ++i) {
+      const std::uint64_t seed = 91000u + 1000u * static_cast<std::uint64_t>(index) + static_cast<std::uint64_t>(i);
+      const Record rec = make(c.hidden, seed, i);
+      const auto t0 = std::chrono::steady_clock::now();
+      (void)check_compatibility(rec.data, opt.processing, opt.compatibility, 7.74e-6, opt.folds, 16);
+      stage_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      ++stage_runs;
+      const DiscrepancyResult r = find_discrepancy(rec.data, rec.set->model, rec.set->vehicle, opt);
+      const double truth = truth_of(rec.h, c.name);
+      bool got = false;
+      std::string said;
+      for (const auto& e : r.effects) {
+        const double v = e.name == "actuator_delay" ? e.parameters.at("delay_s") : e.coefficient;
+        if (e.name == c.name && !got && v * truth > 0.0) {
+          got = true;
+          err.push_back(std::fabs(v - truth));
+          if (e.name == "actuator_delay" || (e.interval[0] <= truth && truth <= e.interval[1])) ++inside;
+        } else {
+          said += " " + (e.name == "term" ? "term " + e.equation + " " + e.expression : e.name);
+        }
+      }
+      if (!said.empty()) {
+        ++wrong;
+        ++wrongs[said];
+      }
+      if (got) ++named;
+      if (!got && said.empty()) ++other;
+      if (!got || !said.empty()) {
+        std::printf("  %s record %d (seed %llu, %.1f s, true %.4g): %s: %s\n", c.hidden, i,
+                    static_cast<unsigned long long>(seed), rec.duration_s, truth, r.verdict.c_str(), r.summary.c_str());
+      }
+    }
+    std::sort(err.begin(), err.end());
+    const Proportion pn = wilson(named, per_case);
+    std::printf("%-15s %4d  %4d %5.1f%% [%4.1f,%5.1f]  %4d of %-4d  %.3g  %4d  %4d\n", c.hidden, per_case, named,
+                100.0 * named / per_case, 100.0 * pn.lo, 100.0 * pn.hi, inside, named,
+                err.empty() ? 0.0 : err[err.size() / 2], wrong, other);
+    for (const auto& [s, k] : wrongs) std::printf("      wrong:%s x%d\n", s.c_str(), k);
+    ++index;
+  }
+  int alarms = 0;
+  std::map<std::string, int> said;
+  for (int i = 0; i < nulls; ++i) {
+    const std::uint64_t seed = 97000u + static_cast<std::uint64_t>(i);
+    const Record rec = make("", seed, i);
+    const DiscrepancyResult r = find_discrepancy(rec.data, rec.set->model, rec.set->vehicle, opt);
+    if (r.verdict != "none") {
+      ++alarms;
+      std::string s = r.verdict + ":";
+      for (const auto& e : r.effects) s += " " + e.name;
+      ++said[s];
+      std::printf("  null record %d (seed %llu): %s: %s\n", i, static_cast<unsigned long long>(seed), r.verdict.c_str(),
+                  r.summary.c_str());
+    }
+  }
+  if (nulls > 0) {
+    const Proportion pa = wilson(alarms, nulls);
+    std::printf("nulls: %d alarms in %d records (%.2f %%, 95 %% upper %.2f %%; target <= 1 %%)\n", alarms, nulls,
+                100.0 * alarms / nulls, 100.0 * pa.hi);
+    for (const auto& [s, k] : said) std::printf("      %s x%d\n", s.c_str(), k);
+  }
+  std::printf("compatibility stage: %.1f ms per record (%d records of 20-40 s)\n", 1e3 * stage_s / std::max(1, stage_runs),
+              stage_runs);
+  return 0;
+}
