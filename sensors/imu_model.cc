@@ -51,6 +51,48 @@ std::vector<VibrationHarmonic> default_flapping_harmonics() {
   return {first, second};
 }
 
+std::int64_t ImuClock::stamp(std::int64_t rig_utime) const {
+  if (identity()) return rig_utime;
+  return rig_utime + std::llround(offset_s * 1e6 + drift_ppm * 1e-6 * static_cast<double>(rig_utime));
+}
+
+std::int64_t ImuClock::rig_utime(std::int64_t stamp_utime) const {
+  if (identity()) return stamp_utime;
+  // stamp() has the slope 1 + drift: the nearest guess (within a microsecond of the answer), then
+  // the earliest neighbour that maps back exactly.
+  const double guess = (static_cast<double>(stamp_utime) - offset_s * 1e6) / (1.0 + drift_ppm * 1e-6);
+  if (!(std::fabs(guess) < 9e18)) return stamp_utime;  // no rig time: garbage, let the caller refuse it
+  const std::int64_t t = std::llround(guess);
+  for (const std::int64_t candidate : {t - 1, t, t + 1}) {
+    if (stamp(candidate) == stamp_utime) return candidate;
+  }
+  return t;
+}
+
+namespace {
+
+Eigen::Matrix3d error_matrix(const Eigen::Vector3d& scale, double xy, double xz, double yx, double yz, double zx,
+                             double zy) {
+  Eigen::Matrix3d m;
+  m << 1.0 + scale.x(), xy, xz,  //
+      yx, 1.0 + scale.y(), yz,   //
+      zx, zy, 1.0 + scale.z();
+  return m;
+}
+
+}  // namespace
+
+Eigen::Matrix3d ImuModelConfig::gyro_error_matrix() const {
+  return error_matrix(gyro_scale_factor, gyro_misalignment_xy_rad, gyro_misalignment_xz_rad, gyro_misalignment_yx_rad,
+                      gyro_misalignment_yz_rad, gyro_misalignment_zx_rad, gyro_misalignment_zy_rad);
+}
+
+Eigen::Matrix3d ImuModelConfig::accel_error_matrix() const {
+  return error_matrix(accel_scale_factor, accel_misalignment_xy_rad, accel_misalignment_xz_rad,
+                      accel_misalignment_yx_rad, accel_misalignment_yz_rad, accel_misalignment_zx_rad,
+                      accel_misalignment_zy_rad);
+}
+
 void validate(const ImuModelConfig& c) {
   // The scalar and vector parameters: the ranges of the loader's table (sensors/sensor_config.h).
   try {
@@ -69,6 +111,11 @@ void validate(const ImuModelConfig& c) {
 
 ImuModel::ImuModel(const ImuModelConfig& config, std::uint64_t seed) : config_(config), rng_(seed) {
   validate(config_);
+  clock_ = config_.clock();
+  gyro_matrix_ = config_.gyro_error_matrix();
+  accel_matrix_ = config_.accel_error_matrix();
+  gyro_errors_ = gyro_matrix_ != Eigen::Matrix3d::Identity();
+  accel_errors_ = accel_matrix_ != Eigen::Matrix3d::Identity();
   // Fixed draw order: turn-on biases, then vibration phases.
   for (int i = 0; i < 3; ++i) {
     gyro_bias_radps_[i] = config_.gyro_bias_initial_radps[i] + config_.gyro_bias_turn_on_sigma_radps * normal_(rng_);
@@ -135,20 +182,26 @@ ImuSample ImuModel::sample(const ImuTruthInput& truth) {
   last_gyro_vibration_radps_ = vib_gyro;
   last_accel_vibration_mps2_ = vib_accel;
 
+  // Scale factor and misalignment act on the true motion (untouched when there are none).
+  const Eigen::Vector3d omega = gyro_errors_ ? Eigen::Vector3d(gyro_matrix_ * truth.omega_body_radps)
+                                             : truth.omega_body_radps;
+  const Eigen::Vector3d force = accel_errors_ ? Eigen::Vector3d(accel_matrix_ * truth.specific_force_body_mps2)
+                                              : truth.specific_force_body_mps2;
+
   ImuSample out;
-  out.utime = truth.utime;
+  out.utime = clock_.stamp(truth.utime);
   out.seq = seq_++;
   out.temperature_degc = config_.temperature_degc;
   std::uint8_t flags = 0;
   for (int i = 0; i < 3; ++i) {
-    const double raw = truth.omega_body_radps[i] + gyro_bias_radps_[i] + vib_gyro[i] +
+    const double raw = omega[i] + gyro_bias_radps_[i] + vib_gyro[i] +
                        config_.gyro_noise_sigma_radps[i] * normal_(rng_);
     bool clamped = false;
     out.gyro_radps[i] = clamp_axis(raw, config_.gyro_range_radps, &clamped);
     if (clamped) flags |= static_cast<std::uint8_t>(kSatGyroX << i);
   }
   for (int i = 0; i < 3; ++i) {
-    const double raw = truth.specific_force_body_mps2[i] + accel_bias_mps2_[i] + vib_accel[i] +
+    const double raw = force[i] + accel_bias_mps2_[i] + vib_accel[i] +
                        config_.accel_noise_sigma_mps2[i] * normal_(rng_);
     bool clamped = false;
     out.accel_mps2[i] = clamp_axis(raw, config_.accel_range_mps2, &clamped);

@@ -3,9 +3,13 @@
 ///
 /// From the truth at the sampling instant (body rates, specific force, flapping frequencies) the
 /// model produces one sample
-///   gyro  = sat( omega_body + b_gyro  + vibration_gyro  + n_gyro  )
-///   accel = sat( f_body     + b_accel + vibration_accel + n_accel )
-/// with
+///   gyro  = sat( (I + S_g + M_g) omega_body + b_gyro  + vibration_gyro  + n_gyro  )
+///   accel = sat( (I + S_a + M_a) f_body     + b_accel + vibration_accel + n_accel )
+/// stamped with the IMU's own clock (ImuClock: rig time + offset + drift x rig time), with
+///  - S: the scale factor errors, diag(k_x, k_y, k_z): an axis reads (1 + k) times its true value;
+///  - M: the cross-axis misalignment, zero diagonal, M(i, j) the fraction of the true value on
+///    axis j that the reading of axis i picks up (a small angle [rad]; ImuModelConfig's keys
+///    ..._misalignment_rad.ij);
 ///  - n: white Gaussian noise, independent per sample and axis, standard deviation per sample
 ///    (thesis Section 8.1: gyro 0.05 deg/s, accelerometer 0.05 g in x and y and 0.08 g in z; the
 ///    published "accuracy" figures are read as 1-sigma per sample at the 512 Hz output rate);
@@ -16,7 +20,8 @@
 ///    difference shows up as a beat), plus a fixed-frequency structural mode (the yaw-rate peak
 ///    near 11 Hz that the thesis reports, Section 8.3 and Appendix D). Phases are seeded.
 ///  - sat: clamp to +-range per axis; a clamped axis sets its bit in saturation_flags.
-/// Sensor axes coincide with body axes (x forward, y right wing, z down). Specific force is the
+/// The errors S and M act on the true motion; the vibration amplitudes are what the sensor reads.
+/// Sensor axes coincide with body axes (x forward, y right wing, z down) up to M. Specific force is the
 /// non-gravitational acceleration: about (0, 0, -9.81) m/s^2 at rest and level.
 ///
 /// Deterministic for a given seed and call sequence (std::mt19937_64 and
@@ -45,6 +50,24 @@ struct VibrationHarmonic {
   Eigen::Vector3d gyro_amplitude_radps = Eigen::Vector3d::Zero();
   /// Amplitude of the sinusoid on the accelerometer axes x y z [m/s^2].
   Eigen::Vector3d accel_amplitude_mps2 = Eigen::Vector3d::Zero();
+};
+
+/// The IMU's clock against the rig's (the motion capture's): the stamp an IMU sample carries is
+///   stamp = t + round(offset_s 1e6 + drift_ppm 1e-6 t)  [us], t the rig time of the sample [us],
+/// so the drift accumulates from rig time 0. The identity when both are zero.
+struct ImuClock {
+  double offset_s = 0.0;   ///< the IMU clock minus the rig clock at rig time 0 [s]
+  double drift_ppm = 0.0;  ///< the IMU clock's rate error [1e-6 s/s]
+  bool identity() const { return offset_s == 0.0 && drift_ppm == 0.0; }
+  /// The stamp of a sample taken at rig time `rig_utime` [us].
+  std::int64_t stamp(std::int64_t rig_utime) const;
+  /// The rig time [us] of a sample stamped `stamp_utime`: the inverse of stamp() on the stamps it
+  /// gives (the nearest rig time for any other). A slow clock (drift < 0) gives two rig times a
+  /// microsecond apart the same stamp once in 1e6 / |drift_ppm| us: the earlier is returned (with
+  /// samples 1953 us apart, one sample in about 2e6 / |drift_ppm| is read back 1 us early). Rig machinery that must keep to
+  /// the rig's clock (lockstep bookkeeping, the time an estimate refers to) reads IMU stamps
+  /// through it; the estimator's filter works on the stamps as they come.
+  std::int64_t rig_utime(std::int64_t stamp_utime) const;
 };
 
 /// The default flapping harmonics (see ImuModelConfig::flapping_harmonics).
@@ -98,11 +121,34 @@ struct ImuModelConfig {
   Eigen::Vector3d structural_accel_amplitude_mps2 = Eigen::Vector3d::Zero();
   /// Reported die temperature [degC]. Assumption: constant 35 degC.
   double temperature_degc = 35.0;
+  /// Gyro scale factor error per axis [-]: the axis reads (1 + k) times its true rate.
+  /// Assumption: 0 (off); MPU-6000 datasheet: +-3 % initial sensitivity tolerance.
+  Eigen::Vector3d gyro_scale_factor = Eigen::Vector3d::Zero();
+  /// Accelerometer scale factor error per axis [-]. Assumption: 0 (off); MPU-6000: +-3 %.
+  Eigen::Vector3d accel_scale_factor = Eigen::Vector3d::Zero();
+  /// Gyro cross-axis misalignment [rad]: misalignment_ij couples the true rate about axis j into
+  /// the reading of axis i. Assumption: 0 (off); MPU-6000 datasheet: cross-axis sensitivity +-2 %.
+  double gyro_misalignment_xy_rad = 0.0, gyro_misalignment_xz_rad = 0.0, gyro_misalignment_yx_rad = 0.0,
+         gyro_misalignment_yz_rad = 0.0, gyro_misalignment_zx_rad = 0.0, gyro_misalignment_zy_rad = 0.0;
+  /// Accelerometer cross-axis misalignment [rad], as the gyro's. Assumption: 0 (off); MPU-6000: +-2 %.
+  double accel_misalignment_xy_rad = 0.0, accel_misalignment_xz_rad = 0.0, accel_misalignment_yx_rad = 0.0,
+         accel_misalignment_yz_rad = 0.0, accel_misalignment_zx_rad = 0.0, accel_misalignment_zy_rad = 0.0;
+  /// The IMU clock's offset against the motion capture's (the rig's) at rig time 0 [s].
+  /// Assumption: 0 (off); the thesis's records needed synchronising (Section 8.1).
+  double clock_offset_s = 0.0;
+  /// The IMU clock's drift against the rig's [ppm]. Assumption: 0 (off); a crystal: tens of ppm.
+  double clock_drift_ppm = 0.0;
+
+  /// The clock of the stamps (clock_offset_s, clock_drift_ppm).
+  ImuClock clock() const { return ImuClock{clock_offset_s, clock_drift_ppm}; }
+  /// I + S + M of the gyro and of the accelerometer (sensor reading per unit of true value).
+  Eigen::Matrix3d gyro_error_matrix() const;
+  Eigen::Matrix3d accel_error_matrix() const;
 };
 
 /// Truth at one IMU sampling instant.
 struct ImuTruthInput {
-  /// Sampling instant, rig time [us].
+  /// Sampling instant, rig time [us] (the sample's stamp is ImuModelConfig::clock().stamp of it).
   std::int64_t utime = 0;
   /// Angular rate of the body relative to the world, body axes [rad/s], order p q r.
   Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();
@@ -124,7 +170,7 @@ class ImuModel {
   /// @throws std::invalid_argument if `config` is invalid (see validate()).
   ImuModel(const ImuModelConfig& config, std::uint64_t seed);
 
-  /// Produces the sample at truth.utime. Samples must come in increasing time; a non-increasing
+  /// Produces the sample at truth.utime, stamped with the IMU's clock. Samples must come in increasing time; a non-increasing
   /// time is accepted (no bias random-walk step) and counted in non_increasing_time_count().
   /// Never throws.
   ImuSample sample(const ImuTruthInput& truth);
@@ -146,6 +192,10 @@ class ImuModel {
 
  private:
   ImuModelConfig config_;
+  ImuClock clock_;
+  /// I + S + M, and whether they differ from I (else the true values pass untouched).
+  Eigen::Matrix3d gyro_matrix_, accel_matrix_;
+  bool gyro_errors_ = false, accel_errors_ = false;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   Eigen::Vector3d gyro_bias_radps_, accel_bias_mps2_;

@@ -10,6 +10,7 @@ namespace nimble {
 const ParamTable<ImuModelConfig>& imu_params() {
   using C = ImuModelConfig;
   const Range nn = Range::non_negative();
+  const Range kMisalignment = Range::closed(-0.1, 0.1);  // about 5.7 deg: far beyond a mounting error
   static const ParamTable<C> table = {
       {"sample_rate_hz", &C::sample_rate_hz, Range{0.0, 1e5, true, false}, "Hz", "output rate; thesis Section 8.1: 512 Hz"},
       {"gyro_noise_sigma_radps", &C::gyro_noise_sigma_radps, nn, "rad/s", "white gyro noise, 1-sigma per sample; thesis Section 8.1: 0.05 deg/s"},
@@ -27,6 +28,22 @@ const ParamTable<ImuModelConfig>& imu_params() {
       {"structural_gyro_amplitude_radps", &C::structural_gyro_amplitude_radps, nn, "rad/s", "structural mode on the gyro axes; assumption: 0.3 rad/s on z only"},
       {"structural_accel_amplitude_mps2", &C::structural_accel_amplitude_mps2, nn, "m/s^2", "structural mode on the accelerometer axes; assumption: zero"},
       {"temperature_degc", &C::temperature_degc, Range::closed(-60.0, 150.0), "degC", "reported die temperature; assumption: constant 35 degC"},
+      {"gyro_scale_factor", &C::gyro_scale_factor, Range::closed(-0.5, 0.5), "-", "gyro scale factor error per axis: the axis reads (1 + k) x its true rate; assumption: 0 (off), MPU-6000 datasheet +-3 %"},
+      {"accel_scale_factor", &C::accel_scale_factor, Range::closed(-0.5, 0.5), "-", "accelerometer scale factor error per axis: (1 + k) x the true specific force; assumption: 0 (off), MPU-6000 datasheet +-3 %"},
+      {"gyro_misalignment_rad.xy", &C::gyro_misalignment_xy_rad, kMisalignment, "rad", "gyro cross-axis misalignment: the true rate about y read on x; assumption: 0 (off), MPU-6000 cross-axis sensitivity +-2 %"},
+      {"gyro_misalignment_rad.xz", &C::gyro_misalignment_xz_rad, kMisalignment, "rad", "the true rate about z read on x"},
+      {"gyro_misalignment_rad.yx", &C::gyro_misalignment_yx_rad, kMisalignment, "rad", "the true rate about x read on y"},
+      {"gyro_misalignment_rad.yz", &C::gyro_misalignment_yz_rad, kMisalignment, "rad", "the true rate about z read on y"},
+      {"gyro_misalignment_rad.zx", &C::gyro_misalignment_zx_rad, kMisalignment, "rad", "the true rate about x read on z"},
+      {"gyro_misalignment_rad.zy", &C::gyro_misalignment_zy_rad, kMisalignment, "rad", "the true rate about y read on z"},
+      {"accel_misalignment_rad.xy", &C::accel_misalignment_xy_rad, kMisalignment, "rad", "accelerometer cross-axis misalignment: the true specific force along y read on x; assumption: 0 (off), MPU-6000 +-2 %"},
+      {"accel_misalignment_rad.xz", &C::accel_misalignment_xz_rad, kMisalignment, "rad", "the true specific force along z read on x"},
+      {"accel_misalignment_rad.yx", &C::accel_misalignment_yx_rad, kMisalignment, "rad", "the true specific force along x read on y"},
+      {"accel_misalignment_rad.yz", &C::accel_misalignment_yz_rad, kMisalignment, "rad", "the true specific force along z read on y"},
+      {"accel_misalignment_rad.zx", &C::accel_misalignment_zx_rad, kMisalignment, "rad", "the true specific force along x read on z"},
+      {"accel_misalignment_rad.zy", &C::accel_misalignment_zy_rad, kMisalignment, "rad", "the true specific force along y read on z"},
+      {"clock_offset_s", &C::clock_offset_s, Range::closed(-1.0, 1.0), "s", "the IMU clock minus the motion capture's at rig time 0: each IMU stamp is rig time + offset + drift x rig time; assumption: 0 (off), the thesis's records needed synchronising (Section 8.1)"},
+      {"clock_drift_ppm", &C::clock_drift_ppm, Range::closed(-1000.0, 1000.0), "ppm", "the IMU clock's rate error against the motion capture's; assumption: 0 (off), a crystal: tens of ppm"},
   };
   return table;
 }
@@ -54,6 +71,12 @@ ImuModelConfig imu_model_config_from(ConfigMap& map) {
   ImuModelConfig c;
   const Range nn = Range::non_negative();
   read_params(map, imu_params(), c);
+  for (const char* group : {"gyro_misalignment_rad", "accel_misalignment_rad"}) {
+    if (!map.has(group)) continue;
+    ConfigMap m = map.get_map(group);
+    read_params(m, imu_params(), c, group);
+    m.finish();
+  }
   if (map.has("flapping_harmonics")) {
     const YAML::Node list = map.get_node("flapping_harmonics");
     if (!list.IsSequence()) map.fail("flapping_harmonics", "must be a list of mappings (harmonic, gyro_amplitude_radps, accel_amplitude_mps2)");

@@ -45,7 +45,11 @@ void check_documented(const nimble::ParamTable<Config>& table, const Config& def
                       const std::string& name) {
   for (const auto& p : table) {
     INFO(name << "." << p.key);
-    REQUIRE(section[p.key]);
+    // A key group.name lives in the sub-mapping group (e.g. imu.gyro_misalignment_rad.xy).
+    const auto dot = p.key.find('.');
+    const YAML::Node at = dot == std::string::npos ? section : YAML::Node(section[p.key.substr(0, dot)]);
+    const std::string key = dot == std::string::npos ? p.key : p.key.substr(dot + 1);
+    REQUIRE(at[key]);
     // The shipped base writes each default (to its printed precision).
     std::visit(
         [&](auto member) {
@@ -53,13 +57,13 @@ void check_documented(const nimble::ParamTable<Config>& table, const Config& def
           if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
             for (int i = 0; i < 3; ++i) {
               const char* axis = nimble::kXyzAxes[static_cast<std::size_t>(i)];
-              CHECK(section[p.key][axis].template as<double>() ==
+              CHECK(at[key][axis].template as<double>() ==
                     Approx((defaults.*member)[i]).epsilon(1e-4).margin(1e-12));
             }
           } else if constexpr (std::is_same_v<T, bool>) {
-            CHECK(section[p.key].template as<bool>() == defaults.*member);
+            CHECK(at[key].template as<bool>() == defaults.*member);
           } else {
-            CHECK(section[p.key].template as<double>() ==
+            CHECK(at[key].template as<double>() ==
                   Approx(static_cast<double>(defaults.*member)).epsilon(1e-4).margin(1e-12));
           }
         },
