@@ -8,6 +8,7 @@
 /// interface: nothing outside those files includes it.
 
 #include <cstddef>
+#include <iosfwd>
 #include <map>
 #include <memory>
 #include <string>
@@ -19,6 +20,10 @@
 #include "core/terms.h"
 #include "ident/discrepancy.h"
 #include "ident/spectrum.h"
+
+namespace nimble {
+class JsonWriter;
+}
 
 namespace nimble::ident::discrepancy_parts {
 
@@ -619,5 +624,17 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
 /// actuator_delay ambiguous with a time offset where a flight's kinematics were not checked.
 /// Returns the stage's alarm tests (three per checked flight).
 std::size_t sensor_findings(DiscrepancyResult& res);
+
+// --- discrepancy_compat_report.cc ---
+
+/// A sensor error's fields in its `effects` entry: channel, against, value, unit, interval, flight.
+void write_sensor_effect(JsonWriter& j, const NamedEffect& e);
+/// The `compatibility` array of the JSON report: every flight's stage, every error tested.
+void write_compatibility(JsonWriter& j, const DiscrepancyResult& r);
+/// The stage in the text report, and a named sensor error's line under "named effects".
+void print_compatibility(std::ostream& o, const DiscrepancyResult& r);
+void print_sensor_effect(std::ostream& o, const NamedEffect& e);
+/// The stage's section of report.md ("" when it did not run).
+std::string compatibility_markdown(const DiscrepancyResult& r);
 
 }  // namespace nimble::ident::discrepancy_parts

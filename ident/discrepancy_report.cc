@@ -14,6 +14,7 @@
 #include "core/json_writer.h"
 #include "core/output_file.h"
 #include "ident/discrepancy.h"
+#include "ident/discrepancy_parts.h"
 #include "ident/plots.h"
 #include "ident/spectrum.h"
 
@@ -68,6 +69,7 @@ void write_effects(JsonWriter& j, const DiscrepancyResult& r) {
   for (const auto& e : r.effects) {
     j.begin_object();
     j.key("name").value(e.name);
+    if (!e.channel.empty()) discrepancy_parts::write_sensor_effect(j, e);
     if (e.name == "term") {
       j.key("equation").value(e.equation);
       j.key("expression").value(e.expression);
@@ -312,6 +314,10 @@ void print_effects(std::ostream& o, const DiscrepancyResult& r) {
     o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
     for (const auto& e : r.effects) {
       o << "  " << e.name << "\n";
+      if (!e.channel.empty()) {
+        discrepancy_parts::print_sensor_effect(o, e);
+        continue;
+      }
       if (e.name == "term") {
         o << "    " << e.equation << " += " << g(e.coefficient) << " * " << e.expression << "  (95 % interval " << g(e.interval[0])
           << " .. " << g(e.interval[1]) << ")\n";
@@ -480,6 +486,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   j.key("rate_hz").value(r.rate_hz);
   j.key("notes").array(r.notes);
   write_effects(j, r);
+  discrepancy_parts::write_compatibility(j, r);
   j.key("ambiguous").begin_array();
   for (const auto& pair : r.ambiguous) j.array(pair);
   j.end_array();
@@ -506,6 +513,7 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
     << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";
   o << "verdict: " << r.verdict << ": " << r.summary << "\n\n";
+  discrepancy_parts::print_compatibility(o, r);
   print_effects(o, r);
   print_flights(o, r);
   print_gap(o, r);
@@ -551,6 +559,7 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
   md << "Data: `" << r.source << "`, " << r.samples << " samples at " << g(r.rate_hz) << " Hz; held-out figures from "
      << r.folds << "-fold cross-validation over contiguous blocks.\n\n";
   md << "**Verdict: " << r.verdict << "**: " << r.summary << "\n\n";
+  md << discrepancy_parts::compatibility_markdown(r);
   if (!r.effects.empty()) {
     md << "## Named effects\n\n| effect | parameter | value | sigma (coloured) |\n|---|---|---|---|\n";
     for (const auto& e : r.effects) {

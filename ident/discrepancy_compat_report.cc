@@ -1,0 +1,140 @@
+// The discrepancy workflow (ident/discrepancy.h), part: the data-compatibility stage in the JSON, text
+// and Markdown reports (ident/data_compatibility.h).
+
+#include <cstdio>
+#include <ostream>
+#include <sstream>
+
+#include "core/json_writer.h"
+#include "ident/discrepancy_parts.h"
+
+namespace nimble::ident::discrepancy_parts {
+
+namespace {
+
+std::string num(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", x);
+  return b;
+}
+
+std::string sensor_words(const NamedEffect& e) {
+  std::string s = e.name + " of " + e.channel;
+  if (!e.against.empty()) s += " against " + e.against;
+  s += ": " + num(e.coefficient) + " " + e.unit + " (95 % interval " + num(e.interval[0]) + " .. " + num(e.interval[1]) + ")";
+  if (e.name == "time_offset") s += e.coefficient > 0.0 ? ", its stamps late" : ", its stamps early";
+  return s;
+}
+
+}  // namespace
+
+void write_sensor_effect(JsonWriter& j, const NamedEffect& e) {
+  j.key("channel").value(e.channel);
+  if (!e.against.empty()) j.key("against").value(e.against);
+  j.key("value").value(e.coefficient);
+  j.key("unit").value(e.unit);
+  j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
+  j.key("flight").value(e.flight);
+}
+
+void write_compatibility(JsonWriter& j, const DiscrepancyResult& r) {
+  j.key("compatibility").begin_array();
+  for (const CompatibilityResult& c : r.compatibility) {
+    j.begin_object();
+    j.key("source").value(c.source);
+    j.key("ran").value(c.ran);
+    if (!c.ran) j.key("note").value(c.note);
+    j.key("equation").value(c.equation);
+    j.key("samples").value(static_cast<long long>(c.samples));
+    j.key("blocks").value(c.blocks);
+    j.key("errors").begin_array();
+    for (const SensorError& e : c.errors) {
+      j.begin_object();
+      j.key("name").value(e.name);
+      j.key("channel").value(e.channel);
+      j.key("against").value(e.against);
+      j.key("unit").value(e.unit);
+      j.key("value").value(e.value);
+      j.key("sigma").value(e.sigma);
+      j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
+      j.key("tolerance").value(e.tolerance);
+      j.key("p_value").value(e.p_value);
+      j.key("significant").value(e.significant);
+      j.key("signature_holds").value(e.signature_holds);
+      j.key("signature").value(e.signature_note);
+      j.key("named").value(e.named);
+      j.key("corrected").value(e.corrected);
+      j.end_object();
+    }
+    j.end_array();
+    j.key("kinematic_gap").begin_object();
+    j.key("before").value(c.kinematic_gap_before);
+    j.key("after").value(c.kinematic_gap_after);
+    j.end_object();
+    if (c.aero_gap_uncorrected >= 0.0) j.key("gap_uncorrected").value(c.aero_gap_uncorrected);
+    j.key("corrections").array(c.corrections);
+    j.end_object();
+  }
+  j.end_array();
+}
+
+void print_compatibility(std::ostream& o, const DiscrepancyResult& r) {
+  if (r.compatibility.empty()) return;
+  o << "data compatibility (the sensors against the kinematics, before any aerodynamic term)\n";
+  for (const CompatibilityResult& c : r.compatibility) {
+    if (r.compatibility.size() > 1) o << "  " << c.source << "\n";
+    if (!c.ran) {
+      o << "  not checked: " << c.note << "\n";
+      continue;
+    }
+    o << "  " << c.equation << ", " << c.samples << " samples, " << num(c.blocks) << " blocks\n";
+    for (const SensorError& e : c.errors) {
+      char line[256];
+      std::snprintf(line, sizeof line, "  %-13s %-3s %11.4g %-5s [%.4g, %.4g]  p %.3g (beyond %.3g)  %s\n",
+                    e.name.c_str(), e.channel.c_str(), e.value, e.unit.c_str(), e.interval[0], e.interval[1], e.p_value,
+                    e.tolerance,
+                    e.named ? "named" : (e.significant ? "significant, signature absent: unnamed" : "-"));
+      o << line;
+      if (e.significant) o << "      signature: " << e.signature_note << "\n";
+    }
+    o << "  kinematic gap (held-out) " << num(c.kinematic_gap_before) << " -> " << num(c.kinematic_gap_after);
+    if (c.aero_gap_uncorrected >= 0.0) {
+      o << "; L/Y gap of the baseline as recorded " << num(c.aero_gap_uncorrected) << " -> corrected " << num(r.gap_before);
+    }
+    o << "\n";
+    for (const auto& s : c.corrections) o << "  corrected: " << s << "\n";
+  }
+  o << "\n";
+}
+
+void print_sensor_effect(std::ostream& o, const NamedEffect& e) { o << "    " << sensor_words(e) << "\n"; }
+
+std::string compatibility_markdown(const DiscrepancyResult& r) {
+  if (r.compatibility.empty()) return "";
+  std::ostringstream md;
+  md << "## Data compatibility\n\nThe sensors against the kinematics, before any aerodynamic term "
+        "(a significant error is corrected in the record; named when its signature holds).\n\n"
+        "| flight | error | channel | value | 95 % interval | p | verdict |\n|---|---|---|---|---|---|---|\n";
+  for (const CompatibilityResult& c : r.compatibility) {
+    if (!c.ran) {
+      md << "| " << c.source << " | not checked | | | | | " << c.note << " |\n";
+      continue;
+    }
+    for (const SensorError& e : c.errors) {
+      md << "| " << c.source << " | " << e.name << " | " << e.channel << " | " << num(e.value) << " " << e.unit << " | "
+         << num(e.interval[0]) << " .. " << num(e.interval[1]) << " | " << num(e.p_value) << " | "
+         << (e.named ? "named" : (e.significant ? "unnamed: signature absent" : "-")) << " |\n";
+    }
+  }
+  md << "\n";
+  for (const CompatibilityResult& c : r.compatibility) {
+    if (!c.ran) continue;
+    md << "Kinematic gap of " << c.source << " (" << c.equation << ", held-out): " << num(c.kinematic_gap_before) << " -> "
+       << num(c.kinematic_gap_after);
+    if (c.aero_gap_uncorrected >= 0.0) md << "; L/Y gap as recorded " << num(c.aero_gap_uncorrected) << " -> corrected " << num(r.gap_before);
+    md << ".\n\n";
+  }
+  return md.str();
+}
+
+}  // namespace nimble::ident::discrepancy_parts
