@@ -27,8 +27,16 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   node_->set_expected_rate(contract::channels::kImu, scenario.expected_rate(contract::channels::kImu));
   node_->set_expected_rate(contract::channels::kMocapPose, scenario.expected_rate(contract::channels::kMocapPose));
   stuck_check_ = sensing.imu.gyro_noise_sigma_radps.norm() > 0.0 || sensing.imu.accel_noise_sigma_mps2.norm() > 0.0;
+  imu_clock_ = sensing.imu.clock();
+  if (!imu_clock_.identity()) {
+    node_->bus().set_stamp_clock(contract::channels::kImu,
+                                 [clock = imu_clock_](int64_t stamp) { return clock.rig_utime(stamp); });
+  }
+  check_ekf_history(section, sensing, scenario.duration_s);  // the clock's drift over this flight
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
-    if (!transport::plausible_sim_utime(m.utime)) {
+    // The stamp is the IMU's clock; the rig's bookkeeping uses the rig time of the sample.
+    const int64_t rig_utime = imu_clock_.rig_utime(m.utime);
+    if (!transport::plausible_sim_utime(rig_utime)) {
       node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kImu,
                    "IMU sample at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
       return;
@@ -36,13 +44,13 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     const ImuSample s = contract::from_message(m);
     if (!imu_usable(s)) return;
     if (node_->lockstep()) {
-      imu_inbox_.push(s.utime, s);
+      imu_inbox_.push(rig_utime, s);
     } else {
-      apply_imu(s);
-      publish(s.utime);
+      apply_imu(s, rig_utime);
+      publish(rig_utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
       node_->record_latency_ns(transport::monotonic_ns() -
-                                (node_->t0_monotonic_ns() + transport::message_us_to_ns(s.utime)));
+                                (node_->t0_monotonic_ns() + transport::message_us_to_ns(rig_utime)));
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
@@ -93,8 +101,14 @@ bool EstimatorNode::imu_usable(const ImuSample& sample) {
   return !imu_stuck_;
 }
 
-void EstimatorNode::apply_imu(const ImuSample& sample) {
+void EstimatorNode::apply_imu(const ImuSample& sample, int64_t rig_utime) {
+  last_imu_stamp_ = sample.utime;
+  last_imu_rig_utime_ = rig_utime;
   if (ekf_->initialized()) ekf_->predict(sample);
+}
+
+int64_t EstimatorNode::filter_rig_utime() const {
+  return ekf_->utime() == last_imu_stamp_ ? last_imu_rig_utime_ : ekf_->utime();
 }
 
 void EstimatorNode::apply_pose(const MocapPose& pose) {
@@ -103,7 +117,13 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
   if (!pose.tracking_valid) ++poses_missing_;
   std::vector<PoseMeasurement> zs = builder_->push(pose);
   if (!ekf_->initialized() && !zs.empty()) {
-    ekf_->initialize_from_measurement(zs.front());
+    // The filter runs on the IMU's clock. When the IMU's stamps are behind the motion capture's
+    // (sensing.imu.clock_offset_s < 0 in the rig, an unsynchronised clock in a lab) it starts at
+    // the newest IMU stamp: started at the frame's, it would refuse every sample until the IMU's
+    // clock reached the frame, and its estimate would stand still meanwhile.
+    PoseMeasurement first = zs.front();
+    if (last_imu_stamp_ != INT64_MIN && last_imu_stamp_ < first.utime) first.utime = last_imu_stamp_;
+    ekf_->initialize_from_measurement(first);
     zs.erase(zs.begin());
   }
   // The frame's measurements together: one re-propagation for those that refer to the past.
@@ -126,19 +146,20 @@ void EstimatorNode::watch_divergence() {
   if (!now_diverged) return;
   diverged_ = true;
   std::ostringstream msg;
-  msg << std::fixed << std::setprecision(3) << "EKF diverged at t = " << 1e-6 * static_cast<double>(ekf_->utime())
+  msg << std::fixed << std::setprecision(3) << "EKF diverged at t = " << 1e-6 * static_cast<double>(filter_rig_utime())
       << " s: " << divergence_->threshold() << " or more of the last " << divergence_->window()
       << " motion-capture measurements failed the innovation gate (a consistent filter does so with probability "
       << kDivergenceFalseAlarm << "; last NIS " << std::setprecision(1) << ekf_->last_nis()
       << "); no more estimates are published";
   node_->fault(fault_event_t::SEVERITY_ERROR, fault_event_t::CODE_ESTIMATOR_DIVERGED, contract::channels::kEstimate,
-               msg.str(), ekf_->utime());
+               msg.str(), filter_rig_utime());
 }
 
 void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatus status) {
-  const int64_t now = ekf_->utime();
-  if (last_drop_fault_utime_ != INT64_MIN && now - last_drop_fault_utime_ < 1000000) return;
-  last_drop_fault_utime_ = now;
+  const int64_t now = ekf_->utime();  // the filter's time: the IMU's clock
+  const int64_t rig_now = filter_rig_utime();
+  if (last_drop_fault_utime_ != INT64_MIN && rig_now - last_drop_fault_utime_ < 1000000) return;
+  last_drop_fault_utime_ = rig_now;
   const EkfCounters& c = ekf_->counters();
   std::ostringstream msg;
   msg << std::fixed << std::setprecision(1) << "mocap frame " << z.frame_number << " dropped by the EKF: ";
@@ -152,7 +173,7 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
         << " so far); the IMU stream is late or the two clocks differ";
   }
   node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW,
-               contract::channels::kMocapPose, msg.str(), now);
+               contract::channels::kMocapPose, msg.str(), rig_now);
 }
 
 void EstimatorNode::tick(int64_t sim_time_ns) {
@@ -164,7 +185,7 @@ void EstimatorNode::tick(int64_t sim_time_ns) {
     const bool pose_ready = pose_inbox_.ready(now_us);
     if (!imu_ready && !pose_ready) break;
     if (imu_ready && (!pose_ready || imu_inbox_.front_stamp_utime() <= pose_inbox_.front_stamp_utime())) {
-      apply_imu(imu_inbox_.front());
+      apply_imu(imu_inbox_.front(), imu_inbox_.front_stamp_utime());
       imu_inbox_.pop();
     } else {
       apply_pose(pose_inbox_.front());
@@ -183,7 +204,7 @@ void EstimatorNode::publish(int64_t utime) {
   Estimate m;
   m.utime = utime;
   m.seq = seq_++;
-  m.imu_utime = ekf_->utime();
+  m.imu_utime = filter_rig_utime();
   m.euler_rad = x.segment<3>(kPhi);
   m.velocity_body_mps = x.segment<3>(kU);
   m.gyro_bias_radps = x.segment<3>(kBiasP);

@@ -23,12 +23,20 @@
 /// is stuck (CODE_SENSOR_STUCK, only when the configured IMU noise is not zero: a noisy sensor
 /// cannot repeat itself); its samples are not used until they change, so the estimate's
 /// imu_utime stops and the controller, which ages an estimate by it, takes its failsafe.
+///
+/// Clocks: the filter works on the IMU's stamps as they come (the on-board clock, which may
+/// differ from the motion capture's by sensing.imu.clock_offset_s and clock_drift_ppm, as in a
+/// lab). The node's own bookkeeping keeps to the rig's clock: it reads each stamp back to the
+/// rig time of its sample (ImuClock::rig_utime) for the lockstep inbox, the real-time
+/// publication and latency, and the estimate's imu_utime, so the controller's input age and the
+/// run monitor's comparison with the truth are on the rig's clock whatever the IMU's.
 
 #include <memory>
 
 #include "estimator/divergence_monitor.h"
 #include "estimator/ekf.h"
 #include "estimator/mocap_measurement.h"
+#include "sensors/imu_model.h"
 #include "scenario/scenario.h"
 #include "core/rig_values.h"
 #include "transport/latched_input.h"
@@ -55,7 +63,11 @@ class EstimatorNode {
   static constexpr double kDivergenceFalseAlarm = 1e-9;
 
  private:
-  void apply_imu(const ImuSample& sample);
+  /// Predicts with `sample`, taken at rig time `rig_utime` [us].
+  void apply_imu(const ImuSample& sample, int64_t rig_utime);
+  /// The rig time [us] of the filter's newest time: the rig time of the newest IMU sample
+  /// applied when that is the filter's time, else the filter's time (a measurement's).
+  int64_t filter_rig_utime() const;
   void apply_pose(const MocapPose& pose);
   void tick(int64_t sim_time_ns);
   void publish(int64_t utime);
@@ -76,7 +88,11 @@ class EstimatorNode {
   std::unique_ptr<AttitudeVelocityEkf> ekf_;
   std::unique_ptr<MocapMeasurementBuilder> builder_;
   std::unique_ptr<transport::ProcessNode> node_;
-  /// Lockstep: IMU samples (by their time) and poses (by their publication time) received,
+  /// The IMU's clock (sensing.imu): stamps to rig time.
+  ImuClock imu_clock_;
+  /// The newest IMU sample applied: its stamp and its rig time [us].
+  int64_t last_imu_stamp_ = INT64_MIN, last_imu_rig_utime_ = INT64_MIN;
+  /// Lockstep: IMU samples (by the rig time of their sample) and poses (by their publication time) received,
   /// applied from the first tick after that time.
   transport::LatchedInput<ImuSample> imu_inbox_;
   transport::LatchedInput<MocapPose> pose_inbox_;

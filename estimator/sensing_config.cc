@@ -1,5 +1,6 @@
 #include "estimator/sensing_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -63,31 +64,42 @@ SensingConfig sensing_config_from(ConfigMap& map) {
     c.ekf = ekf_config_from(m);
   }
   map.finish();
-  const EkfHistoryNeed need = ekf_history_need(c);
-  const double needed_s = need.total_s();
-  if (c.ekf.latency_mode == EkfLatencyMode::kRollback && c.ekf.history_s < needed_s) {
-    const bool window = c.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
-    std::ostringstream why;
-    why << std::setprecision(3) << "is too short for the motion-capture measurements, which would arrive older than the "
-        << "history and be dropped: latency " << 1e3 * need.latency_s << " ms + 3 x jitter " << 1e3 * need.jitter_s
-        << " ms + " << (window ? "" : "half ") << "the differentiator span (" << c.velocity_differentiator.span_frames
-        << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "")
-        << ") " << 1e3 * need.window_s << " ms + 2 IMU periods " << 1e3 * need.imu_s << " ms = " << 1e3 * needed_s
-        << " ms; set ekf.latency.history_s >= " << std::ceil(needed_s * 1e3) / 1e3;
-    std::ostringstream value;
-    value << c.ekf.history_s;
-    throw ConfigError(map.file(), map.key_path("ekf.latency.history_s"), value.str(), why.str());
-  }
+  check_ekf_history(map, c, 0.0);
   return c;
 }
 
-EkfHistoryNeed ekf_history_need(const SensingConfig& config) {
+void check_ekf_history(ConfigMap& map, const SensingConfig& c, double duration_s) {
+  const EkfHistoryNeed need = ekf_history_need(c, duration_s);
+  const double needed_s = need.total_s();
+  if (c.ekf.latency_mode != EkfLatencyMode::kRollback || c.ekf.history_s >= needed_s) return;
+  const bool window = c.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
+  std::ostringstream why;
+  why << std::setprecision(3) << "is too short for the motion-capture measurements, which would arrive older than the "
+      << "history and be dropped: latency " << 1e3 * need.latency_s << " ms + 3 x jitter " << 1e3 * need.jitter_s
+      << " ms + " << (window ? "" : "half ") << "the differentiator span (" << c.velocity_differentiator.span_frames
+      << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "")
+      << ") " << 1e3 * need.window_s << " ms + 2 IMU periods " << 1e3 * need.imu_s << " ms";
+  if (need.clock_s > 0.0) {
+    why << " + the IMU clock against the motion capture's (imu.clock_offset_s " << c.imu.clock_offset_s
+        << " s, clock_drift_ppm " << c.imu.clock_drift_ppm;
+    if (duration_s > 0.0) why << " over " << duration_s << " s";
+    why << ") " << 1e3 * need.clock_s << " ms";
+  }
+  why << " = " << 1e3 * needed_s << " ms; set ekf.latency.history_s >= " << std::ceil(needed_s * 1e3) / 1e3;
+  std::ostringstream value;
+  value << c.ekf.history_s;
+  throw ConfigError(map.file(), map.key_path("ekf.latency.history_s"), value.str(), why.str());
+}
+
+EkfHistoryNeed ekf_history_need(const SensingConfig& config, double duration_s) {
   const double span_s = config.velocity_differentiator.span_frames / config.mocap.frame_rate_hz;
   EkfHistoryNeed need;
   need.latency_s = 1e-6 * static_cast<double>(config.mocap.latency_us);
   need.jitter_s = 3e-6 * config.mocap.latency_jitter_sigma_us;
   need.window_s = config.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean ? span_s : 0.5 * span_s;
   need.imu_s = 2.0 / config.imu.sample_rate_hz;
+  const double offset_s = config.imu.clock_offset_s;
+  need.clock_s = std::max(std::fabs(offset_s), std::fabs(offset_s + 1e-6 * config.imu.clock_drift_ppm * duration_s));
   return need;
 }
 

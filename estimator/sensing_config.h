@@ -43,9 +43,20 @@ struct EkfHistoryNeed {
                            ///< the filter's trajectory from the window's start), half with instant
   double imu_s = 0.0;      ///< two IMU periods (applied at the next IMU sample; the node before
                            ///< the window's start must be kept)
-  double total_s() const { return latency_s + jitter_s + window_s + imu_s; }
+  double clock_s = 0.0;    ///< the largest |IMU clock - motion-capture clock| over the flight
+                           ///< (imu.clock_offset_s, and its drift over `duration_s`): a
+                           ///< measurement looks that much older (or newer) to the filter,
+                           ///< whose time is the IMU's stamps
+  double total_s() const { return latency_s + jitter_s + window_s + imu_s + clock_s; }
 };
-EkfHistoryNeed ekf_history_need(const SensingConfig& config);
+/// `duration_s`: the flight's length, over which imu.clock_drift_ppm moves the IMU clock (0: the
+/// offset alone).
+EkfHistoryNeed ekf_history_need(const SensingConfig& config, double duration_s = 0.0);
+/// Refuses an ekf.latency.history_s (rollback mode) shorter than ekf_history_need(config,
+/// duration_s) with a ConfigError naming the key of `map` (the sensing mapping) and every part of
+/// the need. sensing_config_from() checks with the offset alone, the estimator with its flight's
+/// duration. @throws ConfigError.
+void check_ekf_history(ConfigMap& map, const SensingConfig& config, double duration_s);
 
 /// Shortest ekf.latency.history_s [s] with which no motion-capture measurement arrives too old:
 /// ekf_history_need(config).total_s().

@@ -122,7 +122,9 @@ void PlantNode::publish_imu(int64_t sim_time_ns) {
   in.flap_freq_right_radps = t.flap_freq_right_radps;
   imu_sample_t m = contract::to_message(imu_->sample(in));
   m.seq = imu_seq_++;
-  node_->bus().publish(contract::channels::kImu, m);
+  // m.utime is the IMU's own clock (sensing.imu.clock_offset_s, clock_drift_ppm); a scenario's
+  // faults on IMU are timed in rig time.
+  node_->bus().publish(contract::channels::kImu, m, in.utime);
   // Next sample: the first period boundary after this step.
   imu_next_ns_ = (sim_time_ns / imu_period_ns_ + 1) * imu_period_ns_;
 }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -48,6 +49,9 @@ struct ChannelStats {
   int64_t late = 0;
   bool due_in_sim_time = false;  ///< the channel's utime is simulated time (the contract says)
   bool one_publisher = false;    ///< the channel has one publisher: its seq must continue
+  /// The rig time [us] of a utime stamped on another clock (Bus::set_stamp_clock); empty: the
+  /// utime is rig time.
+  std::function<int64_t(int64_t)> rig_utime_of;
 };
 
 namespace detail {
@@ -79,14 +83,23 @@ class Bus {
   InprocessHub* hub() const { return hub_; }
 
   /// Publishes `msg` on `channel`. Never throws; a failure is counted in publish_failures().
-  /// On a channel the scenario faults, the message goes through the fault injector.
+  /// On a channel the scenario faults, the message goes through the fault injector, which
+  /// decides at `rig_utime` [us] when given (a message stamped on another clock: the IMU's),
+  /// else at the message's utime.
   template <typename T>
-  void publish(const std::string& channel, const T& msg) {
+  void publish(const std::string& channel, const T& msg, std::optional<int64_t> rig_utime = std::nullopt) {
     if (injector_ != nullptr && injector_->targets(channel)) {
-      publish_faulted(channel, msg);
+      publish_faulted(channel, msg, rig_utime);
       return;
     }
     publish_now(channel, msg);
+  }
+
+  /// The messages of `channel` (subscribed or to be) carry a utime on another clock than the
+  /// rig's: `rig_utime_of` gives the rig time of such a utime, at which the message is due
+  /// (the late count of set_deadlines()).
+  void set_stamp_clock(const std::string& channel, std::function<int64_t(int64_t)> rig_utime_of) {
+    stats_[channel].rig_utime_of = std::move(rig_utime_of);
   }
 
   /// Publishes already encoded bytes (the fault injector, tools). Never throws.
@@ -98,10 +111,11 @@ class Bus {
 
  private:
   template <typename T>
-  void publish_faulted(const std::string& channel, const T& original) {
+  void publish_faulted(const std::string& channel, const T& original, std::optional<int64_t> rig_utime) {
     T msg = original;
     FaultableMessage m;
     m.utime = &msg.utime;
+    m.rig_utime = rig_utime;
     m.seq = &msg.seq;
     m.values = contract::value_fields(msg);
     m.encode = [&msg] {
@@ -158,7 +172,7 @@ class Bus {
       if (late_threshold_ns_ > 0 && stats.due_in_sim_time) {
         // Due at its simulated time; a motion-capture pose (stamped at mid-exposure) once
         // its latency has passed.
-        int64_t due_ns = message_us_to_ns(msg.utime);
+        int64_t due_ns = message_us_to_ns(stats.rig_utime_of ? stats.rig_utime_of(msg.utime) : msg.utime);
         if constexpr (detail::has_latency_us<T>::value) due_ns += message_us_to_ns(msg.latency_us);
         count_late(due_ns, stats);
       }

@@ -33,7 +33,9 @@ void FaultInjector::release_due(Bus& bus, const std::string& channel, ChannelSta
 
 void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessage& msg) {
   ChannelState& cs = channels_.at(channel);
-  const int64_t t = *msg.utime;
+  // Decided at rig time; a message keeps its own stamp (the IMU's clock may differ).
+  const int64_t t = msg.rig_utime ? *msg.rig_utime : *msg.utime;
+  const int64_t stamp = *msg.utime;
   release_due(bus, channel, cs, t);
 
   const contract::FaultSpec* f = nullptr;
@@ -82,7 +84,7 @@ void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessa
         cs.held_for = f->index;
       }
       msg.restore(cs.held);
-      *msg.utime = t;
+      *msg.utime = stamp;
       *msg.seq = cs.next_seq++;
       send_now(msg.encode());
       return;

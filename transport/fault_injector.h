@@ -17,6 +17,7 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -31,6 +32,9 @@ class Bus;
 /// codec (Bus::publish builds it around a copy of the message).
 struct FaultableMessage {
   int64_t* utime = nullptr;
+  /// The rig time [us] the faults are decided at, when the message's utime is another clock's
+  /// (the IMU's stamps); empty: *utime.
+  std::optional<int64_t> rig_utime;
   int64_t* seq = nullptr;
   contract::ValueFields values;
   std::function<std::vector<uint8_t>()> encode;
