@@ -53,7 +53,8 @@ std::vector<VibrationHarmonic> default_flapping_harmonics() {
 
 std::int64_t ImuClock::stamp(std::int64_t rig_utime) const {
   if (identity()) return rig_utime;
-  return rig_utime + std::llround(offset_s * 1e6 + drift_ppm * 1e-6 * static_cast<double>(rig_utime));
+  const double error_us = offset_s * 1e6 + drift_ppm * 1e-6 * static_cast<double>(rig_utime);
+  return rig_utime + static_cast<std::int64_t>(std::floor(error_us + kStampRoundingPhase));
 }
 
 std::int64_t ImuClock::rig_utime(std::int64_t stamp_utime) const {

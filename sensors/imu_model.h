@@ -53,8 +53,14 @@ struct VibrationHarmonic {
 };
 
 /// The IMU's clock against the rig's (the motion capture's): the stamp an IMU sample carries is
-///   stamp = t + round(offset_s 1e6 + drift_ppm 1e-6 t)  [us], t the rig time of the sample [us],
-/// so the drift accumulates from rig time 0. The identity when both are zero.
+///   stamp = t + floor(offset_s 1e6 + drift_ppm 1e-6 t + kStampRoundingPhase)  [us],
+/// t the rig time of the sample [us], so the drift accumulates from rig time 0. The identity when
+/// both are zero. The clock's error is rounded to the microsecond with its boundaries at the
+/// fraction 0.618 (kStampRoundingPhase = 2 - golden ratio), off every decimal fraction: with a slow
+/// clock two rig times a microsecond apart share a stamp where the error crosses a boundary, and
+/// at .5 (round to nearest) that is exactly where whole-millisecond sample times with a
+/// whole-ppm drift sit (-500 ppm: every other millisecond).
+constexpr double kStampRoundingPhase = 0.3819660112501051;
 struct ImuClock {
   double offset_s = 0.0;   ///< the IMU clock minus the rig clock at rig time 0 [s]
   double drift_ppm = 0.0;  ///< the IMU clock's rate error [1e-6 s/s]
@@ -63,8 +69,9 @@ struct ImuClock {
   std::int64_t stamp(std::int64_t rig_utime) const;
   /// The rig time [us] of a sample stamped `stamp_utime`: the inverse of stamp() on the stamps it
   /// gives (the nearest rig time for any other). A slow clock (drift < 0) gives two rig times a
-  /// microsecond apart the same stamp once in 1e6 / |drift_ppm| us: the earlier is returned (with
-  /// samples 1953 us apart, one sample in about 2e6 / |drift_ppm| is read back 1 us early). Rig machinery that must keep to
+  /// microsecond apart the same stamp once in 1e6 / |drift_ppm| us: the earlier is returned (a
+  /// sample is read back 1 us early only if it is the later of such a pair, about one in
+  /// 1e6 / |drift_ppm|). Rig machinery that must keep to
   /// the rig's clock (lockstep bookkeeping, the time an estimate refers to) reads IMU stamps
   /// through it; the estimator's filter works on the stamps as they come.
   std::int64_t rig_utime(std::int64_t stamp_utime) const;

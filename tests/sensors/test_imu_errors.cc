@@ -68,10 +68,11 @@ TEST_CASE("IMU errors: each stamp is rig time + offset + drift x rig time, and r
   c.clock_offset_s = -0.05;
   c.clock_drift_ppm = 200.0;
   ImuModel imu(c, 3);
-  for (const std::int64_t t : {std::int64_t{0}, std::int64_t{1953}, std::int64_t{10000000}, std::int64_t{60000000}}) {
+  // rig time -> stamp: t - 50 ms + 200 ppm of t, to the microsecond.
+  const std::int64_t expected[][2] = {{0, -50000}, {1953, -48047}, {10000000, 9952000}, {60000000, 59962000}};
+  for (const auto& [t, stamp] : expected) {
     const ImuSample s = imu.sample(truth_at(t));
-    const std::int64_t expected = t - 50000 + std::llround(200e-6 * static_cast<double>(t));
-    CHECK(s.utime == expected);
+    CHECK(s.utime == stamp);
     CHECK(c.clock().rig_utime(s.utime) == t);
   }
   // The bias walk and the vibration keep to the rig time: with the clock's error alone the
@@ -99,6 +100,9 @@ TEST_CASE("IMU errors: each stamp is rig time + offset + drift x rig time, and r
     shared += back != t;
   }
   CHECK(shared < 10);
+  // Whole-millisecond sample times and a whole-ppm slow clock never share a stamp: each reads back.
+  const ImuClock half{-0.05, -500.0};
+  for (std::int64_t t = 0; t < 10000000; t += 1000) REQUIRE(half.rig_utime(half.stamp(t)) == t);
 }
 
 TEST_CASE("IMU errors: the keys of the imu section, each refused out of range by name", "[imu_errors]") {
