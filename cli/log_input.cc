@@ -67,13 +67,15 @@ CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std:
   auto* states = cmdline::each_value(cl->add_option("--states", "rig log: where the states come from: auto (the estimator's if the log has "
                                         "them, else the truth), estimate, truth, or smoothed (made offline from the "
                                         "log's IMU and motion capture by the fixed-interval smoother, as the thesis's "
-                                        "identification data were)")
+                                        "identification data were), or sensors (the raw channels as a lab records them, "
+                                        "no fusion: p q r the IMU's gyro at its own stamps, phi theta psi each motion-"
+                                        "capture frame's attitude at mid-exposure, u v w its positions differentiated)")
                  ->type_name("SOURCE")
-                 ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed"})),
+                 ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed", "sensors"})),
              [&o](const std::string& v) { o.states = ident::state_source_from_name(v); });
   cl->add_option("--sensing", sensing_file,
-                 "--states smoothed: the sensing the flight flew with (its IMU, motion capture and EKF; default "
-                 "rig_configs/sensing/default_sensing.yaml)")
+                 "--states smoothed or sensors: the sensing the flight flew with (its IMU, motion capture, velocity "
+                 "differentiator and EKF; default rig_configs/sensing/default_sensing.yaml)")
       ->type_name("FILE");
   return states;
 }
@@ -87,7 +89,7 @@ std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOp
       return cl.fail("--states: " + file + " is not a rig log; a CSV file carries its own states");
     }
   }
-  if (o.states != ident::StateSource::kSmoothed) return std::nullopt;
+  if (o.states != ident::StateSource::kSmoothed && o.states != ident::StateSource::kSensors) return std::nullopt;
   try {
     const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);
     o.smoothing.ekf = smoother_ekf_config(sensing);

@@ -1,9 +1,11 @@
 #include "ident/rig_log.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <fstream>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 #include "contract/channels.h"
@@ -101,12 +103,28 @@ void set_origin(FlightData& d, const std::string& state_channel) {
   }
 }
 
+/// Names the origin of the states of StateSource::kSensors: the IMU's gyro, MOCAP_POSE.
+void sensor_origin(FlightData& d) {
+  static const std::string kDifferentiated = "position_m (differentiated)";
+  const std::tuple<const char*, const std::string*, std::string> fields[] = {
+      {"p", &kImu, "gyro_radps[0]"},           {"q", &kImu, "gyro_radps[1]"},
+      {"r", &kImu, "gyro_radps[2]"},           {"phi", &kMocapPose, "quaternion_wxyz"},
+      {"theta", &kMocapPose, "quaternion_wxyz"}, {"psi", &kMocapPose, "quaternion_wxyz"},
+      {"u", &kMocapPose, kDifferentiated},     {"v", &kMocapPose, kDifferentiated},
+      {"w", &kMocapPose, kDifferentiated},
+  };
+  for (const auto& [name, channel, field] : fields) {
+    if (d.has(name)) d.origin[name] = {*channel, field};
+  }
+}
+
 /// Each state source with its name.
 constexpr std::pair<StateSource, const char*> kStateSourceNames[] = {
     {StateSource::kAuto, "auto"},
     {StateSource::kEstimate, "estimate"},
     {StateSource::kTruth, "truth"},
     {StateSource::kSmoothed, "smoothed"},
+    {StateSource::kSensors, "sensors"},
 };
 
 }  // namespace
@@ -122,7 +140,7 @@ StateSource state_source_from_name(const std::string& name) {
   for (const auto& [s, n] : kStateSourceNames) {
     if (name == n) return s;
   }
-  throw std::invalid_argument("state source '" + name + "': auto, estimate, truth or smoothed");
+  throw std::invalid_argument("state source '" + name + "': auto, estimate, truth, smoothed or sensors");
 }
 
 double estimate_time_s(std::int64_t utime, std::int64_t imu_utime) {
@@ -248,6 +266,45 @@ FlightData RigLogAssembler::smoothed_states(const SmoothingOptions& smoothing) c
   return states;
 }
 
+FlightData RigLogAssembler::sensor_states(const VelocityDifferentiatorConfig& differentiator) const {
+  const std::string& file = source_;
+  if (!smoothing_) throw std::logic_error("RigLogAssembler: sensor states need collect_for_smoothing()");
+  if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples (p, q, r)");
+  if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames (phi, u)");
+  FlightData states;
+  // Rates: each IMU message's gyro at the stamp it carries, the IMU's own clock.
+  static const char* const kRates[] = {"p", "q", "r"};
+  for (const ImuSample& m : imu_) {
+    for (int i = 0; i < 3; ++i) append(states.channels[kRates[i]], 1e-6 * static_cast<double>(m.utime), m.gyro_radps[i]);
+  }
+  // Attitude and velocity: the rig's differentiator on the frames in the order they were
+  // published; a frame's attitude comes out once its velocity window is decided, so sort by time.
+  MocapMeasurementBuilder builder(differentiator);
+  std::vector<PoseMeasurement> zs;
+  for (const MocapPose& pose : poses_) {
+    std::vector<PoseMeasurement> out = builder.push(pose);
+    zs.insert(zs.end(), out.begin(), out.end());
+  }
+  const std::vector<PoseMeasurement> rest = builder.flush();
+  zs.insert(zs.end(), rest.begin(), rest.end());
+  if (zs.empty()) throw DataError(file, -1, -1, kMocapPose, "no motion-capture frame was tracked: no attitude");
+  std::stable_sort(zs.begin(), zs.end(),
+                   [](const PoseMeasurement& a, const PoseMeasurement& b) { return a.utime < b.utime; });
+  static const char* const kEuler[] = {"phi", "theta", "psi"};
+  static const char* const kVelocity[] = {"u", "v", "w"};
+  for (const PoseMeasurement& z : zs) {
+    const double t = 1e-6 * static_cast<double>(z.utime);
+    for (int i = 0; i < 3; ++i) {
+      append(states.channels[kEuler[i]], t, z.euler_rad[i]);
+      if (z.has_velocity) append(states.channels[kVelocity[i]], t, z.velocity_body_mps[i]);
+    }
+  }
+  if (!states.has("u")) {
+    throw DataError(file, -1, -1, kMocapPose, "no motion-capture velocity window was complete: no u, v, w");
+  }
+  return states;
+}
+
 RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage, const SmoothingOptions& smoothing) {
   const std::string& file = source_;
   FlightData& inputs = inputs_;
@@ -267,6 +324,8 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
   RigLogData out;
   if (chosen == StateSource::kSmoothed) {
     out.measured = smoothed_states(smoothing);
+  } else if (chosen == StateSource::kSensors) {
+    out.measured = sensor_states(smoothing.differentiator);
   } else if (chosen == StateSource::kEstimate) {
     if (!estimate_.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
     out.measured = std::move(estimate_);
@@ -280,6 +339,7 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
   out.measured.source = file;
   for (const auto& [name, c] : inputs.channels) out.measured.channels[name] = c;
   set_origin(out.measured, chosen == StateSource::kEstimate ? kEstimate : chosen == StateSource::kTruth ? kTruth : "");
+  if (chosen == StateSource::kSensors) sensor_origin(out.measured);
   if (truth_.has("p")) {
     out.truth = std::move(truth_);
     out.truth.source = file + " (truth)";
@@ -292,7 +352,7 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
 RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
   LcmLogReader log(file, options.salvage);
   RigLogAssembler assembler(file);
-  if (source == StateSource::kSmoothed) assembler.collect_for_smoothing();
+  if (source == StateSource::kSmoothed || source == StateSource::kSensors) assembler.collect_for_smoothing();
   std::optional<BoundsTally> refuse;
   if (options.refuse_beyond_bounds && options.beyond_bounds == nullptr) refuse.emplace(*options.refuse_beyond_bounds);
   assembler.leave_out_beyond(refuse ? &*refuse : options.beyond_bounds);

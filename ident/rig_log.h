@@ -37,17 +37,24 @@ enum class StateSource {
   kTruth,     ///< TRUTH
   kSmoothed,  ///< made offline from the log's IMU and MOCAP_POSE by the fixed-interval smoother
               ///< (estimator/smoother.h), as the thesis's identification data were made
+  kSensors,   ///< the raw sensor channels as a lab records them, no fusion: p q r the IMU's gyro
+              ///< at the stamps its messages carry (the IMU's own clock), phi theta psi from each
+              ///< tracked MOCAP_POSE's quaternion at its stamp (mid-exposure), u v w the
+              ///< motion-capture positions through the rig's velocity differentiator
+              ///< (estimator/mocap_measurement.h; SmoothingOptions::differentiator) at the middle
+              ///< of each window; ax ay az the IMU's accelerometer (as with every source)
 };
 
-/// The filter model of StateSource::kSmoothed: the flight's own sensing configuration where it is
-/// known (the scenario's `sensing` section), else the defaults, which are
-/// rig_configs/sensing/default_sensing.yaml's.
+/// The filter model of StateSource::kSmoothed (and the differentiator of kSensors): the flight's
+/// own sensing configuration where it is known (the scenario's `sensing` section), else the
+/// defaults, which are rig_configs/sensing/default_sensing.yaml's.
 struct SmoothingOptions {
   EkfConfig ekf;
   VelocityDifferentiatorConfig differentiator;
 };
 
-/// The name of a state source as commands and reports print it: "auto", "estimate", "truth", "smoothed".
+/// The name of a state source as commands and reports print it: "auto", "estimate", "truth",
+/// "smoothed", "sensors".
 const char* state_source_name(StateSource source);
 /// The state source of such a name. @throws std::invalid_argument for another name.
 StateSource state_source_from_name(const std::string& name);
@@ -56,7 +63,7 @@ StateSource state_source_from_name(const std::string& name);
 struct RigLogData {
   FlightData measured;       ///< states (per StateSource), inputs, set-points, at their own rates
   FlightData truth;          ///< states from TRUTH with the same inputs (empty if no TRUTH)
-  std::string state_source;  ///< "estimate", "truth" or "smoothed"
+  std::string state_source;  ///< "estimate", "truth", "smoothed" or "sensors"
   std::string gain_set;      ///< the roll gain set the controller flew (CONTROLLER_STATUS; empty if none)
   std::string damage;        ///< read with salvage from a damaged log: where and how much was left ("" if whole)
 };
@@ -112,7 +119,7 @@ class RigLogAssembler {
   bool add(const std::string& channel, const void* data, int size, std::int64_t event_number = -1,
            std::int64_t offset = -1);
   /// Keep the IMU samples and motion-capture frames (decoding MOCAP_POSE, which it otherwise
-  /// passes over) for finish(StateSource::kSmoothed). Call before the first add().
+  /// passes over) for finish(StateSource::kSmoothed or kSensors). Call before the first add().
   void collect_for_smoothing() { smoothing_ = true; }
   /// Leave out every message with a field beyond the bounds of `tally`, counting them there
   /// (LogReadOptions::beyond_bounds). Call before the first add().
@@ -121,14 +128,16 @@ class RigLogAssembler {
   bool add(const LogEventRecord& event);
   /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
   /// @throws DataError for a missing channel, as read_rig_log().
-  /// @throws DataError for kSmoothed on a log without IMU or MOCAP_POSE, or without
-  ///         collect_for_smoothing().
+  /// @throws DataError for kSmoothed or kSensors on a log without IMU or MOCAP_POSE, or
+  ///         without collect_for_smoothing().
   RigLogData finish(StateSource source = StateSource::kAuto, const std::string& damage = "",
                     const SmoothingOptions& smoothing = {});
 
  private:
   /// The states smoothed offline from the collected IMU samples and frames (finish()).
   FlightData smoothed_states(const SmoothingOptions& smoothing) const;
+  /// The raw sensor channels of the collected IMU samples and frames (finish(), kSensors).
+  FlightData sensor_states(const VelocityDifferentiatorConfig& differentiator) const;
   enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
   /// The input channel `name`, made on first use; looked up by slot after that.
   Channel& input(InputSlot slot, const char* name);

@@ -300,6 +300,9 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
     const SensingConfig s = load_sensing_config(sensing);
     o.smoothing.ekf = smoother_ekf_config(s);
     o.smoothing.differentiator = s.velocity_differentiator;
+  } else if (o.states == ident::StateSource::kSensors && !sensing.empty()) {
+    // The flight's velocity differentiator (without sensing=, the default one).
+    o.smoothing.differentiator = load_sensing_config(sensing).velocity_differentiator;
   }
   ident::RigLogData log;
   {

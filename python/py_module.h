@@ -48,8 +48,8 @@ struct DataInput {
 /// `data` as flight data: a path (str or os.PathLike) of a rig log or an identification CSV
 /// (read by content, as the commands read it), or a dict {'t': array, 'p': array, ...} of the
 /// channels of ident/flight_data.h on one time base ('t' [s], strictly increasing). `states`
-/// (auto, estimate, truth, smoothed) says where a log's states come from; `sensing` is the
-/// sensing file of the smoother (states='smoothed'). With `vehicle`, a log with a message beyond
+/// (auto, estimate, truth, smoothed, sensors) says where a log's states come from; `sensing` is the
+/// sensing file of the smoother (states='smoothed') or of the differentiator (states='sensors'). With `vehicle`, a log with a message beyond
 /// its physical bounds is refused as it is read (ident::LogReadOptions::refuse_beyond_bounds).
 /// @throws ident::DataError naming the channel and sample; std::invalid_argument for an unknown
 ///         channel, a length that differs from t's, or states given for data that is not a log.

@@ -16,10 +16,12 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nimble/actuator_feedback_t.hpp>
 #include <nimble/estimator_state_t.hpp>
+#include <nimble/imu_sample_t.hpp>
 #include <nimble/mocap_pose_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
+#include "core/attitude.h"
 #include "ident/lcm_log.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"
@@ -366,4 +368,63 @@ TEST_CASE("smoothed states of a rig flight: made offline from its IMU and motion
   const std::string bare = temp_log("no_mocap.lcmlog");
   write_lockstep_log(bare, 1.0);
   CHECK(what_of([&] { read_rig_log(bare, StateSource::kSmoothed); }).find("to smooth") != std::string::npos);
+}
+
+TEST_CASE("sensors: the raw channels of a rig log, p at the IMU's own stamps and phi at the motion capture's",
+          "[ident]") {
+  // A short flight whose IMU clock runs 30 ms ahead of the motion capture's.
+  const std::string log = temp_log("sensors.lcmlog");
+  const auto fly = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
+                                         "/rig_configs/hover.yaml --clock inprocess --no-progress --set duration_s=1"
+                                         " --set processes=[plant,controller,mocap] --set run.controller_input=truth"
+                                         " --set sensing.imu.clock_offset_s=0.03"
+                                         " --log " + log);
+  INFO(fly.out << fly.err);
+  REQUIRE(fly.exit_code == 0);
+  // The log's own IMU and MOCAP_POSE messages.
+  std::vector<std::pair<double, double>> imu_p, pose_phi;
+  LcmLogReader reader(log, false);
+  LogEventRecord ev;
+  while (reader.next(&ev)) {
+    if (ev.channel == kImu) {
+      imu_sample_t m{};
+      REQUIRE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) > 0);
+      imu_p.emplace_back(1e-6 * static_cast<double>(m.utime), m.gyro_radps[0]);
+    } else if (ev.channel == kMocapPose) {
+      mocap_pose_t m{};
+      REQUIRE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) > 0);
+      if (!m.tracking_valid) continue;
+      const Eigen::Quaterniond q(m.quaternion_wxyz[0], m.quaternion_wxyz[1], m.quaternion_wxyz[2], m.quaternion_wxyz[3]);
+      pose_phi.emplace_back(1e-6 * static_cast<double>(m.utime), euler_zyx_from_rotation(q.toRotationMatrix())[0]);
+    }
+  }
+  REQUIRE(imu_p.size() > 500);
+  REQUIRE(pose_phi.size() > 190);
+  const RigLogData d = read_rig_log(log, StateSource::kSensors);
+  CHECK(d.state_source == "sensors");
+  const Channel& p = d.measured.at("p");
+  const Channel& phi = d.measured.at("phi");
+  // p: every IMU message's gyro at its own stamp, which runs 30 ms ahead of the rig time.
+  REQUIRE(p.t_s.size() == imu_p.size());
+  for (std::size_t i = 0; i < p.t_s.size(); ++i) {
+    REQUIRE(p.t_s[i] == imu_p[i].first);
+    REQUIRE(p.values[i] == imu_p[i].second);
+  }
+  CHECK(p.t_s.front() == Approx(0.030).margin(1e-9));  // the first sample, taken at rig time 0
+  // phi: every tracked frame's attitude at its mid-exposure stamp, untouched by the IMU's clock.
+  REQUIRE(phi.t_s.size() == pose_phi.size());
+  for (std::size_t i = 0; i < phi.t_s.size(); ++i) {
+    REQUIRE(phi.t_s[i] == pose_phi[i].first);
+    REQUIRE(phi.values[i] == Approx(pose_phi[i].second).margin(1e-12));
+  }
+  CHECK(phi.t_s.front() < 0.01);
+  CHECK(d.measured.has("u"));  // the differentiated positions
+  CHECK(d.measured.has("ax"));
+  CHECK(d.measured.origin.at("p").first == kImu);
+  CHECK(d.measured.origin.at("phi").first == kMocapPose);
+  // A log without motion capture has no attitude to give, and says so.
+  const std::string bare = temp_log("sensors_no_mocap.lcmlog");
+  write_lockstep_log(bare, 1.0);
+  CHECK(what_of([&] { read_rig_log(bare, StateSource::kSensors); }).find("no IMU samples") != std::string::npos);
+  CHECK(state_source_from_name("sensors") == StateSource::kSensors);
 }
