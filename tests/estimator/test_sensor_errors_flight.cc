@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/run_rig.h"
+#include "../support/scratch.h"
 
 namespace {
 
@@ -17,6 +18,11 @@ const std::string kFlight = std::string("run ") + RIG_SOURCE_DIR +
                             "/rig_configs/hover.yaml --clock inprocess --no-progress --set duration_s=2"
                             " --set processes=[plant,controller,mocap,estimator] --set run.controller_input=estimate"
                             " --json -";
+
+/// The flight's options with its log in the test's scratch directory (removed when the run passes).
+std::string flight(const std::string& name, const std::string& sets) {
+  return kFlight + " --log " + nimble::test::scratch_file("sensor_errors", name + ".lcmlog") + sets;
+}
 
 }  // namespace
 
@@ -36,9 +42,10 @@ TEST_CASE("the estimator in the loop survives each of the IMU's own errors on a 
        " --set sensing.imu.clock_offset_s=-0.05 --set sensing.imu.clock_drift_ppm=-500"
        " --set sensing.ekf.latency.history_s=0.12"},
   };
+  int n = 0;
   for (const auto& c : cases) {
     INFO(c.what);
-    const nimble::test::RigResult r = nimble::test::run_rig(kFlight + c.sets);
+    const nimble::test::RigResult r = nimble::test::run_rig(flight("flight" + std::to_string(n++), c.sets));
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     const YAML::Node s = YAML::Load(r.out);
@@ -58,14 +65,14 @@ TEST_CASE("the estimator in the loop survives each of the IMU's own errors on a 
 
 TEST_CASE("an IMU clock offset beyond the EKF's rollback history is refused at load, naming the history it needs",
           "[sensor_errors]") {
-  const nimble::test::RigResult r = nimble::test::run_rig(kFlight + " --set sensing.imu.clock_offset_s=-0.05");
+  const nimble::test::RigResult r = nimble::test::run_rig(flight("refused", " --set sensing.imu.clock_offset_s=-0.05"));
   CHECK(r.exit_code == 2);
   CHECK(r.err.find("sensing.ekf.latency.history_s") != std::string::npos);
   CHECK(r.err.find("imu.clock_offset_s -0.05") != std::string::npos);
   CHECK(r.err.find("history_s >= 0.119") != std::string::npos);
   // The drift over the flight counts too: 0.1 s holds the offset of 10 ms, not 10 ms + 1000 ppm x 30 s.
-  const nimble::test::RigResult d = nimble::test::run_rig(
-      kFlight + " --set duration_s=30 --set sensing.imu.clock_offset_s=0.01 --set sensing.imu.clock_drift_ppm=1000");
+  const nimble::test::RigResult d = nimble::test::run_rig(flight(
+      "drift", " --set duration_s=30 --set sensing.imu.clock_offset_s=0.01 --set sensing.imu.clock_drift_ppm=1000"));
   CHECK(d.exit_code == 2);
   CHECK(d.err.find("over 30 s") != std::string::npos);
 }
