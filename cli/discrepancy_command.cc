@@ -73,6 +73,15 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                  "controller tick of the rig)")
       ->check(cmdline::kFinite & CLI::Range(0.0, 0.1))
       ->type_name("S");
+  bool no_compatibility = false;
+  cl->add_flag("--no-compatibility", no_compatibility,
+               "skip the data-compatibility stage (the gyro's scale, bias and time offset against the attitude, "
+               "from the kinematics, corrected before the search)");
+  cl->add_option("--offset-max", opt.compatibility.max_offset_s,
+                 "time offsets between the gyro and the attitude scanned by the compatibility stage [s], in (0, 2]")
+      ->check(cmdline::kFinite & CLI::Range(1e-9, 2.0))
+      ->capture_default_str()
+      ->type_name("S");
   cl->add_option("--gains", gains,
                  "roll gain set of the closed-loop controller copy (default: the log's CONTROLLER_STATUS gain "
                  "set; fast for CSV data)")
@@ -84,6 +93,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   cl->add_option("--report", report, "report.md with PNG plots (gnuplot, Debian package gnuplot-nox)")
       ->type_name("DIR");
   if (const auto done = cl.parse(args)) return *done;
+  opt.compatibility.enabled = !no_compatibility;
   if (const auto failed = apply_states(cl, log_options, sensing_file, data_files)) return *failed;
   if (!report.empty()) ident::require_gnuplot();  // fail before the work, not after
   const DerivativeModel model = load_model(model_file);

@@ -11,7 +11,8 @@
 ///     p_rec(t) = (1 + k) p(t - tau) + b,   so   phi_dot(t) = a p_rec(t + tau) + c,
 /// a = 1 / (1 + k), c = -b / (1 + k). On the record low-passed as for identification, phi_dot is
 /// regressed on the gyro side shifted by tau (scanned over whole samples, then refined by one
-/// Gauss-Newton step: the shifted signal's derivative as a regressor), so a, tau and c come with a
+/// Gauss-Newton step: the shifted signal's derivative as a regressor; a clock that runs fast or slow,
+/// tau(t) = tau + d (t - t_mid), by that derivative times t - t_mid), so a, tau, d and c come with a
 /// covariance that allows coloured residuals (batch means; discrepancy_parts.h). Per error:
 ///   - significant: its excess over the tolerance (below: what the record resolves, or what a
 ///     calibrated sensor keeps) is tested by its Wald statistic at the workflow's p_critical
@@ -19,9 +20,12 @@
 ///   - signature: a scale error grows with the signal (a fitted on the samples of small and of
 ///     large |p| agree), a time offset is a phase lag growing linearly with frequency (tau fitted
 ///     below and above the median frequency of p agree), a bias is constant (c fitted on the two
-///     halves of the record agree); each comparison a two-sided test at signature_alpha whose
-///     difference must also exceed the tolerance to count;
-///   - named (sensor_scale, time_offset, sensor_bias) when both hold, with a 95 % interval.
+///     halves of the record agree), a clock drift is even (d on the two halves agree); each
+///     comparison a two-sided test at signature_alpha whose difference must also exceed the
+///     tolerance to count;
+///   - named (sensor_scale, time_offset, clock_drift, sensor_bias) when both hold, with a 95 %
+///     interval. The drift's tolerance is the one that moves the offset by its own tolerance over
+///     the record.
 /// A significant error is corrected in the record (the gyro's samples restamped by -tau, p
 /// unbiased and unscaled) before the aerodynamic search, named or not: what the kinematics show
 /// is not for L and Y to explain. One whose signature fails is reported as structure (verdict
@@ -61,11 +65,13 @@ struct CompatibilityOptions {
 
 /// One sensor error estimated from the kinematics.
 struct SensorError {
-  std::string name;     ///< "sensor_scale", "time_offset" or "sensor_bias"
+  std::string name;     ///< "sensor_scale", "time_offset", "clock_drift" or "sensor_bias"
   std::string channel;  ///< the sensor's channel ("p")
   std::string against;  ///< the source it is compared with ("phi": the attitude)
-  std::string unit;     ///< "-" (a fraction), "s", "rad/s"
-  double value = 0.0;   ///< k, tau (positive: the gyro's stamps are late), b
+  std::string unit;     ///< "-" (a fraction), "s", "ppm", "rad/s"
+  /// k; tau at t_mid_s (positive: the gyro's stamps are late); the drift d of tau per second of the
+  /// record (tau(t) = tau + d (t - t_mid_s)) [ppm]; b.
+  double value = 0.0;
   double sigma = 0.0;   ///< coloured-residual standard deviation
   double interval[2] = {0.0, 0.0};  ///< 95 % (Student's t on the batch-means blocks)
   double tolerance = 0.0;           ///< the excess over this is tested
@@ -84,8 +90,9 @@ struct CompatibilityResult {
   std::string note;       ///< why it did not run, when it did not
   std::string equation;   ///< the kinematic relation used
   std::size_t samples = 0;
+  double t_mid_s = 0.0;   ///< the middle of the rows checked: the time about which a clock drift acts
   double blocks = 0.0;    ///< batch-means blocks of the coloured covariance
-  std::vector<SensorError> errors;  ///< sensor_scale, time_offset, sensor_bias (every one tested)
+  std::vector<SensorError> errors;  ///< sensor_scale, time_offset, sensor_bias, clock_drift (every one tested)
   /// Held-out gap of the kinematic relation (mean squared error over the variance of phi_dot, every
   /// fold predicted by the fit on the others): as recorded (a = 1, tau = 0, c = 0) and corrected.
   double kinematic_gap_before = 0.0, kinematic_gap_after = 0.0;

@@ -3,6 +3,13 @@
 /// they disagree, name the physical effect the model is missing, add it, and show the gap
 /// shrink on data the fit did not see (rig discrepancy, ident/README.md "Discrepancy").
 ///
+/// 0. Sensors. Every flight first goes through the data-compatibility stage
+///    (ident/data_compatibility.h): the gyro's scale factor, bias and time offset against the
+///    attitude, from the kinematic relation phi_dot = p (+ the q, r terms), each tested at the
+///    alarm rule's p_critical beyond a tolerance, named (sensor_scale, time_offset, sensor_bias,
+///    with channel and interval) when its signature holds, and corrected in the record before
+///    anything below sees it, so that a late gyro is not taken for an actuator delay nor a scale
+///    error absorbed into the derivatives.
 /// 1. Gap. The model's regression equations (thesis Eq 21, as rig identify):
 ///        L:  Ic/Izz p_dot  = Lp p + Lv v + sum_u L_u u
 ///        Y:  m v_dot_star  = Yp p + Yv v + sum_u Y_u u

@@ -115,13 +115,27 @@ void test_error(SensorError& e, double blocks, double p_critical) {
   e.significant = e.p_value <= p_critical;
 }
 
-/// The columns of the kinematic regression at a shift of L samples over rows [r0, r0 + n).
-MatrixXd kin_design(const VectorXd& x, const VectorXd& xd, Index r0, Index n, Index L, bool intercept) {
-  MatrixXd X(n, intercept ? 3 : 2);
+/// The columns of the kinematic regression at a shift of L samples over rows [r0, r0 + n): x, its
+/// derivative (the shift's refinement), with `tc` (the rows' times from their middle [s]) the
+/// derivative times tc (a drift of the shift: the clock's rate), and with `intercept` a constant.
+MatrixXd kin_design(const VectorXd& x, const VectorXd& xd, Index r0, Index n, Index L, bool intercept,
+                    const VectorXd* tc = nullptr) {
+  MatrixXd X(n, 2 + (tc ? 1 : 0) + (intercept ? 1 : 0));
   X.col(0) = x.segment(r0 + L, n);
   X.col(1) = xd.segment(r0 + L, n);
-  if (intercept) X.col(2).setOnes();
+  if (tc) X.col(2) = xd.segment(r0 + L, n).cwiseProduct(*tc);
+  if (intercept) X.col(X.cols() - 1).setOnes();
   return X;
+}
+
+/// The clock's drift of a fit with the drift column (the third): gamma / a [s/s], and its sd.
+void drift_of(const LsFit& f, double& d, double& sigma) {
+  const double a = f.theta[0], gamma = f.theta[2];
+  d = gamma / a;
+  VectorXd g = VectorXd::Zero(f.theta.size());
+  g[0] = -gamma / (a * a);
+  g[2] = 1.0 / a;
+  sigma = sd(f.cov, g);
 }
 
 /// The whole-sample shift of x (in -M..M) that fits y best (least RSS with a gain and an offset).
@@ -217,7 +231,9 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
   }
   const VectorXd ys = y.segment(r0, n);
   const Index L = best_shift(x, y, r0, n, M);
-  const MatrixXd X = kin_design(x, xd, r0, n, L, true);
+  const VectorXd tc = u.t_s.segment(r0, n).array() - 0.5 * (u.t_s[r0] + u.t_s[r0 + n - 1]);
+  res.t_mid_s = 0.5 * (u.t_s[r0] + u.t_s[r0 + n - 1]);
+  const MatrixXd X = kin_design(x, xd, r0, n, L, true, &tc);
   const LsFit f = fit(X, ys, static_cast<Index>(min_block));
   if (!f.ok || std::fabs(f.theta[0]) < 0.1) {
     res.note = "p does not follow phi's derivative (no gain between them): the kinematics cannot be checked";
@@ -236,16 +252,22 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     e.unit = unit;
     return e;
   };
-  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"), bias = error("sensor_bias", "rad/s");
+  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"), bias = error("sensor_bias", "rad/s"),
+              drift = error("clock_drift", "ppm");
   scale_of(f, scale.value, scale.sigma);
   tau_of(f, shift_s, offset.value, offset.sigma);
   bias_of(f, bias.value, bias.sigma);
+  drift_of(f, drift.value, drift.sigma);
+  drift.value *= 1e6;
+  drift.sigma *= 1e6;
   scale.tolerance = options.scale_tolerance;
   bias.tolerance = options.bias_tolerance_radps;
   offset.tolerance = options.time_tolerance_s > 0.0
                          ? options.time_tolerance_s
                          : std::max(median_interval(data.at("p")), median_interval(data.at("phi")));
-  for (SensorError* e : {&scale, &offset, &bias}) test_error(*e, f.blocks, p_critical);
+  // A drift that moves the offset by its tolerance over the record.
+  drift.tolerance = 1e6 * offset.tolerance / std::max(1e-9, u.t_s[r0 + n - 1] - u.t_s[r0]);
+  for (SensorError* e : {&scale, &offset, &bias, &drift}) test_error(*e, f.blocks, p_critical);
 
   const auto mb = static_cast<Index>(min_block);
   const double alpha = options.signature_alpha;
@@ -301,7 +323,23 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
                                    "bias in the first and the second half", "rad/s");
     }
   }
-  for (SensorError* e : {&scale, &offset, &bias}) {
+  if (drift.significant) {
+    // A clock's rate: the offset grows evenly, the same drift in both halves of the record.
+    std::vector<char> first(static_cast<std::size_t>(n)), second(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+      first[static_cast<std::size_t>(i)] = i < n / 2;
+      second[static_cast<std::size_t>(i)] = i >= n / 2;
+    }
+    const LsFit f1 = fit_subset(X, ys, first, mb), f2 = fit_subset(X, ys, second, mb);
+    if (f1.ok && f2.ok) {
+      double d1, s1, d2, s2;
+      drift_of(f1, d1, s1);
+      drift_of(f2, d2, s2);
+      drift.signature_holds = agree(1e6 * d1, 1e6 * s1, 1e6 * d2, 1e6 * s2, 2.0 * drift.tolerance, alpha,
+                                    drift.signature_note, "drift in the first and the second half", "ppm");
+    }
+  }
+  for (SensorError* e : {&scale, &offset, &bias, &drift}) {
     e->named = e->significant && e->signature_holds;
     e->corrected = e->significant;
     res.errors.push_back(*e);
@@ -318,7 +356,7 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
 
 FlightData corrected_record(const FlightData& data, const CompatibilityResult& result,
                             const CompatibilityOptions& options) {
-  double k = 0.0, tau = 0.0, b = 0.0;
+  double k = 0.0, tau = 0.0, b = 0.0, drift = 0.0;
   bool any = false;
   for (const auto& e : result.errors) {
     if (!e.corrected) continue;
@@ -326,14 +364,16 @@ FlightData corrected_record(const FlightData& data, const CompatibilityResult& r
     if (e.name == "sensor_scale") k = e.value;
     if (e.name == "time_offset") tau = e.value;
     if (e.name == "sensor_bias") b = e.value;
+    if (e.name == "clock_drift") drift = 1e-6 * e.value;
   }
   if (!any) return data;
   FlightData out = data;
-  if (tau != 0.0) {
+  if (tau != 0.0 || drift != 0.0) {
+    // The offset at the record's middle and the drift about it, on the attitude's clock.
     for (const auto& c : options.imu_channels) {
       auto it = out.channels.find(c);
       if (it == out.channels.end()) continue;
-      for (double& t : it->second.t_s) t -= tau;
+      for (double& t : it->second.t_s) t -= tau + drift * (t - result.t_mid_s);
     }
   }
   if (k != 0.0 || b != 0.0) {
@@ -368,6 +408,7 @@ double baseline_gap(const FlightData& recorded, const DerivativeModel& model, co
 const char* parameter_of(const std::string& error) {
   if (error == "sensor_scale") return "scale_factor";
   if (error == "time_offset") return "offset_s";
+  if (error == "clock_drift") return "drift_ppm";
   return "bias_radps";
 }
 
@@ -384,16 +425,17 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
   FlightData out = corrected_record(recorded, c, options.compatibility);
   for (const SensorError& e : c.errors) {
     if (e.corrected) {
-      c.corrections.push_back(e.name == "time_offset"
-                                  ? "the IMU's channels restamped by " + num(-e.value) + " s"
-                                  : (e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
-                                                              : "p less its bias " + num(e.value) + " rad/s"));
+      c.corrections.push_back(e.name == "time_offset"   ? "the IMU's channels restamped by " + num(-e.value) + " s"
+                              : e.name == "clock_drift" ? "the IMU's stamps rescaled by " + num(-e.value) +
+                                                              " ppm about t = " + num(c.t_mid_s) + " s"
+                              : e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
+                                                         : "p less its bias " + num(e.value) + " rad/s");
     }
     if (!e.named) continue;
     NamedEffect n;
     n.name = e.name;
     n.channel = e.channel;
-    n.against = e.name == "time_offset" ? e.against : "";
+    n.against = e.name == "time_offset" || e.name == "clock_drift" ? e.against : "";
     n.unit = e.unit;
     n.flight = recorded.source;
     n.coefficient = e.value;

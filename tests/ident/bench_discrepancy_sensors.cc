@@ -1,7 +1,8 @@
 // The discrepancy workflow's data-compatibility stage (ident/data_compatibility.h) on records whose
 // gyro has its own errors: a scale factor (5-15 %, either sign), a time offset against the attitude
-// (10-50 ms, either sign), a bias (0.02-0.06 rad/s), and, beside them, records with an actuator
-// delay (which must not be taken for a time offset) and records where nothing is missing. Each
+// (10-50 ms, either sign), a clock drift (100-500 ppm), a bias (0.02-0.06 rad/s), three at once, a
+// sensor error beside an aerodynamic effect, and records with an actuator delay (which must not be
+// taken for a time offset) and where nothing is missing. Each
 // record draws its magnitude (discrepancy_generator.h), length (20-40 s), model set (1-5) and seed.
 //
 // A measurement, not a test: per case it prints how often the error is named (with the right
@@ -17,6 +18,7 @@
 #include <cstdlib>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -31,23 +33,35 @@ using namespace nimble::ident;
 namespace {
 
 struct Case {
-  const char* hidden;  ///< the generator's effect; "" for the nulls
-  const char* name;    ///< the name it should get
+  std::vector<std::string> hidden;  ///< the generator's effects; none for the nulls
+  std::vector<std::string> names;   ///< the names they should get
 };
 
 const std::vector<Case>& cases() {
-  static const std::vector<Case> c{{"sensor_scale", "sensor_scale"},
-                                   {"time_offset", "time_offset"},
-                                   {"sensor_bias", "sensor_bias"},
-                                   {"actuator_delay", "actuator_delay"}};
+  static const std::vector<Case> c{{{"sensor_scale"}, {"sensor_scale"}},
+                                   {{"time_offset"}, {"time_offset"}},
+                                   {{"clock_drift"}, {"clock_drift"}},
+                                   {{"sensor_bias"}, {"sensor_bias"}},
+                                   {{"actuator_delay"}, {"actuator_delay"}},
+                                   {{"sensor_scale", "time_offset", "sensor_bias"}, {"sensor_scale", "time_offset", "sensor_bias"}},
+                                   {{"time_offset", "actuator_delay"}, {"time_offset", "actuator_delay"}},
+                                   {{"sensor_scale", "lateral_inflow"}, {"sensor_scale", "lateral_inflow"}}};
   return c;
 }
 
 double truth_of(const test::HiddenEffects& h, const std::string& name) {
   if (name == "sensor_scale") return h.scale_k;
   if (name == "time_offset") return h.offset_s;
+  if (name == "clock_drift") return h.drift_ppm;
   if (name == "sensor_bias") return h.bias_p;
+  if (name == "lateral_inflow") return h.Y_vv;
   return h.delay_s;
+}
+
+double value_of(const NamedEffect& e) {
+  if (e.name == "actuator_delay") return e.parameters.at("delay_s");
+  if (e.name == "lateral_inflow") return e.parameters.at("Y_vv");
+  return e.coefficient;
 }
 
 struct Record {
@@ -57,12 +71,12 @@ struct Record {
   double duration_s = 0.0;
 };
 
-Record make(const char* hidden, std::uint64_t seed, int i) {
+Record make(const std::vector<std::string>& hidden, std::uint64_t seed, int i) {
   Record r;
   std::mt19937_64 rng(seed * 31u + 11u);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   r.set = &test::model_set(1 + i % 5);
-  if (*hidden) r.h.on = {hidden};
+  r.h.on.insert(hidden.begin(), hidden.end());
   test::draw_magnitudes(r.h, seed);
   test::GeneratorOptions o;
   o.seed = seed;
@@ -79,12 +93,14 @@ int main(int argc, char** argv) {
   const DiscrepancyOptions opt;
   double stage_s = 0.0;
   int stage_runs = 0;
-  std::printf("case            records  named        in interval  median |error|  wrong names  other verdicts\n");
+  std::printf("case (hidden -> name)              records  named (right sign)  true value in 95 %% interval  median |error|  "
+              "records with a wrong name\n");
   int index = 0;
   for (const Case& c : cases()) {
-    int named = 0, inside = 0, wrong = 0, other = 0;
-    std::vector<double> err;
+    std::map<std::string, int> named, inside;
+    std::map<std::string, std::vector<double>> err;
     std::map<std::string, int> wrongs;
+    int wrong = 0;
     for (int i = 0; i < per_case; ++i) {
       const std::uint64_t seed = 91000u + 1000u * static_cast<std::uint64_t>(index) + static_cast<std::uint64_t>(i);
       const Record rec = make(c.hidden, seed, i);
@@ -93,15 +109,16 @@ int main(int argc, char** argv) {
       stage_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ++stage_runs;
       const DiscrepancyResult r = find_discrepancy(rec.data, rec.set->model, rec.set->vehicle, opt);
-      const double truth = truth_of(rec.h, c.name);
-      bool got = false;
       std::string said;
+      std::set<std::string> got;
       for (const auto& e : r.effects) {
-        const double v = e.name == "actuator_delay" ? e.parameters.at("delay_s") : e.coefficient;
-        if (e.name == c.name && !got && v * truth > 0.0) {
-          got = true;
-          err.push_back(std::fabs(v - truth));
-          if (e.name == "actuator_delay" || (e.interval[0] <= truth && truth <= e.interval[1])) ++inside;
+        const bool expected = std::find(c.names.begin(), c.names.end(), e.name) != c.names.end();
+        const double truth = expected ? truth_of(rec.h, e.name) : 0.0, v = value_of(e);
+        if (expected && !got.count(e.name) && v * truth > 0.0) {
+          got.insert(e.name);
+          ++named[e.name];
+          err[e.name].push_back(std::fabs(v - truth));
+          if (e.interval[0] <= truth && truth <= e.interval[1]) ++inside[e.name];
         } else {
           said += " " + (e.name == "term" ? "term " + e.equation + " " + e.expression : e.name);
         }
@@ -110,26 +127,34 @@ int main(int argc, char** argv) {
         ++wrong;
         ++wrongs[said];
       }
-      if (got) ++named;
-      if (!got && said.empty()) ++other;
-      if (!got || !said.empty()) {
-        std::printf("  %s record %d (seed %llu, %.1f s, true %.4g): %s: %s\n", c.hidden, i,
-                    static_cast<unsigned long long>(seed), rec.duration_s, truth, r.verdict.c_str(), r.summary.c_str());
+      if (got.size() < c.names.size() || !said.empty()) {
+        std::printf("  %s record %d (seed %llu, %.1f s): %s: %s\n", c.names.front().c_str(), i,
+                    static_cast<unsigned long long>(seed), rec.duration_s, r.verdict.c_str(), r.summary.c_str());
       }
     }
-    std::sort(err.begin(), err.end());
-    const Proportion pn = wilson(named, per_case);
-    std::printf("%-15s %4d  %4d %5.1f%% [%4.1f,%5.1f]  %4d of %-4d  %.3g  %4d  %4d\n", c.hidden, per_case, named,
-                100.0 * named / per_case, 100.0 * pn.lo, 100.0 * pn.hi, inside, named,
-                err.empty() ? 0.0 : err[err.size() / 2], wrong, other);
-    for (const auto& [s, k] : wrongs) std::printf("      wrong:%s x%d\n", s.c_str(), k);
+    for (std::size_t k = 0; k < c.names.size(); ++k) {
+      const std::string& name = c.names[k];
+      std::string label = k == 0 ? "" : "  ";
+      for (const auto& hname : c.hidden) label += (label.size() > 2 || (k == 0 && !label.empty()) ? "+" : "") + hname;
+      label = (k == 0 ? label : "  ") + " -> " + name;
+      auto& e = err[name];
+      std::sort(e.begin(), e.end());
+      const Proportion pn = wilson(named[name], per_case);
+      const bool interval = name != "actuator_delay" && name != "lateral_inflow";  // model effects: no interval field
+      char cover[32] = "-";
+      if (interval) std::snprintf(cover, sizeof cover, "%d of %d", inside[name], named[name]);
+      std::printf("%-38s %4d  %4d %5.1f%% [%4.1f,%5.1f]  %-10s  %.3g  %s\n", label.c_str(), per_case, named[name],
+                  100.0 * named[name] / per_case, 100.0 * pn.lo, 100.0 * pn.hi, cover, e.empty() ? 0.0 : e[e.size() / 2],
+                  k == 0 ? std::to_string(wrong).c_str() : "");
+    }
+    for (const auto& [w, k] : wrongs) std::printf("      wrong:%s x%d\n", w.c_str(), k);
     ++index;
   }
   int alarms = 0;
   std::map<std::string, int> said;
   for (int i = 0; i < nulls; ++i) {
     const std::uint64_t seed = 97000u + static_cast<std::uint64_t>(i);
-    const Record rec = make("", seed, i);
+    const Record rec = make({}, seed, i);
     const DiscrepancyResult r = find_discrepancy(rec.data, rec.set->model, rec.set->vehicle, opt);
     if (r.verdict != "none") {
       ++alarms;

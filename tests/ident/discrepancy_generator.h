@@ -40,6 +40,9 @@
 ///   sensor_scale          p recorded as (1 + k) p, |k| in [0.05, 0.15], either sign
 ///   time_offset           p recorded tau late (its sample of t - tau stamped t; tau < 0: early),
 ///                         |tau| in [10, 50] ms, either sign: the IMU's clock against the motion capture
+///   clock_drift           the IMU's clock runs fast or slow: p recorded tau(t) = d (t - T/2) late
+///                         (T the record's length; with time_offset, tau + d (t - T/2)), |d| in
+///                         [100, 500] ppm, either sign (assumption: separate devices' crystals)
 ///
 /// Forms that are NOT library effects (the out-of-library suite, test_discrepancy_outside.cc): no
 /// candidate of ident/discrepancy.h has their signature, so a library name given to them is a
@@ -94,6 +97,7 @@ struct HiddenEffects {
   double load_L = 0.0, load_Y = 0.0;  ///< constant_load: L0 [N m], Y0 [N]
   double scale_k = 0.0;         ///< sensor_scale: k
   double offset_s = 0.0;        ///< time_offset: tau [s]
+  double drift_ppm = 0.0;       ///< clock_drift: d [ppm]
 };
 
 struct GeneratorOptions {
@@ -140,6 +144,7 @@ inline void draw_magnitudes(HiddenEffects& h, std::uint64_t seed) {
   // The sensors' errors, drawn last for the same reason.
   h.scale_k = (u01(rng) < 0.5 ? -1.0 : 1.0) * (0.05 + 0.10 * u01(rng)) * h.scale;
   h.offset_s = (u01(rng) < 0.5 ? -1.0 : 1.0) * (0.010 + 0.040 * u01(rng)) * h.scale;
+  h.drift_ppm = (u01(rng) < 0.5 ? -1.0 : 1.0) * (100.0 + 400.0 * u01(rng)) * h.scale;
 }
 
 /// Simulates the record. Channels: t, p, v, phi, u, w, delta_f, delta_t, phi_sp.
@@ -162,7 +167,8 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   const bool dead_zone = h.on.count("flap_dead_zone") > 0, backlash = h.on.count("flap_backlash") > 0;
   const bool lag = h.on.count("flap_lag") > 0, roll_inflow_only = h.on.count("roll_inflow_only") > 0;
   const bool load = h.on.count("constant_load") > 0;
-  const bool scale_err = h.on.count("sensor_scale") > 0, offset_err = h.on.count("time_offset") > 0;
+  const bool scale_err = h.on.count("sensor_scale") > 0, drift_err = h.on.count("clock_drift") > 0;
+  const bool offset_err = h.on.count("time_offset") > 0 || drift_err;
   std::vector<double> p_true;  // every step's p, for a recorded p off in time (time_offset)
   const double Lp3 = -h.cubic_c * std::fabs(Lp) / 4.0;
   // The flap input's effectiveness at time t (effectiveness_drift, effectiveness_step).
@@ -332,7 +338,9 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     // record's ends), with the scale, bias and noise it was recorded with.
     Channel& pc = d.channels["p"];
     for (std::size_t j = 0; j < pc.t_s.size(); ++j) {
-      const double at = pc.t_s[j] - h.offset_s, pos = std::clamp(at / dt, 0.0, static_cast<double>(steps));
+      const double late = (h.on.count("time_offset") ? h.offset_s : 0.0) +
+                          (drift_err ? 1e-6 * h.drift_ppm * (pc.t_s[j] - 0.5 * o.duration_s) : 0.0);
+      const double at = pc.t_s[j] - late, pos = std::clamp(at / dt, 0.0, static_cast<double>(steps));
       const auto i0 = std::min(static_cast<std::size_t>(pos), p_true.size() - 2);
       const double f = pos - static_cast<double>(i0);
       const double now = p_true[static_cast<std::size_t>(j) * sub];

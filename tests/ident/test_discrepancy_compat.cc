@@ -72,7 +72,7 @@ TEST_CASE("compatibility: a late gyro is a time offset, a late flap an actuator 
   CHECK(j["effects"][0]["name"].as<std::string>() == "time_offset");
   CHECK(j["effects"][0]["against"].as<std::string>() == "phi");
   CHECK(j["effects"][0]["interval"].size() == 2);
-  CHECK(j["compatibility"][0]["errors"].size() == 3);
+  CHECK(j["compatibility"][0]["errors"].size() == 4);  // scale, offset, bias, drift
 
   test::HiddenEffects hd;
   const FlightData late_flap = flight({"actuator_delay"}, 4, &hd);
