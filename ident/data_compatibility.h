@@ -32,6 +32,7 @@
 /// `unexplained`), not named.
 
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -96,9 +97,11 @@ struct CompatibilityResult {
   /// Held-out gap of the kinematic relation (mean squared error over the variance of phi_dot, every
   /// fold predicted by the fit on the others): as recorded (a = 1, tau = 0, c = 0) and corrected.
   double kinematic_gap_before = 0.0, kinematic_gap_after = 0.0;
-  /// The held-out gap of L and Y (the workflow's scalar) with the record as recorded, when a
-  /// correction was made (else -1); the workflow's gap_before is on the corrected record.
-  double aero_gap_uncorrected = -1.0;
+  /// When a correction was made: the baseline structure's held-out RMSE per equation output
+  /// ("p_dot", "v_dot_star", "delta_f_dot"; DiscrepancyResult::gap's units) on the record as
+  /// recorded, to set beside the gap table's rmse_before on the corrected record. (Not the
+  /// normalised gap: v_dot_star contains p, so its variance changes with the correction.)
+  std::map<std::string, double> rmse_uncorrected;
   std::vector<std::string> corrections;  ///< what was corrected, in words
 };
 

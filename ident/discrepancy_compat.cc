@@ -388,21 +388,21 @@ namespace nimble::ident::discrepancy_parts {
 
 namespace {
 
-/// The workflow's held-out gap of the baseline structure (L, Y and F) on one flight as recorded.
-double baseline_gap(const FlightData& recorded, const DerivativeModel& model, const Vehicle& vehicle,
-                    const std::vector<std::string>& inputs, const DiscrepancyOptions& options) {
+/// The baseline structure's held-out RMSE per equation output on one flight as recorded.
+std::map<std::string, double> baseline_rmse(const FlightData& recorded, const DerivativeModel& model,
+                                            const Vehicle& vehicle, const std::vector<std::string>& inputs,
+                                            const DiscrepancyOptions& options) {
   PreparedData prep = prepare(recorded, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
   add_applied_command(prep.filtered, options.command_latency_s);
   const UniformData& d = prep.filtered;
   const Model m = build_baseline(d, lateral_equations(Structure::kLateral3, inputs, vehicle), model, vehicle,
                                  recorded.source, nullptr, nullptr);
   const std::vector<VectorXd> cv = heldout_residuals(m, flight_folds({{0, d.size()}}, options.folds));
-  double gap = 0.0;
+  std::map<std::string, double> rmse;
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
-    const VectorXd& y = m.eqs[e].y;
-    gap += cv[e].squaredNorm() / (y.array() - y.mean()).square().sum();
+    rmse[m.eqs[e].output] = std::sqrt(cv[e].squaredNorm() / static_cast<double>(cv[e].size())) / m.eqs[e].scale;
   }
-  return gap / static_cast<double>(m.eqs.size());
+  return rmse;
 }
 
 const char* parameter_of(const std::string& error) {
@@ -445,7 +445,7 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
     n.sigma[parameter_of(e.name)] = e.sigma;
     res.effects.push_back(std::move(n));
   }
-  if (!c.corrections.empty()) c.aero_gap_uncorrected = baseline_gap(recorded, model, vehicle, inputs, options);
+  if (!c.corrections.empty()) c.rmse_uncorrected = baseline_rmse(recorded, model, vehicle, inputs, options);
   res.compatibility.push_back(std::move(c));
   return out;
 }

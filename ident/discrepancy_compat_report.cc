@@ -26,6 +26,19 @@ std::string sensor_words(const NamedEffect& e) {
   return s;
 }
 
+/// The baseline's held-out RMSE as recorded, and (one flight) corrected: the gap table's rmse_before.
+std::string uncorrected_words(const CompatibilityResult& c, const DiscrepancyResult& r) {
+  std::string s = "baseline held-out RMSE as recorded";
+  if (r.compatibility.size() == 1) s += " -> corrected";
+  for (const auto& [out, v] : c.rmse_uncorrected) {
+    s += ", " + out + " " + num(v);
+    for (const OutputGap& g : r.gap) {
+      if (g.output == out && r.compatibility.size() == 1) s += " -> " + num(g.rmse_before);
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 void write_sensor_effect(JsonWriter& j, const NamedEffect& e) {
@@ -71,7 +84,11 @@ void write_compatibility(JsonWriter& j, const DiscrepancyResult& r) {
     j.key("before").value(c.kinematic_gap_before);
     j.key("after").value(c.kinematic_gap_after);
     j.end_object();
-    if (c.aero_gap_uncorrected >= 0.0) j.key("gap_uncorrected").value(c.aero_gap_uncorrected);
+    if (!c.rmse_uncorrected.empty()) {
+      j.key("rmse_uncorrected").begin_object();
+      for (const auto& [out, v] : c.rmse_uncorrected) j.key(out).value(v);
+      j.end_object();
+    }
     j.key("corrections").array(c.corrections);
     j.end_object();
   }
@@ -97,11 +114,8 @@ void print_compatibility(std::ostream& o, const DiscrepancyResult& r) {
       o << line;
       if (e.significant) o << "      signature: " << e.signature_note << "\n";
     }
-    o << "  kinematic gap (held-out) " << num(c.kinematic_gap_before) << " -> " << num(c.kinematic_gap_after);
-    if (c.aero_gap_uncorrected >= 0.0) {
-      o << "; L/Y gap of the baseline as recorded " << num(c.aero_gap_uncorrected) << " -> corrected " << num(r.gap_before);
-    }
-    o << "\n";
+    o << "  kinematic gap (held-out) " << num(c.kinematic_gap_before) << " -> " << num(c.kinematic_gap_after) << "\n";
+    if (!c.rmse_uncorrected.empty()) o << "  " << uncorrected_words(c, r) << "\n";
     for (const auto& s : c.corrections) o << "  corrected: " << s << "\n";
   }
   o << "\n";
@@ -131,8 +145,9 @@ std::string compatibility_markdown(const DiscrepancyResult& r) {
     if (!c.ran) continue;
     md << "Kinematic gap of " << c.source << " (" << c.equation << ", held-out): " << num(c.kinematic_gap_before) << " -> "
        << num(c.kinematic_gap_after);
-    if (c.aero_gap_uncorrected >= 0.0) md << "; L/Y gap as recorded " << num(c.aero_gap_uncorrected) << " -> corrected " << num(r.gap_before);
-    md << ".\n\n";
+    md << ".";
+    if (!c.rmse_uncorrected.empty()) md << " " << uncorrected_words(c, r) << ".";
+    md << "\n\n";
   }
   return md.str();
 }
