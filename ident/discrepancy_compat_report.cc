@@ -59,6 +59,7 @@ void write_compatibility(JsonWriter& j, const DiscrepancyResult& r) {
     if (!c.ran) j.key("note").value(c.note);
     j.key("equation").value(c.equation);
     j.key("samples").value(static_cast<long long>(c.samples));
+    j.key("t_mid_s").value(c.t_mid_s);
     j.key("blocks").value(c.blocks);
     j.key("errors").begin_array();
     for (const SensorError& e : c.errors) {
