@@ -174,6 +174,24 @@ LsFit fit_subset(MatrixXd X, VectorXd y, const std::vector<char>& keep, Index mi
   return fit(X, y, min_block);
 }
 
+/// An error's estimate on the rows in `part` and on the others (as fit_subset), compared by agree()
+/// with the values and sds times `unit`; true (nothing against it) when a part cannot be fitted.
+bool parts_agree(const MatrixXd& X, const VectorXd& y, const std::vector<char>& part, Index min_block,
+                 void (*estimate)(const LsFit&, double&, double&), double unit, double tol, double alpha,
+                 std::string& note, const std::string& what, const std::string& unit_name) {
+  std::vector<char> rest(part.size());
+  for (std::size_t i = 0; i < part.size(); ++i) rest[i] = !part[i];
+  const LsFit f1 = fit_subset(X, y, part, min_block), f2 = fit_subset(X, y, rest, min_block);
+  if (!f1.ok || !f2.ok) {
+    note = what + ": a part could not be fitted";
+    return true;
+  }
+  double v1, s1, v2, s2;
+  estimate(f1, v1, s1);
+  estimate(f2, v2, s2);
+  return agree(unit * v1, unit * s1, unit * v2, unit * s2, tol, alpha, note, what, unit_name);
+}
+
 /// Held-out squared error of y by X over contiguous folds, over the variance of y.
 double heldout_gap(const MatrixXd& X, const VectorXd& y, std::size_t folds) {
   const Index n = y.size(), K = static_cast<Index>(folds);
@@ -191,6 +209,36 @@ double heldout_gap(const MatrixXd& X, const VectorXd& y, std::size_t folds) {
   return var > 0.0 ? sse / var : 0.0;
 }
 
+/// The two sides of the kinematic relation on the record low-passed as for identification: the
+/// gyro side x (p, plus tan(theta) (q sin(phi) + r cos(phi)) where q, r and theta are recorded),
+/// its derivative, and phi's derivative y.
+struct Kinematics {
+  UniformData u;
+  VectorXd x, xd, y;
+  std::string equation;
+};
+
+Kinematics kinematics(const FlightData& data, const ProcessingOptions& processing) {
+  const bool full = data.has("q") && data.has("r") && data.has("theta");
+  FlightData sub;
+  sub.source = data.source;
+  for (const char* c : {"p", "phi", "q", "r", "theta"}) {
+    if (data.has(c) && (full || std::string(c) == "p" || std::string(c) == "phi")) sub.channels[c] = data.at(c);
+  }
+  Kinematics k;
+  k.u = process(sub, processing);
+  k.x = k.u.at("p");
+  const VectorXd& phi = k.u.at("phi");
+  if (full) {
+    const VectorXd &q = k.u.at("q"), &r = k.u.at("r"), &th = k.u.at("theta");
+    k.x.array() += th.array().tan() * (q.array() * phi.array().sin() + r.array() * phi.array().cos());
+  }
+  k.equation = full ? "phi_dot = p + tan(theta) (q sin(phi) + r cos(phi))" : "phi_dot = p";
+  k.y = differentiate(phi, k.u.rate_hz);
+  k.xd = differentiate(k.x, k.u.rate_hz);
+  return k;
+}
+
 }  // namespace
 
 CompatibilityResult check_compatibility(const FlightData& data, const ProcessingOptions& processing,
@@ -206,23 +254,11 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     res.note = "the record lacks p or phi: the kinematics cannot be checked";
     return res;
   }
-  const bool full = data.has("q") && data.has("r") && data.has("theta");
-  FlightData sub;
-  sub.source = data.source;
-  for (const char* c : {"p", "phi", "q", "r", "theta"}) {
-    if (data.has(c) && (full || std::string(c) == "p" || std::string(c) == "phi")) sub.channels[c] = data.at(c);
-  }
-  const UniformData u = process(sub, processing);
+  const Kinematics k = kinematics(data, processing);
+  const UniformData& u = k.u;
+  const VectorXd &x = k.x, &y = k.y, &xd = k.xd;
   const double fs = u.rate_hz;
-  VectorXd x = u.at("p");
-  const VectorXd& phi = u.at("phi");
-  if (full) {
-    const VectorXd &q = u.at("q"), &r = u.at("r"), &th = u.at("theta");
-    x.array() += th.array().tan() * (q.array() * phi.array().sin() + r.array() * phi.array().cos());
-  }
-  res.equation = full ? "phi_dot = p + tan(theta) (q sin(phi) + r cos(phi))" : "phi_dot = p";
-  const VectorXd y = differentiate(phi, fs);
-  const VectorXd xd = differentiate(x, fs);
+  res.equation = k.equation;
   const Index M = static_cast<Index>(std::ceil(options.max_offset_s * fs));
   const Index r0 = M + 4, n = u.size() - 2 * r0;
   if (n < static_cast<Index>(50 * folds)) {
@@ -271,25 +307,28 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
 
   const auto mb = static_cast<Index>(min_block);
   const double alpha = options.signature_alpha;
+  std::vector<char> first(static_cast<std::size_t>(n)), small(static_cast<std::size_t>(n));
+  VectorXd ax = X.col(0).cwiseAbs();
+  std::vector<double> sorted(ax.data(), ax.data() + ax.size());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  for (Index i = 0; i < n; ++i) {
+    first[static_cast<std::size_t>(i)] = i < n / 2;
+    small[static_cast<std::size_t>(i)] = ax[i] <= sorted[sorted.size() / 2];
+  }
+  // A scale grows with the signal: the same scale on the samples of small and of large |p|.
   if (scale.significant) {
-    // Grows with the signal: the same scale on the samples of small and of large |p|.
-    VectorXd ax = X.col(0).cwiseAbs();
-    std::vector<double> sorted(ax.data(), ax.data() + ax.size());
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    const double med = sorted[sorted.size() / 2];
-    std::vector<char> lo(static_cast<std::size_t>(n)), hi(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) {
-      lo[static_cast<std::size_t>(i)] = ax[i] <= med;
-      hi[static_cast<std::size_t>(i)] = ax[i] > med;
-    }
-    const LsFit fl = fit_subset(X, ys, lo, mb), fh = fit_subset(X, ys, hi, mb);
-    if (fl.ok && fh.ok) {
-      double kl, sl, kh, sh;
-      scale_of(fl, kl, sl);
-      scale_of(fh, kh, sh);
-      scale.signature_holds = agree(kl, sl, kh, sh, scale.tolerance, alpha, scale.signature_note,
-                                    "scale on the smaller and the larger half of |p|", "");
-    }
+    scale.signature_holds = parts_agree(X, ys, small, mb, scale_of, 1.0, scale.tolerance, alpha, scale.signature_note,
+                                        "scale on the smaller and the larger half of |p|", "");
+  }
+  // A bias is constant, a clock's rate even: the same in both halves of the record (a half's drift
+  // moves the offset by the tolerance in twice the rate).
+  if (bias.significant) {
+    bias.signature_holds = parts_agree(X, ys, first, mb, bias_of, 1.0, bias.tolerance, alpha, bias.signature_note,
+                                       "bias in the first and the second half", "rad/s");
+  }
+  if (drift.significant) {
+    drift.signature_holds = parts_agree(X, ys, first, mb, drift_of, 1e6, 2.0 * drift.tolerance, alpha,
+                                        drift.signature_note, "drift in the first and the second half", "ppm");
   }
   if (offset.significant) {
     // A pure time shift: the same lag below and above p's RMS frequency.
@@ -305,38 +344,6 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
       tau_of(fh, shift_s, th, sh);
       offset.signature_holds = agree(tl, sl, th, sh, offset.tolerance, alpha, offset.signature_note,
                                      "lag below and above " + num(f_split) + " Hz", "s");
-    }
-  }
-  if (bias.significant) {
-    // Constant: the same bias in both halves of the record.
-    std::vector<char> first(static_cast<std::size_t>(n)), second(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) {
-      first[static_cast<std::size_t>(i)] = i < n / 2;
-      second[static_cast<std::size_t>(i)] = i >= n / 2;
-    }
-    const LsFit f1 = fit_subset(X, ys, first, mb), f2 = fit_subset(X, ys, second, mb);
-    if (f1.ok && f2.ok) {
-      double b1, s1, b2, s2;
-      bias_of(f1, b1, s1);
-      bias_of(f2, b2, s2);
-      bias.signature_holds = agree(b1, s1, b2, s2, bias.tolerance, alpha, bias.signature_note,
-                                   "bias in the first and the second half", "rad/s");
-    }
-  }
-  if (drift.significant) {
-    // A clock's rate: the offset grows evenly, the same drift in both halves of the record.
-    std::vector<char> first(static_cast<std::size_t>(n)), second(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) {
-      first[static_cast<std::size_t>(i)] = i < n / 2;
-      second[static_cast<std::size_t>(i)] = i >= n / 2;
-    }
-    const LsFit f1 = fit_subset(X, ys, first, mb), f2 = fit_subset(X, ys, second, mb);
-    if (f1.ok && f2.ok) {
-      double d1, s1, d2, s2;
-      drift_of(f1, d1, s1);
-      drift_of(f2, d2, s2);
-      drift.signature_holds = agree(1e6 * d1, 1e6 * s1, 1e6 * d2, 1e6 * s2, 2.0 * drift.tolerance, alpha,
-                                    drift.signature_note, "drift in the first and the second half", "ppm");
     }
   }
   for (SensorError* e : {&scale, &offset, &bias, &drift}) {
