@@ -313,7 +313,12 @@ TEST_CASE("rig-flown: a step of the flap input's effectiveness of a drawn size a
     CHECK(t_change <= p["t_change_hi_s"].as<double>());
     CHECK(std::fabs(p["fraction"].as<double>() - fraction) < 0.05);
   }
-  const YAML::Node null = fly_and_check("repeated_null", "id_doublet_train_fast.yaml", 3, train + kNoVibration);
+  // The null flight's gyro without its random turn-on bias: on this 16 s flight (seed 3, a turn-on
+  // bias of -0.026 rad/s) the estimator has taken out only 0.005 rad/s of it by the end, and the
+  // data-compatibility stage rightly names the estimate's p biased against its phi (sensor_bias,
+  // -0.022 rad/s): a finding about the states, not about the effect this case is after.
+  const YAML::Node null = fly_and_check("repeated_null", "id_doublet_train_fast.yaml", 3,
+                                        train + kNoVibration + " --set sensing.imu.gyro_bias_turn_on_sigma_radps=0");
   INFO(null["summary"].as<std::string>());
   CHECK(named(null).empty());
 }
