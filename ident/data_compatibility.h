@@ -26,9 +26,11 @@
 ///   - named (sensor_scale, time_offset, clock_drift, sensor_bias) when both hold, with a 95 %
 ///     interval. The drift's tolerance is the one that moves the offset by its own tolerance over
 ///     the record.
-/// A significant error is corrected in the record (the gyro's samples restamped by -tau, p
-/// unbiased and unscaled) before the aerodynamic search, named or not: what the kinematics show
-/// is not for L and Y to explain. One whose signature fails is reported as structure (verdict
+/// A significant error is corrected in the record (the gyro's samples restamped by -tau and the
+/// drift, p unbiased and unscaled) before the aerodynamic search, named or not: what the kinematics
+/// show is not for L and Y to explain. The offset is taken out even below its tolerance (its
+/// estimate is good to a fraction of a sample, and the aerodynamic search would see what is left as
+/// a lag of the flap input). One whose signature fails is reported as structure (verdict
 /// `unexplained`), not named.
 
 #include <cstddef>
@@ -81,7 +83,7 @@ struct SensorError {
   bool signature_holds = true;
   std::string signature_note;       ///< the comparison's figures
   bool named = false;               ///< significant and its signature holds
-  bool corrected = false;           ///< the record was corrected for it (significant)
+  bool corrected = false;           ///< the record was corrected for it (significant; the offset always)
 };
 
 /// The stage's result for one flight.

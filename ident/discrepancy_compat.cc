@@ -348,7 +348,13 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
   }
   for (SensorError* e : {&scale, &offset, &bias, &drift}) {
     e->named = e->significant && e->signature_holds;
-    e->corrected = e->significant;
+    // The offset is always taken out: its estimate is good to a fraction of a sample (sigma
+    // 0.02-0.2 ms on 6-40 s records), and one left below its tolerance still moves p against delta_f
+    // by as much, which the aerodynamic search (more sensitive) would fit as a lag of the flap
+    // input. A drift's estimate is rougher (sigma 100-300 ppm, up to 1 ms at the ends of an 18 s
+    // record) and a scale or bias below tolerance is within the sensor's calibration: those are
+    // corrected when significant.
+    e->corrected = e->significant || e == &offset;
     res.errors.push_back(*e);
   }
 
@@ -432,7 +438,8 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
   FlightData out = corrected_record(recorded, c, options.compatibility);
   for (const SensorError& e : c.errors) {
     if (e.corrected) {
-      c.corrections.push_back(e.name == "time_offset"   ? "the IMU's channels restamped by " + num(-e.value) + " s"
+      c.corrections.push_back(e.name == "time_offset"   ? "the IMU's channels restamped by " + num(-e.value) + " s" +
+                                                              (e.significant ? "" : " (within its tolerance)")
                               : e.name == "clock_drift" ? "the IMU's stamps rescaled by " + num(-e.value) +
                                                               " ppm about t = " + num(c.t_mid_s) + " s"
                               : e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
@@ -452,7 +459,9 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
     n.sigma[parameter_of(e.name)] = e.sigma;
     res.effects.push_back(std::move(n));
   }
-  if (!c.corrections.empty()) c.rmse_uncorrected = baseline_rmse(recorded, model, vehicle, inputs, options);
+  if (std::any_of(c.errors.begin(), c.errors.end(), [](const SensorError& e) { return e.significant; })) {
+    c.rmse_uncorrected = baseline_rmse(recorded, model, vehicle, inputs, options);
+  }
   res.compatibility.push_back(std::move(c));
   return out;
 }
