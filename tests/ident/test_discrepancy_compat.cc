@@ -145,3 +145,36 @@ TEST_CASE("compatibility: the corrected record restamps the IMU's channels and u
   off.compatibility.enabled = false;
   CHECK(find_discrepancy(flight({}, 31, nullptr, 10.0), test::set1().model, test::set1().vehicle, off).compatibility.empty());
 }
+
+TEST_CASE("compatibility: where the kinematics cannot time the gyro, an actuator delay is ambiguous with a time offset",
+          "[discrepancy][compatibility]") {
+  // An offset scan longer than the record leaves no rows to check: the stage does not run, and a
+  // delay the search finds in L and Y could as well be the gyro's clock.
+  test::HiddenEffects h;
+  h.on = {"actuator_delay"};
+  h.scale = 1.5;
+  test::draw_magnitudes(h, 4);
+  test::GeneratorOptions o;
+  o.seed = 4;
+  o.duration_s = 12.0;
+  const FlightData d = test::generate_flight(test::set1().model, test::set1().vehicle, h, o);
+  DiscrepancyOptions opt;
+  opt.compatibility.max_offset_s = 6.0;
+  const DiscrepancyResult r = find_discrepancy(d, test::set1().model, test::set1().vehicle, opt);
+  INFO(r.summary);
+  REQUIRE(r.compatibility.size() == 1);
+  CHECK_FALSE(r.compatibility.front().ran);
+  CHECK(r.compatibility.front().note.find("too short") != std::string::npos);
+  REQUIRE(find(r, "actuator_delay") != nullptr);
+  CHECK(r.verdict == "ambiguous");
+  REQUIRE(r.ambiguous.size() == 1);
+  CHECK(r.ambiguous.front() == std::vector<std::string>{"actuator_delay", "time_offset"});
+  const bool says_how = std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
+    return n.find("tells them apart") != std::string::npos;
+  });
+  CHECK(says_how);
+  // The same record with the kinematics checked: the delay, named alone.
+  const DiscrepancyResult checked = find_discrepancy(d, test::set1().model, test::set1().vehicle, {});
+  CHECK(checked.verdict == "effects");
+  CHECK(find(checked, "actuator_delay") != nullptr);
+}
