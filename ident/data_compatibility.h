@@ -105,6 +105,7 @@ struct CompatibilityResult {
   /// normalised gap: v_dot_star contains p, so its variance changes with the correction.)
   std::map<std::string, double> rmse_uncorrected;
   std::vector<std::string> corrections;  ///< what was corrected, in words
+  double elapsed_ms = 0.0;  ///< the stage's own time in the workflow: check, correction, RMSE as recorded
 };
 
 /// Runs the stage on one flight. p_critical: the alarm rule's tail; folds: of the held-out gap;

@@ -4,6 +4,7 @@
 #include "ident/data_compatibility.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -431,6 +432,7 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
                                const std::vector<std::string>& inputs, const DiscrepancyOptions& options,
                                DiscrepancyResult& res) {
   if (!options.compatibility.enabled) return recorded;
+  const auto start = std::chrono::steady_clock::now();
   const double p_critical = chi_square_survival(options.partial_f, 1.0);
   const std::size_t min_block = 4 * whiteness_lag_step(0, options.processing);
   CompatibilityResult c =
@@ -462,6 +464,7 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
   if (std::any_of(c.errors.begin(), c.errors.end(), [](const SensorError& e) { return e.significant; })) {
     c.rmse_uncorrected = baseline_rmse(recorded, model, vehicle, inputs, options);
   }
+  c.elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   res.compatibility.push_back(std::move(c));
   return out;
 }

@@ -47,8 +47,6 @@ int main(int argc, char** argv) {
   hs.scale_k = 0.05;
   hs.offset_s = 0.030;
   const FlightData sensed = test::generate_flight(model, vehicle, hs, o);
-  DiscrepancyOptions no_stage;
-  no_stage.compatibility.enabled = false;
   std::vector<double> stage_ms, added_ms;
   for (int i = 0; i < reps; ++i) {
     const DiscrepancyOptions d;
@@ -56,11 +54,9 @@ int main(int argc, char** argv) {
     const CompatibilityResult c = check_compatibility(data, d.processing, d.compatibility, 7.74e-6, d.folds, 16);
     stage_ms.push_back(elapsed_ms(t0, Clock::now()));
     if (!c.ran) return 1;
-    const auto t1 = Clock::now();
-    find_discrepancy(sensed, model, vehicle, {});
-    const auto t2 = Clock::now();
-    find_discrepancy(sensed, model, vehicle, no_stage);
-    added_ms.push_back(elapsed_ms(t1, t2) - elapsed_ms(t2, Clock::now()));
+    const DiscrepancyResult r = find_discrepancy(sensed, model, vehicle, {});
+    if (r.compatibility.size() != 1 || r.compatibility.front().corrections.empty()) return 1;
+    added_ms.push_back(r.compatibility.front().elapsed_ms);
   }
 
   std::vector<double> workflow_ms, closed_ms, floor_ms;
@@ -91,8 +87,9 @@ int main(int argc, char** argv) {
               workflow.min, workflow.max);
   std::printf("  of which the open-world term search: median %.0f ms (the workflow without it: %.0f ms)\n",
               workflow.median - median(closed_ms), median(closed_ms));
-  std::printf("  data-compatibility stage on the record: median %.1f ms; what it adds to the workflow on a record it "
-              "corrects (gyro 5 %% off, 30 ms late): median %.0f ms; target <= 100 ms\n",
+  std::printf("  data-compatibility stage: the check on the record, median %.1f ms; the whole stage in the workflow on a "
+              "record it corrects (gyro 5 %% off, 30 ms late: check, correction, the baseline's error as recorded), "
+              "median %.1f ms; target <= 100 ms\n",
               median(stage_ms), median(added_ms));
   std::printf("  machine floor, one OLS of the baseline L and Y equations: median %.2f ms; workflow / floor = %.0f\n",
               median(floor_ms), median(workflow_ms) / median(floor_ms));
