@@ -240,6 +240,25 @@ Kinematics kinematics(const FlightData& data, const ProcessingOptions& processin
   return k;
 }
 
+/// A time offset's signature: a pure time shift, the same lag below and above p's RMS frequency.
+void offset_signature(const Kinematics& k, Index r0, Index n, Index L, Index min_block,
+                      const ProcessingOptions& processing, double alpha, SensorError& offset) {
+  const double fs = k.u.rate_hz;
+  const double f_split = std::clamp(std::sqrt(k.xd.squaredNorm() / std::max(1e-300, k.x.squaredNorm())) / (2.0 * M_PI),
+                                    0.5, 0.8 * (processing.filter_order > 0 ? processing.cutoff_hz : 0.5 * fs));
+  const VectorXd xh = high_pass(k.x, f_split, fs), yh = high_pass(k.y, f_split, fs);
+  const VectorXd xl = k.x - xh, yl = k.y - yh;
+  const LsFit fh = fit(kin_design(xh, differentiate(xh, fs), r0, n, L, false), yh.segment(r0, n), min_block);
+  const LsFit fl = fit(kin_design(xl, differentiate(xl, fs), r0, n, L, true), yl.segment(r0, n), min_block);
+  if (!fl.ok || !fh.ok) return;
+  const double shift_s = static_cast<double>(L) / fs;
+  double tl, sl, th, sh;
+  tau_of(fl, shift_s, tl, sl);
+  tau_of(fh, shift_s, th, sh);
+  offset.signature_holds = agree(tl, sl, th, sh, offset.tolerance, alpha, offset.signature_note,
+                                 "lag below and above " + num(f_split) + " Hz", "s");
+}
+
 }  // namespace
 
 CompatibilityResult check_compatibility(const FlightData& data, const ProcessingOptions& processing,
@@ -331,22 +350,7 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     drift.signature_holds = parts_agree(X, ys, first, mb, drift_of, 1e6, 2.0 * drift.tolerance, alpha,
                                         drift.signature_note, "drift in the first and the second half", "ppm");
   }
-  if (offset.significant) {
-    // A pure time shift: the same lag below and above p's RMS frequency.
-    const double f_split = std::clamp(std::sqrt(xd.squaredNorm() / std::max(1e-300, x.squaredNorm())) / (2.0 * M_PI),
-                                      0.5, 0.8 * (processing.filter_order > 0 ? processing.cutoff_hz : 0.5 * fs));
-    const VectorXd xh = high_pass(x, f_split, fs), yh = high_pass(y, f_split, fs);
-    const VectorXd xl = x - xh, yl = y - yh;
-    const LsFit fh = fit(kin_design(xh, differentiate(xh, fs), r0, n, L, false), yh.segment(r0, n), mb);
-    const LsFit fl = fit(kin_design(xl, differentiate(xl, fs), r0, n, L, true), yl.segment(r0, n), mb);
-    if (fl.ok && fh.ok) {
-      double tl, sl, th, sh;
-      tau_of(fl, shift_s, tl, sl);
-      tau_of(fh, shift_s, th, sh);
-      offset.signature_holds = agree(tl, sl, th, sh, offset.tolerance, alpha, offset.signature_note,
-                                     "lag below and above " + num(f_split) + " Hz", "s");
-    }
-  }
+  if (offset.significant) offset_signature(k, r0, n, L, mb, processing, alpha, offset);
   for (SensorError* e : {&scale, &offset, &bias, &drift}) {
     e->named = e->significant && e->signature_holds;
     // The offset is always taken out: its estimate is good to a fraction of a sample (sigma

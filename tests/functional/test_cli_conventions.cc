@@ -109,7 +109,7 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"identify " + scenario + " --states smoothed", "--states: " + scenario + " is not a rig log"},
            {"validate x.yaml " + scenario + " --states truth", "--states: " + scenario + " is not a rig log"},
            {"discrepancy " + scenario + " --model x.yaml --states smoothed", "--states: " + scenario + " is not a rig log"},
-           {"identify x.lcmlog --states guess", "--states: guess not in {auto,estimate,truth,smoothed}"},
+           {"identify x.lcmlog --states guess", "--states: guess not in {auto,estimate,truth,smoothed,sensors}"},
        }) {
     INFO(c.args);
     const RigResult r = run_rig(c.args);
