@@ -28,10 +28,10 @@
 ///     the record.
 /// A significant error is corrected in the record (the gyro's samples restamped by -tau and the
 /// drift, p unbiased and unscaled) before the aerodynamic search, named or not: what the kinematics
-/// show is not for L and Y to explain. The offset is taken out even below its tolerance (its
-/// estimate is good to a fraction of a sample, and the aerodynamic search would see what is left as
-/// a lag of the flap input). One whose signature fails is reported as structure (verdict
-/// `unexplained`), not named.
+/// show is not for L and Y to explain. An offset is taken out below its tolerance too once it is
+/// told from zero at signature_alpha (the aerodynamic search would see what is left as a lag of the
+/// flap input). One whose signature fails is reported as structure (verdict `unexplained`), not
+/// named.
 
 #include <cstddef>
 #include <map>
@@ -83,7 +83,7 @@ struct SensorError {
   bool signature_holds = true;
   std::string signature_note;       ///< the comparison's figures
   bool named = false;               ///< significant and its signature holds
-  bool corrected = false;           ///< the record was corrected for it (significant; the offset always)
+  bool corrected = false;           ///< the record was corrected for it (significant; an offset told from zero)
 };
 
 /// The stage's result for one flight.

@@ -351,15 +351,16 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
                                         drift.signature_note, "drift in the first and the second half", "ppm");
   }
   if (offset.significant) offset_signature(k, r0, n, L, mb, processing, alpha, offset);
+  const double z_alpha = boost::math::quantile(boost::math::complement(boost::math::normal(), 0.5 * alpha));
   for (SensorError* e : {&scale, &offset, &bias, &drift}) {
     e->named = e->significant && e->signature_holds;
-    // The offset is always taken out: its estimate is good to a fraction of a sample (sigma
-    // 0.02-0.2 ms on 6-40 s records), and one left below its tolerance still moves p against delta_f
-    // by as much, which the aerodynamic search (more sensitive) would fit as a lag of the flap
-    // input. A drift's estimate is rougher (sigma 100-300 ppm, up to 1 ms at the ends of an 18 s
-    // record) and a scale or bias below tolerance is within the sensor's calibration: those are
-    // corrected when significant.
-    e->corrected = e->significant || e == &offset;
+    // An offset is taken out below its tolerance too, once it is told from zero at the signatures'
+    // level: one left in the record moves p against delta_f by as much, which the aerodynamic search
+    // (more sensitive) fits as a lag of the flap input (a rig flight with a 500 ppm drift: 4.5 ms at
+    // the middle, under the 5 ms tolerance, named lag(delta_f, 0.004)). One not told from zero is
+    // left (moving p by an estimate of zero adds its own error). A drift, scale or bias is
+    // corrected when significant: below tolerance it is within the sensor's calibration.
+    e->corrected = e->significant || (e == &offset && std::fabs(offset.value) > z_alpha * offset.sigma);
     res.errors.push_back(*e);
   }
 
@@ -445,7 +446,7 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
   for (const SensorError& e : c.errors) {
     if (e.corrected) {
       c.corrections.push_back(e.name == "time_offset"   ? "the IMU's channels restamped by " + num(-e.value) + " s" +
-                                                              (e.significant ? "" : " (within its tolerance)")
+                                                              (e.significant ? "" : " (within its tolerance, told from zero)")
                               : e.name == "clock_drift" ? "the IMU's stamps rescaled by " + num(-e.value) +
                                                               " ppm about t = " + num(c.t_mid_s) + " s"
                               : e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
