@@ -148,13 +148,46 @@ Override parse_override(const std::string& text) {
   return Override{text.substr(0, eq), text.substr(eq + 1)};
 }
 
+namespace {
+
+/// Whether an override names a section's base file (`--set sensing.base=FILE`).
+bool is_base_override(const Override& o) {
+  return o.key_path == "base" || (o.key_path.size() > 5 && o.key_path.compare(o.key_path.size() - 5, 5, ".base") == 0);
+}
+
+/// Applies the `--set <section>.base=FILE` overrides to the scenario as written, before its bases
+/// are merged: the section then stands on FILE (relative to the working directory) instead of the
+/// base it names, and its own keys still win over it, as with any base.
+void apply_base_overrides(YAML::Node root, const std::vector<Override>& overrides, KeyOrigins* origins) {
+  for (const auto& o : overrides) {
+    if (!is_base_override(o)) continue;
+    if (o.value.empty()) throw ConfigError("--set", o.key_path, o.value, "must be the name of a base file");
+    YAML::Node node = root;
+    std::string rest = o.key_path;
+    for (auto dot = rest.find('.'); dot != std::string::npos; dot = rest.find('.')) {
+      const std::string part = rest.substr(0, dot);
+      YAML::Node next = node[part];
+      if (next && !next.IsMap()) throw ConfigError("--set", o.key_path, o.value, "'" + part + "' is not a section");
+      if (!next) node[part] = YAML::Node(YAML::NodeType::Map);
+      node.reset(node[part]);
+      rest.erase(0, dot + 1);
+    }
+    node["base"] = fs::absolute(o.value).lexically_normal().string();
+    if (origins != nullptr) (*origins)[o.key_path] = KeyOrigin{"--set", -1};
+  }
+}
+
+}  // namespace
+
 YAML::Node load_scenario_tree(const std::string& file, const std::vector<Override>& overrides, KeyOrigins* origins) {
   YAML::Node root = load_yaml(file, "");
   if (!root.IsMap()) throw ConfigError(file, "", "", "a scenario must be a YAML mapping");
   record_origins(root, file, "", false, origins);
   absolutise_paths(root, fs::absolute(file).parent_path(), true);
+  apply_base_overrides(root, overrides, origins);
   root = resolve_bases(root, file, "", {file}, true, "", origins);
   for (const auto& o : overrides) {
+    if (is_base_override(o)) continue;
     YAML::Node value;
     try {
       value = load_yaml_text(o.value, "--set");

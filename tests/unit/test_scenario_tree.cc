@@ -181,3 +181,26 @@ TEST_CASE("scenario digest: it covers the content of every file the scenario nam
   }
   fs::remove_all(dir);
 }
+
+TEST_CASE("scenario tree: --set sensing.base=FILE stands the section on another base file (the flight vibration "
+          "file) below which the default's other keys stay (without it: the scenario's own base)",
+          "[scenario]") {
+  const std::string configs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+  const std::string vibration = configs + "sensing/nimble_flight_vibration.yaml";
+  nimble::KeyOrigins origins;
+  const YAML::Node tree =
+      nimble::load_scenario_tree(configs + "hover.yaml", {nimble::parse_override("sensing.base=" + vibration)}, &origins);
+  CHECK(tree["sensing"]["imu"]["structural_gyro_amplitude_radps"]["z"].as<double>() > 3.0);
+  CHECK(tree["sensing"]["mocap"]["frame_rate_hz"].as<int>() == 200);  // from default_sensing.yaml below it
+  CHECK_FALSE(tree["sensing"]["base"]);
+  CHECK(origins.at("sensing.base").file == "--set");
+
+  const YAML::Node plain = nimble::load_scenario_tree(configs + "hover.yaml");
+  CHECK(plain["sensing"]["imu"]["structural_gyro_amplitude_radps"]["z"].as<double>() == 0.3);
+
+  CHECK_THROWS_AS(nimble::load_scenario_tree(configs + "hover.yaml", {nimble::parse_override("sensing.base=")}),
+                  nimble::ConfigError);
+  CHECK_THROWS_AS(nimble::load_scenario_tree(configs + "hover.yaml",
+                                             {nimble::parse_override("sensing.base=" + configs + "absent.yaml")}),
+                  nimble::ConfigError);
+}
