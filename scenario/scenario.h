@@ -7,7 +7,10 @@
 ///     file (the mapping's own keys win; bases may nest);
 ///  2. relative paths (keys model, longitudinal_model, vehicle, manoeuvre, base) become
 ///     absolute, relative to the file they are written in;
-///  3. `--set a.b.c=value` overrides from the command line replace single values.
+///  3. `--set a.b.c=value` overrides from the command line replace single values; except
+///     `--set a.b.base=FILE`, which is applied before step 1: the section stands on FILE
+///     (relative to the working directory) instead of the base it names, its own keys still
+///     winning (`--set sensing.base=rig_configs/sensing/nimble_flight_vibration.yaml`).
 /// The launcher writes the resolved tree next to the run's log and hands it to every
 /// process, so a run can always be repeated from its record.
 
