@@ -476,10 +476,12 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
 
 std::size_t sensor_findings(DiscrepancyResult& res) {
   std::size_t tests = 0;
-  bool unchecked = false;
+  const CompatibilityResult* unchecked = nullptr;  // the first flight whose kinematics were not checked
   for (const CompatibilityResult& c : res.compatibility) {
-    unchecked = unchecked || !c.ran;
-    if (!c.ran) continue;
+    if (!c.ran) {
+      if (unchecked == nullptr) unchecked = &c;
+      continue;
+    }
     tests += c.errors.size();
     for (const SensorError& e : c.errors) {
       if (!e.significant || e.signature_holds) continue;
@@ -494,11 +496,11 @@ std::size_t sensor_findings(DiscrepancyResult& res) {
   }
   const bool delay = std::any_of(res.effects.begin(), res.effects.end(),
                                  [](const NamedEffect& e) { return e.name == "actuator_delay"; });
-  if (delay && unchecked) {
+  if (delay && unchecked != nullptr) {
     // Without the kinematic check a late gyro and a late actuator look alike in L and Y.
     res.ambiguous.push_back({"actuator_delay", "time_offset"});
-    res.notes.push_back("actuator_delay could be a time offset of the IMU: the record's kinematics were not checked (" +
-                        res.compatibility.front().note +
+    res.notes.push_back("actuator_delay could be a time offset of the IMU: the kinematics of " + unchecked->source +
+                        " were not checked (" + unchecked->note +
                         "); a record with p and phi, p excited, tells them apart (a time offset shows in phi_dot = p)");
   }
   return tests;
