@@ -10,6 +10,7 @@
 // name given (a wrong name: an aerodynamic effect, a term, or another sensor error), and for the
 // nulls every alarm (a name, `ambiguous`, `unexplained`); and the stage's time per record.
 //   build/bin/bench_discrepancy_sensors [records per case, default 20] [null records, default 200]
+//   build/bin/bench_discrepancy_sensors --stress N   (the stage alone on records of varied noise, gains, length)
 
 #include <algorithm>
 #include <chrono>
@@ -85,9 +86,57 @@ Record make(const std::vector<std::string>& hidden, std::uint64_t seed, int i) {
   return r;
 }
 
+/// --stress N: the stage alone (check_compatibility) on N records per error and N nulls whose noise,
+/// gains and length vary beyond the generator's defaults (phi noise x1-7, p noise x1-5, process
+/// noise x1-5, PD gains x0.6-1.4, 8-120 s, most of them short): alarms where nothing is set, and
+/// how often each error is named and its true value covered.
+int stress(int n) {
+  const DiscrepancyOptions opt;
+  for (const char* hidden : {"", "time_offset", "sensor_scale", "clock_drift", "sensor_bias"}) {
+    int alarms = 0, named = 0, covered = 0;
+    for (int i = 0; i < n; ++i) {
+      const std::uint64_t seed = 5000u + static_cast<std::uint64_t>(i);
+      std::mt19937_64 rng(seed);
+      std::uniform_real_distribution<double> u(0.0, 1.0);
+      test::HiddenEffects h;
+      if (*hidden) h.on = {hidden};
+      test::draw_magnitudes(h, seed);
+      test::GeneratorOptions o;
+      o.seed = seed;
+      o.duration_s = 8.0 + 112.0 * u(rng) * u(rng);
+      o.noise_phi *= 1.0 + 6.0 * u(rng);
+      o.noise_p *= 1.0 + 4.0 * u(rng);
+      o.moment_noise_Nm *= 1.0 + 4.0 * u(rng);
+      o.force_noise_N *= 1.0 + 4.0 * u(rng);
+      const double gain = 0.6 + 0.8 * u(rng);
+      o.k_phi *= gain;
+      o.k_p *= gain;
+      const test::ModelSet& ms = test::model_set(1 + i % 5);
+      const CompatibilityResult c = check_compatibility(test::generate_flight(ms.model, ms.vehicle, h, o), opt.processing,
+                                                        opt.compatibility, 7.74e-6, opt.folds, 16);
+      bool other = false;
+      for (const SensorError& e : c.errors) {
+        if (!e.significant) continue;
+        if (e.name != hidden) {
+          other = true;
+          continue;
+        }
+        const double truth = truth_of(h, e.name);
+        named += e.named && e.value * truth > 0.0;
+        covered += e.named && e.interval[0] <= truth && truth <= e.interval[1];
+      }
+      alarms += other;
+    }
+    std::printf("stress %-13s %4d records: named %4d, true value covered %4d, other errors significant in %d\n",
+                *hidden ? hidden : "(nothing)", n, named, covered, alarms);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 2 && std::string(argv[1]) == "--stress") return stress(std::max(1, std::atoi(argv[2])));
   const int per_case = argc > 1 ? std::max(1, std::atoi(argv[1])) : 20;
   const int nulls = argc > 2 ? std::max(0, std::atoi(argv[2])) : 200;
   const DiscrepancyOptions opt;
