@@ -501,8 +501,8 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
 
   Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0, {}, {}};
-  wf.batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
-  wf.p_critical = chi_square_survival(options.partial_f, 1.0);
+  wf.batch.min_block = batch_min_block(options);
+  wf.p_critical = alarm_p_critical(options);
 
   std::vector<const CandidateSpec*> pool;
   for (const auto& c : candidate_library()) {

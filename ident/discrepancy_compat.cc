@@ -6,12 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
-#include "core/chi_square.h"
 #include "ident/discrepancy_parts.h"
 #include "ident/identify.h"
 
@@ -21,10 +19,12 @@ namespace {
 
 using namespace discrepancy_parts;
 
-std::string num(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", x);
-  return b;
+std::string num(double x) { return fmt(x, 4); }
+
+/// The two-sided normal quantile of alpha (2.576 at 0.01): the signatures' comparisons and the
+/// offset's test against zero.
+double two_sided_z(double alpha) {
+  return boost::math::quantile(boost::math::complement(boost::math::normal(), 0.5 * alpha));
 }
 
 /// Median interval between a channel's stamps [s] (0 for fewer than 2 samples).
@@ -96,7 +96,7 @@ void bias_of(const LsFit& f, double& b, double& sigma) {
 /// its standard deviation, within the two-sided normal quantile of alpha.
 bool agree(double v1, double s1, double v2, double s2, double tol, double alpha, std::string& note,
            const std::string& what, const std::string& unit) {
-  const double z = boost::math::quantile(boost::math::complement(boost::math::normal(), 0.5 * alpha));
+  const double z = two_sided_z(alpha);
   const double sd_diff = std::hypot(s1, s2);
   const double excess = std::max(0.0, std::fabs(v1 - v2) - tol);
   const bool ok = excess <= z * sd_diff;
@@ -191,23 +191,6 @@ bool parts_agree(const MatrixXd& X, const VectorXd& y, const std::vector<char>& 
   estimate(f1, v1, s1);
   estimate(f2, v2, s2);
   return agree(unit * v1, unit * s1, unit * v2, unit * s2, tol, alpha, note, what, unit_name);
-}
-
-/// Held-out squared error of y by X over contiguous folds, over the variance of y.
-double heldout_gap(const MatrixXd& X, const VectorXd& y, std::size_t folds) {
-  const Index n = y.size(), K = static_cast<Index>(folds);
-  const MatrixXd Gt = X.transpose() * X;
-  const VectorXd bt = X.transpose() * y;
-  double sse = 0.0;
-  for (Index k = 0; k < K; ++k) {
-    const Index a = n * k / K, e = n * (k + 1) / K;
-    const auto Xk = X.middleRows(a, e - a);
-    const auto yk = y.segment(a, e - a);
-    const VectorXd th = (Gt - Xk.transpose() * Xk).ldlt().solve(bt - Xk.transpose() * yk);
-    sse += (yk - Xk * th).squaredNorm();
-  }
-  const double var = (y.array() - y.mean()).square().sum();
-  return var > 0.0 ? sse / var : 0.0;
 }
 
 /// The two sides of the kinematic relation on the record low-passed as for identification: the
@@ -351,7 +334,7 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
                                         drift.signature_note, "drift in the first and the second half", "ppm");
   }
   if (offset.significant) offset_signature(k, r0, n, L, mb, processing, alpha, offset);
-  const double z_alpha = boost::math::quantile(boost::math::complement(boost::math::normal(), 0.5 * alpha));
+  const double z_alpha = two_sided_z(alpha);
   for (SensorError* e : {&scale, &offset, &bias, &drift}) {
     e->named = e->significant && e->signature_holds;
     // An offset is taken out below its tolerance too, once it is told from zero at the signatures'
@@ -364,12 +347,12 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     res.errors.push_back(*e);
   }
 
-  MatrixXd X0(n, 1);
-  X0.col(0) = x.segment(r0, n);
-  const VectorXd e0 = ys - X0.col(0);
+  // As recorded: phi_dot = x (a = 1, tau = 0, c = 0, nothing fitted); corrected: held out.
   const double var = (ys.array() - ys.mean()).square().sum();
-  res.kinematic_gap_before = var > 0.0 ? e0.squaredNorm() / var : 0.0;
-  res.kinematic_gap_after = heldout_gap(X, ys, folds);
+  if (var > 0.0) {
+    res.kinematic_gap_before = (ys - x.segment(r0, n)).squaredNorm() / var;
+    res.kinematic_gap_after = heldout_residual(X, ys, make_folds(n, folds)).squaredNorm() / var;
+  }
   return res;
 }
 
@@ -438,10 +421,9 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
                                DiscrepancyResult& res) {
   if (!options.compatibility.enabled) return recorded;
   const auto start = std::chrono::steady_clock::now();
-  const double p_critical = chi_square_survival(options.partial_f, 1.0);
-  const std::size_t min_block = 4 * whiteness_lag_step(0, options.processing);
-  CompatibilityResult c =
-      check_compatibility(recorded, options.processing, options.compatibility, p_critical, options.folds, min_block);
+  CompatibilityResult c = check_compatibility(recorded, options.processing, options.compatibility,
+                                              alarm_p_critical(options), options.folds,
+                                              static_cast<std::size_t>(batch_min_block(options)));
   FlightData out = corrected_record(recorded, c, options.compatibility);
   for (const SensorError& e : c.errors) {
     if (e.corrected) {

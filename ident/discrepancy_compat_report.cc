@@ -12,11 +12,7 @@ namespace nimble::ident::discrepancy_parts {
 
 namespace {
 
-std::string num(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", x);
-  return b;
-}
+std::string num(double x) { return fmt(x, 4); }
 
 std::string sensor_words(const NamedEffect& e) {
   std::string s = e.name + " of " + e.channel;

@@ -456,8 +456,16 @@ void heldout_drop(const std::vector<VectorXd>& before, const std::vector<VectorX
 /// Correlation of two columns after projecting out the columns of X.
 double residual_correlation(const MatrixXd& X, const VectorXd& a, const VectorXd& b);
 
-/// Held-out residual of each equation (every fold predicted by the fit on the others).
+/// Held-out residual of y by the columns C (every fold predicted by the fit on the others).
+VectorXd heldout_residual(const MatrixXd& C, const VectorXd& y, const Folds& folds);
+
+/// Held-out residual of each equation (heldout_residual of its design).
 std::vector<VectorXd> heldout_residuals(const Model& m, const Folds& folds);
+
+/// The alarm rule's tail, P(chi2_1 >= options.partial_f), and the batch rule's smallest block
+/// (four whiteness lag steps): the workflow's and the compatibility stage's, derived once.
+double alarm_p_critical(const DiscrepancyOptions& options);
+Index batch_min_block(const DiscrepancyOptions& options);
 
 /// Full-data fit of the model: parameters with coloured sigma, and residuals.
 std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRule& batch, std::vector<VectorXd>* residuals);

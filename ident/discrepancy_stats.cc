@@ -12,6 +12,7 @@
 #include <boost/math/distributions/fisher_f.hpp>
 
 #include "core/chi_square.h"
+#include "ident/identify.h"
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
 
@@ -234,21 +235,28 @@ double residual_correlation(const MatrixXd& X, const VectorXd& a, const VectorXd
 }
 
 /// Held-out residual of each equation (every fold predicted by the fit on the others).
+VectorXd heldout_residual(const MatrixXd& C, const VectorXd& y, const Folds& folds) {
+  const FoldStats fs = fold_stats(C, y, folds);
+  VectorXd r(C.rows());
+  for (std::size_t k = 0; k < folds.size(); ++k) {
+    VectorXd th;
+    const auto [a, b] = folds[k];
+    if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) th = VectorXd::Zero(C.cols());
+    r.segment(a, b - a) = y.segment(a, b - a) - C.middleRows(a, b - a) * th;
+  }
+  return r;
+}
+
 std::vector<VectorXd> heldout_residuals(const Model& m, const Folds& folds) {
   std::vector<VectorXd> out;
-  for (std::size_t e = 0; e < m.eqs.size(); ++e) {
-    const MatrixXd C = m.X(e);
-    const FoldStats fs = fold_stats(C, m.eqs[e].y, folds);
-    VectorXd r(C.rows());
-    for (std::size_t k = 0; k < folds.size(); ++k) {
-      VectorXd th;
-      const auto [a, b] = folds[k];
-      if (!solve(fs.Gt - fs.G[k], fs.bt - fs.b[k], th)) th = VectorXd::Zero(C.cols());
-      r.segment(a, b - a) = m.eqs[e].y.segment(a, b - a) - C.middleRows(a, b - a) * th;
-    }
-    out.push_back(r);
-  }
+  for (std::size_t e = 0; e < m.eqs.size(); ++e) out.push_back(heldout_residual(m.X(e), m.eqs[e].y, folds));
   return out;
+}
+
+double alarm_p_critical(const DiscrepancyOptions& options) { return chi_square_survival(options.partial_f, 1.0); }
+
+Index batch_min_block(const DiscrepancyOptions& options) {
+  return static_cast<Index>(4 * whiteness_lag_step(0, options.processing));
 }
 
 /// Full-data fit of the model: parameters with coloured sigma, and residuals.
