@@ -18,6 +18,7 @@
 #include "controller/attitude_controller.h"
 #include "controller/pilot.h"
 #include "estimator/ekf.h"
+#include "estimator/imu_prefilter.h"
 #include "sensors/sensor_config.h"
 
 namespace nimble::cli {
@@ -74,6 +75,8 @@ const std::vector<Section>& sections() {
       {"sensing.imu", [] { return params_markdown(imu_params(), ImuModelConfig{}, "sensing.imu."); }},
       {"sensing.mocap", [] { return params_markdown(mocap_params(), MocapConfig{}, "sensing.mocap."); }},
       {"sensing.ekf", [] { return params_markdown(ekf_params(), EkfConfig{}, "sensing.ekf."); }},
+      {"sensing.imu_prefilter",
+       [] { return params_markdown(imu_prefilter_params(), ImuPrefilterConfig{}, "sensing.imu_prefilter."); }},
       // Not a scenario section: the vehicle file's (rig_configs/vehicles/), read by load_vehicle.
       {"vehicle.data_bounds", [] { return params_markdown(data_bounds_params(), DataBounds{}, "data_bounds."); }},
   };

@@ -28,7 +28,7 @@ const std::vector<ChannelSpec>& channel_table() {
       {kActuatorCommandCan, "actuator_command_t", "`controller.rate_hz`",
        {"can_rig (commands decoded from CAN frames)"}, {"plant (`actuator_link: can`)"}},
       {kActuatorFeedback, "actuator_feedback_t", "`plant.feedback_rate_hz` (default 100 Hz)", {"plant"},
-       {"can_rig (`actuator_link: can`)", kIdent}},
+       {"can_rig (`actuator_link: can`)", "estimator (`sensing.imu_prefilter.enabled`)", kIdent}},
       {kActuatorFeedbackCan, "actuator_feedback_t", "`plant.feedback_rate_hz`",
        {"can_flight (feedback decoded from CAN frames)"}, {}},
       {kCanHealth, "can_health_t", "`can_bridge.health_rate_hz` per side (default 2 Hz, wall clock) and at exit",

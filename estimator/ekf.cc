@@ -142,6 +142,7 @@ void AttitudeVelocityEkf::initialize(std::int64_t utime, const EkfState& x0, con
   node.x = x0;
   ekf_wrap_angles(&node.x);
   node.P = 0.5 * (P0 + P0.transpose());
+  node.input_psd = input_psd_;
   history_.push_back(node);
   initialized_utime_ = utime;
   last_nis_ = -1.0;
@@ -171,7 +172,7 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 }
 
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                    double dt_s, EkfCovariance* Phi) const {
+                                    double dt_s, const EkfInput& psd, EkfCovariance* Phi) const {
   using Mat6 = EkfLinearisation::Block;
   using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
@@ -208,11 +209,11 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   Phi12.bottomRightCorner<3, 3>().diagonal().array() -= dt_s;
   // Qc = G S G^T + diag(0, 0, q_bg, q_ba) = [Q 0; 0 diag(q_bg, q_ba)] with
   // Q = B S B^T = B_g S_g B_g^T + diag(0, S_a) (S = diag(S_g, S_a)).
-  const auto input_noise = [this](const Mat63& Bg) {
-    const Mat63 BgS = Bg * input_psd_.head<3>().asDiagonal();
+  const auto input_noise = [&psd](const Mat63& Bg) {
+    const Mat63 BgS = Bg * psd.head<3>().asDiagonal();
     Mat6 Q;
     Q.noalias() = BgS.lazyProduct(Bg.transpose());
-    Q.diagonal().tail<3>() += input_psd_.tail<3>();
+    Q.diagonal().tail<3>() += psd.tail<3>();
     return Q;
   };
 
@@ -251,7 +252,7 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
 
 void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0,
                                              const EkfInput& u1, std::int64_t t0, std::int64_t t1,
-                                             EkfCovariance* Phi) const {
+                                             const EkfInput& psd, EkfCovariance* Phi) const {
   if (t1 <= t0) return;
   const double dt_s = 1e-6 * (static_cast<double>(t1) - static_cast<double>(t0));
   // At most kMaxSubsteps: an IMU time far ahead (a stray message, found by fuzz_node_estimator)
@@ -262,14 +263,14 @@ void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, cons
   for (int i = 0; i < steps; ++i) {
     const EkfInput ua = u0 + (static_cast<double>(i) / steps) * (u1 - u0);
     const EkfInput ub = u0 + (static_cast<double>(i + 1) / steps) * (u1 - u0);
-    propagate(x, P, ua, ub, h, Phi);
+    propagate(x, P, ua, ub, h, psd, Phi);
   }
 }
 
 EkfCovariance AttitudeVelocityEkf::predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0,
                                                    const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
   EkfCovariance Phi = EkfCovariance::Identity();
-  propagate_interval(x, P, u0, u1, t0, t1, &Phi);
+  propagate_interval(x, P, u0, u1, t0, t1, input_psd_, &Phi);
   return Phi;
 }
 
@@ -282,13 +283,13 @@ void AttitudeVelocityEkf::release_history() {
   pending_.clear();
 }
 
-bool AttitudeVelocityEkf::predict(const ImuSample& sample) {
+bool AttitudeVelocityEkf::predict(const ImuSample& sample, const EkfInput* input_var_per_sample) {
   EkfInput u;
   u << sample.gyro_radps, sample.accel_mps2;
-  return predict(sample.utime, u);
+  return predict(sample.utime, u, input_var_per_sample);
 }
 
-bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input) {
+bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input, const EkfInput* input_var_per_sample) {
   if (!initialized() || !imu_input.allFinite()) {
     ++counters_.imu_rejected;
     return false;
@@ -311,12 +312,16 @@ bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input)
   next.has_input = true;
   next.x = last.x;
   next.P = last.P;
+  next.input_psd = input_psd_;
+  if (input_var_per_sample != nullptr && input_var_per_sample->allFinite()) {
+    next.input_psd = next.input_psd.cwiseMax(*input_var_per_sample / config_.process_noise_reference_rate_hz);
+  }
   const EkfInput u0 = last.has_input ? last.u : imu_input;
   if (!last.has_input) {
     last.u = imu_input;
     last.has_input = true;
   }
-  propagate_interval(&next.x, &next.P, u0, imu_input, last.utime, utime);
+  propagate_interval(&next.x, &next.P, u0, imu_input, last.utime, utime, next.input_psd);
   history_.push_back(next);
   ++counters_.imu_samples;
 
@@ -412,7 +417,8 @@ void AttitudeVelocityEkf::replay(std::size_t j) {
     while (k < accepted_.size() && accepted_[k].z.utime <= b.utime) {
       const std::int64_t tm = accepted_[k].z.utime;
       if (tm > t) {
-        propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), lerp(a.u, b.u, a.utime, b.utime, tm), t, tm);
+        propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), lerp(a.u, b.u, a.utime, b.utime, tm), t, tm,
+                           b.input_psd);
         t = tm;
       }
       EkfUpdateRecord record;
@@ -434,7 +440,7 @@ void AttitudeVelocityEkf::replay(std::size_t j) {
       ++k;
     }
     if (t < b.utime) {
-      propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), b.u, t, b.utime);
+      propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), b.u, t, b.utime, b.input_psd);
       t = b.utime;
     }
     b.x = x;

@@ -203,6 +203,9 @@ struct EkfNode {
   std::int64_t utime = 0;  ///< [us]
   EkfInput u = EkfInput::Zero();
   bool has_input = false;
+  /// PSD of the input noise over the interval that ends at this node (the configured one, or
+  /// raised for this sample: predict()'s input_var_per_sample); a replay uses it again.
+  EkfInput input_psd = EkfInput::Zero();
   EkfState x = EkfState::Zero();
   EkfCovariance P = EkfCovariance::Identity();
 };
@@ -224,9 +227,13 @@ class AttitudeVelocityEkf {
   /// Propagates to the sample time with the IMU sample as input; returns false (and counts) if the
   /// sample is not used (not initialised, time not after the newest sample, non-finite values).
   /// The first sample at the initialisation time only sets the input.
-  bool predict(std::int64_t utime, const EkfInput& imu_input);
+  /// `input_var_per_sample` (optional): the input noise of this interval as per-sample variances
+  /// at process_noise.reference_rate_hz, like the configured ones; each channel takes the larger
+  /// of the two (the on-board IMU filtering's own measure of what vibration it left,
+  /// ImuPrefilter::residual_var()).
+  bool predict(std::int64_t utime, const EkfInput& imu_input, const EkfInput* input_var_per_sample = nullptr);
   /// predict() from an ImuSample ([gyro accel]).
-  bool predict(const ImuSample& sample);
+  bool predict(const ImuSample& sample, const EkfInput* input_var_per_sample = nullptr);
 
   /// Processes one measurement stamped z.utime (see the top of this header for latency handling).
   EkfMeasurementStatus add_measurement(const PoseMeasurement& z);
@@ -284,10 +291,11 @@ class AttitudeVelocityEkf {
   };
 
   /// One Heun step; with `Phi`, also its transition matrix, left-multiplied into *Phi.
+  /// `psd`: the input noise's PSD over the step.
   void propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s,
-                 EkfCovariance* Phi = nullptr) const;
+                 const EkfInput& psd, EkfCovariance* Phi = nullptr) const;
   void propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                          std::int64_t t0, std::int64_t t1, EkfCovariance* Phi = nullptr) const;
+                          std::int64_t t0, std::int64_t t1, const EkfInput& psd, EkfCovariance* Phi = nullptr) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
   /// Stores z (already prepared, not too old) and replays from the node before it.
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);

@@ -1,10 +1,13 @@
 #include "estimator/estimator_node.h"
 
 #include <climits>
+#include <cmath>
+#include <utility>
 #include <iomanip>
 #include <sstream>
 #include <vector>
 
+#include <nimble/actuator_feedback_t.hpp>
 #include <nimble/fault_event_t.hpp>
 
 #include "contract/messages.h"
@@ -22,6 +25,9 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   if (sensing.ekf.gate_enabled) {
     divergence_ = std::make_unique<DivergenceMonitor>(kDivergenceWindow, 1.0 - sensing.ekf.gate_probability,
                                                       kDivergenceFalseAlarm);
+  }
+  if (sensing.imu_prefilter.enabled) {
+    prefilter_ = std::make_unique<ImuPrefilter>(sensing.imu_prefilter, sensing.imu.sample_rate_hz);
   }
   node_ = transport::make_process_node(scenario, options);
   node_->set_expected_rate(contract::channels::kImu, scenario.expected_rate(contract::channels::kImu));
@@ -69,6 +75,14 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
     else apply_pose(p);
   });
+  if (prefilter_) {
+    node_->bus().subscribe<actuator_feedback_t>(contract::channels::kActuatorFeedback,
+                                                [this](const actuator_feedback_t& m) {
+      if (!std::isfinite(m.flap_freq_left_radps) || !std::isfinite(m.flap_freq_right_radps)) return;
+      if (node_->lockstep()) flap_inbox_.push(m.utime, {m.flap_freq_left_radps, m.flap_freq_right_radps});
+      else prefilter_->set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
+    });
+  }
   // Lockstep ticks only: in real time the work happens as the inputs arrive.
   node_->add_task("estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); },
                   transport::ProcessNode::Trigger::kInput);
@@ -104,7 +118,12 @@ bool EstimatorNode::imu_usable(const ImuSample& sample) {
 void EstimatorNode::apply_imu(const ImuSample& sample, int64_t rig_utime) {
   last_imu_stamp_ = sample.utime;
   last_imu_rig_utime_ = rig_utime;
-  if (ekf_->initialized()) ekf_->predict(sample);
+  if (!prefilter_) {
+    if (ekf_->initialized()) ekf_->predict(sample);
+    return;
+  }
+  const ImuSample s = prefilter_->filter(sample, rig_utime);
+  if (ekf_->initialized()) ekf_->predict(s, &prefilter_->residual_var());
 }
 
 int64_t EstimatorNode::filter_rig_utime() const {
@@ -116,6 +135,9 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
   last_frame_ = pose.frame_number;
   if (!pose.tracking_valid) ++poses_missing_;
   std::vector<PoseMeasurement> zs = builder_->push(pose);
+  // With the on-board IMU filtering the filter starts once its lines are learnt (its start,
+  // ImuPrefilter::settled): before, the samples still carry most of the vibration.
+  if (!ekf_->initialized() && prefilter_ && !prefilter_->settled()) return;
   if (!ekf_->initialized() && !zs.empty()) {
     // The filter runs on the IMU's clock. When the IMU's stamps are behind the motion capture's
     // (sensing.imu.clock_offset_s < 0 in the rig, an unsynchronised clock in a lab) it starts at
@@ -185,6 +207,12 @@ void EstimatorNode::tick(int64_t sim_time_ns) {
     const bool pose_ready = pose_inbox_.ready(now_us);
     if (!imu_ready && !pose_ready) break;
     if (imu_ready && (!pose_ready || imu_inbox_.front_stamp_utime() <= pose_inbox_.front_stamp_utime())) {
+      // The flapping frequencies measured up to this sample's time.
+      while (flap_inbox_.ready(now_us) && flap_inbox_.front_stamp_utime() <= imu_inbox_.front_stamp_utime()) {
+        prefilter_->set_flap_frequencies(flap_inbox_.front().first, flap_inbox_.front().second,
+                                         flap_inbox_.front_stamp_utime());
+        flap_inbox_.pop();
+      }
       apply_imu(imu_inbox_.front(), imu_inbox_.front_stamp_utime());
       imu_inbox_.pop();
     } else {

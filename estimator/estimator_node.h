@@ -6,11 +6,20 @@
 ///   IMU          imu_sample_t    512 Hz   prediction input
 ///   MOCAP_POSE   mocap_pose_t    200 Hz   measurements (attitude; body velocity from the
 ///                                         differentiated position)
+///   ACTUATOR_FB  actuator_feedback_t 100 Hz  only with sensing.imu_prefilter enabled: the
+///                                         measured flapping frequencies that place its notches
 ///   RUN_CONTROL, RIG_CLOCK                (ProcessNode; lockstep participant at the IMU rate)
 /// Publishes:
 ///   ESTIMATE     estimator_state_t  512 Hz  state, bias-corrected rates, covariance diagonal,
 ///                                           pose counters
 ///   FAULT, HEARTBEAT, TIMING_HEALTH, STEP_ACK (ProcessNode)
+///
+/// With sensing.imu_prefilter enabled each IMU sample passes the on-board filtering
+/// (estimator/imu_prefilter.h) before the EKF, its notches at the newest measured flapping
+/// frequencies (lockstep: the feedback stamped at or before the sample's rig time among those
+/// released, so the result does not depend on process timing), and the filter starts only once
+/// the prefilter has learnt its lines (0.25 s of samples; the controller's first-input timeout is
+/// 0.5 s). The stuck-IMU check reads the raw samples.
 ///
 /// The filter starts from the first motion-capture measurement. Real time: each IMU sample
 /// is predicted and published as it arrives, each pose applied as it arrives (late poses by
@@ -35,6 +44,7 @@
 
 #include "estimator/divergence_monitor.h"
 #include "estimator/ekf.h"
+#include "estimator/imu_prefilter.h"
 #include "estimator/mocap_measurement.h"
 #include "sensors/imu_model.h"
 #include "scenario/scenario.h"
@@ -86,6 +96,10 @@ class EstimatorNode {
   int imu_repeats_ = 0;
   bool imu_stuck_ = false;
   std::unique_ptr<AttitudeVelocityEkf> ekf_;
+  /// The on-board IMU filtering (sensing.imu_prefilter); null when off.
+  std::unique_ptr<ImuPrefilter> prefilter_;
+  /// Lockstep: the measured flapping frequencies [rad/s] (left, right) by their rig time.
+  transport::LatchedInput<std::pair<double, double>> flap_inbox_;
   std::unique_ptr<MocapMeasurementBuilder> builder_;
   std::unique_ptr<transport::ProcessNode> node_;
   /// The IMU's clock (sensing.imu): stamps to rig time.

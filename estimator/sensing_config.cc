@@ -63,6 +63,11 @@ SensingConfig sensing_config_from(ConfigMap& map) {
     ConfigMap m = map.get_map("ekf");
     c.ekf = ekf_config_from(m);
   }
+  if (map.has("imu_prefilter")) {
+    ConfigMap m = map.get_map("imu_prefilter");
+    read_params(m, imu_prefilter_params(), c.imu_prefilter);
+    m.finish();
+  }
   map.finish();
   check_ekf_history(map, c, 0.0);
   return c;

@@ -13,6 +13,7 @@
 
 #include "core/config.h"
 #include "estimator/ekf.h"
+#include "estimator/imu_prefilter.h"
 #include "estimator/mocap_measurement.h"
 #include "sensors/sensor_config.h"
 
@@ -23,6 +24,7 @@ namespace nimble {
 struct SensingConfig : SensorConfig {
   VelocityDifferentiatorConfig velocity_differentiator;  ///< section `velocity_differentiator`
   EkfConfig ekf;                                         ///< section `ekf`
+  ImuPrefilterConfig imu_prefilter;                      ///< section `imu_prefilter` (the firmware's IMU filtering)
 };
 
 /// Reads the `velocity_differentiator` section. @throws ConfigError.
@@ -30,7 +32,7 @@ VelocityDifferentiatorConfig velocity_differentiator_config_from(ConfigMap& map)
 /// Reads the `ekf` section. @throws ConfigError.
 EkfConfig ekf_config_from(ConfigMap& map);
 /// Reads a sensing mapping with optional sections imu, mocap (sensor_config_from()),
-/// velocity_differentiator, ekf and an optional seed; any other key is an error. Also checks that the EKF's rollback history holds what a motion-capture
+/// velocity_differentiator, ekf, imu_prefilter and an optional seed; any other key is an error. Also checks that the EKF's rollback history holds what a motion-capture
 /// measurement needs when it arrives (ekf_history_needed_s). @throws ConfigError.
 SensingConfig sensing_config_from(ConfigMap& map);
 

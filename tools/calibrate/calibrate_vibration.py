@@ -58,6 +58,11 @@ SHARES = {
     "gyro": [(0.70, 0.30, 0.0), (0.70, 0.30, 0.0), (0.35, 0.15, 0.50)],
     "accel": [(0.40, 0.60, 0.0), (0.70, 0.30, 0.0), (0.70, 0.30, 0.0)],
 }
+# The on-board firmware's filtering before the EKF (estimator/imu_prefilter.h): notches at the
+# flapping harmonics, placed by the measured flapping frequencies (ACTUATOR_FB), and at the 11 Hz
+# line on the gyro. Their widths are assumptions: wide enough for the feedback's age (10 ms at
+# 100 Hz) while delta_f moves, narrow enough to leave the manoeuvres (up to 7 Hz) alone.
+PREFILTER = {"flap_harmonics": 2, "flap_notch_bandwidth_hz": 4.0, "structural_notch_bandwidth_hz": 3.0}
 # Tolerance of the measured level against its target (the beat of the two wing pairs and a
 # finite flight leave a few per cent; assumption).
 TOLERANCE = 0.10
@@ -77,6 +82,8 @@ def amplitudes():
 
 
 def vec(values, digits=4):
+    if digits > 4:  # small values: significant digits
+        return "{" + ", ".join("%s: %.*e" % (a, digits - 2, v) for a, v in zip(AXES, values)) + "}"
     return "{" + ", ".join("%s: %.*f" % (a, digits, v) for a, v in zip(AXES, values)) + "}"
 
 
@@ -107,6 +114,29 @@ imu:
   structural_mode_hz: {STRUCTURAL_HZ:.1f}
   structural_gyro_amplitude_radps: {vec([r[2] for r in g])}
   structural_accel_amplitude_mps2: {vec([r[2] for r in a])}
+
+# The on-board firmware's filtering of this IMU before the EKF (estimator/imu_prefilter.h): notches
+# at the flapping harmonics, moved with the measured flapping frequencies (ACTUATOR_FB), and at the
+# 11 Hz line on the gyro, with a lead that leaves the slow motion without lag. The thesis does not
+# describe its vehicle's filtering; widths are assumptions (the tool's PREFILTER).
+imu_prefilter:
+  enabled: true
+  flap_harmonics: {PREFILTER["flap_harmonics"]}
+  flap_notch_bandwidth_hz: {PREFILTER["flap_notch_bandwidth_hz"]:.1f}
+  structural_notch_hz: {STRUCTURAL_HZ:.1f}
+  structural_notch_bandwidth_hz: {PREFILTER["structural_notch_bandwidth_hz"]:.1f}
+  structural_notch_gyro: true
+  structural_notch_accel: false
+
+# The EKF's input noise: the IMU's white noise alone (default_sensing.yaml's, per sample at 512 Hz);
+# what the filtering above leaves of the vibration is added sample by sample, where it is larger
+# (ImuPrefilter::residual_var: large while the lines are learnt). Thesis Eq 8.2 Q spread the whole
+# vibration as white noise; with the lines removed it would over-bound the errors (NEES far below
+# its band; estimator/README.md).
+ekf:
+  process_noise:
+    gyro_var_per_sample_rad2ps2: {vec([n * n for n in NOISE_GYRO], 6)}
+    accel_var_per_sample_m2ps4: {vec([n * n for n in NOISE_ACCEL], 4)}
 """
 
 
