@@ -19,7 +19,9 @@
 #include "launcher/launcher.h"
 #include "launcher/run_plan.h"
 #include "campaign/sweep.h"
+#include "reproduce/beside.h"
 #include "reproduce/thesis_campaign.h"
+#include "scenario/scenario.h"
 
 namespace nimble::cli {
 namespace {
@@ -44,6 +46,42 @@ std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
   return seeds;
 }
 
+/// Flies the campaign (with `beside`, twice: reproduce/beside.h), prints its tables and writes its
+/// JSON to `json_file` ("-": stdout, the text then on stderr); the command's exit code.
+int fly_and_print(const reproduce::CampaignOptions& o, bool beside, const std::string& json_file) {
+  reproduce::CampaignResult result;
+  reproduce::BesideResult both;
+  try {
+    if (beside) {
+      both = reproduce::run_beside(o);
+    } else {
+      result = reproduce::run_campaign(o);
+    }
+  } catch (const ConfigError& e) {
+    std::cerr << "rig reproduce: config error: " << e.what() << "\n";
+    return cmdline::kExitUsage;
+  } catch (const std::exception& e) {
+    std::cerr << "rig reproduce: " << e.what() << "\n";
+    return cmdline::kExitUsage;
+  }
+  (json_file == "-" ? std::cerr : std::cout) << (beside ? reproduce::beside_text(both) : reproduce::campaign_text(result));
+  if (!json_file.empty()) {
+    const std::string text = (beside ? reproduce::beside_json(both) : reproduce::campaign_json(result)) + "\n";
+    if (json_file == "-") {
+      std::cout << text;
+    } else {
+      try {
+        write_file(json_file, text);
+      } catch (const OutputError& e) {
+        std::cerr << "rig reproduce: " << e.what() << "\n";
+        return cmdline::kExitUsage;
+      }
+    }
+  }
+  if (beside) return both.without.differing() > 0 || both.with.differing() > 0 ? 1 : 0;
+  return result.differing() > 0 ? 1 : 0;
+}
+
 }  // namespace
 
 int run_reproduce_command(const std::vector<std::string>& args) {
@@ -64,8 +102,10 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                  "thesis's tolerance), explained (a reason whose check holds in the same run), differs or\n"
                  "inconclusive (the rig's own interval wider than the tolerance); calibrated and model cells\n"
                  "match or differ; fit metrics of the very model the plant flies are not comparable.");
-  cl->footer("Exit code: 0 no cell differs, 1 some cell differs, 2 bad input or a flight that could not fly.\n"
-             "Example: rig reproduce thesis --json tables.json --report report/");
+  cl->footer("Exit code: 0 no cell differs, 1 some cell differs (with --beside: in either run), 2 bad input or a\n"
+             "flight that could not fly.\n"
+             "Examples: rig reproduce thesis --json tables.json --report report/\n"
+             "          rig reproduce thesis --vibration --beside --json beside.json");
   cl->add_option("what", what, "the campaign to reproduce")->required()->check(CLI::IsMember({"thesis"}));
   cl->add_option("--campaign", o.campaign_file, "the campaign file (default rig_configs/reproduce/thesis.yaml)")
       ->type_name("FILE");
@@ -98,14 +138,36 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       ->type_name("DIR");
   cl->add_option("--controller", o.controller_file, "the controller copy of the closed-loop validation")
       ->type_name("FILE");
+  cmdline::each_value(cl->add_option("--set", "override one scenario value in every flight of the campaign, parsed as "
+                                              "YAML (repeatable; as for rig run, SECTION.base=FILE included); printed "
+                                              "in the report, and part of what identifies a --dir")
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
+  bool vibration = false, beside = false;
+  cl->add_flag("--vibration", vibration,
+               "the real vehicle's flight vibration on every flight: --set sensing.base=<the source tree's "
+               "rig_configs/sensing/nimble_flight_vibration.yaml> (before any --set)");
+  cl->add_flag("--beside", beside,
+               "fly the campaign twice, without and with the overrides (--set, --vibration; their logs, figures and "
+               "campaign directory in without/ and with/ of --logs, --report and --dir), and print per cell the "
+               "published value, the rig's without and with, each judged on its own run, and whether the cell moved "
+               "toward the published value or away (same: the change of |rig - published| within the cell's "
+               "tolerance or the two means' 95 % interval), with the counts and the verdicts that changed");
   cl.add_json(json_file, "the tables: {\"tables\": [{\"id\", \"title\", \"cells\": [{\"row\", \"column\", "
-                         "\"published\", \"rig\", \"verdict\", \"reason\"}]}], \"counts\", \"flights\"}");
+                         "\"published\", \"rig\", \"verdict\", \"reason\"}]}], \"counts\", \"flights\", "
+                         "\"overrides\"}; with --beside, per cell \"rig_without\", \"rig_with\", \"verdict_without\", "
+                         "\"verdict_with\", \"moved\" and both runs' cells, and each run's whole JSON in \"without\" "
+                         "and \"with\",");
   cl->add_option("--report", o.report_dir,
                  "figures in DIR: Fig 9.1 (every set's eigenvalues), the identification, the open-loop "
                  "validations with residual autocorrelation, the closed-loop traces (phi_sp, phi, delta_f)")
       ->type_name("DIR");
   cl->add_flag("--no-progress", "no line per flight on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
+  if (vibration) o.overrides.insert(o.overrides.begin(), Override{"sensing.base", NIMBLE_DEFAULT_VIBRATION});
+  if (beside && o.overrides.empty()) return cl.fail("--beside needs overrides to fly beside: --set KEY=VALUE or --vibration");
   try {
     o.seeds = parse_seed_list(seeds);
   } catch (const std::invalid_argument& e) {
@@ -120,31 +182,7 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   o.rig_exe = ec ? "rig" : exe.string();
-  reproduce::CampaignResult result;
-  try {
-    result = reproduce::run_campaign(o);
-  } catch (const ConfigError& e) {
-    std::cerr << "rig reproduce: config error: " << e.what() << "\n";
-    return cmdline::kExitUsage;
-  } catch (const std::exception& e) {
-    std::cerr << "rig reproduce: " << e.what() << "\n";
-    return cmdline::kExitUsage;
-  }
-  (json_file == "-" ? std::cerr : std::cout) << reproduce::campaign_text(result);
-  if (!json_file.empty()) {
-    const std::string text = reproduce::campaign_json(result) + "\n";
-    if (json_file == "-") {
-      std::cout << text;
-    } else {
-      try {
-        write_file(json_file, text);
-      } catch (const OutputError& e) {
-        std::cerr << "rig reproduce: " << e.what() << "\n";
-        return cmdline::kExitUsage;
-      }
-    }
-  }
-  return result.differing() > 0 ? 1 : 0;
+  return fly_and_print(o, beside, json_file);
 }
 
 }  // namespace nimble::cli

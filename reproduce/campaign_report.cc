@@ -54,6 +54,11 @@ std::string campaign_text(const CampaignResult& r) {
   std::ostringstream out;
   out << fmt::format("== rig reproduce thesis: {} flights, clock {}, seeds {}, states {}, {:.1f} s ==\n",
                      r.flights.size(), r.clock, seeds_text(r.seeds), r.states, r.wall_s);
+  if (!r.overrides.empty()) {
+    std::string ov;
+    for (const auto& o : r.overrides) ov += (ov.empty() ? "" : ", ") + o;
+    out << "  overrides (every flight): " << ov << "\n";
+  }
   int failed = 0;
   for (const auto& f : r.flights) failed += f.result == "ok" ? 0 : 1;
   out << fmt::format("  flights not ok: {}\n", failed);
@@ -138,6 +143,9 @@ std::string campaign_json(const CampaignResult& r) {
   for (const auto s : r.seeds) w.value(static_cast<long long>(s));
   w.end_array();
   w.key("states").value(r.states);
+  w.key("overrides").begin_array();
+  for (const auto& o : r.overrides) w.value(o);
+  w.end_array();
   w.key("wall_s").value(r.wall_s);
   w.key("flights").begin_array();
   for (const auto& f : r.flights) {

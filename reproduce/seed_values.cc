@@ -104,6 +104,18 @@ SeedValues seed_values_from_line(const std::string& line) {
 
 std::string seed_key(std::uint64_t seed) { return "seed-" + std::to_string(seed); }
 
+std::vector<Override> flight_overrides(const CampaignOptions& o, const std::vector<Override>& own) {
+  std::vector<Override> all = o.overrides;
+  all.insert(all.end(), own.begin(), own.end());
+  return all;
+}
+
+std::vector<std::string> override_texts(const std::vector<Override>& overrides) {
+  std::vector<std::string> out;
+  for (const Override& ov : overrides) out.push_back(ov.key_path + "=" + ov.value);
+  return out;
+}
+
 std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
   namespace fs = std::filesystem;
   const auto absolute = [](const std::string& p) { return fs::absolute(p).lexically_normal().string(); };
@@ -116,8 +128,11 @@ std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
   m["logs"] = absolute(o.work_dir);
   m["controller digest"] = file_digest(o.controller_file);
   m["rig digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
+  // Overrides on every flight: named (checked before the scenarios, so a refusal names them), and
+  // in the scenarios' digests, with the content of a base file they name.
+  m["overrides"] = Json(override_texts(o.overrides));
   for (const auto& [name, scenario] : spec.flights) {
-    m["scenario " + name] = scenario_digest(load_scenario(scenario));
+    m["scenario " + name] = scenario_digest(load_scenario(scenario, o.overrides));
   }
   for (const auto& set : spec.sets) m["model " + set.row] = file_digest(set.model);
   m["model lateral4"] = file_digest(spec.lateral4_model);

@@ -52,8 +52,9 @@ std::string seed_key(std::uint64_t seed);
 /// campaigns, so that a directory's stored seeds are only used by the campaign that flew them.
 /// The campaign file, every scenario it flies (scenario_digest: the file and all it names), every
 /// model it reads and the controller copy, by content; the clock, the states, the logs'
-/// directory (the records point there); and the rig's executable, by content. The seeds are not
-/// in it: a campaign with more seeds flies only the new ones.
+/// directory (the records point there); the rig's executable, by content; and the overrides on
+/// every flight (CampaignOptions::overrides), named (an empty list without) and inside each
+/// scenario's digest. The seeds are not in it: a campaign with more seeds flies only the new ones.
 std::string seeds_manifest(const CampaignOptions& options, const CampaignSpec& spec);
 
 }  // namespace nimble::reproduce

@@ -60,7 +60,8 @@ ident::SmoothingOptions smoothing_of(const Scenario& scenario) {
 }
 
 Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name, const std::string& scenario,
-          const std::vector<Override>& overrides) {
+          const std::vector<Override>& own) {
+  const std::vector<Override> overrides = flight_overrides(o, own);
   Flown f;
   f.record.name = name;
   f.record.seed = seed;
@@ -438,7 +439,6 @@ void mark_repeats(std::vector<Table>& tables, const std::map<std::string, std::m
   }
 }
 
-
 /// The closed-loop tables every closed-loop cause is flown on.
 const std::array<const char*, 3> kClosedLoopTables = {"9", "10", "11"};
 
@@ -551,6 +551,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   result.states = o.states;
   result.campaign = o.campaign_file;
   result.clock = o.clock;
+  result.overrides = override_texts(o.overrides);
   result.seeds = o.seeds;
 
   const std::vector<PlanItem> items = plan_items(spec);

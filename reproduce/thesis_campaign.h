@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "reproduce/cell_verdict.h"
+#include "scenario/scenario.h"
 
 namespace nimble::reproduce {
 
@@ -91,6 +92,7 @@ struct FlightRecord {
 struct CampaignResult {
   std::string campaign;  ///< campaign file
   std::string clock;
+  std::vector<std::string> overrides;  ///< key=value, on every flight (CampaignOptions::overrides)
   std::vector<std::uint64_t> seeds;
   std::string states;  ///< where the measured states come from
   std::vector<FlightRecord> flights;
@@ -123,7 +125,17 @@ struct CampaignOptions {
   /// A campaign directory (campaign/result_files.h) keeping each seed's values as it finishes
   /// (empty: none): the same campaign started again there flies only the seeds it lacks.
   std::string result_dir;
+  /// Scenario overrides on every flight of the campaign (`--set`, e.g. sensing.base=FILE), under
+  /// each flight's own (a set's model, a cause's `with`); they are part of what identifies a
+  /// campaign directory.
+  std::vector<Override> overrides;
 };
+
+/// `options.overrides` followed by a flight's own: what the flight is flown with.
+std::vector<Override> flight_overrides(const CampaignOptions& options, const std::vector<Override>& own);
+
+/// `key=value` of each override, in order.
+std::vector<std::string> override_texts(const std::vector<Override>& overrides);
 
 /// Flies the campaign and builds the tables.
 /// @throws ConfigError for a bad campaign file; std::runtime_error if a flight cannot be flown.
@@ -132,9 +144,10 @@ CampaignResult run_campaign(const CampaignOptions& options);
 /// The tables side by side as text.
 std::string campaign_text(const CampaignResult& result);
 
-/// `{"tables": [{"id", "title", "category", "cells": [{"row", "column", "published", "rig", "rig_sd",
-/// "interval", "seeds", "tolerance", "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds",
-/// "value"}, "repeats"}]}], "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
+/// `{"campaign", "clock", "seeds", "states", "overrides": ["key=value"], ..., "tables": [{"id", "title",
+/// "category", "cells": [{"row", "column", "published", "rig", "rig_sd", "interval", "seeds", "tolerance",
+/// "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds", "value"}, "repeats"}]}],
+/// "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
 std::string campaign_json(const CampaignResult& result);
 
 }  // namespace nimble::reproduce

@@ -105,6 +105,8 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            {"reproduce paper", "what: paper not in {thesis}"},
            {"reproduce thesis --states guess", "--states: guess not in {smoothed,estimate,truth}"},
            {"reproduce thesis --seeds 5-1", "--seeds 5-1: --seeds needs A-B"},
+           {"reproduce thesis --set sensing", "--set: key 'sensing'"},
+           {"reproduce thesis --beside", "--beside needs overrides"},
            // A regular file that is no rig log (/dev/null is refused before, as no regular file).
            {"identify " + scenario + " --states smoothed", "--states: " + scenario + " is not a rig log"},
            {"validate x.yaml " + scenario + " --states truth", "--states: " + scenario + " is not a rig log"},
@@ -123,6 +125,33 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
                                nimble::test::scratch_file("cli_eq", "eq.lcmlog"));
   CHECK(eq.exit_code == 0);
   CHECK(eq.out.find("clock      inprocess") != std::string::npos);
+}
+
+TEST_CASE("cli: rig reproduce thesis --dir refuses a directory made with other overrides, naming them", "[cli]") {
+  // A campaign made with an override that stops its first flight short (its identification
+  // fails at once, exit 2) leaves its manifest: started again with other overrides, or none, it
+  // is refused before anything flies.
+  const std::string dir = nimble::test::scratch_dir("cli_reproduce_dir");
+  const std::string common = "reproduce thesis --no-progress --seeds 1 --jobs 1 --logs " + dir + "/logs --dir " + dir +
+                             "/campaign";
+  const RigResult made = run_rig(common + " --set duration_s=0.05");
+  INFO(made.out << made.err);
+  REQUIRE(made.exit_code == 2);
+  REQUIRE(std::filesystem::exists(dir + "/campaign/campaign.json"));
+  const RigResult vibration = run_rig(common + " --vibration");
+  CHECK(vibration.exit_code == 2);
+  CHECK(vibration.err.find("holds another campaign: its overrides is [\"duration_s=0.05\"], this one's "
+                           "[\"sensing.base=" + std::string(RIG_SOURCE_DIR) +
+                           "/rig_configs/sensing/nimble_flight_vibration.yaml\"]") != std::string::npos);
+  const RigResult none = run_rig(common);
+  CHECK(none.exit_code == 2);
+  CHECK(none.err.find("holds another campaign: its overrides is [\"duration_s=0.05\"], this one's []") !=
+        std::string::npos);
+  // --beside keeps its two campaigns beside one: a directory holding one is refused.
+  const RigResult beside = run_rig(common + " --vibration --beside");
+  CHECK(beside.exit_code == 2);
+  CHECK(beside.err.find("holds one campaign; --beside keeps its two in") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir + "/logs/without"));
 }
 
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli][programs]") {
