@@ -87,6 +87,22 @@ void table_text(std::ostringstream& out, const BesideTable& t) {
   for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
 }
 
+/// The identified derivatives against the plant's in both runs (not thesis cells).
+void plant_check_text(std::ostringstream& out, const BesideResult& r) {
+  if (r.without.plant_check.size() != r.with.plant_check.size() || r.with.plant_check.empty()) return;
+  out << fmt::format("\nThe identification against the plant (not a thesis cell; states {}, mean over the seeds)\n",
+                     r.with.states);
+  out << fmt::format("  {:<7} {:<10} {:>11}  {:>11} {:>9} {:>8}  {:>11} {:>9} {:>8}\n", "row", "derivative", "plant",
+                     "without", "+-95%", "error", "with", "+-95%", "error");
+  for (std::size_t i = 0; i < r.with.plant_check.size(); ++i) {
+    const PlantCheck& a = r.without.plant_check[i];
+    const PlantCheck& b = r.with.plant_check[i];
+    out << fmt::format("  {:<7} {:<10} {:>11.4g}  {:>11.4g} {:>9.2g} {:>7.1f}%  {:>11.4g} {:>9.2g} {:>7.1f}%\n", a.row,
+                       a.derivative, a.plant, a.mean, a.interval, 100 * (a.mean / a.plant - 1), b.mean, b.interval,
+                       100 * (b.mean / b.plant - 1));
+  }
+}
+
 /// "n a, m b" of a count map, with the total; the keys in `first` first, in that order.
 std::string count_line(const std::map<std::string, int>& counts, const std::vector<std::string>& first = {}) {
   std::vector<std::string> order = first;
@@ -195,6 +211,7 @@ std::string beside_text(const BesideResult& r) {
   run_lines(out, "without", r.without);
   run_lines(out, "with", r.with);
   for (const auto& t : r.tables) table_text(out, t);
+  plant_check_text(out, r);
   out << "\ncells by category and verdict (a cell repeating another's numbers counted once):\n";
   for (const auto* run : {&r.without, &r.with}) {
     out << (run == &r.without ? "  without\n" : "  with\n");
