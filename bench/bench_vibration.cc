@@ -2,6 +2,7 @@
 /// estimator in the loop, over many seeds: does the estimator survive it, and is it consistent?
 ///
 ///   bench_vibration [--seeds N] [--first-seed S] [--scenario FILE]... [--sensing FILE|none] [--set k=v]... [--json F]
+///   bench_vibration --residual [--seeds N] [--first-seed S] [--sensing FILE] [--set k=v]...
 ///
 /// Every flight is flown in process with processes [plant, controller, mocap, estimator], the
 /// controller on the estimate, and `sensing.base` = the sensing file (default
@@ -22,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -29,7 +31,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <nimble/actuator_feedback_t.hpp>
 #include <nimble/estimator_state_t.hpp>
+#include <nimble/imu_sample_t.hpp>
 #include <nimble/fault_event_t.hpp>
 #include <nimble/truth_state_t.hpp>
 
@@ -38,6 +42,8 @@
 #include "contract/messages.h"
 #include "core/chi_square.h"
 #include "core/output_file.h"
+#include "estimator/imu_prefilter.h"
+#include "estimator/sensing_config.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 
@@ -149,6 +155,78 @@ Band band(const std::map<int64_t, NeesAt>& by_time, int seeds, bool attitude) {
   return b;
 }
 
+/// --residual: the on-board filtering's output against TRUTH on hover flights (seeds first..),
+/// per IMU channel: the per-sample variance and the low-frequency level (0.5-5 Hz, the band the
+/// EKF's attitude and velocity integrate) as the per-sample variance of a white noise with that
+/// PSD. The prefilter is run here on the flight's IMU and ACTUATOR_FB, as the estimator runs it.
+int residual(const std::string& sensing, int first_seed, int seeds, const std::vector<Override>& extra) {
+  constexpr int kSegment = 1024;  // 2 s at 512 Hz: bins 0.5 Hz apart
+  Eigen::Matrix<double, 6, 1> var = Eigen::Matrix<double, 6, 1>::Zero(), low = var;
+  long long samples = 0, segments = 0;
+  for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
+    launcher::RunOptions o;
+    o.scenario_file = std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml";
+    o.clock = launcher::kClockInprocess;
+    o.seed = static_cast<unsigned long long>(seed);
+    o.overrides = {{"processes", "[plant, controller, mocap, estimator]"}, {"run.controller_input", "estimate"},
+                   {"sensing.base", sensing}};
+    o.overrides.insert(o.overrides.end(), extra.begin(), extra.end());
+    const launcher::RunPlan plan = launcher::load_run_plan(o);
+    ConfigMap section = plan.scenario.section("sensing");
+    const SensingConfig sc = sensing_config_from(section);
+    ImuPrefilter filter(sc.imu_prefilter, sc.imu.sample_rate_hz);
+    std::map<int64_t, Truth> truth;
+    std::vector<Eigen::Matrix<double, 6, 1>> err;
+    launcher::InprocessOptions io;
+    io.config_digest = false;
+    io.on_message = [&](const std::string& channel, const void* data, int size) {
+      if (channel == contract::channels::kTruth) {
+        truth_state_t m;
+        if (m.decode(data, 0, size) == size) truth[m.utime] = contract::from_message(m);
+      } else if (channel == contract::channels::kActuatorFeedback) {
+        actuator_feedback_t m;
+        if (m.decode(data, 0, size) == size) filter.set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
+      } else if (channel == contract::channels::kImu) {
+        imu_sample_t m;
+        if (m.decode(data, 0, size) != size) return;
+        const ImuSample f = filter.filter(contract::from_message(m), m.utime);
+        const auto it = truth.find(m.utime);
+        if (it == truth.end() || m.utime < 1000000) return;
+        Eigen::Matrix<double, 6, 1> e;
+        e << f.gyro_radps - it->second.omega_body_radps, f.accel_mps2 - it->second.specific_force_body_mps2;
+        err.push_back(e);
+      }
+    };
+    launcher::fly_inprocess(plan, io);
+    // Per-channel mean out (the biases); per-sample variance; 0.5-5 Hz periodogram level per segment.
+    Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const auto& e : err) mean += e;
+    mean /= std::max<std::size_t>(1, err.size());
+    for (const auto& e : err) var += (e - mean).cwiseAbs2();
+    samples += static_cast<long long>(err.size());
+    for (std::size_t start = 0; start + kSegment <= err.size(); start += kSegment) {
+      for (int bin = 1; bin <= 10; ++bin) {  // 0.5 .. 5 Hz
+        Eigen::Matrix<std::complex<double>, 6, 1> X = Eigen::Matrix<std::complex<double>, 6, 1>::Zero();
+        for (int n = 0; n < kSegment; ++n) {
+          const std::complex<double> w = std::polar(1.0, -2.0 * M_PI * bin * n / kSegment);
+          X += (err[start + static_cast<std::size_t>(n)] - mean).cast<std::complex<double>>() * w;
+        }
+        low += X.cwiseAbs2() / (10.0 * kSegment);
+      }
+      ++segments;
+    }
+  }
+  var /= std::max<long long>(1, samples);
+  low /= std::max<long long>(1, segments);
+  const char* names[6] = {"gyro p (rad/s)^2", "gyro q (rad/s)^2", "gyro r (rad/s)^2",
+                          "accel x (m/s^2)^2", "accel y (m/s^2)^2", "accel z (m/s^2)^2"};
+  std::printf("the on-board filtering's output against TRUTH, hover, seeds %d-%d, %lld samples, %lld segments of 2 s\n",
+              first_seed, first_seed + seeds - 1, samples, segments);
+  std::printf("%-20s %14s %22s\n", "channel", "per-sample var", "0.5-5 Hz, white-equiv.");
+  for (int i = 0; i < 6; ++i) std::printf("%-20s %14.4g %22.4g\n", names[i], var[i], low[i]);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -170,6 +248,11 @@ int main(int argc, char** argv) {
   cl->add_option("--sensing", sensing, "the sensing base file, or none for the scenario's own")->capture_default_str();
   cl->add_option("--set", sets, "a scenario override k=v (repeatable)")->type_name("K=V");
   cl->add_option("--json", json_file, "the figures as JSON to FILE")->type_name("FILE");
+  bool residual_mode = false, series = false;
+  cl->add_flag("--series", series, "also the seed-mean NEES per 0.1 s of each scenario");
+  cl->add_flag("--residual", residual_mode,
+               "instead: the on-board filtering's output against TRUTH on hover flights (seeds FIRST..), per-sample "
+               "and 0.5-5 Hz levels per IMU channel: what the EKF's input noise must hold");
   if (const auto done = cl.parse(argc, argv)) return *done;
   if (scenarios.empty()) {
     for (const auto& s : kPaperManoeuvres) scenarios.push_back(std::string(RIG_SOURCE_DIR) + "/rig_configs/" + s + ".yaml");
@@ -177,10 +260,20 @@ int main(int argc, char** argv) {
   std::vector<Override> overrides = {{"processes", "[plant, controller, mocap, estimator]"},
                                      {"run.controller_input", "estimate"}};
   if (sensing != "none") overrides.push_back({"sensing.base", sensing});
+  std::vector<Override> extra;
   try {
-    for (const auto& s : sets) overrides.push_back(parse_override(s));
+    for (const auto& s : sets) extra.push_back(parse_override(s));
   } catch (const std::exception& e) {
     return cl.fail(e.what());
+  }
+  overrides.insert(overrides.end(), extra.begin(), extra.end());
+  if (residual_mode) {
+    try {
+      return residual(sensing, first_seed, seeds, extra);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_vibration: %s\n", e.what());
+      return 2;
+    }
   }
   std::printf("sensing %s, seeds %d-%d, controller on the estimate\n", sensing.c_str(), first_seed,
               first_seed + seeds - 1);
@@ -193,6 +286,24 @@ int main(int argc, char** argv) {
       f.name = std::filesystem::path(scenario).stem().string();
       for (int seed = first_seed; seed < first_seed + seeds; ++seed) fly(scenario, seed, overrides, &f);
       const Band ba = band(f.by_time, seeds, true), bv = band(f.by_time, seeds, false);
+      if (series) {
+        // The seed mean of each NEES over 0.1 s windows (every estimate time with every seed).
+        double sa = 0.0, sv = 0.0;
+        int n = 0;
+        int64_t window = -1;
+        for (const auto& [t, at] : f.by_time) {
+          if (at.n != seeds) continue;
+          if (t / 100000 != window && n > 0) {
+            std::printf("  %s t %.1f s: NEES att %.2f vel %.2f\n", f.name.c_str(), window / 10.0, sa / n, sv / n);
+            sa = sv = 0.0;
+            n = 0;
+          }
+          window = t / 100000;
+          sa += at.att / seeds;
+          sv += at.vel / seeds;
+          ++n;
+        }
+      }
       const double n = std::max<long long>(1, f.samples);
       const double rej = static_cast<double>(f.rejected) / std::max<long long>(1, f.accepted + f.rejected);
       std::printf("%-24s %5d/%-2d %5d/%-2d %5d/%-2d %9.2f%% %8.3f° %9.3f %9.2f %8.0f%% (%2.0f/%2.0f%%) %9.2f %8.0f%% (%2.0f/%2.0f%%)\n",

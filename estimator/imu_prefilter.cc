@@ -1,9 +1,10 @@
 #include "estimator/imu_prefilter.h"
 
 #include <algorithm>
-#include <cmath>
 #include <climits>
+#include <cmath>
 #include <stdexcept>
+#include <tuple>
 
 namespace nimble {
 
@@ -12,21 +13,23 @@ const ParamTable<ImuPrefilterConfig>& imu_prefilter_params() {
   static const ParamTable<C> table = {
       {"enabled", &C::enabled, Range::any(), "-", "the on-board IMU filtering before the EKF on or off"},
       {"flap_harmonics", &C::flap_harmonics, Range::closed(0, 8), "-",
-       "notches at k x each wing pair's measured flapping frequency (ACTUATOR_FB), k = 1..this"},
+       "lines at k x each wing pair's measured flapping frequency (ACTUATOR_FB), k = 1..this"},
       {"flap_notch_bandwidth_hz", &C::flap_notch_bandwidth_hz, Range::closed(0.1, 20.0), "Hz",
-       "-3 dB width of each flapping notch; assumption: wide enough for the feedback's 10 ms age while delta_f moves"},
+       "-3 dB width of each flapping line's notch; assumption: a few Hz, the lines' amplitudes change slowly"},
       {"initial_flap_freq_hz", &C::initial_flap_freq_hz, Range::closed(0.0, 40.0), "Hz",
        "flapping frequency before the first actuator feedback; thesis: 17 Hz"},
       {"structural_notch_hz", &C::structural_notch_hz, Range::closed(0.0, 100.0), "Hz",
-       "fixed notch (0: none); thesis Section 8.3: the yaw-rate line at about 11 Hz"},
+       "fixed line (0: none); thesis Section 8.3: the yaw-rate line at about 11 Hz"},
       {"structural_notch_bandwidth_hz", &C::structural_notch_bandwidth_hz, Range::closed(0.1, 20.0), "Hz",
-       "-3 dB width of the fixed notch"},
-      {"structural_notch_gyro", &C::structural_notch_gyro, Range::any(), "-", "the fixed notch on the gyro channels"},
+       "-3 dB width of the fixed line's notch"},
+      {"structural_notch_gyro", &C::structural_notch_gyro, Range::any(), "-", "the fixed line on the gyro channels"},
       {"structural_notch_accel", &C::structural_notch_accel, Range::any(), "-",
-       "the fixed notch on the accelerometer channels"},
-      {"accel", &C::accel, Range::any(), "-", "the flapping notches on the accelerometer channels too"},
-      {"lead_compensation", &C::lead_compensation, Range::any(), "-",
-       "a one-tap lead that gives the chain zero group delay at DC (an attitude integrated from the rates does not lag)"},
+       "the fixed line on the accelerometer channels"},
+      {"accel", &C::accel, Range::any(), "-", "the flapping lines on the accelerometer channels too"},
+      {"level_bandwidth_hz", &C::level_bandwidth_hz, Range::closed(1.0, 100.0), "Hz",
+       "bandwidth of the level that takes the motion, so the lines learn from what it leaves; above the manoeuvres' 7 Hz"},
+      {"amplitude_smoothing_s", &C::amplitude_smoothing_s, Range::closed(0.0, 1.0), "s",
+       "low-pass of the amplitudes the output uses (0: none): smooths away what the motion shakes into them"},
   };
   return table;
 }
@@ -41,11 +44,34 @@ ImuPrefilter::ImuPrefilter(const ImuPrefilterConfig& config, double sample_rate_
   if (!(fs_ > 0.0) || !std::isfinite(fs_)) throw std::invalid_argument("ImuPrefilter: sample rate must be positive");
   const double w0 = 2.0 * M_PI * config_.initial_flap_freq_hz;
   feedback_[0] = feedback_[1] = {INT64_MIN, w0, w0};
-  wb_flap_ = 2.0 * M_PI * config_.flap_notch_bandwidth_hz;
-  wb_structural_ = 2.0 * M_PI * config_.structural_notch_bandwidth_hz;
-  lines_.resize(2 * static_cast<std::size_t>(config_.flap_harmonics) + 1);
-  for (auto& a : amp_) a.assign(lines_.size(), {0.0, 0.0});
-  for (auto& d : demod_) d.assign(2 * lines_.size(), {0.0, 0.0});
+  const int n_flap = 2 * config_.flap_harmonics;
+  lines_.resize(static_cast<std::size_t>(n_flap) + 1);
+  // A line element's random walk alpha = rho wB^2 dt dt_nom / 2 gives it the steady gain wB dt
+  // (a notch of width B); the level's, alpha = k^2 rho / (1 - k) per nominal sample, the steady
+  // gain k = 2 pi B_level / fs.
+  const double dt_nom = 1.0 / fs_;
+  const double k = std::min(0.5, 2.0 * M_PI * config_.level_bandwidth_hz / fs_);
+  for (auto [set, flap, structural] : {std::tuple{&gyro_, true, config_.structural_notch_gyro},
+                                      std::tuple{&accel_, config_.accel, config_.structural_notch_accel}}) {
+    if (flap) {
+      for (int i = 0; i < n_flap; ++i) set->lines.push_back(i);
+    }
+    if (structural && config_.structural_notch_hz > 0.0) set->lines.push_back(n_flap);
+    const int d = 2 * static_cast<int>(set->lines.size());
+    set->P = Eigen::MatrixXd::Identity(d + 1, d + 1);
+    set->P(d, d) = kLevelPrior;
+    set->alpha_rate.resize(d + 1);
+    for (int e = 0; e < d; ++e) {
+      const bool fixed = set->lines[static_cast<std::size_t>(e / 2)] == n_flap;
+      const double wb = 2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
+      set->alpha_rate[e] = 0.5 * wb * wb * dt_nom;  // times rho at each step
+      // Once learnt, lines apart: P = p I per line, p = rho wB dt_nom, h^T P h = sum of p.
+      if (e % 2 == 0) set->usual_per_rho += wb * dt_nom;
+    }
+    set->alpha_rate[d] = k * k / (1.0 - k) * fs_;  // times rho at each step
+  }
+  for (int ch = 0; ch < 6; ++ch) amp_[ch] = Eigen::VectorXd::Zero((ch < 3 ? gyro_ : accel_).P.rows());
+  smooth_ = amp_;
 }
 
 void ImuPrefilter::set_flap_frequencies(double left_radps, double right_radps, std::int64_t utime) {
@@ -69,21 +95,8 @@ double ImuPrefilter::flap_radps(bool left, std::int64_t utime) const {
   return std::max(0.0, fb + (fb - (left ? a.left : a.right)) * ahead / span);
 }
 
-ImuSample ImuPrefilter::filter(const ImuSample& raw, std::int64_t rig_utime) {
-  if (!config_.enabled) return raw;
-  const std::array<double, 6> in{raw.gyro_radps.x(), raw.gyro_radps.y(), raw.gyro_radps.z(),
-                                 raw.accel_mps2.x(), raw.accel_mps2.y(), raw.accel_mps2.z()};
-  if (!started_) {
-    first_utime_ = last_utime_ = raw.utime;
-    last_out_ = in;
-    level_ = in;
-    started_ = true;
-  }
-  const std::int64_t dt_us = raw.utime - last_utime_;
-  const double dt_s = 1e-6 * static_cast<double>(std::max<std::int64_t>(dt_us, 0));
-  last_utime_ = std::max(last_utime_, raw.utime);
-  // The lines' frequencies at this sample and their references moved on over the interval.
-  const double left = flap_radps(true, rig_utime), right = flap_radps(false, rig_utime);
+void ImuPrefilter::advance_lines(std::int64_t utime, double dt_s) {
+  const double left = flap_radps(true, utime), right = flap_radps(false, utime);
   const std::size_t n_flap = lines_.size() - 1;
   for (std::size_t i = 0; i < lines_.size(); ++i) {
     const int k = static_cast<int>(i / 2) + 1;
@@ -93,61 +106,83 @@ ImuSample ImuPrefilter::filter(const ImuSample& raw, std::int64_t rig_utime) {
     l.theta = std::fmod(l.theta + l.w * dt_s, 2.0 * M_PI);
     l.ref = {std::cos(l.theta), std::sin(l.theta)};
   }
-  // The gain: a running mean at first (2 dt / elapsed), then the notch's own 2 dt / T = wB dt.
-  const double elapsed_s = 1e-6 * static_cast<double>(last_utime_ - first_utime_) + dt_s;
-  const auto gain = [&](double wb) { return elapsed_s > 0.0 ? 2.0 * dt_s * std::max(0.5 * wb, 1.0 / elapsed_s) : 0.0; };
-  const double g_flap = gain(wb_flap_), g_structural = gain(wb_structural_);
-  // Each channel's level m: its running mean over the start (kStartS), then held.
-  if (elapsed_s <= kStartS && elapsed_s > 0.0) {
-    for (int ch = 0; ch < 6; ++ch) level_[ch] += dt_s / elapsed_s * (in[ch] - level_[ch]);
+}
+
+ImuSample ImuPrefilter::filter(const ImuSample& raw, std::int64_t rig_utime) {
+  if (!config_.enabled) return raw;
+  const std::array<double, 6> in{raw.gyro_radps.x(), raw.gyro_radps.y(), raw.gyro_radps.z(),
+                                 raw.accel_mps2.x(), raw.accel_mps2.y(), raw.accel_mps2.z()};
+  if (!started_) {
+    first_utime_ = last_utime_ = raw.utime;
+    started_ = true;
   }
-  const double residual_gain = -std::expm1(-dt_s / kResidualTimeS);
+  const std::int64_t dt_us = raw.utime - last_utime_;
+  const double dt_s = 1e-6 * static_cast<double>(std::max<std::int64_t>(dt_us, 0));
+  last_utime_ = std::max(last_utime_, raw.utime);
+  advance_lines(rig_utime, dt_s);
+  std::array<double, 6> filtered = in;
+  step_set(gyro_, 0, in, dt_s, &filtered);
+  step_set(accel_, 3, in, dt_s, &filtered);
   ImuSample out = raw;
-  for (int ch = 0; ch < 6; ++ch) {
-    const bool gyro = ch < 3;
-    const bool flap = gyro || config_.accel;
-    const bool structural = gyro ? config_.structural_notch_gyro : config_.structural_notch_accel;
-    std::vector<std::complex<double>>& c = amp_[ch];
-    // Every line of the channel at once: e = y - sum of lines, each line learnt from e - m.
-    double lines = 0.0, g_sum = 0.0, inv_w2 = 0.0, wb_inv_w2 = 0.0;
-    for (std::size_t i = 0; i < lines_.size(); ++i) {
-      const Line& l = lines_[i];
-      if (l.w == 0.0 || !(i == n_flap ? structural : flap)) continue;
-      lines += (c[i] * l.ref).real();
-      g_sum += i == n_flap ? g_structural : g_flap;
-      inv_w2 = 1.0 / (l.w * l.w);
-      wb_inv_w2 += (i == n_flap ? wb_structural_ : wb_flap_) * inv_w2;
-    }
-    // The recursion d[k+1] = (d[k] + g e[k]) e^{j w dt} of a rotating line d = c e^{j theta} holds
-    // -g/2 of a constant part of e - m: with the sum G of the gains,
-    // e = (y - lines + G m / 2) / (1 + G / 2) is exactly y for a constant y, whatever m (unit gain
-    // at DC; without it 1 / (1 - G/2), 2.5 % per line at 4 Hz), and still zero at every line.
-    const double m = level_[ch];
-    const double e = (in[ch] - lines + 0.5 * g_sum * m) / (1.0 + 0.5 * g_sum);
-    // What is left of each line, (e - m) e^{-j theta} through two first-order low-passes (its
-    // mean is half the line's remaining complex amplitude): the residual's variance is the sum of
-    // 2 |mean|^2 over the lines.
-    double residual = 0.0;
-    for (std::size_t i = 0; i < lines_.size(); ++i) {
-      const Line& l = lines_[i];
-      if (l.w == 0.0 || !(i == n_flap ? structural : flap)) continue;
-      const std::complex<double> demod = (e - m) * std::conj(l.ref);
-      c[i] += (i == n_flap ? g_structural : g_flap) * demod;
-      std::complex<double>& d1 = demod_[ch][2 * i];
-      std::complex<double>& d2 = demod_[ch][2 * i + 1];
-      d1 += residual_gain * (demod - d1);
-      d2 += residual_gain * (d1 - d2);
-      residual += 2.0 * std::norm(d2);
-    }
-    residual_var_[ch] = residual;
-    // The lead: the chain's delay at DC once the lines are learnt, sum of wB / w^2.
-    const double lead = config_.lead_compensation && dt_s > 0.0 ? wb_inv_w2 / dt_s : 0.0;
-    const double led = e + lead * (e - last_out_[ch]);
-    last_out_[ch] = e;
-    if (ch == 0) dc_delay_s_ = wb_inv_w2;
-    (gyro ? out.gyro_radps : out.accel_mps2)[ch % 3] = led;
-  }
+  out.gyro_radps = Eigen::Vector3d(filtered[0], filtered[1], filtered[2]);
+  out.accel_mps2 = Eigen::Vector3d(filtered[3], filtered[4], filtered[5]);
   return out;
+}
+
+void ImuPrefilter::step_set(LineSet& set, int first, const std::array<double, 6>& in, double dt_s,
+                            std::array<double, 6>* out) {
+  const int d = static_cast<int>(set.P.rows()) - 1;  // amplitude elements; the last is the level
+  // The regressor: line i = a_i cos theta_i - b_i sin theta_i (a line left out: zero), level 1.
+  Eigen::VectorXd h(d + 1);
+  for (int e = 0; e < d; e += 2) {
+    const Line& l = lines_[static_cast<std::size_t>(set.lines[static_cast<std::size_t>(e / 2)])];
+    h[e] = l.w > 0.0 ? l.ref.real() : 0.0;
+    h[e + 1] = l.w > 0.0 ? -l.ref.imag() : 0.0;
+  }
+  h[d] = 1.0;
+  // The amplitudes wander and fall back to their prior I where nothing is learnt about them
+  // (P <- D P D + diag(alpha), D = diag(sqrt(1 - alpha))); the level is a random walk. The
+  // walks scale with rho, so that the steady gains (each notch's width, the level's bandwidth)
+  // do not depend on it.
+  const Eigen::VectorXd alpha = (set.alpha_rate * (dt_s * set.rho)).cwiseMin(1.0);
+  Eigen::VectorXd shrink = (1.0 - alpha.array()).sqrt().matrix();
+  shrink[d] = 1.0;
+  set.P = shrink.asDiagonal() * set.P * shrink.asDiagonal();
+  set.P.diagonal() += alpha;
+  const Eigen::VectorXd Ph = set.P * h;
+  const double s = h.dot(Ph) + set.rho;
+  const Eigen::VectorXd K = Ph / s;
+  const auto hl = h.head(d);
+  const double hPh_lines = hl.dot(set.P.topLeftCorner(d, d) * hl);
+  const double smooth = config_.amplitude_smoothing_s > 0.0 ? -std::expm1(-dt_s / config_.amplitude_smoothing_s) : 1.0;
+  const double noise_gain = -std::expm1(-dt_s / kNoiseTimeS);
+  double noise = 0.0, power = 0.0;
+  for (int ch = first; ch < first + 3; ++ch) {
+    Eigen::VectorXd& x = amp_[ch];
+    const double nu = in[ch] - h.dot(x);
+    x += K * nu;
+    Eigen::VectorXd& xs = smooth_[ch];
+    xs += smooth * (x - xs);
+    (*out)[ch] = in[ch] - hl.dot(xs.head(d));
+    // The line power per amplitude element (the prior's scale) and what else the channel carries
+    // (the innovations' mean square; its expected value is that times h^T P h + rho).
+    const double power_per_element = d > 0 ? x.head(d).squaredNorm() / d : 0.0;
+    innovation_ms_[ch] += noise_gain * (nu * nu - innovation_ms_[ch]);
+    noise += innovation_ms_[ch] / s;
+    power += power_per_element;
+    // What the lines' error may hold beyond its usual part (which the EKF's configured input
+    // noise holds: measured, bench_vibration --residual): h^T P h over the lines above its lower
+    // envelope, in units of the prior.
+    residual_var_[ch] = power_per_element * std::max(0.0, hPh_lines - set.rho * set.usual_per_rho);
+  }
+  // The lower envelope of h^T P h / rho: down at once, up over kUsualTimeS (a part of the lines
+  // unknown for longer than that is usual: the configured input noise must hold it).
+  const double v = hPh_lines / set.rho;
+  set.usual_per_rho = v < set.usual_per_rho ? v : set.usual_per_rho - std::expm1(-dt_s / kUsualTimeS) * (v - set.usual_per_rho);
+  // rho, measured: what else the channels carry against their line power, within its bounds.
+  if (power > 0.0) set.rho = std::clamp(noise / power, kRhoMin, kRhoMax);
+  set.P.noalias() -= K * Ph.transpose();
+  set.P = 0.5 * (set.P + set.P.transpose());
 }
 
 }  // namespace nimble

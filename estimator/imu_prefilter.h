@@ -8,33 +8,33 @@
 ///    the measured flapping frequencies (the rig's ACTUATOR_FB, the way a multicopter firmware
 ///    moves its notches with the motors' measured speed);
 ///  - optionally at a fixed structural frequency (the thesis's 11 Hz yaw-rate line), on the gyro
-///    and/or the accelerometer;
-///  - then a lead gives the result unit gain and zero group delay at DC.
+///    and/or the accelerometer.
 ///
-/// The lines are cancelled adaptively (Widrow's adaptive noise cancelling with sinusoidal
-/// references): each line is Re(c e^{j theta}), theta the integral of its measured frequency over
-/// the samples' own intervals, c its complex amplitude; the output e is the input minus every
-/// line, and each c += (2 dt / T) e e^{-j theta}, all learnt from the same e (in a cascade of
-/// single notches the two wing pairs' lines, within a notch width of each other while delta_f
-/// swings, would keep moving each other's phase: 0.6 rad/s left on p of the identification train
-/// against 0.04). For one fixed line this is exactly the notch (s^2 + w0^2) / (s^2 + (2/T) s +
-/// w0^2): -3 dB width B = 1 / (pi T). Unlike a fixed
-/// second-order section it keeps the line's amplitude and phase when the frequency moves (the
-/// vibration's phase is the integral of a flapping frequency that delta_f swings by +-10 Hz in the
-/// paper's manoeuvres), and it needs no even sampling (the rig's IMU samples at 512 Hz on the
-/// plant's 1 kHz steps: 1 and 2 ms intervals). At start c is 0; the gain starts at 2 dt / t
-/// (a running mean) and falls to 2 dt / T, so the lines are learnt within a few periods rather
-/// than T's e-folds. They learn from what a stage leaves minus the channel's level (its running
-/// mean over the start, kStartS, then held), so that gravity on the accelerometer is not taken
-/// for a line while they are learnt.
+/// How: a Kalman filter per group of channels (the gyro's, the accelerometer's) over the lines'
+/// amplitudes and a level. Each line is a_i cos theta_i - b_i sin theta_i, theta_i the integral
+/// of its measured frequency over the samples' own intervals (the rig's IMU samples at 512 Hz on
+/// the plant's 1 kHz steps: 1 and 2 ms apart), so a line keeps its amplitude and phase however
+/// fast its frequency moves (delta_f swings the wing pairs by +-10 Hz in the paper's manoeuvres);
+/// the level (a random walk of bandwidth level_bandwidth_hz) takes what the motion is, so that
+/// the amplitudes learn from what the motion leaves. The amplitudes are random walks whose steady
+/// gain makes each line a notch of -3 dB width B (flap_notch_bandwidth_hz,
+/// structural_notch_bandwidth_hz) and which fall back to their prior where nothing is learnt about
+/// them. The output is the input minus the lines computed with the amplitudes low-passed over
+/// amplitude_smoothing_s: what the motion shakes into an amplitude beats at about the line's
+/// frequency and is smoothed away, so the motion passes without delay (at 0.5-5 Hz under 0.3 ms;
+/// a plain notch of these widths delays the slow part by B / (2 pi f0^2), 10 ms over the chain,
+/// 3° of attitude at 5 rad/s).
 ///
-/// Why the lead: a notch of width B at f0 delays the slow part of the signal by
-/// tau = 2 pi B / w0^2 (2.2 ms for 4 Hz at 17 Hz); an attitude integrated from delayed rates lags
-/// by that delay times the rate (1.3° at 10 rad/s), an error the motion capture then sees. The
-/// lead y + tau (y[k] - y[k-1]) / dt, tau the sum over the chain, is exact for a ramp whatever the
-/// intervals: the slow part passes with an error of second order in its frequency while each line
-/// is removed. A notch at or above 0.45 x the IMU's rate, or at zero, is bypassed.
+/// Why a filter over all lines at once, with a covariance: while the wing pairs flap in step
+/// (delta_f = 0, every hover) only the sum of their two lines can be seen; when they part, the
+/// split, which nothing has shown yet, shows at once. A covariance knows that: the filter learns
+/// the split within a few periods of the lines' relative phase, and residual_var() reports the
+/// uncertainty beforehand, for the EKF to widen its input noise by it (estimator/ekf.h predict()).
+/// (A cascade of single notches, each adapted alone, took 0.3-0.5 s and left 0.6 rad/s on p over
+/// the identification train.)
 ///
+/// Start: the amplitudes start at zero with their prior; settled() after kStartS, when the
+/// estimator starts its EKF. A line at or above 0.45 x the IMU's rate, or at zero, is left out.
 /// The sample's stamp, temperature and saturation flags pass unchanged.
 
 #include <array>
@@ -52,19 +52,23 @@ namespace nimble {
 /// Section `sensing.imu_prefilter`. Defaults: off (the emulated IMU's default vibration is small).
 struct ImuPrefilterConfig {
   bool enabled = false;
-  /// Notches at k x each wing pair's flapping frequency, k = 1..flap_harmonics (0: none).
+  /// Lines at k x each wing pair's flapping frequency, k = 1..flap_harmonics (0: none).
   int flap_harmonics = 2;
-  /// -3 dB width of each flapping-harmonic notch [Hz] (its time constant T = 1 / (pi B)).
+  /// -3 dB width of each flapping line's notch [Hz].
   double flap_notch_bandwidth_hz = 4.0;
   /// Flapping frequency assumed before the first actuator feedback [Hz]; the thesis's 17 Hz.
   double initial_flap_freq_hz = 17.0;
-  /// Fixed notch [Hz] (0: none): the fuselage's yaw-rate line of thesis Section 8.3.
+  /// Fixed line [Hz] (0: none): the fuselage's yaw-rate line of thesis Section 8.3.
   double structural_notch_hz = 0.0;
   double structural_notch_bandwidth_hz = 3.0;
-  bool structural_notch_gyro = true;    ///< the fixed notch on the three gyro channels
-  bool structural_notch_accel = false;  ///< the fixed notch on the three accelerometer channels
-  bool accel = true;                    ///< the flapping notches on the accelerometer too
-  bool lead_compensation = true;        ///< zero group delay at DC (see above)
+  bool structural_notch_gyro = true;    ///< the fixed line on the three gyro channels
+  bool structural_notch_accel = false;  ///< the fixed line on the three accelerometer channels
+  bool accel = true;                    ///< the flapping lines on the accelerometer too
+  /// Bandwidth of the level that takes the motion [Hz]: above the manoeuvres' (to 7 Hz).
+  double level_bandwidth_hz = 30.0;
+  /// Time constant of the amplitudes' low-pass for the output [s]: longer than the beat of the
+  /// motion with the lowest line (11 - 7 Hz), shorter than the lines' learning.
+  double amplitude_smoothing_s = 0.02;
 };
 
 /// The section's parameters: key, range, unit, meaning (`rig params sensing.imu_prefilter`).
@@ -84,25 +88,24 @@ class ImuPrefilter {
   /// evaluated then; the intervals come from the samples' own stamps). Not enabled: `raw`.
   ImuSample filter(const ImuSample& raw, std::int64_t rig_utime);
 
-  /// The gyro p chain's group delay at DC before the lead, at the last sample [s]: the sum of
-  /// wB / w0^2 over its lines.
-  double dc_group_delay_s() const { return dc_delay_s_; }
   const ImuPrefilterConfig& config() const { return config_; }
-  /// What the lines left in the last sample, per channel [gyro p q r (rad/s)^2, accelerometer
-  /// x y z (m/s^2)^2]: each line's remainder demodulated (the output times e^{-j theta},
-  /// low-passed twice with kResidualTimeS) summed as a variance. Large while the lines are
-  /// learnt (at the start; when the wing pairs' frequencies part, since while they are equal
-  /// only the sum of their lines can be known). The estimator gives it to the EKF as the input
-  /// noise of the sample where it exceeds the configured one.
-  const Eigen::Matrix<double, 6, 1>& residual_var() const { return residual_var_; }
   /// True once the lines have been learnt over the start (kStartS of samples), or when off: the
   /// estimator starts its EKF on the filtered samples only from then on.
-  bool settled() const { return !config_.enabled || (started_ && 1e-6 * static_cast<double>(last_utime_ - first_utime_) >= kStartS); }
+  bool settled() const {
+    return !config_.enabled || (started_ && 1e-6 * static_cast<double>(last_utime_ - first_utime_) >= kStartS);
+  }
+  /// What the lines may still hold in the last sample beyond their steady uncertainty, per
+  /// channel, as a per-sample variance [gyro p q r (rad/s)^2, accelerometer x y z (m/s^2)^2]:
+  /// the channel's line power per amplitude element times h^T P h over the lines above its
+  /// steady value. Large while the lines are learnt and when two wing pairs' lines part after
+  /// flapping in step. The estimator gives it to the EKF as the sample's input noise where it
+  /// exceeds the configured one.
+  const Eigen::Matrix<double, 6, 1>& residual_var() const { return residual_var_; }
 
  private:
   /// One line: its frequency and reference (shared by the six channels).
   struct Line {
-    double w = 0.0;      ///< [rad/s]; 0: bypassed
+    double w = 0.0;      ///< [rad/s]; 0: left out
     double theta = 0.0;  ///< reference phase, wrapped into [0, 2 pi)
     std::complex<double> ref{1.0, 0.0};  ///< e^{j theta}
   };
@@ -111,31 +114,49 @@ class ImuPrefilter {
     std::int64_t utime;
     double left, right;  ///< [rad/s]
   };
+  /// The lines one group of channels carries and the covariance of their amplitudes and level,
+  /// shared by the group's channels: it depends only on the references (in units of one
+  /// amplitude element's prior).
+  struct LineSet {
+    std::vector<int> lines;      ///< indices into lines_
+    Eigen::MatrixXd P;           ///< (2n + 1)^2: [a_i b_i] per line, then the level
+    Eigen::VectorXd alpha_rate;  ///< per element, per second: the random walks (amplitudes: per unit rho)
+    double rho = kRhoMax;        ///< what else the channels carry against one element's prior
+    double usual_per_rho = 0.0;  ///< lower envelope of h^T P h over the lines, per unit rho
+  };
   /// A wing pair's flapping frequency at `utime` [rad/s]: the newest measurement, carried on along
   /// the slope of the last two for at most two of their intervals (delta_f moves by up to
   /// 400 Hz/s in the manoeuvres; held, a 100 Hz feedback is 0.16 Hz off in RMS, carried on 0.05).
   double flap_radps(bool left, std::int64_t utime) const;
+  /// Sets the lines' frequencies for rig time `utime` and moves their references on by `dt_s`.
+  void advance_lines(std::int64_t utime, double dt_s);
+  /// One step of `set` on its channels [first, first + 3): the covariance, then each channel.
+  void step_set(LineSet& set, int first, const std::array<double, 6>& in, double dt_s, std::array<double, 6>* out);
 
   ImuPrefilterConfig config_;
   double fs_;
-  double wb_flap_, wb_structural_;  ///< 2 pi x the widths [rad/s]
-  Feedback feedback_[2];            ///< the last two measurements, oldest first
+  Feedback feedback_[2];  ///< the last two measurements, oldest first
   /// k f_left, k f_right for k = 1..flap_harmonics, then the structural line.
   std::vector<Line> lines_;
-  /// Per channel and line: the line's complex amplitude.
-  std::array<std::vector<std::complex<double>>, 6> amp_;
-  std::array<double, 6> last_out_{};  ///< the chain's previous output, for the lead
-  std::array<double, 6> level_{};     ///< each channel's level m (see filter())
-  double dc_delay_s_ = 0.0;           ///< the gyro p chain's delay at DC at the last sample [s]
-  /// Per channel and line: the demodulated remainder through the first and second low-pass.
-  std::array<std::vector<std::complex<double>>, 6> demod_;
+  LineSet gyro_, accel_;
+  /// Per channel: its lines' amplitudes [a_i b_i] and level, and the amplitudes' low-pass.
+  std::array<Eigen::VectorXd, 6> amp_, smooth_;
   Eigen::Matrix<double, 6, 1> residual_var_ = Eigen::Matrix<double, 6, 1>::Zero();
-  /// Time constant of the residual's demodulation low-passes [s]: a beat with the motion (at
-  /// least 11 - 7 = 4 Hz away from a line) is damped by (1 + (2 pi 4 x 0.05)^2), 16 in power.
-  static constexpr double kResidualTimeS = 0.05;
-  /// The start [s] over which m is each channel's running mean (then held) and the gains fall from
-  /// a running mean's: several periods of the lowest line (11 Hz; a running mean over t leaves
-  /// another line Dw away at about 1 / (Dw t) of its amplitude: 10 % for 11 against 17 Hz).
+  /// rho, the ratio of what else a group's channels carry (the motion, the white noise) to one
+  /// amplitude element's prior (the line power per element), sets how much of a surprise goes to
+  /// a line whose amplitude is still unknown and scales the covariance into the predicted error.
+  /// It is measured (the innovations' mean square over kNoiseTimeS against the line power) within
+  /// [kRhoMin, kRhoMax]; it starts at kRhoMax, as noisy as the lines are strong, before the lines
+  /// are known. The steady gains, and so the notches' widths, do not depend on it.
+  static constexpr double kRhoMin = 1e-5, kRhoMax = 1.0;
+  static constexpr double kNoiseTimeS = 0.5;
+  /// How long a raised h^T P h takes to count as usual [s]: longer than the wing pairs' parting
+  /// (the split is learnt within about 0.2 s).
+  static constexpr double kUsualTimeS = 0.1;
+  std::array<double, 6> innovation_ms_{};  ///< each channel's innovations' mean square
+  /// The level's prior variance, in the same units: unknown (the accelerometer's gravity).
+  static constexpr double kLevelPrior = 1e6;
+  /// The start [s] before settled(): several periods of the lowest line (11 Hz).
   static constexpr double kStartS = 0.25;
   std::int64_t first_utime_ = 0, last_utime_ = 0;
   bool started_ = false;
