@@ -8,6 +8,7 @@
 
 #include "core/config.h"
 #include "estimator/sensing_config.h"
+#include "ident/flight_sensing.h"
 
 namespace nimble::cli {
 
@@ -92,8 +93,7 @@ std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOp
   if (o.states != ident::StateSource::kSmoothed && o.states != ident::StateSource::kSensors) return std::nullopt;
   try {
     const SensingConfig sensing = load_sensing_config(sensing_file.empty() ? NIMBLE_DEFAULT_SENSING : sensing_file);
-    o.smoothing.ekf = smoother_ekf_config(sensing);
-    o.smoothing.differentiator = sensing.velocity_differentiator;
+    o.smoothing = ident::smoothing_options(sensing);
   } catch (const ConfigError& e) {
     return cl.fail(std::string("--sensing: ") + e.what());
   }

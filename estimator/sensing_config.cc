@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/config_fields.h"
+#include "scenario/scenario.h"
 
 namespace nimble {
 
@@ -111,7 +112,9 @@ EkfHistoryNeed ekf_history_need(const SensingConfig& config, double duration_s) 
 double ekf_history_needed_s(const SensingConfig& config) { return ekf_history_need(config).total_s(); }
 
 SensingConfig load_sensing_config(const std::string& file) {
-  ConfigMap root = ConfigMap::load_file(file);
+  // A scenario's merging of bases (scenario/scenario.h): a file that stands on another
+  // (`base: default_sensing.yaml`) reads as the section it makes in a scenario.
+  ConfigMap root(load_scenario_tree(file), file, "");
   return sensing_config_from(root);
 }
 

@@ -63,7 +63,9 @@ void check_ekf_history(ConfigMap& map, const SensingConfig& config, double durat
 /// Shortest ekf.latency.history_s [s] with which no motion-capture measurement arrives too old:
 /// ekf_history_need(config).total_s().
 double ekf_history_needed_s(const SensingConfig& config);
-/// Loads a sensing file (e.g. rig_configs/sensing/default_sensing.yaml). @throws ConfigError.
+/// Loads a sensing file (e.g. rig_configs/sensing/default_sensing.yaml) as a scenario's `sensing`
+/// section reads it: the files its `base:` keys name merged under it (nimble_flight_vibration.yaml
+/// stands on default_sensing.yaml). @throws ConfigError.
 SensingConfig load_sensing_config(const std::string& file);
 
 /// Options of ekf_config_matched_to_sensors().

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 
 #include <Eigen/Cholesky>
 
@@ -18,11 +20,91 @@ EkfInput input_of(const ImuSample& s) {
   return u;
 }
 
+/// The backward pass's prediction of an interval with the input noise its forward pass used
+/// (EkfNode::input_psd, at least the configured PSD). The noise an interval adds is linear in the
+/// input PSD, so the part above the configured PSD is added channel by channel: each channel's
+/// noise per unit of per-sample variance comes from a filter whose only noise is that channel's.
+class IntervalPredictor {
+ public:
+  IntervalPredictor(const AttitudeVelocityEkf& filter, const EkfConfig& config) : filter_(filter), config_(config) {
+    configured_psd_ << config.gyro_noise_var_per_sample_rad2ps2, config.accel_noise_var_per_sample_m2ps4;
+    configured_psd_ /= config.process_noise_reference_rate_hz;  // as AttitudeVelocityEkf's
+  }
+
+  /// predict_between from node a to node b; returns Phi.
+  EkfCovariance operator()(const EkfNode& a, const EkfNode& b, EkfState* x_pred, EkfCovariance* P_pred) {
+    const EkfInput& u1 = b.has_input ? b.u : a.u;
+    const EkfCovariance Phi = filter_.predict_between(x_pred, P_pred, a.u, u1, a.utime, b.utime);
+    if (!b.has_input) return Phi;
+    for (int i = 0; i < kEkfInputDim; ++i) {
+      const double extra = b.input_psd(i) - configured_psd_(i);
+      if (!(extra > 0.0)) continue;
+      EkfState x = a.x;
+      EkfCovariance Q = EkfCovariance::Zero();
+      unit(i).predict_between(&x, &Q, a.u, u1, a.utime, b.utime);
+      *P_pred += (extra * config_.process_noise_reference_rate_hz) * Q;
+    }
+    return Phi;
+  }
+
+ private:
+  /// The filter whose only noise is a per-sample variance of 1 on input channel i.
+  const AttitudeVelocityEkf& unit(int i) {
+    if (!unit_[i]) {
+      EkfConfig c = config_;
+      c.gyro_noise_var_per_sample_rad2ps2.setZero();
+      c.accel_noise_var_per_sample_m2ps4.setZero();
+      (i < 3 ? c.gyro_noise_var_per_sample_rad2ps2 : c.accel_noise_var_per_sample_m2ps4)(i % 3) = 1.0;
+      c.gyro_bias_rw_radps_per_sqrts.setZero();
+      c.accel_bias_rw_mps2_per_sqrts.setZero();
+      unit_[i] = std::make_unique<AttitudeVelocityEkf>(c);
+    }
+    return *unit_[i];
+  }
+
+  const AttitudeVelocityEkf& filter_;
+  const EkfConfig& config_;
+  EkfInput configured_psd_;
+  std::unique_ptr<AttitudeVelocityEkf> unit_[kEkfInputDim];
+};
+
 }  // namespace
+
+PrefilteredImu prefilter_imu(const ImuPrefilterConfig& config, double sample_rate_hz, const std::vector<ImuSample>& imu,
+                             std::vector<FlapFrequencies> flaps,
+                             const std::function<std::int64_t(std::int64_t)>& rig_utime) {
+  PrefilteredImu out;
+  if (!config.enabled) {
+    out.imu = imu;
+    return out;
+  }
+  ImuPrefilter prefilter(config, sample_rate_hz);
+  std::stable_sort(flaps.begin(), flaps.end(),
+                   [](const FlapFrequencies& a, const FlapFrequencies& b) { return a.utime < b.utime; });
+  out.imu.reserve(imu.size());
+  out.input_var.reserve(imu.size());
+  std::size_t next = 0;  // the next flapping frequency to give
+  for (const ImuSample& s : imu) {
+    if (!input_of(s).allFinite()) continue;
+    const std::int64_t t = rig_utime ? rig_utime(s.utime) : s.utime;
+    for (; next < flaps.size() && flaps[next].utime <= t; ++next) {
+      prefilter.set_flap_frequencies(flaps[next].left_radps, flaps[next].right_radps, flaps[next].utime);
+    }
+    const ImuSample filtered = prefilter.filter(s, t);
+    if (!prefilter.settled()) continue;  // the estimator starts its filter only then
+    out.imu.push_back(filtered);
+    out.input_var.push_back(prefilter.residual_var());
+  }
+  return out;
+}
 
 std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const VelocityDifferentiatorConfig& differentiator,
                                           const std::vector<ImuSample>& imu, const std::vector<MocapPose>& poses,
-                                          SmootherReport* report) {
+                                          SmootherReport* report, const std::vector<EkfInput>* input_var) {
+  if (input_var != nullptr && input_var->size() != imu.size()) {
+    throw std::invalid_argument("smooth_flight: " + std::to_string(input_var->size()) + " input variances for " +
+                                std::to_string(imu.size()) + " IMU samples");
+  }
   // Every measurement the frames make, in time order.
   MocapMeasurementBuilder builder(differentiator);
   std::vector<PoseMeasurement> zs;
@@ -53,19 +135,21 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
   };
   offer_until(filter.utime());
   const ImuSample* previous = nullptr;
-  for (const ImuSample& s : imu) {
+  for (std::size_t i = 0; i < imu.size(); ++i) {
+    const ImuSample& s = imu[i];
     if (s.utime < filter.utime() || !input_of(s).allFinite()) continue;
     const EkfInput u = input_of(s);
+    const EkfInput* var = input_var != nullptr ? &(*input_var)[i] : nullptr;
     // A node at each measurement time inside the interval, the input interpolated.
     while (previous != nullptr && m < zs.size() && zs[m].utime < s.utime) {
       const std::int64_t t = zs[m].utime;
       if (t > filter.utime()) {
         const double a = static_cast<double>(t - previous->utime) / static_cast<double>(s.utime - previous->utime);
-        filter.predict(t, input_of(*previous) + std::clamp(a, 0.0, 1.0) * (u - input_of(*previous)));
+        filter.predict(t, input_of(*previous) + std::clamp(a, 0.0, 1.0) * (u - input_of(*previous)), var);
       }
       offer_until(t);
     }
-    filter.predict(s.utime, u);
+    filter.predict(s.utime, u, var);
     offer_until(s.utime);
     previous = &s;
   }
@@ -79,6 +163,7 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
   if (nodes.empty()) return {};
 
   // Backward pass.
+  IntervalPredictor predict(filter, config);
   const std::size_t n = nodes.size();
   std::vector<EkfState> xs(n);
   xs[n - 1] = nodes.back().x;
@@ -87,7 +172,7 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
     const EkfNode& b = nodes[k + 1];
     EkfState x_pred = a.x;
     EkfCovariance P_pred = a.P;
-    const EkfCovariance Phi = filter.predict_between(&x_pred, &P_pred, a.u, b.has_input ? b.u : a.u, a.utime, b.utime);
+    const EkfCovariance Phi = predict(a, b, &x_pred, &P_pred);
     const EkfCovariance C = P_pred.ldlt().solve(Phi * a.P).transpose();
     EkfState dx = xs[k + 1] - x_pred;
     for (int i = 0; i < 3; ++i) dx(i) = wrap_pi(dx(i));

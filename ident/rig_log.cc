@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -209,6 +210,7 @@ bool RigLogAssembler::add(const LogEventRecord& event) {
     const double t = static_cast<double>(message.utime) * 1e-6;
     if (!within(*ev, message, t)) return true;
     const ActuatorFeedback m = contract::from_message(message);
+    if (smoothing_) flaps_.push_back({m.utime, m.flap_freq_left_radps, m.flap_freq_right_radps});
     append(input(kDeltaF, "delta_f"), t, m.delta_f_radps);
     append(input(kDeltaT, "delta_t"), t, m.throttle_pct);
     append(input(kDeltaD, "delta_d"), t, m.dihedral_rad);
@@ -248,12 +250,30 @@ bool RigLogAssembler::add(const LogEventRecord& event) {
   return true;
 }
 
+PrefilteredImu RigLogAssembler::imu_as_filtered(const SmoothingOptions& smoothing) const {
+  if (!smoothing.prefilter.enabled) return {imu_, {}};
+  return prefilter_imu(smoothing.prefilter, smoothing.imu_rate_hz, imu_, flaps_, smoothing.imu_rig_utime);
+}
+
 FlightData RigLogAssembler::smoothed_states(const SmoothingOptions& smoothing) const {
   const std::string& file = source_;
   if (!smoothing_) throw std::logic_error("RigLogAssembler: smoothed states need collect_for_smoothing()");
   if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples to smooth");
   if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames to smooth");
-  const std::vector<SmoothedSample> smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu_, poses_);
+  const PrefilteredImu imu = imu_as_filtered(smoothing);
+  if (imu.imu.empty()) throw DataError(file, -1, -1, kImu, "the IMU filtering left no sample to smooth");
+  std::vector<SmoothedSample> smoothed;
+  if (smoothing.prefilter.enabled) {
+    // The filter starts with the filtered samples (prefilter_imu leaves out those before its
+    // lines are learnt): the frames from the first of them on.
+    std::vector<MocapPose> poses;
+    for (const MocapPose& pose : poses_) {
+      if (pose.utime >= imu.imu.front().utime) poses.push_back(pose);
+    }
+    smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu.imu, poses, nullptr, &imu.input_var);
+  } else {
+    smoothed = smooth_flight(smoothing.ekf, smoothing.differentiator, imu_, poses_);
+  }
   if (smoothed.empty()) {
     throw DataError(file, -1, -1, kMocapPose, "no motion-capture frame gave a measurement: nothing to smooth");
   }
@@ -266,20 +286,21 @@ FlightData RigLogAssembler::smoothed_states(const SmoothingOptions& smoothing) c
   return states;
 }
 
-FlightData RigLogAssembler::sensor_states(const VelocityDifferentiatorConfig& differentiator) const {
+FlightData RigLogAssembler::sensor_states(const SmoothingOptions& smoothing) const {
   const std::string& file = source_;
   if (!smoothing_) throw std::logic_error("RigLogAssembler: sensor states need collect_for_smoothing()");
   if (imu_.empty()) throw DataError(file, -1, -1, kImu, "the log has no IMU samples (p, q, r)");
   if (poses_.empty()) throw DataError(file, -1, -1, kMocapPose, "the log has no motion-capture frames (phi, u)");
   FlightData states;
-  // Rates: each IMU message's gyro at the stamp it carries, the IMU's own clock.
+  // Rates: each IMU message's gyro at the stamp it carries, the IMU's own clock (through the
+  // flight's on-board filtering when it had one).
   static const char* const kRates[] = {"p", "q", "r"};
-  for (const ImuSample& m : imu_) {
+  for (const ImuSample& m : imu_as_filtered(smoothing).imu) {
     for (int i = 0; i < 3; ++i) append(states.channels[kRates[i]], 1e-6 * static_cast<double>(m.utime), m.gyro_radps[i]);
   }
   // Attitude and velocity: the rig's differentiator on the frames in the order they were
   // published; a frame's attitude comes out once its velocity window is decided, so sort by time.
-  MocapMeasurementBuilder builder(differentiator);
+  MocapMeasurementBuilder builder(smoothing.differentiator);
   std::vector<PoseMeasurement> zs;
   for (const MocapPose& pose : poses_) {
     std::vector<PoseMeasurement> out = builder.push(pose);
@@ -325,7 +346,7 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
   if (chosen == StateSource::kSmoothed) {
     out.measured = smoothed_states(smoothing);
   } else if (chosen == StateSource::kSensors) {
-    out.measured = sensor_states(smoothing.differentiator);
+    out.measured = sensor_states(smoothing);
   } else if (chosen == StateSource::kEstimate) {
     if (!estimate_.has("p")) throw DataError(file, -1, -1, kEstimate, "the log has no estimator output");
     out.measured = std::move(estimate_);

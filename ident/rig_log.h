@@ -24,7 +24,9 @@
 #include "core/rig_values.h"
 #include "core/vehicle.h"
 #include "estimator/ekf.h"
+#include "estimator/imu_prefilter.h"
 #include "estimator/mocap_measurement.h"
+#include "estimator/smoother.h"
 #include "ident/flight_data.h"
 #include "ident/lcm_log.h"
 
@@ -47,11 +49,27 @@ enum class StateSource {
 
 /// The filter model of StateSource::kSmoothed (and the differentiator of kSensors): the flight's
 /// own sensing configuration where it is known (the scenario's `sensing` section), else the
-/// defaults, which are rig_configs/sensing/default_sensing.yaml's.
+/// defaults, which are rig_configs/sensing/default_sensing.yaml's. smoothing_options()
+/// (ident/flight_sensing.h) makes it from a sensing configuration.
 struct SmoothingOptions {
+  SmoothingOptions() = default;
+  /// A flight without on-board IMU filtering.
+  SmoothingOptions(const EkfConfig& ekf_config, const VelocityDifferentiatorConfig& differentiator_config)
+      : ekf(ekf_config), differentiator(differentiator_config) {}
+
   EkfConfig ekf;
   VelocityDifferentiatorConfig differentiator;
+  /// The on-board IMU filtering the flight's estimator ran (sensing.imu_prefilter). Enabled: the
+  /// log's IMU passes the same filtering, fed with the log's ACTUATOR_FB (estimator/smoother.h,
+  /// prefilter_imu), before the smoother (its residual variance the forward pass's input noise
+  /// per sample) and before the rates of kSensors. Off (the default): the IMU as logged.
+  ImuPrefilterConfig prefilter;
+  double imu_rate_hz = 512.0;  ///< sensing.imu.sample_rate_hz, the prefilter's rate
+  /// sensing.imu's clock: an IMU stamp [us] to the rig time of its sample (ImuClock::rig_utime);
+  /// empty: the identity.
+  std::function<std::int64_t(std::int64_t)> imu_rig_utime;
 };
+
 
 /// The name of a state source as commands and reports print it: "auto", "estimate", "truth",
 /// "smoothed", "sensors".
@@ -137,7 +155,9 @@ class RigLogAssembler {
   /// The states smoothed offline from the collected IMU samples and frames (finish()).
   FlightData smoothed_states(const SmoothingOptions& smoothing) const;
   /// The raw sensor channels of the collected IMU samples and frames (finish(), kSensors).
-  FlightData sensor_states(const VelocityDifferentiatorConfig& differentiator) const;
+  FlightData sensor_states(const SmoothingOptions& smoothing) const;
+  /// The collected IMU samples through the flight's on-board filtering (as logged when off).
+  PrefilteredImu imu_as_filtered(const SmoothingOptions& smoothing) const;
   enum InputSlot { kDeltaF, kDeltaT, kDeltaD, kDeltaW, kDeltaFCmd, kPhiSp, kAx, kAy, kAz, kInputSlots };
   /// The input channel `name`, made on first use; looked up by slot after that.
   Channel& input(InputSlot slot, const char* name);
@@ -155,6 +175,7 @@ class RigLogAssembler {
   BoundsTally* beyond_ = nullptr;
   std::vector<ImuSample> imu_;     ///< for the smoother
   std::vector<MocapPose> poses_;   ///< for the smoother
+  std::vector<FlapFrequencies> flaps_;  ///< ACTUATOR_FB's flapping frequencies, for the IMU filtering
   LogEventRecord event_;  ///< reused by add(channel, data, ...)
 };
 

@@ -22,6 +22,7 @@
 #include "estimator/sensing_config.h"
 #include "ident/closed_loop.h"
 #include "ident/discrepancy.h"
+#include "ident/flight_sensing.h"
 #include "ident/identify.h"
 #include "ident/model_writer.h"
 #include "ident/report.h"
@@ -297,12 +298,10 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
   }
   if (o.states == ident::StateSource::kSmoothed) {
     if (sensing.empty()) throw std::invalid_argument("states='smoothed' needs sensing= (the flight's sensing file)");
-    const SensingConfig s = load_sensing_config(sensing);
-    o.smoothing.ekf = smoother_ekf_config(s);
-    o.smoothing.differentiator = s.velocity_differentiator;
+    o.smoothing = ident::smoothing_options(load_sensing_config(sensing));
   } else if (o.states == ident::StateSource::kSensors && !sensing.empty()) {
-    // The flight's velocity differentiator (without sensing=, the default one).
-    o.smoothing.differentiator = load_sensing_config(sensing).velocity_differentiator;
+    // The flight's velocity differentiator and IMU filtering (without sensing=, the default ones).
+    o.smoothing = ident::smoothing_options(load_sensing_config(sensing));
   }
   ident::RigLogData log;
   {
