@@ -134,10 +134,11 @@ void EstimatorNode::apply_pose(const MocapPose& pose) {
   if (last_frame_ >= 0 && pose.frame_number > last_frame_ + 1) poses_missing_ += pose.frame_number - last_frame_ - 1;
   last_frame_ = pose.frame_number;
   if (!pose.tracking_valid) ++poses_missing_;
-  std::vector<PoseMeasurement> zs = builder_->push(pose);
   // With the on-board IMU filtering the filter starts once its lines are learnt (its start,
-  // ImuPrefilter::settled): before, the samples still carry most of the vibration.
+  // ImuPrefilter::settled): before, the samples still carry most of the vibration. The frames
+  // before then are not differentiated either: their measurements would refer to before the start.
   if (!ekf_->initialized() && prefilter_ && !prefilter_->settled()) return;
+  std::vector<PoseMeasurement> zs = builder_->push(pose);
   if (!ekf_->initialized() && !zs.empty()) {
     // The filter runs on the IMU's clock. When the IMU's stamps are behind the motion capture's
     // (sensing.imu.clock_offset_s < 0 in the rig, an unsynchronised clock in a lab) it starts at

@@ -65,8 +65,6 @@ ImuPrefilter::ImuPrefilter(const ImuPrefilterConfig& config, double sample_rate_
       const bool fixed = set->lines[static_cast<std::size_t>(e / 2)] == n_flap;
       const double wb = 2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
       set->alpha_rate[e] = 0.5 * wb * wb * dt_nom;  // times rho at each step
-      // Once learnt, lines apart: P = p I per line, p = rho wB dt_nom, h^T P h = sum of p.
-      if (e % 2 == 0) set->usual_per_rho += wb * dt_nom;
     }
     set->alpha_rate[d] = k * k / (1.0 - k) * fs_;  // times rho at each step
   }
@@ -153,10 +151,12 @@ void ImuPrefilter::step_set(LineSet& set, int first, const std::array<double, 6>
   const double s = h.dot(Ph) + set.rho;
   const Eigen::VectorXd K = Ph / s;
   const auto hl = h.head(d);
-  const double hPh_lines = hl.dot(set.P.topLeftCorner(d, d) * hl);
   const double smooth = config_.amplitude_smoothing_s > 0.0 ? -std::expm1(-dt_s / config_.amplitude_smoothing_s) : 1.0;
   const double noise_gain = -std::expm1(-dt_s / kNoiseTimeS);
+  const double usual_gain = -std::expm1(-dt_s / kUsualTimeS);
+  const int n_flap = 2 * config_.flap_harmonics;
   double noise = 0.0, power = 0.0;
+  Eigen::VectorXd sh(d);
   for (int ch = first; ch < first + 3; ++ch) {
     Eigen::VectorXd& x = amp_[ch];
     const double nu = in[ch] - h.dot(x);
@@ -164,21 +164,30 @@ void ImuPrefilter::step_set(LineSet& set, int first, const std::array<double, 6>
     Eigen::VectorXd& xs = smooth_[ch];
     xs += smooth * (x - xs);
     (*out)[ch] = in[ch] - hl.dot(xs.head(d));
-    // The line power per amplitude element (the prior's scale) and what else the channel carries
-    // (the innovations' mean square; its expected value is that times h^T P h + rho).
-    const double power_per_element = d > 0 ? x.head(d).squaredNorm() / d : 0.0;
+    // What else the channel carries (the innovations' mean square; expected: that times
+    // h^T P h + rho) against its line power per amplitude element, for rho.
     innovation_ms_[ch] += noise_gain * (nu * nu - innovation_ms_[ch]);
     noise += innovation_ms_[ch] / s;
-    power += power_per_element;
+    power += d > 0 ? x.head(d).squaredNorm() / d : 0.0;
+    // Each amplitude element's prior, from the lines learnt: a line of amplitude A has elements of
+    // variance A^2 / 2. A wing pair's lines take A^2 = |c_1|^2 + |c_2|^2: in step only their sum S
+    // is learnt, split evenly, and two independent lines of power A^2 give E|S|^2 = 2 A^2.
+    // The lines' error variance is then (S h)^T P (S h).
+    for (int j = 0; j < d / 2; ++j) {
+      const double own = x.segment<2>(2 * j).squaredNorm();
+      const bool pair = set.lines[static_cast<std::size_t>(j)] < n_flap;
+      const double a2 = pair ? own + x.segment<2>(2 * (j ^ 1)).squaredNorm() : own;
+      sh.segment<2>(2 * j) = std::sqrt(0.5 * a2) * hl.segment<2>(2 * j);
+    }
+    const double q = sh.dot(set.P.topLeftCorner(d, d) * sh);
     // What the lines' error may hold beyond its usual part (which the EKF's configured input
-    // noise holds: measured, bench_vibration --residual): h^T P h over the lines above its lower
-    // envelope, in units of the prior.
-    residual_var_[ch] = power_per_element * std::max(0.0, hPh_lines - set.rho * set.usual_per_rho);
+    // noise holds: measured, bench_vibration --residual): q above its lower envelope per unit rho,
+    // which comes down at once and goes up over kUsualTimeS (a part of the lines unknown for
+    // longer than that is usual).
+    residual_var_[ch] = std::max(0.0, q - set.rho * usual_[ch]);
+    const double v = q / set.rho;
+    usual_[ch] = v < usual_[ch] ? v : usual_[ch] + usual_gain * (v - usual_[ch]);
   }
-  // The lower envelope of h^T P h / rho: down at once, up over kUsualTimeS (a part of the lines
-  // unknown for longer than that is usual: the configured input noise must hold it).
-  const double v = hPh_lines / set.rho;
-  set.usual_per_rho = v < set.usual_per_rho ? v : set.usual_per_rho - std::expm1(-dt_s / kUsualTimeS) * (v - set.usual_per_rho);
   // rho, measured: what else the channels carry against their line power, within its bounds.
   if (power > 0.0) set.rho = std::clamp(noise / power, kRhoMin, kRhoMax);
   set.P.noalias() -= K * Ph.transpose();

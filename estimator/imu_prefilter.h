@@ -94,12 +94,12 @@ class ImuPrefilter {
   bool settled() const {
     return !config_.enabled || (started_ && 1e-6 * static_cast<double>(last_utime_ - first_utime_) >= kStartS);
   }
-  /// What the lines may still hold in the last sample beyond their steady uncertainty, per
+  /// What the lines may still hold in the last sample beyond their usual uncertainty, per
   /// channel, as a per-sample variance [gyro p q r (rad/s)^2, accelerometer x y z (m/s^2)^2]:
-  /// the channel's line power per amplitude element times h^T P h over the lines above its
-  /// steady value. Large while the lines are learnt and when two wing pairs' lines part after
-  /// flapping in step. The estimator gives it to the EKF as the sample's input noise where it
-  /// exceeds the configured one.
+  /// (S h)^T P (S h), S each amplitude element's prior standard deviation from the lines learnt,
+  /// above its lower envelope. Large while the lines are learnt and when two wing pairs' lines
+  /// part after flapping in step. The estimator gives it to the EKF as the sample's input noise
+  /// where it exceeds the configured one.
   const Eigen::Matrix<double, 6, 1>& residual_var() const { return residual_var_; }
 
  private:
@@ -122,7 +122,6 @@ class ImuPrefilter {
     Eigen::MatrixXd P;           ///< (2n + 1)^2: [a_i b_i] per line, then the level
     Eigen::VectorXd alpha_rate;  ///< per element, per second: the random walks (amplitudes: per unit rho)
     double rho = kRhoMax;        ///< what else the channels carry against one element's prior
-    double usual_per_rho = 0.0;  ///< lower envelope of h^T P h over the lines, per unit rho
   };
   /// A wing pair's flapping frequency at `utime` [rad/s]: the newest measurement, carried on along
   /// the slope of the last two for at most two of their intervals (delta_f moves by up to
@@ -150,10 +149,11 @@ class ImuPrefilter {
   /// are known. The steady gains, and so the notches' widths, do not depend on it.
   static constexpr double kRhoMin = 1e-5, kRhoMax = 1.0;
   static constexpr double kNoiseTimeS = 0.5;
-  /// How long a raised h^T P h takes to count as usual [s]: longer than the wing pairs' parting
+  /// How long a raised error variance takes to count as usual [s]: longer than the wing pairs' parting
   /// (the split is learnt within about 0.2 s).
   static constexpr double kUsualTimeS = 0.1;
   std::array<double, 6> innovation_ms_{};  ///< each channel's innovations' mean square
+  std::array<double, 6> usual_{};          ///< each channel's lower envelope of its lines' error variance / rho
   /// The level's prior variance, in the same units: unknown (the accelerometer's gravity).
   static constexpr double kLevelPrior = 1e6;
   /// The start [s] before settled(): several periods of the lowest line (11 Hz).

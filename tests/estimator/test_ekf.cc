@@ -454,3 +454,38 @@ TEST_CASE("EKF velocity on 4 Hz doublets, noise-free sensors: the window-mean re
   CHECK(gain_instant < 0.98);
   CHECK(rms_window < 0.05 * rms_instant);
 }
+
+TEST_CASE("EKF: a sample's own input noise raises the covariance over its interval and a replay keeps it",
+          "[ekf]") {
+  const SensingConfig s = matched_sensing();
+  // Two filters on the same samples; the second is told, over samples 200-260, that the input is
+  // noisier (ImuPrefilter::residual_var), as per-sample variances at the reference rate.
+  AttitudeVelocityEkf plain(s.ekf), raised(s.ekf);
+  plain.initialize(0, EkfState::Zero(), s.ekf.initial_covariance());
+  raised.initialize(0, EkfState::Zero(), s.ekf.initial_covariance());
+  EkfInput var = EkfInput::Zero();
+  var.head<3>().setConstant(0.5);  // (rad/s)^2
+  for (int k = 1; k <= 300; ++k) {
+    REQUIRE(plain.predict(imu_time(k), level_at_rest()));
+    REQUIRE(raised.predict(imu_time(k), level_at_rest(), k >= 200 && k <= 260 ? &var : nullptr));
+    if (k == 199) CHECK(raised.covariance() == plain.covariance());
+  }
+  // 61 samples of 0.5 (rad/s)^2 per sample at 512 Hz: about 61 x 0.5 / 512^2 rad^2 of roll.
+  const double added = raised.covariance()(kPhi, kPhi) - plain.covariance()(kPhi, kPhi);
+  CHECK(added == Approx(61 * 0.5 / (512.0 * 512.0)).epsilon(0.1));
+  // A measurement in the past (inside the raised interval) is replayed through the stored
+  // inputs with the noise each interval had: the same as applying it in time order.
+  AttitudeVelocityEkf in_order(s.ekf), late(s.ekf);
+  in_order.initialize(0, EkfState::Zero(), s.ekf.initial_covariance());
+  late.initialize(0, EkfState::Zero(), s.ekf.initial_covariance());
+  const PoseMeasurement z = attitude_measurement(imu_time(230), Eigen::Vector3d(0.01, 0.0, 0.0));
+  for (int k = 1; k <= 300; ++k) {
+    const EkfInput* v = k >= 200 && k <= 260 ? &var : nullptr;
+    REQUIRE(in_order.predict(imu_time(k), level_at_rest(), v));
+    if (k == 230) REQUIRE(in_order.add_measurement(z) == EkfMeasurementStatus::kAccepted);
+    REQUIRE(late.predict(imu_time(k), level_at_rest(), v));
+    if (k == 250) REQUIRE(late.add_measurement(z) == EkfMeasurementStatus::kAccepted);
+  }
+  CHECK((late.covariance() - in_order.covariance()).norm() < 1e-12 * in_order.covariance().norm());
+  CHECK((late.state() - in_order.state()).norm() < 1e-12);
+}
