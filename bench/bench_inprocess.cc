@@ -5,8 +5,10 @@
 /// Prints, for the scenario (default rig_configs/id_doublet_train_fast.yaml, every process:
 /// plant, controller, mocap, estimator), flown for S simulated seconds (default 30):
 ///  - the in-process speed in multiples of real time, median and best of N runs (default 5),
-///    with the LCM log written (the target: >= 300x), without a log, and without the estimator
-///    and motion capture (flying on truth);
+///    with the LCM log written (the target: >= 300x), the same with the real vehicle's flight
+///    vibration and its on-board IMU filtering (rig_configs/sensing/nimble_flight_vibration.yaml;
+///    the target: within 5 % of the default), without a log, and without the estimator and
+///    motion capture (flying on truth);
 ///  - the machine's floor in the same run: the plant model stepped alone at its rate, nothing
 ///    else (no sensors, no controller, no messages), as a speed and as the ratio rig / floor;
 ///  - the time of `rig sweep` over the five published parameter sets x 20 seeds, with one job
@@ -153,12 +155,19 @@ int main(int argc, char** argv) {
                 duration_s, runs, std::max(1u, std::thread::hardware_concurrency()));
     const Speeds full = fly(base, {}, dir + "/bench.lcmlog", runs);
     const double log_mb = static_cast<double>(fs::file_size(dir + "/bench.lcmlog")) / 1e6;
+    // The real vehicle's flight vibration with its on-board filtering (the target: within 5 % of
+    // the default's speed).
+    const std::string vibration_file = std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/nimble_flight_vibration.yaml";
+    const Speeds vibration = fly(base, {{"sensing.base", vibration_file}}, dir + "/bench_vibration.lcmlog", runs);
     const Speeds no_log = fly(base, {}, "", runs);
     const Speeds truth = fly(base, {{"run.controller_input", "truth"}, {"processes", "[plant,controller]"}}, "", runs);
     const double floor_x = plant_floor_x(plan, duration_s, runs);
     std::printf("  %-58s median %7.1fx  best %7.1fx   (%s; log %.1f MB)\n",
                 "in process, every process, log written (target >= 300x)", full.median_x, full.best_x,
                 full.verdict.c_str(), log_mb);
+    std::printf("  %-58s median %7.1fx  best %7.1fx   (%s; %.3f of the default, target >= 0.95)\n",
+                "the same with the flight vibration and its IMU filtering", vibration.median_x, vibration.best_x,
+                vibration.verdict.c_str(), vibration.median_x / full.median_x);
     std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, every process, no log", no_log.median_x,
                 no_log.best_x);
     std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, plant and controller on truth, no log",
@@ -192,6 +201,7 @@ int main(int argc, char** argv) {
                          {"truth_only_speed_x", truth.median_x}, {"log_mb", log_mb}}},
           {"floor", {{"speed_x", floor_x}, {"what", "the plant model alone at its rate"}}},
           {"ratio_to_floor", full.median_x / floor_x},
+          {"vibration", {{"speed_x", vibration.median_x}, {"ratio_to_default", vibration.median_x / full.median_x}}},
           {"sweep", {{"runs", kSweepRuns}, {"runs_per_s_1job", runs_per_s_1}, {"runs_per_s_all", runs_per_s_all},
                      {"jobs_all", jobs_all}, {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
           {"reproduce", {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}}}};
