@@ -20,7 +20,7 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
-    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
+    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] [--vibration] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
      nimble::cli::run_run_command},
     {"view", "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--hold|--loop|--exit-when-done]   replay a log live to Foxglove/Lichtblick",
      nimble::cli::run_view_command},

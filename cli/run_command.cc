@@ -97,7 +97,12 @@ int run_run_command(const std::vector<std::string>& args) {
   cl->add_flag("--no-progress", "no progress line on stderr (for logs and scripts)")
       ->each([&o](const std::string&) { o.progress = false; });
   cl->add_flag("--strict-timing", o.strict_timing, "a real-time degraded run exits 4");
+  bool vibration = false;
+  cl->add_flag("--vibration", vibration,
+               "the real vehicle's flight vibration and its on-board IMU filtering: --set sensing.base=<the source "
+               "tree's rig_configs/sensing/nimble_flight_vibration.yaml> (before any --set)");
   if (const auto done = cl.parse(args)) return *done;
+  if (vibration) o.overrides.insert(o.overrides.begin(), Override{"sensing.base", NIMBLE_DEFAULT_VIBRATION});
   // The live view (--foxglove) is bound here, before the launcher moves into the run's network
   // namespace: the socket stays on this host's network, where Foxglove can reach it. It is closed
   // when `live` goes, after the run.

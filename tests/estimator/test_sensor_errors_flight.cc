@@ -83,9 +83,9 @@ TEST_CASE("the estimator in the loop flies the real vehicle's vibration, and wit
   // Q's level: 1.6-3.5 rad/s per sample on the gyro), controller on the estimate. Over seeds 1-40
   // (bench_vibration) no flight takes the failsafe, the attitude error is 0.09-0.11 deg rms and the
   // rate error 0.04-0.05 rad/s; here seeds 1-3 within margins of those.
+  // --vibration: --set sensing.base=<rig_configs/sensing/nimble_flight_vibration.yaml>.
   const std::string train = std::string("run ") + RIG_SOURCE_DIR +
-                            "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --no-progress --json -"
-                            " --set sensing.base=" + RIG_SOURCE_DIR + "/rig_configs/sensing/nimble_flight_vibration.yaml";
+                            "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --no-progress --json - --vibration";
   for (int seed = 1; seed <= 3; ++seed) {
     INFO("seed " << seed);
     const nimble::test::RigResult r = nimble::test::run_rig(
