@@ -17,6 +17,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "estimator/ekf.h"
+#include "estimator/imu_prefilter.h"
 #include "plant/plant_model.h"
 #include "sensors/sensor_config.h"
 
@@ -96,6 +97,7 @@ TEST_CASE("every tabled sensing parameter is written at its default in the shipp
   const YAML::Node base = YAML::LoadFile(std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/default_sensing.yaml");
   check_documented(nimble::imu_params(), nimble::ImuModelConfig{}, base["imu"], "imu");
   check_documented(nimble::mocap_params(), nimble::MocapConfig{}, base["mocap"], "mocap");
+  check_documented(nimble::imu_prefilter_params(), nimble::ImuPrefilterConfig{}, base["imu_prefilter"], "imu_prefilter");
   // The EKF's keys live in sub-mappings (process_noise.gyro_var_per_sample_rad2ps2 ...).
   const YAML::Node ekf = base["ekf"];
   for (const auto& p : nimble::ekf_params()) {
