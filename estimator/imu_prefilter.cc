@@ -87,9 +87,10 @@ double ImuPrefilter::flap_radps(bool left, std::int64_t utime) const {
   const Feedback& b = feedback_[1];
   const double fb = left ? b.left : b.right;
   if (a.utime == INT64_MIN || b.utime == INT64_MIN || b.utime <= a.utime) return fb;
-  // On from the newest measurement along the last two, for at most two of their intervals.
+  // On from the newest measurement along the last two, for at most two of their intervals (and
+  // back at most one: in real time a sample may be older than the newest feedback).
   const double span = static_cast<double>(b.utime - a.utime);
-  const double ahead = std::min(static_cast<double>(utime - b.utime), 2.0 * span);
+  const double ahead = std::clamp(static_cast<double>(utime - b.utime), -span, 2.0 * span);
   return std::max(0.0, fb + (fb - (left ? a.left : a.right)) * ahead / span);
 }
 
