@@ -46,7 +46,7 @@ const Command kCommands[] = {
      nimble::cli::run_turbulence_response_command},
     {"loop", "loop <scenario.yaml> [--all-sets] [--gains NAME|KP,KD] [--break actuator|sensor] [--design ...] [--json F|-] [--plots DIR]   the roll loop's margins, poles, bandwidth; PD design",
      nimble::cli::run_loop_command},
-    {"reproduce", "reproduce thesis [--seeds LIST] [--states smoothed|estimate|truth] [--clock C] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
+    {"reproduce", "reproduce thesis [--seeds LIST] [--states smoothed|estimate|truth] [--clock C] [--set k=v] [--vibration] [--beside] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
      nimble::cli::run_reproduce_command},
 };
 
