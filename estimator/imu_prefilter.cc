@@ -22,7 +22,10 @@ const ParamTable<ImuPrefilterConfig>& imu_prefilter_params() {
        "fixed line (0: none); thesis Section 8.3: the yaw-rate line at about 11 Hz"},
       {"structural_notch_bandwidth_hz", &C::structural_notch_bandwidth_hz, Range::closed(0.1, 20.0), "Hz",
        "-3 dB width of the fixed line's notch"},
-      {"structural_notch_gyro", &C::structural_notch_gyro, Range::any(), "-", "the fixed line on the gyro channels"},
+      {"structural_notch_p", &C::structural_notch_p, Range::any(), "-", "the fixed line on the roll rate"},
+      {"structural_notch_q", &C::structural_notch_q, Range::any(), "-", "the fixed line on the pitch rate"},
+      {"structural_notch_r", &C::structural_notch_r, Range::any(), "-",
+       "the fixed line on the yaw rate; thesis Section 8.3: the 11 Hz line is the yaw rate's"},
       {"structural_notch_accel", &C::structural_notch_accel, Range::any(), "-",
        "the fixed line on the accelerometer channels"},
       {"accel", &C::accel, Range::any(), "-", "the flapping lines on the accelerometer channels too"},
@@ -51,24 +54,38 @@ ImuPrefilter::ImuPrefilter(const ImuPrefilterConfig& config, double sample_rate_
   // gain k = 2 pi B_level / fs.
   const double dt_nom = 1.0 / fs_;
   const double k = std::min(0.5, 2.0 * M_PI * config_.level_bandwidth_hz / fs_);
-  for (auto [set, flap, structural] : {std::tuple{&gyro_, true, config_.structural_notch_gyro},
-                                      std::tuple{&accel_, config_.accel, config_.structural_notch_accel}}) {
-    if (flap) {
-      for (int i = 0; i < n_flap; ++i) set->lines.push_back(i);
+  // Each channel's lines; channels of one sensor with the same lines share a set (rho, measured
+  // per set, differs between the gyro and the accelerometer by two orders of magnitude).
+  const bool structural_on[6] = {config_.structural_notch_p, config_.structural_notch_q, config_.structural_notch_r,
+                                 config_.structural_notch_accel, config_.structural_notch_accel,
+                                 config_.structural_notch_accel};
+  for (int ch = 0; ch < 6; ++ch) {
+    std::vector<int> lines;
+    if (ch < 3 || config_.accel) {
+      for (int i = 0; i < n_flap; ++i) lines.push_back(i);
     }
-    if (structural && config_.structural_notch_hz > 0.0) set->lines.push_back(n_flap);
-    const int d = 2 * static_cast<int>(set->lines.size());
-    set->P = Eigen::MatrixXd::Identity(d + 1, d + 1);
-    set->P(d, d) = kLevelPrior;
-    set->alpha_rate.resize(d + 1);
-    for (int e = 0; e < d; ++e) {
-      const bool fixed = set->lines[static_cast<std::size_t>(e / 2)] == n_flap;
-      const double wb = 2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
-      set->alpha_rate[e] = 0.5 * wb * wb * dt_nom;  // times rho at each step
+    if (structural_on[ch] && config_.structural_notch_hz > 0.0) lines.push_back(n_flap);
+    auto it = std::find_if(sets_.begin(), sets_.end(),
+                           [&](const LineSet& s) { return s.lines == lines && (s.channels.front() < 3) == (ch < 3); });
+    if (it == sets_.end()) {
+      LineSet set;
+      set.lines = lines;
+      const int d = 2 * static_cast<int>(lines.size());
+      set.P = Eigen::MatrixXd::Identity(d + 1, d + 1);
+      set.P(d, d) = kLevelPrior;
+      set.alpha_rate.resize(d + 1);
+      for (int e = 0; e < d; ++e) {
+        const bool fixed = lines[static_cast<std::size_t>(e / 2)] == n_flap;
+        const double wb = 2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
+        set.alpha_rate[e] = 0.5 * wb * wb * dt_nom;  // times rho at each step
+      }
+      set.alpha_rate[d] = k * k / (1.0 - k) * fs_;  // times rho at each step
+      sets_.push_back(set);
+      it = sets_.end() - 1;
     }
-    set->alpha_rate[d] = k * k / (1.0 - k) * fs_;  // times rho at each step
+    it->channels.push_back(ch);
+    amp_[ch] = Eigen::VectorXd::Zero(it->P.rows());
   }
-  for (int ch = 0; ch < 6; ++ch) amp_[ch] = Eigen::VectorXd::Zero((ch < 3 ? gyro_ : accel_).P.rows());
   smooth_ = amp_;
 }
 
@@ -120,16 +137,14 @@ ImuSample ImuPrefilter::filter(const ImuSample& raw, std::int64_t rig_utime) {
   last_utime_ = std::max(last_utime_, raw.utime);
   advance_lines(rig_utime, dt_s);
   std::array<double, 6> filtered = in;
-  step_set(gyro_, 0, in, dt_s, &filtered);
-  step_set(accel_, 3, in, dt_s, &filtered);
+  for (LineSet& set : sets_) step_set(set, in, dt_s, &filtered);
   ImuSample out = raw;
   out.gyro_radps = Eigen::Vector3d(filtered[0], filtered[1], filtered[2]);
   out.accel_mps2 = Eigen::Vector3d(filtered[3], filtered[4], filtered[5]);
   return out;
 }
 
-void ImuPrefilter::step_set(LineSet& set, int first, const std::array<double, 6>& in, double dt_s,
-                            std::array<double, 6>* out) {
+void ImuPrefilter::step_set(LineSet& set, const std::array<double, 6>& in, double dt_s, std::array<double, 6>* out) {
   const int d = static_cast<int>(set.P.rows()) - 1;  // amplitude elements; the last is the level
   // The regressor: line i = a_i cos theta_i - b_i sin theta_i (a line left out: zero), level 1.
   Eigen::VectorXd h(d + 1);
@@ -158,7 +173,7 @@ void ImuPrefilter::step_set(LineSet& set, int first, const std::array<double, 6>
   const int n_flap = 2 * config_.flap_harmonics;
   double noise = 0.0, power = 0.0;
   Eigen::VectorXd sh(d);
-  for (int ch = first; ch < first + 3; ++ch) {
+  for (const int ch : set.channels) {
     Eigen::VectorXd& x = amp_[ch];
     const double nu = in[ch] - h.dot(x);
     x += K * nu;

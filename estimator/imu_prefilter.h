@@ -10,7 +10,7 @@
 ///  - optionally at a fixed structural frequency (the thesis's 11 Hz yaw-rate line), on the gyro
 ///    and/or the accelerometer.
 ///
-/// How: a Kalman filter per group of channels (the gyro's, the accelerometer's) over the lines'
+/// How: a Kalman filter per group of channels with the same lines over the lines'
 /// amplitudes and a level. Each line is a_i cos theta_i - b_i sin theta_i, theta_i the integral
 /// of its measured frequency over the samples' own intervals (the rig's IMU samples at 512 Hz on
 /// the plant's 1 kHz steps: 1 and 2 ms apart), so a line keeps its amplitude and phase however
@@ -61,7 +61,9 @@ struct ImuPrefilterConfig {
   /// Fixed line [Hz] (0: none): the fuselage's yaw-rate line of thesis Section 8.3.
   double structural_notch_hz = 0.0;
   double structural_notch_bandwidth_hz = 3.0;
-  bool structural_notch_gyro = true;    ///< the fixed line on the three gyro channels
+  /// The fixed line on each gyro channel: thesis Section 8.3 sees it in the yaw rate only (on p
+  /// it would take out the roll motion near 11 Hz for nothing: Lp identified 2.5-3.5 % high).
+  bool structural_notch_p = false, structural_notch_q = false, structural_notch_r = true;
   bool structural_notch_accel = false;  ///< the fixed line on the three accelerometer channels
   bool accel = true;                    ///< the flapping lines on the accelerometer too
   /// Bandwidth of the level that takes the motion [Hz]: above the manoeuvres' (to 7 Hz).
@@ -114,10 +116,11 @@ class ImuPrefilter {
     std::int64_t utime;
     double left, right;  ///< [rad/s]
   };
-  /// The lines one group of channels carries and the covariance of their amplitudes and level,
-  /// shared by the group's channels: it depends only on the references (in units of one
-  /// amplitude element's prior).
+  /// The lines a group of channels carries and the covariance of their amplitudes and level,
+  /// shared by the group's channels (those with the same lines): it depends only on the
+  /// references (in units of one amplitude element's prior).
   struct LineSet {
+    std::vector<int> channels;   ///< 0-2 gyro p q r, 3-5 accelerometer x y z
     std::vector<int> lines;      ///< indices into lines_
     Eigen::MatrixXd P;           ///< (2n + 1)^2: [a_i b_i] per line, then the level
     Eigen::VectorXd alpha_rate;  ///< per element, per second: the random walks (amplitudes: per unit rho)
@@ -129,15 +132,15 @@ class ImuPrefilter {
   double flap_radps(bool left, std::int64_t utime) const;
   /// Sets the lines' frequencies for rig time `utime` and moves their references on by `dt_s`.
   void advance_lines(std::int64_t utime, double dt_s);
-  /// One step of `set` on its channels [first, first + 3): the covariance, then each channel.
-  void step_set(LineSet& set, int first, const std::array<double, 6>& in, double dt_s, std::array<double, 6>* out);
+  /// One step of `set` on its channels: the covariance, then each channel.
+  void step_set(LineSet& set, const std::array<double, 6>& in, double dt_s, std::array<double, 6>* out);
 
   ImuPrefilterConfig config_;
   double fs_;
   Feedback feedback_[2];  ///< the last two measurements, oldest first
   /// k f_left, k f_right for k = 1..flap_harmonics, then the structural line.
   std::vector<Line> lines_;
-  LineSet gyro_, accel_;
+  std::vector<LineSet> sets_;
   /// Per channel: its lines' amplitudes [a_i b_i] and level, and the amplitudes' low-pass.
   std::array<Eigen::VectorXd, 6> amp_, smooth_;
   Eigen::Matrix<double, 6, 1> residual_var_ = Eigen::Matrix<double, 6, 1>::Zero();
