@@ -118,7 +118,8 @@ void ImuPrefilter::advance_lines(std::int64_t utime, double dt_s) {
     const int k = static_cast<int>(i / 2) + 1;
     const double f_hz = i == n_flap ? config_.structural_notch_hz : k * (i % 2 == 0 ? left : right) / (2.0 * M_PI);
     Line& l = lines_[i];
-    l.w = (f_hz > 0.0 && f_hz < 0.45 * fs_) ? 2.0 * M_PI * f_hz : 0.0;
+    l.w = 0.0;  // left out
+    if (f_hz > 0.0 && f_hz < 0.45 * fs_) l.w = 2.0 * M_PI * f_hz;
     l.theta = std::fmod(l.theta + l.w * dt_s, 2.0 * M_PI);
     l.ref = {std::cos(l.theta), std::sin(l.theta)};
   }
