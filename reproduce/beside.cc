@@ -15,7 +15,7 @@ namespace nimble::reproduce {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;
+using OJson = nlohmann::ordered_json;
 
 std::string join(const std::vector<std::string>& v, const char* sep) {
   std::string s;
@@ -23,7 +23,7 @@ std::string join(const std::vector<std::string>& v, const char* sep) {
   return s;
 }
 
-std::string seeds_text(const std::vector<std::uint64_t>& seeds) {
+std::string seed_list_text(const std::vector<std::uint64_t>& seeds) {
   std::string s;
   for (std::size_t i = 0; i < seeds.size(); ++i) s += (i ? "," : "") + std::to_string(seeds[i]);
   return s;
@@ -120,10 +120,10 @@ std::string count_line(const std::map<std::string, int>& counts, const std::vect
   return fmt::format("{} (of {})", line, total);
 }
 
-Json cell_json(const Json& side_table, std::size_t k) { return side_table.at("cells").at(k); }
+OJson cell_json(const OJson& side_table, std::size_t k) { return side_table.at("cells").at(k); }
 
 /// A double as JSON: null for NaN or infinity, as the campaign's JSON writes them.
-Json number(double x) { return std::isfinite(x) ? Json(x) : Json(nullptr); }
+OJson json_number(double x) { return std::isfinite(x) ? OJson(x) : OJson(nullptr); }
 
 }  // namespace
 
@@ -206,7 +206,7 @@ BesideResult run_beside(const CampaignOptions& o) {
 std::string beside_text(const BesideResult& r) {
   std::ostringstream out;
   out << fmt::format("== rig reproduce thesis, without and with overrides: clock {}, seeds {}, states {} ==\n",
-                     r.with.clock, seeds_text(r.with.seeds), r.with.states);
+                     r.with.clock, seed_list_text(r.with.seeds), r.with.states);
   out << "  overrides (every flight of the second run): " << join(r.with.overrides, ", ") << "\n";
   run_lines(out, "without", r.without);
   run_lines(out, "with", r.with);
@@ -231,25 +231,25 @@ std::string beside_text(const BesideResult& r) {
 }
 
 std::string beside_json(const BesideResult& r) {
-  const Json without = Json::parse(campaign_json(r.without)), with = Json::parse(campaign_json(r.with));
-  Json j;
+  const OJson without = OJson::parse(campaign_json(r.without)), with = OJson::parse(campaign_json(r.with));
+  OJson j;
   j["beside"] = true;
   j["overrides"] = r.with.overrides;
-  j["tables"] = Json::array();
+  j["tables"] = OJson::array();
   for (std::size_t i = 0; i < r.tables.size(); ++i) {
     const BesideTable& t = r.tables[i];
-    Json cells = Json::array();
+    OJson cells = OJson::array();
     for (std::size_t k = 0; k < t.cells.size(); ++k) {
       const BesideCell& c = t.cells[k];
       cells.push_back({{"row", c.without.row},
                        {"column", c.without.column},
-                       {"published", number(c.without.published)},
-                       {"tolerance", number(c.without.tolerance)},
+                       {"published", json_number(c.without.published)},
+                       {"tolerance", json_number(c.without.tolerance)},
                        {"category", c.without.category},
-                       {"rig_without", number(c.without.rig)},
-                       {"rig_with", number(c.with.rig)},
-                       {"interval_without", number(c.without.interval)},
-                       {"interval_with", number(c.with.interval)},
+                       {"rig_without", json_number(c.without.rig)},
+                       {"rig_with", json_number(c.with.rig)},
+                       {"interval_without", json_number(c.without.interval)},
+                       {"interval_with", json_number(c.with.interval)},
                        {"verdict_without", c.without.verdict},
                        {"verdict_with", c.with.verdict},
                        {"moved", c.moved},
@@ -263,7 +263,7 @@ std::string beside_json(const BesideResult& r) {
   j["verdict_changes"] = r.verdict_changes();
   j["without"] = without;
   j["with"] = with;
-  return j.dump(-1, ' ', false, Json::error_handler_t::replace);
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
 }
 
 }  // namespace nimble::reproduce
