@@ -13,6 +13,7 @@
 #include "ident/flight_sensing.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"
+#include "../support/fit_metrics.h"
 #include "../support/run_rig.h"
 #include "tests/support/scratch.h"
 
@@ -111,14 +112,7 @@ TEST_CASE("smoothed states of a vibrating flight: the IMU through the flight's o
     INFO(name << " = " << value << ", set 1 " << set1);
     CHECK(std::fabs(value - set1) < 0.10 * std::fabs(set1));
   }
-  for (const char* out : {"p_dot", "v_dot_star"}) {
-    const YAML::Node m = report["metrics"][out];
-    INFO(out << ": r_xy " << m["rxy"].as<double>() << ", R2 " << m["r2"].as<double>() << ", RMSE "
-             << m["rmse_pct_range"].as<double>() << " % of range");
-    CHECK(m["rxy"].as<double>() > 0.9);
-    CHECK(m["r2"].as<double>() > 0.8);
-    CHECK(m["rmse_pct_range"].as<double>() < 10.0);
-  }
+  nimble::test::check_fit_metrics(report);
   // The IMU as logged (a sensing file on the flight's with the filtering off): outside them.
   const std::string as_logged_file = dir + "/as_logged.yaml";
   std::ofstream(as_logged_file) << "base: " << kVibration << "\nimu_prefilter:\n  enabled: false\n";

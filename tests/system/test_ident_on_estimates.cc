@@ -17,6 +17,7 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "../support/fit_metrics.h"
 #include "../support/rig_runs.h"
 #include "core/model.h"
 
@@ -108,14 +109,7 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
 
   // Metrics of the order of Table 4 (p_dot: r_xy 0.945, R^2 0.907, RMSE 5.74 % of range;
   // v_dot: 0.982, 0.967, 2.84 %).
-  for (const char* out : {"p_dot", "v_dot_star"}) {
-    const YAML::Node m = report["metrics"][out];
-    INFO(out << ": r_xy " << m["rxy"].as<double>() << ", R2 " << m["r2"].as<double>() << ", RMSE "
-             << m["rmse_pct_range"].as<double>() << " % of range");
-    CHECK(m["rxy"].as<double>() > 0.9);
-    CHECK(m["r2"].as<double>() > 0.8);
-    CHECK(m["rmse_pct_range"].as<double>() < 10.0);
-  }
+  nimble::test::check_fit_metrics(report);
 
   // The estimate and the truth of the same flight give the same roll derivatives: the states
   // of ESTIMATE are placed at the IMU sample they describe (stamped at the estimator's
