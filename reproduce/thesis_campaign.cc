@@ -25,6 +25,7 @@
 #include "core/vehicle.h"
 #include "core/yaml_input.h"
 #include "ident/closed_loop.h"
+#include "ident/flight_sensing.h"
 #include "ident/identify.h"
 #include "ident/plots.h"
 #include "ident/rig_log.h"
@@ -52,11 +53,10 @@ struct Flown {
   double range_p = 0, range_v = 0, range_phi = 0;
 };
 
-/// The smoother's model for a flight flown with `scenario`: its own sensing (smoother_ekf_config).
+/// The smoother's model for a flight flown with `scenario`: its own sensing and IMU filtering.
 ident::SmoothingOptions smoothing_of(const Scenario& scenario) {
   ConfigMap section = scenario.section("sensing");
-  const SensingConfig sensing = sensing_config_from(section);
-  return {smoother_ekf_config(sensing), sensing.velocity_differentiator};
+  return ident::smoothing_options(sensing_config_from(section));
 }
 
 Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name, const std::string& scenario,
