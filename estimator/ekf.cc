@@ -268,9 +268,10 @@ void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, cons
 }
 
 EkfCovariance AttitudeVelocityEkf::predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0,
-                                                   const EkfInput& u1, std::int64_t t0, std::int64_t t1) const {
+                                                   const EkfInput& u1, std::int64_t t0, std::int64_t t1,
+                                                   const EkfInput* input_psd) const {
   EkfCovariance Phi = EkfCovariance::Identity();
-  propagate_interval(x, P, u0, u1, t0, t1, input_psd_, &Phi);
+  propagate_interval(x, P, u0, u1, t0, t1, input_psd != nullptr ? *input_psd : input_psd_, &Phi);
   return Phi;
 }
 

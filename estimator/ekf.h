@@ -255,9 +255,10 @@ class AttitudeVelocityEkf {
   void release_history();
   /// The prediction of the filter from t0 to t1 [us] with the input linear from u0 to u1, as
   /// predict() makes it (substeps included); returns the transition matrix Phi of the whole
-  /// interval (the product of the substeps' exact Jacobians).
+  /// interval (the product of the substeps' exact Jacobians). `input_psd`: the interval's input
+  /// noise PSD (a history node's EkfNode::input_psd); null: the configured one.
   EkfCovariance predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                std::int64_t t0, std::int64_t t1) const;
+                                std::int64_t t0, std::int64_t t1, const EkfInput* input_psd = nullptr) const;
 
   /// State at the newest IMU sample.
   const EkfState& state() const { return history_.back().x; }

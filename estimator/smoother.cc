@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -19,54 +18,6 @@ EkfInput input_of(const ImuSample& s) {
   u << s.gyro_radps, s.accel_mps2;
   return u;
 }
-
-/// The backward pass's prediction of an interval with the input noise its forward pass used
-/// (EkfNode::input_psd, at least the configured PSD). The noise an interval adds is linear in the
-/// input PSD, so the part above the configured PSD is added channel by channel: each channel's
-/// noise per unit of per-sample variance comes from a filter whose only noise is that channel's.
-class IntervalPredictor {
- public:
-  IntervalPredictor(const AttitudeVelocityEkf& filter, const EkfConfig& config) : filter_(filter), config_(config) {
-    configured_psd_ << config.gyro_noise_var_per_sample_rad2ps2, config.accel_noise_var_per_sample_m2ps4;
-    configured_psd_ /= config.process_noise_reference_rate_hz;  // as AttitudeVelocityEkf's
-  }
-
-  /// predict_between from node a to node b; returns Phi.
-  EkfCovariance operator()(const EkfNode& a, const EkfNode& b, EkfState* x_pred, EkfCovariance* P_pred) {
-    const EkfInput& u1 = b.has_input ? b.u : a.u;
-    const EkfCovariance Phi = filter_.predict_between(x_pred, P_pred, a.u, u1, a.utime, b.utime);
-    if (!b.has_input) return Phi;
-    for (int i = 0; i < kEkfInputDim; ++i) {
-      const double extra = b.input_psd(i) - configured_psd_(i);
-      if (!(extra > 0.0)) continue;
-      EkfState x = a.x;
-      EkfCovariance Q = EkfCovariance::Zero();
-      unit(i).predict_between(&x, &Q, a.u, u1, a.utime, b.utime);
-      *P_pred += (extra * config_.process_noise_reference_rate_hz) * Q;
-    }
-    return Phi;
-  }
-
- private:
-  /// The filter whose only noise is a per-sample variance of 1 on input channel i.
-  const AttitudeVelocityEkf& unit(int i) {
-    if (!unit_[i]) {
-      EkfConfig c = config_;
-      c.gyro_noise_var_per_sample_rad2ps2.setZero();
-      c.accel_noise_var_per_sample_m2ps4.setZero();
-      (i < 3 ? c.gyro_noise_var_per_sample_rad2ps2 : c.accel_noise_var_per_sample_m2ps4)(i % 3) = 1.0;
-      c.gyro_bias_rw_radps_per_sqrts.setZero();
-      c.accel_bias_rw_mps2_per_sqrts.setZero();
-      unit_[i] = std::make_unique<AttitudeVelocityEkf>(c);
-    }
-    return *unit_[i];
-  }
-
-  const AttitudeVelocityEkf& filter_;
-  const EkfConfig& config_;
-  EkfInput configured_psd_;
-  std::unique_ptr<AttitudeVelocityEkf> unit_[kEkfInputDim];
-};
 
 }  // namespace
 
@@ -163,7 +114,6 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
   if (nodes.empty()) return {};
 
   // Backward pass.
-  IntervalPredictor predict(filter, config);
   const std::size_t n = nodes.size();
   std::vector<EkfState> xs(n);
   xs[n - 1] = nodes.back().x;
@@ -172,7 +122,9 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
     const EkfNode& b = nodes[k + 1];
     EkfState x_pred = a.x;
     EkfCovariance P_pred = a.P;
-    const EkfCovariance Phi = predict(a, b, &x_pred, &P_pred);
+    // With the input noise the forward pass used over the interval (EkfNode::input_psd).
+    const EkfCovariance Phi =
+        filter.predict_between(&x_pred, &P_pred, a.u, b.has_input ? b.u : a.u, a.utime, b.utime, &b.input_psd);
     const EkfCovariance C = P_pred.ldlt().solve(Phi * a.P).transpose();
     EkfState dx = xs[k + 1] - x_pred;
     for (int i = 0; i < 3; ++i) dx(i) = wrap_pi(dx(i));

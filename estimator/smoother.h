@@ -25,8 +25,7 @@
 /// flapping frequencies (ACTUATOR_FB) as the estimator node feeds it, and its residual variance
 /// per sample is the forward pass's input noise where it exceeds the configured one, as on board
 /// (AttitudeVelocityEkf::predict's input_var_per_sample). The backward pass predicts each interval
-/// with the input noise the forward pass used there (EkfNode::input_psd): the transition's noise
-/// is linear in the input PSD, so the part above the configured PSD is added channel by channel.
+/// with the input noise the forward pass used there (EkfNode::input_psd).
 
 #include <cstdint>
 #include <functional>
