@@ -42,8 +42,8 @@
 #include "contract/messages.h"
 #include "core/chi_square.h"
 #include "core/output_file.h"
-#include "estimator/imu_prefilter.h"
 #include "estimator/sensing_config.h"
+#include "estimator/smoother.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 
@@ -158,7 +158,7 @@ Band band(const std::map<int64_t, NeesAt>& by_time, int seeds, bool attitude) {
 /// --residual: the on-board filtering's output against TRUTH on hover flights (seeds first..),
 /// per IMU channel: the per-sample variance and the low-frequency level (0.5-5 Hz, the band the
 /// EKF's attitude and velocity integrate) as the per-sample variance of a white noise with that
-/// PSD. The prefilter is run here on the flight's IMU and ACTUATOR_FB, as the estimator runs it.
+/// PSD. The flight's IMU is filtered here from its ACTUATOR_FB as the estimator filters it (prefilter_imu).
 int residual(const std::string& sensing, int first_seed, int seeds, const std::vector<Override>& extra) {
   constexpr int kSegment = 1024;  // 2 s at 512 Hz: bins 0.5 Hz apart
   Eigen::Matrix<double, 6, 1> var = Eigen::Matrix<double, 6, 1>::Zero(), low = var;
@@ -174,9 +174,9 @@ int residual(const std::string& sensing, int first_seed, int seeds, const std::v
     const launcher::RunPlan plan = launcher::load_run_plan(o);
     ConfigMap section = plan.scenario.section("sensing");
     const SensingConfig sc = sensing_config_from(section);
-    ImuPrefilter filter(sc.imu_prefilter, sc.imu.sample_rate_hz);
     std::map<int64_t, Truth> truth;
-    std::vector<Eigen::Matrix<double, 6, 1>> err;
+    std::vector<ImuSample> imu;
+    std::vector<FlapFrequencies> flaps;
     launcher::InprocessOptions io;
     io.config_digest = false;
     io.on_message = [&](const std::string& channel, const void* data, int size) {
@@ -185,19 +185,23 @@ int residual(const std::string& sensing, int first_seed, int seeds, const std::v
         if (m.decode(data, 0, size) == size) truth[m.utime] = contract::from_message(m);
       } else if (channel == contract::channels::kActuatorFeedback) {
         actuator_feedback_t m;
-        if (m.decode(data, 0, size) == size) filter.set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
+        if (m.decode(data, 0, size) == size) flaps.push_back({m.utime, m.flap_freq_left_radps, m.flap_freq_right_radps});
       } else if (channel == contract::channels::kImu) {
         imu_sample_t m;
-        if (m.decode(data, 0, size) != size) return;
-        const ImuSample f = filter.filter(contract::from_message(m), m.utime);
-        const auto it = truth.find(m.utime);
-        if (it == truth.end() || m.utime < 1000000) return;
-        Eigen::Matrix<double, 6, 1> e;
-        e << f.gyro_radps - it->second.omega_body_radps, f.accel_mps2 - it->second.specific_force_body_mps2;
-        err.push_back(e);
+        if (m.decode(data, 0, size) == size) imu.push_back(contract::from_message(m));
       }
     };
     launcher::fly_inprocess(plan, io);
+    // The flight's IMU through its on-board filtering, fed as the estimator feeds it.
+    const PrefilteredImu filtered = prefilter_imu(sc.imu_prefilter, sc.imu.sample_rate_hz, imu, flaps);
+    std::vector<Eigen::Matrix<double, 6, 1>> err;
+    for (const ImuSample& f : filtered.imu) {
+      const auto it = truth.find(f.utime);
+      if (it == truth.end() || f.utime < 1000000) continue;
+      Eigen::Matrix<double, 6, 1> e;
+      e << f.gyro_radps - it->second.omega_body_radps, f.accel_mps2 - it->second.specific_force_body_mps2;
+      err.push_back(e);
+    }
     // Per-channel mean out (the biases); per-sample variance; 0.5-5 Hz periodogram level per segment.
     Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
     for (const auto& e : err) mean += e;
