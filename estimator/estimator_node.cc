@@ -1,7 +1,6 @@
 #include "estimator/estimator_node.h"
 
 #include <climits>
-#include <cmath>
 #include <utility>
 #include <iomanip>
 #include <sstream>
@@ -78,7 +77,7 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
   if (prefilter_) {
     node_->bus().subscribe<actuator_feedback_t>(contract::channels::kActuatorFeedback,
                                                 [this](const actuator_feedback_t& m) {
-      if (!std::isfinite(m.flap_freq_left_radps) || !std::isfinite(m.flap_freq_right_radps)) return;
+      // Non-finite values are ignored by the prefilter itself.
       if (node_->lockstep()) flap_inbox_.push(m.utime, {m.flap_freq_left_radps, m.flap_freq_right_radps});
       else prefilter_->set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
     });
