@@ -1,6 +1,7 @@
 /// `rig discrepancy`: the discrepancy workflow on flight data against a model (ident/discrepancy.h).
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -56,6 +57,19 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                                effect_name_list())
                  ->type_name("LIST"),
              [&opt](const std::string& v) { opt.candidates = split_list(v); });
+  cmdline::each_value(cl->add_option("--test-term")
+                          ->description("a form to test as given, EQUATION: EXPRESSION (e.g. \"L: p^3\"; grammar: "
+                                        "docs/models.md \"Terms\"), once on the model as given: the test that knows the "
+                                        "form, beside the search; reported, not an alarm (repeatable)")
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+                          ->type_name("TERM"),
+                      [&opt](const std::string& v) {
+                        const auto colon = v.find(':');
+                        if (colon == std::string::npos) throw std::invalid_argument("'" + v + "' is not EQUATION: EXPRESSION");
+                        std::string eq = v.substr(0, colon);
+                        eq.erase(std::remove_if(eq.begin(), eq.end(), [](unsigned char c) { return std::isspace(c); }), eq.end());
+                        opt.test_terms.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "--test-term"});
+                      });
   cl->add_option("--folds", opt.folds, "held-out cross-validation folds")
       ->check(CLI::Range(4, 100))
       ->capture_default_str()

@@ -530,6 +530,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
     res.baseline = full_fit(m, wf.batch, &base_resid);
   }
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
+  test_given_terms(wf, m, res);
 
   stepwise_search(wf, pool, known, m, res);
   std::vector<BandGap> wide_bands;

@@ -226,6 +226,12 @@ struct DiscrepancyOptions {
   /// family-wise bound, up to term_rounds terms.
   bool term_search = true;
   std::size_t term_rounds = 2;
+  /// Forms to test as given (`rig discrepancy --test-term "L: p^3"`), each once, on the model as
+  /// given, beside the search: the test that knows the form, which no search over forms can beat
+  /// (docs/discrepancy.md, "Power against the test that knows the form"). Its p-value is for the
+  /// user to compare with their own level; it is not an alarm and changes no verdict
+  /// (DiscrepancyResult::term_tests).
+  std::vector<Term> test_terms;
   /// The data-compatibility stage, first on every flight (ident/data_compatibility.h): the gyro's
   /// scale, bias and clock against the attitude from the kinematics, corrected before the search.
   CompatibilityOptions compatibility;
@@ -407,6 +413,16 @@ struct ClosedLoopGap {
   double rmse_before = 0.0, rmse_after = 0.0;
 };
 
+/// A form tested as given (DiscrepancyOptions::test_terms): its column beside the model's in its
+/// equation, the coefficient with its coloured sigma (batch means, BatchRule), the Wald statistic
+/// and its tail (Hotelling's, wald_tail) as one test: no scan, no Bonferroni.
+struct TermTest {
+  std::string equation, expression;
+  double coefficient = 0.0, sigma = 0.0, wald = 0.0, p_value = 1.0;
+  double blocks = 0.0;  ///< batches the covariance rests on
+  std::string note;     ///< why it could not be tested (p_value 1), empty otherwise
+};
+
 /// Everything rig discrepancy reports.
 struct DiscrepancyResult {
   std::string source;
@@ -448,6 +464,8 @@ struct DiscrepancyResult {
   std::vector<std::string> notes;
   /// The data-compatibility stage of each flight (empty when it is off).
   std::vector<CompatibilityResult> compatibility;
+  /// The forms tested as given (DiscrepancyOptions::test_terms), in their order.
+  std::vector<TermTest> term_tests;
 };
 
 /// Runs the workflow on `data` against `model` (lateral3, inputs delta_f and optionally

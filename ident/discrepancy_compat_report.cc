@@ -1,5 +1,5 @@
 // The discrepancy workflow (ident/discrepancy.h), part: the data-compatibility stage in the JSON, text
-// and Markdown reports (ident/data_compatibility.h).
+// and Markdown reports (ident/data_compatibility.h), and the forms tested as given (term_tests).
 
 #include <cstdio>
 #include <ostream>
@@ -147,6 +147,38 @@ std::string compatibility_markdown(const DiscrepancyResult& r) {
     md << "\n\n";
   }
   return md.str();
+}
+
+void write_term_tests(JsonWriter& j, const DiscrepancyResult& r) {
+  j.key("term_tests").begin_array();
+  for (const TermTest& t : r.term_tests) {
+    j.begin_object();
+    j.key("equation").value(t.equation);
+    j.key("expression").value(t.expression);
+    j.key("coefficient").value(t.coefficient);
+    j.key("sigma").value(t.sigma);
+    j.key("wald").value(t.wald);
+    j.key("p_value").value(t.p_value);
+    j.key("blocks").value(t.blocks);
+    j.key("note").value(t.note);
+    j.end_object();
+  }
+  j.end_array();
+}
+
+void print_term_tests(std::ostream& o, const DiscrepancyResult& r) {
+  if (r.term_tests.empty()) return;
+  o << "forms tested as given (one test each on the model as given, not an alarm):\n";
+  for (const TermTest& t : r.term_tests) {
+    o << "  " << t.equation << " += c " << t.expression << ": ";
+    if (!t.note.empty()) {
+      o << "not tested: " << t.note << "\n";
+      continue;
+    }
+    o << "c = " << num(t.coefficient) << " (sigma " << num(t.sigma) << "), Wald " << num(t.wald) << ", p " << num(t.p_value)
+      << " (" << num(t.blocks) << " batches)\n";
+  }
+  o << "\n";
 }
 
 }  // namespace nimble::ident::discrepancy_parts

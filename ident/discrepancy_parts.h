@@ -262,6 +262,10 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
 
 struct Workflow;
 
+/// Each form of DiscrepancyOptions::test_terms tested once on `m` (the model as given), into
+/// res.term_tests. @throws std::invalid_argument for an equation the record has not.
+void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res);
+
 /// The open-world search, run when no library effect earned its name: each round tries every
 /// family in the roll-moment and side-force equations without a term yet (one form per
 /// equation: a later round looks for the effect in the other one) with the entry rules of a
@@ -641,6 +645,9 @@ void write_sensor_effect(JsonWriter& j, const NamedEffect& e);
 void write_compatibility(JsonWriter& j, const DiscrepancyResult& r);
 /// The stage in the text report, and a named sensor error's line under "named effects".
 void print_compatibility(std::ostream& o, const DiscrepancyResult& r);
+/// The `term_tests` array of the JSON report and its lines in the text (DiscrepancyOptions::test_terms).
+void write_term_tests(JsonWriter& j, const DiscrepancyResult& r);
+void print_term_tests(std::ostream& o, const DiscrepancyResult& r);
 void print_sensor_effect(std::ostream& o, const NamedEffect& e);
 /// The stage's section of report.md ("" when it did not run).
 std::string compatibility_markdown(const DiscrepancyResult& r);

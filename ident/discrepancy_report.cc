@@ -487,6 +487,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   j.key("notes").array(r.notes);
   write_effects(j, r);
   discrepancy_parts::write_compatibility(j, r);
+  discrepancy_parts::write_term_tests(j, r);
   j.key("ambiguous").begin_array();
   for (const auto& pair : r.ambiguous) j.array(pair);
   j.end_array();
@@ -520,6 +521,7 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
   print_closed_loop(o, r);
   print_candidates(o, r);
   print_located(o, r);
+  discrepancy_parts::print_term_tests(o, r);
   return o.str();
 }
 

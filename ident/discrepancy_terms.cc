@@ -356,6 +356,48 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   }
 }
 
+void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res) {
+  for (const Term& given : wf.opt.test_terms) {
+    TermTest out;
+    out.equation = given.equation;
+    out.expression = given.expression.to_string();
+    std::size_t e = m.eqs.size();
+    for (std::size_t i = 0; i < m.eqs.size(); ++i) {
+      if (m.eqs[i].name == given.equation) e = i;
+    }
+    if (e == m.eqs.size()) {
+      std::string have;
+      for (const auto& eq : m.eqs) have += (have.empty() ? "" : ", ") + eq.name;
+      throw std::invalid_argument("discrepancy: the form to test " + given.equation + ": " + out.expression +
+                                  " names equation " + given.equation + ", which this record has not (" + have + ")");
+    }
+    const Term term{given.equation, given.expression, 0.0, ""};
+    Addition a{e, {term_parameter_name(term)}, {term_column(wf.data, term)}};
+    const VectorXd& col = a.cols.front();
+    AdditionFit f;
+    if (!col.allFinite() || !excited(col, "")) {
+      out.note = "its column is not finite or not excited on this record";
+    } else {
+      std::vector<Addition> all = m.added[e];
+      all.push_back(a);
+      const MatrixXd C = augmented_design(m.eqs[e], all);
+      const Folds whole{{0, C.rows()}};
+      const FoldStats with = fold_stats(C, m.eqs[e].y, whole);
+      const double rss_before = full_rss(fold_stats(m.X(e), m.eqs[e].y, whole));
+      if (!fit_addition(m, a, with, rss_before, wf.batch, f)) {
+        out.note = "its column cannot be separated from the model's";
+      } else {
+        out.coefficient = f.theta[f.off];
+        out.sigma = std::sqrt(std::max(0.0, f.cov(f.off, f.off)));
+        out.wald = f.wald;
+        out.p_value = f.p;
+        out.blocks = block_count(C.rows(), wf.batch.block(m.eqs[e].y - C * f.theta));
+      }
+    }
+    res.term_tests.push_back(std::move(out));
+  }
+}
+
 void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Model& m, DiscrepancyResult& res) {
   const std::vector<TermFamily> families = term_families(wf.data, inputs);
   std::vector<std::size_t> eqs;  // the roll moment and the side force (not the actuator's own equation)
