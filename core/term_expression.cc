@@ -29,8 +29,22 @@ const std::vector<std::string>& one_argument_functions() {
   return names;
 }
 const std::vector<std::string>& two_argument_functions() {
-  static const std::vector<std::string> names{"deadzone", "backlash", "lag"};
+  static const std::vector<std::string> names{"deadzone", "backlash", "lag", "sat", "ratelimit"};
   return names;
+}
+
+/// The number argument of a two-argument function: its letter, what it is, and, where it must
+/// be positive, the problem a non-positive one is refused with.
+struct Parameter {
+  const char* letter;
+  const char* meaning;
+  const char* positive;  ///< nullptr: any number >= 0 (the grammar's numbers have no sign)
+};
+Parameter parameter_of(const std::string& function) {
+  if (function == "lag") return {"tau", "the time constant tau [s]", "a time constant tau > 0 s"};
+  if (function == "sat") return {"s", "the limit s", "a limit s > 0"};
+  if (function == "ratelimit") return {"r", "the rate r [per s]", "a rate r > 0 per second"};
+  return {"w", "the width w", nullptr};
 }
 bool contains(const std::vector<std::string>& v, const std::string& s) {
   return std::find(v.begin(), v.end(), s) != v.end();
@@ -65,7 +79,10 @@ class Parser {
   std::string found() const {
     if (pos_ >= text_.size()) return "the end";
     std::size_t end = pos_ + 1;
-    if (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_' || text_[pos_] == '.') {
+    const bool negative_number = text_[pos_] == '-' && end < text_.size() &&
+                                 (std::isdigit(static_cast<unsigned char>(text_[end])) || text_[end] == '.');
+    if (negative_number || std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_' ||
+        text_[pos_] == '.') {
       while (end < text_.size() &&
              (std::isalnum(static_cast<unsigned char>(text_[end])) || text_[end] == '_' || text_[end] == '.'))
         ++end;
@@ -177,27 +194,34 @@ class Parser {
         n->name = name;
         return n;
       }
-      expect('(', "'(' after " + name);
-      auto n = std::make_shared<Node>();
-      n->kind = Node::Kind::kCall;
-      n->name = name;
-      n->children = {expr()};
-      if (two) {
-        std::string param = name == "lag" ? "the time constant tau [s]" : "the width w";
-        expect(',', "',' and " + param + " of " + name + "(x, " + (name == "lag" ? "tau" : "w") + ")");
-        std::size_t at = pos_;
-        skip_space();
-        at = pos_;
-        n->number = number(param + " (a number)");
-        if (name == "lag" && !(n->number > 0.0)) {
-          pos_ = at;
-          fail("expected a time constant tau > 0 s");
-        }
-      }
-      expect(')', one ? "')' closing " + name + "(x)" : "')' closing " + name + "(x, ...)");
-      return n;
+      return call(name, two);
     }
     fail("expected a number, a signal, a function or '('");
+  }
+
+  NodePtr call(const std::string& name, bool two) {
+    expect('(', "'(' after " + name);
+    auto n = std::make_shared<Node>();
+    n->kind = Node::Kind::kCall;
+    n->name = name;
+    n->children = {expr()};
+    if (two) {
+      const Parameter param = parameter_of(name);
+      const std::string meaning = param.meaning;
+      expect(',', "',' and " + meaning + " of " + name + "(x, " + param.letter + ")");
+      skip_space();
+      const std::size_t at = pos_;
+      if (param.positive && at < text_.size() && text_[at] == '-') {
+        fail(std::string("expected ") + param.positive);
+      }
+      n->number = number(meaning + " (a number)");
+      if (param.positive && !(n->number > 0.0)) {
+        pos_ = at;
+        fail(std::string("expected ") + param.positive);
+      }
+    }
+    expect(')', two ? "')' closing " + name + "(x, ...)" : "')' closing " + name + "(x)");
+    return n;
   }
 
   const std::string& text_;
@@ -244,7 +268,9 @@ void collect_signals(const Node& n, std::set<std::string>& out) {
 }
 
 bool has_state(const Node& n) {
-  if (n.kind == Node::Kind::kCall && (n.name == "backlash" || n.name == "lag")) return true;
+  if (n.kind == Node::Kind::kCall && (n.name == "backlash" || n.name == "lag" || n.name == "ratelimit")) {
+    return true;
+  }
   for (const auto& c : n.children)
     if (has_state(*c)) return true;
   return false;
@@ -323,8 +349,10 @@ void TermProgram::emit(const TermExpression::Node& n, const std::vector<std::str
       else if (n.name == "pos") in = {Op::kPos};
       else if (n.name == "neg") in = {Op::kNeg0};
       else if (n.name == "deadzone") in = {Op::kDeadzone, n.number, 0};
+      else if (n.name == "sat") in = {Op::kSat, n.number, 0};
       else {
-        in = {n.name == "lag" ? Op::kLag : Op::kBacklash, n.number, static_cast<int>(state_.size())};
+        const Op op = n.name == "lag" ? Op::kLag : n.name == "ratelimit" ? Op::kRateLimit : Op::kBacklash;
+        in = {op, n.number, static_cast<int>(state_.size())};
         state_.push_back(0.0);
       }
       break;
@@ -358,6 +386,7 @@ double TermProgram::evaluate(const double* signals) {
         s[top] = x > w ? x - w : (x < -w ? x + w : 0.0);
         break;
       }
+      case Op::kSat: s[top] = std::clamp(s[top], -in.value, in.value); break;
       case Op::kBacklash: {
         const auto k = static_cast<std::size_t>(in.index);
         double x = s[top], w = in.value;
@@ -381,6 +410,20 @@ double TermProgram::evaluate(const double* signals) {
         s[top] = state_[k];
         break;
       }
+      case Op::kRateLimit: {
+        // The input, within the reach of the last committed output over the last step.
+        const auto k = static_cast<std::size_t>(in.index);
+        double x = s[top];
+        if (!started_[k]) {
+          state_[k] = x;
+          started_[k] = 1;
+        }
+        const double reach = in.value * dt_s_;
+        double y = std::min(std::max(x, state_[k] - reach), state_[k] + reach);
+        pending_[k] = y;
+        s[top] = y;
+        break;
+      }
     }
   }
   return s[0];
@@ -388,18 +431,20 @@ double TermProgram::evaluate(const double* signals) {
 
 void TermProgram::advance(double dt_s) {
   for (const Instr& in : code_) {
-    if (in.op == Op::kBacklash) {
+    if (in.op == Op::kBacklash || in.op == Op::kRateLimit) {
       state_[static_cast<std::size_t>(in.index)] = pending_[static_cast<std::size_t>(in.index)];
     } else if (in.op == Op::kLag) {
       const auto k = static_cast<std::size_t>(in.index);
       state_[k] = pending_[k] + (state_[k] - pending_[k]) * std::exp(-dt_s / in.value);
     }
   }
+  dt_s_ = dt_s;
 }
 
 void TermProgram::reset() {
   std::fill(started_.begin(), started_.end(), 0);
   std::fill(state_.begin(), state_.end(), 0.0);
+  dt_s_ = 0.0;
 }
 
 std::vector<double> evaluate_along(const TermExpression& expression, const std::vector<std::string>& names,

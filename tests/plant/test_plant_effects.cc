@@ -1,6 +1,7 @@
 // The plant flies what a model file carries beside its derivatives: every effect of its
 // effects: section with the model's coefficients, and its terms.
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -446,6 +448,47 @@ TEST_CASE("plant terms add coefficient * expression to the roll moment and side 
   }
   // After 0.3 s the lagged moment (positive with delta_f) has rolled the vehicle faster.
   CHECK(lagged.truth().omega_body_radps.x() > plain.truth().omega_body_radps.x());
+}
+
+TEST_CASE("a plant term ratelimit(delta_f, 300) - delta_f limits the flap moment on a fast flap input only",
+          "[plant][terms]") {
+  // With coefficient L_df the term replaces the flap moment L_df delta_f by L_df times delta_f
+  // limited to 300 rad/s per s. A flap difference of +-60 rad/s (command) gives delta_f rates
+  // up to about 570 rad/s^2 at 10 Hz (limited), 130 rad/s^2 at 0.5 Hz (not: below half the
+  // limit, so the plant's RK4 stages, which see the window of the step before, do not clip).
+  Fixture f;
+  PlantConfig cfg;
+  cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("ratelimit(delta_f, 300) - delta_f"),
+                            f.model.at("L_df"), "test"}};
+  const auto fly = [&](double hz, int steps) {
+    PlantModel limited = make_plant(f, cfg), plain = make_plant(f);
+    double max_gap = 0.0, max_plain = 0.0, max_df_rate = 0.0, df_before = 0.0;
+    int differ = 0;
+    for (int i = 0; i < steps; ++i) {
+      auto cmd = plain.trim_command();
+      const double half = 30.0 * std::sin(2.0 * M_PI * hz * i * 1e-3);
+      cmd.flap_freq_left_radps += half;
+      cmd.flap_freq_right_radps -= half;
+      limited.step(cmd);
+      plain.step(cmd);
+      const double p_limited = limited.truth().omega_body_radps.x(), p_plain = plain.truth().omega_body_radps.x();
+      differ += p_limited != p_plain;
+      max_gap = std::max(max_gap, std::fabs(p_limited - p_plain));
+      max_plain = std::max(max_plain, std::fabs(p_plain));
+      max_df_rate = std::max(max_df_rate, std::fabs(plain.truth().delta_f_radps - df_before) / 1e-3);
+      df_before = plain.truth().delta_f_radps;
+    }
+    return std::tuple<int, double, double, double>{differ, max_gap, max_plain, max_df_rate};
+  };
+  const auto [slow_differ, slow_gap, slow_plain, slow_rate] = fly(0.5, 1000);
+  CHECK(slow_rate < 150.0);
+  CHECK(slow_differ == 0);
+  CHECK(slow_gap == 0.0);
+  CHECK(slow_plain > 1.0);
+  const auto [fast_differ, fast_gap, fast_plain, fast_rate] = fly(10.0, 300);
+  CHECK(fast_rate > 450.0);
+  CHECK(fast_differ > 250);
+  CHECK(fast_gap > 0.1 * fast_plain);
 }
 
 // ---------------------------------------------------------------------------------------
