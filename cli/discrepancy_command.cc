@@ -28,6 +28,27 @@
 
 namespace nimble::cli {
 
+namespace {
+
+/// --test-term EQUATION: EXPRESSION (repeatable): forms tested as given (DiscrepancyOptions::test_terms).
+void add_test_terms(cmdline::CommandLine& cl, ident::DiscrepancyOptions& opt) {
+  cmdline::each_value(cl->add_option("--test-term")
+                          ->description("a form to test as given, EQUATION: EXPRESSION (e.g. \"L: p^3\"; grammar: "
+                                        "docs/models.md \"Terms\"), once on the model as given: the test that knows the "
+                                        "form, beside the search; reported, not an alarm (repeatable)")
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+                          ->type_name("TERM"),
+                      [&opt](const std::string& v) {
+                        const auto colon = v.find(':');
+                        if (colon == std::string::npos) throw std::invalid_argument("'" + v + "' is not EQUATION: EXPRESSION");
+                        std::string eq = v.substr(0, colon);
+                        eq.erase(std::remove_if(eq.begin(), eq.end(), [](unsigned char c) { return std::isspace(c); }), eq.end());
+                        opt.test_terms.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "--test-term"});
+                      });
+}
+
+}  // namespace
+
 int run_discrepancy_command(const std::vector<std::string>& args) {
   if (std::find(args.begin(), args.end(), "--power") != args.end()) return run_discrepancy_power_command(args);
   std::vector<std::string> data_files;
@@ -57,19 +78,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
                                effect_name_list())
                  ->type_name("LIST"),
              [&opt](const std::string& v) { opt.candidates = split_list(v); });
-  cmdline::each_value(cl->add_option("--test-term")
-                          ->description("a form to test as given, EQUATION: EXPRESSION (e.g. \"L: p^3\"; grammar: "
-                                        "docs/models.md \"Terms\"), once on the model as given: the test that knows the "
-                                        "form, beside the search; reported, not an alarm (repeatable)")
-                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
-                          ->type_name("TERM"),
-                      [&opt](const std::string& v) {
-                        const auto colon = v.find(':');
-                        if (colon == std::string::npos) throw std::invalid_argument("'" + v + "' is not EQUATION: EXPRESSION");
-                        std::string eq = v.substr(0, colon);
-                        eq.erase(std::remove_if(eq.begin(), eq.end(), [](unsigned char c) { return std::isspace(c); }), eq.end());
-                        opt.test_terms.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "--test-term"});
-                      });
+  add_test_terms(cl, opt);
   cl->add_option("--folds", opt.folds, "held-out cross-validation folds")
       ->check(CLI::Range(4, 100))
       ->capture_default_str()

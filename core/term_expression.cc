@@ -50,15 +50,12 @@ bool contains(const std::vector<std::string>& v, const std::string& s) {
   return std::find(v.begin(), v.end(), s) != v.end();
 }
 
+/// The shortest text that reads back as x, fixed or scientific, whichever is shorter (900, not
+/// 9e+02; 1e-05, not 0.00001).
 std::string format_number(double x) {
   char buf[40];
-  for (int precision = 1; precision <= 17; ++precision) {
-    std::snprintf(buf, sizeof buf, "%.*g", precision, x);
-    double back = 0.0;
-    std::from_chars(buf, buf + std::char_traits<char>::length(buf), back);
-    if (back == x) break;
-  }
-  return buf;
+  const auto end = std::to_chars(buf, buf + sizeof buf, x).ptr;
+  return std::string(buf, end);
 }
 
 class Parser {

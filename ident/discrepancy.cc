@@ -17,6 +17,7 @@
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
 #include "ident/discrepancy_location.h"
+#include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
 
 namespace nimble::ident {
@@ -249,6 +250,12 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
     for (const auto& t : res.candidates) {
       if (t.name == "term" && t.entered && t.equation == term.equation && t.expression == eff.expression) {
         eff.alternatives = t.alternatives;
+        for (const char* k : {"w", "s", "r", "tau"}) {  // a scanned parameter with its 95 % interval
+          for (const std::string suffix : {"", "_lo", "_hi"}) {
+            const auto it = t.parameters.find(k + suffix);
+            if (it != t.parameters.end()) eff.parameters[k + suffix] = it->second;
+          }
+        }
       }
       // Why each library effect was ruled out: its first trial (it was tried before any term).
       if (t.name == "term" || t.round != 1) continue;
@@ -270,6 +277,7 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
     for (const auto& t : res.candidates) {
       if (t.name != name || !t.entered) continue;
       if (name == "actuator_delay") eff.parameters["delay_s"] = t.delay_s;
+      eff.contradicts = t.contradicts;
       time_varying_parameters(m, wf.batch, wf.data, t, eff);  // rate or change time, for effects that change
     }
     res.effects.push_back(std::move(eff));
@@ -363,7 +371,18 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
         s << " " << e.channel << (e.against.empty() ? "" : " against " + e.against) << " " << fmt(e.coefficient) << " "
           << e.unit << " [" << fmt(e.interval[0]) << ", " << fmt(e.interval[1]) << "]";
       }
-      if (e.name == "term") s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (a form outside the library)";
+      if (e.name == "term") {
+        s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (a form outside the library";
+        for (const char* k : {"w", "s", "r", "tau"}) {
+          const auto v = e.parameters.find(k), lo = e.parameters.find(k + std::string("_lo")),
+                     hi = e.parameters.find(k + std::string("_hi"));
+          if (v != e.parameters.end() && lo != e.parameters.end() && hi != e.parameters.end()) {
+            s << "; " << k << " " << fmt(v->second) << " [" << fmt(lo->second) << ", " << fmt(hi->second) << "]";
+          }
+        }
+        s << ")";
+      }
+      if (!e.contradicts.empty()) s << " (" << e.contradicts << ")";
     }
     for (const auto& pair : res.ambiguous) s << "; " << pair[0] << " and " << pair[1] << " explain the same thing";
     s << "; held-out gap " << fmt(res.gap_before) << " -> " << fmt(res.gap_after) << " in the identification band";

@@ -111,17 +111,23 @@
 /// tie in every such equation give `ambiguous` with what would tell them apart. sensor_bias: the
 /// same bias in the kinematic relation phi_dot = p, per held-out block b_k = (integral of p -
 /// rise of phi) / duration, the blocks' mean against 0 by Student's t (K - 1 dof) at
-/// gust_band_alpha; lateral_inflow: its roll moment is its side force at the arm, L_vv = arm Y_vv.
+/// gust_band_alpha; lateral_inflow: its roll moment is its side force at the arm, L_vv = arm Y_vv
+/// (when both met the partial-F rule with one sign, only the assumed arm disagrees: the name is
+/// kept with the measured arm and the assumption it contradicts, NamedEffect::contradicts).
 /// A failed signature withdraws the name and reports the structure (Located::signature); it acts
 /// only where a candidate met the alarm rule already, so the family-wise bound holds.
 ///
 /// The open world (DiscrepancyOptions::term_search, on; "Terms" in docs/discrepancy.md): after
 /// the library, generic terms of p, v and the inputs (powers and products to degree 3, x|x|,
-/// one-sided, an input's dead zone, backlash and lag with a scanned width or time constant) are
-/// tried in L and Y with the entry rules, Bonferroni over every family and equation, Kish's
-/// effective blocks, a confirmation through the excitation's bank (a function of the
-/// excitation, which a linear plant's residual is independent of) and, for an input's forms,
-/// most of the input acting through them. A found term is the effect `term`.
+/// one-sided, |p| and |v| times an input, the linear term of every recorded signal the
+/// equations lack, an input's dead zone, backlash, saturation, rate limit and lag with a scanned
+/// width, limit or time constant) are tried in L and Y with the entry rules, Bonferroni over
+/// every family and equation, the coefficient's variance floored at the stationary residual's
+/// (stationary_floor in ident/discrepancy_parts.h), a confirmation through the excitation's
+/// bank (a function of the excitation, which a linear plant's residual is independent of; not
+/// for the linear forms, the lag and the rate limit, which it cannot see) and, for an input's
+/// forms, most of the input acting through them. A found term is the effect `term`; a scanned
+/// one carries its parameter with a 95 % profile interval (scan_interval).
 ///
 /// Effects the model file already carries (section `effects:`, e.g. from an earlier run's
 /// --model-out) belong to the baseline structure: refit with the derivatives, not tried again.
@@ -278,6 +284,10 @@ struct CandidateTrial {
   /// to the other): "term L: lag(delta_f, 0.0232)"; the verdict is then ambiguous. And what would
   /// tell them apart.
   std::string ambiguous_with, tell_apart;
+  /// A signature that holds in form but contradicts a prior of the library's (lateral_inflow's
+  /// arm): the measured value, its interval and the assumption, e.g. "arm 0.041 m [0.036,
+  /// 0.046], outside the assumed 0.01 m x/ 3 (inflow_arm_m, inflow_arm_factor)".
+  std::string contradicts;
 };
 
 /// A named effect with its parameters.
@@ -296,6 +306,7 @@ struct NamedEffect {
   double interval[2] = {0.0, 0.0};
   std::vector<std::string> alternatives;
   std::vector<std::pair<std::string, std::string>> ruled_out;  ///< (library effect, reason)
+  std::string contradicts;  ///< the prior its measured value contradicts (CandidateTrial::contradicts)
   /// A sensor error of the compatibility stage (sensor_scale, time_offset, sensor_bias from the
   /// kinematics): the sensor's channel, the source it was compared with, the unit of its value
   /// (coefficient, with interval), and the flight it was found in. Empty for a model effect.

@@ -10,6 +10,7 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
+#include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
 #include "ident/identify.h"
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/json_writer.h"
+#include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
 
 namespace nimble::ident::discrepancy_parts {

@@ -171,6 +171,9 @@ struct ScanPoint {
   /// Per equation, the blocks the coloured covariance of the addition's coefficient rests on
   /// (effectiveness_step, ChangeProfile::kish); empty: every block of the record counts.
   std::vector<double> effective_blocks;
+  /// A generic term: its variance floored at the stationary one (stationary_floor), computed
+  /// where it can change the decision (the local test passes).
+  bool stationary_floor = false;
   std::vector<Addition> adds;  ///< columns empty for effectiveness_step: Workflow::columns_of()
   std::vector<FoldStats> stats;
   std::vector<bool> touched;
@@ -241,6 +244,10 @@ struct TermFamily {
   /// A linear filter of a signal (the lag): no excitation confirmation, which cannot see a
   /// linear form (Workflow::term_trial).
   bool linear = false;
+  /// A scanned family: its parameter's name ("w", "s", "r", "tau"), the expression's text before
+  /// the number ("ratelimit(delta_f, ") and the grid's values (points[i] has values[i]).
+  std::string parameter, prefix;
+  std::vector<double> values;
 };
 
 struct LocationFrame;
@@ -261,6 +268,16 @@ struct TermConfirmation {
 std::vector<TermFamily> term_families(const UniformData& d, const std::vector<std::string>& inputs);
 
 struct Workflow;
+
+/// The profile interval of a scanned term's parameter (TermFamily::parameter) once the term won
+/// its round: the equation's RSS over the family's grid and a grid 16 times finer between the
+/// best point's neighbours; the statistic D(v) = (RSS(v) - RSS_min) / (s2 kappa), kappa the
+/// ratio of the term's coloured to white variance (at least 1), is chi2_1 at the true value for a
+/// regular parameter, so the 95 % interval is the set with D <= 3.84, reaching half a fine step
+/// past its outermost points (an end of the grid: the interval ends there). The term's expression
+/// and column move to the fine grid's best; t.parameters gain the value and its _lo, _hi.
+void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, std::size_t eq, CandidateTrial& t,
+                   Addition& add);
 
 /// Each form of DiscrepancyOptions::test_terms tested once on `m` (the model as given), into
 /// res.term_tests. @throws std::invalid_argument for an equation the record has not.
@@ -442,6 +459,23 @@ std::vector<FoldStats> model_stats(const Model& m, const Folds& folds);
 bool fit_addition(const Model& m, const Addition& a, const FoldStats& with, double rss_before, const BatchRule& batch,
                   AdditionFit& f);
 
+/// Variance of coefficient j of the least-squares fit of y on C when its residual e is stationary:
+/// e's autocovariance gamma_l over lags |l| <= bandwidth (Bartlett-tapered: a positive
+/// semi-definite estimate), estimated from the whole record, applied to the coefficient's
+/// influence w = C (C'C)^-1 e_j: sum over l of taper_l gamma_l sum_t w_t w_{t+l}, times n / (n - q).
+/// Its precision rests on every block of the record, wherever the column has its energy.
+double stationary_variance(const MatrixXd& C, const VectorXd& e, Index j, Index bandwidth);
+
+/// A generic term's Wald test with its variance floored at the stationary one (the open world's
+/// entry rule, docs/discrepancy.md "Terms"): the batch-means variance of a column whose energy
+/// sits in a few blocks rests on those blocks alone and can be small by chance where the scan
+/// over forms looks; under the null the equation error is process and measurement noise, whose
+/// autocovariance the whole record estimates (stationary_variance, the batch rule's block as
+/// bandwidth). The larger of the two is kept: the local one guards a residual larger where the
+/// term lives. The tail counts the record's blocks, as every library candidate's does.
+/// Single-column additions only (f.k == 1); f's cov, wald and p updated.
+void stationary_floor(const Model& m, const Addition& a, const BatchRule& batch, AdditionFit& f);
+
 /// Records the fit of `a` in the trial: partial F, parameters, sigma, PSE of its equation.
 void record(const Model& m, const Addition& a, const AdditionFit& f, CandidateTrial& t);
 
@@ -621,35 +655,5 @@ std::vector<std::vector<double>> weight_flights(Model& m, const std::vector<Vect
 /// alone) and the test that they are the same in all flights (Cochran's Q).
 void flight_consistency(const Model& m, const BatchRule& batch, const std::vector<std::pair<Index, Index>>& rows,
                         double alpha, DiscrepancyResult& res);
-
-// --- discrepancy_compat.cc ---
-
-/// The data-compatibility stage of one flight (ident/data_compatibility.h): checks the record,
-/// names its significant sensor errors whose signatures hold in res.effects (with channel and
-/// interval), keeps the stage's result in res.compatibility (with the baseline's held-out gap on
-/// the record as recorded when a correction was made) and returns the corrected record.
-FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel& model, const Vehicle& vehicle,
-                               const std::vector<std::string>& inputs, const DiscrepancyOptions& options,
-                               DiscrepancyResult& res);
-
-/// The stage's significant errors without their signature located as structure (unexplained);
-/// actuator_delay ambiguous with a time offset where a flight's kinematics were not checked.
-/// Returns the stage's alarm tests (three per checked flight).
-std::size_t sensor_findings(DiscrepancyResult& res);
-
-// --- discrepancy_compat_report.cc ---
-
-/// A sensor error's fields in its `effects` entry: channel, against, value, unit, interval, flight.
-void write_sensor_effect(JsonWriter& j, const NamedEffect& e);
-/// The `compatibility` array of the JSON report: every flight's stage, every error tested.
-void write_compatibility(JsonWriter& j, const DiscrepancyResult& r);
-/// The stage in the text report, and a named sensor error's line under "named effects".
-void print_compatibility(std::ostream& o, const DiscrepancyResult& r);
-/// The `term_tests` array of the JSON report and its lines in the text (DiscrepancyOptions::test_terms).
-void write_term_tests(JsonWriter& j, const DiscrepancyResult& r);
-void print_term_tests(std::ostream& o, const DiscrepancyResult& r);
-void print_sensor_effect(std::ostream& o, const NamedEffect& e);
-/// The stage's section of report.md ("" when it did not run).
-std::string compatibility_markdown(const DiscrepancyResult& r);
 
 }  // namespace nimble::ident::discrepancy_parts

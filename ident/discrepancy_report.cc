@@ -14,6 +14,7 @@
 #include "core/json_writer.h"
 #include "core/output_file.h"
 #include "ident/discrepancy.h"
+#include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
 #include "ident/plots.h"
 #include "ident/spectrum.h"
@@ -70,6 +71,7 @@ void write_effects(JsonWriter& j, const DiscrepancyResult& r) {
     j.begin_object();
     j.key("name").value(e.name);
     if (!e.channel.empty()) discrepancy_parts::write_sensor_effect(j, e);
+    if (!e.contradicts.empty()) j.key("contradicts").value(e.contradicts);
     if (e.name == "term") {
       j.key("equation").value(e.equation);
       j.key("expression").value(e.expression);
@@ -313,7 +315,7 @@ void print_effects(std::ostream& o, const DiscrepancyResult& r) {
   if (!r.effects.empty()) {
     o << "named effects (parameters refit with the baseline derivatives; sigma allows coloured residuals)\n";
     for (const auto& e : r.effects) {
-      o << "  " << e.name << "\n";
+      o << "  " << e.name << (e.contradicts.empty() ? "" : ": " + e.contradicts) << "\n";
       if (!e.channel.empty()) {
         discrepancy_parts::print_sensor_effect(o, e);
         continue;

@@ -88,6 +88,7 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
     AdditionFit f;
     if (!fit_addition(m, a, P.stats[a.eq], rss_before[a.eq], batch, f)) continue;
     if (!P.effective_blocks.empty()) f.p = wald_tail(f.wald, f.k, P.effective_blocks[a.eq]);
+    if (P.stationary_floor && f.p * bonferroni <= p_critical) stationary_floor(m, a, batch, f);
     record(m, a, f, t);
     const std::string& eqname = m.eqs[a.eq].name;
     use_eq[a.eq] = f.p * bonferroni <= p_critical;

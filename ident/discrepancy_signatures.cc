@@ -68,6 +68,13 @@ void Workflow::sensor_bias_signature(CandidateTrial& t) const {
 /// not hold). A side force too small to see agrees with a small roll moment; a v|v| roll moment
 /// with no side force of its size beside it (or a side force of the other sign) is a moment the
 /// library does not have.
+///
+/// The arm itself is an assumption (the plant file's ratio), not part of the form: when the side
+/// force and the roll moment each met the partial-F rule and have the same sign, the data shows
+/// one v|v| force acting at some arm, the form of the lateral inflow, and only the assumed arm
+/// disagrees. The name is kept with the measured arm, L_vv / Y_vv, its 95 % interval (delta
+/// method on the two coloured sigmas) and the assumption it contradicts (CandidateTrial::
+/// contradicts): a user with another vehicle learns that an inflow acts and where.
 void Workflow::inflow_arm_signature(CandidateTrial& t) const {
   const auto L = t.parameters.find("L_vv"), Y = t.parameters.find("Y_vv");
   const auto sL = t.sigma.find("L_vv"), sY = t.sigma.find("Y_vv");
@@ -82,13 +89,27 @@ void Workflow::inflow_arm_signature(CandidateTrial& t) const {
   t.signature["arm_p"] = p;
   t.signature["arm_ratio"] = ratio;
   const bool within = ratio >= 1.0 / opt.inflow_arm_factor && ratio <= opt.inflow_arm_factor;
-  if (p <= opt.gust_band_alpha && !within) {
-    t.signature_holds = false;
-    t.signature_note = "its roll moment is not its side force at the inflow's arm (L_vv " + fmt(L->second) + ", Y_vv " +
-                       fmt(Y->second) + ", arm " + fmt(a) + " m: their ratio " + fmt(ratio) +
-                       " of the arm's, L_vv - arm Y_vv " + fmt(z) + " sigma from 0, p " + fmt(p) +
-                       "): not the lateral inflow";
+  if (p > opt.gust_band_alpha || within) return;
+  const auto met = [&](const char* eq) {
+    const auto F = t.partial_f.find(eq);
+    return F != t.partial_f.end() && F->second >= opt.partial_f;
+  };
+  if (met("L") && met("Y") && ratio > 0.0) {
+    const double arm = L->second / Y->second;
+    const double rel = std::hypot(sL->second / L->second, sY->second / Y->second);
+    const double lo = arm * (1.0 - 1.96 * rel), hi = arm * (1.0 + 1.96 * rel);
+    t.signature["arm_m"] = arm;
+    t.signature["arm_lo_m"] = lo;
+    t.signature["arm_hi_m"] = hi;
+    t.contradicts = "arm " + fmt(arm) + " m [" + fmt(lo) + ", " + fmt(hi) + "], outside the assumed " + fmt(a) +
+                    " m x/ " + fmt(opt.inflow_arm_factor) + " (inflow_arm_m, inflow_arm_factor)";
+    return;
   }
+  t.signature_holds = false;
+  t.signature_note = "its roll moment is not its side force at the inflow's arm (L_vv " + fmt(L->second) + ", Y_vv " +
+                     fmt(Y->second) + ", arm " + fmt(a) + " m: their ratio " + fmt(ratio) +
+                     " of the arm's, L_vv - arm Y_vv " + fmt(z) + " sigma from 0, p " + fmt(p) +
+                     "), and the two do not both meet the partial-F rule with one sign: not the lateral inflow";
 }
 
 void Workflow::signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {

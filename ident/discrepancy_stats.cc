@@ -153,6 +153,39 @@ std::vector<FoldStats> model_stats(const Model& m, const Folds& folds) {
   return out;
 }
 
+double stationary_variance(const MatrixXd& C, const VectorXd& e, Index j, Index bandwidth) {
+  const Index n = C.rows(), q = C.cols();
+  VectorXd unit = VectorXd::Zero(q), g;
+  unit[j] = 1.0;
+  if (!solve(C.transpose() * C, unit, g)) return std::numeric_limits<double>::infinity();
+  const VectorXd w = C * g;  // the coefficient's influence on each sample: theta_j = w' y
+  const double mean = e.mean();
+  const VectorXd d = e.array() - mean;
+  const Index L = std::clamp<Index>(bandwidth, 0, n - 1);
+  double var = 0.0;
+  for (Index l = 0; l <= L; ++l) {
+    const double gamma = d.head(n - l).dot(d.tail(n - l)) / static_cast<double>(n);
+    const double ww = w.head(n - l).dot(w.tail(n - l));
+    const double taper = 1.0 - static_cast<double>(l) / static_cast<double>(L + 1);
+    var += (l == 0 ? 1.0 : 2.0) * taper * gamma * ww;
+  }
+  return std::max(0.0, var) * static_cast<double>(n) / static_cast<double>(std::max<Index>(1, n - q));
+}
+
+void stationary_floor(const Model& m, const Addition& a, const BatchRule& batch, AdditionFit& f) {
+  if (f.k != 1) return;
+  std::vector<Addition> all = m.added[a.eq];
+  all.push_back(a);
+  const MatrixXd C = augmented_design(m.eqs[a.eq], all);
+  const VectorXd resid = m.eqs[a.eq].y - C * f.theta;
+  const Index block = batch.block(resid);
+  const double v = stationary_variance(C, resid, f.off, block);
+  if (!(v > f.cov(f.off, f.off))) return;
+  f.cov(f.off, f.off) = v;
+  f.wald = f.theta[f.off] * f.theta[f.off] / v;
+  f.p = wald_tail(f.wald, 1, block_count(C.rows(), block));
+}
+
 /// Fits `a` (see AdditionFit); false if the design is singular.
 bool fit_addition(const Model& m, const Addition& a, const FoldStats& with, double rss_before, const BatchRule& batch,
                   AdditionFit& f) {

@@ -44,6 +44,20 @@ TermFamily family(const std::string& label, const std::vector<std::string>& text
   return f;
 }
 
+/// A scanned family op(x, v) over `values`, labelled "op(x, parameter)".
+TermFamily scanned(const std::string& op, const std::string& x, const std::string& parameter,
+                   const std::vector<double>& values) {
+  TermFamily f;
+  f.label = op + "(" + x + ", " + parameter + ")";
+  f.parameter = parameter;
+  f.prefix = op + "(" + x + ", ";
+  for (double v : values) {
+    f.points.push_back(TermExpression::parse(f.prefix + number_text(v) + ")"));
+    f.values.push_back(v);
+  }
+  return f;
+}
+
 /// A family of one expression, labelled by it.
 TermFamily single(const std::string& text) { return family(text, {text}); }
 
@@ -91,22 +105,42 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
       for (std::size_t k = j + 1; k < all.size(); ++k) out.push_back(single(x + "*" + y + "*" + all[k]));
     }
   }
+  // A magnitude times an input: an input whose effectiveness changes with the size of a state
+  // (L_df delta_f (1 - c |p|): a flap that loses effect at high roll rate).
+  for (const char* s : {"p", "v"}) {
+    for (const auto& x : ins) out.push_back(single(std::string("abs(") + s + ")*" + x));
+  }
+  // Linear terms of the recorded signals the equations lack (the model's are p, v and its
+  // inputs): a missing derivative such as a roll stiffness L_phi phi. A linear function of a
+  // signal's excitation part lies in the excitation's own span, which the confirmation through
+  // the excitation projects out, so, as a lag, it is exempt from it.
+  for (const auto& x : term_signal_names()) {
+    if (x == "p" || x == "v" || std::find(inputs.begin(), inputs.end(), x) != inputs.end()) continue;
+    if (!d.has(x) || !excited(d.at(x), x)) continue;
+    out.push_back(single(x));
+    out.back().linear = true;
+  }
   // An input's dead zone and backlash of width w (scanned from 1 % to 40 % of its largest
-  // magnitude), and its first-order lag (time constant scanned from 4 to 100 ms).
+  // magnitude), its saturation at s (25 % to 95 %: below, the input would act mostly as its
+  // sign), its rate limit r (5 % to 80 % of its largest rate: a limit above that never acts,
+  // one far below turns the input into a ramp) and its first-order lag (time constant scanned
+  // from 4 to 100 ms).
   for (const auto& x : ins) {
     const VectorXd& v = d.at(x);
     const double span = v.cwiseAbs().maxCoeff();
-    std::vector<std::string> dz, bl, lag;
-    for (double w : log_grid(0.01 * span, 0.4 * span, kTermScanPoints)) {
-      dz.push_back("deadzone(" + x + ", " + number_text(w) + ")");
-      bl.push_back("backlash(" + x + ", " + number_text(w) + ")");
-    }
-    for (double tau : log_grid(kLagGridS[0], kLagGridS[1], kTermScanPoints)) lag.push_back("lag(" + x + ", " + number_text(tau) + ")");
-    out.push_back(family("deadzone(" + x + ", w)", dz));
-    out.push_back(family("backlash(" + x + ", w)", bl));
-    out.push_back(family("lag(" + x + ", tau)", lag));
-    for (std::size_t i = out.size() - 3; i < out.size(); ++i) out[i].acts_through = x;
+    double rate = 0.0;
+    for (Index i = 1; i < v.size(); ++i) rate = std::max(rate, std::fabs(v[i] - v[i - 1]) * d.rate_hz);
+    const std::vector<double> widths = log_grid(0.01 * span, 0.4 * span, kTermScanPoints);
+    out.push_back(scanned("deadzone", x, "w", widths));
+    out.push_back(scanned("backlash", x, "w", widths));
+    if (span > 0.0) out.push_back(scanned("sat", x, "s", log_grid(0.25 * span, 0.95 * span, kTermScanPoints)));
+    if (rate > 0.0) out.push_back(scanned("ratelimit", x, "r", log_grid(0.1 * rate, rate, kTermScanPoints)));
+    out.push_back(scanned("lag", x, "tau", log_grid(kLagGridS[0], kLagGridS[1], kTermScanPoints)));
+    for (std::size_t i = out.size() - 3 - (span > 0.0) - (rate > 0.0); i < out.size(); ++i) out[i].acts_through = x;
     out.back().linear = true;
+    // A rate limit acts where the input moves fastest, which its excitation part (a projection
+    // on the excitation's slow bank) does not reach: exempt from that confirmation as the lag.
+    if (rate > 0.0) out[out.size() - 2].linear = true;
   }
   return out;
 }
@@ -220,11 +254,11 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   CandidateSpec spec;
   spec.name = "term";
   spec.scanned = points.size() > 1;
-  // The coefficient's coloured variance rests on the blocks where the term's column has its
-  // energy: a product with the throttle lives in the throttle's doublets. Its Wald tail counts
-  // Kish's effective blocks, as effectiveness_step's does (ChangeProfile), not the record's.
+  // The coefficient's variance: the local batch means floored at the stationary residual's
+  // (stationary_floor): a product with the throttle lives in the throttle's doublets, a cubic
+  // of the rate in the few largest manoeuvres, where batch means rest on a few blocks.
   ScanPoint P = points[best];
-  P.effective_blocks = change_profile(m, P).kish;
+  P.stationary_floor = true;
   std::vector<bool> use_eq(neq, false);
   std::string p_eq;
   const double p_min = significance(spec, m, P, rss_before, points.size(), t, use_eq, p_eq);
@@ -356,6 +390,65 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   }
 }
 
+void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, std::size_t eq, CandidateTrial& t,
+                   Addition& add) {
+  if (fam.values.size() < 2) return;
+  std::size_t best = 0;
+  while (best < fam.points.size() && fam.points[best].to_string() != t.expression) ++best;
+  if (best == fam.points.size()) return;
+  std::vector<double> grid = fam.values;
+  const double lo = fam.values[best == 0 ? 0 : best - 1], hi = fam.values[std::min(best + 1, fam.values.size() - 1)];
+  const std::size_t fine = 16 * (best == 0 || best + 1 == fam.values.size() ? 1 : 2);
+  for (double v : log_grid(lo, hi, fine + 1)) grid.push_back(v);
+  std::sort(grid.begin(), grid.end());
+  const MatrixXd X = m.X(eq);
+  const VectorXd& y = m.eqs[eq].y;
+  const VectorXd& w = m.eqs[eq].w;
+  const Folds whole{{0, y.size()}};
+  const FoldStats model_whole = fold_stats(X, y, whole);
+  std::vector<double> rss(grid.size(), std::numeric_limits<double>::infinity());
+  std::vector<std::string> texts(grid.size());
+  std::size_t arg = 0;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    texts[i] = fam.prefix + number_text(grid[i]) + ")";
+    const VectorXd& c = wf.term_column_of(TermExpression::parse(texts[i]));
+    if (!c.allFinite()) continue;
+    const double r = full_rss(fold_stats_with(model_whole, X, y, w.size() ? VectorXd(c.cwiseProduct(w)) : c, whole));
+    if (std::isfinite(r)) rss[i] = r;
+    if (rss[i] < rss[arg]) arg = i;
+  }
+  if (!std::isfinite(rss[arg])) return;
+  // The scale of the profile: s2 and kappa at the best (as change_profile's).
+  const TermExpression at = TermExpression::parse(texts[arg]);
+  const VectorXd& c = wf.term_column_of(at);
+  MatrixXd C(X.rows(), X.cols() + 1);
+  C << X, (w.size() ? VectorXd(c.cwiseProduct(w)) : c);
+  VectorXd theta;
+  if (!solve(C.transpose() * C, C.transpose() * y, theta)) return;
+  const VectorXd r = y - C * theta;
+  const Index q = C.cols();
+  const double s2 = r.squaredNorm() / static_cast<double>(std::max<Index>(1, C.rows() - q));
+  VectorXd unit = VectorXd::Zero(q), g;
+  unit[q - 1] = 1.0;
+  if (!solve(C.transpose() * C, unit, g) || !(s2 > 0.0)) return;
+  const double coloured = coloured_covariance(C, r, wf.batch.block(r))(q - 1, q - 1);
+  const double kappa = std::max(1.0, coloured / (s2 * g[q - 1]));
+  const double crit = 3.841458820694124;  // chi2_1's 95 % point
+  std::size_t first = arg, last = arg;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    if ((rss[i] - rss[arg]) / (s2 * kappa) > crit) continue;
+    first = std::min(first, i);
+    last = std::max(last, i);
+  }
+  const double half_step = std::pow(hi / lo, 0.5 / static_cast<double>(fine));
+  t.expression = at.to_string();
+  t.parameters[fam.parameter] = grid[arg];
+  t.parameters[fam.parameter + "_lo"] = first == 0 ? grid.front() : grid[first] / half_step;
+  t.parameters[fam.parameter + "_hi"] = last + 1 == grid.size() ? grid.back() : grid[last] * half_step;
+  add.names = {term_parameter_name(Term{m.eqs[eq].name, at, 0.0, ""})};
+  add.cols = {c};
+}
+
 void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res) {
   for (const Term& given : wf.opt.test_terms) {
     TermTest out;
@@ -387,6 +480,7 @@ void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res
       if (!fit_addition(m, a, with, rss_before, wf.batch, f)) {
         out.note = "its column cannot be separated from the model's";
       } else {
+        stationary_floor(m, a, wf.batch, f);  // the search's own variance for a term
         out.coefficient = f.theta[f.off];
         out.sigma = std::sqrt(std::max(0.0, f.cov(f.off, f.off)));
         out.wald = f.wald;
@@ -429,6 +523,7 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
     struct Pass {
       CandidateTrial trial;
       std::vector<Addition> adds;
+      const TermFamily* family = nullptr;
     };
     std::vector<Pass> passing;
     CandidateTrial closest;  // the smallest p of the round, reported when nothing passes
@@ -441,7 +536,7 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
         CandidateTrial t = wf.term_trial(fam, e, m, base, base_cv, round, family_count, confirm.at(e), adds);
         if (!t.available) continue;
         if (t.passed) {
-          passing.push_back({std::move(t), std::move(adds)});
+          passing.push_back({std::move(t), std::move(adds), &fam});
         } else if (t.p_value < closest.p_value) {
           closest = std::move(t);
         }
@@ -467,6 +562,7 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
     }
     win.trial.entered = true;
     win.trial.reason = "entered: " + win.trial.reason;
+    if (win.family) scan_interval(wf, m, *win.family, wa.eq, win.trial, win.adds.front());
     done.push_back(wa.eq);
     Term term{m.eqs[wa.eq].name, TermExpression::parse(win.trial.expression), 0.0, "rig discrepancy"};
     m.effect_names.push_back(kTermPrefix + term_parameter_name(term));

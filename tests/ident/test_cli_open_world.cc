@@ -136,3 +136,49 @@ TEST_CASE("an asymmetric flap effectiveness flown by the plant is found by rig d
   CHECK(rmse_aug < 0.7 * rmse_set1);
   fs::remove_all(dir);
 }
+
+TEST_CASE("a flap whose rate is limited, flown by the plant, is found by rig discrepancy as ratelimit(delta_f, r) in L "
+          "with the flown limit inside r's interval and no library name, and --test-term reports the form as given",
+          "[cli][terms][open_world]") {
+  // The data-compatibility train (three 7 and 4 Hz identification trains, 18 s): the flapping-
+  // frequency difference moves at up to about 1,400 rad/s^2, so a limit of 900 acts in the fast
+  // parts of the doublets only. The plant's forces see the limited input, the log the actuator's.
+  const fs::path dir = work_dir();
+  const std::string log = (dir / "ratelimit.lcmlog").string(), report = (dir / "ratelimit.json").string();
+  const double limit = 900.0;  // rad/s per s
+  const std::string form = "\"ratelimit(delta_f, 900) - delta_f\"";
+  using test::run_rig;
+  const auto flight = run_rig("run " + ident::test::kConfigs + "compat_doublet_train.yaml --clock inprocess --seed 1 --log " +
+                              log + " --set pilot.enabled=false --set sensing.imu.vibration_enabled=false" +
+                              " --set 'plant.terms=[{equation: L, expression: " + form + ", coefficient: 1.06e-4}, " +
+                              "{equation: Y, expression: " + form + ", coefficient: -8.63e-4}]'");
+  INFO(flight.out << flight.err);
+  REQUIRE(flight.exit_code == 0);
+  const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1_kinematic.yaml";
+  const auto d = run_rig("discrepancy " + log + " --model " + model + " --test-term 'L: ratelimit(delta_f, 900)' --json " +
+                         report);
+  INFO(d.out << d.err);
+  REQUIRE(d.exit_code == 0);
+  const YAML::Node j = YAML::LoadFile(report);
+  REQUIRE(j["verdict"].as<std::string>() == "effects");
+  YAML::Node term;
+  for (const YAML::Node& e : j["effects"]) {
+    CHECK(e["name"].as<std::string>() == "term");  // no library name
+    if (e["name"].as<std::string>() == "term" && e["equation"].as<std::string>() == "L") term = e;
+  }
+  REQUIRE(term);
+  CHECK(term["expression"].as<std::string>().rfind("ratelimit(delta_f, ", 0) == 0);
+  const double r = term["parameters"]["r"].as<double>(), lo = term["parameters"]["r_lo"].as<double>(),
+               hi = term["parameters"]["r_hi"].as<double>();
+  INFO("r " << r << " [" << lo << ", " << hi << "], flown " << limit);
+  CHECK(lo <= limit);
+  CHECK(limit <= hi);
+  CHECK(hi - lo < 0.2 * limit);  // an interval, not the scan's range
+  // The coefficient is the flap's whole effectiveness, acting through the limit (set 1's L_df).
+  CHECK(term["coefficient"].as<double>() == Approx(1.06e-4).epsilon(0.15));
+  // The form tested as given: one test, far beyond any level.
+  REQUIRE(j["term_tests"].size() == 1);
+  CHECK(j["term_tests"][0]["expression"].as<std::string>() == "ratelimit(delta_f, 900)");
+  CHECK(j["term_tests"][0]["p_value"].as<double>() < 1e-10);
+  fs::remove_all(dir);
+}
