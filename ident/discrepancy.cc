@@ -19,6 +19,7 @@
 #include "ident/discrepancy_location.h"
 #include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
+#include "ident/discrepancy_pool_parts.h"
 
 namespace nimble::ident {
 

@@ -12,6 +12,7 @@
 
 #include "ident/discrepancy_compat_parts.h"
 #include "ident/discrepancy_parts.h"
+#include "ident/discrepancy_pool_parts.h"
 #include "ident/identify.h"
 
 namespace nimble::ident {

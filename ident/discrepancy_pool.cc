@@ -3,6 +3,7 @@
 // the test that they agree.
 
 #include "ident/discrepancy_parts.h"
+#include "ident/discrepancy_pool_parts.h"
 
 #include <algorithm>
 #include <cmath>
