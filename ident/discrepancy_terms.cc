@@ -266,6 +266,16 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   t.p_value = std::min(1.0, p_min * static_cast<double>(points.size()) * static_cast<double>(family_count));
   use_eq.assign(neq, false);
   use_eq[eq] = t.p_value <= p_critical;
+  if (!use_eq[eq]) {
+    // Not significant: the trial fails whatever the other rules say, and most families of a
+    // round end here, so the others (a high-pass and the cross-validation fits) are not run.
+    std::ostringstream why;
+    why << "fails: not significant (p " << fmt(t.p_value) << " > " << fmt(p_critical);
+    if (!p_eq.empty()) why << ", F " << fmt(t.partial_f[p_eq]) << " in " << p_eq;
+    why << "; the other rules not tried)";
+    t.reason = why.str();
+    return t;
+  }
   // The confirmation above the gust band at the family's level too: a slow form (a long lag of
   // the input, a product of slow signals) fits a closed-loop record's low-frequency misfit.
   if (!p_eq.empty()) t.highpass_p = std::min(1.0, above_gust_band(m, P, points.size()) * static_cast<double>(family_count));
