@@ -34,6 +34,52 @@ GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz) {
   return b;
 }
 
+/// The Whittle fit of a first-order wind spectrum A / (1 + (2 pi f tau)^2) + N0 below f_ref_hi
+/// (tau on a log grid 0.02-20 s, A from a tenth to a hundred times the low band's excess), and the
+/// 95 % interval of tau from its profile.
+struct WindFit {
+  double tau = 0.0, a = 0.0, tau_lo = 0.0, tau_hi = 0.0;
+  double tau_min = 0.0;  ///< the band's premise: the shortest tau with 90 % of the variance below it
+  bool reaches = false;  ///< the interval reaches tau_min or beyond
+};
+
+WindFit fit_wind(const Psd& Pg, double excess, double N0g, double f_ref_hi, double per_bin, double band_hz) {
+  WindFit out;
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> profile(61, std::numeric_limits<double>::infinity());  // over tau, A fitted
+  for (int i = 0; i <= 60; ++i) {
+    const double tau = 0.02 * std::pow(1000.0, i / 60.0);
+    for (int j = 0; j <= 60; ++j) {
+      const double A = excess * std::pow(10.0, -1.0 + 3.0 * j / 60.0);
+      double nll = 0.0;
+      for (Index k = 1; k < Pg.psd.size() && Pg.f_hz[k] <= f_ref_hi; ++k) {
+        const double w = 2.0 * M_PI * Pg.f_hz[k] * tau;
+        const double S = A / (1.0 + w * w) + N0g;
+        nll += Pg.psd[k] / S + std::log(S);
+      }
+      profile[static_cast<std::size_t>(i)] = std::min(profile[static_cast<std::size_t>(i)], nll);
+      if (nll < best) {
+        best = nll;
+        out.tau = tau;
+        out.a = A;
+      }
+    }
+  }
+  // The band's premise: a wind whose correlation time puts 90 % of its variance below the gust
+  // band, tau >= tan(0.45 pi) / (2 pi band_hz) (0.50 s at 2 Hz). The profile's 95 % interval: the
+  // likelihood ratio scaled by the independent bins per padded bin, against chi2_1's 3.84.
+  out.tau_min = std::tan(0.45 * M_PI) / (2.0 * M_PI * band_hz);
+  out.tau_lo = out.tau_hi = out.tau;
+  for (int i = 0; i <= 60; ++i) {
+    const double tau = 0.02 * std::pow(1000.0, i / 60.0);
+    if (2.0 * per_bin * (profile[static_cast<std::size_t>(i)] - best) > 3.841458820694124) continue;
+    out.tau_lo = std::min(out.tau_lo, tau);
+    out.tau_hi = std::max(out.tau_hi, tau);
+    out.reaches = out.reaches || tau >= out.tau_min;
+  }
+  return out;
+}
+
 CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
                           const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
                           const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
@@ -104,43 +150,13 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   const Psd Pg = given ? periodogram(given_resid, rate_hz) : P;
   const GustBands bg = gust_bands(Pg, opt.gust_band_hz, f_ref_hi);
   const double lo_g = bg.lo, N0g = bg.ref / static_cast<double>(k_ref);
-  double best = std::numeric_limits<double>::infinity(), tau_best = 0.0, a_best = 0.0;
-  const double excess = std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g);
-  std::vector<double> profile(61, std::numeric_limits<double>::infinity());  // over tau, A fitted
-  for (int i = 0; i <= 60; ++i) {
-    const double tau = 0.02 * std::pow(1000.0, i / 60.0);
-    for (int j = 0; j <= 60; ++j) {
-      const double A = excess * std::pow(10.0, -1.0 + 3.0 * j / 60.0);
-      double nll = 0.0;
-      for (Index k = 1; k < Pg.psd.size() && Pg.f_hz[k] <= f_ref_hi; ++k) {
-        const double w = 2.0 * M_PI * Pg.f_hz[k] * tau;
-        const double S = A / (1.0 + w * w) + N0g;
-        nll += Pg.psd[k] / S + std::log(S);
-      }
-      profile[static_cast<std::size_t>(i)] = std::min(profile[static_cast<std::size_t>(i)], nll);
-      if (nll < best) {
-        best = nll;
-        tau_best = tau;
-        a_best = A;
-      }
-    }
-  }
-  // The band's premise: a wind whose correlation time puts 90 % of its variance below the gust
-  // band, tau >= tan(0.45 pi) / (2 pi gust_band_hz) (0.50 s at 2 Hz). A low-frequency excess
-  // whose spectrum excludes every such tau (the Whittle profile's 95 % interval, the likelihood
-  // ratio scaled by the independent bins per padded bin, against chi2_1's 3.84) is a random
+  const WindFit fit_w = fit_wind(Pg, std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g), N0g, f_ref_hi, per_bin,
+                                  opt.gust_band_hz);
+  const double tau_best = fit_w.tau, a_best = fit_w.a, tau_lo = fit_w.tau_lo, tau_hi = fit_w.tau_hi, tau_min = fit_w.tau_min;
+  const bool reaches = fit_w.reaches;
+  // A low-frequency excess whose spectrum excludes every tau of the band's premise is a random
   // force broader than a wind, coloured process noise like the rest of the equation error that
   // every test allows for, not a side wind: no name and no alarm.
-  const double tau_min = std::tan(0.45 * M_PI) / (2.0 * M_PI * opt.gust_band_hz);
-  double tau_lo = tau_best, tau_hi = tau_best;
-  bool reaches = false;
-  for (int i = 0; i <= 60; ++i) {
-    const double tau = 0.02 * std::pow(1000.0, i / 60.0);
-    if (2.0 * per_bin * (profile[static_cast<std::size_t>(i)] - best) > 3.841458820694124) continue;
-    tau_lo = std::min(tau_lo, tau);
-    tau_hi = std::max(tau_hi, tau);
-    reaches = reaches || tau >= tau_min;
-  }
   t.signature["tau_lo_s"] = tau_lo;
   t.signature["tau_hi_s"] = tau_hi;
   t.signature["tau_min_s"] = tau_min;
