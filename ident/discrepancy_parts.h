@@ -259,6 +259,9 @@ struct LocationFrame;
 struct TermConfirmation {
   std::unique_ptr<LocationFrame> frame;
   const UniformData* excitation_parts = nullptr;
+  /// The confirmations' Bonferroni factor: the families of the round that met the significance
+  /// rule (0 before that is known: every family of the round).
+  std::size_t bonferroni = 0;
 };
 
 /// The open world's families on `d` (ident/discrepancy.h, "Terms"): for each of p, v and the

@@ -278,14 +278,19 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   }
   // The confirmation above the gust band at the family's level too: a slow form (a long lag of
   // the input, a product of slow signals) fits a closed-loop record's low-frequency misfit.
-  if (!p_eq.empty()) t.highpass_p = std::min(1.0, above_gust_band(m, P, points.size()) * static_cast<double>(family_count));
+  // The confirmations hold the family-wise rate among the families that reach them: under the
+  // null a valid significance rule lets through at most its own level, and where a bias (a side
+  // gust's, the regression's own in closed loop) lets families through, the confirmations are
+  // Bonferroni'd over those (term_search), not over every family tried.
+  const std::size_t confirm_count = confirm.bonferroni > 0 ? confirm.bonferroni : family_count;
+  if (!p_eq.empty()) t.highpass_p = std::min(1.0, above_gust_band(m, P, points.size()) * static_cast<double>(confirm_count));
   if (!heldout(spec, m, points, best, base, base_cv, use_eq, ChangeProfile{}, t)) {
     t.reason = "a cross-validation fit is singular (the term is not excited in every block)";
     return t;
   }
   judge(t, p_eq);
   if (t.passed && !fam.acts_through.empty()) acts_through(fam, m, eq, P, t);
-  if (t.passed && !fam.linear) excitation_confirms(fam.points[best], m.eqs[eq].name, family_count, confirm, t);
+  if (t.passed && !fam.linear) excitation_confirms(fam.points[best], m.eqs[eq].name, confirm_count, confirm, t);
   if (t.passed) best_adds = P.adds;
   return t;
 }
@@ -538,6 +543,9 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
     std::vector<Pass> passing;
     CandidateTrial closest;  // the smallest p of the round, reported when nothing passes
     closest.p_value = 2.0;
+    // First every family against the significance rule (a family that fails it ends there), then
+    // the confirmations of those that met it, Bonferroni'd over their number.
+    std::vector<std::pair<std::size_t, const TermFamily*>> significant;
     for (std::size_t e : eqs) {
       // One form per equation: a later round looks for the effect in the other equation.
       if (std::find(done.begin(), done.end(), e) != done.end()) continue;
@@ -545,11 +553,21 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
         std::vector<Addition> adds;
         CandidateTrial t = wf.term_trial(fam, e, m, base, base_cv, round, family_count, confirm.at(e), adds);
         if (!t.available) continue;
-        if (t.passed) {
-          passing.push_back({std::move(t), std::move(adds), &fam});
+        if (t.p_value <= wf.p_critical) {
+          significant.emplace_back(e, &fam);
         } else if (t.p_value < closest.p_value) {
           closest = std::move(t);
         }
+      }
+    }
+    for (auto& [e, c] : confirm) c.bonferroni = significant.size();
+    for (const auto& [e, fam] : significant) {
+      std::vector<Addition> adds;
+      CandidateTrial t = wf.term_trial(*fam, e, m, base, base_cv, round, family_count, confirm.at(e), adds);
+      if (t.passed) {
+        passing.push_back({std::move(t), std::move(adds), fam});
+      } else if (t.p_value < closest.p_value) {
+        closest = std::move(t);
       }
     }
     if (passing.empty()) {
