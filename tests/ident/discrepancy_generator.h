@@ -76,6 +76,7 @@
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
+#include "model_sets.h"
 
 namespace nimble::ident::test {
 
@@ -351,25 +352,5 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   return d;
 }
 
-/// A model set of rig_configs/models (nimble_lateral_set<set>.yaml) with its vehicle, loaded once
-/// per test program (needs RIG_SOURCE_DIR).
-struct ModelSet {
-  DerivativeModel model;
-  Vehicle vehicle;
-};
-
-inline const ModelSet& model_set(int set) {
-  static std::map<int, ModelSet> sets;
-  auto it = sets.find(set);
-  if (it == sets.end()) {
-    DerivativeModel m = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set" +
-                                   std::to_string(set) + ".yaml");
-    Vehicle v = load_vehicle(m.vehicle_file);
-    it = sets.emplace(set, ModelSet{std::move(m), std::move(v)}).first;
-  }
-  return it->second;
-}
-
-inline const ModelSet& set1() { return model_set(1); }
 
 }  // namespace nimble::ident::test

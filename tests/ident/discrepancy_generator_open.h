@@ -82,6 +82,7 @@
 #include "core/terms.h"
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
+#include "model_sets.h"
 
 namespace nimble::ident::test_open {
 
@@ -491,23 +492,8 @@ inline Record generate(const std::string& form, double size, std::uint64_t seed,
   return fly(Plant(model, veh, h), sc);
 }
 
-/// A model set of rig_configs/models (nimble_lateral_set<set>.yaml) with its vehicle, loaded once
-/// per program (needs RIG_SOURCE_DIR).
-struct ModelSet {
-  DerivativeModel model;
-  Vehicle vehicle;
-};
-
-inline const ModelSet& model_set(int set) {
-  static std::map<int, ModelSet> sets;
-  auto it = sets.find(set);
-  if (it == sets.end()) {
-    DerivativeModel m = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set" +
-                                   std::to_string(set) + ".yaml");
-    Vehicle v = load_vehicle(m.vehicle_file);
-    it = sets.emplace(set, ModelSet{std::move(m), std::move(v)}).first;
-  }
-  return it->second;
-}
+/// The model sets the records are flown with (tests/ident/model_sets.h).
+using test::ModelSet;
+using test::model_set;
 
 }  // namespace nimble::ident::test_open
