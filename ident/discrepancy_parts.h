@@ -277,7 +277,8 @@ struct Workflow;
 /// best point's neighbours; the statistic D(v) = (RSS(v) - RSS_min) / (s2 kappa), kappa the
 /// ratio of the term's coloured to white variance (at least 1), is chi2_1 at the true value for a
 /// regular parameter, so the 95 % interval is the set with D <= 3.84, reaching half a fine step
-/// past its outermost points (an end of the grid: the interval ends there). The term's expression
+/// past its outermost points (to the next coarse point past a coarse one; an end of the grid: the
+/// interval ends there). The term's expression
 /// and column move to the fine grid's best; t.parameters gain the value and its _lo, _hi.
 void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, std::size_t eq, CandidateTrial& t,
                    Addition& add);

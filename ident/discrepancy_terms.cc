@@ -122,9 +122,10 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
   }
   // An input's dead zone and backlash of width w (scanned from 1 % to 40 % of its largest
   // magnitude), its saturation at s (25 % to 95 %: below, the input would act mostly as its
-  // sign), its rate limit r (5 % to 80 % of its largest rate: a limit above that never acts,
-  // one far below turns the input into a ramp) and its first-order lag (time constant scanned
-  // from 4 to 100 ms).
+  // sign), its rate limit r (10 % to 100 % of its largest rate on the record, which the 9 Hz
+  // low-pass lowers: a limit of the raw input near its raw largest rate still acts on the fast
+  // peaks; one far below turns the input into a ramp) and its first-order lag (time constant
+  // scanned from 4 to 100 ms).
   for (const auto& x : ins) {
     const VectorXd& v = d.at(x);
     const double span = v.cwiseAbs().maxCoeff();
@@ -455,11 +456,16 @@ void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, st
     first = std::min(first, i);
     last = std::max(last, i);
   }
+  // Half a fine step past an accepted point of the fine grid; to the next grid point past one of
+  // the coarse grid outside it (the parameter between two coarse points is fitted by either).
   const double half_step = std::pow(hi / lo, 0.5 / static_cast<double>(fine));
+  const auto fine_point = [&](std::size_t i) { return grid[i] >= lo * (1.0 - 1e-12) && grid[i] <= hi * (1.0 + 1e-12); };
   t.expression = at.to_string();
   t.parameters[fam.parameter] = grid[arg];
-  t.parameters[fam.parameter + "_lo"] = first == 0 ? grid.front() : grid[first] / half_step;
-  t.parameters[fam.parameter + "_hi"] = last + 1 == grid.size() ? grid.back() : grid[last] * half_step;
+  t.parameters[fam.parameter + "_lo"] =
+      first == 0 ? grid.front() : (fine_point(first) ? grid[first] / half_step : grid[first - 1]);
+  t.parameters[fam.parameter + "_hi"] =
+      last + 1 == grid.size() ? grid.back() : (fine_point(last) ? grid[last] * half_step : grid[last + 1]);
   add.names = {term_parameter_name(Term{m.eqs[eq].name, at, 0.0, ""})};
   add.cols = {c};
 }
