@@ -251,7 +251,7 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
     for (const auto& t : res.candidates) {
       if (t.name == "term" && t.entered && t.equation == term.equation && t.expression == eff.expression) {
         eff.alternatives = t.alternatives;
-        for (const char* k : {"w", "s", "r", "tau"}) {  // a scanned parameter with its 95 % interval
+        for (const char* k : kScanParameters) {  // a scanned parameter with its 95 % interval
           for (const std::string suffix : {"", "_lo", "_hi"}) {
             const auto it = t.parameters.find(k + suffix);
             if (it != t.parameters.end()) eff.parameters[k + suffix] = it->second;
@@ -374,7 +374,7 @@ void judge(const CandidateTrial& gust_result, DiscrepancyResult& res) {
       }
       if (e.name == "term") {
         s << " " << e.equation << " += " << fmt(e.coefficient) << " " << e.expression << " (a form outside the library";
-        for (const char* k : {"w", "s", "r", "tau"}) {
+        for (const char* k : kScanParameters) {
           const auto v = e.parameters.find(k), lo = e.parameters.find(k + std::string("_lo")),
                      hi = e.parameters.find(k + std::string("_hi"));
           if (v != e.parameters.end() && lo != e.parameters.end() && hi != e.parameters.end()) {

@@ -119,6 +119,7 @@ struct AdditionFit {
   MatrixXd cov;
   Index off = 0, k = 0;  ///< the addition's parameters: theta.segment(off, k)
   double wald = 0.0, p = 1.0;
+  double blocks = 0.0;  ///< batches the covariance rests on (the tail's)
   double pse_before = 0.0, pse_after = 0.0;
 };
 
@@ -233,6 +234,8 @@ inline bool is_found_term(const std::string& effect_name) { return effect_name.r
 /// points per scan, and the lag's time constants [s] (also the delay's lag signature).
 inline constexpr std::size_t kTermScanPoints = 12;
 inline constexpr double kLagGridS[2] = {0.004, 0.100};
+/// The scanned families' parameters (TermFamily::parameter), reported with _lo and _hi.
+inline constexpr const char* kScanParameters[] = {"w", "s", "r", "tau"};
 
 /// One family of generic terms: one expression, or one per point of a scanned parameter.
 struct TermFamily {

@@ -183,7 +183,8 @@ void stationary_floor(const Model& m, const Addition& a, const BatchRule& batch,
   if (!(v > f.cov(f.off, f.off))) return;
   f.cov(f.off, f.off) = v;
   f.wald = f.theta[f.off] * f.theta[f.off] / v;
-  f.p = wald_tail(f.wald, 1, block_count(C.rows(), block));
+  f.blocks = block_count(C.rows(), block);
+  f.p = wald_tail(f.wald, 1, f.blocks);
 }
 
 /// Fits `a` (see AdditionFit); false if the design is singular.
@@ -200,7 +201,8 @@ bool fit_addition(const Model& m, const Addition& a, const FoldStats& with, doub
   f.off = C.cols() - f.k;
   const VectorXd th = f.theta.tail(f.k);
   f.wald = th.dot(f.cov.block(f.off, f.off, f.k, f.k).ldlt().solve(th));
-  f.p = wald_tail(f.wald, f.k, block_count(C.rows(), block));
+  f.blocks = block_count(C.rows(), block);
+  f.p = wald_tail(f.wald, f.k, f.blocks);
   // PSE = RSS / N + sigma_max^2 P / N, sigma_max^2 the variance of the dependent (SIDPAC).
   const double N = static_cast<double>(C.rows());
   const VectorXd& y = m.eqs[a.eq].y;

@@ -131,17 +131,20 @@ std::vector<TermFamily> term_families(const UniformData& d, const std::vector<st
     const double span = v.cwiseAbs().maxCoeff();
     double rate = 0.0;
     for (Index i = 1; i < v.size(); ++i) rate = std::max(rate, std::fabs(v[i] - v[i - 1]) * d.rate_hz);
+    // Each acts through the input. A lag is a linear filter, and a rate limit acts where the input
+    // moves fastest, which its excitation part (a projection on the excitation's slow bank) does
+    // not reach: both are exempt from that confirmation (`linear`).
+    const auto through = [&](TermFamily f, bool linear) {
+      f.acts_through = x;
+      f.linear = linear;
+      out.push_back(std::move(f));
+    };
     const std::vector<double> widths = log_grid(0.01 * span, 0.4 * span, kTermScanPoints);
-    out.push_back(scanned("deadzone", x, "w", widths));
-    out.push_back(scanned("backlash", x, "w", widths));
-    if (span > 0.0) out.push_back(scanned("sat", x, "s", log_grid(0.25 * span, 0.95 * span, kTermScanPoints)));
-    if (rate > 0.0) out.push_back(scanned("ratelimit", x, "r", log_grid(0.1 * rate, rate, kTermScanPoints)));
-    out.push_back(scanned("lag", x, "tau", log_grid(kLagGridS[0], kLagGridS[1], kTermScanPoints)));
-    for (std::size_t i = out.size() - 3 - (span > 0.0) - (rate > 0.0); i < out.size(); ++i) out[i].acts_through = x;
-    out.back().linear = true;
-    // A rate limit acts where the input moves fastest, which its excitation part (a projection
-    // on the excitation's slow bank) does not reach: exempt from that confirmation as the lag.
-    if (rate > 0.0) out[out.size() - 2].linear = true;
+    through(scanned("deadzone", x, "w", widths), false);
+    through(scanned("backlash", x, "w", widths), false);
+    if (span > 0.0) through(scanned("sat", x, "s", log_grid(0.25 * span, 0.95 * span, kTermScanPoints)), false);
+    if (rate > 0.0) through(scanned("ratelimit", x, "r", log_grid(0.1 * rate, rate, kTermScanPoints)), true);
+    through(scanned("lag", x, "tau", log_grid(kLagGridS[0], kLagGridS[1], kTermScanPoints)), true);
   }
   return out;
 }
@@ -434,25 +437,19 @@ void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, st
     if (rss[i] < rss[arg]) arg = i;
   }
   if (!std::isfinite(rss[arg])) return;
-  // The scale of the profile: s2 and kappa at the best (as change_profile's).
+  // The scale of the profile, 1 / (s2 kappa), at the best point: change_profile's.
   const TermExpression at = TermExpression::parse(texts[arg]);
   const VectorXd& c = wf.term_column_of(at);
-  MatrixXd C(X.rows(), X.cols() + 1);
-  C << X, (w.size() ? VectorXd(c.cwiseProduct(w)) : c);
-  VectorXd theta;
-  if (!solve(C.transpose() * C, C.transpose() * y, theta)) return;
-  const VectorXd r = y - C * theta;
-  const Index q = C.cols();
-  const double s2 = r.squaredNorm() / static_cast<double>(std::max<Index>(1, C.rows() - q));
-  VectorXd unit = VectorXd::Zero(q), g;
-  unit[q - 1] = 1.0;
-  if (!solve(C.transpose() * C, unit, g) || !(s2 > 0.0)) return;
-  const double coloured = coloured_covariance(C, r, wf.batch.block(r))(q - 1, q - 1);
-  const double kappa = std::max(1.0, coloured / (s2 * g[q - 1]));
+  ScanPoint P;
+  P.adds = {Addition{eq, {term_parameter_name(Term{m.eqs[eq].name, at, 0.0, ""})}, {c}}};
+  P.stats.resize(m.eqs.size());
+  P.stats[eq] = fold_stats_with(model_whole, X, y, w.size() ? VectorXd(c.cwiseProduct(w)) : c, whole);
+  const double scale = wf.change_profile(m, P).scale[eq];
+  if (!(scale > 0.0)) return;
   const double crit = 3.841458820694124;  // chi2_1's 95 % point
   std::size_t first = arg, last = arg;
   for (std::size_t i = 0; i < grid.size(); ++i) {
-    if ((rss[i] - rss[arg]) / (s2 * kappa) > crit) continue;
+    if ((rss[i] - rss[arg]) * scale > crit) continue;
     first = std::min(first, i);
     last = std::max(last, i);
   }
@@ -466,8 +463,7 @@ void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, st
       first == 0 ? grid.front() : (fine_point(first) ? grid[first] / half_step : grid[first - 1]);
   t.parameters[fam.parameter + "_hi"] =
       last + 1 == grid.size() ? grid.back() : (fine_point(last) ? grid[last] * half_step : grid[last + 1]);
-  add.names = {term_parameter_name(Term{m.eqs[eq].name, at, 0.0, ""})};
-  add.cols = {c};
+  add = P.adds.front();
 }
 
 void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res) {
@@ -506,7 +502,7 @@ void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res
         out.sigma = std::sqrt(std::max(0.0, f.cov(f.off, f.off)));
         out.wald = f.wald;
         out.p_value = f.p;
-        out.blocks = block_count(C.rows(), wf.batch.block(m.eqs[e].y - C * f.theta));
+        out.blocks = f.blocks;
       }
     }
     res.term_tests.push_back(std::move(out));
