@@ -431,6 +431,8 @@ struct TermTest {
   std::string equation, expression;
   double coefficient = 0.0, sigma = 0.0, wald = 0.0, p_value = 1.0;
   double blocks = 0.0;  ///< batches the covariance rests on
+  /// The same form instrumented by the excitation (instrumented_wald): coefficient, sigma, p.
+  double iv_coefficient = 0.0, iv_sigma = 0.0, iv_p_value = 1.0;
   std::string note;     ///< why it could not be tested (p_value 1), empty otherwise
 };
 

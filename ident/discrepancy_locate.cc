@@ -135,6 +135,27 @@ double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block
   return wald_tail(wald, k, block_count(n, block));
 }
 
+double instrumented_wald(const MatrixXd& X, const VectorXd& y, const MatrixXd& C, const Span& instruments,
+                         Index min_block, double* coefficient, double* sigma) {
+  const Index n = y.size(), k = C.cols(), q = X.cols() + k;
+  if (instruments.rank() < q) return 1.0;  // fewer instruments than regressors: not identified
+  MatrixXd W(n, q);
+  W << X, C;
+  const MatrixXd& Q = instruments.Q;
+  const MatrixXd H = Q * (Q.transpose() * W);  // the regressors' excitation parts
+  const ScaledSolver s(H.transpose() * W);
+  if (!s.ok) return 1.0;
+  const VectorXd theta = s.solve(H.transpose() * y);
+  const VectorXd u = y - W * theta;
+  const Index block = score_block(H.rightCols(k), u, min_block);
+  const MatrixXd cov = coloured_covariance(H, u, block);
+  const VectorXd th = theta.tail(k);
+  const double wald = th.dot(cov.bottomRightCorner(k, k).ldlt().solve(th));
+  if (coefficient) *coefficient = theta[q - 1];
+  if (sigma) *sigma = std::sqrt(std::max(0.0, cov(q - 1, q - 1)));
+  return wald_tail(wald, k, block_count(n, block));
+}
+
 /// The held-out rule every candidate passes, for the columns C on the frame: each of the folds
 /// predicted by the frame's span with and without C fitted on the other folds; true when the
 /// relative drop of the held-out squared error exceeds `sigmas` of its standard error

@@ -79,6 +79,19 @@ struct LocationRule {
 /// given) the square root of the share of the residual's sum of squares they explain.
 double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block, double* partial_r);
 
+/// An instrumented (two-stage least squares) test of the columns C beside the design X: the
+/// regressors [X, C] replaced by their projections on the instruments' span (`instruments`, the
+/// excitation's bank), the coefficients of C tested with the sandwich covariance of the
+/// projected regressors' scores (batch means, blocks as score_block). Under the model the
+/// equation error is process and measurement noise, independent of the excitation, so the test
+/// holds its level however the error correlates with the measured regressors: the closed loop's
+/// feedback of the noise into the states, and the derivative's window, which spreads noise the
+/// states already answered over the samples around them. Unlike frame_wald the excitation's
+/// span is the instruments, not regressors: a linear column (a missing derivative) stays
+/// testable. The p-value; `coefficient` and `sigma` (if given) the last column's.
+double instrumented_wald(const MatrixXd& X, const VectorXd& y, const MatrixXd& C, const Span& instruments,
+                         Index min_block, double* coefficient, double* sigma);
+
 void state_findings(const LocationFrame& frame, const MatrixXd& X, const std::string& output, const UniformData& d,
                     const LocationRule& rule, std::vector<StateFinding>& out);
 

@@ -247,6 +247,10 @@ struct TermFamily {
   /// A linear filter of a signal (the lag): no excitation confirmation, which cannot see a
   /// linear form (Workflow::term_trial).
   bool linear = false;
+  /// A recorded signal's linear term (a missing derivative): confirmed by the test instrumented
+  /// by the excitation (Workflow::instrument_confirms) instead of above the gust band, where a
+  /// slow signal such as phi has little to show.
+  bool instrumented = false;
   /// A scanned family: its parameter's name ("w", "s", "r", "tau"), the expression's text before
   /// the number ("ratelimit(delta_f, ") and the grid's values (points[i] has values[i]).
   std::string parameter, prefix;
@@ -254,6 +258,7 @@ struct TermFamily {
 };
 
 struct LocationFrame;
+struct Span;
 
 /// What the open-world search tests a term against in one equation: the location frame of the
 /// current model and the record's excitation (LocationFrame; none without an exogenous signal),
@@ -262,6 +267,7 @@ struct LocationFrame;
 struct TermConfirmation {
   std::unique_ptr<LocationFrame> frame;
   const UniformData* excitation_parts = nullptr;
+  const Span* instruments = nullptr;  ///< the excitation bank's span (instrumented_wald)
   /// The confirmations' Bonferroni factor: the families of the round that met the significance
   /// rule (0 before that is known: every family of the round).
   std::size_t bonferroni = 0;
@@ -355,6 +361,8 @@ struct Workflow {
   void acts_through(const TermFamily& fam, const Model& m, std::size_t eq, const ScanPoint& P, CandidateTrial& t) const;
   /// A term passes only if it is also significant seen through the excitation (the location
   /// tests' frame), Bonferroni over `family_count`, at gust_band_alpha.
+  void instrument_confirms(const TermExpression& expr, const Model& m, std::size_t eq, std::size_t family_count,
+                           const TermConfirmation& confirm, CandidateTrial& t) const;
   void excitation_confirms(const TermExpression& expr, const std::string& eqname, std::size_t family_count,
                            const TermConfirmation& confirm, CandidateTrial& t) const;
   CandidateTrial term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,

@@ -70,6 +70,8 @@ struct Args {
   /// standard deviation scaled by sqrt(corner / drawn corner), which keeps the level below the
   /// corners), and the measurement noise times this factor. 0 and 1: as drawn.
   double corner_hz = 0.0, measurement_noise = 1.0;
+  double process_noise = 1.0;  ///< Diagnostic: the process noise's standard deviations times this factor.
+  double cutoff_hz = 0.0;      ///< Diagnostic: the workflow's low-pass cut-off (0: its default).
   /// Diagnostic: the nulls from the suite's own generator (discrepancy_generator.h, no effect), to
   /// tell the oracle's null rate on these records from its rate on those.
   bool reference_nulls = false;
@@ -105,6 +107,8 @@ Args parse_args(int argc, char** argv) {
     else if (k == "--reference-nulls") a.reference_nulls = true;
     else if (k == "--corner-hz") a.corner_hz = std::atof(value().c_str());
     else if (k == "--measurement-noise") a.measurement_noise = std::atof(value().c_str());
+    else if (k == "--process-noise") a.process_noise = std::atof(value().c_str());
+    else if (k == "--cutoff-hz") a.cutoff_hz = std::atof(value().c_str());
     else {
       std::fprintf(stderr, "usage: bench_discrepancy_oracle [--records N] [--nulls M] [--forms a,b] [--sizes x,y]"
                            " [--alpha A] [--json FILE] [--verbose] [--oracle-only] [--corner-hz F]"
@@ -190,7 +194,7 @@ Kind classify(const DiscrepancyResult& r, const std::string& form, const std::st
 
 struct Cell {
   double size = 0.0;
-  int records = 0, refused = 0, oracle = 0, oracle_cal = 0, untestable = 0, detected = 0;
+  int records = 0, refused = 0, oracle = 0, oracle_cal = 0, oracle_iv = 0, untestable = 0, detected = 0;
   int kinds[kKinds] = {};
   std::map<std::string, int> other_terms, library;
   double seconds = 0.0;
@@ -199,8 +203,10 @@ struct Cell {
 /// Runs one record through the workflow with the oracle beside it; false if the oracle could not
 /// be formed (the grammar lacks its operator).
 DiscrepancyResult run_workflow(const FlightData& data, const gen::ModelSet& ms, const std::vector<Term>& oracle,
-                               bool oracle_only, double& seconds) {
+                               bool oracle_only, double& seconds, double cutoff_hz) {
   DiscrepancyOptions opt;
+  if (cutoff_hz > 0.0) opt.processing.cutoff_hz = cutoff_hz;
+  if (cutoff_hz < 0.0) opt.processing.filter_order = 0;  // diagnostic: no low-pass at all
   opt.test_terms = oracle;
   if (oracle_only) {
     opt.term_search = false;
@@ -223,6 +229,8 @@ gen::Record fly_record(const Args& args, const std::string& form, double size, s
     }
     for (double* n : {&sc.noise_p, &sc.noise_v, &sc.noise_phi, &sc.noise_df, &sc.noise_u, &sc.noise_w})
       *n *= args.measurement_noise;
+    sc.sigma_L *= args.process_noise;
+    sc.sigma_Y *= args.process_noise;
   };
   for (int attempt = 0;; ++attempt) {
     const std::uint64_t s = seed + 1000000u * static_cast<std::uint64_t>(attempt);
@@ -258,12 +266,13 @@ Cell run_cell(const Args& args, const gen::FormSpec& form, std::size_t form_inde
     } catch (const std::exception& e) {
       if (c.untestable == 0) std::printf("  oracle %s: %s not testable: %s\n", form.name, text.c_str(), e.what());
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds);
+    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds, args.cutoff_hz);
     ++c.records;
     if (oracle.empty() || r.term_tests.empty() || !r.term_tests[0].note.empty()) ++c.untestable;
     const double p = r.term_tests.empty() ? 1.0 : r.term_tests[0].p_value;
     if (!r.term_tests.empty() && p <= args.alpha) ++c.oracle;
     if (!r.term_tests.empty() && cal.count(form.name) && p < cal.at(form.name)) ++c.oracle_cal;
+    if (!r.term_tests.empty() && r.term_tests[0].iv_p_value <= args.alpha) ++c.oracle_iv;
     std::string label;
     const Kind k = classify(r, form.name, eq, text, label);
     ++c.kinds[k];
@@ -276,6 +285,18 @@ Cell run_cell(const Args& args, const gen::FormSpec& form, std::size_t form_inde
                   r.term_tests.empty() || r.term_tests[0].note.empty() ? "" : " ",
                   r.term_tests.empty() ? "" : r.term_tests[0].note.c_str(), kind_name(k), label.empty() ? "" : ": ",
                   label.c_str(), rec.max_p);
+    if (args.verbose && (k == kNone || k == kOtherTerm)) {
+      // Why the search did not name the form: the term trials of the form's equation that came
+      // closest (the smallest p-values), with their reasons.
+      std::vector<const CandidateTrial*> trials;
+      for (const CandidateTrial& t : r.candidates)
+        if (t.name == "term") trials.push_back(&t);
+      std::sort(trials.begin(), trials.end(),
+                [](const CandidateTrial* a, const CandidateTrial* b) { return a->p_value < b->p_value; });
+      for (std::size_t j = 0; j < trials.size() && j < 3; ++j)
+        std::printf("      %s %s: p %.3g, %s\n", trials[j]->equation.c_str(), trials[j]->expression.c_str(),
+                    trials[j]->p_value, trials[j]->reason.substr(0, 400).c_str());
+    }
   }
   return c;
 }
@@ -295,11 +316,11 @@ std::string listing(const std::map<std::string, int>& m) {
 
 void print_form(const gen::FormSpec& form, const std::vector<Cell>& cells, double alpha, bool has_calibration) {
   std::printf("\n%s (oracle %s: %s)\n", form.name, form.equation, form.expression);
-  std::printf("  %6s %4s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s\n", "size", "n", "oracle", "or.cal", "detect",
+  std::printf("  %6s %4s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s\n", "size", "n", "oracle", "or.cal", "or.iv", "detect",
               "right", "o.term", "lib", "ambig", "unexpl", "gust", "none", "refuse", "right/or");
   for (const Cell& c : cells) {
-    std::printf("  %6g %4d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %8s\n", c.size, c.records, c.oracle, c.oracle_cal,
-                c.detected,
+    std::printf("  %6g %4d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %8s\n", c.size, c.records, c.oracle, c.oracle_cal,
+                c.oracle_iv, c.detected,
                 c.kinds[kRight], c.kinds[kOtherTerm], c.kinds[kLibrary], c.kinds[kAmbiguous], c.kinds[kUnexplained],
                 c.kinds[kGust], c.kinds[kNone], c.refused,
                 c.oracle ? (std::to_string(c.kinds[kRight]) + "/" + std::to_string(c.oracle)).c_str() : "-");
@@ -340,6 +361,9 @@ struct NullTally {
   std::vector<std::string> alarm_lines;
   std::map<std::string, int> oracle_rejects, oracle_tested;  ///< per oracle form
   std::map<std::string, std::vector<double>> oracle_p;       ///< per oracle form, every null's p-value
+  std::map<std::string, std::vector<double>> oracle_z;       ///< per oracle form, every null's coefficient / sigma
+  std::map<std::string, std::vector<double>> iv_z;           ///< the same, instrumented by the excitation
+  std::map<std::string, int> iv_rejects;
 };
 
 NullTally run_nulls(const Args& args) {
@@ -367,12 +391,15 @@ NullTally run_nulls(const Args& args) {
       } catch (const std::exception&) {
       }
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds);
+    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds, args.cutoff_hz);
     ++t.records;
     for (std::size_t k = 0; k < r.term_tests.size() && k < names.size(); ++k) {
       if (!r.term_tests[k].note.empty()) continue;
       ++t.oracle_tested[names[k]];
       t.oracle_p[names[k]].push_back(r.term_tests[k].p_value);
+      if (r.term_tests[k].sigma > 0.0) t.oracle_z[names[k]].push_back(r.term_tests[k].coefficient / r.term_tests[k].sigma);
+      if (r.term_tests[k].iv_sigma > 0.0) t.iv_z[names[k]].push_back(r.term_tests[k].iv_coefficient / r.term_tests[k].iv_sigma);
+      if (r.term_tests[k].iv_p_value <= args.alpha) ++t.iv_rejects[names[k]];
       if (r.term_tests[k].p_value <= args.alpha) ++t.oracle_rejects[names[k]];
     }
     std::string label;
@@ -402,8 +429,21 @@ void print_nulls(const NullTally& t, double alpha) {
       continue;
     }
     const int k = t.oracle_rejects.count(f.name) ? t.oracle_rejects.at(f.name) : 0;
-    std::printf("    %-30s %s: %-22s %s of %d\n", f.name, f.equation, f.expression, percent(k, it->second).c_str(),
-                it->second);
+    // Coefficient / sigma over the nulls: a mean away from 0 is a bias, a spread above 1 a
+    // variance the test underestimates.
+    double mean = 0.0, sd = 0.0;
+    const std::vector<double>& z = t.oracle_z.count(f.name) ? t.oracle_z.at(f.name) : std::vector<double>{};
+    for (double v : z) mean += v / static_cast<double>(std::max<std::size_t>(1, z.size()));
+    for (double v : z) sd += (v - mean) * (v - mean) / static_cast<double>(std::max<std::size_t>(2, z.size()) - 1);
+    std::printf("    %-30s %s: %-22s %s of %d; coefficient/sigma mean %+.2f sd %.2f\n", f.name, f.equation,
+                f.expression, percent(k, it->second).c_str(), it->second, mean, std::sqrt(sd));
+    double ivm = 0.0, ivsd = 0.0;
+    const std::vector<double>& zi = t.iv_z.count(f.name) ? t.iv_z.at(f.name) : std::vector<double>{};
+    for (double v : zi) ivm += v / static_cast<double>(std::max<std::size_t>(1, zi.size()));
+    for (double v : zi) ivsd += (v - ivm) * (v - ivm) / static_cast<double>(std::max<std::size_t>(2, zi.size()) - 1);
+    const int ki = t.iv_rejects.count(f.name) ? t.iv_rejects.at(f.name) : 0;
+    std::printf("    %-30s    instrumented by the excitation %s; coefficient/sigma mean %+.2f sd %.2f\n", "",
+                percent(ki, it->second).c_str(), ivm, std::sqrt(ivsd));
   }
 }
 
