@@ -161,6 +161,9 @@ void write_term_tests(JsonWriter& j, const DiscrepancyResult& r) {
     j.key("wald").value(t.wald);
     j.key("p_value").value(t.p_value);
     j.key("blocks").value(t.blocks);
+    j.key("iv_coefficient").value(t.iv_coefficient);
+    j.key("iv_sigma").value(t.iv_sigma);
+    j.key("iv_p_value").value(t.iv_p_value);
     j.key("note").value(t.note);
     j.end_object();
   }
@@ -177,7 +180,8 @@ void print_term_tests(std::ostream& o, const DiscrepancyResult& r) {
       continue;
     }
     o << "c = " << num(t.coefficient) << " (sigma " << num(t.sigma) << "), Wald " << num(t.wald) << ", p " << num(t.p_value)
-      << " (" << num(t.blocks) << " batches)\n";
+      << " (" << num(t.blocks) << " batches); instrumented by the excitation: c = " << num(t.iv_coefficient)
+      << " (sigma " << num(t.iv_sigma) << "), p " << num(t.iv_p_value) << "\n";
   }
   o << "\n";
 }
