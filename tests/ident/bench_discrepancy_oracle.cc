@@ -12,12 +12,15 @@
 // right when it names the form: a `term` in the oracle's equation with the oracle's operator and
 // signals (its number, scanned, may differ), or for inflow_other_arm the library's lateral_inflow.
 //
-// Printed per form and size: records, oracle detections, workflow detections, the right form,
+// Printed per form and size: records, oracle detections (nominal; calibrated, or.cal; and
+// instrumented by the excitation, or.iv: instrumented_wald at alpha), workflow detections, the right form,
 // another term, a library name (a wrong name, listed), ambiguous, unexplained, a side gust alone,
 // none, and right form / oracle detections. Per form: the oracle's 90 %-power size (the smallest
 // grid size where the oracle detects at least 90 %) and the right-form rate over the records at
 // that size and above (target at least 80 %), with Wilson 95 % intervals. Null records (no form):
-// every alarm of the workflow, and the oracle's own rejection rate per oracle term at alpha.
+// every alarm of the workflow, and the oracle's own rejection rate per oracle term at alpha, least
+// squares and instrumented, with the mean and spread of coefficient / sigma (a mean away from 0 is
+// the test's bias, a spread above 1 a variance it underestimates).
 // Records whose loop diverged are refused by the generator, counted and replaced.
 //
 // The oracle's own null rate is not alpha: one test of a form beside the model's refit
@@ -34,7 +37,9 @@
 // Diagnostics: --oracle-only (the library search cut to one candidate, no term search: the oracle
 // alone, fast, for placing a grid), --corner-hz F and --measurement-noise K (the nulls' process
 // noise at another corner, the measurement noise scaled), --reference-nulls (the nulls from
-// discrepancy_generator.h instead).
+// discrepancy_generator.h instead); --process-noise K (the process noise scaled), --cutoff-hz F
+// (the workflow's low-pass at F Hz; negative: none) and --heldout-sigmas S (the held-out rule's
+// sigmas), to find where the least-squares oracle's bias comes from and what a rule costs.
 
 #include <algorithm>
 #include <chrono>
@@ -72,6 +77,7 @@ struct Args {
   double corner_hz = 0.0, measurement_noise = 1.0;
   double process_noise = 1.0;  ///< Diagnostic: the process noise's standard deviations times this factor.
   double cutoff_hz = 0.0;      ///< Diagnostic: the workflow's low-pass cut-off (0: its default).
+  double heldout_sigmas = -1.0;  ///< Diagnostic: DiscrepancyOptions::heldout_sigmas (negative: its default).
   /// Diagnostic: the nulls from the suite's own generator (discrepancy_generator.h, no effect), to
   /// tell the oracle's null rate on these records from its rate on those.
   bool reference_nulls = false;
@@ -109,10 +115,12 @@ Args parse_args(int argc, char** argv) {
     else if (k == "--measurement-noise") a.measurement_noise = std::atof(value().c_str());
     else if (k == "--process-noise") a.process_noise = std::atof(value().c_str());
     else if (k == "--cutoff-hz") a.cutoff_hz = std::atof(value().c_str());
+    else if (k == "--heldout-sigmas") a.heldout_sigmas = std::atof(value().c_str());
     else {
       std::fprintf(stderr, "usage: bench_discrepancy_oracle [--records N] [--nulls M] [--forms a,b] [--sizes x,y]"
                            " [--alpha A] [--json FILE] [--verbose] [--oracle-only] [--corner-hz F]"
-                           " [--measurement-noise K]\n");
+                           " [--measurement-noise K] [--process-noise K] [--cutoff-hz F] [--heldout-sigmas S]"
+                           " [--reference-nulls]\n");
       std::exit(2);
     }
   }
@@ -203,8 +211,9 @@ struct Cell {
 /// Runs one record through the workflow with the oracle beside it; false if the oracle could not
 /// be formed (the grammar lacks its operator).
 DiscrepancyResult run_workflow(const FlightData& data, const gen::ModelSet& ms, const std::vector<Term>& oracle,
-                               bool oracle_only, double& seconds, double cutoff_hz) {
+                               bool oracle_only, double& seconds, double cutoff_hz, double heldout_sigmas) {
   DiscrepancyOptions opt;
+  if (heldout_sigmas >= 0.0) opt.heldout_sigmas = heldout_sigmas;
   if (cutoff_hz > 0.0) opt.processing.cutoff_hz = cutoff_hz;
   if (cutoff_hz < 0.0) opt.processing.filter_order = 0;  // diagnostic: no low-pass at all
   opt.test_terms = oracle;
@@ -266,7 +275,7 @@ Cell run_cell(const Args& args, const gen::FormSpec& form, std::size_t form_inde
     } catch (const std::exception& e) {
       if (c.untestable == 0) std::printf("  oracle %s: %s not testable: %s\n", form.name, text.c_str(), e.what());
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds, args.cutoff_hz);
+    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds, args.cutoff_hz, args.heldout_sigmas);
     ++c.records;
     if (oracle.empty() || r.term_tests.empty() || !r.term_tests[0].note.empty()) ++c.untestable;
     const double p = r.term_tests.empty() ? 1.0 : r.term_tests[0].p_value;
@@ -391,7 +400,7 @@ NullTally run_nulls(const Args& args) {
       } catch (const std::exception&) {
       }
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds, args.cutoff_hz);
+    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds, args.cutoff_hz, args.heldout_sigmas);
     ++t.records;
     for (std::size_t k = 0; k < r.term_tests.size() && k < names.size(); ++k) {
       if (!r.term_tests[k].note.empty()) continue;
@@ -486,7 +495,7 @@ void write_json(const std::string& file, const Args& args, const std::map<std::s
                    i ? "," : "", c.size, c.records, c.refused, c.oracle, c.oracle_cal, c.detected);
       const char* keys[] = {"right", "another_term", "library_name", "ambiguous", "unexplained", "gust", "none"};
       for (int k = 0; k < kKinds; ++k) std::fprintf(f, ", \"%s\": %d", keys[k], c.kinds[k]);
-      std::fprintf(f, ", \"seconds\": %.3f}", c.seconds);
+      std::fprintf(f, ", \"oracle_instrumented\": %d, \"seconds\": %.3f}", c.oracle_iv, c.seconds);
     }
     std::fprintf(f, "]");
   }
@@ -495,6 +504,13 @@ void write_json(const std::string& file, const Args& args, const std::map<std::s
   bool first = true;
   for (const auto& [name, n] : nulls.oracle_tested) {
     const int k = nulls.oracle_rejects.count(name) ? nulls.oracle_rejects.at(name) : 0;
+    std::fprintf(f, "%s\"%s\": [%d, %d]", first ? "" : ", ", name.c_str(), k, n);
+    first = false;
+  }
+  std::fprintf(f, "}, \"instrumented_rejections\": {");
+  first = true;
+  for (const auto& [name, n] : nulls.oracle_tested) {
+    const int k = nulls.iv_rejects.count(name) ? nulls.iv_rejects.at(name) : 0;
     std::fprintf(f, "%s\"%s\": [%d, %d]", first ? "" : ", ", name.c_str(), k, n);
     first = false;
   }
