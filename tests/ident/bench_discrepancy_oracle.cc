@@ -33,7 +33,7 @@
 //                                      [--alpha A] [--json FILE] [--verbose]
 // Defaults: 10 records per form and size (15-45 s, model sets 1-5, seeds 700000 + 10000 form +
 // 1000 size + record), each form's own size grid (discrepancy_generator_open.h form_specs()), 200
-// nulls (seeds from 800000); a refused record's next try adds 1000000 to its seed. About 7 min.
+// nulls (seeds from 800000); a refused record's next try adds 1000000 to its seed. About 6 min.
 // Diagnostics: --oracle-only (the library search cut to one candidate, no term search: the oracle
 // alone, fast, for placing a grid), --corner-hz F and --measurement-noise K (the nulls' process
 // noise at another corner, the measurement noise scaled), --reference-nulls (the nulls from
