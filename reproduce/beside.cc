@@ -39,14 +39,14 @@ std::string sub_dir(const std::string& dir, const char* sub) {
 
 /// The note one run's cell carries, numbered among the table's `notes` (text repeated once):
 /// what an explained cell's reason and check are, why a differing cell's reason does not hold,
-/// why a cell is inconclusive on too few seeds, what a calibrated cell was tuned on. A cell that
-/// differs without a reason, or is inconclusive on an interval wider than its tolerance, carries
-/// none: its line shows the numbers, the interval and the tolerance.
+/// why a cell is inconclusive (too few seeds, or its interval across an edge of the band, with the
+/// seeds that would decide it), what a calibrated cell was tuned on. A cell that differs without a
+/// reason carries none: its line shows the numbers, the interval and the tolerance.
 std::string side_note(const std::string& table_category, const Cell& c, std::vector<std::string>& notes) {
   std::string text;
   if (c.verdict == "explained") {
     text = c.reason + " [check: " + c.check.predicate + "; found: " + c.check.value + "]";
-  } else if ((c.verdict == "differs" && c.has_check) || (c.verdict == "inconclusive" && !(c.interval > c.tolerance))) {
+  } else if ((c.verdict == "differs" && c.has_check) || c.verdict == "inconclusive") {
     text = c.reason;
   } else if (c.category == "calibrated" && !c.reason.empty() && table_category != "calibrated") {
     text = "calibrated: " + c.reason;

@@ -18,9 +18,26 @@ double match_share(const CampaignResult& r) {
   const auto it = counts.find("flights");
   if (it == counts.end()) return 0.0;
   int total = 0;
-  for (const auto& [verdict, n] : it->second) total += n;
+  for (const auto& [verdict, n] : it->second) total += verdict == "not judged" ? 0 : n;
   const auto m = it->second.find("match");
   return total > 0 && m != it->second.end() ? static_cast<double>(m->second) / total : 0.0;
+}
+
+/// The bases of a table's tolerances, each with the cells it holds for (all of them: "every cell").
+std::string tolerance_bases(const Table& t) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> bases;
+  for (const auto& c : t.cells) {
+    auto it = std::find_if(bases.begin(), bases.end(), [&](const auto& b) { return b.first == c.tolerance_basis; });
+    if (it == bases.end()) it = bases.insert(bases.end(), {c.tolerance_basis, {}});
+    it->second.push_back(c.row + " / " + c.column);
+  }
+  std::string out;
+  for (const auto& [basis, cells] : bases) {
+    std::string list;
+    for (const auto& cell : cells) list += (list.empty() ? "" : ", ") + cell;
+    out += (out.empty() ? "" : "; ") + basis + (bases.size() == 1 ? " (every cell)" : " (" + list + ")");
+  }
+  return out;
 }
 
 std::string seeds_text(const std::vector<std::uint64_t>& seeds) {
@@ -44,7 +61,7 @@ std::map<std::string, std::map<std::string, int>> CampaignResult::counts() const
 int CampaignResult::differing() const {
   int n = 0;
   for (const auto& t : tables) {
-    for (const auto& cell : t.cells) n += (cell.verdict == "differs" && cell.repeats.empty()) ? 1 : 0;
+    for (const auto& cell : t.cells) n += cell.verdict == "differs" ? 1 : 0;  // a repeat differs too
   }
   return n;
 }
@@ -68,6 +85,7 @@ std::string campaign_text(const CampaignResult& r) {
   for (const auto& t : r.tables) {
     out << fmt::format("\nTable {}: {}  [{}]\n", t.id, t.title, t.category);
     if (!t.why.empty()) out << "  " << t.why << "\n";
+    out << "  tolerance: " << tolerance_bases(t) << "\n";
     out << fmt::format("  {:<10} {:<16} {:>10} {:>10} {:>9} {:>9}  {}\n", "row", "column", "published", "rig",
                        "+-95%", "tol", "verdict");
     std::vector<std::string> notes;
@@ -163,7 +181,7 @@ std::string campaign_json(const CampaignResult& r) {
     for (const auto& c : t.cells) {
       w.begin_object().key("row").value(c.row).key("column").value(c.column);
       w.key("published").value(c.published).key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
-      w.key("interval").value(c.interval).key("seeds").value(c.seeds);
+      w.key("interval").value(c.interval).key("seeds").value(c.seeds).key("seeds_to_decide").value(c.seeds_to_decide);
       w.key("tolerance").value(c.tolerance).key("tolerance_basis").value(c.tolerance_basis);
       w.key("category").value(c.category).key("verdict").value(c.verdict).key("reason").value(c.reason);
       if (c.has_check) {

@@ -2,6 +2,7 @@
 
 #include "reproduce/campaign_spec.h"
 
+#include <cmath>
 #include <filesystem>
 
 #include <yaml-cpp/yaml.h>
@@ -40,6 +41,18 @@ std::map<std::string, double> double_map(ConfigMap& parent, const std::string& k
   }
   m.finish();
   return out;
+}
+
+/// Half a unit of the last digit of a number as written ("0.900": 0.0005; "12": 0.5; "1e-3": the
+/// number's own last digit, from the value).
+double printed_half_digit(const std::string& text) {
+  const auto e = text.find_first_of("eE");
+  const auto dot = text.find('.');
+  if (e == std::string::npos && dot != std::string::npos) {
+    return 0.5 * std::pow(10.0, -static_cast<double>(text.size() - dot - 1));
+  }
+  if (e == std::string::npos) return 0.5;
+  return half_last_digit(std::stod(text));
 }
 
 /// Fails on `key` unless `cell` ("row / column") is a published cell of `t`.
@@ -174,6 +187,7 @@ CampaignSpec load_campaign(const std::string& file) {
       for (const auto& col : row.second) {
         const std::string cname = col.first.as<std::string>();
         s.published[name][cname] = cols.get_double(cname);
+        s.printed_half_digit[name][cname] = printed_half_digit(col.second.Scalar());
         s.column_order[name].push_back(cname);
       }
       cols.finish();

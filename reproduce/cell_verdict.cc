@@ -27,6 +27,23 @@ std::string join(const std::vector<std::string>& v) {
 
 }  // namespace
 
+double half_last_digit(double value) {
+  for (int d = 0; d <= 9; ++d) {
+    const double scaled = value * std::pow(10.0, d);
+    if (std::fabs(scaled - std::round(scaled)) < 1e-6 * std::max(1.0, std::fabs(scaled))) return 0.5 * std::pow(10.0, -d);
+  }
+  return 0.0;
+}
+
+int seeds_to_decide(double sd, double distance) {
+  if (!(distance > 0.0) || !std::isfinite(sd)) return 0;
+  if (sd == 0.0) return 2;
+  for (int n = 2; n <= 1000000; n = n < 64 ? n + 1 : n + n / 8) {
+    if (t975(n - 1) * sd / std::sqrt(static_cast<double>(n)) < distance) return n;
+  }
+  return 0;
+}
+
 const char* category_name(Category c) {
   switch (c) {
     case Category::kFlights: return "flights";
@@ -80,9 +97,26 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.tolerance = t.relative * std::fabs(c.published);
     c.tolerance_basis = fmt::format("{:g} % of the published value", 100 * t.relative);
   }
+  // A printed number carries its rounding: no tolerance is tighter than half its last digit.
+  double half_digit = half_last_digit(c.published);
+  if (const auto r = t.printed_half_digit.find(row); r != t.printed_half_digit.end()) {
+    if (const auto h = r->second.find(column); h != r->second.end()) half_digit = h->second;
+  }
+  if (c.tolerance < half_digit) {
+    c.tolerance = half_digit;
+    c.tolerance_basis += fmt::format(", raised to half the printed last digit, {:g}", half_digit);
+  }
   if (category == Category::kNotComparable) {
     c.verdict = "not comparable";
     c.reason = t.why;
+    return c;
+  }
+  // A band that holds zero and the value's opposite cannot fail: no verdict.
+  if (!(c.tolerance < std::fabs(c.published))) {
+    c.verdict = "not judged";
+    c.reason = fmt::format("the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
+                           "fail",
+                           c.tolerance, c.tolerance_basis, c.published);
     return c;
   }
   const double off = c.rig - c.published;
@@ -91,22 +125,27 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.reason = "the rig has no value";
     return c;
   }
-  if (category == Category::kFlights) {
-    if (c.seeds < t.min_seeds) {
-      c.verdict = "inconclusive";
-      c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
-      return c;
-    }
-    if (c.interval > c.tolerance) {
-      c.verdict = "inconclusive";
-      c.reason = fmt::format("the rig's own interval +-{:.3g} ({} seeds) is wider than the tolerance {:.3g}",
-                             c.interval, c.seeds, c.tolerance);
-      return c;
-    }
+  if (category == Category::kFlights && c.seeds < t.min_seeds) {
+    c.verdict = "inconclusive";
+    c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
+    return c;
   }
-  if (std::fabs(off) <= c.tolerance) {
+  // Equivalence by two one-sided tests: the mean's 95 % interval inside the tolerance band is a
+  // match, wholly outside it a difference, across an edge neither.
+  const double lo = c.rig - c.interval, hi = c.rig + c.interval;
+  const double band_lo = c.published - c.tolerance, band_hi = c.published + c.tolerance;
+  if (lo >= band_lo && hi <= band_hi) {
     c.verdict = "match";
     if (calibrated) c.reason = t.calibrated_why;
+    return c;
+  }
+  if (lo <= band_hi && hi >= band_lo) {
+    c.verdict = "inconclusive";
+    c.seeds_to_decide = seeds_to_decide(c.rig_sd, std::min(std::fabs(c.rig - band_lo), std::fabs(c.rig - band_hi)));
+    c.reason = fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
+                           c.rig, c.interval, c.seeds, c.published, c.tolerance) +
+               (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
+                                      : std::string("no number of seeds decides it (the mean sits on the edge)"));
     return c;
   }
   const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
@@ -127,6 +166,12 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   if (why->max_off >= 0) {
     parts.push_back(fmt::format("|rig - published| <= {:g}", why->max_off));
     holds = holds && std::fabs(off) <= why->max_off;
+    // A bound far above the gap cannot fail: it describes nothing of this cell.
+    if (why->max_off > kMaxOffPerGap * std::fabs(off)) {
+      found.push_back(fmt::format("the bound {:g} is over {:g} times the cell's gap {:.3g}: it cannot fail", why->max_off,
+                                  kMaxOffPerGap, std::fabs(off)));
+      holds = false;
+    }
   }
   if (!why->states.empty()) {
     parts.push_back("states from " + join(why->states));
@@ -134,7 +179,13 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     found.push_back("states from " + context.states);
     holds = holds && ok;
   }
-  if (!why->with.empty()) {
+  if (why->with.empty()) {
+    // Direction, bound and states describe a difference; only a cause flown in the same run,
+    // which moves the cell, explains it.
+    parts.push_back("a cause flown in this run (with:) that moves the cell");
+    found.push_back("the reason names no cause to fly: it describes the difference, it does not explain it");
+    holds = false;
+  } else {
     std::vector<std::string> set;
     for (const auto& [k, v] : why->with) set.push_back(k + "=" + v);
     parts.push_back(fmt::format("with {} the cell moves {} the published value by >= {:g} of the gap", join(set),

@@ -3,10 +3,11 @@
 /// the flights that feed them (reproduce/thesis_campaign.h).
 ///
 /// Categories (each table has one, from the campaign file):
-///  - flights: numbers the rig's own flights and pipeline produce. Verdicts `match` (within the
-///    tolerance), `explained` (outside it, with a reason whose check holds in this run),
-///    `differs` (outside it, no reason or a reason whose check fails) or `inconclusive` (the
-///    rig's own seed-to-seed interval is wider than the tolerance: too noisy to judge).
+///  - flights: numbers the rig's own flights and pipeline produce. Verdicts by equivalence (two
+///    one-sided tests on the mean's 95 % interval): `match` (the interval inside the tolerance
+///    band), `differs` (wholly outside it, no reason or a reason whose check fails), `explained`
+///    (wholly outside, with a reason whose check holds in this run) or `inconclusive` (the
+///    interval across an edge of the band, with about how many seeds would decide it).
 ///  - calibrated: numbers the rig was tuned to; `match` or `differs`, never explained.
 ///  - model: arithmetic on the transcribed model (a transcription check); `match` or `differs`.
 ///  - not comparable: fit metrics where the rig's plant is the very model being validated; the
@@ -15,18 +16,22 @@
 /// Tolerance (never widened by the rig's noise): where the campaign file gives the thesis's
 /// standard deviation of a cell, k of those (k the table's `thesis_sigmas`); else `relative`
 /// times |published| (an eigenvalue's real part relative to the real part) or, per column, an
-/// `absolute` one.
+/// `absolute` one; never tighter than half a unit of the published number's last digit (its
+/// rounding). A tolerance as wide as the value itself could not fail: such a cell is `not judged`,
+/// with why. Each cell carries its tolerance's basis.
 /// The rig's value is the mean over the seeds flown; its interval is the 95 % half-width of
 /// that mean (Student t, n - 1 degrees of freedom), reported beside it. A table may ask for a
 /// least number of seeds (`min_seeds`): with fewer, its flight cells are `inconclusive`.
 ///
 /// A reason belongs to the cells it lists ("row / column", no wildcards) and carries the
 /// predicate the command checks in the same run: the direction of the rig's value against the
-/// published one (`rig: above | below`), a bound on the size of the difference (`max_off`) and
-/// the state sources it applies to (`states`), all three required by the campaign file; and where
-/// it names a cause, a second flight with that cause added (`with`: scenario overrides) that
-/// must move the cell toward (or away from) the published value by at least `at_least` of the
-/// gap. A predicate that does not hold makes the cell `differs`, and says which part failed.
+/// published one (`rig: above | below`), a bound on the size of the difference (`max_off`, at
+/// most kMaxOffPerGap times the cell's own gap: a wider one cannot fail) and the state sources
+/// it applies to (`states`), all three required by the campaign file; and the cause, a second
+/// flight with it added (`with`: scenario overrides) that must move the cell toward (or away
+/// from) the published value by at least `at_least` of the gap. Direction, bound and states
+/// describe a difference; without a cause flown in the run a reason explains nothing. A
+/// predicate that does not hold makes the cell `differs`, and says which part failed.
 
 #include <map>
 #include <string>
@@ -67,6 +72,9 @@ struct TableSpec {
   std::map<std::string, double> thesis_sigma;  ///< "row / column" -> the thesis's sigma
   int min_seeds = 1;
   std::map<std::string, std::map<std::string, double>> published;  ///< row -> column -> value
+  /// row -> column -> half a unit of the last digit as written in the campaign file ("0.900":
+  /// 0.0005); a cell without it takes half_last_digit() of its value.
+  std::map<std::string, std::map<std::string, double>> printed_half_digit;
   std::vector<std::string> row_order;
   std::map<std::string, std::vector<std::string>> column_order;    ///< row -> columns as written
   std::vector<Reason> reasons;
@@ -97,6 +105,7 @@ struct Cell {
   bool has_check = false;
   Check check;
   std::string repeats;       ///< "table / row / column" of an earlier cell with the same numbers
+  int seeds_to_decide = 0;   ///< inconclusive: about how many seeds would decide it (0: none would)
 };
 
 /// What judge() needs beyond the numbers.
@@ -112,6 +121,19 @@ struct JudgeContext {
 /// Judges one cell (see the top of this header).
 Cell judge(const TableSpec& table, const std::string& row, const std::string& column, const std::vector<double>& rig,
            const JudgeContext& context);
+
+/// Half a unit of the last digit `value` is printed with (0.24: 0.005; 12.06: 0.005; 0.907:
+/// 0.0005), the rounding every published number carries: the floor of every tolerance.
+double half_last_digit(double value);
+
+/// A reason's bound (`max_off`) may be at most this many times the cell's own gap: a wider bound
+/// cannot fail, so it explains nothing.
+inline constexpr double kMaxOffPerGap = 1.5;
+
+/// The least number of seeds whose mean's 95 % half-width (Student t, seed-to-seed spread `sd`)
+/// is below `distance` (the mean's distance to the nearer edge of the tolerance band); 0 when no
+/// number does (the mean on the edge).
+int seeds_to_decide(double sd, double distance);
 
 /// Mean, standard deviation and 95 % half-width of the mean of `x`.
 void mean_interval(const std::vector<double>& x, double* mean, double* sd, double* half_width);

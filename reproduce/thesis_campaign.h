@@ -102,7 +102,8 @@ struct CampaignResult {
   double wall_s = 0.0;
   /// Cells by category and verdict; a cell that repeats an earlier one's numbers counts once.
   std::map<std::string, std::map<std::string, int>> counts() const;
-  /// Cells of the flights category with verdict `differs`.
+  /// Cells with verdict `differs`, a repeat of an earlier cell's numbers included (the exit code:
+  /// a repeat is counted once in counts(), but a difference is never dropped).
   int differing() const;
 };
 
