@@ -38,8 +38,16 @@ int run_identify_command(const std::vector<std::string>& args) {
                  ->type_name("NAME")
                  ->check(CLI::IsMember({"lateral3", "lateral4"})),
              [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
-  cmdline::each_value(cl->add_option("--method", "estimator: wls (default) or ols")->type_name("NAME")->check(CLI::IsMember({"ols", "wls"})),
+  cmdline::each_value(cl->add_option("--method", "estimator: wls (default, equation error), ols, or output-error (the "
+                                                 "states simulated from the recorded inputs in segments and fitted to "
+                                                 "the measured ones, from the WLS values; lateral3)")
+                          ->type_name("NAME")
+                          ->check(CLI::IsMember({"ols", "wls", "output-error"})),
              [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
+  cl->add_option("--oe-segment", opt.output_error.segment_s,
+                 "output error: the segment each simulation runs from a measured state [s]")
+      ->type_name("S")
+      ->check(CLI::PositiveNumber);
   add_vehicle(cl, vehicle_file, "rig_configs/vehicles/nimble_no_wifi.yaml");
   add_salvage(cl, log_options);
   std::string sensing_file;

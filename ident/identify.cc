@@ -1,5 +1,7 @@
 #include "ident/identify.h"
 
+#include "ident/output_error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -412,6 +414,49 @@ void add_state_psds(const IdentOptions& options, IdentResult& res) {
   }
 }
 
+/// Replaces the equation error's estimates in `res.regression` by output error's (started from
+/// them), equation by equation; the fitted derivatives and residuals are those of the new values.
+void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle, const std::vector<Equation>& equations,
+                            IdentResult& res) {
+  if (options.structure != Structure::kLateral3) {
+    throw std::invalid_argument("output error: the lateral3 structure only (lateral4's r equation is not simulated)");
+  }
+  std::map<std::string, double> start;
+  for (const auto& [name, est] : res.regression.parameters()) start[name] = est.value;
+  OutputErrorOptions oe = options.output_error;
+  if (oe.coloured_block == 0) {
+    oe.coloured_block = static_cast<Eigen::Index>(4 * coloured_lags(options.coloured_lags, options.processing));
+  }
+  const OutputErrorResult r =
+      output_error(res.data.filtered, equations, options.trim, vehicle.gravity_mps2, start, oe);
+  RegressionResult& g = res.regression;
+  g.method = Method::kOutputError;
+  g.covariance = r.covariance;
+  g.covariance_coloured = r.covariance_coloured;
+  Eigen::Index off = 0;
+  for (auto& eq : g.equations) {
+    const Eigen::Index k = eq.theta.size();
+    eq.theta = r.theta.segment(off, k);
+    eq.covariance = r.covariance.block(off, off, k, k);
+    eq.sigma = eq.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    eq.sigma_coloured = r.covariance_coloured.block(off, off, k, k).diagonal().cwiseMax(0.0).cwiseSqrt();
+    const Eigen::VectorXd d = eq.sigma.cwiseMax(1e-300).cwiseInverse();
+    eq.correlation = d.asDiagonal() * eq.covariance * d.asDiagonal();
+    Eigen::MatrixXd X(eq.y.size(), k);
+    for (Eigen::Index j = 0; j < k; ++j) X.col(j) = res.data.filtered.at(eq.equation.regressors[static_cast<std::size_t>(j)]);
+    eq.fitted = X * eq.theta;
+    eq.residual = eq.y - eq.fitted;
+    eq.residual_variance = eq.residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, eq.y.size() - k));
+    off += k;
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "output error: %d segments of %.3g s, %d iterations (%s), weighted cost %.4g -> %.4g from the "
+                "equation error's values",
+                r.segments, oe.segment_s, r.iterations, r.converged ? "converged" : "not converged", r.cost_start, r.cost);
+  res.notes.push_back(buf);
+}
+
 }  // namespace
 
 IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
@@ -436,6 +481,7 @@ IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::
   CovarianceOptions cov;
   cov.correlation_lags = static_cast<Eigen::Index>(coloured_lags(options.coloured_lags, options.processing));
   res.regression = estimate(res.data.filtered.signals, equations, options.method, wls, cov);
+  if (options.method == Method::kOutputError) refine_by_output_error(options, vehicle, equations, res);
   res.parameters = res.regression.parameters();
   res.parameter_order = res.regression.parameter_names;
   res.correlated = correlated_pairs(res.regression, options.correlation_threshold);

@@ -27,6 +27,7 @@
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
 #include "ident/metrics.h"
+#include "ident/output_error.h"
 #include "ident/regression.h"
 #include "ident/signal.h"
 #include "ident/spectrum.h"
@@ -105,6 +106,8 @@ struct IdentOptions {
   /// (evaluate_along()), to its equation; its coefficient is the parameter "<equation>:<expression>"
   /// (term_parameter_name()) and the identified model carries the terms with the fitted values.
   std::vector<Term> terms;
+  /// Method::kOutputError's options (ident/output_error.h).
+  OutputErrorOptions output_error;
 };
 
 /// Data prepared for regression.

@@ -305,12 +305,20 @@ RegressionResult ols(const std::vector<Equation>& equations, const std::vector<D
 
 }  // namespace
 
-std::string to_string(Method m) { return m == Method::kOls ? "ols" : "wls"; }
+std::string to_string(Method m) {
+  switch (m) {
+    case Method::kOls: return "ols";
+    case Method::kWls: return "wls";
+    case Method::kOutputError: return "output-error";
+  }
+  return "?";
+}
 
 Method method_from_string(const std::string& name) {
   if (name == "ols") return Method::kOls;
   if (name == "wls") return Method::kWls;
-  throw std::invalid_argument("unknown method '" + name + "' (ols or wls)");
+  if (name == "output-error") return Method::kOutputError;
+  throw std::invalid_argument("unknown method '" + name + "' (ols, wls or output-error)");
 }
 
 std::map<std::string, ParameterEstimate> RegressionResult::parameters() const {
@@ -417,6 +425,7 @@ RegressionResult estimate_wls(const SignalTable& signals, const std::vector<Equa
 
 RegressionResult estimate(const SignalTable& signals, const std::vector<Equation>& equations, Method method,
                           const WlsOptions& options, const CovarianceOptions& covariance) {
+  // Output error starts from the equation error's WLS (identify() refines it).
   return method == Method::kOls ? estimate_ols(signals, equations, covariance)
                                 : estimate_wls(signals, equations, options, covariance);
 }

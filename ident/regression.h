@@ -60,9 +60,10 @@ struct Equation {
 };
 
 /// Estimation method.
-enum class Method { kOls, kWls };
+/// kOutputError: the equation error's WLS for start values, then output error (ident/output_error.h).
+enum class Method { kOls, kWls, kOutputError };
 
-/// "ols" or "wls".
+/// "ols", "wls" or "output-error".
 std::string to_string(Method m);
 /// @throws std::invalid_argument for another name.
 Method method_from_string(const std::string& name);

@@ -98,7 +98,7 @@ void plant_check_text(std::ostringstream& out, const BesideResult& r) {
     const PlantCheck& a = r.without.plant_check[i];
     const PlantCheck& b = r.with.plant_check[i];
     out << fmt::format("  {:<7} {:<10} {:>11.4g}  {:>11.4g} {:>9.2g} {:>7.1f}%  {:>11.4g} {:>9.2g} {:>7.1f}%\n", a.row,
-                       a.derivative, a.plant, a.mean, a.interval, 100 * (a.mean / a.plant - 1), b.mean, b.interval,
+                       a.derivative + (a.method == "output error" ? " (OE)" : ""), a.plant, a.mean, a.interval, 100 * (a.mean / a.plant - 1), b.mean, b.interval,
                        100 * (b.mean / b.plant - 1));
   }
 }

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -113,10 +112,12 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
 }
 
 /// The thesis's identification of one flight (WLS, Eq 21 with w0 the flight's initial w), plus
-/// the regressor p (w - w0) in the side-force equation.
+/// the regressor p (w - w0) in the side-force equation; or the same by output error.
 ident::IdentResult identify_flight(const ident::FlightData& data, const Vehicle& vehicle,
-                                   const std::string& vehicle_file, const std::string& name) {
+                                   const std::string& vehicle_file, const std::string& name,
+                                   ident::Method method = ident::Method::kWls) {
   ident::IdentOptions opt;
+  opt.method = method;
   opt.trim.w0_mps = data.at("w").values.front();
   opt.model_name = name;
   const double w0 = opt.trim.w0_mps, g = vehicle.gravity_mps2;
@@ -243,6 +244,8 @@ struct WithCause {
 
 /// The derivatives whose identification is checked against the plant's.
 constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
+/// The key of a derivative identified by output error among a seed's identified values.
+constexpr const char* kOutputErrorSuffix = " (output error)";
 
 /// One run of the campaign: the flights of every seed, the values of every table.
 class CampaignRun {
@@ -316,10 +319,14 @@ class CampaignRun {
       t94[set.row + " / phi"] = f.range_phi;
       const DerivativeModel truth = load_model(set.model);
       const Vehicle vehicle = load_vehicle(truth.vehicle_file);
-      ident::IdentResult id = identify_flight(read(f).measured, vehicle, truth.vehicle_file, "rig_" + set.row);
+      const ident::FlightData measured = read(f).measured;
+      ident::IdentResult id = identify_flight(measured, vehicle, truth.vehicle_file, "rig_" + set.row);
+      const ident::IdentResult oe =
+          identify_flight(measured, vehicle, truth.vehicle_file, "rig_" + set.row, ident::Method::kOutputError);
       put_eigenvalues(t95, set.row, id.eigenvalues);
       for (const char* d : kCheckedDerivatives) {
         identified_[set.row][d].push_back(id.parameters.at(d).value);
+        identified_[set.row][std::string(d) + kOutputErrorSuffix].push_back(oe.parameters.at(d).value);
         plant_[set.row][d] = truth.derivatives.at(d);
       }
       all_eigenvalues.emplace_back(set.row, id.eigenvalues);
@@ -486,14 +493,18 @@ std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<
   std::vector<PlantCheck> out;
   for (const auto& set : spec.sets) {
     for (const char* d : kCheckedDerivatives) {
-      PlantCheck c;
-      c.row = set.row;
-      c.derivative = d;
-      c.plant = seeds.front().plant.at(set.row).at(d);
-      std::vector<double> x;
-      for (const SeedValues& v : seeds) x.push_back(v.identified.at(set.row).at(d));
-      mean_interval(x, &c.mean, &c.sd, &c.interval);
-      out.push_back(c);
+      for (const char* method : {"equation error", "output error"}) {
+        PlantCheck c;
+        c.row = set.row;
+        c.derivative = d;
+        c.method = method;
+        c.plant = seeds.front().plant.at(set.row).at(d);
+        const std::string key = std::string(d) + (c.method == "output error" ? kOutputErrorSuffix : "");
+        std::vector<double> x;
+        for (const SeedValues& v : seeds) x.push_back(v.identified.at(set.row).at(key));
+        mean_interval(x, &c.mean, &c.sd, &c.interval);
+        out.push_back(c);
+      }
     }
   }
   return out;

@@ -64,6 +64,7 @@ struct CauseCell {
 struct PlantCheck {
   std::string row;         ///< "set N"
   std::string derivative;  ///< e.g. "Yv"
+  std::string method;      ///< "equation error" (the thesis's WLS) or "output error"
   double plant = 0.0;
   double mean = 0.0;       ///< over the seeds
   double sd = 0.0;         ///< seed-to-seed
