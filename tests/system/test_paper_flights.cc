@@ -231,6 +231,18 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   bool repeated = false;
   for (const auto& c : table(j, "14")["cells"]) repeated = repeated || !c["repeats"].as<std::string>().empty();
   CHECK(repeated);
+  // The identification against the plant, by both methods: the strong derivatives within 2 % of
+  // the plant's by either.
+  int oe_rows = 0;
+  for (const auto& c : j["plant_check"]) {
+    const std::string d = c["derivative"].as<std::string>(), method = c["method"].as<std::string>();
+    oe_rows += method == "output error" ? 1 : 0;
+    INFO(c["row"].as<std::string>() << " " << d << " " << method);
+    if (d == "Lp" || d == "L_df" || d == "Y_df") {
+      CHECK(std::fabs(c["mean"].as<double>() / c["plant"].as<double>() - 1.0) < 0.02);
+    }
+  }
+  CHECK(oe_rows == 30);  // 6 derivatives of 5 sets
   // The closed-loop causes were flown and reported.
   CHECK(j["causes"].size() == 3);
 }
