@@ -18,6 +18,7 @@
 #include "core/data_bounds.h"
 #include "core/json_writer.h"
 #include "core/model.h"
+#include "core/terms.h"
 #include "core/vehicle.h"
 #include "estimator/sensing_config.h"
 #include "ident/closed_loop.h"
@@ -91,16 +92,73 @@ py::dict signals_of(const ident::UniformData& u) {
   return out;
 }
 
+/// The generic terms of identify(terms=): a model file's terms: section (a path), or a list of
+/// "EQUATION: EXPRESSION" texts (as rig discrepancy --test-term).
+std::vector<Term> terms_of(const py::object& terms) {
+  if (terms.is_none()) return {};
+  if (is_path(terms)) return load_model(path_text(terms)).terms;
+  std::vector<Term> out;
+  for (const auto& item : terms) {
+    if (!py::isinstance<py::str>(item)) {
+      throw py::value_error("terms: a model file's path or a list of 'EQUATION: EXPRESSION' texts, not " +
+                            py::str(py::type::of(item)).cast<std::string>());
+    }
+    const std::string v = item.cast<std::string>();
+    const auto colon = v.find(':');
+    if (colon == std::string::npos) throw py::value_error("terms: '" + v + "' is not 'EQUATION: EXPRESSION' (e.g. 'Y: v*abs(v)')");
+    std::string eq = v.substr(0, colon);
+    eq.erase(0, eq.find_first_not_of(' '));
+    eq.erase(eq.find_last_not_of(' ') + 1);
+    out.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "identify(terms=)"});
+  }
+  return out;
+}
+
+/// Time ranges [(start, end), ...] of identify(hover=, manoeuvre=).
+std::vector<ident::TimeRange> ranges_of(const std::optional<std::vector<std::pair<double, double>>>& r,
+                                        const char* what) {
+  std::vector<ident::TimeRange> out;
+  if (!r) return out;
+  for (const auto& [a, b] : *r) {
+    if (!(std::isfinite(a) && std::isfinite(b) && b > a)) {
+      throw py::value_error(std::string(what) + ": (" + std::to_string(a) + ", " + std::to_string(b) +
+                            ") is not a time range (start < end, finite)");
+    }
+    out.push_back({a, b});
+  }
+  return out;
+}
+
+/// A finite value of a keyword, or a ValueError naming it.
+double finite_arg(double v, const char* name) {
+  if (!std::isfinite(v)) throw py::value_error(std::string(name) + " must be finite");
+  return v;
+}
+
 py::dict identify(const py::object& data, const std::string& structure, const std::string& method,
                   const std::optional<std::vector<std::string>>& inputs, const std::optional<std::string>& vehicle,
                   const std::optional<std::string>& model_out, const std::string& states,
                   const std::optional<std::string>& sensing, bool salvage, std::optional<double> rate_hz,
-                  std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
+                  std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation,
+                  double w0, double u0, double theta0, double phi0, const py::object& terms,
+                  const std::optional<std::vector<std::pair<double, double>>>& hover,
+                  const std::optional<std::vector<std::pair<double, double>>>& manoeuvre, double oe_segment_s) {
   ident::IdentOptions o;
   o.structure = structure_from_string(structure);
   o.method = ident::method_from_string(method);
   if (inputs) o.inputs = *inputs;
   o.processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
+  // The command line's --w0, --u0 (and the trim attitude the model files carry), --terms,
+  // --hover, --manoeuvre and --oe-segment.
+  o.trim.w0_mps = finite_arg(w0, "w0");
+  o.trim.u0_mps = finite_arg(u0, "u0");
+  o.trim.theta0_rad = finite_arg(theta0, "theta0");
+  o.trim.phi0_rad = finite_arg(phi0, "phi0");
+  o.terms = terms_of(terms);
+  o.segments.hover = ranges_of(hover, "hover");
+  o.segments.manoeuvre = ranges_of(manoeuvre, "manoeuvre");
+  if (!(std::isfinite(oe_segment_s) && oe_segment_s > 0.0)) throw py::value_error("oe_segment_s must be > 0 s");
+  o.output_error.segment_s = oe_segment_s;
   const std::string vehicle_file = vehicle.value_or(ident::default_vehicle_file());
   const Vehicle v = load_vehicle(vehicle_file);
   const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage, &v);
@@ -279,6 +337,16 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
   if (vehicle != nullptr) o.refuse_beyond_bounds = *vehicle;
   o.states = ident::state_source_from_name(states);
   DataInput in;
+  if (py::hasattr(data, "report") && py::hasattr(data, "channels")) {
+    // A Flight: its log, if it was flown with one.
+    const py::dict report = data.attr("report").cast<py::dict>();
+    const std::string log = report.contains("log") ? report["log"].cast<std::string>() : std::string();
+    if (log.empty()) {
+      throw std::invalid_argument("data: this Flight was flown without a log; fly(scenario, log='flight.lcmlog') "
+                                  "keeps the record the analyses read");
+    }
+    return flight_data_of(py::str(log), states, sensing, salvage, vehicle);
+  }
   if (py::isinstance<py::dict>(data)) {
     if (o.states != ident::StateSource::kAuto) {
       throw std::invalid_argument("states='" + states + "': the data is a dict of arrays, which carries its own states");
@@ -286,7 +354,7 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
     in.data = dict_data(data.cast<py::dict>());
     return in;
   }
-  if (!is_path(data)) throw std::invalid_argument("data: a path (rig log or CSV file) or a dict of arrays, not " +
+  if (!is_path(data)) throw std::invalid_argument("data: a path (rig log or CSV file), a Flight or a dict of arrays, not " +
                                                   py::str(py::type::of(data)).cast<std::string>());
   const std::string file = path_text(data);
   if (!ident::is_lcm_log(file)) {
@@ -318,10 +386,15 @@ void add_analysis(py::module_& m) {
         py::arg("method") = "wls", py::arg("inputs") = py::none(), py::arg("vehicle") = py::none(),
         py::arg("model_out") = py::none(), py::arg("states") = "auto", py::arg("sensing") = py::none(),
         py::arg("salvage") = false, py::arg("rate_hz") = py::none(), py::arg("cutoff_hz") = py::none(),
-        py::arg("order") = py::none(), py::arg("interpolation") = "cubic",
-        "Identifies the lateral model's dimensional derivatives from flight data (equation error, as "
-        "`rig identify`). data: a rig log or CSV path, or a dict of numpy arrays {'t', 'p', 'v', 'phi', "
-        "'delta_f', 'delta_t', ...}. Returns `rig identify --json`'s content as a dict (parameters, metrics, "
+        py::arg("order") = py::none(), py::arg("interpolation") = "cubic", py::arg("w0") = 0.0, py::arg("u0") = 0.0,
+        py::arg("theta0") = 0.0, py::arg("phi0") = 0.0, py::arg("terms") = py::none(), py::arg("hover") = py::none(),
+        py::arg("manoeuvre") = py::none(), py::arg("oe_segment_s") = 2.0,
+        "Identifies the lateral model's dimensional derivatives from flight data, as `rig identify`: "
+        "method 'wls' (default) or 'ols' (equation error) or 'output-error'. data: a rig log or CSV path, a "
+        "Flight flown with log= (its log is read), or a dict of numpy arrays {'t', 'p', 'v', 'phi', "
+        "'delta_f', 'delta_t', ...}. w0, u0 [m/s], theta0, phi0 [rad]: the trim of Eq 21 (--w0, --u0); terms: a "
+        "model file whose terms: are fitted alongside, or a list of 'EQUATION: EXPRESSION' texts; hover, "
+        "manoeuvre: lists of (start, end) [s] for the PSDs; oe_segment_s: output error's segment [s]. Returns `rig identify --json`'s content as a dict (parameters, metrics, "
         "eigenvalues, ...) plus 'signals' (the resampled, filtered signals the regression used, 't' first) and "
         "'equations' (per equation its regressors, parameters, y = scale * dependent, theta). model_out: write "
         "the identified model file there. Raises DataError for bad data, ValueError for a bad option.");

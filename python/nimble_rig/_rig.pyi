@@ -2,7 +2,7 @@
 editors. python.module (tests/python/test_stubs.py) checks that every function and class of the
 module is here with the module's own parameter names."""
 import os
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -10,7 +10,7 @@ PathLike = Union[str, os.PathLike]
 #: Flight data: a rig log or identification CSV path, or channel name -> numpy array on one time
 #: base ('t' [s] strictly increasing; 'p', 'v', 'phi', 'delta_f', 'delta_t', ... of
 #: ident/flight_data.h).
-Data = Union[PathLike, Dict[str, np.ndarray]]
+Data = Union[PathLike, "Flight", Dict[str, np.ndarray]]
 
 class ConfigError(ValueError):
     """A bad scenario or configuration value; str(e) is the rig's message."""
@@ -65,8 +65,13 @@ def identify(data: Data, *, structure: str = "lateral3", method: str = "wls", in
              vehicle: Optional[str] = None, model_out: Optional[str] = None, states: str = "auto",
              sensing: Optional[str] = None, salvage: bool = False, rate_hz: Optional[float] = None,
              cutoff_hz: Optional[float] = None, order: Optional[int] = None,
-             interpolation: str = "cubic") -> Dict[str, Any]:
-    """`rig identify --json`'s content, plus 'signals' and 'equations' (regressors, y, theta) as arrays."""
+             interpolation: str = "cubic", w0: float = 0.0, u0: float = 0.0, theta0: float = 0.0,
+             phi0: float = 0.0, terms: Optional[Union[PathLike, List[str]]] = None,
+             hover: Optional[List[Tuple[float, float]]] = None,
+             manoeuvre: Optional[List[Tuple[float, float]]] = None,
+             oe_segment_s: float = 2.0) -> Dict[str, Any]:
+    """`rig identify --json`'s content, plus 'signals' and 'equations' (regressors, y, theta) as arrays.
+    data may also be a Flight flown with log=; method 'wls', 'ols' or 'output-error'."""
     ...
 
 def validate(model: PathLike, data: Data, *, closed_loop: bool = False, gains: Optional[str] = None,

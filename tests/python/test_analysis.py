@@ -133,3 +133,30 @@ def test_options_out_of_the_command_lines_ranges_are_refused_as_there(train):
         name = next(iter(bad))
         with pytest.raises(ValueError, match=name):
             nimble_rig.identify(train["log"], **bad)
+
+
+def test_identify_takes_every_option_of_the_command_line_and_a_flight(train, tmp_path):
+    # The trim of Eq 21: set 1's w0 of -0.30 m/s, as `rig identify --w0 -0.30` (without it Yp comes out
+    # with the other sign on this train).
+    got = nimble_rig.identify(train["log"], w0=-0.30)
+    assert without_arrays(got) == rig_json("identify", train["log"], "--w0", "-0.30")
+    assert got["parameters"]["Yp"]["value"] > 0
+    assert nimble_rig.identify(train["log"])["parameters"]["Yp"]["value"] < 0
+    # Output error, as `rig identify --method output-error`.
+    oe = nimble_rig.identify(train["log"], w0=-0.30, method="output-error", oe_segment_s=1.5)
+    assert without_arrays(oe) == rig_json("identify", train["log"], "--w0", "-0.30", "--method", "output-error",
+                                          "--oe-segment", "1.5")
+    # Terms as texts, and the PSD segments.
+    with_term = nimble_rig.identify(train["log"], w0=-0.30, terms=["Y: v*abs(v)"], hover=[(0.5, 4.0)])
+    assert "Y:v*abs(v)" in with_term["parameters"]
+    with pytest.raises(ValueError, match="EQUATION: EXPRESSION"):
+        nimble_rig.identify(train["log"], terms=["v*abs(v)"])
+    with pytest.raises(ValueError, match="hover"):
+        nimble_rig.identify(train["log"], hover=[(4.0, 1.0)])
+    # A Flight flown with a log is read from it; one flown without says how to keep one.
+    log = str(tmp_path / "f.lcmlog")
+    flight = nimble_rig.fly(nimble_rig.load_scenario(TRAIN), seed=1, log=log)
+    assert without_arrays(nimble_rig.identify(flight, w0=-0.30)) == without_arrays(got) | {"source": log}
+    bare = nimble_rig.fly(nimble_rig.load_scenario(TRAIN), seed=1)
+    with pytest.raises(Exception, match="flown without a log"):
+        nimble_rig.identify(bare)
