@@ -100,8 +100,9 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
 }  // namespace
 
 const std::vector<std::string>& campaign_table_ids() {
-  static const std::vector<std::string> ids = {"9.4", "9.5", "9.5-model", "9.6", "9.6-model", "8.8", "4", "7", "8",
-                                               "9",   "10",  "11",        "12",  "13",        "14",  "15", "16"};
+  static const std::vector<std::string> ids = {"9.4", "9.5", "9.5-oe", "9.5-model", "9.6", "9.6-oe", "9.6-model",
+                                               "8.8", "4",   "7",      "8",         "9",   "10",     "11",
+                                               "12",  "13",  "14",     "15",        "16"};
   return ids;
 }
 

@@ -307,7 +307,7 @@ class CampaignRun {
 
   /// The identification flight of every set: Tables 9.4, 9.5 (and 9.6, 4 from set 1).
   void identification_sets() {
-    CellMap t94, t95, t96, t4;
+    CellMap t94, t95, t96, t4, t95_oe, t96_oe;
     std::vector<std::pair<std::string, std::vector<std::complex<double>>>> all_eigenvalues;
     for (const auto& set : spec_.sets) {
       const bool first = set.row == spec_.sets.front().row;
@@ -324,6 +324,7 @@ class CampaignRun {
       const ident::IdentResult oe =
           identify_flight(measured, vehicle, truth.vehicle_file, "rig_" + set.row, ident::Method::kOutputError);
       put_eigenvalues(t95, set.row, id.eigenvalues);
+      put_eigenvalues(t95_oe, set.row, oe.eigenvalues);
       for (const char* d : kCheckedDerivatives) {
         identified_[set.row][d].push_back(id.parameters.at(d).value);
         identified_[set.row][std::string(d) + kOutputErrorSuffix].push_back(oe.parameters.at(d).value);
@@ -332,6 +333,7 @@ class CampaignRun {
       all_eigenvalues.emplace_back(set.row, id.eigenvalues);
       if (first) {
         put_nondimensional(t96, set.row, [&id](const char* n) { return id.parameters.at(n).value; }, id.vehicle);
+        put_nondimensional(t96_oe, set.row, [&oe](const char* n) { return oe.parameters.at(n).value; }, oe.vehicle);
         put_fit(t4, "p_dot", fit_of(id.fits, "p_dot").metrics);
         put_fit(t4, "v_dot", fit_of(id.fits, "v_dot_star").metrics);
         if (plots_ && !o_.report_dir.empty()) {
@@ -346,6 +348,8 @@ class CampaignRun {
     values_["9.4"].push_back(t94);
     values_["9.5"].push_back(t95);
     values_["9.6"].push_back(t96);
+    values_["9.5-oe"].push_back(t95_oe);
+    values_["9.6-oe"].push_back(t96_oe);
     values_["4"].push_back(t4);
     if (plots_ && !o_.report_dir.empty()) plot_eigenvalue_map(o_.report_dir, all_eigenvalues, spec_.tables.at("9.5"));
   }
