@@ -1,12 +1,15 @@
 /// `rig reproduce thesis`'s tables as text and JSON, and the counts by category and verdict.
 
 #include <algorithm>
+#include <complex>
 #include <filesystem>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "core/json_writer.h"
+#include "core/output_file.h"
+#include "ident/plots.h"
 #include "reproduce/thesis_campaign.h"
 
 namespace nimble::reproduce {
@@ -228,6 +231,32 @@ std::string campaign_json(const CampaignResult& r) {
   w.key("match_share").value(match_share(r));
   w.end_object();
   return w.str();
+}
+
+/// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
+void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std::string, std::vector<std::complex<double>>>>& rig,
+                         const TableSpec& published) {
+  std::ostringstream data;
+  for (const auto& [row, eig] : rig) {
+    for (const auto& e : eig) data << e.real() << " " << e.imag() << "\n";
+  }
+  data << "\n\n";
+  for (const auto& row : published.row_order) {
+    const auto& c = published.published.at(row);
+    data << c.at("aperiodic") << " 0\n";
+    data << c.at("oscillatory re") << " " << c.at("oscillatory im") << "\n";
+    data << c.at("oscillatory re") << " " << -c.at("oscillatory im") << "\n";
+  }
+  const std::filesystem::path dat = std::filesystem::path(dir) / "eigenvalues_9_1.dat",
+                              png = std::filesystem::path(dir) / "eigenvalues_9_1.png";
+  write_file(dat, data.str());
+  ident::run_gnuplot(dir, "eigenvalues_9_1",
+                     "set terminal pngcairo size 900,650\nset output " + ident::gp_quote(png.string()) + "\n"
+                     "set title 'Eigenvalues of the identified models, every set (thesis Fig 9.1)'\n"
+                     "set xlabel 'real part [1/s]'\nset ylabel 'imaginary part [1/s]'\nset grid\n"
+                     "set key below\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n"
+                     "plot " + ident::gp_quote(dat.string()) + " index 0 with points pt 7 ps 1.5 title 'rig-identified', "
+                     "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
 }
 
 }  // namespace nimble::reproduce

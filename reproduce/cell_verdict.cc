@@ -74,19 +74,12 @@ void mean_interval(const std::vector<double>& x, double* mean, double* sd, doubl
   *half_width = n > 1 ? t975(n - 1) * s / std::sqrt(static_cast<double>(n)) : 0.0;
 }
 
-Cell judge(const TableSpec& t, const std::string& row, const std::string& column, const std::vector<double>& rig,
-           const JudgeContext& context) {
-  Cell c;
-  c.row = row;
-  c.column = column;
-  c.published = t.published.at(row).at(column);
-  c.seeds = static_cast<int>(rig.size());
-  mean_interval(rig, &c.rig, &c.rig_sd, &c.interval);
+namespace {
+
+/// The cell's tolerance and its basis: the thesis's sigma where it gives one, else absolute by
+/// column, else relative; never tighter than half the published number's last digit.
+void set_tolerance(const TableSpec& t, const std::string& row, const std::string& column, Cell& c) {
   const std::string key = row + " / " + column;
-  const bool calibrated = std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
-  const Category category = calibrated ? Category::kCalibrated : t.category;
-  c.category = category_name(category);
-  // The tolerance: the thesis's sigma where it gives one, else relative, else absolute by column.
   if (const auto s = t.thesis_sigma.find(key); s != t.thesis_sigma.end() && t.thesis_sigmas > 0) {
     c.tolerance = t.thesis_sigmas * s->second;
     c.tolerance_basis = fmt::format("{:g} x the thesis's sigma {:.3g}", t.thesis_sigmas, s->second);
@@ -106,56 +99,13 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.tolerance = half_digit;
     c.tolerance_basis += fmt::format(", raised to half the printed last digit, {:g}", half_digit);
   }
-  if (category == Category::kNotComparable) {
-    c.verdict = "not comparable";
-    c.reason = t.why;
-    return c;
-  }
-  // A band that holds zero and the value's opposite cannot fail: no verdict.
-  if (!(c.tolerance < std::fabs(c.published))) {
-    c.verdict = "not judged";
-    c.reason = fmt::format("the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
-                           "fail",
-                           c.tolerance, c.tolerance_basis, c.published);
-    return c;
-  }
-  const double off = c.rig - c.published;
-  if (!std::isfinite(c.rig)) {
-    c.verdict = "differs";
-    c.reason = "the rig has no value";
-    return c;
-  }
-  if (category == Category::kFlights && c.seeds < t.min_seeds) {
-    c.verdict = "inconclusive";
-    c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
-    return c;
-  }
-  // Equivalence by two one-sided tests: the mean's 95 % interval inside the tolerance band is a
-  // match, wholly outside it a difference, across an edge neither.
-  const double lo = c.rig - c.interval, hi = c.rig + c.interval;
-  const double band_lo = c.published - c.tolerance, band_hi = c.published + c.tolerance;
-  if (lo >= band_lo && hi <= band_hi) {
-    c.verdict = "match";
-    if (calibrated) c.reason = t.calibrated_why;
-    return c;
-  }
-  if (lo <= band_hi && hi >= band_lo) {
-    c.verdict = "inconclusive";
-    c.seeds_to_decide = seeds_to_decide(c.rig_sd, std::min(std::fabs(c.rig - band_lo), std::fabs(c.rig - band_hi)));
-    c.reason = fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
-                           c.rig, c.interval, c.seeds, c.published, c.tolerance) +
-               (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
-                                      : std::string("no number of seeds decides it (the mean sits on the edge)"));
-    return c;
-  }
-  const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
-  if (why == nullptr) {
-    c.verdict = "differs";
-    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}", off, c.tolerance);
-    return c;
-  }
-  // The reason's predicate, every part checked.
-  std::vector<std::string> parts, found;
+}
+
+/// Each part of a reason's predicate on the cell (`off` = rig - published), in words (`parts`)
+/// and as found (`found`); true if every part holds.
+bool reason_holds(const Reason& r, double off, const Cell& c, const JudgeContext& context,
+                  std::vector<std::string>& parts, std::vector<std::string>& found) {
+  const Reason* why = &r;
   bool holds = true;
   if (!why->rig.empty()) {
     parts.push_back("rig " + why->rig + " published");
@@ -211,6 +161,74 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
       holds = holds && ok;
     }
   }
+  return holds;
+}
+
+}  // namespace
+
+Cell judge(const TableSpec& t, const std::string& row, const std::string& column, const std::vector<double>& rig,
+           const JudgeContext& context) {
+  Cell c;
+  c.row = row;
+  c.column = column;
+  c.published = t.published.at(row).at(column);
+  c.seeds = static_cast<int>(rig.size());
+  mean_interval(rig, &c.rig, &c.rig_sd, &c.interval);
+  const std::string key = row + " / " + column;
+  const bool calibrated = std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
+  const Category category = calibrated ? Category::kCalibrated : t.category;
+  c.category = category_name(category);
+  set_tolerance(t, row, column, c);
+  if (category == Category::kNotComparable) {
+    c.verdict = "not comparable";
+    c.reason = t.why;
+    return c;
+  }
+  // A band that holds zero and the value's opposite cannot fail: no verdict.
+  if (!(c.tolerance < std::fabs(c.published))) {
+    c.verdict = "not judged";
+    c.reason = fmt::format("the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
+                           "fail",
+                           c.tolerance, c.tolerance_basis, c.published);
+    return c;
+  }
+  const double off = c.rig - c.published;
+  if (!std::isfinite(c.rig)) {
+    c.verdict = "differs";
+    c.reason = "the rig has no value";
+    return c;
+  }
+  if (category == Category::kFlights && c.seeds < t.min_seeds) {
+    c.verdict = "inconclusive";
+    c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
+    return c;
+  }
+  // Equivalence by two one-sided tests: the mean's 95 % interval inside the tolerance band is a
+  // match, wholly outside it a difference, across an edge neither.
+  const double lo = c.rig - c.interval, hi = c.rig + c.interval;
+  const double band_lo = c.published - c.tolerance, band_hi = c.published + c.tolerance;
+  if (lo >= band_lo && hi <= band_hi) {
+    c.verdict = "match";
+    if (calibrated) c.reason = t.calibrated_why;
+    return c;
+  }
+  if (lo <= band_hi && hi >= band_lo) {
+    c.verdict = "inconclusive";
+    c.seeds_to_decide = seeds_to_decide(c.rig_sd, std::min(std::fabs(c.rig - band_lo), std::fabs(c.rig - band_hi)));
+    c.reason = fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
+                           c.rig, c.interval, c.seeds, c.published, c.tolerance) +
+               (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
+                                      : std::string("no number of seeds decides it (the mean sits on the edge)"));
+    return c;
+  }
+  const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
+  if (why == nullptr) {
+    c.verdict = "differs";
+    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}", off, c.tolerance);
+    return c;
+  }
+  std::vector<std::string> parts, found;
+  const bool holds = reason_holds(*why, off, c, context, parts, found);
   c.has_check = true;
   c.check.predicate = parts.empty() ? "(none)" : join(parts);
   c.check.holds = holds && !parts.empty();

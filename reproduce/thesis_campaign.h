@@ -32,6 +32,7 @@
 /// beside the published values, whichever way.
 
 #include <cstdint>
+#include <complex>
 #include <map>
 #include <optional>
 #include <string>
@@ -151,5 +152,11 @@ std::string campaign_text(const CampaignResult& result);
 /// "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds", "value"}, "repeats"}]}],
 /// "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
 std::string campaign_json(const CampaignResult& result);
+
+/// Fig 9.1: every set's identified eigenvalues (`rig`: set row, eigenvalues) with the published
+/// ones of Table 9.5, on one map (eigenvalues_9_1.png in `dir`).
+void plot_eigenvalue_map(const std::string& dir,
+                         const std::vector<std::pair<std::string, std::vector<std::complex<double>>>>& rig,
+                         const TableSpec& published);
 
 }  // namespace nimble::reproduce
