@@ -258,7 +258,6 @@ struct TermFamily {
 };
 
 struct LocationFrame;
-struct Span;
 
 /// What the open-world search tests a term against in one equation: the location frame of the
 /// current model and the record's excitation (LocationFrame; none without an exogenous signal),
@@ -267,7 +266,6 @@ struct Span;
 struct TermConfirmation {
   std::unique_ptr<LocationFrame> frame;
   const UniformData* excitation_parts = nullptr;
-  const Span* instruments = nullptr;  ///< the excitation bank's span (instrumented_wald)
   /// The confirmations' Bonferroni factor: the families of the round that met the significance
   /// rule (0 before that is known: every family of the round).
   std::size_t bonferroni = 0;
@@ -359,10 +357,12 @@ struct Workflow {
   /// the scan and `family_count`; fills the trial and, when it passes, its addition.
   /// A dead zone, backlash or lag of an input passes only if the input acts mostly through it.
   void acts_through(const TermFamily& fam, const Model& m, std::size_t eq, const ScanPoint& P, CandidateTrial& t) const;
-  /// A term passes only if it is also significant seen through the excitation (the location
-  /// tests' frame), Bonferroni over `family_count`, at gust_band_alpha.
+  /// A recorded signal's linear term passes only if it is also significant with the excitation
+  /// as instruments (the frame's excitation span), Bonferroni over `family_count`, at gust_band_alpha.
   void instrument_confirms(const TermExpression& expr, const Model& m, std::size_t eq, std::size_t family_count,
                            const TermConfirmation& confirm, CandidateTrial& t) const;
+  /// A term passes only if it is also significant seen through the excitation (the location
+  /// tests' frame), Bonferroni over `family_count`, at gust_band_alpha.
   void excitation_confirms(const TermExpression& expr, const std::string& eqname, std::size_t family_count,
                            const TermConfirmation& confirm, CandidateTrial& t) const;
   CandidateTrial term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,

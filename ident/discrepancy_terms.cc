@@ -197,7 +197,7 @@ void Workflow::instrument_confirms(const TermExpression& expr, const Model& m, s
   // independent of the excitation, so the test holds its level where the least-squares test
   // meets the feedback's bias (measured on the open generator's 200 nulls: coefficient / sigma
   // of phi in L, mean -1.22 by least squares, -0.18 instrumented).
-  if (!confirm.instruments) {
+  if (!confirm.frame) {
     t.passed = false;
     t.reason = "fails: no exogenous signal to instrument the term by (" + t.reason + ")";
     return;
@@ -205,7 +205,7 @@ void Workflow::instrument_confirms(const TermExpression& expr, const Model& m, s
   MatrixXd C(data.size(), 1);
   C.col(0) = term_column_of(expr);
   const double p = std::min(1.0, instrumented_wald(augmented_design(m.eqs[eq], m.added[eq]), m.eqs[eq].y, C,
-                                                   *confirm.instruments, batch.min_block, nullptr, nullptr) *
+                                                   confirm.frame->excitation, batch.min_block, nullptr, nullptr) *
                                      static_cast<double>(family_count));
   t.signature["instrumented_p"] = p;
   if (p > opt.gust_band_alpha) {
@@ -499,6 +499,7 @@ void scan_interval(const Workflow& wf, const Model& m, const TermFamily& fam, st
 }
 
 void test_given_terms(const Workflow& wf, const Model& m, DiscrepancyResult& res) {
+  if (wf.opt.test_terms.empty()) return;
   const Excitation ex = excitation_bank(wf.data, wf.opt.excitation);
   const std::optional<Span> instruments = ex.signals.empty() ? std::nullopt : std::optional<Span>(Span(ex.Z));
   for (const Term& given : wf.opt.test_terms) {
@@ -559,10 +560,9 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
   // The excitation (the location tests' bank) and each signal's excitation part.
   const Excitation ex = excitation_bank(wf.data, wf.opt.excitation);
   UniformData excitation_parts;
-  std::optional<Span> instruments;
   if (!ex.signals.empty()) {
     excitation_parts = wf.data;
-    const Span& span = instruments.emplace(ex.Z);
+    const Span span(ex.Z);
     for (auto& [name, x] : excitation_parts.signals) {
       if (x.size() == ex.Z.rows()) x = span.project(x);
     }
@@ -577,7 +577,6 @@ void term_search(const Workflow& wf, const std::vector<std::string>& inputs, Mod
       if (ex.signals.empty()) continue;
       c.frame = std::make_unique<LocationFrame>(m.X(e), m.eqs[e].y, ex.Z);
       c.excitation_parts = &excitation_parts;
-      c.instruments = &*instruments;
     }
     struct Pass {
       CandidateTrial trial;
