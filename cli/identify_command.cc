@@ -45,7 +45,8 @@ int run_identify_command(const std::vector<std::string>& args) {
                           ->check(CLI::IsMember({"ols", "wls", "output-error"})),
              [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
   cl->add_option("--oe-segment", opt.output_error.segment_s,
-                 "output error: the segment each simulation runs from a measured state [s]")
+                 "output error: the length of each simulated segment, whose initial state is fitted from the "
+                 "measured one [s]")
       ->type_name("S")
       ->check(CLI::PositiveNumber);
   add_vehicle(cl, vehicle_file, "rig_configs/vehicles/nimble_no_wifi.yaml");

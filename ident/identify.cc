@@ -418,9 +418,6 @@ void add_state_psds(const IdentOptions& options, IdentResult& res) {
 /// them), equation by equation; the fitted derivatives and residuals are those of the new values.
 void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle, const std::vector<Equation>& equations,
                             IdentResult& res) {
-  if (options.structure != Structure::kLateral3) {
-    throw std::invalid_argument("output error: the lateral3 structure only (lateral4's r equation is not simulated)");
-  }
   std::map<std::string, double> start;
   for (const auto& [name, est] : res.regression.parameters()) start[name] = est.value;
   OutputErrorOptions oe = options.output_error;
@@ -440,8 +437,7 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
     eq.covariance = r.covariance.block(off, off, k, k);
     eq.sigma = eq.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     eq.sigma_coloured = r.covariance_coloured.block(off, off, k, k).diagonal().cwiseMax(0.0).cwiseSqrt();
-    const Eigen::VectorXd d = eq.sigma.cwiseMax(1e-300).cwiseInverse();
-    eq.correlation = d.asDiagonal() * eq.covariance * d.asDiagonal();
+    eq.correlation = correlation_of(eq.covariance);
     Eigen::MatrixXd X(eq.y.size(), k);
     for (Eigen::Index j = 0; j < k; ++j) X.col(j) = res.data.filtered.at(eq.equation.regressors[static_cast<std::size_t>(j)]);
     eq.fitted = X * eq.theta;
@@ -449,11 +445,12 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
     eq.residual_variance = eq.residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, eq.y.size() - k));
     off += k;
   }
-  char buf[256];
+  char buf[320];
   std::snprintf(buf, sizeof buf,
                 "output error: %d segments of %.3g s, %d iterations (%s), weighted cost %.4g -> %.4g from the "
-                "equation error's values",
-                r.segments, oe.segment_s, r.iterations, r.converged ? "converged" : "not converged", r.cost_start, r.cost);
+                "equation error's values; constant accelerations fitted beside: p %.3g rad/s^2, v %.3g m/s^2",
+                r.segments, oe.segment_s, r.iterations, r.converged ? "converged" : "not converged", r.cost_start, r.cost,
+                r.bias_p, r.bias_v);
   res.notes.push_back(buf);
 }
 
@@ -462,6 +459,9 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
 IdentResult identify(const FlightData& data, const Vehicle& vehicle, const std::string& vehicle_file,
                      const IdentOptions& options) {
   if (!(options.wls_window_s > 0.0)) throw std::invalid_argument("WLS window must be > 0 s");
+  if (options.method == Method::kOutputError && options.structure != Structure::kLateral3) {
+    throw std::invalid_argument("output error: the lateral3 structure only (lateral4's r equation is not simulated)");
+  }
   check_flight_data(data, vehicle);
   IdentResult res;
   res.source = data.source;

@@ -61,26 +61,21 @@ Linear linear_of(const Problem& P, const VectorXd& theta) {
   return m;
 }
 
-/// The simulated states of every segment (samples x 3), segment i from the state x0.row(i).
-MatrixXd simulate(const Problem& P, const Linear& m, const MatrixXd& x0) {
-  MatrixXd X = MatrixXd::Zero(P.Y.rows(), 3);
+/// Segment `i`'s simulated states, from the state `x`, written into its rows of X (samples x 3).
+void simulate_segment(const Problem& P, const Linear& m, std::size_t i, Eigen::Vector3d x, MatrixXd& X) {
+  const auto [a, b] = P.segments[i];
   const double h = P.dt;
-  for (std::size_t i = 0; i < P.segments.size(); ++i) {
-    const auto [a, b] = P.segments[i];
-    Eigen::Vector3d x = x0.row(static_cast<Index>(i)).transpose();
-    X.row(a) = x.transpose();
-    for (Index k = a; k + 1 < b; ++k) {
-      const VectorXd u0 = P.U.row(k).transpose(), u1 = P.U.row(k + 1).transpose();
-      const VectorXd um = 0.5 * (u0 + u1);
-      const Eigen::Vector3d k1 = m.A * x + m.B * u0 + m.bias;
-      const Eigen::Vector3d k2 = m.A * (x + 0.5 * h * k1) + m.B * um + m.bias;
-      const Eigen::Vector3d k3 = m.A * (x + 0.5 * h * k2) + m.B * um + m.bias;
-      const Eigen::Vector3d k4 = m.A * (x + h * k3) + m.B * u1 + m.bias;
-      x += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-      X.row(k + 1) = x.transpose();
-    }
+  X.row(a) = x.transpose();
+  for (Index k = a; k + 1 < b; ++k) {
+    const VectorXd u0 = P.U.row(k).transpose(), u1 = P.U.row(k + 1).transpose();
+    const VectorXd um = 0.5 * (u0 + u1);
+    const Eigen::Vector3d k1 = m.A * x + m.B * u0 + m.bias;
+    const Eigen::Vector3d k2 = m.A * (x + 0.5 * h * k1) + m.B * um + m.bias;
+    const Eigen::Vector3d k3 = m.A * (x + 0.5 * h * k2) + m.B * um + m.bias;
+    const Eigen::Vector3d k4 = m.A * (x + h * k3) + m.B * u1 + m.bias;
+    x += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    X.row(k + 1) = x.transpose();
   }
-  return X;
 }
 
 /// Weighted cost of the residuals E (samples x 3) with weights w (1 / variance per output).
@@ -120,6 +115,37 @@ Problem problem_of(const UniformData& d, const std::vector<Equation>& equations,
   return P;
 }
 
+/// The weighted information matrix S' W S and gradient S' W e of the residuals E (samples x 3),
+/// S their sensitivities stacked output by output, W the outputs' weights w.
+void information(const MatrixXd& S, const MatrixXd& E, const Eigen::Vector3d& w, MatrixXd& M, VectorXd& g) {
+  const Index m = E.rows();
+  VectorXd wv(E.size());
+  for (Index j = 0; j < 3; ++j) wv.segment(j * m, m).setConstant(w[j]);
+  M = S.transpose() * wv.asDiagonal() * S;
+  g = S.transpose() * (wv.asDiagonal() * Eigen::Map<const VectorXd>(E.data(), E.size()));
+}
+
+/// Cramer-Rao bounds of the first `nd` parameters at the solution: the inverse information
+/// (white residuals) and its sandwich with the scores s_i = sum over outputs of S_i' w nu_i in
+/// batches of `block` samples, longer than the residuals' correlation (coloured residuals).
+void bounds(const MatrixXd& S, const MatrixXd& E, const Eigen::Vector3d& w, Index nd, Index block,
+            OutputErrorResult& res) {
+  const Index q = S.cols(), m = E.rows();
+  MatrixXd M;
+  VectorXd g;
+  information(S, E, w, M, g);
+  const MatrixXd Minv = M.ldlt().solve(MatrixXd::Identity(q, q));
+  res.covariance = Minv.topLeftCorner(nd, nd);
+  MatrixXd G = MatrixXd::Zero(q, q);
+  for (Index a = 0; a < m; a += block) {
+    const Index len = std::min(block, m - a);
+    VectorXd s = VectorXd::Zero(q);
+    for (Index j = 0; j < 3; ++j) s += w[j] * S.middleRows(j * m + a, len).transpose() * E.col(j).segment(a, len);
+    G += s * s.transpose();
+  }
+  res.covariance_coloured = (Minv * G * Minv).topLeftCorner(nd, nd);
+}
+
 }  // namespace
 
 OutputErrorResult output_error(const UniformData& data, const std::vector<Equation>& equations, const Trim& trim,
@@ -146,18 +172,15 @@ OutputErrorResult output_error(const UniformData& data, const std::vector<Equati
     theta[j] = it->second;
   }
   res.segments = static_cast<int>(P.segments.size());
-  // The samples the segments cover enter the cost.
-  std::vector<Index> rows;
-  for (const auto& [a, b] : P.segments) {
-    for (Index k = a; k < b; ++k) rows.push_back(k);
-  }
+  // The samples the segments cover enter the cost, segment after segment: segment i's are rows
+  // [i len, (i + 1) len) of the residuals (every segment has the same length).
+  const Index len = P.segments.front().second - P.segments.front().first;
+  const Index first = P.segments.front().first;
   const auto residuals = [&](const VectorXd& th) {
-    MatrixXd x0(ns, 3);
-    for (Index i = 0; i < ns; ++i) x0.row(i) = th.segment(nd + 2 + 3 * i, 3).transpose();
-    const MatrixXd X = simulate(P, linear_of(P, th.head(nd + 2)), x0);
-    MatrixXd E(static_cast<Index>(rows.size()), 3);
-    for (std::size_t i = 0; i < rows.size(); ++i) E.row(static_cast<Index>(i)) = P.Y.row(rows[i]) - X.row(rows[i]);
-    return E;
+    const Linear lin = linear_of(P, th.head(nd + 2));
+    MatrixXd X(P.Y.rows(), 3);
+    for (Index i = 0; i < ns; ++i) simulate_segment(P, lin, static_cast<std::size_t>(i), th.segment(nd + 2 + 3 * i, 3), X);
+    return MatrixXd(P.Y.middleRows(first, ns * len) - X.middleRows(first, ns * len));
   };
   MatrixXd E = residuals(theta);
   const auto weights_of = [](const MatrixXd& R) {
@@ -168,29 +191,40 @@ OutputErrorResult output_error(const UniformData& data, const std::vector<Equati
   Eigen::Vector3d w = weights_of(E);
   res.cost_start = cost_of(E, w);
   double lambda = 1e-3;
-  MatrixXd S;  // sensitivities: (rows x 3) stacked output by output, q columns
   const auto sensitivities = [&](const VectorXd& th, const MatrixXd& E0) {
-    MatrixXd out(E0.size(), q);
+    // d(model output) / d theta = -(dE / d theta), by forward differences. A derivative or a
+    // constant acceleration moves every segment; a segment's initial state moves that segment
+    // only, so only it is simulated again.
+    MatrixXd out = MatrixXd::Zero(E0.size(), q);
+    const Index m = E0.rows();
+    const Linear lin = linear_of(P, th.head(nd + 2));
+    MatrixXd X(P.Y.rows(), 3);
     for (Index j = 0; j < q; ++j) {
       VectorXd tp = th;
       const double step = 1e-6 * std::max(std::fabs(th[j]), 1e-3 * th.head(nd).cwiseAbs().maxCoeff() + 1e-12);
       tp[j] += step;
-      const MatrixXd Ep = residuals(tp);
-      // d(model output)/d theta = -(dE/d theta)
-      out.col(j) = Eigen::Map<const VectorXd>((E0 - Ep).eval().data(), E0.size()) / step;
+      if (j < nd + 2) {
+        const MatrixXd Ep = residuals(tp);
+        out.col(j) = Eigen::Map<const VectorXd>((E0 - Ep).eval().data(), E0.size()) / step;
+        continue;
+      }
+      const Index i = (j - nd - 2) / 3;
+      simulate_segment(P, lin, static_cast<std::size_t>(i), tp.segment(nd + 2 + 3 * i, 3), X);
+      const Index a = P.segments[static_cast<std::size_t>(i)].first;
+      const MatrixXd Ep = P.Y.middleRows(a, len) - X.middleRows(a, len);
+      for (Index o = 0; o < 3; ++o) {
+        out.col(j).segment(o * m + i * len, len) = (E0.col(o).segment(i * len, len) - Ep.col(o)) / step;
+      }
     }
     return out;
   };
   for (res.iterations = 0; res.iterations < options.max_iterations; ++res.iterations) {
     w = weights_of(E);
     const double c0 = cost_of(E, w);
-    S = sensitivities(theta, E);
-    const Index m = E.rows();
-    VectorXd wv(E.size());
-    for (Index j = 0; j < 3; ++j) wv.segment(j * m, m).setConstant(w[j]);
-    const VectorXd e = Eigen::Map<const VectorXd>(E.data(), E.size());
-    const MatrixXd M = S.transpose() * wv.asDiagonal() * S;
-    const VectorXd g = S.transpose() * (wv.asDiagonal() * e);
+    const MatrixXd S = sensitivities(theta, E);  // (rows x 3) stacked output by output, q columns
+    MatrixXd M;
+    VectorXd g;
+    information(S, E, w, M, g);
     bool improved = false;
     for (int tries = 0; tries < 12 && !improved; ++tries) {
       MatrixXd Md = M;
@@ -214,29 +248,10 @@ OutputErrorResult output_error(const UniformData& data, const std::vector<Equati
   }
   w = weights_of(E);
   res.cost = cost_of(E, w);
-  for (Index j = 0; j < 3; ++j) res.residual_sd[j] = 1.0 / std::sqrt(w[j]);
   res.theta = theta.head(nd);
   res.bias_p = theta[nd];
   res.bias_v = theta[nd + 1];
-  // Cramer-Rao bounds at the solution.
-  S = sensitivities(theta, E);
-  const Index m = E.rows();
-  VectorXd wv(E.size());
-  for (Index j = 0; j < 3; ++j) wv.segment(j * m, m).setConstant(w[j]);
-  const MatrixXd M = S.transpose() * wv.asDiagonal() * S;
-  const MatrixXd Minv = M.ldlt().solve(MatrixXd::Identity(q, q));
-  res.covariance = Minv.topLeftCorner(nd, nd);
-  // The scores s_i = sum over outputs of S_i' w nu_i, in batches longer than the residuals'
-  // correlation; their spread is the information the coloured residuals really carry.
-  const Index block = options.coloured_block > 0 ? options.coloured_block : 64;
-  MatrixXd G = MatrixXd::Zero(q, q);
-  for (Index a = 0; a < m; a += block) {
-    const Index len = std::min(block, m - a);
-    VectorXd s = VectorXd::Zero(q);
-    for (Index j = 0; j < 3; ++j) s += w[j] * S.middleRows(j * m + a, len).transpose() * E.col(j).segment(a, len);
-    G += s * s.transpose();
-  }
-  res.covariance_coloured = (Minv * G * Minv).topLeftCorner(nd, nd);
+  bounds(sensitivities(theta, E), E, w, nd, options.coloured_block > 0 ? options.coloured_block : 64, res);
   return res;
 }
 

@@ -57,7 +57,6 @@ struct OutputErrorResult {
   int iterations = 0;
   bool converged = false;
   double cost_start = 0.0, cost = 0.0;  ///< weighted output error at the start values and at the end
-  Eigen::Vector3d residual_sd = Eigen::Vector3d::Zero();  ///< of p, v, phi at the end
   int segments = 0;
 };
 

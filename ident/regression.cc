@@ -96,17 +96,6 @@ QrSolution solve_qr(const Design& d, const Equation& eq) {
   return s;
 }
 
-Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
-  const Eigen::VectorXd s = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-  Eigen::MatrixXd c = cov;
-  for (Eigen::Index i = 0; i < c.rows(); ++i) {
-    for (Eigen::Index j = 0; j < c.cols(); ++j) {
-      c(i, j) = (s[i] > 0.0 && s[j] > 0.0) ? cov(i, j) / (s[i] * s[j]) : (i == j ? 1.0 : 0.0);
-    }
-  }
-  return c;
-}
-
 /// Bartlett-weighted long-run covariance of the score rows G (N x P):
 /// sum_{|k| <= K} (1 - |k| / (K + 1)) sum_i g_i g_{i+k}', computed as
 /// (1 / (K + 1)) sum_j S_j S_j' over the sums S_j of every window of K + 1
@@ -304,6 +293,17 @@ RegressionResult ols(const std::vector<Equation>& equations, const std::vector<D
 }
 
 }  // namespace
+
+Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
+  const Eigen::VectorXd s = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  Eigen::MatrixXd c = cov;
+  for (Eigen::Index i = 0; i < c.rows(); ++i) {
+    for (Eigen::Index j = 0; j < c.cols(); ++j) {
+      c(i, j) = (s[i] > 0.0 && s[j] > 0.0) ? cov(i, j) / (s[i] * s[j]) : (i == j ? 1.0 : 0.0);
+    }
+  }
+  return c;
+}
 
 std::string to_string(Method m) {
   switch (m) {

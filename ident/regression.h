@@ -63,6 +63,9 @@ struct Equation {
 /// kOutputError: the equation error's WLS for start values, then output error (ident/output_error.h).
 enum class Method { kOls, kWls, kOutputError };
 
+/// The correlation matrix of a covariance (1 on the diagonal; 0 beside a zero variance).
+Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov);
+
 /// "ols", "wls" or "output-error".
 std::string to_string(Method m);
 /// @throws std::invalid_argument for another name.

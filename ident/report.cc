@@ -237,9 +237,14 @@ std::string identification_text(const IdentResult& r) {
   for (const auto& note : r.inputs_left_out) out += "note       " + note + "\n";
   out += fmt("model      %s, inputs %s, %s\n", to_string(o.structure).c_str(), inputs.c_str(),
              o.method == Method::kOls ? "ordinary least squares"
-                                      : fmt("weighted least squares (residual covariance over %.3g s%s)",
-                                            o.wls_window_s, o.wls_cross_equation ? ", across equations" : "")
-                                            .c_str());
+             : o.method == Method::kWls
+                 ? fmt("weighted least squares (residual covariance over %.3g s%s)", o.wls_window_s,
+                       o.wls_cross_equation ? ", across equations" : "")
+                       .c_str()
+                 : fmt("output error (the states simulated from the recorded inputs in segments of %.3g s, "
+                       "from the weighted least squares' values)",
+                       o.output_error.segment_s)
+                       .c_str());
   out += fmt("vehicle    %s (%s): m = %.2f g, Ixx %.3g, Izz %.3g, Ixz %.3g kg m^2\n", r.vehicle.name.c_str(),
              r.vehicle.file.c_str(), 1e3 * r.vehicle.mass_kg, r.vehicle.Ixx_kgm2, r.vehicle.Izz_kgm2,
              r.vehicle.Ixz_kgm2);
