@@ -97,8 +97,9 @@ void plant_check_text(std::ostringstream& out, const BesideResult& r) {
   for (std::size_t i = 0; i < r.with.plant_check.size(); ++i) {
     const PlantCheck& a = r.without.plant_check[i];
     const PlantCheck& b = r.with.plant_check[i];
+    const std::string derivative = a.derivative + (a.method == "output error" ? " (OE)" : "");
     out << fmt::format("  {:<7} {:<10} {:>11.4g}  {:>11.4g} {:>9.2g} {:>7.1f}%  {:>11.4g} {:>9.2g} {:>7.1f}%\n", a.row,
-                       a.derivative + (a.method == "output error" ? " (OE)" : ""), a.plant, a.mean, a.interval, 100 * (a.mean / a.plant - 1), b.mean, b.interval,
+                       derivative, a.plant, a.mean, a.interval, 100 * (a.mean / a.plant - 1), b.mean, b.interval,
                        100 * (b.mean / b.plant - 1));
   }
 }
