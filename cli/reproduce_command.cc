@@ -97,11 +97,12 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                  "open-loop 6 Hz doublet and 1-1-2; closed-loop slow train and 1-1-2s; coupled doublet; 20 and\n"
                  "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
                  "thesis did, validates it on the others, and prints every table it reproduces beside the\n"
-                 "published one (Tables 9.4, 9.5, 9.6, 4, 7, 8, 9, 10, 11, 15, 16, 8.8), each cell with its\n"
-                 "category and verdict (reproduce/cell_verdict.h): the rig's own flights are match (within the\n"
-                 "thesis's tolerance), explained (a reason whose check holds in the same run), differs or\n"
-                 "inconclusive (the rig's own interval wider than the tolerance); calibrated and model cells\n"
-                 "match or differ; fit metrics of the very model the plant flies are not comparable.");
+                 "published one (Tables 9.4, 9.5, 9.6, 4, 7-16, 8.8), each cell with its category, decided by\n"
+                 "what it is computed from, and its verdict (reproduce/cell_verdict.h): ranges and fit metrics\n"
+                 "of the rig's flights are match (the mean's 95 % interval inside the tolerance), explained (a\n"
+                 "reason whose check holds in the same run), differs (wholly outside) or inconclusive (across\n"
+                 "an edge); calibrated cells match or differ; model cells check the transcribed model files\n"
+                 "against the thesis and the rig's re-identification of its own plant against the plant file.");
   cl->footer("Exit code: 0 no cell differs, 1 some cell differs (with --beside: in either run), 2 bad input or a\n"
              "flight that could not fly.\n"
              "Examples: rig reproduce thesis --json tables.json --report report/\n"

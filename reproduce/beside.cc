@@ -129,8 +129,8 @@ OJson json_number(double x) { return std::isfinite(x) ? OJson(x) : OJson(nullptr
 }  // namespace
 
 std::string moved(const Cell& without, const Cell& with) {
-  if (!std::isfinite(without.rig) || !std::isfinite(with.rig) || !std::isfinite(without.published)) return "n/a";
-  const double before = std::fabs(without.rig - without.published), after = std::fabs(with.rig - with.published);
+  if (!std::isfinite(without.rig) || !std::isfinite(with.rig) || !std::isfinite(without.reference)) return "n/a";
+  const double before = std::fabs(without.rig - without.reference), after = std::fabs(with.rig - with.reference);
   const double bound = std::max({without.tolerance, with.tolerance, std::hypot(without.interval, with.interval)});
   if (std::fabs(after - before) <= bound) return "same";
   return after < before ? "toward" : "away";
@@ -220,8 +220,8 @@ std::string beside_text(const BesideResult& r) {
       out << fmt::format("    {:<15} {}\n", category, count_line(verdicts));
     }
   }
-  out << "\nmoved against the published value, without -> with (|rig - published|; same: within the tolerance or "
-         "the two means' 95 % interval):\n";
+  out << "\nmoved against the value judged against (published; a pipeline check's plant file), without -> with "
+         "(|rig - reference|; same: within the tolerance or the two means' 95 % interval):\n";
   const auto changes = r.verdict_changes();
   for (const auto& [category, counts] : r.moved_counts()) {
     out << fmt::format("  {:<15} {}\n", category, count_line(counts, {"toward", "away", "same"}));

@@ -5,8 +5,10 @@
 /// its own run exactly as a campaign alone judges it (reproduce/cell_verdict.h), and whether the
 /// cell moved toward the published value or away.
 ///
-/// Moved, by the distance |rig - published| of the two runs' means: `toward` (smaller with the
-/// overrides), `away` (larger), `same` when the change of the distance is within the cell's
+/// Moved, by the distance |rig - reference| of the two runs' means (the reference is what the
+/// cell is judged against: the published value, or the plant file's for a pipeline check):
+/// `toward` (smaller with the overrides), `away` (larger), `same` when the change of the distance
+/// is within the cell's
 /// tolerance or within the 95 % half-width of the difference of the two means (the two cells'
 /// intervals added in quadrature), the bounds the verdict code judges a cell by; `n/a` where a
 /// run has no value. A cell that repeats an earlier cell's numbers in both runs is counted once.
@@ -19,7 +21,7 @@
 
 namespace nimble::reproduce {
 
-/// How a cell moved from `without` to `with` against the published value (see above).
+/// How a cell moved from `without` to `with` against its reference (see above).
 std::string moved(const Cell& without, const Cell& with);
 
 /// One cell in both runs.

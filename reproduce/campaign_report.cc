@@ -89,8 +89,10 @@ std::string campaign_text(const CampaignResult& r) {
     out << fmt::format("\nTable {}: {}  [{}]\n", t.id, t.title, t.category);
     if (!t.why.empty()) out << "  " << t.why << "\n";
     out << "  tolerance: " << tolerance_bases(t) << "\n";
-    out << fmt::format("  {:<10} {:<16} {:>10} {:>10} {:>9} {:>9}  {}\n", "row", "column", "published", "rig",
-                       "+-95%", "tol", "verdict");
+    // A pipeline check is judged against the plant file's value, printed beside the thesis's.
+    const bool pipeline = t.against_plant;
+    out << fmt::format("  {:<10} {:<16} {:>10} {:>10} {:>10} {:>9} {:>9}  {}\n", "row", "column", "published",
+                       pipeline ? "plant" : "", "rig", "+-95%", "tol", "verdict");
     std::vector<std::string> notes;
     for (const auto& c : t.cells) {
       std::string note;
@@ -104,11 +106,12 @@ std::string campaign_text(const CampaignResult& r) {
         auto it = std::find(notes.begin(), notes.end(), text);
         if (it == notes.end()) it = notes.insert(notes.end(), text);
         note += fmt::format(" [{}]", it - notes.begin() + 1);
-      } else if (!c.reason.empty() && c.verdict != "not comparable") {
+      } else if (!c.reason.empty()) {
         note += " (" + c.reason + ")";
       }
-      out << fmt::format("  {:<10} {:<16} {:>10.4g} {:>10.4g} {:>9.2g} {:>9.3g}  {}{}\n", c.row, c.column, c.published,
-                         c.rig, c.interval, c.tolerance, c.verdict, note);
+      out << fmt::format("  {:<10} {:<16} {:>10.4g} {:>10} {:>10.4g} {:>9.2g} {:>9.3g}  {}{}\n", c.row, c.column,
+                         c.published, pipeline ? fmt::format("{:.4g}", c.reference) : "", c.rig, c.interval,
+                         c.tolerance, c.verdict, note);
     }
     for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
   }
@@ -179,11 +182,15 @@ std::string campaign_json(const CampaignResult& r) {
   w.key("tables").begin_array();
   for (const auto& t : r.tables) {
     w.begin_object().key("id").value(t.id).key("title").value(t.title).key("category").value(t.category);
-    w.key("why").value(t.why);
+    w.key("why").value(t.why).key("against").value(t.against_plant ? "plant file" : "published");
     w.key("cells").begin_array();
     for (const auto& c : t.cells) {
       w.begin_object().key("row").value(c.row).key("column").value(c.column);
-      w.key("published").value(c.published).key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
+      w.key("published").value(c.published).key("reference").value(c.reference);
+      w.key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
+      w.key("values").begin_array();
+      for (const double v : c.values) w.value(v);
+      w.end_array();
       w.key("interval").value(c.interval).key("seeds").value(c.seeds).key("seeds_to_decide").value(c.seeds_to_decide);
       w.key("tolerance").value(c.tolerance).key("tolerance_basis").value(c.tolerance_basis);
       w.key("category").value(c.category).key("verdict").value(c.verdict).key("reason").value(c.reason);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
@@ -97,6 +98,78 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
   return out;
 }
 
+/// One table of the campaign file (`t`, table `id`).
+TableSpec load_table(ConfigMap& t, const std::string& file, const std::string& id) {
+  TableSpec s;
+  s.title = t.get_string("title");
+  // The category follows from what the cells are computed from, in code: never from this file.
+  const Source source = table_source(id);
+  for (const char* key : {"category", "why"}) {
+    if (t.has(key)) {
+      t.fail(key, fmt::format("the code decides a table's category from what its cells are computed from "
+                              "(reproduce/campaign_spec.h): table {}'s are {}",
+                              id, source_statement(source)));
+    }
+  }
+  s.category = category_of(source);
+  s.why = source_statement(source);
+  s.reference_table = reference_table(id);
+  if (!s.reference_table.empty()) {
+    for (const char* key : {"tolerance", "thesis_sigma", "calibrated", "reasons"}) {
+      if (t.has(key)) {
+        t.fail(key, "table " + id + " is a pipeline check, judged against the plant file within half the published "
+                    "number's last digit (reproduce/cell_verdict.h): it takes no " + key);
+      }
+    }
+  } else {
+    ConfigMap tol = t.get_map("tolerance");
+    s.relative = tol.get_double_or("relative", 0.0, Range::closed(0.0, 10.0));
+    s.thesis_sigmas = tol.get_double_or("thesis_sigmas", 0.0, Range::closed(0.0, 10.0));
+    s.min_seeds = static_cast<int>(tol.get_double_or("min_seeds", 1.0, Range::closed(1.0, 1000.0)));
+    if (tol.has("absolute")) s.absolute = double_map(tol, "absolute", Range::closed(0.0, 1e6));
+    tol.finish();
+  }
+  const YAML::Node published = t.get_node("published");
+  if (!published.IsMap() || published.size() == 0) t.fail("published", "must map rows to their published columns");
+  for (const auto& row : published) {
+    const std::string name = row.first.as<std::string>();
+    s.row_order.push_back(name);
+    ConfigMap cols(row.second, file, t.key_path("published") + "." + name);
+    for (const auto& col : row.second) {
+      const std::string cname = col.first.as<std::string>();
+      s.published[name][cname] = cols.get_double(cname);
+      s.printed_half_digit[name][cname] = printed_half_digit(col.second.Scalar());
+      s.column_order[name].push_back(cname);
+    }
+    cols.finish();
+  }
+  if (t.has("thesis_sigma")) {
+    s.thesis_sigma = double_map(t, "thesis_sigma", Range::closed(0.0, 1e9));
+    for (const auto& [cell, sigma] : s.thesis_sigma) require_cell(t, "thesis_sigma", s, cell);
+  }
+  if (t.has("calibrated")) {
+    if (s.category != Category::kFlights) t.fail("calibrated", "names the tuned cells of a flights table");
+    ConfigMap cal = t.get_map("calibrated");
+    s.calibrated_cells = cal.get_string_list("cells");
+    s.calibrated_why = cal.get_string("why");
+    cal.finish();
+    for (const std::string& cell : s.calibrated_cells) require_cell(t, "calibrated", s, cell);
+  }
+  if (t.has("reasons")) {
+    if (s.category != Category::kFlights) {
+      t.fail("reasons", "only a table of the rig's own flights (category flights) has reasons");
+    }
+    const YAML::Node rs = t.get_node("reasons");
+    if (!rs.IsSequence()) t.fail("reasons", "must be a list of {cells, text, and a predicate}");
+    for (std::size_t i = 0; i < rs.size(); ++i) {
+      s.reasons.push_back(load_reason(rs[i], file, t.key_path("reasons") + "[" + std::to_string(i) + "]", s, id));
+    }
+  }
+  if (t.has("explained")) t.fail("explained", "replaced by reasons: each names its cells and a checked predicate");
+  t.finish();
+  return s;
+}
+
 }  // namespace
 
 const std::vector<std::string>& campaign_table_ids() {
@@ -104,6 +177,38 @@ const std::vector<std::string>& campaign_table_ids() {
                                                "8.8", "4",   "7",      "8",         "9",   "10",     "11",
                                                "12",  "13",  "14",     "15",        "16"};
   return ids;
+}
+
+Source table_source(const std::string& id) {
+  if (id == "9.4") return Source::kFlightRanges;
+  if (id == "9.5" || id == "9.5-oe" || id == "9.6" || id == "9.6-oe") return Source::kReidentifiedPlant;
+  if (id == "9.5-model" || id == "9.6-model" || id == "8.8") return Source::kModelArithmetic;
+  return Source::kFlightFit;
+}
+
+Category category_of(Source s) {
+  return s == Source::kFlightRanges || s == Source::kFlightFit ? Category::kFlights : Category::kModel;
+}
+
+const char* source_statement(Source s) {
+  switch (s) {
+    case Source::kFlightRanges:
+      return "ranges of the rig's own flights: what its excitation, controller and sensing make of the plant";
+    case Source::kReidentifiedPlant:
+      return "the rig's identification of its own plant file from its flights: a check of the pipeline (states, "
+             "identification) against the plant file's exact value, the thesis's number beside it";
+    case Source::kModelArithmetic:
+      return "arithmetic on a transcribed model file: a check of the transcription against the thesis";
+    case Source::kFlightFit:
+      return "fit metrics of a model on the rig's flights, which carry the rig's sensing noise, estimator and "
+             "effects (the plant file does not fix them): a difference says what the rig's flights lack or add";
+  }
+  return "?";
+}
+
+std::string reference_table(const std::string& id) {
+  if (table_source(id) != Source::kReidentifiedPlant) return "";
+  return id.substr(0, 3) + "-model";
 }
 
 std::string table_flight(const std::string& id) {
@@ -163,61 +268,7 @@ CampaignSpec load_campaign(const std::string& file) {
   ConfigMap tables = root.get_map("tables");
   for (const std::string& id : campaign_table_ids()) {
     ConfigMap t = tables.get_map(id);
-    TableSpec s;
-    s.title = t.get_string("title");
-    const std::string category = t.get_enum("category", {"flights", "calibrated", "model", "not comparable"});
-    s.category = category == "flights"      ? Category::kFlights
-                 : category == "calibrated" ? Category::kCalibrated
-                 : category == "model"      ? Category::kModel
-                                            : Category::kNotComparable;
-    if (s.category != Category::kFlights) s.why = t.get_string("why");
-    {
-      ConfigMap tol = t.get_map("tolerance");
-      s.relative = tol.get_double_or("relative", 0.0, Range::closed(0.0, 10.0));
-      s.thesis_sigmas = tol.get_double_or("thesis_sigmas", 0.0, Range::closed(0.0, 10.0));
-      s.min_seeds = static_cast<int>(tol.get_double_or("min_seeds", 1.0, Range::closed(1.0, 1000.0)));
-      if (tol.has("absolute")) s.absolute = double_map(tol, "absolute", Range::closed(0.0, 1e6));
-      tol.finish();
-    }
-    const YAML::Node published = t.get_node("published");
-    if (!published.IsMap() || published.size() == 0) t.fail("published", "must map rows to their published columns");
-    for (const auto& row : published) {
-      const std::string name = row.first.as<std::string>();
-      s.row_order.push_back(name);
-      ConfigMap cols(row.second, file, t.key_path("published") + "." + name);
-      for (const auto& col : row.second) {
-        const std::string cname = col.first.as<std::string>();
-        s.published[name][cname] = cols.get_double(cname);
-        s.printed_half_digit[name][cname] = printed_half_digit(col.second.Scalar());
-        s.column_order[name].push_back(cname);
-      }
-      cols.finish();
-    }
-    if (t.has("thesis_sigma")) {
-      s.thesis_sigma = double_map(t, "thesis_sigma", Range::closed(0.0, 1e9));
-      for (const auto& [cell, sigma] : s.thesis_sigma) require_cell(t, "thesis_sigma", s, cell);
-    }
-    if (t.has("calibrated")) {
-      if (s.category != Category::kFlights) t.fail("calibrated", "names the tuned cells of a flights table");
-      ConfigMap cal = t.get_map("calibrated");
-      s.calibrated_cells = cal.get_string_list("cells");
-      s.calibrated_why = cal.get_string("why");
-      cal.finish();
-      for (const std::string& cell : s.calibrated_cells) require_cell(t, "calibrated", s, cell);
-    }
-    if (t.has("reasons")) {
-      if (s.category != Category::kFlights) {
-        t.fail("reasons", "only a table of the rig's own flights (category flights) has reasons");
-      }
-      const YAML::Node rs = t.get_node("reasons");
-      if (!rs.IsSequence()) t.fail("reasons", "must be a list of {cells, text, and a predicate}");
-      for (std::size_t i = 0; i < rs.size(); ++i) {
-        s.reasons.push_back(load_reason(rs[i], file, t.key_path("reasons") + "[" + std::to_string(i) + "]", s, id));
-      }
-    }
-    if (t.has("explained")) t.fail("explained", "replaced by reasons: each names its cells and a checked predicate");
-    t.finish();
-    c.tables[id] = s;
+    c.tables[id] = load_table(t, file, id);
   }
   tables.finish();
   root.finish();

@@ -49,7 +49,6 @@ const char* category_name(Category c) {
     case Category::kFlights: return "flights";
     case Category::kCalibrated: return "calibrated";
     case Category::kModel: return "model";
-    case Category::kNotComparable: return "not comparable";
   }
   return "?";
 }
@@ -76,10 +75,27 @@ void mean_interval(const std::vector<double>& x, double* mean, double* sd, doubl
 
 namespace {
 
-/// The cell's tolerance and its basis: the thesis's sigma where it gives one, else absolute by
-/// column, else relative; never tighter than half the published number's last digit.
+/// Half a unit of the last digit of the published number as the campaign file writes it.
+double printed_half(const TableSpec& t, const std::string& row, const std::string& column, double published) {
+  if (const auto r = t.printed_half_digit.find(row); r != t.printed_half_digit.end()) {
+    if (const auto h = r->second.find(column); h != r->second.end()) return h->second;
+  }
+  return half_last_digit(published);
+}
+
+/// The cell's tolerance and its basis. A pipeline check: half the published number's last digit.
+/// Otherwise the thesis's sigma where it gives one, else absolute by column, else relative; never
+/// tighter than half the published number's last digit.
 void set_tolerance(const TableSpec& t, const std::string& row, const std::string& column, Cell& c) {
   const std::string key = row + " / " + column;
+  const double half_digit = printed_half(t, row, column, c.published);
+  if (!t.reference_table.empty()) {
+    c.tolerance = half_digit;
+    c.tolerance_basis = fmt::format("half the published number's last digit, {:g}: the pipeline's error must not show "
+                                    "in the number as the thesis prints it",
+                                    half_digit);
+    return;
+  }
   if (const auto s = t.thesis_sigma.find(key); s != t.thesis_sigma.end() && t.thesis_sigmas > 0) {
     c.tolerance = t.thesis_sigmas * s->second;
     c.tolerance_basis = fmt::format("{:g} x the thesis's sigma {:.3g}", t.thesis_sigmas, s->second);
@@ -91,10 +107,6 @@ void set_tolerance(const TableSpec& t, const std::string& row, const std::string
     c.tolerance_basis = fmt::format("{:g} % of the published value", 100 * t.relative);
   }
   // A printed number carries its rounding: no tolerance is tighter than half its last digit.
-  double half_digit = half_last_digit(c.published);
-  if (const auto r = t.printed_half_digit.find(row); r != t.printed_half_digit.end()) {
-    if (const auto h = r->second.find(column); h != r->second.end()) half_digit = h->second;
-  }
   if (c.tolerance < half_digit) {
     c.tolerance = half_digit;
     c.tolerance_basis += fmt::format(", raised to half the printed last digit, {:g}", half_digit);
@@ -178,35 +190,39 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   const bool calibrated = std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
   const Category category = calibrated ? Category::kCalibrated : t.category;
   c.category = category_name(category);
+  c.values = rig;
+  const bool pipeline = !t.reference_table.empty();
+  c.reference = pipeline ? context.reference : c.published;
   set_tolerance(t, row, column, c);
-  if (category == Category::kNotComparable) {
-    c.verdict = "not comparable";
-    c.reason = t.why;
+  if (pipeline && !std::isfinite(c.reference)) {
+    c.verdict = "differs";
+    c.reason = "the plant file gives no value to judge the pipeline against";
     return c;
   }
   // A band that holds zero and the value's opposite cannot fail: no verdict.
-  if (!(c.tolerance < std::fabs(c.published))) {
+  if (!(c.tolerance < std::fabs(c.reference))) {
     c.verdict = "not judged";
     c.reason = fmt::format("the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
                            "fail",
-                           c.tolerance, c.tolerance_basis, c.published);
+                           c.tolerance, c.tolerance_basis, c.reference);
     return c;
   }
-  const double off = c.rig - c.published;
+  const double off = c.rig - c.reference;
   if (!std::isfinite(c.rig)) {
     c.verdict = "differs";
     c.reason = "the rig has no value";
     return c;
   }
-  if (category == Category::kFlights && c.seeds < t.min_seeds) {
+  const int min_seeds = pipeline ? kPipelineMinSeeds : category == Category::kFlights ? t.min_seeds : 1;
+  if (c.seeds < min_seeds) {
     c.verdict = "inconclusive";
-    c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", t.min_seeds, c.seeds);
+    c.reason = fmt::format("judged on the mean of at least {} seeds; {} flown", min_seeds, c.seeds);
     return c;
   }
   // Equivalence by two one-sided tests: the mean's 95 % interval inside the tolerance band is a
   // match, wholly outside it a difference, across an edge neither.
   const double lo = c.rig - c.interval, hi = c.rig + c.interval;
-  const double band_lo = c.published - c.tolerance, band_hi = c.published + c.tolerance;
+  const double band_lo = c.reference - c.tolerance, band_hi = c.reference + c.tolerance;
   if (lo >= band_lo && hi <= band_hi) {
     c.verdict = "match";
     if (calibrated) c.reason = t.calibrated_why;
@@ -216,7 +232,7 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.verdict = "inconclusive";
     c.seeds_to_decide = seeds_to_decide(c.rig_sd, std::min(std::fabs(c.rig - band_lo), std::fabs(c.rig - band_hi)));
     c.reason = fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
-                           c.rig, c.interval, c.seeds, c.published, c.tolerance) +
+                           c.rig, c.interval, c.seeds, c.reference, c.tolerance) +
                (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
                                       : std::string("no number of seeds decides it (the mean sits on the edge)"));
     return c;
@@ -224,7 +240,8 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
   if (why == nullptr) {
     c.verdict = "differs";
-    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}", off, c.tolerance);
+    c.reason = fmt::format("off by {:.3g}{}, allowed {:.3g}", off, pipeline ? " from the plant file's value" : "",
+                           c.tolerance);
     return c;
   }
   std::vector<std::string> parts, found;

@@ -2,16 +2,23 @@
 /// The verdict of one cell of a reproduced table: the rules of `rig reproduce thesis`, apart from
 /// the flights that feed them (reproduce/thesis_campaign.h).
 ///
-/// Categories (each table has one, from the campaign file):
-///  - flights: numbers the rig's own flights and pipeline produce. Verdicts by equivalence (two
-///    one-sided tests on the mean's 95 % interval): `match` (the interval inside the tolerance
-///    band), `differs` (wholly outside it, no reason or a reason whose check fails), `explained`
-///    (wholly outside, with a reason whose check holds in this run) or `inconclusive` (the
-///    interval across an edge of the band, with about how many seeds would decide it).
-///  - calibrated: numbers the rig was tuned to; `match` or `differs`, never explained.
-///  - model: arithmetic on the transcribed model (a transcription check); `match` or `differs`.
-///  - not comparable: fit metrics where the rig's plant is the very model being validated; the
-///    rig's figure is printed beside the thesis's with the table's statement of why, and no verdict.
+/// Categories: each table has one, decided by the code from what its cells are computed from
+/// (reproduce/campaign_spec.h, table_source()), never by the campaign file:
+///  - flights: numbers whose character the plant file does not fix (ranges flown, fit metrics of
+///    flights with the rig's sensing noise, estimator, vibration, gusts or effects). Verdicts by
+///    equivalence (two one-sided tests on the mean's 95 % interval): `match` (the interval inside
+///    the tolerance band), `differs` (wholly outside it, no reason or a reason whose check fails),
+///    `explained` (wholly outside, with a reason whose check holds in this run) or `inconclusive`
+///    (the interval across an edge of the band, with about how many seeds would decide it).
+///  - calibrated: cells of a flights table the rig was tuned to; `match` or `differs`, never
+///    explained.
+///  - model: checks of the model, not of the vehicle. Arithmetic on a transcribed model file is
+///    judged against the published number (a transcription check); the rig's re-identification of
+///    its own plant file is judged against the plant file's exact value (a pipeline check:
+///    TableSpec::reference_table), within half a unit of the published number's last digit (the
+///    pipeline's error must not show in the number as the thesis prints it), on the mean of at
+///    least kPipelineMinSeeds seeds, and printed beside the thesis's number. `match`, `differs` or
+///    `inconclusive` (a pipeline check's interval across an edge).
 ///
 /// Tolerance (never widened by the rig's noise): where the campaign file gives the thesis's
 /// standard deviation of a cell, k of those (k the table's `thesis_sigmas`); else `relative`
@@ -33,6 +40,7 @@
 /// describe a difference; without a cause flown in the run a reason explains nothing. A
 /// predicate that does not hold makes the cell `differs`, and says which part failed.
 
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -40,9 +48,9 @@
 namespace nimble::reproduce {
 
 /// What a table's cells are.
-enum class Category { kFlights, kCalibrated, kModel, kNotComparable };
+enum class Category { kFlights, kCalibrated, kModel };
 
-/// "flights", "calibrated", "model", "not comparable".
+/// "flights", "calibrated", "model".
 const char* category_name(Category c);
 
 /// A reason for cells outside the tolerance, with its predicate.
@@ -61,7 +69,11 @@ struct Reason {
 struct TableSpec {
   std::string title;
   Category category = Category::kFlights;
-  std::string why;  ///< calibrated, model, not comparable: what the cells are (printed)
+  std::string why;  ///< what the cells are computed from, and so why the category (printed)
+  /// A pipeline check: the table whose cells hold the plant file's exact values this one's are
+  /// judged against (the rig's re-identification of its own plant); empty: judged against the
+  /// published values.
+  std::string reference_table;
   /// Cells of a flights table the rig was tuned to ("row / column"): judged as calibrated, with
   /// `calibrated_why`; the rest of the table is held out of the calibration.
   std::vector<std::string> calibrated_cells;
@@ -93,14 +105,18 @@ struct Check {
 struct Cell {
   std::string row, column;
   double published = 0.0;
+  /// What the rig's value is judged against: the published value, or for a pipeline check
+  /// (TableSpec::reference_table) the plant file's exact value.
+  double reference = 0.0;
   double rig = 0.0;          ///< mean over the seeds
+  std::vector<double> values;  ///< the rig's value on each seed flown, in the seeds' order
   double rig_sd = 0.0;       ///< seed-to-seed standard deviation (0 with one seed)
   double interval = 0.0;     ///< 95 % half-width of the mean (0 with one seed)
   int seeds = 0;
   double tolerance = 0.0;    ///< |rig - published| allowed for a match
   std::string tolerance_basis;  ///< "2 thesis sigma", "5 % of the value", "absolute"
   std::string category;
-  std::string verdict;       ///< match, explained, differs, inconclusive, not comparable
+  std::string verdict;       ///< match, explained, differs, inconclusive, not judged
   std::string reason;        ///< the reason (explained) or why it differs / is not judged
   bool has_check = false;
   Check check;
@@ -116,6 +132,8 @@ struct JudgeContext {
   /// How a flight with the cause went wrong ("" if every one flew as its scenario asks): a cause
   /// that stops the flight (a failsafe, a diverged estimator) cannot explain a cell.
   std::string with_failure;
+  /// A pipeline check's reference: the plant file's exact value of the cell (NaN: none).
+  double reference = NAN;
 };
 
 /// Judges one cell (see the top of this header).
@@ -125,6 +143,9 @@ Cell judge(const TableSpec& table, const std::string& row, const std::string& co
 /// Half a unit of the last digit `value` is printed with (0.24: 0.005; 12.06: 0.005; 0.907:
 /// 0.0005), the rounding every published number carries: the floor of every tolerance.
 double half_last_digit(double value);
+
+/// A pipeline check is judged on the mean of at least this many seeds: one seed has no interval.
+inline constexpr int kPipelineMinSeeds = 2;
 
 /// A reason's bound (`max_off`) may be at most this many times the cell's own gap: a wider bound
 /// cannot fail, so it explains nothing.

@@ -615,6 +615,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     table.title = spec_t.title;
     table.category = category_name(spec_t.category);
     table.why = spec_t.why;
+    table.against_plant = !spec_t.reference_table.empty();
     for (const auto& row : spec_t.row_order) {
       for (const auto& column : spec_t.column_order.at(row)) {
         const std::string key = row + " / " + column;
@@ -625,6 +626,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
           ctx.with_values = over_seeds(flown.seeds, key);
           if (!flown.failures.empty()) ctx.with_failure = flown.failures.front();
         }
+        if (!spec_t.reference_table.empty()) ctx.reference = over_seeds(values.at(spec_t.reference_table), key).front();
         const std::vector<double> x = over_seeds(values.at(id), key);
         raw[id][key] = x;
         table.cells.push_back(judge(spec_t, row, column, x, ctx));

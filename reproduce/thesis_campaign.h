@@ -47,7 +47,8 @@ struct Table {
   std::string id;     ///< thesis table number, e.g. "9.4"
   std::string title;
   std::string category;  ///< reproduce/cell_verdict.h
-  std::string why;       ///< what a calibrated, model or not-comparable table's cells are
+  std::string why;       ///< what the cells are computed from (the category's ground)
+  bool against_plant = false;  ///< a pipeline check: cells judged against the plant file's values
   std::vector<Cell> cells;
 };
 
@@ -148,8 +149,9 @@ CampaignResult run_campaign(const CampaignOptions& options);
 std::string campaign_text(const CampaignResult& result);
 
 /// `{"campaign", "clock", "seeds", "states", "overrides": ["key=value"], ..., "tables": [{"id", "title",
-/// "category", "cells": [{"row", "column", "published", "rig", "rig_sd", "interval", "seeds", "tolerance",
-/// "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds", "value"}, "repeats"}]}],
+/// "category", "why", "against" ("published" or "plant file"), "cells": [{"row", "column", "published",
+/// "reference" (what the cell is judged against), "rig", "values" (per seed), "rig_sd", "interval",
+/// "seeds", "tolerance", "tolerance_basis", "category", "verdict", "reason", "check": {"predicate", "holds", "value"}, "repeats"}]}],
 /// "counts": {category: {verdict: n}}, "match_share", "causes": [...], "flights": [...]}`.
 std::string campaign_json(const CampaignResult& result);
 

@@ -18,6 +18,7 @@ Cell cell(double published, double rig, double interval, double tolerance, const
   c.row = row;
   c.column = column;
   c.published = published;
+  c.reference = published;
   c.rig = rig;
   c.interval = interval;
   c.tolerance = tolerance;
@@ -57,6 +58,10 @@ TEST_CASE("beside: a cell moves toward or away by its distance to the published 
   // Within the two means' interval (0.3 and 0.4 in quadrature: 0.5) though beyond the tolerance.
   CHECK(moved(cell(1, 2, 0.3, 0.1), cell(1, 1.55, 0.4, 0.1)) == "same");
   CHECK(moved(cell(1, 2, 0.3, 0.1), cell(1, 1.45, 0.4, 0.1)) == "toward");
+  // A pipeline check moves against the plant file's value, not the thesis's.
+  Cell a = cell(1, 2, 0, 0.1), b = cell(1, 2.5, 0, 0.1);
+  a.reference = b.reference = 3;
+  CHECK(moved(a, b) == "toward");
   // No value in a run: nothing to say.
   CHECK(moved(cell(1, NAN, 0, 0.1), cell(1, 1.5, 0, 0.1)) == "n/a");
   CHECK(moved(cell(1, 2, 0, 0.1), cell(1, NAN, 0, 0.1)) == "n/a");

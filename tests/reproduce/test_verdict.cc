@@ -165,15 +165,43 @@ TEST_CASE("verdict: the rig's noise never widens a tolerance, and too noisy is i
   CHECK(judge(t, "p_dot", "R2", {0.90, 0.90}, ctx()).verdict == "inconclusive");
 }
 
-TEST_CASE("verdict: calibrated and model cells match or differ, and not comparable cells carry no verdict", "[verdict]") {
+TEST_CASE("verdict: calibrated and model cells match or differ", "[verdict]") {
   for (const Category c : {Category::kCalibrated, Category::kModel}) {
     CHECK(judge(table(c), "p_dot", "R2", {0.92}, ctx()).verdict == "match");
     CHECK(judge(table(c), "p_dot", "R2", {0.99}, ctx()).verdict == "differs");
   }
-  const Cell nc = judge(table(Category::kNotComparable), "p_dot", "R2", {0.99}, ctx());
-  CHECK(nc.verdict == "not comparable");
-  CHECK(nc.rig == Approx(0.99));
-  CHECK(nc.reason == "why");
+}
+
+TEST_CASE("verdict: a pipeline check is judged against the plant file's value within half the published number's "
+          "last digit, on at least two seeds",
+          "[verdict]") {
+  // Table 9.6's Yv+: the thesis prints -1.13, the plant file's exact value is -1.1285.
+  TableSpec t;
+  t.category = Category::kModel;
+  t.reference_table = "9.6-model";
+  t.relative = 0.5;  // a table's own tolerance is not a pipeline check's
+  t.published["set 1"]["Yv+"] = -1.13;
+  t.printed_half_digit["set 1"]["Yv+"] = 0.005;
+  JudgeContext c = ctx();
+  c.reference = -1.1285;
+  const Cell exact = judge(t, "set 1", "Yv+", {-1.1283, -1.1287, -1.1285}, c);
+  CHECK(exact.verdict == "match");
+  CHECK(exact.reference == -1.1285);
+  CHECK(exact.tolerance == Approx(0.005));
+  CHECK_THAT(exact.tolerance_basis, Catch::Contains("pipeline"));
+  // 1 % off the plant, though within 0.5 % of the thesis's -1.13 had it been judged against it.
+  const Cell biased = judge(t, "set 1", "Yv+", {-1.1399, -1.1401, -1.1400}, c);
+  CHECK(biased.verdict == "differs");
+  CHECK_THAT(biased.reason, Catch::Contains("plant file"));
+  // Scattered around the plant's value more than the band: more seeds would decide it.
+  const Cell noisy = judge(t, "set 1", "Yv+", {-1.11, -1.15, -1.13, -1.12, -1.14}, c);
+  CHECK(noisy.verdict == "inconclusive");
+  CHECK(noisy.seeds_to_decide > 5);
+  // One seed has no interval; no plant value, no check.
+  CHECK(judge(t, "set 1", "Yv+", {-1.1285}, c).verdict == "inconclusive");
+  const Cell none = judge(t, "set 1", "Yv+", {-1.1285, -1.1285}, ctx());
+  CHECK(none.verdict == "differs");
+  CHECK_THAT(none.reason, Catch::Contains("plant file gives no value"));
 }
 
 TEST_CASE("verdict: a tuned cell of a flights table is calibrated, the cells held out are judged", "[verdict]") {

@@ -12,6 +12,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/rig_runs.h"
+#include "reproduce/campaign_spec.h"
+#include "reproduce/cell_verdict.h"
 
 using nimble::test::rig_run;
 using nimble::test::RunResult;
@@ -22,6 +24,36 @@ const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
 double range(const YAML::Node& summary, const char* state) { return summary["ranges"][state].as<double>(); }
 double vertical(const YAML::Node& summary, const char* key) { return summary["vertical"][key].as<double>(); }
+
+/// A flights cell of `rig reproduce thesis --json` (`c`) judged again by the table's own rule
+/// (`t`) with the published value moved: onto the rig's mean it matches (or, where the interval
+/// is wider than the band, more seeds would decide it), and far enough above or below it differs.
+void check_can_match_and_differ(nimble::reproduce::TableSpec t, const YAML::Node& c) {
+  const std::string row = c["row"].as<std::string>(), column = c["column"].as<std::string>();
+  const auto values = c["values"].as<std::vector<double>>();
+  const double mean = c["rig"].as<double>();
+  nimble::reproduce::JudgeContext ctx;
+  ctx.states = "smoothed";
+  t.reasons.clear();
+  t.published[row][column] = mean;
+  const nimble::reproduce::Cell on = nimble::reproduce::judge(t, row, column, values, ctx);
+  if (on.interval < on.tolerance) {
+    CHECK(on.verdict == "match");
+  } else {
+    CHECK(on.verdict == "inconclusive");
+    CHECK(on.seeds_to_decide > 5);
+  }
+  for (const double sign : {1.0, -1.0}) {
+    std::string verdict;
+    double d = on.tolerance + on.interval;
+    for (int k = 0; k < 8 && verdict != "differs"; ++k, d *= 2) {
+      t.published[row][column] = mean + sign * d;
+      verdict = nimble::reproduce::judge(t, row, column, values, ctx).verdict;
+    }
+    INFO("published moved " << (sign > 0 ? "above" : "below"));
+    CHECK(verdict == "differs");
+  }
+}
 
 }  // namespace
 
@@ -175,15 +207,18 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   CHECK(j["states"].as<std::string>() == "smoothed");
   CHECK(j["seeds"].size() == 5);
   for (const auto& f : j["flights"]) CHECK(f["controlled"].as<bool>());
+  // Every table's category is the code's, from what its cells are computed from; the campaign
+  // file names none.
+  const nimble::reproduce::CampaignSpec spec = nimble::reproduce::load_campaign(kConfigs + "reproduce/thesis.yaml");
   for (const auto& t : j["tables"]) {
-    const std::string cat = t["category"].as<std::string>();
+    const std::string id = t["id"].as<std::string>(), cat = t["category"].as<std::string>();
+    CHECK(cat == nimble::reproduce::category_name(nimble::reproduce::category_of(nimble::reproduce::table_source(id))));
+    CHECK(t["why"].as<std::string>().size() > 40);
+    const nimble::reproduce::TableSpec& ts = spec.tables.at(id);
     for (const auto& c : t["cells"]) {
       const std::string v = c["verdict"].as<std::string>();
-      INFO(t["id"].as<std::string>() << " " << c["row"].as<std::string>() << " / " << c["column"].as<std::string>());
-      if (cat == "not comparable") {
-        CHECK(v == "not comparable");
-        CHECK(t["why"].as<std::string>().size() > 40);
-      } else if (cat == "flights") {
+      INFO(id << " " << c["row"].as<std::string>() << " / " << c["column"].as<std::string>());
+      if (cat == "flights") {
         CHECK((v == "match" || v == "explained" || v == "differs" || v == "inconclusive" || v == "not judged"));
         CHECK(c["seeds"].as<int>() == 5);
         // No verdict only where the tolerance is as wide as the value, and it says so.
@@ -192,8 +227,15 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
           CHECK_THAT(c["reason"].as<std::string>(), Catch::Contains("as wide as the value"));
         }
         if (v == "inconclusive") CHECK_THAT(c["reason"].as<std::string>(), Catch::Contains("crosses an edge"));
+        if (c["category"].as<std::string>() == "flights" && v != "not judged") check_can_match_and_differ(ts, c);
+      } else if (t["against"].as<std::string>() == "plant file") {
+        // A pipeline check: judged against the plant file's value, which is not the thesis's.
+        CHECK((v == "match" || v == "differs" || v == "inconclusive"));
+        CHECK(c["reference"].as<double>() != c["published"].as<double>());
+        CHECK(c["tolerance"].as<double>() == Approx(0.005));
       } else {
         CHECK((v == "match" || v == "differs"));
+        CHECK(c["reference"].as<double>() == c["published"].as<double>());
       }
       CHECK(c["tolerance"].as<double>() > 0);
       // An explained cell carries its check, and the check holds.
@@ -216,16 +258,11 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   }
   CHECK(held_out == 8);  // p and v of sets 2-5
   CHECK(table(j, "9.4")["cells"][0]["published"].as<double>() == 12.06);
-  // From the smoothed states every set's real eigenvalue is found within 5 % of the thesis's.
-  for (const auto& c : table(j, "9.5")["cells"]) {
-    if (c["column"].as<std::string>() == "aperiodic") CHECK(c["verdict"].as<std::string>() == "match");
-  }
-  // Table 9.6: Yp+ and Yv+ judged within the printed values' rounding (2 thesis sigma is under it),
-  // Lp+ and Lv+ not judged (2 thesis sigma is wider than the value).
+  // Set 1's roll derivatives are recovered from the smoothed states within the thesis's printing:
+  // the pipeline check matches its plant file.
   for (const auto& c : table(j, "9.6")["cells"]) {
     const std::string col = c["column"].as<std::string>();
-    if (col == "Yp+" || col == "Yv+") CHECK(c["tolerance"].as<double>() == Approx(0.005));
-    if (col == "Lp+" || col == "Lv+") CHECK(c["verdict"].as<std::string>() == "not judged");
+    if (col == "Lp+" || col == "Lv+") CHECK(c["verdict"].as<std::string>() == "match");
   }
   // The phi_dot rows of Tables 13 and 14 are one number (the kinematic identity on one flight): counted once.
   bool repeated = false;
@@ -324,6 +361,23 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
     INFO(rb.out << rb.err);
     CHECK(rb.exit_code == 2);
     CHECK_THAT(rb.err, Catch::Contains("max_off"));
+    // A table relabelled by the campaign file is refused: the code decides the category.
+    w["tables"]["15"].remove("reasons");
+    w["tables"]["12"]["category"] = "not comparable";
+    std::ofstream(dir + "/relabel.yaml") << w;
+    const auto rr = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/relabel.yaml --logs " +
+                                          dir);
+    INFO(rr.out << rr.err);
+    CHECK(rr.exit_code == 2);
+    CHECK_THAT(rr.err, Catch::Contains("tables.12.category") && Catch::Contains("fit metrics of a model on the rig's flights"));
+    // A pipeline check takes no tolerance from the file: it is derived.
+    w["tables"]["12"].remove("category");
+    w["tables"]["9.6"]["tolerance"] = YAML::Load("{relative: 0.5}");
+    std::ofstream(dir + "/loose.yaml") << w;
+    const auto rl = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/loose.yaml --logs " + dir);
+    INFO(rl.out << rl.err);
+    CHECK(rl.exit_code == 2);
+    CHECK_THAT(rl.err, Catch::Contains("tables.9.6.tolerance") && Catch::Contains("pipeline check"));
   }
   // An output that cannot be written is named before anything flies.
   const auto out = nimble::test::run_rig("reproduce thesis --no-progress --logs " + dir + "/never --json " + dir +
