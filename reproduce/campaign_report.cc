@@ -119,11 +119,14 @@ std::string campaign_text(const CampaignResult& r) {
     out << fmt::format("\nThe identification against the plant (not a thesis cell: each set's flight flew that set's "
                        "model; states {}, mean over the seeds)\n",
                        r.states);
-    out << fmt::format("  {:<7} {:<10} {:<15} {:>11} {:>11} {:>9} {:>9} {:>8}\n", "row", "derivative", "method", "plant",
-                       "identified", "sd", "+-95%", "error");
+    out << "  (sd: seed to seed; own sd: the method's own standard deviation of one flight's estimate, coloured "
+           "residuals, mean over the seeds)\n";
+    out << fmt::format("  {:<7} {:<10} {:<15} {:>11} {:>11} {:>9} {:>9} {:>9} {:>8}\n", "row", "derivative", "method",
+                       "plant", "identified", "sd", "own sd", "+-95%", "error");
     for (const auto& c : r.plant_check) {
-      out << fmt::format("  {:<7} {:<10} {:<15} {:>11.4g} {:>11.4g} {:>9.2g} {:>9.2g} {:>7.1f}%\n", c.row, c.derivative,
-                         c.method, c.plant, c.mean, c.sd, c.interval, 100 * (c.mean / c.plant - 1));
+      out << fmt::format("  {:<7} {:<10} {:<15} {:>11.4g} {:>11.4g} {:>9.2g} {:>9.2g} {:>9.2g} {:>7.1f}%\n", c.row,
+                         c.derivative, c.method, c.plant, c.mean, c.sd, c.own_sd, c.interval,
+                         100 * (c.mean / c.plant - 1));
     }
   }
   if (!r.causes.empty()) {
@@ -225,7 +228,8 @@ std::string campaign_json(const CampaignResult& r) {
   for (const auto& c : r.plant_check) {
     w.begin_object().key("row").value(c.row).key("derivative").value(c.derivative).key("method").value(c.method);
     w.key("plant").value(c.plant);
-    w.key("mean").value(c.mean).key("sd").value(c.sd).key("interval").value(c.interval).end_object();
+    w.key("mean").value(c.mean).key("sd").value(c.sd).key("own_sd").value(c.own_sd);
+    w.key("interval").value(c.interval).end_object();
   }
   w.end_array();
   w.key("counts").begin_object();

@@ -221,6 +221,8 @@ struct WithCause {
 constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
 /// The key of a derivative identified by output error among a seed's identified values.
 constexpr const char* kOutputErrorSuffix = " (output error)";
+/// The key of a derivative's own standard deviation (coloured residuals) among them.
+constexpr const char* kOwnSigmaSuffix = " sigma";
 
 /// One run of the campaign: the flights of every seed, the values of every table.
 class CampaignRun {
@@ -301,8 +303,11 @@ class CampaignRun {
       put_eigenvalues(t95, set.row, id.eigenvalues);
       put_eigenvalues(t95_oe, set.row, oe.eigenvalues);
       for (const char* d : kCheckedDerivatives) {
-        identified_[set.row][d].push_back(id.parameters.at(d).value);
-        identified_[set.row][std::string(d) + kOutputErrorSuffix].push_back(oe.parameters.at(d).value);
+        const std::string ee = d, oe_key = std::string(d) + kOutputErrorSuffix;
+        identified_[set.row][ee].push_back(id.parameters.at(d).value);
+        identified_[set.row][oe_key].push_back(oe.parameters.at(d).value);
+        identified_[set.row][ee + kOwnSigmaSuffix].push_back(id.parameters.at(d).sigma_coloured);
+        identified_[set.row][oe_key + kOwnSigmaSuffix].push_back(oe.parameters.at(d).sigma_coloured);
         plant_[set.row][d] = truth.derivatives.at(d);
       }
       all_eigenvalues.emplace_back(set.row, id.eigenvalues);
@@ -480,7 +485,11 @@ std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<
         c.plant = seeds.front().plant.at(set.row).at(d);
         const std::string key = std::string(d) + (c.method == "output error" ? kOutputErrorSuffix : "");
         std::vector<double> x;
-        for (const SeedValues& v : seeds) x.push_back(v.identified.at(set.row).at(key));
+        c.own_sd = 0.0;
+        for (const SeedValues& v : seeds) {
+          x.push_back(v.identified.at(set.row).at(key));
+          c.own_sd += v.identified.at(set.row).at(key + kOwnSigmaSuffix) / static_cast<double>(seeds.size());
+        }
         mean_interval(x, &c.mean, &c.sd, &c.interval);
         out.push_back(c);
       }

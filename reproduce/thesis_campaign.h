@@ -71,6 +71,10 @@ struct PlantCheck {
   double mean = 0.0;       ///< over the seeds
   double sd = 0.0;         ///< seed-to-seed
   double interval = 0.0;   ///< 95 % half-width of the mean
+  /// The method's own standard deviation of one flight's estimate (Cramer-Rao or regression,
+  /// allowing coloured residuals), mean over the seeds: beside `sd`, whether the method knows
+  /// how well one flight determines the derivative.
+  double own_sd = 0.0;
 };
 
 struct CauseStudy {

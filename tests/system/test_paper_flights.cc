@@ -275,6 +275,8 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
     const std::string d = c["derivative"].as<std::string>(), method = c["method"].as<std::string>();
     oe_rows += method == "output error" ? 1 : 0;
     INFO(c["row"].as<std::string>() << " " << d << " " << method);
+    // The method's own standard deviation of one flight's estimate is printed beside the seeds'.
+    CHECK(c["own_sd"].as<double>() > 0);
     if (d == "Lp" || d == "L_df" || d == "Y_df") {
       CHECK(std::fabs(c["mean"].as<double>() / c["plant"].as<double>() - 1.0) < 0.02);
     }
