@@ -140,4 +140,29 @@ std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
   return m.dump();
 }
 
+std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<SeedValues>& seeds) {
+  std::vector<PlantCheck> out;
+  for (const auto& set : spec.sets) {
+    for (const char* d : kCheckedDerivatives) {
+      for (const char* method : {"equation error", "output error"}) {
+        PlantCheck c;
+        c.row = set.row;
+        c.derivative = d;
+        c.method = method;
+        c.plant = seeds.front().plant.at(set.row).at(d);
+        const std::string key = std::string(d) + (c.method == "output error" ? kOutputErrorSuffix : "");
+        std::vector<double> x;
+        c.own_sd = 0.0;
+        for (const SeedValues& v : seeds) {
+          x.push_back(v.identified.at(set.row).at(key));
+          c.own_sd += v.identified.at(set.row).at(key + kOwnSigmaSuffix) / static_cast<double>(seeds.size());
+        }
+        mean_interval(x, &c.mean, &c.sd, &c.interval);
+        out.push_back(c);
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace nimble::reproduce

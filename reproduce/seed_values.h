@@ -37,6 +37,13 @@ struct SeedValues {
   std::vector<WithFlight> with;                                 ///< one per flight with a cause, in the plan's order
 };
 
+/// The derivatives whose identification is checked against the plant's (SeedValues::identified).
+inline constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
+/// The key of a derivative identified by output error among a seed's identified values.
+inline constexpr const char* kOutputErrorSuffix = " (output error)";
+/// The key of a derivative's own standard deviation (coloured residuals) among them.
+inline constexpr const char* kOwnSigmaSuffix = " sigma";
+
 /// One line of JSON.
 std::string seed_values_line(const SeedValues& values);
 
@@ -44,6 +51,9 @@ std::string seed_values_line(const SeedValues& values);
 SeedValues seed_values_from_line(const std::string& line);
 
 struct CampaignSpec;
+
+/// The identified derivatives against the plant's, over the seeds flown.
+std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<SeedValues>& seeds);
 
 /// A seed's key among a campaign directory's result files (campaign/result_files.h): seed-N.
 std::string seed_key(std::uint64_t seed);

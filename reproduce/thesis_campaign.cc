@@ -217,12 +217,6 @@ struct WithCause {
   std::vector<std::string> failures;
 };
 
-/// The derivatives whose identification is checked against the plant's.
-constexpr const char* kCheckedDerivatives[] = {"Lp", "Lv", "Yp", "Yv", "L_df", "Y_df"};
-/// The key of a derivative identified by output error among a seed's identified values.
-constexpr const char* kOutputErrorSuffix = " (output error)";
-/// The key of a derivative's own standard deviation (coloured residuals) among them.
-constexpr const char* kOwnSigmaSuffix = " sigma";
 
 /// One run of the campaign: the flights of every seed, the values of every table.
 class CampaignRun {
@@ -470,32 +464,6 @@ std::vector<std::string> plan_labels(const std::vector<PlanItem>& items) {
     labels[j] = it->second;
   }
   return labels;
-}
-
-/// The identified derivatives against the plant's, over the seeds flown.
-std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<SeedValues>& seeds) {
-  std::vector<PlantCheck> out;
-  for (const auto& set : spec.sets) {
-    for (const char* d : kCheckedDerivatives) {
-      for (const char* method : {"equation error", "output error"}) {
-        PlantCheck c;
-        c.row = set.row;
-        c.derivative = d;
-        c.method = method;
-        c.plant = seeds.front().plant.at(set.row).at(d);
-        const std::string key = std::string(d) + (c.method == "output error" ? kOutputErrorSuffix : "");
-        std::vector<double> x;
-        c.own_sd = 0.0;
-        for (const SeedValues& v : seeds) {
-          x.push_back(v.identified.at(set.row).at(key));
-          c.own_sd += v.identified.at(set.row).at(key + kOwnSigmaSuffix) / static_cast<double>(seeds.size());
-        }
-        mean_interval(x, &c.mean, &c.sd, &c.interval);
-        out.push_back(c);
-      }
-    }
-  }
-  return out;
 }
 
 /// Every seed flown in the campaigns' worker pool (`jobs` at a time), each with all its flights
