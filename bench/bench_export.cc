@@ -25,7 +25,7 @@
 #include "cmdline/args.h"
 #include "core/bench_timing.h"
 #include "core/json_writer.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include "lcmjson/lcm_json.h"
@@ -49,8 +49,8 @@ double timed(int runs, const std::function<void()>& f) {
 
 /// The floor: every event of the log read (header checks, channel, bytes), nothing decoded.
 int64_t read_events(const std::string& log) {
-  ident::LcmLogReader reader(log);
-  ident::LogEventRecord ev;
+  lcmlog::LcmLogReader reader(log);
+  lcmlog::LogEventRecord ev;
   int64_t bytes = 0;
   while (reader.next(&ev)) bytes += static_cast<int64_t>(ev.data.size());
   return bytes;
@@ -58,8 +58,8 @@ int64_t read_events(const std::string& log) {
 
 /// The log read and every message of a known channel decoded to JSON, nothing written.
 int64_t decode_events(const std::string& log) {
-  ident::LcmLogReader reader(log);
-  ident::LogEventRecord ev;
+  lcmlog::LcmLogReader reader(log);
+  lcmlog::LogEventRecord ev;
   lcmjson::JsonMessage json;
   int64_t bytes = 0;
   while (reader.next(&ev)) {

@@ -25,6 +25,7 @@
 #include "mcap/log_export.h"
 #include "cli/log_input.h"
 #include "core/config.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 
@@ -118,7 +119,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   if (const auto done = cl.parse(args)) return *done;
   opt.compatibility.enabled = !no_compatibility;
   if (const auto failed = apply_states(cl, log_options, sensing_file, data_files)) return *failed;
-  if (!report.empty()) ident::require_gnuplot();  // fail before the work, not after
+  if (!report.empty()) plots::require_gnuplot();  // fail before the work, not after
   const DerivativeModel model = load_model(model_file);
   const std::string vfile = vehicle_file.empty() ? model.vehicle_file : vehicle_file;
   const Vehicle vehicle = load_vehicle(vfile);

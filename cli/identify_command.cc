@@ -21,6 +21,7 @@
 #include "ident/report.h"
 #include "mcap/log_export.h"
 #include "cli/log_input.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 
@@ -94,7 +95,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   cl.add_plots(plots, "");
   if (const auto done = cl.parse(args)) return *done;
   if (!terms_file.empty()) opt.terms = load_model(terms_file).terms;
-  if (!plots.empty()) ident::require_gnuplot();  // fail before the work, not after
+  if (!plots.empty()) plots::require_gnuplot();  // fail before the work, not after
 
   if (vehicle_file.empty()) vehicle_file = ident::default_vehicle_file();
   const Vehicle vehicle = load_vehicle(vehicle_file);

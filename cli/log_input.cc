@@ -113,7 +113,7 @@ void warn_damage(const char* command, const std::string& file, const std::string
 /// Counts the undecodable messages a log reader passes over (the channels it does not read), as
 /// the MCAP export counts what it leaves out: `o.other_event` feeds `count`.
 void count_undecodable(ident::LogReadOptions& o, mcap::UndecodableCount& count) {
-  o.other_event = [&count](const ident::LogEventRecord& e) { count.add(e); };
+  o.other_event = [&count](const lcmlog::LogEventRecord& e) { count.add(e); };
 }
 
 /// Says on stderr which messages beyond the vehicle's physical bounds a read left out.

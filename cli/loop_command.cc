@@ -20,6 +20,7 @@
 #include "loop/loop_report.h"
 #include "loop/loop_setup.h"
 #include "loop/loop_study.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 namespace {
@@ -110,7 +111,7 @@ int run_loop_command(const std::vector<std::string>& args) {
   cl.add_plots(plots, "loop_bode.png, loop_nyquist.png, loop_step.png and loop_poles.png");
   if (const auto done = cl.parse(args)) return *done;
   if ((!gains_out.empty() || fly) && design_text_arg.empty()) return cl.fail("--gains-out and --fly need --design");
-  if (!plots.empty()) ident::require_gnuplot();
+  if (!plots.empty()) plots::require_gnuplot();
 
   // --fly flies in process: the design is for that loop unless another clock is asked for.
   if (fly && clock.empty()) clock = "inprocess";

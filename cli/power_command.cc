@@ -13,6 +13,7 @@
 #include "detection_power/effect_size.h"
 #include "detection_power/power_campaign.h"
 #include "detection_power/power_report.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 namespace {
@@ -121,7 +122,7 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
       ->type_name("DIR");
   cl->add_flag("--no-progress", "no progress line on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
-  if (!plots.empty()) ident::require_gnuplot();  // fail before the flights, not after
+  if (!plots.empty()) plots::require_gnuplot();  // fail before the flights, not after
 
   detection_power::PowerResult result;
   try {

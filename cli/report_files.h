@@ -8,12 +8,13 @@
 #include "core/config.h"
 #include "core/output_file.h"
 #include "ident/plots.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 
 /// The identification plots' gnuplot helpers (ident/plots.h); files are written with
 /// nimble::write_file (core/output_file.h).
-using ident::gp_quote;
-using ident::run_gnuplot;
+using plots::gp_quote;
+using plots::run_gnuplot;
 
 }  // namespace nimble::cli

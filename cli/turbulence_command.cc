@@ -20,6 +20,7 @@
 #include "turbulence/ce500_analysis.h"
 #include "turbulence/ce500_config.h"
 #include "turbulence/ce500_model.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 namespace {
@@ -376,10 +377,10 @@ std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
   const auto& names = ce500_output_names();
   const char* labels[] = {"beta [deg]", "phi [deg]", "pb/2V [-]", "rb/2V [-]", "a_y [m/s^2]"};
   const Eigen::Index n = std::min<Eigen::Index>(a.t_s.size(), static_cast<Eigen::Index>(std::llround(120.0 / a.options.dt_s)) + 1);
-  std::vector<ident::TimePanel> panels;
+  std::vector<plots::TimePanel> panels;
   for (std::size_t i = 0; i < names.size(); ++i) {
     const Eigen::Index c = static_cast<Eigen::Index>(i);
-    ident::TimePanel p;
+    plots::TimePanel p;
     p.name = names[i];
     p.title = names[i];
     p.ylabel = labels[i];
@@ -387,7 +388,7 @@ std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
     p.series.push_back({"reduced", a.reduced.y.col(c).head(n), "#d62728", true});
     panels.push_back(p);
   }
-  return ident::plot_time_histories(dir, "time_histories", "Ce500 responses to the same v_g, w_g turbulence record",
+  return plots::plot_time_histories(dir, "time_histories", "Ce500 responses to the same v_g, w_g turbulence record",
                                      a.t_s.head(n), panels);
 }
 
@@ -418,7 +419,7 @@ int run_turbulence_command(const std::vector<std::string>& args) {
   cl.add_json(json, "the report");
   cl.add_plots(plots, "psd_matrix.png, time_histories.png, pole_map.png");
   if (const auto done = cl.parse(args)) return *done;
-  if (!plots.empty()) ident::require_gnuplot();
+  if (!plots.empty()) plots::require_gnuplot();
 
   const Ce500Config config = load_ce500_config(file);
   Ce500Options options = ce500_default_options(config);

@@ -30,6 +30,7 @@
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "turbulence/hover_gust_response.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 namespace {
@@ -326,7 +327,7 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
                "response_psd.png (flight Welch, model expectation and band, analytical PSD) and "
                "response_ratio.png (flight / model with the band)");
   if (const auto done = cl.parse(args)) return *done;
-  if (!plots.empty()) ident::require_gnuplot();
+  if (!plots.empty()) plots::require_gnuplot();
 
   const Setup s = setup_from(scenario, overrides);
   double dt_s = 0.0;

@@ -23,6 +23,7 @@
 #include "mcap/log_export.h"
 #include "cli/log_input.h"
 #include "core/config.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::cli {
 
@@ -62,7 +63,7 @@ int run_validate_command(const std::vector<std::string>& args) {
       ->type_name("FILE");
   if (const auto done = cl.parse(args)) return *done;
   if (const auto failed = apply_states(cl, log_options, sensing_file, {csv})) return *failed;
-  if (!plots.empty()) ident::require_gnuplot();
+  if (!plots.empty()) plots::require_gnuplot();
 
   const DerivativeModel model = load_model(model_file);
   const Vehicle vehicle = load_vehicle(vehicle_file.empty() ? model.vehicle_file : vehicle_file);

@@ -16,7 +16,7 @@
 #include "ident/identify.h"
 #include "contract/channels.h"
 #include "ident/flight_data.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "lcmjson/lcm_json.h"
 
 namespace nimble::cli {
@@ -55,8 +55,8 @@ struct Replay {
 /// Replays `file` into `view`, paced by rig time x `speed` (0: as fast as possible).
 /// @throws ident::DataError for a damaged log (without salvage).
 Replay replay(const std::string& file, bool salvage, double speed, foxglove::LiveView& view) {
-  ident::LcmLogReader log(file, salvage);
-  ident::LogEventRecord ev;
+  lcmlog::LcmLogReader log(file, salvage);
+  lcmlog::LogEventRecord ev;
   Replay r;
   int64_t first_us = -1, rig_us = -1;
   auto start = std::chrono::steady_clock::now();
@@ -108,7 +108,7 @@ bool inputs_ok(const std::string& log_file, const std::string& web, const std::s
   }
   if (!log_file.empty()) {
     try {
-      ident::LcmLogReader check(log_file, salvage);  // opens and checks the header now, before serving
+      lcmlog::LcmLogReader check(log_file, salvage);  // opens and checks the header now, before serving
     } catch (const std::exception& e) {
       std::cerr << "rig view: " << e.what() << "\n";
       return false;

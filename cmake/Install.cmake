@@ -2,12 +2,14 @@
 #
 #   bin/                          rig and the rig's processes (rig finds them next to itself)
 #   lib/                          the libraries for reuse (static): nimble_core, nimble_contract,
-#                                 nimble_messages, nimble_ident, nimble_ident_lcm, nimble_estimation
-#   include/nimble_rig/           their headers (core/, contract/, ident/, estimator/), the generated
+#                                 nimble_messages, nimble_lcmlog, nimble_plots, nimble_ident,
+#                                 nimble_ident_lcm, nimble_estimation
+#   include/nimble_rig/           their headers (core/, contract/, lcmlog/, plots/, ident/, estimator/), the generated
 #                                 LCM types (nimble/<type>.hpp) and their list (nimble/rig_message_list.hpp,
 #                                 which contract/messages.h and contract/faults.cc include)
 #   lib/cmake/nimble_rig/         find_package(nimble_rig): nimble_rig::lcmtypes, ::core,
-#                                 ::contract, ::messages, ::ident, ::ident_lcm, ::estimation
+#                                 ::contract, ::messages, ::lcmlog, ::plots, ::ident, ::ident_lcm,
+#                                 ::estimation
 #   lib/pkgconfig/nimble_rig.pc   the same for pkg-config
 #   lib/python3/dist-packages/    nimble (the LCM types, generated) and nimble_rig (log reader)
 #   share/java/                   nimble_lcmtypes.jar (lcm-spy, lcm-logplayer-gui)
@@ -23,12 +25,14 @@ set(NIMBLE_INSTALL_PYTHONDIR "lib/python3/dist-packages")
 install(TARGETS rig nimble_plant nimble_controller nimble_estimator nimble_mocap nimble_can_bridge
         RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
 
-set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_messages nimble_ident nimble_ident_lcm
-    nimble_estimation)
+set(nimble_exported nimble_lcmtypes nimble_core nimble_contract nimble_messages nimble_lcmlog nimble_plots nimble_ident
+    nimble_ident_lcm nimble_estimation)
 set_target_properties(nimble_lcmtypes PROPERTIES EXPORT_NAME lcmtypes)
 set_target_properties(nimble_core PROPERTIES EXPORT_NAME core)
 set_target_properties(nimble_contract PROPERTIES EXPORT_NAME contract)
 set_target_properties(nimble_messages PROPERTIES EXPORT_NAME messages)
+set_target_properties(nimble_lcmlog PROPERTIES EXPORT_NAME lcmlog)
+set_target_properties(nimble_plots PROPERTIES EXPORT_NAME plots)
 set_target_properties(nimble_ident PROPERTIES EXPORT_NAME ident)
 set_target_properties(nimble_ident_lcm PROPERTIES EXPORT_NAME ident_lcm)
 set_target_properties(nimble_estimation PROPERTIES EXPORT_NAME estimation)
@@ -39,7 +43,7 @@ install(TARGETS ${nimble_exported} EXPORT nimble_rigTargets
         ARCHIVE DESTINATION "${CMAKE_INSTALL_LIBDIR}")
 install(EXPORT nimble_rigTargets NAMESPACE nimble_rig:: DESTINATION "${NIMBLE_INSTALL_CMAKEDIR}")
 
-foreach(dir core contract ident estimator)
+foreach(dir core contract lcmlog plots ident estimator)
   install(DIRECTORY "${PROJECT_SOURCE_DIR}/${dir}/" DESTINATION "${NIMBLE_INSTALL_INCLUDEDIR}/${dir}"
           FILES_MATCHING PATTERN "*.h")
 endforeach()

@@ -10,6 +10,7 @@
 #include "core/json_writer.h"
 #include "core/output_file.h"
 #include "ident/plots.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::detection_power {
 namespace {
@@ -196,7 +197,7 @@ std::string power_json(const PowerResult& r, const std::vector<std::string>& plo
 }
 
 std::vector<std::string> write_power_plots(const PowerResult& r, const std::string& dir_text) {
-  ident::require_gnuplot();
+  plots::require_gnuplot();
   const fs::path dir(dir_text);
   fs::create_directories(dir);
   std::vector<std::string> pngs;
@@ -215,8 +216,8 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
     }
     write_file(dir / "power_length.dat", data.str());
     script << "set terminal pngcairo noenhanced size 1000,650\nset output "
-           << ident::gp_quote((dir / "power_length.png").string()) << "\n"
-           << "set title " << ident::gp_quote("P(" + r.named_as + " named) on " + r.scenario + ", " +
+           << plots::gp_quote((dir / "power_length.png").string()) << "\n"
+           << "set title " << plots::gp_quote("P(" + r.named_as + " named) on " + r.scenario + ", " +
                                               std::to_string(r.flights) + " flights per point, 95 % Wilson intervals")
            << "\nset xlabel 'record length [s]'\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\n"
            << "set key bottom right\n" << target;
@@ -228,12 +229,12 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
     }
     script << "plot ";
     for (std::size_t s = 0; s < r.sizes.size(); ++s) {
-      script << (s ? ", " : "") << ident::gp_quote((dir / "power_length.dat").string()) << " index " << s
+      script << (s ? ", " : "") << plots::gp_quote((dir / "power_length.dat").string()) << " index " << s
              << " using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '" << colour(s) << "' title "
-             << ident::gp_quote(r.parameter + " = " + num(r.sizes[s]) + " " + r.unit);
+             << plots::gp_quote(r.parameter + " = " + num(r.sizes[s]) + " " + r.unit);
     }
     script << "\n";
-    ident::run_gnuplot(dir, "power_length", script.str());
+    plots::run_gnuplot(dir, "power_length", script.str());
     pngs.push_back((dir / "power_length.png").string());
   }
   // Against |size|: one block per length.
@@ -253,17 +254,17 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
     }
     write_file(dir / "power_size.dat", data.str());
     script << "set terminal pngcairo noenhanced size 1000,650\nset output "
-           << ident::gp_quote((dir / "power_size.png").string()) << "\n"
-           << "set title " << ident::gp_quote("P(" + r.named_as + " named) on " + r.scenario + " against the size")
-           << "\nset xlabel " << ident::gp_quote("|" + r.parameter + "| [" + r.unit + "]")
+           << plots::gp_quote((dir / "power_size.png").string()) << "\n"
+           << "set title " << plots::gp_quote("P(" + r.named_as + " named) on " + r.scenario + " against the size")
+           << "\nset xlabel " << plots::gp_quote("|" + r.parameter + "| [" + r.unit + "]")
            << "\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\nset key bottom right\n" << target << "plot ";
     for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-      script << (l ? ", " : "") << ident::gp_quote((dir / "power_size.dat").string()) << " index " << l
+      script << (l ? ", " : "") << plots::gp_quote((dir / "power_size.dat").string()) << " index " << l
              << " using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '" << colour(l) << "' title "
-             << ident::gp_quote("length " + num(r.lengths_s[l]) + " s");
+             << plots::gp_quote("length " + num(r.lengths_s[l]) + " s");
     }
     script << "\n";
-    ident::run_gnuplot(dir, "power_size", script.str());
+    plots::run_gnuplot(dir, "power_size", script.str());
     pngs.push_back((dir / "power_size.png").string());
   }
   return pngs;

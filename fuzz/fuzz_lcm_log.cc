@@ -10,7 +10,7 @@
 
 #include "fuzz/fuzz_support.h"
 #include "ident/flight_data.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "ident/rig_log.h"
 
 using nimble::fuzz::require;
@@ -23,8 +23,8 @@ int64_t read_all(const std::string& file, bool salvage, std::size_t file_size, b
   *error = false;
   int64_t n = 0;
   try {
-    nimble::ident::LcmLogReader reader(file, salvage);
-    nimble::ident::LogEventRecord ev;
+    nimble::lcmlog::LcmLogReader reader(file, salvage);
+    nimble::lcmlog::LogEventRecord ev;
     while (reader.next(&ev)) {
       ++n;
       require(ev.offset >= 0 && static_cast<std::size_t>(ev.offset) + ev.data.size() + ev.channel.size() <= file_size,

@@ -24,7 +24,7 @@
 #include "can_bridge/codec.h"
 #include "contract/channels.h"
 #include "ident/flight_data.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 #include <nimble/fault_event_t.hpp>
@@ -184,10 +184,10 @@ int main(int argc, char** argv) {
 
   // The first three messages of each channel, in log order.
   std::map<std::string, std::vector<std::vector<uint8_t>>> by_channel;
-  std::vector<ident::LogEventRecord> kept;
+  std::vector<lcmlog::LogEventRecord> kept;
   {
-    ident::LcmLogReader reader(io.log_file);
-    ident::LogEventRecord ev;
+    lcmlog::LcmLogReader reader(io.log_file);
+    lcmlog::LogEventRecord ev;
     while (reader.next(&ev)) {
       auto& list = by_channel[ev.channel];
       if (list.size() >= 3) continue;

@@ -9,6 +9,7 @@
 #include "ident/data_check.h"
 #include "ident/plots.h"
 #include "ident/signal.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::ident {
 namespace {
@@ -264,13 +265,13 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
     const char* unit;
   };
   const Signal signals[] = {{"p", "rad/s"}, {"phi", "rad"}, {"v", "m/s"}, {"delta_f", "rad/s"}};
-  std::vector<TimePanel> panels;
+  std::vector<plots::TimePanel> panels;
   for (const Signal& s : signals) {
     const FitMetrics& f = r.fits.at(s.name);
     char title[200];
     std::snprintf(title, sizeof title, "%s   r_xy %.3f  R^2 %.3f  RMSE %.3g %s (%.1f %% of range)", s.name, f.rxy, f.r2,
                   f.rmse, s.unit, f.rmse_pct_range);
-    TimePanel panel;
+    plots::TimePanel panel;
     panel.name = s.name;
     panel.title = title;
     panel.ylabel = std::string(s.name) + " [" + s.unit + "]";
@@ -300,7 +301,7 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
     f.whiteness = residual_whiteness(f.measured - f.estimated, r.rate_hz, 50, lag_step);
     fits.push_back(std::move(f));
   }
-  return {plot_time_histories(dir, "closed_loop", title, r.t_s, panels),
+  return {plots::plot_time_histories(dir, "closed_loop", title, r.t_s, panels),
           plot_autocorrelation(dir, fits, "residual autocorrelation, closed loop: " + r.model + " on " + r.source)};
 }
 

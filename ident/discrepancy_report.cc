@@ -18,6 +18,7 @@
 #include "ident/discrepancy_parts.h"
 #include "ident/plots.h"
 #include "ident/spectrum.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::ident {
 namespace {
@@ -528,11 +529,11 @@ std::string discrepancy_text(const DiscrepancyResult& r) {
 }
 
 std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, const std::string& dir) {
-  require_gnuplot();
+  plots::require_gnuplot();
   std::filesystem::create_directories(dir);
   std::vector<std::string> files;
 
-  std::vector<TimePanel> outputs, residuals, psds;
+  std::vector<plots::TimePanel> outputs, residuals, psds;
   Eigen::VectorXd f_hz;
   const std::size_t segment = std::max<std::size_t>(64, static_cast<std::size_t>(2.0 * r.rate_hz));
   for (const auto& o : r.gap) {
@@ -550,13 +551,13 @@ std::vector<std::string> write_discrepancy_report(const DiscrepancyResult& r, co
                      {"after", pa.psd.cwiseMax(1e-30), "#1f77b4", false}}});
   }
   const std::string what = r.model_name + " on " + r.source;
-  files.push_back(plot_time_histories(dir, "outputs", "discrepancy: " + what, r.t_s, outputs));
-  files.push_back(plot_time_histories(dir, "residuals", "held-out residuals before and after: " + what, r.t_s, residuals));
-  PlotAxes axes;
+  files.push_back(plots::plot_time_histories(dir, "outputs", "discrepancy: " + what, r.t_s, outputs));
+  files.push_back(plots::plot_time_histories(dir, "residuals", "held-out residuals before and after: " + what, r.t_s, residuals));
+  plots::PlotAxes axes;
   axes.xlabel = "frequency [Hz]";
   axes.log_y = true;
   axes.x_max = r.cutoff_hz > 0.0 ? 2.0 * r.cutoff_hz : 0.5 * r.rate_hz;
-  files.push_back(plot_panels(dir, "residual_psd", "residual PSDs (Welch, 2 s): " + what, f_hz, psds, axes));
+  files.push_back(plots::plot_panels(dir, "residual_psd", "residual PSDs (Welch, 2 s): " + what, f_hz, psds, axes));
 
   std::ostringstream md;
   md << "# Discrepancy: " << r.model_name << "\n\n";

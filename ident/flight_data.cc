@@ -14,17 +14,6 @@
 namespace nimble::ident {
 namespace {
 
-std::string format_error(const std::string& source, int line, int row, const std::string& column,
-                         const std::string& problem) {
-  std::ostringstream out;
-  out << source;
-  if (line > 0) out << ":" << line;
-  out << ": ";
-  if (row > 0) out << "row " << row << ", ";
-  if (!column.empty()) out << "column '" << column << "': ";
-  out << problem;
-  return out.str();
-}
 
 std::string trim(const std::string& s) {
   std::size_t a = 0, b = s.size();
@@ -114,13 +103,6 @@ std::size_t FlightData::min_samples() const {
   return n;
 }
 
-DataError::DataError(std::string source, int line, int row, std::string column, std::string problem)
-    : std::runtime_error(format_error(source, line, row, column, problem)),
-      source_(std::move(source)),
-      line_(line),
-      row_(row),
-      column_(std::move(column)),
-      problem_(std::move(problem)) {}
 
 FlightData parse_flight_csv(const std::string& text, const std::string& source) {
   // A UTF-8 byte order mark (spreadsheet programs write one) is not part of the first name.

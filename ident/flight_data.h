@@ -22,6 +22,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/data_error.h"
+
 namespace nimble::ident {
 
 /// Name, unit and role of one flight-data channel.
@@ -65,30 +67,9 @@ struct FlightData {
   std::size_t min_samples() const;
 };
 
-/// Error in flight data: names the source, the file line, the 1-based data
-/// row and the column where it applies (line/row -1 and column empty if not).
-class DataError : public std::runtime_error {
- public:
-  DataError(std::string source, int line, int row, std::string column, std::string problem);
+/// Error in flight data (core/data_error.h).
+using DataError = ::nimble::DataError;
 
-  /// File or log the error is in.
-  const std::string& source() const { return source_; }
-  /// 1-based line in the file, or -1.
-  int line() const { return line_; }
-  /// 1-based data row (the first row after the header is row 1), or -1.
-  int row() const { return row_; }
-  /// Column name, or empty.
-  const std::string& column() const { return column_; }
-  /// What is wrong, without the location.
-  const std::string& problem() const { return problem_; }
-
- private:
-  std::string source_;
-  int line_;
-  int row_;
-  std::string column_;
-  std::string problem_;
-};
 
 /// Parses CSV text (format above); `source` names it in errors.
 /// @throws DataError on a missing required column, an unknown or duplicate

@@ -10,29 +10,17 @@
 #include <stdexcept>
 
 #include "core/output_file.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::ident {
 namespace {
 
-/// Single-quoted shell word.
-std::string sh_quote(const std::string& s) {
-  std::string out = "'";
-  for (const char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
+using plots::gp_number;
+using plots::gp_quote;
+using plots::png_terminal;
+using plots::run_gnuplot;
 
 namespace fs = std::filesystem;
-
-std::string terminal(int width, int height) {
-  return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
-         " font 'sans,10'\nset termoption noenhanced\n";
-}
-
-std::string g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", x);
-  return buf;
-}
 
 /// Measured outputs over time against the model's: `model_label` says what the model's are
 /// ("estimated" by the regression, "predicted" by a model under validation). One panel per output.
@@ -43,8 +31,8 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
   for (const auto& f : fits) data << " " << f.output << "_measured " << f.output << "_" << model_label;
   data << "\n";
   for (Eigen::Index k = 0; k < t.size(); ++k) {
-    data << g(t[k]);
-    for (const auto& f : fits) data << " " << g(f.measured[k]) << " " << g(f.estimated[k]);
+    data << gp_number(t[k]);
+    for (const auto& f : fits) data << " " << gp_number(f.measured[k]) << " " << gp_number(f.estimated[k]);
     data << "\n";
   }
   const fs::path dat = dir / "derivatives.dat";
@@ -52,7 +40,7 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
   const fs::path png = dir / "derivatives.png";
   const int n = static_cast<int>(fits.size());
   std::ostringstream s;
-  s << terminal(1400, 320 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << png_terminal(1400, 320 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
   s << "set grid\nset key top right\nset xlabel 'time [s]'\n";
   for (int i = 0; i < n; ++i) {
@@ -79,7 +67,7 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   for (const auto& f : fits) {
     data << "# " << f.output << "\n";
     for (Eigen::Index k = 0; k < f.whiteness.rho.size(); ++k) {
-      data << g(static_cast<double>(k) * f.whiteness.lag_step_s) << " " << g(f.whiteness.rho[k]) << "\n";
+      data << gp_number(static_cast<double>(k) * f.whiteness.lag_step_s) << " " << gp_number(f.whiteness.rho[k]) << "\n";
     }
     data << "\n\n";
   }
@@ -87,11 +75,11 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   const fs::path png = dir / "autocorrelation.png";
   const int n = static_cast<int>(fits.size());
   std::ostringstream s;
-  s << terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << png_terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
   double max_lag_s = 0.0;
   for (const auto& f : fits) max_lag_s = std::max(max_lag_s, static_cast<double>(f.whiteness.lags) * f.whiteness.lag_step_s);
-  s << "set grid\nset yrange [-1.05:1.05]\nset xrange [0:" << g(max_lag_s) << "]\n";
+  s << "set grid\nset yrange [-1.05:1.05]\nset xrange [0:" << gp_number(max_lag_s) << "]\n";
   s << "set xlabel 'lag [s]'\nset ylabel 'autocorrelation'\nset key top right\n";
   for (int i = 0; i < n; ++i) {
     const OutputFit& f = fits[static_cast<std::size_t>(i)];
@@ -114,8 +102,8 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
     s << "set title " << gp_quote(sub) << " noenhanced\n";
     s << "plot " << gp_quote(dat.string()) << " index " << i
       << " using 1:2 with impulses lw 3 lc rgb '#1f77b4' title 'autocorrelation', \\\n"
-      << "     " << g(f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' title '95 % bounds', \\\n"
-      << "     " << g(-f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' notitle\n";
+      << "     " << gp_number(f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' title '95 % bounds', \\\n"
+      << "     " << gp_number(-f.whiteness.bound) << " with lines dt 2 lc rgb '#d62728' notitle\n";
   }
   s << "unset multiplot\n";
   run_gnuplot(dir, "autocorrelation", s.str());
@@ -133,7 +121,7 @@ std::string plot_psd(const fs::path& dir, const IdentResult& r) {
       const bool have = (psd == &p.hover) ? p.has_hover : p.has_manoeuvre;
       data << "# " << p.state << (psd == &p.hover ? " hover" : " manoeuvre") << "\n";
       if (have) {
-        for (Eigen::Index k = 1; k < psd->psd.size(); ++k) data << g(psd->f_hz[k]) << " " << g(psd->psd[k]) << "\n";
+        for (Eigen::Index k = 1; k < psd->psd.size(); ++k) data << gp_number(psd->f_hz[k]) << " " << gp_number(psd->psd[k]) << "\n";
       } else {
         data << "NaN NaN\n";
       }
@@ -146,16 +134,16 @@ std::string plot_psd(const fs::path& dir, const IdentResult& r) {
   const double cutoff = r.options.processing.cutoff_hz;
   const double fmax = std::max(20.0, 3.0 * cutoff);
   std::ostringstream s;
-  s << terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
+  s << png_terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title "
     << gp_quote("state PSDs (Welch, Hann, 50 % overlap; unfiltered), hover vs manoeuvre; segments by " +
                 r.segments.how)
     << "\n";
-  s << "set grid\nset logscale y\nset format y '%.0e'\nset xrange [0:" << g(fmax) << "]\nset xlabel 'frequency [Hz]'\n";
+  s << "set grid\nset logscale y\nset format y '%.0e'\nset xrange [0:" << gp_number(fmax) << "]\nset xlabel 'frequency [Hz]'\n";
   if (r.options.processing.filter_order > 0) {
-    s << "set arrow 1 from " << g(cutoff) << ", graph 0 to " << g(cutoff)
+    s << "set arrow 1 from " << gp_number(cutoff) << ", graph 0 to " << gp_number(cutoff)
       << ", graph 1 nohead dt 2 lc rgb '#2ca02c'\n";
-    s << "set label 1 'cut-off " << g(cutoff) << " Hz' at " << g(cutoff) << ", graph 0.92 offset 0.5,0 tc rgb '#2ca02c'\n";
+    s << "set label 1 'cut-off " << gp_number(cutoff) << " Hz' at " << gp_number(cutoff) << ", graph 0.92 offset 0.5,0 tc rgb '#2ca02c'\n";
   }
   for (int i = 0; i < n; ++i) {
     const StatePsd& p = r.psd[static_cast<std::size_t>(i)];
@@ -176,17 +164,17 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
   data << "# re im [1/s]\n";
   double extent = 1.0;
   for (const auto& z : r.eigenvalues) {
-    data << g(z.real()) << " " << g(z.imag()) << "\n";
+    data << gp_number(z.real()) << " " << gp_number(z.imag()) << "\n";
     extent = std::max({extent, std::fabs(z.real()), std::fabs(z.imag())});
   }
   write_file(dat, data.str());
   const fs::path png = dir / "eigenvalues.png";
   const double lim = 1.2 * extent;
   std::ostringstream s;
-  s << terminal(700, 600) << "set output " << gp_quote(png.string()) << "\n";
+  s << png_terminal(700, 600) << "set output " << gp_quote(png.string()) << "\n";
   s << "set title " << gp_quote("eigenvalues of the identified model (" + r.model.name + ")") << " noenhanced\n";
   s << "set grid\nset xlabel 'real [1/s]'\nset ylabel 'imaginary [rad/s]'\n";
-  s << "set xrange [" << g(-lim) << ":" << g(lim) << "]\nset yrange [" << g(-lim) << ":" << g(lim) << "]\n";
+  s << "set xrange [" << gp_number(-lim) << ":" << gp_number(lim) << "]\nset yrange [" << gp_number(-lim) << ":" << gp_number(lim) << "]\n";
   s << "set size ratio -1\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n";
   // The legend below the axes: a cross inside them would read as one more pole.
   s << "set key outside below center\n";
@@ -195,50 +183,10 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
   return png.string();
 }
 
-fs::path make_dir(const std::string& dir) {
-  require_gnuplot();
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create the plot directory");
-  return fs::absolute(dir);
-}
-
 }  // namespace
 
-std::string gp_quote(const std::string& s) {
-  std::string out = "'";
-  for (const char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-void run_gnuplot(const std::filesystem::path& dir, const std::string& name, const std::string& script) {
-  const fs::path gp = dir / (name + ".gp");
-  const fs::path log = dir / (name + ".log");
-  write_file(gp, script);
-  const std::string cmd = "gnuplot " + sh_quote(gp.string()) + " >" + sh_quote(log.string()) + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  if (status != 0) {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    throw std::runtime_error("gnuplot failed on " + gp.string() + ": " + text.str());
-  }
-  // gnuplot's output is kept only when it said something (a warning worth reading).
-  std::error_code ec;
-  if (fs::exists(log, ec) && fs::file_size(log, ec) == 0) fs::remove(log, ec);
-}
-
-
-bool gnuplot_available() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
-
-void require_gnuplot() {
-  if (!gnuplot_available()) {
-    throw std::runtime_error("--plots needs gnuplot, which is not on the PATH: install the Debian package gnuplot-nox");
-  }
-}
-
 std::vector<std::string> plot_identification(const IdentResult& result, const std::string& dir) {
-  const fs::path d = make_dir(dir);
+  const fs::path d = plots::plot_dir(dir);
   const std::string what = result.source + ": " + to_string(result.options.structure) + ", " +
                            to_string(result.options.method);
   return {plot_derivatives(d, result.data.filtered.t_s, result.fits, "identification " + what, "estimated"),
@@ -246,70 +194,8 @@ std::vector<std::string> plot_identification(const IdentResult& result, const st
           plot_eigenvalues(d, result)};
 }
 
-std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
-                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels) {
-  return plot_panels(dir, name, title, t_s, panels, PlotAxes{});
-}
-
-std::string plot_panels(const std::string& dir, const std::string& name, const std::string& title,
-                        const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels, const PlotAxes& axes) {
-  if (panels.empty()) throw std::invalid_argument("plot " + name + ": no panel");
-  for (const auto& panel : panels) {
-    if (panel.series.empty()) throw std::invalid_argument("plot " + name + ": panel '" + panel.title + "' has no series");
-    for (const auto& c : panel.series) {
-      if (c.y.size() != t_s.size()) {
-        throw std::invalid_argument("plot " + name + ": series '" + c.label + "' has " + std::to_string(c.y.size()) +
-                                    " samples, the time vector " + std::to_string(t_s.size()));
-      }
-    }
-  }
-  const fs::path d = make_dir(dir);
-  const fs::path dat = d / (name + ".dat");
-  std::ostringstream data;
-  data << "# t_s";
-  for (const auto& panel : panels) {
-    for (const auto& c : panel.series) {
-      std::string column = panel.name + ":" + c.label;
-      for (char& ch : column) ch = (ch == ' ') ? '_' : ch;
-      data << " " << column;
-    }
-  }
-  data << "\n";
-  for (Eigen::Index k = 0; k < t_s.size(); ++k) {
-    data << g(t_s[k]);
-    for (const auto& panel : panels) {
-      for (const auto& c : panel.series) data << " " << g(c.y[k]);
-    }
-    data << "\n";
-  }
-  write_file(dat, data.str());
-  const fs::path png = d / (name + ".png");
-  const int n = static_cast<int>(panels.size());
-  std::ostringstream s;
-  s << terminal(1400, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
-  s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
-  s << "set grid\nset key top right\nset xlabel " << gp_quote(axes.xlabel) << "\n";
-  if (axes.log_y) s << "set logscale y\nset format y '%.0e'\n";
-  if (axes.x_max > 0.0) s << "set xrange [0:" << g(axes.x_max) << "]\n";
-  int column = 2;
-  for (const auto& panel : panels) {
-    s << "set title " << gp_quote(panel.title) << " noenhanced\n";
-    s << "set ylabel " << gp_quote(panel.ylabel) << " noenhanced\n";
-    s << "plot ";
-    for (std::size_t i = 0; i < panel.series.size(); ++i) {
-      const PlotSeries& c = panel.series[i];
-      s << (i == 0 ? gp_quote(dat.string()) : std::string("''")) << " using 1:" << column++
-        << " with lines lw 1.2" << (c.dashed ? " dt 2" : "") << " lc rgb " << gp_quote(c.colour) << " title "
-        << gp_quote(c.label) << (i + 1 < panel.series.size() ? ", \\\n     " : "\n");
-    }
-  }
-  s << "unset multiplot\n";
-  run_gnuplot(d, name, s.str());
-  return png.string();
-}
-
 std::vector<std::string> plot_validation(const ValidationResult& result, const std::string& dir) {
-  const fs::path d = make_dir(dir);
+  const fs::path d = plots::plot_dir(dir);
   const std::string what = result.source + " with model " + result.model.name;
   return {plot_derivatives(d, result.data.t_s, result.fits, "open-loop validation " + what, "predicted"),
           plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what)};

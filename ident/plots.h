@@ -1,7 +1,5 @@
 #pragma once
-/// PNG plots of an identification or validation, drawn by gnuplot (Debian
-/// package gnuplot-nox): each plot is a data file plus a gnuplot script in the
-/// output directory, then `gnuplot <script>` renders the PNG next to them.
+/// PNG plots of an identification or validation, drawn by gnuplot (plots/gnuplot.h).
 
 #include <filesystem>
 #include <string>
@@ -11,35 +9,6 @@
 #include "ident/validate.h"
 
 namespace nimble::ident {
-
-/// One curve of a time-history panel.
-struct PlotSeries {
-  std::string label;
-  Eigen::VectorXd y;                ///< one value per time sample
-  std::string colour = "#1f77b4";   ///< gnuplot rgb colour
-  bool dashed = false;
-};
-
-/// One panel of a time-history plot.
-struct TimePanel {
-  std::string name;   ///< short name: the data columns are <name>:<label> (spaces as _)
-  std::string title;
-  std::string ylabel;
-  std::vector<PlotSeries> series;
-};
-
-/// Single-quoted gnuplot string ('' escapes a quote).
-std::string gp_quote(const std::string& s);
-
-/// Writes `script` to <dir>/<name>.gp and runs gnuplot on it, its output to <dir>/<name>.log.
-/// @throws std::runtime_error with the log if gnuplot fails.
-void run_gnuplot(const std::filesystem::path& dir, const std::string& name, const std::string& script);
-
-/// True if a `gnuplot` executable is on the PATH.
-bool gnuplot_available();
-
-/// @throws std::runtime_error naming the Debian package gnuplot-nox if gnuplot is not on the PATH.
-void require_gnuplot();
 
 /// Writes into `dir` (created if needed): derivatives.png (measured and
 /// estimated state derivatives), autocorrelation.png (residual
@@ -57,24 +26,5 @@ std::vector<std::string> plot_validation(const ValidationResult& result, const s
 /// (OutputFit::whiteness) with the 95 % bounds, one panel per output, titled with its verdict.
 std::string plot_autocorrelation(const std::filesystem::path& dir, const std::vector<OutputFit>& fits,
                                  const std::string& title);
-
-/// Axes of plot_panels().
-struct PlotAxes {
-  std::string xlabel = "time [s]";
-  bool log_y = false;
-  double x_max = 0.0;  ///< > 0: the x axis ends there
-};
-
-/// Panels over any x (e.g. frequency, with a logarithmic y): as plot_time_histories.
-std::string plot_panels(const std::string& dir, const std::string& name, const std::string& title,
-                        const Eigen::VectorXd& x, const std::vector<TimePanel>& panels, const PlotAxes& axes);
-
-/// Time histories over `t_s`, one panel per entry stacked under `title`: writes
-/// <name>.dat (t and every series, one column each), <name>.gp and <name>.png into `dir`
-/// (created if needed). Returns the path of the PNG.
-/// @throws std::invalid_argument if there is no panel, a panel has no series or a series
-///         is not as long as t_s; std::runtime_error as plot_identification.
-std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
-                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels);
 
 }  // namespace nimble::ident

@@ -16,7 +16,7 @@
 #include "core/input_file.h"
 #include "estimator/smoother.h"
 #include "ident/data_check.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 
 namespace nimble::ident {
 namespace {
@@ -58,7 +58,7 @@ void append_states(FlightData& d, std::array<Channel*, 9>& c, double t, const Ei
 }
 
 template <typename T>
-T decode_or_throw(const LogEventRecord& ev, const std::string& file) {
+T decode_or_throw(const lcmlog::LogEventRecord& ev, const std::string& file) {
   T msg{};
   std::string why;
   if (!contract::decode_exact(ev.data.data(), static_cast<int>(ev.data.size()), msg, &why)) {
@@ -71,7 +71,7 @@ T decode_or_throw(const LogEventRecord& ev, const std::string& file) {
 /// The event's message as its value (contract/messages.h); a message that does not decode
 /// exactly is an error naming the event.
 template <typename T>
-auto read_value(const LogEventRecord& ev, const std::string& file) {
+auto read_value(const lcmlog::LogEventRecord& ev, const std::string& file) {
   return contract::from_message(decode_or_throw<T>(ev, file));
 }
 
@@ -181,12 +181,12 @@ Channel& RigLogAssembler::input(InputSlot slot, const char* name) {
 }
 
 template <class M>
-bool RigLogAssembler::within(const LogEventRecord& ev, const M& message, double t_s) const {
+bool RigLogAssembler::within(const lcmlog::LogEventRecord& ev, const M& message, double t_s) const {
   return beyond_ == nullptr || contract::message_within_bounds(ev.channel, message, t_s, *beyond_, ev.event_number);
 }
 
-bool RigLogAssembler::add(const LogEventRecord& event) {
-  const LogEventRecord* ev = &event;
+bool RigLogAssembler::add(const lcmlog::LogEventRecord& event) {
+  const lcmlog::LogEventRecord* ev = &event;
   const std::string& file = source_;
   if (ev->channel == kTruth) {
     const auto message = decode_or_throw<truth_state_t>(*ev, file);
@@ -371,13 +371,13 @@ RigLogData RigLogAssembler::finish(StateSource source, const std::string& damage
 }
 
 RigLogData read_rig_log(const std::string& file, StateSource source, const LogReadOptions& options) {
-  LcmLogReader log(file, options.salvage);
+  lcmlog::LcmLogReader log(file, options.salvage);
   RigLogAssembler assembler(file);
   if (source == StateSource::kSmoothed || source == StateSource::kSensors) assembler.collect_for_smoothing();
   std::optional<BoundsTally> refuse;
   if (options.refuse_beyond_bounds && options.beyond_bounds == nullptr) refuse.emplace(*options.refuse_beyond_bounds);
   assembler.leave_out_beyond(refuse ? &*refuse : options.beyond_bounds);
-  LogEventRecord record;
+  lcmlog::LogEventRecord record;
   while (log.next(&record)) {
     if (!assembler.add(record) && options.other_event) options.other_event(record);
   }

@@ -28,7 +28,7 @@
 #include "estimator/mocap_measurement.h"
 #include "estimator/smoother.h"
 #include "ident/flight_data.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 
 namespace nimble::ident {
 
@@ -94,7 +94,7 @@ struct LogReadOptions {
   /// Called with every event the reader does not decode (channels it does not read, and
   /// CONTROLLER_STATUS after the first): e.g. to count those that are not a message of their
   /// channel's type (mcap::UndecodableCount), which the reader would otherwise pass over unseen.
-  std::function<void(const LogEventRecord&)> other_event;
+  std::function<void(const lcmlog::LogEventRecord&)> other_event;
   /// Where read_flight_data() takes the states from (read_rig_log() takes its own argument).
   StateSource states = StateSource::kAuto;
   /// The smoother's model, for StateSource::kSmoothed.
@@ -143,7 +143,7 @@ class RigLogAssembler {
   /// (LogReadOptions::beyond_bounds). Call before the first add().
   void leave_out_beyond(BoundsTally* tally) { beyond_ = tally; }
   /// One event of a log. @throws DataError as above.
-  bool add(const LogEventRecord& event);
+  bool add(const lcmlog::LogEventRecord& event);
   /// The data, states per `source`; `damage` goes to RigLogData::damage. Call once.
   /// @throws DataError for a missing channel, as read_rig_log().
   /// @throws DataError for kSmoothed or kSensors on a log without IMU or MOCAP_POSE, or
@@ -169,17 +169,17 @@ class RigLogAssembler {
   std::string gain_set_;
   /// The message, decoded, passes the bounds (true without leave_out_beyond()).
   template <class M>
-  bool within(const LogEventRecord& event, const M& message, double t_s) const;
+  bool within(const lcmlog::LogEventRecord& event, const M& message, double t_s) const;
 
   bool smoothing_ = false;
   BoundsTally* beyond_ = nullptr;
   std::vector<ImuSample> imu_;     ///< for the smoother
   std::vector<MocapPose> poses_;   ///< for the smoother
   std::vector<FlapFrequencies> flaps_;  ///< ACTUATOR_FB's flapping frequencies, for the IMU filtering
-  LogEventRecord event_;  ///< reused by add(channel, data, ...)
+  lcmlog::LogEventRecord event_;  ///< reused by add(channel, data, ...)
 };
 
-/// Reads a rig log (the LCM log format, through LcmLogReader: damage is never read past).
+/// Reads a rig log (the LCM log format, through lcmlog::LcmLogReader: damage is never read past).
 /// @throws DataError naming the log, the byte offset and event of damage, or the event number
 ///         (as the row) and channel of a message that does not decode, or a missing channel.
 RigLogData read_rig_log(const std::string& file, StateSource source = StateSource::kAuto,

@@ -13,13 +13,14 @@
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "loop/loop_report.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::loop {
 namespace {
 
 namespace fs = std::filesystem;
-using ident::gp_quote;
-using ident::run_gnuplot;
+using plots::gp_quote;
+using plots::run_gnuplot;
 
 const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
 

@@ -12,7 +12,7 @@
 #include "contract/message_bounds.h"
 #include "core/json_writer.h"
 #include "ident/data_check.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "lcmjson/lcm_json.h"
 
 namespace nimble::mcap {
@@ -59,7 +59,7 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
   stats.compression = options.compression;
   if (options.vehicle) stats.beyond.emplace(*options.vehicle);
 
-  ident::LcmLogReader reader(log_path, options.salvage);  // throws DataError for a file that is no log
+  lcmlog::LcmLogReader reader(log_path, options.salvage);  // throws DataError for a file that is no log
   WriterOptions wo;
   wo.compression = options.compression;
   wo.chunk_size = options.chunk_size;
@@ -97,7 +97,7 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
     return channels.emplace(name, s).first->second;
   };
 
-  ident::LogEventRecord ev;
+  lcmlog::LogEventRecord ev;
   lcmjson::JsonMessage json;
   int64_t newest_rig_time_us = 0;
   bool any = false;
@@ -164,8 +164,8 @@ ExportStats export_log_to_mcap(const std::string& log_path, const std::string& o
 
 LogBounds check_log_bounds(const std::string& log_path, const Vehicle& vehicle, bool salvage) {
   LogBounds out(vehicle);
-  ident::LcmLogReader reader(log_path, salvage);
-  ident::LogEventRecord ev;
+  lcmlog::LcmLogReader reader(log_path, salvage);
+  lcmlog::LogEventRecord ev;
   while (reader.next(&ev)) {
     const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(ev.channel);
     if (type == nullptr) continue;
@@ -200,7 +200,7 @@ std::string undecodable_text(const std::map<std::string, uint64_t>& by_channel) 
   return std::to_string(total) + " undecodable left out (" + list + ")";
 }
 
-void UndecodableCount::add(const ident::LogEventRecord& event) {
+void UndecodableCount::add(const lcmlog::LogEventRecord& event) {
   const lcmjson::LcmStruct* type = lcmjson::rig_type_for_channel(event.channel);
   if (type == nullptr) return;  // a channel the contract does not know: nothing to decode it as
   thread_local lcmjson::JsonMessage json;

@@ -37,7 +37,7 @@
 #include "core/data_bounds.h"
 #include "core/json_writer.h"
 #include "core/vehicle.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "mcap/mcap_writer.h"
 
 namespace nimble::mcap {
@@ -122,7 +122,7 @@ LogBounds check_log_bounds(const std::string& log_path, const Vehicle& vehicle, 
 /// they do not use (ident::LogReadOptions::other_event), so that they can say what they left.
 class UndecodableCount {
  public:
-  void add(const ident::LogEventRecord& event);
+  void add(const lcmlog::LogEventRecord& event);
   const std::map<std::string, uint64_t>& by_channel() const { return by_channel_; }
   uint64_t total() const;
 

@@ -11,6 +11,7 @@
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "reproduce/thesis_campaign.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::reproduce {
 namespace {
@@ -261,12 +262,12 @@ void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std
   const std::filesystem::path dat = std::filesystem::path(dir) / "eigenvalues_9_1.dat",
                               png = std::filesystem::path(dir) / "eigenvalues_9_1.png";
   write_file(dat, data.str());
-  ident::run_gnuplot(dir, "eigenvalues_9_1",
-                     "set terminal pngcairo size 900,650\nset output " + ident::gp_quote(png.string()) + "\n"
+  plots::run_gnuplot(dir, "eigenvalues_9_1",
+                     "set terminal pngcairo size 900,650\nset output " + plots::gp_quote(png.string()) + "\n"
                      "set title 'Eigenvalues of the identified models, every set (thesis Fig 9.1)'\n"
                      "set xlabel 'real part [1/s]'\nset ylabel 'imaginary part [1/s]'\nset grid\n"
                      "set key below\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n"
-                     "plot " + ident::gp_quote(dat.string()) + " index 0 with points pt 7 ps 1.5 title 'rig-identified', "
+                     "plot " + plots::gp_quote(dat.string()) + " index 0 with points pt 7 ps 1.5 title 'rig-identified', "
                      "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
 }
 

@@ -36,6 +36,7 @@
 #include "campaign/result_files.h"
 #include "estimator/sensing_config.h"
 #include "scenario/scenario.h"
+#include "plots/gnuplot.h"
 
 namespace nimble::reproduce {
 namespace {
@@ -511,7 +512,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
   if (!o.result_dir.empty()) files = campaign::open_result_dir(o.result_dir, seeds_manifest(o, spec));
   fs::create_directories(o.work_dir);
   if (!o.report_dir.empty()) {
-    ident::require_gnuplot();
+    plots::require_gnuplot();
     fs::create_directories(o.report_dir);
   }
   CampaignResult result;

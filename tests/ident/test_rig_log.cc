@@ -22,7 +22,7 @@
 
 #include "contract/channels.h"
 #include "core/attitude.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"
 #include "../support/run_rig.h"
@@ -30,6 +30,8 @@
 
 using namespace nimble;
 using namespace nimble::ident;
+using nimble::lcmlog::LcmLogReader;
+using nimble::lcmlog::LogEventRecord;
 using namespace nimble::contract::channels;
 
 namespace {

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "contract/decode.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "mcap/mcap_writer.h"
 #include "tests/support/rig_runs.h"
 #include "contract/channels.h"
@@ -230,8 +230,8 @@ TEST_CASE("node: a damaged log is refused naming the offset, --salvage exports w
   // Cut the copy 20 bytes into the event in the middle of the log.
   std::vector<int64_t> offsets;
   {
-    nimble::ident::LcmLogReader reader(log);
-    nimble::ident::LogEventRecord ev;
+    nimble::lcmlog::LcmLogReader reader(log);
+    nimble::lcmlog::LogEventRecord ev;
     while (reader.next(&ev)) offsets.push_back(ev.offset);
   }
   REQUIRE(offsets.size() > 100);

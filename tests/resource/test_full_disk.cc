@@ -18,7 +18,7 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "launcher/inprocess.h"
 #include "launcher/recorder.h"
 #include "launcher/run_plan.h"
@@ -80,8 +80,8 @@ std::string rig() { return RIG_BIN; }
 
 /// Every event of the log, read strictly (damage throws); returns the count.
 int64_t whole_events(const std::string& log) {
-  nimble::ident::LcmLogReader reader(log);
-  nimble::ident::LogEventRecord ev;
+  nimble::lcmlog::LcmLogReader reader(log);
+  nimble::lcmlog::LogEventRecord ev;
   int64_t n = 0;
   while (reader.next(&ev)) ++n;
   return n;

@@ -24,7 +24,7 @@
 #include "contract/channels.h"
 #include "core/data_bounds.h"
 #include "core/vehicle.h"
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 #include "tests/support/run_rig.h"
 #include "tests/support/scratch.h"
 
@@ -57,14 +57,14 @@ const Garbled& garbled() {
     const std::string clean = dir + "/hover.lcmlog";
     const RigResult run = run_rig("run " + kSource + "/rig_configs/hover.yaml --clock inprocess --set duration_s=3 --log " + clean);
     REQUIRE(run.exit_code == 0);
-    std::vector<nimble::ident::LogEventRecord> truth;
-    nimble::ident::LcmLogReader reader(clean);
-    nimble::ident::LogEventRecord ev;
+    std::vector<nimble::lcmlog::LogEventRecord> truth;
+    nimble::lcmlog::LcmLogReader reader(clean);
+    nimble::lcmlog::LogEventRecord ev;
     while (reader.next(&ev)) {
       if (ev.channel == nimble::contract::channels::kTruth) truth.push_back(ev);
     }
     REQUIRE(truth.size() > 100);
-    const nimble::ident::LogEventRecord& victim = truth[truth.size() / 2];
+    const nimble::lcmlog::LogEventRecord& victim = truth[truth.size() / 2];
     std::string bytes = read_bytes(clean);
     const std::size_t payload = static_cast<std::size_t>(victim.offset) + 28 + victim.channel.size();
     REQUIRE(bytes.compare(payload, victim.data.size(), std::string(victim.data.begin(), victim.data.end())) == 0);

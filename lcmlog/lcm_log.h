@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
-namespace nimble::ident {
+#include "core/data_error.h"
+
+namespace nimble::lcmlog {
 
 /// One event of an LCM log.
 struct LogEventRecord {
@@ -54,4 +56,4 @@ class LcmLogReader {
   std::string damage_;
 };
 
-}  // namespace nimble::ident
+}  // namespace nimble::lcmlog

@@ -1,11 +1,10 @@
-#include "ident/lcm_log.h"
+#include "lcmlog/lcm_log.h"
 
 #include <filesystem>
 
 #include "core/input_file.h"
-#include "ident/flight_data.h"
 
-namespace nimble::ident {
+namespace nimble::lcmlog {
 namespace {
 
 constexpr uint32_t kSync = 0xEDA1DA01;
@@ -93,4 +92,4 @@ bool LcmLogReader::next(LogEventRecord* ev) {
   return true;
 }
 
-}  // namespace nimble::ident
+}  // namespace nimble::lcmlog
