@@ -1,4 +1,4 @@
-/// `rig discrepancy`: the discrepancy workflow on flight data against a model (ident/discrepancy.h).
+/// `rig discrepancy`: the discrepancy workflow on flight data against a model (discrepancy/discrepancy.h).
 
 #include <algorithm>
 #include <cctype>
@@ -18,7 +18,8 @@
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
 #include "ident/closed_loop.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/closed_loop_compare.h"
+#include "discrepancy/discrepancy.h"
 #include "ident/model_writer.h"
 #include "ident/plots.h"
 #include "ident/report.h"

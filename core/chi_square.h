@@ -1,6 +1,6 @@
 #pragma once
 /// Chi-square distribution functions: innovation gating and consistency tests (estimator),
-/// significance of regression terms (ident/discrepancy.h).
+/// significance of regression terms (discrepancy/discrepancy.h).
 
 namespace nimble {
 

@@ -1,7 +1,7 @@
 #pragma once
 /// The effects the rig knows beyond the linear derivatives, named once: the registry that a
 /// model file's `effects:` section (core/model.h), the plant (plant/effects/), the discrepancy
-/// workflow's candidate library (ident/discrepancy.h) and the command-line help all read.
+/// workflow's candidate library (discrepancy/discrepancy.h) and the command-line help all read.
 ///
 /// Each entry is an effect as the identification sees it: its physics, the data it needs, the
 /// regressor columns it adds to the roll-moment (L), side-force (Y) and flap-actuator (F)

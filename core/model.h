@@ -87,7 +87,7 @@ struct DerivativeModel {
 };
 
 /// Names an `effects:` section of a model file may use: the candidate effects of the
-/// discrepancy workflow (ident/discrepancy.h), named as the plant's effects where the plant
+/// discrepancy workflow (discrepancy/discrepancy.h), named as the plant's effects where the plant
 /// has them.
 const std::vector<std::string>& model_effect_names();
 

@@ -10,7 +10,7 @@
 /// (common random numbers: the cells differ by the effect and the length, not by the noise,
 /// which makes the curves smoother than independent seeds would). Each flight is flown in
 /// process and its messages become flight data in memory as rig_log.h reads a log
-/// (power_flight.h); the workflow (ident/discrepancy.h, options as rig discrepancy's) runs on it
+/// (power_flight.h); the workflow (discrepancy/discrepancy.h, options as rig discrepancy's) runs on it
 /// against the model. Flights run in `jobs` worker processes forked once after every cell's run
 /// plan is loaded; a worker that dies costs the flight it was flying (counted as failed) and is
 /// replaced.
@@ -42,7 +42,7 @@
 #include <string>
 #include <vector>
 
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 #include "launcher/run_plan.h"
 #include "detection_power/power_curve.h"
 #include "detection_power/power_flight.h"

@@ -10,7 +10,7 @@
 
 #include "core/model.h"
 #include "core/vehicle.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 #include "launcher/run_plan.h"
 
 namespace nimble::detection_power {

@@ -14,7 +14,6 @@
 #include "controller/attitude_controller.h"
 #include "core/model.h"
 #include "core/vehicle.h"
-#include "ident/discrepancy.h"
 #include "ident/flight_data.h"
 #include "ident/metrics.h"
 #include "ident/signal.h"
@@ -66,12 +65,5 @@ std::string closed_loop_json(const ClosedLoopResult& result, const std::vector<s
 /// The controller configuration the closed-loop copies fly unless told otherwise:
 /// rig_configs/controller/nimble_attitude.yaml of the source tree this library was built from.
 std::string default_controller_file();
-
-/// The closed loop before and after a discrepancy refit (result.closed_loop, closed_loop_note), as
-/// `rig discrepancy` reports it: `model` and result.augmented_model each flown by the controller
-/// copy `controller` with `gains` on the one flight's phi_sp. Pooled flights, a flight without
-/// phi_sp or a failing simulation are not flown, and closed_loop_note says why.
-void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights, const DerivativeModel& model,
-                         const Vehicle& vehicle, const ControllerConfig& controller, const std::string& gains);
 
 }  // namespace nimble::ident

@@ -15,8 +15,8 @@
 
 #include "core/bench_timing.h"
 #include "discrepancy_generator.h"
-#include "ident/data_compatibility.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/data_compatibility.h"
+#include "discrepancy/discrepancy.h"
 #include "ident/identify.h"
 
 using namespace nimble;

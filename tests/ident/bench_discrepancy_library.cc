@@ -21,7 +21,7 @@
 
 #include "core/proportion.h"
 #include "discrepancy_generator.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

@@ -55,7 +55,7 @@
 #include "core/proportion.h"
 #include "discrepancy_generator.h"
 #include "discrepancy_generator_open.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

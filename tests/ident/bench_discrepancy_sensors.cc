@@ -1,4 +1,4 @@
-// The discrepancy workflow's data-compatibility stage (ident/data_compatibility.h) on records whose
+// The discrepancy workflow's data-compatibility stage (discrepancy/data_compatibility.h) on records whose
 // gyro has its own errors: a scale factor (5-15 %, either sign), a time offset against the attitude
 // (10-50 ms, either sign), a clock drift (100-500 ppm), a bias (0.02-0.06 rad/s), three at once, a
 // sensor error beside an aerodynamic effect, and records with an actuator delay (which must not be
@@ -25,8 +25,8 @@
 
 #include "core/proportion.h"
 #include "discrepancy_generator.h"
-#include "ident/data_compatibility.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/data_compatibility.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

@@ -35,7 +35,7 @@
 ///   effectiveness_step    L_df and Y_df change by the fraction f from t* on: a damaged wing,
 ///                         f in [-0.40, -0.15], t* in the middle 60 % of the record
 ///
-/// The sensors' own errors (the data-compatibility stage, ident/data_compatibility.h): the
+/// The sensors' own errors (the data-compatibility stage, discrepancy/data_compatibility.h): the
 /// dynamics are untouched, only the recorded gyro channel p differs from the truth:
 ///   sensor_scale          p recorded as (1 + k) p, |k| in [0.05, 0.15], either sign
 ///   time_offset           p recorded tau late (its sample of t - tau stamped t; tau < 0: early),
@@ -45,7 +45,7 @@
 ///                         [100, 500] ppm, either sign (assumption: separate devices' crystals)
 ///
 /// Forms that are NOT library effects (the out-of-library suite, test_discrepancy_outside.cc): no
-/// candidate of ident/discrepancy.h has their signature, so a library name given to them is a
+/// candidate of discrepancy/discrepancy.h has their signature, so a library name given to them is a
 /// wrong name. Magnitudes drawn by the seed from the ranges below:
 ///   flap_asymmetry        the flap input is 1 + a times as effective for delta_f > 0 as for
 ///                         delta_f < 0 (L and Y alike), a in [0.25, 0.45]

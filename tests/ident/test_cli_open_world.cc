@@ -1,4 +1,4 @@
-// The discrepancy workflow's open world on a rig flight (ident/discrepancy.h, "Terms"): an effect
+// The discrepancy workflow's open world on a rig flight (discrepancy/discrepancy.h, "Terms"): an effect
 // the library does not have, flown by the plant as a generic term (plant.terms), is found by
 // rig discrepancy as a term with its form, not given a library name; written into the model by
 // --model-out; and the model with it predicts the flight better (rig validate).

@@ -12,7 +12,7 @@
 #include <catch2/catch.hpp>
 
 #include "ident/data_check.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 #include "ident/identify.h"
 #include "ident/synthetic.h"
 #include "ident/validate.h"

@@ -1,4 +1,4 @@
-// Tests of the discrepancy workflow (ident/discrepancy.h) on records with a hidden effect
+// Tests of the discrepancy workflow (discrepancy/discrepancy.h) on records with a hidden effect
 // from an in-test generator independent of the plant code (discrepancy_generator.h).
 
 #include <algorithm>
@@ -18,8 +18,8 @@
 
 #include "core/config.h"
 #include "discrepancy_generator.h"
-#include "ident/discrepancy.h"
-#include "ident/discrepancy_location.h"
+#include "discrepancy/discrepancy.h"
+#include "discrepancy/discrepancy_location.h"
 #include "ident/model_writer.h"
 #include "tests/support/scratch.h"
 

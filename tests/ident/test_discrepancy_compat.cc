@@ -1,4 +1,4 @@
-// Tests of the discrepancy workflow's data-compatibility stage (ident/data_compatibility.h): the
+// Tests of the discrepancy workflow's data-compatibility stage (discrepancy/data_compatibility.h): the
 // gyro's own errors found from the kinematics before any aerodynamic name, told from an actuator
 // delay, and corrected in the record. Records from the in-test generator (discrepancy_generator.h).
 // The rates over many records: build/bin/bench_discrepancy_sensors.
@@ -12,8 +12,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "discrepancy_generator.h"
-#include "ident/data_compatibility.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/data_compatibility.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

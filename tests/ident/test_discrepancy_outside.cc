@@ -13,7 +13,7 @@
 
 #include "discrepancy_generator.h"
 #include "discrepancy_generator_open.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

@@ -11,7 +11,7 @@
 
 #include "core/config.h"
 #include "discrepancy_generator.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 
 using namespace nimble;
 using namespace nimble::ident;

@@ -1,7 +1,7 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the equations of the baseline model and the regressor columns of each candidate
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the equations of the baseline model and the regressor columns of each candidate
 // effect on the prepared data.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

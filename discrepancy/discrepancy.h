@@ -4,7 +4,7 @@
 /// shrink on data the fit did not see (rig discrepancy, ident/README.md "Discrepancy").
 ///
 /// 0. Sensors. Every flight first goes through the data-compatibility stage
-///    (ident/data_compatibility.h): the gyro's scale factor, bias and time offset against the
+///    (discrepancy/data_compatibility.h): the gyro's scale factor, bias and time offset against the
 ///    attitude, from the kinematic relation phi_dot = p (+ the q, r terms), each tested at the
 ///    alarm rule's p_critical beyond a tolerance, named (sensor_scale, time_offset, sensor_bias,
 ///    with channel and interval) when its signature holds, and corrected in the record before
@@ -123,7 +123,7 @@
 /// equations lack, an input's dead zone, backlash, saturation, rate limit and lag with a scanned
 /// width, limit or time constant) are tried in L and Y with the entry rules, Bonferroni over
 /// every family and equation, the coefficient's variance floored at the stationary residual's
-/// (stationary_floor in ident/discrepancy_parts.h), a confirmation through the excitation's
+/// (stationary_floor in discrepancy/discrepancy_parts.h), a confirmation through the excitation's
 /// bank (a function of the excitation, which a linear plant's residual is independent of; not
 /// for the linear forms, the lag and the rate limit, which it cannot see) and, for an input's
 /// forms, most of the input acting through them. A found term is the effect `term`; a scanned
@@ -152,7 +152,7 @@
 
 #include "core/model.h"
 #include "core/vehicle.h"
-#include "ident/data_compatibility.h"
+#include "discrepancy/data_compatibility.h"
 #include "ident/flight_data.h"
 #include "ident/identify.h"
 #include "core/effects.h"
@@ -228,7 +228,7 @@ struct DiscrepancyOptions {
   /// flown: Y_vv -0.0068 for -0.005).
   double inflow_arm_factor = 3.0;
   /// The open world (docs/discrepancy.md "Terms"): when no library effect earns its name, search
-  /// generic terms (ident/discrepancy_parts.h term_families) under the same entry rules and
+  /// generic terms (discrepancy/discrepancy_parts.h term_families) under the same entry rules and
   /// family-wise bound, up to term_rounds terms.
   bool term_search = true;
   std::size_t term_rounds = 2;
@@ -238,7 +238,7 @@ struct DiscrepancyOptions {
   /// user to compare with their own level; it is not an alarm and changes no verdict
   /// (DiscrepancyResult::term_tests).
   std::vector<Term> test_terms;
-  /// The data-compatibility stage, first on every flight (ident/data_compatibility.h): the gyro's
+  /// The data-compatibility stage, first on every flight (discrepancy/data_compatibility.h): the gyro's
   /// scale, bias and clock against the attitude from the kinematics, corrected before the search.
   CompatibilityOptions compatibility;
 };

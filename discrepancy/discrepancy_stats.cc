@@ -1,7 +1,7 @@
-// The discrepancy workflow (ident/discrepancy.h), part: least squares from per-fold sufficient statistics: solution, held-out and
+// The discrepancy workflow (discrepancy/discrepancy.h), part: least squares from per-fold sufficient statistics: solution, held-out and
 // training error, coloured (batch-means) covariance and the Wald / partial-F tests on it.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

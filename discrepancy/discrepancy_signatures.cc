@@ -1,9 +1,9 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the signatures that confirm a name. A
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the signatures that confirm a name. A
 // candidate that met the alarm rule is named only if what else its effect predicts holds on the
 // held-out data (DiscrepancyOptions::signature_checks; docs/discrepancy.md, "Effects outside the
 // library, and signatures").
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <cmath>
 #include <limits>

@@ -1,8 +1,8 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the candidates found in the residual's
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the candidates found in the residual's
 // spectrum: the lateral gust from its signature in the residual (its bands against the
 // reference), the flapping forcing scanned over its band.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,11 +1,11 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the open world. When no library effect
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the open world. When no library effect
 // earns its name, generic terms in the grammar of core/term_expression.h are searched under the
 // same entry rules and the same family-wise bound (term_families, term_search); and the signature
 // every library effect shares, that no generic term's form fits the data better than its own
 // (rival_form_signature), which tells the library's pure delay from a first-order lag.
 
-#include "ident/discrepancy_location.h"
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_location.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #pragma once
 /// The discrepancy workflow's parts that check the sensors before the search and report it
-/// (ident/data_compatibility.h: discrepancy_compat.cc, discrepancy_compat_report.cc), and the
+/// (discrepancy/data_compatibility.h: discrepancy_compat.cc, discrepancy_compat_report.cc), and the
 /// report of the forms tested as given; the rest of the workflow's parts: discrepancy_parts.h.
 
 #include <cstddef>
@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 namespace nimble::ident::discrepancy_parts {
 
 // --- discrepancy_compat.cc ---
 
-/// The data-compatibility stage of one flight (ident/data_compatibility.h): checks the record,
+/// The data-compatibility stage of one flight (discrepancy/data_compatibility.h): checks the record,
 /// names its significant sensor errors whose signatures hold in res.effects (with channel and
 /// interval), keeps the stage's result in res.compatibility (with the baseline's held-out gap on
 /// the record as recorded when a correction was made) and returns the corrected record.

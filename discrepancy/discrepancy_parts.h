@@ -1,5 +1,5 @@
 #pragma once
-/// The parts of the discrepancy workflow (ident/discrepancy.h), shared by the files that hold
+/// The parts of the discrepancy workflow (discrepancy/discrepancy.h), shared by the files that hold
 /// them: the least squares from per-fold statistics and the tests on them
 /// (discrepancy_stats.cc), the equations and the candidates' regressor columns
 /// (discrepancy_columns.cc), the trials of the stepwise search (discrepancy_search.cc); the
@@ -18,7 +18,7 @@
 #include <Eigen/Dense>
 
 #include "core/terms.h"
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 #include "ident/spectrum.h"
 
 namespace nimble {
@@ -271,7 +271,7 @@ struct TermConfirmation {
   std::size_t bonferroni = 0;
 };
 
-/// The open world's families on `d` (ident/discrepancy.h, "Terms"): for each of p, v and the
+/// The open world's families on `d` (discrepancy/discrepancy.h, "Terms"): for each of p, v and the
 /// excited `inputs`: x^2, x^3, x*abs(x), and abs(x) (states) or pos(x) (inputs); the
 /// products of two and three of them to degree 3; for each input its dead zone and backlash
 /// (width scanned over 1-40 % of its largest magnitude) and first-order lag (4-100 ms).

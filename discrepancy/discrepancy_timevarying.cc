@@ -1,4 +1,4 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the candidates whose effect changes during
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the candidates whose effect changes during
 // the record. effectiveness_drift, (t - t_mid) delta_f, is an ordinary candidate with one column
 // per equation; here only its rate is derived when it is named. effectiveness_step,
 // H(t - t*) delta_f, is scanned over t*: its fold statistics at every t* of the grid come from
@@ -6,7 +6,7 @@
 // model's columns are sums over the samples after t*), and its change time is named with an
 // interval from the profile of the residual sum of squares over t*.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

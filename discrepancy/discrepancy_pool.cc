@@ -1,9 +1,9 @@
-// The discrepancy workflow (ident/discrepancy.h), part: several flights at once: joined end to
+// The discrepancy workflow (discrepancy/discrepancy.h), part: several flights at once: joined end to
 // end with their own folds and noise levels, and each flight's estimate of a named effect with
 // the test that they agree.
 
-#include "ident/discrepancy_parts.h"
-#include "ident/discrepancy_pool_parts.h"
+#include "discrepancy/discrepancy_parts.h"
+#include "discrepancy/discrepancy_pool_parts.h"
 
 #include <algorithm>
 #include <cmath>

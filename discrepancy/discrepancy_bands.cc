@@ -1,8 +1,8 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the held-out gap: each equation's error
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the held-out gap: each equation's error
 // before and after, the scalar gap, and the gap in the band where each named effect's evidence
 // lives (BandGap), beside the gap in the identification band.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

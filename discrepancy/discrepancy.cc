@@ -1,7 +1,7 @@
-// The discrepancy workflow (ident/discrepancy.h): the candidate library and find_discrepancy(),
-// which joins the parts of ident/discrepancy_parts.h.
+// The discrepancy workflow (discrepancy/discrepancy.h): the candidate library and find_discrepancy(),
+// which joins the parts of discrepancy/discrepancy_parts.h.
 
-#include "ident/discrepancy.h"
+#include "discrepancy/discrepancy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,10 +16,10 @@
 #include "ident/data_check.h"
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
-#include "ident/discrepancy_location.h"
-#include "ident/discrepancy_compat_parts.h"
-#include "ident/discrepancy_parts.h"
-#include "ident/discrepancy_pool_parts.h"
+#include "discrepancy/discrepancy_location.h"
+#include "discrepancy/discrepancy_compat_parts.h"
+#include "discrepancy/discrepancy_parts.h"
+#include "discrepancy/discrepancy_pool_parts.h"
 
 namespace nimble::ident {
 

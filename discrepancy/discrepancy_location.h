@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 namespace nimble::ident::discrepancy_parts {
 

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 namespace nimble::ident::discrepancy_parts {
 

@@ -1,9 +1,9 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the trials of the stepwise search: a
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the trials of the stepwise search: a
 // candidate with regressors on the current model, scanned, judged by the entry rules and held
 // out. The candidates found in the residual's spectrum are in discrepancy_spectral.cc, the
 // signatures that confirm a name in discrepancy_signatures.cc.
 
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

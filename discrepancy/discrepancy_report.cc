@@ -1,4 +1,4 @@
-/// JSON, text and Markdown reports of the discrepancy workflow (ident/discrepancy.h); the
+/// JSON, text and Markdown reports of the discrepancy workflow (discrepancy/discrepancy.h); the
 /// Markdown report draws its figures with gnuplot (ident/plots.h).
 
 #include <algorithm>
@@ -13,9 +13,9 @@
 
 #include "core/json_writer.h"
 #include "core/output_file.h"
-#include "ident/discrepancy.h"
-#include "ident/discrepancy_compat_parts.h"
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy.h"
+#include "discrepancy/discrepancy_compat_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 #include "ident/plots.h"
 #include "ident/spectrum.h"
 #include "plots/gnuplot.h"

@@ -1,11 +1,11 @@
-// The discrepancy workflow (ident/discrepancy.h), part: where the residual of the baseline
+// The discrepancy workflow (discrepancy/discrepancy.h), part: where the residual of the baseline
 // structure lives: a periodic component, a nonlinear dependence on a state or input, and the
 // manoeuvres and windows that carry its energy (descriptive). Every
 // test here is an alarm test, held to the one rule of the workflow (ident/README.md "One error
 // rate for every alarm").
 
-#include "ident/discrepancy_location.h"
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_location.h"
+#include "discrepancy/discrepancy_parts.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
-// The discrepancy workflow (ident/discrepancy.h), part: data compatibility, the sensors' own errors
-// estimated from the kinematics before any aerodynamic term (ident/data_compatibility.h).
+// The discrepancy workflow (discrepancy/discrepancy.h), part: data compatibility, the sensors' own errors
+// estimated from the kinematics before any aerodynamic term (discrepancy/data_compatibility.h).
 
-#include "ident/data_compatibility.h"
+#include "discrepancy/data_compatibility.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,9 +10,9 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
-#include "ident/discrepancy_compat_parts.h"
-#include "ident/discrepancy_parts.h"
-#include "ident/discrepancy_pool_parts.h"
+#include "discrepancy/discrepancy_compat_parts.h"
+#include "discrepancy/discrepancy_parts.h"
+#include "discrepancy/discrepancy_pool_parts.h"
 #include "ident/identify.h"
 
 namespace nimble::ident {

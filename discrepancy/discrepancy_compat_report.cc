@@ -1,13 +1,13 @@
-// The discrepancy workflow (ident/discrepancy.h), part: the data-compatibility stage in the JSON, text
-// and Markdown reports (ident/data_compatibility.h), and the forms tested as given (term_tests).
+// The discrepancy workflow (discrepancy/discrepancy.h), part: the data-compatibility stage in the JSON, text
+// and Markdown reports (discrepancy/data_compatibility.h), and the forms tested as given (term_tests).
 
 #include <cstdio>
 #include <ostream>
 #include <sstream>
 
 #include "core/json_writer.h"
-#include "ident/discrepancy_compat_parts.h"
-#include "ident/discrepancy_parts.h"
+#include "discrepancy/discrepancy_compat_parts.h"
+#include "discrepancy/discrepancy_parts.h"
 
 namespace nimble::ident::discrepancy_parts {
 

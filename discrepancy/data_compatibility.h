@@ -1,6 +1,6 @@
 #pragma once
 /// Data compatibility: are the sensors telling the truth? The first stage of the discrepancy
-/// workflow (ident/discrepancy.h), run on every flight before any aerodynamic term is tried
+/// workflow (discrepancy/discrepancy.h), run on every flight before any aerodynamic term is tried
 /// (Klein & Morelli, Aircraft System Identification, ch. 10; TU Delft's flight path
 /// reconstruction). docs/discrepancy.md "Data compatibility" has the method and its figures.
 ///
