@@ -8,6 +8,7 @@
 
 #include "contract/messages.h"
 #include "contract/rates.h"
+#include "core/config.h"
 #include <nimble/fault_event_t.hpp>
 
 #include "transport/clock.h"
@@ -35,8 +36,10 @@ std::string hex_id(const can_frame& f) {
 /// The controller's rate: one command per control cycle (the controller section's, else the
 /// contract's default).
 double controller_rate_hz(const Scenario& scenario) {
-  const YAML::Node rate = scenario.root["controller"]["rate_hz"];
-  return rate ? rate.as<double>() : contract::kDefaultControlRateHz;
+  const YAML::Node section = scenario.root["controller"];
+  if (!section || !section.IsMap() || !section["rate_hz"]) return contract::kDefaultControlRateHz;
+  ConfigMap controller(section, scenario.file, "controller");
+  return controller.get_double("rate_hz", Range::closed(contract::kMinControlRateHz, contract::kMaxControlRateHz));
 }
 
 }  // namespace
@@ -54,6 +57,8 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
   }
   ConfigMap section = scenario.section("can_bridge");
   config_ = can_bridge_config_from(section);
+  // Every value read and checked before a socket is opened.
+  const double cycle_hz = controller_rate_hz(scenario);
 
   CanSocketOptions so;
   // The rig's identifier block, not only its five identifiers: an unexpected identifier in
@@ -81,7 +86,6 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
     if (transport::monotonic_ns() >= next_health_wall_ns_) publish_health();
   });
 
-  const double cycle_hz = controller_rate_hz(scenario);
   cycle_period_ns_ = static_cast<int64_t>(std::llround(1e9 / cycle_hz));
   // Lockstep only: in real time an input-triggered task never runs unless notified.
   node_->add_task("control_cycle", cycle_hz, [this](int64_t t) { on_cycle(t); },

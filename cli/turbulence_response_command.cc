@@ -78,8 +78,8 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
   ConfigMap controller_section = scenario.section("controller");
   const ControllerConfig controller = controller_config_from(controller_section);
   s.gain_set = controller.default_gain_set;
-  if (scenario.root["manoeuvre"]) {
-    const Manoeuvre m = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>());
+  if (const std::string file = manoeuvre_file(scenario); !file.empty()) {
+    const Manoeuvre m = load_manoeuvre(file);
     std::vector<std::string> sets = {m.gain_set};
     for (const auto& seg : m.segments) sets.push_back(seg.gain_set.empty() ? m.gain_set : seg.gain_set);
     for (const auto& g : sets) {

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/constants.h"
+#include "contract/rates.h"
 #include "core/config.h"
 
 namespace nimble {
@@ -54,7 +55,7 @@ std::string known_sets(const ControllerConfig& config) {
 }
 
 // Allowed ranges, shared by validate() and the loader.
-const Range kRateHz = Range::closed(50.0, 5000.0);
+const Range kRateHz = Range::closed(contract::kMinControlRateHz, contract::kMaxControlRateHz);
 const Range kZeta = Range::closed(0.0, 5.0);
 const Range kSetpointMaxRad{0.0, 0.5 * kPi, true, true};
 const Range kGain = Range::closed(0.0, 100.0);

@@ -20,10 +20,7 @@ using contract::channels::kTruth;
 ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOptions& options) {
   ConfigMap section = scenario.section("controller");
   config_ = controller_config_from(section);
-  if (!scenario.root["manoeuvre"]) {
-    throw ConfigError(scenario.file, "manoeuvre", "", "missing required key: the controller plays a manoeuvre file");
-  }
-  const Manoeuvre manoeuvre = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>());
+  const Manoeuvre manoeuvre = load_manoeuvre(manoeuvre_file(scenario, true, "the controller plays a manoeuvre file"));
   check_gain_sets(manoeuvre, config_);
   controller_ = std::make_unique<AttitudeController>(config_);
   player_ = std::make_unique<ManoeuvrePlayer>(manoeuvre, config_.trim_throttle_pct);

@@ -29,14 +29,16 @@
 
 #include <Eigen/Dense>
 
+#include "contract/rates.h"
 #include "controller/attitude_controller.h"
 #include "core/model.h"
+
 
 namespace nimble {
 
 /// Parameters of the linear pitch loop that are not the PD gains.
 struct PitchLoopOptions {
-  double rate_hz = 512.0;                   ///< controller rate [Hz]
+  double rate_hz = contract::kDefaultControlRateHz;                   ///< controller rate [Hz]
   double lowpass_cutoff_hz = 15.0;          ///< pitch command low-pass cut-off [Hz]
   double pitch_cmd_to_dihedral_rad = 0.35;  ///< dihedral per unit pitch command [rad]
   double servo_wn2_rad2ps2 = 554.2;         ///< servo wn^2 [rad^2/s^2] (plant config servo.wn2_rad2ps2)

@@ -33,10 +33,12 @@
 
 #include <Eigen/Dense>
 
+#include "contract/rates.h"
 #include "controller/attitude_controller.h"
 #include "controller/loop_margins.h"
 #include "controller/reference_generator.h"
 #include "core/model.h"
+
 
 namespace nimble {
 
@@ -53,7 +55,7 @@ std::string to_string(LoopBreak b);
 /// Everything of the roll loop besides the aircraft model.
 struct RollLoopConfig {
   GainSet gains;                             ///< roll PD gains
-  double rate_hz = 512.0;                    ///< control rate [Hz]
+  double rate_hz = contract::kDefaultControlRateHz;                    ///< control rate [Hz]
   double lowpass_cutoff_hz = 15.0;           ///< Butterworth cut-off of the roll command [Hz]
   double roll_cmd_to_delta_f_radps = 125.0;  ///< delta_f_cmd per unit command [rad/s]
   double flap_gain_per_s = 8.97;             ///< flap actuator numerator [1/s] (thesis Eq 33)

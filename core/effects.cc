@@ -1,9 +1,15 @@
 #include "core/effects.h"
 
+#include <utility>
+
 namespace nimble {
 
-const std::vector<EffectSpec>& effect_registry() {
-  static const std::vector<EffectSpec> registry{
+namespace {
+
+/// The effects of the equations' form: terms the linear model leaves out, and the inputs and
+/// states it does not carry.
+std::vector<EffectSpec> form_effects() {
+  return {
       {"kinematic_coupling",
        "p (w - w0): the vertical-velocity part of the kinematic term p w of v_dot that Eq 21 "
        "linearises at w0 (coefficient the mass)",
@@ -68,6 +74,13 @@ const std::vector<EffectSpec>& effect_registry() {
        {{"L", "Lr", "r"}, {"Y", "Yr", "r"}},
        false, false, false,
        "the yaw-rate derivatives Lr, Yr (inert on a lateral3 model: r held at trim)"},
+  };
+}
+
+/// The effects that change over the flight or come from a process: drifts and steps of the flap
+/// input's effectiveness, the flapping forcing, the side gust.
+std::vector<EffectSpec> time_and_process_effects() {
+  return {
       {"effectiveness_drift",
        "(t - t_mid) delta_f in roll moment and side force: the flap input's effectiveness drifts over the "
        "flight (battery sag), named with its rate as a fraction of L_df per minute (plant effect "
@@ -102,6 +115,16 @@ const std::vector<EffectSpec>& effect_registry() {
        false, false, true,
        "effects.lateral_gust (Gauss-Markov, sigma_mps and tau_s)"},
   };
+}
+
+}  // namespace
+
+const std::vector<EffectSpec>& effect_registry() {
+  static const std::vector<EffectSpec> registry = [] {
+    std::vector<EffectSpec> all = form_effects();
+    for (auto& e : time_and_process_effects()) all.push_back(std::move(e));
+    return all;
+  }();
   return registry;
 }
 

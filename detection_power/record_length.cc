@@ -18,11 +18,7 @@ namespace nimble::detection_power {
 namespace {
 
 std::string manoeuvre_file_of(const Scenario& scenario) {
-  const YAML::Node m = scenario.root["manoeuvre"];
-  if (!m || !m.IsScalar()) {
-    throw ConfigError(scenario.file, "manoeuvre", "", "missing: a power flight repeats the scenario's manoeuvre");
-  }
-  return m.Scalar();
+  return manoeuvre_file(scenario, true, "a power flight repeats the scenario's manoeuvre");
 }
 
 /// The manoeuvre file's segments `repetitions` times, with a level hold of `pad_s` between.

@@ -467,6 +467,39 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
 
 }  // namespace
 
+namespace {
+
+/// The library's candidates the options ask for (all when they name none), in the library's order.
+std::vector<const CandidateSpec*> candidate_pool(const DiscrepancyOptions& options) {
+  std::vector<const CandidateSpec*> pool;
+  for (const auto& c : candidate_library()) {
+    if (options.candidates.empty() ||
+        std::find(options.candidates.begin(), options.candidates.end(), c.name) != options.candidates.end()) {
+      pool.push_back(&c);
+    }
+  }
+  return pool;
+}
+
+/// The run's alarm rule: each library trial is a test; the open-world search is one test per round
+/// (Bonferroni over its families inside), however many of its trials are listed; plus the location
+/// and compatibility tests (`other_tests`).
+AlarmRule alarm_rule(const std::vector<CandidateTrial>& candidates, double p_critical, std::size_t other_tests) {
+  std::size_t term_rounds = 0;
+  for (const auto& t : candidates) {
+    if (t.name == "term") term_rounds = std::max(term_rounds, t.round);
+  }
+  AlarmRule rule;
+  rule.p_critical = p_critical;
+  rule.tests = static_cast<std::size_t>(std::count_if(candidates.begin(), candidates.end(),
+                                                      [](const CandidateTrial& t) { return t.name != "term"; })) +
+               term_rounds + other_tests;
+  rule.family_wise = static_cast<double>(rule.tests) * p_critical;
+  return rule;
+}
+
+}  // namespace
+
 DiscrepancyResult find_discrepancy(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
                                    const DiscrepancyOptions& options) {
   return find_discrepancy(std::vector<FlightData>{data}, model, vehicle, options);
@@ -524,13 +557,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   wf.batch.min_block = batch_min_block(options);
   wf.p_critical = alarm_p_critical(options);
 
-  std::vector<const CandidateSpec*> pool;
-  for (const auto& c : candidate_library()) {
-    if (options.candidates.empty() ||
-        std::find(options.candidates.begin(), options.candidates.end(), c.name) != options.candidates.end()) {
-      pool.push_back(&c);
-    }
-  }
+  const std::vector<const CandidateSpec*> pool = candidate_pool(options);
 
   // Baseline fit and its held-out residuals; pooled flights weighted by their own noise levels.
   std::vector<VectorXd> base_resid;
@@ -574,17 +601,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::size_t location_tests = locate(d, options, m, base_resid, wf.batch, wf.folds, wf.p_critical, res);
   signature_findings(options, res);
   const std::size_t compatibility_tests = sensor_findings(res);
-  res.alarm_rule.p_critical = wf.p_critical;
-  // Each library trial is a test; the open-world search is one test per round (Bonferroni over
-  // its families inside), however many of its trials are listed.
-  std::size_t term_rounds = 0;
-  for (const auto& t : res.candidates) {
-    if (t.name == "term") term_rounds = std::max(term_rounds, t.round);
-  }
-  res.alarm_rule.tests = static_cast<std::size_t>(std::count_if(res.candidates.begin(), res.candidates.end(),
-                                                                [](const CandidateTrial& t) { return t.name != "term"; })) +
-                         term_rounds + location_tests + compatibility_tests;
-  res.alarm_rule.family_wise = static_cast<double>(res.alarm_rule.tests) * wf.p_critical;
+  res.alarm_rule = alarm_rule(res.candidates, wf.p_critical, location_tests + compatibility_tests);
   gap_table(d, model, options, known_values, m, cv_before, cv_after, res);
   gap_bands(d, options, m, cv_before, cv_after, std::move(wide_bands), res);
   if (pooled) flight_consistency(m, wf.batch, rows, options.consistency_alpha, res);

@@ -44,10 +44,7 @@ void validate_process_sections(const Scenario& s) {
   if (s.runs("controller")) {
     ConfigMap section = s.section("controller");
     const ControllerConfig controller = controller_config_from(section);
-    if (!s.root["manoeuvre"]) {
-      throw ConfigError(s.file, "manoeuvre", "", "missing required key: the controller plays a manoeuvre file");
-    }
-    const Manoeuvre manoeuvre = load_manoeuvre(s.root["manoeuvre"].as<std::string>());
+    const Manoeuvre manoeuvre = load_manoeuvre(manoeuvre_file(s, true, "the controller plays a manoeuvre file"));
     check_gain_sets(manoeuvre, controller);
     // The plant reconstructs delta_t from the collective with the controller's map.
     if (std::fabs(plant.collective_radps_per_pct - controller.throttle_to_freq_radps_per_pct) >

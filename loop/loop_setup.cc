@@ -56,9 +56,7 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
   ConfigMap controller_section = scenario.section("controller");
   s.controller = controller_config_from(controller_section);
   s.gain_set = s.controller.default_gain_set;
-  if (scenario.root["manoeuvre"]) {
-    s.gain_set = load_manoeuvre(scenario.root["manoeuvre"].as<std::string>()).gain_set;
-  }
+  if (const std::string file = manoeuvre_file(scenario); !file.empty()) s.gain_set = load_manoeuvre(file).gain_set;
   const ProcessRunOptions run = process_run_options(scenario);
   s.input = input.empty() ? run.controller_input : input;
   if (s.input != "truth" && s.input != "estimate") {

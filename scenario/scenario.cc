@@ -342,6 +342,18 @@ std::string plant_command_channel(const Scenario& scenario) {
   return contract::plant_command_channel(scenario.actuator_link == "can");
 }
 
+std::string manoeuvre_file(const Scenario& scenario, bool required, const std::string& why) {
+  const YAML::Node m = scenario.root["manoeuvre"];
+  if (!m || m.IsNull()) {
+    if (required) throw ConfigError(scenario.file, "manoeuvre", "", "missing required key: " + why);
+    return "";
+  }
+  if (!m.IsScalar() || m.Scalar().empty()) {
+    throw ConfigError(scenario.file, "manoeuvre", yaml_text(m), "must be the path of a manoeuvre file");
+  }
+  return m.Scalar();
+}
+
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides) {
   KeyOrigins origins;
   const YAML::Node root = load_scenario_tree(file, overrides, &origins);

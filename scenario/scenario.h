@@ -110,6 +110,11 @@ const std::vector<std::string>& scenario_section_keys();
 /// Validates the top level of a resolved tree. @throws ConfigError naming the key.
 Scenario scenario_from_tree(const YAML::Node& root, const std::string& file);
 
+/// The scenario's manoeuvre file (absolute: load_scenario resolves the path), or "" when it names
+/// none. `required`: a scenario without one is an error saying `why` it needs one.
+/// @throws ConfigError naming `manoeuvre` if it is not a file name (a scalar), or missing when required.
+std::string manoeuvre_file(const Scenario& scenario, bool required = false, const std::string& why = "");
+
 /// load_scenario_tree + scenario_from_tree.
 Scenario load_scenario(const std::string& file, const std::vector<Override>& overrides = {});
 

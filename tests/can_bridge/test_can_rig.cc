@@ -568,6 +568,18 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
   CHECK(rig.health.back().messages_to_lcm == 1);
 }
 
+TEST_CASE("the bridge refuses a control rate outside the controller's range, before it opens a socket", "[bridge]") {
+  const nimble::Scenario scenario = nimble::load_scenario(
+      kConfigs + "id_doublet_train_fast.yaml", {{"actuator_link", "can"}, {"controller.rate_hz", "10"}});
+  try {
+    CanBridgeNode node(scenario, {kRigProcess, scenario.file, "memq://"});
+    FAIL("no exception");
+  } catch (const nimble::ConfigError& e) {
+    CHECK_THAT(std::string(e.what()), Catch::Matchers::Contains("controller.rate_hz") &&
+                                          Catch::Matchers::Contains("10"));
+  }
+}
+
 TEST_CASE("can_bridge.fd on an interface with the classical MTU names the fix", "[bridge][fd]") {
   pin_to_cpu0();
   const std::string classical_if = "vcan_cc";
