@@ -73,7 +73,9 @@ Spawned spawn(const std::vector<std::string>& argv, const std::string& out_file)
   Spawned s;
   s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   s.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  const auto sec = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  const auto sec = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
   // wait4 gives the child's own usage; its descendants that it waited for are in RUSAGE_CHILDREN
   // of the child, which the kernel folds into the child's figures when it is reaped.
   s.cpu_s = sec(ru.ru_utime) + sec(ru.ru_stime);
@@ -150,9 +152,12 @@ void per_run_figures(const std::string& rig, const std::string& scenario, double
     const double per_hour = realtime ? 3600.0 / s.wall_s : 3600.0 / s.cpu_s;
     std::printf("  %-10s %9.2f %9.2f %9.0f MB %11.0f kB %10.0f %s\n", clock, s.cpu_s, s.wall_s, s.max_rss_mb,
                 log_kb_per_s, per_hour, realtime ? "per slot" : "per core");
-    j["per_run"][clock] = {{"cpu_s", s.cpu_s},           {"wall_s", s.wall_s},
-                           {"max_rss_mb", s.max_rss_mb}, {"log_bytes_per_sim_s", log_kb_per_s * 1024.0},
-                           {"sim_s", sim_s},             {realtime ? "runs_per_hour_per_slot" : "runs_per_core_hour", per_hour}};
+    j["per_run"][clock] = {{"cpu_s", s.cpu_s},
+                           {"wall_s", s.wall_s},
+                           {"max_rss_mb", s.max_rss_mb},
+                           {"log_bytes_per_sim_s", log_kb_per_s * 1024.0},
+                           {"sim_s", sim_s},
+                           {realtime ? "runs_per_hour_per_slot" : "runs_per_core_hour", per_hour}};
     fs::remove(log);
   }
 }
@@ -169,7 +174,8 @@ void scaling_figures(const std::string& rig, const std::string& scenario, int cp
     all.push_back(plant_alone_s(plan, 60.0, cpus));
   }
   const double machine_scaling = cpus * median(one) / median(all);
-  const std::string sweep = rig + " sweep " + scenario + " --seeds 1-20 --vary " + five_sets() + " --no-progress >/dev/null";
+  const std::string sweep =
+      rig + " sweep " + scenario + " --seeds 1-20 --vary " + five_sets() + " --no-progress >/dev/null";
   std::vector<double> s1, sn;
   for (int k = 0; k < repeats; ++k) {
     s1.push_back(std::abs(seconds_of(sweep + " --jobs 1")));
@@ -199,8 +205,8 @@ bool slurm_figures(const std::string& rig, const std::string& scenario, const st
   }
   ::setenv("SLURM_CONF", (cluster + "/slurm.conf").c_str(), 1);
   const int seeds = campaign_runs / 5;
-  const std::string campaign = rig + " sweep " + scenario + " --seeds 1-" + std::to_string(seeds) + " --vary " +
-                               five_sets() + " --no-progress";
+  const std::string campaign =
+      rig + " sweep " + scenario + " --seeds 1-" + std::to_string(seeds) + " --vary " + five_sets() + " --no-progress";
   std::vector<double> local, one_wave, chunks;
   for (int k = 0; k < repeats; ++k) {
     const std::string tag = std::to_string(k);
@@ -209,17 +215,20 @@ bool slurm_figures(const std::string& rig, const std::string& scenario, const st
     one_wave.push_back(seconds_of(campaign + " --backend slurm --chunk " +
                                   std::to_string((5 * seeds + cpus - 1) / cpus) + " --dir " + dir + "/wave" + tag +
                                   " >/dev/null 2>&1"));
-    chunks.push_back(seconds_of(campaign + " --backend slurm --chunk 25 --dir " + dir + "/chunks" + tag + " >/dev/null 2>&1"));
+    chunks.push_back(
+        seconds_of(campaign + " --backend slurm --chunk 25 --dir " + dir + "/chunks" + tag + " >/dev/null 2>&1"));
   }
-  std::system((std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh stop " + cluster + " >/dev/null 2>&1").c_str());
+  std::system(
+      (std::string(RIG_SOURCE_DIR) + "/tests/cluster/slurm_cluster.sh stop " + cluster + " >/dev/null 2>&1").c_str());
   const double l = median(local), w = median(one_wave), c = median(chunks);
   std::printf("\n  a campaign of %d runs (5 sets x %d seeds), median of %d, command to merged result:\n", 5 * seeds,
               seeds, repeats);
   std::printf("    local, %d jobs:                          %7.2f s%s\n", cpus, std::abs(l), l < 0 ? " (failed)" : "");
   std::printf("    slurm, %d tasks of %d runs (one wave):   %7.2f s%s  overhead %+.1f %% (target <= 20 %%)\n", cpus,
-              (5 * seeds + cpus - 1) / cpus, std::abs(w), w < 0 ? " (failed)" : "", 100.0 * (std::abs(w) / std::abs(l) - 1));
-  std::printf("    slurm, chunks of 25 runs (%2d tasks):     %7.2f s%s  overhead %+.1f %%\n", (5 * seeds + 24) / 25, std::abs(c),
-              c < 0 ? " (failed)" : "", 100.0 * (std::abs(c) / std::abs(l) - 1));
+              (5 * seeds + cpus - 1) / cpus, std::abs(w), w < 0 ? " (failed)" : "",
+              100.0 * (std::abs(w) / std::abs(l) - 1));
+  std::printf("    slurm, chunks of 25 runs (%2d tasks):     %7.2f s%s  overhead %+.1f %%\n", (5 * seeds + 24) / 25,
+              std::abs(c), c < 0 ? " (failed)" : "", 100.0 * (std::abs(c) / std::abs(l) - 1));
   j["slurm"] = {{"runs", 5 * seeds},
                 {"local_s", std::abs(l)},
                 {"slurm_one_wave_s", std::abs(w)},
@@ -238,8 +247,9 @@ int main(int argc, char** argv) {
   int campaign_runs = 200, repeats = 3;
   bool slurm = false;
   std::string json_file;
-  cmdline::CommandLine cl("bench_campaign", "What one run of a campaign costs by clock, the sweep's scaling against the "
-                                        "machine's own, and Slurm's overhead over local (--slurm).");
+  cmdline::CommandLine cl("bench_campaign",
+                          "What one run of a campaign costs by clock, the sweep's scaling against the "
+                          "machine's own, and Slurm's overhead over local (--slurm).");
   cl->footer("Not a test: the figures depend on the machine; the ratios travel.");
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)");
   cl->add_option("--duration", duration_s, "simulated seconds of each run")
@@ -248,7 +258,9 @@ int main(int argc, char** argv) {
   cl->add_option("--campaign-runs", campaign_runs, "runs of the Slurm comparison (a multiple of 5)")
       ->check(CLI::Range(5, 100000))
       ->capture_default_str();
-  cl->add_option("--repeats", repeats, "times each campaign is flown (median)")->check(CLI::Range(1, 100))->capture_default_str();
+  cl->add_option("--repeats", repeats, "times each campaign is flown (median)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   cl->add_flag("--slurm", slurm, "bring up a one-node Slurm cluster (root) and compare the backends");
   cl->add_option("--json", json_file, "the figures as JSON to FILE")->type_name("FILE");
   if (const auto done = cl.parse(argc, argv)) return *done;

@@ -45,15 +45,16 @@ struct Summary {
 Summary summarise(std::vector<int64_t> ns) {
   std::sort(ns.begin(), ns.end());
   auto at = [&](double q) {
-    const std::size_t i = std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size() - 1) + 0.5));
+    const std::size_t i =
+        std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size() - 1) + 0.5));
     return static_cast<double>(ns[i]) / 1000.0;
   };
   return {at(0.50), at(0.99), static_cast<double>(ns.back()) / 1000.0, ns.size()};
 }
 
 void print(const char* what, const Summary& s) {
-  std::printf("  %-44s p50 %8.1f us   p99 %8.1f us   max %8.1f us   (n = %zu)\n", what, s.p50_us, s.p99_us,
-              s.max_us, s.n);
+  std::printf("  %-44s p50 %8.1f us   p99 %8.1f us   max %8.1f us   (n = %zu)\n", what, s.p50_us, s.p99_us, s.max_us,
+              s.n);
 }
 
 std::vector<can_filter> only(uint32_t id) { return {can_filter{id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG}}; }
@@ -150,9 +151,8 @@ int run(const std::string& iface, int count, int warmup) {
   stop = true;
   echo.join();
 
-  const char* where = std::getenv("CANVM_GUEST") != nullptr
-                          ? "measured inside the qemu VM (software emulation, no KVM)"
-                          : "measured on this host's kernel";
+  const char* where = std::getenv("CANVM_GUEST") != nullptr ? "measured inside the qemu VM (software emulation, no KVM)"
+                                                            : "measured on this host's kernel";
   std::printf("bench_can on %s, %d samples each after %d warm-up; %s\n", iface.c_str(), count, warmup, where);
   print("frame send -> receive (one frame)", summarise(frame_ns));
   if (!kernel_to_user_ns.empty()) print("  of which kernel rx timestamp -> user space", summarise(kernel_to_user_ns));

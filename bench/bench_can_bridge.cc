@@ -72,7 +72,6 @@
 #include "launcher/supervisor.h"
 #include "scenario/scenario.h"
 
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -115,7 +114,8 @@ Summary summarise(std::vector<int64_t> ns) {
   if (ns.empty()) return s;
   std::sort(ns.begin(), ns.end());
   auto at = [&](double q) {
-    const std::size_t i = std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size() - 1) + 0.5));
+    const std::size_t i =
+        std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size() - 1) + 0.5));
     return static_cast<double>(ns[i]) / 1000.0;
   };
   s.p50_us = at(0.50);
@@ -130,8 +130,8 @@ void print(const char* what, const Summary& s) {
     std::printf("  %-46s no samples\n", what);
     return;
   }
-  std::printf("  %-46s p50 %8.1f us   p99 %8.1f us   max %8.1f us   (n = %zu)\n", what, s.p50_us, s.p99_us,
-              s.max_us, s.n);
+  std::printf("  %-46s p50 %8.1f us   p99 %8.1f us   max %8.1f us   (n = %zu)\n", what, s.p50_us, s.p99_us, s.max_us,
+              s.n);
 }
 
 // ---- the receiving side -----------------------------------------------------------------------
@@ -267,8 +267,8 @@ std::string wait_for_state(Receiver& rx, ProcessSupervisor& supervisor, int8_t s
     }
     const int64_t now = monotonic_ns();
     if (now - start > static_cast<int64_t>(timeout_ms) * 1000000) {
-      return "no HEARTBEAT state " + std::to_string(state) + " from every bridge within " +
-             std::to_string(timeout_ms) + " ms";
+      return "no HEARTBEAT state " + std::to_string(state) + " from every bridge within " + std::to_string(timeout_ms) +
+             " ms";
     }
     if (every_second && now >= next_second) {
       every_second();
@@ -365,18 +365,19 @@ void print_health(Receiver& rx, const std::vector<ChildProcess>& children) {
       continue;
     }
     const can_health_t& h = it->second;
-    std::printf("  CAN_HEALTH %-10s (seq %lld) to CAN %lld, to LCM %lld, frames sent %lld, received %lld; rejected: "
-                "unknown id %lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; "
-                "counter gaps %lld, ENOBUFS %lld, send retries %lld, send dropped %lld, receive dropped %lld, error frames %lld\n",
-                c.name.c_str(), static_cast<long long>(h.seq), static_cast<long long>(h.messages_to_can),
-                static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
-                static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
-                static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
-                static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
-                static_cast<long long>(h.counter_gaps), static_cast<long long>(h.send_enobufs),
-                static_cast<long long>(h.send_retries),
-                static_cast<long long>(h.send_dropped), static_cast<long long>(h.receive_dropped),
-                static_cast<long long>(h.error_frames));
+    std::printf(
+        "  CAN_HEALTH %-10s (seq %lld) to CAN %lld, to LCM %lld, frames sent %lld, received %lld; rejected: "
+        "unknown id %lld, wrong length %lld, bad checksum %lld, stale counter %lld, out of range %lld; "
+        "counter gaps %lld, ENOBUFS %lld, send retries %lld, send dropped %lld, receive dropped %lld, error frames "
+        "%lld\n",
+        c.name.c_str(), static_cast<long long>(h.seq), static_cast<long long>(h.messages_to_can),
+        static_cast<long long>(h.messages_to_lcm), static_cast<long long>(h.frames_sent),
+        static_cast<long long>(h.frames_received), static_cast<long long>(h.rejected_unknown_id),
+        static_cast<long long>(h.rejected_wrong_length), static_cast<long long>(h.rejected_bad_checksum),
+        static_cast<long long>(h.rejected_stale_counter), static_cast<long long>(h.rejected_out_of_range),
+        static_cast<long long>(h.counter_gaps), static_cast<long long>(h.send_enobufs),
+        static_cast<long long>(h.send_retries), static_cast<long long>(h.send_dropped),
+        static_cast<long long>(h.receive_dropped), static_cast<long long>(h.error_frames));
   }
   if (rx.fault_count > 0) {
     std::printf("  FAULT events: %lld, e.g.\n", static_cast<long long>(rx.fault_count));
@@ -399,16 +400,20 @@ int report(const Options& opt, Receiver& rx, const std::vector<int64_t>& sent, i
       warm_can += k >= 0;
       continue;
     }
-    if (d >= 0) direct_ns.push_back(d - sent[seq]);
-    else ++direct_lost;
-    if (k >= 0) can_ns.push_back(k - sent[seq]);
-    else ++can_lost;
+    if (d >= 0)
+      direct_ns.push_back(d - sent[seq]);
+    else
+      ++direct_lost;
+    if (k >= 0)
+      can_ns.push_back(k - sent[seq]);
+    else
+      ++can_lost;
     if (d >= 0 && k >= 0) added_ns.push_back(k - d);
   }
   const Summary direct = summarise(direct_ns), can = summarise(can_ns), added = summarise(added_ns);
 
-  std::printf("bench_can_bridge: %d commands at %g Hz after %d warm-up, %s on %s\n", opt.count, opt.rate_hz,
-              opt.warmup, kUrl, kInterface);
+  std::printf("bench_can_bridge: %d commands at %g Hz after %d warm-up, %s on %s\n", opt.count, opt.rate_hz, opt.warmup,
+              kUrl, kInterface);
   std::printf("  measured %s\n", where_measured().c_str());
   std::printf("  network: %s\n", ns_detail.c_str());
   std::printf("  bridge: %s (scenario %s)\n", bridge.c_str(), opt.scenario.c_str());
@@ -418,15 +423,17 @@ int report(const Options& opt, Receiver& rx, const std::vector<int64_t>& sent, i
     std::printf("  %-46s %8.1f us (difference of the medians)\n", "added by the CAN path", can.p50_us - direct.p50_us);
   }
   print("  per command, CAN path minus direct hop", added);
-  std::printf("  lost (published, not received): direct %lld of %d, CAN path %lld of %d; warm-up received: direct "
-              "%lld, CAN %lld of %d\n",
-              static_cast<long long>(direct_lost), opt.count, static_cast<long long>(can_lost), opt.count,
-              static_cast<long long>(warm_direct), static_cast<long long>(warm_can), opt.warmup);
-  std::printf("  CAN path: values differing from those sent %lld, duplicates %lld, unknown seq %lld, source '%s'; "
-              "undecodable messages %lld; publisher late by > 1 period %lld times\n",
-              static_cast<long long>(rx.can_mismatches), static_cast<long long>(rx.can_duplicates),
-              static_cast<long long>(rx.can_other), rx.can_sources.c_str(), static_cast<long long>(rx.malformed),
-              static_cast<long long>(late));
+  std::printf(
+      "  lost (published, not received): direct %lld of %d, CAN path %lld of %d; warm-up received: direct "
+      "%lld, CAN %lld of %d\n",
+      static_cast<long long>(direct_lost), opt.count, static_cast<long long>(can_lost), opt.count,
+      static_cast<long long>(warm_direct), static_cast<long long>(warm_can), opt.warmup);
+  std::printf(
+      "  CAN path: values differing from those sent %lld, duplicates %lld, unknown seq %lld, source '%s'; "
+      "undecodable messages %lld; publisher late by > 1 period %lld times\n",
+      static_cast<long long>(rx.can_mismatches), static_cast<long long>(rx.can_duplicates),
+      static_cast<long long>(rx.can_other), rx.can_sources.c_str(), static_cast<long long>(rx.malformed),
+      static_cast<long long>(late));
   std::printf("  bridges stopped by %s: ", stop_how.c_str());
   for (std::size_t i = 0; i < children.size(); ++i) {
     std::printf("%s%s %s", i ? ", " : "", children[i].name.c_str(), children[i].describe().c_str());
@@ -480,7 +487,8 @@ std::vector<int64_t> publish_commands(lcm::LCM& pub, int64_t total, int64_t peri
 void wait_for_commands(Receiver& rx, int64_t total) {
   int64_t last_progress = monotonic_ns();
   int64_t last_seen = -1;
-  while (rx.direct_count.load(std::memory_order_acquire) < total || rx.can_count.load(std::memory_order_acquire) < total) {
+  while (rx.direct_count.load(std::memory_order_acquire) < total ||
+         rx.can_count.load(std::memory_order_acquire) < total) {
     const int64_t seen = rx.direct_count.load() + rx.can_count.load();
     if (seen != last_seen) {
       last_seen = seen;

@@ -78,9 +78,9 @@ int main(int argc, char** argv) {
   int level = mcap::ExportOptions{}.zstd_level;
   double duration_s = 60.0;
   cmdline::CommandLine cl("bench_export",
-                      "Times rig export --format mcap (zstd and none) on a flight's log against the machine's\n"
-                      "floor measured in the same run (the log read event by event, nothing decoded), and\n"
-                      "prints the sizes.");
+                          "Times rig export --format mcap (zstd and none) on a flight's log against the machine's\n"
+                          "floor measured in the same run (the log read event by event, nothing decoded), and\n"
+                          "prints the sizes.");
   cl->footer("Not a test: the figures depend on the machine; the ratio to the floor travels.");
   cl->add_option("log", log, "an LCM log to export (default: a hover flight of --duration seconds, flown here)")
       ->type_name("LOG.lcmlog");

@@ -187,7 +187,8 @@ Percentiles percentiles(std::vector<int64_t>& samples_ns) {
   if (samples_ns.empty()) return p;
   std::sort(samples_ns.begin(), samples_ns.end());
   const auto at = [&](double q) {
-    const std::size_t i = std::min(samples_ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(samples_ns.size())));
+    const std::size_t i =
+        std::min(samples_ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(samples_ns.size())));
     return static_cast<double>(samples_ns[i]) / 1000.0;
   };
   p.p50_us = at(0.50);
@@ -337,8 +338,8 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
                 std::memcpy(tick, rb->data, sizeof tick);
                 if (tick[0] >= 0) {
                   if (tick[1] < s->next_due_ns) return;  // not due at this tick
-                  s->next_due_ns = s->me.aligned ? contract::next_due_after(tick[1], s->me.period_ns)
-                                                 : tick[1] + s->me.period_ns;
+                  s->next_due_ns =
+                      s->me.aligned ? contract::next_due_after(tick[1], s->me.period_ns) : tick[1] + s->me.period_ns;
                 }
                 const int64_t ack[3] = {s->index, tick[0], s->next_due_ns};
                 lcm_publish(s->lcm, kAck, ack, sizeof ack);
@@ -395,7 +396,8 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
           ++ticks;
           const int64_t deadline = monotonic_ns() + 2000000000LL;
           while (!m.schedule.missing(step, t).empty()) {
-            if (monotonic_ns() > deadline) return fail("no acknowledgement of step " + std::to_string(step) + " in 2 s");
+            if (monotonic_ns() > deadline)
+              return fail("no acknowledgement of step " + std::to_string(step) + " in 2 s");
             lcm_handle_timeout(lcm, 100);
           }
         }

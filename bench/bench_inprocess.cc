@@ -116,8 +116,8 @@ double sweep_seconds(const std::string& rig, const std::string& scenario, int jo
     vary += std::string(k > 1 ? "," : "") + RIG_SOURCE_DIR + "/rig_configs/models/nimble_lateral_set" +
             std::to_string(k) + ".yaml";
   }
-  return command_seconds(rig + " sweep " + scenario + " --seeds 1-20 --vary " + vary + " --jobs " + std::to_string(jobs) +
-                         " --no-progress > /dev/null");
+  return command_seconds(rig + " sweep " + scenario + " --seeds 1-20 --vary " + vary + " --jobs " +
+                         std::to_string(jobs) + " --no-progress > /dev/null");
 }
 
 }  // namespace
@@ -128,8 +128,8 @@ int main(int argc, char** argv) {
   double duration_s = 30.0;
   std::string json_file;
   cmdline::CommandLine cl("bench_inprocess",
-                      "Times the in-process executor on a flight against the machine's floor (the plant model\n"
-                      "alone) measured in the same run, and rig sweep.");
+                          "Times the in-process executor on a flight against the machine's floor (the plant model\n"
+                          "alone) measured in the same run, and rig sweep.");
   cl->footer("Not a test: the figures depend on the machine; the ratio to the floor travels.");
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/id_doublet_train_fast.yaml)")
       ->type_name("SCENARIO.YAML");
@@ -157,7 +157,8 @@ int main(int argc, char** argv) {
     const double log_mb = static_cast<double>(fs::file_size(dir + "/bench.lcmlog")) / 1e6;
     // The real vehicle's flight vibration with its on-board filtering (the target: within 5 % of
     // the default's speed).
-    const std::string vibration_file = std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/nimble_flight_vibration.yaml";
+    const std::string vibration_file =
+        std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/nimble_flight_vibration.yaml";
     const Speeds vibration = fly(base, {{"sensing.base", vibration_file}}, dir + "/bench_vibration.lcmlog", runs);
     const Speeds no_log = fly(base, {}, "", runs);
     const Speeds truth = fly(base, {{"run.controller_input", "truth"}, {"processes", "[plant,controller]"}}, "", runs);
@@ -180,8 +181,8 @@ int main(int argc, char** argv) {
     const double sweep_all_s = sweep_seconds(rig, scenario, jobs_all);
     const double runs_per_s_1 = kSweepRuns / std::abs(sweep_1_s);
     const double runs_per_s_all = kSweepRuns / std::abs(sweep_all_s);
-    std::printf("  %-58s %7.2f s%s  %.1f runs/s\n", "rig sweep, 5 published sets x 20 seeds, 1 job", std::abs(sweep_1_s),
-                sweep_1_s < 0 ? "  (some run not ok)" : "", runs_per_s_1);
+    std::printf("  %-58s %7.2f s%s  %.1f runs/s\n", "rig sweep, 5 published sets x 20 seeds, 1 job",
+                std::abs(sweep_1_s), sweep_1_s < 0 ? "  (some run not ok)" : "", runs_per_s_1);
     std::printf("  %-58s %7.2f s%s  %.1f runs/s (%.2fx one job; target >= 1.8x on 2 cores)\n",
                 ("rig sweep, the same, " + std::to_string(jobs_all) + " jobs").c_str(), std::abs(sweep_all_s),
                 sweep_all_s < 0 ? "  (some run not ok)" : "", runs_per_s_all, runs_per_s_all / runs_per_s_1);
@@ -197,13 +198,21 @@ int main(int argc, char** argv) {
           {"scenario", plan.scenario.name},
           {"duration_s", duration_s},
           {"runs", runs},
-          {"inprocess", {{"speed_x", full.median_x}, {"best_x", full.best_x}, {"no_log_speed_x", no_log.median_x},
-                         {"truth_only_speed_x", truth.median_x}, {"log_mb", log_mb}}},
+          {"inprocess",
+           {{"speed_x", full.median_x},
+            {"best_x", full.best_x},
+            {"no_log_speed_x", no_log.median_x},
+            {"truth_only_speed_x", truth.median_x},
+            {"log_mb", log_mb}}},
           {"floor", {{"speed_x", floor_x}, {"what", "the plant model alone at its rate"}}},
           {"ratio_to_floor", full.median_x / floor_x},
           {"vibration", {{"speed_x", vibration.median_x}, {"ratio_to_default", vibration.median_x / full.median_x}}},
-          {"sweep", {{"runs", kSweepRuns}, {"runs_per_s_1job", runs_per_s_1}, {"runs_per_s_all", runs_per_s_all},
-                     {"jobs_all", jobs_all}, {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
+          {"sweep",
+           {{"runs", kSweepRuns},
+            {"runs_per_s_1job", runs_per_s_1},
+            {"runs_per_s_all", runs_per_s_all},
+            {"jobs_all", jobs_all},
+            {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
           {"reproduce", {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}}}};
       cmdline::write_json(json_file, j.dump(2));
     }

@@ -38,7 +38,8 @@ struct Loop {
 
 Loop hover_loop() {
   const DerivativeModel m = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
-  const ControllerConfig c = load_controller_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/controller/nimble_attitude.yaml");
+  const ControllerConfig c =
+      load_controller_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/controller/nimble_attitude.yaml");
   Loop l{build_state_space(m, load_vehicle(m.vehicle_file)), roll_loop_config(c, roll_gain_set(c, "fast"))};
   l.config.latency_s = 2.0 / c.rate_hz;
   return l;
@@ -75,10 +76,11 @@ int main(int argc, char** argv) {
   std::string json;
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml";
   cmdline::CommandLine cl("bench_loop",
-                      "Times rig loop --all-sets (a whole process) and one loop's analysis against the machine's\n"
-                      "floor measured in the same run: one frequency response of the roll loop (600 points).");
-  cl->footer("Not a test: the figures depend on the machine; the ratios to the floor travel. Target: rig loop "
-             "--all-sets <= 100 ms.");
+                          "Times rig loop --all-sets (a whole process) and one loop's analysis against the machine's\n"
+                          "floor measured in the same run: one frequency response of the roll loop (600 points).");
+  cl->footer(
+      "Not a test: the figures depend on the machine; the ratios to the floor travel. Target: rig loop "
+      "--all-sets <= 100 ms.");
   cl->add_option("scenario", scenario, "the scenario (default rig_configs/hover.yaml)")->type_name("SCENARIO.YAML");
   cl->add_option("--runs", reps, "repetitions of each figure (the median is reported)")
       ->check(CLI::Range(3, 10000))
@@ -110,9 +112,10 @@ int main(int argc, char** argv) {
     std::printf("  floor: one frequency response of the roll loop, 600 points   %8.3f ms CPU\n", floor);
     std::printf("  one loop analysed (margins, poles, bandwidth)               %8.3f ms CPU   %6.1f x floor\n", one,
                 one / floor);
-    std::printf("  rig loop --all-sets, whole process                          %8.3f ms wall  %6.1f x floor"
-                "   (target <= 100 ms)\n",
-                all, all / floor);
+    std::printf(
+        "  rig loop --all-sets, whole process                          %8.3f ms wall  %6.1f x floor"
+        "   (target <= 100 ms)\n",
+        all, all / floor);
     std::printf("  (a bare 'rig --version' process: %.1f ms wall)\n", version_ms);
   }
   if (!json.empty()) {

@@ -47,16 +47,21 @@ int main(int argc, char** argv) {
   std::string effect = "actuator_delay=0.004";
   double length_s = 0.0;
   cmdline::CommandLine cl("bench_power",
-                      "The time of rig discrepancy --power for one effect size and one record length: N flights\n"
-                      "of the in-process rig, the discrepancy workflow on each; wall time and where it goes.");
+                          "The time of rig discrepancy --power for one effect size and one record length: N flights\n"
+                          "of the in-process rig, the discrepancy workflow on each; wall time and where it goes.");
   cl->add_option("--scenario", o.scenario_file, "the scenario")->capture_default_str()->type_name("FILE");
   cl->add_option("--model", o.model_file, "the model the workflow checks")->capture_default_str()->type_name("FILE");
   cl->add_option("--effect", effect, "the effect and its one size")->capture_default_str()->type_name("NAME=SIZE");
   cl->add_option("--length", length_s, "record length [s] (default: the scenario's)")
       ->check(cmdline::kFinite & CLI::PositiveNumber)
       ->type_name("S");
-  cl->add_option("--flights", o.flights, "flights")->check(CLI::Range(1, 100000))->capture_default_str()->type_name("N");
-  cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
+  cl->add_option("--flights", o.flights, "flights")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->type_name("N");
+  cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")
+      ->check(CLI::Range(1, 256))
+      ->type_name("N");
   if (const auto done = cl.parse(argc, argv)) return *done;
   try {
     const detection_power::EffectSizes e = detection_power::parse_effect_sizes(effect);

@@ -70,8 +70,8 @@ std::string self_dir() {
 YAML::Node fly(const std::string& scenario, const std::string& args, const std::string& dir) {
   const std::string json = dir + "/summary.json";
   fs::remove(json);
-  const std::string cmd = self_dir() + "/rig run " + scenario + " --no-progress --log " + dir + "/bench.lcmlog --json " +
-                          json + " " + args + " > " + dir + "/out.txt 2>&1";
+  const std::string cmd = self_dir() + "/rig run " + scenario + " --no-progress --log " + dir +
+                          "/bench.lcmlog --json " + json + " " + args + " > " + dir + "/out.txt 2>&1";
   const int status = std::system(cmd.c_str());
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !fs::exists(json)) {
     throw std::runtime_error("'" + cmd + "' failed; see " + dir + "/out.txt");
@@ -210,7 +210,7 @@ struct Figures {
   bench::LockstepFloor limit;
   std::size_t participants = 0;
   double speed = 0.0, rig_messages = 0.0;
-  bool foxglove = false;     ///< --foxglove-client: the run with a client below
+  bool foxglove = false;  ///< --foxglove-client: the run with a client below
   RigRealtime with_client;
   long long client_messages = 0;
 };
@@ -276,13 +276,13 @@ void add_options(cmdline::CommandLine& cl, std::string& scenario, std::string& j
                "fly once more in real time with --foxglove and one client subscribed to every channel: the "
                "control loop's latency p99 with it against without (target: within 10 %)");
   cmdline::each_value(cl->add_option("--set", "override one scenario value in every rig run; repeatable")
-                      ->type_name("KEY.PATH=VALUE")
-                      ->allow_extra_args(false)
-                      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-                  [&](const std::string& v) {
-                    extra.push_back(parse_override(v));
-                    set_args += " --set " + v;
-                  });
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&](const std::string& v) {
+                        extra.push_back(parse_override(v));
+                        set_args += " --set " + v;
+                      });
 }
 
 /// Flies the rig once more in real time with --foxglove and one client on every channel, and
@@ -292,8 +292,8 @@ RigRealtime fly_with_client(const std::string& scenario, const std::string& set_
   RigRealtime with_client;
   const int port = free_port();
   FoxgloveClient client(port);
-  with_client = realtime_figures(
-      fly(scenario, "--clock realtime --foxglove 127.0.0.1:" + std::to_string(port) + set_args, dir));
+  with_client =
+      realtime_figures(fly(scenario, "--clock realtime --foxglove 127.0.0.1:" + std::to_string(port) + set_args, dir));
   client.stop();
   client_messages = client.messages();
   row("rig + live view, 1 client on every channel: loop latency",
@@ -383,23 +383,25 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
 
     std::printf("bench_rig: %s\n", plan.scenario.name.c_str());
-    std::printf("machine: %ld CPUs online; rig settings: CPUs %s, SCHED_FIFO priority %d%s, spin %d us, controller "
-                "on the %s\n",
-                ::sysconf(_SC_NPROCESSORS_ONLN), cpus_text(rig_like.cpus).c_str(), run.realtime_priority,
-                run.realtime_priority == 0 ? " (off)" : "", run.spin_us, run.controller_input.c_str());
+    std::printf(
+        "machine: %ld CPUs online; rig settings: CPUs %s, SCHED_FIFO priority %d%s, spin %d us, controller "
+        "on the %s\n",
+        ::sysconf(_SC_NPROCESSORS_ONLN), cpus_text(rig_like.cpus).c_str(), run.realtime_priority,
+        run.realtime_priority == 0 ? " (off)" : "", run.spin_us, run.controller_input.c_str());
     std::printf("\nreal time, quiet machine%*s p50 [us] p99 [us]  max [us]\n", 28, "");
     const bench::Percentiles wake = bench::wake_up_floor(1000.0, 5.0, rig_like);
     const std::string wake_label = "floor: bare 1 kHz wake-up, SCHED_FIFO " + std::to_string(rig_like.priority);
     row(wake_label.c_str(), wake);
     const bench::Percentiles chain = bench::lcm_chain_floor(url, hops, 1000.0, 5.0, 256, rig_like);
-    const std::string chain_label =
-        "floor: bare LCM chain, " + std::to_string(hops) + " hops, 1 kHz, SCHED_FIFO " + std::to_string(rig_like.priority);
+    const std::string chain_label = "floor: bare LCM chain, " + std::to_string(hops) + " hops, 1 kHz, SCHED_FIFO " +
+                                    std::to_string(rig_like.priority);
     row(chain_label.c_str(), chain);
     const RigRealtime quiet = realtime_figures(fly(scenario, "--clock realtime" + set_args, dir));
     row("rig: plant 1 kHz wake-up jitter", {quiet.jitter_p50_us, quiet.jitter_p99_us, quiet.jitter_max_us, 0});
     row("rig: control loop TRUTH -> ACTUATOR_CMD at the plant",
         {quiet.latency_p50_us, quiet.latency_p99_us, quiet.latency_max_us, 0});
-    if (on_estimate) row("rig: estimator, IMU sample -> ESTIMATE", {quiet.estimator_p50_us, quiet.estimator_p99_us, 0, 0});
+    if (on_estimate)
+      row("rig: estimator, IMU sample -> ESTIMATE", {quiet.estimator_p50_us, quiet.estimator_p99_us, 0, 0});
     std::printf("  %s\n", quiet.health.c_str());
 
     RigRealtime with_client;
@@ -426,9 +428,10 @@ int main(int argc, char** argv) {
 
     const double r_quiet = quiet.latency_p99_us / chain.p99_us, r_loaded = loaded.latency_p99_us / chain_loaded.p99_us;
     const double r_jitter = quiet.jitter_p99_us / wake.p99_us;
-    std::printf("\nratios to the floors (targets): latency p99 quiet %.2f (<= 2.5), loaded %.2f (<= 4); plant jitter "
-                "p99 %.2f (<= 2); lockstep %.0f %% of the limit (>= 50 %%)\n",
-                r_quiet, r_loaded, r_jitter, 100.0 * speed / limit.speed_x);
+    std::printf(
+        "\nratios to the floors (targets): latency p99 quiet %.2f (<= 2.5), loaded %.2f (<= 4); plant jitter "
+        "p99 %.2f (<= 2); lockstep %.0f %% of the limit (>= 50 %%)\n",
+        r_quiet, r_loaded, r_jitter, 100.0 * speed / limit.speed_x);
 
     if (!json_file.empty()) {
       write_figures_json(json_file, Figures{plan.scenario.name, hops, wake, chain, chain_loaded, quiet, loaded, limit,

@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
                                      "  machine's floor measured in the same run.\n",
                                      5);
   if (reps < 0) return -reps - 1;
-  const Ce500Config config = load_ce500_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/turbulence/ce500_practical.yaml");
+  const Ce500Config config =
+      load_ce500_config(std::string(RIG_SOURCE_DIR) + "/rig_configs/turbulence/ce500_practical.yaml");
   Ce500Options options = ce500_default_options(config);
   options.dt_s = 0.01;         // 100 Hz
   options.duration_s = 600.0;  // 10 minutes

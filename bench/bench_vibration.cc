@@ -52,7 +52,7 @@ using namespace nimble;
 namespace {
 
 const std::vector<std::string> kPaperManoeuvres = {
-    "id_doublet_train_fast", "ol_doublet_6hz_fast",   "ol_112_fast",        "cl_112_slow",
+    "id_doublet_train_fast", "ol_doublet_6hz_fast",     "ol_112_fast",        "cl_112_slow",
     "cl_doublet_train_slow", "nonlinear_doublet_30deg", "coupled_doublet_6hz"};
 
 /// Sums over the seeds at one estimate time.
@@ -168,7 +168,8 @@ int residual(const std::string& sensing, int first_seed, int seeds, const std::v
     o.scenario_file = std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml";
     o.clock = launcher::kClockInprocess;
     o.seed = static_cast<unsigned long long>(seed);
-    o.overrides = {{"processes", "[plant, controller, mocap, estimator]"}, {"run.controller_input", "estimate"},
+    o.overrides = {{"processes", "[plant, controller, mocap, estimator]"},
+                   {"run.controller_input", "estimate"},
                    {"sensing.base", sensing}};
     o.overrides.insert(o.overrides.end(), extra.begin(), extra.end());
     const launcher::RunPlan plan = launcher::load_run_plan(o);
@@ -185,7 +186,8 @@ int residual(const std::string& sensing, int first_seed, int seeds, const std::v
         if (m.decode(data, 0, size) == size) truth[m.utime] = contract::from_message(m);
       } else if (channel == contract::channels::kActuatorFeedback) {
         actuator_feedback_t m;
-        if (m.decode(data, 0, size) == size) flaps.push_back({m.utime, m.flap_freq_left_radps, m.flap_freq_right_radps});
+        if (m.decode(data, 0, size) == size)
+          flaps.push_back({m.utime, m.flap_freq_left_radps, m.flap_freq_right_radps});
       } else if (channel == contract::channels::kImu) {
         imu_sample_t m;
         if (m.decode(data, 0, size) == size) imu.push_back(contract::from_message(m));
@@ -222,7 +224,7 @@ int residual(const std::string& sensing, int first_seed, int seeds, const std::v
   }
   var /= std::max<long long>(1, samples);
   low /= std::max<long long>(1, segments);
-  const char* names[6] = {"gyro p (rad/s)^2", "gyro q (rad/s)^2", "gyro r (rad/s)^2",
+  const char* names[6] = {"gyro p (rad/s)^2",  "gyro q (rad/s)^2",  "gyro r (rad/s)^2",
                           "accel x (m/s^2)^2", "accel y (m/s^2)^2", "accel z (m/s^2)^2"};
   std::printf("the on-board filtering's output against TRUTH, hover, seeds %d-%d, %lld samples, %lld segments of 2 s\n",
               first_seed, first_seed + seeds - 1, samples, segments);
@@ -259,7 +261,8 @@ int main(int argc, char** argv) {
                "and 0.5-5 Hz levels per IMU channel: what the EKF's input noise must hold");
   if (const auto done = cl.parse(argc, argv)) return *done;
   if (scenarios.empty()) {
-    for (const auto& s : kPaperManoeuvres) scenarios.push_back(std::string(RIG_SOURCE_DIR) + "/rig_configs/" + s + ".yaml");
+    for (const auto& s : kPaperManoeuvres)
+      scenarios.push_back(std::string(RIG_SOURCE_DIR) + "/rig_configs/" + s + ".yaml");
   }
   std::vector<Override> overrides = {{"processes", "[plant, controller, mocap, estimator]"},
                                      {"run.controller_input", "estimate"}};
@@ -310,17 +313,27 @@ int main(int argc, char** argv) {
       }
       const double n = std::max<long long>(1, f.samples);
       const double rej = static_cast<double>(f.rejected) / std::max<long long>(1, f.accepted + f.rejected);
-      std::printf("%-24s %5d/%-2d %5d/%-2d %5d/%-2d %9.2f%% %8.3f° %9.3f %9.2f %8.0f%% (%2.0f/%2.0f%%) %9.2f %8.0f%% (%2.0f/%2.0f%%)\n",
-                  f.name.c_str(), f.failsafe, f.flights, f.diverged, f.flights, f.controlled, f.flights, 100 * rej,
-                  std::sqrt(f.phi2 / n) * 180 / M_PI, std::sqrt(f.p2 / n), f.att_sum / n, 100 * ba.inside,
-                  100 * ba.below, 100 * ba.above, f.vel_sum / n, 100 * bv.inside, 100 * bv.below, 100 * bv.above);
+      std::printf(
+          "%-24s %5d/%-2d %5d/%-2d %5d/%-2d %9.2f%% %8.3f° %9.3f %9.2f %8.0f%% (%2.0f/%2.0f%%) %9.2f %8.0f%% "
+          "(%2.0f/%2.0f%%)\n",
+          f.name.c_str(), f.failsafe, f.flights, f.diverged, f.flights, f.controlled, f.flights, 100 * rej,
+          std::sqrt(f.phi2 / n) * 180 / M_PI, std::sqrt(f.p2 / n), f.att_sum / n, 100 * ba.inside, 100 * ba.below,
+          100 * ba.above, f.vel_sum / n, 100 * bv.inside, 100 * bv.below, 100 * bv.above);
       std::fflush(stdout);
-      out.push_back({{"scenario", f.name}, {"flights", f.flights}, {"failsafe", f.failsafe}, {"diverged", f.diverged},
-                     {"controlled", f.controlled}, {"gate_rejected_fraction", rej},
-                     {"phi_rms_deg", std::sqrt(f.phi2 / n) * 180 / M_PI}, {"p_rms_radps", std::sqrt(f.p2 / n)},
-                     {"nees_attitude_mean", f.att_sum / n}, {"nees_velocity_mean", f.vel_sum / n},
-                     {"nees_attitude_in_band", ba.inside}, {"nees_attitude_below", ba.below},
-                     {"nees_velocity_in_band", bv.inside}, {"nees_velocity_below", bv.below},
+      out.push_back({{"scenario", f.name},
+                     {"flights", f.flights},
+                     {"failsafe", f.failsafe},
+                     {"diverged", f.diverged},
+                     {"controlled", f.controlled},
+                     {"gate_rejected_fraction", rej},
+                     {"phi_rms_deg", std::sqrt(f.phi2 / n) * 180 / M_PI},
+                     {"p_rms_radps", std::sqrt(f.p2 / n)},
+                     {"nees_attitude_mean", f.att_sum / n},
+                     {"nees_velocity_mean", f.vel_sum / n},
+                     {"nees_attitude_in_band", ba.inside},
+                     {"nees_attitude_below", ba.below},
+                     {"nees_velocity_in_band", bv.inside},
+                     {"nees_velocity_below", bv.below},
                      {"band", {ba.lo, ba.hi}}});
     }
   } catch (const std::exception& e) {

@@ -26,8 +26,7 @@ actuator_command_t make_command(int64_t seq) {
 bool same_values(const actuator_command_t& a, const actuator_command_t& b) {
   auto near = [](double x, double y, double tol) { return std::fabs(x - y) <= tol; };
   return a.mode == b.mode && near(a.flap_freq_left_radps, b.flap_freq_left_radps, 1e-6) &&
-         near(a.flap_freq_right_radps, b.flap_freq_right_radps, 1e-6) &&
-         near(a.delta_f_radps, b.delta_f_radps, 1e-6) &&
+         near(a.flap_freq_right_radps, b.flap_freq_right_radps, 1e-6) && near(a.delta_f_radps, b.delta_f_radps, 1e-6) &&
          near(a.flap_freq_collective_radps, b.flap_freq_collective_radps, 1e-6) &&
          near(a.throttle_pct, b.throttle_pct, 1e-6) && near(a.dihedral_rad, b.dihedral_rad, 1e-7) &&
          near(a.wing_root_rad, b.wing_root_rad, 1e-7) && a.rolling_counter == b.rolling_counter;

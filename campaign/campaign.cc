@@ -107,9 +107,18 @@ std::string run_tag(const Campaign& c, std::size_t i) {
 /// `rig run` itself for a clock other than in process (it makes its own network namespace), in a
 /// child that does not outlive this worker; returns how it ended.
 std::string run_rig(const RunOptions& options, const std::string& json_file, const std::string& log_file) {
-  std::vector<std::string> args = {self_exe(), "run", options.scenario_file, "--clock", *options.clock,
-                                   "--seed", std::to_string(*options.seed), "--json", json_file,
-                                   "--log", log_file.empty() ? json_file + ".lcmlog" : log_file, "--no-progress"};
+  std::vector<std::string> args = {self_exe(),
+                                   "run",
+                                   options.scenario_file,
+                                   "--clock",
+                                   *options.clock,
+                                   "--seed",
+                                   std::to_string(*options.seed),
+                                   "--json",
+                                   json_file,
+                                   "--log",
+                                   log_file.empty() ? json_file + ".lcmlog" : log_file,
+                                   "--no-progress"};
   for (const auto& ov : options.overrides) {
     args.push_back("--set");
     args.push_back(ov.key_path + "=" + ov.value);
@@ -217,14 +226,16 @@ void read_report(const Json& j, SweepRun& run) {
     const auto series = [&t](const char* name) {
       std::vector<double> xs;
       if (!t.contains(name) || !t[name].is_array()) return xs;
-      for (const auto& x : t[name]) xs.push_back(x.is_number() ? x.get<double>() : std::numeric_limits<double>::quiet_NaN());
+      for (const auto& x : t[name])
+        xs.push_back(x.is_number() ? x.get<double>() : std::numeric_limits<double>::quiet_NaN());
       return xs;
     };
     run.trace.dt_s = number_or_nan(t, {"dt_s"});
     run.trace.p = series("p");
     run.trace.v = series("v");
     run.trace.phi = series("phi");
-    if (!(run.trace.dt_s > 0) || run.trace.v.size() != run.trace.p.size() || run.trace.phi.size() != run.trace.p.size()) {
+    if (!(run.trace.dt_s > 0) || run.trace.v.size() != run.trace.p.size() ||
+        run.trace.phi.size() != run.trace.p.size()) {
       run.trace = RunTrace{};
     }
   }
@@ -264,9 +275,12 @@ Json manifest_of(const Campaign& c) {
   m["trace_hz"] = c.trace_hz;
   m["logs_dir"] = c.logs_dir;
   m["backend"] = c.backend;
-  m["cluster"] = {{"partition", c.cluster.partition},     {"account", c.cluster.account},
-                  {"time_limit", c.cluster.time_limit},   {"cpus_per_task", c.cluster.cpus_per_task},
-                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu}, {"chunk_size", c.cluster.chunk_size},
+  m["cluster"] = {{"partition", c.cluster.partition},
+                  {"account", c.cluster.account},
+                  {"time_limit", c.cluster.time_limit},
+                  {"cpus_per_task", c.cluster.cpus_per_task},
+                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu},
+                  {"chunk_size", c.cluster.chunk_size},
                   {"rig", c.cluster.rig}};
   return m;
 }
@@ -301,7 +315,8 @@ void read_manifest_fields(const Json& m, Campaign& c) {
   c.trace_hz = m.at("trace_hz").get<double>();
   c.logs_dir = m.at("logs_dir").get<std::string>();
   c.backend = m.at("backend").get<std::string>();
-  if (c.backend != kBackendLocal && c.backend != kBackendSlurm) throw std::runtime_error("unknown backend " + c.backend);
+  if (c.backend != kBackendLocal && c.backend != kBackendSlurm)
+    throw std::runtime_error("unknown backend " + c.backend);
   const Json& k = m.at("cluster");
   c.cluster.partition = k.at("partition").get<std::string>();
   c.cluster.account = k.at("account").get<std::string>();
@@ -310,7 +325,8 @@ void read_manifest_fields(const Json& m, Campaign& c) {
   c.cluster.memory_mb_per_cpu = k.at("memory_mb_per_cpu").get<int>();
   c.cluster.chunk_size = k.at("chunk_size").get<std::size_t>();
   c.cluster.rig = k.at("rig").get<std::string>();
-  if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1) throw std::runtime_error("chunk size or CPUs per task below 1");
+  if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1)
+    throw std::runtime_error("chunk size or CPUs per task below 1");
   c.created_unix_s = m.at("made").at("unix_s").get<double>();
 }
 
@@ -352,7 +368,6 @@ std::string last_line(const std::string& file) {
   }
   return last;
 }
-
 
 Campaign create_campaign(const CampaignRequest& request) {
   const SweepOptions& o = request.sweep;
@@ -517,8 +532,10 @@ void fly_campaign_runs(const Campaign& c, const std::vector<std::size_t>& runs, 
       r["report"] = nullptr;
       r["failure"] = "failed: the run ended without a report (" + how + ")" + (said.empty() ? "" : ": " + said);
     }
-    r["machine"] = {{"host", host}, {"where", where.empty() ? "local" : where},
-                    {"started_unix_s", started_s}, {"finished_unix_s", unix_now()}};
+    r["machine"] = {{"host", host},
+                    {"where", where.empty() ? "local" : where},
+                    {"started_unix_s", started_s},
+                    {"finished_unix_s", unix_now()}};
     std::error_code ec;
     fs::remove(f[0], ec);
     fs::remove(f[1], ec);

@@ -36,23 +36,23 @@ inline constexpr const char* kBackendSlurm = "slurm";
 
 /// The manifest.
 struct Campaign {
-  std::string dir;                    ///< absolute
-  std::string scenario_file;          ///< absolute
+  std::string dir;            ///< absolute
+  std::string scenario_file;  ///< absolute
   /// Where `rig sweep` was started: relative paths in --set and --vary values resolve here, on
   /// every node too (tasks and --resume run in it).
   std::string working_dir;
-  std::string scenario;               ///< its name
-  std::vector<Override> overrides;    ///< --set, applied to every run
+  std::string scenario;             ///< its name
+  std::vector<Override> overrides;  ///< --set, applied to every run
   std::vector<Vary> vary;
   std::vector<ParameterSet> sets;
   std::vector<std::string> set_digests;  ///< each set's configuration digest when the campaign was made
   uint64_t first_seed = 1, last_seed = 1;
   std::string clock;
-  double trace_hz = 0.0;              ///< > 0: every run's report carries a trace (rig sweep --report)
-  std::string logs_dir;               ///< keep each run's LCM log here (empty: none kept)
+  double trace_hz = 0.0;  ///< > 0: every run's report carries a trace (rig sweep --report)
+  std::string logs_dir;   ///< keep each run's LCM log here (empty: none kept)
   std::string backend = kBackendLocal;
   launcher::ClusterSettings cluster;
-  double created_unix_s = 0.0;        ///< when the campaign was made (the manifest's "made")
+  double created_unix_s = 0.0;  ///< when the campaign was made (the manifest's "made")
   /// Its directory's manifest and result files: held by this process (create_campaign,
   /// open_campaign) or written beside the one that holds it (load_campaign: an array task).
   ResultFiles results;
@@ -78,10 +78,10 @@ struct Campaign {
 /// What `rig sweep` asks for, turned into a campaign.
 struct CampaignRequest {
   SweepOptions sweep;
-  std::string dir;                 ///< empty: a new directory under rig_campaigns/
+  std::string dir;  ///< empty: a new directory under rig_campaigns/
   std::string backend = kBackendLocal;
-  launcher::ClusterSettings cluster;         ///< from the scenario's `cluster:` with the options over it
-  bool report = false;             ///< traces for --report
+  launcher::ClusterSettings cluster;  ///< from the scenario's `cluster:` with the options over it
+  bool report = false;                ///< traces for --report
 };
 
 /// The directory of a sweep that keeps none (no --dir): rig_sweep_<pid>_<n> under TMPDIR, made
@@ -154,6 +154,5 @@ std::string trim(const std::string& s);
 /// The last line of `file` that is not blank, trimmed (empty if none or no file): what a run or
 /// a task said last before it ended.
 std::string last_line(const std::string& file);
-
 
 }  // namespace nimble::campaign

@@ -40,8 +40,8 @@ double unix_time_s() {
 bool key_ok(const std::string& key) {
   if (key.empty() || key[0] == '.') return false;
   for (const char c : key) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
-                    c == '_' || c == '-';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
     if (!ok) return false;
   }
   return true;
@@ -209,7 +209,8 @@ void ResultFiles::check_all() const {
 std::string read_manifest(const std::string& dir) {
   const std::string file = ResultFiles(fs::absolute(dir).lexically_normal().string(), "").manifest_file();
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw std::runtime_error("no campaign in " + fs::path(file).parent_path().string() + " (no " + file + ")");
+  if (!fs::exists(file, ec))
+    throw std::runtime_error("no campaign in " + fs::path(file).parent_path().string() + " (no " + file + ")");
   Json m = parse_manifest(file);
   m.erase(kMadeKey);
   return m.dump();
@@ -231,9 +232,9 @@ ResultFiles open_result_dir(const std::string& dir, const std::string& manifest)
     check_same_campaign(files.dir(), want, parse_manifest(files.manifest_file()));
   } else {
     if (!fs::is_empty(files.dir(), ec)) {
-      throw std::runtime_error(files.dir() + " is not empty and holds no campaign (no campaign.json; it holds " +
-                               some_entries(files.dir()) +
-                               "): a campaign directory is new, empty or the campaign's own; nothing in it was touched");
+      throw std::runtime_error(
+          files.dir() + " is not empty and holds no campaign (no campaign.json; it holds " + some_entries(files.dir()) +
+          "): a campaign directory is new, empty or the campaign's own; nothing in it was touched");
     }
     Json m = want;
     m[kMadeKey] = {{"unix_s", unix_time_s()}, {"host", host_name()}, {"pid", ::getpid()}};

@@ -163,11 +163,11 @@ std::string write_batch_script(const Campaign& c) {
 std::string submit_tasks(const Campaign& c, const std::vector<std::size_t>& tasks) {
   const std::string script = write_batch_script(c);
   const std::string spec = array_spec(tasks);
-  const CommandOutput r =
-      run_command({"sbatch", "--parsable", "--array=" + spec, "--chdir=" + c.working_dir, script});
+  const CommandOutput r = run_command({"sbatch", "--parsable", "--array=" + spec, "--chdir=" + c.working_dir, script});
   if (r.exit_code == -1) {
-    throw std::runtime_error("sbatch not found: the slurm backend needs Slurm's client commands on PATH "
-                             "(Debian: slurm-client) and a cluster to submit to");
+    throw std::runtime_error(
+        "sbatch not found: the slurm backend needs Slurm's client commands on PATH "
+        "(Debian: slurm-client) and a cluster to submit to");
   }
   if (r.exit_code != 0) {
     throw std::runtime_error("sbatch refused the campaign's job (exit " + std::to_string(r.exit_code) +
@@ -250,8 +250,8 @@ std::map<std::size_t, std::string> task_outcomes(const std::string& job) {
   std::map<std::size_t, std::string> out;
   const CommandOutput r = run_command({"scontrol", "-o", "show", "job", job});
   if (r.exit_code != 0) return out;
-  static const std::regex task_re(R"(ArrayTaskId=(\d+))"), state_re(R"(JobState=(\S+))"),
-      exit_re(R"( ExitCode=(\S+))"), reason_re(R"( Reason=(\S+))");
+  static const std::regex task_re(R"(ArrayTaskId=(\d+))"), state_re(R"(JobState=(\S+))"), exit_re(R"( ExitCode=(\S+))"),
+      reason_re(R"( Reason=(\S+))");
   std::istringstream in(r.out);
   std::string line;
   while (std::getline(in, line)) {
@@ -307,7 +307,7 @@ std::vector<std::size_t> tasks_with_missing_runs(const Campaign& c) {
 }
 
 std::vector<std::string> describe_missing(const Campaign& c, const std::string& job,
-                                         const std::vector<std::size_t>& tasks) {
+                                          const std::vector<std::size_t>& tasks) {
   const std::vector<bool> done = finished_runs(c);
   const std::map<std::size_t, std::string> outcomes = task_outcomes(job);
   std::vector<std::string> lines;

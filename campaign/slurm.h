@@ -15,7 +15,7 @@ namespace nimble::campaign {
 
 /// The result of a command run by the backend.
 struct CommandOutput {
-  int exit_code = -1;   ///< -1: could not be started
+  int exit_code = -1;  ///< -1: could not be started
   std::string out, err;
 };
 /// Runs argv[0] (searched on PATH) with the arguments, capturing stdout and stderr.
@@ -57,7 +57,7 @@ void wait_for_job(const Campaign& campaign, const std::string& job, const std::v
 /// One line per task of `tasks` that left runs without results: its runs, how it ended (from
 /// Slurm, or its output file's last line) and which runs are missing.
 std::vector<std::string> describe_missing(const Campaign& campaign, const std::string& job,
-                                         const std::vector<std::size_t>& tasks);
+                                          const std::vector<std::size_t>& tasks);
 
 /// The array tasks that hold the runs without results.
 std::vector<std::size_t> tasks_with_missing_runs(const Campaign& campaign);

@@ -70,7 +70,9 @@ Vary parse_vary(const std::string& text) {
 }
 
 std::pair<uint64_t, uint64_t> parse_seed_range(const std::string& text) {
-  const auto bad = [&] { return std::invalid_argument("--seeds needs A-B or A (whole numbers, A <= B), got '" + text + "'"); };
+  const auto bad = [&] {
+    return std::invalid_argument("--seeds needs A-B or A (whole numbers, A <= B), got '" + text + "'");
+  };
   const auto number = [&](const std::string& s) {
     if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos) throw bad();
     try {
@@ -137,8 +139,9 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
   const std::size_t seeds = r.sets.empty() ? 0 : r.runs.size() / r.sets.size();
   char line[256];
   out << "\n== sweep: " << r.scenario << " ==\n";
-  std::snprintf(line, sizeof line, "%zu runs: %zu parameter set%s x %zu seed%s (%llu-%llu), clock %s, %d job%s, %.2f s\n",
-                r.runs.size(), r.sets.size(), r.sets.size() == 1 ? "" : "s", seeds, seeds == 1 ? "" : "s",
+  std::snprintf(line, sizeof line,
+                "%zu runs: %zu parameter set%s x %zu seed%s (%llu-%llu), clock %s, %d job%s, %.2f s\n", r.runs.size(),
+                r.sets.size(), r.sets.size() == 1 ? "" : "s", seeds, seeds == 1 ? "" : "s",
                 r.runs.empty() ? 0ULL : static_cast<unsigned long long>(r.runs.front().seed),
                 r.runs.empty() ? 0ULL : static_cast<unsigned long long>(r.runs.back().seed), r.clock.c_str(), r.jobs,
                 r.jobs == 1 ? "" : "s", r.wall_time_s);
@@ -159,12 +162,14 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
   for (std::size_t s = 0; s < r.sets.size(); ++s) {
     const SetStatistics st = set_statistics(r, s);
     const long long n = static_cast<long long>(st.runs.size());
-    std::snprintf(line, sizeof line, "\n[%zu] %s\n    controlled %lld/%lld (%.0f %%), back to hover %lld/%lld, result ok %lld/%lld\n",
+    std::snprintf(line, sizeof line,
+                  "\n[%zu] %s\n    controlled %lld/%lld (%.0f %%), back to hover %lld/%lld, result ok %lld/%lld\n",
                   s + 1, r.sets[s].label.c_str(), st.controlled, n,
-                  n == 0 ? 0.0 : 100.0 * static_cast<double>(st.controlled) / static_cast<double>(n), st.hover, n, st.ok,
-                  n);
+                  n == 0 ? 0.0 : 100.0 * static_cast<double>(st.controlled) / static_cast<double>(n), st.hover, n,
+                  st.ok, n);
     out << line;
-    std::snprintf(line, sizeof line, "    %-32s %10s %10s %10s %10s %10s\n", "across runs", "min", "p5", "p50", "p95", "max");
+    std::snprintf(line, sizeof line, "    %-32s %10s %10s %10s %10s %10s\n", "across runs", "min", "p5", "p50", "p95",
+                  "max");
     out << line;
     for (const auto& fig : sweep_figures()) {
       const auto it = st.by_figure.find(fig.key);

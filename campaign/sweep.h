@@ -32,8 +32,8 @@ std::pair<uint64_t, uint64_t> parse_seed_range(const std::string& text);
 
 /// One parameter set: the overrides of one combination of --vary values.
 struct ParameterSet {
-  std::string label;               ///< "key=value key2=value2", or "scenario as given" if nothing varies
-  std::vector<Override> overrides; ///< applied after the sweep's own --set overrides
+  std::string label;                ///< "key=value key2=value2", or "scenario as given" if nothing varies
+  std::vector<Override> overrides;  ///< applied after the sweep's own --set overrides
 };
 /// Every combination of the values, the first --vary varying slowest.
 std::vector<ParameterSet> parameter_sets(const std::vector<Vary>& vary);
@@ -48,10 +48,10 @@ struct RunTrace {
 
 /// The figures of one run that the sweep keeps.
 struct SweepRun {
-  std::size_t set = 0;        ///< index into the parameter sets
+  std::size_t set = 0;  ///< index into the parameter sets
   uint64_t seed = 0;
   int exit_code = -1;
-  std::string verdict;        ///< the run's result text, or why it could not run
+  std::string verdict;  ///< the run's result text, or why it could not run
   bool controlled = false;
   bool hover = false;
   double sim_time_s = 0.0;
@@ -60,7 +60,7 @@ struct SweepRun {
   double wall_time_s = 0.0, speed_x_realtime = 0.0;
   std::string host;
   std::map<std::string, double> figures;  ///< by kSweepFigures name; absent if the run had none
-  RunTrace trace;             ///< empty if the run had no TRUTH or no trace was asked for
+  RunTrace trace;                         ///< empty if the run had no TRUTH or no trace was asked for
 };
 
 /// A quantity summarised across runs: its key in SweepRun::figures, its label and unit.
@@ -76,24 +76,24 @@ const std::vector<SweepFigure>& sweep_figures();
 double percentile(std::vector<double> values, double pct);
 
 struct SweepOptions {
-  launcher::RunOptions base;              ///< scenario, --set, --clock (default inprocess), bin_dir
+  launcher::RunOptions base;  ///< scenario, --set, --clock (default inprocess), bin_dir
   uint64_t first_seed = 1, last_seed = 1;
   std::vector<Vary> vary;
-  int jobs = 1;                 ///< runs at once (each in its own child process)
-  std::string logs_dir;         ///< keep each run's LCM log here (empty: none kept)
-  bool progress = true;         ///< progress bar on stderr
+  int jobs = 1;          ///< runs at once (each in its own child process)
+  std::string logs_dir;  ///< keep each run's LCM log here (empty: none kept)
+  bool progress = true;  ///< progress bar on stderr
 };
 
 struct SweepResult {
   std::string scenario;
   std::string clock;
   std::vector<ParameterSet> sets;
-  std::vector<SweepRun> runs;   ///< by set, then by seed
+  std::vector<SweepRun> runs;  ///< by set, then by seed
   // How it ran (the `machine` fields): not part of the result's meaning.
   double wall_time_s = 0.0;
-  int jobs = 1;                 ///< runs at a time (local), CPUs per task (slurm)
+  int jobs = 1;  ///< runs at a time (local), CPUs per task (slurm)
   std::string backend = "local";
-  std::size_t chunk_size = 0;   ///< runs per array task (slurm); 0: local
+  std::size_t chunk_size = 0;  ///< runs per array task (slurm); 0: local
 };
 
 /// The summary table.

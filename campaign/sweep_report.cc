@@ -193,16 +193,16 @@ void svg_panel(std::ostringstream& out, const Envelope& e, const Quantity& q, do
   }
   for (long long k = x.first; k <= x.last; ++k) {
     const double t = static_cast<double>(k) * x.step;
-    out << "<line x1=\"" << fixed(px(t), 2) << "\" y1=\"" << fixed(y0, 1) << "\" x2=\"" << fixed(px(t), 2)
-        << "\" y2=\"" << fixed(y1 + 4.0, 1) << "\" stroke=\"#ddd\" stroke-width=\"1\"/>\n";
+    out << "<line x1=\"" << fixed(px(t), 2) << "\" y1=\"" << fixed(y0, 1) << "\" x2=\"" << fixed(px(t), 2) << "\" y2=\""
+        << fixed(y1 + 4.0, 1) << "\" stroke=\"#ddd\" stroke-width=\"1\"/>\n";
     out << "<text x=\"" << fixed(px(t), 2) << "\" y=\"" << fixed(y1 + 16.0, 1)
         << "\" text-anchor=\"middle\" font-size=\"11\">" << fixed(t, x.decimals) << "</text>\n";
   }
   out << "<text x=\"" << fixed(kPlotRight, 1) << "\" y=\"" << fixed(y1 + 32.0, 1)
       << "\" text-anchor=\"end\" font-size=\"12\">t [s]</text>\n";
   out << "<text transform=\"translate(" << fixed(kPlotLeft - 58.0, 1) << "," << fixed((y0 + y1) / 2, 1)
-      << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << escape_xml(q.name) << " ["
-      << escape_xml(q.unit) << "]</text>\n";
+      << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << escape_xml(q.name) << " [" << escape_xml(q.unit)
+      << "]</text>\n";
 
   // Band and median, one piece per stretch of grid times that have samples.
   std::size_t k = 0;
@@ -267,8 +267,7 @@ std::string envelopes_csv(const std::vector<SetReport>& sets) {
       const Envelope& e = envelope_of(sets[s], q);
       for (std::size_t k = 0; k < e.t_s.size(); ++k) {
         out += head + kQuantities[q].name + "," + kQuantities[q].unit + "," + number(e.t_s[k]) + "," +
-               std::to_string(e.n[k]) + "," + number(e.p5[k]) + "," + number(e.p50[k]) + "," + number(e.p95[k]) +
-               "\n";
+               std::to_string(e.n[k]) + "," + number(e.p5[k]) + "," + number(e.p50[k]) + "," + number(e.p95[k]) + "\n";
       }
     }
   }
@@ -334,8 +333,8 @@ std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets)
       << "th, td { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: left; }\n"
       << "td.num { text-align: right; }\nimg { max-width: 100%; border: 1px solid #ddd; }\n</style>\n"
       << "</head>\n<body>\n<h1>rig sweep: " << escape_xml(r.scenario) << "</h1>\n"
-      << "<p>Clock " << escape_xml(r.clock) << ", " << runs << " run" << (runs == 1 ? "" : "s") << " in "
-      << sets.size() << " parameter set" << (sets.size() == 1 ? "" : "s")
+      << "<p>Clock " << escape_xml(r.clock) << ", " << runs << " run" << (runs == 1 ? "" : "s") << " in " << sets.size()
+      << " parameter set" << (sets.size() == 1 ? "" : "s")
       << ". Controlled rates with their 95 % Wilson score interval; envelopes across runs: median and "
       << "5 % and 95 % percentiles at each time. Data: <a href=\"envelopes.csv\">envelopes.csv</a>, "
       << "<a href=\"report.json\">report.json</a>.</p>\n"
@@ -343,9 +342,9 @@ std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets)
       << "<th>controlled rate</th><th>95 % interval</th><th>traces</th></tr></thead>\n<tbody>\n";
   for (std::size_t s = 0; s < sets.size(); ++s) {
     const SetReport& st = sets[s];
-    out << "<tr><td class=\"num\"><a href=\"#set-" << s + 1 << "\">" << s + 1 << "</a></td><td>"
-        << escape_xml(st.label) << "</td><td class=\"num\">" << st.runs << "</td><td class=\"num\">"
-        << st.controlled << "</td><td class=\"num\">" << fixed(100.0 * st.rate.p, 1) << " %</td><td class=\"num\">"
+    out << "<tr><td class=\"num\"><a href=\"#set-" << s + 1 << "\">" << s + 1 << "</a></td><td>" << escape_xml(st.label)
+        << "</td><td class=\"num\">" << st.runs << "</td><td class=\"num\">" << st.controlled
+        << "</td><td class=\"num\">" << fixed(100.0 * st.rate.p, 1) << " %</td><td class=\"num\">"
         << fixed(100.0 * st.rate.lo, 1) << "-" << fixed(100.0 * st.rate.hi, 1) << " %</td><td class=\"num\">"
         << st.traces << "</td></tr>\n";
   }
@@ -358,7 +357,6 @@ std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets)
   out << "</body>\n</html>\n";
   return out.str();
 }
-
 
 }  // namespace
 
@@ -381,9 +379,8 @@ std::vector<SetReport> sweep_report_sets(const SweepResult& result) {
                                   " has samples but no positive dt_s (" + number(run.trace.dt_s) + ")");
     }
     if (st.traces > 0 && run.trace.dt_s != st.dt_s) {
-      throw std::invalid_argument("sweep report: the traces of " + which + " have different dt_s (" +
-                                  number(st.dt_s) + " s and " + number(run.trace.dt_s) + " s at seed " +
-                                  std::to_string(run.seed) + ")");
+      throw std::invalid_argument("sweep report: the traces of " + which + " have different dt_s (" + number(st.dt_s) +
+                                  " s and " + number(run.trace.dt_s) + " s at seed " + std::to_string(run.seed) + ")");
     }
     st.dt_s = run.trace.dt_s;
     ++st.traces;

@@ -16,8 +16,8 @@ namespace nimble::campaign {
 
 /// One quantity across the runs of a set, on the set's time grid t_k = k dt_s.
 struct Envelope {
-  std::vector<double> t_s;  ///< grid times [s]
-  std::vector<int> n;       ///< runs with a (finite) sample at that time
+  std::vector<double> t_s;           ///< grid times [s]
+  std::vector<int> n;                ///< runs with a (finite) sample at that time
   std::vector<double> p5, p50, p95;  ///< percentiles over those runs (NaN where n is 0), in the quantity's unit
 };
 

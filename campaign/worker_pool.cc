@@ -120,7 +120,8 @@ std::vector<std::string> run_in_workers(std::size_t n, int jobs, const PoolWork&
   const auto& work = pool.work;
   std::vector<std::string> results(n);
   if (n == 0) return results;
-  struct sigaction ignore{}, old_pipe{};
+  struct sigaction ignore {
+  }, old_pipe{};
   ignore.sa_handler = SIG_IGN;
   sigaction(SIGPIPE, &ignore, &old_pipe);  // a worker that died must not take the parent with it
 

@@ -51,9 +51,9 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
   } else if (options.name == kRigProcess) {
     role_ = Role::kRig;
   } else {
-    throw ConfigError(options.scenario_file, "--name", options.name,
-                      "the CAN bridge runs as '" + kFlightProcess + "' (flight-board side) or '" + kRigProcess +
-                          "' (rig side)");
+    throw ConfigError(
+        options.scenario_file, "--name", options.name,
+        "the CAN bridge runs as '" + kFlightProcess + "' (flight-board side) or '" + kRigProcess + "' (rig side)");
   }
   ConfigMap section = scenario.section("can_bridge");
   config_ = can_bridge_config_from(section);
@@ -79,8 +79,10 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
 
   node_ = transport::make_process_node(scenario, options);
   link_faults_ = std::make_unique<CanLinkFaults>(scenario.faults, scenario.seed);
-  if (socket_->fd() >= 0) node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
-  else options.hub->add_poller([this] { return drain_socket() > 0; });
+  if (socket_->fd() >= 0)
+    node_->watch_fd(socket_->fd(), [this] { drain_socket(); });
+  else
+    options.hub->add_poller([this] { return drain_socket() > 0; });
   health_period_ns_ = static_cast<int64_t>(1e9 / config_.health_rate_hz);
   node_->on_housekeeping([this] {
     if (transport::monotonic_ns() >= next_health_wall_ns_) publish_health();
@@ -88,8 +90,8 @@ CanBridgeNode::CanBridgeNode(const Scenario& scenario, const transport::NodeOpti
 
   cycle_period_ns_ = static_cast<int64_t>(std::llround(1e9 / cycle_hz));
   // Lockstep only: in real time an input-triggered task never runs unless notified.
-  node_->add_task("control_cycle", cycle_hz, [this](int64_t t) { on_cycle(t); },
-                  ProcessNode::Trigger::kInput);
+  node_->add_task(
+      "control_cycle", cycle_hz, [this](int64_t t) { on_cycle(t); }, ProcessNode::Trigger::kInput);
 
   if (role_ == Role::kFlight) {
     node_->set_expected_rate(ch::kActuatorCommand, scenario.expected_rate(ch::kActuatorCommand));
@@ -224,8 +226,8 @@ void CanBridgeNode::on_command_crossed() {
 void CanBridgeNode::log_frame(const ReceivedFrame& rx) {
   if (!candump_) return;
   const int64_t t = rx.has_kernel_time ? rx.kernel_time_ns : realtime_ns();
-  const bool ok = rx.is_fd ? candump_->write(rx.fd_frame, t, config_.interface)
-                           : candump_->write(rx.frame, t, config_.interface);
+  const bool ok =
+      rx.is_fd ? candump_->write(rx.fd_frame, t, config_.interface) : candump_->write(rx.frame, t, config_.interface);
   if (!ok) candump_failed();
 }
 
@@ -270,8 +272,10 @@ int CanBridgeNode::drain_socket() {
   // Bounded, so that a flooded bus cannot starve LCM; the wait loop comes back at once.
   int n = 0;
   for (; n < 256 && socket_->receive(&rx, 0) == ReceiveResult::kFrame; ++n) {
-    if (rx.is_error_frame) on_error_frame(rx);
-    else on_frame(rx);
+    if (rx.is_error_frame)
+      on_error_frame(rx);
+    else
+      on_frame(rx);
   }
   return n;
 }
@@ -309,8 +313,8 @@ void CanBridgeNode::on_frame(const ReceivedFrame& rx) {
 }
 
 void CanBridgeNode::reject(const ReceivedFrame& rx, DecodeResult result) {
-  const unsigned len = rx.is_fd ? std::min<unsigned>(rx.fd_frame.len, CANFD_MAX_DLEN)
-                                : std::min<unsigned>(rx.frame.len, CAN_MAX_DLEN);
+  const unsigned len =
+      rx.is_fd ? std::min<unsigned>(rx.fd_frame.len, CANFD_MAX_DLEN) : std::min<unsigned>(rx.frame.len, CAN_MAX_DLEN);
   const uint8_t* bytes = rx.is_fd ? rx.fd_frame.data : rx.frame.data;
   std::string data;
   char byte[4];
@@ -326,10 +330,14 @@ void CanBridgeNode::reject(const ReceivedFrame& rx, DecodeResult result) {
 void CanBridgeNode::on_error_frame(const ReceivedFrame& rx) {
   log_frame(rx);
   const ErrorFrameInfo& e = rx.error;
-  if (e.bus_off) bus_state_ = CanHealth::kBusOff;
-  else if (e.error_passive) bus_state_ = CanHealth::kBusPassive;
-  else if (e.error_warning) bus_state_ = CanHealth::kBusWarning;
-  else if (e.back_to_error_active || e.restarted) bus_state_ = CanHealth::kBusActive;
+  if (e.bus_off)
+    bus_state_ = CanHealth::kBusOff;
+  else if (e.error_passive)
+    bus_state_ = CanHealth::kBusPassive;
+  else if (e.error_warning)
+    bus_state_ = CanHealth::kBusWarning;
+  else if (e.back_to_error_active || e.restarted)
+    bus_state_ = CanHealth::kBusActive;
   last_error_ = e.description;
   node_->fault(e.bus_off ? fault_event_t::SEVERITY_ERROR : fault_event_t::SEVERITY_WARNING,
                fault_event_t::CODE_CAN_ERROR_FRAME, "CAN " + config_.interface,

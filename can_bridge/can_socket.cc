@@ -37,8 +37,8 @@ std::string errno_text(int err) {
   throw CanError(interface, err, what);
 }
 
-void set_option(int fd, const std::string& interface, int level, int name, const void* value,
-                socklen_t size, const char* what) {
+void set_option(int fd, const std::string& interface, int level, int name, const void* value, socklen_t size,
+                const char* what) {
   if (::setsockopt(fd, level, name, value, size) != 0) {
     const int err = errno;
     fail(fd, interface, err,
@@ -82,8 +82,8 @@ canfd_frame to_fd_frame(const can_frame& frame, uint8_t flags) {
   return f;
 }
 
-SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy,
-                           CanSocketStats& stats, const SleepFunction& sleep) {
+SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy, CanSocketStats& stats,
+                           const SleepFunction& sleep) {
   std::chrono::microseconds backoff = policy.first_backoff;
   for (int tries = 0;; ++tries) {
     const int err = attempt();
@@ -118,12 +118,13 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
   const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
   if (fd < 0) {
     const int err = errno;
-    std::string msg = "cannot open a CAN socket for '" + interface + "': socket(PF_CAN, SOCK_RAW, CAN_RAW) failed: " +
-                      errno_text(err);
+    std::string msg = "cannot open a CAN socket for '" + interface +
+                      "': socket(PF_CAN, SOCK_RAW, CAN_RAW) failed: " + errno_text(err);
     if (err == EAFNOSUPPORT) {
-      msg += ". The running kernel has no CAN support (CONFIG_CAN not set or the can module not "
-             "loadable). On a kernel with CAN: modprobe can can_raw vcan. Tests get real SocketCAN "
-             "without it through tools/canvm/canvm (ctest runs the tests labelled 'can' that way).";
+      msg +=
+          ". The running kernel has no CAN support (CONFIG_CAN not set or the can module not "
+          "loadable). On a kernel with CAN: modprobe can can_raw vcan. Tests get real SocketCAN "
+          "without it through tools/canvm/canvm (ctest runs the tests labelled 'can' that way).";
     } else if (err == EPROTONOSUPPORT) {
       msg += ". The kernel has CAN but no raw CAN sockets: modprobe can_raw.";
     }
@@ -134,15 +135,14 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
   if (index == 0) {
     const int err = errno;
     fail(fd, interface, err,
-         "no network interface '" + interface + "': " + errno_text(err) +
-             ". For a virtual bus: ip link add dev " + interface + " type vcan && ip link set " + interface + " up");
+         "no network interface '" + interface + "': " + errno_text(err) + ". For a virtual bus: ip link add dev " +
+             interface + " type vcan && ip link set " + interface + " up");
   }
 
   ifreq ifr{};
   std::memcpy(ifr.ifr_name, interface.c_str(), interface.size() + 1);
   if (::ioctl(fd, SIOCGIFFLAGS, &ifr) == 0 && !(ifr.ifr_flags & IFF_UP)) {
-    fail(fd, interface, ENETDOWN,
-         "CAN interface '" + interface + "' is down: ip link set " + interface + " up");
+    fail(fd, interface, ENETDOWN, "CAN interface '" + interface + "' is down: ip link set " + interface + " up");
   }
 
   if (options.fd) {
@@ -155,19 +155,19 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
     if (mtu_req.ifr_mtu != static_cast<int>(CANFD_MTU)) {
       fail(fd, interface, EINVAL,
            "CAN interface '" + interface + "' has MTU " + std::to_string(mtu_req.ifr_mtu) +
-               (mtu_req.ifr_mtu == static_cast<int>(CAN_MTU) ? " (classical CAN only)" : "") +
-               "; CAN FD needs MTU " + std::to_string(CANFD_MTU) + ": ip link set " + interface +
-               " down && ip link set " + interface + " mtu " + std::to_string(CANFD_MTU) + " && ip link set " +
-               interface + " up (a vcan accepts 16 or 72; a real controller also needs its data bitrate, "
-               "e.g. ip link set " + interface + " type can bitrate 1000000 dbitrate 4000000 fd on)");
+               (mtu_req.ifr_mtu == static_cast<int>(CAN_MTU) ? " (classical CAN only)" : "") + "; CAN FD needs MTU " +
+               std::to_string(CANFD_MTU) + ": ip link set " + interface + " down && ip link set " + interface +
+               " mtu " + std::to_string(CANFD_MTU) + " && ip link set " + interface +
+               " up (a vcan accepts 16 or 72; a real controller also needs its data bitrate, "
+               "e.g. ip link set " +
+               interface + " type can bitrate 1000000 dbitrate 4000000 fd on)");
     }
     const int on = 1;
     set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on, "CAN_RAW_FD_FRAMES");
   }
 
   if (!options.receive_all) {
-    set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_FILTER,
-               options.filters.empty() ? nullptr : options.filters.data(),
+    set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_FILTER, options.filters.empty() ? nullptr : options.filters.data(),
                static_cast<socklen_t>(options.filters.size() * sizeof(can_filter)), "CAN_RAW_FILTER");
   }
   const can_err_mask_t err_mask = options.error_frames ? options.error_mask : 0;
@@ -175,16 +175,16 @@ CanSocket CanSocket::open(const std::string& interface, const CanSocketOptions& 
   const int own = options.receive_own ? 1 : 0;
   set_option(fd, interface, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own, "CAN_RAW_RECV_OWN_MSGS");
   if (options.send_buffer_bytes > 0) {
-    set_option(fd, interface, SOL_SOCKET, SO_SNDBUF, &options.send_buffer_bytes,
-               sizeof options.send_buffer_bytes, "SO_SNDBUF");
+    set_option(fd, interface, SOL_SOCKET, SO_SNDBUF, &options.send_buffer_bytes, sizeof options.send_buffer_bytes,
+               "SO_SNDBUF");
   }
   if (options.receive_buffer_bytes > 0) {
-    set_option(fd, interface, SOL_SOCKET, SO_RCVBUF, &options.receive_buffer_bytes,
-               sizeof options.receive_buffer_bytes, "SO_RCVBUF");
+    set_option(fd, interface, SOL_SOCKET, SO_RCVBUF, &options.receive_buffer_bytes, sizeof options.receive_buffer_bytes,
+               "SO_RCVBUF");
   }
   if (options.timestamps) {
-    const int flags = SOF_TIMESTAMPING_RX_SOFTWARE | SOF_TIMESTAMPING_SOFTWARE |
-                      SOF_TIMESTAMPING_RX_HARDWARE | SOF_TIMESTAMPING_RAW_HARDWARE;
+    const int flags = SOF_TIMESTAMPING_RX_SOFTWARE | SOF_TIMESTAMPING_SOFTWARE | SOF_TIMESTAMPING_RX_HARDWARE |
+                      SOF_TIMESTAMPING_RAW_HARDWARE;
     set_option(fd, interface, SOL_SOCKET, SO_TIMESTAMPING, &flags, sizeof flags, "SO_TIMESTAMPING");
   }
   const int one = 1;
@@ -240,8 +240,7 @@ SendResult CanSocket::send(const can_frame& frame) {
     if (n == static_cast<ssize_t>(sizeof frame)) return 0;
     return n < 0 ? errno : EIO;
   };
-  return send_with_retry(attempt, retry_, stats_,
-                         [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
+  return send_with_retry(attempt, retry_, stats_, [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
 }
 
 SendResult CanSocket::send(const canfd_frame& frame) {
@@ -251,8 +250,8 @@ SendResult CanSocket::send(const canfd_frame& frame) {
     if (n == static_cast<ssize_t>(sizeof frame)) return 0;
     return n < 0 ? errno : EIO;
   };
-  const SendResult r = send_with_retry(attempt, retry_, stats_,
-                                       [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
+  const SendResult r =
+      send_with_retry(attempt, retry_, stats_, [](std::chrono::microseconds t) { std::this_thread::sleep_for(t); });
   if (r == SendResult::kSent) ++stats_.fd_frames_sent;
   return r;
 }

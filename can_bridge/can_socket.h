@@ -36,29 +36,29 @@ class CanError : public std::runtime_error {
 /// Back-off for a full transmit queue: retry after first_backoff, doubling up to max_backoff,
 /// at most max_retries times; then the frame is dropped.
 struct SendRetryPolicy {
-  int max_retries = 8;                                ///< retries after the first attempt
-  std::chrono::microseconds first_backoff{20};        ///< wait before the first retry
-  std::chrono::microseconds max_backoff{2000};        ///< longest single wait
+  int max_retries = 8;                          ///< retries after the first attempt
+  std::chrono::microseconds first_backoff{20};  ///< wait before the first retry
+  std::chrono::microseconds max_backoff{2000};  ///< longest single wait
 };
 
 /// Everything a CanSocket counts.
 struct CanSocketStats {
-  uint64_t frames_sent = 0;          ///< frames the kernel accepted (classical and FD)
-  uint64_t frames_received = 0;      ///< data frames received (classical and FD)
-  uint64_t fd_frames_sent = 0;       ///< of frames_sent: CAN FD frames
-  uint64_t fd_frames_received = 0;   ///< of frames_received: CAN FD frames
-  uint64_t error_frames = 0;         ///< error frames received (CAN_RAW_ERR_FILTER)
-  uint64_t send_enobufs = 0;         ///< send attempts that returned ENOBUFS (queue full)
-  uint64_t send_eagain = 0;          ///< send attempts that returned EAGAIN (socket buffer full)
-  uint64_t send_retries = 0;         ///< retries after ENOBUFS / EAGAIN
-  uint64_t send_dropped = 0;         ///< frames given up after max_retries
-  uint64_t send_errors = 0;          ///< sends failed with another errno (e.g. ENETDOWN)
-  uint64_t receive_errors = 0;       ///< failed receive calls
-  uint64_t receive_dropped = 0;      ///< frames the kernel dropped for this socket because its
-                                     ///< receive queue was full (SO_RXQ_OVFL; known with the
-                                     ///< next frame received after the drops)
-  uint64_t missing_timestamps = 0;   ///< received frames without a kernel timestamp
-  int last_errno = 0;                ///< errno of the last failed call
+  uint64_t frames_sent = 0;         ///< frames the kernel accepted (classical and FD)
+  uint64_t frames_received = 0;     ///< data frames received (classical and FD)
+  uint64_t fd_frames_sent = 0;      ///< of frames_sent: CAN FD frames
+  uint64_t fd_frames_received = 0;  ///< of frames_received: CAN FD frames
+  uint64_t error_frames = 0;        ///< error frames received (CAN_RAW_ERR_FILTER)
+  uint64_t send_enobufs = 0;        ///< send attempts that returned ENOBUFS (queue full)
+  uint64_t send_eagain = 0;         ///< send attempts that returned EAGAIN (socket buffer full)
+  uint64_t send_retries = 0;        ///< retries after ENOBUFS / EAGAIN
+  uint64_t send_dropped = 0;        ///< frames given up after max_retries
+  uint64_t send_errors = 0;         ///< sends failed with another errno (e.g. ENETDOWN)
+  uint64_t receive_errors = 0;      ///< failed receive calls
+  uint64_t receive_dropped = 0;     ///< frames the kernel dropped for this socket because its
+                                    ///< receive queue was full (SO_RXQ_OVFL; known with the
+                                    ///< next frame received after the drops)
+  uint64_t missing_timestamps = 0;  ///< received frames without a kernel timestamp
+  int last_errno = 0;               ///< errno of the last failed call
 };
 
 /// Exact-match filters for the rig's identifiers (frame_layout.h).
@@ -75,17 +75,17 @@ can_filter rig_block_filter();
 struct CanSocketOptions {
   /// Receive filters (CAN_RAW_FILTER). Empty: receive no data frames (a send-only socket).
   std::vector<can_filter> filters = rig_filters();
-  bool receive_all = false;      ///< receive every data frame (filters ignored)
-  bool error_frames = true;      ///< CAN_RAW_ERR_FILTER with error_mask
+  bool receive_all = false;                  ///< receive every data frame (filters ignored)
+  bool error_frames = true;                  ///< CAN_RAW_ERR_FILTER with error_mask
   can_err_mask_t error_mask = CAN_ERR_MASK;  ///< error classes to receive
-  bool timestamps = true;        ///< SO_TIMESTAMPING (software, and hardware where the driver has it)
-  bool receive_own = false;      ///< CAN_RAW_RECV_OWN_MSGS
-  int send_buffer_bytes = 0;     ///< SO_SNDBUF; 0: kernel default
-  int receive_buffer_bytes = 0;  ///< SO_RCVBUF; 0: kernel default
+  bool timestamps = true;                    ///< SO_TIMESTAMPING (software, and hardware where the driver has it)
+  bool receive_own = false;                  ///< CAN_RAW_RECV_OWN_MSGS
+  int send_buffer_bytes = 0;                 ///< SO_SNDBUF; 0: kernel default
+  int receive_buffer_bytes = 0;              ///< SO_RCVBUF; 0: kernel default
   /// CAN FD (CAN_RAW_FD_FRAMES): send(const canfd_frame&) works and receive() returns FD frames
   /// too. The interface must have the CAN FD MTU (CANFD_MTU, 72); open() throws otherwise.
   bool fd = false;
-  SendRetryPolicy retry;         ///< back-off on a full queue
+  SendRetryPolicy retry;  ///< back-off on a full queue
 };
 
 /// Result of CanSocket::send.
@@ -109,15 +109,15 @@ enum class ReceiveResult : uint8_t {
 /// data), so code that takes a can_frame handles them unchanged. For longer FD frames `frame`
 /// holds only the identifier, with length 0.
 struct ReceivedFrame {
-  can_frame frame{};                ///< the frame as received (classical), or see above (FD)
-  bool is_fd = false;               ///< a CAN FD frame (CANFD_MTU bytes from the kernel)
-  canfd_frame fd_frame{};           ///< the FD frame (is_fd only), up to 64 data bytes
-  uint8_t fd_flags = 0;             ///< its flags: CANFD_BRS, CANFD_ESI, CANFD_FDF (is_fd only)
-  bool is_error_frame = false;      ///< CAN_ERR_FLAG set; see `error`
-  ErrorFrameInfo error;             ///< decoded error frame (is_error_frame only)
-  bool has_kernel_time = false;     ///< software receive timestamp present
-  int64_t kernel_time_ns = 0;       ///< software receive timestamp, CLOCK_REALTIME [ns]
-  int64_t hardware_time_ns = 0;     ///< hardware receive timestamp [ns]; 0 if none
+  can_frame frame{};             ///< the frame as received (classical), or see above (FD)
+  bool is_fd = false;            ///< a CAN FD frame (CANFD_MTU bytes from the kernel)
+  canfd_frame fd_frame{};        ///< the FD frame (is_fd only), up to 64 data bytes
+  uint8_t fd_flags = 0;          ///< its flags: CANFD_BRS, CANFD_ESI, CANFD_FDF (is_fd only)
+  bool is_error_frame = false;   ///< CAN_ERR_FLAG set; see `error`
+  ErrorFrameInfo error;          ///< decoded error frame (is_error_frame only)
+  bool has_kernel_time = false;  ///< software receive timestamp present
+  int64_t kernel_time_ns = 0;    ///< software receive timestamp, CLOCK_REALTIME [ns]
+  int64_t hardware_time_ns = 0;  ///< hardware receive timestamp [ns]; 0 if none
 };
 
 /// One send attempt: returns 0 if the frame was accepted, else the errno value.
@@ -135,8 +135,8 @@ canfd_frame to_fd_frame(const can_frame& frame, uint8_t flags);
 
 /// Calls `attempt` until it succeeds, retrying ENOBUFS / EAGAIN / EWOULDBLOCK per `policy` with
 /// `sleep` between tries; counts every outcome in `stats`. Never throws.
-SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy,
-                           CanSocketStats& stats, const SleepFunction& sleep);
+SendResult send_with_retry(const SendAttempt& attempt, const SendRetryPolicy& policy, CanSocketStats& stats,
+                           const SleepFunction& sleep);
 
 /// Where a side of the CAN bridge sends and receives its frames: a SocketCAN socket
 /// (CanSocket) or, in a run flown in one process, an endpoint of an InprocessCanBus.

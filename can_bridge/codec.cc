@@ -35,9 +35,7 @@ void seal(can_frame& f, uint8_t counter) {
   f.data[kCrcByte] = frame_crc(f.can_id & CAN_SFF_MASK, f.data, kCrcByte);
 }
 
-double physical(const can_frame& f, const SignalSpec& s) {
-  return to_physical(s, unpack_signal(f.data, f.len, s));
-}
+double physical(const can_frame& f, const SignalSpec& s) { return to_physical(s, unpack_signal(f.data, f.len, s)); }
 
 int64_t raw(const can_frame& f, const SignalSpec& s) { return unpack_signal(f.data, f.len, s); }
 
@@ -63,7 +61,10 @@ DecodeResult validate(const can_frame& f, const std::array<FrameSpec, N>& frames
 void count(DecodeResult r, DecodeStats& stats) {
   switch (r) {
     case DecodeResult::kAccepted: ++stats.frames_accepted; break;
-    case DecodeResult::kMessageComplete: ++stats.frames_accepted; ++stats.messages; break;
+    case DecodeResult::kMessageComplete:
+      ++stats.frames_accepted;
+      ++stats.messages;
+      break;
     case DecodeResult::kUnknownId: ++stats.unknown_id; break;
     case DecodeResult::kWrongLength: ++stats.wrong_length; break;
     case DecodeResult::kBadChecksum: ++stats.bad_checksum; break;

@@ -34,16 +34,16 @@ struct FrameSpec {
 
 /// One signal inside a frame (a DBC `SG_`), little-endian, physical = raw * factor + offset.
 struct SignalSpec {
-  const char* name;      ///< DBC signal name
-  uint32_t frame_id;     ///< identifier of the frame that carries it
-  uint8_t start_bit;     ///< bit number of the least significant bit (DBC little-endian start bit)
-  uint8_t length_bits;   ///< width [bits]
-  bool is_signed;        ///< two's complement raw value
-  double factor;         ///< physical units per raw bit
-  double offset;         ///< physical value of raw 0
-  double min;            ///< smallest valid physical value
-  double max;            ///< largest valid physical value
-  const char* unit;      ///< DBC unit string
+  const char* name;     ///< DBC signal name
+  uint32_t frame_id;    ///< identifier of the frame that carries it
+  uint8_t start_bit;    ///< bit number of the least significant bit (DBC little-endian start bit)
+  uint8_t length_bits;  ///< width [bits]
+  bool is_signed;       ///< two's complement raw value
+  double factor;        ///< physical units per raw bit
+  double offset;        ///< physical value of raw 0
+  double min;           ///< smallest valid physical value
+  double max;           ///< largest valid physical value
+  const char* unit;     ///< DBC unit string
 };
 
 // --- frames ----------------------------------------------------------------------------------------
@@ -63,8 +63,7 @@ inline constexpr std::array kCommandFrames{kCmdFlap, kCmdServo};
 /// Frames of one actuator_feedback_t, in sending order.
 inline constexpr std::array kFeedbackFrames{kFbMotor, kFbServo, kFbStatus};
 /// Every frame of the layout.
-inline constexpr std::array kAllFrames{kCmdFlap, kCmdServo, kFbMotor, kFbServo,
-                                                     kFbStatus};
+inline constexpr std::array kAllFrames{kCmdFlap, kCmdServo, kFbMotor, kFbServo, kFbStatus};
 
 // --- signals ---------------------------------------------------------------------------------------
 // Flapping frequency: 0.01 rad/s per bit, 0..400 rad/s (the Nimble flaps near 107 rad/s).
@@ -112,11 +111,11 @@ inline constexpr int64_t kCmdAgeMax_us = 0xFFFFFE;
 
 /// Every signal of the layout.
 inline constexpr std::array kAllSignals{
-    kCmdFlapFreqLeft, kCmdFlapFreqRight, kCmdThrottle, kCmdMode, kCmdFlapCounter, kCmdFlapCrc,
-    kCmdDihedral, kCmdWingRoot, kCmdSeq, kCmdServoCounter, kCmdServoCrc,
-    kFbFlapFreqLeft, kFbFlapFreqRight, kFbThrottle, kFbMotorCounter, kFbMotorCrc,
-    kFbDihedral, kFbWingRoot, kFbServoCounter, kFbServoCrc,
-    kFbCmdSeq, kFbCmdAge, kFbSafeState, kFbStatusCounter, kFbStatusCrc};
+    kCmdFlapFreqLeft, kCmdFlapFreqRight, kCmdThrottle,     kCmdMode,         kCmdFlapCounter,
+    kCmdFlapCrc,      kCmdDihedral,      kCmdWingRoot,     kCmdSeq,          kCmdServoCounter,
+    kCmdServoCrc,     kFbFlapFreqLeft,   kFbFlapFreqRight, kFbThrottle,      kFbMotorCounter,
+    kFbMotorCrc,      kFbDihedral,       kFbWingRoot,      kFbServoCounter,  kFbServoCrc,
+    kFbCmdSeq,        kFbCmdAge,         kFbSafeState,     kFbStatusCounter, kFbStatusCrc};
 
 // --- rolling counter and checksum ------------------------------------------------------------------
 /// Byte of the rolling counter (bits 4..7) in every frame.

@@ -5,8 +5,7 @@
 
 namespace nimble::can {
 
-void pack_bits_le(uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits,
-                  uint64_t raw) {
+void pack_bits_le(uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits, uint64_t raw) {
   for (unsigned i = 0; i < length_bits; ++i) {
     const unsigned bit = start_bit + i;
     const std::size_t byte = bit / 8;
@@ -20,8 +19,7 @@ void pack_bits_le(uint8_t* data, std::size_t length_bytes, unsigned start_bit, u
   }
 }
 
-uint64_t unpack_bits_le(const uint8_t* data, std::size_t length_bytes, unsigned start_bit,
-                        unsigned length_bits) {
+uint64_t unpack_bits_le(const uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits) {
   uint64_t raw = 0;
   for (unsigned i = 0; i < length_bits; ++i) {
     const unsigned bit = start_bit + i;
@@ -49,9 +47,7 @@ ToRawResult to_raw(const SignalSpec& s, double physical) {
   return r;
 }
 
-double to_physical(const SignalSpec& s, int64_t raw) {
-  return static_cast<double>(raw) * s.factor + s.offset;
-}
+double to_physical(const SignalSpec& s, int64_t raw) { return static_cast<double>(raw) * s.factor + s.offset; }
 
 void pack_signal(uint8_t* data, std::size_t length_bytes, const SignalSpec& s, int64_t raw) {
   pack_bits_le(data, length_bytes, s.start_bit, s.length_bits, static_cast<uint64_t>(raw));

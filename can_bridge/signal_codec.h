@@ -13,12 +13,10 @@ namespace nimble::can {
 
 /// Writes the low `length_bits` bits of `raw` little-endian at `start_bit` of `data`.
 /// Bits outside the buffer are not written.
-void pack_bits_le(uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits,
-                  uint64_t raw);
+void pack_bits_le(uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits, uint64_t raw);
 
 /// Reads `length_bits` bits little-endian from `start_bit` of `data` (zero-extended).
-uint64_t unpack_bits_le(const uint8_t* data, std::size_t length_bytes, unsigned start_bit,
-                        unsigned length_bits);
+uint64_t unpack_bits_le(const uint8_t* data, std::size_t length_bytes, unsigned start_bit, unsigned length_bits);
 
 /// Smallest and largest raw value of a signal's documented physical range.
 int64_t raw_min(const SignalSpec& signal);

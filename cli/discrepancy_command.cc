@@ -34,19 +34,20 @@ namespace {
 
 /// --test-term EQUATION: EXPRESSION (repeatable): forms tested as given (DiscrepancyOptions::test_terms).
 void add_test_terms(cmdline::CommandLine& cl, ident::DiscrepancyOptions& opt) {
-  cmdline::each_value(cl->add_option("--test-term")
-                          ->description("a form to test as given, EQUATION: EXPRESSION (e.g. \"L: p^3\"; grammar: "
-                                        "docs/models.md \"Terms\"), once on the model as given: the test that knows the "
-                                        "form, beside the search; reported, not an alarm (repeatable)")
-                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
-                          ->type_name("TERM"),
-                      [&opt](const std::string& v) {
-                        const auto colon = v.find(':');
-                        if (colon == std::string::npos) throw std::invalid_argument("'" + v + "' is not EQUATION: EXPRESSION");
-                        std::string eq = v.substr(0, colon);
-                        eq.erase(std::remove_if(eq.begin(), eq.end(), [](unsigned char c) { return std::isspace(c); }), eq.end());
-                        opt.test_terms.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "--test-term"});
-                      });
+  cmdline::each_value(
+      cl->add_option("--test-term")
+          ->description("a form to test as given, EQUATION: EXPRESSION (e.g. \"L: p^3\"; grammar: "
+                        "docs/models.md \"Terms\"), once on the model as given: the test that knows the "
+                        "form, beside the search; reported, not an alarm (repeatable)")
+          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+          ->type_name("TERM"),
+      [&opt](const std::string& v) {
+        const auto colon = v.find(':');
+        if (colon == std::string::npos) throw std::invalid_argument("'" + v + "' is not EQUATION: EXPRESSION");
+        std::string eq = v.substr(0, colon);
+        eq.erase(std::remove_if(eq.begin(), eq.end(), [](unsigned char c) { return std::isspace(c); }), eq.end());
+        opt.test_terms.push_back(Term{eq, TermExpression::parse(v.substr(colon + 1)), 0.0, "--test-term"});
+      });
 }
 
 }  // namespace
@@ -58,13 +59,14 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   ident::DiscrepancyOptions opt;
   ident::LogReadOptions log_options;
   cmdline::CommandLine cl("rig discrepancy",
-                 "Where the model and the measured data disagree, which physical effect the model is\n"
-                 "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
-                 "did not see (ident/README.md, \"Discrepancy workflow\").");
-  cl->footer("With --power, no data: how long to fly to name an effect, by simulated flights of a scenario\n"
-             "(rig discrepancy --power --scenario S --model M --effect NAME=SIZE; 'rig discrepancy --power --help').\n"
-             "Exit code: 0 whatever the verdict; 2 bad usage or input (a record refused as not finite or not\n"
-             "physical, naming its first bad sample).");
+                          "Where the model and the measured data disagree, which physical effect the model is\n"
+                          "missing (by name), the model refit with it, and the gap before and after on data the fit\n"
+                          "did not see (ident/README.md, \"Discrepancy workflow\").");
+  cl->footer(
+      "With --power, no data: how long to fly to name an effect, by simulated flights of a scenario\n"
+      "(rig discrepancy --power --scenario S --model M --effect NAME=SIZE; 'rig discrepancy --power --help').\n"
+      "Exit code: 0 whatever the verdict; 2 bad usage or input (a record refused as not finite or not\n"
+      "physical, naming its first bad sample).");
   cl->add_option("data", data_files,
                  "flight data: identification CSV or a rig log (.lcmlog); several flights of the same vehicle are "
                  "pooled (each its own folds and noise level; an effect named only on the pooled evidence, each "
@@ -76,10 +78,10 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   add_states(cl, log_options, sensing_file);
   add_vehicle(cl, vehicle_file, "the model's");
   cmdline::each_value(cl->add_option("--candidates")
-                 ->description("comma-separated candidate effects to try (default: all the data supports): " +
-                               effect_name_list())
-                 ->type_name("LIST"),
-             [&opt](const std::string& v) { opt.candidates = split_list(v); });
+                          ->description("comma-separated candidate effects to try (default: all the data supports): " +
+                                        effect_name_list())
+                          ->type_name("LIST"),
+                      [&opt](const std::string& v) { opt.candidates = split_list(v); });
   add_test_terms(cl, opt);
   cl->add_option("--folds", opt.folds, "held-out cross-validation folds")
       ->check(CLI::Range(4, 100))

@@ -39,7 +39,6 @@ int export_mcap(const std::string& log, const std::string& out, const mcap::Expo
   return 0;
 }
 
-
 }  // namespace
 
 int run_export_command(const std::vector<std::string>& args) {
@@ -48,17 +47,18 @@ int run_export_command(const std::vector<std::string>& args) {
   double rate_hz = 512.0;
   ident::LogReadOptions log_options;
   ident::Interpolation interpolation = ident::Interpolation::kCubic;
-  cmdline::CommandLine cl("rig export",
-                 "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
-                 "resampled onto one grid, or as MCAP for Foxglove, Lichtblick and PlotJuggler.\n"
-                 "CSV: states come from the estimator (ESTIMATE) when the log has it, else from the plant's\n"
-                 "truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. MCAP (docs/viewers.md): one\n"
-                 "channel per LCM channel, JSON messages with their JSON Schema, log time = rig time.\n"
-                 "A damaged log is an error naming the byte offset and the event; a message that is not one of\n"
-                 "its channel's type is left out and named, by channel and count (CSV: those of the channels it\n"
-                 "does not read; a damaged message on a channel it reads is an error naming the event). A message\n"
-                 "with a value beyond the vehicle's physical bounds (its data_bounds) is left out and named by\n"
-                 "channel, field, time and count (--strict: the export is refused).");
+  cmdline::CommandLine cl(
+      "rig export",
+      "Writes a rig log as identification CSV (the format rig identify reads), every channel\n"
+      "resampled onto one grid, or as MCAP for Foxglove, Lichtblick and PlotJuggler.\n"
+      "CSV: states come from the estimator (ESTIMATE) when the log has it, else from the plant's\n"
+      "truth; inputs from ACTUATOR_FB; phi_sp from ATTITUDE_SP. MCAP (docs/viewers.md): one\n"
+      "channel per LCM channel, JSON messages with their JSON Schema, log time = rig time.\n"
+      "A damaged log is an error naming the byte offset and the event; a message that is not one of\n"
+      "its channel's type is left out and named, by channel and count (CSV: those of the channels it\n"
+      "does not read; a damaged message on a channel it reads is an error naming the event). A message\n"
+      "with a value beyond the vehicle's physical bounds (its data_bounds) is left out and named by\n"
+      "channel, field, time and count (--strict: the export is refused).");
   cl->add_option("log", log, "the rig log (.lcmlog)")->required();
   cl->add_option("--format", format, "csv or mcap (default: mcap when --out ends in .mcap, else csv)")
       ->check(CLI::IsMember({"csv", "mcap"}))
@@ -70,7 +70,8 @@ int run_export_command(const std::vector<std::string>& args) {
                    ->capture_default_str()
                    ->type_name("HZ");
   auto* interp = cmdline::each_value(
-      cl->add_option("--interpolation", "CSV: cubic (default) or linear")->type_name("MODE")
+      cl->add_option("--interpolation", "CSV: cubic (default) or linear")
+          ->type_name("MODE")
           ->check(CLI::IsMember({"cubic", "linear"})),
       [&interpolation](const std::string& v) { interpolation = ident::interpolation_from_string(v); });
   std::string sensing_file;

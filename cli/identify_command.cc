@@ -30,21 +30,22 @@ int run_identify_command(const std::vector<std::string>& args) {
   ident::IdentOptions opt;
   ident::LogReadOptions log_options;
   cmdline::CommandLine cl("rig identify",
-                 "Identifies the dimensional stability and control derivatives of the lateral model from\n"
-                 "flight data, a CSV file or a rig log (read by its content; equation error, thesis\n"
-                 "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
-                 "accuracy metrics, residual whiteness, eigenvalues and modes, and state PSDs.");
+                          "Identifies the dimensional stability and control derivatives of the lateral model from\n"
+                          "flight data, a CSV file or a rig log (read by its content; equation error, thesis\n"
+                          "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
+                          "accuracy metrics, residual whiteness, eigenvalues and modes, and state PSDs.");
   cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
   cmdline::each_value(cl->add_option("--structure", "model structure: lateral3 (default) or lateral4")
-                 ->type_name("NAME")
-                 ->check(CLI::IsMember({"lateral3", "lateral4"})),
-             [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
-  cmdline::each_value(cl->add_option("--method", "estimator: wls (default, equation error), ols, or output-error (the "
-                                                 "states simulated from the recorded inputs in segments and fitted to "
-                                                 "the measured ones, from the WLS values; lateral3)")
+                          ->type_name("NAME")
+                          ->check(CLI::IsMember({"lateral3", "lateral4"})),
+                      [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
+  cmdline::each_value(cl->add_option("--method",
+                                     "estimator: wls (default, equation error), ols, or output-error (the "
+                                     "states simulated from the recorded inputs in segments and fitted to "
+                                     "the measured ones, from the WLS values; lateral3)")
                           ->type_name("NAME")
                           ->check(CLI::IsMember({"ols", "wls", "output-error"})),
-             [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
+                      [&opt](const std::string& v) { opt.method = ident::method_from_string(v); });
   cl->add_option("--oe-segment", opt.output_error.segment_s,
                  "output error: the length of each simulated segment, whose initial state is fitted from the "
                  "measured one [s]")
@@ -54,10 +55,11 @@ int run_identify_command(const std::vector<std::string>& args) {
   add_salvage(cl, log_options);
   std::string sensing_file;
   add_states(cl, log_options, sensing_file);
-  cmdline::each_value(cl->add_option("--inputs", "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
-                                        "when the data has them)")
-                 ->type_name("LIST"),
-             [&opt](const std::string& v) { opt.inputs = split_list(v); });
+  cmdline::each_value(cl->add_option("--inputs",
+                                     "comma-separated inputs (default delta_f,delta_t plus delta_d, delta_w "
+                                     "when the data has them)")
+                          ->type_name("LIST"),
+                      [&opt](const std::string& v) { opt.inputs = split_list(v); });
   cl->add_option("--w0", opt.trim.w0_mps, "trim vertical velocity of Eq 21 [m/s]")
       ->check(cmdline::kFinite)
       ->capture_default_str()
@@ -76,15 +78,15 @@ int run_identify_command(const std::vector<std::string>& args) {
       ->capture_default_str()
       ->type_name("N");
   cmdline::each_value(cl->add_option("--hover", "a hover PSD segment [s] (repeatable; default from |phi_sp|)")
-                 ->type_name("A:B")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&opt](const std::string& v) { opt.segments.hover.push_back(time_range(v)); });
+                          ->type_name("A:B")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&opt](const std::string& v) { opt.segments.hover.push_back(time_range(v)); });
   cmdline::each_value(cl->add_option("--manoeuvre", "a manoeuvre PSD segment [s] (repeatable; default from |phi_sp|)")
-                 ->type_name("A:B")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&opt](const std::string& v) { opt.segments.manoeuvre.push_back(time_range(v)); });
+                          ->type_name("A:B")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&opt](const std::string& v) { opt.segments.manoeuvre.push_back(time_range(v)); });
   std::string terms_file;
   cl->add_option("--terms", terms_file,
                  "fit the generic terms of this model file's terms: section alongside the derivatives (their "
@@ -110,11 +112,12 @@ int run_identify_command(const std::vector<std::string>& args) {
   const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
 
   if (!model_out.empty()) {
-    ident::write_model_yaml(result.model, model_out,
-                            {"Identified by rig identify from " + csv + ".",
-                             "Structure " + to_string(opt.structure) + ", " + ident::to_string(opt.method) +
-                                 "; published: holds the eigenvalues and the standard deviations of this identification",
-                             "(white-residual formula)."});
+    ident::write_model_yaml(
+        result.model, model_out,
+        {"Identified by rig identify from " + csv + ".",
+         "Structure " + to_string(opt.structure) + ", " + ident::to_string(opt.method) +
+             "; published: holds the eigenvalues and the standard deviations of this identification",
+         "(white-residual formula)."});
   }
   std::vector<std::string> pngs;
   if (!plots.empty()) pngs = ident::plot_identification(result, plots);

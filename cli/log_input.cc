@@ -52,9 +52,9 @@ void add_processing(cmdline::CommandLine& cl, ident::ProcessingOptions& p) {
       ->capture_default_str()
       ->type_name("N");
   cmdline::each_value(cl->add_option("--interpolation", "resampling of every channel: cubic (default) or linear")
-                 ->type_name("MODE")
-                 ->check(CLI::IsMember({"cubic", "linear"})),
-             [&p](const std::string& v) { p.interpolation = ident::interpolation_from_string(v); });
+                          ->type_name("MODE")
+                          ->check(CLI::IsMember({"cubic", "linear"})),
+                      [&p](const std::string& v) { p.interpolation = ident::interpolation_from_string(v); });
 }
 
 /// --salvage: read a damaged log up to the damage.
@@ -65,15 +65,17 @@ void add_salvage(cmdline::CommandLine& cl, ident::LogReadOptions& o) {
 /// --states SOURCE and --sensing FILE: where a rig log's states come from, and the sensing the
 /// smoother's filter is matched to.
 CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std::string& sensing_file) {
-  auto* states = cmdline::each_value(cl->add_option("--states", "rig log: where the states come from: auto (the estimator's if the log has "
-                                        "them, else the truth), estimate, truth, or smoothed (made offline from the "
-                                        "log's IMU and motion capture by the fixed-interval smoother, as the thesis's "
-                                        "identification data were), or sensors (the raw channels as a lab records them, "
-                                        "no fusion: p q r the IMU's gyro at its own stamps, phi theta psi each motion-"
-                                        "capture frame's attitude at mid-exposure, u v w its positions differentiated)")
-                 ->type_name("SOURCE")
-                 ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed", "sensors"})),
-             [&o](const std::string& v) { o.states = ident::state_source_from_name(v); });
+  auto* states = cmdline::each_value(
+      cl->add_option("--states",
+                     "rig log: where the states come from: auto (the estimator's if the log has "
+                     "them, else the truth), estimate, truth, or smoothed (made offline from the "
+                     "log's IMU and motion capture by the fixed-interval smoother, as the thesis's "
+                     "identification data were), or sensors (the raw channels as a lab records them, "
+                     "no fusion: p q r the IMU's gyro at its own stamps, phi theta psi each motion-"
+                     "capture frame's attitude at mid-exposure, u v w its positions differentiated)")
+          ->type_name("SOURCE")
+          ->check(CLI::IsMember({"auto", "estimate", "truth", "smoothed", "sensors"})),
+      [&o](const std::string& v) { o.states = ident::state_source_from_name(v); });
   cl->add_option("--sensing", sensing_file,
                  "--states smoothed or sensors: the sensing the flight flew with (its IMU, motion capture, velocity "
                  "differentiator and EKF; default rig_configs/sensing/default_sensing.yaml)")
@@ -81,8 +83,8 @@ CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std:
   return states;
 }
 
-std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
-                                const std::vector<std::string>& data_files) {
+std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o,
+                                const std::string& sensing_file, const std::vector<std::string>& data_files) {
   if (o.states == ident::StateSource::kAuto) return std::nullopt;
   for (const std::string& file : data_files) {
     // (a file that is not there is named by the reader)

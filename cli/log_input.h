@@ -38,8 +38,8 @@ CLI::Option* add_states(cmdline::CommandLine& cl, ident::LogReadOptions& o, std:
 /// Checks --states against the data files (a CSV file carries its own states: --states is for rig
 /// logs) and sets the smoother's model from --sensing (or the default sensing file) for --states
 /// smoothed. Returns the exit code of a usage error naming the file (reported through `cl`).
-std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o, const std::string& sensing_file,
-                                const std::vector<std::string>& data_files);
+std::optional<int> apply_states(const cmdline::CommandLine& cl, ident::LogReadOptions& o,
+                                const std::string& sensing_file, const std::vector<std::string>& data_files);
 
 /// --vehicle FILE.
 void add_vehicle(cmdline::CommandLine& cl, std::string& file, const std::string& default_text);

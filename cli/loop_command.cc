@@ -35,7 +35,8 @@ constexpr const char* kDescription =
     "the flap actuator (thesis Eq 33), the PD with its 15 Hz Butterworth, the command map, the\n"
     "reference generator, 512 Hz zero-order hold and the latency from the controller's input to the\n"
     "command's action (in lockstep and in process none on the truth, two control periods on the\n"
-    "estimate; in real time none; plus the plant's actuator_delay). Prints per model and gain set the gain margin (and the gain reduction margin of\n"
+    "estimate; in real time none; plus the plant's actuator_delay). Prints per model and gain set the gain margin (and "
+    "the gain reduction margin of\n"
     "the unstable open loop), phase margin and crossover, delay margin, peak sensitivity Ms, the -3 dB\n"
     "bandwidth of phi/phi_ref and the closed-loop poles. --all-sets: model sets 1-5 (the files\n"
     "nimble_lateral_set1..5.yaml beside the scenario's model) with every gain set, and per gain set\n"
@@ -77,17 +78,18 @@ int run_loop_command(const std::vector<std::string>& args) {
   bool all_sets = false, fly = false;
   std::vector<Override> overrides;
   cmdline::CommandLine cl("rig loop", kDescription);
-  cl->footer("Exit code: 0 if every analysed loop is stable (and a design is feasible and its flight ok), 1 if "
-             "not, 2 bad usage or input.");
+  cl->footer(
+      "Exit code: 0 if every analysed loop is stable (and a design is feasible and its flight ok), 1 if "
+      "not, 2 bad usage or input.");
   cl->add_option("scenario", scenario, "the scenario: model, controller, actuator and timing")->required();
   cl->add_option("--model", model_file, "a lateral3 model in place of the scenario's")->type_name("FILE");
   cl->add_option("--gains", gains_text, "a gain set of the controller, or KP,KD (default: the manoeuvre's set)")
       ->type_name("NAME|KP,KD");
   cmdline::each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
-                 ->type_name("KEY.PATH=VALUE")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
   cl->add_option("--on", input, "what the controller flies on (default: the scenario's run.controller_input)")
       ->check(CLI::IsMember({"truth", "estimate"}))
       ->type_name("truth|estimate");
@@ -104,9 +106,11 @@ int run_loop_command(const std::vector<std::string>& args) {
       ->type_name("KEY=VALUE,...");
   cl->add_option("--gains-out", gains_out, "write the designed gain set (controller config format)")->type_name("FILE");
   cl->add_option("--design-name", design_name, "the designed gain set's name")->capture_default_str();
-  cl->add_flag("--fly", fly, "fly the scenario in process with the designed gains and print its summary (the design "
-                             "then has the in-process timing unless --clock says otherwise)");
-  cl->add_option("--log", fly_log, "the log of the --fly flight (default rig_logs/<name>-<time>.lcmlog)")->type_name("F");
+  cl->add_flag("--fly", fly,
+               "fly the scenario in process with the designed gains and print its summary (the design "
+               "then has the in-process timing unless --clock says otherwise)");
+  cl->add_option("--log", fly_log, "the log of the --fly flight (default rig_logs/<name>-<time>.lcmlog)")
+      ->type_name("F");
   cl.add_json(json, "the report");
   cl.add_plots(plots, "loop_bode.png, loop_nyquist.png, loop_step.png and loop_poles.png");
   if (const auto done = cl.parse(args)) return *done;

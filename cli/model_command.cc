@@ -61,9 +61,8 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
                 const std::vector<std::complex<double>>& eig, const std::vector<Mode>& modes) {
   std::printf("model    %s (%s)\n", model.name.c_str(), to_string(model.structure).c_str());
   std::printf("source   %s\n", model.source.c_str());
-  std::printf("vehicle  %s: m = %.2f g, Ixx %.3g, Iyy %.3g, Izz %.3g, Ixz %.3g kg m^2\n",
-              vehicle.name.c_str(), vehicle.mass_kg * 1e3, vehicle.Ixx_kgm2, vehicle.Iyy_kgm2,
-              vehicle.Izz_kgm2, vehicle.Ixz_kgm2);
+  std::printf("vehicle  %s: m = %.2f g, Ixx %.3g, Iyy %.3g, Izz %.3g, Ixz %.3g kg m^2\n", vehicle.name.c_str(),
+              vehicle.mass_kg * 1e3, vehicle.Ixx_kgm2, vehicle.Iyy_kgm2, vehicle.Izz_kgm2, vehicle.Ixz_kgm2);
   std::printf("trim     u0 %.3g m/s, w0 %.3g m/s, theta0 %.3g rad, phi0 %.3g rad\n\n", model.trim.u0_mps,
               model.trim.w0_mps, model.trim.theta0_rad, model.trim.phi0_rad);
 
@@ -91,9 +90,10 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
                 m.natural_frequency_radps, m.damping_ratio, period, t2);
   }
 
-  std::printf("\nnon-dimensional eigenvectors (rates / f, velocities / (2 Phi f r2), angles / 2pi;"
-              " f = %.1f rad/s, Phi = %.3f rad, r2 = %.4g m), normalised on the attitude angle\n  %-8s",
-              vehicle.flap_frequency_radps(), vehicle.flap_amplitude_rad, vehicle.r2_m, "state");
+  std::printf(
+      "\nnon-dimensional eigenvectors (rates / f, velocities / (2 Phi f r2), angles / 2pi;"
+      " f = %.1f rad/s, Phi = %.3f rad, r2 = %.4g m), normalised on the attitude angle\n  %-8s",
+      vehicle.flap_frequency_radps(), vehicle.flap_amplitude_rad, vehicle.r2_m, "state");
   for (std::size_t k = 0; k < modes.size(); ++k) std::printf(" %20s", ("mode " + std::to_string(k + 1)).c_str());
   std::printf("\n");
   for (std::size_t i = 0; i < ss.states.size(); ++i) {
@@ -200,8 +200,8 @@ std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const 
 int run_model_command(const std::vector<std::string>& args) {
   std::string model_file, vehicle_file, json;
   cmdline::CommandLine cl("rig model",
-                 "Builds A and B of the model's structure from its derivatives and vehicle, prints the\n"
-                 "eigenvalues, the mode table and the non-dimensional eigenvectors.");
+                          "Builds A and B of the model's structure from its derivatives and vehicle, prints the\n"
+                          "eigenvalues, the mode table and the non-dimensional eigenvectors.");
   cl->add_option("model", model_file, "the model file (rig_configs/models/*.yaml)")->required();
   cl->add_option("--vehicle", vehicle_file, "use this vehicle instead of the one the model file names")
       ->type_name("FILE");

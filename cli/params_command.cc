@@ -50,18 +50,23 @@ struct Section {
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> list = {
-      {"run", [] {
+      {"run",
+       [] {
          return params_markdown(launcher::launch_params(), launcher::LaunchConfig{}, "run.") +
                 params_markdown_rows(process_run_params(), ProcessRunOptions{}, "run.");
        }},
-      {"controller", [] {
+      {"controller",
+       [] {
          return params_markdown(controller_params(), ControllerConfig{}, "controller.") +
-                params_markdown_rows(reference_params(), ReferenceGeneratorConfig{}, "controller.reference.{roll,pitch}.") +
+                params_markdown_rows(reference_params(), ReferenceGeneratorConfig{},
+                                     "controller.reference.{roll,pitch}.") +
                 params_markdown_rows(gain_params(), GainSet{}, "controller.{roll_gain_sets.NAME,pitch_gains,yaw}.");
        }},
-      {"plant", [] {
+      {"plant",
+       [] {
          return params_markdown(plant::plant_params(), plant::PlantConfig{}, "plant.") +
-                params_markdown_rows(plant::flap_actuator_params(), plant::FlapActuatorConfig{}, "plant.flap_actuator.") +
+                params_markdown_rows(plant::flap_actuator_params(), plant::FlapActuatorConfig{},
+                                     "plant.flap_actuator.") +
                 params_markdown_rows(plant::servo_params(), plant::ServoConfig{}, "plant.servo.") +
                 params_markdown_rows(plant::thrust_params(), ThrustCurve{}, "plant.thrust.") +
                 params_markdown_rows(plant::initial_params(), plant::InitialState{}, "plant.initial.");
@@ -90,9 +95,9 @@ int run_params_command(const std::vector<std::string>& args) {
   std::vector<std::string> names;
   for (const auto& s : sections()) names.push_back(s.name);
   cmdline::CommandLine cl("rig params",
-                 "The parameters of a scenario section (default: every section that has a table): key,\n"
-                 "default, allowed range, unit and meaning, as Markdown. The same table the loader and\n"
-                 "the validation use.");
+                          "The parameters of a scenario section (default: every section that has a table): key,\n"
+                          "default, allowed range, unit and meaning, as Markdown. The same table the loader and\n"
+                          "the validation use.");
   bool page = false;
   cl->add_option("section", section, "one section")->check(CLI::IsMember(names));
   cl->add_flag("--doc-page", page,
@@ -101,7 +106,8 @@ int run_params_command(const std::vector<std::string>& args) {
   if (const auto done = cl.parse(args)) return *done;
   if (page) std::cout << kDocPageHead;
   for (const auto& s : sections()) {
-    if (section.empty() || section == s.name) std::cout << (page ? "## " : "### ") << s.name << "\n\n" << s.markdown() << "\n";
+    if (section.empty() || section == s.name)
+      std::cout << (page ? "## " : "### ") << s.name << "\n\n" << s.markdown() << "\n";
   }
   return 0;
 }

@@ -38,7 +38,8 @@ std::string power_footer() {
       "Flight i of every cell has the seed hash(--seed, i); --verify flies fresh seeds.\n"
       "Exit code: 0 whatever the probabilities; 2 bad usage or input.\n"
       "Example: rig discrepancy --power --scenario rig_configs/cl_doublet_train_slow.yaml \\\n"
-      "           --model rig_configs/models/nimble_lateral_set1_kinematic.yaml --effect actuator_delay=0.004,0.008 \\\n"
+      "           --model rig_configs/models/nimble_lateral_set1_kinematic.yaml --effect actuator_delay=0.004,0.008 "
+      "\\\n"
       "           --lengths 9,18,36 --flights 100 --plots power/";
   return out;
 }
@@ -58,61 +59,70 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   cl->add_option("--scenario", o.scenario_file, "the scenario to fly")->type_name("FILE")->required();
   cl->add_option("--model", o.model_file, "the model (lateral3) the workflow checks")->type_name("FILE")->required();
   cmdline::each_value(cl->add_option("--effect")
-                 ->description("the plant effect and its sizes, a list A,B or a grid FROM:TO:STEP: " +
-                               detection_power::sized_effect_list())
-                 ->type_name("NAME=SIZE")
-                 ->required(),
-             [&o](const std::string& v) {
-               const detection_power::EffectSizes e = detection_power::parse_effect_sizes(v);
-               o.effect = e.effect;
-               o.sizes = e.sizes;
-             });
-  cmdline::each_value(cl->add_option("--lengths", "record lengths [s], a list or FROM:TO:STEP (default: the scenario's block "
-                                         "times 1, 2, 4, 8)")
-                 ->type_name("S"),
-             [&o](const std::string& v) {
-               o.lengths_s = cmdline::number_grid(v);
-               for (const double l : o.lengths_s) {
-                 if (!(l > 0.0)) throw std::invalid_argument("a record length must be > 0 s, got " + v);
-               }
-             });
+                          ->description("the plant effect and its sizes, a list A,B or a grid FROM:TO:STEP: " +
+                                        detection_power::sized_effect_list())
+                          ->type_name("NAME=SIZE")
+                          ->required(),
+                      [&o](const std::string& v) {
+                        const detection_power::EffectSizes e = detection_power::parse_effect_sizes(v);
+                        o.effect = e.effect;
+                        o.sizes = e.sizes;
+                      });
+  cmdline::each_value(cl->add_option("--lengths",
+                                     "record lengths [s], a list or FROM:TO:STEP (default: the scenario's block "
+                                     "times 1, 2, 4, 8)")
+                          ->type_name("S"),
+                      [&o](const std::string& v) {
+                        o.lengths_s = cmdline::number_grid(v);
+                        for (const double l : o.lengths_s) {
+                          if (!(l > 0.0)) throw std::invalid_argument("a record length must be > 0 s, got " + v);
+                        }
+                      });
   cl->add_option("--flights", o.flights, "flights per (size, length)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str()
       ->type_name("N");
-  cl->add_option("--seed", o.seed, "the campaign's seed")->check(cmdline::kWholeNumber)->capture_default_str()->type_name("N");
-  cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")->check(CLI::Range(1, 256))->type_name("N");
+  cl->add_option("--seed", o.seed, "the campaign's seed")
+      ->check(cmdline::kWholeNumber)
+      ->capture_default_str()
+      ->type_name("N");
+  cl->add_option("--jobs", o.jobs, "flights at a time (default: one per CPU)")
+      ->check(CLI::Range(1, 256))
+      ->type_name("N");
   cl->add_option("--target", o.target, "the naming probability a recommended length reaches")
       ->check(cmdline::kFinite & CLI::Range(0.01, 0.999))
       ->capture_default_str()
       ->type_name("P");
-  cl->add_option("--refine", o.refine, "rounds of refinement of each recommended length (a cell at the interpolated "
-                                      "length)")
+  cl->add_option("--refine", o.refine,
+                 "rounds of refinement of each recommended length (a cell at the interpolated "
+                 "length)")
       ->check(CLI::Range(0, 20))
       ->capture_default_str()
       ->type_name("N");
   cl->add_option("--verify", o.verify, "fly N fresh seeds at each recommended length and report the rate there")
       ->check(CLI::Range(0, 100000))
       ->type_name("N");
-  cmdline::each_value(cl->add_option("--set", "override one scenario value in every flight, parsed as YAML (repeatable)")
-                 ->type_name("KEY.PATH=VALUE")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
+  cmdline::each_value(
+      cl->add_option("--set", "override one scenario value in every flight, parsed as YAML (repeatable)")
+          ->type_name("KEY.PATH=VALUE")
+          ->allow_extra_args(false)
+          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+      [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
   cl->add_option("--vehicle", o.vehicle_file, "the vehicle of the workflow (default: the model's)")->type_name("FILE");
   cmdline::each_value(cl->add_option("--candidates")
-                 ->description("comma-separated candidate effects the workflow tries (default: all the data "
-                               "supports): " + effect_name_list())
-                 ->type_name("LIST"),
-             [&o](const std::string& v) {
-               o.discrepancy.candidates.clear();
-               std::size_t start = 0;
-               while (start <= v.size()) {
-                 const std::size_t comma = std::min(v.find(',', start), v.size());
-                 if (comma > start) o.discrepancy.candidates.push_back(v.substr(start, comma - start));
-                 start = comma + 1;
-               }
-             });
+                          ->description("comma-separated candidate effects the workflow tries (default: all the data "
+                                        "supports): " +
+                                        effect_name_list())
+                          ->type_name("LIST"),
+                      [&o](const std::string& v) {
+                        o.discrepancy.candidates.clear();
+                        std::size_t start = 0;
+                        while (start <= v.size()) {
+                          const std::size_t comma = std::min(v.find(',', start), v.size());
+                          if (comma > start) o.discrepancy.candidates.push_back(v.substr(start, comma - start));
+                          start = comma + 1;
+                        }
+                      });
   cl.add_json(json, "the cells, recommendations, verification and timing");
   cl.add_plots(plots, "power_length.png, power_size.png");
   cl->add_option("--dir", o.result_dir,

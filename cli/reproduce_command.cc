@@ -32,7 +32,8 @@ std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = text.find(',', start);
-    const auto [a, b] = campaign::parse_seed_range(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    const auto [a, b] =
+        campaign::parse_seed_range(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (b - a >= 1000 || seeds.size() + (b - a + 1) > 1000) throw std::invalid_argument("at most 1000 seeds");
     for (std::uint64_t s = a; s <= b; ++s) {
       if (std::find(seeds.begin(), seeds.end(), s) != seeds.end()) {
@@ -64,7 +65,8 @@ int fly_and_print(const reproduce::CampaignOptions& o, bool beside, const std::s
     std::cerr << "rig reproduce: " << e.what() << "\n";
     return cmdline::kExitUsage;
   }
-  (json_file == "-" ? std::cerr : std::cout) << (beside ? reproduce::beside_text(both) : reproduce::campaign_text(result));
+  (json_file == "-" ? std::cerr : std::cout)
+      << (beside ? reproduce::beside_text(both) : reproduce::campaign_text(result));
   if (!json_file.empty()) {
     const std::string text = (beside ? reproduce::beside_json(both) : reproduce::campaign_json(result)) + "\n";
     if (json_file == "-") {
@@ -92,27 +94,29 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   o.work_dir = "rig_logs/reproduce";
   o.progress = true;
   std::string what, json_file;
-  cmdline::CommandLine cl("rig reproduce",
-                 "Flies the thesis's campaign (identification train on every identification set's model;\n"
-                 "open-loop 6 Hz doublet and 1-1-2; closed-loop slow train and 1-1-2s; coupled doublet; 20 and\n"
-                 "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
-                 "thesis did, validates it on the others, and prints every table it reproduces beside the\n"
-                 "published one (Tables 9.4, 9.5, 9.6, 4, 7-16, 8.8), each cell with its category, decided by\n"
-                 "what it is computed from, and its verdict (reproduce/cell_verdict.h): ranges and fit metrics\n"
-                 "of the rig's flights are match (the mean's 95 % interval inside the tolerance), explained (a\n"
-                 "reason whose check holds in the same run), differs (wholly outside) or inconclusive (across\n"
-                 "an edge); calibrated cells match or differ; model cells check the transcribed model files\n"
-                 "against the thesis and the rig's re-identification of its own plant against the plant file.");
-  cl->footer("Exit code: 0 no cell differs, 1 some cell differs (with --beside: in either run), 2 bad input or a\n"
-             "flight that could not fly.\n"
-             "Examples: rig reproduce thesis --json tables.json --report report/\n"
-             "          rig reproduce thesis --vibration --beside --json beside.json");
+  cmdline::CommandLine cl(
+      "rig reproduce",
+      "Flies the thesis's campaign (identification train on every identification set's model;\n"
+      "open-loop 6 Hz doublet and 1-1-2; closed-loop slow train and 1-1-2s; coupled doublet; 20 and\n"
+      "30 deg nonlinear doublets), identifies set 1's model from its identification flight as the\n"
+      "thesis did, validates it on the others, and prints every table it reproduces beside the\n"
+      "published one (Tables 9.4, 9.5, 9.6, 4, 7-16, 8.8), each cell with its category, decided by\n"
+      "what it is computed from, and its verdict (reproduce/cell_verdict.h): ranges and fit metrics\n"
+      "of the rig's flights are match (the mean's 95 % interval inside the tolerance), explained (a\n"
+      "reason whose check holds in the same run), differs (wholly outside) or inconclusive (across\n"
+      "an edge); calibrated cells match or differ; model cells check the transcribed model files\n"
+      "against the thesis and the rig's re-identification of its own plant against the plant file.");
+  cl->footer(
+      "Exit code: 0 no cell differs, 1 some cell differs (with --beside: in either run), 2 bad input or a\n"
+      "flight that could not fly.\n"
+      "Examples: rig reproduce thesis --json tables.json --report report/\n"
+      "          rig reproduce thesis --vibration --beside --json beside.json");
   cl->add_option("what", what, "the campaign to reproduce")->required()->check(CLI::IsMember({"thesis"}));
   cl->add_option("--campaign", o.campaign_file, "the campaign file (default rig_configs/reproduce/thesis.yaml)")
       ->type_name("FILE");
   cl->add_option("--clock", o.clock, "inprocess (default), lockstep or realtime")
       ->check(CLI::IsMember({std::string(launcher::kClockInprocess), std::string(launcher::kClockLockstep),
-                              std::string(launcher::kClockRealtime)}))
+                             std::string(launcher::kClockRealtime)}))
       ->capture_default_str();
   std::string seeds = "1-5";
   cl->add_option("--seeds", seeds,
@@ -139,9 +143,10 @@ int run_reproduce_command(const std::vector<std::string>& args) {
       ->type_name("DIR");
   cl->add_option("--controller", o.controller_file, "the controller copy of the closed-loop validation")
       ->type_name("FILE");
-  cmdline::each_value(cl->add_option("--set", "override one scenario value in every flight of the campaign, parsed as "
-                                              "YAML (repeatable; as for rig run, SECTION.base=FILE included); printed "
-                                              "in the report, and part of what identifies a --dir")
+  cmdline::each_value(cl->add_option("--set",
+                                     "override one scenario value in every flight of the campaign, parsed as "
+                                     "YAML (repeatable; as for rig run, SECTION.base=FILE included); printed "
+                                     "in the report, and part of what identifies a --dir")
                           ->type_name("KEY.PATH=VALUE")
                           ->allow_extra_args(false)
                           ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
@@ -156,11 +161,12 @@ int run_reproduce_command(const std::vector<std::string>& args) {
                "published value, the rig's without and with, each judged on its own run, and whether the cell moved "
                "toward the published value or away (same: the change of |rig - published| within the cell's "
                "tolerance or the two means' 95 % interval), with the counts and the verdicts that changed");
-  cl.add_json(json_file, "the tables: {\"tables\": [{\"id\", \"title\", \"cells\": [{\"row\", \"column\", "
-                         "\"published\", \"rig\", \"verdict\", \"reason\"}]}], \"counts\", \"flights\", "
-                         "\"overrides\"}; with --beside, per cell \"rig_without\", \"rig_with\", \"verdict_without\", "
-                         "\"verdict_with\", \"moved\" and both runs' cells, and each run's whole JSON in \"without\" "
-                         "and \"with\",");
+  cl.add_json(json_file,
+              "the tables: {\"tables\": [{\"id\", \"title\", \"cells\": [{\"row\", \"column\", "
+              "\"published\", \"rig\", \"verdict\", \"reason\"}]}], \"counts\", \"flights\", "
+              "\"overrides\"}; with --beside, per cell \"rig_without\", \"rig_with\", \"verdict_without\", "
+              "\"verdict_with\", \"moved\" and both runs' cells, and each run's whole JSON in \"without\" "
+              "and \"with\",");
   cl->add_option("--report", o.report_dir,
                  "figures in DIR: Fig 9.1 (every set's eigenvalues), the identification, the open-loop "
                  "validations with residual autocorrelation, the closed-loop traces (phi_sp, phi, delta_f)")
@@ -168,7 +174,8 @@ int run_reproduce_command(const std::vector<std::string>& args) {
   cl->add_flag("--no-progress", "no line per flight on stderr")->each([&o](const std::string&) { o.progress = false; });
   if (const auto done = cl.parse(args)) return *done;
   if (vibration) o.overrides.insert(o.overrides.begin(), Override{"sensing.base", NIMBLE_DEFAULT_VIBRATION});
-  if (beside && o.overrides.empty()) return cl.fail("--beside needs overrides to fly beside: --set KEY=VALUE or --vibration");
+  if (beside && o.overrides.empty())
+    return cl.fail("--beside needs overrides to fly beside: --set KEY=VALUE or --vibration");
   try {
     o.seeds = parse_seed_list(seeds);
   } catch (const std::invalid_argument& e) {

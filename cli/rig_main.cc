@@ -20,11 +20,16 @@ struct Command {
 const Command kCommands[] = {
     {"model", "model <model.yaml> [--vehicle <vehicle.yaml>] [--json]   A, B, eigenvalues, modes, eigenvectors",
      nimble::cli::run_model_command},
-    {"run", "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] [--vibration] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
+    {"run",
+     "run <scenario.yaml> [--clock realtime|lockstep|inprocess] [--log F] [--mcap F] [--json F|-] [--set k=v] "
+     "[--vibration] [--seed N] [--foxglove [HOST:]PORT]   fly a scenario",
      nimble::cli::run_run_command},
-    {"view", "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--hold|--loop|--exit-when-done]   replay a log live to Foxglove/Lichtblick",
+    {"view",
+     "view [LOG] [--foxglove [HOST:]PORT] [--speed X] [--web [HOST:]PORT] [--hold|--loop|--exit-when-done]   replay a "
+     "log live to Foxglove/Lichtblick",
      nimble::cli::run_view_command},
-    {"sweep", "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F|-] [--csv F]   Monte Carlo campaign",
+    {"sweep",
+     "sweep <scenario.yaml> --seeds A-B [--vary k=v1,v2]... [--jobs N] [--json F|-] [--csv F]   Monte Carlo campaign",
      nimble::cli::run_sweep_command},
     {"params", "params [SECTION]                                   parameters: default, range, unit, meaning",
      nimble::cli::run_params_command},
@@ -32,21 +37,37 @@ const Command kCommands[] = {
      nimble::cli::run_check_command},
     {"spy", "spy [--pid PID] [--url URL]                        lcm-spy with the rig's message types",
      nimble::cli::run_spy_command},
-    {"identify", "identify <data.csv|log.lcmlog> [--structure lateral3|lateral4] [--method ols|wls] [--states auto|estimate|truth|smoothed|sensors] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
+    {"identify",
+     "identify <data.csv|log.lcmlog> [--structure lateral3|lateral4] [--method ols|wls] [--states "
+     "auto|estimate|truth|smoothed|sensors] [--json F] [--model-out F] [--plots DIR] ...   identify the lateral model",
      nimble::cli::run_identify_command},
-    {"validate", "validate <model.yaml> <data.csv|log.lcmlog> [--json F] [--plots DIR] ...   open-loop validation of a model on flight data",
+    {"validate",
+     "validate <model.yaml> <data.csv|log.lcmlog> [--json F] [--plots DIR] ...   open-loop validation of a model on "
+     "flight data",
      nimble::cli::run_validate_command},
-    {"discrepancy", "discrepancy <data> --model <model.yaml> [--json F] [--model-out F] ...   name the effect the model misses",
+    {"discrepancy",
+     "discrepancy <data> --model <model.yaml> [--json F] [--model-out F] ...   name the effect the model misses",
      nimble::cli::run_discrepancy_command},
-    {"export", "export <log.lcmlog> (--csv <out.csv> [--rate HZ] [--interpolation cubic|linear] [--states auto|estimate|truth|smoothed|sensors] | --format mcap --out <out.mcap> [--compression zstd|none] [--raw]) [--salvage] [--json F|-]   a rig log as identification CSV, or as MCAP for Foxglove, Lichtblick, PlotJuggler",
+    {"export",
+     "export <log.lcmlog> (--csv <out.csv> [--rate HZ] [--interpolation cubic|linear] [--states "
+     "auto|estimate|truth|smoothed|sensors] | --format mcap --out <out.mcap> [--compression zstd|none] [--raw]) "
+     "[--salvage] [--json F|-]   a rig log as identification CSV, or as MCAP for Foxglove, Lichtblick, PlotJuggler",
      nimble::cli::run_export_command},
-    {"turbulence", "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence practical",
+    {"turbulence",
+     "turbulence <practical.yaml> [--json F|-] [--plots DIR] [--duration S] [--dt S] [--seed N]   the Ce500 turbulence "
+     "practical",
      nimble::cli::run_turbulence_command},
-    {"turbulence-response", "turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--f-max HZ] [--json F|-] [--plots DIR]   a flight in Dryden gusts against the closed-loop model",
+    {"turbulence-response",
+     "turbulence-response <scenario.yaml> <log.lcmlog> [--set k=v] [--f-max HZ] [--json F|-] [--plots DIR]   a flight "
+     "in Dryden gusts against the closed-loop model",
      nimble::cli::run_turbulence_response_command},
-    {"loop", "loop <scenario.yaml> [--all-sets] [--gains NAME|KP,KD] [--break actuator|sensor] [--design ...] [--json F|-] [--plots DIR]   the roll loop's margins, poles, bandwidth; PD design",
+    {"loop",
+     "loop <scenario.yaml> [--all-sets] [--gains NAME|KP,KD] [--break actuator|sensor] [--design ...] [--json F|-] "
+     "[--plots DIR]   the roll loop's margins, poles, bandwidth; PD design",
      nimble::cli::run_loop_command},
-    {"reproduce", "reproduce thesis [--seeds LIST] [--states smoothed|estimate|truth] [--clock C] [--set k=v] [--vibration] [--beside] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
+    {"reproduce",
+     "reproduce thesis [--seeds LIST] [--states smoothed|estimate|truth] [--clock C] [--set k=v] [--vibration] "
+     "[--beside] [--json F|-] [--report DIR]   the thesis's campaign beside its published tables",
      nimble::cli::run_reproduce_command},
 };
 

@@ -28,7 +28,8 @@ constexpr const char* kRunFooter =
     "network namespace whose loopback carries multicast; 'rig spy --pid PID' joins it. always:\n"
     "fail if one cannot be made; never: the host's network (see rig check).\n"
     "Exit code: 0 controlled, 1 not controlled, 2 bad input, 3 a process failed, hung\n"
-    "(HEARTBEAT_LOST), the run stalled or its log could not be written, 4 real-time degraded (only with --strict-timing),\n"
+    "(HEARTBEAT_LOST), the run stalled or its log could not be written, 4 real-time degraded (only with "
+    "--strict-timing),\n"
     "5 completed in the controller's failsafe, 6 controlled but not tracking (the roll tracking error\n"
     "beyond summary.max_tracking_rms_deg or max_tracking_error_deg, or a sustained or growing roll\n"
     "oscillation), 130 interrupted.";
@@ -58,7 +59,7 @@ int run_run_command(const std::vector<std::string>& args) {
   cl->add_option("scenario", o.scenario_file, "the scenario file (rig_configs/*.yaml)")->required();
   cl->add_option("--clock", o.clock, "realtime, lockstep or inprocess (default: the scenario's clock)")
       ->check(CLI::IsMember({std::string(launcher::kClockRealtime), std::string(launcher::kClockLockstep),
-                                std::string(launcher::kClockInprocess)}));
+                             std::string(launcher::kClockInprocess)}));
   cl->add_option("--log", o.log_file,
                  "the LCM log (default rig_logs/<name>-<time>.lcmlog); the resolved scenario and each "
                  "process's output are written next to it")
@@ -84,18 +85,20 @@ int run_run_command(const std::vector<std::string>& args) {
                  "ws://HOST:PORT): every channel as JSON, read-only; host 127.0.0.1 unless given, port 0 picks a "
                  "free one (printed on stderr); e.g. --foxglove 8765 (docs/live_view.md)")
       ->type_name("[HOST:]PORT");
-  cmdline::each_value(cl->add_option("--set", "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
+  cmdline::each_value(cl->add_option("--set",
+                                     "override one scenario value, parsed as YAML; repeatable: --set duration_s=3, "
                                      "--set processes=[plant,controller], --set 'faults=[{target: IMU, kind: off, "
                                      "start_s: 1}]' (quote values with spaces for the shell)")
-                 ->type_name("KEY.PATH=VALUE")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&o](const std::string& v) { o.overrides.push_back(parse_override(v)); });
   cl->add_option("--seed", o.seed, "the run's seed (a whole number >= 0; default: the scenario's seed)")
       ->check(cmdline::kWholeNumber)
       ->type_name("N");
-  cl->add_flag("--no-progress", "no progress line on stderr (for logs and scripts)")
-      ->each([&o](const std::string&) { o.progress = false; });
+  cl->add_flag("--no-progress", "no progress line on stderr (for logs and scripts)")->each([&o](const std::string&) {
+    o.progress = false;
+  });
   cl->add_flag("--strict-timing", o.strict_timing, "a real-time degraded run exits 4");
   bool vibration = false;
   cl->add_flag("--vibration", vibration,

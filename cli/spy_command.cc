@@ -21,7 +21,7 @@ namespace {
 
 /// The inode of a namespace link (/proc/<pid>/ns/<kind>), 0 if it cannot be read.
 ino_t namespace_inode(const std::string& pid, const std::string& kind) {
-  struct stat st{};
+  struct stat st {};
   return ::stat(("/proc/" + pid + "/ns/" + kind).c_str(), &st) == 0 ? st.st_ino : 0;
 }
 
@@ -48,8 +48,8 @@ int run_spy_command(const std::vector<std::string>& args) {
   std::string url;
   std::string pid;
   cmdline::CommandLine cl("rig spy",
-                 "Starts lcm-spy with the rig's type jar on its classpath. lcm-spy is a window: it needs a\n"
-                 "display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).");
+                          "Starts lcm-spy with the rig's type jar on its classpath. lcm-spy is a window: it needs a\n"
+                          "display (DISPLAY; over ssh: ssh -X; headless: xvfb-run).");
   cl->add_option("--pid", pid,
                  "join the network namespace of a running 'rig run' (it prints its pid at start) to watch it "
                  "live; the user who started the run may (a run started without root lives in a user namespace "
@@ -68,7 +68,8 @@ int run_spy_command(const std::vector<std::string>& args) {
       return cmdline::kExitUsage;
     }
     if (namespace_inode(pid, "net") == namespace_inode("self", "net")) {
-      std::cerr << "rig spy: pid " << pid << " runs on this host's network, not in a namespace of its own: "
+      std::cerr << "rig spy: pid " << pid
+                << " runs on this host's network, not in a namespace of its own: "
                    "watch it with the URL it printed at start (rig spy --url '...')\n";
       return cmdline::kExitUsage;
     }

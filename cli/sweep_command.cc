@@ -156,14 +156,13 @@ int run_on_slurm(const campaign::Campaign& c, int retries, bool wait, bool progr
     if (attempt == 0) {
       std::cerr << "  waiting (Ctrl-C leaves the job running: `rig sweep collect " << c.dir << "` later)\n";
     }
-    campaign::wait_for_job(c, job, tasks,
-                           [&](std::size_t finished, std::size_t) {
-                             if (progress) {
-                               campaign::progress_bar(finished, c.run_count(), SIZE_MAX,
-                                                      static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9,
-                                                      ::isatty(STDERR_FILENO));
-                             }
-                           });
+    campaign::wait_for_job(c, job, tasks, [&](std::size_t finished, std::size_t) {
+      if (progress) {
+        campaign::progress_bar(finished, c.run_count(), SIZE_MAX,
+                               static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9,
+                               ::isatty(STDERR_FILENO));
+      }
+    });
     const std::vector<std::string> lines = campaign::describe_missing(c, job, tasks);
     if (lines.empty()) return 0;
     for (const auto& line : lines) std::cerr << "rig sweep: " << line << "\n";
@@ -183,8 +182,9 @@ int task_command(const std::vector<std::string>& args) {
   std::string dir;
   std::size_t task = 0;
   int jobs = 0;
-  cmdline::CommandLine cl("rig sweep task", "Flies the runs of one array task of a campaign that have no result yet (what the "
-                                   "campaign's batch script runs on a node), each run's result file written atomically.");
+  cmdline::CommandLine cl("rig sweep task",
+                          "Flies the runs of one array task of a campaign that have no result yet (what the "
+                          "campaign's batch script runs on a node), each run's result file written atomically.");
   cl->add_option("dir", dir, "the campaign directory")->required();
   cl->add_option("--task", task, "the array task (SLURM_ARRAY_TASK_ID)")->required();
   cl->add_option("--jobs", jobs, "runs at a time (default: the campaign's CPUs per task)")->check(CLI::Range(1, 1024));
@@ -192,14 +192,17 @@ int task_command(const std::vector<std::string>& args) {
   try {
     const campaign::Campaign c = campaign::load_campaign(dir);
     if (task >= c.chunk_count()) {
-      return cl.fail("--task " + std::to_string(task) + ": the campaign has tasks 0-" + std::to_string(c.chunk_count() - 1));
+      return cl.fail("--task " + std::to_string(task) + ": the campaign has tasks 0-" +
+                     std::to_string(c.chunk_count() - 1));
     }
     campaign::enter_working_dir(c);
     campaign::check_campaign_inputs(c);
     const char* job = std::getenv("SLURM_ARRAY_JOB_ID");
-    const std::string where = (job ? "slurm job " + std::string(job) + " " : std::string()) + "task " + std::to_string(task);
+    const std::string where =
+        (job ? "slurm job " + std::string(job) + " " : std::string()) + "task " + std::to_string(task);
     const std::vector<std::size_t> runs = c.chunk(task);
-    std::cerr << "rig sweep task: " << c.dir << " task " << task << ", runs " << runs.front() << "-" << runs.back() << "\n";
+    std::cerr << "rig sweep task: " << c.dir << " task " << task << ", runs " << runs.front() << "-" << runs.back()
+              << "\n";
     campaign::fly_campaign_runs(c, runs, jobs > 0 ? jobs : c.cluster.cpus_per_task, where, {});
     const std::vector<bool> done = campaign::finished_runs(c);
     for (const std::size_t i : runs) {
@@ -220,9 +223,10 @@ int task_command(const std::vector<std::string>& args) {
 int collect_command(const std::vector<std::string>& args) {
   std::string dir;
   Outputs o;
-  cmdline::CommandLine cl("rig sweep collect", "Merges a campaign's runs (rig sweep --backend slurm --no-wait, or one that was "
-                                      "interrupted): the summary, DIR/result.json and DIR/result.csv. Runs without a "
-                                      "result are named, with the Slurm jobs still running, and exit 3.");
+  cmdline::CommandLine cl("rig sweep collect",
+                          "Merges a campaign's runs (rig sweep --backend slurm --no-wait, or one that was "
+                          "interrupted): the summary, DIR/result.json and DIR/result.csv. Runs without a "
+                          "result are named, with the Slurm jobs still running, and exit 3.");
   cl->add_option("dir", dir, "the campaign directory")->required();
   add_outputs(cl, o);
   if (const auto done = cl.parse(args)) return *done;
@@ -243,36 +247,40 @@ int collect_command(const std::vector<std::string>& args) {
 std::pair<CLI::Option*, CLI::Option*> add_sweep_options(cmdline::CommandLine& cl, campaign::SweepOptions& o) {
   cl->add_option("scenario", o.base.scenario_file, "the scenario file");
   auto* seeds = cl->add_option("--seeds", "the seeds A-B, each flown once per parameter set")->type_name("A-B");
-  cmdline::each_value(seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
-  cmdline::each_value(cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
-                 ->type_name("KEY=V1,V2,...")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&o](const std::string& v) { o.vary.push_back(campaign::parse_vary(v)); });
+  cmdline::each_value(
+      seeds, [&o](const std::string& v) { std::tie(o.first_seed, o.last_seed) = campaign::parse_seed_range(v); });
+  cmdline::each_value(
+      cl->add_option("--vary", "a parameter and its values (repeatable; the sets are every combination)")
+          ->type_name("KEY=V1,V2,...")
+          ->allow_extra_args(false)
+          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+      [&o](const std::string& v) { o.vary.push_back(campaign::parse_vary(v)); });
   auto* jobs = cl->add_option("--jobs", o.jobs, "local: runs at a time (default: one per CPU)")
                    ->check(CLI::Range(1, 256))
                    ->type_name("N");
   cl->add_option("--clock", o.base.clock, "inprocess (default), lockstep or realtime")
       ->check(CLI::IsMember({std::string(launcher::kClockInprocess), std::string(launcher::kClockLockstep),
-                              std::string(launcher::kClockRealtime)}));
+                             std::string(launcher::kClockRealtime)}));
   cmdline::each_value(cl->add_option("--set", "override one scenario value in every run, parsed as YAML (repeatable)")
-                 ->type_name("KEY.PATH=VALUE")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&o](const std::string& v) { o.base.overrides.push_back(parse_override(v)); });
-  cl->add_option("--logs", o.logs_dir, "keep each run's LCM log in DIR (slurm: on the shared file system)")->type_name("DIR");
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&o](const std::string& v) { o.base.overrides.push_back(parse_override(v)); });
+  cl->add_option("--logs", o.logs_dir, "keep each run's LCM log in DIR (slurm: on the shared file system)")
+      ->type_name("DIR");
   return {seeds, jobs};
 }
 
 /// The campaign's options: backend, directory, --resume, and the Slurm settings over the
 /// scenario's cluster section.
-void add_campaign_options(cmdline::CommandLine& cl, campaign::CampaignRequest& req, std::string& resume_dir, int& retries,
-                          bool& no_wait, std::size_t& chunk, launcher::ClusterSettings& cli_cluster) {
+void add_campaign_options(cmdline::CommandLine& cl, campaign::CampaignRequest& req, std::string& resume_dir,
+                          int& retries, bool& no_wait, std::size_t& chunk, launcher::ClusterSettings& cli_cluster) {
   cl->add_option("--backend", req.backend, "local (default) or slurm")
       ->check(CLI::IsMember({std::string(campaign::kBackendLocal), std::string(campaign::kBackendSlurm)}));
-  cl->add_option("--dir", req.dir,
-                 "the campaign directory (slurm: on a file system every node sees; default rig_campaigns/<name>-<time>; "
-                 "local: kept only if given)")
+  cl->add_option(
+        "--dir", req.dir,
+        "the campaign directory (slurm: on a file system every node sees; default rig_campaigns/<name>-<time>; "
+        "local: kept only if given)")
       ->type_name("DIR");
   cl->add_option("--resume", resume_dir, "finish the campaign in DIR: fly or submit the runs without a result")
       ->type_name("DIR");
@@ -280,13 +288,15 @@ void add_campaign_options(cmdline::CommandLine& cl, campaign::CampaignRequest& r
       ->check(CLI::Range(0, 100))
       ->type_name("N");
   cl->add_flag("--no-wait", no_wait, "slurm: print the job id and return; `rig sweep collect DIR` merges later");
-  cl->add_option("--chunk", chunk, "slurm: runs per array task (default: cluster.chunk_size, else 100 in process, "
-                                   "4 lockstep, 1 real time)")
+  cl->add_option("--chunk", chunk,
+                 "slurm: runs per array task (default: cluster.chunk_size, else 100 in process, "
+                 "4 lockstep, 1 real time)")
       ->check(CLI::Range(1, 1000000))
       ->type_name("N");
   cl->add_option("--partition", cli_cluster.partition, "slurm: the partition (default: cluster.partition)");
   cl->add_option("--account", cli_cluster.account, "slurm: the account (default: cluster.account)");
-  cl->add_option("--time", cli_cluster.time_limit, "slurm: each task's time limit (default: cluster.time_limit, 01:00:00)")
+  cl->add_option("--time", cli_cluster.time_limit,
+                 "slurm: each task's time limit (default: cluster.time_limit, 01:00:00)")
       ->type_name("TIME");
   cl->add_option("--cpus-per-task", cli_cluster.cpus_per_task,
                  "slurm: CPUs of each task, its runs at a time (default: cluster.cpus_per_task, 1)")

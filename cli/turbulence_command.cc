@@ -102,8 +102,8 @@ std::string report_text(const Ce500Analysis& a) {
          "both systems driven by the same gust record. Outputs beta [deg], phi [deg], pb/2V, rb/2V [-],\n"
          "a_y = V (beta_dot + r) [m/s^2].\n";
   out << "PSD estimates: periodogram (rectangular, zero-padded to " << c0.periodograms.front().segment_length
-      << "), Welch (Hann, " << w.segment_length << "-sample segments, 50 % overlap, " << w.segments
-      << " segments, " << fmt("%.1f", w.dof) << " degrees of freedom per bin); common grid: the " << w.omega_radps.size()
+      << "), Welch (Hann, " << w.segment_length << "-sample segments, 50 % overlap, " << w.segments << " segments, "
+      << fmt("%.1f", w.dof) << " degrees of freedom per bin); common grid: the " << w.omega_radps.size()
       << " Welch bins, d omega " << fmt("%.4f", w.d_omega_radps) << " rad/s.\n\n";
 
   const auto bands = ce500_bands(a.options.dt_s);
@@ -122,11 +122,13 @@ std::string report_text(const Ce500Analysis& a) {
     }
   }
   out << "  (sampled-process / analytical > 1 near Nyquist is aliasing: what a record at dt can see. The periodogram\n"
-         "  far above the analytical PSD at high frequency is leakage of its rectangular window, which the Hann window\n"
+         "  far above the analytical PSD at high frequency is leakage of its rectangular window, which the Hann "
+         "window\n"
          "  of Welch removes: the practical's 'fft error at high frequencies'. '-': no bin in the band.)\n\n";
 
   for (const SystemAnalysis* s : {&a.controlled, &a.reduced}) {
-    out << "Variances (" << s->key << "), value +- one sigma: Lyapunov is exact; the analytical-PSD sigma is the\n"
+    out << "Variances (" << s->key
+        << "), value +- one sigma: Lyapunov is exact; the analytical-PSD sigma is the\n"
            "quadrature error; the others are the statistical spread for this record (turbulence/uncertainty.h)\n";
     out << "    " << pad("output", 8) << pad("unit", 10) << pad("lyapunov", 12) << pad("analytical_psd", 22)
         << pad("periodogram", 22) << pad("welch", 22) << pad("sample", 22) << "sigma(sample) from PSD\n";
@@ -139,7 +141,8 @@ std::string report_text(const Ce500Analysis& a) {
   }
   out << "\n";
 
-  out << "The practical's Table 5.1 beside ours (C controlled, R reduced; ours: Lyapunov | periodogram | Welch | sample)\n";
+  out << "The practical's Table 5.1 beside ours (C controlled, R reduced; ours: Lyapunov | periodogram | Welch | "
+         "sample)\n";
   out << "    " << pad("output", 8) << pad("sys", 4) << pad("published: analytical", 24) << pad("fft", 10)
       << pad("pwelch", 10) << pad("var", 10) << "| ours: " << pad("lyapunov", 11) << pad("periodogram", 12)
       << pad("welch", 11) << "sample\n";
@@ -264,8 +267,9 @@ std::string report_json(const Ce500Analysis& a) {
   j.end_object();
 
   j.key("psd").begin_object();
-  j.key("omega_radps").array(std::vector<double>(a.controlled.omega_radps.data(),
-                                                 a.controlled.omega_radps.data() + a.controlled.omega_radps.size()));
+  j.key("omega_radps")
+      .array(std::vector<double>(a.controlled.omega_radps.data(),
+                                 a.controlled.omega_radps.data() + a.controlled.omega_radps.size()));
   for (const SystemAnalysis* s : {&a.controlled, &a.reduced}) {
     j.key(s->key).begin_object();
     for (std::size_t i = 0; i < names.size(); ++i) {
@@ -306,14 +310,15 @@ std::string report_json(const Ce500Analysis& a) {
 std::string plot_psd_matrix(const fs::path& dir, const Ce500Analysis& a) {
   const auto& names = ce500_output_names();
   std::ostringstream data;
-  data << "# omega_radps, then per output: C analytical, R analytical, C periodogram, R periodogram, C welch, R welch\n";
+  data
+      << "# omega_radps, then per output: C analytical, R analytical, C periodogram, R periodogram, C welch, R welch\n";
   const SystemAnalysis& c = a.controlled;
   const SystemAnalysis& r = a.reduced;
   for (Eigen::Index k = 1; k < c.omega_radps.size(); ++k) {
     data << fmt("%.9g", c.omega_radps[k]);
     for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(names.size()); ++i) {
-      for (const Eigen::MatrixXd* m : {&c.psd_analytical, &r.psd_analytical, &c.psd_periodogram, &r.psd_periodogram,
-                                       &c.psd_welch, &r.psd_welch}) {
+      for (const Eigen::MatrixXd* m :
+           {&c.psd_analytical, &r.psd_analytical, &c.psd_periodogram, &r.psd_periodogram, &c.psd_welch, &r.psd_welch}) {
         const Eigen::MatrixXd& M = *m;
         data << " " << fmt("%.9g", M(k, i));
       }
@@ -335,8 +340,9 @@ std::string plot_psd_matrix(const fs::path& dir, const Ce500Analysis& a) {
       const int col = 2 + static_cast<int>(i) * 6 + 2 * m;
       s << "set title " << gp_quote(names[i] + ", " + methods[m]) << "\n";
       s << "set xlabel 'omega [rad/s]'\nset ylabel " << gp_quote(units[i]) << "\n";
-      s << "plot " << gp_quote(dat.string()) << " using 1:" << col << " with lines lc rgb '#1f77b4' title 'C', '' using 1:"
-        << col + 1 << " with lines lc rgb '#d62728' title 'R'\n";
+      s << "plot " << gp_quote(dat.string()) << " using 1:" << col
+        << " with lines lc rgb '#1f77b4' title 'C', '' using 1:" << col + 1
+        << " with lines lc rgb '#d62728' title 'R'\n";
     }
   }
   s << "unset multiplot\n";
@@ -376,7 +382,8 @@ std::string plot_pole_map(const fs::path& dir, const Ce500Analysis& a) {
 std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
   const auto& names = ce500_output_names();
   const char* labels[] = {"beta [deg]", "phi [deg]", "pb/2V [-]", "rb/2V [-]", "a_y [m/s^2]"};
-  const Eigen::Index n = std::min<Eigen::Index>(a.t_s.size(), static_cast<Eigen::Index>(std::llround(120.0 / a.options.dt_s)) + 1);
+  const Eigen::Index n =
+      std::min<Eigen::Index>(a.t_s.size(), static_cast<Eigen::Index>(std::llround(120.0 / a.options.dt_s)) + 1);
   std::vector<plots::TimePanel> panels;
   for (std::size_t i = 0; i < names.size(); ++i) {
     const Eigen::Index c = static_cast<Eigen::Index>(i);
@@ -389,7 +396,7 @@ std::string plot_time(const std::string& dir, const Ce500Analysis& a) {
     panels.push_back(p);
   }
   return plots::plot_time_histories(dir, "time_histories", "Ce500 responses to the same v_g, w_g turbulence record",
-                                     a.t_s.head(n), panels);
+                                    a.t_s.head(n), panels);
 }
 
 }  // namespace
@@ -400,8 +407,9 @@ int run_turbulence_command(const std::vector<std::string>& args) {
   std::optional<std::uint64_t> seed;
   std::optional<std::size_t> segment;
   cmdline::CommandLine cl("rig turbulence", kDescription);
-  cl->footer("Exit code: 0, or 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance;\n"
-             "2 bad usage or input.");
+  cl->footer(
+      "Exit code: 0, or 1 if an eigenvalue differs from Table 2.1 by more than the file's tolerance;\n"
+      "2 bad usage or input.");
   cl->add_option("practical", file, "the practical's file (rig_configs/turbulence/ce500_practical.yaml)")->required();
   cl->add_option("--duration", duration, "record length [s] (default: the file's simulation.duration_s)")
       ->check(cmdline::kFinite & CLI::PositiveNumber)

@@ -63,8 +63,10 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
   const plant::PlantConfig plant = plant::plant_config_from(plant_section);
   const auto& gust = plant.effects.get<plant::LateralGustConfig>();
   if (!gust.enabled || gust.form != plant::GustForm::kDryden || !(gust.sigma_mps > 0.0)) {
-    throw std::invalid_argument(file + ": plant.effects.lateral_gust must be enabled with form dryden and "
-                                "sigma_mps > 0 (it is " + std::string(gust.enabled ? "enabled" : "disabled") + ", " +
+    throw std::invalid_argument(file +
+                                ": plant.effects.lateral_gust must be enabled with form dryden and "
+                                "sigma_mps > 0 (it is " +
+                                std::string(gust.enabled ? "enabled" : "disabled") + ", " +
                                 plant::to_string(gust.form) + ", sigma " + fmt("%g", gust.sigma_mps) + " m/s)");
   }
   // Every other enabled plant effect (the linear hover loop leaves them out), from the registry.
@@ -84,8 +86,9 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
     for (const auto& seg : m.segments) sets.push_back(seg.gain_set.empty() ? m.gain_set : seg.gain_set);
     for (const auto& g : sets) {
       if (g != s.gain_set) {
-        throw std::invalid_argument(file + ": the manoeuvre flies gain set '" + g + "' and the controller's default is '" +
-                                    s.gain_set + "': the comparison needs one gain set throughout");
+        throw std::invalid_argument(file + ": the manoeuvre flies gain set '" + g +
+                                    "' and the controller's default is '" + s.gain_set +
+                                    "': the comparison needs one gain set throughout");
       }
     }
   }
@@ -116,8 +119,8 @@ std::map<std::string, Eigen::VectorXd> truth_records(const std::string& log, dou
   for (std::size_t i = 0; i + 1 < ref.t_s.size(); ++i) {
     const double step = ref.t_s[i + 1] - ref.t_s[i];
     if (std::fabs(step - dt_s) > 1e-3 * dt_s) {
-      throw std::invalid_argument(log + ": TRUTH is not evenly sampled (step " + fmt("%.6g", step) + " s at t = " +
-                                  fmt("%.6g", ref.t_s[i]) + " s against " + fmt("%.6g", dt_s) +
+      throw std::invalid_argument(log + ": TRUTH is not evenly sampled (step " + fmt("%.6g", step) +
+                                  " s at t = " + fmt("%.6g", ref.t_s[i]) + " s against " + fmt("%.6g", dt_s) +
                                   " s); fly with --clock lockstep");
     }
   }
@@ -137,8 +140,8 @@ std::string report_text(const std::string& scenario, const std::string& log, con
                         const ResponseComparison& c, double skip_s) {
   std::ostringstream out;
   out << "rig turbulence-response: " << log << " (scenario " << scenario << ")\n";
-  out << "Closed loop: " << s.model.name << ", gain set " << s.gain_set << " (Kp " << s.params.kp_per_rad << " /rad, Kd "
-      << s.params.kd_per_radps << " s/rad), low-pass " << s.params.lowpass_cutoff_hz << " Hz, map "
+  out << "Closed loop: " << s.model.name << ", gain set " << s.gain_set << " (Kp " << s.params.kp_per_rad
+      << " /rad, Kd " << s.params.kd_per_radps << " s/rad), low-pass " << s.params.lowpass_cutoff_hz << " Hz, map "
       << s.params.roll_cmd_to_delta_f_radps << " rad/s, flap " << s.params.flap_gain_per_s << "/(s+"
       << s.params.flap_pole_radps << "); Dryden gust sigma " << s.params.gust_sigma_mps << " m/s, T "
       << s.params.gust_time_scale_s << " s\n";
@@ -147,19 +150,22 @@ std::string report_text(const std::string& scenario, const std::string& log, con
         << "; the model's controller reads the true state (the estimator's noise and lag are not in it)\n";
   }
   for (const auto& e : s.other_effects) out << "note: plant effect " << e << " is on; the linear model leaves it out\n";
-  out << "Flight: " << c.samples << " TRUTH samples at " << fmt("%.4g", 1.0 / c.dt_s) << " Hz after the first " << skip_s
-      << " s; Welch " << c.segments << " Hann segments of " << c.segment_length << " (" << fmt("%.3g", c.segment_length * c.dt_s)
-      << " s), " << fmt("%.1f", c.dof) << " degrees of freedom, " << fmt("%.0f", 100 * c.level) << " % band x["
-      << fmt("%.3f", c.band_lower) << ", " << fmt("%.3f", c.band_upper) << "]\n";
-  out << "PSD: S(omega) two-sided in unit^2/(rad/s), sigma^2 = (1/pi) int_0^inf S d omega (turbulence/spectral_density.h)\n\n";
-  out << "Spectra up to " << fmt("%g", c.f_max_hz) << " Hz, flight Welch against the model's expected Welch estimate:\n";
+  out << "Flight: " << c.samples << " TRUTH samples at " << fmt("%.4g", 1.0 / c.dt_s) << " Hz after the first "
+      << skip_s << " s; Welch " << c.segments << " Hann segments of " << c.segment_length << " ("
+      << fmt("%.3g", c.segment_length * c.dt_s) << " s), " << fmt("%.1f", c.dof) << " degrees of freedom, "
+      << fmt("%.0f", 100 * c.level) << " % band x[" << fmt("%.3f", c.band_lower) << ", " << fmt("%.3f", c.band_upper)
+      << "]\n";
+  out << "PSD: S(omega) two-sided in unit^2/(rad/s), sigma^2 = (1/pi) int_0^inf S d omega "
+         "(turbulence/spectral_density.h)\n\n";
+  out << "Spectra up to " << fmt("%g", c.f_max_hz)
+      << " Hz, flight Welch against the model's expected Welch estimate:\n";
   out << "  output  bins  counted  outside  allowed  mean ratio        max |E/analytical - 1|  verdict\n";
   for (const auto& o : c.outputs) {
     out << "  " << o.name << std::string(8 - o.name.size(), ' ') << fmt("%4.0f", double(o.bins))
         << fmt("%9.0f", double(o.counted)) << fmt("%9.0f", double(o.outside)) << fmt("%9.0f", double(o.allowed)) << "  "
         << fmt("%.3f", o.mean_ratio) << " +- " << fmt("%.3f", o.mean_ratio_sigma) << "   "
-        << fmt("%-24.3f", o.max_analytical_deviation)
-        << (o.bins_agree && o.mean_agrees ? "agrees" : "DISAGREES") << "\n";
+        << fmt("%-24.3f", o.max_analytical_deviation) << (o.bins_agree && o.mean_agrees ? "agrees" : "DISAGREES")
+        << "\n";
   }
   out << "\nVariances, flight (sample variance) against the model (Lyapunov) with the model's sampling spread:\n";
   for (const auto& o : c.outputs) {
@@ -169,15 +175,18 @@ std::string report_text(const std::string& scenario, const std::string& log, con
         << fmt("%.2e", o.flight_variance_sigma) << " (" << o.unit << ")^2  (" << fmt("%+.2f", z) << " sigma)  "
         << (o.variance_agrees ? "agrees" : "DISAGREES") << "\n";
   }
-  out << "\n" << (c.agrees() ? "AGREES" : "DISAGREES") << ": "
-      << "bins outside the band within the binomial bound (every other bin, false alarm 1e-3), mean ratio within 3 sigma "
+  out << "\n"
+      << (c.agrees() ? "AGREES" : "DISAGREES") << ": "
+      << "bins outside the band within the binomial bound (every other bin, false alarm 1e-3), mean ratio within 3 "
+         "sigma "
          "of 1, variances within 3 sigma\n";
   return out.str();
 }
 
 std::vector<double> vec(const Eigen::VectorXd& x) { return std::vector<double>(x.data(), x.data() + x.size()); }
 
-std::string report_json(const std::string& scenario, const std::string& log, const Setup& s, const ResponseComparison& c) {
+std::string report_json(const std::string& scenario, const std::string& log, const Setup& s,
+                        const ResponseComparison& c) {
   JsonWriter j;
   j.begin_object();
   j.key("scenario").value(scenario);
@@ -234,7 +243,8 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
   for (Eigen::Index k = 0; k < n; ++k) {
     data << fmt("%.9g", c.outputs.front().omega_radps[k]);
     for (const auto& o : c.outputs) {
-      for (const double x : {o.welch[k], o.expected[k], o.lower[k], o.upper[k], o.analytical[k]}) data << " " << fmt("%.9g", x);
+      for (const double x : {o.welch[k], o.expected[k], o.lower[k], o.upper[k], o.analytical[k]})
+        data << " " << fmt("%.9g", x);
     }
     data << "\n";
   }
@@ -250,12 +260,13 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
     s << "set terminal pngcairo size 1100,1300 font 'sans,10'\nset termoption noenhanced\n";
     s << "set output " << gp_quote(png.string()) << "\n";
     s << "set multiplot layout 3,1 title "
-      << gp_quote(std::string(ratio ? "Flight Welch PSD / model expectation" : "Hover in Dryden gusts: flight against the closed-loop model") +
+      << gp_quote(std::string(ratio ? "Flight Welch PSD / model expectation"
+                                    : "Hover in Dryden gusts: flight against the closed-loop model") +
                   " (" + fmt("%.0f", 100 * c.level) + " % band, " + fmt("%.1f", c.dof) + " dof; compared up to " +
                   fmt("%g", c.f_max_hz) + " Hz)")
       << "\n";
-    s << "set logscale x\nset grid\nset key top right\nset xrange [" << fmt("%.6g", c.outputs.front().omega_radps[0]) << ":"
-      << fmt("%.6g", x_hi) << "]\n";
+    s << "set logscale x\nset grid\nset key top right\nset xrange [" << fmt("%.6g", c.outputs.front().omega_radps[0])
+      << ":" << fmt("%.6g", x_hi) << "]\n";
     s << "set arrow 1 from " << fmt("%.6g", w_max) << ", graph 0 to " << fmt("%.6g", w_max)
       << ", graph 1 nohead dt 3 lc rgb '#555555'\n";
     if (ratio) {
@@ -271,7 +282,8 @@ std::vector<std::string> plot_response(const fs::path& dir, const ResponseCompar
         s << "set ylabel 'flight / expected [-]'\n";
         s << "plot " << gp_quote(dat.string()) << " using 1:(" << c.band_lower << "):(" << c.band_upper
           << ") with filledcurves lc rgb '#cce0f5' title 'band', '' using 1:($" << base << "/$" << base + 1
-          << ") with linespoints pt 7 ps 0.5 lc rgb '#d62728' title 'flight / model', 1 with lines lc rgb '#1f77b4' notitle\n";
+          << ") with linespoints pt 7 ps 0.5 lc rgb '#d62728' title 'flight / model', 1 with lines lc rgb '#1f77b4' "
+             "notitle\n";
       } else {
         s << "set ylabel " << gp_quote("(" + o.unit + ")^2/(rad/s)") << "\n";
         s << "plot " << gp_quote(dat.string()) << " using 1:" << base + 2 << ":" << base + 3
@@ -302,10 +314,10 @@ int run_turbulence_response_command(const std::vector<std::string>& args) {
   cl->add_option("scenario", scenario, "the scenario the flight was flown with")->required();
   cl->add_option("log", log, "the flight's LCM log")->required();
   cmdline::each_value(cl->add_option("--set", "scenario override, as for rig run (repeatable)")
-                 ->type_name("KEY.PATH=VALUE")
-                 ->allow_extra_args(false)
-                 ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-             [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
+                          ->type_name("KEY.PATH=VALUE")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&overrides](const std::string& v) { overrides.push_back(parse_override(v)); });
   cl->add_option("--skip", skip_s, "drop the first S seconds of the flight (start-up)")
       ->capture_default_str()
       ->check(cmdline::kFinite & CLI::NonNegativeNumber)

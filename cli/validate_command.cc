@@ -34,8 +34,8 @@ int run_validate_command(const std::vector<std::string>& args) {
   ident::ValidationOptions opt;
   ident::LogReadOptions log_options;
   cmdline::CommandLine cl("rig validate",
-                 "Open-loop validation: the state derivatives predicted by the model from the measured\n"
-                 "states and inputs against the measured ones (thesis Tables 7-8).");
+                          "Open-loop validation: the state derivatives predicted by the model from the measured\n"
+                          "states and inputs against the measured ones (thesis Tables 7-8).");
   cl->add_option("model", model_file, "the model file")->required();
   cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
   add_vehicle(cl, vehicle_file, "the model's");
@@ -58,9 +58,7 @@ int run_validate_command(const std::vector<std::string>& args) {
                  "roll gain set of the controller copy (default: the set a rig log's controller flew, "
                  "fast for CSV data)")
       ->type_name("NAME");
-  cl->add_option("--controller", controller_file, "controller configuration")
-      ->capture_default_str()
-      ->type_name("FILE");
+  cl->add_option("--controller", controller_file, "controller configuration")->capture_default_str()->type_name("FILE");
   if (const auto done = cl.parse(args)) return *done;
   if (const auto failed = apply_states(cl, log_options, sensing_file, {csv})) return *failed;
   if (!plots.empty()) plots::require_gnuplot();

@@ -48,8 +48,8 @@ void sleep_until(std::chrono::steady_clock::time_point t) {
 /// What a replay did.
 struct Replay {
   int64_t events = 0;
-  double rig_s = 0.0;       ///< rig time covered [s]
-  std::string damage;       ///< salvaged: what was left out
+  double rig_s = 0.0;  ///< rig time covered [s]
+  std::string damage;  ///< salvaged: what was left out
 };
 
 /// Replays `file` into `view`, paced by rig time x `speed` (0: as fast as possible).

@@ -134,14 +134,18 @@ CommandLine::CommandLine(const std::string& program, const std::string& descript
 }
 
 CLI::Option* CommandLine::add_json(std::string& target, const std::string& what) {
-  return app_.add_option("--json", target, what + " as JSON to FILE; '-' writes it alone to stdout (the text then "
-                                            "goes to stderr or is left out)")
+  return app_
+      .add_option("--json", target,
+                  what +
+                      " as JSON to FILE; '-' writes it alone to stdout (the text then "
+                      "goes to stderr or is left out)")
       ->type_name("FILE|-");
 }
 
 CLI::Option* CommandLine::add_plots(std::string& dir, const std::string& files) {
-  return app_.add_option("--plots", dir, "PNG plots via gnuplot (Debian package gnuplot-nox)" +
-                                             (files.empty() ? std::string() : ": " + files))
+  return app_
+      .add_option("--plots", dir,
+                  "PNG plots via gnuplot (Debian package gnuplot-nox)" + (files.empty() ? std::string() : ": " + files))
       ->type_name("DIR");
 }
 

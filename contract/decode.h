@@ -38,12 +38,14 @@ bool decode_bytes(const void* data, int size, T& msg, std::string* error, bool e
     if (msg.decode(data, 0, size) == size) {
       if (!encodes_back_check || encodes_back(msg, data, size)) return true;
       if (error) {
-        *error = "cannot decode as " + std::string(T::getTypeName()) + " (a string with a NUL inside or without its terminating NUL, " +
-                 std::to_string(size) + " bytes)";
+        *error = "cannot decode as " + std::string(T::getTypeName()) +
+                 " (a string with a NUL inside or without its terminating NUL, " + std::to_string(size) + " bytes)";
       }
       return false;
     }
-    if (error) *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " + std::to_string(size) + " bytes)";
+    if (error)
+      *error = "cannot decode as " + std::string(T::getTypeName()) + " (wrong type or truncated, " +
+               std::to_string(size) + " bytes)";
   } catch (const std::exception& e) {
     if (error) *error = "decoding as " + std::string(T::getTypeName()) + " failed: " + e.what();
   }

@@ -82,11 +82,25 @@ const char* fault_kind_name(FaultKind kind) {
 std::string fault_code_name(int32_t code) {
   // fault_event_t's CODE_* constants, by value.
   static const char* const kNames[] = {
-      "OTHER",          "COMMAND_TIMEOUT",   "MESSAGE_MALFORMED", "QUEUE_DROP",
-      "DEADLINE_MISS",  "PROCESS_EXIT",      "CAN_ERROR_FRAME",   "CONFIG_ERROR",
-      "ESTIMATOR_DIVERGED", "HEARTBEAT_LOST", "STEP_ACK_TIMEOUT", "TRACKING_LOST",
-      "REALTIME_UNAVAILABLE", "COMMAND_CLAMPED", "INPUT_STALE",   "MEASUREMENT_OUT_OF_WINDOW",
-      "FAULT_INJECTED", "SENSOR_STUCK",      "FAILSAFE",
+      "OTHER",
+      "COMMAND_TIMEOUT",
+      "MESSAGE_MALFORMED",
+      "QUEUE_DROP",
+      "DEADLINE_MISS",
+      "PROCESS_EXIT",
+      "CAN_ERROR_FRAME",
+      "CONFIG_ERROR",
+      "ESTIMATOR_DIVERGED",
+      "HEARTBEAT_LOST",
+      "STEP_ACK_TIMEOUT",
+      "TRACKING_LOST",
+      "REALTIME_UNAVAILABLE",
+      "COMMAND_CLAMPED",
+      "INPUT_STALE",
+      "MEASUREMENT_OUT_OF_WINDOW",
+      "FAULT_INJECTED",
+      "SENSOR_STUCK",
+      "FAILSAFE",
   };
   if (code >= 0 && code < static_cast<int32_t>(sizeof kNames / sizeof kNames[0])) return kNames[code];
   return "code " + std::to_string(code);

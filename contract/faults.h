@@ -42,9 +42,9 @@ enum class FaultTarget {
 /// compile until each of them handles it (docs/faults.md, "Adding a fault kind").
 struct FaultKindInfo {
   FaultKind kind;
-  const char* name;     ///< in a scenario's `kind:`
+  const char* name;  ///< in a scenario's `kind:`
   FaultTarget target;
-  const char* params;   ///< its `params:` keys, as docs/faults.md lists them ("" for none)
+  const char* params;  ///< its `params:` keys, as docs/faults.md lists them ("" for none)
 };
 
 /// Every kind, in the order of the enumeration.
@@ -62,19 +62,19 @@ const std::vector<std::string>& fault_channel_targets();
 
 /// One entry of the scenario's `faults` list.
 struct FaultSpec {
-  int index = 0;            ///< position in the list (names the fault; seeds its random choices)
-  std::string target;       ///< a channel of fault_channel_targets(), or kFaultTargetCan
+  int index = 0;       ///< position in the list (names the fault; seeds its random choices)
+  std::string target;  ///< a channel of fault_channel_targets(), or kFaultTargetCan
   FaultKind kind = FaultKind::kOff;
-  int64_t start_us = 0;     ///< simulated time it starts [us]
+  int64_t start_us = 0;                                  ///< simulated time it starts [us]
   int64_t end_us = std::numeric_limits<int64_t>::max();  ///< simulated time it ends [us]
   // Parameters (those of the kind; the others keep their defaults).
-  bool garbage_nan = false; ///< garbage: non-finite values (true) or malformed bytes (false)
-  std::string field;        ///< wrong, garbage nan: the value fields touched ("" = all); a name or name[i]
-  double scale = 1.0;       ///< wrong
-  double bias = 0.0;        ///< wrong, in the field's unit
-  int divisor = 2;          ///< slow
-  int64_t delay_us = 0;     ///< delayed
-  double probability = 0.0; ///< intermittent, loss, corrupt
+  bool garbage_nan = false;  ///< garbage: non-finite values (true) or malformed bytes (false)
+  std::string field;         ///< wrong, garbage nan: the value fields touched ("" = all); a name or name[i]
+  double scale = 1.0;        ///< wrong
+  double bias = 0.0;         ///< wrong, in the field's unit
+  int divisor = 2;           ///< slow
+  int64_t delay_us = 0;      ///< delayed
+  double probability = 0.0;  ///< intermittent, loss, corrupt
 
   bool active_at(int64_t utime) const { return utime >= start_us && utime < end_us; }
   /// "fault 2 (MOCAP_POSE delayed 50 ms, 1.000-2.000 s)".

@@ -66,7 +66,8 @@ void assign(double (&to)[N], const Eigen::Matrix<double, N, 1>& from) {
 template <class Message, class Value>
 Message message_of(const Value& value) {
   Message m{};
-  nimble::bind_fields(value, m, [](const char*, const auto& value_field, auto& message_field) { assign(message_field, value_field); });
+  nimble::bind_fields(
+      value, m, [](const char*, const auto& value_field, auto& message_field) { assign(message_field, value_field); });
   return m;
 }
 
@@ -74,7 +75,8 @@ Message message_of(const Value& value) {
 template <class Value, class Message>
 Value value_of(const Message& m) {
   Value value;
-  nimble::bind_fields(value, m, [](const char*, auto& value_field, const auto& message_field) { assign(value_field, message_field); });
+  nimble::bind_fields(
+      value, m, [](const char*, auto& value_field, const auto& message_field) { assign(value_field, message_field); });
   return value;
 }
 

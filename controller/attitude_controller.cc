@@ -69,7 +69,8 @@ const Range kThrottleMap = Range::closed(0.0, 50.0);
 /// A table's first violation as the controller's InvalidParameter, its key under `prefix`.
 template <typename C>
 void check_table(const ParamTable<C>& table, const C& config, const std::string& prefix) {
-  if (const auto v = first_violation(table, config)) throw InvalidParameter(prefix + v->key, v->value, "must be " + v->allowed);
+  if (const auto v = first_violation(table, config))
+    throw InvalidParameter(prefix + v->key, v->value, "must be " + v->allowed);
 }
 
 void check_reference(const std::string& axis, const ReferenceGeneratorConfig& r) {
@@ -98,19 +99,29 @@ const ParamTable<ControllerConfig>& controller_params() {
   using C = ControllerConfig;
   static const ParamTable<C> table = {
       {"rate_hz", &C::rate_hz, kRateHz, "Hz", "control rate; thesis: 512 Hz onboard loop"},
-      {"mixing.roll_cmd_to_delta_f_radps", &C::roll_cmd_to_delta_f_radps, kRollMap, "rad/s", "flapping-frequency difference per unit roll command (calibrated, see the controller file)"},
-      {"mixing.mix_abs_roll_gain", &C::mix_abs_roll_gain, kMixAbs, "-", "collective added per |roll command|, onboard mixing 0.1 |roll|"},
-      {"mixing.pitch_cmd_to_dihedral_rad", &C::pitch_cmd_to_dihedral_rad, kPitchMap, "rad", "dihedral per unit pitch command"},
+      {"mixing.roll_cmd_to_delta_f_radps", &C::roll_cmd_to_delta_f_radps, kRollMap, "rad/s",
+       "flapping-frequency difference per unit roll command (calibrated, see the controller file)"},
+      {"mixing.mix_abs_roll_gain", &C::mix_abs_roll_gain, kMixAbs, "-",
+       "collective added per |roll command|, onboard mixing 0.1 |roll|"},
+      {"mixing.pitch_cmd_to_dihedral_rad", &C::pitch_cmd_to_dihedral_rad, kPitchMap, "rad",
+       "dihedral per unit pitch command"},
       {"yaw.enabled", &C::yaw_enabled, Range{}, "-", "the yaw loop flies the wing-root servo (four-state models)"},
-      {"yaw.cmd_to_wing_root_rad", &C::yaw_cmd_to_wing_root_rad, Range::closed(-1.0, 1.0), "rad", "wing-root angle per unit yaw command; negative: N_dw < 0 (Table 8.3)"},
+      {"yaw.cmd_to_wing_root_rad", &C::yaw_cmd_to_wing_root_rad, Range::closed(-1.0, 1.0), "rad",
+       "wing-root angle per unit yaw command; negative: N_dw < 0 (Table 8.3)"},
       {"throttle.trim_throttle_pct", &C::trim_throttle_pct, kTrimThrottle, "%", "throttle at trim"},
-      {"throttle.f_trim_radps", &C::f_trim_radps, Range{0.0, 1000.0, true, false}, "rad/s", "collective flapping frequency at trim, within the limits"},
-      {"throttle.throttle_to_freq_radps_per_pct", &C::throttle_to_freq_radps_per_pct, kThrottleMap, "rad/s/%", "collective per % throttle; the plant's collective_radps_per_pct"},
+      {"throttle.f_trim_radps", &C::f_trim_radps, Range{0.0, 1000.0, true, false}, "rad/s",
+       "collective flapping frequency at trim, within the limits"},
+      {"throttle.throttle_to_freq_radps_per_pct", &C::throttle_to_freq_radps_per_pct, kThrottleMap, "rad/s/%",
+       "collective per % throttle; the plant's collective_radps_per_pct"},
       {"limits.flap_freq_min_radps", &C::flap_freq_min_radps, kFreq, "rad/s", "lowest flapping-frequency command"},
-      {"limits.flap_freq_max_radps", &C::flap_freq_max_radps, Range{0.0, 1000.0, true, false}, "rad/s", "highest flapping-frequency command, above the lowest"},
-      {"failsafe.input_stale_s", &C::input_stale_s, Range{0.0, 10.0, true, false}, "s", "an input older than this engages the failsafe"},
-      {"failsafe.first_input_timeout_s", &C::first_input_timeout_s, Range{0.0, 60.0, true, false}, "s", "no input at all by this time engages the failsafe"},
-      {"failsafe.throttle_pct", &C::failsafe_throttle_pct, Range::closed(0.0, 100.0), "%", "throttle of the failsafe (neutral roll and pitch)"},
+      {"limits.flap_freq_max_radps", &C::flap_freq_max_radps, Range{0.0, 1000.0, true, false}, "rad/s",
+       "highest flapping-frequency command, above the lowest"},
+      {"failsafe.input_stale_s", &C::input_stale_s, Range{0.0, 10.0, true, false}, "s",
+       "an input older than this engages the failsafe"},
+      {"failsafe.first_input_timeout_s", &C::first_input_timeout_s, Range{0.0, 60.0, true, false}, "s",
+       "no input at all by this time engages the failsafe"},
+      {"failsafe.throttle_pct", &C::failsafe_throttle_pct, Range::closed(0.0, 100.0), "%",
+       "throttle of the failsafe (neutral roll and pitch)"},
   };
   return table;
 }
@@ -143,7 +154,8 @@ double hover_flap_frequency_radps(double mass_kg, double gravity_mps2) {
     throw std::invalid_argument("hover_flap_frequency_radps: mass_kg must be > 0, got " + general_text(mass_kg));
   }
   if (!(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0)) {
-    throw std::invalid_argument("hover_flap_frequency_radps: gravity_mps2 must be > 0, got " + general_text(gravity_mps2));
+    throw std::invalid_argument("hover_flap_frequency_radps: gravity_mps2 must be > 0, got " +
+                                general_text(gravity_mps2));
   }
   return ThrustCurve{}.frequency_radps(mass_kg * gravity_mps2);
 }
@@ -170,11 +182,10 @@ void validate(const ControllerConfig& c) {
   }
   check_gains("pitch_gains", c.pitch_gains);
   check_gains("yaw", c.yaw_gains);
-  check(c.flap_freq_max_radps > c.flap_freq_min_radps,
-        "limits.flap_freq_max_radps", c.flap_freq_max_radps,
+  check(c.flap_freq_max_radps > c.flap_freq_min_radps, "limits.flap_freq_max_radps", c.flap_freq_max_radps,
         "in (flap_freq_min_radps = " + general_text(c.flap_freq_min_radps) + ", 1000]");
-  check(c.f_trim_radps >= c.flap_freq_min_radps && c.f_trim_radps <= c.flap_freq_max_radps,
-        "throttle.f_trim_radps", c.f_trim_radps, "within [flap_freq_min_radps, flap_freq_max_radps]");
+  check(c.f_trim_radps >= c.flap_freq_min_radps && c.f_trim_radps <= c.flap_freq_max_radps, "throttle.f_trim_radps",
+        c.f_trim_radps, "within [flap_freq_min_radps, flap_freq_max_radps]");
 }
 
 const GainSet& roll_gain_set(const ControllerConfig& config, const std::string& name) {
@@ -353,8 +364,7 @@ ControllerOutput AttitudeController::step(const ControllerInput& in) {
   const std::int64_t clamps_before = roll_ref_.setpoint_clamp_count() + pitch_ref_.setpoint_clamp_count();
   const ReferenceState& rr = roll_ref_.step(roll_sp);
   const ReferenceState& pr = pitch_ref_.step(pitch_sp);
-  counters_.setpoint_clamps +=
-      roll_ref_.setpoint_clamp_count() + pitch_ref_.setpoint_clamp_count() - clamps_before;
+  counters_.setpoint_clamps += roll_ref_.setpoint_clamp_count() + pitch_ref_.setpoint_clamp_count() - clamps_before;
   out.roll_ref_rad = rr.angle_rad;
   out.roll_rate_ref_radps = rr.rate_radps;
   out.pitch_ref_rad = pr.angle_rad;

@@ -150,19 +150,19 @@ ControllerConfig load_controller_config(const std::string& file);
 
 /// Inputs of one control step: measured attitude and rates, set-points.
 struct ControllerInput {
-  double phi_rad = 0.0;        ///< measured roll angle [rad], positive right wing down
-  double theta_rad = 0.0;      ///< measured pitch angle [rad], positive nose up
-  double p_radps = 0.0;        ///< measured roll rate, body x [rad/s]
-  double q_radps = 0.0;        ///< measured pitch rate, body y [rad/s]
-  double roll_sp_rad = 0.0;    ///< roll set-point [rad]
-  double pitch_sp_rad = 0.0;   ///< pitch set-point [rad]
+  double phi_rad = 0.0;       ///< measured roll angle [rad], positive right wing down
+  double theta_rad = 0.0;     ///< measured pitch angle [rad], positive nose up
+  double p_radps = 0.0;       ///< measured roll rate, body x [rad/s]
+  double q_radps = 0.0;       ///< measured pitch rate, body y [rad/s]
+  double roll_sp_rad = 0.0;   ///< roll set-point [rad]
+  double pitch_sp_rad = 0.0;  ///< pitch set-point [rad]
   /// Throttle set-point before tilt compensation [% of full scale, 0..100]
   /// (attitude_setpoint_t.throttle_pct). Not finite (the default): trim throttle.
   double throttle_pct = std::numeric_limits<double>::quiet_NaN();
   /// Tilt compensation factor THRF [-], >= 1 (attitude_setpoint_t.throttle_factor).
   double throttle_factor = 1.0;
-  double psi_rad = 0.0;        ///< measured yaw angle [rad] (yaw loop)
-  double r_radps = 0.0;        ///< measured yaw rate, body z [rad/s] (yaw loop)
+  double psi_rad = 0.0;  ///< measured yaw angle [rad] (yaw loop)
+  double r_radps = 0.0;  ///< measured yaw rate, body z [rad/s] (yaw loop)
 };
 
 /// Outputs of one control step.

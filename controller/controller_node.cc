@@ -53,12 +53,14 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       const Estimate e = contract::from_message(message);
       // Times outside any run are not an estimate to fly on (and would overflow its age).
       if (!transport::plausible_sim_utime(e.utime) || !transport::plausible_sim_utime(e.imu_utime)) {
-        node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kEstimate,
+        node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED,
+                     contract::channels::kEstimate,
                      "estimate stamped outside any run (utime " + std::to_string(e.utime) + " us, imu_utime " +
                          std::to_string(e.imu_utime) + " us): not used");
         return;
       }
-      const Input in{e.utime, e.imu_utime, e.euler_rad[0], e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1],
+      const Input in{e.utime,        e.imu_utime,           e.euler_rad[0],
+                     e.euler_rad[1], e.omega_body_radps[0], e.omega_body_radps[1],
                      e.euler_rad[2], e.omega_body_radps[2]};
       if (node_->lockstep()) {
         estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
@@ -77,18 +79,25 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
         return;
       }
       const Truth t = contract::from_message(message);
-      input_ = Input{utime, utime, t.euler_rad[0], t.euler_rad[1], t.omega_body_radps[0], t.omega_body_radps[1],
-                     t.euler_rad[2], t.omega_body_radps[2]};
+      input_ = Input{utime,
+                     utime,
+                     t.euler_rad[0],
+                     t.euler_rad[1],
+                     t.omega_body_radps[0],
+                     t.omega_body_radps[1],
+                     t.euler_rad[2],
+                     t.omega_body_radps[2]};
       if (pilot_on_truth_) pilot_->observe(static_cast<double>(utime) * 1e-6, -t.position_ned_m[2]);
       have_input_ = true;
       node_->notify_input(transport::message_us_to_ns(utime));
     });
   }
-  node_->add_task("controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
-                  run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
-                                                    : transport::ProcessNode::Trigger::kTimer,
-                  // Triggered by its input, it still runs once that input is stale, to take the failsafe.
-                  static_cast<int64_t>(config_.input_stale_s * 1e9));
+  node_->add_task(
+      "controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
+      run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
+                                        : transport::ProcessNode::Trigger::kTimer,
+      // Triggered by its input, it still runs once that input is stale, to take the failsafe.
+      static_cast<int64_t>(config_.input_stale_s * 1e9));
 }
 
 int ControllerNode::run() { return node_->run(); }
@@ -146,7 +155,8 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
       engage_failsafe(utime, "its input is not finite");
     }
   }
-  const ControllerOutput out = failsafe_ ? controller_->failsafe_output(config_.failsafe_throttle_pct) : controller_->step(in);
+  const ControllerOutput out =
+      failsafe_ ? controller_->failsafe_output(config_.failsafe_throttle_pct) : controller_->step(in);
   // The command goes out first: it is what the plant waits for.
 
   ActuatorCommand cmd;

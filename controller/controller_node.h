@@ -58,7 +58,7 @@ class ControllerNode {
   std::unique_ptr<transport::ProcessNode> node_;
   /// The state the next cycle uses (from TRUTH or ESTIMATE).
   struct Input {
-    int64_t utime = -1;     ///< the message's stamp (a lockstep estimate's tick)
+    int64_t utime = -1;           ///< the message's stamp (a lockstep estimate's tick)
     int64_t measured_utime = -1;  ///< the time the state refers to (an estimate: its IMU sample)
     double phi_rad = 0, theta_rad = 0, p_radps = 0, q_radps = 0, psi_rad = 0, r_radps = 0;
   };

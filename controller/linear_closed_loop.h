@@ -22,26 +22,26 @@ namespace nimble {
 
 /// Options of the linear closed-loop simulation.
 struct LinearLoopOptions {
-  double plant_rate_hz = 1000.0;     ///< plant integration rate [Hz]
-  double flap_gain_per_s = 8.97;     ///< numerator of the flap actuator [1/s] (thesis Eq 33)
-  double flap_pole_radps = 12.56;    ///< pole of the flap actuator [rad/s] (thesis Eq 33)
-  double tail_s = 4.0;               ///< hover simulated after the manoeuvre ends [s]
-  double settle_window_s = 0.5;      ///< final window checked for the return to hover [s]
-  bool record_trace = false;         ///< keep every plant sample in LinearLoopResult::trace
+  double plant_rate_hz = 1000.0;   ///< plant integration rate [Hz]
+  double flap_gain_per_s = 8.97;   ///< numerator of the flap actuator [1/s] (thesis Eq 33)
+  double flap_pole_radps = 12.56;  ///< pole of the flap actuator [rad/s] (thesis Eq 33)
+  double tail_s = 4.0;             ///< hover simulated after the manoeuvre ends [s]
+  double settle_window_s = 0.5;    ///< final window checked for the return to hover [s]
+  bool record_trace = false;       ///< keep every plant sample in LinearLoopResult::trace
 };
 
 /// One plant sample of the simulation.
 struct LinearLoopSample {
-  double t_s;                 ///< time since the manoeuvre start [s]
-  double p_radps;             ///< roll rate [rad/s]
-  double v_mps;               ///< side velocity [m/s]
-  double phi_rad;             ///< roll angle [rad]
-  double delta_f_radps;       ///< actuator output [rad/s]
-  double delta_f_cmd_radps;   ///< controller command [rad/s]
-  double delta_t_pct;         ///< throttle deviation fed to the model [%]
-  double roll_sp_rad;         ///< roll set-point [rad]
-  double roll_ref_rad;        ///< roll reference [rad]
-  double roll_cmd_norm;       ///< normalised roll command [-]
+  double t_s;                ///< time since the manoeuvre start [s]
+  double p_radps;            ///< roll rate [rad/s]
+  double v_mps;              ///< side velocity [m/s]
+  double phi_rad;            ///< roll angle [rad]
+  double delta_f_radps;      ///< actuator output [rad/s]
+  double delta_f_cmd_radps;  ///< controller command [rad/s]
+  double delta_t_pct;        ///< throttle deviation fed to the model [%]
+  double roll_sp_rad;        ///< roll set-point [rad]
+  double roll_ref_rad;       ///< roll reference [rad]
+  double roll_cmd_norm;      ///< normalised roll command [-]
 };
 
 /// Range (max - min) of a signal.
@@ -54,24 +54,24 @@ struct SignalRange {
 
 /// Outcome of one simulation.
 struct LinearLoopResult {
-  SignalRange p_radps, v_mps, phi_rad;   ///< over the whole run
-  SignalRange delta_f_radps;             ///< actuator output over the whole run
-  SignalRange delta_f_cmd_radps;         ///< controller command over the whole run
-  double settle_max_abs_p_radps = 0.0;   ///< max |p| in the final settle window
-  double settle_max_abs_v_mps = 0.0;     ///< max |v| in the final settle window
-  double settle_max_abs_phi_rad = 0.0;   ///< max |phi| in the final settle window
-  double duration_s = 0.0;               ///< simulated time [s]
-  bool finite = true;                    ///< no state became non-finite or absurdly large
-  ControllerCounters counters;           ///< controller counters at the end
-  std::vector<LinearLoopSample> trace;   ///< every plant sample if requested
+  SignalRange p_radps, v_mps, phi_rad;  ///< over the whole run
+  SignalRange delta_f_radps;            ///< actuator output over the whole run
+  SignalRange delta_f_cmd_radps;        ///< controller command over the whole run
+  double settle_max_abs_p_radps = 0.0;  ///< max |p| in the final settle window
+  double settle_max_abs_v_mps = 0.0;    ///< max |v| in the final settle window
+  double settle_max_abs_phi_rad = 0.0;  ///< max |phi| in the final settle window
+  double duration_s = 0.0;              ///< simulated time [s]
+  bool finite = true;                   ///< no state became non-finite or absurdly large
+  ControllerCounters counters;          ///< controller counters at the end
+  std::vector<LinearLoopSample> trace;  ///< every plant sample if requested
 };
 
 /// Reference ranges (max - min) a calibration aims at.
 struct TargetRanges {
-  double p_radps = 12.06;       ///< thesis Table 9.4, identification data set 1
-  double v_mps = 1.17;          ///< thesis Table 9.4, identification data set 1
-  double phi_rad = 0.89;        ///< thesis Table 9.4, identification data set 1
-  double delta_f_radps = 115.0; ///< thesis Table 9.10: RMSE 12.59 rad/s = 10.95 % of the measured range
+  double p_radps = 12.06;        ///< thesis Table 9.4, identification data set 1
+  double v_mps = 1.17;           ///< thesis Table 9.4, identification data set 1
+  double phi_rad = 0.89;         ///< thesis Table 9.4, identification data set 1
+  double delta_f_radps = 115.0;  ///< thesis Table 9.10: RMSE 12.59 rad/s = 10.95 % of the measured range
 };
 
 /// Calibration score: root mean square of log(range / target) over p, v, phi and

@@ -32,7 +32,8 @@ struct GainCandidate {
 };
 
 /// The nearest candidate beyond 1 (upward or downward) at which stability really changes.
-std::optional<GainCandidate> stability_edge(const BrokenLoop& loop, std::vector<GainCandidate> candidates, bool upward) {
+std::optional<GainCandidate> stability_edge(const BrokenLoop& loop, std::vector<GainCandidate> candidates,
+                                            bool upward) {
   std::sort(candidates.begin(), candidates.end(),
             [upward](const GainCandidate& a, const GainCandidate& b) { return upward ? a.k < b.k : a.k > b.k; });
   for (std::size_t i = 0; i < candidates.size(); ++i) {

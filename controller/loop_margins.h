@@ -74,8 +74,8 @@ struct MarginOptions {
 /// is +infinity (gain, delay), -infinity (gain reduction) or NaN (phase, its crossover);
 /// its frequency is NaN.
 struct LoopMargins {
-  bool closed_loop_stable = false;   ///< every closed-loop eigenvalue inside the unit circle
-  bool open_loop_stable = false;     ///< every eigenvalue of A inside the unit circle
+  bool closed_loop_stable = false;  ///< every closed-loop eigenvalue inside the unit circle
+  bool open_loop_stable = false;    ///< every eigenvalue of A inside the unit circle
   double gain_margin = std::numeric_limits<double>::infinity();  ///< factor [-], > 1
   double gain_margin_hz = std::numeric_limits<double>::quiet_NaN();
   double gain_reduction_margin = 0.0;  ///< factor [-], < 1; 0: the gain may go to zero
@@ -109,10 +109,10 @@ LoopMargins loop_margins(const BrokenLoop& loop, const MarginOptions& options = 
 
 /// One closed-loop pole.
 struct LoopPole {
-  std::complex<double> z;  ///< discrete eigenvalue
-  std::complex<double> s;  ///< its continuous equivalent ln(z) / dt [1/s]
-  double damping = 1.0;    ///< -Re(s) / |s| [-]
-  double natural_hz = 0.0; ///< |s| / 2 pi [Hz]
+  std::complex<double> z;   ///< discrete eigenvalue
+  std::complex<double> s;   ///< its continuous equivalent ln(z) / dt [1/s]
+  double damping = 1.0;     ///< -Re(s) / |s| [-]
+  double natural_hz = 0.0;  ///< |s| / 2 pi [Hz]
 };
 
 /// The eigenvalues of `phi` (a closed-loop transition matrix over `dt_s`) as poles, sorted by

@@ -13,7 +13,7 @@ namespace nimble {
 namespace {
 
 constexpr double kDegToRad = kPi / 180.0;
-constexpr double kLimitDeg = 60.0;           // onboard roll set-point limit
+constexpr double kLimitDeg = 60.0;            // onboard roll set-point limit
 constexpr double kMaxMainFrequencyHz = 50.0;  // pulses of at least 10 ms (5 control steps at 512 Hz)
 
 const Range kAngleDeg = Range::closed(-kLimitDeg, kLimitDeg);
@@ -32,8 +32,9 @@ Axis axis_from(ConfigMap& seg, bool required) {
 void check_pulse_limit(ConfigMap& seg, const Segment& s) {
   const double base = s.axis == Axis::kRoll ? s.roll_rad : s.pitch_rad;
   if (std::fabs(base) + s.amplitude_rad > kManoeuvreAngleLimitRad + 1e-12) {
-    seg.fail("amplitude_deg", "offset " + general_text(base / kDegToRad) + " deg plus/minus the amplitude exceeds the " +
-                                  general_text(kLimitDeg) + " deg set-point limit");
+    seg.fail("amplitude_deg", "offset " + general_text(base / kDegToRad) +
+                                  " deg plus/minus the amplitude exceeds the " + general_text(kLimitDeg) +
+                                  " deg set-point limit");
   }
 }
 
@@ -122,8 +123,7 @@ void Segment::attitude_at(double t, double& roll, double& pitch) const {
   pitch = pitch_rad;
   double value = 0.0;
   switch (kind) {
-    case SegmentKind::kHold:
-      return;
+    case SegmentKind::kHold: return;
     case SegmentKind::kDoublet: {
       const double u = pulse_width_s();
       value = (t < u ? sign : -sign) * amplitude_rad;
@@ -271,9 +271,9 @@ Setpoint ManoeuvrePlayer::at(double t_s) const {
   const Segment& s = manoeuvre_.segments[index];
   s.attitude_at(t_s - starts_[index], sp.roll_sp_rad, sp.pitch_sp_rad);
   sp.throttle_pct = std::clamp(trim_throttle_pct_ + s.delta_throttle_pct, 0.0, 100.0);
-  sp.throttle_factor = !s.apply_throttle_factor ? 1.0
+  sp.throttle_factor = !s.apply_throttle_factor                   ? 1.0
                        : manoeuvre_.throttle_factor_from_setpoint ? throttle_factor_for(std::fabs(sp.roll_sp_rad))
-                                                                   : manoeuvre_.throttle_factor;
+                                                                  : manoeuvre_.throttle_factor;
   sp.delta_throttle_pct = sp.throttle_pct * sp.throttle_factor - trim_throttle_pct_;
   sp.segment_index = static_cast<int>(index);
   sp.segment_name = s.name;

@@ -38,19 +38,19 @@ std::string to_string(Axis axis);
 /// One segment of a manoeuvre. Angles in rad internally (degrees in the file).
 struct Segment {
   SegmentKind kind = SegmentKind::kHold;  ///< what the segment commands
-  std::string name;                 ///< name from the file or "<kind>_<index>"
-  Axis axis = Axis::kRoll;          ///< axis of the doublet, 112 or ramp
-  double duration_s = 0.0;          ///< length [s]; derived for doublet (1/f) and 112 (2/f)
-  double roll_rad = 0.0;            ///< roll set-point, or the offset of a roll doublet/112 [rad]
-  double pitch_rad = 0.0;           ///< pitch set-point, or the offset of a pitch doublet/112 [rad]
-  double amplitude_rad = 0.0;       ///< pulse amplitude of a doublet/112 [rad], > 0
-  double main_frequency_hz = 0.0;   ///< doublet: its main frequency; 112: that of the short pulses [Hz]
-  int sign = -1;                    ///< sign of the first pulse of a doublet/112, -1 or +1
-  double ramp_from_rad = 0.0;       ///< ramp start value [rad]
-  double ramp_to_rad = 0.0;         ///< ramp end value [rad]
-  double delta_throttle_pct = 0.0;  ///< throttle offset from trim before the factor [%]
-  bool apply_throttle_factor = false;  ///< multiply the throttle by the manoeuvre's THRF
-  std::string gain_set;             ///< roll gain set during this segment
+  std::string name;                       ///< name from the file or "<kind>_<index>"
+  Axis axis = Axis::kRoll;                ///< axis of the doublet, 112 or ramp
+  double duration_s = 0.0;                ///< length [s]; derived for doublet (1/f) and 112 (2/f)
+  double roll_rad = 0.0;                  ///< roll set-point, or the offset of a roll doublet/112 [rad]
+  double pitch_rad = 0.0;                 ///< pitch set-point, or the offset of a pitch doublet/112 [rad]
+  double amplitude_rad = 0.0;             ///< pulse amplitude of a doublet/112 [rad], > 0
+  double main_frequency_hz = 0.0;         ///< doublet: its main frequency; 112: that of the short pulses [Hz]
+  int sign = -1;                          ///< sign of the first pulse of a doublet/112, -1 or +1
+  double ramp_from_rad = 0.0;             ///< ramp start value [rad]
+  double ramp_to_rad = 0.0;               ///< ramp end value [rad]
+  double delta_throttle_pct = 0.0;        ///< throttle offset from trim before the factor [%]
+  bool apply_throttle_factor = false;     ///< multiply the throttle by the manoeuvre's THRF
+  std::string gain_set;                   ///< roll gain set during this segment
 
   /// Width of one unit pulse [s]: 1/(2 f) for doublet and 112, 0 otherwise.
   double pulse_width_s() const;
@@ -64,10 +64,10 @@ struct Segment {
 
 /// A named sequence of segments.
 struct Manoeuvre {
-  std::string name;               ///< manoeuvre name (published in attitude_setpoint_t.manoeuvre)
-  std::string source;             ///< where the manoeuvre comes from (thesis section, figure)
-  std::string file;               ///< file it was loaded from (empty if built in code)
-  std::string gain_set = "fast";  ///< default roll gain set of the segments
+  std::string name;                  ///< manoeuvre name (published in attitude_setpoint_t.manoeuvre)
+  std::string source;                ///< where the manoeuvre comes from (thesis section, figure)
+  std::string file;                  ///< file it was loaded from (empty if built in code)
+  std::string gain_set = "fast";     ///< default roll gain set of the segments
   bool throttle_factor_auto = true;  ///< THRF = 1/cos(max |roll set-point|)
   /// `throttle_factor: setpoint`: THRF follows the roll set-point, 1/cos(phi_sp(t)), in the
   /// segments that apply it (thesis Eq 7.1 read with the set-point of the moment, Figs 7.1-7.4).

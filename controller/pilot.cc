@@ -15,11 +15,15 @@ const ParamTable<PilotConfig>& pilot_params() {
   static const ParamTable<C> table = {
       {"enabled", &C::enabled, Range{}, "-", "the pilot holds the altitude through the throttle"},
       // At least 50 ms: the pilot then only uses poses published long before the cycle (lockstep determinism).
-      {"reaction_delay_s", &C::reaction_delay_s, Range::closed(0.05, 1.0), "s", "from what the pilot sees to the throttle he gives (assumption: 0.2-0.3 s, human operator)"},
-      {"bandwidth_radps", &C::bandwidth_radps, Range{0.0, 5.0, true, false}, "rad/s", "natural frequency of the pilot's height loop (assumption)"},
+      {"reaction_delay_s", &C::reaction_delay_s, Range::closed(0.05, 1.0), "s",
+       "from what the pilot sees to the throttle he gives (assumption: 0.2-0.3 s, human operator)"},
+      {"bandwidth_radps", &C::bandwidth_radps, Range{0.0, 5.0, true, false}, "rad/s",
+       "natural frequency of the pilot's height loop (assumption)"},
       {"damping", &C::damping, Range::closed(0.3, 3.0), "-", "damping ratio of the pilot's height loop (assumption)"},
-      {"speed_window_s", &C::speed_window_s, Range::closed(0.01, 0.5), "s", "window over which the pilot judges the climb rate (assumption)"},
-      {"max_correction_pct", &C::max_correction_pct, Range{0.0, 50.0, true, false}, "%", "largest throttle correction the pilot gives (assumption)"},
+      {"speed_window_s", &C::speed_window_s, Range::closed(0.01, 0.5), "s",
+       "window over which the pilot judges the climb rate (assumption)"},
+      {"max_correction_pct", &C::max_correction_pct, Range{0.0, 50.0, true, false}, "%",
+       "largest throttle correction the pilot gives (assumption)"},
   };
   return table;
 }

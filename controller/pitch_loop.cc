@@ -83,8 +83,7 @@ StateSpace pitch_plant_with_servo(const StateSpace& lon, const PitchLoopOptions&
   return ss;
 }
 
-Eigen::MatrixXd pitch_closed_loop_matrix(const StateSpace& lon, const GainSet& gains,
-                                         const PitchLoopOptions& options) {
+Eigen::MatrixXd pitch_closed_loop_matrix(const StateSpace& lon, const GainSet& gains, const PitchLoopOptions& options) {
   check_options(gains, options);
   const StateSpace plant = pitch_plant_with_servo(lon, options);
   const double map = options.pitch_cmd_to_dihedral_rad;

@@ -33,18 +33,17 @@
 #include "controller/attitude_controller.h"
 #include "core/model.h"
 
-
 namespace nimble {
 
 /// Parameters of the linear pitch loop that are not the PD gains.
 struct PitchLoopOptions {
-  double rate_hz = contract::kDefaultControlRateHz;                   ///< controller rate [Hz]
-  double lowpass_cutoff_hz = 15.0;          ///< pitch command low-pass cut-off [Hz]
-  double pitch_cmd_to_dihedral_rad = 0.35;  ///< dihedral per unit pitch command [rad]
-  double servo_wn2_rad2ps2 = 554.2;         ///< servo wn^2 [rad^2/s^2] (plant config servo.wn2_rad2ps2)
-  double servo_c1_radps = 30.25;            ///< servo damping term [rad/s] (plant config servo.c1_radps)
-  bool continuous = false;                  ///< analogue loop instead of the 512 Hz discrete one
-  int delay_steps = 0;                      ///< whole control periods of command delay (discrete only)
+  double rate_hz = contract::kDefaultControlRateHz;  ///< controller rate [Hz]
+  double lowpass_cutoff_hz = 15.0;                   ///< pitch command low-pass cut-off [Hz]
+  double pitch_cmd_to_dihedral_rad = 0.35;           ///< dihedral per unit pitch command [rad]
+  double servo_wn2_rad2ps2 = 554.2;                  ///< servo wn^2 [rad^2/s^2] (plant config servo.wn2_rad2ps2)
+  double servo_c1_radps = 30.25;                     ///< servo damping term [rad/s] (plant config servo.c1_radps)
+  bool continuous = false;                           ///< analogue loop instead of the 512 Hz discrete one
+  int delay_steps = 0;                               ///< whole control periods of command delay (discrete only)
 };
 
 /// Options with the rate, pitch cut-off and dihedral map of `config` (servo: defaults).
@@ -63,8 +62,7 @@ StateSpace pitch_plant_with_servo(const StateSpace& lon, const PitchLoopOptions&
 /// rate), then delay_steps held commands (discrete only).
 /// @throws std::invalid_argument as pitch_plant_with_servo, or for a bad rate,
 ///         cut-off (not in (0, rate/2)), negative gains, map or delay.
-Eigen::MatrixXd pitch_closed_loop_matrix(const StateSpace& lon, const GainSet& gains,
-                                         const PitchLoopOptions& options);
+Eigen::MatrixXd pitch_closed_loop_matrix(const StateSpace& lon, const GainSet& gains, const PitchLoopOptions& options);
 
 /// Closed-loop poles of one gain pair.
 struct PitchLoopPoles {

@@ -32,9 +32,9 @@ struct ReferenceGeneratorConfig {
 
 /// State of one axis of the reference generator.
 struct ReferenceState {
-  double angle_rad = 0.0;      ///< reference angle [rad]
-  double rate_radps = 0.0;     ///< reference rate [rad/s]
-  double accel_radps2 = 0.0;   ///< reference acceleration [rad/s^2]
+  double angle_rad = 0.0;     ///< reference angle [rad]
+  double rate_radps = 0.0;    ///< reference rate [rad/s]
+  double accel_radps2 = 0.0;  ///< reference acceleration [rad/s^2]
 };
 
 /// One axis of the reference generator, integrated at a fixed step.

@@ -48,8 +48,8 @@ void check_config(const RollLoopConfig& c) {
     throw std::invalid_argument("roll loop: rate must be > 0 Hz, got " + general_text(c.rate_hz));
   }
   if (!(std::isfinite(c.lowpass_cutoff_hz) && c.lowpass_cutoff_hz > 0.0 && c.lowpass_cutoff_hz < 0.5 * c.rate_hz)) {
-    throw std::invalid_argument("roll loop: low-pass cut-off must be in (0, rate/2), got " + general_text(c.lowpass_cutoff_hz) +
-                                " Hz");
+    throw std::invalid_argument("roll loop: low-pass cut-off must be in (0, rate/2), got " +
+                                general_text(c.lowpass_cutoff_hz) + " Hz");
   }
   if (!(std::isfinite(c.latency_s) && c.latency_s >= 0.0 && c.latency_s <= 1.0)) {
     throw std::invalid_argument("roll loop: latency must be in [0, 1] s, got " + general_text(c.latency_s));
@@ -259,7 +259,8 @@ RollLoopAnalysis analyse_roll_loop(const StateSpace& lateral, const RollLoopConf
   r.margins = loop_margins(broken, options);
   r.saturation_error_rad = config.gains.kp_per_rad > 0.0 ? 1.0 / config.gains.kp_per_rad : INFINITY;
   if (!full) return r;
-  const BrokenLoop at_actuator = where == LoopBreak::kActuator ? broken : roll_broken_loop(lateral, config, LoopBreak::kActuator);
+  const BrokenLoop at_actuator =
+      where == LoopBreak::kActuator ? broken : roll_broken_loop(lateral, config, LoopBreak::kActuator);
   r.poles = loop_poles(closed_loop_matrix(at_actuator), at_actuator.dt_s, &r.poles_at_origin);
   const double nyquist = kPi / broken.dt_s;
   for (const LoopPole& p : r.poles) {
@@ -325,11 +326,11 @@ RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, c
   if (!d.analysis.margins.closed_loop_stable) {
     d.note = with + "kp " + general_text(kp) + ", kd " + general_text(kd) + " leave the closed loop unstable";
   } else if (std::abs(d.analysis.margins.phase_margin_deg - request.phase_margin_deg) > 1.0) {
-    d.note = with + "another crossover (" + general_text(d.analysis.margins.crossover_hz) + " Hz) has the smaller phase margin, " +
-             general_text(d.analysis.margins.phase_margin_deg) + " deg";
+    d.note = with + "another crossover (" + general_text(d.analysis.margins.crossover_hz) +
+             " Hz) has the smaller phase margin, " + general_text(d.analysis.margins.phase_margin_deg) + " deg";
   } else if (d.analysis.dc_gain < request.min_dc_gain) {
-    d.note = with + "kp " + general_text(kp) + ", kd " + general_text(kd) + " track phi_ref at 0 Hz only by " + general_text(d.analysis.dc_gain) +
-             " (at least " + general_text(request.min_dc_gain) + " asked)";
+    d.note = with + "kp " + general_text(kp) + ", kd " + general_text(kd) + " track phi_ref at 0 Hz only by " +
+             general_text(d.analysis.dc_gain) + " (at least " + general_text(request.min_dc_gain) + " asked)";
   } else {
     d.feasible = true;
   }
@@ -340,11 +341,12 @@ RollDesign try_design(const StateSpace& lateral, const RollLoopConfig& config, c
 
 RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& config, const DesignRequest& request) {
   if (!(request.phase_margin_deg > 0.0 && request.phase_margin_deg < 90.0)) {
-    throw std::invalid_argument("design: phase_margin_deg must be in (0, 90), got " + general_text(request.phase_margin_deg));
+    throw std::invalid_argument("design: phase_margin_deg must be in (0, 90), got " +
+                                general_text(request.phase_margin_deg));
   }
   if (!(request.crossover_hz > 0.0 && request.crossover_hz < config.rate_hz / 4.0)) {
-    throw std::invalid_argument("design: crossover_hz must be in (0, " + general_text(config.rate_hz / 4.0) + "), got " +
-                                general_text(request.crossover_hz));
+    throw std::invalid_argument("design: crossover_hz must be in (0, " + general_text(config.rate_hz / 4.0) +
+                                "), got " + general_text(request.crossover_hz));
   }
   std::vector<double> cutoffs{config.lowpass_cutoff_hz};
   for (const double f : {20.0, 25.0, 30.0, 40.0, 50.0, 64.0}) {
@@ -356,9 +358,10 @@ RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& co
     c.lowpass_cutoff_hz = cutoff;
     RollDesign d = try_design(lateral, c, request);
     if (d.feasible) {
-      d.note = cutoff == config.lowpass_cutoff_hz ? "on the configured " + general_text(cutoff) + " Hz low-pass"
-                                                  : "the low-pass cut-off raised from " + general_text(config.lowpass_cutoff_hz) +
-                                                        " to " + general_text(cutoff) + " Hz: " + first_why;
+      d.note = cutoff == config.lowpass_cutoff_hz
+                   ? "on the configured " + general_text(cutoff) + " Hz low-pass"
+                   : "the low-pass cut-off raised from " + general_text(config.lowpass_cutoff_hz) + " to " +
+                         general_text(cutoff) + " Hz: " + first_why;
       return d;
     }
     if (first_why.empty()) first_why = d.note;
@@ -377,10 +380,12 @@ RollDesign design_roll_gains(const StateSpace& lateral, const RollLoopConfig& co
     }
   }
   none.note += lo > 0.0 ? "; with the " + general_text(config.lowpass_cutoff_hz) + " Hz low-pass a " +
-                              general_text(request.phase_margin_deg) + " deg margin is reached at crossovers " + general_text(lo) + " to " +
-                              general_text(hi) + " Hz"
-                        : "; with the " + general_text(config.lowpass_cutoff_hz) + " Hz low-pass no crossover from 0.1 to 10 Hz "
-                              "reaches a " + general_text(request.phase_margin_deg) + " deg margin";
+                              general_text(request.phase_margin_deg) + " deg margin is reached at crossovers " +
+                              general_text(lo) + " to " + general_text(hi) + " Hz"
+                        : "; with the " + general_text(config.lowpass_cutoff_hz) +
+                              " Hz low-pass no crossover from 0.1 to 10 Hz "
+                              "reaches a " +
+                              general_text(request.phase_margin_deg) + " deg margin";
   return none;
 }
 

@@ -39,7 +39,6 @@
 #include "controller/reference_generator.h"
 #include "core/model.h"
 
-
 namespace nimble {
 
 /// Where the roll loop is broken for its margins.
@@ -54,14 +53,14 @@ std::string to_string(LoopBreak b);
 
 /// Everything of the roll loop besides the aircraft model.
 struct RollLoopConfig {
-  GainSet gains;                             ///< roll PD gains
-  double rate_hz = contract::kDefaultControlRateHz;                    ///< control rate [Hz]
-  double lowpass_cutoff_hz = 15.0;           ///< Butterworth cut-off of the roll command [Hz]
-  double roll_cmd_to_delta_f_radps = 125.0;  ///< delta_f_cmd per unit command [rad/s]
-  double flap_gain_per_s = 8.97;             ///< flap actuator numerator [1/s] (thesis Eq 33)
-  double flap_pole_radps = 12.56;            ///< flap actuator pole [rad/s] (thesis Eq 33)
-  double latency_s = 0.0;                    ///< from the measurement to the command's action [s]
-  ReferenceGeneratorConfig reference;        ///< the roll reference generator
+  GainSet gains;                                     ///< roll PD gains
+  double rate_hz = contract::kDefaultControlRateHz;  ///< control rate [Hz]
+  double lowpass_cutoff_hz = 15.0;                   ///< Butterworth cut-off of the roll command [Hz]
+  double roll_cmd_to_delta_f_radps = 125.0;          ///< delta_f_cmd per unit command [rad/s]
+  double flap_gain_per_s = 8.97;                     ///< flap actuator numerator [1/s] (thesis Eq 33)
+  double flap_pole_radps = 12.56;                    ///< flap actuator pole [rad/s] (thesis Eq 33)
+  double latency_s = 0.0;                            ///< from the measurement to the command's action [s]
+  ReferenceGeneratorConfig reference;                ///< the roll reference generator
 };
 
 /// The roll part of a controller configuration with the gains `gains`; flap actuator: defaults.
@@ -80,11 +79,11 @@ BrokenLoop roll_broken_loop(const StateSpace& lateral, const RollLoopConfig& con
 
 /// The closed loop driven by the roll set-point r through the reference generator.
 struct SetpointLoop {
-  Eigen::MatrixXd A;          ///< transition over one control period
-  Eigen::VectorXd B;          ///< set-point input
-  Eigen::RowVectorXd phi;     ///< output: the aircraft's roll angle [rad]
-  Eigen::RowVectorXd phi_ref; ///< output: the reference angle the controller uses [rad]
-  Eigen::RowVectorXd p;       ///< output: the roll rate [rad/s]
+  Eigen::MatrixXd A;               ///< transition over one control period
+  Eigen::VectorXd B;               ///< set-point input
+  Eigen::RowVectorXd phi;          ///< output: the aircraft's roll angle [rad]
+  Eigen::RowVectorXd phi_ref;      ///< output: the reference angle the controller uses [rad]
+  Eigen::RowVectorXd p;            ///< output: the roll rate [rad/s]
   Eigen::RowVectorXd delta_f_cmd;  ///< output: the actuator command [rad/s]
   double dt_s = 0.0;
 };
@@ -102,16 +101,16 @@ StepResponse roll_step_response(const SetpointLoop& loop, double step_rad, doubl
 
 /// What `rig loop` states of one model and gain set.
 struct RollLoopAnalysis {
-  LoopMargins margins;                   ///< broken where asked
-  std::vector<LoopPole> poles;           ///< of the feedback loop (the generator's are not in it)
-  int poles_at_origin = 0;               ///< pure delays
+  LoopMargins margins;          ///< broken where asked
+  std::vector<LoopPole> poles;  ///< of the feedback loop (the generator's are not in it)
+  int poles_at_origin = 0;      ///< pure delays
   bool has_dominant_pair = false;
   /// The least-damped complex pair (Im > 0): the oscillation a step or a disturbance shows.
   LoopPole dominant;
-  double bandwidth_hz = 0.0;             ///< -3 dB of phi / phi_ref (from its value at 0 Hz)
-  double setpoint_bandwidth_hz = 0.0;    ///< -3 dB of phi / the set-point, through the generator
-  double dc_gain = 0.0;                  ///< phi / phi_ref at 0 Hz [-]
-  double saturation_error_rad = 0.0;     ///< an angle error that alone saturates the command: 1 / kp
+  double bandwidth_hz = 0.0;           ///< -3 dB of phi / phi_ref (from its value at 0 Hz)
+  double setpoint_bandwidth_hz = 0.0;  ///< -3 dB of phi / the set-point, through the generator
+  double dc_gain = 0.0;                ///< phi / phi_ref at 0 Hz [-]
+  double saturation_error_rad = 0.0;   ///< an angle error that alone saturates the command: 1 / kp
 };
 
 /// Analyses the loop broken at `where`; `full` false: the margins only (no poles, bandwidth).

@@ -28,14 +28,14 @@ namespace nimble {
 
 /// Parameters of the linear roll-yaw loop that are not the yaw gains.
 struct YawLoopOptions {
-  GainSet roll_gains{1.406, 0.200};           ///< roll PD (default: the fast set)
-  double roll_cmd_to_delta_f_radps = 125.0;   ///< roll map [rad/s per unit command]
-  double yaw_cmd_to_wing_root_rad = -0.35;    ///< yaw map [rad per unit command]
-  double lowpass_cutoff_hz = 15.0;            ///< both command low-passes [Hz]
-  double flap_gain_per_s = 8.97;              ///< thesis Eq 33
-  double flap_pole_radps = 12.56;             ///< thesis Eq 33
-  double servo_wn2_rad2ps2 = 554.2;           ///< plant servo wn^2
-  double servo_c1_radps = 30.25;              ///< plant servo 2 zeta wn
+  GainSet roll_gains{1.406, 0.200};          ///< roll PD (default: the fast set)
+  double roll_cmd_to_delta_f_radps = 125.0;  ///< roll map [rad/s per unit command]
+  double yaw_cmd_to_wing_root_rad = -0.35;   ///< yaw map [rad per unit command]
+  double lowpass_cutoff_hz = 15.0;           ///< both command low-passes [Hz]
+  double flap_gain_per_s = 8.97;             ///< thesis Eq 33
+  double flap_pole_radps = 12.56;            ///< thesis Eq 33
+  double servo_wn2_rad2ps2 = 554.2;          ///< plant servo wn^2
+  double servo_c1_radps = 30.25;             ///< plant servo 2 zeta wn
 };
 
 /// Options with the controller's roll gain set `gain_set`, maps and cut-offs.

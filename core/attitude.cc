@@ -17,9 +17,8 @@ Eigen::Matrix3d rotation_from_euler_zyx(const Eigen::Vector3d& euler_rad) {
   const double st = std::sin(euler_rad[1]), ct = std::cos(euler_rad[1]);
   const double sp = std::sin(euler_rad[2]), cp = std::cos(euler_rad[2]);
   Eigen::Matrix3d R;
-  R << cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
-       sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
-       -st,     ct * sf,                ct * cf;
+  R << cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf, sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
+      -st, ct * sf, ct * cf;
   return R;
 }
 
@@ -29,9 +28,7 @@ Eigen::Quaterniond quaternion_from_euler_zyx(const Eigen::Vector3d& euler_rad) {
   const double st = std::sin(ht), ct = std::cos(ht);
   const double sp = std::sin(hp), cp = std::cos(hp);
   // q = qz(psi) * qy(theta) * qx(phi)
-  Eigen::Quaterniond q(cp * ct * cf + sp * st * sf,
-                       cp * ct * sf - sp * st * cf,
-                       cp * st * cf + sp * ct * sf,
+  Eigen::Quaterniond q(cp * ct * cf + sp * st * sf, cp * ct * sf - sp * st * cf, cp * st * cf + sp * ct * sf,
                        sp * ct * cf - cp * st * sf);
   if (q.w() < 0.0) q.coeffs() = -q.coeffs();
   return q.normalized();
@@ -73,15 +70,11 @@ Eigen::Quaterniond quaternion_from_wxyz(const std::array<double, 4>& wxyz) {
   return q;
 }
 
-std::array<double, 4> quaternion_to_wxyz(const Eigen::Quaterniond& q) {
-  return {q.w(), q.x(), q.y(), q.z()};
-}
+std::array<double, 4> quaternion_to_wxyz(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y(), q.z()}; }
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
-  S << 0.0, -v.z(), v.y(),
-       v.z(), 0.0, -v.x(),
-       -v.y(), v.x(), 0.0;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
   return S;
 }
 
@@ -109,9 +102,7 @@ Eigen::Matrix3d euler_rate_matrix(double phi_rad, double theta_rad) {
   const double sf = std::sin(phi_rad), cf = std::cos(phi_rad);
   const double ct = std::cos(theta_rad), tt = std::tan(theta_rad);
   Eigen::Matrix3d W;
-  W << 1.0, sf * tt, cf * tt,
-       0.0, cf, -sf,
-       0.0, sf / ct, cf / ct;
+  W << 1.0, sf * tt, cf * tt, 0.0, cf, -sf, 0.0, sf / ct, cf / ct;
   return W;
 }
 

@@ -44,8 +44,8 @@ double gamma_q_continued_fraction(double a, double x) {
 
 double regularized_gamma_p(double a, double x) {
   if (!(a > 0.0) || !(x >= 0.0) || !std::isfinite(a) || !std::isfinite(x)) {
-    throw std::invalid_argument("regularized_gamma_p: need a > 0 and finite x >= 0, got a = " +
-                                std::to_string(a) + ", x = " + std::to_string(x));
+    throw std::invalid_argument("regularized_gamma_p: need a > 0 and finite x >= 0, got a = " + std::to_string(a) +
+                                ", x = " + std::to_string(x));
   }
   if (x == 0.0) return 0.0;
   if (x < a + 1.0) return gamma_p_series(a, x);
@@ -72,15 +72,18 @@ double chi_square_survival(double x, double dof) {
 
 double chi_square_quantile(double p, double dof) {
   if (!(dof > 0.0) || !(p > 0.0 && p < 1.0)) {
-    throw std::invalid_argument("chi_square_quantile: need dof > 0 and 0 < p < 1, got dof = " +
-                                std::to_string(dof) + ", p = " + std::to_string(p));
+    throw std::invalid_argument("chi_square_quantile: need dof > 0 and 0 < p < 1, got dof = " + std::to_string(dof) +
+                                ", p = " + std::to_string(p));
   }
   // Bracket, then bisection (the CDF is monotonic); 200 halvings reach machine precision.
   double lo = 0.0, hi = std::max(1.0, dof);
   while (chi_square_cdf(hi, dof) < p) hi *= 2.0;
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);
-    if (chi_square_cdf(mid, dof) < p) lo = mid; else hi = mid;
+    if (chi_square_cdf(mid, dof) < p)
+      lo = mid;
+    else
+      hi = mid;
     if (hi - lo <= 1e-13 * hi) break;
   }
   return 0.5 * (lo + hi);

@@ -13,9 +13,8 @@
 namespace nimble {
 namespace {
 
-std::string format_error(const std::string& file, const std::string& key,
-                         const std::string& value, const std::string& problem,
-                         int line) {
+std::string format_error(const std::string& file, const std::string& key, const std::string& value,
+                         const std::string& problem, int line) {
   std::ostringstream out;
   out << file;
   if (line > 0) out << ":" << line;
@@ -39,8 +38,7 @@ std::string format_number(double x) {
 
 }  // namespace
 
-ConfigError::ConfigError(std::string file, std::string key, std::string value,
-                         std::string problem, int line)
+ConfigError::ConfigError(std::string file, std::string key, std::string value, std::string problem, int line)
     : std::runtime_error(format_error(file, key, value, problem, line)),
       file_(std::move(file)),
       key_(std::move(key)),
@@ -75,8 +73,8 @@ std::string Range::describe() const {
   const bool has_lo = std::isfinite(lo);
   const bool has_hi = std::isfinite(hi);
   if (has_lo && has_hi) {
-    return std::string("in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " +
-           format_number(hi) + (hi_open ? ")" : "]");
+    return std::string("in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " + format_number(hi) +
+           (hi_open ? ")" : "]");
   }
   if (has_lo) return (lo_open ? "> " : ">= ") + format_number(lo);
   if (has_hi) return (hi_open ? "< " : "<= ") + format_number(hi);
@@ -96,10 +94,10 @@ std::string yaml_text(const YAML::Node& node) {
 ConfigMap::ConfigMap(YAML::Node node, std::string file, std::string path)
     : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
   if (!node_.IsMap()) {
-    throw ConfigError(file_, path_, yaml_text(node_),
-                      path_.empty() ? "the file must hold a YAML mapping (key: value pairs)"
-                                    : "must be a mapping (key: value pairs)",
-                      line_of(node_));
+    throw ConfigError(
+        file_, path_, yaml_text(node_),
+        path_.empty() ? "the file must hold a YAML mapping (key: value pairs)" : "must be a mapping (key: value pairs)",
+        line_of(node_));
   }
 }
 
@@ -151,22 +149,15 @@ ConfigMap ConfigMap::load_string(const std::string& text, const std::string& ori
   return ConfigMap(root, origin, "");
 }
 
-bool ConfigMap::has(const std::string& key) const {
-  return static_cast<bool>(node_[key]);
-}
+bool ConfigMap::has(const std::string& key) const { return static_cast<bool>(node_[key]); }
 
-std::string ConfigMap::key_path(const std::string& key) const {
-  return path_.empty() ? key : path_ + "." + key;
-}
+std::string ConfigMap::key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
-std::string ConfigMap::directory() const {
-  return std::filesystem::path(file_).parent_path().string();
-}
+std::string ConfigMap::directory() const { return std::filesystem::path(file_).parent_path().string(); }
 
 void ConfigMap::fail(const std::string& key, const std::string& problem) const {
   const YAML::Node node = node_[key];
-  throw ConfigError(file_, key_path(key), node ? yaml_text(node) : "", problem,
-                    node ? line_of(node) : line_of(node_));
+  throw ConfigError(file_, key_path(key), node ? yaml_text(node) : "", problem, node ? line_of(node) : line_of(node_));
 }
 
 YAML::Node ConfigMap::require(const std::string& key) {
@@ -271,9 +262,7 @@ std::vector<std::string> ConfigMap::get_string_list(const std::string& key) {
   return out;
 }
 
-ConfigMap ConfigMap::get_map(const std::string& key) {
-  return ConfigMap(require(key), file_, key_path(key));
-}
+ConfigMap ConfigMap::get_map(const std::string& key) { return ConfigMap(require(key), file_, key_path(key)); }
 
 YAML::Node ConfigMap::get_node(const std::string& key) { return require(key); }
 
@@ -290,8 +279,8 @@ void ConfigMap::finish() const {
     if (used_.count(key) == 0) {
       std::string list;
       for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      throw ConfigError(file_, key_path(key), yaml_text(item.second),
-                        "unknown key (known keys here: " + list + ")", line_of(item.first));
+      throw ConfigError(file_, key_path(key), yaml_text(item.second), "unknown key (known keys here: " + list + ")",
+                        line_of(item.first));
     }
   }
 }

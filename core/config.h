@@ -24,8 +24,7 @@ namespace nimble {
 /// A configuration error: which file, which key, which value, and what is wrong.
 class ConfigError : public std::runtime_error {
  public:
-  ConfigError(std::string file, std::string key, std::string value,
-              std::string problem, int line = -1);
+  ConfigError(std::string file, std::string key, std::string value, std::string problem, int line = -1);
 
   const std::string& file() const { return file_; }
   /// Dotted key path, e.g. "inertia_kgm2.Ixx"; empty for file-level errors.

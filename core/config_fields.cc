@@ -2,8 +2,8 @@
 
 namespace nimble {
 
-Eigen::Vector3d get_vec3_or(ConfigMap& map, const std::string& key, const Eigen::Vector3d& fallback,
-                            const Range& range, const AxisNames& names) {
+Eigen::Vector3d get_vec3_or(ConfigMap& map, const std::string& key, const Eigen::Vector3d& fallback, const Range& range,
+                            const AxisNames& names) {
   if (!map.has(key)) return fallback;
   ConfigMap sub = map.get_map(key);
   Eigen::Vector3d v;

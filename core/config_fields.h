@@ -21,8 +21,8 @@ constexpr AxisNames kXyzAxes = {"x", "y", "z"};
 /// Optional 3-vector written as a mapping with the keys `names` (each optional, falling back to its
 /// component of `fallback`), every component within `range`; `fallback` when `key` is absent.
 /// @throws ConfigError naming the component's key.
-Eigen::Vector3d get_vec3_or(ConfigMap& map, const std::string& key, const Eigen::Vector3d& fallback,
-                            const Range& range, const AxisNames& names = kXyzAxes);
+Eigen::Vector3d get_vec3_or(ConfigMap& map, const std::string& key, const Eigen::Vector3d& fallback, const Range& range,
+                            const AxisNames& names = kXyzAxes);
 
 /// Optional integer within `range`; `fallback` when `key` is absent. @throws ConfigError.
 long long get_int_or(ConfigMap& map, const std::string& key, long long fallback, const Range& range);

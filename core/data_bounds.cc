@@ -21,7 +21,8 @@ std::string with_unit(double x, const std::optional<QuantityBound>& b) {
 }
 
 std::string at_time(const BoundsTally::Entry& e) {
-  std::string at = std::isfinite(e.first_t_s) ? "at t = " + number(e.first_t_s, "%.4f") + " s" : "at a time that is not finite";
+  std::string at =
+      std::isfinite(e.first_t_s) ? "at t = " + number(e.first_t_s, "%.4f") + " s" : "at a time that is not finite";
   if (e.first_event >= 0) at += " (event " + std::to_string(e.first_event) + ")";
   return at;
 }

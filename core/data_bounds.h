@@ -42,9 +42,9 @@ class BoundsTally {
     std::string field;     ///< message field ("omega_body_radps[0]"), or the column ("p")
     std::string quantity;  ///< the bounded quantity ("p")
     std::uint64_t count = 0;
-    double first_t_s = 0.0;     ///< time of the first such sample [s] (may itself be not finite)
-    double first_value = 0.0;   ///< its value
-    std::int64_t first_event = -1;  ///< its log event number (-1: not from a log)
+    double first_t_s = 0.0;              ///< time of the first such sample [s] (may itself be not finite)
+    double first_value = 0.0;            ///< its value
+    std::int64_t first_event = -1;       ///< its log event number (-1: not from a log)
     std::optional<QuantityBound> bound;  ///< nullopt: a quantity without a bound (not finite)
   };
 

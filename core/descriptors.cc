@@ -12,9 +12,9 @@ void close_descriptors_from(int first) noexcept {
   if (::syscall(SYS_close_range, static_cast<unsigned>(first), ~0U, 0U) == 0) return;
 #endif
   // No close_range (kernels before 5.9): every possible descriptor, as the limit allows.
-  struct rlimit lim{};
-  long last = ::getrlimit(RLIMIT_NOFILE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY ? static_cast<long>(lim.rlim_cur)
-                                                                                      : 65536L;
+  struct rlimit lim {};
+  long last =
+      ::getrlimit(RLIMIT_NOFILE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY ? static_cast<long>(lim.rlim_cur) : 65536L;
   if (last > (1L << 20)) last = 1L << 20;
   for (long fd = first; fd < last; ++fd) ::close(static_cast<int>(fd));
 }

@@ -13,7 +13,7 @@ namespace nimble {
 namespace {
 
 const InputBound kConfigBound{"a configuration file", 4'000'000};
-const InputBound kRecordBound{"a flight record", kMaxRecordSamples * kMaxRecordLineBytes};
+const InputBound kRecordBound{"a flight record", kMaxRecordSamples* kMaxRecordLineBytes};
 const InputBound kLcmLogBound{"an LCM log", kMaxLcmLogBytes};
 const InputBound kCampaignBound{"a campaign file", 64'000'000};
 const InputBound kWebFileBound{"a file of the web root", 16'000'000};
@@ -102,8 +102,8 @@ std::string read_input_descriptor(int fd, const std::string& file, InputKind kin
     text.append(buffer, static_cast<std::size_t>(n));
     if (text.size() > max) {
       const InputBound& bound = input_bound(kind);
-      throw InputFileError(file, "grew past the " + byte_size_text(max) + " bound for " + bound.what +
-                                     " while it was read");
+      throw InputFileError(file,
+                           "grew past the " + byte_size_text(max) + " bound for " + bound.what + " while it was read");
     }
   }
   return text;

@@ -101,9 +101,7 @@ JsonWriter& JsonWriter::array(const std::vector<std::string>& xs) {
   return end_array();
 }
 
-std::string JsonWriter::str() const {
-  return impl_->root.dump(-1, ' ', false, Json::error_handler_t::replace);
-}
+std::string JsonWriter::str() const { return impl_->root.dump(-1, ' ', false, Json::error_handler_t::replace); }
 
 std::string json_quote(const std::string& s) { return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace); }
 

@@ -133,8 +133,7 @@ DerivativeModel model_from_config(ConfigMap& map) {
   m.file = map.file();
   m.name = map.get_string("name");
   m.source = map.get_string("source");
-  m.structure = structure_from_string(
-      map.get_enum("structure", {"lateral3", "lateral4", "longitudinal"}));
+  m.structure = structure_from_string(map.get_enum("structure", {"lateral3", "lateral4", "longitudinal"}));
 
   const std::string vehicle = map.get_string("vehicle");
   const std::filesystem::path vehicle_path(vehicle);
@@ -143,9 +142,8 @@ DerivativeModel model_from_config(ConfigMap& map) {
                        : (std::filesystem::path(map.directory()) / vehicle_path).lexically_normal().string();
 
   if (m.structure == Structure::kLateral4) {
-    m.coupling = map.get_enum("roll_yaw_coupling", {"full", "decoupled"}) == "full"
-                     ? RollYawCoupling::kFull
-                     : RollYawCoupling::kDecoupled;
+    m.coupling = map.get_enum("roll_yaw_coupling", {"full", "decoupled"}) == "full" ? RollYawCoupling::kFull
+                                                                                    : RollYawCoupling::kDecoupled;
   }
 
   m.inputs = map.get_string_list("inputs");
@@ -154,8 +152,7 @@ DerivativeModel model_from_config(ConfigMap& map) {
     bool known = false;
     for (const auto& k : known_inputs()) known = known || (k == m.inputs[i]);
     if (!known) {
-      map.fail("inputs", "unknown input '" + m.inputs[i] +
-                             "' (known: delta_f, delta_t, delta_d, delta_w)");
+      map.fail("inputs", "unknown input '" + m.inputs[i] + "' (known: delta_f, delta_t, delta_d, delta_w)");
     }
     for (std::size_t j = 0; j < i; ++j) {
       if (m.inputs[j] == m.inputs[i]) map.fail("inputs", "input '" + m.inputs[i] + "' listed twice");
@@ -270,9 +267,8 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
     case Structure::kLateral3: {
       // x = [p v phi]; pdot = Izz/Ic * L, vdot = Y/m + w0 p + g cos(theta0) cos(phi0) phi.
       const double kL = Izz / Ic;
-      ss.A << kL * d("Lp"), kL * d("Lv"), 0.0,
-              d("Yp") / mass + t.w0_mps, d("Yv") / mass, g * std::cos(t.theta0_rad) * std::cos(t.phi0_rad),
-              1.0, 0.0, 0.0;
+      ss.A << kL * d("Lp"), kL * d("Lv"), 0.0, d("Yp") / mass + t.w0_mps, d("Yv") / mass,
+          g * std::cos(t.theta0_rad) * std::cos(t.phi0_rad), 1.0, 0.0, 0.0;
       for (std::size_t j = 0; j < m; ++j) {
         const auto names = control_derivative_names(model.structure, ss.inputs[j]);
         ss.B(0, j) = kL * d(names[0]);
@@ -309,11 +305,9 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
     case Structure::kLongitudinal: {
       // x = [q u w theta] (Eq B.15).
       const double Iyy = vehicle.Iyy_kgm2;
-      ss.A << d("Mq") / Iyy, d("Mu") / Iyy, d("Mw") / Iyy, 0.0,
-              d("Xq") / mass - t.w0_mps, d("Xu") / mass, d("Xw") / mass, -g * std::cos(t.theta0_rad),
-              d("Zq") / mass + t.u0_mps, d("Zu") / mass, d("Zw") / mass,
-              -g * std::sin(t.theta0_rad) * std::cos(t.phi0_rad),
-              std::cos(t.phi0_rad), 0.0, 0.0, 0.0;
+      ss.A << d("Mq") / Iyy, d("Mu") / Iyy, d("Mw") / Iyy, 0.0, d("Xq") / mass - t.w0_mps, d("Xu") / mass,
+          d("Xw") / mass, -g * std::cos(t.theta0_rad), d("Zq") / mass + t.u0_mps, d("Zu") / mass, d("Zw") / mass,
+          -g * std::sin(t.theta0_rad) * std::cos(t.phi0_rad), std::cos(t.phi0_rad), 0.0, 0.0, 0.0;
       for (std::size_t j = 0; j < m; ++j) {
         const auto names = control_derivative_names(model.structure, ss.inputs[j]);  // M, X, Z
         ss.B(0, j) = d(names[0]) / Iyy;

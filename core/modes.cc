@@ -29,9 +29,12 @@ Eigen::VectorXd nondim_divisors(const StateSpace& ss, const Vehicle& vehicle) {
   Eigen::VectorXd div(ss.states.size());
   for (std::size_t i = 0; i < ss.states.size(); ++i) {
     const std::string& unit = ss.state_units[i];
-    if (unit == "rad/s") div[i] = f;
-    else if (unit == "m/s") div[i] = velocity_scale;
-    else div[i] = 2.0 * M_PI;  // angles
+    if (unit == "rad/s")
+      div[i] = f;
+    else if (unit == "m/s")
+      div[i] = velocity_scale;
+    else
+      div[i] = 2.0 * M_PI;  // angles
   }
   return div;
 }
@@ -60,8 +63,8 @@ std::vector<Mode> analyse_modes(const StateSpace& ss, const Vehicle& vehicle) {
     mode.natural_frequency_radps = std::abs(lambda);
     mode.damping_ratio = mode.natural_frequency_radps > 0.0 ? -lambda.real() / mode.natural_frequency_radps : 0.0;
     mode.period_s = mode.oscillatory ? 2.0 * M_PI / lambda.imag() : 0.0;
-    mode.time_to_double_or_half_s = lambda.real() != 0.0 ? std::log(2.0) / std::fabs(lambda.real())
-                                                         : std::numeric_limits<double>::infinity();
+    mode.time_to_double_or_half_s =
+        lambda.real() != 0.0 ? std::log(2.0) / std::fabs(lambda.real()) : std::numeric_limits<double>::infinity();
     Eigen::VectorXcd vec = solver.eigenvectors().col(i);
     for (Eigen::Index k = 0; k < vec.size(); ++k) vec[k] /= div[k];
     if (std::abs(vec[ref]) > 0.0) vec /= vec[ref];

@@ -15,12 +15,12 @@ namespace nimble {
 
 /// One dynamic mode: a real eigenvalue or a complex-conjugate pair.
 struct Mode {
-  std::complex<double> eigenvalue;   ///< for a pair, the member with positive imaginary part
+  std::complex<double> eigenvalue;  ///< for a pair, the member with positive imaginary part
   bool oscillatory = false;
-  bool stable = false;               ///< real part < 0
+  bool stable = false;  ///< real part < 0
   double natural_frequency_radps = 0.0;
-  double damping_ratio = 0.0;        ///< -re/|lambda| (1 or -1 for real eigenvalues)
-  double period_s = 0.0;             ///< 2 pi / im; 0 for aperiodic modes
+  double damping_ratio = 0.0;  ///< -re/|lambda| (1 or -1 for real eigenvalues)
+  double period_s = 0.0;       ///< 2 pi / im; 0 for aperiodic modes
   /// ln 2 / |re|: time to double amplitude (unstable) or to halve it (stable); infinite for re = 0.
   double time_to_double_or_half_s = 0.0;
   /// Eigenvector made non-dimensional (scale_divisors) and normalised so that

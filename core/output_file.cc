@@ -19,9 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string reason(int error_number) {
-  return error_number != 0 ? std::strerror(error_number) : "unknown error";
-}
+std::string reason(int error_number) { return error_number != 0 ? std::strerror(error_number) : "unknown error"; }
 
 /// Writes all of `size` bytes at the descriptor's offset; returns the bytes written and sets
 /// `error_number` when fewer were.
@@ -55,7 +53,7 @@ void sync_directory_of(const std::string& file) {
 }  // namespace
 
 void write_file(const std::string& file, std::string_view text) {
-  struct stat st{};
+  struct stat st {};
   const bool in_place = ::stat(file.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
   const std::string target =
       in_place ? file : file + "." + host_name() + "." + std::to_string(::getpid()) + kPartialSuffix;
@@ -123,7 +121,7 @@ OutputFile::OutputFile(const std::string& file, std::size_t buffer_bytes, const 
     fd_ = -1;
     throw;
   }
-  struct stat st{};
+  struct stat st {};
   if (::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode) && ::ftruncate(fd_, 0) != 0) {
     const int e = errno;
     ::close(fd_);
@@ -173,7 +171,8 @@ void OutputFile::write_buffer() {
   }
   const int64_t failed_at = written_ + static_cast<int64_t>(done);
   written_ = failed_at;
-  if (done != buffer_.size()) fail("write failed at byte " + std::to_string(failed_at) + ": " + reason(e), e, failed_at);
+  if (done != buffer_.size())
+    fail("write failed at byte " + std::to_string(failed_at) + ": " + reason(e), e, failed_at);
   buffer_.clear();
   record_ends_.clear();
 }
@@ -231,7 +230,7 @@ int64_t free_bytes_at(const std::string& path) {
     if (p == p.parent_path()) break;
     p = p.parent_path();
   }
-  struct statvfs vfs{};
+  struct statvfs vfs {};
   if (::statvfs(p.c_str(), &vfs) != 0) return -1;
   return static_cast<int64_t>(vfs.f_bavail) * static_cast<int64_t>(vfs.f_frsize);
 }
@@ -245,10 +244,14 @@ std::string host_name() {
 std::string human_bytes(int64_t bytes) {
   char buf[32];
   const double b = static_cast<double>(bytes);
-  if (bytes < 1000) std::snprintf(buf, sizeof buf, "%" PRId64 " B", bytes);
-  else if (bytes < 1000000) std::snprintf(buf, sizeof buf, "%.1f kB", b / 1e3);
-  else if (bytes < 1000000000) std::snprintf(buf, sizeof buf, "%.1f MB", b / 1e6);
-  else std::snprintf(buf, sizeof buf, "%.2f GB", b / 1e9);
+  if (bytes < 1000)
+    std::snprintf(buf, sizeof buf, "%" PRId64 " B", bytes);
+  else if (bytes < 1000000)
+    std::snprintf(buf, sizeof buf, "%.1f kB", b / 1e3);
+  else if (bytes < 1000000000)
+    std::snprintf(buf, sizeof buf, "%.1f MB", b / 1e6);
+  else
+    std::snprintf(buf, sizeof buf, "%.2f GB", b / 1e9);
   return buf;
 }
 

@@ -76,7 +76,8 @@ std::optional<LockHolder> lock_holder(dev_t device, ino_t inode) {
     unsigned major_id = 0, minor_id = 0;
     unsigned long long ino = 0;
     if (std::sscanf(where.c_str(), "%x:%x:%llu", &major_id, &minor_id, &ino) != 3) continue;
-    if (ino != static_cast<unsigned long long>(inode) || major_id != major(device) || minor_id != minor(device)) continue;
+    if (ino != static_cast<unsigned long long>(inode) || major_id != major(device) || minor_id != minor(device))
+      continue;
     const int p = std::atoi(pid.c_str());
     if (p <= 0) continue;
     return LockHolder{p, command_of(p)};
@@ -115,7 +116,7 @@ namespace {
 /// Locks the open `fd` (closed on failure) and returns its (device, inode).
 /// @throws OutputBusy if another writer holds it, OutputError on any other failure.
 struct stat lock_or_close(int fd, const std::string& path, const std::string& what, const char* kind) {
-  struct stat st{};
+  struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int e = errno;
     ::close(fd);
@@ -170,7 +171,7 @@ OutputLock::OutputLock(int fd, std::string path, dev_t device, ino_t inode)
 }
 
 bool held_by_this_process(int fd) {
-  struct stat st{};
+  struct stat st {};
   if (::fstat(fd, &st) != 0) return false;
   std::lock_guard<std::mutex> g(held_mutex());
   return held_set().count({st.st_dev, st.st_ino}) > 0;
@@ -178,7 +179,7 @@ bool held_by_this_process(int fd) {
 
 void lock_open_output(int fd, const std::string& path, const std::string& what) {
   if (held_by_this_process(fd)) return;
-  struct stat st{};
+  struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return;  // a FIFO or a device: nothing to share
   while (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     if (errno == EINTR) continue;

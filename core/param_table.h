@@ -30,13 +30,13 @@ namespace nimble {
 
 template <typename Config>
 struct Param {
-  using Member = std::variant<double Config::*, Eigen::Vector3d Config::*, bool Config::*, int Config::*,
-                              std::int64_t Config::*>;
+  using Member =
+      std::variant<double Config::*, Eigen::Vector3d Config::*, bool Config::*, int Config::*, std::int64_t Config::*>;
   std::string key;
   Member member;
-  Range range;          ///< of the value (of each component of a vector); unused for booleans
-  std::string unit;     ///< e.g. "rad/s", "-" for none
-  std::string meaning;  ///< one line, with its source where it has one
+  Range range;                ///< of the value (of each component of a vector); unused for booleans
+  std::string unit;           ///< e.g. "rad/s", "-" for none
+  std::string meaning;        ///< one line, with its source where it has one
   AxisNames axes = kXyzAxes;  ///< a vector's component keys
 };
 
@@ -144,7 +144,8 @@ inline constexpr const char* kParamsMarkdownHeader =
 /// The rows of the table in Markdown, one per parameter (key after `prefix`, default from
 /// `defaults`, allowed range, unit, meaning), without the header: tables of one section join up.
 template <typename Config>
-std::string params_markdown_rows(const ParamTable<Config>& table, const Config& defaults, const std::string& prefix = "") {
+std::string params_markdown_rows(const ParamTable<Config>& table, const Config& defaults,
+                                 const std::string& prefix = "") {
   using param_detail::number;
   std::ostringstream out;
   for (const Param<Config>& p : table) {
@@ -155,8 +156,8 @@ std::string params_markdown_rows(const ParamTable<Config>& table, const Config& 
           using T = std::decay_t<decltype(defaults.*member)>;
           const T& field = defaults.*member;
           if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-            value = std::string("{") + p.axes[0] + ": " + number(field[0]) + ", " + p.axes[1] + ": " + number(field[1]) +
-                    ", " + p.axes[2] + ": " + number(field[2]) + "}";
+            value = std::string("{") + p.axes[0] + ": " + number(field[0]) + ", " + p.axes[1] + ": " +
+                    number(field[1]) + ", " + p.axes[2] + ": " + number(field[2]) + "}";
           } else if constexpr (std::is_same_v<T, bool>) {
             value = field ? "true" : "false";
             is_bool = true;

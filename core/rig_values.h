@@ -93,7 +93,7 @@ struct Truth {
   Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();  ///< u v w
   Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();          ///< phi theta psi
   Eigen::Vector4d quaternion_wxyz = Eigen::Vector4d(1, 0, 0, 0);
-  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();   ///< p q r
+  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();  ///< p q r
   Eigen::Vector3d specific_force_body_mps2 = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_accel_body_radps2 = Eigen::Vector3d::Zero();
   double flap_freq_left_radps = 0.0;
@@ -102,7 +102,7 @@ struct Truth {
   double throttle_pct = 0.0;  ///< actual delta_t (deviation from trim) [%]
   double dihedral_rad = 0.0;
   double wing_root_rad = 0.0;
-  double gust_v_mps = 0.0;    ///< side gust the aerodynamics see; not on the bus
+  double gust_v_mps = 0.0;  ///< side gust the aerodynamics see; not on the bus
 };
 
 /// A command of the flight board to the actuators (ACTUATOR_CMD).
@@ -115,14 +115,14 @@ struct ActuatorCommand {
   int8_t mode = kModeLeftRight;
   double flap_freq_left_radps = 0.0;
   double flap_freq_right_radps = 0.0;
-  double delta_f_radps = 0.0;               ///< left minus right [rad/s]
+  double delta_f_radps = 0.0;  ///< left minus right [rad/s]
   double flap_freq_collective_radps = 0.0;
-  double throttle_pct = 0.0;                ///< throttle after tilt compensation [%]
+  double throttle_pct = 0.0;  ///< throttle after tilt compensation [%]
   double dihedral_rad = 0.0;
   double wing_root_rad = 0.0;
-  int64_t input_utime = -1;                 ///< utime of the state the command was computed from (-1: none)
-  int8_t rolling_counter = 0;               ///< 0..15, one step per command
-  std::string source;                       ///< the publishing process
+  int64_t input_utime = -1;    ///< utime of the state the command was computed from (-1: none)
+  int8_t rolling_counter = 0;  ///< 0..15, one step per command
+  std::string source;          ///< the publishing process
 };
 
 /// What the actuators report back (ACTUATOR_FB).
@@ -241,14 +241,14 @@ struct CanHealth {
 /// Something a process reports (FAULT): severity and code are fault_event_t's SEVERITY_* and
 /// CODE_* values (contract/faults.h names them).
 struct FaultEvent {
-  int64_t utime = 0;       ///< wall clock when it was reported [us]
+  int64_t utime = 0;  ///< wall clock when it was reported [us]
   int64_t seq = 0;
-  int64_t rig_utime = 0;   ///< the rig's time it refers to [us]
-  std::string process;     ///< who reports it
+  int64_t rig_utime = 0;  ///< the rig's time it refers to [us]
+  std::string process;    ///< who reports it
   int8_t severity = 0;
   int32_t code = 0;
-  std::string channel;     ///< the channel it concerns ("" if none)
-  std::string message;     ///< what happened, in words
+  std::string channel;  ///< the channel it concerns ("" if none)
+  std::string message;  ///< what happened, in words
 };
 
 }  // namespace nimble

@@ -110,9 +110,12 @@ class Parser {
   NodePtr expr() {
     NodePtr left = product();
     for (;;) {
-      if (accept('+')) left = make(Node::Kind::kAdd, {left, product()});
-      else if (accept('-')) left = make(Node::Kind::kSub, {left, product()});
-      else return left;
+      if (accept('+'))
+        left = make(Node::Kind::kAdd, {left, product()});
+      else if (accept('-'))
+        left = make(Node::Kind::kSub, {left, product()});
+      else
+        return left;
     }
   }
   NodePtr product() {
@@ -181,7 +184,8 @@ class Parser {
     }
     if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
       std::size_t start = pos_;
-      while (pos_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_')) ++pos_;
+      while (pos_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_'))
+        ++pos_;
       std::string name = text_.substr(start, pos_ - start);
       bool one = contains(one_argument_functions(), name);
       bool two = contains(two_argument_functions(), name);
@@ -274,7 +278,8 @@ bool has_state(const Node& n) {
 }
 
 bool same(const Node& a, const Node& b) {
-  if (a.kind != b.kind || a.name != b.name || a.power != b.power || a.children.size() != b.children.size()) return false;
+  if (a.kind != b.kind || a.name != b.name || a.power != b.power || a.children.size() != b.children.size())
+    return false;
   if (std::memcmp(&a.number, &b.number, sizeof(double)) != 0) return false;
   for (std::size_t i = 0; i < a.children.size(); ++i)
     if (!same(*a.children[i], *b.children[i])) return false;
@@ -289,8 +294,8 @@ TermParseError::TermParseError(std::string text, std::size_t position, std::stri
       problem_(std::move(problem)) {}
 
 const std::vector<std::string>& term_signal_names() {
-  static const std::vector<std::string> names{"p",     "q",       "r",       "u",       "v",      "w",
-                                              "phi",   "theta",   "delta_f", "delta_t", "delta_d", "delta_w"};
+  static const std::vector<std::string> names{"p",   "q",     "r",       "u",       "v",       "w",
+                                              "phi", "theta", "delta_f", "delta_t", "delta_d", "delta_w"};
   return names;
 }
 
@@ -341,12 +346,18 @@ void TermProgram::emit(const TermExpression::Node& n, const std::vector<std::str
     case Node::Kind::kNeg: in = {Op::kNeg}; break;
     case Node::Kind::kPow: in = {Op::kPow, 0.0, n.power}; break;
     case Node::Kind::kCall:
-      if (n.name == "abs") in = {Op::kAbs};
-      else if (n.name == "sign") in = {Op::kSign};
-      else if (n.name == "pos") in = {Op::kPos};
-      else if (n.name == "neg") in = {Op::kNeg0};
-      else if (n.name == "deadzone") in = {Op::kDeadzone, n.number, 0};
-      else if (n.name == "sat") in = {Op::kSat, n.number, 0};
+      if (n.name == "abs")
+        in = {Op::kAbs};
+      else if (n.name == "sign")
+        in = {Op::kSign};
+      else if (n.name == "pos")
+        in = {Op::kPos};
+      else if (n.name == "neg")
+        in = {Op::kNeg0};
+      else if (n.name == "deadzone")
+        in = {Op::kDeadzone, n.number, 0};
+      else if (n.name == "sat")
+        in = {Op::kSat, n.number, 0};
       else {
         const Op op = n.name == "lag" ? Op::kLag : n.name == "ratelimit" ? Op::kRateLimit : Op::kBacklash;
         in = {op, n.number, static_cast<int>(state_.size())};
@@ -364,9 +375,18 @@ double TermProgram::evaluate(const double* signals) {
     switch (in.op) {
       case Op::kConst: s[++top] = in.value; break;
       case Op::kSignal: s[++top] = signals[in.index]; break;
-      case Op::kAdd: s[top - 1] += s[top]; --top; break;
-      case Op::kSub: s[top - 1] -= s[top]; --top; break;
-      case Op::kMul: s[top - 1] *= s[top]; --top; break;
+      case Op::kAdd:
+        s[top - 1] += s[top];
+        --top;
+        break;
+      case Op::kSub:
+        s[top - 1] -= s[top];
+        --top;
+        break;
+      case Op::kMul:
+        s[top - 1] *= s[top];
+        --top;
+        break;
       case Op::kNeg: s[top] = -s[top]; break;
       case Op::kPow: {
         double base = s[top], r = 1.0;

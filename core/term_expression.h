@@ -97,8 +97,22 @@ class TermProgram {
 
  private:
   enum class Op {
-    kConst, kSignal, kAdd, kSub, kMul, kNeg, kPow, kAbs, kSign, kPos, kNeg0, kDeadzone, kSat,
-    kBacklash, kLag, kRateLimit
+    kConst,
+    kSignal,
+    kAdd,
+    kSub,
+    kMul,
+    kNeg,
+    kPow,
+    kAbs,
+    kSign,
+    kPos,
+    kNeg0,
+    kDeadzone,
+    kSat,
+    kBacklash,
+    kLag,
+    kRateLimit
   };
   struct Instr {
     Op op;

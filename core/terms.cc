@@ -12,7 +12,8 @@ std::string join(const std::vector<std::string>& v) {
 }
 }  // namespace
 
-std::vector<Term> terms_from_config(ConfigMap& parent, const std::string& key, const std::vector<std::string>& equations,
+std::vector<Term> terms_from_config(ConfigMap& parent, const std::string& key,
+                                    const std::vector<std::string>& equations,
                                     const std::vector<std::string>& signals) {
   std::vector<Term> out;
   const YAML::Node list = parent.get_node(key);

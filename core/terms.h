@@ -26,8 +26,8 @@ struct Term {
 ///         unknown or missing key, an equation outside `equations`, an expression that does not
 ///         parse (with the position) or reads a signal outside `signals`, or a coefficient that
 ///         is not a finite number.
-std::vector<Term> terms_from_config(ConfigMap& parent, const std::string& key, const std::vector<std::string>& equations,
-                                    const std::vector<std::string>& signals);
+std::vector<Term> terms_from_config(ConfigMap& parent, const std::string& key,
+                                    const std::vector<std::string>& equations, const std::vector<std::string>& signals);
 
 /// Name of a term's coefficient in an identification's parameter list: "<equation>:<expression>",
 /// e.g. "L:p^3".

@@ -46,8 +46,7 @@ Vehicle vehicle_from_config(ConfigMap& map) {
   inertia.finish();
   if (!(v.Ic() > 0.0)) {
     std::ostringstream why;
-    why << "Ixx*Izz - Ixz^2 = " << v.Ic()
-        << " must be > 0 (Ixx=" << v.Ixx_kgm2 << ", Izz=" << v.Izz_kgm2
+    why << "Ixx*Izz - Ixz^2 = " << v.Ic() << " must be > 0 (Ixx=" << v.Ixx_kgm2 << ", Izz=" << v.Izz_kgm2
         << "): not a physical inertia tensor";
     inertia.fail("Ixz", why.str());
   }

@@ -38,8 +38,8 @@ const SizedEffect& sized_effect(const std::string& effect) {
   for (const auto& e : sized_effects()) {
     if (e.effect == effect) return e;
   }
-  throw std::invalid_argument("unknown effect '" + effect + "'; the plant effects and what SIZE sets: " +
-                              sized_effect_list());
+  throw std::invalid_argument("unknown effect '" + effect +
+                              "'; the plant effects and what SIZE sets: " + sized_effect_list());
 }
 
 std::string sized_effect_list() {
@@ -53,8 +53,8 @@ std::string sized_effect_list() {
 EffectSizes parse_effect_sizes(const std::string& text) {
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw std::invalid_argument("'" + text + "' is not NAME=SIZE; the plant effects and what SIZE sets: " +
-                                sized_effect_list());
+    throw std::invalid_argument("'" + text +
+                                "' is not NAME=SIZE; the plant effects and what SIZE sets: " + sized_effect_list());
   }
   const SizedEffect& e = sized_effect(text.substr(0, eq));
   EffectSizes out;

@@ -30,9 +30,9 @@ struct SizedEffect {
   std::string effect;     ///< plant effect, plant.effects.<effect>
   std::string parameter;  ///< the key SIZE sets
   std::string unit;
-  Range range;            ///< of SIZE (the parameter's range in the plant's table)
-  std::string named_as;   ///< the name the discrepancy workflow gives it (core/effects.h)
-  std::string scales;     ///< what else SIZE moves (help text)
+  Range range;           ///< of SIZE (the parameter's range in the plant's table)
+  std::string named_as;  ///< the name the discrepancy workflow gives it (core/effects.h)
+  std::string scales;    ///< what else SIZE moves (help text)
   /// The effect's values at a size (plant/effects/effect_sizing.h).
   std::vector<plant::EffectValue> (*values)(const YAML::Node& section, double size) = nullptr;
 };

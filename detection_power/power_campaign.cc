@@ -148,8 +148,8 @@ void fly_cells(const std::vector<CellPlan>& plans, std::vector<PowerCell>& cells
   campaign::KeptItems kept;
   for (std::size_t item = 0; item < n; ++item) {
     const CellPlan& c = plans[item / static_cast<std::size_t>(flights)];
-    kept.keys.push_back(flight_key(c.size, c.length.length_s,
-                                   flight_seed(campaign_seed, item % static_cast<std::size_t>(flights))));
+    kept.keys.push_back(
+        flight_key(c.size, c.length.length_s, flight_seed(campaign_seed, item % static_cast<std::size_t>(flights))));
   }
   kept.keep = [](const std::string& line) { return decode(line).error.empty(); };
   const auto lines = campaign::run_kept(kept, jobs, pool, files);
@@ -291,7 +291,8 @@ std::vector<double> grid_lengths(const PowerOptions& o, double block_s) {
   std::vector<double> lengths = o.lengths_s;
   if (lengths.empty()) lengths = {block_s, 2 * block_s, 4 * block_s};
   for (const double l : lengths) {
-    if (!(std::isfinite(l) && l > 0.0)) throw std::invalid_argument("record length " + fmt_number(l) + " s: must be > 0");
+    if (!(std::isfinite(l) && l > 0.0))
+      throw std::invalid_argument("record length " + fmt_number(l) + " s: must be > 0");
   }
   std::sort(lengths.begin(), lengths.end());
   lengths.erase(std::unique(lengths.begin(), lengths.end()), lengths.end());

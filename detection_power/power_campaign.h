@@ -51,22 +51,22 @@ namespace nimble::detection_power {
 
 struct PowerOptions {
   std::string scenario_file;
-  std::vector<Override> overrides;   ///< --set, applied before the effect's and the length's
-  std::string model_file;            ///< the model the workflow checks
-  std::string vehicle_file;          ///< empty: the model's
+  std::vector<Override> overrides;  ///< --set, applied before the effect's and the length's
+  std::string model_file;           ///< the model the workflow checks
+  std::string vehicle_file;         ///< empty: the model's
   ident::DiscrepancyOptions discrepancy;
-  std::string effect;                ///< plant effect (effect_size.h)
+  std::string effect;  ///< plant effect (effect_size.h)
   std::vector<double> sizes;
   /// Record lengths of the grid [s]; empty: the scenario's block times 1, 2, 4, doubled on to 16
   /// blocks for a size that has not reached the target.
   std::vector<double> lengths_s;
-  int flights = 100;                 ///< per cell
-  std::uint64_t seed = 1;            ///< the campaign's seed
+  int flights = 100;       ///< per cell
+  std::uint64_t seed = 1;  ///< the campaign's seed
   int jobs = 1;
-  double target = 0.9;               ///< the probability a recommended length reaches
-  int refine = 3;                    ///< rounds of refinement of each recommended length
-  int verify = 0;                    ///< fresh flights at each recommended length
-  bool progress = true;              ///< progress line on stderr
+  double target = 0.9;   ///< the probability a recommended length reaches
+  int refine = 3;        ///< rounds of refinement of each recommended length
+  int verify = 0;        ///< fresh flights at each recommended length
+  bool progress = true;  ///< progress line on stderr
   /// A campaign directory (campaign/result_files.h) keeping each flight's outcome as it finishes
   /// (empty: none): the same campaign started again there flies only the flights it lacks.
   std::string result_dir;
@@ -77,15 +77,15 @@ struct PowerCell {
   double size = 0.0;
   double length_s = 0.0;
   int repetitions = 1;
-  std::string kind;                       ///< grid, longer, refined or verification
+  std::string kind;  ///< grid, longer, refined or verification
   std::vector<FlightOutcome> flights;
-  Proportion named;                       ///< the effect named
-  Proportion other;                       ///< some other effect named
-  Proportion alarm;                       ///< any verdict but none
-  std::map<std::string, int> other_names; ///< how often each other effect was named
-  std::map<std::string, int> verdicts;    ///< how often each verdict was given (effects, none, ...)
-  int not_ok = 0;                         ///< runs whose verdict was not ok (the workflow still ran)
-  int failed = 0;                         ///< flights with no workflow result (FlightOutcome::error)
+  Proportion named;                        ///< the effect named
+  Proportion other;                        ///< some other effect named
+  Proportion alarm;                        ///< any verdict but none
+  std::map<std::string, int> other_names;  ///< how often each other effect was named
+  std::map<std::string, int> verdicts;     ///< how often each verdict was given (effects, none, ...)
+  int not_ok = 0;                          ///< runs whose verdict was not ok (the workflow still ran)
+  int failed = 0;                          ///< flights with no workflow result (FlightOutcome::error)
   /// FlightOutcome's times summed over the cell's flights [s].
   double flight_s = 0.0, build_s = 0.0, workflow_s = 0.0, flight_cpu_s = 0.0, workflow_cpu_s = 0.0;
 };
@@ -98,7 +98,7 @@ struct SizeCurve {
 };
 
 struct PowerResult {
-  std::string scenario;     ///< its name
+  std::string scenario;  ///< its name
   std::string model;
   std::string effect, parameter, unit, named_as;
   double block_s = 0.0;
@@ -106,14 +106,14 @@ struct PowerResult {
   int flights = 0;
   std::uint64_t seed = 1;
   int jobs = 1;
-  std::vector<double> sizes, lengths_s;    ///< the grid
-  std::vector<PowerCell> cells;            ///< the grid's (by size, then length), then the longer and refined ones
-  std::vector<SizeCurve> curves;           ///< per size
-  std::vector<Crossing> size_for_length;   ///< per grid length: the smallest size named with the target
+  std::vector<double> sizes, lengths_s;   ///< the grid
+  std::vector<PowerCell> cells;           ///< the grid's (by size, then length), then the longer and refined ones
+  std::vector<SizeCurve> curves;          ///< per size
+  std::vector<Crossing> size_for_length;  ///< per grid length: the smallest size named with the target
   /// Per size with a recommended length (size 0 excepted): its fresh seeds flown there.
   std::vector<PowerCell> verification;
-  double wall_s = 0.0;                     ///< flying and analysing, plans loaded before
-  double setup_s = 0.0;                    ///< loading the grid's plans
+  double wall_s = 0.0;   ///< flying and analysing, plans loaded before
+  double setup_s = 0.0;  ///< loading the grid's plans
 
   /// The grid's cell of size `s` and length `l` (indices into sizes and lengths_s).
   const PowerCell& cell(std::size_t s, std::size_t l) const { return cells.at(s * lengths_s.size() + l); }

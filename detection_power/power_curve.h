@@ -32,11 +32,11 @@ double normal_quantile(double q);
 
 /// Where a curve reaches a target.
 struct Crossing {
-  bool reached = false;      ///< the target lies at or below the last x
-  bool bracketed = false;    ///< and above the first: lo_x < value <= hi_x
-  double value = 0.0;        ///< the x that reaches it; NaN if not reached
+  bool reached = false;           ///< the target lies at or below the last x
+  bool bracketed = false;         ///< and above the first: lo_x < value <= hi_x
+  double value = 0.0;             ///< the x that reaches it; NaN if not reached
   double lo_x = 0.0, hi_x = 0.0;  ///< the bracket (bracketed only)
-  std::string note;          ///< "interpolated between 12 and 24", "at or below 6, ...", "not reached by 48 (there 85 %)"
+  std::string note;  ///< "interpolated between 12 and 24", "at or below 6, ...", "not reached by 48 (there 85 %)"
 };
 
 /// The target crossing of `p` along `x` (increasing in |x|), as above: probit against sqrt|x|

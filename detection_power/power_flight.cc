@@ -14,9 +14,7 @@
 namespace nimble::detection_power {
 namespace {
 
-double seconds_since(std::int64_t start_ns) {
-  return static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9;
-}
+double seconds_since(std::int64_t start_ns) { return static_cast<double>(transport::monotonic_ns() - start_ns) / 1e9; }
 
 /// CPU time of this process [s].
 double cpu_s() {
@@ -105,7 +103,8 @@ FlightOutcome fly_and_check(launcher::RunPlan plan, std::uint64_t seed, const Fl
   const std::int64_t workflow_ns = transport::monotonic_ns();
   const double workflow_cpu = cpu_s();
   try {
-    const ident::DiscrepancyResult r = ident::find_discrepancy(f.data.measured, check.model, check.vehicle, check.options);
+    const ident::DiscrepancyResult r =
+        ident::find_discrepancy(f.data.measured, check.model, check.vehicle, check.options);
     out.analysed = true;
     out.verdict = r.verdict;
     for (const auto& e : r.effects) out.named.push_back(e.name);

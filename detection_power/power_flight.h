@@ -25,15 +25,15 @@ struct FlightCheck {
 /// What one flight gave.
 struct FlightOutcome {
   std::uint64_t seed = 0;
-  int run_exit = -1;                  ///< the run's verdict (launcher/run_plan.h kRun*), -1: not flown
-  bool analysed = false;              ///< the workflow ran on the flight's data
-  std::string error;                  ///< why the flight or the workflow did not complete ("" if it did)
-  std::string verdict;                ///< the workflow's verdict (effects, ambiguous, unexplained, none)
-  std::vector<std::string> named;     ///< the effects it named
-  std::vector<std::string> ambiguous; ///< the candidates of its ambiguous pairs
-  double flight_s = 0.0;              ///< wall time of the flight, building its processes included [s]
-  double build_s = 0.0;               ///< of which building the processes [s]
-  double workflow_s = 0.0;            ///< wall time of the workflow [s]
+  int run_exit = -1;                   ///< the run's verdict (launcher/run_plan.h kRun*), -1: not flown
+  bool analysed = false;               ///< the workflow ran on the flight's data
+  std::string error;                   ///< why the flight or the workflow did not complete ("" if it did)
+  std::string verdict;                 ///< the workflow's verdict (effects, ambiguous, unexplained, none)
+  std::vector<std::string> named;      ///< the effects it named
+  std::vector<std::string> ambiguous;  ///< the candidates of its ambiguous pairs
+  double flight_s = 0.0;               ///< wall time of the flight, building its processes included [s]
+  double build_s = 0.0;                ///< of which building the processes [s]
+  double workflow_s = 0.0;             ///< wall time of the workflow [s]
   /// CPU time of this process [s] during the flight (both of its threads: the flight and the
   /// one that records and assembles its messages) and during the workflow: what the flight costs
   /// a core, whatever else the machine runs.

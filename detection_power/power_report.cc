@@ -33,7 +33,8 @@ std::string cell_text(const Proportion& p) {
 /// One size's cells by length: the naming probability, another name, any alarm, runs not ok.
 void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& curve) {
   char line[200];
-  out << "\n" << r.parameter << " = " << num(curve.size) << " " << r.unit
+  out << "\n"
+      << r.parameter << " = " << num(curve.size) << " " << r.unit
       << (curve.size == 0.0 ? " (the effect off: naming it is a false name)" : "") << "\n";
   std::snprintf(line, sizeof line, "  %10s %7s %9s  %-18s %-18s %-18s %s\n", "length [s]", "blocks", "", "named, %",
                 "another name, %", "any alarm, %", "not ok");
@@ -48,8 +49,9 @@ void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& 
   const Crossing& rec = curve.length;
   if (curve.size != 0.0) {
     out << "  -> " << num(100 * r.target, "%.0f") << " %: "
-        << (rec.reached ? num(rec.value, "%.2f") + " s, " + num(rec.value / r.block_s, "%.2f") + " blocks (" + rec.note + ")"
-                        : rec.note)
+        << (rec.reached
+                ? num(rec.value, "%.2f") + " s, " + num(rec.value / r.block_s, "%.2f") + " blocks (" + rec.note + ")"
+                : rec.note)
         << "\n";
   }
 }
@@ -142,14 +144,14 @@ std::string power_text(const PowerResult& r) {
   out << "\nsmallest size named with " << num(100 * r.target, "%.0f") << " % (probit against |size|):\n";
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
     const Crossing& rec = r.size_for_length[l];
-    out << "  length " << num(r.lengths_s[l]) << " s: " << (rec.reached ? num(rec.value) + " (" + rec.note + ")" : rec.note)
-        << "\n";
+    out << "  length " << num(r.lengths_s[l])
+        << " s: " << (rec.reached ? num(rec.value) + " (" + rec.note + ")" : rec.note) << "\n";
   }
   for (const PowerCell& c : r.verification) {
     out << "verification, fresh seeds: size " << num(c.size) << " at " << num(c.length_s) << " s: named "
-        << c.named.count << "/" << c.named.n << " = " << num(100 * c.named.p, "%.1f") << " % [" << num(100 * c.named.lo, "%.1f")
-        << ", " << num(100 * c.named.hi, "%.1f") << "], another name " << num(100 * c.other.p, "%.1f") << " %, any alarm "
-        << num(100 * c.alarm.p, "%.1f") << " %\n";
+        << c.named.count << "/" << c.named.n << " = " << num(100 * c.named.p, "%.1f") << " % ["
+        << num(100 * c.named.lo, "%.1f") << ", " << num(100 * c.named.hi, "%.1f") << "], another name "
+        << num(100 * c.other.p, "%.1f") << " %, any alarm " << num(100 * c.alarm.p, "%.1f") << " %\n";
   }
   const Totals t = totals(r);
   const double n = std::max<double>(1.0, static_cast<double>(t.flights));
@@ -186,7 +188,8 @@ std::string power_json(const PowerResult& r, const std::vector<std::string>& plo
   const Totals t = totals(r);
   const double n = std::max<double>(1.0, static_cast<double>(t.flights));
   w.key("timing").begin_object();
-  w.key("wall_s").value(r.wall_s).key("setup_s").value(r.setup_s).key("flights").value(static_cast<long long>(t.flights));
+  w.key("wall_s").value(r.wall_s).key("setup_s").value(r.setup_s).key("flights").value(
+      static_cast<long long>(t.flights));
   w.key("flight_s_mean").value(t.flight_s / n).key("build_s_mean").value(t.build_s / n);
   w.key("workflow_s_mean").value(t.workflow_s / n);
   w.key("flight_cpu_s_mean").value(t.flight_cpu_s / n).key("workflow_cpu_s_mean").value(t.workflow_cpu_s / n);
@@ -217,10 +220,12 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
     write_file(dir / "power_length.dat", data.str());
     script << "set terminal pngcairo noenhanced size 1000,650\nset output "
            << plots::gp_quote((dir / "power_length.png").string()) << "\n"
-           << "set title " << plots::gp_quote("P(" + r.named_as + " named) on " + r.scenario + ", " +
-                                              std::to_string(r.flights) + " flights per point, 95 % Wilson intervals")
+           << "set title "
+           << plots::gp_quote("P(" + r.named_as + " named) on " + r.scenario + ", " + std::to_string(r.flights) +
+                              " flights per point, 95 % Wilson intervals")
            << "\nset xlabel 'record length [s]'\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\n"
-           << "set key bottom right\n" << target;
+           << "set key bottom right\n"
+           << target;
     for (std::size_t s = 0; s < r.curves.size(); ++s) {
       const Crossing& rec = r.curves[s].length;
       if (!rec.reached || r.curves[s].size == 0.0) continue;
@@ -257,7 +262,8 @@ std::vector<std::string> write_power_plots(const PowerResult& r, const std::stri
            << plots::gp_quote((dir / "power_size.png").string()) << "\n"
            << "set title " << plots::gp_quote("P(" + r.named_as + " named) on " + r.scenario + " against the size")
            << "\nset xlabel " << plots::gp_quote("|" + r.parameter + "| [" + r.unit + "]")
-           << "\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\nset key bottom right\n" << target << "plot ";
+           << "\nset ylabel 'probability'\nset yrange [0:1.05]\nset grid\nset key bottom right\n"
+           << target << "plot ";
     for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
       script << (l ? ", " : "") << plots::gp_quote((dir / "power_size.dat").string()) << " index " << l
              << " using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '" << colour(l) << "' title "

@@ -69,7 +69,7 @@ RecordLength record_length(const Scenario& scenario, double length_s, const std:
   YAML::Emitter emitter;
   emitter << repeated(load_yaml_file(file), out.repetitions, pad_s);
   write_file(path, "# " + file + " flown " + std::to_string(out.repetitions) + " times, " + shortest_text(pad_s) +
-                        " s of level hover between (rig discrepancy --power)\n" + emitter.c_str() + "\n");
+                       " s of level hover between (rig discrepancy --power)\n" + emitter.c_str() + "\n");
   out.manoeuvre_file = path.string();
   out.overrides.push_back({"manoeuvre", out.manoeuvre_file});
   return out;

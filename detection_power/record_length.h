@@ -20,9 +20,9 @@ namespace nimble::detection_power {
 /// How a scenario is flown for `length_s`.
 struct RecordLength {
   double length_s = 0.0;
-  double block_s = 0.0;       ///< one block: max(duration_s, the manoeuvre's duration)
-  int repetitions = 1;        ///< blocks flown (the last one possibly cut)
-  std::string manoeuvre_file; ///< the repeated manoeuvre written (empty: the scenario's own)
+  double block_s = 0.0;             ///< one block: max(duration_s, the manoeuvre's duration)
+  int repetitions = 1;              ///< blocks flown (the last one possibly cut)
+  std::string manoeuvre_file;       ///< the repeated manoeuvre written (empty: the scenario's own)
   std::vector<Override> overrides;  ///< duration_s and manoeuvre
 };
 

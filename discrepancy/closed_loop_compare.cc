@@ -8,8 +8,9 @@
 
 namespace nimble::ident {
 
-void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights, const DerivativeModel& model,
-                         const Vehicle& vehicle, const ControllerConfig& controller, const std::string& gains) {
+void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights,
+                         const DerivativeModel& model, const Vehicle& vehicle, const ControllerConfig& controller,
+                         const std::string& gains) {
   if (flights.size() > 1) {
     result.closed_loop_note = "not flown for pooled flights: run rig discrepancy on one flight for it";
     return;

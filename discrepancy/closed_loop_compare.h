@@ -17,7 +17,8 @@ namespace nimble::ident {
 /// `rig discrepancy` reports it: `model` and result.augmented_model each flown by the controller
 /// copy `controller` with `gains` on the one flight's phi_sp. Pooled flights, a flight without
 /// phi_sp or a failing simulation are not flown, and closed_loop_note says why.
-void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights, const DerivativeModel& model,
-                         const Vehicle& vehicle, const ControllerConfig& controller, const std::string& gains);
+void compare_closed_loop(DiscrepancyResult& result, const std::vector<FlightData>& flights,
+                         const DerivativeModel& model, const Vehicle& vehicle, const ControllerConfig& controller,
+                         const std::string& gains);
 
 }  // namespace nimble::ident

@@ -75,26 +75,26 @@ struct SensorError {
   /// k; tau at t_mid_s (positive: the gyro's stamps are late); the drift d of tau per second of the
   /// record (tau(t) = tau + d (t - t_mid_s)) [ppm]; b.
   double value = 0.0;
-  double sigma = 0.0;   ///< coloured-residual standard deviation
+  double sigma = 0.0;               ///< coloured-residual standard deviation
   double interval[2] = {0.0, 0.0};  ///< 95 % (Student's t on the batch-means blocks)
   double tolerance = 0.0;           ///< the excess over this is tested
   double p_value = 1.0;             ///< of the excess, against p_critical
   bool significant = false;
   bool signature_holds = true;
-  std::string signature_note;       ///< the comparison's figures
-  bool named = false;               ///< significant and its signature holds
-  bool corrected = false;           ///< the record was corrected for it (significant; an offset told from zero)
+  std::string signature_note;  ///< the comparison's figures
+  bool named = false;          ///< significant and its signature holds
+  bool corrected = false;      ///< the record was corrected for it (significant; an offset told from zero)
 };
 
 /// The stage's result for one flight.
 struct CompatibilityResult {
   std::string source;
   bool ran = false;
-  std::string note;       ///< why it did not run, when it did not
-  std::string equation;   ///< the kinematic relation used
+  std::string note;      ///< why it did not run, when it did not
+  std::string equation;  ///< the kinematic relation used
   std::size_t samples = 0;
-  double t_mid_s = 0.0;   ///< the middle of the rows checked: the time about which a clock drift acts
-  double blocks = 0.0;    ///< batch-means blocks of the coloured covariance
+  double t_mid_s = 0.0;             ///< the middle of the rows checked: the time about which a clock drift acts
+  double blocks = 0.0;              ///< batch-means blocks of the coloured covariance
   std::vector<SensorError> errors;  ///< sensor_scale, time_offset, sensor_bias, clock_drift (every one tested)
   /// Held-out gap of the kinematic relation (mean squared error over the variance of phi_dot, every
   /// fold predicted by the fit on the others): as recorded (a = 1, tau = 0, c = 0) and corrected.
@@ -105,7 +105,7 @@ struct CompatibilityResult {
   /// normalised gap: v_dot_star contains p, so its variance changes with the correction.)
   std::map<std::string, double> rmse_uncorrected;
   std::vector<std::string> corrections;  ///< what was corrected, in words
-  double elapsed_ms = 0.0;  ///< the stage's own time in the workflow: check, correction, RMSE as recorded
+  double elapsed_ms = 0.0;               ///< the stage's own time in the workflow: check, correction, RMSE as recorded
 };
 
 /// Runs the stage on one flight. p_critical: the alarm rule's tail; folds: of the held-out gap;

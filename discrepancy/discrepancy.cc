@@ -11,7 +11,6 @@
 #include <sstream>
 #include <stdexcept>
 
-
 #include "core/chi_square.h"
 #include "ident/data_check.h"
 #include "ident/metrics.h"
@@ -36,7 +35,9 @@ void check_request(const DerivativeModel& model, const DiscrepancyOptions& optio
                                 to_string(model.structure));
   }
   // The command line's ranges (rig discrepancy --help), checked here for every front end (Python).
-  const auto value = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string(std::isnan(v) ? "nan" : "inf"); };
+  const auto value = [](double v) {
+    return std::isfinite(v) ? std::to_string(v) : std::string(std::isnan(v) ? "nan" : "inf");
+  };
   if (options.folds < 4 || options.folds > 100) {
     throw std::invalid_argument("discrepancy: folds must be in [4, 100], not " + std::to_string(options.folds));
   }
@@ -46,7 +47,8 @@ void check_request(const DerivativeModel& model, const DiscrepancyOptions& optio
   if (!std::isfinite(options.delay_max_s) || !(options.delay_max_s >= 1e-9 && options.delay_max_s <= 1.0)) {
     throw std::invalid_argument("discrepancy: delay_max_s must be in (0, 1] s, not " + value(options.delay_max_s));
   }
-  if (!std::isfinite(options.command_latency_s) || !(options.command_latency_s >= 0.0 && options.command_latency_s <= 0.1)) {
+  if (!std::isfinite(options.command_latency_s) ||
+      !(options.command_latency_s >= 0.0 && options.command_latency_s <= 0.1)) {
     throw std::invalid_argument("discrepancy: command_latency_s must be in [0, 0.1] s, not " +
                                 value(options.command_latency_s));
   }
@@ -95,8 +97,9 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
           for (const auto& ca : a.cols) {
             for (const auto& cb : b.cols) {
               const VectorXd& w = m.eqs[a.eq].w;
-              rho_max = std::max(rho_max, std::fabs(w.size() ? residual_correlation(X, ca.cwiseProduct(w), cb.cwiseProduct(w))
-                                                              : residual_correlation(X, ca, cb)));
+              rho_max =
+                  std::max(rho_max, std::fabs(w.size() ? residual_correlation(X, ca.cwiseProduct(w), cb.cwiseProduct(w))
+                                                       : residual_correlation(X, ca, cb)));
             }
           }
         }
@@ -144,7 +147,8 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
     Model wm = build_baseline(wide.filtered, equations, model, vehicle, data.source, nullptr, nullptr);
     for (const Term& term : m.found_terms) {
       for (std::size_t e = 0; e < wm.eqs.size(); ++e) {
-        if (wm.eqs[e].name == term.equation) wm.added[e].push_back({e, {term_parameter_name(term)}, {term_column(wide.filtered, term)}});
+        if (wm.eqs[e].name == term.equation)
+          wm.added[e].push_back({e, {term_parameter_name(term)}, {term_column(wide.filtered, term)}});
       }
     }
     for (const auto& name : m.effect_names) {
@@ -154,7 +158,8 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
       for (const auto& t : res.candidates) {
         if (t.name == name && t.entered) k = scan_index(name, t.parameters, wide.filtered);
       }
-      for (auto& a : candidate_columns(spec, wide.filtered, model.trim, vehicle.gravity_mps2, k)) wm.added[a.eq].push_back(a);
+      for (auto& a : candidate_columns(spec, wide.filtered, model.trim, vehicle.gravity_mps2, k))
+        wm.added[a.eq].push_back(a);
     }
     BatchRule wide_batch = wf.batch;
     wide_batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, wide_proc));
@@ -174,8 +179,8 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
       for (std::size_t e = 0; e < wm.eqs.size(); ++e) contribution.push_back(cv_before[e] - cv_after[e]);
       const double f = t.parameters.at("flapping_hz");
       for (int h = 1; h <= 2; ++h) {
-        BandGap g = band_gap(t.name + " harmonic " + std::to_string(h), wm, eqs, cv_before, cv_after, rate, h * f - half,
-                             h * f + half, &contribution);
+        BandGap g = band_gap(t.name + " harmonic " + std::to_string(h), wm, eqs, cv_before, cv_after, rate,
+                             h * f - half, h * f + half, &contribution);
         g.wideband = true;
         bands.push_back(std::move(g));
       }
@@ -201,15 +206,15 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
   // A side wind has no regressor: named from its signature in the final residual.
   const auto gust = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->stochastic; });
   CandidateTrial gust_result;
-  const double f_ref_hi =
-      options.processing.filter_order > 0 ? 0.6 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
+  const double f_ref_hi = options.processing.filter_order > 0 ? 0.6 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   if (gust != pool.end() && std::find(known.begin(), known.end(), (*gust)->name) == known.end()) {
     std::vector<VectorXd> extra;  // Y columns of every deterministic candidate the data supports
     for (const auto& c : candidate_library()) {
       if (c.scanned || c.wideband || c.stochastic) continue;
       if (std::find(m.effect_names.begin(), m.effect_names.end(), c.name) != m.effect_names.end()) continue;
       if (std::find(known.begin(), known.end(), c.name) != known.end()) continue;
-      if (!std::all_of(c.needs.begin(), c.needs.end(), [&](const std::string& n) { return d.has(n) && excited(d.at(n), n); })) {
+      if (!std::all_of(c.needs.begin(), c.needs.end(),
+                       [&](const std::string& n) { return d.has(n) && excited(d.at(n), n); })) {
         continue;
       }
       for (auto& a : candidate_columns(c, d, model.trim, vehicle.gravity_mps2, 0)) {
@@ -306,8 +311,8 @@ std::size_t locate(const UniformData& d, const DiscrepancyOptions& options, cons
   }
   const double f_hi = options.processing.filter_order > 0 ? 0.8 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   std::size_t tests = 0;
-  const LocationRule rule{p_critical, batch.min_block, options.gust_band_hz, options.gust_band_alpha,
-                          folds, options.heldout_sigmas};
+  const LocationRule rule{p_critical, batch.min_block,       options.gust_band_hz, options.gust_band_alpha,
+                          folds,      options.heldout_sigmas};
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
     // Not the actuator's own equation: its error on sampled data follows the recorded command's
     // sampling and latency, which the locator cannot tell from physics (with the command recorded,
@@ -453,7 +458,8 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
   for (const auto& e : res.effects) {
     if (!e.channel.empty()) continue;  // a sensor error: the record was corrected, the model is not changed
     if (e.name == "term") {
-      am.terms.push_back(Term{e.equation, TermExpression::parse(e.expression), e.coefficient, "rig discrepancy " + source});
+      am.terms.push_back(
+          Term{e.equation, TermExpression::parse(e.expression), e.coefficient, "rig discrepancy " + source});
     } else {
       am.effects[e.name] = e.parameters;
     }
@@ -521,7 +527,8 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
     check_flight_data(recorded, vehicle);
     check_excitation(recorded, state_names(model.structure), inputs);
     for (const auto& in : inputs) {
-      if (!recorded.has(in)) throw DataError(recorded.source, -1, -1, in, "the model's input " + in + " is not in the data");
+      if (!recorded.has(in))
+        throw DataError(recorded.source, -1, -1, in, "the model's input " + in + " is not in the data");
     }
     const FlightData& data = aligned.emplace_back(compatibility_stage(recorded, model, vehicle, inputs, options, res));
     PreparedData prep = prepare(data, Structure::kLateral3, model.trim, vehicle.gravity_mps2, options.processing);
@@ -529,9 +536,11 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
     if (prep.filtered.size() < static_cast<Index>(50 * options.folds)) {
       char need[96];
       std::snprintf(need, sizeof need, ": need at least %zu (50 per fold, %.2f s at %.6g Hz)", 50 * options.folds,
-                    static_cast<double>(50 * options.folds - 1) / options.processing.rate_hz, options.processing.rate_hz);
-      throw DataError(data.source, -1, -1, "", std::to_string(prep.filtered.size()) + " samples are too few for " +
-                                                   std::to_string(options.folds) + "-fold cross-validation" + need);
+                    static_cast<double>(50 * options.folds - 1) / options.processing.rate_hz,
+                    options.processing.rate_hz);
+      throw DataError(data.source, -1, -1, "",
+                      std::to_string(prep.filtered.size()) + " samples are too few for " +
+                          std::to_string(options.folds) + "-fold cross-validation" + need);
     }
     prepared.push_back(std::move(prep.filtered));
   }
@@ -589,7 +598,8 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::vector<VectorXd> aug_resid;
   res.augmented = full_fit(m, wf.batch, &aug_resid);
   const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
-  const CandidateTrial gust_result = gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
+  const CandidateTrial gust_result =
+      gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
   name_effects(m, wf, res);
   if (gust_result.entered) {
     NamedEffect gust;

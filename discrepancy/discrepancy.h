@@ -176,12 +176,12 @@ struct DiscrepancyOptions {
   std::vector<std::string> candidates;
   /// Inputs of the baseline equations; empty: the model's inputs.
   std::vector<std::string> inputs;
-  std::size_t folds = 10;             ///< K of the held-out cross-validation, >= 4
-  double partial_f = 20.0;            ///< the partial-F rule (SIDPAC), applied as its chi2_1 tail
-  double heldout_sigmas = 1.0;        ///< held-out drop must exceed this many standard errors (its spread)
-  double collinearity = 0.9;          ///< |rho| above which two passing candidates are ambiguous
-  std::size_t max_effects = 4;        ///< rounds of the stepwise search
-  double delay_max_s = 0.060;         ///< actuator_delay scan: 1 sample .. this delay
+  std::size_t folds = 10;       ///< K of the held-out cross-validation, >= 4
+  double partial_f = 20.0;      ///< the partial-F rule (SIDPAC), applied as its chi2_1 tail
+  double heldout_sigmas = 1.0;  ///< held-out drop must exceed this many standard errors (its spread)
+  double collinearity = 0.9;    ///< |rho| above which two passing candidates are ambiguous
+  std::size_t max_effects = 4;  ///< rounds of the stepwise search
+  double delay_max_s = 0.060;   ///< actuator_delay scan: 1 sample .. this delay
   /// The flap actuator of the model as given, delta_f = gain / (s + pole) delta_f_cmd (thesis
   /// Eq 33; the plant's plant.flap): the actuator equation F of data that carries delta_f_cmd.
   double actuator_gain = 8.97;
@@ -197,7 +197,7 @@ struct DiscrepancyOptions {
   /// correlation time of 0.5 s or longer (the plant's lateral_gust.tau_s) has 90 % of its
   /// variance below 2 Hz ((2/pi) atan(2 pi f tau)).
   double gust_band_hz = 2.0;
-  double gust_band_alpha = 0.01;      ///< level of the confirmation above the gust band
+  double gust_band_alpha = 0.01;  ///< level of the confirmation above the gust band
   /// flapping_forcing: the band scanned [Hz] (the Nimble flaps at about 17 Hz; 10-25 Hz covers
   /// the throttle range) and the low-pass of the data it is tested on [Hz], above the second
   /// harmonic of the band's upper half (clamped to 0.4 x the rate).
@@ -208,10 +208,10 @@ struct DiscrepancyOptions {
   /// throttle the manoeuvre commands. Data from an open-loop flight should name its commanded
   /// input here (e.g. delta_f_cmd); with none of them in the data the location tests are not run.
   std::vector<std::string> excitation{"phi_sp", "delta_t"};
-  double consistency_alpha = 0.01;    ///< level of the test that pooled flights agree on an effect
-  double window_s = 1.0;              ///< time location windows [s]
+  double consistency_alpha = 0.01;  ///< level of the test that pooled flights agree on an effect
+  double window_s = 1.0;            ///< time location windows [s]
   std::size_t whiteness_lags = 50;
-  SegmentOptions segments;            ///< manoeuvre / hover segments of the time location
+  SegmentOptions segments;  ///< manoeuvre / hover segments of the time location
   /// Signature checks (docs/discrepancy.md "Effects outside the library, and signatures"): a
   /// candidate that meets every entry rule is named only if the rest of its physical signature is
   /// in the data (above). A failed signature withdraws the name and reports the structure
@@ -245,24 +245,24 @@ struct DiscrepancyOptions {
 
 /// Statistics of one candidate tried in one round.
 struct CandidateTrial {
-  std::string name;             ///< a library effect, or "term" (the open-world search)
+  std::string name;  ///< a library effect, or "term" (the open-world search)
   /// "term": the equation and the expression tried (the scan's best point), and the passing
   /// forms that explain the same thing (|rho| above the collinearity bound) when it entered.
   std::string equation, expression;
   std::vector<std::string> alternatives;
   std::size_t round = 0;
-  bool available = true;        ///< false: the data lacks a channel it needs, or a regressor is not excited
-  bool passed = false;          ///< met every criterion in this round
-  bool entered = false;         ///< entered the model in this round
-  std::string reason;           ///< why it entered or not
+  bool available = true;                    ///< false: the data lacks a channel it needs, or a regressor is not excited
+  bool passed = false;                      ///< met every criterion in this round
+  bool entered = false;                     ///< entered the model in this round
+  std::string reason;                       ///< why it entered or not
   std::map<std::string, double> partial_f;  ///< per equation: Wald / k (coloured covariance)
-  double p_value = 1.0;         ///< adjusted tail probability (equations and scan), compared with p_critical
-  double p_critical = 0.0;      ///< P(chi2_1 >= partial_f option)
+  double p_value = 1.0;     ///< adjusted tail probability (equations and scan), compared with p_critical
+  double p_critical = 0.0;  ///< P(chi2_1 >= partial_f option)
   std::size_t scan_points = 1;
-  double delay_s = 0.0;         ///< chosen delay (actuator_delay)
+  double delay_s = 0.0;                                 ///< chosen delay (actuator_delay)
   std::map<std::string, double> pse_before, pse_after;  ///< per equation
-  double heldout_drop = 0.0;    ///< mean over folds of the relative drop of the held-out squared error
-  double heldout_se = 0.0;      ///< its standard error over the folds
+  double heldout_drop = 0.0;  ///< mean over folds of the relative drop of the held-out squared error
+  double heldout_se = 0.0;    ///< its standard error over the folds
   std::map<std::string, double> parameters, sigma;  ///< the candidate's parameters (coloured sigma)
   /// actuator_delay, per equation: partial F of the part of delta_f that still acts
   /// instantaneously (reported; the criterion is the delayed fraction, parameter
@@ -278,7 +278,7 @@ struct CandidateTrial {
   /// The signature test's figures (sensor_bias: kinematic_bias_radps, its sigma_radps over the
   /// blocks, blocks, p_value).
   std::map<std::string, double> signature;
-  std::string signature_note;  ///< what the signature predicted and what the data showed, when it failed
+  std::string signature_note;   ///< what the signature predicted and what the data showed, when it failed
   std::string signature_rival;  ///< the generic terms its form was compared with, per equation
   /// A generic form this record cannot tell from the effect's (it fits as well alone, neither adds
   /// to the other): "term L: lag(delta_f, 0.0232)"; the verdict is then ambiguous. And what would
@@ -297,7 +297,7 @@ struct NamedEffect {
   /// rate_per_min_lo, _hi (95 %) and t_mid_s; effectiveness_step: t_change_s with
   /// t_change_lo_s, _hi_s (95 %) and fraction with fraction_lo, _hi.
   std::map<std::string, double> parameters;
-  std::map<std::string, double> sigma;       ///< coloured-residual standard deviations
+  std::map<std::string, double> sigma;  ///< coloured-residual standard deviations
   /// "term": the equation it enters, its expression (core/term_expression.h), its coefficient
   /// [N m or N per unit of the expression] with the 95 % interval (coefficient +- 1.96 coloured
   /// sigma), the other forms that fit as well, and why each library effect was ruled out.
@@ -333,11 +333,11 @@ struct OutputGap {
 /// divided by the dependent's sum of squares about its mean, so that a band's figures are its
 /// share of the whole gap.
 struct BandGap {
-  std::string name;        ///< "identification band", or the effect whose band it is
+  std::string name;                    ///< "identification band", or the effect whose band it is
   std::vector<std::string> equations;  ///< e.g. {"L", "Y"}, {"F"}
   double lo_hz = 0.0, hi_hz = 0.0;
   double before = 0.0, after = 0.0;
-  bool wideband = false;   ///< measured on the data low-passed at flapping_cutoff_hz, not the identification band
+  bool wideband = false;  ///< measured on the data low-passed at flapping_cutoff_hz, not the identification band
   /// Why the gap here cannot shrink by much, when it does not (the effect's fitted contribution
   /// is a small share of the held-out error in its band).
   std::string note;
@@ -347,8 +347,8 @@ struct BandGap {
 struct FrequencyFinding {
   std::string output;
   double f_hz = 0.0;
-  double ratio = 0.0;      ///< periodogram / local background
-  double p_value = 1.0;    ///< Bonferroni-corrected over the bins scanned
+  double ratio = 0.0;    ///< periodogram / local background
+  double p_value = 1.0;  ///< Bonferroni-corrected over the bins scanned
 };
 
 /// A state or input whose nonlinear function (x^2, x^3 of its standardised value) the
@@ -363,7 +363,7 @@ struct StateFinding {
 /// A time segment and its share of the residual energy.
 struct TimeFinding {
   std::string output;
-  std::string what;        ///< "manoeuvre", "hover" or "window"
+  std::string what;  ///< "manoeuvre", "hover" or "window"
   double start_s = 0.0, end_s = 0.0;
   double energy_share = 0.0;  ///< of the residual sum of squares
   double time_share = 0.0;    ///< of the record
@@ -391,9 +391,9 @@ struct Located {
 /// adjusted p <= p_critical, so the chance of any alarm on a record where nothing is missing
 /// is at most tests * p_critical (Bonferroni), whatever the tests' dependence.
 struct AlarmRule {
-  double p_critical = 0.0;    ///< P(chi2_1 >= partial_f): the partial-F rule's tail
-  std::size_t tests = 0;      ///< alarm tests this record ran
-  double family_wise = 0.0;   ///< the bound tests * p_critical
+  double p_critical = 0.0;   ///< P(chi2_1 >= partial_f): the partial-F rule's tail
+  std::size_t tests = 0;     ///< alarm tests this record ran
+  double family_wise = 0.0;  ///< the bound tests * p_critical
 };
 
 /// One flight of a pooled analysis: its rows, noise level and its own estimate of each named
@@ -401,8 +401,8 @@ struct AlarmRule {
 struct FlightEstimate {
   std::string source;
   std::size_t samples = 0;
-  double start_s = 0.0, end_s = 0.0;        ///< its rows on the pool's time line
-  std::map<std::string, double> noise;      ///< per equation: RMS of the baseline residual [scaled]
+  double start_s = 0.0, end_s = 0.0;                ///< its rows on the pool's time line
+  std::map<std::string, double> noise;              ///< per equation: RMS of the baseline residual [scaled]
   std::map<std::string, double> parameters, sigma;  ///< the named effects' parameters
 };
 
@@ -412,8 +412,8 @@ struct FlightEstimate {
 struct FlightConsistency {
   std::string effect;
   double q = 0.0, dof = 0.0, p_value = 1.0;
-  bool same = true;        ///< p_value > consistency_alpha
-  std::string differs;     ///< the flight whose estimate contributes most to Q, when not the same
+  bool same = true;     ///< p_value > consistency_alpha
+  std::string differs;  ///< the flight whose estimate contributes most to Q, when not the same
 };
 
 /// Closed-loop comparison of one signal (rig validate --closed-loop): the model as given and
@@ -433,7 +433,7 @@ struct TermTest {
   double blocks = 0.0;  ///< batches the covariance rests on
   /// The same form instrumented by the excitation (instrumented_wald): coefficient, sigma, p.
   double iv_coefficient = 0.0, iv_sigma = 0.0, iv_p_value = 1.0;
-  std::string note;     ///< why it could not be tested (p_value 1), empty otherwise
+  std::string note;  ///< why it could not be tested (p_value 1), empty otherwise
 };
 
 /// Everything rig discrepancy reports.
@@ -458,7 +458,7 @@ struct DiscrepancyResult {
   double rate_hz = 0.0;
   double cutoff_hz = 0.0;  ///< identification low-pass of the data (0: none)
   std::size_t samples = 0;
-  Eigen::VectorXd t_s;     ///< time grid of the gap table's series [s]
+  Eigen::VectorXd t_s;  ///< time grid of the gap table's series [s]
   /// Baseline refit and the refit with the named effects (all data), by parameter name.
   std::map<std::string, ParameterEstimate> baseline, augmented;
   /// The model with the refit derivatives and the named effects (DerivativeModel::effects).

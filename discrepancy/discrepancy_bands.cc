@@ -135,9 +135,10 @@ void gap_table(const UniformData& d, const DerivativeModel& model, const Discrep
   res.gap_before = gb / static_cast<double>(m.eqs.size());
   res.gap_after = ga / static_cast<double>(m.eqs.size());
   res.gap_metric =
-      "mean over the equations (L, Y, and F when the data has the actuator command) of the held-out squared equation error divided by the sum of squares of the "
-      "dependent about its mean (1 - R^2 on data the fit did not see, " + std::to_string(options.folds) +
-      "-fold cross-validation over contiguous blocks)";
+      "mean over the equations (L, Y, and F when the data has the actuator command) of the held-out squared equation "
+      "error divided by the sum of squares of the "
+      "dependent about its mean (1 - R^2 on data the fit did not see, " +
+      std::to_string(options.folds) + "-fold cross-validation over contiguous blocks)";
 }
 
 /// The gap in the identification band, in the band of each named effect's fitted contribution
@@ -159,8 +160,9 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
     for (std::size_t k = 0; k < m.eqs.size(); ++k) {
       if (m.eqs[k].name != "Y") continue;
       BandGap g = band_gap(e.name, m, {k}, cv_before, cv_after, d.rate_hz, 0.0, options.gust_band_hz, nullptr);
-      g.note = "random: a side wind has no regressor, so no model term removes it; its evidence is the side-force "
-               "residual's excess below the gust band";
+      g.note =
+          "random: a side wind has no regressor, so no model term removes it; its evidence is the side-force "
+          "residual's excess below the gust band";
       res.gap_bands.push_back(std::move(g));
     }
   }
@@ -185,8 +187,8 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
         for (std::size_t j = 0; j < add.cols.size(); ++j) {
           const auto it = res.augmented.find(add.names[j]);
           if (it == res.augmented.end()) continue;
-          contribution[e] += (m.eqs[e].w.size() ? VectorXd(add.cols[j].cwiseProduct(m.eqs[e].w)) : add.cols[j]) *
-                             it->second.value;
+          contribution[e] +=
+              (m.eqs[e].w.size() ? VectorXd(add.cols[j].cwiseProduct(m.eqs[e].w)) : add.cols[j]) * it->second.value;
         }
         if (std::find(eqs.begin(), eqs.end(), e) == eqs.end()) eqs.push_back(e);
       }

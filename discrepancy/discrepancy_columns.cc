@@ -74,8 +74,8 @@ bool has_actuator_equation(const UniformData& d) {
 
 /// The columns of candidate `spec` on the prepared data (`scan`: delay in samples for
 /// actuator_delay, sample of the change for effectiveness_step).
-std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
-                                        double g, Index scan) {
+std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim, double g,
+                                        Index scan) {
   const Index n = d.size();
   VectorXd col;
   std::vector<Addition> out;
@@ -248,7 +248,8 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
     if (eq == m.eqs.end()) continue;
     for (const auto& s : term.expression.signals()) {
       if (!d.has(s)) {
-        throw DataError(source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s + ", not in the data");
+        throw DataError(source, -1, -1, s,
+                        "the model's term " + term_parameter_name(term) + " needs " + s + ", not in the data");
       }
     }
     eq->names.push_back(term_parameter_name(term));

@@ -251,7 +251,8 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
                                         std::size_t min_block) {
   if (!(options.max_offset_s >= 0.0) || !(options.scale_tolerance >= 0.0) || !(options.bias_tolerance_radps >= 0.0) ||
       !(options.time_tolerance_s >= 0.0) || !(options.signature_alpha > 0.0 && options.signature_alpha < 1.0)) {
-    throw std::invalid_argument("discrepancy: invalid compatibility options (offsets and tolerances >= 0, alpha in (0, 1))");
+    throw std::invalid_argument(
+        "discrepancy: invalid compatibility options (offsets and tolerances >= 0, alpha in (0, 1))");
   }
   CompatibilityResult res;
   res.source = data.source;
@@ -293,8 +294,8 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     e.unit = unit;
     return e;
   };
-  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"), bias = error("sensor_bias", "rad/s"),
-              drift = error("clock_drift", "ppm");
+  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"),
+              bias = error("sensor_bias", "rad/s"), drift = error("clock_drift", "ppm");
   scale_of(f, scale.value, scale.sigma);
   tau_of(f, shift_s, offset.value, offset.sigma);
   bias_of(f, bias.value, bias.sigma);
@@ -423,14 +424,15 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
                                DiscrepancyResult& res) {
   if (!options.compatibility.enabled) return recorded;
   const auto start = std::chrono::steady_clock::now();
-  CompatibilityResult c = check_compatibility(recorded, options.processing, options.compatibility,
-                                              alarm_p_critical(options), options.folds,
-                                              static_cast<std::size_t>(batch_min_block(options)));
+  CompatibilityResult c =
+      check_compatibility(recorded, options.processing, options.compatibility, alarm_p_critical(options), options.folds,
+                          static_cast<std::size_t>(batch_min_block(options)));
   FlightData out = corrected_record(recorded, c, options.compatibility);
   for (const SensorError& e : c.errors) {
     if (e.corrected) {
-      c.corrections.push_back(e.name == "time_offset"   ? "the IMU's channels restamped by " + num(-e.value) + " s" +
-                                                              (e.significant ? "" : " (within its tolerance, told from zero)")
+      c.corrections.push_back(e.name == "time_offset"
+                                  ? "the IMU's channels restamped by " + num(-e.value) + " s" +
+                                        (e.significant ? "" : " (within its tolerance, told from zero)")
                               : e.name == "clock_drift" ? "the IMU's stamps rescaled by " + num(-e.value) +
                                                               " ppm about t = " + num(c.t_mid_s) + " s"
                               : e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)

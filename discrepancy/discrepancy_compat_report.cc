@@ -18,7 +18,8 @@ std::string num(double x) { return fmt(x, 4); }
 std::string sensor_words(const NamedEffect& e) {
   std::string s = e.name + " of " + e.channel;
   if (!e.against.empty()) s += " against " + e.against;
-  s += ": " + num(e.coefficient) + " " + e.unit + " (95 % interval " + num(e.interval[0]) + " .. " + num(e.interval[1]) + ")";
+  s += ": " + num(e.coefficient) + " " + e.unit + " (95 % interval " + num(e.interval[0]) + " .. " +
+       num(e.interval[1]) + ")";
   if (e.name == "time_offset") s += e.coefficient > 0.0 ? ", its stamps late" : ", its stamps early";
   return s;
 }
@@ -107,8 +108,7 @@ void print_compatibility(std::ostream& o, const DiscrepancyResult& r) {
       char line[256];
       std::snprintf(line, sizeof line, "  %-13s %-3s %11.4g %-5s [%.4g, %.4g]  p %.3g (beyond %.3g)  %s\n",
                     e.name.c_str(), e.channel.c_str(), e.value, e.unit.c_str(), e.interval[0], e.interval[1], e.p_value,
-                    e.tolerance,
-                    e.named ? "named" : (e.significant ? "significant, signature absent: unnamed" : "-"));
+                    e.tolerance, e.named ? "named" : (e.significant ? "significant, signature absent: unnamed" : "-"));
       o << line;
       if (e.significant) o << "      signature: " << e.signature_note << "\n";
     }
@@ -141,8 +141,8 @@ std::string compatibility_markdown(const DiscrepancyResult& r) {
   md << "\n";
   for (const CompatibilityResult& c : r.compatibility) {
     if (!c.ran) continue;
-    md << "Kinematic gap of " << c.source << " (" << c.equation << ", held-out): " << num(c.kinematic_gap_before) << " -> "
-       << num(c.kinematic_gap_after);
+    md << "Kinematic gap of " << c.source << " (" << c.equation << ", held-out): " << num(c.kinematic_gap_before)
+       << " -> " << num(c.kinematic_gap_after);
     md << ".";
     if (!c.rmse_uncorrected.empty()) md << " " << uncorrected_words(c, r) << ".";
     md << "\n\n";
@@ -179,9 +179,10 @@ void print_term_tests(std::ostream& o, const DiscrepancyResult& r) {
       o << "not tested: " << t.note << "\n";
       continue;
     }
-    o << "c = " << num(t.coefficient) << " (sigma " << num(t.sigma) << "), Wald " << num(t.wald) << ", p " << num(t.p_value)
-      << " (" << num(t.blocks) << " batches); instrumented by the excitation: c = " << num(t.iv_coefficient)
-      << " (sigma " << num(t.iv_sigma) << "), p " << num(t.iv_p_value) << "\n";
+    o << "c = " << num(t.coefficient) << " (sigma " << num(t.sigma) << "), Wald " << num(t.wald) << ", p "
+      << num(t.p_value) << " (" << num(t.blocks)
+      << " batches); instrumented by the excitation: c = " << num(t.iv_coefficient) << " (sigma " << num(t.iv_sigma)
+      << "), p " << num(t.iv_p_value) << "\n";
   }
   o << "\n";
 }

@@ -126,7 +126,8 @@ double frame_wald(const LocationFrame& frame, const MatrixXd& C, Index min_block
   // The partialled regression's sandwich, its degrees of freedom those of the full one (the
   // frame's span and C).
   const double q = static_cast<double>(frame.model_and_excitation.rank() + k);
-  const MatrixXd cov = coloured_covariance(R, e, block) * (static_cast<double>(n - k) / std::max(1.0, static_cast<double>(n) - q));
+  const MatrixXd cov =
+      coloured_covariance(R, e, block) * (static_cast<double>(n - k) / std::max(1.0, static_cast<double>(n) - q));
   const double wald = th.dot(cov.ldlt().solve(th));
   if (partial_r) {
     const double rss0 = frame.residual.squaredNorm();
@@ -187,7 +188,8 @@ void frequency_peaks(const LocationFrame& frame, const std::string& output, doub
                      double f_hi, const LocationRule& rule, std::vector<FrequencyFinding>& out) {
   const Index n = frame.y.size();
   const double T = static_cast<double>(n) / rate;
-  const double f = scan_frequency({frame.residual}, rate, f_lo, f_hi, 1, std::vector<bool>(static_cast<std::size_t>(n), true));
+  const double f =
+      scan_frequency({frame.residual}, rate, f_lo, f_hi, 1, std::vector<bool>(static_cast<std::size_t>(n), true));
   const double M = std::max(1.0, std::ceil((f_hi - f_lo) * T));  // independent frequencies of the band
   MatrixXd C(n, 2);
   for (Index i = 0; i < n; ++i) {
@@ -257,11 +259,11 @@ void time_findings(const std::string& output, const VectorXd& r, const UniformDa
   const Index n = r.size();
   if (!(total > 0.0) || n == 0) return;
   auto share = [&](Index a, Index b) { return r.segment(a, b - a).squaredNorm() / total; };
-  for (const auto& [what, list] : {std::pair<std::string, const std::vector<TimeRange>*>{"manoeuvre", &seg.manoeuvre},
-                                   {"hover", &seg.hover}}) {
+  for (const auto& [what, list] :
+       {std::pair<std::string, const std::vector<TimeRange>*>{"manoeuvre", &seg.manoeuvre}, {"hover", &seg.hover}}) {
     for (const auto& [a, b] : sample_ranges(d, *list)) {
-      out.push_back({output, what, d.t_s[a], d.t_s[b - 1], share(a, b),
-                     static_cast<double>(b - a) / static_cast<double>(n)});
+      out.push_back(
+          {output, what, d.t_s[a], d.t_s[b - 1], share(a, b), static_cast<double>(b - a) / static_cast<double>(n)});
     }
   }
   // The three 1 s windows with the most residual energy.

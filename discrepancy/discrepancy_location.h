@@ -52,9 +52,9 @@ struct LocationFrame {
   LocationFrame(const MatrixXd& X, const VectorXd& y, const MatrixXd& Z);
   VectorXd y;
   MatrixXd excitation_columns;  ///< Z
-  Span excitation;            ///< span of Z
-  Span model_and_excitation;  ///< span of [X, Z]
-  VectorXd residual;          ///< y minus its projection on [X, Z]
+  Span excitation;              ///< span of Z
+  Span model_and_excitation;    ///< span of [X, Z]
+  VectorXd residual;            ///< y minus its projection on [X, Z]
 };
 
 /// Dependence of the frame's residual on a nonlinear function (z^2 and z^3, z standardised) of
@@ -70,7 +70,7 @@ struct LocationRule {
   double alpha = 0.0;
   Index min_block = 1;
   double gust_band_hz = 2.0, gust_band_alpha = 0.01;
-  Folds folds;                 ///< the held-out rule's folds (the workflow's)
+  Folds folds;                  ///< the held-out rule's folds (the workflow's)
   double heldout_sigmas = 1.0;  ///< DiscrepancyOptions::heldout_sigmas
 };
 

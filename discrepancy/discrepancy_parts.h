@@ -40,7 +40,7 @@ struct Eq {
   std::string output;  // "p_dot", "v_dot_star", "delta_f_dot"
   std::string unit;
   double scale = 1.0;
-  VectorXd y;          // scale * dependent (times w)
+  VectorXd y;  // scale * dependent (times w)
   std::vector<std::string> names;
   std::vector<VectorXd> cols;  // times w
   /// Row weights when flights are pooled (each flight's rows 1 / its noise level, relative to
@@ -157,7 +157,6 @@ struct GustBands {
 inline constexpr std::size_t kActuatorEq = 2;
 
 // ---------------------------------------------------------------------------------------
-
 
 /// effectiveness_step's grid of change times t* [s]: one every kChangeGridS, a quarter of a
 /// second, the period of the slowest roll doublet of the identification trains (4 Hz): the
@@ -324,8 +323,7 @@ struct Workflow {
   /// Tries `spec` on model `m` in round `round`; fills the trial and, when it passes,
   /// the additions it would make.
   CandidateTrial trial(const CandidateSpec& spec, const Model& m, const std::vector<FoldStats>& base,
-                       const std::vector<VectorXd>& base_cv, std::size_t round,
-                       std::vector<Addition>& best_adds) const;
+                       const std::vector<VectorXd>& base_cv, std::size_t round, std::vector<Addition>& best_adds) const;
 
   // The steps of trial() (discrepancy_search.cc).
   std::vector<ScanPoint> scan(const CandidateSpec& spec, const Model& m, const std::vector<Index>& delays,
@@ -521,7 +519,8 @@ double alarm_p_critical(const DiscrepancyOptions& options);
 Index batch_min_block(const DiscrepancyOptions& options);
 
 /// Full-data fit of the model: parameters with coloured sigma, and residuals.
-std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRule& batch, std::vector<VectorXd>* residuals);
+std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRule& batch,
+                                                  std::vector<VectorXd>* residuals);
 
 // --- discrepancy_columns.cc ---
 
@@ -557,8 +556,8 @@ bool has_actuator_equation(const UniformData& d);
 
 /// The columns of candidate `spec` on the prepared data (`scan`: delay in samples for
 /// actuator_delay, sample of the change for effectiveness_step: H(t - t*) is 1 from it on).
-std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim,
-                                        double g, Index scan);
+std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim, double g,
+                                        Index scan);
 
 /// The scan index of effect `name` with parameters `params` (a model's effects: section or a
 /// trial's parameters) on `d`: the delay in samples of actuator_delay (delay_s, at least one

@@ -127,9 +127,11 @@ void flight_consistency(const Model& m, const BatchRule& batch, const std::vecto
         MatrixXd C(k, k);
         for (Index i = 0; i < k; ++i) {
           t[i] = th[idx[static_cast<std::size_t>(i)]];
-          for (Index j = 0; j < k; ++j) C(i, j) = cov(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
+          for (Index j = 0; j < k; ++j)
+            C(i, j) = cov(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
           res.flights[f].parameters[names[static_cast<std::size_t>(idx[static_cast<std::size_t>(i)])]] = t[i];
-          res.flights[f].sigma[names[static_cast<std::size_t>(idx[static_cast<std::size_t>(i)])]] = std::sqrt(std::max(0.0, C(i, i)));
+          res.flights[f].sigma[names[static_cast<std::size_t>(idx[static_cast<std::size_t>(i)])]] =
+              std::sqrt(std::max(0.0, C(i, i)));
         }
         theta.push_back(t);
         info.push_back(C.ldlt().solve(MatrixXd::Identity(k, k)));

@@ -40,7 +40,6 @@ void number_map(JsonWriter& j, const std::map<std::string, double>& m) {
   j.end_object();
 }
 
-
 /// The gap's numbers, each finite: a gap of nan (a record without excitation that reached the
 /// workflow) is an error here, never a printed "nan" or a JSON null.
 void require_finite_gap(const DiscrepancyResult& r) {
@@ -53,8 +52,10 @@ void require_finite_gap(const DiscrepancyResult& r) {
   need(r.gap_before, "the held-out gap before");
   need(r.gap_after, "the held-out gap after");
   for (const auto& o : r.gap) {
-    for (const auto& [x, what] : {std::pair{o.rmse_model, "RMSE of the model"}, {o.rmse_before, "RMSE before"},
-                                  {o.rmse_after, "RMSE after"}, {o.fit_before_pct, "fit before"},
+    for (const auto& [x, what] : {std::pair{o.rmse_model, "RMSE of the model"},
+                                  {o.rmse_before, "RMSE before"},
+                                  {o.rmse_after, "RMSE after"},
+                                  {o.fit_before_pct, "fit before"},
                                   {o.fit_after_pct, "fit after"}}) {
       need(x, std::string(what) + " of " + o.output);
     }
@@ -322,8 +323,8 @@ void print_effects(std::ostream& o, const DiscrepancyResult& r) {
         continue;
       }
       if (e.name == "term") {
-        o << "    " << e.equation << " += " << g(e.coefficient) << " * " << e.expression << "  (95 % interval " << g(e.interval[0])
-          << " .. " << g(e.interval[1]) << ")\n";
+        o << "    " << e.equation << " += " << g(e.coefficient) << " * " << e.expression << "  (95 % interval "
+          << g(e.interval[0]) << " .. " << g(e.interval[1]) << ")\n";
         if (!e.alternatives.empty()) {
           o << "    forms that fit as well:";
           for (const auto& a : e.alternatives) o << " " << a;
@@ -336,16 +337,16 @@ void print_effects(std::ostream& o, const DiscrepancyResult& r) {
       }
       const auto& q = e.parameters;
       if (q.count("rate_per_min")) {
-        o << "    drift of the flap input's effectiveness: " << g(100.0 * q.at("rate_per_min")) << " %/min (95 % interval "
-          << g(100.0 * q.at("rate_per_min_lo")) << " .. " << g(100.0 * q.at("rate_per_min_hi")) << ") of its value at t = "
-          << g(q.at("t_mid_s")) << " s\n";
+        o << "    drift of the flap input's effectiveness: " << g(100.0 * q.at("rate_per_min"))
+          << " %/min (95 % interval " << g(100.0 * q.at("rate_per_min_lo")) << " .. "
+          << g(100.0 * q.at("rate_per_min_hi")) << ") of its value at t = " << g(q.at("t_mid_s")) << " s\n";
       }
       if (q.count("t_change_s")) {
         o << "    change at t = " << g(q.at("t_change_s")) << " s (95 % interval " << g(q.at("t_change_lo_s")) << " .. "
           << g(q.at("t_change_hi_s")) << " s)";
         if (q.count("fraction")) {
-          o << ", the flap input's effectiveness by " << g(100.0 * q.at("fraction")) << " % (" << g(100.0 * q.at("fraction_lo"))
-            << " .. " << g(100.0 * q.at("fraction_hi")) << ")";
+          o << ", the flap input's effectiveness by " << g(100.0 * q.at("fraction")) << " % ("
+            << g(100.0 * q.at("fraction_lo")) << " .. " << g(100.0 * q.at("fraction_hi")) << ")";
         }
         o << "\n";
       }
@@ -392,8 +393,12 @@ void print_gap(std::ostream& o, const DiscrepancyResult& r) {
     char line[200];
     std::snprintf(line, sizeof line, "  %-12s  %-8s  %10.4g  %11.4g  %10.4g  %11.1f  %10.1f  %s/%s\n", x.output.c_str(),
                   x.unit.c_str(), x.rmse_model, x.rmse_before, x.rmse_after, x.fit_before_pct, x.fit_after_pct,
-                  !x.white_tested ? "-" : x.white_before ? "yes" : "no",
-                  !x.white_tested ? "-" : x.white_after ? "yes" : "no");
+                  !x.white_tested  ? "-"
+                  : x.white_before ? "yes"
+                                   : "no",
+                  !x.white_tested ? "-"
+                  : x.white_after ? "yes"
+                                  : "no");
     o << line;
   }
   for (const auto& note : r.notes) o << "  " << note << "\n";
@@ -417,8 +422,8 @@ void print_closed_loop(std::ostream& o, const DiscrepancyResult& r) {
     o << "): the model as given -> the augmented model\n";
     for (const auto& c : r.closed_loop) {
       char line[160];
-      std::snprintf(line, sizeof line, "  %-8s R^2 %7.3f -> %7.3f   RMSE %10.4g -> %10.4g\n", c.output.c_str(), c.r2_before,
-                    c.r2_after, c.rmse_before, c.rmse_after);
+      std::snprintf(line, sizeof line, "  %-8s R^2 %7.3f -> %7.3f   RMSE %10.4g -> %10.4g\n", c.output.c_str(),
+                    c.r2_before, c.r2_after, c.rmse_before, c.rmse_after);
       o << line;
     }
   } else if (!r.closed_loop_note.empty()) {
@@ -454,12 +459,12 @@ void print_located(std::ostream& o, const DiscrepancyResult& r) {
     << " alarm tests in all: any alarm on a record with nothing missing <= " << g(r.alarm_rule.family_wise) << ")\n";
   if (!r.located.note.empty()) o << "  " << r.located.note << "\n";
   for (const auto& f : r.located.frequency) {
-    o << "  frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio)
-      << " x local background (p " << g(f.p_value) << ")\n";
+    o << "  frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio) << " x local background (p "
+      << g(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.state) {
-    o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
-      << ", p " << g(f.p_value) << ")\n";
+    o << "  state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r) << ", p "
+      << g(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.signature) {
     o << "  signature: " << f.note << "\n";
@@ -514,8 +519,8 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
 std::string discrepancy_text(const DiscrepancyResult& r) {
   require_finite_gap(r);
   std::ostringstream o;
-  o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at "
-    << g(r.rate_hz) << " Hz, " << r.folds << "-fold held-out)\n";
+  o << "discrepancy of " << r.model_name << " on " << r.source << " (" << r.samples << " samples at " << g(r.rate_hz)
+    << " Hz, " << r.folds << "-fold held-out)\n";
   o << "verdict: " << r.verdict << ": " << r.summary << "\n\n";
   discrepancy_parts::print_compatibility(o, r);
   print_effects(o, r);

@@ -27,22 +27,29 @@ std::vector<std::string> report_figures(const DiscrepancyResult& r, const std::s
   Eigen::VectorXd f_hz;
   const std::size_t segment = std::max<std::size_t>(64, static_cast<std::size_t>(2.0 * r.rate_hz));
   for (const auto& o : r.gap) {
-    outputs.push_back({o.output, o.output + " [" + o.unit + "]", o.unit,
+    outputs.push_back({o.output,
+                       o.output + " [" + o.unit + "]",
+                       o.unit,
                        {{"measured", o.measured, "#000000", false},
                         {"model structure refit (held-out)", o.predicted_before, "#d62728", true},
                         {"with the named effects (held-out)", o.predicted_after, "#1f77b4", false}}});
     const Eigen::VectorXd rb = o.measured - o.predicted_before, ra = o.measured - o.predicted_after;
-    residuals.push_back({o.output + "_residual", o.output + " residual [" + o.unit + "]", o.unit,
+    residuals.push_back({o.output + "_residual",
+                         o.output + " residual [" + o.unit + "]",
+                         o.unit,
                          {{"before", rb, "#d62728", false}, {"after", ra, "#1f77b4", false}}});
     const Psd pb = welch(rb, r.rate_hz, segment), pa = welch(ra, r.rate_hz, segment);
     f_hz = pb.f_hz;
-    psds.push_back({o.output + "_psd", o.output + " residual PSD [(" + o.unit + ")^2/Hz]", "PSD",
-                    {{"before", pb.psd.cwiseMax(1e-30), "#d62728", false},
-                     {"after", pa.psd.cwiseMax(1e-30), "#1f77b4", false}}});
+    psds.push_back(
+        {o.output + "_psd",
+         o.output + " residual PSD [(" + o.unit + ")^2/Hz]",
+         "PSD",
+         {{"before", pb.psd.cwiseMax(1e-30), "#d62728", false}, {"after", pa.psd.cwiseMax(1e-30), "#1f77b4", false}}});
   }
   const std::string what = r.model_name + " on " + r.source;
   files.push_back(plots::plot_time_histories(dir, "outputs", "discrepancy: " + what, r.t_s, outputs));
-  files.push_back(plots::plot_time_histories(dir, "residuals", "held-out residuals before and after: " + what, r.t_s, residuals));
+  files.push_back(
+      plots::plot_time_histories(dir, "residuals", "held-out residuals before and after: " + what, r.t_s, residuals));
   plots::PlotAxes axes;
   axes.xlabel = "frequency [Hz]";
   axes.log_y = true;
@@ -71,31 +78,41 @@ std::string report_markdown(const DiscrepancyResult& r) {
     }
     md << "\n";
   }
-  md << "## Gap on held-out data\n\n" << r.gap_metric << ": **" << g(r.gap_before) << " -> " << g(r.gap_after)
-     << "**\n\n";
-  md << "| output | unit | RMSE model | RMSE before | RMSE after | fit % before | fit % after | white before | white after "
+  md << "## Gap on held-out data\n\n"
+     << r.gap_metric << ": **" << g(r.gap_before) << " -> " << g(r.gap_after) << "**\n\n";
+  md << "| output | unit | RMSE model | RMSE before | RMSE after | fit % before | fit % after | white before | white "
+        "after "
         "|\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& o : r.gap) {
     md << "| " << o.output << " | " << o.unit << " | " << g(o.rmse_model) << " | " << g(o.rmse_before) << " | "
        << g(o.rmse_after) << " | " << g(o.fit_before_pct, "%.1f") << " | " << g(o.fit_after_pct, "%.1f") << " | "
-       << (!o.white_tested ? "-" : o.white_before ? "yes" : "no") << " | "
-       << (!o.white_tested ? "-" : o.white_after ? "yes" : "no") << " |\n";
+       << (!o.white_tested  ? "-"
+           : o.white_before ? "yes"
+                            : "no")
+       << " | "
+       << (!o.white_tested ? "-"
+           : o.white_after ? "yes"
+                           : "no")
+       << " |\n";
   }
   for (const auto& note : r.notes) md << "\n" << note << "\n";
   if (!r.closed_loop.empty()) {
     md << "\nClosed loop (the model flown by the controller copy on the data's phi_sp), the model as given -> "
-          "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after |\n|---|---|---|---|---|\n";
+          "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after "
+          "|\n|---|---|---|---|---|\n";
     for (const auto& c : r.closed_loop) {
       md << "| " << c.output << " | " << g(c.r2_before, "%.3f") << " | " << g(c.r2_after, "%.3f") << " | "
          << g(c.rmse_before) << " | " << g(c.rmse_after) << " |\n";
     }
   }
   md << "\n![outputs](outputs.png)\n\n![residuals](residuals.png)\n\n![residual PSDs](residual_psd.png)\n\n";
-  md << "## Candidates\n\n| round | candidate | partial F | p (adjusted) | held-out drop | result |\n|---|---|---|---|---|---|\n";
+  md << "## Candidates\n\n| round | candidate | partial F | p (adjusted) | held-out drop | result "
+        "|\n|---|---|---|---|---|---|\n";
   for (const auto& t : r.candidates) {
     std::string f;
     for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + g(v);
-    md << "| " << t.round << " | " << trial_name(t, "`") << " | " << f << " | " << (t.available ? g(t.p_value) : "") << " | "
+    md << "| " << t.round << " | " << trial_name(t, "`") << " | " << f << " | " << (t.available ? g(t.p_value) : "")
+       << " | "
        << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
        << " | " << t.reason << " |\n";
   }
@@ -115,13 +132,13 @@ std::string report_markdown(const DiscrepancyResult& r) {
        << " x the local background (p " << g(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.state) {
-    md << "- state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r) << ", p "
-       << g(f.p_value) << ")\n";
+    md << "- state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
+       << ", p " << g(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.time) {
-    md << "- time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f") << " s: "
-       << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in " << g(100.0 * f.time_share, "%.1f")
-       << " % of the time\n";
+    md << "- time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
+       << " s: " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
+       << g(100.0 * f.time_share, "%.1f") << " % of the time\n";
   }
   return md.str();
 }

@@ -224,7 +224,6 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
   if (!cv_ok) return false;
   heldout_drop(base_cv, after, batch, t.heldout_drop, t.heldout_se);
   return true;
-
 }
 
 /// Whether the trial passes every entry rule, and its reason in words.
@@ -239,8 +238,8 @@ void Workflow::judge(CandidateTrial& t, const std::string& p_eq) const {
   t.passed = significant && pse_falls && heldout && consistent && above_gusts;
   std::ostringstream why;
   if (t.passed) {
-    why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq])
-        << " in " << p_eq << "), PSE falls, held-out error falls " << fmt(100.0 * t.heldout_drop) << " % (+- "
+    why << "passes: p " << fmt(t.p_value) << " <= " << fmt(p_critical) << " (F " << fmt(t.partial_f[p_eq]) << " in "
+        << p_eq << "), PSE falls, held-out error falls " << fmt(100.0 * t.heldout_drop) << " % (+- "
         << fmt(100.0 * t.heldout_se) << ")";
   } else {
     why << "fails:";

@@ -126,9 +126,9 @@ void Workflow::signature(const CandidateSpec& spec, const Model& m, const ScanPo
       t.signature_note = "a constant fits but p carries no bias against phi's derivative (" + figures + ", p " +
                          fmt(t.signature["p_value"]) + "): not a rate-sensor bias";
       reason = "fails its signature: it " + t.reason.substr(std::string("passes: ").size()) +
-               ", but p carries no bias against phi's derivative (" + figures + " over " +
-               fmt(t.signature["blocks"]) + " blocks, p " + fmt(t.signature["p_value"]) + " > " +
-               fmt(opt.gust_band_alpha) + "): a constant moment or force, or the mean of another effect, not a "
+               ", but p carries no bias against phi's derivative (" + figures + " over " + fmt(t.signature["blocks"]) +
+               " blocks, p " + fmt(t.signature["p_value"]) + " > " + fmt(opt.gust_band_alpha) +
+               "): a constant moment or force, or the mean of another effect, not a "
                "rate-sensor bias";
     } else if (spec.name == "constant_load") {
       // A constant load's signature is the sensor bias's absent: p agrees with phi's derivative.

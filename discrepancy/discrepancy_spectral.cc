@@ -150,9 +150,10 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   const Psd Pg = given ? periodogram(given_resid, rate_hz) : P;
   const GustBands bg = gust_bands(Pg, opt.gust_band_hz, f_ref_hi);
   const double lo_g = bg.lo, N0g = bg.ref / static_cast<double>(k_ref);
-  const WindFit fit_w = fit_wind(Pg, std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g), N0g, f_ref_hi, per_bin,
-                                  opt.gust_band_hz);
-  const double tau_best = fit_w.tau, a_best = fit_w.a, tau_lo = fit_w.tau_lo, tau_hi = fit_w.tau_hi, tau_min = fit_w.tau_min;
+  const WindFit fit_w =
+      fit_wind(Pg, std::max(0.0, lo_g / static_cast<double>(k_lo) - N0g), N0g, f_ref_hi, per_bin, opt.gust_band_hz);
+  const double tau_best = fit_w.tau, a_best = fit_w.a, tau_lo = fit_w.tau_lo, tau_hi = fit_w.tau_hi,
+               tau_min = fit_w.tau_min;
   const bool reaches = fit_w.reaches;
   // A low-frequency excess whose spectrum excludes every tau of the band's premise is a random
   // force broader than a wind, coloured process noise like the rest of the equation error that
@@ -163,9 +164,9 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   if (!reaches) {
     t.parameters["tau_s"] = tau_best;
     t.reason = "no signature: the Y residual's low-frequency excess (" + fmt(ratio) + " times its level above " +
-                       fmt(opt.gust_band_hz) + " Hz, p " + fmt(t.p_value) + ") has a spectrum of tau " + fmt(tau_best) +
-                       " s [" + fmt(tau_lo) + ", " + fmt(tau_hi) + "], shorter than the " + fmt(tau_min) +
-                       " s of a wind with 90 % of its variance below the band: coloured process noise, not a side wind";
+               fmt(opt.gust_band_hz) + " Hz, p " + fmt(t.p_value) + ") has a spectrum of tau " + fmt(tau_best) +
+               " s [" + fmt(tau_lo) + ", " + fmt(tau_hi) + "], shorter than the " + fmt(tau_min) +
+               " s of a wind with 90 % of its variance below the band: coloured process noise, not a side wind";
     return t;
   }
   const double sigma_force = std::sqrt(a_best / (4.0 * tau_best));
@@ -176,8 +177,8 @@ CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
   t.passed = true;
   t.entered = true;
   t.reason = "entered: the Y residual below " + fmt(opt.gust_band_hz) + " Hz is " + fmt(ratio) +
-             " times its level above (p " + fmt(t.p_value) + " <= " + fmt(p_critical) +
-             "), a side wind of about " + fmt(t.parameters["sigma_mps"]) + " m/s with tau " + fmt(tau_best) + " s";
+             " times its level above (p " + fmt(t.p_value) + " <= " + fmt(p_critical) + "), a side wind of about " +
+             fmt(t.parameters["sigma_mps"]) + " m/s with tau " + fmt(tau_best) + " s";
   return t;
 }
 
@@ -216,8 +217,8 @@ double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo
 
 /// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
 CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
-                              double p_critical, const BatchRule& batch,
-                              std::vector<VectorXd>* heldout_before, std::vector<VectorXd>* heldout_after) {
+                              double p_critical, const BatchRule& batch, std::vector<VectorXd>* heldout_before,
+                              std::vector<VectorXd>* heldout_after) {
   CandidateTrial t;
   t.name = "flapping_forcing";
   t.round = m.effect_names.size() + 1;
@@ -310,8 +311,8 @@ CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds&
       << t.scan_points << " independent frequencies, data low-passed at " << fmt(opt.flapping_cutoff_hz) << " Hz): p "
       << fmt(t.p_value) << (significant ? " <= " : " > ") << fmt(p_critical);
   if (!p_eq.empty()) why << " (F " << fmt(t.partial_f[p_eq]) << " in " << p_eq << ")";
-  why << (pse_falls ? ", PSE falls" : ", PSE does not fall") << ", held-out error change " << fmt(-100.0 * t.heldout_drop)
-      << " % (spread " << fmt(100.0 * t.heldout_se) << " %)";
+  why << (pse_falls ? ", PSE falls" : ", PSE does not fall") << ", held-out error change "
+      << fmt(-100.0 * t.heldout_drop) << " % (spread " << fmt(100.0 * t.heldout_se) << " %)";
   t.reason = why.str();
   return t;
 }

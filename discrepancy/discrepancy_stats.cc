@@ -105,8 +105,8 @@ MatrixXd coloured_covariance(const MatrixXd& C, const VectorXd& e, Index block) 
   }
   const MatrixXd G = C.transpose() * C;
   const VectorXd d = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const MatrixXd Ginv = d.asDiagonal() * (d.asDiagonal() * G * d.asDiagonal()).ldlt().solve(
-                                             MatrixXd::Identity(q, q)) * d.asDiagonal();
+  const MatrixXd Ginv =
+      d.asDiagonal() * (d.asDiagonal() * G * d.asDiagonal()).ldlt().solve(MatrixXd::Identity(q, q)) * d.asDiagonal();
   return Ginv * S * Ginv * (static_cast<double>(n) / static_cast<double>(std::max<Index>(1, n - q)));
 }
 
@@ -295,7 +295,8 @@ Index batch_min_block(const DiscrepancyOptions& options) {
 }
 
 /// Full-data fit of the model: parameters with coloured sigma, and residuals.
-std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRule& batch, std::vector<VectorXd>* residuals) {
+std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRule& batch,
+                                                  std::vector<VectorXd>* residuals) {
   std::map<std::string, ParameterEstimate> out;
   for (std::size_t e = 0; e < m.eqs.size(); ++e) {
     const MatrixXd C = m.X(e);

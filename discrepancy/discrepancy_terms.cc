@@ -182,9 +182,9 @@ void Workflow::acts_through(const TermFamily& fam, const Model& m, std::size_t e
   t.parameters["fraction_through_form"] = fraction;
   if (fraction < 0.5) {
     t.passed = false;
-    t.reason = "fails: " + fam.acts_through + " does not act mostly through " + t.expression + " (fraction " + fmt(fraction) +
-               " < 0.5 of its effect in " + eqname + "): a correction of its linear effect, not its form; " +
-               t.reason.substr(t.reason.find(':') + 1);
+    t.reason = "fails: " + fam.acts_through + " does not act mostly through " + t.expression + " (fraction " +
+               fmt(fraction) + " < 0.5 of its effect in " + eqname +
+               "): a correction of its linear effect, not its form; " + t.reason.substr(t.reason.find(':') + 1);
   }
 }
 
@@ -210,9 +210,9 @@ void Workflow::instrument_confirms(const TermExpression& expr, const Model& m, s
   t.signature["instrumented_p"] = p;
   if (p > opt.gust_band_alpha) {
     t.passed = false;
-    t.reason = "fails: not confirmed with the excitation as instruments (p " + fmt(p) + " > " + fmt(opt.gust_band_alpha) +
-               ", every regressor replaced by its excitation part, Bonferroni over " + std::to_string(family_count) +
-               " terms); " + t.reason.substr(t.reason.find(':') + 1);
+    t.reason = "fails: not confirmed with the excitation as instruments (p " + fmt(p) + " > " +
+               fmt(opt.gust_band_alpha) + ", every regressor replaced by its excitation part, Bonferroni over " +
+               std::to_string(family_count) + " terms); " + t.reason.substr(t.reason.find(':') + 1);
   }
 }
 
@@ -241,13 +241,15 @@ void Workflow::excitation_confirms(const TermExpression& expr, const std::string
     t.passed = false;
     t.reason = "fails: not confirmed through the excitation (p " + fmt(p) + " > " + fmt(opt.gust_band_alpha) +
                " for the term of the signals' excitation parts against the residual of the model and the excitation, "
-               "Bonferroni over " + std::to_string(family_count) + " terms); " + t.reason.substr(t.reason.find(':') + 1);
+               "Bonferroni over " +
+               std::to_string(family_count) + " terms); " + t.reason.substr(t.reason.find(':') + 1);
   }
 }
 
-CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const Model& m, const std::vector<FoldStats>& base,
-                                    const std::vector<VectorXd>& base_cv, std::size_t round, std::size_t family_count,
-                                    const TermConfirmation& confirm, std::vector<Addition>& best_adds) const {
+CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const Model& m,
+                                    const std::vector<FoldStats>& base, const std::vector<VectorXd>& base_cv,
+                                    std::size_t round, std::size_t family_count, const TermConfirmation& confirm,
+                                    std::vector<Addition>& best_adds) const {
   CandidateTrial t;
   t.name = "term";
   t.round = round;
@@ -331,7 +333,8 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   return t;
 }
 
-void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {
+void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P,
+                                    CandidateTrial& t) const {
   // A library effect's form must be the data's form. In each equation where the effect's terms
   // met the partial-F rule (the roll moment and the side force; not the actuator's own equation,
   // where a lag is the actuator's pole, which the baseline refits), the generic term that alone

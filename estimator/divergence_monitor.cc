@@ -12,8 +12,8 @@ double DivergenceMonitor::binomial_tail(int n, double q, int k) {
   // Sum of the pmf from k to n, in logs (lgamma) for large n.
   double tail = 0.0;
   for (int i = k; i <= n; ++i) {
-    const double log_pmf = std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) +
-                           i * std::log(q) + (n - i) * std::log1p(-q);
+    const double log_pmf = std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) + i * std::log(q) +
+                           (n - i) * std::log1p(-q);
     tail += std::exp(log_pmf);
   }
   return tail;

@@ -15,9 +15,7 @@ namespace nimble {
 namespace {
 
 /// Velocity relative to the world in NED axes [m/s] of a filter state.
-Eigen::Vector3d world_velocity(const EkfState& x) {
-  return rotation_from_euler_zyx(x.head<3>()) * x.segment<3>(3);
-}
+Eigen::Vector3d world_velocity(const EkfState& x) { return rotation_from_euler_zyx(x.head<3>()) * x.segment<3>(3); }
 
 EkfInput lerp(const EkfInput& a, const EkfInput& b, std::int64_t ta, std::int64_t tb, std::int64_t t) {
   if (tb <= ta) return b;
@@ -79,7 +77,8 @@ bool finite(const PoseMeasurement& z) {
 EkfCovariance EkfConfig::initial_covariance() const {
   EkfState d;
   d << Eigen::Vector3d::Constant(initial_attitude_sigma_rad), Eigen::Vector3d::Constant(initial_velocity_sigma_mps),
-      Eigen::Vector3d::Constant(initial_gyro_bias_sigma_radps), Eigen::Vector3d::Constant(initial_accel_bias_sigma_mps2);
+      Eigen::Vector3d::Constant(initial_gyro_bias_sigma_radps),
+      Eigen::Vector3d::Constant(initial_accel_bias_sigma_mps2);
   return d.array().square().matrix().asDiagonal();
 }
 
@@ -90,23 +89,39 @@ const ParamTable<EkfConfig>& ekf_params() {
   static const AxisNames euler = {"phi", "theta", "psi"};
   static const AxisNames uvw = {"u", "v", "w"};
   static const ParamTable<C> table = {
-      {"gravity_mps2", &C::gravity_mps2, Range::closed(9.0, 10.5), "m/s^2", "gravity; the value of the thesis's models (9.81)"},
-      {"min_abs_cos_theta", &C::min_abs_cos_theta, Range{0.0, 0.5, true, false}, "-", "smallest |cos(theta)| in the Euler kinematics (pitch singularity guard)"},
-      {"process_noise.reference_rate_hz", &C::process_noise_reference_rate_hz, pos, "Hz", "rate at which the *_var_per_sample values are per-sample variances; thesis: 512 Hz"},
-      {"process_noise.gyro_var_per_sample_rad2ps2", &C::gyro_noise_var_per_sample_rad2ps2, nn, "(rad/s)^2", "gyro input noise per sample at the reference rate; thesis Eq 8.2 Q(1:3)"},
-      {"process_noise.accel_var_per_sample_m2ps4", &C::accel_noise_var_per_sample_m2ps4, nn, "(m/s^2)^2", "accelerometer input noise per sample at the reference rate; thesis Eq 8.2 Q(4:6)"},
-      {"process_noise.gyro_bias_rw_radps_per_sqrts", &C::gyro_bias_rw_radps_per_sqrts, nn, "rad/s/sqrt(s)", "gyro bias random walk; not in the thesis, the emulated IMU's"},
-      {"process_noise.accel_bias_rw_mps2_per_sqrts", &C::accel_bias_rw_mps2_per_sqrts, nn, "m/s^2/sqrt(s)", "accelerometer bias random walk; the emulated IMU's"},
-      {"measurement_noise.attitude_var_rad2", &C::attitude_var_rad2, pos, "rad^2", "variance of the measured phi, theta, psi; thesis Eq 8.2 R(1:3)", euler},
-      {"measurement_noise.velocity_var_m2ps2", &C::velocity_var_m2ps2, pos, "(m/s)^2", "variance of the measured u, v, w; thesis Eq 8.2 R(4:6)", uvw},
-      {"initial_sigma.attitude_rad", &C::initial_attitude_sigma_rad, pos, "rad", "initial 1-sigma of the attitude; assumption: 0.02"},
-      {"initial_sigma.velocity_mps", &C::initial_velocity_sigma_mps, pos, "m/s", "initial 1-sigma of the body velocity; assumption: 0.1 (near hover)"},
-      {"initial_sigma.gyro_bias_radps", &C::initial_gyro_bias_sigma_radps, pos, "rad/s", "initial 1-sigma of the gyro bias; the emulated IMU's turn-on sigma"},
-      {"initial_sigma.accel_bias_mps2", &C::initial_accel_bias_sigma_mps2, pos, "m/s^2", "initial 1-sigma of the accelerometer bias; the emulated IMU's turn-on sigma"},
+      {"gravity_mps2", &C::gravity_mps2, Range::closed(9.0, 10.5), "m/s^2",
+       "gravity; the value of the thesis's models (9.81)"},
+      {"min_abs_cos_theta", &C::min_abs_cos_theta, Range{0.0, 0.5, true, false}, "-",
+       "smallest |cos(theta)| in the Euler kinematics (pitch singularity guard)"},
+      {"process_noise.reference_rate_hz", &C::process_noise_reference_rate_hz, pos, "Hz",
+       "rate at which the *_var_per_sample values are per-sample variances; thesis: 512 Hz"},
+      {"process_noise.gyro_var_per_sample_rad2ps2", &C::gyro_noise_var_per_sample_rad2ps2, nn, "(rad/s)^2",
+       "gyro input noise per sample at the reference rate; thesis Eq 8.2 Q(1:3)"},
+      {"process_noise.accel_var_per_sample_m2ps4", &C::accel_noise_var_per_sample_m2ps4, nn, "(m/s^2)^2",
+       "accelerometer input noise per sample at the reference rate; thesis Eq 8.2 Q(4:6)"},
+      {"process_noise.gyro_bias_rw_radps_per_sqrts", &C::gyro_bias_rw_radps_per_sqrts, nn, "rad/s/sqrt(s)",
+       "gyro bias random walk; not in the thesis, the emulated IMU's"},
+      {"process_noise.accel_bias_rw_mps2_per_sqrts", &C::accel_bias_rw_mps2_per_sqrts, nn, "m/s^2/sqrt(s)",
+       "accelerometer bias random walk; the emulated IMU's"},
+      {"measurement_noise.attitude_var_rad2", &C::attitude_var_rad2, pos, "rad^2",
+       "variance of the measured phi, theta, psi; thesis Eq 8.2 R(1:3)", euler},
+      {"measurement_noise.velocity_var_m2ps2", &C::velocity_var_m2ps2, pos, "(m/s)^2",
+       "variance of the measured u, v, w; thesis Eq 8.2 R(4:6)", uvw},
+      {"initial_sigma.attitude_rad", &C::initial_attitude_sigma_rad, pos, "rad",
+       "initial 1-sigma of the attitude; assumption: 0.02"},
+      {"initial_sigma.velocity_mps", &C::initial_velocity_sigma_mps, pos, "m/s",
+       "initial 1-sigma of the body velocity; assumption: 0.1 (near hover)"},
+      {"initial_sigma.gyro_bias_radps", &C::initial_gyro_bias_sigma_radps, pos, "rad/s",
+       "initial 1-sigma of the gyro bias; the emulated IMU's turn-on sigma"},
+      {"initial_sigma.accel_bias_mps2", &C::initial_accel_bias_sigma_mps2, pos, "m/s^2",
+       "initial 1-sigma of the accelerometer bias; the emulated IMU's turn-on sigma"},
       {"gate.enabled", &C::gate_enabled, Range::any(), "-", "innovation gating on or off"},
-      {"gate.probability", &C::gate_probability, Range{0.0, 1.0, true, true}, "-", "probability of the chi-square gate (0.999: a consistent measurement is rejected 1 in 1000)"},
-      {"latency.history_s", &C::history_s, Range::closed(0.0, 10.0), "s", "length of the rollback history; older measurements are dropped and counted"},
-      {"integration.max_step_s", &C::max_step_s, Range{0.0, 0.1, true, false}, "s", "longest single integration step; longer IMU intervals are split"},
+      {"gate.probability", &C::gate_probability, Range{0.0, 1.0, true, true}, "-",
+       "probability of the chi-square gate (0.999: a consistent measurement is rejected 1 in 1000)"},
+      {"latency.history_s", &C::history_s, Range::closed(0.0, 10.0), "s",
+       "length of the rollback history; older measurements are dropped and counted"},
+      {"integration.max_step_s", &C::max_step_s, Range{0.0, 0.1, true, false}, "s",
+       "longest single integration step; longer IMU intervals are split"},
       {"integration.imu_gap_s", &C::imu_gap_s, pos, "s", "IMU interval above which a gap is counted"},
   };
   return table;
@@ -171,8 +186,8 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
   return false;
 }
 
-void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                    double dt_s, const EkfInput& psd, EkfCovariance* Phi) const {
+void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s,
+                                    const EkfInput& psd, EkfCovariance* Phi) const {
   using Mat6 = EkfLinearisation::Block;
   using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
@@ -250,9 +265,9 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   }
 }
 
-void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0,
-                                             const EkfInput& u1, std::int64_t t0, std::int64_t t1,
-                                             const EkfInput& psd, EkfCovariance* Phi) const {
+void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
+                                             std::int64_t t0, std::int64_t t1, const EkfInput& psd,
+                                             EkfCovariance* Phi) const {
   if (t1 <= t0) return;
   const double dt_s = 1e-6 * (static_cast<double>(t1) - static_cast<double>(t0));
   // At most kMaxSubsteps: an IMU time far ahead (a stray message, found by fuzz_node_estimator)
@@ -408,10 +423,10 @@ void AttitudeVelocityEkf::replay(std::size_t j) {
   EkfState x = history_[j].x;
   EkfCovariance P = history_[j].P;
   std::int64_t t = history_[j].utime;
-  std::size_t k = static_cast<std::size_t>(
-      std::upper_bound(accepted_.begin(), accepted_.end(), t,
-                       [](std::int64_t tt, const Stored& s) { return tt < s.z.utime; }) -
-      accepted_.begin());
+  std::size_t k =
+      static_cast<std::size_t>(std::upper_bound(accepted_.begin(), accepted_.end(), t,
+                                                [](std::int64_t tt, const Stored& s) { return tt < s.z.utime; }) -
+                               accepted_.begin());
   for (std::size_t i = j; i + 1 < history_.size(); ++i) {
     const Node& a = history_[i];
     Node& b = history_[i + 1];
@@ -570,8 +585,7 @@ void AttitudeVelocityEkf::add_batch(const PoseMeasurement* zs, std::size_t n, Ek
     // One replay serves the measurements stored since the last, with the result of one replay
     // each: a window offset reads the history, which must hold the earlier measurements first,
     // and a measurement before one already stored would be gated before it.
-    const bool reads_history =
-        z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
+    const bool reads_history = z.has_velocity && config_.velocity_measurement == EkfVelocityMeasurement::kWindowMean;
     if (from != kNone && (reads_history || z.utime < last_stored_utime)) {
       replay(from);
       from = kNone;

@@ -156,11 +156,11 @@ const ParamTable<EkfConfig>& ekf_params();
 
 /// Outcome of add_measurement().
 enum class EkfMeasurementStatus {
-  kAccepted,        ///< applied (now or in the past)
-  kRejectedGate,    ///< NIS above the gate
-  kPending,         ///< stamped (or its velocity window ends) after the newest IMU sample; applied when the IMU catches up
-  kTooOld,          ///< older than the history; dropped
-  kTooNew,          ///< more than history_s ahead of the newest IMU sample; dropped
+  kAccepted,      ///< applied (now or in the past)
+  kRejectedGate,  ///< NIS above the gate
+  kPending,  ///< stamped (or its velocity window ends) after the newest IMU sample; applied when the IMU catches up
+  kTooOld,   ///< older than the history; dropped
+  kTooNew,   ///< more than history_s ahead of the newest IMU sample; dropped
   kNotInitialized,  ///< the filter is not initialised; dropped
   kInvalid,         ///< non-finite values; dropped
 };
@@ -185,16 +185,16 @@ struct EkfUpdateRecord {
 
 /// Counters of the EKF (published by the estimator process).
 struct EkfCounters {
-  std::int64_t imu_samples = 0;                ///< IMU samples used for prediction
-  std::int64_t imu_rejected = 0;               ///< IMU samples dropped (time not increasing, non-finite, not initialised)
-  std::int64_t imu_gaps = 0;                   ///< IMU intervals longer than imu_gap_s
-  std::int64_t measurements_accepted = 0;      ///< measurements applied
-  std::int64_t measurements_rejected_gate = 0; ///< measurements rejected by the innovation gate
-  std::int64_t measurements_too_old = 0;       ///< measurements older than the history
-  std::int64_t measurements_too_new = 0;       ///< measurements too far ahead of the IMU
-  std::int64_t measurements_invalid = 0;       ///< non-finite or before initialisation
-  std::int64_t rollbacks = 0;                  ///< measurements inserted in the past
-  std::int64_t velocity_window_uncovered = 0;  ///< velocity windows the history did not cover (no offset applied)
+  std::int64_t imu_samples = 0;            ///< IMU samples used for prediction
+  std::int64_t imu_rejected = 0;           ///< IMU samples dropped (time not increasing, non-finite, not initialised)
+  std::int64_t imu_gaps = 0;               ///< IMU intervals longer than imu_gap_s
+  std::int64_t measurements_accepted = 0;  ///< measurements applied
+  std::int64_t measurements_rejected_gate = 0;  ///< measurements rejected by the innovation gate
+  std::int64_t measurements_too_old = 0;        ///< measurements older than the history
+  std::int64_t measurements_too_new = 0;        ///< measurements too far ahead of the IMU
+  std::int64_t measurements_invalid = 0;        ///< non-finite or before initialisation
+  std::int64_t rollbacks = 0;                   ///< measurements inserted in the past
+  std::int64_t velocity_window_uncovered = 0;   ///< velocity windows the history did not cover (no offset applied)
 };
 
 /// One node of the filter's history: an IMU sample's time and input, and the state and
@@ -257,8 +257,8 @@ class AttitudeVelocityEkf {
   /// predict() makes it (substeps included); returns the transition matrix Phi of the whole
   /// interval (the product of the substeps' exact Jacobians). `input_psd`: the interval's input
   /// noise PSD (a history node's EkfNode::input_psd); null: the configured one.
-  EkfCovariance predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                std::int64_t t0, std::int64_t t1, const EkfInput* input_psd = nullptr) const;
+  EkfCovariance predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, std::int64_t t0,
+                                std::int64_t t1, const EkfInput* input_psd = nullptr) const;
 
   /// State at the newest IMU sample.
   const EkfState& state() const { return history_.back().x; }
@@ -295,8 +295,8 @@ class AttitudeVelocityEkf {
   /// `psd`: the input noise's PSD over the step.
   void propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s,
                  const EkfInput& psd, EkfCovariance* Phi = nullptr) const;
-  void propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                          std::int64_t t0, std::int64_t t1, const EkfInput& psd, EkfCovariance* Phi = nullptr) const;
+  void propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, std::int64_t t0,
+                          std::int64_t t1, const EkfInput& psd, EkfCovariance* Phi = nullptr) const;
   bool update(EkfState* x, EkfCovariance* P, const PoseMeasurement& z, bool gate, EkfUpdateRecord* record) const;
   /// Stores z (already prepared, not too old) and replays from the node before it.
   EkfMeasurementStatus insert_in_past(const PoseMeasurement& z);
@@ -324,7 +324,7 @@ class AttitudeVelocityEkf {
   EkfConfig config_;
   EkfModelParams params_;
   Eigen::Matrix<double, kEkfInputDim, 1> input_psd_;  // S
-  Eigen::Matrix<double, 6, 1> bias_rw_psd_;          // q_bg, q_ba
+  Eigen::Matrix<double, 6, 1> bias_rw_psd_;           // q_bg, q_ba
   double gate3_ = 0.0, gate6_ = 0.0;
   std::int64_t history_us_ = 0;
   std::deque<Node> history_;

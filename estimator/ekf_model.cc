@@ -143,8 +143,8 @@ EkfState ekf_discrete_step(const EkfState& x, const EkfInput& u0, const EkfInput
 }
 
 EkfCovariance ekf_discrete_jacobian(const EkfState& x, const EkfInput& u0, const EkfInput& u1, double dt_s,
-                                    const EkfModelParams& params, EkfCovariance* F0_out,
-                                    EkfCovariance* F1_out, EkfState* x1_out) {
+                                    const EkfModelParams& params, EkfCovariance* F0_out, EkfCovariance* F1_out,
+                                    EkfState* x1_out) {
   const EkfState x1 = x + dt_s * ekf_process_derivative(x, u0, params);
   const EkfCovariance F0 = ekf_process_jacobian(x, u0, params);
   const EkfCovariance F1 = ekf_process_jacobian(x1, u1, params);

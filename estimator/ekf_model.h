@@ -37,10 +37,18 @@ constexpr int kEkfInputDim = 6;
 
 /// Index of each state in the state vector.
 enum EkfStateIndex : int {
-  kPhi = 0, kTheta = 1, kPsi = 2,
-  kU = 3, kV = 4, kW = 5,
-  kBiasP = 6, kBiasQ = 7, kBiasR = 8,
-  kBiasAx = 9, kBiasAy = 10, kBiasAz = 11,
+  kPhi = 0,
+  kTheta = 1,
+  kPsi = 2,
+  kU = 3,
+  kV = 4,
+  kW = 5,
+  kBiasP = 6,
+  kBiasQ = 7,
+  kBiasR = 8,
+  kBiasAx = 9,
+  kBiasAy = 10,
+  kBiasAz = 11,
 };
 
 using EkfState = Eigen::Matrix<double, kEkfStateDim, 1>;

@@ -55,36 +55,42 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
       publish(rig_utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
       node_->record_latency_ns(transport::monotonic_ns() -
-                                (node_->t0_monotonic_ns() + transport::message_us_to_ns(rig_utime)));
+                               (node_->t0_monotonic_ns() + transport::message_us_to_ns(rig_utime)));
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
     if (!transport::plausible_sim_utime(m.utime)) {
-      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED,
+                   contract::channels::kMocapPose,
                    "pose at utime " + std::to_string(m.utime) + " us lies outside any run; ignored");
       return;
     }
     const MocapPose p = contract::from_message(m);
     if (!p.position_ned_m.allFinite() || !p.q_body_to_ned.coeffs().allFinite()) {
-      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED, contract::channels::kMocapPose,
+      node_->fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_MESSAGE_MALFORMED,
+                   contract::channels::kMocapPose,
                    "motion-capture frame " + std::to_string(p.frame_number) + " has non-finite values: not used",
                    p.publish_utime);
       return;
     }
-    if (node_->lockstep()) pose_inbox_.push(p.publish_utime, p);
-    else apply_pose(p);
+    if (node_->lockstep())
+      pose_inbox_.push(p.publish_utime, p);
+    else
+      apply_pose(p);
   });
   if (prefilter_) {
-    node_->bus().subscribe<actuator_feedback_t>(contract::channels::kActuatorFeedback,
-                                                [this](const actuator_feedback_t& m) {
-      // Non-finite values are ignored by the prefilter itself.
-      if (node_->lockstep()) flap_inbox_.push(m.utime, {m.flap_freq_left_radps, m.flap_freq_right_radps});
-      else prefilter_->set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
-    });
+    node_->bus().subscribe<actuator_feedback_t>(
+        contract::channels::kActuatorFeedback, [this](const actuator_feedback_t& m) {
+          // Non-finite values are ignored by the prefilter itself.
+          if (node_->lockstep())
+            flap_inbox_.push(m.utime, {m.flap_freq_left_radps, m.flap_freq_right_radps});
+          else
+            prefilter_->set_flap_frequencies(m.flap_freq_left_radps, m.flap_freq_right_radps, m.utime);
+        });
   }
   // Lockstep ticks only: in real time the work happens as the inputs arrive.
-  node_->add_task("estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); },
-                  transport::ProcessNode::Trigger::kInput);
+  node_->add_task(
+      "estimator", sensing.imu.sample_rate_hz, [this](int64_t t) { tick(t); }, transport::ProcessNode::Trigger::kInput);
 }
 
 int EstimatorNode::run() { return node_->run(); }
@@ -102,7 +108,8 @@ bool EstimatorNode::imu_usable(const ImuSample& sample) {
   if (!same && imu_stuck_) {
     imu_stuck_ = false;
     node_->fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_SENSOR_STUCK, contract::channels::kImu,
-                 "IMU values change again at " + std::to_string(sample.utime) + " us: samples used again", sample.utime);
+                 "IMU values change again at " + std::to_string(sample.utime) + " us: samples used again",
+                 sample.utime);
   }
   if (imu_repeats_ + 1 >= kImuStuckSamples && !imu_stuck_) {
     imu_stuck_ = true;
@@ -186,7 +193,8 @@ void EstimatorNode::report_dropped(const PoseMeasurement& z, EkfMeasurementStatu
   std::ostringstream msg;
   msg << std::fixed << std::setprecision(1) << "mocap frame " << z.frame_number << " dropped by the EKF: ";
   if (status == EkfMeasurementStatus::kTooOld) {
-    msg << "it refers to " << 1e-3 * static_cast<double>(now - z.utime) << " ms before the newest IMU sample, older than "
+    msg << "it refers to " << 1e-3 * static_cast<double>(now - z.utime)
+        << " ms before the newest IMU sample, older than "
         << "the rollback history of " << 1e3 * ekf_->config().history_s << " ms (" << c.measurements_too_old
         << " so far); the motion-capture stream is late: raise sensing.ekf.latency.history_s or find the delay";
   } else {

@@ -30,7 +30,8 @@ const ParamTable<ImuPrefilterConfig>& imu_prefilter_params() {
        "the fixed line on the accelerometer channels"},
       {"accel", &C::accel, Range::any(), "-", "the flapping lines on the accelerometer channels too"},
       {"level_bandwidth_hz", &C::level_bandwidth_hz, Range::closed(1.0, 100.0), "Hz",
-       "bandwidth of the level that takes the motion, so the lines learn from what it leaves; above the manoeuvres' 7 Hz"},
+       "bandwidth of the level that takes the motion, so the lines learn from what it leaves; above the manoeuvres' 7 "
+       "Hz"},
       {"amplitude_smoothing_s", &C::amplitude_smoothing_s, Range::closed(0.0, 1.0), "s",
        "low-pass of the amplitudes the output uses (0: none): smooths away what the motion shakes into them"},
   };
@@ -56,9 +57,9 @@ ImuPrefilter::ImuPrefilter(const ImuPrefilterConfig& config, double sample_rate_
   const double k = std::min(0.5, 2.0 * M_PI * config_.level_bandwidth_hz / fs_);
   // Each channel's lines; channels of one sensor with the same lines share a set (rho, measured
   // per set, differs between the gyro and the accelerometer by two orders of magnitude).
-  const bool structural_on[6] = {config_.structural_notch_p, config_.structural_notch_q, config_.structural_notch_r,
-                                 config_.structural_notch_accel, config_.structural_notch_accel,
-                                 config_.structural_notch_accel};
+  const bool structural_on[6] = {config_.structural_notch_p,     config_.structural_notch_q,
+                                 config_.structural_notch_r,     config_.structural_notch_accel,
+                                 config_.structural_notch_accel, config_.structural_notch_accel};
   for (int ch = 0; ch < 6; ++ch) {
     std::vector<int> lines;
     if (ch < 3 || config_.accel) {
@@ -76,7 +77,8 @@ ImuPrefilter::ImuPrefilter(const ImuPrefilterConfig& config, double sample_rate_
       set.alpha_rate.resize(d + 1);
       for (int e = 0; e < d; ++e) {
         const bool fixed = lines[static_cast<std::size_t>(e / 2)] == n_flap;
-        const double wb = 2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
+        const double wb =
+            2.0 * M_PI * (fixed ? config_.structural_notch_bandwidth_hz : config_.flap_notch_bandwidth_hz);
         set.alpha_rate[e] = 0.5 * wb * wb * dt_nom;  // times rho at each step
       }
       set.alpha_rate[d] = k * k / (1.0 - k) * fs_;  // times rho at each step

@@ -107,8 +107,8 @@ class ImuPrefilter {
  private:
   /// One line: its frequency and reference (shared by the six channels).
   struct Line {
-    double w = 0.0;      ///< [rad/s]; 0: left out
-    double theta = 0.0;  ///< reference phase, wrapped into [0, 2 pi)
+    double w = 0.0;                      ///< [rad/s]; 0: left out
+    double theta = 0.0;                  ///< reference phase, wrapped into [0, 2 pi)
     std::complex<double> ref{1.0, 0.0};  ///< e^{j theta}
   };
   /// One measured pair of flapping frequencies.

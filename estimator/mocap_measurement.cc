@@ -28,8 +28,7 @@ void validate(const VelocityDifferentiatorConfig& c) {
     throw std::invalid_argument(out.str());
   }
   if (c.span_frames % c.stride_frames == 0) {
-    out << "VelocityDifferentiatorConfig.stride_frames = " << c.stride_frames
-        << ": span_frames (" << c.span_frames
+    out << "VelocityDifferentiatorConfig.stride_frames = " << c.stride_frames << ": span_frames (" << c.span_frames
         << ") must not be a multiple of it, otherwise successive velocity pairs share a frame and "
            "the velocity noise is not white";
     throw std::invalid_argument(out.str());

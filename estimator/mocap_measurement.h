@@ -113,8 +113,8 @@ class MocapMeasurementBuilder {
   PoseMeasurement attitude_only(const Frame& frame);
 
   VelocityDifferentiatorConfig config_;
-  std::deque<Frame> recent_;   // frames within the last span, increasing frame number
-  std::deque<Frame> held_;     // tracked middle frames waiting for their end frame
+  std::deque<Frame> recent_;  // frames within the last span, increasing frame number
+  std::deque<Frame> held_;    // tracked middle frames waiting for their end frame
   bool have_last_ = false;
   std::int64_t last_frame_number_ = 0;
   std::int64_t frames_received_ = 0, frames_invalid_ = 0, frames_missing_ = 0, frames_out_of_order_ = 0;

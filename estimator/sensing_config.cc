@@ -42,8 +42,8 @@ EkfConfig ekf_config_from(ConfigMap& map) {
   if (map.has("latency")) {
     ConfigMap l = map.get_map("latency");
     if (l.has("mode")) {
-      c.latency_mode = l.get_enum("mode", {"rollback", "naive"}) == "naive" ? EkfLatencyMode::kNaive
-                                                                             : EkfLatencyMode::kRollback;
+      c.latency_mode =
+          l.get_enum("mode", {"rollback", "naive"}) == "naive" ? EkfLatencyMode::kNaive : EkfLatencyMode::kRollback;
     }
     read_params(l, ekf_params(), c, "latency");
     l.finish();
@@ -83,8 +83,8 @@ void check_ekf_history(ConfigMap& map, const SensingConfig& c, double duration_s
   why << std::setprecision(3) << "is too short for the motion-capture measurements, which would arrive older than the "
       << "history and be dropped: latency " << 1e3 * need.latency_s << " ms + 3 x jitter " << 1e3 * need.jitter_s
       << " ms + " << (window ? "" : "half ") << "the differentiator span (" << c.velocity_differentiator.span_frames
-      << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "")
-      << ") " << 1e3 * need.window_s << " ms + 2 IMU periods " << 1e3 * need.imu_s << " ms";
+      << " frames at " << c.mocap.frame_rate_hz << " Hz" << (window ? ", velocity_measurement window_mean" : "") << ") "
+      << 1e3 * need.window_s << " ms + 2 IMU periods " << 1e3 * need.imu_s << " ms";
   if (need.clock_s > 0.0) {
     why << " + the IMU clock against the motion capture's (imu.clock_offset_s " << c.imu.clock_offset_s
         << " s, clock_drift_ppm " << c.imu.clock_drift_ppm;

@@ -49,7 +49,8 @@ PrefilteredImu prefilter_imu(const ImuPrefilterConfig& config, double sample_rat
   return out;
 }
 
-std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const VelocityDifferentiatorConfig& differentiator,
+std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config,
+                                          const VelocityDifferentiatorConfig& differentiator,
                                           const std::vector<ImuSample>& imu, const std::vector<MocapPose>& poses,
                                           SmootherReport* report, const std::vector<EkfInput>* input_var) {
   if (input_var != nullptr && input_var->size() != imu.size()) {
@@ -63,7 +64,8 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
     for (PoseMeasurement& z : builder.push(pose)) zs.push_back(std::move(z));
   }
   for (PoseMeasurement& z : builder.flush()) zs.push_back(std::move(z));
-  std::stable_sort(zs.begin(), zs.end(), [](const PoseMeasurement& a, const PoseMeasurement& b) { return a.utime < b.utime; });
+  std::stable_sort(zs.begin(), zs.end(),
+                   [](const PoseMeasurement& a, const PoseMeasurement& b) { return a.utime < b.utime; });
   if (report) *report = SmootherReport{};
   if (zs.empty() || imu.empty()) return {};
 
@@ -80,7 +82,7 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf_config, const Vel
   filter.set_node_observer([&nodes](const EkfNode& n) { nodes.push_back(n); });
 
   filter.initialize_from_measurement(zs.front());
-  std::size_t m = 1;  // next measurement to offer (the first started the filter)
+  std::size_t m = 1;                              // next measurement to offer (the first started the filter)
   const auto offer_until = [&](std::int64_t t) {  // measurements stamped at or before t
     while (m < zs.size() && zs[m].utime <= t) filter.add_measurement(zs[m++]);
   };

@@ -51,9 +51,9 @@ struct SmoothedSample {
 
 /// What the smoothing did.
 struct SmootherReport {
-  EkfCounters counters;            ///< the forward pass's filter counters
-  std::int64_t measurements = 0;   ///< motion-capture measurements offered to the filter
-  std::int64_t nodes = 0;          ///< nodes smoothed (IMU samples and measurement times)
+  EkfCounters counters;           ///< the forward pass's filter counters
+  std::int64_t measurements = 0;  ///< motion-capture measurements offered to the filter
+  std::int64_t nodes = 0;         ///< nodes smoothed (IMU samples and measurement times)
 };
 
 /// Smooths a recorded flight (see the top of this header). `imu` and `poses` in time order as
@@ -71,15 +71,15 @@ std::vector<SmoothedSample> smooth_flight(const EkfConfig& ekf, const VelocityDi
 
 /// The wing pairs' measured flapping frequencies at a rig time (ACTUATOR_FB).
 struct FlapFrequencies {
-  std::int64_t utime = 0;     ///< rig time [us]
+  std::int64_t utime = 0;  ///< rig time [us]
   double left_radps = 0.0;
   double right_radps = 0.0;
 };
 
 /// A recorded IMU through the on-board filtering.
 struct PrefilteredImu {
-  std::vector<ImuSample> imu;        ///< the filtered samples (stamps unchanged)
-  std::vector<EkfInput> input_var;   ///< per sample: ImuPrefilter::residual_var() after it
+  std::vector<ImuSample> imu;       ///< the filtered samples (stamps unchanged)
+  std::vector<EkfInput> input_var;  ///< per sample: ImuPrefilter::residual_var() after it
 };
 
 /// The recorded samples `imu` (in the order recorded) through an ImuPrefilter of `config` at

@@ -46,8 +46,7 @@ std::string endpoint_text(const tcp::endpoint& e) {
 /// One WebSocket client.
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(FoxgloveServer::Impl* server, beast::tcp_stream stream, std::string subprotocol,
-            uint64_t id)
+  WsSession(FoxgloveServer::Impl* server, beast::tcp_stream stream, std::string subprotocol, uint64_t id)
       : server_(server),
         ws_(std::move(stream)),
         subprotocol_(std::move(subprotocol)),
@@ -229,8 +228,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       const auto old = subs_by_channel_.find(channel);
       const bool was = old != subs_by_channel_.end();
       const bool fresh = now && (!was || old->second != sub);
-      if (now) subs_by_channel_[channel] = sub;
-      else subs_by_channel_.erase(channel);
+      if (now)
+        subs_by_channel_[channel] = sub;
+      else
+        subs_by_channel_.erase(channel);
       if (now && !was) server_->subscribers[channel].fetch_add(1);
       if (!now && was) server_->subscribers[channel].fetch_sub(1);
       if (!now) held_.erase(channel);
@@ -343,8 +344,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   int64_t sent_ = 0, dropped_ = 0;
 };
 
-void start_websocket(FoxgloveServer::Impl* server, beast::tcp_stream stream, const std::string& subprotocol, uint64_t id,
-                     http::request<http::string_body> request) {
+void start_websocket(FoxgloveServer::Impl* server, beast::tcp_stream stream, const std::string& subprotocol,
+                     uint64_t id, http::request<http::string_body> request) {
   std::make_shared<WsSession>(server, std::move(stream), subprotocol, id)->accept(std::move(request));
 }
 
@@ -431,9 +432,8 @@ FoxgloveServer::FoxgloveServer(ServerOptions options) : impl_(std::make_unique<I
   if (ec) throw std::runtime_error("cannot listen on " + where + ": " + ec.message());
   impl_->port = acc.local_endpoint().port();
   const net::ip::address bound = acc.local_endpoint().address();
-  impl_->loopback = bound.is_loopback() ||
-                    (bound.is_v6() && bound.to_v6().is_v4_mapped() &&
-                     net::ip::make_address_v4(net::ip::v4_mapped, bound.to_v6()).is_loopback());
+  impl_->loopback = bound.is_loopback() || (bound.is_v6() && bound.to_v6().is_v4_mapped() &&
+                                            net::ip::make_address_v4(net::ip::v4_mapped, bound.to_v6()).is_loopback());
   impl_->session_id = std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
                                          std::chrono::system_clock::now().time_since_epoch())
                                          .count()) +

@@ -35,9 +35,9 @@
 namespace nimble::foxglove {
 
 struct ServerOptions {
-  std::string host = "127.0.0.1";  ///< the address to listen on (an IPv4 or IPv6 literal, or "localhost")
-  uint16_t port = 8765;            ///< 0: a free port, chosen by the system (port() tells which)
-  std::string name = "nimble_rig"; ///< serverInfo's name
+  std::string host = "127.0.0.1";               ///< the address to listen on (an IPv4 or IPv6 literal, or "localhost")
+  uint16_t port = 8765;                         ///< 0: a free port, chosen by the system (port() tells which)
+  std::string name = "nimble_rig";              ///< serverInfo's name
   std::map<std::string, std::string> metadata;  ///< serverInfo's metadata
   /// Each client's queue of messages not yet sent: at most this many bytes and this many
   /// messages; a message beyond either is dropped for that client and counted.
@@ -64,15 +64,15 @@ std::string set_thread_nice(int nice);
 /// The server's figures since it was made.
 struct ServerStats {
   int64_t clients_now = 0;
-  int64_t clients_total = 0;        ///< WebSocket clients accepted
-  int64_t handshakes_refused = 0;   ///< upgrades offering no subprotocol of the protocol
-  int64_t messages_sent = 0;        ///< messageData frames written to clients
-  int64_t bytes_sent = 0;           ///< bytes of every frame written (messages, serverInfo, advertise, status)
-  int64_t dropped = 0;              ///< messages dropped because a client's queue was full
-  int64_t refused = 0;              ///< client messages refused (read-only server), binary frames
-  int64_t protocol_errors = 0;      ///< bad client messages (garbage, unknown op, unknown ids, oversized)
-  int64_t oversized_closes = 0;     ///< connections closed for a frame over max_frame_bytes
-  int64_t http_requests = 0;        ///< plain HTTP requests answered
+  int64_t clients_total = 0;       ///< WebSocket clients accepted
+  int64_t handshakes_refused = 0;  ///< upgrades offering no subprotocol of the protocol
+  int64_t messages_sent = 0;       ///< messageData frames written to clients
+  int64_t bytes_sent = 0;          ///< bytes of every frame written (messages, serverInfo, advertise, status)
+  int64_t dropped = 0;             ///< messages dropped because a client's queue was full
+  int64_t refused = 0;             ///< client messages refused (read-only server), binary frames
+  int64_t protocol_errors = 0;     ///< bad client messages (garbage, unknown op, unknown ids, oversized)
+  int64_t oversized_closes = 0;    ///< connections closed for a frame over max_frame_bytes
+  int64_t http_requests = 0;       ///< plain HTTP requests answered
 };
 
 /// One connected client's figures.
@@ -126,9 +126,9 @@ class FoxgloveServer {
   void publish(uint32_t channel_id, uint64_t timestamp_ns, std::string_view payload);
   /// A client's new subscription to a channel, held until deliver_backlog() names it.
   struct NewSubscription {
-    uint64_t client = 0;   ///< ClientStats::id
+    uint64_t client = 0;  ///< ClientStats::id
     uint32_t channel = 0;
-    uint64_t token = 0;    ///< this subscription (a later one of the same client and channel has another)
+    uint64_t token = 0;  ///< this subscription (a later one of the same client and channel has another)
   };
   /// With a handler, every new subscription starts held: publish() leaves that client out for
   /// that channel, and `handler` is called (on the I/O thread, with no lock of the server held;

@@ -62,8 +62,7 @@ bool read_web_file(const std::filesystem::path& root, const std::filesystem::pat
 /// WsSession, anything else is answered (a static file, or why not) and closed.
 class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  public:
-  HttpConnection(FoxgloveServer::Impl* server, tcp::socket socket)
-      : server_(server), stream_(std::move(socket)) {}
+  HttpConnection(FoxgloveServer::Impl* server, tcp::socket socket) : server_(server), stream_(std::move(socket)) {}
 
   void start() {
     parser_.emplace();
@@ -135,8 +134,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     respond(req, http::status::ok, w.content_type, std::move(body));
   }
 
-  void respond(const http::request<http::string_body>& req, http::status status, const char* type,
-               std::string body) {
+  void respond(const http::request<http::string_body>& req, http::status status, const char* type, std::string body) {
     respond(req.version(), req.method() == http::verb::head, status, type, std::move(body));
   }
 

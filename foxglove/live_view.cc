@@ -249,8 +249,10 @@ void LiveView::run() {
     int64_t undecodable = 0, published = 0;
     for (Pending& p : batch) {
       if (p.route == nullptr) {
-        if (p.restart) history_.clear();
-        else answer(p.subscription, &message);
+        if (p.restart)
+          history_.clear();
+        else
+          answer(p.subscription, &message);
         continue;
       }
       // Garbage that decoded: not plotted as a number (not sent), not kept for late clients.

@@ -39,7 +39,7 @@
 namespace nimble::lcmjson {
 struct LcmStruct;
 struct JsonMessage;
-}
+}  // namespace nimble::lcmjson
 
 namespace nimble::foxglove {
 
@@ -68,17 +68,17 @@ struct LiveViewOptions {
 
 /// What the live view counted, with the server's own figures.
 struct LiveViewStats {
-  int64_t offered = 0;      ///< messages offered on a channel with a subscriber
-  int64_t dropped = 0;      ///< of those, dropped because the live view's queue was full
+  int64_t offered = 0;  ///< messages offered on a channel with a subscriber
+  int64_t dropped = 0;  ///< of those, dropped because the live view's queue was full
   /// Messages of channels without a subscriber that the history missed: the queue was full (a
   /// run in process can outpace the live view's thread; a replay waits instead).
   int64_t history_dropped = 0;
-  int64_t undecodable = 0;  ///< bytes that were not a message of the channel's type (not sent)
-  int64_t beyond_bounds = 0;      ///< messages with a field beyond the vehicle's bounds (not sent, not kept)
-  std::string beyond_bounds_text; ///< which: channel, field, time and count (BoundsTally::text()); "" if none
-  int64_t published = 0;    ///< messages handed to the server live
-  int64_t backlogs = 0;     ///< histories handed to clients that subscribed
-  int64_t backlog_messages = 0;  ///< messages in those
+  int64_t undecodable = 0;         ///< bytes that were not a message of the channel's type (not sent)
+  int64_t beyond_bounds = 0;       ///< messages with a field beyond the vehicle's bounds (not sent, not kept)
+  std::string beyond_bounds_text;  ///< which: channel, field, time and count (BoundsTally::text()); "" if none
+  int64_t published = 0;           ///< messages handed to the server live
+  int64_t backlogs = 0;            ///< histories handed to clients that subscribed
+  int64_t backlog_messages = 0;    ///< messages in those
   ServerStats server;
 };
 
@@ -157,13 +157,13 @@ class LiveView {
 
   FoxgloveServer& server_;
   LiveViewOptions options_;
-  std::map<std::string, Route> routes_;  // fixed after construction
+  std::map<std::string, Route> routes_;     // fixed after construction
   std::map<uint32_t, const Route*> by_id_;  // fixed after construction
-  std::map<uint32_t, History> history_;  // the thread's only (channel id -> its history)
+  std::map<uint32_t, History> history_;     // the thread's only (channel id -> its history)
   uint32_t verdict_id_ = 0;
   std::atomic<int64_t> newest_rig_us_{-1};
 
-  mutable std::mutex mu_;  // everything below
+  mutable std::mutex mu_;            // everything below
   std::condition_variable cv_;       // work for the thread, or stop
   std::condition_variable idle_cv_;  // the thread went idle (flush())
   std::condition_variable room_cv_;  // the thread took the queue (offer() waiting for room)

@@ -175,8 +175,7 @@ void ClientSession::on_binary(std::string_view frame, std::vector<std::string>* 
          replies);
 }
 
-void ClientSession::subscribe(const json& request, std::vector<uint32_t>* changed,
-                              std::vector<std::string>* replies) {
+void ClientSession::subscribe(const json& request, std::vector<uint32_t>* changed, std::vector<std::string>* replies) {
   const auto list = request.find("subscriptions");
   if (list == request.end() || !list->is_array()) {
     protocol_error("subscribe: \"subscriptions\" must be an array of {id, channelId}", replies);

@@ -85,7 +85,7 @@ std::string endpoint_text(const tcp::endpoint& e);
 void start_http_connection(FoxgloveServer::Impl* server, tcp::socket socket);
 
 /// A WebSocket session for `request`, an upgrade offering `subprotocol`, as client `id`.
-void start_websocket(FoxgloveServer::Impl* server, beast::tcp_stream stream, const std::string& subprotocol, uint64_t id,
-                     http::request<http::string_body> request);
+void start_websocket(FoxgloveServer::Impl* server, beast::tcp_stream stream, const std::string& subprotocol,
+                     uint64_t id, http::request<http::string_body> request);
 
 }  // namespace nimble::foxglove

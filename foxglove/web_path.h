@@ -28,8 +28,8 @@ inline constexpr std::size_t kMaxWebTarget = 2048;
 
 /// What a request target comes to.
 struct WebPath {
-  int status = 404;             ///< 200: `file` is served; 400: malformed; 404: nothing served there
-  std::filesystem::path file;   ///< status 200: see the functions
+  int status = 404;                    ///< 200: `file` is served; 400: malformed; 404: nothing served there
+  std::filesystem::path file;          ///< status 200: see the functions
   const char* content_type = nullptr;  ///< status 200 from resolve_web_path(): web_content_type(file)
 };
 

@@ -75,8 +75,8 @@ void check_command(const nimble::actuator_command_t& c) {
               std::abs(again.flap_freq_right_radps - c.flap_freq_right_radps) <= kCmdFlapFreqRight.factor / 2 &&
               std::abs(again.throttle_pct - c.throttle_pct) <= kCmdThrottle.factor / 2 &&
               std::abs(again.dihedral_rad - c.dihedral_rad) <= kCmdDihedral.factor / 2 &&
-              std::abs(again.wing_root_rad - c.wing_root_rad) <= kCmdWingRoot.factor / 2 &&
-              again.mode == c.mode && (again.seq & 0xFFFF) == (c.seq & 0xFFFF),
+              std::abs(again.wing_root_rad - c.wing_root_rad) <= kCmdWingRoot.factor / 2 && again.mode == c.mode &&
+              (again.seq & 0xFFFF) == (c.seq & 0xFFFF),
           "a decoded command does not survive encoding and decoding again");
 }
 

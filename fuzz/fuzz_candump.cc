@@ -18,11 +18,13 @@ namespace {
 bool same(const CandumpRecord& a, const CandumpRecord& b) {
   if (a.time_ns != b.time_ns || a.interface != b.interface || a.is_fd != b.is_fd) return false;
   if (a.frame.can_id != b.frame.can_id || a.frame.len != b.frame.len) return false;
-  if (std::memcmp(a.frame.data, b.frame.data, a.frame.len <= CAN_MAX_DLEN ? a.frame.len : CAN_MAX_DLEN) != 0) return false;
+  if (std::memcmp(a.frame.data, b.frame.data, a.frame.len <= CAN_MAX_DLEN ? a.frame.len : CAN_MAX_DLEN) != 0)
+    return false;
   if (!a.is_fd) return true;
   return a.fd_frame.can_id == b.fd_frame.can_id && a.fd_frame.len == b.fd_frame.len &&
          a.fd_frame.flags == b.fd_frame.flags &&
-         std::memcmp(a.fd_frame.data, b.fd_frame.data, a.fd_frame.len <= CANFD_MAX_DLEN ? a.fd_frame.len : CANFD_MAX_DLEN) == 0;
+         std::memcmp(a.fd_frame.data, b.fd_frame.data,
+                     a.fd_frame.len <= CANFD_MAX_DLEN ? a.fd_frame.len : CANFD_MAX_DLEN) == 0;
 }
 
 }  // namespace
@@ -42,8 +44,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const std::string again = record->is_fd ? format_candump_line(record->fd_frame, record->time_ns, record->interface)
                                             : format_candump_line(record->frame, record->time_ns, record->interface);
     const auto reparsed = parse_candump_line(again);
-    require(reparsed.has_value(), "the line written for a parsed line does not parse: '" + again + "' from '" + line + "'");
-    require(same(*record, *reparsed), "a parsed line changes when written and parsed again: '" + line + "' -> '" + again + "'");
+    require(reparsed.has_value(),
+            "the line written for a parsed line does not parse: '" + again + "' from '" + line + "'");
+    require(same(*record, *reparsed),
+            "a parsed line changes when written and parsed again: '" + line + "' -> '" + again + "'");
   }
   return 0;
 }

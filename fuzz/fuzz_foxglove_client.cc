@@ -39,8 +39,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const SessionCounters before = session.counters();
     std::vector<std::string> replies;
     std::vector<uint32_t> changed;
-    if (binary) session.on_binary(frame, &replies);
-    else changed = session.on_text(frame, &replies);
+    if (binary)
+      session.on_binary(frame, &replies);
+    else
+      changed = session.on_text(frame, &replies);
     const SessionCounters after = session.counters();
     require(static_cast<int64_t>(replies.size()) ==
                 (after.refused - before.refused) + (after.protocol_errors - before.protocol_errors),

@@ -23,7 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const std::string why = nimble::lcmjson::to_json(*parsed, data, size, &message);
     const bool exact = type.decodes(data, static_cast<int>(size));
     nimble::fuzz::require(exact == why.empty(), type.name + ": the generated decoder " + (exact ? "takes" : "refuses") +
-                                                    " the bytes, the JSON view " + (why.empty() ? "takes them" : "says " + why));
+                                                    " the bytes, the JSON view " +
+                                                    (why.empty() ? "takes them" : "says " + why));
     if (why.empty()) {
       nimble::fuzz::require(nlohmann::json::accept(message.json), type.name + ": invalid JSON " + message.json);
     }

@@ -15,7 +15,8 @@ void build(nimble::fuzz::NodeRig& rig) {
   for (const char* fd : {"can_bridge.fd=false", "can_bridge.fd=true"}) {
     const auto& s = fuzz_scenario("hover.yaml", {"actuator_link=can", "can_bridge.candump_log=false", fd});
     for (const auto& name : {nimble::can::kFlightProcess, nimble::can::kRigProcess}) {
-      rig.add(std::make_shared<nimble::can::CanBridgeNode>(s, nimble::transport::NodeOptions{name, s.file, "inprocess", &rig.hub}, &rig.can_bus));
+      rig.add(std::make_shared<nimble::can::CanBridgeNode>(
+          s, nimble::transport::NodeOptions{name, s.file, "inprocess", &rig.hub}, &rig.can_bus));
     }
   }
 }

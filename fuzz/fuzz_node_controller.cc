@@ -12,8 +12,10 @@ void build(nimble::fuzz::NodeRig& rig) {
   using nimble::fuzz::fuzz_scenario;
   const auto& on_estimate = fuzz_scenario("hover.yaml", {"run.controller_input=estimate"});
   const auto& on_truth = fuzz_scenario("hover.yaml", {"run.controller_input=truth"});
-  rig.add(std::make_shared<nimble::ControllerNode>(on_estimate, nimble::transport::NodeOptions{"controller", on_estimate.file, "inprocess", &rig.hub}));
-  rig.add(std::make_shared<nimble::ControllerNode>(on_truth, nimble::transport::NodeOptions{"controller", on_truth.file, "inprocess", &rig.hub}));
+  rig.add(std::make_shared<nimble::ControllerNode>(
+      on_estimate, nimble::transport::NodeOptions{"controller", on_estimate.file, "inprocess", &rig.hub}));
+  rig.add(std::make_shared<nimble::ControllerNode>(
+      on_truth, nimble::transport::NodeOptions{"controller", on_truth.file, "inprocess", &rig.hub}));
 }
 
 }  // namespace

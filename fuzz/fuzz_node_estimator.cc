@@ -10,7 +10,8 @@ namespace {
 
 void build(nimble::fuzz::NodeRig& rig) {
   const auto& s = nimble::fuzz::fuzz_scenario("hover.yaml", {});
-  rig.add(std::make_shared<nimble::EstimatorNode>(s, nimble::transport::NodeOptions{"estimator", s.file, "inprocess", &rig.hub}));
+  rig.add(std::make_shared<nimble::EstimatorNode>(
+      s, nimble::transport::NodeOptions{"estimator", s.file, "inprocess", &rig.hub}));
 }
 
 }  // namespace

@@ -12,8 +12,10 @@ void build(nimble::fuzz::NodeRig& rig) {
   using nimble::fuzz::fuzz_scenario;
   const auto& lcm_link = fuzz_scenario("hover.yaml", {});
   const auto& can_link = fuzz_scenario("hover.yaml", {"actuator_link=can"});
-  rig.add(std::make_shared<nimble::plant::PlantNode>(lcm_link, nimble::transport::NodeOptions{"plant", lcm_link.file, "inprocess", &rig.hub}));
-  rig.add(std::make_shared<nimble::plant::PlantNode>(can_link, nimble::transport::NodeOptions{"plant", can_link.file, "inprocess", &rig.hub}));
+  rig.add(std::make_shared<nimble::plant::PlantNode>(
+      lcm_link, nimble::transport::NodeOptions{"plant", lcm_link.file, "inprocess", &rig.hub}));
+  rig.add(std::make_shared<nimble::plant::PlantNode>(
+      can_link, nimble::transport::NodeOptions{"plant", can_link.file, "inprocess", &rig.hub}));
 }
 
 }  // namespace

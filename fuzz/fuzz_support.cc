@@ -52,8 +52,8 @@ LcmType make_type() {
     if (!contract::decode_exact(data, size, first)) return;
     const std::string type = T::getTypeName();
     const int encoded_size = first.getEncodedSize();
-    require(encoded_size == size, type + ": decoded " + std::to_string(size) + " bytes, re-encodes to " +
-                                      std::to_string(encoded_size));
+    require(encoded_size == size,
+            type + ": decoded " + std::to_string(size) + " bytes, re-encodes to " + std::to_string(encoded_size));
     std::vector<uint8_t> once(static_cast<std::size_t>(encoded_size));
     require(first.encode(once.data(), 0, encoded_size) == encoded_size, type + ": re-encoding failed");
     T second{};

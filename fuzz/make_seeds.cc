@@ -74,90 +74,90 @@ std::string frame_record(const can_frame& f) {
 /// fuzz_can_frame and fuzz_candump: the rig's command and feedback frames, an error frame, a CAN
 /// FD frame and a remote frame.
 void write_can_seeds(const fs::path& out) {
-// ---------------------------------------------------------------------------
-can::CommandEncoder commands;
-can::FeedbackEncoder feedback;
-std::string frames, candump;
-int64_t t_ns = 1700000000123456000LL;
-for (int i = 0; i < 3; ++i) {
-  actuator_command_t cmd{};
-  cmd.seq = 100 + i;
-  cmd.mode = actuator_command_t::MODE_DELTA_F;
-  cmd.flap_freq_collective_radps = 102.5;
-  cmd.delta_f_radps = 10.0 * i;
-  cmd.throttle_pct = 40.0;
-  cmd.dihedral_rad = 0.1;
-  cmd.wing_root_rad = -0.05;
-  cmd.rolling_counter = static_cast<int8_t>(i + 1);
-  for (const can_frame& f : commands.encode(cmd)) {
-    frames += frame_record(f);
-    candump += can::format_candump_line(f, t_ns += 1000000, "vcan0") + "\n";
+  // ---------------------------------------------------------------------------
+  can::CommandEncoder commands;
+  can::FeedbackEncoder feedback;
+  std::string frames, candump;
+  int64_t t_ns = 1700000000123456000LL;
+  for (int i = 0; i < 3; ++i) {
+    actuator_command_t cmd{};
+    cmd.seq = 100 + i;
+    cmd.mode = actuator_command_t::MODE_DELTA_F;
+    cmd.flap_freq_collective_radps = 102.5;
+    cmd.delta_f_radps = 10.0 * i;
+    cmd.throttle_pct = 40.0;
+    cmd.dihedral_rad = 0.1;
+    cmd.wing_root_rad = -0.05;
+    cmd.rolling_counter = static_cast<int8_t>(i + 1);
+    for (const can_frame& f : commands.encode(cmd)) {
+      frames += frame_record(f);
+      candump += can::format_candump_line(f, t_ns += 1000000, "vcan0") + "\n";
+    }
+    actuator_feedback_t fb{};
+    fb.flap_freq_left_radps = 103.0;
+    fb.flap_freq_right_radps = 102.0;
+    fb.throttle_pct = -3.0;
+    fb.cmd_seq = 100 + i;
+    fb.cmd_age_us = 1500;
+    for (const can_frame& f : feedback.encode(fb)) {
+      frames += frame_record(f);
+      candump += can::format_candump_line(f, t_ns += 1000000, "vcan0") + "\n";
+    }
   }
-  actuator_feedback_t fb{};
-  fb.flap_freq_left_radps = 103.0;
-  fb.flap_freq_right_radps = 102.0;
-  fb.throttle_pct = -3.0;
-  fb.cmd_seq = 100 + i;
-  fb.cmd_age_us = 1500;
-  for (const can_frame& f : feedback.encode(fb)) {
-    frames += frame_record(f);
-    candump += can::format_candump_line(f, t_ns += 1000000, "vcan0") + "\n";
-  }
-}
-write(out / "fuzz_can_frame", "command_and_feedback", frames);
-can_frame error{};
-error.can_id = CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_BUSOFF | CAN_ERR_CNT;
-error.len = CAN_ERR_DLC;
-error.data[1] = CAN_ERR_CRTL_TX_PASSIVE;
-error.data[6] = 128;
-write(out / "fuzz_can_frame", "error_frame", frame_record(error));
-candump += can::format_candump_line(error, t_ns += 1000000, "vcan0") + "\n";
-canfd_frame fd{};
-fd.can_id = 0x101;
-fd.len = 12;
-fd.flags = CANFD_BRS;
-for (int i = 0; i < 12; ++i) fd.data[i] = static_cast<uint8_t>(i * 17);
-candump += can::format_candump_line(fd, t_ns += 1000000, "vcan1") + "\n";
-candump += "(1700000000.200000) vcan0 123#R\n";
-candump += "(1700000000.300000) vcan0 12345678#DEADBEEF\n";
-write(out / "fuzz_candump", "rig_frames", candump);
+  write(out / "fuzz_can_frame", "command_and_feedback", frames);
+  can_frame error{};
+  error.can_id = CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_BUSOFF | CAN_ERR_CNT;
+  error.len = CAN_ERR_DLC;
+  error.data[1] = CAN_ERR_CRTL_TX_PASSIVE;
+  error.data[6] = 128;
+  write(out / "fuzz_can_frame", "error_frame", frame_record(error));
+  candump += can::format_candump_line(error, t_ns += 1000000, "vcan0") + "\n";
+  canfd_frame fd{};
+  fd.can_id = 0x101;
+  fd.len = 12;
+  fd.flags = CANFD_BRS;
+  for (int i = 0; i < 12; ++i) fd.data[i] = static_cast<uint8_t>(i * 17);
+  candump += can::format_candump_line(fd, t_ns += 1000000, "vcan1") + "\n";
+  candump += "(1700000000.200000) vcan0 123#R\n";
+  candump += "(1700000000.300000) vcan0 12345678#DEADBEEF\n";
+  write(out / "fuzz_candump", "rig_frames", candump);
 }
 
 /// fuzz_flight_csv, fuzz_model_yaml and fuzz_scenario_yaml: a flight CSV and the shipped files.
 void write_text_seeds(const fs::path& out) {
-// --- flight CSV -----------------------------------------------------------------------------
-ident::FlightData flight;
-flight.source = "seed";
-for (const char* name : {"p", "v", "phi", "delta_f", "delta_t", "phi_sp"}) {
-  ident::Channel c;
-  for (int i = 0; i < 4; ++i) {
-    c.t_s.push_back(0.01 * i);
-    c.values.push_back(0.1 * i - 0.05 + static_cast<double>(std::string(name).size()));
+  // --- flight CSV -----------------------------------------------------------------------------
+  ident::FlightData flight;
+  flight.source = "seed";
+  for (const char* name : {"p", "v", "phi", "delta_f", "delta_t", "phi_sp"}) {
+    ident::Channel c;
+    for (int i = 0; i < 4; ++i) {
+      c.t_s.push_back(0.01 * i);
+      c.values.push_back(0.1 * i - 0.05 + static_cast<double>(std::string(name).size()));
+    }
+    flight.channels[name] = c;
   }
-  flight.channels[name] = c;
-}
-write(out / "fuzz_flight_csv", "flight", ident::format_flight_csv(flight));
-write(out / "fuzz_flight_csv", "comments_and_blank_lines",
-      "# a flight\n# units\nt,p,v,phi,delta_f,delta_t\n\n0,1e-3,-2,0.5,3,4\n0.5,2E-3,-1,0.25,3,4\n");
+  write(out / "fuzz_flight_csv", "flight", ident::format_flight_csv(flight));
+  write(out / "fuzz_flight_csv", "comments_and_blank_lines",
+        "# a flight\n# units\nt,p,v,phi,delta_f,delta_t\n\n0,1e-3,-2,0.5,3,4\n0.5,2E-3,-1,0.25,3,4\n");
 
-// --- model and scenario YAML: the shipped files -------------------------------------------
-for (const char* model : {"nimble_lateral_set1.yaml", "nimble_lateral4_yaw.yaml", "nimble_longitudinal.yaml",
-                          "nimble_lateral_set1_kinematic.yaml"}) {
-  std::ifstream in(kSource + "/rig_configs/models/" + model);
-  write(out / "fuzz_model_yaml", model, std::string(std::istreambuf_iterator<char>(in), {}));
-}
-for (const char* scenario : {"hover.yaml", "id_doublet_train_fast.yaml", "coupled_doublet_6hz.yaml",
-                             "hover_turbulence.yaml"}) {
-  std::ifstream in(kSource + "/rig_configs/" + scenario);
-  write(out / "fuzz_scenario_yaml", scenario, std::string(std::istreambuf_iterator<char>(in), {}));
-}
-{
-  // The hover scenario resolved (every section written out), with paths relative again.
-  std::string resolved = to_yaml(load_scenario_tree(kSource + "/rig_configs/hover.yaml"));
-  const std::string prefix = kSource + "/rig_configs/";
-  for (std::size_t at; (at = resolved.find(prefix)) != std::string::npos;) resolved.erase(at, prefix.size());
-  write(out / "fuzz_scenario_yaml", "hover_resolved.yaml", resolved);
-}
+  // --- model and scenario YAML: the shipped files -------------------------------------------
+  for (const char* model : {"nimble_lateral_set1.yaml", "nimble_lateral4_yaw.yaml", "nimble_longitudinal.yaml",
+                            "nimble_lateral_set1_kinematic.yaml"}) {
+    std::ifstream in(kSource + "/rig_configs/models/" + model);
+    write(out / "fuzz_model_yaml", model, std::string(std::istreambuf_iterator<char>(in), {}));
+  }
+  for (const char* scenario :
+       {"hover.yaml", "id_doublet_train_fast.yaml", "coupled_doublet_6hz.yaml", "hover_turbulence.yaml"}) {
+    std::ifstream in(kSource + "/rig_configs/" + scenario);
+    write(out / "fuzz_scenario_yaml", scenario, std::string(std::istreambuf_iterator<char>(in), {}));
+  }
+  {
+    // The hover scenario resolved (every section written out), with paths relative again.
+    std::string resolved = to_yaml(load_scenario_tree(kSource + "/rig_configs/hover.yaml"));
+    const std::string prefix = kSource + "/rig_configs/";
+    for (std::size_t at; (at = resolved.find(prefix)) != std::string::npos;) resolved.erase(at, prefix.size());
+    write(out / "fuzz_scenario_yaml", "hover_resolved.yaml", resolved);
+  }
 }
 
 }  // namespace

@@ -127,8 +127,10 @@ void fuzz_nodes(const uint8_t* data, std::size_t size, const NodeFactory& factor
       // At least once: what the nodes publish in answer may be refused too (a seq the fuzzer's
       // message broke), so "exactly once" would not hold of the channel's count.
       require(now > malformed, node->name() + " took " + std::to_string(length) + " bytes on " + channel +
-                                   " that do not decode as " + table[index].type + " without counting them as "
-                                   "malformed (malformed count stayed " + std::to_string(now) + ")");
+                                   " that do not decode as " + table[index].type +
+                                   " without counting them as "
+                                   "malformed (malformed count stayed " +
+                                   std::to_string(now) + ")");
     }
   }
 }

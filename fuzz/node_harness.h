@@ -34,8 +34,8 @@ namespace nimble::fuzz {
 struct NodeRig {
   transport::InprocessHub hub;
   can::InprocessCanBus can_bus;
-  std::vector<transport::ProcessNode*> nodes;  ///< every node's frame (for its Bus's counters)
-  std::vector<std::shared_ptr<void>> owners;   ///< the node objects
+  std::vector<transport::ProcessNode*> nodes;    ///< every node's frame (for its Bus's counters)
+  std::vector<std::shared_ptr<void>> owners;     ///< the node objects
   std::unique_ptr<can::FramePort> can_injector;  ///< the fuzzer's own endpoint on can_bus, if any
 
   /// Keeps `node` alive with the rig and watches its frame.

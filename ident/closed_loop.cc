@@ -51,7 +51,8 @@ class EffectForces {
   }
 
   /// Extra L [N m] and Y [N] at sample k.
-  std::pair<double, double> at(Eigen::Index k, double p, double v, double phi, const std::vector<double>& df_hist) const {
+  std::pair<double, double> at(Eigen::Index k, double p, double v, double phi,
+                               const std::vector<double>& df_hist) const {
     double L = 0.0, Y = 0.0;
     const Trim& trim = model_.trim;
     const double t = grid_.t_s[k] - grid_.t_s[0];
@@ -64,23 +65,36 @@ class EffectForces {
         }
         double x = 0.0;
         const std::string form = key.substr(key.find('_') == 1 ? 2 : 1);  // "L_vv" -> "vv", "Lr" -> "r"
-        if (form == "pw") x = p * (grid_.at("w")[k] - trim.w0_mps);
-        else if (form == "gphi") x = g_ * std::cos(trim.theta0_rad) * (std::sin(phi) - phi);
-        else if (form == "vv") x = v * std::fabs(v);
-        else if (form == "up") x = (grid_.at("u")[k] - trim.u0_mps) * p;
-        else if (form == "uv") x = (grid_.at("u")[k] - trim.u0_mps) * v;
+        if (form == "pw")
+          x = p * (grid_.at("w")[k] - trim.w0_mps);
+        else if (form == "gphi")
+          x = g_ * std::cos(trim.theta0_rad) * (std::sin(phi) - phi);
+        else if (form == "vv")
+          x = v * std::fabs(v);
+        else if (form == "up")
+          x = (grid_.at("u")[k] - trim.u0_mps) * p;
+        else if (form == "uv")
+          x = (grid_.at("u")[k] - trim.u0_mps) * v;
         else if (form == "df_delayed") {
           const std::size_t n = df_hist.size();
           const std::size_t back = static_cast<std::size_t>(delay_samples_);
           x = df_hist[n > back ? n - 1 - back : 0] - df_hist.back();
-        } else if (form == "df_rate") x = (grid_.t_s[k] - t_mid_s_) * df_hist.back();
-        else if (form == "df_step") x = grid_.t_s[k] >= t_change_s_ ? df_hist.back() : 0.0;
-        else if (form == "0") x = 1.0;
-        else if (form == "dd") x = grid_.at("delta_d")[k];
-        else if (form == "r") x = grid_.at("r")[k];
-        else if (form.rfind("sin", 0) == 0) x = std::sin(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
-        else if (form.rfind("cos", 0) == 0) x = std::cos(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
-        else throw std::invalid_argument("closed loop: effect parameter '" + key + "' of " + name + " has no form");
+        } else if (form == "df_rate")
+          x = (grid_.t_s[k] - t_mid_s_) * df_hist.back();
+        else if (form == "df_step")
+          x = grid_.t_s[k] >= t_change_s_ ? df_hist.back() : 0.0;
+        else if (form == "0")
+          x = 1.0;
+        else if (form == "dd")
+          x = grid_.at("delta_d")[k];
+        else if (form == "r")
+          x = grid_.at("r")[k];
+        else if (form.rfind("sin", 0) == 0)
+          x = std::sin(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
+        else if (form.rfind("cos", 0) == 0)
+          x = std::cos(2.0 * M_PI * std::stoi(form.substr(3)) * flapping_hz_ * t);
+        else
+          throw std::invalid_argument("closed loop: effect parameter '" + key + "' of " + name + " has no form");
         (key[0] == 'L' ? L : Y) += c * x;
       }
     }
@@ -163,8 +177,8 @@ std::vector<TermProgram> compile_terms(const FlightData& data, const DerivativeM
       const auto i = static_cast<std::size_t>(std::find(term_names.begin(), term_names.end(), s) - term_names.begin());
       if (s == "p" || s == "v" || s == "phi" || s == "delta_f" || (s == "delta_t" && i_dt >= 0)) continue;
       if (!grid.has(s)) {
-        throw DataError(data.source, -1, -1, s, "the model's term " + term_parameter_name(term) + " needs " + s +
-                                                   ", not in the data");
+        throw DataError(data.source, -1, -1, s,
+                        "the model's term " + term_parameter_name(term) + " needs " + s + ", not in the data");
       }
       from_data[i] = &grid.at(s);
     }
@@ -236,8 +250,8 @@ ClosedLoopResult validate_closed_loop(const FlightData& data, const DerivativeMo
     const Eigen::Index back = static_cast<Eigen::Index>(cmd_hist.size()) - 1 - cmd_delay;
     const Eigen::Vector2d u(back >= 0 ? cmd_hist[static_cast<std::size_t>(back)] : 0.0, dt[k]);
     df_hist.push_back(x[3]);
-    auto [dL, dY] = model.effects.empty() ? std::pair<double, double>{0.0, 0.0}
-                                          : effects.at(k, x[0], x[1], x[2], df_hist);
+    auto [dL, dY] =
+        model.effects.empty() ? std::pair<double, double>{0.0, 0.0} : effects.at(k, x[0], x[1], x[2], df_hist);
     if (!terms.empty()) {
       for (std::size_t i = 0; i < term_names.size(); ++i) term_in[i] = from_data[i] ? (*from_data[i])[k] : 0.0;
       term_in[0] = x[0];  // term_signal_names(): p q r u v w phi theta delta_f delta_t delta_d delta_w
@@ -283,8 +297,8 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
     }
     panels.push_back(std::move(panel));
   }
-  const std::string title = "closed-loop validation: " + r.model + " flown by the controller copy (gains " + r.gain_set +
-                            ") on phi_sp of " + r.source;
+  const std::string title = "closed-loop validation: " + r.model + " flown by the controller copy (gains " +
+                            r.gain_set + ") on phi_sp of " + r.source;
   // Residual autocorrelation of each simulated signal (thesis Figs C.4-C.9), lags as for the
   // identification's 9 Hz data.
   std::vector<OutputFit> fits;

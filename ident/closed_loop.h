@@ -21,10 +21,10 @@
 namespace nimble::ident {
 
 struct ClosedLoopOptions {
-  ControllerConfig controller;    ///< the controller copy (rate = data grid rate)
-  std::string gain_set = "fast";  ///< roll gain set flown
-  double flap_gain_per_s = 8.97;  ///< flap actuator numerator (thesis Eq 33) [1/s]
-  double flap_pole_radps = 12.56; ///< flap actuator pole (thesis Eq 33) [rad/s]
+  ControllerConfig controller;                          ///< the controller copy (rate = data grid rate)
+  std::string gain_set = "fast";                        ///< roll gain set flown
+  double flap_gain_per_s = 8.97;                        ///< flap actuator numerator (thesis Eq 33) [1/s]
+  double flap_pole_radps = 12.56;                       ///< flap actuator pole (thesis Eq 33) [rad/s]
   Interpolation interpolation = Interpolation::kCubic;  ///< resampling onto the controller's rate
 };
 
@@ -36,8 +36,8 @@ struct ClosedLoopResult {
   Eigen::VectorXd t_s;
   /// Measured and simulated p [rad/s], v [m/s], phi [rad], delta_f [rad/s].
   std::map<std::string, Eigen::VectorXd> measured, simulated;
-  Eigen::VectorXd phi_sp;  ///< roll set-point flown [rad]
-  Eigen::VectorXd phi_ref; ///< the controller copy's roll reference (reference generator output) [rad]
+  Eigen::VectorXd phi_sp;   ///< roll set-point flown [rad]
+  Eigen::VectorXd phi_ref;  ///< the controller copy's roll reference (reference generator output) [rad]
   /// Fit of each simulated signal against the measured one (P = 1: nothing fitted).
   std::map<std::string, FitMetrics> fits;
 };

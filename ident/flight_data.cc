@@ -14,7 +14,6 @@
 namespace nimble::ident {
 namespace {
 
-
 std::string trim(const std::string& s) {
   std::size_t a = 0, b = s.size();
   while (a < b && (s[a] == ' ' || s[a] == '\t' || s[a] == '\r')) ++a;
@@ -68,7 +67,8 @@ const std::vector<ChannelSpec>& channel_specs() {
       {"ay", "m/s^2", false, "specific force (body y)"},
       {"az", "m/s^2", false, "specific force (body z)"},
       {"phi_sp", "rad", false, "roll-angle set-point"},
-      {"delta_f_cmd", "rad/s", false, "flapping-frequency difference commanded by the flight board (flap actuator input)"},
+      {"delta_f_cmd", "rad/s", false,
+       "flapping-frequency difference commanded by the flight board (flap actuator input)"},
   };
   return specs;
 }
@@ -102,7 +102,6 @@ std::size_t FlightData::min_samples() const {
   for (const auto& [name, c] : channels) n = std::min(n, c.values.size());
   return n;
 }
-
 
 FlightData parse_flight_csv(const std::string& text, const std::string& source) {
   // A UTF-8 byte order mark (spreadsheet programs write one) is not part of the first name.
@@ -154,8 +153,8 @@ FlightData parse_flight_csv(const std::string& text, const std::string& source) 
   }
   if (!missing.empty()) {
     throw DataError(source, header_line, -1, missing.front(),
-                    std::string(missing.size() == 1 ? "missing required column" : "missing required columns") +
-                        " " + join(missing));
+                    std::string(missing.size() == 1 ? "missing required column" : "missing required columns") + " " +
+                        join(missing));
   }
 
   std::vector<std::vector<double>> columns(header.size());
@@ -171,9 +170,9 @@ FlightData parse_flight_csv(const std::string& text, const std::string& source) 
     ++row;
     const std::vector<std::string> cells = split_cells(t);
     if (cells.size() != header.size()) {
-      throw DataError(source, line_no, row, "",
-                      "has " + std::to_string(cells.size()) + " cells, the header has " +
-                          std::to_string(header.size()));
+      throw DataError(
+          source, line_no, row, "",
+          "has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
     }
     for (std::size_t i = 0; i < cells.size(); ++i) {
       const std::string& cell = cells[i];
@@ -257,9 +256,7 @@ std::string format_flight_csv(const FlightData& data) {
   return out.str();
 }
 
-void write_flight_csv(const FlightData& data, const std::string& file) {
-  write_file(file, format_flight_csv(data));
-}
+void write_flight_csv(const FlightData& data, const std::string& file) { write_file(file, format_flight_csv(data)); }
 
 namespace {
 
@@ -269,9 +266,9 @@ void check_time_at(const std::string& source, const std::string& column, const s
   const int sample = static_cast<int>(k) + 1;
   if (!std::isfinite(t_s[k])) throw DataError(source, -1, sample, column, "sample is not a finite number");
   if (k > 0 && !(t_s[k] > t_s[k - 1])) {
-    throw DataError(source, -1, sample, column,
-                    "time " + format_number(t_s[k]) + " s does not increase (previous " + format_number(t_s[k - 1]) +
-                        " s)");
+    throw DataError(
+        source, -1, sample, column,
+        "time " + format_number(t_s[k]) + " s does not increase (previous " + format_number(t_s[k - 1]) + " s)");
   }
 }
 
@@ -291,8 +288,8 @@ FlightData flight_data_from_columns(const std::string& source, const std::vector
       throw std::invalid_argument(source + ": unknown channel '" + name + "' (known: " + join(known) + ")");
     }
     if (values.size() != t_s.size()) {
-      throw std::invalid_argument(source + ": '" + name + "' has " + std::to_string(values.size()) + " samples, 't' has " +
-                                  std::to_string(t_s.size()));
+      throw std::invalid_argument(source + ": '" + name + "' has " + std::to_string(values.size()) +
+                                  " samples, 't' has " + std::to_string(t_s.size()));
     }
     out.channels[name] = Channel{t_s, std::move(values)};
   }
@@ -309,8 +306,7 @@ void validate_flight_data(const FlightData& data) {
   for (const auto& [name, c] : data.channels) {
     if (c.t_s.size() != c.values.size()) {
       throw DataError(data.source, -1, -1, name,
-                      std::to_string(c.values.size()) + " values but " + std::to_string(c.t_s.size()) +
-                          " time stamps");
+                      std::to_string(c.values.size()) + " values but " + std::to_string(c.t_s.size()) + " time stamps");
     }
     for (std::size_t k = 0; k < c.values.size(); ++k) {
       if (!std::isfinite(c.values[k])) {

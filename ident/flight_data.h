@@ -70,7 +70,6 @@ struct FlightData {
 /// Error in flight data (core/data_error.h).
 using DataError = ::nimble::DataError;
 
-
 /// Parses CSV text (format above); `source` names it in errors.
 /// @throws DataError on a missing required column, an unknown or duplicate
 ///         column, a row with the wrong number of cells, an empty,

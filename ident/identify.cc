@@ -39,7 +39,8 @@ void require_channels(const FlightData& data, const std::vector<std::string>& na
   if (missing.empty()) return;
   std::string list;
   for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
-  throw DataError(data.source, -1, -1, missing.front(), why + " needs column" + (missing.size() > 1 ? "s " : " ") + list);
+  throw DataError(data.source, -1, -1, missing.front(),
+                  why + " needs column" + (missing.size() > 1 ? "s " : " ") + list);
 }
 
 std::vector<TimeRange> runs(const UniformData& data, const std::vector<bool>& mask, double min_length_s) {
@@ -122,10 +123,10 @@ std::vector<std::pair<Eigen::Index, Eigen::Index>> sample_ranges(const UniformDa
   if (n == 0) return out;
   const double t0 = data.t_s[0];
   for (const auto& r : ranges) {
-    const Eigen::Index a = std::clamp<Eigen::Index>(
-        static_cast<Eigen::Index>(std::ceil((r.start_s - t0) * data.rate_hz - 1e-9)), 0, n);
-    const Eigen::Index b = std::clamp<Eigen::Index>(
-        static_cast<Eigen::Index>(std::floor((r.end_s - t0) * data.rate_hz + 1e-9)) + 1, a, n);
+    const Eigen::Index a =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil((r.start_s - t0) * data.rate_hz - 1e-9)), 0, n);
+    const Eigen::Index b =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor((r.end_s - t0) * data.rate_hz + 1e-9)) + 1, a, n);
     if (b > a) out.push_back({a, b});
   }
   return out;
@@ -193,8 +194,8 @@ std::vector<Equation> lateral_equations(Structure structure, const std::vector<s
   for (const auto& in : inputs) {
     if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
   }
-  std::vector<std::string> regressors = structure == Structure::kLateral4 ? std::vector<std::string>{"p", "r", "v"}
-                                                                          : std::vector<std::string>{"p", "v"};
+  std::vector<std::string> regressors =
+      structure == Structure::kLateral4 ? std::vector<std::string>{"p", "r", "v"} : std::vector<std::string>{"p", "v"};
   for (const auto& in : inputs) regressors.push_back(in);
   std::vector<Equation> eqs;
   for (const auto& letter : letters) {
@@ -275,11 +276,14 @@ Eigen::VectorXd term_column(const UniformData& data, const Term& term) {
   std::vector<const std::vector<double>*> columns;
   for (const auto& v : values) columns.push_back(&v);
   std::vector<double> out = evaluate_along(term.expression, names, columns, 1.0 / data.rate_hz);
-  if (names.empty()) out.assign(static_cast<std::size_t>(data.size()), TermProgram(term.expression, {}).evaluate(nullptr));
+  if (names.empty())
+    out.assign(static_cast<std::size_t>(data.size()), TermProgram(term.expression, {}).evaluate(nullptr));
   return Eigen::Map<const Eigen::VectorXd>(out.data(), static_cast<Eigen::Index>(out.size()));
 }
 
-void add_term_column(UniformData& data, const Term& term) { data.signals[term_signal_column(term)] = term_column(data, term); }
+void add_term_column(UniformData& data, const Term& term) {
+  data.signals[term_signal_column(term)] = term_column(data, term);
+}
 
 namespace {
 
@@ -300,11 +304,12 @@ void choose_inputs(const FlightData& data, const IdentOptions& options, IdentRes
 
 /// The structure's equations with the extra regressors and terms; throws if the data are too few
 /// for their parameters.
-std::vector<Equation> equations_for(const FlightData& data, const Vehicle& vehicle, const std::vector<std::string>& inputs,
-                                    const IdentOptions& options) {
+std::vector<Equation> equations_for(const FlightData& data, const Vehicle& vehicle,
+                                    const std::vector<std::string>& inputs, const IdentOptions& options) {
   std::vector<Equation> equations = lateral_equations(options.structure, inputs, vehicle);
   for (const auto& extra : options.extra_regressors) {
-    auto it = std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == extra.equation; });
+    auto it =
+        std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == extra.equation; });
     if (it == equations.end()) {
       throw std::invalid_argument("extra regressor '" + extra.signal + "': structure " + to_string(options.structure) +
                                   " has no equation '" + extra.equation + "'");
@@ -313,7 +318,8 @@ std::vector<Equation> equations_for(const FlightData& data, const Vehicle& vehic
     it->parameters.push_back(extra.equation + "_" + extra.signal);
   }
   for (const auto& term : options.terms) {
-    auto it = std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == term.equation; });
+    auto it =
+        std::find_if(equations.begin(), equations.end(), [&](const Equation& e) { return e.name == term.equation; });
     if (it == equations.end()) {
       throw std::invalid_argument("term '" + term_parameter_name(term) + "' (" + term.where + "): structure " +
                                   to_string(options.structure) + " has no equation '" + term.equation + "'");
@@ -344,8 +350,8 @@ void fit_outputs(const IdentOptions& options, IdentResult& res) {
     fit.measured = eq.y / eq.equation.scale;
     fit.estimated = eq.fitted / eq.equation.scale;
     fit.metrics = fit_metrics(fit.measured, fit.estimated, static_cast<int>(eq.theta.size()));
-    fit.whiteness = residual_whiteness(fit.measured - fit.estimated, res.data.filtered.rate_hz,
-                                       options.whiteness_lags, lag_step);
+    fit.whiteness =
+        residual_whiteness(fit.measured - fit.estimated, res.data.filtered.rate_hz, options.whiteness_lags, lag_step);
     res.fits.push_back(std::move(fit));
   }
 }
@@ -404,8 +410,10 @@ void add_state_psds(const IdentOptions& options, IdentResult& res) {
                     part, part, options.segments.min_length_s, std::string(part) == "hover" ? "<=" : ">",
                     options.segments.active_threshold_rad, options.segments.margin_s, length_s);
     } else if (res.segments.how == "whole record") {
-      std::snprintf(buf, sizeof buf, "%s PSD skipped: without phi_sp the whole record (%.2f s) is the manoeuvre; "
-                    "--hover A:B gives a hover part", part, length_s);
+      std::snprintf(buf, sizeof buf,
+                    "%s PSD skipped: without phi_sp the whole record (%.2f s) is the manoeuvre; "
+                    "--hover A:B gives a hover part",
+                    part, length_s);
     } else {
       std::snprintf(buf, sizeof buf, "%s PSD skipped: no %s range given, or none holds a segment of 8 samples", part,
                     part);
@@ -424,8 +432,7 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
   if (oe.coloured_block == 0) {
     oe.coloured_block = static_cast<Eigen::Index>(4 * coloured_lags(options.coloured_lags, options.processing));
   }
-  const OutputErrorResult r =
-      output_error(res.data.filtered, equations, options.trim, vehicle.gravity_mps2, start, oe);
+  const OutputErrorResult r = output_error(res.data.filtered, equations, options.trim, vehicle.gravity_mps2, start, oe);
   RegressionResult& g = res.regression;
   g.method = Method::kOutputError;
   g.covariance = r.covariance;
@@ -439,7 +446,8 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
     eq.sigma_coloured = r.covariance_coloured.block(off, off, k, k).diagonal().cwiseMax(0.0).cwiseSqrt();
     eq.correlation = correlation_of(eq.covariance);
     Eigen::MatrixXd X(eq.y.size(), k);
-    for (Eigen::Index j = 0; j < k; ++j) X.col(j) = res.data.filtered.at(eq.equation.regressors[static_cast<std::size_t>(j)]);
+    for (Eigen::Index j = 0; j < k; ++j)
+      X.col(j) = res.data.filtered.at(eq.equation.regressors[static_cast<std::size_t>(j)]);
     eq.fitted = X * eq.theta;
     eq.residual = eq.y - eq.fitted;
     eq.residual_variance = eq.residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, eq.y.size() - k));
@@ -449,8 +457,8 @@ void refine_by_output_error(const IdentOptions& options, const Vehicle& vehicle,
   std::snprintf(buf, sizeof buf,
                 "output error: %d segments of %.3g s, %d iterations (%s), weighted cost %.4g -> %.4g from the "
                 "equation error's values; constant accelerations fitted beside: p %.3g rad/s^2, v %.3g m/s^2",
-                r.segments, oe.segment_s, r.iterations, r.converged ? "converged" : "not converged", r.cost_start, r.cost,
-                r.bias_p, r.bias_v);
+                r.segments, oe.segment_s, r.iterations, r.converged ? "converged" : "not converged", r.cost_start,
+                r.cost, r.bias_p, r.bias_v);
   res.notes.push_back(buf);
 }
 

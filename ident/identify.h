@@ -86,8 +86,8 @@ struct IdentOptions {
   std::vector<std::string> inputs;
   Trim trim;  ///< u0 [m/s] (lateral4 only), w0 [m/s], theta0, phi0 [rad] of Eq 21 / C.10
   ProcessingOptions processing;
-  double wls_window_s = 2.0;        ///< WLS residual-covariance window [s], > 0
-  bool wls_cross_equation = true;   ///< see WlsOptions
+  double wls_window_s = 2.0;       ///< WLS residual-covariance window [s], > 0
+  bool wls_cross_equation = true;  ///< see WlsOptions
   double correlation_threshold = 0.9;
   /// Bartlett lags of the coloured-residual covariance [samples]; 0:
   /// 4 rate / (2 cutoff), four correlation times of band-limited residuals.
@@ -96,7 +96,7 @@ struct IdentOptions {
   std::size_t whiteness_lag_step = 0;  ///< samples per lag; 0: round(rate / (2 cutoff))
   double psd_segment_s = 2.0;          ///< Welch segment length [s]
   SegmentOptions segments;
-  std::string model_name;              ///< name of the identified model; empty: from the source
+  std::string model_name;  ///< name of the identified model; empty: from the source
   /// Called with the prepared (filtered) signals before the regression, to
   /// add signals for extra regressors.
   std::function<void(UniformData&)> add_signals;
@@ -159,8 +159,8 @@ Eigen::VectorXd term_column(const UniformData& data, const Term& term);
 
 /// A measured output and its estimate.
 struct OutputFit {
-  std::string output;   ///< e.g. "p_dot", "v_dot_star"
-  std::string unit;     ///< e.g. "rad/s^2"
+  std::string output;  ///< e.g. "p_dot", "v_dot_star"
+  std::string unit;    ///< e.g. "rad/s^2"
   Eigen::VectorXd measured;
   Eigen::VectorXd estimated;
   FitMetrics metrics;

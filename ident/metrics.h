@@ -47,16 +47,16 @@ FitMetrics fit_metrics(const Eigen::VectorXd& measured, const Eigen::VectorXd& e
 /// A residual too short for max_lag lags after decimation is not tested: `tested` is false and
 /// `note` says how long a record the test needs (never an error: the rest of a report stands).
 struct Whiteness {
-  bool tested = true;            ///< false: too few samples for the lags; only `note` (and lags, lag_step) hold
-  std::string note;              ///< why it was not tested, with the record length it needs ("" if tested)
-  Eigen::VectorXd rho;           ///< autocorrelation at lags 0..max_lag (rho[0] = 1)
-  std::size_t lag_step = 1;      ///< samples per lag
-  double lag_step_s = 0.0;       ///< seconds per lag
-  double bound = 0.0;            ///< 1.96 / sqrt(N_d)
-  std::size_t lags = 0;          ///< lags tested (1..lags)
-  std::size_t outside = 0;       ///< lags with |rho| > bound
-  double fraction_outside = 0.0; ///< outside / lags
-  double allowed_fraction = 0.0; ///< the verdict's limit on fraction_outside
+  bool tested = true;             ///< false: too few samples for the lags; only `note` (and lags, lag_step) hold
+  std::string note;               ///< why it was not tested, with the record length it needs ("" if tested)
+  Eigen::VectorXd rho;            ///< autocorrelation at lags 0..max_lag (rho[0] = 1)
+  std::size_t lag_step = 1;       ///< samples per lag
+  double lag_step_s = 0.0;        ///< seconds per lag
+  double bound = 0.0;             ///< 1.96 / sqrt(N_d)
+  std::size_t lags = 0;           ///< lags tested (1..lags)
+  std::size_t outside = 0;        ///< lags with |rho| > bound
+  double fraction_outside = 0.0;  ///< outside / lags
+  double allowed_fraction = 0.0;  ///< the verdict's limit on fraction_outside
   bool white = false;
 };
 

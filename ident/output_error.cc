@@ -16,19 +16,19 @@ using Eigen::VectorXd;
 /// The linear model x_dot = A x + B u of the parameters, states (p, v, phi).
 struct Linear {
   Eigen::Matrix3d A;
-  MatrixXd B;  // 3 x inputs
+  MatrixXd B;                                      // 3 x inputs
   Eigen::Vector3d bias = Eigen::Vector3d::Zero();  // constant accelerations of p and v
 };
 
 /// What the simulation needs of the record and the equations.
 struct Problem {
-  std::vector<std::string> inputs;         // in the L equation's regressor order
-  std::vector<Index> L_index, Y_index;     // per regressor of each equation: 0 p, 1 v, 2 + input
+  std::vector<std::string> inputs;      // in the L equation's regressor order
+  std::vector<Index> L_index, Y_index;  // per regressor of each equation: 0 p, 1 v, 2 + input
   double sL = 1.0, sY = 1.0, w0 = 0.0, g_phi = 0.0, dt = 0.0;
-  MatrixXd U;                              // samples x inputs
-  MatrixXd Y;                              // samples x 3: measured p, v, phi
+  MatrixXd U;                                     // samples x inputs
+  MatrixXd Y;                                     // samples x 3: measured p, v, phi
   std::vector<std::pair<Index, Index>> segments;  // [first, last)
-  Index nL = 0;                            // parameters of L (then those of Y)
+  Index nL = 0;                                   // parameters of L (then those of Y)
 };
 
 /// 0 for p, 1 for v, 2 + its column for any other regressor: an input, or an extra regressor or
@@ -101,7 +101,8 @@ Problem problem_of(const UniformData& d, const std::vector<Equation>& equations,
   const Index n = d.size();
   P.U.resize(n, static_cast<Index>(P.inputs.size()));
   for (std::size_t i = 0; i < P.inputs.size(); ++i) {
-    if (!d.has(P.inputs[i])) throw std::invalid_argument("output error: the record has no signal '" + P.inputs[i] + "'");
+    if (!d.has(P.inputs[i]))
+      throw std::invalid_argument("output error: the record has no signal '" + P.inputs[i] + "'");
     P.U.col(static_cast<Index>(i)) = d.at(P.inputs[i]);
   }
   P.Y.resize(n, 3);
@@ -163,11 +164,13 @@ OutputErrorResult output_error(const UniformData& data, const std::vector<Equati
   // through the whole segment, amplified by the unstable mode.
   const Index q = nd + 2 + 3 * ns;
   VectorXd theta = VectorXd::Zero(q);
-  for (Index i = 0; i < ns; ++i) theta.segment(nd + 2 + 3 * i, 3) = P.Y.row(P.segments[static_cast<std::size_t>(i)].first).transpose();
+  for (Index i = 0; i < ns; ++i)
+    theta.segment(nd + 2 + 3 * i, 3) = P.Y.row(P.segments[static_cast<std::size_t>(i)].first).transpose();
   for (Index j = 0; j < nd; ++j) {
     const auto it = start.find(res.parameter_names[static_cast<std::size_t>(j)]);
     if (it == start.end()) {
-      throw std::invalid_argument("output error: no start value of " + res.parameter_names[static_cast<std::size_t>(j)]);
+      throw std::invalid_argument("output error: no start value of " +
+                                  res.parameter_names[static_cast<std::size_t>(j)]);
     }
     theta[j] = it->second;
   }
@@ -179,7 +182,8 @@ OutputErrorResult output_error(const UniformData& data, const std::vector<Equati
   const auto residuals = [&](const VectorXd& th) {
     const Linear lin = linear_of(P, th.head(nd + 2));
     MatrixXd X(P.Y.rows(), 3);
-    for (Index i = 0; i < ns; ++i) simulate_segment(P, lin, static_cast<std::size_t>(i), th.segment(nd + 2 + 3 * i, 3), X);
+    for (Index i = 0; i < ns; ++i)
+      simulate_segment(P, lin, static_cast<std::size_t>(i), th.segment(nd + 2 + 3 * i, 3), X);
     return MatrixXd(P.Y.middleRows(first, ns * len) - X.middleRows(first, ns * len));
   };
   MatrixXd E = residuals(theta);

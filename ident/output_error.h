@@ -41,10 +41,11 @@
 namespace nimble::ident {
 
 struct OutputErrorOptions {
-  double segment_s = 2.0;       ///< multiple-shooting segment [s], > 0
+  double segment_s = 2.0;  ///< multiple-shooting segment [s], > 0
   int max_iterations = 40;
-  double tolerance = 1e-9;      ///< relative fall of the cost below which the fit has converged
-  Eigen::Index coloured_block = 0;  ///< batch length of the coloured bounds [samples]; 0: 64 (rig identify: 4 x its coloured lags)
+  double tolerance = 1e-9;  ///< relative fall of the cost below which the fit has converged
+  Eigen::Index coloured_block =
+      0;  ///< batch length of the coloured bounds [samples]; 0: 64 (rig identify: 4 x its coloured lags)
 };
 
 struct OutputErrorResult {

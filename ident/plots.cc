@@ -50,8 +50,10 @@ std::string plot_derivatives(const fs::path& dir, const Eigen::VectorXd& t, cons
                   f.metrics.rxy, f.metrics.r2, f.metrics.rmse, f.unit.c_str(), f.metrics.rmse_pct_range);
     s << "set title " << gp_quote(sub) << " noenhanced\n";
     s << "set ylabel " << gp_quote(f.output + " [" + f.unit + "]") << " noenhanced\n";
-    s << "plot " << gp_quote(dat.string()) << " using 1:" << 2 + 2 * i << " with lines lw 1.2 lc rgb '#1f77b4' title 'measured', \\\n"
-      << "     '' using 1:" << 3 + 2 * i << " with lines lw 1.2 lc rgb '#d62728' title " << gp_quote(model_label) << "\n";
+    s << "plot " << gp_quote(dat.string()) << " using 1:" << 2 + 2 * i
+      << " with lines lw 1.2 lc rgb '#1f77b4' title 'measured', \\\n"
+      << "     '' using 1:" << 3 + 2 * i << " with lines lw 1.2 lc rgb '#d62728' title " << gp_quote(model_label)
+      << "\n";
   }
   s << "unset multiplot\n";
   run_gnuplot(dir, "derivatives", s.str());
@@ -67,7 +69,8 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   for (const auto& f : fits) {
     data << "# " << f.output << "\n";
     for (Eigen::Index k = 0; k < f.whiteness.rho.size(); ++k) {
-      data << gp_number(static_cast<double>(k) * f.whiteness.lag_step_s) << " " << gp_number(f.whiteness.rho[k]) << "\n";
+      data << gp_number(static_cast<double>(k) * f.whiteness.lag_step_s) << " " << gp_number(f.whiteness.rho[k])
+           << "\n";
     }
     data << "\n\n";
   }
@@ -78,7 +81,8 @@ std::string plot_autocorrelation(const fs::path& dir, const std::vector<OutputFi
   s << png_terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title " << gp_quote(title) << "\n";
   double max_lag_s = 0.0;
-  for (const auto& f : fits) max_lag_s = std::max(max_lag_s, static_cast<double>(f.whiteness.lags) * f.whiteness.lag_step_s);
+  for (const auto& f : fits)
+    max_lag_s = std::max(max_lag_s, static_cast<double>(f.whiteness.lags) * f.whiteness.lag_step_s);
   s << "set grid\nset yrange [-1.05:1.05]\nset xrange [0:" << gp_number(max_lag_s) << "]\n";
   s << "set xlabel 'lag [s]'\nset ylabel 'autocorrelation'\nset key top right\n";
   for (int i = 0; i < n; ++i) {
@@ -121,7 +125,8 @@ std::string plot_psd(const fs::path& dir, const IdentResult& r) {
       const bool have = (psd == &p.hover) ? p.has_hover : p.has_manoeuvre;
       data << "# " << p.state << (psd == &p.hover ? " hover" : " manoeuvre") << "\n";
       if (have) {
-        for (Eigen::Index k = 1; k < psd->psd.size(); ++k) data << gp_number(psd->f_hz[k]) << " " << gp_number(psd->psd[k]) << "\n";
+        for (Eigen::Index k = 1; k < psd->psd.size(); ++k)
+          data << gp_number(psd->f_hz[k]) << " " << gp_number(psd->psd[k]) << "\n";
       } else {
         data << "NaN NaN\n";
       }
@@ -136,14 +141,15 @@ std::string plot_psd(const fs::path& dir, const IdentResult& r) {
   std::ostringstream s;
   s << png_terminal(1000, 300 * n) << "set output " << gp_quote(png.string()) << "\n";
   s << "set multiplot layout " << n << ",1 title "
-    << gp_quote("state PSDs (Welch, Hann, 50 % overlap; unfiltered), hover vs manoeuvre; segments by " +
-                r.segments.how)
+    << gp_quote("state PSDs (Welch, Hann, 50 % overlap; unfiltered), hover vs manoeuvre; segments by " + r.segments.how)
     << "\n";
-  s << "set grid\nset logscale y\nset format y '%.0e'\nset xrange [0:" << gp_number(fmax) << "]\nset xlabel 'frequency [Hz]'\n";
+  s << "set grid\nset logscale y\nset format y '%.0e'\nset xrange [0:" << gp_number(fmax)
+    << "]\nset xlabel 'frequency [Hz]'\n";
   if (r.options.processing.filter_order > 0) {
     s << "set arrow 1 from " << gp_number(cutoff) << ", graph 0 to " << gp_number(cutoff)
       << ", graph 1 nohead dt 2 lc rgb '#2ca02c'\n";
-    s << "set label 1 'cut-off " << gp_number(cutoff) << " Hz' at " << gp_number(cutoff) << ", graph 0.92 offset 0.5,0 tc rgb '#2ca02c'\n";
+    s << "set label 1 'cut-off " << gp_number(cutoff) << " Hz' at " << gp_number(cutoff)
+      << ", graph 0.92 offset 0.5,0 tc rgb '#2ca02c'\n";
   }
   for (int i = 0; i < n; ++i) {
     const StatePsd& p = r.psd[static_cast<std::size_t>(i)];
@@ -174,11 +180,13 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
   s << png_terminal(700, 600) << "set output " << gp_quote(png.string()) << "\n";
   s << "set title " << gp_quote("eigenvalues of the identified model (" + r.model.name + ")") << " noenhanced\n";
   s << "set grid\nset xlabel 'real [1/s]'\nset ylabel 'imaginary [rad/s]'\n";
-  s << "set xrange [" << gp_number(-lim) << ":" << gp_number(lim) << "]\nset yrange [" << gp_number(-lim) << ":" << gp_number(lim) << "]\n";
+  s << "set xrange [" << gp_number(-lim) << ":" << gp_number(lim) << "]\nset yrange [" << gp_number(-lim) << ":"
+    << gp_number(lim) << "]\n";
   s << "set size ratio -1\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n";
   // The legend below the axes: a cross inside them would read as one more pole.
   s << "set key outside below center\n";
-  s << "plot " << gp_quote(dat.string()) << " using 1:2 with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'identified eigenvalue'\n";
+  s << "plot " << gp_quote(dat.string())
+    << " using 1:2 with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'identified eigenvalue'\n";
   run_gnuplot(dir, "eigenvalues", s.str());
   return png.string();
 }
@@ -187,8 +195,8 @@ std::string plot_eigenvalues(const fs::path& dir, const IdentResult& r) {
 
 std::vector<std::string> plot_identification(const IdentResult& result, const std::string& dir) {
   const fs::path d = plots::plot_dir(dir);
-  const std::string what = result.source + ": " + to_string(result.options.structure) + ", " +
-                           to_string(result.options.method);
+  const std::string what =
+      result.source + ": " + to_string(result.options.structure) + ", " + to_string(result.options.method);
   return {plot_derivatives(d, result.data.filtered.t_s, result.fits, "identification " + what, "estimated"),
           plot_autocorrelation(d, result.fits, "residual autocorrelation, " + what), plot_psd(d, result),
           plot_eigenvalues(d, result)};

@@ -88,8 +88,7 @@ QrSolution solve_qr(const Design& d, const Equation& eq) {
   QrSolution s;
   s.theta = qr.solve(d.y).cwiseQuotient(norms);
   const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(p, p).template triangularView<Eigen::Upper>();
-  const Eigen::MatrixXd Rinv =
-      R.template triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(p, p));
+  const Eigen::MatrixXd Rinv = R.template triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(p, p));
   const Eigen::MatrixXd perm = qr.colsPermutation();
   const Eigen::MatrixXd inv_n = perm * Rinv * Rinv.transpose() * perm.transpose();  // (Xn'Xn)^-1
   s.xtx_inv = norms.cwiseInverse().asDiagonal() * inv_n * norms.cwiseInverse().asDiagonal();
@@ -199,8 +198,9 @@ RegressionResult gls(const std::vector<Equation>& equations, const std::vector<D
   Eigen::LDLT<Eigen::MatrixXd> ldlt(Ms);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
       ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff()) {
-    throw std::invalid_argument("weighted least squares: the weighted normal equations are singular "
-                                "(regressors linearly dependent or weights degenerate)");
+    throw std::invalid_argument(
+        "weighted least squares: the weighted normal equations are singular "
+        "(regressors linearly dependent or weights degenerate)");
   }
   const Eigen::VectorXd theta = dscale.asDiagonal() * ldlt.solve(dscale.asDiagonal() * b);
   const Eigen::MatrixXd Minv = dscale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(P, P)) * dscale.asDiagonal();
@@ -375,8 +375,8 @@ RegressionResult estimate_gls(const SignalTable& signals, const std::vector<Equa
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::MatrixXd& Wi = weights[static_cast<std::size_t>(i)];
     if (Wi.rows() != ne || Wi.cols() != ne) {
-      throw std::invalid_argument("estimate_gls: weight matrix " + std::to_string(i) + " is not " +
-                                  std::to_string(ne) + " x " + std::to_string(ne));
+      throw std::invalid_argument("estimate_gls: weight matrix " + std::to_string(i) + " is not " + std::to_string(ne) +
+                                  " x " + std::to_string(ne));
     }
     w.col(i) = Eigen::Map<const Eigen::VectorXd>(Wi.data(), ne * ne);
   }

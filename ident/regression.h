@@ -100,14 +100,14 @@ struct ParameterEstimate {
 /// Result of one equation.
 struct EquationResult {
   Equation equation;
-  Eigen::VectorXd theta;        ///< parameters, in regressor order
-  Eigen::VectorXd sigma;        ///< their standard deviations (white residuals)
+  Eigen::VectorXd theta;           ///< parameters, in regressor order
+  Eigen::VectorXd sigma;           ///< their standard deviations (white residuals)
   Eigen::VectorXd sigma_coloured;  ///< their standard deviations (coloured residuals)
-  Eigen::MatrixXd covariance;   ///< of theta (white residuals)
-  Eigen::MatrixXd correlation;  ///< of theta (1 on the diagonal)
-  Eigen::VectorXd y;            ///< scale * dependent
-  Eigen::VectorXd fitted;       ///< X theta
-  Eigen::VectorXd residual;     ///< y - fitted
+  Eigen::MatrixXd covariance;      ///< of theta (white residuals)
+  Eigen::MatrixXd correlation;     ///< of theta (1 on the diagonal)
+  Eigen::VectorXd y;               ///< scale * dependent
+  Eigen::VectorXd fitted;          ///< X theta
+  Eigen::VectorXd residual;        ///< y - fitted
   double residual_variance = 0.0;  ///< residual' residual / (N - p)
 };
 

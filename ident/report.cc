@@ -33,8 +33,8 @@ double phase_deg(const std::complex<double>& z) {
 double pct(double sigma, double value) { return value != 0.0 ? 100.0 * sigma / std::fabs(value) : INFINITY; }
 
 std::string metrics_text(const std::vector<OutputFit>& fits) {
-  std::string out = fmt("  %-12s %8s %8s %12s %-8s %10s %10s\n", "output", "r_xy", "R2", "RMSE", "unit", "range",
-                        "RMSE[%rng]");
+  std::string out =
+      fmt("  %-12s %8s %8s %12s %-8s %10s %10s\n", "output", "r_xy", "R2", "RMSE", "unit", "range", "RMSE[%rng]");
   for (const auto& f : fits) {
     out += fmt("  %-12s %8.4f %8.4f %12.4g %-8s %10.4g %10.2f\n", f.output.c_str(), f.metrics.rxy, f.metrics.r2,
                f.metrics.rmse, f.unit.c_str(), f.metrics.range, f.metrics.rmse_pct_range);
@@ -48,9 +48,10 @@ std::string whiteness_text(const std::vector<OutputFit>& fits) {
   if (!fits.empty() && !fits.front().whiteness.tested) return "  " + fits.front().whiteness.note + "\n";
   if (!fits.empty()) {
     const Whiteness& w = fits.front().whiteness;
-    out += fmt("  (residual decimated to lags of %zu samples = %.4f s; %zu lags; 95 %% bounds +-1.96/sqrt(N);"
-               " white if at most %.0f %% of the lags lie outside)\n",
-               w.lag_step, w.lag_step_s, w.lags, 100.0 * w.allowed_fraction);
+    out +=
+        fmt("  (residual decimated to lags of %zu samples = %.4f s; %zu lags; 95 %% bounds +-1.96/sqrt(N);"
+            " white if at most %.0f %% of the lags lie outside)\n",
+            w.lag_step, w.lag_step_s, w.lags, 100.0 * w.allowed_fraction);
   }
   out += fmt("  %-12s %8s %8s %10s  %s\n", "output", "bound", "outside", "fraction", "verdict");
   for (const auto& f : fits) {
@@ -226,9 +227,10 @@ std::string identification_text(const IdentResult& r) {
              d.size() > 0 ? d.t_s[d.size() - 1] - d.t_s[0] : 0.0);
   const std::string interpolation = to_string(o.processing.interpolation);
   if (o.processing.filter_order > 0) {
-    out += fmt("processing %s resampling; zero-phase Butterworth low-pass, order %d, cut-off %.4g Hz;"
-               " 4th-order central differences\n",
-               interpolation.c_str(), o.processing.filter_order, o.processing.cutoff_hz);
+    out +=
+        fmt("processing %s resampling; zero-phase Butterworth low-pass, order %d, cut-off %.4g Hz;"
+            " 4th-order central differences\n",
+            interpolation.c_str(), o.processing.filter_order, o.processing.cutoff_hz);
   } else {
     out += fmt("processing %s resampling, no low-pass; 4th-order central differences\n", interpolation.c_str());
   }
@@ -245,9 +247,9 @@ std::string identification_text(const IdentResult& r) {
                        "from the weighted least squares' values)",
                        o.output_error.segment_s)
                        .c_str());
-  out += fmt("vehicle    %s (%s): m = %.2f g, Ixx %.3g, Izz %.3g, Ixz %.3g kg m^2\n", r.vehicle.name.c_str(),
-             r.vehicle.file.c_str(), 1e3 * r.vehicle.mass_kg, r.vehicle.Ixx_kgm2, r.vehicle.Izz_kgm2,
-             r.vehicle.Ixz_kgm2);
+  out +=
+      fmt("vehicle    %s (%s): m = %.2f g, Ixx %.3g, Izz %.3g, Ixz %.3g kg m^2\n", r.vehicle.name.c_str(),
+          r.vehicle.file.c_str(), 1e3 * r.vehicle.mass_kg, r.vehicle.Ixx_kgm2, r.vehicle.Izz_kgm2, r.vehicle.Ixz_kgm2);
   out += fmt("trim       u0 %.4g m/s, w0 %.4g m/s, theta0 %.4g rad, phi0 %.4g rad\n\n", r.model.trim.u0_mps,
              r.model.trim.w0_mps, r.model.trim.theta0_rad, r.model.trim.phi0_rad);
 
@@ -274,8 +276,8 @@ std::string identification_text(const IdentResult& r) {
   for (std::size_t k = 0; k < r.modes.size(); ++k) {
     const Mode& m = r.modes[k];
     out += fmt("  %-3zu %-22s %-12s %-9s %10.3f %7.3f\n", k + 1, complex_text(m.eigenvalue).c_str(),
-               m.oscillatory ? "oscillatory" : "aperiodic", m.stable ? "stable" : "UNSTABLE",
-               m.natural_frequency_radps, m.damping_ratio);
+               m.oscillatory ? "oscillatory" : "aperiodic", m.stable ? "stable" : "UNSTABLE", m.natural_frequency_radps,
+               m.damping_ratio);
   }
   out += "non-dimensional eigenvectors (normalised on the roll angle)\n";
   out += fmt("  %-8s", "state");
@@ -291,8 +293,8 @@ std::string identification_text(const IdentResult& r) {
   }
 
   out += fmt("\nstate PSDs (Welch, unfiltered): hover vs manoeuvre, segments by %s\n", r.segments.how.c_str());
-  out += fmt("  hover %zu segment(s), manoeuvre %zu segment(s)\n", r.segments.hover.size(),
-             r.segments.manoeuvre.size());
+  out +=
+      fmt("  hover %zu segment(s), manoeuvre %zu segment(s)\n", r.segments.hover.size(), r.segments.manoeuvre.size());
   const double fc = o.processing.cutoff_hz;
   out += fmt("  %-8s %-10s %18s %18s %12s\n", "state", "unit", "hover var<=fc", "manoeuvre var<=fc", "ratio");
   for (const auto& p : r.psd) {
@@ -350,7 +352,8 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
 std::string validation_text(const ValidationResult& r) {
   std::string out;
   out += fmt("validate   %s (open loop: state derivatives from the measured states and inputs)\n", r.source.c_str());
-  out += fmt("model      %s (%s), %s\n", r.model.name.c_str(), r.model.file.c_str(), to_string(r.model.structure).c_str());
+  out +=
+      fmt("model      %s (%s), %s\n", r.model.name.c_str(), r.model.file.c_str(), to_string(r.model.structure).c_str());
   out += fmt("vehicle    %s\n", r.vehicle.name.c_str());
   out += fmt("data       %ld samples at %.6g Hz\n\n", static_cast<long>(r.data.size()), r.data.rate_hz);
   out += "accuracy (measured vs predicted state derivatives; R2 with P = 1)\n" + metrics_text(r.fits);

@@ -88,10 +88,15 @@ struct InputOrigin {
   const char* field;
 };
 const InputOrigin kInputFields[] = {
-    {"delta_f", &kActuatorFeedback, "delta_f_radps"}, {"delta_t", &kActuatorFeedback, "throttle_pct"},
-    {"delta_d", &kActuatorFeedback, "dihedral_rad"},  {"delta_w", &kActuatorFeedback, "wing_root_rad"},
-    {"delta_f_cmd", &kActuatorCommand, "delta_f_radps"}, {"phi_sp", &kAttitudeSetpoint, "roll_sp_rad"},
-    {"ax", &kImu, "accel_mps2[0]"}, {"ay", &kImu, "accel_mps2[1]"}, {"az", &kImu, "accel_mps2[2]"},
+    {"delta_f", &kActuatorFeedback, "delta_f_radps"},
+    {"delta_t", &kActuatorFeedback, "throttle_pct"},
+    {"delta_d", &kActuatorFeedback, "dihedral_rad"},
+    {"delta_w", &kActuatorFeedback, "wing_root_rad"},
+    {"delta_f_cmd", &kActuatorCommand, "delta_f_radps"},
+    {"phi_sp", &kAttitudeSetpoint, "roll_sp_rad"},
+    {"ax", &kImu, "accel_mps2[0]"},
+    {"ay", &kImu, "accel_mps2[1]"},
+    {"az", &kImu, "accel_mps2[2]"},
 };
 
 /// Names the origin of every channel of `d` whose states come from `state_channel` ("" : none).
@@ -108,10 +113,14 @@ void set_origin(FlightData& d, const std::string& state_channel) {
 void sensor_origin(FlightData& d) {
   static const std::string kDifferentiated = "position_m (differentiated)";
   const std::tuple<const char*, const std::string*, std::string> fields[] = {
-      {"p", &kImu, "gyro_radps[0]"},           {"q", &kImu, "gyro_radps[1]"},
-      {"r", &kImu, "gyro_radps[2]"},           {"phi", &kMocapPose, "quaternion_wxyz"},
-      {"theta", &kMocapPose, "quaternion_wxyz"}, {"psi", &kMocapPose, "quaternion_wxyz"},
-      {"u", &kMocapPose, kDifferentiated},     {"v", &kMocapPose, kDifferentiated},
+      {"p", &kImu, "gyro_radps[0]"},
+      {"q", &kImu, "gyro_radps[1]"},
+      {"r", &kImu, "gyro_radps[2]"},
+      {"phi", &kMocapPose, "quaternion_wxyz"},
+      {"theta", &kMocapPose, "quaternion_wxyz"},
+      {"psi", &kMocapPose, "quaternion_wxyz"},
+      {"u", &kMocapPose, kDifferentiated},
+      {"v", &kMocapPose, kDifferentiated},
       {"w", &kMocapPose, kDifferentiated},
   };
   for (const auto& [name, channel, field] : fields) {
@@ -121,11 +130,8 @@ void sensor_origin(FlightData& d) {
 
 /// Each state source with its name.
 constexpr std::pair<StateSource, const char*> kStateSourceNames[] = {
-    {StateSource::kAuto, "auto"},
-    {StateSource::kEstimate, "estimate"},
-    {StateSource::kTruth, "truth"},
-    {StateSource::kSmoothed, "smoothed"},
-    {StateSource::kSensors, "sensors"},
+    {StateSource::kAuto, "auto"},         {StateSource::kEstimate, "estimate"}, {StateSource::kTruth, "truth"},
+    {StateSource::kSmoothed, "smoothed"}, {StateSource::kSensors, "sensors"},
 };
 
 }  // namespace
@@ -222,8 +228,8 @@ bool RigLogAssembler::add(const lcmlog::LogEventRecord& event) {
     const double t = static_cast<double>(message.utime) * 1e-6;
     if (!within(*ev, message, t)) return true;
     const ActuatorCommand m = contract::from_message(message);
-    const double df = m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps
-                                                             : m.flap_freq_left_radps - m.flap_freq_right_radps;
+    const double df =
+        m.mode == ActuatorCommand::kModeDeltaF ? m.delta_f_radps : m.flap_freq_left_radps - m.flap_freq_right_radps;
     append(input(kDeltaFCmd, "delta_f_cmd"), t, df);
   } else if (ev->channel == kControllerStatus) {
     if (!gain_set_.empty()) return false;
@@ -296,7 +302,8 @@ FlightData RigLogAssembler::sensor_states(const SmoothingOptions& smoothing) con
   // flight's on-board filtering when it had one).
   static const char* const kRates[] = {"p", "q", "r"};
   for (const ImuSample& m : imu_as_filtered(smoothing).imu) {
-    for (int i = 0; i < 3; ++i) append(states.channels[kRates[i]], 1e-6 * static_cast<double>(m.utime), m.gyro_radps[i]);
+    for (int i = 0; i < 3; ++i)
+      append(states.channels[kRates[i]], 1e-6 * static_cast<double>(m.utime), m.gyro_radps[i]);
   }
   // Attitude and velocity: the rig's differentiator on the frames in the order they were
   // published; a frame's attitude comes out once its velocity window is decided, so sort by time.

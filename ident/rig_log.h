@@ -70,7 +70,6 @@ struct SmoothingOptions {
   std::function<std::int64_t(std::int64_t)> imu_rig_utime;
 };
 
-
 /// The name of a state source as commands and reports print it: "auto", "estimate", "truth",
 /// "smoothed", "sensors".
 const char* state_source_name(StateSource source);
@@ -173,10 +172,10 @@ class RigLogAssembler {
 
   bool smoothing_ = false;
   BoundsTally* beyond_ = nullptr;
-  std::vector<ImuSample> imu_;     ///< for the smoother
-  std::vector<MocapPose> poses_;   ///< for the smoother
+  std::vector<ImuSample> imu_;          ///< for the smoother
+  std::vector<MocapPose> poses_;        ///< for the smoother
   std::vector<FlapFrequencies> flaps_;  ///< ACTUATOR_FB's flapping frequencies, for the IMU filtering
-  lcmlog::LogEventRecord event_;  ///< reused by add(channel, data, ...)
+  lcmlog::LogEventRecord event_;        ///< reused by add(channel, data, ...)
 };
 
 /// Reads a rig log (the LCM log format, through lcmlog::LcmLogReader: damage is never read past).

@@ -130,11 +130,11 @@ Eigen::VectorXd differentiate(const Eigen::VectorXd& x, double rate_hz);
 
 /// Options of the processing chain.
 struct ProcessingOptions {
-  double rate_hz = 512.0;     ///< uniform grid rate [Hz], > 0
+  double rate_hz = 512.0;                               ///< uniform grid rate [Hz], > 0
   Interpolation interpolation = Interpolation::kCubic;  ///< of resample_uniform()
-  int filter_order = 10;      ///< Butterworth order, 1..40; 0 disables the low-pass
-  double cutoff_hz = 9.0;     ///< low-pass cut-off [Hz], in (0, rate/2)
-  std::size_t padding = 0;    ///< filtfilt edge padding [samples]; 0: default_padding()
+  int filter_order = 10;                                ///< Butterworth order, 1..40; 0 disables the low-pass
+  double cutoff_hz = 9.0;                               ///< low-pass cut-off [Hz], in (0, rate/2)
+  std::size_t padding = 0;                              ///< filtfilt edge padding [samples]; 0: default_padding()
 };
 
 /// Every signal of `u` low-pass filtered as `options` says (Butterworth of filter_order at cutoff_hz,

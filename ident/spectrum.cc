@@ -17,7 +17,8 @@ double one_sided(std::size_t k, std::size_t nfft) { return (k == 0 || 2 * k == n
 
 void fft_radix2(std::vector<std::complex<double>>& x) {
   const std::size_t n = x.size();
-  if (!is_power_of_two(n)) throw std::invalid_argument("fft_radix2: size " + std::to_string(n) + " is not a power of two");
+  if (!is_power_of_two(n))
+    throw std::invalid_argument("fft_radix2: size " + std::to_string(n) + " is not a power of two");
   for (std::size_t i = 1, j = 0; i < n; ++i) {  // bit reversal
     std::size_t bit = n >> 1;
     for (; j & bit; bit >>= 1) j ^= bit;
@@ -72,8 +73,7 @@ Psd periodogram(const Eigen::VectorXd& x, double rate_hz) {
   out.psd.resize(static_cast<Eigen::Index>(bins));
   for (std::size_t k = 0; k < bins; ++k) {
     out.f_hz[static_cast<Eigen::Index>(k)] = static_cast<double>(k) * out.df_hz;
-    out.psd[static_cast<Eigen::Index>(k)] =
-        one_sided(k, nfft) * std::norm(buf[k]) / (rate_hz * static_cast<double>(n));
+    out.psd[static_cast<Eigen::Index>(k)] = one_sided(k, nfft) * std::norm(buf[k]) / (rate_hz * static_cast<double>(n));
   }
   return out;
 }
@@ -102,7 +102,8 @@ Psd welch(const Eigen::VectorXd& x, double rate_hz, std::size_t segment_length,
 
   // Periodic Hann window (sums exactly for 50 % overlap).
   Eigen::VectorXd w(seg);
-  for (Eigen::Index i = 0; i < seg; ++i) w[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * static_cast<double>(i) / static_cast<double>(seg));
+  for (Eigen::Index i = 0; i < seg; ++i)
+    w[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * static_cast<double>(i) / static_cast<double>(seg));
   const double w2 = w.squaredNorm();
 
   const std::size_t bins = nseg / 2 + 1;
@@ -114,7 +115,8 @@ Psd welch(const Eigen::VectorXd& x, double rate_hz, std::size_t segment_length,
       const double mean = x.segment(start, seg).mean();
       for (Eigen::Index i = 0; i < seg; ++i) buf[static_cast<std::size_t>(i)] = w[i] * (x[start + i] - mean);
       fft_radix2(buf);
-      for (std::size_t k = 0; k < bins; ++k) acc[static_cast<Eigen::Index>(k)] += one_sided(k, nseg) * std::norm(buf[k]);
+      for (std::size_t k = 0; k < bins; ++k)
+        acc[static_cast<Eigen::Index>(k)] += one_sided(k, nseg) * std::norm(buf[k]);
       ++count;
     }
   }

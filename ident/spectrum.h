@@ -25,10 +25,10 @@ std::size_t next_power_of_two(std::size_t n);
 
 /// A one-sided power spectral density.
 struct Psd {
-  Eigen::VectorXd f_hz;       ///< bin frequencies [Hz]
-  Eigen::VectorXd psd;        ///< [unit^2/Hz]
-  double df_hz = 0.0;         ///< bin spacing [Hz]
-  std::size_t segments = 0;   ///< number of averaged segments (1 for the periodogram)
+  Eigen::VectorXd f_hz;      ///< bin frequencies [Hz]
+  Eigen::VectorXd psd;       ///< [unit^2/Hz]
+  double df_hz = 0.0;        ///< bin spacing [Hz]
+  std::size_t segments = 0;  ///< number of averaged segments (1 for the periodogram)
 
   /// Sum of psd * df over all bins [unit^2]: the variance of the signal.
   double integral() const;

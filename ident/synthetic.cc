@@ -50,9 +50,13 @@ FlightData simulate_synthetic(const DerivativeModel& model, const Vehicle& vehic
   }
   int i_f = -1, i_t = -1;
   for (std::size_t j = 0; j < model.inputs.size(); ++j) {
-    if (model.inputs[j] == "delta_f") i_f = static_cast<int>(j);
-    else if (model.inputs[j] == "delta_t") i_t = static_cast<int>(j);
-    else throw std::invalid_argument("synthetic data: input '" + model.inputs[j] + "' is not simulated (delta_f, delta_t)");
+    if (model.inputs[j] == "delta_f")
+      i_f = static_cast<int>(j);
+    else if (model.inputs[j] == "delta_t")
+      i_t = static_cast<int>(j);
+    else
+      throw std::invalid_argument("synthetic data: input '" + model.inputs[j] +
+                                  "' is not simulated (delta_f, delta_t)");
   }
   if (i_f < 0) throw std::invalid_argument("synthetic data: model " + model.name + " has no delta_f input");
   check_positive(o.duration_s, "duration_s");

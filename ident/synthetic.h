@@ -29,20 +29,20 @@ namespace nimble::ident {
 struct SyntheticOptions {
   double duration_s = 60.0;
   double rate_hz = 512.0;
-  double hover_s = 5.0;                                ///< hover before the first doublet [s]
+  double hover_s = 5.0;  ///< hover before the first doublet [s]
   std::vector<double> doublet_frequencies_hz{7.0, 4.0};
-  double doublet_amplitude_rad = 0.35;                 ///< roll set-point amplitude [rad]
-  double doublet_gap_s = 1.5;                          ///< hover after each doublet [s]
-  double tail_hover_s = 5.0;                           ///< hover at the end [s]
-  double k_phi_radps_per_rad = 112.0;                  ///< PD gain on the roll error
-  double k_p_radps_per_radps = 16.0;                   ///< PD gain on the roll rate
-  double throttle_amplitude_pct = 2.0;                 ///< throttle doublet amplitude [%]
-  double throttle_frequency_hz = 2.0;                  ///< main frequency of the throttle doublets
-  double throttle_period_s = 3.7;                      ///< one throttle doublet every this many s
-  double actuator_pole_radps = 12.56;                  ///< a of a/(s + a)
-  double moment_noise_Nm = 0.0;                        ///< std of the L (and N) disturbance per sample
-  double force_noise_N = 0.0;                          ///< std of the Y disturbance per sample
-  double noise_p_radps = 0.0;                          ///< measurement noise std of p (and r)
+  double doublet_amplitude_rad = 0.35;  ///< roll set-point amplitude [rad]
+  double doublet_gap_s = 1.5;           ///< hover after each doublet [s]
+  double tail_hover_s = 5.0;            ///< hover at the end [s]
+  double k_phi_radps_per_rad = 112.0;   ///< PD gain on the roll error
+  double k_p_radps_per_radps = 16.0;    ///< PD gain on the roll rate
+  double throttle_amplitude_pct = 2.0;  ///< throttle doublet amplitude [%]
+  double throttle_frequency_hz = 2.0;   ///< main frequency of the throttle doublets
+  double throttle_period_s = 3.7;       ///< one throttle doublet every this many s
+  double actuator_pole_radps = 12.56;   ///< a of a/(s + a)
+  double moment_noise_Nm = 0.0;         ///< std of the L (and N) disturbance per sample
+  double force_noise_N = 0.0;           ///< std of the Y disturbance per sample
+  double noise_p_radps = 0.0;           ///< measurement noise std of p (and r)
   double noise_v_mps = 0.0;
   double noise_phi_rad = 0.0;
   double noise_delta_f_radps = 0.0;

@@ -41,13 +41,13 @@ ValidationResult validate_open_loop(const FlightData& data, const DerivativeMode
   for (const auto& term : model.terms) {
     for (const auto& s : term.expression.signals()) {
       if (!d.signals.count(s)) {
-        throw DataError(data.source, -1, -1, s, "model " + model.name + " needs column " + s + " for its term " +
-                                                     term_parameter_name(term));
+        throw DataError(data.source, -1, -1, s,
+                        "model " + model.name + " needs column " + s + " for its term " + term_parameter_name(term));
       }
     }
     add_term_column(d, term);
-    predicted += term.coefficient * term_state_gain(model, vehicle, term.equation) *
-                 d.at(term_signal_column(term)).transpose();
+    predicted +=
+        term.coefficient * term_state_gain(model, vehicle, term.equation) * d.at(term_signal_column(term)).transpose();
   }
 
   const std::size_t lag_step = whiteness_lag_step(options.whiteness_lag_step, options.processing);

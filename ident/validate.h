@@ -30,9 +30,9 @@ struct ValidationResult {
   DerivativeModel model;
   Vehicle vehicle;
   StateSpace state_space;
-  UniformData data;               ///< processed data with "<state>_dot"
-  std::vector<OutputFit> fits;    ///< one per state derivative: "p_dot", "v_dot", "phi_dot", ...
-  std::vector<std::string> notes; ///< diagnostics skipped on a record too short for them (whiteness)
+  UniformData data;                ///< processed data with "<state>_dot"
+  std::vector<OutputFit> fits;     ///< one per state derivative: "p_dot", "v_dot", "phi_dot", ...
+  std::vector<std::string> notes;  ///< diagnostics skipped on a record too short for them (whiteness)
 };
 
 /// Predicts every state derivative of `model` from the measured states and

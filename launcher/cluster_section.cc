@@ -8,7 +8,8 @@ namespace {
 /// Slurm's --time formats: minutes, minutes:seconds, hours:minutes:seconds, days-hours,
 /// days-hours:minutes, days-hours:minutes:seconds.
 bool valid_time_limit(const std::string& t) {
-  static const std::regex re(R"(^(\d+|\d+:\d+|\d+:\d+:\d+|\d+-\d+|\d+-\d+:\d+|\d+-\d+:\d+:\d+|UNLIMITED|unlimited|infinite)$)");
+  static const std::regex re(
+      R"(^(\d+|\d+:\d+|\d+:\d+:\d+|\d+-\d+|\d+-\d+:\d+|\d+-\d+:\d+:\d+|UNLIMITED|unlimited|infinite)$)");
   return std::regex_match(t, re);
 }
 

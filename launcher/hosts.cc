@@ -94,8 +94,9 @@ HostConfig read_host(const Scenario& scenario, ConfigMap& section, const std::st
       host_map.fail("start", "the first host is the launcher's: its processes are started by the launcher");
     }
     if (host.by_hand && host_map.has("address")) {
-      host_map.fail("address", "is the address of the emulated link's end; a host started by hand is a machine of "
-                               "the lab network with its own address");
+      host_map.fail("address",
+                    "is the address of the emulated link's end; a host started by hand is a machine of "
+                    "the lab network with its own address");
     }
     if (host_map.has("address")) {
       host.address = host_map.get_string("address");
@@ -107,8 +108,9 @@ HostConfig read_host(const Scenario& scenario, ConfigMap& section, const std::st
     }
     host_map.finish();
   } else {
-    section.fail(name, "must be a list of processes, e.g. [controller, estimator], or a mapping with "
-                       "processes: (and address: or start:)");
+    section.fail(name,
+                 "must be a list of processes, e.g. [controller, estimator], or a mapping with "
+                 "processes: (and address: or start:)");
   }
   for (const auto& p : listed) {
     if (!scenario.runs(p)) {
@@ -117,10 +119,11 @@ HostConfig read_host(const Scenario& scenario, ConfigMap& section, const std::st
     }
     const auto [it, fresh] = placed.emplace(p, name);
     if (!fresh) {
-      throw ConfigError(scenario.file, list_key, p,
-                        "process '" + p + "' is placed twice (" +
-                            (it->second == name ? "on host '" + name + "'" : "on hosts '" + it->second + "' and '" + name + "'") +
-                            ")");
+      throw ConfigError(
+          scenario.file, list_key, p,
+          "process '" + p + "' is placed twice (" +
+              (it->second == name ? "on host '" + name + "'" : "on hosts '" + it->second + "' and '" + name + "'") +
+              ")");
     }
   }
   if (listed.empty() && i > 0) {
@@ -150,8 +153,8 @@ void check_two_hosts(const Scenario& scenario, const LaunchConfig& launch, const
     const auto it = placed.find(side);
     if (it != placed.end() && it->second != first.name) {
       throw ConfigError(scenario.file, "hosts." + it->second, side,
-                        "the CAN bridge side '" + side + "' must run on the launcher's host '" +
-                            first.name + "' (the first in hosts): the run's virtual CAN interface is created in "
+                        "the CAN bridge side '" + side + "' must run on the launcher's host '" + first.name +
+                            "' (the first in hosts): the run's virtual CAN interface is created in "
                             "that host's network namespace, and a vcan cannot span two hosts");
     }
   }
@@ -164,21 +167,24 @@ void check_two_hosts(const Scenario& scenario, const LaunchConfig& launch, const
     }
     if (launch.lcm_url == "auto" || lcm_url_ttl(launch.lcm_url) < 1) {
       throw ConfigError(scenario.file, "run.lcm_url", launch.lcm_url,
-                        where + ": give the lab network's URL, with ttl >= 1 so that the datagrams leave this "
-                                "machine, e.g. udpm://239.255.76.67:7667?ttl=1");
+                        where +
+                            ": give the lab network's URL, with ttl >= 1 so that the datagrams leave this "
+                            "machine, e.g. udpm://239.255.76.67:7667?ttl=1");
     }
     if (scenario.clock == kClockRealtime) {
       throw ConfigError(scenario.file, "clock", scenario.clock,
-                        where + ": fly it in lockstep; in real time every process keeps the start time, the "
-                                "launcher's CLOCK_MONOTONIC, which another machine does not share");
+                        where +
+                            ": fly it in lockstep; in real time every process keeps the start time, the "
+                            "launcher's CLOCK_MONOTONIC, which another machine does not share");
     }
     return;
   }
   for (const auto& p : launch.external_processes) {
     if (placement.host_index(p) > 0) {
       throw ConfigError(scenario.file, "run.external_processes", p,
-                        "process '" + p + "' runs on the emulated host '" + second.name + "', whose processes the "
-                        "launcher starts in that host's network namespace (on two real machines: start: by_hand)");
+                        "process '" + p + "' runs on the emulated host '" + second.name +
+                            "', whose processes the "
+                            "launcher starts in that host's network namespace (on two real machines: start: by_hand)");
     }
   }
   if (launch.network_namespace == "never") {
@@ -198,8 +204,9 @@ void check_two_hosts(const Scenario& scenario, const LaunchConfig& launch, const
 HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& launch) {
   HostPlacement placement;
   if (!scenario.has_section("hosts")) return placement;
-  const std::string usage = "must be a mapping of host names to the processes each runs, e.g. "
-                            "{sim: [plant, mocap], flight: [controller, estimator]}";
+  const std::string usage =
+      "must be a mapping of host names to the processes each runs, e.g. "
+      "{sim: [plant, mocap], flight: [controller, estimator]}";
   if (!scenario.root["hosts"].IsMap()) {
     throw ConfigError(scenario.file, "hosts", yaml_text(scenario.root["hosts"]), usage);
   }
@@ -207,9 +214,9 @@ HostPlacement host_placement_from(const Scenario& scenario, const LaunchConfig& 
   const std::vector<std::string> names = section.keys();
   if (names.empty()) throw ConfigError(scenario.file, "hosts", "{}", usage);
   if (names.size() > kMaxHosts) {
-    throw ConfigError(scenario.file, "hosts", join(names),
-                      "at most " + std::to_string(kMaxHosts) +
-                          " hosts (the launcher's and one other, joined by one emulated link)");
+    throw ConfigError(
+        scenario.file, "hosts", join(names),
+        "at most " + std::to_string(kMaxHosts) + " hosts (the launcher's and one other, joined by one emulated link)");
   }
   std::map<std::string, std::string> placed;  // process -> host
   for (std::size_t i = 0; i < names.size(); ++i) {
@@ -235,8 +242,9 @@ std::unique_ptr<HostLink> link_hosts(const HostPlacement& placement, bool in_pri
     return nullptr;
   }
   if (!in_private_namespace) {
-    *problem = "a run over two hosts emulates them as network namespaces, and the launcher could not make its own "
-               "(it needs root or unprivileged user namespaces)";
+    *problem =
+        "a run over two hosts emulates them as network namespaces, and the launcher could not make its own "
+        "(it needs root or unprivileged user namespaces)";
     return nullptr;
   }
   return HostLink::create(placement.hosts[0].address, placement.hosts[1].address, problem);
@@ -276,7 +284,8 @@ std::string hosts_hint(const HostPlacement& placement, const std::string& waitin
     for (std::size_t start = 0; start < waiting.size();) {
       const auto end = waiting.find(", ", start);
       if (placement.started_by_hand(waiting.substr(start, end - start))) {
-        return " (host '" + placement.hosts[1].name + "' is started by hand: were its processes started there, "
+        return " (host '" + placement.hosts[1].name +
+               "' is started by hand: were its processes started there, "
                "with the resolved scenario and this run's URL, and does multicast cross the lab network both ways?)";
       }
       if (end == std::string::npos) break;
@@ -290,7 +299,8 @@ std::string hosts_hint(const HostPlacement& placement, const std::string& waitin
     if (end == std::string::npos) break;
     start = end + 2;
   }
-  return " (all on host '" + placement.hosts[1].name + "': nothing of theirs reached the launcher's host over the "
+  return " (all on host '" + placement.hosts[1].name +
+         "': nothing of theirs reached the launcher's host over the "
          "link; multicast must cross it, with ttl >= 1 and a 224.0.0.0/4 route on each end)";
 }
 

@@ -43,8 +43,8 @@ extern "C" void on_inprocess_interrupt(int) {
 struct Process {
   std::string name;
   transport::ProcessNode* node = nullptr;
-  std::function<int()> run;        ///< the lockstep master only: flies the run
-  std::function<void()> finish;    ///< participants: after the run, before their last health report
+  std::function<int()> run;      ///< the lockstep master only: flies the run
+  std::function<void()> finish;  ///< participants: after the run, before their last health report
   std::shared_ptr<void> owner;
 };
 
@@ -100,8 +100,10 @@ Process* build_processes(const Scenario& s, transport::InprocessHub& hub, can::I
   Process* master = nullptr;
   for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus));
   for (auto& p : processes) {
-    if (p.name == "plant") master = &p;
-    else p.node->join_inprocess();
+    if (p.name == "plant")
+      master = &p;
+    else
+      p.node->join_inprocess();
   }
   if (master == nullptr) throw ConfigError(s.file, "processes", "", "a run needs the process plant");
   return master;
@@ -230,7 +232,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   hub.drain();
 
   g_flight_interrupted = 0;
-  struct sigaction sa{}, old_int{}, old_term{};
+  struct sigaction sa {
+  }, old_int{}, old_term{};
   sa.sa_handler = on_inprocess_interrupt;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, &old_int);
@@ -260,8 +263,8 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   if (options.progress && tty) std::fprintf(stderr, "\n");
   if (failure.empty() && master_code != transport::kExitOk) {
     const std::string why = last_fatal_fault(monitor);
-    failure = "the lockstep master (plant) ended with code " + std::to_string(master_code) + " at simulated t = " +
-              std::to_string(monitor.sim_time_s()) + " s" + (why.empty() ? "" : ": " + why);
+    failure = "the lockstep master (plant) ended with code " + std::to_string(master_code) +
+              " at simulated t = " + std::to_string(monitor.sim_time_s()) + " s" + (why.empty() ? "" : ": " + why);
   }
 
   return report_of(plan, options, hub.published(), recorder.get(), monitor, processes, master,

@@ -20,9 +20,9 @@
 namespace nimble::launcher {
 
 struct InprocessOptions {
-  std::string log_file;   ///< the LCM log; empty: none (the monitor still sees every message)
+  std::string log_file;       ///< the LCM log; empty: none (the monitor still sees every message)
   int64_t log_max_bytes = 0;  ///< the log's limit (0: none): reaching it ends the run, as a full disk does
-  bool progress = false;  ///< progress line on stderr
+  bool progress = false;      ///< progress line on stderr
   /// Compute the report's configuration digest (scenario_digest(): the tree and every file it
   /// names, read again); false leaves it empty, for a caller that keeps only the verdict of
   /// many flights of one plan.

@@ -162,8 +162,7 @@ int run_scenario(const RunOptions& options) {
   resolved.log_file = log_file_for(plan, options);
   // A log that will not fit is refused now, not found cut after the flight.
   if (options.space_check || options.log_max_bytes > 0) {
-    const std::string problem =
-        log_space_problem(plan, resolved.log_file, options.log_max_bytes, options.space_check);
+    const std::string problem = log_space_problem(plan, resolved.log_file, options.log_max_bytes, options.space_check);
     if (!problem.empty()) {
       std::cerr << "rig run: refused: " << problem << "\n";
       return kRunBadInput;
@@ -189,8 +188,12 @@ namespace {
 class ProcessRun {
  public:
   ProcessRun(RunPlan& plan, const RunOptions& options)
-      : plan_(plan), options_(options), scenario_(plan.scenario), lc_(plan.launch),
-        lockstep_(plan.scenario.clock == kClockLockstep), monitor_(monitor_config(plan)) {}
+      : plan_(plan),
+        options_(options),
+        scenario_(plan.scenario),
+        lc_(plan.launch),
+        lockstep_(plan.scenario.clock == kClockLockstep),
+        monitor_(monitor_config(plan)) {}
 
   int run() {
     if (const int code = open_transport(); code != kRunOk) return code;
@@ -199,7 +202,7 @@ class ProcessRun {
     if (const int code = open_record(); code != kRunOk) return code;
     // In the run's network namespace now: a follower of the run may start its threads.
     if (options_.tap.start) options_.tap.start();
-    struct sigaction sa{};
+    struct sigaction sa {};
     sa.sa_handler = on_interrupt;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
@@ -223,7 +226,6 @@ class ProcessRun {
   }
 
  private:
-
   /// The transport: a private network namespace unless told otherwise (before any thread), and
   /// the second emulated host's link.
   int open_transport() {
@@ -293,7 +295,8 @@ class ProcessRun {
       return kRunBadInput;
     }
     try {
-      recorder_ = std::make_unique<Recorder>(log_file_, monitor_, lockstep_ ? LogStamps::kSimulated : LogStamps::kWallClock);
+      recorder_ =
+          std::make_unique<Recorder>(log_file_, monitor_, lockstep_ ? LogStamps::kSimulated : LogStamps::kWallClock);
       recorder_->set_max_bytes(options_.log_max_bytes);
     } catch (const std::exception& e) {
       std::cerr << "rig run: " << e.what() << "\n";
@@ -330,8 +333,9 @@ class ProcessRun {
     for (const auto& name : scenario_.processes) {
       if (external(name)) {
         std::cerr << "rig run: " << name << " is external: start it in this run's network"
-                  << (ns_detail_.empty() || url_ != kNamespaceLcmUrl ? ""
-                                                                      : " (nsenter -t " + std::to_string(::getpid()) + " -n)")
+                  << (ns_detail_.empty() || url_ != kNamespaceLcmUrl
+                          ? ""
+                          : " (nsenter -t " + std::to_string(::getpid()) + " -n)")
                   << " with\n  " << bin_dir << "/" << executable_of(name) << " --name " << name << " --scenario "
                   << resolved_file_ << " --lcm-url '" << url_ << "'\n";
         continue;
@@ -341,7 +345,8 @@ class ProcessRun {
                         {"--name", name, "--scenario", resolved_file_, "--lcm-url", url_},
                         log_file_ + "." + name + ".out", lc_.rig_cpus, host_ns);
     }
-    if (const std::string note = pin_to(lc_.rig_cpus); !note.empty()) std::cerr << "rig run: run.rig_cpus: " << note << "\n";
+    if (const std::string note = pin_to(lc_.rig_cpus); !note.empty())
+      std::cerr << "rig run: run.rig_cpus: " << note << "\n";
     if (const std::string note = pin_to(lc_.launcher_cpus); !note.empty()) {
       std::cerr << "rig run: run.launcher_cpus: " << note << "\n";
     }
@@ -387,9 +392,10 @@ class ProcessRun {
     for (const auto& name : scenario_.processes) {
       const RunMonitor::Heartbeat* hb = monitor_.heartbeat(name);
       if (hb == nullptr || hb->digest == run_digest_) continue;
-      return "process '" + name + "' (pid " + std::to_string(hb->pid) + ") was started with another scenario: " +
-             "configuration digest " + (hb->digest.empty() ? std::string("(none)") : hb->digest) + ", the run's " +
-             run_digest_ + " (the scenario " + resolved_file_ +
+      return "process '" + name + "' (pid " + std::to_string(hb->pid) +
+             ") was started with another scenario: " + "configuration digest " +
+             (hb->digest.empty() ? std::string("(none)") : hb->digest) + ", the run's " + run_digest_ +
+             " (the scenario " + resolved_file_ +
              " and the files it names, as they were when the run started); refused. Start it with --scenario " +
              resolved_file_ + ", and change no model, manoeuvre or vehicle file during a run";
     }
@@ -518,8 +524,8 @@ class ProcessRun {
           last_progress_truth = monitor_.truth_count();
           last_progress_change_ns = now;
         } else if (now - last_progress_change_ns > static_cast<int64_t>(lc_.stall_timeout_s * 1e9)) {
-          return "lockstep run stalled: no new TRUTH for " + std::to_string(lc_.stall_timeout_s) + " s at t = " +
-                 std::to_string(monitor_.sim_time_s()) + " s";
+          return "lockstep run stalled: no new TRUTH for " + std::to_string(lc_.stall_timeout_s) +
+                 " s at t = " + std::to_string(monitor_.sim_time_s()) + " s";
         }
       } else {
         done = now >= t0 + start.duration_ns + 20000000LL;
@@ -552,8 +558,10 @@ class ProcessRun {
                   scenario_.clock.c_str(), monitor_.sim_time_s(), scenario_.duration_s, wall,
                   wall > 0 ? monitor_.sim_time_s() / wall : 0.0, static_cast<long long>(monitor_.truth_count()),
                   monitor_.faults().size());
-    if (tty) std::fprintf(stderr, "\r%s", buf);
-    else std::fprintf(stderr, "%s\n", buf);
+    if (tty)
+      std::fprintf(stderr, "\r%s", buf);
+    else
+      std::fprintf(stderr, "%s\n", buf);
     return now + (tty ? 200000000LL : 2000000000LL);
   }
 
@@ -577,7 +585,8 @@ class ProcessRun {
       const bool stopped = hb != nullptr && hb->state == heartbeat_t::STATE_STOPPING;
       report.processes.push_back(ProcessOutcome{name, hb != nullptr ? hb->pid : -1, stopped, stopped ? 0 : -1, 0,
                                                 hb == nullptr ? "external, never heard"
-                                                              : stopped ? "external, stopped" : "external, still running"});
+                                                : stopped     ? "external, stopped"
+                                                              : "external, still running"});
     }
     report.hosts = host_summaries(plan_.hosts, host_link_.get());
     report.verdict = judge_run(report.flight, plan_.judge, interrupted, failure,

@@ -5,7 +5,10 @@
 namespace nimble::launcher {
 
 MessagePipe::MessagePipe(Sink sink, std::size_t batch_bytes, std::size_t max_batches)
-    : sink_(std::move(sink)), batch_bytes_(batch_bytes), max_batches_(max_batches), current_(std::make_unique<Batch>()) {
+    : sink_(std::move(sink)),
+      batch_bytes_(batch_bytes),
+      max_batches_(max_batches),
+      current_(std::make_unique<Batch>()) {
   current_->bytes.reserve(batch_bytes_);
   thread_ = std::thread([this] { receive_loop(); });
 }
@@ -56,7 +59,8 @@ void MessagePipe::receive_loop() {
     }
     try {
       if (!error_) {
-        for (const Header& h : batch->headers) sink_(*h.channel, batch->bytes.data() + h.offset, h.size, h.recv_ns, h.own_encoding);
+        for (const Header& h : batch->headers)
+          sink_(*h.channel, batch->bytes.data() + h.offset, h.size, h.recv_ns, h.own_encoding);
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -189,13 +189,15 @@ std::string ensure_can_interface(const std::string& name, bool create_virtual, b
   const int probe = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
   if (probe < 0) {
     const int e = errno;
-    if (e == EAFNOSUPPORT) return "this kernel has no CAN support (AF_CAN: " + std::string(std::strerror(e)) + "); " + no_can_hint;
+    if (e == EAFNOSUPPORT)
+      return "this kernel has no CAN support (AF_CAN: " + std::string(std::strerror(e)) + "); " + no_can_hint;
     return std::string("cannot open a CAN socket: ") + std::strerror(e);
   }
   ::close(probe);
   if (::if_nametoindex(name.c_str()) == 0) {
     if (!create_virtual) {
-      return "CAN interface '" + name + "' does not exist in the run's network namespace (create it, set "
+      return "CAN interface '" + name +
+             "' does not exist in the run's network namespace (create it, set "
              "can_bridge.create_virtual: true, or run.network_namespace: never to use the host's interfaces)";
     }
     std::string out;
@@ -225,7 +227,8 @@ std::string ensure_can_interface(const std::string& name, bool create_virtual, b
              (mtu == static_cast<int>(CAN_MTU) ? " (classical CAN only)" : "") +
              " but can_bridge.fd is true, which needs CAN FD (MTU " + std::to_string(CANFD_MTU) + "): ip link set " +
              name + " down && ip link set " + name + " mtu " + std::to_string(CANFD_MTU) + " && ip link set " + name +
-             " up (a real controller: ip link set " + name + " type can bitrate ... dbitrate ... fd on), "
+             " up (a real controller: ip link set " + name +
+             " type can bitrate ... dbitrate ... fd on), "
              "or set can_bridge.fd: false";
     }
   }

@@ -139,8 +139,8 @@ void Recorder::record(const std::string& channel, const void* data, int size, in
 void Recorder::forget_kept() {
   const int64_t kept = log_.kept_records();
   if (kept <= pending_first_) return;
-  const auto n = static_cast<std::size_t>(
-      std::min<int64_t>(kept - pending_first_, static_cast<int64_t>(pending_sim_s_.size())));
+  const auto n =
+      static_cast<std::size_t>(std::min<int64_t>(kept - pending_first_, static_cast<int64_t>(pending_sim_s_.size())));
   kept_sim_s_ = pending_sim_s_[n - 1];
   pending_sim_s_.erase(pending_sim_s_.begin(), pending_sim_s_.begin() + static_cast<std::ptrdiff_t>(n));
   pending_first_ += static_cast<int64_t>(n);

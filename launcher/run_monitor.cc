@@ -25,8 +25,7 @@ using namespace contract::channels;
 /// Publisher names a run's messages may carry besides its processes.
 bool known_publisher(const MonitorConfig& cfg, const std::string& name) {
   if (name == "launcher" || name == "logger") return true;
-  return cfg.processes.empty() ||
-         std::find(cfg.processes.begin(), cfg.processes.end(), name) != cfg.processes.end();
+  return cfg.processes.empty() || std::find(cfg.processes.begin(), cfg.processes.end(), name) != cfg.processes.end();
 }
 
 /// A stream message of the contract as the monitor uses it: decoded exactly as its channel's
@@ -153,19 +152,25 @@ void RunMonitor::add_truth(const Truth& t, int64_t utime) {
   }
   const double height = start_down_m_ - t.position_ned_m[2], w = t.velocity_body_mps[2];
   if (!std::isfinite(height) || !std::isfinite(w)) f.finite = false;
-  f.min_height_m = std::min(f.min_height_m, height); f.max_height_m = std::max(f.max_height_m, height);
+  f.min_height_m = std::min(f.min_height_m, height);
+  f.max_height_m = std::max(f.max_height_m, height);
   f.final_height_m = height;
-  f.min_w = std::min(f.min_w, w); f.max_w = std::max(f.max_w, w);
+  f.min_w = std::min(f.min_w, w);
+  f.max_w = std::max(f.max_w, w);
   ++f.samples;
   f.max_abs_p = std::max(f.max_abs_p, std::fabs(p));
   f.max_abs_v = std::max(f.max_abs_v, std::fabs(v));
   f.max_abs_phi = std::max(f.max_abs_phi, std::fabs(phi));
   f.max_abs_theta = std::max(f.max_abs_theta, std::fabs(t.euler_rad[1]));
   f.max_abs_psi = std::max(f.max_abs_psi, std::fabs(t.euler_rad[2]));
-  f.min_p = std::min(f.min_p, p); f.max_p = std::max(f.max_p, p);
-  f.min_v = std::min(f.min_v, v); f.max_v = std::max(f.max_v, v);
-  f.min_phi = std::min(f.min_phi, phi); f.max_phi = std::max(f.max_phi, phi);
-  f.min_df = std::min(f.min_df, t.delta_f_radps); f.max_df = std::max(f.max_df, t.delta_f_radps);
+  f.min_p = std::min(f.min_p, p);
+  f.max_p = std::max(f.max_p, p);
+  f.min_v = std::min(f.min_v, v);
+  f.max_v = std::max(f.max_v, v);
+  f.min_phi = std::min(f.min_phi, phi);
+  f.max_phi = std::max(f.max_phi, phi);
+  f.min_df = std::min(f.min_df, t.delta_f_radps);
+  f.max_df = std::max(f.max_df, t.delta_f_radps);
   f.final_p = p;
   f.final_v = v;
   f.final_phi = phi;
@@ -213,10 +218,12 @@ void RunMonitor::add_status(const ControllerStatus& status, int64_t utime) {
   tracking_.add(static_cast<double>(utime) / 1e6, error * 180.0 / M_PI, status.roll_ref_rad * 180.0 / M_PI);
 }
 
-void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns, bool own_encoding) {
+void RunMonitor::on_message(const std::string& channel, const void* data, int size, int64_t recv_ns,
+                            bool own_encoding) {
   // Channels nobody in a run publishes are counted under one name, so that a flood of made-up
   // names cannot grow the table without bound.
-  Counter& c = counters_[contract::find_channel(channel) != nullptr || channel == "LCM_SELF_TEST" ? channel : "(other)"];
+  Counter& c =
+      counters_[contract::find_channel(channel) != nullptr || channel == "LCM_SELF_TEST" ? channel : "(other)"];
   // A message is counted and used only once it decodes exactly as its channel's type and
   // continues its publisher's seq; anything else is malformed and left out of every figure.
   const auto take = [&](auto& msg, const std::string& publisher) {
@@ -263,8 +270,8 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
     fault_event_t message{};
     if (take(message, "")) {
       const FaultEvent f = contract::from_message(message);
-      faults_.push_back(FaultRecord{f.process, f.severity, f.code, f.channel, f.message,
-                                    static_cast<double>(f.rig_utime) / 1e6});
+      faults_.push_back(
+          FaultRecord{f.process, f.severity, f.code, f.channel, f.message, static_cast<double>(f.rig_utime) / 1e6});
     }
     return;
   }

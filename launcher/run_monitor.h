@@ -20,9 +20,9 @@ namespace nimble::launcher {
 /// What the monitor needs to know about the run to judge it.
 struct MonitorConfig {
   bool lockstep = false;
-  int64_t t0_monotonic_ns = 0;       ///< real time: CLOCK_MONOTONIC of simulated time 0
-  int64_t late_threshold_us = 2000;  ///< real time: a stream message later than this is late
-  std::map<std::string, double> expected_hz;  ///< per channel; wall-clock channels per process
+  int64_t t0_monotonic_ns = 0;                   ///< real time: CLOCK_MONOTONIC of simulated time 0
+  int64_t late_threshold_us = 2000;              ///< real time: a stream message later than this is late
+  std::map<std::string, double> expected_hz;     ///< per channel; wall-clock channels per process
   std::vector<std::string> wall_clock_channels;  ///< rates of these are per wall second
   /// The run's processes: a HEARTBEAT, TIMING_HEALTH, FAULT, STEP_ACK or CAN_HEALTH naming
   /// another publisher (the launcher and its logger aside) is not trusted. Empty: any.
@@ -138,9 +138,9 @@ class TrackingRecorder {
  private:
   TrackingSummary s_;
   double sum2_ = 0.0;
-  int side_ = 0;                ///< -1, +1: the side of the half-cycle in progress; 0 before the first
+  int side_ = 0;  ///< -1, +1: the side of the half-cycle in progress; 0 before the first
   double last_t_ = 0.0, last_e_ = 0.0;
-  double crossing_s_ = 0.0;     ///< the newest zero crossing [s]
+  double crossing_s_ = 0.0;                           ///< the newest zero crossing [s]
   double reference_min_ = 0.0, reference_max_ = 0.0;  ///< in the half-cycle in progress [deg]
 };
 
@@ -225,7 +225,7 @@ class RunMonitor {
     double phi, p, v;
   };
   std::map<int64_t, TruthPoint> recent_truth_;  // utime -> truth, the last second
-  double start_down_m_ = 0.0;  ///< the first TRUTH's down position [m]
+  double start_down_m_ = 0.0;                   ///< the first TRUTH's down position [m]
   double est_phi2_ = 0, est_p2_ = 0, est_v2_ = 0;
   EstimatorSummary est_;
   TrackingRecorder tracking_;

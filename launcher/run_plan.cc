@@ -49,8 +49,9 @@ LaunchConfig launch_config_from(const Scenario& s) {
   // The processes' own keys of the section, checked where they are defined.
   const ProcessRunOptions processes = process_run_options_from(m);
   if (processes.start_wait_s <= c.ready_timeout_s) {
-    m.fail("start_wait_s", "must be above run.ready_timeout_s (" + std::to_string(c.ready_timeout_s) +
-                               " s): a process would give up waiting for the start before the launcher stops waiting for it");
+    m.fail("start_wait_s",
+           "must be above run.ready_timeout_s (" + std::to_string(c.ready_timeout_s) +
+               " s): a process would give up waiting for the start before the launcher stops waiting for it");
   }
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
@@ -86,11 +87,15 @@ std::string timestamp() {
 const ParamTable<LaunchConfig>& launch_params() {
   using C = LaunchConfig;
   static const ParamTable<C> table = {
-      {"ready_timeout_s", &C::ready_timeout_s, Range{0.0, 600.0, true, false}, "s", "every process must report READY within this"},
+      {"ready_timeout_s", &C::ready_timeout_s, Range{0.0, 600.0, true, false}, "s",
+       "every process must report READY within this"},
       {"stop_grace_s", &C::stop_grace_s, Range::closed(0.0, 60.0), "s", "after RUN_CONTROL stop, before SIGTERM"},
-      {"stall_timeout_s", &C::stall_timeout_s, Range{0.0, 3600.0, true, false}, "s", "lockstep: no new TRUTH for this long (wall clock) is a failure"},
-      {"start_delay_s", &C::start_delay_s, Range::closed(0.0, 10.0), "s", "real time: simulated time 0 lies this far after the start command"},
-      {"heartbeat_timeout_s", &C::heartbeat_timeout_s, Range{0.0, 600.0, true, false}, "s", "a running process silent for this long (wall clock) is lost: HEARTBEAT_LOST, the run fails"},
+      {"stall_timeout_s", &C::stall_timeout_s, Range{0.0, 3600.0, true, false}, "s",
+       "lockstep: no new TRUTH for this long (wall clock) is a failure"},
+      {"start_delay_s", &C::start_delay_s, Range::closed(0.0, 10.0), "s",
+       "real time: simulated time 0 lies this far after the start command"},
+      {"heartbeat_timeout_s", &C::heartbeat_timeout_s, Range{0.0, 600.0, true, false}, "s",
+       "a running process silent for this long (wall clock) is lost: HEARTBEAT_LOST, the run fails"},
   };
   return table;
 }
@@ -98,21 +103,38 @@ const ParamTable<LaunchConfig>& launch_params() {
 const ParamTable<JudgeConfig>& judge_params() {
   using C = JudgeConfig;
   static const ParamTable<C> table = {
-      {"max_phi_deg", &C::max_phi_deg, Range{0.0, 180.0, true, false}, "deg", "beyond this roll the vehicle is not controlled"},
-      {"max_theta_deg", &C::max_theta_deg, Range{0.0, 90.0, true, false}, "deg", "beyond this pitch (the pitch set-point limit) neither"},
+      {"max_phi_deg", &C::max_phi_deg, Range{0.0, 180.0, true, false}, "deg",
+       "beyond this roll the vehicle is not controlled"},
+      {"max_theta_deg", &C::max_theta_deg, Range{0.0, 90.0, true, false}, "deg",
+       "beyond this pitch (the pitch set-point limit) neither"},
       {"hover_phi_deg", &C::hover_phi_deg, Range::positive(), "deg", "final |phi| within this: returned to hover"},
       {"hover_p_radps", &C::hover_p_radps, Range::positive(), "rad/s", "final |p| within this: returned to hover"},
       {"hover_v_mps", &C::hover_v_mps, Range::positive(), "m/s", "final |v| within this: returned to hover"},
-      {"max_late_fraction", &C::max_late_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a channel's messages late at a receiving process than this is real-time degraded"},
-      {"trace_hz", &C::trace_hz, Range::closed(0.0, 1000.0), "Hz", "the JSON report's trace: p, v and phi of TRUTH at this rate of rig time (0: none; rig sweep --report sets it)"},
-      {"max_overrun_fraction", &C::max_overrun_fraction, Range::closed(0.0, 1.0), "-", "real time: more of a process's cycles overrun than this is real-time degraded"},
-      {"max_tracking_rms_deg", &C::max_tracking_rms_deg, Range{0.0, 180.0, true, false}, "deg", "RMS over the run of the roll tracking error (the controller's roll reference - the true roll) beyond this: not tracking (nominal flights 10.7 at most, within the loop's margins 14.7)"},
-      {"max_tracking_error_deg", &C::max_tracking_error_deg, Range{0.0, 180.0, true, false}, "deg", "largest |roll tracking error| beyond this: not tracking (nominal flights 56.1 at most, within the loop's margins 76)"},
-      {"oscillation_amplitude_deg", &C::oscillation_amplitude_deg, Range::positive(), "deg", "roll oscillation: every half-cycle's peak of the tracking error at least this (within the loop's margins 2.6 at most; beyond them 7 and more)"},
-      {"oscillation_cycles", &C::oscillation_cycles, Range::closed(2.0, 100.0), "-", "roll oscillation: this many cycles in a row"},
-      {"oscillation_period_tolerance", &C::oscillation_period_tolerance, Range{0.0, 1.0, true, true}, "-", "roll oscillation: every full period within this fraction of their mean"},
-      {"oscillation_max_damping", &C::oscillation_max_damping, Range{-1.0, 1.0, true, true}, "-", "roll oscillation: its amplitude decays with a damping ratio below this (within the loop's margins 0.0057 and more; beyond them 0.0010 and less)"},
-      {"oscillation_reference_still_deg", &C::oscillation_reference_still_deg, Range{0.0, 180.0, true, false}, "deg", "roll oscillation: counts only half-cycles in which the roll reference moved less than this (the loop's own motion, not the manoeuvre's)"},
+      {"max_late_fraction", &C::max_late_fraction, Range::closed(0.0, 1.0), "-",
+       "real time: more of a channel's messages late at a receiving process than this is real-time degraded"},
+      {"trace_hz", &C::trace_hz, Range::closed(0.0, 1000.0), "Hz",
+       "the JSON report's trace: p, v and phi of TRUTH at this rate of rig time (0: none; rig sweep --report sets it)"},
+      {"max_overrun_fraction", &C::max_overrun_fraction, Range::closed(0.0, 1.0), "-",
+       "real time: more of a process's cycles overrun than this is real-time degraded"},
+      {"max_tracking_rms_deg", &C::max_tracking_rms_deg, Range{0.0, 180.0, true, false}, "deg",
+       "RMS over the run of the roll tracking error (the controller's roll reference - the true roll) beyond this: not "
+       "tracking (nominal flights 10.7 at most, within the loop's margins 14.7)"},
+      {"max_tracking_error_deg", &C::max_tracking_error_deg, Range{0.0, 180.0, true, false}, "deg",
+       "largest |roll tracking error| beyond this: not tracking (nominal flights 56.1 at most, within the loop's "
+       "margins 76)"},
+      {"oscillation_amplitude_deg", &C::oscillation_amplitude_deg, Range::positive(), "deg",
+       "roll oscillation: every half-cycle's peak of the tracking error at least this (within the loop's margins 2.6 "
+       "at most; beyond them 7 and more)"},
+      {"oscillation_cycles", &C::oscillation_cycles, Range::closed(2.0, 100.0), "-",
+       "roll oscillation: this many cycles in a row"},
+      {"oscillation_period_tolerance", &C::oscillation_period_tolerance, Range{0.0, 1.0, true, true}, "-",
+       "roll oscillation: every full period within this fraction of their mean"},
+      {"oscillation_max_damping", &C::oscillation_max_damping, Range{-1.0, 1.0, true, true}, "-",
+       "roll oscillation: its amplitude decays with a damping ratio below this (within the loop's margins 0.0057 and "
+       "more; beyond them 0.0010 and less)"},
+      {"oscillation_reference_still_deg", &C::oscillation_reference_still_deg, Range{0.0, 180.0, true, false}, "deg",
+       "roll oscillation: counts only half-cycles in which the roll reference moved less than this (the loop's own "
+       "motion, not the manoeuvre's)"},
   };
   return table;
 }

@@ -18,11 +18,11 @@ namespace nimble::launcher {
 
 /// Exit codes of `rig run`.
 constexpr int kRunOk = 0;
-constexpr int kRunNotControlled = 1;  ///< the run completed but the vehicle was not controlled
-constexpr int kRunBadInput = 2;       ///< bad scenario, flag or environment
-constexpr int kRunFailed = 3;         ///< a process failed, did not start, or the run stalled
-constexpr int kRunTimingDegraded = 4; ///< with --strict-timing: controlled, but real time was degraded
-constexpr int kRunFailsafe = 5;       ///< the run completed with the controller in its failsafe
+constexpr int kRunNotControlled = 1;   ///< the run completed but the vehicle was not controlled
+constexpr int kRunBadInput = 2;        ///< bad scenario, flag or environment
+constexpr int kRunFailed = 3;          ///< a process failed, did not start, or the run stalled
+constexpr int kRunTimingDegraded = 4;  ///< with --strict-timing: controlled, but real time was degraded
+constexpr int kRunFailsafe = 5;        ///< the run completed with the controller in its failsafe
 /// The run completed within the control limits, but the roll did not follow the controller's
 /// reference: the tracking error beyond its bounds, or a sustained or growing oscillation.
 constexpr int kRunNotTracking = 6;
@@ -41,10 +41,10 @@ constexpr const char* kNamespaceLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_b
 
 /// Figures of a RunTap for the run summary: a section `title` in the text, `key` in the JSON.
 struct TapFigures {
-  std::string key;    ///< JSON key, e.g. "live_view"
-  std::string title;  ///< text label, e.g. "live view"
+  std::string key;                                        ///< JSON key, e.g. "live_view"
+  std::string title;                                      ///< text label, e.g. "live view"
   std::vector<std::pair<std::string, long long>> values;  ///< name and figure, in order
-  std::string note;   ///< one line after the figures (e.g. where it was served); may be empty
+  std::string note;  ///< one line after the figures (e.g. where it was served); may be empty
 };
 
 /// Someone besides the recorder who follows a run as it flies (rig run --foxglove: the live
@@ -79,16 +79,16 @@ struct RunOptions {
   /// the log's name: "" when it succeeded, else what failed, which turns the run's result into
   /// `failed: ...` (exit 3) so that the summary and the exit code agree.
   std::function<std::string(const std::string& log_file)> after_log;
-  bool strict_timing = false;        ///< --strict-timing: a degraded real-time run exits kRunTimingDegraded
-  RunTap tap;                        ///< a live follower of the run (rig run --foxglove); empty: none
+  bool strict_timing = false;  ///< --strict-timing: a degraded real-time run exits kRunTimingDegraded
+  RunTap tap;                  ///< a live follower of the run (rig run --foxglove); empty: none
 };
 
 /// Settings of the launcher itself (scenario section `run`).
 struct LaunchConfig {
-  double ready_timeout_s = 15.0;   ///< every process must report READY within this [s]
-  double stop_grace_s = 2.0;       ///< after RUN_CONTROL stop, before SIGTERM [s]
-  double stall_timeout_s = 10.0;   ///< lockstep: no simulated progress for this long is a failure [s]
-  double start_delay_s = 0.05;     ///< real time: t0 lies this far after the start command [s]
+  double ready_timeout_s = 15.0;  ///< every process must report READY within this [s]
+  double stop_grace_s = 2.0;      ///< after RUN_CONTROL stop, before SIGTERM [s]
+  double stall_timeout_s = 10.0;  ///< lockstep: no simulated progress for this long is a failure [s]
+  double start_delay_s = 0.05;    ///< real time: t0 lies this far after the start command [s]
   /// A running process that sends no heartbeat for this long (wall clock) is lost
   /// (CODE_HEARTBEAT_LOST) and the run fails [s]. Heartbeats come at 2 Hz while running, so
   /// 2 s is four missed in a row.
@@ -97,19 +97,19 @@ struct LaunchConfig {
   /// another machine of the lab, docs/machines.md "Running across machines") with the run's resolved
   /// scenario and LCM URL, which the launcher prints; it waits for their READY as for the others.
   std::vector<std::string> external_processes;
-  std::string lcm_url = "auto";    ///< "auto": private namespace (or host multicast) per run
+  std::string lcm_url = "auto";            ///< "auto": private namespace (or host multicast) per run
   std::string network_namespace = "auto";  ///< auto | always | never
-  std::vector<int> rig_cpus;       ///< CPUs for the rig's processes (empty: no pinning)
-  std::vector<int> launcher_cpus;  ///< CPUs for the launcher itself (empty: no pinning)
+  std::vector<int> rig_cpus;               ///< CPUs for the rig's processes (empty: no pinning)
+  std::vector<int> launcher_cpus;          ///< CPUs for the launcher itself (empty: no pinning)
 };
 
 /// Judgement of the flight (scenario section `summary`).
 struct JudgeConfig {
-  double max_phi_deg = 80.0;        ///< beyond this roll the vehicle is not controlled
-  double max_theta_deg = 60.0;      ///< beyond this pitch (the pitch set-point limit) neither
-  double hover_phi_deg = 5.0;       ///< final |phi| for "returned to hover"
-  double hover_p_radps = 0.5;       ///< final |p| for "returned to hover"
-  double hover_v_mps = 0.3;         ///< final |v| for "returned to hover"
+  double max_phi_deg = 80.0;    ///< beyond this roll the vehicle is not controlled
+  double max_theta_deg = 60.0;  ///< beyond this pitch (the pitch set-point limit) neither
+  double hover_phi_deg = 5.0;   ///< final |phi| for "returned to hover"
+  double hover_p_radps = 0.5;   ///< final |p| for "returned to hover"
+  double hover_v_mps = 0.3;     ///< final |v| for "returned to hover"
   /// Real time: a run in which some process received more than this fraction of a stream
   /// channel's messages late (run.late_threshold_us), or overran more than max_overrun_fraction
   /// of its cycles, is "real-time degraded". 1 % each: a lab loop that misses one cycle in a
@@ -180,7 +180,7 @@ const ParamTable<LaunchConfig>& launch_params();
 const ParamTable<JudgeConfig>& judge_params();
 
 struct RunPlan {
-  Scenario scenario;            ///< resolved: bases merged, --clock/--seed/--set applied, validated
+  Scenario scenario;  ///< resolved: bases merged, --clock/--seed/--set applied, validated
   LaunchConfig launch;
   JudgeConfig judge;
   contract::ProcessRates rates;

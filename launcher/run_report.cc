@@ -40,7 +40,7 @@ void print_channels_and_timing(std::ostream& out, const RunReport& r) {
                c.drops, c.late, c.malformed, c.wall_clock ? "  (per wall second)" : "");
   }
   out << "\nloop timing "
-      << (r.clock == kClockRealtime ? "(wake-up jitter)"
+      << (r.clock == kClockRealtime    ? "(wake-up jitter)"
           : r.clock == kClockInprocess ? "(in process: wall time per step, all processes)"
                                        : "(lockstep: wall time per step / per wait)")
       << "\nprocess        rate [Hz]    loops  overruns   p50 [us]   p99 [us]   max [us]\n";
@@ -50,7 +50,7 @@ void print_channels_and_timing(std::ostream& out, const RunReport& r) {
   }
   for (const auto& [name, t] : r.timing) {
     if (t.latency_count == 0) continue;
-    const char* what = name == "plant" ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
+    const char* what = name == "plant"       ? "control loop latency (TRUTH published -> ACTUATOR_CMD received)"
                        : name == "estimator" ? "latency (IMU sample time -> ESTIMATE published)"
                                              : "latency";
     fmt::print(out, "{} {}: p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us over {} messages\n", name, what,
@@ -61,8 +61,8 @@ void print_channels_and_timing(std::ostream& out, const RunReport& r) {
 /// The flight's extremes, ranges, final state and vertical excursion.
 void print_flight(std::ostream& out, const RunReport& r) {
   const FlightSummary& f = r.flight;
-  fmt::print(out, "\nflight     max |p| {:.4g} rad/s, max |v| {:.4g} m/s, max |phi| {:.4g} deg", f.max_abs_p, f.max_abs_v,
-             f.max_abs_phi * 180 / M_PI);
+  fmt::print(out, "\nflight     max |p| {:.4g} rad/s, max |v| {:.4g} m/s, max |phi| {:.4g} deg", f.max_abs_p,
+             f.max_abs_v, f.max_abs_phi * 180 / M_PI);
   if (f.max_abs_theta > 0.0) fmt::print(out, ", max |theta| {:.4g} deg", f.max_abs_theta * 180 / M_PI);
   if (f.max_abs_psi > 0.0) fmt::print(out, ", max |psi| {:.4g} deg", f.max_abs_psi * 180 / M_PI);
   out << "\n";
@@ -70,7 +70,9 @@ void print_flight(std::ostream& out, const RunReport& r) {
              f.max_v - f.min_v, f.max_phi - f.min_phi, f.max_df - f.min_df);
   fmt::print(out, "final      p {:.3f} rad/s, v {:.3f} m/s, phi {:.2f} deg\n", f.final_p, f.final_v,
              f.final_phi * 180 / M_PI);
-  fmt::print(out, "vertical   height {:+.2f} .. {:+.2f} m from the start (final {:+.2f} m), w {:.2f} .. {:.2f} m/s (initial {:.2f})\n",
+  fmt::print(out,
+             "vertical   height {:+.2f} .. {:+.2f} m from the start (final {:+.2f} m), w {:.2f} .. {:.2f} m/s (initial "
+             "{:.2f})\n",
              f.min_height_m, f.max_height_m, f.final_height_m, f.min_w, f.max_w, f.initial_w);
 }
 
@@ -78,11 +80,12 @@ void print_flight(std::ostream& out, const RunReport& r) {
 void print_estimator_and_tracking(std::ostream& out, const RunReport& r) {
   const EstimatorSummary& est = r.estimator;
   if (est.samples > 0) {
-    fmt::print(out,
-               "estimator  phi error rms {:.3f} deg (max {:.3f}), p error rms {:.4f} rad/s, v error rms {:.4f} m/s over {} "
-               "estimates; poses accepted {}, rejected {}, missing {}\n",
-               est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, est.samples, est.poses_accepted,
-               est.poses_rejected, est.poses_missing);
+    fmt::print(
+        out,
+        "estimator  phi error rms {:.3f} deg (max {:.3f}), p error rms {:.4f} rad/s, v error rms {:.4f} m/s over {} "
+        "estimates; poses accepted {}, rejected {}, missing {}\n",
+        est.phi_rms_deg, est.phi_max_deg, est.p_rms_radps, est.v_rms_mps, est.samples, est.poses_accepted,
+        est.poses_rejected, est.poses_missing);
     if (est.poses_too_old + est.poses_too_new + est.velocity_windows_uncovered + est.imu_rejected + est.imu_gaps > 0) {
       fmt::print(out,
                  "estimator  poses dropped {} too old, {} too new; velocity windows uncovered {}; IMU samples "
@@ -102,17 +105,19 @@ void print_estimator_and_tracking(std::ostream& out, const RunReport& r) {
 /// Each side of the CAN bridge: what it carried and what it rejected.
 void print_can_health(std::ostream& out, const RunReport& r) {
   for (const auto& [name, h] : r.can_health) {
-    fmt::print(out,
-               "{:<10} {}: {} messages to CAN, {} to LCM; frames sent {}, received {}; rejected: unknown id {}, wrong "
-               "length {}, bad checksum {}, stale counter {}, out of range {}; error frames {}; ENOBUFS {}, dropped {}\n",
-               name, h.interface_name, h.messages_to_can, h.messages_to_lcm, h.frames_sent, h.frames_received,
-               h.rejected_unknown_id, h.rejected_wrong_length, h.rejected_bad_checksum, h.rejected_stale_counter,
-               h.rejected_out_of_range, h.error_frames, h.send_enobufs, h.send_dropped + h.receive_dropped);
+    fmt::print(
+        out,
+        "{:<10} {}: {} messages to CAN, {} to LCM; frames sent {}, received {}; rejected: unknown id {}, wrong "
+        "length {}, bad checksum {}, stale counter {}, out of range {}; error frames {}; ENOBUFS {}, dropped {}\n",
+        name, h.interface_name, h.messages_to_can, h.messages_to_lcm, h.frames_sent, h.frames_received,
+        h.rejected_unknown_id, h.rejected_wrong_length, h.rejected_bad_checksum, h.rejected_stale_counter,
+        h.rejected_out_of_range, h.error_frames, h.send_enobufs, h.send_dropped + h.receive_dropped);
     if (h.fd) {
       out << "           CAN FD: " << h.fd_frames_sent << " of the frames sent and " << h.fd_frames_received
           << " of those received were FD frames\n";
     }
-    if (!h.candump_file.empty()) out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
+    if (!h.candump_file.empty())
+      out << "           candump log " << h.candump_file << " (" << h.candump_lines << " frames)\n";
   }
 }
 
@@ -166,7 +171,8 @@ void print_priority(std::ostream& out, const RunReport& r) {
   std::string no_priority, why;
   for (const auto& fr : r.faults) {
     if (fr.code != fault_event_t::CODE_REALTIME_UNAVAILABLE) continue;
-    if (no_priority.find(fr.process) == std::string::npos) no_priority += (no_priority.empty() ? "" : ", ") + fr.process;
+    if (no_priority.find(fr.process) == std::string::npos)
+      no_priority += (no_priority.empty() ? "" : ", ") + fr.process;
     why = fr.message;
   }
   if (!no_priority.empty()) {
@@ -262,12 +268,32 @@ void write_can_json(JsonWriter& w, const std::map<std::string, nimble::CanHealth
 /// The flight's extremes, ranges, final state, vertical excursion and its trace where kept.
 void write_flight_json(JsonWriter& w, const RunReport& r) {
   const FlightSummary& f = r.flight;
-  w.key("max_abs").begin_object().key("p").value(f.max_abs_p).key("v").value(f.max_abs_v).key("phi").value(f.max_abs_phi).key("theta").value(f.max_abs_theta).key("psi").value(f.max_abs_psi).end_object();
+  w.key("max_abs")
+      .begin_object()
+      .key("p")
+      .value(f.max_abs_p)
+      .key("v")
+      .value(f.max_abs_v)
+      .key("phi")
+      .value(f.max_abs_phi)
+      .key("theta")
+      .value(f.max_abs_theta)
+      .key("psi")
+      .value(f.max_abs_psi)
+      .end_object();
   w.key("ranges").begin_object();
   w.key("p").value(f.max_p - f.min_p).key("v").value(f.max_v - f.min_v).key("phi").value(f.max_phi - f.min_phi);
   w.key("delta_f").value(f.max_df - f.min_df);
   w.end_object();
-  w.key("final").begin_object().key("p").value(f.final_p).key("v").value(f.final_v).key("phi").value(f.final_phi).end_object();
+  w.key("final")
+      .begin_object()
+      .key("p")
+      .value(f.final_p)
+      .key("v")
+      .value(f.final_v)
+      .key("phi")
+      .value(f.final_phi)
+      .end_object();
   w.key("vertical").begin_object();
   w.key("height_min_m").value(f.min_height_m).key("height_max_m").value(f.max_height_m);
   w.key("height_final_m").value(f.final_height_m).key("max_abs_height_change_m").value(f.max_abs_height_change_m());

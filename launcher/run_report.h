@@ -29,19 +29,19 @@ struct ProcessOutcome {
 /// What a run's log holds: whole events only, also when a write failed.
 struct LogKept {
   std::string file;
-  int64_t events = 0;      ///< whole events in the file
+  int64_t events = 0;  ///< whole events in the file
   int64_t bytes = 0;
-  double sim_time_s = 0;   ///< the simulated time of its last event
-  std::string failure;     ///< "" or why recording stopped ("log write failed at byte N of F: reason")
+  double sim_time_s = 0;  ///< the simulated time of its last event
+  std::string failure;    ///< "" or why recording stopped ("log write failed at byte N of F: reason")
 };
 
 /// One host of the run and what ran on it.
 struct HostSummary {
-  std::string name;                    ///< as in the scenario's hosts section
-  bool launcher = false;               ///< the host that recorded and watched the run
+  std::string name;       ///< as in the scenario's hosts section
+  bool launcher = false;  ///< the host that recorded and watched the run
   std::vector<std::string> processes;
-  std::string address;                 ///< its end of the emulated link ("" on one host)
-  std::string network_namespace;       ///< the kernel's name of its namespace, e.g. "net:[4026532417]" ("" if unknown)
+  std::string address;            ///< its end of the emulated link ("" on one host)
+  std::string network_namespace;  ///< the kernel's name of its namespace, e.g. "net:[4026532417]" ("" if unknown)
 };
 
 struct RunReport {
@@ -51,7 +51,7 @@ struct RunReport {
   std::string transport;         ///< the LCM URL, or "in process"
   std::string transport_detail;  ///< network namespace etc. (may be empty)
   std::string log_file;
-  LogKept log;                   ///< what the log holds (events 0 and no file: no log was written)
+  LogKept log;  ///< what the log holds (events 0 and no file: no log was written)
   /// The run's configuration digest (scenario_digest(): the resolved scenario and the content of
   /// every file it names); every process flew with it.
   std::string config_digest;
@@ -60,8 +60,8 @@ struct RunReport {
   std::map<std::string, ChannelSummary> channels;
   std::map<std::string, TimingSummary> timing;
   FlightSummary flight;
-  EstimatorSummary estimator;    ///< samples == 0: no estimator in the run
-  TrackingSummary tracking;      ///< samples == 0: no controller in the run
+  EstimatorSummary estimator;  ///< samples == 0: no estimator in the run
+  TrackingSummary tracking;    ///< samples == 0: no controller in the run
   std::map<std::string, nimble::CanHealth> can_health;
   std::vector<FaultRecord> faults;
   std::vector<ProcessOutcome> processes;

@@ -37,7 +37,8 @@ void validate_process_sections(const Scenario& s) {
   }
   ConfigMap pilot_section = s.section("pilot");
   if (pilot_config_from(pilot_section).enabled && !s.runs("controller")) {
-    throw ConfigError(s.file, "pilot.enabled", "true", "the pilot flies the controller's throttle: it needs the process controller");
+    throw ConfigError(s.file, "pilot.enabled", "true",
+                      "the pilot flies the controller's throttle: it needs the process controller");
   }
   // Without the process mocap (ideal sensing) the pilot watches the TRUTH height; flying on the
   // estimate needs mocap anyway (checked above).

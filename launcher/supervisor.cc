@@ -133,8 +133,10 @@ bool ProcessSupervisor::wait_all(double seconds, const Idle& idle) {
     reap();
     if (all_exited()) return true;
     if (transport::monotonic_ns() >= until) return false;
-    if (idle) idle();
-    else std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (idle)
+      idle();
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }
 

@@ -95,8 +95,8 @@ Oscillation find_oscillation(const std::vector<TrackingHalfCycle>& h, const Judg
     o.cycles = static_cast<int>((end - j) / 2);
     o.frequency_hz = static_cast<double>(end - j) / 2.0 / (h[end - 1].end_s - h[j].start_s);
     for (std::size_t i = j; i < end; ++i) o.amplitude_deg = std::max(o.amplitude_deg, amplitude(i));
-    o.text = fmt::format("roll oscillation {:.1f} Hz +-{:.0f} deg {} from t = {:.1f} s", o.frequency_hz, o.amplitude_deg,
-                         o.growing ? "growing" : "sustained", o.start_s);
+    o.text = fmt::format("roll oscillation {:.1f} Hz +-{:.0f} deg {} from t = {:.1f} s", o.frequency_hz,
+                         o.amplitude_deg, o.growing ? "growing" : "sustained", o.start_s);
     return o;
   }
   return o;
@@ -113,7 +113,8 @@ TrackingVerdict judge_tracking(const TrackingSummary& t, const JudgeConfig& jc) 
   std::vector<std::string> lost;
   if (v.oscillation.detected) lost.push_back(v.oscillation.text);
   if (t.rms_deg > jc.max_tracking_rms_deg) {
-    lost.push_back(fmt::format("roll tracking error rms {:.1f} deg (limit {:g} deg)", t.rms_deg, jc.max_tracking_rms_deg));
+    lost.push_back(
+        fmt::format("roll tracking error rms {:.1f} deg (limit {:g} deg)", t.rms_deg, jc.max_tracking_rms_deg));
   }
   if (t.max_deg > jc.max_tracking_error_deg) {
     lost.push_back(fmt::format("roll tracking error {:.1f} deg at t = {:.2f} s (limit {:g} deg)", t.max_deg, t.max_at_s,
@@ -154,8 +155,8 @@ TimingVerdict judge_timing(const std::map<std::string, TimingSummary>& timing, c
       const std::string from = publishers_of(channel);
       consider(f, jc.max_late_fraction, process,
                percent(f) + " of " + channel + " arrived late at " + process +
-                   (from.empty() ? "" : " (published by " + from + ")") + " (limit " +
-                   percent(jc.max_late_fraction) + ")");
+                   (from.empty() ? "" : " (published by " + from + ")") + " (limit " + percent(jc.max_late_fraction) +
+                   ")");
     }
   }
   if (worst_ratio < 0.0) {
@@ -180,8 +181,8 @@ Verdict judge_run(const FlightSummary& f, const JudgeConfig& jc, bool interrupte
                   const TrackingVerdict& tracking) {
   constexpr double kRad = M_PI / 180.0;
   Verdict v;
-  v.controlled = f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * kRad &&
-                 f.max_abs_theta <= jc.max_theta_deg * kRad;
+  v.controlled =
+      f.samples > 0 && f.finite && f.max_abs_phi <= jc.max_phi_deg * kRad && f.max_abs_theta <= jc.max_theta_deg * kRad;
   v.hover = v.controlled && std::fabs(f.final_phi) <= jc.hover_phi_deg * kRad &&
             std::fabs(f.final_p) <= jc.hover_p_radps && std::fabs(f.final_v) <= jc.hover_v_mps;
   if (interrupted) {

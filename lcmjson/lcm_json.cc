@@ -18,15 +18,14 @@ enum class Kind { kInt8, kInt16, kInt32, kInt64, kByte, kBoolean, kFloat, kDoubl
 Kind kind_of(const std::string& type) {
   switch (type[0]) {
     case 'i':
-      return type[3] == '8' ? Kind::kInt8 : type[3] == '1' ? Kind::kInt16 : type[3] == '3' ? Kind::kInt32 : Kind::kInt64;
-    case 'b':
-      return type[1] == 'y' ? Kind::kByte : Kind::kBoolean;
-    case 'f':
-      return Kind::kFloat;
-    case 'd':
-      return Kind::kDouble;
-    default:
-      return Kind::kString;
+      return type[3] == '8'   ? Kind::kInt8
+             : type[3] == '1' ? Kind::kInt16
+             : type[3] == '3' ? Kind::kInt32
+                              : Kind::kInt64;
+    case 'b': return type[1] == 'y' ? Kind::kByte : Kind::kBoolean;
+    case 'f': return Kind::kFloat;
+    case 'd': return Kind::kDouble;
+    default: return Kind::kString;
   }
 }
 
@@ -98,7 +97,8 @@ void append_string(std::string* out, const uint8_t* s, std::size_t n) {
         const uint32_t cp = ((c & 0x0Fu) << 12) | ((s[i + 1] & 0x3Fu) << 6) | (s[i + 2] & 0x3Fu);
         ok = cp >= 0x800 && (cp < 0xD800 || cp > 0xDFFF);
       } else if (ok && len == 4) {
-        const uint32_t cp = ((c & 0x07u) << 18) | ((s[i + 1] & 0x3Fu) << 12) | ((s[i + 2] & 0x3Fu) << 6) | (s[i + 3] & 0x3Fu);
+        const uint32_t cp =
+            ((c & 0x07u) << 18) | ((s[i + 1] & 0x3Fu) << 12) | ((s[i + 2] & 0x3Fu) << 6) | (s[i + 3] & 0x3Fu);
         ok = cp >= 0x10000 && cp <= 0x10FFFF;
       }
       if (ok) {
@@ -119,18 +119,13 @@ std::size_t fixed_size(Kind k) {
   switch (k) {
     case Kind::kInt8:
     case Kind::kByte:
-    case Kind::kBoolean:
-      return 1;
-    case Kind::kInt16:
-      return 2;
+    case Kind::kBoolean: return 1;
+    case Kind::kInt16: return 2;
     case Kind::kInt32:
-    case Kind::kFloat:
-      return 4;
+    case Kind::kFloat: return 4;
     case Kind::kInt64:
-    case Kind::kDouble:
-      return 8;
-    case Kind::kString:
-      return 0;
+    case Kind::kDouble: return 8;
+    case Kind::kString: return 0;
   }
   return 0;
 }
@@ -167,7 +162,8 @@ std::string to_json(const LcmStruct& type, const void* data, std::size_t size, J
         }
       }
       if (n < 0) return "field " + f.name + ": array size " + d + " is " + std::to_string(n);
-      if (n > static_cast<int64_t>(size)) return "field " + f.name + ": array size " + std::to_string(n) + " larger than the message";
+      if (n > static_cast<int64_t>(size))
+        return "field " + f.name + ": array size " + std::to_string(n) + " larger than the message";
       count *= static_cast<std::size_t>(n);
     }
     const bool array = !f.dims.empty();
@@ -183,9 +179,7 @@ std::string to_json(const LcmStruct& type, const void* data, std::size_t size, J
           append_int(&json, v);
           break;
         }
-        case Kind::kByte:
-          append_int(&json, static_cast<int64_t>(in.be(1)));
-          break;
+        case Kind::kByte: append_int(&json, static_cast<int64_t>(in.be(1))); break;
         case Kind::kInt16: {
           const int64_t v = static_cast<int16_t>(in.be(2));
           if (!array && fi < 64) scalars[fi] = v;
@@ -228,11 +222,13 @@ std::string to_json(const LcmStruct& type, const void* data, std::size_t size, J
           if (!in.has(4)) return "truncated in field " + f.name;
           const int64_t len = static_cast<int32_t>(in.be(4));
           if (len < 1 || static_cast<std::size_t>(len) > in.left()) {
-            return "field " + f.name + ": string length " + std::to_string(len) + " with " + std::to_string(in.left()) + " bytes left";
+            return "field " + f.name + ": string length " + std::to_string(len) + " with " + std::to_string(in.left()) +
+                   " bytes left";
           }
           const uint8_t* s = in.take(static_cast<std::size_t>(len));
           if (s[len - 1] != 0) return "field " + f.name + ": a string without its terminating NUL";
-          if (std::memchr(s, 0, static_cast<std::size_t>(len - 1)) != nullptr) return "field " + f.name + ": a string with a NUL inside";
+          if (std::memchr(s, 0, static_cast<std::size_t>(len - 1)) != nullptr)
+            return "field " + f.name + ": a string with a NUL inside";
           append_string(&json, s, static_cast<std::size_t>(len - 1));
           break;
         }

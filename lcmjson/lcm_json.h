@@ -25,10 +25,10 @@ namespace nimble::lcmjson {
 /// One field of an LCM struct.
 struct LcmField {
   std::string name;
-  std::string type;                ///< int8_t, int16_t, int32_t, int64_t, byte, boolean, float, double, string
-  std::vector<std::string> dims;   ///< per dimension: a number (fixed) or the name of an earlier integer field
-  std::string comment;             ///< the `///` comment above the field, lines joined by a space
-  std::string unit;                ///< the comment's last "[...]" (e.g. "rad/s"), "" if none
+  std::string type;               ///< int8_t, int16_t, int32_t, int64_t, byte, boolean, float, double, string
+  std::vector<std::string> dims;  ///< per dimension: a number (fixed) or the name of an earlier integer field
+  std::string comment;            ///< the `///` comment above the field, lines joined by a space
+  std::string unit;               ///< the comment's last "[...]" (e.g. "rad/s"), "" if none
 };
 
 /// One `const` of an LCM struct.

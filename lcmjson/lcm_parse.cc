@@ -13,8 +13,8 @@ namespace nimble::lcmjson {
 namespace {
 
 bool is_primitive(const std::string& type) {
-  static const char* const kPrimitives[] = {"int8_t", "int16_t", "int32_t", "int64_t", "byte",
-                                            "boolean", "float", "double", "string"};
+  static const char* const kPrimitives[] = {"int8_t",  "int16_t", "int32_t", "int64_t", "byte",
+                                            "boolean", "float",   "double",  "string"};
   for (const char* p : kPrimitives) {
     if (type == p) return true;
   }
@@ -178,7 +178,8 @@ class Parser {
         if (!std::isdigit(static_cast<unsigned char>(dim[0]))) {
           bool found = false;
           for (const auto& earlier : s.fields) {
-            if (earlier.name == dim && earlier.dims.empty() && is_integer(earlier.type) && earlier.type != "byte") found = true;
+            if (earlier.name == dim && earlier.dims.empty() && is_integer(earlier.type) && earlier.type != "byte")
+              found = true;
           }
           if (!found) lexer_.fail("array size '" + dim + "' is not an earlier integer field of " + s.name);
         } else {
@@ -207,7 +208,8 @@ class Parser {
   static int rig_time_field(const LcmStruct& s) {
     auto index = [&s](const std::string& name) {
       for (std::size_t i = 0; i < s.fields.size(); ++i) {
-        if (s.fields[i].name == name && s.fields[i].type == "int64_t" && s.fields[i].dims.empty()) return static_cast<int>(i);
+        if (s.fields[i].name == name && s.fields[i].type == "int64_t" && s.fields[i].dims.empty())
+          return static_cast<int>(i);
       }
       return -1;
     };
@@ -261,7 +263,8 @@ class Parser {
   }
   void expect(const std::string& punct) {
     if (tok_.kind != Token::kPunct || tok_.text != punct) {
-      lexer_.fail("expected '" + punct + "', found '" + (tok_.kind == Token::kEnd ? std::string("end of file") : tok_.text) + "'");
+      lexer_.fail("expected '" + punct + "', found '" +
+                  (tok_.kind == Token::kEnd ? std::string("end of file") : tok_.text) + "'");
     }
     advance();
   }

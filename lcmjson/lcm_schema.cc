@@ -42,11 +42,16 @@ int typical_encoded_size(const LcmStruct& type) {
   int bytes = 8;  // the fingerprint
   for (const LcmField& f : type.fields) {
     int one = 0;
-    if (f.type == "string") one = 4 + kTypicalStringBytes + 1;  // length, text, NUL
-    else if (f.type == "int8_t" || f.type == "byte" || f.type == "boolean") one = 1;
-    else if (f.type == "int16_t") one = 2;
-    else if (f.type == "int32_t" || f.type == "float") one = 4;
-    else one = 8;  // int64_t, double
+    if (f.type == "string")
+      one = 4 + kTypicalStringBytes + 1;  // length, text, NUL
+    else if (f.type == "int8_t" || f.type == "byte" || f.type == "boolean")
+      one = 1;
+    else if (f.type == "int16_t")
+      one = 2;
+    else if (f.type == "int32_t" || f.type == "float")
+      one = 4;
+    else
+      one = 8;  // int64_t, double
     int count = 1;
     for (const std::string& d : f.dims) {
       count *= !d.empty() && std::isdigit(static_cast<unsigned char>(d[0])) ? std::stoi(d) : kTypicalArrayLength;
@@ -82,9 +87,7 @@ std::string json_schema(const LcmStruct& type) {
     properties[f.name] = s;
     required.push_back(f.name);
   }
-  Json schema{{"$schema", "http://json-schema.org/draft-07/schema#"},
-              {"title", type.full_name()},
-              {"type", "object"}};
+  Json schema{{"$schema", "http://json-schema.org/draft-07/schema#"}, {"title", type.full_name()}, {"type", "object"}};
   if (!type.comment.empty()) schema["description"] = type.comment;
   schema["properties"] = properties;
   schema["required"] = required;

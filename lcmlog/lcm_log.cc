@@ -37,8 +37,8 @@ LcmLogReader::LcmLogReader(const std::string& file, bool salvage) : file_(file),
 }
 
 bool LcmLogReader::damaged(int64_t offset, const std::string& problem) {
-  const std::string where = "damaged at byte " + std::to_string(offset) + " of " + std::to_string(size_) +
-                            ", event " + std::to_string(events_ + 1) + " (after " + std::to_string(events_) +
+  const std::string where = "damaged at byte " + std::to_string(offset) + " of " + std::to_string(size_) + ", event " +
+                            std::to_string(events_ + 1) + " (after " + std::to_string(events_) +
                             " whole events): " + problem;
   if (!salvage_) {
     throw DataError(file_, -1, -1, "",
@@ -78,8 +78,7 @@ bool LcmLogReader::next(LogEventRecord* ev) {
   ev->timestamp_us = timestamp;
   ev->channel.resize(static_cast<std::size_t>(channel_bytes));
   ev->data.resize(static_cast<std::size_t>(data_bytes));
-  if (!in_.read(ev->channel.data(), channel_bytes) ||
-      !in_.read(reinterpret_cast<char*>(ev->data.data()), data_bytes)) {
+  if (!in_.read(ev->channel.data(), channel_bytes) || !in_.read(reinterpret_cast<char*>(ev->data.data()), data_bytes)) {
     return damaged(at, "cannot read the event's channel and data");
   }
   for (const char c : ev->channel) {

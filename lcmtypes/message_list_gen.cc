@@ -94,7 +94,8 @@ struct MessageType {
 
 )";
 
-const char* const kEpilogue = R"(/// Calls f("name", m.name) for every field of message `m`, in .lcm order (m may be const).
+const char* const kEpilogue =
+    R"(/// Calls f("name", m.name) for every field of message `m`, in .lcm order (m may be const).
 template <class M, class F>
 void for_each_field(M& m, F&& f) {
   MessageFields<typename std::remove_const<M>::type>::visit(m, f);

@@ -50,7 +50,8 @@ std::vector<std::complex<double>> loop_zeros(const BrokenLoop& b) {
   return zeros;
 }
 
-std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, const std::vector<RollLoopResponse>& resp) {
+std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows,
+                      const std::vector<RollLoopResponse>& resp) {
   std::ostringstream data, script;
   const std::vector<double>& w = resp.front().omega_radps;
   for (std::size_t i = 0; i < w.size(); ++i) {
@@ -61,7 +62,8 @@ std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, con
     data << "\n";
   }
   write_file(dir / "loop_bode.dat", data.str());
-  script << "set terminal pngcairo noenhanced size 1100,800\nset output " << gp_quote((dir / "loop_bode.png").string()) << "\n"
+  script << "set terminal pngcairo noenhanced size 1100,800\nset output " << gp_quote((dir / "loop_bode.png").string())
+         << "\n"
          << "set multiplot layout 2,1 title 'Return ratio L at the break (margins marked)'\nset logscale x\n"
          << "set xrange [" << w.front() / (2 * kPi) << ":" << w.back() / (2 * kPi) << "]\nset yrange [-80:40]\n"
          << "set grid\nset ylabel '|L| [dB]'\nset arrow from graph 0, first 0 to graph 1, first 0 nohead dt 2\n";
@@ -79,7 +81,8 @@ std::string plot_bode(const fs::path& dir, const std::vector<LoopRow>& rows, con
     script << (k ? ", " : "") << gp_quote((dir / "loop_bode.dat").string()) << " using 1:" << 2 + 2 * k
            << " with lines lw 2 lc rgb '" << colour(k) << "' title " << gp_quote(title_of(rows[k]));
   }
-  script << "\nunset arrow\nunset label\nset yrange [-200:200]\nset ylabel 'phase of L [deg]'\nset xlabel 'frequency [Hz]'\n"
+  script << "\nunset arrow\nunset label\nset yrange [-200:200]\nset ylabel 'phase of L [deg]'\nset xlabel 'frequency "
+            "[Hz]'\n"
          << "set arrow from graph 0, first -180 to graph 1, first -180 nohead dt 2\n";
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const LoopMargins& m = rows[k].analysis.margins;
@@ -109,7 +112,8 @@ std::string plot_nyquist(const fs::path& dir, const std::vector<LoopRow>& rows,
     data << "\n\n";
   }
   write_file(dir / "loop_nyquist.dat", data.str());
-  script << "set terminal pngcairo noenhanced size 900,800\nset output " << gp_quote((dir / "loop_nyquist.png").string()) << "\n"
+  script << "set terminal pngcairo noenhanced size 900,800\nset output "
+         << gp_quote((dir / "loop_nyquist.png").string()) << "\n"
          << "set title 'Nyquist of L (unit circle, -1 marked)'\nset grid\nset size ratio -1\n"
          << "set xrange [-3:2]\nset yrange [-2.5:2.5]\nset xlabel 'Re L'\nset ylabel 'Im L'\n"
          << "set object 1 circle at 0,0 size 1 fs empty border lc rgb '#888888'\n"
@@ -138,7 +142,8 @@ std::string plot_step(const fs::path& dir, const std::vector<LoopRow>& rows) {
     data << "\n";
   }
   write_file(dir / "loop_step.dat", data.str());
-  script << "set terminal pngcairo noenhanced size 1000,600\nset output " << gp_quote((dir / "loop_step.png").string()) << "\n"
+  script << "set terminal pngcairo noenhanced size 1000,600\nset output " << gp_quote((dir / "loop_step.png").string())
+         << "\n"
          << "set title 'Closed loop: phi after a 10 deg roll set-point step (dashed: the reference phi_ref)'\n"
          << "set grid\nset xlabel 'time [s]'\nset ylabel 'phi [deg]'\nplot ";
   for (std::size_t k = 0; k < rows.size(); ++k) {
@@ -164,10 +169,12 @@ std::string plot_poles(const fs::path& dir, const std::vector<LoopRow>& rows) {
     data << "\n\n";
   }
   write_file(dir / "loop_poles.dat", data.str());
-  script << "set terminal pngcairo noenhanced size 900,800\nset output " << gp_quote((dir / "loop_poles.png").string()) << "\n"
-         << "set title 'Pole-zero map (s = ln z / T): closed-loop poles x, open-loop poles +, zeros of L o'\n"
-         << "set grid\nset xlabel 'Re s [1/s]'\nset ylabel 'Im s [rad/s]'\nset xrange [-150:20]\nset yrange [-120:120]\n"
-         << "set arrow from 0, graph 0 to 0, graph 1 nohead dt 2\nplot ";
+  script
+      << "set terminal pngcairo noenhanced size 900,800\nset output " << gp_quote((dir / "loop_poles.png").string())
+      << "\n"
+      << "set title 'Pole-zero map (s = ln z / T): closed-loop poles x, open-loop poles +, zeros of L o'\n"
+      << "set grid\nset xlabel 'Re s [1/s]'\nset ylabel 'Im s [rad/s]'\nset xrange [-150:20]\nset yrange [-120:120]\n"
+      << "set arrow from 0, graph 0 to 0, graph 1 nohead dt 2\nplot ";
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const std::string f = gp_quote((dir / "loop_poles.dat").string());
     script << (k ? ", " : "") << f << " index " << 3 * k << " with points pt 2 ps 2 lw 2 lc rgb '" << colour(k)

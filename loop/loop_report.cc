@@ -19,8 +19,10 @@ std::string or_none(const char* format, double x, const char* none = "none") {
 
 std::string pole_text(const LoopPole& p) {
   std::string s = fmt("%9.3f", p.s.real());
-  if (std::abs(p.s.imag()) > 1e-9) s += fmt(" %+9.3fj", p.s.imag());
-  else s += "           ";
+  if (std::abs(p.s.imag()) > 1e-9)
+    s += fmt(" %+9.3fj", p.s.imag());
+  else
+    s += "           ";
   return s + fmt("   zeta %6.3f", p.damping) + fmt("   f_n %7.3f Hz", p.natural_hz);
 }
 
@@ -62,9 +64,10 @@ std::string loop_header_text(const LoopSetup& s, const std::string& scenario) {
   out << fmt("          PD -> %g Hz Butterworth -> ", s.controller.roll_lowpass_cutoff_hz)
       << fmt("delta_f_cmd = %g rad/s x cmd -> ", s.controller.roll_cmd_to_delta_f_radps)
       << fmt("flap %g/(s + ", s.flap_gain_per_s) << fmt("%g) -> lateral3\n", s.flap_pole_radps);
-  out << "  linear: not in it the clip |cmd| <= 1 (|delta_f_cmd| <= " << fmt("%g", s.controller.roll_cmd_to_delta_f_radps)
-      << " rad/s), the flapping-frequency limits " << fmt("%g", s.controller.flap_freq_min_radps) << ".."
-      << fmt("%g", s.controller.flap_freq_max_radps) << " rad/s, sin(phi)";
+  out << "  linear: not in it the clip |cmd| <= 1 (|delta_f_cmd| <= "
+      << fmt("%g", s.controller.roll_cmd_to_delta_f_radps) << " rad/s), the flapping-frequency limits "
+      << fmt("%g", s.controller.flap_freq_min_radps) << ".." << fmt("%g", s.controller.flap_freq_max_radps)
+      << " rad/s, sin(phi)";
   if (!s.nonlinear_effects.empty()) {
     out << "; plant effects on:";
     for (const auto& e : s.nonlinear_effects) out << " " << e;
@@ -77,20 +80,23 @@ std::string loop_text(const LoopRow& r) {
   const RollLoopAnalysis& a = r.analysis;
   const LoopMargins& m = a.margins;
   std::ostringstream out;
-  out << "\n" << r.model << ", gains " << r.gains << fmt(" (kp %g 1/rad, ", r.gain_values.kp_per_rad)
+  out << "\n"
+      << r.model << ", gains " << r.gains << fmt(" (kp %g 1/rad, ", r.gain_values.kp_per_rad)
       << fmt("kd %g s/rad), broken at ", r.gain_values.kd_per_radps)
       << (r.where == LoopBreak::kActuator ? "the actuator command" : "the measured " + to_string(r.where)) << "\n";
   out << fmt("  an angle error of %.1f deg alone saturates the command\n", a.saturation_error_rad * 180.0 / kPi);
   if (!m.closed_loop_stable) out << "  CLOSED LOOP UNSTABLE: no margins\n";
-  out << "  gain margin        " << or_none("%+.2f dB", m.gain_margin_db()) << or_none(" at %.3f Hz", m.gain_margin_hz, "")
-      << ";  gain reduction margin " << or_none("%.2f dB", m.gain_reduction_margin_db(), "none (any lower gain is stable)")
+  out << "  gain margin        " << or_none("%+.2f dB", m.gain_margin_db())
+      << or_none(" at %.3f Hz", m.gain_margin_hz, "") << ";  gain reduction margin "
+      << or_none("%.2f dB", m.gain_reduction_margin_db(), "none (any lower gain is stable)")
       << or_none(" at %.3f Hz", m.gain_reduction_margin_hz, "") << "\n";
-  out << "  phase margin       " << or_none("%.2f deg", m.phase_margin_deg) << or_none(" at %.3f Hz", m.crossover_hz, "")
-      << "\n";
+  out << "  phase margin       " << or_none("%.2f deg", m.phase_margin_deg)
+      << or_none(" at %.3f Hz", m.crossover_hz, "") << "\n";
   out << "  delay margin       " << or_none("%.2f ms", 1e3 * m.delay_margin_s) << "\n";
-  out << "  sensitivity peak   " << fmt("Ms %.3f", m.sensitivity_peak) << fmt(" at %.3f Hz", m.sensitivity_peak_hz) << "\n";
-  out << fmt("  bandwidth          %.3f Hz phi/phi_ref", a.bandwidth_hz)
-      << fmt(" (at 0 Hz %.3f), ", a.dc_gain) << fmt("%.3f Hz phi/set-point\n", a.setpoint_bandwidth_hz);
+  out << "  sensitivity peak   " << fmt("Ms %.3f", m.sensitivity_peak) << fmt(" at %.3f Hz", m.sensitivity_peak_hz)
+      << "\n";
+  out << fmt("  bandwidth          %.3f Hz phi/phi_ref", a.bandwidth_hz) << fmt(" (at 0 Hz %.3f), ", a.dc_gain)
+      << fmt("%.3f Hz phi/set-point\n", a.setpoint_bandwidth_hz);
   out << "  closed-loop poles  s [1/s]\n";
   for (const LoopPole& p : a.poles) {
     if (p.s.imag() < -1e-9) continue;  // one line per pair
@@ -121,9 +127,10 @@ std::string loop_table_text(const std::vector<LoopRow>& rows) {
       continue;
     }
     out << or_none("%8.2f", m.gain_margin_db(), "     inf") << or_none("%7.2f", m.gain_margin_hz, "      -")
-        << or_none("%9.2f", m.gain_reduction_margin_db(), "     -inf") << or_none("%9.2f", m.phase_margin_deg, "        -")
-        << or_none("%8.2f", m.crossover_hz, "       -") << or_none("%8.2f", 1e3 * m.delay_margin_s, "     inf")
-        << fmt("%6.2f", m.sensitivity_peak) << fmt("%9.2f", a.bandwidth_hz);
+        << or_none("%9.2f", m.gain_reduction_margin_db(), "     -inf")
+        << or_none("%9.2f", m.phase_margin_deg, "        -") << or_none("%8.2f", m.crossover_hz, "       -")
+        << or_none("%8.2f", 1e3 * m.delay_margin_s, "     inf") << fmt("%6.2f", m.sensitivity_peak)
+        << fmt("%9.2f", a.bandwidth_hz);
     if (a.has_dominant_pair) out << fmt("  %13.3f", a.dominant.damping) << fmt("%9.3f", a.dominant.natural_hz);
     out << "\n";
   }
@@ -265,10 +272,14 @@ std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, cons
     w.key("phase_margin_deg_requested").value(design->request.phase_margin_deg);
     w.key("crossover_hz_requested").value(design->request.crossover_hz);
     w.key("feasible").value(design->design.feasible).key("note").value(design->design.note);
-    w.key("kp_per_rad").value(design->design.gains.kp_per_rad).key("kd_per_radps").value(design->design.gains.kd_per_radps);
+    w.key("kp_per_rad")
+        .value(design->design.gains.kp_per_rad)
+        .key("kd_per_radps")
+        .value(design->design.gains.kd_per_radps);
     w.key("lowpass_cutoff_hz").value(design->design.lowpass_cutoff_hz);
     if (design->design.feasible) write_margins(w, design->design.analysis);
-    if (!design->flight.empty()) w.key("flight").value(design->flight).key("flight_exit_code").value(design->flight_exit);
+    if (!design->flight.empty())
+      w.key("flight").value(design->flight).key("flight_exit_code").value(design->flight_exit);
     w.end_object();
   }
   w.end_object();

@@ -12,19 +12,19 @@ namespace nimble::loop {
 
 /// One analysed loop: a model with a gain set, broken at one point.
 struct LoopRow {
-  std::string model;     ///< the model's name
-  std::string gains;     ///< the gain set's name
+  std::string model;  ///< the model's name
+  std::string gains;  ///< the gain set's name
   GainSet gain_values;
   LoopBreak where = LoopBreak::kActuator;
   RollLoopConfig config;
-  StateSpace lateral;    ///< the model's state space
+  StateSpace lateral;  ///< the model's state space
   RollLoopAnalysis analysis;
 };
 
 /// The worst margins over a family of loops, each naming the loop it comes from.
 struct WorstMargins {
-  std::string gains;       ///< the gain set
-  std::string over;        ///< what the family is ("sets 1-5", "nimble_lateral_set1 +-2 sigma")
+  std::string gains;  ///< the gain set
+  std::string over;   ///< what the family is ("sets 1-5", "nimble_lateral_set1 +-2 sigma")
   int loops = 0, unstable = 0;
   double gain_margin_db = INFINITY, phase_margin_deg = INFINITY, delay_margin_ms = INFINITY;
   double gain_reduction_margin_db = -INFINITY, sensitivity_peak = 0.0;
@@ -52,9 +52,9 @@ std::string worst_text(const WorstMargins& w);
 struct DesignOutcome {
   DesignRequest request;
   RollDesign design;
-  std::string name;        ///< the gain set's name in --gains-out
+  std::string name;  ///< the gain set's name in --gains-out
   std::string model;
-  std::string flight;      ///< the flight's verdict with --fly ("" without)
+  std::string flight;  ///< the flight's verdict with --fly ("" without)
   int flight_exit = 0;
 };
 std::string design_text(const DesignOutcome& d);

@@ -50,8 +50,8 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
   }
 
   s.model = load_model(model_file.empty() ? scenario.model_file : model_file);
-  s.vehicle = load_vehicle(scenario.vehicle_file.empty() || !model_file.empty() ? s.model.vehicle_file
-                                                                                 : scenario.vehicle_file);
+  s.vehicle =
+      load_vehicle(scenario.vehicle_file.empty() || !model_file.empty() ? s.model.vehicle_file : scenario.vehicle_file);
   if (!s.model.effects.empty()) s.nonlinear_effects.push_back("the model's effects: section");
   ConfigMap controller_section = scenario.section("controller");
   s.controller = controller_config_from(controller_section);
@@ -103,8 +103,8 @@ DerivativeBox derivative_box(const std::string& file) {
   }
   for (const std::string& name : loop_derivatives()) {
     const auto& p = j["parameters"];
-    if (!p.contains(name) || !p[name].contains("value") || !p[name].contains("sigma") || !p[name]["value"].is_number() ||
-        !p[name]["sigma"].is_number()) {
+    if (!p.contains(name) || !p[name].contains("value") || !p[name].contains("sigma") ||
+        !p[name]["value"].is_number() || !p[name]["sigma"].is_number()) {
       throw std::invalid_argument("derivative box: " + file + " has no value and sigma of " + name);
     }
     box.value[name] = p[name]["value"].get<double>();

@@ -21,15 +21,15 @@ struct LoopSetup {
   DerivativeModel model;
   Vehicle vehicle;
   ControllerConfig controller;
-  std::string gain_set;                 ///< the set the scenario's manoeuvre flies
-  double flap_gain_per_s = 8.97;        ///< the plant's flap actuator
+  std::string gain_set;           ///< the set the scenario's manoeuvre flies
+  double flap_gain_per_s = 8.97;  ///< the plant's flap actuator
   double flap_pole_radps = 12.56;
   double plant_rate_hz = 1000.0;
-  std::string input;                    ///< truth | estimate: what the controller flies on
-  std::string clock;                    ///< realtime | lockstep | inprocess: whose timing the loop has
-  std::string trigger;                  ///< state | timer: what starts a real-time controller cycle
-  double pipeline_latency_s = 0.0;      ///< from the input's sample to the command's action
-  double actuator_delay_s = 0.0;        ///< the plant's actuator_delay effect, whole plant steps
+  std::string input;                           ///< truth | estimate: what the controller flies on
+  std::string clock;                           ///< realtime | lockstep | inprocess: whose timing the loop has
+  std::string trigger;                         ///< state | timer: what starts a real-time controller cycle
+  double pipeline_latency_s = 0.0;             ///< from the input's sample to the command's action
+  double actuator_delay_s = 0.0;               ///< the plant's actuator_delay effect, whole plant steps
   std::vector<std::string> nonlinear_effects;  ///< plant effects on that the linear loop leaves out
   /// The latency the loop has: pipeline + actuator delay [s].
   double latency_s() const { return pipeline_latency_s + actuator_delay_s; }

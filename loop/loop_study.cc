@@ -67,7 +67,8 @@ const MarginOptions kBoxGrid{0.01, 300};
 
 /// Per gain set: the worst over the given rows and over the +-2 sigma box (every corner).
 std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopRow>& rows,
-                                     const std::vector<std::pair<std::string, GainSet>>& sets, const DerivativeBox& box) {
+                                     const std::vector<std::pair<std::string, GainSet>>& sets,
+                                     const DerivativeBox& box) {
   std::vector<WorstMargins> out;
   const auto& names = loop_derivatives();
   const int corners = 1 << names.size();
@@ -106,7 +107,8 @@ std::vector<WorstMargins> robustness(const LoopSetup& s, const std::vector<LoopR
       for (const int sign : {-1, 1}) {
         std::vector<int> signs(names.size(), 0);
         signs[static_cast<std::size_t>(&name - names.data())] = sign;
-        if (!margins_at(signs).margins.closed_loop_stable) over_box.unstable_alone.push_back(name + (sign > 0 ? "+" : "-"));
+        if (!margins_at(signs).margins.closed_loop_stable)
+          over_box.unstable_alone.push_back(name + (sign > 0 ? "+" : "-"));
       }
     }
     for (const auto& [key, count] : by_sign) over_box.unstable_by_sign.emplace_back(key, count);
@@ -164,7 +166,8 @@ LoopStudy study_loop(const LoopRequest& q) {
     }
   }
   if (q.all_sets) {
-    study.worst = robustness(s, study.rows, sets, q.box_file.empty() ? derivative_box(s.model) : derivative_box(q.box_file));
+    study.worst =
+        robustness(s, study.rows, sets, q.box_file.empty() ? derivative_box(s.model) : derivative_box(q.box_file));
   }
 
   if (!q.design.empty()) {

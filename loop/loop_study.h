@@ -17,17 +17,17 @@ namespace nimble::loop {
 /// What a study is asked for: `rig loop`'s options. The empty text is the option left out.
 struct LoopRequest {
   std::string scenario_file;
-  std::vector<Override> overrides;      ///< --set
-  std::string model_file;               ///< a lateral3 model in place of the scenario's
-  std::string gains;                    ///< NAME of a gain set or "KP,KD" (default: the manoeuvre's set;
-                                        ///< with all_sets every set)
-  std::string input;                    ///< truth | estimate (default: the scenario's run.controller_input)
-  std::string clock;                    ///< realtime | lockstep | inprocess (default: the scenario's)
-  std::string break_at = "actuator";    ///< actuator | sensor (phi and p, one at a time)
-  bool all_sets = false;                ///< model sets 1-5 with every gain set, and the robustness lines
-  std::string box_file;                 ///< the +-2 sigma box (default: the scenario model's published sigma)
-  std::string design;                   ///< "phase_margin_deg=45,crossover_hz=F": design PD gains
-  std::string design_name = "designed"; ///< the designed gain set's name
+  std::vector<Override> overrides;       ///< --set
+  std::string model_file;                ///< a lateral3 model in place of the scenario's
+  std::string gains;                     ///< NAME of a gain set or "KP,KD" (default: the manoeuvre's set;
+                                         ///< with all_sets every set)
+  std::string input;                     ///< truth | estimate (default: the scenario's run.controller_input)
+  std::string clock;                     ///< realtime | lockstep | inprocess (default: the scenario's)
+  std::string break_at = "actuator";     ///< actuator | sensor (phi and p, one at a time)
+  bool all_sets = false;                 ///< model sets 1-5 with every gain set, and the robustness lines
+  std::string box_file;                  ///< the +-2 sigma box (default: the scenario model's published sigma)
+  std::string design;                    ///< "phase_margin_deg=45,crossover_hz=F": design PD gains
+  std::string design_name = "designed";  ///< the designed gain set's name
 };
 
 /// What a study found.

@@ -44,23 +44,23 @@ namespace nimble::mcap {
 
 struct ExportOptions {
   Compression compression = Compression::kZstd;
-  bool raw = false;       ///< also `<CHANNEL>/lcm` with the LCM bytes
-  bool salvage = false;   ///< a damaged log: export the events before the damage
+  bool raw = false;      ///< also `<CHANNEL>/lcm` with the LCM bytes
+  bool salvage = false;  ///< a damaged log: export the events before the damage
   std::size_t chunk_size = 2u << 20;
   int zstd_level = WriterOptions{}.zstd_level;
   /// Check the messages against this vehicle's data bounds (none: not checked).
   std::optional<Vehicle> vehicle;
-  bool strict = false;    ///< a message beyond the bounds refuses the export
+  bool strict = false;  ///< a message beyond the bounds refuses the export
 };
 
 /// One LCM channel of the log.
 struct ChannelExport {
-  std::string type;           ///< full type name, "" for a channel the contract does not know
-  uint64_t events = 0;        ///< events of the channel in the log
-  uint64_t json = 0;          ///< messages written as JSON
-  uint64_t undecodable = 0;   ///< events that are not exactly one message of the type
-  uint64_t beyond_bounds = 0; ///< messages left out with a field beyond the vehicle's bounds
-  uint64_t raw = 0;           ///< messages written to `<CHANNEL>/lcm`
+  std::string type;            ///< full type name, "" for a channel the contract does not know
+  uint64_t events = 0;         ///< events of the channel in the log
+  uint64_t json = 0;           ///< messages written as JSON
+  uint64_t undecodable = 0;    ///< events that are not exactly one message of the type
+  uint64_t beyond_bounds = 0;  ///< messages left out with a field beyond the vehicle's bounds
+  uint64_t raw = 0;            ///< messages written to `<CHANNEL>/lcm`
 };
 
 struct ExportStats {
@@ -68,15 +68,15 @@ struct ExportStats {
   Compression compression = Compression::kZstd;
   std::map<std::string, ChannelExport> channels;  ///< by LCM channel name
   std::vector<std::string> unknown_channels;      ///< channels the contract does not know
-  uint64_t events = 0;            ///< events read from the log
-  uint64_t messages = 0;          ///< MCAP messages written (JSON and raw)
-  uint64_t undecodable = 0;       ///< over every channel
-  uint64_t unknown_events = 0;    ///< events on unknown channels
+  uint64_t events = 0;                            ///< events read from the log
+  uint64_t messages = 0;                          ///< MCAP messages written (JSON and raw)
+  uint64_t undecodable = 0;                       ///< over every channel
+  uint64_t unknown_events = 0;                    ///< events on unknown channels
   uint64_t mcap_channels = 0;
   uint64_t start_time_ns = 0, end_time_ns = 0;  ///< log times of the first and last message
   uint64_t bytes_in = 0, bytes_out = 0;
   double seconds = 0.0;
-  std::string damage;  ///< salvaging: what was wrong with the log ("" if it was whole)
+  std::string damage;                 ///< salvaging: what was wrong with the log ("" if it was whole)
   uint64_t beyond_bounds = 0;         ///< messages left out, over every channel
   std::optional<BoundsTally> beyond;  ///< their fields, when the export checked the bounds
 };

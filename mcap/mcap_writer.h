@@ -63,7 +63,7 @@ struct WriterOptions {
 struct WriterStats {
   uint64_t messages = 0;
   uint64_t chunks = 0;
-  uint64_t bytes = 0;              ///< size of the file
+  uint64_t bytes = 0;  ///< size of the file
   uint64_t uncompressed_chunk_bytes = 0;
   uint64_t compressed_chunk_bytes = 0;
 };
@@ -126,29 +126,29 @@ class McapWriter {
   void write_channel_record(std::string& out, uint16_t id);
   void flush_chunk();
   void write_out(const void* data, std::size_t size);  ///< to the file; CRC of the data section
-  void fail(const std::string& what);                    ///< throws WriteError; removes the .part
+  void fail(const std::string& what);                  ///< throws WriteError; removes the .part
   void check_open() const;
 
   std::string path_, part_path_;
   WriterOptions options_;
   std::FILE* file_ = nullptr;
-  uint64_t offset_ = 0;      ///< bytes written to the file
-  uint32_t data_crc_ = 0;    ///< CRC-32 of every byte written so far (the data section until DataEnd)
+  uint64_t offset_ = 0;    ///< bytes written to the file
+  uint32_t data_crc_ = 0;  ///< CRC-32 of every byte written so far (the data section until DataEnd)
   bool closed_ = false;
 
-  std::vector<Schema> schemas_;   ///< id = index + 1
+  std::vector<Schema> schemas_;  ///< id = index + 1
   std::vector<bool> schema_in_chunk_;
   std::vector<Channel> channels_;  ///< id = index + 1
 
   // The open chunk.
-  std::string chunk_;              ///< uncompressed records
+  std::string chunk_;                                                    ///< uncompressed records
   std::vector<std::vector<std::pair<uint64_t, uint64_t>>> chunk_index_;  ///< per channel: (log time, offset)
   std::vector<uint16_t> chunk_channels_;  ///< channels with messages in the chunk, in first-seen order
   uint64_t chunk_start_ = 0, chunk_end_ = 0;
   bool chunk_has_messages_ = false;
 
-  std::string compressed_;   ///< reused compression buffer
-  std::string scratch_;      ///< reused record buffer
+  std::string compressed_;  ///< reused compression buffer
+  std::string scratch_;     ///< reused record buffer
   struct ZstdContext;
   std::unique_ptr<ZstdContext> zstd_;
 

@@ -28,13 +28,15 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
     const Eigen::Vector4d& q = truth.quaternion_wxyz;
     in.q_body_to_ned = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
     for (const MocapPose& pose : emulator_->step(in)) {
-      if (node_->lockstep()) outbox_.push(pose.publish_utime, pose);
-      else publish(pose);
+      if (node_->lockstep())
+        outbox_.push(pose.publish_utime, pose);
+      else
+        publish(pose);
     }
   });
   // Lockstep ticks only: in real time frames go out as the truth shows they are due.
-  node_->add_task("mocap", sensing.mocap.frame_rate_hz, [this](int64_t t) { flush(t); },
-                  transport::ProcessNode::Trigger::kInput);
+  node_->add_task(
+      "mocap", sensing.mocap.frame_rate_hz, [this](int64_t t) { flush(t); }, transport::ProcessNode::Trigger::kInput);
 }
 
 int MocapNode::run() { return node_->run(); }

@@ -15,8 +15,14 @@ double quantize(double x, double resolution) {
 }
 
 double clamp(double x, double lo, double hi, bool& clamped) {
-  if (x < lo) { clamped = true; return lo; }
-  if (x > hi) { clamped = true; return hi; }
+  if (x < lo) {
+    clamped = true;
+    return lo;
+  }
+  if (x > hi) {
+    clamped = true;
+    return hi;
+  }
   return x;
 }
 

@@ -6,20 +6,29 @@
 #include <cmath>
 #include <stdexcept>
 
-
 namespace nimble::plant {
 namespace {
 
 // State layout.
 enum : int {
-  kN = 0, kE, kD,            // position NED [m]
-  kU, kV, kW,                // body velocity [m/s]
-  kPhi, kTheta, kPsi,        // ZYX Euler angles [rad]
-  kP, kQ, kR,                // body rates [rad/s]
-  kFcoll,                    // actual collective flapping frequency [rad/s]
-  kDf,                       // actual flapping-frequency difference [rad/s]
-  kDd, kDdRate,              // dihedral servo position [rad] and rate [rad/s]
-  kDw, kDwRate,              // wing-root servo position [rad] and rate [rad/s]
+  kN = 0,
+  kE,
+  kD,  // position NED [m]
+  kU,
+  kV,
+  kW,  // body velocity [m/s]
+  kPhi,
+  kTheta,
+  kPsi,  // ZYX Euler angles [rad]
+  kP,
+  kQ,
+  kR,      // body rates [rad/s]
+  kFcoll,  // actual collective flapping frequency [rad/s]
+  kDf,     // actual flapping-frequency difference [rad/s]
+  kDd,
+  kDdRate,  // dihedral servo position [rad] and rate [rad/s]
+  kDw,
+  kDwRate,  // wing-root servo position [rad] and rate [rad/s]
   kStates
 };
 static_assert(kStates == PlantModel::kStateDim, "PlantModel::kStateDim is the state layout's size");
@@ -42,14 +51,22 @@ Eigen::Vector4d quaternion_from_euler(double phi, double theta, double psi) {
 const ParamTable<PlantConfig>& plant_params() {
   using C = PlantConfig;
   static const ParamTable<C> table = {
-      {"rate_hz", &C::rate_hz, Range::closed(100.0, 20000.0), "Hz", "integration rate, the lockstep step; whole ns per step"},
-      {"truth_rate_hz", &C::truth_rate_hz, Range{0.0, 20000.0, true, false}, "Hz", "TRUTH publication rate; divides rate_hz"},
-      {"feedback_rate_hz", &C::feedback_rate_hz, Range{0.0, 20000.0, true, false}, "Hz", "ACTUATOR_FB publication rate; divides rate_hz"},
-      {"command_timeout_s", &C::command_timeout_s, Range{0.0, 10.0, true, false}, "s", "hold the safe state when commands stop this long"},
-      {"command_resolution.flap_freq_radps", &C::flap_command_resolution_radps, Range::closed(0.0, 10.0), "rad/s", "flapping-frequency commands are rounded to this (the CAN frames' resolution)"},
-      {"command_resolution.servo_rad", &C::servo_command_resolution_rad, Range::closed(0.0, 0.1), "rad", "servo commands are rounded to this"},
-      {"collective_radps_per_pct", &C::collective_radps_per_pct, Range::positive(), "rad/s/%", "collective per % throttle; equals the controller's throttle_to_freq_radps_per_pct"},
-      {"vertical_damping_Zw_nspm", &C::vertical_damping_Zw_nspm, Range::closed(-10.0, 0.0), "N s/m", "vertical damping without a longitudinal model"},
+      {"rate_hz", &C::rate_hz, Range::closed(100.0, 20000.0), "Hz",
+       "integration rate, the lockstep step; whole ns per step"},
+      {"truth_rate_hz", &C::truth_rate_hz, Range{0.0, 20000.0, true, false}, "Hz",
+       "TRUTH publication rate; divides rate_hz"},
+      {"feedback_rate_hz", &C::feedback_rate_hz, Range{0.0, 20000.0, true, false}, "Hz",
+       "ACTUATOR_FB publication rate; divides rate_hz"},
+      {"command_timeout_s", &C::command_timeout_s, Range{0.0, 10.0, true, false}, "s",
+       "hold the safe state when commands stop this long"},
+      {"command_resolution.flap_freq_radps", &C::flap_command_resolution_radps, Range::closed(0.0, 10.0), "rad/s",
+       "flapping-frequency commands are rounded to this (the CAN frames' resolution)"},
+      {"command_resolution.servo_rad", &C::servo_command_resolution_rad, Range::closed(0.0, 0.1), "rad",
+       "servo commands are rounded to this"},
+      {"collective_radps_per_pct", &C::collective_radps_per_pct, Range::positive(), "rad/s/%",
+       "collective per % throttle; equals the controller's throttle_to_freq_radps_per_pct"},
+      {"vertical_damping_Zw_nspm", &C::vertical_damping_Zw_nspm, Range::closed(-10.0, 0.0), "N s/m",
+       "vertical damping without a longitudinal model"},
   };
   return table;
 }
@@ -57,7 +74,8 @@ const ParamTable<PlantConfig>& plant_params() {
 const ParamTable<FlapActuatorConfig>& flap_actuator_params() {
   using C = FlapActuatorConfig;
   static const ParamTable<C> table = {
-      {"delta_f_gain_radps", &C::delta_f_gain_radps, Range::positive(), "rad/s", "delta_f = gain / (s + pole) delta_f_cmd; thesis Eq 33 scaled by 1/1.4"},
+      {"delta_f_gain_radps", &C::delta_f_gain_radps, Range::positive(), "rad/s",
+       "delta_f = gain / (s + pole) delta_f_cmd; thesis Eq 33 scaled by 1/1.4"},
       {"pole_radps", &C::pole_radps, Range::positive(), "rad/s", "flap mechanism pole; thesis Eq 33: 12.56"},
   };
   return table;
@@ -65,15 +83,17 @@ const ParamTable<FlapActuatorConfig>& flap_actuator_params() {
 
 const ParamTable<ServoConfig>& servo_params() {
   // y = wn^2 / (s^2 + c1 s + wn^2) u; thesis: 554.2 / (s^2 + 30.25 s + 554.2).
-  static const ParamTable<ServoConfig> table = {{"wn2_rad2ps2", &ServoConfig::wn2_rad2ps2, Range::positive(), "1/s^2", "servo wn^2; thesis: 554.2"},
-                                                {"c1_radps", &ServoConfig::c1_radps, Range::positive(), "1/s", "servo 2 zeta wn; thesis: 30.25"}};
+  static const ParamTable<ServoConfig> table = {
+      {"wn2_rad2ps2", &ServoConfig::wn2_rad2ps2, Range::positive(), "1/s^2", "servo wn^2; thesis: 554.2"},
+      {"c1_radps", &ServoConfig::c1_radps, Range::positive(), "1/s", "servo 2 zeta wn; thesis: 30.25"}};
   return table;
 }
 
 const ParamTable<ThrustCurve>& thrust_params() {
   using C = ThrustCurve;
   static const ParamTable<C> table = {
-      {"slope_n_per_hz", &C::slope_n_per_hz, Range::positive(), "N/Hz", "thrust slope per wing pair; thesis Eq 4.18: 0.0114"},
+      {"slope_n_per_hz", &C::slope_n_per_hz, Range::positive(), "N/Hz",
+       "thrust slope per wing pair; thesis Eq 4.18: 0.0114"},
       {"offset_n", &C::offset_n, Range::any(), "N", "thrust offset per wing pair; thesis Eq 4.18: 0.0449"},
       {"pairs", &C::pairs, Range::positive(), "-", "wing pairs: 2"},
   };
@@ -103,8 +123,8 @@ PlantConfig plant_config_from(ConfigMap& map) {
     read_params(r, plant_params(), c, "command_resolution");
     r.finish();
   }
-  for (const auto& [key, rate] : {std::pair<const char*, double>{"truth_rate_hz", c.truth_rate_hz},
-                                  {"feedback_rate_hz", c.feedback_rate_hz}}) {
+  for (const auto& [key, rate] :
+       {std::pair<const char*, double>{"truth_rate_hz", c.truth_rate_hz}, {"feedback_rate_hz", c.feedback_rate_hz}}) {
     const double ratio = c.rate_hz / rate;
     if (std::fabs(ratio - std::round(ratio)) > 1e-9) {
       map.fail(key, "must divide rate_hz (" + std::to_string(c.rate_hz) + " Hz) into whole steps");
@@ -140,13 +160,16 @@ const std::vector<std::string>& plant_term_equations() {
 
 std::string terms_markdown() {
   std::string out = kParamsMarkdownHeader;
-  out += "| `plant.terms[].equation` | - | L, Y, N | - | the equation the term adds to: roll moment L, side force Y, "
-         "yaw moment N (lateral4 only) |\n";
-  out += "| `plant.terms[].expression` | - | the term grammar (docs/models.md, \"Terms\"); signals p, q, r, u, v, w, "
-         "phi, theta, delta_f, delta_t, delta_d, delta_w | - | the expression, e.g. `p^3`, `v*abs(v)`, "
-         "`lag(delta_f, 0.02)` |\n";
-  out += "| `plant.terms[].coefficient` | - | finite | N m (L, N) or N (Y) per unit of the expression | "
-         "L, Y or N += coefficient * expression |\n";
+  out +=
+      "| `plant.terms[].equation` | - | L, Y, N | - | the equation the term adds to: roll moment L, side force Y, "
+      "yaw moment N (lateral4 only) |\n";
+  out +=
+      "| `plant.terms[].expression` | - | the term grammar (docs/models.md, \"Terms\"); signals p, q, r, u, v, w, "
+      "phi, theta, delta_f, delta_t, delta_d, delta_w | - | the expression, e.g. `p^3`, `v*abs(v)`, "
+      "`lag(delta_f, 0.02)` |\n";
+  out +=
+      "| `plant.terms[].coefficient` | - | finite | N m (L, N) or N (Y) per unit of the expression | "
+      "L, Y or N += coefficient * expression |\n";
   return out;
 }
 
@@ -173,17 +196,41 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   active_u_ = lon_.has_value();
 
   const auto& L = lat_;
-  Lp_ = get_or_zero(L, "Lp"); Lr_ = get_or_zero(L, "Lr"); Lv_ = get_or_zero(L, "Lv");
-  Np_ = get_or_zero(L, "Np"); Nr_ = get_or_zero(L, "Nr"); Nv_ = get_or_zero(L, "Nv");
-  Yp_ = get_or_zero(L, "Yp"); Yr_ = get_or_zero(L, "Yr"); Yv_ = get_or_zero(L, "Yv");
-  L_df_ = get_or_zero(L, "L_df"); L_dt_ = get_or_zero(L, "L_dt"); L_dd_ = get_or_zero(L, "L_dd"); L_dw_ = get_or_zero(L, "L_dw");
-  N_df_ = get_or_zero(L, "N_df"); N_dt_ = get_or_zero(L, "N_dt"); N_dd_ = get_or_zero(L, "N_dd"); N_dw_ = get_or_zero(L, "N_dw");
-  Y_df_ = get_or_zero(L, "Y_df"); Y_dt_ = get_or_zero(L, "Y_dt"); Y_dd_ = get_or_zero(L, "Y_dd"); Y_dw_ = get_or_zero(L, "Y_dw");
+  Lp_ = get_or_zero(L, "Lp");
+  Lr_ = get_or_zero(L, "Lr");
+  Lv_ = get_or_zero(L, "Lv");
+  Np_ = get_or_zero(L, "Np");
+  Nr_ = get_or_zero(L, "Nr");
+  Nv_ = get_or_zero(L, "Nv");
+  Yp_ = get_or_zero(L, "Yp");
+  Yr_ = get_or_zero(L, "Yr");
+  Yv_ = get_or_zero(L, "Yv");
+  L_df_ = get_or_zero(L, "L_df");
+  L_dt_ = get_or_zero(L, "L_dt");
+  L_dd_ = get_or_zero(L, "L_dd");
+  L_dw_ = get_or_zero(L, "L_dw");
+  N_df_ = get_or_zero(L, "N_df");
+  N_dt_ = get_or_zero(L, "N_dt");
+  N_dd_ = get_or_zero(L, "N_dd");
+  N_dw_ = get_or_zero(L, "N_dw");
+  Y_df_ = get_or_zero(L, "Y_df");
+  Y_dt_ = get_or_zero(L, "Y_dt");
+  Y_dd_ = get_or_zero(L, "Y_dd");
+  Y_dw_ = get_or_zero(L, "Y_dw");
   if (lon_) {
     const auto& M = *lon_;
-    Mq_ = M.at("Mq"); Mu_ = M.at("Mu"); Mw_ = M.at("Mw"); M_dd_ = get_or_zero(M, "M_dd");
-    Xq_ = M.at("Xq"); Xu_ = M.at("Xu"); Xw_ = M.at("Xw"); X_dd_ = get_or_zero(M, "X_dd");
-    Zq_ = M.at("Zq"); Zu_ = M.at("Zu"); Zw_ = M.at("Zw"); Z_dd_ = get_or_zero(M, "Z_dd");
+    Mq_ = M.at("Mq");
+    Mu_ = M.at("Mu");
+    Mw_ = M.at("Mw");
+    M_dd_ = get_or_zero(M, "M_dd");
+    Xq_ = M.at("Xq");
+    Xu_ = M.at("Xu");
+    Xw_ = M.at("Xw");
+    X_dd_ = get_or_zero(M, "X_dd");
+    Zq_ = M.at("Zq");
+    Zu_ = M.at("Zu");
+    Zw_ = M.at("Zw");
+    Z_dd_ = get_or_zero(M, "Z_dd");
   }
 
   // Generic terms: the plant file's, then the lateral model's.
@@ -219,9 +266,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   update_truth(trim_command());
 }
 
-ActuatorInput PlantModel::trim_command() const {
-  return ActuatorInput{f_trim_radps_, f_trim_radps_, 0.0, 0.0};
-}
+ActuatorInput PlantModel::trim_command() const { return ActuatorInput{f_trim_radps_, f_trim_radps_, 0.0, 0.0}; }
 
 ActuatorInput PlantModel::actuated(const ActuatorInput& cmd) {
   ActuatorInput out = cmd;
@@ -324,9 +369,8 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
   dx[kPsi] = (q * sphi + r * cphi) / cth;
   const double spsi = std::sin(psi), cpsi = std::cos(psi);
   Eigen::Matrix3d R;  // body to NED, ZYX
-  R << cth * cpsi, sphi * sth * cpsi - cphi * spsi, cphi * sth * cpsi + sphi * spsi,
-       cth * spsi, sphi * sth * spsi + cphi * cpsi, cphi * sth * spsi - sphi * cpsi,
-       -sth, sphi * cth, cphi * cth;
+  R << cth * cpsi, sphi * sth * cpsi - cphi * spsi, cphi * sth * cpsi + sphi * spsi, cth * spsi,
+      sphi * sth * spsi + cphi * cpsi, cphi * sth * spsi - sphi * cpsi, -sth, sphi * cth, cphi * cth;
   dx.segment<3>(kN) = R * Eigen::Vector3d(uu, v, w);
 
   if (specific_force) *specific_force = Eigen::Vector3d(X / m, Y / m, Z / m);
@@ -336,11 +380,18 @@ PlantModel::State PlantModel::derivative(const State& x, const ActuatorInput& u,
 
 void PlantModel::term_signals(const State& x, double* out) const {
   // In term_signal_names() order: p q r u v w phi theta delta_f delta_t delta_d delta_w.
-  out[0] = x[kP]; out[1] = x[kQ]; out[2] = x[kR];
-  out[3] = x[kU]; out[4] = x[kV]; out[5] = x[kW];
-  out[6] = x[kPhi]; out[7] = x[kTheta];
-  out[8] = x[kDf]; out[9] = (x[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
-  out[10] = x[kDd]; out[11] = x[kDw];
+  out[0] = x[kP];
+  out[1] = x[kQ];
+  out[2] = x[kR];
+  out[3] = x[kU];
+  out[4] = x[kV];
+  out[5] = x[kW];
+  out[6] = x[kPhi];
+  out[7] = x[kTheta];
+  out[8] = x[kDf];
+  out[9] = (x[kFcoll] - f_trim_radps_) / cfg_.collective_radps_per_pct;
+  out[10] = x[kDd];
+  out[11] = x[kDw];
 }
 
 void PlantModel::step(const ActuatorInput& cmd_in) {

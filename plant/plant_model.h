@@ -67,10 +67,10 @@ struct InitialState {
 
 /// Everything the plant model needs besides the derivative models and the vehicle.
 struct PlantConfig {
-  double rate_hz = 1000.0;           ///< integration rate [Hz]
-  double truth_rate_hz = 1000.0;     ///< TRUTH publication rate [Hz]
-  double feedback_rate_hz = 100.0;   ///< ACTUATOR_FB publication rate [Hz]
-  double command_timeout_s = 0.1;    ///< hold the safe state when commands stop this long [s]
+  double rate_hz = 1000.0;          ///< integration rate [Hz]
+  double truth_rate_hz = 1000.0;    ///< TRUTH publication rate [Hz]
+  double feedback_rate_hz = 100.0;  ///< ACTUATOR_FB publication rate [Hz]
+  double command_timeout_s = 0.1;   ///< hold the safe state when commands stop this long [s]
   /// Resolution of the actuator interface: commands are rounded to a multiple of it
   /// (0 = no rounding). Defaults: the CAN frames' resolution (can_bridge/nimble_rig.dbc), so
   /// that the plant flies the same commands over the LCM and the CAN link.
@@ -130,8 +130,8 @@ class PlantModel {
   /// @throws std::invalid_argument if the structures do not fit, if the lateral model's
   ///         effects cannot be flown (naming the model and the effect), or if
   ///         forward_speed_coupling has both a gain and coefficients.
-  PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
-             const Vehicle& vehicle, const PlantConfig& config);
+  PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal, const Vehicle& vehicle,
+             const PlantConfig& config);
 
   /// Advances by one integration step of 1/rate_hz with `cmd` held (RK4).
   void step(const ActuatorInput& cmd);

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdio>
 
-
 #include "contract/messages.h"
 #include "sensors/sensor_config.h"
 #include "transport/process_main.h"
@@ -43,8 +42,7 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   command_channel_ = plant_command_channel(scenario);
   controller_on_estimate_ = process_run_options(scenario).controller_input == "estimate";
   node_->set_expected_rate(command_channel_, scenario.expected_rate(command_channel_));
-  node_->bus().subscribe<actuator_command_t>(command_channel_,
-                                             [this](const actuator_command_t& c) { on_command(c); });
+  node_->bus().subscribe<actuator_command_t>(command_channel_, [this](const actuator_command_t& c) { on_command(c); });
   node_->add_task("plant", config_.rate_hz, [this](int64_t t) { step(t); });
 }
 
@@ -67,15 +65,12 @@ void PlantNode::report(const ActuatorEvent& event) {
   int8_t severity = fault_event_t::SEVERITY_ERROR;
   int32_t code = fault_event_t::CODE_MESSAGE_MALFORMED;
   switch (event.kind) {
-    case ActuatorEvent::Kind::kRejected:
-      break;
+    case ActuatorEvent::Kind::kRejected: break;
     case ActuatorEvent::Kind::kClamped:
       severity = fault_event_t::SEVERITY_WARNING;
       code = fault_event_t::CODE_COMMAND_CLAMPED;
       break;
-    case ActuatorEvent::Kind::kTimeout:
-      code = fault_event_t::CODE_COMMAND_TIMEOUT;
-      break;
+    case ActuatorEvent::Kind::kTimeout: code = fault_event_t::CODE_COMMAND_TIMEOUT; break;
     case ActuatorEvent::Kind::kResumed:
       severity = fault_event_t::SEVERITY_INFO;
       code = fault_event_t::CODE_COMMAND_TIMEOUT;

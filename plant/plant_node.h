@@ -70,7 +70,7 @@ class PlantNode {
   int64_t imu_seq_ = 0;
   std::unique_ptr<transport::ProcessNode> node_;
   std::unique_ptr<ActuatorInterface> actuators_;
-  std::string command_channel_;  ///< ACTUATOR_CMD, or ACTUATOR_CMD_CAN over the CAN link
+  std::string command_channel_;          ///< ACTUATOR_CMD, or ACTUATOR_CMD_CAN over the CAN link
   bool controller_on_estimate_ = false;  ///< run.controller_input: estimate (the IMU goes out first)
   int64_t step_index_ = 0;
   int64_t truth_every_ = 1;

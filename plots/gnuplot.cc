@@ -75,7 +75,7 @@ std::filesystem::path plot_dir(const std::string& dir) {
 }
 
 std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
-                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels) {
+                                const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels) {
   return plot_panels(dir, name, title, t_s, panels, PlotAxes{});
 }
 
@@ -83,7 +83,8 @@ std::string plot_panels(const std::string& dir, const std::string& name, const s
                         const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels, const PlotAxes& axes) {
   if (panels.empty()) throw std::invalid_argument("plot " + name + ": no panel");
   for (const auto& panel : panels) {
-    if (panel.series.empty()) throw std::invalid_argument("plot " + name + ": panel '" + panel.title + "' has no series");
+    if (panel.series.empty())
+      throw std::invalid_argument("plot " + name + ": panel '" + panel.title + "' has no series");
     for (const auto& c : panel.series) {
       if (c.y.size() != t_s.size()) {
         throw std::invalid_argument("plot " + name + ": series '" + c.label + "' has " + std::to_string(c.y.size()) +
@@ -126,9 +127,9 @@ std::string plot_panels(const std::string& dir, const std::string& name, const s
     s << "plot ";
     for (std::size_t i = 0; i < panel.series.size(); ++i) {
       const PlotSeries& c = panel.series[i];
-      s << (i == 0 ? gp_quote(dat.string()) : std::string("''")) << " using 1:" << column++
-        << " with lines lw 1.2" << (c.dashed ? " dt 2" : "") << " lc rgb " << gp_quote(c.colour) << " title "
-        << gp_quote(c.label) << (i + 1 < panel.series.size() ? ", \\\n     " : "\n");
+      s << (i == 0 ? gp_quote(dat.string()) : std::string("''")) << " using 1:" << column++ << " with lines lw 1.2"
+        << (c.dashed ? " dt 2" : "") << " lc rgb " << gp_quote(c.colour) << " title " << gp_quote(c.label)
+        << (i + 1 < panel.series.size() ? ", \\\n     " : "\n");
     }
   }
   s << "unset multiplot\n";

@@ -15,14 +15,14 @@ namespace nimble::plots {
 /// One curve of a time-history panel.
 struct PlotSeries {
   std::string label;
-  Eigen::VectorXd y;                ///< one value per time sample
-  std::string colour = "#1f77b4";   ///< gnuplot rgb colour
+  Eigen::VectorXd y;               ///< one value per time sample
+  std::string colour = "#1f77b4";  ///< gnuplot rgb colour
   bool dashed = false;
 };
 
 /// One panel of a time-history plot.
 struct TimePanel {
-  std::string name;   ///< short name: the data columns are <name>:<label> (spaces as _)
+  std::string name;  ///< short name: the data columns are <name>:<label> (spaces as _)
   std::string title;
   std::string ylabel;
   std::vector<PlotSeries> series;
@@ -69,6 +69,6 @@ std::string plot_panels(const std::string& dir, const std::string& name, const s
 ///         is not as long as t_s; std::runtime_error if gnuplot is missing or fails, or a file
 ///         cannot be written.
 std::string plot_time_histories(const std::string& dir, const std::string& name, const std::string& title,
-                                 const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels);
+                                const Eigen::VectorXd& t_s, const std::vector<TimePanel>& panels);
 
 }  // namespace nimble::plots

@@ -36,9 +36,7 @@ namespace nimble::python {
 
 namespace {
 
-bool is_path(const py::handle& data) {
-  return py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__");
-}
+bool is_path(const py::handle& data) { return py::isinstance<py::str>(data) || py::hasattr(data, "__fspath__"); }
 
 /// A dict of arrays on one time base 't' as flight data, checked as ident::flight_data_from_columns
 /// checks a user's columns.
@@ -47,7 +45,8 @@ ident::FlightData dict_data(const py::dict& d) {
   using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
   const auto column = [](const py::handle& value, const std::string& name) {
     const Doubles a = Doubles::ensure(value);
-    if (!a || a.ndim() != 1) throw std::invalid_argument("data: '" + name + "' is not a one-dimensional array of numbers");
+    if (!a || a.ndim() != 1)
+      throw std::invalid_argument("data: '" + name + "' is not a one-dimensional array of numbers");
     return std::vector<double>(a.data(), a.data() + a.size());
   };
   std::map<std::string, std::vector<double>> columns;
@@ -106,7 +105,8 @@ std::vector<Term> terms_of(const py::object& terms) {
     }
     const std::string v = item.cast<std::string>();
     const auto colon = v.find(':');
-    if (colon == std::string::npos) throw py::value_error("terms: '" + v + "' is not 'EQUATION: EXPRESSION' (e.g. 'Y: v*abs(v)')");
+    if (colon == std::string::npos)
+      throw py::value_error("terms: '" + v + "' is not 'EQUATION: EXPRESSION' (e.g. 'Y: v*abs(v)')");
     std::string eq = v.substr(0, colon);
     eq.erase(0, eq.find_first_not_of(' '));
     eq.erase(eq.find_last_not_of(' ') + 1);
@@ -169,11 +169,12 @@ py::dict identify(const py::object& data, const std::string& structure, const st
     r = ident::identify(in.data, v, vehicle_file, o);
   }
   if (model_out) {
-    ident::write_model_yaml(r.model, *model_out,
-                            {"Identified by nimble_rig.identify from " + in.data.source + ".",
-                             "Structure " + to_string(o.structure) + ", " + ident::to_string(o.method) +
-                                 "; published: holds the eigenvalues and the standard deviations of this identification",
-                             "(white-residual formula)."});
+    ident::write_model_yaml(
+        r.model, *model_out,
+        {"Identified by nimble_rig.identify from " + in.data.source + ".",
+         "Structure " + to_string(o.structure) + ", " + ident::to_string(o.method) +
+             "; published: holds the eigenvalues and the standard deviations of this identification",
+         "(white-residual formula)."});
   }
   py::dict out = json_value(ident::identification_json(r, model_out.value_or(""), {}));
   out["signals"] = signals_of(r.data.filtered);
@@ -262,8 +263,7 @@ py::dict discrepancy(const py::object& data, const py::object& model_path,
   std::string gain_set = gains.value_or("");
   const bool pooled = py::isinstance<py::list>(data) || py::isinstance<py::tuple>(data);
   for (const py::handle item : pooled ? py::iterable(data) : py::iterable(py::make_tuple(data))) {
-    DataInput in =
-        flight_data_of(py::reinterpret_borrow<py::object>(item), states, sensing.value_or(""), salvage, &v);
+    DataInput in = flight_data_of(py::reinterpret_borrow<py::object>(item), states, sensing.value_or(""), salvage, &v);
     if (gain_set.empty()) gain_set = in.gain_set;
     flights.push_back(std::move(in.data));
   }
@@ -277,10 +277,11 @@ py::dict discrepancy(const py::object& data, const py::object& model_path,
     ident::compare_closed_loop(r, flights, model, v, controller, gain_set);
   }
   if (model_out) {
-    ident::write_model_yaml(r.augmented_model, *model_out,
-                            {"Refit by nimble_rig.discrepancy from " + flights.front().source + " on " + model_file + ".",
-                             "Verdict: " + r.verdict + ". " + r.summary,
-                             "published.sigma: coloured-residual standard deviations of this refit."});
+    ident::write_model_yaml(
+        r.augmented_model, *model_out,
+        {"Refit by nimble_rig.discrepancy from " + flights.front().source + " on " + model_file + ".",
+         "Verdict: " + r.verdict + ". " + r.summary,
+         "published.sigma: coloured-residual standard deviations of this refit."});
   }
   return json_value(ident::discrepancy_json(r));
 }
@@ -331,8 +332,8 @@ py::dict log_bounds(const py::object& log, const std::optional<std::string>& veh
 
 }  // namespace
 
-DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
-                         bool salvage, const Vehicle* vehicle) {
+DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing, bool salvage,
+                         const Vehicle* vehicle) {
   ident::LogReadOptions o;
   o.salvage = salvage;
   if (vehicle != nullptr) o.refuse_beyond_bounds = *vehicle;
@@ -343,24 +344,28 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
     const py::dict report = data.attr("report").cast<py::dict>();
     const std::string log = report.contains("log") ? report["log"].cast<std::string>() : std::string();
     if (log.empty()) {
-      throw std::invalid_argument("data: this Flight was flown without a log; fly(scenario, log='flight.lcmlog') "
-                                  "keeps the record the analyses read");
+      throw std::invalid_argument(
+          "data: this Flight was flown without a log; fly(scenario, log='flight.lcmlog') "
+          "keeps the record the analyses read");
     }
     return flight_data_of(py::str(log), states, sensing, salvage, vehicle);
   }
   if (py::isinstance<py::dict>(data)) {
     if (o.states != ident::StateSource::kAuto) {
-      throw std::invalid_argument("states='" + states + "': the data is a dict of arrays, which carries its own states");
+      throw std::invalid_argument("states='" + states +
+                                  "': the data is a dict of arrays, which carries its own states");
     }
     in.data = dict_data(data.cast<py::dict>());
     return in;
   }
-  if (!is_path(data)) throw std::invalid_argument("data: a path (rig log or CSV file), a Flight or a dict of arrays, not " +
-                                                  py::str(py::type::of(data)).cast<std::string>());
+  if (!is_path(data))
+    throw std::invalid_argument("data: a path (rig log or CSV file), a Flight or a dict of arrays, not " +
+                                py::str(py::type::of(data)).cast<std::string>());
   const std::string file = path_text(data);
   if (!ident::is_lcm_log(file)) {
     if (o.states != ident::StateSource::kAuto && std::filesystem::exists(file)) {
-      throw std::invalid_argument("states='" + states + "': " + file + " is not a rig log; a CSV file carries its own states");
+      throw std::invalid_argument("states='" + states + "': " + file +
+                                  " is not a rig log; a CSV file carries its own states");
     }
     in.data = ident::read_flight_data(file, o);
     return in;
@@ -395,7 +400,8 @@ void add_analysis(py::module_& m) {
         "Flight flown with log= (its log is read), or a dict of numpy arrays {'t', 'p', 'v', 'phi', "
         "'delta_f', 'delta_t', ...}. w0, u0 [m/s], theta0, phi0 [rad]: the trim of Eq 21 (--w0, --u0); terms: a "
         "model file whose terms: are fitted alongside, or a list of 'EQUATION: EXPRESSION' texts; hover, "
-        "manoeuvre: lists of (start, end) [s] for the PSDs; oe_segment_s: output error's segment [s]. Returns `rig identify --json`'s content as a dict (parameters, metrics, "
+        "manoeuvre: lists of (start, end) [s] for the PSDs; oe_segment_s: output error's segment [s]. Returns `rig "
+        "identify --json`'s content as a dict (parameters, metrics, "
         "eigenvalues, ...) plus 'signals' (the resampled, filtered signals the regression used, 't' first) and "
         "'equations' (per equation its regressors, parameters, y = scale * dependent, theta). model_out: write "
         "the identified model file there. Raises DataError for bad data, ValueError for a bad option.");

@@ -38,16 +38,20 @@ void append(M& m, ChannelColumns& c) {
     Column& col = c.columns[k++];
     if constexpr (std::is_arithmetic_v<T>) {
       col.kind = std::is_floating_point_v<T> ? Column::kFloat : Column::kInt;
-      if constexpr (std::is_floating_point_v<T>) col.f.push_back(field);
-      else col.i.push_back(static_cast<std::int64_t>(field));
+      if constexpr (std::is_floating_point_v<T>)
+        col.f.push_back(field);
+      else
+        col.i.push_back(static_cast<std::int64_t>(field));
     } else if constexpr (std::is_array_v<T> && std::is_arithmetic_v<std::remove_extent_t<T>>) {
       using E = std::remove_extent_t<T>;
       col.row = true;
       col.width = std::extent_v<T>;
       col.kind = std::is_floating_point_v<E> ? Column::kFloat : Column::kInt;
       for (std::size_t j = 0; j < std::extent_v<T>; ++j) {
-        if constexpr (std::is_floating_point_v<E>) col.f.push_back(field[j]);
-        else col.i.push_back(static_cast<std::int64_t>(field[j]));
+        if constexpr (std::is_floating_point_v<E>)
+          col.f.push_back(field[j]);
+        else
+          col.i.push_back(static_cast<std::int64_t>(field[j]));
       }
     } else if constexpr (std::is_same_v<T, std::string>) {
       col.kind = Column::kObject;
@@ -164,7 +168,8 @@ py::array_t<T> numpy_of(std::vector<T>&& values, std::size_t n, std::size_t widt
 py::array strings_of(const std::vector<std::vector<std::string>>& values) {
   std::size_t width = 1;
   for (const auto& v : values) width = std::max(width, v.front().size());
-  py::array a(py::dtype("<U" + std::to_string(width)), std::vector<py::ssize_t>{static_cast<py::ssize_t>(values.size())});
+  py::array a(py::dtype("<U" + std::to_string(width)),
+              std::vector<py::ssize_t>{static_cast<py::ssize_t>(values.size())});
   auto* out = static_cast<std::uint32_t*>(a.mutable_data());
   std::fill(out, out + values.size() * width, 0u);
   for (std::size_t i = 0; i < values.size(); ++i) {

@@ -23,7 +23,7 @@ struct Column {
   bool row = false;       ///< a fixed-size array (even of size 1): a 2-D array
   std::vector<double> f;
   std::vector<std::int64_t> i;
-  std::vector<std::vector<double>> fo;        ///< variable-length numeric arrays
+  std::vector<std::vector<double>> fo;       ///< variable-length numeric arrays
   std::vector<std::vector<std::string>> so;  ///< strings and arrays of strings
   bool strings = false;
   bool scalar_string = false;  ///< a string field (not an array of strings)
@@ -72,9 +72,9 @@ class ChannelCollector {
     Decode decode = nullptr;  ///< nullptr: not a channel of the contract
     ChannelColumns* columns = nullptr;
   };
-  std::map<std::string, Sink> sinks_;  ///< by channel, made at its first message
+  std::map<std::string, Sink> sinks_;               ///< by channel, made at its first message
   std::map<std::string, ChannelColumns> channels_;  ///< (a node's columns stay where they are)
-  std::size_t pending_batches_ = 0;  ///< handed over, not yet decoded
+  std::size_t pending_batches_ = 0;                 ///< handed over, not yet decoded
   std::condition_variable idle_;
   Batch filling_;
   std::vector<Batch> queue_;

@@ -4,7 +4,6 @@
 
 #include <pybind11/stl.h>
 
-
 #include <algorithm>
 #include <cstdint>
 #include <memory>
@@ -41,10 +40,10 @@ struct Flight {
   py::dict channels;
 };
 
-Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock,
-           const py::object& log) {
+Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock, const py::object& log) {
   if (clock != launcher::kClockInprocess) {
-    throw py::value_error("clock '" + clock + "': a flight from Python is flown in process (clock='inprocess'); "
+    throw py::value_error("clock '" + clock +
+                          "': a flight from Python is flown in process (clock='inprocess'); "
                           "the lockstep and real-time clocks run separate processes: use `rig run`");
   }
   // The plan of this flight: the scenario's, flown in process, with `seed` (as `rig run --clock
@@ -154,15 +153,17 @@ py::dict sweep(const Scenario& scenario, const std::string& seeds, const py::dic
 }  // namespace
 
 void add_flights(py::module_& m) {
-  py::class_<Scenario, std::shared_ptr<Scenario>>(m, "Scenario",
-                                                  "A scenario loaded and checked as `rig run` loads it.")
-      .def_property_readonly("file", [](const Scenario& s) { return s.options.scenario_file; },
-                             "the scenario file")
-      .def_property_readonly("name", [](const Scenario& s) { return s.plan.scenario.name; }, "its name")
-      .def_property_readonly("seed", [](const Scenario& s) { return s.plan.scenario.seed; },
-                             "its seed (fly() flies it unless given another)")
-      .def_property_readonly("duration_s", [](const Scenario& s) { return s.plan.scenario.duration_s; },
-                             "its duration [s] of simulated time")
+  py::class_<Scenario, std::shared_ptr<Scenario>>(m, "Scenario", "A scenario loaded and checked as `rig run` loads it.")
+      .def_property_readonly(
+          "file", [](const Scenario& s) { return s.options.scenario_file; }, "the scenario file")
+      .def_property_readonly(
+          "name", [](const Scenario& s) { return s.plan.scenario.name; }, "its name")
+      .def_property_readonly(
+          "seed", [](const Scenario& s) { return s.plan.scenario.seed; },
+          "its seed (fly() flies it unless given another)")
+      .def_property_readonly(
+          "duration_s", [](const Scenario& s) { return s.plan.scenario.duration_s; },
+          "its duration [s] of simulated time")
       .def("__repr__", [](const Scenario& s) {
         return "<nimble_rig.Scenario '" + s.plan.scenario.name + "' from " + s.options.scenario_file + ">";
       });

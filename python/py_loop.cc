@@ -71,14 +71,15 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
       broken.push_back(roll_broken_loop(row.lateral, row.config, row.where));
     }
   }
-  py::dict out = json_value(loop::loop_json(study.setup, study.rows, study.worst,
-                                            study.design ? &*study.design : nullptr));
+  py::dict out =
+      json_value(loop::loop_json(study.setup, study.rows, study.worst, study.design ? &*study.design : nullptr));
   py::list loops = out["loops"];
   for (std::size_t k = 0; k < study.rows.size(); ++k) {
     py::dict entry = loops[k];
     const RollLoopResponse& f = responses[k];
     Eigen::VectorXd hz(static_cast<Eigen::Index>(f.omega_radps.size()));
-    for (std::size_t i = 0; i < f.omega_radps.size(); ++i) hz(static_cast<Eigen::Index>(i)) = f.omega_radps[i] / (2 * kPi);
+    for (std::size_t i = 0; i < f.omega_radps.size(); ++i)
+      hz(static_cast<Eigen::Index>(i)) = f.omega_radps[i] / (2 * kPi);
     entry["frequency_hz"] = array_of(hz);
     entry["ratio"] = complex_of(f.ratio);
     entry["tracking"] = complex_of(f.tracking);
@@ -97,10 +98,10 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
 }  // namespace
 
 void add_loop(py::module_& m) {
-  m.def("loop", &loop, py::arg("scenario"), py::kw_only(), py::arg("model") = py::none(),
-        py::arg("gains") = py::none(), py::arg("overrides") = py::dict(), py::arg("on") = py::none(),
-        py::arg("clock") = py::none(), py::arg("break_at") = "actuator", py::arg("all_sets") = false,
-        py::arg("box") = py::none(), py::arg("design") = py::none(), py::arg("design_name") = "designed",
+  m.def("loop", &loop, py::arg("scenario"), py::kw_only(), py::arg("model") = py::none(), py::arg("gains") = py::none(),
+        py::arg("overrides") = py::dict(), py::arg("on") = py::none(), py::arg("clock") = py::none(),
+        py::arg("break_at") = "actuator", py::arg("all_sets") = false, py::arg("box") = py::none(),
+        py::arg("design") = py::none(), py::arg("design_name") = "designed",
         "The roll loop of a scenario (a path or a Scenario) as the rig flies it, as `rig loop`: returns its --json "
         "content as a dict ('loops' first: per model, gain set and break its margins, sensitivity peak, "
         "bandwidth and poles; 'robustness' with all_sets; 'design' with design='phase_margin_deg=45,"

@@ -53,8 +53,8 @@ struct DataInput {
 /// its physical bounds is refused as it is read (ident::LogReadOptions::refuse_beyond_bounds).
 /// @throws ident::DataError naming the channel and sample; std::invalid_argument for an unknown
 ///         channel, a length that differs from t's, or states given for data that is not a log.
-DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing,
-                         bool salvage, const Vehicle* vehicle = nullptr);
+DataInput flight_data_of(const py::object& data, const std::string& states, const std::string& sensing, bool salvage,
+                         const Vehicle* vehicle = nullptr);
 
 /// A numpy array of an Eigen vector (one copy, no Python work per sample).
 py::object array_of(const Eigen::VectorXd& v);

@@ -83,9 +83,10 @@ void translate(std::exception_ptr p) {
 
 PYBIND11_MODULE(_rig, m) {
   using namespace nimble::python;
-  m.doc() = "The rig's library code: scenarios loaded and checked as `rig run` does, flights and sweeps in "
-            "process, identification, validation, the discrepancy workflow, the roll loop's analysis and the "
-            "MCAP export.";
+  m.doc() =
+      "The rig's library code: scenarios loaded and checked as `rig run` does, flights and sweeps in "
+      "process, identification, validation, the discrepancy workflow, the roll loop's analysis and the "
+      "MCAP export.";
   g_config_error = PyErr_NewExceptionWithDoc("nimble_rig.ConfigError",
                                              "A bad scenario or configuration value: .file, .line, .key, .value and "
                                              ".problem say where and what (str(e) is the rig's message).",

@@ -117,9 +117,10 @@ std::string campaign_text(const CampaignResult& r) {
     for (std::size_t i = 0; i < notes.size(); ++i) out << fmt::format("  [{}] {}\n", i + 1, notes[i]);
   }
   if (!r.plant_check.empty()) {
-    out << fmt::format("\nThe identification against the plant (not a thesis cell: each set's flight flew that set's "
-                       "model; states {}, mean over the seeds)\n",
-                       r.states);
+    out << fmt::format(
+        "\nThe identification against the plant (not a thesis cell: each set's flight flew that set's "
+        "model; states {}, mean over the seeds)\n",
+        r.states);
     out << "  (sd: seed to seed; own sd: the method's own standard deviation of one flight's estimate, coloured "
            "residuals, mean over the seeds)\n";
     out << fmt::format("  {:<7} {:<10} {:<15} {:>11} {:>11} {:>9} {:>9} {:>9} {:>8}\n", "row", "derivative", "method",
@@ -246,7 +247,8 @@ std::string campaign_json(const CampaignResult& r) {
 }
 
 /// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
-void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std::string, std::vector<std::complex<double>>>>& rig,
+void plot_eigenvalue_map(const std::string& dir,
+                         const std::vector<std::pair<std::string, std::vector<std::complex<double>>>>& rig,
                          const TableSpec& published) {
   std::ostringstream data;
   for (const auto& [row, eig] : rig) {
@@ -263,12 +265,15 @@ void plot_eigenvalue_map(const std::string& dir, const std::vector<std::pair<std
                               png = std::filesystem::path(dir) / "eigenvalues_9_1.png";
   write_file(dat, data.str());
   plots::run_gnuplot(dir, "eigenvalues_9_1",
-                     "set terminal pngcairo size 900,650\nset output " + plots::gp_quote(png.string()) + "\n"
-                     "set title 'Eigenvalues of the identified models, every set (thesis Fig 9.1)'\n"
-                     "set xlabel 'real part [1/s]'\nset ylabel 'imaginary part [1/s]'\nset grid\n"
-                     "set key below\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n"
-                     "plot " + plots::gp_quote(dat.string()) + " index 0 with points pt 7 ps 1.5 title 'rig-identified', "
-                     "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
+                     "set terminal pngcairo size 900,650\nset output " + plots::gp_quote(png.string()) +
+                         "\n"
+                         "set title 'Eigenvalues of the identified models, every set (thesis Fig 9.1)'\n"
+                         "set xlabel 'real part [1/s]'\nset ylabel 'imaginary part [1/s]'\nset grid\n"
+                         "set key below\nset xzeroaxis lt -1\nset yzeroaxis lt -1\n"
+                         "plot " +
+                         plots::gp_quote(dat.string()) +
+                         " index 0 with points pt 7 ps 1.5 title 'rig-identified', "
+                         "'' index 1 with points pt 6 ps 2 lw 2 title 'published (Table 9.5)'\n");
 }
 
 }  // namespace nimble::reproduce

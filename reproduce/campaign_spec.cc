@@ -16,7 +16,9 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string resolve(const std::string& file, const std::string& path) {
-  return (fs::path(path).is_absolute() ? fs::path(path) : fs::path(file).parent_path() / path).lexically_normal().string();
+  return (fs::path(path).is_absolute() ? fs::path(path) : fs::path(file).parent_path() / path)
+      .lexically_normal()
+      .string();
 }
 
 /// A mapping of scalars as strings (scenario overrides).
@@ -86,7 +88,8 @@ Reason load_reason(const YAML::Node& node, const std::string& file, const std::s
   out.states = r.get_string_list("states");
   if (out.states.empty()) r.fail("states", "must name the state sources the reason holds for");
   for (const auto& s : out.states) {
-    if (s != "smoothed" && s != "estimate" && s != "truth") r.fail("states", "'" + s + "': smoothed, estimate or truth");
+    if (s != "smoothed" && s != "estimate" && s != "truth")
+      r.fail("states", "'" + s + "': smoothed, estimate or truth");
   }
   if (r.has("with")) {
     if (table_flight(id).empty()) r.fail("with", "table " + id + " has no flight of its own to fly with a cause");
@@ -117,8 +120,10 @@ TableSpec load_table(ConfigMap& t, const std::string& file, const std::string& i
   if (!s.reference_table.empty()) {
     for (const char* key : {"tolerance", "thesis_sigma", "calibrated", "reasons"}) {
       if (t.has(key)) {
-        t.fail(key, "table " + id + " is a pipeline check, judged against the plant file within half the published "
-                    "number's last digit (reproduce/cell_verdict.h): it takes no " + key);
+        t.fail(key, "table " + id +
+                        " is a pipeline check, judged against the plant file within half the published "
+                        "number's last digit (reproduce/cell_verdict.h): it takes no " +
+                        key);
       }
     }
   } else {
@@ -213,9 +218,9 @@ std::string reference_table(const std::string& id) {
 
 std::string table_flight(const std::string& id) {
   static const std::map<std::string, std::string> flights = {
-      {"7", "ol_doublet"}, {"8", "ol_112"}, {"12", "coupled"}, {"13", "coupled"}, {"14", "coupled"},
-      {"15", "nonlinear_30"}, {"16", "nonlinear_20"}, {"9", "identification"}, {"10", "cl_doublet_train"},
-      {"11", "cl_112"}};
+      {"7", "ol_doublet"},        {"8", "ol_112"},        {"12", "coupled"},      {"13", "coupled"},
+      {"14", "coupled"},          {"15", "nonlinear_30"}, {"16", "nonlinear_20"}, {"9", "identification"},
+      {"10", "cl_doublet_train"}, {"11", "cl_112"}};
   const auto it = flights.find(id);
   return it == flights.end() ? "" : it->second;
 }

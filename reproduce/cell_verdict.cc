@@ -13,8 +13,8 @@ namespace {
 /// Student t quantile 0.975 for 1..30 degrees of freedom (standard tables); 1.96 beyond.
 double t975(int dof) {
   static const double kT[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
-                              2.201,  2.179, 2.160,       2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
-                              2.080,  2.074, 2.069,       2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+                              2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                              2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
   if (dof < 1) return NAN;
   return dof <= 30 ? kT[dof - 1] : 1.96;
 }
@@ -30,7 +30,8 @@ std::string join(const std::vector<std::string>& v) {
 double half_last_digit(double value) {
   for (int d = 0; d <= 9; ++d) {
     const double scaled = value * std::pow(10.0, d);
-    if (std::fabs(scaled - std::round(scaled)) < 1e-6 * std::max(1.0, std::fabs(scaled))) return 0.5 * std::pow(10.0, -d);
+    if (std::fabs(scaled - std::round(scaled)) < 1e-6 * std::max(1.0, std::fabs(scaled)))
+      return 0.5 * std::pow(10.0, -d);
   }
   return 0.0;
 }
@@ -91,9 +92,10 @@ void set_tolerance(const TableSpec& t, const std::string& row, const std::string
   const double half_digit = printed_half(t, row, column, c.published);
   if (!t.reference_table.empty()) {
     c.tolerance = half_digit;
-    c.tolerance_basis = fmt::format("half the published number's last digit, {:g}: the pipeline's error must not show "
-                                    "in the number as the thesis prints it",
-                                    half_digit);
+    c.tolerance_basis = fmt::format(
+        "half the published number's last digit, {:g}: the pipeline's error must not show "
+        "in the number as the thesis prints it",
+        half_digit);
     return;
   }
   if (const auto s = t.thesis_sigma.find(key); s != t.thesis_sigma.end() && t.thesis_sigmas > 0) {
@@ -130,8 +132,8 @@ bool reason_holds(const Reason& r, double off, const Cell& c, const JudgeContext
     holds = holds && std::fabs(off) <= why->max_off;
     // A bound far above the gap cannot fail: it describes nothing of this cell.
     if (why->max_off > kMaxOffPerGap * std::fabs(off)) {
-      found.push_back(fmt::format("the bound {:g} is over {:g} times the cell's gap {:.3g}: it cannot fail", why->max_off,
-                                  kMaxOffPerGap, std::fabs(off)));
+      found.push_back(fmt::format("the bound {:g} is over {:g} times the cell's gap {:.3g}: it cannot fail",
+                                  why->max_off, kMaxOffPerGap, std::fabs(off)));
       holds = false;
     }
   }
@@ -187,7 +189,8 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   c.seeds = static_cast<int>(rig.size());
   mean_interval(rig, &c.rig, &c.rig_sd, &c.interval);
   const std::string key = row + " / " + column;
-  const bool calibrated = std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
+  const bool calibrated =
+      std::find(t.calibrated_cells.begin(), t.calibrated_cells.end(), key) != t.calibrated_cells.end();
   const Category category = calibrated ? Category::kCalibrated : t.category;
   c.category = category_name(category);
   c.values = rig;
@@ -202,9 +205,10 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   // A band that holds zero and the value's opposite cannot fail: no verdict.
   if (!(c.tolerance < std::fabs(c.reference))) {
     c.verdict = "not judged";
-    c.reason = fmt::format("the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
-                           "fail",
-                           c.tolerance, c.tolerance_basis, c.reference);
+    c.reason = fmt::format(
+        "the tolerance {:.3g} ({}) is as wide as the value {:g} itself: no comparison with it could "
+        "fail",
+        c.tolerance, c.tolerance_basis, c.reference);
     return c;
   }
   const double off = c.rig - c.reference;
@@ -231,10 +235,11 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
   if (lo <= band_hi && hi >= band_lo) {
     c.verdict = "inconclusive";
     c.seeds_to_decide = seeds_to_decide(c.rig_sd, std::min(std::fabs(c.rig - band_lo), std::fabs(c.rig - band_hi)));
-    c.reason = fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
-                           c.rig, c.interval, c.seeds, c.reference, c.tolerance) +
-               (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
-                                      : std::string("no number of seeds decides it (the mean sits on the edge)"));
+    c.reason =
+        fmt::format("the rig's interval {:.4g} +- {:.3g} ({} seeds) crosses an edge of the band {:.4g} +- {:.3g}; ",
+                    c.rig, c.interval, c.seeds, c.reference, c.tolerance) +
+        (c.seeds_to_decide > 0 ? fmt::format("about {} seeds would decide it", c.seeds_to_decide)
+                               : std::string("no number of seeds decides it (the mean sits on the edge)"));
     return c;
   }
   const Reason* why = category == Category::kFlights ? t.reason_for(key) : nullptr;
@@ -255,8 +260,8 @@ Cell judge(const TableSpec& t, const std::string& row, const std::string& column
     c.reason = why->text;
   } else {
     c.verdict = "differs";
-    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}; the reason's check fails: {} (found: {})", off,
-                           c.tolerance, c.check.predicate, c.check.value);
+    c.reason = fmt::format("off by {:.3g}, allowed {:.3g}; the reason's check fails: {} (found: {})", off, c.tolerance,
+                           c.check.predicate, c.check.value);
   }
   return c;
 }

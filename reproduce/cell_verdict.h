@@ -57,12 +57,12 @@ const char* category_name(Category c);
 struct Reason {
   std::vector<std::string> cells;  ///< "row / column", each named explicitly
   std::string text;
-  std::string rig;                 ///< "above" or "below": where the rig's value lies ("" unchecked)
-  double max_off = -1.0;           ///< bound on |rig - published| (< 0 unchecked)
-  std::vector<std::string> states; ///< state sources it holds for (empty unchecked)
+  std::string rig;                          ///< "above" or "below": where the rig's value lies ("" unchecked)
+  double max_off = -1.0;                    ///< bound on |rig - published| (< 0 unchecked)
+  std::vector<std::string> states;          ///< state sources it holds for (empty unchecked)
   std::map<std::string, std::string> with;  ///< scenario overrides adding the cause (empty: none)
-  std::string moves = "toward";    ///< with `with`: "toward" or "away" from the published value
-  double at_least = 0.1;           ///< with `with`: the least share of the gap it must move
+  std::string moves = "toward";             ///< with `with`: "toward" or "away" from the published value
+  double at_least = 0.1;                    ///< with `with`: the least share of the gap it must move
 };
 
 /// A table of the campaign file.
@@ -78,9 +78,9 @@ struct TableSpec {
   /// `calibrated_why`; the rest of the table is held out of the calibration.
   std::vector<std::string> calibrated_cells;
   std::string calibrated_why;
-  double relative = 0.0;                   ///< tolerance relative to |published|
-  std::map<std::string, double> absolute;  ///< by column
-  double thesis_sigmas = 0.0;              ///< k: tolerance k * thesis sigma where given
+  double relative = 0.0;                       ///< tolerance relative to |published|
+  std::map<std::string, double> absolute;      ///< by column
+  double thesis_sigmas = 0.0;                  ///< k: tolerance k * thesis sigma where given
   std::map<std::string, double> thesis_sigma;  ///< "row / column" -> the thesis's sigma
   int min_seeds = 1;
   std::map<std::string, std::map<std::string, double>> published;  ///< row -> column -> value
@@ -88,7 +88,7 @@ struct TableSpec {
   /// 0.0005); a cell without it takes half_last_digit() of its value.
   std::map<std::string, std::map<std::string, double>> printed_half_digit;
   std::vector<std::string> row_order;
-  std::map<std::string, std::vector<std::string>> column_order;    ///< row -> columns as written
+  std::map<std::string, std::vector<std::string>> column_order;  ///< row -> columns as written
   std::vector<Reason> reasons;
   /// The reason naming `cell` ("row / column"), or null.
   const Reason* reason_for(const std::string& cell) const;
@@ -98,7 +98,7 @@ struct TableSpec {
 struct Check {
   std::string predicate;  ///< in words
   bool holds = false;
-  std::string value;      ///< what was found
+  std::string value;  ///< what was found
 };
 
 /// One judged cell.
@@ -108,20 +108,20 @@ struct Cell {
   /// What the rig's value is judged against: the published value, or for a pipeline check
   /// (TableSpec::reference_table) the plant file's exact value.
   double reference = 0.0;
-  double rig = 0.0;          ///< mean over the seeds
+  double rig = 0.0;            ///< mean over the seeds
   std::vector<double> values;  ///< the rig's value on each seed flown, in the seeds' order
-  double rig_sd = 0.0;       ///< seed-to-seed standard deviation (0 with one seed)
-  double interval = 0.0;     ///< 95 % half-width of the mean (0 with one seed)
+  double rig_sd = 0.0;         ///< seed-to-seed standard deviation (0 with one seed)
+  double interval = 0.0;       ///< 95 % half-width of the mean (0 with one seed)
   int seeds = 0;
-  double tolerance = 0.0;    ///< |rig - published| allowed for a match
+  double tolerance = 0.0;       ///< |rig - published| allowed for a match
   std::string tolerance_basis;  ///< "2 thesis sigma", "5 % of the value", "absolute"
   std::string category;
-  std::string verdict;       ///< match, explained, differs, inconclusive, not judged
-  std::string reason;        ///< the reason (explained) or why it differs / is not judged
+  std::string verdict;  ///< match, explained, differs, inconclusive, not judged
+  std::string reason;   ///< the reason (explained) or why it differs / is not judged
   bool has_check = false;
   Check check;
-  std::string repeats;       ///< "table / row / column" of an earlier cell with the same numbers
-  int seeds_to_decide = 0;   ///< inconclusive: about how many seeds would decide it (0: none would)
+  std::string repeats;      ///< "table / row / column" of an earlier cell with the same numbers
+  int seeds_to_decide = 0;  ///< inconclusive: about how many seeds would decide it (0: none would)
 };
 
 /// What judge() needs beyond the numbers.

@@ -43,8 +43,10 @@ std::map<std::string, std::map<std::string, double>> nested_of(const Json& j) {
 }
 
 Json record_json(const FlightRecord& r) {
-  return {{"name", r.name}, {"seed", r.seed}, {"scenario", r.scenario}, {"log", r.log}, {"result", r.result},
-          {"controlled", r.controlled}, {"sim_s", number(r.sim_s)}, {"wall_s", number(r.wall_s)}};
+  return {{"name", r.name},           {"seed", r.seed},
+          {"scenario", r.scenario},   {"log", r.log},
+          {"result", r.result},       {"controlled", r.controlled},
+          {"sim_s", number(r.sim_s)}, {"wall_s", number(r.wall_s)}};
 }
 FlightRecord record_of(const Json& j) {
   FlightRecord r;
@@ -97,8 +99,8 @@ SeedValues seed_values_from_line(const std::string& line) {
     }
     return v;
   } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error("rig reproduce: a seed's values do not read back (" + std::string(e.what()) + "): " +
-                             line.substr(0, 200));
+    throw std::runtime_error("rig reproduce: a seed's values do not read back (" + std::string(e.what()) +
+                             "): " + line.substr(0, 200));
   }
 }
 

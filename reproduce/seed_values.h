@@ -30,11 +30,11 @@ struct WithFlight {
 
 struct SeedValues {
   std::uint64_t seed = 1;
-  std::map<std::string, CellMap> tables;                        ///< table id -> its cells
+  std::map<std::string, CellMap> tables;                            ///< table id -> its cells
   std::map<std::string, std::map<std::string, double>> identified;  ///< set row -> derivative -> value
   std::map<std::string, std::map<std::string, double>> plant;       ///< set row -> derivative -> the plant's
-  std::vector<FlightRecord> flights;                            ///< the seed's own flights, in flying order
-  std::vector<WithFlight> with;                                 ///< one per flight with a cause, in the plan's order
+  std::vector<FlightRecord> flights;                                ///< the seed's own flights, in flying order
+  std::vector<WithFlight> with;  ///< one per flight with a cause, in the plan's order
 };
 
 /// The derivatives whose identification is checked against the plant's (SeedValues::identified).

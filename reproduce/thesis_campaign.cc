@@ -106,8 +106,8 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
   }
   f.record.wall_s = seconds_since(t0);
   if (o.progress) {
-    std::cerr << fmt::format("rig reproduce: flew {} seed {} ({}) in {:.2f} s: {}\n", name, seed, fs::path(scenario).filename().string(),
-                             f.record.wall_s, f.record.result);
+    std::cerr << fmt::format("rig reproduce: flew {} seed {} ({}) in {:.2f} s: {}\n", name, seed,
+                             fs::path(scenario).filename().string(), f.record.wall_s, f.record.result);
   }
   return f;
 }
@@ -218,7 +218,6 @@ struct WithCause {
   std::vector<std::string> failures;
 };
 
-
 /// One run of the campaign: the flights of every seed, the values of every table.
 class CampaignRun {
  public:
@@ -307,8 +306,10 @@ class CampaignRun {
       }
       all_eigenvalues.emplace_back(set.row, id.eigenvalues);
       if (first) {
-        put_nondimensional(t96, set.row, [&id](const char* n) { return id.parameters.at(n).value; }, id.vehicle);
-        put_nondimensional(t96_oe, set.row, [&oe](const char* n) { return oe.parameters.at(n).value; }, oe.vehicle);
+        put_nondimensional(
+            t96, set.row, [&id](const char* n) { return id.parameters.at(n).value; }, id.vehicle);
+        put_nondimensional(
+            t96_oe, set.row, [&oe](const char* n) { return oe.parameters.at(n).value; }, oe.vehicle);
         put_fit(t4, "p_dot", fit_of(id.fits, "p_dot").metrics);
         put_fit(t4, "v_dot", fit_of(id.fits, "v_dot_star").metrics);
         if (plots_ && !o_.report_dir.empty()) {
@@ -373,7 +374,8 @@ class CampaignRun {
     const auto other = spec_.coupled_models.find(id);
     const DerivativeModel m_other = other != spec_.coupled_models.end() ? load_model(other->second) : model;
     const Vehicle v_other = other != spec_.coupled_models.end() ? load_vehicle(m_other.vehicle_file) : vehicle;
-    const ident::ValidationResult v = ident::validate_open_loop(data.measured, m_other, v_other, ident::ValidationOptions{});
+    const ident::ValidationResult v =
+        ident::validate_open_loop(data.measured, m_other, v_other, ident::ValidationOptions{});
     for (const char* out : {"p_dot", "v_dot", "phi_dot"}) put_fit(m, out, fit_of(v.fits, out).metrics);
     if (plot && other == spec_.coupled_models.end()) {
       fs::create_directories(dir);
@@ -407,7 +409,8 @@ std::vector<double> over_seeds(const std::vector<CellMap>& seeds, const std::str
 }
 
 /// Marks cells whose published value and rig values repeat an earlier cell's (counted once).
-void mark_repeats(std::vector<Table>& tables, const std::map<std::string, std::map<std::string, std::vector<double>>>& raw) {
+void mark_repeats(std::vector<Table>& tables,
+                  const std::map<std::string, std::map<std::string, std::vector<double>>>& raw) {
   std::vector<std::pair<std::string, std::vector<double>>> seen;  // "table / row / column", published + values
   for (Table& t : tables) {
     for (Cell& c : t.cells) {
@@ -538,7 +541,8 @@ CampaignResult run_campaign(const CampaignOptions& o) {
       const Vehicle v = load_vehicle(m.vehicle_file);
       put_eigenvalues(eig, set.row, model_eigenvalues(m, v));
       if (set.row == spec.sets.front().row) {
-        put_nondimensional(nd, set.row, [&m](const char* n) { return m.derivatives.at(n); }, v);
+        put_nondimensional(
+            nd, set.row, [&m](const char* n) { return m.derivatives.at(n); }, v);
       }
     }
     values["9.5-model"] = {eig};

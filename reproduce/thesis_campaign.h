@@ -44,10 +44,10 @@
 namespace nimble::reproduce {
 
 struct Table {
-  std::string id;     ///< thesis table number, e.g. "9.4"
+  std::string id;  ///< thesis table number, e.g. "9.4"
   std::string title;
-  std::string category;  ///< reproduce/cell_verdict.h
-  std::string why;       ///< what the cells are computed from (the category's ground)
+  std::string category;        ///< reproduce/cell_verdict.h
+  std::string why;             ///< what the cells are computed from (the category's ground)
   bool against_plant = false;  ///< a pipeline check: cells judged against the plant file's values
   std::vector<Cell> cells;
 };
@@ -68,9 +68,9 @@ struct PlantCheck {
   std::string derivative;  ///< e.g. "Yv"
   std::string method;      ///< "equation error" (the thesis's WLS) or "output error"
   double plant = 0.0;
-  double mean = 0.0;       ///< over the seeds
-  double sd = 0.0;         ///< seed-to-seed
-  double interval = 0.0;   ///< 95 % half-width of the mean
+  double mean = 0.0;      ///< over the seeds
+  double sd = 0.0;        ///< seed-to-seed
+  double interval = 0.0;  ///< 95 % half-width of the mean
   /// The method's own standard deviation of one flight's estimate (Cramer-Rao or regression,
   /// allowing coloured residuals), mean over the seeds: beside `sd`, whether the method knows
   /// how well one flight determines the derivative.
@@ -78,21 +78,21 @@ struct PlantCheck {
 };
 
 struct CauseStudy {
-  std::string name;    ///< e.g. "flapping forcing"
-  std::string source;  ///< where its size comes from
+  std::string name;                    ///< e.g. "flapping forcing"
+  std::string source;                  ///< where its size comes from
   std::vector<std::string> overrides;  ///< key=value
   std::vector<CauseCell> cells;
-  std::vector<std::string> failures;   ///< flights with the cause that did not fly as their scenario asks
+  std::vector<std::string> failures;  ///< flights with the cause that did not fly as their scenario asks
 };
 
 struct FlightRecord {
-  std::string name;      ///< the campaign file's flight name
+  std::string name;  ///< the campaign file's flight name
   std::uint64_t seed = 1;
   std::string scenario;  ///< scenario file
   std::string log;       ///< its log
   std::string result;    ///< the run's verdict text
   bool controlled = false;
-  double sim_s = 0.0;    ///< simulated time flown
+  double sim_s = 0.0;  ///< simulated time flown
   double wall_s = 0.0;
 };
 
@@ -118,15 +118,15 @@ struct CampaignOptions {
   std::string campaign_file;
   std::string clock = "inprocess";  ///< inprocess, lockstep or realtime (the last two through `rig run`)
   std::vector<std::uint64_t> seeds{1, 2, 3, 4, 5};  ///< every flight is flown with each
-  std::string work_dir;             ///< logs land here
-  std::string rig_exe;              ///< `rig` itself, for the lockstep and real-time clocks
-  std::string report_dir;           ///< figures (empty: none)
-  std::string controller_file;      ///< the controller copy of the closed-loop validation
+  std::string work_dir;                             ///< logs land here
+  std::string rig_exe;                              ///< `rig` itself, for the lockstep and real-time clocks
+  std::string report_dir;                           ///< figures (empty: none)
+  std::string controller_file;                      ///< the controller copy of the closed-loop validation
   /// Where the identification and validation take the states: "smoothed" (made offline from the
   /// log's IMU and motion capture, as the thesis's were; the default), "estimate" (the on-board
   /// EKF's) or "truth" (the plant's).
   std::string states = "smoothed";
-  bool progress = false;            ///< a line per flight on stderr
+  bool progress = false;  ///< a line per flight on stderr
   /// Seeds flown at a time, each in a worker of the campaigns' pool (campaign/worker_pool.h); the
   /// tables are the same for any number.
   int jobs = 1;

@@ -70,16 +70,16 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
     if (can) {
       if (!can_link) m.fail("target", "the CAN link is faulted only in a run with actuator_link: can");
     } else {
-
       const std::string publisher = publisher_of(f.target);
       if (std::find(processes.begin(), processes.end(), publisher) == processes.end()) {
-        m.fail("target", f.target + " is published by the " + publisher + ", which this run does not start (processes: " +
-                             join(processes) + ")");
+        m.fail("target", f.target + " is published by the " + publisher +
+                             ", which this run does not start (processes: " + join(processes) + ")");
       }
     }
 
     // Parameters of the kind, strictly: a key the kind does not take is an error.
-    ConfigMap p = m.has("params") ? m.get_map("params") : ConfigMap(YAML::Node(YAML::NodeType::Map), file, path + ".params");
+    ConfigMap p =
+        m.has("params") ? m.get_map("params") : ConfigMap(YAML::Node(YAML::NodeType::Map), file, path + ".params");
     switch (f.kind) {
       case FaultKind::kGarbage:
         f.garbage_nan = p.has("mode") && p.get_enum("mode", {"bytes", "nan"}) == "nan";
@@ -91,17 +91,13 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
         if (p.has("field")) f.field = p.get_string("field");
         if (f.scale == 1.0 && f.bias == 0.0) p.fail("scale", "wrong needs a scale other than 1 or a bias other than 0");
         break;
-      case FaultKind::kSlow:
-        f.divisor = static_cast<int>(p.get_int("divisor", Range::closed(2, 1e6)));
-        break;
+      case FaultKind::kSlow: f.divisor = static_cast<int>(p.get_int("divisor", Range::closed(2, 1e6))); break;
       case FaultKind::kDelayed:
         f.delay_us = static_cast<int64_t>(std::llround(1e3 * p.get_double("delay_ms", Range{0.0, 60e3, true, false})));
         break;
       case FaultKind::kIntermittent:
       case FaultKind::kCanLoss:
-      case FaultKind::kCanCorrupt:
-        f.probability = p.get_double("probability", Range{0.0, 1.0, true, false});
-        break;
+      case FaultKind::kCanCorrupt: f.probability = p.get_double("probability", Range{0.0, 1.0, true, false}); break;
       case FaultKind::kOff:
       case FaultKind::kStuck:
       case FaultKind::kCanBusOff: break;  // no parameters: p.finish() refuses any
@@ -112,8 +108,9 @@ std::vector<contract::FaultSpec> faults_from(const YAML::Node& faults, const std
     const bool withholds = f.kind == FaultKind::kOff || f.kind == FaultKind::kSlow || f.kind == FaultKind::kDelayed ||
                            f.kind == FaultKind::kIntermittent || (f.kind == FaultKind::kGarbage && !f.garbage_nan);
     if (can_link && f.target == contract::channels::kActuatorCommand && withholds) {
-      m.fail("kind", "over actuator_link: can, commands that do not reach the bridge are a fault of the link: use "
-                     "target CAN (loss, corrupt, bus_off)");
+      m.fail("kind",
+             "over actuator_link: can, commands that do not reach the bridge are a fault of the link: use "
+             "target CAN (loss, corrupt, bus_off)");
     }
     if (!f.field.empty()) {
       const std::vector<std::string> names = contract::value_field_names(f.target);

@@ -73,7 +73,9 @@ YAML::Node merge(const YAML::Node& under, const YAML::Node& over) {
   return out;
 }
 
-std::string join_path(const std::string& a, const std::string& b) { return a.empty() ? b : b.empty() ? a : a + "." + b; }
+std::string join_path(const std::string& a, const std::string& b) {
+  return a.empty() ? b : b.empty() ? a : a + "." + b;
+}
 
 /// Records where each key of `node` (freshly parsed from `file`, so with line marks) is
 /// written, as key paths under `mount`. `replace`: the new origins win over ones already
@@ -246,9 +248,8 @@ ConfigError locate_error(const ConfigError& error, const std::string& scenario_f
 const std::vector<std::string>& scenario_section_keys() {
   // The IMU, motion-capture and EKF settings live under sensing (sensing.imu, sensing.mocap,
   // sensing.ekf): a top-level imu, mocap or estimator section would be read by nobody.
-  static const std::vector<std::string> keys = {"plant",    "controller", "sensing", "can_bridge",
-                                                "lockstep", "run",        "summary", "hosts",
-                                                "pilot",    "cluster"};
+  static const std::vector<std::string> keys = {"plant", "controller", "sensing", "can_bridge", "lockstep",
+                                                "run",   "summary",    "hosts",   "pilot",      "cluster"};
   return keys;
 }
 
@@ -293,7 +294,8 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   std::set<std::string> seen;
   for (const auto& p : s.processes) {
     if (!known.count(p)) {
-      map.fail("processes", "unknown process '" + p + "' (known: plant, controller, mocap, estimator, can_flight, can_rig)");
+      map.fail("processes",
+               "unknown process '" + p + "' (known: plant, controller, mocap, estimator, can_flight, can_rig)");
     }
     if (!seen.insert(p).second) map.fail("processes", "process '" + p + "' listed twice");
     if ((p == "can_flight" || p == "can_rig") && s.actuator_link != "can") {
@@ -332,7 +334,8 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
     std::error_code ec;
     const bool found = fs::exists(f, ec);
     // A name the file system refuses (too long, a component that is not a folder) is named as such.
-    if (ec && ec != std::errc::no_such_file_or_directory) throw ConfigError(file, "model", f, "cannot be looked up: " + ec.message());
+    if (ec && ec != std::errc::no_such_file_or_directory)
+      throw ConfigError(file, "model", f, "cannot be looked up: " + ec.message());
     if (!found) throw ConfigError(file, "model", f, "file not found");
   }
   return s;
@@ -369,8 +372,10 @@ Scenario load_scenario(const std::string& file, const std::vector<Override>& ove
 const ParamTable<LockstepOptions>& lockstep_params() {
   using C = LockstepOptions;
   static const ParamTable<C> table = {
-      {"ack_timeout_ms", &C::ack_timeout_ms, Range::closed(10, 600000), "ms", "how long the plant waits for a due participant's STEP_ACK (wall clock)"},
-      {"logger_period_ms", &C::logger_period_ms, Range::closed(1.0, 1000.0), "ms", "the launcher's recorder acknowledges every this much simulated time, so the run never outpaces the log"},
+      {"ack_timeout_ms", &C::ack_timeout_ms, Range::closed(10, 600000), "ms",
+       "how long the plant waits for a due participant's STEP_ACK (wall clock)"},
+      {"logger_period_ms", &C::logger_period_ms, Range::closed(1.0, 1000.0), "ms",
+       "the launcher's recorder acknowledges every this much simulated time, so the run never outpaces the log"},
   };
   return table;
 }
@@ -378,11 +383,18 @@ const ParamTable<LockstepOptions>& lockstep_params() {
 const ParamTable<ProcessRunOptions>& process_run_params() {
   using C = ProcessRunOptions;
   static const ParamTable<C> table = {
-      {"realtime_priority", &C::realtime_priority, Range::closed(0, 99), "-", "real time: SCHED_FIFO priority of the rig's processes, 0 = default scheduler"},
-      {"spin_us", &C::spin_us, Range::closed(0, 1000), "us", "real time: spin this long before each deadline instead of sleeping (0 = sleep)"},
-      {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us", "real time: a stream message received later than this after its due time is late"},
-      {"channel_filter", &C::channel_filter, Range::closed(0, 1), "-", "1: each process's LCM socket drops, in the kernel, the channels the process does not take; 0: every message wakes every process"},
-      {"start_wait_s", &C::start_wait_s, Range{0.0, 86400.0, true, false}, "s", "a process waits this long for the run's start, then gives up, named (one started by hand for a run that was refused or whose launcher is gone); above run.ready_timeout_s"},
+      {"realtime_priority", &C::realtime_priority, Range::closed(0, 99), "-",
+       "real time: SCHED_FIFO priority of the rig's processes, 0 = default scheduler"},
+      {"spin_us", &C::spin_us, Range::closed(0, 1000), "us",
+       "real time: spin this long before each deadline instead of sleeping (0 = sleep)"},
+      {"late_threshold_us", &C::late_threshold_us, Range::positive(), "us",
+       "real time: a stream message received later than this after its due time is late"},
+      {"channel_filter", &C::channel_filter, Range::closed(0, 1), "-",
+       "1: each process's LCM socket drops, in the kernel, the channels the process does not take; 0: every message "
+       "wakes every process"},
+      {"start_wait_s", &C::start_wait_s, Range{0.0, 86400.0, true, false}, "s",
+       "a process waits this long for the run's start, then gives up, named (one started by hand for a run that was "
+       "refused or whose launcher is gone); above run.ready_timeout_s"},
   };
   return table;
 }

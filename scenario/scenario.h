@@ -61,11 +61,11 @@ ConfigError locate_error(const ConfigError& error, const std::string& scenario_f
 /// The top-level facts of a resolved scenario; process sections stay in `root` and are
 /// validated by their owners (plant_config_from, controller config, ...).
 struct Scenario {
-  std::string file;         ///< the file it was loaded from (or the resolved copy)
+  std::string file;  ///< the file it was loaded from (or the resolved copy)
   std::string name;
   std::string description;
   double duration_s = 0.0;
-  std::string clock;        ///< "realtime", "lockstep" or "inprocess" (launcher/run_plan.h)
+  std::string clock;  ///< "realtime", "lockstep" or "inprocess" (launcher/run_plan.h)
   uint64_t seed = 1;
   std::string model_file;               ///< lateral derivative model
   std::string longitudinal_model_file;  ///< optional

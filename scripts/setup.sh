@@ -44,6 +44,8 @@ case "$PROFILE" in
   all)
     PACKAGES+=(gnuplot-nox can-utils qemu-system-x86 xz-utils python3 python3-numpy chromium-headless-shell
                slurm-wlm munge
+               # the layout check of every C++ source against .clang-format (meta.format)
+               clang-format
                # the rig from Python: the compiled module (python/), its tests (scipy.signal checks the
                # loop analysis) and the notebook in docs/ (executed by nbconvert, plots by matplotlib)
                pybind11-dev python3-dev python3-pytest python3-scipy python3-matplotlib python3-yaml

@@ -176,18 +176,20 @@ ImuSample ImuModel::sample(const ImuTruthInput& truth) {
       }
     }
     for (int i = 0; i < 3; ++i) {
-      vib_gyro[i] += config_.structural_gyro_amplitude_radps[i] * std::sin(structural_phase_rad_ + structural_gyro_phase_rad_[i]);
-      vib_accel[i] += config_.structural_accel_amplitude_mps2[i] * std::sin(structural_phase_rad_ + structural_accel_phase_rad_[i]);
+      vib_gyro[i] +=
+          config_.structural_gyro_amplitude_radps[i] * std::sin(structural_phase_rad_ + structural_gyro_phase_rad_[i]);
+      vib_accel[i] +=
+          config_.structural_accel_amplitude_mps2[i] * std::sin(structural_phase_rad_ + structural_accel_phase_rad_[i]);
     }
   }
   last_gyro_vibration_radps_ = vib_gyro;
   last_accel_vibration_mps2_ = vib_accel;
 
   // Scale factor and misalignment act on the true motion (untouched when there are none).
-  const Eigen::Vector3d omega = gyro_errors_ ? Eigen::Vector3d(gyro_matrix_ * truth.omega_body_radps)
-                                             : truth.omega_body_radps;
-  const Eigen::Vector3d force = accel_errors_ ? Eigen::Vector3d(accel_matrix_ * truth.specific_force_body_mps2)
-                                              : truth.specific_force_body_mps2;
+  const Eigen::Vector3d omega =
+      gyro_errors_ ? Eigen::Vector3d(gyro_matrix_ * truth.omega_body_radps) : truth.omega_body_radps;
+  const Eigen::Vector3d force =
+      accel_errors_ ? Eigen::Vector3d(accel_matrix_ * truth.specific_force_body_mps2) : truth.specific_force_body_mps2;
 
   ImuSample out;
   out.utime = clock_.stamp(truth.utime);
@@ -195,15 +197,14 @@ ImuSample ImuModel::sample(const ImuTruthInput& truth) {
   out.temperature_degc = config_.temperature_degc;
   std::uint8_t flags = 0;
   for (int i = 0; i < 3; ++i) {
-    const double raw = omega[i] + gyro_bias_radps_[i] + vib_gyro[i] +
-                       config_.gyro_noise_sigma_radps[i] * normal_(rng_);
+    const double raw = omega[i] + gyro_bias_radps_[i] + vib_gyro[i] + config_.gyro_noise_sigma_radps[i] * normal_(rng_);
     bool clamped = false;
     out.gyro_radps[i] = clamp_axis(raw, config_.gyro_range_radps, &clamped);
     if (clamped) flags |= static_cast<std::uint8_t>(kSatGyroX << i);
   }
   for (int i = 0; i < 3; ++i) {
-    const double raw = force[i] + accel_bias_mps2_[i] + vib_accel[i] +
-                       config_.accel_noise_sigma_mps2[i] * normal_(rng_);
+    const double raw =
+        force[i] + accel_bias_mps2_[i] + vib_accel[i] + config_.accel_noise_sigma_mps2[i] * normal_(rng_);
     bool clamped = false;
     out.accel_mps2[i] = clamp_axis(raw, config_.accel_range_mps2, &clamped);
     if (clamped) flags |= static_cast<std::uint8_t>(kSatAccelX << i);

@@ -88,8 +88,7 @@ struct ImuModelConfig {
   /// White gyro noise, 1-sigma per sample, axes x y z [rad/s]; thesis Section 8.1: 0.05 deg/s.
   Eigen::Vector3d gyro_noise_sigma_radps = Eigen::Vector3d::Constant(0.05 * kDegToRad);
   /// White accelerometer noise, 1-sigma per sample [m/s^2]; thesis Section 8.1: 0.05 g (x, y), 0.08 g (z).
-  Eigen::Vector3d accel_noise_sigma_mps2 =
-      Eigen::Vector3d(0.05, 0.05, 0.08) * kStandardGravityMps2;
+  Eigen::Vector3d accel_noise_sigma_mps2 = Eigen::Vector3d(0.05, 0.05, 0.08) * kStandardGravityMps2;
   /// Fixed part of the initial gyro bias [rad/s] (scenario value, e.g. an injected bias).
   Eigen::Vector3d gyro_bias_initial_radps = Eigen::Vector3d::Zero();
   /// Fixed part of the initial accelerometer bias [m/s^2].

@@ -23,9 +23,7 @@ std::int64_t MocapConfig::frame_period_us() const {
   return static_cast<std::int64_t>(std::llround(1e6 / frame_rate_hz));
 }
 
-double MocapConfig::position_sigma_m() const {
-  return mean_position_error_m / (2.0 * std::sqrt(2.0 / M_PI));
-}
+double MocapConfig::position_sigma_m() const { return mean_position_error_m / (2.0 * std::sqrt(2.0 / M_PI)); }
 
 double MocapConfig::expected_dropout_fraction() const {
   const double period_s = 1e-6 * static_cast<double>(frame_period_us());
@@ -52,9 +50,7 @@ void validate(const MocapConfig& c) {
 }
 
 MocapEmulator::MocapEmulator(const MocapConfig& config, std::uint64_t seed)
-    : config_(config),
-      noise_rng_(seed),
-      dropout_rng_(seed ^ 0x9E3779B97F4A7C15ULL) {
+    : config_(config), noise_rng_(seed), dropout_rng_(seed ^ 0x9E3779B97F4A7C15ULL) {
   validate(config_);
   period_us_ = config_.frame_period_us();
   position_sigma_m_ = config_.position_sigma_m();
@@ -146,7 +142,8 @@ std::vector<MocapPose> MocapEmulator::step(const MocapTruthInput& truth_now) {
   // skips to it, and the frames skipped count as dropped.
   constexpr std::int64_t kMaxCatchUpFrames = 1000;
   if (truth_now.utime > next_frame_utime() &&
-      (static_cast<double>(truth_now.utime) - static_cast<double>(next_frame_utime())) / static_cast<double>(period_us_) >
+      (static_cast<double>(truth_now.utime) - static_cast<double>(next_frame_utime())) /
+              static_cast<double>(period_us_) >
           static_cast<double>(kMaxCatchUpFrames)) {
     const std::int64_t skip = (truth_now.utime - next_frame_utime()) / period_us_;
     next_frame_ += skip;

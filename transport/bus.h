@@ -123,7 +123,9 @@ class Bus {
       msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
       return bytes;
     };
-    m.restore = [&msg](const std::vector<uint8_t>& bytes) { msg.decode(bytes.data(), 0, static_cast<int>(bytes.size())); };
+    m.restore = [&msg](const std::vector<uint8_t>& bytes) {
+      msg.decode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    };
     injector_->publish(*this, channel, m);
   }
 
@@ -143,7 +145,6 @@ class Bus {
   }
 
  public:
-
   /// Subscribes `handler` to `channel` (an exact name). The handler gets the decoded
   /// message. Types whose first fields are `utime, seq` get drop counting from gaps in seq.
   /// A message that does not decode exactly, or (on a channel with one publisher) whose seq
@@ -158,7 +159,7 @@ class Bus {
     sub->stats->due_in_sim_time = contract::due_in_sim_time(channel);
     sub->stats->one_publisher = contract::single_publisher(channel);
     sub->decode_and_call = [this, handler](const void* data, int size, ChannelStats& stats,
-                                     std::string& error) -> bool {
+                                           std::string& error) -> bool {
       T msg{};  // value-initialised: decode() fills it, the compiler cannot see that
       // Bytes the rig's own encoder wrote in this process encode back by construction; any
       // other bytes (over LCM, or published raw) are checked in full.
@@ -264,10 +265,10 @@ class Bus {
   bool filter_enabled_ = false;
   bool filter_active_ = false;
   bool subscribed_by_pattern_ = false;
-  int port_ = -1;                  ///< the udpm URL's port, -1 for other providers
-  std::set<int> sockets_before_;   ///< UDP sockets on port_ before LCM made its receive socket
-  int receive_fd_ = -1;            ///< LCM's receive socket, once found
-  std::set<std::string> channels_; ///< exact subscriptions
+  int port_ = -1;                   ///< the udpm URL's port, -1 for other providers
+  std::set<int> sockets_before_;    ///< UDP sockets on port_ before LCM made its receive socket
+  int receive_fd_ = -1;             ///< LCM's receive socket, once found
+  std::set<std::string> channels_;  ///< exact subscriptions
   std::string filter_problem_;
 };
 

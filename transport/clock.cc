@@ -41,9 +41,7 @@ double LatencyHistogram::percentile_us(double pct) const {
   return max_us();
 }
 
-double LatencyHistogram::mean_us() const {
-  return count_ == 0 ? 0.0 : sum_ns_ / static_cast<double>(count_) / 1000.0;
-}
+double LatencyHistogram::mean_us() const { return count_ == 0 ? 0.0 : sum_ns_ / static_cast<double>(count_) / 1000.0; }
 
 void sleep_until_ns(int64_t deadline_ns) {
   timespec ts{};

@@ -75,9 +75,7 @@ void FaultInjector::publish(Bus& bus, const std::string& channel, FaultableMessa
   }
   std::mt19937_64& rng = rng_.at(f->index);
   switch (f->kind) {
-    case FaultKind::kOff:
-      ++withheld_;
-      return;
+    case FaultKind::kOff: ++withheld_; return;
     case FaultKind::kStuck: {
       if (cs.held_for != f->index) {
         cs.held = cs.last_good.empty() ? msg.encode() : cs.last_good;

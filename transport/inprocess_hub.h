@@ -54,7 +54,7 @@ class InprocessHub {
 
  private:
   struct Entry {
-    int channel = 0;  // index into names_
+    int channel = 0;   // index into names_
     bool own = false;  // written by the rig's own encoder
     std::vector<unsigned char> data;
   };
@@ -78,7 +78,7 @@ class InprocessHub {
   RecentName recent_[kRecentNames];
   std::vector<std::vector<int>> targets_;
   std::vector<char> targets_valid_;  // per channel: targets_ is up to date (char: read per delivery)
-  std::vector<Entry> queue_;  // entries [head_, count_) wait; their buffers are reused
+  std::vector<Entry> queue_;         // entries [head_, count_) wait; their buffers are reused
   std::size_t head_ = 0, count_ = 0;
   bool draining_ = false;
   bool delivering_own_ = false;

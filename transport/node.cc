@@ -50,23 +50,21 @@ ProcessNode::ProcessNode(const NodeOptions& options, const RealtimeSettings& rea
           "dropped a malformed message on " + channel + ": " + what);
   });
   // Subscribed before anything is announced, so that no start command is missed.
-  bus_.subscribe<run_control_t>(contract::channels::kRunControl,
-                                [this](const run_control_t& m) { on_run_control(m); });
+  bus_.subscribe<run_control_t>(contract::channels::kRunControl, [this](const run_control_t& m) { on_run_control(m); });
   if (options.hub == nullptr && !realtime_problem().empty()) {
     fault(fault_event_t::SEVERITY_WARNING, fault_event_t::CODE_REALTIME_UNAVAILABLE, "", realtime_problem());
   }
 }
 
 void ProcessNode::install_signal_handlers() {
-  struct sigaction sa{};
+  struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
 }
 
-void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger,
-                           int64_t backstop_ns) {
+void ProcessNode::add_task(const std::string& label, double rate_hz, TaskFn fn, Trigger trigger, int64_t backstop_ns) {
   const double period = 1e9 / rate_hz;
   if (!(rate_hz > 0.0) || std::fabs(period - std::round(period)) > 1e-6) {
     throw std::invalid_argument("task '" + label + "': rate " + std::to_string(rate_hz) +
@@ -231,7 +229,8 @@ int ProcessNode::run_realtime() {
   while (!stop_) {
     Task* task = nullptr;
     for (auto& t : tasks_) {
-      if (t.timed() && t.next_ns < duration_ns_ && (task == nullptr || t.deadline_ns() < task->deadline_ns())) task = &t;
+      if (t.timed() && t.next_ns < duration_ns_ && (task == nullptr || t.deadline_ns() < task->deadline_ns()))
+        task = &t;
     }
     if (task == nullptr) {
       // Only input-triggered tasks (or timed ones done): they run from notify_input() while

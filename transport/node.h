@@ -107,7 +107,6 @@ class ProcessNode {
   /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
   void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
 
-
   /// Makes this node the lockstep master (the plant): its single task defines the step.
   void set_lockstep_master(bool master) { master_ = master; }
   /// Lockstep master: how long to wait for a participant's STEP_ACK [ms] (wall clock).
@@ -249,7 +248,7 @@ class ProcessNode {
   int64_t last_acked_step_ = -1;
   void run_deferred();
   int64_t spin_ns_ = 0;
-  int64_t start_wait_ns_ = 0;      ///< give up waiting for the start after this long (0: never)
+  int64_t start_wait_ns_ = 0;  ///< give up waiting for the start after this long (0: never)
   bool start_wait_expired_ = false;
   int64_t loop_count_ = 0;
   int64_t overruns_ = 0;

@@ -50,8 +50,8 @@ void ProcessNode::inject_faults(const std::vector<contract::FaultSpec>& faults, 
   bool any = false;
   for (const auto& f : faults) any |= f.target != contract::kFaultTargetCan;
   if (!any) return;
-  bus_.set_fault_injector(std::make_unique<FaultInjector>(
-      faults, seed, [this](const contract::FaultSpec& f, bool began, int64_t utime) {
+  bus_.set_fault_injector(
+      std::make_unique<FaultInjector>(faults, seed, [this](const contract::FaultSpec& f, bool began, int64_t utime) {
         char when[48];
         std::snprintf(when, sizeof when, " at t = %.3f s", 1e-6 * static_cast<double>(utime));
         fault(fault_event_t::SEVERITY_INFO, fault_event_t::CODE_FAULT_INJECTED, f.target,

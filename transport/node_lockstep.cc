@@ -50,14 +50,14 @@ void ProcessNode::subscribe_lockstep_side() {
   lockstep_side_subscribed_ = true;
   if (master_) {
     bus_.subscribe<step_ack_t>(
-      contract::channels::kStepAck,
-      [this](const step_ack_t& ack) {
-        schedule_.acknowledge(ack.process, ack.step, ack.next_due_ns);  // others are not of this run
-      },
-      100000);
+        contract::channels::kStepAck,
+        [this](const step_ack_t& ack) {
+          schedule_.acknowledge(ack.process, ack.step, ack.next_due_ns);  // others are not of this run
+        },
+        100000);
   } else {
     bus_.subscribe<rig_clock_t>(
-      contract::channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
+        contract::channels::kRigClock, [this](const rig_clock_t& tick) { on_rig_clock(tick); }, 100000);
   }
 }
 
@@ -110,8 +110,8 @@ int ProcessNode::run_lockstep_participant() {
 
 int ProcessNode::ack_missing(const std::string& participant, int64_t step, int64_t t, const std::string& when) {
   fault(fault_event_t::SEVERITY_FATAL, fault_event_t::CODE_STEP_ACK_TIMEOUT, contract::channels::kStepAck,
-        "lockstep: no STEP_ACK from '" + participant + "' for step " + std::to_string(step) + " (t = " +
-            std::to_string(static_cast<double>(t) / 1e9) + " s) " + when);
+        "lockstep: no STEP_ACK from '" + participant + "' for step " + std::to_string(step) +
+            " (t = " + std::to_string(static_cast<double>(t) / 1e9) + " s) " + when);
   return kExitAckTimeout;
 }
 

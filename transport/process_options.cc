@@ -43,12 +43,14 @@ std::optional<int> parse_node_options(int argc, char** argv, const std::string& 
                                       const std::string& default_name, NodeOptions& options) {
   NodeOptions o;
   o.name = default_name;
-  cmdline::CommandLine cl(program, "The rig's " + default_name +
-                                   " process. 'rig run' starts it with the resolved scenario it writes next to\n"
-                                   "the log and the run's LCM URL; it announces HEARTBEAT READY, waits for RUN_CONTROL\n"
-                                   "start and runs until stopped.");
-  cl->footer("Exit code: 0 stopped cleanly, 2 bad command line or configuration, 3 a lockstep participant\n"
-             "did not acknowledge in time, 4 another fatal fault.");
+  cmdline::CommandLine cl(program,
+                          "The rig's " + default_name +
+                              " process. 'rig run' starts it with the resolved scenario it writes next to\n"
+                              "the log and the run's LCM URL; it announces HEARTBEAT READY, waits for RUN_CONTROL\n"
+                              "start and runs until stopped.");
+  cl->footer(
+      "Exit code: 0 stopped cleanly, 2 bad command line or configuration, 3 a lockstep participant\n"
+      "did not acknowledge in time, 4 another fatal fault.");
   cl->add_option("--scenario", o.scenario_file, "the resolved scenario YAML (rig run writes it next to the log)")
       ->type_name("FILE")
       ->required();

@@ -19,9 +19,9 @@ constexpr int kExitFault = 4;       ///< other fatal fault at run time
 
 /// Command-line options common to every rig process.
 struct NodeOptions {
-  std::string name;           ///< process name, used on HEARTBEAT, FAULT, STEP_ACK
-  std::string scenario_file;  ///< resolved scenario YAML written by the launcher
-  std::string lcm_url;        ///< LCM URL of the run
+  std::string name;             ///< process name, used on HEARTBEAT, FAULT, STEP_ACK
+  std::string scenario_file;    ///< resolved scenario YAML written by the launcher
+  std::string lcm_url;          ///< LCM URL of the run
   InprocessHub* hub = nullptr;  ///< set: the node is one of a run flown in one process (no LCM)
 };
 

@@ -21,7 +21,9 @@ constexpr double kExplainedSigmas = 2.0;
 /// [aircraft of a (4), aircraft of b (4), gust filters (6, shared)], outputs [a's; b's].
 /// Exactly discretised, this samples both responses to one turbulence record.
 LinearSystem share_gusts(const LinearSystem& a, const LinearSystem& b) {
-  if ((a.A.bottomRightCorner(kCe500GustStates, kCe500GustStates) - b.A.bottomRightCorner(kCe500GustStates, kCe500GustStates)).norm() != 0.0 ||
+  if ((a.A.bottomRightCorner(kCe500GustStates, kCe500GustStates) -
+       b.A.bottomRightCorner(kCe500GustStates, kCe500GustStates))
+              .norm() != 0.0 ||
       (a.B.bottomRows(kCe500GustStates) - b.B.bottomRows(kCe500GustStates)).norm() != 0.0) {
     throw std::invalid_argument("share_gusts: the two systems have different gust filters");
   }
@@ -32,8 +34,10 @@ LinearSystem share_gusts(const LinearSystem& a, const LinearSystem& b) {
   s.C = Eigen::MatrixXd::Zero(a.n_outputs() + b.n_outputs(), n);
   s.D = Eigen::MatrixXd::Zero(s.C.rows(), a.n_inputs());
   const auto place = [&](const LinearSystem& x, Eigen::Index row, Eigen::Index out) {
-    s.A.block(row, row, kCe500AircraftStates, kCe500AircraftStates) = x.A.topLeftCorner(kCe500AircraftStates, kCe500AircraftStates);
-    s.A.block(row, 2 * kCe500AircraftStates, kCe500AircraftStates, kCe500GustStates) = x.A.topRightCorner(kCe500AircraftStates, kCe500GustStates);
+    s.A.block(row, row, kCe500AircraftStates, kCe500AircraftStates) =
+        x.A.topLeftCorner(kCe500AircraftStates, kCe500AircraftStates);
+    s.A.block(row, 2 * kCe500AircraftStates, kCe500AircraftStates, kCe500GustStates) =
+        x.A.topRightCorner(kCe500AircraftStates, kCe500GustStates);
     s.B.middleRows(row, kCe500AircraftStates) = x.B.topRows(kCe500AircraftStates);
     s.C.block(out, row, x.n_outputs(), kCe500AircraftStates) = x.C.leftCols(kCe500AircraftStates);
     s.C.block(out, 2 * kCe500AircraftStates, x.n_outputs(), kCe500GustStates) = x.C.rightCols(kCe500GustStates);
@@ -68,9 +72,8 @@ SystemAnalysis analyse_system(const std::string& key, const LinearSystem& sys, c
   const VectorQuadrature to_nyquist = integrate_psds(psd, nyquist);
   const VectorQuadrature coherent =
       integrate_psds([&](double w) -> Eigen::VectorXd { return coherent_output_psd(sys, W, w); });
-  const VectorQuadrature squared =
-      integrate_psds([&](double w) -> Eigen::VectorXd { return psd(w).cwiseAbs2(); },
-                     std::numeric_limits<double>::infinity(), 1.0, 1e-8);
+  const VectorQuadrature squared = integrate_psds([&](double w) -> Eigen::VectorXd { return psd(w).cwiseAbs2(); },
+                                                  std::numeric_limits<double>::infinity(), 1.0, 1e-8);
   const Eigen::MatrixXd P_held = solve_discrete_lyapunov(s.discrete.Phi, held_noise_covariance(s.discrete, W));
   const Eigen::VectorXd held = (sys.C * P_held * sys.C.transpose()).diagonal();
 
@@ -240,7 +243,8 @@ std::vector<Table51Cell> explain_table_5_1(const Ce500Analysis& a) {
         Table51Cell c = make("var", pub_var, v.sample.value);
         // The sampling spread of a sample variance over the practical's (assumed) record length.
         const std::size_t n = static_cast<std::size_t>(std::llround(cfg.published.record_length_s / a.options.dt_s));
-        const Eigen::VectorXd Ri = sampled_autocovariance(s.discrete.Phi, s.P, s.system.C.row(static_cast<Eigen::Index>(o)), n);
+        const Eigen::VectorXd Ri =
+            sampled_autocovariance(s.discrete.Phi, s.P, s.system.C.row(static_cast<Eigen::Index>(o)), n);
         const double sigma = quadratic_estimate_std(sample_variance_weights(std::max<std::size_t>(n, 2)), Ri) * u;
         const double z = (pub_var - L) / sigma;
         c.explanation_name = "the sampling spread of a " + number(cfg.published.record_length_s) + " s record";
@@ -344,8 +348,8 @@ Ce500Analysis analyse_ce500(const Ce500Config& config, const Ce500Options& optio
 
   const std::vector<NamedEigenvalue>* ours[3] = {&a.uncontrolled_eigenvalues, &a.controlled.eigenvalues,
                                                  &a.reduced.eigenvalues};
-  const std::vector<std::complex<double>>* published[3] = {&config.published.uncontrolled,
-                                                           &config.published.controlled, &config.published.reduced};
+  const std::vector<std::complex<double>>* published[3] = {&config.published.uncontrolled, &config.published.controlled,
+                                                           &config.published.reduced};
   const char* keys[3] = {"uncontrolled", "controlled", "reduced"};
   for (int i = 0; i < 3; ++i) {
     EigenvalueColumn& col = a.table_2_1[static_cast<std::size_t>(i)];

@@ -58,19 +58,19 @@ struct OutputVariances {
 /// Mean ratio of an estimate to the analytical PSD over the bins of a frequency band.
 struct BandRatio {
   double lo_radps = 0.0, hi_radps = 0.0;
-  double periodogram = 0.0;   ///< mean of periodogram / analytical over the periodogram bins
-  double welch = 0.0;         ///< mean of Welch / analytical over the Welch bins
-  double sampled = 0.0;       ///< mean of the sampled-process PSD / analytical (aliasing)
+  double periodogram = 0.0;  ///< mean of periodogram / analytical over the periodogram bins
+  double welch = 0.0;        ///< mean of Welch / analytical over the Welch bins
+  double sampled = 0.0;      ///< mean of the sampled-process PSD / analytical (aliasing)
 };
 
 /// One analysed system (controlled or reduced).
 struct SystemAnalysis {
-  std::string key;                           ///< "controlled" or "reduced"
+  std::string key;  ///< "controlled" or "reduced"
   LinearSystem system;
   std::vector<NamedEigenvalue> eigenvalues;
-  Eigen::MatrixXd P;                         ///< stationary state covariance
+  Eigen::MatrixXd P;  ///< stationary state covariance
   DiscreteModel discrete;
-  Eigen::MatrixXd y;                         ///< samples x 5 outputs
+  Eigen::MatrixXd y;  ///< samples x 5 outputs
   /// The common frequency grid: the Welch bins (a subset of the periodogram bins) [rad/s].
   Eigen::VectorXd omega_radps;
   Eigen::MatrixXd psd_analytical, psd_periodogram, psd_welch, psd_sampled;  ///< grid x outputs
@@ -95,11 +95,11 @@ struct EigenvalueColumn {
 
 /// One cell of Table 5.1 beside ours, with the reason for the difference.
 struct Table51Cell {
-  std::string output;   ///< beta, phi, p_hat, r_hat, a_y
-  std::string system;   ///< controlled, reduced
-  std::string method;   ///< analytical, fft, pwelch, var
+  std::string output;  ///< beta, phi, p_hat, r_hat, a_y
+  std::string system;  ///< controlled, reduced
+  std::string method;  ///< analytical, fft, pwelch, var
   double published = 0.0;
-  double ours = 0.0;    ///< the same method on our record (analytical: Lyapunov)
+  double ours = 0.0;  ///< the same method on our record (analytical: Lyapunov)
   std::string explanation_name;
   double explanation_value = 0.0;  ///< what the named cause predicts for the published value
   bool explained = false;          ///< within 10 % (var: within 2 sigma of the sampling spread)

@@ -18,14 +18,14 @@ namespace nimble::turbulence {
 
 /// Flight condition and inertia (non-dimensional, Ce500 practical).
 struct Ce500FlightCondition {
-  double V_mps = 0.0;   ///< true airspeed, > 0
-  double S_m2 = 0.0;    ///< wing area, > 0 (not used by the non-dimensional construction)
-  double b_m = 0.0;     ///< span, > 0
-  double mu_b = 0.0;    ///< relative density, > 0
-  double KX2 = 0.0;     ///< KX^2, > 0
-  double KZ2 = 0.0;     ///< KZ^2, > 0
-  double KXZ = 0.0;     ///< KXZ, with KX2 KZ2 - KXZ^2 > 0
-  double CL = 0.0;      ///< trim lift coefficient, >= 0
+  double V_mps = 0.0;  ///< true airspeed, > 0
+  double S_m2 = 0.0;   ///< wing area, > 0 (not used by the non-dimensional construction)
+  double b_m = 0.0;    ///< span, > 0
+  double mu_b = 0.0;   ///< relative density, > 0
+  double KX2 = 0.0;    ///< KX^2, > 0
+  double KZ2 = 0.0;    ///< KZ^2, > 0
+  double KXZ = 0.0;    ///< KXZ, with KX2 KZ2 - KXZ^2 > 0
+  double CL = 0.0;     ///< trim lift coefficient, >= 0
 };
 
 /// Non-dimensional derivatives [-].
@@ -41,9 +41,9 @@ struct Ce500Derivatives {
 struct Ce500Turbulence {
   double Lg_m = 0.0;
   double sigma_ug_mps = 0.0, sigma_vg_mps = 0.0, sigma_wg_mps = 0.0;
-  double Iug0_factor = 0.0;            ///< Iug0 = factor (sigma_ug / V)^2
-  double Iag0_factor = 0.0;            ///< Iag0 = factor (sigma_wg / V)^2
-  std::array<double, 6> tau{};         ///< tau1..tau6 [-] in units of Lg / V
+  double Iug0_factor = 0.0;     ///< Iug0 = factor (sigma_ug / V)^2
+  double Iag0_factor = 0.0;     ///< Iag0 = factor (sigma_wg / V)^2
+  std::array<double, 6> tau{};  ///< tau1..tau6 [-] in units of Lg / V
 };
 
 /// Which white-noise inputs drive the filters and with what intensity.
@@ -83,8 +83,8 @@ struct Ce500Config {
   Ce500Derivatives derivatives;
   Ce500Turbulence turbulence;
   Ce500Excitation excitation;
-  double K_phi = 0.0;   ///< roll damper gain on phi [rad/rad], delta_a = -K x
-  double K_p = 0.0;     ///< roll damper gain on pb/2V [rad]
+  double K_phi = 0.0;  ///< roll damper gain on phi [rad/rad], delta_a = -K x
+  double K_p = 0.0;    ///< roll damper gain on pb/2V [rad]
   ReducedGustColumns reduced_gust_columns = ReducedGustColumns::kFullModelRows;
   Ce500Simulation simulation;
   Ce500Published published;

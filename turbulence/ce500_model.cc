@@ -14,8 +14,8 @@ enum State : Eigen::Index { kBeta = 0, kPhi, kP, kR, kUg, kUgStar, kAg, kAgStar,
 enum Input : Eigen::Index { kDa = 0, kDr, kW1, kW3, kW2 };
 
 const std::vector<std::string>& state_names() {
-  static const std::vector<std::string> names = {"beta",    "phi",      "pb/2V",  "rb/2V",  "u_g",
-                                                 "u_g*",    "alpha_g",  "alpha_g*", "beta_g", "beta_g*"};
+  static const std::vector<std::string> names = {"beta", "phi",     "pb/2V",    "rb/2V",  "u_g",
+                                                 "u_g*", "alpha_g", "alpha_g*", "beta_g", "beta_g*"};
   return names;
 }
 
@@ -147,10 +147,7 @@ LinearSystem ce500_reduced_model(const Ce500Config& config, bool with_damper) {
   P(3, 2) = 4.0 * mu * f.KXZ * b / V;  // KXZ, not the practical's misprinted KXZ^2
   P(3, 3) = -4.0 * mu * f.KZ2 * b / V;
   Eigen::Matrix4d Q;
-  Q << 0, 0, 0, -1,
-       0, 0, -1, 0,
-       -d.Clb, 0, -d.Clp, -d.Clr,
-       -d.Cnb, 0, -d.Cnp, -d.Cnr;
+  Q << 0, 0, 0, -1, 0, 0, -1, 0, -d.Clb, 0, -d.Clp, -d.Clr, -d.Cnb, 0, -d.Cnp, -d.Cnr;
   Eigen::Matrix<double, 4, 2> R = Eigen::Matrix<double, 4, 2>::Zero();
   R.row(2) << -d.Clda, -d.Cldr;
   R.row(3) << -d.Cnda, -d.Cndr;
@@ -158,7 +155,7 @@ LinearSystem ce500_reduced_model(const Ce500Config& config, bool with_damper) {
   const double Clpw = d.Clpw_per_Clp * d.Clp, Cnpw = d.Cnpw_per_Cnp * d.Cnp;
   const double Clrw = d.Clrw_per_Clr * d.Clr, Cnrw = d.Cnrw_per_Cnr * d.Cnr;
   Eigen::Matrix<double, 4, 6> Qg = Eigen::Matrix<double, 4, 6>::Zero();
-  Qg(2, 0) = Clrw;    // -(-Clrw)
+  Qg(2, 0) = Clrw;  // -(-Clrw)
   Qg(3, 0) = Cnrw;
   Qg(2, 2) = -Clpw;
   Qg(3, 2) = -Cnpw;
@@ -198,8 +195,7 @@ Eigen::VectorXd ce500_noise_intensity(const Ce500Config& config) {
 
 std::vector<ShapingFilter> ce500_gust_filters(const Ce500Config& config) {
   const Ce500Coefficients k = ce500_coefficients(config);
-  return {practical_filter("u_g", k.u_g), practical_filter("alpha_g", k.alpha_g),
-          practical_filter("beta_g", k.beta_g)};
+  return {practical_filter("u_g", k.u_g), practical_filter("alpha_g", k.alpha_g), practical_filter("beta_g", k.beta_g)};
 }
 
 std::vector<NamedEigenvalue> ce500_named_eigenvalues(const LinearSystem& sys) {

@@ -27,18 +27,18 @@ namespace nimble::turbulence {
 
 /// x_{k+1} = Phi x_k + Gamma u_k + e_k with e_k ~ N(0, Qd) independent of the past.
 struct DiscreteModel {
-  Eigen::MatrixXd Phi;          ///< exp(A dt)
-  Eigen::MatrixXd Gamma;        ///< ZOH input matrix of every input (deterministic use)
-  Eigen::MatrixXd Qd;           ///< exact process-noise covariance of the driven white-noise inputs
-  Eigen::MatrixXd noise_factor; ///< L with L L' = Qd (symmetric eigen factor; Qd may be singular)
+  Eigen::MatrixXd Phi;           ///< exp(A dt)
+  Eigen::MatrixXd Gamma;         ///< ZOH input matrix of every input (deterministic use)
+  Eigen::MatrixXd Qd;            ///< exact process-noise covariance of the driven white-noise inputs
+  Eigen::MatrixXd noise_factor;  ///< L with L L' = Qd (symmetric eigen factor; Qd may be singular)
   double dt_s = 0.0;
 };
 
 /// Van Loan: the exact process-noise covariance of x_dot = A x + G w, w of intensity W
 /// (square, symmetric, positive semi-definite), over one step dt.
 /// @throws std::invalid_argument if dt is not > 0 or the sizes do not fit.
-Eigen::MatrixXd van_loan_noise_covariance(const Eigen::MatrixXd& A, const Eigen::MatrixXd& G,
-                                          const Eigen::MatrixXd& W, double dt_s);
+Eigen::MatrixXd van_loan_noise_covariance(const Eigen::MatrixXd& A, const Eigen::MatrixXd& G, const Eigen::MatrixXd& W,
+                                          double dt_s);
 
 /// Exact discretisation of `sys` at step dt: ZOH for every input (Gamma) and the Van Loan
 /// process noise of the inputs with intensity > 0 (`intensity`, one per input).

@@ -86,8 +86,8 @@ ShapingFilter dryden_vertical(double sigma_mps, double L_m, double V_mps, Dryden
   return f;
 }
 
-PracticalFilterCoefficients practical_asymmetric_coefficients(double V_mps, double L_m, double ta, double tb,
-                                                              double tc, double I0) {
+PracticalFilterCoefficients practical_asymmetric_coefficients(double V_mps, double L_m, double ta, double tb, double tc,
+                                                              double I0) {
   const char* who = "practical_asymmetric_coefficients";
   require_positive(who, "V", V_mps);
   require_positive(who, "L", L_m);

@@ -35,9 +35,9 @@ namespace nimble::turbulence {
 /// A shaping filter: one unit-intensity white-noise input "w", one output, and its PSD.
 struct ShapingFilter {
   std::string name;
-  LinearSystem system;                         ///< input "w", output the gust quantity
-  std::function<double(double)> psd;           ///< S(omega) [output unit^2/(rad/s)], omega [rad/s]
-  double variance = 0.0;                       ///< (1/pi) int_0^inf S: closed form where one exists
+  LinearSystem system;                ///< input "w", output the gust quantity
+  std::function<double(double)> psd;  ///< S(omega) [output unit^2/(rad/s)], omega [rad/s]
+  double variance = 0.0;              ///< (1/pi) int_0^inf S: closed form where one exists
 };
 
 /// Which standard's Dryden lateral/vertical scale convention to use.
@@ -64,8 +64,8 @@ struct PracticalFilterCoefficients {
 
 /// a1, a2, b1, b2 of the practical's u_g or alpha_g filter (V, L > 0, ta, tb > 0, tc >= 0,
 /// I0 > 0 the intensity [-]). @throws std::invalid_argument.
-PracticalFilterCoefficients practical_asymmetric_coefficients(double V_mps, double L_m, double ta, double tb,
-                                                              double tc, double I0);
+PracticalFilterCoefficients practical_asymmetric_coefficients(double V_mps, double L_m, double ta, double tb, double tc,
+                                                              double I0);
 /// a1, a2, b1, b2 of the practical's beta_g filter (sigma, V, L > 0).
 PracticalFilterCoefficients practical_beta_g_coefficients(double sigma_mps, double V_mps, double L_m);
 

@@ -43,7 +43,8 @@ LinearSystem hover_gust_loop(const DerivativeModel& model, const Vehicle& vehicl
   if (!(c.kp_per_rad >= 0.0 && c.kd_per_radps >= 0.0 && c.lowpass_cutoff_hz > 0.0 &&
         c.roll_cmd_to_delta_f_radps > 0.0 && c.flap_gain_per_s > 0.0 && c.flap_pole_radps > 0.0 &&
         c.gust_sigma_mps > 0.0 && c.gust_time_scale_s > 0.0)) {
-    throw std::invalid_argument("hover_gust_loop: gains must be >= 0, cut-off, map, actuator, sigma and time scale > 0");
+    throw std::invalid_argument(
+        "hover_gust_loop: gains must be >= 0, cut-off, map, actuator, sigma and time scale > 0");
   }
   const StateSpace ss = build_state_space(model, vehicle);
   const ShapingFilter gust = time_based_second_order(c.gust_sigma_mps, c.gust_time_scale_s);
@@ -92,8 +93,9 @@ bool ResponseComparison::agrees() const {
   return true;
 }
 
-ResponseComparison compare_hover_response(const LinearSystem& loop, const std::map<std::string, Eigen::VectorXd>& records,
-                                          double dt_s, const ResponseComparisonOptions& options) {
+ResponseComparison compare_hover_response(const LinearSystem& loop,
+                                          const std::map<std::string, Eigen::VectorXd>& records, double dt_s,
+                                          const ResponseComparisonOptions& options) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) throw std::invalid_argument("compare_hover_response: dt must be > 0");
   if (!(options.level > 0.0 && options.level < 1.0) || !(options.false_alarm > 0.0 && options.false_alarm < 1.0)) {
     throw std::invalid_argument("compare_hover_response: level and false_alarm must lie in (0, 1)");
@@ -113,8 +115,10 @@ ResponseComparison compare_hover_response(const LinearSystem& loop, const std::m
   }
   const std::size_t M = options.welch_segment > 0 ? options.welch_segment : default_welch_segment(N);
   if (N < 2 * M) {
-    throw std::invalid_argument("compare_hover_response: " + std::to_string(N) + " samples are too few for Welch "
-                                "segments of " + std::to_string(M) + " (need at least two)");
+    throw std::invalid_argument("compare_hover_response: " + std::to_string(N) +
+                                " samples are too few for Welch "
+                                "segments of " +
+                                std::to_string(M) + " (need at least two)");
   }
 
   const Eigen::VectorXd unit = Eigen::VectorXd::Ones(1);

@@ -75,26 +75,26 @@ struct ResponseComparisonOptions {
 
 /// One output's comparison.
 struct OutputComparison {
-  std::string name;                  ///< p, v, phi
-  std::string unit;                  ///< rad/s, m/s, rad
-  Eigen::VectorXd omega_radps;       ///< Welch bins 1 .. (up to Nyquist)
-  Eigen::VectorXd welch;             ///< flight's Welch PSD [unit^2/(rad/s)]
-  Eigen::VectorXd expected;          ///< model's expected Welch estimate
-  Eigen::VectorXd analytical;        ///< model's analytical PSD
-  Eigen::VectorXd lower, upper;      ///< confidence band around `expected`
-  std::size_t bins = 0;              ///< bins compared: 2 .. f_max (bin 1 carries the mean removal)
-  std::size_t counted = 0;           ///< every other of them: the nearly independent bins counted
-  std::size_t outside = 0;           ///< of the counted, outside the band
-  std::size_t allowed = 0;           ///< binomial bound on `outside`
-  double mean_ratio = 0.0;           ///< mean welch / expected over the bins up to f_max
-  double mean_ratio_sigma = 0.0;     ///< its standard deviation under the model
+  std::string name;                       ///< p, v, phi
+  std::string unit;                       ///< rad/s, m/s, rad
+  Eigen::VectorXd omega_radps;            ///< Welch bins 1 .. (up to Nyquist)
+  Eigen::VectorXd welch;                  ///< flight's Welch PSD [unit^2/(rad/s)]
+  Eigen::VectorXd expected;               ///< model's expected Welch estimate
+  Eigen::VectorXd analytical;             ///< model's analytical PSD
+  Eigen::VectorXd lower, upper;           ///< confidence band around `expected`
+  std::size_t bins = 0;                   ///< bins compared: 2 .. f_max (bin 1 carries the mean removal)
+  std::size_t counted = 0;                ///< every other of them: the nearly independent bins counted
+  std::size_t outside = 0;                ///< of the counted, outside the band
+  std::size_t allowed = 0;                ///< binomial bound on `outside`
+  double mean_ratio = 0.0;                ///< mean welch / expected over the bins up to f_max
+  double mean_ratio_sigma = 0.0;          ///< its standard deviation under the model
   double max_analytical_deviation = 0.0;  ///< max |expected / analytical - 1| up to f_max
-  double model_variance = 0.0;       ///< Lyapunov [unit^2]
-  double flight_variance = 0.0;      ///< sample variance of the record [unit^2]
-  double flight_variance_sigma = 0.0;  ///< its standard deviation under the model [unit^2]
-  bool bins_agree = false;           ///< outside <= allowed
-  bool mean_agrees = false;          ///< |mean_ratio - 1| <= 3 mean_ratio_sigma
-  bool variance_agrees = false;      ///< |flight - model| <= 3 flight_variance_sigma
+  double model_variance = 0.0;            ///< Lyapunov [unit^2]
+  double flight_variance = 0.0;           ///< sample variance of the record [unit^2]
+  double flight_variance_sigma = 0.0;     ///< its standard deviation under the model [unit^2]
+  bool bins_agree = false;                ///< outside <= allowed
+  bool mean_agrees = false;               ///< |mean_ratio - 1| <= 3 mean_ratio_sigma
+  bool variance_agrees = false;           ///< |flight - model| <= 3 flight_variance_sigma
 };
 
 /// The whole comparison.
@@ -106,7 +106,7 @@ struct ResponseComparison {
   double band_lower = 0.0, band_upper = 0.0;  ///< multipliers of the band
   double f_max_hz = 0.0;
   double level = 0.0;
-  std::vector<OutputComparison> outputs;      ///< p, v, phi
+  std::vector<OutputComparison> outputs;  ///< p, v, phi
   /// True if every output agrees in both spectral checks and its variance.
   bool agrees() const;
 };
@@ -115,7 +115,8 @@ struct ResponseComparison {
 /// stationary: the caller drops the start-up) with `loop` (hover_gust_loop()).
 /// @throws std::invalid_argument if a record is missing or too short for the segment, or the
 ///         options are out of range (f_max must lie below the Nyquist frequency).
-ResponseComparison compare_hover_response(const LinearSystem& loop, const std::map<std::string, Eigen::VectorXd>& records,
-                                          double dt_s, const ResponseComparisonOptions& options = {});
+ResponseComparison compare_hover_response(const LinearSystem& loop,
+                                          const std::map<std::string, Eigen::VectorXd>& records, double dt_s,
+                                          const ResponseComparisonOptions& options = {});
 
 }  // namespace nimble::turbulence

@@ -13,13 +13,13 @@ namespace nimble::turbulence {
 
 /// x_dot = A x + B u, y = C x + D u. Time in s, frequencies in rad/s.
 struct LinearSystem {
-  Eigen::MatrixXd A;                  ///< n x n
-  Eigen::MatrixXd B;                  ///< n x m
-  Eigen::MatrixXd C;                  ///< p x n
-  Eigen::MatrixXd D;                  ///< p x m
-  std::vector<std::string> states;    ///< n names (with units where useful)
-  std::vector<std::string> inputs;    ///< m names
-  std::vector<std::string> outputs;   ///< p names
+  Eigen::MatrixXd A;                 ///< n x n
+  Eigen::MatrixXd B;                 ///< n x m
+  Eigen::MatrixXd C;                 ///< p x n
+  Eigen::MatrixXd D;                 ///< p x m
+  std::vector<std::string> states;   ///< n names (with units where useful)
+  std::vector<std::string> inputs;   ///< m names
+  std::vector<std::string> outputs;  ///< p names
 
   Eigen::Index n_states() const { return A.rows(); }
   Eigen::Index n_inputs() const { return B.cols(); }

@@ -47,7 +47,7 @@ Eigen::MatrixXd solve_continuous_lyapunov(const Eigen::MatrixXd& A, const Eigen:
     for (Eigen::Index j = 0; j < n; ++j) {
       K.block(i * n, j * n, n, n) = A(i, j) * I;  // A (x) I
     }
-    K.block(i * n, i * n, n, n) += A;               // I (x) A
+    K.block(i * n, i * n, n, n) += A;  // I (x) A
   }
   return solve_vectorised(K, Q);
 }

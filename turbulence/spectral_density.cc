@@ -17,8 +17,7 @@ void check_intensity(const LinearSystem& sys, const Eigen::VectorXd& intensity) 
 }
 
 /// 5-point Gauss-Legendre nodes and weights on [-1, 1].
-constexpr double kNodes[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                              0.9061798459386640};
+constexpr double kNodes[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
 constexpr double kWeights[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
                                 0.2369268850561891};
 
@@ -47,7 +46,8 @@ Eigen::VectorXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& inten
   return H.cwiseAbs2() * intensity;
 }
 
-Eigen::MatrixXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& intensity, const Eigen::VectorXd& omega_radps) {
+Eigen::MatrixXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& intensity,
+                           const Eigen::VectorXd& omega_radps) {
   Eigen::MatrixXd out(omega_radps.size(), sys.n_outputs());
   for (Eigen::Index k = 0; k < omega_radps.size(); ++k) {
     out.row(k) = output_psd(sys, intensity, omega_radps[k]).transpose();
@@ -91,8 +91,8 @@ VectorQuadrature integrate_psds(const std::function<Eigen::VectorXd(double)>& ps
 
 Quadrature integrate_psd(const std::function<double(double)>& psd, double omega_max_radps, double omega_scale_radps,
                          double rel_tol) {
-  const VectorQuadrature v = integrate_psds(
-      [&](double w) { return Eigen::VectorXd::Constant(1, psd(w)); }, omega_max_radps, omega_scale_radps, rel_tol);
+  const VectorQuadrature v = integrate_psds([&](double w) { return Eigen::VectorXd::Constant(1, psd(w)); },
+                                            omega_max_radps, omega_scale_radps, rel_tol);
   Quadrature q;
   q.value = v.value[0];
   q.error = v.error[0];

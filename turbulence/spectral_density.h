@@ -38,7 +38,8 @@ namespace nimble::turbulence {
 Eigen::VectorXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& intensity, double omega_radps);
 
 /// output_psd() on a grid: one row per frequency, one column per output.
-Eigen::MatrixXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& intensity, const Eigen::VectorXd& omega_radps);
+Eigen::MatrixXd output_psd(const LinearSystem& sys, const Eigen::VectorXd& intensity,
+                           const Eigen::VectorXd& omega_radps);
 
 /// The defective sum (sum_j |H_ij| sqrt(W_j))^2 of independent inputs, for diagnosis only: it is
 /// not the PSD of the output (it adds amplitudes of uncorrelated signals).
@@ -47,7 +48,7 @@ Eigen::VectorXd coherent_output_psd(const LinearSystem& sys, const Eigen::Vector
 /// A numerical integral with its error estimate.
 struct Quadrature {
   double value = 0.0;
-  double error = 0.0;   ///< |I(2n) - I(n)|: the change from the last doubling of the panels
+  double error = 0.0;  ///< |I(2n) - I(n)|: the change from the last doubling of the panels
   int panels = 0;
 };
 

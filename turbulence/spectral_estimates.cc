@@ -40,7 +40,8 @@ std::size_t next_power_of_two(std::size_t n) {
 Eigen::VectorXd hann_window(std::size_t M) {
   Eigen::VectorXd w(static_cast<Eigen::Index>(M));
   for (std::size_t n = 0; n < M; ++n) {
-    w[static_cast<Eigen::Index>(n)] = 0.5 * (1.0 - std::cos(2.0 * M_PI * static_cast<double>(n) / static_cast<double>(M)));
+    w[static_cast<Eigen::Index>(n)] =
+        0.5 * (1.0 - std::cos(2.0 * M_PI * static_cast<double>(n) / static_cast<double>(M)));
   }
   return w;
 }
@@ -57,7 +58,8 @@ SpectralEstimate periodogram(const Eigen::VectorXd& x, double dt_s) {
   e.method = "periodogram";
   e.psd = power_half(in) * (dt_s / static_cast<double>(N));
   e.d_omega_radps = 2.0 * M_PI / (static_cast<double>(nfft) * dt_s);
-  e.omega_radps = Eigen::VectorXd::LinSpaced(e.psd.size(), 0.0, e.d_omega_radps * static_cast<double>(e.psd.size() - 1));
+  e.omega_radps =
+      Eigen::VectorXd::LinSpaced(e.psd.size(), 0.0, e.d_omega_radps * static_cast<double>(e.psd.size() - 1));
   e.record_length = N;
   e.segment_length = nfft;
   e.segments = 1;
@@ -69,8 +71,8 @@ SpectralEstimate welch(const Eigen::VectorXd& x, double dt_s, std::size_t M) {
   check_dt(dt_s);
   const std::size_t N = static_cast<std::size_t>(x.size());
   if (!is_power_of_two(M) || M < 8 || M > N) {
-    throw std::invalid_argument("welch: the segment length " + std::to_string(M) +
-                                " must be a power of two in [8, " + std::to_string(N) + "]");
+    throw std::invalid_argument("welch: the segment length " + std::to_string(M) + " must be a power of two in [8, " +
+                                std::to_string(N) + "]");
   }
   const std::size_t hop = M / 2;
   const std::size_t K = (N - M) / hop + 1;
@@ -89,7 +91,8 @@ SpectralEstimate welch(const Eigen::VectorXd& x, double dt_s, std::size_t M) {
   e.method = "welch";
   e.psd = sum * (dt_s / (w2 * static_cast<double>(K)));
   e.d_omega_radps = 2.0 * M_PI / (static_cast<double>(M) * dt_s);
-  e.omega_radps = Eigen::VectorXd::LinSpaced(e.psd.size(), 0.0, e.d_omega_radps * static_cast<double>(e.psd.size() - 1));
+  e.omega_radps =
+      Eigen::VectorXd::LinSpaced(e.psd.size(), 0.0, e.d_omega_radps * static_cast<double>(e.psd.size() - 1));
   e.record_length = N;
   e.segment_length = M;
   e.segments = K;
@@ -97,12 +100,12 @@ SpectralEstimate welch(const Eigen::VectorXd& x, double dt_s, std::size_t M) {
   return e;
 }
 
-Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M,
-                                  std::size_t bins) {
+Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M, std::size_t bins) {
   check_dt(dt_s);
   if (!is_power_of_two(M) || M < 8 || bins > M / 2 + 1 || autocovariance.size() == 0) {
-    throw std::invalid_argument("welch_expectation: need M a power of two >= 8, at most M/2 + 1 bins and an "
-                                "autocovariance");
+    throw std::invalid_argument(
+        "welch_expectation: need M a power of two >= 8, at most M/2 + 1 bins and an "
+        "autocovariance");
   }
   const Eigen::VectorXd w = hann_window(M);
   const Eigen::Index lags = std::min<Eigen::Index>(autocovariance.size(), static_cast<Eigen::Index>(M));

@@ -56,8 +56,7 @@ std::size_t default_welch_segment(std::size_t n);
 /// centre of the confidence band where the analytical PSD curves on the scale of a bin.
 /// @throws std::invalid_argument unless M is a power of two >= 8, bins <= M/2 + 1, dt > 0 and
 ///         the autocovariance is not empty.
-Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M,
-                                  std::size_t bins);
+Eigen::VectorXd welch_expectation(const Eigen::VectorXd& autocovariance, double dt_s, std::size_t M, std::size_t bins);
 
 /// The periodic Hann window of length M.
 Eigen::VectorXd hann_window(std::size_t M);

@@ -55,7 +55,8 @@ double quadratic_estimate_std_from_correlation(const Eigen::VectorXd& c, const E
 }
 
 double quadratic_estimate_std(const Eigen::VectorXd& q, const Eigen::VectorXd& R) {
-  if (q.size() == 0 || R.size() == 0) throw std::invalid_argument("quadratic_estimate_std: empty weights or autocovariance");
+  if (q.size() == 0 || R.size() == 0)
+    throw std::invalid_argument("quadratic_estimate_std: empty weights or autocovariance");
   return quadratic_estimate_std_from_correlation(weight_autocorrelation(q, static_cast<std::size_t>(R.size())), R);
 }
 

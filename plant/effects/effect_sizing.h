@@ -20,8 +20,8 @@ using EffectValue = std::pair<std::string, std::string>;
 struct EffectSizing {
   std::string parameter;  ///< the key SIZE sets ("": the effect is not sized by one number)
   std::string unit;
-  Range range;            ///< of SIZE (the parameter's range in the effect's table)
-  std::string scales;     ///< what else SIZE moves (help text)
+  Range range;         ///< of SIZE (the parameter's range in the effect's table)
+  std::string scales;  ///< what else SIZE moves (help text)
   /// The values that fly the effect at `size` (not 0), given the scenario's section of the
   /// effect (`section`, null if it has none): the parameter and every companion it scales.
   /// @throws std::invalid_argument naming the problem (a companion that leaves its range, a

@@ -117,10 +117,15 @@ std::unique_ptr<EffectProcess> flapping_forcing_process(const FlappingForcingCon
 }
 
 std::string flapping_forcing_markdown_rows(const std::string& prefix) {
-  return "| `" + prefix + "enabled` | false | true, false | - | fly the effect (required) |\n"
-         "| `" + prefix + "roll_moment_amplitudes_nm` | [] | list, each in [-1, 1] | N m | roll moment at harmonic h "
+  return "| `" + prefix +
+         "enabled` | false | true, false | - | fly the effect (required) |\n"
+         "| `" +
+         prefix +
+         "roll_moment_amplitudes_nm` | [] | list, each in [-1, 1] | N m | roll moment at harmonic h "
          "(entry h-1) of the flapping frequency |\n"
-         "| `" + prefix + "side_force_amplitudes_n` | [] | list, each in [-1, 1] | N | side force at harmonic h "
+         "| `" +
+         prefix +
+         "side_force_amplitudes_n` | [] | list, each in [-1, 1] | N | side force at harmonic h "
          "(entry h-1) of the flapping frequency |\n";
 }
 
@@ -155,7 +160,8 @@ void flapping_forcing_from_model(const ModelSection& s, FlappingForcingConfig& c
 
 EffectSizing flapping_forcing_sizing() {
   return {"roll_moment_amplitudes_nm[0]", "N m", kAmplitudeRange,
-          "every amplitude of both lists scales with the first roll amplitude", [](const YAML::Node& section, double size) {
+          "every amplitude of both lists scales with the first roll amplitude",
+          [](const YAML::Node& section, double size) {
             std::vector<double> roll = section_list(section, "roll_moment_amplitudes_nm");
             std::vector<double> side = section_list(section, "side_force_amplitudes_n");
             if (roll.empty() || roll[0] == 0.0) {

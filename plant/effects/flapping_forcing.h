@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-
 #include "core/config.h"
 #include "plant/effects/effect_process.h"
 #include "plant/effects/effect_sizing.h"

@@ -28,8 +28,10 @@ ForwardSpeedCouplingConfig forward_speed_coupling_from(ConfigMap& map) {
     if (map.has(key) && coefficient.empty()) coefficient = key;
   }
   if (gain && !coefficient.empty()) {
-    map.fail("gain_per_mps", "give either gain_per_mps or the coefficients L_up_ns2, L_uv_ns2pm, Y_up_ns2pm, "
-                             "Y_uv_ns2pm2, not both (" + coefficient + " is given too)");
+    map.fail("gain_per_mps",
+             "give either gain_per_mps or the coefficients L_up_ns2, L_uv_ns2pm, Y_up_ns2pm, "
+             "Y_uv_ns2pm2, not both (" +
+                 coefficient + " is given too)");
   }
   read_params(map, forward_speed_coupling_params(), c);
   return c;
@@ -68,7 +70,8 @@ std::unique_ptr<EffectProcess> forward_speed_coupling_process(const ForwardSpeed
   if (!config.enabled) return nullptr;
   if (config.gain_per_mps != 0.0 && config.has_coefficients()) {
     throw std::invalid_argument(
-        "plant: forward_speed_coupling has both gain_per_mps and the coefficients L_up, L_uv, Y_up, Y_uv; give one form");
+        "plant: forward_speed_coupling has both gain_per_mps and the coefficients L_up, L_uv, Y_up, Y_uv; give one "
+        "form");
   }
   return std::make_unique<ForwardSpeedCouplingProcess>(config);
 }

@@ -40,9 +40,9 @@ std::string to_string(GustForm form);
 struct LateralGustConfig {
   bool enabled = false;
   double sigma_mps = 0.0;
-  double tau_s = 1.0;                     ///< Gauss-Markov correlation time [s]
+  double tau_s = 1.0;                      ///< Gauss-Markov correlation time [s]
   GustForm form = GustForm::kGaussMarkov;  ///< key `form`: gauss_markov | dryden
-  double time_scale_s = 1.0;              ///< Dryden time scale T [s]
+  double time_scale_s = 1.0;               ///< Dryden time scale T [s]
 };
 
 /// `plant.effects.lateral_gust`: key, range, unit, meaning (`form` is read on its own).

@@ -41,49 +41,65 @@ const std::vector<PlantEffect>& plant_effects() {
   static const std::vector<PlantEffect> effects = {
       {"forward_speed_coupling",
        [](ConfigMap& m, EffectsConfig& e) { e.get<ForwardSpeedCouplingConfig>() = forward_speed_coupling_from(m); },
-       [](const std::string& prefix) { return params_markdown_rows(forward_speed_coupling_params(), ForwardSpeedCouplingConfig{}, prefix); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(forward_speed_coupling_params(), ForwardSpeedCouplingConfig{}, prefix);
+       },
        "forward_speed_coupling",
-       [](const ModelSection& s, EffectsConfig& e) { forward_speed_coupling_from_model(s, e.get<ForwardSpeedCouplingConfig>()); },
-       [](const EffectsConfig& e, ProcessContext&) { return forward_speed_coupling_process(e.get<ForwardSpeedCouplingConfig>()); },
-       [](const EffectsConfig& e) { return e.get<ForwardSpeedCouplingConfig>().enabled; }, forward_speed_coupling_sizing},
-      {"constant_load",
-       [](ConfigMap& m, EffectsConfig& e) { e.get<ConstantLoadConfig>() = constant_load_from(m); },
-       [](const std::string& prefix) { return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix); }, "constant_load",
+       [](const ModelSection& s, EffectsConfig& e) {
+         forward_speed_coupling_from_model(s, e.get<ForwardSpeedCouplingConfig>());
+       },
+       [](const EffectsConfig& e, ProcessContext&) {
+         return forward_speed_coupling_process(e.get<ForwardSpeedCouplingConfig>());
+       },
+       [](const EffectsConfig& e) { return e.get<ForwardSpeedCouplingConfig>().enabled; },
+       forward_speed_coupling_sizing},
+      {"constant_load", [](ConfigMap& m, EffectsConfig& e) { e.get<ConstantLoadConfig>() = constant_load_from(m); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix);
+       },
+       "constant_load",
        [](const ModelSection& s, EffectsConfig& e) { constant_load_from_model(s, e.get<ConstantLoadConfig>()); },
        [](const EffectsConfig& e, ProcessContext&) {
          return load_process<ConstantLoadConfig>(
-             e.get<ConstantLoadConfig>(), [](const ConstantLoadConfig& c, const LoadInputs&, double& L, double& Y) { add_constant_load(c, L, Y); });
+             e.get<ConstantLoadConfig>(),
+             [](const ConstantLoadConfig& c, const LoadInputs&, double& L, double& Y) { add_constant_load(c, L, Y); });
        },
        [](const EffectsConfig& e) { return e.get<ConstantLoadConfig>().enabled; }, constant_load_sizing},
-      {"lateral_inflow",
-       [](ConfigMap& m, EffectsConfig& e) { e.get<LateralInflowConfig>() = lateral_inflow_from(m); },
-       [](const std::string& prefix) { return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix); }, "lateral_inflow",
+      {"lateral_inflow", [](ConfigMap& m, EffectsConfig& e) { e.get<LateralInflowConfig>() = lateral_inflow_from(m); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix);
+       },
+       "lateral_inflow",
        [](const ModelSection& s, EffectsConfig& e) { lateral_inflow_from_model(s, e.get<LateralInflowConfig>()); },
        [](const EffectsConfig& e, ProcessContext&) {
-         return load_process<LateralInflowConfig>(
-             e.get<LateralInflowConfig>(),
-             [](const LateralInflowConfig& c, const LoadInputs& in, double& L, double& Y) { add_lateral_inflow(c, in.v_rel, L, Y); });
+         return load_process<LateralInflowConfig>(e.get<LateralInflowConfig>(),
+                                                  [](const LateralInflowConfig& c, const LoadInputs& in, double& L,
+                                                     double& Y) { add_lateral_inflow(c, in.v_rel, L, Y); });
        },
        [](const EffectsConfig& e) { return e.get<LateralInflowConfig>().enabled; }, lateral_inflow_sizing},
       {"flapping_forcing",
        [](ConfigMap& m, EffectsConfig& e) { e.get<FlappingForcingConfig>() = flapping_forcing_from(m); },
        flapping_forcing_markdown_rows, "flapping_forcing",
        [](const ModelSection& s, EffectsConfig& e) { flapping_forcing_from_model(s, e.get<FlappingForcingConfig>()); },
-       [](const EffectsConfig& e, ProcessContext& c) { return flapping_forcing_process(e.get<FlappingForcingConfig>(), c); },
+       [](const EffectsConfig& e, ProcessContext& c) {
+         return flapping_forcing_process(e.get<FlappingForcingConfig>(), c);
+       },
        [](const EffectsConfig& e) { return e.get<FlappingForcingConfig>().enabled; }, flapping_forcing_sizing},
-      {"actuator_delay",
-       [](ConfigMap& m, EffectsConfig& e) { e.get<ActuatorDelayConfig>() = actuator_delay_from(m); },
-       [](const std::string& prefix) { return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix); }, "actuator_delay",
+      {"actuator_delay", [](ConfigMap& m, EffectsConfig& e) { e.get<ActuatorDelayConfig>() = actuator_delay_from(m); },
+       [](const std::string& prefix) {
+         return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix);
+       },
+       "actuator_delay",
        [](const ModelSection& s, EffectsConfig& e) { actuator_delay_from_model(s, e.get<ActuatorDelayConfig>()); },
        [](const EffectsConfig& e, ProcessContext&) { return actuator_delay_process(e.get<ActuatorDelayConfig>()); },
        [](const EffectsConfig& e) { return e.get<ActuatorDelayConfig>().enabled; }, actuator_delay_sizing, true},
-      {"lateral_gust",
-       [](ConfigMap& m, EffectsConfig& e) { e.get<LateralGustConfig>() = lateral_gust_from(m); },
+      {"lateral_gust", [](ConfigMap& m, EffectsConfig& e) { e.get<LateralGustConfig>() = lateral_gust_from(m); },
        [](const std::string& prefix) {
          return params_markdown_rows(lateral_gust_params(), LateralGustConfig{}, prefix) + "| `" + prefix +
                 "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
        },
-       "lateral_gust", [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.get<LateralGustConfig>()); },
+       "lateral_gust",
+       [](const ModelSection& s, EffectsConfig& e) { lateral_gust_from_model(s, e.get<LateralGustConfig>()); },
        [](const EffectsConfig& e, ProcessContext& c) { return lateral_gust_process(e.get<LateralGustConfig>(), c); },
        [](const EffectsConfig& e) { return e.get<LateralGustConfig>().enabled; }, lateral_gust_sizing},
       {"effectiveness_drift",
@@ -92,10 +108,13 @@ const std::vector<PlantEffect>& plant_effects() {
          return params_markdown_rows(effectiveness_drift_params(), EffectivenessDriftConfig{}, prefix);
        },
        "effectiveness_drift",
-       [](const ModelSection& s, EffectsConfig& e) { effectiveness_drift_from_model(s, e.get<EffectivenessDriftConfig>()); },
+       [](const ModelSection& s, EffectsConfig& e) {
+         effectiveness_drift_from_model(s, e.get<EffectivenessDriftConfig>());
+       },
        [](const EffectsConfig& e, ProcessContext&) {
          return load_process<EffectivenessDriftConfig>(
-             e.get<EffectivenessDriftConfig>(), [](const EffectivenessDriftConfig& c, const LoadInputs& in, double& L, double& Y) {
+             e.get<EffectivenessDriftConfig>(),
+             [](const EffectivenessDriftConfig& c, const LoadInputs& in, double& L, double& Y) {
                add_effectiveness_drift(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
              });
        },
@@ -106,10 +125,13 @@ const std::vector<PlantEffect>& plant_effects() {
          return params_markdown_rows(effectiveness_step_params(), EffectivenessStepConfig{}, prefix);
        },
        "effectiveness_step",
-       [](const ModelSection& s, EffectsConfig& e) { effectiveness_step_from_model(s, e.get<EffectivenessStepConfig>()); },
+       [](const ModelSection& s, EffectsConfig& e) {
+         effectiveness_step_from_model(s, e.get<EffectivenessStepConfig>());
+       },
        [](const EffectsConfig& e, ProcessContext&) {
          return load_process<EffectivenessStepConfig>(
-             e.get<EffectivenessStepConfig>(), [](const EffectivenessStepConfig& c, const LoadInputs& in, double& L, double& Y) {
+             e.get<EffectivenessStepConfig>(),
+             [](const EffectivenessStepConfig& c, const LoadInputs& in, double& L, double& Y) {
                add_effectiveness_step(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
              });
        },

@@ -108,11 +108,11 @@ TEST_CASE("signals pack little-endian and sign-extend", "[signal]") {
 
 TEST_CASE("a command frame has the documented bytes", "[layout]") {
   actuator_command_t c = command(0x1234, 3);
-  c.flap_freq_left_radps = 100.0;   // 10000 = 0x2710
-  c.flap_freq_right_radps = 90.0;   // 9000 = 0x2328
-  c.throttle_pct = 50.0;            // 5000 = 0x1388
-  c.dihedral_rad = -0.1234;         // -1234 = 0xFB2E
-  c.wing_root_rad = 0.5;            // 5000 = 0x1388
+  c.flap_freq_left_radps = 100.0;  // 10000 = 0x2710
+  c.flap_freq_right_radps = 90.0;  // 9000 = 0x2328
+  c.throttle_pct = 50.0;           // 5000 = 0x1388
+  c.dihedral_rad = -0.1234;        // -1234 = 0xFB2E
+  c.wing_root_rad = 0.5;           // 5000 = 0x1388
   CommandEncoder enc;
   const auto frames = enc.encode(c);
   REQUIRE(frames[0].can_id == 0x101);

@@ -138,14 +138,16 @@ void pin_to_cpu0() {
 struct Bridge {
   explicit Bridge(const std::string& side, bool fd = false)
       : pinned((pin_to_cpu0(), true)),
-        scenario(nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml",
-                                       {{"actuator_link", "can"},
-                                        {"can_bridge.interface", fd ? kFdIf : kIf},
-                                        {"can_bridge.fd", fd ? "true" : "false"}})),
+        scenario(
+            nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml", {{"actuator_link", "can"},
+                                                                            {"can_bridge.interface", fd ? kFdIf : kIf},
+                                                                            {"can_bridge.fd", fd ? "true" : "false"}})),
         node(scenario, {side, scenario.file, "memq://"}) {
     auto& bus = node.node().bus();
-    bus.subscribe<actuator_command_t>(kActuatorCommandCan, [this](const actuator_command_t& m) { commands.push_back(m); });
-    bus.subscribe<actuator_feedback_t>(kActuatorFeedbackCan, [this](const actuator_feedback_t& m) { feedback.push_back(m); });
+    bus.subscribe<actuator_command_t>(kActuatorCommandCan,
+                                      [this](const actuator_command_t& m) { commands.push_back(m); });
+    bus.subscribe<actuator_feedback_t>(kActuatorFeedbackCan,
+                                       [this](const actuator_feedback_t& m) { feedback.push_back(m); });
     bus.subscribe<can_health_t>(kCanHealth, [this](const can_health_t& m) { health.push_back(m); });
     bus.subscribe<fault_event_t>(kFault, [this](const fault_event_t& m) { faults.push_back(m); });
   }
@@ -298,8 +300,7 @@ TEST_CASE("can_flight: ACTUATOR_CMD goes out as the documented frames, feedback 
   CHECK(h.frames_received == 3);
 }
 
-TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN, ACTUATOR_FB goes out as frames",
-          "[bridge]") {
+TEST_CASE("can_rig: command frames from cansend become ACTUATOR_CMD_CAN, ACTUATOR_FB goes out as frames", "[bridge]") {
   Bridge rig(kRigProcess);
   CommandEncoder enc;
   for (int64_t seq : {1000, 1001}) {
@@ -336,8 +337,9 @@ TEST_CASE("bad frames and error frames are counted, reported on CAN_HEALTH and F
       "cansend " + kIf + " 00000101#0011",         // extended identifier: filtered as well
       cansend(good[0], 5),                         // short frame (DLC 5)
       cansend(corrupt),                            // bad checksum
-      cansend(good[0]), cansend(good[1]),          // a valid command
-      cansend(good[1]),                            // the same counter again: stale
+      cansend(good[0]),
+      cansend(good[1]),  // a valid command
+      cansend(good[1]),  // the same counter again: stale
   };
   std::string all;
   for (const auto& s : sends) all += (all.empty() ? "" : " && ") + s;
@@ -414,9 +416,10 @@ void check_link_carried(const YAML::Node& summary, int commands, bool fd) {
 
 }  // namespace
 
-TEST_CASE("the identification doublet train in lockstep: the same truth over the CAN link as over LCM, "
-          "the run's candump log replays with canplayer",
-          "[system][rig]") {
+TEST_CASE(
+    "the identification doublet train in lockstep: the same truth over the CAN link as over LCM, "
+    "the run's candump log replays with canplayer",
+    "[system][rig]") {
   pin_to_cpu0();
   const std::string dir = nimble::test::scratch_dir("can_link");
   fs::create_directories(dir + "/lcm");
@@ -426,8 +429,9 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   // VM on a loaded host a process can be descheduled for seconds (a controller step of 3.2 s was
   // seen): the lockstep acknowledgement timeout is raised from 2 s so that a starved vCPU is
   // not taken for a stalled participant; this test is about the truth, not about timing.
-  const std::string common = "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller] "
-                             "--set lockstep.ack_timeout_ms=30000";
+  const std::string common =
+      "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller] "
+      "--set lockstep.ack_timeout_ms=30000";
   const RunResult over_lcm = rig_run(scenario, dir + "/lcm", common);
   INFO(over_lcm.output);
   REQUIRE(over_lcm.exit_code == 0);
@@ -486,8 +490,10 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
     ReceivedFrame rx;
     while (replayed.size() < 600) {
       const ReceiveResult r = listener.receive(&rx, 200);
-      if (r == ReceiveResult::kFrame) replayed.push_back(rx.frame);
-      else if (done) break;
+      if (r == ReceiveResult::kFrame)
+        replayed.push_back(rx.frame);
+      else if (done)
+        break;
     }
   });
   const int played = run("canplayer -t -g 1 -I " + head + " " + kIf + "=" + kIf);
@@ -501,9 +507,10 @@ TEST_CASE("the identification doublet train in lockstep: the same truth over the
   fs::remove_all(dir);
 }
 
-TEST_CASE("can_bridge.fd: commands go out as FD frames with bit rate switch, FD and classical feedback frames "
-          "become ACTUATOR_FB_CAN, FD frames of another length are wrong_length",
-          "[bridge][fd]") {
+TEST_CASE(
+    "can_bridge.fd: commands go out as FD frames with bit rate switch, FD and classical feedback frames "
+    "become ACTUATOR_FB_CAN, FD frames of another length are wrong_length",
+    "[bridge][fd]") {
   ensure_fd_interface();
   Bridge flight(kFlightProcess, true);
   CanSocket listener = fd_listener();
@@ -551,7 +558,8 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
   ensure_fd_interface();
   Bridge rig(kRigProcess, true);
   CommandEncoder enc;
-  REQUIRE(run(send_all(enc.encode(sample_command(1000)), [](const can_frame& f) { return cansend_fd(f, hex(f)); })) == 0);
+  REQUIRE(run(send_all(enc.encode(sample_command(1000)), [](const can_frame& f) { return cansend_fd(f, hex(f)); })) ==
+          0);
   rig.pump();
   REQUIRE(rig.commands.size() == 1);
   check_sample_command(rig.commands.back(), 1000);
@@ -569,22 +577,22 @@ TEST_CASE("can_bridge.fd: FD command frames from cansend become ACTUATOR_CMD_CAN
 }
 
 TEST_CASE("the bridge refuses a control rate outside the controller's range, before it opens a socket", "[bridge]") {
-  const nimble::Scenario scenario = nimble::load_scenario(
-      kConfigs + "id_doublet_train_fast.yaml", {{"actuator_link", "can"}, {"controller.rate_hz", "10"}});
+  const nimble::Scenario scenario = nimble::load_scenario(kConfigs + "id_doublet_train_fast.yaml",
+                                                          {{"actuator_link", "can"}, {"controller.rate_hz", "10"}});
   try {
     CanBridgeNode node(scenario, {kRigProcess, scenario.file, "memq://"});
     FAIL("no exception");
   } catch (const nimble::ConfigError& e) {
-    CHECK_THAT(std::string(e.what()), Catch::Matchers::Contains("controller.rate_hz") &&
-                                          Catch::Matchers::Contains("10"));
+    CHECK_THAT(std::string(e.what()),
+               Catch::Matchers::Contains("controller.rate_hz") && Catch::Matchers::Contains("10"));
   }
 }
 
 TEST_CASE("can_bridge.fd on an interface with the classical MTU names the fix", "[bridge][fd]") {
   pin_to_cpu0();
   const std::string classical_if = "vcan_cc";
-  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if + " mtu 16 && ip link set " +
-              classical_if + " up") == 0);
+  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if +
+              " mtu 16 && ip link set " + classical_if + " up") == 0);
   const nimble::Scenario scenario = nimble::load_scenario(
       kConfigs + "id_doublet_train_fast.yaml",
       {{"actuator_link", "can"}, {"can_bridge.interface", classical_if}, {"can_bridge.fd", "true"}});
@@ -665,8 +673,9 @@ TEST_CASE("rig run over the CAN link with can_bridge.fd: every command crosses i
   fs::remove_all(dir);
 }
 
-TEST_CASE("faults of the CAN link over vcan0 in lockstep: the frames lost and the truth are those of the in-process run",
-          "[system][rig][faults]") {
+TEST_CASE(
+    "faults of the CAN link over vcan0 in lockstep: the frames lost and the truth are those of the in-process run",
+    "[system][rig][faults]") {
   pin_to_cpu0();
   const std::string dir = nimble::test::scratch_dir("can_link_faults");
   fs::create_directories(dir + "/vcan");

@@ -80,22 +80,23 @@ TEST_CASE("error frames are decoded into flags and a readable description", "[er
     CHECK(e.description == "controller: TX error-passive; TEC 130 REC 5");
   }
   SECTION("controller warning and overflow") {
-    const ErrorFrameInfo e = decode_error_frame(
-        error_frame(CAN_ERR_CRTL, {0, CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_RX_OVERFLOW}));
+    const ErrorFrameInfo e =
+        decode_error_frame(error_frame(CAN_ERR_CRTL, {0, CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_RX_OVERFLOW}));
     CHECK(e.error_warning);
     CHECK(e.overflow);
     CHECK(e.description == "controller: RX buffer overflow, RX error-warning");
   }
   SECTION("protocol violation with location, transceiver, no ACK") {
-    const ErrorFrameInfo e = decode_error_frame(
-        error_frame(CAN_ERR_PROT | CAN_ERR_TRX | CAN_ERR_ACK,
-                    {0, 0, CAN_ERR_PROT_STUFF | CAN_ERR_PROT_TX, CAN_ERR_PROT_LOC_DATA, CAN_ERR_TRX_CANH_SHORT_TO_GND}));
+    const ErrorFrameInfo e = decode_error_frame(error_frame(
+        CAN_ERR_PROT | CAN_ERR_TRX | CAN_ERR_ACK,
+        {0, 0, CAN_ERR_PROT_STUFF | CAN_ERR_PROT_TX, CAN_ERR_PROT_LOC_DATA, CAN_ERR_TRX_CANH_SHORT_TO_GND}));
     CHECK(e.description ==
-          "protocol: stuff error, on transmission at data section; transceiver: CANH short to GND; no ACK on transmission");
+          "protocol: stuff error, on transmission at data section; transceiver: CANH short to GND; no ACK on "
+          "transmission");
   }
   SECTION("lost arbitration, restart, back to error-active") {
-    const ErrorFrameInfo e = decode_error_frame(
-        error_frame(CAN_ERR_LOSTARB | CAN_ERR_RESTARTED | CAN_ERR_CRTL, {7, CAN_ERR_CRTL_ACTIVE}));
+    const ErrorFrameInfo e =
+        decode_error_frame(error_frame(CAN_ERR_LOSTARB | CAN_ERR_RESTARTED | CAN_ERR_CRTL, {7, CAN_ERR_CRTL_ACTIVE}));
     CHECK(e.restarted);
     CHECK(e.back_to_error_active);
     CHECK(e.description == "lost arbitration at bit 7; controller: back to error-active; controller restarted");
@@ -179,7 +180,8 @@ TEST_CASE("CAN FD frames have candump's ID##F format and parse back", "[candump]
   std::vector<uint8_t> long_payload(64);
   for (std::size_t i = 0; i < long_payload.size(); ++i) long_payload[i] = static_cast<uint8_t>(i * 7);
   const canfd_frame longest = fd_frame(0x102, CANFD_BRS, long_payload);
-  CHECK(format_candump_line(longest, 0, "vcan1").size() == std::string("(0000000000.000000) vcan1 102##1").size() + 128);
+  CHECK(format_candump_line(longest, 0, "vcan1").size() ==
+        std::string("(0000000000.000000) vcan1 102##1").size() + 128);
 
   for (const canfd_frame& f : {cmd, fd_frame(0x5, 0, {}), fd_frame(0x1ABCDEF0 | CAN_EFF_FLAG, CANFD_BRS, {1, 2, 3}),
                                fd_frame(0x183, CANFD_ESI, {9, 8, 7, 6, 5, 4, 3, 2, 1, 0, 0xFF, 0xEE}), longest}) {
@@ -211,10 +213,10 @@ TEST_CASE("CAN FD frames have candump's ID##F format and parse back", "[candump]
   const auto dotted = parse_candump_line("(1.000001) vcan1 181##1de.ad.be.ef");
   REQUIRE(dotted);
   CHECK(same_fd_frame(dotted->fd_frame, fd_frame(0x181, CANFD_BRS, {0xDE, 0xAD, 0xBE, 0xEF})));
-  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##"));                 // no flags digit
-  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##G00"));              // flags not hex
-  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##100112"));           // odd number of digits
-  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 20000040##100"));         // no FD error frames
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##"));                           // no flags digit
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##G00"));                        // flags not hex
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##100112"));                     // odd number of digits
+  CHECK_FALSE(parse_candump_line("(1.000001) vcan1 20000040##100"));                   // no FD error frames
   CHECK_FALSE(parse_candump_line("(1.000001) vcan1 101##1" + std::string(130, '0')));  // 65 bytes
   CHECK_FALSE(parse_candump_line("(1.000001) vcan1 FFF##100"));
 }
@@ -281,7 +283,12 @@ TEST_CASE("a full send queue is retried with bounded back-off, counted, and neve
   SECTION("a queue that stays full drops the frame after max_retries") {
     CanSocketStats stats;
     int calls = 0;
-    const SendResult r = send_with_retry([&] { ++calls; return ENOBUFS; }, policy, stats, record);
+    const SendResult r = send_with_retry(
+        [&] {
+          ++calls;
+          return ENOBUFS;
+        },
+        policy, stats, record);
     CHECK(r == SendResult::kDropped);
     CHECK(calls == 6);
     CHECK(stats.send_enobufs == 6);
@@ -301,7 +308,12 @@ TEST_CASE("a full send queue is retried with bounded back-off, counted, and neve
   SECTION("other errors are not retried") {
     CanSocketStats stats;
     int calls = 0;
-    CHECK(send_with_retry([&] { ++calls; return ENETDOWN; }, policy, stats, record) == SendResult::kError);
+    CHECK(send_with_retry(
+              [&] {
+                ++calls;
+                return ENETDOWN;
+              },
+              policy, stats, record) == SendResult::kError);
     CHECK(calls == 1);
     CHECK(stats.send_errors == 1);
     CHECK(stats.last_errno == ENETDOWN);

@@ -32,9 +32,9 @@
 #include "tests/support/scratch.h"
 
 using namespace nimble::can;
+using Catch::Matchers::Contains;
 using nimble::actuator_command_t;
 using nimble::actuator_feedback_t;
-using Catch::Matchers::Contains;
 
 namespace {
 
@@ -138,7 +138,8 @@ class Child {
         buffer_.erase(0, nl + 1);
         return true;
       }
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) return false;
       pollfd p{fd_, POLLIN, 0};
       if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
@@ -243,9 +244,7 @@ canfd_frame fd_frame(uint32_t id, uint8_t flags, unsigned len, uint8_t seed) {
   return f;
 }
 
-std::string temp_path(const std::string& name) {
-  return nimble::test::scratch_path(name);
-}
+std::string temp_path(const std::string& name) { return nimble::test::scratch_path(name); }
 
 }  // namespace
 
@@ -277,8 +276,8 @@ TEST_CASE("frames sent with CanSocket arrive bit-exact with monotonic kernel tim
     last_ts = got.kernel_time_ns;
     actuator_command_t c;
     actuator_feedback_t fb;
-    const DecodeResult r = (got.frame.can_id & CAN_SFF_MASK) < kFbMotor.id ? cdec.decode(got.frame, &c)
-                                                                          : fdec.decode(got.frame, &fb);
+    const DecodeResult r =
+        (got.frame.can_id & CAN_SFF_MASK) < kFbMotor.id ? cdec.decode(got.frame, &c) : fdec.decode(got.frame, &fb);
     CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
   }
   CHECK(nothing_pending(rx, 50));
@@ -327,9 +326,8 @@ TEST_CASE("frames sent with cansend arrive and decode, bad ones are counted", "[
   const std::string servo_hex = hex(f);
   std::string bad_crc_hex = servo_hex;
   bad_crc_hex[15] = bad_crc_hex[15] == '0' ? '1' : '0';
-  REQUIRE(run("cansend " + kIf + " 101#" + flap_hex + " && cansend " + kIf + " 102#" + servo_hex +
-              " && cansend " + kIf + " 1FF#0011 && cansend " + kIf + " 101#1027 && cansend " + kIf + " 102#" +
-              bad_crc_hex) == 0);
+  REQUIRE(run("cansend " + kIf + " 101#" + flap_hex + " && cansend " + kIf + " 102#" + servo_hex + " && cansend " +
+              kIf + " 1FF#0011 && cansend " + kIf + " 101#1027 && cansend " + kIf + " 102#" + bad_crc_hex) == 0);
 
   CommandDecoder dec;
   actuator_command_t out{};
@@ -596,13 +594,17 @@ TEST_CASE("CAN FD frames sent with CanSocket arrive bit-exact on a vcan with MTU
     if (id == kCmdFlap.id || id == kCmdServo.id) {
       actuator_command_t c;
       const DecodeResult r = cdec.decode(got.frame, &c);
-      if (sent.len == 8) CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
-      else CHECK(r == DecodeResult::kWrongLength);
+      if (sent.len == 8)
+        CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
+      else
+        CHECK(r == DecodeResult::kWrongLength);
     } else if (id == kFbMotor.id || id == kFbServo.id || id == kFbStatus.id) {
       actuator_feedback_t fb;
       const DecodeResult r = fdec.decode(got.frame, &fb);
-      if (sent.len == 8) CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
-      else CHECK(r == DecodeResult::kWrongLength);
+      if (sent.len == 8)
+        CHECK((r == DecodeResult::kAccepted || r == DecodeResult::kMessageComplete));
+      else
+        CHECK(r == DecodeResult::kWrongLength);
     }
   }
   const ReceivedFrame got_classical = next_data(rx);
@@ -629,15 +631,15 @@ TEST_CASE("CAN FD frames sent with CanSocket arrive bit-exact on a vcan with MTU
 
 TEST_CASE("CAN FD on an interface with the classical MTU is refused with the fix", "[vcan][fd]") {
   const std::string classical_if = "vcan_cc";
-  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if + " mtu 16 && ip link set " +
-              classical_if + " up") == 0);
+  REQUIRE(run("ip link add dev " + classical_if + " type vcan && ip link set " + classical_if +
+              " mtu 16 && ip link set " + classical_if + " up") == 0);
   try {
     CanSocket::open(classical_if, fd_options(send_only()));
     FAIL("no exception");
   } catch (const CanError& e) {
     CHECK(e.interface() == classical_if);
-    CHECK_THAT(std::string(e.what()), Contains("'" + classical_if + "' has MTU 16") &&
-                                          Contains("ip link set " + classical_if + " mtu 72"));
+    CHECK_THAT(std::string(e.what()),
+               Contains("'" + classical_if + "' has MTU 16") && Contains("ip link set " + classical_if + " mtu 72"));
   }
   CanSocket::open(classical_if, send_only());  // classical CAN is fine there
   CHECK(run("ip link del dev " + classical_if) == 0);
@@ -699,7 +701,8 @@ TEST_CASE("cansend FD frames arrive, candump -L prints FD frames exactly as our 
   CHECK(matched == frames.size());
 }
 
-TEST_CASE("a CAN FD candump log written by CandumpWriter is replayed by canplayer identically", "[vcan][fd][can-utils]") {
+TEST_CASE("a CAN FD candump log written by CandumpWriter is replayed by canplayer identically",
+          "[vcan][fd][can-utils]") {
   ensure_fd_interface();
   const std::string path = temp_path("rig_canplayer_fd") + ".log";
   std::vector<canfd_frame> frames = fd_traffic(8);

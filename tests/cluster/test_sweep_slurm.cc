@@ -32,9 +32,10 @@ namespace {
 
 const std::string kSource = std::string(RIG_SOURCE_DIR) + "/";
 const std::string kClusterScript = kSource + "tests/cluster/slurm_cluster.sh";
-const std::string kCampaign = kSource + "rig_configs/id_doublet_train_fast.yaml --seeds 1-20 --set duration_s=3 --vary model=" +
-                              kSource + "rig_configs/models/nimble_lateral_set1.yaml," + kSource +
-                              "rig_configs/models/nimble_lateral_set4.yaml --no-progress";
+const std::string kCampaign =
+    kSource + "rig_configs/id_doublet_train_fast.yaml --seeds 1-20 --set duration_s=3 --vary model=" + kSource +
+    "rig_configs/models/nimble_lateral_set1.yaml," + kSource +
+    "rig_configs/models/nimble_lateral_set4.yaml --no-progress";
 
 /// A one-node cluster for the life of the object; SLURM_CONF points the client commands at it.
 class Cluster {
@@ -67,7 +68,8 @@ Outcome rig_sweep(const std::string& dir, const std::string& name, const std::st
 
 /// The local reference: one job, campaign in DIR/local.
 std::string local_reference(const std::string& d) {
-  const Outcome local = rig_sweep(d, "local", kCampaign + " --jobs 1 --dir " + d + "/local --report " + d + "/local_report");
+  const Outcome local =
+      rig_sweep(d, "local", kCampaign + " --jobs 1 --dir " + d + "/local --report " + d + "/local_report");
   INFO(local.output);
   REQUIRE(local.exit_code == 0);
   return d + "/local";
@@ -125,8 +127,8 @@ TEST_CASE("slurm: a 40-run campaign gives the local backend's result, whatever t
   require_same_result(local, d + "/local2");
 
   // Six array tasks of 7 runs (the last of 5), one run at a time each.
-  const Outcome slurm7 = rig_sweep(d, "slurm7", kCampaign + " --backend slurm --chunk 7 --dir " + d + "/slurm7 --report " +
-                                                    d + "/slurm7_report");
+  const Outcome slurm7 = rig_sweep(
+      d, "slurm7", kCampaign + " --backend slurm --chunk 7 --dir " + d + "/slurm7 --report " + d + "/slurm7_report");
   INFO(slurm7.output);
   REQUIRE(slurm7.exit_code == 0);
   CHECK(slurm7.output.find("array tasks 0-5 of 6, up to 7 runs each") != std::string::npos);
@@ -141,8 +143,8 @@ TEST_CASE("slurm: a 40-run campaign gives the local backend's result, whatever t
   }
 
   // One task of all 40 runs, two at a time on its two CPUs.
-  const Outcome slurm40 = rig_sweep(d, "slurm40", kCampaign + " --backend slurm --chunk 40 --cpus-per-task 2 --dir " + d +
-                                                      "/slurm40");
+  const Outcome slurm40 =
+      rig_sweep(d, "slurm40", kCampaign + " --backend slurm --chunk 40 --cpus-per-task 2 --dir " + d + "/slurm40");
   INFO(slurm40.output);
   REQUIRE(slurm40.exit_code == 0);
   require_same_result(local, d + "/slurm40");
@@ -178,7 +180,9 @@ TEST_CASE("slurm: a cancelled array task is named with its runs, and --resume fi
   const std::string said = slurp(d + "/waiting.txt");
   INFO(said);
   CHECK(std::stoi(slurp(d + "/waiting.exit")) == 3);
-  CHECK(said.find("job " + job + " task 3 (runs 30-39 (set 2 seed 11 to set 2 seed 20)) never started (CANCELLED while pending") != std::string::npos);
+  CHECK(said.find("job " + job +
+                  " task 3 (runs 30-39 (set 2 seed 11 to set 2 seed 20)) never started (CANCELLED while pending") !=
+        std::string::npos);
   CHECK(said.find("10 of 10 runs without a result (set 2 seed 11, set 2 seed 12, set 2 seed 13, set 2 seed 14, ...)") !=
         std::string::npos);
   CHECK(said.find("rig sweep --resume " + c) != std::string::npos);
@@ -227,8 +231,8 @@ TEST_CASE("slurm: a task that exits non-zero is named, and --retries resubmits o
       << "exec " << RIG_BIN << " \"$@\"\n";
   }
   fs::permissions(wrapper, fs::perms::owner_all);
-  const Outcome r = rig_sweep(d, "retry", kCampaign + " --backend slurm --chunk 10 --retries 1 --rig " + wrapper +
-                                             " --dir " + c);
+  const Outcome r =
+      rig_sweep(d, "retry", kCampaign + " --backend slurm --chunk 10 --retries 1 --rig " + wrapper + " --dir " + c);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   const std::string job = job_of(c, 0);

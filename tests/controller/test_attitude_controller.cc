@@ -89,7 +89,8 @@ TEST_CASE("throttle factor raises throttle and collective, delta_t is relative t
   const ControllerOutput out = c.step(in);
   CHECK(out.throttle_cmd_pct == Approx(1.2 * cfg.trim_throttle_pct));
   CHECK(out.delta_throttle_pct == Approx(0.2 * cfg.trim_throttle_pct));
-  CHECK(out.collective_radps == Approx(cfg.f_trim_radps + cfg.throttle_to_freq_radps_per_pct * 0.2 * cfg.trim_throttle_pct));
+  CHECK(out.collective_radps ==
+        Approx(cfg.f_trim_radps + cfg.throttle_to_freq_radps_per_pct * 0.2 * cfg.trim_throttle_pct));
   CHECK_FALSE(out.saturated);
 }
 
@@ -168,8 +169,9 @@ TEST_CASE("gain sets by name, unknown name is an error naming it", "[controller]
 
   expect_key_error("default_gain_set: medium\n", "default_gain_set", "medium");
 
-  const ControllerConfig user = from_text("roll_gain_sets:\n  gentle: {kp_per_rad: 0.3, kd_per_radps: 0.1}\n"
-                                          "default_gain_set: gentle\n");
+  const ControllerConfig user = from_text(
+      "roll_gain_sets:\n  gentle: {kp_per_rad: 0.3, kd_per_radps: 0.1}\n"
+      "default_gain_set: gentle\n");
   CHECK(user.roll_gain_sets.size() == 3);
   AttitudeController g(user);
   CHECK(g.gain_set() == "gentle");

@@ -110,9 +110,9 @@ TEST_CASE("slow gains with a too small map (5 rad/s) do not return to hover", "[
 
 TEST_CASE("every shipped manoeuvre flies stably with its gain set and with the other", "[closed_loop]") {
   const Rig rig;
-  for (const std::string name : {"hover", "ol_doublet_6hz", "ol_112_7_3p5hz", "cl_doublet_train_6_4_2hz",
-                                 "cl_112_4_2hz", "coupled_doublet_6hz", "nonlinear_doublet_20deg",
-                                 "nonlinear_doublet_30deg"}) {
+  for (const std::string name :
+       {"hover", "ol_doublet_6hz", "ol_112_7_3p5hz", "cl_doublet_train_6_4_2hz", "cl_112_4_2hz", "coupled_doublet_6hz",
+        "nonlinear_doublet_20deg", "nonlinear_doublet_30deg"}) {
     for (const std::string gains : {"fast", "slow"}) {
       const LinearLoopResult r = fly(rig, name, gains);
       INFO(name << " with " << gains << " gains: settle |phi| " << r.settle_max_abs_phi_rad << " |v| "

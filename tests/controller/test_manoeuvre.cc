@@ -67,9 +67,10 @@ void expect_key_error(const std::string& text, const std::string& key, const std
 }  // namespace
 
 TEST_CASE("doublet of main frequency f: two pulses of 1/(2f), negative first", "[manoeuvre]") {
-  const Manoeuvre m = from_text(with_segments("  - {kind: hold, duration_s: 1.0}\n"
-                                              "  - {kind: doublet, main_frequency_hz: 7, amplitude_deg: 35}\n"
-                                              "  - {kind: hold, duration_s: 1.0}\n"));
+  const Manoeuvre m =
+      from_text(with_segments("  - {kind: hold, duration_s: 1.0}\n"
+                              "  - {kind: doublet, main_frequency_hz: 7, amplitude_deg: 35}\n"
+                              "  - {kind: hold, duration_s: 1.0}\n"));
   const ManoeuvrePlayer player(m, kTrim);
   CHECK(m.segments[1].duration_s == Approx(1.0 / 7.0));
   CHECK(player.duration_s() == Approx(2.0 + 1.0 / 7.0));
@@ -97,9 +98,10 @@ TEST_CASE("doublet with sign +1 and an offset", "[manoeuvre]") {
 }
 
 TEST_CASE("112: unit width 1/(2f), pulses u, u, 2u with alternating signs", "[manoeuvre]") {
-  const Manoeuvre m = from_text(with_segments("  - {kind: hold, duration_s: 0.5}\n"
-                                              "  - {kind: one_one_two, main_frequency_hz: 7, amplitude_deg: 20}\n"
-                                              "  - {kind: hold, duration_s: 0.5}\n"));
+  const Manoeuvre m =
+      from_text(with_segments("  - {kind: hold, duration_s: 0.5}\n"
+                              "  - {kind: one_one_two, main_frequency_hz: 7, amplitude_deg: 20}\n"
+                              "  - {kind: hold, duration_s: 0.5}\n"));
   const ManoeuvrePlayer player(m, kTrim);
   const double u = 1.0 / 14.0;
   CHECK(m.segments[1].pulse_width_s() == Approx(u));
@@ -116,8 +118,8 @@ TEST_CASE("112: unit width 1/(2f), pulses u, u, 2u with alternating signs", "[ma
 }
 
 TEST_CASE("ramp is linear on its axis", "[manoeuvre]") {
-  const Manoeuvre m = from_text(with_segments(
-      "  - {kind: ramp, axis: pitch, from_deg: 0, to_deg: 20, duration_s: 0.2, roll_deg: 3}\n"));
+  const Manoeuvre m = from_text(
+      with_segments("  - {kind: ramp, axis: pitch, from_deg: 0, to_deg: 20, duration_s: 0.2, roll_deg: 3}\n"));
   const ManoeuvrePlayer player(m, kTrim);
   CHECK(player.at(0.0).pitch_sp_rad == Approx(0.0).margin(1e-12));
   CHECK(player.at(0.1).pitch_sp_rad == Approx(10.0 * kDeg));
@@ -136,7 +138,8 @@ TEST_CASE("throttle factor 1/cos(max roll) applies only during manoeuvre segment
   for (double t = -0.5; t < player.duration_s() + 0.5; t += 1.0 / 512.0) {
     const Setpoint sp = player.at(t);
     CHECK(sp.throttle_pct == kTrim);
-    const bool doublet = sp.active && m.segments[static_cast<std::size_t>(sp.segment_index)].kind == SegmentKind::kDoublet;
+    const bool doublet =
+        sp.active && m.segments[static_cast<std::size_t>(sp.segment_index)].kind == SegmentKind::kDoublet;
     if (doublet) {
       ++in_doublets;
       CHECK(sp.throttle_factor == Approx(m.throttle_factor));
@@ -158,28 +161,29 @@ TEST_CASE("throttle factor 1/cos(max roll) applies only during manoeuvre segment
   nl.throttle_factor_from_setpoint = false;
   CHECK(nl.throttle_factor == Approx(1.0 / std::cos(45.0 * kDeg)));
   const ManoeuvrePlayer nlp(nl, kTrim);
-  CHECK(nlp.at(0.5).throttle_factor == 1.0);  // hover before
+  CHECK(nlp.at(0.5).throttle_factor == 1.0);                     // hover before
   CHECK(nlp.at(1.5).throttle_factor == Approx(std::sqrt(2.0)));  // sideways hold
 
   // With `throttle_factor: setpoint` (the shipped file): the factor follows the set-point of the
   // moment (its largest, offset + amplitude, is the manoeuvre's).
   const Manoeuvre& nls = shipped;
   const ManoeuvrePlayer nlsp(nls, kTrim);
-  CHECK(nlsp.at(0.5).throttle_factor == 1.0);  // hover before
-  CHECK(nlsp.at(1.1).throttle_factor == Approx(1.0 / std::cos(15.0 * kDeg)));  // half-way up the ramp
-  CHECK(nlsp.at(1.5).throttle_factor == Approx(1.0 / std::cos(30.0 * kDeg)));  // sideways hold
+  CHECK(nlsp.at(0.5).throttle_factor == 1.0);                                   // hover before
+  CHECK(nlsp.at(1.1).throttle_factor == Approx(1.0 / std::cos(15.0 * kDeg)));   // half-way up the ramp
+  CHECK(nlsp.at(1.5).throttle_factor == Approx(1.0 / std::cos(30.0 * kDeg)));   // sideways hold
   CHECK(nlsp.at(1.75).throttle_factor == Approx(1.0 / std::cos(15.0 * kDeg)));  // doublet, lower pulse
-  CHECK(nlsp.at(1.9).throttle_factor == Approx(std::sqrt(2.0)));  // doublet, far pulse at 45 deg
+  CHECK(nlsp.at(1.9).throttle_factor == Approx(std::sqrt(2.0)));                // doublet, far pulse at 45 deg
   CHECK(nlsp.at(1.9).delta_throttle_pct == Approx(kTrim * (std::sqrt(2.0) - 1.0)));
   CHECK(nlsp.at(nlsp.duration_s() - 0.1).throttle_factor == 1.0);  // hover after
-  CHECK(nlp.at(nlp.duration_s() - 0.1).throttle_factor == 1.0);  // hover after
+  CHECK(nlp.at(nlp.duration_s() - 0.1).throttle_factor == 1.0);    // hover after
 }
 
 TEST_CASE("explicit throttle factor, segment offsets and opt-out", "[manoeuvre][throttle]") {
-  const Manoeuvre m = from_text("name: t\nsource: s\nthrottle_factor: 1.1\nsegments:\n"
-                                "  - {kind: hold, duration_s: 1, delta_throttle_pct: 5}\n"
-                                "  - {kind: doublet, main_frequency_hz: 2, amplitude_deg: 10, apply_throttle_factor: false}\n"
-                                "  - {kind: hold, duration_s: 1, apply_throttle_factor: true}\n");
+  const Manoeuvre m = from_text(
+      "name: t\nsource: s\nthrottle_factor: 1.1\nsegments:\n"
+      "  - {kind: hold, duration_s: 1, delta_throttle_pct: 5}\n"
+      "  - {kind: doublet, main_frequency_hz: 2, amplitude_deg: 10, apply_throttle_factor: false}\n"
+      "  - {kind: hold, duration_s: 1, apply_throttle_factor: true}\n");
   CHECK_FALSE(m.throttle_factor_auto);
   const ManoeuvrePlayer p(m, kTrim);
   CHECK(p.at(0.5).throttle_pct == kTrim + 5.0);
@@ -246,23 +250,31 @@ TEST_CASE("unknown gain set in a manoeuvre is an error naming it", "[manoeuvre][
     CHECK(e.key() == "gain_set");
     CHECK(e.value() == "medium");
   }
-  const Manoeuvre seg = from_text(with_segments("  - {kind: hold, duration_s: 1}\n"
-                                                "  - {kind: hold, duration_s: 1, gain_set: turbo}\n"));
+  const Manoeuvre seg =
+      from_text(with_segments("  - {kind: hold, duration_s: 1}\n"
+                              "  - {kind: hold, duration_s: 1, gain_set: turbo}\n"));
   CHECK_THROWS_WITH(check_gain_sets(seg, cfg), Catch::Contains("segments[1].gain_set") && Catch::Contains("turbo"));
   CHECK_NOTHROW(check_gain_sets(load_manoeuvre(kManoeuvres + "cl_112_4_2hz.yaml"), cfg));
 }
 
 TEST_CASE("player rejects a throttle outside 0..100 and names the segment", "[manoeuvre][throttle]") {
-  const Manoeuvre m = from_text(with_segments("  - {kind: hold, name: boost, duration_s: 1, delta_throttle_pct: 50}\n"));
+  const Manoeuvre m =
+      from_text(with_segments("  - {kind: hold, name: boost, duration_s: 1, delta_throttle_pct: 50}\n"));
   CHECK_THROWS_WITH(ManoeuvrePlayer(m, 60.0), Catch::Contains("boost"));
   CHECK_NOTHROW(ManoeuvrePlayer(m, 40.0));
   CHECK_THROWS_AS(ManoeuvrePlayer(m, 0.0), std::invalid_argument);
 }
 
 TEST_CASE("shipped manoeuvre files load, name their thesis source, match their names", "[manoeuvre][files]") {
-  const std::vector<std::string> files = {
-      "hover", "id_doublet_train_7_4hz", "ol_doublet_6hz", "ol_112_7_3p5hz", "cl_doublet_train_6_4_2hz",
-      "cl_112_4_2hz", "coupled_doublet_6hz", "nonlinear_doublet_20deg", "nonlinear_doublet_30deg"};
+  const std::vector<std::string> files = {"hover",
+                                          "id_doublet_train_7_4hz",
+                                          "ol_doublet_6hz",
+                                          "ol_112_7_3p5hz",
+                                          "cl_doublet_train_6_4_2hz",
+                                          "cl_112_4_2hz",
+                                          "coupled_doublet_6hz",
+                                          "nonlinear_doublet_20deg",
+                                          "nonlinear_doublet_30deg"};
   const ControllerConfig cfg;
   for (const auto& name : files) {
     const std::string path = kManoeuvres + name + ".yaml";
@@ -278,7 +290,7 @@ TEST_CASE("shipped manoeuvre files load, name their thesis source, match their n
     CHECK(m.max_abs_roll_rad() <= kManoeuvreAngleLimitRad);
     const ManoeuvrePlayer p(m, cfg.trim_throttle_pct);
     CHECK(p.duration_s() > 1.0);
-    CHECK(p.at(0.0).roll_sp_rad == 0.0);  // every manoeuvre starts from hover
+    CHECK(p.at(0.0).roll_sp_rad == 0.0);                    // every manoeuvre starts from hover
     CHECK(p.at(p.duration_s() - 1e-6).roll_sp_rad == 0.0);  // and ends in hover
   }
   // Gain sets and frequencies named by the thesis.

@@ -116,8 +116,7 @@ TEST_CASE("pilot: the section is checked, naming the key", "[pilot]") {
   CHECK_THROWS_WITH(load("{enabled: true, bandwith_radps: 1}"), Catch::Contains("bandwith_radps"));
 }
 
-TEST_CASE("pilot: closed around a vertical axis like the rig's, it stops a 0.3 m/s climb without pumping",
-          "[pilot]") {
+TEST_CASE("pilot: closed around a vertical axis like the rig's, it stops a 0.3 m/s climb without pumping", "[pilot]") {
   // Height h (up), climb rate hd; throttle acts through the collective's first-order lag
   // (12.56 rad/s, thesis Eq 33) with kAccelPerPct per %, weak vertical damping Zw/m.
   const double dt = 1.0 / 512.0, pole = 12.56, damping_per_s = 5.9e-3 / 0.02876;

@@ -106,8 +106,8 @@ TEST_CASE("pitch loop: the shipped pitch gains are stable and well damped on the
     PitchLoopOptions o = rig.options;
     o.continuous = continuous;
     const PitchLoopPoles r = analyse_pitch_loop(rig.lon, rig.config.pitch_gains, o);
-    INFO((continuous ? "continuous" : "discrete") << ": max real part " << r.max_real_per_s << " /s, min damping "
-                                                  << r.min_damping << " at " << r.least_damped);
+    INFO((continuous ? "continuous" : "discrete")
+         << ": max real part " << r.max_real_per_s << " /s, min damping " << r.min_damping << " at " << r.least_damped);
     CHECK(r.stable);
     for (const auto& s : r.poles_s) CHECK(s.real() < 0.0);
     REQUIRE(r.has_oscillatory);
@@ -135,13 +135,12 @@ TEST_CASE("pitch loop: the previous assumption (slow roll gains 0.625/0.156) is 
 
 TEST_CASE("pitch loop: the shipped pitch gains are the best of the calibration grid", "[pitch_loop][calibration]") {
   const PitchRig rig;
-  const PitchGainScan scan =
-      scan_pitch_gains(rig.lon, rig.options, default_pitch_kp_grid(), default_pitch_kd_grid());
+  const PitchGainScan scan = scan_pitch_gains(rig.lon, rig.options, default_pitch_kp_grid(), default_pitch_kd_grid());
   REQUIRE(scan.best.has_value());
   const PitchGainPoint& best = scan.points[*scan.best];
   const PitchLoopPoles shipped = analyse_pitch_loop(rig.lon, rig.config.pitch_gains, rig.options);
-  INFO("best kp " << best.gains.kp_per_rad << " kd " << best.gains.kd_per_radps << " damping "
-                  << best.poles.min_damping << "; shipped kp " << rig.config.pitch_gains.kp_per_rad << " kd "
+  INFO("best kp " << best.gains.kp_per_rad << " kd " << best.gains.kd_per_radps << " damping " << best.poles.min_damping
+                  << "; shipped kp " << rig.config.pitch_gains.kp_per_rad << " kd "
                   << rig.config.pitch_gains.kd_per_radps << " damping " << shipped.min_damping);
   CHECK(best.poles.stable);
   CHECK(shipped.stable);

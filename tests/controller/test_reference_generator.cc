@@ -19,7 +19,8 @@ constexpr double kDeg = kPi / 180.0;
 /// Unit-step response of omega^2 / (s^2 + 2 zeta omega s + omega^2), zeta < 1.
 double continuous_step(double t, double omega, double zeta) {
   const double wd = omega * std::sqrt(1.0 - zeta * zeta);
-  return 1.0 - std::exp(-zeta * omega * t) * (std::cos(wd * t) + zeta / std::sqrt(1.0 - zeta * zeta) * std::sin(wd * t));
+  return 1.0 -
+         std::exp(-zeta * omega * t) * (std::cos(wd * t) + zeta / std::sqrt(1.0 - zeta * zeta) * std::sin(wd * t));
 }
 
 }  // namespace

@@ -78,8 +78,7 @@ std::vector<double> fly_controller(const StateSpace& lateral, const RollLoopConf
 
 }  // namespace
 
-TEST_CASE("roll loop: the assembled set-point loop steps as the attitude controller's code does",
-          "[roll_loop]") {
+TEST_CASE("roll loop: the assembled set-point loop steps as the attitude controller's code does", "[roll_loop]") {
   const StateSpace lat = lateral_set(1);
   const double T = 1.0 / 512.0;
   for (const double latency : {0.0, 2.0 * T, 0.4 * T, 3.7 * T}) {
@@ -161,7 +160,8 @@ TEST_CASE("roll loop: broken at the actuator or at either sensor, it is the same
   auto sorted_poles = [&](LoopBreak b) {
     const Eigen::VectorXcd e = closed_loop_matrix(roll_broken_loop(lat, cfg, b)).eigenvalues();
     std::vector<std::complex<double>> v(e.data(), e.data() + e.size());
-    std::sort(v.begin(), v.end(), [](auto a, auto b) { return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag(); });
+    std::sort(v.begin(), v.end(),
+              [](auto a, auto b) { return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag(); });
     return v;
   };
   const auto actuator = sorted_poles(LoopBreak::kActuator);

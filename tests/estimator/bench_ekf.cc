@@ -40,13 +40,14 @@ struct Stats {
     return us[i];
   }
   void print(const char* name) {
-    std::printf("  %-38s median %7.2f us   p99 %7.2f us   (%zu calls)\n", name, percentile(0.5), percentile(0.99), us.size());
+    std::printf("  %-38s median %7.2f us   p99 %7.2f us   (%zu calls)\n", name, percentile(0.5), percentile(0.99),
+                us.size());
   }
 };
 
 struct Data {
   std::vector<nimble::ImuSample> imu;
-  std::vector<nimble::PoseMeasurement> measurements;  // in arrival order (builder output)
+  std::vector<nimble::PoseMeasurement> measurements;             // in arrival order (builder output)
   std::vector<std::int64_t> frame_utime_of_measurement_arrival;  // timestamp of the frame that completed it
   EkfState x0;
 };
@@ -83,8 +84,9 @@ Data make_data(const nimble::SensingConfig& s, double seconds) {
 
 int main(int argc, char** argv) {
   if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-    std::printf("usage: bench_ekf [seconds_of_flight >= 2 (default 60)]\n"
-                "  Times the EKF's predict and update on emulated flight data.\n");
+    std::printf(
+        "usage: bench_ekf [seconds_of_flight >= 2 (default 60)]\n"
+        "  Times the EKF's predict and update on emulated flight data.\n");
     return 0;
   }
   const double seconds = argc > 1 ? std::atof(argv[1]) : 60.0;
@@ -94,8 +96,8 @@ int main(int argc, char** argv) {
   }
   const nimble::SensingConfig s;
   const Data d = make_data(s, seconds);
-  std::printf("bench_ekf: %.0f s of emulated flight, %zu IMU samples, %zu mocap measurements\n", seconds,
-              d.imu.size(), d.measurements.size());
+  std::printf("bench_ekf: %.0f s of emulated flight, %zu IMU samples, %zu mocap measurements\n", seconds, d.imu.size(),
+              d.measurements.size());
 
   // 1. predict only.
   {
@@ -137,11 +139,11 @@ int main(int argc, char** argv) {
     if (rollback) {
       att.print("rollback 20 ms, attitude (3-dof)");
       full.print("rollback 20+30 ms, att.+velocity (6)");
-      std::printf("  filter time with 20 ms latency: %.0f us per second of flight (%.2f %% of one core); "
-                  "rollbacks %lld, too old %lld\n",
-                  1e6 * total_s / seconds, 100.0 * total_s / seconds,
-                  static_cast<long long>(ekf.counters().rollbacks),
-                  static_cast<long long>(ekf.counters().measurements_too_old));
+      std::printf(
+          "  filter time with 20 ms latency: %.0f us per second of flight (%.2f %% of one core); "
+          "rollbacks %lld, too old %lld\n",
+          1e6 * total_s / seconds, 100.0 * total_s / seconds, static_cast<long long>(ekf.counters().rollbacks),
+          static_cast<long long>(ekf.counters().measurements_too_old));
     } else {
       att.print("update (3-dof attitude)");
       full.print("update (6-dof attitude + velocity)");

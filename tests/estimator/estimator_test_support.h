@@ -30,8 +30,7 @@ EkfState estimation_error(const EkfState& estimate, const EkfState& truth);
 /// timestamp through a MocapMeasurementBuilder (at equal times the IMU sample goes first).
 /// `frame_hook` may modify frames before the builder; `after_imu(k)` runs after IMU sample k.
 void feed(AttitudeVelocityEkf& ekf, const RecordedData& data, std::int64_t delay_us,
-          const VelocityDifferentiatorConfig& differentiator,
-          const std::function<void(MocapPose&)>& frame_hook,
+          const VelocityDifferentiatorConfig& differentiator, const std::function<void(MocapPose&)>& frame_hook,
           const std::function<void(std::size_t)>& after_imu);
 
 }  // namespace nimble::test

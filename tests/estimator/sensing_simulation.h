@@ -54,15 +54,15 @@ struct SensingRecord {
 
 /// Output of run_sensing_simulation().
 struct SensingRunResult {
-  std::vector<SensingRecord> records;    ///< every record_every-th IMU step
-  std::vector<EkfUpdateRecord> updates;  ///< every gating decision
-  EkfCounters counters;                  ///< EKF counters at the end
-  std::int64_t frames = 0;            ///< mocap frames produced
-  std::int64_t frames_invalid = 0;    ///< frames with tracking_valid false
+  std::vector<SensingRecord> records;           ///< every record_every-th IMU step
+  std::vector<EkfUpdateRecord> updates;         ///< every gating decision
+  EkfCounters counters;                         ///< EKF counters at the end
+  std::int64_t frames = 0;                      ///< mocap frames produced
+  std::int64_t frames_invalid = 0;              ///< frames with tracking_valid false
   std::int64_t velocity_measurements = 0;       ///< 6-dof measurements built
   std::int64_t attitude_only_measurements = 0;  ///< 3-dof measurements built
-  std::vector<ImuSample> imu;     ///< every IMU sample, as recorded
-  std::vector<MocapPose> poses;   ///< every frame delivered, as recorded (after pose_hook)
+  std::vector<ImuSample> imu;                   ///< every IMU sample, as recorded
+  std::vector<MocapPose> poses;                 ///< every frame delivered, as recorded (after pose_hook)
 };
 
 /// Runs one scenario. @throws std::invalid_argument for invalid configs (from the components).

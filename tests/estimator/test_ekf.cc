@@ -62,7 +62,8 @@ TEST_CASE("EKF at rest with exact IMU stays at rest, updates shrink the covarian
   for (int k = 0; k <= 512; ++k) REQUIRE(ekf.predict(imu_time(k), level_at_rest()));
   CHECK(ekf.state().norm() < 1e-12);
   const EkfCovariance before = ekf.covariance();
-  CHECK(ekf.add_measurement(attitude_measurement(ekf.utime(), Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kAccepted);
+  CHECK(ekf.add_measurement(attitude_measurement(ekf.utime(), Eigen::Vector3d::Zero())) ==
+        EkfMeasurementStatus::kAccepted);
   const EkfCovariance after = ekf.covariance();
   for (int i = 0; i < 3; ++i) CHECK(after(i, i) < before(i, i));
   CHECK((after - after.transpose()).norm() == 0.0);
@@ -81,7 +82,8 @@ TEST_CASE("EKF: yaw innovation is wrapped across +-180 deg", "[ekf]") {
   REQUIRE(ekf.predict(imu_time(1), level_at_rest()));
   EkfUpdateRecord last;
   ekf.set_update_observer([&last](const EkfUpdateRecord& r) { last = r; });
-  const auto status = ekf.add_measurement(attitude_measurement(imu_time(1), Eigen::Vector3d(0, 0, -179.0 * M_PI / 180.0)));
+  const auto status =
+      ekf.add_measurement(attitude_measurement(imu_time(1), Eigen::Vector3d(0, 0, -179.0 * M_PI / 180.0)));
   CHECK(status == EkfMeasurementStatus::kAccepted);
   CHECK(last.innovation[2] == Approx(2.0 * M_PI / 180.0));  // not -358 deg
   const double psi = ekf.state()[kPsi];
@@ -98,18 +100,21 @@ TEST_CASE("EKF measurement timing: pending, too old, too new, not initialised", 
   for (int k = 0; k <= 100; ++k) REQUIRE(ekf.predict(imu_time(k), level_at_rest()));
   const std::int64_t now = ekf.utime();
   SECTION("a measurement 1.5 ms ahead waits for the next IMU sample") {
-    CHECK(ekf.add_measurement(attitude_measurement(now + 1500, Eigen::Vector3d(0.01, 0, 0))) == EkfMeasurementStatus::kPending);
+    CHECK(ekf.add_measurement(attitude_measurement(now + 1500, Eigen::Vector3d(0.01, 0, 0))) ==
+          EkfMeasurementStatus::kPending);
     CHECK(ekf.counters().measurements_accepted == 0);
     REQUIRE(ekf.predict(imu_time(101), level_at_rest()));
     CHECK(ekf.counters().measurements_accepted == 1);
     CHECK(ekf.state()[kPhi] > 0.0);
   }
   SECTION("older than the history: dropped and counted") {
-    CHECK(ekf.add_measurement(attitude_measurement(now - 150000, Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kTooOld);
+    CHECK(ekf.add_measurement(attitude_measurement(now - 150000, Eigen::Vector3d::Zero())) ==
+          EkfMeasurementStatus::kTooOld);
     CHECK(ekf.counters().measurements_too_old == 1);
   }
   SECTION("more than the history ahead: dropped and counted") {
-    CHECK(ekf.add_measurement(attitude_measurement(now + 150000, Eigen::Vector3d::Zero())) == EkfMeasurementStatus::kTooNew);
+    CHECK(ekf.add_measurement(attitude_measurement(now + 150000, Eigen::Vector3d::Zero())) ==
+          EkfMeasurementStatus::kTooNew);
     CHECK(ekf.counters().measurements_too_new == 1);
   }
   SECTION("non-finite measurement or IMU sample: dropped and counted") {
@@ -118,7 +123,7 @@ TEST_CASE("EKF measurement timing: pending, too old, too new, not initialised", 
     bad[3] = INFINITY;
     CHECK_FALSE(ekf.predict(imu_time(101), bad));
     CHECK_FALSE(ekf.predict(imu_time(100), level_at_rest()));  // time not increasing
-    CHECK(ekf.counters().imu_rejected == 3);  // including the one before initialisation
+    CHECK(ekf.counters().imu_rejected == 3);                   // including the one before initialisation
   }
   SECTION("the history holds about history_s of IMU samples") {
     CHECK(ekf.history_size() >= 52);
@@ -193,7 +198,8 @@ TEST_CASE("EKF latency: rollback equals the filter without latency, naive late u
                                           << ", naive " << rms(naive.phi_err) * d);
   INFO("v RMS error [m/s]: no latency " << rms(immediate.v_err) << ", rollback " << rms(rollback.v_err) << ", naive "
                                         << rms(naive.v_err));
-  INFO("naive: accepted " << naive.counters.measurements_accepted << ", rejected " << naive.counters.measurements_rejected_gate);
+  INFO("naive: accepted " << naive.counters.measurements_accepted << ", rejected "
+                          << naive.counters.measurements_rejected_gate);
   // At the current time the rollback filter lacks the last 20 ms of frames, which costs little.
   CHECK(rms(rollback.phi_err) < 1.15 * rms(immediate.phi_err));
   CHECK(rms(rollback.v_err) < 1.15 * rms(immediate.v_err));
@@ -295,9 +301,9 @@ TEST_CASE("EKF gating: injected outliers are rejected and counted, good measurem
         if (!r.accepted) ++good_rejected;
       }
     }
-    INFO((thesis_noise ? "thesis Q/R" : "matched Q/R") << ": outliers rejected " << outliers_rejected << " of "
-                                                      << bad_measurement_frames.size() << ", good rejected "
-                                                      << good_rejected << " of " << good);
+    INFO((thesis_noise ? "thesis Q/R" : "matched Q/R")
+         << ": outliers rejected " << outliers_rejected << " of " << bad_measurement_frames.size() << ", good rejected "
+         << good_rejected << " of " << good);
     CHECK(outliers_accepted == 0);
     CHECK(outliers_rejected == static_cast<int>(bad_measurement_frames.size()));
     CHECK(ekf.counters().measurements_rejected_gate == outliers_rejected + good_rejected);
@@ -333,9 +339,10 @@ EkfInput lateral_sine_input(double t_s, double amplitude_mps, double omega_radps
 
 }  // namespace
 
-TEST_CASE("EKF velocity measurement: a central difference is the window mean, which kWindowMean measures "
-          "without the sinc scaling of kInstant",
-          "[ekf]") {
+TEST_CASE(
+    "EKF velocity measurement: a central difference is the window mean, which kWindowMean measures "
+    "without the sinc scaling of kInstant",
+    "[ekf]") {
   // v(t) = 0.5 sin(2 pi 5 t): the 60 ms central difference centred on a peak (t_c = 0.45 s) reads
   // A sin(x) / x = 0.858 A (x = pi 5 Hz 60 ms), not A.
   const double A = 0.5, w = 2.0 * M_PI * 5.0;
@@ -365,7 +372,8 @@ TEST_CASE("EKF velocity measurement: a central difference is the window mean, wh
     const EkfMeasurementStatus status = ekf.add_measurement(z);
     CHECK(status == (mode == EkfVelocityMeasurement::kWindowMean ? EkfMeasurementStatus::kPending
                                                                  : EkfMeasurementStatus::kAccepted));
-    for (; imu_time(k) <= te + 5000; ++k) REQUIRE(ekf.predict(imu_time(k), lateral_sine_input(1e-6 * imu_time(k), A, w)));
+    for (; imu_time(k) <= te + 5000; ++k)
+      REQUIRE(ekf.predict(imu_time(k), lateral_sine_input(1e-6 * imu_time(k), A, w)));
     REQUIRE(updates.size() == 1);
     CHECK(updates[0].accepted);
     *counters = ekf.counters();
@@ -376,13 +384,14 @@ TEST_CASE("EKF velocity measurement: a central difference is the window mean, wh
   CHECK(counters.velocity_window_uncovered == 0);
   const double instant = innovation_v(EkfVelocityMeasurement::kInstant, &counters);
   INFO("v innovation: window mean " << window << " m/s, instant " << instant << " m/s");
-  CHECK(std::fabs(window) < 1e-3);                // the filter's own trajectory explains the mean
+  CHECK(std::fabs(window) < 1e-3);                  // the filter's own trajectory explains the mean
   CHECK(instant == Approx(mean - A).margin(1e-3));  // -0.070 m/s: the sinc scaling, read as an error
 }
 
-TEST_CASE("EKF velocity window: a window the history does not cover is counted and applied as instantaneous, "
-          "one without bounds is instantaneous",
-          "[ekf]") {
+TEST_CASE(
+    "EKF velocity window: a window the history does not cover is counted and applied as instantaneous, "
+    "one without bounds is instantaneous",
+    "[ekf]") {
   EkfConfig c;
   AttitudeVelocityEkf ekf(c);
   ekf.initialize(0, EkfState::Zero(), c.initial_covariance());
@@ -403,9 +412,10 @@ TEST_CASE("EKF velocity window: a window the history does not cover is counted a
   CHECK(ekf.counters().measurements_accepted == 1);
 }
 
-TEST_CASE("EKF velocity on 4 Hz doublets, noise-free sensors: the window-mean reading keeps the estimate's "
-          "gain on v at 1, the instant reading scales it down",
-          "[ekf]") {
+TEST_CASE(
+    "EKF velocity on 4 Hz doublets, noise-free sensors: the window-mean reading keeps the estimate's "
+    "gain on v at 1, the instant reading scales it down",
+    "[ekf]") {
   // The rig's default EKF (thesis Q and R: the filter leans on the mocap velocity) on noise-free
   // sensors, so that the measurement model is the only error.
   SensingConfig s;
@@ -437,7 +447,8 @@ TEST_CASE("EKF velocity on 4 Hz doublets, noise-free sensors: the window-mean re
     feed(ekf, data, 5000, s.velocity_differentiator, nullptr, [&](std::size_t k) {
       if (data.imu[k].utime <= 1000000) return;
       const double truth = data.truth_at_imu[k][kV], estimate = ekf.state()[kV];
-      const std::complex<double> phasor = std::polar(1.0, -2.0 * M_PI * 4.0 * 1e-6 * static_cast<double>(data.imu[k].utime));
+      const std::complex<double> phasor =
+          std::polar(1.0, -2.0 * M_PI * 4.0 * 1e-6 * static_cast<double>(data.imu[k].utime));
       est_4hz += estimate * phasor;
       truth_4hz += truth * phasor;
       err.push_back(estimate - truth);
@@ -455,8 +466,7 @@ TEST_CASE("EKF velocity on 4 Hz doublets, noise-free sensors: the window-mean re
   CHECK(rms_window < 0.05 * rms_instant);
 }
 
-TEST_CASE("EKF: a sample's own input noise raises the covariance over its interval and a replay keeps it",
-          "[ekf]") {
+TEST_CASE("EKF: a sample's own input noise raises the covariance over its interval and a replay keeps it", "[ekf]") {
   const SensingConfig s = matched_sensing();
   // Two filters on the same samples; the second is told, over samples 200-260, that the input is
   // noisier (ImuPrefilter::residual_var), as per-sample variances at the reference rate.

@@ -35,10 +35,10 @@ Eigen::MatrixXd numerical_jacobian(const std::function<Eigen::VectorXd(const Eig
 EkfState random_state(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   EkfState x;
-  x << 2.5 * u(rng), 1.2 * u(rng), 2.5 * u(rng),             // phi theta psi [rad]
-      1.5 * u(rng), 1.5 * u(rng), 1.0 * u(rng),              // u v w [m/s]
-      0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng),              // gyro bias [rad/s]
-      0.5 * u(rng), 0.5 * u(rng), 0.5 * u(rng);              // accel bias [m/s^2]
+  x << 2.5 * u(rng), 1.2 * u(rng), 2.5 * u(rng),  // phi theta psi [rad]
+      1.5 * u(rng), 1.5 * u(rng), 1.0 * u(rng),   // u v w [m/s]
+      0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng),   // gyro bias [rad/s]
+      0.5 * u(rng), 0.5 * u(rng), 0.5 * u(rng);   // accel bias [m/s^2]
   return x;
 }
 
@@ -99,7 +99,8 @@ TEST_CASE("Jacobian of the discrete Heun step matches central differences", "[ek
       const std::function<Eigen::VectorXd(const EkfState&)> step = [&](const EkfState& xx) {
         return Eigen::VectorXd(ekf_discrete_step(xx, u0, u1, dt, params));
       };
-      worst = std::max(worst, relative_error(ekf_discrete_jacobian(x, u0, u1, dt, params), numerical_jacobian<12>(step, x)));
+      worst = std::max(worst,
+                       relative_error(ekf_discrete_jacobian(x, u0, u1, dt, params), numerical_jacobian<12>(step, x)));
     }
   }
   CHECK(worst < 1e-7);
@@ -109,7 +110,9 @@ TEST_CASE("measurement Jacobian H matches central differences", "[ekf_model]") {
   std::mt19937_64 rng(14);
   for (const int dim : {3, 6}) {
     const EkfState x = random_state(rng);
-    const std::function<Eigen::VectorXd(const EkfState&)> h = [&](const EkfState& xx) { return ekf_measurement(xx, dim); };
+    const std::function<Eigen::VectorXd(const EkfState&)> h = [&](const EkfState& xx) {
+      return ekf_measurement(xx, dim);
+    };
     CHECK(relative_error(ekf_measurement_jacobian(x, dim), numerical_jacobian<12>(h, x)) < 1e-9);
   }
 }

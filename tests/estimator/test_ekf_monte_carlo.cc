@@ -35,8 +35,8 @@ SensingRunConfig consistency_scenario(int run, double duration_s) {
   c.sensing.mocap.dropout_burst_rate_hz = 0.0;
   c.sensing.velocity_differentiator.span_frames = 6;
   c.sensing.velocity_differentiator.stride_frames = 4;
-  c.sensing.ekf = ekf_config_matched_to_sensors(c.sensing.ekf, c.sensing.imu, c.sensing.mocap,
-                                                c.sensing.velocity_differentiator);
+  c.sensing.ekf =
+      ekf_config_matched_to_sensors(c.sensing.ekf, c.sensing.imu, c.sensing.mocap, c.sensing.velocity_differentiator);
   c.perturb_initial_state = true;
   c.record_every = 8;
   return c;
@@ -118,7 +118,8 @@ struct BiasCheck {
     out << "bias recovery: " << inside << "/" << total << " components within 3 sigma (largest |e|/sigma " << worst
         << "); injected RMS gyro " << std::sqrt(injected_gyro_sq / (3 * runs)) << " rad/s, accel "
         << std::sqrt(injected_accel_sq / (3 * runs)) << " m/s^2; final error RMS gyro "
-        << std::sqrt(error_gyro_sq / (3 * runs)) << " rad/s, accel " << std::sqrt(error_accel_sq / (3 * runs)) << " m/s^2";
+        << std::sqrt(error_gyro_sq / (3 * runs)) << " rad/s, accel " << std::sqrt(error_accel_sq / (3 * runs))
+        << " m/s^2";
     return out.str();
   }
 };
@@ -148,13 +149,15 @@ TEST_CASE("MC consistency: NEES, NIS, bias recovery, accuracy", "[monte_carlo]")
   const auto [nees_mean, nees_inside] = nees.summarize(b12, kRuns, 500000);
   const auto [nis6_mean, nis6_inside] = nis6.summarize(b6, kRuns, 500000);
   const auto [nis3_mean, nis3_inside] = nis3.summarize(b3, kRuns, 500000);
-  WARN("consistency MC (" << kRuns << " runs x " << duration << " s): average NEES " << nees_mean << " in ["
-       << b12.lo << ", " << b12.hi << "], fraction of times inside " << nees_inside << "; NIS(6) " << nis6_mean
-       << " in [" << b6.lo << ", " << b6.hi << "], inside " << nis6_inside << "; NIS(3) " << nis3_mean << " in ["
-       << b3.lo << ", " << b3.hi << "], inside " << nis3_inside << "; gate rejections " << rejected << "/" << updates);
-  WARN("consistency MC errors (t > 2 s): phi " << errors.rms(kPhi) * kRadToDeg << " deg, theta "
-       << errors.rms(kTheta) * kRadToDeg << " deg, psi " << errors.rms(kPsi) * kRadToDeg << " deg, u v w "
-       << errors.rms(kU) << " " << errors.rms(kV) << " " << errors.rms(kW) << " m/s");
+  WARN("consistency MC (" << kRuns << " runs x " << duration << " s): average NEES " << nees_mean << " in [" << b12.lo
+                          << ", " << b12.hi << "], fraction of times inside " << nees_inside << "; NIS(6) " << nis6_mean
+                          << " in [" << b6.lo << ", " << b6.hi << "], inside " << nis6_inside << "; NIS(3) "
+                          << nis3_mean << " in [" << b3.lo << ", " << b3.hi << "], inside " << nis3_inside
+                          << "; gate rejections " << rejected << "/" << updates);
+  WARN("consistency MC errors (t > 2 s): phi "
+       << errors.rms(kPhi) * kRadToDeg << " deg, theta " << errors.rms(kTheta) * kRadToDeg << " deg, psi "
+       << errors.rms(kPsi) * kRadToDeg << " deg, u v w " << errors.rms(kU) << " " << errors.rms(kV) << " "
+       << errors.rms(kW) << " m/s");
   WARN(biases.report(kRuns));
   CHECK(nees_mean >= b12.lo);
   CHECK(nees_mean <= b12.hi);
@@ -199,11 +202,13 @@ TEST_CASE("MC rig defaults (thesis Q and R): accuracy, no overconfidence", "[mon
   const Bounds b12 = average_bounds(kRuns, 12);
   const auto [nees_mean, nees_inside] = nees.summarize(b12, kRuns, 500000);
   WARN("rig-default MC (" << kRuns << " runs x " << duration << " s): errors (t > 2 s) phi "
-       << errors.rms(kPhi) * kRadToDeg << " deg, theta " << errors.rms(kTheta) * kRadToDeg << " deg, psi "
-       << errors.rms(kPsi) * kRadToDeg << " deg, u v w " << errors.rms(kU) << " " << errors.rms(kV) << " "
-       << errors.rms(kW) << " m/s; average NEES " << nees_mean << " (95 % bounds [" << b12.lo << ", " << b12.hi
-       << "]: thesis Q over-bounds the emulated IMU); NIS per dof " << nis_sum / updates << "; gate rejections "
-       << rejected << "/" << updates << "; occluded frames " << invalid << "/" << frames);
+                          << errors.rms(kPhi) * kRadToDeg << " deg, theta " << errors.rms(kTheta) * kRadToDeg
+                          << " deg, psi " << errors.rms(kPsi) * kRadToDeg << " deg, u v w " << errors.rms(kU) << " "
+                          << errors.rms(kV) << " " << errors.rms(kW) << " m/s; average NEES " << nees_mean
+                          << " (95 % bounds [" << b12.lo << ", " << b12.hi
+                          << "]: thesis Q over-bounds the emulated IMU); NIS per dof " << nis_sum / updates
+                          << "; gate rejections " << rejected << "/" << updates << "; occluded frames " << invalid
+                          << "/" << frames);
   WARN(biases.report(kRuns));
   CHECK(errors.rms(kPhi) * kRadToDeg <= 0.5);
   CHECK(errors.rms(kTheta) * kRadToDeg <= 0.5);
@@ -251,7 +256,7 @@ TEST_CASE("MC 0.5 s mocap dropout: bounded, recovers within 1 s", "[monte_carlo]
     c.record_every = 4;
     const SensingRunResult r = run_sensing_simulation(c);
     for (const SensingRecord& rec : r.records) {
-      Window* w = in(rec.utime, 9.0, 10.0)    ? &before
+      Window* w = in(rec.utime, 9.0, 10.0)     ? &before
                   : in(rec.utime, 10.45, 10.5) ? &at_end
                   : in(rec.utime, 11.4, 11.5)  ? &after
                                                : nullptr;
@@ -276,11 +281,14 @@ TEST_CASE("MC 0.5 s mocap dropout: bounded, recovers within 1 s", "[monte_carlo]
   const double s_phi0 = mean(before.sigma_phi, before.n), s_v0 = mean(before.sigma_v, before.n);
   const double e_phi0 = std::sqrt(mean(before.err_phi_sq, before.n)), e_v0 = std::sqrt(mean(before.err_v_sq, before.n));
   WARN("dropout MC: sigma phi before " << s_phi0 * kRadToDeg << " deg, at the end of the dropout "
-       << mean(at_end.sigma_phi, at_end.n) * kRadToDeg << ", 1 s after " << mean(after.sigma_phi, after.n) * kRadToDeg
-       << "; sigma velocity " << s_v0 << ", " << mean(at_end.sigma_v, at_end.n) << ", " << mean(after.sigma_v, after.n)
-       << " m/s; RMS error phi " << e_phi0 * kRadToDeg << " -> " << std::sqrt(mean(after.err_phi_sq, after.n)) * kRadToDeg
-       << " deg, velocity " << e_v0 << " -> " << std::sqrt(mean(after.err_v_sq, after.n)) << " m/s; during the dropout "
-       << during_inside << "/" << during << " attitude/velocity errors within 3 sigma (largest " << during_worst << ")");
+                                       << mean(at_end.sigma_phi, at_end.n) * kRadToDeg << ", 1 s after "
+                                       << mean(after.sigma_phi, after.n) * kRadToDeg << "; sigma velocity " << s_v0
+                                       << ", " << mean(at_end.sigma_v, at_end.n) << ", " << mean(after.sigma_v, after.n)
+                                       << " m/s; RMS error phi " << e_phi0 * kRadToDeg << " -> "
+                                       << std::sqrt(mean(after.err_phi_sq, after.n)) * kRadToDeg << " deg, velocity "
+                                       << e_v0 << " -> " << std::sqrt(mean(after.err_v_sq, after.n))
+                                       << " m/s; during the dropout " << during_inside << "/" << during
+                                       << " attitude/velocity errors within 3 sigma (largest " << during_worst << ")");
   // The covariance grows during the dropout.
   CHECK(mean(at_end.sigma_v, at_end.n) > 1.5 * s_v0);
   CHECK(mean(at_end.sigma_phi, at_end.n) > s_phi0);

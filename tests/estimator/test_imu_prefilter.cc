@@ -46,7 +46,8 @@ Residual at_rest(const SensingConfig& sensing, ImuPrefilterConfig pf, double lef
     if (k < settle) continue;
     r.filtered += (f.gyro_radps - imu.gyro_bias_radps()).array().square().matrix();
     r.raw += imu.last_gyro_vibration_radps().array().square().matrix();
-    r.accel_filtered += (f.accel_mps2 - imu.accel_bias_mps2() - truth.specific_force_body_mps2).array().square().matrix();
+    r.accel_filtered +=
+        (f.accel_mps2 - imu.accel_bias_mps2() - truth.specific_force_body_mps2).array().square().matrix();
     r.accel_raw += imu.last_accel_vibration_mps2().array().square().matrix();
   }
   const double m = n - settle;
@@ -194,6 +195,6 @@ TEST_CASE("the prefilter reports what it may have left when the wing pairs part 
   CHECK(var_parting > err_parting / 3.0);  // and the report holds it, within a factor of 3
   CHECK(var_parting < 3.0 * err_parting);
   CHECK(before < 1e-3 * var_parting / (0.2 * kRate * 8));  // in step: nothing beyond the usual
-  CHECK(after < 1e-3);                                    // (rad/s)^2: learnt
-  CHECK(std::sqrt(err_after / raw_after) < 0.01);         // and removed
+  CHECK(after < 1e-3);                                     // (rad/s)^2: learnt
+  CHECK(std::sqrt(err_after / raw_after) < 0.01);          // and removed
 }

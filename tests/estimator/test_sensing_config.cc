@@ -76,7 +76,8 @@ TEST_CASE("sensing config: every key optional, overrides applied", "[sensing_con
   const SensingConfig empty = load_text("{}");
   CHECK(empty.ekf.gate_probability == 0.999);
   CHECK(ekf_history_needed_s(empty) == Approx(0.005 + 0.060 + 2.0 / 512.0));
-  CHECK(load_text("ekf: {velocity_measurement: instant, latency: {history_s: 0.04}}").ekf.history_s == 0.04);  // 5 + 30 + 3.9 ms
+  CHECK(load_text("ekf: {velocity_measurement: instant, latency: {history_s: 0.04}}").ekf.history_s ==
+        0.04);                                                                               // 5 + 30 + 3.9 ms
   CHECK(load_text("ekf: {latency: {mode: naive, history_s: 0.01}}").ekf.history_s == 0.01);  // naive: no rollback
   CHECK(empty.ekf.velocity_measurement == EkfVelocityMeasurement::kWindowMean);
   const SensingConfig c = load_text(R"(
@@ -123,7 +124,8 @@ TEST_CASE("sensing config: strict errors name file, key and problem", "[sensing_
   expect_config_error("ekf: {gate: {probability: 1.0}}", "ekf.gate.probability", "in (0, 1)");
   expect_config_error("ekf: {measurement_noise: {attitude_var_rad2: {phi: 0}}}",
                       "ekf.measurement_noise.attitude_var_rad2.phi", "> 0");
-  expect_config_error("imu: {flapping_harmonics: [{harmonic: 0}]}", "imu.flapping_harmonics[0].harmonic", "in [1, 100]");
+  expect_config_error("imu: {flapping_harmonics: [{harmonic: 0}]}", "imu.flapping_harmonics[0].harmonic",
+                      "in [1, 100]");
   expect_config_error("imu: {flapping_harmonics: {harmonic: 1}}", "imu.flapping_harmonics", "list");
   expect_config_error("sensors: {}", "sensors", "unknown key");
 }

@@ -35,8 +35,9 @@ TEST_CASE("the estimator in the loop survives each of the IMU's own errors on a 
        " --set sensing.imu.gyro_scale_factor.x=0.1 --set sensing.imu.gyro_scale_factor.y=-0.08"
        " --set sensing.imu.gyro_scale_factor.z=0.05 --set sensing.imu.accel_scale_factor.x=0.05"
        " --set sensing.imu.accel_scale_factor.z=-0.05"},
-      {"misalignment", " --set sensing.imu.gyro_misalignment_rad.xy=0.02 --set sensing.imu.gyro_misalignment_rad.zx=-0.02"
-                       " --set sensing.imu.accel_misalignment_rad.yz=0.02 --set sensing.imu.accel_misalignment_rad.xz=-0.02"},
+      {"misalignment",
+       " --set sensing.imu.gyro_misalignment_rad.xy=0.02 --set sensing.imu.gyro_misalignment_rad.zx=-0.02"
+       " --set sensing.imu.accel_misalignment_rad.yz=0.02 --set sensing.imu.accel_misalignment_rad.xz=-0.02"},
       {"IMU clock 50 ms ahead", " --set sensing.imu.clock_offset_s=0.05 --set sensing.ekf.latency.history_s=0.12"},
       {"IMU clock 50 ms behind, drifting",
        " --set sensing.imu.clock_offset_s=-0.05 --set sensing.imu.clock_drift_ppm=-500"
@@ -84,8 +85,9 @@ TEST_CASE("the estimator in the loop flies the real vehicle's vibration, and wit
   // (bench_vibration) no flight takes the failsafe, the attitude error is 0.09-0.11 deg rms and the
   // rate error 0.04-0.05 rad/s; here seeds 1-3 within margins of those.
   // --vibration: --set sensing.base=<rig_configs/sensing/nimble_flight_vibration.yaml>.
-  const std::string train = std::string("run ") + RIG_SOURCE_DIR +
-                            "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --no-progress --json - --vibration";
+  const std::string train =
+      std::string("run ") + RIG_SOURCE_DIR +
+      "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --no-progress --json - --vibration";
   for (int seed = 1; seed <= 3; ++seed) {
     INFO("seed " << seed);
     const nimble::test::RigResult r = nimble::test::run_rig(
@@ -105,27 +107,30 @@ TEST_CASE("the estimator in the loop flies the real vehicle's vibration, and wit
   }
   // The same flight without the filtering: the lines reach the EKF and its divergence monitor
   // stops it, the controller takes its failsafe.
-  const nimble::test::RigResult off = nimble::test::run_rig(
-      train + " --seed 1 --set sensing.imu_prefilter.enabled=false --log " +
-      nimble::test::scratch_file("sensor_errors", "vibration_off.lcmlog"));
+  const nimble::test::RigResult off =
+      nimble::test::run_rig(train + " --seed 1 --set sensing.imu_prefilter.enabled=false --log " +
+                            nimble::test::scratch_file("sensor_errors", "vibration_off.lcmlog"));
   INFO(off.err);
   REQUIRE(off.exit_code != 2);
   const YAML::Node s = YAML::Load(off.out);
   CHECK(s["result"].as<std::string>().find("failsafe") != std::string::npos);
   bool diverged = false;
-  for (const auto& f : s["faults"]) diverged |= f["message"].as<std::string>().find("EKF diverged") != std::string::npos;
+  for (const auto& f : s["faults"])
+    diverged |= f["message"].as<std::string>().find("EKF diverged") != std::string::npos;
   CHECK(diverged);
   // With the filtering, a real divergence is still caught: the motion capture's roll 3.4 deg off
   // from 1 s (as fault.wrong's 23 deg) stops the filter within 0.3 s.
-  const nimble::test::RigResult wrong = nimble::test::run_rig(
-      train + " --seed 1 --set 'faults=[{target: MOCAP_POSE, kind: wrong, start_s: 1.0, params: "
-              "{field: \"quaternion_wxyz[1]\", bias: 0.03}}]' --log " +
-      nimble::test::scratch_file("sensor_errors", "vibration_wrong.lcmlog"));
+  const nimble::test::RigResult wrong =
+      nimble::test::run_rig(train +
+                            " --seed 1 --set 'faults=[{target: MOCAP_POSE, kind: wrong, start_s: 1.0, params: "
+                            "{field: \"quaternion_wxyz[1]\", bias: 0.03}}]' --log " +
+                            nimble::test::scratch_file("sensor_errors", "vibration_wrong.lcmlog"));
   INFO(wrong.err);
   const YAML::Node w = YAML::Load(wrong.out);
   double diverged_at = -1.0;
   for (const auto& f : w["faults"]) {
-    if (f["message"].as<std::string>().find("EKF diverged") != std::string::npos) diverged_at = f["rig_time_s"].as<double>();
+    if (f["message"].as<std::string>().find("EKF diverged") != std::string::npos)
+      diverged_at = f["rig_time_s"].as<double>();
   }
   CHECK(diverged_at > 1.0);
   CHECK(diverged_at < 1.3);

@@ -16,14 +16,13 @@ using namespace nimble;
 namespace {
 
 struct ErrorFigures {
-  double rms = 0.0;  ///< rms error of the channel
+  double rms = 0.0;     ///< rms error of the channel
   double lag_ms = 0.0;  ///< least-squares delay of the estimate behind the truth: e = -lag x_dot
 };
 
 /// Error of channel `k` of the estimates against the truth records (same IMU instants): rms, and
 /// the delay from the regression of the error on the truth's derivative.
-ErrorFigures figures(const std::vector<SensingRecord>& truth, const std::vector<double>& estimate, int k,
-                     double dt_s) {
+ErrorFigures figures(const std::vector<SensingRecord>& truth, const std::vector<double>& estimate, int k, double dt_s) {
   double se = 0, sxd = 0, sxdxd = 0;
   int n = 0;
   for (std::size_t i = 1; i + 1 < truth.size(); ++i) {
@@ -39,9 +38,10 @@ ErrorFigures figures(const std::vector<SensingRecord>& truth, const std::vector<
 
 }  // namespace
 
-TEST_CASE("smoother: on recorded IMU and motion capture its v and phi are closer to the truth than the filter's, "
-          "and do not lag it",
-          "[smoother]") {
+TEST_CASE(
+    "smoother: on recorded IMU and motion capture its v and phi are closer to the truth than the filter's, "
+    "and do not lag it",
+    "[smoother]") {
   SensingRunConfig c;
   c.duration_s = 12.0;
   c.profile = make_roll_doublet_profile(41, c.duration_s);
@@ -49,8 +49,8 @@ TEST_CASE("smoother: on recorded IMU and motion capture its v and phi are closer
   {
     const SensingRunResult r = run_sensing_simulation(c);
     SmootherReport report;
-    const std::vector<SmoothedSample> s = smooth_flight(smoother_ekf_config(c.sensing), c.sensing.velocity_differentiator,
-                                                        r.imu, r.poses, &report);
+    const std::vector<SmoothedSample> s =
+        smooth_flight(smoother_ekf_config(c.sensing), c.sensing.velocity_differentiator, r.imu, r.poses, &report);
     REQUIRE(s.size() > r.imu.size() * 9 / 10);
     CHECK(report.measurements > 0);
     CHECK(report.counters.measurements_too_old == 0);
@@ -74,8 +74,8 @@ TEST_CASE("smoother: on recorded IMU and motion capture its v and phi are closer
     const ErrorFigures fphi = figures(truth, filt_phi, kPhi, dt), sphi = figures(truth, smooth_phi, kPhi, dt);
     INFO("v rms filter " << fv.rms << " smoother " << sv.rms << "; lag filter " << fv.lag_ms << " ms smoother "
                          << sv.lag_ms << " ms");
-    INFO("phi rms filter " << fphi.rms << " smoother " << sphi.rms << "; lag filter " << fphi.lag_ms
-                           << " ms smoother " << sphi.lag_ms << " ms");
+    INFO("phi rms filter " << fphi.rms << " smoother " << sphi.rms << "; lag filter " << fphi.lag_ms << " ms smoother "
+                           << sphi.lag_ms << " ms");
     CHECK(sv.rms < 0.8 * fv.rms);
     CHECK(sphi.rms < 0.8 * fphi.rms);
     // No delay worth a quarter of an IMU period (0.49 ms at 512 Hz).

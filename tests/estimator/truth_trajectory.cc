@@ -106,9 +106,10 @@ Eigen::Vector3d TruthTrajectory::specific_force(double t, const Eigen::Quaternio
                                                 const Eigen::Vector3d& v_b) const {
   const Eigen::Matrix3d R = q.toRotationMatrix();
   const double g = profile_.gravity_mps2;
-  const double fx = -profile_.drag_u_per_s * v_b.x() +
-                    profile_.forward_accel_amplitude_mps2 *
-                        std::sin(2.0 * M_PI * profile_.forward_accel_frequency_hz * t + profile_.forward_accel_phase_rad);
+  const double fx =
+      -profile_.drag_u_per_s * v_b.x() +
+      profile_.forward_accel_amplitude_mps2 *
+          std::sin(2.0 * M_PI * profile_.forward_accel_frequency_hz * t + profile_.forward_accel_phase_rad);
   const double fy = -profile_.drag_v_per_s * v_b.y();
   const double v_down = R.row(2).dot(v_b);
   // Thrust along -z_b chosen so that the NED down acceleration is -damping * v_down.
@@ -124,10 +125,8 @@ TruthTrajectory::Derivative TruthTrajectory::derivative(double t, const Eigen::V
   Derivative d;
   // q_dot = 1/2 q * (0, w)
   const double qw = q_wxyz[0], qx = q_wxyz[1], qy = q_wxyz[2], qz = q_wxyz[3];
-  d.q_dot << 0.5 * (-qx * w.x() - qy * w.y() - qz * w.z()),
-             0.5 * (qw * w.x() + qy * w.z() - qz * w.y()),
-             0.5 * (qw * w.y() - qx * w.z() + qz * w.x()),
-             0.5 * (qw * w.z() + qx * w.y() - qy * w.x());
+  d.q_dot << 0.5 * (-qx * w.x() - qy * w.y() - qz * w.z()), 0.5 * (qw * w.x() + qy * w.z() - qz * w.y()),
+      0.5 * (qw * w.y() - qx * w.z() + qz * w.x()), 0.5 * (qw * w.z() + qx * w.y() - qy * w.x());
   const Eigen::Matrix3d R = q.toRotationMatrix();
   const Eigen::Vector3d gravity_body = R.transpose() * Eigen::Vector3d(0.0, 0.0, profile_.gravity_mps2);
   d.v_dot = specific_force(t, q, v_b) + gravity_body - w.cross(v_b);

@@ -42,23 +42,24 @@ struct RollDoublet {
 struct TruthProfile {
   /// Roll doublets (may overlap; their rates add).
   std::vector<RollDoublet> roll_doublets;
-  double pitch_rate_amplitude_radps = 0.3;   ///< q(t) = amplitude sin(2 pi f t + phase) [rad/s]
-  double pitch_rate_frequency_hz = 0.7;      ///< f of q(t) [Hz]
-  double pitch_rate_phase_rad = 0.0;         ///< phase of q(t) [rad]
-  double yaw_rate_amplitude_radps = 0.3;     ///< r(t) = amplitude sin(2 pi f t + phase) [rad/s]
-  double yaw_rate_frequency_hz = 0.3;        ///< f of r(t) [Hz]
-  double yaw_rate_phase_rad = 0.0;           ///< phase of r(t) [rad]
-  double forward_accel_amplitude_mps2 = 0.5; ///< forward specific-force command a(t) = amplitude sin(2 pi f t + phase) [m/s^2]
-  double forward_accel_frequency_hz = 0.4;   ///< f of a(t) [Hz]
-  double forward_accel_phase_rad = 0.0;      ///< phase of a(t) [rad]
-  double drag_u_per_s = 1.0;                 ///< linear drag on u [1/s] (assumption)
-  double drag_v_per_s = 1.95;                ///< linear drag on v [1/s]: -Yv/m of set 1 (5.61e-2 / 0.02876 kg)
-  double vertical_damping_per_s = 2.0;       ///< damping of the NED down velocity by the thrust [1/s]
-  double gravity_mps2 = 9.81;                ///< [m/s^2]
+  double pitch_rate_amplitude_radps = 0.3;  ///< q(t) = amplitude sin(2 pi f t + phase) [rad/s]
+  double pitch_rate_frequency_hz = 0.7;     ///< f of q(t) [Hz]
+  double pitch_rate_phase_rad = 0.0;        ///< phase of q(t) [rad]
+  double yaw_rate_amplitude_radps = 0.3;    ///< r(t) = amplitude sin(2 pi f t + phase) [rad/s]
+  double yaw_rate_frequency_hz = 0.3;       ///< f of r(t) [Hz]
+  double yaw_rate_phase_rad = 0.0;          ///< phase of r(t) [rad]
+  double forward_accel_amplitude_mps2 =
+      0.5;  ///< forward specific-force command a(t) = amplitude sin(2 pi f t + phase) [m/s^2]
+  double forward_accel_frequency_hz = 0.4;          ///< f of a(t) [Hz]
+  double forward_accel_phase_rad = 0.0;             ///< phase of a(t) [rad]
+  double drag_u_per_s = 1.0;                        ///< linear drag on u [1/s] (assumption)
+  double drag_v_per_s = 1.95;                       ///< linear drag on v [1/s]: -Yv/m of set 1 (5.61e-2 / 0.02876 kg)
+  double vertical_damping_per_s = 2.0;              ///< damping of the NED down velocity by the thrust [1/s]
+  double gravity_mps2 = 9.81;                       ///< [m/s^2]
   double flap_frequency_radps = 2.0 * M_PI * 17.0;  ///< both wing pairs [rad/s]; thesis Table A.1: 17 Hz
   Eigen::Vector3d initial_position_ned_m = Eigen::Vector3d(0.0, 0.0, -1.5);  ///< [m]
-  Eigen::Vector3d initial_euler_rad = Eigen::Vector3d::Zero();                ///< ZYX [rad]
-  Eigen::Vector3d initial_velocity_body_mps = Eigen::Vector3d::Zero();        ///< [m/s]
+  Eigen::Vector3d initial_euler_rad = Eigen::Vector3d::Zero();               ///< ZYX [rad]
+  Eigen::Vector3d initial_velocity_body_mps = Eigen::Vector3d::Zero();       ///< [m/s]
   /// Largest RK4 step [s].
   double max_step_s = 5e-4;
 };
@@ -70,16 +71,16 @@ TruthProfile make_roll_doublet_profile(std::uint64_t seed, double duration_s);
 
 /// Truth at one instant; mirrors truth_state_t.
 struct TruthSample {
-  std::int64_t utime = 0;                                                ///< [us]
-  Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();              ///< [m]
-  Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();           ///< [m/s]
-  Eigen::Quaterniond q_body_to_ned = Eigen::Quaterniond::Identity();     ///< body -> NED
-  Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();                   ///< ZYX [rad]
-  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();            ///< [rad/s]
-  Eigen::Vector3d specific_force_body_mps2 = Eigen::Vector3d::Zero();    ///< [m/s^2]
-  Eigen::Vector3d angular_accel_body_radps2 = Eigen::Vector3d::Zero();   ///< [rad/s^2]
-  double flap_freq_left_radps = 0.0;                                     ///< [rad/s]
-  double flap_freq_right_radps = 0.0;                                    ///< [rad/s]
+  std::int64_t utime = 0;                                               ///< [us]
+  Eigen::Vector3d position_ned_m = Eigen::Vector3d::Zero();             ///< [m]
+  Eigen::Vector3d velocity_body_mps = Eigen::Vector3d::Zero();          ///< [m/s]
+  Eigen::Quaterniond q_body_to_ned = Eigen::Quaterniond::Identity();    ///< body -> NED
+  Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();                  ///< ZYX [rad]
+  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();           ///< [rad/s]
+  Eigen::Vector3d specific_force_body_mps2 = Eigen::Vector3d::Zero();   ///< [m/s^2]
+  Eigen::Vector3d angular_accel_body_radps2 = Eigen::Vector3d::Zero();  ///< [rad/s^2]
+  double flap_freq_left_radps = 0.0;                                    ///< [rad/s]
+  double flap_freq_right_radps = 0.0;                                   ///< [rad/s]
 
   /// The IMU model's input at this instant.
   ImuTruthInput imu_input() const;

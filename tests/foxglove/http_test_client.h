@@ -32,8 +32,8 @@ struct HttpAnswer {
       if (colon == name.size()) {
         bool same = true;
         for (std::size_t i = 0; i < colon; ++i) {
-          same = same && std::tolower(static_cast<unsigned char>(line[i])) ==
-                             std::tolower(static_cast<unsigned char>(name[i]));
+          same = same &&
+                 std::tolower(static_cast<unsigned char>(line[i])) == std::tolower(static_cast<unsigned char>(name[i]));
         }
         if (same) return line.substr(line.find_first_not_of(' ', colon + 1));
       }

@@ -70,8 +70,8 @@ TEST_CASE("server messages: serverInfo, advertise, status, messageData", "[foxgl
 TEST_CASE("session: subscribe and unsubscribe", "[foxglove][protocol]") {
   ClientSession s = session();
   std::vector<std::string> replies;
-  auto changed = s.on_text(R"({"op":"subscribe","subscriptions":[{"id":10,"channelId":1},{"id":11,"channelId":3}]})",
-                           &replies);
+  auto changed =
+      s.on_text(R"({"op":"subscribe","subscriptions":[{"id":10,"channelId":1},{"id":11,"channelId":3}]})", &replies);
   CHECK(replies.empty());
   CHECK(changed == std::vector<uint32_t>{1, 3});
   uint32_t sub = 0;

@@ -122,9 +122,10 @@ TEST_CASE("server: a handshake without the protocol's subprotocol is refused", "
   CHECK(f.server.stats().clients_total == 0);
 }
 
-TEST_CASE("server: subscribe gives messageData with the subscription id, timestamp and payload, unsubscribe "
-          "stops them",
-          "[foxglove][server]") {
+TEST_CASE(
+    "server: subscribe gives messageData with the subscription id, timestamp and payload, unsubscribe "
+    "stops them",
+    "[foxglove][server]") {
   Fixture f;
   TestClient c;
   join(c, f);
@@ -196,7 +197,8 @@ TEST_CASE("server: a frame over the limit closes the connection (1009)", "[foxgl
   // may meet a closed socket, or the socket's end.
   INFO(c.error.message());
   CHECK((c.error == websocket::error::closed || c.error == net::error::broken_pipe ||
-         c.error == net::error::connection_reset || c.error == net::error::eof || c.error == net::error::not_connected));
+         c.error == net::error::connection_reset || c.error == net::error::eof ||
+         c.error == net::error::not_connected));
   CHECK(c.reason().code == websocket::close_code::too_big);
   CHECK(eventually([&] { return f.server.stats().clients_now == 0; }));
   CHECK(f.server.stats().oversized_closes == 1);

@@ -233,9 +233,10 @@ TEST_CASE("live view: a full queue drops and counts, offer() stays quick", "[fox
   CHECK(s.dropped + s.published == 10000);
 }
 
-TEST_CASE("live view: a client that subscribes late gets the last 10 s of a channel in order, then the live "
-          "messages without a gap or a repetition",
-          "[foxglove][live_view]") {
+TEST_CASE(
+    "live view: a client that subscribes late gets the last 10 s of a channel in order, then the live "
+    "messages without a gap or a repetition",
+    "[foxglove][live_view]") {
   FoxgloveServer server(any_port());
   LiveView view(server);  // the default history: 10 s of rig time
   view.start();

@@ -148,7 +148,8 @@ TEST_CASE("rig view and rig run: a live view port in use is named, exit 2, not a
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("cannot listen on " + busy));
   r = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
-                            "/rig_configs/hover.yaml --clock inprocess --set duration_s=1 --no-progress --foxglove " + busy);
+                            "/rig_configs/hover.yaml --clock inprocess --set duration_s=1 --no-progress --foxglove " +
+                            busy);
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains("--foxglove " + busy + ": cannot listen on " + busy));
   ::close(fd);

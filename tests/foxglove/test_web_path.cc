@@ -68,28 +68,77 @@ struct WebRoot {
 /// any spelling and encoding, encoded separators, backslashes, double encoding, overlong UTF-8,
 /// NUL and control characters, bad escapes, bytes outside a path, too long.
 const std::vector<std::string>& malformed_targets() {
-  static const std::vector<std::string> t = {
-      "//etc/passwd", "///etc/passwd", "/sub//page.html", "", "*", "http://127.0.0.1/etc/passwd",
-      "http://127.0.0.1//etc/passwd", "127.0.0.1:80", "etc/passwd", "/..", "/.", "/./index.html",
-      "/../secret.html", "/sub/../../secret.html", "/%2e%2e/secret.html", "/%2E%2e/secret.html",
-      "/.%2e/secret.html", "/%2e./secret.html", "/sub/%2e%2e/%2e%2e/secret.html", "/..%2fsecret.html",
-      "/%2e%2e%2fsecret.html", "/%2fetc%2fpasswd", "/..%5csecret.html", "/..\\secret.html",
-      "/%252e%252e/secret.html", "/%25%32%65%25%32%65/secret.html", "/%c0%ae%c0%ae/secret.html",
-      "/%c0%af", "/%e0%80%ae%e0%80%ae/secret.html", "/index.html%00.png", "/%00", "/x%0a",
-      "/x%0d%0aSet-Cookie:%20a", "/%7f", "/%", "/%2", "/%zz", "/%%32%65", "/a#b", "/<script>",
-      "/\xc3\xa9.html", std::string("/index.html\0.js", 15), "/\x01", "/index.html%2f",
-      "/sub/.x/..", "/" + std::string(3000, 'a')};
+  static const std::vector<std::string> t = {"//etc/passwd",
+                                             "///etc/passwd",
+                                             "/sub//page.html",
+                                             "",
+                                             "*",
+                                             "http://127.0.0.1/etc/passwd",
+                                             "http://127.0.0.1//etc/passwd",
+                                             "127.0.0.1:80",
+                                             "etc/passwd",
+                                             "/..",
+                                             "/.",
+                                             "/./index.html",
+                                             "/../secret.html",
+                                             "/sub/../../secret.html",
+                                             "/%2e%2e/secret.html",
+                                             "/%2E%2e/secret.html",
+                                             "/.%2e/secret.html",
+                                             "/%2e./secret.html",
+                                             "/sub/%2e%2e/%2e%2e/secret.html",
+                                             "/..%2fsecret.html",
+                                             "/%2e%2e%2fsecret.html",
+                                             "/%2fetc%2fpasswd",
+                                             "/..%5csecret.html",
+                                             "/..\\secret.html",
+                                             "/%252e%252e/secret.html",
+                                             "/%25%32%65%25%32%65/secret.html",
+                                             "/%c0%ae%c0%ae/secret.html",
+                                             "/%c0%af",
+                                             "/%e0%80%ae%e0%80%ae/secret.html",
+                                             "/index.html%00.png",
+                                             "/%00",
+                                             "/x%0a",
+                                             "/x%0d%0aSet-Cookie:%20a",
+                                             "/%7f",
+                                             "/%",
+                                             "/%2",
+                                             "/%zz",
+                                             "/%%32%65",
+                                             "/a#b",
+                                             "/<script>",
+                                             "/\xc3\xa9.html",
+                                             std::string("/index.html\0.js", 15),
+                                             "/\x01",
+                                             "/index.html%2f",
+                                             "/sub/.x/..",
+                                             "/" + std::string(3000, 'a')};
   return t;
 }
 
 /// Well-formed targets of nothing served (404): dotfiles and dot-folders, symlinks leading out,
 /// a symlink to a dotfile, a FIFO, folders, unknown types, missing files.
 const std::vector<std::string>& not_served_targets() {
-  static const std::vector<std::string> t = {
-      "/.secret", "/.git/config", "/%2egit/config", "/sub/.hidden.html", "/out.html", "/rel_out.html",
-      "/outdir/secret.txt", "/fsroot/etc/passwd", "/fsroot/etc/hostname", "/to_dot.txt", "/pipe.js", "/sub",
-      "/sub/", "/outdir", "/notes.bin", "/missing.css", "/index.html/", "/%3cscript%3e.html",
-      "/index.HTML"};
+  static const std::vector<std::string> t = {"/.secret",
+                                             "/.git/config",
+                                             "/%2egit/config",
+                                             "/sub/.hidden.html",
+                                             "/out.html",
+                                             "/rel_out.html",
+                                             "/outdir/secret.txt",
+                                             "/fsroot/etc/passwd",
+                                             "/fsroot/etc/hostname",
+                                             "/to_dot.txt",
+                                             "/pipe.js",
+                                             "/sub",
+                                             "/sub/",
+                                             "/outdir",
+                                             "/notes.bin",
+                                             "/missing.css",
+                                             "/index.html/",
+                                             "/%3cscript%3e.html",
+                                             "/index.HTML"};
   return t;
 }
 
@@ -98,12 +147,9 @@ const std::vector<std::string>& not_served_targets() {
 TEST_CASE("web path: the target's lexical rules (400 malformed, 404 dotfiles, the query stripped)",
           "[foxglove][web][resource]") {
   const std::vector<std::pair<std::string, std::string>> good = {
-      {"/", "index.html"},
-      {"/?ws=ws://127.0.0.1:8765&x=../../etc/passwd", "index.html"},
-      {"/sub/", "sub/index.html"},
-      {"/sub/p%61ge.html", "sub/page.html"},
-      {"/a%20b.html", "a b.html"},
-      {"/app.js?v=1", "app.js"}};
+      {"/", "index.html"},         {"/?ws=ws://127.0.0.1:8765&x=../../etc/passwd", "index.html"},
+      {"/sub/", "sub/index.html"}, {"/sub/p%61ge.html", "sub/page.html"},
+      {"/a%20b.html", "a b.html"}, {"/app.js?v=1", "app.js"}};
   for (const auto& [target, relative] : good) {
     INFO(target);
     const WebPath w = parse_web_target(target);
@@ -174,7 +220,7 @@ TEST_CASE("server: the page server over a socket refuses every traversal form, s
   std::vector<std::string> refused = malformed_targets();
   refused.insert(refused.end(), not_served_targets().begin(), not_served_targets().end());
   refused.push_back("/" + w.base.string() + "/secret.html");  // "//tmp/.../secret.html"
-  refused.push_back("/a b");                                   // not a request line the parser takes
+  refused.push_back("/a b");                                  // not a request line the parser takes
   for (const std::string& target : refused) {
     for (const char* method : {"GET", "HEAD"}) {
       INFO(method << " " << target);
@@ -182,8 +228,10 @@ TEST_CASE("server: the page server over a socket refuses every traversal form, s
       CHECK((a.status == 400 || a.status == 404));
       // A fixed body, never the target; none for HEAD, unless the parser refused the request line
       // before its method was known.
-      if (method == std::string("GET")) CHECK((a.body == "bad request\n" || a.body == "not found\n"));
-      else CHECK((a.body.empty() || (a.status == 400 && a.body == "bad request\n")));
+      if (method == std::string("GET"))
+        CHECK((a.body == "bad request\n" || a.body == "not found\n"));
+      else
+        CHECK((a.body.empty() || (a.status == 400 && a.body == "bad request\n")));
       CHECK(a.raw.find(w.token) == std::string::npos);
       CHECK(a.raw.find("root:x:0:0") == std::string::npos);
       CHECK(a.raw.find("Set-Cookie") == std::string::npos);
@@ -191,7 +239,7 @@ TEST_CASE("server: the page server over a socket refuses every traversal form, s
   }
   // Raw bytes the request line may not hold at all: a 400 from the parser.
   for (const std::string& line : {std::string("GET /index.html\0 HTTP/1.1", 25), std::string("GET /\x7f HTTP/1.1"),
-                                   std::string("GET /\r HTTP/1.1"), std::string("GARBAGE")}) {
+                                  std::string("GET /\r HTTP/1.1"), std::string("GARBAGE")}) {
     INFO(line);
     const HttpAnswer a = http_exchange(port, line + "\r\nHost: 127.0.0.1\r\n\r\n");
     CHECK(a.status == 400);

@@ -19,8 +19,8 @@
 // Channel names come from the contract (functional.contract checks that no file spells them).
 using nimble::contract::channels::kTruth;
 
-using nimble::test::run_rig;
 using nimble::test::RigResult;
+using nimble::test::run_rig;
 
 namespace {
 
@@ -43,8 +43,9 @@ YAML::Node json_of(const RigResult& r) {
 
 }  // namespace
 
-TEST_CASE("cli: every command answers --help on stdout with exit 0, is in docs/tool.md, and --version names the version",
-          "[cli]") {
+TEST_CASE(
+    "cli: every command answers --help on stdout with exit 0, is in docs/tool.md, and --version names the version",
+    "[cli]") {
   // The commands as `rig --help` lists them (its one table, cli/rig_main.cc).
   const RigResult help = run_rig("--help");
   REQUIRE(help.exit_code == 0);
@@ -110,7 +111,8 @@ TEST_CASE("cli: usage errors name the option and exit 2, and values are checked 
            // A regular file that is no rig log (/dev/null is refused before, as no regular file).
            {"identify " + scenario + " --states smoothed", "--states: " + scenario + " is not a rig log"},
            {"validate x.yaml " + scenario + " --states truth", "--states: " + scenario + " is not a rig log"},
-           {"discrepancy " + scenario + " --model x.yaml --states smoothed", "--states: " + scenario + " is not a rig log"},
+           {"discrepancy " + scenario + " --model x.yaml --states smoothed",
+            "--states: " + scenario + " is not a rig log"},
            {"identify x.lcmlog --states guess", "--states: guess not in {auto,estimate,truth,smoothed,sensors}"},
        }) {
     INFO(c.args);
@@ -132,8 +134,8 @@ TEST_CASE("cli: rig reproduce thesis --dir refuses a directory made with other o
   // fails at once, exit 2) leaves its manifest: started again with other overrides, or none, it
   // is refused before anything flies.
   const std::string dir = nimble::test::scratch_dir("cli_reproduce_dir");
-  const std::string common = "reproduce thesis --no-progress --seeds 1 --jobs 1 --logs " + dir + "/logs --dir " + dir +
-                             "/campaign";
+  const std::string common =
+      "reproduce thesis --no-progress --seeds 1 --jobs 1 --logs " + dir + "/logs --dir " + dir + "/campaign";
   const RigResult made = run_rig(common + " --set duration_s=0.05");
   INFO(made.out << made.err);
   REQUIRE(made.exit_code == 2);
@@ -141,8 +143,9 @@ TEST_CASE("cli: rig reproduce thesis --dir refuses a directory made with other o
   const RigResult vibration = run_rig(common + " --vibration");
   CHECK(vibration.exit_code == 2);
   CHECK(vibration.err.find("holds another campaign: its overrides is [\"duration_s=0.05\"], this one's "
-                           "[\"sensing.base=" + std::string(RIG_SOURCE_DIR) +
-                           "/rig_configs/sensing/nimble_flight_vibration.yaml\"]") != std::string::npos);
+                           "[\"sensing.base=" +
+                           std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/nimble_flight_vibration.yaml\"]") !=
+        std::string::npos);
   const RigResult none = run_rig(common);
   CHECK(none.exit_code == 2);
   CHECK(none.err.find("holds another campaign: its overrides is [\"duration_s=0.05\"], this one's []") !=
@@ -155,9 +158,9 @@ TEST_CASE("cli: rig reproduce thesis --dir refuses a directory made with other o
 }
 
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli][programs]") {
-  for (const std::string bench : {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf",
-                                  "bench_turbulence", "bench_can", "bench_can_bridge", "bench_loop", "bench_power",
-                                  "bench_export"}) {
+  for (const std::string bench :
+       {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf", "bench_turbulence",
+        "bench_can", "bench_can_bridge", "bench_loop", "bench_power", "bench_export"}) {
     INFO(bench);
     const RigResult r = run_bench(bench, "--help");
     CHECK(r.exit_code == 0);
@@ -231,8 +234,8 @@ TEST_CASE("cli: --json - writes the JSON alone to stdout (run, sweep, check, exp
   const std::string dir = nimble::test::scratch_dir("cli_json");
   const std::string log = dir + "/hover.lcmlog";
 
-  const RigResult run = run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " +
-                                log + " --json -");
+  const RigResult run = run_rig(
+      "run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " + log + " --json -");
   CHECK(run.exit_code == 0);
   const YAML::Node summary = json_of(run);
   CHECK(summary["result"].as<std::string>() == "ok");

@@ -58,8 +58,7 @@ void check_documented(const nimble::ParamTable<Config>& table, const Config& def
           if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
             for (int i = 0; i < 3; ++i) {
               const char* axis = nimble::kXyzAxes[static_cast<std::size_t>(i)];
-              CHECK(at[key][axis].template as<double>() ==
-                    Approx((defaults.*member)[i]).epsilon(1e-4).margin(1e-12));
+              CHECK(at[key][axis].template as<double>() == Approx((defaults.*member)[i]).epsilon(1e-4).margin(1e-12));
             }
           } else if constexpr (std::is_same_v<T, bool>) {
             CHECK(at[key].template as<bool>() == defaults.*member);
@@ -77,10 +76,11 @@ void check_documented(const nimble::ParamTable<Config>& table, const Config& def
 TEST_CASE("rig params prints each section's table, and an unknown section is named", "[cli]") {
   const Out all = rig("params");
   REQUIRE(all.code == 0);
-  for (const char* key : {"`run.stop_grace_s`", "`run.spin_us`", "`lockstep.ack_timeout_ms`", "`summary.max_phi_deg`", "`sensing.imu.gyro_noise_sigma_radps`",
-                          "`sensing.mocap.latency_us`", "`sensing.ekf.measurement_noise.attitude_var_rad2`",
-                          "`plant.thrust.slope_n_per_hz`", "`plant.command_resolution.flap_freq_radps`",
-                          "`controller.mixing.roll_cmd_to_delta_f_radps`", "`can_bridge.health_rate_hz`"}) {
+  for (const char* key : {"`run.stop_grace_s`", "`run.spin_us`", "`lockstep.ack_timeout_ms`", "`summary.max_phi_deg`",
+                          "`sensing.imu.gyro_noise_sigma_radps`", "`sensing.mocap.latency_us`",
+                          "`sensing.ekf.measurement_noise.attitude_var_rad2`", "`plant.thrust.slope_n_per_hz`",
+                          "`plant.command_resolution.flap_freq_radps`", "`controller.mixing.roll_cmd_to_delta_f_radps`",
+                          "`can_bridge.health_rate_hz`"}) {
     CHECK(all.text.find(key) != std::string::npos);
   }
   const Out mocap = rig("params sensing.mocap");
@@ -97,7 +97,8 @@ TEST_CASE("every tabled sensing parameter is written at its default in the shipp
   const YAML::Node base = YAML::LoadFile(std::string(RIG_SOURCE_DIR) + "/rig_configs/sensing/default_sensing.yaml");
   check_documented(nimble::imu_params(), nimble::ImuModelConfig{}, base["imu"], "imu");
   check_documented(nimble::mocap_params(), nimble::MocapConfig{}, base["mocap"], "mocap");
-  check_documented(nimble::imu_prefilter_params(), nimble::ImuPrefilterConfig{}, base["imu_prefilter"], "imu_prefilter");
+  check_documented(nimble::imu_prefilter_params(), nimble::ImuPrefilterConfig{}, base["imu_prefilter"],
+                   "imu_prefilter");
   // The EKF's keys live in sub-mappings (process_noise.gyro_var_per_sample_rad2ps2 ...).
   const YAML::Node ekf = base["ekf"];
   for (const auto& p : nimble::ekf_params()) {
@@ -120,11 +121,15 @@ TEST_CASE("every tabled plant parameter is written at its default in the shipped
   for (const auto& p : nimble::plant::plant_params()) {
     INFO(p.key);
     const auto dot = p.key.find('.');
-    const YAML::Node node = dot == std::string::npos ? plant[p.key] : plant[p.key.substr(0, dot)][p.key.substr(dot + 1)];
+    const YAML::Node node =
+        dot == std::string::npos ? plant[p.key] : plant[p.key.substr(0, dot)][p.key.substr(dot + 1)];
     REQUIRE(node);
-    CHECK(node.as<double>() == Approx(static_cast<double>(nimble::plant::PlantConfig{}.*std::get<double nimble::plant::PlantConfig::*>(p.member))).epsilon(1e-4));
+    CHECK(node.as<double>() == Approx(static_cast<double>(nimble::plant::PlantConfig{}.*
+                                                          std::get<double nimble::plant::PlantConfig::*>(p.member)))
+                                   .epsilon(1e-4));
   }
-  check_documented(nimble::plant::flap_actuator_params(), nimble::plant::FlapActuatorConfig{}, plant["flap_actuator"], "flap_actuator");
+  check_documented(nimble::plant::flap_actuator_params(), nimble::plant::FlapActuatorConfig{}, plant["flap_actuator"],
+                   "flap_actuator");
   check_documented(nimble::plant::servo_params(), nimble::plant::ServoConfig{}, plant["servo"], "servo");
   check_documented(nimble::plant::thrust_params(), nimble::ThrustCurve{}, plant["thrust"], "thrust");
 }
@@ -138,8 +143,9 @@ TEST_CASE("docs/configuration.md is the configuration reference the parameter ta
   REQUIRE(in);
   std::stringstream text;
   text << in.rdbuf();
-  INFO("docs/configuration.md is out of date: regenerate it with build/bin/rig params --doc-page > "
-       "docs/configuration.md");
+  INFO(
+      "docs/configuration.md is out of date: regenerate it with build/bin/rig params --doc-page > "
+      "docs/configuration.md");
   CHECK(text.str() == page.text);
   CHECK(page.text.find("`plant.effects.lateral_inflow.Y_vv_ns2pm2`") != std::string::npos);
 }

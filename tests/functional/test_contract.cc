@@ -149,10 +149,15 @@ TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
   r.controller_hz = 512.0;
   r.estimator_hz = 512.0;
   SECTION("real time, no motion capture, LCM link") {
-    const std::map<std::string, double> expected = {
-        {kTruth, 500.0},           {kImu, 512.0},         {kActuatorCommand, 512.0}, {kAttitudeSetpoint, 512.0},
-        {kControllerStatus, 512.0}, {kEstimate, 512.0},   {kActuatorFeedback, 100.0}, {kHeartbeat, 6.0},
-        {kTimingHealth, 3.0}};
+    const std::map<std::string, double> expected = {{kTruth, 500.0},
+                                                    {kImu, 512.0},
+                                                    {kActuatorCommand, 512.0},
+                                                    {kAttitudeSetpoint, 512.0},
+                                                    {kControllerStatus, 512.0},
+                                                    {kEstimate, 512.0},
+                                                    {kActuatorFeedback, 100.0},
+                                                    {kHeartbeat, 6.0},
+                                                    {kTimingHealth, 3.0}};
     const auto hz = expected_rates(r, RunShape{false, 10.0, 3});
     for (const auto& [channel, rate] : expected) {
       INFO(channel);
@@ -162,7 +167,8 @@ TEST_CASE("nominal rates follow the configured process rates", "[contract]") {
     }
     // Nothing of the processes and links this run has not (every other periodic channel has a
     // rate in a run with all of them: functional.message_list).
-    for (const auto& channel : {kMocapPose, kActuatorCommandCan, kActuatorFeedbackCan, kCanHealth, kRigClock, kStepAck}) {
+    for (const auto& channel :
+         {kMocapPose, kActuatorCommandCan, kActuatorFeedbackCan, kCanHealth, kRigClock, kStepAck}) {
       INFO(channel);
       CHECK(hz.count(channel) == 0);
     }
@@ -194,13 +200,12 @@ TEST_CASE("the value fields a fault may change, per target channel", "[contract]
     for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
     return out;
   };
-  CHECK(value_field_names(kImu) ==
-        join({elements("gyro_radps", 3), elements("accel_mps2", 3), {"temperature_degc"}}));
+  CHECK(value_field_names(kImu) == join({elements("gyro_radps", 3), elements("accel_mps2", 3), {"temperature_degc"}}));
   CHECK(value_field_names(kMocapPose) ==
         join({elements("position_m", 3), elements("quaternion_wxyz", 4), {"mean_marker_error_m"}}));
-  CHECK(value_field_names(kEstimate) == join({elements("euler_rad", 3), elements("velocity_body_mps", 3),
-                                              elements("gyro_bias_radps", 3), elements("accel_bias_mps2", 3),
-                                              elements("omega_body_radps", 3)}));
+  CHECK(value_field_names(kEstimate) ==
+        join({elements("euler_rad", 3), elements("velocity_body_mps", 3), elements("gyro_bias_radps", 3),
+              elements("accel_bias_mps2", 3), elements("omega_body_radps", 3)}));
   CHECK(value_field_names(kActuatorCommand) ==
         std::vector<std::string>{"flap_freq_left_radps", "flap_freq_right_radps", "delta_f_radps",
                                  "flap_freq_collective_radps", "throttle_pct", "dihedral_rad", "wing_root_rad"});

@@ -19,8 +19,8 @@ TEST_CASE("Java and C++ fingerprints agree for every type", "[lcmtypes][java]") 
     cpp[std::string("nimble.") + T::getTypeName()] = static_cast<uint64_t>(T::getHash());
   });
 
-  std::string cmd = std::string(JAVA_EXE) + " -cp " + FINGERPRINT_CLASSES + ":" + TYPES_JAR + ":" + LCM_JAR +
-                    " PrintFingerprints";
+  std::string cmd =
+      std::string(JAVA_EXE) + " -cp " + FINGERPRINT_CLASSES + ":" + TYPES_JAR + ":" + LCM_JAR + " PrintFingerprints";
   for (const auto& [name, hash] : cpp) cmd += " " + name;
   cmd += " 2>&1";
   FILE* pipe = ::popen(cmd.c_str(), "r");

@@ -117,8 +117,8 @@ TEMPLATE_TEST_CASE("decoding with a corrupted fingerprint fails", "[lcmtypes]", 
 }
 
 TEMPLATE_TEST_CASE("decoding a message of another type fails", "[lcmtypes]", RIG_LCM_TYPES) {
-  using Other = typename std::conditional<std::is_same<TestType, nimble::heartbeat_t>::value,
-                                          nimble::fault_event_t, nimble::heartbeat_t>::type;
+  using Other = typename std::conditional<std::is_same<TestType, nimble::heartbeat_t>::value, nimble::fault_event_t,
+                                          nimble::heartbeat_t>::type;
   const std::vector<uint8_t> buf = encode(make_sample<Other>());
   TestType out{};
   REQUIRE(out.decode(buf.data(), 0, static_cast<int>(buf.size())) < 0);
@@ -164,8 +164,7 @@ TEST_CASE("timing_health_t with zero channels round-trips", "[lcmtypes]") {
   fill(in, g, 0);
   const std::vector<uint8_t> buf = encode(in);
   nimble::timing_health_t out{};
-  REQUIRE(out.decode(buf.data(), 0, static_cast<int>(buf.size())) ==
-          static_cast<int>(buf.size()));
+  REQUIRE(out.decode(buf.data(), 0, static_cast<int>(buf.size())) == static_cast<int>(buf.size()));
   require_equal(in, out);
   REQUIRE(out.channel.empty());
 }
@@ -257,7 +256,8 @@ TEST_CASE("decode_exact refuses a string the encoder cannot write back", "[lcmty
   const std::vector<uint8_t> buf = encode(fault);
   const std::size_t message_end = buf.size() - 1;  // the message is the last field: its NUL ends the bytes
   REQUIRE(buf[message_end] == 0);
-  for (const auto& [pos, byte] : std::vector<std::pair<std::size_t, uint8_t>>{{message_end - 3, 0}, {message_end, 'x'}}) {
+  for (const auto& [pos, byte] :
+       std::vector<std::pair<std::size_t, uint8_t>>{{message_end - 3, 0}, {message_end, 'x'}}) {
     INFO("byte " << pos << " set to " << int{byte});
     std::vector<uint8_t> bad = buf;
     bad[pos] = byte;

@@ -43,13 +43,15 @@ struct RequireChanged {
   }
   template <typename T, std::size_t N>
   void operator()(const char* name, const T (&filled)[N], const T (&empty)[N]) const {
-    for (std::size_t i = 0; i < N; ++i) (*this)((std::string(name) + "[" + std::to_string(i) + "]").c_str(), filled[i], empty[i]);
+    for (std::size_t i = 0; i < N; ++i)
+      (*this)((std::string(name) + "[" + std::to_string(i) + "]").c_str(), filled[i], empty[i]);
   }
 };
 
 }  // namespace
 
-TEST_CASE("every .lcm file of lcmtypes/ is a type of the list, of the viewers and of the fuzz targets", "[message_list]") {
+TEST_CASE("every .lcm file of lcmtypes/ is a type of the list, of the viewers and of the fuzz targets",
+          "[message_list]") {
   std::vector<std::string> files;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(RIG_SOURCE_DIR) + "/lcmtypes")) {
     if (entry.path().extension() == ".lcm") files.push_back(entry.path().stem().string());
@@ -129,7 +131,8 @@ TEST_CASE("every channel published at a rate has its nominal rate (contract/rate
   }
 }
 
-TEST_CASE("the samples fill every field of every type, and a message equals itself through its bytes", "[message_list]") {
+TEST_CASE("the samples fill every field of every type, and a message equals itself through its bytes",
+          "[message_list]") {
   for_each_message_type([](auto type) {
     using M = typename decltype(type)::type;
     INFO(M::getTypeName());

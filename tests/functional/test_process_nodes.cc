@@ -62,7 +62,8 @@ run_control_t stop_command() {
 struct PlantOutputs {
   explicit PlantOutputs(transport::Bus& bus) {
     bus.subscribe<truth_state_t>(kTruth, [this](const truth_state_t& m) { truth.push_back(m); });
-    bus.subscribe<actuator_feedback_t>(kActuatorFeedback, [this](const actuator_feedback_t& m) { feedback.push_back(m); });
+    bus.subscribe<actuator_feedback_t>(kActuatorFeedback,
+                                       [this](const actuator_feedback_t& m) { feedback.push_back(m); });
     bus.subscribe<fault_event_t>(kFault, [this](const fault_event_t& m) { faults.push_back(m); });
     bus.subscribe<heartbeat_t>(kHeartbeat, [&bus](const heartbeat_t& m) {
       if (m.state == heartbeat_t::STATE_FINISHED) bus.publish(kRunControl, stop_command());
@@ -292,9 +293,10 @@ TEST_CASE("controller node: acknowledges when due, flies the manoeuvre's set-poi
   CHECK(doublet_seen);
 }
 
-TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion capture falls behind by more "
-          "than the history, its poses are dropped, counted and raised as a FAULT naming the key",
-          "[estimator][process]") {
+TEST_CASE(
+    "estimator node: ESTIMATE carries the EKF's counters, when the motion capture falls behind by more "
+    "than the history, its poses are dropped, counted and raised as a FAULT naming the key",
+    "[estimator][process]") {
   const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
   EstimatorNode estimator(scenario, {"estimator", "", "memq://"});
   transport::Bus& bus = estimator.node().bus();
@@ -373,9 +375,10 @@ TEST_CASE("estimator node: ESTIMATE carries the EKF's counters, when the motion 
   CHECK(dropped == 1);  // at most one a second of rig time
 }
 
-TEST_CASE("lockstep participant: a tick that overtakes RUN_CONTROL start is handled once the run starts, a repeated "
-          "tick is acknowledged again without running twice",
-          "[controller][process][lockstep]") {
+TEST_CASE(
+    "lockstep participant: a tick that overtakes RUN_CONTROL start is handled once the run starts, a repeated "
+    "tick is acknowledged again without running twice",
+    "[controller][process][lockstep]") {
   // RUN_CONTROL start (from the launcher) and the master's first RIG_CLOCK come from different
   // senders; the tick may arrive first. The master repeats a tick whose acknowledgement is
   // missing; the participant must answer without running its tasks again.
@@ -462,9 +465,10 @@ std::vector<ReceivedPose> run_mocap(const Scenario& scenario, double duration_s)
 
 }  // namespace
 
-TEST_CASE("mocap node: 200 Hz poses from the plant-rate truth, each out at the tick after its latency, "
-          "seeded marker noise",
-          "[mocap][process]") {
+TEST_CASE(
+    "mocap node: 200 Hz poses from the plant-rate truth, each out at the tick after its latency, "
+    "seeded marker noise",
+    "[mocap][process]") {
   const Scenario scenario = load_scenario(kConfigs + "hover.yaml");
   const std::vector<ReceivedPose> poses = run_mocap(scenario, 1.0);
 

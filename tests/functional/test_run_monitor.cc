@@ -178,7 +178,8 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   CHECK(c.malformed == 2);
 }
 
-TEST_CASE("roll tracking: the controller's reference against the newest TRUTH at or before its cycle", "[launcher][monitor]") {
+TEST_CASE("roll tracking: the controller's reference against the newest TRUTH at or before its cycle",
+          "[launcher][monitor]") {
   MonitorConfig cfg;
   cfg.lockstep = true;
   RunMonitor mon(cfg);

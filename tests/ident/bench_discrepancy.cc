@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
                                      "  against the machine's floor (one identification) in the same run.\n",
                                      5);
   if (reps < 0) return -reps - 1;
-  const DerivativeModel model = load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
+  const DerivativeModel model =
+      load_model(std::string(RIG_SOURCE_DIR) + "/rig_configs/models/nimble_lateral_set1.yaml");
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   test::HiddenEffects h;
   h.on = {"kinematic_coupling", "forward_speed_coupling"};
@@ -87,10 +88,11 @@ int main(int argc, char** argv) {
               workflow.min, workflow.max);
   std::printf("  of which the open-world term search: median %.0f ms (the workflow without it: %.0f ms)\n",
               workflow.median - median(closed_ms), median(closed_ms));
-  std::printf("  data-compatibility stage: the check on the record, median %.1f ms; the whole stage in the workflow on a "
-              "record it corrects (gyro 5 %% off, 30 ms late: check, correction, the baseline's error as recorded), "
-              "median %.1f ms; target <= 100 ms\n",
-              median(stage_ms), median(added_ms));
+  std::printf(
+      "  data-compatibility stage: the check on the record, median %.1f ms; the whole stage in the workflow on a "
+      "record it corrects (gyro 5 %% off, 30 ms late: check, correction, the baseline's error as recorded), "
+      "median %.1f ms; target <= 100 ms\n",
+      median(stage_ms), median(added_ms));
   std::printf("  machine floor, one OLS of the baseline L and Y equations: median %.2f ms; workflow / floor = %.0f\n",
               median(floor_ms), median(workflow_ms) / median(floor_ms));
   return 0;

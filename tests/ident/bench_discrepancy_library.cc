@@ -103,7 +103,8 @@ int main(int argc, char** argv) {
       }
       if (!is_exact) {
         std::string said = r.verdict + ":";
-        for (const auto& e : r.effects) said += " " + (e.name == "term" ? "term " + e.equation + " " + e.expression : e.name);
+        for (const auto& e : r.effects)
+          said += " " + (e.name == "term" ? "term " + e.equation + " " + e.expression : e.name);
         ++others[said];
         std::printf("  %s record %d (seed %llu, %.1f s): %s: %s\n", c.hidden, i, static_cast<unsigned long long>(seed),
                     o.duration_s, r.verdict.c_str(), r.summary.c_str());
@@ -111,8 +112,9 @@ int main(int argc, char** argv) {
     }
     const Proportion p = wilson(exact, per_effect);
     char row[512];
-    std::snprintf(row, sizeof row, "%-24s %4d  %4d %5.1f%% [%5.1f,%5.1f]  none %2d  unexplained %2d  other %2d", c.hidden,
-                  per_effect, exact, 100.0 * exact / per_effect, 100.0 * p.lo, 100.0 * p.hi, none, unexplained, other);
+    std::snprintf(row, sizeof row, "%-24s %4d  %4d %5.1f%% [%5.1f,%5.1f]  none %2d  unexplained %2d  other %2d",
+                  c.hidden, per_effect, exact, 100.0 * exact / per_effect, 100.0 * p.lo, 100.0 * p.hi, none,
+                  unexplained, other);
     std::string line = row;
     for (const auto& [said, k] : others) line += "\n      " + said + " x" + std::to_string(k);
     rows.push_back(line);
@@ -124,8 +126,9 @@ int main(int argc, char** argv) {
               closed ? "closed world (no signature checks, no term search)" : "the workflow's defaults");
   for (const auto& r : rows) std::printf("%s\n", r.c_str());
   const Proportion p = wilson(all_exact, all);
-  std::printf("all: %d of %d named exactly (%.1f %%, 95 %% %.1f-%.1f %%; target 99 %%); workflow time %.2f s (%.3f s per "
-              "record)\n",
-              all_exact, all, 100.0 * all_exact / all, 100.0 * p.lo, 100.0 * p.hi, seconds, seconds / all);
+  std::printf(
+      "all: %d of %d named exactly (%.1f %%, 95 %% %.1f-%.1f %%; target 99 %%); workflow time %.2f s (%.3f s per "
+      "record)\n",
+      all_exact, all, 100.0 * all_exact / all, 100.0 * p.lo, 100.0 * p.hi, seconds, seconds / all);
   return 0;
 }

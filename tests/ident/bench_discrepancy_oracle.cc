@@ -75,8 +75,8 @@ struct Args {
   /// standard deviation scaled by sqrt(corner / drawn corner), which keeps the level below the
   /// corners), and the measurement noise times this factor. 0 and 1: as drawn.
   double corner_hz = 0.0, measurement_noise = 1.0;
-  double process_noise = 1.0;  ///< Diagnostic: the process noise's standard deviations times this factor.
-  double cutoff_hz = 0.0;      ///< Diagnostic: the workflow's low-pass cut-off (0: its default).
+  double process_noise = 1.0;    ///< Diagnostic: the process noise's standard deviations times this factor.
+  double cutoff_hz = 0.0;        ///< Diagnostic: the workflow's low-pass cut-off (0: its default).
   double heldout_sigmas = -1.0;  ///< Diagnostic: DiscrepancyOptions::heldout_sigmas (negative: its default).
   /// Diagnostic: the nulls from the suite's own generator (discrepancy_generator.h, no effect), to
   /// tell the oracle's null rate on these records from its rate on those.
@@ -102,25 +102,40 @@ Args parse_args(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (k == "--records") a.records = std::atoi(value().c_str());
-    else if (k == "--nulls") a.nulls = std::atoi(value().c_str());
-    else if (k == "--forms") a.forms = split(value());
-    else if (k == "--sizes") for (const auto& s : split(value())) a.sizes.push_back(std::atof(s.c_str()));
-    else if (k == "--alpha") a.alpha = std::atof(value().c_str());
-    else if (k == "--json") a.json = value();
-    else if (k == "--verbose") a.verbose = true;
-    else if (k == "--oracle-only") a.oracle_only = true;
-    else if (k == "--reference-nulls") a.reference_nulls = true;
-    else if (k == "--corner-hz") a.corner_hz = std::atof(value().c_str());
-    else if (k == "--measurement-noise") a.measurement_noise = std::atof(value().c_str());
-    else if (k == "--process-noise") a.process_noise = std::atof(value().c_str());
-    else if (k == "--cutoff-hz") a.cutoff_hz = std::atof(value().c_str());
-    else if (k == "--heldout-sigmas") a.heldout_sigmas = std::atof(value().c_str());
+    if (k == "--records")
+      a.records = std::atoi(value().c_str());
+    else if (k == "--nulls")
+      a.nulls = std::atoi(value().c_str());
+    else if (k == "--forms")
+      a.forms = split(value());
+    else if (k == "--sizes")
+      for (const auto& s : split(value())) a.sizes.push_back(std::atof(s.c_str()));
+    else if (k == "--alpha")
+      a.alpha = std::atof(value().c_str());
+    else if (k == "--json")
+      a.json = value();
+    else if (k == "--verbose")
+      a.verbose = true;
+    else if (k == "--oracle-only")
+      a.oracle_only = true;
+    else if (k == "--reference-nulls")
+      a.reference_nulls = true;
+    else if (k == "--corner-hz")
+      a.corner_hz = std::atof(value().c_str());
+    else if (k == "--measurement-noise")
+      a.measurement_noise = std::atof(value().c_str());
+    else if (k == "--process-noise")
+      a.process_noise = std::atof(value().c_str());
+    else if (k == "--cutoff-hz")
+      a.cutoff_hz = std::atof(value().c_str());
+    else if (k == "--heldout-sigmas")
+      a.heldout_sigmas = std::atof(value().c_str());
     else {
-      std::fprintf(stderr, "usage: bench_discrepancy_oracle [--records N] [--nulls M] [--forms a,b] [--sizes x,y]"
-                           " [--alpha A] [--json FILE] [--verbose] [--oracle-only] [--corner-hz F]"
-                           " [--measurement-noise K] [--process-noise K] [--cutoff-hz F] [--heldout-sigmas S]"
-                           " [--reference-nulls]\n");
+      std::fprintf(stderr,
+                   "usage: bench_discrepancy_oracle [--records N] [--nulls M] [--forms a,b] [--sizes x,y]"
+                   " [--alpha A] [--json FILE] [--verbose] [--oracle-only] [--corner-hz F]"
+                   " [--measurement-noise K] [--process-noise K] [--cutoff-hz F] [--heldout-sigmas S]"
+                   " [--reference-nulls]\n");
       std::exit(2);
     }
   }
@@ -163,8 +178,8 @@ std::string form_key(std::string text) {
 
 enum Kind { kRight, kOtherTerm, kLibrary, kAmbiguous, kUnexplained, kGust, kNone, kKinds };
 const char* kind_name(int k) {
-  static const char* names[] = {"right form", "another term", "library name", "ambiguous", "unexplained",
-                                "side gust alone", "none"};
+  static const char* names[] = {"right form",  "another term",    "library name", "ambiguous",
+                                "unexplained", "side gust alone", "none"};
   return names[k];
 }
 
@@ -251,7 +266,8 @@ gen::Record fly_record(const Args& args, const std::string& form, double size, s
     if (!rec.diverged) return rec;
     ++refused;
     std::printf("  refused: %s size %g seed %llu (set %d, %.1f s): the loop diverged\n",
-                form.empty() ? "null" : form.c_str(), size, static_cast<unsigned long long>(s), 1 + index % 5, duration);
+                form.empty() ? "null" : form.c_str(), size, static_cast<unsigned long long>(s), 1 + index % 5,
+                duration);
   }
 }
 
@@ -275,7 +291,8 @@ Cell run_cell(const Args& args, const gen::FormSpec& form, std::size_t form_inde
     } catch (const std::exception& e) {
       if (c.untestable == 0) std::printf("  oracle %s: %s not testable: %s\n", form.name, text.c_str(), e.what());
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds, args.cutoff_hz, args.heldout_sigmas);
+    const DiscrepancyResult r =
+        run_workflow(rec.data, *ms, oracle, args.oracle_only, c.seconds, args.cutoff_hz, args.heldout_sigmas);
     ++c.records;
     if (oracle.empty() || r.term_tests.empty() || !r.term_tests[0].note.empty()) ++c.untestable;
     const double p = r.term_tests.empty() ? 1.0 : r.term_tests[0].p_value;
@@ -289,9 +306,9 @@ Cell run_cell(const Args& args, const gen::FormSpec& form, std::size_t form_inde
     if (k == kOtherTerm) ++c.other_terms[label];
     if (k == kLibrary) ++c.library[label];
     if (args.verbose)
-      std::printf("  %s size %g seed %llu set %d %.1f s: oracle %s p %.3g%s%s; %s%s%s (max |p| %.1f rad/s)\n", form.name,
-                  size, static_cast<unsigned long long>(rec.scenario.seed), 1 + i % 5, duration, text.c_str(), p,
-                  r.term_tests.empty() || r.term_tests[0].note.empty() ? "" : " ",
+      std::printf("  %s size %g seed %llu set %d %.1f s: oracle %s p %.3g%s%s; %s%s%s (max |p| %.1f rad/s)\n",
+                  form.name, size, static_cast<unsigned long long>(rec.scenario.seed), 1 + i % 5, duration,
+                  text.c_str(), p, r.term_tests.empty() || r.term_tests[0].note.empty() ? "" : " ",
                   r.term_tests.empty() ? "" : r.term_tests[0].note.c_str(), kind_name(k), label.empty() ? "" : ": ",
                   label.c_str(), rec.max_p);
     if (args.verbose && (k == kNone || k == kOtherTerm)) {
@@ -325,13 +342,12 @@ std::string listing(const std::map<std::string, int>& m) {
 
 void print_form(const gen::FormSpec& form, const std::vector<Cell>& cells, double alpha, bool has_calibration) {
   std::printf("\n%s (oracle %s: %s)\n", form.name, form.equation, form.expression);
-  std::printf("  %6s %4s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s\n", "size", "n", "oracle", "or.cal", "or.iv", "detect",
-              "right", "o.term", "lib", "ambig", "unexpl", "gust", "none", "refuse", "right/or");
+  std::printf("  %6s %4s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s\n", "size", "n", "oracle", "or.cal",
+              "or.iv", "detect", "right", "o.term", "lib", "ambig", "unexpl", "gust", "none", "refuse", "right/or");
   for (const Cell& c : cells) {
-    std::printf("  %6g %4d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %8s\n", c.size, c.records, c.oracle, c.oracle_cal,
-                c.oracle_iv, c.detected,
-                c.kinds[kRight], c.kinds[kOtherTerm], c.kinds[kLibrary], c.kinds[kAmbiguous], c.kinds[kUnexplained],
-                c.kinds[kGust], c.kinds[kNone], c.refused,
+    std::printf("  %6g %4d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %6d %8s\n", c.size, c.records, c.oracle,
+                c.oracle_cal, c.oracle_iv, c.detected, c.kinds[kRight], c.kinds[kOtherTerm], c.kinds[kLibrary],
+                c.kinds[kAmbiguous], c.kinds[kUnexplained], c.kinds[kGust], c.kinds[kNone], c.refused,
                 c.oracle ? (std::to_string(c.kinds[kRight]) + "/" + std::to_string(c.oracle)).c_str() : "-");
     if (c.untestable) std::printf("         the oracle could not be tested on %d records\n", c.untestable);
     if (!c.other_terms.empty()) std::printf("         another term: %s\n", listing(c.other_terms).c_str());
@@ -357,10 +373,11 @@ void print_form(const gen::FormSpec& form, const std::vector<Cell>& cells, doubl
       continue;
     }
     const Proportion o = wilson(hits(*at90), at90->records), r = wilson(right, n);
-    std::printf("  %s 90 %%-power size %g (%d of %d, 95 %% %.0f-%.0f %%); right form at sizes >= it: %d of %d "
-                "(%.0f %%, 95 %% %.0f-%.0f %%; target >= 80 %%)\n",
-                which, at90->size, hits(*at90), at90->records, 100 * o.lo, 100 * o.hi, right, n,
-                n ? 100.0 * right / n : 0.0, 100 * r.lo, 100 * r.hi);
+    std::printf(
+        "  %s 90 %%-power size %g (%d of %d, 95 %% %.0f-%.0f %%); right form at sizes >= it: %d of %d "
+        "(%.0f %%, 95 %% %.0f-%.0f %%; target >= 80 %%)\n",
+        which, at90->size, hits(*at90), at90->records, 100 * o.lo, 100 * o.hi, right, n, n ? 100.0 * right / n : 0.0,
+        100 * r.lo, 100 * r.hi);
   }
 }
 
@@ -400,14 +417,17 @@ NullTally run_nulls(const Args& args) {
       } catch (const std::exception&) {
       }
     }
-    const DiscrepancyResult r = run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds, args.cutoff_hz, args.heldout_sigmas);
+    const DiscrepancyResult r =
+        run_workflow(rec.data, *ms, oracle, args.oracle_only, t.seconds, args.cutoff_hz, args.heldout_sigmas);
     ++t.records;
     for (std::size_t k = 0; k < r.term_tests.size() && k < names.size(); ++k) {
       if (!r.term_tests[k].note.empty()) continue;
       ++t.oracle_tested[names[k]];
       t.oracle_p[names[k]].push_back(r.term_tests[k].p_value);
-      if (r.term_tests[k].sigma > 0.0) t.oracle_z[names[k]].push_back(r.term_tests[k].coefficient / r.term_tests[k].sigma);
-      if (r.term_tests[k].iv_sigma > 0.0) t.iv_z[names[k]].push_back(r.term_tests[k].iv_coefficient / r.term_tests[k].iv_sigma);
+      if (r.term_tests[k].sigma > 0.0)
+        t.oracle_z[names[k]].push_back(r.term_tests[k].coefficient / r.term_tests[k].sigma);
+      if (r.term_tests[k].iv_sigma > 0.0)
+        t.iv_z[names[k]].push_back(r.term_tests[k].iv_coefficient / r.term_tests[k].iv_sigma);
       if (r.term_tests[k].iv_p_value <= args.alpha) ++t.iv_rejects[names[k]];
       if (r.term_tests[k].p_value <= args.alpha) ++t.oracle_rejects[names[k]];
     }
@@ -416,7 +436,8 @@ NullTally run_nulls(const Args& args) {
     if (k != kNone) {
       ++t.alarms;
       char buf[512];
-      std::snprintf(buf, sizeof buf, "null seed %llu (set %d, %.1f s, disturbance corners L %.1f Hz, Y %.1f Hz): %s%s%s",
+      std::snprintf(buf, sizeof buf,
+                    "null seed %llu (set %d, %.1f s, disturbance corners L %.1f Hz, Y %.1f Hz): %s%s%s",
                     static_cast<unsigned long long>(rec.scenario.seed), 1 + i % 5, duration, rec.scenario.corner_L_hz,
                     rec.scenario.corner_Y_hz, r.verdict.c_str(), label.empty() ? "" : ": ", label.c_str());
       t.alarm_lines.push_back(buf);
@@ -489,10 +510,11 @@ void write_json(const std::string& file, const Args& args, const std::map<std::s
     first_form = false;
     for (std::size_t i = 0; i < list.size(); ++i) {
       const Cell& c = list[i];
-      std::fprintf(f,
-                   "%s\n    {\"size\": %g, \"records\": %d, \"refused\": %d, \"oracle\": %d, \"oracle_calibrated\": %d, "
-                   "\"detected\": %d",
-                   i ? "," : "", c.size, c.records, c.refused, c.oracle, c.oracle_cal, c.detected);
+      std::fprintf(
+          f,
+          "%s\n    {\"size\": %g, \"records\": %d, \"refused\": %d, \"oracle\": %d, \"oracle_calibrated\": %d, "
+          "\"detected\": %d",
+          i ? "," : "", c.size, c.records, c.refused, c.oracle, c.oracle_cal, c.detected);
       const char* keys[] = {"right", "another_term", "library_name", "ambiguous", "unexplained", "gust", "none"};
       for (int k = 0; k < kKinds; ++k) std::fprintf(f, ", \"%s\": %d", keys[k], c.kinds[k]);
       std::fprintf(f, ", \"oracle_instrumented\": %d, \"seconds\": %.3f}", c.oracle_iv, c.seconds);

@@ -44,9 +44,12 @@ struct OutsideForm {
 
 const std::vector<OutsideForm>& outside_forms() {
   static const std::vector<OutsideForm> forms{
-      {"flap_asymmetry", "", "delta_f", "pos(delta_f)"},       {"cubic_roll_damping", "p_dot", "p", "p^3"},
-      {"flap_dead_zone", "", "delta_f", "deadzone(delta_f,"},   {"flap_backlash", "", "delta_f", "backlash(delta_f,"},
-      {"flap_lag", "", "delta_f", "lag(delta_f,"},              {"roll_inflow_only", "p_dot", "v", "v*abs(v)"},
+      {"flap_asymmetry", "", "delta_f", "pos(delta_f)"},
+      {"cubic_roll_damping", "p_dot", "p", "p^3"},
+      {"flap_dead_zone", "", "delta_f", "deadzone(delta_f,"},
+      {"flap_backlash", "", "delta_f", "backlash(delta_f,"},
+      {"flap_lag", "", "delta_f", "lag(delta_f,"},
+      {"roll_inflow_only", "p_dot", "v", "v*abs(v)"},
   };
   return forms;
 }
@@ -83,7 +86,8 @@ Tally measure(const DiscrepancyOptions& opt, const char* title) {
   for (const OutsideForm& form : outside_forms()) {
     Tally& t = tallies[form.name];
     for (int i = 0; i < per_form; ++i) {
-      const std::uint64_t seed = 50000u + 1000u * static_cast<std::uint64_t>(form_index) + static_cast<std::uint64_t>(i);
+      const std::uint64_t seed =
+          50000u + 1000u * static_cast<std::uint64_t>(form_index) + static_cast<std::uint64_t>(i);
       std::mt19937_64 rng(seed * 31u + 7u);
       std::uniform_real_distribution<double> u(0.0, 1.0);
       const int set = 1 + i % 5;
@@ -113,11 +117,13 @@ Tally measure(const DiscrepancyOptions& opt, const char* title) {
           for (const auto& [k, v] : c.signature) std::printf(" %s %.3g", k.c_str(), v);
           std::printf("\n");
         }
-      } else if (r.verdict == "effects" && std::any_of(r.effects.begin(), r.effects.end(), [](const NamedEffect& e) { return e.name == "term"; })) {
+      } else if (r.verdict == "effects" && std::any_of(r.effects.begin(), r.effects.end(),
+                                                       [](const NamedEffect& e) { return e.name == "term"; })) {
         bool right = false;
         for (const auto& e : r.effects) {
           if (e.name != "term") continue;
-          const bool eq_ok = std::string(form.output).empty() || (std::string(form.output) == "p_dot") == (e.equation == "L");
+          const bool eq_ok =
+              std::string(form.output).empty() || (std::string(form.output) == "p_dot") == (e.equation == "L");
           if (eq_ok && e.expression.rfind(form.expression, 0) == 0) right = true;
           // The form without its scanned number: "deadzone(delta_f" for "deadzone(delta_f, 1.5)".
           ++t.names["term " + e.equation + ": " + e.expression.substr(0, e.expression.find(','))];
@@ -159,7 +165,8 @@ Tally measure(const DiscrepancyOptions& opt, const char* title) {
   print_row("all", all);
   for (const OutsideForm& form : outside_forms())
     for (const auto& [n, k] : tallies[form.name].names) std::printf("  %s: named %s in %d\n", form.name, n.c_str(), k);
-  std::printf("workflow time: %.2f s over %d records (%.3f s each)\n", all.seconds, all.records, all.seconds / all.records);
+  std::printf("workflow time: %.2f s over %d records (%.3f s each)\n", all.seconds, all.records,
+              all.seconds / all.records);
   return all;
 }
 
@@ -173,10 +180,11 @@ int main(int argc, char** argv) {
     opt.signature_checks = false;
     opt.term_search = false;
   }
-  const Tally all = measure(opt, closed ? "closed world (no signature checks, no term search)" : "the workflow's defaults");
+  const Tally all =
+      measure(opt, closed ? "closed world (no signature checks, no term search)" : "the workflow's defaults");
   const Proportion p = wilson(all.wrong_name, all.records);
   std::printf("\nwrong names: %d of %d (%.1f %%, 95 %% %.1f-%.1f %%; target: at most 2 %%); the form found: %d of %d\n",
-              all.wrong_name, all.records, 100.0 * all.wrong_name / all.records, 100.0 * p.lo, 100.0 * p.hi, all.term_right,
-              all.records);
+              all.wrong_name, all.records, 100.0 * all.wrong_name / all.records, 100.0 * p.lo, 100.0 * p.hi,
+              all.term_right, all.records);
   return 0;
 }

@@ -39,14 +39,15 @@ struct Case {
 };
 
 const std::vector<Case>& cases() {
-  static const std::vector<Case> c{{{"sensor_scale"}, {"sensor_scale"}},
-                                   {{"time_offset"}, {"time_offset"}},
-                                   {{"clock_drift"}, {"clock_drift"}},
-                                   {{"sensor_bias"}, {"sensor_bias"}},
-                                   {{"actuator_delay"}, {"actuator_delay"}},
-                                   {{"sensor_scale", "time_offset", "sensor_bias"}, {"sensor_scale", "time_offset", "sensor_bias"}},
-                                   {{"time_offset", "actuator_delay"}, {"time_offset", "actuator_delay"}},
-                                   {{"sensor_scale", "lateral_inflow"}, {"sensor_scale", "lateral_inflow"}}};
+  static const std::vector<Case> c{
+      {{"sensor_scale"}, {"sensor_scale"}},
+      {{"time_offset"}, {"time_offset"}},
+      {{"clock_drift"}, {"clock_drift"}},
+      {{"sensor_bias"}, {"sensor_bias"}},
+      {{"actuator_delay"}, {"actuator_delay"}},
+      {{"sensor_scale", "time_offset", "sensor_bias"}, {"sensor_scale", "time_offset", "sensor_bias"}},
+      {{"time_offset", "actuator_delay"}, {"time_offset", "actuator_delay"}},
+      {{"sensor_scale", "lateral_inflow"}, {"sensor_scale", "lateral_inflow"}}};
   return c;
 }
 
@@ -112,8 +113,8 @@ int stress(int n) {
       o.k_phi *= gain;
       o.k_p *= gain;
       const test::ModelSet& ms = test::model_set(1 + i % 5);
-      const CompatibilityResult c = check_compatibility(test::generate_flight(ms.model, ms.vehicle, h, o), opt.processing,
-                                                        opt.compatibility, 7.74e-6, opt.folds, 16);
+      const CompatibilityResult c = check_compatibility(test::generate_flight(ms.model, ms.vehicle, h, o),
+                                                        opt.processing, opt.compatibility, 7.74e-6, opt.folds, 16);
       bool other = false;
       for (const SensorError& e : c.errors) {
         if (!e.significant) continue;
@@ -142,8 +143,9 @@ int main(int argc, char** argv) {
   const DiscrepancyOptions opt;
   double stage_s = 0.0;
   int stage_runs = 0;
-  std::printf("case (hidden -> name)              records  named (right sign)  true value in 95 %% interval  median |error|  "
-              "records with a wrong name\n");
+  std::printf(
+      "case (hidden -> name)              records  named (right sign)  true value in 95 %% interval  median |error|  "
+      "records with a wrong name\n");
   int index = 0;
   for (const Case& c : cases()) {
     std::map<std::string, int> named, inside;
@@ -193,8 +195,8 @@ int main(int argc, char** argv) {
       char cover[32] = "-";
       if (interval) std::snprintf(cover, sizeof cover, "%d of %d", inside[name], named[name]);
       std::printf("%-38s %4d  %4d %5.1f%% [%4.1f,%5.1f]  %-10s  %.3g  %s\n", label.c_str(), per_case, named[name],
-                  100.0 * named[name] / per_case, 100.0 * pn.lo, 100.0 * pn.hi, cover, e.empty() ? 0.0 : e[e.size() / 2],
-                  k == 0 ? std::to_string(wrong).c_str() : "");
+                  100.0 * named[name] / per_case, 100.0 * pn.lo, 100.0 * pn.hi, cover,
+                  e.empty() ? 0.0 : e[e.size() / 2], k == 0 ? std::to_string(wrong).c_str() : "");
     }
     for (const auto& [w, k] : wrongs) std::printf("      wrong:%s x%d\n", w.c_str(), k);
     ++index;
@@ -220,7 +222,7 @@ int main(int argc, char** argv) {
                 100.0 * alarms / nulls, 100.0 * pa.hi);
     for (const auto& [s, k] : said) std::printf("      %s x%d\n", s.c_str(), k);
   }
-  std::printf("compatibility stage: %.1f ms per record (%d records of 20-40 s)\n", 1e3 * stage_s / std::max(1, stage_runs),
-              stage_runs);
+  std::printf("compatibility stage: %.1f ms per record (%d records of 20-40 s)\n",
+              1e3 * stage_s / std::max(1, stage_runs), stage_runs);
   return 0;
 }

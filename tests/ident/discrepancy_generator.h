@@ -81,30 +81,30 @@
 namespace nimble::ident::test {
 
 struct HiddenEffects {
-  std::set<std::string> on;   ///< effect names (see the file comment)
-  double scale = 1.0;         ///< multiplies every drawn magnitude (small effects: << 1)
+  std::set<std::string> on;  ///< effect names (see the file comment)
+  double scale = 1.0;        ///< multiplies every drawn magnitude (small effects: << 1)
   double Y_vv = 0.0, L_vv = 0.0, k_speed = 0.0, delay_s = 0.0, bias_p = 0.0;
   double flap_hz = 17.0, flap_L = 0.0, flap_Y = 0.0, flap_phase1 = 0.0, flap_phase2 = 0.0;
-  double drift_per_min = 0.0;   ///< effectiveness_drift: r [1/min]
-  double step_fraction = 0.0;   ///< effectiveness_step: f
-  double step_at = 0.5;         ///< effectiveness_step: t* as a fraction of the record's length
+  double drift_per_min = 0.0;  ///< effectiveness_drift: r [1/min]
+  double step_fraction = 0.0;  ///< effectiveness_step: f
+  double step_at = 0.5;        ///< effectiveness_step: t* as a fraction of the record's length
   // Out-of-library forms (see the file comment).
-  double asym = 0.0;            ///< flap_asymmetry: a
-  double cubic_c = 0.0;         ///< cubic_roll_damping: c
-  double dead_zone = 0.0;       ///< flap_dead_zone: z [rad/s]
-  double backlash = 0.0;        ///< flap_backlash: b [rad/s]
-  double lag_s = 0.0;           ///< flap_lag: tau [s]
-  double L_vv_only = 0.0;       ///< roll_inflow_only: L_vo [N m s^2/m^2]
+  double asym = 0.0;                  ///< flap_asymmetry: a
+  double cubic_c = 0.0;               ///< cubic_roll_damping: c
+  double dead_zone = 0.0;             ///< flap_dead_zone: z [rad/s]
+  double backlash = 0.0;              ///< flap_backlash: b [rad/s]
+  double lag_s = 0.0;                 ///< flap_lag: tau [s]
+  double L_vv_only = 0.0;             ///< roll_inflow_only: L_vo [N m s^2/m^2]
   double load_L = 0.0, load_Y = 0.0;  ///< constant_load: L0 [N m], Y0 [N]
-  double scale_k = 0.0;         ///< sensor_scale: k
-  double offset_s = 0.0;        ///< time_offset: tau [s]
-  double drift_ppm = 0.0;       ///< clock_drift: d [ppm]
+  double scale_k = 0.0;               ///< sensor_scale: k
+  double offset_s = 0.0;              ///< time_offset: tau [s]
+  double drift_ppm = 0.0;             ///< clock_drift: d [ppm]
 };
 
 struct GeneratorOptions {
   double duration_s = 40.0;
   double rate_hz = 512.0;
-  double doublet_amplitude_rad = 0.6;         ///< 34 deg, the rig's identification doublet (35 deg)
+  double doublet_amplitude_rad = 0.6;  ///< 34 deg, the rig's identification doublet (35 deg)
   /// PD on the roll error [rad/s per rad, per rad/s]: half the rig's fast gains through the
   /// roll map (1.406 and 0.2 per unit times 125 rad/s), so that the loop stays stable with the
   /// 40 ms delays the generator hides.
@@ -211,7 +211,9 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     return 0.0;
   };
   const double ph_w = 2.0 * M_PI * std::uniform_real_distribution<double>(0.0, 1.0)(rng);
-  auto w_of = [&](double t) { return w0 - 0.6 * std::sin(2.0 * M_PI * t / 13.0 + ph_w) - 0.3 * std::sin(2.0 * M_PI * t / 5.3); };
+  auto w_of = [&](double t) {
+    return w0 - 0.6 * std::sin(2.0 * M_PI * t / 13.0 + ph_w) - 0.3 * std::sin(2.0 * M_PI * t / 5.3);
+  };
   auto u_of = [&](double t) { return 0.6 + 0.6 * std::sin(2.0 * M_PI * t / 11.0 + ph_w); };
 
   // State: p, v, phi, delta_f, v_gust.
@@ -224,7 +226,10 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
     const double td = t - h.delay_s;
     double val = 0.0;
     for (const auto& [ti, di] : df_hist) {
-      if (ti <= td) val = di; else break;
+      if (ti <= td)
+        val = di;
+      else
+        break;
     }
     return val;
   };
@@ -351,6 +356,5 @@ inline FlightData generate_flight(const DerivativeModel& model, const Vehicle& v
   }
   return d;
 }
-
 
 }  // namespace nimble::ident::test

@@ -260,7 +260,7 @@ struct Hidden {
   double size = 1.0;
   double Lp3 = 0.0, L_phi = 0.0, Y_phi = 0.0, c_rate = 0.0, asym = 0.0, dead_zone = 0.0, L_vo = 0.0;
   double Y_vv = 0.0, L_vv = 0.0;
-  double k_rate = 1.0, k_sat = 1.0;      ///< the rate limit's and saturation's factors k
+  double k_rate = 1.0, k_sat = 1.0;           ///< the rate limit's and saturation's factors k
   double rate_limit = 0.0, saturation = 0.0;  ///< r [rad/s per s], s [rad/s], from the record's references
 };
 
@@ -493,7 +493,7 @@ inline Record generate(const std::string& form, double size, std::uint64_t seed,
 }
 
 /// The model sets the records are flown with (tests/ident/model_sets.h).
-using test::ModelSet;
 using test::model_set;
+using test::ModelSet;
 
 }  // namespace nimble::ident::test_open

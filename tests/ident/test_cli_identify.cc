@@ -32,10 +32,7 @@ using namespace nimble::ident;
 
 namespace {
 
-
-fs::path work_dir() {
-  return fs::path(nimble::test::scratch_file("test_cli_identify", "")).parent_path();
-}
+fs::path work_dir() { return fs::path(nimble::test::scratch_file("test_cli_identify", "")).parent_path(); }
 
 using nimble::test::run_rig;
 using nimble::test::slurp;
@@ -210,8 +207,9 @@ TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histori
   std::ifstream dat(plots / "closed_loop.dat");
   std::string header, line;
   std::getline(dat, header);
-  for (const char* column : {" t_s ", " p:measured ", " p:simulated ", " phi:measured ", " phi:simulated ",
-                             " phi:phi_sp ", " phi:phi_ref ", " v:measured ", " v:simulated ", " delta_f:measured ", " delta_f:simulated "}) {
+  for (const char* column :
+       {" t_s ", " p:measured ", " p:simulated ", " phi:measured ", " phi:simulated ", " phi:phi_sp ", " phi:phi_ref ",
+        " v:measured ", " v:simulated ", " delta_f:measured ", " delta_f:simulated "}) {
     INFO(column);
     CHECK((header + " ").find(column) != std::string::npos);
   }
@@ -227,7 +225,8 @@ TEST_CASE("rig validate --closed-loop --plots draws the closed-loop time histori
   CHECK(rows == j["samples"].as<long>());
   CHECK(columns == 11);
   const std::string script = slurp((plots / "closed_loop.gp").string());
-  for (const char* panel : {"p ", "phi ", "v ", "delta_f "}) CHECK(script.find(std::string("set title '") + panel) != std::string::npos);
+  for (const char* panel : {"p ", "phi ", "v ", "delta_f "})
+    CHECK(script.find(std::string("set title '") + panel) != std::string::npos);
 
   const Result missing = run_rig("validate " + ident::test::kConfigs + "models/nimble_lateral_set1.yaml " +
                                      flight_csv() + " --closed-loop --plots " + plots.string(),
@@ -393,9 +392,10 @@ std::pair<std::string, double> short_flight_csv(const std::string& name, double 
 
 }  // namespace
 
-TEST_CASE("rig identify, validate and discrepancy refuse a diverged record with exit code 2, naming its first bad "
-          "sample's time, column and bound",
-          "[cli][bad_data]") {
+TEST_CASE(
+    "rig identify, validate and discrepancy refuse a diverged record with exit code 2, naming its first bad "
+    "sample's time, column and bound",
+    "[cli][bad_data]") {
   const auto [csv, t_bad] = short_flight_csv("diverged.csv", 4.0, true);
   REQUIRE(t_bad > 1.5);
   const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1.yaml";
@@ -415,9 +415,10 @@ TEST_CASE("rig identify, validate and discrepancy refuse a diverged record with 
   }
 }
 
-TEST_CASE("rig identify completes on a 2.5 s record, the whiteness test skipped with a note saying how long a record "
-          "it needs, in the text and the JSON",
-          "[cli][bad_data]") {
+TEST_CASE(
+    "rig identify completes on a 2.5 s record, the whiteness test skipped with a note saying how long a record "
+    "it needs, in the text and the JSON",
+    "[cli][bad_data]") {
   const std::string csv = short_flight_csv("short.csv", 2.5, false).first;
   const std::string note =
       "whiteness skipped: needs at least 2.79 s of data at this decimation (50 lags of 28 samples, 1429 samples at "
@@ -444,20 +445,23 @@ TEST_CASE("a plant term flown in process is recovered by rig identify --terms an
   const fs::path dir = work_dir();
   const std::string log = (dir / "terms.lcmlog").string();
   const double truth = -2.0e-5;
-  const Result flight = run_rig("run " + ident::test::kConfigs + "id_doublet_train_fast.yaml --clock inprocess --seed 1 --log " +
-                                log + " --set 'plant.terms=[{equation: L, expression: \"p^3\", coefficient: -2.0e-5}]'");
+  const Result flight =
+      run_rig("run " + ident::test::kConfigs + "id_doublet_train_fast.yaml --clock inprocess --seed 1 --log " + log +
+              " --set 'plant.terms=[{equation: L, expression: \"p^3\", coefficient: -2.0e-5}]'");
   INFO(flight.out << flight.err);
   REQUIRE(flight.exit_code == 0);
 
   const std::string set1 = slurp(ident::test::kConfigs + "models/nimble_lateral_set1.yaml");
   std::string base = set1;
-  base.replace(base.find("vehicle: ../vehicles/nimble_no_wifi.yaml"), std::string("vehicle: ../vehicles/nimble_no_wifi.yaml").size(),
+  base.replace(base.find("vehicle: ../vehicles/nimble_no_wifi.yaml"),
+               std::string("vehicle: ../vehicles/nimble_no_wifi.yaml").size(),
                "vehicle: " + ident::test::kConfigs + "vehicles/nimble_no_wifi.yaml");
   const std::string with_term = (dir / "set1_p3.yaml").string();
   std::ofstream(with_term) << base << "terms:\n  - {equation: L, expression: \"p^3\", coefficient: 0}\n";
 
   const std::string json = (dir / "terms_ident.json").string(), fitted = (dir / "fitted.yaml").string();
-  const Result id = run_rig("identify " + log + " --w0 -0.30 --terms " + with_term + " --json " + json + " --model-out " + fitted);
+  const Result id =
+      run_rig("identify " + log + " --w0 -0.30 --terms " + with_term + " --json " + json + " --model-out " + fitted);
   INFO(id.out << id.err);
   REQUIRE(id.exit_code == 0);
   CHECK(id.out.find("L:p^3") != std::string::npos);

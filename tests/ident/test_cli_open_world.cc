@@ -23,9 +23,7 @@ using namespace nimble;
 
 namespace {
 
-fs::path work_dir() {
-  return fs::path(nimble::test::scratch_file("test_open_world", "")).parent_path();
-}
+fs::path work_dir() { return fs::path(nimble::test::scratch_file("test_open_world", "")).parent_path(); }
 
 /// A 24 s identification flight: the 7 and 4 Hz train's doublets and two slower ones, four times
 /// over (one 6 s train holds too few independent blocks for the term's confirmation through the
@@ -37,7 +35,8 @@ std::string long_train_scenario(const fs::path& dir) {
        "throttle_factor: auto\nsegments:\n  - {kind: hold, name: hover_before, duration_s: 1.0}\n";
   int i = 0;
   for (int rep = 0; rep < 4; ++rep) {
-    for (const auto& [f, a] : {std::pair{7.0, 35.0}, std::pair{4.0, 25.0}, std::pair{2.0, 15.0}, std::pair{5.0, 30.0}}) {
+    for (const auto& [f, a] :
+         {std::pair{7.0, 35.0}, std::pair{4.0, 25.0}, std::pair{2.0, 15.0}, std::pair{5.0, 30.0}}) {
       ++i;
       m << "  - {kind: doublet, name: d" << i << ", axis: roll, main_frequency_hz: " << f << ", amplitude_deg: " << a
         << "}\n  - {kind: hold, name: h" << i << ", duration_s: 0.5}\n";
@@ -65,15 +64,17 @@ std::string long_train_scenario(const fs::path& dir) {
 
 }  // namespace
 
-TEST_CASE("an asymmetric flap effectiveness flown by the plant is found by rig discrepancy as the term pos(delta_f) in "
-          "L, not named a sensor bias, written into the model, and the model with it predicts the flight better",
-          "[cli][terms][open_world][heavy]") {
+TEST_CASE(
+    "an asymmetric flap effectiveness flown by the plant is found by rig discrepancy as the term pos(delta_f) in "
+    "L, not named a sensor bias, written into the model, and the model with it predicts the flight better",
+    "[cli][terms][open_world][heavy]") {
   const fs::path dir = work_dir();
   const std::string log = (dir / "asym.lcmlog").string();
   const double truth = 3.5e-5;  // N m per rad/s: a third of set 1's L_df more for delta_f > 0
   using test::run_rig;
-  const auto flight = run_rig("run " + long_train_scenario(dir) + " --clock inprocess --seed 1 --log " + log +
-                              " --set 'plant.terms=[{equation: L, expression: \"pos(delta_f)\", coefficient: 3.5e-5}]'");
+  const auto flight =
+      run_rig("run " + long_train_scenario(dir) + " --clock inprocess --seed 1 --log " + log +
+              " --set 'plant.terms=[{equation: L, expression: \"pos(delta_f)\", coefficient: 3.5e-5}]'");
   INFO(flight.out << flight.err);
   REQUIRE(flight.exit_code == 0);
 
@@ -137,9 +138,10 @@ TEST_CASE("an asymmetric flap effectiveness flown by the plant is found by rig d
   fs::remove_all(dir);
 }
 
-TEST_CASE("a flap whose rate is limited, flown by the plant, is found by rig discrepancy as ratelimit(delta_f, r) in L "
-          "with the flown limit inside r's interval and no library name, and --test-term reports the form as given",
-          "[cli][terms][open_world]") {
+TEST_CASE(
+    "a flap whose rate is limited, flown by the plant, is found by rig discrepancy as ratelimit(delta_f, r) in L "
+    "with the flown limit inside r's interval and no library name, and --test-term reports the form as given",
+    "[cli][terms][open_world]") {
   // The data-compatibility train (three 7 and 4 Hz identification trains, 18 s): the flapping-
   // frequency difference moves at up to about 1,400 rad/s^2, so a limit of 900 acts in the fast
   // parts of the doublets only. The plant's forces see the limited input, the log the actuator's.
@@ -148,15 +150,16 @@ TEST_CASE("a flap whose rate is limited, flown by the plant, is found by rig dis
   const double limit = 900.0;  // rad/s per s
   const std::string form = "\"ratelimit(delta_f, 900) - delta_f\"";
   using test::run_rig;
-  const auto flight = run_rig("run " + ident::test::kConfigs + "compat_doublet_train.yaml --clock inprocess --seed 1 --log " +
-                              log + " --set pilot.enabled=false --set sensing.imu.vibration_enabled=false" +
-                              " --set 'plant.terms=[{equation: L, expression: " + form + ", coefficient: 1.06e-4}, " +
-                              "{equation: Y, expression: " + form + ", coefficient: -8.63e-4}]'");
+  const auto flight =
+      run_rig("run " + ident::test::kConfigs + "compat_doublet_train.yaml --clock inprocess --seed 1 --log " + log +
+              " --set pilot.enabled=false --set sensing.imu.vibration_enabled=false" +
+              " --set 'plant.terms=[{equation: L, expression: " + form + ", coefficient: 1.06e-4}, " +
+              "{equation: Y, expression: " + form + ", coefficient: -8.63e-4}]'");
   INFO(flight.out << flight.err);
   REQUIRE(flight.exit_code == 0);
   const std::string model = ident::test::kConfigs + "models/nimble_lateral_set1_kinematic.yaml";
-  const auto d = run_rig("discrepancy " + log + " --model " + model + " --test-term 'L: ratelimit(delta_f, 900)' --json " +
-                         report);
+  const auto d = run_rig("discrepancy " + log + " --model " + model +
+                         " --test-term 'L: ratelimit(delta_f, 900)' --json " + report);
   INFO(d.out << d.err);
   REQUIRE(d.exit_code == 0);
   const YAML::Node j = YAML::LoadFile(report);

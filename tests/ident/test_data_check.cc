@@ -73,9 +73,10 @@ std::string refusal(F&& f) {
 
 }  // namespace
 
-TEST_CASE("bad data: a diverged record is refused by identify, validate and discrepancy, alone or pooled, naming "
-          "its first bad sample's time, channel and bound",
-          "[data_check][bad_data]") {
+TEST_CASE(
+    "bad data: a diverged record is refused by identify, validate and discrepancy, alone or pooled, naming "
+    "its first bad sample's time, channel and bound",
+    "[data_check][bad_data]") {
   const DerivativeModel model = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   REQUIRE(vehicle.data_bounds.rate_max_radps == 50.0);
@@ -94,11 +95,11 @@ TEST_CASE("bad data: a diverged record is refused by identify, validate and disc
                                      vehicle.file + ", bound data_bounds.rate_max_radps)";
   IdentOptions io;
   io.trim = model.trim;
-  for (const std::string& message :
-       {refusal([&] { identify(bad, vehicle, vehicle.file, io); }),
-        refusal([&] { validate_open_loop(bad, model, vehicle, {}); }),
-        refusal([&] { find_discrepancy(bad, model, vehicle, {}); }),
-        refusal([&] { find_discrepancy(std::vector<FlightData>{good, bad}, model, vehicle, {}); })}) {
+  for (const std::string& message : {refusal([&] { identify(bad, vehicle, vehicle.file, io); }),
+                                     refusal([&] { validate_open_loop(bad, model, vehicle, {}); }),
+                                     refusal([&] { find_discrepancy(bad, model, vehicle, {}); }), refusal([&] {
+                                       find_discrepancy(std::vector<FlightData>{good, bad}, model, vehicle, {});
+                                     })}) {
     INFO(message);
     CHECK(message.rfind(expected_head, 0) == 0);
     CHECK(message.find(expected_where) != std::string::npos);
@@ -127,12 +128,13 @@ TEST_CASE("bad data: a NaN or infinite sample is refused wherever it is, naming 
   IdentOptions io;
   io.trim = model.trim;
   for (const std::string& message : {refusal([&] { identify(bad, vehicle, vehicle.file, io); }),
-                                     refusal([&] { validate_open_loop(bad, model, vehicle, {}); }),
-                                     refusal([&] { find_discrepancy(std::vector<FlightData>{good, bad}, model,
-                                                                    vehicle, {}); })}) {
+                                     refusal([&] { validate_open_loop(bad, model, vehicle, {}); }), refusal([&] {
+                                       find_discrepancy(std::vector<FlightData>{good, bad}, model, vehicle, {});
+                                     })}) {
     // The first bad sample, then every bad sample counted by channel (BoundsTally::refusal()).
     CHECK(message.rfind(expected + "; 2 samples beyond the physical bounds of vehicle file " + vehicle.file +
-                            ": v: 1 sample not finite (value or time), nan " + time_text(v.t_s[k]) + "; delta_f: 1 sample",
+                            ": v: 1 sample not finite (value or time), nan " + time_text(v.t_s[k]) +
+                            "; delta_f: 1 sample",
                         0) == 0);
   }
   // An infinity is refused as well, even in a channel without a bound (psi), and even with every
@@ -145,14 +147,18 @@ TEST_CASE("bad data: a NaN or infinite sample is refused wherever it is, naming 
                     &unbounded.data_bounds.angle_max_rad}) {
     *b = DataBounds::kNone;
   }
-  CHECK(refusal([&] { check_flight_data(inf, unbounded); })
-            .rfind("refused: flight_4.csv: psi = -inf " + time_text(v.t_s[k]) + " is not a finite number; 1 sample ", 0) == 0);
+  CHECK(
+      refusal([&] {
+        check_flight_data(inf, unbounded);
+      }).rfind("refused: flight_4.csv: psi = -inf " + time_text(v.t_s[k]) + " is not a finite number; 1 sample ", 0) ==
+      0);
   CHECK_NOTHROW(check_flight_data(diverged(good), unbounded));
 }
 
-TEST_CASE("short record: identify, validate and discrepancy complete on 2.5 s, the whiteness test skipped with a "
-          "note saying how long a record it needs",
-          "[data_check][bad_data]") {
+TEST_CASE(
+    "short record: identify, validate and discrepancy complete on 2.5 s, the whiteness test skipped with a "
+    "note saying how long a record it needs",
+    "[data_check][bad_data]") {
   const DerivativeModel model = ident::test::set1_model();
   const Vehicle vehicle = load_vehicle(model.vehicle_file);
   const FlightData d = short_flight(2.5, 5);

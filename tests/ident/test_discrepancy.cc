@@ -84,13 +84,15 @@ TEST_CASE("discrepancy: a hidden kinematic coupling is named, its coefficient is
     // The refit Yp comes back to the model's value once the effect is in (Eq 21's bias gone).
     const auto& yp = r.augmented.at("Yp");
     CHECK(std::fabs(yp.value - ident::test::set1().model.at("Yp")) < 4.0 * yp.sigma_coloured + 1e-9);
-    CHECK(std::fabs(r.baseline.at("Yp").value - ident::test::set1().model.at("Yp")) > std::fabs(yp.value - ident::test::set1().model.at("Yp")));
+    CHECK(std::fabs(r.baseline.at("Yp").value - ident::test::set1().model.at("Yp")) >
+          std::fabs(yp.value - ident::test::set1().model.at("Yp")));
   }
 }
 
-TEST_CASE("discrepancy: a lateral gust alone is named lateral_gust from its signature, a deterministic name in at "
-          "most 5 % of 24 records",
-          "[discrepancy][null][records]") {
+TEST_CASE(
+    "discrepancy: a lateral gust alone is named lateral_gust from its signature, a deterministic name in at "
+    "most 5 % of 24 records",
+    "[discrepancy][null][records]") {
   // A side gust drives v and so correlates the equation error with functions of v in closed
   // loop; the confirmation above the gust band removes most of it (6 of 24 records named
   // lateral_inflow without it). The rate is measured, and must not exceed the null rate bound.
@@ -142,9 +144,10 @@ TEST_CASE("discrepancy: a hidden actuator delay (12-40 ms) is named with its del
   CHECK(hits >= 7);
 }
 
-TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named from the recorded command, and with "
-          "no delay the recorded command names nothing",
-          "[discrepancy][records]") {
+TEST_CASE(
+    "discrepancy: a command delay before the actuator (12-40 ms) is named from the recorded command, and with "
+    "no delay the recorded command names nothing",
+    "[discrepancy][records]") {
   // The recorded delta_f is the actuator's output, so the L and Y equations cannot see a delay
   // before the actuator; the actuator equation (delta_f against the recorded command) does.
   // The generator's command path has no latency of its own: command_latency_s 0.
@@ -158,8 +161,9 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
     ident::test::GeneratorOptions o;
     o.seed = static_cast<std::uint64_t>(s);
     o.record_command = true;
-    const DiscrepancyResult r = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
-                                                 ident::test::set1().model, ident::test::set1().vehicle, opt);
+    const DiscrepancyResult r =
+        find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
+                         ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("seed " << s << " delay " << h.delay_s << ": " << r.summary);
     for (const auto& n : names(r)) CHECK(n == "actuator_delay");
     if (named(r, "actuator_delay")) {
@@ -170,8 +174,9 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
       CHECK(r.gap_after < r.gap_before);
     }
     ident::test::HiddenEffects none;
-    const DiscrepancyResult n0 = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, none, o),
-                                                  ident::test::set1().model, ident::test::set1().vehicle, opt);
+    const DiscrepancyResult n0 =
+        find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, none, o),
+                         ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("null seed " << s << ": " << n0.summary);
     null_named += !n0.effects.empty();
     // The actuator equation is part of the model when the command is recorded.
@@ -182,9 +187,10 @@ TEST_CASE("discrepancy: a command delay before the actuator (12-40 ms) is named 
   CHECK(null_named == 0);
 }
 
-TEST_CASE("discrepancy: a hidden lateral inflow is named with the damping sign in two thirds of 24 records and in all "
-          "but one of the upper half of its range, nothing else is named",
-          "[discrepancy][records]") {
+TEST_CASE(
+    "discrepancy: a hidden lateral inflow is named with the damping sign in two thirds of 24 records and in all "
+    "but one of the upper half of its range, nothing else is named",
+    "[discrepancy][records]") {
   // Power grows with the size: Y_vv is drawn from [-0.03, -0.01]; the upper half of the range
   // (|Y_vv| >= 0.02) must be named in all its records but one, the whole range in 16 of 24.
   int hits = 0, large = 0, large_hits = 0;
@@ -250,10 +256,10 @@ TEST_CASE("discrepancy: a hidden flapping forcing (14-20 Hz) is named at its fre
     CHECK(band->lo_hz < h.flap_hz);
     CHECK(band->hi_hz > h.flap_hz);
     CHECK(band->after < 0.5 * band->before);
-    std::printf("flapping forcing %.2f Hz (seed %d): identification band gap %.4g -> %.4g, harmonic 1 band %.2f-%.2f Hz "
-                "%.4g -> %.4g\n",
-                h.flap_hz, static_cast<int>(s), r.gap_before, r.gap_after, band->lo_hz, band->hi_hz, band->before,
-                band->after);
+    std::printf(
+        "flapping forcing %.2f Hz (seed %d): identification band gap %.4g -> %.4g, harmonic 1 band %.2f-%.2f Hz "
+        "%.4g -> %.4g\n",
+        h.flap_hz, static_cast<int>(s), r.gap_before, r.gap_after, band->lo_hz, band->hi_hz, band->before, band->after);
   }
 }
 
@@ -267,8 +273,9 @@ TEST_CASE("discrepancy: a sensor bias is named from the kinematics, and the gap 
     ident::test::draw_magnitudes(h, s);
     ident::test::GeneratorOptions o;
     o.seed = s;
-    const DiscrepancyResult r = find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
-                                                 ident::test::set1().model, ident::test::set1().vehicle, {});
+    const DiscrepancyResult r =
+        find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, h, o),
+                         ident::test::set1().model, ident::test::set1().vehicle, {});
     INFO("seed " << s << " bias " << h.bias_p << ": " << r.summary);
     REQUIRE(r.effects.size() == 1);
     const NamedEffect& e = r.effects.front();
@@ -284,9 +291,10 @@ TEST_CASE("discrepancy: a sensor bias is named from the kinematics, and the gap 
   }
 }
 
-TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexplained, in the side-force equation) "
-          "and, with the open-world search, found as the term v*abs(v) in Y",
-          "[discrepancy][records]") {
+TEST_CASE(
+    "discrepancy: a nonlinearity outside the candidates is located (unexplained, in the side-force equation) "
+    "and, with the open-world search, found as the term v*abs(v) in Y",
+    "[discrepancy][records]") {
   // A lateral inflow at three times its drawn size (Y_vv -0.03..-0.09) with its candidate
   // withheld: no name can explain it. Without the term search the side-force residual is located
   // on v (the state test sees it through the excitation); with it, its form is found. (The false-
@@ -304,7 +312,8 @@ TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexpl
     DiscrepancyOptions opt;
     opt.candidates = {"sensor_bias", "actuator_delay"};
     opt.term_search = false;
-    const DiscrepancyResult closed = find_discrepancy(data, ident::test::set1().model, ident::test::set1().vehicle, opt);
+    const DiscrepancyResult closed =
+        find_discrepancy(data, ident::test::set1().model, ident::test::set1().vehicle, opt);
     INFO("seed " << s << " Y_vv " << h.Y_vv << ", closed world: " << closed.summary);
     CHECK(closed.effects.empty());
     const bool side_force = std::any_of(closed.located.state.begin(), closed.located.state.end(),
@@ -326,14 +335,16 @@ TEST_CASE("discrepancy: a nonlinearity outside the candidates is located (unexpl
       ++found;
     }
   }
-  std::printf("discrepancy locator: lateral inflow (3x) with its candidate withheld located in %d of %d records, its "
-              "form v*abs(v) in Y found in %d\n",
-              located, seeds, found);
+  std::printf(
+      "discrepancy locator: lateral inflow (3x) with its candidate withheld located in %d of %d records, its "
+      "form v*abs(v) in Y found in %d\n",
+      located, seeds, found);
   CHECK(located >= seeds - 1);
   CHECK(found >= seeds - 1);
 }
 
-TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguous, naming both", "[discrepancy][heavy]") {
+TEST_CASE("discrepancy: two candidates that explain the same thing give ambiguous, naming both",
+          "[discrepancy][heavy]") {
   // The dihedral acts (thesis Table B.2 derivatives); the record's yaw rate follows the dihedral,
   // so yaw_coupling explains the same residual as dihedral_coupling.
   for (std::uint64_t s = 1; s <= 2; ++s) {
@@ -367,7 +378,8 @@ TEST_CASE("discrepancy: two hidden effects at once are both named", "[discrepanc
   CHECK(both >= 7);
 }
 
-TEST_CASE("discrepancy: an effect too small to matter (2 % of its physical range) is not named", "[discrepancy][heavy]") {
+TEST_CASE("discrepancy: an effect too small to matter (2 % of its physical range) is not named",
+          "[discrepancy][heavy]") {
   for (std::uint64_t s = 1; s <= 3; ++s) {
     const DiscrepancyResult r = run({"forward_speed_coupling"}, s, 0.02);
     INFO("seed " << s << ": " << r.summary);
@@ -380,11 +392,13 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
           "[discrepancy]") {
   const DiscrepancyResult r = run({}, 5);
   for (const auto& spec : candidate_library()) {
-    const auto it = std::find_if(r.candidates.begin(), r.candidates.end(), [&](const auto& t) { return t.name == spec.name; });
+    const auto it =
+        std::find_if(r.candidates.begin(), r.candidates.end(), [&](const auto& t) { return t.name == spec.name; });
     REQUIRE(it != r.candidates.end());
     CHECK_FALSE(it->reason.empty());
   }
-  const auto yaw = std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& t) { return t.name == "yaw_coupling"; });
+  const auto yaw =
+      std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& t) { return t.name == "yaw_coupling"; });
   CHECK_FALSE(yaw->available);
   CHECK(yaw->reason == "the data has no r");
   // Every library name may stand in a model file's effects: section.
@@ -394,9 +408,10 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
   }
   DiscrepancyOptions bad;
   bad.candidates = {"lateral_inflow", "warp_drive"};
-  CHECK_THROWS_WITH(find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, {}, {}), ident::test::set1().model,
-                                     ident::test::set1().vehicle, bad),
-                    Catch::Contains("unknown candidate 'warp_drive'"));
+  CHECK_THROWS_WITH(
+      find_discrepancy(ident::test::generate_flight(ident::test::set1().model, ident::test::set1().vehicle, {}, {}),
+                       ident::test::set1().model, ident::test::set1().vehicle, bad),
+      Catch::Contains("unknown candidate 'warp_drive'"));
 }
 
 TEST_CASE("discrepancy: the augmented model carries the named effect and reads back from its file", "[discrepancy]") {
@@ -417,12 +432,14 @@ TEST_CASE("discrepancy: the augmented model carries the named effect and reads b
     text.insert(at + 9, "  warp_drive:\n    c: 1\n");
     std::ofstream(nimble::test::scratch_file("discrepancy", "bad.yaml")) << text;
   }
-  CHECK_THROWS_WITH(load_model(nimble::test::scratch_file("discrepancy", "bad.yaml")), Catch::Contains("unknown effect"));
+  CHECK_THROWS_WITH(load_model(nimble::test::scratch_file("discrepancy", "bad.yaml")),
+                    Catch::Contains("unknown effect"));
 }
 
-TEST_CASE("instrumented_wald: a column that shares the equation's noise with the model's regressor is not taken for a "
-          "term (least squares takes it), and a real one is found",
-          "[discrepancy][instrumented]") {
+TEST_CASE(
+    "instrumented_wald: a column that shares the equation's noise with the model's regressor is not taken for a "
+    "term (least squares takes it), and a real one is found",
+    "[discrepancy][instrumented]") {
   // The closed loop in miniature: the model's regressor x and a candidate w both carry the noise u
   // that drives the equation error (the states answer the process noise), and both move with an
   // exogenous excitation z. Least squares gives w a coefficient under the model; the test
@@ -461,9 +478,9 @@ TEST_CASE("instrumented_wald: a column that shares the equation's noise with the
     W << X, w;
     ls_mean += W.colPivHouseholderQr().solve(y0)[2] / records;
   }
-  INFO("least squares mean coefficient " << ls_mean << ", instrumented " << iv_mean << "; instrumented rejections at 1 %: "
-                                         << iv_rejects_null << " of " << records << " under the model, "
-                                         << iv_rejects_term << " with the term 0.3 w");
+  INFO("least squares mean coefficient " << ls_mean << ", instrumented " << iv_mean
+                                         << "; instrumented rejections at 1 %: " << iv_rejects_null << " of " << records
+                                         << " under the model, " << iv_rejects_term << " with the term 0.3 w");
   CHECK(std::fabs(ls_mean) > 0.15);  // measured 0.23
   CHECK(std::fabs(iv_mean) < 0.05);
   CHECK(iv_rejects_null <= 3);  // binomial(40, 0.01): P(>= 4) < 1e-3

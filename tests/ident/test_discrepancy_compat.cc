@@ -33,7 +33,8 @@ FlightData flight(const std::set<std::string>& effects, std::uint64_t seed, test
 }
 
 const NamedEffect* find(const DiscrepancyResult& r, const std::string& name) {
-  const auto it = std::find_if(r.effects.begin(), r.effects.end(), [&](const NamedEffect& e) { return e.name == name; });
+  const auto it =
+      std::find_if(r.effects.begin(), r.effects.end(), [&](const NamedEffect& e) { return e.name == name; });
   return it == r.effects.end() ? nullptr : &*it;
 }
 
@@ -86,9 +87,10 @@ TEST_CASE("compatibility: a late gyro is a time offset, a late flap an actuator 
   CHECK_FALSE(error(rd.compatibility.front(), "time_offset").significant);
 }
 
-TEST_CASE("compatibility: a gyro scale error and a bias are estimated with the truth inside their intervals, and a "
-          "true gyro is left alone",
-          "[discrepancy][compatibility]") {
+TEST_CASE(
+    "compatibility: a gyro scale error and a bias are estimated with the truth inside their intervals, and a "
+    "true gyro is left alone",
+    "[discrepancy][compatibility]") {
   for (std::uint64_t s = 11; s <= 12; ++s) {
     test::HiddenEffects h;
     const CompatibilityResult c = stage(flight({"sensor_scale"}, s, &h));
@@ -143,7 +145,8 @@ TEST_CASE("compatibility: the corrected record restamps the IMU's channels and u
 
   DiscrepancyOptions off;
   off.compatibility.enabled = false;
-  CHECK(find_discrepancy(flight({}, 31, nullptr, 10.0), test::set1().model, test::set1().vehicle, off).compatibility.empty());
+  CHECK(find_discrepancy(flight({}, 31, nullptr, 10.0), test::set1().model, test::set1().vehicle, off)
+            .compatibility.empty());
 }
 
 TEST_CASE("compatibility: where the kinematics cannot time the gyro, an actuator delay is ambiguous with a time offset",

@@ -57,9 +57,10 @@ NullRecord draw_null(int i) {
 
 }  // namespace
 
-TEST_CASE("discrepancy: over 240 null records of varied length, noise, gains and model set, at most 1 % raise an "
-          "alarm (a name, ambiguous or unexplained)",
-          "[discrepancy][null]") {
+TEST_CASE(
+    "discrepancy: over 240 null records of varied length, noise, gains and model set, at most 1 % raise an "
+    "alarm (a name, ambiguous or unexplained)",
+    "[discrepancy][null]") {
   const int records = 240;
   int alarms = 0;
   std::map<std::string, int> kinds;
@@ -88,9 +89,10 @@ TEST_CASE("discrepancy: over 240 null records of varied length, noise, gains and
   }
   const Proportion rate = wilson(alarms, records);
   const double lo = rate.lo, hi = rate.hi;
-  std::printf("discrepancy null records: %d of %d raised an alarm (%.2f %%, 95 %% interval %.2f-%.2f %%); stated bound "
-              "per record <= %.2g (tests x p_critical)\n",
-              alarms, records, 100.0 * alarms / records, 100.0 * lo, 100.0 * hi, bound_max);
+  std::printf(
+      "discrepancy null records: %d of %d raised an alarm (%.2f %%, 95 %% interval %.2f-%.2f %%); stated bound "
+      "per record <= %.2g (tests x p_critical)\n",
+      alarms, records, 100.0 * alarms / records, 100.0 * lo, 100.0 * hi, bound_max);
   for (const auto& [k, v] : kinds) std::printf("  %s: %d\n", k.c_str(), v);
   CHECK(static_cast<double>(alarms) / records <= 0.01);
 }

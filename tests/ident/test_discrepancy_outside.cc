@@ -49,10 +49,11 @@ const NamedEffect* term(const DiscrepancyResult& r, const std::string& equation,
 
 }  // namespace
 
-TEST_CASE("discrepancy open world: an asymmetric flap effectiveness is not called a sensor bias but found as "
-          "pos(delta_f) in L, a roll-only inflow not lateral_inflow but found as an odd term of v in L (v*abs(v), or v^3 "
-          "where the record does not tell the two laws apart)",
-          "[discrepancy][signature]") {
+TEST_CASE(
+    "discrepancy open world: an asymmetric flap effectiveness is not called a sensor bias but found as "
+    "pos(delta_f) in L, a roll-only inflow not lateral_inflow but found as an odd term of v in L (v*abs(v), or v^3 "
+    "where the record does not tell the two laws apart)",
+    "[discrepancy][signature]") {
   for (int i = 0; i < 3; ++i) {
     const std::uint64_t seed = 50000u + static_cast<std::uint64_t>(i);
     const DiscrepancyResult asym = run("flap_asymmetry", seed, 1 + i % 5, true);
@@ -78,9 +79,10 @@ TEST_CASE("discrepancy open world: an asymmetric flap effectiveness is not calle
   }
 }
 
-TEST_CASE("discrepancy open world: a true sensor bias and a true lateral inflow keep their names, with no term beside "
-          "them",
-          "[discrepancy][signature]") {
+TEST_CASE(
+    "discrepancy open world: a true sensor bias and a true lateral inflow keep their names, with no term beside "
+    "them",
+    "[discrepancy][signature]") {
   // At twice the drawn magnitudes (as the sensor bias's own test), with the defaults: named in most
   // records, nothing else beside (no term, no constant_load for the bias: the kinematics show it).
   // (Without the signatures sensor_bias and constant_load, the same columns, are ambiguous.)
@@ -98,9 +100,10 @@ TEST_CASE("discrepancy open world: a true sensor bias and a true lateral inflow 
   }
 }
 
-TEST_CASE("discrepancy open world: a lateral inflow at four times the assumed arm keeps its name, with the measured arm "
-          "and the assumption it contradicts, where a roll-only inflow stays a term",
-          "[discrepancy][signature]") {
+TEST_CASE(
+    "discrepancy open world: a lateral inflow at four times the assumed arm keeps its name, with the measured arm "
+    "and the assumption it contradicts, where a roll-only inflow stays a term",
+    "[discrepancy][signature]") {
   // The generator's inflow acts at 0.01 m (the plant file's arm, the workflow's assumption);
   // here at 0.04 m. The side force and the roll moment each meet the partial-F rule with one
   // sign: the form of the lateral inflow, only its assumed arm disagrees.
@@ -116,7 +119,8 @@ TEST_CASE("discrepancy open world: a lateral inflow at four times the assumed ar
     test::GeneratorOptions o;
     o.seed = seed;
     o.duration_s = 30.0;
-    const DiscrepancyResult r = find_discrepancy(test::generate_flight(ms.model, ms.vehicle, h, o), ms.model, ms.vehicle, {});
+    const DiscrepancyResult r =
+        find_discrepancy(test::generate_flight(ms.model, ms.vehicle, h, o), ms.model, ms.vehicle, {});
     INFO("seed " << seed << ": " << r.verdict << ": " << r.summary);
     REQUIRE(r.effects.size() == 1);
     const NamedEffect& e = r.effects.front();
@@ -125,7 +129,8 @@ TEST_CASE("discrepancy open world: a lateral inflow at four times the assumed ar
     // The measured arm and its interval, from the candidate's signature figures.
     for (const auto& t : r.candidates) {
       if (t.name != "lateral_inflow" || !t.entered) continue;
-      INFO("arm " << t.signature.at("arm_m") << " [" << t.signature.at("arm_lo_m") << ", " << t.signature.at("arm_hi_m") << "]");
+      INFO("arm " << t.signature.at("arm_m") << " [" << t.signature.at("arm_lo_m") << ", " << t.signature.at("arm_hi_m")
+                  << "]");
       CHECK(t.signature.at("arm_lo_m") < t.signature.at("arm_m"));
       CHECK(t.signature.at("arm_m") < t.signature.at("arm_hi_m"));
       CHECK(t.signature.at("arm_m") > 0.03);  // 0.04 m flown; closed-loop estimates are biased (about 30 %)
@@ -134,9 +139,10 @@ TEST_CASE("discrepancy open world: a lateral inflow at four times the assumed ar
   }
 }
 
-TEST_CASE("discrepancy open world: a side stiffness (thrust off the weight tilting a side force) is found as phi in Y, "
-          "confirmed with the excitation as instruments",
-          "[discrepancy][outside]") {
+TEST_CASE(
+    "discrepancy open world: a side stiffness (thrust off the weight tilting a side force) is found as phi in Y, "
+    "confirmed with the excitation as instruments",
+    "[discrepancy][outside]") {
   // phi moves slowly: above the gust band it has little to show, and its excitation part lies in
   // the excitation's span. The instrumented test (every regressor by its excitation part) holds
   // its level in the closed loop and confirms it. Records of the independent generator

@@ -68,7 +68,7 @@ TEST_CASE("discrepancy pool: a lateral inflow too weak to name on one 12 s recor
   }
   std::printf("discrepancy pool: lateral inflow on 12 s records named alone in %d of %d, pooled by three in %d of %d\n",
               single, 3 * seeds, pooled, seeds);
-  CHECK(single <= seeds);          // at most a third of the single records
+  CHECK(single <= seeds);  // at most a third of the single records
   CHECK(pooled >= seeds - 2);
 }
 
@@ -95,9 +95,10 @@ TEST_CASE("discrepancy pool: flights with the same effect agree, a flight with t
     REQUIRE(cd != d.consistency.end());
     caught += !cd->same && cd->differs == flights.back().source;
   }
-  std::printf("discrepancy pool: 3 flights with the same forward-speed coupling agree in %d of %d; with one at 3x, "
-              "that one is found in %d of %d\n",
-              same, seeds, caught, seeds);
+  std::printf(
+      "discrepancy pool: 3 flights with the same forward-speed coupling agree in %d of %d; with one at 3x, "
+      "that one is found in %d of %d\n",
+      same, seeds, caught, seeds);
   CHECK(same >= seeds - 1);
   CHECK(caught >= seeds - 1);
 }
@@ -105,7 +106,8 @@ TEST_CASE("discrepancy pool: flights with the same effect agree, a flight with t
 TEST_CASE("discrepancy pool: three null flights raise no alarm", "[discrepancy][pool][null]") {
   for (std::uint64_t s = 1; s <= 4; ++s) {
     std::vector<FlightData> flights;
-    for (std::uint64_t k = 0; k < 3; ++k) flights.push_back(flight({}, s, 1000 * s + k, 10.0 + 8.0 * static_cast<double>(k)));
+    for (std::uint64_t k = 0; k < 3; ++k)
+      flights.push_back(flight({}, s, 1000 * s + k, 10.0 + 8.0 * static_cast<double>(k)));
     const DiscrepancyResult r = find_discrepancy(flights, test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << ": " << r.summary);
     CHECK(r.verdict == "none");

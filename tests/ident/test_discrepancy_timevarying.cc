@@ -27,7 +27,8 @@ DiscrepancyResult run(const std::set<std::string>& effects, std::uint64_t seed) 
   test::draw_magnitudes(h, seed);
   test::GeneratorOptions o;
   o.seed = seed;
-  return find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o), test::set1().model, test::set1().vehicle, {});
+  return find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o), test::set1().model,
+                          test::set1().vehicle, {});
 }
 
 std::vector<std::string> names(const DiscrepancyResult& r) {
@@ -46,9 +47,10 @@ const NamedEffect* effect(const DiscrepancyResult& r, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("discrepancy: a hidden step of the flap input's effectiveness (-15..-40 % in the middle 60 % of a 40 s "
-          "record, a damaged wing) is named with its change time inside its interval",
-          "[discrepancy][timevarying]") {
+TEST_CASE(
+    "discrepancy: a hidden step of the flap input's effectiveness (-15..-40 % in the middle 60 % of a 40 s "
+    "record, a damaged wing) is named with its change time inside its interval",
+    "[discrepancy][timevarying]") {
   // The change time is located to the manoeuvres around it: between two doublets delta_f is
   // quiet and any t* there fits alike, which the interval shows. The fraction is conditional on
   // the named t*: reported, not held to its interval.
@@ -78,16 +80,18 @@ TEST_CASE("discrepancy: a hidden step of the flap input's effectiveness (-15..-4
     CHECK(std::fabs(p.at("fraction") - h.step_fraction) < 0.05);
     CHECK(r.gap_after < r.gap_before);
   }
-  std::printf("discrepancy effectiveness step: named in %d of %d records; change time inside its 95 %% interval in %d "
-              "of %d, largest error %.2f s; fraction inside its interval in %d of %d\n",
-              hits, seeds, covered, hits, worst_s, fraction_covered, hits);
+  std::printf(
+      "discrepancy effectiveness step: named in %d of %d records; change time inside its 95 %% interval in %d "
+      "of %d, largest error %.2f s; fraction inside its interval in %d of %d\n",
+      hits, seeds, covered, hits, worst_s, fraction_covered, hits);
   CHECK(hits >= 22);
   CHECK(covered >= hits - 2);
 }
 
-TEST_CASE("discrepancy: a hidden drift of the flap input's effectiveness (-2..-8 %/min over a 120 s record, battery "
-          "sag) is named with its rate inside its interval",
-          "[discrepancy][timevarying]") {
+TEST_CASE(
+    "discrepancy: a hidden drift of the flap input's effectiveness (-2..-8 %/min over a 120 s record, battery "
+    "sag) is named with its rate inside its interval",
+    "[discrepancy][timevarying]") {
   // A sag of a few percent per minute needs minutes: over 40 s the rate's standard deviation is
   // about 1.4 %/min on these records, so only the largest rates reach the partial-F rule; over
   // 120 s it is about 0.3 %/min. The Nimble flies about 5 min on a battery. The generator scales
@@ -101,8 +105,8 @@ TEST_CASE("discrepancy: a hidden drift of the flap input's effectiveness (-2..-8
     test::GeneratorOptions o;
     o.seed = static_cast<std::uint64_t>(s);
     o.duration_s = 120.0;
-    const DiscrepancyResult r =
-        find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o), test::set1().model, test::set1().vehicle, {});
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, h, o),
+                                                 test::set1().model, test::set1().vehicle, {});
     INFO("seed " << s << " rate " << h.drift_per_min << " /min: " << r.summary);
     CHECK(r.verdict != "ambiguous");
     for (const auto& n : names(r)) CHECK(n == "effectiveness_drift");
@@ -116,16 +120,18 @@ TEST_CASE("discrepancy: a hidden drift of the flap input's effectiveness (-2..-8
     covered += p.at("rate_per_min_lo") <= expected && expected <= p.at("rate_per_min_hi");
     CHECK(std::fabs(p.at("rate_per_min") - expected) < 0.3 * std::fabs(expected) + 0.005);
   }
-  std::printf("discrepancy effectiveness drift: named in %d of %d 120 s records; rate inside its 95 %% interval in %d "
-              "of %d\n",
-              hits, seeds, covered, hits);
+  std::printf(
+      "discrepancy effectiveness drift: named in %d of %d 120 s records; rate inside its 95 %% interval in %d "
+      "of %d\n",
+      hits, seeds, covered, hits);
   CHECK(hits >= 14);
   CHECK(covered >= hits - 2);
 }
 
-TEST_CASE("discrepancy: null records of 8-60 s under other noise and gains name no effect that changes during the "
-          "record",
-          "[discrepancy][null][timevarying]") {
+TEST_CASE(
+    "discrepancy: null records of 8-60 s under other noise and gains name no effect that changes during the "
+    "record",
+    "[discrepancy][null][timevarying]") {
   // Lengths drawn from 8-60 s, process noise x1/x2/x5, measurement noise x1/x2/x4 (delta_f's
   // too), three PD gain pairs, half the records with the recorded command: settings the entry
   // rules were not derived on. effectiveness_step is scanned over many t*; no t* may name it.
@@ -149,8 +155,8 @@ TEST_CASE("discrepancy: null records of 8-60 s under other noise and gains name 
     o.record_command = s % 2 == 0;
     DiscrepancyOptions opt;
     opt.command_latency_s = 0.0;  // the generator's command path has no latency of its own
-    const DiscrepancyResult r =
-        find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, {}, o), test::set1().model, test::set1().vehicle, opt);
+    const DiscrepancyResult r = find_discrepancy(test::generate_flight(test::set1().model, test::set1().vehicle, {}, o),
+                                                 test::set1().model, test::set1().vehicle, opt);
     INFO("seed " << s << ", " << o.duration_s << " s: " << r.summary);
     CHECK(effect(r, "effectiveness_drift") == nullptr);
     CHECK(effect(r, "effectiveness_step") == nullptr);
@@ -159,7 +165,8 @@ TEST_CASE("discrepancy: null records of 8-60 s under other noise and gains name 
     alarms += r.verdict != "none";  // a name, ambiguous or unexplained
     if (r.verdict != "none") std::printf("  alarm: seed %d: %s\n", s, r.summary.c_str());
   }
-  std::printf("discrepancy null records of 8-60 s: %d of %d named a time-varying effect, %d named any effect, %d raised "
-              "any alarm\n",
-              named_tv, records, named_any, alarms);
+  std::printf(
+      "discrepancy null records of 8-60 s: %d of %d named a time-varying effect, %d named any effect, %d raised "
+      "any alarm\n",
+      named_tv, records, named_any, alarms);
 }

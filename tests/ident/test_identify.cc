@@ -36,9 +36,7 @@ IdentOptions options_for(const DerivativeModel& truth, Method method) {
 
 double rel_sigma(const ParameterEstimate& e) { return e.sigma_coloured / std::fabs(e.value); }
 
-std::string temp_path(const std::string& name) {
-  return nimble::test::scratch_file("test_ident", name);
-}
+std::string temp_path(const std::string& name) { return nimble::test::scratch_file("test_ident", name); }
 
 /// The lateral4 model of thesis Table 8.3 reduced to the inputs delta_f and
 /// delta_t, with the yaw damping Nr made negative: the published Nr gives an
@@ -118,7 +116,8 @@ TEST_CASE("synthetic set-1 flight: well-determined derivatives within 3 sigma an
     }
     // Lv and L_dt: little v and delta_t excitation (v within +-0.3 m/s, 0.5 % throttle doublets).
     double worst_good = 0.0;
-    for (const char* name : {"Lp", "L_df", "Yv", "Y_df"}) worst_good = std::max(worst_good, rel_sigma(r.parameters.at(name)));
+    for (const char* name : {"Lp", "L_df", "Yv", "Y_df"})
+      worst_good = std::max(worst_good, rel_sigma(r.parameters.at(name)));
     for (const char* name : {"Lv", "L_dt"}) {
       INFO(name << " relative sigma " << rel_sigma(r.parameters.at(name)));
       CHECK(rel_sigma(r.parameters.at(name)) > 0.02);
@@ -133,7 +132,8 @@ TEST_CASE("synthetic set-1 flight: well-determined derivatives within 3 sigma an
     }
     const auto truth_eig = sorted_eigenvalues(build_state_space(truth, vehicle).A);
     REQUIRE(r.eigenvalues.size() == 3);
-    for (std::size_t i = 0; i < 3; ++i) CHECK(std::abs(r.eigenvalues[i] - truth_eig[i]) < 0.05 * std::abs(truth_eig[i]));
+    for (std::size_t i = 0; i < 3; ++i)
+      CHECK(std::abs(r.eigenvalues[i] - truth_eig[i]) < 0.05 * std::abs(truth_eig[i]));
     CHECK(r.correlated.empty());
   }
 }
@@ -207,9 +207,7 @@ TEST_CASE("an extra regressor is estimated, reported and kept out of the linear 
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
   const FlightData data = simulate_synthetic(truth, vehicle, identification_flight(7));
   IdentOptions o = options_for(truth, Method::kOls);
-  o.add_signals = [](UniformData& d) {
-    d.signals["v_abs_v"] = d.at("v").cwiseProduct(d.at("v").cwiseAbs());
-  };
+  o.add_signals = [](UniformData& d) { d.signals["v_abs_v"] = d.at("v").cwiseProduct(d.at("v").cwiseAbs()); };
   o.extra_regressors = {{"Y", "v_abs_v"}};
   const IdentResult r = identify(data, vehicle, truth.vehicle_file, o);
   REQUIRE(r.parameters.count("Y_v_abs_v") == 1);
@@ -330,8 +328,7 @@ TEST_CASE("identification input errors", "[identify]") {
   CHECK_THROWS_WITH(identify(data, vehicle, truth.vehicle_file, o), Catch::Contains("unknown input 'delta_x'"));
 }
 
-TEST_CASE("open-loop validation: the true model predicts the state derivatives, a wrong one does not",
-          "[validate]") {
+TEST_CASE("open-loop validation: the true model predicts the state derivatives, a wrong one does not", "[validate]") {
   const DerivativeModel truth = set1_model();
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
   const FlightData data = simulate_synthetic(truth, vehicle, identification_flight(31));
@@ -404,8 +401,7 @@ double relative_error(const IdentResult& r, const DerivativeModel& truth, const 
 
 }  // namespace
 
-TEST_CASE("inputs recorded at 100 Hz: linear upsampling biases the control derivatives, cubic does not",
-          "[identify]") {
+TEST_CASE("inputs recorded at 100 Hz: linear upsampling biases the control derivatives, cubic does not", "[identify]") {
   const DerivativeModel truth = set1_model();
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
   const FlightData data = multirate_flight(0.0);
@@ -438,7 +434,8 @@ TEST_CASE("states stamped 1.5 ms late against the inputs make the roll damping L
   const IdentResult aligned = identify(multirate_flight(0.0), vehicle, truth.vehicle_file, o);
   const IdentResult late = identify(multirate_flight(1.46e-3), vehicle, truth.vehicle_file, o);
   const double e_aligned = relative_error(aligned, truth, "Lp"), e_late = relative_error(late, truth, "Lp");
-  INFO("Lp relative error: aligned " << e_aligned << ", states 1.46 ms late " << e_late << " (Lp < 0: positive = too small)");
+  INFO("Lp relative error: aligned " << e_aligned << ", states 1.46 ms late " << e_late
+                                     << " (Lp < 0: positive = too small)");
   CHECK(std::fabs(e_aligned) < 1e-3);
   CHECK(e_late > 0.10);
   CHECK(e_late < 0.35);
@@ -478,9 +475,10 @@ TEST_CASE("a servo input enters only when it is excited beyond its floor, otherw
   CHECK(r.inputs_left_out.empty());
 }
 
-TEST_CASE("output error: the derivatives come back from a closed-loop flight simulated in segments, with bounds "
-          "that hold them, and lateral4 is refused by name",
-          "[identify][output_error]") {
+TEST_CASE(
+    "output error: the derivatives come back from a closed-loop flight simulated in segments, with bounds "
+    "that hold them, and lateral4 is refused by name",
+    "[identify][output_error]") {
   const DerivativeModel truth = set1_model();
   const Vehicle vehicle = load_vehicle(truth.vehicle_file);
   const FlightData data = simulate_synthetic(truth, vehicle, identification_flight(11));

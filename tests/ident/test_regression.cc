@@ -194,7 +194,8 @@ TEST_CASE("OLS sigma matches the Monte Carlo spread of the estimates", "[regress
   CHECK(mean(sbc) == Approx(spread(b).sd).epsilon(0.15));  // white residuals: both agree
 }
 
-TEST_CASE("WLS sigma matches the Monte Carlo spread with heteroscedastic, correlated noise", "[regression][montecarlo]") {
+TEST_CASE("WLS sigma matches the Monte Carlo spread with heteroscedastic, correlated noise",
+          "[regression][montecarlo]") {
   std::mt19937_64 rng(77);
   std::normal_distribution<double> nd;
   const Eigen::Index n = 2000;

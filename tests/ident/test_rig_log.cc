@@ -36,9 +36,7 @@ using namespace nimble::contract::channels;
 
 namespace {
 
-std::string temp_log(const std::string& name) {
-  return nimble::test::scratch_file("test_rig_log", name);
-}
+std::string temp_log(const std::string& name) { return nimble::test::scratch_file("test_rig_log", name); }
 
 template <typename T>
 void write(lcm::LogFile& log, const std::string& channel, const T& msg, int64_t utime) {
@@ -114,8 +112,7 @@ LockstepLog write_lockstep_log(const std::string& file, double duration_s) {
 
 }  // namespace
 
-TEST_CASE("ESTIMATE states are placed at the IMU sample they describe, not at their publication",
-          "[rig_log]") {
+TEST_CASE("ESTIMATE states are placed at the IMU sample they describe, not at their publication", "[rig_log]") {
   const std::string file = temp_log("lockstep.lcmlog");
   const LockstepLog written = write_lockstep_log(file, 1.0);
   REQUIRE(written.utimes.size() > 500);
@@ -275,9 +272,10 @@ TEST_CASE("a damaged log is refused naming the byte offset and the event, --salv
   CHECK(what_of([&] { LcmLogReader r(corrupted); }).find("is not an LCM log") != std::string::npos);
 }
 
-TEST_CASE("rig export --csv of a log with one damaged payload names what it left out, by channel and count, on "
-          "stderr and in --json, as the MCAP export does",
-          "[ident][bad_data]") {
+TEST_CASE(
+    "rig export --csv of a log with one damaged payload names what it left out, by channel and count, on "
+    "stderr and in --json, as the MCAP export does",
+    "[ident][bad_data]") {
   // One second of TRUTH (1 kHz) and ACTUATOR_FB (100 Hz); at 0.5 s a motion-capture pose whose
   // payload is damaged (its fingerprint, the event's framing intact), as a fault test's garbage
   // or a bad sector would leave it. The CSV does not use MOCAP_POSE, so it used to pass over it
@@ -328,9 +326,10 @@ TEST_CASE("rig export --csv of a log with one damaged payload names what it left
   CHECK(nimble::test::slurp(mjson).find("\"undecodable_channels\":{\"MOCAP_POSE\":1}") != std::string::npos);
 }
 
-TEST_CASE("smoothed states of a rig flight: made offline from its IMU and motion capture, closer to the truth than "
-          "the on-board estimate, and rig identify --states smoothed reads them",
-          "[ident]") {
+TEST_CASE(
+    "smoothed states of a rig flight: made offline from its IMU and motion capture, closer to the truth than "
+    "the on-board estimate, and rig identify --states smoothed reads them",
+    "[ident]") {
   const std::string log = temp_log("smoothed.lcmlog");
   const auto fly = nimble::test::run_rig("run " + std::string(RIG_SOURCE_DIR) +
                                          "/rig_configs/id_doublet_train_fast.yaml --clock inprocess --seed 3 --log " +
@@ -380,7 +379,8 @@ TEST_CASE("sensors: the raw channels of a rig log, p at the IMU's own stamps and
                                          "/rig_configs/hover.yaml --clock inprocess --no-progress --set duration_s=1"
                                          " --set processes=[plant,controller,mocap] --set run.controller_input=truth"
                                          " --set sensing.imu.clock_offset_s=0.03"
-                                         " --log " + log);
+                                         " --log " +
+                                         log);
   INFO(fly.out << fly.err);
   REQUIRE(fly.exit_code == 0);
   // The log's own IMU and MOCAP_POSE messages.
@@ -396,7 +396,8 @@ TEST_CASE("sensors: the raw channels of a rig log, p at the IMU's own stamps and
       mocap_pose_t m{};
       REQUIRE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) > 0);
       if (!m.tracking_valid) continue;
-      const Eigen::Quaterniond q(m.quaternion_wxyz[0], m.quaternion_wxyz[1], m.quaternion_wxyz[2], m.quaternion_wxyz[3]);
+      const Eigen::Quaterniond q(m.quaternion_wxyz[0], m.quaternion_wxyz[1], m.quaternion_wxyz[2],
+                                 m.quaternion_wxyz[3]);
       pose_phi.emplace_back(1e-6 * static_cast<double>(m.utime), euler_zyx_from_rotation(q.toRotationMatrix())[0]);
     }
   }

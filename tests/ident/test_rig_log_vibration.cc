@@ -51,9 +51,10 @@ double derivative_error(const FlightData& data, const FlightData& truth, const s
 
 }  // namespace
 
-TEST_CASE("smoothed states of a vibrating flight: the IMU through the flight's on-board filtering gives the "
-          "identification train's derivatives within the bounds of the flights without vibration",
-          "[ident]") {
+TEST_CASE(
+    "smoothed states of a vibrating flight: the IMU through the flight's on-board filtering gives the "
+    "identification train's derivatives within the bounds of the flights without vibration",
+    "[ident]") {
   // The identification train with the real vehicle's vibration, flown on the truth (the flight does
   // not depend on the on-board estimator), the pilot off as in the system test's flights.
   const std::string dir = nimble::test::scratch_dir("rig_log_vibration");
@@ -61,7 +62,8 @@ TEST_CASE("smoothed states of a vibrating flight: the IMU through the flight's o
   const auto fly = nimble::test::run_rig("run " + kConfigs + "id_doublet_train_fast.yaml --clock inprocess --seed 2" +
                                          " --no-progress --set sensing.base=" + kVibration +
                                          " --set processes=[plant,controller,mocap] --set run.controller_input=truth"
-                                         " --set pilot.enabled=false --log " + log);
+                                         " --set pilot.enabled=false --log " +
+                                         log);
   INFO(fly.out << fly.err);
   REQUIRE(fly.exit_code == 0);
   const SensingConfig sensing = load_sensing_config(kVibration);
@@ -101,8 +103,8 @@ TEST_CASE("smoothed states of a vibrating flight: the IMU through the flight's o
   // the bounds of the identification system test (tests/system/test_ident_on_estimates.cc):
   // Lp, L_df, Yv, Y_df within 10 % of set 1, p_dot and v_dot* with r_xy > 0.9, R^2 > 0.8, RMSE
   // below 10 % of the range.
-  const auto id = nimble::test::run_rig("identify " + log + " --w0 -0.30 --states smoothed --sensing " + kVibration +
-                                        " --json -");
+  const auto id =
+      nimble::test::run_rig("identify " + log + " --w0 -0.30 --states smoothed --sensing " + kVibration + " --json -");
   INFO(id.err);
   REQUIRE(id.exit_code == 0);
   const YAML::Node report = YAML::Load(id.out);
@@ -128,9 +130,10 @@ TEST_CASE("smoothed states of a vibrating flight: the IMU through the flight's o
   CHECK(r2 < 0.8);
 }
 
-TEST_CASE("prefilter_imu: off, the samples as logged, on, only the samples after its lines are learnt, each with "
-          "its residual variance",
-          "[ident]") {
+TEST_CASE(
+    "prefilter_imu: off, the samples as logged, on, only the samples after its lines are learnt, each with "
+    "its residual variance",
+    "[ident]") {
   std::vector<ImuSample> imu(512);
   for (std::size_t i = 0; i < imu.size(); ++i) {
     imu[i].utime = static_cast<std::int64_t>(i) * 1953;

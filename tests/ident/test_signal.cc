@@ -13,7 +13,8 @@ namespace {
 
 Eigen::VectorXd sine(double f_hz, double rate_hz, Eigen::Index n, double phase_rad = 0.0) {
   Eigen::VectorXd x(n);
-  for (Eigen::Index k = 0; k < n; ++k) x[k] = std::sin(2.0 * M_PI * f_hz * static_cast<double>(k) / rate_hz + phase_rad);
+  for (Eigen::Index k = 0; k < n; ++k)
+    x[k] = std::sin(2.0 * M_PI * f_hz * static_cast<double>(k) / rate_hz + phase_rad);
   return x;
 }
 
@@ -57,8 +58,8 @@ TEST_CASE("resampling interpolates linearly onto the common grid of all channels
   d.channels["p"] = Channel{tp, vp};
   d.channels["v"] = Channel{tv, vv};
   const UniformData u = resample_uniform(d, 100.0, Interpolation::kLinear);
-  CHECK(u.t_s[0] == Approx(0.1));                       // latest first stamp
-  CHECK(u.t_s[u.size() - 1] <= 1.5 + 1e-12);             // earliest last stamp
+  CHECK(u.t_s[0] == Approx(0.1));             // latest first stamp
+  CHECK(u.t_s[u.size() - 1] <= 1.5 + 1e-12);  // earliest last stamp
   CHECK(u.t_s[u.size() - 1] == Approx(1.5));
   CHECK(u.size() == 141);
   for (Eigen::Index k = 0; k < u.size(); ++k) {
@@ -72,8 +73,7 @@ TEST_CASE("resampling interpolates linearly onto the common grid of all channels
   for (Eigen::Index k = 0; k < c.size(); ++k) CHECK(c.at("p")[k] == Approx(lin(c.t_s[k])).margin(1e-12));
 }
 
-TEST_CASE("cubic resampling: exact for quadratics on uneven stamps, keeps samples, upsamples 100 Hz data",
-          "[signal]") {
+TEST_CASE("cubic resampling: exact for quadratics on uneven stamps, keeps samples, upsamples 100 Hz data", "[signal]") {
   SECTION("quadratics on uneven stamps and samples on the grid") {
     FlightData d;
     d.source = "quadratic";
@@ -141,7 +141,8 @@ TEST_CASE("cubic resampling: exact for quadratics on uneven stamps, keeps sample
     CHECK(u.at("delta_t").minCoeff() == Approx(-2.0 / 27.0).margin(1e-4));
     CHECK(u.at("delta_t").maxCoeff() == Approx(1.0 + 2.0 / 27.0).margin(1e-4));
     for (Eigen::Index k = 0; k < u.size(); ++k) {
-      if (u.t_s[k] < 0.08 - 1e-9 || u.t_s[k] > 0.11 + 1e-9) CHECK(u.at("delta_t")[k] == Approx(y[u.t_s[k] < 0.1 ? 0 : 20]));
+      if (u.t_s[k] < 0.08 - 1e-9 || u.t_s[k] > 0.11 + 1e-9)
+        CHECK(u.at("delta_t")[k] == Approx(y[u.t_s[k] < 0.1 ? 0 : 20]));
     }
     // The set-point, a step by nature, is interpolated linearly: no overshoot.
     CHECK(is_set_point("phi_sp"));

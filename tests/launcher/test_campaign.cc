@@ -31,9 +31,7 @@ namespace {
 
 const std::string kSource = std::string(RIG_SOURCE_DIR) + "/";
 
-std::string scratch(const std::string& tag) {
-  return nimble::test::scratch_dir("campaign_" + tag);
-}
+std::string scratch(const std::string& tag) { return nimble::test::scratch_dir("campaign_" + tag); }
 
 std::string slurp(const std::string& file) {
   std::ifstream in(file);
@@ -42,7 +40,8 @@ std::string slurp(const std::string& file) {
 
 }  // namespace
 
-TEST_CASE("campaign: run i flies set i / S with seed A + i % S, and chunks cover every run once", "[launcher][campaign]") {
+TEST_CASE("campaign: run i flies set i / S with seed A + i % S, and chunks cover every run once",
+          "[launcher][campaign]") {
   Campaign c;
   c.sets = parameter_sets({parse_vary("model=a,b,c")});
   c.first_seed = 11;
@@ -118,7 +117,7 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("the campaign directory " + d + "/c is being written by") &&
                                               Catch::Contains("pid " + std::to_string(::getpid())));
   CHECK(!c.files().held());  // load_campaign takes nothing (an array task beside the holder)
-  made = Campaign{};  // released
+  made = Campaign{};         // released
   {
     const Campaign again = create_campaign(req);  // the same campaign: taken to be finished
     CHECK(!again.files().made());
@@ -127,7 +126,8 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
     req.sweep.last_seed = 6;
     CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("is being written by"));
   }
-  CHECK_THROWS_WITH(create_campaign(req), Catch::Contains(d + "/c holds another campaign: its runs is 6, this one's 8"));
+  CHECK_THROWS_WITH(create_campaign(req),
+                    Catch::Contains(d + "/c holds another campaign: its runs is 6, this one's 8"));
 
   const std::string script = slurp(write_batch_script(c));
   CHECK(script.find("#SBATCH --partition=short\n") != std::string::npos);
@@ -139,8 +139,8 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   std::string text = slurp(d + "/c/campaign.json");
   text.replace(text.find("\"seeds\""), 7, "\"seedz\"");
   std::ofstream(d + "/c/campaign.json") << text;
-  CHECK_THROWS_WITH(load_campaign(d + "/c"), Catch::Contains("damaged campaign manifest " + d + "/c/campaign.json") &&
-                                                  Catch::Contains("seeds"));
+  CHECK_THROWS_WITH(load_campaign(d + "/c"),
+                    Catch::Contains("damaged campaign manifest " + d + "/c/campaign.json") && Catch::Contains("seeds"));
   CHECK_THROWS_WITH(load_campaign(d), Catch::Contains("no campaign in " + d));
 }
 
@@ -162,12 +162,14 @@ TEST_CASE("campaign: the scenario's cluster section is checked like any other", 
     return cluster_settings_from(nimble::load_scenario(base, ov));
   };
   CHECK(cluster({}).time_limit == "01:00:00");
-  const ClusterSettings c = cluster({{"cluster", "{partition: gpu, time_limit: \"2-00:00:00\", cpus_per_task: 4, chunk_size: 10}"}});
+  const ClusterSettings c =
+      cluster({{"cluster", "{partition: gpu, time_limit: \"2-00:00:00\", cpus_per_task: 4, chunk_size: 10}"}});
   CHECK(c.partition == "gpu");
   CHECK(c.time_limit == "2-00:00:00");
   CHECK(c.cpus_per_task == 4);
   CHECK(c.chunk_size == 10);
-  CHECK_THROWS_WITH(cluster({{"cluster.time_limit", "an hour"}}), Catch::Contains("time_limit") && Catch::Contains("MM:SS"));
+  CHECK_THROWS_WITH(cluster({{"cluster.time_limit", "an hour"}}),
+                    Catch::Contains("time_limit") && Catch::Contains("MM:SS"));
   CHECK_THROWS_WITH(cluster({{"cluster.cpus_per_task", "0"}}), Catch::Contains("cpus_per_task"));
   CHECK_THROWS_WITH(cluster({{"cluster.partion", "short"}}), Catch::Contains("unknown key"));
 }
@@ -182,8 +184,8 @@ TEST_CASE("worker pool: every item once, results by index, each reported as it f
   std::vector<std::size_t> done_seen;
   PoolWork pool;
   pool.work = [](std::size_t i) -> std::string {
-    if (i == 7) ::abort();                                   // the worker dies on item 7
-    if (i == 11) throw std::runtime_error("bad\nitem");      // an item that fails, in words
+    if (i == 7) ::abort();                               // the worker dies on item 7
+    if (i == 11) throw std::runtime_error("bad\nitem");  // an item that fails, in words
     return "item " + std::to_string(i) + " in " + std::to_string(::getpid());
   };
   pool.died = [](std::size_t i, const std::string& how) { return "died on " + std::to_string(i) + ": " + how; };
@@ -234,8 +236,9 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
     CHECK(!files.read("seed-4"));
     std::ofstream(files.runs_dir() + "/seed-4.json.host.1.partial") << "half";
     // One writer: held while it lives (this process's second open is refused like any other's).
-    CHECK_THROWS_WITH(open_result_dir(dir, manifest), Catch::Contains("the campaign directory " + dir + " is being written by") &&
-                                                          Catch::Contains("pid " + std::to_string(::getpid())));
+    CHECK_THROWS_WITH(open_result_dir(dir, manifest),
+                      Catch::Contains("the campaign directory " + dir + " is being written by") &&
+                          Catch::Contains("pid " + std::to_string(::getpid())));
     identity = files.identity();
     // A writer beside the holder (an array task) takes nothing and writes this campaign's results.
     const ResultFiles beside = attach_result_dir(dir);
@@ -244,18 +247,20 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
   }
 
   // The same manifest (keys in any order): the same campaign, its results there, the partial file gone.
-  const ResultFiles again = open_result_dir(dir, R"({"clock": "inprocess", "campaign": "test", "scenario digest": "00aa"})");
+  const ResultFiles again =
+      open_result_dir(dir, R"({"clock": "inprocess", "campaign": "test", "scenario digest": "00aa"})");
   CHECK(!again.made());
   CHECK(again.identity() == identity);
   CHECK(again.read("seed-3") == std::optional<std::string>("three"));
   CHECK(!fs::exists(again.runs_dir() + "/seed-4.json.host.1.partial"));
-  CHECK(read_manifest(dir) == nlohmann::json::parse(R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})").dump());
+  CHECK(read_manifest(dir) ==
+        nlohmann::json::parse(R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})").dump());
 
   const std::string other = base + "/other";
   fs::create_directories(other);
   std::ofstream(other + "/notes.txt") << "mine";
-  CHECK_THROWS_WITH(open_result_dir(other, manifest), Catch::Contains("not empty and holds no campaign") &&
-                                                          Catch::Contains("it holds notes.txt"));
+  CHECK_THROWS_WITH(open_result_dir(other, manifest),
+                    Catch::Contains("not empty and holds no campaign") && Catch::Contains("it holds notes.txt"));
   CHECK(slurp(other + "/notes.txt") == "mine");
   CHECK(!fs::exists(other + "/campaign.json"));
   CHECK_THROWS_WITH(again.file("../x"), Catch::Contains("'../x'"));
@@ -270,15 +275,17 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
     t.write("seed-6", "six of the twin");
   }
   CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00bb", "clock": "inprocess"})"),
-                    Catch::Contains(twin + " holds another campaign") && Catch::Contains("scenario digest is \"00aa\"") &&
-                        Catch::Contains("\"00bb\""));
-  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00aa"})"), Catch::Contains("it has clock"));
+                    Catch::Contains(twin + " holds another campaign") &&
+                        Catch::Contains("scenario digest is \"00aa\"") && Catch::Contains("\"00bb\""));
+  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00aa"})"),
+                    Catch::Contains("it has clock"));
   CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "power", "clock": "lockstep"})"),
                     Catch::Contains("its campaign is \"test\", this one's \"power\""));
   fs::copy_file(twin + "/runs/seed-5.json", again.runs_dir() + "/seed-5.json");
   CHECK_THROWS_AS(again.read("seed-5"), ForeignResult);
-  CHECK_THROWS_WITH(again.read("seed-5"), Catch::Contains(again.runs_dir() + "/seed-5.json is not a result of this campaign") &&
-                                             Catch::Contains("another campaign"));
+  CHECK_THROWS_WITH(again.read("seed-5"),
+                    Catch::Contains(again.runs_dir() + "/seed-5.json is not a result of this campaign") &&
+                        Catch::Contains("another campaign"));
   CHECK_THROWS_WITH(again.check_all(), Catch::Contains("seed-5.json"));
   fs::remove(again.runs_dir() + "/seed-5.json");
   fs::copy_file(again.runs_dir() + "/seed-3.json", again.runs_dir() + "/seed-7.json");
@@ -288,15 +295,17 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
   CHECK_THROWS_WITH(again.read("seed-8"), Catch::Contains("does not start with a campaign line"));
   fs::remove(again.runs_dir() + "/seed-8.json");
   std::ofstream(again.runs_dir() + "/notes.txt") << "mine";
-  CHECK_THROWS_WITH(again.check_all(), Catch::Contains(again.runs_dir() + "/notes.txt is not a result file of a campaign"));
+  CHECK_THROWS_WITH(again.check_all(),
+                    Catch::Contains(again.runs_dir() + "/notes.txt is not a result file of a campaign"));
   fs::remove(again.runs_dir() + "/notes.txt");
   CHECK_NOTHROW(again.check_all());
   CHECK(again.read("seed-3") == std::optional<std::string>("three"));
 }
 
-TEST_CASE("result files: started again, a campaign does only the items without a kept result, and keeps what "
-          "the first start finished",
-          "[campaign][result_files]") {
+TEST_CASE(
+    "result files: started again, a campaign does only the items without a kept result, and keeps what "
+    "the first start finished",
+    "[campaign][result_files]") {
   const std::string dir = scratch("kept");
   const ResultFiles files = open_result_dir(dir + "/c", R"({"campaign": "test"})");
   const std::string calls = dir + "/calls.txt";  // each item done appends its index (items run in workers)

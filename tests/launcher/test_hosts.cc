@@ -106,11 +106,12 @@ TEST_CASE("bad sections are refused naming the key and the problem", "[unit]") {
                "IPv4 address with its prefix length");
   expect_error("hosts: {sim: [plant], flight: {processes: [controller], address: 10.0.0.300/30}}",
                "hosts.flight.address", "IPv4 address");
-  expect_error("hosts: {sim: [plant], flight: {processes: [controller], address: 10.9.9.2/30}}",
-               "hosts.flight.address", "distinct addresses in one subnet (host 'sim' has 10.76.67.1/30)");
-  expect_error("hosts: {sim: {processes: [plant], address: 10.0.0.1/30}, flight: {processes: [controller], "
-               "address: 10.0.0.1/30}}",
-               "hosts.flight.address", "distinct addresses");
+  expect_error("hosts: {sim: [plant], flight: {processes: [controller], address: 10.9.9.2/30}}", "hosts.flight.address",
+               "distinct addresses in one subnet (host 'sim' has 10.76.67.1/30)");
+  expect_error(
+      "hosts: {sim: {processes: [plant], address: 10.0.0.1/30}, flight: {processes: [controller], "
+      "address: 10.0.0.1/30}}",
+      "hosts.flight.address", "distinct addresses");
   // The CAN bridge's sides share the virtual CAN interface of the launcher's host.
   const std::vector<std::string> with_can = {"plant", "controller", "can_flight", "can_rig"};
   expect_error("hosts: {sim: [plant], flight: [controller, can_flight]}", "hosts.flight",
@@ -150,7 +151,8 @@ TEST_CASE("addresses with prefix, and the hint when only the far host is silent"
 }
 
 TEST_CASE("a second host started by hand flies on the lab network's URL, in lockstep", "[unit]") {
-  const std::string by_hand = "hosts: {sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}";
+  const std::string by_hand =
+      "hosts: {sim: [plant, mocap], flight: {processes: [controller, estimator], start: by_hand}}";
   LaunchConfig lab;
   lab.network_namespace = "never";
   lab.lcm_url = "udpm://239.255.76.67:7667?ttl=1";
@@ -176,8 +178,8 @@ TEST_CASE("a second host started by hand flies on the lab network's URL, in lock
 
   expect_error("hosts: {sim: {processes: [plant], start: by_hand}, flight: [controller]}", "hosts.sim.start",
                "the first host is the launcher's", kFour, lab);
-  expect_error("hosts: {sim: [plant], flight: {processes: [controller], start: ssh}}", "hosts.flight.start",
-               "launcher", kFour, lab);
+  expect_error("hosts: {sim: [plant], flight: {processes: [controller], start: ssh}}", "hosts.flight.start", "launcher",
+               kFour, lab);
   expect_error("hosts: {sim: [plant], flight: {processes: [controller], start: by_hand, address: 10.76.67.2/30}}",
                "hosts.flight.address", "a host started by hand is a machine of the lab network", kFour, lab);
   LaunchConfig in_namespace = lab;

@@ -204,7 +204,7 @@ TEST_CASE("in-process CAN bus: frames reach every other endpoint, FD only where 
   CHECK(rx.frame.can_id == 0x120);  // the first 8 bytes as a classical view
   CHECK(rx.frame.data[7] == 0xAB);
   CHECK(classical->receive(&rx, 0) == ReceiveResult::kTimeout);  // a classical socket never sees FD
-  CHECK(classical->send(fd) == SendResult::kError);                // nor may it send one
+  CHECK(classical->send(fd) == SendResult::kError);              // nor may it send one
   CHECK(classical->stats().last_errno == EINVAL);
 
   CHECK(flight->stats().frames_sent == 2);
@@ -215,7 +215,6 @@ TEST_CASE("in-process CAN bus: frames reach every other endpoint, FD only where 
 }
 
 // --- rig sweep's parts ------------------------------------------------------------------
-
 
 TEST_CASE("sweep: --vary splits values at top-level commas only", "[launcher][sweep]") {
   const Vary v = parse_vary("model=a.yaml, b.yaml");
@@ -360,7 +359,7 @@ TimingSummary loops(int64_t count, int64_t overruns) {
 TEST_CASE("timing verdict: fractions against the thresholds, the worst named", "[launcher]") {
   JudgeConfig jc;  // 1 % late, 1 % overruns
   std::map<std::string, TimingSummary> timing;
-  timing["plant"] = loops(6000, 30);  // 0.5 %
+  timing["plant"] = loops(6000, 30);                                                    // 0.5 %
   timing["plant"].received[nimble::contract::channels::kActuatorCommand] = {3000, 15};  // 0.5 %
   timing["controller"] = loops(3000, 0);
   timing["controller"].received[nimble::contract::channels::kEstimate] = {3000, 3};  // 0.1 %

@@ -24,9 +24,7 @@ using nimble::launcher::ProcessSupervisor;
 
 namespace {
 
-std::string scratch(const std::string& name) {
-  return nimble::test::scratch_file("supervisor", name);
-}
+std::string scratch(const std::string& name) { return nimble::test::scratch_file("supervisor", name); }
 
 std::string slurp(const std::string& file) {
   std::ifstream in(file);
@@ -151,9 +149,12 @@ TEST_CASE("supervisor: a child inherits only its standard streams, whatever the 
     std::istringstream words(line.substr(0, arrow));
     std::string word, fd;
     while (words >> word) fd = word;
-    if (fd == "0" || fd == "1" || fd == "2") ++standard;
-    else if (target.rfind("/proc/", 0) == 0 && target.size() > 3 && target.compare(target.size() - 3, 3, "/fd") == 0) ++own;
-    else ++inherited;
+    if (fd == "0" || fd == "1" || fd == "2")
+      ++standard;
+    else if (target.rfind("/proc/", 0) == 0 && target.size() > 3 && target.compare(target.size() - 3, 3, "/fd") == 0)
+      ++own;
+    else
+      ++inherited;
   }
   CHECK(standard == 3);
   CHECK(own <= 1);

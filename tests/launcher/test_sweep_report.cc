@@ -448,9 +448,7 @@ TEST_CASE("a directory or file that cannot be written is an error naming it", "[
   r.runs.push_back(make_run(0, 1, true, 0.1, 2, 0.0, 0.0, 0.0));
   const fs::path base = fresh_dir("unwritable");
   fs::create_directories(base);
-  {
-    std::ofstream(base / "plain_file") << "not a directory\n";
-  }
+  { std::ofstream(base / "plain_file") << "not a directory\n"; }
   // Under a regular file: no directory can be made there, whoever runs the test.
   const std::string under_file = (base / "plain_file" / "report").string();
   try {

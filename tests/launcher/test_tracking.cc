@@ -25,8 +25,9 @@ namespace {
 constexpr double kRate = 512.0;  // the controller's cycles [Hz]
 
 /// The summary of `error(t)` [deg] against `reference(t)` [deg] over `duration_s`.
-TrackingSummary tracked(double duration_s, const std::function<double(double)>& error,
-                        const std::function<double(double)>& reference = [](double) { return 0.0; }) {
+TrackingSummary tracked(
+    double duration_s, const std::function<double(double)>& error,
+    const std::function<double(double)>& reference = [](double) { return 0.0; }) {
   TrackingRecorder rec;
   for (int k = 0; k <= static_cast<int>(duration_s * kRate); ++k) {
     const double t = k / kRate;
@@ -53,7 +54,8 @@ FlightSummary within_limits() {
 
 }  // namespace
 
-TEST_CASE("tracking: the recorder's half-cycles of a sine are its halves, at its zero crossings", "[launcher][tracking]") {
+TEST_CASE("tracking: the recorder's half-cycles of a sine are its halves, at its zero crossings",
+          "[launcher][tracking]") {
   const TrackingSummary s = tracked(2.0, [](double t) { return 30.0 * std::sin(2.0 * M_PI * 4.0 * t); });
   CHECK(s.samples == 1025);
   CHECK(s.rms_deg == Approx(30.0 / std::sqrt(2.0)).epsilon(0.01));
@@ -68,8 +70,8 @@ TEST_CASE("tracking: the recorder's half-cycles of a sine are its halves, at its
     CHECK(h.reference_range_deg == 0.0);
   }
   // Jitter within the dead band does not split a half-cycle.
-  const TrackingSummary jittered =
-      tracked(2.0, [](double t) { return 30.0 * std::sin(2.0 * M_PI * 4.0 * t) + 0.9 * std::sin(2.0 * M_PI * 200.0 * t); });
+  const TrackingSummary jittered = tracked(
+      2.0, [](double t) { return 30.0 * std::sin(2.0 * M_PI * 4.0 * t) + 0.9 * std::sin(2.0 * M_PI * 200.0 * t); });
   CHECK(jittered.half_cycles.size() == 16);
 }
 
@@ -108,7 +110,8 @@ TEST_CASE("tracking: a growing oscillation is named as growing, from where it re
   REQUIRE(o.detected);
   CHECK(o.growing);
   CHECK(o.frequency_hz == Approx(2.0).epsilon(0.01));
-  CHECK(o.damping_ratio == Approx(-std::log(1.3) / std::sqrt(4 * M_PI * M_PI + std::pow(std::log(1.3), 2))).epsilon(0.05));
+  CHECK(o.damping_ratio ==
+        Approx(-std::log(1.3) / std::sqrt(4 * M_PI * M_PI + std::pow(std::log(1.3), 2))).epsilon(0.05));
   // The first peak of 4 deg or more is the half-cycle from 2.75 s (the one before peaks at 3.96).
   CHECK(o.start_s == Approx(2.75).margin(0.001));
   CHECK(o.amplitude_deg == Approx(std::exp(sigma * 6.375)).epsilon(0.01));
@@ -158,7 +161,8 @@ TEST_CASE("tracking: noise is not an oscillation, and a sine the reference drive
   std::normal_distribution<double> noise(0.0, 0.6);  // twice hover's RMS error (0.19-0.29 deg)
   std::vector<double> samples;
   for (int k = 0; k <= 20 * 512; ++k) samples.push_back(noise(rng));
-  const TrackingSummary s = tracked(20.0, [&](double t) { return samples[static_cast<std::size_t>(std::lround(t * kRate))]; });
+  const TrackingSummary s =
+      tracked(20.0, [&](double t) { return samples[static_cast<std::size_t>(std::lround(t * kRate))]; });
   CHECK_FALSE(s.half_cycles.empty());  // it does cross the dead band
   const TrackingVerdict tv = judge_tracking(s, jc);
   CHECK_FALSE(tv.oscillation.detected);
@@ -245,7 +249,8 @@ TEST_CASE("tracking: beyond the limits the run is not controlled and names its o
   CHECK(judge_run(within_limits(), jc, false, "", degraded, true, "", tv).exit_code == kRunNotTracking);
 }
 
-TEST_CASE("tracking: the report's text and JSON carry the tracking figures and the oscillation", "[launcher][tracking]") {
+TEST_CASE("tracking: the report's text and JSON carry the tracking figures and the oscillation",
+          "[launcher][tracking]") {
   RunReport r;
   r.scenario = "unit";
   r.clock = kClockInprocess;
@@ -255,7 +260,8 @@ TEST_CASE("tracking: the report's text and JSON carry the tracking figures and t
   std::ostringstream text;
   write_report_text(text, r);
   CHECK(text.str().find("tracking   roll error rms 21.21 deg, max 30.00 deg") != std::string::npos);
-  CHECK(text.str().find("roll oscillation 4.0 Hz +-30 deg sustained from t = 0.0 s (damping ratio") != std::string::npos);
+  CHECK(text.str().find("roll oscillation 4.0 Hz +-30 deg sustained from t = 0.0 s (damping ratio") !=
+        std::string::npos);
   CHECK(text.str().find("result     completed, roll oscillation 4.0 Hz") != std::string::npos);
   const YAML::Node j = YAML::Load(report_json(r));
   CHECK(j["exit_code"].as<int>() == kRunNotTracking);

@@ -25,7 +25,8 @@ std::string delay(const std::string& seconds) {
 }
 
 RunResult fly(const std::string& scenario, const std::string& tag, const std::string& args) {
-  const RunResult r = rig_run(kConfigs + scenario, nimble::test::scratch_dir("verdict_" + tag), "--clock inprocess " + args);
+  const RunResult r =
+      rig_run(kConfigs + scenario, nimble::test::scratch_dir("verdict_" + tag), "--clock inprocess " + args);
   const std::string result = r.summary ? r.summary["result"].as<std::string>() : "(no summary)";
   std::printf("%-24s %-40s exit %d: %s\n", scenario.c_str(), args.c_str(), r.exit_code, result.c_str());
   return r;
@@ -60,14 +61,16 @@ TEST_CASE("verdict: hover with 14.3 ms of actuator delay rolls in a limit cycle:
   CHECK(o["cycles"].as<int>() >= 20);
   CHECK(r.summary["tracking"]["lost"].as<bool>());
   // The limit cycle's error about the hover reference is the roll itself.
-  CHECK(r.summary["tracking"]["max_deg"].as<double>() == Approx(r.summary["max_abs"]["phi"].as<double>() * 180.0 / M_PI).epsilon(0.01));
+  CHECK(r.summary["tracking"]["max_deg"].as<double>() ==
+        Approx(r.summary["max_abs"]["phi"].as<double>() * 180.0 / M_PI).epsilon(0.01));
 }
 
 TEST_CASE("verdict: the identification train with 30 ms of actuator delay is not ok and names its oscillation",
           "[launcher][verdict]") {
   // Seed 2 stays within the roll limit (79 deg, judged ok on the roll alone); seed 1 passes it.
   for (const int seed : {1, 2}) {
-    const RunResult r = fly("id_doublet_train_fast.yaml", "id_delay", "--seed " + std::to_string(seed) + delay("0.030"));
+    const RunResult r =
+        fly("id_doublet_train_fast.yaml", "id_delay", "--seed " + std::to_string(seed) + delay("0.030"));
     INFO("seed " << seed << "\n" << r.output);
     REQUIRE(r.summary);
     const bool controlled = r.summary["controlled"].as<bool>();

@@ -93,7 +93,8 @@ std::vector<uint8_t> random_message(const LcmStruct& type, std::mt19937_64& rng)
     }
     for (std::size_t n = 0; n < count; ++n) {
       if (f.type == "double" || f.type == "float") {
-        encode_value(f.type, json(f.type == "float" ? static_cast<double>(static_cast<float>(real(rng))) : real(rng)), &out);
+        encode_value(f.type, json(f.type == "float" ? static_cast<double>(static_cast<float>(real(rng))) : real(rng)),
+                     &out);
       } else if (f.type == "boolean") {
         encode_value(f.type, json(rng() % 2 == 1), &out);
       } else if (f.type == "string") {
@@ -103,7 +104,11 @@ std::vector<uint8_t> random_message(const LcmStruct& type, std::mt19937_64& rng)
         // Integers that may size an array stay small; others span their type.
         int64_t v = static_cast<int64_t>(rng() % 5);
         if (f.name.rfind("num_", 0) != 0) {
-          const int bits = f.type == "int8_t" ? 7 : f.type == "int16_t" ? 15 : f.type == "int32_t" ? 31 : f.type == "byte" ? 8 : 62;
+          const int bits = f.type == "int8_t"    ? 7
+                           : f.type == "int16_t" ? 15
+                           : f.type == "int32_t" ? 31
+                           : f.type == "byte"    ? 8
+                                                 : 62;
           v = static_cast<int64_t>(rng() % (uint64_t{1} << bits));
           if (f.type != "byte" && rng() % 2) v = -v;
         }
@@ -140,8 +145,10 @@ void check_against_generated(std::mt19937_64& rng) {
 
 }  // namespace
 
-TEST_CASE("lcmjson: every rig type parsed from its .lcm file has lcm-gen's fingerprint, and its JSON encodes back to the same bytes",
-          "[lcmjson]") {
+TEST_CASE(
+    "lcmjson: every rig type parsed from its .lcm file has lcm-gen's fingerprint, and its JSON encodes back to the "
+    "same bytes",
+    "[lcmjson]") {
   std::mt19937_64 rng(7);
   CHECK(nimble::lcmjson::rig_types().size() == static_cast<std::size_t>(nimble::kRigMessageCount));
   nimble::for_each_message_type([&rng](auto type) { check_against_generated<typename decltype(type)::type>(rng); });
@@ -183,14 +190,16 @@ TEST_CASE("lcmjson: a truth message's JSON holds its values, NaN as null, and it
   CHECK(nimble::lcmjson::rig_time_us(*type, bytes.data(), bytes.size()) == -1);
 }
 
-TEST_CASE("lcmjson: rig time is utime where it is rig time, rig_utime for a fault, none for the wall-clock channels", "[lcmjson]") {
+TEST_CASE("lcmjson: rig time is utime where it is rig time, rig_utime for a fault, none for the wall-clock channels",
+          "[lcmjson]") {
   using nimble::lcmjson::find_rig_type;
   auto field = [](const char* type) {
     const LcmStruct* t = find_rig_type(type);
     return t->rig_time_field < 0 ? std::string() : t->fields[static_cast<std::size_t>(t->rig_time_field)].name;
   };
-  for (const char* t : {"truth_state_t", "imu_sample_t", "mocap_pose_t", "estimator_state_t", "actuator_command_t",
-                        "actuator_feedback_t", "attitude_setpoint_t", "controller_status_t", "rig_clock_t", "step_ack_t"}) {
+  for (const char* t :
+       {"truth_state_t", "imu_sample_t", "mocap_pose_t", "estimator_state_t", "actuator_command_t",
+        "actuator_feedback_t", "attitude_setpoint_t", "controller_status_t", "rig_clock_t", "step_ack_t"}) {
     INFO(t);
     CHECK(field(t) == "utime");
   }
@@ -207,7 +216,8 @@ TEST_CASE("lcmjson: rig time is utime where it is rig time, rig_utime for a faul
   CHECK(nimble::lcmjson::rig_type_for_channel("NOT_A_CHANNEL") == nullptr);
 }
 
-TEST_CASE("lcmjson: bytes that are not exactly one message are refused with the reason, at every truncation", "[lcmjson]") {
+TEST_CASE("lcmjson: bytes that are not exactly one message are refused with the reason, at every truncation",
+          "[lcmjson]") {
   // fuzz/fuzz_lcm_decode checks on arbitrary bytes that the JSON view takes exactly what the
   // generated decoder (contract::decode_exact) takes.
   const LcmStruct* type = nimble::lcmjson::find_rig_type("nimble.fault_event_t");
@@ -265,7 +275,7 @@ TEST_CASE("lcmjson: a string that is not UTF-8 stays valid JSON and keeps its by
   h.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   nimble::lcmjson::JsonMessage m;
   REQUIRE(nimble::lcmjson::to_json(*type, bytes.data(), bytes.size(), &m).empty());
-  const json j = json::parse(m.json);  // throws on invalid UTF-8
+  const json j = json::parse(m.json);                                  // throws on invalid UTF-8
   CHECK(j["process"].get<std::string>() == "a\xc3\xbf\xc3\xa9\x01z");  // 0xff as U+00FF, the rest as it was
 }
 
@@ -282,7 +292,8 @@ TEST_CASE("lcmjson: each type's JSON Schema has every field with its type, size,
   CHECK(s["properties"]["euler_rad"]["items"]["type"] == json::array({"number", "null"}));
   CHECK(s["properties"]["euler_rad"]["x-unit"] == "rad");
   CHECK(s["properties"]["omega_body_radps"]["x-unit"] == "rad/s");
-  CHECK(s["properties"]["delta_f_radps"]["description"].get<std::string>().find("flap_freq_left_radps") != std::string::npos);
+  CHECK(s["properties"]["delta_f_radps"]["description"].get<std::string>().find("flap_freq_left_radps") !=
+        std::string::npos);
   const json f = json::parse(nimble::lcmjson::json_schema(*nimble::lcmjson::find_rig_type("fault_event_t")));
   CHECK(f["x-constants"]["CODE_FAILSAFE"]["value"] == 18);
   CHECK(f["properties"]["severity"]["minimum"] == -128);
@@ -308,7 +319,10 @@ TEST_CASE("lcmjson: a .lcm text the parser does not understand is an error namin
   CHECK(error("struct s { double a; double a; }").find("twice") != std::string::npos);
   CHECK(error("struct s { /* open").find("does not end") != std::string::npos);
   CHECK(error("message s { }").find("expected 'package' or 'struct'") != std::string::npos);
-  const auto parsed = parse_lcm("package p;\n/// A thing.\nstruct s {\n  /// Size [-].\n  int32_t n;\n  /// Values [m].\n  double v[n][2];\n  const int8_t A = 1, B = -2;\n}\n", "y.lcm");
+  const auto parsed = parse_lcm(
+      "package p;\n/// A thing.\nstruct s {\n  /// Size [-].\n  int32_t n;\n  /// Values [m].\n  double v[n][2];\n  "
+      "const int8_t A = 1, B = -2;\n}\n",
+      "y.lcm");
   REQUIRE(parsed.size() == 1);
   CHECK(parsed[0].full_name() == "p.s");
   CHECK(parsed[0].comment == "A thing.");

@@ -104,7 +104,8 @@ class Cursor {
 };
 
 inline uint32_t crc(const std::string& s, std::size_t begin, std::size_t end) {
-  return static_cast<uint32_t>(::crc32(0, reinterpret_cast<const Bytef*>(s.data() + begin), static_cast<uInt>(end - begin)));
+  return static_cast<uint32_t>(
+      ::crc32(0, reinterpret_cast<const Bytef*>(s.data() + begin), static_cast<uInt>(end - begin)));
 }
 
 inline std::string slurp_binary(const std::string& path) {
@@ -159,7 +160,8 @@ inline McapFile check(const std::string& file) {
   const std::vector<Record> all = split_records(file, 8, end, P, "file");
   if (!P.empty()) return f;
   if (all.empty() || all.front().op != 0x01) P.push_back("first record is not a Header");
-  if (all.empty() || all.back().op != 0x02 || all.back().length != 20) P.push_back("last record is not a Footer of 20 bytes");
+  if (all.empty() || all.back().op != 0x02 || all.back().length != 20)
+    P.push_back("last record is not a Footer of 20 bytes");
   if (!P.empty()) return f;
   {
     Cursor c(file, all.front().body, all.front().body + all.front().length);
@@ -258,7 +260,8 @@ inline McapFile check(const std::string& file) {
       continue;
     }
     if (records.size() != sc.uncompressed) P.push_back("chunk uncompressed_size does not match");
-    if (crc(records, 0, records.size()) != chunk_crc) P.push_back("chunk at " + std::to_string(r.offset) + ": CRC mismatch");
+    if (crc(records, 0, records.size()) != chunk_crc)
+      P.push_back("chunk at " + std::to_string(r.offset) + ": CRC mismatch");
     std::vector<std::string> inner_problems;
     const std::vector<Record> inner = split_records(records, 0, records.size(), inner_problems, "chunk");
     for (auto& p : inner_problems) P.push_back(p);
@@ -297,9 +300,11 @@ inline McapFile check(const std::string& file) {
       } else {
         P.push_back("unexpected record in a chunk");
       }
-      if (ic.bad() || (ir.op != 0x05 && ic.pos() != ic.end())) P.push_back("chunk record fields do not fill its length");
+      if (ic.bad() || (ir.op != 0x05 && ic.pos() != ic.end()))
+        P.push_back("chunk record fields do not fill its length");
     }
-    if (!by_offset.empty() && (sc.start != lo || sc.end != hi)) P.push_back("chunk start/end times are not its messages'");
+    if (!by_offset.empty() && (sc.start != lo || sc.end != hi))
+      P.push_back("chunk start/end times are not its messages'");
     // The Message Index records right after the chunk.
     std::set<uint64_t> indexed;
     std::size_t j = i + 1;
@@ -319,7 +324,8 @@ inline McapFile check(const std::string& file) {
           P.push_back("message index entry points at no message record");
           continue;
         }
-        if (it->second.channel_id != id || it->second.log_time != t) P.push_back("message index entry names another message");
+        if (it->second.channel_id != id || it->second.log_time != t)
+          P.push_back("message index entry names another message");
         if (k > 0 && t < previous) P.push_back("message index not in log-time order");
         previous = t;
         indexed.insert(off);
@@ -344,7 +350,8 @@ inline McapFile check(const std::string& file) {
     if (it == groups.end()) {
       groups[r.op] = {r.offset, r.offset + r.total()};
     } else {
-      if (it->second.second != r.offset) P.push_back("summary records of opcode " + std::to_string(r.op) + " not grouped");
+      if (it->second.second != r.offset)
+        P.push_back("summary records of opcode " + std::to_string(r.op) + " not grouped");
       it->second.second = r.offset + r.total();
     }
     Cursor c(file, r.body, r.body + r.length);
@@ -410,16 +417,19 @@ inline McapFile check(const std::string& file) {
       const uint64_t offset = c.u(8), length = c.u(8);
       const std::string name = c.str();
       const auto it = metadata_at.find(offset);
-      if (it == metadata_at.end() || it->second != name) P.push_back("metadata index points at no metadata record " + name);
+      if (it == metadata_at.end() || it->second != name)
+        P.push_back("metadata index points at no metadata record " + name);
       for (const Record& a : all) {
         if (a.offset == offset && a.total() != length) P.push_back("metadata index length wrong");
       }
     } else {
       P.push_back("unexpected record in the summary");
     }
-    if (c.bad() || c.pos() != c.end()) P.push_back("summary record 0x" + std::to_string(r.op) + " fields do not fill its length");
+    if (c.bad() || c.pos() != c.end())
+      P.push_back("summary record 0x" + std::to_string(r.op) + " fields do not fill its length");
   }
-  if (!summary.empty() && summary.front().offset != summary_start) P.push_back("summary does not start at summary_start");
+  if (!summary.empty() && summary.front().offset != summary_start)
+    P.push_back("summary does not start at summary_start");
   // Summary offsets: one per group, pointing at it exactly.
   std::set<uint8_t> offset_groups;
   for (const Record& r : offsets) {
@@ -436,9 +446,11 @@ inline McapFile check(const std::string& file) {
       P.push_back("summary offset of group " + std::to_string(op) + " does not point at it");
     }
   }
-  if (!offsets.empty() && offsets.front().offset != summary_offset_start) P.push_back("summary offsets not at summary_offset_start");
+  if (!offsets.empty() && offsets.front().offset != summary_offset_start)
+    P.push_back("summary offsets not at summary_offset_start");
   for (const auto& g : groups) {
-    if (!offset_groups.count(g.first)) P.push_back("summary group " + std::to_string(g.first) + " has no summary offset");
+    if (!offset_groups.count(g.first))
+      P.push_back("summary group " + std::to_string(g.first) + " has no summary offset");
   }
   // Summary against the data.
   if (seen_chunks.size() != f.chunk_count) P.push_back("chunks not all seen");
@@ -466,7 +478,8 @@ inline McapFile check(const std::string& file) {
     const Statistics& s = f.statistics;
     if (s.message_count != f.messages.size()) P.push_back("statistics message count wrong");
     if (s.chunk_count != seen_chunks.size()) P.push_back("statistics chunk count wrong");
-    if (s.channel_count != f.channels.size() || s.schema_count != f.schemas.size()) P.push_back("statistics channel/schema count wrong");
+    if (s.channel_count != f.channels.size() || s.schema_count != f.schemas.size())
+      P.push_back("statistics channel/schema count wrong");
     if (s.metadata_count != metadata_at.size()) P.push_back("statistics metadata count wrong");
     std::map<uint16_t, uint64_t> counts;
     uint64_t lo = UINT64_MAX, hi = 0;

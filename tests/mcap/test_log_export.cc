@@ -28,14 +28,12 @@ using nimble::contract::channels::kTruth;
 
 namespace fs = std::filesystem;
 namespace check = nimble::test::mcap_check;
-using nimble::mcap::ExportOptions;
 using nimble::mcap::export_log_to_mcap;
+using nimble::mcap::ExportOptions;
 
 namespace {
 
-std::string scratch(const std::string& name) {
-  return nimble::test::scratch_file("mcap_export", name);
-}
+std::string scratch(const std::string& name) { return nimble::test::scratch_file("mcap_export", name); }
 
 template <typename T>
 std::string encoded(const T& m) {

@@ -24,10 +24,10 @@
 using nimble::contract::channels::kTruth;
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using nimble::test::RigResult;
 using nimble::test::run_program;
 using nimble::test::run_rig;
+using nlohmann::json;
 
 namespace {
 
@@ -80,10 +80,10 @@ TEST_CASE("node: a synthetic MCAP file reads back in @mcap/core, both compressio
   const int n = 5000;
   {
     nimble::mcap::McapWriter w(file, o);
-    const uint16_t schema = w.add_schema(
-        "test.sample_t", "jsonschema",
-        R"({"$schema":"http://json-schema.org/draft-07/schema#","type":"object","required":["i","x"],)"
-        R"("properties":{"i":{"type":"integer","x-unit":"-"},"x":{"type":["number","null"]}}})");
+    const uint16_t schema =
+        w.add_schema("test.sample_t", "jsonschema",
+                     R"({"$schema":"http://json-schema.org/draft-07/schema#","type":"object","required":["i","x"],)"
+                     R"("properties":{"i":{"type":"integer","x-unit":"-"},"x":{"type":["number","null"]}}})");
     const uint16_t a = w.add_channel(schema, "A", "json");
     const uint16_t b = w.add_channel(schema, "B", "json");
     for (int i = 0; i < n; ++i) {
@@ -243,8 +243,8 @@ TEST_CASE("node: a damaged log is refused naming the offset, --salvage exports w
   const std::string out = dir + "/cut.mcap";
   const RigResult refused = run_rig("export " + cut + " --format mcap --out " + out);
   CHECK(refused.exit_code == 2);
-  CHECK_THAT(refused.err, Catch::Contains("damaged at byte " + std::to_string(offsets[half])) &&
-                              Catch::Contains("--salvage"));
+  CHECK_THAT(refused.err,
+             Catch::Contains("damaged at byte " + std::to_string(offsets[half])) && Catch::Contains("--salvage"));
   CHECK_FALSE(fs::exists(out));
   CHECK_FALSE(fs::exists(out + ".part"));
 
@@ -255,5 +255,6 @@ TEST_CASE("node: a damaged log is refused naming the offset, --salvage exports w
   const json r = read_with_node(out);
   CHECK(r.at("messages") == half);
   CHECK(r.at("stream").at("messages") == half);
-  CHECK(r.at("metadata")[0].at("metadata").at("damage").get<std::string>().find("damaged at byte") != std::string::npos);
+  CHECK(r.at("metadata")[0].at("metadata").at("damage").get<std::string>().find("damaged at byte") !=
+        std::string::npos);
 }

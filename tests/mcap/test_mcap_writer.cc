@@ -58,7 +58,8 @@ std::vector<Written> write_sample(const std::string& path, WriterOptions options
   for (int i = 0; i < n; ++i) {
     const uint16_t ch = i % 3 == 0 ? truth : i % 3 == 1 ? imu : raw;
     const uint64_t t = 1000000ull * static_cast<uint64_t>(i / 3) + (ch == imu ? 7 : 0);
-    std::string data = "{\"i\":" + std::to_string(i) + ",\"pad\":\"" + std::string(static_cast<std::size_t>(i % 97), 'x') + "\"}";
+    std::string data =
+        "{\"i\":" + std::to_string(i) + ",\"pad\":\"" + std::string(static_cast<std::size_t>(i % 97), 'x') + "\"}";
     if (ch == raw) data.assign(1 + i % 13, static_cast<char>(i));  // binary bytes, NULs included
     out.push_back({ch, static_cast<uint32_t>(i), t, t + 5, data});
     w.add_message(ch, static_cast<uint32_t>(i), t, t + 5, data.data(), data.size());

@@ -54,5 +54,4 @@ inline Eigen::Vector3d lateral(const PlantModel& plant) {
   return {t.omega_body_radps.x(), t.velocity_body_mps.y(), t.euler_rad.x()};
 }
 
-
 }  // namespace nimble::plant_test

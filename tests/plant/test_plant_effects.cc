@@ -32,10 +32,10 @@
 #include "plant_fixture.h"
 
 using namespace nimble;
+using nimble::model_effect_names;
 using nimble::plant::ActuatorInput;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
-using nimble::model_effect_names;
 
 using namespace nimble::plant_test;
 
@@ -51,16 +51,23 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
       {"gravity_nonlinearity", {{"Y_gphi", 0.02876}}},
       {"lateral_inflow", {{"L_vv", -2e-4}, {"Y_vv", -0.02}}},
       {"forward_speed_coupling", {{"L_up", -1e-4}, {"L_uv", -2e-4}, {"Y_up", 1e-3}, {"Y_uv", -0.03}}},
-      {"actuator_delay", {{"delay_s", 0.02}, {"L_df_delayed", 1e-4}, {"Y_df_delayed", -8e-4},
-                          {"L_df_fraction_delayed", 0.9}, {"Y_df_fraction_delayed", 0.9}, {"F_cmd_delayed", 0.5}}},
+      {"actuator_delay",
+       {{"delay_s", 0.02},
+        {"L_df_delayed", 1e-4},
+        {"Y_df_delayed", -8e-4},
+        {"L_df_fraction_delayed", 0.9},
+        {"Y_df_fraction_delayed", 0.9},
+        {"F_cmd_delayed", 0.5}}},
       {"sensor_bias", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
       {"constant_load", {{"L_0", 1e-5}, {"Y_0", -1e-4}}},
       {"dihedral_coupling", {{"L_dd", 1.4e-3}, {"Y_dd", -0.06}}},
       {"yaw_coupling", {{"Lr", -2.8e-4}, {"Yr", 8.4e-3}}},
       {"flapping_forcing", {{"flapping_hz", 16.5}, {"L_sin1", 1e-3}, {"L_cos1", 1e-3}, {"L_amp1", std::sqrt(2e-6)}}},
       {"lateral_gust", {{"sigma_mps", 0.1}, {"tau_s", 0.5}}},
-      {"effectiveness_drift", {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}, {"rate_per_min", -0.05}, {"t_mid_s", 20.0}}},
-      {"effectiveness_step", {{"L_df_step", -2.6e-5}, {"Y_df_step", 2.2e-4}, {"t_change_s", 12.0}, {"fraction", -0.25}}},
+      {"effectiveness_drift",
+       {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}, {"rate_per_min", -0.05}, {"t_mid_s", 20.0}}},
+      {"effectiveness_step",
+       {{"L_df_step", -2.6e-5}, {"Y_df_step", 2.2e-4}, {"t_change_s", 12.0}, {"fraction", -0.25}}},
   };
   for (const auto& name : model_effect_names()) {
     INFO("effect " << name);
@@ -79,18 +86,19 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
   CHECK(eom == std::vector<std::string>{"kinematic_coupling", "gravity_nonlinearity"});
 }
 
-TEST_CASE("the effect registry and the plant agree: every regressor parameter of every effect flies, every plant "
-          "effect flies a registry effect and is written in the plant file",
-          "[plant][model_effects]") {
+TEST_CASE(
+    "the effect registry and the plant agree: every regressor parameter of every effect flies, every plant "
+    "effect flies a registry effect and is written in the plant file",
+    "[plant][model_effects]") {
   // Built from the registry (core/effects.h) alone: an effect added there without its plant
   // side (plant/effects/registry.cc) fails here.
   for (const auto& spec : nimble::effect_registry()) {
     std::map<std::string, double> section;
     for (const auto& term : spec.terms) section[term.parameter] = 1e-4;
-    if (spec.name == "actuator_delay") section["delay_s"] = 0.02;  // the scanned delay
-    if (spec.name == "flapping_forcing") section["flapping_hz"] = 16.5;  // the scanned frequency
+    if (spec.name == "actuator_delay") section["delay_s"] = 0.02;                     // the scanned delay
+    if (spec.name == "flapping_forcing") section["flapping_hz"] = 16.5;               // the scanned frequency
     if (spec.name == "lateral_gust") section = {{"sigma_mps", 0.1}, {"tau_s", 0.5}};  // stochastic: no terms
-    if (spec.name == "effectiveness_step") section["t_change_s"] = 12.0;  // the scanned change time
+    if (spec.name == "effectiveness_step") section["t_change_s"] = 12.0;              // the scanned change time
     // The drift's coefficients are per second of the model's L_df (1.06e-4) and Y_df (-8.63e-4):
     // 1e-4 would be a rate of 57 per minute; -5 %/min is the plant file's.
     if (spec.name == "effectiveness_drift") section = {{"L_df_rate", -8.8e-8}, {"Y_df_rate", 7.2e-7}};
@@ -131,7 +139,8 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
   const DerivativeModel lon = load_model(kModels + "nimble_longitudinal.yaml");
   const double L_up = -1.5e-4, L_uv = 3.0e-4, Y_up = 2.0e-3, Y_uv = -0.03;
   Fixture f;
-  const Fixture g = with_effect("forward_speed_coupling", {{"L_up", L_up}, {"L_uv", L_uv}, {"Y_up", Y_up}, {"Y_uv", Y_uv}});
+  const Fixture g =
+      with_effect("forward_speed_coupling", {{"L_up", L_up}, {"L_uv", L_uv}, {"Y_up", Y_up}, {"Y_uv", Y_uv}});
   PlantConfig cfg;
   cfg.initial.u_mps = 0.6;
   cfg.initial.v_mps = 0.4;
@@ -174,7 +183,8 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
 
 TEST_CASE("actuator delay from the model postpones the delta_f response by delay_s", "[plant][model_effects]") {
   // The plant file's delay (50 ms) is replaced by the model's (20 ms).
-  const Fixture g = with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
+  const Fixture g =
+      with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
   PlantConfig cfg;
   cfg.effects.get<plant::ActuatorDelayConfig>().enabled = true;
   cfg.effects.get<plant::ActuatorDelayConfig>().delay_s = 0.050;
@@ -218,9 +228,14 @@ TEST_CASE("flapping forcing from the model oscillates at the plant's flapping fr
 
   // Both equations and two harmonics: the same as the plant file's forcing with the
   // amplitudes hypot(sin_h, cos_h), with the plant's seeded phases.
-  const Fixture h = with_effect("flapping_forcing", {{"flapping_hz", 16.0}, {"L_sin1", 1.2e-3}, {"L_cos1", -1.6e-3},
-                                                     {"L_sin2", 0.6e-3}, {"L_cos2", 0.8e-3}, {"Y_cos1", 1.0e-2},
-                                                     {"Y_sin2", -3.0e-3}, {"Y_cos2", 4.0e-3}});
+  const Fixture h = with_effect("flapping_forcing", {{"flapping_hz", 16.0},
+                                                     {"L_sin1", 1.2e-3},
+                                                     {"L_cos1", -1.6e-3},
+                                                     {"L_sin2", 0.6e-3},
+                                                     {"L_cos2", 0.8e-3},
+                                                     {"Y_cos1", 1.0e-2},
+                                                     {"Y_sin2", -3.0e-3},
+                                                     {"Y_cos2", 4.0e-3}});
   PlantConfig by_config;
   by_config.effects.get<plant::FlappingForcingConfig>().enabled = true;
   by_config.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
@@ -244,7 +259,8 @@ TEST_CASE("sensor_bias from the model is a constant roll moment and side force",
   const PlantModel plain = make_plant(Fixture{});
   PlantModel biased = make_plant(g);
   REQUIRE(plain.truth().angular_accel_body_radps2.x() == 0.0);
-  CHECK(biased.truth().angular_accel_body_radps2.x() == Approx(g.vehicle.Izz_kgm2 / g.vehicle.Ic() * L0).epsilon(1e-12));
+  CHECK(biased.truth().angular_accel_body_radps2.x() ==
+        Approx(g.vehicle.Izz_kgm2 / g.vehicle.Ic() * L0).epsilon(1e-12));
   CHECK(biased.truth().specific_force_body_mps2.y() == Approx(Y0 / g.vehicle.mass_kg).epsilon(1e-12));
   // The same as the plant file's constant load.
   PlantConfig by_config;
@@ -294,7 +310,8 @@ TEST_CASE("yaw_coupling from the model sets Lr and Yr (acting where r is a state
   moved.effects["yaw_coupling"] = {{"Lr", full.at("Lr")}, {"Yr", full.at("Yr")}};
   PlantConfig cfg;
   cfg.initial.r_radps = 0.5;
-  PlantModel a(full, std::nullopt, vehicle, cfg), b(moved, std::nullopt, vehicle, cfg), c(without, std::nullopt, vehicle, cfg);
+  PlantModel a(full, std::nullopt, vehicle, cfg), b(moved, std::nullopt, vehicle, cfg),
+      c(without, std::nullopt, vehicle, cfg);
   for (int i = 0; i < 300; ++i) {
     a.step(a.trim_command());
     b.step(b.trim_command());
@@ -366,8 +383,9 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
                   flown(make_plant(Fixture{}), 600).truth().omega_body_radps.x()) > 1e-3);
 
   // From a model: the fractions are the coefficients over the model's L_df and Y_df.
-  const Fixture g = with_effect("effectiveness_step", {{"L_df_step", fL * 1.06e-4}, {"Y_df_step", fY * -8.63e-4},
-                                                       {"t_change_s", 0.3}, {"t_change_lo_s", 0.2}});
+  const Fixture g = with_effect(
+      "effectiveness_step",
+      {{"L_df_step", fL * 1.06e-4}, {"Y_df_step", fY * -8.63e-4}, {"t_change_s", 0.3}, {"t_change_lo_s", 0.2}});
   const PlantModel c = flown(make_plant(g), 600), d = flown(make_plant(Fixture{}, later), 600);
   CHECK(c.truth().omega_body_radps.x() == Approx(d.truth().omega_body_radps.x()).epsilon(1e-9));
   CHECK_THROWS_WITH(make_plant(with_effect("effectiveness_step", {{"L_df_step", -1e-5}})),
@@ -376,9 +394,10 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
                     Catch::Contains("effects.effectiveness_step.L_df_step / L_df"));
 }
 
-TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 60, clamped at 0, and a model's "
-          "coefficients give the rate",
-          "[plant][model_effects]") {
+TEST_CASE(
+    "effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 60, clamped at 0, and a model's "
+    "coefficients give the rate",
+    "[plant][model_effects]") {
   plant::EffectivenessDriftConfig c{true, -0.05, 10.0};
   double L = 0.0, Y = 0.0;
   plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);  // 30 s after t_ref: -2.5 %
@@ -407,7 +426,8 @@ TEST_CASE("effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 
 
   // From a model: rate = 60 L_df_rate / L_df (per minute), t_ref = t_mid_s.
   const Fixture f;
-  const std::map<std::string, double> params{{"L_df_rate", -0.05 / 60.0 * 1.06e-4}, {"Y_df_rate", 1e-6}, {"t_mid_s", 30.0}};
+  const std::map<std::string, double> params{
+      {"L_df_rate", -0.05 / 60.0 * 1.06e-4}, {"Y_df_rate", 1e-6}, {"t_mid_s", 30.0}};
   plant::EffectivenessDriftConfig m;
   plant::effectiveness_drift_from_model({f.model, "effectiveness_drift", params}, m);
   CHECK(m.enabled);
@@ -458,8 +478,8 @@ TEST_CASE("a plant term ratelimit(delta_f, 300) - delta_f limits the flap moment
   // limit, so the plant's RK4 stages, which see the window of the step before, do not clip).
   Fixture f;
   PlantConfig cfg;
-  cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("ratelimit(delta_f, 300) - delta_f"),
-                            f.model.at("L_df"), "test"}};
+  cfg.terms = {nimble::Term{"L", nimble::TermExpression::parse("ratelimit(delta_f, 300) - delta_f"), f.model.at("L_df"),
+                            "test"}};
   const auto fly = [&](double hz, int steps) {
     PlantModel limited = make_plant(f, cfg), plain = make_plant(f);
     double max_gap = 0.0, max_plain = 0.0, max_df_rate = 0.0, df_before = 0.0;

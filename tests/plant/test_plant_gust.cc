@@ -106,7 +106,8 @@ TEST_CASE("plant config: lateral_gust form dryden with its time scale, bad value
   CHECK(d.effects.get<plant::LateralGustConfig>().sigma_mps == 0.3);
   CHECK(d.effects.get<plant::LateralGustConfig>().time_scale_s == 2.5);
   CHECK(load("enabled: true, sigma_mps: 0.3").effects.get<plant::LateralGustConfig>().form == GustForm::kGaussMarkov);
-  CHECK(load("enabled: true, form: gauss_markov").effects.get<plant::LateralGustConfig>().form == GustForm::kGaussMarkov);
+  CHECK(load("enabled: true, form: gauss_markov").effects.get<plant::LateralGustConfig>().form ==
+        GustForm::kGaussMarkov);
   CHECK(PlantConfig{}.effects.get<plant::LateralGustConfig>().time_scale_s == 1.0);
   CHECK(nimble::plant::to_string(GustForm::kDryden) == "dryden");
 
@@ -126,13 +127,16 @@ TEST_CASE("plant file: the lateral_gust keys and their defaults", "[plant][gust]
   const PlantConfig c = nimble::plant::plant_config_from(m);
   const PlantConfig defaults;
   CHECK(c.effects.get<plant::LateralGustConfig>().form == defaults.effects.get<plant::LateralGustConfig>().form);
-  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s == defaults.effects.get<plant::LateralGustConfig>().time_scale_s);
+  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s ==
+        defaults.effects.get<plant::LateralGustConfig>().time_scale_s);
   // The defaults: the Dryden form's integral time scale T/2 equals the Gauss-Markov tau, so
   // both forms have the same S(0) = 2 sigma^2 tau = sigma^2 T.
-  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s == Approx(2.0 * c.effects.get<plant::LateralGustConfig>().tau_s));
+  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s ==
+        Approx(2.0 * c.effects.get<plant::LateralGustConfig>().tau_s));
 }
 
-TEST_CASE("Dryden gust: the exact discrete variance is sigma^2 at the plant rate and at a coarse rate", "[plant][gust]") {
+TEST_CASE("Dryden gust: the exact discrete variance is sigma^2 at the plant rate and at a coarse rate",
+          "[plant][gust]") {
   const double sigma = 0.1, T = 1.0;
   const tb::ShapingFilter f = tb::time_based_second_order(sigma, T);
   const Eigen::VectorXd W = Eigen::VectorXd::Ones(1);

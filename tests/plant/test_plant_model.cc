@@ -26,10 +26,10 @@
 #include "plant_fixture.h"
 
 using namespace nimble;
+using nimble::model_effect_names;
 using nimble::plant::ActuatorInput;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
-using nimble::model_effect_names;
 
 using namespace nimble::plant_test;
 
@@ -69,7 +69,8 @@ TEST_CASE("small perturbations reproduce the linear model's eigenvalues", "[plan
   const double dt = base.dt_s();
   for (const auto& lambda : linear) {
     double best = INFINITY;
-    for (int i = 0; i < 3; ++i) best = std::min(best, std::abs(std::log(std::complex<double>(es.eigenvalues()[i])) / dt - lambda));
+    for (int i = 0; i < 3; ++i)
+      best = std::min(best, std::abs(std::log(std::complex<double>(es.eigenvalues()[i])) / dt - lambda));
     INFO("linear eigenvalue " << lambda);
     CHECK(best / std::abs(lambda) < 0.005);
   }

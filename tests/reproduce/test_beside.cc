@@ -44,9 +44,10 @@ CampaignResult run(const std::vector<Cell>& cells, const std::vector<std::string
 
 }  // namespace
 
-TEST_CASE("beside: a cell moves toward or away by its distance to the published value, the same within its "
-          "tolerance or interval",
-          "[beside]") {
+TEST_CASE(
+    "beside: a cell moves toward or away by its distance to the published value, the same within its "
+    "tolerance or interval",
+    "[beside]") {
   // Published 1, tolerance 0.1: from 2 to 1.5 is toward, to 2.5 away; a crossing to 0 is the same
   // distance, so the same.
   CHECK(moved(cell(1, 2, 0, 0.1), cell(1, 1.5, 0, 0.1)) == "toward");

@@ -65,9 +65,10 @@ TEST_CASE("verdict: a reason explains only while each part of its predicate hold
   CHECK(judge(t, "p_dot", "R2", {0.99}, c).verdict == "differs");
 }
 
-TEST_CASE("verdict: direction, bound and states describe a difference: without a cause flown they do not explain it, "
-          "and a bound that cannot fail is refused",
-          "[verdict]") {
+TEST_CASE(
+    "verdict: direction, bound and states describe a difference: without a cause flown they do not explain it, "
+    "and a bound that cannot fail is refused",
+    "[verdict]") {
   TableSpec t = table();
   Reason r;
   r.cells = {"p_dot / R2"};
@@ -92,9 +93,10 @@ TEST_CASE("verdict: direction, bound and states describe a difference: without a
   CHECK(judge(t, "p_dot", "R2", {0.99}, c).verdict == "explained");
 }
 
-TEST_CASE("verdict: by equivalence, an interval inside the band matches, wholly outside differs, across an edge is "
-          "inconclusive with the seeds that would decide it",
-          "[verdict]") {
+TEST_CASE(
+    "verdict: by equivalence, an interval inside the band matches, wholly outside differs, across an edge is "
+    "inconclusive with the seeds that would decide it",
+    "[verdict]") {
   // Table 9.6's Yv+ with the published value moved to -1.5: the rig's -1.137 +- 0.015 lies wholly
   // outside the band (2 thesis sigma, 6.7e-4 each, raised to the 0.005 of the printed -1.13) and
   // differs, though its interval is wider than the tolerance.
@@ -103,7 +105,7 @@ TEST_CASE("verdict: by equivalence, an interval inside the band matches, wholly 
   t.thesis_sigmas = 2;
   t.thesis_sigma["set 1 / Yv+"] = 6.7e-4;
   t.published["set 1"]["Yv+"] = -1.5;
-  t.printed_half_digit["set 1"]["Yv+"] = 0.005;  // written "-1.50"
+  t.printed_half_digit["set 1"]["Yv+"] = 0.005;                           // written "-1.50"
   const std::vector<double> rig{-1.152, -1.122, -1.142, -1.127, -1.142};  // -1.137 +- 0.015
   const Cell moved = judge(t, "set 1", "Yv+", rig, ctx());
   CHECK(moved.interval > moved.tolerance);
@@ -172,9 +174,10 @@ TEST_CASE("verdict: calibrated and model cells match or differ", "[verdict]") {
   }
 }
 
-TEST_CASE("verdict: a pipeline check is judged against the plant file's value within half the published number's "
-          "last digit, on at least two seeds",
-          "[verdict]") {
+TEST_CASE(
+    "verdict: a pipeline check is judged against the plant file's value within half the published number's "
+    "last digit, on at least two seeds",
+    "[verdict]") {
   // Table 9.6's Yv+: the thesis prints -1.13, the plant file's exact value is -1.1285.
   TableSpec t;
   t.category = Category::kModel;
@@ -242,9 +245,10 @@ TEST_CASE("verdict: a cause whose flight did not fly as asked explains nothing",
   CHECK_THAT(failed.check.value, Catch::Contains("failsafe"));
 }
 
-TEST_CASE("verdict: no tolerance is tighter than the published number's rounding, and one as wide as the value "
-          "judges nothing",
-          "[verdict]") {
+TEST_CASE(
+    "verdict: no tolerance is tighter than the published number's rounding, and one as wide as the value "
+    "judges nothing",
+    "[verdict]") {
   CHECK(half_last_digit(0.24) == Approx(0.005));
   CHECK(half_last_digit(-1.13) == Approx(0.005));
   CHECK(half_last_digit(0.907) == Approx(0.0005));

@@ -126,7 +126,8 @@ TEST_CASE("a YAML alias bomb is refused at once, naming the file and line", "[re
     text += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [" + list + "]\n";
   }
   const std::string bomb = write("bomb.yaml", text);
-  refused("run " + bomb + " --clock inprocess --no-progress", bomb + ":6:", "YAML aliases expand to more than 100000 nodes");
+  refused("run " + bomb + " --clock inprocess --no-progress",
+          bomb + ":6:", "YAML aliases expand to more than 100000 nodes");
   refused("model " + bomb, bomb + ":6:", "YAML aliases expand to more than 100000 nodes");
   // As a base file, and through --set.
   const std::string scenario = write("bomb_base.yaml", "base: " + bomb + "\n");

@@ -63,8 +63,17 @@ int exit_code(pid_t pid) {
 }
 
 std::vector<std::string> sweep_args(const std::string& seeds, const std::string& dir) {
-  return {"sweep", kSource + "rig_configs/hover.yaml", "--set", "duration_s=0.2", "--jobs", "1", "--no-progress",
-          "--seeds", seeds, "--dir", dir};
+  return {"sweep",
+          kSource + "rig_configs/hover.yaml",
+          "--set",
+          "duration_s=0.2",
+          "--jobs",
+          "1",
+          "--no-progress",
+          "--seeds",
+          seeds,
+          "--dir",
+          dir};
 }
 
 /// The seeds of DIR/result.json's runs, and that each run is whole (its verdict and exit code there).
@@ -87,9 +96,10 @@ std::size_t files_in(const std::string& dir) {
 
 }  // namespace
 
-TEST_CASE("campaign directory: two rig sweep --dir racing on one directory, 20 times: one writer, the campaign left "
-          "holds its own results whole",
-          "[resource]") {
+TEST_CASE(
+    "campaign directory: two rig sweep --dir racing on one directory, 20 times: one writer, the campaign left "
+    "holds its own results whole",
+    "[resource]") {
   const std::string d = nimble::test::scratch_dir("campaign_race");
   int busy = 0, other = 0, resumed = 0, intact = 0;
   for (int k = 0; k < 20; ++k) {
@@ -102,7 +112,8 @@ TEST_CASE("campaign directory: two rig sweep --dir racing on one directory, 20 t
     const int code[2] = {exit_code(pid[0]), exit_code(pid[1])};
     const std::string said[2] = {slurp(out[0]), slurp(out[1])};
     INFO("race " << k << (same ? " (the same campaign)" : " (two campaigns)") << "\n--- a: exit " << code[0] << "\n"
-                 << said[0] << "\n--- b: exit " << code[1] << "\n" << said[1]);
+                 << said[0] << "\n--- b: exit " << code[1] << "\n"
+                 << said[1]);
     REQUIRE((code[0] == 0 || code[1] == 0));
     const int won = code[0] == 0 ? 0 : 1, lost = 1 - won;
     if (code[lost] == 2) {
@@ -138,17 +149,19 @@ TEST_CASE("campaign directory: two rig sweep --dir racing on one directory, 20 t
     CHECK(nimble::test::csv_without_machine(dir + "/result.csv") == csv);
     intact += got == want && collect.exit_code == 0;
   }
-  std::printf("campaign race: 20 races of two rig sweep --dir: %d refused at once as held (exit 2, the holder's pid "
-              "named), %d refused as another campaign (exit 2), %d resumed a finished campaign (exit 0); %d of 20 "
-              "campaigns left whole with only their own runs\n",
-              busy, other, resumed, intact);
+  std::printf(
+      "campaign race: 20 races of two rig sweep --dir: %d refused at once as held (exit 2, the holder's pid "
+      "named), %d refused as another campaign (exit 2), %d resumed a finished campaign (exit 0); %d of 20 "
+      "campaigns left whole with only their own runs\n",
+      busy, other, resumed, intact);
   CHECK(busy + other + resumed == 20);
   CHECK(intact == 20);
 }
 
-TEST_CASE("campaign directory: a user's directory or a stray result file is refused untouched by rig sweep, "
-          "rig reproduce thesis --dir and rig discrepancy --power --dir",
-          "[resource]") {
+TEST_CASE(
+    "campaign directory: a user's directory or a stray result file is refused untouched by rig sweep, "
+    "rig reproduce thesis --dir and rig discrepancy --power --dir",
+    "[resource]") {
   const std::string d = nimble::test::scratch_dir("campaign_foreign");
   const std::string user = d + "/user";
   fs::create_directories(user);
@@ -167,8 +180,8 @@ TEST_CASE("campaign directory: a user's directory or a stray result file is refu
           "--refine 0 --no-progress",
   };
   for (const std::string& command : commands) {
-    for (const auto& [dir, holds] : {std::pair{user, std::string("it holds scenario.yaml")},
-                                    std::pair{stray, std::string("it holds runs/")}}) {
+    for (const auto& [dir, holds] :
+         {std::pair{user, std::string("it holds scenario.yaml")}, std::pair{stray, std::string("it holds runs/")}}) {
       INFO(command << " --dir " << dir);
       const auto r = run_rig(command + " --dir " + dir);
       INFO(r.out << r.err);
@@ -183,9 +196,10 @@ TEST_CASE("campaign directory: a user's directory or a stray result file is refu
   }
 }
 
-TEST_CASE("campaign directory: a result file copied from another campaign is refused, named, and the campaign's own "
-          "read back whole once it is gone",
-          "[resource]") {
+TEST_CASE(
+    "campaign directory: a result file copied from another campaign is refused, named, and the campaign's own "
+    "read back whole once it is gone",
+    "[resource]") {
   const std::string d = nimble::test::scratch_dir("campaign_copied");
   // Two campaigns with the same options, made apart: each its own identity.
   for (const char* c : {"/c1", "/c2"}) {
@@ -197,13 +211,15 @@ TEST_CASE("campaign directory: a result file copied from another campaign is ref
   const std::string csv = nimble::test::csv_without_machine(d + "/c1/result.csv");
   fs::copy_file(own, kept);
   fs::copy_file(d + "/c2/runs/run-000001.json", own, fs::copy_options::overwrite_existing);
-  for (const std::string& args : {"sweep collect " + d + "/c1 --no-progress", "sweep --resume " + d + "/c1 --no-progress",
-                                  kSweep + " --seeds 1-3 --dir " + d + "/c1"}) {
+  for (const std::string& args :
+       {"sweep collect " + d + "/c1 --no-progress", "sweep --resume " + d + "/c1 --no-progress",
+        kSweep + " --seeds 1-3 --dir " + d + "/c1"}) {
     INFO(args);
     const auto r = run_rig(args);
     INFO(r.out << r.err);
     CHECK(r.exit_code == 2);
-    CHECK(r.err.find(own + " is not a result of this campaign: it is a result of another campaign") != std::string::npos);
+    CHECK(r.err.find(own + " is not a result of this campaign: it is a result of another campaign") !=
+          std::string::npos);
   }
   fs::copy_file(kept, own, fs::copy_options::overwrite_existing);
   // A file in runs/ that is no result file at all.
@@ -220,9 +236,10 @@ TEST_CASE("campaign directory: a result file copied from another campaign is ref
   CHECK(nimble::test::csv_without_machine(d + "/c1/result.csv") == csv);
 }
 
-TEST_CASE("campaign directory: a directory held by another process is refused at once by every campaign, naming it "
-          "and the holder's pid, and once the holder is killed the next campaign takes it",
-          "[resource]") {
+TEST_CASE(
+    "campaign directory: a directory held by another process is refused at once by every campaign, naming it "
+    "and the holder's pid, and once the holder is killed the next campaign takes it",
+    "[resource]") {
   const std::string d = nimble::test::scratch_dir("campaign_held");
   const std::string dir = d + "/c";
   int ready[2];
@@ -243,8 +260,8 @@ TEST_CASE("campaign directory: a directory held by another process is refused at
   char byte = 0;
   REQUIRE(::read(ready[0], &byte, 1) == 1);
   ::close(ready[0]);
-  const std::string held = "the campaign directory " + dir + " is being written by another process (pid " +
-                           std::to_string(holder);
+  const std::string held =
+      "the campaign directory " + dir + " is being written by another process (pid " + std::to_string(holder);
   for (const std::string& command : {
            kSweep + " --seeds 1-3",
            "reproduce thesis --seeds 1 --no-progress --logs " + d + "/logs",

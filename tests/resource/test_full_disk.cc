@@ -33,9 +33,7 @@ namespace {
 
 constexpr int64_t kDiskBytes = 300 * 1000;  // the issue's 300 kB disk
 
-std::string scratch(const std::string& tag) {
-  return nimble::test::scratch_dir("full_disk_" + tag);
-}
+std::string scratch(const std::string& tag) { return nimble::test::scratch_dir("full_disk_" + tag); }
 
 struct Ran {
   int exit_code = -1;
@@ -150,20 +148,22 @@ TEST_CASE("a run whose log will not fit on its disk is refused before it starts,
   SmallDisk disk(scratch("refuse"), kDiskBytes);
   WARN("small disk: " << disk.describe());
   if (!disk.tmpfs()) {
-    FAIL("this machine allows no tmpfs mount (not root?): the free-space check before a run cannot be tested here; "
-         "CI runs it as root");
+    FAIL(
+        "this machine allows no tmpfs mount (not root?): the free-space check before a run cannot be tested here; "
+        "CI runs it as root");
   }
   const std::string log = disk.dir() + "/run.lcmlog";
-  const Ran r = run_on(disk, rig() + " run rig_configs/hover.yaml --clock lockstep --set duration_s=6 --log " + log +
-                                 " --no-progress");
+  const Ran r = run_on(
+      disk, rig() + " run rig_configs/hover.yaml --clock lockstep --set duration_s=6 --log " + log + " --no-progress");
   INFO(r.output);
   CHECK(r.exit_code == 2);
-  CHECK_THAT(r.output, Contains("refused: the log " + log + " is expected to take ") && Contains("for 6.0 s simulated") &&
-                           Contains("but its filesystem has ") && Contains("--no-space-check"));
+  CHECK_THAT(r.output, Contains("refused: the log " + log + " is expected to take ") &&
+                           Contains("for 6.0 s simulated") && Contains("but its filesystem has ") &&
+                           Contains("--no-space-check"));
   CHECK_FALSE(fs::exists(log));
   // A short run fits and flies.
-  const Ran ok = run_on(disk, rig() + " run rig_configs/hover.yaml --clock inprocess --set duration_s=0.2 --log " + log +
-                                  " --no-progress");
+  const Ran ok = run_on(disk, rig() + " run rig_configs/hover.yaml --clock inprocess --set duration_s=0.2 --log " +
+                                  log + " --no-progress");
   INFO(ok.output);
   CHECK(ok.exit_code == 0);
   CHECK(whole_events(log) > 0);
@@ -205,8 +205,8 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
   const std::string log = outside + "/train.lcmlog";
   {
     SmallDisk big(scratch("writers_unused"), 1 << 30);
-    const Ran made = run_on(big, rig() + " run rig_configs/id_doublet_train_fast.yaml --clock inprocess --log " + log +
-                                     " --no-progress");
+    const Ran made = run_on(
+        big, rig() + " run rig_configs/id_doublet_train_fast.yaml --clock inprocess --log " + log + " --no-progress");
     INFO(made.output);
     REQUIRE(made.exit_code == 0);
   }
@@ -223,14 +223,16 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
       {"rig export --csv", " export " + log + " --csv " + d + "/x.csv", d + "/x.csv"},
       {"rig identify --model-out", " identify " + log + " --model-out " + d + "/m.yaml", d + "/m.yaml"},
       {"rig identify --json", " identify " + log + " --json " + d + "/i.json", d + "/i.json"},
-      {"rig run --json", " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
-                             "/h.lcmlog --no-progress --json " + d + "/run.json",
+      {"rig run --json",
+       " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
+           "/h.lcmlog --no-progress --json " + d + "/run.json",
        d + "/run.json"},
-      {"rig run --mcap", " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
-                             "/m.lcmlog --no-progress --mcap " + d + "/run.mcap",
+      {"rig run --mcap",
+       " run rig_configs/hover.yaml --clock inprocess --set duration_s=1 --log " + outside +
+           "/m.lcmlog --no-progress --mcap " + d + "/run.mcap",
        d + "/run.mcap"},
-      {"rig sweep --csv", " sweep rig_configs/hover.yaml --seeds 1-3 --set duration_s=0.5 --no-progress --csv " + d +
-                              "/sweep.csv",
+      {"rig sweep --csv",
+       " sweep rig_configs/hover.yaml --seeds 1-3 --set duration_s=0.5 --no-progress --csv " + d + "/sweep.csv",
        d + "/sweep.csv"},
   };
   for (const Writer& w : writers) {
@@ -247,7 +249,8 @@ TEST_CASE("every other writer names a full disk and leaves no partial file", "[r
     }
     // Nothing half written under the output's name, no temporary file left.
     CHECK_FALSE(fs::exists(w.output));
-    for (const auto& e : fs::directory_iterator(d)) CHECK(e.path().filename().string().find(".part") == std::string::npos);
+    for (const auto& e : fs::directory_iterator(d))
+      CHECK(e.path().filename().string().find(".part") == std::string::npos);
   }
   fs::remove_all(outside);
 }

@@ -55,7 +55,8 @@ const Garbled& garbled() {
   static const Garbled g = [] {
     const std::string dir = nimble::test::scratch_dir("garbled");
     const std::string clean = dir + "/hover.lcmlog";
-    const RigResult run = run_rig("run " + kSource + "/rig_configs/hover.yaml --clock inprocess --set duration_s=3 --log " + clean);
+    const RigResult run =
+        run_rig("run " + kSource + "/rig_configs/hover.yaml --clock inprocess --set duration_s=3 --log " + clean);
     REQUIRE(run.exit_code == 0);
     std::vector<nimble::lcmlog::LogEventRecord> truth;
     nimble::lcmlog::LcmLogReader reader(clean);
@@ -68,12 +69,14 @@ const Garbled& garbled() {
     std::string bytes = read_bytes(clean);
     const std::size_t payload = static_cast<std::size_t>(victim.offset) + 28 + victim.channel.size();
     REQUIRE(bytes.compare(payload, victim.data.size(), std::string(victim.data.begin(), victim.data.end())) == 0);
-    std::reverse(bytes.begin() + static_cast<long>(payload + 16), bytes.begin() + static_cast<long>(payload + victim.data.size()));
+    std::reverse(bytes.begin() + static_cast<long>(payload + 16),
+                 bytes.begin() + static_cast<long>(payload + victim.data.size()));
     Garbled out;
     out.log = dir + "/garbled.lcmlog";
     std::ofstream(out.log, std::ios::binary) << bytes;
     std::int64_t utime = 0;
-    for (int i = 0; i < 8; ++i) utime = (utime << 8) | static_cast<unsigned char>(victim.data[8 + static_cast<std::size_t>(i)]);
+    for (int i = 0; i < 8; ++i)
+      utime = (utime << 8) | static_cast<unsigned char>(victim.data[8 + static_cast<std::size_t>(i)]);
     out.event = victim.event_number;
     out.t_s = static_cast<double>(utime) * 1e-6;
     return out;
@@ -123,12 +126,14 @@ void check_named(const std::string& text) {
 
 }  // namespace
 
-TEST_CASE("garbled payload: rig export --csv warns naming the message, leaves it out, and writes no value beyond the "
-          "bounds, and --strict refuses it",
-          "[resource][garbled]") {
+TEST_CASE(
+    "garbled payload: rig export --csv warns naming the message, leaves it out, and writes no value beyond the "
+    "bounds, and --strict refuses it",
+    "[resource][garbled]") {
   const Garbled& g = garbled();
   const std::string dir = nimble::test::scratch_dir("garbled_csv");
-  const RigResult r = run_rig("export " + g.log + " --csv " + dir + "/truth.csv --states truth --json " + dir + "/e.json");
+  const RigResult r =
+      run_rig("export " + g.log + " --csv " + dir + "/truth.csv --states truth --json " + dir + "/e.json");
   REQUIRE(r.exit_code == 0);
   check_named(r.err);
   CHECK(r.err.find("rig export: warning: " + g.log + ": left out: 1 message with ") != std::string::npos);
@@ -145,9 +150,10 @@ TEST_CASE("garbled payload: rig export --csv warns naming the message, leaves it
   CHECK_FALSE(fs::exists(dir + "/strict.csv"));
 }
 
-TEST_CASE("garbled payload: rig export --format mcap leaves the message out of the JSON channel and names it, and "
-          "--strict refuses and leaves no file",
-          "[resource][garbled]") {
+TEST_CASE(
+    "garbled payload: rig export --format mcap leaves the message out of the JSON channel and names it, and "
+    "--strict refuses and leaves no file",
+    "[resource][garbled]") {
   const Garbled& g = garbled();
   const std::string dir = nimble::test::scratch_dir("garbled_mcap");
   const RigResult r = run_rig("export " + g.log + " --out " + dir + "/g.mcap --json -");
@@ -166,14 +172,15 @@ TEST_CASE("garbled payload: rig export --format mcap leaves the message out of t
   CHECK_FALSE(fs::exists(dir + "/s.mcap.part"));
 }
 
-TEST_CASE("garbled payload: identify, validate and discrepancy refuse the log with one message naming the channel, "
-          "field, time and count",
-          "[resource][garbled]") {
+TEST_CASE(
+    "garbled payload: identify, validate and discrepancy refuse the log with one message naming the channel, "
+    "field, time and count",
+    "[resource][garbled]") {
   const Garbled& g = garbled();
   std::string first;
-  for (const std::string& command : {"identify " + g.log + " --states truth",
-                                     "validate " + kModel + " " + g.log + " --states truth",
-                                     "discrepancy " + g.log + " --model " + kModel + " --states truth"}) {
+  for (const std::string& command :
+       {"identify " + g.log + " --states truth", "validate " + kModel + " " + g.log + " --states truth",
+        "discrepancy " + g.log + " --model " + kModel + " --states truth"}) {
     const RigResult r = run_rig(command);
     INFO(command << "\n" << r.err);
     CHECK(r.exit_code == 2);
@@ -196,9 +203,10 @@ TEST_CASE("garbled payload: rig view does not show the message and names it", "[
   CHECK((r.out + r.err).find("beyond_bounds 1") != std::string::npos);  // the live view's figures
 }
 
-TEST_CASE("a record of zeros: identify, validate and discrepancy (one flight and pooled) refuse it with one message, "
-          "and print no nan",
-          "[resource][garbled]") {
+TEST_CASE(
+    "a record of zeros: identify, validate and discrepancy (one flight and pooled) refuse it with one message, "
+    "and print no nan",
+    "[resource][garbled]") {
   const std::string csv = nimble::test::scratch_file("zero_record", "zero.csv");
   {
     std::ofstream out(csv);

@@ -103,8 +103,8 @@ TEST_CASE("the processes of a run inherit nothing of the launcher's: log, LCM so
     WARN(name << " (pid " << pid << "):\n" << listing.str());
     REQUIRE(fds.count(1) == 1);
     // Its output file (comm is cut at 15 characters: the name's start is enough).
-    CHECK_THAT(fds.at(1), Catch::StartsWith(log + "." + name.substr(std::string("nimble_").size())) &&
-                              Catch::EndsWith(".out"));
+    CHECK_THAT(fds.at(1),
+               Catch::StartsWith(log + "." + name.substr(std::string("nimble_").size())) && Catch::EndsWith(".out"));
     for (const auto& [fd, target] : fds) {
       if (fd <= 2 || target.rfind("anon_inode:", 0) == 0) continue;  // epoll, timers: not told apart by name
       // Its own: its LCM sockets, epoll and timer descriptors; none the launcher holds.

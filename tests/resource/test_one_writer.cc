@@ -34,7 +34,7 @@ const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
 /// The pid holding the flock on `path` (-1: none, or no such file).
 int holder_of(const std::string& path) {
-  struct stat st{};
+  struct stat st {};
   if (::stat(path.c_str(), &st) != 0) return -1;
   const auto h = nimble::lock_holder(st.st_dev, st.st_ino);
   return h ? h->pid : -1;
@@ -68,9 +68,10 @@ int events_in(const std::string& log) {
 
 }  // namespace
 
-TEST_CASE("one writer per log: a second run on a log being written is refused at once in every clock, the "
-          "first run's log whole",
-          "[resource]") {
+TEST_CASE(
+    "one writer per log: a second run on a log being written is refused at once in every clock, the "
+    "first run's log whole",
+    "[resource]") {
   for (const std::string clock : {"inprocess", "lockstep", "realtime"}) {
     INFO("clock " << clock);
     const std::string a = nimble::test::scratch_dir("one_writer_log_" + clock);
@@ -81,9 +82,9 @@ TEST_CASE("one writer per log: a second run on a log being written is refused at
     ::kill(first, SIGSTOP);
     REQUIRE(holder > 0);
     // The second run: another seed, another summary, the same log.
-    const RigResult second = run_rig("run " + kConfigs + "hover.yaml --clock " + clock +
-                                      " --set duration_s=2 --seed 4 --no-progress --json " + a +
-                                      "/second.json --log " + log);
+    const RigResult second =
+        run_rig("run " + kConfigs + "hover.yaml --clock " + clock +
+                " --set duration_s=2 --seed 4 --no-progress --json " + a + "/second.json --log " + log);
     ::kill(first, SIGCONT);
     INFO(second.out << second.err);
     CHECK(second.exit_code == 2);
@@ -103,32 +104,35 @@ TEST_CASE("one writer per log: a second run on a log being written is refused at
   }
 }
 
-TEST_CASE("one writer per MCAP file: rig run --mcap and rig export on a file being written are refused, the "
-          "first one's file whole",
-          "[resource]") {
+TEST_CASE(
+    "one writer per MCAP file: rig run --mcap and rig export on a file being written are refused, the "
+    "first one's file whole",
+    "[resource]") {
   const std::string a = nimble::test::scratch_dir("one_writer_mcap");
   const std::string mcap = a + "/run.mcap";
   // A whole log for the export to read.
-  const RigResult source = run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " +
-                                   a + "/source.lcmlog");
+  const RigResult source =
+      run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " + a +
+              "/source.lcmlog");
   REQUIRE(source.exit_code == 0);
   const pid_t first = nimble::test::rig_run_background(kConfigs + "hover.yaml", a,
                                                        "--clock lockstep --set duration_s=2 --mcap " + mcap);
   const int holder = wait_for_holder(mcap + ".part");
   ::kill(first, SIGSTOP);
   REQUIRE(holder > 0);
-  const RigResult run = run_rig("run " + kConfigs + "hover.yaml --clock lockstep --set duration_s=2 --no-progress --log " +
-                                a + "/other.lcmlog --mcap " + mcap);
+  const RigResult run =
+      run_rig("run " + kConfigs + "hover.yaml --clock lockstep --set duration_s=2 --no-progress --log " + a +
+              "/other.lcmlog --mcap " + mcap);
   const RigResult export_ = run_rig("export " + a + "/source.lcmlog --format mcap --out " + mcap);
   ::kill(first, SIGCONT);
   INFO(run.out << run.err << export_.out << export_.err);
   CHECK(run.exit_code == 2);
-  CHECK_THAT(run.err, Contains("refused: --mcap: the MCAP file " + mcap + ".part is being written by another process (pid " +
-                               std::to_string(holder)));
+  CHECK_THAT(run.err, Contains("refused: --mcap: the MCAP file " + mcap +
+                               ".part is being written by another process (pid " + std::to_string(holder)));
   CHECK_FALSE(fs::exists(a + "/other.lcmlog"));  // refused before the flight
   CHECK(export_.exit_code == 2);
-  CHECK_THAT(export_.err, Contains("the MCAP file " + mcap + " is being written by another process (pid " +
-                                   std::to_string(holder)));
+  CHECK_THAT(export_.err,
+             Contains("the MCAP file " + mcap + " is being written by another process (pid " + std::to_string(holder)));
   CHECK(nimble::test::wait_exit_code(first) == 0);
   // The first run's export is whole: renamed from its part, readable from its magic to its end.
   CHECK_FALSE(fs::exists(mcap + ".part"));
@@ -149,8 +153,9 @@ TEST_CASE("one writer per log: a writer killed while it held the log does not bl
   // Its processes end when their launcher dies (each on its parent-death signal, a few ms later
   // on a loaded machine), and the lock goes with the last of them: no lock file is left to clean.
   CHECK(wait_for_no_holder(log));
-  const RigResult next = run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " +
-                                 log + " --json " + a + "/next.json");
+  const RigResult next =
+      run_rig("run " + kConfigs + "hover.yaml --clock inprocess --set duration_s=1 --no-progress --log " + log +
+              " --json " + a + "/next.json");
   INFO(next.out << next.err);
   CHECK(next.exit_code == 0);
   CHECK(events_in(log) == YAML::LoadFile(a + "/next.json")["log_kept"]["events"].as<int>());

@@ -113,7 +113,8 @@ gyro_misalignment_rad: {xy: 0.01, zy: -0.02}
 accel_misalignment_rad: {yx: 0.003}
 clock_offset_s: -0.2
 clock_drift_ppm: 50
-)", "sensing.yaml");
+)",
+                                         "sensing.yaml");
   const ImuModelConfig c = imu_model_config_from(map);
   CHECK(c.gyro_scale_factor == Eigen::Vector3d(0.1, 0.0, -0.05));
   CHECK(c.accel_scale_factor.y() == 0.02);

@@ -116,7 +116,7 @@ TEST_CASE("IMU saturation clamps to the range and sets the flags", "[imu]") {
   const ImuSample calm = imu.sample(t);
   CHECK(calm.saturation_flags == 0);
   t = at_rest(1);
-  t.omega_body_radps = Eigen::Vector3d(40.0, -40.0, 1.0);  // > 2000 deg/s = 34.9 rad/s on x and y
+  t.omega_body_radps = Eigen::Vector3d(40.0, -40.0, 1.0);          // > 2000 deg/s = 34.9 rad/s on x and y
   t.specific_force_body_mps2 = Eigen::Vector3d(0.0, 0.0, -200.0);  // > 16 g on z
   const ImuSample s = imu.sample(t);
   CHECK(s.gyro_radps[0] == Approx(2000.0 * M_PI / 180.0));

@@ -186,16 +186,15 @@ TEST_CASE("mocap config validation names the field", "[mocap]") {
   CHECK_THROWS_WITH(MocapEmulator(d, 1), Catch::Contains("exposure_us"));
 }
 
-TEST_CASE("mocap: a truth far ahead of the frame schedule skips to it instead of capturing every frame",
-          "[mocap]") {
+TEST_CASE("mocap: a truth far ahead of the frame schedule skips to it instead of capturing every frame", "[mocap]") {
   // Found by fuzz_node_mocap: a TRUTH 10^11 us after the previous one made step() capture 2 * 10^7
   // frames (a process that hangs). Up to 1000 frames are caught up; further ahead, the schedule
   // moves to the truth and the frames between count as dropped.
   MocapConfig c = no_dropouts();
   c.latency_us = 0;
   MocapEmulator mocap(c, 7);
-  CHECK(mocap.step(still(0)).empty());                    // the first frame is half an exposure later
-  CHECK(mocap.step(still(5000 * 999)).size() >= 998);     // within reach: every frame
+  CHECK(mocap.step(still(0)).empty());                 // the first frame is half an exposure later
+  CHECK(mocap.step(still(5000 * 999)).size() >= 998);  // within reach: every frame
   const std::int64_t far = 100000000000;               // 10^11 us
   const std::vector<MocapPose> poses = mocap.step(still(far));
   CHECK(poses.size() <= 2);

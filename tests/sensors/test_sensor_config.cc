@@ -16,7 +16,8 @@ imu: {sample_rate_hz: 256, vibration_enabled: false}
 mocap: {latency_us: 8000}
 velocity_differentiator: {span_frames: 4, stride_frames: 3}
 ekf: {gate: {enabled: false}}
-)", "inline.yaml");
+)",
+                                         "inline.yaml");
   const SensorConfig c = sensor_config_from(map);
   CHECK(c.seed == 7);
   CHECK(c.imu.sample_rate_hz == 256.0);

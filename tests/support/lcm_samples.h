@@ -120,7 +120,8 @@ struct Comparer {
   }
   template <typename T, std::size_t N>
   void operator()(const char* name, const T (&a)[N], const T (&b)[N]) const {
-    for (std::size_t i = 0; i < N; ++i) (*this)((std::string(name) + "[" + std::to_string(i) + "]").c_str(), a[i], b[i]);
+    for (std::size_t i = 0; i < N; ++i)
+      (*this)((std::string(name) + "[" + std::to_string(i) + "]").c_str(), a[i], b[i]);
   }
   template <typename T>
   void operator()(const char* name, const std::vector<T>& a, const std::vector<T>& b) const {

@@ -29,8 +29,8 @@ namespace nimble::test {
 /// Outcome of one `rig run`.
 struct RunResult {
   int exit_code = -1;
-  std::string output;   ///< stdout and stderr together
-  YAML::Node summary;   ///< the --json summary (null if none was written)
+  std::string output;  ///< stdout and stderr together
+  YAML::Node summary;  ///< the --json summary (null if none was written)
 };
 
 /// Runs `rig run <scenario> <args>` to completion, logging to <dir>/run.lcmlog with the

@@ -55,7 +55,7 @@ class SmallDisk {
   /// has the whole limit).
   void fill_to(int64_t keep_free) const {
     if (!tmpfs_) return;
-    struct statvfs v{};
+    struct statvfs v {};
     if (::statvfs(dir_.c_str(), &v) != 0) return;
     const int64_t free = static_cast<int64_t>(v.f_bavail) * static_cast<int64_t>(v.f_frsize);
     if (free <= keep_free) return;

@@ -80,9 +80,10 @@ int64_t malformed_total(const YAML::Node& summary) {
 
 }  // namespace
 
-TEST_CASE("garbage at 2000 messages per second: every process survives, the garbage is counted, the figures are "
-          "the flight's",
-          "[fault]") {
+TEST_CASE(
+    "garbage at 2000 messages per second: every process survives, the garbage is counted, the figures are "
+    "the flight's",
+    "[fault]") {
   const YAML::Node s = fly_through("steady", "--rate 2000 --seconds 2 --seed 3", 4.0, true);
   // About 4000 messages went out; the launcher hears all of them and trusts none.
   CHECK(malformed_total(s) > 3000);
@@ -95,9 +96,10 @@ TEST_CASE("garbage at 2000 messages per second: every process survives, the garb
   CHECK(reported);
 }
 
-TEST_CASE("garbage in bursts of 20000 messages: every process survives, and what the bursts pushed out is counted "
-          "as dropped",
-          "[fault]") {
+TEST_CASE(
+    "garbage in bursts of 20000 messages: every process survives, and what the bursts pushed out is counted "
+    "as dropped",
+    "[fault]") {
   const YAML::Node s = fly_through("burst", "--burst 20000 --seconds 2 --seed 4", 4.0, false);
   CHECK(malformed_total(s) > 1000);
 }

@@ -23,8 +23,9 @@ const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 const std::string kModel = kConfigs + "models/nimble_lateral_set1_kinematic.yaml";
 /// No vibration, no pilot, no turn-on gyro bias (a random bias of 0.02 rad/s sigma that the stage
 /// rightly finds): the flight's gyro has only the errors a case sets.
-const std::string kClean = " --clock lockstep --set pilot.enabled=false --set sensing.imu.vibration_enabled=false"
-                           " --set sensing.imu.gyro_bias_turn_on_sigma_radps=0";
+const std::string kClean =
+    " --clock lockstep --set pilot.enabled=false --set sensing.imu.vibration_enabled=false"
+    " --set sensing.imu.gyro_bias_turn_on_sigma_radps=0";
 
 YAML::Node fly_and_check(const std::string& tag, const std::string& sets) {
   const std::string dir = nimble::test::scratch_dir("compatibility_" + tag);
@@ -41,21 +42,25 @@ YAML::Node fly_and_check(const std::string& tag, const std::string& sets) {
 
 }  // namespace
 
-TEST_CASE("rig-flown: the IMU's scale factor, clock offset, clock drift and bias set in the sensing file are each "
-          "found from the raw sensors with the set value inside its interval, and nothing else is named",
-          "[system][compatibility]") {
+TEST_CASE(
+    "rig-flown: the IMU's scale factor, clock offset, clock drift and bias set in the sensing file are each "
+    "found from the raw sensors with the set value inside its interval, and nothing else is named",
+    "[system][compatibility]") {
   const double k = 0.08, offset = -0.025, drift = 800.0, bias = 0.04;
-  const YAML::Node d = fly_and_check("errors", " --set sensing.imu.gyro_scale_factor.x=" + std::to_string(k) +
-                                                   " --set sensing.imu.clock_offset_s=" + std::to_string(offset) +
-                                                   " --set sensing.imu.clock_drift_ppm=" + std::to_string(drift) +
-                                                   " --set sensing.imu.gyro_bias_initial_radps.x=" + std::to_string(bias) +
-                                                   " --set sensing.ekf.latency.history_s=0.12");
+  const YAML::Node d =
+      fly_and_check("errors", " --set sensing.imu.gyro_scale_factor.x=" + std::to_string(k) +
+                                  " --set sensing.imu.clock_offset_s=" + std::to_string(offset) +
+                                  " --set sensing.imu.clock_drift_ppm=" + std::to_string(drift) +
+                                  " --set sensing.imu.gyro_bias_initial_radps.x=" + std::to_string(bias) +
+                                  " --set sensing.ekf.latency.history_s=0.12");
   INFO(d["summary"].as<std::string>());
   // The offset the stage reports is the one at the middle of the rows it checked: the IMU stamps
   // rig time t as t + offset + drift t.
   const double t_mid = d["compatibility"][0]["t_mid_s"].as<double>();
-  const std::map<std::string, double> truth{
-      {"sensor_scale", k}, {"time_offset", offset + 1e-6 * drift * t_mid}, {"clock_drift", drift}, {"sensor_bias", bias}};
+  const std::map<std::string, double> truth{{"sensor_scale", k},
+                                            {"time_offset", offset + 1e-6 * drift * t_mid},
+                                            {"clock_drift", drift},
+                                            {"sensor_bias", bias}};
   std::set<std::string> found;
   for (const auto& e : d["effects"]) {
     const std::string name = e["name"].as<std::string>();

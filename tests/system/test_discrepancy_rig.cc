@@ -45,8 +45,9 @@ YAML::Node fly_and_check(const std::string& tag, const std::string& scenario, in
   // The pilot off: the workflow's naming rates were measured on flights without the pilot's
   // throttle; with it, the kinematic term that Eq 21 drops is larger (docs/paper-flights.md "Flights like the
   // paper's"; system.paper.*).
-  const auto run = nimble::test::rig_run(kConfigs + scenario, dir,
-                                         "--clock lockstep --set pilot.enabled=false --seed " + std::to_string(seed) + kLinearOnly + " " + sets);
+  const auto run = nimble::test::rig_run(
+      kConfigs + scenario, dir,
+      "--clock lockstep --set pilot.enabled=false --seed " + std::to_string(seed) + kLinearOnly + " " + sets);
   INFO(run.output);
   REQUIRE(run.exit_code == 0);
   const std::string json = dir + "/discrepancy.json";
@@ -83,7 +84,8 @@ std::string held_throttle() {
 std::string repeated_train(int cycles) {
   const std::string dir = nimble::test::scratch_dir("discrepancy_repeated_train_" + std::to_string(cycles));
   std::ostringstream m;
-  m << "name: id_doublet_train_7_4hz_x" << cycles << "\nsource: \"id_doublet_train_7_4hz repeated (test_discrepancy_rig)\"\n"
+  m << "name: id_doublet_train_7_4hz_x" << cycles
+    << "\nsource: \"id_doublet_train_7_4hz repeated (test_discrepancy_rig)\"\n"
     << "gain_set: fast\nthrottle_factor: auto\nsegments:\n"
     << "  - {kind: hold, name: hover_before, duration_s: 1.0}\n";
   for (int i = 0; i < cycles; ++i) {
@@ -120,9 +122,10 @@ TEST_CASE("rig-flown: no plant effect, the identification train and the 30 deg n
   }
 }
 
-TEST_CASE("rig-flown: lateral inflow of a drawn size on the 30 deg nonlinear doublet is named with the plant's "
-          "coefficients",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: lateral inflow of a drawn size on the 30 deg nonlinear doublet is named with the plant's "
+    "coefficients",
+    "[system][discrepancy]") {
   // Physical range: the nonlinear doublet scenarios fly Y_vv = -0.07 N s^2/m^2, the size that
   // brings their max |v| to the thesis's; drawn between half and 1.5 times that, with
   // L_vv = 0.01 m * Y_vv (the plant file's ratio).
@@ -143,15 +146,16 @@ TEST_CASE("rig-flown: lateral inflow of a drawn size on the 30 deg nonlinear dou
   }
 }
 
-TEST_CASE("rig-flown: forward-speed coupling of a drawn size on the coupled doublet is named", "[system][discrepancy]") {
+TEST_CASE("rig-flown: forward-speed coupling of a drawn size on the coupled doublet is named",
+          "[system][discrepancy]") {
   // Physical range: gain_per_mps 0.3 .. 0.7 (the plant file's 0.5 gives +60 % at 1.22 m/s).
   for (int seed : {1, 2}) {
     const double k = drawn(seed, 0.3, 0.7);
     INFO("seed " << seed << " k " << k);
     const YAML::Node d = fly_and_check("speed", "coupled_doublet_6hz.yaml", seed,
                                        "--set plant.effects.forward_speed_coupling.enabled=true "
-                                       "--set plant.effects.forward_speed_coupling.gain_per_mps=" + std::to_string(k) +
-                                           kNoVibration);
+                                       "--set plant.effects.forward_speed_coupling.gain_per_mps=" +
+                                           std::to_string(k) + kNoVibration);
     INFO(d["summary"].as<std::string>());
     CHECK(named(d) == std::vector<std::string>{"forward_speed_coupling"});
     // The same flight without the effect names nothing.
@@ -181,7 +185,8 @@ TEST_CASE("rig-flown: a lateral gust alone gets no deterministic name, and a str
     INFO("strong gust, seed " << seed);
     const YAML::Node d = fly_and_check("gust_strong", "cl_doublet_train_slow.yaml", seed,
                                        "--set plant.effects.lateral_gust.enabled=true "
-                                       "--set plant.effects.lateral_gust.sigma_mps=0.3" + kNoVibration);
+                                       "--set plant.effects.lateral_gust.sigma_mps=0.3" +
+                                           kNoVibration);
     INFO(d["summary"].as<std::string>());
     REQUIRE(named(d) == std::vector<std::string>{"lateral_gust"});
     const double sigma = d["effects"][0]["parameters"]["sigma_mps"].as<double>();
@@ -191,9 +196,10 @@ TEST_CASE("rig-flown: a lateral gust alone gets no deterministic name, and a str
   }
 }
 
-TEST_CASE("rig-flown: flapping forcing of a drawn size on the 30 deg nonlinear doublet is named at the plant's "
-          "flapping frequency, without it nothing is named",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: flapping forcing of a drawn size on the 30 deg nonlinear doublet is named at the plant's "
+    "flapping frequency, without it nothing is named",
+    "[system][discrepancy]") {
   // The nonlinear doublet with its throttle held (held_throttle()): the flapping frequency
   // (about the trim collective, 16.3 Hz) stays put; the roll manoeuvre excites the derivatives (in hover the
   // baseline is barely identifiable). Ideal sensing: the log's states are the plant's truth.
@@ -204,11 +210,12 @@ TEST_CASE("rig-flown: flapping forcing of a drawn size on the 30 deg nonlinear d
   for (int seed : {1, 2}) {
     const double a = drawn(seed, 1e-3, 3e-3);
     INFO("seed " << seed << " roll moment " << a);
-    const std::string sets = "--set plant.effects.flapping_forcing.enabled=true"
-                             " --set plant.effects.flapping_forcing.roll_moment_amplitudes_nm=[" +
-                             std::to_string(a) + "," + std::to_string(a / 2) + "," + std::to_string(a / 4) +
-                             "] --set plant.effects.flapping_forcing.side_force_amplitudes_n=[" +
-                             std::to_string(5 * a) + "," + std::to_string(2.5 * a) + "]" + ideal;
+    const std::string sets =
+        "--set plant.effects.flapping_forcing.enabled=true"
+        " --set plant.effects.flapping_forcing.roll_moment_amplitudes_nm=[" +
+        std::to_string(a) + "," + std::to_string(a / 2) + "," + std::to_string(a / 4) +
+        "] --set plant.effects.flapping_forcing.side_force_amplitudes_n=[" + std::to_string(5 * a) + "," +
+        std::to_string(2.5 * a) + "]" + ideal;
     const YAML::Node d = fly_and_check("flapping", "nonlinear_doublet_30deg.yaml", seed, sets);
     INFO(d["summary"].as<std::string>());
     REQUIRE(named(d) == std::vector<std::string>{"flapping_forcing"});
@@ -220,9 +227,10 @@ TEST_CASE("rig-flown: flapping forcing of a drawn size on the 30 deg nonlinear d
   }
 }
 
-TEST_CASE("rig-flown: the emulated IMU's vibration at the flapping frequency is named flapping_forcing, and nothing "
-          "else",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: the emulated IMU's vibration at the flapping frequency is named flapping_forcing, and nothing "
+    "else",
+    "[system][discrepancy]") {
   // The equation error cannot tell a rate-gyro vibration from a flapping moment (both are a
   // sinusoid in p and its derivative); the 30 deg nonlinear doublet with its throttle held
   // (held_throttle()) keeps the vibration of the default sensing at one frequency.
@@ -231,9 +239,10 @@ TEST_CASE("rig-flown: the emulated IMU's vibration at the flapping frequency is 
   CHECK(named(d) == std::vector<std::string>{"flapping_forcing"});
 }
 
-TEST_CASE("rig-flown: the plant's actuator delay of a drawn size is named from the actuator equation with its delay, "
-          "and the closed loop with it fits better",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: the plant's actuator delay of a drawn size is named from the actuator equation with its delay, "
+    "and the closed loop with it fits better",
+    "[system][discrepancy]") {
   // The plant's actuator delay acts before the flap actuator, whose output (ACTUATOR_FB) the log
   // records as delta_f; the L and Y equations cannot see it, the actuator equation (delta_f
   // against the flight board's command, ACTUATOR_CMD) can. Delay drawn from [5, 15] ms: a
@@ -259,23 +268,24 @@ TEST_CASE("rig-flown: the plant's actuator delay of a drawn size is named from t
   }
 }
 
-TEST_CASE("rig-flown: the augmented model flies what was found: a scenario with it as model has the named lateral "
-          "inflow, and the workflow names it again",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: the augmented model flies what was found: a scenario with it as model has the named lateral "
+    "inflow, and the workflow names it again",
+    "[system][discrepancy]") {
   // The scenario as shipped: its lateral inflow on (Y_vv = -0.07 N s^2/m^2).
   const std::string dir = nimble::test::scratch_dir("discrepancy_fly_found");
-  const auto found = nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir,
-                                           "--clock lockstep --seed 1" + kNoVibration);
+  const auto found =
+      nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir, "--clock lockstep --seed 1" + kNoVibration);
   REQUIRE(found.exit_code == 0);
   const std::string augmented = dir + "/augmented.yaml";
-  const auto r = nimble::test::run_rig("discrepancy " + dir + "/run.lcmlog --model " + kModel + " --model-out " +
-                                       augmented);
+  const auto r =
+      nimble::test::run_rig("discrepancy " + dir + "/run.lcmlog --model " + kModel + " --model-out " + augmented);
   REQUIRE(r.exit_code == 0);
   // Fly the augmented model as the plant's model, the plant's own effect off.
   const std::string dir2 = nimble::test::scratch_dir("discrepancy_fly_found_2");
-  const auto flown = nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir2,
-                                           "--clock lockstep --seed 2 --set model=" + augmented + kLinearOnly +
-                                               kNoVibration);
+  const auto flown =
+      nimble::test::rig_run(kConfigs + "nonlinear_doublet_30deg.yaml", dir2,
+                            "--clock lockstep --seed 2 --set model=" + augmented + kLinearOnly + kNoVibration);
   INFO(flown.output);
   REQUIRE(flown.exit_code == 0);
   const std::string json = dir2 + "/discrepancy.json";
@@ -287,9 +297,10 @@ TEST_CASE("rig-flown: the augmented model flies what was found: a scenario with 
   CHECK(std::fabs(d["effects"][0]["parameters"]["Y_vv"].as<double>() + 0.07) < 0.0175);  // the scenario's -0.07
 }
 
-TEST_CASE("rig-flown: a step of the flap input's effectiveness of a drawn size and time is named with its change "
-          "time and fraction, and the same flight without it names nothing",
-          "[system][discrepancy]") {
+TEST_CASE(
+    "rig-flown: a step of the flap input's effectiveness of a drawn size and time is named with its change "
+    "time and fraction, and the same flight without it names nothing",
+    "[system][discrepancy]") {
   // The long identification train, 8 cycles (repeated_train(), 16 s). A damaged wing: the
   // fraction drawn from -15..-40 % for both L_df and Y_df, the time from the middle 60 % of the
   // flight (4.2-11.8 s).
@@ -298,12 +309,12 @@ TEST_CASE("rig-flown: a step of the flap input's effectiveness of a drawn size a
     const double fraction = drawn(seed, -0.40, -0.15), t_change = drawn(seed + 10, 4.2, 11.8);
     INFO("seed " << seed << " step " << fraction << " at " << t_change << " s");
     const std::string f = std::to_string(fraction);
-    const YAML::Node d = fly_and_check("step", "id_doublet_train_fast.yaml", seed,
-                                       "--set plant.effects.effectiveness_step.enabled=true"
-                                       " --set plant.effects.effectiveness_step.t_change_s=" + std::to_string(t_change) +
-                                           " --set plant.effects.effectiveness_step.roll_fraction=" + f +
-                                           " --set plant.effects.effectiveness_step.side_fraction=" + f + train +
-                                           kNoVibration);
+    const YAML::Node d =
+        fly_and_check("step", "id_doublet_train_fast.yaml", seed,
+                      "--set plant.effects.effectiveness_step.enabled=true"
+                      " --set plant.effects.effectiveness_step.t_change_s=" +
+                          std::to_string(t_change) + " --set plant.effects.effectiveness_step.roll_fraction=" + f +
+                          " --set plant.effects.effectiveness_step.side_fraction=" + f + train + kNoVibration);
     INFO(d["summary"].as<std::string>());
     REQUIRE(named(d) == std::vector<std::string>{"effectiveness_step"});
     const YAML::Node p = d["effects"][0]["parameters"];
@@ -338,8 +349,8 @@ TEST_CASE("rig-flown: a drift of the flap input's effectiveness of a drawn rate 
     INFO("seed " << seed << " drift " << rate << " /min");
     const YAML::Node d = fly_and_check("drift", "id_doublet_train_fast.yaml", seed,
                                        "--set plant.effects.effectiveness_drift.enabled=true"
-                                       " --set plant.effects.effectiveness_drift.rate_per_min=" + std::to_string(rate) +
-                                           train + kNoVibration);
+                                       " --set plant.effects.effectiveness_drift.rate_per_min=" +
+                                           std::to_string(rate) + train + kNoVibration);
     INFO(d["summary"].as<std::string>());
     REQUIRE(named(d) == std::vector<std::string>{"effectiveness_drift"});
     const YAML::Node p = d["effects"][0]["parameters"];

@@ -43,9 +43,9 @@ constexpr int kExitOk = 0, kExitFailed = 3, kExitBadInput = 2, kExitFailsafe = 5
 RunResult fly(const std::string& tag, const std::string& faults, double duration_s = 3.0,
               const std::string& extra = "") {
   const std::string dir = nimble::test::scratch_dir("faults_" + tag);
-  return rig_run(kConfigs + "hover.yaml", dir,
-                 "--clock lockstep --set duration_s=" + std::to_string(duration_s) + " --set 'faults=" + faults + "' " +
-                     extra);
+  return rig_run(
+      kConfigs + "hover.yaml", dir,
+      "--clock lockstep --set duration_s=" + std::to_string(duration_s) + " --set 'faults=" + faults + "' " + extra);
 }
 
 /// The faults of a run summary with `code`, as "process: message" lines.
@@ -92,8 +92,8 @@ std::string dir_of(const std::string& tag) { return nimble::test::scratch_path("
 /// The second run `b` (tag `tag_b`) of the faulted run tagged `tag_a`, same seed: the fault's
 /// random choices are drawn from the seed at the publisher, so it lost the same `drops` messages
 /// on `channel` and flew byte-identical TRUTH.
-void check_same_again(const std::string& tag_a, const RunResult& b, const std::string& tag_b, const std::string& channel,
-                      int drops) {
+void check_same_again(const std::string& tag_a, const RunResult& b, const std::string& tag_b,
+                      const std::string& channel, int drops) {
   REQUIRE(b.summary);
   CHECK(b.summary["channels"][channel]["drops"].as<int>() == drops);
   CHECK(nimble::test::differing(nimble::test::truth_payloads(dir_of(tag_a) + "/run.lcmlog"),
@@ -120,8 +120,7 @@ TEST_CASE("off: ESTIMATE stops at 1 s, the controller takes its failsafe 50 ms l
 }
 
 TEST_CASE("off: ACTUATOR_CMD stops for 0.3 s, the plant holds its safe state on COMMAND_TIMEOUT", "[fault]") {
-  const RunResult r =
-      fly("off_cmd", "[{target: ACTUATOR_CMD, kind: off, start_s: 1.0, duration_s: 0.3}]");
+  const RunResult r = fly("off_cmd", "[{target: ACTUATOR_CMD, kind: off, start_s: 1.0, duration_s: 0.3}]");
   INFO(r.output);
   REQUIRE(r.summary);
   check_announced(r.summary, "controller", ch::kActuatorCommand);
@@ -164,10 +163,9 @@ TEST_CASE("garbage: malformed MOCAP_POSE bytes are counted and left out, the run
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("garbage nan: non-finite poses are refused by the estimator as malformed, the run flies on",
-          "[fault]") {
-  const RunResult r = fly("garbage_nan",
-                          "[{target: MOCAP_POSE, kind: garbage, start_s: 1.0, duration_s: 0.5, params: {mode: nan}}]");
+TEST_CASE("garbage nan: non-finite poses are refused by the estimator as malformed, the run flies on", "[fault]") {
+  const RunResult r =
+      fly("garbage_nan", "[{target: MOCAP_POSE, kind: garbage, start_s: 1.0, duration_s: 0.5, params: {mode: nan}}]");
   INFO(r.output);
   REQUIRE(r.summary);
   CHECK(r.exit_code == kExitOk);
@@ -178,11 +176,11 @@ TEST_CASE("garbage nan: non-finite poses are refused by the estimator as malform
   CHECK(std::isfinite(r.summary["estimator"]["phi_rms_deg"].as<double>()));
 }
 
-TEST_CASE("wrong: a 23 deg roll bias on the motion capture makes the estimator declare ESTIMATOR_DIVERGED",
-          "[fault]") {
+TEST_CASE("wrong: a 23 deg roll bias on the motion capture makes the estimator declare ESTIMATOR_DIVERGED", "[fault]") {
   // quaternion x + 0.2: about 23 deg of roll; every attitude innovation fails the gate.
-  const RunResult r = fly("wrong_pose", "[{target: MOCAP_POSE, kind: wrong, start_s: 1.0, params: "
-                                        "{field: \"quaternion_wxyz[1]\", bias: 0.2}}]");
+  const RunResult r = fly("wrong_pose",
+                          "[{target: MOCAP_POSE, kind: wrong, start_s: 1.0, params: "
+                          "{field: \"quaternion_wxyz[1]\", bias: 0.2}}]");
   INFO(r.output);
   REQUIRE(r.summary);
   const YAML::Node d = first_fault(r.summary, fault_event_t::CODE_ESTIMATOR_DIVERGED, "estimator");
@@ -207,8 +205,8 @@ TEST_CASE("slow: MOCAP_POSE at a quarter of its rate arrives without gaps and th
 }
 
 TEST_CASE("delayed: MOCAP_POSE 150 ms late is outside the EKF's window: MEASUREMENT_OUT_OF_WINDOW", "[fault]") {
-  const RunResult r = fly("delayed_pose",
-                          "[{target: MOCAP_POSE, kind: delayed, start_s: 1.0, duration_s: 1.0, params: {delay_ms: 150}}]");
+  const RunResult r = fly(
+      "delayed_pose", "[{target: MOCAP_POSE, kind: delayed, start_s: 1.0, duration_s: 1.0, params: {delay_ms: 150}}]");
   INFO(r.output);
   REQUIRE(r.summary);
   const YAML::Node w = first_fault(r.summary, fault_event_t::CODE_MEASUREMENT_OUT_OF_WINDOW, "estimator");
@@ -289,8 +287,8 @@ TEST_CASE("external process: one started by hand with the run's scenario joins t
   const std::string bin_dir = std::filesystem::path(RIG_BIN).parent_path().string();
   const auto run_with_external = [&](const std::string& tag, bool same_scenario) {
     const std::string dir = nimble::test::scratch_dir("faults_external_" + tag);
-    const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
-                                         "--clock lockstep --set duration_s=2 --set run.external_processes=[controller]");
+    const pid_t rig = rig_run_background(
+        kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=2 --set run.external_processes=[controller]");
     // The launcher writes the resolved scenario before it starts anyone.
     const std::string resolved = dir + "/run.lcmlog.scenario.yaml";
     for (int i = 0; i < 200 && !std::filesystem::exists(resolved); ++i) ::usleep(50000);
@@ -345,9 +343,9 @@ TEST_CASE("external process: one started after the run's model file changed unde
     s.replace(s.find(from), from.size(), to);
     std::ofstream(model) << s;
   }
-  const pid_t rig = rig_run_background(kConfigs + "hover.yaml", dir,
-                                       "--clock lockstep --set duration_s=2 --set model=" + model +
-                                           " --set run.external_processes=[controller]");
+  const pid_t rig = rig_run_background(
+      kConfigs + "hover.yaml", dir,
+      "--clock lockstep --set duration_s=2 --set model=" + model + " --set run.external_processes=[controller]");
   const std::string resolved = dir + "/run.lcmlog.scenario.yaml";
   for (int i = 0; i < 200 && !std::filesystem::exists(resolved); ++i) ::usleep(50000);
   REQUIRE(std::filesystem::exists(resolved));
@@ -377,7 +375,8 @@ TEST_CASE("watchdogs stay quiet in nominal flights: no divergence, stuck IMU or 
   for (const std::string scenario : {"id_doublet_train_fast", "cl_doublet_train_slow"}) {
     for (int seed = 1; seed <= 8; ++seed) {
       const std::string dir = nimble::test::scratch_dir("faults_quiet");
-      const RunResult r = rig_run(kConfigs + scenario + ".yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
+      const RunResult r =
+          rig_run(kConfigs + scenario + ".yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
       INFO(scenario << " seed " << seed << "\n" << r.output);
       REQUIRE(r.summary);
       CHECK(r.exit_code == kExitOk);
@@ -426,8 +425,8 @@ TEST_CASE("CAN loss: frames lost with p = 0.2 lose whole commands as drops, the 
 }
 
 TEST_CASE("CAN corrupt: a flipped bit fails the frame's CRC, both sides name it MESSAGE_MALFORMED", "[fault]") {
-  const RunResult r =
-      fly_can("can_corrupt", "[{target: CAN, kind: corrupt, start_s: 1.0, duration_s: 1.0, params: {probability: 0.1}}]");
+  const RunResult r = fly_can(
+      "can_corrupt", "[{target: CAN, kind: corrupt, start_s: 1.0, duration_s: 1.0, params: {probability: 0.1}}]");
   INFO(r.output);
   REQUIRE(r.summary);
   CHECK(r.exit_code == kExitOk);
@@ -443,8 +442,7 @@ TEST_CASE("CAN corrupt: a flipped bit fails the frame's CRC, both sides name it 
   CHECK(r.summary["controlled"].as<bool>());
 }
 
-TEST_CASE("CAN bus_off: both controllers report bus-off, the plant holds its safe state and resumes after",
-          "[fault]") {
+TEST_CASE("CAN bus_off: both controllers report bus-off, the plant holds its safe state and resumes after", "[fault]") {
   const RunResult r = fly_can("can_bus_off", "[{target: CAN, kind: bus_off, start_s: 1.0, duration_s: 0.3}]");
   INFO(r.output);
   REQUIRE(r.summary);
@@ -457,7 +455,8 @@ TEST_CASE("CAN bus_off: both controllers report bus-off, the plant holds its saf
   }
   // No command for command_timeout_s (0.1 s): the safe state at 1.1 s, left once commands resume.
   std::vector<double> times;
-  for (const auto& f : faults_with(r.summary, fault_event_t::CODE_COMMAND_TIMEOUT)) times.push_back(f["rig_time_s"].as<double>());
+  for (const auto& f : faults_with(r.summary, fault_event_t::CODE_COMMAND_TIMEOUT))
+    times.push_back(f["rig_time_s"].as<double>());
   REQUIRE(times.size() == 2);
   CHECK(times[0] == Approx(1.1).margin(0.005));
   CHECK(times[1] > 1.3);

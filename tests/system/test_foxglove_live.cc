@@ -69,9 +69,10 @@ double check_topic(const json& received, const std::map<int64_t, std::pair<doubl
 
 }  // namespace
 
-TEST_CASE("live view of a real-time hover run: Foxglove's client gets TRUTH and ESTIMATE at the run's rates with "
-          "the log's values",
-          "[system][foxglove]") {
+TEST_CASE(
+    "live view of a real-time hover run: Foxglove's client gets TRUTH and ESTIMATE at the run's rates with "
+    "the log's values",
+    "[system][foxglove]") {
   const std::string npm = NPM_DIR;
   if (!std::filesystem::exists(npm + "/node_modules/@foxglove/ws-protocol") ||
       !std::filesystem::exists(npm + "/node_modules/ws")) {
@@ -85,8 +86,8 @@ TEST_CASE("live view of a real-time hover run: Foxglove's client gets TRUTH and 
   int client_code = -1;
   if (port > 0) {
     const std::string cmd = "node " + npm + "/ws_client.mjs --url ws://127.0.0.1:" + std::to_string(port) +
-                            " --topics TRUTH,ESTIMATE --seconds 1.5 --connect-timeout 20 --out " + client_json +
-                            " >" + dir + "/client.txt 2>&1";
+                            " --topics TRUTH,ESTIMATE --seconds 1.5 --connect-timeout 20 --out " + client_json + " >" +
+                            dir + "/client.txt 2>&1";
     const int status = std::system(cmd.c_str());
     client_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }

@@ -27,7 +27,6 @@ namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
-
 /// Relative standard deviation (coloured-residual sigma) of one parameter of a report.
 double rel_sigma_c(const YAML::Node& p, const std::string& name) {
   return p[name]["sigma_coloured"].as<double>() / std::fabs(p[name]["value"].as<double>());
@@ -43,11 +42,12 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   const std::string dir = nimble::test::scratch_dir("ident_est_" + std::to_string(seed));
   const std::string log = dir + "/run.lcmlog", summary = dir + "/summary.json";
   // Explicit processes, controller input and seed: the test does not depend on the shipped defaults.
-  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
-                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
-                          " --seed " + std::to_string(seed) + " --set processes=[plant,controller,mocap,estimator]" +
-                          " --set run.controller_input=estimate --log " + log + " --json " + summary +
-                          " --no-progress >" + dir + "/run.txt 2>&1";
+  const std::string fly =
+      std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
+      " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
+      " --seed " + std::to_string(seed) + " --set processes=[plant,controller,mocap,estimator]" +
+      " --set run.controller_input=estimate --log " + log + " --json " + summary + " --no-progress >" + dir +
+      "/run.txt 2>&1";
   const int status = std::system(fly.c_str());
   INFO(nimble::test::slurp(dir + "/run.txt"));
   REQUIRE(WIFEXITED(status));
@@ -72,7 +72,7 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   // Set 1 as the plant flies it (rig_configs/models/nimble_lateral_set1.yaml), which must be
   // thesis Table 9.2 data set 1.
   const YAML::Node model = YAML::LoadFile(kConfigs + "models/nimble_lateral_set1.yaml")["derivatives"];
-  const std::map<std::string, double> table_9_2 = {{"Lp", -2.43e-4}, {"Lv", -3.74e-4}, {"L_df", 1.06e-4},
+  const std::map<std::string, double> table_9_2 = {{"Lp", -2.43e-4},  {"Lv", -3.74e-4}, {"L_df", 1.06e-4},
                                                    {"L_dt", 4.19e-5}, {"Yv", -5.61e-2}, {"Y_df", -8.63e-4}};
   std::map<std::string, double> set1;
   for (const auto& [name, value] : table_9_2) {
@@ -88,8 +88,8 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   for (const char* name : {"Lp", "L_df", "Yv", "Y_df"}) {
     const double value = p[name]["value"].as<double>(), sigma_c = p[name]["sigma_coloured"].as<double>();
     const double truth = set1.at(name);
-    INFO(name << " = " << value << " (sigma " << p[name]["sigma"].as<double>() << ", sigma_c " << sigma_c
-              << "), set 1 " << truth << ": " << 100.0 * (value - truth) / std::fabs(truth) << " %, "
+    INFO(name << " = " << value << " (sigma " << p[name]["sigma"].as<double>() << ", sigma_c " << sigma_c << "), set 1 "
+              << truth << ": " << 100.0 * (value - truth) / std::fabs(truth) << " %, "
               << std::fabs(value - truth) / sigma_c << " sigma_c");
     REQUIRE(sigma_c > 0.0);
     CHECK(std::fabs(value - truth) < 0.10 * std::fabs(truth));
@@ -128,16 +128,18 @@ TEST_CASE("identification on the estimator: the set-1 derivatives from ESTIMATE,
   }
 }
 
-TEST_CASE("discrepancy on the effect-free identification train: the kinematic term Eq 21 drops is named and Yp comes "
-          "back to the plant's value",
-          "[system]") {
+TEST_CASE(
+    "discrepancy on the effect-free identification train: the kinematic term Eq 21 drops is named and Yp comes "
+    "back to the plant's value",
+    "[system]") {
   // The rig's own truth against the paper's linear model: the nonlinear plant has p w and
   // g sin(phi) in v_dot, Eq 21 linearises them at w0 while w drifts during the manoeuvre.
   const std::string dir = nimble::test::scratch_dir("discrepancy_id_train");
   const std::string log = dir + "/run.lcmlog";
-  const std::string fly = std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
-                          " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
-                          " --seed 1 --log " + log + " --no-progress >" + dir + "/run.txt 2>&1";
+  const std::string fly =
+      std::string(RIG_BIN) + " run " + kConfigs + "id_doublet_train_fast.yaml --clock lockstep" +
+      " --set pilot.enabled=false" +  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
+      " --seed 1 --log " + log + " --no-progress >" + dir + "/run.txt 2>&1";
   const int status = std::system(fly.c_str());
   INFO(nimble::test::slurp(dir + "/run.txt"));
   REQUIRE(WIFEXITED(status));
@@ -148,8 +150,9 @@ TEST_CASE("discrepancy on the effect-free identification train: the kinematic te
   for (const std::string& data : {log, dir + "/truth.csv"}) {
     INFO(data);
     const std::string json = dir + "/discrepancy.json", model_out = dir + "/augmented.yaml";
-    const auto r = nimble::test::run_rig("discrepancy " + data + " --model " + kConfigs +
-                                         "models/nimble_lateral_set1.yaml --json " + json + " --model-out " + model_out);
+    const auto r =
+        nimble::test::run_rig("discrepancy " + data + " --model " + kConfigs +
+                              "models/nimble_lateral_set1.yaml --json " + json + " --model-out " + model_out);
     INFO(r.out << r.err);
     REQUIRE(r.exit_code == 0);
     const YAML::Node d = YAML::LoadFile(json);

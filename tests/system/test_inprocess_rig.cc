@@ -31,9 +31,14 @@ const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("inprocess_" + tag); }
 
 /// The channels every processes' code publishes from simulated time only.
-const std::vector<std::string> kDataChannels = {ch::kTruth,         ch::kImu,        ch::kMocapPose,
-                                                ch::kEstimate,      ch::kActuatorCommand, ch::kActuatorFeedback,
-                                                ch::kAttitudeSetpoint, ch::kControllerStatus};
+const std::vector<std::string> kDataChannels = {ch::kTruth,
+                                                ch::kImu,
+                                                ch::kMocapPose,
+                                                ch::kEstimate,
+                                                ch::kActuatorCommand,
+                                                ch::kActuatorFeedback,
+                                                ch::kAttitudeSetpoint,
+                                                ch::kControllerStatus};
 
 int run_command(const std::string& cmd) {
   const int status = std::system(cmd.c_str());
@@ -157,7 +162,8 @@ TEST_CASE("bad input a new user gives is refused before the run, with a message 
     }
   }
   // (the copy's relative paths resolve against its own folder: the same files are linked there)
-  for (const char* sub : {"models", "manoeuvres", "plant", "controller", "sensing", "run", "vehicles", "turbulence", "pilot"}) {
+  for (const char* sub :
+       {"models", "manoeuvres", "plant", "controller", "sensing", "run", "vehicles", "turbulence", "pilot"}) {
     std::filesystem::create_directory_symlink(kConfigs + sub, d + "/" + sub);
   }
   const RunResult twice = rig_run(dup, d, "--clock inprocess");

@@ -44,7 +44,8 @@ const Gains kSlow{"slow", 0.625, 0.156};
 /// `rig loop <scenario> <args> --json F`, parsed; the command must succeed.
 YAML::Node rig_loop(const std::string& scenario, const std::string& dir, const std::string& args) {
   const std::string json = dir + "/loop.json", out = dir + "/loop.txt";
-  const std::string cmd = std::string(RIG_BIN) + " loop " + scenario + " " + args + " --json " + json + " >" + out + " 2>&1";
+  const std::string cmd =
+      std::string(RIG_BIN) + " loop " + scenario + " " + args + " --json " + json + " >" + out + " 2>&1";
   const int status = std::system(cmd.c_str());
   INFO(cmd << "\n" << nimble::test::slurp(out));
   REQUIRE(WIFEXITED(status));
@@ -106,8 +107,8 @@ Flight fly(const std::string& scenario, const std::string& tag, const std::strin
 
 /// One line of figures per flight.
 void print_flight(const std::string& what, const Flight& f) {
-  std::printf("%-48s max |phi| 5-10 s %6.2f deg, 15-20 s %6.2f deg, exit %d\n", what.c_str(), f.truth.max_abs_deg(5.0, 10.0),
-              f.truth.max_abs_deg(15.0, 20.0), f.run.exit_code);
+  std::printf("%-48s max |phi| 5-10 s %6.2f deg, 15-20 s %6.2f deg, exit %d\n", what.c_str(),
+              f.truth.max_abs_deg(5.0, 10.0), f.truth.max_abs_deg(15.0, 20.0), f.run.exit_code);
 }
 
 /// Below the margin: the loop regulates: over the last 5 s, |phi| within the noise of the
@@ -216,8 +217,8 @@ TEST_CASE("rig loop: a designed gain set is written, loads as controller keys, a
   const std::string dir = nimble::test::scratch_dir("loop_design");
   const std::string gains = dir + "/designed.yaml";
   const std::string cmd = std::string(RIG_BIN) + " loop " + kConfigs + "nonlinear_doublet_20deg.yaml" +
-                          " --design phase_margin_deg=45,crossover_hz=1.2 --gains-out " + gains + " --fly --log " + dir +
-                          "/fly.lcmlog --json " + dir + "/loop.json >" + dir + "/out.txt 2>&1";
+                          " --design phase_margin_deg=45,crossover_hz=1.2 --gains-out " + gains + " --fly --log " +
+                          dir + "/fly.lcmlog --json " + dir + "/loop.json >" + dir + "/out.txt 2>&1";
   const int status = std::system(cmd.c_str());
   const std::string out = nimble::test::slurp(dir + "/out.txt");
   INFO(out);
@@ -229,12 +230,14 @@ TEST_CASE("rig loop: a designed gain set is written, loads as controller keys, a
   CHECK(j["crossover_hz"].as<double>() == Approx(1.2).epsilon(1e-3));
   CHECK(j["flight"].as<std::string>() == "ok");
   const YAML::Node written = YAML::LoadFile(gains);
-  CHECK(written["roll_gain_sets"]["designed"]["kp_per_rad"].as<double>() == Approx(j["kp_per_rad"].as<double>()).epsilon(1e-5));
+  CHECK(written["roll_gain_sets"]["designed"]["kp_per_rad"].as<double>() ==
+        Approx(j["kp_per_rad"].as<double>()).epsilon(1e-5));
   CHECK(written["roll_gain_sets"]["designed"]["kd_per_radps"].as<double>() ==
         Approx(j["kd_per_radps"].as<double>()).epsilon(1e-5));
   CHECK(out.find("result     ok") != std::string::npos);
   // The flight flew the designed gains: its controller status carries them.
-  const auto status_msgs = nimble::test::decode_channel<nimble::controller_status_t>(dir + "/fly.lcmlog", nimble::contract::channels::kControllerStatus);
+  const auto status_msgs = nimble::test::decode_channel<nimble::controller_status_t>(
+      dir + "/fly.lcmlog", nimble::contract::channels::kControllerStatus);
   REQUIRE(status_msgs.size() > 3000);
   CHECK(status_msgs.back().kp == Approx(j["kp_per_rad"].as<double>()).epsilon(1e-12));
   CHECK(status_msgs.back().kd == Approx(j["kd_per_radps"].as<double>()).epsilon(1e-12));
@@ -273,7 +276,8 @@ TEST_CASE("rig loop: robustness over an identified model's +-2 sigma box from ri
   const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock inprocess");
   REQUIRE(r.exit_code == 0);
   const std::string id = dir + "/identify.json";
-  REQUIRE(std::system((std::string(RIG_BIN) + " identify " + dir + "/run.lcmlog --json " + id + " > /dev/null").c_str()) == 0);
+  REQUIRE(std::system(
+              (std::string(RIG_BIN) + " identify " + dir + "/run.lcmlog --json " + id + " > /dev/null").c_str()) == 0);
   const YAML::Node identified = rig_loop(kConfigs + "hover.yaml", dir, "--clock inprocess --all-sets --box " + id);
   REQUIRE(identified["loops"].size() == 10);
   REQUIRE(identified["robustness"].size() == 4);

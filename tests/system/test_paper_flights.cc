@@ -63,8 +63,8 @@ TEST_CASE("paper flights: the identification train holds its height with the pil
   const double p_range = 12.06, v_range = 1.17, phi_range = 0.89, v_max = 1.00;
   for (int seed = 1; seed <= 5; ++seed) {
     const std::string dir = nimble::test::scratch_dir("paper_id_" + std::to_string(seed));
-    const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                                "--clock inprocess --seed " + std::to_string(seed));
+    const RunResult r =
+        rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
     INFO("seed " << seed << "\n" << r.output);
     REQUIRE(r.exit_code == 0);
     const YAML::Node& s = r.summary;
@@ -85,8 +85,9 @@ TEST_CASE("paper flights: with the pilot, the term Eq 21 drops is what the ident
   // The pilot moves w from w0 to 0; Eq 21 subtracts w0 p only. rig discrepancy names the exact
   // kinematic term with the mass as its coefficient, and nothing of the gap is left after it.
   const std::string dir = nimble::test::scratch_dir("paper_id_kinematic");
-  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                              "--clock inprocess --seed 1 --set 'processes=[plant, controller]' --set run.controller_input=truth");
+  const RunResult r =
+      rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+              "--clock inprocess --seed 1 --set 'processes=[plant, controller]' --set run.controller_input=truth");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   const std::string json = dir + "/discrepancy.json";
@@ -107,17 +108,18 @@ TEST_CASE("paper flights: with the pilot, the term Eq 21 drops is what the ident
 
 TEST_CASE("paper flights: without the pilot the same train climbs by metres", "[system]") {
   const std::string dir = nimble::test::scratch_dir("paper_id_no_pilot");
-  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                              "--clock inprocess --seed 1 --set pilot.enabled=false");
+  const RunResult r =
+      rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock inprocess --seed 1 --set pilot.enabled=false");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   // Trim thrust holds the trim climb rate w0 = -0.30 m/s of Table 9.3 and THRF adds to it.
   CHECK(vertical(r.summary, "height_final_m") > 2.0);
 }
 
-TEST_CASE("paper flights: the nonlinear doublets fly sideways as fast as the thesis's, with the scenario's lateral "
-          "inflow, and faster without it",
-          "[system]") {
+TEST_CASE(
+    "paper flights: the nonlinear doublets fly sideways as fast as the thesis's, with the scenario's lateral "
+    "inflow, and faster without it",
+    "[system]") {
   // Thesis Section 9.5: max |v| 1.43 m/s (20 deg) and 1.60 m/s (30 deg).
   const struct {
     const char* scenario;
@@ -147,23 +149,24 @@ TEST_CASE("paper flights: the nonlinear doublets fly sideways as fast as the the
 TEST_CASE("paper flights: on ideal sensing the pilot watches the true height, and a bad pilot value is refused",
           "[system]") {
   const std::string dir = nimble::test::scratch_dir("paper_pilot_truth");
-  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                              "--clock inprocess --set 'processes=[plant, controller]' --set run.controller_input=truth");
+  const RunResult r =
+      rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
+              "--clock inprocess --set 'processes=[plant, controller]' --set run.controller_input=truth");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK(vertical(r.summary, "max_abs_height_change_m") < 0.9);
-  const RunResult bad = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                                "--clock inprocess --set pilot.reaction_delay_s=0.01");
+  const RunResult bad =
+      rig_run(kConfigs + "id_doublet_train_fast.yaml", dir, "--clock inprocess --set pilot.reaction_delay_s=0.01");
   INFO(bad.output);
   CHECK(bad.exit_code == 2);
   CHECK_THAT(bad.output, Catch::Contains("pilot.reaction_delay_s") && Catch::Contains("0.01"));
 }
 
-TEST_CASE("paper flights: the yaw loop holds the four-state model of Table 8.3 through the doublet train",
-          "[system]") {
+TEST_CASE("paper flights: the yaw loop holds the four-state model of Table 8.3 through the doublet train", "[system]") {
   for (int seed = 1; seed <= 3; ++seed) {
     const std::string dir = nimble::test::scratch_dir("paper_yaw_" + std::to_string(seed));
-    const RunResult r = rig_run(kConfigs + "yaw_hold_lateral4.yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
+    const RunResult r =
+        rig_run(kConfigs + "yaw_hold_lateral4.yaml", dir, "--clock inprocess --seed " + std::to_string(seed));
     INFO("seed " << seed << "\n" << r.output);
     REQUIRE(r.exit_code == 0);
     CHECK(r.summary["controlled"].as<bool>());
@@ -173,7 +176,8 @@ TEST_CASE("paper flights: the yaw loop holds the four-state model of Table 8.3 t
   }
   // Without the yaw loop the model's unstable yaw mode (+2.69 /s) is not held.
   const std::string dir = nimble::test::scratch_dir("paper_yaw_off");
-  const RunResult off = rig_run(kConfigs + "yaw_hold_lateral4.yaml", dir, "--clock inprocess --set controller.yaw.enabled=false");
+  const RunResult off =
+      rig_run(kConfigs + "yaw_hold_lateral4.yaml", dir, "--clock inprocess --set controller.yaw.enabled=false");
   INFO(off.output);
   CHECK(off.exit_code != 0);
   CHECK_FALSE(off.summary["controlled"].as<bool>());
@@ -191,11 +195,11 @@ YAML::Node table(const YAML::Node& json, const std::string& id) {
 
 }  // namespace
 
-TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, and every verdict can fail",
-          "[system]") {
+TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, and every verdict can fail", "[system]") {
   const std::string dir = nimble::test::scratch_dir("paper_reproduce");
   const std::string json = dir + "/tables.json";
-  const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-5 --logs " + dir + "/logs --json " + json);
+  const auto r =
+      nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-5 --logs " + dir + "/logs --json " + json);
   INFO(r.out << r.err);
   const YAML::Node j = YAML::LoadFile(json);
   // Exit 1 exactly when a cell differs, a repeat of another cell's numbers included.
@@ -286,15 +290,17 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   CHECK(j["causes"].size() == 3);
 }
 
-TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown one at a time, two at once, or one "
-          "now and the other later in a campaign directory",
-          "[system]") {
+TEST_CASE(
+    "rig reproduce thesis: the tables are the same with the seeds flown one at a time, two at once, or one "
+    "now and the other later in a campaign directory",
+    "[system]") {
   // Each seed is one item of the campaigns' worker pool; what comes back must not depend on how
   // many workers flew them (wall times and the logs' directory aside), nor on whether a seed was
   // kept in a campaign directory (--dir) and read back instead of flown.
   const std::string dir = nimble::test::scratch_dir("paper_reproduce_jobs");
   const auto tables = [&](const std::string& seeds, const std::string& args, const std::string& json) {
-    const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds " + seeds + " " + args + " --json " + json);
+    const auto r =
+        nimble::test::run_rig("reproduce thesis --no-progress --seeds " + seeds + " " + args + " --json " + json);
     INFO(r.out << r.err);
     REQUIRE((r.exit_code == 0 || r.exit_code == 1));
     YAML::Node j = YAML::LoadFile(json);
@@ -326,7 +332,8 @@ TEST_CASE("rig reproduce thesis: the tables are the same with the seeds flown on
   // Another campaign in the same directory is refused before it flies, naming what differs.
   const auto other = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1-2 --states truth " + kept);
   CHECK(other.exit_code == 2);
-  CHECK(other.err.find("holds another campaign: its states is \"smoothed\", this one's \"truth\"") != std::string::npos);
+  CHECK(other.err.find("holds another campaign: its states is \"smoothed\", this one's \"truth\"") !=
+        std::string::npos);
 }
 
 TEST_CASE("rig reproduce: a campaign file with a table left out is refused, naming the key", "[system]") {
@@ -351,15 +358,17 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
     for (auto item : w["flights"]) item.second = kConfigs + "reproduce/" + item.second.as<std::string>();
     w["tables"]["15"]["reasons"] = YAML::Load("[{cells: ['p_dot / *'], text: everything, rig: above}]");
     std::ofstream(dir + "/wild.yaml") << w;
-    const auto rw = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/wild.yaml --logs " + dir);
+    const auto rw =
+        nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/wild.yaml --logs " + dir);
     INFO(rw.out << rw.err);
     CHECK(rw.exit_code == 2);
     CHECK_THAT(rw.err, Catch::Contains("no wildcards"));
     // A reason without a bound on the size of the difference is refused, naming the key.
-    w["tables"]["15"]["reasons"] = YAML::Load("[{cells: ['p_dot / R2'], text: closer, rig: above, states: [smoothed]}]");
+    w["tables"]["15"]["reasons"] =
+        YAML::Load("[{cells: ['p_dot / R2'], text: closer, rig: above, states: [smoothed]}]");
     std::ofstream(dir + "/unbounded.yaml") << w;
-    const auto rb = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/unbounded.yaml --logs " +
-                                          dir);
+    const auto rb =
+        nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/unbounded.yaml --logs " + dir);
     INFO(rb.out << rb.err);
     CHECK(rb.exit_code == 2);
     CHECK_THAT(rb.err, Catch::Contains("max_off"));
@@ -367,16 +376,18 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
     w["tables"]["15"].remove("reasons");
     w["tables"]["12"]["category"] = "not comparable";
     std::ofstream(dir + "/relabel.yaml") << w;
-    const auto rr = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/relabel.yaml --logs " +
-                                          dir);
+    const auto rr =
+        nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/relabel.yaml --logs " + dir);
     INFO(rr.out << rr.err);
     CHECK(rr.exit_code == 2);
-    CHECK_THAT(rr.err, Catch::Contains("tables.12.category") && Catch::Contains("fit metrics of a model on the rig's flights"));
+    CHECK_THAT(rr.err,
+               Catch::Contains("tables.12.category") && Catch::Contains("fit metrics of a model on the rig's flights"));
     // A pipeline check takes no tolerance from the file: it is derived.
     w["tables"]["12"].remove("category");
     w["tables"]["9.6"]["tolerance"] = YAML::Load("{relative: 0.5}");
     std::ofstream(dir + "/loose.yaml") << w;
-    const auto rl = nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/loose.yaml --logs " + dir);
+    const auto rl =
+        nimble::test::run_rig("reproduce thesis --no-progress --campaign " + dir + "/loose.yaml --logs " + dir);
     INFO(rl.out << rl.err);
     CHECK(rl.exit_code == 2);
     CHECK_THAT(rl.err, Catch::Contains("tables.9.6.tolerance") && Catch::Contains("pipeline check"));

@@ -96,7 +96,8 @@ TEST_CASE("power: SIZE sets the effect's main parameter and keeps the scenario's
   CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.Y_vv_ns2pm2")) == Approx(-0.035));
   CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.L_vv_ns2pm")) == Approx(-3.5e-4));
   CHECK(detection_power::size_overrides(nl.scenario.root, "lateral_inflow", 0.0).size() == 1);  // off: the null case
-  const auto flapping = detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 1e-3);  // plant file: 2e-3, ...
+  const auto flapping =
+      detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 1e-3);  // plant file: 2e-3, ...
   CHECK(value_of(flapping, "plant.effects.flapping_forcing.roll_moment_amplitudes_nm") == "[0.001,0.0005,0.00025]");
   const auto delay = detection_power::size_overrides(nl.scenario.root, "actuator_delay", 0.01);
   CHECK(std::stod(value_of(delay, "plant.effects.actuator_delay.delay_s")) == 0.01);
@@ -104,15 +105,16 @@ TEST_CASE("power: SIZE sets the effect's main parameter and keeps the scenario's
   for (const auto& e : detection_power::sized_effects()) {
     INFO(e.effect);
     const double size = e.effect == "flapping_forcing" ? 1e-3 : 0.1 * e.range.hi;
-    CHECK_NOTHROW(plan_of("nonlinear_doublet_30deg.yaml", detection_power::size_overrides(nl.scenario.root, e.effect, size)));
+    CHECK_NOTHROW(
+        plan_of("nonlinear_doublet_30deg.yaml", detection_power::size_overrides(nl.scenario.root, e.effect, size)));
   }
   CHECK(detection_power::parse_effect_sizes("lateral_inflow=-0.03:-0.01:0.01").sizes.size() == 3);
   CHECK(detection_power::sized_effect("constant_load").named_as == "constant_load");
   // A size whose companions leave their range is refused, naming them.
   CHECK_THROWS_WITH(detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 0.5),
                     Catch::Contains("side_force_amplitudes_n 2.5, not in [-1, 1]"));
-  CHECK_THROWS_WITH(detection_power::parse_effect_sizes("inflow=1"), Catch::Contains("unknown effect 'inflow'") &&
-                                                                Catch::Contains("actuator_delay=delay_s [s]"));
+  CHECK_THROWS_WITH(detection_power::parse_effect_sizes("inflow=1"),
+                    Catch::Contains("unknown effect 'inflow'") && Catch::Contains("actuator_delay=delay_s [s]"));
   CHECK_THROWS_WITH(detection_power::parse_effect_sizes("actuator_delay=0.9"),
                     Catch::Contains("plant.effects.actuator_delay.delay_s") && Catch::Contains("in [0, 0.5]"));
   CHECK_THROWS_WITH(detection_power::parse_effect_sizes("lateral_gust=big"), Catch::Contains("lateral_gust"));
@@ -126,22 +128,31 @@ TEST_CASE("power: the curve's statistics: Wilson intervals and the target crossi
   // Probit linear in sqrt(length): 50 % at 4 s and 97.7 % (z = 2) at 16 s put 90 % (z = 1.28) at
   // sqrt(L) = 2 + 1.28 / 2 * 2.
   const std::vector<double> x = {4.0, 16.0};
-  const detection_power::Crossing c = detection_power::crossing(x, {detection_power::wilson(500, 1000), detection_power::wilson(977, 1000)}, 0.9, true);
+  const detection_power::Crossing c =
+      detection_power::crossing(x, {detection_power::wilson(500, 1000), detection_power::wilson(977, 1000)}, 0.9, true);
   REQUIRE(c.bracketed);
   const double z977 = detection_power::normal_quantile(0.977);
   CHECK(c.value == Approx(std::pow(2.0 + detection_power::normal_quantile(0.9) / z977 * 2.0, 2)).epsilon(1e-9));
   // A dip is pooled away; a curve that never reaches the target says so.
-  CHECK_FALSE(detection_power::crossing({1, 2, 3}, {detection_power::wilson(5, 10), detection_power::wilson(3, 10), detection_power::wilson(6, 10)}, 0.9, true).reached);
-  CHECK(detection_power::crossing({1, 2}, {detection_power::wilson(10, 10), detection_power::wilson(10, 10)}, 0.9, true).note.find("at or below") == 0);
+  CHECK_FALSE(detection_power::crossing(
+                  {1, 2, 3},
+                  {detection_power::wilson(5, 10), detection_power::wilson(3, 10), detection_power::wilson(6, 10)}, 0.9,
+                  true)
+                  .reached);
+  CHECK(detection_power::crossing({1, 2}, {detection_power::wilson(10, 10), detection_power::wilson(10, 10)}, 0.9, true)
+            .note.find("at or below") == 0);
 }
 
-TEST_CASE("rig discrepancy --power: a few flights give every cell its proportions, and on a clear case more "
-          "delay is named more often",
-          "[power]") {
+TEST_CASE(
+    "rig discrepancy --power: a few flights give every cell its proportions, and on a clear case more "
+    "delay is named more often",
+    "[power]") {
   const std::string dir = test::scratch_dir("power_cli");
-  const auto r = test::run_rig("discrepancy --power --scenario " + kConfigs + "cl_doublet_train_slow.yaml --model " +
-                               kModel + " --effect actuator_delay=0,0.002,0.006 --lengths 9 --flights 6 --refine 0"
-                               " --no-progress --json " + dir + "/power.json --plots " + dir + "/plots");
+  const auto r =
+      test::run_rig("discrepancy --power --scenario " + kConfigs + "cl_doublet_train_slow.yaml --model " + kModel +
+                    " --effect actuator_delay=0,0.002,0.006 --lengths 9 --flights 6 --refine 0"
+                    " --no-progress --json " +
+                    dir + "/power.json --plots " + dir + "/plots");
   INFO(r.out << r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.find("delay_s = 0.006 s") != std::string::npos);
@@ -172,15 +183,17 @@ TEST_CASE("rig discrepancy --power: a few flights give every cell its proportion
   CHECK(std::filesystem::exists(dir + "/plots/power_size.png"));
 }
 
-TEST_CASE("rig discrepancy --power --dir: started again, the campaign flies only the flights it lacks, reading the "
-          "others from its directory",
-          "[power]") {
+TEST_CASE(
+    "rig discrepancy --power --dir: started again, the campaign flies only the flights it lacks, reading the "
+    "others from its directory",
+    "[power]") {
   const std::string dir = test::scratch_dir("power_dir");
-  const std::string base = "discrepancy --power --scenario " + kConfigs + "cl_doublet_train_slow.yaml --model " + kModel +
-                           " --lengths 9 --refine 0 --no-progress --dir " + dir + "/campaign";
+  const std::string base = "discrepancy --power --scenario " + kConfigs + "cl_doublet_train_slow.yaml --model " +
+                           kModel + " --lengths 9 --refine 0 --no-progress --dir " + dir + "/campaign";
   const auto count_runs = [&] {
     std::vector<std::string> files;
-    for (const auto& e : std::filesystem::directory_iterator(dir + "/campaign/runs")) files.push_back(e.path().string());
+    for (const auto& e : std::filesystem::directory_iterator(dir + "/campaign/runs"))
+      files.push_back(e.path().string());
     return files;
   };
   const auto first = test::run_rig(base + " --effect actuator_delay=0.006 --flights 2");
@@ -248,9 +261,10 @@ TEST_CASE("rig discrepancy --power: bad input is named before anything flies, ex
   }
 }
 
-TEST_CASE("rig discrepancy --power: at the recommended length, fresh seeds name the effect with the target "
-          "probability (85-95 %)",
-          "[power]") {
+TEST_CASE(
+    "rig discrepancy --power: at the recommended length, fresh seeds name the effect with the target "
+    "probability (85-95 %)",
+    "[power]") {
   // Lateral inflow of -0.005 N s^2/m^2 (L_vv in the scenario's ratio) on the 30 deg nonlinear
   // doublet, the IMU's flapping vibration off (the workflow names it flapping_forcing): not named
   // in one 6 s block, always in two, so the 90 % length lies between, where the curve is steep.
@@ -258,10 +272,11 @@ TEST_CASE("rig discrepancy --power: at the recommended length, fresh seeds name 
   // 200 fresh seeds there. The claim holds if the 99 % interval of their rate reaches into
   // [85, 95] %.
   const std::string dir = test::scratch_dir("power_check");
-  const auto r = test::run_rig("discrepancy --power --scenario " + kConfigs + "nonlinear_doublet_30deg.yaml --model " +
-                               kModel + " --effect lateral_inflow=-0.005 --lengths 6,12 --flights 60 --verify 200"
-                               " --set sensing.imu.vibration_enabled=false --seed 11 --no-progress --json " +
-                               dir + "/power.json");
+  const auto r =
+      test::run_rig("discrepancy --power --scenario " + kConfigs + "nonlinear_doublet_30deg.yaml --model " + kModel +
+                    " --effect lateral_inflow=-0.005 --lengths 6,12 --flights 60 --verify 200"
+                    " --set sensing.imu.vibration_enabled=false --seed 11 --no-progress --json " +
+                    dir + "/power.json");
   INFO(r.out << r.err);
   REQUIRE(r.exit_code == 0);
   const YAML::Node d = YAML::LoadFile(dir + "/power.json");

@@ -40,17 +40,17 @@ namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
 
-using nimble::test::decode_channel;
-using nimble::test::RunResult;
-using nimble::test::slurp;
-using nimble::test::differing;
-using nimble::test::rig_run;
-using nimble::test::truth_payloads;
 using nimble::test::channel_counts;
 using nimble::test::child_named;
+using nimble::test::decode_channel;
+using nimble::test::differing;
+using nimble::test::rig_run;
 using nimble::test::rig_run_background;
-using nimble::test::wait_for_running;
+using nimble::test::RunResult;
+using nimble::test::slurp;
+using nimble::test::truth_payloads;
 using nimble::test::wait_exit_code;
+using nimble::test::wait_for_running;
 
 /// A fresh directory for one test's logs.
 std::string scratch_dir(const std::string& tag) { return nimble::test::scratch_dir("system_" + tag); }
@@ -260,9 +260,10 @@ TEST_CASE("bad scenario values stop the run before anything starts, naming the k
 TEST_CASE("a rig log flows into the identification: export to CSV, identify the set-1 derivatives", "[system]") {
   const std::string dir = scratch_dir("ident");
   // Ideal sensing: the log has no ESTIMATE, so the truth is the measured data.
-  const RunResult r = rig_run(kConfigs + "id_doublet_train_fast.yaml", dir,
-                              "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller] "
-                              "--set pilot.enabled=false");  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
+  const RunResult r = rig_run(
+      kConfigs + "id_doublet_train_fast.yaml", dir,
+      "--clock lockstep --set run.controller_input=truth --set processes=[plant,controller] "
+      "--set pilot.enabled=false");  // the pilot off: Eq 21 subtracts a constant w0 p, and with the pilot w moves from w0 to 0 (docs/paper-flights.md "Flights like the paper's")
   REQUIRE(r.exit_code == 0);
   const std::string log = dir + "/run.lcmlog", csv = dir + "/flight.csv", json = dir + "/ident.json";
   const auto exported = nimble::test::run_rig("export " + log + " --csv " + csv);
@@ -277,7 +278,7 @@ TEST_CASE("a rig log flows into the identification: export to CSV, identify the 
     REQUIRE(ident.exit_code == 0);
     const YAML::Node p = YAML::LoadFile(json)["parameters"];
     // Set 1 (thesis Table 9.2), flown by the nonlinear plant, measured by its truth.
-    const std::map<std::string, double> set1 = {{"Lp", -2.43e-4}, {"Lv", -3.74e-4}, {"L_df", 1.06e-4},
+    const std::map<std::string, double> set1 = {{"Lp", -2.43e-4},  {"Lv", -3.74e-4}, {"L_df", 1.06e-4},
                                                 {"L_dt", 4.19e-5}, {"Yv", -5.61e-2}, {"Y_df", -8.63e-4}};
     for (const auto& [name, truth] : set1) {
       INFO(name);
@@ -342,12 +343,11 @@ TEST_CASE("the plant's IMU stream: 512 Hz, seeded, noisy around the truth", "[sy
   CHECK(sum_az / n == Approx(-9.81).margin(0.2));
 }
 
-TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm marker error, latency",
-          "[system]") {
+TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm marker error, latency", "[system]") {
   const std::string dir = scratch_dir("mocap");
-  const RunResult r =
-      rig_run(kConfigs + "hover.yaml", dir, "--clock lockstep --set duration_s=4 --set processes=[plant,controller,mocap] "
-             "--set run.controller_input=truth");
+  const RunResult r = rig_run(kConfigs + "hover.yaml", dir,
+                              "--clock lockstep --set duration_s=4 --set processes=[plant,controller,mocap] "
+                              "--set run.controller_input=truth");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   const YAML::Node c = r.summary["channels"][kMocapPose];
@@ -384,8 +384,7 @@ TEST_CASE("the motion-capture emulator: 200 Hz poses at mid-exposure, 0.85 mm ma
   CHECK(mean_error_mm == Approx(0.85).epsilon(0.1));
 }
 
-TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, deterministic in lockstep",
-          "[system]") {
+TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, deterministic in lockstep", "[system]") {
   const std::string a = scratch_dir("est_a"), b = scratch_dir("est_b");
   // The shipped scenario as it is: it flies on the estimator.
   const std::string args = "--clock lockstep";
@@ -423,9 +422,10 @@ TEST_CASE("flying on the estimator: IMU and motion capture fused, controlled, de
   CHECK(differing(ta, tb) == 0);
 }
 
-TEST_CASE("the coupled doublet: pitch 20 deg nose down (forward flight) and a 6 Hz roll doublet with the "
-          "longitudinal model, held",
-          "[system]") {
+TEST_CASE(
+    "the coupled doublet: pitch 20 deg nose down (forward flight) and a 6 Hz roll doublet with the "
+    "longitudinal model, held",
+    "[system]") {
   const std::string dir = scratch_dir("coupled");
   const RunResult r = rig_run(kConfigs + "coupled_doublet_6hz.yaml", dir, "--clock lockstep");
   INFO(r.output);
@@ -471,7 +471,8 @@ TEST_CASE("the CAN link without a usable interface stops the run before anything
   CHECK_FALSE(fs::exists(dir + "/run.lcmlog.scenario.yaml"));  // nothing was started
 
   // A bad section value is named as well.
-  const RunResult bad = rig_run(kConfigs + "hover.yaml", dir, "--set actuator_link=can --set can_bridge.health_rate_hz=0");
+  const RunResult bad =
+      rig_run(kConfigs + "hover.yaml", dir, "--set actuator_link=can --set can_bridge.health_rate_hz=0");
   CHECK(bad.exit_code == 2);
   CHECK(bad.output.find("can_bridge.health_rate_hz") != std::string::npos);
 }

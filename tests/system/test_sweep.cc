@@ -49,8 +49,8 @@ TEST_CASE("rig sweep: two model sets x three seeds, each run as a single run wou
   const std::string set1 = kSource + "rig_configs/models/nimble_lateral_set1.yaml";
   const std::string set4 = kSource + "rig_configs/models/nimble_lateral_set4.yaml";
   const SweepOutcome s = rig_sweep(d, kScenario + " --seeds 4-6 --vary model=" + set1 + "," + set4 +
-                                          " --set pilot.enabled=false --jobs 2 --json " + d + "/sweep.json --csv " + d + "/sweep.csv --logs " +
-                                          d + "/logs");
+                                          " --set pilot.enabled=false --jobs 2 --json " + d + "/sweep.json --csv " + d +
+                                          "/sweep.csv --logs " + d + "/logs");
   INFO(s.output);
   REQUIRE(s.exit_code == 0);
   CHECK(s.output.find("6 runs: 2 parameter sets x 3 seeds (4-6), clock inprocess, 2 jobs") != std::string::npos);
@@ -85,8 +85,8 @@ TEST_CASE("rig sweep: two model sets x three seeds, each run as a single run wou
 TEST_CASE("rig sweep: a run that is not controlled makes exit 1 and is listed with its seed", "[system]") {
   const std::string d = nimble::test::scratch_dir("sweep_bad_run");
   // A roll limit of 5 deg: the first doublet breaks it.
-  const SweepOutcome s = rig_sweep(d, kScenario + " --seeds 1-2 --set duration_s=3 --set summary.max_phi_deg=5 --json " +
-                                          d + "/sweep.json");
+  const SweepOutcome s = rig_sweep(
+      d, kScenario + " --seeds 1-2 --set duration_s=3 --set summary.max_phi_deg=5 --json " + d + "/sweep.json");
   INFO(s.output);
   CHECK(s.exit_code == 1);
   CHECK(s.output.find("controlled 0/2") != std::string::npos);
@@ -126,7 +126,8 @@ std::size_t count_run_files(const std::string& campaign) {
 
 }  // namespace
 
-TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resume, nothing lost or flown twice", "[system]") {
+TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resume, nothing lost or flown twice",
+          "[system]") {
   const std::string d = nimble::test::scratch_dir("sweep_resume");
   const std::string c = d + "/campaign";
   const std::string args = kScenario + " --seeds 1-24 --set duration_s=4 --set pilot.enabled=false";
@@ -158,8 +159,8 @@ TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resu
   const SweepOutcome resumed = rig_sweep(d, "--resume " + c + " --jobs 2");
   INFO(resumed.output);
   REQUIRE(resumed.exit_code == 0);
-  CHECK(resumed.output.find("resuming " + c + ": " + std::to_string(24 - before.size()) + " of 24 runs without a result") !=
-        std::string::npos);
+  CHECK(resumed.output.find("resuming " + c + ": " + std::to_string(24 - before.size()) +
+                            " of 24 runs without a result") != std::string::npos);
   CHECK(!std::filesystem::exists(c + "/runs/run-000023.json.host.1.partial"));
   CHECK(count_run_files(c) == 24);
   for (const auto& [name, time] : before) {
@@ -169,8 +170,10 @@ TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resu
   // The same result as the campaign flown in one go, two at a time.
   const SweepOutcome whole = rig_sweep(d, args + " --jobs 2 --dir " + d + "/whole");
   REQUIRE(whole.exit_code == 0);
-  CHECK(nimble::test::json_without_machine(c + "/result.json") == nimble::test::json_without_machine(d + "/whole/result.json"));
-  CHECK(nimble::test::csv_without_machine(c + "/result.csv") == nimble::test::csv_without_machine(d + "/whole/result.csv"));
+  CHECK(nimble::test::json_without_machine(c + "/result.json") ==
+        nimble::test::json_without_machine(d + "/whole/result.json"));
+  CHECK(nimble::test::csv_without_machine(c + "/result.csv") ==
+        nimble::test::csv_without_machine(d + "/whole/result.csv"));
 
   // A result file damaged afterwards (a full disk, a bad copy) is named, not merged.
   std::filesystem::resize_file(c + "/runs/run-000007.json", 40);
@@ -190,14 +193,16 @@ TEST_CASE("rig sweep: a campaign refuses to go on when its scenario or a file it
     text.replace(text.find(vehicle), vehicle.size(), kSource + "rig_configs/vehicles/nimble_no_wifi.yaml");
     std::ofstream(model) << text;
   }
-  const SweepOutcome first = rig_sweep(d, kScenario + " --seeds 1-2 --set duration_s=2 --vary model=" + model + " --dir " + d + "/c");
+  const SweepOutcome first =
+      rig_sweep(d, kScenario + " --seeds 1-2 --set duration_s=2 --vary model=" + model + " --dir " + d + "/c");
   INFO(first.output);
   REQUIRE(first.exit_code == 0);
   std::filesystem::remove(d + "/c/runs/run-000001.json");
   { std::ofstream(model, std::ios::app) << "\n# edited after the campaign was made\n"; }
   const SweepOutcome resumed = rig_sweep(d, "--resume " + d + "/c");
   CHECK(resumed.exit_code == 2);
-  CHECK(resumed.output.find("changed since the campaign was made (parameter set 1 'model=" + model + "'") != std::string::npos);
+  CHECK(resumed.output.find("changed since the campaign was made (parameter set 1 'model=" + model + "'") !=
+        std::string::npos);
   // Neither is a directory without a campaign, nor another campaign made in one directory.
   CHECK(rig_sweep(d, "--resume " + d).output.find("no campaign in " + d) != std::string::npos);
   const SweepOutcome again = rig_sweep(d, kScenario + " --seeds 1-2 --dir " + d + "/c");

@@ -51,7 +51,8 @@ TEST_CASE("Hover in Dryden gusts: flown p, v, phi PSDs and variances agree with 
       INFO(name << ": outside " << o["outside"].as<int>() << " of " << o["counted"].as<int>() << " (allowed "
                 << o["allowed"].as<int>() << "), mean ratio " << o["mean_ratio"].as<double>() << " +- "
                 << o["mean_ratio_sigma"].as<double>() << ", variance " << o["flight_variance"].as<double>()
-                << " against " << o["model_variance"].as<double>() << " +- " << o["flight_variance_sigma"].as<double>());
+                << " against " << o["model_variance"].as<double>() << " +- "
+                << o["flight_variance_sigma"].as<double>());
       CHECK(o["bins"].as<int>() >= 70);
       CHECK(o["bins_agree"].as<bool>());
       CHECK(o["mean_agrees"].as<bool>());

@@ -86,8 +86,9 @@ void check_split_report(const RunResult& r) {
   CHECK(sim_ns.rfind("net:[", 0) == 0);
   CHECK(flight_ns.rfind("net:[", 0) == 0);
   CHECK(sim_ns != flight_ns);
-  CHECK(r.output.find("hosts      sim (launcher, 10.76.67.1/30, " + sim_ns + "): plant, mocap; flight (10.76.67.2/30, " +
-                      flight_ns + "): controller, estimator") != std::string::npos);
+  CHECK(r.output.find("hosts      sim (launcher, 10.76.67.1/30, " + sim_ns +
+                      "): plant, mocap; flight (10.76.67.2/30, " + flight_ns + "): controller, estimator") !=
+        std::string::npos);
   // The second host's namespace (and the veth pair with it) is gone: nothing holds it.
   CHECK(holders_of(flight_ns).empty());
 }
@@ -120,13 +121,15 @@ TEST_CASE("lockstep over two hosts: the verdict and the truth, byte for byte, of
     const auto& y = truth_two[i];
     bool same = x.utime == y.utime && x.seq == y.seq && x.step == y.step && x.delta_f_radps == y.delta_f_radps;
     for (int k = 0; k < 3; ++k) {
-      same = same && x.omega_body_radps[k] == y.omega_body_radps[k] && x.velocity_body_mps[k] == y.velocity_body_mps[k] &&
-             x.euler_rad[k] == y.euler_rad[k] && x.position_ned_m[k] == y.position_ned_m[k];
+      same = same && x.omega_body_radps[k] == y.omega_body_radps[k] &&
+             x.velocity_body_mps[k] == y.velocity_body_mps[k] && x.euler_rad[k] == y.euler_rad[k] &&
+             x.position_ned_m[k] == y.position_ned_m[k];
     }
     different += !same;
   }
   CHECK(different == 0);
-  CHECK(differing(channel_payloads(a + "/run.lcmlog", ch::kTruth), channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
+  CHECK(differing(channel_payloads(a + "/run.lcmlog", ch::kTruth), channel_payloads(b + "/run.lcmlog", ch::kTruth)) ==
+        0);
   // Not trivially equal: the vehicle flew the doublet.
   CHECK(two.summary["max_abs"]["phi"].as<double>() > 0.1);
 
@@ -160,8 +163,9 @@ TEST_CASE("real time over two hosts: controlled as on one host, each process in 
   const pid_t plant = nimble::test::child_named(rig, "nimble_plant");
   const pid_t mocap = nimble::test::child_named(rig, "nimble_mocap");
   const pid_t estimator = nimble::test::child_named(rig, "nimble_estimator");
-  const std::string rig_ns = namespace_of(rig), controller_ns = namespace_of(controller), plant_ns = namespace_of(plant),
-                    mocap_ns = namespace_of(mocap), estimator_ns = namespace_of(estimator);
+  const std::string rig_ns = namespace_of(rig), controller_ns = namespace_of(controller),
+                    plant_ns = namespace_of(plant), mocap_ns = namespace_of(mocap),
+                    estimator_ns = namespace_of(estimator);
   const int code = nimble::test::wait_exit_code(rig);
   const std::string out = slurp(b + "/out.txt");
   INFO(out);
@@ -211,7 +215,8 @@ int fly_by_hand(const std::string& dir, const std::string& args, bool other_seed
       << " --log " << dir << "/run.lcmlog --json " << dir << "/summary.json --no-progress > " << dir
       << "/out.txt 2>&1 &\n"
       << "rig=$!\n"
-      << "for i in $(seq 800); do [ \"$(grep -c -- '--lcm-url' " << dir << "/out.txt)\" = 2 ] && break; sleep 0.025; done\n"
+      << "for i in $(seq 800); do [ \"$(grep -c -- '--lcm-url' " << dir
+      << "/out.txt)\" = 2 ] && break; sleep 0.025; done\n"
       << "grep -- '--lcm-url' " << dir << "/out.txt > " << dir << "/commands.txt\n"
       << (other_seed ? "sed 's/^seed: .*/seed: 99/' " + resolved + " > " + dir + "/other.yaml\n" +
                            "sed -i '/--name controller/s#--scenario [^ ]*#--scenario " + dir + "/other.yaml#' " + dir +
@@ -228,12 +233,12 @@ int fly_by_hand(const std::string& dir, const std::string& args, bool other_seed
       << "exit $code\n";
   const int status = std::system(("unshare -n bash " + script).c_str());
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (code == 90) FAIL("this machine cannot give a private network namespace a multicast loopback (unshare -n, ip route)");
+  if (code == 90)
+    FAIL("this machine cannot give a private network namespace a multicast loopback (unshare -n, ip route)");
   return code;
 }
 
-TEST_CASE("a host started by hand: rig run prints its commands, they fly with it, the truth of one host",
-          "[system]") {
+TEST_CASE("a host started by hand: rig run prints its commands, they fly with it, the truth of one host", "[system]") {
   const std::string a = scratch_dir("hand_one"), b = scratch_dir("hand_two");
   const std::string common = "--clock lockstep --seed 4 --set duration_s=2";
   const RunResult one = rig_run(kOneHost, a, common);
@@ -275,8 +280,7 @@ TEST_CASE("a process started by hand with another scenario is named before the r
   CHECK(nimble::test::channel_counts(d + "/run.lcmlog").count(ch::kTruth) == 0);  // nothing flew
 }
 
-TEST_CASE("a bad hosts section stops the run before anything starts, naming the file, the line and why",
-          "[system]") {
+TEST_CASE("a bad hosts section stops the run before anything starts, naming the file, the line and why", "[system]") {
   const std::string d = scratch_dir("bad");
   const std::string file = d + "/split.yaml";
   std::ofstream(file) << "base: " << kOneHost << "\n"

@@ -35,9 +35,9 @@ TEST_CASE("Table 2.1: uncontrolled, controlled and reduced eigenvalues within 1e
   const auto uncontrolled = ce500_named_eigenvalues(ce500_full_model(c));
   const auto controlled = ce500_named_eigenvalues(ce500_controlled_model(c));
   const auto reduced = ce500_named_eigenvalues(ce500_reduced_model(c));
-  for (const auto& [ours, published] : {std::make_pair(&uncontrolled, &c.published.uncontrolled),
-                                        std::make_pair(&controlled, &c.published.controlled),
-                                        std::make_pair(&reduced, &c.published.reduced)}) {
+  for (const auto& [ours, published] :
+       {std::make_pair(&uncontrolled, &c.published.uncontrolled), std::make_pair(&controlled, &c.published.controlled),
+        std::make_pair(&reduced, &c.published.reduced)}) {
     for (const auto& m : match_eigenvalues(*ours, *published)) {
       INFO("ours " << m.ours.value << ", published " << m.published);
       CHECK(m.distance < 1e-3);

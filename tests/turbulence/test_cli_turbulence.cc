@@ -87,7 +87,8 @@ TEST_CASE("rig turbulence rejects bad usage and bad files with exit 2 and a mess
 TEST_CASE("rig turbulence --plots writes PNGs, or says gnuplot is missing", "[cli][turbulence]") {
   const std::filesystem::path dir = nimble::test::scratch_path("turbulence_plots");
   // Without gnuplot on the PATH: a clear error, not a crash.
-  const Result none = run_rig("turbulence " + kPractical + " --duration 100 --plots " + dir.string(), "PATH=/nonexistent");
+  const Result none =
+      run_rig("turbulence " + kPractical + " --duration 100 --plots " + dir.string(), "PATH=/nonexistent");
   CHECK(none.exit_code == 2);
   CHECK(none.err.find("gnuplot-nox") != std::string::npos);
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {

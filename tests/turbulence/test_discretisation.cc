@@ -92,7 +92,8 @@ TEST_CASE("Unit intensity means held samples of variance 1 over dt and a simulat
   const std::size_t N = 100000;
   const DiscreteModel d = discretise(f.system, W, dt);
   const Eigen::VectorXd x = simulate_stationary(d, P, N, 7).col(0);
-  const double sd = quadratic_estimate_std(sample_variance_weights(N), sampled_autocovariance(d.Phi, P, f.system.C.row(0), N));
+  const double sd =
+      quadratic_estimate_std(sample_variance_weights(N), sampled_autocovariance(d.Phi, P, f.system.C.row(0), N));
   CHECK(std::abs(sample_variance(x) - sigma * sigma) < 4.0 * sd);
 
   // The same intensity as held samples w_k = n_k / sqrt(dt) at a fine step (Euler-like):

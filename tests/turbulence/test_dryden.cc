@@ -21,16 +21,17 @@ constexpr double kV = 51.4;
 constexpr double kL = 150.0;
 
 std::vector<ShapingFilter> all_filters() {
-  return {time_based_first_order(0.7, 2.0),
-          time_based_second_order(0.7, 2.0),
-          dryden_longitudinal(1.2, kL, kV),
-          dryden_lateral(1.2, kL, kV),
-          dryden_vertical(1.2, kL, kV),
-          dryden_lateral(1.2, kL, kV, DrydenStandard::kMilHdbk1797),
-          dryden_vertical(1.2, kL, kV, DrydenStandard::kMilHdbk1797),
-          practical_filter("u_g", practical_asymmetric_coefficients(kV, kL, 0.0991, 0.5545, 0.4159, 0.0249 / (kV * kV))),
-          practical_filter("alpha_g", practical_asymmetric_coefficients(kV, kL, 0.06, 0.3294, 0.2243, 0.0182 / (kV * kV))),
-          practical_filter("beta_g", practical_beta_g_coefficients(1.0, kV, kL))};
+  return {
+      time_based_first_order(0.7, 2.0),
+      time_based_second_order(0.7, 2.0),
+      dryden_longitudinal(1.2, kL, kV),
+      dryden_lateral(1.2, kL, kV),
+      dryden_vertical(1.2, kL, kV),
+      dryden_lateral(1.2, kL, kV, DrydenStandard::kMilHdbk1797),
+      dryden_vertical(1.2, kL, kV, DrydenStandard::kMilHdbk1797),
+      practical_filter("u_g", practical_asymmetric_coefficients(kV, kL, 0.0991, 0.5545, 0.4159, 0.0249 / (kV * kV))),
+      practical_filter("alpha_g", practical_asymmetric_coefficients(kV, kL, 0.06, 0.3294, 0.2243, 0.0182 / (kV * kV))),
+      practical_filter("beta_g", practical_beta_g_coefficients(1.0, kV, kL))};
 }
 
 }  // namespace

@@ -28,7 +28,8 @@ struct Set1 {
 };
 
 /// p, v, phi of a stationary record of `loop` at dt.
-std::map<std::string, Eigen::VectorXd> simulate(const LinearSystem& loop, double dt, std::size_t N, std::uint64_t seed) {
+std::map<std::string, Eigen::VectorXd> simulate(const LinearSystem& loop, double dt, std::size_t N,
+                                                std::uint64_t seed) {
   const Eigen::VectorXd W = Eigen::VectorXd::Ones(1);
   const DiscreteModel d = discretise(loop, W, dt);
   const Eigen::MatrixXd X = simulate_stationary(d, stationary_covariance(loop, W), N, seed);
@@ -47,7 +48,8 @@ TEST_CASE("Binomial upper quantile: the smallest count with the cumulative proba
   CHECK_THROWS(binomial_upper_quantile(10, 0.05, 1.0));
 }
 
-TEST_CASE("Expected Welch estimate: integrates to R_0 and is the sampled PSD where it is smooth", "[turbulence][hover]") {
+TEST_CASE("Expected Welch estimate: integrates to R_0 and is the sampled PSD where it is smooth",
+          "[turbulence][hover]") {
   const ShapingFilter f = time_based_second_order(0.3, 2.0);
   const Eigen::VectorXd W = Eigen::VectorXd::Ones(1);
   const double dt = 0.01;
@@ -61,7 +63,8 @@ TEST_CASE("Expected Welch estimate: integrates to R_0 and is the sampled PSD whe
   e.psd = E;
   e.d_omega_radps = 2.0 * M_PI / (static_cast<double>(M) * dt);
   CHECK(variance_from_estimate(e) == Approx(R[0]).epsilon(1e-9));
-  const Eigen::VectorXd omega = Eigen::VectorXd::LinSpaced(E.size(), 0.0, e.d_omega_radps * static_cast<double>(E.size() - 1));
+  const Eigen::VectorXd omega =
+      Eigen::VectorXd::LinSpaced(E.size(), 0.0, e.d_omega_radps * static_cast<double>(E.size() - 1));
   const Eigen::MatrixXd S = sampled_output_psd(d.Phi, P, f.system.C, dt, omega);
   for (const Eigen::Index k : {20, 100, 1000}) CHECK(E[k] == Approx(S(k, 0)).epsilon(0.01));
   CHECK_THROWS(welch_expectation(R, dt, 1000, 10));

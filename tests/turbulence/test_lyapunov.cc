@@ -30,7 +30,8 @@ TEST_CASE("Continuous and discrete Lyapunov solutions satisfy their equations", 
   CHECK((Phi * Pd * Phi.transpose() + Q - Pd).norm() < 1e-12 * Pd.norm());
 }
 
-TEST_CASE("Lyapunov refuses the unstable uncontrolled Ce500 and names the spiral eigenvalue", "[turbulence][lyapunov]") {
+TEST_CASE("Lyapunov refuses the unstable uncontrolled Ce500 and names the spiral eigenvalue",
+          "[turbulence][lyapunov]") {
   const auto& config = nimble::turbulence::test::practical();
   const LinearSystem open = ce500_full_model(config);
   try {

@@ -84,9 +84,10 @@ TEST_CASE("known attitudes follow the rig conventions (NED, body x fwd y right z
   }
   SECTION("yaw, pitch and roll compose in ZYX order") {
     const Eigen::Vector3d e(10 * d, -25 * d, 135 * d);
-    const Eigen::Matrix3d expected = (Eigen::AngleAxisd(e[2], Eigen::Vector3d::UnitZ()) *
-                                      Eigen::AngleAxisd(e[1], Eigen::Vector3d::UnitY()) *
-                                      Eigen::AngleAxisd(e[0], Eigen::Vector3d::UnitX())).toRotationMatrix();
+    const Eigen::Matrix3d expected =
+        (Eigen::AngleAxisd(e[2], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(e[1], Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(e[0], Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
     CHECK((rotation_from_euler_zyx(e) - expected).cwiseAbs().maxCoeff() < 1e-15);
   }
   SECTION("gravity in body axes at rest: specific force (0, 0, -g) when level") {

@@ -73,7 +73,7 @@ TEST_CASE("channel filter: only the listed channels' LCM messages reach the sock
       lcm_short_datagram(ch::kTruth, payload),
       imu,
       lcm_short_datagram(ch::kImu + "X", payload),         // a longer name sharing the prefix
-      lcm_short_datagram(ch::kImu.substr(0, 2), payload),           // a shorter one
+      lcm_short_datagram(ch::kImu.substr(0, 2), payload),  // a shorter one
       lcm_short_datagram(ch::kActuatorCommandCan, payload),
       cmd,
       lcm_short_datagram(ch::kActuatorFeedback, payload),  // same first words as the command

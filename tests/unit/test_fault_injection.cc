@@ -101,7 +101,8 @@ TEST_CASE("fault injector: stuck repeats the last message before it with fresh s
   CHECK(r.messages[30].gyro_radps[0] == 30.0);
 }
 
-TEST_CASE("fault injector: garbage bytes are refused by receivers, garbage nan replaces exactly the fields asked", "[fault_injector]") {
+TEST_CASE("fault injector: garbage bytes are refused by receivers, garbage nan replaces exactly the fields asked",
+          "[fault_injector]") {
   const Received bytes = publish_through({fault(FaultKind::kGarbage, 20000, 30000)});
   CHECK(bytes.malformed == 10);
   CHECK(bytes.messages.size() == 90);
@@ -208,7 +209,8 @@ TEST_CASE("faults section: entries are read, bad ones named by their key", "[fau
   CHECK(error_of("[{target: MOCAP_POSE, kind: off, start_s: 1}]", {"plant", "controller"})
             .find("published by the mocap") != std::string::npos);
   CHECK(error_of("{target: IMU}", processes).find("must be a list") != std::string::npos);
-  CHECK(error_of("[{target: IMU, kind: wrong, start_s: 1}]", processes).find("scale other than 1") != std::string::npos);
+  CHECK(error_of("[{target: IMU, kind: wrong, start_s: 1}]", processes).find("scale other than 1") !=
+        std::string::npos);
 }
 
 TEST_CASE("divergence monitor: the threshold follows from the gate and the false-alarm rate", "[divergence]") {
@@ -256,9 +258,10 @@ TEST_CASE("fault code names: every CODE_ constant of fault_event_t.lcm has its n
   CHECK(nimble::contract::fault_code_name(999) == "code 999");
 }
 
-TEST_CASE("fault kinds: one list names every kind once, in the enumeration's order, and docs/faults.md lists each with "
-          "its parameters",
-          "[fault_injector]") {
+TEST_CASE(
+    "fault kinds: one list names every kind once, in the enumeration's order, and docs/faults.md lists each with "
+    "its parameters",
+    "[fault_injector]") {
   const auto& kinds = nimble::contract::fault_kinds();
   REQUIRE(kinds.size() == static_cast<std::size_t>(FaultKind::kCanBusOff) + 1);
   std::ifstream in(std::string(RIG_SOURCE_DIR) + "/docs/faults.md");

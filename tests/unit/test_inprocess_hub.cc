@@ -138,7 +138,8 @@ TEST_CASE("bus: a string of encoded length 0 and a seq that does not continue ar
   std::vector<nimble::heartbeat_t> heartbeats;
   std::vector<std::string> malformed;
   receiver.subscribe<nimble::truth_state_t>(ch::kTruth, [&](const nimble::truth_state_t& t) { truth.push_back(t); });
-  receiver.subscribe<nimble::heartbeat_t>(ch::kHeartbeat, [&](const nimble::heartbeat_t& h) { heartbeats.push_back(h); });
+  receiver.subscribe<nimble::heartbeat_t>(ch::kHeartbeat,
+                                          [&](const nimble::heartbeat_t& h) { heartbeats.push_back(h); });
   receiver.on_malformed([&](const std::string& c, const std::string& what) { malformed.push_back(c + ": " + what); });
   // A heartbeat whose `process` string has an encoded length of 0 (bytes 24-27): LCM 1.3.1's
   // generated decoder threw std::length_error from std::string::assign; with the rig's decoder
@@ -220,7 +221,8 @@ struct TwoNodes {
     master.set_lockstep_master(true);
     master.add_task("plant", 1000.0, [this](int64_t t) { master_steps.push_back(t); });
     participant.add_task("cycle", 500.0, [this](int64_t t) { participant_ticks.push_back(t); });
-    control.subscribe<nimble::fault_event_t>(ch::kFault, [this](const nimble::fault_event_t& f) { faults.push_back(f); });
+    control.subscribe<nimble::fault_event_t>(ch::kFault,
+                                             [this](const nimble::fault_event_t& f) { faults.push_back(f); });
     participant.join_inprocess();
     nimble::run_control_t start{};
     start.command = nimble::run_control_t::COMMAND_START;
@@ -271,7 +273,8 @@ TEST_CASE("lockstep schedule: the master's ticks and acknowledgements are the on
   ProcessNode master{NodeOptions{"plant", "", "inprocess", &hub}};
   master.set_lockstep_master(true);
   master.add_task("plant", 1000.0, [](int64_t) {});
-  const std::vector<std::pair<std::string, double>> rates = {{"controller", 512.0}, {"mocap", 200.0}, {"estimator", 512.0}};
+  const std::vector<std::pair<std::string, double>> rates = {
+      {"controller", 512.0}, {"mocap", 200.0}, {"estimator", 512.0}};
   std::vector<std::unique_ptr<ProcessNode>> participants;
   for (const auto& [name, hz] : rates) {
     participants.push_back(std::make_unique<ProcessNode>(NodeOptions{name, "", "inprocess", &hub}));

@@ -112,8 +112,7 @@ TEST_CASE("set 1 non-dimensional eigenvectors match thesis Table 6", "[model]") 
   struct Expected {
     double mag, phase_deg;
   };
-  const Expected table6[2][3] = {{{0.30, 180.0}, {0.86, 180.0}, {1.0, 0.0}},
-                                 {{0.16, 83.4}, {0.70, -53.5}, {1.0, 0.0}}};
+  const Expected table6[2][3] = {{{0.30, 180.0}, {0.86, 180.0}, {1.0, 0.0}}, {{0.16, 83.4}, {0.70, -53.5}, {1.0, 0.0}}};
   CHECK_FALSE(modes[0].oscillatory);
   CHECK(modes[1].oscillatory);
   for (int k = 0; k < 2; ++k) {
@@ -162,7 +161,7 @@ TEST_CASE("four-state model: decoupled and full roll-yaw inertia coupling", "[mo
   CHECK(dec.A(2, 0) == Approx(-0.156).margin(5e-4));  // Yp/m + w0
   CHECK(dec.A(2, 1) == Approx(-0.090).margin(5e-4));  // Yr/m - u0
   CHECK(dec.A(2, 1) == Approx(8.37e-3 / v.mass_kg - model.trim.u0_mps));
-  CHECK(dec.A(2, 3) == Approx(9.743).margin(5e-4));   // g cos(theta0) cos(phi0)
+  CHECK(dec.A(2, 3) == Approx(9.743).margin(5e-4));  // g cos(theta0) cos(phi0)
   CHECK(dec.A(3, 0) == 1.0);
   CHECK(dec.A(3, 1) == Approx(-0.079).margin(5e-4));  // tan(theta0) cos(phi0)
   // With it, thesis Table 8.8: -8.44, 1.99 +- 5.54i, 2.70, each within 1 %.
@@ -259,11 +258,13 @@ TEST_CASE("a model file's terms: section is read, and a bad entry is refused nam
   };
   const std::string where = kConfigs + "models/terms_test.yaml:" + std::to_string(line) + ": ";
   CHECK(refused("terms:\n  - {equation: L, expression: \"p^\", coefficient: 1}\n") ==
-        where + "key 'terms[0].expression': value 'p^': does not parse: at position 3: expected an integer power in "
-                "[0, 16] after '^', found the end");
+        where +
+            "key 'terms[0].expression': value 'p^': does not parse: at position 3: expected an integer power in "
+            "[0, 16] after '^', found the end");
   CHECK(refused("terms:\n  - {equation: L, expression: \"x*p\", coefficient: 1}\n") ==
-        where + "key 'terms[0].expression': value 'x*p': reads an unknown signal 'x' (known: p, q, r, u, v, w, phi, "
-                "theta, delta_f, delta_t, delta_d, delta_w)");
+        where +
+            "key 'terms[0].expression': value 'x*p': reads an unknown signal 'x' (known: p, q, r, u, v, w, phi, "
+            "theta, delta_f, delta_t, delta_d, delta_w)");
   CHECK(refused("terms:\n  - {equation: M, expression: \"p\", coefficient: 1}\n") ==
         where + "key 'terms[0].equation': value 'M': must be one of: L, Y");
   CHECK_THAT(refused("terms:\n  - {equation: L, expression: \"p\", coefficient: 1, gain: 2}\n"),

@@ -23,9 +23,7 @@ using nimble::OutputFile;
 
 namespace {
 
-std::string scratch(const std::string& tag) {
-  return nimble::test::scratch_dir("output_file_" + tag);
-}
+std::string scratch(const std::string& tag) { return nimble::test::scratch_dir("output_file_" + tag); }
 
 std::string read_all(const std::string& file) {
   std::ifstream in(file, std::ios::binary);

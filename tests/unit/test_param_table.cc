@@ -59,8 +59,8 @@ TEST_CASE("param table: absent keys keep the struct's defaults, present ones are
 }
 
 TEST_CASE("param table: the loader refuses what the range refuses, naming file, key and value", "[config]") {
-  CHECK_THROWS_WITH(load("{rate_hz: 0}"), Catch::Contains("toy.yaml") && Catch::Contains("rate_hz") &&
-                                              Catch::Contains("0"));
+  CHECK_THROWS_WITH(load("{rate_hz: 0}"),
+                    Catch::Contains("toy.yaml") && Catch::Contains("rate_hz") && Catch::Contains("0"));
   CHECK_THROWS_WITH(load("{sigma: {z: -1}}"), Catch::Contains("sigma.z"));
   CHECK_THROWS_WITH(load("{count: 11}"), Catch::Contains("count"));
   CHECK_THROWS_WITH(load("{count: 1.5}"), Catch::Contains("count"));
@@ -84,7 +84,8 @@ TEST_CASE("param table: a struct built in code is checked against the same range
 TEST_CASE("param table: the documentation shows each key with its default, range, unit and meaning", "[config]") {
   const std::string md = params_markdown(toy_params(), Toy{}, "toy.");
   CHECK(md.find("| key | default | allowed | unit | meaning |") == 0);
-  const std::string rate_row = "| `toy.rate_hz` | 512 | " + Range{0.0, 1e5, true, false}.describe() + " | Hz | output rate |";
+  const std::string rate_row =
+      "| `toy.rate_hz` | 512 | " + Range{0.0, 1e5, true, false}.describe() + " | Hz | output rate |";
   CHECK(md.find(rate_row) != std::string::npos);
   CHECK(md.find("| `toy.sigma` | {x: 0.1, y: 0.2, z: 0.3} |") != std::string::npos);
   CHECK(md.find("| `toy.enabled` | true | true, false | - | on or off |") != std::string::npos);

@@ -33,9 +33,10 @@ fs::path write_tree() {
 
 }  // namespace
 
-TEST_CASE("scenario tree: top-level files and base are paths relative to their file, section keys of the same name "
-          "are values",
-          "[scenario]") {
+TEST_CASE(
+    "scenario tree: top-level files and base are paths relative to their file, section keys of the same name "
+    "are values",
+    "[scenario]") {
   const fs::path dir = write_tree();
   const YAML::Node t = nimble::load_scenario_tree((dir / "scenario.yaml").string());
   CHECK(t["model"].as<std::string>() == (dir / "models/m.yaml").lexically_normal().string());
@@ -65,9 +66,10 @@ TEST_CASE("scenario: a top-level section that no process reads is refused, namin
   }
 }
 
-TEST_CASE("scenario: a model file name the file system refuses (a component over 255 bytes) is a ConfigError "
-          "naming the key and the reason, not an escaping filesystem_error",
-          "[scenario]") {
+TEST_CASE(
+    "scenario: a model file name the file system refuses (a component over 255 bytes) is a ConfigError "
+    "naming the key and the reason, not an escaping filesystem_error",
+    "[scenario]") {
   YAML::Node t = YAML::Load("name: t\nduration_s: 1\nclock: lockstep\nseed: 1\nprocesses: [plant]\n");
   t["model"] = std::string(RIG_SOURCE_DIR) + "/rig_configs/models/" + std::string(300, 'a') + ".yaml";
   try {
@@ -82,9 +84,10 @@ TEST_CASE("scenario: a model file name the file system refuses (a component over
   CHECK_THROWS_WITH(nimble::scenario_from_tree(t, "t.yaml"), Catch::Contains("file not found"));
 }
 
-TEST_CASE("scenario tree: every key's origin is recorded (file and line, base files, --set), and an error is "
-          "moved there",
-          "[scenario]") {
+TEST_CASE(
+    "scenario tree: every key's origin is recorded (file and line, base files, --set), and an error is "
+    "moved there",
+    "[scenario]") {
   const fs::path dir = write_tree();
   nimble::KeyOrigins origins;
   nimble::load_scenario_tree((dir / "scenario.yaml").string(), {{"plant.rate_hz", "2000"}, {"run", "{spin_us: 5}"}},
@@ -172,7 +175,8 @@ TEST_CASE("scenario digest: it covers the content of every file the scenario nam
   CHECK(original.size() == 16);
   CHECK(digest() == original);  // nothing changed: the same digest
   // Each named file changed under its own path changes the digest.
-  for (const fs::path& file : {dir / "models" / "m.yaml", dir / "vehicles" / "nimble_no_wifi.yaml", dir / "hover.yaml"}) {
+  for (const fs::path& file :
+       {dir / "models" / "m.yaml", dir / "vehicles" / "nimble_no_wifi.yaml", dir / "hover.yaml"}) {
     INFO(file);
     std::ofstream(file, std::ios::app) << "# changed\n";
     const std::string changed = digest();
@@ -182,14 +186,15 @@ TEST_CASE("scenario digest: it covers the content of every file the scenario nam
   fs::remove_all(dir);
 }
 
-TEST_CASE("scenario tree: --set sensing.base=FILE stands the section on another base file (the flight vibration "
-          "file) below which the default's other keys stay (without it: the scenario's own base)",
-          "[scenario]") {
+TEST_CASE(
+    "scenario tree: --set sensing.base=FILE stands the section on another base file (the flight vibration "
+    "file) below which the default's other keys stay (without it: the scenario's own base)",
+    "[scenario]") {
   const std::string configs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
   const std::string vibration = configs + "sensing/nimble_flight_vibration.yaml";
   nimble::KeyOrigins origins;
-  const YAML::Node tree =
-      nimble::load_scenario_tree(configs + "hover.yaml", {nimble::parse_override("sensing.base=" + vibration)}, &origins);
+  const YAML::Node tree = nimble::load_scenario_tree(configs + "hover.yaml",
+                                                     {nimble::parse_override("sensing.base=" + vibration)}, &origins);
   CHECK(tree["sensing"]["imu"]["structural_gyro_amplitude_radps"]["z"].as<double>() > 3.0);
   CHECK(tree["sensing"]["mocap"]["frame_rate_hz"].as<int>() == 200);  // from default_sensing.yaml below it
   CHECK_FALSE(tree["sensing"]["base"]);

@@ -30,11 +30,24 @@ double value_at(const std::string& text, const std::vector<std::string>& names, 
 }  // namespace
 
 TEST_CASE("term expressions parse, print and round-trip", "[term]") {
-  const std::vector<std::string> good{"p^3", "v*abs(v)", "pos(delta_f)", "deadzone(delta_f, 0.05)",
-                                      "lag(delta_f, 0.02)", "p*v^2", "-0.0005*p^3", "p - (v - phi)",
-                                      "-(p*v)", "(p + v)^2", "sign(p)*neg(v) + 1e-3", "backlash(delta_f, 0.1)",
-                                      "p*-v", "(-p)^3", "lag(abs(delta_f) - 2, 0.125)", "0.1 + 0.2",
-                                      "sat(p, 0.5)", "ratelimit(delta_f, 300) - delta_f",
+  const std::vector<std::string> good{"p^3",
+                                      "v*abs(v)",
+                                      "pos(delta_f)",
+                                      "deadzone(delta_f, 0.05)",
+                                      "lag(delta_f, 0.02)",
+                                      "p*v^2",
+                                      "-0.0005*p^3",
+                                      "p - (v - phi)",
+                                      "-(p*v)",
+                                      "(p + v)^2",
+                                      "sign(p)*neg(v) + 1e-3",
+                                      "backlash(delta_f, 0.1)",
+                                      "p*-v",
+                                      "(-p)^3",
+                                      "lag(abs(delta_f) - 2, 0.125)",
+                                      "0.1 + 0.2",
+                                      "sat(p, 0.5)",
+                                      "ratelimit(delta_f, 300) - delta_f",
                                       "sat(ratelimit(v, 2.5), 1e-3)^2"};
   for (const auto& text : good) {
     INFO(text);
@@ -55,24 +68,32 @@ TEST_CASE("term expressions parse, print and round-trip", "[term]") {
   CHECK(TermExpression::parse("ratelimit(delta_f, 300)").stateful());
   CHECK(TermExpression::parse("sat(lag(p, 0.1), 1)").stateful());
   CHECK_FALSE(TermExpression::parse("sat(delta_f, 3)").stateful());
-  CHECK(TermExpression::parse("sat(v, 1)*ratelimit(delta_f, 300)").signals() == std::vector<std::string>{"delta_f", "v"});
+  CHECK(TermExpression::parse("sat(v, 1)*ratelimit(delta_f, 300)").signals() ==
+        std::vector<std::string>{"delta_f", "v"});
   CHECK_FALSE(TermExpression::parse("sat(p, 2)").same_as(TermExpression::parse("ratelimit(p, 2)")));
 }
 
 TEST_CASE("bad term expressions are refused naming the position and what was expected", "[term]") {
-  CHECK(parse_error("p^") == "expression 'p^': at position 3: expected an integer power in [0, 16] after '^', found the end");
+  CHECK(parse_error("p^") ==
+        "expression 'p^': at position 3: expected an integer power in [0, 16] after '^', found the end");
   CHECK(parse_error("p^1.5") == "expression 'p^1.5': at position 3: expected an integer power in [0, 16], found '1.5'");
-  CHECK(parse_error("p +* v") == "expression 'p +* v': at position 4: expected a number, a signal, a function or '(', found '*'");
+  CHECK(parse_error("p +* v") ==
+        "expression 'p +* v': at position 4: expected a number, a signal, a function or '(', found '*'");
   CHECK(parse_error("abs(p") == "expression 'abs(p': at position 6: expected ')' closing abs(x), found the end");
   CHECK(parse_error("lag(delta_f)") ==
-        "expression 'lag(delta_f)': at position 12: expected ',' and the time constant tau [s] of lag(x, tau), found ')'");
-  CHECK(parse_error("lag(delta_f, 0)") == "expression 'lag(delta_f, 0)': at position 14: expected a time constant tau > 0 s, found '0'");
+        "expression 'lag(delta_f)': at position 12: expected ',' and the time constant tau [s] of lag(x, tau), found "
+        "')'");
+  CHECK(parse_error("lag(delta_f, 0)") ==
+        "expression 'lag(delta_f, 0)': at position 14: expected a time constant tau > 0 s, found '0'");
   CHECK(parse_error("deadzone(p, v)") ==
         "expression 'deadzone(p, v)': at position 13: expected the width w (a number), found 'v'");
-  CHECK(parse_error("p v") == "expression 'p v': at position 3: expected an operator (+, -, *, ^) or the end of the expression, found 'v'");
+  CHECK(parse_error("p v") ==
+        "expression 'p v': at position 3: expected an operator (+, -, *, ^) or the end of the expression, found 'v'");
   CHECK(parse_error("2p") == "expression '2p': at position 2: expected an operator after the number 2, found 'p'");
-  CHECK(parse_error("") == "expression '': at position 1: expected a number, a signal, a function or '(', found the end");
-  CHECK(parse_error("p / v") == "expression 'p / v': at position 3: expected an operator (+, -, *, ^) or the end of the expression, found '/'");
+  CHECK(parse_error("") ==
+        "expression '': at position 1: expected a number, a signal, a function or '(', found the end");
+  CHECK(parse_error("p / v") ==
+        "expression 'p / v': at position 3: expected an operator (+, -, *, ^) or the end of the expression, found '/'");
   // A signal outside the order a program is bound to is refused naming it.
   try {
     TermProgram program(TermExpression::parse("p*x"), {"p", "v"});
@@ -132,7 +153,8 @@ TEST_CASE("term evaluation matches hand-computed values", "[term]") {
 TEST_CASE("sat and ratelimit refuse a missing or non-positive argument naming it", "[term]") {
   CHECK(parse_error("sat(p, 0)") == "expression 'sat(p, 0)': at position 8: expected a limit s > 0, found '0'");
   CHECK(parse_error("sat(p, -1)") == "expression 'sat(p, -1)': at position 8: expected a limit s > 0, found '-1'");
-  CHECK(parse_error("sat(p)") == "expression 'sat(p)': at position 6: expected ',' and the limit s of sat(x, s), found ')'");
+  CHECK(parse_error("sat(p)") ==
+        "expression 'sat(p)': at position 6: expected ',' and the limit s of sat(x, s), found ')'");
   CHECK(parse_error("sat(p, )") == "expression 'sat(p, )': at position 8: expected the limit s (a number), found ')'");
   CHECK(parse_error("ratelimit(p, 0)") ==
         "expression 'ratelimit(p, 0)': at position 14: expected a rate r > 0 per second, found '0'");

@@ -59,7 +59,6 @@ std::vector<unsigned char> fingerprint(const std::string& channel) {
 
 }  // namespace
 
-
 int main(int argc, char** argv) {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   double rate = 2000.0, seconds = 2.0;

@@ -49,8 +49,8 @@ std::string format_pole(const std::complex<double>& s) {
 }
 
 void print_point_header() {
-  std::printf("%8s %8s %9s %9s %8s %10s %8s %s\n", "kp", "kd", "Kp_eff", "Kd_eff", "min_zeta", "max_re/s",
-              "wn_rad/s", "stable");
+  std::printf("%8s %8s %9s %9s %8s %10s %8s %s\n", "kp", "kd", "Kp_eff", "Kd_eff", "min_zeta", "max_re/s", "wn_rad/s",
+              "stable");
 }
 
 void print_point(const PitchGainPoint& p, double map, const char* note = "") {
@@ -86,13 +86,12 @@ void print_setup(const DerivativeModel& model, const Vehicle& vehicle, const Sta
                  const PitchLoopOptions& options, bool continuous, const std::vector<double>& kp_values,
                  const std::vector<double>& kd_values) {
   std::printf("model %s (%s), vehicle %s; trim u0 %.3f m/s, w0 %.3f m/s, theta0 %.3f rad\n", model.name.c_str(),
-              model.source.c_str(), vehicle.name.c_str(), model.trim.u0_mps, model.trim.w0_mps,
-              model.trim.theta0_rad);
-  std::printf("loop: %s; servo %.1f/(s^2 + %.2f s + %.1f); low-pass %.1f Hz Butterworth; "
-              "pitch_cmd_to_dihedral_rad %.4f\n",
-              continuous ? "continuous" : "discrete at the controller rate, zero-order hold", options.servo_wn2_rad2ps2,
-              options.servo_c1_radps, options.servo_wn2_rad2ps2, options.lowpass_cutoff_hz,
-              options.pitch_cmd_to_dihedral_rad);
+              model.source.c_str(), vehicle.name.c_str(), model.trim.u0_mps, model.trim.w0_mps, model.trim.theta0_rad);
+  std::printf(
+      "loop: %s; servo %.1f/(s^2 + %.2f s + %.1f); low-pass %.1f Hz Butterworth; "
+      "pitch_cmd_to_dihedral_rad %.4f\n",
+      continuous ? "continuous" : "discrete at the controller rate, zero-order hold", options.servo_wn2_rad2ps2,
+      options.servo_c1_radps, options.servo_wn2_rad2ps2, options.lowpass_cutoff_hz, options.pitch_cmd_to_dihedral_rad);
   if (!continuous) {
     std::printf("controller %.0f Hz, command delay %d control period(s)\n", options.rate_hz, options.delay_steps);
   }
@@ -100,17 +99,19 @@ void print_setup(const DerivativeModel& model, const Vehicle& vehicle, const Sta
   std::printf("open loop (kp = kd = 0): max real part %.3f /s\n", open.max_real_per_s);
   std::printf("grid: kp %zu values %.4f..%.4f, kd %zu values %.4f..%.4f\n", kp_values.size(), kp_values.front(),
               kp_values.back(), kd_values.size(), kd_values.front(), kd_values.back());
-  std::printf("min_zeta: smallest damping ratio of the complex closed-loop poles (real poles excluded);\n"
-              "wn: natural frequency of that pole; Kp_eff, Kd_eff = gain * map (dihedral rad per rad, per rad/s)\n\n");
+  std::printf(
+      "min_zeta: smallest damping ratio of the complex closed-loop poles (real poles excluded);\n"
+      "wn: natural frequency of that pole; Kp_eff, Kd_eff = gain * map (dihedral rad per rad, per rad/s)\n\n");
 }
 
 /// The best gain pair of the scan, and its closed-loop poles.
 void print_best(const PitchGainPoint& best, const PitchLoopOptions& options) {
-  std::printf("\nbest: kp_per_rad %.4f, kd_per_radps %.4f (Kp_eff %.5f rad/rad, Kd_eff %.5f rad/(rad/s)); "
-              "smallest damping %.3f at wn %.2f rad/s; max real part %.3f /s\n",
-              best.gains.kp_per_rad, best.gains.kd_per_radps, best.gains.kp_per_rad * options.pitch_cmd_to_dihedral_rad,
-              best.gains.kd_per_radps * options.pitch_cmd_to_dihedral_rad, best.poles.min_damping,
-              std::abs(best.poles.least_damped), best.poles.max_real_per_s);
+  std::printf(
+      "\nbest: kp_per_rad %.4f, kd_per_radps %.4f (Kp_eff %.5f rad/rad, Kd_eff %.5f rad/(rad/s)); "
+      "smallest damping %.3f at wn %.2f rad/s; max real part %.3f /s\n",
+      best.gains.kp_per_rad, best.gains.kd_per_radps, best.gains.kp_per_rad * options.pitch_cmd_to_dihedral_rad,
+      best.gains.kd_per_radps * options.pitch_cmd_to_dihedral_rad, best.poles.min_damping,
+      std::abs(best.poles.least_damped), best.poles.max_real_per_s);
   std::printf("closed-loop poles [1/s]:");
   for (const auto& s : best.poles.poles_s) std::printf("  %s", format_pole(s).c_str());
   std::printf("\n");
@@ -137,8 +138,8 @@ void print_scan(const PitchGainScan& scan, std::size_t n_kp, std::size_t n_kd, b
       const double pz = p.poles.has_oscillatory ? p.poles.min_damping : -INFINITY;
       const double bz = b.poles.has_oscillatory ? b.poles.min_damping : -INFINITY;
       const bool better = p.poles.stable != b.poles.stable ? p.poles.stable
-                          : p.poles.stable                ? pz > bz
-                                                          : p.poles.max_real_per_s < b.poles.max_real_per_s;
+                          : p.poles.stable                 ? pz > bz
+                                                           : p.poles.max_real_per_s < b.poles.max_real_per_s;
       if (better) best = i * n_kd + j;
     }
     print_point(scan.points[best], map);
@@ -163,8 +164,9 @@ int main(int argc, char** argv) {
       "Scans the pitch PD gains kp, kd (fixed dihedral map) on the linear closed loop of the longitudinal\n"
       "model and picks the pair whose closed loop is stable and whose least-damped complex poles are best\n"
       "damped. Prints, per kp, the best kd, then the chosen gains and their poles.");
-  cl->footer("LIST: A,B,C or FROM:TO:STEP. The controller file's pitch gains are always checked.\n"
-             "Exit code: 0 a stable pair found, 1 no grid point is stable, 2 a usage or config error.");
+  cl->footer(
+      "LIST: A,B,C or FROM:TO:STEP. The controller file's pitch gains are always checked.\n"
+      "Exit code: 0 a stable pair found, 1 no grid point is stable, 2 a usage or config error.");
   cl->add_option("--model", model_file,
                  "the longitudinal model (default rig_configs/models/nimble_longitudinal.yaml, thesis Table E.4)")
       ->type_name("FILE");
@@ -179,23 +181,23 @@ int main(int argc, char** argv) {
       ->check(cmdline::kFinite)
       ->type_name("RAD");
   cmdline::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0.005:0.300:0.005)")->type_name("LIST"),
-                  [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
+                      [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
   cmdline::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0.0005:0.0400:0.0005)")->type_name("LIST"),
-                  [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
+                      [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
   cl->add_flag("--continuous", continuous, "the continuous loop instead of the discrete one at the controller rate");
   cl->add_option("--delay-steps", delay_steps, "extra command delay of the discrete loop [control periods]")
       ->check(CLI::Range(0, 100))
       ->type_name("N")
       ->capture_default_str();
   cmdline::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
-                      ->type_name("KP,KD")
-                      ->allow_extra_args(false)
-                      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-                  [&checks](const std::string& v) {
-                    const std::vector<double> g = cmdline::number_list(v, ',');
-                    if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
-                    checks.push_back({g[0], g[1]});
-                  });
+                          ->type_name("KP,KD")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&checks](const std::string& v) {
+                        const std::vector<double> g = cmdline::number_list(v, ',');
+                        if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
+                        checks.push_back({g[0], g[1]});
+                      });
   cl->add_flag("--full", full, "print every grid point, not only the best kd per kp");
   cl->add_option("--u0", u0, "replaces the model's trim u0 (the linearisation point, Eq B.15)")
       ->check(cmdline::kFinite)

@@ -74,23 +74,27 @@ int main(int argc, char** argv) {
       "Sweeps roll_cmd_to_delta_f_radps (and the doublet amplitude of a manoeuvre) on the linear closed\n"
       "loop and prints the state and delta_f ranges next to the published ones (thesis Table 9.4 set 1,\n"
       "Table 9.10).");
-  cl->footer("'stable': |phi| < 0.01 rad, |p| < 0.1 rad/s, |v| < 0.05 m/s in the last 0.5 s simulated.\n"
-             "Exit code: 0 a stable combination found, 1 none, 2 a usage or config error.");
+  cl->footer(
+      "'stable': |phi| < 0.01 rad, |p| < 0.1 rad/s, |v| < 0.05 m/s in the last 0.5 s simulated.\n"
+      "Exit code: 0 a stable combination found, 1 none, 2 a usage or config error.");
   cl->add_option("--model", model_file, "the lateral model (default rig_configs/models/nimble_lateral_set1.yaml)")
       ->type_name("FILE");
-  cl->add_option("--controller", controller_file, "the controller (default rig_configs/controller/nimble_attitude.yaml)")
+  cl->add_option("--controller", controller_file,
+                 "the controller (default rig_configs/controller/nimble_attitude.yaml)")
       ->type_name("FILE");
   cl->add_option("--manoeuvre", manoeuvre_file,
                  "the manoeuvre (default rig_configs/manoeuvres/id_doublet_train_7_4hz.yaml, the identification "
                  "doublet train)")
       ->type_name("FILE");
-  cl->add_option("--gain-set", gain_set, "the roll gain set of the controller")->type_name("NAME")->capture_default_str();
-  cmdline::each_value(cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")
-                      ->type_name("A,B,.."),
-                  [&maps](const std::string& v) { maps = cmdline::number_list(v); });
+  cl->add_option("--gain-set", gain_set, "the roll gain set of the controller")
+      ->type_name("NAME")
+      ->capture_default_str();
+  cmdline::each_value(
+      cl->add_option("--maps", "the roll_cmd_to_delta_f_radps values (default 10,20,..,160)")->type_name("A,B,.."),
+      [&maps](const std::string& v) { maps = cmdline::number_list(v); });
   cmdline::each_value(cl->add_option("--amplitudes-deg", "the roll doublet amplitudes (default: the manoeuvre's own)")
-                      ->type_name("A,B,.."),
-                  [&amplitudes_deg](const std::string& v) { amplitudes_deg = cmdline::number_list(v); });
+                          ->type_name("A,B,.."),
+                      [&amplitudes_deg](const std::string& v) { amplitudes_deg = cmdline::number_list(v); });
   cl->add_option("--tail-s", options.tail_s, "hover simulated after the manoeuvre")
       ->check(cmdline::kFinite & CLI::NonNegativeNumber)
       ->type_name("S")
@@ -128,8 +132,8 @@ int main(int argc, char** argv) {
     std::printf("targets (ranges max-min): p %.2f rad/s, v %.2f m/s, phi %.2f rad, delta_f %.0f rad/s\n",
                 target.p_radps, target.v_mps, target.phi_rad, target.delta_f_radps);
     std::printf("score = rms of log(range / target) over p, v, phi, delta_f (actuator output)\n\n");
-    std::printf("%8s %7s %8s %7s %7s %9s %9s %6s %7s %9s %s\n", "map", "amp_deg", "p", "v", "phi", "df",
-                "df_cmd", "sat", "THRF", "score", "stable");
+    std::printf("%8s %7s %8s %7s %7s %9s %9s %6s %7s %9s %s\n", "map", "amp_deg", "p", "v", "phi", "df", "df_cmd",
+                "sat", "THRF", "score", "stable");
 
     double best_score = INFINITY, best_map = 0.0, best_amp = 0.0;
     for (const double amp_deg : amplitudes_deg) {
@@ -141,10 +145,10 @@ int main(int argc, char** argv) {
         const LinearLoopResult r = simulate_linear_closed_loop(model, vehicle, config, gain_set, player, options);
         const bool stable = returned_to_hover(r);
         const double score = range_score(r, target);
-        std::printf("%8.1f %7.1f %8.2f %7.2f %7.3f %9.1f %9.1f %6lld %7.3f %9.3f %s\n", k, amp_deg,
-                    r.p_radps.range(), r.v_mps.range(), r.phi_rad.range(), r.delta_f_radps.range(),
-                    r.delta_f_cmd_radps.range(), static_cast<long long>(r.counters.saturated_steps),
-                    m.throttle_factor, score, stable ? "yes" : "NO");
+        std::printf("%8.1f %7.1f %8.2f %7.2f %7.3f %9.1f %9.1f %6lld %7.3f %9.3f %s\n", k, amp_deg, r.p_radps.range(),
+                    r.v_mps.range(), r.phi_rad.range(), r.delta_f_radps.range(), r.delta_f_cmd_radps.range(),
+                    static_cast<long long>(r.counters.saturated_steps), m.throttle_factor, score,
+                    stable ? "yes" : "NO");
         if (stable && score < best_score) {
           best_score = score;
           best_map = k;
@@ -153,8 +157,8 @@ int main(int argc, char** argv) {
       }
     }
     if (std::isfinite(best_score)) {
-      std::printf("\nbest: roll_cmd_to_delta_f_radps %.1f rad/s per unit, amplitude %.1f deg (score %.3f)\n",
-                  best_map, best_amp, best_score);
+      std::printf("\nbest: roll_cmd_to_delta_f_radps %.1f rad/s per unit, amplitude %.1f deg (score %.3f)\n", best_map,
+                  best_amp, best_score);
     } else {
       std::printf("\nno stable combination\n");
       return 1;

@@ -74,30 +74,32 @@ int main(int argc, char** argv) {
   std::vector<GainSet> checks;
 
   cmdline::CommandLine cl("calibrate_yaw_gains",
-                      "Scans the yaw PD gains kp, kd (fixed wing-root map) on the linear roll-yaw loop of the\n"
-                      "four-state model with the roll loop of a gain set, and picks the pair whose closed loop is\n"
-                      "stable and whose least-damped complex poles are best damped.");
-  cl->footer("LIST: A,B,C or FROM:TO:STEP. The controller file's yaw gains are always checked.\n"
-             "Exit code: 0 a pair found, 1 no grid point decays fast enough, 2 a usage or config error.");
+                          "Scans the yaw PD gains kp, kd (fixed wing-root map) on the linear roll-yaw loop of the\n"
+                          "four-state model with the roll loop of a gain set, and picks the pair whose closed loop is\n"
+                          "stable and whose least-damped complex poles are best damped.");
+  cl->footer(
+      "LIST: A,B,C or FROM:TO:STEP. The controller file's yaw gains are always checked.\n"
+      "Exit code: 0 a pair found, 1 no grid point decays fast enough, 2 a usage or config error.");
   cl->add_option("--model", model_file, "the four-state model (default rig_configs/models/nimble_lateral4_yaw.yaml)")
       ->type_name("FILE");
-  cl->add_option("--controller", controller_file,
-                 "the controller: roll gains and map, yaw map, cut-off (default rig_configs/controller/nimble_attitude.yaml)")
+  cl->add_option(
+        "--controller", controller_file,
+        "the controller: roll gains and map, yaw map, cut-off (default rig_configs/controller/nimble_attitude.yaml)")
       ->type_name("FILE");
   cl->add_option("--gain-set", gain_set, "the roll gain set flown with the yaw loop")->capture_default_str();
   cmdline::each_value(cl->add_option("--kp", "the kp grid [1/rad] (default 0:1.5:0.01)")->type_name("LIST"),
-                  [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
+                      [&kp_values](const std::string& v) { kp_values = cmdline::number_grid(v); });
   cmdline::each_value(cl->add_option("--kd", "the kd grid [s/rad] (default 0:0.3:0.005)")->type_name("LIST"),
-                  [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
+                      [&kd_values](const std::string& v) { kd_values = cmdline::number_grid(v); });
   cmdline::each_value(cl->add_option("--check", "also evaluate this gain pair; repeatable")
-                      ->type_name("KP,KD")
-                      ->allow_extra_args(false)
-                      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
-                  [&checks](const std::string& v) {
-                    const std::vector<double> g = cmdline::number_list(v, ',');
-                    if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
-                    checks.push_back({g[0], g[1]});
-                  });
+                          ->type_name("KP,KD")
+                          ->allow_extra_args(false)
+                          ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll),
+                      [&checks](const std::string& v) {
+                        const std::vector<double> g = cmdline::number_list(v, ',');
+                        if (g.size() != 2) throw std::invalid_argument("'" + v + "' is not KP,KD");
+                        checks.push_back({g[0], g[1]});
+                      });
   cl->add_option("--min-decay", g_min_decay, "slowest decay accepted: every pole's real part <= -this [1/s]")
       ->check(CLI::Range(0.0, 100.0))
       ->type_name("PER_S")
@@ -109,9 +111,10 @@ int main(int argc, char** argv) {
     const StateSpace lat4 = build_state_space(model, load_vehicle(model.vehicle_file));
     const ControllerConfig config = load_controller_config(controller_file);
     const YawLoopOptions options = yaw_loop_options(config, gain_set);
-    std::printf("model %s; roll gains '%s' (kp %.3f, kd %.3f), roll map %.1f rad/s, yaw map %.3f rad, low-pass %.1f Hz\n",
-                model.name.c_str(), gain_set.c_str(), options.roll_gains.kp_per_rad, options.roll_gains.kd_per_radps,
-                options.roll_cmd_to_delta_f_radps, options.yaw_cmd_to_wing_root_rad, options.lowpass_cutoff_hz);
+    std::printf(
+        "model %s; roll gains '%s' (kp %.3f, kd %.3f), roll map %.1f rad/s, yaw map %.3f rad, low-pass %.1f Hz\n",
+        model.name.c_str(), gain_set.c_str(), options.roll_gains.kp_per_rad, options.roll_gains.kd_per_radps,
+        options.roll_cmd_to_delta_f_radps, options.yaw_cmd_to_wing_root_rad, options.lowpass_cutoff_hz);
     const Point open{{0.0, 0.0}, analyse_yaw_loop(lat4, {0.0, 0.0}, options)};
     std::printf("roll loop alone (yaw kp = kd = 0): max real part %.3f /s\n", open.poles.max_real_per_s);
     print_poles(open);
