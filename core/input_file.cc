@@ -41,7 +41,7 @@ void check_stat(const struct stat& st, const std::string& file, InputKind kind) 
   }
 }
 
-std::string reason(int error_number) { return std::strerror(error_number); }
+std::string errno_text(int error_number) { return std::strerror(error_number); }
 
 }  // namespace
 
@@ -78,7 +78,7 @@ std::uint64_t check_input_file(const std::string& file, InputKind kind) {
   struct stat st {};
   if (::stat(file.c_str(), &st) != 0) {
     const int e = errno;
-    throw InputFileError(file, e == ENOENT ? "file not found" : "cannot be read: " + reason(e));
+    throw InputFileError(file, e == ENOENT ? "file not found" : "cannot be read: " + errno_text(e));
   }
   check_stat(st, file, kind);
   return static_cast<std::uint64_t>(st.st_size);
@@ -86,7 +86,7 @@ std::uint64_t check_input_file(const std::string& file, InputKind kind) {
 
 std::string read_input_descriptor(int fd, const std::string& file, InputKind kind) {
   struct stat st {};
-  if (::fstat(fd, &st) != 0) throw InputFileError(file, "cannot be read: " + reason(errno));
+  if (::fstat(fd, &st) != 0) throw InputFileError(file, "cannot be read: " + errno_text(errno));
   check_stat(st, file, kind);
   const std::uint64_t max = input_bound(kind).max_bytes;
   std::string text;
@@ -96,7 +96,8 @@ std::string read_input_descriptor(int fd, const std::string& file, InputKind kin
     const ssize_t n = ::read(fd, buffer, sizeof buffer);
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw InputFileError(file, "cannot be read: " + reason(errno) + " (at byte " + std::to_string(text.size()) + ")");
+      throw InputFileError(file,
+                           "cannot be read: " + errno_text(errno) + " (at byte " + std::to_string(text.size()) + ")");
     }
     if (n == 0) break;
     text.append(buffer, static_cast<std::size_t>(n));
@@ -113,7 +114,7 @@ std::string read_input_file(const std::string& file, InputKind kind) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
   if (fd < 0) {
     const int e = errno;
-    throw InputFileError(file, e == ENOENT ? "file not found" : "cannot be read: " + reason(e));
+    throw InputFileError(file, e == ENOENT ? "file not found" : "cannot be read: " + errno_text(e));
   }
   try {
     std::string text = read_input_descriptor(fd, file, kind);

@@ -17,7 +17,7 @@
 namespace nimble::ident {
 namespace {
 
-std::string g(double x, const char* f = "%.4g") { return report_number(x, f); }
+std::string num(double x, const char* f = "%.4g") { return report_number(x, f); }
 
 /// outputs.png, residuals.png and residual_psd.png in `dir`: the held-out outputs and residuals
 /// before and after, and the residuals' spectra.
@@ -63,7 +63,7 @@ std::vector<std::string> report_figures(const DiscrepancyResult& r, const std::s
 std::string report_markdown(const DiscrepancyResult& r) {
   std::ostringstream md;
   md << "# Discrepancy: " << r.model_name << "\n\n";
-  md << "Data: `" << r.source << "`, " << r.samples << " samples at " << g(r.rate_hz) << " Hz; held-out figures from "
+  md << "Data: `" << r.source << "`, " << r.samples << " samples at " << num(r.rate_hz) << " Hz; held-out figures from "
      << r.folds << "-fold cross-validation over contiguous blocks.\n\n";
   md << "**Verdict: " << r.verdict << "**: " << r.summary << "\n\n";
   md << discrepancy_parts::compatibility_markdown(r);
@@ -72,20 +72,20 @@ std::string report_markdown(const DiscrepancyResult& r) {
     for (const auto& e : r.effects) {
       for (const auto& [k, v] : e.parameters) {
         const auto s = e.sigma.find(k);
-        md << "| " << e.name << " | " << k << " | " << g(v) << " | " << (s == e.sigma.end() ? "" : g(s->second))
+        md << "| " << e.name << " | " << k << " | " << num(v) << " | " << (s == e.sigma.end() ? "" : num(s->second))
            << " |\n";
       }
     }
     md << "\n";
   }
   md << "## Gap on held-out data\n\n"
-     << r.gap_metric << ": **" << g(r.gap_before) << " -> " << g(r.gap_after) << "**\n\n";
+     << r.gap_metric << ": **" << num(r.gap_before) << " -> " << num(r.gap_after) << "**\n\n";
   md << "| output | unit | RMSE model | RMSE before | RMSE after | fit % before | fit % after | white before | white "
         "after "
         "|\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& o : r.gap) {
-    md << "| " << o.output << " | " << o.unit << " | " << g(o.rmse_model) << " | " << g(o.rmse_before) << " | "
-       << g(o.rmse_after) << " | " << g(o.fit_before_pct, "%.1f") << " | " << g(o.fit_after_pct, "%.1f") << " | "
+    md << "| " << o.output << " | " << o.unit << " | " << num(o.rmse_model) << " | " << num(o.rmse_before) << " | "
+       << num(o.rmse_after) << " | " << num(o.fit_before_pct, "%.1f") << " | " << num(o.fit_after_pct, "%.1f") << " | "
        << (!o.white_tested  ? "-"
            : o.white_before ? "yes"
                             : "no")
@@ -101,8 +101,8 @@ std::string report_markdown(const DiscrepancyResult& r) {
           "the augmented model:\n\n| signal | R^2 before | R^2 after | RMSE before | RMSE after "
           "|\n|---|---|---|---|---|\n";
     for (const auto& c : r.closed_loop) {
-      md << "| " << c.output << " | " << g(c.r2_before, "%.3f") << " | " << g(c.r2_after, "%.3f") << " | "
-         << g(c.rmse_before) << " | " << g(c.rmse_after) << " |\n";
+      md << "| " << c.output << " | " << num(c.r2_before, "%.3f") << " | " << num(c.r2_after, "%.3f") << " | "
+         << num(c.rmse_before) << " | " << num(c.rmse_after) << " |\n";
     }
   }
   md << "\n![outputs](outputs.png)\n\n![residuals](residuals.png)\n\n![residual PSDs](residual_psd.png)\n\n";
@@ -110,35 +110,35 @@ std::string report_markdown(const DiscrepancyResult& r) {
         "|\n|---|---|---|---|---|---|\n";
   for (const auto& t : r.candidates) {
     std::string f;
-    for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + g(v);
-    md << "| " << t.round << " | " << trial_name(t, "`") << " | " << f << " | " << (t.available ? g(t.p_value) : "")
+    for (const auto& [eq, v] : t.partial_f) f += (f.empty() ? "" : ", ") + eq + " " + num(v);
+    md << "| " << t.round << " | " << trial_name(t, "`") << " | " << f << " | " << (t.available ? num(t.p_value) : "")
        << " | "
-       << (t.available ? g(100.0 * t.heldout_drop, "%.1f") + " % +- " + g(100.0 * t.heldout_se, "%.1f") + " %" : "")
+       << (t.available ? num(100.0 * t.heldout_drop, "%.1f") + " % +- " + num(100.0 * t.heldout_se, "%.1f") + " %" : "")
        << " | " << t.reason << " |\n";
   }
   md << "\n## Gap by band\n\n| band | equations | Hz | before | after |\n|---|---|---|---|---|\n";
   for (const auto& b : r.gap_bands) {
     std::string eqs;
     for (const auto& e : b.equations) eqs += (eqs.empty() ? "" : ", ") + e;
-    md << "| " << b.name << (b.wideband ? " (wideband data)" : "") << " | " << eqs << " | " << g(b.lo_hz) << "-"
-       << g(b.hi_hz) << " | " << g(b.before) << " | " << g(b.after) << " |\n";
+    md << "| " << b.name << (b.wideband ? " (wideband data)" : "") << " | " << eqs << " | " << num(b.lo_hz) << "-"
+       << num(b.hi_hz) << " | " << num(b.before) << " | " << num(b.after) << " |\n";
   }
   for (const auto& b : r.gap_bands) {
     if (!b.note.empty()) md << "\n" << b.name << ": " << b.note << "\n";
   }
   md << "\n## Located\n\n";
   for (const auto& f : r.located.frequency) {
-    md << "- frequency: " << f.output << " peak at " << g(f.f_hz) << " Hz, " << g(f.ratio)
-       << " x the local background (p " << g(f.p_value) << ")\n";
+    md << "- frequency: " << f.output << " peak at " << num(f.f_hz) << " Hz, " << num(f.ratio)
+       << " x the local background (p " << num(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.state) {
-    md << "- state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << g(f.partial_r)
-       << ", p " << g(f.p_value) << ")\n";
+    md << "- state: " << f.output << " depends nonlinearly on " << f.signal << " (partial r " << num(f.partial_r)
+       << ", p " << num(f.p_value) << ")\n";
   }
   for (const auto& f : r.located.time) {
-    md << "- time: " << f.output << " " << f.what << " " << g(f.start_s, "%.2f") << "-" << g(f.end_s, "%.2f")
-       << " s: " << g(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
-       << g(100.0 * f.time_share, "%.1f") << " % of the time\n";
+    md << "- time: " << f.output << " " << f.what << " " << num(f.start_s, "%.2f") << "-" << num(f.end_s, "%.2f")
+       << " s: " << num(100.0 * f.energy_share, "%.1f") << " % of the residual energy in "
+       << num(100.0 * f.time_share, "%.1f") << " % of the time\n";
   }
   return md.str();
 }
