@@ -36,9 +36,8 @@ std::string hex_id(const can_frame& f) {
 /// The controller's rate: one command per control cycle (the controller section's, else the
 /// contract's default).
 double controller_rate_hz(const Scenario& scenario) {
-  const YAML::Node section = scenario.root["controller"];
-  if (!section || !section.IsMap() || !section["rate_hz"]) return contract::kDefaultControlRateHz;
-  ConfigMap controller(section, scenario.file, "controller");
+  ConfigMap controller = scenario.section("controller");
+  if (!controller.has("rate_hz")) return contract::kDefaultControlRateHz;
   return controller.get_double("rate_hz", Range::closed(contract::kMinControlRateHz, contract::kMaxControlRateHz));
 }
 

@@ -186,7 +186,7 @@ const std::vector<std::string>& campaign_table_ids() {
 
 Source table_source(const std::string& id) {
   if (id == "9.4") return Source::kFlightRanges;
-  if (id == "9.5" || id == "9.5-oe" || id == "9.6" || id == "9.6-oe") return Source::kReidentifiedPlant;
+  if (!reference_table(id).empty()) return Source::kReidentifiedPlant;
   if (id == "9.5-model" || id == "9.6-model" || id == "8.8") return Source::kModelArithmetic;
   return Source::kFlightFit;
 }
@@ -212,8 +212,11 @@ const char* source_statement(Source s) {
 }
 
 std::string reference_table(const std::string& id) {
-  if (table_source(id) != Source::kReidentifiedPlant) return "";
-  return id.substr(0, 3) + "-model";
+  // A re-identification of the plant, by either method, against the arithmetic on its model file.
+  static const std::map<std::string, std::string> reference = {
+      {"9.5", "9.5-model"}, {"9.5-oe", "9.5-model"}, {"9.6", "9.6-model"}, {"9.6-oe", "9.6-model"}};
+  const auto it = reference.find(id);
+  return it == reference.end() ? "" : it->second;
 }
 
 std::string table_flight(const std::string& id) {
