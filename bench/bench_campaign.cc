@@ -103,10 +103,10 @@ double plant_alone_s(const launcher::RunPlan& plan, double sim_s, int procs) {
       ConfigMap section = plan.scenario.section("plant");
       const plant::PlantConfig config = plant::plant_config_from(section);
       const std::unique_ptr<plant::PlantModel> model = plant::plant_model_for(plan.scenario, config);
-      const plant::ActuatorInput trim = model->trim_command();
+      const effects::ActuatorInput trim = model->trim_command();
       const long steps = static_cast<long>(sim_s * config.rate_hz);
       for (long i = 0; i < steps; ++i) {
-        plant::ActuatorInput u = trim;
+        effects::ActuatorInput u = trim;
         const double half_df = (i / 100) % 2 ? 1.25 : -1.25;
         u.flap_freq_left_radps += half_df;
         u.flap_freq_right_radps -= half_df;

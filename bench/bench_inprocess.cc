@@ -83,11 +83,11 @@ double plant_floor_x(const launcher::RunPlan& plan, double duration_s, int runs)
   std::vector<double> x;
   for (int i = 0; i < runs; ++i) {
     const std::unique_ptr<plant::PlantModel> model = plant::plant_model_for(s, config);
-    const plant::ActuatorInput trim = model->trim_command();
+    const effects::ActuatorInput trim = model->trim_command();
     const long steps = static_cast<long>(duration_s * config.rate_hz);
     const auto t0 = std::chrono::steady_clock::now();
     for (long k = 0; k < steps; ++k) {
-      plant::ActuatorInput u = trim;  // a +-2.5 rad/s square wave of delta_f, so the state moves
+      effects::ActuatorInput u = trim;  // a +-2.5 rad/s square wave of delta_f, so the state moves
       const double half_df = (k / 100) % 2 ? 1.25 : -1.25;
       u.flap_freq_left_radps += half_df;
       u.flap_freq_right_radps -= half_df;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "cmdline/args.h"
-#include "core/effects.h"
+#include "effects/registry.h"
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -79,7 +79,7 @@ int run_discrepancy_command(const std::vector<std::string>& args) {
   add_vehicle(cl, vehicle_file, "the model's");
   cmdline::each_value(cl->add_option("--candidates")
                           ->description("comma-separated candidate effects to try (default: all the data supports): " +
-                                        effect_name_list())
+                                        effects::effect_name_list())
                           ->type_name("LIST"),
                       [&opt](const std::string& v) { opt.candidates = split_list(v); });
   add_test_terms(cl, opt);

@@ -11,7 +11,7 @@
 #include "core/param_table.h"
 #include "core/vehicle.h"
 #include "launcher/run_plan.h"
-#include "plant/effects/registry.h"
+#include "effects/registry.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "can_bridge/bridge_config.h"
@@ -71,7 +71,7 @@ const std::vector<Section>& sections() {
                 params_markdown_rows(plant::thrust_params(), ThrustCurve{}, "plant.thrust.") +
                 params_markdown_rows(plant::initial_params(), plant::InitialState{}, "plant.initial.");
        }},
-      {"plant.effects", [] { return plant::effects_markdown(); }},
+      {"plant.effects", [] { return effects::effects_markdown(); }},
       {"plant.terms", [] { return plant::terms_markdown(); }},
       {"pilot", [] { return params_markdown(pilot_params(), PilotConfig{}, "pilot."); }},
       {"can_bridge", [] { return params_markdown(can::can_bridge_params(), can::CanBridgeConfig{}, "can_bridge."); }},

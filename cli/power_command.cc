@@ -8,7 +8,7 @@
 
 #include "cli/commands.h"
 #include "cmdline/args.h"
-#include "core/effects.h"
+#include "effects/registry.h"
 #include "ident/plots.h"
 #include "detection_power/effect_size.h"
 #include "detection_power/power_campaign.h"
@@ -112,7 +112,7 @@ int run_discrepancy_power_command(const std::vector<std::string>& args_in) {
   cmdline::each_value(cl->add_option("--candidates")
                           ->description("comma-separated candidate effects the workflow tries (default: all the data "
                                         "supports): " +
-                                        effect_name_list())
+                                        effects::effect_name_list())
                           ->type_name("LIST"),
                       [&o](const std::string& v) {
                         o.discrepancy.candidates.clear();

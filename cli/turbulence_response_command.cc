@@ -25,8 +25,8 @@
 #include "core/vehicle.h"
 #include "ident/plots.h"
 #include "ident/rig_log.h"
-#include "plant/effects/lateral_gust.h"
-#include "plant/effects/registry.h"
+#include "effects/lateral_gust.h"
+#include "effects/registry.h"
 #include "plant/plant_model.h"
 #include "scenario/scenario.h"
 #include "turbulence/hover_gust_response.h"
@@ -61,17 +61,17 @@ Setup setup_from(const std::string& file, const std::vector<Override>& overrides
   Setup s;
   ConfigMap plant_section = scenario.section("plant");
   const plant::PlantConfig plant = plant::plant_config_from(plant_section);
-  const auto& gust = plant.effects.get<plant::LateralGustConfig>();
-  if (!gust.enabled || gust.form != plant::GustForm::kDryden || !(gust.sigma_mps > 0.0)) {
+  const auto& gust = plant.effects.get<effects::LateralGustConfig>();
+  if (!gust.enabled || gust.form != effects::GustForm::kDryden || !(gust.sigma_mps > 0.0)) {
     throw std::invalid_argument(file +
                                 ": plant.effects.lateral_gust must be enabled with form dryden and "
                                 "sigma_mps > 0 (it is " +
                                 std::string(gust.enabled ? "enabled" : "disabled") + ", " +
-                                plant::to_string(gust.form) + ", sigma " + fmt("%g", gust.sigma_mps) + " m/s)");
+                                effects::to_string(gust.form) + ", sigma " + fmt("%g", gust.sigma_mps) + " m/s)");
   }
   // Every other enabled plant effect (the linear hover loop leaves them out), from the registry.
-  for (const plant::PlantEffect& e : plant::plant_effects()) {
-    if (e.name != "lateral_gust" && e.enabled(plant.effects)) s.other_effects.push_back(e.name);
+  for (const effects::Effect* e : effects::plant_effects()) {
+    if (!e->definition.stochastic() && e->plant.enabled(plant.effects)) s.other_effects.push_back(e->name());
   }
 
   s.model = load_model(scenario.model_file);

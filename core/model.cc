@@ -1,7 +1,5 @@
 #include "core/model.h"
 
-#include "core/effects.h"
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -206,7 +204,6 @@ DerivativeModel model_from_config(ConfigMap& map) {
   if (map.has("effects")) {
     ConfigMap effects = map.get_map("effects");
     for (const auto& name : effects.keys()) {
-      if (find_effect(name) == nullptr) effects.fail(name, "unknown effect (known: " + effect_name_list() + ")");
       ConfigMap params = effects.get_map(name);
       for (const auto& key : params.keys()) m.effects[name][key] = params.get_double(key);
       params.finish();
@@ -219,15 +216,6 @@ DerivativeModel model_from_config(ConfigMap& map) {
   }
   map.finish();
   return m;
-}
-
-const std::vector<std::string>& model_effect_names() {
-  static const std::vector<std::string> names = [] {
-    std::vector<std::string> out;
-    for (const auto& e : effect_registry()) out.push_back(e.name);
-    return out;
-  }();
-  return names;
 }
 
 std::vector<std::string> model_term_equations(Structure s) {

@@ -76,7 +76,9 @@ struct DerivativeModel {
   std::map<std::string, double> published_sigma;
   /// Effects beyond the linear derivatives that a discrepancy analysis named (optional
   /// section `effects:` of a model file, written by rig discrepancy --model-out): effect name
-  /// (one of model_effect_names()) -> parameter name -> value, in SI units.
+  /// -> parameter name -> value, in SI units. The names and parameters are the effects
+  /// registry's (effects/registry.h), which the plant and the discrepancy workflow check them
+  /// against (check_model_effects()) when they use the model.
   std::map<std::string, std::map<std::string, double>> effects;
   /// Generic terms (optional section `terms:`, core/terms.h): each adds coefficient * expression
   /// to the force or moment of its equation (model_term_equations()), in SI.
@@ -85,11 +87,6 @@ struct DerivativeModel {
   /// Value of a derivative; @throws std::out_of_range naming it if absent.
   double at(const std::string& name) const;
 };
-
-/// Names an `effects:` section of a model file may use: the candidate effects of the
-/// discrepancy workflow (discrepancy/discrepancy.h), named as the plant's effects where the plant
-/// has them.
-const std::vector<std::string>& model_effect_names();
 
 /// Equations a `terms:` entry of a model of structure `s` may name: L, Y (lateral3); L, N, Y
 /// (lateral4); none for the longitudinal structure.

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "cmdline/args.h"
-#include "plant/effects/registry.h"
+#include "effects/registry.h"
 
 namespace nimble::detection_power {
 namespace {
@@ -19,15 +19,15 @@ namespace {
 }  // namespace
 
 const std::vector<SizedEffect>& sized_effects() {
-  // Every plant effect that declares its sizing (plant/effects/effect_sizing.h), in the
+  // Every plant effect that declares its sizing (effects/effect_sizing.h), in the
   // registry's order.
   static const std::vector<SizedEffect> effects = [] {
     std::vector<SizedEffect> v;
-    for (const plant::PlantEffect& effect : plant::plant_effects()) {
-      if (effect.sizing == nullptr) continue;
-      const plant::EffectSizing sizing = effect.sizing();
-      v.push_back({effect.name, sizing.parameter, sizing.unit, sizing.range, effect.model_effect, sizing.scales,
-                   sizing.values});
+    for (const effects::Effect* effect : effects::plant_effects()) {
+      if (effect->plant.sizing == nullptr) continue;
+      const effects::EffectSizing sizing = effect->plant.sizing();
+      v.push_back(
+          {effect->name(), sizing.parameter, sizing.unit, sizing.range, effect->name(), sizing.scales, sizing.values});
     }
     return v;
   }();
@@ -79,7 +79,8 @@ std::vector<Override> size_overrides(const YAML::Node& tree, const std::string& 
   const YAML::Node plant = tree["plant"];
   const YAML::Node section = plant && plant["effects"] ? plant["effects"][effect] : YAML::Node();
   try {
-    for (const plant::EffectValue& value : e.values(section, size)) out.push_back({prefix + value.first, value.second});
+    for (const effects::EffectValue& value : e.values(section, size))
+      out.push_back({prefix + value.first, value.second});
   } catch (const std::invalid_argument& bad) {
     fail(e, bad.what());
   }

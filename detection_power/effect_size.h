@@ -1,10 +1,10 @@
 #pragma once
 /// The size of a plant effect, as `rig discrepancy --power --effect NAME=SIZE` takes it: one
-/// number per plant effect (plant/effects/), the value of its main plant parameter, in that
+/// number per plant effect (effects/), the value of its main plant parameter, in that
 /// parameter's unit, within its range.
 ///
 /// Each plant effect declares what its SIZE sets in its own file (`<name>_sizing()`,
-/// plant/effects/effect_sizing.h); `rig discrepancy --help` lists them. E.g. lateral_inflow:
+/// effects/effect_sizing.h); `rig discrepancy --help` lists them. E.g. lateral_inflow:
 /// SIZE sets Y_vv_ns2pm2 [N s^2/m^2] and L_vv keeps its ratio to Y_vv.
 ///
 /// "Keeps its ratio": the scenario's own values (after its --set) fix the shape of the effect,
@@ -20,7 +20,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
-#include "plant/effects/effect_sizing.h"
+#include "effects/effect_sizing.h"
 #include "scenario/scenario.h"
 
 namespace nimble::detection_power {
@@ -31,10 +31,10 @@ struct SizedEffect {
   std::string parameter;  ///< the key SIZE sets
   std::string unit;
   Range range;           ///< of SIZE (the parameter's range in the plant's table)
-  std::string named_as;  ///< the name the discrepancy workflow gives it (core/effects.h)
+  std::string named_as;  ///< the name the discrepancy workflow gives it (effects/registry.h: the effect itself)
   std::string scales;    ///< what else SIZE moves (help text)
-  /// The effect's values at a size (plant/effects/effect_sizing.h).
-  std::vector<plant::EffectValue> (*values)(const YAML::Node& section, double size) = nullptr;
+  /// The effect's values at a size (effects/effect_sizing.h).
+  std::vector<effects::EffectValue> (*values)(const YAML::Node& section, double size) = nullptr;
 };
 
 /// Every sizable effect, in the plant registry's order.

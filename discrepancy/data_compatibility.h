@@ -40,6 +40,7 @@
 
 #include "ident/flight_data.h"
 #include "ident/signal.h"
+#include "effects/sensor_bias.h"
 
 namespace nimble::ident {
 
@@ -66,9 +67,16 @@ struct CompatibilityOptions {
   std::vector<std::string> imu_channels{"p", "q", "r", "ax", "ay", "az"};
 };
 
+/// The sensor errors' names. The rate gyro's bias is the effect sensor_bias (effects/sensor_bias.h)
+/// found before any aerodynamic name, and carries its name.
+inline const std::string kSensorScaleError = "sensor_scale";
+inline const std::string kTimeOffsetError = "time_offset";
+inline const std::string kClockDriftError = "clock_drift";
+inline const std::string& kSensorBiasError = effects::kSensorBiasName;
+
 /// One sensor error estimated from the kinematics.
 struct SensorError {
-  std::string name;     ///< "sensor_scale", "time_offset", "clock_drift" or "sensor_bias"
+  std::string name;     ///< kSensorScaleError, kTimeOffsetError, kClockDriftError or kSensorBiasError
   std::string channel;  ///< the sensor's channel ("p")
   std::string against;  ///< the source it is compared with ("phi": the attitude)
   std::string unit;     ///< "-" (a fraction), "s", "ppm", "rad/s"

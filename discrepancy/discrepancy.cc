@@ -24,7 +24,14 @@ namespace nimble::ident {
 
 using namespace discrepancy_parts;
 
-const std::vector<CandidateSpec>& candidate_library() { return effect_registry(); }
+const std::vector<CandidateSpec>& candidate_library() {
+  static const std::vector<CandidateSpec> library = [] {
+    std::vector<CandidateSpec> out;
+    for (const auto& e : effects::effect_registry()) out.push_back(e.definition);
+    return out;
+  }();
+  return library;
+}
 
 namespace {
 
@@ -34,6 +41,7 @@ void check_request(const DerivativeModel& model, const DiscrepancyOptions& optio
     throw std::invalid_argument("rig discrepancy works on lateral3 models; '" + model.name + "' is " +
                                 to_string(model.structure));
   }
+  effects::check_model_effects(model);  // every effect of its effects: section one the registry knows
   // The command line's ranges (rig discrepancy --help), checked here for every front end (Python).
   const auto value = [](double v) {
     return std::isfinite(v) ? std::to_string(v) : std::string(std::isnan(v) ? "nan" : "inf");
@@ -53,8 +61,8 @@ void check_request(const DerivativeModel& model, const DiscrepancyOptions& optio
                                 value(options.command_latency_s));
   }
   for (const auto& name : options.candidates) {
-    if (find_effect(name) == nullptr) {
-      throw std::invalid_argument("unknown candidate '" + name + "' (known: " + effect_name_list() + ")");
+    if (effects::find_definition(name) == nullptr) {
+      throw std::invalid_argument("unknown candidate '" + name + "' (known: " + effects::effect_name_list() + ")");
     }
   }
 }
@@ -75,7 +83,7 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
     };
     std::vector<Pass> passing;
     for (const CandidateSpec* spec : pool) {
-      if (spec->wideband || spec->stochastic) continue;  // the wideband and signature stages below
+      if (spec->wideband() || spec->stochastic()) continue;  // the wideband and signature stages below
       if (std::find(entered.begin(), entered.end(), spec->name) != entered.end()) continue;
       std::vector<Addition> adds;
       res.candidates.push_back(wf.trial(*spec, m, base, base_cv, round, adds));
@@ -137,8 +145,9 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
   // it now stands (baseline, known and named effects) is refit on the same data low-passed at
   // flapping_cutoff_hz, and harmonics at a frequency scanned over the flapping band are tried
   // with the same entry rule (Bonferroni over the independent frequencies of the band).
-  const auto flapping = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->wideband; });
+  const auto flapping = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->wideband(); });
   if (flapping != pool.end() && std::find(known.begin(), known.end(), (*flapping)->name) == known.end()) {
+    const CandidateSpec& wide_spec = **flapping;
     ProcessingOptions wide_proc = options.processing;
     wide_proc.filter_order = 10;
     wide_proc.cutoff_hz = std::min(options.flapping_cutoff_hz, 0.4 * options.processing.rate_hz);
@@ -153,10 +162,10 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
     }
     for (const auto& name : m.effect_names) {
       if (is_found_term(name)) continue;
-      const CandidateSpec& spec = *find_effect(name);
+      const CandidateSpec& spec = *effects::find_definition(name);
       Index k = 0;
       for (const auto& t : res.candidates) {
-        if (t.name == name && t.entered) k = scan_index(name, t.parameters, wide.filtered);
+        if (t.name == name && t.entered) k = scan_index(spec, t.parameters, wide.filtered);
       }
       for (auto& a : candidate_columns(spec, wide.filtered, model.trim, vehicle.gravity_mps2, k))
         wm.added[a.eq].push_back(a);
@@ -164,8 +173,8 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
     BatchRule wide_batch = wf.batch;
     wide_batch.min_block = static_cast<Index>(4 * whiteness_lag_step(0, wide_proc));
     std::vector<VectorXd> cv_before, cv_after;
-    CandidateTrial t =
-        flapping_trial(wm, wide.filtered, wf.folds, options, wf.p_critical, wide_batch, &cv_before, &cv_after);
+    CandidateTrial t = flapping_trial(wide_spec, wm, wide.filtered, wf.folds, options, wf.p_critical, wide_batch,
+                                      &cv_before, &cv_after);
     if (t.passed) {
       // The gap where the forcing lives: a band at each harmonic, of the record's resolution or
       // kFlappingBandHz wide, in the equations the harmonics enter (not the actuator's).
@@ -204,13 +213,13 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
                           const Workflow& wf, const Model& m, const std::vector<VectorXd>& aug_resid,
                           DiscrepancyResult& res) {
   // A side wind has no regressor: named from its signature in the final residual.
-  const auto gust = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->stochastic; });
+  const auto gust = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->stochastic(); });
   CandidateTrial gust_result;
   const double f_ref_hi = options.processing.filter_order > 0 ? 0.6 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   if (gust != pool.end() && std::find(known.begin(), known.end(), (*gust)->name) == known.end()) {
     std::vector<VectorXd> extra;  // Y columns of every deterministic candidate the data supports
     for (const auto& c : candidate_library()) {
-      if (c.scanned || c.wideband || c.stochastic) continue;
+      if (c.scanned() || c.wideband() || c.stochastic()) continue;
       if (std::find(m.effect_names.begin(), m.effect_names.end(), c.name) != m.effect_names.end()) continue;
       if (std::find(known.begin(), known.end(), c.name) != known.end()) continue;
       if (!std::all_of(c.needs.begin(), c.needs.end(),
@@ -229,8 +238,8 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
       given_resid = m.eqs[e].y - given_prediction(m.eqs[e], model, known_values, options);
       yv_given = model.derivatives.at("Yv");
     }
-    gust_result = gust_trial(m, aug_resid, res.augmented, d.rate_hz, f_ref_hi, extra, given_resid, yv_given, options,
-                             wf.p_critical);
+    gust_result = gust_trial(**gust, m, aug_resid, res.augmented, d.rate_hz, f_ref_hi, extra, given_resid, yv_given,
+                             options, wf.p_critical);
     res.candidates.push_back(gust_result);
   }
   return gust_result;
@@ -270,10 +279,11 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
     res.effects.push_back(std::move(eff));
   }
   for (const auto& name : m.effect_names) {
-    if (name == "flapping_forcing" || is_found_term(name)) continue;  // flapping: named by the wideband stage
+    if (is_found_term(name)) continue;
+    const CandidateSpec& spec = *effects::find_definition(name);
+    if (spec.wideband()) continue;  // named by the wideband stage
     NamedEffect eff;
     eff.name = name;
-    const CandidateSpec& spec = *find_effect(name);
     for (const auto& term : spec.terms) {
       const auto it = res.augmented.find(term.parameter);
       if (it == res.augmented.end()) continue;
@@ -282,7 +292,7 @@ void name_effects(const Model& m, const Workflow& wf, DiscrepancyResult& res) {
     }
     for (const auto& t : res.candidates) {
       if (t.name != name || !t.entered) continue;
-      if (name == "actuator_delay") eff.parameters["delay_s"] = t.delay_s;
+      if (spec.scan == effects::Scan::kDelay) eff.parameters[spec.scan_parameter()] = t.delay_s;
       eff.contradicts = t.contradicts;
       time_varying_parameters(m, wf.batch, wf.data, t, eff);  // rate or change time, for effects that change
     }
@@ -444,16 +454,16 @@ DerivativeModel augmented_model(const std::string& source, const DerivativeModel
   }
   am.effects.clear();
   for (const auto& name : known) {
-    const auto& spec = *find_effect(name);
+    const auto& spec = *effects::find_definition(name);
     for (const auto& term : spec.terms) {
       const auto it = res.augmented.find(term.parameter);
       if (it != res.augmented.end()) am.effects[name][term.parameter] = it->second.value;
     }
     const auto& given = model.effects.at(name);
-    for (const char* scanned : {"delay_s", "t_change_s"}) {
-      if (given.count(scanned)) am.effects[name][scanned] = given.at(scanned);
-    }
-    if (spec.stochastic) am.effects[name] = given;
+    const std::string scanned = spec.scan_parameter();
+    const bool refit_keeps_scan = spec.scan == effects::Scan::kDelay || spec.scan == effects::Scan::kChangeTime;
+    if (refit_keeps_scan && given.count(scanned)) am.effects[name][scanned] = given.at(scanned);
+    if (spec.stochastic()) am.effects[name] = given;
   }
   for (const auto& e : res.effects) {
     if (!e.channel.empty()) continue;  // a sensor error: the record was corrected, the model is not changed

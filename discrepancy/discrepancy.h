@@ -155,18 +155,19 @@
 #include "discrepancy/data_compatibility.h"
 #include "ident/flight_data.h"
 #include "ident/identify.h"
-#include "core/effects.h"
+#include "effects/effect.h"
 #include "ident/signal.h"
 
 namespace nimble::ident {
 
-/// One regressor column of a candidate effect in one equation (core/effects.h).
-using CandidateTerm = EffectTerm;
+/// One regressor column of a candidate effect in one equation (effects/effect.h).
+using CandidateTerm = effects::EffectColumn;
 
-/// A physically named candidate effect: an effect of the rig's registry (core/effects.h).
-using CandidateSpec = EffectSpec;
+/// A physically named candidate effect: the definition of an effect of the rig's registry
+/// (effects/registry.h).
+using CandidateSpec = effects::EffectDefinition;
 
-/// Every candidate effect, in a fixed order: the registry's effects.
+/// Every candidate effect, in a fixed order: the registry's effects' definitions.
 const std::vector<CandidateSpec>& candidate_library();
 
 /// Options of the workflow. Every threshold is documented where it is defined.

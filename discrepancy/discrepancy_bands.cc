@@ -154,7 +154,8 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
   id.after = res.gap_after;
   res.gap_bands.push_back(id);
   for (const auto& e : res.effects) {
-    if (e.name != "lateral_gust") continue;
+    const CandidateSpec* spec = effects::find_definition(e.name);
+    if (spec == nullptr || !spec->stochastic()) continue;
     // A side wind has no regressor: its band (below the gust band, the side-force equation) is
     // where its evidence is, and the gap there stays as it is.
     for (std::size_t k = 0; k < m.eqs.size(); ++k) {
@@ -172,8 +173,8 @@ void gap_bands(const UniformData& d, const DiscrepancyOptions& options, const Mo
     if (is_found_term(name)) {
       params.push_back(name.substr(std::string(kTermPrefix).size()));
     } else {
-      const CandidateSpec& spec = *find_effect(name);
-      if (spec.wideband || spec.stochastic) continue;
+      const CandidateSpec& spec = *effects::find_definition(name);
+      if (spec.wideband() || spec.stochastic()) continue;
       for (const auto& t : spec.terms) params.push_back(t.parameter);
     }
     std::vector<std::size_t> eqs;

@@ -13,13 +13,14 @@
 #include "core/chi_square.h"
 #include "ident/metrics.h"
 #include "ident/spectrum.h"
+#include "core/term_expression.h"
 
 namespace nimble::ident::discrepancy_parts {
 
 // ---------------------------------------------------------------------------------------
 // The candidate library.
 
-// The library is the registry's effects (core/effects.h); the regressor columns of each are
+// The library is the registry's effects (effects/registry.h); the regressor columns of each are
 // computed in candidate_columns().
 
 /// A regressor column is excited when its standard deviation reaches this fraction of its
@@ -72,12 +73,31 @@ bool has_actuator_equation(const UniformData& d) {
   return d.has("delta_f_cmd_applied") && d.has("delta_f") && excited(d.at("delta_f_cmd_applied"), "delta_f");
 }
 
-/// The columns of candidate `spec` on the prepared data (`scan`: delay in samples for
-/// actuator_delay, sample of the change for effectiveness_step).
+/// A column of form kTerm on the prepared data: the term with the trim's u0 and w0 put in.
+VectorXd term_column_of(const CandidateTerm& c, const UniformData& d, const Trim& trim) {
+  const TermExpression expression = TermExpression::parse(effects::column_term(c, trim.u0_mps, trim.w0_mps));
+  const std::vector<std::string> names = expression.signals();
+  std::vector<std::vector<double>> values;
+  std::vector<const std::vector<double>*> columns;
+  values.reserve(names.size());
+  for (const auto& name : names) {
+    const VectorXd& x = d.at(name);
+    values.emplace_back(x.data(), x.data() + x.size());
+  }
+  for (const auto& v : values) columns.push_back(&v);
+  if (names.empty()) return VectorXd::Constant(d.size(), TermProgram(expression, {}).evaluate(nullptr));
+  const std::vector<double> out = evaluate_along(expression, names, columns, 1.0 / d.rate_hz);
+  return Eigen::Map<const VectorXd>(out.data(), static_cast<Index>(out.size()));
+}
+
+/// The columns of candidate `spec` on the prepared data (`scan`: delay in samples of a delayed
+/// input, sample of the change of an input after a change), each computed as its form says
+/// (effects/effect.h). A harmonic column has no form on these data: the wideband stage makes
+/// it (harmonic_columns()).
 std::vector<Addition> candidate_columns(const CandidateSpec& spec, const UniformData& d, const Trim& trim, double g,
                                         Index scan) {
+  using effects::ColumnForm;
   const Index n = d.size();
-  VectorXd col;
   std::vector<Addition> out;
   auto add = [&](std::size_t eq, const std::string& name, VectorXd c) {
     for (auto& a : out) {
@@ -89,54 +109,33 @@ std::vector<Addition> candidate_columns(const CandidateSpec& spec, const Uniform
     }
     out.push_back({eq, {name}, {std::move(c)}});
   };
-  const std::size_t L = 0, Y = 1;
-  const auto& p = d.at("p");
-  const auto& v = d.at("v");
-  if (spec.name == "kinematic_coupling") {
-    add(Y, "Y_pw", p.cwiseProduct((d.at("w").array() - trim.w0_mps).matrix()));
-  } else if (spec.name == "gravity_nonlinearity") {
-    const auto& phi = d.at("phi");
-    add(Y, "Y_gphi", (g * std::cos(trim.theta0_rad) * (phi.array().sin() - phi.array())).matrix());
-  } else if (spec.name == "lateral_inflow") {
-    const VectorXd vv = v.cwiseProduct(v.cwiseAbs());
-    add(L, "L_vv", vv);
-    add(Y, "Y_vv", vv);
-  } else if (spec.name == "forward_speed_coupling") {
-    const VectorXd du = d.at("u").array() - trim.u0_mps;
-    add(L, "L_up", du.cwiseProduct(p));
-    add(L, "L_uv", du.cwiseProduct(v));
-    add(Y, "Y_up", du.cwiseProduct(p));
-    add(Y, "Y_uv", du.cwiseProduct(v));
-  } else if (spec.name == "actuator_delay") {
-    const auto& df = d.at("delta_f");
-    const VectorXd c = delayed(df, scan) - df;
-    add(L, "L_df_delayed", c);
-    add(Y, "Y_df_delayed", c);
-    if (has_actuator_equation(d)) {
-      const auto& cmd = d.at("delta_f_cmd_applied");
-      add(kActuatorEq, "F_cmd_delayed", delayed(cmd, scan) - cmd);
+  for (const CandidateTerm& c : spec.terms) {
+    const bool actuator = c.equation == "F";
+    if (actuator && !has_actuator_equation(d)) continue;
+    const std::size_t eq = actuator ? kActuatorEq : c.equation == "L" ? 0 : 1;
+    switch (c.form) {
+      case ColumnForm::kTerm: add(eq, c.parameter, term_column_of(c, d, trim)); break;
+      case ColumnForm::kGravityResidual: {
+        const auto& phi = d.at("phi");
+        add(eq, c.parameter, (g * std::cos(trim.theta0_rad) * (phi.array().sin() - phi.array())).matrix());
+        break;
+      }
+      case ColumnForm::kDelayedInput: {
+        const auto& x = d.at(actuator ? "delta_f_cmd_applied" : "delta_f");
+        add(eq, c.parameter, delayed(x, scan) - x);
+        break;
+      }
+      case ColumnForm::kInputTimesTime: add(eq, c.parameter, drift_time(d).cwiseProduct(d.at("delta_f"))); break;
+      case ColumnForm::kInputAfterChange: {
+        VectorXd x = d.at("delta_f");
+        x.head(std::clamp<Index>(scan, 0, n)).setZero();
+        add(eq, c.parameter, x);
+        break;
+      }
+      case ColumnForm::kHarmonic: throw std::logic_error("candidate " + spec.name + ": harmonic columns have no scan");
     }
-  } else if (spec.name == "effectiveness_drift") {
-    const VectorXd c = drift_time(d).cwiseProduct(d.at("delta_f"));
-    add(L, "L_df_rate", c);
-    add(Y, "Y_df_rate", c);
-  } else if (spec.name == "effectiveness_step") {
-    VectorXd c = d.at("delta_f");
-    c.head(std::clamp<Index>(scan, 0, n)).setZero();
-    add(L, "L_df_step", c);
-    add(Y, "Y_df_step", c);
-  } else if (is_constant_effect(spec.name)) {
-    add(L, "L_0", VectorXd::Ones(n));
-    add(Y, "Y_0", VectorXd::Ones(n));
-  } else if (spec.name == "dihedral_coupling") {
-    add(L, "L_dd", d.at("delta_d"));
-    add(Y, "Y_dd", d.at("delta_d"));
-  } else if (spec.name == "yaw_coupling") {
-    add(L, "Lr", d.at("r"));
-    add(Y, "Yr", d.at("r"));
-  } else {
-    throw std::logic_error("no columns for candidate " + spec.name);
   }
+  if (out.empty() && !spec.terms.empty()) throw std::logic_error("no columns for candidate " + spec.name);
   return out;
 }
 
@@ -223,19 +222,19 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
   }
   m.added.resize(m.eqs.size());
   for (const auto& [name, params] : model.effects) {
-    const EffectSpec* spec = find_effect(name);
-    if (spec == nullptr) continue;  // an effect the library has no regressor form for
+    const CandidateSpec* spec = effects::find_definition(name);
+    if (spec == nullptr) throw std::invalid_argument("the model's effect " + name + " is not one the registry knows");
     if (known) known->push_back(name);
     if (known_values) {
       for (const auto& [key, value] : params) (*known_values)[key] = value;
     }
-    if (spec->wideband) continue;
+    if (spec->wideband()) continue;
     for (const auto& need : spec->needs) {
       if (!d.has(need)) {
         throw DataError(source, -1, -1, need, "the model's effect " + name + " needs " + need + ", not in the data");
       }
     }
-    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, scan_index(name, params, d))) {
+    for (auto& add : candidate_columns(*spec, d, model.trim, vehicle.gravity_mps2, scan_index(*spec, params, d))) {
       for (std::size_t j = 0; j < add.names.size(); ++j) {
         m.eqs[add.eq].names.push_back(add.names[j]);
         m.eqs[add.eq].cols.push_back(std::move(add.cols[j]));
@@ -259,18 +258,15 @@ Model build_baseline(const UniformData& d, const std::vector<Equation>& equation
   return m;
 }
 
-/// The scan index of effect `name` with parameters `params` on `d`: the delay in samples of
-/// actuator_delay (delay_s, at least one sample), the first sample at or after t_change_s of
-/// effectiveness_step, 0 otherwise.
-Index scan_index(const std::string& name, const std::map<std::string, double>& params, const UniformData& d) {
-  if (name == "actuator_delay") {
-    const auto delay = params.find("delay_s");
-    return delay == params.end() ? 0 : std::max<Index>(1, std::lround(delay->second * d.rate_hz));
-  }
-  if (name == "effectiveness_step") {
-    const auto t = params.find("t_change_s");
-    if (t == params.end()) return 0;
-    const auto first = std::lower_bound(d.t_s.data(), d.t_s.data() + d.size(), t->second);
+/// The scan index of the effect `spec` with parameters `params` on `d`: the delay in samples of
+/// a scanned delay (its scan parameter, at least one sample), the first sample at or after the
+/// change time of a scanned change, 0 otherwise.
+Index scan_index(const CandidateSpec& spec, const std::map<std::string, double>& params, const UniformData& d) {
+  const auto it = params.find(spec.scan_parameter());
+  if (it == params.end()) return 0;
+  if (spec.scan == effects::Scan::kDelay) return std::max<Index>(1, std::lround(it->second * d.rate_hz));
+  if (spec.scan == effects::Scan::kChangeTime) {
+    const auto first = std::lower_bound(d.t_s.data(), d.t_s.data() + d.size(), it->second);
     return static_cast<Index>(first - d.t_s.data());
   }
   return 0;

@@ -286,7 +286,7 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
   res.blocks = f.blocks;
   const double shift_s = static_cast<double>(L) / fs;
 
-  const auto error = [](const char* name, const char* unit) {
+  const auto error = [](const std::string& name, const char* unit) {
     SensorError e;
     e.name = name;
     e.channel = "p";
@@ -294,8 +294,8 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     e.unit = unit;
     return e;
   };
-  SensorError scale = error("sensor_scale", "-"), offset = error("time_offset", "s"),
-              bias = error("sensor_bias", "rad/s"), drift = error("clock_drift", "ppm");
+  SensorError scale = error(kSensorScaleError, "-"), offset = error(kTimeOffsetError, "s"),
+              bias = error(kSensorBiasError, "rad/s"), drift = error(kClockDriftError, "ppm");
   scale_of(f, scale.value, scale.sigma);
   tau_of(f, shift_s, offset.value, offset.sigma);
   bias_of(f, bias.value, bias.sigma);
@@ -366,10 +366,10 @@ FlightData corrected_record(const FlightData& data, const CompatibilityResult& r
   for (const auto& e : result.errors) {
     if (!e.corrected) continue;
     any = true;
-    if (e.name == "sensor_scale") k = e.value;
-    if (e.name == "time_offset") tau = e.value;
-    if (e.name == "sensor_bias") b = e.value;
-    if (e.name == "clock_drift") drift = 1e-6 * e.value;
+    if (e.name == kSensorScaleError) k = e.value;
+    if (e.name == kTimeOffsetError) tau = e.value;
+    if (e.name == kSensorBiasError) b = e.value;
+    if (e.name == kClockDriftError) drift = 1e-6 * e.value;
   }
   if (!any) return data;
   FlightData out = data;
@@ -411,9 +411,9 @@ std::map<std::string, double> baseline_rmse(const FlightData& recorded, const De
 }
 
 const char* parameter_of(const std::string& error) {
-  if (error == "sensor_scale") return "scale_factor";
-  if (error == "time_offset") return "offset_s";
-  if (error == "clock_drift") return "drift_ppm";
+  if (error == kSensorScaleError) return "scale_factor";
+  if (error == kTimeOffsetError) return "offset_s";
+  if (error == kClockDriftError) return "drift_ppm";
   return "bias_radps";
 }
 
@@ -430,19 +430,19 @@ FlightData compatibility_stage(const FlightData& recorded, const DerivativeModel
   FlightData out = corrected_record(recorded, c, options.compatibility);
   for (const SensorError& e : c.errors) {
     if (e.corrected) {
-      c.corrections.push_back(e.name == "time_offset"
+      c.corrections.push_back(e.name == kTimeOffsetError
                                   ? "the IMU's channels restamped by " + num(-e.value) + " s" +
                                         (e.significant ? "" : " (within its tolerance, told from zero)")
-                              : e.name == "clock_drift" ? "the IMU's stamps rescaled by " + num(-e.value) +
-                                                              " ppm about t = " + num(c.t_mid_s) + " s"
-                              : e.name == "sensor_scale" ? "p divided by 1 + " + num(e.value)
-                                                         : "p less its bias " + num(e.value) + " rad/s");
+                              : e.name == kClockDriftError ? "the IMU's stamps rescaled by " + num(-e.value) +
+                                                                 " ppm about t = " + num(c.t_mid_s) + " s"
+                              : e.name == kSensorScaleError ? "p divided by 1 + " + num(e.value)
+                                                            : "p less its bias " + num(e.value) + " rad/s");
     }
     if (!e.named) continue;
     NamedEffect n;
     n.name = e.name;
     n.channel = e.channel;
-    n.against = e.name == "time_offset" || e.name == "clock_drift" ? e.against : "";
+    n.against = e.name == kTimeOffsetError || e.name == kClockDriftError ? e.against : "";
     n.unit = e.unit;
     n.flight = recorded.source;
     n.coefficient = e.value;
@@ -480,12 +480,14 @@ std::size_t sensor_findings(DiscrepancyResult& res) {
       res.located.signature.push_back(std::move(f));
     }
   }
-  const bool delay = std::any_of(res.effects.begin(), res.effects.end(),
-                                 [](const NamedEffect& e) { return e.name == "actuator_delay"; });
-  if (delay && unchecked != nullptr) {
+  const auto delay = std::find_if(res.effects.begin(), res.effects.end(), [](const NamedEffect& e) {
+    const CandidateSpec* spec = effects::find_definition(e.name);
+    return spec != nullptr && spec->scan == effects::Scan::kDelay;
+  });
+  if (delay != res.effects.end() && unchecked != nullptr) {
     // Without the kinematic check a late gyro and a late actuator look alike in L and Y.
-    res.ambiguous.push_back({"actuator_delay", "time_offset"});
-    res.notes.push_back("actuator_delay could be a time offset of the IMU: the kinematics of " + unchecked->source +
+    res.ambiguous.push_back({delay->name, kTimeOffsetError});
+    res.notes.push_back(delay->name + " could be a time offset of the IMU: the kinematics of " + unchecked->source +
                         " were not checked (" + unchecked->note +
                         "); a record with p and phi, p excited, tells them apart (a time offset shows in phi_dot = p)");
   }

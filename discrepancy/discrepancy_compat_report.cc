@@ -20,7 +20,7 @@ std::string sensor_words(const NamedEffect& e) {
   if (!e.against.empty()) s += " against " + e.against;
   s += ": " + num(e.coefficient) + " " + e.unit + " (95 % interval " + num(e.interval[0]) + " .. " +
        num(e.interval[1]) + ")";
-  if (e.name == "time_offset") s += e.coefficient > 0.0 ? ", its stamps late" : ", its stamps early";
+  if (e.name == kTimeOffsetError) s += e.coefficient > 0.0 ? ", its stamps late" : ", its stamps early";
   return s;
 }
 

@@ -20,6 +20,7 @@
 #include "core/terms.h"
 #include "discrepancy/discrepancy.h"
 #include "ident/spectrum.h"
+#include "effects/registry.h"
 
 namespace nimble {
 class JsonWriter;
@@ -220,11 +221,6 @@ std::size_t best_scan_point(const std::vector<ScanPoint>& points);
 /// Each equation's RSS of the fit on all folds (full_rss of each).
 std::vector<double> full_rss_each(const std::vector<FoldStats>& stats);
 
-/// sensor_bias and constant_load: the same constant columns in L and Y, told apart by the
-/// kinematics (Workflow::sensor_bias_signature); exempt from the excitation floor and the test
-/// above the gust band, where a constant has no content.
-inline bool is_constant_effect(const std::string& name) { return name == "sensor_bias" || name == "constant_load"; }
-
 /// Model::effect_names' prefix of a term found by the open-world search.
 inline constexpr const char* kTermPrefix = "term:";
 inline bool is_found_term(const std::string& effect_name) { return effect_name.rfind(kTermPrefix, 0) == 0; }
@@ -390,12 +386,6 @@ struct Workflow {
 
 // --- discrepancy_timevarying.cc ---
 
-/// True for the effects that change the flap input's effectiveness during the record
-/// (effectiveness_drift, effectiveness_step).
-inline bool changes_input_effectiveness(const std::string& name) {
-  return name == "effectiveness_drift" || name == "effectiveness_step";
-}
-
 /// effectiveness_step's scan grid: sample indices of t* every kChangeGridS from the end of the
 /// first cross-validation block to the start of the last. The margin at each end is one block
 /// (a tenth of the record with the default 10 folds): both sides of every t* then hold at least
@@ -527,7 +517,7 @@ std::map<std::string, ParameterEstimate> full_fit(const Model& m, const BatchRul
 // ---------------------------------------------------------------------------------------
 // The candidate library.
 
-// The library is the registry's effects (core/effects.h); the regressor columns of each are
+// The library is the registry's effects (effects/registry.h); the regressor columns of each are
 // computed in candidate_columns().
 
 /// A regressor column is excited when its standard deviation reaches this fraction of its
@@ -562,7 +552,7 @@ std::vector<Addition> candidate_columns(const CandidateSpec& spec, const Uniform
 /// The scan index of effect `name` with parameters `params` (a model's effects: section or a
 /// trial's parameters) on `d`: the delay in samples of actuator_delay (delay_s, at least one
 /// sample), the first sample at or after t_change_s of effectiveness_step, 0 otherwise.
-Index scan_index(const std::string& name, const std::map<std::string, double>& params, const UniformData& d);
+Index scan_index(const CandidateSpec& spec, const std::map<std::string, double>& params, const UniformData& d);
 
 /// t - t_mid of effectiveness_drift's column (t_mid the middle of the record) [s].
 VectorXd drift_time(const UniformData& d);
@@ -592,7 +582,7 @@ std::string fmt(double x, int digits = 3);
 
 GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz);
 
-CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
+CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const std::vector<VectorXd>& resid,
                           const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
                           const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
                           const DiscrepancyOptions& opt, double p_critical);
@@ -604,8 +594,8 @@ double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo
 
 /// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy);
 /// its held-out residuals without and with the harmonics, when asked for.
-CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
-                              double p_critical, const BatchRule& batch,
+CandidateTrial flapping_trial(const CandidateSpec& spec, const Model& m, const UniformData& d, const Folds& folds,
+                              const DiscrepancyOptions& opt, double p_critical, const BatchRule& batch,
                               std::vector<VectorXd>* heldout_before = nullptr,
                               std::vector<VectorXd>* heldout_after = nullptr);
 

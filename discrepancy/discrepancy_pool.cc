@@ -98,7 +98,7 @@ Slice slice(const Model& m, std::size_t e, Index a, Index b) {
 void flight_consistency(const Model& m, const BatchRule& batch, const std::vector<std::pair<Index, Index>>& rows,
                         double alpha, DiscrepancyResult& res) {
   for (const auto& effect : m.effect_names) {
-    const EffectSpec* spec = find_effect(effect);
+    const CandidateSpec* spec = effects::find_definition(effect);
     if (spec == nullptr || spec->terms.empty()) continue;
     FlightConsistency c;
     c.effect = effect;

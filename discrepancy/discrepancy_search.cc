@@ -58,7 +58,7 @@ std::vector<ScanPoint> Workflow::scan(const CandidateSpec& spec, const Model& m,
     bool ok = true;
     for (const auto& a : pt.adds) {
       for (const auto& c : a.cols) {
-        const bool constant = is_constant_effect(spec.name);
+        const bool constant = spec.constant();
         if (!constant && !excited(c, "")) ok = false;
       }
       std::vector<Addition> all = m.added[a.eq];
@@ -96,8 +96,8 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
       p_min = f.p;
       p_eq = eqname;
     }
-    if (spec.name == "lateral_inflow") t.signature["p_" + eqname] = f.p;
-    if (spec.name == "actuator_delay") {
+    if (spec.signature == effects::Signature::kInflow) t.signature["p_" + eqname] = f.p;
+    if (spec.scan == effects::Scan::kDelay) {
       // A delayed input acts (mostly) delayed: with the columns delta_f and
       // delta_f(t - tau) - delta_f the delayed fraction is c / theta_df. In closed loop a
       // feedback-driven correlation of delta_f with the filtered equation error also
@@ -121,7 +121,8 @@ double Workflow::significance(const CandidateSpec& spec, const Model& m, const S
   // it has a term in once it is significant in one. Left out of the equation where it is weaker,
   // the change there would be named again in the next round as another effect (a drift for what
   // is a step).
-  if (changes_input_effectiveness(spec.name) && std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) {
+  if (spec.change != effects::EffectivenessChange::kNone &&
+      std::any_of(use_eq.begin(), use_eq.end(), [](bool b) { return b; })) {
     for (const auto& a : P.adds) use_eq[a.eq] = true;
   }
   return p_min;
@@ -170,7 +171,7 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
   const std::size_t neq = m.eqs.size();
   const std::size_t K = folds.size();
   std::vector<VectorXd> after = base_cv;
-  if (spec.name == "effectiveness_step") {
+  if (spec.scan == effects::Scan::kChangeTime) {
     if (!heldout_change(spec, m, points, use_eq, profile, after)) return false;
     heldout_drop(base_cv, after, batch, t.heldout_drop, t.heldout_se);
     return true;
@@ -180,7 +181,7 @@ bool Workflow::heldout(const CandidateSpec& spec, const Model& m, const std::vec
   std::map<std::size_t, std::vector<std::pair<Addition, MatrixXd>>> designs;
   for (std::size_t k = 0; k < K && cv_ok; ++k) {
     std::size_t pick = best;
-    if (spec.scanned) {
+    if (spec.scanned()) {
       double best_rel = std::numeric_limits<double>::infinity();
       for (std::size_t i = 0; i < points.size(); ++i) {
         if (!std::isfinite(points[i].rss_rel)) continue;
@@ -288,8 +289,8 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
   }
   const std::size_t neq = m.eqs.size();
   std::vector<Index> delays{0};  // the scan: delays [samples] of actuator_delay, change samples of effectiveness_step
-  const bool change = spec.name == "effectiveness_step";
-  if (spec.name == "actuator_delay") {
+  const bool change = spec.scan == effects::Scan::kChangeTime;
+  if (spec.scan == effects::Scan::kDelay) {
     delays.clear();
     const Index kmax = std::max<Index>(1, static_cast<Index>(std::floor(opt.delay_max_s * data.rate_hz + 1e-9)));
     for (Index k = 1; k <= kmax; ++k) delays.push_back(k);
@@ -314,12 +315,12 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
     profile = change_profile(m, P);
     P.effective_blocks = profile.kish;
   }
-  if (spec.name == "actuator_delay") t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
+  if (spec.scan == effects::Scan::kDelay) t.delay_s = static_cast<double>(delays[best]) / data.rate_hz;
 
   std::vector<bool> use_eq(neq, false);
   std::string p_eq;
   const double p_min = significance(spec, m, P, rss_before, delays.size(), t, use_eq, p_eq);
-  if (spec.name == "actuator_delay") t.parameters["delay_s"] = t.delay_s;
+  if (spec.scan == effects::Scan::kDelay) t.parameters[spec.scan_parameter()] = t.delay_s;
   if (change) {
     profile.restrict_to(use_eq);
     t.parameters["t_change_s"] = data.t_s[P.k];
@@ -333,7 +334,7 @@ CandidateTrial Workflow::trial(const CandidateSpec& spec, const Model& m, const 
   // opt.gust_band_alpha with the same Bonferroni factors, on the equations high-passed above
   // opt.gust_band_hz (y and every column alike). A constant (sensor_bias) has no content
   // there and is exempt.
-  if (!p_eq.empty() && !is_constant_effect(spec.name)) t.highpass_p = above_gust_band(m, P, delays.size());
+  if (!p_eq.empty() && !spec.constant()) t.highpass_p = above_gust_band(m, P, delays.size());
   t.p_value = std::min(1.0, p_min * static_cast<double>(P.adds.size()) * static_cast<double>(delays.size()));
   if (!heldout(spec, m, points, best, base, base_cv, use_eq, profile, t)) {
     t.reason = "a cross-validation fit is singular (the candidate is not excited in every block)";

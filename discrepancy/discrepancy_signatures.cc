@@ -114,15 +114,15 @@ void Workflow::inflow_arm_signature(CandidateTrial& t) const {
 
 void Workflow::signature(const CandidateSpec& spec, const Model& m, const ScanPoint& P, CandidateTrial& t) const {
   std::string reason;  // the failed signature's reason, when it is not "fails its signature: " + the note
-  if (spec.name == "lateral_inflow") {
+  if (spec.signature == effects::Signature::kInflow) {
     inflow_arm_signature(t);
-  } else if (is_constant_effect(spec.name)) {
+  } else if (spec.constant()) {
     // sensor_bias and constant_load fit the same constant; the kinematics tell which it is.
     sensor_bias_signature(t);
     const bool biased = t.signature_holds;
     const std::string figures = "kinematic bias " + fmt(t.signature["kinematic_bias_radps"]) + " rad/s, sigma " +
                                 fmt(t.signature["sigma_radps"]);
-    if (spec.name == "sensor_bias" && !biased) {
+    if (spec.signature == effects::Signature::kRateGyroBias && !biased) {
       t.signature_note = "a constant fits but p carries no bias against phi's derivative (" + figures + ", p " +
                          fmt(t.signature["p_value"]) + "): not a rate-sensor bias";
       reason = "fails its signature: it " + t.reason.substr(std::string("passes: ").size()) +
@@ -130,7 +130,7 @@ void Workflow::signature(const CandidateSpec& spec, const Model& m, const ScanPo
                " blocks, p " + fmt(t.signature["p_value"]) + " > " + fmt(opt.gust_band_alpha) +
                "): a constant moment or force, or the mean of another effect, not a "
                "rate-sensor bias";
-    } else if (spec.name == "constant_load") {
+    } else if (spec.signature == effects::Signature::kConstantLoad) {
       // A constant load's signature is the sensor bias's absent: p agrees with phi's derivative.
       t.signature_holds = !biased;
       if (biased) {

@@ -80,12 +80,12 @@ WindFit fit_wind(const Psd& Pg, double excess, double N0g, double f_ref_hi, doub
   return out;
 }
 
-CandidateTrial gust_trial(const Model& m, const std::vector<VectorXd>& resid,
+CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const std::vector<VectorXd>& resid,
                           const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
                           const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
                           const DiscrepancyOptions& opt, double p_critical) {
   CandidateTrial t;
-  t.name = "lateral_gust";
+  t.name = spec.name;
   t.round = m.effect_names.size() + 1;
   t.p_critical = p_critical;
   std::size_t ey = m.eqs.size();
@@ -215,12 +215,13 @@ double scan_frequency(const std::vector<VectorXd>& resid, double rate, double lo
   return best_f;
 }
 
-/// The flapping_forcing candidate on wideband data (see the wideband stage of find_discrepancy).
-CandidateTrial flapping_trial(const Model& m, const UniformData& d, const Folds& folds, const DiscrepancyOptions& opt,
-                              double p_critical, const BatchRule& batch, std::vector<VectorXd>* heldout_before,
-                              std::vector<VectorXd>* heldout_after) {
+/// The wideband candidate `spec` (the flapping forcing) on wideband data (see the wideband stage of
+/// find_discrepancy).
+CandidateTrial flapping_trial(const CandidateSpec& spec, const Model& m, const UniformData& d, const Folds& folds,
+                              const DiscrepancyOptions& opt, double p_critical, const BatchRule& batch,
+                              std::vector<VectorXd>* heldout_before, std::vector<VectorXd>* heldout_after) {
   CandidateTrial t;
-  t.name = "flapping_forcing";
+  t.name = spec.name;
   t.round = m.effect_names.size() + 1;
   t.p_critical = p_critical;
   const int H = 2;

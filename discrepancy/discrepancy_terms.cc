@@ -63,12 +63,12 @@ TermFamily scanned(const std::string& op, const std::string& x, const std::strin
 TermFamily single(const std::string& text) { return family(text, {text}); }
 
 /// What would tell a library effect from a generic form that fits a record as well.
-std::string tell_apart(const std::string& rival, const std::string& effect) {
-  if (rival.rfind("lag(", 0) == 0 && effect == "actuator_delay") {
+std::string tell_apart(const std::string& rival, const CandidateSpec& effect) {
+  if (rival.rfind("lag(", 0) == 0 && effect.scan == effects::Scan::kDelay) {
     return "a pure delay keeps the input's gain at every frequency, a first-order lag's falls above 1 / (2 pi tau): a "
            "flap input with more power above that frequency (faster doublets, a chirp) tells them apart";
   }
-  return "a manoeuvre that moves the signals of " + rival + " and of " + effect +
+  return "a manoeuvre that moves the signals of " + rival + " and of " + effect.name +
          "'s terms differently (other amplitudes, both signs, other frequencies) tells them apart";
 }
 
@@ -289,7 +289,7 @@ CandidateTrial Workflow::term_trial(const TermFamily& fam, std::size_t eq, const
   t.scan_points = points.size();
   CandidateSpec spec;
   spec.name = "term";
-  spec.scanned = points.size() > 1;
+  spec.scan = points.size() > 1 ? effects::Scan::kFormParameter : effects::Scan::kNone;
   // The coefficient's variance: the local batch means floored at the stationary residual's
   // (stationary_floor): a product with the throttle lives in the throttle's doublets, a cubic
   // of the rate in the few largest manoeuvres, where batch means rest on a few blocks.
@@ -407,7 +407,7 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
     t.signature["rival_p_" + eq] = p_rival;
     t.signature["own_p_" + eq] = p_own;
     rivals += (rivals.empty() ? "" : ", ") + eq + ": " + rival_text;
-    const bool confusable = spec.name == "actuator_delay" && rival_text.rfind("lag(", 0) == 0;
+    const bool confusable = spec.scan == effects::Scan::kDelay && rival_text.rfind("lag(", 0) == 0;
     // Each alone: the rival's fit against the effect's own, with the same model beside.
     std::vector<Addition> with_rival = m.added[e];
     with_rival.push_back(rival);
@@ -440,7 +440,7 @@ void Workflow::rival_form_signature(const CandidateSpec& spec, const Model& m, c
   // Ambiguous when every equation where the effect is significant is a tie.
   if (all_tied && !tied_with.empty() && t.signature_holds) {
     t.ambiguous_with = tied_with;
-    t.tell_apart = tell_apart(tied_with.substr(tied_with.find(": ") + 2), spec.name);
+    t.tell_apart = tell_apart(tied_with.substr(tied_with.find(": ") + 2), spec);
   }
 }
 

@@ -304,7 +304,10 @@ bool Workflow::heldout_change(const CandidateSpec& spec, const Model& m, const s
 
 void time_varying_parameters(const Model& m, const BatchRule& batch, const UniformData& d, const CandidateTrial& t,
                              NamedEffect& eff) {
-  const bool drift = t.name == "effectiveness_drift", step = t.name == "effectiveness_step";
+  const CandidateSpec* spec = effects::find_definition(t.name);
+  const auto change = spec ? spec->change : effects::EffectivenessChange::kNone;
+  const bool drift = change == effects::EffectivenessChange::kDrift,
+             step = change == effects::EffectivenessChange::kStep;
   if (!drift && !step) return;
   const std::string suffix = drift ? "_df_rate" : "_df_step";
   // The rate (the fraction) from the roll equation when the effect entered it, else from the

@@ -9,8 +9,8 @@
 
 #include "controller/manoeuvre.h"
 #include "core/input_file.h"
-#include "plant/effects/actuator_delay.h"
-#include "plant/effects/registry.h"
+#include "effects/actuator_delay.h"
+#include "effects/registry.h"
 #include "plant/plant_model.h"
 
 namespace nimble::loop {
@@ -40,13 +40,14 @@ LoopSetup loop_setup(const std::string& file, const std::vector<Override>& overr
   s.flap_pole_radps = plant.flap.pole_radps;
   s.plant_rate_hz = plant.rate_hz;
   const auto& fx = plant.effects;
-  if (fx.get<plant::ActuatorDelayConfig>().enabled && fx.get<plant::ActuatorDelayConfig>().delay_s > 0.0) {
+  if (fx.get<effects::ActuatorDelayConfig>().enabled && fx.get<effects::ActuatorDelayConfig>().delay_s > 0.0) {
     // The plant applies the newest command issued at least delay_s before each of its steps.
-    s.actuator_delay_s = std::ceil(fx.get<plant::ActuatorDelayConfig>().delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
+    s.actuator_delay_s =
+        std::ceil(fx.get<effects::ActuatorDelayConfig>().delay_s * plant.rate_hz - 1e-6) / plant.rate_hz;
   }
   // Every enabled plant effect the linear loop leaves out, from the registry.
-  for (const plant::PlantEffect& e : plant::plant_effects()) {
-    if (!e.in_linear_loop && e.enabled(fx)) s.nonlinear_effects.push_back(e.name);
+  for (const effects::Effect* e : effects::plant_effects()) {
+    if (!e->plant.in_linear_loop && e->plant.enabled(fx)) s.nonlinear_effects.push_back(e->name());
   }
 
   s.model = load_model(model_file.empty() ? scenario.model_file : model_file);

@@ -1,12 +1,14 @@
 #include "plant/plant_model.h"
 
-#include "plant/effects/registry.h"
+#include "effects/registry.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace nimble::plant {
+using effects::LoadInputs;
+using effects::ProcessContext;
 namespace {
 
 // State layout.
@@ -146,7 +148,7 @@ PlantConfig plant_config_from(ConfigMap& map) {
   sub("initial", initial_params(), c.initial);
   if (map.has("effects")) {
     ConfigMap e = map.get_map("effects");
-    effects_from(e, c.effects);  // plant/effects/registry.h
+    effects_from(e, c.effects);  // effects/registry.h
   }
   if (map.has("terms")) c.terms = terms_from_config(map, "terms", plant_term_equations(), term_signal_names());
   map.finish();
@@ -188,7 +190,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   // flies with the model's coefficients, overriding the plant file's effect of the same name;
   // dihedral_coupling and yaw_coupling set derivatives (read into the cache below);
   // kinematic_coupling and gravity_nonlinearity are in the equations of motion already; an
-  // effect the plant does not know is refused. The mapping: plant/effects/registry.h.
+  // effect the plant does not know is refused. The mapping: effects/registry.h.
   apply_model_effects(lateral, cfg_.effects, lat_.derivatives);
   lateral4_ = lat_.structure == Structure::kLateral4;
   active_r_ = lateral4_;
@@ -235,6 +237,8 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
 
   // Generic terms: the plant file's, then the lateral model's.
   std::vector<Term> terms = cfg_.terms;
+  const std::vector<Term> effect_terms = effects::effect_terms(cfg_.effects);  // term effects (effects/term_effect.h)
+  terms.insert(terms.end(), effect_terms.begin(), effect_terms.end());
   terms.insert(terms.end(), lateral.terms.begin(), lateral.terms.end());
   for (const Term& term : terms) {
     const auto& eqs = plant_term_equations();

@@ -27,9 +27,9 @@
 #include "core/terms.h"
 #include "core/thrust_curve.h"
 #include "core/vehicle.h"
-#include "plant/actuator_input.h"
-#include "plant/effects/effects_config.h"
-#include "plant/effects/effect_process.h"
+#include "effects/actuator_input.h"
+#include "effects/effects_config.h"
+#include "effects/effect_process.h"
 
 namespace nimble::plant {
 
@@ -53,9 +53,11 @@ using ThrustConfig = ThrustCurve;
 
 /// The plant's effects (FlappingForcingConfig, LateralInflowConfig, ForwardSpeedCouplingConfig,
 /// ActuatorDelayConfig, LateralGustConfig, ConstantLoadConfig and EffectsConfig): one file each
-/// in plant/effects/. Each can also come from the lateral model: an effect its `effects:`
+/// in effects/. Each can also come from the lateral model: an effect its `effects:`
 /// section carries (rig discrepancy --model-out) overrides the plant file's effect of the same
-/// name with the model's coefficients (plant/effects/registry.h apply_model_effects()).
+/// name with the model's coefficients (effects/registry.h apply_model_effects()).
+using effects::EffectProcess;
+using effects::EffectsConfig;
 
 /// Initial perturbation from trim. q, r, u and theta apply only where they are states
 /// (q, u, theta with a longitudinal model; r with a lateral4 model).
@@ -115,8 +117,8 @@ const ParamTable<ServoConfig>& servo_params();                 ///< `servo`
 const ParamTable<ThrustCurve>& thrust_params();                ///< `thrust`
 const ParamTable<InitialState>& initial_params();              ///< `initial`
 
-/// Actuator command as the plant receives it: plant/actuator_input.h.
-using plant::ActuatorInput;
+/// Actuator command as the plant receives it: effects/actuator_input.h.
+using effects::ActuatorInput;
 
 /// Truth of the rigid body and actuators at one instant: the value TRUTH carries
 /// (core/rig_values.h).
@@ -185,7 +187,7 @@ class PlantModel {
   double flap_phase_rad_ = 0.0;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
-  /// The process of every effect that acts (plant/effects/registry.h), in the registry's order.
+  /// The process of every effect that acts (effects/registry.h), in the registry's order.
   std::vector<std::unique_ptr<EffectProcess>> effects_;
   /// The plant's terms and the lateral model's (config.terms, then the model's terms: section):
   /// programs bound to term_signal_names(), their equation (0 L, 1 Y, 2 N) and coefficient. The

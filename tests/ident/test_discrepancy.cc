@@ -19,6 +19,7 @@
 #include "core/config.h"
 #include "discrepancy_generator.h"
 #include "discrepancy/discrepancy.h"
+#include "effects/registry.h"
 #include "discrepancy/discrepancy_location.h"
 #include "ident/model_writer.h"
 #include "tests/support/scratch.h"
@@ -401,10 +402,10 @@ TEST_CASE("discrepancy: every candidate is tried and reported, candidates the da
       std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& t) { return t.name == "yaw_coupling"; });
   CHECK_FALSE(yaw->available);
   CHECK(yaw->reason == "the data has no r");
-  // Every library name may stand in a model file's effects: section.
-  for (const auto& spec : candidate_library()) {
-    const auto& known = model_effect_names();
-    CHECK(std::find(known.begin(), known.end(), spec.name) != known.end());
+  // The library is the effect registry's definitions, in its order.
+  REQUIRE(candidate_library().size() == nimble::effects::effect_registry().size());
+  for (std::size_t i = 0; i < candidate_library().size(); ++i) {
+    CHECK(candidate_library()[i].name == nimble::effects::effect_registry()[i].name());
   }
   DiscrepancyOptions bad;
   bad.candidates = {"lateral_inflow", "warp_drive"};
@@ -423,7 +424,7 @@ TEST_CASE("discrepancy: the augmented model carries the named effect and reads b
   CHECK(back.effects.at("kinematic_coupling").at("Y_pw") ==
         Approx(r.augmented_model.effects.at("kinematic_coupling").at("Y_pw")).epsilon(1e-8));
   CHECK(back.at("Yp") == Approx(r.augmented.at("Yp").value).epsilon(1e-8));
-  // An effect the library does not know is refused, naming the key.
+  // An effect the registry does not know is read, and refused by the workflow, naming it.
   {
     std::ifstream in(file);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -432,8 +433,10 @@ TEST_CASE("discrepancy: the augmented model carries the named effect and reads b
     text.insert(at + 9, "  warp_drive:\n    c: 1\n");
     std::ofstream(nimble::test::scratch_file("discrepancy", "bad.yaml")) << text;
   }
-  CHECK_THROWS_WITH(load_model(nimble::test::scratch_file("discrepancy", "bad.yaml")),
-                    Catch::Contains("unknown effect"));
+  const DerivativeModel bad = load_model(nimble::test::scratch_file("discrepancy", "bad.yaml"));
+  CHECK_THROWS_WITH(find_discrepancy(ident::test::generate_flight(bad, ident::test::set1().vehicle, {}, {}), bad,
+                                     ident::test::set1().vehicle, DiscrepancyOptions{}),
+                    Catch::Contains("unknown effect 'warp_drive'"));
 }
 
 TEST_CASE(

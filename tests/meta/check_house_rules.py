@@ -15,6 +15,9 @@
    sources is on the map, and the map's rows name only rooms on lower floors.
 8. No rate literal in a process: a process room's .cc files give no rate a literal fallback
    (a rate comes from the process's configuration or the contract, contract/rates.h).
+9. An effect's name is spelled only in its own file pair (effects/<name>.{h,cc}): no other
+   source holds a string literal that is an effect's name, so that no code outside the effect
+   picks it by name (the workflow reads the effect's properties, effects/effect.h).
 
 Usage: check_house_rules.py <source dir>. Prints every breach as file:line and exits 1 if
 there is one.
@@ -100,9 +103,23 @@ def channel_names(root):
     return set(names)
 
 
+def effect_names(root):
+    """{name: its file pair's stem} of every effect of effects/, from its definition (or its name's constant)."""
+    out = {}
+    for path in sorted((root / "effects").glob("*.[ch]*")):
+        text = path.read_text()
+        for name in re.findall(r'definition = \{"([a-z_0-9]+)"', text) + re.findall(r'k\w*Name = "([a-z_0-9]+)"', text):
+            out[name] = path.stem
+    if len(out) < 10:
+        sys.exit("check_house_rules: found only %d effect definitions in effects/" % len(out))
+    return out
+
+
 def main():
     root = pathlib.Path(sys.argv[1]).resolve()
     channel_set = channel_names(root)
+    effect_set = effect_names(root)
+    string_literal = re.compile(r'"([a-z_0-9]+)"')
     literal = re.compile(r'"([A-Z_]+)"')
     rate_call = re.compile(r"set_expected_rate\s*\(([^;]*)\)")
     number = re.compile(r"(?<![\w.])\d+(\.\d*)?([eE][-+]?\d+)?(?![\w.])")
@@ -131,6 +148,10 @@ def main():
                 for name in literal.findall(code):
                     if name in channel_set:
                         breaches.append('%s:%d: channel "%s" spelled outside contract/channels.h' % (rel, n, name))
+            for name in string_literal.findall(code):
+                if name in effect_set and not (top == "effects" and rel.stem == effect_set[name]):
+                    breaches.append('%s:%d: effect "%s" named outside its file pair effects/%s.{h,cc}: use its '
+                                    "properties (effects/effect.h)" % (rel, n, name, effect_set[name]))
             for args in rate_call.findall(code):
                 if number.search(args.split(",", 1)[-1]):
                     breaches.append("%s:%d: set_expected_rate with a rate literal: %s" % (rel, n, line.strip()))
@@ -154,8 +175,8 @@ def main():
         breaches.append("%s/ has sources and is not on the layer map of docs/layout.md" % room)
     for b in breaches:
         print(b)
-    print("check_house_rules: %d source files, %d rooms, %d channel names, %d breaches"
-          % (checked, len(rooms), len(channel_set), len(breaches)))
+    print("check_house_rules: %d source files, %d rooms, %d channel names, %d effect names, %d breaches"
+          % (checked, len(rooms), len(channel_set), len(effect_set), len(breaches)))
     return 1 if breaches else 0
 
 

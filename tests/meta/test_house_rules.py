@@ -8,7 +8,7 @@ import tempfile
 
 CHECKER = pathlib.Path(__file__).resolve().parent / "check_house_rules.py"
 
-ROOMS = ["core", "contract", "scenario", "transport", "plant", "ident", "launcher", "reproduce", "cli", "bench"]
+ROOMS = ["core", "effects", "contract", "scenario", "transport", "plant", "ident", "launcher", "reproduce", "cli", "bench"]
 MAP = """# Layout
 
 ## The layer map
@@ -17,6 +17,7 @@ MAP = """# Layout
 |---|---|---|
 | 1 | `core` | nothing of the rig |
 | 2 | `contract` | core |
+| 2 | `effects` | core |
 | 3 | `scenario` | contract, core |
 | 4 | `transport` | contract, core, scenario |
 | 5 | `plant` | contract, core, scenario, transport |
@@ -42,6 +43,8 @@ def tree(root, broken):
     write(root, "contract/channels.h", CHANNELS + "\n")
     for room in ROOMS:
         write(root, "%s/%s_part.cc" % (room, room), "int %s_part() { return 1; }\n" % room)
+    for i in range(10):  # ten effects, each named in its own file pair
+        write(root, "effects/effect_%d.cc" % i, 'Effect effect_%d() {\n  e.definition = {"effect_%d", "x"};\n}\n' % (i, i))
     long_body = "".join("  x += %d;\n" % i for i in range(130 if broken else 100))
     write(root, "ident/fit.cc", '#include "core/x.h"\nint fit() {\n  int x = 0;\n' + long_body + "  return x;\n}\n")
     write(root, "plant/node.cc", '#include "transport/bus.h"\ndouble rate_hz(bool set) { return set ? 100.0 : %s; }\n'
@@ -53,6 +56,7 @@ def tree(root, broken):
         write(root, "mcap/writer.cc", "int w() { return 3; }\n")             # a room not on the map
         write(root, "core/names.cc", 'const char* c = "CH_C";\n')           # a channel name
         write(root, "plant/long.cc", "\n" * 700)                             # a file over 650 lines
+        write(root, "ident/pick.cc", 'bool f(const S& s) { return s == "effect_3"; }\n')  # an effect by name
 
 
 def run(broken):
@@ -78,6 +82,7 @@ def main():
         'core/names.cc:1: channel "CH_C" spelled outside contract/channels.h',
         "plant/node.cc:2: a rate literal in a process",
         "plant/long.cc: 700 lines, over 650",
+        'ident/pick.cc:1: effect "effect_3" named outside its file pair effects/effect_3.{h,cc}',
     ]
     missing = [e for e in expected if e not in out]
     if code != 1 or missing:

@@ -16,24 +16,23 @@
 #include <catch2/catch.hpp>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "core/effects.h"
 #include "core/model.h"
 #include "core/modes.h"
-#include "plant/effects/actuator_delay.h"
-#include "plant/effects/constant_load.h"
-#include "plant/effects/effectiveness_drift.h"
-#include "plant/effects/effectiveness_step.h"
-#include "plant/effects/flapping_forcing.h"
-#include "plant/effects/forward_speed_coupling.h"
-#include "plant/effects/lateral_gust.h"
-#include "plant/effects/lateral_inflow.h"
-#include "plant/effects/registry.h"
+#include "effects/actuator_delay.h"
+#include "effects/constant_load.h"
+#include "effects/effectiveness_drift.h"
+#include "effects/effectiveness_step.h"
+#include "effects/flapping_forcing.h"
+#include "effects/forward_speed_coupling.h"
+#include "effects/lateral_gust.h"
+#include "effects/lateral_inflow.h"
+#include "effects/registry.h"
+#include "effects/term_effect.h"
 #include "plant/plant_model.h"
 #include "plant_fixture.h"
 
 using namespace nimble;
-using nimble::model_effect_names;
-using nimble::plant::ActuatorInput;
+using nimble::effects::ActuatorInput;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
 
@@ -45,7 +44,7 @@ using namespace nimble::plant_test;
 TEST_CASE("every effect name a model may carry is one the plant flies", "[plant][model_effects]") {
   // A valid section per name: these, with the keys beyond the regressors' (the scanned delay,
   // frequency and change time, the reported fractions and rates), or else every regressor
-  // parameter of the effect (core/effects.h) at 1e-4.
+  // parameter of the effect (effects/registry.h) at 1e-4.
   const std::map<std::string, std::map<std::string, double>> sections{
       {"kinematic_coupling", {{"Y_pw", 0.02876}}},
       {"gravity_nonlinearity", {{"Y_gphi", 0.02876}}},
@@ -69,30 +68,28 @@ TEST_CASE("every effect name a model may carry is one the plant flies", "[plant]
       {"effectiveness_step",
        {{"L_df_step", -2.6e-5}, {"Y_df_step", 2.2e-4}, {"t_change_s", 12.0}, {"fraction", -0.25}}},
   };
-  for (const auto& name : model_effect_names()) {
+  for (const auto& effect : nimble::effects::effect_registry()) {
+    const std::string& name = effect.name();
     INFO("effect " << name);
     std::map<std::string, double> section;
     if (sections.count(name)) {
       section = sections.at(name);
     } else {
-      const nimble::EffectSpec* spec = nimble::find_effect(name);
-      REQUIRE(spec != nullptr);
-      for (const auto& term : spec->terms) section[term.parameter] = 1e-4;
+      for (const auto& term : effect.definition.terms) section[term.parameter] = 1e-4;
     }
     const Fixture f = with_effect(name, section);
     CHECK_NOTHROW(make_plant(f));
   }
-  const auto& eom = nimble::plant::effects_in_equations_of_motion();
-  CHECK(eom == std::vector<std::string>{"kinematic_coupling", "gravity_nonlinearity"});
 }
 
 TEST_CASE(
     "the effect registry and the plant agree: every regressor parameter of every effect flies, every plant "
     "effect flies a registry effect and is written in the plant file",
     "[plant][model_effects]") {
-  // Built from the registry (core/effects.h) alone: an effect added there without its plant
-  // side (plant/effects/registry.cc) fails here.
-  for (const auto& spec : nimble::effect_registry()) {
+  // Built from the registry (effects/registry.h) alone: an effect whose model mapping or plant
+  // side does not fly its own regressor parameters fails here.
+  for (const auto& effect : nimble::effects::effect_registry()) {
+    const auto& spec = effect.definition;
     std::map<std::string, double> section;
     for (const auto& term : spec.terms) section[term.parameter] = 1e-4;
     if (spec.name == "actuator_delay") section["delay_s"] = 0.02;                     // the scanned delay
@@ -108,11 +105,10 @@ TEST_CASE(
   std::ifstream in(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
   std::stringstream plant_file;
   plant_file << in.rdbuf();
-  for (const auto& effect : nimble::plant::plant_effects()) {
-    INFO("plant effect " << effect.name);
-    CHECK(nimble::find_effect(effect.model_effect) != nullptr);
-    CHECK(plant_file.str().find("\n  " + effect.name + ":") != std::string::npos);
-    CHECK(effect.markdown_rows("x.").find("`x.enabled`") != std::string::npos);
+  for (const auto* effect : nimble::effects::plant_effects()) {
+    INFO("plant effect " << effect->name());
+    CHECK(plant_file.str().find("\n  " + effect->name() + ":") != std::string::npos);
+    CHECK(effect->plant.markdown_rows("x.").find("`x.enabled`") != std::string::npos);
   }
 }
 
@@ -161,8 +157,8 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
   // k Yp, k Yv it flies as the gain k does (lateral3).
   const double k = 0.5;
   PlantConfig by_gain = cfg;
-  by_gain.effects.get<plant::ForwardSpeedCouplingConfig>().enabled = true;
-  by_gain.effects.get<plant::ForwardSpeedCouplingConfig>().gain_per_mps = k;
+  by_gain.effects.get<effects::ForwardSpeedCouplingConfig>().enabled = true;
+  by_gain.effects.get<effects::ForwardSpeedCouplingConfig>().gain_per_mps = k;
   const Fixture h = with_effect("forward_speed_coupling", {{"L_up", k * f.model.at("Lp")},
                                                            {"L_uv", k * f.model.at("Lv")},
                                                            {"Y_up", k * f.model.at("Yp")},
@@ -177,7 +173,7 @@ TEST_CASE("forward-speed coupling from the model adds the (u - u0) p and (u - u0
 
   // A plant file with both forms is refused.
   PlantConfig both = by_gain;
-  both.effects.get<plant::ForwardSpeedCouplingConfig>().Y_uv_ns2pm2 = 0.01;
+  both.effects.get<effects::ForwardSpeedCouplingConfig>().Y_uv_ns2pm2 = 0.01;
   CHECK_THROWS_WITH(PlantModel(f.model, lon, f.vehicle, both), Catch::Contains("forward_speed_coupling"));
 }
 
@@ -186,8 +182,8 @@ TEST_CASE("actuator delay from the model postpones the delta_f response by delay
   const Fixture g =
       with_effect("actuator_delay", {{"delay_s", 0.020}, {"L_df_delayed", 1.0e-4}, {"L_df_fraction_delayed", 0.95}});
   PlantConfig cfg;
-  cfg.effects.get<plant::ActuatorDelayConfig>().enabled = true;
-  cfg.effects.get<plant::ActuatorDelayConfig>().delay_s = 0.050;
+  cfg.effects.get<effects::ActuatorDelayConfig>().enabled = true;
+  cfg.effects.get<effects::ActuatorDelayConfig>().delay_s = 0.050;
   PlantModel plant = make_plant(g, cfg), undelayed = make_plant(Fixture{});
   ActuatorInput cmd = plant.trim_command();
   cmd.flap_freq_left_radps += 10;
@@ -237,12 +233,12 @@ TEST_CASE("flapping forcing from the model oscillates at the plant's flapping fr
                                                      {"Y_sin2", -3.0e-3},
                                                      {"Y_cos2", 4.0e-3}});
   PlantConfig by_config;
-  by_config.effects.get<plant::FlappingForcingConfig>().enabled = true;
-  by_config.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
-  by_config.effects.get<plant::FlappingForcingConfig>().side_force_amplitudes_n = {1.0e-2, 5.0e-3};
+  by_config.effects.get<effects::FlappingForcingConfig>().enabled = true;
+  by_config.effects.get<effects::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2.0e-3, 1.0e-3};
+  by_config.effects.get<effects::FlappingForcingConfig>().side_force_amplitudes_n = {1.0e-2, 5.0e-3};
   PlantConfig other;  // the plant file's own forcing, replaced by the model's
-  other.effects.get<plant::FlappingForcingConfig>() = by_config.effects.get<plant::FlappingForcingConfig>();
-  other.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
+  other.effects.get<effects::FlappingForcingConfig>() = by_config.effects.get<effects::FlappingForcingConfig>();
+  other.effects.get<effects::FlappingForcingConfig>().roll_moment_amplitudes_nm = {5.0e-3, 1.0e-3};
   PlantModel a = make_plant(Fixture{}, by_config), b = make_plant(h, other);
   for (int i = 0; i < 500; ++i) {
     a.step(a.trim_command());
@@ -264,7 +260,7 @@ TEST_CASE("sensor_bias from the model is a constant roll moment and side force",
   CHECK(biased.truth().specific_force_body_mps2.y() == Approx(Y0 / g.vehicle.mass_kg).epsilon(1e-12));
   // The same as the plant file's constant load.
   PlantConfig by_config;
-  by_config.effects.get<plant::ConstantLoadConfig>() = {true, L0, Y0};
+  by_config.effects.get<effects::ConstantLoadConfig>() = {true, L0, Y0};
   PlantModel a = make_plant(Fixture{}, by_config);
   for (int i = 0; i < 200; ++i) {
     a.step(a.trim_command());
@@ -325,10 +321,10 @@ TEST_CASE("yaw_coupling from the model sets Lr and Yr (acting where r is a state
 TEST_CASE("lateral_gust from the model has the model's sigma and tau", "[plant][model_effects]") {
   const Fixture g = with_effect("lateral_gust", {{"sigma_mps", 0.2}, {"tau_s", 0.05}});
   PlantConfig file_gust;  // the plant file's gust, replaced by the model's
-  file_gust.effects.get<plant::LateralGustConfig>() = {true, 1.0, 0.5};
+  file_gust.effects.get<effects::LateralGustConfig>() = {true, 1.0, 0.5};
   file_gust.seed = 7;
   PlantConfig by_config;
-  by_config.effects.get<plant::LateralGustConfig>() = {true, 0.2, 0.05};
+  by_config.effects.get<effects::LateralGustConfig>() = {true, 0.2, 0.05};
   by_config.seed = 7;
   PlantModel a = make_plant(g, file_gust), b = make_plant(Fixture{}, by_config);
   CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
@@ -365,7 +361,7 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
   };
   // Changed from the start: the same as a model with the changed derivatives.
   PlantConfig from_start;
-  from_start.effects.get<plant::EffectivenessStepConfig>() = {true, 0.0, fL, fY};
+  from_start.effects.get<effects::EffectivenessStepConfig>() = {true, 0.0, fL, fY};
   Fixture scaled;
   scaled.model.derivatives["L_df"] *= 1.0 + fL;
   scaled.model.derivatives["Y_df"] *= 1.0 + fY;
@@ -375,7 +371,7 @@ TEST_CASE("effectiveness step: from t_change_s on the plant flies L_df and Y_df 
   CHECK(std::fabs(a.truth().omega_body_radps.x()) > 1e-2);
   // Changed at 0.3 s: the plain plant's flight until then, another after.
   PlantConfig later;
-  later.effects.get<plant::EffectivenessStepConfig>() = {true, 0.3, fL, fY};
+  later.effects.get<effects::EffectivenessStepConfig>() = {true, 0.3, fL, fY};
   const int before = static_cast<int>(0.3 / make_plant(Fixture{}).dt_s()) - 1;
   CHECK(flown(make_plant(Fixture{}, later), before).truth().omega_body_radps.x() ==
         flown(make_plant(Fixture{}), before).truth().omega_body_radps.x());
@@ -398,17 +394,17 @@ TEST_CASE(
     "effectiveness drift: L_df and Y_df scale with 1 + rate (t - t_ref) / 60, clamped at 0, and a model's "
     "coefficients give the rate",
     "[plant][model_effects]") {
-  plant::EffectivenessDriftConfig c{true, -0.05, 10.0};
+  effects::EffectivenessDriftConfig c{true, -0.05, 10.0};
   double L = 0.0, Y = 0.0;
-  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);  // 30 s after t_ref: -2.5 %
+  effects::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);  // 30 s after t_ref: -2.5 %
   CHECK(L == Approx(-0.025 * 2e-3));
   CHECK(Y == Approx(-0.025 * -1e-2));
   L = Y = 0.0;
-  plant::add_effectiveness_drift(c, 10.0 + 3600.0, 2e-3, -1e-2, L, Y);  // an hour later: no input left, not reversed
+  effects::add_effectiveness_drift(c, 10.0 + 3600.0, 2e-3, -1e-2, L, Y);  // an hour later: no input left, not reversed
   CHECK(L == Approx(-2e-3));
   c.enabled = false;
   L = 0.0;
-  plant::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);
+  effects::add_effectiveness_drift(c, 40.0, 2e-3, -1e-2, L, Y);
   CHECK(L == 0.0);
 
   // Flown: differs from the plain plant, and not at all with rate 0.
@@ -419,8 +415,8 @@ TEST_CASE(
     return plant.truth().omega_body_radps.x();
   };
   PlantConfig drift, none;
-  drift.effects.get<plant::EffectivenessDriftConfig>() = {true, -0.5, 0.0};
-  none.effects.get<plant::EffectivenessDriftConfig>() = {true, 0.0, 0.0};
+  drift.effects.get<effects::EffectivenessDriftConfig>() = {true, -0.5, 0.0};
+  none.effects.get<effects::EffectivenessDriftConfig>() = {true, 0.0, 0.0};
   CHECK(flown(make_plant(Fixture{}, none)) == flown(make_plant(Fixture{})));
   CHECK(std::fabs(flown(make_plant(Fixture{}, drift)) - flown(make_plant(Fixture{}))) > 1e-5);
 
@@ -428,8 +424,8 @@ TEST_CASE(
   const Fixture f;
   const std::map<std::string, double> params{
       {"L_df_rate", -0.05 / 60.0 * 1.06e-4}, {"Y_df_rate", 1e-6}, {"t_mid_s", 30.0}};
-  plant::EffectivenessDriftConfig m;
-  plant::effectiveness_drift_from_model({f.model, "effectiveness_drift", params}, m);
+  effects::EffectivenessDriftConfig m;
+  effects::effectiveness_drift_from_model({f.model, "effectiveness_drift", params}, m);
   CHECK(m.enabled);
   CHECK(m.rate_per_min == Approx(-0.05));
   CHECK(m.t_ref_s == 30.0);
@@ -519,21 +515,21 @@ TEST_CASE("effects act through their processes: none when all are off, one per e
           "[plant][effect_process]") {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
-  plant::ProcessContext context{1e-3, rng, normal};
-  plant::EffectsConfig off;
-  CHECK(plant::make_effect_processes(off, context).empty());
+  effects::ProcessContext context{1e-3, rng, normal};
+  effects::EffectsConfig off;
+  CHECK(effects::make_effect_processes(off, context).empty());
 
-  plant::EffectsConfig on;
-  on.get<plant::LateralInflowConfig>().enabled = true;
-  on.get<plant::LateralInflowConfig>().Y_vv_ns2pm2 = -0.02;
-  on.get<plant::ActuatorDelayConfig>().enabled = true;
-  on.get<plant::ActuatorDelayConfig>().delay_s = 0.0;  // on with no delay: acts on nothing, so no process
-  on.get<plant::LateralGustConfig>().enabled = true;
-  on.get<plant::LateralGustConfig>().sigma_mps = 0.3;
-  const auto processes = plant::make_effect_processes(on, context);
+  effects::EffectsConfig on;
+  on.get<effects::LateralInflowConfig>().enabled = true;
+  on.get<effects::LateralInflowConfig>().Y_vv_ns2pm2 = -0.02;
+  on.get<effects::ActuatorDelayConfig>().enabled = true;
+  on.get<effects::ActuatorDelayConfig>().delay_s = 0.0;  // on with no delay: acts on nothing, so no process
+  on.get<effects::LateralGustConfig>().enabled = true;
+  on.get<effects::LateralGustConfig>().sigma_mps = 0.3;
+  const auto processes = effects::make_effect_processes(on, context);
   REQUIRE(processes.size() == 2);
   double L = 0.0, Y = 0.0;
-  plant::LoadInputs in;
+  effects::LoadInputs in;
   in.v_rel = 2.0;
   processes[0]->add_loads(in, L, Y);
   CHECK(Y == Approx(-0.02 * 4.0));
@@ -548,15 +544,15 @@ TEST_CASE("the flapping forcing draws its phases whether it is on or not: the gu
   const auto gust_after = [](bool forcing_on) {
     std::mt19937_64 rng(11);
     std::normal_distribution<double> normal(0.0, 1.0);
-    plant::ProcessContext context{1e-3, rng, normal};
-    plant::EffectsConfig fx;
-    fx.get<plant::FlappingForcingConfig>().enabled = forcing_on;
-    fx.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2e-3, 1e-3};
-    fx.get<plant::FlappingForcingConfig>().side_force_amplitudes_n = {1e-2};
-    fx.get<plant::LateralGustConfig>().enabled = true;
-    fx.get<plant::LateralGustConfig>().form = plant::GustForm::kDryden;
-    fx.get<plant::LateralGustConfig>().sigma_mps = 0.5;
-    auto processes = plant::make_effect_processes(fx, context);
+    effects::ProcessContext context{1e-3, rng, normal};
+    effects::EffectsConfig fx;
+    fx.get<effects::FlappingForcingConfig>().enabled = forcing_on;
+    fx.get<effects::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2e-3, 1e-3};
+    fx.get<effects::FlappingForcingConfig>().side_force_amplitudes_n = {1e-2};
+    fx.get<effects::LateralGustConfig>().enabled = true;
+    fx.get<effects::LateralGustConfig>().form = effects::GustForm::kDryden;
+    fx.get<effects::LateralGustConfig>().sigma_mps = 0.5;
+    auto processes = effects::make_effect_processes(fx, context);
     REQUIRE(processes.size() == (forcing_on ? 2u : 1u));
     for (int k = 0; k < 50; ++k) {
       for (auto& p : processes) p->step(1e-3, rng, normal);
@@ -565,4 +561,67 @@ TEST_CASE("the flapping forcing draws its phases whether it is on or not: the gu
   };
   CHECK(gust_after(true) == gust_after(false));
   CHECK(gust_after(true) != 0.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// An effect the term grammar states needs no plant code: its plant side comes from its columns.
+
+TEST_CASE("a term effect's plant section is its columns' coefficients, flown as the plant's terms",
+          "[plant][model_effects]") {
+  using namespace nimble::effects;
+  const Effect cubic = term_effect(
+      {"cubic_roll_damping",
+       "p^3 in roll moment",
+       {},
+       {{"L", "L_ppp", "p^3", ColumnForm::kTerm, "p^3", "N m s^3/rad^3", nimble::Range::closed(-1e-3, 1e-3)}},
+       Scan::kNone,
+       Signature::kNone,
+       EffectivenessChange::kNone,
+       "plant.effects.cubic_roll_damping"});
+  REQUIRE(cubic.has_plant_section());
+  EffectsConfig fx;
+  CHECK_FALSE(cubic.plant.enabled(fx));
+  CHECK(cubic.plant.terms(fx).empty());
+  {
+    ConfigMap m = ConfigMap::load_string("enabled: true\nL_ppp: -2.5e-5\n", "plant.yaml");
+    cubic.plant.load(m, fx);
+    m.finish();
+  }
+  CHECK(cubic.plant.enabled(fx));
+  const std::vector<nimble::Term> terms = cubic.plant.terms(fx);
+  REQUIRE(terms.size() == 1);
+  CHECK(terms[0].equation == "L");
+  CHECK(terms[0].expression.to_string() == "p^3");
+  CHECK(terms[0].coefficient == -2.5e-5);
+  // The section's keys are the model's, with the column's range; a value outside it is refused.
+  ConfigMap wide = ConfigMap::load_string("enabled: true\nL_ppp: 0.5\n", "plant.yaml");
+  CHECK_THROWS_WITH(cubic.plant.load(wide, fx), Catch::Contains("L_ppp"));
+  const std::string rows = cubic.plant.markdown_rows("plant.effects.cubic_roll_damping.");
+  CHECK(rows.find("`plant.effects.cubic_roll_damping.L_ppp`") != std::string::npos);
+  CHECK(rows.find("N m s^3/rad^3") != std::string::npos);
+  // Off again: no terms.
+  ConfigMap off = ConfigMap::load_string("enabled: false\nL_ppp: -2.5e-5\n", "plant.yaml");
+  cubic.plant.load(off, fx);
+  CHECK(cubic.plant.terms(fx).empty());
+  // From a model's effects: section, with the same key; an unknown key is refused by name.
+  DerivativeModel model;
+  model.name = "m";
+  const std::map<std::string, double> params{{"L_ppp", -1e-5}};
+  std::map<std::string, double> derivatives;
+  cubic.from_model(ModelSection{model, "cubic_roll_damping", params}, fx, derivatives);
+  REQUIRE(cubic.plant.terms(fx).size() == 1);
+  CHECK(cubic.plant.terms(fx)[0].coefficient == -1e-5);
+  const std::map<std::string, double> typo{{"L_pp", -1e-5}};
+  CHECK_THROWS_WITH(cubic.from_model(ModelSection{model, "cubic_roll_damping", typo}, fx, derivatives),
+                    Catch::Contains("L_pp") && Catch::Contains("L_ppp"));
+  // A column that is not a load term cannot make a term effect.
+  CHECK_THROWS_AS(term_effect({"bad",
+                               "x",
+                               {},
+                               {{"L", "L_x", "x", ColumnForm::kInputTimesTime}},
+                               Scan::kNone,
+                               Signature::kNone,
+                               EffectivenessChange::kNone,
+                               ""}),
+                  std::logic_error);
 }

@@ -8,7 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/model.h"
-#include "plant/effects/lateral_gust.h"
+#include "effects/lateral_gust.h"
 #include "plant/plant_model.h"
 #include "turbulence/discretisation.h"
 #include "turbulence/dryden.h"
@@ -17,7 +17,7 @@
 #include "turbulence/uncertainty.h"
 
 using namespace nimble;
-using nimble::plant::GustForm;
+using nimble::effects::GustForm;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
 namespace tb = nimble::turbulence;
@@ -36,10 +36,10 @@ PlantConfig dryden_config(double sigma, double T, double rate_hz, std::uint64_t 
   cfg.rate_hz = rate_hz;
   cfg.truth_rate_hz = rate_hz;
   cfg.feedback_rate_hz = rate_hz;
-  cfg.effects.get<plant::LateralGustConfig>().enabled = true;
-  cfg.effects.get<plant::LateralGustConfig>().form = GustForm::kDryden;
-  cfg.effects.get<plant::LateralGustConfig>().sigma_mps = sigma;
-  cfg.effects.get<plant::LateralGustConfig>().time_scale_s = T;
+  cfg.effects.get<effects::LateralGustConfig>().enabled = true;
+  cfg.effects.get<effects::LateralGustConfig>().form = GustForm::kDryden;
+  cfg.effects.get<effects::LateralGustConfig>().sigma_mps = sigma;
+  cfg.effects.get<effects::LateralGustConfig>().time_scale_s = T;
   cfg.seed = seed;
   return cfg;
 }
@@ -67,11 +67,11 @@ TEST_CASE("lateral gust: the Gauss-Markov default flies the same seeded values a
   // sigma 0.2 m/s, tau 0.05 s, set 1 at trim, 1 kHz): gust and side velocity after n steps.
   Fixture f;
   PlantConfig cfg;
-  cfg.effects.get<plant::LateralGustConfig>().enabled = true;
-  cfg.effects.get<plant::LateralGustConfig>().sigma_mps = 0.2;
-  cfg.effects.get<plant::LateralGustConfig>().tau_s = 0.05;
+  cfg.effects.get<effects::LateralGustConfig>().enabled = true;
+  cfg.effects.get<effects::LateralGustConfig>().sigma_mps = 0.2;
+  cfg.effects.get<effects::LateralGustConfig>().tau_s = 0.05;
   cfg.seed = 7;
-  REQUIRE(cfg.effects.get<plant::LateralGustConfig>().form == GustForm::kGaussMarkov);
+  REQUIRE(cfg.effects.get<effects::LateralGustConfig>().form == GustForm::kGaussMarkov);
   struct Golden {
     int step;
     double gust, v;
@@ -102,14 +102,14 @@ TEST_CASE("plant config: lateral_gust form dryden with its time scale, bad value
     return nimble::plant::plant_config_from(m);
   };
   const PlantConfig d = load("enabled: true, form: dryden, sigma_mps: 0.3, time_scale_s: 2.5");
-  CHECK(d.effects.get<plant::LateralGustConfig>().form == GustForm::kDryden);
-  CHECK(d.effects.get<plant::LateralGustConfig>().sigma_mps == 0.3);
-  CHECK(d.effects.get<plant::LateralGustConfig>().time_scale_s == 2.5);
-  CHECK(load("enabled: true, sigma_mps: 0.3").effects.get<plant::LateralGustConfig>().form == GustForm::kGaussMarkov);
-  CHECK(load("enabled: true, form: gauss_markov").effects.get<plant::LateralGustConfig>().form ==
+  CHECK(d.effects.get<effects::LateralGustConfig>().form == GustForm::kDryden);
+  CHECK(d.effects.get<effects::LateralGustConfig>().sigma_mps == 0.3);
+  CHECK(d.effects.get<effects::LateralGustConfig>().time_scale_s == 2.5);
+  CHECK(load("enabled: true, sigma_mps: 0.3").effects.get<effects::LateralGustConfig>().form == GustForm::kGaussMarkov);
+  CHECK(load("enabled: true, form: gauss_markov").effects.get<effects::LateralGustConfig>().form ==
         GustForm::kGaussMarkov);
-  CHECK(PlantConfig{}.effects.get<plant::LateralGustConfig>().time_scale_s == 1.0);
-  CHECK(nimble::plant::to_string(GustForm::kDryden) == "dryden");
+  CHECK(PlantConfig{}.effects.get<effects::LateralGustConfig>().time_scale_s == 1.0);
+  CHECK(nimble::effects::to_string(GustForm::kDryden) == "dryden");
 
   CHECK_THROWS_WITH(load("enabled: true, form: dryden, sigma_mps: -0.1"),
                     Catch::Contains("effects.lateral_gust.sigma_mps"));
@@ -126,13 +126,13 @@ TEST_CASE("plant file: the lateral_gust keys and their defaults", "[plant][gust]
   ConfigMap m = ConfigMap::load_file(std::string(RIG_SOURCE_DIR) + "/rig_configs/plant/nimble_plant.yaml");
   const PlantConfig c = nimble::plant::plant_config_from(m);
   const PlantConfig defaults;
-  CHECK(c.effects.get<plant::LateralGustConfig>().form == defaults.effects.get<plant::LateralGustConfig>().form);
-  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s ==
-        defaults.effects.get<plant::LateralGustConfig>().time_scale_s);
+  CHECK(c.effects.get<effects::LateralGustConfig>().form == defaults.effects.get<effects::LateralGustConfig>().form);
+  CHECK(c.effects.get<effects::LateralGustConfig>().time_scale_s ==
+        defaults.effects.get<effects::LateralGustConfig>().time_scale_s);
   // The defaults: the Dryden form's integral time scale T/2 equals the Gauss-Markov tau, so
   // both forms have the same S(0) = 2 sigma^2 tau = sigma^2 T.
-  CHECK(c.effects.get<plant::LateralGustConfig>().time_scale_s ==
-        Approx(2.0 * c.effects.get<plant::LateralGustConfig>().tau_s));
+  CHECK(c.effects.get<effects::LateralGustConfig>().time_scale_s ==
+        Approx(2.0 * c.effects.get<effects::LateralGustConfig>().tau_s));
 }
 
 TEST_CASE("Dryden gust: the exact discrete variance is sigma^2 at the plant rate and at a coarse rate",

@@ -12,22 +12,20 @@
 #include <catch2/catch.hpp>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "core/effects.h"
 #include "core/model.h"
 #include "core/modes.h"
-#include "plant/effects/actuator_delay.h"
-#include "plant/effects/constant_load.h"
-#include "plant/effects/flapping_forcing.h"
-#include "plant/effects/forward_speed_coupling.h"
-#include "plant/effects/lateral_gust.h"
-#include "plant/effects/lateral_inflow.h"
-#include "plant/effects/registry.h"
+#include "effects/actuator_delay.h"
+#include "effects/constant_load.h"
+#include "effects/flapping_forcing.h"
+#include "effects/forward_speed_coupling.h"
+#include "effects/lateral_gust.h"
+#include "effects/lateral_inflow.h"
+#include "effects/registry.h"
 #include "plant/plant_model.h"
 #include "plant_fixture.h"
 
 using namespace nimble;
-using nimble::model_effect_names;
-using nimble::plant::ActuatorInput;
+using nimble::effects::ActuatorInput;
 using nimble::plant::PlantConfig;
 using nimble::plant::PlantModel;
 
@@ -126,8 +124,8 @@ TEST_CASE("servo: dihedral step settles with the second-order response", "[plant
 TEST_CASE("actuator delay postpones the response by the configured time", "[plant]") {
   Fixture f;
   PlantConfig cfg;
-  cfg.effects.get<plant::ActuatorDelayConfig>().enabled = true;
-  cfg.effects.get<plant::ActuatorDelayConfig>().delay_s = 0.020;
+  cfg.effects.get<effects::ActuatorDelayConfig>().enabled = true;
+  cfg.effects.get<effects::ActuatorDelayConfig>().delay_s = 0.020;
   PlantModel plant = make_plant(f, cfg);
   ActuatorInput cmd = plant.trim_command();
   cmd.flap_freq_left_radps += 10;
@@ -142,9 +140,9 @@ TEST_CASE("actuator delay postpones the response by the configured time", "[plan
 TEST_CASE("lateral gust: seeded, with the configured standard deviation", "[plant]") {
   Fixture f;
   PlantConfig cfg;
-  cfg.effects.get<plant::LateralGustConfig>().enabled = true;
-  cfg.effects.get<plant::LateralGustConfig>().sigma_mps = 0.2;
-  cfg.effects.get<plant::LateralGustConfig>().tau_s = 0.05;
+  cfg.effects.get<effects::LateralGustConfig>().enabled = true;
+  cfg.effects.get<effects::LateralGustConfig>().sigma_mps = 0.2;
+  cfg.effects.get<effects::LateralGustConfig>().tau_s = 0.05;
   cfg.seed = 7;
   PlantModel a = make_plant(f, cfg), b = make_plant(f, cfg);
   CHECK(same_gust_rms(a, b, 60000) == Approx(0.2).epsilon(0.1));
@@ -153,8 +151,8 @@ TEST_CASE("lateral gust: seeded, with the configured standard deviation", "[plan
 TEST_CASE("flapping forcing puts a roll-rate oscillation at the flapping frequency", "[plant]") {
   Fixture f;
   PlantConfig cfg;
-  cfg.effects.get<plant::FlappingForcingConfig>().enabled = true;
-  cfg.effects.get<plant::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2e-3};
+  cfg.effects.get<effects::FlappingForcingConfig>().enabled = true;
+  cfg.effects.get<effects::FlappingForcingConfig>().roll_moment_amplitudes_nm = {2e-3};
   PlantModel plant = make_plant(f, cfg);
   // Correlate p with sin/cos at the flapping frequency over 1 s, against a frequency 5 Hz off.
   const double w = plant.trim_flap_frequency_radps();
@@ -187,15 +185,15 @@ TEST_CASE("plant config: errors name the key", "[plant]") {
   const PlantConfig c = load(
       "effects:\n  forward_speed_coupling: {enabled: true, L_up_ns2: 1.0e-4, L_uv_ns2pm: 2.0e-4, Y_up_ns2pm: 3.0e-3, "
       "Y_uv_ns2pm2: -4.0e-2}\n  constant_load: {enabled: true, roll_moment_nm: 1.0e-4, side_force_n: -2.0e-3}\n");
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().enabled);
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().gain_per_mps == 0.0);
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().L_up_ns2 == 1.0e-4);
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().L_uv_ns2pm == 2.0e-4);
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().Y_up_ns2pm == 3.0e-3);
-  CHECK(c.effects.get<plant::ForwardSpeedCouplingConfig>().Y_uv_ns2pm2 == -4.0e-2);
-  CHECK(c.effects.get<plant::ConstantLoadConfig>().enabled);
-  CHECK(c.effects.get<plant::ConstantLoadConfig>().roll_moment_nm == 1.0e-4);
-  CHECK(c.effects.get<plant::ConstantLoadConfig>().side_force_n == -2.0e-3);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().enabled);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().gain_per_mps == 0.0);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().L_up_ns2 == 1.0e-4);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().L_uv_ns2pm == 2.0e-4);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().Y_up_ns2pm == 3.0e-3);
+  CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().Y_uv_ns2pm2 == -4.0e-2);
+  CHECK(c.effects.get<effects::ConstantLoadConfig>().enabled);
+  CHECK(c.effects.get<effects::ConstantLoadConfig>().roll_moment_nm == 1.0e-4);
+  CHECK(c.effects.get<effects::ConstantLoadConfig>().side_force_n == -2.0e-3);
   // The two forms of forward-speed coupling do not mix.
   CHECK_THROWS_WITH(load("effects:\n  forward_speed_coupling: {enabled: true, gain_per_mps: 0.5, Y_uv_ns2pm2: 0.01}\n"),
                     Catch::Contains("effects.forward_speed_coupling.gain_per_mps") && Catch::Contains("Y_uv_ns2pm2"));
@@ -207,7 +205,7 @@ TEST_CASE("a model that carries lateral_inflow flies it with the model's coeffic
   Fixture f;
   PlantConfig by_config;
   by_config.initial.v_mps = 1.2;
-  by_config.effects.get<plant::LateralInflowConfig>() = {true, -0.025, -2.5e-4};
+  by_config.effects.get<effects::LateralInflowConfig>() = {true, -0.025, -2.5e-4};
   Fixture g;
   g.model.effects["lateral_inflow"] = {{"Y_vv", -0.025}, {"L_vv", -2.5e-4}};
   PlantConfig plain;

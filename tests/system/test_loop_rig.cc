@@ -20,7 +20,7 @@
 
 #include "../support/modal_fit.h"
 #include "../support/rig_runs.h"
-#include "plant/effects/registry.h"
+#include "effects/registry.h"
 #include <nimble/controller_status_t.hpp>
 #include <nimble/truth_state_t.hpp>
 #include "core/constants.h"
@@ -302,10 +302,10 @@ TEST_CASE("rig loop names every plant effect on that its linear loop leaves out,
           "[system]") {
   const std::string dir = nimble::test::scratch_dir("loop_effects");
   // Every plant effect of the registry but actuator_delay, which the linear loop models as a delay.
-  REQUIRE(nimble::plant::plant_effects().size() >= 8);
-  for (const auto& e : nimble::plant::plant_effects()) {
-    if (e.name == "actuator_delay") continue;
-    const std::string& effect = e.name;
+  REQUIRE(nimble::effects::plant_effects().size() >= 8);
+  for (const auto* e : nimble::effects::plant_effects()) {
+    if (e->plant.in_linear_loop) continue;
+    const std::string& effect = e->name();
     INFO(effect);
     const std::string cmd = std::string(RIG_BIN) + " loop " + kConfigs + "hover.yaml --set plant.effects." + effect +
                             ".enabled=true >" + dir + "/out.txt 2>&1";
