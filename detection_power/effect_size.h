@@ -5,7 +5,7 @@
 ///
 /// Each plant effect declares what its SIZE sets in its own file (`<name>_sizing()`,
 /// effects/effect_sizing.h); `rig discrepancy --help` lists them. E.g. lateral_inflow:
-/// SIZE sets Y_vv_ns2pm2 [N s^2/m^2] and L_vv keeps its ratio to Y_vv.
+/// SIZE sets Y_vv [N s^2/m^2] and L_vv keeps its ratio to Y_vv.
 ///
 /// "Keeps its ratio": the scenario's own values (after its --set) fix the shape of the effect,
 /// SIZE its scale: lateral inflow with SIZE -0.035 on a scenario that flies Y_vv -0.07 and
@@ -44,7 +44,7 @@ const std::vector<SizedEffect>& sized_effects();
 /// its parameter and unit.
 const SizedEffect& sized_effect(const std::string& effect);
 
-/// "lateral_inflow=Y_vv_ns2pm2 [N s^2/m^2], ..." for help texts and errors.
+/// "lateral_inflow=Y_vv [N s^2/m^2], ..." for help texts and errors.
 std::string sized_effect_list();
 
 /// An effect and its sizes, from `--effect NAME=SIZE[,SIZE...]` (sizes: a list "a,b,c" or a

@@ -6,8 +6,8 @@ const ParamTable<ConstantLoadConfig>& constant_load_params() {
   using C = ConstantLoadConfig;
   static const ParamTable<C> table = {
       {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
-      {"roll_moment_nm", &C::roll_moment_nm, Range::closed(-0.1, 0.1), "N m", "constant roll moment"},
-      {"side_force_n", &C::side_force_n, Range::closed(-1.0, 1.0), "N", "constant side force"},
+      {"L_0", &C::roll_moment_nm, Range::closed(-0.1, 0.1), "N m", "constant roll moment"},
+      {"Y_0", &C::side_force_n, Range::closed(-1.0, 1.0), "N", "constant side force"},
   };
   return table;
 }
@@ -23,15 +23,14 @@ void constant_load_from_model(const ModelSection& s, ConstantLoadConfig& c) {
   // Regressor 1 in L and Y: a constant roll moment L_0 and side force Y_0.
   s.check_keys({"L_0", "Y_0"});
   c.enabled = true;
-  c.roll_moment_nm = s.or_zero("L_0", range_of(constant_load_params(), "roll_moment_nm"));
-  c.side_force_n = s.or_zero("Y_0", range_of(constant_load_params(), "side_force_n"));
+  c.roll_moment_nm = s.or_zero("L_0", range_of(constant_load_params(), "L_0"));
+  c.side_force_n = s.or_zero("Y_0", range_of(constant_load_params(), "Y_0"));
 }
 
 EffectSizing constant_load_sizing() {
-  return {"roll_moment_nm", "N m", range_of(constant_load_params(), "roll_moment_nm"),
-          "side_force_n keeps its ratio to the moment", [](const YAML::Node& section, double size) {
-            return with_companion_ratio(section, size, "roll_moment_nm", "side_force_n",
-                                        range_of(constant_load_params(), "side_force_n"), 0.0);
+  return {"L_0", "N m", range_of(constant_load_params(), "L_0"), "Y_0 keeps its ratio to the moment",
+          [](const YAML::Node& section, double size) {
+            return with_companion_ratio(section, size, "L_0", "Y_0", range_of(constant_load_params(), "Y_0"), 0.0);
           }};
 }
 
@@ -41,8 +40,8 @@ Effect constant_load_effect() {
                   "a constant roll moment and side force (an offset trim: an asymmetric mass or wing) with "
                   "no bias of the rate gyro (p agrees with phi's derivative)",
                   {},
-                  {{"L", "L_0", "1", ColumnForm::kTerm, "1", "N m", range_of(constant_load_params(), "roll_moment_nm")},
-                   {"Y", "Y_0", "1", ColumnForm::kTerm, "1", "N", range_of(constant_load_params(), "side_force_n")}},
+                  {{"L", "L_0", "1", ColumnForm::kTerm, "1", "N m", range_of(constant_load_params(), "L_0")},
+                   {"Y", "Y_0", "1", ColumnForm::kTerm, "1", "N", range_of(constant_load_params(), "Y_0")}},
                   Scan::kNone,
                   Signature::kConstantLoad,
                   EffectivenessChange::kNone,

@@ -1,5 +1,5 @@
 #pragma once
-/// Constant roll moment and side force: L += roll_moment_nm, Y += side_force_n. Flies the model
+/// Constant roll moment and side force: L += L_0, Y += Y_0 (keys L_0, Y_0, as a model keys them). Flies the model
 /// effect sensor_bias (L_0, Y_0): the equation-error regression cannot tell a rate-sensor bias
 /// from a constant moment, and the plant flies the moment/force form.
 
@@ -33,7 +33,7 @@ inline void add_constant_load(const ConstantLoadConfig& c, double& L, double& Y)
   Y += c.side_force_n;
 }
 
-/// SIZE sets roll_moment_nm; side_force_n keeps its ratio to it (none if the scenario's moment is 0).
+/// SIZE sets L_0; Y_0 keeps its ratio to it (none if the scenario's moment is 0).
 EffectSizing constant_load_sizing();
 
 /// The effect's definition, its mapping from a model and its plant section (registry.h).

@@ -58,9 +58,9 @@ struct EffectColumn {
 /// What the effect's scanned parameter is (the workflow scans it over a grid).
 enum class Scan {
   kNone,
-  kDelay,       ///< a delay of the flap input, 1 sample .. delay_max_s; named as delay_s
-  kChangeTime,  ///< the time of a change, over the record away from its ends; named as t_change_s
-  kFrequency,   ///< the flapping frequency, on data low-passed above the flapping band
+  kDelay,          ///< a delay of the flap input, 1 sample .. delay_max_s; named as delay_s
+  kChangeTime,     ///< the time of a change, over the record away from its ends; named as t_change_s
+  kFrequency,      ///< the flapping frequency, on data low-passed above the flapping band
   kFormParameter,  ///< a generic form's parameter (a width, a time constant) over its family's grid
 };
 

@@ -10,10 +10,10 @@ const ParamTable<ForwardSpeedCouplingConfig>& forward_speed_coupling_params() {
       {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
       {"gain_per_mps", &C::gain_per_mps, Range::closed(-2.0, 2.0), "1/(m/s)",
        "the lateral stability derivatives scale with 1 + k (u - u0) (or give the four coefficients)"},
-      {"L_up_ns2", &C::L_up_ns2, Range::closed(-0.1, 0.1), "N s^2", "L += L_up (u - u0) p"},
-      {"L_uv_ns2pm", &C::L_uv_ns2pm, Range::closed(-0.1, 0.1), "N s^2/m", "L += L_uv (u - u0) v"},
-      {"Y_up_ns2pm", &C::Y_up_ns2pm, Range::closed(-1.0, 1.0), "N s^2/m", "Y += Y_up (u - u0) p"},
-      {"Y_uv_ns2pm2", &C::Y_uv_ns2pm2, Range::closed(-1.0, 1.0), "N s^2/m^2", "Y += Y_uv (u - u0) v"},
+      {"L_up", &C::L_up_ns2, Range::closed(-0.1, 0.1), "N s^2", "L += L_up (u - u0) p"},
+      {"L_uv", &C::L_uv_ns2pm, Range::closed(-0.1, 0.1), "N s^2/m", "L += L_uv (u - u0) v"},
+      {"Y_up", &C::Y_up_ns2pm, Range::closed(-1.0, 1.0), "N s^2/m", "Y += Y_up (u - u0) p"},
+      {"Y_uv", &C::Y_uv_ns2pm2, Range::closed(-1.0, 1.0), "N s^2/m^2", "Y += Y_uv (u - u0) v"},
   };
   return table;
 }
@@ -24,13 +24,13 @@ ForwardSpeedCouplingConfig forward_speed_coupling_from(ConfigMap& map) {
   // One form or the other: a gain on the stability derivatives, or the four coefficients.
   const bool gain = map.has("gain_per_mps");
   std::string coefficient;
-  for (const char* key : {"L_up_ns2", "L_uv_ns2pm", "Y_up_ns2pm", "Y_uv_ns2pm2"}) {
+  for (const char* key : {"L_up", "L_uv", "Y_up", "Y_uv"}) {
     if (map.has(key) && coefficient.empty()) coefficient = key;
   }
   if (gain && !coefficient.empty()) {
     map.fail("gain_per_mps",
-             "give either gain_per_mps or the coefficients L_up_ns2, L_uv_ns2pm, Y_up_ns2pm, "
-             "Y_uv_ns2pm2, not both (" +
+             "give either gain_per_mps or the coefficients L_up, L_uv, Y_up, "
+             "Y_uv, not both (" +
                  coefficient + " is given too)");
   }
   read_params(map, forward_speed_coupling_params(), c);
@@ -44,10 +44,10 @@ void forward_speed_coupling_from_model(const ModelSection& s, ForwardSpeedCoupli
   const auto& t = forward_speed_coupling_params();
   c.enabled = true;
   c.gain_per_mps = 0.0;
-  c.L_up_ns2 = s.or_zero("L_up", range_of(t, "L_up_ns2"));
-  c.L_uv_ns2pm = s.or_zero("L_uv", range_of(t, "L_uv_ns2pm"));
-  c.Y_up_ns2pm = s.or_zero("Y_up", range_of(t, "Y_up_ns2pm"));
-  c.Y_uv_ns2pm2 = s.or_zero("Y_uv", range_of(t, "Y_uv_ns2pm2"));
+  c.L_up_ns2 = s.or_zero("L_up", range_of(t, "L_up"));
+  c.L_uv_ns2pm = s.or_zero("L_uv", range_of(t, "L_uv"));
+  c.Y_up_ns2pm = s.or_zero("Y_up", range_of(t, "Y_up"));
+  c.Y_uv_ns2pm2 = s.or_zero("Y_uv", range_of(t, "Y_uv"));
 }
 
 namespace {

@@ -6,8 +6,8 @@ const ParamTable<LateralInflowConfig>& lateral_inflow_params() {
   using C = LateralInflowConfig;
   static const ParamTable<C> table = {
       {"enabled", &C::enabled, Range::any(), "-", "fly the effect (required)"},
-      {"Y_vv_ns2pm2", &C::Y_vv_ns2pm2, Range::closed(-1.0, 1.0), "N s^2/m^2", "side force Y_vv v|v|"},
-      {"L_vv_ns2pm", &C::L_vv_ns2pm, Range::closed(-0.1, 0.1), "N m s^2/m^2", "roll moment L_vv v|v|"},
+      {"Y_vv", &C::Y_vv_ns2pm2, Range::closed(-1.0, 1.0), "N s^2/m^2", "side force Y_vv v|v|"},
+      {"L_vv", &C::L_vv_ns2pm, Range::closed(-0.1, 0.1), "N m s^2/m^2", "roll moment L_vv v|v|"},
   };
   return table;
 }
@@ -23,32 +23,30 @@ void lateral_inflow_from_model(const ModelSection& s, LateralInflowConfig& c) {
   // L += L_vv v|v|, Y += Y_vv v|v| (v relative to the gust).
   s.check_keys({"L_vv", "Y_vv"});
   c.enabled = true;
-  c.L_vv_ns2pm = s.or_zero("L_vv", range_of(lateral_inflow_params(), "L_vv_ns2pm"));
-  c.Y_vv_ns2pm2 = s.or_zero("Y_vv", range_of(lateral_inflow_params(), "Y_vv_ns2pm2"));
+  c.L_vv_ns2pm = s.or_zero("L_vv", range_of(lateral_inflow_params(), "L_vv"));
+  c.Y_vv_ns2pm2 = s.or_zero("Y_vv", range_of(lateral_inflow_params(), "Y_vv"));
 }
 
 EffectSizing lateral_inflow_sizing() {
-  return {"Y_vv_ns2pm2", "N s^2/m^2", range_of(lateral_inflow_params(), "Y_vv_ns2pm2"),
-          "L_vv_ns2pm keeps its ratio to Y_vv (0.01 m if Y_vv is 0)", [](const YAML::Node& section, double size) {
-            return with_companion_ratio(section, size, "Y_vv_ns2pm2", "L_vv_ns2pm",
-                                        range_of(lateral_inflow_params(), "L_vv_ns2pm"), 0.01);
+  return {"Y_vv", "N s^2/m^2", range_of(lateral_inflow_params(), "Y_vv"),
+          "L_vv keeps its ratio to Y_vv (0.01 m if Y_vv is 0)", [](const YAML::Node& section, double size) {
+            return with_companion_ratio(section, size, "Y_vv", "L_vv", range_of(lateral_inflow_params(), "L_vv"), 0.01);
           }};
 }
 
 Effect lateral_inflow_effect() {
   Effect e;
-  e.definition = {"lateral_inflow",
-                  "v|v| in side force and roll moment: lateral inflow on the leading-edge vortex in sideways "
-                  "flight",
-                  {},
-                  {{"L", "L_vv", "v|v|", ColumnForm::kTerm, "v*abs(v)", "N m s^2/m^2",
-                    range_of(lateral_inflow_params(), "L_vv_ns2pm")},
-                   {"Y", "Y_vv", "v|v|", ColumnForm::kTerm, "v*abs(v)", "N s^2/m^2",
-                    range_of(lateral_inflow_params(), "Y_vv_ns2pm2")}},
-                  Scan::kNone,
-                  Signature::kInflow,
-                  EffectivenessChange::kNone,
-                  "plant.effects.lateral_inflow: L, Y += c v|v|"};
+  e.definition = {
+      "lateral_inflow",
+      "v|v| in side force and roll moment: lateral inflow on the leading-edge vortex in sideways "
+      "flight",
+      {},
+      {{"L", "L_vv", "v|v|", ColumnForm::kTerm, "v*abs(v)", "N m s^2/m^2", range_of(lateral_inflow_params(), "L_vv")},
+       {"Y", "Y_vv", "v|v|", ColumnForm::kTerm, "v*abs(v)", "N s^2/m^2", range_of(lateral_inflow_params(), "Y_vv")}},
+      Scan::kNone,
+      Signature::kInflow,
+      EffectivenessChange::kNone,
+      "plant.effects.lateral_inflow: L, Y += c v|v|"};
   e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
     lateral_inflow_from_model(s, fx.get<LateralInflowConfig>());
   };

@@ -34,7 +34,7 @@ inline void add_lateral_inflow(const LateralInflowConfig& c, double v_rel, doubl
   L += c.L_vv_ns2pm * v_rel * std::fabs(v_rel);
 }
 
-/// SIZE sets Y_vv_ns2pm2; L_vv_ns2pm keeps its ratio to it (0.01 m if the scenario's Y_vv is 0).
+/// SIZE sets Y_vv; L_vv keeps its ratio to it (0.01 m if the scenario's Y_vv is 0).
 EffectSizing lateral_inflow_sizing();
 
 /// The effect's definition, its mapping from a model and its plant section (registry.h).

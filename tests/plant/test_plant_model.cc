@@ -183,8 +183,8 @@ TEST_CASE("plant config: errors name the key", "[plant]") {
   CHECK_THROWS_WITH(load("effects:\n  gusty: {enabled: true}\n"), Catch::Contains("effects.gusty"));
   CHECK(load("initial: {u_mps: 0.4}\n").initial.u_mps == 0.4);
   const PlantConfig c = load(
-      "effects:\n  forward_speed_coupling: {enabled: true, L_up_ns2: 1.0e-4, L_uv_ns2pm: 2.0e-4, Y_up_ns2pm: 3.0e-3, "
-      "Y_uv_ns2pm2: -4.0e-2}\n  constant_load: {enabled: true, roll_moment_nm: 1.0e-4, side_force_n: -2.0e-3}\n");
+      "effects:\n  forward_speed_coupling: {enabled: true, L_up: 1.0e-4, L_uv: 2.0e-4, Y_up: 3.0e-3, "
+      "Y_uv: -4.0e-2}\n  constant_load: {enabled: true, L_0: 1.0e-4, Y_0: -2.0e-3}\n");
   CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().enabled);
   CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().gain_per_mps == 0.0);
   CHECK(c.effects.get<effects::ForwardSpeedCouplingConfig>().L_up_ns2 == 1.0e-4);
@@ -195,10 +195,10 @@ TEST_CASE("plant config: errors name the key", "[plant]") {
   CHECK(c.effects.get<effects::ConstantLoadConfig>().roll_moment_nm == 1.0e-4);
   CHECK(c.effects.get<effects::ConstantLoadConfig>().side_force_n == -2.0e-3);
   // The two forms of forward-speed coupling do not mix.
-  CHECK_THROWS_WITH(load("effects:\n  forward_speed_coupling: {enabled: true, gain_per_mps: 0.5, Y_uv_ns2pm2: 0.01}\n"),
-                    Catch::Contains("effects.forward_speed_coupling.gain_per_mps") && Catch::Contains("Y_uv_ns2pm2"));
-  CHECK_THROWS_WITH(load("effects:\n  constant_load: {enabled: true, roll_moment_nm: 0.5}\n"),
-                    Catch::Contains("effects.constant_load.roll_moment_nm"));
+  CHECK_THROWS_WITH(load("effects:\n  forward_speed_coupling: {enabled: true, gain_per_mps: 0.5, Y_uv: 0.01}\n"),
+                    Catch::Contains("effects.forward_speed_coupling.gain_per_mps") && Catch::Contains("Y_uv"));
+  CHECK_THROWS_WITH(load("effects:\n  constant_load: {enabled: true, L_0: 0.5}\n"),
+                    Catch::Contains("effects.constant_load.L_0"));
 }
 
 TEST_CASE("a model that carries lateral_inflow flies it with the model's coefficients", "[plant]") {

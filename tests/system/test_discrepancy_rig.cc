@@ -134,9 +134,8 @@ TEST_CASE(
     INFO("seed " << seed << " Y_vv " << y_vv << " L_vv " << l_vv);
     const YAML::Node d = fly_and_check(
         "inflow", "nonlinear_doublet_30deg.yaml", seed,
-        "--set plant.effects.lateral_inflow.enabled=true --set plant.effects.lateral_inflow.Y_vv_ns2pm2=" +
-            std::to_string(y_vv) + " --set plant.effects.lateral_inflow.L_vv_ns2pm=" + std::to_string(l_vv) +
-            kNoVibration);
+        "--set plant.effects.lateral_inflow.enabled=true --set plant.effects.lateral_inflow.Y_vv=" +
+            std::to_string(y_vv) + " --set plant.effects.lateral_inflow.L_vv=" + std::to_string(l_vv) + kNoVibration);
     INFO(d["summary"].as<std::string>());
     REQUIRE(named(d) == std::vector<std::string>{"lateral_inflow"});
     const YAML::Node p = d["effects"][0]["parameters"];

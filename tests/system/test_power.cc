@@ -93,8 +93,8 @@ TEST_CASE("power: SIZE sets the effect's main parameter and keeps the scenario's
   const launcher::RunPlan nl = plan_of("nonlinear_doublet_30deg.yaml");  // lateral inflow -0.07, -7e-4
   const auto inflow = detection_power::size_overrides(nl.scenario.root, "lateral_inflow", -0.035);
   CHECK(value_of(inflow, "plant.effects.lateral_inflow.enabled") == "true");
-  CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.Y_vv_ns2pm2")) == Approx(-0.035));
-  CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.L_vv_ns2pm")) == Approx(-3.5e-4));
+  CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.Y_vv")) == Approx(-0.035));
+  CHECK(std::stod(value_of(inflow, "plant.effects.lateral_inflow.L_vv")) == Approx(-3.5e-4));
   CHECK(detection_power::size_overrides(nl.scenario.root, "lateral_inflow", 0.0).size() == 1);  // off: the null case
   const auto flapping =
       detection_power::size_overrides(nl.scenario.root, "flapping_forcing", 1e-3);  // plant file: 2e-3, ...
