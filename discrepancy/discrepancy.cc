@@ -35,6 +35,14 @@ const std::vector<CandidateSpec>& candidate_library() {
 
 namespace {
 
+/// What the search starts from: the candidates it may try and the effects the model file
+/// carries (refit with the derivatives, not tried again), with their values as the file gives them.
+struct SearchScope {
+  std::vector<const CandidateSpec*> pool;
+  std::vector<std::string> known;
+  std::map<std::string, double> known_values;
+};
+
 /// Refuses a model or options the workflow cannot run on.
 void check_request(const DerivativeModel& model, const DiscrepancyOptions& options) {
   if (model.structure != Structure::kLateral3) {
@@ -137,10 +145,14 @@ void stepwise_search(const Workflow& wf, const std::vector<const CandidateSpec*>
 }
 
 /// The wideband stage (flapping forcing above the identification low-pass).
-void wideband_stage(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle,
-                    const DiscrepancyOptions& options, const std::vector<Equation>& equations,
-                    const std::vector<const CandidateSpec*>& pool, const std::vector<std::string>& known,
-                    const Workflow& wf, Model& m, DiscrepancyResult& res, std::vector<BandGap>& bands) {
+void wideband_stage(const Workflow& wf, const SearchScope& scope, const FlightData& data,
+                    const std::vector<Equation>& equations, Model& m, DiscrepancyResult& res,
+                    std::vector<BandGap>& bands) {
+  const DiscrepancyOptions& options = wf.opt;
+  const DerivativeModel& model = wf.model;
+  const Vehicle& vehicle = wf.vehicle;
+  const auto& pool = scope.pool;
+  const auto& known = scope.known;
   // Wideband stage: flapping forcing lies above the identification low-pass. The model as
   // it now stands (baseline, known and named effects) is refit on the same data low-passed at
   // flapping_cutoff_hz, and harmonics at a frequency scanned over the flapping band are tried
@@ -207,17 +219,22 @@ void wideband_stage(const FlightData& data, const DerivativeModel& model, const 
 }
 
 /// The lateral gust, named from its signature in the final residual (it has no regressor).
-CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, const Vehicle& vehicle,
-                          const DiscrepancyOptions& options, const std::vector<const CandidateSpec*>& pool,
-                          const std::vector<std::string>& known, const std::map<std::string, double>& known_values,
-                          const Workflow& wf, const Model& m, const std::vector<VectorXd>& aug_resid,
-                          DiscrepancyResult& res) {
+CandidateTrial gust_stage(const Workflow& wf, const SearchScope& scope, const Model& m,
+                          const std::vector<VectorXd>& aug_resid, DiscrepancyResult& res) {
+  const UniformData& d = wf.data;
+  const DiscrepancyOptions& options = wf.opt;
+  const DerivativeModel& model = wf.model;
+  const Vehicle& vehicle = wf.vehicle;
+  const auto& pool = scope.pool;
+  const auto& known = scope.known;
+  const auto& known_values = scope.known_values;
   // A side wind has no regressor: named from its signature in the final residual.
   const auto gust = std::find_if(pool.begin(), pool.end(), [](const CandidateSpec* c) { return c->stochastic(); });
   CandidateTrial gust_result;
   const double f_ref_hi = options.processing.filter_order > 0 ? 0.6 * options.processing.cutoff_hz : 0.45 * d.rate_hz;
   if (gust != pool.end() && std::find(known.begin(), known.end(), (*gust)->name) == known.end()) {
-    std::vector<VectorXd> extra;  // Y columns of every deterministic candidate the data supports
+    GustEvidence evidence{aug_resid, res.augmented, d.rate_hz, f_ref_hi, {}, {}, 0.0};
+    std::vector<VectorXd>& extra = evidence.extra;  // Y columns of every deterministic candidate the data supports
     for (const auto& c : candidate_library()) {
       if (c.scanned() || c.wideband() || c.stochastic()) continue;
       if (std::find(m.effect_names.begin(), m.effect_names.end(), c.name) != m.effect_names.end()) continue;
@@ -231,15 +248,12 @@ CandidateTrial gust_stage(const UniformData& d, const DerivativeModel& model, co
         for (auto& col : a.cols) extra.push_back(std::move(col));
       }
     }
-    VectorXd given_resid;
-    double yv_given = 0.0;
     for (std::size_t e = 0; e < m.eqs.size(); ++e) {
       if (m.eqs[e].name != "Y" || !model.derivatives.count("Yv")) continue;
-      given_resid = m.eqs[e].y - given_prediction(m.eqs[e], model, known_values, options);
-      yv_given = model.derivatives.at("Yv");
+      evidence.given_resid = m.eqs[e].y - given_prediction(m.eqs[e], model, known_values, options);
+      evidence.yv_given = model.derivatives.at("Yv");
     }
-    gust_result = gust_trial(**gust, m, aug_resid, res.augmented, d.rate_hz, f_ref_hi, extra, given_resid, yv_given,
-                             options, wf.p_critical);
+    gust_result = gust_trial(**gust, m, evidence, options, wf.p_critical);
     res.candidates.push_back(gust_result);
   }
   return gust_result;
@@ -568,15 +582,16 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
 
   // Baseline equations (the model's structure with the effects the model file carries).
   const auto equations = lateral_equations(Structure::kLateral3, inputs, vehicle);
-  std::vector<std::string> known;
-  std::map<std::string, double> known_values;
-  Model m = build_baseline(d, equations, model, vehicle, data.source, &known, &known_values);
+  SearchScope scope;
+  Model m = build_baseline(d, equations, model, vehicle, data.source, &scope.known, &scope.known_values);
 
   Workflow wf{options, vehicle, model, d, flight_folds(rows, options.folds), {}, 0.0, {}, {}};
   wf.batch.min_block = batch_min_block(options);
   wf.p_critical = alarm_p_critical(options);
 
-  const std::vector<const CandidateSpec*> pool = candidate_pool(options);
+  scope.pool = candidate_pool(options);
+  const std::vector<std::string>& known = scope.known;
+  const std::map<std::string, double>& known_values = scope.known_values;
 
   // Baseline fit and its held-out residuals; pooled flights weighted by their own noise levels.
   std::vector<VectorXd> base_resid;
@@ -598,9 +613,9 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   const std::vector<VectorXd> cv_before = heldout_residuals(m, wf.folds);
   test_given_terms(wf, m, res);
 
-  stepwise_search(wf, pool, known, m, res);
+  stepwise_search(wf, scope.pool, known, m, res);
   std::vector<BandGap> wide_bands;
-  if (!pooled) wideband_stage(data, model, vehicle, options, equations, pool, known, wf, m, res, wide_bands);
+  if (!pooled) wideband_stage(wf, scope, data, equations, m, res, wide_bands);
   // The open world: what the library's named effects leave (none may be ambiguous).
   if (options.term_search && res.ambiguous.empty()) term_search(wf, inputs, m, res);
 
@@ -608,8 +623,7 @@ DiscrepancyResult find_discrepancy(const std::vector<FlightData>& flights, const
   std::vector<VectorXd> aug_resid;
   res.augmented = full_fit(m, wf.batch, &aug_resid);
   const std::vector<VectorXd> cv_after = heldout_residuals(m, wf.folds);
-  const CandidateTrial gust_result =
-      gust_stage(d, model, vehicle, options, pool, known, known_values, wf, m, aug_resid, res);
+  const CandidateTrial gust_result = gust_stage(wf, scope, m, aug_resid, res);
   name_effects(m, wf, res);
   if (gust_result.entered) {
     NamedEffect gust;

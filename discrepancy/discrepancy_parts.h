@@ -582,9 +582,21 @@ std::string fmt(double x, int digits = 3);
 
 GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz);
 
-CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const std::vector<VectorXd>& resid,
-                          const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
-                          const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
+/// What the side gust's trial reads of the record: the augmented fit's residuals and estimates,
+/// the side-force columns of every deterministic candidate the data supports (`extra`, fitted
+/// with the residual so that only what no candidate explains counts), and the model as given:
+/// its side-force residual and Yv (the whole wind force -Yv v_g shows there).
+struct GustEvidence {
+  const std::vector<VectorXd>& resid;
+  const std::map<std::string, ParameterEstimate>& fit;
+  double rate_hz;
+  double f_ref_hi;  ///< upper end of the reference band [Hz]
+  std::vector<VectorXd> extra;
+  VectorXd given_resid;
+  double yv_given = 0.0;
+};
+
+CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const GustEvidence& evidence,
                           const DiscrepancyOptions& opt, double p_critical);
 
 /// Frequency in [lo, hi] where the residuals (each normalised by its variance) have the most

@@ -80,10 +80,13 @@ WindFit fit_wind(const Psd& Pg, double excess, double N0g, double f_ref_hi, doub
   return out;
 }
 
-CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const std::vector<VectorXd>& resid,
-                          const std::map<std::string, ParameterEstimate>& fit, double rate_hz, double f_ref_hi,
-                          const std::vector<VectorXd>& extra, const VectorXd& given_resid, double yv_given,
+CandidateTrial gust_trial(const CandidateSpec& spec, const Model& m, const GustEvidence& evidence,
                           const DiscrepancyOptions& opt, double p_critical) {
+  const std::vector<VectorXd>& resid = evidence.resid;
+  const auto& fit = evidence.fit;
+  const double rate_hz = evidence.rate_hz, f_ref_hi = evidence.f_ref_hi, yv_given = evidence.yv_given;
+  const std::vector<VectorXd>& extra = evidence.extra;
+  const VectorXd& given_resid = evidence.given_resid;
   CandidateTrial t;
   t.name = spec.name;
   t.round = m.effect_names.size() + 1;
