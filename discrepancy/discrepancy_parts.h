@@ -582,10 +582,9 @@ std::string fmt(double x, int digits = 3);
 
 GustBands gust_bands(const Psd& P, double band_hz, double ref_hi_hz);
 
-/// What the side gust's trial reads of the record: the augmented fit's residuals and estimates,
-/// the side-force columns of every deterministic candidate the data supports (`extra`, fitted
-/// with the residual so that only what no candidate explains counts), and the model as given:
-/// its side-force residual and Yv (the whole wind force -Yv v_g shows there).
+/// What the side gust's trial reads: the augmented fit's residuals and estimates, the Y columns
+/// of every deterministic candidate the data supports (`extra`, fitted with the residual), and
+/// the model as given: its side-force residual and Yv (where the whole wind force -Yv v_g shows).
 struct GustEvidence {
   const std::vector<VectorXd>& resid;
   const std::map<std::string, ParameterEstimate>& fit;

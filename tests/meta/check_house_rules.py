@@ -108,10 +108,13 @@ def effect_names(root):
     out = {}
     for path in sorted((root / "effects").glob("*.[ch]*")):
         text = path.read_text()
-        for name in re.findall(r'definition = \{"([a-z_0-9]+)"', text) + re.findall(r'k\w*Name = "([a-z_0-9]+)"', text):
+        for name in re.findall(r'definition = \{\s*"([a-z_0-9]+)"', text) + re.findall(r'k\w*Name = "([a-z_0-9]+)"', text):
             out[name] = path.stem
-    if len(out) < 10:
-        sys.exit("check_house_rules: found only %d effect definitions in effects/" % len(out))
+    registry = root / "effects" / "registry.cc"
+    listed = len(re.findall(r"^\s+\w+_effect\(\),", registry.read_text(), re.M)) if registry.exists() else len(out)
+    if len(out) < 10 or len(out) != listed:
+        sys.exit("check_house_rules: found %d effect names in effects/, and effects/registry.cc lists %d effects"
+                 % (len(out), listed))
     return out
 
 
