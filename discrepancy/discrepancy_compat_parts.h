@@ -29,18 +29,13 @@ std::size_t sensor_findings(DiscrepancyResult& res);
 
 // --- discrepancy_compat_report.cc ---
 
-/// A sensor error's fields in its `effects` entry: channel, against, value, unit, interval, flight.
-void write_sensor_effect(JsonWriter& j, const NamedEffect& e);
-/// The `compatibility` array of the JSON report: every flight's stage, every error tested.
-void write_compatibility(JsonWriter& j, const DiscrepancyResult& r);
 /// The stage in the text report, and a named sensor error's line under "named effects".
 void print_compatibility(std::ostream& o, const DiscrepancyResult& r);
 void print_sensor_effect(std::ostream& o, const NamedEffect& e);
 /// The stage's section of report.md ("" when it did not run).
 std::string compatibility_markdown(const DiscrepancyResult& r);
 
-/// The `term_tests` array of the JSON report and its lines in the text (DiscrepancyOptions::test_terms).
-void write_term_tests(JsonWriter& j, const DiscrepancyResult& r);
+/// The term tests' lines in the text (DiscrepancyOptions::test_terms; their JSON: discrepancy_json.cc).
 void print_term_tests(std::ostream& o, const DiscrepancyResult& r);
 
 }  // namespace nimble::ident::discrepancy_parts

@@ -5,7 +5,6 @@
 #include <ostream>
 #include <sstream>
 
-#include "core/json_writer.h"
 #include "discrepancy/discrepancy_compat_parts.h"
 #include "discrepancy/discrepancy_parts.h"
 
@@ -38,61 +37,6 @@ std::string uncorrected_words(const CompatibilityResult& c, const DiscrepancyRes
 }
 
 }  // namespace
-
-void write_sensor_effect(JsonWriter& j, const NamedEffect& e) {
-  j.key("channel").value(e.channel);
-  if (!e.against.empty()) j.key("against").value(e.against);
-  j.key("value").value(e.coefficient);
-  j.key("unit").value(e.unit);
-  j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
-  j.key("flight").value(e.flight);
-}
-
-void write_compatibility(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("compatibility").begin_array();
-  for (const CompatibilityResult& c : r.compatibility) {
-    j.begin_object();
-    j.key("source").value(c.source);
-    j.key("ran").value(c.ran);
-    if (!c.ran) j.key("note").value(c.note);
-    j.key("equation").value(c.equation);
-    j.key("samples").value(static_cast<long long>(c.samples));
-    j.key("t_mid_s").value(c.t_mid_s);
-    j.key("blocks").value(c.blocks);
-    j.key("errors").begin_array();
-    for (const SensorError& e : c.errors) {
-      j.begin_object();
-      j.key("name").value(e.name);
-      j.key("channel").value(e.channel);
-      j.key("against").value(e.against);
-      j.key("unit").value(e.unit);
-      j.key("value").value(e.value);
-      j.key("sigma").value(e.sigma);
-      j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
-      j.key("tolerance").value(e.tolerance);
-      j.key("p_value").value(e.p_value);
-      j.key("significant").value(e.significant);
-      j.key("signature_holds").value(e.signature_holds);
-      j.key("signature").value(e.signature_note);
-      j.key("named").value(e.named);
-      j.key("corrected").value(e.corrected);
-      j.end_object();
-    }
-    j.end_array();
-    j.key("kinematic_gap").begin_object();
-    j.key("before").value(c.kinematic_gap_before);
-    j.key("after").value(c.kinematic_gap_after);
-    j.end_object();
-    if (!c.rmse_uncorrected.empty()) {
-      j.key("rmse_uncorrected").begin_object();
-      for (const auto& [out, v] : c.rmse_uncorrected) j.key(out).value(v);
-      j.end_object();
-    }
-    j.key("corrections").array(c.corrections);
-    j.end_object();
-  }
-  j.end_array();
-}
 
 void print_compatibility(std::ostream& o, const DiscrepancyResult& r) {
   if (r.compatibility.empty()) return;
@@ -148,26 +92,6 @@ std::string compatibility_markdown(const DiscrepancyResult& r) {
     md << "\n\n";
   }
   return md.str();
-}
-
-void write_term_tests(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("term_tests").begin_array();
-  for (const TermTest& t : r.term_tests) {
-    j.begin_object();
-    j.key("equation").value(t.equation);
-    j.key("expression").value(t.expression);
-    j.key("coefficient").value(t.coefficient);
-    j.key("sigma").value(t.sigma);
-    j.key("wald").value(t.wald);
-    j.key("p_value").value(t.p_value);
-    j.key("blocks").value(t.blocks);
-    j.key("iv_coefficient").value(t.iv_coefficient);
-    j.key("iv_sigma").value(t.iv_sigma);
-    j.key("iv_p_value").value(t.iv_p_value);
-    j.key("note").value(t.note);
-    j.end_object();
-  }
-  j.end_array();
 }
 
 void print_term_tests(std::ostream& o, const DiscrepancyResult& r) {

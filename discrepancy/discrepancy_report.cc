@@ -11,7 +11,6 @@
 #include <string>
 #include <utility>
 
-#include "core/json_writer.h"
 #include "core/output_file.h"
 #include "discrepancy/discrepancy.h"
 #include "discrepancy/discrepancy_compat_parts.h"
@@ -30,22 +29,12 @@ std::string report_number(double x, const char* format) {
   return buf;
 }
 
-namespace {
-
-std::string g(double x, const char* f = "%.4g") { return report_number(x, f); }
-
-void number_map(JsonWriter& j, const std::map<std::string, double>& m) {
-  j.begin_object();
-  for (const auto& [k, v] : m) j.key(k).value(v);
-  j.end_object();
-}
-
 /// The gap's numbers, each finite: a gap of nan (a record without excitation that reached the
 /// workflow) is an error here, never a printed "nan" or a JSON null.
 void require_finite_gap(const DiscrepancyResult& r) {
   const auto need = [&r](double x, const std::string& what) {
     if (!std::isfinite(x)) {
-      throw std::logic_error("discrepancy of " + r.source + ": " + what + " is " + g(x) +
+      throw std::logic_error("discrepancy of " + r.source + ": " + what + " is " + report_number(x, "%.4g") +
                              ", not a finite number: no gap is reported from it");
     }
   };
@@ -66,251 +55,9 @@ void require_finite_gap(const DiscrepancyResult& r) {
   }
 }
 
-/// Each named effect with its parameters; a term also with its equation, interval and the forms it beat.
-void write_effects(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("effects").begin_array();
-  for (const auto& e : r.effects) {
-    j.begin_object();
-    j.key("name").value(e.name);
-    if (!e.channel.empty()) discrepancy_parts::write_sensor_effect(j, e);
-    if (!e.contradicts.empty()) j.key("contradicts").value(e.contradicts);
-    if (e.name == "term") {
-      j.key("equation").value(e.equation);
-      j.key("expression").value(e.expression);
-      j.key("coefficient").value(e.coefficient);
-      j.key("interval").begin_array().value(e.interval[0]).value(e.interval[1]).end_array();
-      j.key("alternatives").array(e.alternatives);
-      j.key("ruled_out").begin_array();
-      for (const auto& [name, reason] : e.ruled_out) {
-        j.begin_object();
-        j.key("name").value(name);
-        j.key("reason").value(reason);
-        j.end_object();
-      }
-      j.end_array();
-    }
-    j.key("parameters");
-    number_map(j, e.parameters);
-    j.key("sigma");
-    number_map(j, e.sigma);
-    j.end_object();
-  }
-  j.end_array();
-}
+namespace {
 
-/// Every candidate tried, round by round, with its test statistics where it could be tried.
-void write_candidates(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("candidates").begin_array();
-  for (const auto& t : r.candidates) {
-    j.begin_object();
-    j.key("name").value(t.name);
-    j.key("round").value(static_cast<long long>(t.round));
-    j.key("available").value(t.available);
-    j.key("passed").value(t.passed);
-    j.key("entered").value(t.entered);
-    j.key("reason").value(t.reason);
-    if (t.name == "term") {
-      j.key("equation").value(t.equation);
-      j.key("expression").value(t.expression);
-    }
-    if (!t.ambiguous_with.empty()) {
-      j.key("ambiguous_with").value(t.ambiguous_with);
-      j.key("tell_apart").value(t.tell_apart);
-    }
-    if (t.available) {
-      j.key("partial_f");
-      number_map(j, t.partial_f);
-      j.key("p_value").value(t.p_value);
-      j.key("p_critical").value(t.p_critical);
-      j.key("highpass_p").value(t.highpass_p);
-      j.key("scan_points").value(static_cast<long long>(t.scan_points));
-      j.key("pse_before");
-      number_map(j, t.pse_before);
-      j.key("pse_after");
-      number_map(j, t.pse_after);
-      j.key("heldout_drop").value(t.heldout_drop);
-      j.key("heldout_se").value(t.heldout_se);
-      j.key("parameters");
-      number_map(j, t.parameters);
-      j.key("sigma");
-      number_map(j, t.sigma);
-      if (!t.instantaneous_f.empty()) {
-        j.key("instantaneous_f");
-        number_map(j, t.instantaneous_f);
-      }
-    }
-    j.end_object();
-  }
-  j.end_array();
-}
-
-/// Where the residual is: in time, in frequency, in the states and in the candidates' signatures.
-void write_located(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("located").begin_object();
-  j.key("excitation").begin_array();
-  for (const auto& x : r.located.excitation) j.value(x);
-  j.end_array();
-  j.key("note").value(r.located.note);
-  j.key("time").begin_array();
-  for (const auto& f : r.located.time) {
-    j.begin_object();
-    j.key("output").value(f.output);
-    j.key("what").value(f.what);
-    j.key("start_s").value(f.start_s);
-    j.key("end_s").value(f.end_s);
-    j.key("energy_share").value(f.energy_share);
-    j.key("time_share").value(f.time_share);
-    j.end_object();
-  }
-  j.end_array();
-  j.key("frequency").begin_array();
-  for (const auto& f : r.located.frequency) {
-    j.begin_object();
-    j.key("output").value(f.output);
-    j.key("f_hz").value(f.f_hz);
-    j.key("ratio").value(f.ratio);
-    j.key("p_value").value(f.p_value);
-    j.end_object();
-  }
-  j.end_array();
-  j.key("state").begin_array();
-  for (const auto& f : r.located.state) {
-    j.begin_object();
-    j.key("output").value(f.output);
-    j.key("signal").value(f.signal);
-    j.key("partial_r").value(f.partial_r);
-    j.key("p_value").value(f.p_value);
-    j.end_object();
-  }
-  j.end_array();
-  // Only with DiscrepancyOptions::signature_checks can there be one; the key is written when there is.
-  if (!r.located.signature.empty()) j.key("signature").begin_array();
-  for (const auto& f : r.located.signature) {
-    j.begin_object();
-    j.key("candidate").value(f.candidate);
-    j.key("equations").begin_array();
-    for (const auto& e : f.equations) j.value(e);
-    j.end_array();
-    j.key("note").value(f.note);
-    j.end_object();
-  }
-  if (!r.located.signature.empty()) j.end_array();
-  j.end_object();
-}
-
-/// The held-out gap before and after the named effects, by output and by band.
-void write_gap(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("gap").begin_object();
-  j.key("metric").value(r.gap_metric);
-  j.key("before").value(r.gap_before);
-  j.key("after").value(r.gap_after);
-  j.key("folds").value(static_cast<long long>(r.folds));
-  j.key("outputs").begin_array();
-  for (const auto& o : r.gap) {
-    j.begin_object();
-    j.key("output").value(o.output);
-    j.key("unit").value(o.unit);
-    j.key("rmse_model").value(o.rmse_model);
-    j.key("rmse_before").value(o.rmse_before);
-    j.key("rmse_after").value(o.rmse_after);
-    j.key("fit_before_pct").value(o.fit_before_pct);
-    j.key("fit_after_pct").value(o.fit_after_pct);
-    if (o.white_tested) {
-      j.key("white_before").value(o.white_before);
-      j.key("white_after").value(o.white_after);
-    } else {  // too short for the lags: see notes
-      j.key("white_before").null();
-      j.key("white_after").null();
-    }
-    j.key("peak_psd_before").value(o.peak_psd_before);
-    j.key("peak_psd_after").value(o.peak_psd_after);
-    j.end_object();
-  }
-  j.end_array();
-  j.key("bands").begin_array();
-  for (const auto& b : r.gap_bands) {
-    j.begin_object();
-    j.key("name").value(b.name);
-    j.key("equations").begin_array();
-    for (const auto& e : b.equations) j.value(e);
-    j.end_array();
-    j.key("lo_hz").value(b.lo_hz);
-    j.key("hi_hz").value(b.hi_hz);
-    j.key("before").value(b.before);
-    j.key("after").value(b.after);
-    j.key("wideband").value(b.wideband);
-    j.key("note").value(b.note);
-    j.end_object();
-  }
-  j.end_array();
-  j.end_object();
-}
-
-void write_closed_loop(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("closed_loop").begin_object();
-  j.key("note").value(r.closed_loop_note);
-  j.key("outputs").begin_array();
-  for (const auto& c : r.closed_loop) {
-    j.begin_object();
-    j.key("output").value(c.output);
-    j.key("r2_before").value(c.r2_before);
-    j.key("r2_after").value(c.r2_after);
-    j.key("rmse_before").value(c.rmse_before);
-    j.key("rmse_after").value(c.rmse_after);
-    j.end_object();
-  }
-  j.end_array();
-  j.end_object();
-}
-
-/// Each pooled flight's own estimate of the named effects.
-void write_flights(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("flights").begin_array();
-  for (const auto& f : r.flights) {
-    j.begin_object();
-    j.key("source").value(f.source);
-    j.key("samples").value(static_cast<long long>(f.samples));
-    j.key("start_s").value(f.start_s);
-    j.key("end_s").value(f.end_s);
-    j.key("noise");
-    number_map(j, f.noise);
-    j.key("parameters");
-    number_map(j, f.parameters);
-    j.key("sigma");
-    number_map(j, f.sigma);
-    j.end_object();
-  }
-  j.end_array();
-}
-
-/// Whether each named effect is the same in all the pooled flights.
-void write_consistency(JsonWriter& j, const DiscrepancyResult& r) {
-  j.key("consistency").begin_array();
-  for (const auto& c : r.consistency) {
-    j.begin_object();
-    j.key("effect").value(c.effect);
-    j.key("q").value(c.q);
-    j.key("dof").value(c.dof);
-    j.key("p_value").value(c.p_value);
-    j.key("same").value(c.same);
-    j.key("differs").value(c.differs);
-    j.end_object();
-  }
-  j.end_array();
-}
-
-/// A model's parameter estimates under `key`: each value with its sigma, white and coloured.
-void write_parameters(JsonWriter& j, const char* key, const std::map<std::string, ParameterEstimate>& m) {
-  j.key(key).begin_object();
-  for (const auto& [name, e] : m) {
-    j.key(name).begin_object();
-    j.key("value").value(e.value);
-    j.key("sigma").value(e.sigma);
-    j.key("sigma_coloured").value(e.sigma_coloured);
-    j.end_object();
-  }
-  j.end_object();
-}
+std::string g(double x, const char* f = "%.4g") { return report_number(x, f); }
 
 /// The named effects in words: a term as its equation, a drift or a change as what it does.
 void print_effects(std::ostream& o, const DiscrepancyResult& r) {
@@ -481,40 +228,6 @@ void print_located(std::ostream& o, const DiscrepancyResult& r) {
 }
 
 }  // namespace
-
-std::string discrepancy_json(const DiscrepancyResult& r) {
-  require_finite_gap(r);
-  JsonWriter j;
-  j.begin_object();
-  j.key("source").value(r.source);
-  j.key("model").value(r.model_name);
-  j.key("verdict").value(r.verdict);
-  j.key("summary").value(r.summary);
-  j.key("samples").value(static_cast<long long>(r.samples));
-  j.key("rate_hz").value(r.rate_hz);
-  j.key("notes").array(r.notes);
-  write_effects(j, r);
-  discrepancy_parts::write_compatibility(j, r);
-  discrepancy_parts::write_term_tests(j, r);
-  j.key("ambiguous").begin_array();
-  for (const auto& pair : r.ambiguous) j.array(pair);
-  j.end_array();
-  write_candidates(j, r);
-  j.key("alarm_rule").begin_object();
-  j.key("p_critical").value(r.alarm_rule.p_critical);
-  j.key("tests").value(static_cast<long long>(r.alarm_rule.tests));
-  j.key("family_wise").value(r.alarm_rule.family_wise);
-  j.end_object();
-  write_located(j, r);
-  write_gap(j, r);
-  write_closed_loop(j, r);
-  write_flights(j, r);
-  write_consistency(j, r);
-  write_parameters(j, "baseline", r.baseline);
-  write_parameters(j, "augmented", r.augmented);
-  j.end_object();
-  return j.str();
-}
 
 std::string discrepancy_text(const DiscrepancyResult& r) {
   require_finite_gap(r);
