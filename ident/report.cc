@@ -1,10 +1,9 @@
 #include "ident/report.h"
+#include "ident/report_numbers.h"
 
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
-
-#include "core/json_writer.h"
 
 namespace nimble::ident {
 namespace {
@@ -24,13 +23,6 @@ std::string complex_text(const std::complex<double>& z) {
   if (std::fabs(z.imag()) < 1e-12) return fmt("%.4f", z.real());
   return fmt("%.4f %c %.4fi", z.real(), z.imag() < 0 ? '-' : '+', std::fabs(z.imag()));
 }
-
-double phase_deg(const std::complex<double>& z) {
-  const double deg = std::arg(z) * 180.0 / M_PI;
-  return deg <= -180.0 + 1e-6 ? deg + 360.0 : deg;
-}
-
-double pct(double sigma, double value) { return value != 0.0 ? 100.0 * sigma / std::fabs(value) : INFINITY; }
 
 std::string metrics_text(const std::vector<OutputFit>& fits) {
   std::string out =
@@ -60,160 +52,6 @@ std::string whiteness_text(const std::vector<OutputFit>& fits) {
                w.white ? "white" : "COLOURED");
   }
   return out;
-}
-
-void fits_json(JsonWriter& w, const std::vector<OutputFit>& fits) {
-  w.key("metrics").begin_object();
-  for (const auto& f : fits) {
-    w.key(f.output).begin_object();
-    w.key("rxy").value(f.metrics.rxy);
-    w.key("r2").value(f.metrics.r2);
-    w.key("rmse").value(f.metrics.rmse);
-    w.key("range").value(f.metrics.range);
-    w.key("rmse_pct_range").value(f.metrics.rmse_pct_range);
-    w.key("unit").value(f.unit);
-    w.key("samples").value(static_cast<long long>(f.metrics.samples));
-    w.key("parameters").value(f.metrics.parameters);
-    w.end_object();
-  }
-  w.end_object();
-  // A whiteness test skipped on a short record: null fractions, and the note saying what it needs.
-  w.key("whiteness").begin_object();
-  for (const auto& f : fits) {
-    w.key(f.output);
-    if (f.whiteness.tested) {
-      w.value(f.whiteness.fraction_outside);
-    } else {
-      w.null();
-    }
-  }
-  w.end_object();
-  w.key("whiteness_detail").begin_object();
-  for (const auto& f : fits) {
-    const Whiteness& x = f.whiteness;
-    w.key(f.output).begin_object();
-    w.key("tested").value(x.tested);
-    if (!x.tested) {
-      w.key("note").value(x.note);
-      w.key("lags").value(static_cast<long long>(x.lags));
-      w.key("lag_step_samples").value(static_cast<long long>(x.lag_step));
-      w.end_object();
-      continue;
-    }
-    w.key("white").value(x.white);
-    w.key("fraction_outside").value(x.fraction_outside);
-    w.key("allowed_fraction").value(x.allowed_fraction);
-    w.key("outside").value(static_cast<long long>(x.outside));
-    w.key("lags").value(static_cast<long long>(x.lags));
-    w.key("lag_step_samples").value(static_cast<long long>(x.lag_step));
-    w.key("lag_step_s").value(x.lag_step_s);
-    w.key("bound").value(x.bound);
-    w.key("autocorrelation").begin_array();
-    for (Eigen::Index k = 0; k < x.rho.size(); ++k) w.value(x.rho[k]);
-    w.end_array();
-    w.end_object();
-  }
-  w.end_object();
-}
-
-void ranges_json(JsonWriter& w, const std::vector<TimeRange>& ranges) {
-  w.begin_array();
-  for (const auto& r : ranges) w.begin_array().value(r.start_s).value(r.end_s).end_array();
-  w.end_array();
-}
-
-/// Each parameter with its sigmas, each equation's correlation matrix, and the pairs over the threshold.
-void parameters_json(JsonWriter& w, const IdentResult& r) {
-  w.key("parameters").begin_object();
-  for (const auto& name : r.parameter_order) {
-    const ParameterEstimate& e = r.parameters.at(name);
-    w.key(name).begin_object();
-    w.key("value").value(e.value);
-    w.key("sigma").value(e.sigma);
-    w.key("sigma_pct").value(pct(e.sigma, e.value));
-    w.key("sigma_coloured").value(e.sigma_coloured);
-    w.key("sigma_coloured_pct").value(pct(e.sigma_coloured, e.value));
-    w.end_object();
-  }
-  w.end_object();
-  w.key("correlation").begin_object();
-  for (const auto& eq : r.regression.equations) {
-    w.key(eq.equation.name).begin_object();
-    w.key("parameters").array(eq.equation.parameters);
-    w.key("matrix").begin_array();
-    for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
-      w.begin_array();
-      for (Eigen::Index j = 0; j < eq.correlation.cols(); ++j) w.value(eq.correlation(i, j));
-      w.end_array();
-    }
-    w.end_array();
-    w.end_object();
-  }
-  w.end_object();
-  w.key("correlation_threshold").value(r.options.correlation_threshold);
-  w.key("correlated_pairs").begin_array();
-  for (const auto& c : r.correlated) {
-    w.begin_object().key("equation").value(c.equation).key("a").value(c.a).key("b").value(c.b);
-    w.key("rho").value(c.rho).end_object();
-  }
-  w.end_array();
-}
-
-/// The identified model's eigenvalues and modes, each mode's eigenvector by state.
-void modes_json(JsonWriter& w, const IdentResult& r) {
-  w.key("eigenvalues").begin_array();
-  for (const auto& z : r.eigenvalues) w.begin_array().value(z.real()).value(z.imag()).end_array();
-  w.end_array();
-  w.key("modes").begin_array();
-  for (const auto& m : r.modes) {
-    w.begin_object();
-    w.key("eigenvalue").begin_array().value(m.eigenvalue.real()).value(m.eigenvalue.imag()).end_array();
-    w.key("oscillatory").value(m.oscillatory).key("stable").value(m.stable);
-    w.key("natural_frequency_radps").value(m.natural_frequency_radps).key("damping_ratio").value(m.damping_ratio);
-    w.key("eigenvector_nondim").begin_object();
-    for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
-      const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
-      w.key(r.state_space.states[i]).begin_object();
-      w.key("magnitude").value(std::abs(c)).key("phase_deg").value(phase_deg(c));
-      w.end_object();
-    }
-    w.end_object();
-    w.end_object();
-  }
-  w.end_array();
-}
-
-/// The hover and manoeuvre segments, and each state's PSD in each.
-void segments_json(JsonWriter& w, const IdentResult& r) {
-  const IdentOptions& o = r.options;
-  w.key("segments").begin_object();
-  w.key("how").value(r.segments.how);
-  w.key("hover");
-  ranges_json(w, r.segments.hover);
-  w.key("manoeuvre");
-  ranges_json(w, r.segments.manoeuvre);
-  w.end_object();
-  w.key("psd").begin_object();
-  for (const auto& p : r.psd) {
-    w.key(p.state).begin_object();
-    w.key("unit").value("(" + p.unit + ")^2/Hz");
-    for (const auto* part : {&p.hover, &p.manoeuvre}) {
-      const bool have = part == &p.hover ? p.has_hover : p.has_manoeuvre;
-      w.key(part == &p.hover ? "hover" : "manoeuvre");
-      if (!have) {
-        w.null();
-        continue;
-      }
-      w.begin_object();
-      w.key("variance").value(part->integral());
-      w.key("variance_below_cutoff").value(part->integral_up_to(o.processing.cutoff_hz));
-      w.key("df_hz").value(part->df_hz);
-      w.key("segments").value(static_cast<long long>(part->segments));
-      w.end_object();
-    }
-    w.end_object();
-  }
-  w.end_object();
 }
 
 }  // namespace
@@ -308,47 +146,6 @@ std::string identification_text(const IdentResult& r) {
   return out;
 }
 
-std::string identification_json(const IdentResult& r, const std::string& model_out,
-                                const std::vector<std::string>& plots) {
-  const IdentOptions& o = r.options;
-  JsonWriter w;
-  w.begin_object();
-  w.key("source").value(r.source);
-  w.key("structure").value(to_string(o.structure));
-  w.key("method").value(to_string(o.method));
-  w.key("inputs").array(r.inputs);
-  w.key("inputs_left_out").array(r.inputs_left_out);
-  w.key("notes").array(r.notes);
-  w.key("vehicle").begin_object();
-  w.key("name").value(r.vehicle.name).key("file").value(r.vehicle.file).key("mass_kg").value(r.vehicle.mass_kg);
-  w.end_object();
-  w.key("trim").begin_object();
-  w.key("u0_mps").value(r.model.trim.u0_mps).key("w0_mps").value(r.model.trim.w0_mps);
-  w.key("theta0_rad").value(r.model.trim.theta0_rad).key("phi0_rad").value(r.model.trim.phi0_rad);
-  w.end_object();
-  w.key("processing").begin_object();
-  w.key("rate_hz").value(o.processing.rate_hz);
-  w.key("interpolation").value(to_string(o.processing.interpolation));
-  w.key("filter_order").value(o.processing.filter_order);
-  w.key("cutoff_hz").value(o.processing.cutoff_hz);
-  w.key("samples").value(static_cast<long long>(r.data.filtered.size()));
-  w.end_object();
-  if (o.method == Method::kWls) {
-    w.key("wls").begin_object();
-    w.key("window_s").value(o.wls_window_s).key("cross_equation").value(o.wls_cross_equation);
-    w.key("scale_factor").value(r.regression.scale_factor);
-    w.end_object();
-  }
-  parameters_json(w, r);
-  fits_json(w, r.fits);
-  modes_json(w, r);
-  segments_json(w, r);
-  if (!model_out.empty()) w.key("model_out").value(model_out);
-  if (!plots.empty()) w.key("plots").array(plots);
-  w.end_object();
-  return w.str();
-}
-
 std::string validation_text(const ValidationResult& r) {
   std::string out;
   out += fmt("validate   %s (open loop: state derivatives from the measured states and inputs)\n", r.source.c_str());
@@ -359,23 +156,6 @@ std::string validation_text(const ValidationResult& r) {
   out += "accuracy (measured vs predicted state derivatives; R2 with P = 1)\n" + metrics_text(r.fits);
   out += "\nresidual whiteness\n" + whiteness_text(r.fits);
   return out;
-}
-
-std::string validation_json(const ValidationResult& r, const std::vector<std::string>& plots) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("source").value(r.source);
-  w.key("model").value(r.model.name);
-  w.key("model_file").value(r.model.file);
-  w.key("structure").value(to_string(r.model.structure));
-  w.key("vehicle").value(r.vehicle.name);
-  w.key("samples").value(static_cast<long long>(r.data.size()));
-  w.key("rate_hz").value(r.data.rate_hz);
-  w.key("notes").array(r.notes);
-  fits_json(w, r.fits);
-  if (!plots.empty()) w.key("plots").array(plots);
-  w.end_object();
-  return w.str();
 }
 
 }  // namespace nimble::ident
