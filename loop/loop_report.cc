@@ -6,7 +6,6 @@
 
 #include "core/config.h"
 #include "core/constants.h"
-#include "core/json_writer.h"
 
 namespace nimble::loop {
 namespace {
@@ -201,89 +200,6 @@ std::string design_yaml(const DesignOutcome& d, const std::string& command) {
   out << fmt("    kp_per_rad: %.6g\n", d.design.gains.kp_per_rad);
   out << fmt("    kd_per_radps: %.6g\n", d.design.gains.kd_per_radps);
   return out.str();
-}
-
-namespace {
-
-void write_margins(JsonWriter& w, const RollLoopAnalysis& a) {
-  const LoopMargins& m = a.margins;
-  w.key("closed_loop_stable").value(m.closed_loop_stable).key("open_loop_stable").value(m.open_loop_stable);
-  w.key("gain_margin_db").value(m.gain_margin_db()).key("gain_margin_hz").value(m.gain_margin_hz);
-  w.key("gain_reduction_margin_db").value(m.gain_reduction_margin_db());
-  w.key("gain_reduction_margin_hz").value(m.gain_reduction_margin_hz);
-  w.key("phase_margin_deg").value(m.phase_margin_deg).key("crossover_hz").value(m.crossover_hz);
-  w.key("crossovers_hz").array(m.crossovers_hz);
-  w.key("delay_margin_ms").value(1e3 * m.delay_margin_s);
-  w.key("sensitivity_peak").value(m.sensitivity_peak).key("sensitivity_peak_hz").value(m.sensitivity_peak_hz);
-  w.key("bandwidth_hz").value(a.bandwidth_hz).key("setpoint_bandwidth_hz").value(a.setpoint_bandwidth_hz);
-  w.key("dc_gain").value(a.dc_gain);
-  w.key("dominant_pair");
-  if (a.has_dominant_pair) {
-    w.begin_object().key("re").value(a.dominant.s.real()).key("im").value(a.dominant.s.imag());
-    w.key("damping").value(a.dominant.damping).key("natural_hz").value(a.dominant.natural_hz).end_object();
-  } else {
-    w.null();
-  }
-  w.key("closed_loop_poles").begin_array();
-  for (const LoopPole& p : a.poles) {
-    w.begin_object().key("re").value(p.s.real()).key("im").value(p.s.imag());
-    w.key("damping").value(p.damping).key("natural_hz").value(p.natural_hz).end_object();
-  }
-  w.end_array();
-  w.key("poles_at_origin").value(a.poles_at_origin);
-}
-
-void write_worst(JsonWriter& w, const WorstMargins& x) {
-  w.begin_object().key("gains").value(x.gains).key("over").value(x.over);
-  w.key("loops").value(x.loops).key("unstable").value(x.unstable).key("unstable_at").value(x.unstable_at);
-  w.key("gain_margin_db").value(x.gain_margin_db).key("gain_margin_at").value(x.gain_margin_at);
-  w.key("gain_reduction_margin_db").value(x.gain_reduction_margin_db);
-  w.key("gain_reduction_margin_at").value(x.gain_reduction_margin_at);
-  w.key("phase_margin_deg").value(x.phase_margin_deg).key("phase_margin_at").value(x.phase_margin_at);
-  w.key("delay_margin_ms").value(x.delay_margin_ms).key("delay_margin_at").value(x.delay_margin_at);
-  w.key("sensitivity_peak").value(x.sensitivity_peak).key("sensitivity_peak_at").value(x.sensitivity_peak_at);
-  w.key("unstable_alone").array(x.unstable_alone);
-  w.end_object();
-}
-
-}  // namespace
-
-std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, const std::vector<WorstMargins>& worst,
-                      const DesignOutcome* design) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(s.scenario_file).key("input").value(s.input).key("clock").value(s.clock);
-  w.key("latency_s").value(s.latency_s()).key("actuator_delay_s").value(s.actuator_delay_s);
-  w.key("rate_hz").value(s.controller.rate_hz).key("lowpass_cutoff_hz").value(s.controller.roll_lowpass_cutoff_hz);
-  w.key("loops").begin_array();
-  for (const LoopRow& r : rows) {
-    w.begin_object().key("model").value(r.model).key("gains").value(r.gains).key("break").value(to_string(r.where));
-    w.key("kp_per_rad").value(r.gain_values.kp_per_rad).key("kd_per_radps").value(r.gain_values.kd_per_radps);
-    write_margins(w, r.analysis);
-    w.end_object();
-  }
-  w.end_array();
-  w.key("robustness").begin_array();
-  for (const WorstMargins& x : worst) write_worst(w, x);
-  w.end_array();
-  if (design) {
-    w.key("design").begin_object();
-    w.key("model").value(design->model).key("name").value(design->name);
-    w.key("phase_margin_deg_requested").value(design->request.phase_margin_deg);
-    w.key("crossover_hz_requested").value(design->request.crossover_hz);
-    w.key("feasible").value(design->design.feasible).key("note").value(design->design.note);
-    w.key("kp_per_rad")
-        .value(design->design.gains.kp_per_rad)
-        .key("kd_per_radps")
-        .value(design->design.gains.kd_per_radps);
-    w.key("lowpass_cutoff_hz").value(design->design.lowpass_cutoff_hz);
-    if (design->design.feasible) write_margins(w, design->design.analysis);
-    if (!design->flight.empty())
-      w.key("flight").value(design->flight).key("flight_exit_code").value(design->flight_exit);
-    w.end_object();
-  }
-  w.end_object();
-  return w.str();
 }
 
 }  // namespace nimble::loop
