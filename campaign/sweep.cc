@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/json_writer.h"
+#include <nlohmann/json.hpp>
 
 namespace nimble::campaign {
 
@@ -190,62 +190,49 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
 }
 
 std::string sweep_json(const SweepResult& r) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(r.scenario);
-  w.key("clock").value(r.clock);
-  w.key("sets").begin_array();
+  using OJson = nlohmann::ordered_json;
+  OJson j = {{"scenario", r.scenario}, {"clock", r.clock}, {"sets", OJson::array()}};
   for (std::size_t s = 0; s < r.sets.size(); ++s) {
-    w.begin_object();
-    w.key("label").value(r.sets[s].label);
-    w.key("overrides").begin_object();
-    for (const auto& ov : r.sets[s].overrides) w.key(ov.key_path).value(ov.value);
-    w.end_object();
+    OJson overrides = OJson::object();
+    for (const auto& ov : r.sets[s].overrides) overrides[ov.key_path] = ov.value;
     const SetStatistics st = set_statistics(r, s);
-    const long long n = static_cast<long long>(st.runs.size());
-    w.key("runs").value(n).key("controlled").value(st.controlled).key("returned_to_hover").value(st.hover);
-    w.key("ok").value(st.ok);
-    w.key("controlled_rate").value(n > 0 ? static_cast<double>(st.controlled) / static_cast<double>(n) : 0.0);
-    w.key("percentiles").begin_object();
+    const std::size_t n = st.runs.size();
+    OJson percentiles = OJson::object();
     for (const auto& fig : sweep_figures()) {
       const auto it = st.by_figure.find(fig.key);
       if (it == st.by_figure.end()) continue;
-      w.key(fig.key).begin_object();
-      for (const double p : kPercentiles) {
-        w.key("p" + std::to_string(static_cast<int>(p))).value(percentile(it->second, p));
-      }
-      w.end_object();
+      OJson& at = percentiles[fig.key];
+      at = OJson::object();
+      for (const double p : kPercentiles) at["p" + std::to_string(static_cast<int>(p))] = percentile(it->second, p);
     }
-    w.end_object();
-    w.end_object();
+    j["sets"].push_back({{"label", r.sets[s].label},
+                         {"overrides", std::move(overrides)},
+                         {"runs", n},
+                         {"controlled", st.controlled},
+                         {"returned_to_hover", st.hover},
+                         {"ok", st.ok},
+                         {"controlled_rate", n > 0 ? static_cast<double>(st.controlled) / static_cast<double>(n) : 0.0},
+                         {"percentiles", std::move(percentiles)}});
   }
-  w.end_array();
-  w.key("runs").begin_array();
+  j["runs"] = OJson::array();
   for (const auto& run : r.runs) {
-    w.begin_object();
-    w.key("set").value(static_cast<long long>(run.set + 1));
-    w.key("seed").value(static_cast<long long>(run.seed));
-    w.key("exit_code").value(run.exit_code);
-    w.key("result").value(run.verdict);
-    w.key("controlled").value(run.controlled);
-    w.key("returned_to_hover").value(run.hover);
-    w.key("sim_time_s").value(run.sim_time_s);
-    w.key("figures").begin_object();
-    for (const auto& [k, v] : run.figures) w.key(k).value(v);
-    w.end_object();
-    w.key("machine").begin_object();
-    w.key("host").value(run.host).key("wall_time_s").value(run.wall_time_s);
-    w.key("speed_x_realtime").value(run.speed_x_realtime);
-    w.end_object();
-    w.end_object();
+    OJson figures = OJson::object();
+    for (const auto& [k, v] : run.figures) figures[k] = v;
+    j["runs"].push_back(
+        {{"set", run.set + 1},
+         {"seed", run.seed},
+         {"exit_code", run.exit_code},
+         {"result", run.verdict},
+         {"controlled", run.controlled},
+         {"returned_to_hover", run.hover},
+         {"sim_time_s", run.sim_time_s},
+         {"figures", std::move(figures)},
+         {"machine",
+          {{"host", run.host}, {"wall_time_s", run.wall_time_s}, {"speed_x_realtime", run.speed_x_realtime}}}});
   }
-  w.end_array();
-  w.key("machine").begin_object();
-  w.key("backend").value(r.backend).key("jobs").value(r.jobs);
-  w.key("chunk_size").value(static_cast<long long>(r.chunk_size)).key("wall_time_s").value(r.wall_time_s);
-  w.end_object();
-  w.end_object();
-  return w.str();
+  j["machine"] = {
+      {"backend", r.backend}, {"jobs", r.jobs}, {"chunk_size", r.chunk_size}, {"wall_time_s", r.wall_time_s}};
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
 }
 
 std::string sweep_csv(const SweepResult& r) {

@@ -12,7 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/json_writer.h"
+#include <nlohmann/json.hpp>
+
 #include "core/output_file.h"
 
 namespace nimble::campaign {
@@ -275,51 +276,33 @@ std::string envelopes_csv(const std::vector<SetReport>& sets) {
 }
 
 std::string report_json(const SweepResult& r, const std::vector<SetReport>& sets) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(r.scenario);
-  w.key("clock").value(r.clock);
-  w.key("confidence").value(0.95);
-  w.key("percentiles").array(std::vector<double>{5.0, 50.0, 95.0});
-  w.key("sets").begin_array();
+  using OJson = nlohmann::ordered_json;
+  OJson j = {{"scenario", r.scenario},
+             {"clock", r.clock},
+             {"confidence", 0.95},
+             {"percentiles", {5.0, 50.0, 95.0}},
+             {"sets", OJson::array()}};
   for (std::size_t s = 0; s < sets.size(); ++s) {
     const SetReport& st = sets[s];
-    w.begin_object();
-    w.key("set").value(static_cast<long long>(s + 1));
-    w.key("label").value(st.label);
-    w.key("runs").value(st.runs);
-    w.key("controlled").value(st.controlled);
-    w.key("controlled_rate").value(st.rate.p);
-    w.key("wilson_lo").value(st.rate.lo);
-    w.key("wilson_hi").value(st.rate.hi);
-    w.key("traces").value(st.traces);
-    w.key("dt_s");
-    if (st.traces > 0) {
-      w.value(st.dt_s);
-    } else {
-      w.null();
-    }
-    w.key("svg").value("set-" + std::to_string(s + 1) + ".svg");
-    w.key("envelopes").begin_object();
+    OJson envelopes = OJson::object();
     for (std::size_t q = 0; q < 3; ++q) {
       const Envelope& e = envelope_of(st, q);
-      w.key(kQuantities[q].name).begin_object();
-      w.key("unit").value(kQuantities[q].unit);
-      w.key("t_s").array(e.t_s);
-      w.key("n").begin_array();
-      for (const int n : e.n) w.value(n);
-      w.end_array();
-      w.key("p5").array(e.p5);
-      w.key("p50").array(e.p50);
-      w.key("p95").array(e.p95);
-      w.end_object();
+      envelopes[kQuantities[q].name] = {
+          {"unit", kQuantities[q].unit}, {"t_s", e.t_s}, {"n", e.n}, {"p5", e.p5}, {"p50", e.p50}, {"p95", e.p95}};
     }
-    w.end_object();
-    w.end_object();
+    j["sets"].push_back({{"set", s + 1},
+                         {"label", st.label},
+                         {"runs", st.runs},
+                         {"controlled", st.controlled},
+                         {"controlled_rate", st.rate.p},
+                         {"wilson_lo", st.rate.lo},
+                         {"wilson_hi", st.rate.hi},
+                         {"traces", st.traces},
+                         {"dt_s", st.traces > 0 ? OJson(st.dt_s) : OJson(nullptr)},
+                         {"svg", "set-" + std::to_string(s + 1) + ".svg"},
+                         {"envelopes", std::move(envelopes)}});
   }
-  w.end_array();
-  w.end_object();
-  return w.str() + "\n";
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace) + "\n";
 }
 
 std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets) {
