@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
-#include "core/json_writer.h"
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "reproduce/thesis_campaign.h"
@@ -165,85 +165,89 @@ std::string campaign_text(const CampaignResult& r) {
 }
 
 std::string campaign_json(const CampaignResult& r) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("campaign").value(r.campaign).key("clock").value(r.clock);
-  w.key("seeds").begin_array();
-  for (const auto s : r.seeds) w.value(static_cast<long long>(s));
-  w.end_array();
-  w.key("states").value(r.states);
-  w.key("overrides").begin_array();
-  for (const auto& o : r.overrides) w.value(o);
-  w.end_array();
-  w.key("wall_s").value(r.wall_s);
-  w.key("flights").begin_array();
+  using OJson = nlohmann::ordered_json;
+  OJson j = {{"campaign", r.campaign}, {"clock", r.clock},         {"seeds", r.seeds},
+             {"states", r.states},     {"overrides", r.overrides}, {"wall_s", r.wall_s}};
+  j["flights"] = OJson::array();
   for (const auto& f : r.flights) {
-    w.begin_object().key("name").value(f.name).key("seed").value(static_cast<long long>(f.seed));
-    w.key("scenario").value(f.scenario).key("log").value(f.log);
-    w.key("result").value(f.result).key("controlled").value(f.controlled).key("sim_s").value(f.sim_s);
-    w.key("wall_s").value(f.wall_s).end_object();
+    j["flights"].push_back({{"name", f.name},
+                            {"seed", f.seed},
+                            {"scenario", f.scenario},
+                            {"log", f.log},
+                            {"result", f.result},
+                            {"controlled", f.controlled},
+                            {"sim_s", f.sim_s},
+                            {"wall_s", f.wall_s}});
   }
-  w.end_array();
-  w.key("tables").begin_array();
+  j["tables"] = OJson::array();
   for (const auto& t : r.tables) {
-    w.begin_object().key("id").value(t.id).key("title").value(t.title).key("category").value(t.category);
-    w.key("why").value(t.why).key("against").value(t.against_plant ? "plant file" : "published");
-    w.key("cells").begin_array();
+    OJson cells = OJson::array();
     for (const auto& c : t.cells) {
-      w.begin_object().key("row").value(c.row).key("column").value(c.column);
-      w.key("published").value(c.published).key("reference").value(c.reference);
-      w.key("rig").value(c.rig).key("rig_sd").value(c.rig_sd);
-      w.key("values").begin_array();
-      for (const double v : c.values) w.value(v);
-      w.end_array();
-      w.key("interval").value(c.interval).key("seeds").value(c.seeds).key("seeds_to_decide").value(c.seeds_to_decide);
-      w.key("tolerance").value(c.tolerance).key("tolerance_basis").value(c.tolerance_basis);
-      w.key("category").value(c.category).key("verdict").value(c.verdict).key("reason").value(c.reason);
+      OJson cell = {{"row", c.row},
+                    {"column", c.column},
+                    {"published", c.published},
+                    {"reference", c.reference},
+                    {"rig", c.rig},
+                    {"rig_sd", c.rig_sd},
+                    {"values", c.values},
+                    {"interval", c.interval},
+                    {"seeds", c.seeds},
+                    {"seeds_to_decide", c.seeds_to_decide},
+                    {"tolerance", c.tolerance},
+                    {"tolerance_basis", c.tolerance_basis},
+                    {"category", c.category},
+                    {"verdict", c.verdict},
+                    {"reason", c.reason}};
       if (c.has_check) {
-        w.key("check").begin_object().key("predicate").value(c.check.predicate).key("holds").value(c.check.holds);
-        w.key("value").value(c.check.value).end_object();
+        cell["check"] = {{"predicate", c.check.predicate}, {"holds", c.check.holds}, {"value", c.check.value}};
       }
-      w.key("repeats").value(c.repeats).end_object();
+      cell["repeats"] = c.repeats;
+      cells.push_back(std::move(cell));
     }
-    w.end_array().end_object();
+    j["tables"].push_back({{"id", t.id},
+                           {"title", t.title},
+                           {"category", t.category},
+                           {"why", t.why},
+                           {"against", t.against_plant ? "plant file" : "published"},
+                           {"cells", std::move(cells)}});
   }
-  w.end_array();
-  w.key("causes").begin_array();
+  j["causes"] = OJson::array();
   for (const auto& s : r.causes) {
-    w.begin_object().key("name").value(s.name).key("source").value(s.source);
-    w.key("overrides").begin_array();
-    for (const auto& o : s.overrides) w.value(o);
-    w.end_array();
-    w.key("failures").begin_array();
-    for (const auto& f : s.failures) w.value(f);
-    w.end_array();
-    w.key("cells").begin_array();
+    OJson cells = OJson::array();
     for (const auto& c : s.cells) {
-      w.begin_object().key("table").value(c.table).key("row").value(c.row).key("column").value(c.column);
-      w.key("published").value(c.published).key("rig").value(c.rig).key("with_cause").value(c.with_cause);
-      w.key("interval").value(c.interval).end_object();
+      cells.push_back({{"table", c.table},
+                       {"row", c.row},
+                       {"column", c.column},
+                       {"published", c.published},
+                       {"rig", c.rig},
+                       {"with_cause", c.with_cause},
+                       {"interval", c.interval}});
     }
-    w.end_array().end_object();
+    j["causes"].push_back({{"name", s.name},
+                           {"source", s.source},
+                           {"overrides", s.overrides},
+                           {"failures", s.failures},
+                           {"cells", std::move(cells)}});
   }
-  w.end_array();
-  w.key("plant_check").begin_array();
+  j["plant_check"] = OJson::array();
   for (const auto& c : r.plant_check) {
-    w.begin_object().key("row").value(c.row).key("derivative").value(c.derivative).key("method").value(c.method);
-    w.key("plant").value(c.plant);
-    w.key("mean").value(c.mean).key("sd").value(c.sd).key("own_sd").value(c.own_sd);
-    w.key("interval").value(c.interval).end_object();
+    j["plant_check"].push_back({{"row", c.row},
+                                {"derivative", c.derivative},
+                                {"method", c.method},
+                                {"plant", c.plant},
+                                {"mean", c.mean},
+                                {"sd", c.sd},
+                                {"own_sd", c.own_sd},
+                                {"interval", c.interval}});
   }
-  w.end_array();
-  w.key("counts").begin_object();
+  j["counts"] = OJson::object();
   for (const auto& [category, verdicts] : r.counts()) {
-    w.key(category).begin_object();
-    for (const auto& [verdict, n] : verdicts) w.key(verdict).value(n);
-    w.end_object();
+    OJson& of = j["counts"][category];
+    of = OJson::object();
+    for (const auto& [verdict, n] : verdicts) of[verdict] = n;
   }
-  w.end_object();
-  w.key("match_share").value(match_share(r));
-  w.end_object();
-  return w.str();
+  j["match_share"] = match_share(r);
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
 }
 
 /// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
