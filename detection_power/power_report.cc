@@ -7,7 +7,8 @@
 #include <map>
 #include <sstream>
 
-#include "core/json_writer.h"
+#include <nlohmann/json.hpp>
+
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "plots/gnuplot.h"
@@ -56,43 +57,38 @@ void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& 
   }
 }
 
-void proportion_json(JsonWriter& w, const std::string& key, const Proportion& p) {
-  w.key(key).begin_object();
-  w.key("count").value(p.count).key("n").value(p.n).key("p").value(p.p).key("lo").value(p.lo).key("hi").value(p.hi);
-  w.end_object();
+using OJson = nlohmann::ordered_json;
+
+OJson proportion_json(const Proportion& p) {
+  return {{"count", p.count}, {"n", p.n}, {"p", p.p}, {"lo", p.lo}, {"hi", p.hi}};
 }
 
-void cell_json(JsonWriter& w, const PowerCell& c) {
-  w.begin_object();
-  w.key("size").value(c.size).key("length_s").value(c.length_s).key("repetitions").value(c.repetitions);
-  w.key("kind").value(c.kind);
-  w.key("flights").value(static_cast<long long>(c.flights.size()));
-  proportion_json(w, "named", c.named);
-  proportion_json(w, "other", c.other);
-  proportion_json(w, "alarm", c.alarm);
-  w.key("other_names").begin_object();
-  for (const auto& [name, count] : c.other_names) w.key(name).value(count);
-  w.end_object();
-  w.key("verdicts").begin_object();
-  for (const auto& [verdict, count] : c.verdicts) w.key(verdict).value(count);
-  w.end_object();
-  w.key("not_ok").value(c.not_ok).key("failed").value(c.failed);
+OJson cell_json(const PowerCell& c) {
   const double n = std::max<double>(1.0, static_cast<double>(c.flights.size()));
-  w.key("flight_s_mean").value(c.flight_s / n).key("workflow_s_mean").value(c.workflow_s / n);
-  w.key("flight_cpu_s_mean").value(c.flight_cpu_s / n).key("workflow_cpu_s_mean").value(c.workflow_cpu_s / n);
-  w.end_object();
+  OJson other_names = OJson::object(), verdicts = OJson::object();
+  for (const auto& [name, count] : c.other_names) other_names[name] = count;
+  for (const auto& [verdict, count] : c.verdicts) verdicts[verdict] = count;
+  return {{"size", c.size},
+          {"length_s", c.length_s},
+          {"repetitions", c.repetitions},
+          {"kind", c.kind},
+          {"flights", c.flights.size()},
+          {"named", proportion_json(c.named)},
+          {"other", proportion_json(c.other)},
+          {"alarm", proportion_json(c.alarm)},
+          {"other_names", std::move(other_names)},
+          {"verdicts", std::move(verdicts)},
+          {"not_ok", c.not_ok},
+          {"failed", c.failed},
+          {"flight_s_mean", c.flight_s / n},
+          {"workflow_s_mean", c.workflow_s / n},
+          {"flight_cpu_s_mean", c.flight_cpu_s / n},
+          {"workflow_cpu_s_mean", c.workflow_cpu_s / n}};
 }
 
-void crossing_json(JsonWriter& w, const char* what, double at, const char* value_key, const Crossing& rec) {
-  w.begin_object();
-  w.key(what).value(at).key("reached").value(rec.reached).key(value_key);
-  if (std::isfinite(rec.value)) {
-    w.value(rec.value);
-  } else {
-    w.null();
-  }
-  w.key("note").value(rec.note);
-  w.end_object();
+/// Where a curve reaches the target: `what` at `at`, and `value_key` where it is reached (null if not).
+OJson crossing_json(const char* what, double at, const char* value_key, const Crossing& rec) {
+  return {{what, at}, {"reached", rec.reached}, {value_key, rec.value}, {"note", rec.note}};
 }
 
 struct Totals {
@@ -164,39 +160,34 @@ std::string power_text(const PowerResult& r) {
 }
 
 std::string power_json(const PowerResult& r, const std::vector<std::string>& plots) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(r.scenario).key("model").value(r.model).key("effect").value(r.effect);
-  w.key("parameter").value(r.parameter).key("unit").value(r.unit).key("named_as").value(r.named_as);
-  w.key("block_s").value(r.block_s).key("target").value(r.target).key("flights_per_cell").value(r.flights);
-  w.key("seed").value(static_cast<long long>(r.seed)).key("jobs").value(r.jobs);
-  w.key("sizes").array(r.sizes).key("lengths_s").array(r.lengths_s);
-  w.key("cells").begin_array();
-  for (const PowerCell& c : r.cells) cell_json(w, c);
-  w.end_array();
-  w.key("recommended_length").begin_array();
-  for (const SizeCurve& c : r.curves) crossing_json(w, "size", c.size, "length_s", c.length);
-  w.end_array();
-  w.key("smallest_size").begin_array();
+  OJson j = {{"scenario", r.scenario},   {"model", r.model},   {"effect", r.effect},
+             {"parameter", r.parameter}, {"unit", r.unit},     {"named_as", r.named_as},
+             {"block_s", r.block_s},     {"target", r.target}, {"flights_per_cell", r.flights},
+             {"seed", r.seed},           {"jobs", r.jobs},     {"sizes", r.sizes},
+             {"lengths_s", r.lengths_s}};
+  j["cells"] = OJson::array();
+  for (const PowerCell& c : r.cells) j["cells"].push_back(cell_json(c));
+  j["recommended_length"] = OJson::array();
+  for (const SizeCurve& c : r.curves)
+    j["recommended_length"].push_back(crossing_json("size", c.size, "length_s", c.length));
+  j["smallest_size"] = OJson::array();
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
-    crossing_json(w, "length_s", r.lengths_s[l], "size", r.size_for_length[l]);
+    j["smallest_size"].push_back(crossing_json("length_s", r.lengths_s[l], "size", r.size_for_length[l]));
   }
-  w.end_array();
-  w.key("verification").begin_array();
-  for (const PowerCell& c : r.verification) cell_json(w, c);
-  w.end_array();
+  j["verification"] = OJson::array();
+  for (const PowerCell& c : r.verification) j["verification"].push_back(cell_json(c));
   const Totals t = totals(r);
   const double n = std::max<double>(1.0, static_cast<double>(t.flights));
-  w.key("timing").begin_object();
-  w.key("wall_s").value(r.wall_s).key("setup_s").value(r.setup_s).key("flights").value(
-      static_cast<long long>(t.flights));
-  w.key("flight_s_mean").value(t.flight_s / n).key("build_s_mean").value(t.build_s / n);
-  w.key("workflow_s_mean").value(t.workflow_s / n);
-  w.key("flight_cpu_s_mean").value(t.flight_cpu_s / n).key("workflow_cpu_s_mean").value(t.workflow_cpu_s / n);
-  w.end_object();
-  w.key("plots").array(plots);
-  w.end_object();
-  return w.str();
+  j["timing"] = {{"wall_s", r.wall_s},
+                 {"setup_s", r.setup_s},
+                 {"flights", t.flights},
+                 {"flight_s_mean", t.flight_s / n},
+                 {"build_s_mean", t.build_s / n},
+                 {"workflow_s_mean", t.workflow_s / n},
+                 {"flight_cpu_s_mean", t.flight_cpu_s / n},
+                 {"workflow_cpu_s_mean", t.workflow_cpu_s / n}};
+  j["plots"] = plots;
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
 }
 
 std::vector<std::string> write_power_plots(const PowerResult& r, const std::string& dir_text) {
