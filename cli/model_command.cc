@@ -7,9 +7,10 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "cmdline/args.h"
 #include "cli/commands.h"
-#include "core/json_writer.h"
 #include "core/model.h"
 #include "core/modes.h"
 #include "core/vehicle.h"
@@ -120,79 +121,68 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
   }
 }
 
-void write_rows(JsonWriter& w, const Eigen::MatrixXd& M) {
-  w.begin_array();
+using OJson = nlohmann::ordered_json;
+
+OJson rows_json(const Eigen::MatrixXd& M) {
+  OJson rows = OJson::array();
   for (Eigen::Index i = 0; i < M.rows(); ++i) {
-    w.begin_array();
-    for (Eigen::Index j = 0; j < M.cols(); ++j) w.value(M(i, j));
-    w.end_array();
+    OJson row = OJson::array();
+    for (Eigen::Index j = 0; j < M.cols(); ++j) row.push_back(M(i, j));
+    rows.push_back(std::move(row));
   }
-  w.end_array();
+  return rows;
 }
 
-void write_complex(JsonWriter& w, const std::complex<double>& z) {
-  w.begin_array().value(z.real()).value(z.imag()).end_array();
+OJson complex_json(const std::complex<double>& z) { return OJson::array({z.real(), z.imag()}); }
+
+OJson complex_list_json(const std::vector<std::complex<double>>& zs) {
+  OJson a = OJson::array();
+  for (const auto& z : zs) a.push_back(complex_json(z));
+  return a;
+}
+
+OJson mode_json(const Mode& m, const StateSpace& ss) {
+  OJson vector = OJson::object();
+  for (std::size_t i = 0; i < ss.states.size(); ++i) {
+    vector[ss.states[i]] = {{"magnitude", std::abs(m.eigenvector_nondim[i])},
+                            {"phase_deg", phase_deg(m.eigenvector_nondim[i])}};
+  }
+  return {{"eigenvalue", complex_json(m.eigenvalue)},
+          {"oscillatory", m.oscillatory},
+          {"stable", m.stable},
+          {"natural_frequency_radps", m.natural_frequency_radps},
+          {"damping_ratio", m.damping_ratio},
+          {"period_s", m.period_s},
+          {m.stable ? "time_to_half_s" : "time_to_double_s", m.time_to_double_or_half_s},
+          {"eigenvector_nondim", std::move(vector)}};
 }
 
 std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const StateSpace& ss,
                     const std::vector<std::complex<double>>& eig, const std::vector<Mode>& modes) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("model").value(model.name);
-  w.key("model_file").value(model.file);
-  w.key("source").value(model.source);
-  w.key("structure").value(to_string(model.structure));
-  w.key("vehicle").begin_object();
-  w.key("name").value(vehicle.name).key("file").value(vehicle.file).key("mass_kg").value(vehicle.mass_kg);
-  w.end_object();
-  w.key("trim").begin_object();
-  w.key("u0_mps").value(model.trim.u0_mps).key("w0_mps").value(model.trim.w0_mps);
-  w.key("theta0_rad").value(model.trim.theta0_rad).key("phi0_rad").value(model.trim.phi0_rad);
-  w.end_object();
-  w.key("states").array(ss.states);
-  w.key("state_units").array(ss.state_units);
-  w.key("inputs").array(ss.inputs);
-  w.key("input_units").array(ss.input_units);
-  w.key("A");
-  write_rows(w, ss.A);
-  w.key("B");
-  write_rows(w, ss.B);
-  w.key("eigenvalues").begin_array();
-  for (const auto& z : eig) write_complex(w, z);
-  w.end_array();
-  w.key("modes").begin_array();
-  for (const auto& m : modes) {
-    w.begin_object();
-    w.key("eigenvalue");
-    write_complex(w, m.eigenvalue);
-    w.key("oscillatory").value(m.oscillatory);
-    w.key("stable").value(m.stable);
-    w.key("natural_frequency_radps").value(m.natural_frequency_radps);
-    w.key("damping_ratio").value(m.damping_ratio);
-    w.key("period_s").value(m.period_s);
-    w.key(m.stable ? "time_to_half_s" : "time_to_double_s").value(m.time_to_double_or_half_s);
-    w.key("eigenvector_nondim").begin_object();
-    for (std::size_t i = 0; i < ss.states.size(); ++i) {
-      w.key(ss.states[i]).begin_object();
-      w.key("magnitude").value(std::abs(m.eigenvector_nondim[i]));
-      w.key("phase_deg").value(phase_deg(m.eigenvector_nondim[i]));
-      w.end_object();
-    }
-    w.end_object();
-    w.end_object();
-  }
-  w.end_array();
+  OJson j = {{"model", model.name},
+             {"model_file", model.file},
+             {"source", model.source},
+             {"structure", to_string(model.structure)},
+             {"vehicle", {{"name", vehicle.name}, {"file", vehicle.file}, {"mass_kg", vehicle.mass_kg}}},
+             {"trim",
+              {{"u0_mps", model.trim.u0_mps},
+               {"w0_mps", model.trim.w0_mps},
+               {"theta0_rad", model.trim.theta0_rad},
+               {"phi0_rad", model.trim.phi0_rad}}},
+             {"states", ss.states},
+             {"state_units", ss.state_units},
+             {"inputs", ss.inputs},
+             {"input_units", ss.input_units},
+             {"A", rows_json(ss.A)},
+             {"B", rows_json(ss.B)},
+             {"eigenvalues", complex_list_json(eig)}};
+  j["modes"] = OJson::array();
+  for (const auto& m : modes) j["modes"].push_back(mode_json(m, ss));
   if (!model.published_eigenvalues.empty()) {
     const auto errors = published_errors(model.published_eigenvalues, eig);
-    w.key("published").begin_object();
-    w.key("eigenvalues").begin_array();
-    for (const auto& z : model.published_eigenvalues) write_complex(w, z);
-    w.end_array();
-    w.key("relative_errors").array(errors);
-    w.end_object();
+    j["published"] = {{"eigenvalues", complex_list_json(model.published_eigenvalues)}, {"relative_errors", errors}};
   }
-  w.end_object();
-  return w.str();
+  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
 }
 
 }  // namespace
