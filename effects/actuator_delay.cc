@@ -83,17 +83,11 @@ Effect actuator_delay_effect() {
                   Signature::kNone,
                   EffectivenessChange::kNone,
                   "plant.effects.actuator_delay: pure command delay of delay_s"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    actuator_delay_from_model(s, fx.get<ActuatorDelayConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) { fx.get<ActuatorDelayConfig>() = actuator_delay_from(m); };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(actuator_delay_params(), ActuatorDelayConfig{}, prefix);
-  };
+  e.from_model = config_from_model(actuator_delay_from_model);
+  e.plant = table_plant_side(actuator_delay_from, actuator_delay_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return actuator_delay_process(fx.get<ActuatorDelayConfig>());
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<ActuatorDelayConfig>().enabled; };
   e.plant.sizing = actuator_delay_sizing;
   e.plant.in_linear_loop = true;
   return e;

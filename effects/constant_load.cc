@@ -46,19 +46,13 @@ Effect constant_load_effect() {
                   Signature::kConstantLoad,
                   EffectivenessChange::kNone,
                   "plant.effects.constant_load: constant roll moment L_0 and side force Y_0"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    constant_load_from_model(s, fx.get<ConstantLoadConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) { fx.get<ConstantLoadConfig>() = constant_load_from(m); };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(constant_load_params(), ConstantLoadConfig{}, prefix);
-  };
+  e.from_model = config_from_model(constant_load_from_model);
+  e.plant = table_plant_side(constant_load_from, constant_load_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return load_process<ConstantLoadConfig>(
         fx.get<ConstantLoadConfig>(),
         [](const ConstantLoadConfig& c, const LoadInputs&, double& L, double& Y) { add_constant_load(c, L, Y); });
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<ConstantLoadConfig>().enabled; };
   e.plant.sizing = constant_load_sizing;
   return e;
 }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/config.h"
+#include "core/param_table.h"
 #include "core/terms.h"
 #include "effects/effect_process.h"
 #include "effects/effect_sizing.h"
@@ -134,6 +135,27 @@ struct Effect {
   const std::string& name() const { return definition.name; }
   bool has_plant_section() const { return static_cast<bool>(plant.load); }
 };
+
+/// The mapping from a model's section of an effect whose plant configuration is `Config`:
+/// `from_model` sets that configuration from the section.
+template <class Config>
+auto config_from_model(void (*from_model)(const ModelSection&, Config&)) {
+  return [from_model](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
+    from_model(s, fx.get<Config>());
+  };
+}
+
+/// The plant side of an effect whose configuration `Config` is read by `from` and described by
+/// `params` (its rows in `rig params`), on when `Config::enabled`; the effect adds its process and
+/// its sizing.
+template <class Config>
+PlantSide table_plant_side(Config (*from)(ConfigMap&), const ParamTable<Config>& (*params)()) {
+  PlantSide p;
+  p.load = [from](ConfigMap& m, EffectsConfig& fx) { fx.get<Config>() = from(m); };
+  p.markdown_rows = [params](const std::string& prefix) { return params_markdown_rows(params(), Config{}, prefix); };
+  p.enabled = [](const EffectsConfig& fx) { return fx.get<Config>().enabled; };
+  return p;
+}
 
 /// The column of `c` (kTerm) with the trim's values put for u0 and w0, in the term grammar.
 std::string column_term(const EffectColumn& c, double u0_mps, double w0_mps);

@@ -57,15 +57,8 @@ Effect effectiveness_drift_effect() {
                   Signature::kNone,
                   EffectivenessChange::kDrift,
                   "plant.effects.effectiveness_drift: L_df, Y_df x (1 + rate_per_min (t - t_ref) / 60)"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    effectiveness_drift_from_model(s, fx.get<EffectivenessDriftConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) {
-    fx.get<EffectivenessDriftConfig>() = effectiveness_drift_from(m);
-  };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(effectiveness_drift_params(), EffectivenessDriftConfig{}, prefix);
-  };
+  e.from_model = config_from_model(effectiveness_drift_from_model);
+  e.plant = table_plant_side(effectiveness_drift_from, effectiveness_drift_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return load_process<EffectivenessDriftConfig>(
         fx.get<EffectivenessDriftConfig>(),
@@ -73,7 +66,6 @@ Effect effectiveness_drift_effect() {
           add_effectiveness_drift(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
         });
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<EffectivenessDriftConfig>().enabled; };
   return e;
 }
 

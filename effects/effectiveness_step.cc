@@ -56,15 +56,8 @@ Effect effectiveness_step_effect() {
                   EffectivenessChange::kStep,
                   "plant.effects.effectiveness_step: L_df x (1 + roll_fraction), Y_df x (1 + side_fraction) from "
                   "t_change_s on"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    effectiveness_step_from_model(s, fx.get<EffectivenessStepConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) {
-    fx.get<EffectivenessStepConfig>() = effectiveness_step_from(m);
-  };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(effectiveness_step_params(), EffectivenessStepConfig{}, prefix);
-  };
+  e.from_model = config_from_model(effectiveness_step_from_model);
+  e.plant = table_plant_side(effectiveness_step_from, effectiveness_step_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return load_process<EffectivenessStepConfig>(
         fx.get<EffectivenessStepConfig>(),
@@ -72,7 +65,6 @@ Effect effectiveness_step_effect() {
           add_effectiveness_step(c, in.t_s, in.roll_input_nm, in.roll_input_n, L, Y);
         });
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<EffectivenessStepConfig>().enabled; };
   return e;
 }
 

@@ -200,9 +200,7 @@ Effect flapping_forcing_effect() {
                   EffectivenessChange::kNone,
                   "plant.effects.flapping_forcing: amplitude hypot(sin_h, cos_h) at harmonic h of the plant's "
                   "flapping phase"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    flapping_forcing_from_model(s, fx.get<FlappingForcingConfig>());
-  };
+  e.from_model = config_from_model(flapping_forcing_from_model);
   e.plant.load = [](ConfigMap& m, EffectsConfig& fx) { fx.get<FlappingForcingConfig>() = flapping_forcing_from(m); };
   e.plant.markdown_rows = flapping_forcing_markdown_rows;
   e.plant.make = [](const EffectsConfig& fx, ProcessContext& c) {

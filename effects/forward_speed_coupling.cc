@@ -96,19 +96,11 @@ Effect forward_speed_coupling_effect() {
                   EffectivenessChange::kNone,
                   "plant.effects.forward_speed_coupling, four-coefficient form: L += L_up (u - u0) p + L_uv (u - u0) "
                   "v, Y likewise"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    forward_speed_coupling_from_model(s, fx.get<ForwardSpeedCouplingConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) {
-    fx.get<ForwardSpeedCouplingConfig>() = forward_speed_coupling_from(m);
-  };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(forward_speed_coupling_params(), ForwardSpeedCouplingConfig{}, prefix);
-  };
+  e.from_model = config_from_model(forward_speed_coupling_from_model);
+  e.plant = table_plant_side(forward_speed_coupling_from, forward_speed_coupling_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return forward_speed_coupling_process(fx.get<ForwardSpeedCouplingConfig>());
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<ForwardSpeedCouplingConfig>().enabled; };
   e.plant.sizing = forward_speed_coupling_sizing;
   return e;
 }

@@ -115,10 +115,8 @@ Effect lateral_gust_effect() {
                   Signature::kResidualSpectrum,
                   EffectivenessChange::kNone,
                   "plant.effects.lateral_gust (Gauss-Markov, sigma_mps and tau_s)"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    lateral_gust_from_model(s, fx.get<LateralGustConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) { fx.get<LateralGustConfig>() = lateral_gust_from(m); };
+  e.from_model = config_from_model(lateral_gust_from_model);
+  e.plant = table_plant_side(lateral_gust_from, lateral_gust_params);
   e.plant.markdown_rows = [](const std::string& prefix) {
     return params_markdown_rows(lateral_gust_params(), LateralGustConfig{}, prefix) + "| `" + prefix +
            "form` | gauss_markov | gauss_markov, dryden | - | the gust's spectrum (lateral_gust.h) |\n";
@@ -126,7 +124,6 @@ Effect lateral_gust_effect() {
   e.plant.make = [](const EffectsConfig& fx, ProcessContext& c) {
     return lateral_gust_process(fx.get<LateralGustConfig>(), c);
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<LateralGustConfig>().enabled; };
   e.plant.sizing = lateral_gust_sizing;
   return e;
 }

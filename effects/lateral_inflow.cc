@@ -47,20 +47,14 @@ Effect lateral_inflow_effect() {
       Signature::kInflow,
       EffectivenessChange::kNone,
       "plant.effects.lateral_inflow: L, Y += c v|v|"};
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    lateral_inflow_from_model(s, fx.get<LateralInflowConfig>());
-  };
-  e.plant.load = [](ConfigMap& m, EffectsConfig& fx) { fx.get<LateralInflowConfig>() = lateral_inflow_from(m); };
-  e.plant.markdown_rows = [](const std::string& prefix) {
-    return params_markdown_rows(lateral_inflow_params(), LateralInflowConfig{}, prefix);
-  };
+  e.from_model = config_from_model(lateral_inflow_from_model);
+  e.plant = table_plant_side(lateral_inflow_from, lateral_inflow_params);
   e.plant.make = [](const EffectsConfig& fx, ProcessContext&) {
     return load_process<LateralInflowConfig>(
         fx.get<LateralInflowConfig>(), [](const LateralInflowConfig& c, const LoadInputs& in, double& L, double& Y) {
           add_lateral_inflow(c, in.v_rel, L, Y);
         });
   };
-  e.plant.enabled = [](const EffectsConfig& fx) { return fx.get<LateralInflowConfig>().enabled; };
   e.plant.sizing = lateral_inflow_sizing;
   return e;
 }

@@ -18,9 +18,7 @@ Effect sensor_bias_effect() {
   // The workflow's sensor_bias fits the same constant L_0 and Y_0 as constant_load (they differ
   // in what the rate gyro shows against the kinematics): the plant flies it as that constant
   // load, the same moment and force.
-  e.from_model = [](const ModelSection& s, EffectsConfig& fx, std::map<std::string, double>&) {
-    constant_load_from_model(s, fx.get<ConstantLoadConfig>());
-  };
+  e.from_model = config_from_model(constant_load_from_model);
   return e;
 }
 
