@@ -1,7 +1,7 @@
 #pragma once
 /// An effect while the plant flies: its state (a gust's filter, a delay line, seeded phases)
 /// and the ways it may act on the plant, each a hook whose default does nothing. The plant
-/// holds one process per effect that acts (registry.h, PlantEffect::make) and calls every hook
+/// holds one process per effect that acts (registry.h, PlantSide::make) and calls every hook
 /// of every process in the registry's order, so the plant model has no line for any one effect.
 
 #include <memory>
