@@ -111,8 +111,9 @@ struct PlantSide {
   std::function<std::unique_ptr<EffectProcess>(const EffectsConfig& effects, ProcessContext& context)> make;
   /// True if the effect is on in `effects` (what `rig loop` names as left out of its linear loop).
   std::function<bool(const EffectsConfig& effects)> enabled;
-  /// The terms it adds to the plant's loads (a term effect's), none for the others.
-  std::function<std::vector<Term>(const EffectsConfig& effects)> terms;
+  /// The terms it adds to the plant's loads (a term effect's), none for the others; `trim` is the
+  /// plant's trim, put for u0 and w0 (the plant's u and w are the whole velocities).
+  std::function<std::vector<Term>(const EffectsConfig& effects, const Trim& trim)> terms;
   /// What one number SIZE sets (effect_sizing.h: `rig discrepancy --power`), or nullptr.
   EffectSizing (*sizing)() = nullptr;
   /// True if its process acts only on the commands, which the linear loop of `rig loop` models

@@ -75,11 +75,11 @@ std::vector<std::unique_ptr<EffectProcess>> make_effect_processes(const EffectsC
   return out;
 }
 
-std::vector<Term> effect_terms(const EffectsConfig& effects) {
+std::vector<Term> effect_terms(const EffectsConfig& effects, const Trim& trim) {
   std::vector<Term> out;
   for (const Effect* effect : plant_effects()) {
     if (!effect->plant.terms) continue;
-    for (auto& t : effect->plant.terms(effects)) out.push_back(std::move(t));
+    for (auto& t : effect->plant.terms(effects, trim)) out.push_back(std::move(t));
   }
   return out;
 }

@@ -38,8 +38,9 @@ std::vector<const Effect*> plant_effects();
 std::vector<std::unique_ptr<EffectProcess>> make_effect_processes(const EffectsConfig& effects,
                                                                   ProcessContext& context);
 
-/// The terms the term effects on in `effects` add to the plant's loads, in the registry's order.
-std::vector<Term> effect_terms(const EffectsConfig& effects);
+/// The terms the term effects on in `effects` add to the plant's loads, in the registry's order,
+/// with `trim` (the plant's) put for u0 and w0.
+std::vector<Term> effect_terms(const EffectsConfig& effects, const Trim& trim);
 
 /// Reads the `effects` section of the plant: every key one of plant_effects().
 /// @throws ConfigError naming the key (an unknown effect names the known ones).

@@ -10,13 +10,15 @@ namespace nimble::effects {
 namespace {
 
 /// The plant's terms of `definition` with the coefficients `values` (a column the section does
-/// not carry adds nothing). The plant's u and w are perturbations' totals: the trim is 0 there.
-std::vector<Term> plant_terms(const EffectDefinition& definition, const std::map<std::string, double>& values) {
+/// not carry adds nothing), `trim`'s u0 and w0 put in: the plant's u and w are the whole
+/// velocities, trim included.
+std::vector<Term> plant_terms(const EffectDefinition& definition, const std::map<std::string, double>& values,
+                              const Trim& trim) {
   std::vector<Term> out;
   for (const EffectColumn& c : definition.terms) {
     const auto it = values.find(c.parameter);
     if (it == values.end() || it->second == 0.0) continue;
-    out.push_back({c.equation, TermExpression::parse(column_term(c, 0.0, 0.0)), it->second,
+    out.push_back({c.equation, TermExpression::parse(column_term(c, trim.u0_mps, trim.w0_mps)), it->second,
                    "plant.effects." + definition.name + "." + c.parameter});
   }
   return out;
@@ -38,7 +40,7 @@ Effect term_effect(EffectDefinition definition) {
     if (c.form != ColumnForm::kTerm || c.equation == "F") {
       throw std::logic_error("effect " + definition.name + ": column " + c.parameter + " is not a load term");
     }
-    TermExpression::parse(column_term(c, 0.0, 0.0));
+    TermExpression::parse(column_term(c, 0.0, 0.0));  // parses whatever the trim
   }
   const std::string name = definition.name;
   Effect e;
@@ -63,10 +65,10 @@ Effect term_effect(EffectDefinition definition) {
   e.plant.markdown_rows = [def](const std::string& prefix) { return markdown_rows(def, prefix); };
   e.plant.make = [](const EffectsConfig&, ProcessContext&) { return std::unique_ptr<EffectProcess>(); };
   e.plant.enabled = [name](const EffectsConfig& fx) { return fx.get<TermEffectsConfig>().on.count(name) > 0; };
-  e.plant.terms = [def](const EffectsConfig& fx) {
+  e.plant.terms = [def](const EffectsConfig& fx, const Trim& trim) {
     const auto& on = fx.get<TermEffectsConfig>().on;
     const auto it = on.find(def.name);
-    return it == on.end() ? std::vector<Term>{} : plant_terms(def, it->second);
+    return it == on.end() ? std::vector<Term>{} : plant_terms(def, it->second, trim);
   };
   return e;
 }

@@ -237,7 +237,8 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
 
   // Generic terms: the plant file's, then the lateral model's.
   std::vector<Term> terms = cfg_.terms;
-  const std::vector<Term> effect_terms = effects::effect_terms(cfg_.effects);  // term effects (effects/term_effect.h)
+  const std::vector<Term> effect_terms =
+      effects::effect_terms(cfg_.effects, lat_.trim);  // term effects (effects/term_effect.h)
   terms.insert(terms.end(), effect_terms.begin(), effect_terms.end());
   terms.insert(terms.end(), lateral.terms.begin(), lateral.terms.end());
   for (const Term& term : terms) {

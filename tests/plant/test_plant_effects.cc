@@ -581,14 +581,14 @@ TEST_CASE("a term effect's plant section is its columns' coefficients, flown as 
   REQUIRE(cubic.has_plant_section());
   EffectsConfig fx;
   CHECK_FALSE(cubic.plant.enabled(fx));
-  CHECK(cubic.plant.terms(fx).empty());
+  CHECK(cubic.plant.terms(fx, nimble::Trim{}).empty());
   {
     ConfigMap m = ConfigMap::load_string("enabled: true\nL_ppp: -2.5e-5\n", "plant.yaml");
     cubic.plant.load(m, fx);
     m.finish();
   }
   CHECK(cubic.plant.enabled(fx));
-  const std::vector<nimble::Term> terms = cubic.plant.terms(fx);
+  const std::vector<nimble::Term> terms = cubic.plant.terms(fx, nimble::Trim{});
   REQUIRE(terms.size() == 1);
   CHECK(terms[0].equation == "L");
   CHECK(terms[0].expression.to_string() == "p^3");
@@ -602,18 +602,35 @@ TEST_CASE("a term effect's plant section is its columns' coefficients, flown as 
   // Off again: no terms.
   ConfigMap off = ConfigMap::load_string("enabled: false\nL_ppp: -2.5e-5\n", "plant.yaml");
   cubic.plant.load(off, fx);
-  CHECK(cubic.plant.terms(fx).empty());
+  CHECK(cubic.plant.terms(fx, nimble::Trim{}).empty());
   // From a model's effects: section, with the same key; an unknown key is refused by name.
   DerivativeModel model;
   model.name = "m";
   const std::map<std::string, double> params{{"L_ppp", -1e-5}};
   std::map<std::string, double> derivatives;
   cubic.from_model(ModelSection{model, "cubic_roll_damping", params}, fx, derivatives);
-  REQUIRE(cubic.plant.terms(fx).size() == 1);
-  CHECK(cubic.plant.terms(fx)[0].coefficient == -1e-5);
+  REQUIRE(cubic.plant.terms(fx, nimble::Trim{}).size() == 1);
+  CHECK(cubic.plant.terms(fx, nimble::Trim{})[0].coefficient == -1e-5);
   const std::map<std::string, double> typo{{"L_pp", -1e-5}};
   CHECK_THROWS_WITH(cubic.from_model(ModelSection{model, "cubic_roll_damping", typo}, fx, derivatives),
                     Catch::Contains("L_pp") && Catch::Contains("L_ppp"));
+  // A column with the trim's u0 flies at the plant's trim: its u is the whole forward speed.
+  const Effect speed = term_effect(
+      {"speed_roll",
+       "(u - u0) p in roll moment",
+       {"u"},
+       {{"L", "L_up", "(u - u0) p", ColumnForm::kTerm, "(u - u0)*p", "N s^2", nimble::Range::closed(-0.1, 0.1)}},
+       Scan::kNone,
+       Signature::kNone,
+       EffectivenessChange::kNone,
+       "plant.effects.speed_roll"});
+  ConfigMap on = ConfigMap::load_string("enabled: true\nL_up: 1e-4\n", "plant.yaml");
+  speed.plant.load(on, fx);
+  nimble::Trim trim;
+  trim.u0_mps = 0.25;
+  const std::vector<nimble::Term> at_trim = speed.plant.terms(fx, trim);
+  REQUIRE(at_trim.size() == 1);
+  CHECK(at_trim[0].expression.same_as(nimble::TermExpression::parse("(u - 0.25)*p")));
   // A column that is not a load term cannot make a term effect.
   CHECK_THROWS_AS(term_effect({"bad",
                                "x",
