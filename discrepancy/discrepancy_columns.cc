@@ -73,21 +73,11 @@ bool has_actuator_equation(const UniformData& d) {
   return d.has("delta_f_cmd_applied") && d.has("delta_f") && excited(d.at("delta_f_cmd_applied"), "delta_f");
 }
 
-/// A column of form kTerm on the prepared data: the term with the trim's u0 and w0 put in.
+/// A column of form kTerm on the prepared data: the term with the trim's u0 and w0 put in,
+/// evaluated as the identification evaluates a model's terms (term_column()).
 VectorXd term_column_of(const CandidateTerm& c, const UniformData& d, const Trim& trim) {
-  const TermExpression expression = TermExpression::parse(effects::column_term(c, trim.u0_mps, trim.w0_mps));
-  const std::vector<std::string> names = expression.signals();
-  std::vector<std::vector<double>> values;
-  std::vector<const std::vector<double>*> columns;
-  values.reserve(names.size());
-  for (const auto& name : names) {
-    const VectorXd& x = d.at(name);
-    values.emplace_back(x.data(), x.data() + x.size());
-  }
-  for (const auto& v : values) columns.push_back(&v);
-  if (names.empty()) return VectorXd::Constant(d.size(), TermProgram(expression, {}).evaluate(nullptr));
-  const std::vector<double> out = evaluate_along(expression, names, columns, 1.0 / d.rate_hz);
-  return Eigen::Map<const VectorXd>(out.data(), static_cast<Index>(out.size()));
+  return term_column(d, Term{c.equation, TermExpression::parse(effects::column_term(c, trim.u0_mps, trim.w0_mps)), 1.0,
+                             "effect column " + c.parameter});
 }
 
 /// The columns of candidate `spec` on the prepared data (`scan`: delay in samples of a delayed
