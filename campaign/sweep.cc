@@ -1,6 +1,7 @@
 #include "campaign/sweep.h"
 
 #include "campaign/campaign.h"
+#include "core/json_line.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +9,6 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 namespace nimble::campaign {
 
@@ -190,7 +189,7 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
 }
 
 std::string sweep_json(const SweepResult& r) {
-  using OJson = nlohmann::ordered_json;
+  using OJson = OrderedJson;
   OJson j = {{"scenario", r.scenario}, {"clock", r.clock}, {"sets", OJson::array()}};
   for (std::size_t s = 0; s < r.sets.size(); ++s) {
     OJson overrides = OJson::object();
@@ -232,7 +231,7 @@ std::string sweep_json(const SweepResult& r) {
   }
   j["machine"] = {
       {"backend", r.backend}, {"jobs", r.jobs}, {"chunk_size", r.chunk_size}, {"wall_time_s", r.wall_time_s}};
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 std::string sweep_csv(const SweepResult& r) {

@@ -12,9 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <nlohmann/json.hpp>
-
 #include "core/output_file.h"
+#include "core/json_line.h"
 
 namespace nimble::campaign {
 
@@ -276,7 +275,7 @@ std::string envelopes_csv(const std::vector<SetReport>& sets) {
 }
 
 std::string report_json(const SweepResult& r, const std::vector<SetReport>& sets) {
-  using OJson = nlohmann::ordered_json;
+  using OJson = OrderedJson;
   OJson j = {{"scenario", r.scenario},
              {"clock", r.clock},
              {"confidence", 0.95},
@@ -302,7 +301,7 @@ std::string report_json(const SweepResult& r, const std::vector<SetReport>& sets
                          {"svg", "set-" + std::to_string(s + 1) + ".svg"},
                          {"envelopes", std::move(envelopes)}});
   }
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace) + "\n";
+  return json_line(j) + "\n";
 }
 
 std::string index_html(const SweepResult& r, const std::vector<SetReport>& sets) {

@@ -7,13 +7,12 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "cmdline/args.h"
 #include "cli/commands.h"
 #include "core/model.h"
 #include "core/modes.h"
 #include "core/vehicle.h"
+#include "core/json_line.h"
 
 namespace nimble::cli {
 namespace {
@@ -121,7 +120,7 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
   }
 }
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 OJson rows_json(const Eigen::MatrixXd& M) {
   OJson rows = OJson::array();
@@ -182,7 +181,7 @@ std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const 
     const auto errors = published_errors(model.published_eigenvalues, eig);
     j["published"] = {{"eigenvalues", complex_list_json(model.published_eigenvalues)}, {"relative_errors", errors}};
   }
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 }  // namespace

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <nlohmann/json.hpp>
+#include "core/json_line.h"
 
 namespace nimble {
 
-using Json = nlohmann::ordered_json;
+using Json = OrderedJson;
 
 struct JsonWriter::Impl {
   Json root;
@@ -101,8 +101,8 @@ JsonWriter& JsonWriter::array(const std::vector<std::string>& xs) {
   return end_array();
 }
 
-std::string JsonWriter::str() const { return impl_->root.dump(-1, ' ', false, Json::error_handler_t::replace); }
+std::string JsonWriter::str() const { return json_line(impl_->root); }
 
-std::string json_quote(const std::string& s) { return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace); }
+std::string json_quote(const std::string& s) { return json_line(Json(s)); }
 
 }  // namespace nimble

@@ -7,11 +7,10 @@
 #include <map>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "plots/gnuplot.h"
+#include "core/json_line.h"
 
 namespace nimble::detection_power {
 namespace {
@@ -57,7 +56,7 @@ void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& 
   }
 }
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 OJson proportion_json(const Proportion& p) {
   return {{"count", p.count}, {"n", p.n}, {"p", p.p}, {"lo", p.lo}, {"hi", p.hi}};
@@ -187,7 +186,7 @@ std::string power_json(const PowerResult& r, const std::vector<std::string>& plo
                  {"flight_cpu_s_mean", t.flight_cpu_s / n},
                  {"workflow_cpu_s_mean", t.workflow_cpu_s / n}};
   j["plots"] = plots;
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 std::vector<std::string> write_power_plots(const PowerResult& r, const std::string& dir_text) {

@@ -3,15 +3,14 @@
 // shortest text that reads back to the same double, a non-finite number as null). The keys and
 // their order are the report's format (docs/discrepancy.md, "JSON").
 
-#include <nlohmann/json.hpp>
-
 #include "discrepancy/discrepancy.h"
 #include "discrepancy/discrepancy_parts.h"
 #include "discrepancy/report_parts.h"
+#include "core/json_line.h"
 
 namespace nimble::ident {
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 namespace {
 
@@ -245,7 +244,7 @@ std::string discrepancy_json(const DiscrepancyResult& r) {
   j["consistency"] = array_of(r.consistency, consistency_json);
   j["baseline"] = parameters_json(r.baseline);
   j["augmented"] = parameters_json(r.augmented);
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 }  // namespace nimble::ident

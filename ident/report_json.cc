@@ -6,15 +6,14 @@
 #include <cmath>
 #include <complex>
 
-#include <nlohmann/json.hpp>
-
 #include "ident/report.h"
 #include "ident/report_numbers.h"
+#include "core/json_line.h"
 
 namespace nimble::ident {
 namespace {
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 /// Each output's fit metrics, its whiteness fraction (null: not tested) and the test's detail, into `j`.
 void add_fits(OJson& j, const std::vector<OutputFit>& fits) {
@@ -135,8 +134,6 @@ void add_segments(OJson& j, const IdentResult& r) {
   }
 }
 
-std::string dumped(const OJson& j) { return j.dump(-1, ' ', false, OJson::error_handler_t::replace); }
-
 }  // namespace
 
 std::string identification_json(const IdentResult& r, const std::string& model_out,
@@ -165,7 +162,7 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
   add_segments(j, r);
   if (!model_out.empty()) j["model_out"] = model_out;
   if (!plots.empty()) j["plots"] = plots;
-  return dumped(j);
+  return json_line(j);
 }
 
 std::string validation_json(const ValidationResult& r, const std::vector<std::string>& plots) {
@@ -175,7 +172,7 @@ std::string validation_json(const ValidationResult& r, const std::vector<std::st
              {"rate_hz", r.data.rate_hz},  {"notes", r.notes}};
   add_fits(j, r.fits);
   if (!plots.empty()) j["plots"] = plots;
-  return dumped(j);
+  return json_line(j);
 }
 
 }  // namespace nimble::ident

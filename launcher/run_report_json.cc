@@ -5,14 +5,13 @@
 
 #include <algorithm>
 
-#include <nlohmann/json.hpp>
-
 #include "launcher/run_report.h"
+#include "core/json_line.h"
 
 namespace nimble::launcher {
 namespace {
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 /// The run's roll tracking and its oscillation (a run with a controller).
 OJson tracking_json(const RunReport& r) {
@@ -204,7 +203,7 @@ std::string report_json(const RunReport& r) {
     for (const auto& v : t.values) tap[v.first] = v.second;
     if (!t.note.empty()) tap["note"] = t.note;
   }
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 }  // namespace nimble::launcher

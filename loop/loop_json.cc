@@ -3,14 +3,13 @@
 // back to the same double, a non-finite number as null). The keys and their order are the
 // report's format (docs/loop.md).
 
-#include <nlohmann/json.hpp>
-
 #include "loop/loop_report.h"
+#include "core/json_line.h"
 
 namespace nimble::loop {
 namespace {
 
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 OJson pole_json(const LoopPole& p) {
   return {{"re", p.s.real()}, {"im", p.s.imag()}, {"damping", p.damping}, {"natural_hz", p.natural_hz}};
@@ -101,7 +100,7 @@ std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, cons
   j["robustness"] = OJson::array();
   for (const WorstMargins& x : worst) j["robustness"].push_back(worst_json(x));
   if (design) j["design"] = design_json(*design);
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 }  // namespace nimble::loop

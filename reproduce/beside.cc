@@ -1,6 +1,7 @@
 /// `rig reproduce thesis --beside` (reproduce/beside.h).
 
 #include "reproduce/beside.h"
+#include "core/json_line.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,13 +10,12 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 namespace nimble::reproduce {
 namespace {
 
 namespace fs = std::filesystem;
-using OJson = nlohmann::ordered_json;
+using OJson = OrderedJson;
 
 std::string join(const std::vector<std::string>& v, const char* sep) {
   std::string s;
@@ -264,7 +264,7 @@ std::string beside_json(const BesideResult& r) {
   j["verdict_changes"] = r.verdict_changes();
   j["without"] = without;
   j["with"] = with;
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 }  // namespace nimble::reproduce

@@ -6,12 +6,12 @@
 #include <sstream>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "core/output_file.h"
 #include "ident/plots.h"
 #include "reproduce/thesis_campaign.h"
 #include "plots/gnuplot.h"
+#include "core/json_line.h"
 
 namespace nimble::reproduce {
 namespace {
@@ -165,7 +165,7 @@ std::string campaign_text(const CampaignResult& r) {
 }
 
 std::string campaign_json(const CampaignResult& r) {
-  using OJson = nlohmann::ordered_json;
+  using OJson = OrderedJson;
   OJson j = {{"campaign", r.campaign}, {"clock", r.clock},         {"seeds", r.seeds},
              {"states", r.states},     {"overrides", r.overrides}, {"wall_s", r.wall_s}};
   j["flights"] = OJson::array();
@@ -247,7 +247,7 @@ std::string campaign_json(const CampaignResult& r) {
     for (const auto& [verdict, n] : verdicts) of[verdict] = n;
   }
   j["match_share"] = match_share(r);
-  return j.dump(-1, ' ', false, OJson::error_handler_t::replace);
+  return json_line(j);
 }
 
 /// Fig 9.1: every set's identified eigenvalues with the published ones, on one map.
