@@ -31,6 +31,24 @@
 #include "scenario/scenario.h"
 #include "transport/clock.h"
 
+// The sweep manifest's parts as JSON (nlohmann's to_json/from_json, found by argument-dependent
+// lookup in each type's namespace): an override as its command-line text, "key.path=value".
+namespace nimble {
+static void to_json(nlohmann::json& j, const Override& o) { j = o.key_path + "=" + o.value; }
+static void from_json(const nlohmann::json& j, Override& o) { o = parse_override(j.get<std::string>()); }
+}  // namespace nimble
+
+namespace nimble::launcher {
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ClusterSettings, partition, account, time_limit, cpus_per_task, memory_mb_per_cpu,
+                                   chunk_size, rig)
+}  // namespace nimble::launcher
+
+namespace nimble::campaign {
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Vary, key, values)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SweepManifest, scenario, scenario_file, working_dir, overrides, vary, set_digests,
+                                   first_seed, last_seed, clock, trace_hz, logs_dir, backend, cluster)
+}  // namespace nimble::campaign
+
 namespace nimble::campaign {
 
 // One run is the launcher's (run plan, executors, report); a campaign flies many.
@@ -40,7 +58,6 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-constexpr const char* kManifestFormat = "nimble-rig-campaign/2";
 /// The manifest's "campaign": which command's campaign a directory holds.
 constexpr const char* kSweepCampaign = "rig sweep";
 constexpr const char* kRunFilePrefix = "run-";
@@ -241,93 +258,26 @@ void read_report(const Json& j, SweepRun& run) {
   }
 }
 
-Json overrides_json(const std::vector<Override>& overrides) {
-  Json a = Json::array();
-  for (const auto& ov : overrides) a.push_back(Json::array({ov.key_path, ov.value}));
-  return a;
+/// The sweep's campaign: its manifest (result_files.h), its keys those of SweepManifest.
+Manifest manifest_of(const Campaign& c) {
+  return Manifest{kSweepCampaign, Json(static_cast<const SweepManifest&>(c)), {}};
 }
 
-std::vector<Override> overrides_from(const Json& a) {
-  std::vector<Override> out;
-  for (const auto& pair : a) out.push_back(Override{pair.at(0).get<std::string>(), pair.at(1).get<std::string>()});
-  return out;
-}
-
-/// The manifest: everything that makes two sweeps different (open_result_dir() adds when, where and
-/// by which process it was made).
-Json manifest_of(const Campaign& c) {
-  Json m;
-  m["campaign"] = kSweepCampaign;
-  m["format"] = kManifestFormat;
-  m["scenario"] = c.scenario;
-  m["scenario_file"] = c.scenario_file;
-  m["working_dir"] = c.working_dir;
-  m["overrides"] = overrides_json(c.overrides);
-  m["vary"] = Json::array();
-  for (const Vary& v : c.vary) m["vary"].push_back({{"key", v.key}, {"values", v.values}});
-  m["sets"] = Json::array();
-  for (std::size_t s = 0; s < c.sets.size(); ++s) {
-    m["sets"].push_back({{"label", c.sets[s].label}, {"config_digest", c.set_digests[s]}});
-  }
-  m["seeds"] = {c.first_seed, c.last_seed};
-  m["runs"] = c.run_count();
-  m["clock"] = c.clock;
-  m["trace_hz"] = c.trace_hz;
-  m["logs_dir"] = c.logs_dir;
-  m["backend"] = c.backend;
-  m["cluster"] = {{"partition", c.cluster.partition},
-                  {"account", c.cluster.account},
-                  {"time_limit", c.cluster.time_limit},
-                  {"cpus_per_task", c.cluster.cpus_per_task},
-                  {"memory_mb_per_cpu", c.cluster.memory_mb_per_cpu},
-                  {"chunk_size", c.cluster.chunk_size},
-                  {"rig", c.cluster.rig}};
-  return m;
-}
-
-/// The campaign the manifest `m` describes, into `c`.
+/// The sweep the manifest `m` describes, into `c`, its parameter sets made from its vary list.
 /// @throws std::exception saying what is missing or wrong.
-void read_manifest_fields(const Json& m, Campaign& c) {
-  if (m.at("format").get<std::string>() != kManifestFormat) {
-    throw std::runtime_error("format '" + m.at("format").get<std::string>() + "', this rig reads " + kManifestFormat);
-  }
-  c.scenario = m.at("scenario").get<std::string>();
-  c.scenario_file = m.at("scenario_file").get<std::string>();
-  c.working_dir = m.at("working_dir").get<std::string>();
-  c.overrides = overrides_from(m.at("overrides"));
-  for (const auto& v : m.at("vary")) {
-    c.vary.push_back(Vary{v.at("key").get<std::string>(), v.at("values").get<std::vector<std::string>>()});
-  }
+void read_sweep_manifest(const Manifest& m, Campaign& c) {
+  m.fields.get_to(static_cast<SweepManifest&>(c));
   c.sets = parameter_sets(c.vary);
-  const Json& sets = m.at("sets");
-  if (sets.size() != c.sets.size()) throw std::runtime_error("its sets do not match its vary list");
-  for (std::size_t s = 0; s < c.sets.size(); ++s) {
-    if (sets[s].at("label").get<std::string>() != c.sets[s].label) {
-      throw std::runtime_error("set " + std::to_string(s + 1) + "'s label does not match its vary list");
-    }
-    c.set_digests.push_back(sets[s].at("config_digest").get<std::string>());
+  if (c.set_digests.size() != c.sets.size()) {
+    throw std::runtime_error("its " + std::to_string(c.set_digests.size()) + " set digests do not match the " +
+                             std::to_string(c.sets.size()) + " sets of its vary list");
   }
-  c.first_seed = m.at("seeds").at(0).get<uint64_t>();
-  c.last_seed = m.at("seeds").at(1).get<uint64_t>();
   if (c.last_seed < c.first_seed) throw std::runtime_error("its seeds are out of order");
-  if (m.at("runs").get<std::size_t>() != c.run_count()) throw std::runtime_error("its run count does not match");
-  c.clock = m.at("clock").get<std::string>();
-  c.trace_hz = m.at("trace_hz").get<double>();
-  c.logs_dir = m.at("logs_dir").get<std::string>();
-  c.backend = m.at("backend").get<std::string>();
   if (c.backend != kBackendLocal && c.backend != kBackendSlurm)
     throw std::runtime_error("unknown backend " + c.backend);
-  const Json& k = m.at("cluster");
-  c.cluster.partition = k.at("partition").get<std::string>();
-  c.cluster.account = k.at("account").get<std::string>();
-  c.cluster.time_limit = k.at("time_limit").get<std::string>();
-  c.cluster.cpus_per_task = k.at("cpus_per_task").get<int>();
-  c.cluster.memory_mb_per_cpu = k.at("memory_mb_per_cpu").get<int>();
-  c.cluster.chunk_size = k.at("chunk_size").get<std::size_t>();
-  c.cluster.rig = k.at("rig").get<std::string>();
   if (c.cluster.chunk_size == 0 || c.cluster.cpus_per_task < 1)
     throw std::runtime_error("chunk size or CPUs per task below 1");
-  c.created_unix_s = m.at("made").at("unix_s").get<double>();
+  c.created_unix_s = m.made.is_null() ? 0.0 : m.made.at("unix_s").get<double>();
 }
 
 }  // namespace
@@ -408,7 +358,7 @@ Campaign create_campaign(const CampaignRequest& request) {
   c.dir = fs::absolute(dir).lexically_normal().string();
   c.logs_dir = o.logs_dir.empty() ? "" : fs::absolute(o.logs_dir).lexically_normal().string();
   // The campaigns' one manifest: the directory is taken, and is new, empty or this campaign's.
-  c.results = open_result_dir(c.dir, manifest_of(c).dump());
+  c.results = open_result_dir(c.dir, manifest_of(c));
   if (c.results.made()) write_file(c.dir + "/scenario.yaml", YAML::Dump(first.scenario.root) + "\n");
   if (!c.logs_dir.empty()) fs::create_directories(c.logs_dir);
   c.created_unix_s = load_campaign(c.dir).created_unix_s;
@@ -419,25 +369,13 @@ Campaign load_campaign(const std::string& dir_in) {
   Campaign c;
   c.dir = fs::absolute(dir_in).lexically_normal().string();
   const std::string file = c.dir + "/campaign.json";
-  std::string text;
-  try {
-    text = read_input_file(file, InputKind::kCampaign);  // a regular file within a campaign file's bound
-  } catch (const InputFileError& e) {
-    throw std::runtime_error("no campaign in " + c.dir + " (" + e.what() + ")");
-  }
-  Json m;
-  try {
-    m = Json::parse(text);
-  } catch (const std::exception& e) {
-    throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
-  }
-  if (!m.is_object() || m.value(std::string("campaign"), Json()) != kSweepCampaign) {
-    throw std::runtime_error(c.dir + " holds no campaign of rig sweep (" + file + "'s campaign is " +
-                             (m.is_object() && m.contains("campaign") ? m["campaign"].dump() : std::string("missing")) +
-                             ")");
+  const Manifest m = read_manifest(c.dir);  // a regular file within a campaign file's bound, of this rig's format
+  if (m.campaign != kSweepCampaign) {
+    throw std::runtime_error(c.dir + " holds no campaign of rig sweep (" + file + "'s campaign is \"" + m.campaign +
+                             "\")");
   }
   try {
-    read_manifest_fields(m, c);
+    read_sweep_manifest(m, c);
   } catch (const std::exception& e) {
     throw std::runtime_error("damaged campaign manifest " + file + ": " + e.what());
   }

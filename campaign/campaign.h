@@ -34,17 +34,16 @@ namespace nimble::campaign {
 inline constexpr const char* kBackendLocal = "local";
 inline constexpr const char* kBackendSlurm = "slurm";
 
-/// The manifest.
-struct Campaign {
-  std::string dir;            ///< absolute
+/// What makes two sweeps different: the sweep's keys of its manifest (result_files.h's Manifest,
+/// DIR/campaign.json), written and read by nlohmann's to_json/from_json (campaign.cc).
+struct SweepManifest {
+  std::string scenario;       ///< its name
   std::string scenario_file;  ///< absolute
   /// Where `rig sweep` was started: relative paths in --set and --vary values resolve here, on
   /// every node too (tasks and --resume run in it).
   std::string working_dir;
-  std::string scenario;             ///< its name
   std::vector<Override> overrides;  ///< --set, applied to every run
   std::vector<Vary> vary;
-  std::vector<ParameterSet> sets;
   std::vector<std::string> set_digests;  ///< each set's configuration digest when the campaign was made
   uint64_t first_seed = 1, last_seed = 1;
   std::string clock;
@@ -52,7 +51,13 @@ struct Campaign {
   std::string logs_dir;   ///< keep each run's LCM log here (empty: none kept)
   std::string backend = kBackendLocal;
   launcher::ClusterSettings cluster;
-  double created_unix_s = 0.0;  ///< when the campaign was made (the manifest's "made")
+};
+
+/// A sweep kept in its directory: its manifest, the parameter sets it describes, and the files.
+struct Campaign : SweepManifest {
+  std::string dir;                 ///< absolute
+  std::vector<ParameterSet> sets;  ///< from vary (parameter_sets), in the order of set_digests
+  double created_unix_s = 0.0;     ///< when the campaign was made (the manifest's "made")
   /// Its directory's manifest and result files: held by this process (create_campaign,
   /// open_campaign) or written beside the one that holds it (load_campaign: an array task).
   ResultFiles results;

@@ -27,8 +27,9 @@ using Json = nlohmann::json;
 
 /// What a manifest records without making the campaign another: when, where, by which process.
 constexpr const char* kMadeKey = "made";
-/// The key compared first: which command's campaign it is.
+/// The key compared first: which command's campaign it is; then its format.
 constexpr const char* kCampaignKey = "campaign";
+constexpr const char* kFormatKey = "format";
 constexpr const char* kReadAgain = "; remove it and the item is done again, or use the directory it came from";
 
 double unix_time_s() {
@@ -124,17 +125,18 @@ std::string some_entries(const std::string& dir) {
 /// Refuses unless `have` (DIR's manifest) is `want`, apart from what it records: names the first
 /// key that differs, the campaign key first.
 void check_same_campaign(const std::string& dir, const Json& want, const Json& have) {
-  std::vector<std::string> keys;
-  if (want.contains(kCampaignKey)) keys.push_back(kCampaignKey);
+  std::vector<std::string> keys = {kCampaignKey, kFormatKey};
   for (const auto& [key, value] : want.items()) {
-    if (key != kCampaignKey) keys.push_back(key);
+    if (key != kCampaignKey && key != kFormatKey && key != kMadeKey) keys.push_back(key);
   }
   for (const std::string& key : keys) {
     const auto it = have.find(key);
     if (it == have.end() || *it != want[key]) {
       throw std::runtime_error(dir + " holds another campaign: its " + key + " is " +
                                (it == have.end() ? std::string("missing") : it->dump()) + ", this one's " +
-                               want[key].dump() + " (a new directory, or the same options, finishes it)");
+                               want[key].dump() +
+                               (key == kFormatKey ? " (a campaign of another rig: finish it with the rig that made it)"
+                                                  : " (a new directory, or the same options, finishes it)"));
     }
   }
   for (const auto& [key, value] : have.items()) {
@@ -146,6 +148,39 @@ void check_same_campaign(const std::string& dir, const Json& want, const Json& h
 }
 
 }  // namespace
+
+void to_json(Json& j, const Manifest& m) {
+  j = Json::object();
+  j[kCampaignKey] = m.campaign;
+  j[kFormatKey] = kManifestFormat;
+  for (const auto& [key, value] : m.fields.items()) {
+    if (key == kCampaignKey || key == kFormatKey || key == kMadeKey) {
+      throw std::invalid_argument("a campaign's key '" + key + "' is one the manifest keeps for itself");
+    }
+    j[key] = value;
+  }
+  if (!m.made.is_null()) j[kMadeKey] = m.made;
+}
+
+void from_json(const Json& j, Manifest& m) {
+  if (!j.is_object()) throw std::runtime_error("not a JSON object");
+  if (!j.contains(kCampaignKey) || !j[kCampaignKey].is_string()) throw std::runtime_error("no campaign");
+  const Json format = j.value(kFormatKey, Json());
+  if (format != kManifestFormat) {
+    throw std::runtime_error("format " + (format.is_null() ? std::string("missing") : format.dump()) +
+                             ", this rig reads \"" + kManifestFormat +
+                             "\" (a campaign of another rig: finish it with the rig that made it)");
+  }
+  m.campaign = j[kCampaignKey].get<std::string>();
+  m.fields = Json::object();
+  for (const auto& [key, value] : j.items()) {
+    if (key != kCampaignKey && key != kFormatKey && key != kMadeKey) m.fields[key] = value;
+  }
+  m.made = j.value(kMadeKey, Json());
+  if (!m.made.is_null() && !(m.made.is_object() && m.made.contains("unix_s") && m.made["unix_s"].is_number())) {
+    throw std::runtime_error("its made has no unix_s");
+  }
+}
 
 std::string ResultFiles::file(const std::string& key) const {
   if (!key_ok(key)) throw std::invalid_argument("result key '" + key + "' holds a character other than [A-Za-z0-9._-]");
@@ -206,14 +241,17 @@ void ResultFiles::check_all() const {
   }
 }
 
-std::string read_manifest(const std::string& dir) {
+Manifest read_manifest(const std::string& dir) {
   const std::string file = ResultFiles(fs::absolute(dir).lexically_normal().string(), "").manifest_file();
   std::error_code ec;
   if (!fs::exists(file, ec))
     throw std::runtime_error("no campaign in " + fs::path(file).parent_path().string() + " (no " + file + ")");
-  Json m = parse_manifest(file);
-  m.erase(kMadeKey);
-  return m.dump();
+  const Json m = parse_manifest(file);
+  try {
+    return m.get<Manifest>();
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file + " is not a campaign manifest of this rig: " + e.what());
+  }
 }
 
 ResultFiles attach_result_dir(const std::string& dir) {
@@ -222,8 +260,8 @@ ResultFiles attach_result_dir(const std::string& dir) {
   return ResultFiles(abs, identity_of(slurp(ResultFiles(abs, "").manifest_file())));
 }
 
-ResultFiles open_result_dir(const std::string& dir, const std::string& manifest) {
-  const Json want = Json::parse(manifest);
+ResultFiles open_result_dir(const std::string& dir, const Manifest& manifest) {
+  const Json want = manifest;
   ResultFiles files(fs::absolute(dir).lexically_normal().string(), "");
   // One writer: nothing is read or written in DIR before it is ours.
   files.lock_ = std::make_shared<const OutputLock>(OutputLock::directory(files.dir(), "the campaign directory"));
@@ -236,8 +274,9 @@ ResultFiles open_result_dir(const std::string& dir, const std::string& manifest)
           files.dir() + " is not empty and holds no campaign (no campaign.json; it holds " + some_entries(files.dir()) +
           "): a campaign directory is new, empty or the campaign's own; nothing in it was touched");
     }
-    Json m = want;
-    m[kMadeKey] = {{"unix_s", unix_time_s()}, {"host", host_name()}, {"pid", ::getpid()}};
+    Manifest made = manifest;
+    made.made = {{"unix_s", unix_time_s()}, {"host", host_name()}, {"pid", ::getpid()}};
+    const Json m = made;
     fs::create_directories(files.runs_dir());
     write_file(files.manifest_file(), m.dump(2) + "\n");
     files.made_ = true;

@@ -17,6 +17,10 @@
 /// manifest, as written) and its item, checked whenever it is read: a file of another campaign,
 /// another item or none is refused, naming it, never counted or merged.
 ///
+/// Every campaign has the one manifest form (Manifest): whose campaign it is, the format, and
+/// the command's own keys, snake_case; a file the results depend on is named by its digest
+/// (`<file>_digest`).
+///
 /// Results go through the worker pool (worker_pool.h): run_kept() does the items that have no
 /// result file yet and writes each one's as it finishes.
 
@@ -28,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "campaign/worker_pool.h"
 
 namespace nimble {
@@ -35,6 +41,30 @@ class OutputLock;
 }
 
 namespace nimble::campaign {
+
+/// The format of the manifests this rig writes and reads. A directory whose manifest has another
+/// (or none: the format of an older rig) is another campaign, refused naming both.
+inline constexpr const char* kManifestFormat = "nimble-rig-campaign/3";
+
+/// A campaign's manifest (DIR/campaign.json), the one form of every campaign's: as JSON, an
+/// object with "campaign", "format", the command's keys and "made".
+struct Manifest {
+  /// Whose campaign it is: the command ("rig sweep", "rig reproduce thesis",
+  /// "rig discrepancy --power"); compared first.
+  std::string campaign;
+  /// What makes two of its campaigns different, one key per thing (snake_case; a file the results
+  /// depend on by its digest, "<file>_digest"); compared key by key.
+  nlohmann::json fields = nlohmann::json::object();
+  /// When, where and by which process the campaign was made (unix_s, host, pid): recorded, not
+  /// compared; null until open_result_dir() made it.
+  nlohmann::json made;
+};
+
+/// The manifest as campaign.json holds it.
+void to_json(nlohmann::json& j, const Manifest& m);
+/// @throws std::runtime_error naming what is wrong: not an object, no campaign, another format,
+///         or "made" without its unix_s.
+void from_json(const nlohmann::json& j, Manifest& m);
 
 /// A result file that is not this campaign's: another campaign's, another item's, or no result
 /// file of a campaign at all. Its message names the file and what differs.
@@ -78,29 +108,29 @@ class ResultFiles {
   void check_all() const;
 
  private:
-  friend ResultFiles open_result_dir(const std::string& dir, const std::string& manifest);
+  friend ResultFiles open_result_dir(const std::string& dir, const Manifest& manifest);
   std::string dir_;
   std::string identity_;
   bool made_ = false;
   std::shared_ptr<const OutputLock> lock_;
 };
 
-/// Takes DIR as the one writer of a campaign whose manifest is `manifest` (a JSON object's text,
-/// one key per thing that makes two campaigns different; a "campaign" key, if any, is compared
-/// first): a new or empty DIR gets the manifest (with "made": when, where and by which process,
-/// which is recorded, not compared) and DIR/runs; a DIR that holds this manifest already is the
-/// same campaign, to be finished: its partial files are removed and its result files checked.
+/// Takes DIR as the one writer of the campaign `manifest` describes (its "made", if any, is not
+/// compared): a new or empty DIR gets the manifest (with "made" now) and DIR/runs; a DIR that
+/// holds this manifest already is the same campaign, to be finished: its partial files are
+/// removed and its result files checked. Keys are compared campaign first, then format, then the
+/// command's.
 /// @throws OutputBusy naming DIR and the holder's pid if another process holds it;
 ///         std::runtime_error naming DIR and what it holds if it is not empty and holds no
 ///         campaign, or the first key whose value differs if it holds another campaign (or a
 ///         manifest that cannot be read); ForeignResult naming a result file not of this campaign.
 ///         Nothing in DIR is changed when it is refused.
-ResultFiles open_result_dir(const std::string& dir, const std::string& manifest);
+ResultFiles open_result_dir(const std::string& dir, const Manifest& manifest);
 
-/// The manifest of the campaign in DIR, without what it records ("made"): what open_result_dir()
-/// was given when it made it.
-/// @throws std::runtime_error naming the file if it is missing or cannot be read.
-std::string read_manifest(const std::string& dir);
+/// The manifest of the campaign in DIR, "made" and all.
+/// @throws std::runtime_error naming the file and what is wrong if it is missing, cannot be read
+///         or is not a manifest of this rig's format.
+Manifest read_manifest(const std::string& dir);
 
 /// The result files of the campaign in DIR for a process that writes results while another holds
 /// DIR (an array task of a Slurm job, while `rig sweep` waits for it): nothing is taken, made or

@@ -196,16 +196,15 @@ void tally(PowerCell& c, const std::string& named_as) {
 /// its size, length and seed (its key). The scenario as flown (scenario_digest of the plan with
 /// --set: the file and all it names), the effect, the model and vehicle the workflow checks and
 /// its candidates, and the rig's executable, by content.
-std::string power_manifest(const PowerOptions& o, const launcher::RunPlan& base, const FlightCheck& check) {
+campaign::Manifest power_manifest(const PowerOptions& o, const launcher::RunPlan& base, const FlightCheck& check) {
   nlohmann::json m;
-  m["campaign"] = "rig discrepancy --power";
-  m["scenario digest"] = scenario_digest(base.scenario);
+  m["scenario_digest"] = scenario_digest(base.scenario);
   m["effect"] = o.effect;
-  m["model digest"] = file_digest(o.model_file);
-  m["vehicle digest"] = file_digest(check.vehicle.file);
+  m["model_digest"] = file_digest(o.model_file);
+  m["vehicle_digest"] = file_digest(check.vehicle.file);
   m["candidates"] = check.options.candidates;
-  m["rig digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
-  return m.dump();
+  m["rig_digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
+  return campaign::Manifest{"rig discrepancy --power", m, {}};
 }
 
 /// A length rounded to 0.01 s (refined lengths: a record is flown at whole plant steps anyway).

@@ -118,28 +118,27 @@ std::vector<std::string> override_texts(const std::vector<Override>& overrides) 
   return out;
 }
 
-std::string seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
+campaign::Manifest seeds_manifest(const CampaignOptions& o, const CampaignSpec& spec) {
   namespace fs = std::filesystem;
   const auto absolute = [](const std::string& p) { return fs::absolute(p).lexically_normal().string(); };
   Json m;
-  m["campaign"] = "rig reproduce thesis";
-  m["campaign file"] = absolute(o.campaign_file);
-  m["campaign file digest"] = file_digest(o.campaign_file);
+  m["campaign_file"] = absolute(o.campaign_file);
+  m["campaign_file_digest"] = file_digest(o.campaign_file);
   m["clock"] = o.clock;
   m["states"] = o.states;
   m["logs"] = absolute(o.work_dir);
-  m["controller digest"] = file_digest(o.controller_file);
-  m["rig digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
+  m["controller_digest"] = file_digest(o.controller_file);
+  m["rig_digest"] = file_digest("/proc/self/exe", InputKind::kProgram);
   // Overrides on every flight: named (checked before the scenarios, so a refusal names them), and
   // in the scenarios' digests, with the content of a base file they name.
-  m["overrides"] = Json(override_texts(o.overrides));
+  m["overrides"] = override_texts(o.overrides);
   for (const auto& [name, scenario] : spec.flights) {
-    m["scenario " + name] = scenario_digest(load_scenario(scenario, o.overrides));
+    m["scenario_digests"][name] = scenario_digest(load_scenario(scenario, o.overrides));
   }
-  for (const auto& set : spec.sets) m["model " + set.row] = file_digest(set.model);
-  m["model lateral4"] = file_digest(spec.lateral4_model);
-  for (const auto& [id, model] : spec.coupled_models) m["model " + id] = file_digest(model);
-  return m.dump();
+  for (const auto& set : spec.sets) m["model_digests"][set.row] = file_digest(set.model);
+  m["model_digests"]["lateral4"] = file_digest(spec.lateral4_model);
+  for (const auto& [id, model] : spec.coupled_models) m["model_digests"][id] = file_digest(model);
+  return campaign::Manifest{"rig reproduce thesis", m, {}};
 }
 
 std::vector<PlantCheck> plant_check(const CampaignSpec& spec, const std::vector<SeedValues>& seeds) {

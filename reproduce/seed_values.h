@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "campaign/result_files.h"
 #include "reproduce/thesis_campaign.h"
 
 namespace nimble::reproduce {
@@ -65,6 +66,6 @@ std::string seed_key(std::uint64_t seed);
 /// directory (the records point there); the rig's executable, by content; and the overrides on
 /// every flight (CampaignOptions::overrides), named (an empty list without) and inside each
 /// scenario's digest. The seeds are not in it: a campaign with more seeds flies only the new ones.
-std::string seeds_manifest(const CampaignOptions& options, const CampaignSpec& spec);
+campaign::Manifest seeds_manifest(const CampaignOptions& options, const CampaignSpec& spec);
 
 }  // namespace nimble::reproduce

@@ -105,7 +105,9 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
   CHECK(c.sets[1].label == "summary.hover_phi_deg=6");
   CHECK(c.set_digests == made.set_digests);
   CHECK(c.set_digests[0] != c.set_digests[1]);
-  CHECK(c.overrides.size() == 1);
+  REQUIRE(c.overrides.size() == 1);
+  CHECK(c.overrides[0].key_path == "duration_s");
+  CHECK(c.overrides[0].value == "2");
   CHECK(c.cluster.partition == "short");
   CHECK(c.cluster.time_limit == "0-00:10:00");
   CHECK(c.cluster.cpus_per_task == 2);
@@ -127,7 +129,7 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
     CHECK_THROWS_WITH(create_campaign(req), Catch::Contains("is being written by"));
   }
   CHECK_THROWS_WITH(create_campaign(req),
-                    Catch::Contains(d + "/c holds another campaign: its runs is 6, this one's 8"));
+                    Catch::Contains(d + "/c holds another campaign: its last_seed is 5, this one's 6"));
 
   const std::string script = slurp(write_batch_script(c));
   CHECK(script.find("#SBATCH --partition=short\n") != std::string::npos);
@@ -137,10 +139,10 @@ TEST_CASE("campaign: the manifest is written once and read back as it was made",
 
   // A damaged manifest is named with what is wrong.
   std::string text = slurp(d + "/c/campaign.json");
-  text.replace(text.find("\"seeds\""), 7, "\"seedz\"");
+  text.replace(text.find("\"first_seed\""), 12, "\"first_seex\"");
   std::ofstream(d + "/c/campaign.json") << text;
-  CHECK_THROWS_WITH(load_campaign(d + "/c"),
-                    Catch::Contains("damaged campaign manifest " + d + "/c/campaign.json") && Catch::Contains("seeds"));
+  CHECK_THROWS_WITH(load_campaign(d + "/c"), Catch::Contains("damaged campaign manifest " + d + "/c/campaign.json") &&
+                                                 Catch::Contains("first_seed"));
   CHECK_THROWS_WITH(load_campaign(d), Catch::Contains("no campaign in " + d));
 }
 
@@ -223,7 +225,7 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
           "[campaign][result_files]") {
   const std::string base = scratch("results");
   const std::string dir = base + "/c";
-  const std::string manifest = R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})";
+  const Manifest manifest{"test", {{"scenario_digest", "00aa"}, {"clock", "inprocess"}}, {}};
   std::string identity;
   {
     const ResultFiles files = open_result_dir(dir, manifest);
@@ -248,13 +250,20 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
 
   // The same manifest (keys in any order): the same campaign, its results there, the partial file gone.
   const ResultFiles again =
-      open_result_dir(dir, R"({"clock": "inprocess", "campaign": "test", "scenario digest": "00aa"})");
+      open_result_dir(dir, Manifest{"test", {{"clock", "inprocess"}, {"scenario_digest", "00aa"}}, {}});
   CHECK(!again.made());
   CHECK(again.identity() == identity);
   CHECK(again.read("seed-3") == std::optional<std::string>("three"));
   CHECK(!fs::exists(again.runs_dir() + "/seed-4.json.host.1.partial"));
-  CHECK(read_manifest(dir) ==
-        nlohmann::json::parse(R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})").dump());
+  const Manifest kept = read_manifest(dir);
+  CHECK(kept.campaign == "test");
+  CHECK(kept.fields == manifest.fields);
+  CHECK(kept.made.at("pid").get<int>() == ::getpid());
+  // Its text: campaign, format, the command's keys and made, one form for every campaign.
+  const nlohmann::json text = nlohmann::json::parse(slurp(dir + "/campaign.json"));
+  CHECK(text.at("format") == kManifestFormat);
+  CHECK(text.at("scenario_digest") == "00aa");
+  CHECK(text.size() == 5);
 
   const std::string other = base + "/other";
   fs::create_directories(other);
@@ -274,13 +283,23 @@ TEST_CASE("result files: a campaign directory takes its own manifest again and r
     t.write("seed-5", "five of the twin");
     t.write("seed-6", "six of the twin");
   }
-  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00bb", "clock": "inprocess"})"),
+  CHECK_THROWS_WITH(open_result_dir(twin, Manifest{"test", {{"scenario_digest", "00bb"}, {"clock", "inprocess"}}, {}}),
                     Catch::Contains(twin + " holds another campaign") &&
-                        Catch::Contains("scenario digest is \"00aa\"") && Catch::Contains("\"00bb\""));
-  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "test", "scenario digest": "00aa"})"),
+                        Catch::Contains("scenario_digest is \"00aa\"") && Catch::Contains("\"00bb\""));
+  CHECK_THROWS_WITH(open_result_dir(twin, Manifest{"test", {{"scenario_digest", "00aa"}}, {}}),
                     Catch::Contains("it has clock"));
-  CHECK_THROWS_WITH(open_result_dir(twin, R"({"campaign": "power", "clock": "lockstep"})"),
+  CHECK_THROWS_WITH(open_result_dir(twin, Manifest{"power", {{"clock", "lockstep"}}, {}}),
                     Catch::Contains("its campaign is \"test\", this one's \"power\""));
+  // A campaign of another rig's format is another campaign, named as such, and left as it was.
+  const std::string older = base + "/older";
+  fs::create_directories(older);
+  std::ofstream(older + "/campaign.json") << R"({"campaign": "test", "scenario digest": "00aa", "clock": "inprocess"})";
+  CHECK_THROWS_WITH(open_result_dir(older, manifest),
+                    Catch::Contains(older + " holds another campaign: its format is missing") &&
+                        Catch::Contains("finish it with the rig that made it"));
+  CHECK_THROWS_WITH(read_manifest(older),
+                    Catch::Contains("format missing, this rig reads \"" + std::string(kManifestFormat) + "\""));
+  CHECK(!fs::exists(older + "/runs"));
   fs::copy_file(twin + "/runs/seed-5.json", again.runs_dir() + "/seed-5.json");
   CHECK_THROWS_AS(again.read("seed-5"), ForeignResult);
   CHECK_THROWS_WITH(again.read("seed-5"),
@@ -307,7 +326,7 @@ TEST_CASE(
     "the first start finished",
     "[campaign][result_files]") {
   const std::string dir = scratch("kept");
-  const ResultFiles files = open_result_dir(dir + "/c", R"({"campaign": "test"})");
+  const ResultFiles files = open_result_dir(dir + "/c", Manifest{"test", nlohmann::json::object(), {}});
   const std::string calls = dir + "/calls.txt";  // each item done appends its index (items run in workers)
   KeptItems items;
   for (std::size_t i = 0; i < 6; ++i) items.keys.push_back("item-" + std::to_string(i));

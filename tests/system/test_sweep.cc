@@ -207,7 +207,7 @@ TEST_CASE("rig sweep: a campaign refuses to go on when its scenario or a file it
   CHECK(rig_sweep(d, "--resume " + d).output.find("no campaign in " + d) != std::string::npos);
   const SweepOutcome again = rig_sweep(d, kScenario + " --seeds 1-2 --dir " + d + "/c");
   CHECK(again.exit_code == 2);
-  CHECK(again.output.find(d + "/c holds another campaign: its overrides is [[\"duration_s\",\"2\"]], this one's []") !=
+  CHECK(again.output.find(d + "/c holds another campaign: its overrides is [\"duration_s=2\"], this one's []") !=
         std::string::npos);
   // No Slurm client on this machine: said so, with the package that has it.
   const std::string path = std::getenv("PATH");
