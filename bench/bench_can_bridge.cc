@@ -68,6 +68,7 @@
 #include "bench/can_bridge_commands.h"
 #include "cmdline/args.h"
 #include "contract/channels.h"
+#include "contract/default_rates.h"
 #include "launcher/netns.h"
 #include "launcher/supervisor.h"
 #include "scenario/scenario.h"
@@ -304,7 +305,7 @@ std::string where_measured() {
 struct Options {
   int count = 5000;
   int warmup = 200;
-  double rate_hz = 512.0;
+  double rate_hz = nimble::contract::kDefaultControlRateHz;
   std::string bridge;
   std::string scenario = std::string(RIG_SOURCE_DIR) + "/rig_configs/hover.yaml";
   std::string candump;  ///< can_rig's candump log of every frame it received; empty: none

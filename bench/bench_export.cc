@@ -24,7 +24,7 @@
 
 #include "cmdline/args.h"
 #include "core/bench_timing.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "lcmlog/lcm_log.h"
 #include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
@@ -139,23 +139,17 @@ int main(int argc, char** argv) {
     std::fprintf(text, "  ratio export zstd / floor: %.1f   export none / floor: %.1f\n", zstd_s / floor_s,
                  none_s / floor_s);
     if (!json.empty()) {
-      JsonWriter w;
-      w.begin_object();
-      w.key("source").value(source).key("runs").value(runs);
-      w.key("events").value(static_cast<long long>(zstd_stats.events));
-      w.key("log_bytes").value(static_cast<long long>(fs::file_size(log)));
-      w.key("zstd").begin_object();
-      w.key("seconds").value(zstd_s).key("bytes").value(static_cast<long long>(zstd_stats.bytes_out));
-      w.key("level").value(level);
-      w.end_object();
-      w.key("none").begin_object();
-      w.key("seconds").value(none_s).key("bytes").value(static_cast<long long>(none_stats.bytes_out));
-      w.end_object();
-      w.key("decode_seconds").value(decode_s);
-      w.key("floor_seconds").value(floor_s);
-      w.key("ratio_zstd_floor").value(zstd_s / floor_s);
-      w.end_object();
-      cmdline::write_json(json, w.str());
+      OrderedJson j;
+      j["source"] = source;
+      j["runs"] = runs;
+      j["events"] = zstd_stats.events;
+      j["log_bytes"] = fs::file_size(log);
+      j["zstd"] = {{"seconds", zstd_s}, {"bytes", zstd_stats.bytes_out}, {"level", level}};
+      j["none"] = {{"seconds", none_s}, {"bytes", none_stats.bytes_out}};
+      j["decode_seconds"] = decode_s;
+      j["floor_seconds"] = floor_s;
+      j["ratio_zstd_floor"] = zstd_s / floor_s;
+      cmdline::write_json(json, json_line(j));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_export: %s\n", e.what());

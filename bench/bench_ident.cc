@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "contract/default_rates.h"
 #include "core/bench_timing.h"
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
 
   SyntheticOptions so;
   so.duration_s = 60.0;
-  so.rate_hz = 512.0;
+  so.rate_hz = contract::kDefaultImuRateHz;
   so.moment_noise_Nm = 2e-4;
   so.force_noise_N = 2e-3;
   so.noise_p_radps = 0.02;

@@ -20,7 +20,7 @@
 #include "controller/loop_margins.h"
 #include "controller/roll_loop.h"
 #include "core/bench_timing.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "core/constants.h"
@@ -119,14 +119,15 @@ int main(int argc, char** argv) {
     std::printf("  (a bare 'rig --version' process: %.1f ms wall)\n", version_ms);
   }
   if (!json.empty()) {
-    JsonWriter w;
-    w.begin_object();
-    w.key("floor").begin_object().key("frequency_response_ms").value(floor).end_object();
-    w.key("one_loop_ms").value(one).key("one_loop_per_floor").value(one / floor);
-    w.key("all_sets_ms").value(all).key("all_sets_per_floor").value(all / floor);
-    w.key("process_start_ms").value(version_ms).key("target_ms").value(100.0);
-    w.end_object();
-    cmdline::write_json(json, w.str());
+    OrderedJson j;
+    j["floor"] = {{"frequency_response_ms", floor}};
+    j["one_loop_ms"] = one;
+    j["one_loop_per_floor"] = one / floor;
+    j["all_sets_ms"] = all;
+    j["all_sets_per_floor"] = all / floor;
+    j["process_start_ms"] = version_ms;
+    j["target_ms"] = 100.0;
+    cmdline::write_json(json, json_line(j));
   }
   return 0;
 }

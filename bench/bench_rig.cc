@@ -49,7 +49,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cmdline/args.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "bench/bench_floor.h"
 #include "launcher/netns.h"
 #include "launcher/run_plan.h"
@@ -217,45 +217,36 @@ struct Figures {
 
 /// The figures as JSON to `file`, under fixed keys. @throws std::runtime_error if it cannot be written.
 void write_figures_json(const std::string& file, const Figures& f) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("scenario").value(f.scenario);
-  w.key("cpus").value(static_cast<long long>(::sysconf(_SC_NPROCESSORS_ONLN)));
-  w.key("realtime").begin_object();
-  w.key("latency_p99_us").value(f.quiet.latency_p99_us);
-  w.key("floor_latency_p99_us").value(f.chain.p99_us);
-  w.key("jitter_p99_us").value(f.quiet.jitter_p99_us);
-  w.key("floor_jitter_p99_us").value(f.wake.p99_us);
-  w.key("latency_p50_us").value(f.quiet.latency_p50_us);
-  w.key("floor_latency_p50_us").value(f.chain.p50_us);
-  w.key("estimator_latency_p99_us").value(f.quiet.estimator_p99_us);
-  w.key("chain_hops").value(f.hops);
-  w.key("health").value(f.quiet.health);
-  w.key("loaded").begin_object();
-  w.key("latency_p99_us").value(f.loaded.latency_p99_us);
-  w.key("floor_latency_p99_us").value(f.chain_loaded.p99_us);
-  w.key("jitter_p99_us").value(f.loaded.jitter_p99_us);
-  w.key("health").value(f.loaded.health);
-  w.end_object();
+  OrderedJson j;
+  j["scenario"] = f.scenario;
+  j["cpus"] = ::sysconf(_SC_NPROCESSORS_ONLN);
+  OrderedJson& rt = j["realtime"];
+  rt["latency_p99_us"] = f.quiet.latency_p99_us;
+  rt["floor_latency_p99_us"] = f.chain.p99_us;
+  rt["jitter_p99_us"] = f.quiet.jitter_p99_us;
+  rt["floor_jitter_p99_us"] = f.wake.p99_us;
+  rt["latency_p50_us"] = f.quiet.latency_p50_us;
+  rt["floor_latency_p50_us"] = f.chain.p50_us;
+  rt["estimator_latency_p99_us"] = f.quiet.estimator_p99_us;
+  rt["chain_hops"] = f.hops;
+  rt["health"] = f.quiet.health;
+  rt["loaded"] = {{"latency_p99_us", f.loaded.latency_p99_us},
+                  {"floor_latency_p99_us", f.chain_loaded.p99_us},
+                  {"jitter_p99_us", f.loaded.jitter_p99_us},
+                  {"health", f.loaded.health}};
   if (f.foxglove) {
-    w.key("foxglove").begin_object();
-    w.key("latency_p99_us").value(f.with_client.latency_p99_us);
-    w.key("latency_p99_us_without").value(f.quiet.latency_p99_us);
-    w.key("ratio").value(f.with_client.latency_p99_us / f.quiet.latency_p99_us);
-    w.key("client_messages").value(f.client_messages);
-    w.end_object();
+    rt["foxglove"] = {{"latency_p99_us", f.with_client.latency_p99_us},
+                      {"latency_p99_us_without", f.quiet.latency_p99_us},
+                      {"ratio", f.with_client.latency_p99_us / f.quiet.latency_p99_us},
+                      {"client_messages", f.client_messages}};
   }
-  w.end_object();
-  w.key("lockstep").begin_object();
-  w.key("speed_x").value(f.speed);
-  w.key("limit_speed_x").value(f.limit.speed_x);
-  w.key("messages_per_sim_s").value(f.rig_messages);
-  w.key("limit_messages_per_sim_s").value(f.limit.messages_per_sim_s);
-  w.key("participants").value(static_cast<long long>(f.participants));
-  w.end_object();
-  w.end_object();
+  j["lockstep"] = {{"speed_x", f.speed},
+                   {"limit_speed_x", f.limit.speed_x},
+                   {"messages_per_sim_s", f.rig_messages},
+                   {"limit_messages_per_sim_s", f.limit.messages_per_sim_s},
+                   {"participants", f.participants}};
   std::ofstream out(file);
-  out << w.str() << "\n";
+  out << json_line(j) << "\n";
   if (!out) throw std::runtime_error("cannot write " + file);
 }
 

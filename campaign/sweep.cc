@@ -189,19 +189,18 @@ void write_sweep_text(std::ostream& out, const SweepResult& r) {
 }
 
 std::string sweep_json(const SweepResult& r) {
-  using OJson = OrderedJson;
-  OJson j = {{"scenario", r.scenario}, {"clock", r.clock}, {"sets", OJson::array()}};
+  OrderedJson j = {{"scenario", r.scenario}, {"clock", r.clock}, {"sets", OrderedJson::array()}};
   for (std::size_t s = 0; s < r.sets.size(); ++s) {
-    OJson overrides = OJson::object();
+    OrderedJson overrides = OrderedJson::object();
     for (const auto& ov : r.sets[s].overrides) overrides[ov.key_path] = ov.value;
     const SetStatistics st = set_statistics(r, s);
     const std::size_t n = st.runs.size();
-    OJson percentiles = OJson::object();
+    OrderedJson percentiles = OrderedJson::object();
     for (const auto& fig : sweep_figures()) {
       const auto it = st.by_figure.find(fig.key);
       if (it == st.by_figure.end()) continue;
-      OJson& at = percentiles[fig.key];
-      at = OJson::object();
+      OrderedJson& at = percentiles[fig.key];
+      at = OrderedJson::object();
       for (const double p : kPercentiles) at["p" + std::to_string(static_cast<int>(p))] = percentile(it->second, p);
     }
     j["sets"].push_back({{"label", r.sets[s].label},
@@ -213,9 +212,9 @@ std::string sweep_json(const SweepResult& r) {
                          {"controlled_rate", n > 0 ? static_cast<double>(st.controlled) / static_cast<double>(n) : 0.0},
                          {"percentiles", std::move(percentiles)}});
   }
-  j["runs"] = OJson::array();
+  j["runs"] = OrderedJson::array();
   for (const auto& run : r.runs) {
-    OJson figures = OJson::object();
+    OrderedJson figures = OrderedJson::object();
     for (const auto& [k, v] : run.figures) figures[k] = v;
     j["runs"].push_back(
         {{"set", run.set + 1},

@@ -275,15 +275,14 @@ std::string envelopes_csv(const std::vector<SetReport>& sets) {
 }
 
 std::string report_json(const SweepResult& r, const std::vector<SetReport>& sets) {
-  using OJson = OrderedJson;
-  OJson j = {{"scenario", r.scenario},
-             {"clock", r.clock},
-             {"confidence", 0.95},
-             {"percentiles", {5.0, 50.0, 95.0}},
-             {"sets", OJson::array()}};
+  OrderedJson j = {{"scenario", r.scenario},
+                   {"clock", r.clock},
+                   {"confidence", 0.95},
+                   {"percentiles", {5.0, 50.0, 95.0}},
+                   {"sets", OrderedJson::array()}};
   for (std::size_t s = 0; s < sets.size(); ++s) {
     const SetReport& st = sets[s];
-    OJson envelopes = OJson::object();
+    OrderedJson envelopes = OrderedJson::object();
     for (std::size_t q = 0; q < 3; ++q) {
       const Envelope& e = envelope_of(st, q);
       envelopes[kQuantities[q].name] = {
@@ -297,7 +296,7 @@ std::string report_json(const SweepResult& r, const std::vector<SetReport>& sets
                          {"wilson_lo", st.rate.lo},
                          {"wilson_hi", st.rate.hi},
                          {"traces", st.traces},
-                         {"dt_s", st.traces > 0 ? OJson(st.dt_s) : OJson(nullptr)},
+                         {"dt_s", st.traces > 0 ? OrderedJson(st.dt_s) : OrderedJson(nullptr)},
                          {"svg", "set-" + std::to_string(s + 1) + ".svg"},
                          {"envelopes", std::move(envelopes)}});
   }

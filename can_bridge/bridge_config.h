@@ -18,6 +18,7 @@
 
 #include <string>
 
+#include "contract/default_rates.h"
 #include "core/config.h"
 #include "core/param_table.h"
 
@@ -33,7 +34,7 @@ struct CanBridgeConfig {
   bool candump_log = true;
   /// Set by the launcher in the resolved scenario (next to the run's log); empty: no log.
   std::string candump_file;
-  double health_rate_hz = 2.0;
+  double health_rate_hz = contract::kDefaultCanHealthRateHz;
   int receive_buffer_bytes = 0;
   /// CAN FD: both sides send every frame as an FD frame of 8 bytes with CANFD_BRS and accept
   /// classical and FD frames of 8 bytes. The interface needs the CAN FD MTU (72).

@@ -11,6 +11,7 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "contract/default_rates.h"
 #include "core/data_bounds.h"
 #include "core/model.h"
 #include "core/vehicle.h"
@@ -18,7 +19,7 @@
 #include "ident/identify.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "ident/signal.h"
 #include "ident/report.h"
 #include "mcap/log_export.h"
@@ -44,7 +45,7 @@ int export_mcap(const std::string& log, const std::string& out, const mcap::Expo
 int run_export_command(const std::vector<std::string>& args) {
   std::string log, csv, out_file, format, compression = "zstd", json;
   bool raw = false;
-  double rate_hz = 512.0;
+  double rate_hz = contract::kDefaultImuRateHz;
   ident::LogReadOptions log_options;
   ident::Interpolation interpolation = ident::Interpolation::kCubic;
   cmdline::CommandLine cl(
@@ -139,19 +140,20 @@ int run_export_command(const std::vector<std::string>& args) {
   (json == "-" ? std::cerr : std::cout) << "rig export: " << grid.size() << " samples at " << rate_hz
                                         << " Hz (states from " << data.state_source << ") -> " << csv << "\n";
   if (!json.empty()) {
-    JsonWriter w;
-    w.begin_object();
-    w.key("log").value(log).key("csv").value(csv).key("samples").value(static_cast<long long>(grid.size()));
-    w.key("rate_hz").value(rate_hz).key("interpolation").value(ident::to_string(interpolation));
-    w.key("state_source").value(data.state_source).key("damage").value(data.damage);
-    w.key("undecodable").value(static_cast<long long>(undecodable.total()));
-    mcap::undecodable_json(w, undecodable.by_channel());
-    beyond.json(w);
-    w.key("columns").begin_array();
-    for (const auto& [name, channel] : out.channels) w.value(name);
-    w.end_array();
-    w.end_object();
-    cmdline::write_json(json, w.str());
+    OrderedJson j;
+    j["log"] = log;
+    j["csv"] = csv;
+    j["samples"] = grid.size();
+    j["rate_hz"] = rate_hz;
+    j["interpolation"] = ident::to_string(interpolation);
+    j["state_source"] = data.state_source;
+    j["damage"] = data.damage;
+    j["undecodable"] = undecodable.total();
+    j["undecodable_channels"] = mcap::undecodable_json(undecodable.by_channel());
+    j["beyond_bounds"] = beyond.json();
+    OrderedJson& columns = j["columns"] = OrderedJson::array();
+    for (const auto& [name, channel] : out.channels) columns.push_back(name);
+    cmdline::write_json(json, json_line(j));
   }
   return 0;
 }

@@ -11,7 +11,6 @@
 
 #include "cmdline/args.h"
 #include "core/data_bounds.h"
-#include "core/json_writer.h"
 #include "ident/identify.h"
 #include "ident/rig_log.h"
 #include "ident/signal.h"

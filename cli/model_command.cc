@@ -120,28 +120,24 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
   }
 }
 
-using OJson = OrderedJson;
-
-OJson rows_json(const Eigen::MatrixXd& M) {
-  OJson rows = OJson::array();
+OrderedJson rows_json(const Eigen::MatrixXd& M) {
+  OrderedJson rows = OrderedJson::array();
   for (Eigen::Index i = 0; i < M.rows(); ++i) {
-    OJson row = OJson::array();
+    OrderedJson row = OrderedJson::array();
     for (Eigen::Index j = 0; j < M.cols(); ++j) row.push_back(M(i, j));
     rows.push_back(std::move(row));
   }
   return rows;
 }
 
-OJson complex_json(const std::complex<double>& z) { return OJson::array({z.real(), z.imag()}); }
-
-OJson complex_list_json(const std::vector<std::complex<double>>& zs) {
-  OJson a = OJson::array();
+OrderedJson complex_list_json(const std::vector<std::complex<double>>& zs) {
+  OrderedJson a = OrderedJson::array();
   for (const auto& z : zs) a.push_back(complex_json(z));
   return a;
 }
 
-OJson mode_json(const Mode& m, const StateSpace& ss) {
-  OJson vector = OJson::object();
+OrderedJson mode_json(const Mode& m, const StateSpace& ss) {
+  OrderedJson vector = OrderedJson::object();
   for (std::size_t i = 0; i < ss.states.size(); ++i) {
     vector[ss.states[i]] = {{"magnitude", std::abs(m.eigenvector_nondim[i])},
                             {"phase_deg", phase_deg(m.eigenvector_nondim[i])}};
@@ -158,24 +154,24 @@ OJson mode_json(const Mode& m, const StateSpace& ss) {
 
 std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const StateSpace& ss,
                     const std::vector<std::complex<double>>& eig, const std::vector<Mode>& modes) {
-  OJson j = {{"model", model.name},
-             {"model_file", model.file},
-             {"source", model.source},
-             {"structure", to_string(model.structure)},
-             {"vehicle", {{"name", vehicle.name}, {"file", vehicle.file}, {"mass_kg", vehicle.mass_kg}}},
-             {"trim",
-              {{"u0_mps", model.trim.u0_mps},
-               {"w0_mps", model.trim.w0_mps},
-               {"theta0_rad", model.trim.theta0_rad},
-               {"phi0_rad", model.trim.phi0_rad}}},
-             {"states", ss.states},
-             {"state_units", ss.state_units},
-             {"inputs", ss.inputs},
-             {"input_units", ss.input_units},
-             {"A", rows_json(ss.A)},
-             {"B", rows_json(ss.B)},
-             {"eigenvalues", complex_list_json(eig)}};
-  j["modes"] = OJson::array();
+  OrderedJson j = {{"model", model.name},
+                   {"model_file", model.file},
+                   {"source", model.source},
+                   {"structure", to_string(model.structure)},
+                   {"vehicle", {{"name", vehicle.name}, {"file", vehicle.file}, {"mass_kg", vehicle.mass_kg}}},
+                   {"trim",
+                    {{"u0_mps", model.trim.u0_mps},
+                     {"w0_mps", model.trim.w0_mps},
+                     {"theta0_rad", model.trim.theta0_rad},
+                     {"phi0_rad", model.trim.phi0_rad}}},
+                   {"states", ss.states},
+                   {"state_units", ss.state_units},
+                   {"inputs", ss.inputs},
+                   {"input_units", ss.input_units},
+                   {"A", rows_json(ss.A)},
+                   {"B", rows_json(ss.B)},
+                   {"eigenvalues", complex_list_json(eig)}};
+  j["modes"] = OrderedJson::array();
   for (const auto& m : modes) j["modes"].push_back(mode_json(m, ss));
   if (!model.published_eigenvalues.empty()) {
     const auto errors = published_errors(model.published_eigenvalues, eig);

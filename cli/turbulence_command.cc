@@ -15,7 +15,7 @@
 #include "cmdline/args.h"
 #include "cli/commands.h"
 #include "cli/report_files.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "ident/plots.h"
 #include "turbulence/ce500_analysis.h"
 #include "turbulence/ce500_config.h"
@@ -172,25 +172,23 @@ std::string report_text(const Ce500Analysis& a) {
   return out.str();
 }
 
-void write_variances(JsonWriter& j, const Ce500Analysis& a, bool sigma) {
+/// The variances (or their standard errors, `sigma`) of both systems by output and method.
+OrderedJson variances_json(const Ce500Analysis& a, bool sigma) {
   const auto& names = ce500_output_names();
-  j.begin_object();
+  const auto pick = [sigma](const VarianceEstimate& e) { return sigma ? e.sigma : e.value; };
+  OrderedJson j;
   for (const SystemAnalysis* s : {&a.controlled, &a.reduced}) {
-    j.key(s->key).begin_object();
+    OrderedJson& system = j[s->key];
     for (std::size_t i = 0; i < names.size(); ++i) {
       const OutputVariances& v = s->variances[i];
-      const auto pick = [sigma](const VarianceEstimate& e) { return sigma ? e.sigma : e.value; };
-      j.key(names[i]).begin_object();
-      j.key("lyapunov").value(pick(v.lyapunov));
-      j.key("analytical_psd").value(pick(v.analytical_psd));
-      j.key("periodogram").value(pick(v.periodogram));
-      j.key("welch").value(pick(v.welch));
-      j.key("sample").value(pick(v.sample));
-      j.end_object();
+      system[names[i]] = {{"lyapunov", pick(v.lyapunov)},
+                          {"analytical_psd", pick(v.analytical_psd)},
+                          {"periodogram", pick(v.periodogram)},
+                          {"welch", pick(v.welch)},
+                          {"sample", pick(v.sample)}};
     }
-    j.end_object();
   }
-  j.end_object();
+  return j;
 }
 
 std::vector<double> column(const Eigen::MatrixXd& M, Eigen::Index c) {
@@ -201,107 +199,82 @@ std::vector<double> column(const Eigen::MatrixXd& M, Eigen::Index c) {
 
 std::string report_json(const Ce500Analysis& a) {
   const auto& names = ce500_output_names();
-  JsonWriter j;
-  j.begin_object();
-  j.key("config").value(a.config.file);
-  j.key("options").begin_object();
-  j.key("dt_s").value(a.options.dt_s);
-  j.key("duration_s").value(a.options.duration_s);
-  j.key("samples").value(static_cast<long long>(a.t_s.size()));
-  j.key("seed").value(static_cast<long long>(a.options.seed));
-  j.key("welch_segment").value(static_cast<long long>(a.controlled.welches.front().segment_length));
-  j.key("welch_segments").value(static_cast<long long>(a.controlled.welches.front().segments));
-  j.key("welch_dof").value(a.welch_dof);
-  j.end_object();
-  j.key("units").begin_object();
-  for (const auto& n : names) j.key(n).value(output_unit(n));
-  j.key("psd").value("output unit^2/(rad/s), two-sided, sigma^2 = (1/pi) int_0^inf S d omega");
-  j.end_object();
+  OrderedJson j;
+  j["config"] = a.config.file;
+  const SpectralEstimate& welch = a.controlled.welches.front();
+  j["options"] = {
+      {"dt_s", a.options.dt_s},  {"duration_s", a.options.duration_s},    {"samples", a.t_s.size()},
+      {"seed", a.options.seed},  {"welch_segment", welch.segment_length}, {"welch_segments", welch.segments},
+      {"welch_dof", a.welch_dof}};
+  OrderedJson& units = j["units"];
+  for (const auto& n : names) units[n] = output_unit(n);
+  units["psd"] = "output unit^2/(rad/s), two-sided, sigma^2 = (1/pi) int_0^inf S d omega";
 
-  j.key("systems").begin_object();
+  OrderedJson& systems = j["systems"];
   const std::vector<NamedEigenvalue>* eig[3] = {&a.uncontrolled_eigenvalues, &a.controlled.eigenvalues,
                                                 &a.reduced.eigenvalues};
   for (int i = 0; i < 3; ++i) {
     const EigenvalueColumn& col = a.table_2_1[static_cast<std::size_t>(i)];
-    j.key(col.key).begin_object();
-    j.key("eigenvalues").begin_array();
-    for (const auto& e : *eig[i]) j.begin_array().value(e.value.real()).value(e.value.imag()).end_array();
-    j.end_array();
-    j.key("modes").begin_array();
-    for (const auto& e : *eig[i]) j.value(e.mode);
-    j.end_array();
-    j.key("table_2_1").begin_array();
-    for (const auto& r : col.rows) {
-      j.begin_object();
-      j.key("ours").begin_array().value(r.ours.value.real()).value(r.ours.value.imag()).end_array();
-      j.key("published").begin_array().value(r.published.real()).value(r.published.imag()).end_array();
-      j.key("distance").value(r.distance);
-      j.key("mode").value(r.ours.mode);
-      j.end_object();
+    OrderedJson& system = systems[col.key];
+    OrderedJson values = OrderedJson::array(), modes = OrderedJson::array();
+    for (const auto& e : *eig[i]) {
+      values.push_back(complex_json(e.value));
+      modes.push_back(e.mode);
     }
-    j.end_array();
-    j.key("max_distance").value(col.max_distance);
-    j.key("within_tolerance").value(col.max_distance <= a.config.published.eigenvalue_tolerance);
-    j.end_object();
+    system["eigenvalues"] = std::move(values);
+    system["modes"] = std::move(modes);
+    OrderedJson& rows = system["table_2_1"] = OrderedJson::array();
+    for (const auto& r : col.rows) {
+      rows.push_back({{"ours", complex_json(r.ours.value)},
+                      {"published", complex_json(r.published)},
+                      {"distance", r.distance},
+                      {"mode", r.ours.mode}});
+    }
+    system["max_distance"] = col.max_distance;
+    system["within_tolerance"] = col.max_distance <= a.config.published.eigenvalue_tolerance;
   }
-  j.end_object();
 
-  j.key("variances");
-  write_variances(j, a, false);
-  j.key("variance_sigmas");
-  write_variances(j, a, true);
-  j.key("variance_diagnostics").begin_object();
+  j["variances"] = variances_json(a, false);
+  j["variance_sigmas"] = variances_json(a, true);
+  OrderedJson& diagnostics = j["variance_diagnostics"];
   for (const SystemAnalysis* s : {&a.controlled, &a.reduced}) {
-    j.key(s->key).begin_object();
+    OrderedJson& system = diagnostics[s->key];
     for (std::size_t i = 0; i < names.size(); ++i) {
       const OutputVariances& v = s->variances[i];
-      j.key(names[i]).begin_object();
-      j.key("analytical_psd_to_nyquist").value(v.analytical_psd_to_nyquist);
-      j.key("sample_sigma_from_psd").value(v.sample_sigma_from_psd);
-      j.key("coherent_sum").value(v.coherent_sum);
-      j.key("held_noise").value(v.held_noise);
-      j.end_object();
+      system[names[i]] = {{"analytical_psd_to_nyquist", v.analytical_psd_to_nyquist},
+                          {"sample_sigma_from_psd", v.sample_sigma_from_psd},
+                          {"coherent_sum", v.coherent_sum},
+                          {"held_noise", v.held_noise}};
     }
-    j.end_object();
   }
-  j.end_object();
 
-  j.key("psd").begin_object();
-  j.key("omega_radps")
-      .array(std::vector<double>(a.controlled.omega_radps.data(),
-                                 a.controlled.omega_radps.data() + a.controlled.omega_radps.size()));
+  OrderedJson& psd = j["psd"];
+  psd["omega_radps"] = std::vector<double>(a.controlled.omega_radps.data(),
+                                           a.controlled.omega_radps.data() + a.controlled.omega_radps.size());
   for (const SystemAnalysis* s : {&a.controlled, &a.reduced}) {
-    j.key(s->key).begin_object();
+    OrderedJson& system = psd[s->key];
     for (std::size_t i = 0; i < names.size(); ++i) {
       const Eigen::Index c = static_cast<Eigen::Index>(i);
-      j.key(names[i]).begin_object();
-      j.key("analytical").array(column(s->psd_analytical, c));
-      j.key("periodogram").array(column(s->psd_periodogram, c));
-      j.key("welch").array(column(s->psd_welch, c));
-      j.key("sampled").array(column(s->psd_sampled, c));
-      j.end_object();
+      system[names[i]] = {{"analytical", column(s->psd_analytical, c)},
+                          {"periodogram", column(s->psd_periodogram, c)},
+                          {"welch", column(s->psd_welch, c)},
+                          {"sampled", column(s->psd_sampled, c)}};
     }
-    j.end_object();
   }
-  j.end_object();
 
-  j.key("table_5_1").begin_array();
+  OrderedJson& table = j["table_5_1"] = OrderedJson::array();
   for (const auto& c : a.table_5_1) {
-    j.begin_object();
-    j.key("output").value(c.output);
-    j.key("system").value(c.system);
-    j.key("method").value(c.method);
-    j.key("published").value(c.published);
-    j.key("ours").value(c.ours);
-    j.key("explanation").value(c.explanation_name);
-    j.key("predicted").value(c.explanation_value);
-    j.key("explained").value(c.explained);
-    j.key("reason").value(c.reason);
-    j.end_object();
+    table.push_back({{"output", c.output},
+                     {"system", c.system},
+                     {"method", c.method},
+                     {"published", c.published},
+                     {"ours", c.ours},
+                     {"explanation", c.explanation_name},
+                     {"predicted", c.explanation_value},
+                     {"explained", c.explained},
+                     {"reason", c.reason}});
   }
-  j.end_array();
-  j.end_object();
-  return j.str();
+  return json_line(j);
 }
 
 // --- plots -------------------------------------------------------------------------------

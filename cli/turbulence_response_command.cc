@@ -20,7 +20,7 @@
 #include "cli/report_files.h"
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "ident/plots.h"
@@ -187,52 +187,45 @@ std::vector<double> vec(const Eigen::VectorXd& x) { return std::vector<double>(x
 
 std::string report_json(const std::string& scenario, const std::string& log, const Setup& s,
                         const ResponseComparison& c) {
-  JsonWriter j;
-  j.begin_object();
-  j.key("scenario").value(scenario);
-  j.key("log").value(log);
-  j.key("model").value(s.model.name);
-  j.key("gain_set").value(s.gain_set);
-  j.key("controller_input").value(s.controller_input);
-  j.key("gust").begin_object();
-  j.key("form").value("dryden");
-  j.key("sigma_mps").value(s.params.gust_sigma_mps);
-  j.key("time_scale_s").value(s.params.gust_time_scale_s);
-  j.end_object();
-  j.key("dt_s").value(c.dt_s);
-  j.key("samples").value(static_cast<long long>(c.samples));
-  j.key("segment_length").value(static_cast<long long>(c.segment_length));
-  j.key("segments").value(static_cast<long long>(c.segments));
-  j.key("dof").value(c.dof);
-  j.key("level").value(c.level);
-  j.key("f_max_hz").value(c.f_max_hz);
-  j.key("agrees").value(c.agrees());
-  j.key("outputs").begin_object();
+  OrderedJson j;
+  j["scenario"] = scenario;
+  j["log"] = log;
+  j["model"] = s.model.name;
+  j["gain_set"] = s.gain_set;
+  j["controller_input"] = s.controller_input;
+  j["gust"] = {
+      {"form", "dryden"}, {"sigma_mps", s.params.gust_sigma_mps}, {"time_scale_s", s.params.gust_time_scale_s}};
+  j["dt_s"] = c.dt_s;
+  j["samples"] = c.samples;
+  j["segment_length"] = c.segment_length;
+  j["segments"] = c.segments;
+  j["dof"] = c.dof;
+  j["level"] = c.level;
+  j["f_max_hz"] = c.f_max_hz;
+  j["agrees"] = c.agrees();
+  OrderedJson& outputs = j["outputs"] = OrderedJson::object();
   for (const auto& o : c.outputs) {
-    j.key(o.name).begin_object();
-    j.key("unit").value(o.unit);
-    j.key("bins").value(static_cast<long long>(o.bins));
-    j.key("counted").value(static_cast<long long>(o.counted));
-    j.key("outside").value(static_cast<long long>(o.outside));
-    j.key("allowed").value(static_cast<long long>(o.allowed));
-    j.key("mean_ratio").value(o.mean_ratio);
-    j.key("mean_ratio_sigma").value(o.mean_ratio_sigma);
-    j.key("max_analytical_deviation").value(o.max_analytical_deviation);
-    j.key("flight_variance").value(o.flight_variance);
-    j.key("model_variance").value(o.model_variance);
-    j.key("flight_variance_sigma").value(o.flight_variance_sigma);
-    j.key("bins_agree").value(o.bins_agree);
-    j.key("mean_agrees").value(o.mean_agrees);
-    j.key("variance_agrees").value(o.variance_agrees);
-    j.key("omega_radps").array(vec(o.omega_radps));
-    j.key("welch").array(vec(o.welch));
-    j.key("expected").array(vec(o.expected));
-    j.key("analytical").array(vec(o.analytical));
-    j.end_object();
+    OrderedJson& out = outputs[o.name];
+    out["unit"] = o.unit;
+    out["bins"] = o.bins;
+    out["counted"] = o.counted;
+    out["outside"] = o.outside;
+    out["allowed"] = o.allowed;
+    out["mean_ratio"] = o.mean_ratio;
+    out["mean_ratio_sigma"] = o.mean_ratio_sigma;
+    out["max_analytical_deviation"] = o.max_analytical_deviation;
+    out["flight_variance"] = o.flight_variance;
+    out["model_variance"] = o.model_variance;
+    out["flight_variance_sigma"] = o.flight_variance_sigma;
+    out["bins_agree"] = o.bins_agree;
+    out["mean_agrees"] = o.mean_agrees;
+    out["variance_agrees"] = o.variance_agrees;
+    out["omega_radps"] = vec(o.omega_radps);
+    out["welch"] = vec(o.welch);
+    out["expected"] = vec(o.expected);
+    out["analytical"] = vec(o.analytical);
   }
-  j.end_object();
-  j.end_object();
-  return j.str();
+  return json_line(j);
 }
 
 /// response_psd.png and response_ratio.png: three panels each (p, v, phi), log frequency axis.

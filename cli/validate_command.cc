@@ -16,7 +16,6 @@
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
 #include "ident/closed_loop.h"
-#include "core/json_writer.h"
 #include "ident/plots.h"
 #include "ident/report.h"
 #include "ident/validate.h"

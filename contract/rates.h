@@ -8,18 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "contract/default_rates.h"
 #include "contract/lockstep_schedule.h"
 
 namespace nimble::contract {
-
-/// The control rate of the onboard loop [Hz], the IMU's rate (thesis Section 8.1: the onboard
-/// IMU at 512 Hz; the loop runs on its samples): `controller.rate_hz`'s default, and so the rate
-/// of ACTUATOR_CMD and of the CAN bridge's cycle when a scenario does not set it.
-inline constexpr double kDefaultControlRateHz = 512.0;
-/// The control rates a scenario may set (`controller.rate_hz`) [Hz]: the controller's parameter
-/// table and every other reader of the value check it against these.
-inline constexpr double kMinControlRateHz = 50.0;
-inline constexpr double kMaxControlRateHz = 5000.0;
 
 /// Rates the processes of a scenario run at [Hz].
 struct ProcessRates {

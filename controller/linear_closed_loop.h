@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "contract/default_rates.h"
 #include "controller/attitude_controller.h"
 #include "controller/manoeuvre.h"
 #include "core/model.h"
@@ -22,12 +23,12 @@ namespace nimble {
 
 /// Options of the linear closed-loop simulation.
 struct LinearLoopOptions {
-  double plant_rate_hz = 1000.0;   ///< plant integration rate [Hz]
-  double flap_gain_per_s = 8.97;   ///< numerator of the flap actuator [1/s] (thesis Eq 33)
-  double flap_pole_radps = 12.56;  ///< pole of the flap actuator [rad/s] (thesis Eq 33)
-  double tail_s = 4.0;             ///< hover simulated after the manoeuvre ends [s]
-  double settle_window_s = 0.5;    ///< final window checked for the return to hover [s]
-  bool record_trace = false;       ///< keep every plant sample in LinearLoopResult::trace
+  double plant_rate_hz = contract::kDefaultPlantRateHz;  ///< plant integration rate [Hz]
+  double flap_gain_per_s = 8.97;                         ///< numerator of the flap actuator [1/s] (thesis Eq 33)
+  double flap_pole_radps = 12.56;                        ///< pole of the flap actuator [rad/s] (thesis Eq 33)
+  double tail_s = 4.0;                                   ///< hover simulated after the manoeuvre ends [s]
+  double settle_window_s = 0.5;                          ///< final window checked for the return to hover [s]
+  bool record_trace = false;                             ///< keep every plant sample in LinearLoopResult::trace
 };
 
 /// One plant sample of the simulation.

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <utility>
 
-#include "core/json_writer.h"
+#include "core/json_line.h"
 
 namespace nimble {
 namespace {
@@ -164,24 +164,29 @@ std::string BoundsTally::refusal() const {
   return first + "; " + text();
 }
 
-void BoundsTally::json(JsonWriter& w) const {
-  w.key("beyond_bounds").begin_object();
-  w.key("messages").value(static_cast<long long>(messages_));
-  w.key("samples").value(static_cast<long long>(samples())).key("bounds").value(where_);
-  w.key("channels").begin_array();
+OrderedJson BoundsTally::json() const {
+  OrderedJson j;
+  j["messages"] = messages_;
+  j["samples"] = samples();
+  j["bounds"] = where_;
+  OrderedJson& channels = j["channels"] = OrderedJson::array();
   for (const Entry& e : entries_) {
-    w.begin_object();
-    w.key("channel").value(e.channel).key("field").value(e.field).key("quantity").value(e.quantity);
-    w.key("count").value(static_cast<long long>(e.count));
+    OrderedJson c;
+    c["channel"] = e.channel;
+    c["field"] = e.field;
+    c["quantity"] = e.quantity;
+    c["count"] = e.count;
     if (e.bound) {
-      w.key("bound").value(e.bound->value).key("key").value(e.bound->key).key("unit").value(e.bound->unit);
+      c["bound"] = e.bound->value;
+      c["key"] = e.bound->key;
+      c["unit"] = e.bound->unit;
     }
-    w.key("first_t_s").value(e.first_t_s).key("first_value").value(e.first_value);
-    w.key("first_event").value(static_cast<long long>(e.first_event));
-    w.end_object();
+    c["first_t_s"] = e.first_t_s;
+    c["first_value"] = e.first_value;
+    c["first_event"] = e.first_event;
+    channels.push_back(std::move(c));
   }
-  w.end_array();
-  w.end_object();
+  return j;
 }
 
 }  // namespace nimble

@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "core/vehicle.h"
 
 namespace nimble {
-
-class JsonWriter;
 
 /// The bound of one quantity: its value, its key in the vehicle file
 /// ("data_bounds.rate_max_radps") and its unit ("rad/s").
@@ -87,9 +87,9 @@ class BoundsTally {
   /// "p = 1.2e+147 rad/s at t = 3.4121 s exceeds the physical bound 50 rad/s (vehicle file F,
   /// bound data_bounds.rate_max_radps); N samples beyond the bounds: <entry>; <entry>".
   std::string refusal() const;
-  /// The "beyond_bounds" object of a --json report: samples, where, and per entry channel,
+  /// The "beyond_bounds" object of a --json report: messages, samples, bounds, and per entry channel,
   /// field, quantity, count, bound, key, unit, first_t_s, first_value (null: not finite), first_event.
-  void json(JsonWriter& w) const;
+  nlohmann::ordered_json json() const;
 
  private:
   DataBounds bounds_;

@@ -56,15 +56,13 @@ void size_block(std::ostringstream& out, const PowerResult& r, const SizeCurve& 
   }
 }
 
-using OJson = OrderedJson;
-
-OJson proportion_json(const Proportion& p) {
+OrderedJson proportion_json(const Proportion& p) {
   return {{"count", p.count}, {"n", p.n}, {"p", p.p}, {"lo", p.lo}, {"hi", p.hi}};
 }
 
-OJson cell_json(const PowerCell& c) {
+OrderedJson cell_json(const PowerCell& c) {
   const double n = std::max<double>(1.0, static_cast<double>(c.flights.size()));
-  OJson other_names = OJson::object(), verdicts = OJson::object();
+  OrderedJson other_names = OrderedJson::object(), verdicts = OrderedJson::object();
   for (const auto& [name, count] : c.other_names) other_names[name] = count;
   for (const auto& [verdict, count] : c.verdicts) verdicts[verdict] = count;
   return {{"size", c.size},
@@ -86,7 +84,7 @@ OJson cell_json(const PowerCell& c) {
 }
 
 /// Where a curve reaches the target: `what` at `at`, and `value_key` where it is reached (null if not).
-OJson crossing_json(const char* what, double at, const char* value_key, const Crossing& rec) {
+OrderedJson crossing_json(const char* what, double at, const char* value_key, const Crossing& rec) {
   return {{what, at}, {"reached", rec.reached}, {value_key, rec.value}, {"note", rec.note}};
 }
 
@@ -159,21 +157,21 @@ std::string power_text(const PowerResult& r) {
 }
 
 std::string power_json(const PowerResult& r, const std::vector<std::string>& plots) {
-  OJson j = {{"scenario", r.scenario},   {"model", r.model},   {"effect", r.effect},
-             {"parameter", r.parameter}, {"unit", r.unit},     {"named_as", r.named_as},
-             {"block_s", r.block_s},     {"target", r.target}, {"flights_per_cell", r.flights},
-             {"seed", r.seed},           {"jobs", r.jobs},     {"sizes", r.sizes},
-             {"lengths_s", r.lengths_s}};
-  j["cells"] = OJson::array();
+  OrderedJson j = {{"scenario", r.scenario},   {"model", r.model},   {"effect", r.effect},
+                   {"parameter", r.parameter}, {"unit", r.unit},     {"named_as", r.named_as},
+                   {"block_s", r.block_s},     {"target", r.target}, {"flights_per_cell", r.flights},
+                   {"seed", r.seed},           {"jobs", r.jobs},     {"sizes", r.sizes},
+                   {"lengths_s", r.lengths_s}};
+  j["cells"] = OrderedJson::array();
   for (const PowerCell& c : r.cells) j["cells"].push_back(cell_json(c));
-  j["recommended_length"] = OJson::array();
+  j["recommended_length"] = OrderedJson::array();
   for (const SizeCurve& c : r.curves)
     j["recommended_length"].push_back(crossing_json("size", c.size, "length_s", c.length));
-  j["smallest_size"] = OJson::array();
+  j["smallest_size"] = OrderedJson::array();
   for (std::size_t l = 0; l < r.lengths_s.size(); ++l) {
     j["smallest_size"].push_back(crossing_json("length_s", r.lengths_s[l], "size", r.size_for_length[l]));
   }
-  j["verification"] = OJson::array();
+  j["verification"] = OrderedJson::array();
   for (const PowerCell& c : r.verification) j["verification"].push_back(cell_json(c));
   const Totals t = totals(r);
   const double n = std::max<double>(1.0, static_cast<double>(t.flights));

@@ -10,19 +10,17 @@
 
 namespace nimble::ident {
 
-using OJson = OrderedJson;
-
 namespace {
 
 /// A found term's name in the effects and candidates ("term": its equation and expression follow).
 bool is_term(const std::string& name) { return name == "term"; }
 
-OJson interval_json(const double (&x)[2]) { return OJson::array({x[0], x[1]}); }
+OrderedJson interval_json(const double (&x)[2]) { return OrderedJson::array({x[0], x[1]}); }
 
 /// Each named effect with its parameters; a term also with its equation, interval and the forms it
 /// beat; a sensor error with its channel, value and interval.
-OJson effect_json(const NamedEffect& e) {
-  OJson j;
+OrderedJson effect_json(const NamedEffect& e) {
+  OrderedJson j;
   j["name"] = e.name;
   if (!e.channel.empty()) {
     j["channel"] = e.channel;
@@ -39,7 +37,7 @@ OJson effect_json(const NamedEffect& e) {
     j["coefficient"] = e.coefficient;
     j["interval"] = interval_json(e.interval);
     j["alternatives"] = e.alternatives;
-    j["ruled_out"] = OJson::array();
+    j["ruled_out"] = OrderedJson::array();
     for (const auto& [name, reason] : e.ruled_out) j["ruled_out"].push_back({{"name", name}, {"reason", reason}});
   }
   j["parameters"] = e.parameters;
@@ -48,9 +46,9 @@ OJson effect_json(const NamedEffect& e) {
 }
 
 /// A candidate tried, with its test statistics where it could be tried.
-OJson candidate_json(const CandidateTrial& t) {
-  OJson j = {{"name", t.name},     {"round", t.round},     {"available", t.available},
-             {"passed", t.passed}, {"entered", t.entered}, {"reason", t.reason}};
+OrderedJson candidate_json(const CandidateTrial& t) {
+  OrderedJson j = {{"name", t.name},     {"round", t.round},     {"available", t.available},
+                   {"passed", t.passed}, {"entered", t.entered}, {"reason", t.reason}};
   if (is_term(t.name)) {
     j["equation"] = t.equation;
     j["expression"] = t.expression;
@@ -77,9 +75,9 @@ OJson candidate_json(const CandidateTrial& t) {
 }
 
 /// Where the residual is: in time, in frequency, in the states and in the candidates' signatures.
-OJson located_json(const Located& l) {
-  OJson j = {{"excitation", l.excitation}, {"note", l.note}};
-  j["time"] = OJson::array();
+OrderedJson located_json(const Located& l) {
+  OrderedJson j = {{"excitation", l.excitation}, {"note", l.note}};
+  j["time"] = OrderedJson::array();
   for (const auto& f : l.time) {
     j["time"].push_back({{"output", f.output},
                          {"what", f.what},
@@ -88,11 +86,11 @@ OJson located_json(const Located& l) {
                          {"energy_share", f.energy_share},
                          {"time_share", f.time_share}});
   }
-  j["frequency"] = OJson::array();
+  j["frequency"] = OrderedJson::array();
   for (const auto& f : l.frequency) {
     j["frequency"].push_back({{"output", f.output}, {"f_hz", f.f_hz}, {"ratio", f.ratio}, {"p_value", f.p_value}});
   }
-  j["state"] = OJson::array();
+  j["state"] = OrderedJson::array();
   for (const auto& f : l.state) {
     j["state"].push_back(
         {{"output", f.output}, {"signal", f.signal}, {"partial_r", f.partial_r}, {"p_value", f.p_value}});
@@ -105,25 +103,25 @@ OJson located_json(const Located& l) {
 }
 
 /// The held-out gap before and after the named effects, by output and by band.
-OJson gap_json(const DiscrepancyResult& r) {
-  OJson j = {{"metric", r.gap_metric}, {"before", r.gap_before}, {"after", r.gap_after}, {"folds", r.folds}};
-  j["outputs"] = OJson::array();
+OrderedJson gap_json(const DiscrepancyResult& r) {
+  OrderedJson j = {{"metric", r.gap_metric}, {"before", r.gap_before}, {"after", r.gap_after}, {"folds", r.folds}};
+  j["outputs"] = OrderedJson::array();
   for (const auto& o : r.gap) {
-    OJson out = {{"output", o.output},
-                 {"unit", o.unit},
-                 {"rmse_model", o.rmse_model},
-                 {"rmse_before", o.rmse_before},
-                 {"rmse_after", o.rmse_after},
-                 {"fit_before_pct", o.fit_before_pct},
-                 {"fit_after_pct", o.fit_after_pct}};
+    OrderedJson out = {{"output", o.output},
+                       {"unit", o.unit},
+                       {"rmse_model", o.rmse_model},
+                       {"rmse_before", o.rmse_before},
+                       {"rmse_after", o.rmse_after},
+                       {"fit_before_pct", o.fit_before_pct},
+                       {"fit_after_pct", o.fit_after_pct}};
     // Too short for the lags: null (see notes).
-    out["white_before"] = o.white_tested ? OJson(o.white_before) : OJson(nullptr);
-    out["white_after"] = o.white_tested ? OJson(o.white_after) : OJson(nullptr);
+    out["white_before"] = o.white_tested ? OrderedJson(o.white_before) : OrderedJson(nullptr);
+    out["white_after"] = o.white_tested ? OrderedJson(o.white_after) : OrderedJson(nullptr);
     out["peak_psd_before"] = o.peak_psd_before;
     out["peak_psd_after"] = o.peak_psd_after;
     j["outputs"].push_back(std::move(out));
   }
-  j["bands"] = OJson::array();
+  j["bands"] = OrderedJson::array();
   for (const auto& b : r.gap_bands) {
     j["bands"].push_back({{"name", b.name},
                           {"equations", b.equations},
@@ -137,8 +135,8 @@ OJson gap_json(const DiscrepancyResult& r) {
   return j;
 }
 
-OJson closed_loop_json(const DiscrepancyResult& r) {
-  OJson j = {{"note", r.closed_loop_note}, {"outputs", OJson::array()}};
+OrderedJson closed_loop_json(const DiscrepancyResult& r) {
+  OrderedJson j = {{"note", r.closed_loop_note}, {"outputs", OrderedJson::array()}};
   for (const auto& c : r.closed_loop) {
     j["outputs"].push_back({{"output", c.output},
                             {"r2_before", c.r2_before},
@@ -150,20 +148,20 @@ OJson closed_loop_json(const DiscrepancyResult& r) {
 }
 
 /// Each pooled flight's own estimate of the named effects.
-OJson flight_json(const FlightEstimate& f) {
+OrderedJson flight_json(const FlightEstimate& f) {
   return {{"source", f.source}, {"samples", f.samples},       {"start_s", f.start_s}, {"end_s", f.end_s},
           {"noise", f.noise},   {"parameters", f.parameters}, {"sigma", f.sigma}};
 }
 
 /// Whether a named effect is the same in all the pooled flights.
-OJson consistency_json(const FlightConsistency& c) {
+OrderedJson consistency_json(const FlightConsistency& c) {
   return {{"effect", c.effect},   {"q", c.q},       {"dof", c.dof},
           {"p_value", c.p_value}, {"same", c.same}, {"differs", c.differs}};
 }
 
 /// A model's parameter estimates: each value with its sigma, white and coloured.
-OJson parameters_json(const std::map<std::string, ParameterEstimate>& m) {
-  OJson j = OJson::object();
+OrderedJson parameters_json(const std::map<std::string, ParameterEstimate>& m) {
+  OrderedJson j = OrderedJson::object();
   for (const auto& [name, e] : m) {
     j[name] = {{"value", e.value}, {"sigma", e.sigma}, {"sigma_coloured", e.sigma_coloured}};
   }
@@ -171,14 +169,14 @@ OJson parameters_json(const std::map<std::string, ParameterEstimate>& m) {
 }
 
 /// Every flight's data-compatibility stage, every error tested.
-OJson compatibility_json(const CompatibilityResult& c) {
-  OJson j = {{"source", c.source}, {"ran", c.ran}};
+OrderedJson compatibility_json(const CompatibilityResult& c) {
+  OrderedJson j = {{"source", c.source}, {"ran", c.ran}};
   if (!c.ran) j["note"] = c.note;
   j["equation"] = c.equation;
   j["samples"] = c.samples;
   j["t_mid_s"] = c.t_mid_s;
   j["blocks"] = c.blocks;
-  j["errors"] = OJson::array();
+  j["errors"] = OrderedJson::array();
   for (const SensorError& e : c.errors) {
     j["errors"].push_back({{"name", e.name},
                            {"channel", e.channel},
@@ -202,7 +200,7 @@ OJson compatibility_json(const CompatibilityResult& c) {
 }
 
 /// A form of DiscrepancyOptions::test_terms, tested once.
-OJson term_test_json(const TermTest& t) {
+OrderedJson term_test_json(const TermTest& t) {
   return {{"equation", t.equation},
           {"expression", t.expression},
           {"coefficient", t.coefficient},
@@ -217,8 +215,8 @@ OJson term_test_json(const TermTest& t) {
 }
 
 template <typename T, typename F>
-OJson array_of(const std::vector<T>& xs, F f) {
-  OJson a = OJson::array();
+OrderedJson array_of(const std::vector<T>& xs, F f) {
+  OrderedJson a = OrderedJson::array();
   for (const auto& x : xs) a.push_back(f(x));
   return a;
 }
@@ -227,8 +225,8 @@ OJson array_of(const std::vector<T>& xs, F f) {
 
 std::string discrepancy_json(const DiscrepancyResult& r) {
   require_finite_gap(r);
-  OJson j = {{"source", r.source},   {"model", r.model_name}, {"verdict", r.verdict}, {"summary", r.summary},
-             {"samples", r.samples}, {"rate_hz", r.rate_hz},  {"notes", r.notes}};
+  OrderedJson j = {{"source", r.source},   {"model", r.model_name}, {"verdict", r.verdict}, {"summary", r.summary},
+                   {"samples", r.samples}, {"rate_hz", r.rate_hz},  {"notes", r.notes}};
   j["effects"] = array_of(r.effects, effect_json);
   j["compatibility"] = array_of(r.compatibility, compatibility_json);
   j["term_tests"] = array_of(r.term_tests, term_test_json);

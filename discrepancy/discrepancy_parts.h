@@ -22,10 +22,6 @@
 #include "ident/spectrum.h"
 #include "effects/registry.h"
 
-namespace nimble {
-class JsonWriter;
-}
-
 namespace nimble::ident::discrepancy_parts {
 
 using Eigen::Index;

@@ -64,6 +64,7 @@
 
 #include <Eigen/Core>
 
+#include "contract/default_rates.h"
 #include "core/param_table.h"
 
 #include "estimator/ekf_model.h"
@@ -94,7 +95,7 @@ struct EkfConfig {
 
   /// Rate at which the *_var_per_sample values are per-sample variances [Hz]; thesis: data
   /// upsampled to 512 Hz for the fusion.
-  double process_noise_reference_rate_hz = 512.0;
+  double process_noise_reference_rate_hz = contract::kDefaultImuRateHz;
   /// Gyro input noise, variance per sample at the reference rate [(rad/s)^2]; thesis Eq 8.2 Q(1:3).
   Eigen::Vector3d gyro_noise_var_per_sample_rad2ps2 = Eigen::Vector3d(7.60, 2.60, 12.07);
   /// Accelerometer input noise, variance per sample at the reference rate [(m/s^2)^2]; Eq 8.2 Q(4:6).

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "ident/data_check.h"
 #include "ident/plots.h"
 #include "ident/signal.h"
@@ -320,22 +320,20 @@ std::vector<std::string> plot_closed_loop(const ClosedLoopResult& r, const std::
 }
 
 std::string closed_loop_json(const ClosedLoopResult& r, const std::vector<std::string>& plots) {
-  JsonWriter w;
-  w.begin_object();
-  w.key("source").value(r.source).key("model").value(r.model).key("gain_set").value(r.gain_set);
-  w.key("rate_hz").value(r.rate_hz).key("samples").value(static_cast<long long>(r.t_s.size()));
-  w.key("closed_loop").begin_object();
+  OrderedJson j;
+  j["source"] = r.source;
+  j["model"] = r.model;
+  j["gain_set"] = r.gain_set;
+  j["rate_hz"] = r.rate_hz;
+  j["samples"] = r.t_s.size();
+  OrderedJson& fits = j["closed_loop"] = OrderedJson::object();
   for (const char* name : {"p", "v", "phi", "delta_f"}) {
     const FitMetrics& f = r.fits.at(name);
-    w.key(name).begin_object();
-    w.key("rxy").value(f.rxy).key("r2").value(f.r2).key("rmse").value(f.rmse);
-    w.key("range").value(f.range).key("rmse_pct_range").value(f.rmse_pct_range);
-    w.end_object();
+    fits[name] = {
+        {"rxy", f.rxy}, {"r2", f.r2}, {"rmse", f.rmse}, {"range", f.range}, {"rmse_pct_range", f.rmse_pct_range}};
   }
-  w.end_object();
-  if (!plots.empty()) w.key("plots").array(plots);
-  w.end_object();
-  return w.str();
+  if (!plots.empty()) j["plots"] = plots;
+  return json_line(j);
 }
 
 std::string default_controller_file() { return NIMBLE_DEFAULT_CONTROLLER; }

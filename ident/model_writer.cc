@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/output_file.h"
 
 namespace nimble::ident {

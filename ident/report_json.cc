@@ -13,11 +13,9 @@
 namespace nimble::ident {
 namespace {
 
-using OJson = OrderedJson;
-
 /// Each output's fit metrics, its whiteness fraction (null: not tested) and the test's detail, into `j`.
-void add_fits(OJson& j, const std::vector<OutputFit>& fits) {
-  j["metrics"] = OJson::object();
+void add_fits(OrderedJson& j, const std::vector<OutputFit>& fits) {
+  j["metrics"] = OrderedJson::object();
   for (const auto& f : fits) {
     j["metrics"][f.output] = {{"rxy", f.metrics.rxy},
                               {"r2", f.metrics.r2},
@@ -29,14 +27,14 @@ void add_fits(OJson& j, const std::vector<OutputFit>& fits) {
                               {"parameters", f.metrics.parameters}};
   }
   // A whiteness test skipped on a short record: null fractions, and the note saying what it needs.
-  j["whiteness"] = OJson::object();
+  j["whiteness"] = OrderedJson::object();
   for (const auto& f : fits) {
-    j["whiteness"][f.output] = f.whiteness.tested ? OJson(f.whiteness.fraction_outside) : OJson(nullptr);
+    j["whiteness"][f.output] = f.whiteness.tested ? OrderedJson(f.whiteness.fraction_outside) : OrderedJson(nullptr);
   }
-  j["whiteness_detail"] = OJson::object();
+  j["whiteness_detail"] = OrderedJson::object();
   for (const auto& f : fits) {
     const Whiteness& x = f.whiteness;
-    OJson& d = j["whiteness_detail"][f.output];
+    OrderedJson& d = j["whiteness_detail"][f.output];
     d = {{"tested", x.tested}};
     if (!x.tested) {
       d["note"] = x.note;
@@ -56,15 +54,15 @@ void add_fits(OJson& j, const std::vector<OutputFit>& fits) {
   }
 }
 
-OJson ranges_json(const std::vector<TimeRange>& ranges) {
-  OJson a = OJson::array();
+OrderedJson ranges_json(const std::vector<TimeRange>& ranges) {
+  OrderedJson a = OrderedJson::array();
   for (const auto& r : ranges) a.push_back({r.start_s, r.end_s});
   return a;
 }
 
 /// Each parameter with its sigmas, each equation's correlation matrix, and the pairs over the threshold.
-void add_parameters(OJson& j, const IdentResult& r) {
-  j["parameters"] = OJson::object();
+void add_parameters(OrderedJson& j, const IdentResult& r) {
+  j["parameters"] = OrderedJson::object();
   for (const auto& name : r.parameter_order) {
     const ParameterEstimate& e = r.parameters.at(name);
     j["parameters"][name] = {{"value", e.value},
@@ -73,30 +71,30 @@ void add_parameters(OJson& j, const IdentResult& r) {
                              {"sigma_coloured", e.sigma_coloured},
                              {"sigma_coloured_pct", pct(e.sigma_coloured, e.value)}};
   }
-  j["correlation"] = OJson::object();
+  j["correlation"] = OrderedJson::object();
   for (const auto& eq : r.regression.equations) {
-    OJson matrix = OJson::array();
+    OrderedJson matrix = OrderedJson::array();
     for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
-      OJson row = OJson::array();
+      OrderedJson row = OrderedJson::array();
       for (Eigen::Index k = 0; k < eq.correlation.cols(); ++k) row.push_back(eq.correlation(i, k));
       matrix.push_back(std::move(row));
     }
     j["correlation"][eq.equation.name] = {{"parameters", eq.equation.parameters}, {"matrix", std::move(matrix)}};
   }
   j["correlation_threshold"] = r.options.correlation_threshold;
-  j["correlated_pairs"] = OJson::array();
+  j["correlated_pairs"] = OrderedJson::array();
   for (const auto& c : r.correlated) {
     j["correlated_pairs"].push_back({{"equation", c.equation}, {"a", c.a}, {"b", c.b}, {"rho", c.rho}});
   }
 }
 
 /// The identified model's eigenvalues and modes, each mode's eigenvector by state.
-void add_modes(OJson& j, const IdentResult& r) {
-  j["eigenvalues"] = OJson::array();
+void add_modes(OrderedJson& j, const IdentResult& r) {
+  j["eigenvalues"] = OrderedJson::array();
   for (const auto& z : r.eigenvalues) j["eigenvalues"].push_back({z.real(), z.imag()});
-  j["modes"] = OJson::array();
+  j["modes"] = OrderedJson::array();
   for (const auto& m : r.modes) {
-    OJson vector = OJson::object();
+    OrderedJson vector = OrderedJson::object();
     for (std::size_t i = 0; i < r.state_space.states.size(); ++i) {
       const auto c = m.eigenvector_nondim[static_cast<Eigen::Index>(i)];
       vector[r.state_space.states[i]] = {{"magnitude", std::abs(c)}, {"phase_deg", phase_deg(c)}};
@@ -111,13 +109,13 @@ void add_modes(OJson& j, const IdentResult& r) {
 }
 
 /// The hover and manoeuvre segments, and each state's PSD in each.
-void add_segments(OJson& j, const IdentResult& r) {
+void add_segments(OrderedJson& j, const IdentResult& r) {
   j["segments"] = {{"how", r.segments.how},
                    {"hover", ranges_json(r.segments.hover)},
                    {"manoeuvre", ranges_json(r.segments.manoeuvre)}};
-  j["psd"] = OJson::object();
+  j["psd"] = OrderedJson::object();
   for (const auto& p : r.psd) {
-    OJson& s = j["psd"][p.state];
+    OrderedJson& s = j["psd"][p.state];
     s = {{"unit", "(" + p.unit + ")^2/Hz"}};
     for (const auto* part : {&p.hover, &p.manoeuvre}) {
       const bool have = part == &p.hover ? p.has_hover : p.has_manoeuvre;
@@ -139,8 +137,8 @@ void add_segments(OJson& j, const IdentResult& r) {
 std::string identification_json(const IdentResult& r, const std::string& model_out,
                                 const std::vector<std::string>& plots) {
   const IdentOptions& o = r.options;
-  OJson j = {{"source", r.source}, {"structure", to_string(o.structure)},  {"method", to_string(o.method)},
-             {"inputs", r.inputs}, {"inputs_left_out", r.inputs_left_out}, {"notes", r.notes}};
+  OrderedJson j = {{"source", r.source}, {"structure", to_string(o.structure)},  {"method", to_string(o.method)},
+                   {"inputs", r.inputs}, {"inputs_left_out", r.inputs_left_out}, {"notes", r.notes}};
   j["vehicle"] = {{"name", r.vehicle.name}, {"file", r.vehicle.file}, {"mass_kg", r.vehicle.mass_kg}};
   j["trim"] = {{"u0_mps", r.model.trim.u0_mps},
                {"w0_mps", r.model.trim.w0_mps},
@@ -166,10 +164,10 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
 }
 
 std::string validation_json(const ValidationResult& r, const std::vector<std::string>& plots) {
-  OJson j = {{"source", r.source},         {"model", r.model.name},
-             {"model_file", r.model.file}, {"structure", to_string(r.model.structure)},
-             {"vehicle", r.vehicle.name},  {"samples", r.data.size()},
-             {"rate_hz", r.data.rate_hz},  {"notes", r.notes}};
+  OrderedJson j = {{"source", r.source},         {"model", r.model.name},
+                   {"model_file", r.model.file}, {"structure", to_string(r.model.structure)},
+                   {"vehicle", r.vehicle.name},  {"samples", r.data.size()},
+                   {"rate_hz", r.data.rate_hz},  {"notes", r.notes}};
   add_fits(j, r.fits);
   if (!plots.empty()) j["plots"] = plots;
   return json_line(j);

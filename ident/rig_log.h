@@ -20,6 +20,7 @@
 #include <optional>
 #include <string>
 
+#include "contract/default_rates.h"
 #include "core/data_bounds.h"
 #include "core/rig_values.h"
 #include "core/vehicle.h"
@@ -64,7 +65,7 @@ struct SmoothingOptions {
   /// prefilter_imu), before the smoother (its residual variance the forward pass's input noise
   /// per sample) and before the rates of kSensors. Off (the default): the IMU as logged.
   ImuPrefilterConfig prefilter;
-  double imu_rate_hz = 512.0;  ///< sensing.imu.sample_rate_hz, the prefilter's rate
+  double imu_rate_hz = contract::kDefaultImuRateHz;  ///< sensing.imu.sample_rate_hz, the prefilter's rate
   /// sensing.imu's clock: an IMU stamp [us] to the rig time of its sample (ImuClock::rig_utime);
   /// empty: the identity.
   std::function<std::int64_t(std::int64_t)> imu_rig_utime;

@@ -16,6 +16,7 @@
 
 #include <Eigen/Dense>
 
+#include "contract/default_rates.h"
 #include "ident/flight_data.h"
 
 namespace nimble::ident {
@@ -130,7 +131,7 @@ Eigen::VectorXd differentiate(const Eigen::VectorXd& x, double rate_hz);
 
 /// Options of the processing chain.
 struct ProcessingOptions {
-  double rate_hz = 512.0;                               ///< uniform grid rate [Hz], > 0
+  double rate_hz = contract::kDefaultImuRateHz;         ///< uniform grid rate [Hz], > 0
   Interpolation interpolation = Interpolation::kCubic;  ///< of resample_uniform()
   int filter_order = 10;                                ///< Butterworth order, 1..40; 0 disables the low-pass
   double cutoff_hz = 9.0;                               ///< low-pass cut-off [Hz], in (0, rate/2)

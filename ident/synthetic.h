@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "contract/default_rates.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
@@ -28,7 +29,7 @@ namespace nimble::ident {
 /// flight with the fast gains scaled by 80 rad/s per unit command.
 struct SyntheticOptions {
   double duration_s = 60.0;
-  double rate_hz = 512.0;
+  double rate_hz = contract::kDefaultImuRateHz;
   double hover_s = 5.0;  ///< hover before the first doublet [s]
   std::vector<double> doublet_frequencies_hz{7.0, 4.0};
   double doublet_amplitude_rad = 0.35;  ///< roll set-point amplitude [rad]

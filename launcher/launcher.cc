@@ -36,7 +36,7 @@
 #include "contract/decode.h"
 #include "contract/messages.h"
 #include "contract/rates.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/output_file.h"
 #include "core/output_lock.h"
 #include "launcher/hosts.h"
@@ -121,18 +121,18 @@ int check_host(const std::string& json_target) {
   }
   const bool ok = host_ok || ns_ok;
   if (!json_target.empty()) {
-    JsonWriter w;
-    w.begin_object();
-    w.key("url").value(url).key("host_multicast").value(host_ok);
-    w.key("private_namespace").value(host_ok ? "not needed" : (ns_ok ? "works" : "does not work"));
-    w.key("runs_can_start").value(ok);
-    if (!host_ok) w.key("fix").value(multicast_fix_commands());
-    w.end_object();
+    OrderedJson j;
+    j["url"] = url;
+    j["host_multicast"] = host_ok;
+    j["private_namespace"] = host_ok ? "not needed" : (ns_ok ? "works" : "does not work");
+    j["runs_can_start"] = ok;
+    if (!host_ok) j["fix"] = multicast_fix_commands();
+    const std::string doc = json_line(j);
     if (json_target == "-") {
-      std::cout << w.str() << "\n";
+      std::cout << doc << "\n";
     } else {
       try {
-        write_file(json_target, w.str() + "\n");
+        write_file(json_target, doc + "\n");
       } catch (const OutputError& e) {
         std::cerr << "rig check: " << e.what() << "\n";
         return kRunBadInput;

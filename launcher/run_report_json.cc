@@ -11,10 +11,8 @@
 namespace nimble::launcher {
 namespace {
 
-using OJson = OrderedJson;
-
 /// The run's roll tracking and its oscillation (a run with a controller).
-OJson tracking_json(const RunReport& r) {
+OrderedJson tracking_json(const RunReport& r) {
   const TrackingSummary& t = r.tracking;
   const Oscillation& o = r.verdict.tracking.oscillation;
   return {{"samples", t.samples},
@@ -35,7 +33,7 @@ OJson tracking_json(const RunReport& r) {
 }
 
 /// One side of the CAN bridge: what it carried and what it rejected.
-OJson can_json(const nimble::CanHealth& h) {
+OrderedJson can_json(const nimble::CanHealth& h) {
   return {{"interface", h.interface_name},
           {"messages_to_can", h.messages_to_can},
           {"messages_to_lcm", h.messages_to_lcm},
@@ -63,7 +61,7 @@ OJson can_json(const nimble::CanHealth& h) {
 }
 
 /// The flight's extremes, ranges, final state, vertical excursion and its trace where kept, into `j`.
-void add_flight(OJson& j, const FlightSummary& f) {
+void add_flight(OrderedJson& j, const FlightSummary& f) {
   j["max_abs"] = {{"p", f.max_abs_p},
                   {"v", f.max_abs_v},
                   {"phi", f.max_abs_phi},
@@ -86,7 +84,7 @@ void add_flight(OJson& j, const FlightSummary& f) {
   }
 }
 
-OJson estimator_json(const EstimatorSummary& est) {
+OrderedJson estimator_json(const EstimatorSummary& est) {
   return {{"samples", est.samples},
           {"phi_rms_deg", est.phi_rms_deg},
           {"phi_max_deg", est.phi_max_deg},
@@ -102,8 +100,8 @@ OJson estimator_json(const EstimatorSummary& est) {
           {"imu_gaps", est.imu_gaps}};
 }
 
-OJson channels_json(const RunReport& r) {
-  OJson j = OJson::object();
+OrderedJson channels_json(const RunReport& r) {
+  OrderedJson j = OrderedJson::object();
   for (const auto& [name, c] : r.channels) {
     j[name] = {{"count", c.count},
                {"rate_hz", c.rate_hz},
@@ -117,10 +115,10 @@ OJson channels_json(const RunReport& r) {
 }
 
 /// Each process's loop timing, message latency and what it received.
-OJson timing_json(const RunReport& r) {
-  OJson j = OJson::object();
+OrderedJson timing_json(const RunReport& r) {
+  OrderedJson j = OrderedJson::object();
   for (const auto& [name, t] : r.timing) {
-    OJson received = OJson::object();
+    OrderedJson received = OrderedJson::object();
     for (const auto& [channel, rc] : t.received) received[channel] = {{"count", rc.count}, {"late", rc.late}};
     j[name] = {{"loop_rate_hz", t.loop_rate_hz},
                {"loop_count", t.loop_count},
@@ -138,8 +136,8 @@ OJson timing_json(const RunReport& r) {
 }
 
 /// Every fault, each process with how it ended, and the hosts they ran on, into `j`.
-void add_faults_processes_hosts(OJson& j, const RunReport& r) {
-  j["faults"] = OJson::array();
+void add_faults_processes_hosts(OrderedJson& j, const RunReport& r) {
+  j["faults"] = OrderedJson::array();
   for (const auto& fr : r.faults) {
     j["faults"].push_back({{"process", fr.process},
                            {"severity", fr.severity},
@@ -148,9 +146,9 @@ void add_faults_processes_hosts(OJson& j, const RunReport& r) {
                            {"message", fr.message},
                            {"rig_time_s", fr.rig_time_s}});
   }
-  j["processes"] = OJson::object();
+  j["processes"] = OrderedJson::object();
   for (const auto& p : r.processes) {
-    OJson& out = j["processes"][p.name];
+    OrderedJson& out = j["processes"][p.name];
     out = {{"pid", p.pid}, {"exit_code", p.exit_code}, {"signal", p.signal}};
     for (const HostSummary& h : r.hosts) {
       if (std::find(h.processes.begin(), h.processes.end(), p.name) != h.processes.end()) out["host"] = h.name;
@@ -168,8 +166,8 @@ void add_faults_processes_hosts(OJson& j, const RunReport& r) {
 }  // namespace
 
 std::string report_json(const RunReport& r) {
-  OJson j = {{"scenario", r.scenario},           {"clock", r.clock},       {"seed", r.seed},
-             {"config_digest", r.config_digest}, {"lcm_url", r.transport}, {"log", r.log_file}};
+  OrderedJson j = {{"scenario", r.scenario},           {"clock", r.clock},       {"seed", r.seed},
+                   {"config_digest", r.config_digest}, {"lcm_url", r.transport}, {"log", r.log_file}};
   if (!r.log.file.empty()) {
     j["log_kept"] = {
         {"events", r.log.events}, {"bytes", r.log.bytes}, {"sim_time_s", r.log.sim_time_s}, {"failure", r.log.failure}};
@@ -198,8 +196,8 @@ std::string report_json(const RunReport& r) {
   j["timing"] = timing_json(r);
   add_faults_processes_hosts(j, r);
   for (const TapFigures& t : r.taps) {
-    OJson& tap = j[t.key];
-    tap = OJson::object();
+    OrderedJson& tap = j[t.key];
+    tap = OrderedJson::object();
     for (const auto& v : t.values) tap[v.first] = v.second;
     if (!t.note.empty()) tap["note"] = t.note;
   }

@@ -9,14 +9,12 @@
 namespace nimble::loop {
 namespace {
 
-using OJson = OrderedJson;
-
-OJson pole_json(const LoopPole& p) {
+OrderedJson pole_json(const LoopPole& p) {
   return {{"re", p.s.real()}, {"im", p.s.imag()}, {"damping", p.damping}, {"natural_hz", p.natural_hz}};
 }
 
 /// A loop's margins, bandwidths and closed-loop poles, into `j`.
-void add_margins(OJson& j, const RollLoopAnalysis& a) {
+void add_margins(OrderedJson& j, const RollLoopAnalysis& a) {
   const LoopMargins& m = a.margins;
   j["closed_loop_stable"] = m.closed_loop_stable;
   j["open_loop_stable"] = m.open_loop_stable;
@@ -33,13 +31,13 @@ void add_margins(OJson& j, const RollLoopAnalysis& a) {
   j["bandwidth_hz"] = a.bandwidth_hz;
   j["setpoint_bandwidth_hz"] = a.setpoint_bandwidth_hz;
   j["dc_gain"] = a.dc_gain;
-  j["dominant_pair"] = a.has_dominant_pair ? pole_json(a.dominant) : OJson(nullptr);
-  j["closed_loop_poles"] = OJson::array();
+  j["dominant_pair"] = a.has_dominant_pair ? pole_json(a.dominant) : OrderedJson(nullptr);
+  j["closed_loop_poles"] = OrderedJson::array();
   for (const LoopPole& p : a.poles) j["closed_loop_poles"].push_back(pole_json(p));
   j["poles_at_origin"] = a.poles_at_origin;
 }
 
-OJson worst_json(const WorstMargins& x) {
+OrderedJson worst_json(const WorstMargins& x) {
   return {{"gains", x.gains},
           {"over", x.over},
           {"loops", x.loops},
@@ -58,16 +56,16 @@ OJson worst_json(const WorstMargins& x) {
           {"unstable_alone", x.unstable_alone}};
 }
 
-OJson design_json(const DesignOutcome& d) {
-  OJson j = {{"model", d.model},
-             {"name", d.name},
-             {"phase_margin_deg_requested", d.request.phase_margin_deg},
-             {"crossover_hz_requested", d.request.crossover_hz},
-             {"feasible", d.design.feasible},
-             {"note", d.design.note},
-             {"kp_per_rad", d.design.gains.kp_per_rad},
-             {"kd_per_radps", d.design.gains.kd_per_radps},
-             {"lowpass_cutoff_hz", d.design.lowpass_cutoff_hz}};
+OrderedJson design_json(const DesignOutcome& d) {
+  OrderedJson j = {{"model", d.model},
+                   {"name", d.name},
+                   {"phase_margin_deg_requested", d.request.phase_margin_deg},
+                   {"crossover_hz_requested", d.request.crossover_hz},
+                   {"feasible", d.design.feasible},
+                   {"note", d.design.note},
+                   {"kp_per_rad", d.design.gains.kp_per_rad},
+                   {"kd_per_radps", d.design.gains.kd_per_radps},
+                   {"lowpass_cutoff_hz", d.design.lowpass_cutoff_hz}};
   if (d.design.feasible) add_margins(j, d.design.analysis);
   if (!d.flight.empty()) {
     j["flight"] = d.flight;
@@ -80,24 +78,24 @@ OJson design_json(const DesignOutcome& d) {
 
 std::string loop_json(const LoopSetup& s, const std::vector<LoopRow>& rows, const std::vector<WorstMargins>& worst,
                       const DesignOutcome* design) {
-  OJson j = {{"scenario", s.scenario_file},
-             {"input", s.input},
-             {"clock", s.clock},
-             {"latency_s", s.latency_s()},
-             {"actuator_delay_s", s.actuator_delay_s},
-             {"rate_hz", s.controller.rate_hz},
-             {"lowpass_cutoff_hz", s.controller.roll_lowpass_cutoff_hz}};
-  j["loops"] = OJson::array();
+  OrderedJson j = {{"scenario", s.scenario_file},
+                   {"input", s.input},
+                   {"clock", s.clock},
+                   {"latency_s", s.latency_s()},
+                   {"actuator_delay_s", s.actuator_delay_s},
+                   {"rate_hz", s.controller.rate_hz},
+                   {"lowpass_cutoff_hz", s.controller.roll_lowpass_cutoff_hz}};
+  j["loops"] = OrderedJson::array();
   for (const LoopRow& r : rows) {
-    OJson loop = {{"model", r.model},
-                  {"gains", r.gains},
-                  {"break", to_string(r.where)},
-                  {"kp_per_rad", r.gain_values.kp_per_rad},
-                  {"kd_per_radps", r.gain_values.kd_per_radps}};
+    OrderedJson loop = {{"model", r.model},
+                        {"gains", r.gains},
+                        {"break", to_string(r.where)},
+                        {"kp_per_rad", r.gain_values.kp_per_rad},
+                        {"kd_per_radps", r.gain_values.kd_per_radps}};
     add_margins(loop, r.analysis);
     j["loops"].push_back(std::move(loop));
   }
-  j["robustness"] = OJson::array();
+  j["robustness"] = OrderedJson::array();
   for (const WorstMargins& x : worst) j["robustness"].push_back(worst_json(x));
   if (design) j["design"] = design_json(*design);
   return json_line(j);

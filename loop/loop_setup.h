@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "contract/default_rates.h"
 #include "controller/attitude_controller.h"
 #include "controller/roll_loop.h"
 #include "core/model.h"
@@ -24,7 +25,7 @@ struct LoopSetup {
   std::string gain_set;           ///< the set the scenario's manoeuvre flies
   double flap_gain_per_s = 8.97;  ///< the plant's flap actuator
   double flap_pole_radps = 12.56;
-  double plant_rate_hz = 1000.0;
+  double plant_rate_hz = contract::kDefaultPlantRateHz;
   std::string input;                           ///< truth | estimate: what the controller flies on
   std::string clock;                           ///< realtime | lockstep | inprocess: whose timing the loop has
   std::string trigger;                         ///< state | timer: what starts a real-time controller cycle

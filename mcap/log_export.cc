@@ -10,7 +10,6 @@
 
 #include "core/input_file.h"
 #include "contract/message_bounds.h"
-#include "core/json_writer.h"
 #include "ident/data_check.h"
 #include "lcmlog/lcm_log.h"
 #include "lcmjson/lcm_json.h"
@@ -238,42 +237,43 @@ std::string summary_line(const ExportStats& s) {
   return line;
 }
 
-void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel) {
-  w.key("undecodable_channels").begin_object();
-  for (const auto& [name, n] : by_channel) w.key(name).value(static_cast<long long>(n));
-  w.end_object();
+OrderedJson undecodable_json(const std::map<std::string, uint64_t>& by_channel) {
+  OrderedJson j = OrderedJson::object();
+  for (const auto& [name, n] : by_channel) j[name] = n;
+  return j;
 }
 
 std::string export_json(const ExportStats& s) {
-  auto n = [](uint64_t v) { return static_cast<long long>(v); };
-  JsonWriter w;
-  w.begin_object();
-  w.key("log").value(s.log).key("out").value(s.out).key("format").value("mcap");
-  w.key("compression").value(to_string(s.compression));
-  w.key("events").value(n(s.events)).key("messages").value(n(s.messages));
-  w.key("mcap_channels").value(n(s.mcap_channels));
-  w.key("undecodable").value(n(s.undecodable)).key("unknown_channel_events").value(n(s.unknown_events));
-  undecodable_json(w, undecodable_by_channel(s));
-  w.key("start_time_ns").value(n(s.start_time_ns)).key("end_time_ns").value(n(s.end_time_ns));
-  w.key("bytes_in").value(n(s.bytes_in)).key("bytes_out").value(n(s.bytes_out));
-  w.key("seconds").value(s.seconds).key("damage").value(s.damage);
-  w.key("beyond_bounds_messages").value(n(s.beyond_bounds));
-  if (s.beyond) s.beyond->json(w);
-  w.key("channels").begin_object();
-  for (const auto& kv : s.channels) {
-    w.key(kv.first).begin_object();
-    w.key("type").value(kv.second.type).key("events").value(n(kv.second.events));
-    w.key("json").value(n(kv.second.json)).key("undecodable").value(n(kv.second.undecodable));
-    w.key("beyond_bounds").value(n(kv.second.beyond_bounds));
-    w.key("raw").value(n(kv.second.raw));
-    w.end_object();
+  OrderedJson j;
+  j["log"] = s.log;
+  j["out"] = s.out;
+  j["format"] = "mcap";
+  j["compression"] = to_string(s.compression);
+  j["events"] = s.events;
+  j["messages"] = s.messages;
+  j["mcap_channels"] = s.mcap_channels;
+  j["undecodable"] = s.undecodable;
+  j["unknown_channel_events"] = s.unknown_events;
+  j["undecodable_channels"] = undecodable_json(undecodable_by_channel(s));
+  j["start_time_ns"] = s.start_time_ns;
+  j["end_time_ns"] = s.end_time_ns;
+  j["bytes_in"] = s.bytes_in;
+  j["bytes_out"] = s.bytes_out;
+  j["seconds"] = s.seconds;
+  j["damage"] = s.damage;
+  j["beyond_bounds_messages"] = s.beyond_bounds;
+  if (s.beyond) j["beyond_bounds"] = s.beyond->json();
+  OrderedJson& channels = j["channels"] = OrderedJson::object();
+  for (const auto& [name, c] : s.channels) {
+    channels[name] = {{"type", c.type},
+                      {"events", c.events},
+                      {"json", c.json},
+                      {"undecodable", c.undecodable},
+                      {"beyond_bounds", c.beyond_bounds},
+                      {"raw", c.raw}};
   }
-  w.end_object();
-  w.key("unknown_channels").begin_array();
-  for (const auto& c : s.unknown_channels) w.value(c);
-  w.end_array();
-  w.end_object();
-  return w.str();
+  j["unknown_channels"] = s.unknown_channels;
+  return json_line(j);
 }
 
 }  // namespace nimble::mcap

@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "core/data_bounds.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/vehicle.h"
 #include "lcmlog/lcm_log.h"
 #include "mcap/mcap_writer.h"
@@ -99,7 +99,7 @@ std::map<std::string, uint64_t> undecodable_by_channel(const ExportStats& stats)
 std::string undecodable_text(const std::map<std::string, uint64_t>& by_channel);
 
 /// The undecodable messages by channel as the "undecodable_channels" object of a --json report.
-void undecodable_json(JsonWriter& w, const std::map<std::string, uint64_t>& by_channel);
+OrderedJson undecodable_json(const std::map<std::string, uint64_t>& by_channel);
 
 /// An export as `rig export --format mcap --json` reports it: counts, times, sizes, damage, and
 /// per channel its type, events, JSON messages, undecodable and raw messages.

@@ -19,6 +19,7 @@
 
 #include <Eigen/Dense>
 
+#include "contract/default_rates.h"
 #include "core/config.h"
 #include "core/model.h"
 #include "core/param_table.h"
@@ -69,10 +70,10 @@ struct InitialState {
 
 /// Everything the plant model needs besides the derivative models and the vehicle.
 struct PlantConfig {
-  double rate_hz = 1000.0;          ///< integration rate [Hz]
-  double truth_rate_hz = 1000.0;    ///< TRUTH publication rate [Hz]
-  double feedback_rate_hz = 100.0;  ///< ACTUATOR_FB publication rate [Hz]
-  double command_timeout_s = 0.1;   ///< hold the safe state when commands stop this long [s]
+  double rate_hz = contract::kDefaultPlantRateHz;              ///< integration rate [Hz]
+  double truth_rate_hz = contract::kDefaultTruthRateHz;        ///< TRUTH publication rate [Hz]
+  double feedback_rate_hz = contract::kDefaultFeedbackRateHz;  ///< ACTUATOR_FB publication rate [Hz]
+  double command_timeout_s = 0.1;                              ///< hold the safe state when commands stop this long [s]
   /// Resolution of the actuator interface: commands are rounded to a multiple of it
   /// (0 = no rounding). Defaults: the CAN frames' resolution (can_bridge/nimble_rig.dbc), so
   /// that the plant flies the same commands over the LCM and the CAN link.

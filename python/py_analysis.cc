@@ -16,7 +16,7 @@
 
 #include "controller/attitude_controller.h"
 #include "core/data_bounds.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/model.h"
 #include "core/terms.h"
 #include "core/vehicle.h"
@@ -320,12 +320,10 @@ py::dict log_bounds(const py::object& log, const std::optional<std::string>& veh
     py::gil_scoped_release free;
     found.emplace(mcap::check_log_bounds(path, v, salvage));
   }
-  JsonWriter w;
-  w.begin_object();
-  found->tally.json(w);
-  w.key("text").value(found->tally.empty() ? std::string() : found->tally.text());
-  w.end_object();
-  py::dict out = json_value(w.str());
+  OrderedJson j;
+  j["beyond_bounds"] = found->tally.json();
+  j["text"] = found->tally.empty() ? std::string() : found->tally.text();
+  py::dict out = json_value(json_line(j));
   out["offsets"] = found->offsets;
   return out;
 }

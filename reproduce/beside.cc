@@ -15,7 +15,6 @@ namespace nimble::reproduce {
 namespace {
 
 namespace fs = std::filesystem;
-using OJson = OrderedJson;
 
 std::string join(const std::vector<std::string>& v, const char* sep) {
   std::string s;
@@ -121,10 +120,10 @@ std::string count_line(const std::map<std::string, int>& counts, const std::vect
   return fmt::format("{} (of {})", line, total);
 }
 
-OJson cell_json(const OJson& side_table, std::size_t k) { return side_table.at("cells").at(k); }
+OrderedJson cell_json(const OrderedJson& side_table, std::size_t k) { return side_table.at("cells").at(k); }
 
 /// A double as JSON: null for NaN or infinity, as the campaign's JSON writes them.
-OJson json_number(double x) { return std::isfinite(x) ? OJson(x) : OJson(nullptr); }
+OrderedJson json_number(double x) { return std::isfinite(x) ? OrderedJson(x) : OrderedJson(nullptr); }
 
 }  // namespace
 
@@ -232,14 +231,15 @@ std::string beside_text(const BesideResult& r) {
 }
 
 std::string beside_json(const BesideResult& r) {
-  const OJson without = OJson::parse(campaign_json(r.without)), with = OJson::parse(campaign_json(r.with));
-  OJson j;
+  const OrderedJson without = OrderedJson::parse(campaign_json(r.without)),
+                    with = OrderedJson::parse(campaign_json(r.with));
+  OrderedJson j;
   j["beside"] = true;
   j["overrides"] = r.with.overrides;
-  j["tables"] = OJson::array();
+  j["tables"] = OrderedJson::array();
   for (std::size_t i = 0; i < r.tables.size(); ++i) {
     const BesideTable& t = r.tables[i];
-    OJson cells = OJson::array();
+    OrderedJson cells = OrderedJson::array();
     for (std::size_t k = 0; k < t.cells.size(); ++k) {
       const BesideCell& c = t.cells[k];
       cells.push_back({{"row", c.without.row},

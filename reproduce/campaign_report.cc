@@ -165,10 +165,9 @@ std::string campaign_text(const CampaignResult& r) {
 }
 
 std::string campaign_json(const CampaignResult& r) {
-  using OJson = OrderedJson;
-  OJson j = {{"campaign", r.campaign}, {"clock", r.clock},         {"seeds", r.seeds},
-             {"states", r.states},     {"overrides", r.overrides}, {"wall_s", r.wall_s}};
-  j["flights"] = OJson::array();
+  OrderedJson j = {{"campaign", r.campaign}, {"clock", r.clock},         {"seeds", r.seeds},
+                   {"states", r.states},     {"overrides", r.overrides}, {"wall_s", r.wall_s}};
+  j["flights"] = OrderedJson::array();
   for (const auto& f : r.flights) {
     j["flights"].push_back({{"name", f.name},
                             {"seed", f.seed},
@@ -179,25 +178,25 @@ std::string campaign_json(const CampaignResult& r) {
                             {"sim_s", f.sim_s},
                             {"wall_s", f.wall_s}});
   }
-  j["tables"] = OJson::array();
+  j["tables"] = OrderedJson::array();
   for (const auto& t : r.tables) {
-    OJson cells = OJson::array();
+    OrderedJson cells = OrderedJson::array();
     for (const auto& c : t.cells) {
-      OJson cell = {{"row", c.row},
-                    {"column", c.column},
-                    {"published", c.published},
-                    {"reference", c.reference},
-                    {"rig", c.rig},
-                    {"rig_sd", c.rig_sd},
-                    {"values", c.values},
-                    {"interval", c.interval},
-                    {"seeds", c.seeds},
-                    {"seeds_to_decide", c.seeds_to_decide},
-                    {"tolerance", c.tolerance},
-                    {"tolerance_basis", c.tolerance_basis},
-                    {"category", c.category},
-                    {"verdict", c.verdict},
-                    {"reason", c.reason}};
+      OrderedJson cell = {{"row", c.row},
+                          {"column", c.column},
+                          {"published", c.published},
+                          {"reference", c.reference},
+                          {"rig", c.rig},
+                          {"rig_sd", c.rig_sd},
+                          {"values", c.values},
+                          {"interval", c.interval},
+                          {"seeds", c.seeds},
+                          {"seeds_to_decide", c.seeds_to_decide},
+                          {"tolerance", c.tolerance},
+                          {"tolerance_basis", c.tolerance_basis},
+                          {"category", c.category},
+                          {"verdict", c.verdict},
+                          {"reason", c.reason}};
       if (c.has_check) {
         cell["check"] = {{"predicate", c.check.predicate}, {"holds", c.check.holds}, {"value", c.check.value}};
       }
@@ -211,9 +210,9 @@ std::string campaign_json(const CampaignResult& r) {
                            {"against", t.against_plant ? "plant file" : "published"},
                            {"cells", std::move(cells)}});
   }
-  j["causes"] = OJson::array();
+  j["causes"] = OrderedJson::array();
   for (const auto& s : r.causes) {
-    OJson cells = OJson::array();
+    OrderedJson cells = OrderedJson::array();
     for (const auto& c : s.cells) {
       cells.push_back({{"table", c.table},
                        {"row", c.row},
@@ -229,7 +228,7 @@ std::string campaign_json(const CampaignResult& r) {
                            {"failures", s.failures},
                            {"cells", std::move(cells)}});
   }
-  j["plant_check"] = OJson::array();
+  j["plant_check"] = OrderedJson::array();
   for (const auto& c : r.plant_check) {
     j["plant_check"].push_back({{"row", c.row},
                                 {"derivative", c.derivative},
@@ -240,10 +239,10 @@ std::string campaign_json(const CampaignResult& r) {
                                 {"own_sd", c.own_sd},
                                 {"interval", c.interval}});
   }
-  j["counts"] = OJson::object();
+  j["counts"] = OrderedJson::object();
   for (const auto& [category, verdicts] : r.counts()) {
-    OJson& of = j["counts"][category];
-    of = OJson::object();
+    OrderedJson& of = j["counts"][category];
+    of = OrderedJson::object();
     for (const auto& [verdict, n] : verdicts) of[verdict] = n;
   }
   j["match_share"] = match_share(r);

@@ -18,7 +18,6 @@
 
 #include "controller/attitude_controller.h"
 #include "core/config.h"
-#include "core/json_writer.h"
 #include "core/model.h"
 #include "core/output_file.h"
 #include "core/vehicle.h"

@@ -33,6 +33,7 @@
 
 #include <Eigen/Core>
 
+#include "contract/default_rates.h"
 #include "core/rig_values.h"
 
 namespace nimble {
@@ -84,7 +85,7 @@ std::vector<VibrationHarmonic> default_flapping_harmonics();
 struct ImuModelConfig {
   /// Output rate [Hz]; thesis Section 8.1 (512 Hz). The model uses the actual sample times; this is
   /// the nominal rate for the process that calls it and for matched EKF noise.
-  double sample_rate_hz = 512.0;
+  double sample_rate_hz = contract::kDefaultImuRateHz;
   /// White gyro noise, 1-sigma per sample, axes x y z [rad/s]; thesis Section 8.1: 0.05 deg/s.
   Eigen::Vector3d gyro_noise_sigma_radps = Eigen::Vector3d::Constant(0.05 * kDegToRad);
   /// White accelerometer noise, 1-sigma per sample [m/s^2]; thesis Section 8.1: 0.05 g (x, y), 0.08 g (z).

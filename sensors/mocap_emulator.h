@@ -35,6 +35,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "contract/default_rates.h"
 #include "core/rig_values.h"
 
 namespace nimble {
@@ -42,7 +43,7 @@ namespace nimble {
 /// Parameters of MocapEmulator.
 struct MocapConfig {
   /// Frame rate [Hz]; thesis Section 8.1: 200 Hz. 1e6 / rate must be a whole number of microseconds.
-  double frame_rate_hz = 200.0;
+  double frame_rate_hz = contract::kDefaultMocapFrameRateHz;
   /// Start of the exposure of frame 0 [us] (rig time).
   std::int64_t first_frame_start_utime = 0;
   /// Exposure time [us]. Assumption: 500 us (typical OptiTrack setting for fast bodies).

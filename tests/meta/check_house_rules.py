@@ -18,6 +18,12 @@
 9. An effect's name is spelled only in its own file pair (effects/<name>.{h,cc}): no other
    source holds a string literal that is an effect's name, so that no code outside the effect
    picks it by name (the workflow reads the effect's properties, effects/effect.h).
+10. JSON is written through nlohmann (core/json_line.h: a document built as an OrderedJson,
+   written by json_line()): no source writes it key by key through a writer of its own
+   (`.key("...")`). lcmjson/ is the one serialiser by hand: it walks an LCM message's bytes.
+11. No rate default outside the contract: a rate's default (`..._rate_hz = 512.0;`) is one of
+   contract/rates.h's constants, so that each default is written once, where the contract
+   derives the channels' rates from them.
 
 Usage: check_house_rules.py <source dir>. Prints every breach as file:line and exits 1 if
 there is one.
@@ -35,6 +41,8 @@ ABOVE_LAUNCHER = {"launcher", "campaign", "cli", "python", "reproduce", "detecti
 MAX_LINES = 650
 MAX_FUNCTION_LINES = 120
 PROCESS_ROOMS = {"plant", "controller", "estimator", "mocap", "can_bridge", "sensors", "transport"}
+KEY_WRITER = re.compile(r'\.key\(\s*"')
+RATE_DEFAULT = re.compile(r"\b(?!\w*burst)\w*rate_hz\s*=\s*(?=[\d.]*[1-9])\d*\.?\d*([eE][-+]?\d+)?\s*;")
 RATE_FALLBACK = re.compile(r"(rate|_hz)\b.*\?.*:\s*\d+(\.\d*)?([eE][-+]?\d+)?\s*;|_hz\s*=\s*\d+(\.\d*)?\s*;")
 
 
@@ -161,6 +169,12 @@ def main():
             if top in PROCESS_ROOMS and rel.suffix == ".cc" and RATE_FALLBACK.search(code):
                 breaches.append("%s:%d: a rate literal in a process (take it from the configuration or "
                                 "contract/rates.h): %s" % (rel, n, line.strip()))
+            if KEY_WRITER.search(code) and top != "lcmjson":
+                breaches.append("%s:%d: JSON written key by key: build an OrderedJson and write it with json_line() "
+                                "(core/json_line.h)" % (rel, n))
+            if top != "contract" and RATE_DEFAULT.search(code):
+                breaches.append("%s:%d: a rate default outside the contract (use contract/rates.h's constant): %s"
+                                % (rel, n, line.strip()))
             m_any = any_include.search(code)
             if m_any:
                 check_include(rel, n, m_any.group(1), layers, breaches)

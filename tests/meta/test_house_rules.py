@@ -49,6 +49,8 @@ def tree(root, broken):
     write(root, "ident/fit.cc", '#include "core/x.h"\nint fit() {\n  int x = 0;\n' + long_body + "  return x;\n}\n")
     write(root, "plant/node.cc", '#include "transport/bus.h"\ndouble rate_hz(bool set) { return set ? 100.0 : %s; }\n'
           % ("512.0" if broken else "kDefaultRateHz"))
+    write(root, "ident/grid.h", "struct G {\n  double rate_hz = %s;\n  double cutoff_hz = 9.0;\n};\n"
+          % ("512.0" if broken else "kDefaultImuRateHz"))  # a rate default
     if broken:
         write(root, "ident/uses_plant.cc", '#include "plant/model.h"\n')     # not on ident's row
         write(root, "scenario/up.cc", '#include "transport/bus.h"\n')        # not on scenario's row
@@ -57,6 +59,7 @@ def tree(root, broken):
         write(root, "core/names.cc", 'const char* c = "CH_C";\n')           # a channel name
         write(root, "plant/long.cc", "\n" * 700)                             # a file over 650 lines
         write(root, "ident/pick.cc", 'bool f(const S& s) { return s == "effect_3"; }\n')  # an effect by name
+        write(root, "ident/report.cc", 'void r(W& w) { w.key("a").value(1); }\n')  # JSON key by key
 
 
 def run(broken):
@@ -83,6 +86,8 @@ def main():
         "plant/node.cc:2: a rate literal in a process",
         "plant/long.cc: 700 lines, over 650",
         'ident/pick.cc:1: effect "effect_3" named outside its file pair effects/effect_3.{h,cc}',
+        "ident/report.cc:1: JSON written key by key",
+        "ident/grid.h:2: a rate default outside the contract",
     ]
     missing = [e for e in expected if e not in out]
     if code != 1 or missing:

@@ -13,7 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/config.h"
-#include "core/json_writer.h"
+#include "core/json_line.h"
 #include "core/model.h"
 #include "core/param_table.h"
 #include "core/vehicle.h"
@@ -214,19 +214,21 @@ TEST_CASE("model errors name file, key and value", "[config]") {
   }
 }
 
-TEST_CASE("json writer: keys in written order, escapes, non-finite numbers as null, doubles that read back exactly",
+TEST_CASE("json_line: keys in written order, escapes, non-finite numbers as null, doubles that read back exactly",
           "[json]") {
-  nimble::JsonWriter w;
   const double third = 1.0 / 3.0;
-  w.begin_object();
-  w.key("zeta").value(third).key("alpha").value(static_cast<long long>(-7));
-  w.key("text").value(std::string("quote \" backslash \\ newline \n tab \t bell \a"));
-  w.key("nan").value(std::nan("")).key("inf").value(HUGE_VAL).key("flag").value(true);
-  w.key("list").array(std::vector<double>{1.5, -0.0, 1e-300});
-  w.key("nested").begin_object().key("empty").begin_array().end_array().key("none").null().end_object();
-  w.key("bad_utf8").value(std::string("ok \xff\xfe end"));
-  w.end_object();
-  const std::string s = w.str();
+  nimble::OrderedJson j;
+  j["zeta"] = third;
+  j["alpha"] = -7;
+  j["text"] = "quote \" backslash \\ newline \n tab \t bell \a";
+  j["nan"] = std::nan("");
+  j["inf"] = HUGE_VAL;
+  j["flag"] = true;
+  j["list"] = std::vector<double>{1.5, -0.0, 1e-300};
+  j["nested"] = {{"empty", nimble::OrderedJson::array()}, {"none", nullptr}};
+  j["bad_utf8"] = "ok \xff\xfe end";
+  j["complex"] = nimble::complex_json({1.5, -2.0});
+  const std::string s = nimble::json_line(j);
   INFO(s);
   CHECK(s.find("\"zeta\"") < s.find("\"alpha\""));  // written order, not sorted
   CHECK(s.find("\\\"") != std::string::npos);
@@ -242,6 +244,7 @@ TEST_CASE("json writer: keys in written order, escapes, non-finite numbers as nu
   CHECK(n["nested"]["empty"].size() == 0);
   CHECK(n["text"].as<std::string>() == "quote \" backslash \\ newline \n tab \t bell \a");
   CHECK(n["bad_utf8"].as<std::string>().find("\xef\xbf\xbd") != std::string::npos);  // U+FFFD
+  CHECK(n["complex"][1].as<double>() == -2.0);
   CHECK(nimble::json_quote("a\"b") == "\"a\\\"b\"");
 }
 
