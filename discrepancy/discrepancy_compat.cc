@@ -94,15 +94,30 @@ void bias_of(const LsFit& f, double& b, double& sigma) {
   sigma = sd(f.cov, g);
 }
 
+/// An estimate and its standard deviation.
+struct ValueSd {
+  double value = 0.0;
+  double sd = 0.0;
+};
+
+/// A signature test: two estimates of one error, compared in `unit`.
+struct SignatureTest {
+  std::string what;        ///< what is compared, for the note ("bias in the first and the second half")
+  std::string unit;        ///< the unit of the values ("" for a ratio)
+  double tolerance = 0.0;  ///< a difference up to this is no difference [unit]
+  double alpha = 0.05;     ///< the test's level (two-sided)
+  double factor = 1.0;     ///< a fit's estimate times this is in `unit`
+};
+
 /// Whether two estimates of the same error agree: their difference beyond the tolerance, against
-/// its standard deviation, within the two-sided normal quantile of alpha.
-bool agree(double v1, double s1, double v2, double s2, double tol, double alpha, std::string& note,
-           const std::string& what, const std::string& unit) {
-  const double z = two_sided_z(alpha);
-  const double sd_diff = std::hypot(s1, s2);
-  const double excess = std::max(0.0, std::fabs(v1 - v2) - tol);
+/// its standard deviation, within the two-sided normal quantile of alpha. `note` says so.
+bool agree(const ValueSd& a, const ValueSd& b, const SignatureTest& t, std::string& note) {
+  const double z = two_sided_z(t.alpha);
+  const double sd_diff = std::hypot(a.sd, b.sd);
+  const double excess = std::max(0.0, std::fabs(a.value - b.value) - t.tolerance);
   const bool ok = excess <= z * sd_diff;
-  note = what + ": " + num(v1) + " +- " + num(s1) + " and " + num(v2) + " +- " + num(s2) + " " + unit +
+  note = t.what + ": " + num(a.value) + " +- " + num(a.sd) + " and " + num(b.value) + " +- " + num(b.sd) + " " +
+         t.unit +
          (ok ? " agree" : " differ beyond the tolerance (" + num(excess / sd_diff) + " sd, limit " + num(z) + ")");
   return ok;
 }
@@ -177,22 +192,29 @@ LsFit fit_subset(MatrixXd X, VectorXd y, const std::vector<char>& keep, Index mi
   return fit(X, y, min_block);
 }
 
-/// An error's estimate on the rows in `part` and on the others (as fit_subset), compared by agree()
-/// with the values and sds times `unit`; true (nothing against it) when a part cannot be fitted.
-bool parts_agree(const MatrixXd& X, const VectorXd& y, const std::vector<char>& part, Index min_block,
-                 void (*estimate)(const LsFit&, double&, double&), double unit, double tol, double alpha,
-                 std::string& note, const std::string& what, const std::string& unit_name) {
+/// The rows of a regression: design, response, and the block length of its sandwich variance.
+struct Rows {
+  const MatrixXd& X;
+  const VectorXd& y;
+  Index min_block = 1;
+};
+
+/// An error's estimate on the rows in `part` and on the others (as fit_subset), compared by agree();
+/// true (nothing against it) when a part cannot be fitted.
+bool parts_agree(const Rows& rows, const std::vector<char>& part, void (*estimate)(const LsFit&, double&, double&),
+                 const SignatureTest& t, std::string& note) {
   std::vector<char> rest(part.size());
   for (std::size_t i = 0; i < part.size(); ++i) rest[i] = !part[i];
-  const LsFit f1 = fit_subset(X, y, part, min_block), f2 = fit_subset(X, y, rest, min_block);
+  const LsFit f1 = fit_subset(rows.X, rows.y, part, rows.min_block),
+              f2 = fit_subset(rows.X, rows.y, rest, rows.min_block);
   if (!f1.ok || !f2.ok) {
-    note = what + ": a part could not be fitted";
+    note = t.what + ": a part could not be fitted";
     return true;
   }
-  double v1, s1, v2, s2;
-  estimate(f1, v1, s1);
-  estimate(f2, v2, s2);
-  return agree(unit * v1, unit * s1, unit * v2, unit * s2, tol, alpha, note, what, unit_name);
+  ValueSd e1, e2;
+  estimate(f1, e1.value, e1.sd);
+  estimate(f2, e2.value, e2.sd);
+  return agree({t.factor * e1.value, t.factor * e1.sd}, {t.factor * e2.value, t.factor * e2.sd}, t, note);
 }
 
 /// The two sides of the kinematic relation on the record low-passed as for identification: the
@@ -237,11 +259,11 @@ void offset_signature(const Kinematics& k, Index r0, Index n, Index L, Index min
   const LsFit fl = fit(kin_design(xl, differentiate(xl, fs), r0, n, L, true), yl.segment(r0, n), min_block);
   if (!fl.ok || !fh.ok) return;
   const double shift_s = static_cast<double>(L) / fs;
-  double tl, sl, th, sh;
-  tau_of(fl, shift_s, tl, sl);
-  tau_of(fh, shift_s, th, sh);
-  offset.signature_holds = agree(tl, sl, th, sh, offset.tolerance, alpha, offset.signature_note,
-                                 "lag below and above " + num(f_split) + " Hz", "s");
+  ValueSd low, high;
+  tau_of(fl, shift_s, low.value, low.sd);
+  tau_of(fh, shift_s, high.value, high.sd);
+  const SignatureTest t{"lag below and above " + num(f_split) + " Hz", "s", offset.tolerance, alpha};
+  offset.signature_holds = agree(low, high, t, offset.signature_note);
 }
 
 }  // namespace
@@ -321,20 +343,21 @@ CompatibilityResult check_compatibility(const FlightData& data, const Processing
     first[static_cast<std::size_t>(i)] = i < n / 2;
     small[static_cast<std::size_t>(i)] = ax[i] <= sorted[sorted.size() / 2];
   }
+  const Rows rows{X, ys, mb};
   // A scale grows with the signal: the same scale on the samples of small and of large |p|.
   if (scale.significant) {
-    scale.signature_holds = parts_agree(X, ys, small, mb, scale_of, 1.0, scale.tolerance, alpha, scale.signature_note,
-                                        "scale on the smaller and the larger half of |p|", "");
+    const SignatureTest t{"scale on the smaller and the larger half of |p|", "", scale.tolerance, alpha};
+    scale.signature_holds = parts_agree(rows, small, scale_of, t, scale.signature_note);
   }
   // A bias is constant, a clock's rate even: the same in both halves of the record (a half's drift
   // moves the offset by the tolerance in twice the rate).
   if (bias.significant) {
-    bias.signature_holds = parts_agree(X, ys, first, mb, bias_of, 1.0, bias.tolerance, alpha, bias.signature_note,
-                                       "bias in the first and the second half", "rad/s");
+    const SignatureTest t{"bias in the first and the second half", "rad/s", bias.tolerance, alpha};
+    bias.signature_holds = parts_agree(rows, first, bias_of, t, bias.signature_note);
   }
   if (drift.significant) {
-    drift.signature_holds = parts_agree(X, ys, first, mb, drift_of, 1e6, 2.0 * drift.tolerance, alpha,
-                                        drift.signature_note, "drift in the first and the second half", "ppm");
+    const SignatureTest t{"drift in the first and the second half", "ppm", 2.0 * drift.tolerance, alpha, 1e6};
+    drift.signature_holds = parts_agree(rows, first, drift_of, t, drift.signature_note);
   }
   if (offset.significant) offset_signature(k, r0, n, L, mb, processing, alpha, offset);
   const double z_alpha = two_sided_z(alpha);
