@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """bench_python: a flight from Python against the same flight by `rig run --clock inprocess`.
 
-    PYTHONPATH=build/python python3 bench/bench_python.py [--rig build/bin/rig] [--runs N]
+    PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [--rig build/bin/rig] [--runs N]
         [--scenario F] [--duration S] [--json F]
 
 Flies the scenario (default rig_configs/id_doublet_train_fast.yaml for 30 s of simulated time,
