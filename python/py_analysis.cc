@@ -177,6 +177,7 @@ py::dict identify(const py::object& data, const std::string& structure, const st
          "(white-residual formula)."});
   }
   py::dict out = json_value(ident::identification_json(r, model_out.value_or(""), {}));
+  out["eigenvalues"] = complex_array_of(r.eigenvalues);  // [1/s], as numpy.linalg.eigvals gives them
   out["signals"] = signals_of(r.data.filtered);
   py::list equations;
   for (const ident::EquationResult& e : r.regression.equations) {

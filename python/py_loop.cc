@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <complex>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <optional>
@@ -31,17 +32,83 @@ py::array_t<double> matrix_of(const Eigen::MatrixXd& m) {
   return a;
 }
 
-py::array_t<std::complex<double>> complex_of(const std::vector<std::complex<double>>& v) {
-  py::array_t<std::complex<double>> a(static_cast<py::ssize_t>(v.size()));
-  if (!v.empty()) std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(std::complex<double>));
-  return a;
+/// The closed-loop poles of an analysis as numpy wants them, into a loop's entry: the poles s
+/// [1/s] a complex array (slowest first), their damping [-] and natural frequency [Hz] arrays in
+/// the same order, and the dominant pair's pole complex beside its damping and frequency.
+void set_poles(py::dict entry, const RollLoopAnalysis& a) {
+  std::vector<std::complex<double>> s;
+  Eigen::VectorXd zeta(static_cast<Eigen::Index>(a.poles.size())), fn(zeta.size());
+  for (std::size_t i = 0; i < a.poles.size(); ++i) {
+    s.push_back(a.poles[i].s);
+    zeta(static_cast<Eigen::Index>(i)) = a.poles[i].damping;
+    fn(static_cast<Eigen::Index>(i)) = a.poles[i].natural_hz;
+  }
+  entry["closed_loop_poles"] = complex_array_of(s);
+  entry["closed_loop_damping"] = array_of(zeta);
+  entry["closed_loop_natural_hz"] = array_of(fn);
+  if (a.has_dominant_pair) {
+    py::dict d;
+    d["pole"] = a.dominant.s;
+    d["damping"] = a.dominant.damping;
+    d["natural_hz"] = a.dominant.natural_hz;
+    entry["dominant_pair"] = d;
+  }
 }
 
-py::dict loop(const py::object& scenario, const std::optional<std::string>& model,
-              const std::optional<std::string>& gains, const py::dict& overrides, const std::optional<std::string>& on,
-              const std::optional<std::string>& clock, const std::string& break_at, bool all_sets,
-              const std::optional<std::string>& box, const std::optional<std::string>& design,
-              const std::string& design_name) {
+/// The loop broken at its break as a discrete state space, for numpy and scipy: A, B, C, D (D a
+/// 1 x 1 array like the others), dt [s], and the same as a scipy.signal.dlti and a python-control
+/// StateSpace, each where its package can be imported.
+py::dict discrete_of(const BrokenLoop& b) {
+  py::dict d;
+  d["A"] = matrix_of(b.A);
+  d["B"] = matrix_of(b.B);
+  d["C"] = matrix_of(b.C);
+  d["D"] = matrix_of(Eigen::MatrixXd::Constant(1, 1, b.D));
+  d["dt"] = b.dt_s;
+  // Each where its package imports (scripts/setup.sh installs python3-scipy; Debian has no
+  // python-control): a package that is not there leaves its entry out.
+  try {
+    d["dlti"] =
+        py::module_::import("scipy.signal").attr("dlti")(d["A"], d["B"], d["C"], d["D"], py::arg("dt") = b.dt_s);
+  } catch (const py::error_already_set& e) {
+    if (!e.matches(PyExc_ImportError)) throw;
+  }
+  try {
+    d["control"] = py::module_::import("control").attr("ss")(d["A"], d["B"], d["C"], d["D"], b.dt_s);
+  } catch (const py::error_already_set& e) {
+    if (!e.matches(PyExc_ImportError)) throw;
+  }
+  return d;
+}
+
+/// gains= as `rig loop --gains` takes it: a set's name or "KP,KD" as they are, a pair of numbers
+/// (KP [1/rad], KD [s/rad]), or a dict with kp_per_rad and kd_per_radps (a loop entry's own keys).
+/// @throws TypeError (py::type_error) for anything else.
+std::string gains_text(const py::object& gains) {
+  if (gains.is_none()) return "";
+  if (py::isinstance<py::str>(gains)) return gains.cast<std::string>();
+  double kp = 0.0, kd = 0.0;
+  if (py::isinstance<py::dict>(gains)) {
+    const auto d = gains.cast<py::dict>();
+    if (!d.contains("kp_per_rad") || !d.contains("kd_per_radps") || d.size() != 2)
+      throw py::type_error("gains: a dict holds kp_per_rad and kd_per_radps, nothing else");
+    kp = d["kp_per_rad"].cast<double>();
+    kd = d["kd_per_radps"].cast<double>();
+  } else if (py::isinstance<py::sequence>(gains) && py::len(gains) == 2) {
+    kp = gains.cast<py::sequence>()[0].cast<double>();
+    kd = gains.cast<py::sequence>()[1].cast<double>();
+  } else {
+    throw py::type_error("gains: a set's name, 'KP,KD', (KP, KD) or {'kp_per_rad': KP, 'kd_per_radps': KD}");
+  }
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g,%.17g", kp, kd);
+  return text;
+}
+
+py::dict loop(const py::object& scenario, const std::optional<std::string>& model, const py::object& gains,
+              const py::dict& overrides, const std::optional<std::string>& on, const std::optional<std::string>& clock,
+              const std::string& break_at, bool all_sets, const std::optional<std::string>& box,
+              const std::optional<std::string>& design, const std::string& design_name) {
   loop::LoopRequest r;
   if (py::isinstance<Scenario>(scenario)) {
     const auto& s = scenario.cast<const Scenario&>();
@@ -52,7 +119,7 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
   }
   for (const Override& o : overrides_of(overrides)) r.overrides.push_back(o);
   r.model_file = model.value_or("");
-  r.gains = gains.value_or("");
+  r.gains = gains_text(gains);
   r.input = on.value_or("");
   r.clock = clock.value_or("");
   r.break_at = break_at;
@@ -81,16 +148,12 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
     for (std::size_t i = 0; i < f.omega_radps.size(); ++i)
       hz(static_cast<Eigen::Index>(i)) = f.omega_radps[i] / (2 * kPi);
     entry["frequency_hz"] = array_of(hz);
-    entry["ratio"] = complex_of(f.ratio);
-    entry["tracking"] = complex_of(f.tracking);
-    py::dict d;
-    d["A"] = matrix_of(broken[k].A);
-    d["B"] = matrix_of(broken[k].B);
-    d["C"] = matrix_of(broken[k].C);
-    d["D"] = broken[k].D;
-    d["dt"] = broken[k].dt_s;
-    entry["discrete"] = d;
+    entry["ratio"] = complex_array_of(f.ratio);
+    entry["tracking"] = complex_array_of(f.tracking);
+    entry["discrete"] = discrete_of(broken[k]);
+    set_poles(entry, study.rows[k].analysis);
   }
+  if (study.design && study.design->design.feasible) set_poles(out["design"], study.design->design.analysis);
   out["ok"] = study.ok();
   return out;
 }
@@ -108,7 +171,11 @@ void add_loop(py::module_& m) {
         "crossover_hz=2') and 'ok' (rig loop's exit code 0). Each loop also carries 'frequency_hz' with the "
         "return ratio 'ratio' (L, complex) and 'tracking' (phi/phi_ref) on the grid the Bode plot draws, and "
         "'discrete': the loop broken there as x[k+1] = A x + B w, y = C x + D w, dt [s], closed by w = y "
-        "(L = -G). gains: a set's name or 'KP,KD'.");
+        "(L = -G), with 'dlti' (scipy.signal.dlti) and, where python-control imports, 'control' (its "
+        "StateSpace). Poles are complex arrays: 'closed_loop_poles' s [1/s] (slowest first) with "
+        "'closed_loop_damping' [-] and 'closed_loop_natural_hz' [Hz] in the same order, 'dominant_pair' "
+        "{'pole', 'damping', 'natural_hz'}. gains: a set's name, 'KP,KD', (KP [1/rad], KD [s/rad]) or "
+        "{'kp_per_rad': KP, 'kd_per_radps': KD}.");
 }
 
 }  // namespace nimble::python

@@ -5,6 +5,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <complex>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -58,6 +59,8 @@ DataInput flight_data_of(const py::object& data, const std::string& states, cons
 
 /// A numpy array of an Eigen vector (one copy, no Python work per sample).
 py::object array_of(const Eigen::VectorXd& v);
+/// A complex numpy array of complex numbers (eigenvalues, poles, frequency responses).
+py::object complex_array_of(const std::vector<std::complex<double>>& v);
 
 /// A path given as str or os.PathLike (pathlib.Path) as text. @throws TypeError for anything else.
 std::string path_text(const py::handle& path);

@@ -4,6 +4,7 @@
 // (python/py_analysis.cc), the roll loop's analysis (python/py_loop.cc). The rig's errors become
 // Python exceptions here. python/nimble_rig/__init__.py exports it; docs/python.md describes it.
 
+#include <pybind11/complex.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -32,6 +33,12 @@ std::vector<Override> overrides_of(const py::dict& overrides) {
 py::object array_of(const Eigen::VectorXd& v) {
   py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
   if (v.size() > 0) std::memcpy(a.mutable_data(), v.data(), static_cast<std::size_t>(v.size()) * sizeof(double));
+  return std::move(a);
+}
+
+py::object complex_array_of(const std::vector<std::complex<double>>& v) {
+  py::array_t<std::complex<double>> a(static_cast<py::ssize_t>(v.size()));
+  if (!v.empty()) std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(std::complex<double>));
   return std::move(a);
 }
 

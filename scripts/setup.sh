@@ -47,8 +47,9 @@ case "$PROFILE" in
                # the layout check of every C++ source against .clang-format (meta.format)
                clang-format
                # the rig from Python: the compiled module (python/), its tests (scipy.signal checks the
-               # loop analysis) and the notebook in docs/ (executed by nbconvert, plots by matplotlib)
-               pybind11-dev python3-dev python3-pytest python3-scipy python3-matplotlib python3-yaml
+               # loop analysis; a loop's discrete state space as scipy.signal.dlti; a channel as a
+               # pandas DataFrame) and the notebook in docs/ (executed by nbconvert, plots by matplotlib)
+               pybind11-dev python3-dev python3-pytest python3-scipy python3-pandas python3-matplotlib python3-yaml
                jupyter-nbconvert python3-ipykernel)
     # Node.js with npm: Debian's nodejs and npm, unless a Node.js with npm is already installed.
     command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)

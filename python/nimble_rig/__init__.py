@@ -16,9 +16,9 @@ Pure Python and numpy: the message types come from the `nimble` package that lcm
 lcmtypes/*.lcm (installed next to this one); LCM's own Python module is not needed.
 """
 
-from .log import LogError, RigLog, read_log
+from .log import LogError, RigLog, channel_frame, read_log
 
-__all__ = ["LogError", "RigLog", "read_log"]
+__all__ = ["LogError", "RigLog", "channel_frame", "read_log"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
     from ._rig import (ConfigError, DataError, Flight, Scenario, discrepancy, export_mcap, fly, identify,
@@ -26,6 +26,15 @@ try:  # the compiled module (python/rig_module.cc), where the build had pybind11
 
     __all__ += ["ConfigError", "DataError", "Flight", "Scenario", "discrepancy", "export_mcap", "fly", "identify",
                 "load_scenario", "loop", "sweep", "validate"]
+
+    def _flight_frame(self, channel):
+        """The channel as a pandas DataFrame indexed by t_s [s] (nimble_rig.channel_frame)."""
+        if channel not in self.channels:
+            raise KeyError("no message on channel %r in this flight (channels: %s)"
+                           % (channel, ", ".join(sorted(self.channels))))
+        return channel_frame(self.channels[channel], channel)
+
+    Flight.frame = _flight_frame
 except ModuleNotFoundError:  # built without pybind11: the log reader alone (a module that fails to load raises)
     pass
 __version__ = "@PROJECT_VERSION@"

@@ -45,6 +45,9 @@ class Flight:
     def report(self) -> Dict[str, Any]: ...
     @property
     def channels(self) -> Dict[str, Dict[str, np.ndarray]]: ...
+    def frame(self, channel: str) -> Any:
+        """The channel as a pandas DataFrame indexed by t_s [s], a column per field ("euler_rad[0]")."""
+        ...
 
 def load_scenario(path: PathLike, overrides: Dict[str, Any] = ...) -> Scenario:
     """Loads a scenario with the same checks as `rig run`; overrides are --set values. Raises ConfigError."""
@@ -70,8 +73,9 @@ def identify(data: Data, *, structure: str = "lateral3", method: str = "wls", in
              hover: Optional[List[Tuple[float, float]]] = None,
              manoeuvre: Optional[List[Tuple[float, float]]] = None,
              oe_segment_s: float = 2.0) -> Dict[str, Any]:
-    """`rig identify --json`'s content, plus 'signals' and 'equations' (regressors, y, theta) as arrays.
-    data may also be a Flight flown with log=; method 'wls', 'ols' or 'output-error'."""
+    """`rig identify --json`'s content, plus 'signals' and 'equations' (regressors, y, theta) as arrays;
+    'eigenvalues' a complex array [1/s]. data may also be a Flight flown with log=; method 'wls', 'ols'
+    or 'output-error'."""
     ...
 
 def validate(model: PathLike, data: Data, *, closed_loop: bool = False, gains: Optional[str] = None,
@@ -90,11 +94,16 @@ def discrepancy(data: Union[Data, Sequence[Data]], *, model: PathLike, candidate
     """`rig discrepancy --json`'s content: the verdict, the named effects, the gap before and after."""
     ...
 
-def loop(scenario: Union[PathLike, Scenario], *, model: Optional[str] = None, gains: Optional[str] = None,
+def loop(scenario: Union[PathLike, Scenario], *, model: Optional[str] = None,
+         gains: Union[None, str, Tuple[float, float], Dict[str, float]] = None,
          overrides: Dict[str, Any] = ..., on: Optional[str] = None, clock: Optional[str] = None,
          break_at: str = "actuator", all_sets: bool = False, box: Optional[str] = None,
          design: Optional[str] = None, design_name: str = "designed") -> Dict[str, Any]:
-    """`rig loop --json`'s content; each loop with 'frequency_hz', 'ratio', 'tracking' and 'discrete'."""
+    """`rig loop --json`'s content; each loop with 'frequency_hz' [Hz], 'ratio' and 'tracking' (complex
+    arrays), 'discrete' (A, B, C, D arrays, dt [s], 'dlti': scipy.signal.dlti, 'control' where
+    python-control imports), 'closed_loop_poles' (complex [1/s]) with 'closed_loop_damping' and
+    'closed_loop_natural_hz' [Hz]. gains: a set's name, 'KP,KD', (KP [1/rad], KD [s/rad]) or
+    {'kp_per_rad': KP, 'kd_per_radps': KD}."""
     ...
 
 def export_mcap(log: PathLike, out: PathLike, *, raw: bool = False, compression: str = "zstd",

@@ -129,9 +129,42 @@ class RigLog:
                            % (channel, self.path, ", ".join(self.channels())))
         return self._channels[channel]
 
+    def frame(self, channel):
+        """The channel as a pandas DataFrame: one row per message, indexed by its time t_s [s]
+        (the message's utime, simulated time), one column per field ("euler_rad[0]" for an
+        array field's elements); see channel_frame()."""
+        return channel_frame(self[channel], channel)
+
     def __repr__(self):
         counts = ", ".join("%s: %d" % (c, len(v["log_utime"])) for c, v in sorted(self._channels.items()))
         return "RigLog(%r, %d events; %s)" % (self.path, self.events, counts)
+
+
+def channel_frame(fields, channel="channel"):
+    """A channel's fields (name -> numpy array, one row per message, with "utime" [us]) as a pandas
+    DataFrame indexed by t_s = utime * 1e-6 [s]: a field of one value per message is a column, an
+    array field one column per element, named "field[i]" ("field[i][j]" for a matrix); the units
+    are those of the field names (docs/python.md: _rad, _radps, _mps, _us, ...).
+
+    Needs pandas (Debian: python3-pandas). Raises ModuleNotFoundError naming the package without it,
+    KeyError if the channel has no utime."""
+    try:
+        import pandas
+    except ModuleNotFoundError as e:
+        raise ModuleNotFoundError("frame() needs pandas: install Debian's python3-pandas") from e
+    if "utime" not in fields:
+        raise KeyError("%s has no utime field to index its frame by" % channel)
+    columns = {}
+    for name, values in fields.items():
+        a = np.asarray(values)
+        if a.ndim <= 1:
+            columns[name] = a
+        else:
+            flat = a.reshape(a.shape[0], -1)
+            for k, index in enumerate(np.ndindex(*a.shape[1:])):
+                columns[name + "".join("[%d]" % i for i in index)] = flat[:, k]
+    t_s = np.asarray(fields["utime"], dtype=np.int64) * 1e-6
+    return pandas.DataFrame(columns, index=pandas.Index(t_s, name="t_s"))
 
 
 def _beyond_bounds(path, vehicle, salvage):

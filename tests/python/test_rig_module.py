@@ -57,6 +57,18 @@ def test_a_flight_from_python_has_the_truth_of_rig_run_and_read_logs_arrays(tmp_
             if values.dtype != object:
                 np.testing.assert_array_equal(values, log[channel][field], err_msg=channel + "." + field)
     assert flight.channels["TRUTH"]["euler_rad"].shape == (len(ours), 3)
+    # A channel as a pandas DataFrame: indexed by t_s [s], a column per field or element, the
+    # flight's and the log's the same.
+    frame = flight.frame("TRUTH")
+    assert frame.index.name == "t_s" and len(frame) == len(ours)
+    np.testing.assert_array_equal(frame.index.to_numpy(), flight.channels["TRUTH"]["utime"] * 1e-6)
+    np.testing.assert_array_equal(frame["euler_rad[0]"].to_numpy(), flight.channels["TRUTH"]["euler_rad"][:, 0])
+    assert "euler_rad[2]" in frame and "euler_rad" not in frame
+    logged = log.frame("TRUTH")
+    assert set(frame.columns) <= set(logged.columns)
+    np.testing.assert_array_equal(logged["euler_rad[1]"].to_numpy(), frame["euler_rad[1]"].to_numpy())
+    with pytest.raises(KeyError, match="NOPE"):
+        flight.frame("NOPE")
 
 
 def test_a_bad_value_raises_config_error_with_file_line_and_key(tmp_path):
