@@ -61,23 +61,35 @@ void raise_with(PyObject* type, const char* message, const py::dict& attributes)
   PyErr_SetObject(type, error.ptr());
 }
 
+/// Where the rig's errors say an override (`--set`) is from.
+const std::string kOverrideSource = "--set";
+
+/// A line number for Python: None where the rig has none (-1, or 0).
+py::object line_of(int line) { return line > 0 ? py::object(py::int_(line)) : py::object(py::none()); }
+
 /// The rig's errors as Python exceptions: a bad configuration value and bad flight data carry
 /// where they are; the rest become ValueError or RuntimeError (pybind11's own translation).
 void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
   } catch (const ConfigError& e) {
+    // An override (the command line's --set) came from Python's overrides dict: named so, no line.
+    const bool override = e.file() == kOverrideSource;
+    std::string message = e.what();
+    if (override && message.rfind(kOverrideSource, 0) == 0)
+      message = "overrides" + message.substr(kOverrideSource.size());
     py::dict a;
-    a["file"] = e.file();
-    a["line"] = e.line();
+    a["file"] = override ? py::object(py::none()) : py::str(e.file());
+    a["line"] = line_of(e.line());
     a["key"] = e.key();
     a["value"] = e.value();
     a["problem"] = e.problem();
-    raise_with(g_config_error, e.what(), a);
+    a["override"] = override;
+    raise_with(g_config_error, message.c_str(), a);
   } catch (const ident::DataError& e) {
     py::dict a;
     a["source"] = e.source();
-    a["line"] = e.line();
+    a["line"] = line_of(e.line());
     a["row"] = e.row();
     a["column"] = e.column();
     a["problem"] = e.problem();
@@ -96,11 +108,12 @@ PYBIND11_MODULE(_rig, m) {
       "MCAP export.";
   g_config_error = PyErr_NewExceptionWithDoc("nimble_rig.ConfigError",
                                              "A bad scenario or configuration value: .file, .line, .key, .value and "
-                                             ".problem say where and what (str(e) is the rig's message).",
+                                             ".problem say where and what (str(e) is the rig's message); a value "
+                                             "of the overrides dict has .override True, .file and .line None.",
                                              PyExc_ValueError, nullptr);
   g_data_error = PyErr_NewExceptionWithDoc("nimble_rig.DataError",
-                                           "Bad flight data: .source, .line, .row (1-based sample), .column and "
-                                           ".problem say where and what (str(e) is the rig's message).",
+                                           "Bad flight data: .source, .line (None: no line), .row (1-based sample), "
+                                           ".column and .problem say where and what (str(e) is the rig's message).",
                                            PyExc_ValueError, nullptr);
   m.attr("ConfigError") = py::reinterpret_borrow<py::object>(g_config_error);
   m.attr("DataError") = py::reinterpret_borrow<py::object>(g_data_error);

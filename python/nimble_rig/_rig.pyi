@@ -13,17 +13,19 @@ PathLike = Union[str, os.PathLike]
 Data = Union[PathLike, "Flight", Dict[str, np.ndarray]]
 
 class ConfigError(ValueError):
-    """A bad scenario or configuration value; str(e) is the rig's message."""
-    file: str
-    line: int
+    """A bad scenario or configuration value; str(e) is the rig's message. A value of an overrides
+    dict has override True and no file or line (None)."""
+    file: Optional[str]
+    line: Optional[int]
     key: str
     value: str
     problem: str
+    override: bool
 
 class DataError(ValueError):
-    """Bad flight data; str(e) is the rig's message."""
+    """Bad flight data; str(e) is the rig's message. line is None where the data have no lines."""
     source: str
-    line: int
+    line: Optional[int]
     row: int
     column: str
     problem: str

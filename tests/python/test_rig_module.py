@@ -81,9 +81,14 @@ def test_a_bad_value_raises_config_error_with_file_line_and_key(tmp_path):
     assert e.line == 3
     assert e.key == "duration_s"
     assert "duration_s" in str(e)
+    assert not e.override
+    # A value of the overrides dict: named as one, with no file and no line to point at.
     with pytest.raises(nimble_rig.ConfigError) as caught:
         nimble_rig.load_scenario(TRAIN, {"plant.effects.lateral_gust.sigma_mps": 99.0})
-    assert "sigma_mps" in str(caught.value)
+    e = caught.value
+    assert str(e).startswith("overrides: key 'plant.effects.lateral_gust.sigma_mps'")
+    assert e.override and e.file is None and e.line is None
+    assert e.key == "plant.effects.lateral_gust.sigma_mps" and e.value == "99.0"
     with pytest.raises(ValueError):
         nimble_rig.fly(nimble_rig.load_scenario(TRAIN), clock="lockstep")
 
