@@ -14,7 +14,10 @@ in one run on one machine, and prints the medians of:
    same seed), and load_scenario() + fly() of a fresh one; every channel handed over as arrays;
  - the ratio Python / rig of each. The target: the flight from Python within 5 % of rig run's
    (ratio <= 1.05), as bench_inprocess measures a flight. Both sides run on this machine in this
-   run, so the ratios travel.
+   run, so the ratios travel;
+ - the same flight with a controller written in Python in the loop (docs/examples/python_pd.py,
+   nimble_rig.fly(participants=), each step called with the GIL taken) against the rig's C++
+   controller: each flight's wall time and speed [x real time]. The target: >= 30x.
 Not a test: figures depend on the machine and on what else runs on it.
 """
 import argparse
@@ -41,7 +44,10 @@ def main():
     if a.runs < 1 or a.duration <= 0:
         ap.error("--runs must be >= 1 and --duration > 0")
 
-    py_flight, py_call, py_total, rig_flight, rig_total = [], [], [], [], []
+    sys.path.insert(0, os.path.join(source, "docs", "examples"))
+    from python_pd import PythonPD
+
+    py_flight, py_call, py_total, rig_flight, rig_total, pd_flight = [], [], [], [], [], []
     loaded = nimble_rig.load_scenario(a.scenario, {"duration_s": a.duration})
     with tempfile.TemporaryDirectory() as tmp:
         log_py, log_rig, report = (os.path.join(tmp, n) for n in ("py.lcmlog", "rig.lcmlog", "rig.json"))
@@ -64,6 +70,10 @@ def main():
                 sys.exit("bench_python: rig run failed: " + done.stderr)
             with open(report) as f:
                 rig_flight.append(json.load(f)["wall_time_s"])
+            pd = nimble_rig.fly(loaded, seed=1, log=log_py, participants={"controller": PythonPD()})
+            if pd.report["result"] != "ok":
+                sys.exit("bench_python: the flight with the Python controller ended " + pd.report["result"])
+            pd_flight.append(pd.report["wall_time_s"])
 
     med = statistics.median
     figures = {
@@ -73,6 +83,9 @@ def main():
         "total_s": {"python": med(py_total), "rig_run": med(rig_total), "ratio": med(py_total) / med(rig_total)},
     }
     figures["within_5_percent"] = figures["flight_s"]["ratio"] <= 1.05
+    figures["python_controller"] = {"flight_s": med(pd_flight), "speed_x": a.duration / med(pd_flight),
+                                    "cpp_flight_s": med(py_flight), "cpp_speed_x": a.duration / med(py_flight)}
+    figures["python_controller"]["at_least_30x"] = figures["python_controller"]["speed_x"] >= 30.0
     print("bench_python: %s, %g s simulated, seed 1, log written, medians of %d runs each (alternating)"
           % (os.path.basename(a.scenario), a.duration, a.runs))
     for key, what in (("flight_s", "the flight (its report's wall time)"),
@@ -82,6 +95,10 @@ def main():
         print("  %-42s python %7.3f s (%5.0fx)  rig run %7.3f s (%5.0fx)  ratio %.3f"
               % (what, f["python"], a.duration / f["python"], f["rig_run"], a.duration / f["rig_run"], f["ratio"]))
     print("  the flight within 5 %% of rig run's: %s" % ("yes" if figures["within_5_percent"] else "NO"))
+    pc = figures["python_controller"]
+    print("  the flight with the controller in Python: %.3f s (%.0fx real time; the C++ controller's %.3f s, %.0fx); "
+          ">= 30x: %s" % (pc["flight_s"], pc["speed_x"], pc["cpp_flight_s"], pc["cpp_speed_x"],
+                          "yes" if pc["at_least_30x"] else "NO"))
     if a.json:
         with open(a.json, "w") as f:
             json.dump(figures, f, indent=2)

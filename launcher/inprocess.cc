@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -59,8 +60,17 @@ Process make(const std::string& name, std::shared_ptr<Node> n) {
 }
 
 Process make_process(const std::string& name, const Scenario& scenario, transport::InprocessHub& hub,
-                     can::InprocessCanBus& can_bus) {
+                     can::InprocessCanBus& can_bus, const InprocessOptions& options) {
   const transport::NodeOptions o{name, scenario.file, "inprocess", &hub};
+  if (const auto it = options.replace.find(name); it != options.replace.end()) {
+    const CustomParticipant c = it->second(o);
+    if (c.node == nullptr) throw std::invalid_argument("the participant in place of " + name + " has no process node");
+    Process p;
+    p.name = name;
+    p.node = c.node;
+    p.owner = c.owner;
+    return p;
+  }
   if (name == "plant") return make(name, std::make_shared<plant::PlantNode>(scenario, o));
   if (name == "controller") return make(name, std::make_shared<ControllerNode>(scenario, o));
   if (name == "mocap") return make(name, std::make_shared<MocapNode>(scenario, o));
@@ -96,9 +106,16 @@ void print_progress(const RunMonitor& monitor, double duration_s, double wall, b
 
 /// Builds the run's processes; returns the lockstep master, the plant (the others join in process).
 Process* build_processes(const Scenario& s, transport::InprocessHub& hub, can::InprocessCanBus& can_bus,
-                         std::vector<Process>& processes) {
+                         const InprocessOptions& options, std::vector<Process>& processes) {
+  for (const auto& [name, factory] : options.replace) {
+    if (name == "plant")
+      throw ConfigError(s.file, "processes", name, "the plant, the lockstep master, cannot be replaced");
+    if (std::find(s.processes.begin(), s.processes.end(), name) == s.processes.end()) {
+      throw ConfigError(s.file, "processes", name, "a participant in place of a process the scenario does not run");
+    }
+  }
   Process* master = nullptr;
-  for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus));
+  for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus, options));
   for (auto& p : processes) {
     if (p.name == "plant")
       master = &p;
@@ -219,7 +236,7 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
 
   can::InprocessCanBus can_bus;
   std::vector<Process> processes;
-  Process* master = build_processes(s, hub, can_bus, processes);
+  Process* master = build_processes(s, hub, can_bus, options, processes);
   transport::ProcessNode* master_node = master->node;
   master_node->on_housekeeping([&record_failed, master_node] {
     if (record_failed.load(std::memory_order_relaxed)) master_node->end_run();

@@ -12,12 +12,31 @@
 /// executors: the log has every channel, the report and verdict are the same.
 
 #include <functional>
+#include <map>
+#include <memory>
 #include <string>
 
 #include "launcher/run_plan.h"
 #include "launcher/run_report.h"
 
+namespace nimble::transport {
+class ProcessNode;
+struct NodeOptions;
+}  // namespace nimble::transport
+
 namespace nimble::launcher {
+
+/// A participant of one's own flying in place of one of the scenario's processes (a controller
+/// written in Python: nimble_rig.fly(participants=)): built on the run's hub with that process's
+/// node options (its name, the scenario), joined and stepped by the lockstep master like the
+/// rig's own, its heartbeat, health and faults on the bus as theirs are.
+struct CustomParticipant {
+  transport::ProcessNode* node = nullptr;  ///< its process frame: bus, tasks, heartbeat
+  std::shared_ptr<void> owner;             ///< keeps it alive until the run's end
+};
+/// Builds a custom participant. Something it throws ends the run before it starts; something its
+/// tasks throw ends the run as a rig process's failure does, naming the process.
+using ParticipantFactory = std::function<CustomParticipant(const transport::NodeOptions& options)>;
 
 struct InprocessOptions {
   std::string log_file;       ///< the LCM log; empty: none (the monitor still sees every message)
@@ -31,6 +50,9 @@ struct InprocessOptions {
   /// the recorder and the monitor); empty: none. Something it throws ends the run: it is
   /// rethrown by fly_inprocess().
   std::function<void(const std::string& channel, const void* data, int size)> on_message;
+  /// Participants of one's own, by the name of the scenario's process each replaces (not the
+  /// plant: it is the lockstep master). A name the scenario does not run is a ConfigError.
+  std::map<std::string, ParticipantFactory> replace;
 };
 
 /// Flies `plan` (any clock: it is flown in process) and returns its report; prints nothing

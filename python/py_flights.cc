@@ -40,7 +40,8 @@ struct Flight {
   py::dict channels;
 };
 
-Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock, const py::object& log) {
+Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::string& clock, const py::object& log,
+           const py::dict& participants) {
   if (clock != launcher::kClockInprocess) {
     throw py::value_error("clock '" + clock +
                           "': a flight from Python is flown in process (clock='inprocess'); "
@@ -55,9 +56,11 @@ Flight fly(Scenario& scenario, std::optional<std::uint64_t> seed, const std::str
     scenario.flown = std::make_shared<const launcher::RunPlan>(launcher::load_run_plan(options));
     scenario.flown_seed = seed;
   }
-  const launcher::RunPlan& plan = *scenario.flown;
+  const std::shared_ptr<const launcher::RunPlan> held = scenario.flown;  // kept while it flies
+  const launcher::RunPlan& plan = *held;
   ChannelCollector collector;
   launcher::InprocessOptions io;
+  io.replace = participants_of(plan.scenario, participants);
   io.log_file = log.is_none() ? "" : path_text(log);
   io.on_message = [&collector](const std::string& channel, const void* data, int size) {
     collector.add(channel, data, size);
@@ -177,10 +180,14 @@ void add_flights(py::module_& m) {
         "Loads a scenario with the same checks as `rig run`; overrides are --set values "
         "({'plant.effects.lateral_gust.enabled': True}). Raises ConfigError naming the file, line and key.");
   m.def("fly", &fly, py::arg("scenario"), py::arg("seed") = py::none(), py::arg("clock") = "inprocess",
-        py::arg("log") = py::none(),
+        py::arg("log") = py::none(), py::kw_only(), py::arg("participants") = py::dict(),
         "Flies the scenario in process (the GIL released) and returns a Flight; log: also write the LCM log "
         "there. The TRUTH is byte for byte that of `rig run --clock inprocess` with the same seed. SIGINT "
-        "during the flight ends it with result interrupted.");
+        "during the flight ends it with result interrupted. participants: {process: object} flies each "
+        "object in place of the scenario's process of that name (not the plant): an object with inputs, "
+        "outputs, rate_hz [Hz] and step(t_s, inputs) -> {channel: message} (nimble_rig.Participant), called "
+        "at its rate with the GIL taken for the call alone; an exception it raises ends the flight with "
+        "result failed, naming the process, the exception and the simulated time, the log kept.");
   m.def("sweep", &sweep, py::arg("scenario"), py::arg("seeds") = "1-10", py::arg("vary") = py::dict(),
         py::arg("jobs") = 1, py::arg("dir") = py::none(), py::arg("envelopes") = false, py::arg("report") = py::none(),
         "Flies the scenario over seeds ('1-100') and parameter sets (vary={'key.path': [v1, v2]}) in process, "

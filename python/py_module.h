@@ -7,6 +7,7 @@
 
 #include <complex>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 #include "core/config.h"
 #include "ident/flight_data.h"
 #include "ident/rig_log.h"
+#include "launcher/inprocess.h"
 #include "launcher/run_plan.h"
 
 namespace nimble::python {
@@ -67,6 +69,13 @@ std::string path_text(const py::handle& path);
 
 /// A JSON text as Python objects (json.loads).
 py::object json_value(const std::string& text);
+
+/// The participants of a flight (nimble_rig.fly(participants=)): each value of `participants` a
+/// Python object (nimble_rig/participant.py) flying in place of the scenario's process its key
+/// names, checked here; `scenario` must outlive the flight.
+/// @throws TypeError or ValueError from the check, naming the process and what is wrong.
+std::map<std::string, launcher::ParticipantFactory> participants_of(const nimble::Scenario& scenario,
+                                                                    const py::dict& participants);
 
 /// Adds load_scenario, fly, sweep and their classes (python/py_flights.cc).
 void add_flights(py::module_& m);

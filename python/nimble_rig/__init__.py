@@ -17,8 +17,9 @@ lcmtypes/*.lcm (installed next to this one); LCM's own Python module is not need
 """
 
 from .log import LogError, RigLog, channel_frame, read_log
+from .participant import Participant
 
-__all__ = ["LogError", "RigLog", "channel_frame", "read_log"]
+__all__ = ["LogError", "Participant", "RigLog", "channel_frame", "read_log"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
     from ._rig import (ConfigError, DataError, Flight, Scenario, discrepancy, export_mcap, fly, identify,

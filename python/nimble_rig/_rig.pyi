@@ -56,8 +56,9 @@ def load_scenario(path: PathLike, overrides: Dict[str, Any] = ...) -> Scenario:
     ...
 
 def fly(scenario: Scenario, seed: Optional[int] = None, clock: str = "inprocess",
-        log: Optional[PathLike] = None) -> Flight:
-    """Flies the scenario in process (the GIL released); SIGINT ends it with result interrupted."""
+        log: Optional[PathLike] = None, *, participants: Dict[str, Any] = ...) -> Flight:
+    """Flies the scenario in process (the GIL released); SIGINT ends it with result interrupted.
+    participants: {process: nimble_rig.Participant} flies each in place of that process."""
     ...
 
 def sweep(scenario: Scenario, seeds: str = "1-10", vary: Dict[str, List[Any]] = ..., jobs: int = 1,
