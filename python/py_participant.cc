@@ -84,7 +84,8 @@ std::map<std::string, launcher::ParticipantFactory> participants_of(const nimble
   const py::object make_stepper = py::module_::import("nimble_rig.participant").attr("stepper");
   // The contract's channels: each one's type and publishers, which the check holds a participant to.
   py::dict channels;
-  for (const contract::ChannelSpec& c : contract::channel_table()) channels[py::str(c.name)] = py::make_tuple(c.type, c.publishers);
+  for (const contract::ChannelSpec& c : contract::channel_table())
+    channels[py::str(c.name)] = py::make_tuple(c.type, c.publishers);
   for (const auto& [key, participant] : participants) {
     const std::string process = key.cast<std::string>();
     // The participant's declaration, checked in Python (nimble_rig/participant.py): the callable
