@@ -200,7 +200,8 @@ py::dict validate(const py::object& model_path, const py::object& data, bool clo
                   const std::optional<std::string>& vehicle, const std::string& states,
                   const std::optional<std::string>& sensing, bool salvage, std::optional<double> rate_hz,
                   std::optional<double> cutoff_hz, std::optional<int> order, const std::string& interpolation) {
-  const DerivativeModel model = load_model(path_text(model_path));
+  const ModelFile file(model_path);
+  const DerivativeModel model = load_model(file.path());
   const Vehicle v = vehicle_of(vehicle, model.vehicle_file);
   const DataInput in = flight_data_of(data, states, sensing.value_or(""), salvage, &v);
   const ident::ProcessingOptions processing = processing_of(rate_hz, cutoff_hz, order, interpolation);
@@ -250,7 +251,8 @@ py::dict discrepancy(const py::object& data, const py::object& model_path,
                      std::optional<double> command_latency_s, const std::optional<std::string>& gains,
                      const std::optional<std::string>& vehicle, const std::optional<std::string>& model_out,
                      const std::string& states, const std::optional<std::string>& sensing, bool salvage) {
-  const std::string model_file = path_text(model_path);
+  const ModelFile file(model_path);
+  const std::string& model_file = file.path();
   ident::DiscrepancyOptions o;
   if (candidates) o.candidates = *candidates;
   if (folds) o.folds = *folds;

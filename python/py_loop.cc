@@ -105,8 +105,8 @@ std::string gains_text(const py::object& gains) {
   return text;
 }
 
-py::dict loop(const py::object& scenario, const std::optional<std::string>& model, const py::object& gains,
-              const py::dict& overrides, const std::optional<std::string>& on, const std::optional<std::string>& clock,
+py::dict loop(const py::object& scenario, const py::object& model, const py::object& gains, const py::dict& overrides,
+              const std::optional<std::string>& on, const std::optional<std::string>& clock,
               const std::string& break_at, bool all_sets, const std::optional<std::string>& box,
               const std::optional<std::string>& design, const std::string& design_name) {
   loop::LoopRequest r;
@@ -118,7 +118,8 @@ py::dict loop(const py::object& scenario, const std::optional<std::string>& mode
     r.scenario_file = path_text(scenario);
   }
   for (const Override& o : overrides_of(overrides)) r.overrides.push_back(o);
-  r.model_file = model.value_or("");
+  std::optional<ModelFile> model_file;
+  if (!model.is_none()) r.model_file = model_file.emplace(model).path();
   r.gains = gains_text(gains);
   r.input = on.value_or("");
   r.clock = clock.value_or("");

@@ -67,6 +67,24 @@ py::object complex_array_of(const std::vector<std::complex<double>>& v);
 /// A path given as str or os.PathLike (pathlib.Path) as text. @throws TypeError for anything else.
 std::string path_text(const py::handle& path);
 
+/// A model given to an analysis: a path (str or os.PathLike) of a model file, or a dict with a model
+/// file's content (name, structure, vehicle, inputs, trim, derivatives, ...; a relative vehicle path
+/// taken from the current directory), written to a temporary file that goes with this.
+class ModelFile {
+ public:
+  /// @throws TypeError for anything else; OSError if the temporary file cannot be written.
+  explicit ModelFile(const py::handle& model);
+  ~ModelFile();
+  ModelFile(const ModelFile&) = delete;
+  ModelFile& operator=(const ModelFile&) = delete;
+  /// The model file (the path given, or the temporary file of the dict).
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::string temporary_dir_;  ///< "" for a path
+};
+
 /// A JSON text as Python objects (json.loads).
 py::object json_value(const std::string& text);
 

@@ -10,6 +10,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,31 @@ py::object complex_array_of(const std::vector<std::complex<double>>& v) {
 
 std::string path_text(const py::handle& path) {
   return py::module_::import("os").attr("fspath")(path).cast<std::string>();
+}
+
+ModelFile::ModelFile(const py::handle& model) {
+  if (!py::isinstance<py::dict>(model)) {
+    path_ = path_text(model);
+    return;
+  }
+  py::dict content = py::module_::import("copy").attr("deepcopy")(model);
+  const py::object os_path = py::module_::import("os.path");
+  if (content.contains("vehicle") && py::isinstance<py::str>(content["vehicle"]) &&
+      !os_path.attr("isabs")(content["vehicle"]).cast<bool>()) {
+    content["vehicle"] = os_path.attr("abspath")(content["vehicle"]);
+  }
+  const py::object tempfile = py::module_::import("tempfile");
+  temporary_dir_ = tempfile.attr("mkdtemp")(py::arg("prefix") = "nimble_rig_model_").cast<std::string>();
+  path_ = temporary_dir_ + "/model.yaml";
+  // JSON is YAML: the loader reads the dict as it reads a model file, with the same checks.
+  const std::string text = py::module_::import("json").attr("dumps")(content).cast<std::string>();
+  py::module_::import("pathlib").attr("Path")(path_).attr("write_text")(text);
+}
+
+ModelFile::~ModelFile() {
+  if (temporary_dir_.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove_all(temporary_dir_, ec);
 }
 
 py::object json_value(const std::string& text) { return py::module_::import("json").attr("loads")(text); }

@@ -11,6 +11,9 @@ PathLike = Union[str, os.PathLike]
 #: base ('t' [s] strictly increasing; 'p', 'v', 'phi', 'delta_f', 'delta_t', ... of
 #: ident/flight_data.h).
 Data = Union[PathLike, "Flight", Dict[str, np.ndarray]]
+#: A model: a model file's path, or a dict with a model file's content (a relative vehicle path
+#: taken from the current directory).
+Model = Union[PathLike, Dict[str, Any]]
 
 class ConfigError(ValueError):
     """A bad scenario or configuration value; str(e) is the rig's message. A value of an overrides
@@ -81,7 +84,7 @@ def identify(data: Data, *, structure: str = "lateral3", method: str = "wls", in
     or 'output-error'."""
     ...
 
-def validate(model: PathLike, data: Data, *, closed_loop: bool = False, gains: Optional[str] = None,
+def validate(model: Model, data: Data, *, closed_loop: bool = False, gains: Optional[str] = None,
              controller: Optional[str] = None, vehicle: Optional[str] = None, states: str = "auto",
              sensing: Optional[str] = None, salvage: bool = False, rate_hz: Optional[float] = None,
              cutoff_hz: Optional[float] = None, order: Optional[int] = None,
@@ -89,7 +92,7 @@ def validate(model: PathLike, data: Data, *, closed_loop: bool = False, gains: O
     """`rig validate [--closed-loop] --json`'s content, plus 't', 'measured' and 'predicted' or 'simulated'."""
     ...
 
-def discrepancy(data: Union[Data, Sequence[Data]], *, model: PathLike, candidates: Optional[List[str]] = None,
+def discrepancy(data: Union[Data, Sequence[Data]], *, model: Model, candidates: Optional[List[str]] = None,
                 folds: Optional[int] = None, partial_f: Optional[float] = None,
                 delay_max_s: Optional[float] = None, command_latency_s: Optional[float] = None,
                 gains: Optional[str] = None, vehicle: Optional[str] = None, model_out: Optional[str] = None,
@@ -97,7 +100,7 @@ def discrepancy(data: Union[Data, Sequence[Data]], *, model: PathLike, candidate
     """`rig discrepancy --json`'s content: the verdict, the named effects, the gap before and after."""
     ...
 
-def loop(scenario: Union[PathLike, Scenario], *, model: Optional[str] = None,
+def loop(scenario: Union[PathLike, Scenario], *, model: Optional[Model] = None,
          gains: Union[None, str, Tuple[float, float], Dict[str, float]] = None,
          overrides: Dict[str, Any] = ..., on: Optional[str] = None, clock: Optional[str] = None,
          break_at: str = "actuator", all_sets: bool = False, box: Optional[str] = None,

@@ -87,6 +87,26 @@ def test_validate_gives_rig_validate_open_and_closed_loop(train):
     assert r2 == pytest.approx(closed["closed_loop"]["phi"]["r2"], rel=1e-9)
 
 
+def test_a_model_given_as_a_dict_is_the_model_file_it_holds(train, monkeypatch):
+    import yaml
+
+    with open(SET1) as f:
+        content = yaml.safe_load(f)
+    # Its vehicle path is taken from the current directory: the model file's own directory here.
+    monkeypatch.chdir(os.path.dirname(SET1))
+    from_dict = nimble_rig.validate(content, train["log"])
+    from_file = nimble_rig.validate(SET1, train["log"])
+    assert from_dict["metrics"] == from_file["metrics"]
+    changed = dict(content, derivatives=dict(content["derivatives"], Lp=2 * content["derivatives"]["Lp"]))
+    assert nimble_rig.validate(changed, train["log"])["metrics"] != from_file["metrics"]
+    loop = nimble_rig.loop(TRAIN, model=content, gains="fast")["loops"][0]
+    assert loop["phase_margin_deg"] == nimble_rig.loop(TRAIN, model=SET1, gains="fast")["loops"][0]["phase_margin_deg"]
+    with pytest.raises(nimble_rig.ConfigError, match="Lp"):
+        nimble_rig.validate(dict(content, derivatives=dict(content["derivatives"], Lp="fast")), train["log"])
+    with pytest.raises(TypeError):
+        nimble_rig.validate(42, train["log"])
+
+
 def test_discrepancy_gives_rig_discrepancy(train):
     got = nimble_rig.discrepancy(train["log"], model=SET1)
     assert got == rig_json("discrepancy", train["log"], "--model", SET1)
