@@ -28,7 +28,7 @@ and the simulated time; the log keeps everything until then.
 
 import math
 
-import nimble
+from .log import _types_by_fingerprint
 
 __all__ = ["Participant", "stepper"]
 
@@ -45,15 +45,6 @@ class Participant:
 
     def step(self, t_s, inputs):
         raise NotImplementedError("a participant defines step(t_s, inputs)")
-
-
-def _types_by_fingerprint():
-    found = {}
-    for name in dir(nimble):
-        cls = getattr(nimble, name)
-        if isinstance(cls, type) and hasattr(cls, "_get_packed_fingerprint"):
-            found[cls._get_packed_fingerprint()] = cls
-    return found
 
 
 def _channel_list(process, what, value, channels):
