@@ -402,8 +402,9 @@ void add_analysis(py::module_& m) {
         "'delta_f', 'delta_t', ...}. w0, u0 [m/s], theta0, phi0 [rad]: the trim of Eq 21 (--w0, --u0); terms: a "
         "model file whose terms: are fitted alongside, or a list of 'EQUATION: EXPRESSION' texts; hover, "
         "manoeuvre: lists of (start, end) [s] for the PSDs; oe_segment_s: output error's segment [s]. Returns `rig "
-        "identify --json`'s content as a dict (parameters, metrics, "
-        "eigenvalues, ...) plus 'signals' (the resampled, filtered signals the regression used, 't' first) and "
+        "identify --json`'s content as a dict (parameters in SI units per unit of state or input, metrics, "
+        "'eigenvalues' a complex array [1/s], ...) plus 'signals' (the resampled, filtered signals the regression "
+        "used, 't' first) and "
         "'equations' (per equation its regressors, parameters, y = scale * dependent, theta). model_out: write "
         "the identified model file there. Raises DataError for bad data, ValueError for a bad option.");
   m.def("validate", &validate, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("closed_loop") = false,
@@ -411,10 +412,12 @@ void add_analysis(py::module_& m) {
         py::arg("states") = "auto", py::arg("sensing") = py::none(), py::arg("salvage") = false,
         py::arg("rate_hz") = py::none(), py::arg("cutoff_hz") = py::none(), py::arg("order") = py::none(),
         py::arg("interpolation") = "cubic",
-        "Validates a model file on flight data, as `rig validate`: open loop (the state derivatives predicted "
+        "Validates a model (a model file's path, or a dict with its content) on flight data, as `rig "
+        "validate`: open loop (the state derivatives predicted "
         "from the measured states; 't', 'measured', 'predicted' arrays beside the --json content) or, "
         "closed_loop=True, the model flown by the controller copy on the data's phi_sp (gains: the log's set, "
-        "'fast' for other data; 't', 'measured', 'simulated' {p, v, phi, delta_f}, 'phi_sp', 'phi_ref').");
+        "'fast' for other data; 't' [s], 'measured', 'simulated' {p [rad/s], v [m/s], phi [rad], delta_f "
+        "[rad/s]}, 'phi_sp', 'phi_ref' [rad]). rate_hz, cutoff_hz [Hz], order: the resampling and low-pass.");
   m.def("discrepancy", &discrepancy, py::arg("data"), py::kw_only(), py::arg("model"),
         py::arg("candidates") = py::none(), py::arg("folds") = py::none(), py::arg("partial_f") = py::none(),
         py::arg("delay_max_s") = py::none(), py::arg("command_latency_s") = py::none(), py::arg("gains") = py::none(),
@@ -422,8 +425,12 @@ void add_analysis(py::module_& m) {
         py::arg("sensing") = py::none(), py::arg("salvage") = false,
         "The discrepancy workflow, as `rig discrepancy`: where the model and the data disagree, the effect the "
         "model misses (by name, or unexplained / ambiguous), the refit and the gap before and after on held-out "
-        "data. data: one flight (path or dict of arrays) or a list of flights pooled. Returns `rig discrepancy "
-        "--json`'s content as a dict; model_out: write the refit model there.");
+        "data. data: one flight (path or dict of arrays) or a list of flights pooled; model: a model file's path "
+        "or a dict with its content. folds: held-out cross-validation folds; partial_f: the partial F a term must "
+        "reach (SIDPAC's rule, 20) [-]; "
+        "delay_max_s: the actuator_delay scan's limit [s]; command_latency_s: the flap command path's known latency "
+        "[s]. Returns `rig "
+        "discrepancy --json`'s content as a dict; model_out: write the refit model there.");
   m.def("export_mcap", &export_mcap, py::arg("log"), py::arg("out"), py::kw_only(), py::arg("raw") = false,
         py::arg("compression") = "zstd", py::arg("salvage") = false, py::arg("vehicle") = py::none(),
         py::arg("strict") = false,
