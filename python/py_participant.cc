@@ -4,6 +4,7 @@
 /// by its task at its rate with the GIL taken for the call alone.
 
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <regex>
 #include <stdexcept>
@@ -13,7 +14,16 @@
 
 #include <pybind11/stl.h>
 
+#include <nimble/actuator_command_t.hpp>
+#include <nimble/actuator_feedback_t.hpp>
+#include <nimble/attitude_setpoint_t.hpp>
+#include <nimble/can_health_t.hpp>
+#include <nimble/controller_status_t.hpp>
+#include <nimble/estimator_state_t.hpp>
+#include <nimble/mocap_pose_t.hpp>
+
 #include "contract/channels.h"
+#include "contract/decode.h"
 #include "launcher/inprocess.h"
 #include "python/py_module.h"
 #include "transport/process_main.h"
@@ -21,15 +31,50 @@
 namespace nimble::python {
 namespace {
 
+/// Publishes a participant's encoded message as the rig's own process publishes its own: decoded
+/// into its type and sent through the bus's fault injector, so that the scenario's faults on the
+/// channel apply. @throws std::runtime_error if the bytes are not one message of the type.
+template <typename T>
+void publish_typed(transport::Bus& bus, const std::string& channel, const std::string& bytes) {
+  T msg{};
+  std::string error;
+  if (!contract::decode_as(bytes.data(), static_cast<int>(bytes.size()), msg, false, &error)) {
+    throw std::runtime_error("its message on " + channel + " does not decode: " + error);
+  }
+  bus.publish(channel, msg);
+}
+
+using TypedPublish = void (*)(transport::Bus&, const std::string&, const std::string&);
+
+/// How each message type a replaceable process publishes (controller, mocap, estimator, the CAN
+/// bridge's sides; contract/channels.cc) goes out; participant.py holds outputs to those channels.
+TypedPublish typed_publish(const std::string& type) {
+  static const std::map<std::string, TypedPublish> table = {
+      {"actuator_command_t", &publish_typed<actuator_command_t>},
+      {"actuator_feedback_t", &publish_typed<actuator_feedback_t>},
+      {"attitude_setpoint_t", &publish_typed<attitude_setpoint_t>},
+      {"can_health_t", &publish_typed<can_health_t>},
+      {"controller_status_t", &publish_typed<controller_status_t>},
+      {"estimator_state_t", &publish_typed<estimator_state_t>},
+      {"mocap_pose_t", &publish_typed<mocap_pose_t>},
+  };
+  const auto it = table.find(type);
+  if (it == table.end()) {
+    throw std::logic_error("a participant's output of type " + type + ": no replaceable process publishes it");
+  }
+  return it->second;
+}
+
 /// One Python participant: its inputs' newest bytes, handed to its stepper once per task run.
 class PythonParticipant {
  public:
   /// `stepper` is held, not copied: it is a Python object, and this may be built and destroyed
   /// without the GIL.
   PythonParticipant(const nimble::Scenario& scenario, const transport::NodeOptions& options,
-                    std::shared_ptr<py::object> stepper, const std::vector<std::string>& inputs, double rate_hz,
-                    std::string label)
+                    std::shared_ptr<py::object> stepper, const std::vector<std::string>& inputs,
+                    const std::map<std::string, std::string>& outputs, double rate_hz, std::string label)
       : node_(transport::make_process_node(scenario, options)), stepper_(std::move(stepper)), label_(std::move(label)) {
+    for (const auto& [channel, type] : outputs) publish_[channel] = typed_publish(type);
     for (const std::string& channel : inputs) {
       node_->bus().subscribe_raw(std::regex_replace(channel, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)"),
                                  [this](const std::string& c, const void* data, int size, int64_t) {
@@ -66,7 +111,13 @@ class PythonParticipant {
       }
     }
     for (const auto& [channel, bytes] : out) {
-      node_->bus().publish_bytes(channel, bytes.data(), static_cast<int>(bytes.size()));
+      const auto it = publish_.find(channel);
+      if (it == publish_.end()) throw std::runtime_error(label_ + " published on " + channel + ", not an output");
+      try {
+        it->second(node_->bus(), channel, bytes);
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error(label_ + ": " + e.what());
+      }
     }
   }
 
@@ -74,6 +125,7 @@ class PythonParticipant {
   std::shared_ptr<py::object> stepper_;
   std::string label_;
   std::vector<std::pair<std::string, std::string>> fresh_;  ///< (channel, bytes) since the last step
+  std::map<std::string, TypedPublish> publish_;             ///< its outputs, each by its type
 };
 
 }  // namespace
@@ -99,9 +151,11 @@ std::map<std::string, launcher::ParticipantFactory> participants_of(const nimble
     const auto inputs = made[1].cast<std::vector<std::string>>();
     const double rate_hz = made[2].cast<double>();
     const std::string label = made[3].cast<std::string>();
+    const auto outputs = made[4].cast<std::map<std::string, std::string>>();
+    for (const auto& [channel, type] : outputs) typed_publish(type);  // every output has its way out
     const nimble::Scenario* s = &scenario;
-    out[process] = [s, stepper, inputs, rate_hz, label](const transport::NodeOptions& options) {
-      auto p = std::make_shared<PythonParticipant>(*s, options, stepper, inputs, rate_hz, label);
+    out[process] = [s, stepper, inputs, outputs, rate_hz, label](const transport::NodeOptions& options) {
+      auto p = std::make_shared<PythonParticipant>(*s, options, stepper, inputs, outputs, rate_hz, label);
       return launcher::CustomParticipant{&p->node(), p};
     };
   }

@@ -64,9 +64,9 @@ def _publishes(process, publishers):
 
 
 def stepper(process, participant, channels):
-    """Checks `participant` and returns (call, inputs, rate_hz, label) for the flight: call(t_s,
+    """Checks `participant` and returns (call, inputs, rate_hz, label, outputs) for the flight: call(t_s,
     fresh) takes the inputs' bytes that came since the last call ({channel: bytes}) and returns
-    [(channel, bytes)] to publish. `channels`: the contract's {channel: (type, publishers)}. Its
+    [(channel, bytes)] to publish; outputs: {channel: type}. `channels`: the contract's {channel: (type, publishers)}. Its
     outputs must be channels the contract lets `process` publish, each message of the channel's
     type. Raises TypeError or ValueError naming the process."""
     label = "%s (Python %s)" % (process, type(participant).__name__)
@@ -111,4 +111,4 @@ def stepper(process, participant, channels):
             published.append((channel, message.encode()))
         return published
 
-    return call, inputs, float(rate_hz), label
+    return call, inputs, float(rate_hz), label, expected

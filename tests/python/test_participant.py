@@ -97,3 +97,14 @@ def test_a_participant_in_place_of_a_process_the_scenario_does_not_run_is_refuse
 
     with pytest.raises(nimble_rig.ConfigError, match="a participant in place of a process the scenario does not run"):
         nimble_rig.fly(hover, participants={"can_flight": Nothing()})
+
+
+def test_the_scenarios_faults_apply_to_a_participants_outputs_as_to_the_process_it_replaces():
+    faulted = nimble_rig.load_scenario(HOVER, {"duration_s": 3, "faults": [
+        {"target": "ACTUATOR_CMD", "kind": "off", "start_s": 1.0, "duration_s": 0.5}]})
+    flight = nimble_rig.fly(faulted, seed=1, participants={"controller": PythonPD()})
+    t = flight.channels["ACTUATOR_CMD"]["utime"] * 1e-6
+    assert ((t >= 1.0) & (t < 1.5)).sum() == 0 and (t >= 1.5).sum() > 700  # none while off, all after
+    announced = [f for f in flight.report["faults"] if f["channel"] == "ACTUATOR_CMD"]
+    assert announced[0]["process"] == "controller" and "ACTUATOR_CMD off" in announced[0]["message"]
+    assert any(f["process"] == "plant" and "no actuator command" in f["message"] for f in announced)
