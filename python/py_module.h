@@ -101,5 +101,7 @@ void add_flights(py::module_& m);
 void add_analysis(py::module_& m);
 /// Adds loop (python/py_loop.cc).
 void add_loop(py::module_& m);
+/// Adds the live run's subscription (python/py_subscribe.cc).
+void add_subscribe(py::module_& m);
 
 }  // namespace nimble::python

@@ -147,4 +147,5 @@ PYBIND11_MODULE(_rig, m) {
   add_flights(m);
   add_analysis(m);
   add_loop(m);
+  add_subscribe(m);
 }

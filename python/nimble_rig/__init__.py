@@ -16,10 +16,11 @@ Pure Python and numpy: the message types come from the `nimble` package that lcm
 lcmtypes/*.lcm (installed next to this one); LCM's own Python module is not needed.
 """
 
+from .live import subscribe
 from .log import LogError, RigLog, channel_frame, read_log
 from .participant import Participant
 
-__all__ = ["LogError", "Participant", "RigLog", "channel_frame", "read_log"]
+__all__ = ["LogError", "Participant", "RigLog", "channel_frame", "read_log", "subscribe"]
 
 try:  # the compiled module (python/rig_module.cc), where the build had pybind11
     from ._rig import (ConfigError, DataError, Flight, Scenario, discrepancy, export_mcap, fly, identify,
