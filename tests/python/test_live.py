@@ -12,7 +12,7 @@ import nimble_rig
 
 SOURCE = os.environ["RIG_SOURCE_DIR"]
 RIG = os.environ["RIG_BIN"]
-URL = "udpm://239.255.76.67:7667?ttl=0"
+URL = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"  # the rig's own, kernel buffer and all
 READER = textwrap.dedent("""
     import subprocess, sys
     import nimble_rig
