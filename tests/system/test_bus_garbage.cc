@@ -58,9 +58,15 @@ YAML::Node fly_through(const std::string& tag, const std::string& flood_args, do
   // The figures are those of the real messages: hover stays within a few degrees, the rates
   // are the rig's, nothing counted as dropped.
   CHECK(s["max_abs"]["phi"].as<double>() < 0.2);
+  // Every TRUTH the plant published, received or counted as dropped: one per millisecond of the
+  // run's simulated time. A real-time run ends on the wall clock, and under the flood its
+  // simulated time may end a few milliseconds short of the duration (3.979 of 4 s seen on a
+  // loaded machine): no message is lost by that.
   const YAML::Node truth = s["channels"][ch::kTruth];
   const double received = truth["count"].as<double>(), dropped = truth["drops"].as<double>();
-  CHECK(received + dropped == Approx(1000.0 * duration_s).margin(5));
+  const double sim_time_s = s["sim_time_s"].as<double>();
+  CHECK(sim_time_s >= 0.98 * duration_s);
+  CHECK(received + dropped == Approx(1000.0 * sim_time_s).margin(5));
   if (lossless) {
     CHECK(dropped == 0);
     CHECK(s["channels"][ch::kActuatorCommand]["drops"].as<int>() == 0);
