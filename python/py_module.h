@@ -85,6 +85,10 @@ class ModelFile {
   std::string temporary_dir_;  ///< "" for a path
 };
 
+/// The regex (Bus::subscribe_raw) that matches exactly the channels named, each taken literally;
+/// "" for none.
+std::string channels_pattern(const std::vector<std::string>& channels);
+
 /// A JSON text as Python objects (json.loads).
 py::object json_value(const std::string& text);
 

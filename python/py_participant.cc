@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <map>
 #include <memory>
-#include <regex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -75,8 +74,8 @@ class PythonParticipant {
                     const std::map<std::string, std::string>& outputs, double rate_hz, std::string label)
       : node_(transport::make_process_node(scenario, options)), stepper_(std::move(stepper)), label_(std::move(label)) {
     for (const auto& [channel, type] : outputs) publish_[channel] = typed_publish(type);
-    for (const std::string& channel : inputs) {
-      node_->bus().subscribe_raw(std::regex_replace(channel, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)"),
+    if (!inputs.empty()) {
+      node_->bus().subscribe_raw(channels_pattern(inputs),
                                  [this](const std::string& c, const void* data, int size, int64_t) {
                                    fresh_.emplace_back(c, std::string(static_cast<const char*>(data), size));
                                  });

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <deque>
 #include <memory>
-#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,11 +23,8 @@ class Subscription {
  public:
   /// @throws TransportError (RuntimeError) naming the URL if LCM does not start on it.
   Subscription(const std::vector<std::string>& channels, const std::string& url) : bus_(url) {
-    std::string pattern;
-    for (const std::string& c : channels) {
-      pattern += (pattern.empty() ? "" : "|") + std::regex_replace(c, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)");
-    }
-    bus_.subscribe_raw(pattern.empty() ? ".*" : "(" + pattern + ")",
+    const std::string pattern = channels_pattern(channels);
+    bus_.subscribe_raw(pattern.empty() ? ".*" : pattern,
                        [this](const std::string& channel, const void* data, int size, int64_t) {
                          received_.emplace_back(channel, std::string(static_cast<const char*>(data), size));
                        });

@@ -11,6 +11,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,14 @@ ModelFile::~ModelFile() {
   if (temporary_dir_.empty()) return;
   std::error_code ec;
   std::filesystem::remove_all(temporary_dir_, ec);
+}
+
+std::string channels_pattern(const std::vector<std::string>& channels) {
+  static const std::regex special(R"([.^$|()\[\]{}*+?\\])");
+  std::string pattern;
+  for (const std::string& c : channels)
+    pattern += (pattern.empty() ? "" : "|") + std::regex_replace(c, special, R"(\$&)");
+  return pattern.empty() ? pattern : "(" + pattern + ")";
 }
 
 py::object json_value(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
