@@ -17,7 +17,10 @@ in one run on one machine, and prints the medians of:
    run, so the ratios travel;
  - the same flight with a controller written in Python in the loop (docs/examples/python_pd.py,
    nimble_rig.fly(participants=), each step called with the GIL taken) against the rig's C++
-   controller: each flight's wall time and speed [x real time]. The target: >= 30x.
+   controller: each flight's wall time and speed [x real time]. The target: >= 30x;
+ - the same in lockstep (`rig run --clock lockstep`, --lockstep-runs times, default 3): the Python
+   controller as a process of its own over LCM (the scenario's `participants` section, python -m
+   nimble_rig.node) against the rig's C++ controller process, each run's wall time and speed.
 Not a test: figures depend on the machine and on what else runs on it.
 """
 import argparse
@@ -39,6 +42,7 @@ def main():
     ap.add_argument("--scenario", default=os.path.join(source, "rig_configs", "id_doublet_train_fast.yaml"))
     ap.add_argument("--duration", type=float, default=30.0, help="simulated seconds [s]")
     ap.add_argument("--runs", type=int, default=7)
+    ap.add_argument("--lockstep-runs", type=int, default=3)
     ap.add_argument("--json", help="write the figures here")
     a = ap.parse_args()
     if a.runs < 1 or a.duration <= 0:
@@ -74,6 +78,19 @@ def main():
             if pd.report["result"] != "ok":
                 sys.exit("bench_python: the flight with the Python controller ended " + pd.report["result"])
             pd_flight.append(pd.report["wall_time_s"])
+        # Lockstep: every process its own, over LCM in the run's private network namespace.
+        pd_file = os.path.join(source, "docs", "examples", "python_pd.py")
+        section = "participants={controller: {python: %s, class: PythonPD}}" % pd_file
+        lockstep = {"python": [], "cpp": []}
+        for _ in range(a.lockstep_runs):
+            for who, extra in (("cpp", []), ("python", ["--set", section])):
+                cmd = [a.rig, "run", a.scenario, "--clock", "lockstep", "--seed", "1", "--set",
+                       "duration_s=%g" % a.duration, "--no-progress", "--log", log_rig, "--json", report] + extra
+                done = subprocess.run(cmd, capture_output=True, text=True)
+                if done.returncode != 0:
+                    sys.exit("bench_python: rig run --clock lockstep (%s controller) failed: %s" % (who, done.stderr))
+                with open(report) as f:
+                    lockstep[who].append(json.load(f)["wall_time_s"])
 
     med = statistics.median
     figures = {
@@ -86,6 +103,10 @@ def main():
     figures["python_controller"] = {"flight_s": med(pd_flight), "speed_x": a.duration / med(pd_flight),
                                     "cpp_flight_s": med(py_flight), "cpp_speed_x": a.duration / med(py_flight)}
     figures["python_controller"]["at_least_30x"] = figures["python_controller"]["speed_x"] >= 30.0
+    if a.lockstep_runs > 0:
+        figures["lockstep"] = {"python_flight_s": med(lockstep["python"]), "cpp_flight_s": med(lockstep["cpp"]),
+                               "python_speed_x": a.duration / med(lockstep["python"]),
+                               "cpp_speed_x": a.duration / med(lockstep["cpp"]), "runs": a.lockstep_runs}
     print("bench_python: %s, %g s simulated, seed 1, log written, medians of %d runs each (alternating)"
           % (os.path.basename(a.scenario), a.duration, a.runs))
     for key, what in (("flight_s", "the flight (its report's wall time)"),
@@ -99,6 +120,11 @@ def main():
     print("  the flight with the controller in Python: %.3f s (%.0fx real time; the C++ controller's %.3f s, %.0fx); "
           ">= 30x: %s" % (pc["flight_s"], pc["speed_x"], pc["cpp_flight_s"], pc["cpp_speed_x"],
                           "yes" if pc["at_least_30x"] else "NO"))
+    if a.lockstep_runs > 0:
+        ls = figures["lockstep"]
+        print("  lockstep, every process its own over LCM (medians of %d): the Python controller's process %.3f s "
+              "(%.0fx), the C++ controller's %.3f s (%.0fx)" % (ls["runs"], ls["python_flight_s"], ls["python_speed_x"],
+                                                             ls["cpp_flight_s"], ls["cpp_speed_x"]))
     if a.json:
         with open(a.json, "w") as f:
             json.dump(figures, f, indent=2)

@@ -21,7 +21,10 @@ constexpr const char* kRunDescription =
     "process over LCM; inprocess flies the same processes' code in this process, lockstep\n"
     "semantics, no transport (same log, same truth as lockstep). Real time is judged from what\n"
     "each process reports: more than summary.max_late_fraction of a channel late or\n"
-    "summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.";
+    "summary.max_overrun_fraction of a process's cycles overrun gives 'real-time degraded'.\n"
+    "A process the scenario's `participants` section replaces by a Python class runs as\n"
+    "run.python -m nimble_rig.node (realtime, lockstep); in process it flies only from Python,\n"
+    "nimble_rig.fly() (docs/python.md).";
 
 constexpr const char* kRunFooter =
     "Network: run.network_namespace auto (default) flies realtime and lockstep runs in a private\n"

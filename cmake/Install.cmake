@@ -64,7 +64,7 @@ install(FILES "${PROJECT_BINARY_DIR}/nimble_rig.pc" DESTINATION "${CMAKE_INSTALL
 install(DIRECTORY "${PROJECT_BINARY_DIR}/python/nimble" DESTINATION "${NIMBLE_INSTALL_PYTHONDIR}")
 configure_file("${PROJECT_SOURCE_DIR}/python/nimble_rig/__init__.py"
   "${PROJECT_BINARY_DIR}/python/nimble_rig/__init__.py" @ONLY)
-foreach(f log.py live.py participant.py _rig.pyi py.typed)
+foreach(f log.py live.py node.py participant.py _rig.pyi py.typed)
   configure_file("${PROJECT_SOURCE_DIR}/python/nimble_rig/${f}" "${PROJECT_BINARY_DIR}/python/nimble_rig/${f}" COPYONLY)
 endforeach()
 install(DIRECTORY "${PROJECT_BINARY_DIR}/python/nimble_rig" DESTINATION "${NIMBLE_INSTALL_PYTHONDIR}")

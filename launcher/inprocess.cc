@@ -114,6 +114,15 @@ Process* build_processes(const Scenario& s, transport::InprocessHub& hub, can::I
       throw ConfigError(s.file, "processes", name, "a participant in place of a process the scenario does not run");
     }
   }
+  // A participant the scenario names flies in process only as a Python object (nimble_rig.fly()
+  // makes it from the section): the rig's own process in its place would be another run.
+  for (const auto& [name, spec] : s.participants) {
+    if (options.replace.count(name) == 0) {
+      throw ConfigError(s.file, "participants." + name, spec.python_file,
+                        "a Python participant flies in process only from Python (nimble_rig.fly(scenario)); the rig "
+                        "tool embeds no Python: run it with --clock lockstep or realtime, where it is its own process");
+    }
+  }
   Process* master = nullptr;
   for (const auto& name : s.processes) processes.push_back(make_process(name, s, hub, can_bus, options));
   for (auto& p : processes) {
@@ -187,8 +196,9 @@ RunReport report_of(const RunPlan& plan, const InprocessOptions& options, int64_
   for (const auto& p : processes) {
     const int code = &p == master ? end.master_code : transport::kExitOk;
     report.processes.push_back(ProcessOutcome{p.name, static_cast<long long>(::getpid()), true, code, 0,
-                                              "in process, returned " + std::to_string(code)});
+                                              "in process, returned " + std::to_string(code), 0, ""});
   }
+  describe_processes(report, plan.scenario, monitor);
   report.verdict = judge_run(report.flight, plan.judge, end.interrupted, end.failure, {}, false, failsafe_of(monitor),
                              judge_tracking(report.tracking, plan.judge));
   return report;

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <cstdio>
 #include <ctime>
@@ -83,6 +84,18 @@ std::string self_dir() {
 std::string executable_of(const std::string& process) {
   if (process == can::kFlightProcess || process == can::kRigProcess) return "nimble_can_bridge";
   return "nimble_" + process;
+}
+
+/// Where the rig's Python module (nimble_rig) lies for the executables in `bin_dir`: the build
+/// tree's python/ beside bin/, or the installed lib/python3/dist-packages; "" if neither has it
+/// (the interpreter's own path then has to).
+std::string python_module_dir(const std::string& bin_dir) {
+  for (const char* rel : {"../python", "../lib/python3/dist-packages"}) {
+    const std::filesystem::path dir = (std::filesystem::path(bin_dir) / rel).lexically_normal();
+    std::error_code ec;
+    if (std::filesystem::exists(dir / "nimble_rig" / "node.py", ec)) return dir.string();
+  }
+  return "";
 }
 
 /// Flies `plan` with each rig process its own OS process over LCM (clock realtime or lockstep).
@@ -327,23 +340,34 @@ class ProcessRun {
     return kRunOk;
   }
 
-  /// Starts every process of the scenario but the external ones (whose commands it prints).
+  /// Starts every process of the scenario but the external ones (whose commands it prints). A
+  /// process the scenario replaces by a Python participant is `python -m nimble_rig.node`, with
+  /// the rig's Python module found beside its executables.
   void start_processes() {
     const std::string bin_dir = options_.bin_dir.empty() ? self_dir() : options_.bin_dir;
+    const std::string module_dir = python_module_dir(bin_dir);
     for (const auto& name : scenario_.processes) {
+      const bool python = scenario_.participants.count(name) > 0;
+      const std::string exe = python ? lc_.python : bin_dir + "/" + executable_of(name);
+      std::vector<std::string> args = {"--name", name, "--scenario", resolved_file_, "--lcm-url", url_};
+      if (python) args.insert(args.begin(), {"-m", "nimble_rig.node"});
+      std::vector<std::string> environment;
+      if (python && !module_dir.empty()) {
+        const char* path = std::getenv("PYTHONPATH");
+        environment.push_back("PYTHONPATH=" + module_dir + (path != nullptr && *path ? ":" + std::string(path) : ""));
+      }
       if (external(name)) {
         std::cerr << "rig run: " << name << " is external: start it in this run's network"
                   << (ns_detail_.empty() || url_ != kNamespaceLcmUrl
                           ? ""
                           : " (nsenter -t " + std::to_string(::getpid()) + " -n)")
-                  << " with\n  " << bin_dir << "/" << executable_of(name) << " --name " << name << " --scenario "
-                  << resolved_file_ << " --lcm-url '" << url_ << "'\n";
+                  << " with\n  " << (environment.empty() ? "" : environment.front() + " ") << exe;
+        for (const auto& a : args) std::cerr << " " << (a == url_ ? "'" + a + "'" : a);
+        std::cerr << "\n";
         continue;
       }
       const int host_ns = host_link_ && plan_.hosts.host_index(name) > 0 ? host_link_->remote_namespace_fd() : -1;
-      supervisor_.start(name, bin_dir + "/" + executable_of(name),
-                        {"--name", name, "--scenario", resolved_file_, "--lcm-url", url_},
-                        log_file_ + "." + name + ".out", lc_.rig_cpus, host_ns);
+      supervisor_.start(name, exe, args, log_file_ + "." + name + ".out", lc_.rig_cpus, host_ns, environment);
     }
     if (const std::string note = pin_to(lc_.rig_cpus); !note.empty())
       std::cerr << "rig run: run.rig_cpus: " << note << "\n";
@@ -535,12 +559,13 @@ class ProcessRun {
     }
   }
 
-  /// A process that ended during the run: what, when, its last fatal fault and output.
+  /// A process that ended during the run: what, when and its last fatal fault (on the first line,
+  /// which the result keeps), then its output.
   std::string died_during_run(const ChildProcess& dead) const {
     std::string why;
     for (auto it = monitor_.faults().rbegin(); it != monitor_.faults().rend(); ++it) {
       if (it->process == dead.name && it->severity >= 3) {
-        why = "\n  its last fatal fault: " + it->message;
+        why = "; its last fatal fault: " + it->message.substr(0, it->message.find('\n'));
         break;
       }
     }
@@ -578,7 +603,7 @@ class ProcessRun {
     report.log = recorder_->kept();
     fill_from_monitor(report, monitor_, monitor_.sim_time_s(), wall_s);
     for (const auto& c : supervisor_.children()) {
-      report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe()});
+      report.processes.push_back(ProcessOutcome{c.name, c.pid, c.exited, c.exit_code, c.signal, c.describe(), 0, ""});
     }
     for (const auto& name : lc_.external_processes) {
       const RunMonitor::Heartbeat* hb = monitor_.heartbeat(name);
@@ -586,8 +611,10 @@ class ProcessRun {
       report.processes.push_back(ProcessOutcome{name, hb != nullptr ? hb->pid : -1, stopped, stopped ? 0 : -1, 0,
                                                 hb == nullptr ? "external, never heard"
                                                 : stopped     ? "external, stopped"
-                                                              : "external, still running"});
+                                                              : "external, still running",
+                                                0, ""});
     }
+    describe_processes(report, scenario_, monitor_);
     report.hosts = host_summaries(plan_.hosts, host_link_.get());
     report.verdict = judge_run(report.flight, plan_.judge, interrupted, failure,
                                judge_timing(report.timing, plan_.judge, !lockstep_), options_.strict_timing,

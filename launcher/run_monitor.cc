@@ -238,7 +238,10 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
 
   if (channel == kHeartbeat) {
     heartbeat_t hb{};
-    if (take(hb, "")) heartbeat_[hb.process] = Heartbeat{hb.state, hb.pid, hb.config_digest, recv_ns};
+    if (take(hb, "")) {
+      Heartbeat& h = heartbeat_[hb.process];
+      h = Heartbeat{hb.state, hb.pid, hb.config_digest, recv_ns, h.count + 1};
+    }
     return;
   }
   if (channel == kTimingHealth) {

@@ -162,6 +162,7 @@ class RunMonitor {
     int pid = 0;
     std::string digest;
     int64_t recv_ns = 0;  ///< CLOCK_MONOTONIC
+    int64_t count = 0;    ///< heartbeats heard from it in the run
   };
   /// nullptr if the process was never heard.
   const Heartbeat* heartbeat(const std::string& process) const;

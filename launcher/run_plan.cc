@@ -1,9 +1,11 @@
 #include "launcher/run_plan.h"
 
-#include <algorithm>
-
 #include <sched.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -44,6 +46,11 @@ LaunchConfig launch_config_from(const Scenario& s) {
   ConfigMap m = s.section("run");
   read_params(m, launch_params(), c);
   c.lcm_url = m.get_string_or("lcm_url", c.lcm_url);
+  c.python = m.get_string_or("python", c.python);
+  if (!s.participants.empty() && ::access(c.python.c_str(), X_OK) != 0) {
+    m.fail("python", "'" + c.python + "' is not an executable Python interpreter (" + std::strerror(errno) +
+                         "): the scenario's participants run under it");
+  }
   c.network_namespace = m.has("network_namespace") ? m.get_enum("network_namespace", {"auto", "always", "never"})
                                                    : m.get_string_or("network_namespace", "auto");
   // The processes' own keys of the section, checked where they are defined.

@@ -97,6 +97,9 @@ struct LaunchConfig {
   /// another machine of the lab, docs/machines.md "Running across machines") with the run's resolved
   /// scenario and LCM URL, which the launcher prints; it waits for their READY as for the others.
   std::vector<std::string> external_processes;
+  /// The interpreter of the scenario's Python participants (section `participants`), started as
+  /// `python -m nimble_rig.node`: Debian's, which has the python3-numpy the module needs.
+  std::string python = "/usr/bin/python3";
   std::string lcm_url = "auto";            ///< "auto": private namespace (or host multicast) per run
   std::string network_namespace = "auto";  ///< auto | always | never
   std::vector<int> rig_cpus;               ///< CPUs for the rig's processes (empty: no pinning)

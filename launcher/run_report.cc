@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -16,6 +17,16 @@
 #include "core/output_file.h"
 
 namespace nimble::launcher {
+
+void describe_processes(RunReport& report, const Scenario& scenario, const RunMonitor& monitor) {
+  for (ProcessOutcome& p : report.processes) {
+    if (const RunMonitor::Heartbeat* hb = monitor.heartbeat(p.name)) p.heartbeats = hb->count;
+    if (const auto it = scenario.participants.find(p.name); it != scenario.participants.end()) {
+      p.python = "Python " + it->second.class_name + " of " +
+                 std::filesystem::path(it->second.python_file).filename().string();
+    }
+  }
+}
 
 void fill_from_monitor(RunReport& r, const RunMonitor& monitor, double sim_s, double wall_s) {
   r.sim_time_s = sim_s;
@@ -149,7 +160,10 @@ void print_faults(std::ostream& out, const RunReport& r) {
 /// Each process with how it ended, and the hosts they ran on.
 void print_processes_and_hosts(std::ostream& out, const RunReport& r) {
   out << "processes ";
-  for (const auto& p : r.processes) out << " " << p.name << "(" << p.ended << ")";
+  for (const auto& p : r.processes) {
+    out << " " << p.name << "(" << (p.python.empty() ? "" : p.python + "; ") << p.ended << ", " << p.heartbeats
+        << (p.heartbeats == 1 ? " heartbeat)" : " heartbeats)");
+  }
   out << "\n";
   if (!r.hosts.empty()) {
     out << "hosts     ";

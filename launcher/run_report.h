@@ -23,7 +23,11 @@ struct ProcessOutcome {
   bool exited = false;
   int exit_code = -1;
   int signal = 0;
-  std::string ended;  ///< "exited with code 0", "was killed by signal 9 (Killed)", "running"
+  std::string ended;       ///< "exited with code 0", "was killed by signal 9 (Killed)", "running"
+  int64_t heartbeats = 0;  ///< heartbeats the launcher heard from it
+  /// A Python participant in the process's place (scenario section `participants`): "Python
+  /// MyController of my_controller.py"; "" for the rig's own process.
+  std::string python;
 };
 
 /// What a run's log holds: whole events only, also when a write failed.
@@ -76,6 +80,10 @@ struct RunReport {
 /// estimator, roll tracking, CAN health, faults) for a run of `sim_s` simulated and `wall_s`
 /// wall seconds.
 void fill_from_monitor(RunReport& report, const RunMonitor& monitor, double sim_s, double wall_s);
+
+/// Each of report.processes' heartbeats heard (from `monitor`) and, for a process the scenario
+/// replaces by a Python participant, which ("Python MyController of my_controller.py").
+void describe_processes(RunReport& report, const Scenario& scenario, const RunMonitor& monitor);
 
 /// The human-readable summary.
 void write_report_text(std::ostream& out, const RunReport& report);

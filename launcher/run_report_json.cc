@@ -149,7 +149,8 @@ void add_faults_processes_hosts(OrderedJson& j, const RunReport& r) {
   j["processes"] = OrderedJson::object();
   for (const auto& p : r.processes) {
     OrderedJson& out = j["processes"][p.name];
-    out = {{"pid", p.pid}, {"exit_code", p.exit_code}, {"signal", p.signal}};
+    out = {{"pid", p.pid}, {"exit_code", p.exit_code}, {"signal", p.signal}, {"heartbeats", p.heartbeats}};
+    if (!p.python.empty()) out["python"] = p.python;
     for (const HostSummary& h : r.hosts) {
       if (std::find(h.processes.begin(), h.processes.end(), p.name) != h.processes.end()) out["host"] = h.name;
     }

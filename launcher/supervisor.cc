@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -63,13 +64,27 @@ ProcessSupervisor::~ProcessSupervisor() {
 
 const ChildProcess& ProcessSupervisor::start(const std::string& name, const std::string& exe,
                                              const std::vector<std::string>& args, const std::string& output_file,
-                                             const std::vector<int>& cpus, int network_namespace_fd) {
+                                             const std::vector<int>& cpus, int network_namespace_fd,
+                                             const std::vector<std::string>& environment) {
   // Everything the child needs is prepared before fork: it only calls async-signal-safe
   // functions until exec.
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(exe.c_str()));
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  // The child's environment: this one's, with `environment`'s entries in place of those of the same name.
+  std::vector<std::string> env_entries;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string entry = *e;
+    const std::string name_eq = entry.substr(0, entry.find('=') + 1);
+    const bool replaced = std::any_of(environment.begin(), environment.end(),
+                                      [&name_eq](const std::string& x) { return x.rfind(name_eq, 0) == 0; });
+    if (!replaced) env_entries.push_back(entry);
+  }
+  env_entries.insert(env_entries.end(), environment.begin(), environment.end());
+  std::vector<char*> envp;
+  for (auto& e : env_entries) envp.push_back(e.data());
+  envp.push_back(nullptr);
   std::fflush(stdout);
   std::fflush(stderr);
   const pid_t pid = ::fork();
@@ -93,7 +108,7 @@ const ChildProcess& ProcessSupervisor::start(const std::string& name, const std:
     // The process inherits its standard streams only: not the run's log, the launcher's LCM
     // sockets, a live view's listening socket or the pipes of other children.
     close_descriptors_from(STDERR_FILENO + 1);
-    ::execv(exe.c_str(), argv.data());
+    ::execve(exe.c_str(), argv.data(), envp.data());
     std::fprintf(stderr, "cannot execute %s: %s\n", exe.c_str(), std::strerror(errno));
     ::_exit(127);
   }

@@ -49,11 +49,12 @@ class ProcessSupervisor {
   /// Starts `exe` with `args` as child `name`. If the executable cannot be started the child
   /// exits with code 127 and says why in its output. With `network_namespace_fd` (a descriptor
   /// of a network namespace, e.g. HostLink's) the child enters that namespace before exec
-  /// (setns); if it cannot, it exits with code 127 and says why.
+  /// (setns); if it cannot, it exits with code 127 and says why. `environment`: "NAME=value"
+  /// entries that replace or add to the supervisor's own environment in the child's.
   /// @throws std::runtime_error if fork fails.
   const ChildProcess& start(const std::string& name, const std::string& exe, const std::vector<std::string>& args,
                             const std::string& output_file = "", const std::vector<int>& cpus = {},
-                            int network_namespace_fd = -1);
+                            int network_namespace_fd = -1, const std::vector<std::string>& environment = {});
 
   /// Reaps the children that have exited; returns the first one newly found dead, or nullptr.
   const ChildProcess* reap();

@@ -438,11 +438,14 @@ void add_analysis(py::module_& m) {
         "returns its --json content (messages per channel, what was left out). A damaged log raises DataError "
         "naming the byte offset unless salvage=True. A message with a value beyond the physical bounds of "
         "vehicle (default the rig's) is left out with a UserWarning naming its channel, field, time and count "
-        "('beyond_bounds' in the result); strict=True raises DataError instead.");
+        "('beyond_bounds' in the result); strict=True raises DataError instead. Each MCAP message's log time is its "
+        "rig time "
+        "[ns from the run's start] (docs/viewers.md); its fields keep the units their names say.");
   m.def("log_bounds", &log_bounds, py::arg("log"), py::kw_only(), py::arg("vehicle") = py::none(),
         py::arg("salvage") = false,
         "The messages of a rig log with a value beyond the physical bounds of vehicle (default the rig's): "
-        "'beyond_bounds' (count, and per channel and field its count, bound, first time and value), 'text' "
+        "'beyond_bounds' (count, and per channel and field its count, bound and value in the field's unit, "
+        "first time [s of simulated time]), 'text' "
         "(the same for people, '' if none) and 'offsets' (each such message's byte offset in the log). "
         "read_log uses it to leave them out.");
 }

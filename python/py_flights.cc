@@ -196,8 +196,10 @@ void add_flights(py::module_& m) {
         "--dir takes it (one writer: RuntimeError naming the holder's pid if another process holds it; a "
         "directory that is not empty and holds no campaign is refused untouched; this same campaign there is "
         "finished, not flown again). envelopes: also "
-        "'envelopes', per parameter set the 5/50/95 % percentiles of p, v and phi across seeds against time "
-        "(rig sweep --report's figures, as arrays); report: write rig sweep --report's files into that "
+        "'envelopes', per parameter set the 5/50/95 % percentiles of p [rad/s], v [m/s] and phi_deg [deg] "
+        "across seeds against t_s [s of simulated time] (rig sweep --report's figures, as arrays), with "
+        "'controlled_rate' (fraction, 95 % Wilson interval); vary's values are in the unit the key's name or "
+        "its configuration says (docs/configuration.md); report: write rig sweep --report's files into that "
         "directory. Raises ConfigError for a bad value in any set.");
 }
 

@@ -94,10 +94,17 @@ py::object json_value(const std::string& text);
 
 /// The participants of a flight (nimble_rig.fly(participants=)): each value of `participants` a
 /// Python object (nimble_rig/participant.py) flying in place of the scenario's process its key
-/// names, checked here; `scenario` must outlive the flight.
+/// names, and the scenario's own (section `participants`) where `participants` names none in
+/// their place, each checked here; `scenario` must outlive the flight.
 /// @throws TypeError or ValueError from the check, naming the process and what is wrong.
 std::map<std::string, launcher::ParticipantFactory> participants_of(const nimble::Scenario& scenario,
                                                                     const py::dict& participants);
+
+/// A Python participant as a rig process of its own over LCM (`python -m nimble_rig.node --name
+/// controller --scenario FILE --lcm-url URL`, the flags of every rig process): the participant the
+/// scenario's section `participants` names in place of that process, flown until the run ends.
+/// Returns the process's exit code (transport/process_options.h).
+int run_node(const std::vector<std::string>& args);
 
 /// Adds load_scenario, fly, sweep and their classes (python/py_flights.cc).
 void add_flights(py::module_& m);

@@ -157,4 +157,7 @@ PYBIND11_MODULE(_rig, m) {
   add_analysis(m);
   add_loop(m);
   add_subscribe(m);
+  m.def("_run_node", &run_node, py::arg("args"),
+        "Runs the scenario's Python participant as a rig process over LCM (python -m nimble_rig.node; "
+        "args: the flags of every rig process, --name, --scenario, --lcm-url); returns its exit code.");
 }

@@ -1,6 +1,7 @@
 #include "scenario/scenario.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -36,7 +37,15 @@ void absolutise_paths(YAML::Node node, const fs::path& dir, bool top_level) {
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string key = it->first.as<std::string>();
       const bool path_key = key == "base" || (top_level && kTopLevelPathKeys.count(key));
-      if (path_key && it->second.IsScalar()) {
+      if (top_level && key == "participants" && it->second.IsMap()) {
+        // Each participant's Python file, relative to the file that names it.
+        for (auto entry : it->second) {
+          YAML::Node python = entry.second.IsMap() ? entry.second["python"] : YAML::Node();
+          if (python && python.IsScalar() && !python.Scalar().empty() && fs::path(python.Scalar()).is_relative()) {
+            entry.second["python"] = (dir / python.Scalar()).lexically_normal().string();
+          }
+        }
+      } else if (path_key && it->second.IsScalar()) {
         const fs::path p(it->second.Scalar());
         if (!p.empty() && p.is_relative()) it->second = (dir / p).lexically_normal().string();
       } else {
@@ -275,6 +284,91 @@ ConfigMap Scenario::section(const std::string& name) const {
   return ConfigMap(YAML::Node(YAML::NodeType::Map), file, name);
 }
 
+const std::vector<std::string>& replaceable_processes() {
+  static const std::vector<std::string> processes = {"controller", "mocap", "estimator"};
+  return processes;
+}
+
+namespace {
+
+/// True if `name` is a Python identifier of ASCII letters, digits and underscores.
+bool python_identifier(const std::string& name) {
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) return false;
+  return std::all_of(name.begin(), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+/// True if the Python source `text` defines `class_name` at its top level (`class Name:` or
+/// `class Name(Base):` at the start of a line): what the scenario can check without Python.
+bool defines_class(const std::string& text, const std::string& class_name) {
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    const std::string line = text.substr(at, end - at);
+    at = end + 1;
+    if (line.rfind("class ", 0) != 0) continue;
+    std::size_t i = 6;
+    while (i < line.size() && line[i] == ' ') ++i;
+    if (line.compare(i, class_name.size(), class_name) != 0) continue;
+    i += class_name.size();
+    while (i < line.size() && line[i] == ' ') ++i;
+    if (i < line.size() && (line[i] == '(' || line[i] == ':')) return true;
+  }
+  return false;
+}
+
+/// The `participants` section: {process: {python: FILE, class: NAME, arguments: {...}}}.
+std::map<std::string, ParticipantSpec> participants_from(const YAML::Node& node, const std::string& file,
+                                                         const std::vector<std::string>& processes) {
+  if (!node.IsMap()) {
+    throw ConfigError(file, "participants", "",
+                      "must be a mapping of process name to {python: FILE, class: NAME}, e.g. "
+                      "controller: {python: my_controller.py, class: MyController}");
+  }
+  std::map<std::string, ParticipantSpec> out;
+  const auto& replaceable = replaceable_processes();
+  for (const auto& entry : node) {
+    const std::string process = entry.first.as<std::string>();
+    const std::string key = "participants." + process;
+    if (std::find(replaceable.begin(), replaceable.end(), process) == replaceable.end()) {
+      throw ConfigError(file, key, "",
+                        "a participant of one's own replaces the controller, mocap or estimator (the plant is the "
+                        "vehicle and the lockstep master; the CAN bridge's sides speak SocketCAN)");
+    }
+    if (std::find(processes.begin(), processes.end(), process) == processes.end()) {
+      throw ConfigError(file, key, "", "'" + process + "' is not one of the run's processes: list it in processes");
+    }
+    if (!entry.second.IsMap()) throw ConfigError(file, key, "", "must be a mapping {python: FILE, class: NAME}");
+    ConfigMap m(entry.second, file, key);
+    ParticipantSpec spec;
+    spec.python_file = m.get_string("python");
+    spec.class_name = m.get_string("class");
+    if (m.has("arguments")) {
+      spec.arguments = m.get_node("arguments");
+      if (!spec.arguments.IsMap() && !spec.arguments.IsNull()) {
+        m.fail("arguments", "must be a mapping of the class's keyword arguments, e.g. {kp: 0.5}");
+      }
+    }
+    m.finish();
+    if (!python_identifier(spec.class_name)) m.fail("class", "'" + spec.class_name + "' is not a Python class name");
+    if (fs::path(spec.python_file).extension() != ".py") m.fail("python", "must be a Python file (*.py)");
+    std::string text;
+    try {
+      text = read_input_file(spec.python_file, InputKind::kConfig);
+    } catch (const InputFileError& e) {
+      m.fail("python", e.what());
+    }
+    if (!defines_class(text, spec.class_name)) {
+      m.fail("class", "'" + spec.python_file + "' defines no top-level class " + spec.class_name + " (a line `class " +
+                          spec.class_name + "(nimble_rig.Participant):`)");
+    }
+    out[process] = std::move(spec);
+  }
+  return out;
+}
+
+}  // namespace
+
 Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
   ConfigMap map(root, file, "");
   Scenario s;
@@ -325,6 +419,7 @@ Scenario scenario_from_tree(const YAML::Node& root, const std::string& file) {
     }
     rates.finish();
   }
+  if (map.has("participants")) s.participants = participants_from(map.get_node("participants"), file, s.processes);
   if (map.has("faults")) {
     s.faults = faults_from(map.get_node("faults"), file, s.processes, s.actuator_link == "can", s.duration_s);
   }
@@ -453,6 +548,8 @@ std::vector<std::pair<std::string, std::string>> named_files(const Scenario& sce
   if (scenario.root["manoeuvre"] && scenario.root["manoeuvre"].IsScalar()) {
     add("manoeuvre", scenario.root["manoeuvre"].Scalar());
   }
+  for (const auto& [process, spec] : scenario.participants)
+    add("participants." + process + ".python", spec.python_file);
   return files;
 }
 

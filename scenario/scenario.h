@@ -5,8 +5,8 @@
 /// and one section per process. Loading resolves it into one self-contained tree:
 ///  1. every mapping with a `base: <file.yaml>` key is merged over the content of that
 ///     file (the mapping's own keys win; bases may nest);
-///  2. relative paths (keys model, longitudinal_model, vehicle, manoeuvre, base) become
-///     absolute, relative to the file they are written in;
+///  2. relative paths (keys model, longitudinal_model, vehicle, manoeuvre, base, and each
+///     participant's `python` file) become absolute, relative to the file they are written in;
 ///  3. `--set a.b.c=value` overrides from the command line replace single values; except
 ///     `--set a.b.base=FILE`, which is applied before step 1: the section stands on FILE
 ///     (relative to the working directory) instead of the base it names, its own keys still
@@ -58,6 +58,20 @@ YAML::Node load_scenario_tree(const std::string& file, const std::vector<Overrid
 /// keys without a recorded origin, come back unchanged.
 ConfigError locate_error(const ConfigError& error, const std::string& scenario_file, const KeyOrigins& origins);
 
+/// A participant of one's own in place of one of the scenario's processes, written in Python
+/// (section `participants`: `controller: {python: my_controller.py, class: MyController}`). The
+/// launcher starts it as its own process (`python3 -m nimble_rig.node`) in lockstep and real time;
+/// nimble_rig.fly() flies it in process. python/nimble_rig/participant.py says what the class is.
+struct ParticipantSpec {
+  std::string python_file;  ///< the Python file that defines the class (absolute once resolved)
+  std::string class_name;   ///< a top-level class of that file
+  YAML::Node arguments;     ///< keyword arguments of the class's constructor (a mapping; null: none)
+};
+
+/// The processes a participant of one's own may replace: not the plant (the lockstep master, and
+/// the vehicle itself), nor the sides of the CAN bridge (they speak SocketCAN, not LCM).
+const std::vector<std::string>& replaceable_processes();
+
 /// The top-level facts of a resolved scenario; process sections stay in `root` and are
 /// validated by their owners (plant_config_from, controller config, ...).
 struct Scenario {
@@ -78,6 +92,8 @@ struct Scenario {
   std::string actuator_link = "lcm";
   /// Faults injected into the run (section `faults`, scenario/fault_section.h); empty: none.
   std::vector<contract::FaultSpec> faults;
+  /// Participants written in Python, by the process each replaces (section `participants`).
+  std::map<std::string, ParticipantSpec> participants;
   /// The rate each stream channel of the run is expected at [Hz] (contract::expected_rates() of
   /// the configured process rates). The launcher derives it when it plans the run and writes it
   /// into the resolved scenario (key `expected_rates_hz`) that the processes load, so that each

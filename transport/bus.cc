@@ -104,7 +104,10 @@ void Bus::refresh_channel_filter() {
     receive_fd_ = *fresh.begin();
   }
   if (!filter_enabled_ || subscribed_by_pattern_) {
-    if (filter_active_) ::setsockopt(receive_fd_, SOL_SOCKET, SO_DETACH_FILTER, nullptr, 0);
+    if (filter_active_) {
+      filter_problem_ = detach_channel_filter(receive_fd_);
+      if (!filter_problem_.empty()) return;  // still active: wait_for_start() announces it
+    }
     filter_active_ = false;
     return;
   }

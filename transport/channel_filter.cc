@@ -82,6 +82,15 @@ std::string attach_channel_filter(int fd, const std::set<std::string>& channels)
   return "";
 }
 
+std::string detach_channel_filter(int fd) {
+  // Linux refuses a socket option shorter than an int (EINVAL) even where, as here, it is unused.
+  const int unused = 0;
+  if (::setsockopt(fd, SOL_SOCKET, SO_DETACH_FILTER, &unused, sizeof unused) != 0) {
+    return std::string("SO_DETACH_FILTER: ") + std::strerror(errno);
+  }
+  return "";
+}
+
 std::set<int> udp_sockets_bound_to(int port) {
   std::set<int> fds;
   DIR* dir = ::opendir("/proc/self/fd");

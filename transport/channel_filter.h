@@ -33,6 +33,10 @@ std::vector<sock_filter> channel_filter_program(const std::set<std::string>& cha
 /// Returns "" on success, else why not.
 std::string attach_channel_filter(int fd, const std::set<std::string>& channels);
 
+/// Removes the filter from socket `fd`, so that every datagram reaches it again (a subscription
+/// by pattern needs them all). Returns "" on success, else why not.
+std::string detach_channel_filter(int fd);
+
 /// UDP sockets of this process bound to `port` (the receive sockets of LCM udpm instances).
 std::set<int> udp_sockets_bound_to(int port);
 

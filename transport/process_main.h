@@ -5,6 +5,7 @@
 /// code kExitConfig.
 
 #include <exception>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -34,11 +35,12 @@ inline std::unique_ptr<ProcessNode> make_process_node(const Scenario& scenario, 
   return node;
 }
 
-/// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with
-/// `int run()`). `program` names the executable in messages; `default_name` is the
-/// process name used when --name is not given.
-template <typename Node>
-int process_main(int argc, char** argv, const char* program, const char* default_name) {
+/// Runs a rig process: parses the common flags, loads the resolved scenario, raises the
+/// priority in real time, installs the stop signals, then `run(scenario, options)` builds the
+/// node and runs it, returning its exit code. `program` names the executable in messages;
+/// `default_name` is the process name used when --name is not given.
+inline int run_process_main(int argc, char** argv, const char* program, const char* default_name,
+                            const std::function<int(const Scenario&, const NodeOptions&)>& run) {
   try {
     NodeOptions options;
     if (const auto done = parse_node_options(argc, argv, program, default_name, options)) return *done;
@@ -50,8 +52,7 @@ int process_main(int argc, char** argv, const char* program, const char* default
       set_realtime_problem(apply_realtime_priority(process_run_options(scenario).realtime_priority));
     }
     ProcessNode::install_signal_handlers();
-    Node node(scenario, options);
-    return node.run();
+    return run(scenario, options);
   } catch (const ConfigError& e) {
     std::cerr << program << ": config error: " << e.what() << "\n";
     return kExitConfig;
@@ -59,6 +60,16 @@ int process_main(int argc, char** argv, const char* program, const char* default
     std::cerr << program << ": error: " << e.what() << "\n";
     return kExitConfig;
   }
+}
+
+/// Runs process `Node` (constructible from (const Scenario&, const NodeOptions&), with
+/// `int run()`): run_process_main() with that node.
+template <typename Node>
+int process_main(int argc, char** argv, const char* program, const char* default_name) {
+  return run_process_main(argc, argv, program, default_name, [](const Scenario& scenario, const NodeOptions& options) {
+    Node node(scenario, options);
+    return node.run();
+  });
 }
 
 }  // namespace nimble::transport

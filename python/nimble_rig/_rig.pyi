@@ -67,7 +67,8 @@ def fly(scenario: Scenario, seed: Optional[int] = None, clock: str = "inprocess"
 def sweep(scenario: Scenario, seeds: str = "1-10", vary: Dict[str, List[Any]] = ..., jobs: int = 1,
           dir: Optional[str] = None, envelopes: bool = False, report: Optional[str] = None) -> Dict[str, Any]:
     """Flies the scenario over seeds and parameter sets with `rig sweep`'s engine; its --json content
-    (with envelopes: the percentiles of p, v, phi across seeds against time, as arrays)."""
+    (with envelopes: the percentiles of p [rad/s], v [m/s], phi_deg [deg] across seeds against t_s [s],
+    as arrays); vary's values in the unit of their key (docs/configuration.md)."""
     ...
 
 def identify(data: Data, *, structure: str = "lateral3", method: str = "wls", inputs: Optional[List[str]] = None,
@@ -115,10 +116,12 @@ def loop(scenario: Union[PathLike, Scenario], *, model: Optional[Model] = None,
 def export_mcap(log: PathLike, out: PathLike, *, raw: bool = False, compression: str = "zstd",
                 salvage: bool = False, vehicle: Optional[PathLike] = None, strict: bool = False) -> Dict[str, Any]:
     """Writes the rig log as MCAP; `rig export --format mcap --json`'s content. Messages beyond the
-    vehicle's physical bounds are left out with a UserWarning (strict=True: DataError)."""
+    vehicle's physical bounds are left out with a UserWarning (strict=True: DataError). Log time: the
+    rig time [ns from the run's start]; fields in the units their names say."""
     ...
 
 
 def log_bounds(log: PathLike, *, vehicle: Optional[PathLike] = None, salvage: bool = False) -> Dict[str, Any]:
-    """The messages of a rig log beyond the vehicle's physical bounds: 'beyond_bounds', 'text', 'offsets'."""
+    """The messages of a rig log beyond the vehicle's physical bounds: 'beyond_bounds' (per field: count,
+    bound and first value in the field's unit, first_t_s [s]), 'text', 'offsets' (bytes into the log)."""
     ...

@@ -14,9 +14,22 @@ disturbance written in Python, flown in place of one of the scenario's processes
 
     flight = nimble_rig.fly(scenario, participants={"controller": MyController()})
 
+It flies in every clock. In process, nimble_rig.fly() calls it from the run's own loop; in lockstep
+and real time it is a process of its own over LCM, named in the scenario and started by the launcher
+like the rig's processes (python -m nimble_rig.node):
+
+    participants:
+      controller: {python: my_controller.py, class: MyController, arguments: {kp: 0.5}}
+
+(the file relative to the scenario; `arguments`: the class's keyword arguments). nimble_rig.fly()
+flies the same section in process.
+
 step(t_s, inputs) gets the simulated time [s] and, per input channel, the newest message received
 before this step (the message types of lcmtypes/, as `import nimble` has them: the fields in the
-units their names say), or None while none has come. It returns {channel: message} for any of its
+units their names say), or None while none has come. In lockstep and in process a message another
+participant published at a step counts from the next step on, as the rig's own processes take
+theirs, so that both clocks fly the same flight; the plant's (TRUTH, IMU, ...) count at once: it
+publishes them before the step that uses them. It returns {channel: message} for any of its
 outputs (or None: nothing this step). Each message's utime is set to the step's time [us] and its
 seq to the channel's count, as the rig's own processes stamp theirs; anything else is the
 participant's. The participant takes the process's place on the bus: its heartbeat and health are
@@ -26,11 +39,14 @@ An exception step() raises ends the flight with result failed, naming the proces
 and the simulated time; the log keeps everything until then.
 """
 
+import importlib.util
 import math
+import os
+import sys
 
 from .log import _types_by_fingerprint
 
-__all__ = ["Participant", "stepper"]
+__all__ = ["Participant", "stepper", "load"]
 
 
 class Participant:
@@ -63,10 +79,36 @@ def _publishes(process, publishers):
     return any(p == process or p.startswith(process + " ") for p in publishers)
 
 
+def load(process, path, class_name, arguments):
+    """The participant a scenario names: an instance of class `class_name` of the Python file `path`,
+    made with `arguments` ({name: value}) as keyword arguments. Raises ImportError, TypeError or what
+    the file raises, naming the process and the file."""
+    name = "nimble_rig_participant_%s_%s" % (process, os.path.splitext(os.path.basename(path))[0])
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None:
+        raise ImportError("participants.%s: %s cannot be imported as a Python file" % (process, path))
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    cls = getattr(module, class_name, None)
+    if not isinstance(cls, type):
+        raise ImportError("participants.%s: %s defines no class %s" % (process, path, class_name))
+    try:
+        return cls(**(arguments or {}))
+    except TypeError as e:
+        raise TypeError("participants.%s: %s(**arguments) of %s: %s" % (process, class_name, path, e)) from e
+
+
+def _plausible_sim_utime(utime):
+    """A rig-time stamp [us], not a wall-clock one (the health channels are stamped with the epoch)."""
+    return isinstance(utime, int) and 0 <= utime <= 10 ** 12  # transport/clock.h kMaxSimUtime
+
+
 def stepper(process, participant, channels):
     """Checks `participant` and returns (call, inputs, rate_hz, label, outputs) for the flight: call(t_s,
-    fresh) takes the inputs' bytes that came since the last call ({channel: bytes}) and returns
-    [(channel, bytes)] to publish; outputs: {channel: type}. `channels`: the contract's {channel: (type, publishers)}. Its
+    fresh, lockstep) takes the inputs' bytes that came since the last call ([(channel, bytes)] in the
+    order they came) and returns [(channel, bytes)] to publish; outputs: {channel: type}. lockstep:
+    a message of another participant stamped at or after t_s is held for a later step. `channels`: the contract's {channel: (type, publishers)}. Its
     outputs must be channels the contract lets `process` publish, each message of the channel's
     type. Raises TypeError or ValueError naming the process."""
     label = "%s (Python %s)" % (process, type(participant).__name__)
@@ -87,11 +129,28 @@ def stepper(process, participant, channels):
     types = _types_by_fingerprint()
     latest = {channel: None for channel in inputs}
     seqs = {channel: 0 for channel in outputs}
+    # The plant's channels count at once: the lockstep master publishes them before its tick.
+    at_once = {c for c in inputs if _publishes("plant", channels[c][1])}
+    held = []  # lockstep: (stamp [us], channel, message) of other participants, in arrival order
 
-    def call(t_s, fresh):
-        for channel, data in fresh.items():
+    def call(t_s, fresh, lockstep=False):
+        t_us = int(round(t_s * 1e6))
+        for channel, data in fresh:
             cls = types.get(data[:8])
-            latest[channel] = cls.decode(data) if cls is not None else None
+            message = cls.decode(data) if cls is not None else None
+            stamp = getattr(message, "utime", None)
+            if lockstep and channel not in at_once and _plausible_sim_utime(stamp):
+                held.append((stamp, channel, message))
+            else:
+                latest[channel] = message
+        if held:
+            kept = []
+            for stamp, channel, message in held:
+                if stamp < t_us:
+                    latest[channel] = message
+                else:
+                    kept.append((stamp, channel, message))
+            held[:] = kept
         out = step(t_s, latest)
         if out is None:
             return []
@@ -105,7 +164,7 @@ def stepper(process, participant, channels):
             if type(message).__name__ != expected[channel] or not hasattr(message, "encode"):
                 raise TypeError("step() returned a %s on %s, whose messages are nimble.%s"
                                 % (type(message).__name__, channel, expected[channel]))
-            message.utime = int(round(t_s * 1e6))
+            message.utime = t_us
             message.seq = seqs[channel]
             seqs[channel] += 1
             published.append((channel, message.encode()))

@@ -109,7 +109,7 @@ TEST_CASE("report: the text and the JSON carry the same run", "[launcher]") {
   r.flight = calm_flight();
   r.faults.push_back(FaultRecord{"plant", 2, 13, nimble::contract::channels::kActuatorCommand, "clamped", 1.5});
   r.faults.push_back(FaultRecord{"plant", 2, 13, nimble::contract::channels::kActuatorCommand, "clamped again", 1.6});
-  r.processes.push_back(ProcessOutcome{"plant", 1, true, 0, 0, "in process, returned 0"});
+  r.processes.push_back(ProcessOutcome{"plant", 1, true, 0, 0, "in process, returned 0", 0, ""});
   r.verdict = judge_run(r.flight, JudgeConfig{}, false, "");
   std::ostringstream text;
   write_report_text(text, r);

@@ -106,6 +106,20 @@ TEST_CASE("channel filter: names of every length up to the word boundary and bey
   }
 }
 
+TEST_CASE("channel filter: a detached filter lets every datagram through again", "[transport]") {
+  // What a process needs once it subscribes by pattern after its exact channels (a Python
+  // participant: python/py_participant.cc): the filter of the exact channels must go.
+  Socket rx;
+  REQUIRE(attach_channel_filter(rx.fd, {"A"}).empty());
+  const std::vector<unsigned char> payload(8, 0);
+  REQUIRE(deliver(rx, {lcm_short_datagram("A", payload), lcm_short_datagram("B", payload)}).size() == 1);
+  REQUIRE(detach_channel_filter(rx.fd).empty());
+  const auto got = deliver(rx, {lcm_short_datagram("A", payload), lcm_short_datagram("B", payload)});
+  REQUIRE(got.size() == 2);
+  CHECK(got[1] == lcm_short_datagram("B", payload));
+  CHECK(detach_channel_filter(-1).find("SO_DETACH_FILTER") == 0);
+}
+
 TEST_CASE("channel filter: a new filter replaces the old one, and the bound sockets are found by port", "[transport]") {
   Socket rx;
   REQUIRE(attach_channel_filter(rx.fd, {"A"}).empty());
