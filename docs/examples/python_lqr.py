@@ -18,12 +18,16 @@ that the flight sets beside the C++ PD flying that manoeuvre. Pitch is held by t
 """
 import os
 
+import sys
+
 import numpy as np
 import scipy.linalg
 import yaml
 
-import nimble
 import nimble_rig
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from python_pd import command  # noqa: E402  (the rig controller's mixing at trim)
 
 def lateral_model(model_file):
     """(A, B) of a lateral3 model file for x = [p v phi] and u = delta_f [rad/s] (docs/models.md),
@@ -71,8 +75,6 @@ class PythonLQR(nimble_rig.Participant):
     KP_PITCH = 0.115  # pitch_gains.kp_per_rad [1/rad]
     KD_PITCH = 0.011  # pitch_gains.kd_per_radps [s/rad]
     PITCH_TO_DIHEDRAL = 0.35  # mixing.pitch_cmd_to_dihedral_rad [rad]
-    F_TRIM = 102.49738145337824  # the hover flapping frequency at trim throttle [rad/s]
-    TRIM_THROTTLE = 60.0  # trim_throttle_pct [%]
 
     def __init__(self, model, q=(1.0, 0.05, 30.0), r=1e-4, step_deg=10.0, step_on_s=1.0, step_off_s=5.0):
         """model: a lateral3 model file, relative to this file's folder when not absolute; q: the
@@ -92,8 +94,6 @@ class PythonLQR(nimble_rig.Participant):
 
     def step(self, t_s, inputs):
         est = inputs["ESTIMATE"]
-        cmd = nimble.actuator_command_t()
-        cmd.input_utime = -1
         delta_f, pitch = 0.0, 0.0
         if est is not None:
             phi, theta, _ = est.euler_rad
@@ -104,13 +104,6 @@ class PythonLQR(nimble_rig.Participant):
             delta_f = sp * self.u_per_rad - self.k @ (x - sp * self.x_per_rad)
             delta_f = float(np.clip(delta_f, -self.DELTA_F_MAX, self.DELTA_F_MAX))
             pitch = min(1.0, max(-1.0, -self.KP_PITCH * theta - self.KD_PITCH * q))
-            cmd.input_utime = est.utime
-        cmd.mode = nimble.actuator_command_t.MODE_LEFT_RIGHT
-        cmd.flap_freq_left_radps = self.F_TRIM + 0.5 * delta_f
-        cmd.flap_freq_right_radps = self.F_TRIM - 0.5 * delta_f
-        cmd.delta_f_radps = delta_f
-        cmd.flap_freq_collective_radps = self.F_TRIM
-        cmd.throttle_pct = self.TRIM_THROTTLE
-        cmd.dihedral_rad = self.PITCH_TO_DIHEDRAL * pitch
-        cmd.source = "python_lqr"
+        cmd = command(delta_f, self.PITCH_TO_DIHEDRAL * pitch, "python_lqr")
+        cmd.input_utime = est.utime if est is not None else -1
         return {"ACTUATOR_CMD": cmd}

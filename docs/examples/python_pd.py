@@ -14,6 +14,24 @@ commands the left and right flapping frequencies and the dihedral servo.
 import nimble
 import nimble_rig
 
+F_TRIM = 102.49738145337824  # the hover flapping frequency at trim throttle [rad/s]
+TRIM_THROTTLE = 60.0  # trim_throttle_pct [%]
+
+
+def command(delta_f_radps, dihedral_rad, source):
+    """The actuator command of a roll command delta_f [rad/s] (left minus right flapping frequency
+    about the trim) and a dihedral [rad] at trim throttle, as the rig controller's mixing makes it."""
+    cmd = nimble.actuator_command_t()
+    cmd.mode = nimble.actuator_command_t.MODE_LEFT_RIGHT
+    cmd.flap_freq_left_radps = F_TRIM + 0.5 * delta_f_radps
+    cmd.flap_freq_right_radps = F_TRIM - 0.5 * delta_f_radps
+    cmd.delta_f_radps = delta_f_radps
+    cmd.flap_freq_collective_radps = F_TRIM
+    cmd.throttle_pct = TRIM_THROTTLE
+    cmd.dihedral_rad = dihedral_rad
+    cmd.source = source
+    return cmd
+
 
 class PythonPD(nimble_rig.Participant):
     inputs = ("TRUTH",)
@@ -26,30 +44,18 @@ class PythonPD(nimble_rig.Participant):
     KD_PITCH = 0.011  # pitch_gains.kd_per_radps [s/rad]
     ROLL_TO_DELTA_F = 125.0  # mixing.roll_cmd_to_delta_f_radps: delta_f per unit roll command [rad/s]
     PITCH_TO_DIHEDRAL = 0.35  # mixing.pitch_cmd_to_dihedral_rad: dihedral per unit pitch command [rad]
-    F_TRIM = 102.49738145337824  # the hover flapping frequency at trim throttle [rad/s]
-    TRIM_THROTTLE = 60.0  # trim_throttle_pct [%]
 
     def __init__(self, roll_sp_rad=0.0):
         self.roll_sp_rad = roll_sp_rad  # the roll to hold [rad]
 
     def step(self, t_s, inputs):
         truth = inputs["TRUTH"]
-        cmd = nimble.actuator_command_t()
         phi = theta = p = q = 0.0
-        cmd.input_utime = -1
         if truth is not None:
             phi, theta, _ = truth.euler_rad
             p, q, _ = truth.omega_body_radps
-            cmd.input_utime = truth.utime
         roll = min(1.0, max(-1.0, self.KP_ROLL * (self.roll_sp_rad - phi) - self.KD_ROLL * p))
         pitch = min(1.0, max(-1.0, -self.KP_PITCH * theta - self.KD_PITCH * q))
-        delta_f = self.ROLL_TO_DELTA_F * roll
-        cmd.mode = nimble.actuator_command_t.MODE_LEFT_RIGHT
-        cmd.flap_freq_left_radps = self.F_TRIM + 0.5 * delta_f
-        cmd.flap_freq_right_radps = self.F_TRIM - 0.5 * delta_f
-        cmd.delta_f_radps = delta_f
-        cmd.flap_freq_collective_radps = self.F_TRIM
-        cmd.throttle_pct = self.TRIM_THROTTLE
-        cmd.dihedral_rad = self.PITCH_TO_DIHEDRAL * pitch
-        cmd.source = "python_pd"
+        cmd = command(self.ROLL_TO_DELTA_F * roll, self.PITCH_TO_DIHEDRAL * pitch, "python_pd")
+        cmd.input_utime = truth.utime if truth is not None else -1
         return {"ACTUATOR_CMD": cmd}

@@ -95,7 +95,11 @@ TEST_CASE(
     // The first run flew whole, and its log holds every event its summary counted.
     CHECK(nimble::test::wait_exit_code(first) == 0);
     const YAML::Node summary = YAML::LoadFile(a + "/summary.json");
-    CHECK(summary["result"].as<std::string>() == "ok");
+    // Held stopped while the second was refused, a real-time run may come out late beyond its limit
+    // (real-time degraded, exit code 0): the verdict on its timing, not on its log.
+    const std::string result = summary["result"].as<std::string>();
+    INFO("result: " << result);
+    CHECK((result == "ok" || (clock == "realtime" && result.rfind("real-time degraded", 0) == 0)));
     int counted = 0;
     for (const auto& c : summary["channels"]) counted += c.second["count"].as<int>();
     CHECK(events_in(log) == summary["log_kept"]["events"].as<int>());

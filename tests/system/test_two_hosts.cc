@@ -258,8 +258,8 @@ TEST_CASE("a host started by hand: rig run prints its commands, they fly with it
   CHECK(two["processes"]["controller"]["host"].as<std::string>() == "flight");
   CHECK(two["processes"]["plant"]["host"].as<std::string>() == "sim");
   // Not the launcher's children: run.external_processes, known by their heartbeats.
-  CHECK(out.find("controller(external, stopped)") != std::string::npos);
-  CHECK(out.find("estimator(external, stopped)") != std::string::npos);
+  CHECK(out.find("controller(external, stopped, ") != std::string::npos);
+  CHECK(out.find("estimator(external, stopped, ") != std::string::npos);
   const auto truth_one = channel_payloads(a + "/run.lcmlog", ch::kTruth);
   REQUIRE(truth_one.size() == 2001);
   CHECK(differing(truth_one, channel_payloads(b + "/run.lcmlog", ch::kTruth)) == 0);
