@@ -22,7 +22,7 @@ from collections import defaultdict
 WHOLE_EXECUTABLE_ENTRIES = {"can.vcan", "can.rig"}
 SELF = "meta.ctest_entries"
 # Entries that run a script, not a Catch2 executable.
-SCRIPT_ENTRIES = {"meta.truth_side", "meta.house_rules", "meta.format", "meta.house_rules_catch", "python.module", "python.readme", "python.example_lqr", "resource.bounded_input.python", "resource.garbled.python", "install.prefix", "can.canvm_out", "system.dashboard.browser",
+SCRIPT_ENTRIES = {"meta.truth_side", "meta.house_rules", "meta.format", "meta.house_rules_catch", "python.module", "python.readme", "resource.bounded_input.python", "resource.garbled.python", "install.prefix", "can.canvm_out", "system.dashboard.browser",
                   "system.foxglove.dashboard_replay", "system.foxglove.dashboard_late"}
 # Entries of the sanitizer build that run a libFuzzer target (fuzz/CMakeLists.txt), not Catch2.
 FUZZ_PREFIX = "fuzz."

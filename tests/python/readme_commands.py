@@ -3,9 +3,10 @@
 
 Takes the first ```sh block of the README's "From Python" section and runs each of its lines with
 bash in the source tree's root, as a user pastes them, with nothing of the test's environment added
-but TMPDIR (the notebook's output goes to "${TMPDIR:-/tmp}"). Each must exit 0; the first must print
-the flight's result and the TRUTH attitude's shape; the notebook's executed copy must hold its
-figures. Nothing under docs/ may change: the notebook writes its figures only where it is told.
+but TMPDIR (the outputs go to "${TMPDIR:-/tmp}"). Each must exit 0; the first must print the
+flight's result and the TRUTH attitude's shape; the notebook's executed copy must hold its figures;
+the Python controller's example must fly the same flight in process and in lockstep and draw its
+figure. Nothing under docs/ may change: each writes its figures only where it is told.
 
 Usage: readme_commands.py <source dir> <build dir> <scratch dir>. The README's PYTHONPATH is the
 source tree's build/: run from another build directory, this says so and fails.
@@ -28,8 +29,9 @@ def commands(readme):
     if not block:
         sys.exit("readme_commands: the 'From Python' section has no ```sh block")
     lines = [line for line in block.group(1).splitlines() if line.strip() and not line.startswith("#")]
-    if len(lines) < 2:
-        sys.exit("readme_commands: expected the flight and the notebook commands, found %d lines" % len(lines))
+    if len(lines) < 3:
+        sys.exit("readme_commands: expected the flight, the notebook and the Python controller's commands, "
+                 "found %d lines" % len(lines))
     return lines
 
 
@@ -67,6 +69,12 @@ def main():
                   for cell in json.loads(executed.read_text())["cells"] for out in cell.get("outputs", []))
     if figures < 3:
         sys.exit("readme_commands: the executed notebook shows %d figures, not 3" % figures)
+    # The Python LQR against the C++ PD (docs/examples/lqr_vs_pd.py): every flight controlled (its exit
+    # code), the two clocks' TRUTH identical, the figure where it was told.
+    if "TRUTH in process and in lockstep: identical" not in outputs[2]:
+        sys.exit("readme_commands: the Python controller's example printed no identical flights:\n" + outputs[2][-2000:])
+    if not (scratch / "lqr_vs_pd.png").is_file():
+        sys.exit("readme_commands: the Python controller's figure is not in TMPDIR (%s)" % scratch)
     after = snapshot(source / "docs")
     changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
     if changed:
