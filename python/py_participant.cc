@@ -75,7 +75,7 @@ struct Declared {
   /// holder lets go of it.
   std::shared_ptr<py::object> stepper;
   std::vector<std::string> inputs;
-  std::map<std::string, std::string> outputs;  ///< channel -> message type
+  std::map<std::string, TypedPublish> outputs;  ///< channel -> how its messages go out (by their type)
   double rate_hz = 0.0;
   std::string label;  ///< "controller (Python MyController)"
 };
@@ -95,8 +95,8 @@ Declared declare(const std::string& process, const py::handle& participant) {
   d.inputs = made[1].cast<std::vector<std::string>>();
   d.rate_hz = made[2].cast<double>();
   d.label = made[3].cast<std::string>();
-  d.outputs = made[4].cast<std::map<std::string, std::string>>();
-  for (const auto& [channel, type] : d.outputs) typed_publish(type);  // every output has its way out
+  for (const auto& [channel, type] : made[4].cast<std::map<std::string, std::string>>())
+    d.outputs[channel] = typed_publish(type);
   return d;
 }
 
@@ -138,7 +138,6 @@ class PythonParticipant {
   /// `print_traceback`: an exception's traceback goes to stderr (the process's output file).
   PythonParticipant(std::unique_ptr<transport::ProcessNode> node, Declared declared, bool print_traceback = false)
       : node_(std::move(node)), declared_(std::move(declared)), print_traceback_(print_traceback) {
-    for (const auto& [channel, type] : declared_.outputs) publish_[channel] = typed_publish(type);
     if (!declared_.inputs.empty()) {
       node_->bus().subscribe_raw(channels_pattern(declared_.inputs),
                                  [this](const std::string& c, const void* data, int size, int64_t) {
@@ -191,8 +190,8 @@ class PythonParticipant {
 
   void publish(const std::vector<std::pair<std::string, std::string>>& out) {
     for (const auto& [channel, bytes] : out) {
-      const auto it = publish_.find(channel);
-      if (it == publish_.end())
+      const auto it = declared_.outputs.find(channel);
+      if (it == declared_.outputs.end())
         throw std::runtime_error(declared_.label + " published on " + channel + ", not an output");
       try {
         it->second(node_->bus(), channel, bytes);
@@ -206,7 +205,6 @@ class PythonParticipant {
   Declared declared_;
   bool print_traceback_;
   std::vector<std::pair<std::string, std::string>> fresh_;  ///< (channel, bytes) since the last step
-  std::map<std::string, TypedPublish> publish_;             ///< its outputs, each by its type
 };
 
 }  // namespace
