@@ -74,68 +74,6 @@ bool finite(const PoseMeasurement& z) {
 
 }  // namespace
 
-EkfCovariance EkfConfig::initial_covariance() const {
-  EkfState d;
-  d << Eigen::Vector3d::Constant(initial_attitude_sigma_rad), Eigen::Vector3d::Constant(initial_velocity_sigma_mps),
-      Eigen::Vector3d::Constant(initial_gyro_bias_sigma_radps),
-      Eigen::Vector3d::Constant(initial_accel_bias_sigma_mps2);
-  return d.array().square().matrix().asDiagonal();
-}
-
-const ParamTable<EkfConfig>& ekf_params() {
-  using C = EkfConfig;
-  const Range nn = Range::non_negative();
-  const Range pos = Range::positive();
-  static const AxisNames euler = {"phi", "theta", "psi"};
-  static const AxisNames uvw = {"u", "v", "w"};
-  static const ParamTable<C> table = {
-      {"gravity_mps2", &C::gravity_mps2, Range::closed(9.0, 10.5), "m/s^2",
-       "gravity; the value of the thesis's models (9.81)"},
-      {"min_abs_cos_theta", &C::min_abs_cos_theta, Range{0.0, 0.5, true, false}, "-",
-       "smallest |cos(theta)| in the Euler kinematics (pitch singularity guard)"},
-      {"process_noise.reference_rate_hz", &C::process_noise_reference_rate_hz, pos, "Hz",
-       "rate at which the *_var_per_sample values are per-sample variances; thesis: 512 Hz"},
-      {"process_noise.gyro_var_per_sample_rad2ps2", &C::gyro_noise_var_per_sample_rad2ps2, nn, "(rad/s)^2",
-       "gyro input noise per sample at the reference rate; thesis Eq 8.2 Q(1:3)"},
-      {"process_noise.accel_var_per_sample_m2ps4", &C::accel_noise_var_per_sample_m2ps4, nn, "(m/s^2)^2",
-       "accelerometer input noise per sample at the reference rate; thesis Eq 8.2 Q(4:6)"},
-      {"process_noise.gyro_bias_rw_radps_per_sqrts", &C::gyro_bias_rw_radps_per_sqrts, nn, "rad/s/sqrt(s)",
-       "gyro bias random walk; not in the thesis, the emulated IMU's"},
-      {"process_noise.accel_bias_rw_mps2_per_sqrts", &C::accel_bias_rw_mps2_per_sqrts, nn, "m/s^2/sqrt(s)",
-       "accelerometer bias random walk; the emulated IMU's"},
-      {"measurement_noise.attitude_var_rad2", &C::attitude_var_rad2, pos, "rad^2",
-       "variance of the measured phi, theta, psi; thesis Eq 8.2 R(1:3)", euler},
-      {"measurement_noise.velocity_var_m2ps2", &C::velocity_var_m2ps2, pos, "(m/s)^2",
-       "variance of the measured u, v, w; thesis Eq 8.2 R(4:6)", uvw},
-      {"initial_sigma.attitude_rad", &C::initial_attitude_sigma_rad, pos, "rad",
-       "initial 1-sigma of the attitude; assumption: 0.02"},
-      {"initial_sigma.velocity_mps", &C::initial_velocity_sigma_mps, pos, "m/s",
-       "initial 1-sigma of the body velocity; assumption: 0.1 (near hover)"},
-      {"initial_sigma.gyro_bias_radps", &C::initial_gyro_bias_sigma_radps, pos, "rad/s",
-       "initial 1-sigma of the gyro bias; the emulated IMU's turn-on sigma"},
-      {"initial_sigma.accel_bias_mps2", &C::initial_accel_bias_sigma_mps2, pos, "m/s^2",
-       "initial 1-sigma of the accelerometer bias; the emulated IMU's turn-on sigma"},
-      {"gate.enabled", &C::gate_enabled, Range::any(), "-", "innovation gating on or off"},
-      {"gate.probability", &C::gate_probability, Range{0.0, 1.0, true, true}, "-",
-       "probability of the chi-square gate (0.999: a consistent measurement is rejected 1 in 1000)"},
-      {"latency.history_s", &C::history_s, Range::closed(0.0, 10.0), "s",
-       "length of the rollback history; older measurements are dropped and counted"},
-      {"integration.max_step_s", &C::max_step_s, Range{0.0, 0.1, true, false}, "s",
-       "longest single integration step; longer IMU intervals are split"},
-      {"integration.imu_gap_s", &C::imu_gap_s, pos, "s", "IMU interval above which a gap is counted"},
-  };
-  return table;
-}
-
-void validate(const EkfConfig& c) {
-  // Each parameter's range: the loader's table.
-  try {
-    check_params(ekf_params(), c);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("EkfConfig.") + e.what());
-  }
-}
-
 AttitudeVelocityEkf::AttitudeVelocityEkf(const EkfConfig& config) : config_(config) {
   validate(config_);
   params_ = config_.model_params();
@@ -150,6 +88,7 @@ AttitudeVelocityEkf::AttitudeVelocityEkf(const EkfConfig& config) : config_(conf
 
 void AttitudeVelocityEkf::initialize(std::int64_t utime, const EkfState& x0, const EkfCovariance& P0) {
   history_.clear();
+  kept_.clear();
   accepted_.clear();
   pending_.clear();
   Node node;
@@ -159,6 +98,7 @@ void AttitudeVelocityEkf::initialize(std::int64_t utime, const EkfState& x0, con
   node.P = 0.5 * (P0 + P0.transpose());
   node.input_psd = input_psd_;
   history_.push_back(node);
+  kept_.emplace_back();
   initialized_utime_ = utime;
   last_nis_ = -1.0;
 }
@@ -187,8 +127,7 @@ bool AttitudeVelocityEkf::state_at(std::int64_t utime, EkfState* x, EkfCovarianc
 }
 
 void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1, double dt_s,
-                                    const EkfInput& psd, EkfCovariance* Phi) const {
-  using Mat6 = EkfLinearisation::Block;
+                                    const EkfInput& psd, EkfCovariance* Phi, StepLinearisation* made) const {
   using Mat63 = Eigen::Matrix<double, 6, 3>;
   // One linearisation (f, A, B) at each end of the step, each with one evaluation of the trigonometry.
   const EkfLinearisation lin0 = ekf_linearise(*x, u0, params_);
@@ -210,18 +149,17 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   const Mat63 Bg0 = lin0.B.leftCols<3>();
   const Mat63 Bg1 = lin1.B.leftCols<3>();
   const double h2 = 0.5 * dt_s, hh2 = 0.5 * dt_s * dt_s;
-  Mat6 Phi11;
-  Phi11.noalias() = A1.lazyProduct(A0);
-  Phi11 = hh2 * Phi11 + h2 * (A0 + A1);
-  Phi11.diagonal().array() += 1.0;
+  StepLinearisation step;
+  step.Phi11.noalias() = A1.lazyProduct(A0);
+  step.Phi11 = hh2 * step.Phi11 + h2 * (A0 + A1);
+  step.Phi11.diagonal().array() += 1.0;
   // Phi12 = [dt/2 (B_g0 + B_g1) + dt^2/2 A1 B_g0,  -dt [0; I] - dt^2/2 A1 [0; I]]; A1 [0; I] are
   // the velocity columns of A1, zero in the attitude rows.
-  Mat6 Phi12;
   Mat63 A1Bg0;
   A1Bg0.noalias() = A1.lazyProduct(Bg0);
-  Phi12.leftCols<3>() = hh2 * A1Bg0 + h2 * (Bg0 + Bg1);
-  Phi12.rightCols<3>() = -hh2 * A1.rightCols<3>();
-  Phi12.bottomRightCorner<3, 3>().diagonal().array() -= dt_s;
+  step.Phi12.leftCols<3>() = hh2 * A1Bg0 + h2 * (Bg0 + Bg1);
+  step.Phi12.rightCols<3>() = -hh2 * A1.rightCols<3>();
+  step.Phi12.bottomRightCorner<3, 3>().diagonal().array() -= dt_s;
   // Qc = G S G^T + diag(0, 0, q_bg, q_ba) = [Q 0; 0 diag(q_bg, q_ba)] with
   // Q = B S B^T = B_g S_g B_g^T + diag(0, S_a) (S = diag(S_g, S_a)).
   const auto input_noise = [&psd](const Mat63& Bg) {
@@ -231,9 +169,26 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
     Q.diagonal().tail<3>() += psd.tail<3>();
     return Q;
   };
+  step.Q0 = input_noise(Bg0);
+  step.Q1 = input_noise(Bg1);
+  propagate_covariance(P, step, dt_s);
+  *x += 0.5 * dt_s * (k0 + k1);
+  ekf_wrap_angles(x);
+  if (Phi != nullptr) {
+    EkfCovariance transition = EkfCovariance::Identity();
+    transition.topLeftCorner<6, 6>() = step.Phi11;
+    transition.topRightCorner<6, 6>() = step.Phi12;
+    *Phi = transition * *Phi;
+  }
+  if (made != nullptr) *made = step;
+}
 
+void AttitudeVelocityEkf::propagate_covariance(EkfCovariance* P, const StepLinearisation& step, double dt_s) const {
+  const double h2 = 0.5 * dt_s;
+  const Mat6& Phi11 = step.Phi11;
+  const Mat6& Phi12 = step.Phi12;
   // M = P + dt/2 Qc0
-  const Mat6 M11 = P->topLeftCorner<6, 6>() + h2 * input_noise(Bg0);
+  const Mat6 M11 = P->topLeftCorner<6, 6>() + h2 * step.Q0;
   const Mat6 M12 = P->topRightCorner<6, 6>();
   const Mat6 M21 = P->bottomLeftCorner<6, 6>();
   Mat6 M22 = P->bottomRightCorner<6, 6>();
@@ -249,37 +204,78 @@ void AttitudeVelocityEkf::propagate(EkfState* x, EkfCovariance* P, const EkfInpu
   Mat6 N11;
   N11.noalias() = X11.lazyProduct(Phi11.transpose());
   N11.noalias() += X12.lazyProduct(Phi12.transpose());
-  N11 += h2 * input_noise(Bg1);
+  N11 += h2 * step.Q1;
   M22.diagonal() += h2 * bias_rw_psd_;
   P->topLeftCorner<6, 6>() = 0.5 * (N11 + N11.transpose());
   P->topRightCorner<6, 6>() = X12;
   P->bottomLeftCorner<6, 6>() = X12.transpose();
   P->bottomRightCorner<6, 6>() = M22;
+}
+
+void AttitudeVelocityEkf::propagate_with(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
+                                         double dt_s, const StepLinearisation& step) const {
+  // The state as propagate() makes it (f alone: the same values as the linearisation's x_dot).
+  const EkfState k0 = ekf_process_derivative(*x, u0, params_);
+  const EkfState x1 = *x + dt_s * k0;
+  const EkfState k1 = ekf_process_derivative(x1, u1, params_);
+  propagate_covariance(P, step, dt_s);
   *x += 0.5 * dt_s * (k0 + k1);
   ekf_wrap_angles(x);
-  if (Phi != nullptr) {
-    EkfCovariance step = EkfCovariance::Identity();
-    step.topLeftCorner<6, 6>() = Phi11;
-    step.topRightCorner<6, 6>() = Phi12;
-    *Phi = step * *Phi;
-  }
+}
+
+bool AttitudeVelocityEkf::reusable(const EkfState& x0, const EkfState& x) const {
+  const EkfState d = (x - x0).cwiseAbs();
+  // f depends on phi and theta, not on psi (ekf_model.h); phi wraps, and a wrapped difference
+  // near 2 pi simply linearises again.
+  return std::max(d[kPhi], d[kTheta]) <= config_.replay_relinearise_attitude_rad &&
+         d.segment<3>(kU).maxCoeff() <= config_.replay_relinearise_velocity_mps &&
+         d.segment<3>(kBiasP).maxCoeff() <= config_.replay_relinearise_gyro_bias_radps;
 }
 
 void AttitudeVelocityEkf::propagate_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
-                                             std::int64_t t0, std::int64_t t1, const EkfInput& psd,
-                                             EkfCovariance* Phi) const {
+                                             std::int64_t t0, std::int64_t t1, const EkfInput& psd, EkfCovariance* Phi,
+                                             KeptSteps* kept, bool* reused) const {
+  if (reused != nullptr) *reused = false;
   if (t1 <= t0) return;
   const double dt_s = 1e-6 * (static_cast<double>(t1) - static_cast<double>(t0));
   // At most kMaxSubsteps: an IMU time far ahead (a stray message, found by fuzz_node_estimator)
   // took one step per max_step_s, without end; such an interval is integrated coarsely instead.
   constexpr double kMaxSubsteps = 400;  // 1 s at the default max_step_s
   const int steps = static_cast<int>(std::clamp(std::ceil(dt_s / config_.max_step_s - 1e-9), 1.0, kMaxSubsteps));
-  const double h = dt_s / steps;
-  for (int i = 0; i < steps; ++i) {
-    const EkfInput ua = u0 + (static_cast<double>(i) / steps) * (u1 - u0);
-    const EkfInput ub = u0 + (static_cast<double>(i + 1) / steps) * (u1 - u0);
-    propagate(x, P, ua, ub, h, psd, Phi);
+  // The inputs at the substeps' ends, u0 + (i / steps) (u1 - u0) (for one step: u0 and
+  // u0 + (u1 - u0), which may differ from u1 in the last bit; kept as the substeps make them).
+  const auto input_at = [&](int i) { return EkfInput(u0 + (static_cast<double>(i) / steps) * (u1 - u0)); };
+  if (kept != nullptr && steps == 1 && Phi == nullptr) {
+    const EkfInput ua = input_at(0), ub = input_at(1);
+    for (KeptStep& e : kept->entry) {
+      if (e.t0 == t0 && e.t1 == t1 && reusable(e.x0, *x)) {
+        propagate_with(x, P, ua, ub, dt_s, e.step);
+        if (reused != nullptr) *reused = true;
+        return;
+      }
+    }
+    // A new step, kept in place of the same interval's or else of the older entry.
+    KeptStep* slot = &kept->entry[kept->next];
+    for (KeptStep& e : kept->entry) {
+      if (e.t0 == t0 && e.t1 == t1) slot = &e;
+    }
+    if (slot == &kept->entry[kept->next]) kept->next = (kept->next + 1) % 2;
+    slot->t0 = t0;
+    slot->t1 = t1;
+    slot->x0 = *x;
+    propagate(x, P, ua, ub, dt_s, psd, nullptr, &slot->step);
+    return;
   }
+  const double h = dt_s / steps;
+  for (int i = 0; i < steps; ++i) propagate(x, P, input_at(i), input_at(i + 1), h, psd, Phi);
+}
+
+void AttitudeVelocityEkf::replay_interval(EkfState* x, EkfCovariance* P, const EkfInput& u0, const EkfInput& u1,
+                                          std::int64_t t0, std::int64_t t1, const EkfInput& psd, KeptSteps* kept) {
+  bool reused = false;
+  propagate_interval(x, P, u0, u1, t0, t1, psd, nullptr, kept, &reused);
+  ++counters_.replay_steps;
+  if (!reused) ++counters_.replay_steps_linearised;
 }
 
 EkfCovariance AttitudeVelocityEkf::predict_between(EkfState* x, EkfCovariance* P, const EkfInput& u0,
@@ -295,6 +291,7 @@ void AttitudeVelocityEkf::release_history() {
     for (const Node& n : history_) node_observer_(n);
   }
   history_.clear();
+  kept_.clear();
   accepted_.clear();
   pending_.clear();
 }
@@ -337,7 +334,8 @@ bool AttitudeVelocityEkf::predict(std::int64_t utime, const EkfInput& imu_input,
     last.u = imu_input;
     last.has_input = true;
   }
-  propagate_interval(&next.x, &next.P, u0, imu_input, last.utime, utime, next.input_psd);
+  kept_.emplace_back();
+  propagate_interval(&next.x, &next.P, u0, imu_input, last.utime, utime, next.input_psd, nullptr, &kept_.back());
   history_.push_back(next);
   ++counters_.imu_samples;
 
@@ -360,6 +358,7 @@ void AttitudeVelocityEkf::trim() {
   while (history_.size() >= 2 && history_[1].utime <= cutoff) {
     if (node_observer_) node_observer_(history_.front());
     history_.pop_front();
+    kept_.pop_front();
   }
   while (!accepted_.empty() && accepted_.front().z.utime <= history_.front().utime) accepted_.pop_front();
 }
@@ -433,8 +432,8 @@ void AttitudeVelocityEkf::replay(std::size_t j) {
     while (k < accepted_.size() && accepted_[k].z.utime <= b.utime) {
       const std::int64_t tm = accepted_[k].z.utime;
       if (tm > t) {
-        propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), lerp(a.u, b.u, a.utime, b.utime, tm), t, tm,
-                           b.input_psd);
+        replay_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), lerp(a.u, b.u, a.utime, b.utime, tm), t, tm,
+                        b.input_psd, &kept_[i + 1]);
         t = tm;
       }
       EkfUpdateRecord record;
@@ -456,7 +455,7 @@ void AttitudeVelocityEkf::replay(std::size_t j) {
       ++k;
     }
     if (t < b.utime) {
-      propagate_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), b.u, t, b.utime, b.input_psd);
+      replay_interval(&x, &P, lerp(a.u, b.u, a.utime, b.utime, t), b.u, t, b.utime, b.input_psd, &kept_[i + 1]);
       t = b.utime;
     }
     b.x = x;

@@ -58,4 +58,18 @@ void feed(AttitudeVelocityEkf& ekf, const RecordedData& data, std::int64_t delay
   }
 }
 
+EkfConfig exact_replay(EkfConfig c) {
+  c.replay_relinearise_attitude_rad = 0.0;
+  c.replay_relinearise_velocity_mps = 0.0;
+  c.replay_relinearise_gyro_bias_radps = 0.0;
+  return c;
+}
+
+EkfConfig reusing_replay(EkfConfig c) {
+  c.replay_relinearise_attitude_rad = 0.02;
+  c.replay_relinearise_velocity_mps = 0.05;
+  c.replay_relinearise_gyro_bias_radps = 0.05;
+  return c;
+}
+
 }  // namespace nimble::test

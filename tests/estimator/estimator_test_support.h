@@ -33,4 +33,12 @@ void feed(AttitudeVelocityEkf& ekf, const RecordedData& data, std::int64_t delay
           const VelocityDifferentiatorConfig& differentiator, const std::function<void(MocapPose&)>& frame_hook,
           const std::function<void(std::size_t)>& after_imu);
 
+/// `c` with every replayed step linearised again: the exact replay (EkfConfig::replay_relinearise_*,
+/// the default).
+EkfConfig exact_replay(EkfConfig c);
+
+/// `c` with a replay reusing linearisations within the tolerances EkfConfig names (0.02 rad,
+/// 0.05 m/s, 0.05 rad/s).
+EkfConfig reusing_replay(EkfConfig c);
+
 }  // namespace nimble::test
