@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <thread>
 #include <cstdio>
 #include <cstdlib>
@@ -49,6 +50,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cmdline/args.h"
+#include "contract/channels.h"
+#include "controller/attitude_controller.h"
+#include "transport/clock.h"
 #include "core/json_line.h"
 #include "bench/bench_floor.h"
 #include "launcher/netns.h"
@@ -85,6 +89,19 @@ struct RigRealtime {
   double jitter_p50_us = 0, jitter_p99_us = 0, jitter_max_us = 0;
   double estimator_p50_us = 0, estimator_p99_us = 0;
   std::string health;
+  /// The control loop's stages every process timed (timing.<process>.stages), in the loop's
+  /// order: the points of the loop, then the processes' own work.
+  struct Stage {
+    std::string name;
+    double p50_us = 0, p99_us = 0;
+  };
+  std::vector<Stage> stages;
+  const Stage* stage(const std::string& name) const {
+    for (const Stage& st : stages) {
+      if (st.name == name) return &st;
+    }
+    return nullptr;
+  }
 };
 
 RigRealtime realtime_figures(const YAML::Node& s) {
@@ -101,6 +118,12 @@ RigRealtime realtime_figures(const YAML::Node& s) {
     r.estimator_p99_us = e["latency_p99_us"].as<double>();
   }
   if (s["realtime_health"]) r.health = s["realtime_health"]["text"].as<std::string>();
+  for (const auto& process : s["timing"]) {
+    if (!process.second["stages"]) continue;
+    for (const auto& st : process.second["stages"]) {
+      r.stages.push_back({st["stage"].as<std::string>(), st["p50_us"].as<double>(), st["p99_us"].as<double>()});
+    }
+  }
   return r;
 }
 
@@ -199,6 +222,135 @@ class FoxgloveClient {
   std::thread thread_;
 };
 
+/// The floors of the latency budget's stages that are not the transport's: the EKF's bare
+/// predict + update per IMU sample (bench_ekf, mean), and the controller law alone.
+struct StageFloors {
+  double ekf_bare_us = 0.0;  ///< a textbook EKF of the same model, per IMU sample (mean)
+  double ekf_own_us = 0.0;   ///< the filter's own predict + update at arrival, per IMU sample (mean)
+  bench::Percentiles law;    ///< AttitudeController::step alone
+};
+
+/// Times the scenario's controller law alone on a moving input, `n` calls.
+bench::Percentiles controller_law_floor(const Scenario& scenario, int n) {
+  ConfigMap section = scenario.section("controller");
+  const ControllerConfig config = controller_config_from(section);
+  AttitudeController controller(config);
+  std::vector<int64_t> ns;
+  ns.reserve(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    ControllerInput in;
+    const double t = k / 512.0;
+    in.phi_rad = 0.2 * std::sin(6.0 * t);
+    in.p_radps = 1.2 * std::cos(6.0 * t);
+    in.theta_rad = 0.05 * std::sin(2.0 * t);
+    in.roll_sp_rad = k % 1024 < 512 ? 0.1 : -0.1;
+    const int64_t t0 = transport::monotonic_ns();
+    const ControllerOutput out = controller.step(in);
+    ns.push_back(transport::monotonic_ns() - t0);
+    if (!std::isfinite(out.delta_f_cmd_radps)) throw std::runtime_error("the controller law gave a non-finite command");
+  }
+  return bench::percentiles(ns);
+}
+
+/// The EKF's floors from bench_ekf (beside this program), per IMU sample at `imu_hz`.
+void ekf_floors(const std::string& dir, double imu_hz, StageFloors* f) {
+  const std::string json = dir + "/ekf.json";
+  const std::string cmd = self_dir() + "/bench_ekf 10 --passes 3 --json " + json + " > " + dir + "/ekf.txt 2>&1";
+  const int status = std::system(cmd.c_str());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error("'" + cmd + "' failed");
+  const YAML::Node j = YAML::LoadFile(json);
+  f->ekf_bare_us = j["floor_us_per_s"].as<double>() / imu_hz;
+  f->ekf_own_us = j["own_floor_us_per_s"].as<double>() / imu_hz;
+}
+
+/// One row of the latency budget: a point of the loop, its age, the step from the point before
+/// and that step's floor.
+struct BudgetRow {
+  std::string stage, floor_what;
+  double p50_us = 0, p99_us = 0, step_p50_us = 0, step_p99_us = 0, floor_p50_us = 0, floor_p99_us = 0;
+};
+
+/// The control loop's latency budget of a real-time run on the estimate (the points every
+/// process timed, in the loop's order) beside each step's floor: the wake-up for the plant's
+/// publication, a bare LCM hop (the chain's round trip over its hops) for each transport step,
+/// the EKF's bare predict + update for the estimator, the law alone for the controller.
+std::vector<BudgetRow> latency_budget(const RigRealtime& r, const bench::Percentiles& wake,
+                                      const bench::Percentiles& chain, int hops, const StageFloors& f) {
+  const double hop50 = chain.p50_us / hops, hop99 = chain.p99_us / hops;
+  struct Point {
+    const char* stage;
+    const char* floor_what;
+    double floor_p50, floor_p99;
+  };
+  const Point points[] = {
+      {"plant: IMU sample published", "bare 1 kHz wake-up", wake.p50_us, wake.p99_us},
+      {"estimator: IMU sample received", "bare LCM hop (chain / hops)", hop50, hop99},
+      {"estimator: ESTIMATE published", "bare EKF predict + update (mean)", f.ekf_bare_us, f.ekf_bare_us},
+      {"controller: ESTIMATE received", "bare LCM hop (chain / hops)", hop50, hop99},
+      {"controller: ACTUATOR_CMD published", "the law alone", f.law.p50_us, f.law.p99_us},
+      {"plant: ACTUATOR_CMD received", "bare LCM hop (chain / hops)", hop50, hop99},
+  };
+  std::vector<BudgetRow> rows;
+  double prev50 = 0.0, prev99 = 0.0;
+  for (const Point& pt : points) {
+    const RigRealtime::Stage* st = r.stage(pt.stage);
+    if (st == nullptr) continue;
+    rows.push_back({pt.stage, pt.floor_what, st->p50_us, st->p99_us, st->p50_us - prev50, st->p99_us - prev99,
+                    pt.floor_p50, pt.floor_p99});
+    prev50 = st->p50_us;
+    prev99 = st->p99_us;
+  }
+  return rows;
+}
+
+void print_budget(const char* title, const std::vector<BudgetRow>& rows, const RigRealtime& r, const StageFloors& f) {
+  std::printf("\nlatency budget, %s: the IMU sample's age at each point of the control loop [us]\n", title);
+  std::printf("  %-38s %8s %8s  %9s %9s  %9s %9s  %s\n", "point", "age p50", "age p99", "step p50", "step p99",
+              "floor p50", "floor p99", "the step's floor");
+  double floor50 = 0.0, floor99 = 0.0;
+  for (const BudgetRow& b : rows) {
+    std::printf("  %-38s %8.1f %8.1f  %9.1f %9.1f  %9.1f %9.1f  %s\n", b.stage.c_str(), b.p50_us, b.p99_us,
+                b.step_p50_us, b.step_p99_us, b.floor_p50_us, b.floor_p99_us, b.floor_what.c_str());
+    floor50 += b.floor_p50_us;
+    floor99 += b.floor_p99_us;
+  }
+  if (!rows.empty()) {
+    std::printf("  %-38s %8.1f %8.1f  (the floors' sum; the loop: %.2fx at p50, %.2fx at p99)\n", "sum of the floors",
+                floor50, floor99, rows.back().p50_us / floor50, rows.back().p99_us / floor99);
+  }
+  std::printf("  the processes' own work%*s p50      p99\n", 55, "");
+  for (const RigRealtime::Stage& st : r.stages) {
+    if (st.name.find("its work") == std::string::npos) continue;
+    std::printf("  %-75s %8.1f %8.1f\n", st.name.c_str(), st.p50_us, st.p99_us);
+  }
+  std::printf(
+      "  floors: EKF predict + update per IMU sample (mean) %.2f bare, %.2f the filter's own; the law alone "
+      "p50 %.2f, p99 %.2f\n",
+      f.ekf_bare_us, f.ekf_own_us, f.law.p50_us, f.law.p99_us);
+}
+
+OrderedJson budget_json(const std::vector<BudgetRow>& rows, const RigRealtime& r) {
+  OrderedJson j = OrderedJson::object();
+  j["points"] = OrderedJson::array();
+  for (const BudgetRow& b : rows) {
+    j["points"].push_back({{"stage", b.stage},
+                           {"p50_us", b.p50_us},
+                           {"p99_us", b.p99_us},
+                           {"step_p50_us", b.step_p50_us},
+                           {"step_p99_us", b.step_p99_us},
+                           {"floor_p50_us", b.floor_p50_us},
+                           {"floor_p99_us", b.floor_p99_us},
+                           {"floor", b.floor_what}});
+  }
+  j["work"] = OrderedJson::array();
+  for (const RigRealtime::Stage& st : r.stages) {
+    if (st.name.find("its work") != std::string::npos) {
+      j["work"].push_back({{"stage", st.name}, {"p50_us", st.p50_us}, {"p99_us", st.p99_us}});
+    }
+  }
+  return j;
+}
+
 }  // namespace
 
 /// The figures one bench_rig run reports.
@@ -213,6 +365,7 @@ struct Figures {
   bool foxglove = false;  ///< --foxglove-client: the run with a client below
   RigRealtime with_client;
   long long client_messages = 0;
+  std::vector<BudgetRow> budget_quiet, budget_loaded;  ///< the latency budgets (on the estimate)
 };
 
 /// The figures as JSON to `file`, under fixed keys. @throws std::runtime_error if it cannot be written.
@@ -230,10 +383,11 @@ void write_figures_json(const std::string& file, const Figures& f) {
   rt["estimator_latency_p99_us"] = f.quiet.estimator_p99_us;
   rt["chain_hops"] = f.hops;
   rt["health"] = f.quiet.health;
-  rt["loaded"] = {{"latency_p99_us", f.loaded.latency_p99_us},
-                  {"floor_latency_p99_us", f.chain_loaded.p99_us},
-                  {"jitter_p99_us", f.loaded.jitter_p99_us},
-                  {"health", f.loaded.health}};
+  rt["budget"] = budget_json(f.budget_quiet, f.quiet);
+  rt["loaded"] = {{"latency_p99_us", f.loaded.latency_p99_us},       {"floor_latency_p99_us", f.chain_loaded.p99_us},
+                  {"latency_p50_us", f.loaded.latency_p50_us},       {"floor_latency_p50_us", f.chain_loaded.p50_us},
+                  {"jitter_p99_us", f.loaded.jitter_p99_us},         {"health", f.loaded.health},
+                  {"budget", budget_json(f.budget_loaded, f.loaded)}};
   if (f.foxglove) {
     rt["foxglove"] = {{"latency_p99_us", f.with_client.latency_p99_us},
                       {"latency_p99_us_without", f.quiet.latency_p99_us},
@@ -394,6 +548,14 @@ int main(int argc, char** argv) {
     if (on_estimate)
       row("rig: estimator, IMU sample -> ESTIMATE", {quiet.estimator_p50_us, quiet.estimator_p99_us, 0, 0});
     std::printf("  %s\n", quiet.health.c_str());
+    StageFloors stage_floors;
+    std::vector<BudgetRow> budget_quiet, budget_loaded;
+    if (on_estimate) {
+      stage_floors.law = controller_law_floor(plan.scenario, 20000);
+      ekf_floors(dir, plan.scenario.expected_rate(contract::channels::kImu), &stage_floors);
+      budget_quiet = latency_budget(quiet, wake, chain, hops, stage_floors);
+      print_budget("quiet", budget_quiet, quiet, stage_floors);
+    }
 
     RigRealtime with_client;
     long long client_messages = 0;
@@ -412,12 +574,20 @@ int main(int argc, char** argv) {
     row("rig: control loop TRUTH -> ACTUATOR_CMD at the plant",
         {loaded.latency_p50_us, loaded.latency_p99_us, loaded.latency_max_us, 0});
     std::printf("  %s\n", loaded.health.c_str());
+    if (on_estimate) {
+      budget_loaded = latency_budget(loaded, wake, chain_loaded, hops, stage_floors);
+      print_budget("a busy loop on every CPU", budget_loaded, loaded, stage_floors);
+    }
 
     const Lockstep lockstep = measure_lockstep(ro, scenario, set_args, dir, url, rig_like, runs);
     const bench::LockstepFloor& limit = lockstep.limit;
     const double speed = lockstep.speed;
 
     const double r_quiet = quiet.latency_p99_us / chain.p99_us, r_loaded = loaded.latency_p99_us / chain_loaded.p99_us;
+    std::printf(
+        "\nlatency p50 against the chain's: quiet %.2f, loaded %.2f (target <= 1.4); p99 quiet %.2f, loaded %.2f "
+        "(target <= 1.6)\n",
+        quiet.latency_p50_us / chain.p50_us, loaded.latency_p50_us / chain_loaded.p50_us, r_quiet, r_loaded);
     const double r_jitter = quiet.jitter_p99_us / wake.p99_us;
     std::printf(
         "\nratios to the floors (targets): latency p99 quiet %.2f (<= 2.5), loaded %.2f (<= 4); plant jitter "
@@ -427,7 +597,7 @@ int main(int argc, char** argv) {
     if (!json_file.empty()) {
       write_figures_json(json_file, Figures{plan.scenario.name, hops, wake, chain, chain_loaded, quiet, loaded, limit,
                                             lockstep.participants, speed, lockstep.rig_messages, foxglove_client,
-                                            with_client, client_messages});
+                                            with_client, client_messages, budget_quiet, budget_loaded});
     }
     fs::remove_all(dir);
   } catch (const std::exception& e) {

@@ -65,6 +65,10 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       if (node_->lockstep()) {
         estimates_.push(in.utime, in);  // used from the next tick on (see cycle)
       } else {
+        if (node_->stage_timing()) {
+          input_received_ns_ = transport::monotonic_ns();
+          node_->record_stage_ns(stage_estimate_in_, node_->age_ns(in.measured_utime));
+        }
         input_ = in;
         have_input_ = true;
         node_->notify_input(transport::message_us_to_ns(e.imu_utime));
@@ -92,6 +96,10 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       node_->notify_input(transport::message_us_to_ns(utime));
     });
   }
+  stage_estimate_in_ = node_->add_stage("controller: ESTIMATE received");
+  stage_command_out_ = node_->add_stage("controller: ACTUATOR_CMD published");
+  stage_work_ = node_->add_stage("controller: its work, ESTIMATE received to ACTUATOR_CMD published");
+  stage_publish_ = node_->add_stage("controller: its work, of which publishing ACTUATOR_CMD");
   node_->add_task(
       "controller", config_.rate_hz, [this](int64_t t) { cycle(t); },
       run.controller_trigger == "state" ? transport::ProcessNode::Trigger::kInput
@@ -174,7 +182,16 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   cmd.rolling_counter = rolling_counter_;
   rolling_counter_ = static_cast<int8_t>((rolling_counter_ + 1) % 16);
   cmd.source = node_->name();
+  const int64_t publish_ns = transport::monotonic_ns();
   node_->bus().publish(kActuatorCommand, contract::to_message(cmd));
+  if (use_estimate_ && have_input_ && input_received_ns_ > 0 && node_->stage_timing()) {
+    // Once per estimate: the command computed from it.
+    const int64_t done_ns = transport::monotonic_ns();
+    node_->record_stage_ns(stage_command_out_, node_->age_ns(input_.measured_utime));
+    node_->record_stage_ns(stage_work_, done_ns - input_received_ns_);
+    node_->record_stage_ns(stage_publish_, done_ns - publish_ns);
+    input_received_ns_ = 0;
+  }
 
   // Set-point and status records go out after the command and the step's acknowledgement.
   const double throttle_sp_pct = in.throttle_pct;

@@ -67,6 +67,10 @@ class ControllerNode {
   /// published at an earlier tick, whatever arrived meanwhile.
   transport::LatchedInput<Input> estimates_{transport::LatchedInput<Input>::Release::kAfterStamp, 8};
   bool use_estimate_ = false;
+  /// The control loop's stages the controller times (ProcessNode::add_stage), on the estimate in
+  /// real time, and when the newest estimate arrived [ns, CLOCK_MONOTONIC] (0: already used).
+  int stage_estimate_in_ = -1, stage_command_out_ = -1, stage_work_ = -1, stage_publish_ = -1;
+  int64_t input_received_ns_ = 0;
   bool have_input_ = false;
   bool failsafe_ = false;
   /// Engages the failsafe at `utime` for `why` (CODE_INPUT_STALE and CODE_FAILSAFE).

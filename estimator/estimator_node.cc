@@ -38,7 +38,14 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
                                  [clock = imu_clock_](int64_t stamp) { return clock.rig_utime(stamp); });
   }
   check_ekf_history(section, sensing, scenario.duration_s);  // the clock's drift over this flight
+  stage_imu_in_ = node_->add_stage("estimator: IMU sample received");
+  stage_estimate_out_ = node_->add_stage("estimator: ESTIMATE published");
+  stage_work_ = node_->add_stage("estimator: its work, IMU sample received to ESTIMATE published");
+  stage_filter_ = node_->add_stage("estimator: its work, of which the EKF's prediction");
+  stage_publish_ = node_->add_stage("estimator: its work, of which publishing ESTIMATE");
+  stage_pose_ = node_->add_stage("estimator: its work on a motion-capture frame (EKF update, rollback)");
   node_->bus().subscribe<imu_sample_t>(contract::channels::kImu, [this](const imu_sample_t& m) {
+    const int64_t received_ns = transport::monotonic_ns();
     // The stamp is the IMU's clock; the rig's bookkeeping uses the rig time of the sample.
     const int64_t rig_utime = imu_clock_.rig_utime(m.utime);
     if (!transport::plausible_sim_utime(rig_utime)) {
@@ -51,11 +58,21 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
     if (node_->lockstep()) {
       imu_inbox_.push(rig_utime, s);
     } else {
+      const int64_t filter_ns = transport::monotonic_ns();
       apply_imu(s, rig_utime);
+      const int64_t publish_ns = transport::monotonic_ns();
       publish(rig_utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
-      node_->record_latency_ns(transport::monotonic_ns() -
-                               (node_->t0_monotonic_ns() + transport::message_us_to_ns(rig_utime)));
+      const int64_t done_ns = transport::monotonic_ns();
+      const int64_t age_ns = node_->age_ns(rig_utime);
+      node_->record_latency_ns(age_ns);
+      if (node_->stage_timing()) {
+        node_->record_stage_ns(stage_imu_in_, age_ns - (done_ns - received_ns));
+        node_->record_stage_ns(stage_estimate_out_, age_ns);
+        node_->record_stage_ns(stage_work_, done_ns - received_ns);
+        node_->record_stage_ns(stage_filter_, publish_ns - filter_ns);
+        node_->record_stage_ns(stage_publish_, done_ns - publish_ns);
+      }
     }
   });
   node_->bus().subscribe<mocap_pose_t>(contract::channels::kMocapPose, [this](const mocap_pose_t& m) {
@@ -73,10 +90,13 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
                    p.publish_utime);
       return;
     }
-    if (node_->lockstep())
+    if (node_->lockstep()) {
       pose_inbox_.push(p.publish_utime, p);
-    else
+    } else {
+      const int64_t start_ns = transport::monotonic_ns();
       apply_pose(p);
+      if (node_->stage_timing()) node_->record_stage_ns(stage_pose_, transport::monotonic_ns() - start_ns);
+    }
   });
   if (prefilter_) {
     node_->bus().subscribe<actuator_feedback_t>(

@@ -114,6 +114,9 @@ class EstimatorNode {
   int64_t poses_missing_ = 0;
   int64_t last_frame_ = -1;
   int64_t last_drop_fault_utime_ = INT64_MIN;
+  /// The control loop's stages the estimator times (ProcessNode::add_stage).
+  int stage_imu_in_ = -1, stage_estimate_out_ = -1, stage_work_ = -1, stage_filter_ = -1, stage_publish_ = -1,
+      stage_pose_ = -1;
 };
 
 }  // namespace nimble

@@ -262,6 +262,11 @@ void RunMonitor::on_message(const std::string& channel, const void* data, int si
       t.received[h.channel[static_cast<std::size_t>(i)]] =
           TimingSummary::Received{h.count[static_cast<std::size_t>(i)], h.late[static_cast<std::size_t>(i)]};
     }
+    t.stages.clear();
+    for (std::size_t i = 0; i < static_cast<std::size_t>(h.num_stages); ++i) {
+      t.stages.push_back(
+          TimingSummary::Stage{h.stage[i], h.stage_count[i], h.stage_p50_us[i], h.stage_p99_us[i], h.stage_max_us[i]});
+    }
     return;
   }
   if (channel == kCanHealth) {

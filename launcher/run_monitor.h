@@ -55,6 +55,14 @@ struct TimingSummary {
     int64_t late = 0;
   };
   std::map<std::string, Received> received;
+  /// The control loop's stages the process timed (real time; ProcessNode::add_stage), in the
+  /// order it named them.
+  struct Stage {
+    std::string name;
+    int64_t count = 0;
+    double p50_us = 0.0, p99_us = 0.0, max_us = 0.0;
+  };
+  std::vector<Stage> stages;
 };
 
 struct FaultRecord {

@@ -120,6 +120,14 @@ OrderedJson timing_json(const RunReport& r) {
   for (const auto& [name, t] : r.timing) {
     OrderedJson received = OrderedJson::object();
     for (const auto& [channel, rc] : t.received) received[channel] = {{"count", rc.count}, {"late", rc.late}};
+    OrderedJson stages = OrderedJson::array();
+    for (const TimingSummary::Stage& st : t.stages) {
+      stages.push_back({{"stage", st.name},
+                        {"count", st.count},
+                        {"p50_us", st.p50_us},
+                        {"p99_us", st.p99_us},
+                        {"max_us", st.max_us}});
+    }
     j[name] = {{"loop_rate_hz", t.loop_rate_hz},
                {"loop_count", t.loop_count},
                {"overruns", t.overruns},
@@ -130,7 +138,8 @@ OrderedJson timing_json(const RunReport& r) {
                {"latency_p50_us", t.latency_p50_us},
                {"latency_p99_us", t.latency_p99_us},
                {"latency_max_us", t.latency_max_us},
-               {"received", std::move(received)}};
+               {"received", std::move(received)},
+               {"stages", std::move(stages)}};
   }
   return j;
 }

@@ -44,12 +44,17 @@ PlantNode::PlantNode(const Scenario& scenario, const transport::NodeOptions& opt
   node_->set_expected_rate(command_channel_, scenario.expected_rate(command_channel_));
   node_->bus().subscribe<actuator_command_t>(command_channel_, [this](const actuator_command_t& c) { on_command(c); });
   node_->add_task("plant", config_.rate_hz, [this](int64_t t) { step(t); });
+  stage_imu_out_ = node_->add_stage("plant: IMU sample published");
+  stage_command_in_ = node_->add_stage("plant: ACTUATOR_CMD received");
 }
 
 int PlantNode::run() { return node_->run(); }
 
 void PlantNode::on_command(const actuator_command_t& cmd) {
   const ActuatorInterface::Result result = actuators_->command(contract::from_message(cmd), node_->sim_time_ns());
+  if (result.accepted && cmd.input_utime >= 0 && node_->stage_timing()) {
+    node_->record_stage_ns(stage_command_in_, node_->age_ns(cmd.input_utime));
+  }
   if (result.accepted && cmd.input_utime >= 0) {
     for (const auto& p : published_) {
       if (p.utime == cmd.input_utime) {
@@ -120,6 +125,7 @@ void PlantNode::publish_imu(int64_t sim_time_ns) {
   // m.utime is the IMU's own clock (sensing.imu.clock_offset_s, clock_drift_ppm); a scenario's
   // faults on IMU are timed in rig time.
   node_->bus().publish(contract::channels::kImu, m, in.utime);
+  if (node_->stage_timing()) node_->record_stage_ns(stage_imu_out_, node_->age_ns(in.utime));
   // Next sample: the first period boundary after this step.
   imu_next_ns_ = (sim_time_ns / imu_period_ns_ + 1) * imu_period_ns_;
 }

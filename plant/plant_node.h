@@ -79,6 +79,9 @@ class PlantNode {
   int64_t feedback_seq_ = 0;
   /// CLOCK_MONOTONIC time at which the current step's outputs (IMU, TRUTH) started going out.
   int64_t step_out_ns_ = 0;
+  /// The control loop's stages the plant times (ProcessNode::add_stage): the IMU sample going
+  /// out, the command computed from it coming back (each as the sample's age).
+  int stage_imu_out_ = -1, stage_command_in_ = -1;
   /// For recent TRUTH messages, by seq modulo the ring size: the time their step's outputs
   /// started going out, to measure the control loop's latency from
   /// actuator_command_t.input_utime (the state's time the command was computed from).

@@ -28,6 +28,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nimble/fault_event_t.hpp>
@@ -106,6 +107,17 @@ class ProcessNode {
 
   /// Records one control-loop latency [ns] (reported on TIMING_HEALTH).
   void record_latency_ns(int64_t ns) { latency_.add_ns(ns); }
+
+  /// The control loop's stages this process times (reported on TIMING_HEALTH, read by the
+  /// latency budget of bench_rig): add_stage() names one and returns its index for
+  /// record_stage_ns(). A stage is timed in real time only (stage_timing()).
+  int add_stage(const std::string& name);
+  void record_stage_ns(int stage, int64_t ns) { stages_[static_cast<std::size_t>(stage)].second.add_ns(ns); }
+  /// True when stages are timed: a real-time run, started (the wall clock and the rig's agree).
+  bool stage_timing() const { return started_ && !lockstep() && !inprocess(); }
+  /// Real time: the age now of a sample due at rig time `rig_utime` [us]: the wall time since
+  /// t0_monotonic_ns() + rig_utime [ns].
+  int64_t age_ns(int64_t rig_utime) const { return monotonic_ns() - (t0_ns_ + message_us_to_ns(rig_utime)); }
 
   /// Makes this node the lockstep master (the plant): its single task defines the step.
   void set_lockstep_master(bool master) { master_ = master; }
@@ -228,6 +240,7 @@ class ProcessNode {
 
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
+  std::vector<std::pair<std::string, LatencyHistogram>> stages_;
   std::vector<std::function<void()>> deferred_;
   struct Watched {
     int fd;

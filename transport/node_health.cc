@@ -72,6 +72,11 @@ void ProcessNode::publish_heartbeat(int8_t state) {
   next_heartbeat_us_ = hb.utime + (state == heartbeat_t::STATE_READY ? 100000 : 500000);
 }
 
+int ProcessNode::add_stage(const std::string& name) {
+  stages_.emplace_back(name, LatencyHistogram());
+  return static_cast<int>(stages_.size() - 1);
+}
+
 void ProcessNode::publish_timing_health() {
   const int64_t now = wall_us();
   timing_health_t h;
@@ -100,6 +105,15 @@ void ProcessNode::publish_timing_health() {
     h.late.push_back(s.late);
   }
   h.num_channels = static_cast<int32_t>(h.channel.size());
+  for (const auto& [stage, histogram] : stages_) {
+    if (histogram.count() == 0) continue;
+    h.stage.push_back(stage);
+    h.stage_count.push_back(histogram.count());
+    h.stage_p50_us.push_back(histogram.percentile_us(50));
+    h.stage_p99_us.push_back(histogram.percentile_us(99));
+    h.stage_max_us.push_back(histogram.max_us());
+  }
+  h.num_stages = static_cast<int32_t>(h.stage.size());
   bus_.publish(contract::channels::kTimingHealth, h);
   next_health_us_ = now + 1000000;
 }

@@ -201,7 +201,7 @@ TEST_CASE("an array count larger than the message is refused without allocating 
   // Found by the node fuzz targets: LCM's decoders resized an array to the count in the bytes
   // before reading it, and a 200-byte TIMING_HEALTH with num_channels near 2^31 allocated
   // tens of gigabytes (cmake/LcmDecodeChecks.cmake adds the check). The count sits just before
-  // the elements, which end the encoding.
+  // the elements, which end the encoding (TIMING_HEALTH: but for an empty stage list).
   for (int n : {0, 1, 3}) {
     INFO(n << " elements");
     nimble::run_control_t rc{};
@@ -220,8 +220,15 @@ TEST_CASE("an array count larger than the message is refused without allocating 
     nimble::timing_health_t th{};
     fill(th, g, n);
     for (auto& c : th.channel) c = kTruth;
+    // No stages: the channels' elements are followed by num_stages (0) alone.
+    th.num_stages = 0;
+    th.stage.clear();
+    th.stage_count.clear();
+    th.stage_p50_us.clear();
+    th.stage_p99_us.clear();
+    th.stage_max_us.clear();
     buf = encode(th);
-    const std::size_t th_count_pos = buf.size() - static_cast<std::size_t>(n) * (4 + kTruth.size() + 1 + 5 * 8) - 4;
+    const std::size_t th_count_pos = buf.size() - 4 - static_cast<std::size_t>(n) * (4 + kTruth.size() + 1 + 5 * 8) - 4;
     for (uint32_t bad : {0x7FFFFFFFu, 1000u, 0xFFFFFFFFu}) {
       std::vector<uint8_t> patched = buf;
       put_count(patched, th_count_pos, bad);

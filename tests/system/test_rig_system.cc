@@ -137,6 +137,28 @@ TEST_CASE("a short real-time run holds its rates", "[system]") {
     CHECK(c["drops"].as<int>() == 0);
   }
   CHECK(r.summary["timing"]["plant"]["loop_count"].as<int>() >= 1990);
+  // The control loop's latency budget: each process timed its points of the loop, and the IMU
+  // sample's age grows along the loop (the ages have one reference, the sample's due time).
+  const std::vector<std::pair<std::string, std::string>> points = {{"plant", "plant: IMU sample published"},
+                                                                   {"estimator", "estimator: IMU sample received"},
+                                                                   {"estimator", "estimator: ESTIMATE published"},
+                                                                   {"controller", "controller: ESTIMATE received"},
+                                                                   {"controller", "controller: ACTUATOR_CMD published"},
+                                                                   {"plant", "plant: ACTUATOR_CMD received"}};
+  double previous_p50 = 0.0;
+  for (const auto& [process, stage] : points) {
+    INFO(stage);
+    YAML::Node found;
+    const YAML::Node stages = r.summary["timing"][process]["stages"];
+    for (std::size_t i = 0; i < stages.size(); ++i) {
+      if (stages[i]["stage"].as<std::string>() == stage) found.reset(stages[i]);
+    }
+    REQUIRE(found);
+    CHECK(found["count"].as<int>() > 900);  // 2 s at 512 Hz
+    CHECK(found["p50_us"].as<double>() >= previous_p50);
+    CHECK(found["p99_us"].as<double>() >= found["p50_us"].as<double>());
+    previous_p50 = found["p50_us"].as<double>();
+  }
   // Each process's kernel channel filter is in place (it needs no privilege).
   for (const auto& f : r.summary["faults"]) {
     CHECK(f["message"].as<std::string>().find("channel filter") == std::string::npos);
