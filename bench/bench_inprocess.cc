@@ -1,6 +1,6 @@
 /// bench_inprocess: speed of the in-process executor and of `rig sweep`.
 ///
-///   bench_inprocess [scenario.yaml] [--runs N] [--duration S] [--json F]
+///   bench_inprocess [scenario.yaml] [--runs N] [--duration S] [--json F] [--flights-only]
 ///
 /// Prints, for the scenario (default rig_configs/id_doublet_train_fast.yaml, every process:
 /// plant, controller, mocap, estimator), flown for S simulated seconds (default 30):
@@ -8,7 +8,8 @@
 ///    with the LCM log written (the target: >= 300x), the same with the real vehicle's flight
 ///    vibration and its on-board IMU filtering (rig_configs/sensing/nimble_flight_vibration.yaml;
 ///    the target: within 5 % of the default), without a log, and without the estimator and
-///    motion capture (flying on truth);
+///    motion capture (flying on truth), and without the estimator alone (the motion capture
+///    flying, the controller on truth): the estimator's path per simulated second;
 ///  - the machine's floor in the same run: the plant model stepped alone at its rate, nothing
 ///    else (no sensors, no controller, no messages), as a speed and as the ratio rig / floor;
 ///  - the time of `rig sweep` over the five published parameter sets x 20 seeds, with one job
@@ -142,6 +143,8 @@ int main(int argc, char** argv) {
       ->type_name("S")
       ->capture_default_str();
   cl->add_option("--json", json_file, "the figures as JSON to FILE, under fixed keys")->type_name("FILE");
+  bool flights_only = false;
+  cl->add_flag("--flights-only", flights_only, "the flights and the floor only: no rig sweep, no rig reproduce thesis");
   if (const auto done = cl.parse(argc, argv)) return *done;
   const std::string dir = (fs::temp_directory_path() / ("bench_inprocess_" + std::to_string(::getpid()))).string();
   fs::create_directories(dir);
@@ -162,6 +165,10 @@ int main(int argc, char** argv) {
     const Speeds vibration = fly(base, {{"sensing.base", vibration_file}}, dir + "/bench_vibration.lcmlog", runs);
     const Speeds no_log = fly(base, {}, "", runs);
     const Speeds truth = fly(base, {{"run.controller_input", "truth"}, {"processes", "[plant,controller]"}}, "", runs);
+    // Without the estimator (the motion capture still flies): what the estimator's path costs.
+    const Speeds no_estimator =
+        fly(base, {{"run.controller_input", "truth"}, {"processes", "[plant,controller,mocap]"}}, "", runs);
+    const double estimator_path_us_per_s = 1e6 * (1.0 / no_log.median_x - 1.0 / no_estimator.median_x);
     const double floor_x = plant_floor_x(plan, duration_s, runs);
     std::printf("  %-58s median %7.1fx  best %7.1fx   (%s; log %.1f MB)\n",
                 "in process, every process, log written (target >= 300x)", full.median_x, full.best_x,
@@ -173,8 +180,32 @@ int main(int argc, char** argv) {
                 no_log.best_x);
     std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, plant and controller on truth, no log",
                 truth.median_x, truth.best_x);
+    std::printf("  %-58s median %7.1fx  best %7.1fx\n", "in process, no estimator (controller on truth), no log",
+                no_estimator.median_x, no_estimator.best_x);
+    std::printf("  %-58s %7.0f us per simulated s\n", "the estimator's path (every process minus no estimator)",
+                estimator_path_us_per_s);
     std::printf("  %-58s median %7.1fx\n", "floor: the plant model alone at its rate", floor_x);
     std::printf("  ratio rig (every process, log) / floor: %.3f\n", full.median_x / floor_x);
+    nlohmann::json j{
+        {"scenario", plan.scenario.name},
+        {"duration_s", duration_s},
+        {"runs", runs},
+        {"inprocess",
+         {{"speed_x", full.median_x},
+          {"best_x", full.best_x},
+          {"no_log_speed_x", no_log.median_x},
+          {"truth_only_speed_x", truth.median_x},
+          {"no_estimator_speed_x", no_estimator.median_x},
+          {"estimator_path_us_per_s", estimator_path_us_per_s},
+          {"log_mb", log_mb}}},
+        {"floor", {{"speed_x", floor_x}, {"what", "the plant model alone at its rate"}}},
+        {"ratio_to_floor", full.median_x / floor_x},
+        {"vibration", {{"speed_x", vibration.median_x}, {"ratio_to_default", vibration.median_x / full.median_x}}}};
+    if (flights_only) {
+      if (!json_file.empty()) cmdline::write_json(json_file, j.dump(2));
+      fs::remove_all(dir);
+      return 0;
+    }
     const std::string rig = (fs::path(argv[0]).parent_path() / "rig").string();
     const int jobs_all = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     const double sweep_1_s = sweep_seconds(rig, scenario, 1);
@@ -194,26 +225,12 @@ int main(int argc, char** argv) {
                 "rig reproduce thesis, in process", std::abs(reproduce_s), reproduce_s < 0 ? "  (a cell differs)" : "",
                 campaign_sim_s / std::abs(reproduce_s), campaign_sim_s / std::abs(reproduce_s) / floor_x);
     if (!json_file.empty()) {
-      const nlohmann::json j{
-          {"scenario", plan.scenario.name},
-          {"duration_s", duration_s},
-          {"runs", runs},
-          {"inprocess",
-           {{"speed_x", full.median_x},
-            {"best_x", full.best_x},
-            {"no_log_speed_x", no_log.median_x},
-            {"truth_only_speed_x", truth.median_x},
-            {"log_mb", log_mb}}},
-          {"floor", {{"speed_x", floor_x}, {"what", "the plant model alone at its rate"}}},
-          {"ratio_to_floor", full.median_x / floor_x},
-          {"vibration", {{"speed_x", vibration.median_x}, {"ratio_to_default", vibration.median_x / full.median_x}}},
-          {"sweep",
-           {{"runs", kSweepRuns},
-            {"runs_per_s_1job", runs_per_s_1},
-            {"runs_per_s_all", runs_per_s_all},
-            {"jobs_all", jobs_all},
-            {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}}},
-          {"reproduce", {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}}}};
+      j["sweep"] = {{"runs", kSweepRuns},
+                    {"runs_per_s_1job", runs_per_s_1},
+                    {"runs_per_s_all", runs_per_s_all},
+                    {"jobs_all", jobs_all},
+                    {"all_ok", sweep_1_s > 0 && sweep_all_s > 0}};
+      j["reproduce"] = {{"seconds", std::abs(reproduce_s)}, {"all_cells_match", reproduce_s > 0}};
       cmdline::write_json(json_file, j.dump(2));
     }
   } catch (const std::exception& e) {

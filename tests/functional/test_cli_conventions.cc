@@ -160,7 +160,7 @@ TEST_CASE("cli: rig reproduce thesis --dir refuses a directory made with other o
 TEST_CASE("cli: every benchmark answers --help on stdout with exit 0 instead of running", "[cli][programs]") {
   for (const std::string bench :
        {"bench_rig", "bench_inprocess", "bench_ident", "bench_discrepancy", "bench_ekf", "bench_turbulence",
-        "bench_can", "bench_can_bridge", "bench_loop", "bench_power", "bench_export"}) {
+        "bench_can", "bench_can_bridge", "bench_loop", "bench_power", "bench_export", "bench_all"}) {
     INFO(bench);
     const RigResult r = run_bench(bench, "--help");
     CHECK(r.exit_code == 0);
