@@ -13,11 +13,18 @@
 ///  3. the chain floor and the rig again with a busy loop on every CPU (a bounded background
 ///     load this bench starts and stops);
 ///  4. lockstep: a bare lockstep master with the rig's participants and schedule (the speed the
-///     transport allows), then the rig in lockstep, median of N runs (default 3), with the
-///     messages it exchanges per simulated second.
+///     transport allows), on the CPUs the rig steps on in lockstep (run.lockstep_cpus) at the
+///     default scheduler, as the rig's processes run there; then the rig in lockstep, median of
+///     N runs (default 3), with the messages it exchanges per simulated second and (in its
+///     summary) each participant's turnaround.
+/// The real-time runs also give the control loop's latency budget: the IMU sample's age at each
+/// point of the loop, each step beside its floor (the wake-up, a bare LCM hop, bench_ekf's bare
+/// EKF, the controller law alone), and the processes' own work.
 /// Prints a table and, with --json, the figures under fixed keys:
 ///   realtime.{latency_p99_us, floor_latency_p99_us, jitter_p99_us, floor_jitter_p99_us}
-///   realtime.loaded.{latency_p99_us, floor_latency_p99_us}
+///   realtime.loaded.{latency_p99_us, floor_latency_p99_us, latency_p50_us, floor_latency_p50_us}
+///   realtime.budget, realtime.loaded.budget: {points: [{stage, p50_us, p99_us, step_p50_us,
+///     step_p99_us, floor_p50_us, floor_p99_us, floor}], work: [{stage, p50_us, p99_us}]}
 ///   lockstep.{speed_x, limit_speed_x, messages_per_sim_s}
 /// (and more beside them). With --foxglove-client, the rig flies once more in real time with
 /// `--foxglove` and one Foxglove WebSocket client (in this program) subscribed to every channel:
@@ -461,29 +468,50 @@ struct Lockstep {
 
 /// Measures the lockstep floor, then flies the rig in lockstep `runs` times; prints both.
 Lockstep measure_lockstep(const RunOptions& ro, const std::string& scenario, const std::string& set_args,
-                          const std::string& dir, const std::string& url, const bench::FloorSettings& rig_like,
-                          int runs) {
+                          const std::string& dir, const std::string& url, int runs) {
   RunOptions lo = ro;
   lo.clock = kClockLockstep;
   const RunPlan lplan = load_run_plan(lo);
   const auto participants = contract::lockstep_participants(
       lplan.rates, contract::RunShape{true, lplan.logger_period_ms, lplan.scenario.processes.size()});
   const int64_t step_ns = std::llround(1e9 / lplan.rates.plant_hz);
-  const bench::LockstepFloor limit = bench::lockstep_floor(url, step_ns, participants, 3.0, rig_like);
+  // The floor as the rig steps in lockstep: on run.lockstep_cpus, at the default scheduler (the
+  // rig's processes take SCHED_FIFO in real time only).
+  bench::FloorSettings lockstep_like;
+  lockstep_like.cpus = lplan.launch.lockstep_cpus;
+  const bench::LockstepFloor limit = bench::lockstep_floor(url, step_ns, participants, 3.0, lockstep_like);
   std::vector<double> speeds;
   double rig_messages = 0.0;
+  YAML::Node last;
   for (int i = 0; i < runs; ++i) {
-    const YAML::Node s = fly(scenario, "--clock lockstep" + set_args, dir);
-    speeds.push_back(s["speed_x_realtime"].as<double>());
-    rig_messages = messages_per_sim_s(s);
+    last = fly(scenario, "--clock lockstep" + set_args, dir);
+    speeds.push_back(last["speed_x_realtime"].as<double>());
+    rig_messages = messages_per_sim_s(last);
   }
   const double speed = median(speeds);
+  std::vector<RigRealtime::Stage> turnarounds;  // of the last run: each participant's, the master's own step
+  for (const auto& process : last["timing"]) {
+    if (!process.second["stages"]) continue;
+    for (const auto& st : process.second["stages"]) {
+      const std::string name = st["stage"].as<std::string>();
+      if (name.rfind("lockstep: ", 0) == 0) {
+        turnarounds.push_back({name, st["p50_us"].as<double>(), st["p99_us"].as<double>()});
+      }
+    }
+  }
   std::printf("\nlockstep%*s speed [x real time]  messages per simulated s\n", 44, "");
   std::printf("  %-50s %10.1f %16.0f\n",
               ("floor: bare master + " + std::to_string(participants.size()) + " participants, rig schedule").c_str(),
               limit.speed_x, limit.messages_per_sim_s);
   std::printf("  %-50s %10.1f %16.0f   (median of %d; %.0f %% of the floor)\n", "rig", speed, rig_messages, runs,
               100.0 * speed / limit.speed_x);
+  std::printf(
+      "  a step's wall time on average: the rig %.1f us, the floor %.1f us; the last run's turnarounds "
+      "[us]:\n",
+      1e-3 * static_cast<double>(step_ns) / speed, 1e-3 * static_cast<double>(step_ns) / limit.speed_x);
+  for (const RigRealtime::Stage& st : turnarounds) {
+    std::printf("    %-82s p50 %7.1f  p99 %7.1f\n", st.name.c_str(), st.p50_us, st.p99_us);
+  }
   return Lockstep{limit, participants.size(), speed, rig_messages};
 }
 
@@ -579,7 +607,7 @@ int main(int argc, char** argv) {
       print_budget("a busy loop on every CPU", budget_loaded, loaded, stage_floors);
     }
 
-    const Lockstep lockstep = measure_lockstep(ro, scenario, set_args, dir, url, rig_like, runs);
+    const Lockstep lockstep = measure_lockstep(ro, scenario, set_args, dir, url, runs);
     const bench::LockstepFloor& limit = lockstep.limit;
     const double speed = lockstep.speed;
 

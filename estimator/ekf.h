@@ -149,9 +149,10 @@ struct EkfConfig {
   /// then move by about g dt delta_attitude (gravity terms), dt delta_velocity (the gyro-bias
   /// columns) and dt delta_gyro_bias (the rate terms). Default 0: every replayed step linearised
   /// again, the exact replay. With 0.02 rad, 0.05 m/s, 0.05 rad/s (each entry of Phi within
-  /// 4e-4 per 512 Hz step) the filter costs about a sixth less with the rig's sensing, its state
-  /// stays within 0.02 sigma of the exact replay's and its NEES is unchanged (bench_ekf,
-  /// test_ekf.cc); the estimate then differs in its last digits, and so does a flight flown on it.
+  /// 4e-4 per 512 Hz step) the filter costs a sixth to a half less with the rig's sensing, its
+  /// state stays within a tenth of its sigma of the exact replay's (0.04 to 0.09 sigma at worst
+  /// over bench_ekf's 30 to 60 s flights) and its sigmas within 3 % (bench_ekf, test_ekf.cc);
+  /// a flight flown on that estimate then differs from the exact replay's accordingly.
   double replay_relinearise_attitude_rad = 0.0;
   double replay_relinearise_velocity_mps = 0.0;
   double replay_relinearise_gyro_bias_radps = 0.0;

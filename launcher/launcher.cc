@@ -367,13 +367,13 @@ class ProcessRun {
         continue;
       }
       const int host_ns = host_link_ && plan_.hosts.host_index(name) > 0 ? host_link_->remote_namespace_fd() : -1;
-      supervisor_.start(name, exe, args, log_file_ + "." + name + ".out", lc_.rig_cpus, host_ns, environment);
+      const std::string out = log_file_ + "." + name + ".out";
+      supervisor_.start(name, exe, args, out, lc_.rig_cpus_for(lockstep_), host_ns, environment);
     }
-    if (const std::string note = pin_to(lc_.rig_cpus); !note.empty())
-      std::cerr << "rig run: run.rig_cpus: " << note << "\n";
-    if (const std::string note = pin_to(lc_.launcher_cpus); !note.empty()) {
+    if (const std::string note = pin_to(lc_.rig_cpus_for(lockstep_)); !note.empty())
+      std::cerr << "rig run: run." << (lockstep_ ? "lockstep_cpus" : "rig_cpus") << ": " << note << "\n";
+    if (const std::string note = pin_to(lc_.launcher_cpus); !note.empty())
       std::cerr << "rig run: run.launcher_cpus: " << note << "\n";
-    }
     // Real time: the launcher only records and watches, so it yields the CPU to the rig's
     // processes. (In lockstep it paces the run through its acknowledgements instead.)
     if (!lockstep_) ::setpriority(PRIO_PROCESS, 0, 10);

@@ -61,6 +61,7 @@ LaunchConfig launch_config_from(const Scenario& s) {
                " s): a process would give up waiting for the start before the launcher stops waiting for it");
   }
   c.rig_cpus = read_cpu_list(m, "rig_cpus");
+  c.lockstep_cpus = read_cpu_list(m, "lockstep_cpus");
   c.launcher_cpus = read_cpu_list(m, "launcher_cpus");
   if (m.has("external_processes")) {
     c.external_processes = m.get_string_list("external_processes");

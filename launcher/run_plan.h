@@ -102,8 +102,12 @@ struct LaunchConfig {
   std::string python = "/usr/bin/python3";
   std::string lcm_url = "auto";            ///< "auto": private namespace (or host multicast) per run
   std::string network_namespace = "auto";  ///< auto | always | never
-  std::vector<int> rig_cpus;               ///< CPUs for the rig's processes (empty: no pinning)
-  std::vector<int> launcher_cpus;          ///< CPUs for the launcher itself (empty: no pinning)
+  std::vector<int> rig_cpus;               ///< CPUs for the rig's processes in real time (empty: no pinning)
+  /// CPUs for the rig's processes in lockstep (empty: no pinning). Lockstep has no deadlines:
+  /// the participants a tick wakes step side by side on every CPU, not in turn on one.
+  std::vector<int> lockstep_cpus;
+  const std::vector<int>& rig_cpus_for(bool lockstep) const { return lockstep ? lockstep_cpus : rig_cpus; }
+  std::vector<int> launcher_cpus;  ///< CPUs for the launcher itself (empty: no pinning)
 };
 
 /// Judgement of the flight (scenario section `summary`).

@@ -110,7 +110,8 @@ class ProcessNode {
 
   /// The control loop's stages this process times (reported on TIMING_HEALTH, read by the
   /// latency budget of bench_rig): add_stage() names one and returns its index for
-  /// record_stage_ns(). A stage is timed in real time only (stage_timing()).
+  /// record_stage_ns(). The loop's stages are timed in real time only (stage_timing()); the
+  /// lockstep master times each participant's turnaround and its own step over LCM.
   int add_stage(const std::string& name);
   void record_stage_ns(int stage, int64_t ns) { stages_[static_cast<std::size_t>(stage)].second.add_ns(ns); }
   /// True when stages are timed: a real-time run, started (the wall clock and the rig's agree).
@@ -241,6 +242,9 @@ class ProcessNode {
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
   std::vector<std::pair<std::string, LatencyHistogram>> stages_;
+  /// Lockstep master over LCM: each participant's turnaround stage, and the tick being waited for.
+  std::map<std::string, int> turnaround_stage_;
+  int64_t tick_sent_ns_ = 0, tick_step_ = -1;
   std::vector<std::function<void()>> deferred_;
   struct Watched {
     int fd;

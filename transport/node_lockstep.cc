@@ -53,6 +53,10 @@ void ProcessNode::subscribe_lockstep_side() {
         contract::channels::kStepAck,
         [this](const step_ack_t& ack) {
           schedule_.acknowledge(ack.process, ack.step, ack.next_due_ns);  // others are not of this run
+          if (ack.step == tick_step_) {
+            const auto it = turnaround_stage_.find(ack.process);
+            if (it != turnaround_stage_.end()) record_stage_ns(it->second, monotonic_ns() - tick_sent_ns_);
+          }
         },
         100000);
   } else {
@@ -121,14 +125,21 @@ int ProcessNode::run_lockstep_master() {
   for (const auto& p : participants_) {
     if (p != name_) {
       schedule_.add(p);
+      // Over LCM: each participant's turnaround, from the tick going out to its acknowledgement
+      // coming in (its decode, its step, its publications, the transport both ways).
+      if (!inprocess()) {
+        turnaround_stage_[p] = add_stage("lockstep: " + p + "'s turnaround, RIG_CLOCK sent to its STEP_ACK received");
+      }
     }
   }
+  const int own_step_stage = inprocess() ? -1 : add_stage("lockstep: " + name_ + "'s own step");
   for (int64_t step = 0; !stop_; ++step) {
     const int64_t t = step * task.period_ns;
     if (t > duration_ns_) break;
     const int64_t step_start = monotonic_ns();
     sim_time_ns_ = t;
     task.fn(t);
+    if (own_step_stage >= 0) record_stage_ns(own_step_stage, monotonic_ns() - step_start);
     task.next_ns = t + task.period_ns;
     ++loop_count_;
 
@@ -144,6 +155,8 @@ int ProcessNode::run_lockstep_master() {
     tick.sim_time_ns = t;
     tick.dt_ns = task.period_ns;
     tick.run_id = run_id_;
+    tick_sent_ns_ = monotonic_ns();
+    tick_step_ = step;
     bus_.publish(contract::channels::kRigClock, tick);
     run_deferred();  // outputs nobody waits for this step go out after the tick
 
