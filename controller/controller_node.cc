@@ -67,7 +67,7 @@ ControllerNode::ControllerNode(const Scenario& scenario, const transport::NodeOp
       } else {
         if (node_->stage_timing()) {
           input_received_ns_ = transport::monotonic_ns();
-          node_->record_stage_ns(stage_estimate_in_, node_->age_ns(in.measured_utime));
+          node_->record_stage_ns(stage_estimate_in_, node_->age_ns(in.measured_utime, input_received_ns_));
         }
         input_ = in;
         have_input_ = true;
@@ -187,7 +187,7 @@ void ControllerNode::cycle(int64_t sim_time_ns) {
   if (use_estimate_ && have_input_ && input_received_ns_ > 0 && node_->stage_timing()) {
     // Once per estimate: the command computed from it.
     const int64_t done_ns = transport::monotonic_ns();
-    node_->record_stage_ns(stage_command_out_, node_->age_ns(input_.measured_utime));
+    node_->record_stage_ns(stage_command_out_, node_->age_ns(input_.measured_utime, done_ns));
     node_->record_stage_ns(stage_work_, done_ns - input_received_ns_);
     node_->record_stage_ns(stage_publish_, done_ns - publish_ns);
     input_received_ns_ = 0;

@@ -64,10 +64,10 @@ EstimatorNode::EstimatorNode(const Scenario& scenario, const transport::NodeOpti
       publish(rig_utime);
       // End-to-end latency: from the IMU sample's time to its estimate going out.
       const int64_t done_ns = transport::monotonic_ns();
-      const int64_t age_ns = node_->age_ns(rig_utime);
+      const int64_t age_ns = node_->age_ns(rig_utime, done_ns);
       node_->record_latency_ns(age_ns);
       if (node_->stage_timing()) {
-        node_->record_stage_ns(stage_imu_in_, age_ns - (done_ns - received_ns));
+        node_->record_stage_ns(stage_imu_in_, node_->age_ns(rig_utime, received_ns));
         node_->record_stage_ns(stage_estimate_out_, age_ns);
         node_->record_stage_ns(stage_work_, done_ns - received_ns);
         node_->record_stage_ns(stage_filter_, publish_ns - filter_ns);

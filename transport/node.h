@@ -26,6 +26,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -112,13 +113,17 @@ class ProcessNode {
   /// latency budget of bench_rig): add_stage() names one and returns its index for
   /// record_stage_ns(). The loop's stages are timed in real time only (stage_timing()); the
   /// lockstep master times each participant's turnaround and its own step over LCM.
+  /// A stage's histogram is made at its first sample: a run that times none (in process) does
+  /// not pay for it.
   int add_stage(const std::string& name);
-  void record_stage_ns(int stage, int64_t ns) { stages_[static_cast<std::size_t>(stage)].second.add_ns(ns); }
+  void record_stage_ns(int stage, int64_t ns);
   /// True when stages are timed: a real-time run, started (the wall clock and the rig's agree).
   bool stage_timing() const { return started_ && !lockstep() && !inprocess(); }
-  /// Real time: the age now of a sample due at rig time `rig_utime` [us]: the wall time since
-  /// t0_monotonic_ns() + rig_utime [ns].
-  int64_t age_ns(int64_t rig_utime) const { return monotonic_ns() - (t0_ns_ + message_us_to_ns(rig_utime)); }
+  /// Real time: the age at `now_ns` (CLOCK_MONOTONIC; default now) of a sample due at rig time
+  /// `rig_utime` [us]: the wall time since t0_monotonic_ns() + rig_utime [ns].
+  int64_t age_ns(int64_t rig_utime, int64_t now_ns = monotonic_ns()) const {
+    return now_ns - (t0_ns_ + message_us_to_ns(rig_utime));
+  }
 
   /// Makes this node the lockstep master (the plant): its single task defines the step.
   void set_lockstep_master(bool master) { master_ = master; }
@@ -241,7 +246,7 @@ class ProcessNode {
 
   LatencyHistogram jitter_;
   LatencyHistogram latency_;
-  std::vector<std::pair<std::string, LatencyHistogram>> stages_;
+  std::vector<std::pair<std::string, std::unique_ptr<LatencyHistogram>>> stages_;  // null: no sample yet
   /// Lockstep master over LCM: each participant's turnaround stage, and the tick being waited for.
   std::map<std::string, int> turnaround_stage_;
   int64_t tick_sent_ns_ = 0, tick_step_ = -1;

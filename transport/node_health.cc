@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -73,8 +74,14 @@ void ProcessNode::publish_heartbeat(int8_t state) {
 }
 
 int ProcessNode::add_stage(const std::string& name) {
-  stages_.emplace_back(name, LatencyHistogram());
+  stages_.emplace_back(name, nullptr);
   return static_cast<int>(stages_.size() - 1);
+}
+
+void ProcessNode::record_stage_ns(int stage, int64_t ns) {
+  std::unique_ptr<LatencyHistogram>& histogram = stages_[static_cast<std::size_t>(stage)].second;
+  if (!histogram) histogram = std::make_unique<LatencyHistogram>();
+  histogram->add_ns(ns);
 }
 
 void ProcessNode::publish_timing_health() {
@@ -106,12 +113,12 @@ void ProcessNode::publish_timing_health() {
   }
   h.num_channels = static_cast<int32_t>(h.channel.size());
   for (const auto& [stage, histogram] : stages_) {
-    if (histogram.count() == 0) continue;
+    if (!histogram) continue;
     h.stage.push_back(stage);
-    h.stage_count.push_back(histogram.count());
-    h.stage_p50_us.push_back(histogram.percentile_us(50));
-    h.stage_p99_us.push_back(histogram.percentile_us(99));
-    h.stage_max_us.push_back(histogram.max_us());
+    h.stage_count.push_back(histogram->count());
+    h.stage_p50_us.push_back(histogram->percentile_us(50));
+    h.stage_p99_us.push_back(histogram->percentile_us(99));
+    h.stage_max_us.push_back(histogram->max_us());
   }
   h.num_stages = static_cast<int32_t>(h.stage.size());
   bus_.publish(contract::channels::kTimingHealth, h);
