@@ -53,8 +53,19 @@ leftover_processes() {
   return "$found"
 }
 
+# The tests a pass failed, named again at the very end of the run: the first pass's list would
+# otherwise scroll away under the sanitizer pass's output.
+failed_list() {
+  local file="$1/Testing/Temporary/LastTestsFailed.log"
+  [[ -s "$file" ]] || return 0
+  echo "== $2 failed:"
+  sed 's/^/==   /' "$file"
+}
+
 status=0
-run_ctest "$BUILD_DIR" "$@" || status=$?
+first_status=0
+run_ctest "$BUILD_DIR" "$@" || first_status=$?
+status=$first_status
 
 if [[ "$SANITIZE_PASS" == 1 ]]; then
   start=$(date +%s)
@@ -64,7 +75,11 @@ if [[ "$SANITIZE_PASS" == 1 ]]; then
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
   export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}"
-  run_ctest "$SAN_BUILD_DIR" -L 'unit|functional|fuzz' -LE heavy || status=$?
+  san_status=0
+  run_ctest "$SAN_BUILD_DIR" -L 'unit|functional|fuzz' -LE heavy || san_status=$?
   echo "== sanitizer pass took $(( $(date +%s) - start )) s"
+  [[ "$san_status" == 0 ]] || status=$san_status
+  [[ "$first_status" == 0 ]] || failed_list "$BUILD_DIR" "the first pass (exit $first_status)"
+  [[ "$san_status" == 0 ]] || failed_list "$SAN_BUILD_DIR" "the sanitizer pass (exit $san_status)"
 fi
 exit "$status"
