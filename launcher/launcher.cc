@@ -51,19 +51,10 @@
 #include "launcher/verdict.h"
 #include "transport/bus.h"
 #include "transport/clock.h"
+#include "transport/channel_filter.h"
+#include "transport/multicast_tap.h"
 
 namespace nimble::launcher {
-
-std::string writable_problem(const std::string& file) {
-  const bool existed = std::filesystem::exists(file);
-  errno = 0;
-  {
-    std::ofstream out(file, std::ios::app);
-    if (!out) return std::string("cannot be written (") + (errno ? std::strerror(errno) : "open failed") + ")";
-  }
-  if (!existed) std::filesystem::remove(file);
-  return "";
-}
 
 namespace {
 
@@ -102,58 +93,6 @@ std::string python_module_dir(const std::string& bin_dir) {
 int run_processes(RunPlan& plan, const RunOptions& options);
 
 }  // namespace
-
-int check_host(const std::string& json_target) {
-  // With --json -, stdout carries the JSON and the text goes to stderr.
-  std::ostream& out = json_target == "-" ? std::cerr : std::cout;
-  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  out << "LCM multicast on this host's loopback (" << url << "): ";
-  const bool host_ok = lcm_url_works(url);
-  bool ns_ok = false;
-  if (host_ok) {
-    out << "works\n";
-  } else {
-    out << "does NOT work (no multicast route or loopback multicast off)\n";
-    // Probe a private namespace in a child, so this process stays where it is.
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      const NamespaceResult r = enter_private_network_namespace();
-      ::_exit(r.ok && lcm_url_works(url) ? 0 : 1);
-    }
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    ns_ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-    out << "private network namespace with multicast loopback: " << (ns_ok ? "works" : "does NOT work") << "\n";
-    if (ns_ok) {
-      out << "'rig run' will run each rig in its own private namespace. To run LCM tools on the host\n"
-             "itself (lcm-spy on a host-level URL), fix the host's loopback with:\n"
-          << multicast_fix_commands() << "\n";
-    } else {
-      out << "Neither works. Fix the host's loopback with:\n" << multicast_fix_commands() << "\n";
-    }
-  }
-  const bool ok = host_ok || ns_ok;
-  if (!json_target.empty()) {
-    OrderedJson j;
-    j["url"] = url;
-    j["host_multicast"] = host_ok;
-    j["private_namespace"] = host_ok ? "not needed" : (ns_ok ? "works" : "does not work");
-    j["runs_can_start"] = ok;
-    if (!host_ok) j["fix"] = multicast_fix_commands();
-    const std::string doc = json_line(j);
-    if (json_target == "-") {
-      std::cout << doc << "\n";
-    } else {
-      try {
-        write_file(json_target, doc + "\n");
-      } catch (const OutputError& e) {
-        std::cerr << "rig check: " << e.what() << "\n";
-        return kRunBadInput;
-      }
-    }
-  }
-  return ok ? 0 : 1;
-}
 
 int run_scenario(const RunOptions& options) {
   RunPlan plan;
@@ -228,7 +167,7 @@ class ProcessRun {
     const double wall_s = static_cast<double>(monotonic_ns() - wall_start_ns_) / 1e9;
     if (options_.progress && ::isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     stop_all(failure.empty() ? lc_.stop_grace_s : 0.5);
-    bus_->drain();
+    receive_now();
     recorder_->close();
     // A log that lost messages is the run's failure, whatever else ended it.
     if (recorder_->failed()) {
@@ -319,7 +258,7 @@ class ProcessRun {
     // logged everything before it, every logger_period_ms of simulated time, so the run can
     // never outpace the log (no message lost, whatever the load).
     logger_period_ns_ = static_cast<int64_t>(plan_.logger_period_ms * 1e6);
-    bus_->subscribe_raw(".*", [this](const std::string& channel, const void* data, int size, int64_t recv_us) {
+    auto on_message = [this](const std::string& channel, const void* data, int size, int64_t recv_us) {
       if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
       recorder_->record(channel, data, size, recv_us * 1000);
       if (options_.tap.message) options_.tap.message(channel, data, size);
@@ -336,8 +275,48 @@ class ProcessRun {
           bus_->publish(contract::channels::kStepAck, ack);
         }
       }
-    });
+    };
+    // Over udpm the launcher reads the group itself (transport/multicast_tap.h), without
+    // LCM's receive thread; its LCM instance only publishes.
+    if (transport::udpm_port(url_) > 0) {
+      try {
+        tap_ = std::make_unique<transport::MulticastTap>(url_, on_message);
+      } catch (const transport::TransportError& e) {
+        std::cerr << "rig run: " << e.what() << "\nFix:\n" << multicast_fix_commands() << "\n";
+        return kRunBadInput;
+      }
+      // LCM's own check that a receiver hears the group, as its receive thread makes it.
+      const std::string probe = "rig launcher self test";
+      if (!tap_->self_test([&] { bus_->publish_bytes("LCM_SELF_TEST", probe.data(), static_cast<int>(probe.size())); },
+                           10000000000LL)) {
+        std::cerr << "rig run: the launcher hears nothing on '" << url_
+                  << "' within 10 s: multicast does not loop back\nFix:\n"
+                  << multicast_fix_commands() << "\n";
+        return kRunBadInput;
+      }
+    } else {
+      bus_->subscribe_raw(".*", on_message);
+    }
     return kRunOk;
+  }
+
+  /// Receives what the run sends for up to `ms`: in lockstep waiting on the socket (the logger
+  /// answers ticks), in real time without (no publish wakes the launcher).
+  void receive_for(int ms) {
+    if (tap_) {
+      tap_->receive_for(static_cast<int64_t>(ms) * 1000000LL, lockstep_);
+    } else {
+      bus_->handle_timeout(ms);
+    }
+  }
+
+  /// Receives everything already sent.
+  void receive_now() {
+    if (tap_) {
+      tap_->drain();
+    } else {
+      bus_->drain();
+    }
   }
 
   /// Starts every process of the scenario but the external ones (whose commands it prints). A
@@ -396,14 +375,14 @@ class ProcessRun {
       stop.num_participants = 0;
       bus_->publish(contract::channels::kRunControl, stop);
     };
-    supervisor_.stop(grace_s, ask, [this] { bus_->handle_timeout(10); });
+    supervisor_.stop(grace_s, ask, [this] { receive_for(10); });
   }
 
   /// Ends the run before its start with `message`: stops everything, keeps what was logged.
   int fail(const std::string& message, int code = kRunFailed) {
     std::cerr << "rig run: " << message << "\n";
     stop_all(0.5);
-    bus_->drain();
+    receive_now();
     recorder_->close();
     if (recorder_->failed()) std::cerr << "rig run: " << recorder_->kept().failure << "\n";
     return code;
@@ -458,7 +437,7 @@ class ProcessRun {
   int wait_ready() {
     const int64_t ready_deadline = monotonic_ns() + static_cast<int64_t>(lc_.ready_timeout_s * 1e9);
     for (;;) {
-      bus_->handle_timeout(10);
+      receive_for(10);
       if (const ChildProcess* dead = supervisor_.reap()) {
         return fail("process '" + dead->name + "' " + dead->describe() + " before it was ready:\n" +
                     tail_of(dead->output_file, 12));
@@ -514,13 +493,18 @@ class ProcessRun {
     int64_t next_progress_ns = wall_start_ns_;
     int64_t last_progress_truth = -1, last_progress_change_ns = wall_start_ns_;
     int resends = 0;
+    // The checks below every kCheckPeriodNs, not after each of the run's messages.
+    constexpr int64_t kCheckPeriodNs = 2000000;
+    int64_t next_check_ns = 0;
     for (;;) {
-      bus_->handle_timeout(5);
+      receive_for(5);
       const int64_t now = monotonic_ns();
+      if (now < next_check_ns) continue;
+      next_check_ns = now + kCheckPeriodNs;
       recorder_->flush_if_due(now);
       if (recorder_->failed()) return recorder_->kept().failure;
       if (const ChildProcess* dead = supervisor_.reap()) {
-        bus_->drain();
+        receive_now();
         return died_during_run(*dead);
       }
       if (g_launch_interrupted) {
@@ -636,6 +620,7 @@ class ProcessRun {
   std::string log_file_, resolved_file_;
   std::string run_digest_;  ///< the resolved scenario and the files it names, read when the run starts
   std::unique_ptr<transport::Bus> bus_;
+  std::unique_ptr<transport::MulticastTap> tap_;  ///< the run's messages over udpm (else bus_'s)
   RunMonitor monitor_;
   std::unique_ptr<Recorder> recorder_;
   ProcessSupervisor supervisor_;
