@@ -14,8 +14,9 @@
 #include <map>
 #include <stdexcept>
 
-#include <lcm/lcm.h>
+#include <memory>
 
+#include "transport/bus.h"
 #include "transport/clock.h"
 
 namespace nimble::launcher::bench {
@@ -56,15 +57,15 @@ void sleep_until(int64_t t_ns) {
   }
 }
 
-/// Handles LCM messages until `deadline_ns` (CLOCK_MONOTONIC), sleeping in ppoll between them.
-void handle_until(lcm_t* lcm, int64_t deadline_ns) {
-  const int fd = lcm_get_fileno(lcm);
+/// Handles messages until `deadline_ns` (CLOCK_MONOTONIC), sleeping in ppoll between them.
+void handle_until(transport::Bus& bus, int64_t deadline_ns) {
+  const int fd = bus.fileno();
   for (;;) {
     const int64_t left = deadline_ns - monotonic_ns();
     if (left <= 0) return;
     pollfd pfd{fd, POLLIN, 0};
     timespec ts{static_cast<time_t>(left / 1000000000LL), static_cast<long>(left % 1000000000LL)};
-    if (::ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN)) lcm_handle(lcm);
+    if (::ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN)) bus.drain();
   }
 }
 
@@ -154,26 +155,22 @@ Percentiles to_percentiles(const ChildResult& r) {
   return Percentiles{r.values[0], r.values[1], r.values[2], static_cast<int64_t>(r.values[3])};
 }
 
-lcm_t* open_lcm(const std::string& url) {
-  lcm_t* lcm = lcm_create(url.c_str());
-  if (lcm == nullptr) throw std::runtime_error("LCM does not start on " + url);
-  return lcm;
+/// The rig's own transport (transport::Bus: LCM's wire format and its publish, received as the
+/// rig's processes receive), so that a floor costs what the rig's hops cost without the rig.
+std::unique_ptr<transport::Bus> open_bus(const std::string& url) { return std::make_unique<transport::Bus>(url); }
+
+/// `handler` for the raw bytes of `channel`.
+void on(transport::Bus& bus, const std::string& channel, std::function<void(const void*, int)> handler) {
+  bus.subscribe_raw(
+      channel, [h = std::move(handler)](const std::string&, const void* data, int size, int64_t) { h(data, size); });
 }
 
-/// A process that ends when FLOOR_STOP arrives (or after `guard_s`), handling messages.
-void serve_until_stop(lcm_t* lcm, double guard_s) {
+/// A helper process's life once subscribed: handle messages until FLOOR_STOP (or `guard_s`).
+ChildResult serve(transport::Bus& bus, double guard_s) {
   bool stop = false;
-  lcm_subscribe(
-      lcm, kStop, [](const lcm_recv_buf_t*, const char*, void* u) { *static_cast<bool*>(u) = true; }, &stop);
+  on(bus, kStop, [&stop](const void*, int) { stop = true; });
   const int64_t end = monotonic_ns() + static_cast<int64_t>(guard_s * 1e9);
-  while (!stop && monotonic_ns() < end) lcm_handle_timeout(lcm, 100);
-}
-
-/// A helper process's life after it subscribed `sub`: handle messages until FLOOR_STOP.
-ChildResult serve(lcm_t* lcm, lcm_subscription_t* sub, double guard_s) {
-  lcm_subscription_set_queue_capacity(sub, 1000);
-  serve_until_stop(lcm, guard_s);
-  lcm_destroy(lcm);
+  while (!stop && monotonic_ns() < end) bus.handle_timeout(100);
   ChildResult r;
   r.ok = 1;
   return r;
@@ -229,19 +226,10 @@ Percentiles lcm_chain_floor(const std::string& url, int hops, double rate_hz, do
     const pid_t pid = spawn(
         [&, i]() -> ChildResult {
           if (const std::string e = apply(settings); !e.empty()) return fail(e);
-          lcm_t* lcm = open_lcm(url);
-          struct Hop {
-            lcm_t* lcm;
-            std::string out;
-          } hop{lcm, hop_channel(i)};
-          lcm_subscription_t* sub = lcm_subscribe(
-              lcm, hop_channel(i - 1).c_str(),
-              [](const lcm_recv_buf_t* rb, const char*, void* u) {
-                auto* h = static_cast<Hop*>(u);
-                lcm_publish(h->lcm, h->out.c_str(), rb->data, rb->data_size);
-              },
-              &hop);
-          return serve(lcm, sub, guard_s);
+          const auto bus = open_bus(url);
+          const std::string out = hop_channel(i);
+          on(*bus, hop_channel(i - 1), [&](const void* data, int size) { bus->publish_bytes(out, data, size); });
+          return serve(*bus, guard_s);
         },
         &fd);
     relays.emplace_back(pid, fd);
@@ -251,53 +239,45 @@ Percentiles lcm_chain_floor(const std::string& url, int hops, double rate_hz, do
   const pid_t source = spawn(
       [&]() -> ChildResult {
         if (const std::string e = apply(settings); !e.empty()) return fail(e);
-        lcm_t* lcm = open_lcm(url);
-        struct Back {
-          std::vector<int64_t> latency;
-          bool echoed = false;
-        } back;
-        lcm_subscription_t* sub = lcm_subscribe(
-            lcm, hop_channel(hops - 1).c_str(),
-            [](const lcm_recv_buf_t* rb, const char*, void* u) {
-              auto* b = static_cast<Back*>(u);
-              int64_t head[2];
-              if (rb->data_size < sizeof head) return;
-              std::memcpy(head, rb->data, sizeof head);
-              if (head[0] < 0) {
-                b->echoed = true;
-              } else {
-                b->latency.push_back(monotonic_ns() - head[1]);
-              }
-            },
-            &back);
-        lcm_subscription_set_queue_capacity(sub, 1000);
+        const auto bus = open_bus(url);
+        std::vector<int64_t> latency;
+        bool echoed = false;
+        on(*bus, hop_channel(hops - 1), [&](const void* data, int size) {
+          int64_t head[2];
+          if (size < static_cast<int>(sizeof head)) return;
+          std::memcpy(head, data, sizeof head);
+          if (head[0] < 0) {
+            echoed = true;
+          } else {
+            latency.push_back(monotonic_ns() - head[1]);
+          }
+        });
         std::vector<unsigned char> payload(static_cast<std::size_t>(std::max(payload_bytes, 16)), 0);
         const auto send = [&](int64_t seq) {
           const int64_t head[2] = {seq, monotonic_ns()};
           std::memcpy(payload.data(), head, sizeof head);
-          lcm_publish(lcm, hop_channel(0).c_str(), payload.data(), static_cast<unsigned>(payload.size()));
+          bus->publish_bytes(hop_channel(0), payload.data(), static_cast<int>(payload.size()));
         };
         // The chain is up when a probe comes back through every hop.
         const int64_t give_up = monotonic_ns() + 10000000000LL;
-        while (!back.echoed && monotonic_ns() < give_up) {
+        while (!echoed && monotonic_ns() < give_up) {
           send(-1);
-          handle_until(lcm, monotonic_ns() + 20000000);
+          handle_until(*bus, monotonic_ns() + 20000000);
         }
-        if (!back.echoed) return fail("the chain of " + std::to_string(hops) + " hops did not come up within 10 s");
+        if (!echoed) return fail("the chain of " + std::to_string(hops) + " hops did not come up within 10 s");
         const int64_t period = static_cast<int64_t>(1e9 / rate_hz);
         const int64_t n = static_cast<int64_t>(seconds * rate_hz);
-        back.latency.reserve(static_cast<std::size_t>(n));
+        latency.reserve(static_cast<std::size_t>(n));
         int64_t deadline = monotonic_ns() + period;
         for (int64_t k = 0; k < n; ++k) {
-          handle_until(lcm, deadline);
+          handle_until(*bus, deadline);
           send(k);
           deadline += period;
         }
-        handle_until(lcm, monotonic_ns() + 100000000);  // the last ones back
-        const std::vector<unsigned char> none(1, 0);
-        for (int i = 0; i < 3; ++i) lcm_publish(lcm, kStop, none.data(), 1);
-        lcm_destroy(lcm);
-        ChildResult r = from_percentiles(back.latency);
+        handle_until(*bus, monotonic_ns() + 100000000);  // the last ones back
+        const unsigned char none = 0;
+        for (int i = 0; i < 3; ++i) bus->publish_bytes(kStop, &none, 1);
+        ChildResult r = from_percentiles(latency);
         r.values[4] = static_cast<double>(n);  // sent
         return r;
       },
@@ -322,30 +302,21 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
     const pid_t pid = spawn(
         [&, i, me]() -> ChildResult {
           if (const std::string e = apply(settings); !e.empty()) return fail(e);
-          lcm_t* lcm = open_lcm(url);
-          struct State {
-            lcm_t* lcm;
-            int64_t index;
-            contract::ScheduledParticipant me;
-            int64_t next_due_ns = 0;
-          } st{lcm, static_cast<int64_t>(i), me};
-          lcm_subscription_t* sub = lcm_subscribe(
-              lcm, kTick,
-              [](const lcm_recv_buf_t* rb, const char*, void* u) {
-                auto* s = static_cast<State*>(u);
-                int64_t tick[2];  // step, t
-                if (rb->data_size < sizeof tick) return;
-                std::memcpy(tick, rb->data, sizeof tick);
-                if (tick[0] >= 0) {
-                  if (tick[1] < s->next_due_ns) return;  // not due at this tick
-                  s->next_due_ns =
-                      s->me.aligned ? contract::next_due_after(tick[1], s->me.period_ns) : tick[1] + s->me.period_ns;
-                }
-                const int64_t ack[3] = {s->index, tick[0], s->next_due_ns};
-                lcm_publish(s->lcm, kAck, ack, sizeof ack);
-              },
-              &st);
-          return serve(lcm, sub, guard_s);
+          const auto bus = open_bus(url);
+          const auto index = static_cast<int64_t>(i);
+          int64_t next_due_ns = 0;
+          on(*bus, kTick, [&](const void* data, int size) {
+            int64_t tick[2];  // step, t
+            if (size < static_cast<int>(sizeof tick)) return;
+            std::memcpy(tick, data, sizeof tick);
+            if (tick[0] >= 0) {
+              if (tick[1] < next_due_ns) return;  // not due at this tick
+              next_due_ns = me.aligned ? contract::next_due_after(tick[1], me.period_ns) : tick[1] + me.period_ns;
+            }
+            const int64_t ack[3] = {index, tick[0], next_due_ns};
+            bus->publish_bytes(kAck, ack, sizeof ack);
+          });
+          return serve(*bus, guard_s);
         },
         &fd);
     children.emplace_back(pid, fd);
@@ -354,35 +325,30 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
   const pid_t master = spawn(
       [&]() -> ChildResult {
         if (const std::string e = apply(settings); !e.empty()) return fail(e);
-        lcm_t* lcm = open_lcm(url);
+        const auto bus = open_bus(url);
         struct Master {
           contract::LockstepSchedule schedule;
           std::map<int64_t, bool> ready;
           int64_t acks = 0;
         } m;
         for (std::size_t i = 0; i < participants.size(); ++i) m.schedule.add(std::to_string(i));
-        lcm_subscription_t* sub = lcm_subscribe(
-            lcm, kAck,
-            [](const lcm_recv_buf_t* rb, const char*, void* u) {
-              auto* mm = static_cast<Master*>(u);
-              int64_t ack[3];
-              if (rb->data_size < sizeof ack) return;
-              std::memcpy(ack, rb->data, sizeof ack);
-              if (ack[1] < 0) {
-                mm->ready[ack[0]] = true;
-                return;
-              }
-              ++mm->acks;
-              mm->schedule.acknowledge(std::to_string(ack[0]), ack[1], ack[2]);
-            },
-            &m);
-        lcm_subscription_set_queue_capacity(sub, 1000);
+        on(*bus, kAck, [&m](const void* data, int size) {
+          int64_t ack[3];
+          if (size < static_cast<int>(sizeof ack)) return;
+          std::memcpy(ack, data, sizeof ack);
+          if (ack[1] < 0) {
+            m.ready[ack[0]] = true;
+            return;
+          }
+          ++m.acks;
+          m.schedule.acknowledge(std::to_string(ack[0]), ack[1], ack[2]);
+        });
         // Every participant answers a probe before the clock starts.
         const int64_t give_up = monotonic_ns() + 10000000000LL;
         while (m.ready.size() < participants.size() && monotonic_ns() < give_up) {
           const int64_t probe[2] = {-1, 0};
-          lcm_publish(lcm, kTick, probe, sizeof probe);
-          handle_until(lcm, monotonic_ns() + 20000000);
+          bus->publish_bytes(kTick, probe, sizeof probe);
+          handle_until(*bus, monotonic_ns() + 20000000);
         }
         if (m.ready.size() < participants.size()) return fail("lockstep participants did not answer within 10 s");
         const int64_t horizon = static_cast<int64_t>(sim_seconds * 1e9);
@@ -392,19 +358,18 @@ LockstepFloor lockstep_floor(const std::string& url, int64_t step_ns,
         for (int64_t t = 0; t < horizon; t += step_ns, ++step) {
           if (!m.schedule.tick_at(t)) continue;
           const int64_t tick[2] = {step, t};
-          lcm_publish(lcm, kTick, tick, sizeof tick);
+          bus->publish_bytes(kTick, tick, sizeof tick);
           ++ticks;
           const int64_t deadline = monotonic_ns() + 2000000000LL;
           while (!m.schedule.missing(step, t).empty()) {
             if (monotonic_ns() > deadline)
               return fail("no acknowledgement of step " + std::to_string(step) + " in 2 s");
-            lcm_handle_timeout(lcm, 100);
+            bus->handle_timeout(100);
           }
         }
         const double wall_s = static_cast<double>(monotonic_ns() - start) / 1e9;
-        const std::vector<unsigned char> none(1, 0);
-        for (int i = 0; i < 3; ++i) lcm_publish(lcm, kStop, none.data(), 1);
-        lcm_destroy(lcm);
+        const unsigned char none = 0;
+        for (int i = 0; i < 3; ++i) bus->publish_bytes(kStop, &none, 1);
         ChildResult r;
         r.ok = 1;
         r.values[0] = sim_seconds / wall_s;

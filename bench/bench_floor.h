@@ -7,6 +7,9 @@
 ///  - lcm_chain_floor: a bare LCM chain with the hops of the rig's control path (plant ->
 ///    [estimator ->] controller -> plant), each hop its own process, on the rig's LCM URL,
 ///    CPUs and priority, forwarding raw bytes: the best control-loop latency the transport allows.
+///    The chain and the lockstep floor run on the rig's own transport (transport::Bus: LCM's
+///    publish and wire format, received on the process's own thread as the rig's processes
+///    receive, transport/multicast_tap.h), so a floor costs what a hop of the rig costs.
 ///  - lockstep_floor: a bare lockstep master and the rig's participants, each its own process,
 ///    ticking the rig's schedule with empty steps (fan-out of RIG_CLOCK-sized ticks, fan-in of
 ///    acknowledgements): the fastest the rig could run in lockstep over this transport.

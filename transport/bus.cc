@@ -1,5 +1,6 @@
 #include "transport/bus.h"
 
+#include <cstdlib>
 #include <limits>
 
 #include <poll.h>
@@ -8,11 +9,14 @@
 #include "contract/channels.h"
 #include "transport/channel_filter.h"
 #include "transport/clock.h"
+#include "transport/multicast_tap.h"
 
 namespace nimble::transport {
 
 Bus::Bus(const std::string& url) : url_(url) {
-  port_ = udpm_port(url);
+  // LCM's URL when none is given: LCM_DEFAULT_URL, else its default group (udpm).
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  port_ = udpm_port(!url.empty() || env == nullptr ? url : std::string(env));
   if (port_ > 0) sockets_before_ = udp_sockets_bound_to(port_);
   lcm_ = std::make_unique<lcm::LCM>(url);
   if (!lcm_->good()) {
@@ -55,9 +59,9 @@ void Bus::Subscription::on_receive(const lcm::ReceiveBuffer* rbuf, const std::st
   deliver(ch, rbuf->data, static_cast<int>(rbuf->data_size));
 }
 
-void Bus::Subscription::deliver(const std::string& ch, const void* data, int size) {
+void Bus::Subscription::deliver(const std::string& ch, const void* data, int size, int64_t recv_us) {
   if (raw) {
-    raw(ch, data, size, monotonic_us());
+    raw(ch, data, size, recv_us >= 0 ? recv_us : monotonic_us());
     return;
   }
   std::string error;
@@ -76,8 +80,13 @@ void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
     subs_.push_back(std::move(sub));
     return;
   }
-  lcm::Subscription* handle = lcm_->subscribe(sub->channel, &Subscription::on_receive, sub.get());
-  if (handle != nullptr) handle->setQueueCapacity(queue_capacity);
+  if (port_ > 0) {
+    tap();  // the socket's buffer (the URL's recv_buf_size) is the queue
+    if (sub->raw) sub->pattern = std::make_unique<std::regex>(sub->channel, std::regex::optimize);
+  } else {
+    lcm::Subscription* handle = lcm_->subscribe(sub->channel, &Subscription::on_receive, sub.get());
+    if (handle != nullptr) handle->setQueueCapacity(queue_capacity);
+  }
   if (sub->raw) {
     subscribed_by_pattern_ = true;
   } else {
@@ -89,6 +98,7 @@ void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
 
 void Bus::refresh_channel_filter() {
   if (hub_ != nullptr || port_ <= 0 || channels_.empty()) return;
+  if (receive_fd_ < 0 && tap_) receive_fd_ = tap_->fileno();
   if (receive_fd_ < 0) {
     // LCM made its receive socket at the first subscription: the one socket on the port that
     // was not there before.
@@ -125,11 +135,50 @@ void Bus::subscribe_raw(const std::string& regex,
   attach(std::move(sub), queue_capacity);
 }
 
-int Bus::fileno() const { return hub_ != nullptr ? -1 : lcm_->getFileno(); }
+MulticastTap& Bus::tap() {
+  if (!tap_) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    const std::string url = !url_.empty() ? url_ : (env != nullptr && *env != 0 ? env : "udpm://239.255.76.67:7667");
+    auto t = std::make_unique<MulticastTap>(url, [this](const std::string& ch, const void* data, int size,
+                                                        int64_t recv_us) { dispatch(ch, data, size, recv_us); });
+    // LCM's own check, as its receive thread makes it: its self-test message comes back.
+    const std::string probe = "nimble bus self test";
+    if (!t->self_test([&] { lcm_->publish("LCM_SELF_TEST", probe.data(), static_cast<unsigned>(probe.size())); },
+                      10000000000LL)) {
+      throw TransportError("nothing comes back on '" + url_ +
+                           "' within 10 s: multicast does not loop back. Run 'rig check' for the fix, or let "
+                           "'rig run' create a private network namespace");
+    }
+    tap_ = std::move(t);
+  }
+  return *tap_;
+}
+
+void Bus::dispatch(const std::string& channel, const void* data, int size, int64_t recv_us) {
+  // By index: a handler may subscribe, and subs_ grow under it.
+  for (std::size_t i = 0, n = subs_.size(); i < n; ++i) {
+    Subscription& s = *subs_[i];
+    if (s.pattern ? std::regex_match(channel, *s.pattern) : s.channel == channel)
+      s.deliver(channel, data, size, recv_us);
+  }
+}
+
+int Bus::fileno() const {
+  if (hub_ != nullptr) return -1;
+  if (port_ > 0) return const_cast<Bus*>(this)->tap().fileno();
+  return lcm_->getFileno();
+}
 
 int Bus::handle() {
   if (hub_ != nullptr) {
     hub_->drain();
+    return 0;
+  }
+  if (port_ > 0) {
+    // Waits for a datagram and handles what came (possibly nothing: bytes that are not LCM's).
+    pollfd pfd{tap().fileno(), POLLIN, 0};
+    if (::poll(&pfd, 1, -1) < 0) return -1;
+    tap().drain();
     return 0;
   }
   return lcm_->handle();
@@ -137,11 +186,13 @@ int Bus::handle() {
 
 int Bus::handle_timeout(int timeout_ms) {
   if (hub_ != nullptr) return hub_->drain() > 0 ? 1 : 0;
+  if (port_ > 0) return tap().wait_and_drain(static_cast<int64_t>(timeout_ms) * 1000000LL) > 0 ? 1 : 0;
   return lcm_->handleTimeout(timeout_ms);
 }
 
 int Bus::drain() {
   if (hub_ != nullptr) return static_cast<int>(hub_->drain());
+  if (port_ > 0) return tap().drain();
   int n = 0;
   pollfd pfd{fileno(), POLLIN, 0};
   while (::poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN)) {

@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <regex>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -66,6 +67,8 @@ using MalformedHandler = std::function<void(const std::string& channel, const st
 
 /// Default receive queue per subscription [messages]; LCM's own default of 30 drops silently.
 constexpr int kDefaultQueueCapacity = 1000;
+
+class MulticastTap;
 
 class Bus {
  public:
@@ -239,8 +242,10 @@ class Bus {
     Bus* bus = nullptr;
     std::function<bool(const void*, int, ChannelStats&, std::string&)> decode_and_call;
     std::function<void(const std::string&, const void*, int, int64_t)> raw;
+    std::unique_ptr<std::regex> pattern;  ///< over the tap: a subscribe_raw's pattern, whole-name match
     void on_receive(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-    void deliver(const std::string& channel, const void* data, int size);
+    /// `recv_us`: when it arrived [us, CLOCK_MONOTONIC], or -1: now.
+    void deliver(const std::string& channel, const void* data, int size, int64_t recv_us = -1);
   };
 
   /// Counts gaps in `seq` as drops. On a channel with one publisher, a seq that does not
@@ -249,9 +254,18 @@ class Bus {
   void count_late(int64_t due_ns, ChannelStats& stats) const;
   void attach(std::unique_ptr<Subscription> sub, int queue_capacity);
   void refresh_channel_filter();
+  /// Over udpm: the tap this Bus receives on, made (and its group checked with LCM's self-test
+  /// message) at the first subscription or fileno().
+  /// @throws TransportError if multicast does not reach it.
+  MulticastTap& tap();
+  /// Over the tap: one message to every subscription it matches, in subscription order.
+  void dispatch(const std::string& channel, const void* data, int size, int64_t recv_us);
 
   std::string url_;
   std::unique_ptr<lcm::LCM> lcm_;
+  /// Over udpm the Bus receives on a MulticastTap (transport/multicast_tap.h), read by the
+  /// process's own thread, instead of LCM's receive thread: one wake-up per message, not two.
+  std::unique_ptr<MulticastTap> tap_;
   InprocessHub* hub_ = nullptr;
   std::vector<unsigned char> scratch_;  // in process: the encoded message
   std::unique_ptr<FaultInjector> injector_;

@@ -99,7 +99,10 @@ MulticastTap::MulticastTap(const std::string& url, Handler handler) : handler_(s
   std::string failed;
   if (::setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0) {
     failed = "SO_REUSEADDR";
-  } else if (recv_buf > 0 && ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &recv_buf, sizeof recv_buf) != 0) {
+  } else if (recv_buf > 0 && ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &recv_buf, sizeof recv_buf) != 0 &&
+             ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &recv_buf, sizeof recv_buf) != 0) {
+    // The socket's buffer is the only queue of what waits to be read: beyond net.core.rmem_max
+    // where the process may (CAP_NET_ADMIN), else up to it, as LCM's receive socket.
     failed = "SO_RCVBUF";
   } else if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof one) != 0) {
     failed = "SO_TIMESTAMPNS";
@@ -115,6 +118,13 @@ MulticastTap::MulticastTap(const std::string& url, Handler handler) : handler_(s
     throw TransportError(what);
   }
   buffers_.assign(kBatch, std::vector<unsigned char>(kMaxDatagram));
+}
+
+int MulticastTap::receive_buffer_bytes() const {
+  int bytes = 0;
+  socklen_t len = sizeof bytes;
+  if (fd_ < 0 || ::getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &bytes, &len) != 0) return 0;
+  return bytes;
 }
 
 MulticastTap::~MulticastTap() {

@@ -67,6 +67,9 @@ class MulticastTap {
   /// Datagrams that were not LCM's (too short, another magic, a malformed header) and
   /// fragmented messages abandoned incomplete.
   int64_t discarded() const { return discarded_; }
+  /// The socket's receive buffer as the kernel reports it [bytes] (SO_RCVBUF: twice what was
+  /// granted, its bookkeeping included); 0 without a socket.
+  int receive_buffer_bytes() const;
   /// Messages delivered so far.
   int64_t delivered() const { return delivered_count_; }
   /// True once a message on LCM_SELF_TEST was seen: multicast reaches the tap.

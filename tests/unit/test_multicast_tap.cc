@@ -190,6 +190,10 @@ TEST_CASE("multicast tap: LCM's own messages over a udpm group, short and fragme
       MulticastTap tap(url, into(got));
       lcm::LCM lcm(url);
       if (!lcm.good()) report("LCM does not start on " + url, 3);
+      // The URL's buffer, whatever net.core.rmem_max says (the test runs as root).
+      if (tap.receive_buffer_bytes() < 4194304) {
+        report("a receive buffer of " + std::to_string(tap.receive_buffer_bytes()) + " bytes", 12);
+      }
       const std::string probe = "probe";
       if (!tap.self_test([&] { lcm.publish("LCM_SELF_TEST", probe.data(), static_cast<unsigned>(probe.size())); },
                          5000000000LL)) {
