@@ -294,6 +294,13 @@ class ProcessRun {
                   << multicast_fix_commands() << "\n";
         return kRunBadInput;
       }
+      // The socket's buffer is all that holds the run's messages while the launcher writes its
+      // log: below 2 MB (a process without CAP_NET_ADMIN gets net.core.rmem_max), say so.
+      if (const int bytes = tap_->receive_buffer_bytes(); bytes < 2 * 1024 * 1024) {
+        std::cerr << "rig run: warning: the launcher's receive buffer is " << bytes / 1024
+                  << " kB (net.core.rmem_max); a stall of the launcher longer than it holds loses messages from "
+                     "the log. Raise it: sysctl -w net.core.rmem_max=8388608\n";
+      }
     } else {
       bus_->subscribe_raw(".*", on_message);
     }
