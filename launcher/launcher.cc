@@ -42,6 +42,7 @@
 #include "core/output_lock.h"
 #include "launcher/hosts.h"
 #include "launcher/inprocess.h"
+#include "launcher/lockstep_logger.h"
 #include "launcher/netns.h"
 #include "launcher/recorder.h"
 #include "launcher/run_monitor.h"
@@ -254,27 +255,15 @@ class ProcessRun {
       std::cerr << "rig run: " << e.what() << "\n";
       return kRunBadInput;
     }
-    // Lockstep: the launcher's logger is a participant. It acknowledges a tick once it has
-    // logged everything before it, every logger_period_ms of simulated time, so the run can
-    // never outpace the log (no message lost, whatever the load).
-    logger_period_ns_ = static_cast<int64_t>(plan_.logger_period_ms * 1e6);
+    // Lockstep: the launcher's log is a participant (launcher/lockstep_logger.h).
+    logger_ = std::make_unique<LockstepLogger>(
+        static_cast<int64_t>(plan_.logger_period_ms * 1e6),
+        [this](const step_ack_t& ack) { bus_->publish(contract::channels::kStepAck, ack); });
     auto on_message = [this](const std::string& channel, const void* data, int size, int64_t recv_us) {
       if (channel == "LCM_SELF_TEST") return;  // the udpm provider's own start-up probe
       recorder_->record(channel, data, size, recv_us * 1000);
       if (options_.tap.message) options_.tap.message(channel, data, size);
-      if (lockstep_ && channel == contract::channels::kRigClock) {
-        rig_clock_t tick{};
-        if (contract::decode_exact(data, size, tick) && tick.sim_time_ns >= logger_next_due_ns_) {
-          logger_next_due_ns_ = tick.sim_time_ns + logger_period_ns_;
-          step_ack_t ack{};
-          ack.utime = tick.utime;
-          ack.seq = logger_ack_seq_++;
-          ack.step = tick.step;
-          ack.next_due_ns = logger_next_due_ns_;
-          ack.process = kLogger;
-          bus_->publish(contract::channels::kStepAck, ack);
-        }
-      }
+      if (lockstep_) logger_->on_message(channel, data, size);
     };
     // Over udpm the launcher reads the group itself (transport/multicast_tap.h), without
     // LCM's receive thread; its LCM instance only publishes.
@@ -310,7 +299,10 @@ class ProcessRun {
   /// Receives what the run sends for up to `ms`: in lockstep waiting on the socket (the logger
   /// answers ticks), in real time without (no publish wakes the launcher).
   void receive_for(int ms) {
-    if (tap_) {
+    if (tap_ && lockstep_ && !logger_->may_be_due_next()) {
+      // No tick to answer next: read what came every 150 us instead of waking for each message.
+      tap_->receive_for(std::min<int64_t>(static_cast<int64_t>(ms) * 1000000LL, 150000), false);
+    } else if (tap_) {
       tap_->receive_for(static_cast<int64_t>(ms) * 1000000LL, lockstep_);
     } else {
       bus_->handle_timeout(ms);
@@ -485,7 +477,7 @@ class ProcessRun {
     for (const auto& p : scenario_.processes) {
       if (p != "plant") start.participants.push_back(p);
     }
-    if (lockstep_) start.participants.push_back(kLogger);
+    if (lockstep_) start.participants.push_back(LockstepLogger::kName);
     start.num_participants = static_cast<int32_t>(start.participants.size());
     bus_->publish(contract::channels::kRunControl, start);
     monitor_.set_t0(start.t0_monotonic_ns);
@@ -614,8 +606,6 @@ class ProcessRun {
     return finish_report(report, options_);
   }
 
-  inline static const std::string kLogger = "logger";  ///< the launcher's lockstep participant
-
   RunPlan& plan_;
   const RunOptions& options_;
   Scenario& scenario_;
@@ -632,7 +622,7 @@ class ProcessRun {
   std::unique_ptr<Recorder> recorder_;
   ProcessSupervisor supervisor_;
   int64_t run_control_seq_ = 0, launcher_fault_seq_ = 0;
-  int64_t logger_period_ns_ = 0, logger_next_due_ns_ = 0, logger_ack_seq_ = 0;
+  std::unique_ptr<LockstepLogger> logger_;
   int64_t wall_start_ns_ = 0;
 };
 
