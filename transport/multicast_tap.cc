@@ -20,10 +20,10 @@ namespace nimble::transport {
 
 namespace {
 
-constexpr uint32_t kMagicShort = 0x4c433032;  // "LC02"
-constexpr uint32_t kMagicLong = 0x4c433033;   // "LC03"
-constexpr std::size_t kShortHeader = 8;       // magic, sequence number
-constexpr std::size_t kLongHeader = 20;       // magic, seqno, msg_size, offset, fragment_no, count
+constexpr uint32_t kLc02Magic = 0x4c433032;  // "LC02"
+constexpr uint32_t kLc03Magic = 0x4c433033;  // "LC03"
+constexpr std::size_t kShortHeader = 8;      // magic, sequence number
+constexpr std::size_t kLongHeader = 20;      // magic, seqno, msg_size, offset, fragment_no, count
 constexpr std::size_t kMaxDatagram = 65536;
 constexpr unsigned kBatch = 32;
 // LCM refuses more than 65,535 fragments of 65,423 bytes; the rig's messages are far smaller.
@@ -56,7 +56,7 @@ int64_t realtime_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
 }
 
-std::string fail(const std::string& url, const std::string& call) {
+std::string receive_socket_failure(const std::string& url, const std::string& call) {
   return "the launcher's receive socket on '" + url + "': " + call + ": " + std::strerror(errno) +
          ". For udpm:// the loopback needs multicast: run 'rig check' for the fix, or let 'rig run' create a "
          "private network namespace";
@@ -87,7 +87,7 @@ MulticastTap::MulticastTap(const std::string& url, Handler handler) : handler_(s
     throw TransportError("a multicast tap cannot read the group and port of '" + url + "'");
   }
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd_ < 0) throw TransportError(fail(url, "socket"));
+  if (fd_ < 0) throw TransportError(receive_socket_failure(url, "socket"));
   const int one = 1;
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -112,7 +112,7 @@ MulticastTap::MulticastTap(const std::string& url, Handler handler) : handler_(s
     failed = "IP_ADD_MEMBERSHIP";
   }
   if (!failed.empty()) {
-    const std::string what = fail(url, failed);
+    const std::string what = receive_socket_failure(url, failed);
     ::close(fd_);
     fd_ = -1;
     throw TransportError(what);
@@ -206,11 +206,11 @@ void MulticastTap::take(const unsigned char* d, std::size_t n, uint64_t from, in
     return;
   }
   const uint32_t magic = be32(d);
-  if (magic == kMagicLong) {
+  if (magic == kLc03Magic) {
     take_fragment(d, n, from, recv_us);
     return;
   }
-  if (magic != kMagicShort) {
+  if (magic != kLc02Magic) {
     ++discarded_;
     return;
   }
