@@ -16,8 +16,8 @@ namespace nimble::transport {
 Bus::Bus(const std::string& url) : url_(url) {
   // LCM's URL when none is given: LCM_DEFAULT_URL, else its default group (udpm).
   const char* env = std::getenv("LCM_DEFAULT_URL");
-  port_ = udpm_port(!url.empty() || env == nullptr ? url : std::string(env));
-  if (port_ > 0) sockets_before_ = udp_sockets_bound_to(port_);
+  receive_url_ = !url.empty() ? url : (env != nullptr && *env != 0 ? env : "udpm://239.255.76.67:7667");
+  port_ = udpm_port(receive_url_);
   lcm_ = std::make_unique<lcm::LCM>(url);
   if (!lcm_->good()) {
     throw TransportError("LCM could not start on '" + (url.empty() ? std::string("(default URL)") : url) +
@@ -98,30 +98,16 @@ void Bus::attach(std::unique_ptr<Subscription> sub, int queue_capacity) {
 
 void Bus::refresh_channel_filter() {
   if (hub_ != nullptr || port_ <= 0 || channels_.empty()) return;
-  if (receive_fd_ < 0 && tap_) receive_fd_ = tap_->fileno();
-  if (receive_fd_ < 0) {
-    // LCM made its receive socket at the first subscription: the one socket on the port that
-    // was not there before.
-    std::set<int> fresh;
-    for (int fd : udp_sockets_bound_to(port_)) {
-      if (!sockets_before_.count(fd)) fresh.insert(fd);
-    }
-    if (fresh.size() != 1) {
-      filter_problem_ = "cannot tell LCM's receive socket on port " + std::to_string(port_) + " (" +
-                        std::to_string(fresh.size()) + " candidates)";
-      return;
-    }
-    receive_fd_ = *fresh.begin();
-  }
+  const int fd = tap().fileno();  // made at the first subscription
   if (!filter_enabled_ || subscribed_by_pattern_) {
     if (filter_active_) {
-      filter_problem_ = detach_channel_filter(receive_fd_);
+      filter_problem_ = detach_channel_filter(fd);
       if (!filter_problem_.empty()) return;  // still active: wait_for_start() announces it
     }
     filter_active_ = false;
     return;
   }
-  filter_problem_ = attach_channel_filter(receive_fd_, channels_);
+  filter_problem_ = attach_channel_filter(fd, channels_);
   filter_active_ = filter_problem_.empty();
 }
 
@@ -137,15 +123,14 @@ void Bus::subscribe_raw(const std::string& regex,
 
 MulticastTap& Bus::tap() {
   if (!tap_) {
-    const char* env = std::getenv("LCM_DEFAULT_URL");
-    const std::string url = !url_.empty() ? url_ : (env != nullptr && *env != 0 ? env : "udpm://239.255.76.67:7667");
-    auto t = std::make_unique<MulticastTap>(url, [this](const std::string& ch, const void* data, int size,
-                                                        int64_t recv_us) { dispatch(ch, data, size, recv_us); });
+    auto t =
+        std::make_unique<MulticastTap>(receive_url_, [this](const std::string& ch, const void* data, int size,
+                                                            int64_t recv_us) { dispatch(ch, data, size, recv_us); });
     // LCM's own check, as its receive thread makes it: its self-test message comes back.
     const std::string probe = "nimble bus self test";
     if (!t->self_test([&] { lcm_->publish("LCM_SELF_TEST", probe.data(), static_cast<unsigned>(probe.size())); },
                       10000000000LL)) {
-      throw TransportError("nothing comes back on '" + url_ +
+      throw TransportError("nothing comes back on '" + receive_url_ +
                            "' within 10 s: multicast does not loop back. Run 'rig check' for the fix, or let "
                            "'rig run' create a private network namespace");
     }

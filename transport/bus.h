@@ -201,7 +201,7 @@ class Bus {
     late_threshold_ns_ = threshold_ns;
   }
 
-  /// Over udpm://: keep only the subscribed channels on this process's LCM receive socket, in
+  /// Over udpm://: keep only the subscribed channels on this process's receive socket, in
   /// the kernel (transport/channel_filter.h), from the next subscription on. A subscription
   /// by pattern (subscribe_raw) turns the filter off. No effect in process or on other providers.
   void enable_channel_filter(bool on) {
@@ -279,9 +279,8 @@ class Bus {
   bool filter_enabled_ = false;
   bool filter_active_ = false;
   bool subscribed_by_pattern_ = false;
-  int port_ = -1;                   ///< the udpm URL's port, -1 for other providers
-  std::set<int> sockets_before_;    ///< UDP sockets on port_ before LCM made its receive socket
-  int receive_fd_ = -1;             ///< LCM's receive socket, once found
+  std::string receive_url_;         ///< url_, or LCM's when url_ is empty
+  int port_ = -1;                   ///< receive_url_'s udpm port, -1 for other providers
   std::set<std::string> channels_;  ///< exact subscriptions
   std::string filter_problem_;
 };

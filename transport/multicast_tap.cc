@@ -57,7 +57,7 @@ int64_t realtime_ns() {
 }
 
 std::string receive_socket_failure(const std::string& url, const std::string& call) {
-  return "the launcher's receive socket on '" + url + "': " + call + ": " + std::strerror(errno) +
+  return "the receive socket on '" + url + "': " + call + ": " + std::strerror(errno) +
          ". For udpm:// the loopback needs multicast: run 'rig check' for the fix, or let 'rig run' create a "
          "private network namespace";
 }
