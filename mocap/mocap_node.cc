@@ -42,7 +42,16 @@ MocapNode::MocapNode(const Scenario& scenario, const transport::NodeOptions& opt
 int MocapNode::run() { return node_->run(); }
 
 void MocapNode::flush(int64_t sim_time_ns) {
-  outbox_.drain(sim_time_ns / 1000, [this](const MocapPose& pose) { publish(pose); });
+  const int64_t tick_utime = sim_time_ns / 1000;
+  outbox_.drain(tick_utime, [this, tick_utime](MocapPose pose) {
+    // The frame goes out at this tick, so it says so: a consumer takes a message published at
+    // a tick from its next tick on, whether it arrives before its own turn at this tick or
+    // after. Stamped with its due time instead, it would count at this tick if it arrived in
+    // time, and the run would depend on process timing.
+    pose.publish_utime = tick_utime;
+    pose.latency_us = static_cast<int32_t>(tick_utime - pose.utime);
+    publish(pose);
+  });
 }
 
 void MocapNode::publish(const MocapPose& pose) {

@@ -13,7 +13,10 @@
 ///
 /// Real time: a frame goes out as soon as the truth shows its publication time has come.
 /// Lockstep: frames go out at the frame-rate ticks, so that what a consumer has seen at a
-/// tick does not depend on process timing.
+/// tick does not depend on process timing. A frame's latency_us is then its mid-exposure to
+/// the tick it went out at (at least the configured latency, less than one frame period
+/// more), so that its publication time is that tick and consumers take it from their next
+/// tick on, as they take every other participant's messages.
 
 #include <memory>
 
