@@ -223,11 +223,12 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
   const bool tty = ::isatty(STDERR_FILENO);
   std::atomic<int64_t> wall_start_ns{monotonic_ns()};
   int64_t next_progress_ns = 0;  // the recording thread's own
-  MessagePipe pipe([&](const std::string& channel, const void* data, int size, int64_t /*sent*/, bool own_encoding) {
-    // Stamped on arrival here, as the launcher's logger stamps what it receives.
+  MessagePipe pipe([&](const std::string& channel, const void* data, int size, int64_t sent_ns, bool own_encoding) {
+    // Stamped on arrival here, as the launcher's logger stamps what it receives; the log's
+    // events up to the first tick by their publication, which places the run's simulated time.
     const int64_t recv_ns = monotonic_ns();
     if (recorder) {
-      recorder->record(channel, data, size, recv_ns, own_encoding);
+      recorder->record(channel, data, size, sent_ns > 0 ? sent_ns : recv_ns, own_encoding);
       recorder->flush_if_due(recv_ns);
       if (recorder->failed()) record_failed.store(true, std::memory_order_relaxed);
     } else {
@@ -240,8 +241,14 @@ RunReport fly_inprocess(const RunPlan& plan, const InprocessOptions& options) {
       next_progress_ns = recv_ns + (tty ? 200000000LL : 2000000000LL);
     }
   });
-  hub.subscribe(".*", [&pipe, &hub](const std::string& channel, const void* data, int size) {
-    pipe.send(&channel, data, size, 0, hub.delivering_own_encoding());
+  bool ticked = false;  // the first RIG_CLOCK tick has gone to the log
+  hub.subscribe(".*", [&pipe, &hub, &ticked](const std::string& channel, const void* data, int size) {
+    int64_t sent_ns = 0;  // after the first tick the log's events follow simulated time
+    if (!ticked) {
+      sent_ns = monotonic_ns();
+      ticked = channel == contract::channels::kRigClock;
+    }
+    pipe.send(&channel, data, size, sent_ns, hub.delivering_own_encoding());
   });
 
   can::InprocessCanBus can_bus;

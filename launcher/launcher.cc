@@ -374,7 +374,21 @@ class ProcessRun {
       stop.num_participants = 0;
       bus_->publish(contract::channels::kRunControl, stop);
     };
+    const int64_t deadline = monotonic_ns() + static_cast<int64_t>(grace_s * 1e9);
     supervisor_.stop(grace_s, ask, [this] { receive_for(10); });
+    // The external processes answer the same request; their last heartbeat and timing report
+    // may come after the launcher's own children have exited.
+    while (external_still_running() && monotonic_ns() < deadline) receive_for(10);
+  }
+
+  /// True if an external process has been heard and has not yet said it is stopping.
+  bool external_still_running() const {
+    for (const auto& name : lc_.external_processes) {
+      const RunMonitor::Heartbeat* hb = monitor_.heartbeat(name);
+      if (hb != nullptr && hb->state != heartbeat_t::STATE_STOPPING && hb->state != heartbeat_t::STATE_FAULT)
+        return true;
+    }
+    return false;
   }
 
   /// Ends the run before its start with `message`: stops everything, keeps what was logged.

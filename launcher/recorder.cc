@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <nimble/rig_clock_t.hpp>
+#include <nimble/truth_state_t.hpp>
 
 #include "contract/channels.h"
 #include "contract/decode.h"
@@ -68,24 +69,44 @@ std::string log_space_problem(const RunPlan& plan, const std::string& log_file, 
 Recorder::Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps)
     : file_(log_file), monitor_(monitor), log_(log_file, kWriteBuffer, "the log"), stamps_(stamps) {
   last_flush_ns_ = transport::monotonic_ns();
+  wall_minus_monotonic_us_ = transport::wall_us() - last_flush_ns_ / 1000;
 }
 
 Recorder::~Recorder() {
   if (!failed()) checked([this] { log_.flush(); });
 }
 
-int64_t Recorder::stamp_us(const std::string& channel, const void* data, int size) {
+int64_t Recorder::stamp_us(const std::string& channel, const void* data, int size, int64_t recv_ns) {
   if (stamps_ == LogStamps::kWallClock) return transport::wall_us();
   if (channel == contract::channels::kRigClock) {
     rig_clock_t tick{};
     if (contract::decode_exact(data, size, tick)) {
-      if (sim_base_us_ < 0) sim_base_us_ = transport::wall_us() - tick.sim_time_ns / 1000;
+      if (sim_base_us_ < 0) place_simulated_time(tick.sim_time_ns / 1000, recv_ns);
       last_stamp_us_ = std::max(last_stamp_us_, sim_base_us_ + tick.sim_time_ns / 1000);
       return last_stamp_us_;
     }
   }
-  if (sim_base_us_ < 0) last_stamp_us_ = std::max(last_stamp_us_, transport::wall_us());
+  if (sim_base_us_ < 0 && channel == contract::channels::kTruth) {
+    // The master's first step goes out before its tick: its truth places simulated time.
+    truth_state_t truth{};
+    if (contract::decode_exact(data, size, truth) && truth.step >= 0) {
+      place_simulated_time(truth.utime, recv_ns);
+      last_stamp_us_ = std::max(last_stamp_us_, sim_base_us_ + truth.utime);
+      return last_stamp_us_;
+    }
+  }
+  if (sim_base_us_ < 0) last_stamp_us_ = std::max(last_stamp_us_, received_wall_us(recv_ns));
   return last_stamp_us_;
+}
+
+int64_t Recorder::received_wall_us(int64_t recv_ns) const {
+  return recv_ns > 0 ? wall_minus_monotonic_us_ + recv_ns / 1000 : transport::wall_us();
+}
+
+void Recorder::place_simulated_time(int64_t sim_utime, int64_t recv_ns) {
+  // The wall clock of the message's receipt, not of its recording: a recorder that falls behind
+  // does not move the run's simulated time.
+  sim_base_us_ = std::max(received_wall_us(recv_ns), last_stamp_us_) - sim_utime;
 }
 
 template <typename Write>
@@ -117,7 +138,7 @@ void Recorder::record(const std::string& channel, const void* data, int size, in
     header_.clear();
     put_be<uint32_t>(header_, kLcmLogSync);
     put_be<int64_t>(header_, event_number_);
-    put_be<int64_t>(header_, stamp_us(channel, data, size));
+    put_be<int64_t>(header_, stamp_us(channel, data, size, recv_ns));
     put_be<int32_t>(header_, static_cast<int32_t>(channel.size()));
     put_be<int32_t>(header_, size);
     header_ += channel;

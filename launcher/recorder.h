@@ -44,9 +44,11 @@ class Recorder {
   /// Opens `log_file` for writing (a 1 MiB write buffer; the file is the LCM log format, as
   /// lcm-logger writes it, each event one record of an OutputFile: a failed write cuts the log
   /// back to its last whole event).
-  /// With LogStamps::kSimulated, events before the first RIG_CLOCK tick carry the wall clock;
-  /// from the first tick on, an event carries the wall clock of that tick plus the simulated
-  /// time of the newest tick recorded, never less than the event before it. So the events of a
+  /// With LogStamps::kSimulated, events before the run's simulated time begins carry the wall
+  /// clock of their receipt. It begins with the first RIG_CLOCK tick or lockstep TRUTH (a
+  /// `step` >= 0: the master's first step goes out before its tick), placed at the wall clock
+  /// of that message's receipt; from then on an event carries that base plus the simulated
+  /// time of the newest tick (or that first truth), never less than the event before it. So the events of a
   /// run are spaced as in flight, and the log stays ordered.
   /// @throws std::runtime_error naming the file if it cannot be opened.
   Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps = LogStamps::kWallClock);
@@ -99,9 +101,14 @@ class Recorder {
   double kept_sim_s_ = 0.0;
   int64_t last_flush_ns_ = 0;
   /// The timestamp of `channel`'s event now [us].
-  int64_t stamp_us(const std::string& channel, const void* data, int size);
+  int64_t stamp_us(const std::string& channel, const void* data, int size, int64_t recv_ns);
+  /// The wall clock [us] of a receipt at `recv_ns` (CLOCK_MONOTONIC; 0: now).
+  int64_t received_wall_us(int64_t recv_ns) const;
+  /// Simulated time `sim_utime` [us] was received at `recv_ns`: sets sim_base_us_.
+  void place_simulated_time(int64_t sim_utime, int64_t recv_ns);
   LogStamps stamps_;
-  int64_t sim_base_us_ = -1;  ///< simulated: the wall clock of sim time 0 (-1: no tick yet)
+  int64_t sim_base_us_ = -1;             ///< simulated: the wall clock of sim time 0 (-1: no tick yet)
+  int64_t wall_minus_monotonic_us_ = 0;  ///< the wall clock less CLOCK_MONOTONIC at opening [us]
   int64_t last_stamp_us_ = 0;
 };
 

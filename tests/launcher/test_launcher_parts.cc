@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -22,12 +23,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <nimble/rig_clock_t.hpp>
+#include <nimble/truth_state_t.hpp>
 
 #include "can_bridge/inprocess_can_bus.h"
 #include "contract/channels.h"
 #include "launcher/message_pipe.h"
 #include "launcher/recorder.h"
 #include "launcher/run_report.h"
+#include "transport/clock.h"
 #include "campaign/sweep.h"
 #include "launcher/verdict.h"
 #include "tests/support/scratch.h"
@@ -342,6 +345,64 @@ TEST_CASE("recorder: lockstep logs carry simulated time, real-time logs the wall
   REQUIRE(wall.size() == sim.size());
   CHECK(std::is_sorted(wall.begin(), wall.end()));
   CHECK(wall.back() - wall[1] < 1000000);  // the wall clock: far less than the simulated 3 s
+  std::remove(file.c_str());
+}
+
+namespace {
+
+std::vector<unsigned char> tick_bytes(int64_t sim_time_ns) {
+  nimble::rig_clock_t tick{};
+  tick.step = sim_time_ns / 1000000;
+  tick.sim_time_ns = sim_time_ns;
+  tick.utime = sim_time_ns / 1000;
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(tick.getEncodedSize()));
+  tick.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("recorder: simulated time begins at the receipt of the first tick or lockstep truth, not at its writing",
+          "[launcher]") {
+  const std::string file = nimble::test::scratch_file("recorder", "recorder_late.lcmlog");
+  RunMonitor monitor(MonitorConfig{});
+  const int64_t received_ns = nimble::transport::monotonic_ns();
+  const auto record = [&](const std::string& channel, const std::vector<unsigned char>& bytes, int64_t at_ns) {
+    Recorder recorder(file, monitor, LogStamps::kSimulated);
+    const std::vector<unsigned char> other(16, 0);
+    recorder.record(nimble::contract::channels::kHeartbeat, other.data(), static_cast<int>(other.size()), received_ns);
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));  // the recorder falls behind
+    recorder.record(channel, bytes.data(), static_cast<int>(bytes.size()), at_ns);
+    const std::vector<unsigned char> next = tick_bytes(1000000);
+    recorder.record(nimble::contract::channels::kRigClock, next.data(), static_cast<int>(next.size()), at_ns + 5000000);
+  };
+  const auto times = [&] {
+    lcm::LogFile log(file, "r");
+    std::vector<int64_t> t;
+    while (const lcm::LogEvent* ev = log.readNextEvent()) t.push_back(ev->timestamp);
+    return t;
+  };
+  SECTION("the first tick, received 40 us after a heartbeat") {
+    record(nimble::contract::channels::kRigClock, tick_bytes(0), received_ns + 40000);
+    const std::vector<int64_t> t = times();
+    REQUIRE(t.size() == 3);
+    CHECK(t[1] - t[0] >= 39);  // the receipt times (in whole microseconds)
+    CHECK(t[1] - t[0] <= 41);
+    CHECK(t[2] - t[1] == 1000);  // then simulated time, however late the tick came
+  }
+  SECTION("the master's first truth, which goes out before its tick") {
+    nimble::truth_state_t truth{};
+    truth.utime = 0;
+    truth.step = 0;
+    std::vector<unsigned char> bytes(static_cast<std::size_t>(truth.getEncodedSize()));
+    truth.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    record(nimble::contract::channels::kTruth, bytes, received_ns + 40000);
+    const std::vector<int64_t> t = times();
+    REQUIRE(t.size() == 3);
+    CHECK(t[1] - t[0] >= 39);
+    CHECK(t[1] - t[0] <= 41);
+    CHECK(t[2] - t[1] == 1000);  // the tick of 1 ms, received 5 ms after the truth
+  }
   std::remove(file.c_str());
 }
 
