@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -36,6 +37,8 @@ std::vector<std::string> equation_letters(Structure s) {
     case Structure::kLateral3: return {"L", "Y"};
     case Structure::kLateral4: return {"L", "N", "Y"};
     case Structure::kLongitudinal: return {"M", "X", "Z"};
+    case Structure::kBlackbox3:
+    case Structure::kBlackbox4: return {};  // no force or moment equations: rows of A and B
   }
   return {};
 }
@@ -46,17 +49,25 @@ std::vector<std::string> derivative_states(Structure s) {
     case Structure::kLateral3: return {"p", "v"};
     case Structure::kLateral4: return {"p", "r", "v"};
     case Structure::kLongitudinal: return {"q", "u", "w"};
+    case Structure::kBlackbox3: return {"p", "v", "phi"};
+    case Structure::kBlackbox4: return {"p", "r", "v", "phi"};
   }
   return {};
 }
 
 }  // namespace
 
+bool is_blackbox(Structure s) { return s == Structure::kBlackbox3 || s == Structure::kBlackbox4; }
+
+bool has_yaw_rate(Structure s) { return s == Structure::kLateral4 || s == Structure::kBlackbox4; }
+
 std::string to_string(Structure s) {
   switch (s) {
     case Structure::kLateral3: return "lateral3";
     case Structure::kLateral4: return "lateral4";
     case Structure::kLongitudinal: return "longitudinal";
+    case Structure::kBlackbox3: return "blackbox3";
+    case Structure::kBlackbox4: return "blackbox4";
   }
   return "?";
 }
@@ -65,6 +76,8 @@ Structure structure_from_string(const std::string& name) {
   if (name == "lateral3") return Structure::kLateral3;
   if (name == "lateral4") return Structure::kLateral4;
   if (name == "longitudinal") return Structure::kLongitudinal;
+  if (name == "blackbox3") return Structure::kBlackbox3;
+  if (name == "blackbox4") return Structure::kBlackbox4;
   throw std::invalid_argument("unknown structure '" + name + "'");
 }
 
@@ -73,8 +86,10 @@ const std::vector<std::string>& state_names(Structure s) {
   static const std::vector<std::string> lat4{"p", "r", "v", "phi"};
   static const std::vector<std::string> lon{"q", "u", "w", "theta"};
   switch (s) {
-    case Structure::kLateral3: return lat3;
-    case Structure::kLateral4: return lat4;
+    case Structure::kLateral3:
+    case Structure::kBlackbox3: return lat3;
+    case Structure::kLateral4:
+    case Structure::kBlackbox4: return lat4;
     case Structure::kLongitudinal: return lon;
   }
   return lat3;
@@ -85,8 +100,10 @@ const std::vector<std::string>& state_units(Structure s) {
   static const std::vector<std::string> lat4{"rad/s", "rad/s", "m/s", "rad"};
   static const std::vector<std::string> lon{"rad/s", "m/s", "m/s", "rad"};
   switch (s) {
-    case Structure::kLateral3: return lat3;
-    case Structure::kLateral4: return lat4;
+    case Structure::kLateral3:
+    case Structure::kBlackbox3: return lat3;
+    case Structure::kLateral4:
+    case Structure::kBlackbox4: return lat4;
     case Structure::kLongitudinal: return lon;
   }
   return lat3;
@@ -94,6 +111,12 @@ const std::vector<std::string>& state_units(Structure s) {
 
 std::vector<std::string> stability_derivative_names(Structure s) {
   std::vector<std::string> out;
+  if (is_blackbox(s)) {
+    for (const auto& row : state_names(s)) {
+      for (const auto& column : state_names(s)) out.push_back("a_" + row + "_" + column);
+    }
+    return out;
+  }
   for (const auto& eq : equation_letters(s)) {
     for (const auto& x : derivative_states(s)) out.push_back(eq + x);
   }
@@ -103,6 +126,10 @@ std::vector<std::string> stability_derivative_names(Structure s) {
 std::vector<std::string> control_derivative_names(Structure s, const std::string& input) {
   const InputInfo& info = input_info(input);
   std::vector<std::string> out;
+  if (is_blackbox(s)) {
+    for (const auto& row : state_names(s)) out.push_back("b_" + row + "_" + info.suffix);
+    return out;
+  }
   for (const auto& eq : equation_letters(s)) out.push_back(eq + "_" + info.suffix);
   return out;
 }
@@ -131,7 +158,8 @@ DerivativeModel model_from_config(ConfigMap& map) {
   m.file = map.file();
   m.name = map.get_string("name");
   m.source = map.get_string("source");
-  m.structure = structure_from_string(map.get_enum("structure", {"lateral3", "lateral4", "longitudinal"}));
+  m.structure = structure_from_string(
+      map.get_enum("structure", {"lateral3", "lateral4", "longitudinal", "blackbox3", "blackbox4"}));
 
   const std::string vehicle = map.get_string("vehicle");
   const std::filesystem::path vehicle_path(vehicle);
@@ -202,6 +230,10 @@ DerivativeModel model_from_config(ConfigMap& map) {
     pub.finish();
   }
   if (map.has("effects")) {
+    if (is_blackbox(m.structure)) {
+      map.fail("effects",
+               "a black-box structure takes no effects: they act on forces and moments, which it does not have");
+    }
     ConfigMap effects = map.get_map("effects");
     for (const auto& name : effects.keys()) {
       ConfigMap params = effects.get_map(name);
@@ -212,6 +244,9 @@ DerivativeModel model_from_config(ConfigMap& map) {
   }
   if (map.has("terms")) {
     if (m.structure == Structure::kLongitudinal) map.fail("terms", "the longitudinal structure takes no terms");
+    if (is_blackbox(m.structure)) {
+      map.fail("terms", "a black-box structure takes no terms: its rows are state derivatives, not forces or moments");
+    }
     m.terms = terms_from_config(map, "terms", model_term_equations(m.structure), term_signal_names());
   }
   map.finish();
@@ -222,7 +257,9 @@ std::vector<std::string> model_term_equations(Structure s) {
   switch (s) {
     case Structure::kLateral3: return {"L", "Y"};
     case Structure::kLateral4: return {"L", "N", "Y"};
-    case Structure::kLongitudinal: return {};
+    case Structure::kLongitudinal:
+    case Structure::kBlackbox3:
+    case Structure::kBlackbox4: return {};
   }
   return {};
 }
@@ -252,6 +289,15 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
   const auto d = [&](const std::string& key) { return model.at(key); };
 
   switch (model.structure) {
+    case Structure::kBlackbox3:
+    case Structure::kBlackbox4: {
+      // Every entry free (Eq C.30 / C.37): read as they are.
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t k = 0; k < n; ++k) ss.A(i, k) = d("a_" + ss.states[i] + "_" + ss.states[k]);
+        for (std::size_t j = 0; j < m; ++j) ss.B(i, j) = d(control_derivative_names(model.structure, ss.inputs[j])[i]);
+      }
+      break;
+    }
     case Structure::kLateral3: {
       // x = [p v phi]; pdot = Izz/Ic * L, vdot = Y/m + w0 p + g cos(theta0) cos(phi0) phi.
       const double kL = Izz / Ic;
@@ -322,6 +368,62 @@ Eigen::VectorXd term_state_gain(const DerivativeModel& model, const Vehicle& veh
   }
   throw std::invalid_argument("model " + model.name + " (" + to_string(model.structure) + ") has no term equation '" +
                               equation + "'");
+}
+
+DerivativeModel plant_equivalent(const DerivativeModel& model, const Vehicle& vehicle,
+                                 double* kinematic_row_difference) {
+  if (kinematic_row_difference) *kinematic_row_difference = 0.0;
+  if (!is_blackbox(model.structure)) return model;
+  const bool yaw = has_yaw_rate(model.structure);
+  const Trim& t = model.trim;
+  const double mass = vehicle.mass_kg, Ic = vehicle.Ic();
+  const double to_L = Ic / vehicle.Izz_kgm2, to_N = Ic / vehicle.Ixx_kgm2;
+  DerivativeModel out = model;
+  out.structure = yaw ? Structure::kLateral4 : Structure::kLateral3;
+  out.coupling = RollYawCoupling::kDecoupled;
+  out.derivatives.clear();
+  out.published_sigma.clear();
+  const auto a = [&](const std::string& row, const std::string& column) { return model.at("a_" + row + "_" + column); };
+  // The plant's own linearised terms of v-dot (Eq C.10): w0 p - u0 r + g cos(theta0) cos(phi0) phi.
+  const double own_vp = t.w0_mps, own_vr = -t.u0_mps;
+  const double own_vphi = vehicle.gravity_mps2 * std::cos(t.theta0_rad) * std::cos(t.phi0_rad);
+  std::vector<std::string> xs{"p", "v"};
+  if (yaw) xs = {"p", "r", "v"};
+  for (const auto& x : xs) {
+    out.derivatives["L" + x] = to_L * a("p", x);
+    if (yaw) out.derivatives["N" + x] = to_N * a("r", x);
+    const double own = x == "p" ? own_vp : x == "r" ? own_vr : 0.0;
+    out.derivatives["Y" + x] = mass * (a("v", x) - own);
+  }
+  for (const auto& input : model.inputs) {
+    const std::string suffix = control_derivative_names(Structure::kLateral3, input)[0].substr(2);
+    out.derivatives["L_" + suffix] = to_L * model.at("b_p_" + suffix);
+    if (yaw) out.derivatives["N_" + suffix] = to_N * model.at("b_r_" + suffix);
+    out.derivatives["Y_" + suffix] = mass * model.at("b_v_" + suffix);
+  }
+  // The phi column: a moment or force proportional to the roll angle's deviation from trim.
+  char phi_text[64];
+  std::snprintf(phi_text, sizeof phi_text, "phi - %.17g", t.phi0_rad);
+  const TermExpression dphi = TermExpression::parse(t.phi0_rad == 0.0 ? std::string("phi") : std::string(phi_text));
+  const auto add_term = [&](const std::string& equation, double coefficient) {
+    if (coefficient != 0.0) out.terms.push_back(Term{equation, dphi, coefficient, model.file});
+  };
+  add_term("L", to_L * a("p", "phi"));
+  if (yaw) add_term("N", to_N * a("r", "phi"));
+  add_term("Y", mass * (a("v", "phi") - own_vphi));
+  if (kinematic_row_difference) {
+    double worst = 0.0;
+    for (const auto& x : state_names(model.structure)) {
+      double kinematic = x == "p" ? 1.0 : 0.0;
+      if (x == "r") kinematic = std::tan(t.theta0_rad) * std::cos(t.phi0_rad);
+      worst = std::max(worst, std::abs(a("phi", x) - kinematic));
+    }
+    for (const auto& input : model.inputs) {
+      worst = std::max(worst, std::abs(model.at(control_derivative_names(model.structure, input).back())));
+    }
+    *kinematic_row_difference = worst;
+  }
+  return out;
 }
 
 DiscreteStateSpace discretize_zoh(const StateSpace& ss, double dt_s) {

@@ -6,6 +6,8 @@
 ///  - lateral3:     x = [p v phi]        (thesis Eq 8.4 / paper Eq B.1)
 ///  - lateral4:     x = [p r v phi]      (thesis Eq B.16, or Eq 8.7 with decoupled L and N)
 ///  - longitudinal: x = [q u w theta]    (thesis Eq B.15 / E.11)
+///  - blackbox3:    x = [p v phi]        (thesis Eq 8.6 / C.37: every entry of A and B free)
+///  - blackbox4:    x = [p r v phi]      (thesis Eq 8.5 / C.30: every entry of A and B free)
 /// Inputs are any of delta_f [rad/s] (flapping-frequency difference),
 /// delta_t [%] (throttle, deviation from trim), delta_d [rad] (dihedral),
 /// delta_w [rad] (wing root), each in the order the model file lists them.
@@ -24,7 +26,14 @@
 
 namespace nimble {
 
-enum class Structure { kLateral3, kLateral4, kLongitudinal };
+enum class Structure { kLateral3, kLateral4, kLongitudinal, kBlackbox3, kBlackbox4 };
+
+/// True for the black-box structures: their parameters are the entries of A and B themselves,
+/// named a_<row>_<column> and b_<row>_<input suffix> by the states (a_p_v: the v column of the
+/// p-dot row; b_v_df: the delta_f column of the v-dot row), in SI units of the state space.
+bool is_blackbox(Structure s);
+/// True if the structure has the yaw rate r (lateral4, blackbox4).
+bool has_yaw_rate(Structure s);
 
 /// How the roll and yaw moment equations are combined in the lateral4 structure.
 enum class RollYawCoupling {
@@ -40,9 +49,11 @@ Structure structure_from_string(const std::string& name);
 const std::vector<std::string>& state_names(Structure s);
 /// Units of the states, same order.
 const std::vector<std::string>& state_units(Structure s);
-/// Names of the stability derivatives the structure needs, e.g. {"Lp","Lv","Yp","Yv"}.
+/// Names of the stability derivatives the structure needs, e.g. {"Lp","Lv","Yp","Yv"}; for a
+/// black-box structure the entries of A, row by row (a_p_p, a_p_v, a_p_phi, a_v_p, ...).
 std::vector<std::string> stability_derivative_names(Structure s);
-/// Names of the control derivatives for `input`, e.g. delta_f -> {"L_df","Y_df"}.
+/// Names of the control derivatives for `input`, e.g. delta_f -> {"L_df","Y_df"}; for a
+/// black-box structure the entries of B's column, one per state (b_p_df, b_v_df, b_phi_df).
 std::vector<std::string> control_derivative_names(Structure s, const std::string& input);
 /// Inputs a model may use.
 const std::vector<std::string>& known_inputs();
@@ -89,7 +100,7 @@ struct DerivativeModel {
 };
 
 /// Equations a `terms:` entry of a model of structure `s` may name: L, Y (lateral3); L, N, Y
-/// (lateral4); none for the longitudinal structure.
+/// (lateral4); none for the longitudinal and black-box structures.
 std::vector<std::string> model_term_equations(Structure s);
 
 /// Continuous-time linear state-space model xdot = A x + B u.
@@ -113,6 +124,18 @@ DerivativeModel load_model(const std::string& file);
 
 /// Builds A and B from the derivatives, the trim and the vehicle (thesis Eqs B.15, B.16).
 StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicle);
+
+/// The lateral model the plant flies for a black-box model (blackbox3 -> lateral3, blackbox4 ->
+/// lateral4 with decoupled L and N, Eq 8.7), equal to it in the plant's linearised equations
+/// about the model's trim: the p, r and v rows become derivatives (L = Ic/Izz a_p_*, N = Ic/Ixx
+/// a_r_*, Y = m (a_v_* less the plant's own w0 p - u0 r), and the phi column, which no derivative
+/// has, a term on phi less the plant's own gravity for Y. The phi-dot row is not flown: the
+/// plant's kinematics give phi-dot (1 for p, tan(theta0) cos(phi0) for r, 0 for the rest);
+/// `kinematic_row_difference` (if given) receives the largest difference of the model's row from
+/// those (0 for a model whose phi-dot row is the kinematic one). Any other model is returned as
+/// it is.
+DerivativeModel plant_equivalent(const DerivativeModel& model, const Vehicle& vehicle,
+                                 double* kinematic_row_difference = nullptr);
 
 /// How a unit force or moment in `equation` (L, N [N m]; Y [N]) enters the state derivative of a
 /// lateral model, in the order of its states (the column of B a control derivative of 1 has):

@@ -177,7 +177,7 @@ std::string terms_markdown() {
 
 PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<DerivativeModel>& longitudinal,
                        const Vehicle& vehicle, const PlantConfig& config)
-    : lat_(lateral), lon_(longitudinal), veh_(vehicle), cfg_(config), rng_(config.seed) {
+    : lat_(plant_equivalent(lateral, vehicle)), lon_(longitudinal), veh_(vehicle), cfg_(config), rng_(config.seed) {
   if (lat_.structure == Structure::kLongitudinal) {
     throw std::invalid_argument("plant: model '" + lat_.name + "' is longitudinal; the plant needs a lateral model");
   }
@@ -240,7 +240,7 @@ PlantModel::PlantModel(const DerivativeModel& lateral, const std::optional<Deriv
   const std::vector<Term> effect_terms =
       effects::effect_terms(cfg_.effects, lat_.trim);  // term effects (effects/term_effect.h)
   terms.insert(terms.end(), effect_terms.begin(), effect_terms.end());
-  terms.insert(terms.end(), lateral.terms.begin(), lateral.terms.end());
+  terms.insert(terms.end(), lat_.terms.begin(), lat_.terms.end());  // a black-box model's phi column among them
   for (const Term& term : terms) {
     const auto& eqs = plant_term_equations();
     term_programs_.emplace_back(term.expression, term_signal_names());
