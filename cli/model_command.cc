@@ -72,6 +72,14 @@ void print_text(const DerivativeModel& model, const Vehicle& vehicle, const Stat
   print_matrix("A", ss.A, ss.states, state_cols);
   std::printf("\n");
   print_matrix("B", ss.B, ss.states, input_cols);
+  if (is_blackbox(model.structure)) {
+    double kinematic = 0.0;
+    plant_equivalent(model, vehicle, &kinematic);
+    std::printf(
+        "\nthe plant flies its p, r and v rows; its phi_dot row differs from the plant's kinematics "
+        "(1 for p, tan(theta0) cos(phi0) for r, 0 else) by at most %.3g\n",
+        kinematic);
+  }
 
   std::printf("\neigenvalues [1/s]\n");
   for (const auto& z : eig) std::printf("  %s\n", format_complex(z).c_str());
@@ -173,6 +181,11 @@ std::string to_json(const DerivativeModel& model, const Vehicle& vehicle, const 
                    {"eigenvalues", complex_list_json(eig)}};
   j["modes"] = OrderedJson::array();
   for (const auto& m : modes) j["modes"].push_back(mode_json(m, ss));
+  if (is_blackbox(model.structure)) {
+    double kinematic = 0.0;
+    plant_equivalent(model, vehicle, &kinematic);
+    j["kinematic_row_difference"] = kinematic;
+  }
   if (!model.published_eigenvalues.empty()) {
     const auto errors = published_errors(model.published_eigenvalues, eig);
     j["published"] = {{"eigenvalues", complex_list_json(model.published_eigenvalues)}, {"relative_errors", errors}};

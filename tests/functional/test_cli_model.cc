@@ -106,3 +106,40 @@ TEST_CASE("rig model errors go to stderr with exit code 2", "[cli]") {
     CHECK(run_rig("nonsense").exit_code == 2);
   }
 }
+
+TEST_CASE("rig model on a black-box model: A and B as written, and how far its phi-dot row is from kinematics",
+          "[cli]") {
+  // Set 1's A and B (from rig model itself) written as blackbox3, with a phi-dot row 2 % off.
+  const Result grey = run_rig("model " + kConfigs + "models/nimble_lateral_set1.yaml --json");
+  REQUIRE(grey.exit_code == 0);
+  const YAML::Node g = YAML::Load(grey.out);
+  const std::vector<std::string> states{"p", "v", "phi"}, inputs{"df", "dt"};
+  const std::string file = nimble::test::scratch_file("cli_model", "bb3.yaml");
+  std::ofstream out(file);
+  out << "name: bb3\nsource: set 1 as a black box\nstructure: blackbox3\nvehicle: " << kConfigs
+      << "vehicles/nimble_no_wifi.yaml\ninputs: [delta_f, delta_t]\n"
+      << "trim: {u0_mps: 0.0, w0_mps: -0.30, theta0_rad: 0.0, phi0_rad: 0.0}\nderivatives:\n";
+  out.precision(17);
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double a = g["A"][i][k].as<double>() * (i == 2 && k == 0 ? 0.98 : 1.0);
+      out << "  a_" << states[i] << "_" << states[k] << ": " << a << "\n";
+    }
+    for (std::size_t j = 0; j < 2; ++j)
+      out << "  b_" << states[i] << "_" << inputs[j] << ": " << g["B"][i][j].as<double>() << "\n";
+  }
+  out.close();
+  const Result r = run_rig("model " + file + " --json");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const YAML::Node j = YAML::Load(r.out);
+  CHECK(j["structure"].as<std::string>() == "blackbox3");
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (std::size_t k = 0; k < 3; ++k) CHECK(j["A"][i][k].as<double>() == g["A"][i][k].as<double>());
+  }
+  CHECK(j["A"][2][0].as<double>() == Approx(0.98));
+  CHECK(j["kinematic_row_difference"].as<double>() == Approx(0.02));
+  CHECK_FALSE(g["kinematic_row_difference"]);  // a grey-box model has none
+  const Result text = run_rig("model " + file);
+  CHECK(text.out.find("its phi_dot row differs from the plant's kinematics") != std::string::npos);
+}
