@@ -35,9 +35,11 @@ int run_identify_command(const std::vector<std::string>& args) {
                           "Section IV), prints the parameters with their standard deviations, flagged correlations,\n"
                           "accuracy metrics, residual whiteness, eigenvalues and modes, and state PSDs.");
   cl->add_option("data", csv, "flight data: identification CSV or a rig log (.lcmlog)")->required();
-  cmdline::each_value(cl->add_option("--structure", "model structure: lateral3 (default) or lateral4")
+  cmdline::each_value(cl->add_option("--structure",
+                                     "model structure: lateral3 (default), lateral4, or the black-box "
+                                     "blackbox3, blackbox4 (every entry of A and B free)")
                           ->type_name("NAME")
-                          ->check(CLI::IsMember({"lateral3", "lateral4"})),
+                          ->check(CLI::IsMember({"lateral3", "lateral4", "blackbox3", "blackbox4"})),
                       [&opt](const std::string& v) { opt.structure = structure_from_string(v); });
   cmdline::each_value(cl->add_option("--method",
                                      "estimator: wls (default, equation error), ols, or output-error (the "

@@ -18,7 +18,9 @@ const std::vector<std::string> kInputOrder{"delta_f", "delta_t", "delta_d", "del
 std::vector<std::string> equation_letters(Structure s) {
   if (s == Structure::kLateral3) return {"L", "Y"};
   if (s == Structure::kLateral4) return {"L", "N", "Y"};
-  throw std::invalid_argument("identification supports lateral3 and lateral4, not " + to_string(s));
+  if (is_blackbox(s)) return state_names(s);  // one equation per row of A and B, named by its state
+  throw std::invalid_argument("identification supports lateral3, lateral4, blackbox3 and blackbox4, not " +
+                              to_string(s));
 }
 
 std::string input_suffix(const std::string& input) {
@@ -194,10 +196,27 @@ std::vector<Equation> lateral_equations(Structure structure, const std::vector<s
   for (const auto& in : inputs) {
     if (!is_input(in)) throw std::invalid_argument("unknown input '" + in + "' (delta_f, delta_t, delta_d, delta_w)");
   }
+  std::vector<Equation> eqs;
+  if (is_blackbox(structure)) {
+    // Thesis Eq C.32-C.35 / C.38-C.40: each state derivative on every state and input, the
+    // parameters the entries of A and B themselves; no constant moves to the left-hand side.
+    std::vector<std::string> regressors = state_names(structure);
+    for (const auto& in : inputs) regressors.push_back(in);
+    for (const auto& row : state_names(structure)) {
+      Equation eq;
+      eq.name = row;
+      eq.dependent = row + "_dot";
+      eq.scale = 1.0;
+      eq.regressors = regressors;
+      for (const auto& column : state_names(structure)) eq.parameters.push_back("a_" + row + "_" + column);
+      for (const auto& in : inputs) eq.parameters.push_back("b_" + row + "_" + input_suffix(in));
+      eqs.push_back(std::move(eq));
+    }
+    return eqs;
+  }
   std::vector<std::string> regressors =
       structure == Structure::kLateral4 ? std::vector<std::string>{"p", "r", "v"} : std::vector<std::string>{"p", "v"};
   for (const auto& in : inputs) regressors.push_back(in);
-  std::vector<Equation> eqs;
   for (const auto& letter : letters) {
     Equation eq;
     eq.name = letter;
@@ -346,7 +365,8 @@ void fit_outputs(const IdentOptions& options, IdentResult& res) {
   for (const auto& eq : res.regression.equations) {
     OutputFit fit;
     fit.output = eq.equation.dependent;
-    fit.unit = (eq.equation.dependent == "v_dot_star") ? "m/s^2" : "rad/s^2";
+    const std::string& y = eq.equation.dependent;
+    fit.unit = (y == "v_dot_star" || y == "v_dot") ? "m/s^2" : y == "phi_dot" ? "rad/s" : "rad/s^2";
     fit.measured = eq.y / eq.equation.scale;
     fit.estimated = eq.fitted / eq.equation.scale;
     fit.metrics = fit_metrics(fit.measured, fit.estimated, static_cast<int>(eq.theta.size()));
@@ -370,7 +390,7 @@ void build_model(const FlightData& data, const Vehicle& vehicle, const std::stri
   m.coupling = RollYawCoupling::kDecoupled;
   m.inputs = res.inputs;
   m.trim = options.trim;
-  if (m.structure == Structure::kLateral3) m.trim.u0_mps = 0.0;  // not part of the lateral3 model
+  if (!has_yaw_rate(m.structure)) m.trim.u0_mps = 0.0;  // not part of a three-state model
   std::vector<std::string> model_names = stability_derivative_names(m.structure);
   for (const auto& in : m.inputs) {
     for (const auto& n : control_derivative_names(m.structure, in)) model_names.push_back(n);

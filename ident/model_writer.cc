@@ -20,6 +20,20 @@ std::string num(double x) {
 
 /// Unit of a dimensional derivative, e.g. "Lp" -> "N m s/rad", "Y_df" -> "N per rad/s".
 std::string derivative_unit(const std::string& name) {
+  if (name.rfind("a_", 0) == 0 || name.rfind("b_", 0) == 0) {
+    // A black-box entry a_<row>_<column> / b_<row>_<input>: the row's derivative per the column.
+    const std::size_t split = name.find('_', 2);
+    const std::string row = name.substr(2, split - 2), column = name.substr(split + 1);
+    const auto rate_unit = [](const std::string& state) {
+      return state == "v" ? std::string("m/s^2") : state == "phi" ? std::string("rad/s") : std::string("rad/s^2");
+    };
+    const auto state_unit = [](const std::string& state) {
+      return state == "v" ? std::string("m/s") : state == "phi" ? std::string("rad") : std::string("rad/s");
+    };
+    if (name[0] == 'a') return rate_unit(row) + " per " + state_unit(column);
+    const std::string input = column == "df" ? "rad/s" : column == "dt" ? "%" : "rad";
+    return rate_unit(row) + " per " + input;
+  }
   const char letter = name.empty() ? '?' : name[0];
   const bool moment = letter == 'L' || letter == 'N' || letter == 'M';
   const std::string force = moment ? "N m" : "N";

@@ -91,7 +91,9 @@ std::string identification_text(const IdentResult& r) {
   out += fmt("trim       u0 %.4g m/s, w0 %.4g m/s, theta0 %.4g rad, phi0 %.4g rad\n\n", r.model.trim.u0_mps,
              r.model.trim.w0_mps, r.model.trim.theta0_rad, r.model.trim.phi0_rad);
 
-  out += "parameters (dimensional: L, N in N m, Y in N per unit of the regressor)\n";
+  out += is_blackbox(r.model.structure)
+             ? "parameters (entries of A and B: a_<row>_<column>, b_<row>_<input>, in the state space's units)\n"
+             : "parameters (dimensional: L, N in N m, Y in N per unit of the regressor)\n";
   out += "  sigma: residuals taken as white (thesis formula); sigma_c: allowing coloured residuals (Newey-West)\n";
   out += fmt("  %-12s %13s %12s %10s %12s %10s\n", "name", "value", "sigma", "100s/|v|", "sigma_c", "100s_c/|v|");
   for (const auto& name : r.parameter_order) {
