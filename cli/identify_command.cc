@@ -11,6 +11,7 @@
 
 #include "cmdline/args.h"
 #include "cli/commands.h"
+#include "core/json_line.h"
 #include "core/model.h"
 #include "core/vehicle.h"
 #include "ident/flight_data.h"
@@ -24,6 +25,33 @@
 #include "plots/gnuplot.h"
 
 namespace nimble::cli {
+
+namespace {
+
+/// OLS beside WLS of the same record (--ols-beside-wls): the text and the JSON value.
+struct MethodsComparison {
+  std::string text, json;
+};
+
+MethodsComparison compare_methods(const ident::FlightData& data, const Vehicle& vehicle,
+                                  const std::string& vehicle_file, const ident::IdentOptions& opt) {
+  ident::IdentOptions ols = opt, wls = opt;
+  ols.method = ident::Method::kOls;
+  wls.method = ident::Method::kWls;
+  const ident::IdentResult a = ident::identify(data, vehicle, vehicle_file, ols);
+  const ident::IdentResult b = ident::identify(data, vehicle, vehicle_file, wls);
+  return {ident::methods_comparison_text(a, b), ident::methods_comparison_json(a, b)};
+}
+
+/// The report's JSON with the comparison under "ols_beside_wls" (when there is one).
+std::string with_comparison(const std::string& report, const MethodsComparison& comparison) {
+  if (comparison.json.empty()) return report;
+  OrderedJson j = OrderedJson::parse(report);
+  j["ols_beside_wls"] = OrderedJson::parse(comparison.json);
+  return json_line(j);
+}
+
+}  // namespace
 
 int run_identify_command(const std::vector<std::string>& args) {
   std::string csv, vehicle_file, json, model_out, plots;
@@ -94,6 +122,10 @@ int run_identify_command(const std::vector<std::string>& args) {
                  "fit the generic terms of this model file's terms: section alongside the derivatives (their "
                  "coefficients are regressors, named <equation>:<expression>; docs/models.md, \"Terms\")")
       ->type_name("MODEL");
+  bool ols_beside_wls = false;
+  cl->add_flag("--ols-beside-wls", ols_beside_wls,
+               "also identify the record by OLS and by WLS and print them side by side, estimate, |sigma| and "
+               "100 |sigma/estimate| (thesis Appendix D); JSON: ols_beside_wls");
   cl.add_json(json, "the report");
   cl->add_option("--model-out", model_out, "write the identified model as a model YAML file")->type_name("FILE");
   cl.add_plots(plots, "");
@@ -112,6 +144,8 @@ int run_identify_command(const std::vector<std::string>& args) {
   warn_damage("rig identify", csv, damage);
   warn_undecodable("rig identify", csv, undecodable);
   const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
+  const MethodsComparison comparison =
+      ols_beside_wls ? compare_methods(data, vehicle, vehicle_file, opt) : MethodsComparison{};
 
   if (!model_out.empty()) {
     ident::write_model_yaml(
@@ -125,11 +159,13 @@ int run_identify_command(const std::vector<std::string>& args) {
   if (!plots.empty()) pngs = ident::plot_identification(result, plots);
 
   if (json != "-") std::cout << ident::identification_text(result);
+  if (json != "-" && !comparison.text.empty()) std::cout << "\n" << comparison.text;
   if (!model_out.empty() && json != "-") std::cout << "\nmodel written to " << model_out << "\n";
   for (const auto& p : pngs) {
     if (json != "-") std::cout << "plot " << p << "\n";
   }
-  if (!json.empty()) cmdline::write_json(json, ident::identification_json(result, model_out, pngs));
+  if (!json.empty())
+    cmdline::write_json(json, with_comparison(ident::identification_json(result, model_out, pngs), comparison));
   return 0;
 }
 

@@ -2,6 +2,7 @@
 #include "ident/report_numbers.h"
 
 #include <cmath>
+#include <stdexcept>
 #include <cstdarg>
 #include <cstdio>
 
@@ -144,6 +145,32 @@ std::string identification_text(const IdentResult& r) {
   }
   for (const auto& note : r.notes) {
     if (note.find(" PSD skipped") != std::string::npos) out += "  " + note + "\n";
+  }
+  return out;
+}
+
+namespace {
+
+void require_comparable(const IdentResult& ols, const IdentResult& wls) {
+  if (ols.options.method != Method::kOls || wls.options.method != Method::kWls ||
+      ols.parameter_order != wls.parameter_order) {
+    throw std::invalid_argument("OLS beside WLS: needs an OLS and a WLS identification of the same parameters");
+  }
+}
+
+}  // namespace
+
+std::string methods_comparison_text(const IdentResult& ols, const IdentResult& wls) {
+  require_comparable(ols, wls);
+  std::string out = "OLS beside WLS (thesis Appendix D; sigma by the white-residual formula)\n";
+  out += fmt("  %-12s %12s %10s %12s   %12s %10s %12s\n", "name", "OLS", "|sigma|", "100|s/v|", "WLS", "|sigma|",
+             "100|s/v|");
+  for (const auto& name : ols.parameter_order) {
+    const ParameterEstimate& a = ols.parameters.at(name);
+    const ParameterEstimate& b = wls.parameters.at(name);
+    const auto rel = [](const ParameterEstimate& e) { return 100.0 * std::fabs(e.sigma / e.value); };
+    out += fmt("  %-12s %12.4e %10.3e %12.3g   %12.4e %10.3e %12.3g\n", name.c_str(), a.value, std::fabs(a.sigma),
+               rel(a), b.value, std::fabs(b.sigma), rel(b));
   }
   return out;
 }

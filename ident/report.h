@@ -23,6 +23,14 @@ std::string identification_text(const IdentResult& result);
 std::string identification_json(const IdentResult& result, const std::string& model_out,
                                 const std::vector<std::string>& plots);
 
+/// The same record identified by OLS and by WLS, side by side as thesis Appendix D prints them
+/// (Tables D.1, D.2): per parameter the estimate, |sigma| and 100 |sigma / estimate| of each, with
+/// sigma by the thesis's white-residual formula.
+/// @throws std::invalid_argument if the two are not OLS and WLS of the same parameters.
+std::string methods_comparison_text(const IdentResult& ols, const IdentResult& wls);
+/// The same as a JSON value: [{name, ols: {value, sigma, rel_sigma_pct}, wls: {...}}].
+std::string methods_comparison_json(const IdentResult& ols, const IdentResult& wls);
+
 /// Human-readable report of an open-loop validation: metrics and whiteness per state derivative.
 std::string validation_text(const ValidationResult& result);
 

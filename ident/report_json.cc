@@ -163,6 +163,19 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
   return json_line(j);
 }
 
+std::string methods_comparison_json(const IdentResult& ols, const IdentResult& wls) {
+  methods_comparison_text(ols, wls);  // the same checks
+  OrderedJson rows = OrderedJson::array();
+  for (const auto& name : ols.parameter_order) {
+    const auto one = [](const ParameterEstimate& e) {
+      return OrderedJson{
+          {"value", e.value}, {"sigma", std::fabs(e.sigma)}, {"rel_sigma_pct", 100.0 * std::fabs(e.sigma / e.value)}};
+    };
+    rows.push_back({{"name", name}, {"ols", one(ols.parameters.at(name))}, {"wls", one(wls.parameters.at(name))}});
+  }
+  return json_line(rows);
+}
+
 std::string validation_json(const ValidationResult& r, const std::vector<std::string>& plots) {
   OrderedJson j = {{"source", r.source},         {"model", r.model.name},
                    {"model_file", r.model.file}, {"structure", to_string(r.model.structure)},

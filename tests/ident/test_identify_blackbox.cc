@@ -1,15 +1,18 @@
-// The black-box structures (thesis Eq 8.5 / 8.6, Appendix C.2) identified by equation error:
-// on a synthetic flight of set 1, whose A and B a three-state black box contains, every entry
-// comes back within its own coloured-residual sigma of set 1's.
+// The thesis's other identifications: the black-box structures (Eq 8.5 / 8.6, Appendix C.2) by
+// equation error, where on a synthetic flight of set 1 (whose A and B a three-state black box
+// contains) every entry comes back within its own coloured-residual sigma of set 1's; and OLS
+// beside WLS (Appendix D).
 
 #include <cmath>
 #include <string>
 
 #include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "core/model.h"
 #include "ident/identify.h"
 #include "ident/model_writer.h"
+#include "ident/report.h"
 #include "ident/synthetic.h"
 #include "synthetic_flight.h"
 #include "tests/support/scratch.h"
@@ -73,4 +76,34 @@ TEST_CASE("a black-box structure takes no term and no output error fit, and says
   o.terms.clear();
   o.method = Method::kOutputError;
   CHECK_THROWS_WITH(identify(data, vehicle, truth.vehicle_file, o), Catch::Contains("lateral3 structure only"));
+}
+
+TEST_CASE("OLS beside WLS (Appendix D): every parameter with both estimates, sigmas and relative sigmas",
+          "[identify]") {
+  const DerivativeModel truth = set1_model();
+  const Vehicle vehicle = load_vehicle(truth.vehicle_file);
+  const FlightData data = simulate_synthetic(truth, vehicle, identification_flight(11));
+  IdentOptions o;
+  o.trim = truth.trim;
+  o.method = Method::kOls;
+  const IdentResult ols = identify(data, vehicle, truth.vehicle_file, o);
+  o.method = Method::kWls;
+  const IdentResult wls = identify(data, vehicle, truth.vehicle_file, o);
+  const std::string text = methods_comparison_text(ols, wls);
+  const YAML::Node rows = YAML::Load(methods_comparison_json(ols, wls));
+  REQUIRE(rows.size() == ols.parameter_order.size());
+  for (std::size_t i = 0; i < ols.parameter_order.size(); ++i) {
+    const std::string& name = ols.parameter_order[i];
+    INFO(name);
+    CHECK(text.find("\n  " + name + " ") != std::string::npos);
+    CHECK(rows[i]["name"].as<std::string>() == name);
+    CHECK(rows[i]["ols"]["value"].as<double>() == ols.parameters.at(name).value);
+    CHECK(rows[i]["wls"]["sigma"].as<double>() == std::fabs(wls.parameters.at(name).sigma));
+    CHECK(rows[i]["wls"]["rel_sigma_pct"].as<double>() ==
+          Approx(100.0 * std::fabs(wls.parameters.at(name).sigma / wls.parameters.at(name).value)));
+    // Two estimators of the same record: the same parameter, within their coloured spread.
+    const double spread = ols.parameters.at(name).sigma_coloured + wls.parameters.at(name).sigma_coloured;
+    CHECK(std::fabs(ols.parameters.at(name).value - wls.parameters.at(name).value) < 3.0 * spread);
+  }
+  CHECK_THROWS_WITH(methods_comparison_text(wls, ols), Catch::Contains("needs an OLS and a WLS identification"));
 }
