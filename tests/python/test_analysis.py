@@ -64,6 +64,22 @@ def test_identify_gives_rig_identify_and_numpy_least_squares(train):
         assert np.allclose(eq["y"], eq["scale"] * signals[eq["dependent"]])
 
 
+def test_identify_blackbox_gives_rig_identify_and_an_unconstrained_least_squares_fit(train):
+    """A black box (thesis Eq 8.6): every state derivative on every state and input, unscaled."""
+    got = nimble_rig.identify(train["log"], structure="blackbox3", method="ols")
+    assert without_arrays(got) == without_arrays(rig_json("identify", train["log"], "--structure", "blackbox3",
+                                                          "--method", "ols"))
+    signals = got["signals"]
+    assert [eq["dependent"] for eq in got["equations"]] == ["p_dot", "v_dot", "phi_dot"]
+    for eq in got["equations"]:
+        assert eq["scale"] == 1.0 and eq["regressors"] == ["p", "v", "phi", "delta_f", "delta_t"]
+        x = np.column_stack([signals[r] for r in eq["regressors"]])
+        theta, *_ = np.linalg.lstsq(x, signals[eq["dependent"]], rcond=None)
+        ours = np.array([got["parameters"][p]["value"] for p in eq["parameters"]])
+        np.testing.assert_allclose(ours, theta, rtol=1e-7, atol=1e-12, err_msg=eq["name"])
+    assert got["parameters"]["a_phi_p"]["value"] == pytest.approx(1.0, abs=0.02)  # the kinematic row
+
+
 def test_identify_takes_a_csv_file_and_a_dict_of_arrays_alike(train, tmp_path):
     from_csv = nimble_rig.identify(train["csv"], model_out=str(tmp_path / "m.yaml"))
     from_dict = nimble_rig.identify(csv_arrays(train["csv"]))
