@@ -33,13 +33,17 @@ struct MethodsComparison {
   std::string text, json;
 };
 
+/// `result` is the command's own identification: it serves as the OLS or the WLS one when it is
+/// either, so that only the other is run again.
 MethodsComparison compare_methods(const ident::FlightData& data, const Vehicle& vehicle,
-                                  const std::string& vehicle_file, const ident::IdentOptions& opt) {
-  ident::IdentOptions ols = opt, wls = opt;
-  ols.method = ident::Method::kOls;
-  wls.method = ident::Method::kWls;
-  const ident::IdentResult a = ident::identify(data, vehicle, vehicle_file, ols);
-  const ident::IdentResult b = ident::identify(data, vehicle, vehicle_file, wls);
+                                  const std::string& vehicle_file, const ident::IdentResult& result) {
+  const auto by = [&](ident::Method method) {
+    if (result.options.method == method) return result;
+    ident::IdentOptions o = result.options;
+    o.method = method;
+    return ident::identify(data, vehicle, vehicle_file, o);
+  };
+  const ident::IdentResult a = by(ident::Method::kOls), b = by(ident::Method::kWls);
   return {ident::methods_comparison_text(a, b), ident::methods_comparison_json(a, b)};
 }
 
@@ -145,7 +149,7 @@ int run_identify_command(const std::vector<std::string>& args) {
   warn_undecodable("rig identify", csv, undecodable);
   const ident::IdentResult result = ident::identify(data, vehicle, vehicle_file, opt);
   const MethodsComparison comparison =
-      ols_beside_wls ? compare_methods(data, vehicle, vehicle_file, opt) : MethodsComparison{};
+      ols_beside_wls ? compare_methods(data, vehicle, vehicle_file, result) : MethodsComparison{};
 
   if (!model_out.empty()) {
     ident::write_model_yaml(

@@ -113,7 +113,7 @@ std::vector<std::string> stability_derivative_names(Structure s) {
   std::vector<std::string> out;
   if (is_blackbox(s)) {
     for (const auto& row : state_names(s)) {
-      for (const auto& column : state_names(s)) out.push_back("a_" + row + "_" + column);
+      for (const auto& column : state_names(s)) out.push_back(blackbox_a_name(row, column));
     }
     return out;
   }
@@ -127,7 +127,7 @@ std::vector<std::string> control_derivative_names(Structure s, const std::string
   const InputInfo& info = input_info(input);
   std::vector<std::string> out;
   if (is_blackbox(s)) {
-    for (const auto& row : state_names(s)) out.push_back("b_" + row + "_" + info.suffix);
+    for (const auto& row : state_names(s)) out.push_back(blackbox_b_name(row, input));
     return out;
   }
   for (const auto& eq : equation_letters(s)) out.push_back(eq + "_" + info.suffix);
@@ -144,6 +144,14 @@ const std::vector<std::string>& known_inputs() {
 }
 
 std::string input_unit(const std::string& input) { return input_info(input).unit; }
+
+std::string input_suffix(const std::string& input) { return input_info(input).suffix; }
+
+std::string blackbox_a_name(const std::string& row, const std::string& column) { return "a_" + row + "_" + column; }
+
+std::string blackbox_b_name(const std::string& row, const std::string& input) {
+  return "b_" + row + "_" + input_suffix(input);
+}
 
 double DerivativeModel::at(const std::string& key) const {
   const auto it = derivatives.find(key);
@@ -293,8 +301,8 @@ StateSpace build_state_space(const DerivativeModel& model, const Vehicle& vehicl
     case Structure::kBlackbox4: {
       // Every entry free (Eq C.30 / C.37): read as they are.
       for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t k = 0; k < n; ++k) ss.A(i, k) = d("a_" + ss.states[i] + "_" + ss.states[k]);
-        for (std::size_t j = 0; j < m; ++j) ss.B(i, j) = d(control_derivative_names(model.structure, ss.inputs[j])[i]);
+        for (std::size_t k = 0; k < n; ++k) ss.A(i, k) = d(blackbox_a_name(ss.states[i], ss.states[k]));
+        for (std::size_t j = 0; j < m; ++j) ss.B(i, j) = d(blackbox_b_name(ss.states[i], ss.inputs[j]));
       }
       break;
     }
@@ -383,7 +391,9 @@ DerivativeModel plant_equivalent(const DerivativeModel& model, const Vehicle& ve
   out.coupling = RollYawCoupling::kDecoupled;
   out.derivatives.clear();
   out.published_sigma.clear();
-  const auto a = [&](const std::string& row, const std::string& column) { return model.at("a_" + row + "_" + column); };
+  const auto a = [&](const std::string& row, const std::string& column) {
+    return model.at(blackbox_a_name(row, column));
+  };
   // The plant's own linearised terms of v-dot (Eq C.10): w0 p - u0 r + g cos(theta0) cos(phi0) phi.
   const double own_vp = t.w0_mps, own_vr = -t.u0_mps;
   const double own_vphi = vehicle.gravity_mps2 * std::cos(t.theta0_rad) * std::cos(t.phi0_rad);
@@ -396,10 +406,10 @@ DerivativeModel plant_equivalent(const DerivativeModel& model, const Vehicle& ve
     out.derivatives["Y" + x] = mass * (a("v", x) - own);
   }
   for (const auto& input : model.inputs) {
-    const std::string suffix = control_derivative_names(Structure::kLateral3, input)[0].substr(2);
-    out.derivatives["L_" + suffix] = to_L * model.at("b_p_" + suffix);
-    if (yaw) out.derivatives["N_" + suffix] = to_N * model.at("b_r_" + suffix);
-    out.derivatives["Y_" + suffix] = mass * model.at("b_v_" + suffix);
+    const std::string suffix = input_suffix(input);
+    out.derivatives["L_" + suffix] = to_L * model.at(blackbox_b_name("p", input));
+    if (yaw) out.derivatives["N_" + suffix] = to_N * model.at(blackbox_b_name("r", input));
+    out.derivatives["Y_" + suffix] = mass * model.at(blackbox_b_name("v", input));
   }
   // The phi column: a moment or force proportional to the roll angle's deviation from trim.
   char phi_text[64];
@@ -418,9 +428,7 @@ DerivativeModel plant_equivalent(const DerivativeModel& model, const Vehicle& ve
       if (x == "r") kinematic = std::tan(t.theta0_rad) * std::cos(t.phi0_rad);
       worst = std::max(worst, std::abs(a("phi", x) - kinematic));
     }
-    for (const auto& input : model.inputs) {
-      worst = std::max(worst, std::abs(model.at(control_derivative_names(model.structure, input).back())));
-    }
+    for (const auto& input : model.inputs) worst = std::max(worst, std::abs(model.at(blackbox_b_name("phi", input))));
     *kinematic_row_difference = worst;
   }
   return out;

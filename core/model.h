@@ -59,6 +59,11 @@ std::vector<std::string> control_derivative_names(Structure s, const std::string
 const std::vector<std::string>& known_inputs();
 /// Unit of an input ("rad/s", "%", "rad").
 std::string input_unit(const std::string& input);
+/// The suffix of an input in parameter names ("delta_f" -> "df", as in L_df and b_p_df).
+std::string input_suffix(const std::string& input);
+/// A black-box entry's name: a_<row>_<column> of A, b_<row>_<input suffix> of B (is_blackbox()).
+std::string blackbox_a_name(const std::string& row, const std::string& column);
+std::string blackbox_b_name(const std::string& row, const std::string& input);
 
 /// Trim (reference) condition the linear model is taken about.
 struct Trim {

@@ -23,12 +23,6 @@ std::vector<std::string> equation_letters(Structure s) {
                               to_string(s));
 }
 
-std::string input_suffix(const std::string& input) {
-  // "delta_f" -> "df" (the suffix core/model.h uses in derivative names).
-  const auto names = control_derivative_names(Structure::kLateral3, input);
-  return names.front().substr(2);
-}
-
 bool is_input(const std::string& name) {
   return std::find(kInputOrder.begin(), kInputOrder.end(), name) != kInputOrder.end();
 }
@@ -208,8 +202,8 @@ std::vector<Equation> lateral_equations(Structure structure, const std::vector<s
       eq.dependent = row + "_dot";
       eq.scale = 1.0;
       eq.regressors = regressors;
-      for (const auto& column : state_names(structure)) eq.parameters.push_back("a_" + row + "_" + column);
-      for (const auto& in : inputs) eq.parameters.push_back("b_" + row + "_" + input_suffix(in));
+      for (const auto& column : state_names(structure)) eq.parameters.push_back(blackbox_a_name(row, column));
+      for (const auto& in : inputs) eq.parameters.push_back(blackbox_b_name(row, in));
       eqs.push_back(std::move(eq));
     }
     return eqs;

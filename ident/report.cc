@@ -2,7 +2,6 @@
 #include "ident/report_numbers.h"
 
 #include <cmath>
-#include <stdexcept>
 #include <cstdarg>
 #include <cstdio>
 
@@ -149,17 +148,6 @@ std::string identification_text(const IdentResult& r) {
   return out;
 }
 
-namespace {
-
-void require_comparable(const IdentResult& ols, const IdentResult& wls) {
-  if (ols.options.method != Method::kOls || wls.options.method != Method::kWls ||
-      ols.parameter_order != wls.parameter_order) {
-    throw std::invalid_argument("OLS beside WLS: needs an OLS and a WLS identification of the same parameters");
-  }
-}
-
-}  // namespace
-
 std::string methods_comparison_text(const IdentResult& ols, const IdentResult& wls) {
   require_comparable(ols, wls);
   std::string out = "OLS beside WLS (thesis Appendix D; sigma by the white-residual formula)\n";
@@ -168,9 +156,8 @@ std::string methods_comparison_text(const IdentResult& ols, const IdentResult& w
   for (const auto& name : ols.parameter_order) {
     const ParameterEstimate& a = ols.parameters.at(name);
     const ParameterEstimate& b = wls.parameters.at(name);
-    const auto rel = [](const ParameterEstimate& e) { return 100.0 * std::fabs(e.sigma / e.value); };
     out += fmt("  %-12s %12.4e %10.3e %12.3g   %12.4e %10.3e %12.3g\n", name.c_str(), a.value, std::fabs(a.sigma),
-               rel(a), b.value, std::fabs(b.sigma), rel(b));
+               pct(std::fabs(a.sigma), a.value), b.value, std::fabs(b.sigma), pct(std::fabs(b.sigma), b.value));
   }
   return out;
 }

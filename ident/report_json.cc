@@ -164,12 +164,12 @@ std::string identification_json(const IdentResult& r, const std::string& model_o
 }
 
 std::string methods_comparison_json(const IdentResult& ols, const IdentResult& wls) {
-  methods_comparison_text(ols, wls);  // the same checks
+  require_comparable(ols, wls);
   OrderedJson rows = OrderedJson::array();
   for (const auto& name : ols.parameter_order) {
     const auto one = [](const ParameterEstimate& e) {
       return OrderedJson{
-          {"value", e.value}, {"sigma", std::fabs(e.sigma)}, {"rel_sigma_pct", 100.0 * std::fabs(e.sigma / e.value)}};
+          {"value", e.value}, {"sigma", std::fabs(e.sigma)}, {"rel_sigma_pct", pct(std::fabs(e.sigma), e.value)}};
     };
     rows.push_back({{"name", name}, {"ols", one(ols.parameters.at(name))}, {"wls", one(wls.parameters.at(name))}});
   }

@@ -48,8 +48,8 @@ class Recorder {
   /// clock of their receipt. It begins with the first RIG_CLOCK tick or lockstep TRUTH (a
   /// `step` >= 0: the master's first step goes out before its tick), placed at the wall clock
   /// of that message's receipt; from then on an event carries that base plus the simulated
-  /// time of the newest tick (or that first truth), never less than the event before it. So the events of a
-  /// run are spaced as in flight, and the log stays ordered.
+  /// time of the newest tick (or that first truth), never less than the event before it. So
+  /// the events of a run are spaced as in flight, and the log stays ordered.
   /// @throws std::runtime_error naming the file if it cannot be opened.
   Recorder(const std::string& log_file, RunMonitor& monitor, LogStamps stamps = LogStamps::kWallClock);
   ~Recorder();
