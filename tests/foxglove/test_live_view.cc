@@ -17,6 +17,7 @@
 #include "contract/channels.h"
 #include "foxglove/live_view.h"
 #include "tests/foxglove/ws_test_client.h"
+#include "tests/support/encoded.h"
 
 using namespace nimble;
 using namespace nimble::foxglove;
@@ -24,12 +25,7 @@ using namespace nimble::foxglove::test;
 
 namespace {
 
-template <typename T>
-std::vector<uint8_t> encode(const T& m) {
-  std::vector<uint8_t> out(static_cast<std::size_t>(m.getEncodedSize()));
-  REQUIRE(m.encode(out.data(), 0, static_cast<int>(out.size())) == static_cast<int>(out.size()));
-  return out;
-}
+using nimble::test::encoded;
 
 ServerOptions any_port() {
   ServerOptions o;
@@ -42,7 +38,7 @@ std::vector<uint8_t> truth_at(int64_t utime) {
   truth_state_t t{};
   t.utime = utime;
   t.seq = static_cast<int32_t>(utime / 1000);
-  return encode(t);
+  return encoded(t);
 }
 
 void offer_truth(LiveView& view, int64_t utime) {
@@ -132,7 +128,7 @@ TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time,
   t.seq = 3;
   t.euler_rad[0] = 0.25;
   t.omega_body_radps[0] = -1.5;
-  const std::vector<uint8_t> bytes = encode(t);
+  const std::vector<uint8_t> bytes = encoded(t);
   // No subscriber yet: nothing is queued or decoded.
   view.offer(contract::channels::kTruth, bytes.data(), bytes.size());
   CHECK(view.stats().offered == 0);
@@ -150,7 +146,7 @@ TEST_CASE("live view: a subscribed channel's messages as JSON at their rig time,
   hb.utime = 99;  // wall clock
   hb.process = "plant";
   hb.config_digest = "d";
-  const std::vector<uint8_t> hb_bytes = encode(hb);
+  const std::vector<uint8_t> hb_bytes = encoded(hb);
   view.offer(contract::channels::kHeartbeat, hb_bytes.data(), hb_bytes.size());
   // Not a message of its type: counted, not sent.
   const std::string junk = "not an LCM message";
@@ -224,7 +220,7 @@ TEST_CASE("live view: a full queue drops and counts, offer() stays quick", "[fox
   c.send_text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 1}, {"channelId", id}}}}}.dump());
   REQUIRE(eventually([&] { return server.has_subscribers(id); }));
   truth_state_t t{};
-  const std::vector<uint8_t> bytes = encode(t);
+  const std::vector<uint8_t> bytes = encoded(t);
   for (int i = 0; i < 10000; ++i) view.offer(contract::channels::kTruth, bytes.data(), bytes.size());
   REQUIRE(view.flush());
   const LiveViewStats s = view.stats();

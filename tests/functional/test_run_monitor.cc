@@ -16,6 +16,7 @@
 
 #include "contract/channels.h"
 #include "launcher/run_monitor.h"
+#include "tests/support/encoded.h"
 
 using nimble::controller_status_t;
 using nimble::heartbeat_t;
@@ -32,12 +33,7 @@ namespace {
 
 constexpr int64_t kT0Ns = 1000000000;  // CLOCK_MONOTONIC of simulated time 0
 
-template <typename T>
-std::vector<uint8_t> encode(const T& m) {
-  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  REQUIRE(m.encode(buf.data(), 0, static_cast<int>(buf.size())) == static_cast<int>(buf.size()));
-  return buf;
-}
+using nimble::test::encoded;
 
 RunMonitor real_time_monitor() {
   MonitorConfig cfg;
@@ -63,15 +59,15 @@ int64_t received_at(int64_t sim_us, int64_t after_us) { return kT0Ns + (sim_us +
 TEST_CASE("a pose is late only counting from its stamp plus its latency", "[launcher][monitor]") {
   RunMonitor mon = real_time_monitor();
   // Stamped at 10 ms, published 5 ms later, received 1 ms after that: on time.
-  auto on_time = encode(pose(0, 10000, 5000));
+  auto on_time = encoded(pose(0, 10000, 5000));
   mon.on_message(kMocapPose, on_time.data(), static_cast<int>(on_time.size()), received_at(10000, 6000));
   CHECK(mon.channels(1.0, 1.0).at(kMocapPose).late == 0);
   // The same arrival with no latency declared is 6 ms after it was due: late.
-  auto no_latency = encode(pose(1, 15000, 0));
+  auto no_latency = encoded(pose(1, 15000, 0));
   mon.on_message(kMocapPose, no_latency.data(), static_cast<int>(no_latency.size()), received_at(15000, 6000));
   CHECK(mon.channels(1.0, 1.0).at(kMocapPose).late == 1);
   // A latency that does not explain the delay leaves the pose late.
-  auto still_late = encode(pose(2, 20000, 1000));
+  auto still_late = encoded(pose(2, 20000, 1000));
   mon.on_message(kMocapPose, still_late.data(), static_cast<int>(still_late.size()), received_at(20000, 4000));
   const auto c = mon.channels(1.0, 1.0).at(kMocapPose);
   CHECK(c.late == 2);
@@ -82,7 +78,7 @@ TEST_CASE("a pose is late only counting from its stamp plus its latency", "[laun
 
 TEST_CASE("a pose that does not decode is malformed, not judged", "[launcher][monitor]") {
   RunMonitor mon = real_time_monitor();
-  auto buf = encode(pose(0, 10000, 5000));
+  auto buf = encoded(pose(0, 10000, 5000));
   buf.resize(buf.size() - 1);  // truncated: the header is intact, the pose is not
   mon.on_message(kMocapPose, buf.data(), static_cast<int>(buf.size()), received_at(10000, 60000));
   const auto c = mon.channels(1.0, 1.0).at(kMocapPose);
@@ -96,11 +92,11 @@ TEST_CASE("other stream messages are due at their utime", "[launcher][monitor]")
   truth_state_t t{};
   t.utime = 10000;
   t.seq = 0;
-  auto on_time = encode(t);
+  auto on_time = encoded(t);
   mon.on_message(kTruth, on_time.data(), static_cast<int>(on_time.size()), received_at(10000, 1500));
   t.utime = 11000;
   t.seq = 2;  // one lost
-  auto late = encode(t);
+  auto late = encoded(t);
   mon.on_message(kTruth, late.data(), static_cast<int>(late.size()), received_at(11000, 2500));
   const auto c = mon.channels(1.0, 1.0).at(kTruth);
   CHECK(c.count == 2);
@@ -120,7 +116,7 @@ TEST_CASE("garbage on the rig's channels is malformed and stays out of the fligh
     t.utime = 1000 * k;
     t.seq = k;
     t.euler_rad[0] = 0.1 * std::sin(0.1 * k);
-    const auto b = encode(t);
+    const auto b = encoded(t);
     mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
   }
   std::mt19937_64 rng(7);
@@ -130,11 +126,11 @@ TEST_CASE("garbage on the rig's channels is malformed and stays out of the fligh
     truth_state_t g = t;
     g.seq = static_cast<int64_t>(rng());
     g.euler_rad[0] = 1e4 * static_cast<double>(static_cast<int64_t>(rng() % 2000) - 1000);
-    const auto b = encode(g);
+    const auto b = encoded(g);
     mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
   }
   // Random bytes, half of them behind TRUTH's real fingerprint.
-  const auto real = encode(t);
+  const auto real = encoded(t);
   for (int k = 0; k < 200; ++k, ++garbage) {
     std::vector<uint8_t> b(static_cast<std::size_t>(rng() % 600));
     for (auto& x : b) x = static_cast<uint8_t>(rng());
@@ -157,7 +153,7 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   heartbeat_t hb{};
   hb.process = "plant";
   hb.state = heartbeat_t::STATE_READY;
-  auto b = encode(hb);
+  auto b = encoded(hb);
   mon.on_message(kHeartbeat, b.data(), static_cast<int>(b.size()), 0);
   CHECK(mon.heartbeat_state("plant") == heartbeat_t::STATE_READY);
   // A string whose encoded length is 0 (LCM 1.3.1's decoder threw; the rig's build refuses it,
@@ -170,7 +166,7 @@ TEST_CASE("a decoder that throws, and a publisher not in the run, are malformed"
   heartbeat_t stray = hb;
   stray.process = "intruder";
   stray.seq = 1;
-  auto s = encode(stray);
+  auto s = encoded(stray);
   mon.on_message(kHeartbeat, s.data(), static_cast<int>(s.size()), 0);
   CHECK(mon.heartbeat_state("intruder") == -1);
   const auto c = mon.channels(1.0, 1.0).at(kHeartbeat);
@@ -197,14 +193,14 @@ TEST_CASE("roll tracking: the controller's reference against the newest TRUTH at
     t.utime = 1000 * k;
     t.seq = k;
     t.euler_rad[0] = (k <= 5 ? 10.0 : 20.0) * kDeg;
-    const auto tb = encode(t);
+    const auto tb = encoded(t);
     mon.on_message(kTruth, tb.data(), static_cast<int>(tb.size()), 0);
     if (k % 2 == 0 || k == 5) {
       st.utime = k == 5 ? 5500 : 1000 * k;  // 5.5 ms: the newest truth before it is 5 ms's
       st.seq = status_seq++;
       st.roll_ref_rad = 15.0 * kDeg;
       st.roll_error_rad = st.roll_ref_rad - (t.euler_rad[0] + 3.0 * kDeg);
-      const auto sb = encode(st);
+      const auto sb = encoded(st);
       mon.on_message(kControllerStatus, sb.data(), static_cast<int>(sb.size()), 0);
     }
   }
@@ -238,7 +234,7 @@ TEST_CASE("the flight's trace takes the first TRUTH at or after each grid time",
     t.omega_body_radps[0] = 1e-6 * static_cast<double>(utime);  // p tells the stamp it came from
     t.velocity_body_mps[1] = -t.omega_body_radps[0];
     t.euler_rad[0] = 2.0 * t.omega_body_radps[0];
-    const auto b = encode(t);
+    const auto b = encoded(t);
     mon.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
   }
   const nimble::launcher::FlightSummary& f = mon.flight();
@@ -254,7 +250,7 @@ TEST_CASE("the flight's trace takes the first TRUTH at or after each grid time",
   CHECK(f.trace_phi[3] == Approx(0.12));
   // No grid, no trace.
   RunMonitor plain{MonitorConfig{}};
-  const auto b = encode(t);
+  const auto b = encoded(t);
   plain.on_message(kTruth, b.data(), static_cast<int>(b.size()), 0);
   CHECK(plain.flight().trace_p.empty());
   CHECK(plain.flight().trace_dt_s == 0.0);

@@ -34,6 +34,7 @@
 #include "campaign/sweep.h"
 #include "launcher/verdict.h"
 #include "tests/support/scratch.h"
+#include "tests/support/encoded.h"
 
 using namespace nimble::launcher;
 using namespace nimble::campaign;
@@ -316,8 +317,7 @@ std::vector<int64_t> record_ticks(const std::string& file, LogStamps stamps, int
       tick.step = k;
       tick.sim_time_ns = 1000000LL * k;
       tick.utime = tick.sim_time_ns / 1000;
-      std::vector<unsigned char> bytes(static_cast<std::size_t>(tick.getEncodedSize()));
-      tick.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      const std::vector<unsigned char> bytes = nimble::test::encoded(tick);
       recorder.record(nimble::contract::channels::kRigClock, bytes.data(), static_cast<int>(bytes.size()), 0);
       recorder.record(nimble::contract::channels::kTruth, other.data(), static_cast<int>(other.size()), 0);
     }
@@ -355,9 +355,7 @@ std::vector<unsigned char> tick_bytes(int64_t sim_time_ns) {
   tick.step = sim_time_ns / 1000000;
   tick.sim_time_ns = sim_time_ns;
   tick.utime = sim_time_ns / 1000;
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(tick.getEncodedSize()));
-  tick.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return bytes;
+  return nimble::test::encoded(tick);
 }
 
 }  // namespace
@@ -394,9 +392,7 @@ TEST_CASE("recorder: simulated time begins at the receipt of the first tick or l
     nimble::truth_state_t truth{};
     truth.utime = 0;
     truth.step = 0;
-    std::vector<unsigned char> bytes(static_cast<std::size_t>(truth.getEncodedSize()));
-    truth.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    record(nimble::contract::channels::kTruth, bytes, received_ns + 40000);
+    record(nimble::contract::channels::kTruth, nimble::test::encoded(truth), received_ns + 40000);
     const std::vector<int64_t> t = times();
     REQUIRE(t.size() == 3);
     CHECK(t[1] - t[0] >= 39);

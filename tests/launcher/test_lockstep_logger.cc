@@ -10,6 +10,7 @@
 
 #include "contract/channels.h"
 #include "launcher/lockstep_logger.h"
+#include "tests/support/encoded.h"
 
 using nimble::launcher::LockstepLogger;
 namespace ch = nimble::contract::channels;
@@ -22,9 +23,7 @@ std::vector<unsigned char> encode_tick(int64_t step, int64_t t_ns) {
   tick.sim_time_ns = t_ns;
   tick.utime = t_ns / 1000;
   tick.dt_ns = 1000000;
-  std::vector<unsigned char> b(static_cast<std::size_t>(tick.getEncodedSize()));
-  tick.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
+  return nimble::test::encoded(tick);
 }
 
 std::vector<unsigned char> encode_ack(const std::string& process, int64_t step, int64_t next_due_ns) {
@@ -32,9 +31,7 @@ std::vector<unsigned char> encode_ack(const std::string& process, int64_t step, 
   ack.step = step;
   ack.next_due_ns = next_due_ns;
   ack.process = process;
-  std::vector<unsigned char> b(static_cast<std::size_t>(ack.getEncodedSize()));
-  ack.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
+  return nimble::test::encoded(ack);
 }
 
 }  // namespace
