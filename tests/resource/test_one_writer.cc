@@ -20,44 +20,21 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/output_lock.h"
+#include "tests/support/lock_wait.h"
 #include "tests/support/rig_runs.h"
 #include "tests/support/scratch.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
+using nimble::test::holder_of;
 using nimble::test::RigResult;
 using nimble::test::run_rig;
+using nimble::test::wait_for_holder;
+using nimble::test::wait_for_no_holder;
 
 namespace {
 
 const std::string kConfigs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
-
-/// The pid holding the flock on `path` (-1: none, or no such file).
-int holder_of(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return -1;
-  const auto h = nimble::lock_holder(st.st_dev, st.st_ino);
-  return h ? h->pid : -1;
-}
-
-/// Waits (bounded, 20 s) until someone holds the lock on `path`; returns its pid or -1.
-int wait_for_holder(const std::string& path) {
-  for (int i = 0; i < 20000; ++i) {
-    const int pid = holder_of(path);
-    if (pid > 0) return pid;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return -1;
-}
-
-/// Waits (bounded, 5 s) until nobody holds the lock on `path`; false if someone still does.
-bool wait_for_no_holder(const std::string& path) {
-  for (int i = 0; i < 5000; ++i) {
-    if (holder_of(path) == -1) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return false;
-}
 
 /// The events of every channel in the log, summed.
 int events_in(const std::string& log) {

@@ -20,6 +20,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "../support/campaign_files.h"
+#include "../support/lock_wait.h"
 #include "../support/rig_runs.h"
 
 using nimble::test::rig_run;
@@ -139,11 +140,17 @@ TEST_CASE("rig sweep: a campaign whose launcher was killed is finished by --resu
             "pilot.enabled=false", "--jobs", "1", "--dir", c.c_str(), "--no-progress", static_cast<char*>(nullptr));
     ::_exit(127);
   }
-  for (int k = 0; k < 1000 && count_run_files(c) < 5; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (count_run_files(c) < 5 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
   ::kill(rig, SIGKILL);
   ::waitpid(rig, nullptr, 0);
-  const std::size_t finished = count_run_files(c);
   INFO(slurp(d + "/killed.txt"));
+  // Its workers hold the campaign's lock until the kernel has ended them too (they die with the
+  // launcher, PR_SET_PDEATHSIG); on a loaded machine that is a moment after the launcher.
+  REQUIRE(nimble::test::wait_for_no_holder(c, std::chrono::seconds(30)));
+  const std::size_t finished = count_run_files(c);
   REQUIRE(finished >= 5);
   REQUIRE(finished < 24);
   // What a writer killed mid-file leaves: a temporary name, never merged, removed on resume.
