@@ -54,6 +54,26 @@ std::string whiteness_text(const std::vector<OutputFit>& fits) {
   return out;
 }
 
+/// Each equation's parameter correlation matrix as the thesis prints it (Appendix H): |rho| in the
+/// upper triangle, the lower left blank.
+std::string correlation_matrices_text(const IdentResult& r) {
+  std::string out = "\nparameter correlation matrices (|rho|, per equation; thesis Appendix H)\n";
+  for (const auto& eq : r.regression.equations) {
+    const auto& names = eq.equation.parameters;
+    out += fmt("  %s\n  %-12s", eq.equation.name.c_str(), "");
+    for (const auto& n : names) out += fmt(" %10s", n.c_str());
+    out += "\n";
+    for (Eigen::Index i = 0; i < eq.correlation.rows(); ++i) {
+      out += fmt("  %-12s", names[static_cast<std::size_t>(i)].c_str());
+      for (Eigen::Index k = 0; k < eq.correlation.cols(); ++k) {
+        out += k < i ? fmt(" %10s", "-") : fmt(" %10.4f", std::fabs(eq.correlation(i, k)));
+      }
+      out += "\n";
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string identification_text(const IdentResult& r) {
@@ -106,6 +126,7 @@ std::string identification_text(const IdentResult& r) {
   for (const auto& c : r.correlated) {
     out += fmt("  %s: %s and %s, rho = %.3f\n", c.equation.c_str(), c.a.c_str(), c.b.c_str(), c.rho);
   }
+  out += correlation_matrices_text(r);
   out += "\naccuracy (measured vs estimated state derivatives)\n" + metrics_text(r.fits);
   out += "\nresidual whiteness\n" + whiteness_text(r.fits);
 

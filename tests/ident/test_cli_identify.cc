@@ -85,6 +85,17 @@ TEST_CASE("rig identify writes JSON with parameters, metrics, eigenvalues and wh
   }
   REQUIRE(j["eigenvalues"].size() == 3);
   for (const auto& pair : j["eigenvalues"]) CHECK(pair.size() == 2);
+  // Appendix H's form: each equation's |rho| above the diagonal in the text, the JSON's matrix.
+  const YAML::Node rho = j["correlation"]["L"];
+  REQUIRE(rho["parameters"][0].as<std::string>() == "Lp");
+  REQUIRE(rho["parameters"][1].as<std::string>() == "Lv");
+  const double lp_lv = std::fabs(rho["matrix"][0][1].as<double>());
+  CHECK(std::fabs(rho["matrix"][1][0].as<double>()) == Approx(lp_lv));
+  char row[96];
+  std::snprintf(row, sizeof row, "  %-12s %10.4f %10.4f", "Lp", 1.0, lp_lv);
+  INFO(r.out);
+  CHECK(r.out.find("parameter correlation matrices (|rho|, per equation; thesis Appendix H)") != std::string::npos);
+  CHECK(r.out.find(row) != std::string::npos);
   // The model file flies: load_model reads it and its eigenvalues are those of the JSON.
   const DerivativeModel back = load_model(model);
   CHECK(back.at("L_df") == Approx(j["parameters"]["L_df"]["value"].as<double>()).epsilon(1e-8));
