@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -46,16 +47,15 @@ std::map<std::string, double> double_map(ConfigMap& parent, const std::string& k
   return out;
 }
 
-/// Half a unit of the last digit of a number as written ("0.900": 0.0005; "12": 0.5; "1e-3": the
-/// number's own last digit, from the value).
+/// Half a unit of the last digit of a number as written ("0.900": 0.0005; "12": 0.5; "6.00e-2":
+/// 0.00005, the mantissa's last digit at the exponent).
 double printed_half_digit(const std::string& text) {
   const auto e = text.find_first_of("eE");
-  const auto dot = text.find('.');
-  if (e == std::string::npos && dot != std::string::npos) {
-    return 0.5 * std::pow(10.0, -static_cast<double>(text.size() - dot - 1));
-  }
-  if (e == std::string::npos) return 0.5;
-  return half_last_digit(std::stod(text));
+  const std::string mantissa = text.substr(0, e);
+  const auto dot = mantissa.find('.');
+  const double decimals = dot == std::string::npos ? 0.0 : static_cast<double>(mantissa.size() - dot - 1);
+  const double exponent = e == std::string::npos ? 0.0 : std::stod(text.substr(e + 1));
+  return 0.5 * std::pow(10.0, exponent - decimals);
 }
 
 /// Fails on `key` unless `cell` ("row / column") is a published cell of `t`.
@@ -178,21 +178,28 @@ TableSpec load_table(ConfigMap& t, const std::string& file, const std::string& i
 }  // namespace
 
 const std::vector<std::string>& campaign_table_ids() {
-  static const std::vector<std::string> ids = {"9.4", "9.5", "9.5-oe", "9.5-model", "9.6", "9.6-oe", "9.6-model",
-                                               "8.8", "4",   "7",      "8",         "9",   "10",     "11",
-                                               "12",  "13",  "14",     "15",        "16"};
+  static const std::vector<std::string> ids = {
+      "9.4", "9.5", "9.5-oe", "9.5-model", "9.6", "9.6-oe", "9.6-model", "8.8", "4", "7", "8", "9", "10", "11", "12",
+      "13", "14", "15", "16",
+      // The thesis's model structures (chapter 8, Appendices D, E, H: reproduce/structure_tables.h).
+      "8.2", "8.4", "8.7", "8.9-model", "8.9", "8.10", "8.11", "8.13-model", "8.13", "8.14", "8.15", "D.1", "D.2",
+      "E.2-model", "E.2", "E.3-model", "E.3", "H.1", "H.2", "H.3", "H.4", "H.5"};
   return ids;
 }
 
 Source table_source(const std::string& id) {
   if (id == "9.4") return Source::kFlightRanges;
   if (!reference_table(id).empty()) return Source::kReidentifiedPlant;
-  if (id == "9.5-model" || id == "9.6-model" || id == "8.8") return Source::kModelArithmetic;
+  static const std::set<std::string> arithmetic = {"9.5-model",  "9.6-model", "8.8",      "8.9-model",
+                                                   "8.13-model", "E.2-model", "E.3-model"};
+  if (arithmetic.count(id) > 0) return Source::kModelArithmetic;
+  if (id.rfind("H.", 0) == 0) return Source::kFlightCorrelation;
   return Source::kFlightFit;
 }
 
 Category category_of(Source s) {
-  return s == Source::kFlightRanges || s == Source::kFlightFit ? Category::kFlights : Category::kModel;
+  return s == Source::kFlightRanges || s == Source::kFlightFit || s == Source::kFlightCorrelation ? Category::kFlights
+                                                                                                  : Category::kModel;
 }
 
 const char* source_statement(Source s) {
@@ -204,6 +211,9 @@ const char* source_statement(Source s) {
              "identification) against the plant file's exact value, the thesis's number beside it";
     case Source::kModelArithmetic:
       return "arithmetic on a transcribed model file: a check of the transcription against the thesis";
+    case Source::kFlightCorrelation:
+      return "parameter correlations of the rig's identification of its own flight: what its excitation, controller "
+             "and sensing leave separable (the plant file does not fix them); the thesis prints |rho|";
     case Source::kFlightFit:
       return "fit metrics of a model on the rig's flights, which carry the rig's sensing noise, estimator and "
              "effects (the plant file does not fix them): a difference says what the rig's flights lack or add";
@@ -213,8 +223,15 @@ const char* source_statement(Source s) {
 
 std::string reference_table(const std::string& id) {
   // A re-identification of the plant, by either method, against the arithmetic on its model file.
+  // The model structures' tables (reproduce/structure_tables.h): the black-box models against the
+  // grey-box plant file they were fitted to fly; D.1 and D.2 (OLS and WLS rows) against tables of
+  // the plant file's derivatives that are not printed (kPlantDerivatives*).
   static const std::map<std::string, std::string> reference = {
-      {"9.5", "9.5-model"}, {"9.5-oe", "9.5-model"}, {"9.6", "9.6-model"}, {"9.6-oe", "9.6-model"}};
+      {"9.5", "9.5-model"},         {"9.5-oe", "9.5-model"},     {"9.6", "9.6-model"},
+      {"9.6-oe", "9.6-model"},      {"8.9", "8.9-model"},        {"8.10", "8.8"},
+      {"8.11", "8.9-model"},        {"8.13", "8.13-model"},      {"8.14", "9.5-model"},
+      {"8.15", "8.13-model"},       {"E.2", "E.2-model"},        {"E.3", "E.3-model"},
+      {"D.1", kPlantDerivativesD1}, {"D.2", kPlantDerivativesD2}};
   const auto it = reference.find(id);
   return it == reference.end() ? "" : it->second;
 }
@@ -236,7 +253,7 @@ CampaignSpec load_campaign(const std::string& file) {
   {
     ConfigMap flights = root.get_map("flights");
     for (const char* name : {"identification", "ol_doublet", "ol_112", "cl_doublet_train", "cl_112", "coupled",
-                             "nonlinear_20", "nonlinear_30"}) {
+                             "nonlinear_20", "nonlinear_30", "lateral4"}) {
       c.flights[name] = resolve(file, flights.get_string(name));
     }
     flights.finish();
@@ -259,6 +276,11 @@ CampaignSpec load_campaign(const std::string& file) {
     ConfigMap cm = root.get_map("coupled_models");
     for (const char* id : {"13", "14"}) c.coupled_models[id] = resolve(file, cm.get_string(id));
     cm.finish();
+  }
+  {
+    ConfigMap iv = root.get_map("input_variants");
+    for (const char* id : {"E.2", "E.3"}) c.input_variants[id] = resolve(file, iv.get_string(id));
+    iv.finish();
   }
   if (root.has("closed_loop_causes")) {
     const YAML::Node causes = root.get_node("closed_loop_causes");

@@ -28,6 +28,9 @@ struct CampaignSpec {
   std::vector<Set> sets;
   std::string lateral4_model;
   std::map<std::string, std::string> coupled_models;  ///< table id -> model file
+  /// Appendix E's three-state input variants: table id ("E.2", "E.3") -> the model file the
+  /// identification train is flown on and re-identified with that file's inputs.
+  std::map<std::string, std::string> input_variants;
   std::map<std::string, TableSpec> tables;
   std::vector<CauseSpec> causes;
 };
@@ -40,10 +43,16 @@ const std::vector<std::string>& campaign_table_ids();
 /// file lists cells and published numbers, never their category.
 enum class Source {
   kFlightRanges,       ///< 9.4: ranges of the rig's identification flights
-  kReidentifiedPlant,  ///< 9.5, 9.6 (and by output error): the rig's identification of its own plant file
-  kModelArithmetic,    ///< 9.5-model, 9.6-model, 8.8: arithmetic on a transcribed model file
-  kFlightFit,          ///< 4, 7-16: fit metrics of a model on the rig's flights
+  kReidentifiedPlant,  ///< 9.5, 9.6 (and by output error), 8.9-8.15, D, E: the rig's identification of its own plant file
+  kModelArithmetic,    ///< 9.5-model, 9.6-model, 8.8, 8.9-model, 8.13-model, E.*-model: arithmetic on a model file
+  kFlightFit,          ///< 4, 7-16, 8.2, 8.4, 8.7: fit metrics of a model on the rig's flights
+  kFlightCorrelation,  ///< H.1-H.5: parameter correlations of the rig's identification of its flight
 };
+
+/// The tables of the plant files' derivatives that D.1's and D.2's OLS and WLS rows are judged
+/// against (computed, not printed: the thesis has no such table).
+inline constexpr const char* kPlantDerivativesD1 = "D.1-plant";
+inline constexpr const char* kPlantDerivativesD2 = "D.2-plant";
 
 /// The source of table `id` (one of campaign_table_ids()).
 Source table_source(const std::string& id);

@@ -28,10 +28,10 @@ std::string join(const std::vector<std::string>& v) {
 }  // namespace
 
 double half_last_digit(double value) {
-  for (int d = 0; d <= 9; ++d) {
+  // Relative to the scaled value itself: 1.44e-7 has its last digit at 1e-9, not at 1.
+  for (int d = 0; d <= 15; ++d) {
     const double scaled = value * std::pow(10.0, d);
-    if (std::fabs(scaled - std::round(scaled)) < 1e-6 * std::max(1.0, std::fabs(scaled)))
-      return 0.5 * std::pow(10.0, -d);
+    if (std::fabs(scaled - std::round(scaled)) < 1e-6 * std::fabs(scaled)) return 0.5 * std::pow(10.0, -d);
   }
   return 0.0;
 }

@@ -32,6 +32,7 @@
 #include "launcher/run_plan.h"
 #include "reproduce/campaign_spec.h"
 #include "reproduce/seed_values.h"
+#include "reproduce/structure_tables.h"
 #include "campaign/result_files.h"
 #include "estimator/sensing_config.h"
 #include "scenario/scenario.h"
@@ -111,58 +112,6 @@ Flown fly(const CampaignOptions& o, std::uint64_t seed, const std::string& name,
   return f;
 }
 
-/// The thesis's identification of one flight (WLS, Eq 21 with w0 the flight's initial w), plus
-/// the regressor p (w - w0) in the side-force equation; or the same by output error.
-ident::IdentResult identify_flight(const ident::FlightData& data, const Vehicle& vehicle,
-                                   const std::string& vehicle_file, const std::string& name,
-                                   ident::Method method = ident::Method::kWls) {
-  ident::IdentOptions opt;
-  opt.method = method;
-  opt.trim.w0_mps = data.at("w").values.front();
-  opt.model_name = name;
-  const double w0 = opt.trim.w0_mps, g = vehicle.gravity_mps2;
-  opt.add_signals = [w0, g](ident::UniformData& d) {
-    d.signals["pw"] = d.at("p").cwiseProduct((d.at("w").array() - w0).matrix());
-    d.signals["gphi"] = (g * (d.at("phi").array().sin() - d.at("phi").array())).matrix();
-  };
-  opt.extra_regressors = {{"Y", "pw"}, {"Y", "gphi"}};
-  return ident::identify(data, vehicle, vehicle_file, opt);
-}
-
-void put_fit(CellMap& m, const std::string& row, const ident::FitMetrics& f) {
-  m[row + " / rxy"] = f.rxy;
-  m[row + " / R2"] = f.r2;
-  m[row + " / RMSE %"] = f.rmse_pct_range;
-}
-
-const ident::OutputFit& fit_of(const std::vector<ident::OutputFit>& fits, const std::string& output) {
-  for (const auto& f : fits) {
-    if (f.output == output) return f;
-  }
-  throw std::runtime_error("no fit of " + output);
-}
-
-/// Eigenvalues of a three-state model: the real one and the complex one with positive imaginary part.
-std::pair<double, std::complex<double>> split_eigenvalues(const std::vector<std::complex<double>>& eig) {
-  double real = NAN;
-  std::complex<double> osc(NAN, NAN);
-  for (const auto& e : eig) {
-    if (std::fabs(e.imag()) < 1e-9) {
-      real = e.real();
-    } else if (e.imag() > 0) {
-      osc = e;
-    }
-  }
-  return {real, osc};
-}
-
-void put_eigenvalues(CellMap& m, const std::string& row, const std::vector<std::complex<double>>& eig) {
-  const auto [aperiodic, osc] = split_eigenvalues(eig);
-  m[row + " / aperiodic"] = aperiodic;
-  m[row + " / oscillatory re"] = osc.real();
-  m[row + " / oscillatory im"] = osc.imag();
-}
-
 std::vector<std::complex<double>> model_eigenvalues(const DerivativeModel& model, const Vehicle& vehicle) {
   const Eigen::VectorXcd eig = build_state_space(model, vehicle).A.eigenvalues();
   return {eig.data(), eig.data() + eig.size()};
@@ -183,19 +132,8 @@ void put_nondimensional(CellMap& m, const std::string& row, const std::function<
 /// Table 8.8: the eigenvalues of the four-state model file.
 CellMap table_8_8(const CampaignSpec& spec) {
   const DerivativeModel lat4 = load_model(spec.lateral4_model);
-  const StateSpace ss = build_state_space(lat4, load_vehicle(lat4.vehicle_file));
-  const Eigen::VectorXcd eig = ss.A.eigenvalues();
   CellMap m;
-  for (int i = 0; i < eig.size(); ++i) {
-    if (std::fabs(eig(i).imag()) > 1e-9) {
-      if (eig(i).imag() > 0) {
-        m["lateral4 / oscillatory re"] = eig(i).real();
-        m["lateral4 / oscillatory im"] = eig(i).imag();
-      }
-    } else {
-      m[eig(i).real() < 0 ? "lateral4 / aperiodic stable" : "lateral4 / aperiodic unstable"] = eig(i).real();
-    }
-  }
+  put_eigenvalues4(m, "lateral4", model_eigenvalues(lat4, load_vehicle(lat4.vehicle_file)));
   return m;
 }
 
@@ -230,6 +168,7 @@ class CampaignRun {
     for (const std::string id : {"7", "8", "15", "16", "9", "10", "11", "12", "13", "14"}) {
       values_[id].push_back(table_on(id, base_flight(id)));
     }
+    structure_flights();
   }
 
   /// Table `id`'s flight flown on `seed` with a cause (`with`), labelled `label` if it is not
@@ -290,9 +229,11 @@ class CampaignRun {
       const DerivativeModel truth = load_model(set.model);
       const Vehicle vehicle = load_vehicle(truth.vehicle_file);
       const ident::FlightData measured = read(f).measured;
-      ident::IdentResult id = identify_flight(measured, vehicle, truth.vehicle_file, "rig_" + set.row);
+      ident::IdentResult id = identify_as_thesis(measured, vehicle, truth.vehicle_file, "rig_" + set.row);
+      ident::IdentOptions by_output_error;
+      by_output_error.method = ident::Method::kOutputError;
       const ident::IdentResult oe =
-          identify_flight(measured, vehicle, truth.vehicle_file, "rig_" + set.row, ident::Method::kOutputError);
+          identify_as_thesis(measured, vehicle, truth.vehicle_file, "rig_" + set.row, by_output_error);
       put_eigenvalues(t95, set.row, id.eigenvalues);
       put_eigenvalues(t95_oe, set.row, oe.eigenvalues);
       for (const char* d : kCheckedDerivatives) {
@@ -316,6 +257,7 @@ class CampaignRun {
           fs::create_directories(dir);
           ident::plot_identification(id, dir.string());
         }
+        for (auto& [table, cells] : three_state_tables(measured, id)) values_[table].push_back(std::move(cells));
         set1_[seed_] = std::move(id);
         set1_flight_[seed_] = f;
       }
@@ -327,6 +269,21 @@ class CampaignRun {
     values_["9.6-oe"].push_back(t96_oe);
     values_["4"].push_back(t4);
     if (plots_ && !o_.report_dir.empty()) plot_eigenvalue_map(o_.report_dir, all_eigenvalues, spec_.tables.at("9.5"));
+  }
+
+  /// The flights of the model-structure tables (reproduce/structure_tables.h): the four-state
+  /// flight, and the identification train on each of Appendix E's input variants.
+  void structure_flights() {
+    const Flown& four = flight_with("lateral4", {});
+    for (auto& [table, cells] : four_state_tables(read(four).measured, load_model(spec_.lateral4_model))) {
+      values_[table].push_back(std::move(cells));
+    }
+    for (const auto& [table, model] : spec_.input_variants) {
+      const std::string name = "identification_" + table;
+      const Flown f = fly(o_, seed_, name, spec_.flights.at("identification"), {{"model", model}});
+      result_.flights.push_back(f.record);
+      values_[table].push_back(input_variant_table(read(f).measured, load_model(model)));
+    }
   }
 
   const Flown& base_flight(const std::string& id) {
@@ -547,6 +504,7 @@ CampaignResult run_campaign(const CampaignOptions& o) {
     values["9.5-model"] = {eig};
     values["9.6-model"] = {nd};
     values["8.8"] = {table_8_8(spec)};
+    for (auto& [id, cells] : structure_model_tables(spec)) values[id] = {std::move(cells)};
   }
   // The flights with each cause, over the seeds, item by item.
   std::vector<WithCause> flown(items.size());

@@ -253,6 +253,9 @@ TEST_CASE(
   CHECK(half_last_digit(-1.13) == Approx(0.005));
   CHECK(half_last_digit(0.907) == Approx(0.0005));
   CHECK(half_last_digit(12.0) == Approx(0.5));
+  // A small derivative's last digit is its own (Table D.1's N_df), not that of the units.
+  CHECK(half_last_digit(-1.44e-7) == Approx(5e-10));
+  CHECK(half_last_digit(8.04e-6) == Approx(5e-9));
   // Table 9.6's Yv+: 2 thesis sigma is 0.0013, under the 0.005 of the printed -1.13; the plant's
   // exact -1.1285 (truth states) matches within the rounding.
   TableSpec t;

@@ -3,6 +3,7 @@
 // identification train's state ranges against thesis Table 9.4, set 1, and the nonlinear
 // doublets' sideways speed against thesis Section 9.5.
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -235,8 +236,9 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
       } else if (t["against"].as<std::string>() == "plant file") {
         // A pipeline check: judged against the plant file's value, which is not the thesis's.
         CHECK((v == "match" || v == "differs" || v == "inconclusive"));
-        CHECK(c["reference"].as<double>() != c["published"].as<double>());
-        CHECK(c["tolerance"].as<double>() == Approx(0.005));
+        // Its tolerance is half the printed number's last digit (0.005 of -5.18, 0.05 of 69.7, 5e-7
+        // of -3.79e-4): never more than a half per cent of the number, nor than 0.005 below one.
+        CHECK(c["tolerance"].as<double>() <= 0.005 * std::max(1.0, std::fabs(c["published"].as<double>())));
       } else {
         CHECK((v == "match" || v == "differs"));
         CHECK(c["reference"].as<double>() == c["published"].as<double>());
@@ -248,9 +250,31 @@ TEST_CASE("rig reproduce thesis: five seeds fly, every cell has its category, an
   }
   // The four-state model's and set 1's derivatives' arithmetic; each set's amplitude reached its
   // calibration target, and the ranges held out of it are judged as the rig's own.
-  for (const char* id : {"8.8", "9.6-model"}) {
+  // So are set 1's eigenvectors (Table 8.13) and Appendix E's input variants.
+  for (const char* id : {"8.8", "9.6-model", "8.13-model", "E.2-model", "E.3-model"}) {
+    REQUIRE(table(j, id)["cells"].size() > 0);
     for (const auto& c : table(j, id)["cells"]) CHECK(c["verdict"].as<std::string>() == "match");
   }
+  // The four-state file's eigenvectors are Table 8.9's but one: p+ of the yaw mode, 0.006 here
+  // against the printed 0.05 (the rest within 2 %).
+  for (const auto& c : table(j, "8.9-model")["cells"]) {
+    const bool yaw_p = c["row"].as<std::string>() == "p+" && c["column"].as<std::string>() == "mode 3";
+    CHECK(c["verdict"].as<std::string>() == (yaw_p ? "differs" : "match"));
+  }
+  // The model structures' tables are there, each from the flight it names: the four-state flight
+  // and Appendix E's input variants flown with every seed.
+  for (const char* id : {"8.2", "8.4", "8.7", "8.9", "8.10", "8.11", "8.13", "8.14", "8.15", "D.1", "D.2", "E.2", "E.3",
+                         "H.1", "H.2", "H.3", "H.4", "H.5"}) {
+    INFO(id);
+    CHECK(table(j, id)["cells"].size() > 0);
+  }
+  int four_state = 0, variants = 0;
+  for (const auto& f : j["flights"]) {
+    four_state += f["name"].as<std::string>() == "lateral4";
+    variants += f["name"].as<std::string>().rfind("identification_E.", 0) == 0;
+  }
+  CHECK(four_state == 5);
+  CHECK(variants == 10);
   int held_out = 0;
   for (const auto& c : table(j, "9.4")["cells"]) {
     if (c["category"].as<std::string>() == "calibrated") {
