@@ -196,7 +196,8 @@ std::map<std::string, CellMap> structure_model_tables(const CampaignSpec& spec) 
   put_model_eigenvectors(t["8.9-model"], lateral4);
   put_model_eigenvectors(t["8.13-model"], set1);
   for (const char* row : {"OLS", "WLS"}) {
-    for (const auto& [name, value] : lateral4.derivatives) t[kPlantDerivativesD1][std::string(row) + " / " + name] = value;
+    for (const auto& [name, value] : lateral4.derivatives)
+      t[kPlantDerivativesD1][std::string(row) + " / " + name] = value;
     for (const auto& [name, value] : set1.derivatives) t[kPlantDerivativesD2][std::string(row) + " / " + name] = value;
   }
   for (const auto& [id, file] : spec.input_variants) {
