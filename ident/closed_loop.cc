@@ -123,9 +123,10 @@ class EffectForces {
 std::pair<int, int> input_columns(const FlightData& data, const DerivativeModel& model, const Vehicle& vehicle) {
   check_flight_data(data, vehicle);
   check_excitation(data, state_names(model.structure), model.inputs);
-  if (model.structure != Structure::kLateral3) {
-    throw std::invalid_argument("closed-loop validation needs a lateral3 model; '" + model.name + "' is " +
-                                to_string(model.structure));
+  // The simulation takes the model's A and B whole (its own phi-dot row for a black box).
+  if (model.structure != Structure::kLateral3 && model.structure != Structure::kBlackbox3) {
+    throw std::invalid_argument("closed-loop validation needs a three-state model (lateral3 or blackbox3); '" +
+                                model.name + "' is " + to_string(model.structure));
   }
   int i_df = -1, i_dt = -1;
   for (std::size_t j = 0; j < model.inputs.size(); ++j) {

@@ -42,7 +42,7 @@ struct ClosedLoopResult {
   std::map<std::string, FitMetrics> fits;
 };
 
-/// Simulates `model` (lateral3 with delta_f, optionally delta_t) in closed loop on the
+/// Simulates `model` (lateral3, or blackbox3 with its own phi-dot row; delta_f, optionally delta_t) in closed loop on the
 /// data's phi_sp and delta_t, at the controller's rate. The model's effects (section
 /// effects:, as rig discrepancy writes them) fly too: extra moment and force from the simulated
 /// p, v, phi, delta_f and the measured u, w, delta_d, r they need.

@@ -1,7 +1,7 @@
 // The thesis's other identifications: the black-box structures (Eq 8.5 / 8.6, Appendix C.2) by
 // equation error, where on a synthetic flight of set 1 (whose A and B a three-state black box
 // contains) every entry comes back within its own coloured-residual sigma of set 1's; and OLS
-// beside WLS (Appendix D).
+// beside WLS (Appendix D); a three-state black box validated in closed loop.
 
 #include <cmath>
 #include <string>
@@ -9,7 +9,9 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "controller/attitude_controller.h"
 #include "core/model.h"
+#include "ident/closed_loop.h"
 #include "ident/identify.h"
 #include "ident/model_writer.h"
 #include "ident/report.h"
@@ -106,4 +108,40 @@ TEST_CASE("OLS beside WLS (Appendix D): every parameter with both estimates, sig
     CHECK(std::fabs(ols.parameters.at(name).value - wls.parameters.at(name).value) < 3.0 * spread);
   }
   CHECK_THROWS_WITH(methods_comparison_text(wls, ols), Catch::Contains("needs an OLS and a WLS identification"));
+}
+
+TEST_CASE("a three-state black box holding set 1's A and B validates in closed loop as set 1 does", "[identify]") {
+  const DerivativeModel grey = set1_model();
+  const Vehicle vehicle = load_vehicle(grey.vehicle_file);
+  const StateSpace ss = build_state_space(grey, vehicle);
+  DerivativeModel box = grey;
+  box.name = "set1_as_blackbox3";
+  box.structure = Structure::kBlackbox3;
+  box.derivatives.clear();
+  for (Eigen::Index i = 0; i < ss.A.rows(); ++i) {
+    const std::string& row = ss.states[static_cast<std::size_t>(i)];
+    for (Eigen::Index k = 0; k < ss.A.cols(); ++k) {
+      box.derivatives[blackbox_a_name(row, ss.states[static_cast<std::size_t>(k)])] = ss.A(i, k);
+    }
+    for (Eigen::Index k = 0; k < ss.B.cols(); ++k) {
+      box.derivatives[blackbox_b_name(row, ss.inputs[static_cast<std::size_t>(k)])] = ss.B(i, k);
+    }
+  }
+  const FlightData data = simulate_synthetic(grey, vehicle, identification_flight(7));
+  ClosedLoopOptions o;
+  o.controller = load_controller_config(nimble::ident::test::kConfigs + "controller/nimble_attitude.yaml");
+  const ClosedLoopResult a = validate_closed_loop(data, grey, vehicle, o);
+  const ClosedLoopResult b = validate_closed_loop(data, box, vehicle, o);
+  for (const char* s : {"p", "v", "phi", "delta_f"}) {
+    INFO(s);
+    CHECK(a.simulated.at(s).cwiseAbs().maxCoeff() >
+          0.01);  // the loop flew (the synthetic flight's controller is not the copy's)
+    CHECK(b.fits.at(s).r2 == Approx(a.fits.at(s).r2).margin(1e-9));
+    CHECK((b.simulated.at(s) - a.simulated.at(s)).cwiseAbs().maxCoeff() < 1e-9);
+  }
+  // A four-state model has no place in the three-state loop: refused, naming its structure.
+  DerivativeModel four = load_model(nimble::ident::test::kConfigs + "models/nimble_lateral4_yaw.yaml");
+  CHECK_THROWS_WITH(
+      validate_closed_loop(data, four, vehicle, o),
+      Catch::Contains("needs a three-state model (lateral3 or blackbox3)") && Catch::Contains("is lateral4"));
 }
