@@ -110,9 +110,13 @@ void record_origins(const YAML::Node& node, const std::string& file, const std::
 /// scenario); `at_root`: node is the scenario root. Each base file's keys are recorded in
 /// `origins` where the files above it did not give them.
 /// `chain`: the files from the scenario down to `file` (file last), to name a cycle whole.
+/// `sections`: also resolve the bases of the mappings below `node`. A scenario standing on another
+/// scenario (a root `base:`) is merged with it as written first, sections and their `base:` keys
+/// included, and its sections resolved after: a section's base is the nearest scenario's (or
+/// `--set <section>.base`'s), with every scenario's own keys of the section over it.
 YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path,
                          const std::vector<std::string>& chain, bool at_root, const std::string& mount,
-                         KeyOrigins* origins) {
+                         KeyOrigins* origins, bool sections = true) {
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
     if (out["base"]) {
@@ -136,10 +140,12 @@ YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::st
       const std::string base_mount = join_path(mount, path);
       record_origins(base, base_file, base_mount, false, origins);
       absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);
-      base = resolve_bases(base, base_file, "", below, at_root, base_mount, origins);
+      const bool scenario_chain = at_root && path.empty();
+      base = resolve_bases(base, base_file, "", below, at_root, base_mount, origins, !scenario_chain);
       out.remove("base");
       out = merge(base, out);
     }
+    if (!sections) return out;
     for (auto it = out.begin(); it != out.end(); ++it) {
       const std::string key = it->first.as<std::string>();
       it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, chain, false, mount, origins);

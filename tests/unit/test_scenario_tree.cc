@@ -209,3 +209,32 @@ TEST_CASE(
                                              {nimble::parse_override("sensing.base=" + configs + "absent.yaml")}),
                   nimble::ConfigError);
 }
+
+TEST_CASE(
+    "scenario tree: a scenario standing on another takes its sections as written, its own section base over "
+    "the other's, and --set <section>.base reaches a section it inherits",
+    "[scenario]") {
+  const fs::path dir = nimble::test::scratch_dir("scenario_chain");
+  std::ofstream(dir / "s1.yaml") << "a: 1\nb: 1\n";
+  std::ofstream(dir / "s2.yaml") << "a: 2\n";
+  std::ofstream(dir / "parent.yaml") << "sensing:\n  base: s1.yaml\n  extra: 5\n";
+  std::ofstream(dir / "child.yaml") << "base: parent.yaml\nsensing:\n  base: s2.yaml\n";
+  const YAML::Node child = nimble::load_scenario_tree((dir / "child.yaml").string());
+  CHECK(child["sensing"]["a"].as<int>() == 2);      // the child's section base, not the parent's
+  CHECK_FALSE(child["sensing"]["b"]);               // s1 is not below it
+  CHECK(child["sensing"]["extra"].as<int>() == 5);  // the parent's own key of the section stays
+  const YAML::Node parent = nimble::load_scenario_tree((dir / "parent.yaml").string());
+  CHECK(parent["sensing"]["a"].as<int>() == 1);
+  CHECK(parent["sensing"]["b"].as<int>() == 1);
+
+  // The four-state scenario stands on the identification train, whose sensing section names the
+  // default: --set sensing.base reaches it (it was merged under the default's keys, so lost).
+  const std::string configs = std::string(RIG_SOURCE_DIR) + "/rig_configs/";
+  const YAML::Node vib = nimble::load_scenario_tree(
+      configs + "yaw_hold_lateral4.yaml",
+      {nimble::parse_override("sensing.base=" + configs + "sensing/nimble_flight_vibration.yaml")});
+  CHECK(vib["sensing"]["imu"]["structural_gyro_amplitude_radps"]["z"].as<double>() > 3.0);
+  CHECK(vib["controller"]["yaw"]["enabled"].as<bool>());
+  const YAML::Node plain = nimble::load_scenario_tree(configs + "yaw_hold_lateral4.yaml");
+  CHECK(plain["sensing"]["imu"]["structural_gyro_amplitude_radps"]["z"].as<double>() == 0.3);
+}
