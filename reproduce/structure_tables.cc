@@ -180,6 +180,11 @@ std::map<std::string, CellMap> four_state_tables(const ident::FlightData& measur
   return t;
 }
 
+const std::vector<std::string>& four_state_table_ids() {
+  static const std::vector<std::string> ids = {"8.2", "8.4", "8.9", "8.10", "8.11", "D.1", "H.1", "H.2", "H.3"};
+  return ids;
+}
+
 CellMap input_variant_table(const ident::FlightData& measured, const DerivativeModel& plant) {
   const Vehicle vehicle = load_vehicle(plant.vehicle_file);
   ident::IdentOptions o;

@@ -68,8 +68,11 @@ void put_correlations(CellMap& m, const ident::IdentResult& r, const std::string
 /// 8.15, D.2, H.4, H.5. `set1` is the campaign's identification of it (Table 9.5's).
 std::map<std::string, CellMap> three_state_tables(const ident::FlightData& measured, const ident::IdentResult& set1);
 
-/// The tables from the four-state flight (flown on `plant`): 8.2, 8.4, 8.9, 8.10, 8.11, D.1, H.1-H.3.
+/// The tables from the four-state flight (flown on `plant`): four_state_table_ids().
 std::map<std::string, CellMap> four_state_tables(const ident::FlightData& measured, const DerivativeModel& plant);
+
+/// 8.2, 8.4, 8.9, 8.10, 8.11, D.1, H.1, H.2, H.3.
+const std::vector<std::string>& four_state_table_ids();
 
 /// Table E.2 or E.3: the flight flown on the input variant `plant` identified with its inputs.
 CellMap input_variant_table(const ident::FlightData& measured, const DerivativeModel& plant);

@@ -272,17 +272,20 @@ class CampaignRun {
   }
 
   /// The flights of the model-structure tables (reproduce/structure_tables.h): the four-state
-  /// flight, and the identification train on each of Appendix E's input variants.
+  /// flight, and the identification train on each of Appendix E's input variants. A flight that
+  /// did not fly as its scenario asks (a failsafe) gives its tables no values on this seed: it is
+  /// listed among the flights not ok, and its cells have no value to judge.
   void structure_flights() {
     const Flown& four = flight_with("lateral4", {});
-    for (auto& [table, cells] : four_state_tables(read(four).measured, load_model(spec_.lateral4_model))) {
-      values_[table].push_back(std::move(cells));
-    }
+    std::map<std::string, CellMap> cells;
+    if (four.record.result == "ok") cells = four_state_tables(read(four).measured, load_model(spec_.lateral4_model));
+    for (const std::string& table : four_state_table_ids()) values_[table].push_back(std::move(cells[table]));
     for (const auto& [table, model] : spec_.input_variants) {
       const std::string name = "identification_" + table;
       const Flown f = fly(o_, seed_, name, spec_.flights.at("identification"), {{"model", model}});
       result_.flights.push_back(f.record);
-      values_[table].push_back(input_variant_table(read(f).measured, load_model(model)));
+      values_[table].push_back(f.record.result == "ok" ? input_variant_table(read(f).measured, load_model(model))
+                                                       : CellMap{});
     }
   }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -15,6 +16,7 @@
 #include "../support/rig_runs.h"
 #include "reproduce/campaign_spec.h"
 #include "reproduce/cell_verdict.h"
+#include "reproduce/structure_tables.h"
 
 using nimble::test::rig_run;
 using nimble::test::RunResult;
@@ -423,6 +425,50 @@ TEST_CASE("rig reproduce: a campaign file with a table left out is refused, nami
   CHECK(out.exit_code == 2);
   CHECK_THAT(out.err, Catch::Contains("--json") && Catch::Contains("cannot be written"));
   CHECK_FALSE(std::filesystem::exists(dir + "/never"));
+}
+
+TEST_CASE(
+    "rig reproduce thesis: a structure flight that ends in failsafe leaves its tables without values and the "
+    "campaign goes on",
+    "[system]") {
+  // The four-state flight with the real vehicle's vibration stops its estimator (a failsafe): the
+  // flight stands on yaw_hold_lateral4.yaml, which inherits its sensing section, and the
+  // vibration file reaches it through the section's base.
+  const std::string dir = nimble::test::scratch_dir("paper_reproduce_failsafe");
+  {
+    std::ofstream(dir + "/lateral4_vibration.yaml")
+        << "base: " << kConfigs << "yaw_hold_lateral4.yaml\nsensing:\n  base: " << kConfigs
+        << "sensing/nimble_flight_vibration.yaml\n";
+    std::string text;
+    {
+      std::ifstream in(kConfigs + "reproduce/thesis.yaml");
+      text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    for (auto at = text.find("../"); at != std::string::npos; at = text.find("../", at)) {
+      text.replace(at, 3, kConfigs);
+    }
+    const std::string flight = kConfigs + "yaw_hold_lateral4.yaml";
+    REQUIRE(text.find(flight) != std::string::npos);
+    text.replace(text.find(flight), flight.size(), dir + "/lateral4_vibration.yaml");
+    std::ofstream(dir + "/campaign.yaml") << text;
+  }
+  const std::string json = dir + "/tables.json";
+  const auto r = nimble::test::run_rig("reproduce thesis --no-progress --seeds 1 --campaign " + dir +
+                                       "/campaign.yaml --logs " + dir + "/logs --json " + json);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 1);
+  CHECK_THAT(r.out, Catch::Contains("flights not ok: 1") && Catch::Contains("lateral4 seed 1: completed in failsafe"));
+  const YAML::Node j = YAML::LoadFile(json);
+  for (const std::string& id : nimble::reproduce::four_state_table_ids()) {
+    INFO(id);
+    REQUIRE(table(j, id)["cells"].size() > 0);
+    for (const auto& c : table(j, id)["cells"]) {
+      CHECK(c["verdict"].as<std::string>() == "differs");
+      CHECK(c["reason"].as<std::string>() == "the rig has no value");
+    }
+  }
+  // The other tables have their values: set 1's eigenvectors, the input variants.
+  for (const auto& c : table(j, "E.2")["cells"]) CHECK(c["verdict"].as<std::string>() != "differs");
 }
 
 TEST_CASE("rig validate --closed-loop flies the gain set the log's controller flew", "[system]") {
