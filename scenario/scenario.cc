@@ -113,15 +113,21 @@ void record_origins(const YAML::Node& node, const std::string& file, const std::
 /// `sections`: also resolve the bases of the mappings below `node`. A scenario standing on another
 /// scenario (a root `base:`) is merged with it as written first, sections and their `base:` keys
 /// included, and its sections resolved after: a section's base is the nearest scenario's (or
-/// `--set <section>.base`'s), with every scenario's own keys of the section over it.
+/// `--set <section>.base`'s), with every scenario's own keys of the section over it. Its sections'
+/// chain is then the whole chain of scenarios (`scenarios` receives it), and an error in a section
+/// names the file that wrote the key (`origins`, where given).
 YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::string& path,
                          const std::vector<std::string>& chain, bool at_root, const std::string& mount,
-                         KeyOrigins* origins, bool sections = true) {
+                         KeyOrigins* origins, bool sections = true, std::vector<std::string>* scenarios = nullptr) {
   if (node.IsMap()) {
     YAML::Node out = YAML::Clone(node);
+    std::vector<std::string> section_chain = chain;
     if (out["base"]) {
       const std::string base_key = path.empty() ? "base" : path + ".base";
-      if (!out["base"].IsScalar()) throw ConfigError(file, base_key, "", "must be the name of a base file");
+      const auto written = origins != nullptr ? origins->find(join_path(mount, base_key)) : KeyOrigins::iterator{};
+      const bool known = origins != nullptr && written != origins->end() && written->second.file != "--set";
+      const std::string& where = known ? written->second.file : file;
+      if (!out["base"].IsScalar()) throw ConfigError(where, base_key, "", "must be the name of a base file");
       const std::string base_file = out["base"].as<std::string>();
       std::vector<std::string> below = chain;
       below.push_back(base_file);
@@ -130,10 +136,10 @@ YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::st
         if (file_identity(below[i]) != identity) continue;
         std::string cycle;
         for (std::size_t k = i; k < below.size(); ++k) cycle += (k > i ? " -> " : "") + below[k];
-        throw ConfigError(file, base_key, base_file, "base files form a cycle: " + cycle);
+        throw ConfigError(where, base_key, base_file, "base files form a cycle: " + cycle);
       }
       if (below.size() > kMaxBaseDepth + 1) {
-        throw ConfigError(file, base_key, base_file,
+        throw ConfigError(where, base_key, base_file,
                           "base files nest deeper than " + std::to_string(kMaxBaseDepth) + " levels");
       }
       YAML::Node base = load_yaml(base_file, base_key);
@@ -141,14 +147,17 @@ YAML::Node resolve_bases(YAML::Node node, const std::string& file, const std::st
       record_origins(base, base_file, base_mount, false, origins);
       absolutise_paths(base, fs::absolute(base_file).parent_path(), at_root);
       const bool scenario_chain = at_root && path.empty();
-      base = resolve_bases(base, base_file, "", below, at_root, base_mount, origins, !scenario_chain);
+      base = resolve_bases(base, base_file, "", below, at_root, base_mount, origins, !scenario_chain,
+                           scenario_chain ? &section_chain : nullptr);
       out.remove("base");
       out = merge(base, out);
     }
+    if (scenarios != nullptr) *scenarios = section_chain;
     if (!sections) return out;
     for (auto it = out.begin(); it != out.end(); ++it) {
       const std::string key = it->first.as<std::string>();
-      it->second = resolve_bases(it->second, file, path.empty() ? key : path + "." + key, chain, false, mount, origins);
+      it->second =
+          resolve_bases(it->second, file, path.empty() ? key : path + "." + key, section_chain, false, mount, origins);
     }
     return out;
   }

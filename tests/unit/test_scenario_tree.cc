@@ -226,6 +226,17 @@ TEST_CASE(
   const YAML::Node parent = nimble::load_scenario_tree((dir / "parent.yaml").string());
   CHECK(parent["sensing"]["a"].as<int>() == 1);
   CHECK(parent["sensing"]["b"].as<int>() == 1);
+  // A bad section base the other scenario wrote is named in that scenario's file.
+  std::ofstream(dir / "bad_parent.yaml") << "sensing:\n  base: [s1.yaml]\n";
+  std::ofstream(dir / "bad_child.yaml") << "base: bad_parent.yaml\n";
+  nimble::KeyOrigins origins;
+  try {
+    nimble::load_scenario_tree((dir / "bad_child.yaml").string(), {}, &origins);
+    FAIL("a list as a section's base was taken");
+  } catch (const nimble::ConfigError& e) {
+    CHECK(e.file() == (dir / "bad_parent.yaml").string());
+    CHECK(e.key() == "sensing.base");
+  }
 
   // The four-state scenario stands on the identification train, whose sensing section names the
   // default: --set sensing.base reaches it (it was merged under the default's keys, so lost).
