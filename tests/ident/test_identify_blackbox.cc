@@ -17,6 +17,7 @@
 #include "ident/report.h"
 #include "ident/synthetic.h"
 #include "synthetic_flight.h"
+#include "tests/support/blackbox_model.h"
 #include "tests/support/scratch.h"
 
 using namespace nimble;
@@ -114,19 +115,7 @@ TEST_CASE("a three-state black box holding set 1's A and B validates in closed l
   const DerivativeModel grey = set1_model();
   const Vehicle vehicle = load_vehicle(grey.vehicle_file);
   const StateSpace ss = build_state_space(grey, vehicle);
-  DerivativeModel box = grey;
-  box.name = "set1_as_blackbox3";
-  box.structure = Structure::kBlackbox3;
-  box.derivatives.clear();
-  for (Eigen::Index i = 0; i < ss.A.rows(); ++i) {
-    const std::string& row = ss.states[static_cast<std::size_t>(i)];
-    for (Eigen::Index k = 0; k < ss.A.cols(); ++k) {
-      box.derivatives[blackbox_a_name(row, ss.states[static_cast<std::size_t>(k)])] = ss.A(i, k);
-    }
-    for (Eigen::Index k = 0; k < ss.B.cols(); ++k) {
-      box.derivatives[blackbox_b_name(row, ss.inputs[static_cast<std::size_t>(k)])] = ss.B(i, k);
-    }
-  }
+  const DerivativeModel box = nimble::test::blackbox_of(grey, ss);
   const FlightData data = simulate_synthetic(grey, vehicle, identification_flight(7));
   ClosedLoopOptions o;
   o.controller = load_controller_config(nimble::ident::test::kConfigs + "controller/nimble_attitude.yaml");
